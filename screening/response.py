@@ -1,0 +1,68 @@
+"""``linearize``: the stochastic-linearization response of one block as a labelled dataset."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from . import __version__
+from .condensed import uplift_threshold
+from .lyapunov import DEFAULT_RTOL, HISTORY_VARIABLES, STATUS_MEANINGS, solve_moments
+from .metadata import STATUS, TIME, VARIABLES
+from .timegrid import output_times
+
+
+def model_attributes(block, foundation, excitation):
+    """Flat dict of the (scalar) inputs, for dataset attributes."""
+    attrs = {"m": block.m, "b": block.b, "h": block.h, "I_cm": block.I_cm, "g": block.g,
+             "contact": foundation.contact, "k": foundation.k, "eps": foundation.eps,
+             "excitation": excitation.kind, "S0": excitation.S0,
+             "envelope": excitation.envelope.kind,
+             "intensity_convention": "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"}
+    if foundation.contact == "hunt_crossley":
+        attrs["lam"] = foundation.lam
+    else:
+        attrs["c"] = foundation.c
+    if excitation.kind == "kanai_tajimi":
+        attrs.update(omega_g=excitation.omega_g, zeta_g=excitation.zeta_g)
+    if excitation.envelope.kind == "exponential":
+        attrs.update(T1=excitation.envelope.T1, T2=excitation.envelope.T2)
+    return {k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in attrs.items()}
+
+
+def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL):
+    """Time-varying second-order rocking statistics by stochastic linearization (sections 2.4–2.6).
+
+    Parameters
+    ----------
+    block, foundation, excitation : scalar model objects (for batches of points use
+        :func:`screening.lyapunov.solve_moments`, which this wraps).
+    t_end : record length [s]. dt : output step [s] (the solver is adaptive and finer).
+    rtol : solver relative tolerance.
+
+    Returns
+    -------
+    xarray.Dataset on the coordinate ``t`` [s] with ``var_theta`` [rad2], ``var_theta_dot``
+    [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1], ``c_eq`` [N m s rad-1], ``k_eq``
+    [N m rad-1], ``p_uplift`` [1] (eq. 58), the scalar summaries ``peak_var_theta``,
+    ``t_peak_var_theta``, ``peak_p_uplift``, ``min_k_eq``, ``status`` (CF flag variable)
+    and ``t_stop``.  Inputs are stored as attributes.  Values after a point stopped
+    (status != 0) are NaN.
+    """
+    t = output_times(t_end, dt)
+    res = solve_moments(block, foundation, excitation, t, rtol=rtol)
+    if res["status"].ndim != 0:
+        raise ValueError("linearize() takes scalar model parameters; use "
+                         "screening.lyapunov.solve_moments for arrays of points")
+    data = {name: (("t",), res[name], VARIABLES[name]) for name in HISTORY_VARIABLES}
+    for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "t_stop",
+                 "n_steps"):
+        data[name] = ((), res[name], VARIABLES[name])
+    data["status"] = ((), res["status"], STATUS)
+    data["theta_ul"] = ((), uplift_threshold(block, foundation), VARIABLES["theta_ul"])
+    ds = xr.Dataset(data, coords={"t": ("t", t, TIME)})
+    ds.attrs.update(model_attributes(block, foundation, excitation))
+    ds.attrs.update(method="stochastic linearization + Lyapunov moment equations",
+                    status_meaning=STATUS_MEANINGS[int(res["status"])], rtol=float(rtol),
+                    screening_version=__version__)
+    return ds

@@ -1,0 +1,64 @@
+import math
+
+import numpy as np
+import pytest
+
+from screening.model import Block, Foundation, WinklerFoundation, contact_pressure
+
+
+def test_block_default_inertia_is_uniform_rectangle():
+    blk = Block(m=2.0, b=0.1, h=0.3)
+    # rectangle 2b x 2h: m ((2b)^2 + (2h)^2) / 12
+    assert blk.I_cm == pytest.approx(2.0 * (0.2**2 + 0.6**2) / 12.0, rel=1e-14)
+    assert blk.m_sdof == pytest.approx(blk.I_cm + 2.0 * 0.3**2, rel=1e-14)
+    assert blk.slenderness == pytest.approx(math.atan(0.1 / 0.3), rel=1e-14)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(m=0.0, b=0.1, h=0.3), "'m'"),
+    (dict(m=-1.0, b=0.1, h=0.3), "'m'"),
+    (dict(m=1.0, b=np.nan, h=0.3), "'b'"),
+    (dict(m=1.0, b=0.1, h=np.inf), "'h'"),
+    (dict(m=1.0, b=0.1, h=0.3, I_cm=-1.0), "'I_cm'"),
+    (dict(m="heavy", b=0.1, h=0.3), "'m'"),
+    (dict(m=1.0, b=0.1, h=0.3, g=0.0), "'g'"),
+])
+def test_block_rejects_bad_values_naming_the_parameter(kwargs, name):
+    with pytest.raises(ValueError, match=name) as err:
+        Block(**kwargs)
+    assert "must be" in str(err.value)
+
+
+@pytest.mark.parametrize("make, name", [
+    (lambda: Foundation(k=0.0, lam=1.0), "'k'"),
+    (lambda: Foundation(k=1.0, lam=-1.0), "'lam'"),
+    (lambda: Foundation(k=1.0, lam=1.0, eps=np.nan), "'eps'"),
+    (lambda: WinklerFoundation(k=1.0, c=-2.0), "'c'"),
+    (lambda: Foundation(k=np.array([1.0, -1.0]), lam=1.0), "'k'"),
+])
+def test_foundation_rejects_bad_values(make, name):
+    with pytest.raises(ValueError, match=name):
+        make()
+
+
+def test_parameters_may_be_arrays_that_broadcast():
+    fnd = Foundation(k=2.0e7, lam=1e8, eps=np.array([-1e5, 0.0, 1e7]))
+    assert fnd.eps.shape == (3,)
+    assert isinstance(fnd.k, float)
+
+
+def test_contact_pressure_hunt_crossley_law_and_no_tension():
+    fnd = Foundation(k=2.0e7, lam=3.0e8, eps=5e6)
+    z = np.array([-1e-4, 0.0, 1e-4, 2e-4])
+    zd = np.array([0.3, 0.3, -0.01, 0.02])
+    F = contact_pressure(z, zd, fnd)
+    expected = 2.0e7 * z + 5e6 * 2.0e7 * z**3 + 3.0e8 * z * zd
+    np.testing.assert_allclose(F[2:], expected[2:], rtol=1e-14)
+    assert F[0] == 0.0 and F[1] == 0.0
+
+
+def test_contact_pressure_winkler_uses_linear_dashpot():
+    fnd = WinklerFoundation(k=2.0e7, c=1.5e3)
+    F = contact_pressure(np.array([1e-4, -1e-4]), np.array([0.02, 0.02]), fnd)
+    assert F[0] == pytest.approx(2.0e7 * 1e-4 + 1.5e3 * 0.02, rel=1e-14)
+    assert F[1] == 0.0
