@@ -271,6 +271,7 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
     lowest_k = k0
     steps = 0
     rejected = 0
+    err_old = 1e-4
     code = STATUS_OK
     if not (k0 > 0.0):
         code = STATUS_K_EQ_NEGATIVE
@@ -358,7 +359,10 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
         if y[0] > p[I_SIGMAX] ** 2:
             code = STATUS_VARIANCE_UNBOUNDED
             break
-        fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err**-0.2)
+        # PI step control (Hairer & Wanner's DOPRI5, beta = 0.04): smooth near the stability bound
+        err = max(err, 1e-10)
+        fac = min(5.0, max(0.2, 0.9 * err**-0.17 * err_old**0.04))
+        err_old = err
         h = min(h * fac, h_max)
     status[i] = code
     t_stop[i] = t
