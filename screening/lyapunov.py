@@ -92,6 +92,28 @@ def _envelope(p, t):
 
 
 @numba.njit(cache=True, inline="always")
+def _exp_minus(x):
+    """``exp(-x)`` for ``0 <= x``; a 7-term series below 0.02 (error < 1e-16)."""
+    if x < 0.02:
+        return 1.0 - x * (1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x * (1.0 / 120.0 - x / 720.0)))))
+    return math.exp(-x)
+
+
+@numba.njit(cache=True)
+def _stage_gains(p, t, h, gains):
+    """``m h q(t + c_s h) / M`` at the 7 stage times of a Dormand–Prince step (2 exp per step)."""
+    if p[I_ENV] == 1.0:
+        for s in range(7):
+            gains[s] = p[I_GAIN]
+        return
+    e1 = math.exp(-t / p[I_T1])
+    e2 = math.exp(-t / p[I_T2])
+    for s in range(7):
+        c = _C7[s] * h
+        gains[s] = p[I_GAIN] * 4.0 * (e1 * _exp_minus(c / p[I_T1]) - e2 * _exp_minus(c / p[I_T2]))
+
+
+@numba.njit(cache=True, inline="always")
 def _coefficients(p, var_theta, cov, values, slopes):
     """``(c_eq, k_eq)`` from the moments: the closed forms of :mod:`screening.linearization`."""
     if var_theta > 0.0:
@@ -115,13 +137,15 @@ def _coefficients(p, var_theta, cov, values, slopes):
 
 
 @numba.njit(cache=True, inline="always")
-def _rhs(p, kt, t, y, dy, row, values, slopes):
-    """Moment equations (45)/(51) into ``dy[row]``; returns ``(c_eq, k_eq)`` at ``(t, y)``."""
+def _rhs(p, kt, alpha, y, dy, row, values, slopes):
+    """Moment equations (45)/(51) into ``dy[row]``; returns ``(c_eq, k_eq)`` at ``y``.
+
+    ``alpha = m h q(t) / M`` is the input gain at the stage time.
+    """
     c_eq, k_eq = _coefficients(p, y[0], y[1], values, slopes)
     m = p[I_M]
     kap = k_eq / m
     gam = c_eq / m
-    alpha = p[I_GAIN] * _envelope(p, t)
     if not kt:
         dy[row, 0] = 2.0 * y[1]
         dy[row, 1] = y[2] - kap * y[0] - gam * y[1]
@@ -169,6 +193,7 @@ _A = np.array([
     [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
 ])
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
+_C7 = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 _B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
 _E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
 _P = np.array([
@@ -258,12 +283,13 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
     y_stage = np.empty(n)
     K = np.empty((7, n))
     scale = np.empty(n)
+    gains = np.empty(7)
     _linear_scales(p, kt, scale)
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
     t = t_out[0]
 
-    c0, k0 = _rhs(p, kt, t, y, K, 0, values, slopes)
+    c0, k0 = _rhs(p, kt, p[I_GAIN] * _envelope(p, t), y, K, 0, values, slopes)
     _store(p, i, 0, y, values, slopes, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
     next_out = 1
     best = 0.0
@@ -284,6 +310,7 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
             break
         if t + h > t_end:
             h = t_end - t
+        _stage_gains(p, t, h, gains)
         # stages 2..6
         for s in range(1, 6):
             for j in range(n):
@@ -291,13 +318,13 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
                 for q in range(s):
                     acc += _A[s, q] * K[q, j]
                 y_stage[j] = y[j] + h * acc
-            _rhs(p, kt, t + _C[s] * h, y_stage, K, s, values, slopes)
+            _rhs(p, kt, gains[s], y_stage, K, s, values, slopes)
         for j in range(n):
             acc = 0.0
             for q in range(6):
                 acc += _B[q] * K[q, j]
             y_new[j] = y[j] + h * acc
-        c_new, k_new = _rhs(p, kt, t + h, y_new, K, 6, values, slopes)
+        c_new, k_new = _rhs(p, kt, gains[6], y_new, K, 6, values, slopes)
         err = 0.0
         finite = True
         for j in range(n):
