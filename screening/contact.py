@@ -1,0 +1,265 @@
+"""Contact resultants of the full coupled model (paper eqs. 1–6), exact in every regime.
+
+The resultant force ``F_cb`` [N] and the moment about the base centre ``M_cb`` [N m] are
+the integrals (5)–(6) of the contact law (3)–(4) over the part of the base that is in
+contact.  They are evaluated here in closed form, for any ``theta`` (both signs), any
+``z_cb`` and both bed laws, without small-angle approximations.
+
+Derivation
+----------
+Measure the base by ``u = b - eta`` in ``[-b, b]`` (signed distance from the base centre
+towards edge ``B``).  Eqs. (1)–(2) give a field that is *linear* in ``u``::
+
+    z(u)    = z_cb + u sin(theta),          zdot(u) = zdot_cb + u theta_dot cos(theta),
+    lever arm (b - eta) cos(theta) = u cos(theta).
+
+The compressed edge is ``B`` (``u = +b``) for ``theta >= 0`` and ``A`` (``u = -b``) for
+``theta < 0``; with ``sigma = sign(theta)`` (``+1`` at ``theta = 0``) and ``p`` the distance
+from the compressed edge into the base, ``u = sigma (b - p)`` and ``z`` decreases linearly
+in ``p`` from the compressed-edge indentation ``z_c = z_cb + b |sin(theta)|``.  The contact
+zone is ``0 <= p <= P``:
+
+* full contact (``z_cb - b |sin theta| >= 0``): ``P = 2 b``;
+* uplift (``z_cb - b |sin theta| < 0 < z_c``): ``P = z_c / |sin theta|`` (eq. 6 text:
+  ``eta_U = z_cb / sin(theta) + b`` for ``theta > 0``; the mirror image for ``theta < 0``);
+* flight (``z_c <= 0``): no contact, ``F_cb = M_cb = 0``.
+
+Every integrand is a product of one to four functions that are linear in ``p`` (``z``,
+``zdot`` and the lever ``r = b - p``), so each integral is exact from the end values
+``f1 = f(0)``, ``f2 = f(P)`` (Beta integrals ``int_0^1 (1-t)^i t^j dt = i! j!/(i+j+1)!``)::
+
+    int z            = P (z1 + z2) / 2
+    int z^3          = P (z1 + z2)(z1^2 + z2^2) / 4
+    int z r          = P (2 z1 r1 + z1 r2 + z2 r1 + 2 z2 r2) / 6        (same for zdot r, z zdot)
+    int z^3 r        = P [(z1^3 r1 + z2^3 r2)/5 + (z1^3 r2 + z2^3 r1)/20
+                          + 3 (z1^2 z2 r1 + z1 z2^2 r2)/20 + (z1^2 z2 r2 + z1 z2^2 r1)/10]
+    int z zdot r     = P [(z1 v1 r1 + z2 v2 r2)/4 + (mixed triple products)/12]
+
+and ``F_cb = k int z + eps k int z^3 + lam int z zdot`` (Winkler: ``c int zdot``),
+``M_cb = sigma cos(theta) (k int z r + eps k int z^3 r + lam int z zdot r)``
+(Winkler: ``c int zdot r``).  The end-value form has no division by ``sin(theta)`` and no
+cancellation between large terms, so it is accurate at ``theta = 0`` and at the flight
+boundary alike.
+
+Written out for the regimes of the paper (``s = sin theta``, ``c = cos theta``,
+``z_B = z_cb + b s``, ``zdot_B = zdot_cb + b theta_dot c``):
+
+* full contact (agrees with eq. 9; eq. 10 with ``2/5`` instead of the printed ``2/3``)::
+
+    F = 2 b k z_cb + 2 b eps k z_cb (z_cb^2 + b^2 s^2) + lam b (2 z_cb zdot_cb + (2/3) b^2 s c theta_dot)
+    M = (2/3) b^3 k s c + eps k c (2 b^3 z_cb^2 s + (2/5) b^5 s^3)
+        + (2/3) lam b^3 c (z_cb c theta_dot + zdot_cb s)
+
+* uplift, ``theta > 0`` (stiffness terms agree with eqs. 11–12, damping terms differ)::
+
+    F = k z_B^2/(2 s) + eps k z_B^4/(4 s) + lam z_B^2 (3 s zdot_cb + 2 b s c theta_dot - z_cb c theta_dot)/(6 s^2)
+    M = c [k z_B^2 (2 b s - z_cb)/(6 s^2) + eps k z_B^4 (4 b s - z_cb)/(20 s^2)
+           + lam (c theta_dot (3 b^4 s^4 + 4 b^3 z_cb s^3 + z_cb^4)
+                  + 2 s zdot_cb z_B^2 (2 b s - z_cb))/(12 s^3)]
+
+  Eq. (11) has ``- zdot_cb cos(theta)`` where the integral gives ``- z_cb theta_dot cos(theta)``;
+  eq. (12) lacks one factor ``cos(theta)`` on its ``theta_dot`` term (``zdot = ... - eta
+  theta_dot cos(theta)``), an ``O(1 - cos theta)`` difference.
+
+* uplift, ``theta < 0``: mirror image, ``F(theta, theta_dot) = F(-theta, -theta_dot)`` and
+  ``M(theta, theta_dot) = -M(-theta, -theta_dot)`` at the same ``z_cb, zdot_cb``;
+* flight: ``F = M = 0``.
+
+Winkler beds (``c zdot``): ``F = c int zdot``, ``M = sigma cos(theta) c int zdot r``, e.g.
+full contact ``F = 2 b c zdot_cb``, ``M = (2/3) c b^3 c^2 theta_dot``.
+
+Units: ``theta`` [rad], ``theta_dot`` [rad/s], ``z_cb`` [m] (indentation of the base centre,
+positive into the bed), ``zdot_cb`` [m/s], ``b`` [m], ``k`` [N/m^2], ``eps`` [1/m^2],
+``damping`` = ``lam`` [N s/m^4] (Hunt–Crossley) or ``c`` [N s/m^2] (Winkler).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+#: Integer codes of the contact regimes returned by :func:`contact_regime`.
+REGIME_FULL_CONTACT = 0
+REGIME_UPLIFT_POSITIVE = 1
+REGIME_UPLIFT_NEGATIVE = 2
+REGIME_FLIGHT = 3
+REGIME_NAMES = {REGIME_FULL_CONTACT: "full contact", REGIME_UPLIFT_POSITIVE: "uplift, theta > 0",
+                REGIME_UPLIFT_NEGATIVE: "uplift, theta < 0", REGIME_FLIGHT: "flight"}
+
+
+def foundation_constants(foundation):
+    """``(k, eps, damping, winkler)`` of a foundation object as plain floats and a bool."""
+    winkler = foundation.contact == "winkler"
+    return float(foundation.k), float(foundation.eps), float(foundation.damping), winkler
+
+
+def corner_indentations(theta, z_cb, b):
+    """Indentations of the compressed and of the lifted base edge [m] (eqs. 1–2).
+
+    ``z_c = z_cb + b |sin theta|`` (edge B for ``theta >= 0``, A otherwise) and
+    ``z_f = z_cb - b |sin theta|``.  ``theta`` [rad], ``z_cb`` [m], ``b`` [m].
+    """
+    a = np.abs(np.sin(np.asarray(theta, dtype=float)))
+    z_cb = np.asarray(z_cb, dtype=float)
+    return z_cb + b * a, z_cb - b * a
+
+
+def contact_regime(theta, z_cb, b):
+    """Contact regime code (``REGIME_*``) for rotation ``theta`` [rad] and indentation ``z_cb`` [m]."""
+    theta = np.asarray(theta, dtype=float)
+    z_c, z_f = corner_indentations(theta, z_cb, b)
+    uplift = np.where(theta >= 0.0, REGIME_UPLIFT_POSITIVE, REGIME_UPLIFT_NEGATIVE)
+    return np.where(z_c <= 0.0, REGIME_FLIGHT, np.where(z_f >= 0.0, REGIME_FULL_CONTACT, uplift))
+
+
+def contact_length(theta, z_cb, b):
+    """Length of the contact zone ``P`` [m] measured from the compressed edge (0 in flight).
+
+    ``2 b`` in full contact, ``z_c / |sin theta|`` in uplift (eq. 6 text), ``0`` in flight.
+    """
+    a = np.abs(np.sin(np.asarray(theta, dtype=float)))
+    z_c, z_f = corner_indentations(theta, z_cb, b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        partial = np.minimum(z_c / a, 2.0 * b)
+    return np.where(z_c <= 0.0, 0.0, np.where(z_f >= 0.0, 2.0 * b, partial))
+
+
+def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler=False):
+    """Resultant contact force ``F_cb`` [N] and moment ``M_cb`` [N m] (eqs. 5–6), exact.
+
+    Vectorised over all array arguments (broadcast).  See the module docstring for the
+    derivation and the regime-by-regime formulas.
+
+    Parameters
+    ----------
+    theta : rotation [rad] (positive clockwise, edge B compressed).
+    theta_dot : rotation rate [rad/s].
+    z_cb : indentation of the base centre [m], positive into the bed.
+    z_cb_dot : its rate [m/s].
+    b : half-width of the base [m].
+    k : bed stiffness [N/m^2].
+    eps : cubic stiffness parameter [1/m^2].
+    damping : ``lam`` [N s/m^4] for Hunt–Crossley (``lam z zdot``) or ``c`` [N s/m^2] for
+        Winkler (``c zdot``, ``winkler=True``).
+    winkler : bool, which damping law.
+
+    Returns
+    -------
+    (F_cb, M_cb) : arrays [N], [N m]; both zero in flight.
+    """
+    theta = np.asarray(theta, dtype=float)
+    theta_dot = np.asarray(theta_dot, dtype=float)
+    z_cb = np.asarray(z_cb, dtype=float)
+    z_cb_dot = np.asarray(z_cb_dot, dtype=float)
+    s, c = np.sin(theta), np.cos(theta)
+    sigma = np.where(theta >= 0.0, 1.0, -1.0)
+    a = sigma * s                                   # |sin theta|
+    w = sigma * theta_dot * c                       # rate of the slope, seen from the compressed edge
+    z1 = z_cb + b * a                               # compressed edge
+    v1 = z_cb_dot + b * w
+    full = z_cb - b * a >= 0.0
+    in_contact = z1 > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        length = np.where(full, 2.0 * b, np.where(in_contact, z1 / np.where(a > 0.0, a, 1.0), 0.0))
+    z2 = np.where(full, z_cb - b * a, 0.0)          # far end of the contact zone
+    v2 = v1 - w * length
+    r1, r2 = b, b - length                          # lever arm / cos(theta), towards the compressed edge
+    P = length
+
+    int_z = P * (z1 + z2) / 2.0
+    int_z3 = P * (z1 + z2) * (z1 * z1 + z2 * z2) / 4.0
+    int_zr = P * (2.0 * z1 * r1 + z1 * r2 + z2 * r1 + 2.0 * z2 * r2) / 6.0
+    int_z3r = P * ((z1**3 * r1 + z2**3 * r2) / 5.0 + (z1**3 * r2 + z2**3 * r1) / 20.0
+                   + 3.0 * (z1 * z1 * z2 * r1 + z1 * z2 * z2 * r2) / 20.0
+                   + (z1 * z1 * z2 * r2 + z1 * z2 * z2 * r1) / 10.0)
+    if winkler:
+        int_d = P * (v1 + v2) / 2.0
+        int_dr = P * (2.0 * v1 * r1 + v1 * r2 + v2 * r1 + 2.0 * v2 * r2) / 6.0
+    else:
+        int_d = P * (2.0 * z1 * v1 + z1 * v2 + z2 * v1 + 2.0 * z2 * v2) / 6.0
+        int_dr = P * ((z1 * v1 * r1 + z2 * v2 * r2) / 4.0
+                      + (z1 * v1 * r2 + z1 * v2 * r1 + z2 * v1 * r1
+                         + z1 * v2 * r2 + z2 * v1 * r2 + z2 * v2 * r1) / 12.0)
+    force = k * int_z + eps * k * int_z3 + damping * int_d
+    moment = sigma * c * (k * int_zr + eps * k * int_z3r + damping * int_dr)
+    force = np.where(in_contact, force, 0.0)
+    moment = np.where(in_contact, moment, 0.0)
+    return force, moment
+
+
+def static_indentation_exact(block, foundation):
+    """Static indentation of the base centre at ``theta = 0`` [m], cubic term included.
+
+    Solves ``F_cb = 2 b k (z + eps z^3) = m g`` exactly: the smallest positive real root of
+    ``eps z^3 + z - m g/(2 b k) = 0`` (for ``eps < 0`` the root on the rising, stable
+    branch ``z < 1/sqrt(3 |eps|)``), polished by Newton steps to machine precision.
+    Raises ``ValueError`` when a softening bed (``eps < 0``) cannot carry the weight.
+    """
+    z_lin = block.m * block.g / (2.0 * block.b * foundation.k)
+    eps = float(foundation.eps)
+    if eps == 0.0:
+        return float(z_lin)
+    if eps < 0.0 and z_lin >= 2.0 / (3.0 * math.sqrt(3.0 * -eps)):
+        raise ValueError(f"the softening bed (eps={eps!r} 1/m^2) cannot carry the block's weight: "
+                         f"need m g/(2 b k) < 2/(3 sqrt(3 |eps|))")
+    roots = np.roots([eps, 0.0, 1.0, -z_lin])
+    real = roots[(np.abs(roots.imag) <= 1e-9 * np.abs(roots)) & (roots.real > 0.0)].real
+    z = float(np.min(real))
+    for _ in range(3):
+        z -= (eps * z**3 + z - z_lin) / (3.0 * eps * z * z + 1.0)
+    return z
+
+
+# ----------------------------------------------------------------------------- compiled
+@numba.njit(cache=True)
+def contact_resultants_scalar(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
+    """Compiled scalar :func:`contact_resultants`: returns ``(F_cb [N], M_cb [N m])``.
+
+    Same arguments and units; ``winkler`` is a bool.
+    """
+    return contact_resultants_trig(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
+                                   damping, winkler)
+
+
+@numba.njit(cache=True)
+def contact_resultants_trig(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
+    """:func:`contact_resultants_scalar` from ``s = sin(theta)``, ``c = cos(theta)`` (``|theta| < pi/2``).
+
+    Used by the Monte Carlo integrator, which needs ``sin`` and ``cos`` anyway.
+    """
+    sigma = 1.0 if s >= 0.0 else -1.0
+    a = sigma * s
+    z1 = z_cb + b * a
+    if z1 <= 0.0:
+        return 0.0, 0.0                              # flight
+    w = sigma * theta_dot * c
+    v1 = z_cb_dot + b * w
+    z2 = z_cb - b * a
+    if z2 >= 0.0:
+        P = 2.0 * b                                  # full contact
+    else:
+        z2 = 0.0
+        P = z1 / a                                   # uplift (a > 0 here)
+    v2 = v1 - w * P
+    r1 = b
+    r2 = b - P
+    z1s = z1 * z1
+    z2s = z2 * z2
+    int_z = P * (z1 + z2) * 0.5
+    int_z3 = P * (z1 + z2) * (z1s + z2s) * 0.25
+    int_zr = P * (2.0 * z1 * r1 + z1 * r2 + z2 * r1 + 2.0 * z2 * r2) / 6.0
+    int_z3r = P * ((z1s * z1 * r1 + z2s * z2 * r2) * 0.2 + (z1s * z1 * r2 + z2s * z2 * r1) * 0.05
+                   + 0.15 * (z1s * z2 * r1 + z1 * z2s * r2) + 0.1 * (z1s * z2 * r2 + z1 * z2s * r1))
+    if winkler:
+        int_d = P * (v1 + v2) * 0.5
+        int_dr = P * (2.0 * v1 * r1 + v1 * r2 + v2 * r1 + 2.0 * v2 * r2) / 6.0
+    else:
+        int_d = P * (2.0 * z1 * v1 + z1 * v2 + z2 * v1 + 2.0 * z2 * v2) / 6.0
+        int_dr = P * ((z1 * v1 * r1 + z2 * v2 * r2) * 0.25
+                      + (z1 * v1 * r2 + z1 * v2 * r1 + z2 * v1 * r1
+                         + z1 * v2 * r2 + z2 * v1 * r2 + z2 * v2 * r1) / 12.0)
+    force = k * int_z + eps * k * int_z3 + damping * int_d
+    moment = sigma * c * (k * int_zr + eps * k * int_z3r + damping * int_dr)
+    return force, moment
