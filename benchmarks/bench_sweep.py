@@ -1,0 +1,181 @@
+"""Benchmark: a 10,000-point white-noise sweep (100 eps x 100 S0, 20 s records) end to end.
+
+Runs the sweep exactly as ``screening run`` does (:func:`screening.sweep.run_sweep`: local
+dask cluster, batches, streaming netCDF write, atomic rename) with 1 and then 2 worker
+processes, and prints points per second end to end, the 1 -> 2 worker scaling, and where
+the time goes: cluster start-up, worker warm-up (imports + loading the numba cache),
+the compute phase (batches solved and streamed to disk; the client's write time inside it
+is shown separately), finalisation, shutdown; plus the PNG figures once.
+
+    .venv/bin/python benchmarks/bench_sweep.py            # sweep function, 1 and 2 workers
+    .venv/bin/python benchmarks/bench_sweep.py --cli      # through the `screening run` console script
+    .venv/bin/python benchmarks/bench_sweep.py --n 50 --repeat 2 --complevel 0
+
+Targets: >= 1,000 points/s end to end with 2 workers; >= 1.5x from 1 to 2 workers.
+The machine should be otherwise idle (2 cores): numbers on a shared machine are noisy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+STUDY = """
+title = "benchmark: {n} eps x {n} S0, modulated white noise, 20 s"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = {{start = -6e5, stop = 6e7, num = {n}}}
+[excitation]
+kind = "white"
+S0 = {{start = 1e-5, stop = 2.4e-3, num = {n}, log = true}}
+[time]
+t_end = 20.0
+dt = 0.05
+"""
+
+PHASES = ("cluster_start", "warm_up", "compute", "write", "finalize", "shutdown")
+
+
+def jit_in_this_process():
+    """Import the solver and run it once (compiles only if the on-disk numba cache is stale) [s]."""
+    start = time.perf_counter()
+    from screening.sweep import _warm_up
+
+    _warm_up()
+    return time.perf_counter() - start
+
+
+def _solve_share(n, queue):
+    """Solve ``n`` points of the benchmark grid in this process; put the time taken [s]."""
+    import numpy as np
+
+    from screening.excitation import WhiteNoise
+    from screening.lyapunov import solve_moments
+    from screening.model import Block, Foundation
+    from screening.timegrid import output_times
+
+    t = output_times(20.0, 0.05)
+    models = (Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, np.linspace(-6e5, 6e7, n)),
+              WhiteNoise(np.geomspace(1e-5, 2.4e-3, n)))
+    solve_moments(models[0], Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), t[:3])   # load the JIT cache
+    start = time.perf_counter()
+    solve_moments(*models, t)
+    queue.put(time.perf_counter() - start)
+
+
+def machine_scaling(n=2000):
+    """The same solver work in 1 process, then in 2 concurrent processes (no dask, no I/O).
+
+    Returns ``(t1, t2, ratio)``: seconds for ``n`` points alone, the slower of two concurrent
+    ``n``-point runs, and ``2 t1 / t2`` -- the best speed-up this machine can give 2 workers now.
+    """
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    times = []
+    for n_proc in (1, 2):
+        queue = ctx.Queue()
+        procs = [ctx.Process(target=_solve_share, args=(n, queue)) for _ in range(n_proc)]
+        for p in procs:
+            p.start()
+        times.append(max(queue.get() for _ in procs))
+        for p in procs:
+            p.join()
+    return times[0], times[1], 2 * times[0] / times[1]
+
+
+def run_function(study, out, workers, complevel):
+    from screening.sweep import run_sweep
+
+    start = time.perf_counter()
+    report = run_sweep(study, out, workers=workers, force=True, progress=False, log=lambda *_: None,
+                       complevel=complevel)
+    wall = time.perf_counter() - start
+    assert report.status_counts.get("ok", 0) > 0 and report.n_failed_batches == 0
+    return wall, report.timings
+
+
+def run_cli(study_path, out, workers, complevel):
+    exe = Path(sys.executable).parent / "screening"
+    start = time.perf_counter()
+    subprocess.run([str(exe), "run", str(study_path), "--out", str(out), "--workers", str(workers), "--force",
+                    "--no-plots", "--quiet", "--complevel", str(complevel)], check=True, capture_output=True)
+    return time.perf_counter() - start, {}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=100, help="values per swept parameter (default 100)")
+    parser.add_argument("--repeat", type=int, default=1, help="runs per worker count; the fastest is kept")
+    parser.add_argument("--cli", action="store_true", help="time the `screening run` console script instead")
+    parser.add_argument("--complevel", type=int, default=1, help="zlib level of the file (default 1; 0 = none)")
+    args = parser.parse_args(argv)
+
+    from screening.study import parse_study
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        study_path = tmp / "bench.toml"
+        study_path.write_text(STUDY.format(n=args.n))
+        study = parse_study(study_path.read_text(), name="bench", source=str(study_path))
+        out = tmp / "bench.nc"
+        n_points = study.n_points
+        print(f"{n_points} points x {study.times.size} output times; "
+              f"{'console script' if args.cli else 'run_sweep()'}; zlib level {args.complevel}; "
+              f"best of {args.repeat}")
+        print(f"numba: import + first call in this process (compiles only if the cache is stale): "
+              f"{jit_in_this_process():.2f} s")
+        t1, t2, ratio = machine_scaling()
+        print(f"machine check, solver only (no dask, no I/O): 2000 points in {t1:.2f} s alone, {t2:.2f} s "
+              f"with 2 processes side by side -> at most {ratio:.2f}x from 2 workers on this machine now")
+        rows = {}
+        for workers in (1, 2):
+            best = None
+            for _ in range(args.repeat):
+                wall, timings = (run_cli(study_path, out, workers, args.complevel) if args.cli
+                                 else run_function(study, out, workers, args.complevel))
+                if best is None or wall < best[0]:
+                    best = (wall, timings)
+            rows[workers] = best
+            size = out.stat().st_size / 1e6
+        print(f"result file: {size:.1f} MB")
+        header = f"{'workers':>7} {'total':>7} {'pts/s':>7} " + " ".join(f"{p:>13}" for p in PHASES) \
+            + f" {'compute pts/s':>13}"
+        print(header)
+        for workers, (wall, t) in rows.items():
+            phases = " ".join(f"{t[p]:>12.2f}s" if p in t else f"{'-':>13}" for p in PHASES)
+            compute_rate = f"{n_points / t['compute']:>13.0f}" if t else f"{'-':>13}"
+            print(f"{workers:>7} {wall:>6.2f}s {n_points / wall:>7.0f} {phases} {compute_rate}")
+        (w1, t1), (w2, t2) = rows[1], rows[2]
+        rate = n_points / w2
+        scaling = w1 / w2
+        print(f"end to end, 2 workers: {rate:.0f} points/s  (target >= 1000: {'PASS' if rate >= 1000 else 'FAIL'})")
+        print(f"scaling 1 -> 2 workers, end to end: {scaling:.2f}x  "
+              f"(target >= 1.5: {'PASS' if scaling >= 1.5 else 'FAIL'})")
+        if t1 and t2:
+            print(f"scaling 1 -> 2 workers, compute phase: {t1['compute'] / t2['compute']:.2f}x")
+            fixed = t2["cluster_start"] + t2["warm_up"] + t2["finalize"] + t2["shutdown"]
+            print(f"2 workers: fixed costs (start-up, warm-up, finalize, shutdown) {fixed:.2f} s = "
+                  f"{100 * fixed / w2:.0f} % of the total; client write time {t2['write']:.2f} s "
+                  f"(overlaps the compute phase)")
+        if not args.cli:
+            from screening.plots import plot_result
+            from screening.sweep import open_result
+
+            start = time.perf_counter()
+            with open_result(out) as ds:
+                plot_result(ds, "bench", tmp)
+            print(f"PNG figures (not in the totals above): {time.perf_counter() - start:.2f} s")
+
+
+if __name__ == "__main__":
+    main()
