@@ -1,0 +1,245 @@
+"""Command line: ``screening run | plot | info``.
+
+``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
+dask (:func:`screening.sweep.run_sweep`) and writes ``PATH`` (default
+``outputs/<study-stem>.nc``) plus PNG figures next to it.  An interrupted run restarted
+with the same command resumes; an unchanged study reuses its finished result.
+
+``screening plot RESULT.nc [--out-dir DIR]`` writes the figures; ``screening info RESULT.nc``
+prints the dimensions, swept parameters, status counts and summary statistics.
+
+User errors (bad study file, missing output folder, unreadable result file, unreachable
+scheduler) print one line ``screening: error: ...`` on stderr and exit with status 2,
+without writing anything.  Ctrl-C exits with 130 and keeps the finished batches.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+
+EXIT_OK = 0
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (``screening: error: ...``)."""
+
+    def error(self, message):
+        raise _UsageError(f"{message} (see '{self.prog} --help')")
+
+
+class _UsageError(Exception):
+    pass
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1 (got {text!r})") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1 (got {text!r})")
+    return value
+
+
+def _zlib_level(text):
+    if text not in [str(i) for i in range(10)]:
+        raise argparse.ArgumentTypeError(f"must be an integer in 0..9 (got {text!r})")
+    return int(text)
+
+
+def build_parser():
+    parser = _Parser(prog="screening", description="Stochastic screening of rocking blocks on flexible "
+                                                   "nonlinear foundations.")
+    parser.add_argument("--version", action="version", version=f"screening {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    run = sub.add_parser("run", help="run a study file (TOML) and write a netCDF result + PNG figures")
+    run.add_argument("study", help="study file (TOML), e.g. studies/quick.toml")
+    run.add_argument("--out", help="result file (default outputs/<study-stem>.nc, folder created if missing; "
+                                   "the folder of an explicit path must exist)")
+    where = run.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int,
+                       help="worker processes of the local dask cluster (default 2)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="use an existing dask cluster: scheduler address or scheduler JSON file")
+    run.add_argument("--batch-size", type=_positive_int, help="points per task (default: about 500)")
+    run.add_argument("--complevel", type=_zlib_level, default=1,
+                     help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
+    run.add_argument("--force", action="store_true", help="recompute even if the result is up to date")
+    run.add_argument("--no-plots", action="store_true", help="do not write the PNG figures")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(func=cmd_run)
+
+    plot = sub.add_parser("plot", help="write PNG figures of a result file")
+    plot.add_argument("result", help="result file (netCDF)")
+    plot.add_argument("--out-dir", help="folder for the figures (default: next to the result; must exist)")
+    plot.set_defaults(func=cmd_plot)
+
+    info = sub.add_parser("info", help="describe a result file")
+    info.add_argument("result", help="result file (netCDF)")
+    info.set_defaults(func=cmd_info)
+    return parser
+
+
+def main(argv=None):
+    """Entry point of the ``screening`` console script; returns the exit status."""
+    from .study import StudyError
+    from .sweep import SweepError
+
+    try:
+        args = build_parser().parse_args(argv)
+        return args.func(args)
+    except (_UsageError, StudyError, SweepError) as exc:
+        print(f"screening: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("screening: interrupted; finished batches are kept, re-run the same command to resume",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except SystemExit as exc:               # --help / --version
+        return exc.code if isinstance(exc.code, int) else EXIT_OK
+
+
+# ----------------------------------------------------------------------------- commands
+def _say(msg):
+    print(msg, file=sys.stderr, flush=True)
+
+
+def cmd_run(args):
+    from .study import load_study
+    from .sweep import SweepError, check_output_path, run_sweep
+
+    study = load_study(args.study)
+    if args.out:
+        out = check_output_path(args.out)
+    else:                                    # the default folder is created (the README's `make run`)
+        out = Path("outputs") / f"{study.name}.nc"
+        try:
+            out.parent.mkdir(exist_ok=True)
+        except OSError as exc:
+            raise SweepError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
+        check_output_path(out)
+    report = run_sweep(study, out, workers=args.workers or 2, scheduler=args.scheduler, batch_size=args.batch_size,
+                       force=args.force, progress=not args.quiet, log=_say, complevel=args.complevel)
+    if not report.reused:
+        counts = ", ".join(f"{k} {v}" for k, v in report.status_counts.items())
+        spots = f", {report.n_spots} spot check(s)" if report.n_spots else ""
+        _say(f"wrote {out}: {report.n_points} points ({counts}){spots} in {report.timings['total']:.1f} s")
+    if not args.no_plots:
+        stem = out.name[:-3] if out.name.endswith(".nc") else out.name
+        pngs = [out.parent / f"{stem}_{k}.png" for k in ("histories", "peaks")]
+        if not report.reused or not all(p.exists() for p in pngs):
+            for path in _plot(out, out.parent):
+                _say(f"wrote {path}")
+    if report.n_failed_batches:
+        _say(f"warning: {report.n_failed_batches} batch(es) failed; their points have status task_failed "
+             f"in {out}")
+    return EXIT_OK
+
+
+def _plot(result, out_dir):
+    from .plots import plot_result
+    from .sweep import open_result
+
+    result = Path(result)
+    with open_result(result) as ds:
+        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
+        return plot_result(ds, stem, out_dir)
+
+
+def cmd_plot(args):
+    from .sweep import SweepError, open_result
+
+    result = Path(args.result)
+    open_result(result).close()                  # readable? (before touching the output folder)
+    out_dir = Path(args.out_dir) if args.out_dir else result.parent
+    if not out_dir.is_dir():
+        raise SweepError(f"output folder {out_dir} does not exist")
+    for path in _plot(result, out_dir):
+        print(path)
+    return EXIT_OK
+
+
+def cmd_info(args):
+    from .sweep import open_result
+
+    with open_result(args.result) as ds:
+        print(describe(ds, args.result))
+    return EXIT_OK
+
+
+# ----------------------------------------------------------------------------- info text
+def _fmt(value):
+    return f"{value:.4g}" if isinstance(value, (float, np.floating)) else str(value)
+
+
+def describe(ds, path="result"):
+    """Plain-text summary of a result dataset (what ``screening info`` prints)."""
+    from .plots import grid_dims, grid_units, grid_values, point_label, spot_index
+
+    dims = grid_dims(ds)
+    lines = [f"{path}: {ds.attrs.get('title', '')}",
+             f"  screening {ds.attrs.get('screening_version', '?')}, study {ds.attrs.get('study_file', '?')}, "
+             f"created {ds.attrs.get('date_created', '?')}"]
+    sizes = ", ".join(f"{d} ({n})" for d, n in ds.sizes.items())
+    n_points = int(np.prod([ds.sizes[d] for d in dims], dtype=np.int64))
+    lines.append(f"dimensions: {sizes}; {n_points} grid point(s)")
+    lines.append("swept parameters:" if dims else "swept parameters: none")
+    for d in dims:
+        if d == "case":
+            names = [str(s) for s in ds["case_name"].values]
+            lines.append(f"  case     {len(names)} cases: {', '.join(names)}")
+            continue
+        v = grid_values(ds, d)
+        units = grid_units(ds, d)
+        lines.append(f"  {d:<8} {v.size} values, {_fmt(float(v.min()))} .. {_fmt(float(v.max()))} {units}")
+    fixed = [n for n, var in ds.coords.items() if var.ndim == 0 and np.issubdtype(var.dtype, np.number)]
+    if fixed:
+        lines.append("fixed parameters: " + ", ".join(
+            f"{n} = {_fmt(float(ds[n]))} {ds[n].attrs.get('units', '')}".rstrip() for n in fixed))
+    per_case = [n for n, var in ds.coords.items() if var.dims == ("case",) and n not in ("case", "case_name")]
+    if per_case:
+        lines.append("per-case parameters: " + ", ".join(per_case))
+    labels = [f"{k} = {ds.attrs[k]}" for k in ("contact", "excitation", "envelope") if k in ds.attrs]
+    if labels:
+        lines.append("models: " + ", ".join(labels))
+    t = ds["t"].values
+    lines.append(f"time: {_fmt(float(t[0]))} .. {_fmt(float(t[-1]))} s, {t.size} output times")
+
+    status = np.asarray(ds["status"].values).reshape(-1)
+    codes = [int(c) for c in ds["status"].attrs["flag_values"]]
+    meanings = str(ds["status"].attrs["flag_meanings"]).split()
+    counts = ", ".join(f"{m} {int(np.sum(status == c))}" for c, m in zip(codes, meanings)
+                       if np.any(status == c))
+    lines.append(f"status: {counts}")
+    ok = status == 0
+    lines.append(f"summary over the {int(ok.sum())} status-ok point(s) (min / median / max):")
+    for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"):
+        v = np.asarray(ds[name].values, dtype=float).reshape(-1)[ok]
+        units = ds[name].attrs.get("units", "")
+        if v.size:
+            lines.append(f"  {name:<17} {_fmt(v.min())} / {_fmt(float(np.median(v)))} / {_fmt(v.max())} {units}")
+    if "spot" in ds.dims and ds.sizes["spot"]:
+        lines.append(f"Monte Carlo spot checks ({ds.attrs.get('mcs_model')}, {ds.attrs.get('mcs_samples')} "
+                     f"samples, seed {ds.attrs.get('mcs_seed')}):")
+        for i in range(ds.sizes["spot"]):
+            index = spot_index(ds, i)
+            rel = float(ds["mcs_rel_error_peak_var_theta"].values[i])
+            rel_dot = float(ds["mcs_rel_error_peak_var_theta_dot"].values[i])
+            over = int(ds["mcs_n_overturned"].values[i])
+            div = int(ds["mcs_n_diverged"].values[i])
+            lines.append(f"  {point_label(ds, index)}: peak var_theta rel. error {100 * rel:+.1f} %, "
+                         f"peak var_theta_dot {100 * rel_dot:+.1f} %, overturned {over}, diverged {div}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
