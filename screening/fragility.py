@@ -241,3 +241,38 @@ class RockingAccessor:
 
     def fragility_curve(self, threshold, dim="S0", relative_to=None, method="vanmarcke"):
         return fragility_curve(self._ds, threshold, dim, relative_to, method)
+
+
+def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="S0"):
+    """The fragility result of a sweep: a Dataset with ``p_exceed`` over the swept dims and,
+    when ``dim`` is swept with at least two points, the lognormal ``median`` and ``beta``.
+
+    At Monte Carlo spot points (``spot`` dimension with per-sample ``mcs_peak_abs_theta``),
+    the same probability from the sample peaks (``mcs_p_exceed`` and its standard error)
+    is put beside the Gaussian one (``p_exceed_at_spot``).
+    """
+    p = exceedance_probability(ds, threshold, relative_to, method)
+    out = xr.Dataset({"p_exceed": p})
+    if dim in p.dims and p.sizes[dim] >= 2:
+        _, median, beta = fragility_curve(ds, threshold, dim, relative_to, method)
+        out["median"] = median
+        out["beta"] = beta
+    if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
+        level = threshold_angle(ds, threshold, relative_to)
+        peaks = ds["mcs_peak_abs_theta"]
+        over = ds["mcs_overturned"] if "mcs_overturned" in ds else xr.zeros_like(peaks, dtype=bool)
+        hit = (peaks > level) | over.astype(bool)
+        valid = peaks.notnull() | over.astype(bool)
+        n = valid.sum("sample")
+        p_mcs = hit.where(valid).sum("sample") / n
+        out["mcs_p_exceed"] = p_mcs.assign_attrs(units="1", long_name="probability of exceedance from Monte Carlo peaks")
+        out["mcs_p_exceed_se"] = np.sqrt(p_mcs * (1 - p_mcs) / n).assign_attrs(
+            units="1", long_name="standard error of the Monte Carlo exceedance probability")
+        spot_index = {d: ds[f"spot_{d}"] for d in p.dims if f"spot_{d}" in ds}
+        if len(spot_index) == len(p.dims):
+            out["p_exceed_at_spot"] = p.sel(spot_index, method="nearest").assign_attrs(p.attrs)
+    level = threshold_angle(ds, threshold, relative_to)
+    out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
+                     threshold_rad=float(level.max()), Conventions="CF-1.8",
+                     title="Probability that |theta| exceeds a rotation during the record")
+    return out
