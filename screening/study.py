@@ -117,7 +117,7 @@ _DEFAULTS = {"contact": "hunt_crossley", "envelope": "exponential", "eps": 0.0, 
              "T1": 4.0, "T2": 2.0}
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
-LAYOUT_VERSION = 1
+LAYOUT_VERSION = 2
 
 
 class StudyError(ValueError):

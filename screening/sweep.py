@@ -85,6 +85,8 @@ HISTORY_DTYPE = np.float32
 SUMMARY_FLOATS = ("t_stop", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "theta_ul")
 SUMMARY_INTS = ("n_steps", "n_rejected")
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
+#: State of a Monte Carlo sample at a spot point (``mcs_sample_state``).
+SAMPLE_STATES = {0: "standing", 1: "overturned", 2: "diverged_or_failed"}
 
 DEFAULT_BATCH = 500
 SYNC_POINTS = 2000            # points written between flushes of the file (compression overlaps compute)
@@ -246,13 +248,24 @@ def spot_task(block, foundation, excitation, samples, model, t_end, dt, seed):
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
     n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
     out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
-               n_used=np.int32(samples - n_over - n_div))
+               n_used=np.int32(samples - n_over - n_div),
+               peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
+               sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
     return out
 
 
-def failed_spot(nt):
+def sample_state(overturned, diverged):
+    """Per-sample state code (:data:`SAMPLE_STATES`) from the boolean flags of a Monte Carlo run."""
+    state = np.zeros(np.shape(overturned), dtype=np.int8)
+    state[np.asarray(overturned, dtype=bool)] = 1
+    state[np.asarray(diverged, dtype=bool)] = 2
+    return state
+
+
+def failed_spot(nt, samples):
     out = {name: np.full(nt, np.nan) for name in SPOT_HISTORIES}
-    out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0))
+    out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0),
+               peak_abs_theta=np.full(samples, np.nan), sample_state=np.full(samples, 2, dtype=np.int8))
     return out
 
 
@@ -612,6 +625,20 @@ class ResultFile:
                 {"units": "1", "long_name": f"relative error of the linearization's peak {name} against "
                                             "Monte Carlo, (max_t lin - max_t mcs) / max_t mcs on the output times"},
                 rel)
+        nc.createDimension("sample", spec.samples)
+        v = nc.createVariable("sample", "i4", ("sample",), fill_value=False)
+        v.setncatts({"long_name": "Monte Carlo sample index (input seeded with default_rng([seed, sample]))",
+                     "units": "1"})
+        v[:] = np.arange(spec.samples, dtype=np.int32)
+        var("mcs_peak_abs_theta", "f8", ("spot", "sample"),
+            {"units": "rad", "long_name": "peak |theta| of each Monte Carlo sample over the record (for fragility)"},
+            np.stack([r["peak_abs_theta"] for r in results]))
+        codes = sorted(SAMPLE_STATES)
+        var("mcs_sample_state", "i1", ("spot", "sample"),
+            {"long_name": "state of each Monte Carlo sample at the end of the record",
+             "flag_values": np.array(codes, dtype=np.int8),
+             "flag_meanings": " ".join(SAMPLE_STATES[c] for c in codes)},
+            np.stack([r["sample_state"] for r in results]), fill=False)
         codes = sorted(SPOT_STATUS)
         var("mcs_status", "i1", ("spot",),
             {"long_name": "status of the Monte Carlo spot check", "flag_values": np.array(codes, dtype=np.int8),
@@ -954,7 +981,7 @@ def _spot_checks(client, study, store, result, progress, log):
                 store.save_spot(i, spots[i], results[i])
             except Exception as exc:                  # noqa: BLE001 - recorded as a failed spot check
                 log(f"warning: spot check {i} failed: {_one_line(exc)}")
-                results[i] = failed_spot(study.times.size)
+                results[i] = failed_spot(study.times.size, spec.samples)
                 failed[i] = True
             fut.release()
             bar.update(1)

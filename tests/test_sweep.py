@@ -285,7 +285,8 @@ def fake_monte_carlo(block, foundation, excitation, n_samples=1000, model="coupl
     scale = float(excitation.S0) * (1.0 + float(foundation.eps) * 1e-9)
     data = {"var_theta": ("t", scale * t), "var_theta_dot": ("t", 10 * scale * t),
             "var_theta_se": ("t", 0.1 * scale * t), "var_theta_dot_se": ("t", scale * t),
-            "peak_abs_theta": ("sample", np.zeros(n_samples)),
+            "peak_abs_theta": ("sample", scale * np.arange(n_samples)),
+            "overturned": ("sample", np.arange(n_samples) < 3), "diverged": ("sample", np.arange(n_samples) == 3),
             "n_overturned": ((), 3), "n_diverged": ((), 1)}
     return xr.Dataset(data, coords={"t": t})
 
@@ -313,6 +314,10 @@ def test_spot_checks_store_monte_carlo_on_the_spot_dimension(client, tmp_path, m
         np.testing.assert_array_equal(ds["mcs_n_overturned"].values, [3, 3])
         np.testing.assert_array_equal(ds["mcs_n_used"].values, [3, 3])
         np.testing.assert_array_equal(ds["mcs_status"].values, [0, 0])
+        assert ds["mcs_peak_abs_theta"].dims == ("spot", "sample") and ds.sizes["sample"] == 7
+        np.testing.assert_allclose(ds["mcs_peak_abs_theta"].values[0], 2.4e-3 * 1.06 * np.arange(7), rtol=1e-15)
+        np.testing.assert_array_equal(ds["mcs_sample_state"].values, [[1, 1, 1, 2, 0, 0, 0]] * 2)
+        assert ds["mcs_sample_state"].attrs["flag_meanings"].split()[:2] == ["standing", "overturned"]
         assert ds.attrs["mcs_model"] == "condensed" and int(ds.attrs["mcs_samples"]) == 7
         assert "explicit" in ds.attrs["mcs_selection"]
         assert set(ds["mcs_var_theta"].coords) >= {"spot_eps", "spot_S0", "t"}
