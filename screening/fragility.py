@@ -146,8 +146,9 @@ def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=
 # ------------------------------------------------------------------ xarray layer
 def _parameter(ds, name):
     """A model parameter from the dataset: a coordinate/variable if swept, else an attribute."""
-    if name in ds.variables:
-        return ds[name]
+    for var in (name, f"{name}_value"):          # a swept k is stored as k_value (screening.sweep)
+        if var in ds.variables:
+            return ds[var]
     if name in ds.attrs:
         return xr.DataArray(float(ds.attrs[name]))
     raise KeyError(f"the dataset does not record the parameter '{name}'")
@@ -223,7 +224,7 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
             return np.array([np.nan, np.nan])
 
     fit = xr.apply_ufunc(_fit, p, input_core_dims=[[dim]], output_core_dims=[["fit"]], vectorize=True)
-    median = fit.isel(fit=0, drop=True).assign_attrs(units=im.attrs.get("units", ""),
+    median = fit.isel(fit=0, drop=True).assign_attrs(units=_parameter(ds, dim).attrs.get("units", ""),
                                                      long_name=f"median {dim} of the lognormal fragility")
     beta = fit.isel(fit=1, drop=True).assign_attrs(units="1", long_name="lognormal dispersion beta")
     return p, median, beta
@@ -243,6 +244,48 @@ class RockingAccessor:
         return fragility_curve(self._ds, threshold, dim, relative_to, method)
 
 
+def spot_positions(ds):
+    """Integer positions of the Monte Carlo spot points along each grid dimension.
+
+    Returns a dict ``{dim: DataArray over spot}`` for ``ds.isel(...)`` (pointwise), from the
+    ``spot_<dim>`` coordinates of a sweep result (``spot_case`` holds the case index; a swept
+    ``k`` is matched against ``k_value``).
+    """
+    positions = {}
+    for dim in ds["status"].dims:
+        spot = ds[f"spot_{dim}"].values
+        if dim == "case":
+            idx = spot.astype(int)
+        else:
+            grid = _parameter(ds, dim).values
+            idx = np.abs(grid[None, :] - spot[:, None]).argmin(axis=1)
+        positions[dim] = xr.DataArray(idx, dims="spot")
+    return positions
+
+
+def mcs_exceedance_at_spots(ds, level):
+    """Probability [1] that ``|theta|`` exceeds ``level`` [rad] from the per-sample peaks of the
+    Monte Carlo spot checks (``mcs_peak_abs_theta``, ``mcs_sample_state`` of a sweep result).
+
+    Overturned samples count as exceedances; diverged or failed samples are left out.
+    ``level`` may vary over the grid (it is taken at each spot point).  Returns
+    ``(p, standard_error)`` over ``spot``.
+    """
+    if level.ndim:
+        level = level.isel({d: i for d, i in spot_positions(ds).items() if d in level.dims})
+    peaks = ds["mcs_peak_abs_theta"]
+    state = ds["mcs_sample_state"] if "mcs_sample_state" in ds else xr.zeros_like(peaks, dtype=np.int8)
+    over = state == 1
+    valid = (state == 0) | over
+    n = valid.sum("sample")
+    p = (((peaks > level) | over) & valid).sum("sample") / n.where(n > 0)
+    se = np.sqrt(p * (1 - p) / n.where(n > 0))
+    p.attrs = {"units": "1", "long_name": "probability that |theta| exceeds the threshold, from the Monte Carlo "
+                                          "sample peaks"}
+    se.attrs = {"units": "1", "long_name": "standard error of mcs_p_exceed (binomial)"}
+    return p, se
+
+
 def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="S0"):
     """The fragility result of a sweep: a Dataset with ``p_exceed`` over the swept dims and,
     when ``dim`` is swept with at least two points, the lognormal ``median`` and ``beta``.
@@ -251,6 +294,7 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
     the same probability from the sample peaks (``mcs_p_exceed`` and its standard error)
     is put beside the Gaussian one (``p_exceed_at_spot``).
     """
+    level = threshold_angle(ds, threshold, relative_to)
     p = exceedance_probability(ds, threshold, relative_to, method)
     out = xr.Dataset({"p_exceed": p})
     if dim in p.dims and p.sizes[dim] >= 2:
@@ -258,21 +302,13 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
         out["median"] = median
         out["beta"] = beta
     if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
-        level = threshold_angle(ds, threshold, relative_to)
-        peaks = ds["mcs_peak_abs_theta"]
-        over = ds["mcs_overturned"] if "mcs_overturned" in ds else xr.zeros_like(peaks, dtype=bool)
-        hit = (peaks > level) | over.astype(bool)
-        valid = peaks.notnull() | over.astype(bool)
-        n = valid.sum("sample")
-        p_mcs = hit.where(valid).sum("sample") / n
-        out["mcs_p_exceed"] = p_mcs.assign_attrs(units="1", long_name="probability of exceedance from Monte Carlo peaks")
-        out["mcs_p_exceed_se"] = np.sqrt(p_mcs * (1 - p_mcs) / n).assign_attrs(
-            units="1", long_name="standard error of the Monte Carlo exceedance probability")
-        spot_index = {d: ds[f"spot_{d}"] for d in p.dims if f"spot_{d}" in ds}
-        if len(spot_index) == len(p.dims):
-            out["p_exceed_at_spot"] = p.sel(spot_index, method="nearest").assign_attrs(p.attrs)
-    level = threshold_angle(ds, threshold, relative_to)
+        out["mcs_p_exceed"], out["mcs_p_exceed_se"] = mcs_exceedance_at_spots(ds, level)
+        at_spot = p.isel(spot_positions(ds)) if p.ndim else p.expand_dims(spot=ds.sizes["spot"])
+        out["p_exceed_at_spot"] = at_spot.assign_attrs(
+            units="1", long_name=f"{p.attrs['long_name']} at the spot point")
+    out["threshold_rad"] = level.assign_attrs(units="rad", long_name="rotation threshold")
+    out = out.assign_coords({c: ds[c] for c in out.coords if c in ds.variables})     # units, long_name
     out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
-                     threshold_rad=float(level.max()), Conventions="CF-1.8",
+                     Conventions="CF-1.8",
                      title="Probability that |theta| exceeds a rotation during the record")
     return out
