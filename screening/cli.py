@@ -1,4 +1,4 @@
-"""Command line: ``screening run | plot | info``.
+"""Command line: ``screening run | plot | info | fragility``.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
 dask (:func:`screening.sweep.run_sweep`) and writes ``PATH`` (default
@@ -7,6 +7,8 @@ with the same command resumes; an unchanged study reuses its finished result.
 
 ``screening plot RESULT.nc [--out-dir DIR]`` writes the figures; ``screening info RESULT.nc``
 prints the dimensions, swept parameters, status counts and summary statistics.
+``screening fragility RESULT.nc --threshold X [--relative-to slenderness|theta_ul]`` writes
+the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG).
 
 User errors (bad study file, missing output folder, unreadable result file, unreachable
 scheduler) print one line ``screening: error: ...`` on stderr and exit with status 2,
@@ -49,6 +51,16 @@ def _positive_int(text):
     return value
 
 
+def _positive_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0 (got {text!r})") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0 (got {text!r})")
+    return value
+
+
 def _zlib_level(text):
     if text not in [str(i) for i in range(10)]:
         raise argparse.ArgumentTypeError(f"must be an integer in 0..9 (got {text!r})")
@@ -82,6 +94,20 @@ def build_parser():
     plot.add_argument("result", help="result file (netCDF)")
     plot.add_argument("--out-dir", help="folder for the figures (default: next to the result; must exist)")
     plot.set_defaults(func=cmd_plot)
+
+    frag = sub.add_parser("fragility", help="probability of exceeding a rotation: netCDF + PNG fragility curves")
+    frag.add_argument("result", help="result file (netCDF) of `screening run`")
+    frag.add_argument("--threshold", type=_positive_float, required=True,
+                      help="rotation threshold: in rad, or a fraction of the angle named by --relative-to")
+    frag.add_argument("--relative-to", choices=["slenderness", "theta_ul"],
+                      help="threshold as a fraction of the slenderness angle atan(b/h) or of theta_ul")
+    frag.add_argument("--method", choices=["vanmarcke", "poisson"], default="vanmarcke",
+                      help="up-crossing approximation (default vanmarcke)")
+    frag.add_argument("--dim", help="swept intensity of the fragility curve and its lognormal fit "
+                                    "(default S0 if swept)")
+    frag.add_argument("--out", help="netCDF file (default <result-stem>_fragility.nc next to the result; "
+                                    "its folder must exist); the PNG goes next to it")
+    frag.set_defaults(func=cmd_fragility)
 
     info = sub.add_parser("info", help="describe a result file")
     info.add_argument("result", help="result file (netCDF)")
@@ -165,6 +191,43 @@ def cmd_plot(args):
         raise SweepError(f"output folder {out_dir} does not exist")
     for path in _plot(result, out_dir):
         print(path)
+    return EXIT_OK
+
+
+def cmd_fragility(args):
+    from .fragility import fragility_dataset
+    from .plots import plot_fragility
+    from .sweep import SweepError, check_output_path, open_result
+
+    result = Path(args.result)
+    with open_result(result) as ds:
+        grid = ds["status"].dims
+        if args.dim is not None and args.dim not in grid:
+            raise SweepError(f"--dim {args.dim!r} is not a swept dimension of {result} "
+                             f"(swept: {', '.join(grid) or 'none'})")
+        dim = args.dim or "S0"
+        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
+        out = check_output_path(args.out or result.with_name(f"{stem}_fragility.nc"))
+        frag = fragility_dataset(ds, args.threshold, args.relative_to, args.method, dim).load()
+    frag.attrs.update(source_result=str(result), screening_version=__version__,
+                      history=f"screening fragility {result} --threshold {args.threshold}"
+                              + (f" --relative-to {args.relative_to}" if args.relative_to else ""))
+    tmp = out.with_name(out.name + ".tmp")
+    encoding = {name: {"_FillValue": None} for name in frag.coords}
+    try:
+        frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
+        tmp.replace(out)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise SweepError(f"cannot write {out}: {exc.strerror or exc}") from None
+    print(out)
+    png = plot_fragility(frag, dim, out.with_suffix(".png"))
+    if png is not None:
+        print(png)
+    p = frag["p_exceed"].values
+    _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}"
+         + (f"; lognormal median {dim} {float(frag['median'].median()):.3g}, "
+            f"beta {float(frag['beta'].median()):.2f} (medians over the other dims)" if "median" in frag else ""))
     return EXIT_OK
 
 

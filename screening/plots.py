@@ -7,7 +7,10 @@
   curves for a one-dimensional grid;
 * :func:`plot_spots` — linearization against Monte Carlo (with +-2 standard errors) at the spot
   points;
-* :func:`plot_result` — all of the above for a result file, next to it or in ``out_dir``.
+* :func:`plot_spot_panels` — the paper's panels at one spot point (``c_eq``/``k_eq``; variances
+  with the Monte Carlo 95 % band; ``p_uplift``), one PNG per spot point;
+* :func:`plot_fragility` — fragility curves over a swept intensity with their lognormal fit;
+* :func:`plot_result` — all but the fragility figure for a result file, next to it or in ``out_dir``.
 
 Only the slices that are drawn are read from the file.
 """
@@ -241,10 +244,111 @@ def plot_spots(ds, path):
     return Path(path)
 
 
+#: Two-sided 95 % normal quantile, for the Monte Carlo bands of :func:`plot_spot_panels`.
+Z95 = 1.959964
+MAX_SPOT_FIGURES = 12
+
+
+def spot_file_label(ds, i):
+    """File-name label of spot point ``i``: its case name, or its grid values."""
+    label = point_label(ds, spot_index(ds, i)).replace(", ", "__").replace("=", "_")
+    return "".join(c if c.isalnum() or c in "._-+" else "_" for c in label) or f"spot{i}"
+
+
+def plot_spot_panels(ds, i, path):
+    """The paper's panels at spot point ``i`` (its figs. 2-9): ``c_eq(t)`` and ``k_eq(t)``;
+    ``var_theta(t)`` and ``var_theta_dot(t)`` of the linearization with the Monte Carlo
+    ensemble and its 95 % confidence band (+-1.96 standard errors); ``p_uplift(t)``."""
+    index = spot_index(ds, i)
+    t = ds["t"].values
+    fig = _new_figure(10.0, 7.5)
+    (ax_c, ax_v), (ax_p, ax_vd) = fig.subplots(2, 2, sharex=True)
+    ax_c.plot(t, np.asarray(ds["c_eq"].isel(index).values, dtype=float), color="C0", lw=1.4)
+    ax_c.set_ylabel(_label(ds, "c_eq"), color="C0")
+    ax_k = ax_c.twinx()
+    ax_k.plot(t, np.asarray(ds["k_eq"].isel(index).values, dtype=float), color="C3", lw=1.4)
+    ax_k.set_ylabel(_label(ds, "k_eq"), color="C3")
+    ax_c.set_title("equivalent damping (left) and stiffness (right)", fontsize=8)
+    mcs_label = f"Monte Carlo ({ds.attrs.get('mcs_model', '')}, {ds.attrs.get('mcs_samples', '')} samples), 95 % band"
+    for ax, name in ((ax_v, "var_theta"), (ax_vd, "var_theta_dot")):
+        mcs = np.asarray(ds[f"mcs_{name}"].values[i], dtype=float)
+        se = np.asarray(ds[f"mcs_{name}_se"].values[i], dtype=float)
+        ax.fill_between(t, mcs - Z95 * se, mcs + Z95 * se, color="C1", alpha=0.25, lw=0)
+        ax.plot(t, mcs, color="C1", lw=1.0, label=mcs_label)
+        ax.plot(t, np.asarray(ds[name].isel(index).values, dtype=float), color="C0", lw=1.4,
+                label="stochastic linearization")
+        rel = float(ds[f"mcs_rel_error_peak_{name}"].values[i])
+        ax.set_title(f"{name}: peak rel. error of the linearization {100 * rel:+.1f} %", fontsize=8)
+        ax.set_ylabel(_label(ds, name))
+    ax_v.legend(fontsize=7)
+    ax_p.plot(t, np.asarray(ds["p_uplift"].isel(index).values, dtype=float), color="C2", lw=1.4)
+    ax_p.set_ylabel(_label(ds, "p_uplift"))
+    ax_p.set_title("uplift occupancy P(|theta| > theta_ul), eq. (58)", fontsize=8)
+    for ax in (ax_c, ax_v, ax_p, ax_vd):
+        ax.grid(alpha=0.3)
+    ax_p.set_xlabel("t [s]")
+    ax_vd.set_xlabel("t [s]")
+    over = int(ds["mcs_n_overturned"].values[i])
+    fig.suptitle(f"{point_label(ds, index)}  ({over} of {ds.attrs.get('mcs_samples', '?')} Monte Carlo "
+                 f"samples overturned, excluded from the ensemble)", fontsize=9)
+    fig.savefig(path)
+    return Path(path)
+
+
+def plot_fragility(frag, dim, path, max_curves=8):
+    """Fragility curves: ``p_exceed`` of a :func:`screening.fragility.fragility_dataset` along
+    the swept intensity ``dim`` (lognormal fit dashed), with the Monte Carlo probabilities at
+    the spot points (+-2 standard errors).  Up to ``max_curves`` curves, the other grid
+    dimensions sampled evenly.  ``None`` if ``dim`` is not a dimension of ``p_exceed``."""
+    from scipy.special import ndtr
+
+    p = frag["p_exceed"]
+    if dim not in p.dims:
+        return None
+    other = [d for d in p.dims if d != dim]
+    flat = p.transpose(*other, dim).values.reshape(-1, p.sizes[dim])
+    picks = np.unique(np.linspace(0, flat.shape[0] - 1, min(max_curves, flat.shape[0])).round().astype(int))
+    x = grid_values(frag, dim)
+    fig = _new_figure(7.0, 4.8)
+    ax = fig.subplots()
+    shape = [p.sizes[d] for d in other]
+    median = frag["median"].transpose(*other).values.reshape(-1) if "median" in frag else None
+    beta = frag["beta"].transpose(*other).values.reshape(-1) if "beta" in frag else None
+    xs = np.geomspace(x.min(), x.max(), 200) if np.all(x > 0) else np.linspace(x.min(), x.max(), 200)
+    for n, j in enumerate(picks):
+        index = dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
+        label = point_label(frag, index) if other else "P(|theta| > threshold)"
+        ax.plot(x, flat[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=label)
+        if median is not None and np.isfinite(median[j]) and np.isfinite(beta[j]):
+            ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), "--", color=f"C{n}", lw=0.9,
+                    label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}")
+    if "mcs_p_exceed" in frag and f"spot_{dim}" in frag:
+        pm, se = frag["mcs_p_exceed"].values, frag["mcs_p_exceed_se"].values
+        ax.errorbar(frag[f"spot_{dim}"].values, pm, yerr=2 * se, fmt="ks", ms=5, capsize=3,
+                    label="Monte Carlo at the spot points (+-2 se)")
+    if _is_log(x):
+        ax.set_xscale("log")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel(f"{dim} [{grid_units(frag, dim)}]")
+    ax.set_ylabel("probability of exceedance [1]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    rel = frag.attrs.get("relative_to", "None")
+    what = (f"{frag.attrs['threshold']:.3g} rad" if rel == "None"
+            else f"{frag.attrs['threshold']:.3g} x {rel}")
+    fig.suptitle(f"Fragility: P(max |theta| > {what}) over the record ({frag.attrs.get('method', '')})",
+                 fontsize=9)
+    fig.savefig(path)
+    return Path(path)
+
+
 def plot_result(ds, stem, out_dir):
     """Write all figures of dataset ``ds`` as ``out_dir/<stem>_<kind>.png``; returns the paths."""
     out_dir = Path(out_dir)
     paths = [plot_histories(ds, out_dir / f"{stem}_histories.png"),
              plot_peaks(ds, out_dir / f"{stem}_peaks.png"),
              plot_spots(ds, out_dir / f"{stem}_spots.png")]
+    n_spots = ds.sizes.get("spot", 0)
+    for i in range(min(n_spots, MAX_SPOT_FIGURES)):
+        paths.append(plot_spot_panels(ds, i, out_dir / f"{stem}_spot{i}_{spot_file_label(ds, i)}.png"))
     return [p for p in paths if p is not None]

@@ -126,7 +126,7 @@ def test_rerun_reuses_the_result(cli_result, capsys):
 def test_info_describes_the_result(cli_result, capsys):
     assert main(["info", str(cli_result / "outputs" / "study.nc")]) == 0
     text = capsys.readouterr().out
-    assert "dimensions: eps (3), S0 (4), t (121), spot (1); 12 grid point(s)" in text
+    assert "dimensions: eps (3), S0 (4), t (121), spot (1), sample (8); 12 grid point(s)" in text
     assert "eps      3 values, -6e+05 .. 6e+07 m-2" in text
     assert "S0       4 values, 2e-05 .. 0.0024 m2 s-3" in text
     assert "status: ok 12" in text
@@ -137,7 +137,8 @@ def test_info_describes_the_result(cli_result, capsys):
 def test_plot_command_writes_pngs_into_out_dir(cli_result, tmp_path, capsys):
     assert main(["plot", str(cli_result / "outputs" / "study.nc"), "--out-dir", str(tmp_path)]) == 0
     printed = capsys.readouterr().out.split()
-    assert sorted(Path(p).name for p in printed) == ["study_histories.png", "study_peaks.png", "study_spots.png"]
+    assert sorted(Path(p).name for p in printed) == ["study_histories.png", "study_peaks.png",
+                                                     "study_spot0_eps_-6e+05__S0_0.0024.png", "study_spots.png"]
     assert all(Path(p).stat().st_size > 10_000 for p in printed)
 
 
@@ -261,3 +262,75 @@ def test_killed_run_resumes_to_the_same_file(tmp_path):
             ds.attrs.pop("history")
             ds.attrs.pop("date_created")
         xr.testing.assert_identical(a.load(), b.load())
+
+
+# ----------------------------------------------------------------------------- fragility
+def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_result, tmp_path, capsys):
+    from screening.fragility import exceedance_probability, mcs_exceedance_probability, threshold_angle
+    from screening.sweep import open_result
+
+    out = tmp_path / "frag.nc"
+    assert main(["fragility", str(cli_result / "outputs" / "study.nc"), "--threshold", "5", "--relative-to", "theta_ul",
+                 "--out", str(out)]) == 0
+    assert out.is_file() and out.with_suffix(".png").stat().st_size > 10_000
+    with open_result(cli_result / "outputs" / "study.nc") as res, xr.open_dataset(out) as frag:
+        expected = exceedance_probability(res, 5.0, "theta_ul").values
+        np.testing.assert_array_equal(frag["p_exceed"].values, expected)
+        assert frag["p_exceed"].dims == ("eps", "S0") and frag["p_exceed"].attrs["units"] == "1"
+        assert frag["median"].dims == ("eps",) and frag["beta"].dims == ("eps",)
+        assert frag["median"].attrs["units"] == PARAMETERS["S0"]["units"]
+        assert np.nanmin(expected) < 1e-6 and np.nanmax(expected) > 0.99 and np.all(np.isfinite(frag["median"]))
+        # the Monte Carlo spot point: same probability from its per-sample peaks
+        level = float(threshold_angle(res, 5.0, "theta_ul"))            # k is not swept: one level
+        state = res["mcs_sample_state"].values[0]
+        p_mcs, se = mcs_exceedance_probability(res["mcs_peak_abs_theta"].values[0][state != 2], level,
+                                               overturned=(state == 1)[state != 2])
+        assert float(frag["mcs_p_exceed"][0]) == pytest.approx(p_mcs, abs=1e-15)
+        assert float(frag["mcs_p_exceed_se"][0]) == pytest.approx(se, abs=1e-15)
+        i = int(np.argmin(np.abs(res["eps"].values - float(res["spot_eps"][0]))))
+        j = int(np.argmin(np.abs(res["S0"].values - float(res["spot_S0"][0]))))
+        assert float(frag["p_exceed_at_spot"][0]) == expected[i, j]
+        assert frag.attrs["Conventions"] == "CF-1.8" and frag.attrs["method"] == "vanmarcke"
+
+
+def test_fragility_file_passes_the_cf_checker(cli_result, tmp_path):
+    checker = Path(sys.executable).parent / "compliance-checker"
+    if not checker.exists():
+        pytest.skip("IOOS compliance-checker is not installed")
+    out = tmp_path / "frag.nc"
+    assert main(["fragility", str(cli_result / "outputs" / "study.nc"), "--threshold", "1e-3", "--out", str(out)]) == 0
+    proc = subprocess.run([str(checker), "--test=cf:1.8", "--criteria=strict", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and "All tests passed!" in proc.stdout, proc.stdout + proc.stderr
+
+
+@pytest.mark.parametrize("extra, needle", [
+    (["--threshold", "-1"], "--threshold"),
+    (["--threshold", "nan"], "--threshold"),
+    (["--threshold", "abc"], "--threshold"),
+    ([], "--threshold"),
+    (["--threshold", "0.1", "--relative-to", "height"], "--relative-to"),
+    (["--threshold", "0.1", "--dim", "lam"], "--dim"),
+    (["--threshold", "0.1", "--out", "no/such/folder/f.nc"], "does not exist"),
+])
+def test_fragility_bad_input_exits_2_and_writes_nothing(cli_result, tmp_path, capsys, extra, needle):
+    before = sorted(p.name for p in (cli_result / "outputs").iterdir())
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        code = main(["fragility", str(cli_result / "outputs" / "study.nc"), *extra])
+    finally:
+        os.chdir(cwd)
+    assert code == 2
+    assert needle in one_line_error(capsys.readouterr().err)
+    assert sorted(p.name for p in (cli_result / "outputs").iterdir()) == before and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("content", [None, b"not a netCDF file"])
+def test_fragility_of_unreadable_result_exits_2(tmp_path, capsys, content):
+    path = tmp_path / "r.nc"
+    if content is not None:
+        path.write_bytes(content)
+    assert main(["fragility", str(path), "--threshold", "0.1"]) == 2
+    one_line_error(capsys.readouterr().err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["r.nc"] if content else [])

@@ -7,7 +7,7 @@ from matplotlib.image import imread
 
 from screening.lyapunov import HISTORY_VARIABLES
 from screening.metadata import VARIABLES
-from screening.plots import (plot_histories, plot_peaks, plot_result, plot_spots, point_label,
+from screening.plots import (plot_histories, plot_peaks, plot_result, plot_spots, point_label, spot_file_label,
                              representative_points)
 from screening.sweep import STATUS_CODES
 
@@ -50,6 +50,7 @@ def synthetic(dims, sizes, spots=0, seed=0):
             ds[f"mcs_{name}"] = (("spot", "t"), rng.uniform(0.1, 1.0, (spots, 21)))
             ds[f"mcs_{name}_se"] = (("spot", "t"), np.full((spots, 21), 0.01))
             ds[f"mcs_rel_error_peak_{name}"] = ("spot", rng.uniform(-0.2, 0.2, spots))
+        ds["mcs_n_overturned"] = ("spot", np.arange(spots))
         ds.attrs.update(mcs_model="coupled", mcs_samples=10)
     return ds
 
@@ -67,7 +68,10 @@ def assert_png(path, min_width=500):
 def test_all_figures_for_every_grid_shape(tmp_path, dims, sizes):
     ds = synthetic(dims, sizes, spots=2)
     paths = plot_result(ds, "r", tmp_path)
-    assert [p.name for p in paths] == ["r_histories.png", "r_peaks.png", "r_spots.png"]
+    labels = [spot_file_label(ds, i) for i in range(2)]
+    assert [p.name for p in paths] == ["r_histories.png", "r_peaks.png", "r_spots.png",
+                                       f"r_spot0_{labels[0]}.png", f"r_spot1_{labels[1]}.png"]
+    assert labels[0] != labels[1] and all(c not in "".join(labels) for c in " ,=/")
     for p in paths:
         assert_png(p)
 
