@@ -1,4 +1,4 @@
-"""Command line: ``screening run | plot | info | fragility``.
+"""Command line: ``screening run | plot | info | fragility | tradeoff``.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
 dask (:func:`screening.sweep.run_sweep`) and writes ``PATH`` (default
@@ -9,6 +9,7 @@ with the same command resumes; an unchanged study reuses its finished result.
 prints the dimensions, swept parameters, status counts and summary statistics.
 ``screening fragility RESULT.nc --threshold X [--relative-to slenderness|theta_ul]`` writes
 the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG).
+``screening tradeoff STUDY.toml`` runs the speed-accuracy trade study (:mod:`screening.tradeoff`).
 
 User errors (bad study file, missing output folder, unreadable result file, unreachable
 scheduler) print one line ``screening: error: ...`` on stderr and exit with status 2,
@@ -109,6 +110,9 @@ def build_parser():
                                     "its folder must exist); the PNG goes next to it")
     frag.set_defaults(func=cmd_fragility)
 
+    sub.add_parser("tradeoff", add_help=False,
+                   help="speed-accuracy trade study (screening.tradeoff; see 'screening tradeoff --help')")
+
     info = sub.add_parser("info", help="describe a result file")
     info.add_argument("result", help="result file (netCDF)")
     info.set_defaults(func=cmd_info)
@@ -120,6 +124,11 @@ def main(argv=None):
     from .study import StudyError
     from .sweep import SweepError
 
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["tradeoff"]:                 # its own parser (screening.tradeoff.main)
+        from .tradeoff import main as tradeoff_main
+
+        return tradeoff_main(argv[1:])
     try:
         args = build_parser().parse_args(argv)
         return args.func(args)

@@ -1582,13 +1582,16 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         study = load_tradeoff_study(args.study)
-    except (OSError, TradeoffStudyError) as err:
-        print(f"error: {err}", file=sys.stderr)
+    except OSError as err:
+        print(f"screening: error: cannot read the study file {args.study}: {err.strerror or err}", file=sys.stderr)
+        return 2
+    except TradeoffStudyError as err:
+        print(f"screening: error: {err}", file=sys.stderr)
         return 2
     if args.from_nc:
         nc = output_paths(args.out_dir, _stem(study))["nc"]
         if not nc.exists():
-            print(f"error: --from-nc: {nc} does not exist (run the study first)", file=sys.stderr)
+            print(f"screening: error: --from-nc: {nc} does not exist (run the study first)", file=sys.stderr)
             return 2
         with xr.open_dataset(nc) as saved:
             ds = from_file_layout(saved.load())

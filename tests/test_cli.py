@@ -334,3 +334,12 @@ def test_fragility_of_unreadable_result_exits_2(tmp_path, capsys, content):
     assert main(["fragility", str(path), "--threshold", "0.1"]) == 2
     one_line_error(capsys.readouterr().err)
     assert sorted(p.name for p in tmp_path.iterdir()) == (["r.nc"] if content else [])
+
+
+def test_tradeoff_subcommand_delegates_with_one_line_errors(tmp_path, capsys):
+    assert main(["tradeoff", str(tmp_path / "missing.toml")]) == 2
+    assert "missing.toml" in one_line_error(capsys.readouterr().err)
+    (tmp_path / "bad.toml").write_text("[block]\nm = -1\n")
+    assert main(["tradeoff", str(tmp_path / "bad.toml"), "--out-dir", str(tmp_path)]) == 2
+    one_line_error(capsys.readouterr().err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
