@@ -19,6 +19,7 @@ import math
 import numba
 import numpy as np
 
+from . import cubic_condensation
 from .contact import contact_resultants_trig
 
 MODEL_COUPLED = 0
@@ -35,24 +36,32 @@ REASON_LONG_FLIGHT = 2
 REASON_OUT_OF_BOUNDS = 3
 REASON_STEP_UNDERFLOW = 4
 REASON_STEP_BUDGET = 5
+REASON_NO_EQUILIBRIUM = 6
 REASON_NAMES = {REASON_NONE: "none", REASON_NONFINITE: "non-finite state",
                 REASON_LONG_FLIGHT: "flight longer than max_flight_time",
                 REASON_OUT_OF_BOUNDS: "state out of physical bounds",
-                REASON_STEP_UNDERFLOW: "step size underflow", REASON_STEP_BUDGET: "step budget exhausted"}
+                REASON_STEP_UNDERFLOW: "step size underflow", REASON_STEP_BUDGET: "step budget exhausted",
+                REASON_NO_EQUILIBRIUM: "|theta| beyond the capacity angle (no quasi-static equilibrium)"}
 
 # Layout of the parameter vector (SI units); built by :func:`pack_parameters`.
 (P_M, P_G, P_H, P_ICM, P_B, P_K, P_EPS, P_DAMP, P_WINKLER, P_THETA_OVER, P_MAX_FLIGHT,
  P_Z_MAX, P_Z_MIN, P_RATE_MAX, P_THETA_UL,
  # condensed-model constants (eqs. 24–25): C1, C2 coefficient, K1 = K1_0 + K1_2 theta^2,
  # K2 = MGB/|theta| - K2_32 |theta|^-3/2 - K2_12 |theta|^-1/2 + K2_0
- P_C1, P_C2, P_K1_0, P_K1_2, P_MGB, P_K2_32, P_K2_12, P_K2_0, P_M_SDOF) = range(24)
-N_PARAMS = 24
+ P_C1, P_C2, P_K1_0, P_K1_2, P_MGB, P_K2_32, P_K2_12, P_K2_0, P_M_SDOF,
+ # condensation: 0 paper, 1 cubic (screening.cubic_condensation); m g / (2 b k); capacity angle;
+ # rest indentation z0 and d z / d(theta^2) at rest (Newton start of the no-uplift balance)
+ P_COND, P_Z_LIN, P_THETA_CAP, P_Z_REST, P_Z_CURV) = range(29)
+N_PARAMS = 29
 
 
-def pack_parameters(block, foundation, max_flight_time=0.5):
+def pack_parameters(block, foundation, max_flight_time=0.5, condensation="paper"):
     """Parameter vector of the compiled kernels (layout ``P_*`` above, SI units).
 
     ``block`` and ``foundation`` must have scalar fields; ``max_flight_time`` [s].
+    ``condensation`` (``"paper"`` or ``"cubic"``) selects the condensed model's ``C``, ``K``;
+    with ``"cubic"`` ``P_THETA_UL`` is the cubic threshold and ``P_THETA_CAP`` the capacity
+    angle (``inf`` for the paper's condensation and for ``eps >= 0``).
     """
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     k, eps, damping = float(foundation.k), float(foundation.eps), float(foundation.damping)
@@ -81,6 +90,17 @@ def pack_parameters(block, foundation, max_flight_time=0.5):
     p[P_K2_12] = eps * mg * mg / (5.0 * k) * math.sqrt(2.0 * mg / k)
     p[P_K2_0] = -mg * h + eps * mg * mg * b / k
     p[P_M_SDOF] = float(block.I_cm) + m * h * h
+    p[P_Z_LIN] = mg / (2.0 * b * k)
+    p[P_THETA_CAP] = math.inf
+    if condensation == "cubic":
+        p[P_COND] = 1.0
+        p[P_THETA_UL] = float(cubic_condensation.uplift_threshold(block, foundation))
+        p[P_THETA_CAP] = float(cubic_condensation.capacity_angle(block, foundation))
+        z0 = float(cubic_condensation.rest_indentation(block, foundation))
+        p[P_Z_REST] = z0
+        p[P_Z_CURV] = -eps * b * b * z0 / (1.0 + 3.0 * eps * z0 * z0)
+    elif condensation != "paper":
+        raise ValueError(f"parameter 'condensation' must be one of ('paper', 'cubic') (got {condensation!r})")
     return p
 
 
@@ -108,6 +128,71 @@ def rocking_stiffness_scalar(theta, p):
     return p[P_MGB] * r * r - p[P_K2_32] * r * r * r - p[P_K2_12] * r + p[P_K2_0]
 
 
+@numba.njit(cache=True)
+def cubic_indentation_scalar(a, p):
+    """Compiled quasi-static ``(z_cb [m], dz_cb/da [m/rad], v = b a + z_cb [m])`` of the cubic
+    condensation at ``a = |theta|`` (:func:`screening.cubic_condensation.quasi_static_indentation`)."""
+    b, eps = p[P_B], p[P_EPS]
+    if a <= p[P_THETA_UL]:
+        # eps z^3 + beta z = z_lin, beta = 1 + eps b^2 a^2: Newton from the Taylor start
+        # z0 + (dz/d a^2) a^2 (error O(a^4); monotone like the start z_lin / beta)
+        beta = 1.0 + eps * b * b * a * a
+        z = p[P_Z_REST] + p[P_Z_CURV] * a * a
+        for _ in range(100):
+            step = (eps * z * z * z + beta * z - p[P_Z_LIN]) / (3.0 * eps * z * z + beta)
+            z -= step
+            if abs(step) <= 1e-15 * z:
+                break
+        return z, -2.0 * eps * b * b * a * z / (beta + 3.0 * eps * z * z), z + b * a
+    mg = p[P_M] * p[P_G]
+    big_a = 2.0 * mg * a / p[P_K]
+    s2 = 1.0 + 2.0 * eps * big_a
+    if s2 <= 0.0:                               # beyond the capacity angle: peak load, no rate
+        v = 1.0 / math.sqrt(-eps)
+        return v - b * a, 0.0, v
+    S = math.sqrt(s2)
+    v = math.sqrt(2.0 * big_a / (1.0 + S))
+    return v - b * a, mg / (p[P_K] * S * v) - b, v
+
+
+@numba.njit(cache=True)
+def cubic_coefficients_scalar(theta, p):
+    """Compiled cubic-condensation ``(C(theta) [N m s/rad], K(theta) [N m/rad])``
+    (:mod:`screening.cubic_condensation`), one indentation solve for both."""
+    a = abs(theta)
+    z, dz, v = cubic_indentation_scalar(a, p)
+    b, k, eps, lam = p[P_B], p[P_K], p[P_EPS], p[P_DAMP]
+    mgh = p[P_M] * p[P_G] * p[P_H]
+    b3 = b * b * b
+    if a <= p[P_THETA_UL]:
+        stiffness = 2.0 / 3.0 * b3 * k - mgh + eps * k * (2.0 * b3 * z * z + 0.4 * b3 * b * b * a * a)
+        if p[P_WINKLER] != 0.0:
+            return 2.0 / 3.0 * lam * b3, stiffness
+        return 2.0 / 3.0 * lam * b3 * (z + a * dz), stiffness
+    ba = b * a
+    a3 = a * a * a
+    v2 = v * v
+    stiffness = (k * v2 * (2.0 * ba - z) / 6.0 + eps * k * v2 * v2 * (4.0 * ba - z) / 20.0) / a3 - mgh
+    if p[P_WINKLER] != 0.0:
+        return lam / (a * a) * (0.5 * dz * v * (ba - z) + (ba * ba * ba + z * z * z) / (3.0 * a)), stiffness
+    ba2 = ba * ba
+    z2 = z * z
+    return (lam / (12.0 * a3) * (3.0 * ba2 * ba2 + 4.0 * ba2 * ba * z + z2 * z2 + 2.0 * a * dz * v2 * (2.0 * ba - z)),
+            stiffness)
+
+
+@numba.njit(cache=True)
+def cubic_damping_scalar(theta, p):
+    """Compiled cubic-condensation ``C(theta)`` [N m s/rad] (:mod:`screening.cubic_condensation`)."""
+    return cubic_coefficients_scalar(theta, p)[0]
+
+
+@numba.njit(cache=True)
+def cubic_stiffness_scalar(theta, p):
+    """Compiled cubic-condensation secant ``K(theta)`` [N m/rad] (:mod:`screening.cubic_condensation`)."""
+    return cubic_coefficients_scalar(theta, p)[1]
+
+
 # ----------------------------------------------------------------------------- right-hand sides
 @numba.njit(cache=True)
 def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p):
@@ -131,7 +216,13 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p):
 
 @numba.njit(cache=True)
 def condensed_acceleration(theta, theta_dot, x_g_ddot, p):
-    """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22): ``(m h x_g'' - C theta' - K theta) / m_sdof``."""
+    """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22): ``(m h x_g'' - C theta' - K theta) / m_sdof``.
+
+    ``C``, ``K`` of the paper (eqs. 24–25) or, when ``p[P_COND] != 0``, of the cubic condensation.
+    """
+    if p[P_COND] != 0.0:
+        damping, stiffness = cubic_coefficients_scalar(theta, p)
+        return (p[P_M] * p[P_H] * x_g_ddot - damping * theta_dot - stiffness * theta) / p[P_M_SDOF]
     return ((p[P_M] * p[P_H] * x_g_ddot - rocking_damping_scalar(theta, p) * theta_dot
              - rocking_stiffness_scalar(theta, p) * theta) / p[P_M_SDOF])
 
@@ -326,6 +417,9 @@ def integrate_sample(model, row, acc, acc_dot, dt_grid, t_out, p, y_init, scale,
                 flight_start = -1.0
         elif abs(y1) > p[P_RATE_MAX]:
             status, reason = STATUS_DIVERGED, REASON_OUT_OF_BOUNDS
+            break
+        elif a0 > p[P_THETA_CAP]:                             # cubic condensation, softening bed
+            status, reason = STATUS_DIVERGED, REASON_NO_EQUILIBRIUM
             break
         if landing:
             out_theta[row, i_out] = y0

@@ -22,11 +22,30 @@ the contact zone, with ``zdot = zdot_B - eta theta'`` (small angles):
 
 ``C_2(theta_ul) = (2/3) c b^3``: continuous, like the Hunt–Crossley case.  The same
 procedure applied to ``lam z zdot`` reproduces eq. (24), which checks the route.
+
+Selectable condensation
+-----------------------
+The functions below take ``condensation="paper"`` (default: eqs. 17–25 as printed, the
+static indentation from the *linear* balance) or ``"cubic"`` (the static vertical balance
+including the ``eps`` term, :mod:`screening.cubic_condensation`).  Any other value raises
+``ValueError``.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from . import cubic_condensation
+
+#: Names accepted by the ``condensation`` argument throughout the package.
+CONDENSATIONS = ("paper", "cubic")
+
+
+def check_condensation(condensation):
+    """Return ``condensation`` if it is one of :data:`CONDENSATIONS`, else raise ``ValueError``."""
+    if not isinstance(condensation, str) or condensation not in CONDENSATIONS:
+        raise ValueError(f"parameter 'condensation' must be one of {CONDENSATIONS} (got {condensation!r})")
+    return condensation
 
 
 def m_sdof(block):
@@ -34,8 +53,13 @@ def m_sdof(block):
     return block.I_cm + block.m * block.h**2
 
 
-def uplift_threshold(block, foundation):
-    """Static uplift angle ``theta_ul = m g / (2 b^2 k)`` [rad] (eq. 19)."""
+def uplift_threshold(block, foundation, condensation="paper"):
+    """Static uplift angle ``theta_ul = m g / (2 b^2 k)`` [rad] (eq. 19).
+
+    ``condensation="cubic"``: :func:`screening.cubic_condensation.uplift_threshold`.
+    """
+    if check_condensation(condensation) == "cubic":
+        return cubic_condensation.uplift_threshold(block, foundation)
     return block.m * block.g / (2.0 * block.b**2 * foundation.k)
 
 
@@ -55,11 +79,14 @@ def damping_inner(block, foundation):
     return 2.0 / 3.0 * foundation.c * block.b**3
 
 
-def rocking_damping(theta, block, foundation):
+def rocking_damping(theta, block, foundation, condensation="paper"):
     """Piecewise rocking damping ``C(theta)`` [N m s/rad] (eq. 24; Winkler: module doc).
 
     ``theta`` [rad]; vectorised over theta and parameter arrays.
+    ``condensation="cubic"``: :func:`screening.cubic_condensation.rocking_damping`.
     """
+    if check_condensation(condensation) == "cubic":
+        return cubic_condensation.rocking_damping(theta, block, foundation)
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
     tu = uplift_threshold(block, foundation)
@@ -72,11 +99,14 @@ def rocking_damping(theta, block, foundation):
     return np.where(theta <= tu, c1, c2)
 
 
-def rocking_stiffness(theta, block, foundation):
+def rocking_stiffness(theta, block, foundation, condensation="paper"):
     """Piecewise secant rocking stiffness ``K(theta)`` [N m/rad] (eq. 25).
 
     ``theta`` [rad]; the restoring moment is ``K(theta) theta``.  Same for both beds.
+    ``condensation="cubic"``: :func:`screening.cubic_condensation.rocking_stiffness`.
     """
+    if check_condensation(condensation) == "cubic":
+        return cubic_condensation.rocking_stiffness(theta, block, foundation)
     theta = np.asarray(theta, dtype=float)
     a = np.abs(theta)
     m, g, b, h, k, eps = block.m, block.g, block.b, block.h, foundation.k, foundation.eps
@@ -89,15 +119,15 @@ def rocking_stiffness(theta, block, foundation):
     return np.where(a <= tu, k1, k2)
 
 
-def restoring_moment(theta, block, foundation):
+def restoring_moment(theta, block, foundation, condensation="paper"):
     """Restoring moment ``K(theta) theta`` [N m] of the condensed model (eq. 22)."""
     theta = np.asarray(theta, dtype=float)
-    return rocking_stiffness(theta, block, foundation) * theta
+    return rocking_stiffness(theta, block, foundation, condensation) * theta
 
 
-def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundation):
+def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundation, condensation="paper"):
     """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22), for ground acceleration [m/s^2]."""
     force = (block.m * block.h * np.asarray(ground_acceleration, dtype=float)
-             - rocking_damping(theta, block, foundation) * theta_dot
-             - restoring_moment(theta, block, foundation))
+             - rocking_damping(theta, block, foundation, condensation) * theta_dot
+             - restoring_moment(theta, block, foundation, condensation))
     return force / m_sdof(block)

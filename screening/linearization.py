@@ -35,6 +35,9 @@ continuous), and the eps bracket is ``E[d(K_eps theta)/d theta]`` (coefficient 6
 Limits: ``sigma_theta -> 0`` gives the no-uplift values ``c_eq = C1``,
 ``k_eq = K0 - m g h + eps (E0/2 + (6/5) k b^5 sigma_theta^2)``; ``sigma_theta -> inf`` gives
 ``c_eq -> 0`` and ``k_eq -> -m g h + eps E0``.
+
+``condensation="cubic"`` (:mod:`screening.cubic_condensation`) has no closed form; the public
+functions below then evaluate eq. (31) by quadrature (:mod:`screening.cubic_linearization`).
 """
 
 from __future__ import annotations
@@ -42,7 +45,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
-from .condensed import damping_inner, uplift_threshold
+from . import cubic_linearization
+from .condensed import check_condensation, damping_inner, uplift_threshold
 
 #: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
 X_LIMIT = 700.0
@@ -89,9 +93,12 @@ def gaussian_uplift_integrals(r):
     return out
 
 
-def uplift_probability(sigma_theta, block, foundation):
-    """Uplift occupancy ``P(|theta| > theta_ul) = erfc(theta_ul / (sqrt(2) sigma_theta))`` [1] (eq. 58)."""
-    r = np.asarray(sigma_theta, dtype=float) / uplift_threshold(block, foundation)
+def uplift_probability(sigma_theta, block, foundation, condensation="paper"):
+    """Uplift occupancy ``P(|theta| > theta_ul) = erfc(theta_ul / (sqrt(2) sigma_theta))`` [1] (eq. 58).
+
+    ``theta_ul`` of the chosen ``condensation`` (``"paper"``: eq. 19, or ``"cubic"``).
+    """
+    r = np.asarray(sigma_theta, dtype=float) / uplift_threshold(block, foundation, condensation)
     return gaussian_uplift_integrals(r)["p_out"]
 
 
@@ -107,21 +114,26 @@ def coefficient_constants(block, foundation):
     }
 
 
-def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation):
+def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation,
+                                          condensation="paper"):
     """``(c_eq [N m s/rad], k_eq [N m/rad])`` from ``var_theta`` [rad^2] and ``cov`` [rad^2/s].
 
     The form used by the moment equations: it needs only ``cov / sigma_theta`` and is
     finite at zero covariance (the start of every Lyapunov integration).
+    ``condensation``: ``"paper"`` (closed forms) or ``"cubic"`` (quadrature).
     """
+    check_condensation(condensation)
     var_theta = np.asarray(var_theta, dtype=float)
     cov = np.asarray(cov_theta_theta_dot, dtype=float)
     s = np.sqrt(np.maximum(var_theta, 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
         cov_over_s = np.where(s > 0.0, cov / s, 0.0)
+    if condensation == "cubic":
+        return cubic_linearization.equivalent_coefficients(s, cov_over_s, block, foundation)
     return _coefficients(s, cov_over_s, block, foundation)
 
 
-def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation):
+def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation, condensation="paper"):
     """Closed-form equivalent damping and stiffness (eqs. 35–36, corrected).
 
     Parameters
@@ -130,13 +142,18 @@ def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation
     sigma_theta_dot : standard deviation of the rotational velocity [rad/s], >= 0.
     rho : correlation coefficient of ``theta`` and ``theta'`` [1], in [-1, 1].
     block, foundation : :class:`~screening.model.Block` and a foundation model.
+    condensation : ``"paper"`` (closed forms, eqs. 35–36) or ``"cubic"`` (eq. 31 by
+        quadrature, :mod:`screening.cubic_linearization`).
 
     Returns
     -------
     (c_eq, k_eq) : [N m s/rad], [N m/rad], broadcast over all array arguments.
     """
+    check_condensation(condensation)
     s = np.asarray(sigma_theta, dtype=float)
     cov_over_s = np.asarray(rho, dtype=float) * np.asarray(sigma_theta_dot, dtype=float)
+    if condensation == "cubic":
+        return cubic_linearization.equivalent_coefficients(s, cov_over_s, block, foundation)
     return _coefficients(s, cov_over_s, block, foundation)
 
 

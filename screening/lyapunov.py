@@ -14,16 +14,27 @@ linear stationary moments, dense output for the output grid, and the peak of
 turns negative, whose ``sigma_theta`` passes the slenderness angle, whose state is not
 finite, or which exceeds the step budget stops there with a ``status`` code; the other
 points of the batch are unaffected.
+
+Condensation.  ``condensation="paper"`` (default) uses the closed forms of
+:mod:`screening.linearization` through the universal table of :mod:`screening.fastcoef`.
+``condensation="cubic"`` (:mod:`screening.cubic_condensation`) has no closed form: each
+distinct parameter point gets its own table of ``E[C]``, ``E[K x^2]`` and the
+velocity-coupling term, built once by quadrature (:mod:`screening.cubic_linearization`),
+and the compiled solver reads it in place of the universal one (parameter ``I_COND``
+selects the branch; the default path only pays that one comparison).
 """
 
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numba
 import numpy as np
 
-from .condensed import damping_inner, m_sdof, uplift_threshold
+from . import cubic_condensation, cubic_linearization
+from .condensed import check_condensation, damping_inner, m_sdof, uplift_threshold
+from .cubic_linearization import table_lookup_grid
 from .excitation import ConstantEnvelope, Envelope
 from .fastcoef import coefficient_table, uplift_integrals_log
 
@@ -43,30 +54,52 @@ STATUS_MEANINGS = {
 
 # ---------------------------------------------------------------- parameter layout
 (I_M, I_GAIN, I_TU, I_K0, I_MGH, I_E0, I_EPS, I_C1, I_DAMP, I_S0, I_WG, I_ZG,
- I_ENV, I_T1, I_T2, I_SIGMAX, I_LOG_TU) = range(17)
-N_PARAMS = 17
+ I_ENV, I_T1, I_T2, I_SIGMAX, I_LOG_TU, I_COND, I_K_REST, I_TAB_LO, I_TAB_RATE, I_TAB_N) = range(22)
+N_PARAMS = 22
+
+#: Value of ``params[:, I_COND]`` per condensation.
+CONDENSATION_CODES = {"paper": 0.0, "cubic": 1.0}
+
+#: Points per call of the compiled solver when per-point tables are built (``"cubic"``).
+TABLE_CHUNK = 256
 
 DEFAULT_RTOL = 1e-7
 DEFAULT_MAX_STEPS = 200_000
 
 
-def pack_parameters(block, foundation, excitation):
+def pack_parameters(block, foundation, excitation, condensation="paper"):
     """Broadcast the model objects to a ``(n_points, N_PARAMS)`` float array (SI units).
 
     Every field of ``block``, ``foundation`` and ``excitation`` may be an array; they are
     broadcast together and flattened.  Returns ``(params, shape)`` with the broadcast shape.
+    With ``condensation="cubic"``, ``I_TU`` is the cubic threshold, ``I_C1`` is ``C(0)`` and
+    ``I_E0`` is ``4 k b^3 z0^2`` so that ``K(0) = I_K0 - I_MGH + I_EPS I_E0 / 2`` still holds.
     """
     env = excitation.envelope
     kt = excitation.kind == "kanai_tajimi"
+    cubic = check_condensation(condensation) == "cubic"
+    if cubic:
+        theta_ul = cubic_condensation.uplift_threshold(block, foundation)
+        z0 = cubic_condensation.rest_indentation(block, foundation)
+        e0 = 4.0 * foundation.k * block.b**3 * z0 * z0
+        c_rest = cubic_condensation.damping_at_rest(block, foundation)
+        k_rest = cubic_condensation.stiffness_at_rest(block, foundation)
+        table_n = cubic_linearization.table_size(block, foundation)
+    else:
+        table_n = 0
+        theta_ul = uplift_threshold(block, foundation)
+        e0 = (block.m * block.g) ** 2 * block.b / foundation.k
+        c_rest = damping_inner(block, foundation)
+        k_rest = 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h + 0.5 * foundation.eps * e0
     fields = {
         I_M: m_sdof(block),
         I_GAIN: block.m * block.h / m_sdof(block),
-        I_TU: uplift_threshold(block, foundation),
+        I_TU: theta_ul,
         I_K0: 2.0 / 3.0 * block.b**3 * foundation.k,
         I_MGH: block.m * block.g * block.h,
-        I_E0: (block.m * block.g) ** 2 * block.b / foundation.k,
+        I_E0: e0,
         I_EPS: foundation.eps,
-        I_C1: damping_inner(block, foundation),
+        I_C1: c_rest,
         I_DAMP: 0.0 if foundation.contact == "hunt_crossley" else 1.0,
         I_S0: excitation.S0,
         I_WG: excitation.omega_g if kt else 1.0,
@@ -75,7 +108,12 @@ def pack_parameters(block, foundation, excitation):
         I_T1: env.params[1],
         I_T2: env.params[2],
         I_SIGMAX: block.slenderness,
-        I_LOG_TU: np.log(uplift_threshold(block, foundation)),
+        I_LOG_TU: np.log(theta_ul),
+        I_COND: CONDENSATION_CODES[condensation],
+        I_K_REST: k_rest,
+        I_TAB_LO: cubic_linearization.T_LO,                       # grid of the per-point tables
+        I_TAB_RATE: float(cubic_linearization.STEPS_PER_UNIT),
+        I_TAB_N: table_n,
     }
     arrays = np.broadcast_arrays(*[np.asarray(fields[i], dtype=float) for i in range(N_PARAMS)])
     shape = arrays[0].shape
@@ -114,8 +152,24 @@ def _stage_gains(p, t, h, gains):
 
 
 @numba.njit(cache=True, inline="always")
+def _coefficients_tabulated(p, var_theta, cov, values, slopes):
+    """``(c_eq, k_eq)`` from a per-point table (:mod:`screening.cubic_linearization`):
+    ``c_eq = E[C]``, ``k_eq = E[K x^2] + cov d_c``."""
+    t = 0.5 * math.log(var_theta) - p[I_LOG_TU] if var_theta > 0.0 else -math.inf
+    e_c, e_k, d_c = table_lookup_grid(t, values, slopes, p[I_C1], p[I_K_REST], p[I_TAB_LO], p[I_TAB_RATE],
+                                      p[I_TAB_N])
+    return e_c, e_k + cov * d_c
+
+
+@numba.njit(cache=True, inline="always")
 def _coefficients(p, var_theta, cov, values, slopes):
-    """``(c_eq, k_eq)`` from the moments: the closed forms of :mod:`screening.linearization`."""
+    """``(c_eq, k_eq)`` from the moments: the closed forms of :mod:`screening.linearization`.
+
+    ``values``, ``slopes``: the universal table of :mod:`screening.fastcoef` (``"paper"``), or
+    the point's own table when ``p[I_COND] != 0`` (``"cubic"``).
+    """
+    if p[I_COND] != 0.0:
+        return _coefficients_tabulated(p, var_theta, cov, values, slopes)
     if var_theta > 0.0:
         p_in, tail_m12, tail_m32, p32 = uplift_integrals_log(
             0.5 * math.log(var_theta) - p[I_LOG_TU], values, slopes)
@@ -410,13 +464,24 @@ def _solve_batch(params, kt, t_out, rtol, h_max, max_steps, values, slopes,
                      status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq)
 
 
+@numba.njit(cache=True)
+def _solve_batch_tabulated(params, kt, t_out, rtol, h_max, max_steps, tables_v, tables_s,
+                           var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
+                           status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
+    """:func:`_solve_batch` with one coefficient table per point (``tables_v[i]``, ``tables_s[i]``)."""
+    for i in range(params.shape[0]):
+        _solve_point(params[i], kt, t_out, rtol, h_max, max_steps, tables_v[i], tables_s[i], i,
+                     var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
+                     status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq)
+
+
 HISTORY_VARIABLES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift")
 SUMMARY_VARIABLES = ("status", "t_stop", "n_steps", "peak_var_theta", "t_peak_var_theta",
                      "peak_p_uplift", "min_k_eq")
 
 
 def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max=None,
-                  max_steps=DEFAULT_MAX_STEPS):
+                  max_steps=DEFAULT_MAX_STEPS, condensation="paper"):
     """Integrate the linearized moment equations for a batch of parameter points.
 
     Parameters
@@ -427,6 +492,9 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         times the linear stationary moments of each point).
     h_max : largest step [s]; default ``(t_out[-1] - t_out[0]) / 20``.
     max_steps : step budget per point (accepted + rejected).
+    condensation : ``"paper"`` (eqs. 17–25, default) or ``"cubic"``
+        (:mod:`screening.cubic_condensation`; raises ``ValueError`` for a softening bed that
+        cannot carry the block through the onset of uplift).
 
     Returns
     -------
@@ -440,7 +508,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     t_out = np.ascontiguousarray(t_out, dtype=float)
     if t_out.ndim != 1 or t_out.size < 2 or np.any(np.diff(t_out) <= 0):
         raise ValueError("parameter 't_out' must be an increasing 1-d array of at least 2 times")
-    params, shape = pack_parameters(block, foundation, excitation)
+    params, shape = pack_parameters(block, foundation, excitation, condensation)
     kt = excitation.kind == "kanai_tajimi"
     n, nt = params.shape[0], t_out.size
     if h_max is None:
@@ -454,10 +522,22 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     peak = np.full(n, np.nan)
     t_peak = np.full(n, np.nan)
     min_k = np.full(n, np.nan)
-    _solve_batch(params, kt, t_out, float(rtol), float(h_max), int(max_steps), values, slopes,
-                 hist["var_theta"], hist["cov_theta_theta_dot"], hist["var_theta_dot"],
-                 hist["c_eq"], hist["k_eq"], hist["p_uplift"],
-                 status, t_stop, n_steps, n_rejected, peak, t_peak, min_k)
+    if condensation == "paper":
+        _solve_batch(params, kt, t_out, float(rtol), float(h_max), int(max_steps), values, slopes,
+                     hist["var_theta"], hist["cov_theta_theta_dot"], hist["var_theta_dot"],
+                     hist["c_eq"], hist["k_eq"], hist["p_uplift"],
+                     status, t_stop, n_steps, n_rejected, peak, t_peak, min_k)
+    else:
+        for lo in range(0, n, TABLE_CHUNK):
+            hi = min(lo + TABLE_CHUNK, n)
+            tables_v, tables_s = _chunk_tables(block, foundation, shape, lo, hi)
+            part = slice(lo, hi)
+            _solve_batch_tabulated(params[part], kt, t_out, float(rtol), float(h_max), int(max_steps),
+                                   tables_v, tables_s,
+                                   hist["var_theta"][part], hist["cov_theta_theta_dot"][part],
+                                   hist["var_theta_dot"][part], hist["c_eq"][part], hist["k_eq"][part],
+                                   hist["p_uplift"][part], status[part], t_stop[part], n_steps[part],
+                                   n_rejected[part], peak[part], t_peak[part], min_k[part])
     tu = params[:, I_TU]
     with np.errstate(divide="ignore"):
         from scipy.special import erfc
@@ -471,3 +551,15 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         "min_k_eq": min_k.reshape(shape),
     })
     return out
+
+
+def _chunk_tables(block, foundation, shape, lo, hi):
+    """Coefficient tables ``(values, slopes)`` of the flattened points ``lo:hi`` of the broadcast ``shape``."""
+    def pick(value):
+        return np.broadcast_to(np.asarray(value, dtype=float), shape).ravel()[lo:hi]
+
+    blk = SimpleNamespace(m=pick(block.m), b=pick(block.b), h=pick(block.h), g=pick(block.g))
+    damping = {"lam" if foundation.contact == "hunt_crossley" else "c": pick(foundation.damping)}
+    fnd = SimpleNamespace(k=pick(foundation.k), eps=pick(foundation.eps), damping=pick(foundation.damping),
+                          contact=foundation.contact, **damping)
+    return cubic_linearization.coefficient_tables(blk, fnd, (hi - lo,))

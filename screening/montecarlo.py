@@ -2,10 +2,11 @@
 
 :func:`monte_carlo` integrates either the full coupled model (paper eqs. 7–8 with the
 exact contact resultants of :mod:`screening.contact`) or the condensed SDOF (eq. 22 with
-eqs. 24–25) for ``n_samples`` ground-acceleration samples synthesized by the spectral
-representation method (:mod:`screening.synthesis`), and returns the time histories of
-the ensemble moments of ``theta`` and ``theta'`` on the shared output grid
-(:func:`screening.timegrid.output_times`).
+eqs. 24–25, or with ``condensation="cubic"`` the ``C``, ``K`` of
+:mod:`screening.cubic_condensation`) for ``n_samples`` ground-acceleration samples
+synthesized by the spectral representation method (:mod:`screening.synthesis`), and
+returns the time histories of the ensemble moments of ``theta`` and ``theta'`` on the
+shared output grid (:func:`screening.timegrid.output_times`).
 
 Numerics (all overridable through ``**numerics``; recorded in the dataset attributes):
 
@@ -39,7 +40,8 @@ import numpy as np
 import xarray as xr
 
 from . import _mcs_kernels as kern
-from .condensed import damping_inner, m_sdof, uplift_threshold
+from . import cubic_condensation
+from .condensed import check_condensation, damping_inner, m_sdof, uplift_threshold
 from .contact import static_indentation_exact
 from .progress import Progress
 from .synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
@@ -187,7 +189,7 @@ def _show_progress(progress, n_samples, chunk_size):
 
 # ----------------------------------------------------------------------------- entry point
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
-                seed=0, progress=None, **numerics):
+                seed=0, progress=None, condensation="paper", **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
 
     Parameters
@@ -205,6 +207,11 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         step is adaptive and finer (see ``rtol``, ``h_max``).
     seed : integer >= 0; sample ``i`` uses ``numpy.random.default_rng([seed, i])``.
     progress : None (a bar on stderr for multi-chunk runs on a terminal), True or False.
+    condensation : ``"paper"`` (eqs. 24–25) or ``"cubic"`` (:mod:`screening.cubic_condensation`):
+        the ``C(theta)``, ``K(theta)`` of ``model="condensed"``.  ``"cubic"`` with
+        ``model="coupled"`` raises (the coupled model is not condensed).  With ``"cubic"`` on
+        a softening bed, samples passing the capacity angle (no quasi-static equilibrium)
+        are flagged diverged.
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
         ``cutoff_factor`` [1], ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
         ``max_flight_time`` [s], ``chunk_size``.
@@ -219,17 +226,22 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     condensed: ``|theta| > theta_ul``), per-sample ``peak_abs_theta`` [rad] (maximum of
     ``|theta|`` over the accepted steps, up to overturning or divergence), ``overturned``,
     ``diverged``, ``n_steps`` and scalars ``n_overturned``, ``n_diverged``, ``n_used``.
-    ``attrs["status"]`` is ``"ok"`` or says plainly why the statistics are NaN.
+    ``attrs["status"]`` is ``"ok"`` or says plainly why the statistics are NaN;
+    ``attrs["condensation"]`` names the condensation of a condensed run.
 
     Raises
     ------
     ValueError
-        For a bad ``n_samples``, ``model``, ``seed``, ``t_end``/``dt``, numerics option, or
-        array-valued model parameters — before any work is done.
+        For a bad ``n_samples``, ``model``, ``condensation``, ``seed``, ``t_end``/``dt``, numerics
+        option, or array-valued model parameters — before any work is done.
     """
     n_samples = _check_integer("n_samples", n_samples, 2, "an integer >= 2")
     if model not in MODELS:
         raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
+    check_condensation(condensation)
+    if model == "coupled" and condensation != "paper":
+        raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
+                         f"(got condensation={condensation!r} with model='coupled')")
     seed = validate_seed(seed)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
@@ -239,13 +251,15 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         opts["rtol"] = DEFAULT_RTOL[model]
     show = _show_progress(progress, n_samples, opts["chunk_size"])
     y0 = initial_state(block, foundation, model)       # may raise for a bed that cannot carry the block
+    if condensation == "cubic":
+        cubic_condensation.check_bearing(block, foundation)
 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
     q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
-    params = kern.pack_parameters(block, foundation, opts["max_flight_time"])
+    params = kern.pack_parameters(block, foundation, opts["max_flight_time"], condensation)
     scales = opts["rtol"] * state_scales(block, foundation)
     model_code = kern.MODEL_COUPLED if model == "coupled" else kern.MODEL_CONDENSED
 
@@ -286,11 +300,12 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
     return _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                           block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
-                          h_min, wall)
+                          h_min, wall, condensation)
 
 
 def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
-                   block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall):
+                   block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
+                   condensation="paper"):
     n_used = n_samples - n_over - n_div
     meta = {
         "var_theta": ("rad2", "ensemble variance of the rotation theta"),
@@ -354,7 +369,12 @@ def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reaso
     if excitation.kind == "kanai_tajimi":
         attrs["omega_g"], attrs["zeta_g"] = float(excitation.omega_g), float(excitation.zeta_g)
     if model == "condensed":
-        attrs["theta_ul"] = float(uplift_threshold(block, foundation))
+        attrs["condensation"] = condensation
+        attrs["theta_ul"] = float(uplift_threshold(block, foundation, condensation))
         attrs["m_sdof"] = float(m_sdof(block))
-        attrs["C1"] = float(damping_inner(block, foundation))
+        if condensation == "cubic":
+            attrs["C1"] = float(cubic_condensation.damping_at_rest(block, foundation))
+            attrs["theta_capacity"] = float(cubic_condensation.capacity_angle(block, foundation))
+        else:
+            attrs["C1"] = float(damping_inner(block, foundation))
     return xr.Dataset(data, coords=coords, attrs=attrs)

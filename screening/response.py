@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from scipy.special import erfc
 
 from . import __version__
-from .condensed import uplift_threshold
+from . import cubic_condensation
+from .condensed import check_condensation, uplift_threshold
 from .lyapunov import DEFAULT_RTOL, HISTORY_VARIABLES, STATUS_MEANINGS, solve_moments
 from .metadata import STATUS, TIME, VARIABLES
 from .timegrid import output_times
@@ -30,7 +32,7 @@ def model_attributes(block, foundation, excitation):
     return {k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in attrs.items()}
 
 
-def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL):
+def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL, condensation="paper"):
     """Time-varying second-order rocking statistics by stochastic linearization (sections 2.4–2.6).
 
     Parameters
@@ -39,6 +41,8 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
         :func:`screening.lyapunov.solve_moments`, which this wraps).
     t_end : record length [s]. dt : output step [s] (the solver is adaptive and finer).
     rtol : solver relative tolerance.
+    condensation : ``"paper"`` (eqs. 17–25, default) or ``"cubic"`` (static balance with the
+        cubic term, :mod:`screening.cubic_condensation`); recorded in ``attrs["condensation"]``.
 
     Returns
     -------
@@ -47,10 +51,14 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     [N m rad-1], ``p_uplift`` [1] (eq. 58), the scalar summaries ``peak_var_theta``,
     ``t_peak_var_theta``, ``peak_p_uplift``, ``min_k_eq``, ``status`` (CF flag variable)
     and ``t_stop``.  Inputs are stored as attributes.  Values after a point stopped
-    (status != 0) are NaN.
+    (status != 0) are NaN.  With ``"cubic"`` the attributes also hold ``theta_capacity`` [rad]
+    (softening beds: no quasi-static equilibrium beyond it; ``inf`` otherwise) and
+    ``peak_p_beyond_capacity``, the Gaussian probability ``P(|theta| > theta_capacity)`` at the
+    peak ``var_theta`` (where the cubic condensation leaves its validity).
     """
+    check_condensation(condensation)
     t = output_times(t_end, dt)
-    res = solve_moments(block, foundation, excitation, t, rtol=rtol)
+    res = solve_moments(block, foundation, excitation, t, rtol=rtol, condensation=condensation)
     if res["status"].ndim != 0:
         raise ValueError("linearize() takes scalar model parameters; use "
                          "screening.lyapunov.solve_moments for arrays of points")
@@ -59,10 +67,22 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
                  "n_steps"):
         data[name] = ((), res[name], VARIABLES[name])
     data["status"] = ((), res["status"], STATUS)
-    data["theta_ul"] = ((), uplift_threshold(block, foundation), VARIABLES["theta_ul"])
+    theta_ul_meta = dict(VARIABLES["theta_ul"])
+    if condensation == "cubic":
+        theta_ul_meta["long_name"] = ("static uplift threshold angle, cubic static balance: "
+                                      "b theta_ul (1 + 2 eps b^2 theta_ul^2) = m g / (2 b k)")
+    data["theta_ul"] = ((), uplift_threshold(block, foundation, condensation), theta_ul_meta)
     ds = xr.Dataset(data, coords={"t": ("t", t, TIME)})
     ds.attrs.update(model_attributes(block, foundation, excitation))
     ds.attrs.update(method="stochastic linearization + Lyapunov moment equations",
                     status_meaning=STATUS_MEANINGS[int(res["status"])], rtol=float(rtol),
-                    screening_version=__version__)
+                    condensation=condensation, screening_version=__version__)
+    if condensation == "cubic":
+        cap = float(cubic_condensation.capacity_angle(block, foundation))
+        peak = float(res["peak_var_theta"])
+        beyond = float(erfc(cap / np.sqrt(2.0 * peak))) if np.isfinite(cap) and peak > 0 else 0.0
+        ds.attrs.update(theta_capacity=cap, peak_p_beyond_capacity=beyond,
+                        condensation_note="quasi-static z_cb from the static vertical balance with the "
+                                          "cubic term (eqs. 13, 15); C, K from eqs. 14, 16 with "
+                                          "zdot_cb = z_cb'(theta) theta'")
     return ds

@@ -112,3 +112,135 @@ def test_uplift_probability_eq58(paper_block, any_foundation):
     p = uplift_probability(s, paper_block, any_foundation)
     assert p[0] == 0.0
     np.testing.assert_allclose(p[1:], special.erfc(tu / (np.sqrt(2) * s[1:])), rtol=1e-14)
+
+
+# ---------------------------------------------------------------- cubic condensation
+"""c_eq, k_eq of the "cubic" condensation (quadrature of eq. 31, tabulated per point) against
+an independent quadrature of the regression form Cov^-1 E[g y] with scipy's adaptive quad
+over theta (split at +-theta_ul and +-theta_cap), using the cubic C(theta), K(theta) that
+tests/test_condensed.py checks against the distributed contact law."""
+
+import math  # noqa: E402
+
+from screening import _mcs_kernels as kern  # noqa: E402
+from screening import cubic_condensation as cubic, cubic_linearization as cl, linearization  # noqa: E402
+from screening.condensed import m_sdof, rocking_stiffness  # noqa: E402
+from screening.model import Foundation  # noqa: E402
+
+
+def _cubic_regression_coefficients(s, sv, rhos, block, foundation):
+    tu = cubic.uplift_threshold(block, foundation)
+    cap = cubic.capacity_angle(block, foundation)
+    # the compiled scalar C, K of the Monte Carlo kernel (tested equal to the numpy ones in
+    # tests/test_montecarlo.py): same functions, ~50x faster callbacks for quad
+    p = kern.pack_parameters(block, foundation, condensation="cubic")
+    C = lambda th: kern.cubic_damping_scalar(th, p)
+    R = lambda th: kern.cubic_stiffness_scalar(th, p) * th
+    pdf = lambda th: np.exp(-0.5 * (th / s) ** 2) / (np.sqrt(2 * np.pi) * s)
+
+    def expect(f):
+        L = 40 * s
+        cuts = [p for p in (-cap, -tu, 0.0, tu, cap) if -L < p < L]
+        edges = [-L] + cuts + [L]
+        return sum(integrate.quad(lambda th: f(th) * pdf(th), a, c, epsabs=0, epsrel=1e-10, limit=400)[0]
+                   for a, c in zip(edges[:-1], edges[1:]))
+
+    e_c, e_ct2, e_rt = expect(C), expect(lambda th: C(th) * th * th), expect(lambda th: R(th) * th)
+    out = []
+    for rho in rhos:                       # E[theta' | theta] = rho sv theta / s
+        q = rho * sv / s
+        e_g_theta = q * e_ct2 + e_rt
+        e_g_theta_dot = sv**2 * (1 - rho**2) * e_c + q * q * e_ct2 + q * e_rt
+        cov = rho * s * sv
+        k_eq, c_eq = np.linalg.solve([[s * s, cov], [cov, sv * sv]], [e_g_theta, e_g_theta_dot])
+        out.append((c_eq, k_eq))
+    return out
+
+
+@pytest.mark.parametrize("ratio", [1e-3, 0.1, 0.4, 1.0, 2.5, 30.0, 1e3])
+def test_cubic_coefficients_match_quadrature_of_definition(paper_block, cubic_bed, ratio):
+    tu = cubic.uplift_threshold(paper_block, cubic_bed)
+    s = ratio * tu
+    sv = 42.0 * s
+    rhos = [-0.95, 0.0, 0.6]
+    refs = _cubic_regression_coefficients(s, sv, rhos, paper_block, cubic_bed)
+    for rho, (c_ref, k_ref) in zip(rhos, refs):
+        c_eq, k_eq = linearization.equivalent_coefficients(s, sv, rho, paper_block, cubic_bed, condensation="cubic")
+        assert c_eq == pytest.approx(c_ref, rel=1e-6)
+        assert k_eq == pytest.approx(k_ref, rel=1e-6)
+
+
+def test_cubic_coefficients_at_zero_sigma_are_the_no_uplift_values(paper_block, cubic_bed):
+    c_eq, k_eq = linearization.equivalent_coefficients(0.0, 0.0, 0.0, paper_block, cubic_bed, condensation="cubic")
+    assert np.isfinite(c_eq) and np.isfinite(k_eq)
+    assert c_eq == pytest.approx(float(cubic.rocking_damping(0.0, paper_block, cubic_bed)), rel=1e-13)
+    assert k_eq == pytest.approx(float(cubic.rocking_stiffness(0.0, paper_block, cubic_bed)), rel=1e-13)
+    c0, k0 = linearization.equivalent_coefficients_from_moments(0.0, 0.0, paper_block, cubic_bed,
+                                                                condensation="cubic")
+    assert (c0, k0) == (c_eq, k_eq)
+    # continuous into sigma > 0, and the velocity-coupling term stays finite at small sigma
+    s = 1e-7 * cubic.uplift_threshold(paper_block, cubic_bed)
+    c1, k1 = linearization.equivalent_coefficients(s, 40 * s, 0.9, paper_block, cubic_bed, condensation="cubic")
+    assert c1 == pytest.approx(c_eq, rel=1e-9) and k1 == pytest.approx(k_eq, rel=1e-9)
+
+
+@pytest.mark.parametrize("ratio", [1e-3, 0.3, 1.0, 3.0, 100.0])
+def test_cubic_with_eps_zero_reproduces_the_paper_closed_forms(paper_block, ratio):
+    bed = Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
+    s = ratio * cubic.uplift_threshold(paper_block, bed)
+    for rho in (-0.5, 0.0, 0.8):
+        ref = linearization.equivalent_coefficients(s, 40 * s, rho, paper_block, bed)
+        got = linearization.equivalent_coefficients(s, 40 * s, rho, paper_block, bed, condensation="cubic")
+        np.testing.assert_allclose(got, ref, rtol=1e-10)
+
+
+def test_quadrature_engine_reproduces_the_paper_closed_forms(paper_block, any_foundation):
+    """gaussian_expectations applied to the paper's C, K: exact closed forms (a check of the engine)."""
+    tu = uplift_threshold(paper_block, any_foundation)
+    theta, weight = cl.theta_quadrature(tu, np.inf, 12 * 500 * tu)
+    C = rocking_damping(theta, paper_block, any_foundation)
+    K = rocking_stiffness(theta, paper_block, any_foundation)
+    c0 = float(rocking_damping(0.0, paper_block, any_foundation))
+    k0 = float(rocking_stiffness(0.0, paper_block, any_foundation))
+    s = tu * np.logspace(-4, np.log10(500), 60)
+    values, _ = cl.gaussian_expectations(s, theta, weight, C, K, c0, k0)
+    for rho in (-0.7, 0.0, 0.9):
+        c_ref, k_ref = equivalent_coefficients(s, 40 * s, rho, paper_block, any_foundation)
+        np.testing.assert_allclose(values[:, 0], c_ref, rtol=1e-11)
+        np.testing.assert_allclose(values[:, 1] + rho * 40 * s * s * values[:, 2], k_ref, rtol=1e-10)
+
+
+def test_cubic_table_matches_direct_quadrature_between_nodes(paper_block, cubic_bed):
+    values, slopes = cl.coefficient_table(paper_block, cubic_bed)
+    tu = cubic.uplift_threshold(paper_block, cubic_bed)
+    c0 = float(cubic.damping_at_rest(paper_block, cubic_bed))
+    k0 = float(cubic.stiffness_at_rest(paper_block, cubic_bed))
+    n = values.shape[0]
+    assert n == cl.table_size(paper_block, cubic_bed)
+    assert cl.T_LO + (n - 1) / cl.STEPS_PER_UNIT >= math.log(4 * paper_block.slenderness / tu)
+    t = np.concatenate([cl.T_LO + (np.arange(0, n - 1, 3) + 0.5) / cl.STEPS_PER_UNIT, [-20.0, -13.0]])
+    s = tu * np.exp(t)
+    e_c, e_k, d_c = cl.expectations(s, paper_block, cubic_bed)
+    cov = 0.9 * s * s * math.sqrt(k0 / m_sdof(paper_block))     # a strongly correlated state
+    for i, ti in enumerate(t):
+        got_c, got_k, got_d = cl.table_lookup(ti, values, slopes, c0, k0)
+        assert got_c == pytest.approx(e_c[i], rel=1e-6)
+        # k_eq = e_k + cov d_c crosses zero at large sigma: absolute floor 1e-9 K(0)
+        assert got_k + cov[i] * got_d == pytest.approx(e_k[i] + cov[i] * d_c[i], rel=1e-6, abs=1e-9 * k0)
+    assert cl.table_lookup(-np.inf, values, slopes, c0, k0)[:2] == (c0, k0)
+    # nodes carry the exact d/d(ln sigma): check against central differences of the values
+    h = 1.0 / cl.STEPS_PER_UNIT
+    fd = (values[2:] - values[:-2]) / (2 * h)
+    mid = slice(1, -1)
+    scale = np.abs(values).max(axis=0)
+    smooth = np.arange(1, n - 1) * h + cl.T_LO > 1.0      # well above the onset of uplift
+    np.testing.assert_allclose(fd[smooth], slopes[mid][smooth], rtol=0, atol=2e-3 * scale.max())
+
+
+@pytest.mark.parametrize("bad", ["exact", "", None])
+def test_linearization_rejects_unknown_condensation(paper_block, bad):
+    bed = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic'\)"):
+        equivalent_coefficients(1e-3, 0.04, 0.0, paper_block, bed, condensation=bad)
+    with pytest.raises(ValueError, match="'condensation'"):
+        equivalent_coefficients_from_moments(1e-6, 0.0, paper_block, bed, condensation=bad)

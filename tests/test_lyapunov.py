@@ -4,7 +4,7 @@ from scipy import integrate
 
 from screening.cases import PAPER_CASES, paper_case
 from screening.condensed import damping_inner, m_sdof, uplift_threshold
-from screening.excitation import ConstantEnvelope, KanaiTajimi, WhiteNoise, kanai_tajimi_stationary_moments
+from screening.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise, kanai_tajimi_stationary_moments
 from screening.fastcoef import coefficient_table
 from screening.lyapunov import (STATUS_K_EQ_NEGATIVE, STATUS_MAX_STEPS, STATUS_OK,
                                 STATUS_VARIANCE_UNBOUNDED, _rhs, pack_parameters, solve_moments)
@@ -139,3 +139,106 @@ def test_undamped_bed_stays_finite(paper_block):
 def test_bad_output_grid_is_rejected(paper_block):
     with pytest.raises(ValueError, match="t_out"):
         solve_moments(paper_block, Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), np.array([0.0, 1.0, 0.5]))
+
+
+# ---------------------------------------------------------------- cubic condensation
+from screening import cubic_condensation as cubic  # noqa: E402
+from screening import lyapunov  # noqa: E402
+from screening.linearization import equivalent_coefficients_from_moments  # noqa: E402
+from screening.response import linearize  # noqa: E402
+
+
+@pytest.mark.parametrize("excitation", [WhiteNoise(2.4e-3), KanaiTajimi(2e-3, 10.0, 0.4)], ids=["white", "kt"])
+def test_cubic_with_eps_zero_reproduces_the_paper_solution(paper_block, excitation):
+    t = output_times(20.0, 0.05)
+    bed = Foundation(2.89e7, 8.95e8, 0.0)
+    paper = solve_moments(paper_block, bed, excitation, t)
+    cub = solve_moments(paper_block, bed, excitation, t, condensation="cubic")
+    assert paper["status"] == cub["status"] == STATUS_OK
+    assert paper["peak_p_uplift"] > 0.05                       # the uplift tables are exercised
+    assert cub["peak_var_theta"] == pytest.approx(paper["peak_var_theta"], rel=1e-6)
+    for name in ("var_theta", "var_theta_dot"):
+        np.testing.assert_allclose(cub[name], paper[name], rtol=0, atol=1e-5 * np.max(paper[name]))
+
+
+@pytest.mark.parametrize("foundation", [Foundation(2.89e7, 8.95e8, 6e7), WinklerFoundation(2.89e7, 3.0e3, -2e7)])
+def test_cubic_linear_stationary_variance_uses_the_rest_indentation(paper_block, foundation):
+    """No uplift, constant envelope: pi S0 a^2 / (2 zeta w^3) with the cubic K(0), C(0)."""
+    S0 = 1e-14
+    res = solve_moments(paper_block, foundation, WhiteNoise(S0, ConstantEnvelope()), output_times(12.0, 0.5),
+                        condensation="cubic")
+    M = m_sdof(paper_block)
+    w = np.sqrt(cubic.stiffness_at_rest(paper_block, foundation) / M)
+    zeta = cubic.damping_at_rest(paper_block, foundation) / (2 * M * w)
+    a = paper_block.m * paper_block.h / M
+    expected = np.pi * S0 * a**2 / (2 * zeta * w**3)
+    assert res["var_theta"][-1] == pytest.approx(expected, rel=1e-3)
+    paper = solve_moments(paper_block, foundation, WhiteNoise(S0, ConstantEnvelope()), output_times(12.0, 0.5))
+    assert abs(paper["var_theta"][-1] / expected - 1) > 0.01        # the condensations differ here
+
+
+def test_compiled_cubic_coefficients_match_the_quadrature(paper_block, cubic_bed):
+    params, _ = pack_parameters(paper_block, cubic_bed, WhiteNoise(1e-4), condensation="cubic")
+    values, slopes = lyapunov._chunk_tables(paper_block, cubic_bed, (1,), 0, 1)
+    tu = params[0, lyapunov.I_TU]
+    assert tu == cubic.uplift_threshold(paper_block, cubic_bed)
+    k_scale = cubic.stiffness_at_rest(paper_block, cubic_bed)
+    ratios = np.concatenate([[0.0, 1e-7], np.logspace(-3, np.log10(4 * paper_block.slenderness / tu), 41)])
+    var = (ratios * tu) ** 2
+    for rho in (-0.9, 0.0, 0.9):
+        cov = rho * var * 40.0
+        c_ref, k_ref = equivalent_coefficients_from_moments(var, cov, paper_block, cubic_bed, condensation="cubic")
+        for i in range(var.size):
+            c, k = lyapunov._coefficients(params[0], var[i], cov[i], values[0], slopes[0])
+            assert c == pytest.approx(c_ref[i], rel=1e-6)
+            assert k == pytest.approx(k_ref[i], rel=1e-6, abs=1e-9 * k_scale)
+
+
+def test_cubic_point_alone_or_in_batch_gives_identical_results(paper_block, monkeypatch):
+    monkeypatch.setattr(lyapunov, "TABLE_CHUNK", 3)              # several chunks, one split mid-row
+    t = output_times(20.0, 0.05)
+    eps = np.array([-6e5, 0.0, 6e7])[:, None]
+    S0 = np.array([1e-5, 5e-4])[None, :]
+    batch = solve_moments(paper_block, Foundation(2.89e7, 8.95e8, eps), WhiteNoise(S0), t, condensation="cubic")
+    assert batch["var_theta"].shape == (3, 2, t.size)
+    for i in range(3):
+        for j in range(2):
+            one = solve_moments(paper_block, Foundation(2.89e7, 8.95e8, eps[i, 0]), WhiteNoise(S0[0, j]), t,
+                                condensation="cubic")
+            for key, value in one.items():
+                np.testing.assert_array_equal(batch[key][i, j], value)
+
+
+def test_condensation_is_validated_before_any_work(paper_block):
+    t = output_times(20.0, 0.05)
+    with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic'\)"):
+        solve_moments(paper_block, Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), t, condensation="exact")
+    with pytest.raises(ValueError, match="'condensation'"):
+        linearize(paper_block, Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), condensation="Cubic")
+    beds = Foundation(2.89e7, 8.95e8, np.array([6e7, -3e8]))       # the second cannot carry the block
+    with pytest.raises(ValueError, match="'foundation.eps'"):
+        solve_moments(paper_block, beds, WhiteNoise(1e-4), t, condensation="cubic")
+
+
+def test_linearize_records_the_condensation(paper_block):
+    exc = WhiteNoise(2.4e-5, Envelope(4.0, 2.0))
+    bed = Foundation(2.89e7, 8.95e8, 6e7)
+    paper = linearize(paper_block, bed, exc)
+    cub = linearize(paper_block, bed, exc, condensation="cubic")
+    assert paper.attrs["condensation"] == "paper" and cub.attrs["condensation"] == "cubic"
+    assert float(paper.theta_ul) == uplift_threshold(paper_block, bed)
+    assert float(cub.theta_ul) == cubic.uplift_threshold(paper_block, bed)
+    assert cub.attrs["theta_capacity"] == np.inf and cub.attrs["peak_p_beyond_capacity"] == 0.0
+    # hardening bed: the true rest indentation is smaller, the block softer and less damped
+    assert float(cub.peak_var_theta) > 1.05 * float(paper.peak_var_theta)
+
+
+def test_linearize_reports_the_reach_beyond_the_capacity_angle(paper_block):
+    bed = Foundation(2.89e7, 8.95e8, -2e7)
+    ds = linearize(paper_block, bed, WhiteNoise(5e-4, Envelope(4.0, 2.0)), condensation="cubic")
+    cap = cubic.capacity_angle(paper_block, bed)
+    assert ds.attrs["theta_capacity"] == pytest.approx(cap, rel=1e-14)
+    from scipy.special import erfc
+    expected = erfc(cap / np.sqrt(2 * float(ds.peak_var_theta)))
+    assert ds.attrs["peak_p_beyond_capacity"] == pytest.approx(expected, rel=1e-12)
+    assert 0.0 < ds.attrs["peak_p_beyond_capacity"] < 1.0

@@ -113,14 +113,15 @@ def test_static_equilibrium_is_at_rest(eps):
     assert abs(z_dd) < 1e-12 * BLOCK.g
 
 
-def _run_kernel(model, acc, t_out, foundation, y_init, rtol=1e-8, dt_grid=1e-3, max_flight_time=0.5):
+def _run_kernel(model, acc, t_out, foundation, y_init, rtol=1e-8, dt_grid=1e-3, max_flight_time=0.5,
+                condensation="paper"):
     n_t = t_out.size
     acc = np.atleast_2d(acc)
     outs = [np.empty((1, n_t)) for _ in range(4)]
     uplift = np.zeros((1, n_t), dtype=bool)
     flags = [np.zeros(1), np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(1, np.int64),
              np.zeros(1, np.int64), np.zeros(1)]
-    p = kern.pack_parameters(BLOCK, foundation, max_flight_time)
+    p = kern.pack_parameters(BLOCK, foundation, max_flight_time, condensation)
     scale = rtol * mc.state_scales(BLOCK, foundation)
     kern.integrate_chunk(model, acc, np.zeros_like(acc), dt_grid, t_out, p, np.asarray(y_init, float), scale,
                          rtol, 0.005, 10**7, *outs, uplift, *flags)
@@ -403,3 +404,96 @@ def test_halving_the_step_changes_the_peak_variance_much_less_than_its_standard_
         i = int(np.argmax(coarse[name].values))
         change = abs(float(fine[name].max()) - float(coarse[name][i]))
         assert change < 0.1 * float(coarse[name + "_se"][i]), (name, change, float(coarse[name + "_se"][i]))
+
+
+# ---------------------------------------------------------------- cubic condensation
+from screening import cubic_condensation as cubic  # noqa: E402
+
+CUBIC_MCS_BEDS = [HC, Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), Foundation(k=2.89e7, lam=8.95e8, eps=-2e7),
+                  WinklerFoundation(k=2.89e7, c=2e4, eps=6e7), WinklerFoundation(k=2.89e7, c=2e4, eps=-2e7)]
+
+
+@pytest.mark.parametrize("foundation", CUBIC_MCS_BEDS, ids=["hc+", "hc-", "hc-cap", "winkler+", "winkler-cap"])
+def test_compiled_cubic_coefficients_match_screening_cubic_condensation(foundation):
+    p = kern.pack_parameters(BLOCK, foundation, condensation="cubic")
+    tu = cubic.uplift_threshold(BLOCK, foundation)
+    assert p[kern.P_THETA_UL] == tu
+    assert p[kern.P_THETA_CAP] == cubic.capacity_angle(BLOCK, foundation)
+    theta = np.concatenate([np.linspace(-0.16, 0.16, 201), tu * np.array([1, -1, 0, 1 + 1e-9, 0.5, 0.999, 3.0])])
+    c_ref = cubic.rocking_damping(theta, BLOCK, foundation)
+    k_ref = cubic.rocking_stiffness(theta, BLOCK, foundation)
+    for i, th in enumerate(theta):
+        c, k = kern.cubic_coefficients_scalar(th, p)
+        assert c == pytest.approx(c_ref[i], rel=1e-10)
+        assert k == pytest.approx(k_ref[i], rel=1e-11, abs=1e-9 * abs(k_ref).max())
+        assert (kern.cubic_damping_scalar(th, p), kern.cubic_stiffness_scalar(th, p)) == (c, k)
+    a_ref = (BLOCK.m * BLOCK.h * 0.7 - c_ref * 0.3 - k_ref * theta) / m_sdof(BLOCK)
+    for i, th in enumerate(theta):
+        assert kern.condensed_acceleration(th, 0.3, 0.7, p) == pytest.approx(a_ref[i], rel=1e-10, abs=1e-9)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(condensation="exact"), "condensation"), (dict(condensation=None), "condensation"),
+    (dict(model="coupled", condensation="cubic"), "condensation"),
+    (dict(model="condensed", condensation="cubic", foundation=Foundation(k=2.89e7, lam=8.95e8, eps=-1e8)),
+     "foundation.eps"),
+])
+def test_bad_condensation_raises_before_any_work(no_work, kwargs, name):
+    args = dict(n_samples=10**12, model="condensed", seed=0)
+    args.update(kwargs)
+    foundation = args.pop("foundation", HC)
+    with pytest.raises(ValueError, match=f"'{name}'"):
+        monte_carlo(BLOCK, foundation, WHITE, **args)
+
+
+def test_cubic_condensed_run_records_its_condensation():
+    ds = small_run(model="condensed", condensation="cubic")
+    paper = small_run(model="condensed")
+    assert ds.attrs["condensation"] == "cubic" and paper.attrs["condensation"] == "paper"
+    assert ds.attrs["theta_ul"] == cubic.uplift_threshold(BLOCK, HC)
+    assert ds.attrs["C1"] == pytest.approx(cubic.damping_at_rest(BLOCK, HC), rel=1e-15)
+    assert ds.attrs["theta_capacity"] == math.inf and "condensation" not in small_run().attrs
+    assert not np.allclose(ds.var_theta.values[1:], paper.var_theta.values[1:], rtol=1e-3, atol=0.0)
+
+
+def test_cubic_condensed_run_with_eps_zero_is_the_paper_run():
+    bed = Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
+    strong = WhiteNoise(S0=2.4e-3, envelope=Envelope(4.0, 2.0))
+    # the two C, K agree to rounding: at a tight tolerance the runs differ by integration error only
+    # (~3e-6 relative here; 7e-4 at the default rtol: the strongly nonlinear samples amplify it)
+    cub = small_run(model="condensed", condensation="cubic", foundation=bed, excitation=strong, t_end=4.0, rtol=1e-10)
+    paper = small_run(model="condensed", foundation=bed, excitation=strong, t_end=4.0, rtol=1e-10)
+    assert float(paper.p_uplift.max()) > 0.3
+    for name in ("var_theta", "var_theta_dot"):
+        np.testing.assert_allclose(cub[name].values, paper[name].values, rtol=1e-4,
+                                   atol=1e-9 * float(paper[name].max()))
+
+
+def test_samples_beyond_the_capacity_angle_are_flagged_diverged():
+    bed = Foundation(k=2.89e7, lam=8.95e8, eps=-2e7)
+    cap = cubic.capacity_angle(BLOCK, bed)
+    t_out = np.linspace(0.0, 0.01, 3)
+    outs, flags = _run_kernel(kern.MODEL_CONDENSED, np.zeros(200), t_out, bed, [1.01 * cap, 0.0, 0.0, 0.0],
+                              condensation="cubic")
+    peak, status, reason = flags[0], flags[1], flags[2]
+    assert status[0] == kern.STATUS_DIVERGED and reason[0] == kern.REASON_NO_EQUILIBRIUM
+    assert peak[0] > cap
+    ok, ok_flags = _run_kernel(kern.MODEL_CONDENSED, np.zeros(200), t_out, bed, [0.9 * cap, 0.0, 0.0, 0.0],
+                               condensation="cubic")
+    assert ok_flags[1][0] == kern.STATUS_OK
+    ds = small_run(model="condensed", condensation="cubic", foundation=bed,
+                   excitation=WhiteNoise(S0=5e-4, envelope=Envelope(4.0, 2.0)), t_end=3.0)
+    assert int(ds.n_diverged) > 0 and "capacity angle" in ds.attrs["diverged_reasons"]
+    assert np.all(ds.peak_abs_theta.values[ds.diverged.values] > cap)
+
+
+def test_cubic_linear_regime_matches_the_cubic_lyapunov_solution():
+    """Hardening bed, tiny input: the cubic condensed MCS follows the cubic SL (not the paper's)."""
+    from screening.response import linearize
+    excitation = WhiteNoise(S0=1e-6, envelope=Envelope(4.0, 2.0))
+    ref = linearize(BLOCK, HC, excitation, t_end=8.0, dt=0.05, condensation="cubic")
+    ds = monte_carlo(BLOCK, HC, excitation, n_samples=1000, model="condensed", condensation="cubic", t_end=8.0,
+                     seed=12, progress=False)
+    at = dict(t=[2.0, 3.0, 5.0, 8.0], method="nearest")
+    mc_var, se = ds.var_theta.sel(**at).values, ds.var_theta_se.sel(**at).values
+    assert np.all(np.abs(mc_var - ref.var_theta.sel(**at).values) < 3 * se)
