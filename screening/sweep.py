@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import errno
 import fcntl
 import json
 import logging
@@ -62,6 +63,7 @@ import os
 import sys
 import time
 import uuid
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -411,7 +413,7 @@ class PartialStore:
                     if not np.array_equal(data[name], value):
                         return None
                 return {k: data[k] for k in data.files if k != "__key__" and k not in check}
-        except (OSError, ValueError, KeyError, EOFError):
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):   # BadZipFile: truncated/corrupt part
             return None
 
     def _read_manifest(self):
@@ -769,8 +771,11 @@ def dask_client(workers=2, scheduler=None, client=None):
             c.close()
         return
     try:
+        # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
+        # that port is taken (another run, another cluster): give it a free port on localhost instead
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=None, silence_logs=logging.ERROR,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     except Exception as exc:                          # noqa: BLE001 - dask raises RuntimeError & co
         raise SweepError(f"cannot start a local dask cluster of {workers} worker(s): "
                          f"{type(exc).__name__}: {exc}") from None
@@ -832,8 +837,13 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
         except Exception as exc:                      # noqa: BLE001 - e.g. screening missing on a worker
             raise SweepError(f"the dask workers cannot run the solver: {_one_line(exc)}") from None
         timings["warm_up"] = time.perf_counter() - t0
-        _SweepRun(c, study, out, progress, log, on_batch, report, complevel).run(
-            batch_size or default_batch_size(study, n_workers))
+        try:
+            _SweepRun(c, study, out, progress, log, on_batch, report, complevel).run(
+                batch_size or default_batch_size(study, n_workers))
+        except (OSError, RuntimeError) as exc:
+            if not _is_write_error(exc):
+                raise
+            raise SweepError(_write_error_message(out, exc)) from None
         t0 = time.perf_counter()
     timings["shutdown"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
@@ -842,6 +852,32 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
 
 def _one_line(exc):
     return f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
+
+
+#: errno values of a failing file system (full, quota, too large, read-only, permissions, I/O, gone).
+_DISK_ERRNOS = frozenset(getattr(errno, name) for name in (
+    "ENOSPC", "EDQUOT", "EFBIG", "EACCES", "EPERM", "EROFS", "EIO", "ENOENT", "ENOTDIR", "EISDIR",
+    "ENAMETOOLONG", "ESTALE", "EXDEV") if hasattr(errno, name))
+
+
+def _is_write_error(exc):
+    """A failure of the disk (full, read-only, permission): an OS error on a file or with a file-system
+    errno (not a network error of dask), or an error of the netCDF/HDF5 library (which reports a failed
+    write as ``RuntimeError: NetCDF: ...``)."""
+    if isinstance(exc, OSError):
+        return exc.filename is not None or exc.errno in _DISK_ERRNOS
+    return str(exc).startswith("NetCDF:")
+
+
+def _write_error_message(out, exc):
+    """One line: what could not be written, why, and that the finished batches are kept."""
+    partial = PartialStore(out).dir
+    where = getattr(exc, "filename", None) or f"the results of {out}"
+    reason = (exc.strerror if isinstance(exc, OSError) and exc.strerror
+              else " ".join(str(exc).split())[:200])
+    kept = len(list(partial.glob("batch-*.npz"))) if partial.is_dir() else 0
+    return (f"cannot write {where}: {reason}; the {kept} finished batch(es) are kept in {partial}: "
+            "free some space or fix the permissions, then re-run the same command to resume")
 
 
 class _SweepRun:
