@@ -172,7 +172,12 @@ def cmd_run(args):
         stem = out.name[:-3] if out.name.endswith(".nc") else out.name
         pngs = [out.parent / f"{stem}_{k}.png" for k in ("histories", "peaks")]
         if not report.reused or not all(p.exists() for p in pngs):
-            for path in _plot(out, out.parent):
+            try:
+                paths = _plot(out, out.parent)
+            except SweepError as exc:
+                raise SweepError(f"{exc}; the result {out} is complete, re-run 'screening plot {out}' "
+                                 "for the figures") from None
+            for path in paths:
                 _say(f"wrote {path}")
     if report.n_failed_batches:
         _say(f"warning: {report.n_failed_batches} batch(es) failed; their points have status task_failed "
@@ -180,14 +185,35 @@ def cmd_run(args):
     return EXIT_OK
 
 
+def _read_error(result, exc):
+    """A ``ResultError`` for data that cannot be read (netCDF/HDF5 report it as ``RuntimeError``)."""
+    from .sweep import ResultError
+
+    return ResultError(f"{result}: cannot read the data of the result file, it is damaged "
+                       f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})")
+
+
+def _write_error(path, exc):
+    from .sweep import SweepError
+
+    reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else " ".join(str(exc).split())[:200]
+    return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {reason}")
+
+
 def _plot(result, out_dir):
+    """All figures of ``result`` into ``out_dir`` (none left behind on failure, one-line errors)."""
     from .plots import plot_result
     from .sweep import open_result
 
     result = Path(result)
     with open_result(result) as ds:
         stem = result.name[:-3] if result.name.endswith(".nc") else result.name
-        return plot_result(ds, stem, out_dir)
+        try:
+            return plot_result(ds, stem, out_dir)
+        except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
+            raise _read_error(result, exc) from None
+        except OSError as exc:                  # the PNG could not be written
+            raise _write_error(out_dir, exc) from None
 
 
 def cmd_plot(args):
@@ -217,20 +243,27 @@ def cmd_fragility(args):
         dim = args.dim or "S0"
         stem = result.name[:-3] if result.name.endswith(".nc") else result.name
         out = check_output_path(args.out or result.with_name(f"{stem}_fragility.nc"))
-        frag = fragility_dataset(ds, args.threshold, args.relative_to, args.method, dim).load()
+        try:
+            frag = fragility_dataset(ds, args.threshold, args.relative_to, args.method, dim).load()
+        except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
+            raise _read_error(result, exc) from None
     frag.attrs.update(source_result=str(result), screening_version=__version__,
                       history=f"screening fragility {result} --threshold {args.threshold}"
                               + (f" --relative-to {args.relative_to}" if args.relative_to else ""))
     tmp = out.with_name(out.name + ".tmp")
     encoding = {name: {"_FillValue": None} for name in frag.coords}
+    png_path = out.with_suffix(".png")
+    png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
-        tmp.replace(out)
-    except OSError as exc:
+        png = plot_fragility(frag, dim, png_path)
+        tmp.replace(out)                         # the netCDF appears last: both or neither
+    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
         tmp.unlink(missing_ok=True)
-        raise SweepError(f"cannot write {out}: {exc.strerror or exc}") from None
+        if not png_existed:
+            png_path.unlink(missing_ok=True)
+        raise _write_error(out, exc) from None
     print(out)
-    png = plot_fragility(frag, dim, out.with_suffix(".png"))
     if png is not None:
         print(png)
     p = frag["p_exceed"].values
@@ -244,7 +277,11 @@ def cmd_info(args):
     from .sweep import open_result
 
     with open_result(args.result) as ds:
-        print(describe(ds, args.result))
+        try:
+            text = describe(ds, args.result)
+        except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
+            raise _read_error(args.result, exc) from None
+    print(text)
     return EXIT_OK
 
 
@@ -279,8 +316,10 @@ def describe(ds, path="result"):
             f"{n} = {_fmt(float(ds[n]))} {ds[n].attrs.get('units', '')}".rstrip() for n in fixed))
     per_case = [n for n, var in ds.coords.items() if var.dims == ("case",) and n not in ("case", "case_name")]
     if per_case:
-        lines.append("per-case parameters: " + ", ".join(per_case))
-    labels = [f"{k} = {ds.attrs[k]}" for k in ("contact", "excitation", "envelope") if k in ds.attrs]
+        lines.append("per-case parameters: " + ", ".join(
+            n + (f" ({', '.join(str(v) for v in ds[n].values)})" if ds[n].dtype.kind in "OUS" else "")
+            for n in per_case))
+    labels = [f"{k} = {ds.attrs[k]}" for k in ("contact", "condensation", "excitation", "envelope") if k in ds.attrs]
     if labels:
         lines.append("models: " + ", ".join(labels))
     t = ds["t"].values
@@ -308,9 +347,29 @@ def describe(ds, path="result"):
             rel_dot = float(ds["mcs_rel_error_peak_var_theta_dot"].values[i])
             over = int(ds["mcs_n_overturned"].values[i])
             div = int(ds["mcs_n_diverged"].values[i])
-            lines.append(f"  {point_label(ds, index)}: peak var_theta rel. error {100 * rel:+.1f} %, "
-                         f"peak var_theta_dot {100 * rel_dot:+.1f} %, overturned {over}, diverged {div}")
+            lines.append(f"  {point_label(ds, index)}: " + _spot_summary(
+                rel, rel_dot, over, div, int(ds["mcs_n_used"].values[i]),
+                bool("mcs_status" in ds and int(ds["mcs_status"].values[i]) != 0)))
     return "\n".join(lines)
+
+
+def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):
+    """One spot check in plain words: the relative errors, or why there are none."""
+    n = n_overturned + n_diverged + n_used
+    if failed:
+        return "the Monte Carlo run failed (no statistics; see the run log)"
+    if n_used == 0:
+        if n_overturned == n:
+            return f"all {n} samples overturned: no statistics (the block topples at this point)"
+        if n_diverged == n:
+            return f"all {n} samples diverged: no statistics"
+        return f"no usable sample ({n_overturned} overturned, {n_diverged} diverged of {n}): no statistics"
+
+    def pct(x):
+        return f"{100 * x:+.1f} %" if np.isfinite(x) else "n/a (the linearization stopped)"
+
+    return (f"peak var_theta rel. error {pct(rel)}, peak var_theta_dot {pct(rel_dot)}, "
+            f"overturned {n_overturned}, diverged {n_diverged} of {n}")
 
 
 if __name__ == "__main__":

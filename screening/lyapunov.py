@@ -64,6 +64,9 @@ CONDENSATION_CODES = {"paper": 0.0, "cubic": 1.0}
 TABLE_CHUNK = 256
 
 DEFAULT_RTOL = 1e-7
+
+#: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
+SCALE_FLOOR = 1e-300
 DEFAULT_MAX_STEPS = 200_000
 
 
@@ -299,12 +302,14 @@ def _linear_scales(p, kt, scale):
         idx = 0
         for i in range(4):
             for j in range(i, 4):
-                scale[idx] = math.sqrt(diag[i] * diag[j])
+                scale[idx] = math.sqrt(diag[i]) * math.sqrt(diag[j])   # no S0^2 underflow
                 idx += 1
     else:
         scale[0] = diag[0]
-        scale[1] = math.sqrt(diag[0] * diag[1])
+        scale[1] = math.sqrt(diag[0]) * math.sqrt(diag[1])
         scale[2] = diag[1]
+    for i in range(scale.size):        # vanishing S0 (< ~1e-295): keep the error norm finite
+        scale[i] = max(scale[i], SCALE_FLOOR)
 
 
 @numba.njit(cache=True)

@@ -17,6 +17,7 @@ Only the slices that are drawn are read from the file.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -101,6 +102,20 @@ def _new_figure(width, height):
     return fig
 
 
+def save_figure(fig, path):
+    """Write ``fig`` as PNG to ``path`` atomically (``<path>.tmp`` then rename): a failing write
+    (disk full, permission) leaves no partial file behind and raises the ``OSError``."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        fig.savefig(tmp, format="png")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
 def _label(ds, name):
     units = ds[name].attrs.get("units")
     return f"{name} [{units}]" if units else name
@@ -127,7 +142,7 @@ def plot_histories(ds, path, points=None):
     axes[-1].set_xlabel("t [s]")
     axes[0].legend(fontsize=7, loc="best")
     fig.suptitle(f"{ds.attrs.get('title', '')}\nstochastic linearization: representative points", fontsize=9)
-    fig.savefig(path)
+    save_figure(fig, path)
     return Path(path)
 
 
@@ -155,7 +170,7 @@ def plot_peaks(ds, path):
         for ax, name in zip(axes, PEAK_PANELS):
             _map(ds, name, ydim, xdim, rest, ax, fig)
     fig.suptitle(f"{ds.attrs.get('title', '')}\npeak statistics over the grid{note}", fontsize=9)
-    fig.savefig(path)
+    save_figure(fig, path)
     return Path(path)
 
 
@@ -240,7 +255,7 @@ def plot_spots(ds, path):
     axes[-1, 0].set_xlabel("t [s]")
     axes[-1, 1].set_xlabel("t [s]")
     fig.suptitle(f"{ds.attrs.get('title', '')}\nspot checks against Monte Carlo", fontsize=9)
-    fig.savefig(path)
+    save_figure(fig, path)
     return Path(path)
 
 
@@ -291,7 +306,7 @@ def plot_spot_panels(ds, i, path):
     over = int(ds["mcs_n_overturned"].values[i])
     fig.suptitle(f"{point_label(ds, index)}  ({over} of {ds.attrs.get('mcs_samples', '?')} Monte Carlo "
                  f"samples overturned, excluded from the ensemble)", fontsize=9)
-    fig.savefig(path)
+    save_figure(fig, path)
     return Path(path)
 
 
@@ -338,17 +353,32 @@ def plot_fragility(frag, dim, path, max_curves=8):
             else f"{frag.attrs['threshold']:.3g} x {rel}")
     fig.suptitle(f"Fragility: P(max |theta| > {what}) over the record ({frag.attrs.get('method', '')})",
                  fontsize=9)
-    fig.savefig(path)
+    save_figure(fig, path)
     return Path(path)
 
 
 def plot_result(ds, stem, out_dir):
-    """Write all figures of dataset ``ds`` as ``out_dir/<stem>_<kind>.png``; returns the paths."""
+    """Write all figures of dataset ``ds`` as ``out_dir/<stem>_<kind>.png``; returns the paths.
+
+    All or nothing: if one figure fails (unreadable data, failing write), the figures this
+    call created are removed before the error propagates.
+    """
     out_dir = Path(out_dir)
-    paths = [plot_histories(ds, out_dir / f"{stem}_histories.png"),
-             plot_peaks(ds, out_dir / f"{stem}_peaks.png"),
-             plot_spots(ds, out_dir / f"{stem}_spots.png")]
+    jobs = [(plot_histories, out_dir / f"{stem}_histories.png"),
+            (plot_peaks, out_dir / f"{stem}_peaks.png"),
+            (plot_spots, out_dir / f"{stem}_spots.png")]
     n_spots = ds.sizes.get("spot", 0)
     for i in range(min(n_spots, MAX_SPOT_FIGURES)):
-        paths.append(plot_spot_panels(ds, i, out_dir / f"{stem}_spot{i}_{spot_file_label(ds, i)}.png"))
+        path = out_dir / f"{stem}_spot{i}_{spot_file_label(ds, i)}.png"
+        jobs.append((lambda d, p, i=i: plot_spot_panels(d, i, p), path))
+    existed = {path for _, path in jobs if path.exists()}
+    paths = []
+    try:
+        for make, path in jobs:
+            paths.append(make(ds, path))
+    except BaseException:
+        for path in paths:
+            if path is not None and path not in existed:
+                Path(path).unlink(missing_ok=True)
+        raise
     return [p for p in paths if p is not None]

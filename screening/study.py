@@ -19,6 +19,7 @@ Example (SI units throughout)::
 
     [foundation]
     contact = "hunt_crossley"   # or "winkler" (then give c instead of lam)
+    condensation = "paper"      # or "cubic" (static balance with the eps term; see below)
     k = 2.89e7                  # N m-2
     lam = 8.95e8                # N s m-4
     eps = [-6e5, 0.0, 6e7]      # m-2: a list -> dimension "eps"
@@ -56,6 +57,16 @@ to at least one case.  The cases become the leading dimension ``case`` of the re
 outer product with whatever the base tables sweep.  A case cannot override a swept key;
 every case is validated on its own (errors are prefixed with ``case 'name':``).
 
+Condensation
+------------
+``foundation.condensation`` selects the quasi-static condensation behind the linearization
+and the condensed Monte Carlo model: ``"paper"`` (default, eqs. 17–25) or ``"cubic"`` (the
+static vertical balance keeps the ``eps`` term, :mod:`screening.cubic_condensation`; closer
+to the coupled model on hardening beds, slower to linearize).  Cases may override it, so one
+study can compare both.  ``"cubic"`` needs a bed that can carry the block through uplift
+onset, ``|eps| (m g / (2 b k))^2 < 2/27``; every grid point is checked before any work.
+Coupled Monte Carlo spot checks do not depend on it.
+
 Spot points
 -----------
 ``mcs.points = "auto"`` picks, after the sweep, the ``count`` status-ok points with the
@@ -82,6 +93,8 @@ from types import MappingProxyType
 import numpy as np
 
 from . import __version__
+from .condensed import CONDENSATIONS
+from .cubic_condensation import SOFTENING_LIMIT
 from .excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from .lyapunov import DEFAULT_MAX_STEPS, DEFAULT_RTOL
 from .model import Block, Foundation, WinklerFoundation
@@ -107,13 +120,13 @@ _NUMERIC = {
 }
 _TABLE_KEYS = {
     "block": ("m", "b", "h", "I_cm", "g"),
-    "foundation": ("contact", "k", "lam", "c", "eps"),
+    "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
     "excitation": ("kind", "S0", "omega_g", "zeta_g", "envelope", "T1", "T2"),
 }
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
              "case")
 _RANGE_KEYS = ("start", "stop", "num", "log")
-_DEFAULTS = {"contact": "hunt_crossley", "envelope": "exponential", "eps": 0.0, "g": 9.81,
+_DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential", "eps": 0.0, "g": 9.81,
              "T1": 4.0, "T2": 2.0}
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
@@ -138,6 +151,7 @@ class Case:
     excitation: str
     envelope: str
     params: MappingProxyType
+    condensation: str = "paper"
 
     def applies(self, name):
         """Whether parameter ``name`` is meaningful for this case."""
@@ -404,6 +418,8 @@ def _resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     contact = _choice(foundation, "contact", CONTACTS, f"{where}foundation.", _DEFAULTS["contact"])
     kind = _choice(excitation, "kind", EXCITATIONS, f"{where}excitation.")
     envelope = _choice(excitation, "envelope", ENVELOPES, f"{where}excitation.", _DEFAULTS["envelope"])
+    condensation = _choice(foundation, "condensation", CONDENSATIONS, f"{where}foundation.",
+                           _DEFAULTS["condensation"])
     applicable = _applicable(contact, kind, envelope)
     params = {}
     for tname, table in (("block", block), ("foundation", foundation), ("excitation", excitation)):
@@ -425,8 +441,29 @@ def _resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     if envelope == "exponential" and params["T2"] >= params["T1"]:
         raise StudyError(f"{where}excitation.T2: must be smaller than excitation.T1 "
                          f"(got T1={params['T1']!r}, T2={params['T2']!r})")
-    return Case(name=name, contact=contact, excitation=kind, envelope=envelope,
-                params=MappingProxyType(params))
+    case = Case(name=name, contact=contact, excitation=kind, envelope=envelope,
+                params=MappingProxyType(params), condensation=condensation)
+    if condensation == "cubic":
+        _check_cubic_bearing(case, sweeps, where)
+    return case
+
+
+def _check_cubic_bearing(case, sweeps, where):
+    """Every grid point of a ``condensation = "cubic"`` case must satisfy
+    ``-eps (m g / (2 b k))^2 < 2/27`` (:func:`screening.cubic_condensation.check_bearing`)."""
+    names = [n for n in ("m", "b", "g", "k", "eps") if n in sweeps]
+    grids = np.meshgrid(*(sweeps[n] for n in names), indexing="ij") if names else []
+    p = {n: case.params[n] for n in ("m", "b", "g", "k", "eps") if n not in sweeps}
+    p.update(zip(names, grids))
+    z_lin = p["m"] * p["g"] / (2.0 * p["b"] * p["k"])
+    load = -np.asarray(p["eps"] * z_lin ** 2, dtype=float)
+    if np.any(load >= SOFTENING_LIMIT):
+        j = np.unravel_index(int(np.argmax(load)), load.shape) if load.ndim else ()
+        at = ", ".join(f"{n} = {float(sweeps[n][i])!r}" for n, i in zip(names, j))
+        eps = float(np.broadcast_to(p["eps"], load.shape)[j])
+        raise StudyError(f"{where}foundation.condensation: 'cubic' needs a bed that carries the block "
+                         f"through uplift onset, |eps| (m g / (2 b k))^2 < 2/27, but eps = {eps!r} 1/m^2"
+                         + (f" at {at}" if at else "") + " fails it (use condensation = 'paper')")
 
 
 def _build(raw, text, name, source):

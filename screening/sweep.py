@@ -194,13 +194,14 @@ def batch_models(study, batch):
     return build_models(study.cases[batch.case], batch_values(study, batch))
 
 
-def solve_batch(block, foundation, excitation, t_out, rtol, max_steps):
+def solve_batch(block, foundation, excitation, t_out, rtol, max_steps, condensation="paper"):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     Returns a dict of 1-d/2-d arrays over the batch: the histories as ``float32`` (points x
     time), the summaries (``float64``/``int32``), ``status`` (``int8``) and ``theta_ul`` [rad].
     """
-    res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps)
+    res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
+                        condensation=condensation)
     n = res["status"].size
     out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in HISTORY_VARIABLES}
     out["status"] = res["status"].reshape(n).astype(np.int8)
@@ -208,7 +209,7 @@ def solve_batch(block, foundation, excitation, t_out, rtol, max_steps):
         out[name] = res[name].reshape(n).astype(np.float64)
     for name in SUMMARY_INTS:
         out[name] = res[name].reshape(n).astype(np.int32)
-    out["theta_ul"] = np.broadcast_to(uplift_threshold(block, foundation), res["status"].shape
+    out["theta_ul"] = np.broadcast_to(uplift_threshold(block, foundation, condensation), res["status"].shape
                                       ).reshape(n).astype(np.float64)
     return out
 
@@ -241,12 +242,15 @@ def select_spots(study, status, peak_p_uplift):
     return [tuple(int(i) for i in np.unravel_index(j, study.shape)) for j in order]
 
 
-def spot_task(block, foundation, excitation, samples, model, t_end, dt, seed):
-    """The dask task of one spot check: :func:`screening.montecarlo.monte_carlo` reduced to arrays."""
+def spot_task(block, foundation, excitation, samples, model, t_end, dt, seed, condensation="paper"):
+    """The dask task of one spot check: :func:`screening.montecarlo.monte_carlo` reduced to arrays.
+
+    ``condensation`` applies to ``model="condensed"`` only (the coupled model has none).
+    """
     from .montecarlo import monte_carlo
 
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=t_end,
-                     dt=dt, seed=seed)
+                     dt=dt, seed=seed, condensation=condensation if model == "condensed" else "paper")
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
     n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
     out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
@@ -286,7 +290,8 @@ def parameter_table(study):
     Returns ``(constants, per_case, labels, case_labels)``: ``constants`` maps numeric
     parameter names to floats (same for every case, not swept), ``per_case`` maps the other
     non-swept numeric parameters to arrays over cases (NaN where one does not apply),
-    ``labels``/``case_labels`` do the same for ``contact``, ``excitation`` and ``envelope``.
+    ``labels``/``case_labels`` do the same for ``contact``, ``condensation``, ``excitation`` and
+    ``envelope``.
     """
     names = [n for n in PARAMETERS if n not in study.sweeps]
     values = {}
@@ -303,7 +308,7 @@ def parameter_table(study):
     constants = {n: float(v[0]) for n, v in values.items() if np.all(v == v[0])}
     per_case = {n: v for n, v in values.items() if n not in constants}
     labels, case_labels = {}, {}
-    for name in ("contact", "excitation", "envelope"):
+    for name in ("contact", "condensation", "excitation", "envelope"):
         col = [getattr(c, name) for c in study.cases]
         if len(set(col)) == 1:
             labels[name] = col[0]
@@ -926,7 +931,8 @@ class _SweepRun:
     # -- linearization batches
     def _submit(self, batch, suffix=""):
         return self.client.submit(solve_batch, *batch_models(self.study, batch), self.study.times,
-                                  self.study.rtol, self.study.max_steps, retries=TASK_RETRIES, pure=False,
+                                  self.study.rtol, self.study.max_steps,
+                                  self.study.cases[batch.case].condensation, retries=TASK_RETRIES, pure=False,
                                   key=f"solve_batch-{self.token}-{batch.index:06d}{suffix}")
 
     def _write(self, batch, part, save):
@@ -1004,7 +1010,7 @@ def _spot_checks(client, study, store, result, progress, log):
         if results[i] is None:
             case, values = point_values(study, index)
             fut = client.submit(spot_task, *build_models(study.cases[case], values), spec.samples, spec.model,
-                                study.t_end, study.dt, spec.seed, key=f"spot_check-{token}-{i:04d}",
+                                study.t_end, study.dt, spec.seed, study.cases[case].condensation, key=f"spot_check-{token}-{i:04d}",
                                 retries=TASK_RETRIES, pure=False)
             pending[fut] = i
     with Progress(len(spots), label=f"spot checks ({spec.model}, {spec.samples} samples)",

@@ -220,13 +220,6 @@ def test_corner_grid_in_one_batch_is_finite_or_flagged_and_reaches_the_blow_up_l
         assert np.any(low == STATUS_OK)
 
 
-@pytest.mark.xfail(strict=True, raises=ZeroDivisionError, reason=(
-    "bug in screening.lyapunov (_linear_scales/_solve_point): the absolute-tolerance scales underflow "
-    "to 0 for vanishing S0 -- Kanai-Tajimi: scale = sqrt(diag[i] * diag[j]) forms the product ~S0^2, "
-    "which underflows below S0 ~ 1e-159 (paper block); white noise: diag[0] = var_theta_dot / w^2 "
-    "underflows below S0 ~ 1e-297 -- so the first error estimate is 0 / (rtol * 0 + rtol * 0) and "
-    "numba raises ZeroDivisionError instead of returning a result or a flag (S0 > 0 passes "
-    "validation; far below the 1e-12 lower end of the screened range)"))
 @pytest.mark.parametrize("excitation", [KanaiTajimi(1e-200, 10.0, 0.4), WhiteNoise(1e-305)],
                          ids=["kanai_tajimi_1e-200", "white_1e-305"])
 def test_vanishing_intensity_far_below_the_range_does_not_raise(excitation):

@@ -372,13 +372,9 @@ def test_spot_check_with_every_sample_overturning_is_recorded_not_fatal(all_over
         assert ds["status"].values[1] != STATUS_OK                             # the linearization topples too
     assert main(["info", str(all_overturned)]) == 0
     spot_line = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("S0=0.5")]
-    assert len(spot_line) == 1 and "overturned 4" in spot_line[0]
+    assert len(spot_line) == 1 and "all 4 samples overturned" in spot_line[0]
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "screening.cli.describe prints the spot line of a check whose samples all overturned as "
-    "'peak var_theta rel. error +nan %, peak var_theta_dot +nan %, overturned 4, diverged 0': the counts "
-    "are there but not a plain 'all 4 samples overturned' (enable once describe says so)"))
 def test_info_says_plainly_that_every_spot_sample_overturned(all_overturned, capsys):
     assert main(["info", str(all_overturned)]) == 0
     spot_line = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("S0=0.5")][0]
@@ -608,7 +604,7 @@ def _corrupt_data(good, path):
 
 
 def test_corrupt_data_chunks_are_a_corrupt_file_not_a_foreign_one(tmp_path, result_file):
-    """Precondition of the xfail below: such a file opens (header intact) but its data cannot be read."""
+    """Precondition of the test below: such a file opens (header intact) but its data cannot be read."""
     path = _corrupt_data(result_file, tmp_path / "chunks.nc")
     with open_result(path) as ds:
         with pytest.raises(RuntimeError, match="NetCDF: HDF error"):
@@ -617,11 +613,6 @@ def test_corrupt_data_chunks_are_a_corrupt_file_not_a_foreign_one(tmp_path, resu
             ds["status"].values
 
 
-@pytest.mark.xfail(strict=True, raises=RuntimeError, reason=(
-    "screening.cli: a result file whose header is intact but whose data chunks are corrupt passes "
-    "sweep.open_result (lazy), then the first read of the data in describe()/plot_result()/fragility_dataset() "
-    "raises RuntimeError('NetCDF: HDF error'), which main() does not catch: traceback and exit 1 instead "
-    "of a one-line error and exit 2 (nothing is written)"))
 @pytest.mark.parametrize("command", [["info"], ["plot"], ["fragility", "--threshold", "0.1"]],
                          ids=["info", "plot", "fragility"])
 def test_result_with_corrupt_data_chunks_exits_2_with_one_line(tmp_path, result_file, capsys, command):
@@ -803,6 +794,32 @@ def test_cli_disk_full_exits_2_with_one_line_then_resumes(cli_on_client, referen
     compare_files(reference, out, ignore=("study_file", "study_name"))
 
 
+def test_cli_run_figure_write_failure_keeps_the_complete_result(cli_on_client, reference, tmp_path, capsys,
+                                                                 monkeypatch):
+    """The sweep finished and its file is in place; the disk fills while the PNGs are written:
+    one line saying the result is complete, exit 2, no partial PNG."""
+    from screening import plots
+
+    study = tmp_path / "grid.toml"
+    study.write_text(GRID)
+    out = tmp_path / "grid.nc"
+    original, calls = plots.save_figure, []
+
+    def full_after_one(fig, path):
+        calls.append(path)
+        if len(calls) == 2:
+            raise _enospc(path)
+        return original(fig, path)
+
+    monkeypatch.setattr(plots, "save_figure", full_after_one)
+    assert main(["run", str(study), "--out", str(out), "--batch-size", "3", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"wrote {out}: 20 points")                   # the sweep's own report, then
+    line = one_line_error(err.split("\n", 1)[1])                       # one line for the failure
+    assert "No space left on device" in line and f"the result {out} is complete" in line
+    compare_files(reference, out, ignore=("study_file", "study_name"))
+    assert sorted(p.name for p in tmp_path.glob("*.png*")) == []       # the first figure was removed too
+
 def test_corrupt_part_file_is_recomputed_on_resume(client, reference, tmp_path):
     """A part file damaged while the run was down (e.g. a disk error) is computed again, not trusted."""
     study = parse_study(GRID)
@@ -831,12 +848,6 @@ def _limited_file_size(limit):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "screening.cli: a failing write of the figures or of the fragility file (disk full, file too large, "
-    "permission) is not turned into a one-line error -- cmd_plot/_plot let matplotlib's OSError "
-    "(e.g. [Errno 27] File too large) through, and cmd_fragility catches only OSError around "
-    "frag.to_netcdf while netCDF reports the failed write as RuntimeError('NetCDF: HDF error'), which also "
-    "leaves <out>.tmp behind: traceback and exit 1 instead of exit 2"))
 @pytest.mark.parametrize("command", ["plot", "fragility"])
 def test_write_failure_of_plot_or_fragility_is_one_line_and_leaves_nothing(tmp_path, result_file, command):
     out = tmp_path / "out"

@@ -120,6 +120,45 @@ foundation = {contact = "winkler", c = 2e4, lam = 0.0}
     assert "lam" not in s.cases[1].params
 
 
+def test_condensation_defaults_to_the_paper_and_cases_may_switch_it():
+    s = parse_study(BASE)
+    assert s.cases[0].condensation == "paper"
+    text = edit(BASE, "eps = [-6e5, 0.0, 6e7]", "eps = [0.0, 6e7]") + """
+[[case]]
+name = "paper"
+[[case]]
+name = "cubic"
+foundation.condensation = "cubic"
+"""
+    s = parse_study(text)
+    assert [c.condensation for c in s.cases] == ["paper", "cubic"]
+    s = parse_study(edit(BASE, 'contact = "hunt_crossley"', 'contact = "hunt_crossley"\ncondensation = "cubic"'))
+    assert s.cases[0].condensation == "cubic"      # -6e5 1/m^2 carries the paper block
+
+
+@pytest.mark.parametrize("value, needle", [
+    ('"exact"', r"foundation\.condensation: must be one of 'paper', 'cubic' \(got 'exact'\)"),
+    ("1", r"foundation\.condensation: must be one of .* \(got int\)"),
+])
+def test_bad_condensation_names_the_key(value, needle):
+    with pytest.raises(StudyError, match=needle):
+        parse_study(edit(BASE, 'contact = "hunt_crossley"', f'contact = "hunt_crossley"\ncondensation = {value}'))
+
+
+def test_cubic_condensation_checks_every_grid_point_before_any_work():
+    # |eps| (m g / (2 b k))^2 = 2/27 at eps = -(2/27) / z_lin^2; z_lin = 8.67*9.81/(2*0.035*k)
+    k = 1e6
+    z_lin = 8.67 * 9.81 / (2 * 0.035 * k)
+    limit = -(2.0 / 27.0) / z_lin**2
+    text = edit(BASE, "k = 2.89e7", f"k = {k!r}")
+    text = edit(text, "eps = [-6e5, 0.0, 6e7]", f"eps = [0.0, {0.5 * limit!r}, {1.01 * limit!r}]")
+    text = edit(text, 'contact = "hunt_crossley"', 'contact = "hunt_crossley"\ncondensation = "cubic"')
+    with pytest.raises(StudyError, match=r"foundation\.condensation: 'cubic' needs .* at eps = "):
+        parse_study(text)
+    parse_study(text.replace(f", {1.01 * limit!r}]", "]"))            # the carrying beds pass
+    parse_study(text.replace('condensation = "cubic"', 'condensation = "paper"'))   # the paper's has no limit
+
+
 def test_build_models_structure():
     text = edit(BASE, 'kind = "white"', 'kind = "kanai_tajimi"\nomega_g = 10.0\nzeta_g = 0.4')
     s = parse_study(text)

@@ -16,7 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from screening import sweep
+from screening.condensed import uplift_threshold
 from screening.lyapunov import solve_moments
+from screening.montecarlo import monte_carlo
 from screening.study import build_models, parse_study
 from screening.sweep import (STATUS_TASK_FAILED, PartialStore, SweepError, default_batch_size,
                              hyperslabs, plan_batches, relative_peak_error, run_sweep, select_spots)
@@ -159,6 +161,42 @@ def test_cases_with_both_excitations_match_direct_solves(client, tmp_path):
                 np.testing.assert_array_equal(ds[name].values[i], direct[name].astype(np.float32))
             for name in ("peak_var_theta", "min_k_eq", "t_stop", "n_steps"):
                 np.testing.assert_array_equal(ds[name].values[i], direct[name])
+
+
+def test_cubic_condensation_case_matches_direct_solves(client, tmp_path):
+    text = GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = [-6e5, 6e7]") + """
+[[case]]
+name = "paper"
+[[case]]
+name = "cubic"
+foundation.condensation = "cubic"
+[mcs]
+points = [{case = "cubic", eps = 6e7, S0 = 2.4e-3}]
+samples = 6
+model = "condensed"
+seed = 3
+"""
+    study = parse_study(text)
+    out = tmp_path / "cubic.nc"
+    run_sweep(study, out, client=client, progress=False, log=quiet)
+    with xr.open_dataset(out) as ds:
+        assert list(ds["condensation"].values) == ["paper", "cubic"]
+        eps, s0 = np.meshgrid(study.sweeps["eps"], study.sweeps["S0"], indexing="ij")
+        for i, case in enumerate(study.cases):
+            models = build_models(case, {"eps": eps, "S0": s0})
+            direct = solve_moments(*models, study.times, condensation=case.condensation)
+            for name in ("var_theta", "c_eq", "k_eq"):
+                np.testing.assert_array_equal(ds[name].values[i], direct[name].astype(np.float32))
+            np.testing.assert_array_equal(ds["status"].values[i], direct["status"])
+            np.testing.assert_allclose(ds["theta_ul"].values[i],
+                                       uplift_threshold(*models[:2], condensation=case.condensation))
+        # the condensed spot check ran the cubic condensation, not the paper's
+        mc = monte_carlo(*build_models(study.cases[1], {"eps": 6e7, "S0": 2.4e-3}), n_samples=6,
+                         model="condensed", condensation="cubic", t_end=study.t_end, dt=study.dt, seed=3,
+                         progress=False)
+        np.testing.assert_allclose(ds["mcs_var_theta"].values[0], mc["var_theta"].values, rtol=1e-12)
+        # the hardening bed's cubic threshold sits below the paper's (z0 < z_lin)
+        assert ds["theta_ul"].values[1, 1, 0] < 0.99 * ds["theta_ul"].values[0, 1, 0]
 
 
 def test_a_failing_batch_is_retried_then_flagged(client, tmp_path, monkeypatch):
