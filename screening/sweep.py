@@ -404,9 +404,13 @@ class PartialStore:
     # -- internals
     def _save(self, path, result, **check):
         tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "wb") as fh:
-            np.savez(fh, __key__=np.asarray(self.manifest["key"]), **check, **result)
-        os.replace(tmp, path)
+        try:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, __key__=np.asarray(self.manifest["key"]), **check, **result)
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
 
     def _load(self, path, **check):
         """Arrays of a part file, or ``None`` if absent, unreadable or not this study's."""
@@ -1020,11 +1024,17 @@ def _spot_checks(client, study, store, result, progress, log):
             i = pending.pop(fut)
             try:
                 results[i] = fut.result()
-                store.save_spot(i, spots[i], results[i])
             except Exception as exc:                  # noqa: BLE001 - recorded as a failed spot check
                 log(f"warning: spot check {i} failed: {_one_line(exc)}")
                 results[i] = failed_spot(study.times.size, spec.samples)
                 failed[i] = True
+            else:
+                try:                                  # the resume record only: the result is kept
+                    store.save_spot(i, spots[i], results[i])
+                except OSError as exc:
+                    log(f"warning: cannot save the resume record of spot check {i} "
+                        f"({exc.strerror or _one_line(exc)}); its result is kept, an interrupted run "
+                        "would compute it again")
             fut.release()
             bar.update(1)
     result.write_spots(spots, results, failed, spec)

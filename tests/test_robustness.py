@@ -820,6 +820,25 @@ def test_cli_run_figure_write_failure_keeps_the_complete_result(cli_on_client, r
     compare_files(reference, out, ignore=("study_file", "study_name"))
     assert sorted(p.name for p in tmp_path.glob("*.png*")) == []       # the first figure was removed too
 
+def test_disk_full_while_saving_a_spot_record_keeps_the_spot_result(client, tmp_path, monkeypatch):
+    """The Monte Carlo result is computed; only its resume record cannot be written: the spot
+    check is kept in the file (not turned into a failed one) and a warning says what was lost."""
+    text = GRID + "[mcs]\npoints = [{eps = 6e7, S0 = 2.4e-3}]\nsamples = 4\nmodel = \"condensed\"\n"
+    study = parse_study(text)
+    messages = []
+
+    def no_space(self, i, index, result):
+        raise _enospc(self.spot_path(i))
+
+    monkeypatch.setattr(PartialStore, "save_spot", no_space)
+    run_sweep(study, tmp_path / "s.nc", client=client, progress=False, log=messages.append)
+    assert any("cannot save the resume record of spot check 0" in m and "No space left" in m for m in messages)
+    monkeypatch.undo()
+    run_sweep(study, tmp_path / "ref.nc", client=client, progress=False, log=quiet)
+    with xr.open_dataset(tmp_path / "s.nc") as ds, xr.open_dataset(tmp_path / "ref.nc") as ref:
+        assert int(ds["mcs_status"].values[0]) == 0
+        np.testing.assert_array_equal(ds["mcs_var_theta"].values, ref["mcs_var_theta"].values)
+
 def test_corrupt_part_file_is_recomputed_on_resume(client, reference, tmp_path):
     """A part file damaged while the run was down (e.g. a disk error) is computed again, not trusted."""
     study = parse_study(GRID)
