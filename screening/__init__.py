@@ -3,7 +3,7 @@
 __version__ = "0.1.0"
 
 from .condensed import rocking_damping, rocking_stiffness, uplift_threshold
-from . import fragility  # registers the ``ds.rocking`` accessor
+from . import fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from .excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from .linearization import equivalent_coefficients, uplift_probability
 from .model import Block, Foundation, WinklerFoundation

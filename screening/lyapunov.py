@@ -35,7 +35,6 @@ import numpy as np
 from . import cubic_condensation, cubic_linearization
 from .condensed import check_condensation, damping_inner, m_sdof, uplift_threshold
 from .cubic_linearization import table_lookup_grid
-from .excitation import ConstantEnvelope, Envelope
 from .fastcoef import coefficient_table, uplift_integrals_log
 
 # ---------------------------------------------------------------- status codes
@@ -282,7 +281,6 @@ def _linear_scales(p, kt, scale):
     w2 = abs(k1) / m
     if w2 <= 0.0:
         w2 = 1.0
-    w = math.sqrt(w2)
     zw = max(0.5 * p[I_C1] / m, 0.05)  # floor: undamped points still get a finite scale
     s_eff = p[I_S0]
     if kt:

@@ -1373,7 +1373,6 @@ def plot_error_vs_cost(ds, path):
             ax.set_visible(False)
             continue
         ref = ds.cv_peak_var_theta.sel(cv_model=ref_model).values[:, nref]          # per rep point
-        coup_ref = ds.cv_peak_var_theta.sel(cv_model="coupled").values[:, nref] if "coupled" in models else ref
         # MCS vs sample count
         for model, color in (("coupled", "tab:red"), ("condensed", "tab:blue")):
             if model not in models or (ref_model == "condensed" and model == "coupled"):

@@ -34,3 +34,21 @@ CUBIC_BEDS = {
 @pytest.fixture(params=list(CUBIC_BEDS))
 def cubic_bed(request):
     return CUBIC_BEDS[request.param]
+
+
+@pytest.fixture(scope="module")
+def client():
+    """A 2-worker in-process dask client, one per test module."""
+    from helpers import in_process_client
+
+    with in_process_client(2) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def one_worker():
+    """A 1-worker in-process dask client, one per test module."""
+    from helpers import in_process_client
+
+    with in_process_client(1) as c:
+        yield c

@@ -92,7 +92,6 @@ def test_accessor_on_a_linearization_result():
 def test_fragility_curve_over_s0_from_a_batch():
     import xarray as xr
     from screening.lyapunov import solve_moments
-    from screening.metadata import VARIABLES
     from screening.timegrid import output_times
     S0 = np.logspace(-6, -3, 13)
     t = output_times(20.0, 0.05)

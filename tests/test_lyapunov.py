@@ -8,7 +8,7 @@ from screening.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteN
 from screening.fastcoef import coefficient_table
 from screening.lyapunov import (STATUS_K_EQ_NEGATIVE, STATUS_MAX_STEPS, STATUS_OK,
                                 STATUS_VARIANCE_UNBOUNDED, _rhs, pack_parameters, solve_moments)
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Foundation, WinklerFoundation
 from screening.timegrid import output_times
 
 

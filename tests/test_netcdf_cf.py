@@ -12,6 +12,8 @@ import xarray as xr
 
 from screening import __version__
 from screening.lyapunov import HISTORY_VARIABLES
+from helpers import in_process_client, quiet
+
 from screening.metadata import PARAMETERS, VARIABLES
 from screening.study import parse_study
 from screening.sweep import run_sweep
@@ -89,16 +91,13 @@ dt = 0.1
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
-    from distributed import Client, LocalCluster
-
     folder = tmp_path_factory.mktemp("cf")
     paths = {}
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
+    with in_process_client(2) as client:
         for name, text in (("grid", GRID), ("cases", CASES), ("single", SINGLE)):
             paths[name] = folder / f"{name}.nc"
             run_sweep(parse_study(text, name=name, source=f"{name}.toml"), paths[name], client=client,
-                      progress=False, log=lambda *_: None)
+                      progress=False, log=quiet)
     return paths
 
 

@@ -1,6 +1,5 @@
 """The paper's eight cases (section 3) and the qualitative features the paper describes."""
 
-import numpy as np
 import pytest
 
 from screening import linearize

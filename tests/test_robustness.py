@@ -22,6 +22,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from helpers import GRID, NO_HTTP_PORT_8787, compare_files, quiet
+
 from screening import sweep
 from screening.cli import main
 from screening.condensed import m_sdof
@@ -37,31 +39,12 @@ from screening.timegrid import output_times
 
 SCREENING = Path(sys.executable).parent / "screening"
 #: Test clusters keep off the default HTTP port, so that `screening run` processes never find it taken.
-NO_HTTP_PORT_8787 = {"dashboard_address": "127.0.0.1:0"}
-
 PAPER = Block(8.67, 0.035, 0.21)
 SLENDER = Block(8.67, 0.035, 1.75)          # b/h = 0.02
 SQUAT = Block(8.67, 0.175, 0.035)           # b/h = 5
 LIGHT_WIDE = Block(0.1, 2.0, 0.4)           # b/h = 5, 0.1 kg on a 4 m base
 HEAVY_WIDE = Block(1e4, 2.0, 0.4)
 
-GRID = """
-title = "robustness"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = [-6e5, 0.0, 3e7, 6e7]
-[excitation]
-kind = "white"
-S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}
-[time]
-t_end = 4.0
-dt = 0.05
-"""
 
 #: A grid over the corners of the ranges: every status but non_finite_moments occurs.
 EXTREME = """
@@ -85,10 +68,6 @@ max_steps = 20000
 """
 
 
-def quiet(*_):
-    pass
-
-
 def one_line_error(err):
     """The single stderr line of a CLI error (``screening: error: ...``), no traceback."""
     lines = [line for line in err.splitlines() if line.strip()]
@@ -101,37 +80,6 @@ def one_line_error(err):
 def listing(folder):
     """Every path below ``folder`` (relative), to check that nothing was written."""
     return sorted(str(p.relative_to(folder)) for p in Path(folder).rglob("*"))
-
-
-def compare_files(a, b, ignore=()):
-    """Two result files hold identical data and metadata (creation stamps, batch size and the
-    attributes in ``ignore`` aside)."""
-    with xr.open_dataset(a) as da, xr.open_dataset(b) as db:
-        for ds in (da, db):
-            for name in ("history", "date_created", "batch_size", *ignore):
-                ds.attrs.pop(name, None)
-        xr.testing.assert_identical(da.load(), db.load())
-
-
-@pytest.fixture(scope="module")
-def client():
-    """An in-process dask cluster (threads, 2 workers): fast, and monkeypatches reach the tasks."""
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None,
-                      scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, \
-            Client(cluster) as c:
-        yield c
-
-
-@pytest.fixture(scope="module")
-def one_worker():
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
-                      scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, \
-            Client(cluster) as c:
-        yield c
 
 
 @pytest.fixture(scope="module")

@@ -15,6 +15,8 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from helpers import GRID, compare_files, quiet
+
 from screening import sweep
 from screening.condensed import uplift_threshold
 from screening.lyapunov import solve_moments
@@ -25,23 +27,6 @@ from screening.sweep import (STATUS_TASK_FAILED, PartialStore, SweepError, defau
 
 BIN = Path(sys.executable).parent
 
-GRID = """
-title = "sweep test"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = [-6e5, 0.0, 3e7, 6e7]
-[excitation]
-kind = "white"
-S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}
-[time]
-t_end = 4.0
-dt = 0.05
-"""
 
 CASES = """
 title = "cases test"
@@ -66,29 +51,6 @@ name = "soft_kt"
 foundation.eps = -6e5
 excitation = {kind = "kanai_tajimi", omega_g = 10.0, zeta_g = 0.4}
 """
-
-
-@pytest.fixture(scope="module")
-def client():
-    """An in-process dask cluster (threads): fast, and monkeypatches reach the tasks."""
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
-            Client(cluster) as c:
-        yield c
-
-
-def quiet(*_):
-    pass
-
-
-def compare_files(a, b):
-    """Assert two result files hold identical data and metadata (creation stamps aside)."""
-    with xr.open_dataset(a) as da, xr.open_dataset(b) as db:
-        for ds in (da, db):
-            for name in ("history", "date_created"):
-                ds.attrs.pop(name, None)
-        xr.testing.assert_identical(da.load(), db.load())
 
 
 # ----------------------------------------------------------------------------- pure helpers

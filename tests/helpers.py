@@ -1,0 +1,52 @@
+"""Shared pieces of the sweep, CLI and robustness tests: a small study grid and file checks."""
+
+import contextlib
+
+import xarray as xr
+
+#: 4 eps x 5 S0 white-noise points, 4 s records: the sweep tests' standard grid.
+GRID = """
+title = "sweep test"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = [-6e5, 0.0, 3e7, 6e7]
+[excitation]
+kind = "white"
+S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}
+[time]
+t_end = 4.0
+dt = 0.05
+"""
+
+#: Keep the scheduler's HTTP server off the default port 8787 (parallel test runs).
+NO_HTTP_PORT_8787 = {"dashboard_address": "127.0.0.1:0"}
+
+
+def quiet(*_):
+    """A ``log`` callback that drops the messages."""
+
+
+def compare_files(a, b, ignore=()):
+    """Two result files hold identical data and metadata (creation stamps, batch size and the
+    attributes in ``ignore`` aside)."""
+    with xr.open_dataset(a) as da, xr.open_dataset(b) as db:
+        for ds in (da, db):
+            for name in ("history", "date_created", "batch_size", *ignore):
+                ds.attrs.pop(name, None)
+        xr.testing.assert_identical(da.load(), db.load())
+
+
+@contextlib.contextmanager
+def in_process_client(n_workers=2):
+    """A dask client on an in-process cluster (threads, no dashboard): fast, and monkeypatches
+    reach the tasks."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=False, dashboard_address=None,
+                      scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, Client(cluster) as client:
+        yield client
