@@ -74,6 +74,24 @@ def test_linear_range_and_dimension_order():
     np.testing.assert_array_equal(s.sweeps["k"], [1e7, 2e7, 3e7])
 
 
+#: Study files with their own format (``screening tradeoff``, tested in test_tradeoff.py).
+NOT_SWEEPS = ("speed_accuracy.toml",)
+
+
+@pytest.mark.parametrize("path", [p for p in sorted(STUDIES.glob("*.toml")) if p.name not in NOT_SWEEPS],
+                         ids=lambda p: p.name)
+def test_every_shipped_sweep_study_is_valid(path):
+    study = load_study(path)
+    assert study.n_points >= 1 and study.name == path.stem
+
+
+def test_condensation_study_compares_both_condensations_at_the_same_points():
+    s = load_study(STUDIES / "condensation.toml")
+    assert [c.condensation for c in s.cases] == ["paper", "cubic"]
+    pairs = [s.mcs.points[i:i + 2] for i in range(0, len(s.mcs.points), 2)]
+    assert all(a[0] == 0 and b[0] == 1 and a[1:] == b[1:] for a, b in pairs)
+
+
 def test_quick_study_is_small_and_default_like():
     s = load_study(STUDIES / "quick.toml")
     assert s.name == "quick"
