@@ -85,7 +85,10 @@ from __future__ import annotations
 import hashlib
 import math
 import numbers
-import tomllib
+try:
+    import tomllib
+except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
+    import tomli as tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType

@@ -50,7 +50,10 @@ import math
 import numbers
 import sys
 import time
-import tomllib
+try:
+    import tomllib
+except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
+    import tomli as tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
