@@ -187,17 +187,15 @@ def cmd_run(args):
 
 def _read_error(result, exc):
     """A ``ResultError`` for data that cannot be read (netCDF/HDF5 report it as ``RuntimeError``)."""
-    from .sweep import ResultError
+    from .sweep import ResultError, exception_line
 
-    return ResultError(f"{result}: cannot read the data of the result file, it is damaged "
-                       f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})")
+    return ResultError(f"{result}: cannot read the data of the result file, it is damaged ({exception_line(exc)})")
 
 
 def _write_error(path, exc):
-    from .sweep import SweepError
+    from .sweep import SweepError, write_failure_reason
 
-    reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else " ".join(str(exc).split())[:200]
-    return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {reason}")
+    return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
 
 
 def _plot(result, out_dir):

@@ -112,6 +112,13 @@ def linear_indentation(block, foundation):
     return block.m * block.g / (2.0 * block.b * foundation.k)
 
 
+def bearing_load(block, foundation):
+    """``-eps z_lin^2`` [1]: the bed carries the block through uplift onset while this stays
+    below :data:`SOFTENING_LIMIT` (module docstring); broadcast over array parameters."""
+    eps = np.asarray(foundation.eps, dtype=float)
+    return -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
+
+
 def check_bearing(block, foundation):
     """Raise ``ValueError`` if a softening bed cannot carry the block through uplift onset.
 
@@ -119,7 +126,7 @@ def check_bearing(block, foundation):
     parameters failing it raises.  ``eps >= 0`` always passes.
     """
     eps = np.asarray(foundation.eps, dtype=float)
-    load = -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
+    load = bearing_load(block, foundation)
     if np.any(load >= SOFTENING_LIMIT):
         bad = float(np.broadcast_to(eps, np.broadcast(eps, load).shape)[load >= SOFTENING_LIMIT].flat[0])
         raise ValueError(

@@ -59,6 +59,7 @@ import numba
 import numpy as np
 
 from . import cubic_condensation as cubic
+from .interpolation import hermite_basis
 
 #: Table grid in t = ln(sigma_theta / theta_ul).
 T_LO = -12.0
@@ -254,13 +255,7 @@ def table_lookup_grid(t, values, slopes, c0, k0, t_lo, steps_per_unit, n):
     if u >= n - 1:
         return values[n - 1, 0], values[n - 1, 1], values[n - 1, 2]
     i = int(u)
-    s = u - i
-    s2 = s * s
-    s3 = s2 * s
-    h00 = 2.0 * s3 - 3.0 * s2 + 1.0
-    h10 = (s3 - 2.0 * s2 + s) / steps_per_unit
-    h01 = -2.0 * s3 + 3.0 * s2
-    h11 = (s3 - s2) / steps_per_unit
+    h00, h10, h01, h11 = hermite_basis(u - i, 1.0 / steps_per_unit)
     e_c = h00 * values[i, 0] + h01 * values[i + 1, 0] + h10 * slopes[i, 0] + h11 * slopes[i + 1, 0]
     e_k = h00 * values[i, 1] + h01 * values[i + 1, 1] + h10 * slopes[i, 1] + h11 * slopes[i + 1, 1]
     d_c = h00 * values[i, 2] + h01 * values[i + 1, 2] + h10 * slopes[i, 2] + h11 * slopes[i + 1, 2]

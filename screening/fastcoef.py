@@ -17,6 +17,7 @@ import numba
 import numpy as np
 from scipy import special
 
+from .interpolation import hermite_basis
 from .linearization import X_LIMIT, gaussian_uplift_integrals
 
 #: Grid in t = ln(sigma_theta / theta_ul).
@@ -85,13 +86,7 @@ def uplift_integrals_log(t, values, slopes):
                 x * sx / _G52 * (1.0 - 0.6 * x))
     u = (t - T_LO) * STEPS_PER_UNIT
     i = min(int(u), values.shape[0] - 2)
-    s = u - i
-    s2 = s * s
-    s3 = s2 * s
-    h00 = 2.0 * s3 - 3.0 * s2 + 1.0
-    h10 = (s3 - 2.0 * s2 + s) / STEPS_PER_UNIT
-    h01 = -2.0 * s3 + 3.0 * s2
-    h11 = (s3 - s2) / STEPS_PER_UNIT
+    h00, h10, h01, h11 = hermite_basis(u - i, 1.0 / STEPS_PER_UNIT)
     v0 = values[i]
     v1 = values[i + 1]
     d0 = slopes[i]

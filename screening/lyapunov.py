@@ -63,10 +63,10 @@ CONDENSATION_CODES = {"paper": 0.0, "cubic": 1.0}
 TABLE_CHUNK = 256
 
 DEFAULT_RTOL = 1e-7
+DEFAULT_MAX_STEPS = 200_000
 
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
 SCALE_FLOOR = 1e-300
-DEFAULT_MAX_STEPS = 200_000
 
 
 def pack_parameters(block, foundation, excitation, condensation="paper"):

@@ -97,7 +97,7 @@ import numpy as np
 
 from . import __version__
 from .condensed import CONDENSATIONS
-from .cubic_condensation import SOFTENING_LIMIT
+from .cubic_condensation import SOFTENING_LIMIT, bearing_load
 from .excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from .lyapunov import DEFAULT_MAX_STEPS, DEFAULT_RTOL
 from .model import Block, Foundation, WinklerFoundation
@@ -454,16 +454,15 @@ def _resolve_case(name, tables, sweeps, where, inherited=frozenset()):
 def _check_cubic_bearing(case, sweeps, where):
     """Every grid point of a ``condensation = "cubic"`` case must satisfy
     ``-eps (m g / (2 b k))^2 < 2/27`` (:func:`screening.cubic_condensation.check_bearing`)."""
-    names = [n for n in ("m", "b", "g", "k", "eps") if n in sweeps]
-    grids = np.meshgrid(*(sweeps[n] for n in names), indexing="ij") if names else []
-    p = {n: case.params[n] for n in ("m", "b", "g", "k", "eps") if n not in sweeps}
-    p.update(zip(names, grids))
-    z_lin = p["m"] * p["g"] / (2.0 * p["b"] * p["k"])
-    load = -np.asarray(p["eps"] * z_lin ** 2, dtype=float)
+    names = list(sweeps)
+    grids = np.meshgrid(*sweeps.values(), indexing="ij", sparse=True) if names else []
+    block, foundation, _ = build_models(case, dict(zip(names, grids)))
+    load = np.broadcast_to(bearing_load(block, foundation), tuple(len(v) for v in sweeps.values()))
     if np.any(load >= SOFTENING_LIMIT):
-        j = np.unravel_index(int(np.argmax(load)), load.shape) if load.ndim else ()
-        at = ", ".join(f"{n} = {float(sweeps[n][i])!r}" for n, i in zip(names, j))
-        eps = float(np.broadcast_to(p["eps"], load.shape)[j])
+        j = np.unravel_index(int(np.argmax(load)), load.shape)
+        at = ", ".join(f"{n} = {float(sweeps[n][i])!r}" for n, i in zip(names, j)
+                       if n in ("m", "b", "g", "k", "eps"))
+        eps = float(np.broadcast_to(foundation.eps, load.shape)[j])
         raise StudyError(f"{where}foundation.condensation: 'cubic' needs a bed that carries the block "
                          f"through uplift onset, |eps| (m g / (2 b k))^2 < 2/27, but eps = {eps!r} 1/m^2"
                          + (f" at {at}" if at else "") + " fails it (use condensation = 'paper')")

@@ -705,8 +705,7 @@ def open_result(path):
     try:
         ds = xr.open_dataset(path, engine="netcdf4")
     except Exception as exc:                          # noqa: BLE001 - netCDF/HDF5 raise many types
-        raise ResultError(f"{path}: cannot read the result file ({type(exc).__name__}: "
-                          f"{' '.join(str(exc).split())[:200]})") from None
+        raise ResultError(f"{path}: cannot read the result file ({exception_line(exc)})") from None
     missing = [v for v in REQUIRED_VARIABLES if v not in ds.variables]
     if missing or "t" not in ds.dims:
         ds.close()
@@ -844,7 +843,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
         try:
             c.run(_warm_up)
         except Exception as exc:                      # noqa: BLE001 - e.g. screening missing on a worker
-            raise SweepError(f"the dask workers cannot run the solver: {_one_line(exc)}") from None
+            raise SweepError(f"the dask workers cannot run the solver: {exception_line(exc)}") from None
         timings["warm_up"] = time.perf_counter() - t0
         try:
             _SweepRun(c, study, out, progress, log, on_batch, report, complevel).run(
@@ -859,8 +858,14 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     return report
 
 
-def _one_line(exc):
+def exception_line(exc):
+    """``Type: message`` of an exception on one line (at most 200 characters of message)."""
     return f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
+
+
+def write_failure_reason(exc):
+    """Why a write failed, on one line: the operating system's words when it gave any."""
+    return exc.strerror if isinstance(exc, OSError) and exc.strerror else " ".join(str(exc).split())[:200]
 
 
 #: errno values of a failing file system (full, quota, too large, read-only, permissions, I/O, gone).
@@ -882,8 +887,7 @@ def _write_error_message(out, exc):
     """One line: what could not be written, why, and that the finished batches are kept."""
     partial = PartialStore(out).dir
     where = getattr(exc, "filename", None) or f"the results of {out}"
-    reason = (exc.strerror if isinstance(exc, OSError) and exc.strerror
-              else " ".join(str(exc).split())[:200])
+    reason = write_failure_reason(exc)
     kept = len(list(partial.glob("batch-*.npz"))) if partial.is_dir() else 0
     return (f"cannot write {where}: {reason}; the {kept} finished batch(es) are kept in {partial}: "
             "free some space or fix the permissions, then re-run the same command to resume")
@@ -974,7 +978,7 @@ class _SweepRun:
                     self.report.n_failed_batches += 1
                     if self.report.n_failed_batches <= MAX_FAILURE_MESSAGES:
                         self.log(f"warning: batch {b.index} (points {b.lo}..{b.hi - 1}) failed after "
-                                 f"{TASK_RETRIES} retries: {_one_line(exc)}; its points get status task_failed"
+                                 f"{TASK_RETRIES} retries: {exception_line(exc)}; its points get status task_failed"
                                  + ("; further failures are not shown"
                                     if self.report.n_failed_batches == MAX_FAILURE_MESSAGES else ""))
                     part, ok = failed_result(b.size, self.study.times.size), False
@@ -1025,7 +1029,7 @@ def _spot_checks(client, study, store, result, progress, log):
             try:
                 results[i] = fut.result()
             except Exception as exc:                  # noqa: BLE001 - recorded as a failed spot check
-                log(f"warning: spot check {i} failed: {_one_line(exc)}")
+                log(f"warning: spot check {i} failed: {exception_line(exc)}")
                 results[i] = failed_spot(study.times.size, spec.samples)
                 failed[i] = True
             else:
@@ -1033,7 +1037,7 @@ def _spot_checks(client, study, store, result, progress, log):
                     store.save_spot(i, spots[i], results[i])
                 except OSError as exc:
                     log(f"warning: cannot save the resume record of spot check {i} "
-                        f"({exc.strerror or _one_line(exc)}); its result is kept, an interrupted run "
+                        f"({write_failure_reason(exc)}); its result is kept, an interrupted run "
                         "would compute it again")
             fut.release()
             bar.update(1)

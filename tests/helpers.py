@@ -31,6 +31,15 @@ def quiet(*_):
     """A ``log`` callback that drops the messages."""
 
 
+def one_line_error(err):
+    """The single stderr line of a CLI error (``screening: error: ...``), no traceback."""
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("screening: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
 def compare_files(a, b, ignore=()):
     """Two result files hold identical data and metadata (creation stamps, batch size and the
     attributes in ``ignore`` aside)."""

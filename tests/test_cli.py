@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import compare_files, in_process_client, quiet
+from helpers import compare_files, in_process_client, one_line_error, quiet
 
 from screening import linearize
 from screening.cli import main
@@ -43,14 +43,6 @@ count = 1
 samples = 8
 model = "condensed"
 """
-
-
-def one_line_error(capsys_err):
-    lines = [line for line in capsys_err.splitlines() if line.strip()]
-    assert len(lines) == 1, capsys_err
-    assert lines[0].startswith("screening: error: ")
-    assert "Traceback" not in capsys_err
-    return lines[0]
 
 
 # ----------------------------------------------------------------------------- end to end
@@ -145,28 +137,6 @@ def test_plot_command_writes_pngs_into_out_dir(cli_result, tmp_path, capsys):
 
 
 # ----------------------------------------------------------------------------- errors
-BAD = [
-    ("unknown key", ("h = 0.21", "h = 0.21\ncolour = 1"), "block.colour"),
-    ("wrong type", ("m = 8.67", 'm = "8.67"'), "block.m"),
-    ("empty list", ("eps = [-6e5, 2e7, 6e7]", "eps = []"), "foundation.eps"),
-    ("num = 0", ("num = 4", "num = 0"), "excitation.S0.num"),
-    ("T2 >= T1", ('kind = "white"', 'kind = "white"\nT1 = 2.0\nT2 = 2.0'), "excitation.T2"),
-    ("negative k", ("k = 2.89e7", "k = -1.0"), "foundation.k"),
-    ("syntax", ("[block]", "[block"), "invalid TOML"),
-]
-
-
-@pytest.mark.parametrize("old_new, key", [b[1:] for b in BAD], ids=[b[0] for b in BAD])
-def test_bad_study_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, old_new, key):
-    study = tmp_path / "bad.toml"
-    study.write_text(STUDY.replace(*old_new, 1))
-    code = main(["run", str(study), "--out", str(tmp_path / "bad.nc")])
-    assert code == 2
-    line = one_line_error(capsys.readouterr().err)
-    assert key in line
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
-
-
 def test_missing_output_folder_exits_2(tmp_path, capsys):
     (tmp_path / "s.toml").write_text(STUDY)
     assert main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "missing" / "r.nc")]) == 2

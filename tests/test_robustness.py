@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import GRID, NO_HTTP_PORT_8787, compare_files, quiet
+from helpers import GRID, NO_HTTP_PORT_8787, compare_files, one_line_error, quiet
 
 from screening import sweep
 from screening.cli import main
@@ -66,15 +66,6 @@ dt = 0.1
 [solver]
 max_steps = 20000
 """
-
-
-def one_line_error(err):
-    """The single stderr line of a CLI error (``screening: error: ...``), no traceback."""
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1, err
-    assert lines[0].startswith("screening: error: "), err
-    assert "Traceback" not in err
-    return lines[0]
 
 
 def listing(folder):
@@ -362,6 +353,7 @@ BAD_STUDIES = [
     ("zero mass", ("m = 8.67", "m = 0.0"), "block.m: must be a finite number > 0"),
     ("negative h", ("h = 0.21", "h = -0.21"), "block.h: must be a finite number > 0"),
     ("zero k", ("k = 2.89e7", "k = 0"), "foundation.k: must be a finite number > 0"),
+    ("negative k", ("k = 2.89e7", "k = -1.0"), "foundation.k: must be a finite number > 0"),
     ("nan k", ("k = 2.89e7", "k = nan"), "foundation.k"),
     ("inf lam", ("lam = 8.95e8", "lam = inf"), "foundation.lam"),
     ("negative lam", ("lam = 8.95e8", "lam = -1.0"), "foundation.lam: must be a finite number >= 0"),
