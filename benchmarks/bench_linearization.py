@@ -15,11 +15,11 @@ import time
 
 import numpy as np
 
-from screening.cases import paper_case
-from screening.lyapunov import DEFAULT_RTOL, solve_moments
+from screening.model.cases import paper_case
+from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.model import Block, Foundation
-from screening.excitation import WhiteNoise
-from screening.timegrid import output_times
+from screening.model.excitation import WhiteNoise
+from screening.solvers.timegrid import output_times
 
 
 def main(argv=None):

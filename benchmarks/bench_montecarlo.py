@@ -1,4 +1,4 @@
-"""Wall time and step accuracy of the Monte Carlo engine (screening.montecarlo).
+"""Wall time and step accuracy of the Monte Carlo engine (screening.solvers.montecarlo).
 
 Run:  NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_montecarlo.py [--samples 1000] [--case 1]
 
@@ -19,9 +19,9 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from screening.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
 from screening.model import Block, Foundation  # noqa: E402
-from screening.montecarlo import DEFAULT_RTOL, monte_carlo  # noqa: E402
+from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo  # noqa: E402
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 CASES = {

@@ -1,6 +1,6 @@
 """Benchmark: a 10,000-point white-noise sweep (100 eps x 100 S0, 20 s records) end to end.
 
-Runs the sweep exactly as ``screening run`` does (:func:`screening.sweep.run_sweep`: local
+Runs the sweep exactly as ``screening run`` does (:func:`screening.workflow.sweep.run_sweep`: local
 dask cluster, batches, streaming netCDF write, atomic rename) with 1 and then 2 worker
 processes, and prints points per second end to end, the 1 -> 2 worker scaling, and where
 the time goes: cluster start-up, worker warm-up (imports + loading the numba cache),
@@ -48,7 +48,7 @@ PHASES = ("cluster_start", "warm_up", "compute", "write", "finalize", "shutdown"
 def jit_in_this_process():
     """Import the solver and run it once (compiles only if the on-disk numba cache is stale) [s]."""
     start = time.perf_counter()
-    from screening.sweep import _warm_up
+    from screening.workflow.sweep import _warm_up
 
     _warm_up()
     return time.perf_counter() - start
@@ -58,10 +58,10 @@ def _solve_share(n, queue):
     """Solve ``n`` points of the benchmark grid in this process; put the time taken [s]."""
     import numpy as np
 
-    from screening.excitation import WhiteNoise
-    from screening.lyapunov import solve_moments
+    from screening.model.excitation import WhiteNoise
+    from screening.solvers.moments import solve_moments
     from screening.model import Block, Foundation
-    from screening.timegrid import output_times
+    from screening.solvers.timegrid import output_times
 
     t = output_times(20.0, 0.05)
     models = (Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, np.linspace(-6e5, 6e7, n)),
@@ -94,7 +94,7 @@ def machine_scaling(n=2000):
 
 
 def run_function(study, out, workers, complevel):
-    from screening.sweep import run_sweep
+    from screening.workflow.sweep import run_sweep
 
     start = time.perf_counter()
     report = run_sweep(study, out, workers=workers, force=True, progress=False, log=lambda *_: None,
@@ -120,7 +120,7 @@ def main(argv=None):
     parser.add_argument("--complevel", type=int, default=1, help="zlib level of the file (default 1; 0 = none)")
     args = parser.parse_args(argv)
 
-    from screening.study import parse_study
+    from screening.workflow.study import parse_study
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -168,8 +168,8 @@ def main(argv=None):
                   f"{100 * fixed / w2:.0f} % of the total; client write time {t2['write']:.2f} s "
                   f"(overlaps the compute phase)")
         if not args.cli:
-            from screening.plots import plot_result
-            from screening.sweep import open_result
+            from screening.report.figures import plot_result
+            from screening.workflow.sweep import open_result
 
             start = time.perf_counter()
             with open_result(out) as ds:

@@ -24,9 +24,9 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from screening.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
 from screening.model import Block, Foundation  # noqa: E402
-from screening.montecarlo import monte_carlo  # noqa: E402
+from screening.solvers.montecarlo import monte_carlo  # noqa: E402
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 ENVELOPE = Envelope(T1=4.0, T2=2.0)

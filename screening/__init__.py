@@ -2,12 +2,12 @@
 
 __version__ = "0.1.0"
 
-from .condensed import rocking_damping, rocking_stiffness, uplift_threshold
-from . import fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
-from .excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from .linearization import equivalent_coefficients, uplift_probability
-from .model import Block, Foundation, WinklerFoundation
-from .response import linearize
+from screening.condensation.paper import rocking_damping, rocking_stiffness, uplift_threshold
+from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
+from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
+from screening.condensation.paper_coefficients import equivalent_coefficients, uplift_probability
+from screening.model import Block, Foundation, WinklerFoundation
+from screening.solvers.linearization import linearize
 
 __all__ = [
     "Block", "Foundation", "WinklerFoundation", "Envelope", "ConstantEnvelope", "WhiteNoise",

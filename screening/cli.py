@@ -1,7 +1,7 @@
 """Command line: ``screening run | plot | info | fragility | tradeoff``.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
-dask (:func:`screening.sweep.run_sweep`) and writes ``PATH`` (default
+dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
 ``outputs/<study-stem>.nc``) plus PNG figures next to it.  An interrupted run restarted
 with the same command resumes; an unchanged study reuses its finished result.
 
@@ -9,7 +9,7 @@ with the same command resumes; an unchanged study reuses its finished result.
 prints the dimensions, swept parameters, status counts and summary statistics.
 ``screening fragility RESULT.nc --threshold X [--relative-to slenderness|theta_ul]`` writes
 the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG).
-``screening tradeoff STUDY.toml`` runs the speed-accuracy trade study (:mod:`screening.tradeoff`).
+``screening tradeoff STUDY.toml`` runs the speed-accuracy trade study (:mod:`screening.analysis.tradeoff`).
 
 User errors (bad study file, missing output folder, unreadable result file, unreachable
 scheduler) print one line ``screening: error: ...`` on stderr and exit with status 2,
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from screening import __version__
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -111,7 +111,7 @@ def build_parser():
     frag.set_defaults(func=cmd_fragility)
 
     sub.add_parser("tradeoff", add_help=False,
-                   help="speed-accuracy trade study (screening.tradeoff; see 'screening tradeoff --help')")
+                   help="speed-accuracy trade study (screening.analysis.tradeoff; see 'screening tradeoff --help')")
 
     info = sub.add_parser("info", help="describe a result file")
     info.add_argument("result", help="result file (netCDF)")
@@ -121,12 +121,12 @@ def build_parser():
 
 def main(argv=None):
     """Entry point of the ``screening`` console script; returns the exit status."""
-    from .study import StudyError
-    from .sweep import SweepError
+    from screening.workflow.study import StudyError
+    from screening.workflow.sweep import SweepError
 
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv[:1] == ["tradeoff"]:                 # its own parser (screening.tradeoff.main)
-        from .tradeoff import main as tradeoff_main
+    if argv[:1] == ["tradeoff"]:                 # its own parser (screening.analysis.tradeoff.main)
+        from screening.analysis.tradeoff import main as tradeoff_main
 
         return tradeoff_main(argv[1:])
     try:
@@ -149,8 +149,8 @@ def _say(msg):
 
 
 def cmd_run(args):
-    from .study import load_study
-    from .sweep import SweepError, check_output_path, run_sweep
+    from screening.workflow.study import load_study
+    from screening.workflow.sweep import SweepError, check_output_path, run_sweep
 
     study = load_study(args.study)
     if args.out:
@@ -187,21 +187,21 @@ def cmd_run(args):
 
 def _read_error(result, exc):
     """A ``ResultError`` for data that cannot be read (netCDF/HDF5 report it as ``RuntimeError``)."""
-    from .sweep import ResultError, exception_line
+    from screening.workflow.sweep import ResultError, exception_line
 
     return ResultError(f"{result}: cannot read the data of the result file, it is damaged ({exception_line(exc)})")
 
 
 def _write_error(path, exc):
-    from .sweep import SweepError, write_failure_reason
+    from screening.workflow.sweep import SweepError, write_failure_reason
 
     return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
 
 
 def _plot(result, out_dir):
     """All figures of ``result`` into ``out_dir`` (none left behind on failure, one-line errors)."""
-    from .plots import plot_result
-    from .sweep import open_result
+    from screening.report.figures import plot_result
+    from screening.workflow.sweep import open_result
 
     result = Path(result)
     with open_result(result) as ds:
@@ -215,7 +215,7 @@ def _plot(result, out_dir):
 
 
 def cmd_plot(args):
-    from .sweep import SweepError, open_result
+    from screening.workflow.sweep import SweepError, open_result
 
     result = Path(args.result)
     open_result(result).close()                  # readable? (before touching the output folder)
@@ -228,9 +228,9 @@ def cmd_plot(args):
 
 
 def cmd_fragility(args):
-    from .fragility import fragility_dataset
-    from .plots import plot_fragility
-    from .sweep import SweepError, check_output_path, open_result
+    from screening.analysis.fragility import fragility_dataset
+    from screening.report.figures import plot_fragility
+    from screening.workflow.sweep import SweepError, check_output_path, open_result
 
     result = Path(args.result)
     with open_result(result) as ds:
@@ -272,7 +272,7 @@ def cmd_fragility(args):
 
 
 def cmd_info(args):
-    from .sweep import open_result
+    from screening.workflow.sweep import open_result
 
     with open_result(args.result) as ds:
         try:
@@ -290,7 +290,7 @@ def _fmt(value):
 
 def describe(ds, path="result"):
     """Plain-text summary of a result dataset (what ``screening info`` prints)."""
-    from .plots import grid_dims, grid_units, grid_values, point_label, spot_index
+    from screening.report.figures import grid_dims, grid_units, grid_values, point_label, spot_index
 
     dims = grid_dims(ds)
     lines = [f"{path}: {ds.attrs.get('title', '')}",

@@ -1,6 +1,6 @@
 import pytest
 
-from screening.cases import PAPER_BED, PAPER_BLOCK
+from screening.model.cases import PAPER_BED, PAPER_BLOCK
 from screening.model import Block, Foundation, WinklerFoundation
 
 

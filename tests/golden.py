@@ -65,8 +65,8 @@ timing_repeats = 1
 # ---------------------------------------------------------------- computations through the API
 def _sl(study):
     """float64 SL results of every point of a study, on dims ``(point, t)``."""
-    from screening.lyapunov import solve_moments
-    from screening.study import build_models
+    from screening.solvers.moments import solve_moments
+    from screening.workflow.study import build_models
 
     rows = []
     for c, case in enumerate(study.cases):
@@ -87,7 +87,7 @@ def _sl(study):
 
 
 def _mcs(block, foundation, excitation, n, model, condensation, seed, t_end, dt, prefix):
-    from screening.montecarlo import monte_carlo
+    from screening.solvers.montecarlo import monte_carlo
 
     ds = monte_carlo(block, foundation, excitation, n_samples=n, model=model, t_end=t_end, dt=dt, seed=seed,
                      condensation=condensation)
@@ -96,7 +96,7 @@ def _mcs(block, foundation, excitation, n, model, condensation, seed, t_end, dt,
 
 
 def compute_quick():
-    from screening.study import build_models, load_study
+    from screening.workflow.study import build_models, load_study
 
     study = load_study(ROOT / "studies" / "quick.toml")
     ds = _sl(study)
@@ -114,7 +114,7 @@ def compute_quick():
 
 
 def compute_paper_cases():
-    from screening.study import build_models, load_study
+    from screening.workflow.study import build_models, load_study
 
     study = load_study(ROOT / "studies" / "paper_cases.toml")
     ds = _sl(study)
@@ -132,7 +132,7 @@ TIMING_WORDS = ("time", "cost", "seconds", "wall")
 
 
 def compute_tradeoff(tmp_dir):
-    from screening import tradeoff as to
+    from screening.analysis import tradeoff as to
 
     path = Path(tmp_dir) / "tiny.toml"
     path.write_text(TRADEOFF_STUDY)

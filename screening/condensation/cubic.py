@@ -1,0 +1,282 @@
+"""Quasi-static condensation with the cubic term in the static vertical balance (``"cubic"``).
+
+The paper's condensation (section 2.3, :mod:`screening.condensation.paper`) slaves the base-centre
+indentation to the *linear* static balance, ``z_st = m g / (2 b k)`` (eq. 17) and
+``(k / (2|theta|)) (b|theta| + z_cb)^2 = m g`` (eq. 18), although the moment equations
+(14), (16) it feeds keep the ``eps`` terms.  For a hardening bed the true rest indentation
+is smaller (``z0 = 0.92 z_st`` for the paper's block with ``eps = 6e7``), which lowers the
+no-uplift damping ``(2/3) lam b^3 z`` and the stiffness term ``2 eps k b^3 z^2``.
+Here ``z_cb(theta)`` is the root of the full static vertical balance instead, in both
+regimes, and ``C(theta)``, ``K(theta)`` follow from eqs. (14) and (16) with it.
+
+Symbols and units (SI): ``m`` [kg], ``g`` [m/s^2], ``b`` half-width [m], ``h`` height of the
+centre of mass [m], ``k`` [N/m^2], ``eps`` [1/m^2], ``lam`` [N s/m^4] (Hunt–Crossley) or ``c``
+[N s/m^2] (Winkler), ``theta`` [rad], ``a = |theta|``, ``z = z_cb`` [m] (positive into the
+bed), ``z_lin = m g / (2 b k)`` [m] (eq. 17).  Everything is even in ``theta`` (``C``, ``K``,
+``z_cb``) by the mirror symmetry of the base, so the formulas are written for ``a``.
+
+Derivation (small angles, as eqs. 13–16)
+----------------------------------------
+With ``u = b - eta`` the indentation field is ``z(u) = z + u theta`` (eqs. 1–2), in contact
+where it is positive.  Quasi-static condensation drops ``m z''`` and the damping force from
+the vertical balance (eqs. 13, 15), leaving ``F_k(theta, z) = m g`` with ``F_k`` the
+stiffness part of the resultant:
+
+* no uplift (``z >= b a``), eq. (13)::
+
+      2 b k z + 2 b eps k z (z^2 + b^2 a^2) = m g
+      <=>  eps z^3 + (1 + eps b^2 a^2) z = z_lin                                  (Q1)
+
+  At ``theta = 0`` this is the rest indentation ``z0``: ``eps z0^3 + z0 = z_lin``.
+  ``z`` depends on ``theta`` through ``eps b^2 a^2``; implicit differentiation gives
+  ``dz/da = -2 eps b^2 a z / (1 + eps b^2 a^2 + 3 eps z^2)``.
+
+* uplift (``-b a < z < b a``), eq. (15) with the compressed-edge indentation
+  ``v = b a + z`` (contact length ``v / a``)::
+
+      (k / (2a)) v^2 + (eps k / (4a)) v^4 = m g
+
+  a quadratic in ``w = v^2``: ``(eps/2) w^2 + w = A`` with ``A = 2 m g a / k`` [m^2], whose
+  root on the rising branch (``1 + eps w > 0``) is, without cancellation,
+  ``w = 2 A / (1 + S)``, ``S = sqrt(1 + 2 eps A)``,  so ``z = sqrt(w) - b a``   (Q2)
+  and ``dw/da = 2 m g / (k S)`` (from ``w' (1 + eps w) = A / a`` and ``1 + eps w = S``),
+  ``dz/da = (dw/da) / (2 v) - b``.  ``eps = 0`` gives eq. (18).
+
+* uplift threshold: the regimes meet where ``z = b a`` (``v = 2 b a``); both (Q1) and (Q2)
+  then read ``2 eps y^3 + y = z_lin`` with ``y = b theta_ul``, so
+  ``theta_ul = y / b``  (eq. 19 is the ``eps = 0`` case).  ``z_cb(theta)`` and ``dz/da`` are
+  continuous there (the pressure vanishes at the lifting edge).  The threshold is *not*
+  ``z0 / b``: with ``theta_ul = z0 / b`` the uplift root (Q2) would not meet ``z0`` and
+  ``z_cb``, ``C``, ``K theta`` would jump at the threshold (``z_cb`` by 7 % for the paper's
+  hardening bed).
+
+Moments about the base centre (eqs. 14 and 16, re-derived by integrating the law over
+the contact zone with ``zdot(u) = zdot_cb + u theta'``), minus the gravity term
+``m g h theta``:
+
+* stiffness, ``K(theta) = restoring moment / theta``::
+
+      K_in = (2/3) b^3 k - m g h + eps k (2 b^3 z^2 + (2/5) b^5 a^2)               (eq. 14)
+      K_up = [k v^2 (2 b a - z) / 6 + eps k v^4 (4 b a - z) / 20] / a^3 - m g h    (eq. 16)
+
+* damping, with the quasi-static rate ``zdot_cb = (dz/dtheta) theta'``::
+
+      Hunt–Crossley:  C_in = (2/3) lam b^3 (z + a dz/da)                           (eq. 14)
+                      C_up = lam / (12 a^3) [3 b^4 a^4 + 4 b^3 z a^3 + z^4
+                                             + 2 a (dz/da) v^2 (2 b a - z)]        (eq. 16)
+      Winkler:        C_in = (2/3) c b^3
+                      C_up = (c / a^2) [(dz/da) v (b a - z) / 2 + (b^3 a^3 + z^3) / (3 a)]
+
+  With the linear balance (``z = z_lin``, eq. 18) these are exactly eqs. (24)–(25) and the
+  Winkler forms of :mod:`screening.condensation.paper`; so ``eps = 0`` reproduces the paper.
+
+Rate terms.  ``zdot_cb = z_cb'(theta) theta'`` is kept in ``C``: it is what the paper does
+in the uplift branch (eq. 24 is eq. 16 with ``zdot_cb = z_st'(theta) theta'``), and without
+it the ``eps = 0`` limit would not be the paper's model.  In the no-uplift regime it is new
+(``z_st`` is constant in the paper): for ``eps > 0`` the block rises as it rotates
+(``dz/da < 0``), which lowers ``C_in`` towards the threshold (by 17 % at ``theta_ul`` for
+the paper's hardening bed).  ``C`` is continuous at ``theta_ul``.
+
+Softening beds (``eps < 0``)
+----------------------------
+* The threshold exists only while ``2 eps y^3 + y`` reaches ``z_lin`` on its rising branch:
+  ``|eps| z_lin^2 < 2/27``.  Otherwise the bed cannot carry the block through the onset of
+  uplift and :func:`check_bearing` raises ``ValueError`` (every public function calls it).
+  This is stricter than carrying it at rest (``|eps| z_lin^2 < 4/27``).
+* In uplift the quartic has a root only while ``1 + 2 eps A >= 0``, i.e. up to the
+  *capacity angle* ``theta_cap = k / (4 |eps| m g)`` (:func:`capacity_angle`; 0.142 rad for
+  the paper's softening bed, below its slenderness 0.165 rad).  Beyond it no quasi-static
+  equilibrium exists (the narrowing contact zone cannot carry ``m g``).  The functions here
+  then hold the compressed edge at the peak load (``w = 1/|eps|``, ``z = |eps|^(-1/2) - b a``)
+  and, there being no equilibrium to follow, carry no quasi-static rate (``dz/da`` is
+  reported as 0), so that ``K`` stays finite and continuous and ``C`` finite and positive
+  (``3 b^4 a^4 + 4 b^3 z a^3 + z^4 = v^2 ((z - b a)^2 + 2 b^2 a^2) > 0``) for the Gaussian
+  expectations.  :func:`in_equilibrium` flags those angles, the condensed Monte Carlo stops
+  such samples as diverged, and the moment solver records ``theta_capacity``.  Just below
+  ``theta_cap``, ``dz/da ~ (theta_cap - a)^(-1/2)`` (the block sinks ever faster), an
+  integrable singularity of ``C``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
+SOFTENING_LIMIT = 2.0 / 27.0
+
+_NEWTON_MAX_ITER = 100
+
+
+def linear_indentation(block, foundation):
+    """Paper's static indentation ``z_lin = m g / (2 b k)`` [m] (eq. 17)."""
+    return block.m * block.g / (2.0 * block.b * foundation.k)
+
+
+def bearing_load(block, foundation):
+    """``-eps z_lin^2`` [1]: the bed carries the block through uplift onset while this stays
+    below :data:`SOFTENING_LIMIT` (module docstring); broadcast over array parameters."""
+    eps = np.asarray(foundation.eps, dtype=float)
+    return -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
+
+
+def check_bearing(block, foundation):
+    """Raise ``ValueError`` if a softening bed cannot carry the block through uplift onset.
+
+    The condition is ``|eps| z_lin^2 < 2/27`` (module docstring); any element of array
+    parameters failing it raises.  ``eps >= 0`` always passes.
+    """
+    eps = np.asarray(foundation.eps, dtype=float)
+    load = bearing_load(block, foundation)
+    if np.any(load >= SOFTENING_LIMIT):
+        bad = float(np.broadcast_to(eps, np.broadcast(eps, load).shape)[load >= SOFTENING_LIMIT].flat[0])
+        raise ValueError(
+            f"parameter 'foundation.eps' = {bad!r} 1/m^2: the softening bed cannot carry the block "
+            f"through the onset of uplift under condensation='cubic' (need |eps| (m g/(2 b k))^2 < 2/27)")
+
+
+def _rising_root(alpha, beta, rhs):
+    """Root of ``alpha z^3 + beta z = rhs`` on the rising branch (``beta + 3 alpha z^2 > 0``).
+
+    Newton from ``z = rhs / beta``: for ``alpha >= 0`` the cubic is convex and the start lies
+    right of the root, for ``alpha < 0`` concave with the start left of it, so the iterates
+    converge monotonically (no overshoot onto the falling branch).  Vectorised; SI units of
+    the caller (``z`` and ``rhs`` [m], ``alpha`` [1/m^2], ``beta`` [1]).
+    """
+    alpha, beta, rhs = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (alpha, beta, rhs)))
+    z = rhs / beta
+    for _ in range(_NEWTON_MAX_ITER):
+        step = (alpha * z**3 + beta * z - rhs) / (3.0 * alpha * z * z + beta)
+        z = z - step
+        if np.all(np.abs(step) <= 1e-15 * np.abs(z)):
+            break
+    return z
+
+
+def rest_indentation(block, foundation):
+    """Static indentation at rest ``z0`` [m]: root of ``eps z0^3 + z0 = z_lin`` (eq. 13, theta = 0)."""
+    check_bearing(block, foundation)
+    return _rising_root(foundation.eps, 1.0, linear_indentation(block, foundation))[()]
+
+
+def uplift_threshold(block, foundation):
+    """Uplift threshold ``theta_ul`` [rad]: ``y = b theta_ul`` solves ``2 eps y^3 + y = z_lin``.
+
+    The rotation at which the quasi-static ``z_cb(theta)`` of eq. (13) reaches ``b theta``
+    (eq. 19 generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
+    """
+    check_bearing(block, foundation)
+    y = _rising_root(2.0 * np.asarray(foundation.eps, dtype=float), 1.0, linear_indentation(block, foundation))
+    return (y / block.b)[()]
+
+
+def capacity_angle(block, foundation):
+    """Capacity angle ``theta_cap = k / (4 |eps| m g)`` [rad] of a softening bed; ``inf`` for ``eps >= 0``.
+
+    Beyond it the uplift balance ``(k/(2a)) v^2 + (eps k/(4a)) v^4 = m g`` (eq. 15) has no root.
+    """
+    eps = np.asarray(foundation.eps, dtype=float)
+    with np.errstate(divide="ignore"):
+        cap = np.where(eps < 0.0, foundation.k / (4.0 * np.abs(eps) * block.m * block.g), np.inf)
+    return cap[()]
+
+
+def in_equilibrium(theta, block, foundation):
+    """True where a quasi-static vertical equilibrium exists, ``|theta| <= theta_cap`` [bool]."""
+    return np.abs(np.asarray(theta, dtype=float)) <= capacity_angle(block, foundation)
+
+
+def quasi_static_indentation(theta, block, foundation):
+    """Quasi-static base-centre indentation and its slope, ``(z_cb [m], dz_cb/d|theta| [m/rad])``.
+
+    ``z_cb`` is (Q1) below ``theta_ul`` and (Q2) above it (module docstring); beyond the
+    capacity angle of a softening bed the contact is held at its peak load and the slope
+    reported is 0 (no equilibrium to follow; module docstring).  ``theta`` [rad],
+    vectorised over ``theta`` and array model parameters.  ``z_cb`` is even in ``theta``;
+    ``dz_cb/dtheta = sign(theta) * (second output)``.
+    """
+    return _indentation_state(theta, block, foundation)[:2]
+
+
+def _indentation_state(theta, block, foundation):
+    """``(z, dz/da, v, a, uplift)`` with ``v = b a + z`` the compressed-edge indentation [m]."""
+    check_bearing(block, foundation)
+    a = np.abs(np.asarray(theta, dtype=float))
+    b, k, eps, mg = block.b, foundation.k, np.asarray(foundation.eps, dtype=float), block.m * block.g
+    z_lin = linear_indentation(block, foundation)
+    a, b, k, eps, mg, z_lin = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (a, b, k, eps, mg, z_lin)))
+    uplift = a > uplift_threshold(block, foundation)
+    # no uplift: eq. (13) balance (Q1)
+    beta = 1.0 + eps * b * b * a * a
+    z_in = _rising_root(eps, beta, z_lin)
+    dz_in = -2.0 * eps * b * b * a * z_in / (beta + 3.0 * eps * z_in * z_in)
+    # uplift: eq. (15) balance (Q2), held at the peak load beyond the capacity angle
+    A = 2.0 * mg * a / k
+    s2 = 1.0 + 2.0 * eps * A
+    beyond = s2 <= 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        S = np.sqrt(np.where(beyond, 1.0, s2))
+        w = np.where(beyond, 1.0 / np.abs(np.where(eps != 0.0, eps, 1.0)), 2.0 * A / (1.0 + S))
+        v_up = np.sqrt(w)
+        dz_up = np.where(beyond, 0.0, mg / (k * S * v_up) - b)       # (dw/da) / (2 v) - b
+    z_up = v_up - b * a
+    z = np.where(uplift, z_up, z_in)
+    dz = np.where(uplift, dz_up, dz_in)
+    v = np.where(uplift, v_up, z_in + b * a)
+    return z, dz, v, a, uplift
+
+
+def rocking_damping(theta, block, foundation):
+    """Rocking damping ``C(theta)`` [N m s/rad] of the cubic condensation (module docstring).
+
+    ``theta`` [rad]; vectorised over theta and array model parameters.  Includes the
+    quasi-static rate ``zdot_cb = z_cb'(theta) theta'``.
+    """
+    z, dz, v, a, uplift = _indentation_state(theta, block, foundation)
+    b = block.b
+    if foundation.contact == "hunt_crossley":
+        lam = foundation.lam
+        c_in = 2.0 / 3.0 * lam * b**3 * (z + a * dz)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c_up = lam / (12.0 * a**3) * (3.0 * b**4 * a**4 + 4.0 * b**3 * z * a**3 + z**4
+                                          + 2.0 * a * dz * v * v * (2.0 * b * a - z))
+    else:
+        c = foundation.c
+        c_in = 2.0 / 3.0 * c * b**3 + 0.0 * a
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c_up = c / (a * a) * (0.5 * dz * v * (b * a - z) + (b**3 * a**3 + z**3) / (3.0 * a))
+    return np.where(uplift, c_up, c_in)[()]
+
+
+def rocking_stiffness(theta, block, foundation):
+    """Secant rocking stiffness ``K(theta)`` [N m/rad] of the cubic condensation (module docstring).
+
+    ``theta`` [rad]; the restoring moment is ``K(theta) theta``.  Same for both beds.
+    """
+    z, _, v, a, uplift = _indentation_state(theta, block, foundation)
+    b, k, eps = block.b, foundation.k, foundation.eps
+    mgh = block.m * block.g * block.h
+    k_in = 2.0 / 3.0 * b**3 * k - mgh + eps * k * (2.0 * b**3 * z * z + 0.4 * b**5 * a * a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k_up = (k * v * v * (2.0 * b * a - z) / 6.0 + eps * k * v**4 * (4.0 * b * a - z) / 20.0) / a**3 - mgh
+    return np.where(uplift, k_up, k_in)[()]
+
+
+def restoring_moment(theta, block, foundation):
+    """Restoring moment ``K(theta) theta`` [N m] of the cubic condensation."""
+    theta = np.asarray(theta, dtype=float)
+    return (rocking_stiffness(theta, block, foundation) * theta)[()]
+
+
+def damping_at_rest(block, foundation):
+    """``C(0)`` [N m s/rad]: ``(2/3) lam b^3 z0`` (Hunt–Crossley) or ``(2/3) c b^3`` (Winkler)."""
+    if foundation.contact == "hunt_crossley":
+        return 2.0 / 3.0 * foundation.lam * block.b**3 * rest_indentation(block, foundation)
+    check_bearing(block, foundation)
+    return 2.0 / 3.0 * foundation.c * block.b**3
+
+
+def stiffness_at_rest(block, foundation):
+    """``K(0)`` [N m/rad] ``= (2/3) b^3 k - m g h + 2 eps k b^3 z0^2``."""
+    z0 = rest_indentation(block, foundation)
+    b, k = block.b, foundation.k
+    return 2.0 / 3.0 * b**3 * k - block.m * block.g * block.h + 2.0 * foundation.eps * k * b**3 * z0 * z0

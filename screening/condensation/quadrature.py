@@ -1,0 +1,288 @@
+"""Equivalent linear coefficients of the cubic condensation: Gaussian quadrature, tabulated per point.
+
+The ``"cubic"`` ``C(theta)``, ``K(theta)`` (:mod:`screening.condensation.cubic`) have no
+closed-form Gaussian expectations, so the coefficients of eq. (31) are computed by
+quadrature.  For zero-mean Gaussian ``(theta, theta')`` with ``sigma = sigma_theta`` and
+``cov = E[theta theta']``, Stein's lemma ``E[f'(theta)] = E[theta f(theta)] / sigma^2`` and
+``E[theta' | theta] = cov theta / sigma^2`` turn ``g = C(theta) theta' + K(theta) theta`` into
+
+    c_eq = E[dg/dtheta'] = E[C]                                             = e_c
+    k_eq = E[dg/dtheta]  = E[(K theta)'] + E[C'(theta) theta']              = e_k + cov d_c
+
+with three functions of ``sigma`` alone (``x = theta / sigma``, ``C0 = C(0)``)::
+
+    e_c = E[C]                              [N m s/rad]
+    e_k = E[K x^2]                          [N m/rad]
+    d_c = E[(C - C0) (x^2 - 1)] / sigma^2   [N m s/rad^3]
+
+(``E[x^2 - 1] = 0`` lets ``C0`` be subtracted, which keeps ``d_c`` accurate at small
+``sigma``).  No derivative of the piecewise ``C``, ``K`` is taken: these are the regression
+form ``Cov^-1 E[g y]`` of eq. (31), correct across the kinks at ``+-theta_ul``.  Limits at
+``sigma -> 0``: ``e_c -> C(0)``, ``e_k -> K(0)`` (the no-uplift values) and
+``d_c -> 2 C_2`` for ``C = C0 + C_2 theta^2 + ...``, all finite.  For the paper's ``C``, ``K``
+the same formulas reproduce the closed forms of :mod:`screening.condensation.paper_coefficients`.
+
+Quadrature (``E[f] = 2 int_0^inf f(theta) phi_sigma(theta) dtheta``, ``C``, ``K`` even): one node
+set in ``theta`` per parameter point, Gauss–Legendre (:data:`GAUSS_ORDER` nodes) on panels
+
+* ``[0, theta_ul]``: geometric panels ``[theta_ul 2^-(j+1), theta_ul 2^-j]`` down to
+  ``2^-J_INNER theta_ul``, so every ``sigma`` of the table finds panels of its own size;
+* ``[theta_ul, theta_top]``: geometric panels from ``theta_ul`` (``C``, ``K`` are analytic there
+  with their nearest singularity at ``theta = 0``, one panel length away);
+* softening beds: the panel ``[3/4 theta_cap, theta_cap]`` in ``s = sqrt(theta_cap - theta)``
+  (``dz/da ~ (theta_cap - a)^(-1/2)`` becomes analytic in ``s``), and geometric panels above
+  ``theta_cap``.
+
+``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights.
+
+Table: ``t = ln(sigma / theta_ul)`` on ``[T_LO, t_hi]`` with :data:`STEPS_PER_UNIT` nodes per
+unit, values and their exact ``t``-derivatives (same quadrature)::
+
+    d e_c / dt = E[(C - C0) (x^2 - 1)],   d e_k / dt = E[(K - K0) x^2 (x^2 - 3)],
+    d d_c / dt = E[(C - C0) (x^4 - 6 x^2 + 3)] / sigma^2
+
+read back by cubic Hermite interpolation (:func:`table_lookup_grid`; largest error against
+the direct quadrature 3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; a table costs
+~20 ms per distinct point, ~1200 nodes for the paper's block).  Below ``T_LO``
+(``sigma < 6e-6 theta_ul``) ``e_c``, ``e_k`` follow ``f0 + (f(T_LO) - f0) (sigma/sigma_lo)^2`` and
+``d_c`` is held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``);
+above ``t_hi`` (4 x the slenderness angle, where the moment solver has long stopped the
+point) the last values are held.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numba
+import numpy as np
+
+from screening.condensation import cubic as cubic
+from screening.kernels.interpolation import hermite_basis
+
+#: Table grid in t = ln(sigma_theta / theta_ul).
+T_LO = -12.0
+STEPS_PER_UNIT = 64
+#: Gauss–Legendre nodes per panel and number of geometric panels below theta_ul.
+GAUSS_ORDER = 16
+J_INNER = 22
+#: The Gaussian weight is below 1e-31 of its peak beyond 12 sigma.
+SIGMA_SPAN = 12.0
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(GAUSS_ORDER)
+_INV_SQRT_2PI = 1.0 / math.sqrt(2.0 * math.pi)
+
+
+def _gauss_legendre(edges):
+    """Nodes and weights of :data:`GAUSS_ORDER`-point Gauss–Legendre on the panels between ``edges``."""
+    edges = np.asarray(edges, dtype=float)
+    lo, hi = edges[:-1, None], edges[1:, None]
+    nodes = 0.5 * (hi + lo) + 0.5 * (hi - lo) * _GL_X[None, :]
+    weights = 0.5 * (hi - lo) * _GL_W[None, :]
+    return nodes.ravel(), weights.ravel()
+
+
+def _geometric_edges(start, stop):
+    """``start, 2 start, 4 start, ...`` up to the first value >= ``stop`` (both > 0)."""
+    n = max(int(math.ceil(math.log2(stop / start))), 1)
+    return start * 2.0 ** np.arange(n + 1)
+
+
+def theta_quadrature(theta_ul, theta_cap, theta_top):
+    """Nodes ``theta_j`` [rad] and weights [rad] on ``(0, theta_top]`` for Gaussian expectations.
+
+    ``theta_ul``: uplift threshold [rad]; ``theta_cap``: capacity angle [rad] (``inf`` if none);
+    ``theta_top``: upper end [rad] (at least ``SIGMA_SPAN`` times the largest sigma).  Panels
+    as in the module docstring.
+    """
+    inner = np.concatenate([[0.0], theta_ul * 2.0 ** -np.arange(J_INNER, -1, -1)])
+    parts = [_gauss_legendre(inner)]
+    top = max(theta_top, 2.0 * theta_ul)
+    if theta_cap < top:
+        bend = max(0.75 * theta_cap, theta_ul)
+        if bend > theta_ul:
+            edges = _geometric_edges(theta_ul, bend)
+            parts.append(_gauss_legendre(np.append(edges[edges < bend], bend)))
+        s, ws = _gauss_legendre(np.linspace(0.0, math.sqrt(theta_cap - bend), 4))
+        parts.append((theta_cap - s * s, 2.0 * s * ws))        # theta = theta_cap - s^2
+        parts.append(_gauss_legendre(_geometric_edges(theta_cap, top)))
+    else:
+        parts.append(_gauss_legendre(_geometric_edges(theta_ul, top)))
+    nodes = np.concatenate([p[0] for p in parts])
+    weights = np.concatenate([p[1] for p in parts])
+    return nodes, weights
+
+
+def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
+    """``(values, slopes)``, each ``(len(sigma), 3)``: ``(e_c, e_k, d_c)`` and their d/d ln(sigma).
+
+    ``sigma`` [rad] > 0; ``theta``, ``weight`` from :func:`theta_quadrature`; ``c_values``
+    [N m s/rad], ``k_values`` [N m/rad] = ``C``, ``K`` at the nodes; ``c0``, ``k0`` = ``C(0)``, ``K(0)``.
+    """
+    sigma = np.asarray(sigma, dtype=float)[:, None]
+    x2 = (theta[None, :] / sigma) ** 2
+    phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / sigma
+    dc = c_values - c0
+    dk = k_values - k0
+    inv_s2 = 1.0 / sigma[:, 0] ** 2
+    he2 = phi * (x2 - 1.0)
+    values = np.stack([phi @ c_values, (phi * x2) @ k_values, (he2 @ dc) * inv_s2], axis=1)
+    slopes = np.stack([he2 @ dc, (phi * x2 * (x2 - 3.0)) @ dk,
+                       ((phi * (x2 * (x2 - 6.0) + 3.0)) @ dc) * inv_s2], axis=1)
+    return values, slopes
+
+
+def _point_nodes(block, foundation, sigma_max):
+    """Nodes, weights, ``C``, ``K`` at the nodes and ``C(0)``, ``K(0)`` for one (scalar) point."""
+    tu = float(cubic.uplift_threshold(block, foundation))
+    cap = float(cubic.capacity_angle(block, foundation))
+    theta, weight = theta_quadrature(tu, cap, SIGMA_SPAN * sigma_max)
+    c = cubic.rocking_damping(theta, block, foundation)
+    k = cubic.rocking_stiffness(theta, block, foundation)
+    return theta, weight, c, k, float(cubic.damping_at_rest(block, foundation)), \
+        float(cubic.stiffness_at_rest(block, foundation))
+
+
+def expectations(sigma_theta, block, foundation):
+    """``(e_c, e_k, d_c)`` [SI, module docstring] at ``sigma_theta`` [rad] >= 0 for one scalar point.
+
+    Direct quadrature (no table); below ``sigma_lo = theta_ul exp(T_LO)`` the same ``sigma^2``
+    extrapolation as the table, exact limits at ``sigma = 0``.
+    """
+    s = np.asarray(sigma_theta, dtype=float)
+    tu = float(cubic.uplift_threshold(block, foundation))
+    s_lo = tu * math.exp(T_LO)
+    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, max(float(np.max(s, initial=0.0)), s_lo))
+    flat = s.ravel()
+    above = flat >= s_lo
+    out = np.empty((flat.size, 3))
+    if np.any(above):
+        out[above] = gaussian_expectations(flat[above], theta, weight, c, k, c0, k0)[0]
+    if not np.all(above):
+        lo = gaussian_expectations(np.array([s_lo]), theta, weight, c, k, c0, k0)[0][0]
+        f = (flat[~above] / s_lo) ** 2
+        out[~above] = np.stack([c0 + (lo[0] - c0) * f, k0 + (lo[1] - k0) * f, np.full(f.shape, lo[2])], axis=1)
+    out = out.reshape(s.shape + (3,))
+    return out[..., 0], out[..., 1], out[..., 2]
+
+
+def table_size(block, foundation):
+    """Number of table nodes, from ``T_LO`` up to ``t_hi = ln(4 atan(b/h) / theta_ul)`` (at least 2).
+
+    Vectorised over array model parameters (one size per point).
+    """
+    tu = cubic.uplift_threshold(block, foundation)
+    t_hi = np.maximum(np.log(4.0 * np.arctan2(block.b, block.h) / tu), 2.0)
+    return (np.ceil((t_hi - T_LO) * STEPS_PER_UNIT).astype(int) + 1)[()]
+
+
+def coefficient_table(block, foundation):
+    """``(values, slopes)`` of shape ``(table_size, 3)`` for one scalar point (module docstring).
+
+    Nodes at ``t = T_LO + i / STEPS_PER_UNIT``; depends on the point alone.
+    """
+    n = int(table_size(block, foundation))
+    t = T_LO + np.arange(n) / STEPS_PER_UNIT
+    tu = float(cubic.uplift_threshold(block, foundation))
+    sigma = tu * np.exp(t)
+    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]))
+    values, slopes = gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
+    return np.ascontiguousarray(values), np.ascontiguousarray(slopes)
+
+
+def point_models(block, foundation, shape):
+    """Per-point scalar ``(block, foundation)`` stand-ins for the flattened broadcast ``shape``.
+
+    Yields ``SimpleNamespace`` objects carrying the fields the condensation reads (SI units).
+    """
+    names_b = ("m", "b", "h", "g")
+    hc = foundation.contact == "hunt_crossley"
+    damping_name = "lam" if hc else "c"
+    fields = [np.broadcast_to(np.asarray(getattr(block, n), dtype=float), shape).ravel() for n in names_b]
+    fields += [np.broadcast_to(np.asarray(v, dtype=float), shape).ravel()
+               for v in (foundation.k, foundation.eps, foundation.damping)]
+    for m, b, h, g, k, eps, damping in zip(*fields):
+        yield (SimpleNamespace(m=float(m), b=float(b), h=float(h), g=float(g)),
+               SimpleNamespace(k=float(k), eps=float(eps), contact=foundation.contact,
+                               damping=float(damping), **{damping_name: float(damping)}))
+
+
+def coefficient_tables(block, foundation, shape):
+    """Stacked tables ``(values, slopes)``, each ``(n_points, max size, 3)``, for the flattened
+    broadcast ``shape``; identical points share one computation.  Each point's table is its
+    own (:func:`coefficient_table`), zero-padded to the longest; the padding is never read
+    (:func:`table_lookup_grid` gets each point's :func:`table_size`)."""
+    n = int(np.prod(shape, dtype=int))
+    tables = []
+    cache = {}
+    for blk, fnd in point_models(block, foundation, shape):
+        key = (blk.m, blk.b, blk.h, blk.g, fnd.k, fnd.eps, fnd.damping)
+        if key not in cache:
+            cache[key] = coefficient_table(blk, fnd)
+        tables.append(cache[key])
+    size = max(v.shape[0] for v, _ in tables)
+    values = np.zeros((n, size, 3))
+    slopes = np.zeros((n, size, 3))
+    for i, (v, sl) in enumerate(tables):
+        values[i, :v.shape[0]] = v
+        slopes[i, :v.shape[0]] = sl
+    return values, slopes
+
+
+def table_lookup(t, values, slopes, c0, k0):
+    """``(e_c, e_k, d_c)`` at ``t = ln(sigma_theta / theta_ul)`` (``-inf`` allowed) from one point's table.
+
+    ``c0``, ``k0``: ``C(0)`` [N m s/rad], ``K(0)`` [N m/rad], the limits at ``sigma = 0``.
+    Python entry point of :func:`table_lookup_grid` on the grid of this module.
+    """
+    return table_lookup_grid(t, values, slopes, c0, k0, T_LO, float(STEPS_PER_UNIT), values.shape[0])
+
+
+@numba.njit(cache=True, inline="always")
+def table_lookup_grid(t, values, slopes, c0, k0, t_lo, steps_per_unit, n):
+    """Compiled :func:`table_lookup` on the grid ``t_lo + i / steps_per_unit`` of ``n`` nodes.
+
+    The grid is passed at run time (not read from module constants) so that compiled
+    callers cached by numba can never disagree with the tables built in Python; rows of
+    ``values`` beyond ``n`` (padding of stacked tables) are never read.
+    """
+    n = int(n)
+    if t <= t_lo:
+        f = math.exp(2.0 * (t - t_lo))                 # (sigma / sigma_lo)^2
+        return c0 + (values[0, 0] - c0) * f, k0 + (values[0, 1] - k0) * f, values[0, 2]
+    u = (t - t_lo) * steps_per_unit
+    if u >= n - 1:
+        return values[n - 1, 0], values[n - 1, 1], values[n - 1, 2]
+    i = int(u)
+    h00, h10, h01, h11 = hermite_basis(u - i, 1.0 / steps_per_unit)
+    e_c = h00 * values[i, 0] + h01 * values[i + 1, 0] + h10 * slopes[i, 0] + h11 * slopes[i + 1, 0]
+    e_k = h00 * values[i, 1] + h01 * values[i + 1, 1] + h10 * slopes[i, 1] + h11 * slopes[i + 1, 1]
+    d_c = h00 * values[i, 2] + h01 * values[i + 1, 2] + h10 * slopes[i, 2] + h11 * slopes[i + 1, 2]
+    return e_c, e_k, d_c
+
+
+def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
+    """``(c_eq [N m s/rad], k_eq [N m/rad])`` of the cubic condensation (module docstring).
+
+    ``sigma_theta`` [rad] >= 0 and ``cov_over_sigma = cov(theta, theta') / sigma_theta``
+    [rad/s] (``rho sigma_theta_dot``), broadcast with array model parameters (one quadrature
+    per distinct parameter point).
+    """
+    s = np.asarray(sigma_theta, dtype=float)
+    cs = np.asarray(cov_over_sigma, dtype=float)
+    shape_p = np.broadcast_shapes(*(np.shape(getattr(block, n)) for n in ("m", "b", "h", "g")),
+                                  *(np.shape(v) for v in (foundation.k, foundation.eps, foundation.damping)))
+    shape = np.broadcast_shapes(shape_p, s.shape, cs.shape)
+    s_b = np.broadcast_to(s, shape)
+    cs_b = np.broadcast_to(cs, shape)
+    c_eq = np.empty(shape)
+    k_eq = np.empty(shape)
+    models = list(point_models(block, foundation, shape_p))
+    p_index = np.broadcast_to(np.arange(len(models)).reshape(shape_p), shape)
+    for j, (blk, fnd) in enumerate(models):
+        sel = p_index == j
+        e_c, e_k, d_c = expectations(s_b[sel], blk, fnd)
+        c_eq[sel] = e_c
+        k_eq[sel] = e_k + cs_b[sel] * s_b[sel] * d_c
+    return c_eq[()], k_eq[()]

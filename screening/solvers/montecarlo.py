@@ -1,0 +1,380 @@
+"""Monte Carlo reference: ensemble statistics of the rocking response under synthesized input.
+
+:func:`monte_carlo` integrates either the full coupled model (paper eqs. 7–8 with the
+exact contact resultants of :mod:`screening.physics.contact`) or the condensed SDOF (eq. 22 with
+eqs. 24–25, or with ``condensation="cubic"`` the ``C``, ``K`` of
+:mod:`screening.condensation.cubic`) for ``n_samples`` ground-acceleration samples
+synthesized by the spectral representation method (:mod:`screening.solvers.synthesis`), and
+returns the time histories of the ensemble moments of ``theta`` and ``theta'`` on the
+shared output grid (:func:`screening.solvers.timegrid.output_times`).
+
+Numerics (all overridable through ``**numerics``; recorded in the dataset attributes):
+
+* each sample is integrated by an adaptive Dormand–Prince 5(4) pair (compiled, one
+  sample per loop iteration, ``prange`` over samples) with relative tolerance ``rtol``
+  (default :data:`DEFAULT_RTOL`: 1e-7 coupled, 1e-6 condensed) and absolute scales
+  ``rtol x (theta_ul, theta_ul w_r, z_st, z_st w_v)``; steps land exactly on the output
+  instants and never exceed ``h_max``;
+* the input is band-limited to ``cutoff`` (default :func:`screening.solvers.synthesis.default_cutoff`,
+  3 x the larger of the rocking and vertical frequencies) and read between its grid
+  points by cubic Hermite interpolation;
+* the coupled model starts from static equilibrium (``theta = 0``, ``z_cb`` = exact static
+  indentation including the cubic term, all rates zero), the condensed one from rest.
+
+A sample is *overturned* when ``|theta|`` exceeds the slenderness angle ``atan(b/h)`` and
+*diverged* when its state stops being finite or physical, when it stays in flight longer
+than ``max_flight_time``, or when the step size underflows / the step budget runs out.
+Such samples are excluded from every ensemble statistic (the statistics are conditional
+on survival of the whole record) and reported in ``overturned``, ``diverged`` and the
+counts; they never stop the run.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import sys
+import time
+
+import numpy as np
+import xarray as xr
+
+from screening.solvers import mcs_kernels as kern
+from screening.condensation import cubic as cubic_condensation
+from screening.condensation.paper import check_condensation, damping_inner, m_sdof, uplift_threshold
+from screening.physics.contact import static_indentation_exact
+from screening.workflow.progress import Progress
+from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
+                        spectral_plan, stationary_samples, validate_seed, vertical_frequency)
+from screening.solvers.timegrid import output_times
+
+MODELS = ("coupled", "condensed")
+
+#: Default relative tolerance per model.  The coupled model is tighter: near overturning its
+#: samples are sensitive to integration error (at 1e-6 about 4 % of the samples of the paper's
+#: S0 = 2.4e-3 case switch between overturned and survived against a 1e-9 reference, moving
+#: the survivors' peak variance by ~0.6 standard errors; at 1e-7 ~0.15 SE).
+DEFAULT_RTOL = {"coupled": 1e-7, "condensed": 1e-6}
+
+#: Default numerical settings (see the module docstring).
+DEFAULT_NUMERICS = {
+    "rtol": None,               # relative tolerance of the adaptive pair [1]; None -> DEFAULT_RTOL[model]
+    "cutoff": None,             # band limit of the input [rad/s]; None -> cutoff_factor x max frequency
+    "cutoff_factor": CUTOFF_FACTOR,
+    "oversampling": OVERSAMPLING,
+    "h_max": 0.005,             # largest integration step [s]
+    "max_steps": 5_000_000,     # step budget per sample (accepted + rejected)
+    "max_flight_time": 0.5,     # longest admissible continuous flight [s]
+    "chunk_size": 64,           # samples synthesized and integrated per batch
+}
+
+INTENSITY_CONVENTION = ("E[xi(t) xi(s)] = 2 pi S0 delta(t - s): S0 is the two-sided PSD level of xi "
+                        "over -inf < omega < inf")
+
+
+# ----------------------------------------------------------------------------- validation
+def _check_integer(name, value, lower, text):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
+        raise ValueError(f"parameter '{name}' must be {text} (got {value!r})")
+    return int(value)
+
+
+def _check_scalar_models(block, foundation, excitation):
+    fields = {"block." + n: getattr(block, n) for n in ("m", "b", "h", "I_cm", "g")}
+    fields.update({"foundation." + n: getattr(foundation, n) for n in ("k", "eps")})
+    fields["foundation.damping"] = foundation.damping
+    fields["excitation.S0"] = excitation.S0
+    for name, value in fields.items():
+        if np.ndim(value) != 0:
+            raise ValueError(f"parameter '{name}' must be a scalar for monte_carlo (got an array of shape "
+                             f"{np.shape(value)}); loop over parameter points instead")
+    if excitation.kind not in ("white", "kanai_tajimi"):
+        raise ValueError(f"parameter 'excitation' must be a WhiteNoise or KanaiTajimi (got kind {excitation.kind!r})")
+
+
+def _check_numerics(numerics):
+    unknown = sorted(set(numerics) - set(DEFAULT_NUMERICS))
+    if unknown:
+        raise ValueError(f"unknown numerics option(s) {unknown}; allowed: {sorted(DEFAULT_NUMERICS)}")
+    opts = dict(DEFAULT_NUMERICS, **numerics)
+
+    def positive(name, upper=math.inf):
+        v = opts[name]
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not (0.0 < v <= upper) or not math.isfinite(v):
+            raise ValueError(f"parameter '{name}' must be a finite number in (0, {upper:g}] (got {v!r})")
+        return float(v)
+
+    if opts["rtol"] is not None:
+        opts["rtol"] = positive("rtol", 1e-2)
+    if opts["cutoff"] is not None:
+        opts["cutoff"] = positive("cutoff")
+    opts["cutoff_factor"] = positive("cutoff_factor")
+    opts["h_max"] = positive("h_max")
+    opts["max_flight_time"] = positive("max_flight_time")
+    opts["oversampling"] = _check_integer("oversampling", opts["oversampling"], 2, "an integer >= 2")
+    opts["max_steps"] = _check_integer("max_steps", opts["max_steps"], 1, "an integer >= 1")
+    opts["chunk_size"] = _check_integer("chunk_size", opts["chunk_size"], 1, "an integer >= 1")
+    return opts
+
+
+# ----------------------------------------------------------------------------- set-up
+def state_scales(block, foundation):
+    """Absolute error scales of ``(theta, theta', z_cb, z_cb')``: ``theta_ul`` [rad], ``theta_ul w_r``
+    [rad/s], static indentation ``m g/(2 b k)`` [m] and ``z_st w_v`` [m/s]."""
+    tu = float(uplift_threshold(block, foundation))
+    z_st = float(block.m * block.g / (2.0 * block.b * foundation.k))
+    w_r = max(rocking_frequency(block, foundation), 1.0)
+    return np.array([tu, tu * w_r, z_st, z_st * vertical_frequency(block, foundation)])
+
+
+def initial_state(block, foundation, model):
+    """Initial ``(theta, theta', z_cb, z_cb')``: static equilibrium (coupled) or rest (condensed)."""
+    if model == "coupled":
+        return np.array([0.0, 0.0, static_indentation_exact(block, foundation), 0.0])
+    return np.zeros(4)
+
+
+# ----------------------------------------------------------------------------- statistics
+def ensemble_statistics(theta, theta_dot, uplift, used):
+    """Ensemble moments over the rows ``used`` of ``(n_samples, n_times)`` arrays.
+
+    Variances and the covariance are about the sample mean with ``ddof = 1``.  The standard
+    error of a sample variance ``s^2`` is ``sqrt((m4 - (n-3)/(n-1) s^4) / n)`` with ``m4`` the
+    fourth central sample moment (no Gaussian assumption).  With fewer than two rows every
+    statistic is NaN.
+    """
+    n = int(np.count_nonzero(used))
+    n_t = theta.shape[1]
+    if n < 2:
+        nan = np.full(n_t, np.nan)
+        return {"var_theta": nan, "var_theta_dot": nan.copy(), "cov_theta_theta_dot": nan.copy(),
+                "var_theta_se": nan.copy(), "var_theta_dot_se": nan.copy(), "p_uplift": nan.copy()}
+    x = theta[used]
+    v = theta_dot[used]
+    dx = x - x.mean(axis=0)
+    dv = v - v.mean(axis=0)
+    var_x = np.sum(dx * dx, axis=0) / (n - 1)
+    var_v = np.sum(dv * dv, axis=0) / (n - 1)
+    cov = np.sum(dx * dv, axis=0) / (n - 1)
+
+    def se(d, s2):
+        m4 = np.mean(d**4, axis=0)
+        return np.sqrt(np.maximum(m4 - (n - 3.0) / (n - 1.0) * s2 * s2, 0.0) / n)
+
+    return {"var_theta": var_x, "var_theta_dot": var_v, "cov_theta_theta_dot": cov,
+            "var_theta_se": se(dx, var_x), "var_theta_dot_se": se(dv, var_v),
+            "p_uplift": np.mean(uplift[used], axis=0)}
+
+
+def _status_text(n_samples, n_overturned, n_diverged):
+    n_used = n_samples - n_overturned - n_diverged
+    if n_used >= 2:
+        return "ok"
+    if n_overturned == n_samples:
+        return "all samples overturned"
+    if n_diverged == n_samples:
+        return "all samples diverged"
+    if n_used == 0:
+        return f"all samples excluded ({n_overturned} overturned, {n_diverged} diverged)"
+    return f"fewer than 2 usable samples ({n_overturned} overturned, {n_diverged} diverged)"
+
+
+def _show_progress(progress, n_samples, chunk_size):
+    if progress is None:
+        return n_samples > chunk_size and hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
+    if not isinstance(progress, bool):
+        raise ValueError(f"parameter 'progress' must be None, True or False (got {progress!r})")
+    return progress
+
+
+# ----------------------------------------------------------------------------- entry point
+def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
+                seed=0, progress=None, condensation="paper", **numerics):
+    """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
+
+    Parameters
+    ----------
+    block : :class:`~screening.model.Block` with scalar fields (SI).
+    foundation : :class:`~screening.model.Foundation` (Hunt–Crossley) or
+        :class:`~screening.model.WinklerFoundation`, scalar fields (SI).
+    excitation : :class:`~screening.model.excitation.WhiteNoise` or :class:`~screening.model.excitation.KanaiTajimi`
+        (horizontal ground acceleration ``q(t) xi(t)`` or ``q(t) z(t)``; ``S0`` [m^2/s^3] is the
+        two-sided PSD level, ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``).
+    n_samples : number of samples, integer >= 2.
+    model : ``"coupled"`` (eqs. 7–8, exact contact resultants) or ``"condensed"`` (eq. 22).
+    t_end : record length [s], > 0.
+    dt : OUTPUT step [s]; output times are ``output_times(t_end, dt)``.  The integration
+        step is adaptive and finer (see ``rtol``, ``h_max``).
+    seed : integer >= 0; sample ``i`` uses ``numpy.random.default_rng([seed, i])``.
+    progress : None (a bar on stderr for multi-chunk runs on a terminal), True or False.
+    condensation : ``"paper"`` (eqs. 24–25) or ``"cubic"`` (:mod:`screening.condensation.cubic`):
+        the ``C(theta)``, ``K(theta)`` of ``model="condensed"``.  ``"cubic"`` with
+        ``model="coupled"`` raises (the coupled model is not condensed).  With ``"cubic"`` on
+        a softening bed, samples passing the capacity angle (no quasi-static equilibrium)
+        are flagged diverged.
+    **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
+        ``cutoff_factor`` [1], ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
+        ``max_flight_time`` [s], ``chunk_size``.
+
+    Returns
+    -------
+    xarray.Dataset on coordinate ``t`` [s] (and ``sample``) with ``var_theta`` [rad2],
+    ``var_theta_dot`` [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1] — ensemble moments about
+    the sample mean (``ddof = 1``) over the samples that neither overturned nor diverged —,
+    their standard errors ``var_theta_se``, ``var_theta_dot_se``, the uplift occupancy
+    ``p_uplift`` [1] (coupled: either base edge out of contact, ``z_cb < b |sin theta|``;
+    condensed: ``|theta| > theta_ul``), per-sample ``peak_abs_theta`` [rad] (maximum of
+    ``|theta|`` over the accepted steps, up to overturning or divergence), ``overturned``,
+    ``diverged``, ``n_steps`` and scalars ``n_overturned``, ``n_diverged``, ``n_used``.
+    ``attrs["status"]`` is ``"ok"`` or says plainly why the statistics are NaN;
+    ``attrs["condensation"]`` names the condensation of a condensed run.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``n_samples``, ``model``, ``condensation``, ``seed``, ``t_end``/``dt``, numerics
+        option, or array-valued model parameters — before any work is done.
+    """
+    n_samples = _check_integer("n_samples", n_samples, 2, "an integer >= 2")
+    if model not in MODELS:
+        raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
+    check_condensation(condensation)
+    if model == "coupled" and condensation != "paper":
+        raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
+                         f"(got condensation={condensation!r} with model='coupled')")
+    seed = validate_seed(seed)
+    times = output_times(t_end, dt)
+    t_end, dt = float(t_end), float(dt)
+    _check_scalar_models(block, foundation, excitation)
+    opts = _check_numerics(numerics)
+    if opts["rtol"] is None:
+        opts["rtol"] = DEFAULT_RTOL[model]
+    show = _show_progress(progress, n_samples, opts["chunk_size"])
+    y0 = initial_state(block, foundation, model)       # may raise for a bed that cannot carry the block
+    if condensation == "cubic":
+        cubic_condensation.check_bearing(block, foundation)
+
+    cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
+                                                                              opts["cutoff_factor"])
+    plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
+    q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
+    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
+    params = kern.pack_parameters(block, foundation, opts["max_flight_time"], condensation)
+    scales = opts["rtol"] * state_scales(block, foundation)
+    model_code = kern.MODEL_COUPLED if model == "coupled" else kern.MODEL_CONDENSED
+
+    n_t = times.size
+    theta = np.empty((n_samples, n_t))
+    theta_dot = np.empty((n_samples, n_t))
+    chunk = opts["chunk_size"]
+    z_cb = np.empty((min(chunk, n_samples), n_t))            # scratch: z_cb is not reported
+    z_cb_dot = np.empty_like(z_cb)
+    uplift = np.zeros((n_samples, n_t), dtype=np.bool_)
+    peak = np.zeros(n_samples)
+    status = np.zeros(n_samples, dtype=np.int64)
+    reason = np.zeros(n_samples, dtype=np.int64)
+    n_acc = np.zeros(n_samples, dtype=np.int64)
+    n_rej = np.zeros(n_samples, dtype=np.int64)
+    h_min = np.zeros(n_samples)
+
+    start = time.perf_counter()
+    with Progress(n_samples, label=f"monte_carlo[{model}]", enabled=show) as bar:
+        for lo in range(0, n_samples, chunk):
+            hi = min(lo + chunk, n_samples)
+            acc, acc_dot = stationary_samples(plan, seed, np.arange(lo, hi))
+            acc_dot *= q                                    # d(q f)/dt = q f' + q' f
+            acc_dot += q_dot * acc
+            acc *= q
+            sl = slice(lo, hi)
+            kern.integrate_chunk(model_code, acc, acc_dot, plan.dt, times, params, y0, scales, opts["rtol"],
+                                 opts["h_max"], opts["max_steps"], theta[sl], theta_dot[sl], z_cb[:hi - lo],
+                                 z_cb_dot[:hi - lo], uplift[sl], peak[sl], status[sl], reason[sl], n_acc[sl],
+                                 n_rej[sl], h_min[sl])
+            bar.update(hi - lo)
+    wall = time.perf_counter() - start
+
+    overturned = status == kern.STATUS_OVERTURNED
+    diverged = status == kern.STATUS_DIVERGED
+    used = ~(overturned | diverged)
+    stats = ensemble_statistics(theta, theta_dot, uplift, used)
+    n_over, n_div = int(overturned.sum()), int(diverged.sum())
+    return _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
+                          block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
+                          h_min, wall, condensation)
+
+
+def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
+                   block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
+                   condensation="paper"):
+    n_used = n_samples - n_over - n_div
+    meta = {
+        "var_theta": ("rad2", "ensemble variance of the rotation theta"),
+        "var_theta_dot": ("rad2 s-2", "ensemble variance of the rotation rate theta'"),
+        "cov_theta_theta_dot": ("rad2 s-1", "ensemble covariance of theta and theta'"),
+        "var_theta_se": ("rad2", "standard error of var_theta"),
+        "var_theta_dot_se": ("rad2 s-2", "standard error of var_theta_dot"),
+        "p_uplift": ("1", "fraction of samples in uplift"),
+    }
+    data = {name: ("t", stats[name], {"units": u, "long_name": ln}) for name, (u, ln) in meta.items()}
+    data["peak_abs_theta"] = ("sample", peak, {"units": "rad", "long_name": "peak |theta| over the record "
+                                                                            "(up to overturning or divergence)"})
+    data["overturned"] = ("sample", overturned, {"units": "1", "long_name": "sample overturned (|theta| > atan(b/h))"})
+    data["diverged"] = ("sample", diverged, {"units": "1", "long_name": "sample diverged (excluded)"})
+    data["n_steps"] = ("sample", n_acc + n_rej, {"units": "1", "long_name": "integration steps (accepted + rejected)"})
+    data["n_overturned"] = ((), n_over, {"units": "1", "long_name": "number of overturned samples"})
+    data["n_diverged"] = ((), n_div, {"units": "1", "long_name": "number of diverged samples"})
+    data["n_used"] = ((), n_used, {"units": "1", "long_name": "number of samples in the statistics"})
+    coords = {"t": ("t", times, {"units": "s", "long_name": "time"}),
+              "sample": ("sample", np.arange(n_samples), {"long_name": "sample index (default_rng([seed, i]))"})}
+    env = excitation.envelope
+    reasons = sorted({kern.REASON_NAMES[int(r)] for r in reason[diverged]})
+    accepted = n_acc[~overturned & ~diverged]
+    attrs = {
+        "title": f"Monte Carlo rocking response ({model} model)",
+        "status": _status_text(n_samples, n_over, n_div),
+        "model": model,
+        "n_samples": n_samples,
+        "seed": seed,
+        "t_end": t_end,
+        "dt_output": dt,
+        "excitation": excitation.kind,
+        "S0": float(excitation.S0),
+        "intensity_convention": INTENSITY_CONVENTION,
+        "envelope": env.kind,
+        "block_m": float(block.m), "block_b": float(block.b), "block_h": float(block.h),
+        "block_I_cm": float(block.I_cm), "block_g": float(block.g),
+        "foundation_contact": foundation.contact,
+        "foundation_k": float(foundation.k), "foundation_eps": float(foundation.eps),
+        "foundation_damping": float(foundation.damping),
+        "statistics": "moments about the sample mean (ddof=1) over samples that neither overturned nor diverged",
+        "integrator": "adaptive Dormand-Prince 5(4), PI step control, steps land on output times",
+        "rtol": opts["rtol"],
+        "h_max": opts["h_max"],
+        "dt_integration_mean": float(t_end * accepted.size / max(accepted.sum(), 1)) if accepted.size else float("nan"),
+        "dt_integration_min": float(np.min(h_min)) if np.isfinite(np.min(h_min)) else float("nan"),
+        "dt_integration_note": "dt_integration_mean = t_end / mean accepted steps of the used samples; "
+                               "dt_integration_min = smallest accepted step after the start-up ramp",
+        "synthesis": "spectral representation (Shinozuka-Deodatis), random phases, FFT; cubic Hermite between grid points",
+        "cutoff_rad_s": float(plan.cutoff),
+        "d_omega_rad_s": float(plan.d_omega),
+        "n_frequencies": plan.n_frequencies,
+        "dt_synthesis": float(plan.dt),
+        "input_stationary_variance": plan.stationary_variance,
+        "max_flight_time": opts["max_flight_time"],
+        "diverged_reasons": ", ".join(reasons) if reasons else "none",
+        "wall_time_s": float(wall),
+    }
+    if env.kind == "exponential":
+        attrs["envelope_T1"], attrs["envelope_T2"] = float(env.T1), float(env.T2)
+    if excitation.kind == "kanai_tajimi":
+        attrs["omega_g"], attrs["zeta_g"] = float(excitation.omega_g), float(excitation.zeta_g)
+    if model == "condensed":
+        attrs["condensation"] = condensation
+        attrs["theta_ul"] = float(uplift_threshold(block, foundation, condensation))
+        attrs["m_sdof"] = float(m_sdof(block))
+        if condensation == "cubic":
+            attrs["C1"] = float(cubic_condensation.damping_at_rest(block, foundation))
+            attrs["theta_capacity"] = float(cubic_condensation.capacity_angle(block, foundation))
+        else:
+            attrs["C1"] = float(damping_inner(block, foundation))
+    return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -1,0 +1,188 @@
+"""The result file: CF-1.8 (IOOS compliance-checker, strict), metadata and storage layout."""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+
+from screening import __version__
+from screening.solvers.moments import HISTORY_VARIABLES
+from helpers import in_process_client, quiet
+
+from screening.schema import PARAMETERS, VARIABLES
+from screening.workflow.study import parse_study
+from screening.workflow.sweep import run_sweep
+
+CHECKER = Path(sys.executable).parent / "compliance-checker"
+
+GRID = """
+title = "CF test grid"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = [2.0e7, 2.89e7]
+lam = 8.95e8
+eps = [-6e5, 6e7]
+[excitation]
+kind = "white"
+S0 = {start = 1e-5, stop = 2.4e-3, num = 3, log = true}
+[time]
+t_end = 2.0
+dt = 0.1
+[mcs]
+points = "auto"
+count = 2
+samples = 6
+model = "condensed"
+"""
+
+CASES = """
+title = "CF test cases – with a non-ASCII dash"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+[excitation]
+kind = "white"
+[time]
+t_end = 2.0
+dt = 0.1
+[[case]]
+name = "white"
+foundation.eps = 6e7
+excitation.S0 = 2.4e-5
+[[case]]
+name = "filtered"
+foundation.eps = -6e5
+excitation = {kind = "kanai_tajimi", S0 = 2e-4, omega_g = 10.0, zeta_g = 0.4}
+[mcs]
+points = [{case = "filtered"}]
+samples = 4
+model = "condensed"
+"""
+
+SINGLE = """
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+[excitation]
+kind = "white"
+S0 = 1e-4
+envelope = "constant"
+[time]
+t_end = 1.0
+dt = 0.1
+"""
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cf")
+    paths = {}
+    with in_process_client(2) as client:
+        for name, text in (("grid", GRID), ("cases", CASES), ("single", SINGLE)):
+            paths[name] = folder / f"{name}.nc"
+            run_sweep(parse_study(text, name=name, source=f"{name}.toml"), paths[name], client=client,
+                      progress=False, log=quiet)
+    return paths
+
+
+@pytest.mark.skipif(not CHECKER.exists(), reason="IOOS compliance-checker is not installed in this environment "
+                                                 "(pip install compliance-checker)")
+@pytest.mark.parametrize("name", ["grid", "cases", "single"])
+def test_compliance_checker_cf18_strict_passes(results, name):
+    proc = subprocess.run([str(CHECKER), "--test=cf:1.8", "--criteria=strict", str(results[name])],
+                          capture_output=True, text=True, timeout=300)
+    report = proc.stdout + proc.stderr
+    assert proc.returncode == 0, report
+    assert "All tests passed!" in proc.stdout, report
+    assert "exceptions occurred" not in report, report
+
+
+def test_dimensions_coordinates_and_units(results):
+    with xr.open_dataset(results["grid"]) as ds:
+        assert ds["var_theta"].dims == ("k", "eps", "S0", "t")
+        assert ds.sizes["spot"] == 2
+        for name, var in (("k", "k_value"), ("eps", "eps"), ("S0", "S0")):
+            assert ds[var].dims == (name,)
+            assert ds[var].attrs["units"] == PARAMETERS[name]["units"]
+            assert ds[var].attrs["long_name"] == PARAMETERS[name]["long_name"]
+        np.testing.assert_array_equal(ds["k_value"].values, [2.0e7, 2.89e7])   # k: auxiliary coordinate
+        assert "k_value" in ds["var_theta"].coords
+        assert ds["t"].attrs["units"] == "s" and "axis" not in ds["t"].attrs
+        np.testing.assert_allclose(ds["t"].values, np.arange(21) * 0.1)
+        for name in HISTORY_VARIABLES + ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq",
+                                         "t_stop", "n_steps", "theta_ul"):
+            assert ds[name].attrs["units"] == VARIABLES[name]["units"], name
+            assert ds[name].attrs["long_name"] == VARIABLES[name]["long_name"], name
+        for name in ("m", "b", "h", "I_cm", "g", "lam", "T1", "T2"):     # fixed parameters: scalar coords
+            assert name in ds["var_theta"].coords and ds[name].ndim == 0
+            assert ds[name].attrs["units"] == PARAMETERS[name]["units"]
+        assert float(ds["m"]) == 8.67 and float(ds["T1"]) == 4.0
+        assert ds["status"].attrs["flag_meanings"].split()[:2] == ["task_failed", "ok"]
+        np.testing.assert_array_equal(ds["status"].attrs["flag_values"], [-1, 0, 1, 2, 3, 4])
+        assert ds["theta_ul"].values[0, 0, 0] == pytest.approx(8.67 * 9.81 / (2 * 0.035**2 * 2.0e7))
+        assert ds["spot_S0"].attrs["units"] == "m2 s-3"
+        assert ds["mcs_rel_error_peak_var_theta"].attrs["units"] == "1"
+
+
+def test_storage_layout_and_global_attributes(results):
+    with netCDF4.Dataset(results["grid"]) as nc:
+        for name in ("k_value", "eps", "S0", "t"):
+            assert "_FillValue" not in nc[name].ncattrs(), name
+        for name in HISTORY_VARIABLES:
+            assert nc[name].dtype == np.float32
+            assert nc[name].filters()["zlib"] and nc[name].filters()["shuffle"]
+            assert nc[name].chunking()[-1] == nc.dimensions["t"].size
+        for name in ("peak_var_theta", "min_k_eq", "t_stop"):
+            assert nc[name].dtype == np.float64 and nc[name].filters()["zlib"]
+        assert nc["status"].dtype == np.int8 and nc["n_steps"].dtype == np.int32
+        attrs = nc.__dict__
+        assert attrs["Conventions"] == "CF-1.8"
+        assert attrs["title"] == "CF test grid"
+        assert attrs["screening_version"] == __version__
+        assert attrs["study_text"] == GRID
+        assert attrs["study_file"] == "grid.toml" and len(attrs["study_sha256"]) == 64
+        assert "screening run grid.toml" in attrs["history"]
+        assert "2 pi S0" in attrs["intensity_convention"]
+        assert attrs["contact"] == "hunt_crossley" and attrs["excitation"] == "white"
+
+
+def test_case_dimension_layout(results):
+    with xr.open_dataset(results["cases"]) as ds:
+        assert ds["var_theta"].dims == ("case", "t")
+        assert ds["case"].values.tolist() == [0, 1]
+        assert ds["case_name"].values.tolist() == ["white", "filtered"]
+        assert ds["S0"].dims == ("case",) and ds["S0"].values.tolist() == [2.4e-5, 2e-4]
+        assert np.isnan(ds["zeta_g"].values[0]) and ds["zeta_g"].values[1] == 0.4
+        assert ds["excitation"].values.tolist() == ["white", "kanai_tajimi"]
+        assert ds["spot_case_name"].values.tolist() == ["filtered"]
+        assert "–" in ds.attrs["title"]
+        assert ds.swap_dims(case="case_name")["peak_var_theta"].sel(case_name="filtered").size == 1
+
+
+def test_single_point_result_is_dimensionless_but_time(results):
+    with xr.open_dataset(results["single"]) as ds:
+        assert ds["var_theta"].dims == ("t",)
+        assert ds["status"].dims == () and int(ds["status"]) == 0
+        assert ds.attrs["envelope"] == "constant" and "T1" not in ds.variables
+
+
+@pytest.mark.skipif(shutil.which("ncdump") is None, reason="ncdump (netcdf-bin) is not installed")
+def test_ncdump_header_reads(results):
+    proc = subprocess.run(["ncdump", "-h", str(results["grid"])], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and 'var_theta:units = "rad2"' in proc.stdout

@@ -1,0 +1,410 @@
+"""Sweeps on dask (screening.workflow.sweep): batching, exactness, failures, resume, reuse, spot checks,
+and a real ``dask scheduler`` + ``dask worker`` cluster."""
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from helpers import GRID, compare_files, quiet
+
+from screening.workflow import sweep
+from screening.condensation.paper import uplift_threshold
+from screening.solvers.moments import solve_moments
+from screening.solvers.montecarlo import monte_carlo
+from screening.workflow.study import build_models, parse_study
+from screening.workflow.sweep import (STATUS_TASK_FAILED, PartialStore, SweepError, default_batch_size,
+                             hyperslabs, plan_batches, relative_peak_error, run_sweep, select_spots)
+
+BIN = Path(sys.executable).parent
+
+
+CASES = """
+title = "cases test"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+[excitation]
+kind = "white"
+S0 = [1e-4, 5e-4, 2.4e-3]
+[time]
+t_end = 3.0
+dt = 0.1
+[[case]]
+name = "hard_white"
+foundation.eps = 6e7
+[[case]]
+name = "soft_kt"
+foundation.eps = -6e5
+excitation = {kind = "kanai_tajimi", omega_g = 10.0, zeta_g = 0.4}
+"""
+
+
+# ----------------------------------------------------------------------------- pure helpers
+@settings(max_examples=200, deadline=None)
+@given(shape=st.lists(st.integers(1, 5), min_size=0, max_size=4), data=st.data())
+def test_hyperslabs_cover_a_flat_range_exactly(shape, data):
+    shape = tuple(shape)
+    n = int(np.prod(shape, dtype=np.int64))
+    lo = data.draw(st.integers(0, n - 1))
+    hi = data.draw(st.integers(lo + 1, n))
+    flat = np.arange(n).reshape(shape)
+    pieces = hyperslabs(lo, hi, shape)
+    got = np.concatenate([np.atleast_1d(flat[s] if s else flat).ravel() for s, _, _ in pieces])
+    np.testing.assert_array_equal(got, np.arange(lo, hi))
+    for s, a, b in pieces:
+        np.testing.assert_array_equal(np.atleast_1d(flat[s] if s else flat).ravel(), np.arange(a, b))
+    assert len(pieces) <= max(1, 2 * len(shape) - 1)
+
+
+def test_batches_partition_the_grid_case_by_case():
+    study = parse_study(CASES)
+    batches = plan_batches(study, 2)
+    assert [(b.case, b.lo, b.hi) for b in batches] == [(0, 0, 2), (0, 2, 3), (1, 3, 5), (1, 5, 6)]
+    assert [b.index for b in batches] == list(range(4))
+    with pytest.raises(ValueError, match="batch_size"):
+        plan_batches(study, 0)
+
+
+def test_default_batch_size_is_whole_rows_and_spreads_work():
+    study = parse_study(GRID)                       # 4 x 5 = 20 points
+    assert default_batch_size(study, 2) == 5        # ceil(20 / 4) = 5 = one row
+    big = parse_study(GRID.replace("num = 5", "num = 300"))
+    size = default_batch_size(big, 2)
+    assert size == 300 and size <= sweep.DEFAULT_BATCH
+    huge = parse_study(GRID.replace("num = 5", "num = 7000"))
+    assert default_batch_size(huge, 2) == sweep.DEFAULT_BATCH
+
+
+def test_auto_spots_take_highest_uplift_among_ok_points():
+    study = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 2\n')
+    status = np.zeros(20, dtype=np.int8)
+    upl = np.linspace(0.0, 0.5, 20)
+    status[19] = 1                                  # the highest uplift point is not ok: skipped
+    assert select_spots(study, status, upl) == [(3, 3), (3, 2)]
+    status[:] = 1
+    assert select_spots(study, status, upl) == []
+
+
+def test_relative_peak_error():
+    assert relative_peak_error([0, 1, 2.2, 1], [0, 2.0, 1.0, np.nan]) == pytest.approx(0.1)
+    assert np.isnan(relative_peak_error([1.0], [np.nan]))
+
+
+# ----------------------------------------------------------------------------- runs
+def test_cases_with_both_excitations_match_direct_solves(client, tmp_path):
+    study = parse_study(CASES)
+    out = tmp_path / "cases.nc"
+    report = run_sweep(study, out, client=client, batch_size=2, progress=False, log=quiet)
+    assert report.n_batches == 4 and report.status_counts == {"ok": 6}
+    assert not (tmp_path / "cases.nc.partial").exists()
+    with xr.open_dataset(out) as ds:
+        assert ds["var_theta"].dims == ("case", "S0", "t")
+        assert list(ds["case_name"].values) == ["hard_white", "soft_kt"]
+        np.testing.assert_array_equal(ds["eps"].values, [6e7, -6e5])        # per-case coordinate
+        assert np.isnan(ds["omega_g"].values[0]) and ds["omega_g"].values[1] == 10.0
+        assert list(ds["excitation"].values) == ["white", "kanai_tajimi"]
+        for i, case in enumerate(study.cases):
+            direct = solve_moments(*build_models(case, {"S0": study.sweeps["S0"]}), study.times)
+            for name in ("var_theta", "k_eq", "p_uplift"):
+                np.testing.assert_array_equal(ds[name].values[i], direct[name].astype(np.float32))
+            for name in ("peak_var_theta", "min_k_eq", "t_stop", "n_steps"):
+                np.testing.assert_array_equal(ds[name].values[i], direct[name])
+
+
+def test_cubic_condensation_case_matches_direct_solves(client, tmp_path):
+    text = GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = [-6e5, 6e7]") + """
+[[case]]
+name = "paper"
+[[case]]
+name = "cubic"
+foundation.condensation = "cubic"
+[mcs]
+points = [{case = "cubic", eps = 6e7, S0 = 2.4e-3}]
+samples = 6
+model = "condensed"
+seed = 3
+"""
+    study = parse_study(text)
+    out = tmp_path / "cubic.nc"
+    run_sweep(study, out, client=client, progress=False, log=quiet)
+    with xr.open_dataset(out) as ds:
+        assert list(ds["condensation"].values) == ["paper", "cubic"]
+        eps, s0 = np.meshgrid(study.sweeps["eps"], study.sweeps["S0"], indexing="ij")
+        for i, case in enumerate(study.cases):
+            models = build_models(case, {"eps": eps, "S0": s0})
+            direct = solve_moments(*models, study.times, condensation=case.condensation)
+            for name in ("var_theta", "c_eq", "k_eq"):
+                np.testing.assert_array_equal(ds[name].values[i], direct[name].astype(np.float32))
+            np.testing.assert_array_equal(ds["status"].values[i], direct["status"])
+            np.testing.assert_allclose(ds["theta_ul"].values[i],
+                                       uplift_threshold(*models[:2], condensation=case.condensation))
+        # the condensed spot check ran the cubic condensation, not the paper's
+        mc = monte_carlo(*build_models(study.cases[1], {"eps": 6e7, "S0": 2.4e-3}), n_samples=6,
+                         model="condensed", condensation="cubic", t_end=study.t_end, dt=study.dt, seed=3,
+                         progress=False)
+        np.testing.assert_allclose(ds["mcs_var_theta"].values[0], mc["var_theta"].values, rtol=1e-12)
+        # the hardening bed's cubic threshold sits below the paper's (z0 < z_lin)
+        assert ds["theta_ul"].values[1, 1, 0] < 0.99 * ds["theta_ul"].values[0, 1, 0]
+
+
+def test_a_failing_batch_is_retried_then_flagged(client, tmp_path, monkeypatch):
+    calls = []
+
+    def flaky(block, foundation, excitation, t_out, **kw):
+        eps = np.atleast_1d(foundation.eps)
+        calls.append(float(eps[0]))
+        if np.any(eps == 3e7):
+            raise FloatingPointError("injected failure")
+        return solve_moments(block, foundation, excitation, t_out, **kw)
+
+    monkeypatch.setattr(sweep, "solve_moments", flaky)
+    messages = []
+    study = parse_study(GRID)
+    report = run_sweep(study, tmp_path / "f.nc", client=client, batch_size=5, progress=False,
+                       log=messages.append)
+    assert report.n_failed_batches == 1
+    assert calls.count(3e7) == 1 + sweep.TASK_RETRIES
+    assert any("failed after" in m and "injected failure" in m for m in messages)
+    with xr.open_dataset(tmp_path / "f.nc") as ds:
+        status = ds["status"].values
+        assert np.all(status[2] == STATUS_TASK_FAILED) and np.all(status[[0, 1, 3]] == 0)
+        assert np.all(np.isnan(ds["var_theta"].values[2])) and np.all(ds["n_steps"].values[2] == 0)
+        assert np.all(np.isfinite(ds["peak_var_theta"].values[[0, 1, 3]]))
+        assert int(ds.attrs["n_failed_points"]) == 5
+        assert "task_failed" in ds["status"].attrs["flag_meanings"].split()
+
+
+def test_interrupted_run_resumes_to_the_same_file(client, tmp_path):
+    study = parse_study(GRID)
+    ref = tmp_path / "ref.nc"
+    run_sweep(study, ref, client=client, batch_size=3, progress=False, log=quiet)
+
+    out = tmp_path / "run.nc"
+    seen = []
+
+    def stop_after_two(batch):
+        seen.append(batch.index)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet, on_batch=stop_after_two)
+    partial = tmp_path / "run.nc.partial"
+    assert not out.exists()
+    assert sorted(p.name for p in partial.glob("batch-*.npz")) == sorted(
+        f"batch-{i:06d}.npz" for i in seen)
+    assert json.loads((partial / "manifest.json").read_text())["key"] == study.key
+
+    messages = []
+    report = run_sweep(study, out, client=client, batch_size=50, progress=False, log=messages.append)
+    assert report.n_resumed_batches == 2 and report.n_batches == 7      # layout of the first attempt
+    assert any(m.startswith("resuming: 2 of 7 batches") for m in messages)
+    assert not partial.exists()
+    compare_files(ref, out)
+
+
+def test_unchanged_study_is_reused_and_changed_one_recomputed(client, tmp_path):
+    study = parse_study(GRID)
+    out = tmp_path / "r.nc"
+    run_sweep(study, out, client=client, progress=False, log=quiet)
+    stamp = out.stat().st_mtime_ns
+    messages = []
+    report = run_sweep(study, out, client=client, progress=False, log=messages.append)
+    assert report.reused and out.stat().st_mtime_ns == stamp
+    assert "reusing" in messages[0]
+    changed = parse_study(GRID.replace("t_end = 4.0", "t_end = 2.0"))
+    report = run_sweep(changed, out, client=client, progress=False, log=quiet)
+    assert not report.reused
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes["t"] == 41 and ds.attrs["study_sha256"] == changed.key
+    report = run_sweep(changed, out, client=client, progress=False, log=quiet, force=True)
+    assert not report.reused
+
+
+def test_partial_results_of_another_study_are_discarded(client, tmp_path):
+    out = tmp_path / "s.nc"
+    first = parse_study(GRID)
+
+    def stop(batch):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(first, out, client=client, batch_size=4, progress=False, log=quiet, on_batch=stop)
+    second = parse_study(GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = [0.0, 1e7]"))
+    messages = []
+    report = run_sweep(second, out, client=client, progress=False, log=messages.append)
+    assert report.n_resumed_batches == 0
+    assert any("discarding partial results" in m for m in messages)
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_array_equal(ds["eps"].values, [0.0, 1e7])
+
+
+def test_a_second_concurrent_run_is_refused(client, tmp_path):
+    study = parse_study(GRID)
+    out = tmp_path / "l.nc"
+    holder = PartialStore(out)
+    holder.open(study.key, {"batch_size": 5}, quiet)
+    try:
+        with pytest.raises(SweepError, match="another run is writing"):
+            run_sweep(study, out, client=client, progress=False, log=quiet)
+    finally:
+        holder.close()
+    assert not out.exists()
+
+
+def test_bad_arguments_are_refused_before_any_work(tmp_path):
+    with pytest.raises(SweepError, match="output folder .* does not exist"):
+        run_sweep(parse_study(GRID), tmp_path / "nope" / "x.nc", client=object(), log=quiet)
+    with pytest.raises(SweepError, match="number of workers"):
+        run_sweep(parse_study(GRID), tmp_path / "x.nc", workers=0, log=quiet)
+    with pytest.raises(SweepError, match="zlib level"):
+        run_sweep(parse_study(GRID), tmp_path / "x.nc", client=object(), complevel=12, log=quiet)
+    with pytest.raises(SweepError, match="batch size"):
+        run_sweep(parse_study(GRID), tmp_path / "x.nc", client=object(), batch_size=0, log=quiet)
+    assert list(tmp_path.iterdir()) == []
+
+
+def fake_monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
+                     seed=0, **kw):
+    """Stand-in with the documented API: var = 2 x S0-scaled ramp, so the values are known."""
+    t = np.arange(int(round(t_end / dt)) + 1) * dt
+    scale = float(excitation.S0) * (1.0 + float(foundation.eps) * 1e-9)
+    data = {"var_theta": ("t", scale * t), "var_theta_dot": ("t", 10 * scale * t),
+            "var_theta_se": ("t", 0.1 * scale * t), "var_theta_dot_se": ("t", scale * t),
+            "peak_abs_theta": ("sample", scale * np.arange(n_samples)),
+            "overturned": ("sample", np.arange(n_samples) < 3), "diverged": ("sample", np.arange(n_samples) == 3),
+            "n_overturned": ((), 3), "n_diverged": ((), 1)}
+    return xr.Dataset(data, coords={"t": t})
+
+
+def test_spot_checks_store_monte_carlo_on_the_spot_dimension(client, tmp_path, monkeypatch):
+    import screening.solvers.montecarlo
+
+    monkeypatch.setattr(screening.solvers.montecarlo, "monte_carlo", fake_monte_carlo)
+    study = parse_study(GRID + "[mcs]\npoints = [{eps = 6e7, S0 = 2.4e-3}, {index = {eps = 0, S0 = 1}}]\n"
+                               "samples = 7\nmodel = \"condensed\"\nseed = 4\n")
+    out = tmp_path / "m.nc"
+    report = run_sweep(study, out, client=client, progress=False, log=quiet)
+    assert report.n_spots == 2
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_array_equal(ds["spot_eps"].values, [6e7, -6e5])
+        np.testing.assert_array_equal(ds["spot_S0"].values, [2.4e-3, study.sweeps["S0"][1]])
+        assert ds["mcs_var_theta"].dims == ("spot", "t")
+        t = ds["t"].values
+        for i, (eps, s0) in enumerate([(6e7, 2.4e-3), (-6e5, study.sweeps["S0"][1])]):
+            scale = s0 * (1.0 + eps * 1e-9)
+            np.testing.assert_allclose(ds["mcs_var_theta"].values[i], scale * t, rtol=1e-15)
+            lin = ds["var_theta"].sel(eps=eps, S0=s0).values.astype(float)
+            expected = (np.nanmax(lin) - scale * t[-1]) / (scale * t[-1])
+            assert ds["mcs_rel_error_peak_var_theta"].values[i] == pytest.approx(expected, rel=1e-12)
+        np.testing.assert_array_equal(ds["mcs_n_overturned"].values, [3, 3])
+        np.testing.assert_array_equal(ds["mcs_n_used"].values, [3, 3])
+        np.testing.assert_array_equal(ds["mcs_status"].values, [0, 0])
+        assert ds["mcs_peak_abs_theta"].dims == ("spot", "sample") and ds.sizes["sample"] == 7
+        np.testing.assert_allclose(ds["mcs_peak_abs_theta"].values[0], 2.4e-3 * 1.06 * np.arange(7), rtol=1e-15)
+        np.testing.assert_array_equal(ds["mcs_sample_state"].values, [[1, 1, 1, 2, 0, 0, 0]] * 2)
+        assert ds["mcs_sample_state"].attrs["flag_meanings"].split()[:2] == ["standing", "overturned"]
+        assert ds.attrs["mcs_model"] == "condensed" and int(ds.attrs["mcs_samples"]) == 7
+        assert "explicit" in ds.attrs["mcs_selection"]
+        assert set(ds["mcs_var_theta"].coords) >= {"spot_eps", "spot_S0", "t"}
+
+
+def test_auto_spot_check_with_the_real_monte_carlo(client, tmp_path):
+    study = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 1\nsamples = 8\nmodel = "condensed"\n')
+    out = tmp_path / "a.nc"
+    run_sweep(study, out, client=client, progress=False, log=quiet)
+    with xr.open_dataset(out) as ds:
+        ok = ds["status"].values == 0
+        best = np.unravel_index(np.argmax(np.where(ok, ds["peak_p_uplift"].values, -1)), ok.shape)
+        assert ds["spot_eps"].values[0] == ds["eps"].values[best[0]]
+        assert ds["spot_S0"].values[0] == ds["S0"].values[best[1]]
+        assert np.isfinite(ds["mcs_rel_error_peak_var_theta"].values[0])
+        assert np.all(ds["mcs_var_theta"].values[0, 1:] > 0)
+        assert int(ds["mcs_n_used"].values[0]) + int(ds["mcs_n_overturned"].values[0]) \
+            + int(ds["mcs_n_diverged"].values[0]) == 8
+        assert "auto" in ds.attrs["mcs_selection"]
+
+
+# ----------------------------------------------------------------------------- a real cluster
+@pytest.fixture
+def dask_cluster(tmp_path):
+    """``dask scheduler`` + two ``dask worker`` processes on 127.0.0.1 (torn down afterwards)."""
+    sched_file = tmp_path / "scheduler.json"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    procs = [subprocess.Popen([str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", str(sched_file)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists():
+            if time.monotonic() > deadline or procs[0].poll() is not None:
+                pytest.fail("dask scheduler did not start")
+            time.sleep(0.1)
+        for _ in range(2):
+            procs.append(subprocess.Popen([str(BIN / "dask"), "worker", "--scheduler-file", str(sched_file),
+                                           "--nthreads", "1", "--no-nanny", "--no-dashboard", "--local-directory",
+                                           str(tmp_path)],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+        yield sched_file
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def test_existing_scheduler_with_two_worker_processes(dask_cluster, client, tmp_path):
+    address = json.loads(dask_cluster.read_text())["address"]
+    assert address.startswith("tcp://127.0.0.1:")
+    from distributed import Client
+
+    with Client(address, timeout="30s") as probe:
+        probe.wait_for_workers(2, timeout=60)
+    study = parse_study(GRID)
+    out = tmp_path / "remote.nc"
+    report = run_sweep(study, out, scheduler=address, batch_size=4, progress=False, log=quiet)
+    assert report.n_workers == 2 and report.n_batches == 5
+    ref = tmp_path / "local.nc"
+    run_sweep(study, ref, client=client, batch_size=4, progress=False, log=quiet)
+    compare_files(ref, out)
+    # the scheduler file is accepted too
+    report = run_sweep(study, tmp_path / "file.nc", scheduler=str(dask_cluster), progress=False, log=quiet)
+    assert report.status_counts == {"ok": 20}
+
+
+def test_unreachable_scheduler_is_a_sweep_error(tmp_path, monkeypatch):
+    monkeypatch.setattr(sweep, "CONNECT_TIMEOUT", "1s")
+    with pytest.raises(SweepError, match="cannot connect to the dask scheduler"):
+        run_sweep(parse_study(GRID), tmp_path / "x.nc", scheduler="tcp://127.0.0.1:9", progress=False,
+                  log=quiet)
+    assert list(tmp_path.iterdir()) == []
+    with netCDF4.Dataset(tmp_path / "y.nc", "w"):
+        pass
+    assert sweep.result_key(tmp_path / "y.nc") is None
+
+
+def test_complevel_changes_storage_not_values(client, tmp_path):
+    study = parse_study(GRID)
+    run_sweep(study, tmp_path / "z1.nc", client=client, progress=False, log=quiet)
+    run_sweep(study, tmp_path / "z0.nc", client=client, progress=False, log=quiet, complevel=0)
+    with netCDF4.Dataset(tmp_path / "z0.nc") as nc0, netCDF4.Dataset(tmp_path / "z1.nc") as nc1:
+        assert not nc0["var_theta"].filters()["zlib"] and nc1["var_theta"].filters()["zlib"]
+    compare_files(tmp_path / "z1.nc", tmp_path / "z0.nc")

@@ -1,0 +1,36 @@
+"""The tabulated coefficients used by the compiled solver against the closed forms."""
+
+import numpy as np
+import pytest
+
+from screening.condensation.paper_table import T_HI, T_LO, coefficient_table, uplift_integrals
+from screening.condensation.paper_coefficients import equivalent_coefficients_from_moments, gaussian_uplift_integrals
+from screening.solvers.moments import _coefficients, pack_parameters
+from screening.model.excitation import WhiteNoise
+
+
+def test_table_matches_closed_forms_across_and_beyond_the_grid():
+    values, slopes = coefficient_table()
+    r = np.exp(np.concatenate([np.linspace(T_LO - 2, T_HI + 3, 20011), [-np.inf]]))
+    G = gaussian_uplift_integrals(r)
+    inner_over_r2 = np.where(r > 0, G["inner_m2"] / np.where(r > 0, r, 1) ** 2, 1.0)
+    for i, ri in enumerate(r):
+        got = uplift_integrals(ri, values, slopes)
+        ref = (G["p_in"][i], G["tail_m12"][i], G["tail_m32"][i], inner_over_r2[i])
+        # absolute error against O(1) terms of c_eq, k_eq
+        np.testing.assert_allclose(got, ref, rtol=1e-10, atol=2e-12)
+
+
+@pytest.mark.parametrize("rho_sign", [-1.0, 0.0, 1.0])
+def test_compiled_coefficients_match_closed_forms(paper_block, any_foundation, rho_sign):
+    values, slopes = coefficient_table()
+    params, _ = pack_parameters(paper_block, any_foundation, WhiteNoise(1e-4))
+    tu = params[0, 2]
+    for ratio in np.concatenate([[0.0], np.logspace(-3, 5, 97)]):
+        s = ratio * tu
+        var, cov = s * s, rho_sign * 0.9 * s * (40 * s)
+        c_ref, k_ref = equivalent_coefficients_from_moments(var, cov, paper_block, any_foundation)
+        c, k = _coefficients(params[0], var, cov, values, slopes)
+        scale_k = abs(2 / 3 * 0.035**3 * any_foundation.k)
+        assert c == pytest.approx(c_ref, rel=1e-9, abs=1e-12 * c_ref)
+        assert k == pytest.approx(k_ref, rel=1e-9, abs=1e-11 * scale_k)
