@@ -1,0 +1,13 @@
+"""Quasi-static condensations of the coupled model to one rocking equation, behind one interface.
+
+``get(name)`` turns a registered name into a :class:`Condensation`; ``register`` adds one (a
+third-party condensation needs only the numpy functions of :class:`Condensation`).
+"""
+
+from screening.condensation.base import Condensation
+from screening.condensation.registry import get, names, register, unregister
+
+__all__ = ["Condensation", "get", "names", "register", "unregister"]
+
+# the built-in condensations register themselves
+from screening.condensation import cubic as _cubic, paper as _paper  # noqa: E402,F401

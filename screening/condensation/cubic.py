@@ -100,6 +100,8 @@ Softening beds (``eps < 0``)
 from __future__ import annotations
 
 import numpy as np
+from screening.condensation.base import Condensation
+from screening.condensation.registry import register
 
 #: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
 SOFTENING_LIMIT = 2.0 / 27.0
@@ -280,3 +282,35 @@ def stiffness_at_rest(block, foundation):
     z0 = rest_indentation(block, foundation)
     b, k = block.b, foundation.k
     return 2.0 / 3.0 * b**3 * k - block.m * block.g * block.h + 2.0 * foundation.eps * k * b**3 * z0 * z0
+
+
+class CubicCondensation(Condensation):
+    """Static vertical balance including the cubic term, in both regimes (module docstring)."""
+
+    name = "cubic"
+    description = ("quasi-static z_cb from the static vertical balance with the cubic term (eqs. 13, 15); "
+                   "C, K from eqs. 14, 16 with zdot_cb = z_cb'(theta) theta'")
+
+    def check(self, block, foundation):
+        check_bearing(block, foundation)
+
+    def uplift_threshold(self, block, foundation):
+        return uplift_threshold(block, foundation)
+
+    def capacity_angle(self, block, foundation):
+        return capacity_angle(block, foundation)
+
+    def rocking_damping(self, theta, block, foundation):
+        return rocking_damping(theta, block, foundation)
+
+    def rocking_stiffness(self, theta, block, foundation):
+        return rocking_stiffness(theta, block, foundation)
+
+    def damping_at_rest(self, block, foundation):
+        return damping_at_rest(block, foundation)
+
+    def stiffness_at_rest(self, block, foundation):
+        return stiffness_at_rest(block, foundation)
+
+
+CUBIC = register(CubicCondensation())

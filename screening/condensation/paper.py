@@ -36,6 +36,9 @@ from __future__ import annotations
 import numpy as np
 
 from screening.condensation import cubic as cubic_condensation
+from screening.condensation.base import Condensation
+from screening.condensation.registry import register
+
 
 #: Names accepted by the ``condensation`` argument throughout the package.
 CONDENSATIONS = ("paper", "cubic")
@@ -131,3 +134,30 @@ def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundatio
              - rocking_damping(theta, block, foundation, condensation) * theta_dot
              - restoring_moment(theta, block, foundation, condensation))
     return force / m_sdof(block)
+
+
+class PaperCondensation(Condensation):
+    """The paper's condensation, eqs. (17)–(25): static indentation from the linear vertical balance."""
+
+    name = "paper"
+    description = "quasi-static z_cb from the linear static balance (eqs. 17-25)"
+
+    def uplift_threshold(self, block, foundation):
+        return uplift_threshold(block, foundation)
+
+    def rocking_damping(self, theta, block, foundation):
+        return rocking_damping(theta, block, foundation)
+
+    def rocking_stiffness(self, theta, block, foundation):
+        return rocking_stiffness(theta, block, foundation)
+
+    def damping_at_rest(self, block, foundation):
+        return damping_inner(block, foundation)
+
+    def equivalent_coefficients(self, sigma_theta, cov_over_sigma, block, foundation):
+        from screening.condensation.paper_coefficients import equivalent_coefficients
+
+        return equivalent_coefficients(sigma_theta, cov_over_sigma, 1.0, block, foundation)
+
+
+PAPER = register(PaperCondensation())
