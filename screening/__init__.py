@@ -2,10 +2,10 @@
 
 __version__ = "0.1.0"
 
-from screening.condensation.paper import rocking_damping, rocking_stiffness, uplift_threshold
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from screening.condensation.paper_coefficients import equivalent_coefficients, uplift_probability
+from screening.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,
+                                        uplift_probability, uplift_threshold)
 from screening.model import Block, Foundation, WinklerFoundation
 from screening.solvers.linearization import linearize
 

@@ -70,8 +70,11 @@ LINEARIZATION = {
     "min_k_eq": _v("N m rad-1", "minimum equivalent linear rocking stiffness"),
     "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
-    "status": flag_attributes(PointStatus, "solver status of the point"),
+    "status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "solver status of the point"),
 }
+
+#: Sweep results: a point's status also says when its task failed.
+SWEEP = {"status": flag_attributes(PointStatus, "solver status of the point")}
 
 #: Monte Carlo ensembles (``monte_carlo``); in sweeps the same names carry the prefix ``mcs_``.
 MONTE_CARLO = {

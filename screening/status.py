@@ -86,7 +86,8 @@ class ContactRegime(enum.IntEnum):
 
 
 def flag_attributes(code_space, long_name, dtype=np.int8):
-    """CF flag attributes ``{long_name, flag_values, flag_meanings}`` of an enum (sorted by value)."""
+    """CF flag attributes ``{long_name, flag_values, flag_meanings}`` of an enum or a list of its members
+    (sorted by value)."""
     members = sorted(code_space, key=int)
     return {"long_name": long_name,
             "flag_values": np.array([int(m) for m in members], dtype=dtype),

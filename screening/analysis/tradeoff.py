@@ -62,7 +62,10 @@ import xarray as xr
 
 from screening import __version__
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
-from screening.solvers.moments import STATUS_MEANINGS, solve_moments
+from screening.solvers.moments import solve_moments
+from screening.status import PointStatus
+
+STATUS_MEANINGS = {int(s): s.name for s in PointStatus if s >= 0}
 from screening.schema import PARAMETERS, TIME
 from screening.model import Block, Foundation, WinklerFoundation
 from screening.solvers.montecarlo import DEFAULT_RTOL as MCS_DEFAULT_RTOL

@@ -10,4 +10,4 @@ from screening.condensation.registry import get, names, register, unregister
 __all__ = ["Condensation", "get", "names", "register", "unregister"]
 
 # the built-in condensations register themselves
-from screening.condensation import cubic as _cubic, paper as _paper  # noqa: E402,F401
+from screening.condensation import paper as _paper, cubic as _cubic  # noqa: E402,F401,I001

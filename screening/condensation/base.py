@@ -10,8 +10,37 @@ array model parameters, SI units) and, for the compiled solvers, its kernels (:a
 from __future__ import annotations
 
 import abc
+from typing import NamedTuple
 
 import numpy as np
+
+
+class SdofKernel(NamedTuple):
+    """What the compiled Monte Carlo integrator needs of a condensation (condensed model).
+
+    ``damping_stiffness``: compiled ``(record, theta) -> (C, K)`` (signature
+    :func:`screening.kernels.signatures.sdof_coefficients_signature`); ``record``: a 1-element
+    structured array of its parameters.
+    """
+
+    damping_stiffness: object
+    record: np.ndarray
+
+
+class MomentKernel(NamedTuple):
+    """What the compiled moment solver needs of a condensation, for a batch of points.
+
+    ``coefficients``: compiled ``(record, values, slopes, var_theta, cov) -> (c_eq, k_eq)``
+    (signature :func:`screening.kernels.signatures.moment_coefficients_signature`); ``records``: one
+    structured record per point; ``table_values``, ``table_slopes``: ``(n_tables, nodes, columns)``;
+    ``table_index``: the table of each point.
+    """
+
+    coefficients: object
+    records: np.ndarray
+    table_values: np.ndarray
+    table_slopes: np.ndarray
+    table_index: np.ndarray
 
 
 class Condensation(abc.ABC):
@@ -62,6 +91,18 @@ class Condensation(abc.ABC):
         from screening.condensation import quadrature
 
         return quadrature.equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation, self)
+
+    def moment_kernel(self, block, foundation):
+        """:class:`MomentKernel` for model objects with flat (1-d) fields (default: quadrature tables)."""
+        from screening.condensation import quadrature
+
+        return quadrature.moment_kernel(block, foundation, self)
+
+    def sdof_kernel(self, block, foundation):
+        """:class:`SdofKernel` for scalar model objects: the compiled ``C``, ``K`` of the condensed
+        Monte Carlo.  A condensation without one cannot run ``monte_carlo(model="condensed")``."""
+        raise NotImplementedError(f"condensation {self.name!r} has no compiled C(theta), K(theta) "
+                                  "(Condensation.sdof_kernel) for the condensed Monte Carlo")
 
     def __repr__(self):
         return f"<condensation {self.name!r}>"

@@ -99,9 +99,14 @@ Softening beds (``eps < 0``)
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
-from screening.condensation.base import Condensation
+
+from screening.condensation.base import Condensation, SdofKernel
 from screening.condensation.registry import register
+from screening.kernels.signatures import sdof_coefficients_signature
 
 #: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
 SOFTENING_LIMIT = 2.0 / 27.0
@@ -284,6 +289,83 @@ def stiffness_at_rest(block, foundation):
     return 2.0 / 3.0 * b**3 * k - block.m * block.g * block.h + 2.0 * foundation.eps * k * b**3 * z0 * z0
 
 
+#: Per-point parameters of the compiled twins (SI units): block, bed (``damping``: lam or c),
+#: threshold, ``z_lin`` (eq. 17), rest indentation ``z_rest`` and ``z_curv = dz/d(theta^2)`` at rest
+#: (the Newton start of the no-uplift balance).
+SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("m", "f8"), ("g", "f8"), ("h", "f8"), ("b", "f8"), ("k", "f8"),
+                        ("eps", "f8"), ("damping", "f8"), ("winkler", "f8"), ("z_lin", "f8"), ("z_rest", "f8"),
+                        ("z_curv", "f8")])
+
+
+def sdof_record(block, foundation):
+    """The :data:`SDOF_RECORD` of scalar model objects (a 1-element array)."""
+    b, eps = float(block.b), float(foundation.eps)
+    z0 = float(rest_indentation(block, foundation))
+    rec = np.zeros(1, dtype=SDOF_RECORD)
+    values = dict(theta_ul=float(uplift_threshold(block, foundation)), m=float(block.m), g=float(block.g),
+                  h=float(block.h), b=b, k=float(foundation.k), eps=eps, damping=float(foundation.damping),
+                  winkler=0.0 if foundation.contact == "hunt_crossley" else 1.0,
+                  z_lin=float(linear_indentation(block, foundation)), z_rest=z0,
+                  z_curv=-eps * b * b * z0 / (1.0 + 3.0 * eps * z0 * z0))
+    for name, value in values.items():
+        rec[name] = value
+    return rec
+
+
+@numba.njit(cache=True)
+def quasi_static_indentation_jit(p, a):
+    """Compiled quasi-static ``(z_cb [m], dz_cb/da [m/rad], v = b a + z_cb [m])`` of the cubic
+    condensation at ``a = |theta|`` (compiled twin of :func:`quasi_static_indentation`, ``p`` an :data:`SDOF_RECORD`)."""
+    b, eps = p.b, p.eps
+    if a <= p.theta_ul:
+        # eps z^3 + beta z = z_lin, beta = 1 + eps b^2 a^2: Newton from the Taylor start
+        # z0 + (dz/d a^2) a^2 (error O(a^4); monotone like the start z_lin / beta)
+        beta = 1.0 + eps * b * b * a * a
+        z = p.z_rest + p.z_curv * a * a
+        for _ in range(100):
+            step = (eps * z * z * z + beta * z - p.z_lin) / (3.0 * eps * z * z + beta)
+            z -= step
+            if abs(step) <= 1e-15 * z:
+                break
+        return z, -2.0 * eps * b * b * a * z / (beta + 3.0 * eps * z * z), z + b * a
+    mg = p.m * p.g
+    big_a = 2.0 * mg * a / p.k
+    s2 = 1.0 + 2.0 * eps * big_a
+    if s2 <= 0.0:                               # beyond the capacity angle: peak load, no rate
+        v = 1.0 / math.sqrt(-eps)
+        return v - b * a, 0.0, v
+    S = math.sqrt(s2)
+    v = math.sqrt(2.0 * big_a / (1.0 + S))
+    return v - b * a, mg / (p.k * S * v) - b, v
+
+
+@numba.njit(sdof_coefficients_signature(SDOF_RECORD), cache=True)
+def damping_stiffness_jit(p, theta):
+    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`: ``(C [N m s/rad],
+    K [N m/rad])`` at ``theta`` [rad], one indentation solve for both; ``p`` an :data:`SDOF_RECORD`."""
+    a = abs(theta)
+    z, dz, v = quasi_static_indentation_jit(p, a)
+    b, k, eps, lam = p.b, p.k, p.eps, p.damping
+    mgh = p.m * p.g * p.h
+    b3 = b * b * b
+    if a <= p.theta_ul:
+        stiffness = 2.0 / 3.0 * b3 * k - mgh + eps * k * (2.0 * b3 * z * z + 0.4 * b3 * b * b * a * a)
+        if p.winkler != 0.0:
+            return 2.0 / 3.0 * lam * b3, stiffness
+        return 2.0 / 3.0 * lam * b3 * (z + a * dz), stiffness
+    ba = b * a
+    a3 = a * a * a
+    v2 = v * v
+    stiffness = (k * v2 * (2.0 * ba - z) / 6.0 + eps * k * v2 * v2 * (4.0 * ba - z) / 20.0) / a3 - mgh
+    if p.winkler != 0.0:
+        return lam / (a * a) * (0.5 * dz * v * (ba - z) + (ba * ba * ba + z * z * z) / (3.0 * a)), stiffness
+    ba2 = ba * ba
+    z2 = z * z
+    return (lam / (12.0 * a3) * (3.0 * ba2 * ba2 + 4.0 * ba2 * ba * z + z2 * z2 + 2.0 * a * dz * v2 * (2.0 * ba - z)),
+            stiffness)
+
+
+
 class CubicCondensation(Condensation):
     """Static vertical balance including the cubic term, in both regimes (module docstring)."""
 
@@ -311,6 +393,9 @@ class CubicCondensation(Condensation):
 
     def stiffness_at_rest(self, block, foundation):
         return stiffness_at_rest(block, foundation)
+
+    def sdof_kernel(self, block, foundation):
+        return SdofKernel(damping_stiffness_jit, sdof_record(block, foundation))
 
 
 CUBIC = register(CubicCondensation())

@@ -23,46 +23,24 @@ the contact zone, with ``zdot = zdot_B - eta theta'`` (small angles):
 ``C_2(theta_ul) = (2/3) c b^3``: continuous, like the Hunt–Crossley case.  The same
 procedure applied to ``lam z zdot`` reproduces eq. (24), which checks the route.
 
-Selectable condensation
------------------------
-The functions below take ``condensation="paper"`` (default: eqs. 17–25 as printed, the
-static indentation from the *linear* balance) or ``"cubic"`` (the static vertical balance
-including the ``eps`` term, :mod:`screening.condensation.cubic`).  Any other value raises
-``ValueError``.
+The functions below are the paper's condensation alone; :mod:`screening.condensation.api` has
+the same functions for any registered condensation (``condensation=`` a name or object).
 """
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
-from screening.condensation import cubic as cubic_condensation
-from screening.condensation.base import Condensation
+from screening.condensation.base import Condensation, MomentKernel, SdofKernel
+from screening.kernels.signatures import sdof_coefficients_signature
 from screening.condensation.registry import register
 
 
-#: Names accepted by the ``condensation`` argument throughout the package.
-CONDENSATIONS = ("paper", "cubic")
-
-
-def check_condensation(condensation):
-    """Return ``condensation`` if it is one of :data:`CONDENSATIONS`, else raise ``ValueError``."""
-    if not isinstance(condensation, str) or condensation not in CONDENSATIONS:
-        raise ValueError(f"parameter 'condensation' must be one of {CONDENSATIONS} (got {condensation!r})")
-    return condensation
-
-
-def m_sdof(block):
-    """Rotational inertia of the condensed oscillator, ``I_cm + m h^2`` [kg m^2] (eq. 23)."""
-    return block.I_cm + block.m * block.h**2
-
-
-def uplift_threshold(block, foundation, condensation="paper"):
-    """Static uplift angle ``theta_ul = m g / (2 b^2 k)`` [rad] (eq. 19).
-
-    ``condensation="cubic"``: :func:`screening.condensation.cubic.uplift_threshold`.
-    """
-    if check_condensation(condensation) == "cubic":
-        return cubic_condensation.uplift_threshold(block, foundation)
+def uplift_threshold(block, foundation):
+    """Static uplift angle ``theta_ul = m g / (2 b^2 k)`` [rad] (eq. 19)."""
     return block.m * block.g / (2.0 * block.b**2 * foundation.k)
 
 
@@ -82,14 +60,11 @@ def damping_inner(block, foundation):
     return 2.0 / 3.0 * foundation.c * block.b**3
 
 
-def rocking_damping(theta, block, foundation, condensation="paper"):
+def rocking_damping(theta, block, foundation):
     """Piecewise rocking damping ``C(theta)`` [N m s/rad] (eq. 24; Winkler: module doc).
 
     ``theta`` [rad]; vectorised over theta and parameter arrays.
-    ``condensation="cubic"``: :func:`screening.condensation.cubic.rocking_damping`.
     """
-    if check_condensation(condensation) == "cubic":
-        return cubic_condensation.rocking_damping(theta, block, foundation)
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
     tu = uplift_threshold(block, foundation)
@@ -102,14 +77,11 @@ def rocking_damping(theta, block, foundation, condensation="paper"):
     return np.where(theta <= tu, c1, c2)
 
 
-def rocking_stiffness(theta, block, foundation, condensation="paper"):
+def rocking_stiffness(theta, block, foundation):
     """Piecewise secant rocking stiffness ``K(theta)`` [N m/rad] (eq. 25).
 
     ``theta`` [rad]; the restoring moment is ``K(theta) theta``.  Same for both beds.
-    ``condensation="cubic"``: :func:`screening.condensation.cubic.rocking_stiffness`.
     """
-    if check_condensation(condensation) == "cubic":
-        return cubic_condensation.rocking_stiffness(theta, block, foundation)
     theta = np.asarray(theta, dtype=float)
     a = np.abs(theta)
     m, g, b, h, k, eps = block.m, block.g, block.b, block.h, foundation.k, foundation.eps
@@ -122,18 +94,55 @@ def rocking_stiffness(theta, block, foundation, condensation="paper"):
     return np.where(a <= tu, k1, k2)
 
 
-def restoring_moment(theta, block, foundation, condensation="paper"):
+def restoring_moment(theta, block, foundation):
     """Restoring moment ``K(theta) theta`` [N m] of the condensed model (eq. 22)."""
     theta = np.asarray(theta, dtype=float)
-    return rocking_stiffness(theta, block, foundation, condensation) * theta
+    return rocking_stiffness(theta, block, foundation) * theta
 
 
-def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundation, condensation="paper"):
-    """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22), for ground acceleration [m/s^2]."""
-    force = (block.m * block.h * np.asarray(ground_acceleration, dtype=float)
-             - rocking_damping(theta, block, foundation, condensation) * theta_dot
-             - restoring_moment(theta, block, foundation, condensation))
-    return force / m_sdof(block)
+#: Per-point parameters of :func:`damping_stiffness_jit` (SI units): ``C = C1`` inside the threshold,
+#: ``C2 |theta|^-1/2`` (Winkler ``|theta|^-3/2``) outside; ``K = K1_0 + K1_2 theta^2`` inside,
+#: ``MGB/|theta| - K2_32 |theta|^-3/2 - K2_12 |theta|^-1/2 + K2_0`` outside (eqs. 24–25).
+SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("winkler", "f8"), ("C1", "f8"), ("C2", "f8"), ("K1_0", "f8"),
+                        ("K1_2", "f8"), ("MGB", "f8"), ("K2_32", "f8"), ("K2_12", "f8"), ("K2_0", "f8")])
+
+
+def sdof_record(block, foundation):
+    """The :data:`SDOF_RECORD` of scalar model objects (a 1-element array)."""
+    m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
+    k, eps, damping = float(foundation.k), float(foundation.eps), float(foundation.damping)
+    winkler = foundation.contact == "winkler"
+    mg = m * g
+    rec = np.zeros(1, dtype=SDOF_RECORD)
+    rec["theta_ul"] = uplift_threshold(block, foundation)
+    rec["winkler"] = 1.0 if winkler else 0.0
+    if winkler:
+        rec["C1"] = 2.0 / 3.0 * damping * b**3
+        rec["C2"] = damping / 12.0 * (2.0 * mg / k) ** 1.5            # x |theta|^-3/2
+    else:
+        rec["C1"] = damping * b * b * mg / (3.0 * k)
+        rec["C2"] = damping * b / 12.0 * (2.0 * mg / k) ** 1.5        # x |theta|^-1/2
+    rec["K1_0"] = 2.0 / 3.0 * b**3 * k - mg * h + eps * mg * mg * b / (2.0 * k)
+    rec["K1_2"] = eps * 0.4 * k * b**5
+    rec["MGB"] = mg * b
+    rec["K2_32"] = mg * math.sqrt(2.0 * mg * k) / (3.0 * k)
+    rec["K2_12"] = eps * mg * mg / (5.0 * k) * math.sqrt(2.0 * mg / k)
+    rec["K2_0"] = -mg * h + eps * mg * mg * b / k
+    return rec
+
+
+@numba.njit(sdof_coefficients_signature(SDOF_RECORD), cache=True)
+def damping_stiffness_jit(p, theta):
+    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`: ``(C [N m s/rad], K [N m/rad])``
+    at ``theta`` [rad], ``p`` an :data:`SDOF_RECORD`."""
+    a = abs(theta)
+    if a <= p.theta_ul:
+        return p.C1, p.K1_0 + p.K1_2 * theta * theta
+    r = 1.0 / math.sqrt(a)
+    stiffness = p.MGB * r * r - p.K2_32 * r * r * r - p.K2_12 * r + p.K2_0
+    if p.winkler != 0.0:
+        return p.C2 * r * r * r, stiffness
+    return p.C2 * r, stiffness
 
 
 class PaperCondensation(Condensation):
@@ -154,10 +163,26 @@ class PaperCondensation(Condensation):
     def damping_at_rest(self, block, foundation):
         return damping_inner(block, foundation)
 
+    def stiffness_at_rest(self, block, foundation):
+        e0 = (block.m * block.g) ** 2 * block.b / foundation.k
+        return 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h + 0.5 * foundation.eps * e0
+
     def equivalent_coefficients(self, sigma_theta, cov_over_sigma, block, foundation):
         from screening.condensation.paper_coefficients import equivalent_coefficients
 
-        return equivalent_coefficients(sigma_theta, cov_over_sigma, 1.0, block, foundation)
+        return equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation)
+
+    def sdof_kernel(self, block, foundation):
+        return SdofKernel(damping_stiffness_jit, sdof_record(block, foundation))
+
+    def moment_kernel(self, block, foundation):
+        from screening.condensation.paper_coefficients import equivalent_coefficients_jit, records
+        from screening.condensation.uplift_integrals import coefficient_table
+
+        values, slopes = coefficient_table()
+        rec = records(block, foundation)
+        return MomentKernel(equivalent_coefficients_jit, rec, values[None], slopes[None],
+                            np.zeros(rec.size, dtype=np.int64))
 
 
 PAPER = register(PaperCondensation())

@@ -36,71 +36,18 @@ Limits: ``sigma_theta -> 0`` gives the no-uplift values ``c_eq = C1``,
 ``k_eq = K0 - m g h + eps (E0/2 + (6/5) k b^5 sigma_theta^2)``; ``sigma_theta -> inf`` gives
 ``c_eq -> 0`` and ``k_eq -> -m g h + eps E0``.
 
-``condensation="cubic"`` (:mod:`screening.condensation.cubic`) has no closed form; the public
-functions below then evaluate eq. (31) by quadrature (:mod:`screening.condensation.quadrature`).
 """
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
-from scipy import special
 
-from screening.condensation import quadrature as cubic_linearization
-from screening.condensation.paper import check_condensation, damping_inner, uplift_threshold
-
-#: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
-X_LIMIT = 700.0
-
-_C12 = 2.0**-0.25 / np.sqrt(np.pi)
-_C32 = 2.0**-0.75 / np.sqrt(np.pi)
-
-
-def _upper_gamma(a, x):
-    """Non-regularised upper incomplete gamma ``Gamma(a, x)`` for ``a > 0``."""
-    return special.gammaincc(a, x) * special.gamma(a)
-
-
-def gaussian_uplift_integrals(r):
-    """The dimensionless Gaussian integrals of the module table at ``r = sigma_theta/theta_ul``.
-
-    Returns a dict of arrays ``p_in, p_out, tail_m12, tail_m32, inner_m2`` and the
-    velocity-coupling versions ``tail_m12_r = tail_m12 / r`` and ``tail_m32_r = tail_m32 / r``
-    (finite, and zero, at ``r = 0``).  Exact limits are used where ``x > X_LIMIT``.
-    """
-    r = np.asarray(r, dtype=float)
-    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-        x = 0.5 / r**2
-        tiny = ~(x <= X_LIMIT)  # includes r = 0 (x = inf)
-        rs = np.where(tiny, 1.0, r)
-        xs = np.where(tiny, 0.5, x)
-        sx = np.sqrt(xs)
-        g14 = _upper_gamma(0.25, xs)
-        gm14 = 4.0 * (xs**-0.25 * np.exp(-xs) - _upper_gamma(0.75, xs))
-        out = {
-            "p_in": special.erf(sx),
-            "p_out": special.erfc(sx),
-            "tail_m12": _C12 * rs**-0.5 * g14,
-            "tail_m32": _C32 * rs**-1.5 * gm14,
-            "inner_m2": rs**2 * special.gammainc(1.5, xs),
-            "tail_m12_r": _C12 * rs**-1.5 * g14,
-            "tail_m32_r": _C32 * rs**-2.5 * gm14,
-        }
-    limits = {"p_in": 1.0, "p_out": 0.0, "tail_m12": 0.0, "tail_m32": 0.0,
-              "tail_m12_r": 0.0, "tail_m32_r": 0.0}
-    for name, value in limits.items():
-        out[name] = np.where(tiny, value, out[name])
-    out["inner_m2"] = np.where(tiny, np.where(np.isfinite(r), r, 0.0) ** 2, out["inner_m2"])
-    return out
-
-
-def uplift_probability(sigma_theta, block, foundation, condensation="paper"):
-    """Uplift occupancy ``P(|theta| > theta_ul) = erfc(theta_ul / (sqrt(2) sigma_theta))`` [1] (eq. 58).
-
-    ``theta_ul`` of the chosen ``condensation`` (``"paper"``: eq. 19, or ``"cubic"``).
-    """
-    r = np.asarray(sigma_theta, dtype=float) / uplift_threshold(block, foundation, condensation)
-    return gaussian_uplift_integrals(r)["p_out"]
-
+from screening.condensation.paper import damping_inner, uplift_threshold
+from screening.condensation.uplift_integrals import gaussian_uplift_integrals, uplift_integrals_log
+from screening.kernels.signatures import moment_coefficients_signature
 
 def coefficient_constants(block, foundation):
     """Parameter-only constants of the closed forms (SI): ``C1, K0, mgh, E0, theta_ul``."""
@@ -114,50 +61,16 @@ def coefficient_constants(block, foundation):
     }
 
 
-def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation,
-                                          condensation="paper"):
-    """``(c_eq [N m s/rad], k_eq [N m/rad])`` from ``var_theta`` [rad^2] and ``cov`` [rad^2/s].
+def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
+    """Closed-form ``(c_eq [N m s/rad], k_eq [N m/rad])`` of the paper's condensation (eqs. 35–36 corrected).
 
-    The form used by the moment equations: it needs only ``cov / sigma_theta`` and is
-    finite at zero covariance (the start of every Lyapunov integration).
-    ``condensation``: ``"paper"`` (closed forms) or ``"cubic"`` (quadrature).
+    ``sigma_theta`` [rad] >= 0 and ``cov_over_sigma = cov(theta, theta') / sigma_theta`` [rad/s]
+    (``rho sigma_theta_dot``); broadcast with array model parameters.  The module docstring
+    gives the formulas; :func:`equivalent_coefficients_jit` is the compiled twin the moment
+    solver uses (same formulas, the Gaussian integrals read from :mod:`~screening.condensation.uplift_integrals`).
     """
-    check_condensation(condensation)
-    var_theta = np.asarray(var_theta, dtype=float)
-    cov = np.asarray(cov_theta_theta_dot, dtype=float)
-    s = np.sqrt(np.maximum(var_theta, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cov_over_s = np.where(s > 0.0, cov / s, 0.0)
-    if condensation == "cubic":
-        return cubic_linearization.equivalent_coefficients(s, cov_over_s, block, foundation)
-    return _coefficients(s, cov_over_s, block, foundation)
-
-
-def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation, condensation="paper"):
-    """Closed-form equivalent damping and stiffness (eqs. 35–36, corrected).
-
-    Parameters
-    ----------
-    sigma_theta : standard deviation of the rotation [rad], >= 0.
-    sigma_theta_dot : standard deviation of the rotational velocity [rad/s], >= 0.
-    rho : correlation coefficient of ``theta`` and ``theta'`` [1], in [-1, 1].
-    block, foundation : :class:`~screening.model.Block` and a foundation model.
-    condensation : ``"paper"`` (closed forms, eqs. 35–36) or ``"cubic"`` (eq. 31 by
-        quadrature, :mod:`screening.condensation.quadrature`).
-
-    Returns
-    -------
-    (c_eq, k_eq) : [N m s/rad], [N m/rad], broadcast over all array arguments.
-    """
-    check_condensation(condensation)
     s = np.asarray(sigma_theta, dtype=float)
-    cov_over_s = np.asarray(rho, dtype=float) * np.asarray(sigma_theta_dot, dtype=float)
-    if condensation == "cubic":
-        return cubic_linearization.equivalent_coefficients(s, cov_over_s, block, foundation)
-    return _coefficients(s, cov_over_s, block, foundation)
-
-
-def _coefficients(s, cov_over_s, block, foundation):
+    cov_over_s = np.asarray(cov_over_sigma, dtype=float)
     const = coefficient_constants(block, foundation)
     tu = const["theta_ul"]
     G = gaussian_uplift_integrals(s / tu)
@@ -171,3 +84,48 @@ def _coefficients(s, cov_over_s, block, foundation):
                                               + 0.3 * G["inner_m2"] - 0.2 * G["tail_m12"]))
     c_eq, k_eq = np.broadcast_arrays(c_eq, k_eq)
     return c_eq.copy(), k_eq.copy()
+
+
+#: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units).
+RECORD = np.dtype([("theta_ul", "f8"), ("log_theta_ul", "f8"), ("C1", "f8"), ("K0", "f8"), ("mgh", "f8"),
+                   ("E0", "f8"), ("eps", "f8"), ("winkler", "f8")])
+
+
+def records(block, foundation):
+    """One :data:`RECORD` per point of the (flat, 1-d) model fields."""
+    const = coefficient_constants(block, foundation)
+    fields = {"theta_ul": const["theta_ul"], "log_theta_ul": np.log(const["theta_ul"]), "C1": const["C1"],
+              "K0": const["K0"], "mgh": const["mgh"], "E0": const["E0"], "eps": foundation.eps,
+              "winkler": 0.0 if foundation.contact == "hunt_crossley" else 1.0}
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in fields.values()))
+    out = np.empty(arrays[0].size, dtype=RECORD)
+    for name, a in zip(fields, arrays):
+        out[name] = a.reshape(-1)
+    return out
+
+
+@numba.njit(moment_coefficients_signature(RECORD), cache=True)
+def equivalent_coefficients_jit(p, values, slopes, var_theta, cov):
+    """Compiled twin of :func:`equivalent_coefficients` from the moments ``var_theta`` [rad2], ``cov`` [rad2/s].
+
+    ``p``: a :data:`RECORD`; ``values``, ``slopes``: the universal table of
+    :func:`screening.condensation.uplift_integrals.coefficient_table`.  Finite at ``var_theta = 0``.
+    """
+    if var_theta > 0.0:
+        p_in, tail_m12, tail_m32, p32 = uplift_integrals_log(0.5 * math.log(var_theta) - p.log_theta_ul,
+                                                             values, slopes)
+    else:
+        p_in, tail_m12, tail_m32, p32 = 1.0, 0.0, 0.0, 1.0
+    r2 = var_theta / (p.theta_ul * p.theta_ul)
+    if p.winkler == 0.0:
+        c_shape = tail_m12
+        coupling = 0.5 * tail_m12
+    else:
+        c_shape = tail_m32
+        coupling = 1.5 * tail_m32
+    # D = C1 * coupling * cov / sigma^2, finite at sigma = 0 (coupling vanishes first)
+    d_term = p.C1 * coupling * cov / var_theta if coupling > 0.0 else 0.0
+    c_eq = p.C1 * (p_in + c_shape)
+    k_eq = (p.K0 * (p_in + tail_m32) - p.mgh - d_term
+            + p.eps * p.E0 * (1.0 - 0.5 * p_in + 0.3 * r2 * p32 - 0.2 * tail_m12))
+    return c_eq, k_eq

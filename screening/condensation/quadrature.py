@@ -1,8 +1,9 @@
-"""Equivalent linear coefficients of the cubic condensation: Gaussian quadrature, tabulated per point.
+"""Equivalent linear coefficients of any condensation by Gaussian quadrature, tabulated per point.
 
-The ``"cubic"`` ``C(theta)``, ``K(theta)`` (:mod:`screening.condensation.cubic`) have no
-closed-form Gaussian expectations, so the coefficients of eq. (31) are computed by
-quadrature.  For zero-mean Gaussian ``(theta, theta')`` with ``sigma = sigma_theta`` and
+A condensation whose ``C(theta)``, ``K(theta)`` have no closed-form Gaussian expectations (the
+``"cubic"`` one, :mod:`screening.condensation.cubic`, or one registered from outside) gets the
+coefficients of eq. (31) by quadrature; this is the default of
+:meth:`screening.condensation.Condensation.equivalent_coefficients` and of its moment kernel.  For zero-mean Gaussian ``(theta, theta')`` with ``sigma = sigma_theta`` and
 ``cov = E[theta theta']``, Stein's lemma ``E[f'(theta)] = E[theta f(theta)] / sigma^2`` and
 ``E[theta' | theta] = cov theta / sigma^2`` turn ``g = C(theta) theta' + K(theta) theta`` into
 
@@ -53,13 +54,13 @@ point) the last values are held.
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
-
 import numba
 import numpy as np
 
-from screening.condensation import cubic as cubic
+from screening.condensation.base import MomentKernel
 from screening.kernels.interpolation import hermite_basis
+from screening.kernels.signatures import moment_coefficients_signature
+from screening.model.points import flatten, point_key, select
 
 #: Table grid in t = ln(sigma_theta / theta_ul).
 T_LO = -12.0
@@ -133,27 +134,27 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     return values, slopes
 
 
-def _point_nodes(block, foundation, sigma_max):
+def _point_nodes(block, foundation, sigma_max, cond):
     """Nodes, weights, ``C``, ``K`` at the nodes and ``C(0)``, ``K(0)`` for one (scalar) point."""
-    tu = float(cubic.uplift_threshold(block, foundation))
-    cap = float(cubic.capacity_angle(block, foundation))
+    tu = float(cond.uplift_threshold(block, foundation))
+    cap = float(cond.capacity_angle(block, foundation))
     theta, weight = theta_quadrature(tu, cap, SIGMA_SPAN * sigma_max)
-    c = cubic.rocking_damping(theta, block, foundation)
-    k = cubic.rocking_stiffness(theta, block, foundation)
-    return theta, weight, c, k, float(cubic.damping_at_rest(block, foundation)), \
-        float(cubic.stiffness_at_rest(block, foundation))
+    c = cond.rocking_damping(theta, block, foundation)
+    k = cond.rocking_stiffness(theta, block, foundation)
+    return theta, weight, c, k, float(cond.damping_at_rest(block, foundation)), \
+        float(cond.stiffness_at_rest(block, foundation))
 
 
-def expectations(sigma_theta, block, foundation):
+def expectations(sigma_theta, block, foundation, cond):
     """``(e_c, e_k, d_c)`` [SI, module docstring] at ``sigma_theta`` [rad] >= 0 for one scalar point.
 
     Direct quadrature (no table); below ``sigma_lo = theta_ul exp(T_LO)`` the same ``sigma^2``
     extrapolation as the table, exact limits at ``sigma = 0``.
     """
     s = np.asarray(sigma_theta, dtype=float)
-    tu = float(cubic.uplift_threshold(block, foundation))
+    tu = float(cond.uplift_threshold(block, foundation))
     s_lo = tu * math.exp(T_LO)
-    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, max(float(np.max(s, initial=0.0)), s_lo))
+    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, max(float(np.max(s, initial=0.0)), s_lo), cond)
     flat = s.ravel()
     above = flat >= s_lo
     out = np.empty((flat.size, 3))
@@ -167,67 +168,72 @@ def expectations(sigma_theta, block, foundation):
     return out[..., 0], out[..., 1], out[..., 2]
 
 
-def table_size(block, foundation):
+def table_size(block, foundation, cond):
     """Number of table nodes, from ``T_LO`` up to ``t_hi = ln(4 atan(b/h) / theta_ul)`` (at least 2).
 
     Vectorised over array model parameters (one size per point).
     """
-    tu = cubic.uplift_threshold(block, foundation)
-    t_hi = np.maximum(np.log(4.0 * np.arctan2(block.b, block.h) / tu), 2.0)
+    tu = cond.uplift_threshold(block, foundation)
+    t_hi = np.maximum(np.log(4.0 * block.slenderness / tu), 2.0)
     return (np.ceil((t_hi - T_LO) * STEPS_PER_UNIT).astype(int) + 1)[()]
 
 
-def coefficient_table(block, foundation):
+def coefficient_table(block, foundation, cond):
     """``(values, slopes)`` of shape ``(table_size, 3)`` for one scalar point (module docstring).
 
     Nodes at ``t = T_LO + i / STEPS_PER_UNIT``; depends on the point alone.
     """
-    n = int(table_size(block, foundation))
+    n = int(table_size(block, foundation, cond))
     t = T_LO + np.arange(n) / STEPS_PER_UNIT
-    tu = float(cubic.uplift_threshold(block, foundation))
+    tu = float(cond.uplift_threshold(block, foundation))
     sigma = tu * np.exp(t)
-    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]))
+    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond)
     values, slopes = gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
     return np.ascontiguousarray(values), np.ascontiguousarray(slopes)
 
 
-def point_models(block, foundation, shape):
-    """Per-point scalar ``(block, foundation)`` stand-ins for the flattened broadcast ``shape``.
+def coefficient_tables(block, foundation, cond):
+    """Tables of the points of flat (1-d) model fields: ``(values, slopes, index)``.
 
-    Yields ``SimpleNamespace`` objects carrying the fields the condensation reads (SI units).
+    ``values``, ``slopes``: ``(n_distinct, max size, 3)``, one :func:`coefficient_table` per
+    distinct point, zero-padded to the longest (the padding is never read:
+    :func:`table_lookup_grid` gets each point's :func:`table_size`); ``index[i]`` is point i's table.
     """
-    names_b = ("m", "b", "h", "g")
-    hc = foundation.contact == "hunt_crossley"
-    damping_name = "lam" if hc else "c"
-    fields = [np.broadcast_to(np.asarray(getattr(block, n), dtype=float), shape).ravel() for n in names_b]
-    fields += [np.broadcast_to(np.asarray(v, dtype=float), shape).ravel()
-               for v in (foundation.k, foundation.eps, foundation.damping)]
-    for m, b, h, g, k, eps, damping in zip(*fields):
-        yield (SimpleNamespace(m=float(m), b=float(b), h=float(h), g=float(g)),
-               SimpleNamespace(k=float(k), eps=float(eps), contact=foundation.contact,
-                               damping=float(damping), **{damping_name: float(damping)}))
-
-
-def coefficient_tables(block, foundation, shape):
-    """Stacked tables ``(values, slopes)``, each ``(n_points, max size, 3)``, for the flattened
-    broadcast ``shape``; identical points share one computation.  Each point's table is its
-    own (:func:`coefficient_table`), zero-padded to the longest; the padding is never read
-    (:func:`table_lookup_grid` gets each point's :func:`table_size`)."""
-    n = int(np.prod(shape, dtype=int))
-    tables = []
-    cache = {}
-    for blk, fnd in point_models(block, foundation, shape):
-        key = (blk.m, blk.b, blk.h, blk.g, fnd.k, fnd.eps, fnd.damping)
-        if key not in cache:
-            cache[key] = coefficient_table(blk, fnd)
-        tables.append(cache[key])
+    n = np.size(block.m)
+    index = np.empty(n, dtype=np.int64)
+    tables, seen = [], {}
+    for i in range(n):
+        blk, fnd = select(block, i), select(foundation, i)
+        key = point_key(blk, fnd)
+        if key not in seen:
+            seen[key] = len(tables)
+            tables.append(coefficient_table(blk, fnd, cond))
+        index[i] = seen[key]
     size = max(v.shape[0] for v, _ in tables)
-    values = np.zeros((n, size, 3))
-    slopes = np.zeros((n, size, 3))
-    for i, (v, sl) in enumerate(tables):
-        values[i, :v.shape[0]] = v
-        slopes[i, :v.shape[0]] = sl
-    return values, slopes
+    values = np.zeros((len(tables), size, 3))
+    slopes = np.zeros((len(tables), size, 3))
+    for j, (v, sl) in enumerate(tables):
+        values[j, :v.shape[0]] = v
+        slopes[j, :v.shape[0]] = sl
+    return values, slopes, index
+
+
+#: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units; the table grid in
+#: ``t = ln(sigma_theta / theta_ul)``).
+RECORD = np.dtype([("log_theta_ul", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), ("table_lo", "f8"),
+                   ("table_rate", "f8"), ("table_n", "f8")])
+
+
+def moment_kernel(block, foundation, cond):
+    """:class:`~screening.condensation.base.MomentKernel` of ``cond`` for flat (1-d) model fields."""
+    values, slopes, index = coefficient_tables(block, foundation, cond)
+    fields = {"log_theta_ul": np.log(cond.uplift_threshold(block, foundation)),
+              "c_rest": cond.damping_at_rest(block, foundation), "k_rest": cond.stiffness_at_rest(block, foundation),
+              "table_lo": T_LO, "table_rate": float(STEPS_PER_UNIT), "table_n": table_size(block, foundation, cond)}
+    records = np.empty(index.size, dtype=RECORD)
+    for name, value in fields.items():
+        records[name] = np.broadcast_to(np.asarray(value, dtype=float), index.shape)
+    return MomentKernel(equivalent_coefficients_jit, records, values, slopes, index)
 
 
 def table_lookup(t, values, slopes, c0, k0):
@@ -262,8 +268,17 @@ def table_lookup_grid(t, values, slopes, c0, k0, t_lo, steps_per_unit, n):
     return e_c, e_k, d_c
 
 
-def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
-    """``(c_eq [N m s/rad], k_eq [N m/rad])`` of the cubic condensation (module docstring).
+@numba.njit(moment_coefficients_signature(RECORD), cache=True)
+def equivalent_coefficients_jit(p, values, slopes, var_theta, cov):
+    """Compiled twin of :func:`equivalent_coefficients`, from the moments ``var_theta`` [rad2] and
+    ``cov`` [rad2/s], on one point's table: ``c_eq = e_c``, ``k_eq = e_k + cov d_c``."""
+    t = 0.5 * math.log(var_theta) - p.log_theta_ul if var_theta > 0.0 else -math.inf
+    e_c, e_k, d_c = table_lookup_grid(t, values, slopes, p.c_rest, p.k_rest, p.table_lo, p.table_rate, p.table_n)
+    return e_c, e_k + cov * d_c
+
+
+def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation, cond):
+    """``(c_eq [N m s/rad], k_eq [N m/rad])`` of the condensation ``cond`` by quadrature (module docstring).
 
     ``sigma_theta`` [rad] >= 0 and ``cov_over_sigma = cov(theta, theta') / sigma_theta``
     [rad/s] (``rho sigma_theta_dot``), broadcast with array model parameters (one quadrature
@@ -271,18 +286,16 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
     """
     s = np.asarray(sigma_theta, dtype=float)
     cs = np.asarray(cov_over_sigma, dtype=float)
-    shape_p = np.broadcast_shapes(*(np.shape(getattr(block, n)) for n in ("m", "b", "h", "g")),
-                                  *(np.shape(v) for v in (foundation.k, foundation.eps, foundation.damping)))
+    (blk_flat, fnd_flat), shape_p = flatten(block, foundation)
     shape = np.broadcast_shapes(shape_p, s.shape, cs.shape)
     s_b = np.broadcast_to(s, shape)
     cs_b = np.broadcast_to(cs, shape)
     c_eq = np.empty(shape)
     k_eq = np.empty(shape)
-    models = list(point_models(block, foundation, shape_p))
-    p_index = np.broadcast_to(np.arange(len(models)).reshape(shape_p), shape)
-    for j, (blk, fnd) in enumerate(models):
+    p_index = np.broadcast_to(np.arange(int(np.prod(shape_p, dtype=int))).reshape(shape_p), shape)
+    for j in range(int(np.prod(shape_p, dtype=int))):
         sel = p_index == j
-        e_c, e_k, d_c = expectations(s_b[sel], blk, fnd)
+        e_c, e_k, d_c = expectations(s_b[sel], select(blk_flat, j), select(fnd_flat, j), cond)
         c_eq[sel] = e_c
         k_eq[sel] = e_k + cs_b[sel] * s_b[sel] * d_c
     return c_eq[()], k_eq[()]

@@ -1,5 +1,5 @@
 """Cubic Hermite interpolation weights, shared by the compiled coefficient tables
-(:mod:`screening.condensation.paper_table`, :mod:`screening.condensation.quadrature`)."""
+(:mod:`screening.condensation.uplift_integrals`, :mod:`screening.condensation.quadrature`)."""
 
 import numba
 

@@ -9,8 +9,10 @@ output (eqs. 47–49).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from screening.validation import checked
@@ -131,3 +133,9 @@ def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
     var_u_dot = np.pi * S0 / (2.0 * zeta_g * omega_g)
     var_z = np.pi * S0 * omega_g * (1.0 + 4.0 * zeta_g**2) / (2.0 * zeta_g)
     return var_u, var_u_dot, var_z
+
+
+@numba.njit(cache=True)
+def stationary_filter_moments_jit(S0, omega_g, zeta_g):
+    """Compiled twin of :func:`kanai_tajimi_stationary_moments`: ``(var_u [m^2], var_u_dot [m^2/s^2])``."""
+    return math.pi * S0 / (2.0 * zeta_g * omega_g**3), math.pi * S0 / (2.0 * zeta_g * omega_g)

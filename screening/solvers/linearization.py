@@ -7,9 +7,9 @@ import xarray as xr
 from scipy.special import erfc
 
 from screening import __version__
-from screening.condensation import cubic as cubic_condensation
-from screening.condensation.paper import check_condensation, uplift_threshold
-from screening.solvers.moments import DEFAULT_RTOL, HISTORY_VARIABLES, STATUS_MEANINGS, solve_moments
+from screening.condensation import get as get_condensation
+from screening.solvers.moments import DEFAULT_RTOL, HISTORY_VARIABLES, solve_moments
+from screening.status import PointStatus
 from screening.schema import STATUS, TIME, VARIABLES
 from screening.solvers.timegrid import output_times
 
@@ -56,9 +56,9 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     ``peak_p_beyond_capacity``, the Gaussian probability ``P(|theta| > theta_capacity)`` at the
     peak ``var_theta`` (where the cubic condensation leaves its validity).
     """
-    check_condensation(condensation)
+    cond = get_condensation(condensation)
     t = output_times(t_end, dt)
-    res = solve_moments(block, foundation, excitation, t, rtol=rtol, condensation=condensation)
+    res = solve_moments(block, foundation, excitation, t, rtol=rtol, condensation=cond)
     if res["status"].ndim != 0:
         raise ValueError("linearize() takes scalar model parameters; use "
                          "screening.solvers.moments.solve_moments for arrays of points")
@@ -71,14 +71,14 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     if condensation == "cubic":
         theta_ul_meta["long_name"] = ("static uplift threshold angle, cubic static balance: "
                                       "b theta_ul (1 + 2 eps b^2 theta_ul^2) = m g / (2 b k)")
-    data["theta_ul"] = ((), uplift_threshold(block, foundation, condensation), theta_ul_meta)
+    data["theta_ul"] = ((), cond.uplift_threshold(block, foundation), theta_ul_meta)
     ds = xr.Dataset(data, coords={"t": ("t", t, TIME)})
     ds.attrs.update(model_attributes(block, foundation, excitation))
     ds.attrs.update(method="stochastic linearization + Lyapunov moment equations",
-                    status_meaning=STATUS_MEANINGS[int(res["status"])], rtol=float(rtol),
-                    condensation=condensation, screening_version=__version__)
+                    status_meaning=PointStatus(int(res["status"])).name, rtol=float(rtol),
+                    condensation=cond.name, screening_version=__version__)
     if condensation == "cubic":
-        cap = float(cubic_condensation.capacity_angle(block, foundation))
+        cap = float(cond.capacity_angle(block, foundation))
         peak = float(res["peak_var_theta"])
         beyond = float(erfc(cap / np.sqrt(2.0 * peak))) if np.isfinite(cap) and peak > 0 else 0.0
         ds.attrs.update(theta_capacity=cap, peak_p_beyond_capacity=beyond,

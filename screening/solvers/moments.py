@@ -15,52 +15,32 @@ turns negative, whose ``sigma_theta`` passes the slenderness angle, whose state 
 finite, or which exceeds the step budget stops there with a ``status`` code; the other
 points of the batch are unaffected.
 
-Condensation.  ``condensation="paper"`` (default) uses the closed forms of
-:mod:`screening.condensation.paper_coefficients` through the universal table of :mod:`screening.condensation.paper_table`.
-``condensation="cubic"`` (:mod:`screening.condensation.cubic`) has no closed form: each
-distinct parameter point gets its own table of ``E[C]``, ``E[K x^2]`` and the
-velocity-coupling term, built once by quadrature (:mod:`screening.condensation.quadrature`),
-and the compiled solver reads it in place of the universal one (parameter ``I_COND``
-selects the branch; the default path only pays that one comparison).
+Condensation.  The condensation (a :class:`~screening.condensation.Condensation`, or its
+registered name, turned into the object once here) hands the solver its compiled
+``(c_eq, k_eq)`` function, one parameter record per point and its coefficient tables
+(:meth:`~screening.condensation.Condensation.moment_kernel`): the paper's closed forms read a
+universal table, others per-point quadrature tables.  The compiled loop calls that function and
+never looks at the condensation's name; it is compiled (and cached) once per record type.
 """
 
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numba
 import numpy as np
+from numba import types
+from scipy.special import erfc
 
-from screening.condensation import cubic as cubic_condensation, quadrature as cubic_linearization
-from screening.condensation.paper import check_condensation, damping_inner, m_sdof, uplift_threshold
-from screening.condensation.quadrature import table_lookup_grid
-from screening.condensation.paper_table import coefficient_table, uplift_integrals_log
+from screening.condensation import get as get_condensation
+from screening.kernels import dopri
+from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
+from screening.model.excitation import stationary_filter_moments_jit
+from screening.model.points import flatten, select
+from screening.status import PointStatus
 
-# ---------------------------------------------------------------- status codes
-STATUS_OK = 0
-STATUS_K_EQ_NEGATIVE = 1
-STATUS_VARIANCE_UNBOUNDED = 2
-STATUS_MAX_STEPS = 3
-STATUS_NONFINITE = 4
-STATUS_MEANINGS = {
-    STATUS_OK: "ok",
-    STATUS_K_EQ_NEGATIVE: "k_eq_negative",
-    STATUS_VARIANCE_UNBOUNDED: "sigma_theta_beyond_slenderness",
-    STATUS_MAX_STEPS: "step_budget_exhausted",
-    STATUS_NONFINITE: "non_finite_moments",
-}
-
-# ---------------------------------------------------------------- parameter layout
-(I_M, I_GAIN, I_TU, I_K0, I_MGH, I_E0, I_EPS, I_C1, I_DAMP, I_S0, I_WG, I_ZG,
- I_ENV, I_T1, I_T2, I_SIGMAX, I_LOG_TU, I_COND, I_K_REST, I_TAB_LO, I_TAB_RATE, I_TAB_N) = range(22)
-N_PARAMS = 22
-
-#: Value of ``params[:, I_COND]`` per condensation.
-CONDENSATION_CODES = {"paper": 0.0, "cubic": 1.0}
-
-#: Points per call of the compiled solver when per-point tables are built (``"cubic"``).
-TABLE_CHUNK = 256
+#: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
+CHUNK = 256
 
 DEFAULT_RTOL = 1e-7
 DEFAULT_MAX_STEPS = 200_000
@@ -68,69 +48,59 @@ DEFAULT_MAX_STEPS = 200_000
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
 SCALE_FLOOR = 1e-300
 
+OK = PointStatus.ok
+K_EQ_NEGATIVE = PointStatus.k_eq_negative
+BEYOND_SLENDERNESS = PointStatus.sigma_theta_beyond_slenderness
+STEP_BUDGET = PointStatus.step_budget_exhausted
+NON_FINITE = PointStatus.non_finite_moments
 
-def pack_parameters(block, foundation, excitation, condensation="paper"):
-    """Broadcast the model objects to a ``(n_points, N_PARAMS)`` float array (SI units).
+#: Per-point parameters of the condensed oscillator and its excitation (SI units).
+OSCILLATOR = np.dtype([
+    ("m_sdof", "f8"),             # rotational inertia about the rocking edge [kg m2] (eq. 23)
+    ("gain", "f8"),               # m h / m_sdof [1/m]: input gain of the ground acceleration
+    ("theta_ul", "f8"),           # uplift threshold [rad]
+    ("c_rest", "f8"),             # C(0) [N m s/rad]
+    ("k_rest", "f8"),             # K(0) [N m/rad]
+    ("S0", "f8"),                 # two-sided PSD level of the driving white noise [m2/s3]
+    ("omega_g", "f8"),            # Kanai-Tajimi filter frequency [rad/s] (1 for white noise)
+    ("zeta_g", "f8"),             # Kanai-Tajimi filter damping [1] (1 for white noise)
+    ("constant_envelope", "f8"),  # 1: q(t) = 1, 0: q(t) = 4 (exp(-t/T1) - exp(-t/T2))
+    ("T1", "f8"), ("T2", "f8"),   # envelope times [s]
+    ("slenderness", "f8"),        # atan(b/h) [rad]: sigma_theta beyond it stops the point
+])
 
-    Every field of ``block``, ``foundation`` and ``excitation`` may be an array; they are
-    broadcast together and flattened.  Returns ``(params, shape)`` with the broadcast shape.
-    With ``condensation="cubic"``, ``I_TU`` is the cubic threshold, ``I_C1`` is ``C(0)`` and
-    ``I_E0`` is ``4 k b^3 z0^2`` so that ``K(0) = I_K0 - I_MGH + I_EPS I_E0 / 2`` still holds.
-    """
-    env = excitation.envelope
+HISTORY_VARIABLES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift")
+SUMMARY_VARIABLES = ("status", "t_stop", "n_steps", "peak_var_theta", "t_peak_var_theta",
+                     "peak_p_uplift", "min_k_eq")
+
+
+def oscillator_records(block, foundation, excitation, cond):
+    """One :data:`OSCILLATOR` record per point of flat (1-d) model fields."""
     kt = excitation.kind == "kanai_tajimi"
-    cubic = check_condensation(condensation) == "cubic"
-    if cubic:
-        theta_ul = cubic_condensation.uplift_threshold(block, foundation)
-        z0 = cubic_condensation.rest_indentation(block, foundation)
-        e0 = 4.0 * foundation.k * block.b**3 * z0 * z0
-        c_rest = cubic_condensation.damping_at_rest(block, foundation)
-        k_rest = cubic_condensation.stiffness_at_rest(block, foundation)
-        table_n = cubic_linearization.table_size(block, foundation)
-    else:
-        table_n = 0
-        theta_ul = uplift_threshold(block, foundation)
-        e0 = (block.m * block.g) ** 2 * block.b / foundation.k
-        c_rest = damping_inner(block, foundation)
-        k_rest = 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h + 0.5 * foundation.eps * e0
+    env = excitation.envelope
+    constant = env.kind == "constant"
     fields = {
-        I_M: m_sdof(block),
-        I_GAIN: block.m * block.h / m_sdof(block),
-        I_TU: theta_ul,
-        I_K0: 2.0 / 3.0 * block.b**3 * foundation.k,
-        I_MGH: block.m * block.g * block.h,
-        I_E0: e0,
-        I_EPS: foundation.eps,
-        I_C1: c_rest,
-        I_DAMP: 0.0 if foundation.contact == "hunt_crossley" else 1.0,
-        I_S0: excitation.S0,
-        I_WG: excitation.omega_g if kt else 1.0,
-        I_ZG: excitation.zeta_g if kt else 1.0,
-        I_ENV: float(env.params[0]),
-        I_T1: env.params[1],
-        I_T2: env.params[2],
-        I_SIGMAX: block.slenderness,
-        I_LOG_TU: np.log(theta_ul),
-        I_COND: CONDENSATION_CODES[condensation],
-        I_K_REST: k_rest,
-        I_TAB_LO: cubic_linearization.T_LO,                       # grid of the per-point tables
-        I_TAB_RATE: float(cubic_linearization.STEPS_PER_UNIT),
-        I_TAB_N: table_n,
+        "m_sdof": block.m_sdof,
+        "gain": block.m * block.h / block.m_sdof,
+        "theta_ul": cond.uplift_threshold(block, foundation),
+        "c_rest": cond.damping_at_rest(block, foundation),
+        "k_rest": cond.stiffness_at_rest(block, foundation),
+        "S0": excitation.S0,
+        "omega_g": excitation.omega_g if kt else 1.0,
+        "zeta_g": excitation.zeta_g if kt else 1.0,
+        "constant_envelope": 1.0 if constant else 0.0,
+        "T1": 1.0 if constant else env.T1,
+        "T2": 0.5 if constant else env.T2,
+        "slenderness": block.slenderness,
     }
-    arrays = np.broadcast_arrays(*[np.asarray(fields[i], dtype=float) for i in range(N_PARAMS)])
-    shape = arrays[0].shape
-    params = np.ascontiguousarray(np.stack([a.reshape(-1) for a in arrays], axis=1))
-    return params, shape
+    n = np.size(block.m)
+    out = np.empty(n, dtype=OSCILLATOR)
+    for name, value in fields.items():
+        out[name] = np.broadcast_to(np.asarray(value, dtype=float), (n,))
+    return out
 
 
 # ---------------------------------------------------------------- compiled pieces
-@numba.njit(cache=True, inline="always")
-def _envelope(p, t):
-    if p[I_ENV] == 1.0:
-        return 1.0
-    return 4.0 * (math.exp(-t / p[I_T1]) - math.exp(-t / p[I_T2]))
-
-
 @numba.njit(cache=True, inline="always")
 def _exp_minus(x):
     """``exp(-x)`` for ``0 <= x``; a 7-term series below 0.02 (error < 1e-16)."""
@@ -140,76 +110,37 @@ def _exp_minus(x):
 
 
 @numba.njit(cache=True)
-def _stage_gains(p, t, h, gains):
-    """``m h q(t + c_s h) / M`` at the 7 stage times of a Dormand–Prince step (2 exp per step)."""
-    if p[I_ENV] == 1.0:
+def _stage_gains(osc, t, h, gains):
+    """``m h q(t + c_s h) / M`` at the 7 stage times of a Dormand–Prince step (eq. 57, 2 exp per step)."""
+    if osc.constant_envelope == 1.0:
         for s in range(7):
-            gains[s] = p[I_GAIN]
+            gains[s] = osc.gain
         return
-    e1 = math.exp(-t / p[I_T1])
-    e2 = math.exp(-t / p[I_T2])
+    e1 = math.exp(-t / osc.T1)
+    e2 = math.exp(-t / osc.T2)
     for s in range(7):
-        c = _C7[s] * h
-        gains[s] = p[I_GAIN] * 4.0 * (e1 * _exp_minus(c / p[I_T1]) - e2 * _exp_minus(c / p[I_T2]))
+        c = dopri.C[s] * h
+        gains[s] = osc.gain * 4.0 * (e1 * _exp_minus(c / osc.T1) - e2 * _exp_minus(c / osc.T2))
 
 
 @numba.njit(cache=True, inline="always")
-def _coefficients_tabulated(p, var_theta, cov, values, slopes):
-    """``(c_eq, k_eq)`` from a per-point table (:mod:`screening.condensation.quadrature`):
-    ``c_eq = E[C]``, ``k_eq = E[K x^2] + cov d_c``."""
-    t = 0.5 * math.log(var_theta) - p[I_LOG_TU] if var_theta > 0.0 else -math.inf
-    e_c, e_k, d_c = table_lookup_grid(t, values, slopes, p[I_C1], p[I_K_REST], p[I_TAB_LO], p[I_TAB_RATE],
-                                      p[I_TAB_N])
-    return e_c, e_k + cov * d_c
-
-
-@numba.njit(cache=True, inline="always")
-def _coefficients(p, var_theta, cov, values, slopes):
-    """``(c_eq, k_eq)`` from the moments: the closed forms of :mod:`screening.condensation.paper_coefficients`.
-
-    ``values``, ``slopes``: the universal table of :mod:`screening.condensation.paper_table` (``"paper"``), or
-    the point's own table when ``p[I_COND] != 0`` (``"cubic"``).
-    """
-    if p[I_COND] != 0.0:
-        return _coefficients_tabulated(p, var_theta, cov, values, slopes)
-    if var_theta > 0.0:
-        p_in, tail_m12, tail_m32, p32 = uplift_integrals_log(
-            0.5 * math.log(var_theta) - p[I_LOG_TU], values, slopes)
-    else:
-        p_in, tail_m12, tail_m32, p32 = 1.0, 0.0, 0.0, 1.0
-    r2 = var_theta / (p[I_TU] * p[I_TU])
-    if p[I_DAMP] == 0.0:
-        c_shape = tail_m12
-        coupling = 0.5 * tail_m12
-    else:
-        c_shape = tail_m32
-        coupling = 1.5 * tail_m32
-    # D = C1 * coupling * cov / sigma^2, finite at sigma = 0 (coupling vanishes first)
-    d_term = p[I_C1] * coupling * cov / var_theta if coupling > 0.0 else 0.0
-    c_eq = p[I_C1] * (p_in + c_shape)
-    k_eq = (p[I_K0] * (p_in + tail_m32) - p[I_MGH] - d_term
-            + p[I_EPS] * p[I_E0] * (1.0 - 0.5 * p_in + 0.3 * r2 * p32 - 0.2 * tail_m12))
-    return c_eq, k_eq
-
-
-@numba.njit(cache=True, inline="always")
-def _rhs(p, kt, alpha, y, dy, row, values, slopes):
+def _rhs(coefficients, cond, values, slopes, osc, kt, alpha, y, dy, row):
     """Moment equations (45)/(51) into ``dy[row]``; returns ``(c_eq, k_eq)`` at ``y``.
 
     ``alpha = m h q(t) / M`` is the input gain at the stage time.
     """
-    c_eq, k_eq = _coefficients(p, y[0], y[1], values, slopes)
-    m = p[I_M]
+    c_eq, k_eq = coefficients(cond, values, slopes, y[0], y[1])
+    m = osc.m_sdof
     kap = k_eq / m
     gam = c_eq / m
     if not kt:
         dy[row, 0] = 2.0 * y[1]
         dy[row, 1] = y[2] - kap * y[0] - gam * y[1]
-        dy[row, 2] = -2.0 * kap * y[1] - 2.0 * gam * y[2] + 2.0 * math.pi * p[I_S0] * alpha * alpha
+        dy[row, 2] = -2.0 * kap * y[1] - 2.0 * gam * y[2] + 2.0 * math.pi * osc.S0 * alpha * alpha
         return c_eq, k_eq
     # 4x4 symmetric C stored as (00 01 02 03 11 12 13 22 23 33)
-    wg = p[I_WG]
-    zg = p[I_ZG]
+    wg = osc.omega_g
+    zg = osc.zeta_g
     w2 = wg * wg
     b2 = alpha * w2
     b3 = 2.0 * alpha * zg * wg
@@ -235,68 +166,32 @@ def _rhs(p, kt, alpha, y, dy, row, values, slopes):
     dy[row, 6] = a13 + a31
     dy[row, 7] = 2.0 * c23
     dy[row, 8] = c33 + a32
-    dy[row, 9] = 2.0 * a33 + 2.0 * math.pi * p[I_S0]
+    dy[row, 9] = 2.0 * a33 + 2.0 * math.pi * osc.S0
     return c_eq, k_eq
 
 
-# Dormand–Prince 5(4) tableau with its 4th-order dense output (Hairer; as in scipy's RK45)
-_A = np.array([
-    [0.0, 0, 0, 0, 0],
-    [1 / 5, 0, 0, 0, 0],
-    [3 / 40, 9 / 40, 0, 0, 0],
-    [44 / 45, -56 / 15, 32 / 9, 0, 0],
-    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0],
-    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
-])
-_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
-_C7 = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
-_B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
-_E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
-_P = np.array([
-    [1, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
-    [0, 0, 0, 0],
-    [0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
-    [0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
-    [0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
-    [0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
-    [0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
-])
-
-
-@numba.njit(cache=True, inline="always")
-def _dense(y0, K, h, theta, j):
-    """Component ``j`` of the dense-output polynomial at fraction ``theta`` of the step."""
-    acc = 0.0
-    for i in range(7):
-        q = theta * (_P[i, 0] + theta * (_P[i, 1] + theta * (_P[i, 2] + theta * _P[i, 3])))
-        acc += K[i, j] * q
-    return y0[j] + h * acc
-
-
 @numba.njit(cache=True)
-def _linear_scales(p, kt, scale):
+def _linear_scales(osc, kt, scale):
     """Diagonal moment scales from the linear no-uplift oscillator (for absolute tolerances)."""
-    m = p[I_M]
-    k1 = p[I_K0] - p[I_MGH] + 0.5 * p[I_EPS] * p[I_E0]
-    w2 = abs(k1) / m
+    m = osc.m_sdof
+    w2 = abs(osc.k_rest) / m
     if w2 <= 0.0:
         w2 = 1.0
-    zw = max(0.5 * p[I_C1] / m, 0.05)  # floor: undamped points still get a finite scale
-    s_eff = p[I_S0]
+    zw = max(0.5 * osc.c_rest / m, 0.05)  # floor: undamped points still get a finite scale
+    s_eff = osc.S0
     if kt:
-        wg = p[I_WG]
-        zg = p[I_ZG]
+        wg = osc.omega_g
+        zg = osc.zeta_g
         num = wg**4 + 4.0 * zg * zg * wg * wg * w2
         den = (w2 - wg * wg) ** 2 + 4.0 * zg * zg * wg * wg * w2
-        s_eff = p[I_S0] * num / den
-    g2 = p[I_GAIN] ** 2
+        s_eff = osc.S0 * num / den
+    g2 = osc.gain ** 2
     var_theta_dot = math.pi * s_eff * g2 / (2.0 * zw)
     diag = np.empty(4)
     diag[0] = var_theta_dot / w2
     diag[1] = var_theta_dot
     if kt:
-        diag[2] = math.pi * p[I_S0] / (2.0 * p[I_ZG] * p[I_WG] ** 3)
-        diag[3] = math.pi * p[I_S0] / (2.0 * p[I_ZG] * p[I_WG])
+        diag[2], diag[3] = stationary_filter_moments_jit(osc.S0, osc.omega_g, osc.zeta_g)
         idx = 0
         for i in range(4):
             for j in range(i, 4):
@@ -311,27 +206,28 @@ def _linear_scales(p, kt, scale):
 
 
 @numba.njit(cache=True)
-def _p_uplift(p, var_theta):
+def _p_uplift(osc, var_theta):
+    """Uplift occupancy ``erfc(theta_ul / sqrt(2 var_theta))`` [1] (eq. 58)."""
     if var_theta <= 0.0:
         return 0.0
-    return math.erfc(p[I_TU] / math.sqrt(2.0 * var_theta))
+    return math.erfc(osc.theta_ul / math.sqrt(2.0 * var_theta))
 
 
 @numba.njit(cache=True)
-def _store(p, out_i, k, y, values, slopes, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o,
-           p_upl):
+def _store(coefficients, cond, values, slopes, osc, out_i, k, y, var_theta, cov, var_theta_dot, c_eq_o,
+           k_eq_o, p_upl):
     n = y.shape[0]
     var_theta[out_i, k] = y[0]
     cov[out_i, k] = y[1]
     var_theta_dot[out_i, k] = y[2] if n == 3 else y[4]
-    c, kk = _coefficients(p, y[0], y[1], values, slopes)
+    c, kk = coefficients(cond, values, slopes, y[0], y[1])
     c_eq_o[out_i, k] = c
     k_eq_o[out_i, k] = kk
-    p_upl[out_i, k] = _p_uplift(p, y[0])
+    p_upl[out_i, k] = _p_uplift(osc, y[0])
 
 
 @numba.njit(cache=True)
-def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
+def _solve_point(coefficients, cond, values, slopes, osc, kt, t_out, rtol, h_max, max_steps, i,
                  var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
                  status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
     n = 10 if kt else 3
@@ -341,13 +237,15 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
     K = np.empty((7, n))
     scale = np.empty(n)
     gains = np.empty(7)
-    _linear_scales(p, kt, scale)
+    _linear_scales(osc, kt, scale)
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
     t = t_out[0]
 
-    c0, k0 = _rhs(p, kt, p[I_GAIN] * _envelope(p, t), y, K, 0, values, slopes)
-    _store(p, i, 0, y, values, slopes, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+    gains[0] = osc.gain * (1.0 if osc.constant_envelope == 1.0 else
+                           4.0 * (math.exp(-t / osc.T1) - math.exp(-t / osc.T2)))
+    c0, k0 = _rhs(coefficients, cond, values, slopes, osc, kt, gains[0], y, K, 0)
+    _store(coefficients, cond, values, slopes, osc, i, 0, y, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
     next_out = 1
     best = 0.0
     best_t = t
@@ -355,39 +253,39 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
     steps = 0
     rejected = 0
     err_old = 1e-4
-    code = STATUS_OK
+    code = OK
     if not (k0 > 0.0):
-        code = STATUS_K_EQ_NEGATIVE
+        code = K_EQ_NEGATIVE
         t_end = t  # no step is taken
     else:
-        h = min(h_max, 0.05 / math.sqrt(k0 / p[I_M]), t_end - t)
+        h = min(h_max, 0.05 / math.sqrt(k0 / osc.m_sdof), t_end - t)
     while t < t_end:
         if steps >= max_steps:
-            code = STATUS_MAX_STEPS
+            code = STEP_BUDGET
             break
         if t + h > t_end:
             h = t_end - t
-        _stage_gains(p, t, h, gains)
+        _stage_gains(osc, t, h, gains)
         # stages 2..6
         for s in range(1, 6):
             for j in range(n):
                 acc = 0.0
                 for q in range(s):
-                    acc += _A[s, q] * K[q, j]
+                    acc += dopri.A[s, q] * K[q, j]
                 y_stage[j] = y[j] + h * acc
-            _rhs(p, kt, gains[s], y_stage, K, s, values, slopes)
+            _rhs(coefficients, cond, values, slopes, osc, kt, gains[s], y_stage, K, s)
         for j in range(n):
             acc = 0.0
             for q in range(6):
-                acc += _B[q] * K[q, j]
+                acc += dopri.B[q] * K[q, j]
             y_new[j] = y[j] + h * acc
-        c_new, k_new = _rhs(p, kt, gains[6], y_new, K, 6, values, slopes)
+        c_new, k_new = _rhs(coefficients, cond, values, slopes, osc, kt, gains[6], y_new, K, 6)
         err = 0.0
         finite = True
         for j in range(n):
             e = 0.0
             for q in range(7):
-                e += _E[q] * K[q, j]
+                e += dopri.E[q] * K[q, j]
             e = abs(h * e) / (rtol * scale[j] + rtol * max(abs(y[j]), abs(y_new[j])))
             if not (e < 1e300):
                 finite = False
@@ -397,10 +295,10 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
             if h > 1e-12 * t_end:
                 h *= 0.2
                 continue
-            code = STATUS_NONFINITE
+            code = NON_FINITE
             break
         if err > 1.0:
-            h *= max(0.2, 0.9 * err**-0.2)
+            h *= dopri.rejected_step_factor(err)
             rejected += 1
             continue
         # accepted step [t, t + h]
@@ -408,8 +306,8 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
         while next_out < nt and t_out[next_out] <= t_new * (1.0 + 1e-14):
             theta = (t_out[next_out] - t) / h
             for j in range(n):
-                y_stage[j] = _dense(y, K, h, theta, j)
-            _store(p, i, next_out, y_stage, values, slopes,
+                y_stage[j] = dopri.dense_output(y, K, h, theta, j)
+            _store(coefficients, cond, values, slopes, osc, i, next_out, y_stage,
                    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
             next_out += 1
         # peak of var_theta: d(var)/dt = 2 cov changes sign from + to -
@@ -420,11 +318,11 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
             hi = 1.0
             for _ in range(24):
                 mid = 0.5 * (lo + hi)
-                if _dense(y, K, h, mid, 1) > 0.0:
+                if dopri.dense_output(y, K, h, mid, 1) > 0.0:
                     lo = mid
                 else:
                     hi = mid
-            v = _dense(y, K, h, 0.5 * (lo + hi), 0)
+            v = dopri.dense_output(y, K, h, 0.5 * (lo + hi), 0)
             if v > best:
                 best = v
                 best_t = t + 0.5 * (lo + hi) * h
@@ -438,14 +336,13 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
             K[0, j] = K[6, j]
         t = t_new
         if not (k_new > 0.0):
-            code = STATUS_K_EQ_NEGATIVE
+            code = K_EQ_NEGATIVE
             break
-        if y[0] > p[I_SIGMAX] ** 2:
-            code = STATUS_VARIANCE_UNBOUNDED
+        if y[0] > osc.slenderness ** 2:
+            code = BEYOND_SLENDERNESS
             break
-        # PI step control (Hairer & Wanner's DOPRI5, beta = 0.04): smooth near the stability bound
         err = max(err, 1e-10)
-        fac = min(5.0, max(0.2, 0.9 * err**-0.17 * err_old**0.04))
+        fac = dopri.accepted_step_factor(err, err_old)
         err_old = err
         h = min(h * fac, h_max)
     status[i] = code
@@ -457,30 +354,38 @@ def _solve_point(p, kt, t_out, rtol, h_max, max_steps, values, slopes, i,
     min_k_eq[i] = lowest_k
 
 
-@numba.njit(cache=True)
-def _solve_batch(params, kt, t_out, rtol, h_max, max_steps, values, slopes,
+def _solve_batch(coefficients, conds, osc, tables_v, tables_s, table_index, kt, t_out, rtol, h_max, max_steps,
                  var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
                  status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
-    for i in range(params.shape[0]):
-        _solve_point(params[i], kt, t_out, rtol, h_max, max_steps, values, slopes, i,
-                     var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
+    """Every point of a batch (compiled per condensation record type by :func:`batch_solver`)."""
+    for i in range(osc.shape[0]):
+        j = table_index[i]
+        _solve_point(coefficients, conds[i], tables_v[j], tables_s[j], osc[i], kt, t_out, rtol, h_max, max_steps,
+                     i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
                      status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq)
 
 
-@numba.njit(cache=True)
-def _solve_batch_tabulated(params, kt, t_out, rtol, h_max, max_steps, tables_v, tables_s,
-                           var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                           status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
-    """:func:`_solve_batch` with one coefficient table per point (``tables_v[i]``, ``tables_s[i]``)."""
-    for i in range(params.shape[0]):
-        _solve_point(params[i], kt, t_out, rtol, h_max, max_steps, tables_v[i], tables_s[i], i,
-                     var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                     status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq)
+_SOLVERS = {}
 
 
-HISTORY_VARIABLES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift")
-SUMMARY_VARIABLES = ("status", "t_stop", "n_steps", "peak_var_theta", "t_peak_var_theta",
-                     "peak_p_uplift", "min_k_eq")
+def batch_solver(record_dtype):
+    """The compiled :func:`_solve_batch` for a condensation whose records have ``record_dtype``.
+
+    Compiled once per record type with an explicit signature (the condensation's coefficient
+    function is a first-class argument), so numba caches it on disk like any other kernel.
+    """
+    if record_dtype not in _SOLVERS:
+        f8, i8 = types.float64, types.int64
+        a1 = types.float64[::1]
+        a2 = types.float64[:, ::1]
+        a3 = types.float64[:, :, ::1]
+        cond = record_type(record_dtype)
+        sig = types.void(function_type(moment_coefficients_signature(record_dtype)),
+                         types.Array(cond, 1, "C"), types.Array(record_type(OSCILLATOR), 1, "C"), a3, a3,
+                         types.int64[::1], types.boolean, a1, f8, f8, i8, a2, a2, a2, a2, a2, a2,
+                         types.int8[::1], a1, types.int64[::1], types.int64[::1], a1, a1, a1)
+        _SOLVERS[record_dtype] = numba.njit(sig, cache=True)(_solve_batch)
+    return _SOLVERS[record_dtype]
 
 
 def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max=None,
@@ -495,28 +400,30 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         times the linear stationary moments of each point).
     h_max : largest step [s]; default ``(t_out[-1] - t_out[0]) / 20``.
     max_steps : step budget per point (accepted + rejected).
-    condensation : ``"paper"`` (eqs. 17–25, default) or ``"cubic"``
-        (:mod:`screening.condensation.cubic`; raises ``ValueError`` for a softening bed that
-        cannot carry the block through the onset of uplift).
+    condensation : a :class:`~screening.condensation.Condensation` or a registered name
+        (``"paper"``: eqs. 17–25, default; ``"cubic"``: :mod:`screening.condensation.cubic`,
+        raises ``ValueError`` for a softening bed that cannot carry the block through uplift).
 
     Returns
     -------
     dict of numpy arrays: the time histories ``var_theta`` [rad^2], ``var_theta_dot``
     [rad^2/s^2], ``cov_theta_theta_dot`` [rad^2/s], ``c_eq`` [N m s/rad], ``k_eq`` [N m/rad],
     ``p_uplift`` [1] of shape ``shape + (len(t_out),)`` (NaN after a point stopped), and per
-    point ``status`` (see ``STATUS_MEANINGS``), ``t_stop`` [s], ``n_steps``,
-    ``peak_var_theta`` [rad^2] with ``t_peak_var_theta`` [s], ``peak_p_uplift`` [1] and
-    ``min_k_eq`` [N m/rad] (over the integrated span).
+    point ``status`` (:class:`~screening.status.PointStatus`), ``t_stop`` [s], ``n_steps``,
+    ``n_rejected``, ``peak_var_theta`` [rad^2] with ``t_peak_var_theta`` [s], ``peak_p_uplift``
+    [1] and ``min_k_eq`` [N m/rad] (over the integrated span).
     """
+    cond = get_condensation(condensation)
     t_out = np.ascontiguousarray(t_out, dtype=float)
     if t_out.ndim != 1 or t_out.size < 2 or np.any(np.diff(t_out) <= 0):
         raise ValueError("parameter 't_out' must be an increasing 1-d array of at least 2 times")
-    params, shape = pack_parameters(block, foundation, excitation, condensation)
+    (block, foundation, excitation), shape = flatten(block, foundation, excitation)
+    cond.check(block, foundation)
     kt = excitation.kind == "kanai_tajimi"
-    n, nt = params.shape[0], t_out.size
+    n, nt = int(np.prod(shape, dtype=int)), t_out.size
     if h_max is None:
         h_max = (t_out[-1] - t_out[0]) / 20.0
-    values, slopes = coefficient_table()
+    osc = oscillator_records(block, foundation, excitation, cond)
     hist = {name: np.full((n, nt), np.nan) for name in HISTORY_VARIABLES}
     status = np.zeros(n, dtype=np.int8)
     t_stop = np.full(n, np.nan)
@@ -525,25 +432,17 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     peak = np.full(n, np.nan)
     t_peak = np.full(n, np.nan)
     min_k = np.full(n, np.nan)
-    if condensation == "paper":
-        _solve_batch(params, kt, t_out, float(rtol), float(h_max), int(max_steps), values, slopes,
-                     hist["var_theta"], hist["cov_theta_theta_dot"], hist["var_theta_dot"],
-                     hist["c_eq"], hist["k_eq"], hist["p_uplift"],
-                     status, t_stop, n_steps, n_rejected, peak, t_peak, min_k)
-    else:
-        for lo in range(0, n, TABLE_CHUNK):
-            hi = min(lo + TABLE_CHUNK, n)
-            tables_v, tables_s = _chunk_tables(block, foundation, shape, lo, hi)
-            part = slice(lo, hi)
-            _solve_batch_tabulated(params[part], kt, t_out, float(rtol), float(h_max), int(max_steps),
-                                   tables_v, tables_s,
-                                   hist["var_theta"][part], hist["cov_theta_theta_dot"][part],
-                                   hist["var_theta_dot"][part], hist["c_eq"][part], hist["k_eq"][part],
-                                   hist["p_uplift"][part], status[part], t_stop[part], n_steps[part],
-                                   n_rejected[part], peak[part], t_peak[part], min_k[part])
-    tu = params[:, I_TU]
+    for lo in range(0, n, CHUNK):
+        part = slice(lo, min(lo + CHUNK, n))
+        kernel = cond.moment_kernel(select(block, part), select(foundation, part))
+        solver = batch_solver(kernel.records.dtype)
+        solver(kernel.coefficients, kernel.records, osc[part], kernel.table_values, kernel.table_slopes,
+               kernel.table_index, kt, t_out, float(rtol), float(h_max), int(max_steps),
+               hist["var_theta"][part], hist["cov_theta_theta_dot"][part], hist["var_theta_dot"][part],
+               hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], status[part], t_stop[part],
+               n_steps[part], n_rejected[part], peak[part], t_peak[part], min_k[part])
+    tu = osc["theta_ul"]
     with np.errstate(divide="ignore"):
-        from scipy.special import erfc
         peak_p = np.where(peak > 0, erfc(tu / np.sqrt(2.0 * np.maximum(peak, 1e-300))), 0.0)
     out = {name: a.reshape(shape + (nt,)) for name, a in hist.items()}
     out.update({
@@ -554,15 +453,3 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         "min_k_eq": min_k.reshape(shape),
     })
     return out
-
-
-def _chunk_tables(block, foundation, shape, lo, hi):
-    """Coefficient tables ``(values, slopes)`` of the flattened points ``lo:hi`` of the broadcast ``shape``."""
-    def pick(value):
-        return np.broadcast_to(np.asarray(value, dtype=float), shape).ravel()[lo:hi]
-
-    blk = SimpleNamespace(m=pick(block.m), b=pick(block.b), h=pick(block.h), g=pick(block.g))
-    damping = {"lam" if foundation.contact == "hunt_crossley" else "c": pick(foundation.damping)}
-    fnd = SimpleNamespace(k=pick(foundation.k), eps=pick(foundation.eps), damping=pick(foundation.damping),
-                          contact=foundation.contact, **damping)
-    return cubic_linearization.coefficient_tables(blk, fnd, (hi - lo,))

@@ -40,8 +40,9 @@ import numpy as np
 import xarray as xr
 
 from screening.solvers import mcs_kernels as kern
-from screening.condensation import cubic as cubic_condensation
-from screening.condensation.paper import check_condensation, damping_inner, m_sdof, uplift_threshold
+from screening.condensation import get as get_condensation
+from screening.condensation.paper import uplift_threshold
+from screening.status import DIVERGENCE_TEXT, DivergenceReason
 from screening.physics.contact import static_indentation_exact
 from screening.workflow.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
@@ -238,10 +239,10 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     n_samples = _check_integer("n_samples", n_samples, 2, "an integer >= 2")
     if model not in MODELS:
         raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
-    check_condensation(condensation)
-    if model == "coupled" and condensation != "paper":
+    cond = get_condensation(condensation)
+    if model == "coupled" and cond is not get_condensation("paper"):
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
-                         f"(got condensation={condensation!r} with model='coupled')")
+                         f"(got condensation={cond.name!r} with model='coupled')")
     seed = validate_seed(seed)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
@@ -251,15 +252,17 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         opts["rtol"] = DEFAULT_RTOL[model]
     show = _show_progress(progress, n_samples, opts["chunk_size"])
     y0 = initial_state(block, foundation, model)       # may raise for a bed that cannot carry the block
-    if condensation == "cubic":
-        cubic_condensation.check_bearing(block, foundation)
+    cond.check(block, foundation)
 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
     q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
-    params = kern.pack_parameters(block, foundation, opts["max_flight_time"], condensation)
+    params = kern.model_record(block, foundation, cond, opts["max_flight_time"])
+    sdof = cond.sdof_kernel(block, foundation) if model == "condensed" else \
+        get_condensation("paper").sdof_kernel(block, foundation)         # not read by the coupled model
+    integrate_chunk = kern.chunk_integrator(sdof.record.dtype)
     scales = opts["rtol"] * state_scales(block, foundation)
     model_code = kern.MODEL_COUPLED if model == "coupled" else kern.MODEL_CONDENSED
 
@@ -286,10 +289,10 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
             acc_dot += q_dot * acc
             acc *= q
             sl = slice(lo, hi)
-            kern.integrate_chunk(model_code, acc, acc_dot, plan.dt, times, params, y0, scales, opts["rtol"],
-                                 opts["h_max"], opts["max_steps"], theta[sl], theta_dot[sl], z_cb[:hi - lo],
-                                 z_cb_dot[:hi - lo], uplift[sl], peak[sl], status[sl], reason[sl], n_acc[sl],
-                                 n_rej[sl], h_min[sl])
+            integrate_chunk(model_code, sdof.damping_stiffness, sdof.record, acc, acc_dot, plan.dt, times,
+                            params[None], y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"], theta[sl],
+                            theta_dot[sl], z_cb[:hi - lo], z_cb_dot[:hi - lo], uplift[sl], peak[sl], status[sl],
+                            reason[sl], n_acc[sl], n_rej[sl], h_min[sl])
             bar.update(hi - lo)
     wall = time.perf_counter() - start
 
@@ -300,7 +303,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
     return _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                           block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
-                          h_min, wall, condensation)
+                          h_min, wall, cond.name)
 
 
 def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
@@ -327,7 +330,7 @@ def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reaso
     coords = {"t": ("t", times, {"units": "s", "long_name": "time"}),
               "sample": ("sample", np.arange(n_samples), {"long_name": "sample index (default_rng([seed, i]))"})}
     env = excitation.envelope
-    reasons = sorted({kern.REASON_NAMES[int(r)] for r in reason[diverged]})
+    reasons = sorted({DIVERGENCE_TEXT[DivergenceReason(int(r))] for r in reason[diverged]})
     accepted = n_acc[~overturned & ~diverged]
     attrs = {
         "title": f"Monte Carlo rocking response ({model} model)",
@@ -370,11 +373,12 @@ def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reaso
         attrs["omega_g"], attrs["zeta_g"] = float(excitation.omega_g), float(excitation.zeta_g)
     if model == "condensed":
         attrs["condensation"] = condensation
-        attrs["theta_ul"] = float(uplift_threshold(block, foundation, condensation))
-        attrs["m_sdof"] = float(m_sdof(block))
+        cond = get_condensation(condensation)
+        attrs["theta_ul"] = float(cond.uplift_threshold(block, foundation))
+        attrs["m_sdof"] = float(block.m_sdof)
         if condensation == "cubic":
-            attrs["C1"] = float(cubic_condensation.damping_at_rest(block, foundation))
-            attrs["theta_capacity"] = float(cubic_condensation.capacity_angle(block, foundation))
+            attrs["C1"] = float(cond.damping_at_rest(block, foundation))
+            attrs["theta_capacity"] = float(cond.capacity_angle(block, foundation))
         else:
-            attrs["C1"] = float(damping_inner(block, foundation))
+            attrs["C1"] = float(cond.damping_at_rest(block, foundation))
     return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -39,7 +39,6 @@ import numpy as np
 from scipy import fft as sfft
 from scipy import integrate
 
-from screening.condensation.paper import m_sdof
 
 #: Default cutoff = CUTOFF_FACTOR x the larger of the rocking and vertical frequencies.
 CUTOFF_FACTOR = 3.0
@@ -54,7 +53,7 @@ def rocking_frequency(block, foundation):
     linear rocking stiffness is not positive.
     """
     stiffness = 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h
-    return math.sqrt(max(float(stiffness), 0.0) / float(m_sdof(block)))
+    return math.sqrt(max(float(stiffness), 0.0) / float(block.m_sdof))
 
 
 def vertical_frequency(block, foundation):

@@ -96,7 +96,7 @@ from types import MappingProxyType
 import numpy as np
 
 from screening import __version__
-from screening.condensation.paper import CONDENSATIONS
+from screening.condensation import names as condensation_names
 from screening.condensation.cubic import SOFTENING_LIMIT, bearing_load
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL
@@ -421,7 +421,7 @@ def _resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     contact = _choice(foundation, "contact", CONTACTS, f"{where}foundation.", _DEFAULTS["contact"])
     kind = _choice(excitation, "kind", EXCITATIONS, f"{where}excitation.")
     envelope = _choice(excitation, "envelope", ENVELOPES, f"{where}excitation.", _DEFAULTS["envelope"])
-    condensation = _choice(foundation, "condensation", CONDENSATIONS, f"{where}foundation.",
+    condensation = _choice(foundation, "condensation", condensation_names(), f"{where}foundation.",
                            _DEFAULTS["condensation"])
     applicable = _applicable(contact, kind, envelope)
     params = {}

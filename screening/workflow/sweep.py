@@ -70,8 +70,12 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.condensation.paper import uplift_threshold
-from screening.solvers.moments import HISTORY_VARIABLES, STATUS_MEANINGS, STATUS_OK, solve_moments
+from screening.condensation.api import uplift_threshold
+from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
+from screening.status import PointStatus
+
+STATUS_OK = int(PointStatus.ok)
+STATUS_MEANINGS = {int(s): s.name for s in PointStatus if s >= 0}
 from screening.schema import PARAMETERS, TIME, VARIABLES
 from screening.model import Block
 from screening.workflow.progress import Progress

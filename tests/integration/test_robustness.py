@@ -26,11 +26,10 @@ from helpers import GRID, NO_HTTP_PORT_8787, compare_files, one_line_error, quie
 
 from screening.workflow import sweep
 from screening.cli import main
-from screening.condensation.paper import m_sdof
 from screening.model.excitation import ConstantEnvelope, KanaiTajimi, WhiteNoise
 from screening.condensation.paper_coefficients import coefficient_constants
-from screening.solvers.moments import (DEFAULT_MAX_STEPS, HISTORY_VARIABLES, STATUS_MAX_STEPS, STATUS_OK,
-                                solve_moments)
+from screening.solvers.moments import DEFAULT_MAX_STEPS, HISTORY_VARIABLES, solve_moments
+from screening.status import PointStatus
 from screening.model import Block, Foundation, WinklerFoundation
 from screening.solvers.montecarlo import monte_carlo
 from screening.workflow.study import build_models, parse_study
@@ -95,14 +94,14 @@ def cli_on_client(client, monkeypatch):
 # ============================================================================ 2. solver: stiff points
 STIFF = [
     # name, block, foundation, excitation, expected status
-    ("paper_k1e10_lam1e11_white", PAPER, Foundation(1e10, 1e11), WhiteNoise(1e-4), STATUS_OK),
-    ("paper_k1e10_lam1e11_kt", PAPER, Foundation(1e10, 1e11), KanaiTajimi(1e-4, 200.0, 0.01), STATUS_OK),
-    ("heavy_wide_k1e10_lam1e11", HEAVY_WIDE, Foundation(1e10, 1e11), WhiteNoise(1e-4), STATUS_OK),
-    ("slender_k1e10_lam1e11", SLENDER, Foundation(1e10, 1e11, 1e9), WhiteNoise(1e-4), STATUS_OK),
-    ("squat_k1e4_lam1e11", SQUAT, Foundation(1e4, 1e11), WhiteNoise(1e-4), STATUS_MAX_STEPS),
+    ("paper_k1e10_lam1e11_white", PAPER, Foundation(1e10, 1e11), WhiteNoise(1e-4), PointStatus.ok),
+    ("paper_k1e10_lam1e11_kt", PAPER, Foundation(1e10, 1e11), KanaiTajimi(1e-4, 200.0, 0.01), PointStatus.ok),
+    ("heavy_wide_k1e10_lam1e11", HEAVY_WIDE, Foundation(1e10, 1e11), WhiteNoise(1e-4), PointStatus.ok),
+    ("slender_k1e10_lam1e11", SLENDER, Foundation(1e10, 1e11, 1e9), WhiteNoise(1e-4), PointStatus.ok),
+    ("squat_k1e4_lam1e11", SQUAT, Foundation(1e4, 1e11), WhiteNoise(1e-4), PointStatus.step_budget_exhausted),
     ("light_wide_k1e10_lam1e11_kt", LIGHT_WIDE, Foundation(1e10, 1e11), KanaiTajimi(1e-4, 200.0, 0.01),
-     STATUS_MAX_STEPS),
-    ("squat_winkler_k1e4_c1e7", SQUAT, WinklerFoundation(1e4, 1e7), WhiteNoise(1e-4), STATUS_MAX_STEPS),
+     PointStatus.step_budget_exhausted),
+    ("squat_winkler_k1e4_c1e7", SQUAT, WinklerFoundation(1e4, 1e7), WhiteNoise(1e-4), PointStatus.step_budget_exhausted),
 ]
 
 
@@ -122,13 +121,13 @@ def test_stiff_points_finish_or_flag_with_bounded_work(name, block, foundation, 
     done = t <= stop
     assert np.all(np.isfinite(res["var_theta"][done])) and np.all(np.isnan(res["var_theta"][~done]))
     assert np.isfinite(res["peak_var_theta"]) and np.isfinite(res["min_k_eq"])
-    if status == STATUS_OK:
+    if status == PointStatus.ok:
         assert stop == 20.0 and n_steps < 50_000
     else:
         assert n_steps == DEFAULT_MAX_STEPS and stop < 20.0
     # no step collapse: the mean accepted step is near the stability bound ~3.3 / (spectral radius)
     const = coefficient_constants(block, foundation)
-    M = m_sdof(block)
+    M = block.m_sdof
     radius = 2.0 * max(const["C1"] / M, np.sqrt(abs(const["K0"] - const["mgh"] + 0.5 * foundation.eps * const["E0"]) / M))
     accepted = n_steps - int(res["n_rejected"])
     assert accepted > 0 and stop / accepted > 0.2 * 3.3 / radius
@@ -145,7 +144,7 @@ def test_step_budget_is_reported_in_the_result_file(client, tmp_path):
     report = run_sweep(study, out, client=client, progress=False, log=quiet)
     assert report.status_counts == {"step_budget_exhausted": 20}
     with xr.open_dataset(out) as ds:
-        budget = ds["status"].values == STATUS_MAX_STEPS
+        budget = ds["status"].values == PointStatus.step_budget_exhausted
         assert budget.all()
         assert np.all(ds["n_steps"].values[budget] == 5000)
         assert np.all((ds["n_rejected"].values >= 0) & (ds["n_rejected"].values < ds["n_steps"].values))
@@ -308,7 +307,7 @@ def test_spot_check_with_every_sample_overturning_is_recorded_not_fatal(all_over
         assert np.isnan(ds["mcs_rel_error_peak_var_theta"].values[0])
         assert np.all(ds["mcs_peak_abs_theta"].values[0] > np.arctan2(0.035, 0.21))
         assert np.all(np.isfinite(ds["mcs_var_theta"].values[1])) and np.isfinite(ds["mcs_rel_error_peak_var_theta"][1])
-        assert ds["status"].values[1] != STATUS_OK                             # the linearization topples too
+        assert ds["status"].values[1] != PointStatus.ok                             # the linearization topples too
     assert main(["info", str(all_overturned)]) == 0
     spot_line = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("S0=0.5")]
     assert len(spot_line) == 1 and "all 4 samples overturned" in spot_line[0]

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from helpers import GRID, compare_files, quiet
 
 from screening.workflow import sweep
-from screening.condensation.paper import uplift_threshold
+from screening.condensation.api import uplift_threshold
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
 from screening.workflow.study import build_models, parse_study

@@ -10,8 +10,9 @@ import pytest
 from scipy import integrate, special
 
 from screening.condensation.paper import rocking_damping, restoring_moment, uplift_threshold
-from screening.condensation.paper_coefficients import (equivalent_coefficients, equivalent_coefficients_from_moments,
-                                     gaussian_uplift_integrals, uplift_probability)
+from screening.condensation.api import (equivalent_coefficients, equivalent_coefficients_from_moments,
+                                        uplift_probability)
+from screening.condensation.uplift_integrals import gaussian_uplift_integrals
 
 
 def _regression_coefficients(s, sv, rho, block, foundation):
@@ -122,10 +123,11 @@ tests/unit/condensation/test_paper_condensation.py checks against the distribute
 
 import math  # noqa: E402
 
-from screening.solvers import mcs_kernels as kern  # noqa: E402
-from screening.condensation import cubic, paper_coefficients as linearization, quadrature as cl  # noqa: E402
-from screening.condensation.paper import m_sdof, rocking_stiffness  # noqa: E402
+from screening.condensation import api as linearization, cubic, quadrature as cl  # noqa: E402
+from screening.condensation.paper import rocking_stiffness  # noqa: E402
 from screening.model import Foundation  # noqa: E402
+
+CUBIC = cubic.CUBIC
 
 
 def _cubic_regression_coefficients(s, sv, rhos, block, foundation):
@@ -133,9 +135,9 @@ def _cubic_regression_coefficients(s, sv, rhos, block, foundation):
     cap = cubic.capacity_angle(block, foundation)
     # the compiled scalar C, K of the Monte Carlo kernel (tested equal to the numpy ones in
     # tests/unit/solvers/test_montecarlo.py): same functions, ~50x faster callbacks for quad
-    p = kern.pack_parameters(block, foundation, condensation="cubic")
-    C = lambda th: kern.cubic_damping_scalar(th, p)
-    R = lambda th: kern.cubic_stiffness_scalar(th, p) * th
+    p = cubic.sdof_record(block, foundation)[0]
+    C = lambda th: cubic.damping_stiffness_jit(p, th)[0]
+    R = lambda th: cubic.damping_stiffness_jit(p, th)[1] * th
     pdf = lambda th: np.exp(-0.5 * (th / s) ** 2) / (np.sqrt(2 * np.pi) * s)
 
     def expect(f):
@@ -211,17 +213,17 @@ def test_quadrature_engine_reproduces_the_paper_closed_forms(paper_block, any_fo
 
 
 def test_cubic_table_matches_direct_quadrature_between_nodes(paper_block, cubic_bed):
-    values, slopes = cl.coefficient_table(paper_block, cubic_bed)
+    values, slopes = cl.coefficient_table(paper_block, cubic_bed, CUBIC)
     tu = cubic.uplift_threshold(paper_block, cubic_bed)
     c0 = float(cubic.damping_at_rest(paper_block, cubic_bed))
     k0 = float(cubic.stiffness_at_rest(paper_block, cubic_bed))
     n = values.shape[0]
-    assert n == cl.table_size(paper_block, cubic_bed)
+    assert n == cl.table_size(paper_block, cubic_bed, CUBIC)
     assert cl.T_LO + (n - 1) / cl.STEPS_PER_UNIT >= math.log(4 * paper_block.slenderness / tu)
     t = np.concatenate([cl.T_LO + (np.arange(0, n - 1, 3) + 0.5) / cl.STEPS_PER_UNIT, [-20.0, -13.0]])
     s = tu * np.exp(t)
-    e_c, e_k, d_c = cl.expectations(s, paper_block, cubic_bed)
-    cov = 0.9 * s * s * math.sqrt(k0 / m_sdof(paper_block))     # a strongly correlated state
+    e_c, e_k, d_c = cl.expectations(s, paper_block, cubic_bed, CUBIC)
+    cov = 0.9 * s * s * math.sqrt(k0 / paper_block.m_sdof)     # a strongly correlated state
     for i, ti in enumerate(t):
         got_c, got_k, got_d = cl.table_lookup(ti, values, slopes, c0, k0)
         assert got_c == pytest.approx(e_c[i], rel=1e-6)

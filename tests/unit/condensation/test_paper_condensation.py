@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from screening.condensation.paper import (m_sdof, restoring_moment, rocking_acceleration,
-                                 rocking_damping, rocking_stiffness, static_indentation,
-                                 uplift_threshold)
+from screening.condensation import api
+from screening.condensation.api import rocking_acceleration
+from screening.condensation.paper import (restoring_moment, rocking_damping, rocking_stiffness, static_indentation,
+                                          uplift_threshold)
 from screening.model import contact_pressure
 
 
@@ -81,7 +82,7 @@ def test_no_uplift_stiffness_eq25(paper_block, any_foundation):
 def test_condensed_equation_of_motion(paper_block, any_foundation):
     th, thd, ag = 2e-3, 0.1, 0.7
     expected = (8.67 * 0.21 * ag - rocking_damping(th, paper_block, any_foundation) * thd
-                - restoring_moment(th, paper_block, any_foundation)) / m_sdof(paper_block)
+                - restoring_moment(th, paper_block, any_foundation)) / paper_block.m_sdof
     assert rocking_acceleration(th, thd, ag, paper_block, any_foundation) == pytest.approx(expected)
 
 
@@ -211,7 +212,7 @@ def test_cubic_with_eps_zero_is_the_paper_condensation(paper_block, bed):
     for name in ("rocking_damping", "rocking_stiffness", "restoring_moment"):
         paper = getattr(condensed, name)(theta, paper_block, bed)
         np.testing.assert_allclose(getattr(cubic, name)(theta, paper_block, bed), paper, rtol=1e-12, atol=0)
-        np.testing.assert_allclose(getattr(condensed, name)(theta, paper_block, bed, condensation="cubic"),
+        np.testing.assert_allclose(getattr(api, name)(theta, paper_block, bed, condensation="cubic"),
                                    paper, rtol=1e-12, atol=0)
 
 
@@ -258,7 +259,7 @@ def test_cubic_rejects_a_bed_that_cannot_carry_the_block_through_uplift(paper_bl
         with pytest.raises(ValueError, match="'foundation.eps'.*2/27"):
             f(paper_block, bed)
     with pytest.raises(ValueError, match="'foundation.eps'"):
-        condensed.rocking_stiffness(0.001, paper_block, bed, condensation="cubic")
+        api.rocking_stiffness(0.001, paper_block, bed, condensation="cubic")
     # the limit is sharp: 2/27 (1 - 1e-6) still has a threshold, on the rising branch
     z_lin = cubic.linear_indentation(paper_block, bed)
     edge = Foundation(k=2.89e7, lam=8.95e8, eps=-2 / 27 * (1 - 1e-6) / z_lin**2)
@@ -270,9 +271,9 @@ def test_cubic_rejects_a_bed_that_cannot_carry_the_block_through_uplift(paper_bl
 @pytest.mark.parametrize("bad", ["exact", "Paper", None, 1])
 def test_unknown_condensation_is_rejected(paper_block, bad):
     bed = CUBIC_BEDS["hc_hardening"]
-    for f in (lambda: condensed.uplift_threshold(paper_block, bed, bad),
-              lambda: condensed.rocking_damping(0.001, paper_block, bed, condensation=bad),
-              lambda: condensed.rocking_acceleration(0.001, 0.1, 0.2, paper_block, bed, condensation=bad)):
+    for f in (lambda: api.uplift_threshold(paper_block, bed, bad),
+              lambda: api.rocking_damping(0.001, paper_block, bed, condensation=bad),
+              lambda: api.rocking_acceleration(0.001, 0.1, 0.2, paper_block, bed, condensation=bad)):
         with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic'\)"):
             f()
 
@@ -281,7 +282,7 @@ def test_condensed_equation_of_motion_with_cubic_condensation(paper_block):
     bed = CUBIC_BEDS["hc_hardening"]
     th, thd, ag = 2e-3, 0.1, 0.7
     expected = (8.67 * 0.21 * ag - cubic.rocking_damping(th, paper_block, bed) * thd
-                - cubic.restoring_moment(th, paper_block, bed)) / m_sdof(paper_block)
+                - cubic.restoring_moment(th, paper_block, bed)) / paper_block.m_sdof
     got = rocking_acceleration(th, thd, ag, paper_block, bed, condensation="cubic")
     assert got == pytest.approx(expected, rel=1e-14)
     assert got != pytest.approx(rocking_acceleration(th, thd, ag, paper_block, bed), rel=1e-3)

@@ -3,17 +3,19 @@ import pytest
 from scipy import integrate
 
 from screening.model.cases import PAPER_CASES, paper_case
-from screening.condensation.paper import damping_inner, m_sdof, uplift_threshold
+from screening.condensation.paper import damping_inner, uplift_threshold
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise, kanai_tajimi_stationary_moments
-from screening.condensation.paper_table import coefficient_table
-from screening.solvers.moments import (STATUS_K_EQ_NEGATIVE, STATUS_MAX_STEPS, STATUS_OK,
-                                STATUS_VARIANCE_UNBOUNDED, _rhs, pack_parameters, solve_moments)
+from screening.condensation.uplift_integrals import coefficient_table
+from screening.condensation import get as get_condensation
+from screening.model.points import flatten
+from screening.solvers.moments import _rhs, oscillator_records, solve_moments
+from screening.status import PointStatus
 from screening.model import Foundation, WinklerFoundation
 from screening.solvers.timegrid import output_times
 
 
 def _linear_constants(block, foundation):
-    M = m_sdof(block)
+    M = block.m_sdof
     k1 = 2 / 3 * block.b**3 * foundation.k - block.m * block.g * block.h
     w = np.sqrt(k1 / M)
     zeta = damping_inner(block, foundation) / (2 * M * w)
@@ -49,13 +51,16 @@ def test_kanai_tajimi_linear_stationary_variance_matches_frequency_domain(paper_
 def test_kanai_tajimi_filter_block_of_the_moment_equations_is_stationary_at_closed_form(paper_block):
     """The filter entries of the 4x4 Lyapunov right-hand side vanish at the closed-form moments."""
     S0, wg, zg = 2e-4, 10.0, 0.4
-    params, _ = pack_parameters(paper_block, Foundation(2.89e7, 8.95e8), KanaiTajimi(S0, wg, zg))
+    (block, bed, exc), _ = flatten(paper_block, Foundation(2.89e7, 8.95e8), KanaiTajimi(S0, wg, zg))
+    cond = get_condensation("paper")
+    kernel = cond.moment_kernel(block, bed)
+    osc = oscillator_records(block, bed, exc, cond)
     values, slopes = coefficient_table()
     var_u, var_ud, _ = kanai_tajimi_stationary_moments(S0, wg, zg)
     y = np.zeros(10)
     y[7], y[8], y[9] = var_u, 0.0, var_ud  # (22 23 33) entries
     dy = np.zeros((7, 10))
-    _rhs(params[0], True, 0.0, y, dy, 0, values, slopes)
+    _rhs(kernel.coefficients, kernel.records[0], values, slopes, osc[0], True, 0.0, y, dy, 0)
     np.testing.assert_allclose(dy[0, 7:], 0.0, atol=1e-12 * var_ud * wg)
 
 
@@ -86,28 +91,28 @@ def test_negative_no_uplift_stiffness_is_flagged_at_start_without_touching_other
     t = output_times(20.0, 0.05)
     fnd = Foundation(2.89e7, 8.95e8, np.array([-1e9, 6e7]))
     res = solve_moments(paper_block, fnd, WhiteNoise(1e-4), t)
-    assert res["status"][0] == STATUS_K_EQ_NEGATIVE and res["t_stop"][0] == 0.0
+    assert res["status"][0] == PointStatus.k_eq_negative and res["t_stop"][0] == 0.0
     assert res["k_eq"][0, 0] < 0 and np.all(np.isnan(res["var_theta"][0, 1:]))
     alone = solve_moments(paper_block, Foundation(2.89e7, 8.95e8, 6e7), WhiteNoise(1e-4), t)
-    assert res["status"][1] == STATUS_OK
+    assert res["status"][1] == PointStatus.ok
     np.testing.assert_array_equal(res["var_theta"][1], alone["var_theta"])
 
 
 def test_near_toppling_point_stops_cleanly_with_a_flag(paper_block):
     t = output_times(20.0, 0.05)
     res = solve_moments(paper_block, Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(np.array([1.0, 1e-4])), t)
-    assert res["status"][0] in (STATUS_K_EQ_NEGATIVE, STATUS_VARIANCE_UNBOUNDED)
+    assert res["status"][0] in (PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness)
     stop = res["t_stop"][0]
     assert 0 < stop < 20.0
     before = t <= stop
     assert np.all(np.isfinite(res["var_theta"][0, before])) and np.all(np.isnan(res["var_theta"][0, ~before]))
-    assert res["status"][1] == STATUS_OK and np.all(np.isfinite(res["var_theta"][1]))
+    assert res["status"][1] == PointStatus.ok and np.all(np.isfinite(res["var_theta"][1]))
 
 
 def test_step_budget_is_flagged(paper_block):
     res = solve_moments(paper_block, Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), output_times(20.0, 0.05),
                         max_steps=50)
-    assert res["status"] == STATUS_MAX_STEPS and res["n_steps"] == 50 and res["t_stop"] < 20.0
+    assert res["status"] == PointStatus.step_budget_exhausted and res["n_steps"] == 50 and res["t_stop"] < 20.0
 
 
 def test_peak_is_refined_inside_steps(paper_block):
@@ -132,7 +137,7 @@ def test_uplift_occupancy_is_eq58_of_the_variance(paper_block):
 
 def test_undamped_bed_stays_finite(paper_block):
     res = solve_moments(paper_block, Foundation(2.89e7, 0.0, 0.0), WhiteNoise(1e-6), output_times(20.0, 0.05))
-    assert res["status"] in (STATUS_OK, STATUS_K_EQ_NEGATIVE, STATUS_VARIANCE_UNBOUNDED)
+    assert res["status"] in (PointStatus.ok, PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness)
     assert np.all(np.isfinite(res["var_theta"][: int(res["t_stop"] / 0.05)]))
 
 
@@ -144,7 +149,7 @@ def test_bad_output_grid_is_rejected(paper_block):
 # ---------------------------------------------------------------- cubic condensation
 from screening.condensation import cubic  # noqa: E402
 from screening.solvers import moments as lyapunov  # noqa: E402
-from screening.condensation.paper_coefficients import equivalent_coefficients_from_moments  # noqa: E402
+from screening.condensation.api import equivalent_coefficients_from_moments  # noqa: E402
 from screening.solvers.linearization import linearize  # noqa: E402
 
 
@@ -154,7 +159,7 @@ def test_cubic_with_eps_zero_reproduces_the_paper_solution(paper_block, excitati
     bed = Foundation(2.89e7, 8.95e8, 0.0)
     paper = solve_moments(paper_block, bed, excitation, t)
     cub = solve_moments(paper_block, bed, excitation, t, condensation="cubic")
-    assert paper["status"] == cub["status"] == STATUS_OK
+    assert paper["status"] == cub["status"] == PointStatus.ok
     assert paper["peak_p_uplift"] > 0.05                       # the uplift tables are exercised
     assert cub["peak_var_theta"] == pytest.approx(paper["peak_var_theta"], rel=1e-6)
     for name in ("var_theta", "var_theta_dot"):
@@ -167,7 +172,7 @@ def test_cubic_linear_stationary_variance_uses_the_rest_indentation(paper_block,
     S0 = 1e-14
     res = solve_moments(paper_block, foundation, WhiteNoise(S0, ConstantEnvelope()), output_times(12.0, 0.5),
                         condensation="cubic")
-    M = m_sdof(paper_block)
+    M = paper_block.m_sdof
     w = np.sqrt(cubic.stiffness_at_rest(paper_block, foundation) / M)
     zeta = cubic.damping_at_rest(paper_block, foundation) / (2 * M * w)
     a = paper_block.m * paper_block.h / M
@@ -178,10 +183,11 @@ def test_cubic_linear_stationary_variance_uses_the_rest_indentation(paper_block,
 
 
 def test_compiled_cubic_coefficients_match_the_quadrature(paper_block, cubic_bed):
-    params, _ = pack_parameters(paper_block, cubic_bed, WhiteNoise(1e-4), condensation="cubic")
-    values, slopes = lyapunov._chunk_tables(paper_block, cubic_bed, (1,), 0, 1)
-    tu = params[0, lyapunov.I_TU]
-    assert tu == cubic.uplift_threshold(paper_block, cubic_bed)
+    (block, bed), _ = flatten(paper_block, cubic_bed)
+    kernel = get_condensation("cubic").moment_kernel(block, bed)
+    values, slopes = kernel.table_values, kernel.table_slopes
+    tu = cubic.uplift_threshold(paper_block, cubic_bed)
+    assert kernel.records["log_theta_ul"][0] == np.log(tu)
     k_scale = cubic.stiffness_at_rest(paper_block, cubic_bed)
     ratios = np.concatenate([[0.0, 1e-7], np.logspace(-3, np.log10(4 * paper_block.slenderness / tu), 41)])
     var = (ratios * tu) ** 2
@@ -189,13 +195,13 @@ def test_compiled_cubic_coefficients_match_the_quadrature(paper_block, cubic_bed
         cov = rho * var * 40.0
         c_ref, k_ref = equivalent_coefficients_from_moments(var, cov, paper_block, cubic_bed, condensation="cubic")
         for i in range(var.size):
-            c, k = lyapunov._coefficients(params[0], var[i], cov[i], values[0], slopes[0])
+            c, k = kernel.coefficients(kernel.records[0], values[0], slopes[0], var[i], cov[i])
             assert c == pytest.approx(c_ref[i], rel=1e-6)
             assert k == pytest.approx(k_ref[i], rel=1e-6, abs=1e-9 * k_scale)
 
 
 def test_cubic_point_alone_or_in_batch_gives_identical_results(paper_block, monkeypatch):
-    monkeypatch.setattr(lyapunov, "TABLE_CHUNK", 3)              # several chunks, one split mid-row
+    monkeypatch.setattr(lyapunov, "CHUNK", 3)              # several chunks, one split mid-row
     t = output_times(20.0, 0.05)
     eps = np.array([-6e5, 0.0, 6e7])[:, None]
     S0 = np.array([1e-5, 5e-4])[None, :]

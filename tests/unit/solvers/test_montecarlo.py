@@ -12,7 +12,8 @@ from scipy.integrate import quad
 
 from screening.solvers import mcs_kernels as kern
 from screening.solvers import montecarlo as mc
-from screening.condensation.paper import damping_inner, m_sdof, rocking_damping, rocking_stiffness, uplift_threshold
+from screening.condensation import get as get_condensation, paper
+from screening.condensation.paper import damping_inner, rocking_damping, rocking_stiffness, uplift_threshold
 from screening.physics.contact import contact_resultants, static_indentation_exact
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.model import Block, Foundation, WinklerFoundation
@@ -66,28 +67,36 @@ def test_unknown_numerics_option_and_array_parameters_raise(no_work):
 
 
 # ---------------------------------------------------------------- compiled pieces vs numpy
+def _model_record(foundation, cond=None):
+    """The compiled kernels' model record of BLOCK on ``foundation`` (a scalar record)."""
+    return kern.model_record(BLOCK, foundation, cond or paper.PAPER)[()]
+
+
 @pytest.mark.parametrize("foundation", [HC, Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
                                         WinklerFoundation(k=2.89e7, c=2e4, eps=6e7),
                                         WinklerFoundation(k=2.89e7, c=2e4, eps=-6e5)],
                          ids=["hc+", "hc-", "winkler+", "winkler-"])
 def test_compiled_condensed_coefficients_match_screening_condensed(foundation):
-    p = kern.pack_parameters(BLOCK, foundation)
+    p = paper.sdof_record(BLOCK, foundation)[0]
+    model = _model_record(foundation, paper.PAPER)
     tu = uplift_threshold(BLOCK, foundation)
     theta = np.concatenate([np.linspace(-0.16, 0.16, 201), [tu, -tu, 0.0, tu * (1 + 1e-9), 0.5 * tu]])
     c_ref = rocking_damping(theta, BLOCK, foundation)
     k_ref = rocking_stiffness(theta, BLOCK, foundation)
     for i, th in enumerate(theta):
-        assert kern.rocking_damping_scalar(th, p) == pytest.approx(c_ref[i], rel=1e-12)
-        assert kern.rocking_stiffness_scalar(th, p) == pytest.approx(k_ref[i], rel=1e-11, abs=1e-9 * abs(k_ref).max())
-    a_ref = (BLOCK.m * BLOCK.h * 0.7 - c_ref * 0.3 - k_ref * theta) / m_sdof(BLOCK)
+        c, k = paper.damping_stiffness_jit(p, th)
+        assert c == pytest.approx(c_ref[i], rel=1e-12)
+        assert k == pytest.approx(k_ref[i], rel=1e-11, abs=1e-9 * abs(k_ref).max())
+    a_ref = (BLOCK.m * BLOCK.h * 0.7 - c_ref * 0.3 - k_ref * theta) / BLOCK.m_sdof
     for i, th in enumerate(theta):
-        assert kern.condensed_acceleration(th, 0.3, 0.7, p) == pytest.approx(a_ref[i], rel=1e-11, abs=1e-9)
+        assert kern.condensed_acceleration(paper.damping_stiffness_jit, p, th, 0.3, 0.7, model) == pytest.approx(
+            a_ref[i], rel=1e-11, abs=1e-9)
 
 
 @pytest.mark.parametrize("foundation", [HC, WinklerFoundation(k=2.89e7, c=2e4, eps=-6e5)], ids=["hc", "winkler"])
 def test_coupled_accelerations_solve_eqs_7_and_8(foundation):
     """Compare with a direct numpy solve of the 2x2 system (7)–(8) for (z_cb'', theta'')."""
-    p = kern.pack_parameters(BLOCK, foundation)
+    p = _model_record(foundation)
     m, g, h, I = BLOCK.m, BLOCK.g, BLOCK.h, BLOCK.I_cm
     rng = np.random.default_rng(0)
     for _ in range(50):
@@ -107,7 +116,7 @@ def test_coupled_accelerations_solve_eqs_7_and_8(foundation):
 @pytest.mark.parametrize("eps", [6e7, 0.0, -6e5])
 def test_static_equilibrium_is_at_rest(eps):
     foundation = Foundation(k=2.89e7, lam=8.95e8, eps=eps)
-    p = kern.pack_parameters(BLOCK, foundation)
+    p = _model_record(foundation)
     th_dd, z_dd = kern.coupled_accelerations(0.0, 0.0, static_indentation_exact(BLOCK, foundation), 0.0, 0.0, p)
     assert th_dd == 0.0
     assert abs(z_dd) < 1e-12 * BLOCK.g
@@ -121,17 +130,20 @@ def _run_kernel(model, acc, t_out, foundation, y_init, rtol=1e-8, dt_grid=1e-3, 
     uplift = np.zeros((1, n_t), dtype=bool)
     flags = [np.zeros(1), np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(1, np.int64),
              np.zeros(1, np.int64), np.zeros(1)]
-    p = kern.pack_parameters(BLOCK, foundation, max_flight_time, condensation)
+    cond = get_condensation(condensation)
+    p = kern.model_record(BLOCK, foundation, cond, max_flight_time)
+    sdof = cond.sdof_kernel(BLOCK, foundation)
     scale = rtol * mc.state_scales(BLOCK, foundation)
-    kern.integrate_chunk(model, acc, np.zeros_like(acc), dt_grid, t_out, p, np.asarray(y_init, float), scale,
-                         rtol, 0.005, 10**7, *outs, uplift, *flags)
+    kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, acc, np.zeros_like(acc),
+                                             dt_grid, t_out, p[None], np.asarray(y_init, float), scale, rtol, 0.005,
+                                             10**7, *outs, uplift, *flags)
     return outs, flags
 
 
 def test_integrator_reproduces_the_linear_step_response():
     """Condensed model, eps = 0, constant ground acceleration small enough to stay below theta_ul."""
     foundation = Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
-    ms = m_sdof(BLOCK)
+    ms = BLOCK.m_sdof
     k1 = 2 / 3 * BLOCK.b**3 * foundation.k - BLOCK.m * BLOCK.g * BLOCK.h
     w, zeta = math.sqrt(k1 / ms), damping_inner(BLOCK, foundation) / (2 * math.sqrt(k1 * ms))
     a0 = 0.3 * uplift_threshold(BLOCK, foundation) * k1 / (BLOCK.m * BLOCK.h)   # static theta = 0.3 theta_ul
@@ -176,7 +188,7 @@ def test_undamped_coupled_model_conserves_energy_through_uplift_and_impacts(foun
     assert np.max(np.abs(theta)) > 10 * uplift_threshold(BLOCK, foundation)     # deep into uplift
     assert np.min(z - BLOCK.b * np.abs(np.sin(theta))) < 0.0
     energy = np.array([_coupled_energy(*s, foundation) for s in zip(theta, theta_dot, z, z_dot)])
-    kinetic0 = 0.5 * m_sdof(BLOCK) * 0.6**2
+    kinetic0 = 0.5 * BLOCK.m_sdof * 0.6**2
     assert np.max(np.abs(energy - energy[0])) < 1e-6 * kinetic0
 
 
@@ -307,7 +319,7 @@ def test_progress_bar(capsys):
 def linear_stationary_moments(block, foundation, S0):
     """Closed form for the linear SDOF under white noise of two-sided level S0 (constant envelope):
     ``var_theta = pi S0 a^2 / (2 zeta w^3)``, ``var_theta_dot = w^2 var_theta``."""
-    ms = m_sdof(block)
+    ms = block.m_sdof
     a = block.m * block.h / ms
     w2 = (2 / 3 * block.b**3 * foundation.k - block.m * block.g * block.h) / ms
     two_zeta_w = damping_inner(block, foundation) / ms
@@ -317,7 +329,7 @@ def linear_stationary_moments(block, foundation, S0):
 
 def linear_stationary_moments_quadrature(block, foundation, excitation, cutoff):
     """``int |H|^2 S d omega`` and ``int omega^2 |H|^2 S d omega`` over ``|omega| < cutoff`` (any PSD)."""
-    ms = m_sdof(block)
+    ms = block.m_sdof
     a = block.m * block.h / ms
     w2 = (2 / 3 * block.b**3 * foundation.k - block.m * block.g * block.h) / ms
     two_zeta_w = damping_inner(block, foundation) / ms
@@ -415,21 +427,23 @@ CUBIC_MCS_BEDS = [HC, Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), Foundation(k=2
 
 @pytest.mark.parametrize("foundation", CUBIC_MCS_BEDS, ids=["hc+", "hc-", "hc-cap", "winkler+", "winkler-cap"])
 def test_compiled_cubic_coefficients_match_screening_cubic_condensation(foundation):
-    p = kern.pack_parameters(BLOCK, foundation, condensation="cubic")
+    p = cubic.sdof_record(BLOCK, foundation)[0]
+    model = _model_record(foundation, cubic.CUBIC)
     tu = cubic.uplift_threshold(BLOCK, foundation)
-    assert p[kern.P_THETA_UL] == tu
-    assert p[kern.P_THETA_CAP] == cubic.capacity_angle(BLOCK, foundation)
+    assert model["theta_ul"] == tu and p["theta_ul"] == tu
+    assert model["theta_cap"] == cubic.capacity_angle(BLOCK, foundation)
     theta = np.concatenate([np.linspace(-0.16, 0.16, 201), tu * np.array([1, -1, 0, 1 + 1e-9, 0.5, 0.999, 3.0])])
     c_ref = cubic.rocking_damping(theta, BLOCK, foundation)
     k_ref = cubic.rocking_stiffness(theta, BLOCK, foundation)
     for i, th in enumerate(theta):
-        c, k = kern.cubic_coefficients_scalar(th, p)
+        c, k = cubic.damping_stiffness_jit(p, th)
         assert c == pytest.approx(c_ref[i], rel=1e-10)
         assert k == pytest.approx(k_ref[i], rel=1e-11, abs=1e-9 * abs(k_ref).max())
-        assert (kern.cubic_damping_scalar(th, p), kern.cubic_stiffness_scalar(th, p)) == (c, k)
-    a_ref = (BLOCK.m * BLOCK.h * 0.7 - c_ref * 0.3 - k_ref * theta) / m_sdof(BLOCK)
+        assert cubic.damping_stiffness_jit(p, th) == (c, k)
+    a_ref = (BLOCK.m * BLOCK.h * 0.7 - c_ref * 0.3 - k_ref * theta) / BLOCK.m_sdof
     for i, th in enumerate(theta):
-        assert kern.condensed_acceleration(th, 0.3, 0.7, p) == pytest.approx(a_ref[i], rel=1e-10, abs=1e-9)
+        assert kern.condensed_acceleration(cubic.damping_stiffness_jit, p, th, 0.3, 0.7, model) == pytest.approx(
+            a_ref[i], rel=1e-10, abs=1e-9)
 
 
 @pytest.mark.parametrize("kwargs, name", [

@@ -1,4 +1,7 @@
-"""Fast evaluation of the equivalent coefficients for the compiled moment solver.
+"""The universal Gaussian uplift integrals of the paper's condensation, closed form and tabulated.
+
+:func:`gaussian_uplift_integrals` evaluates them in closed form (numpy, the reference);
+:func:`uplift_integrals_log` is the compiled twin the moment solver reads.
 
 The sigma-dependent parts of ``c_eq`` and ``k_eq`` are universal functions of
 ``r = sigma_theta / theta_ul`` only (see :mod:`screening.condensation.paper_coefficients`), so they are
@@ -18,7 +21,51 @@ import numpy as np
 from scipy import special
 
 from screening.kernels.interpolation import hermite_basis
-from screening.condensation.paper_coefficients import X_LIMIT, gaussian_uplift_integrals
+
+#: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
+X_LIMIT = 700.0
+
+_C12 = 2.0**-0.25 / np.sqrt(np.pi)
+_C32 = 2.0**-0.75 / np.sqrt(np.pi)
+
+
+def _upper_gamma(a, x):
+    """Non-regularised upper incomplete gamma ``Gamma(a, x)`` for ``a > 0``."""
+    return special.gammaincc(a, x) * special.gamma(a)
+
+
+def gaussian_uplift_integrals(r):
+    """The dimensionless Gaussian integrals of the module table at ``r = sigma_theta/theta_ul``.
+
+    Returns a dict of arrays ``p_in, p_out, tail_m12, tail_m32, inner_m2`` and the
+    velocity-coupling versions ``tail_m12_r = tail_m12 / r`` and ``tail_m32_r = tail_m32 / r``
+    (finite, and zero, at ``r = 0``).  Exact limits are used where ``x > X_LIMIT``.
+    """
+    r = np.asarray(r, dtype=float)
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        x = 0.5 / r**2
+        tiny = ~(x <= X_LIMIT)  # includes r = 0 (x = inf)
+        rs = np.where(tiny, 1.0, r)
+        xs = np.where(tiny, 0.5, x)
+        sx = np.sqrt(xs)
+        g14 = _upper_gamma(0.25, xs)
+        gm14 = 4.0 * (xs**-0.25 * np.exp(-xs) - _upper_gamma(0.75, xs))
+        out = {
+            "p_in": special.erf(sx),
+            "p_out": special.erfc(sx),
+            "tail_m12": _C12 * rs**-0.5 * g14,
+            "tail_m32": _C32 * rs**-1.5 * gm14,
+            "inner_m2": rs**2 * special.gammainc(1.5, xs),
+            "tail_m12_r": _C12 * rs**-1.5 * g14,
+            "tail_m32_r": _C32 * rs**-2.5 * gm14,
+        }
+    limits = {"p_in": 1.0, "p_out": 0.0, "tail_m12": 0.0, "tail_m32": 0.0,
+              "tail_m12_r": 0.0, "tail_m32_r": 0.0}
+    for name, value in limits.items():
+        out[name] = np.where(tiny, value, out[name])
+    out["inner_m2"] = np.where(tiny, np.where(np.isfinite(r), r, 0.0) ** 2, out["inner_m2"])
+    return out
+
 
 #: Grid in t = ln(sigma_theta / theta_ul).
 T_LO = -0.5 * math.log(2.0 * X_LIMIT)
@@ -29,8 +76,6 @@ STEPS_PER_UNIT = 512
 P_IN, TAIL_M12, TAIL_M32, P32 = 0, 1, 2, 3
 N_FUNCS = 4
 
-_C12 = 2.0**-0.25 / math.sqrt(math.pi)
-_C32 = 2.0**-0.75 / math.sqrt(math.pi)
 _G14 = math.gamma(0.25)
 _G34 = math.gamma(0.75)
 _G52 = math.gamma(2.5)

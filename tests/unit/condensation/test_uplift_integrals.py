@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from screening.condensation.paper_table import T_HI, T_LO, coefficient_table, uplift_integrals
-from screening.condensation.paper_coefficients import equivalent_coefficients_from_moments, gaussian_uplift_integrals
-from screening.solvers.moments import _coefficients, pack_parameters
-from screening.model.excitation import WhiteNoise
+from screening.condensation.uplift_integrals import T_HI, T_LO, coefficient_table, uplift_integrals
+from screening.condensation.api import equivalent_coefficients_from_moments
+from screening.condensation.uplift_integrals import gaussian_uplift_integrals
+from screening.condensation.paper_coefficients import equivalent_coefficients_jit, records
 
 
 def test_table_matches_closed_forms_across_and_beyond_the_grid():
@@ -24,13 +24,13 @@ def test_table_matches_closed_forms_across_and_beyond_the_grid():
 @pytest.mark.parametrize("rho_sign", [-1.0, 0.0, 1.0])
 def test_compiled_coefficients_match_closed_forms(paper_block, any_foundation, rho_sign):
     values, slopes = coefficient_table()
-    params, _ = pack_parameters(paper_block, any_foundation, WhiteNoise(1e-4))
-    tu = params[0, 2]
+    p = records(paper_block, any_foundation)[0]
+    tu = p["theta_ul"]
     for ratio in np.concatenate([[0.0], np.logspace(-3, 5, 97)]):
         s = ratio * tu
         var, cov = s * s, rho_sign * 0.9 * s * (40 * s)
         c_ref, k_ref = equivalent_coefficients_from_moments(var, cov, paper_block, any_foundation)
-        c, k = _coefficients(params[0], var, cov, values, slopes)
+        c, k = equivalent_coefficients_jit(p, values, slopes, var, cov)
         scale_k = abs(2 / 3 * 0.035**3 * any_foundation.k)
         assert c == pytest.approx(c_ref, rel=1e-9, abs=1e-12 * c_ref)
         assert k == pytest.approx(k_ref, rel=1e-9, abs=1e-11 * scale_k)

@@ -1,0 +1,88 @@
+"""The embedded Dormand–Prince 5(4) pair shared by every compiled integrator of the package.
+
+One home for the tableau (Hairer, Norsett & Wanner, *Solving ODEs I*, table II.5.2; the same as
+scipy's ``RK45``), its 4th-order dense output, and the PI step-size controller of Hairer's
+DOPRI5 (``alpha = 0.17``, ``beta = 0.04``: smooth near the stability bound).  The moment solver
+(:mod:`screening.solvers.moments`, arrays of 3 or 10 moments) and the Monte Carlo integrator
+(:mod:`screening.solvers.mcs_kernels`, 4 scalar states) run their step loops on these.
+
+Symbols: ``h`` step [s], stage ``s`` at time ``t + C[s] h``; ``y_new = y + h sum_s B[s] K[s]``;
+error estimate ``h sum_s E[s] K[s]`` (5th minus 4th order, FSAL stage 7 included).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+#: Stage coefficients a_sq (rows: stages 2..6).
+A = np.array([
+    [0.0, 0, 0, 0, 0],
+    [1 / 5, 0, 0, 0, 0],
+    [3 / 40, 9 / 40, 0, 0, 0],
+    [44 / 45, -56 / 15, 32 / 9, 0, 0],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
+])
+#: Stage times c_s (7 stages, the last one FSAL at t + h).
+C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+#: 5th-order weights.
+B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
+#: Error weights (5th minus 4th order).
+E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
+#: Dense output: coefficients of theta, theta^2, theta^3, theta^4 per stage.
+P = np.array([
+    [1, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+    [0, 0, 0, 0],
+    [0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+    [0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+    [0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
+    [0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+    [0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+])
+
+#: Step-size factor bounds and safety factor of the controller.
+FAC_MIN, FAC_MAX, SAFETY = 0.2, 5.0, 0.9
+#: PI exponents (Hairer's DOPRI5): ``fac = SAFETY err^-ALPHA err_old^BETA``.
+ALPHA, BETA = 0.17, 0.04
+#: Exponent of the plain (I) controller after a rejected step: ``err^-1/5``.
+REJECT_EXPONENT = 0.2
+
+
+@numba.njit(cache=True, inline="always")
+def dense_output(y0, K, h, theta, j):
+    """Component ``j`` of the dense-output polynomial at fraction ``theta`` of the step ``h``.
+
+    ``y0``: state at the start of the step; ``K``: the 7 stage derivatives (rows).
+    """
+    acc = 0.0
+    for i in range(7):
+        q = theta * (P[i, 0] + theta * (P[i, 1] + theta * (P[i, 2] + theta * P[i, 3])))
+        acc += K[i, j] * q
+    return y0[j] + h * acc
+
+
+@numba.njit(cache=True, inline="always")
+def rejected_step_factor(err):
+    """Step factor after a rejected step with error norm ``err > 1``."""
+    return max(FAC_MIN, SAFETY * err**-REJECT_EXPONENT)
+
+
+@numba.njit(cache=True, inline="always")
+def accepted_step_factor(err, err_old):
+    """PI step factor after an accepted step (``err``, ``err_old``: current and previous error norms)."""
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * err**-ALPHA * err_old**BETA))
+
+
+@numba.njit(cache=True, inline="always")
+def accepted_step_factor_log(log_err, log_err_old):
+    """:func:`accepted_step_factor` from the logarithms of the error norms (the scalar integrator's form)."""
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * math.exp(-ALPHA * log_err + BETA * log_err_old)))
+
+
+@numba.njit(cache=True, inline="always")
+def rejected_step_factor_log(log_err):
+    """:func:`rejected_step_factor` from the logarithm of the error norm (the scalar integrator's form)."""
+    return max(FAC_MIN, SAFETY * math.exp(-REJECT_EXPONENT * log_err))

@@ -1,0 +1,35 @@
+"""Numba types of the functions a condensation hands to the compiled solvers.
+
+A condensation's compiled functions take its own parameter record (a numpy structured dtype,
+one record per parameter point) and are passed to the solvers as first-class functions with
+these explicit signatures, so the solvers are compiled once per record type and cached (a
+closure or a dispatcher argument would never hit numba's cache).
+"""
+
+from __future__ import annotations
+
+import numba
+from numba import types
+
+FLOAT = types.float64
+TABLE = types.float64[:, ::1]
+
+
+def record_type(dtype):
+    """The numba type of one record of the structured ``dtype``."""
+    return numba.from_dtype(dtype)
+
+
+def moment_coefficients_signature(dtype):
+    """``(record, table_values, table_slopes, var_theta [rad2], cov [rad2/s]) -> (c_eq, k_eq)``."""
+    return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, TABLE, FLOAT, FLOAT)
+
+
+def sdof_coefficients_signature(dtype):
+    """``(record, theta [rad]) -> (C(theta) [N m s/rad], K(theta) [N m/rad])``."""
+    return types.UniTuple(FLOAT, 2)(record_type(dtype), FLOAT)
+
+
+def function_type(signature):
+    """The first-class function type of a compiled function with ``signature``."""
+    return types.FunctionType(signature)
