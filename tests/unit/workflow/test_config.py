@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from helpers import TRADE_STUDY
 from screening.workflow import config
 from screening.workflow.config import StudyError
 
@@ -68,3 +69,30 @@ def test_resolve_case_and_build_models():
     assert block.m == 8.67 and excitation.S0 == 1e-4
     with pytest.raises(StudyError, match=r"^excitation\.S0: required$"):
         config.resolve_case("c", tables, {"eps": None}, "")
+
+
+SWEEP = TRADE_STUDY.split("[[family]]")[0] + '[excitation]\nkind = "white"\nS0 = 1e-5\n'
+
+
+@pytest.mark.parametrize("old, new, needle", [
+    ("h = 0.21", "h = 0.21\nwidth = 3", "block.width: unknown key (allowed: m, b, h, I_cm, g)"),
+    ("m = 8.67", 'm = "heavy"', "block.m: must be a number (got the string 'heavy')"),
+    ("b = 0.035", "b = -0.035", "block.b: must be a finite number > 0 (got -0.035)"),
+    ("h = 0.21\n", "", "block.h: required"),
+    ("k = 2.89e7", "k = 0.0", "foundation.k: must be a finite number > 0 (got 0.0)"),
+    ("lam = 8.95e8", "lam = 8.95e8\nc = 3.0", "foundation.c: does not apply to contact = 'hunt_crossley'"),
+    ("dt = 0.05", "dt = 0.03", "time.dt: parameter 'dt' must divide"),
+    ("t_end = 2.0", "t_end = -2.0", "time.t_end: must be a finite number > 0 (got -2.0)"),
+])
+def test_sweep_and_trade_studies_share_the_model_tables_and_their_one_line_errors(old, new, needle):
+    from screening.analysis.tradeoff_study import parse_tradeoff_study
+    from screening.workflow.study import parse_study
+
+    messages = []
+    for parse, text in ((parse_study, SWEEP), (parse_tradeoff_study, TRADE_STUDY)):
+        parse(text, source="s.toml")                     # the base texts are valid
+        with pytest.raises(StudyError) as info:
+            parse(text.replace(old, new, 1), source="s.toml")
+        messages.append(str(info.value))
+    assert messages[0] == messages[1]
+    assert messages[0].startswith(f"s.toml: {needle}") and "\n" not in messages[0]
