@@ -61,15 +61,12 @@ from screening.analysis.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS,
                                                load_tradeoff_study)
 from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
 from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, summary_text, write_csv
-from screening.schema import PARAMETERS, TIME
-from screening.solvers.moments import STATUS_MEANINGS, solve_moments
+from screening.schema import TRADEOFF, apply_schema
+from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
 from screening.status import PointStatus
 from screening.workflow.config import StudyError, build_models
-
-QUANTITY_UNITS = {"var_theta": "rad2", "var_theta_dot": "rad2 s-2"}
-
 
 # ============================================================================ model set-up
 def round_significant(x, digits=3):
@@ -371,133 +368,85 @@ def measure_sl_numerics(study, points, t_out):
 
 
 # ============================================================================ dataset
-def _attrs(units, long_name, **extra):
-    a = {"units": units, "long_name": long_name}
-    a.update(extra)
-    return a
-
-
 def build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time):
-    """Assemble every measurement in one labelled :class:`xarray.Dataset` (units attributes)."""
-    n = len(points)
+    """Assemble every measurement in one labelled :class:`xarray.Dataset`; units and long names
+    from :data:`screening.schema.TRADEOFF`."""
+    cv = study.convergence
+    settings = numerics["settings"]
+    reps = conv["point_index"]
     coords = {
-        "t": ("t", t_out, {k: v for k, v in TIME.items() if k != "axis"}),
-        "approach": ("approach", list(METHODS),
-                     {"long_name": "method: sl (stochastic linearization), condensed_mcs, coupled_mcs"}),
-        "mcs_model": ("mcs_model", list(MCS_MODELS), {"long_name": "Monte Carlo model"}),
-        "comparison": ("comparison", list(COMPARISONS),
-                       {"long_name": "estimate_vs_reference", "note": "relative errors are estimate/reference - 1"}),
-        "quantity": ("quantity", list(QUANTITIES), {"long_name": "response variance compared"}),
-        "point": ("point", np.arange(n), {"long_name": "grid point index"}),
-        "point_name": ("point", [p.name for p in points], {"long_name": "grid point label"}),
-        "family": ("point", [p.family for p in points], {"long_name": "excitation family"}),
-        "excitation_kind": ("point", [p.kind for p in points], {"long_name": "excitation kind"}),
-        "eps": ("point", [p.eps for p in points], dict(PARAMETERS["eps"])),
-        "S0": ("point", [p.S0 for p in points], dict(PARAMETERS["S0"])),
-        "omega_g": ("point", [p.omega_g for p in points], dict(PARAMETERS["omega_g"], note="NaN for white noise")),
-        "zeta_g": ("point", [p.zeta_g for p in points], dict(PARAMETERS["zeta_g"], note="NaN for white noise")),
-        "target_peak_p_uplift": ("point", [p.target for p in points],
-                                 _attrs("1", "target SL peak uplift probability used to calibrate S0")),
+        "t": t_out, "approach": list(METHODS), "mcs_model": list(MCS_MODELS), "comparison": list(COMPARISONS),
+        "quantity": list(QUANTITIES), "point": np.arange(len(points)),
+        "point_name": ("point", [p.name for p in points]),
+        "family": ("point", [p.family for p in points]),
+        "excitation_kind": ("point", [p.kind for p in points]),
+        **{name: ("point", [getattr(p, name) for p in points]) for name in ("eps", "S0", "omega_g", "zeta_g")},
+        "target_peak_p_uplift": ("point", [p.target for p in points]),
+        "rep_point_index": ("rep_point", reps.astype(np.int32)),
+        "rep_point_name": ("rep_point", [points[j].name for j in reps]),
+        "cv_model": list(cv["models"]), "n_samples": np.array(cv["samples"], dtype=np.int32),
+        "rtol_factor": np.array(cv["rtol_factors"]),
+        "sl_setting": np.arange(len(settings)),
+        "sl_setting_kind": ("sl_setting", [s[0] for s in settings]),
+        "sl_rtol": ("sl_setting", [s[1] for s in settings]),
+        "sl_h_max": ("sl_setting", [np.nan if s[2] is None else s[2] for s in settings]),
     }
+    apt, ap, mp = ("approach", "point", "t"), ("approach", "point"), ("mcs_model", "point")
     dv = {}
     for q in QUANTITIES:
-        dv[q] = (("approach", "point", "t"), grid["hist"][q], _attrs(QUANTITY_UNITS[q], f"{q} by each method",
-                                                                 note="MCS: over surviving samples"))
-        dv[q + "_se"] = (("approach", "point", "t"), grid["se"][q],
-                         _attrs(QUANTITY_UNITS[q], f"Monte Carlo standard error of {q} (NaN for sl)"))
-    dv["p_uplift"] = (("approach", "point", "t"), grid["p_uplift"], _attrs("1", "uplift probability / occupancy"))
-    dv["cost"] = (("approach", "point"), grid["cost"],
-                  _attrs("s", "wall time per point on one core",
-                         note=f"sl: median of {study.sl['timing_repeats']} single-point solve_moments calls; "
-                              f"MCS: one monte_carlo call with {study.mcs['samples']} samples, "
-                              f"{study.mcs['threads']} numba thread(s)"))
-    dv["n_overturned"] = (("mcs_model", "point"), grid["n_overturned"], _attrs("1", "overturned samples"))
-    dv["n_diverged"] = (("mcs_model", "point"), grid["n_diverged"], _attrs("1", "diverged samples"))
-    dv["n_used"] = (("mcs_model", "point"), grid["n_used"], _attrs("1", "samples in the statistics (survivors)"))
-    dv["overturned_fraction"] = (("mcs_model", "point"), grid["n_overturned"] / study.mcs["samples"],
-                                 _attrs("1", "fraction of samples that overturned (statistics are over survivors)"))
-    dv["sl_status"] = (("point",), grid["sl_status"],
-                       {"long_name": "SL solver status",
-                        "flag_values": np.array(sorted(STATUS_MEANINGS), dtype=np.int8),
-                        "flag_meanings": " ".join(STATUS_MEANINGS[k] for k in sorted(STATUS_MEANINGS))})
-    dv["sl_peak_p_uplift"] = (("point",), grid["sl_peak_p_uplift"], _attrs("1", "SL peak uplift probability (eq. 58)"))
-    dv["sl_min_k_eq"] = (("point",), grid["sl_min_k_eq"], _attrs("N m rad-1", "SL minimum equivalent stiffness"))
-    dv["sl_k_eq0"] = (("point",), grid["sl_k_eq0"], _attrs("N m rad-1", "SL equivalent stiffness at t = 0"))
-    dv["k_eq_margin"] = (("point",), grid["sl_margin"], _attrs("1", "min_k_eq / k_eq(t=0) from SL"))
-    cq = ("comparison", "quantity", "point")
-    err_meta = {
-        "peak_rel_error": ("1", "relative error of the peak: max_t estimate / max_t reference - 1"),
-        "peak_rel_se": ("1", "standard error of the peak difference / reference peak (quadrature for MCS vs MCS)"),
-        "peak_significant": ("1", "1 if |peak difference| > 2 SE"),
-        "time_avg_rel_error": ("1", "int |estimate - reference| dt / int |reference| dt where both are defined"),
-        "time_avg_rel_se": ("1", "int SE dt / int |reference| dt (noise floor of time_avg_rel_error)"),
-        "time_avg_significant": ("1", "1 if time_avg_rel_error > 2 time_avg_rel_se"),
-    }
-    for k, (u, ln) in err_meta.items():
+        dv[q] = (apt, grid["hist"][q])
+        dv[q + "_se"] = (apt, grid["se"][q])
+    dv["p_uplift"] = (apt, grid["p_uplift"])
+    dv["cost"] = (ap, grid["cost"], {
+        "note": f"sl: median of {study.sl['timing_repeats']} single-point solve_moments calls; "
+                f"MCS: one monte_carlo call with {study.mcs['samples']} samples, "
+                f"{study.mcs['threads']} numba thread(s)"})
+    for name in ("n_overturned", "n_diverged", "n_used"):
+        dv[name] = (mp, grid[name])
+    dv["overturned_fraction"] = (mp, grid["n_overturned"] / study.mcs["samples"])
+    dv["sl_status"] = ("point", grid["sl_status"])
+    for name, key in (("sl_peak_p_uplift", "sl_peak_p_uplift"), ("sl_min_k_eq", "sl_min_k_eq"),
+                      ("sl_k_eq0", "sl_k_eq0"), ("k_eq_margin", "sl_margin")):
+        dv[name] = ("point", grid[key])
+    for k in ("peak_rel_error", "peak_rel_se", "peak_significant", "time_avg_rel_error", "time_avg_rel_se",
+              "time_avg_significant"):
         val = errors[k].astype(np.int8) if errors[k].dtype == bool else errors[k]
-        dv[k] = (cq, val, _attrs(u, ln))
+        dv[k] = (("comparison", "quantity", "point"), val)
     for q in QUANTITIES:
-        pk, pse = peak_with_se(grid["hist"][q], grid["se"][q])
-        dv[f"peak_{q}"] = (("approach", "point"), pk, _attrs(QUANTITY_UNITS[q], f"peak over time of {q}"))
-        dv[f"peak_{q}_se"] = (("approach", "point"), pse, _attrs(
-            QUANTITY_UNITS[q], f"Monte Carlo standard error of peak_{q} (at the peak time; 0 for sl)"))
+        peak, se = peak_with_se(grid["hist"][q], grid["se"][q])
+        dv[f"peak_{q}"], dv[f"peak_{q}_se"] = (ap, peak), (ap, se)
     # convergence sub-study
-    cv = study.convergence
-    coords["rep_point_index"] = ("rep_point", conv["point_index"].astype(np.int32),
-                                 {"long_name": "grid point index of a representative point"})
-    coords["rep_point_name"] = ("rep_point", [points[j].name for j in conv["point_index"]], {"long_name": "label"})
-    coords["cv_model"] = ("cv_model", list(cv["models"]), {"long_name": "Monte Carlo model (convergence study)"})
-    coords["n_samples"] = ("n_samples", np.array(cv["samples"], dtype=np.int32), _attrs("1", "Monte Carlo sample count"))
-    coords["rtol_factor"] = ("rtol_factor", np.array(cv["rtol_factors"]),
-                             _attrs("1", "factor on the model's default MCS rtol"))
-    rn = ("rep_point", "cv_model", "n_samples")
-    rf = ("rep_point", "cv_model", "rtol_factor")
-    dv["cv_peak_var_theta"] = (rn, conv["peak"], _attrs("rad2", "MCS peak var_theta vs sample count"))
-    dv["cv_peak_var_theta_se"] = (rn, conv["peak_se"], _attrs("rad2", "its standard error"))
-    dv["cv_peak_var_theta_dot"] = (rn, conv["peak_dot"], _attrs("rad2 s-2", "MCS peak var_theta_dot"))
-    dv["cv_peak_var_theta_dot_se"] = (rn, conv["peak_dot_se"], _attrs("rad2 s-2", "its standard error"))
-    dv["cv_cost"] = (rn, conv["cost"], _attrs("s", "wall time per point, one core"))
-    dv["cv_n_overturned"] = (rn, conv["n_overturned"], _attrs("1", "overturned samples"))
-    ref = conv["peak"][:, :, -1:]
-    dv["cv_deviation_vs_reference"] = (rn, conv["peak"] / ref - 1.0, _attrs(
-        "1", "peak var_theta / peak at the largest sample count (same model) - 1",
-        note="nested samples (same seed): the reference contains the smaller ensembles"))
-    dv["cv_rel_se"] = (rn, conv["peak_se"] / conv["peak"], _attrs("1", "relative standard error of peak var_theta"))
-    dv["tol_peak_var_theta"] = (rf, conv["tol_peak"], _attrs(
-        "rad2", f"MCS peak var_theta vs tolerance ({cv['rtol_samples']} samples, same seed)"))
-    dv["tol_peak_var_theta_se"] = (rf, conv["tol_peak_se"], _attrs("rad2", "its standard error"))
-    dv["tol_cost"] = (rf, conv["tol_cost"], _attrs("s", "wall time per point, one core"))
-    dv["tol_n_overturned"] = (rf, conv["tol_n_overturned"], _attrs("1", "overturned samples"))
-    dv["tol_change_vs_tightest"] = (rf, conv["tol_peak"] / conv["tol_peak"][:, :, :1] - 1.0, _attrs(
-        "1", "peak var_theta / peak at the tightest tolerance - 1 (paired samples)"))
-    dv["cv_sl_peak_var_theta"] = (("rep_point",), conv["sl_peak"], _attrs("rad2", "SL peak var_theta"))
+    rn, rf = ("rep_point", "cv_model", "n_samples"), ("rep_point", "cv_model", "rtol_factor")
+    for name, key in (("cv_peak_var_theta", "peak"), ("cv_peak_var_theta_se", "peak_se"),
+                      ("cv_peak_var_theta_dot", "peak_dot"), ("cv_peak_var_theta_dot_se", "peak_dot_se"),
+                      ("cv_cost", "cost"), ("cv_n_overturned", "n_overturned")):
+        dv[name] = (rn, conv[key])
+    dv["cv_deviation_vs_reference"] = (rn, conv["peak"] / conv["peak"][:, :, -1:] - 1.0)
+    dv["cv_rel_se"] = (rn, conv["peak_se"] / conv["peak"])
+    dv["tol_peak_var_theta"] = (rf, conv["tol_peak"], {"note": f"{cv['rtol_samples']} samples"})
+    for name, key in (("tol_peak_var_theta_se", "tol_peak_se"), ("tol_cost", "tol_cost"),
+                      ("tol_n_overturned", "tol_n_overturned")):
+        dv[name] = (rf, conv[key])
+    dv["tol_change_vs_tightest"] = (rf, conv["tol_peak"] / conv["tol_peak"][:, :, :1] - 1.0)
+    dv["cv_sl_peak_var_theta"] = ("rep_point", conv["sl_peak"])
     # SL numerics
-    coords["sl_setting"] = ("sl_setting", np.arange(len(numerics["settings"])), {"long_name": "SL numerics setting"})
-    coords["sl_setting_kind"] = ("sl_setting", [s[0] for s in numerics["settings"]],
-                                 {"long_name": "which parameter is varied"})
-    coords["sl_rtol"] = ("sl_setting", [s[1] for s in numerics["settings"]], _attrs("1", "SL relative tolerance"))
-    coords["sl_h_max"] = ("sl_setting", [np.nan if s[2] is None else s[2] for s in numerics["settings"]],
-                          _attrs("s", "SL largest step (NaN: default t_end/20)"))
     sp = ("sl_setting", "point")
-    dv["sl_cost"] = (sp, numerics["cost"], _attrs("s", "SL wall time per point (single-point call, median)"))
-    dv["sl_n_steps"] = (sp, numerics["n_steps"], _attrs("1", "SL solver steps"))
-    dv["sl_numerical_peak_error"] = (sp, numerics["peak_err"], _attrs(
-        "1", f"SL peak var_theta / reference (rtol {study.sl['reference_rtol']:g}) - 1"))
-    dv["sl_numerical_time_avg_error"] = (sp, numerics["time_avg_err"], _attrs(
-        "1", "SL time-averaged relative error of var_theta vs the tight-tolerance reference"))
-    dv["sl_batched_cost"] = ((), numerics["batched_cost"], _attrs("s", "SL wall time per point in batched calls"))
+    dv["sl_cost"] = (sp, numerics["cost"])
+    dv["sl_n_steps"] = (sp, numerics["n_steps"])
+    dv["sl_numerical_peak_error"] = (sp, numerics["peak_err"],
+                                     {"note": f"reference: rtol {study.sl['reference_rtol']:g}"})
+    dv["sl_numerical_time_avg_error"] = (sp, numerics["time_avg_err"])
+    dv["sl_batched_cost"] = ((), numerics["batched_cost"])
     case = study.families[0].case          # block, bed and envelope are common to every family
     p = case.params
     attrs = {
         "title": study.title,
         "study_file": study.source,
         "study_toml": study.text,
-        "screening_version": __version__,
-        "intensity_convention": "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD",
         "mcs_samples": study.mcs["samples"], "mcs_seed": study.mcs["seed"], "mcs_threads": study.mcs["threads"],
         "mcs_rtol_coupled": study.mcs["rtol_coupled"], "mcs_rtol_condensed": study.mcs["rtol_condensed"],
         "sl_rtol_default": study.sl["rtol"],
-        "tol_samples": study.convergence["rtol_samples"],
+        "tol_samples": cv["rtol_samples"],
         "statistics_note": "Monte Carlo moments are over surviving samples (neither overturned nor diverged); "
                            "condensed and coupled MCS use the same input samples (same seed)",
         "significance": "peak: |diff| > 2 SE; time-averaged: error > 2 x noise floor",
@@ -512,7 +461,7 @@ def build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time)
         attrs["foundation_lam"] = p["lam"]
     else:
         attrs["foundation_c"] = p["c"]
-    return xr.Dataset(dv, coords=coords, attrs=attrs)
+    return apply_schema(xr.Dataset(dv, coords=coords, attrs=attrs), table=TRADEOFF)
 
 
 #: Dimensions labelled by strings in memory (``ds.sel(approach="sl")``); in the file they are
@@ -522,7 +471,7 @@ LABEL_DIMS = ("approach", "mcs_model", "comparison", "quantity", "cv_model")
 
 def to_file_layout(ds):
     """The dataset as written: string-labelled dimensions -> ``<dim>_name`` auxiliary
-    coordinates, integer index coordinates as int32, CF global attributes."""
+    coordinates, integer index coordinates as int32."""
     out = ds.copy()
     for d in LABEL_DIMS:
         if d in out.coords:
@@ -531,7 +480,6 @@ def to_file_layout(ds):
     for name in ("point", "sl_setting"):
         if name in out.coords:
             out = out.assign_coords({name: (name, out[name].values.astype(np.int32), dict(out[name].attrs))})
-    out.attrs["Conventions"] = "CF-1.8"
     out.attrs["label_coordinates"] = ("dimensions " + ", ".join(LABEL_DIMS) + " are labelled by the auxiliary "
                                       "coordinates <dim>_name (e.g. ds.swap_dims(approach='approach_name'))")
     out.attrs.setdefault("history", f"screening.analysis.tradeoff {__version__}: written by run_tradeoff")

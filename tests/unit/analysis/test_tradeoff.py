@@ -110,6 +110,19 @@ def test_end_to_end_numbers_match_direct_calls(tiny_run):
     assert float(ds.tol_change_vs_tightest.sel(cv_model="coupled", rtol_factor=1.0)[0]) == 0.0
 
 
+def test_units_and_long_names_come_from_the_one_schema(tiny_run):
+    from screening.schema import TRADEOFF, attributes
+
+    _, ds, _, _ = tiny_run
+    for name in ds.variables:
+        declared = attributes(name, TRADEOFF)
+        for key in ("units", "long_name"):
+            assert ds[name].attrs.get(key) == declared.get(key), (name, key)
+    assert list(ds.sl_status.attrs["flag_meanings"].split()) == ["ok", "k_eq_negative", "sigma_theta_beyond_slenderness",
+                                                                 "step_budget_exhausted", "non_finite_moments"]
+    assert ds.cost.attrs["note"].startswith("sl: median of 1 single-point")       # per-run notes are kept
+
+
 CHECKER = Path(sys.executable).parent / "compliance-checker"
 
 
