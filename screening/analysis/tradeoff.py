@@ -10,7 +10,8 @@ Users choose between three methods for the second-order rocking statistics:
   judge; condensed vs coupled MCS (same input samples, same seed) is the *condensation* error.
 
 This module makes the choice measurable.  A study file (TOML, see
-``studies/speed_accuracy.toml`` and :func:`parse_tradeoff_study`) defines the block, the bed,
+``studies/speed_accuracy.toml`` and
+:func:`~screening.analysis.tradeoff_study.parse_tradeoff_study`) defines the block, the bed,
 a grid of excitation *families* x cubic parameters ``eps`` x intensities (given as ``S0`` or as
 target SL peak uplift probabilities, calibrated by bisection on SL), the sample counts and
 tolerances.  :func:`run_tradeoff` then measures, at every point, the errors of SL and of
@@ -26,17 +27,9 @@ and cost move with its tolerance and maximum step.  It writes
 and derives a validity rule (e.g. "SL within 10 % of condensed MCS when SL peak p_uplift < X")
 from the data.
 
-Error metrics (pure functions, NaN-aware, on a common time grid ``t`` [s]):
-
-* peak relative error ``max_t a / max_t b - 1`` (:func:`peak_relative_error`);
-* time-averaged relative error ``int |a - b| dt / int |b| dt`` over the part of the record
-  where both are defined (:func:`time_averaged_relative_error`);
-* significance: a peak difference is significant when ``|diff| > 2 SE``
-  (:func:`is_significant`), with ``SE`` the Monte Carlo standard error of the peak
-  (the sum in quadrature for MCS vs MCS — conservative, as both use the same input samples
-  and their errors are positively correlated); a time-averaged error is significant when it
-  exceeds twice the time-averaged relative standard error ``int SE dt / int |b| dt``
-  (pure sampling noise gives about 0.8 of it).
+Error metrics and rules: :mod:`screening.analysis.metrics`; the study file:
+:mod:`screening.analysis.tradeoff_study`; reports and figures: :mod:`screening.report.tradeoff_text`,
+:mod:`screening.report.tradeoff_figures`; units and long names: :data:`screening.schema.TRADEOFF`.
 
 Monte Carlo statistics are over the samples that neither overturned nor diverged
 (survivors); the overturned fraction is reported with every point.
@@ -54,13 +47,11 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening import __version__
-from screening.analysis.metrics import (compare, derive_rules, peak_with_se, relative_difference,
-                                        time_averaged_relative_error)
+from screening.analysis.metrics import compare, peak_with_se, relative_difference, time_averaged_relative_error
 from screening.analysis.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
                                                load_tradeoff_study)
-from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
-from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, summary_text, write_csv
+from screening.report.tradeoff_files import from_file_layout, output_paths, write_reports
+from screening.report.tradeoff_text import summary_text
 from screening.schema import TRADEOFF, apply_schema
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
@@ -464,90 +455,25 @@ def build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time)
     return apply_schema(xr.Dataset(dv, coords=coords, attrs=attrs), table=TRADEOFF)
 
 
-#: Dimensions labelled by strings in memory (``ds.sel(approach="sl")``); in the file they are
-#: plain dimensions with a ``<dim>_name`` auxiliary coordinate (CF coordinate variables are numeric).
-LABEL_DIMS = ("approach", "mcs_model", "comparison", "quantity", "cv_model")
-
-
-def to_file_layout(ds):
-    """The dataset as written: string-labelled dimensions -> ``<dim>_name`` auxiliary
-    coordinates, integer index coordinates as int32."""
-    out = ds.copy()
-    for d in LABEL_DIMS:
-        if d in out.coords:
-            attrs = dict(out[d].attrs)
-            out = out.assign_coords({f"{d}_name": (d, out[d].values.astype(str), attrs)}).drop_vars(d)
-    for name in ("point", "sl_setting"):
-        if name in out.coords:
-            out = out.assign_coords({name: (name, out[name].values.astype(np.int32), dict(out[name].attrs))})
-    out.attrs["label_coordinates"] = ("dimensions " + ", ".join(LABEL_DIMS) + " are labelled by the auxiliary "
-                                      "coordinates <dim>_name (e.g. ds.swap_dims(approach='approach_name'))")
-    out.attrs.setdefault("history", f"screening.analysis.tradeoff {__version__}: written by run_tradeoff")
-    return out
-
-
-def from_file_layout(ds):
-    """Inverse of :func:`to_file_layout`: string labels back as dimension coordinates."""
-    out = ds.copy()
-    for d in LABEL_DIMS:
-        name = f"{d}_name"
-        if name in out.coords:
-            attrs = dict(out[name].attrs)
-            out = out.drop_vars(name).assign_coords({d: (d, out[name].values.astype(str), attrs)})
-    return out
-
-
-def file_encoding(ds):
-    """netCDF encoding: no fill value on coordinates (CF 2.5.1), compression on the histories."""
-    enc = {name: {"_FillValue": None} for name in ds.coords if ds[name].dtype.kind == "f"}
-    for name in ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se", "p_uplift"):
-        enc[name] = {"zlib": True, "complevel": 4}
-    return enc
-
-
 # ============================================================================ runner
-def output_paths(out_dir, stem):
-    """The files a trade study writes: ``nc``, ``md``, ``csv``, ``error_vs_cost``, ``validity``."""
-    out = Path(out_dir)
-    return {"nc": out / f"{stem}.nc", "md": out / f"{stem}.md", "csv": out / f"{stem}.csv",
-            "error_vs_cost": out / f"{stem}_error_vs_cost.png", "validity": out / f"{stem}_validity.png"}
-
-
-def write_reports(study, ds, out_dir, stem, write_nc=True):
-    """Derive the rules from ``ds`` and write the netCDF, markdown, CSV and plots.
-
-    Returns ``(paths, rules)``.  With ``write_nc=False`` only the reports are (re)written,
-    e.g. from a saved dataset (``main --from-nc``).
-    """
-    paths = output_paths(out_dir, stem)
-    paths["nc"].parent.mkdir(parents=True, exist_ok=True)
-    thr, metric, quantity = study.rule["thresholds"], study.rule["metric"], study.rule["quantity"]
-    rules = derive_rules(ds, thr, metric, quantity)
-    ds.attrs["rules"] = "\n".join(rule_text(r, metric, quantity) for r in rules)
-    if write_nc:
-        to_file_layout(ds).to_netcdf(paths["nc"], encoding=file_encoding(ds))
-    wall = float(ds.attrs.get("wall_time_s", float("nan")))
-    paths["md"].write_text(markdown_report(study, ds, rules) + f"\nTotal run time {wall:.0f} s.\n",
-                           encoding="utf-8")
-    write_csv(point_rows(ds), paths["csv"])
-    plot_error_vs_cost(ds, paths["error_vs_cost"])
-    plot_validity(ds, rules, thr, paths["validity"], metric, quantity)
-    return paths, rules
-
-
 def _stem(study):
     return Path(study.source).stem if study.source != "<string>" else "tradeoff"
+
+
+def _study(study_path):
+    return study_path if isinstance(study_path, TradeoffStudy) else load_tradeoff_study(study_path)
 
 
 def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     """Run the whole trade study of ``study_path`` and write its outputs into ``out_dir``.
 
     ``study_path`` may also be a parsed :class:`TradeoffStudy`; outputs are named after the
-    study file's stem (see :func:`output_paths`).  ``progress`` is a callable taking one line
+    study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress`` is a callable taking one line
     of text (default: stderr) or None.  Returns ``(dataset, paths, rules)``: the dataset of
-    :func:`build_dataset`, the dict of written files and the rules of :func:`derive_rules`.
+    :func:`build_dataset`, the dict of written files and the rules of
+    :func:`~screening.analysis.metrics.derive_rules`.
     """
-    study = load_tradeoff_study(study_path) if not isinstance(study_path, TradeoffStudy) else study_path
+    study = _study(study_path)
     start = time.perf_counter()
     previous = set_threads(study.mcs["threads"])
     try:
@@ -562,6 +488,25 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
         set_threads(previous)
     ds = build_dataset(study, points, t_out, grid, errors, conv, numerics, time.perf_counter() - start)
     paths, rules = write_reports(study, ds, out_dir, _stem(study))
+    return ds, paths, rules
+
+
+def rerender_reports(study_path, out_dir="outputs"):
+    """Re-derive the rules and rewrite the markdown, CSV and plots from the saved ``<out_dir>/<stem>.nc``,
+    without recomputing (e.g. after changing ``[rule]``).
+
+    Returns ``(dataset, paths, rules)`` as :func:`run_tradeoff` (``paths`` without the netCDF).  Raises
+    :class:`~screening.workflow.config.StudyError` for a bad study file and ``FileNotFoundError``
+    when the study has not been run into ``out_dir``.
+    """
+    study = _study(study_path)
+    nc = output_paths(out_dir, _stem(study))["nc"]
+    if not nc.exists():
+        raise FileNotFoundError(f"{nc} does not exist (run the study first)")
+    with xr.open_dataset(nc) as saved:
+        ds = from_file_layout(saved.load())
+    paths, rules = write_reports(study, ds, out_dir, _stem(study), write_nc=False)
+    del paths["nc"]
     return ds, paths, rules
 
 
@@ -582,21 +527,15 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         study = load_tradeoff_study(args.study)
-    except OSError as err:
-        print(f"screening: error: cannot read the study file {args.study}: {err.strerror or err}", file=sys.stderr)
-        return 2
     except StudyError as err:
         print(f"screening: error: {err}", file=sys.stderr)
         return 2
     if args.from_nc:
-        nc = output_paths(args.out_dir, _stem(study))["nc"]
-        if not nc.exists():
-            print(f"screening: error: --from-nc: {nc} does not exist (run the study first)", file=sys.stderr)
+        try:
+            ds, paths, rules = rerender_reports(study, args.out_dir)
+        except FileNotFoundError as err:
+            print(f"screening: error: --from-nc: {err}", file=sys.stderr)
             return 2
-        with xr.open_dataset(nc) as saved:
-            ds = from_file_layout(saved.load())
-        paths, rules = write_reports(study, ds, args.out_dir, _stem(study), write_nc=False)
-        del paths["nc"]
     else:
         ds, paths, rules = run_tradeoff(study, args.out_dir, progress=None if args.quiet else _stderr)
     print(summary_text(study, ds, rules))

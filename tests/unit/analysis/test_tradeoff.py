@@ -11,14 +11,15 @@ import xarray as xr
 from helpers import TRADE_STUDY
 from screening.analysis import tradeoff as to
 from screening.analysis.metrics import peak_relative_error, peak_with_se, time_averaged_relative_error
-from screening.model.excitation import Envelope, WhiteNoise
-from screening.solvers.moments import solve_moments
+from screening.analysis.tradeoff_study import load_tradeoff_study
 from screening.model import Block, Foundation
+from screening.model.excitation import Envelope, WhiteNoise
+from screening.report.tradeoff_files import from_file_layout
+from screening.report.tradeoff_text import summary_text
+from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
-
-ROOT = Path(__file__).resolve().parents[3]
-
+from screening.workflow.config import StudyError
 
 def test_calibration_hits_the_target_uplift_probability():
     block = Block(m=8.67, b=0.035, h=0.21)
@@ -60,7 +61,7 @@ def test_end_to_end_structure(tiny_run):
     assert raw.attrs["Conventions"] == "CF-1.8"
     assert list(raw.approach_name.values) == ["sl", "condensed_mcs", "coupled_mcs"]   # labels: aux coordinates
     assert "approach" not in raw.coords
-    saved = to.from_file_layout(raw)
+    saved = from_file_layout(raw)
     assert saved.sizes["point"] == 2 and saved.sizes["t"] == 41 and saved.sizes["approach"] == 3
     assert list(saved.approach.values) == ["sl", "condensed_mcs", "coupled_mcs"]
     np.testing.assert_array_equal(saved.var_theta.values, ds.var_theta.values)
@@ -134,6 +135,22 @@ def test_result_file_passes_cf18_strict(tiny_run):
     report = proc.stdout + proc.stderr
     assert proc.returncode == 0 and "All tests passed!" in proc.stdout, report
     assert "exceptions occurred" not in report, report
+
+
+def test_rerender_from_netcdf_and_bad_files_write_nothing(tiny_run):
+    d, ds, paths, _ = tiny_run
+    paths["md"].unlink()
+    saved, written, rules = to.rerender_reports(d / "tiny.toml", d / "out")
+    out = summary_text(load_tradeoff_study(d / "tiny.toml"), saved, rules)
+    assert "Recommended: " in out and "SL : condensed : coupled = 1 :" in out
+    assert paths["md"].exists() and "nc" not in written
+    bad = d / "bad.toml"
+    bad.write_text(TINY.replace("[mcs]", "[mcs]\nbogus = 1"))
+    with pytest.raises(StudyError, match=r"bad\.toml: mcs\.bogus: unknown key"):
+        to.run_tradeoff(bad, d / "out2", progress=None)
+    assert not (d / "out2").exists()
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        to.rerender_reports(d / "tiny.toml", d / "nowhere")
 
 
 def test_main_rerenders_from_netcdf_and_rejects_bad_files(tiny_run, capsys):
