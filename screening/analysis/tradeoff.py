@@ -59,6 +59,7 @@ from screening.solvers.timegrid import output_times
 from screening.status import PointStatus
 from screening.workflow.config import StudyError, build_models
 
+
 # ============================================================================ model set-up
 def round_significant(x, digits=3):
     """``x`` rounded to ``digits`` significant digits."""
@@ -130,7 +131,7 @@ def build_points(study, progress=None):
                     S0, target = fam.S0[i], float("nan")
                 else:
                     target = fam.target_peak_p_uplift[i]
-                    block, bed, _ = build_models(fam.case, {"eps": eps, "S0": 1.0})
+                    block, bed, _ = build_models(fam.case, {"eps": eps, "S0": 1.0})   # S0: excitation only
                     try:
                         S0 = calibrate_intensity(
                             block, bed, lambda s: build_models(fam.case, {"eps": eps, "S0": s})[2], target, t_out,
@@ -468,10 +469,10 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     """Run the whole trade study of ``study_path`` and write its outputs into ``out_dir``.
 
     ``study_path`` may also be a parsed :class:`TradeoffStudy`; outputs are named after the
-    study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress`` is a callable taking one line
-    of text (default: stderr) or None.  Returns ``(dataset, paths, rules)``: the dataset of
-    :func:`build_dataset`, the dict of written files and the rules of
-    :func:`~screening.analysis.metrics.derive_rules`.
+    study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress``
+    is a callable taking one line of text (default: stderr) or None.  Returns
+    ``(dataset, paths, rules)``: the dataset of :func:`build_dataset`, the dict of written files
+    and the rules of :func:`~screening.analysis.metrics.derive_rules`.
     """
     study = _study(study_path)
     start = time.perf_counter()
