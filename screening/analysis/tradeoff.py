@@ -37,7 +37,6 @@ Monte Carlo statistics are over the samples that neither overturned nor diverged
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -51,7 +50,6 @@ from screening.analysis.metrics import compare, peak_with_se, relative_differenc
 from screening.analysis.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
                                                load_tradeoff_study)
 from screening.report.tradeoff_files import from_file_layout, output_paths, write_reports
-from screening.report.tradeoff_text import summary_text
 from screening.schema import TRADEOFF, apply_schema
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
@@ -509,40 +507,3 @@ def rerender_reports(study_path, out_dir="outputs"):
     paths, rules = write_reports(study, ds, out_dir, _stem(study), write_nc=False)
     del paths["nc"]
     return ds, paths, rules
-
-
-def main(argv=None):
-    """Command line: ``python -m screening.analysis.tradeoff STUDY.toml [--out-dir DIR] [--quiet] [--from-nc]``.
-
-    ``--from-nc`` re-renders the tables, plots and rules from ``<out-dir>/<stem>.nc`` without
-    recomputing (e.g. after changing ``[rule]``).  Exit status 0 on success, 2 for a bad
-    study file.
-    """
-    parser = argparse.ArgumentParser(prog="screening tradeoff",
-                                     description="Speed-accuracy trade study: SL vs condensed / coupled Monte Carlo")
-    parser.add_argument("study", help="trade-study TOML file (e.g. studies/speed_accuracy.toml)")
-    parser.add_argument("--out-dir", default="outputs", help="output directory (default: outputs)")
-    parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    parser.add_argument("--from-nc", action="store_true",
-                        help="re-render reports from the saved netCDF instead of recomputing")
-    args = parser.parse_args(argv)
-    try:
-        study = load_tradeoff_study(args.study)
-    except StudyError as err:
-        print(f"screening: error: {err}", file=sys.stderr)
-        return 2
-    if args.from_nc:
-        try:
-            ds, paths, rules = rerender_reports(study, args.out_dir)
-        except FileNotFoundError as err:
-            print(f"screening: error: --from-nc: {err}", file=sys.stderr)
-            return 2
-    else:
-        ds, paths, rules = run_tradeoff(study, args.out_dir, progress=None if args.quiet else _stderr)
-    print(summary_text(study, ds, rules))
-    print("wrote " + ", ".join(str(p) for p in paths.values()))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

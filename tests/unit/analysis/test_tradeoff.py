@@ -151,19 +151,3 @@ def test_rerender_from_netcdf_and_bad_files_write_nothing(tiny_run):
     assert not (d / "out2").exists()
     with pytest.raises(FileNotFoundError, match="does not exist"):
         to.rerender_reports(d / "tiny.toml", d / "nowhere")
-
-
-def test_main_rerenders_from_netcdf_and_rejects_bad_files(tiny_run, capsys):
-    d, ds, paths, _ = tiny_run
-    paths["md"].unlink()
-    assert to.main([str(d / "tiny.toml"), "--out-dir", str(d / "out"), "--from-nc"]) == 0
-    out = capsys.readouterr().out
-    assert "Recommended: " in out and "SL : condensed : coupled = 1 :" in out
-    assert paths["md"].exists()
-    bad = d / "bad.toml"
-    bad.write_text(TINY.replace("[mcs]", "[mcs]\nbogus = 1"))
-    assert to.main([str(bad), "--out-dir", str(d / "out2")]) == 2
-    assert "mcs.bogus: unknown key" in capsys.readouterr().err
-    assert not (d / "out2").exists()
-    assert to.main([str(d / "tiny.toml"), "--out-dir", str(d / "nowhere"), "--from-nc"]) == 2
-    assert "does not exist" in capsys.readouterr().err
