@@ -113,6 +113,82 @@ FRAGILITY = {
     "beta": _v("1", "lognormal dispersion beta of the fragility curve"),
 }
 
+#: Speed-accuracy trade study (:mod:`screening.analysis.tradeoff`): its variables and label coordinates.
+TRADEOFF = {
+    # coordinates
+    "approach": {"long_name": "method: sl (stochastic linearization), condensed_mcs, coupled_mcs"},
+    "mcs_model": {"long_name": "Monte Carlo model"},
+    "comparison": {"long_name": "estimate_vs_reference", "note": "relative errors are estimate/reference - 1"},
+    "quantity": {"long_name": "response variance compared"},
+    "point": {"long_name": "grid point index"},
+    "point_name": {"long_name": "grid point label"},
+    "family": {"long_name": "excitation family"},
+    "excitation_kind": {"long_name": "excitation kind"},
+    "omega_g": {**PARAMETERS["omega_g"], "note": "NaN for white noise"},
+    "zeta_g": {**PARAMETERS["zeta_g"], "note": "NaN for white noise"},
+    "target_peak_p_uplift": _v("1", "target SL peak uplift probability used to calibrate S0"),
+    "rep_point_index": {"long_name": "grid point index of a representative point"},
+    "rep_point_name": {"long_name": "label"},
+    "cv_model": {"long_name": "Monte Carlo model (convergence study)"},
+    "n_samples": _v("1", "Monte Carlo sample count"),
+    "rtol_factor": _v("1", "factor on the model's default MCS rtol"),
+    "sl_setting": {"long_name": "SL numerics setting"},
+    "sl_setting_kind": {"long_name": "which parameter is varied"},
+    "sl_rtol": _v("1", "SL relative tolerance"),
+    "sl_h_max": _v("s", "SL largest step (NaN: default t_end/20)"),
+    # histories and per-point results of each method
+    "var_theta": _v("rad2", "var_theta by each method", note="MCS: over surviving samples"),
+    "var_theta_dot": _v("rad2 s-2", "var_theta_dot by each method", note="MCS: over surviving samples"),
+    "var_theta_se": _v("rad2", "Monte Carlo standard error of var_theta (NaN for sl)"),
+    "var_theta_dot_se": _v("rad2 s-2", "Monte Carlo standard error of var_theta_dot (NaN for sl)"),
+    "p_uplift": _v("1", "uplift probability / occupancy"),
+    "cost": _v("s", "wall time per point on one core"),
+    "n_overturned": _v("1", "overturned samples"),
+    "n_diverged": _v("1", "diverged samples"),
+    "n_used": _v("1", "samples in the statistics (survivors)"),
+    "overturned_fraction": _v("1", "fraction of samples that overturned (statistics are over survivors)"),
+    "sl_status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "SL solver status"),
+    "sl_peak_p_uplift": _v("1", "SL peak uplift probability (eq. 58)"),
+    "sl_min_k_eq": _v("N m rad-1", "SL minimum equivalent stiffness"),
+    "sl_k_eq0": _v("N m rad-1", "SL equivalent stiffness at t = 0"),
+    "k_eq_margin": _v("1", "min_k_eq / k_eq(t=0) from SL"),
+    "peak_var_theta": _v("rad2", "peak over time of var_theta"),
+    "peak_var_theta_se": _v("rad2", "Monte Carlo standard error of peak_var_theta (at the peak time; 0 for sl)"),
+    "peak_var_theta_dot": _v("rad2 s-2", "peak over time of var_theta_dot"),
+    "peak_var_theta_dot_se": _v("rad2 s-2", "Monte Carlo standard error of peak_var_theta_dot (at the peak time; "
+                                            "0 for sl)"),
+    # errors of each comparison
+    "peak_rel_error": _v("1", "relative error of the peak: max_t estimate / max_t reference - 1"),
+    "peak_rel_se": _v("1", "standard error of the peak difference / reference peak (quadrature for MCS vs MCS)"),
+    "peak_significant": _v("1", "1 if |peak difference| > 2 SE"),
+    "time_avg_rel_error": _v("1", "int |estimate - reference| dt / int |reference| dt where both are defined"),
+    "time_avg_rel_se": _v("1", "int SE dt / int |reference| dt (noise floor of time_avg_rel_error)"),
+    "time_avg_significant": _v("1", "1 if time_avg_rel_error > 2 time_avg_rel_se"),
+    # Monte Carlo vs sample count and tolerance
+    "cv_peak_var_theta": _v("rad2", "MCS peak var_theta vs sample count"),
+    "cv_peak_var_theta_se": _v("rad2", "its standard error"),
+    "cv_peak_var_theta_dot": _v("rad2 s-2", "MCS peak var_theta_dot"),
+    "cv_peak_var_theta_dot_se": _v("rad2 s-2", "its standard error"),
+    "cv_cost": _v("s", "wall time per point, one core"),
+    "cv_n_overturned": _v("1", "overturned samples"),
+    "cv_deviation_vs_reference": _v("1", "peak var_theta / peak at the largest sample count (same model) - 1",
+                                    note="nested samples (same seed): the reference contains the smaller ensembles"),
+    "cv_rel_se": _v("1", "relative standard error of peak var_theta"),
+    "cv_sl_peak_var_theta": _v("rad2", "SL peak var_theta"),
+    "tol_peak_var_theta": _v("rad2", "MCS peak var_theta vs tolerance (same seed)"),
+    "tol_peak_var_theta_se": _v("rad2", "its standard error"),
+    "tol_cost": _v("s", "wall time per point, one core"),
+    "tol_n_overturned": _v("1", "overturned samples"),
+    "tol_change_vs_tightest": _v("1", "peak var_theta / peak at the tightest tolerance - 1 (paired samples)"),
+    # SL numerics
+    "sl_cost": _v("s", "SL wall time per point (single-point call, median)"),
+    "sl_n_steps": _v("1", "SL solver steps"),
+    "sl_numerical_peak_error": _v("1", "SL peak var_theta / tight-tolerance reference - 1"),
+    "sl_numerical_time_avg_error": _v("1", "SL time-averaged relative error of var_theta vs the tight-tolerance "
+                                           "reference"),
+    "sl_batched_cost": _v("s", "SL wall time per point in batched calls"),
+}
+
 #: Index and label coordinates.
 COORDINATES = {
     "t": TIME,

@@ -23,6 +23,33 @@ t_end = 4.0
 dt = 0.05
 """
 
+#: A small speed-accuracy trade study: one white-noise family, 2 points, 2 s records.
+TRADE_STUDY = """
+title = "t"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+[time]
+t_end = 2.0
+dt = 0.05
+[[family]]
+name = "w"
+kind = "white"
+eps = [6e7]
+S0 = [1e-5, 2e-5]
+[mcs]
+samples = 50
+[convergence]
+points = [{family = "w", eps = 6e7, index = 1}]
+samples = [20, 50]
+rtol_samples = 20
+rtol_factors = [1.0, 32.0]
+"""
+
 #: Keep the scheduler's HTTP server off the default port 8787 (parallel test runs).
 NO_HTTP_PORT_8787 = {"dashboard_address": "127.0.0.1:0"}
 

@@ -74,7 +74,7 @@ def test_linear_range_and_dimension_order():
     np.testing.assert_array_equal(s.sweeps["k"], [1e7, 2e7, 3e7])
 
 
-#: Study files with their own format (``screening tradeoff``, tested in test_tradeoff.py).
+#: Study files with their own format (``screening tradeoff``, tested in test_tradeoff_study.py).
 NOT_SWEEPS = ("speed_accuracy.toml",)
 
 

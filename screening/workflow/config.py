@@ -1,0 +1,404 @@
+"""What every study file shares: validation helpers, the model tables and the model builder.
+
+Sweep studies (:mod:`screening.workflow.study`) and the speed-accuracy trade study
+(:mod:`screening.analysis.tradeoff_study`) read ``[block]``, ``[foundation]``, ``[excitation]``
+and ``[time]`` with the code below, and report every problem as :class:`StudyError`: one line,
+``"<source>: <key>: <message>"``, naming the key as it is spelled in the file (``block.m``,
+``family[0].eps``, ``convergence.points[1].index``).
+
+Conventions of the helpers: ``where`` is the prefix of the keys of a table, with its trailing dot
+(``"block."``, ``""`` at the top level); ``key`` is a full key.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+try:
+    import tomllib
+except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
+    import tomli as tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+
+from screening.condensation.cubic import SOFTENING_LIMIT, bearing_load
+from screening.condensation import names as condensation_names
+from screening.model import Block, Foundation, WinklerFoundation
+from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
+from screening.solvers.timegrid import output_times
+
+#: Parameters that may be swept (given as a list or a range).
+SWEEPABLE = ("eps", "S0", "k", "lam", "c", "omega_g", "zeta_g")
+
+CONTACTS = ("hunt_crossley", "winkler")
+EXCITATIONS = ("white", "kanai_tajimi")
+ENVELOPES = ("exponential", "constant")
+
+#: Numeric model parameters: (table, lower bound, lower bound inclusive).
+NUMERIC = {
+    "m": ("block", 0.0, False), "b": ("block", 0.0, False), "h": ("block", 0.0, False),
+    "I_cm": ("block", 0.0, False), "g": ("block", 0.0, False),
+    "k": ("foundation", 0.0, False), "lam": ("foundation", 0.0, True),
+    "c": ("foundation", 0.0, True), "eps": ("foundation", None, False),
+    "S0": ("excitation", 0.0, False), "omega_g": ("excitation", 0.0, False),
+    "zeta_g": ("excitation", 0.0, False), "T1": ("excitation", 0.0, False),
+    "T2": ("excitation", 0.0, False),
+}
+#: Keys of the model tables of a sweep study (other study kinds allow a subset).
+TABLE_KEYS = {
+    "block": ("m", "b", "h", "I_cm", "g"),
+    "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
+    "excitation": ("kind", "S0", "omega_g", "zeta_g", "envelope", "T1", "T2"),
+}
+MODEL_TABLES = tuple(TABLE_KEYS)
+DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential", "eps": 0.0, "g": 9.81,
+            "T1": 4.0, "T2": 2.0}
+_RANGE_KEYS = ("start", "stop", "num", "log")
+
+
+class StudyError(ValueError):
+    """A study file problem; the message is one line and names the offending key."""
+
+
+# ----------------------------------------------------------------------------- reading
+def read_study_text(path):
+    """The text of the study file ``path``; :class:`StudyError` if it cannot be read."""
+    path = Path(path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise StudyError(f"{path}: cannot read the study file ({exc.__class__.__name__}: "
+                         f"{getattr(exc, 'strerror', None) or exc})") from None
+
+
+def parse_toml(text, source, build):
+    """``build(raw)`` on the parsed TOML ``text``; every :class:`StudyError` is prefixed with ``source``."""
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{source}: invalid TOML: {one_line(exc)}") from None
+    try:
+        return build(raw)
+    except StudyError as exc:
+        raise StudyError(f"{source}: {exc}") from None
+
+
+# ----------------------------------------------------------------------------- helpers
+def one_line(exc):
+    return " ".join(str(exc).split())
+
+
+def type_name(value):
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, str):
+        return f"the string {value!r}"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a table"
+    return type(value).__name__
+
+
+def table(raw, key, where=""):
+    """Sub-table ``key`` of ``raw`` (empty if absent)."""
+    value = raw.get(key, {})
+    if not isinstance(value, dict):
+        raise StudyError(f"{where}{key}: must be a table (got {type_name(value)})")
+    return value
+
+
+def check_keys(tbl, allowed, where):
+    for key in tbl:
+        if key not in allowed:
+            raise StudyError(f"{where}{key}: unknown key (allowed: {', '.join(allowed)})")
+
+
+def required(tbl, key, where, why=""):
+    if key not in tbl:
+        raise StudyError(f"{where}{key}: required{why}")
+    return tbl[key]
+
+
+def is_number(value):
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def check_value(key, value, lower=None, inclusive=False, upper=None):
+    """``value`` as a float: a finite number above ``lower`` and at most ``upper`` (each optional)."""
+    if not is_number(value):
+        raise StudyError(f"{key}: must be a number (got {type_name(value)})")
+    value = float(value)
+    ok = math.isfinite(value)
+    if ok and lower is not None:
+        ok = value >= lower if inclusive else value > lower
+    if ok and upper is not None:
+        ok = value <= upper
+    if not ok:
+        rng = "a finite number"
+        if lower is not None:
+            rng += f" {'>=' if inclusive else '>'} {lower:g}"
+        if upper is not None:
+            rng += f"{' and' if lower is not None else ''} <= {upper:g}"
+        raise StudyError(f"{key}: must be {rng} (got {value!r})")
+    return value
+
+
+def check_integer(key, value, lower):
+    """``value``: an integer (no float, no boolean) ``>= lower``."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < lower:
+        raise StudyError(f"{key}: must be an integer >= {lower} (got {value!r})")
+    return value
+
+
+def integer(tbl, key, default, lower, where):
+    return check_integer(f"{where}{key}", tbl.get(key, default), lower)
+
+
+def check_list(key, value):
+    """``value``: a non-empty list."""
+    if not isinstance(value, list):
+        raise StudyError(f"{key}: must be a list (got {type_name(value)})")
+    if not value:
+        raise StudyError(f"{key}: empty list (give at least one value)")
+    return value
+
+
+def number_list(key, value, **bounds):
+    """A non-empty list of numbers, each checked by :func:`check_value` (``bounds``); a tuple of floats."""
+    return tuple(check_value(f"{key}[{i}]", v, **bounds) for i, v in enumerate(check_list(key, value)))
+
+
+def integer_list(key, value, lower):
+    """A non-empty list of integers ``>= lower``; a tuple."""
+    return tuple(check_integer(f"{key}[{i}]", v, lower) for i, v in enumerate(check_list(key, value)))
+
+
+def check_choice(key, value, choices):
+    if value not in choices:
+        raise StudyError(f"{key}: must be one of {', '.join(map(repr, choices))} "
+                         f"(got {type_name(value) if not isinstance(value, str) else repr(value)})")
+    return value
+
+
+def choice(tbl, key, choices, where, default=None):
+    value = tbl.get(key, default)
+    if value is None:
+        raise StudyError(f"{where}{key}: required (one of {', '.join(map(repr, choices))})")
+    return check_choice(f"{where}{key}", value, choices)
+
+
+def name_string(key, value):
+    """A name: a non-empty string."""
+    if not isinstance(value, str) or not value.strip():
+        raise StudyError(f"{key}: required, a non-empty string (got {type_name(value)})")
+    return value
+
+
+def title_and_description(raw, default_title):
+    title = raw.get("title", default_title)
+    description = raw.get("description", "")
+    for key, value in (("title", title), ("description", description)):
+        if not isinstance(value, str):
+            raise StudyError(f"{key}: must be a string (got {type_name(value)})")
+    return title, description
+
+
+def time_table(raw):
+    """``[time]``: ``(t_end, dt)`` [s] (defaults 20 and 0.05); ``dt`` must divide ``t_end``."""
+    tbl = table(raw, "time")
+    check_keys(tbl, ("t_end", "dt"), "time.")
+    t_end = check_value("time.t_end", tbl.get("t_end", 20.0), 0.0, False)
+    dt = check_value("time.dt", tbl.get("dt", 0.05), 0.0, False)
+    try:
+        output_times(t_end, dt)
+    except ValueError as exc:
+        raise StudyError(f"time.dt: {one_line(exc)}") from None
+    return t_end, dt
+
+
+# ----------------------------------------------------------------------------- model tables
+@dataclass(frozen=True)
+class Case:
+    """One named configuration: structure (contact law, excitation, envelope) and scalars.
+
+    ``params`` maps parameter names to floats [SI] for every non-swept numeric parameter
+    that applies to this case (``I_cm`` only when given).
+    """
+
+    name: str
+    contact: str
+    excitation: str
+    envelope: str
+    params: MappingProxyType
+    condensation: str = "paper"
+
+    def applies(self, name):
+        """Whether parameter ``name`` is meaningful for this case."""
+        return name in applicable(self.contact, self.excitation, self.envelope)
+
+
+def applicable(contact, excitation, envelope):
+    names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0"}
+    names.add("lam" if contact == "hunt_crossley" else "c")
+    if excitation == "kanai_tajimi":
+        names |= {"omega_g", "zeta_g"}
+    if envelope == "exponential":
+        names |= {"T1", "T2"}
+    return names
+
+
+def model_tables(raw, allowed=TABLE_KEYS):
+    """The model tables ``[block]``, ``[foundation]``, ``[excitation]`` of ``raw``, their keys checked
+    against ``allowed`` (table name -> keys)."""
+    tables = {}
+    for tname in MODEL_TABLES:
+        tbl = table(raw, tname)
+        check_keys(tbl, allowed[tname], f"{tname}.")
+        tables[tname] = tbl
+    return tables
+
+
+def sweep_values(key, spec, lower, inclusive):
+    """Values of a swept parameter from a list or a range table (validated)."""
+    if isinstance(spec, list):
+        values = number_list(key, spec, lower=lower, inclusive=inclusive)
+    else:
+        check_keys(spec, _RANGE_KEYS, f"{key}.")
+        for part in ("start", "stop", "num"):
+            if part not in spec:
+                raise StudyError(f"{key}.{part}: required in a range (keys: start, stop, num, log)")
+        num = check_integer(f"{key}.num", spec["num"], 1)
+        log = spec.get("log", False)
+        if not isinstance(log, bool):
+            raise StudyError(f"{key}.log: must be true or false (got {type_name(log)})")
+        start = check_value(f"{key}.start", spec["start"], lower, inclusive)
+        stop = check_value(f"{key}.stop", spec["stop"], lower, inclusive)
+        if log:
+            if start <= 0.0 or stop <= 0.0:
+                raise StudyError(f"{key}: log = true needs start > 0 and stop > 0 (got {start!r}, {stop!r})")
+            values = np.geomspace(start, stop, num)
+            values[0] = start
+            if num > 1:
+                values[-1] = stop
+        else:
+            values = np.linspace(start, stop, num)
+    values = np.asarray(values, dtype=float)
+    if values.size > 1:
+        step = np.diff(values)
+        if not (np.all(step > 0) or np.all(step < 0)):
+            raise StudyError(f"{key}: values must be strictly increasing or strictly decreasing "
+                             "(a coordinate cannot repeat values)")
+    return values
+
+
+def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE):
+    """Scalars of one model table; swept entries go to ``sweeps`` (only when allowed: ``sweeps`` not
+    None and the key in ``sweepable``)."""
+    scalars = {}
+    for key, value in tbl.items():
+        if key not in NUMERIC:
+            continue
+        _, lower, inclusive = NUMERIC[key]
+        full = f"{where}{tname}.{key}"
+        if isinstance(value, (list, dict)):
+            if key not in sweepable:
+                only = f"; only {', '.join(sweepable)} may be swept" if sweepable else ""
+                raise StudyError(f"{full}: must be a number (got {type_name(value)}{only})")
+            if sweeps is None:
+                raise StudyError(f"{full}: a case sets scalars only (sweep in the base tables)")
+            sweeps[key] = sweep_values(full, value, lower, inclusive)
+        else:
+            scalars[key] = check_value(full, value, lower, inclusive)
+    return scalars
+
+
+def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
+    """Check one configuration (model tables, e.g. base tables merged with a case) and return a :class:`Case`.
+
+    ``sweeps`` maps the parameters given per grid point to their values (the values of excitation
+    parameters are not read: None is fine).  Parameters named in ``inherited`` (set by the base
+    tables, not by the case) are dropped when they do not apply to the case's contact law /
+    excitation / envelope.
+    """
+    block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
+    contact = choice(foundation, "contact", CONTACTS, f"{where}foundation.", DEFAULTS["contact"])
+    kind = choice(excitation, "kind", EXCITATIONS, f"{where}excitation.")
+    envelope = choice(excitation, "envelope", ENVELOPES, f"{where}excitation.", DEFAULTS["envelope"])
+    condensation = choice(foundation, "condensation", condensation_names(), f"{where}foundation.",
+                          DEFAULTS["condensation"])
+    names = applicable(contact, kind, envelope)
+    params = {}
+    for tname, tbl in (("block", block), ("foundation", foundation), ("excitation", excitation)):
+        tbl = {k: v for k, v in tbl.items() if k in names or k not in inherited}
+        params.update(numeric_table(tbl, tname, None, where))
+    structure = {"contact": f"contact = {contact!r}", "kind": f"kind = {kind!r}",
+                 "envelope": f"envelope = {envelope!r}"}
+    reason = {"lam": structure["contact"], "c": structure["contact"], "omega_g": structure["kind"],
+              "zeta_g": structure["kind"], "T1": structure["envelope"], "T2": structure["envelope"]}
+    for key in list(params) + list(sweeps):
+        if key not in names:
+            raise StudyError(f"{where}{NUMERIC[key][0]}.{key}: does not apply to {reason[key]}")
+    for key in sorted(names - set(params) - set(sweeps), key=list(NUMERIC).index):
+        if key in DEFAULTS:
+            params[key] = DEFAULTS[key]
+        elif key != "I_cm":
+            why = f" for {reason[key]}" if key in reason else ""
+            raise StudyError(f"{where}{NUMERIC[key][0]}.{key}: required{why}")
+    if envelope == "exponential" and params["T2"] >= params["T1"]:
+        raise StudyError(f"{where}excitation.T2: must be smaller than excitation.T1 "
+                         f"(got T1={params['T1']!r}, T2={params['T2']!r})")
+    case = Case(name=name, contact=contact, excitation=kind, envelope=envelope,
+                params=MappingProxyType(params), condensation=condensation)
+    if condensation == "cubic":
+        _check_cubic_bearing(case, sweeps, where)
+    return case
+
+
+def _check_cubic_bearing(case, sweeps, where):
+    """Every grid point of a ``condensation = "cubic"`` case must satisfy
+    ``-eps (m g / (2 b k))^2 < 2/27`` (:func:`screening.condensation.cubic.check_bearing`)."""
+    sweeps = {n: v for n, v in sweeps.items() if NUMERIC[n][0] != "excitation"}   # trailing dims: no effect
+    names = list(sweeps)
+    grids = np.meshgrid(*sweeps.values(), indexing="ij", sparse=True) if names else []
+    p = {**case.params, **dict(zip(names, grids))}
+    block, foundation = _block(p), _foundation(case, p)
+    load = np.broadcast_to(bearing_load(block, foundation), tuple(len(v) for v in sweeps.values()))
+    if np.any(load >= SOFTENING_LIMIT):
+        j = np.unravel_index(int(np.argmax(load)), load.shape)
+        at = ", ".join(f"{n} = {float(sweeps[n][i])!r}" for n, i in zip(names, j)
+                       if n in ("m", "b", "g", "k", "eps"))
+        eps = float(np.broadcast_to(foundation.eps, load.shape)[j])
+        raise StudyError(f"{where}foundation.condensation: 'cubic' needs a bed that carries the block "
+                         f"through uplift onset, |eps| (m g / (2 b k))^2 < 2/27, but eps = {eps!r} 1/m^2"
+                         + (f" at {at}" if at else "") + " fails it (use condensation = 'paper')")
+
+
+# ----------------------------------------------------------------------------- models
+def _block(p):
+    return Block(m=p["m"], b=p["b"], h=p["h"], I_cm=p.get("I_cm"), g=p["g"])
+
+
+def _foundation(case, p):
+    if case.contact == "hunt_crossley":
+        return Foundation(k=p["k"], lam=p["lam"], eps=p["eps"])
+    return WinklerFoundation(k=p["k"], c=p["c"], eps=p["eps"])
+
+
+def build_models(case, values):
+    """Model objects for ``case`` with ``values`` (swept parameters, scalars or arrays) merged in.
+
+    Returns ``(block, foundation, excitation)``; array fields broadcast as in
+    :func:`screening.solvers.moments.solve_moments`.
+    """
+    p = dict(case.params)
+    p.update(values)
+    envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
+    if case.excitation == "white":
+        excitation = WhiteNoise(S0=p["S0"], envelope=envelope)
+    else:
+        excitation = KanaiTajimi(S0=p["S0"], omega_g=p["omega_g"], zeta_g=p["zeta_g"], envelope=envelope)
+    return _block(p), _foundation(case, p), excitation
