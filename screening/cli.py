@@ -121,8 +121,8 @@ def build_parser():
 
 def main(argv=None):
     """Entry point of the ``screening`` console script; returns the exit status."""
+    from screening.workflow.errors import SweepError
     from screening.workflow.study import StudyError
-    from screening.workflow.sweep import SweepError
 
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["tradeoff"]:                 # its own parser (screening.analysis.tradeoff.main)
@@ -149,8 +149,10 @@ def _say(msg):
 
 
 def cmd_run(args):
+    from screening.workflow.errors import SweepError
     from screening.workflow.study import load_study
-    from screening.workflow.sweep import SweepError, check_output_path, run_sweep
+    from screening.workflow.sweep import run_sweep
+    from screening.workflow.writer import check_output_path
 
     study = load_study(args.study)
     if args.out:
@@ -185,15 +187,8 @@ def cmd_run(args):
     return EXIT_OK
 
 
-def _read_error(result, exc):
-    """A ``ResultError`` for data that cannot be read (netCDF/HDF5 report it as ``RuntimeError``)."""
-    from screening.workflow.sweep import ResultError, exception_line
-
-    return ResultError(f"{result}: cannot read the data of the result file, it is damaged ({exception_line(exc)})")
-
-
 def _write_error(path, exc):
-    from screening.workflow.sweep import SweepError, write_failure_reason
+    from screening.workflow.errors import SweepError, write_failure_reason
 
     return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
 
@@ -201,7 +196,7 @@ def _write_error(path, exc):
 def _plot(result, out_dir):
     """All figures of ``result`` into ``out_dir`` (none left behind on failure, one-line errors)."""
     from screening.report.figures import plot_result
-    from screening.workflow.sweep import open_result
+    from screening.workflow.reader import damaged_data_error, open_result
 
     result = Path(result)
     with open_result(result) as ds:
@@ -209,13 +204,14 @@ def _plot(result, out_dir):
         try:
             return plot_result(ds, stem, out_dir)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
-            raise _read_error(result, exc) from None
+            raise damaged_data_error(result, exc) from None
         except OSError as exc:                  # the PNG could not be written
             raise _write_error(out_dir, exc) from None
 
 
 def cmd_plot(args):
-    from screening.workflow.sweep import SweepError, open_result
+    from screening.workflow.errors import SweepError
+    from screening.workflow.reader import open_result
 
     result = Path(args.result)
     open_result(result).close()                  # readable? (before touching the output folder)
@@ -230,7 +226,9 @@ def cmd_plot(args):
 def cmd_fragility(args):
     from screening.analysis.fragility import fragility_dataset
     from screening.report.figures import plot_fragility
-    from screening.workflow.sweep import SweepError, check_output_path, open_result
+    from screening.workflow.errors import SweepError
+    from screening.workflow.reader import damaged_data_error, open_result
+    from screening.workflow.writer import check_output_path
 
     result = Path(args.result)
     with open_result(result) as ds:
@@ -244,7 +242,7 @@ def cmd_fragility(args):
         try:
             frag = fragility_dataset(ds, args.threshold, args.relative_to, args.method, dim).load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
-            raise _read_error(result, exc) from None
+            raise damaged_data_error(result, exc) from None
     frag.attrs.update(source_result=str(result), screening_version=__version__,
                       history=f"screening fragility {result} --threshold {args.threshold}"
                               + (f" --relative-to {args.relative_to}" if args.relative_to else ""))
@@ -272,13 +270,13 @@ def cmd_fragility(args):
 
 
 def cmd_info(args):
-    from screening.workflow.sweep import open_result
+    from screening.workflow.reader import damaged_data_error, open_result
 
     with open_result(args.result) as ds:
         try:
             text = describe(ds, args.result)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
-            raise _read_error(args.result, exc) from None
+            raise damaged_data_error(args.result, exc) from None
     print(text)
     return EXIT_OK
 

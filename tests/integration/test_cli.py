@@ -232,7 +232,7 @@ def test_killed_run_resumes_to_the_same_file(tmp_path):
 # ----------------------------------------------------------------------------- fragility
 def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_result, tmp_path, capsys):
     from screening.analysis.fragility import exceedance_probability, mcs_exceedance_probability, threshold_angle
-    from screening.workflow.sweep import open_result
+    from screening.workflow.reader import open_result
 
     out = tmp_path / "frag.nc"
     assert main(["fragility", str(cli_result / "outputs" / "study.nc"), "--threshold", "5", "--relative-to", "theta_ul",
