@@ -32,7 +32,7 @@ HISTORY_DTYPE = np.float32
 #: Per-point summaries of the solver (float64 and int32) and per-point model quantities (float64).
 SUMMARY_FLOATS = ("t_stop", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq")
 SUMMARY_INTS = ("n_steps", "n_rejected")
-MODEL_FLOATS = ("theta_ul",)
+MODEL_FLOATS = ("theta_ul", "slenderness")
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
 
@@ -43,7 +43,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
 
     ``condensation`` is a :class:`screening.condensation.Condensation`.  Returns a dict of
     1-d/2-d arrays over the batch: the histories as ``float32`` (points x time), the summaries
-    (``float64``/``int32``), ``status`` (``int8``) and ``theta_ul`` [rad].
+    (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
                         condensation=condensation.name)
@@ -55,7 +55,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
         out[name] = res[name].reshape(n).astype(np.float64)
     for name in SUMMARY_INTS:
         out[name] = res[name].reshape(n).astype(np.int32)
-    model = {"theta_ul": condensation.uplift_threshold(block, foundation)}
+    model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
     for name in MODEL_FLOATS:
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
     return out

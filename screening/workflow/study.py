@@ -133,7 +133,7 @@ _DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "e
              "T1": 4.0, "T2": 2.0}
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
-LAYOUT_VERSION = 2
+LAYOUT_VERSION = 3
 
 
 class StudyError(ValueError):

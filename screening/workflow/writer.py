@@ -20,7 +20,7 @@ File layout (checked with the IOOS compliance-checker in strict mode):
   parameters that differ between cases on ``case`` (NaN where they do not apply);
 * data: the six histories on ``(grid..., t)``; per point ``status`` (flag variable), ``t_stop``,
   ``n_steps``, ``n_rejected``, ``peak_var_theta``, ``t_peak_var_theta``, ``peak_p_uplift``,
-  ``min_k_eq``, ``theta_ul``; spot checks ``mcs_*`` on ``spot`` with the spot
+  ``min_k_eq``, ``theta_ul``, ``slenderness``; spot checks ``mcs_*`` on ``spot`` with the spot
   coordinates ``spot_<dim>``;
 * global attributes: :func:`screening.schema.global_attributes`, ``title``, ``history``,
   ``source``, the study file's path, text and hash, the solver settings.

@@ -35,12 +35,14 @@ def test_solve_batch_takes_the_condensation_object(name):
         np.testing.assert_array_equal(out[key], direct[key].astype(np.float32))
     np.testing.assert_array_equal(out["status"], direct["status"])
     np.testing.assert_array_equal(out["theta_ul"], cond.uplift_threshold(block, foundation))
+    np.testing.assert_array_equal(out["slenderness"], np.full(7, block.slenderness))
 
 
 def test_failed_results_use_the_status_enums():
     part = failed_result(3, 5)
     assert np.all(part["status"] == PointStatus.task_failed) and part["status"].dtype == np.int8
     assert np.all(np.isnan(part["var_theta"])) and np.all(part["n_steps"] == 0)
+    assert np.all(np.isnan(part["slenderness"]))
     spot = failed_spot(5, 4)
     assert np.all(spot["sample_state"] == SampleState.diverged_or_failed) and int(spot["n_used"]) == 0
 

@@ -38,7 +38,7 @@ def write(study, path):
 def test_every_attribute_of_every_variable_comes_from_the_schema(tmp_path, text):
     study = parse_study(text, name="w", source="w.toml")
     with netCDF4.Dataset(write(study, tmp_path / "w.nc")) as nc:
-        assert set(nc.variables) >= {"status", "theta_ul", "var_theta"}
+        assert set(nc.variables) >= {"status", "theta_ul", "slenderness", "var_theta"}
         for name, var in nc.variables.items():
             declared = TIME if name == "t" else attributes("k" if name == "k_value" else name)
             got = {k: var.getncattr(k) for k in var.ncattrs() if k not in ("coordinates", "_FillValue")}
@@ -55,7 +55,7 @@ def test_failed_points_and_spots_carry_the_status_enums(tmp_path):
     with netCDF4.Dataset(write(study, tmp_path / "f.nc")) as nc:
         nc.set_auto_mask(False)
         assert np.all(nc["status"][:] == PointStatus.task_failed)
-        assert np.all(np.isnan(nc["theta_ul"][:]))
+        assert np.all(np.isnan(nc["theta_ul"][:])) and np.all(np.isnan(nc["slenderness"][:]))
         np.testing.assert_array_equal(nc["mcs_status"][:], [SpotStatus.task_failed] * 2)
         np.testing.assert_array_equal(nc["spot_case_name"][:], ["soft_kt", "hard_white"])
 
