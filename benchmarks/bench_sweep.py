@@ -48,9 +48,9 @@ PHASES = ("cluster_start", "warm_up", "compute", "write", "finalize", "shutdown"
 def jit_in_this_process():
     """Import the solver and run it once (compiles only if the on-disk numba cache is stale) [s]."""
     start = time.perf_counter()
-    from screening.workflow.sweep import _warm_up
+    from screening.workflow.execution import warm_up
 
-    _warm_up()
+    warm_up()
     return time.perf_counter() - start
 
 
@@ -169,7 +169,7 @@ def main(argv=None):
                   f"(overlaps the compute phase)")
         if not args.cli:
             from screening.report.figures import plot_result
-            from screening.workflow.sweep import open_result
+            from screening.workflow.reader import open_result
 
             start = time.perf_counter()
             with open_result(out) as ds:

@@ -196,6 +196,13 @@ COORDINATES = {
     "spot": _v("1", "Monte Carlo spot-check index"),
     "case": _v("1", "case index (names in case_name)"),
     "case_name": {"long_name": "case name (the [[case]] tables of the study file)"},
+    "spot_case": _v("1", "case index of the spot point"),
+    "spot_case_name": {"long_name": "case name of the spot point"},
+    # model labels of each case, on dimension case (sweeps whose cases differ in them)
+    "contact": {"long_name": "contact model of the case"},
+    "condensation": {"long_name": "condensation model of the case"},
+    "excitation": {"long_name": "excitation model of the case"},
+    "envelope": {"long_name": "envelope model of the case"},
 }
 
 

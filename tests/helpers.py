@@ -50,6 +50,32 @@ rtol_samples = 20
 rtol_factors = [1.0, 32.0]
 """
 
+#: Two cases (white noise on a hardening bed, Kanai-Tajimi on a softening one) x 3 S0: 6 points.
+CASES = """
+title = "cases test"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+[excitation]
+kind = "white"
+S0 = [1e-4, 5e-4, 2.4e-3]
+[time]
+t_end = 3.0
+dt = 0.1
+[[case]]
+name = "hard_white"
+foundation.eps = 6e7
+[[case]]
+name = "soft_kt"
+foundation.eps = -6e5
+excitation = {kind = "kanai_tajimi", omega_g = 10.0, zeta_g = 0.4}
+"""
+
+
 #: Keep the scheduler's HTTP server off the default port 8787 (parallel test runs).
 NO_HTTP_PORT_8787 = {"dashboard_address": "127.0.0.1:0"}
 

@@ -18,13 +18,13 @@ try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
     import tomli as tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
 
-from screening.condensation.cubic import SOFTENING_LIMIT, bearing_load
+from screening import condensation as condensations
 from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation, WinklerFoundation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
@@ -226,7 +226,9 @@ class Case:
     """One named configuration: structure (contact law, excitation, envelope) and scalars.
 
     ``params`` maps parameter names to floats [SI] for every non-swept numeric parameter
-    that applies to this case (``I_cm`` only when given).
+    that applies to this case (``I_cm`` only when given).  ``condensation`` is the registered
+    name; ``condensation_model`` the :class:`screening.condensation.Condensation` it names,
+    looked up once when the case is made (what the solvers are given).
     """
 
     name: str
@@ -235,6 +237,11 @@ class Case:
     envelope: str
     params: MappingProxyType
     condensation: str = "paper"
+    condensation_model: condensations.Condensation = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self):
+        if self.condensation_model is None:
+            object.__setattr__(self, "condensation_model", condensations.get(self.condensation))
 
     def applies(self, name):
         """Whether parameter ``name`` is meaningful for this case."""
@@ -353,28 +360,42 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
                          f"(got T1={params['T1']!r}, T2={params['T2']!r})")
     case = Case(name=name, contact=contact, excitation=kind, envelope=envelope,
                 params=MappingProxyType(params), condensation=condensation)
-    if condensation == "cubic":
-        _check_cubic_bearing(case, sweeps, where)
+    _check_condensation(case, sweeps, where)
     return case
 
 
-def _check_cubic_bearing(case, sweeps, where):
-    """Every grid point of a ``condensation = "cubic"`` case must satisfy
-    ``-eps (m g / (2 b k))^2 < 2/27`` (:func:`screening.condensation.cubic.check_bearing`)."""
+def _check_condensation(case, sweeps, where):
+    """Every grid point of ``case`` must be a bed its condensation can condense
+    (:meth:`screening.condensation.Condensation.check` on the arrays of grid values)."""
+    cond = case.condensation_model
     sweeps = {n: v for n, v in sweeps.items() if NUMERIC[n][0] != "excitation"}   # trailing dims: no effect
+    if any(v is None for v in sweeps.values()):
+        return                      # values given later (trade-study families): checked there
     names = list(sweeps)
     grids = np.meshgrid(*sweeps.values(), indexing="ij", sparse=True) if names else []
     p = {**case.params, **dict(zip(names, grids))}
-    block, foundation = _block(p), _foundation(case, p)
-    load = np.broadcast_to(bearing_load(block, foundation), tuple(len(v) for v in sweeps.values()))
-    if np.any(load >= SOFTENING_LIMIT):
-        j = np.unravel_index(int(np.argmax(load)), load.shape)
-        at = ", ".join(f"{n} = {float(sweeps[n][i])!r}" for n, i in zip(names, j)
-                       if n in ("m", "b", "g", "k", "eps"))
-        eps = float(np.broadcast_to(foundation.eps, load.shape)[j])
-        raise StudyError(f"{where}foundation.condensation: 'cubic' needs a bed that carries the block "
-                         f"through uplift onset, |eps| (m g / (2 b k))^2 < 2/27, but eps = {eps!r} 1/m^2"
-                         + (f" at {at}" if at else "") + " fails it (use condensation = 'paper')")
+    try:
+        cond.check(_block(p), _foundation(case, p))
+    except ValueError as exc:
+        at = _failing_point(case, sweeps)
+        default = DEFAULTS["condensation"]
+        raise StudyError(f"{where}foundation.condensation: {cond.name!r} needs a bed it can condense and "
+                         + (f"the one at {at}" if at else "this one") + f" is not ({one_line(exc)})"
+                         + (f"; use condensation = {default!r}" if cond.name != default else "")) from None
+
+
+def _failing_point(case, sweeps):
+    """``"name = value, ..."`` of the swept block/foundation parameters at the first grid point
+    (C order) that the case's condensation refuses; ``""`` if none is swept or none is found."""
+    names = list(sweeps)
+    for j in np.ndindex(*(len(sweeps[n]) for n in names)) if names else ():
+        values = {n: sweeps[n][i] for n, i in zip(names, j)}
+        p = {**case.params, **values}
+        try:
+            case.condensation_model.check(_block(p), _foundation(case, p))
+        except ValueError:
+            return ", ".join(f"{n} = {float(v)!r}" for n, v in values.items())
+    return ""
 
 
 # ----------------------------------------------------------------------------- models

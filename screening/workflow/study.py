@@ -104,7 +104,7 @@ _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time"
              "case")
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
-LAYOUT_VERSION = 2
+LAYOUT_VERSION = 3
 
 
 # ----------------------------------------------------------------------------- data

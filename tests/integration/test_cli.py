@@ -13,7 +13,7 @@ import xarray as xr
 
 from helpers import compare_files, in_process_client, one_line_error, quiet
 
-from screening import linearize
+from screening import __version__, linearize
 from screening.cli import main
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.schema import PARAMETERS, VARIABLES
@@ -232,7 +232,7 @@ def test_killed_run_resumes_to_the_same_file(tmp_path):
 # ----------------------------------------------------------------------------- fragility
 def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_result, tmp_path, capsys):
     from screening.analysis.fragility import exceedance_probability, mcs_exceedance_probability, threshold_angle
-    from screening.workflow.sweep import open_result
+    from screening.workflow.reader import open_result
 
     out = tmp_path / "frag.nc"
     assert main(["fragility", str(cli_result / "outputs" / "study.nc"), "--threshold", "5", "--relative-to", "theta_ul",
@@ -308,3 +308,64 @@ def test_tradeoff_subcommand_delegates_with_one_line_errors(tmp_path, capsys):
     assert main(["tradeoff", str(tmp_path / "bad.toml"), "--out-dir", str(tmp_path)]) == 2
     one_line_error(capsys.readouterr().err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
+
+
+# ----------------------------------------------------------------------------- the click parser
+@pytest.mark.parametrize("argv, message", [
+    (["fragility", "r.nc", "--threshold"], "argument --threshold: expected one argument (see 'screening fragility --help')"),
+    (["run", "s.toml", "extra"], "unrecognized arguments: extra (see 'screening run --help')"),
+    (["run", "s.toml", "--scheduler", "a", "--workers", "2"], "argument --workers: not allowed with argument --scheduler"),
+    (["run", "s.toml", "--complevel", "x"], "argument --complevel: must be an integer in 0..9 (got 'x')"),
+    (["fragility", "r.nc", "--threshold", "1", "--method", "x"],
+     "argument --method: invalid choice: 'x' (choose from 'vanmarcke', 'poisson')"),
+    (["launch"], "argument command: invalid choice: 'launch' (choose from 'run', 'plot', 'fragility', 'tradeoff', 'info')"),
+    ([], "the following arguments are required: command (see 'screening --help')"),
+    (["tradeoff"], "the following arguments are required: study (see 'screening tradeoff --help')"),
+    (["tradeoff", "s.toml", "--bogus"], "unrecognized arguments: --bogus (see 'screening tradeoff --help')"),
+    (["info", "--out-dir", "x", "r.nc"], "unrecognized arguments: --out-dir"),
+])
+def test_click_usage_errors_are_one_argparse_style_line(tmp_path, capsys, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    assert message in one_line_error(capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_help_and_version_exit_0(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"screening {__version__}"
+    for argv in (["--help"], ["run", "--help"], ["fragility", "--help"], ["tradeoff", "--help"]):
+        assert main(argv) == 0, argv
+        out = capsys.readouterr().out
+        assert out.startswith(f"Usage: screening {argv[0] if len(argv) > 1 else ''}".rstrip()), out
+
+
+def test_ctrl_c_exits_130_with_one_line(tmp_path, capsys, monkeypatch):
+    import screening.workflow.sweep
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(screening.workflow.sweep, "run_sweep", interrupted)
+    (tmp_path / "s.toml").write_text(STUDY)
+    assert main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "r.nc")]) == 130
+    assert [line for line in capsys.readouterr().err.splitlines() if line.strip()] == [
+        "screening: interrupted; finished batches are kept, re-run the same command to resume"]
+
+
+def test_tradeoff_subcommand_runs_then_rerenders_from_its_netcdf(tmp_path, capsys):
+    from golden import TRADEOFF_STUDY
+
+    study = tmp_path / "tiny.toml"
+    study.write_text(TRADEOFF_STUDY)
+    assert main(["tradeoff", str(study), "--out-dir", str(tmp_path / "nowhere"), "--from-nc"]) == 2
+    assert "--from-nc:" in one_line_error(capsys.readouterr().err) and not (tmp_path / "nowhere").exists()
+    assert main(["tradeoff", str(study), "--out-dir", str(tmp_path / "out"), "--quiet"]) == 0
+    captured = capsys.readouterr()
+    assert "Recommended: " in captured.out and captured.err == ""
+    assert captured.out.splitlines()[-1].startswith(f"wrote {tmp_path / 'out' / 'tiny.nc'}, ")
+    (tmp_path / "out" / "tiny.md").unlink()
+    assert main(["tradeoff", str(study), "--out-dir", str(tmp_path / "out"), "--from-nc"]) == 0
+    out = capsys.readouterr().out
+    assert "SL : condensed : coupled = 1 :" in out and "tiny.nc" not in out.splitlines()[-1]
+    assert (tmp_path / "out" / "tiny.md").exists()

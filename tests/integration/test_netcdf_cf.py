@@ -186,3 +186,12 @@ def test_single_point_result_is_dimensionless_but_time(results):
 def test_ncdump_header_reads(results):
     proc = subprocess.run(["ncdump", "-h", str(results["grid"])], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0 and 'var_theta:units = "rad2"' in proc.stdout
+
+
+def test_slenderness_is_stored_per_point_from_the_model(results):
+    from screening.schema import attributes
+
+    with xr.open_dataset(results["grid"]) as ds:
+        assert ds["slenderness"].dims == ds["theta_ul"].dims == ("k", "eps", "S0")
+        np.testing.assert_array_equal(ds["slenderness"].values, np.arctan2(0.035, 0.21))
+        assert {k: ds["slenderness"].attrs[k] for k in ("units", "long_name")} == attributes("slenderness")

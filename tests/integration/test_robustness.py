@@ -24,7 +24,7 @@ import xarray as xr
 
 from helpers import GRID, NO_HTTP_PORT_8787, compare_files, one_line_error, quiet
 
-from screening.workflow import sweep
+from screening.workflow import execution
 from screening.cli import main
 from screening.model.excitation import ConstantEnvelope, KanaiTajimi, WhiteNoise
 from screening.condensation.paper_coefficients import coefficient_constants
@@ -33,7 +33,11 @@ from screening.status import PointStatus
 from screening.model import Block, Foundation, WinklerFoundation
 from screening.solvers.montecarlo import monte_carlo
 from screening.workflow.study import build_models, parse_study
-from screening.workflow.sweep import PartialStore, SweepError, open_result, run_sweep
+from screening.workflow.errors import SweepError
+from screening.workflow.reader import open_result
+from screening.workflow.store import PartialStore
+from screening.workflow.sweep import run_sweep
+from screening.workflow.writer import ResultFile
 from screening.solvers.timegrid import output_times
 
 SCREENING = Path(sys.executable).parent / "screening"
@@ -87,7 +91,7 @@ def cli_on_client(client, monkeypatch):
     def local(workers=2, scheduler=None, given=None):
         yield client
 
-    monkeypatch.setattr(sweep, "dask_client", local)
+    monkeypatch.setattr(execution, "dask_client", local)
     return client
 
 
@@ -601,7 +605,7 @@ def test_disk_full_while_saving_a_batch_keeps_earlier_batches_and_resumes(client
 def test_netcdf_write_error_keeps_the_saved_batches_and_resumes(client, reference, tmp_path, monkeypatch):
     study = parse_study(GRID)
     out = tmp_path / "hdf.nc"
-    original, written = sweep.ResultFile.write_batch, []
+    original, written = ResultFile.write_batch, []
 
     def write_until_error(self, batch, result):
         if len(written) == 3:
@@ -609,11 +613,11 @@ def test_netcdf_write_error_keeps_the_saved_batches_and_resumes(client, referenc
         original(self, batch, result)
         written.append(batch.index)
 
-    monkeypatch.setattr(sweep.ResultFile, "write_batch", write_until_error)
+    monkeypatch.setattr(ResultFile, "write_batch", write_until_error)
     with pytest.raises(SweepError, match=r"NetCDF: HDF error; the 4 finished batch\(es\) are kept"):
         run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet)
     assert not out.exists()
-    monkeypatch.setattr(sweep.ResultFile, "write_batch", original)
+    monkeypatch.setattr(ResultFile, "write_batch", original)
     report = run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet)
     assert report.n_resumed_batches == 4
     compare_files(reference, out)
@@ -625,7 +629,7 @@ def test_other_errors_are_not_disguised_as_disk_errors(client, tmp_path, monkeyp
     def broken(self, batch, result):
         raise error
 
-    monkeypatch.setattr(sweep.ResultFile, "write_batch", broken)
+    monkeypatch.setattr(ResultFile, "write_batch", broken)
     with pytest.raises(type(error)):
         run_sweep(parse_study(GRID), tmp_path / "x.nc", client=client, batch_size=3, progress=False, log=quiet)
 

@@ -1,5 +1,5 @@
-"""Sweeps on dask (screening.workflow.sweep): batching, exactness, failures, resume, reuse, spot checks,
-and a real ``dask scheduler`` + ``dask worker`` cluster."""
+"""Sweeps on dask (screening.workflow.sweep): exactness, failures, resume, reuse, spot checks, and a real
+``dask scheduler`` + ``dask worker`` cluster.  The pure pieces are tested in tests/unit/workflow."""
 
 import json
 import os
@@ -12,96 +12,21 @@ import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
-from helpers import GRID, compare_files, quiet
+from helpers import CASES, GRID, compare_files, quiet
 
-from screening.workflow import sweep
+from screening.workflow import execution
 from screening.condensation.api import uplift_threshold
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
+from screening.status import PointStatus
+from screening.workflow.errors import SweepError
+from screening.workflow.reader import result_key
+from screening.workflow.store import PartialStore
 from screening.workflow.study import build_models, parse_study
-from screening.workflow.sweep import (STATUS_TASK_FAILED, PartialStore, SweepError, default_batch_size,
-                             hyperslabs, plan_batches, relative_peak_error, run_sweep, select_spots)
+from screening.workflow.sweep import run_sweep
 
 BIN = Path(sys.executable).parent
-
-
-CASES = """
-title = "cases test"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-[excitation]
-kind = "white"
-S0 = [1e-4, 5e-4, 2.4e-3]
-[time]
-t_end = 3.0
-dt = 0.1
-[[case]]
-name = "hard_white"
-foundation.eps = 6e7
-[[case]]
-name = "soft_kt"
-foundation.eps = -6e5
-excitation = {kind = "kanai_tajimi", omega_g = 10.0, zeta_g = 0.4}
-"""
-
-
-# ----------------------------------------------------------------------------- pure helpers
-@settings(max_examples=200, deadline=None)
-@given(shape=st.lists(st.integers(1, 5), min_size=0, max_size=4), data=st.data())
-def test_hyperslabs_cover_a_flat_range_exactly(shape, data):
-    shape = tuple(shape)
-    n = int(np.prod(shape, dtype=np.int64))
-    lo = data.draw(st.integers(0, n - 1))
-    hi = data.draw(st.integers(lo + 1, n))
-    flat = np.arange(n).reshape(shape)
-    pieces = hyperslabs(lo, hi, shape)
-    got = np.concatenate([np.atleast_1d(flat[s] if s else flat).ravel() for s, _, _ in pieces])
-    np.testing.assert_array_equal(got, np.arange(lo, hi))
-    for s, a, b in pieces:
-        np.testing.assert_array_equal(np.atleast_1d(flat[s] if s else flat).ravel(), np.arange(a, b))
-    assert len(pieces) <= max(1, 2 * len(shape) - 1)
-
-
-def test_batches_partition_the_grid_case_by_case():
-    study = parse_study(CASES)
-    batches = plan_batches(study, 2)
-    assert [(b.case, b.lo, b.hi) for b in batches] == [(0, 0, 2), (0, 2, 3), (1, 3, 5), (1, 5, 6)]
-    assert [b.index for b in batches] == list(range(4))
-    with pytest.raises(ValueError, match="batch_size"):
-        plan_batches(study, 0)
-
-
-def test_default_batch_size_is_whole_rows_and_spreads_work():
-    study = parse_study(GRID)                       # 4 x 5 = 20 points
-    assert default_batch_size(study, 2) == 5        # ceil(20 / 4) = 5 = one row
-    big = parse_study(GRID.replace("num = 5", "num = 300"))
-    size = default_batch_size(big, 2)
-    assert size == 300 and size <= sweep.DEFAULT_BATCH
-    huge = parse_study(GRID.replace("num = 5", "num = 7000"))
-    assert default_batch_size(huge, 2) == sweep.DEFAULT_BATCH
-
-
-def test_auto_spots_take_highest_uplift_among_ok_points():
-    study = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 2\n')
-    status = np.zeros(20, dtype=np.int8)
-    upl = np.linspace(0.0, 0.5, 20)
-    status[19] = 1                                  # the highest uplift point is not ok: skipped
-    assert select_spots(study, status, upl) == [(3, 3), (3, 2)]
-    status[:] = 1
-    assert select_spots(study, status, upl) == []
-
-
-def test_relative_peak_error():
-    assert relative_peak_error([0, 1, 2.2, 1], [0, 2.0, 1.0, np.nan]) == pytest.approx(0.1)
-    assert np.isnan(relative_peak_error([1.0], [np.nan]))
 
 
 # ----------------------------------------------------------------------------- runs
@@ -171,17 +96,17 @@ def test_a_failing_batch_is_retried_then_flagged(client, tmp_path, monkeypatch):
             raise FloatingPointError("injected failure")
         return solve_moments(block, foundation, excitation, t_out, **kw)
 
-    monkeypatch.setattr(sweep, "solve_moments", flaky)
+    monkeypatch.setattr(execution, "solve_moments", flaky)
     messages = []
     study = parse_study(GRID)
     report = run_sweep(study, tmp_path / "f.nc", client=client, batch_size=5, progress=False,
                        log=messages.append)
     assert report.n_failed_batches == 1
-    assert calls.count(3e7) == 1 + sweep.TASK_RETRIES
+    assert calls.count(3e7) == 1 + execution.TASK_RETRIES
     assert any("failed after" in m and "injected failure" in m for m in messages)
     with xr.open_dataset(tmp_path / "f.nc") as ds:
         status = ds["status"].values
-        assert np.all(status[2] == STATUS_TASK_FAILED) and np.all(status[[0, 1, 3]] == 0)
+        assert np.all(status[2] == PointStatus.task_failed) and np.all(status[[0, 1, 3]] == 0)
         assert np.all(np.isnan(ds["var_theta"].values[2])) and np.all(ds["n_steps"].values[2] == 0)
         assert np.all(np.isfinite(ds["peak_var_theta"].values[[0, 1, 3]]))
         assert int(ds.attrs["n_failed_points"]) == 5
@@ -391,14 +316,14 @@ def test_existing_scheduler_with_two_worker_processes(dask_cluster, client, tmp_
 
 
 def test_unreachable_scheduler_is_a_sweep_error(tmp_path, monkeypatch):
-    monkeypatch.setattr(sweep, "CONNECT_TIMEOUT", "1s")
+    monkeypatch.setattr(execution, "CONNECT_TIMEOUT", "1s")
     with pytest.raises(SweepError, match="cannot connect to the dask scheduler"):
         run_sweep(parse_study(GRID), tmp_path / "x.nc", scheduler="tcp://127.0.0.1:9", progress=False,
                   log=quiet)
     assert list(tmp_path.iterdir()) == []
     with netCDF4.Dataset(tmp_path / "y.nc", "w"):
         pass
-    assert sweep.result_key(tmp_path / "y.nc") is None
+    assert result_key(tmp_path / "y.nc") is None
 
 
 def test_complevel_changes_storage_not_values(client, tmp_path):

@@ -9,7 +9,7 @@ from screening.solvers.moments import HISTORY_VARIABLES
 from screening.schema import VARIABLES
 from screening.report.figures import (plot_histories, plot_peaks, plot_result, plot_spots, point_label, spot_file_label,
                              representative_points)
-from screening.workflow.sweep import STATUS_CODES
+from screening.schema import attributes
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -31,10 +31,7 @@ def synthetic(dims, sizes, spots=0, seed=0):
     peak = rng.uniform(1e-8, 1e-4, shape)
     data = {name: (dims + ("t",), rng.uniform(0.1, 1.0, shape + (21,)).astype(np.float32),
                    VARIABLES[name]) for name in HISTORY_VARIABLES}
-    codes = sorted(STATUS_CODES)
-    data["status"] = (dims, np.zeros(shape, dtype=np.int8),
-                      {"flag_values": np.array(codes, dtype=np.int8),
-                       "flag_meanings": " ".join(STATUS_CODES[c] for c in codes)})
+    data["status"] = (dims, np.zeros(shape, dtype=np.int8), attributes("status"))
     data["peak_var_theta"] = (dims, peak, VARIABLES["peak_var_theta"])
     data["peak_p_uplift"] = (dims, rng.uniform(0, 1, shape), VARIABLES["peak_p_uplift"])
     data["min_k_eq"] = (dims, rng.uniform(10, 1000, shape), VARIABLES["min_k_eq"])

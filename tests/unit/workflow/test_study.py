@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from screening import condensation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.model import Foundation, WinklerFoundation
 from screening.workflow.study import StudyError, build_models, load_study, parse_study
@@ -150,6 +151,8 @@ foundation.condensation = "cubic"
 """
     s = parse_study(text)
     assert [c.condensation for c in s.cases] == ["paper", "cubic"]
+    # the names are looked up once, when the study is parsed: the solvers get the objects
+    assert [c.condensation_model for c in s.cases] == [condensation.get("paper"), condensation.get("cubic")]
     s = parse_study(edit(BASE, 'contact = "hunt_crossley"', 'contact = "hunt_crossley"\ncondensation = "cubic"'))
     assert s.cases[0].condensation == "cubic"      # -6e5 1/m^2 carries the paper block
 
@@ -175,6 +178,16 @@ def test_cubic_condensation_checks_every_grid_point_before_any_work():
         parse_study(text)
     parse_study(text.replace(f", {1.01 * limit!r}]", "]"))            # the carrying beds pass
     parse_study(text.replace('condensation = "cubic"', 'condensation = "paper"'))   # the paper's has no limit
+
+
+def test_refused_condensation_names_the_first_failing_bed_and_the_reason():
+    # at k = 2.89e7 the cubic condensation carries the paper block down to eps ~ -4.2e7 1/m^2
+    text = edit(BASE, "eps = [-6e5, 0.0, 6e7]", "eps = [0.0, -1e8, -2e8]")
+    with pytest.raises(StudyError) as info:
+        parse_study(edit(text, 'contact = "hunt_crossley"', 'contact = "hunt_crossley"\ncondensation = "cubic"'))
+    message = str(info.value)
+    assert "'cubic' needs a bed it can condense and the one at eps = -100000000.0 is not (" in message
+    assert "parameter 'foundation.eps'" in message and message.endswith("; use condensation = 'paper'")
 
 
 def test_build_models_structure():

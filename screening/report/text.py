@@ -1,0 +1,93 @@
+"""Text reports of a sweep result: :func:`describe` (what ``screening info`` prints)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from screening.status import PointStatus, SpotStatus
+
+
+def _fmt(value):
+    return f"{value:.4g}" if isinstance(value, (float, np.floating)) else str(value)
+
+
+def describe(ds, path="result"):
+    """Plain-text summary of a result dataset (what ``screening info`` prints)."""
+    from screening.report.figures import grid_dims, grid_units, grid_values, point_label, spot_index
+
+    dims = grid_dims(ds)
+    lines = [f"{path}: {ds.attrs.get('title', '')}",
+             f"  screening {ds.attrs.get('screening_version', '?')}, study {ds.attrs.get('study_file', '?')}, "
+             f"created {ds.attrs.get('date_created', '?')}"]
+    sizes = ", ".join(f"{d} ({n})" for d, n in ds.sizes.items())
+    n_points = int(np.prod([ds.sizes[d] for d in dims], dtype=np.int64))
+    lines.append(f"dimensions: {sizes}; {n_points} grid point(s)")
+    lines.append("swept parameters:" if dims else "swept parameters: none")
+    for d in dims:
+        if d == "case":
+            names = [str(s) for s in ds["case_name"].values]
+            lines.append(f"  case     {len(names)} cases: {', '.join(names)}")
+            continue
+        v = grid_values(ds, d)
+        units = grid_units(ds, d)
+        lines.append(f"  {d:<8} {v.size} values, {_fmt(float(v.min()))} .. {_fmt(float(v.max()))} {units}")
+    fixed = [n for n, var in ds.coords.items() if var.ndim == 0 and np.issubdtype(var.dtype, np.number)]
+    if fixed:
+        lines.append("fixed parameters: " + ", ".join(
+            f"{n} = {_fmt(float(ds[n]))} {ds[n].attrs.get('units', '')}".rstrip() for n in fixed))
+    per_case = [n for n, var in ds.coords.items() if var.dims == ("case",) and n not in ("case", "case_name")]
+    if per_case:
+        lines.append("per-case parameters: " + ", ".join(
+            n + (f" ({', '.join(str(v) for v in ds[n].values)})" if ds[n].dtype.kind in "OUS" else "")
+            for n in per_case))
+    labels = [f"{k} = {ds.attrs[k]}" for k in ("contact", "condensation", "excitation", "envelope") if k in ds.attrs]
+    if labels:
+        lines.append("models: " + ", ".join(labels))
+    t = ds["t"].values
+    lines.append(f"time: {_fmt(float(t[0]))} .. {_fmt(float(t[-1]))} s, {t.size} output times")
+
+    status = np.asarray(ds["status"].values).reshape(-1)
+    codes = [int(c) for c in ds["status"].attrs["flag_values"]]
+    meanings = str(ds["status"].attrs["flag_meanings"]).split()
+    counts = ", ".join(f"{m} {int(np.sum(status == c))}" for c, m in zip(codes, meanings)
+                       if np.any(status == c))
+    lines.append(f"status: {counts}")
+    ok = status == PointStatus.ok
+    lines.append(f"summary over the {int(ok.sum())} status-ok point(s) (min / median / max):")
+    for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"):
+        v = np.asarray(ds[name].values, dtype=float).reshape(-1)[ok]
+        units = ds[name].attrs.get("units", "")
+        if v.size:
+            lines.append(f"  {name:<17} {_fmt(v.min())} / {_fmt(float(np.median(v)))} / {_fmt(v.max())} {units}")
+    if "spot" in ds.dims and ds.sizes["spot"]:
+        lines.append(f"Monte Carlo spot checks ({ds.attrs.get('mcs_model')}, {ds.attrs.get('mcs_samples')} "
+                     f"samples, seed {ds.attrs.get('mcs_seed')}):")
+        for i in range(ds.sizes["spot"]):
+            index = spot_index(ds, i)
+            rel = float(ds["mcs_rel_error_peak_var_theta"].values[i])
+            rel_dot = float(ds["mcs_rel_error_peak_var_theta_dot"].values[i])
+            over = int(ds["mcs_n_overturned"].values[i])
+            div = int(ds["mcs_n_diverged"].values[i])
+            lines.append(f"  {point_label(ds, index)}: " + _spot_summary(
+                rel, rel_dot, over, div, int(ds["mcs_n_used"].values[i]),
+                bool("mcs_status" in ds and int(ds["mcs_status"].values[i]) != SpotStatus.ok)))
+    return "\n".join(lines)
+
+
+def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):
+    """One spot check in plain words: the relative errors, or why there are none."""
+    n = n_overturned + n_diverged + n_used
+    if failed:
+        return "the Monte Carlo run failed (no statistics; see the run log)"
+    if n_used == 0:
+        if n_overturned == n:
+            return f"all {n} samples overturned: no statistics (the block topples at this point)"
+        if n_diverged == n:
+            return f"all {n} samples diverged: no statistics"
+        return f"no usable sample ({n_overturned} overturned, {n_diverged} diverged of {n}): no statistics"
+
+    def pct(x):
+        return f"{100 * x:+.1f} %" if np.isfinite(x) else "n/a (the linearization stopped)"
+
+    return (f"peak var_theta rel. error {pct(rel)}, peak var_theta_dot {pct(rel_dot)}, "
+            f"overturned {n_overturned}, diverged {n_diverged} of {n}")

@@ -1,0 +1,180 @@
+"""Execution on dask.distributed: the client, the worker warm-up, and the two task functions.
+
+Each batch of points is **one** task, :func:`solve_batch`: a vectorised call of
+:func:`screening.solvers.moments.solve_moments` on arrays (there is no finer task graph); each
+Monte Carlo spot check is one task, :func:`spot_task`.  Tasks are submitted with
+``retries=TASK_RETRIES``; their results are plain dicts of numpy arrays (the batch record read
+by :class:`~screening.workflow.writer.ResultFile` and saved by
+:class:`~screening.workflow.store.PartialStore`).  Workers must be able to import
+:mod:`screening` (same environment); they never touch the disk.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+
+from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
+from screening.status import PointStatus, SampleState
+from screening.workflow.errors import SweepError
+from screening.workflow.grid import batch_models, point_values
+from screening.workflow.study import build_models
+
+CONNECT_TIMEOUT = "15s"
+TASK_RETRIES = 2
+
+#: Histories are stored as float32 (7 significant digits; the solver tolerance is 1e-7).
+HISTORY_DTYPE = np.float32
+#: Per-point summaries of the solver (float64 and int32) and per-point model quantities (float64).
+SUMMARY_FLOATS = ("t_stop", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq")
+SUMMARY_INTS = ("n_steps", "n_rejected")
+MODEL_FLOATS = ("theta_ul", "slenderness")
+#: Histories of a spot check.
+SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
+
+
+# ============================================================================ tasks
+def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps):
+    """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
+
+    ``condensation`` is a :class:`screening.condensation.Condensation`.  Returns a dict of
+    1-d/2-d arrays over the batch: the histories as ``float32`` (points x time), the summaries
+    (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
+    """
+    res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
+                        condensation=condensation.name)
+    shape = res["status"].shape
+    n = res["status"].size
+    out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in HISTORY_VARIABLES}
+    out["status"] = res["status"].reshape(n).astype(np.int8)
+    for name in SUMMARY_FLOATS:
+        out[name] = res[name].reshape(n).astype(np.float64)
+    for name in SUMMARY_INTS:
+        out[name] = res[name].reshape(n).astype(np.int32)
+    model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
+    for name in MODEL_FLOATS:
+        out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
+    return out
+
+
+def failed_result(n, nt):
+    """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
+    out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in HISTORY_VARIABLES}
+    out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
+    for name in SUMMARY_FLOATS + MODEL_FLOATS:
+        out[name] = np.full(n, np.nan)
+    for name in SUMMARY_INTS:
+        out[name] = np.zeros(n, dtype=np.int32)
+    return out
+
+
+def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
+    """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
+
+    ``condensation`` (a :class:`screening.condensation.Condensation`) applies to
+    ``model="condensed"`` only (the coupled model has none).
+    """
+    from screening.solvers.montecarlo import monte_carlo
+
+    kw = {"condensation": condensation.name} if model == "condensed" else {}
+    ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=t_end, dt=dt,
+                     seed=seed, **kw)
+    out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
+    n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
+    out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
+               n_used=np.int32(samples - n_over - n_div),
+               peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
+               sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
+    return out
+
+
+def sample_state(overturned, diverged):
+    """Per-sample :class:`~screening.status.SampleState` codes from the flags of a Monte Carlo run."""
+    state = np.full(np.shape(overturned), SampleState.standing, dtype=np.int8)
+    state[np.asarray(overturned, dtype=bool)] = SampleState.overturned
+    state[np.asarray(diverged, dtype=bool)] = SampleState.diverged_or_failed
+    return state
+
+
+def failed_spot(nt, samples):
+    """Spot-check result of a task that failed: NaN histories, every sample ``diverged_or_failed``."""
+    out = {name: np.full(nt, np.nan) for name in SPOT_HISTORIES}
+    out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0),
+               peak_abs_theta=np.full(samples, np.nan),
+               sample_state=np.full(samples, SampleState.diverged_or_failed, dtype=np.int8))
+    return out
+
+
+# ============================================================================ submission
+def submit_batch(client, study, batch, key):
+    """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times)."""
+    case = study.cases[batch.case]
+    return client.submit(solve_batch, *batch_models(study, batch), case.condensation_model, study.times,
+                         study.rtol, study.max_steps, retries=TASK_RETRIES, pure=False, key=key)
+
+
+def submit_spot(client, study, index, key):
+    """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times)."""
+    case, values = point_values(study, index)
+    spec = study.mcs
+    return client.submit(spot_task, *build_models(study.cases[case], values), study.cases[case].condensation_model,
+                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, retries=TASK_RETRIES,
+                         pure=False, key=key)
+
+
+# ============================================================================ cluster
+def warm_up():
+    """Import the solver and load its compiled code on a worker; returns the time taken [s]."""
+    start = time.perf_counter()
+    from screening.model import Block, Foundation
+    from screening.model.excitation import WhiteNoise
+
+    solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
+    return time.perf_counter() - start
+
+
+@contextlib.contextmanager
+def dask_client(workers=2, scheduler=None, client=None):
+    """A ``distributed.Client``: the given one, one connected to ``scheduler`` (an address
+    or a scheduler JSON file), or a new ``LocalCluster`` of ``workers`` single-threaded
+    processes (closed on exit)."""
+    if client is not None:
+        yield client
+        return
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            if str(scheduler).endswith(".json") and Path(scheduler).is_file():
+                c = Client(scheduler_file=str(scheduler), timeout=CONNECT_TIMEOUT)
+            else:
+                c = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise SweepError(f"cannot connect to the dask scheduler {scheduler}: {exc}") from None
+        try:
+            try:
+                c.wait_for_workers(1, timeout=30)
+            except TimeoutError:
+                raise SweepError(f"the dask scheduler {scheduler} has no workers") from None
+            yield c
+        finally:
+            c.close()
+        return
+    try:
+        # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
+        # that port is taken (another run, another cluster): give it a free port on localhost instead
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+    except Exception as exc:                          # noqa: BLE001 - dask raises RuntimeError & co
+        raise SweepError(f"cannot start a local dask cluster of {workers} worker(s): "
+                         f"{type(exc).__name__}: {exc}") from None
+    try:
+        with Client(cluster) as c:
+            yield c
+    finally:
+        cluster.close()

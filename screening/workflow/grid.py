@@ -1,0 +1,157 @@
+"""The grid of a study cut into batches: pure functions of a :class:`~screening.workflow.study.Study`.
+
+The grid (``case`` x swept parameters) is flattened in C order and cut into batches of contiguous
+points (never across a case; by default about :data:`DEFAULT_BATCH` points, a whole number of rows
+of the last dimension).  Nothing here touches dask or the disk.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from screening.model import Block
+from screening.schema import PARAMETERS
+from screening.status import PointStatus
+from screening.workflow.study import build_models
+
+DEFAULT_BATCH = 500
+
+
+@dataclass(frozen=True)
+class Batch:
+    """Points ``lo <= i < hi`` (flat C-order indices of the grid), all in case ``case``."""
+
+    index: int
+    case: int
+    lo: int
+    hi: int
+
+    @property
+    def size(self):
+        return self.hi - self.lo
+
+
+def default_batch_size(study, n_workers, target=DEFAULT_BATCH):
+    """Points per batch: about ``target``, at least 2 batches per worker, whole rows if possible."""
+    per_case = study.points_per_case
+    size = max(1, min(target, math.ceil(study.n_points / max(2 * n_workers, 1)), per_case))
+    n_last = study.swept_shape[-1] if study.swept_shape else 1
+    if n_last <= size:
+        size = (size // n_last) * n_last
+    return size
+
+
+def plan_batches(study, batch_size):
+    """Cut the grid into :class:`Batch` es of at most ``batch_size`` points, case by case."""
+    if batch_size < 1:
+        raise ValueError(f"parameter 'batch_size' must be an integer >= 1 (got {batch_size!r})")
+    per_case = study.points_per_case
+    batches = []
+    for case in range(len(study.cases)):
+        for lo in range(0, per_case, batch_size):
+            hi = min(lo + batch_size, per_case)
+            batches.append(Batch(len(batches), case, case * per_case + lo, case * per_case + hi))
+    return batches
+
+
+def hyperslabs(lo, hi, shape):
+    """Split the flat C-order range ``[lo, hi)`` of an array of ``shape`` into hyperslabs.
+
+    Returns a list of ``(slices, a, b)``: ``array[slices]`` holds the flat points
+    ``a <= i < b`` in order; the pieces cover ``[lo, hi)`` exactly.
+    """
+    if not shape:
+        return [((), lo, hi)] if hi > lo else []
+    inner = int(np.prod(shape[1:], dtype=np.int64))
+    i0, r0 = divmod(lo, inner)
+    i1, r1 = divmod(hi, inner)
+    out = []
+    if i0 == i1:
+        for sub, a, b in hyperslabs(r0, r1, shape[1:]):
+            out.append(((slice(i0, i0 + 1),) + sub, i0 * inner + a, i0 * inner + b))
+        return out
+    if r0:
+        for sub, a, b in hyperslabs(r0, inner, shape[1:]):
+            out.append(((slice(i0, i0 + 1),) + sub, i0 * inner + a, i0 * inner + b))
+        i0 += 1
+    if i1 > i0:
+        out.append(((slice(i0, i1),) + tuple(slice(0, n) for n in shape[1:]), i0 * inner, i1 * inner))
+    if r1:
+        for sub, a, b in hyperslabs(0, r1, shape[1:]):
+            out.append(((slice(i1, i1 + 1),) + sub, i1 * inner + a, i1 * inner + b))
+    return out
+
+
+def batch_values(study, batch):
+    """Swept parameter values of the points of ``batch`` (dict of 1-d arrays)."""
+    per_case = study.points_per_case
+    flat = np.arange(batch.lo - batch.case * per_case, batch.hi - batch.case * per_case)
+    if not study.swept_dims:
+        return {}
+    idx = np.unravel_index(flat, study.swept_shape)
+    return {name: study.sweeps[name][i] for name, i in zip(study.swept_dims, idx)}
+
+
+def point_values(study, index):
+    """``(case, values)`` at grid index tuple ``index`` (swept values as floats)."""
+    case = index[0] if study.has_case_dim else 0
+    swept = index[1:] if study.has_case_dim else index
+    return case, {name: float(study.sweeps[name][i]) for name, i in zip(study.swept_dims, swept)}
+
+
+def batch_models(study, batch):
+    """``(block, foundation, excitation)`` with array fields for the points of ``batch``."""
+    return build_models(study.cases[batch.case], batch_values(study, batch))
+
+
+def select_spots(study, status, peak_p_uplift):
+    """Grid index tuples of the Monte Carlo spot points.
+
+    Explicit points are returned as given; ``"auto"`` takes the ``count`` points with
+    ``status == ok`` and the highest ``peak_p_uplift`` (ties: lowest flat index first).
+    ``status`` and ``peak_p_uplift`` are flat arrays over the grid.
+    """
+    spec = study.mcs
+    if spec is None:
+        return []
+    if spec.points != "auto":
+        return list(spec.points)
+    ok = np.flatnonzero((status == PointStatus.ok) & np.isfinite(peak_p_uplift))
+    order = ok[np.argsort(-peak_p_uplift[ok], kind="stable")][:spec.count]
+    return [tuple(int(i) for i in np.unravel_index(j, study.shape)) for j in order]
+
+
+def parameter_table(study):
+    """Split the model parameters into constants and per-case values.
+
+    Returns ``(constants, per_case, labels, case_labels)``: ``constants`` maps numeric
+    parameter names to floats (same for every case, not swept), ``per_case`` maps the other
+    non-swept numeric parameters to arrays over cases (NaN where one does not apply),
+    ``labels``/``case_labels`` do the same for ``contact``, ``condensation``, ``excitation`` and
+    ``envelope``.
+    """
+    names = [n for n in PARAMETERS if n not in study.sweeps]
+    values = {}
+    for name in names:
+        col = []
+        for case in study.cases:
+            if name == "I_cm" and "I_cm" not in case.params:
+                p = case.params
+                col.append(float(Block(m=p["m"], b=p["b"], h=p["h"]).I_cm))
+            else:
+                col.append(float(case.params.get(name, math.nan)))
+        if not all(math.isnan(v) for v in col):
+            values[name] = np.array(col)
+    constants = {n: float(v[0]) for n, v in values.items() if np.all(v == v[0])}
+    per_case = {n: v for n, v in values.items() if n not in constants}
+    labels, case_labels = {}, {}
+    for name in ("contact", "condensation", "excitation", "envelope"):
+        col = [getattr(c, name) for c in study.cases]
+        if len(set(col)) == 1:
+            labels[name] = col[0]
+        else:
+            case_labels[name] = col
+    return constants, per_case, labels, case_labels

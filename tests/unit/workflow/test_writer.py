@@ -1,0 +1,73 @@
+"""The result file writer (screening.workflow.writer) without dask: every attribute comes from the schema."""
+
+import netCDF4
+import numpy as np
+import pytest
+
+from helpers import CASES, GRID
+
+from screening import __version__
+from screening.schema import SWEEP, TIME, attributes, global_attributes
+from screening.status import PointStatus, SpotStatus
+from screening.workflow.errors import SweepError
+from screening.workflow.execution import failed_result, failed_spot
+from screening.workflow.grid import plan_batches, select_spots
+from screening.workflow.study import parse_study
+from screening.workflow.writer import ResultFile, check_output_path, relative_peak_error, result_attributes
+
+SPOTS = '[mcs]\npoints = [{case = "soft_kt", S0 = 1e-4}, {case = "hard_white", S0 = 2.4e-3}]\nsamples = 3\n'
+K_SWEPT = GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]")
+
+
+def write(study, path):
+    """A complete file of ``study`` whose batches and spot checks all failed (no solver needed)."""
+    result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4))
+    try:
+        for batch in plan_batches(study, 4):
+            result.write_batch(batch, failed_result(batch.size, study.times.size))
+        if study.mcs is not None:
+            spots = select_spots(study, result.status, result.peak_p_uplift)
+            result.write_spots(spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
+                               [True] * len(spots), study.mcs)
+    finally:
+        result.close()
+    return path
+
+
+@pytest.mark.parametrize("text", [CASES + SPOTS, K_SWEPT], ids=["cases_and_spots", "k_swept"])
+def test_every_attribute_of_every_variable_comes_from_the_schema(tmp_path, text):
+    study = parse_study(text, name="w", source="w.toml")
+    with netCDF4.Dataset(write(study, tmp_path / "w.nc")) as nc:
+        assert set(nc.variables) >= {"status", "theta_ul", "slenderness", "var_theta"}
+        for name, var in nc.variables.items():
+            declared = TIME if name == "t" else attributes("k" if name == "k_value" else name, SWEEP)
+            got = {k: var.getncattr(k) for k in var.ncattrs() if k not in ("coordinates", "_FillValue")}
+            assert got.keys() == declared.keys(), name
+            for key, value in declared.items():
+                np.testing.assert_array_equal(got[key], value, err_msg=f"{name}:{key}")
+        expected = global_attributes(__version__)
+        assert {k: nc.getncattr(k) for k in expected} == expected
+        assert nc.getncattr("study_file") == "w.toml" and nc.getncattr("title") == study.title
+
+
+def test_failed_points_and_spots_carry_the_status_enums(tmp_path):
+    study = parse_study(CASES + SPOTS)
+    with netCDF4.Dataset(write(study, tmp_path / "f.nc")) as nc:
+        nc.set_auto_mask(False)
+        assert np.all(nc["status"][:] == PointStatus.task_failed)
+        assert np.all(np.isnan(nc["theta_ul"][:])) and np.all(np.isnan(nc["slenderness"][:]))
+        np.testing.assert_array_equal(nc["mcs_status"][:], [SpotStatus.task_failed] * 2)
+        np.testing.assert_array_equal(nc["spot_case_name"][:], ["soft_kt", "hard_white"])
+
+
+def test_relative_peak_error():
+    assert relative_peak_error([0, 1, 2.2, 1], [0, 2.0, 1.0, np.nan]) == pytest.approx(0.1)
+    assert np.isnan(relative_peak_error([1.0], [np.nan]))
+
+
+def test_output_path_checks(tmp_path):
+    assert check_output_path(tmp_path / "r.nc") == tmp_path / "r.nc"
+    with pytest.raises(SweepError, match="is a directory"):
+        check_output_path(tmp_path)
+    with pytest.raises(SweepError, match="output folder .* does not exist"):
+        check_output_path(tmp_path / "missing" / "r.nc")
