@@ -117,6 +117,13 @@ COORDINATES = {
     "spot": _v("1", "Monte Carlo spot-check index"),
     "case": _v("1", "case index (names in case_name)"),
     "case_name": {"long_name": "case name (the [[case]] tables of the study file)"},
+    # a swept k is stored in k_value on dimension k (screening.workflow.sweep.AUX_GRID_COORDINATES)
+    "k_value": PARAMETERS["k"],
+    # string choices that differ between the cases of a sweep (coordinates on case)
+    "contact": {"long_name": "contact model of the case"},
+    "condensation": {"long_name": "condensation model of the case"},
+    "excitation": {"long_name": "excitation model of the case"},
+    "envelope": {"long_name": "envelope model of the case"},
 }
 
 

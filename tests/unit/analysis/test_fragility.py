@@ -3,6 +3,7 @@ import pytest
 from scipy import integrate, stats
 
 from screening import Block, Foundation, WhiteNoise, linearize
+from screening.schema import PARAMETERS
 from screening.analysis.fragility import (exceedance_probability_from_moments, fit_lognormal_fragility,
                                  lognormal_fragility, mcs_exceedance_probability,
                                  oscillator_bandwidth, upcrossing_rate, vanmarcke_factor)
@@ -90,18 +91,13 @@ def test_accessor_on_a_linearization_result():
 
 
 def test_fragility_curve_over_s0_from_a_batch():
-    import xarray as xr
-    from screening.solvers.moments import solve_moments
-    from screening.solvers.timegrid import output_times
     S0 = np.logspace(-6, -3, 13)
-    t = output_times(20.0, 0.05)
-    res = solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(S0), t)
-    ds = xr.Dataset({k: (("S0", "t"), res[k]) for k in ("var_theta", "var_theta_dot", "cov_theta_theta_dot",
-                                                         "c_eq", "k_eq")} | {"status": ("S0", res["status"])},
-                    coords={"S0": S0, "t": t}, attrs=dict(m=8.67, b=0.035, h=0.21, g=9.81, k=2.89e7))
-    p, median, beta = ds.rocking.fragility_curve(0.5, dim="S0", relative_to="theta_ul")
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(S0))
+    curve = ds.rocking.fragility_curve(0.5, dim="S0", relative_to="theta_ul")
+    p, median, beta = curve["p_exceed"], curve["median"], curve["beta"]
     assert p.dims == ("S0",) and np.all(np.diff(p.values) >= 0)
     assert S0[0] < float(median) < S0[-1] and 0 < float(beta) < 5
+    assert median.attrs["units"] == PARAMETERS["S0"]["units"] and beta.attrs["units"] == "1"
 
 
 @pytest.mark.parametrize("S0, ratio", [(2e-6, 0.4), (5e-6, 0.4), (5e-6, 0.6)])
