@@ -76,7 +76,7 @@ def finish(ds, table=None):
     Every producer of a dataset ends with it.  An undeclared data variable still raises ``KeyError``.
     """
     foreign = [name for name in ds.coords if not _declared(name)]
-    return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c] for c in foreign})
+    return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c].variable for c in foreign})
 
 
 def linearization_dataset(result, times, dims, parameters, derived, attrs):
