@@ -159,10 +159,9 @@ def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=
 
 # ------------------------------------------------------------------ xarray layer
 def parameter(ds, name):
-    """A model parameter of a dataset: its coordinate (a swept ``k`` of a sweep file is ``k_value``)."""
-    from screening.workflow.sweep import grid_coordinate
-
-    for var in (name, grid_coordinate(name)):
+    """A model parameter of a dataset: its coordinate (a swept ``k`` of a sweep file is ``k_value``,
+    :data:`screening.workflow.sweep.AUX_GRID_COORDINATES`)."""
+    for var in (name, f"{name}_value"):
         if var in ds.variables:
             return ds[var]
     raise KeyError(f"the dataset does not record the parameter '{name}'")
