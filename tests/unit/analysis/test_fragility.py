@@ -3,6 +3,8 @@ import pytest
 import xarray as xr
 from scipy import integrate, stats
 
+from helpers import GRID
+
 from screening import Block, Foundation, WhiteNoise, linearize
 from screening.schema import PARAMETERS
 from screening.analysis.fragility import (exceedance_probability_from_moments, fit_lognormal_fragility,
@@ -201,21 +203,8 @@ def test_exceedance_of_a_monte_carlo_result_is_the_sample_fraction_with_its_stan
 
 
 # ---------------------------------------------------------------- sweeps whose cases differ in geometry
-CASES = """
-title = "blocks of three shapes"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-[excitation]
-kind = "white"
-S0 = {start = 2e-5, stop = 2.4e-3, num = 6, log = true}
-[time]
-t_end = 4.0
-dt = 0.05
+#: the sweep tests' grid with eps fixed and three blocks of different b, h as cases
+CASES = GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]\n", "").replace('title = "sweep test"', 'title = "three shapes"') + """
 [[case]]
 name = "slim"
 [[case]]
