@@ -8,9 +8,10 @@ from screening.condensation.api import (equivalent_coefficients, rocking_damping
                                         uplift_probability, uplift_threshold)
 from screening.model import Block, Foundation, WinklerFoundation
 from screening.solvers.linearization import linearize
+from screening.solvers.montecarlo import monte_carlo
 
 __all__ = [
     "Block", "Foundation", "WinklerFoundation", "Envelope", "ConstantEnvelope", "WhiteNoise",
     "KanaiTajimi", "uplift_threshold", "rocking_damping", "rocking_stiffness",
-    "equivalent_coefficients", "uplift_probability", "linearize", "__version__",
+    "equivalent_coefficients", "uplift_probability", "linearize", "monte_carlo", "__version__",
 ]

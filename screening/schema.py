@@ -199,6 +199,9 @@ COORDINATES = {
     "spot_case": _v("1", "case index of the spot point"),
     "spot_case_name": {"long_name": "case name of the spot point"},
     # model labels of each case, on dimension case (sweeps whose cases differ in them)
+    # a swept k is stored in k_value on dimension k (screening.workflow.sweep.AUX_GRID_COORDINATES)
+    "k_value": PARAMETERS["k"],
+    # string choices that differ between the cases of a sweep (coordinates on case)
     "contact": {"long_name": "contact model of the case"},
     "condensation": {"long_name": "condensation model of the case"},
     "excitation": {"long_name": "excitation model of the case"},

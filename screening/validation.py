@@ -5,6 +5,7 @@ from __future__ import annotations
 import numbers
 
 import numpy as np
+import xarray as xr
 
 
 def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=None,
@@ -41,7 +42,15 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
 
 
 def checked(name, value, **kwargs):
-    """Like :func:`as_checked_array` but give back a Python float for scalar input."""
+    """Like :func:`as_checked_array` but give back a Python float for scalar input.
+
+    An :class:`xarray.DataArray` is checked on its values and given back as a float DataArray
+    (dims and coordinates kept): the model objects then carry labelled parameters, which
+    :func:`screening.linearize` broadcasts by dimension name.
+    """
+    if isinstance(value, xr.DataArray):
+        as_checked_array(name, value.values, **kwargs)
+        return value if value.dtype == np.float64 else value.astype(np.float64)
     arr = as_checked_array(name, value, **kwargs)
     if arr.ndim == 0 and (isinstance(value, numbers.Number) or np.ndim(value) == 0):
         return float(arr)

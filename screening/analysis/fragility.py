@@ -17,13 +17,27 @@ approximation:
 
 A fragility curve over a swept intensity (usually ``S0``) is fitted with the lognormal
 model ``P(IM) = Phi(ln(IM / median) / beta)``.
+
+The xarray layer (``ds.rocking``) works on every dataset the package returns: a
+:func:`screening.linearize` result (one point or a grid), a sweep result file, and a
+:func:`screening.monte_carlo` result (there the probability is the fraction of samples whose
+peak ``|theta|`` exceeds the threshold).  Every quantity is broadcast by dimension name, and
+the thresholds read the stored ``theta_ul`` and ``slenderness``: nothing here recomputes the
+model.
 """
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import xarray as xr
 from scipy import optimize, special
+
+from screening import schema
+from screening.model.block import Block
+from screening.solvers.datasets import finish
+from screening.status import PointStatus, SampleState
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
 
@@ -144,98 +158,170 @@ def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=
 
 
 # ------------------------------------------------------------------ xarray layer
-def _parameter(ds, name):
-    """A model parameter from the dataset: a coordinate/variable if swept, else an attribute."""
-    for var in (name, f"{name}_value"):          # a swept k is stored as k_value (screening.workflow.sweep)
+def parameter(ds, name):
+    """A model parameter of a dataset: its coordinate (a swept ``k`` of a sweep file is ``k_value``,
+    :data:`screening.workflow.sweep.AUX_GRID_COORDINATES`)."""
+    for var in (name, f"{name}_value"):
         if var in ds.variables:
             return ds[var]
-    if name in ds.attrs:
-        return xr.DataArray(float(ds.attrs[name]))
     raise KeyError(f"the dataset does not record the parameter '{name}'")
+
+
+#: Derived quantities that :func:`model_quantity` rebuilds from the parameters when a dataset does
+#: not store them: name -> (parameters, property of :class:`~screening.model.Block` evaluated on them).
+_FROM_PARAMETERS = {
+    "slenderness": (("b", "h"), Block.slenderness),
+    "m_sdof": (("I_cm", "m", "h"), Block.m_sdof),
+}
+
+
+def model_quantity(ds, name):
+    """A derived model quantity of a dataset (``theta_ul``, ``slenderness``, ``m_sdof``), broadcast by name.
+
+    Datasets store ``theta_ul`` and ``slenderness`` as data variables; they are read, never
+    recomputed.  Fallback for files written before ``slenderness`` was stored (and for ``m_sdof``,
+    which no dataset stores): the :class:`~screening.model.Block` property evaluated on the
+    parameter coordinates.  ``theta_ul`` depends on the condensation and has no fallback.
+    Raises ``KeyError`` naming what is missing.
+    """
+    if name in ds.variables:
+        return ds[name]
+    if name in _FROM_PARAMETERS:
+        names, prop = _FROM_PARAMETERS[name]
+        missing = [n for n in names if n not in ds.variables]
+        if not missing:
+            return prop.fget(SimpleNamespace(**{n: ds[n] for n in names})).rename(name)
+        raise KeyError(f"the dataset stores neither '{name}' nor the parameters it is computed from "
+                       f"(missing {', '.join(missing)})")
+    raise KeyError(f"the dataset does not store '{name}'")
+
+
+RELATIVE_TO = (None, "slenderness", "theta_ul")
 
 
 def threshold_angle(ds, threshold, relative_to=None):
     """The rotation [rad] meant by ``threshold``: absolute, or a fraction of the slenderness
-    angle ``atan(b/h)`` (``relative_to="slenderness"``) or of ``theta_ul`` (``"theta_ul"``)."""
+    angle ``atan(b/h)`` (``relative_to="slenderness"``) or of the uplift angle ``theta_ul`` of the
+    condensation that produced the dataset (``"theta_ul"``), both read from the dataset (per
+    point where they vary)."""
+    if relative_to not in RELATIVE_TO:
+        raise ValueError(f"parameter 'relative_to' must be None, 'slenderness' or 'theta_ul' (got {relative_to!r})")
     if relative_to is None:
         return xr.DataArray(float(threshold))
-    if relative_to == "slenderness":
-        return threshold * np.arctan2(_parameter(ds, "b"), _parameter(ds, "h"))
-    if relative_to == "theta_ul":
-        m, g, b, k = (_parameter(ds, n) for n in ("m", "g", "b", "k"))
-        return threshold * m * g / (2.0 * b**2 * k)
-    raise ValueError(f"parameter 'relative_to' must be None, 'slenderness' or 'theta_ul' (got {relative_to!r})")
+    return float(threshold) * model_quantity(ds, relative_to)
 
 
 def equivalent_damping_ratio(ds):
-    """``zeta_eq(t) = c_eq / (2 sqrt(k_eq M))`` [1] along the record."""
-    m, h, b = (_parameter(ds, n) for n in ("m", "h", "b"))
-    I_cm = _parameter(ds, "I_cm") if ("I_cm" in ds.variables or "I_cm" in ds.attrs) else m * (b**2 + h**2) / 3
-    M = I_cm + m * h**2
+    """``zeta_eq(t) = c_eq / (2 sqrt(k_eq M))`` [1] along the record (``M = I_cm + m h^2``)."""
     k_eq = ds["k_eq"].where(ds["k_eq"] > 0)
-    return ds["c_eq"] / (2.0 * np.sqrt(k_eq * M))
+    return ds["c_eq"] / (2.0 * np.sqrt(k_eq * model_quantity(ds, "m_sdof")))
+
+
+def is_monte_carlo(ds):
+    """True for a :func:`screening.monte_carlo` result (per-sample peaks on ``sample``)."""
+    return "peak_abs_theta" in ds.variables and "sample" in ds["peak_abs_theta"].dims
+
+
+def sample_exceedance(peaks, overturned, valid, level):
+    """``(p, standard_error)`` [1] over the dimension ``sample``: the fraction of the ``valid`` samples
+    whose peak ``|theta|`` exceeds ``level`` (overturned samples count as exceedances), with its
+    binomial standard error.  NaN where no sample is valid."""
+    n = valid.sum("sample")
+    n = n.where(n > 0)
+    p = (((peaks > level) | overturned) & valid).sum("sample") / n
+    se = np.sqrt(p * (1 - p) / n)
+    p.attrs, se.attrs = {}, {}                  # not the flags of a sample-state input
+    return p, se
+
+
+def _monte_carlo_exceedance(ds, level):
+    p, se = sample_exceedance(ds["peak_abs_theta"], ds["overturned"], ~ds["diverged"], level)
+    return (p.assign_coords(mcs_p_exceed_se=se.assign_attrs(schema.attributes("mcs_p_exceed_se")))
+            .assign_attrs(schema.attributes("mcs_p_exceed"), method="monte_carlo").rename("mcs_p_exceed"))
 
 
 def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
-    """Probability [1] that ``|theta|`` exceeds the threshold during the record, over all swept dims.
+    """Probability [1] that ``|theta|`` exceeds the threshold during the record, on the dims of the dataset.
 
-    Points whose linearized model became unstable (status 1: k_eq <= 0, or 2: sigma_theta
-    beyond the slenderness angle) are given probability 1; points that failed numerically
-    (status 3, 4) are NaN.
+    Linearization results and sweeps: the up-crossing approximation ``method`` on the Gaussian
+    moments.  Points whose linearized model became unstable (status ``k_eq_negative`` or
+    ``sigma_theta_beyond_slenderness``) are given probability 1; points that failed numerically
+    are NaN.  Monte Carlo results: the fraction of the samples that did not diverge whose peak
+    ``|theta|`` exceeds the threshold (overturned samples count), named ``mcs_p_exceed``, with its
+    binomial standard error as the coordinate ``mcs_p_exceed_se`` (``method`` is not used).
     """
     level = threshold_angle(ds, threshold, relative_to)
-    bandwidth = None
+    if is_monte_carlo(ds):
+        return _monte_carlo_exceedance(ds, level)
+    if method not in ("poisson", "vanmarcke"):
+        raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
+    moments = [ds[name].fillna(0.0) for name in ("var_theta", "var_theta_dot", "cov_theta_theta_dot")]
+    along_t = [xr.broadcast(level, ds["t"])[0]]
     if method == "vanmarcke":
-        bandwidth = xr.apply_ufunc(oscillator_bandwidth, equivalent_damping_ratio(ds).fillna(0.05))
-    args = [ds["var_theta"], ds["var_theta_dot"], ds["cov_theta_theta_dot"], level]
-    filled = [a.fillna(0.0) if "t" in a.dims else a for a in args]
-    extra = [bandwidth] if bandwidth is not None else []
+        along_t.append(xr.apply_ufunc(oscillator_bandwidth, equivalent_damping_ratio(ds).fillna(0.05)))
 
-    def _prob(t, v, vd, c, a, *bw):
+    def _prob(t, v, vd, c, a, *bandwidth):
         return exceedance_probability_from_moments(t, v, vd, c, a, method=method,
-                                                   bandwidth=bw[0] if bw else None)
+                                                   bandwidth=bandwidth[0] if bandwidth else None)
 
-    p = xr.apply_ufunc(_prob, ds["t"], *filled, *extra,
-                       input_core_dims=[["t"]] * 4 + [[]] + ([["t"]] if extra else []),
-                       output_core_dims=[[]])
-    if "status" in ds:
-        p = xr.where(ds["status"].isin([1, 2]), 1.0, xr.where(ds["status"] == 0, p, np.nan))
-    p.attrs = {"units": "1", "long_name": f"probability that |theta| exceeds the threshold ({method})",
-               "threshold_rad": float(level.max()) if level.size else float(level),
-               "method": method}
-    return p.rename("p_exceed")
+    p = xr.apply_ufunc(_prob, ds["t"], *moments, *along_t, input_core_dims=[["t"]] * (4 + len(along_t)))
+    if "status" in ds.variables:
+        unstable = ds["status"].isin([PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness])
+        p = xr.where(unstable, 1.0, p.where(ds["status"] == PointStatus.ok))
+    return p.rename("p_exceed").assign_attrs(schema.attributes("p_exceed"), method=method)
+
+
+def _lognormal_fit(p, intensity, dim):
+    """``(median, beta)`` of the lognormal fit of ``p`` along ``dim`` at the ``intensity`` values."""
+    def _fit(prob):
+        try:
+            return np.array(fit_lognormal_fragility(intensity, prob))
+        except ValueError:
+            return np.array([np.nan, np.nan])
+
+    fit = xr.apply_ufunc(_fit, p, input_core_dims=[[dim]], output_core_dims=[["fit"]], vectorize=True)
+    return fit.isel(fit=0, drop=True), fit.isel(fit=1, drop=True)
+
+
+def _fragility(ds, p, dim):
+    """``{"p_exceed", "median", "beta"}`` of ``p`` along the swept intensity ``dim`` (unfinished dataset)."""
+    if dim not in p.dims:
+        raise ValueError(f"parameter 'dim' must be a swept dimension of the dataset (got {dim!r}; have {list(p.dims)})")
+    median, beta = _lognormal_fit(p, parameter(ds, dim).values, dim)
+    return xr.Dataset({"p_exceed": p, f"median_{dim}": median, "beta": beta})
+
+
+def _finish(out, dim, threshold, relative_to, method):
+    """The schema's metadata, ``median_<dim>`` renamed ``median`` (units of ``dim``), and the attributes."""
+    out = finish(out, table=schema.FRAGILITY)
+    if f"median_{dim}" in out:
+        out = out.rename({f"median_{dim}": "median"})
+        out["median"].attrs["intensity"] = dim
+    out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
+                     title="Probability that |theta| exceeds a rotation during the record")
+    return out
 
 
 def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke"):
     """Exceedance probability along the intensity ``dim`` and its lognormal fit.
 
-    Returns ``(p, median, beta)``: ``p`` over all swept dims; ``median`` and ``beta``
-    DataArrays over the other dims.
+    Returns a Dataset with ``p_exceed`` [1] over the dims of the dataset, and ``median`` (in the
+    units of ``dim``; ``median.attrs["intensity"]`` names it) and ``beta`` [1] over the other dims.
     """
     p = exceedance_probability(ds, threshold, relative_to, method)
-    if dim not in p.dims:
-        raise ValueError(f"parameter 'dim' must be a swept dimension of the dataset (got {dim!r}; have {list(p.dims)})")
-    im = p[dim]
-
-    def _fit(prob):
-        try:
-            return np.array(fit_lognormal_fragility(im.values, prob))
-        except ValueError:
-            return np.array([np.nan, np.nan])
-
-    fit = xr.apply_ufunc(_fit, p, input_core_dims=[[dim]], output_core_dims=[["fit"]], vectorize=True)
-    median = fit.isel(fit=0, drop=True).assign_attrs(units=_parameter(ds, dim).attrs.get("units", ""),
-                                                     long_name=f"median {dim} of the lognormal fragility")
-    beta = fit.isel(fit=1, drop=True).assign_attrs(units="1", long_name="lognormal dispersion beta")
-    return p, median, beta
+    return _finish(_fragility(ds, p, dim), dim, threshold, relative_to, method)
 
 
 @xr.register_dataset_accessor("rocking")
 class RockingAccessor:
-    """``ds.rocking.exceedance_probability(...)`` and ``ds.rocking.fragility_curve(...)``."""
+    """``ds.rocking.exceedance_probability(...)``, ``ds.rocking.fragility_curve(...)`` and
+    ``ds.rocking.fragility_dataset(...)`` on linearization, sweep and Monte Carlo results."""
 
     def __init__(self, ds):
         self._ds = ds
+
+    def threshold_angle(self, threshold, relative_to=None):
+        return threshold_angle(self._ds, threshold, relative_to)
 
     def exceedance_probability(self, threshold, relative_to=None, method="vanmarcke"):
         return exceedance_probability(self._ds, threshold, relative_to, method)
@@ -243,13 +329,15 @@ class RockingAccessor:
     def fragility_curve(self, threshold, dim="S0", relative_to=None, method="vanmarcke"):
         return fragility_curve(self._ds, threshold, dim, relative_to, method)
 
+    def fragility_dataset(self, threshold, relative_to=None, method="vanmarcke", dim="S0"):
+        return fragility_dataset(self._ds, threshold, relative_to, method, dim)
+
 
 def spot_positions(ds):
     """Integer positions of the Monte Carlo spot points along each grid dimension.
 
     Returns a dict ``{dim: DataArray over spot}`` for ``ds.isel(...)`` (pointwise), from the
-    ``spot_<dim>`` coordinates of a sweep result (``spot_case`` holds the case index; a swept
-    ``k`` is matched against ``k_value``).
+    ``spot_<dim>`` coordinates of a sweep result (``spot_case`` holds the case index).
     """
     positions = {}
     for dim in ds["status"].dims:
@@ -257,7 +345,7 @@ def spot_positions(ds):
         if dim == "case":
             idx = spot.astype(int)
         else:
-            grid = _parameter(ds, dim).values
+            grid = parameter(ds, dim).values
             idx = np.abs(grid[None, :] - spot[:, None]).argmin(axis=1)
         positions[dim] = xr.DataArray(idx, dims="spot")
     return positions
@@ -271,44 +359,30 @@ def mcs_exceedance_at_spots(ds, level):
     ``level`` may vary over the grid (it is taken at each spot point).  Returns
     ``(p, standard_error)`` over ``spot``.
     """
-    if level.ndim:
-        level = level.isel({d: i for d, i in spot_positions(ds).items() if d in level.dims})
+    level = level.isel({d: i for d, i in spot_positions(ds).items() if d in level.dims})
     peaks = ds["mcs_peak_abs_theta"]
     state = ds["mcs_sample_state"] if "mcs_sample_state" in ds else xr.zeros_like(peaks, dtype=np.int8)
-    over = state == 1
-    valid = (state == 0) | over
-    n = valid.sum("sample")
-    p = (((peaks > level) | over) & valid).sum("sample") / n.where(n > 0)
-    se = np.sqrt(p * (1 - p) / n.where(n > 0))
-    p.attrs = {"units": "1", "long_name": "probability that |theta| exceeds the threshold, from the Monte Carlo "
-                                          "sample peaks"}
-    se.attrs = {"units": "1", "long_name": "standard error of mcs_p_exceed (binomial)"}
-    return p, se
+    return sample_exceedance(peaks, state == SampleState.overturned, state != SampleState.diverged_or_failed, level)
 
 
 def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="S0"):
-    """The fragility result of a sweep: a Dataset with ``p_exceed`` over the swept dims and,
-    when ``dim`` is swept with at least two points, the lognormal ``median`` and ``beta``.
+    """The fragility result of a dataset: ``p_exceed`` over its dims, the rotation ``threshold_rad``
+    and, when ``dim`` is swept with at least two points, the lognormal ``median`` and ``beta``.
 
-    At Monte Carlo spot points (``spot`` dimension with per-sample ``mcs_peak_abs_theta``),
-    the same probability from the sample peaks (``mcs_p_exceed`` and its standard error)
-    is put beside the Gaussian one (``p_exceed_at_spot``).
+    At Monte Carlo spot points of a sweep (``spot`` dimension with per-sample ``mcs_peak_abs_theta``),
+    the same probability from the sample peaks (``mcs_p_exceed`` and its standard error
+    ``mcs_p_exceed_se``) is put beside the Gaussian one (``p_exceed_at_spot``).  For a Monte Carlo
+    result: ``mcs_p_exceed`` and ``mcs_p_exceed_se``.
     """
     level = threshold_angle(ds, threshold, relative_to)
-    p = exceedance_probability(ds, threshold, relative_to, method)
-    out = xr.Dataset({"p_exceed": p})
-    if dim in p.dims and p.sizes[dim] >= 2:
-        _, median, beta = fragility_curve(ds, threshold, dim, relative_to, method)
-        out["median"] = median
-        out["beta"] = beta
-    if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
-        out["mcs_p_exceed"], out["mcs_p_exceed_se"] = mcs_exceedance_at_spots(ds, level)
-        at_spot = p.isel(spot_positions(ds)) if p.ndim else p.expand_dims(spot=ds.sizes["spot"])
-        out["p_exceed_at_spot"] = at_spot.assign_attrs(
-            units="1", long_name=f"{p.attrs['long_name']} at the spot point")
-    out["threshold_rad"] = level.assign_attrs(units="rad", long_name="rotation threshold")
-    out = out.assign_coords({c: ds[c] for c in out.coords if c in ds.variables})     # units, long_name
-    out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
-                     Conventions="CF-1.8",
-                     title="Probability that |theta| exceeds a rotation during the record")
-    return out
+    if is_monte_carlo(ds):
+        p = exceedance_probability(ds, threshold, relative_to, method)
+        out = xr.Dataset({"mcs_p_exceed": p.drop_vars("mcs_p_exceed_se"), "mcs_p_exceed_se": p["mcs_p_exceed_se"]})
+    else:
+        p = exceedance_probability(ds, threshold, relative_to, method)
+        out = _fragility(ds, p, dim) if dim in p.dims and p.sizes[dim] >= 2 else xr.Dataset({"p_exceed": p})
+        if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
+            out["mcs_p_exceed"], out["mcs_p_exceed_se"] = mcs_exceedance_at_spots(ds, level)
+            out["p_exceed_at_spot"] = p.isel(spot_positions(ds)) if p.ndim else p.expand_dims(spot=ds.sizes["spot"])
+    out["threshold_rad"] = level
+    return _finish(out, dim, threshold, relative_to, "monte_carlo" if is_monte_carlo(ds) else method)

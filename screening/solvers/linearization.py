@@ -1,88 +1,151 @@
-"""``linearize``: the stochastic-linearization response of one block as a labelled dataset."""
+"""``linearize``: the stochastic-linearization response as a labelled dataset, for one point or a grid.
+
+Any numeric field of the model objects may be a scalar, a 1-d numpy array (swept along a
+dimension named after the parameter, with its values as coordinate) or an
+:class:`xarray.DataArray` (its own dimensions and coordinates).  The fields are broadcast by
+dimension name, the batched solver (:func:`screening.solvers.moments.solve_moments`) runs once on
+plain numpy arrays, and the result is labelled again (:func:`screening.solvers.datasets.linearization_dataset`).
+"""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import xarray as xr
 from scipy.special import erfc
 
-from screening import __version__
-from screening.condensation import get as get_condensation
-from screening.solvers.moments import DEFAULT_RTOL, HISTORY_VARIABLES, solve_moments
-from screening.status import PointStatus
-from screening.schema import STATUS, TIME, VARIABLES
+from screening import condensation as condensations
+from screening.condensation.base import Condensation
+from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
+from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
 
-
-def model_attributes(block, foundation, excitation):
-    """Flat dict of the (scalar) inputs, for dataset attributes."""
-    attrs = {"m": block.m, "b": block.b, "h": block.h, "I_cm": block.I_cm, "g": block.g,
-             "contact": foundation.contact, "k": foundation.k, "eps": foundation.eps,
-             "excitation": excitation.kind, "S0": excitation.S0,
-             "envelope": excitation.envelope.kind,
-             "intensity_convention": "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"}
-    if foundation.contact == "hunt_crossley":
-        attrs["lam"] = foundation.lam
-    else:
-        attrs["c"] = foundation.c
-    if excitation.kind == "kanai_tajimi":
-        attrs.update(omega_g=excitation.omega_g, zeta_g=excitation.zeta_g)
-    if excitation.envelope.kind == "exponential":
-        attrs.update(T1=excitation.envelope.T1, T2=excitation.envelope.T2)
-    return {k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in attrs.items()}
+METHOD = "stochastic linearization + Lyapunov moment equations"
 
 
+# ----------------------------------------------------------------------------- labelled inputs
+def _label(name, value):
+    """``value`` as a float DataArray: 0-d, on the dimension ``name`` (1-d array) or as given (DataArray)."""
+    if isinstance(value, xr.DataArray):
+        if "t" in value.dims:
+            raise ValueError(f"parameter '{name}': the dimension name 't' is reserved for time")
+        return value.astype(float)
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return xr.DataArray(arr)
+    if arr.ndim == 1:
+        return xr.DataArray(arr, dims=(name,), coords={name: arr})
+    raise ValueError(f"parameter '{name}' must be a scalar, a 1-d array (swept along a dimension named '{name}') "
+                     f"or an xarray.DataArray (got an array of shape {arr.shape})")
+
+
+def _same(a, b):
+    return np.shape(a) == np.shape(b) and np.array_equal(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+
+
+def labelled_fields(block, foundation, excitation):
+    """The model parameters by name as DataArrays aligned on their dimensions (not yet broadcast).
+
+    A default ``I_cm`` (the block's uniform-rectangle value of its ``m``, ``b``, ``h``) is derived
+    again from the labelled ``m``, ``b``, ``h``, so that it varies along their dimensions.
+    Raises ``ValueError`` for arrays of more than one dimension, coordinates that disagree along a
+    shared dimension, and a dimension named after a parameter that does not vary along it.
+    """
+    raw = model_fields(block, foundation, excitation)
+    fields = {name: _label(name, value) for name, value in raw.items()}
+    try:
+        fields = dict(zip(fields, xr.align(*fields.values(), join="exact")))
+    except ValueError as exc:
+        raise ValueError("model parameters given as DataArrays must have the same coordinate values along a "
+                         f"shared dimension ({' '.join(str(exc).split())})") from None
+    geometry = {n: raw[n] for n in ("m", "b", "h", "g")}
+    if _same(raw["I_cm"], type(block)(**geometry).I_cm):
+        fields["I_cm"] = type(block)(**{n: fields[n] for n in geometry}).I_cm.astype(float)
+    for name, field in fields.items():
+        for dim in field.dims:
+            own = fields.get(dim)
+            if own is not None and not (own.dims == (dim,) and (dim not in own.coords or _same(own[dim], own))):
+                raise ValueError(f"parameter '{name}' varies along a dimension named '{dim}', which is a parameter: "
+                                 f"'{dim}' must then be a 1-d array on it with its values as coordinate")
+    return fields
+
+
+def broadcast_fields(fields):
+    """``(dims, arrays)``: the fields broadcast by dimension name, as numpy arrays on ``dims``."""
+    arrays = xr.broadcast(*fields.values())
+    dims = arrays[0].dims if arrays else ()
+    return dims, {name: np.array(a.transpose(*dims).values, dtype=float) for name, a in zip(fields, arrays)}
+
+
+def with_fields(obj, arrays):
+    """A copy of a model object whose fields named in ``arrays`` are replaced (the envelope's too)."""
+    names = {f.name for f in dataclasses.fields(obj)}
+    changes = {name: value for name, value in arrays.items() if name in names and name != "envelope"}
+    if "envelope" in names:
+        changes["envelope"] = with_fields(obj.envelope, arrays)
+    return dataclasses.replace(obj, **changes)
+
+
+def on_own_dims(function, fields, names, block, foundation):
+    """``function(block, foundation)`` on the grid of the parameters ``names`` only, as a DataArray."""
+    dims, arrays = broadcast_fields({name: fields[name] for name in names})
+    value = function(with_fields(block, arrays), with_fields(foundation, arrays))
+    return xr.DataArray(np.broadcast_to(value, arrays[names[0]].shape), dims=dims)
+
+
+# ----------------------------------------------------------------------------- entry point
 def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL, condensation="paper"):
     """Time-varying second-order rocking statistics by stochastic linearization (sections 2.4–2.6).
 
     Parameters
     ----------
-    block, foundation, excitation : scalar model objects (for batches of points use
-        :func:`screening.solvers.moments.solve_moments`, which this wraps).
+    block, foundation, excitation : model objects.  Each numeric field may be a scalar, a 1-d numpy
+        array (a dimension named after the parameter, with the values as coordinate) or an
+        :class:`xarray.DataArray` (its own dimensions and coordinates); the fields are broadcast by
+        dimension name and all points are integrated in one batched call.
     t_end : record length [s]. dt : output step [s] (the solver is adaptive and finer).
     rtol : solver relative tolerance.
-    condensation : ``"paper"`` (eqs. 17–25, default) or ``"cubic"`` (static balance with the
-        cubic term, :mod:`screening.condensation.cubic`); recorded in ``attrs["condensation"]``.
+    condensation : a registered condensation (:func:`screening.condensation.get`): ``"paper"``
+        (eqs. 17–25, default) or ``"cubic"`` (static balance with the cubic term); recorded in
+        ``attrs["condensation"]``.
 
     Returns
     -------
-    xarray.Dataset on the coordinate ``t`` [s] with ``var_theta`` [rad2], ``var_theta_dot``
-    [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1], ``c_eq`` [N m s rad-1], ``k_eq``
-    [N m rad-1], ``p_uplift`` [1] (eq. 58), the scalar summaries ``peak_var_theta``,
-    ``t_peak_var_theta``, ``peak_p_uplift``, ``min_k_eq``, ``status`` (CF flag variable)
-    and ``t_stop``.  Inputs are stored as attributes.  Values after a point stopped
-    (status != 0) are NaN.  With ``"cubic"`` the attributes also hold ``theta_capacity`` [rad]
-    (softening beds: no quasi-static equilibrium beyond it; ``inf`` otherwise) and
+    xarray.Dataset on the broadcast dimensions and ``t`` [s] with ``var_theta`` [rad2],
+    ``var_theta_dot`` [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1], ``c_eq`` [N m s rad-1],
+    ``k_eq`` [N m rad-1], ``p_uplift`` [1] (eq. 58), the per-point summaries ``peak_var_theta``,
+    ``t_peak_var_theta``, ``peak_p_uplift``, ``min_k_eq``, ``status`` (CF flag variable),
+    ``t_stop``, ``n_steps``, and ``theta_ul`` [rad] (of the condensation) and ``slenderness``
+    [rad] on the dimensions of their parameters.  The parameters are coordinates (scalar when
+    fixed); contact law, excitation, envelope and condensation are attributes.  Values after a
+    point stopped (status != 0) are NaN.  Scalar inputs give 0-d summaries.
+
+    A condensation with a capacity angle (``"cubic"`` on softening beds: no quasi-static
+    equilibrium beyond it; ``inf`` otherwise) adds ``theta_capacity`` [rad] and
     ``peak_p_beyond_capacity``, the Gaussian probability ``P(|theta| > theta_capacity)`` at the
-    peak ``var_theta`` (where the cubic condensation leaves its validity).
+    peak ``var_theta``: attributes for one point, variables for a grid.
     """
-    cond = get_condensation(condensation)
+    cond = condensations.get(condensation)
     t = output_times(t_end, dt)
-    res = solve_moments(block, foundation, excitation, t, rtol=rtol, condensation=cond)
-    if res["status"].ndim != 0:
-        raise ValueError("linearize() takes scalar model parameters; use "
-                         "screening.solvers.moments.solve_moments for arrays of points")
-    data = {name: (("t",), res[name], VARIABLES[name]) for name in HISTORY_VARIABLES}
-    for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "t_stop",
-                 "n_steps"):
-        data[name] = ((), res[name], VARIABLES[name])
-    data["status"] = ((), res["status"], STATUS)
-    theta_ul_meta = dict(VARIABLES["theta_ul"])
-    if condensation == "cubic":
-        theta_ul_meta["long_name"] = ("static uplift threshold angle, cubic static balance: "
-                                      "b theta_ul (1 + 2 eps b^2 theta_ul^2) = m g / (2 b k)")
-    data["theta_ul"] = ((), cond.uplift_threshold(block, foundation), theta_ul_meta)
-    ds = xr.Dataset(data, coords={"t": ("t", t, TIME)})
-    ds.attrs.update(model_attributes(block, foundation, excitation))
-    ds.attrs.update(method="stochastic linearization + Lyapunov moment equations",
-                    status_meaning=PointStatus(int(res["status"])).name, rtol=float(rtol),
-                    condensation=cond.name, screening_version=__version__)
-    if condensation == "cubic":
-        cap = float(cond.capacity_angle(block, foundation))
-        peak = float(res["peak_var_theta"])
-        beyond = float(erfc(cap / np.sqrt(2.0 * peak))) if np.isfinite(cap) and peak > 0 else 0.0
-        ds.attrs.update(theta_capacity=cap, peak_p_beyond_capacity=beyond,
-                        condensation_note="quasi-static z_cb from the static vertical balance with the "
-                                          "cubic term (eqs. 13, 15); C, K from eqs. 14, 16 with "
-                                          "zdot_cb = z_cb'(theta) theta'")
-    return ds
+    fields = labelled_fields(block, foundation, excitation)
+    dims, arrays = broadcast_fields(fields)
+    point_block, point_foundation = with_fields(block, arrays), with_fields(foundation, arrays)
+    structure = [f.name for obj in (block, foundation) for f in dataclasses.fields(obj)]
+    derived = {"theta_ul": on_own_dims(cond.uplift_threshold, fields, structure, block, foundation),
+               "slenderness": on_own_dims(lambda blk, _: blk.slenderness, fields, ["b", "h"], block, foundation)}
+    res = solve_moments(point_block, point_foundation, with_fields(excitation, arrays), t, rtol=rtol,
+                        condensation=cond)
+    attrs = {**model_labels(foundation, excitation), "condensation": cond.name, "condensation_note": cond.description,
+             "method": METHOD, "rtol": float(rtol)}
+    if type(cond).capacity_angle is not Condensation.capacity_angle:
+        capacity = on_own_dims(cond.capacity_angle, fields, structure, block, foundation)
+        peak = xr.DataArray(res["peak_var_theta"], dims=dims)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            beyond = xr.where(np.isfinite(capacity) & (peak > 0),
+                              erfc(capacity / np.sqrt(2.0 * peak.where(peak > 0, 1.0))), 0.0)
+        if dims:
+            derived.update(theta_capacity=capacity, peak_p_beyond_capacity=beyond)
+        else:
+            attrs.update(theta_capacity=float(capacity), peak_p_beyond_capacity=float(beyond))
+    return linearization_dataset(res, t, dims, fields, derived, attrs)

@@ -37,17 +37,16 @@ import sys
 import time
 
 import numpy as np
-import xarray as xr
 
 from screening.solvers import mcs_kernels as kern
 from screening.condensation import get as get_condensation
 from screening.condensation.paper import uplift_threshold
-from screening.status import DIVERGENCE_TEXT, DivergenceReason
 from screening.physics.contact import static_indentation_exact
 from screening.workflow.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
                         spectral_plan, stationary_samples, validate_seed, vertical_frequency)
 from screening.solvers.timegrid import output_times
+from screening.solvers.datasets import monte_carlo_dataset
 
 MODELS = ("coupled", "condensed")
 
@@ -68,10 +67,6 @@ DEFAULT_NUMERICS = {
     "max_flight_time": 0.5,     # longest admissible continuous flight [s]
     "chunk_size": 64,           # samples synthesized and integrated per batch
 }
-
-INTENSITY_CONVENTION = ("E[xi(t) xi(s)] = 2 pi S0 delta(t - s): S0 is the two-sided PSD level of xi "
-                        "over -inf < omega < inf")
-
 
 # ----------------------------------------------------------------------------- validation
 def _check_integer(name, value, lower, text):
@@ -165,19 +160,6 @@ def ensemble_statistics(theta, theta_dot, uplift, used):
     return {"var_theta": var_x, "var_theta_dot": var_v, "cov_theta_theta_dot": cov,
             "var_theta_se": se(dx, var_x), "var_theta_dot_se": se(dv, var_v),
             "p_uplift": np.mean(uplift[used], axis=0)}
-
-
-def _status_text(n_samples, n_overturned, n_diverged):
-    n_used = n_samples - n_overturned - n_diverged
-    if n_used >= 2:
-        return "ok"
-    if n_overturned == n_samples:
-        return "all samples overturned"
-    if n_diverged == n_samples:
-        return "all samples diverged"
-    if n_used == 0:
-        return f"all samples excluded ({n_overturned} overturned, {n_diverged} diverged)"
-    return f"fewer than 2 usable samples ({n_overturned} overturned, {n_diverged} diverged)"
 
 
 def _show_progress(progress, n_samples, chunk_size):
@@ -301,84 +283,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     used = ~(overturned | diverged)
     stats = ensemble_statistics(theta, theta_dot, uplift, used)
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
-    return _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
+    return monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                           block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
                           h_min, wall, cond.name)
 
-
-def _build_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
-                   block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
-                   condensation="paper"):
-    n_used = n_samples - n_over - n_div
-    meta = {
-        "var_theta": ("rad2", "ensemble variance of the rotation theta"),
-        "var_theta_dot": ("rad2 s-2", "ensemble variance of the rotation rate theta'"),
-        "cov_theta_theta_dot": ("rad2 s-1", "ensemble covariance of theta and theta'"),
-        "var_theta_se": ("rad2", "standard error of var_theta"),
-        "var_theta_dot_se": ("rad2 s-2", "standard error of var_theta_dot"),
-        "p_uplift": ("1", "fraction of samples in uplift"),
-    }
-    data = {name: ("t", stats[name], {"units": u, "long_name": ln}) for name, (u, ln) in meta.items()}
-    data["peak_abs_theta"] = ("sample", peak, {"units": "rad", "long_name": "peak |theta| over the record "
-                                                                            "(up to overturning or divergence)"})
-    data["overturned"] = ("sample", overturned, {"units": "1", "long_name": "sample overturned (|theta| > atan(b/h))"})
-    data["diverged"] = ("sample", diverged, {"units": "1", "long_name": "sample diverged (excluded)"})
-    data["n_steps"] = ("sample", n_acc + n_rej, {"units": "1", "long_name": "integration steps (accepted + rejected)"})
-    data["n_overturned"] = ((), n_over, {"units": "1", "long_name": "number of overturned samples"})
-    data["n_diverged"] = ((), n_div, {"units": "1", "long_name": "number of diverged samples"})
-    data["n_used"] = ((), n_used, {"units": "1", "long_name": "number of samples in the statistics"})
-    coords = {"t": ("t", times, {"units": "s", "long_name": "time"}),
-              "sample": ("sample", np.arange(n_samples), {"long_name": "sample index (default_rng([seed, i]))"})}
-    env = excitation.envelope
-    reasons = sorted({DIVERGENCE_TEXT[DivergenceReason(int(r))] for r in reason[diverged]})
-    accepted = n_acc[~overturned & ~diverged]
-    attrs = {
-        "title": f"Monte Carlo rocking response ({model} model)",
-        "status": _status_text(n_samples, n_over, n_div),
-        "model": model,
-        "n_samples": n_samples,
-        "seed": seed,
-        "t_end": t_end,
-        "dt_output": dt,
-        "excitation": excitation.kind,
-        "S0": float(excitation.S0),
-        "intensity_convention": INTENSITY_CONVENTION,
-        "envelope": env.kind,
-        "block_m": float(block.m), "block_b": float(block.b), "block_h": float(block.h),
-        "block_I_cm": float(block.I_cm), "block_g": float(block.g),
-        "foundation_contact": foundation.contact,
-        "foundation_k": float(foundation.k), "foundation_eps": float(foundation.eps),
-        "foundation_damping": float(foundation.damping),
-        "statistics": "moments about the sample mean (ddof=1) over samples that neither overturned nor diverged",
-        "integrator": "adaptive Dormand-Prince 5(4), PI step control, steps land on output times",
-        "rtol": opts["rtol"],
-        "h_max": opts["h_max"],
-        "dt_integration_mean": float(t_end * accepted.size / max(accepted.sum(), 1)) if accepted.size else float("nan"),
-        "dt_integration_min": float(np.min(h_min)) if np.isfinite(np.min(h_min)) else float("nan"),
-        "dt_integration_note": "dt_integration_mean = t_end / mean accepted steps of the used samples; "
-                               "dt_integration_min = smallest accepted step after the start-up ramp",
-        "synthesis": "spectral representation (Shinozuka-Deodatis), random phases, FFT; cubic Hermite between grid points",
-        "cutoff_rad_s": float(plan.cutoff),
-        "d_omega_rad_s": float(plan.d_omega),
-        "n_frequencies": plan.n_frequencies,
-        "dt_synthesis": float(plan.dt),
-        "input_stationary_variance": plan.stationary_variance,
-        "max_flight_time": opts["max_flight_time"],
-        "diverged_reasons": ", ".join(reasons) if reasons else "none",
-        "wall_time_s": float(wall),
-    }
-    if env.kind == "exponential":
-        attrs["envelope_T1"], attrs["envelope_T2"] = float(env.T1), float(env.T2)
-    if excitation.kind == "kanai_tajimi":
-        attrs["omega_g"], attrs["zeta_g"] = float(excitation.omega_g), float(excitation.zeta_g)
-    if model == "condensed":
-        attrs["condensation"] = condensation
-        cond = get_condensation(condensation)
-        attrs["theta_ul"] = float(cond.uplift_threshold(block, foundation))
-        attrs["m_sdof"] = float(block.m_sdof)
-        if condensation == "cubic":
-            attrs["C1"] = float(cond.damping_at_rest(block, foundation))
-            attrs["theta_capacity"] = float(cond.capacity_angle(block, foundation))
-        else:
-            attrs["C1"] = float(cond.damping_at_rest(block, foundation))
-    return xr.Dataset(data, coords=coords, attrs=attrs)

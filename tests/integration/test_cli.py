@@ -246,14 +246,14 @@ def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_res
         assert frag["median"].attrs["units"] == PARAMETERS["S0"]["units"]
         assert np.nanmin(expected) < 1e-6 and np.nanmax(expected) > 0.99 and np.all(np.isfinite(frag["median"]))
         # the Monte Carlo spot point: same probability from its per-sample peaks
-        level = float(threshold_angle(res, 5.0, "theta_ul"))            # k is not swept: one level
+        i = int(np.argmin(np.abs(res["eps"].values - float(res["spot_eps"][0]))))
+        j = int(np.argmin(np.abs(res["S0"].values - float(res["spot_S0"][0]))))
+        level = float(threshold_angle(res, 5.0, "theta_ul").isel(eps=i, S0=j))   # theta_ul is stored per point
         state = res["mcs_sample_state"].values[0]
         p_mcs, se = mcs_exceedance_probability(res["mcs_peak_abs_theta"].values[0][state != 2], level,
                                                overturned=(state == 1)[state != 2])
         assert float(frag["mcs_p_exceed"][0]) == pytest.approx(p_mcs, abs=1e-15)
         assert float(frag["mcs_p_exceed_se"][0]) == pytest.approx(se, abs=1e-15)
-        i = int(np.argmin(np.abs(res["eps"].values - float(res["spot_eps"][0]))))
-        j = int(np.argmin(np.abs(res["S0"].values - float(res["spot_S0"][0]))))
         assert float(frag["p_exceed_at_spot"][0]) == expected[i, j]
         assert frag.attrs["Conventions"] == "CF-1.8" and frag.attrs["method"] == "vanmarcke"
 

@@ -42,8 +42,9 @@ def test_dataset_metadata(results):
         assert ds[name].dims == ("t",)
         assert ds[name].attrs["units"] == VARIABLES[name]["units"]
         assert ds[name].attrs["long_name"]
-    assert ds.attrs["S0"] == 2.4e-5 and ds.attrs["eps"] == 6e7 and ds.attrs["excitation"] == "white"
-    assert ds.status.attrs["flag_meanings"].split()[0] == "ok"
+    assert float(ds["S0"]) == 2.4e-5 and float(ds["eps"]) == 6e7 and ds.attrs["excitation"] == "white"  # parameters: coordinates
+    flags = dict(zip(ds.status.attrs["flag_values"].tolist(), ds.status.attrs["flag_meanings"].split()))
+    assert flags[0] == "ok"
 
 
 def test_higher_intensity_gives_more_uplift(results):

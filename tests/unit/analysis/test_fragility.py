@@ -1,8 +1,12 @@
 import numpy as np
 import pytest
+import xarray as xr
 from scipy import integrate, stats
 
+from helpers import GRID
+
 from screening import Block, Foundation, WhiteNoise, linearize
+from screening.schema import PARAMETERS
 from screening.analysis.fragility import (exceedance_probability_from_moments, fit_lognormal_fragility,
                                  lognormal_fragility, mcs_exceedance_probability,
                                  oscillator_bandwidth, upcrossing_rate, vanmarcke_factor)
@@ -90,18 +94,13 @@ def test_accessor_on_a_linearization_result():
 
 
 def test_fragility_curve_over_s0_from_a_batch():
-    import xarray as xr
-    from screening.solvers.moments import solve_moments
-    from screening.solvers.timegrid import output_times
     S0 = np.logspace(-6, -3, 13)
-    t = output_times(20.0, 0.05)
-    res = solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(S0), t)
-    ds = xr.Dataset({k: (("S0", "t"), res[k]) for k in ("var_theta", "var_theta_dot", "cov_theta_theta_dot",
-                                                         "c_eq", "k_eq")} | {"status": ("S0", res["status"])},
-                    coords={"S0": S0, "t": t}, attrs=dict(m=8.67, b=0.035, h=0.21, g=9.81, k=2.89e7))
-    p, median, beta = ds.rocking.fragility_curve(0.5, dim="S0", relative_to="theta_ul")
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(S0))
+    curve = ds.rocking.fragility_curve(0.5, dim="S0", relative_to="theta_ul")
+    p, median, beta = curve["p_exceed"], curve["median"], curve["beta"]
     assert p.dims == ("S0",) and np.all(np.diff(p.values) >= 0)
     assert S0[0] < float(median) < S0[-1] and 0 < float(beta) < 5
+    assert median.attrs["units"] == PARAMETERS["S0"]["units"] and beta.attrs["units"] == "1"
 
 
 @pytest.mark.parametrize("S0, ratio", [(2e-6, 0.4), (5e-6, 0.4), (5e-6, 0.6)])
@@ -127,3 +126,152 @@ def test_gaussian_fragility_matches_monte_carlo_peaks_on_a_linear_case(S0, ratio
     assert 0.05 < p_mcs < 0.95
     assert abs(p_vanmarcke - p_mcs) < 3 * se + 0.03
     assert p_poisson > p_vanmarcke                      # Poisson ignores clumping: conservative
+
+
+# ---------------------------------------------------------------- thresholds read from the dataset
+def test_theta_ul_threshold_of_a_cubic_result_is_the_stored_one():
+    from screening.analysis.fragility import threshold_angle
+    from screening.condensation import cubic
+
+    block, bed = Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 6e7)
+    ds = linearize(block, bed, WhiteNoise(5e-4), t_end=4.0, condensation="cubic")
+    level = threshold_angle(ds, 0.5, "theta_ul")
+    assert float(level) == 0.5 * float(ds["theta_ul"]) == 0.5 * cubic.uplift_threshold(block, bed)
+    assert float(level) != pytest.approx(0.5 * block.m * block.g / (2 * block.b**2 * bed.k), rel=1e-3)  # not the paper's
+    assert float(ds.rocking.threshold_angle(0.2, "slenderness")) == 0.2 * block.slenderness
+
+
+def test_stored_slenderness_is_read_and_the_geometry_is_only_a_fallback():
+    from screening.analysis.fragility import model_quantity, threshold_angle
+
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), t_end=2.0)
+    assert float(threshold_angle(ds.assign(slenderness=0.5), 0.1, "slenderness")) == pytest.approx(0.05, rel=1e-15)
+    old = ds.drop_vars("slenderness")                      # a file written before slenderness was stored
+    assert float(model_quantity(old, "slenderness")) == float(ds["slenderness"])
+    with pytest.raises(KeyError, match="slenderness.*missing b, h"):
+        model_quantity(old.drop_vars(["b", "h"]), "slenderness")
+    with pytest.raises(KeyError, match="theta_ul"):
+        threshold_angle(ds.drop_vars("theta_ul"), 0.5, "theta_ul")
+    with pytest.raises(ValueError, match="relative_to"):
+        threshold_angle(ds, 0.5, "height")
+
+
+# ---------------------------------------------------------------- broadcast linearize results
+def test_accessor_on_a_broadcast_linearization_equals_point_by_point_results():
+    eps, S0 = np.array([-6e5, 6e7]), np.array([1e-5, 2e-4, 5e-4])
+    block = Block(8.67, 0.035, 0.21)
+    ds = linearize(block, Foundation(2.89e7, 8.95e8, eps), WhiteNoise(S0), t_end=6.0)
+    for relative_to, threshold in ((None, 2e-3), ("theta_ul", 2.0), ("slenderness", 0.02)):
+        p = ds.rocking.exceedance_probability(threshold, relative_to)
+        assert p.dims == ("eps", "S0") and p.attrs["units"] == "1" and p.name == "p_exceed"
+        for i, e in enumerate(eps):
+            for j, s in enumerate(S0):
+                one = linearize(block, Foundation(2.89e7, 8.95e8, e), WhiteNoise(s), t_end=6.0)
+                assert float(p[i, j]) == pytest.approx(
+                    float(one.rocking.exceedance_probability(threshold, relative_to)), rel=1e-9, abs=1e-15)
+    curve = ds.rocking.fragility_curve(2.0, dim="S0", relative_to="theta_ul")
+    assert curve["median"].dims == ("eps",) and curve["median"].attrs["intensity"] == "S0"
+    frag = ds.rocking.fragility_dataset(2.0, relative_to="theta_ul")
+    assert set(frag.data_vars) == {"p_exceed", "median", "beta", "threshold_rad"}
+    np.testing.assert_array_equal(frag["threshold_rad"].values, 2.0 * ds["theta_ul"].values)
+
+
+# ---------------------------------------------------------------- Monte Carlo results
+def test_exceedance_of_a_monte_carlo_result_is_the_sample_fraction_with_its_standard_error():
+    from screening import monte_carlo
+
+    block, bed = Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 6e7)
+    mc = monte_carlo(block, bed, WhiteNoise(5e-3), n_samples=12, model="coupled", t_end=6.0, dt=0.1, seed=3,
+                     progress=False)
+    assert 0 < int(mc.n_overturned) < 12                    # overturned samples count as exceedances
+    for threshold, relative_to in ((0.1, None), (100.0, "theta_ul"), (0.8, "slenderness")):
+        level = threshold * {None: 1.0, "theta_ul": float(mc["theta_ul"]), "slenderness": block.slenderness}[
+            relative_to]
+        used = ~mc["diverged"].values
+        expected, se = mcs_exceedance_probability(mc["peak_abs_theta"].values[used], level,
+                                                  mc["overturned"].values[used])
+        p = mc.rocking.exceedance_probability(threshold, relative_to)
+        assert p.name == "mcs_p_exceed" and p.attrs["units"] == "1"
+        assert float(p) == pytest.approx(expected, abs=1e-15)
+        assert float(p["mcs_p_exceed_se"]) == pytest.approx(se, abs=1e-15)
+        assert 0 < float(p) < 1
+    frag = mc.rocking.fragility_dataset(100.0, relative_to="theta_ul")
+    assert set(frag.data_vars) == {"mcs_p_exceed", "mcs_p_exceed_se", "threshold_rad"}
+    assert frag.attrs["method"] == "monte_carlo" and frag["mcs_p_exceed_se"].attrs["units"] == "1"
+    with pytest.raises(ValueError, match="'dim'"):
+        mc.rocking.fragility_curve(100.0, relative_to="theta_ul")
+
+
+# ---------------------------------------------------------------- sweeps whose cases differ in geometry
+#: the sweep tests' grid with eps fixed and three blocks of different b, h as cases
+CASES = GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]\n", "").replace('title = "sweep test"', 'title = "three shapes"') + """
+[[case]]
+name = "slim"
+[[case]]
+name = "squat"
+block.b = 0.06
+block.h = 0.15
+[[case]]
+name = "tall"
+block.b = 0.03
+block.h = 0.30
+[mcs]
+points = "auto"
+count = 1
+samples = 6
+model = "condensed"
+"""
+
+
+@pytest.fixture(scope="module")
+def geometry_sweep(tmp_path_factory, one_worker):
+    from helpers import quiet
+    from screening.workflow.study import parse_study
+    from screening.workflow.sweep import run_sweep
+
+    path = tmp_path_factory.mktemp("cases") / "cases.nc"
+    run_sweep(parse_study(CASES, name="cases"), path, client=one_worker, progress=False, log=quiet)
+    return path
+
+
+@pytest.mark.parametrize("threshold, relative_to", [(0.3, "slenderness"), (3.0, "theta_ul")])
+def test_fragility_of_cases_with_different_blocks(geometry_sweep, threshold, relative_to):
+    from screening.analysis.fragility import fragility_dataset
+    from screening.workflow.reader import open_result
+
+    with open_result(geometry_sweep) as ds:
+        ds = ds.load()
+    assert ds["b"].dims == ("case",) and len(set(ds["b"].values)) == 3
+    frag = fragility_dataset(ds, threshold, relative_to)
+    assert frag["p_exceed"].dims == ("case", "S0") and frag["median"].dims == ("case",)
+    if relative_to == "slenderness":                       # stored per point: atan(b/h) of each case
+        per_case = xr.DataArray(np.arctan2(ds["b"].values, ds["h"].values), dims="case")
+        np.testing.assert_allclose(ds["slenderness"].values, per_case.broadcast_like(ds["slenderness"]).values,
+                                   rtol=1e-15)
+        expected = threshold * ds["slenderness"]
+    else:                                                  # per point: (case, S0)
+        expected = threshold * ds["theta_ul"]
+    assert frag["threshold_rad"].dims == expected.dims
+    np.testing.assert_allclose(frag["threshold_rad"].values, expected.values, rtol=1e-15)
+    assert len({round(float(x), 12) for x in np.ravel(frag["threshold_rad"].values)}) >= 3   # the cases differ
+    for c in range(3):                                      # each case alone gives the same probabilities
+        alone = fragility_dataset(ds.isel(case=c), threshold, relative_to)
+        np.testing.assert_allclose(alone["p_exceed"].values, frag["p_exceed"].isel(case=c).values, rtol=1e-14)
+    assert np.isfinite(frag["mcs_p_exceed"].values).all() and frag["p_exceed_at_spot"].dims == ("spot",)
+
+
+@pytest.mark.parametrize("relative_to, threshold", [("slenderness", "0.3"), ("theta_ul", "3")])
+def test_fragility_command_on_cases_with_different_blocks(geometry_sweep, tmp_path, relative_to, threshold):
+    from screening.analysis.fragility import fragility_dataset
+    from screening.cli import main
+    from screening.workflow.reader import open_result
+
+    out = tmp_path / f"frag_{relative_to}.nc"
+    assert main(["fragility", str(geometry_sweep), "--threshold", threshold, "--relative-to", relative_to,
+                 "--out", str(out)]) == 0
+    with open_result(geometry_sweep) as ds, xr.open_dataset(out) as frag:
+        expected = fragility_dataset(ds, float(threshold), relative_to)
+        assert frag["p_exceed"].dims == ("case", "S0") and frag["median"].dims == ("case",)
+        np.testing.assert_array_equal(frag["p_exceed"].values, expected["p_exceed"].values)
+        np.testing.assert_array_equal(frag["threshold_rad"].values, expected["threshold_rad"].values)
+        assert frag["median"].attrs["units"] == PARAMETERS["S0"]["units"]

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+from screening import schema
 from screening.solvers import mcs_kernels as kern
 from screening.solvers import montecarlo as mc
 from screening.condensation import get as get_condensation, paper
@@ -197,7 +198,7 @@ def test_dataset_layout_units_and_attributes(tmp_path):
     ds = small_run(n_samples=5, model="condensed")
     assert ds.attrs["status"] == "ok"
     np.testing.assert_allclose(ds.t.values, np.arange(21) * 0.05)
-    assert ds.t.attrs == {"units": "s", "long_name": "time"}
+    assert ds.t.attrs == schema.TIME
     units = {"var_theta": "rad2", "var_theta_dot": "rad2 s-2", "cov_theta_theta_dot": "rad2 s-1", "p_uplift": "1",
              "var_theta_se": "rad2", "var_theta_dot_se": "rad2 s-2", "peak_abs_theta": "rad"}
     for name, unit in units.items():
@@ -210,10 +211,13 @@ def test_dataset_layout_units_and_attributes(tmp_path):
     assert int(ds.n_used) + int(ds.n_overturned) + int(ds.n_diverged) == 5
     assert ds.var_theta[0] == 0.0 and float(ds.var_theta.max()) > 0.0          # starts from rest
     assert np.all(ds.peak_abs_theta > 0)
-    for key in ("model", "n_samples", "seed", "S0", "rtol", "dt_integration_mean", "cutoff_rad_s",
+    for key in ("model", "n_samples", "seed", "rtol", "dt_integration_mean", "cutoff_rad_s",
                 "intensity_convention", "statistics"):
         assert key in ds.attrs
-    assert ds.attrs["model"] == "condensed" and ds.attrs["n_samples"] == 5 and ds.attrs["S0"] == 2.4e-5
+    # the model parameters are scalar coordinates (they were attributes, S0 and block_m-style names)
+    assert ds.attrs["model"] == "condensed" and ds.attrs["n_samples"] == 5 and float(ds["S0"]) == 2.4e-5
+    for name in ("m", "b", "h", "I_cm", "g", "k", "lam", "eps", "S0", "T1", "T2"):
+        assert name in ds.coords and ds[name].ndim == 0 and ds[name].attrs["units"] == schema.PARAMETERS[name]["units"]
     assert 0 < ds.attrs["dt_integration_mean"] < 0.05
     for value in ds.attrs.values():
         assert isinstance(value, (int, float, str))                              # plain numbers / strings
@@ -237,7 +241,7 @@ def test_reproducible_and_independent_of_chunking():
 def test_kanai_tajimi_and_winkler_runs(model):
     kt = KanaiTajimi(S0=2.5e-4, omega_g=10.0, zeta_g=0.4, envelope=Envelope(4.0, 2.0))
     ds = small_run(model=model, excitation=kt, foundation=WinklerFoundation(k=2.89e7, c=2e4, eps=-6e5))
-    assert ds.attrs["status"] == "ok" and ds.attrs["omega_g"] == 10.0
+    assert ds.attrs["status"] == "ok" and float(ds["omega_g"]) == 10.0
     assert np.all(np.isfinite(ds.var_theta)) and float(ds.var_theta[-1]) > 0
 
 
@@ -464,7 +468,7 @@ def test_cubic_condensed_run_records_its_condensation():
     ds = small_run(model="condensed", condensation="cubic")
     paper = small_run(model="condensed")
     assert ds.attrs["condensation"] == "cubic" and paper.attrs["condensation"] == "paper"
-    assert ds.attrs["theta_ul"] == cubic.uplift_threshold(BLOCK, HC)
+    assert float(ds["theta_ul"]) == cubic.uplift_threshold(BLOCK, HC)
     assert ds.attrs["C1"] == pytest.approx(cubic.damping_at_rest(BLOCK, HC), rel=1e-15)
     assert ds.attrs["theta_capacity"] == math.inf and "condensation" not in small_run().attrs
     assert not np.allclose(ds.var_theta.values[1:], paper.var_theta.values[1:], rtol=1e-3, atol=0.0)

@@ -1,0 +1,188 @@
+"""The datasets the solvers return, built in one place.
+
+Every dataset follows the package's contract:
+
+* model parameters are coordinates named as in :data:`screening.schema.PARAMETERS` (``m``, ``b``,
+  ``h``, ``I_cm``, ``g``, ``k``, ``lam`` or ``c``, ``eps``, ``S0``, ``omega_g``, ``zeta_g``, ``T1``,
+  ``T2`` where they apply): scalar coordinates when fixed, coordinates on dimensions when they vary;
+* the string choices (``contact``, ``excitation``, ``envelope``, ``condensation``) are attributes;
+* the derived ``theta_ul`` [rad] (of the condensation used) and ``slenderness`` [rad]
+  (``atan(b/h)``) are data variables on the dimensions of their parameters: downstream code
+  reads them and never recomputes them;
+* units and long names come from :func:`screening.schema.apply_schema`, called once per dataset.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from screening import condensation as condensations, schema
+from screening.condensation.base import Condensation
+from screening.solvers.moments import HISTORY_VARIABLES
+from screening.status import DIVERGENCE_TEXT, DivergenceReason
+
+#: Per-point summaries of the linearization (beside ``status``).
+LINEARIZATION_SUMMARIES = ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "t_stop", "n_steps")
+
+#: Ensemble statistics of a Monte Carlo run, on ``t``.
+MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",
+                          "p_uplift")
+
+
+def model_fields(block, foundation, excitation):
+    """The numeric fields of the model objects by parameter name, in the order of the objects.
+
+    The names are those of :data:`screening.schema.PARAMETERS` (``lam`` or ``c`` by contact law,
+    ``omega_g``, ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
+    """
+    fields = {}
+    for obj in (block, foundation, excitation, excitation.envelope):
+        for field in dataclasses.fields(obj):
+            if field.name != "envelope":
+                fields[field.name] = getattr(obj, field.name)
+    return fields
+
+
+def model_labels(foundation, excitation):
+    """The string choices of the model objects: ``contact``, ``excitation``, ``envelope``."""
+    return {"contact": foundation.contact, "excitation": excitation.kind, "envelope": excitation.envelope.kind}
+
+
+def _coordinates(times, parameters):
+    """``t`` and the parameters as coordinates, with the coordinates the parameters' DataArrays bring along."""
+    coords = {"t": ("t", np.asarray(times, dtype=float))}
+    for value in parameters.values():
+        if isinstance(value, xr.DataArray):
+            coords.update({c: var.variable for c, var in value.coords.items() if c not in parameters})
+    for name, value in parameters.items():
+        coords[name] = value.variable if isinstance(value, xr.DataArray) else ((), float(value))
+    return coords
+
+
+def _declared(name):
+    try:
+        schema.attributes(name)
+    except KeyError:
+        return False
+    return True
+
+
+def finish(ds, table=None):
+    """:func:`screening.schema.apply_schema` on ``ds``, leaving alone the coordinates the schema does not
+    declare (labels the caller brought along on its own DataArrays: they keep their own attributes).
+
+    Every producer of a dataset ends with it.  An undeclared data variable still raises ``KeyError``.
+    """
+    foreign = [name for name in ds.coords if not _declared(name)]
+    return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c].variable for c in foreign})
+
+
+def linearization_dataset(result, times, dims, parameters, derived, attrs):
+    """The dataset of :func:`screening.linearize`.
+
+    Parameters
+    ----------
+    result : dict of numpy arrays from :func:`screening.solvers.moments.solve_moments`, the
+        histories on ``dims + ("t",)`` and the summaries on ``dims``.
+    times : output times [s].
+    dims : names of the grid dimensions (``()`` for one point).
+    parameters : parameter name -> value (float or DataArray on some of ``dims``), stored as coordinates.
+    derived : name -> value (float or DataArray on some of ``dims``), stored as data variables
+        (``theta_ul``, ``slenderness``, ...).
+    attrs : global attributes (string choices, method, tolerances).
+    """
+    dims = tuple(dims)
+    data = {name: (dims + ("t",), result[name]) for name in HISTORY_VARIABLES}
+    data.update({name: (dims, result[name]) for name in LINEARIZATION_SUMMARIES + ("status",)})
+    data.update(derived)
+    return finish(xr.Dataset(data, coords=_coordinates(times, parameters), attrs=attrs))
+
+
+def _monte_carlo_theta_ul(block, foundation, model, condensation):
+    """``(theta_ul, attrs)``: of the condensation of a condensed run; for the coupled model the exact
+    static uplift angle (the ``"cubic"`` threshold), or the paper's for a softening bed that cannot
+    carry the block through uplift under ``"cubic"``."""
+    if model == "condensed":
+        return float(condensations.get(condensation).uplift_threshold(block, foundation)), {}
+    try:
+        return float(condensations.get("cubic").uplift_threshold(block, foundation)), {"theta_ul_condensation": "cubic"}
+    except ValueError as exc:
+        return (float(condensations.get("paper").uplift_threshold(block, foundation)),
+                {"theta_ul_condensation": "paper",
+                 "theta_ul_note": f"the exact (cubic) uplift angle does not exist here ({exc}); theta_ul is the "
+                                  f"paper's m g / (2 b^2 k)"})
+
+
+def _status_text(n_samples, n_overturned, n_diverged):
+    n_used = n_samples - n_overturned - n_diverged
+    if n_used >= 2:
+        return "ok"
+    if n_overturned == n_samples:
+        return "all samples overturned"
+    if n_diverged == n_samples:
+        return "all samples diverged"
+    if n_used == 0:
+        return f"all samples excluded ({n_overturned} overturned, {n_diverged} diverged)"
+    return f"fewer than 2 usable samples ({n_overturned} overturned, {n_diverged} diverged)"
+
+
+def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
+                        block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
+                        condensation="paper"):
+    """The dataset of :func:`screening.solvers.montecarlo.monte_carlo` (see its docstring).
+
+    ``stats``: the ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`);
+    ``peak``, ``overturned``, ``diverged``, ``n_acc``, ``n_rej``, ``reason``, ``h_min``: per sample;
+    ``n_over``, ``n_div``: counts; ``opts``: the numerics; ``plan``: the spectral plan of the input;
+    ``wall``: the integration time [s].
+    """
+
+    n_used = n_samples - n_over - n_div
+    data = {name: ("t", stats[name]) for name in MONTE_CARLO_STATISTICS}
+    data.update(peak_abs_theta=("sample", peak), overturned=("sample", overturned), diverged=("sample", diverged),
+                n_steps=("sample", n_acc + n_rej), n_overturned=((), n_over), n_diverged=((), n_div),
+                n_used=((), n_used))
+    theta_ul, theta_ul_attrs = _monte_carlo_theta_ul(block, foundation, model, condensation)
+    data.update(theta_ul=((), theta_ul), slenderness=((), float(block.slenderness)))
+    coords = _coordinates(times, model_fields(block, foundation, excitation))
+    coords["sample"] = ("sample", np.arange(n_samples))
+    reasons = sorted({DIVERGENCE_TEXT[DivergenceReason(int(r))] for r in reason[diverged]})
+    accepted = n_acc[~overturned & ~diverged]
+    attrs = {
+        "title": f"Monte Carlo rocking response ({model} model)",
+        "status": _status_text(n_samples, n_over, n_div),
+        "model": model,
+        "n_samples": n_samples,
+        "seed": seed,
+        "t_end": t_end,
+        "dt_output": dt,
+        **model_labels(foundation, excitation),
+        "statistics": "moments about the sample mean (ddof=1) over samples that neither overturned nor diverged",
+        "integrator": "adaptive Dormand-Prince 5(4), PI step control, steps land on output times",
+        "rtol": opts["rtol"],
+        "h_max": opts["h_max"],
+        "dt_integration_mean": float(t_end * accepted.size / max(accepted.sum(), 1)) if accepted.size else float("nan"),
+        "dt_integration_min": float(np.min(h_min)) if np.isfinite(np.min(h_min)) else float("nan"),
+        "dt_integration_note": "dt_integration_mean = t_end / mean accepted steps of the used samples; "
+                               "dt_integration_min = smallest accepted step after the start-up ramp",
+        "synthesis": "spectral representation (Shinozuka-Deodatis), random phases, FFT; cubic Hermite between grid points",
+        "cutoff_rad_s": float(plan.cutoff),
+        "d_omega_rad_s": float(plan.d_omega),
+        "n_frequencies": plan.n_frequencies,
+        "dt_synthesis": float(plan.dt),
+        "input_stationary_variance": plan.stationary_variance,
+        "max_flight_time": opts["max_flight_time"],
+        "diverged_reasons": ", ".join(reasons) if reasons else "none",
+        "wall_time_s": float(wall),
+        **theta_ul_attrs,
+    }
+    if model == "condensed":
+        cond = condensations.get(condensation)
+        attrs.update(condensation=cond.name, m_sdof=float(block.m_sdof),
+                     C1=float(cond.damping_at_rest(block, foundation)))
+        if type(cond).capacity_angle is not Condensation.capacity_angle:
+            attrs["theta_capacity"] = float(cond.capacity_angle(block, foundation))
+    return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.MONTE_CARLO)
