@@ -6,12 +6,12 @@ from screening.analysis import fragility as fragility  # noqa: F401 - registers 
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,
                                         uplift_probability, uplift_threshold)
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Block, Foundation
 from screening.solvers.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
 
 __all__ = [
-    "Block", "Foundation", "WinklerFoundation", "Envelope", "ConstantEnvelope", "WhiteNoise",
+    "Block", "Foundation", "Envelope", "ConstantEnvelope", "WhiteNoise",
     "KanaiTajimi", "uplift_threshold", "rocking_damping", "rocking_stiffness",
     "equivalent_coefficients", "uplift_probability", "linearize", "monte_carlo", "__version__",
 ]

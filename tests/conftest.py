@@ -1,7 +1,7 @@
 import pytest
 
 from screening.model.cases import PAPER_BED, PAPER_BLOCK
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Block, Foundation
 
 
 @pytest.fixture
@@ -15,7 +15,7 @@ def any_foundation(request):
         "hc_hardening": Foundation(eps=6e7, **PAPER_BED),
         "hc_softening": Foundation(eps=-6e5, **PAPER_BED),
         "hc_strong_softening": Foundation(eps=-3e8, **PAPER_BED),
-        "winkler_cubic": WinklerFoundation(k=2.89e7, c=2.0e3, eps=1e7),
+        "winkler_cubic": Foundation(k=2.89e7, c=2.0e3, eps=1e7),
     }[request.param]
 
 
@@ -26,8 +26,8 @@ CUBIC_BEDS = {
     "hc_hardening": Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
     "hc_softening": Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
     "hc_capacity": Foundation(k=2.89e7, lam=8.95e8, eps=-2e7),
-    "winkler_hardening": WinklerFoundation(k=2.89e7, c=2.0e3, eps=1e7),
-    "winkler_softening": WinklerFoundation(k=2.89e7, c=2.0e3, eps=-2e7),
+    "winkler_hardening": Foundation(k=2.89e7, c=2.0e3, eps=1e7),
+    "winkler_softening": Foundation(k=2.89e7, c=2.0e3, eps=-2e7),
 }
 
 

@@ -240,7 +240,7 @@ def rocking_damping(theta, block, foundation):
     """
     z, dz, v, a, uplift = _indentation_state(theta, block, foundation)
     b = block.b
-    if foundation.contact == "hunt_crossley":
+    if not foundation.winkler:
         lam = foundation.lam
         c_in = 2.0 / 3.0 * lam * b**3 * (z + a * dz)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -276,7 +276,7 @@ def restoring_moment(theta, block, foundation):
 
 def damping_at_rest(block, foundation):
     """``C(0)`` [N m s/rad]: ``(2/3) lam b^3 z0`` (Hunt–Crossley) or ``(2/3) c b^3`` (Winkler)."""
-    if foundation.contact == "hunt_crossley":
+    if not foundation.winkler:
         return 2.0 / 3.0 * foundation.lam * block.b**3 * rest_indentation(block, foundation)
     check_bearing(block, foundation)
     return 2.0 / 3.0 * foundation.c * block.b**3
@@ -304,7 +304,7 @@ def sdof_record(block, foundation):
     rec = np.zeros(1, dtype=SDOF_RECORD)
     values = dict(theta_ul=float(uplift_threshold(block, foundation)), m=float(block.m), g=float(block.g),
                   h=float(block.h), b=b, k=float(foundation.k), eps=eps, damping=float(foundation.damping),
-                  winkler=0.0 if foundation.contact == "hunt_crossley" else 1.0,
+                  winkler=1.0 if foundation.winkler else 0.0,
                   z_lin=float(linear_indentation(block, foundation)), z_rest=z0,
                   z_curv=-eps * b * b * z0 / (1.0 + 3.0 * eps * z0 * z0))
     for name, value in values.items():

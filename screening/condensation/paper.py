@@ -55,7 +55,7 @@ def static_indentation(theta, block, foundation):
 
 def damping_inner(block, foundation):
     """No-uplift rocking damping ``C_1`` [N m s/rad] (eq. 24; Winkler: ``(2/3) c b^3``)."""
-    if foundation.contact == "hunt_crossley":
+    if not foundation.winkler:
         return foundation.lam * block.b**2 * block.m * block.g / (3.0 * foundation.k)
     return 2.0 / 3.0 * foundation.c * block.b**3
 
@@ -70,7 +70,7 @@ def rocking_damping(theta, block, foundation):
     tu = uplift_threshold(block, foundation)
     c1 = damping_inner(block, foundation) + 0.0 * theta
     with np.errstate(divide="ignore"):
-        if foundation.contact == "hunt_crossley":
+        if not foundation.winkler:
             c2 = foundation.lam * b / 12.0 * (2.0 * mg / k) ** 1.5 * theta**-0.5
         else:
             c2 = foundation.c / 12.0 * (2.0 * mg / k) ** 1.5 * theta**-1.5
@@ -111,7 +111,7 @@ def sdof_record(block, foundation):
     """The :data:`SDOF_RECORD` of scalar model objects (a 1-element array)."""
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     k, eps, damping = float(foundation.k), float(foundation.eps), float(foundation.damping)
-    winkler = foundation.contact == "winkler"
+    winkler = foundation.winkler
     mg = m * g
     rec = np.zeros(1, dtype=SDOF_RECORD)
     rec["theta_ul"] = uplift_threshold(block, foundation)

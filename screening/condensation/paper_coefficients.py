@@ -74,7 +74,7 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
     const = coefficient_constants(block, foundation)
     tu = const["theta_ul"]
     G = gaussian_uplift_integrals(s / tu)
-    hunt_crossley = foundation.contact == "hunt_crossley"
+    hunt_crossley = not foundation.winkler
     c_shape = G["tail_m12"] if hunt_crossley else G["tail_m32"]
     coupling = 0.5 * G["tail_m12_r"] if hunt_crossley else 1.5 * G["tail_m32_r"]
     c_eq = const["C1"] * (G["p_in"] + c_shape)
@@ -96,7 +96,7 @@ def records(block, foundation):
     const = coefficient_constants(block, foundation)
     fields = {"theta_ul": const["theta_ul"], "log_theta_ul": np.log(const["theta_ul"]), "C1": const["C1"],
               "K0": const["K0"], "mgh": const["mgh"], "E0": const["E0"], "eps": foundation.eps,
-              "winkler": 0.0 if foundation.contact == "hunt_crossley" else 1.0}
+              "winkler": 1.0 if foundation.winkler else 0.0}
     arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in fields.values()))
     out = np.empty(arrays[0].size, dtype=RECORD)
     for name, a in zip(fields, arrays):

@@ -20,62 +20,55 @@ CONTACT_LAWS = ("hunt_crossley", "winkler")
 
 @dataclass(frozen=True)
 class Foundation:
-    """Generalised Hunt–Crossley bed, ``F_n = k z + eps k z^3 + lam z zdot`` (eqs. 3–4).
+    """A distributed bed under the block's base: contact law ``F_n = k z + eps k z^3 + damping``
+    per unit base length (eqs. 3–4).
+
+    ``law = "hunt_crossley"``: damping ``lam z zdot`` (generalised Hunt–Crossley; ``eps = 0`` is
+    plain Hunt–Crossley).  ``law = "winkler"``: damping ``c zdot`` (``eps = 0`` is the classical
+    Winkler bed with a linear dashpot).  Give ``lam`` or ``c``; ``law`` follows from which one
+    unless stated.
 
     Parameters
     ----------
     k : distributed stiffness [N/m^2] (force per unit base length per unit indentation), > 0.
     lam : Hunt–Crossley damping [N s/m^4] (per unit length, per unit indentation and
         per unit indentation rate), >= 0.
-    eps : cubic stiffness parameter [1/m^2]; any finite sign (``eps = 0`` is plain
-        Hunt–Crossley, ``eps > 0`` hardening, ``eps < 0`` softening).
+    eps : cubic stiffness parameter [1/m^2]; any finite sign (``> 0`` hardening, ``< 0`` softening).
+    c : Winkler dashpot [N s/m^2] (per unit length per unit rate), >= 0.
+    law : ``"hunt_crossley"`` or ``"winkler"`` (:data:`CONTACT_LAWS`).
     """
 
     k: float
-    lam: float
+    lam: float | None = None
     eps: float = 0.0
-
-    contact = "hunt_crossley"
+    c: float | None = None
+    law: str | None = None
 
     def __post_init__(self):
+        law = self.law
+        if law is None:
+            law = "winkler" if self.c is not None and self.lam is None else "hunt_crossley"
+        if law not in CONTACT_LAWS:
+            raise ValueError(f"parameter 'law' must be one of {CONTACT_LAWS} (got {law!r})")
+        own, other = ("lam", "c") if law == "hunt_crossley" else ("c", "lam")
+        if getattr(self, other) is not None:
+            raise ValueError(f"parameter '{other}' does not apply to law={law!r} (give '{own}')")
+        if getattr(self, own) is None:
+            raise ValueError(f"parameter '{own}' is required for law={law!r} (a finite number >= 0)")
+        object.__setattr__(self, "law", law)
         object.__setattr__(self, "k", checked("k", self.k, lower=0.0))
-        object.__setattr__(self, "lam", checked("lam", self.lam, lower=0.0, lower_inclusive=True))
+        object.__setattr__(self, own, checked(own, getattr(self, own), lower=0.0, lower_inclusive=True))
         object.__setattr__(self, "eps", checked("eps", self.eps))
 
     @property
     def damping(self):
-        """The damping coefficient of the bed (``lam`` here) [N s/m^4]."""
-        return self.lam
-
-
-@dataclass(frozen=True)
-class WinklerFoundation:
-    """Winkler bed with a linear dashpot, ``F_n = k z + eps k z^3 + c zdot`` (eq. 3 note).
-
-    ``eps = 0`` (the default) is the classical linear Winkler foundation model.
-
-    Parameters
-    ----------
-    k : distributed stiffness [N/m^2], > 0.
-    c : distributed viscous damping [N s/m^2] (per unit length per unit rate), >= 0.
-    eps : cubic stiffness parameter [1/m^2], any finite sign.
-    """
-
-    k: float
-    c: float
-    eps: float = 0.0
-
-    contact = "winkler"
-
-    def __post_init__(self):
-        object.__setattr__(self, "k", checked("k", self.k, lower=0.0))
-        object.__setattr__(self, "c", checked("c", self.c, lower=0.0, lower_inclusive=True))
-        object.__setattr__(self, "eps", checked("eps", self.eps))
+        """The damping coefficient of the law: ``lam`` [N s/m^4] or ``c`` [N s/m^2]."""
+        return self.lam if self.law == "hunt_crossley" else self.c
 
     @property
-    def damping(self):
-        """The damping coefficient of the bed (``c`` here) [N s/m^2]."""
-        return self.c
+    def winkler(self):
+        """True for the Winkler law (linear dashpot ``c zdot``)."""
+        return self.law == "winkler"
 
 
 def contact_pressure(z, z_dot, foundation):
@@ -89,7 +82,7 @@ def contact_pressure(z, z_dot, foundation):
     z = np.asarray(z, dtype=float)
     z_dot = np.asarray(z_dot, dtype=float)
     k, eps = foundation.k, foundation.eps
-    if foundation.contact == "hunt_crossley":
+    if not foundation.winkler:
         damping = foundation.lam * z * z_dot
     else:
         damping = foundation.c * z_dot

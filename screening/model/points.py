@@ -42,6 +42,17 @@ def _map(obj, fn):
     return dataclasses.replace(obj, **changes)
 
 
+def numeric_fields(*objs):
+    """``{name: value}`` of every numeric field of the model objects, nested ones included
+    (``None`` and string fields, such as an unused damping or the contact law, are left out)."""
+    out = {}
+    for obj in objs:
+        out.update(_numeric_fields(obj))
+        for sub in _nested(obj).values():
+            out.update(numeric_fields(sub))
+    return out
+
+
 def broadcast_shape(*objs):
     """The broadcast shape of every numeric field of the model objects ``objs``."""
     return np.broadcast_shapes(*(a.shape for obj in objs for a in _all_arrays(obj)))

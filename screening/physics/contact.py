@@ -91,7 +91,7 @@ REGIME_NAMES = {REGIME_FULL_CONTACT: "full contact", REGIME_UPLIFT_POSITIVE: "up
 
 def foundation_constants(foundation):
     """``(k, eps, damping, winkler)`` of a foundation object as plain floats and a bool."""
-    winkler = foundation.contact == "winkler"
+    winkler = foundation.winkler
     return float(foundation.k), float(foundation.eps), float(foundation.damping), winkler
 
 

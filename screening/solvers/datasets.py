@@ -21,6 +21,7 @@ import xarray as xr
 
 from screening import condensation as condensations, schema
 from screening.condensation.base import Condensation
+from screening.model.points import numeric_fields
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
 
@@ -38,17 +39,12 @@ def model_fields(block, foundation, excitation):
     The names are those of :data:`screening.schema.PARAMETERS` (``lam`` or ``c`` by contact law,
     ``omega_g``, ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
     """
-    fields = {}
-    for obj in (block, foundation, excitation, excitation.envelope):
-        for field in dataclasses.fields(obj):
-            if field.name != "envelope":
-                fields[field.name] = getattr(obj, field.name)
-    return fields
+    return numeric_fields(block, foundation, excitation)
 
 
 def model_labels(foundation, excitation):
     """The string choices of the model objects: ``contact``, ``excitation``, ``envelope``."""
-    return {"contact": foundation.contact, "excitation": excitation.kind, "envelope": excitation.envelope.kind}
+    return {"contact": foundation.law, "excitation": excitation.kind, "envelope": excitation.envelope.kind}
 
 
 def _coordinates(times, parameters):

@@ -17,6 +17,7 @@ from scipy.special import erfc
 
 from screening import condensation as condensations
 from screening.condensation.base import Condensation
+from screening.model.points import numeric_fields
 from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
 from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
@@ -131,7 +132,7 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     fields = labelled_fields(block, foundation, excitation)
     dims, arrays = broadcast_fields(fields)
     point_block, point_foundation = with_fields(block, arrays), with_fields(foundation, arrays)
-    structure = [f.name for obj in (block, foundation) for f in dataclasses.fields(obj)]
+    structure = list(numeric_fields(block, foundation))
     derived = {"theta_ul": on_own_dims(cond.uplift_threshold, fields, structure, block, foundation),
                "slenderness": on_own_dims(lambda blk, _: blk.slenderness, fields, ["b", "h"], block, foundation)}
     res = solve_moments(point_block, point_foundation, with_fields(excitation, arrays), t, rtol=rtol,

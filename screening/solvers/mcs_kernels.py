@@ -60,7 +60,7 @@ def model_record(block, foundation, cond, max_flight_time=0.5):
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     rec = np.zeros((), dtype=MODEL)
     values = dict(m=m, g=g, h=h, I_cm=float(block.I_cm), b=b, k=float(foundation.k), eps=float(foundation.eps),
-                  damping=float(foundation.damping), winkler=0.0 if foundation.contact == "hunt_crossley" else 1.0,
+                  damping=float(foundation.damping), winkler=1.0 if foundation.winkler else 0.0,
                   m_sdof=float(block.m_sdof), theta_over=float(block.slenderness),
                   theta_ul=float(cond.uplift_threshold(block, foundation)),
                   theta_cap=float(cond.capacity_angle(block, foundation)), max_flight=float(max_flight_time),

@@ -179,7 +179,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     ----------
     block : :class:`~screening.model.Block` with scalar fields (SI).
     foundation : :class:`~screening.model.Foundation` (Hunt–Crossley) or
-        :class:`~screening.model.WinklerFoundation`, scalar fields (SI).
+        Winkler law, scalar fields (SI).
     excitation : :class:`~screening.model.excitation.WhiteNoise` or :class:`~screening.model.excitation.KanaiTajimi`
         (horizontal ground acceleration ``q(t) xi(t)`` or ``q(t) z(t)``; ``S0`` [m^2/s^3] is the
         two-sided PSD level, ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``).

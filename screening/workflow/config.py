@@ -26,7 +26,7 @@ import numpy as np
 
 from screening import condensation as condensations
 from screening.condensation import names as condensation_names
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Block, Foundation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.solvers.timegrid import output_times
 
@@ -406,7 +406,7 @@ def _block(p):
 def _foundation(case, p):
     if case.contact == "hunt_crossley":
         return Foundation(k=p["k"], lam=p["lam"], eps=p["eps"])
-    return WinklerFoundation(k=p["k"], c=p["c"], eps=p["eps"])
+    return Foundation(k=p["k"], c=p["c"], eps=p["eps"])
 
 
 def build_models(case, values):

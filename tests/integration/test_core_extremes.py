@@ -20,7 +20,7 @@ from screening.condensation.api import equivalent_coefficients
 from screening.condensation.paper_coefficients import coefficient_constants
 from screening.solvers.moments import solve_moments
 from screening.status import PointStatus
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Block, Foundation
 from screening.solvers.timegrid import output_times
 
 log_uniform = lambda lo, hi: st.floats(np.log10(lo), np.log10(hi)).map(lambda e: 10.0**e)
@@ -31,8 +31,8 @@ blocks = st.builds(lambda m, b, slender: Block(m, b, b * slender),
 eps_values = st.one_of(st.just(0.0), log_uniform(1.0, 1e9), log_uniform(1.0, 1e7).map(lambda e: -e))
 foundations = st.one_of(
     st.builds(Foundation, log_uniform(1e4, 1e10), st.one_of(st.just(0.0), log_uniform(1.0, 1e11)), eps_values),
-    st.builds(WinklerFoundation, log_uniform(1e4, 1e10), st.one_of(st.just(0.0), log_uniform(1e-3, 1e7)),
-              eps_values),
+    st.builds(lambda k, c, eps: Foundation(k=k, c=c, eps=eps), log_uniform(1e4, 1e10),
+              st.one_of(st.just(0.0), log_uniform(1e-3, 1e7)), eps_values),
 )
 envelopes = st.sampled_from([Envelope(4.0, 2.0), ConstantEnvelope(), Envelope(60.0, 0.05)])
 excitations = st.one_of(
@@ -49,7 +49,7 @@ STIFF_DAMPED = Foundation(1e10, 1e11, 1e9)
 SOFT_UNDAMPED_SOFTENING = Foundation(1e4, 0.0, -1e7)
 STIFF_UNDAMPED = Foundation(1e10, 0.0, 0.0)
 SOFT_DAMPED = Foundation(1e4, 1e11, 0.0)
-WINKLER_CORNER = WinklerFoundation(1e10, 1e7, -1e7)
+WINKLER_CORNER = Foundation(k=1e10, c=1e7, eps=-1e7)
 
 
 def _settings(n):

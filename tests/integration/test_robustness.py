@@ -30,7 +30,7 @@ from screening.model.excitation import ConstantEnvelope, KanaiTajimi, WhiteNoise
 from screening.condensation.paper_coefficients import coefficient_constants
 from screening.solvers.moments import DEFAULT_MAX_STEPS, HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Block, Foundation
 from screening.solvers.montecarlo import monte_carlo
 from screening.workflow.study import build_models, parse_study
 from screening.workflow.errors import SweepError
@@ -105,7 +105,7 @@ STIFF = [
     ("squat_k1e4_lam1e11", SQUAT, Foundation(1e4, 1e11), WhiteNoise(1e-4), PointStatus.step_budget_exhausted),
     ("light_wide_k1e10_lam1e11_kt", LIGHT_WIDE, Foundation(1e10, 1e11), KanaiTajimi(1e-4, 200.0, 0.01),
      PointStatus.step_budget_exhausted),
-    ("squat_winkler_k1e4_c1e7", SQUAT, WinklerFoundation(1e4, 1e7), WhiteNoise(1e-4), PointStatus.step_budget_exhausted),
+    ("squat_winkler_k1e4_c1e7", SQUAT, Foundation(k=1e4, c=1e7), WhiteNoise(1e-4), PointStatus.step_budget_exhausted),
 ]
 
 
@@ -239,7 +239,7 @@ MC_CORNERS = [
     ("stiff_hardening_undamped", SQUAT, Foundation(1e10, 0.0, 1e9)),
     ("soft_heavily_damped", PAPER, Foundation(1e5, 1e11, 0.0)),
     ("slender_undamped", SLENDER, Foundation(2.89e7, 0.0, 0.0)),
-    ("winkler_stiff", SQUAT, WinklerFoundation(1e10, 0.0, 0.0)),
+    ("winkler_stiff", SQUAT, Foundation(k=1e10, c=0.0, eps=0.0)),
     ("softening", PAPER, Foundation(2.89e7, 8.95e8, -6e5)),
 ]
 

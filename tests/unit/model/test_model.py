@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from screening.model import Block, Foundation, WinklerFoundation, contact_pressure
+from screening.model import Block, Foundation, contact_pressure
 
 
 def test_block_default_inertia_is_uniform_rectangle():
@@ -33,7 +33,7 @@ def test_block_rejects_bad_values_naming_the_parameter(kwargs, name):
     (lambda: Foundation(k=0.0, lam=1.0), "'k'"),
     (lambda: Foundation(k=1.0, lam=-1.0), "'lam'"),
     (lambda: Foundation(k=1.0, lam=1.0, eps=np.nan), "'eps'"),
-    (lambda: WinklerFoundation(k=1.0, c=-2.0), "'c'"),
+    (lambda: Foundation(k=1.0, c=-2.0), "'c'"),
     (lambda: Foundation(k=np.array([1.0, -1.0]), lam=1.0), "'k'"),
 ])
 def test_foundation_rejects_bad_values(make, name):
@@ -58,7 +58,18 @@ def test_contact_pressure_hunt_crossley_law_and_no_tension():
 
 
 def test_contact_pressure_winkler_uses_linear_dashpot():
-    fnd = WinklerFoundation(k=2.0e7, c=1.5e3)
+    fnd = Foundation(k=2.0e7, c=1.5e3)
     F = contact_pressure(np.array([1e-4, -1e-4]), np.array([0.02, 0.02]), fnd)
     assert F[0] == pytest.approx(2.0e7 * 1e-4 + 1.5e3 * 0.02, rel=1e-14)
     assert F[1] == 0.0
+
+
+def test_one_bed_type_whose_law_follows_the_damping_given():
+    hc, wk = Foundation(k=2.0e7, lam=1e8), Foundation(k=2.0e7, c=1.5e3)
+    assert (hc.law, wk.law) == ("hunt_crossley", "winkler") and (hc.winkler, wk.winkler) == (False, True)
+    assert hc.damping == 1e8 and wk.damping == 1.5e3 and hc.c is None and wk.lam is None
+    assert Foundation(k=2.0e7, c=0.0, law="winkler").damping == 0.0
+    for kwargs, name in ((dict(lam=1.0, c=1.0), "'c'"), (dict(lam=1.0, law="winkler"), "'lam'"),
+                         (dict(law="winkler"), "'c'"), (dict(), "'lam'"), (dict(lam=1.0, law="kelvin"), "'law'")):
+        with pytest.raises(ValueError, match=name):
+            Foundation(k=2.0e7, **kwargs)

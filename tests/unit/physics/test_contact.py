@@ -11,7 +11,7 @@ from scipy.integrate import quad
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_UPLIFT_NEGATIVE,
                                REGIME_UPLIFT_POSITIVE, contact_length, contact_regime, contact_resultants,
                                contact_resultants_scalar, foundation_constants, static_indentation_exact)
-from screening.model import Block, Foundation, WinklerFoundation, contact_pressure
+from screening.model import Block, Foundation, contact_pressure
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 B = BLOCK.b
@@ -19,8 +19,8 @@ K = 2.89e7
 Z_ST = BLOCK.m * BLOCK.g / (2.0 * B * K)          # ~4.2e-5 m
 
 FOUNDATIONS = [Foundation(k=K, lam=8.95e8, eps=6e7), Foundation(k=K, lam=8.95e8, eps=-6e5),
-               Foundation(k=K, lam=8.95e8, eps=0.0), WinklerFoundation(k=K, c=2.0e4, eps=6e7),
-               WinklerFoundation(k=K, c=2.0e4, eps=-6e5)]
+               Foundation(k=K, lam=8.95e8, eps=0.0), Foundation(k=K, c=2.0e4, eps=6e7),
+               Foundation(k=K, c=2.0e4, eps=-6e5)]
 FOUNDATION_IDS = ["hc-eps+", "hc-eps-", "hc-eps0", "winkler-eps+", "winkler-eps-"]
 
 # (theta [rad], theta_dot [rad/s], z_cb [m], z_cb_dot [m/s], expected regime)

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import screening
-from screening import (Block, ConstantEnvelope, Envelope, Foundation, KanaiTajimi, WhiteNoise, WinklerFoundation,
+from screening import (Block, ConstantEnvelope, Envelope, Foundation, KanaiTajimi, WhiteNoise,
                        linearize, monte_carlo, schema)
 from screening.condensation import cubic, get
 from screening.solvers.datasets import finish, linearization_dataset, model_fields
@@ -58,14 +58,14 @@ def test_linearize_and_monte_carlo_follow_the_same_contract():
 
 
 @pytest.mark.parametrize("foundation, excitation, present, absent", [
-    (WinklerFoundation(2.89e7, 2e4, -6e5), KanaiTajimi(2e-4, 10.0, 0.4), ("c", "omega_g", "zeta_g", "T1", "T2"),
+    (Foundation(k=2.89e7, c=2e4, eps=-6e5), KanaiTajimi(2e-4, 10.0, 0.4), ("c", "omega_g", "zeta_g", "T1", "T2"),
      ("lam",)),
     (HC, WhiteNoise(1e-5, ConstantEnvelope()), ("lam",), ("c", "omega_g", "zeta_g", "T1", "T2")),
 ], ids=["winkler_kt", "hc_constant"])
 def test_monte_carlo_parameters_follow_the_model_kind(foundation, excitation, present, absent):
     ds = small_mc(foundation=foundation, excitation=excitation, model="coupled")
     assert all(name in ds.coords for name in present) and not any(name in ds.variables for name in absent)
-    assert ds.attrs["contact"] == foundation.contact and ds.attrs["excitation"] == excitation.kind
+    assert ds.attrs["contact"] == foundation.law and ds.attrs["excitation"] == excitation.kind
     assert ds.attrs["envelope"] == excitation.envelope.kind
     assert float(ds["k"]) == 2.89e7 and float(ds["I_cm"]) == BLOCK.I_cm
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from screening import Block, Envelope, Foundation, KanaiTajimi, WhiteNoise, WinklerFoundation, linearize
+from screening import Block, Envelope, Foundation, KanaiTajimi, WhiteNoise, linearize
 from screening.condensation import cubic
 from screening.schema import DERIVED, LINEARIZATION, PARAMETERS
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
@@ -44,7 +44,7 @@ def test_scalar_input_gives_0d_summaries_and_parameters_as_scalar_coordinates(pa
 
 
 def test_labels_follow_the_model_kind():
-    ds = linearize(Block(8.67, 0.035, 0.21), WinklerFoundation(2.89e7, 2e4), KanaiTajimi(1e-4, 10.0, 0.4),
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, c=2e4), KanaiTajimi(1e-4, 10.0, 0.4),
                    t_end=2.0)
     assert "c" in ds.coords and "lam" not in ds.coords
     assert float(ds["omega_g"]) == 10.0 and float(ds["zeta_g"]) == 0.4

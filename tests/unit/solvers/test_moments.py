@@ -10,7 +10,7 @@ from screening.condensation import get as get_condensation
 from screening.model.points import flatten
 from screening.solvers.moments import _rhs, oscillator_records, solve_moments
 from screening.status import PointStatus
-from screening.model import Foundation, WinklerFoundation
+from screening.model import Foundation
 from screening.solvers.timegrid import output_times
 
 
@@ -22,7 +22,7 @@ def _linear_constants(block, foundation):
     return w, zeta, block.m * block.h / M
 
 
-@pytest.mark.parametrize("foundation", [Foundation(2.89e7, 8.95e8), WinklerFoundation(2.89e7, 3.0e3)])
+@pytest.mark.parametrize("foundation", [Foundation(2.89e7, 8.95e8), Foundation(k=2.89e7, c=3.0e3)])
 def test_linear_stationary_variance(paper_block, foundation):
     """No uplift (sigma << theta_ul), eps = 0, constant envelope: pi S0 a^2 / (2 zeta w^3)."""
     S0 = 1e-14
@@ -166,7 +166,7 @@ def test_cubic_with_eps_zero_reproduces_the_paper_solution(paper_block, excitati
         np.testing.assert_allclose(cub[name], paper[name], rtol=0, atol=1e-5 * np.max(paper[name]))
 
 
-@pytest.mark.parametrize("foundation", [Foundation(2.89e7, 8.95e8, 6e7), WinklerFoundation(2.89e7, 3.0e3, -2e7)])
+@pytest.mark.parametrize("foundation", [Foundation(2.89e7, 8.95e8, 6e7), Foundation(k=2.89e7, c=3.0e3, eps=-2e7)])
 def test_cubic_linear_stationary_variance_uses_the_rest_indentation(paper_block, foundation):
     """No uplift, constant envelope: pi S0 a^2 / (2 zeta w^3) with the cubic K(0), C(0)."""
     S0 = 1e-14

@@ -17,7 +17,7 @@ from screening.condensation import get as get_condensation, paper
 from screening.condensation.paper import damping_inner, rocking_damping, rocking_stiffness, uplift_threshold
 from screening.physics.contact import contact_resultants, static_indentation_exact
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from screening.model import Block, Foundation, WinklerFoundation
+from screening.model import Block, Foundation
 from screening.solvers.montecarlo import ensemble_statistics, monte_carlo
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
@@ -74,8 +74,8 @@ def _model_record(foundation, cond=None):
 
 
 @pytest.mark.parametrize("foundation", [HC, Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
-                                        WinklerFoundation(k=2.89e7, c=2e4, eps=6e7),
-                                        WinklerFoundation(k=2.89e7, c=2e4, eps=-6e5)],
+                                        Foundation(k=2.89e7, c=2e4, eps=6e7),
+                                        Foundation(k=2.89e7, c=2e4, eps=-6e5)],
                          ids=["hc+", "hc-", "winkler+", "winkler-"])
 def test_compiled_condensed_coefficients_match_screening_condensed(foundation):
     p = paper.sdof_record(BLOCK, foundation)[0]
@@ -94,7 +94,7 @@ def test_compiled_condensed_coefficients_match_screening_condensed(foundation):
             a_ref[i], rel=1e-11, abs=1e-9)
 
 
-@pytest.mark.parametrize("foundation", [HC, WinklerFoundation(k=2.89e7, c=2e4, eps=-6e5)], ids=["hc", "winkler"])
+@pytest.mark.parametrize("foundation", [HC, Foundation(k=2.89e7, c=2e4, eps=-6e5)], ids=["hc", "winkler"])
 def test_coupled_accelerations_solve_eqs_7_and_8(foundation):
     """Compare with a direct numpy solve of the 2x2 system (7)–(8) for (z_cb'', theta'')."""
     p = _model_record(foundation)
@@ -104,7 +104,7 @@ def test_coupled_accelerations_solve_eqs_7_and_8(foundation):
         theta, theta_dot = rng.uniform(-0.15, 0.15), rng.normal(0, 1.0)
         z, z_dot, a = rng.uniform(-2e-3, 3e-4), rng.normal(0, 1e-2), rng.normal(0, 3.0)
         F, M = contact_resultants(theta, theta_dot, z, z_dot, BLOCK.b, foundation.k, foundation.eps,
-                                  foundation.damping, foundation.contact == "winkler")
+                                  foundation.damping, foundation.winkler)
         s, c = math.sin(theta), math.cos(theta)
         lhs = np.array([[m, m * h * s], [m * h * s, I + m * h * h]])
         rhs = np.array([m * g - F - m * h * theta_dot**2 * c, m * h * a * c - M + m * h * g * s])
@@ -176,7 +176,7 @@ def _coupled_energy(theta, theta_dot, z, z_dot, foundation):
 
 
 @pytest.mark.parametrize("foundation", [Foundation(k=2.89e7, lam=0.0, eps=6e7),
-                                        WinklerFoundation(k=2.89e7, c=0.0, eps=-6e5)], ids=["hc", "winkler"])
+                                        Foundation(k=2.89e7, c=0.0, eps=-6e5)], ids=["hc", "winkler"])
 def test_undamped_coupled_model_conserves_energy_through_uplift_and_impacts(foundation):
     """With no dashpots eqs. (7)–(8) are conservative: a strong independent check of the
     resultants, the equations and the integrator in every contact regime."""
@@ -240,7 +240,7 @@ def test_reproducible_and_independent_of_chunking():
 @pytest.mark.parametrize("model", ["coupled", "condensed"])
 def test_kanai_tajimi_and_winkler_runs(model):
     kt = KanaiTajimi(S0=2.5e-4, omega_g=10.0, zeta_g=0.4, envelope=Envelope(4.0, 2.0))
-    ds = small_run(model=model, excitation=kt, foundation=WinklerFoundation(k=2.89e7, c=2e4, eps=-6e5))
+    ds = small_run(model=model, excitation=kt, foundation=Foundation(k=2.89e7, c=2e4, eps=-6e5))
     assert ds.attrs["status"] == "ok" and float(ds["omega_g"]) == 10.0
     assert np.all(np.isfinite(ds.var_theta)) and float(ds.var_theta[-1]) > 0
 
@@ -426,7 +426,7 @@ def test_halving_the_step_changes_the_peak_variance_much_less_than_its_standard_
 from screening.condensation import cubic  # noqa: E402
 
 CUBIC_MCS_BEDS = [HC, Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), Foundation(k=2.89e7, lam=8.95e8, eps=-2e7),
-                  WinklerFoundation(k=2.89e7, c=2e4, eps=6e7), WinklerFoundation(k=2.89e7, c=2e4, eps=-2e7)]
+                  Foundation(k=2.89e7, c=2e4, eps=6e7), Foundation(k=2.89e7, c=2e4, eps=-2e7)]
 
 
 @pytest.mark.parametrize("foundation", CUBIC_MCS_BEDS, ids=["hc+", "hc-", "hc-cap", "winkler+", "winkler-cap"])

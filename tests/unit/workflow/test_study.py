@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from screening import condensation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from screening.model import Foundation, WinklerFoundation
+from screening.model import Foundation
 from screening.workflow.study import StudyError, build_models, load_study, parse_study
 
 STUDIES = Path(__file__).resolve().parents[3] / "studies"
@@ -204,7 +204,7 @@ def test_build_models_structure():
     text = edit(text, "T1 = 4.0\nT2 = 2.0", 'envelope = "constant"')
     s = parse_study(text)
     _, foundation, excitation = build_models(s.cases[0], {"eps": 0.0, "S0": 1e-4})
-    assert isinstance(foundation, WinklerFoundation) and foundation.c == 2e4
+    assert isinstance(foundation, Foundation) and foundation.winkler and foundation.c == 2e4
     assert isinstance(excitation, WhiteNoise) and isinstance(excitation.envelope, ConstantEnvelope)
 
 
