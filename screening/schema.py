@@ -258,7 +258,3 @@ def apply_schema(ds, table=None, **global_attrs):
     ds.attrs.update(global_attributes(__version__, **global_attrs))
     return ds
 
-
-# names still used by modules being moved onto apply_schema (issue 11); removed when the last one is
-VARIABLES = {**LINEARIZATION, "theta_ul": DERIVED["theta_ul"]}
-STATUS = LINEARIZATION["status"]

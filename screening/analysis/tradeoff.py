@@ -133,7 +133,7 @@ def build_points(study, progress=None):
                     try:
                         S0 = calibrate_intensity(
                             block, bed, lambda s: build_models(fam.case, {"eps": eps, "S0": s})[2], target, t_out,
-                            rtol=study.sl["calibration_rtol"], condensation=study.condensation.name)
+                            rtol=study.sl["calibration_rtol"], condensation=study.condensation)
                     except ValueError as err:
                         raise StudyError(f"{study.source}: family[{f}].target_peak_p_uplift[{i}]: family "
                                          f"'{fam.name}', eps = {eps:g}: {err}") from None
@@ -171,7 +171,7 @@ def solve_sl(study, models, t_out, rtol=None, h_max=None, repeats=1):
     """SL of ``models`` via :func:`~screening.solvers.moments.solve_moments`; ``(result dict, seconds)``."""
     rtol = study.sl["rtol"] if rtol is None else rtol
     return time_call(lambda: solve_moments(*models, t_out, rtol=rtol, h_max=h_max,
-                                           condensation=study.condensation.name), repeats)
+                                           condensation=study.condensation), repeats)
 
 
 def run_sl(study, point, t_out, rtol=None, h_max=None, repeats=1):
@@ -197,10 +197,10 @@ def warm_up(study):
     pt = Point("warm-up", fam.name, fam.kind, fam.omega_g, fam.zeta_g, fam.eps[0], 1e-6, float("nan"), 0)
     block, bed, exc = point_models(study, pt)
     t_short = output_times(study.dt * 4, study.dt)
-    solve_moments(block, bed, exc, t_short, condensation=study.condensation.name)
+    solve_moments(block, bed, exc, t_short, condensation=study.condensation)
     for model in MCS_MODELS:
         monte_carlo(block, bed, exc, n_samples=2, model=model, t_end=study.dt * 4, dt=study.dt, progress=False,
-                    condensation=study.condensation.name)
+                    condensation=study.condensation)
 
 
 def set_threads(n):

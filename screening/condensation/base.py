@@ -104,5 +104,12 @@ class Condensation(abc.ABC):
         raise NotImplementedError(f"condensation {self.name!r} has no compiled C(theta), K(theta) "
                                   "(Condensation.sdof_kernel) for the condensed Monte Carlo")
 
+    def __eq__(self, other):
+        """Equal when of the same class with the same state (a copy sent to a worker equals the original)."""
+        return type(other) is type(self) and other.__dict__ == self.__dict__
+
+    def __hash__(self):
+        return hash((type(self), self.name))
+
     def __repr__(self):
         return f"<condensation {self.name!r}>"

@@ -222,7 +222,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     if model not in MODELS:
         raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
     cond = get_condensation(condensation)
-    if model == "coupled" and cond is not get_condensation("paper"):
+    if model == "coupled" and cond != get_condensation("paper"):
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
                          f"(got condensation={cond.name!r} with model='coupled')")
     seed = validate_seed(seed)

@@ -46,7 +46,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
-                        condensation=condensation.name)
+                        condensation=condensation)
     shape = res["status"].shape
     n = res["status"].size
     out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in HISTORY_VARIABLES}
@@ -80,7 +80,7 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     """
     from screening.solvers.montecarlo import monte_carlo
 
-    kw = {"condensation": condensation.name} if model == "condensed" else {}
+    kw = {"condensation": condensation} if model == "condensed" else {}
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=t_end, dt=dt,
                      seed=seed, **kw)
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}

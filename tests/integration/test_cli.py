@@ -16,7 +16,7 @@ from helpers import compare_files, in_process_client, one_line_error, quiet
 from screening import __version__, linearize
 from screening.cli import main
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
-from screening.schema import PARAMETERS, VARIABLES
+from screening.schema import LINEARIZATION as VARIABLES, PARAMETERS
 from screening.workflow.study import build_models, parse_study
 
 SCREENING = Path(sys.executable).parent / "screening"

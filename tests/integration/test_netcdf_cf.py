@@ -14,7 +14,9 @@ from screening import __version__
 from screening.solvers.moments import HISTORY_VARIABLES
 from helpers import in_process_client, quiet
 
-from screening.schema import PARAMETERS, VARIABLES
+from screening.schema import DERIVED, LINEARIZATION, PARAMETERS
+
+VARIABLES = {**LINEARIZATION, **DERIVED}
 from screening.workflow.study import parse_study
 from screening.workflow.sweep import run_sweep
 

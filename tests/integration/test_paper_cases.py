@@ -4,7 +4,7 @@ import pytest
 
 from screening import linearize
 from screening.model.cases import PAPER_CASES, paper_case
-from screening.schema import VARIABLES
+from screening.schema import LINEARIZATION as VARIABLES
 
 
 @pytest.fixture(scope="module")

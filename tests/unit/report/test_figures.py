@@ -6,7 +6,7 @@ import xarray as xr
 from matplotlib.image import imread
 
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.schema import VARIABLES
+from screening.schema import LINEARIZATION as VARIABLES
 from screening.report.figures import (plot_histories, plot_peaks, plot_result, plot_spots, point_label, spot_file_label,
                              representative_points)
 from screening.schema import attributes
