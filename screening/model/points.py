@@ -7,25 +7,32 @@ them, so that every downstream function sees ordinary model objects.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 
 import numpy as np
+
+
+@functools.lru_cache(maxsize=None)
+def _field_names(cls):
+    return tuple(f.name for f in dataclasses.fields(cls))
 
 
 def _numeric_fields(obj):
     """``{name: value}`` of the numeric dataclass fields of ``obj`` (nested model objects excluded)."""
     out = {}
-    for f in dataclasses.fields(obj):
-        value = getattr(obj, f.name)
+    for name in _field_names(type(obj)):
+        value = getattr(obj, name)
         if value is None or isinstance(value, str) or dataclasses.is_dataclass(value):
             continue
-        out[f.name] = value
+        out[name] = value
     return out
 
 
 def _nested(obj):
-    return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)
-            if dataclasses.is_dataclass(getattr(obj, f.name))}
+    return {name: getattr(obj, name) for name in _field_names(type(obj))
+            if dataclasses.is_dataclass(getattr(obj, name))}
 
 
 def _all_arrays(obj):
@@ -36,10 +43,17 @@ def _all_arrays(obj):
 
 
 def _map(obj, fn):
-    """A copy of ``obj`` with ``fn`` applied to every numeric field (recursively)."""
-    changes = {name: fn(np.asarray(v, dtype=float)) for name, v in _numeric_fields(obj).items()}
-    changes.update({name: _map(sub, fn) for name, sub in _nested(obj).items()})
-    return dataclasses.replace(obj, **changes)
+    """A copy of ``obj`` with ``fn`` applied to every numeric field (recursively).
+
+    ``fn`` only broadcasts or indexes values that the object has already validated, so the copy
+    is not validated again (that would cost more than a small solve).
+    """
+    out = copy.copy(obj)
+    for name, value in _numeric_fields(obj).items():
+        object.__setattr__(out, name, fn(np.asarray(value, dtype=float)))
+    for name, sub in _nested(obj).items():
+        object.__setattr__(out, name, _map(sub, fn))
+    return out
 
 
 def numeric_fields(*objs):
