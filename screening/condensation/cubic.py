@@ -105,18 +105,14 @@ import numba
 import numpy as np
 
 from screening.condensation.base import Condensation, SdofKernel
+from screening.physics import contact
+from screening.physics.contact import linear_indentation, rising_root
 from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
 #: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
 SOFTENING_LIMIT = 2.0 / 27.0
 
-_NEWTON_MAX_ITER = 100
-
-
-def linear_indentation(block, foundation):
-    """Paper's static indentation ``z_lin = m g / (2 b k)`` [m] (eq. 17)."""
-    return block.m * block.g / (2.0 * block.b * foundation.k)
 
 
 def bearing_load(block, foundation):
@@ -141,28 +137,11 @@ def check_bearing(block, foundation):
             f"through the onset of uplift under condensation='cubic' (need |eps| (m g/(2 b k))^2 < 2/27)")
 
 
-def _rising_root(alpha, beta, rhs):
-    """Root of ``alpha z^3 + beta z = rhs`` on the rising branch (``beta + 3 alpha z^2 > 0``).
-
-    Newton from ``z = rhs / beta``: for ``alpha >= 0`` the cubic is convex and the start lies
-    right of the root, for ``alpha < 0`` concave with the start left of it, so the iterates
-    converge monotonically (no overshoot onto the falling branch).  Vectorised; SI units of
-    the caller (``z`` and ``rhs`` [m], ``alpha`` [1/m^2], ``beta`` [1]).
-    """
-    alpha, beta, rhs = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (alpha, beta, rhs)))
-    z = rhs / beta
-    for _ in range(_NEWTON_MAX_ITER):
-        step = (alpha * z**3 + beta * z - rhs) / (3.0 * alpha * z * z + beta)
-        z = z - step
-        if np.all(np.abs(step) <= 1e-15 * np.abs(z)):
-            break
-    return z
-
-
 def rest_indentation(block, foundation):
-    """Static indentation at rest ``z0`` [m]: root of ``eps z0^3 + z0 = z_lin`` (eq. 13, theta = 0)."""
+    """Static indentation at rest ``z0`` [m] (:func:`screening.physics.contact.rest_indentation`), for a bed
+    the cubic condensation can carry through uplift onset (:func:`check_bearing`)."""
     check_bearing(block, foundation)
-    return _rising_root(foundation.eps, 1.0, linear_indentation(block, foundation))[()]
+    return contact.rest_indentation(block, foundation)
 
 
 def uplift_threshold(block, foundation):
@@ -172,7 +151,7 @@ def uplift_threshold(block, foundation):
     (eq. 19 generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
     """
     check_bearing(block, foundation)
-    y = _rising_root(2.0 * np.asarray(foundation.eps, dtype=float), 1.0, linear_indentation(block, foundation))
+    y = rising_root(2.0 * np.asarray(foundation.eps, dtype=float), 1.0, linear_indentation(block, foundation))
     return (y / block.b)[()]
 
 
@@ -214,7 +193,7 @@ def _indentation_state(theta, block, foundation):
     uplift = a > uplift_threshold(block, foundation)
     # no uplift: eq. (13) balance (Q1)
     beta = 1.0 + eps * b * b * a * a
-    z_in = _rising_root(eps, beta, z_lin)
+    z_in = rising_root(eps, beta, z_lin)
     dz_in = -2.0 * eps * b * b * a * z_in / (beta + 3.0 * eps * z_in * z_in)
     # uplift: eq. (15) balance (Q2), held at the peak load beyond the capacity angle
     A = 2.0 * mg * a / k

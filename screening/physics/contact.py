@@ -189,43 +189,60 @@ def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, win
     return force, moment
 
 
-def static_indentation_exact(block, foundation):
-    """Static indentation of the base centre at ``theta = 0`` [m], cubic term included.
+def linear_indentation(block, foundation):
+    """Static indentation of the base centre by the linear law alone, ``z_lin = m g / (2 b k)`` [m] (eq. 17)."""
+    return block.m * block.g / (2.0 * block.b * foundation.k)
 
-    Solves ``F_cb = 2 b k (z + eps z^3) = m g`` exactly: the smallest positive real root of
-    ``eps z^3 + z - m g/(2 b k) = 0`` (for ``eps < 0`` the root on the rising, stable
-    branch ``z < 1/sqrt(3 |eps|)``), polished by Newton steps to machine precision.
-    Raises ``ValueError`` when a softening bed (``eps < 0``) cannot carry the weight.
+
+def rising_root(alpha, beta, rhs, max_iter=100):
+    """Root of ``alpha z^3 + beta z = rhs`` on the rising branch (``beta + 3 alpha z^2 > 0``).
+
+    Newton from ``z = rhs / beta``: for ``alpha >= 0`` the cubic is convex and the start lies
+    right of the root, for ``alpha < 0`` concave with the start left of it, so the iterates
+    converge monotonically (no overshoot onto the falling branch).  Vectorised; SI units of
+    the caller (``z`` and ``rhs`` [m], ``alpha`` [1/m^2], ``beta`` [1]).
     """
-    z_lin = block.m * block.g / (2.0 * block.b * foundation.k)
-    eps = float(foundation.eps)
-    if eps == 0.0:
-        return float(z_lin)
-    if eps < 0.0 and z_lin >= 2.0 / (3.0 * math.sqrt(3.0 * -eps)):
-        raise ValueError(f"the softening bed (eps={eps!r} 1/m^2) cannot carry the block's weight: "
-                         f"need m g/(2 b k) < 2/(3 sqrt(3 |eps|))")
-    roots = np.roots([eps, 0.0, 1.0, -z_lin])
-    real = roots[(np.abs(roots.imag) <= 1e-9 * np.abs(roots)) & (roots.real > 0.0)].real
-    z = float(np.min(real))
-    for _ in range(3):
-        z -= (eps * z**3 + z - z_lin) / (3.0 * eps * z * z + 1.0)
+    alpha, beta, rhs = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (alpha, beta, rhs)))
+    z = rhs / beta
+    for _ in range(max_iter):
+        step = (alpha * z**3 + beta * z - rhs) / (3.0 * alpha * z * z + beta)
+        z = z - step
+        if np.all(np.abs(step) <= 1e-15 * np.abs(z)):
+            break
     return z
+
+
+def rest_indentation(block, foundation):
+    """Static indentation of the base centre at rest ``z0`` [m], cubic term included (eq. 13, theta = 0).
+
+    The root of ``2 b k (z + eps z^3) = m g``, i.e. ``eps z0^3 + z0 = z_lin``, on the rising
+    (stable) branch.  Vectorised.  Raises ``ValueError`` when a softening bed cannot carry the
+    weight at all: ``|eps| z_lin^2 >= 4/27``.
+    """
+    z_lin = linear_indentation(block, foundation)
+    eps = np.asarray(foundation.eps, dtype=float)
+    load = -eps * np.asarray(z_lin, dtype=float) ** 2
+    if np.any(load >= 4.0 / 27.0):
+        bad = float(np.broadcast_to(eps, np.shape(load))[load >= 4.0 / 27.0].flat[0])
+        raise ValueError(f"parameter 'foundation.eps' = {bad!r} 1/m^2: the softening bed cannot carry the block's "
+                         f"weight (need |eps| (m g/(2 b k))^2 < 4/27)")
+    return rising_root(eps, 1.0, z_lin)[()]
 
 
 # ----------------------------------------------------------------------------- compiled
 @numba.njit(cache=True)
-def contact_resultants_scalar(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
+def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
     """Compiled scalar :func:`contact_resultants`: returns ``(F_cb [N], M_cb [N m])``.
 
     Same arguments and units; ``winkler`` is a bool.
     """
-    return contact_resultants_trig(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
+    return contact_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                    damping, winkler)
 
 
 @numba.njit(cache=True)
-def contact_resultants_trig(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """:func:`contact_resultants_scalar` from ``s = sin(theta)``, ``c = cos(theta)`` (``|theta| < pi/2``).
+def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
+    """:func:`contact_resultants_jit` from ``s = sin(theta)``, ``c = cos(theta)`` (``|theta| < pi/2``).
 
     Used by the Monte Carlo integrator, which needs ``sin`` and ``cos`` anyway.
     """

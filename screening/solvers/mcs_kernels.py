@@ -22,8 +22,9 @@ import numpy as np
 from numba import types
 
 from screening.kernels import dopri
+from screening.kernels.interpolation import hermite
 from screening.kernels.signatures import function_type, record_type, sdof_coefficients_signature
-from screening.physics.contact import contact_resultants_trig
+from screening.physics.contact import contact_resultants_trig_jit
 from screening.status import DivergenceReason, SampleStatus
 
 #: Which equations a sample integrates.
@@ -84,7 +85,7 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p):
     m, g, h = p.m, p.g, p.h
     s = math.sin(theta)
     c = math.cos(theta)
-    force, moment = contact_resultants_trig(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.damping,
+    force, moment = contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.damping,
                                             p.winkler != 0.0)
     mh = m * h
     theta_ddot = ((mh * x_g_ddot * c - moment + h * force * s + mh * h * theta_dot * theta_dot * s * c)
@@ -121,11 +122,7 @@ def _hermite(row, acc, acc_dot, dt, t):
         j = n - 2
     if j < 0:
         j = 0
-    u = x - j
-    u2 = u * u
-    u3 = u2 * u
-    return ((2.0 * u3 - 3.0 * u2 + 1.0) * acc[row, j] + (-2.0 * u3 + 3.0 * u2) * acc[row, j + 1]
-            + dt * ((u3 - 2.0 * u2 + u) * acc_dot[row, j] + (u3 - u2) * acc_dot[row, j + 1]))
+    return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], x - j, dt)
 
 
 @numba.njit(cache=True)

@@ -41,7 +41,7 @@ import numpy as np
 from screening.solvers import mcs_kernels as kern
 from screening.condensation import get as get_condensation
 from screening.condensation.paper import uplift_threshold
-from screening.physics.contact import static_indentation_exact
+from screening.physics.contact import rest_indentation
 from screening.workflow.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
                         spectral_plan, stationary_samples, validate_seed, vertical_frequency)
@@ -126,7 +126,7 @@ def state_scales(block, foundation):
 def initial_state(block, foundation, model):
     """Initial ``(theta, theta', z_cb, z_cb')``: static equilibrium (coupled) or rest (condensed)."""
     if model == "coupled":
-        return np.array([0.0, 0.0, static_indentation_exact(block, foundation), 0.0])
+        return np.array([0.0, 0.0, rest_indentation(block, foundation), 0.0])
     return np.zeros(4)
 
 

@@ -10,7 +10,7 @@ from scipy.integrate import quad
 
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_UPLIFT_NEGATIVE,
                                REGIME_UPLIFT_POSITIVE, contact_length, contact_regime, contact_resultants,
-                               contact_resultants_scalar, foundation_constants, static_indentation_exact)
+                               contact_resultants_jit, foundation_constants, rest_indentation)
 from screening.model import Block, Foundation, contact_pressure
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
@@ -73,7 +73,7 @@ def test_resultants_match_quadrature(state, foundation):
     f_ref, m_ref = brute_force_resultants(theta, theta_dot, z_cb, z_cb_dot, foundation)
     k, eps, damping, winkler = foundation_constants(foundation)
     f_vec, m_vec = contact_resultants(theta, theta_dot, z_cb, z_cb_dot, B, k, eps, damping, winkler)
-    f_nb, m_nb = contact_resultants_scalar(theta, theta_dot, z_cb, z_cb_dot, B, k, eps, damping, winkler)
+    f_nb, m_nb = contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, B, k, eps, damping, winkler)
     tol = _scales(theta_dot, z_cb, z_cb_dot)
     for f in (float(f_vec), f_nb):
         assert f == pytest.approx(f_ref, rel=1e-9, abs=tol)
@@ -106,7 +106,7 @@ def test_vectorised_over_arrays_matches_scalar():
     regimes = contact_regime(theta, z_cb, B)
     assert set(np.unique(regimes)) == {0, 1, 2, 3}       # all regimes exercised
     for i in range(n):
-        fi, mi = contact_resultants_scalar(theta[i], theta_dot[i], z_cb[i], z_cb_dot[i], B, k, eps, lam, False)
+        fi, mi = contact_resultants_jit(theta[i], theta_dot[i], z_cb[i], z_cb_dot[i], B, k, eps, lam, False)
         assert fi == pytest.approx(f[i], rel=1e-12, abs=1e-9)
         assert mi == pytest.approx(m[i], rel=1e-12, abs=1e-11)
 
@@ -117,8 +117,8 @@ def test_vectorised_over_arrays_matches_scalar():
 def test_mirror_symmetry(theta, theta_dot, z_cb, z_cb_dot, winkler):
     """F(theta, theta') = F(-theta, -theta') and M(theta, theta') = -M(-theta, -theta')."""
     damping = 2e4 if winkler else 8.95e8
-    f1, m1 = contact_resultants_scalar(theta, theta_dot, z_cb, z_cb_dot, B, K, 6e7, damping, winkler)
-    f2, m2 = contact_resultants_scalar(-theta, -theta_dot, z_cb, z_cb_dot, B, K, 6e7, damping, winkler)
+    f1, m1 = contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, B, K, 6e7, damping, winkler)
+    f2, m2 = contact_resultants_jit(-theta, -theta_dot, z_cb, z_cb_dot, B, K, 6e7, damping, winkler)
     scale_f = abs(f1) + 1e-9
     assert abs(f1 - f2) <= 1e-12 * scale_f + 1e-12
     assert abs(m1 + m2) <= 1e-12 * (abs(m1) + 1e-9) + 1e-14
@@ -131,9 +131,9 @@ def test_continuous_across_regime_boundaries(theta):
     k, eps, lam, _ = foundation_constants(FOUNDATIONS[0])
     for z_edge in (B * a, -B * a):                 # full<->uplift and uplift<->flight boundaries
         d = 1e-12
-        below = contact_resultants_scalar(theta, 0.3, z_edge - d, 1e-3, B, k, eps, lam, False)
-        above = contact_resultants_scalar(theta, 0.3, z_edge + d, 1e-3, B, k, eps, lam, False)
-        at = contact_resultants_scalar(theta, 0.3, z_edge, 1e-3, B, k, eps, lam, False)
+        below = contact_resultants_jit(theta, 0.3, z_edge - d, 1e-3, B, k, eps, lam, False)
+        above = contact_resultants_jit(theta, 0.3, z_edge + d, 1e-3, B, k, eps, lam, False)
+        at = contact_resultants_jit(theta, 0.3, z_edge, 1e-3, B, k, eps, lam, False)
         scale = abs(at[0]) + k * B * 1e-9
         assert abs(below[0] - above[0]) < 1e-6 * scale
         assert abs(below[1] - above[1]) < 1e-6 * scale * B
@@ -142,8 +142,8 @@ def test_continuous_across_regime_boundaries(theta):
 @pytest.mark.parametrize("eps", [6e7, 0.0, -6e5, -6e7])
 def test_static_indentation_carries_the_weight(eps):
     foundation = Foundation(k=K, lam=8.95e8, eps=eps)
-    z = static_indentation_exact(BLOCK, foundation)
-    force, moment = contact_resultants_scalar(0.0, 0.0, z, 0.0, B, K, eps, 8.95e8, False)
+    z = rest_indentation(BLOCK, foundation)
+    force, moment = contact_resultants_jit(0.0, 0.0, z, 0.0, B, K, eps, 8.95e8, False)
     assert force == pytest.approx(BLOCK.m * BLOCK.g, rel=1e-14)
     assert moment == 0.0
     assert 0.0 < z < 2 * Z_ST
@@ -154,7 +154,7 @@ def test_static_indentation_carries_the_weight(eps):
 
 def test_static_indentation_rejects_a_bed_that_cannot_carry_the_block():
     with pytest.raises(ValueError, match="cannot carry"):
-        static_indentation_exact(BLOCK, Foundation(k=K, lam=1.0, eps=-1e11))
+        rest_indentation(BLOCK, Foundation(k=K, lam=1.0, eps=-1e11))
 
 
 # ---------------------------------------------------------------- the printed equations (errata)

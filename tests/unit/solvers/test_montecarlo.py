@@ -15,7 +15,7 @@ from screening.solvers import mcs_kernels as kern
 from screening.solvers import montecarlo as mc
 from screening.condensation import get as get_condensation, paper
 from screening.condensation.paper import damping_inner, rocking_damping, rocking_stiffness, uplift_threshold
-from screening.physics.contact import contact_resultants, static_indentation_exact
+from screening.physics.contact import contact_resultants, rest_indentation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.model import Block, Foundation
 from screening.solvers.montecarlo import ensemble_statistics, monte_carlo
@@ -118,7 +118,7 @@ def test_coupled_accelerations_solve_eqs_7_and_8(foundation):
 def test_static_equilibrium_is_at_rest(eps):
     foundation = Foundation(k=2.89e7, lam=8.95e8, eps=eps)
     p = _model_record(foundation)
-    th_dd, z_dd = kern.coupled_accelerations(0.0, 0.0, static_indentation_exact(BLOCK, foundation), 0.0, 0.0, p)
+    th_dd, z_dd = kern.coupled_accelerations(0.0, 0.0, rest_indentation(BLOCK, foundation), 0.0, 0.0, p)
     assert th_dd == 0.0
     assert abs(z_dd) < 1e-12 * BLOCK.g
 
@@ -181,7 +181,7 @@ def test_undamped_coupled_model_conserves_energy_through_uplift_and_impacts(foun
     """With no dashpots eqs. (7)–(8) are conservative: a strong independent check of the
     resultants, the equations and the integrator in every contact regime."""
     t_out = np.linspace(0.0, 1.5, 31)
-    z0 = static_indentation_exact(BLOCK, foundation)
+    z0 = rest_indentation(BLOCK, foundation)
     outs, flags = _run_kernel(kern.MODEL_COUPLED, np.zeros(1600), t_out, foundation, [0.0, 0.6, z0, 0.0],
                               rtol=1e-9)
     theta, theta_dot, z, z_dot = (o[0] for o in outs)
@@ -299,7 +299,7 @@ def test_diverged_samples_are_flagged_not_fatal():
 def test_flight_then_landing_and_overlong_flight():
     """Dropped from 1 mm above the bed: free fall (flight, F = M = 0), impact, settling."""
     t_out = np.linspace(0.0, 1.0, 21)
-    z_st = static_indentation_exact(BLOCK, HC)
+    z_st = rest_indentation(BLOCK, HC)
     outs, flags = _run_kernel(kern.MODEL_COUPLED, np.zeros(1100), t_out, HC, [0.0, 0.0, -1e-3, 0.0])
     assert flags[1][0] == kern.STATUS_OK
     t_fall = math.sqrt(2e-3 / BLOCK.g)                                      # ~14 ms in the air
