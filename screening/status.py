@@ -3,6 +3,8 @@
 Compiled kernels read the members as integer constants (numba supports ``IntEnum``); files store
 the integer with CF ``flag_values`` / ``flag_meanings`` made by :func:`flag_attributes`.
 Nothing else in the package spells a status number.
+
+Method and how it is checked: ``docs/method.md#status-flags``.
 """
 
 from __future__ import annotations

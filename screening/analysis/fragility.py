@@ -24,6 +24,8 @@ The xarray layer (``ds.rocking``) works on every dataset the package returns: a
 peak ``|theta|`` exceeds the threshold).  Every quantity is broadcast by dimension name, and
 the thresholds read the stored ``theta_ul`` and ``slenderness``: nothing here recomputes the
 model.
+
+Method and how it is checked: ``docs/method.md#fragility``.
 """
 
 from __future__ import annotations

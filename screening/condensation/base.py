@@ -5,6 +5,8 @@ A condensation turns the coupled rocking/vertical model into one rocking equatio
 the base to the rotation.  It provides the numpy functions below (vectorised over ``theta`` and
 array model parameters, SI units) and, for the compiled solvers, its kernels (:attr:`moment_kernel`,
 :attr:`sdof_kernel`).  Register an instance with :func:`screening.condensation.register`.
+
+Method and how it is checked: ``docs/method.md#quasi-static-condensation``.
 """
 
 from __future__ import annotations

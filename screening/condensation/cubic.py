@@ -95,6 +95,8 @@ Softening beds (``eps < 0``)
   such samples as diverged, and the moment solver records ``theta_capacity``.  Just below
   ``theta_cap``, ``dz/da ~ (theta_cap - a)^(-1/2)`` (the block sinks ever faster), an
   integrable singularity of ``C``.
+
+Method and how it is checked: ``docs/method.md#cubic-condensation``.
 """
 
 from __future__ import annotations

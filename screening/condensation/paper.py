@@ -25,6 +25,8 @@ procedure applied to ``lam z zdot`` reproduces eq. (24), which checks the route.
 
 The functions below are the paper's condensation alone; :mod:`screening.condensation.api` has
 the same functions for any registered condensation (``condensation=`` a name or object).
+
+Method and how it is checked: ``docs/method.md#paper-condensation``.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 ``c_eq = E[dg/dtheta']`` and ``k_eq = E[dg/dtheta]`` (eq. 31) for
 ``g = C(theta) theta' + K(theta) theta`` with ``(theta, theta')`` zero-mean Gaussian.
 
-Closed forms (eq. 35 and eq. 36 as corrected in ERRATA.md).  With ``r = sigma_theta /
+Closed forms (eq. 35 and eq. 36 as corrected: docs/method.md#eq-36-equivalent-stiffness).  With ``r = sigma_theta /
 theta_ul`` and ``x = theta_ul^2 / (2 sigma_theta^2) = 1 / (2 r^2)`` every sigma-dependent
 part is one of these dimensionless Gaussian integrals (``1_in``: ``|theta| <= theta_ul``):
 
@@ -36,6 +36,8 @@ Limits: ``sigma_theta -> 0`` gives the no-uplift values ``c_eq = C1``,
 ``k_eq = K0 - m g h + eps (E0/2 + (6/5) k b^5 sigma_theta^2)``; ``sigma_theta -> inf`` gives
 ``c_eq -> 0`` and ``k_eq -> -m g h + eps E0``.
 
+
+Method and how it is checked: ``docs/method.md#closed-forms-for-the-paper-condensation``.
 """
 
 from __future__ import annotations

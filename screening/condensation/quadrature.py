@@ -49,6 +49,8 @@ the direct quadrature 3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; a ta
 ``d_c`` is held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``);
 above ``t_hi`` (4 x the slenderness angle, where the moment solver has long stopped the
 point) the last values are held.
+
+Method and how it is checked: ``docs/method.md#quadrature-tables``.
 """
 
 from __future__ import annotations

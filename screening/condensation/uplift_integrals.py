@@ -9,6 +9,8 @@ tabulated once, for every block and foundation, on a uniform grid in ``t = ln r`
 their exact derivatives, and read back by cubic Hermite interpolation (error ~1e-12,
 tested against the closed forms).  Below the grid every tail is zero to double precision;
 above it the small-``x`` series of the incomplete gamma functions is exact to rounding.
+
+Method and how it is checked: ``docs/method.md#tabulated-evaluation``.
 """
 
 from __future__ import annotations

@@ -8,6 +8,8 @@ DOPRI5 (``alpha = 0.17``, ``beta = 0.04``: smooth near the stability bound).  Th
 
 Symbols: ``h`` step [s], stage ``s`` at time ``t + C[s] h``; ``y_new = y + h sum_s B[s] K[s]``;
 error estimate ``h sum_s E[s] K[s]`` (5th minus 4th order, FSAL stage 7 included).
+
+Method and how it is checked: ``docs/method.md#moment-solver``.
 """
 
 from __future__ import annotations

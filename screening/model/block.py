@@ -1,4 +1,7 @@
-"""The rigid block (paper, section 2.1)."""
+"""The rigid block (paper, section 2.1).
+
+Method and how it is checked: ``docs/method.md#block``.
+"""
 
 from __future__ import annotations
 

@@ -5,6 +5,8 @@ Intensity convention (paper eq. 39): the driving white noise has
 its two-sided power spectral density over ``-inf < omega < inf``.  The horizontal ground
 acceleration is ``q(t) xi(t)`` (white) or ``q(t) z(t)`` with ``z`` the Kanai–Tajimi filter
 output (eqs. 47–49).
+
+Method and how it is checked: ``docs/method.md#excitation``.
 """
 
 from __future__ import annotations

@@ -5,6 +5,8 @@ other so that the physics functions downstream are vectorised over parameter poi
 All quantities are SI.  The contact law gives a force per unit base length [N/m], so
 ``k`` is in N/m^2, the Hunt–Crossley ``lam`` in N s/m^4, the Winkler dashpot ``c`` in
 N s/m^2 and ``eps`` in 1/m^2.
+
+Method and how it is checked: ``docs/method.md#contact-law``.
 """
 
 from __future__ import annotations

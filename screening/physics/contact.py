@@ -71,6 +71,8 @@ full contact ``F = 2 b c zdot_cb``, ``M = (2/3) c b^3 c^2 theta_dot``.
 Units: ``theta`` [rad], ``theta_dot`` [rad/s], ``z_cb`` [m] (indentation of the base centre,
 positive into the bed), ``zdot_cb`` [m/s], ``b`` [m], ``k`` [N/m^2], ``eps`` [1/m^2],
 ``damping`` = ``lam`` [N s/m^4] (Hunt–Crossley) or ``c`` [N s/m^2] (Winkler).
+
+Method and how it is checked: ``docs/method.md#contact-regimes-and-resultants``.
 """
 
 from __future__ import annotations

@@ -10,6 +10,8 @@ are clipped to land exactly on the output instants.  The modulated ground accele
 ``q f`` and its exact rate ``q f' + q' f`` are given on the synthesis grid; between grid
 points the input is their cubic Hermite interpolant.  Samples are independent, so the
 ``prange`` loop gives the same numbers for any number of threads or chunking.
+
+Method and how it is checked: ``docs/method.md#coupled-and-condensed-models``.
 """
 
 from __future__ import annotations

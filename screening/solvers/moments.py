@@ -21,6 +21,8 @@ registered name, turned into the object once here) hands the solver its compiled
 (:meth:`~screening.condensation.Condensation.moment_kernel`): the paper's closed forms read a
 universal table, others per-point quadrature tables.  The compiled loop calls that function and
 never looks at the condensation's name; it is compiled (and cached) once per record type.
+
+Method and how it is checked: ``docs/method.md#moment-equations``.
 """
 
 from __future__ import annotations

@@ -27,6 +27,8 @@ than ``max_flight_time``, or when the step size underflows / the step budget run
 Such samples are excluded from every ensemble statistic (the statistics are conditional
 on survival of the whole record) and reported in ``overturned``, ``diverged`` and the
 counts; they never stop the run.
+
+Method and how it is checked: ``docs/method.md#monte-carlo``.
 """
 
 from __future__ import annotations

@@ -27,6 +27,8 @@ from rest (as in a Lyapunov integration from zero covariance) differs during its
 Sample ``i`` of a run with seed ``seed`` draws its phases from
 ``numpy.random.default_rng([seed, i])``: a run is reproducible and a sample does not depend
 on how the samples are split into chunks or workers.
+
+Method and how it is checked: ``docs/method.md#ground-motion-synthesis``.
 """
 
 from __future__ import annotations

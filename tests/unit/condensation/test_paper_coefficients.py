@@ -61,7 +61,7 @@ def test_limits_at_zero_sigma_are_no_uplift_values(paper_block, any_foundation):
 
 
 def test_small_sigma_limit_keeps_the_cubic_secant_term(paper_block, any_foundation):
-    """ERRATA: k_eq -> K1 + eps (6/5) k b^5 s^2 (not 2/5) while uplift is negligible."""
+    """Corrected eq. (36) (docs/method.md): k_eq -> K1 + eps (6/5) k b^5 s^2 (not 2/5) while uplift is negligible."""
     s = 0.02 * uplift_threshold(paper_block, any_foundation)
     _, k_eq = equivalent_coefficients(s, 40 * s, 0.3, paper_block, any_foundation)
     _, k0 = equivalent_coefficients(0.0, 0.0, 0.0, paper_block, any_foundation)
