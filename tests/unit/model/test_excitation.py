@@ -51,3 +51,11 @@ def test_kanai_tajimi_filter_moments_match_frequency_domain():
     vu, vud, _ = kanai_tajimi_stationary_moments(S0, wg, zg)
     assert vu == pytest.approx(var_u, rel=1e-8)
     assert vud == pytest.approx(var_ud, rel=1e-8)
+
+
+def test_compiled_filter_moments_are_the_closed_form():
+    from screening.model.excitation import stationary_filter_moments_jit
+
+    for S0, wg, zg in ((2e-4, 10.0, 0.4), (1e-12, 200.0, 0.01), (3.0, 0.5, 2.0)):
+        var_u, var_ud, _ = kanai_tajimi_stationary_moments(S0, wg, zg)
+        assert stationary_filter_moments_jit(S0, wg, zg) == (var_u, var_ud)

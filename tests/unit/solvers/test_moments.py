@@ -248,3 +248,23 @@ def test_linearize_reports_the_reach_beyond_the_capacity_angle(paper_block):
     expected = erfc(cap / np.sqrt(2 * float(ds.peak_var_theta)))
     assert ds.attrs["peak_p_beyond_capacity"] == pytest.approx(expected, rel=1e-12)
     assert 0.0 < ds.attrs["peak_p_beyond_capacity"] < 1.0
+
+
+def test_compiled_uplift_probability_and_envelope_are_their_numpy_references(paper_block):
+    """The solver's p_uplift history is eq. (58) of its own var_theta; its stage gains are m h q(t) / M."""
+    from screening.condensation.api import uplift_probability
+    from screening.kernels import dopri
+
+    bed = Foundation(2.89e7, 8.95e8, -6e5)
+    res = solve_moments(paper_block, bed, WhiteNoise(6.5e-4), output_times(20.0, 0.05))
+    ok = np.isfinite(res["var_theta"])
+    ref = uplift_probability(np.sqrt(res["var_theta"][ok]), paper_block, bed)
+    assert ref.max() > 0.5                                       # the heavy-uplift regime is exercised
+    np.testing.assert_allclose(res["p_uplift"][ok], ref, rtol=1e-12, atol=1e-300)
+    (block, fnd, exc), _ = flatten(paper_block, bed, WhiteNoise(1e-4, Envelope(4.0, 2.0)))
+    osc = oscillator_records(block, fnd, exc, get_condensation("paper"))[0]
+    gains = np.empty(7)
+    for t, h in ((0.0, 0.01), (2.7, 0.3), (19.5, 0.5)):
+        lyapunov._stage_gains(osc, t, h, gains)
+        expected = paper_block.m * paper_block.h / paper_block.m_sdof * Envelope(4.0, 2.0)(t + dopri.C * h)
+        np.testing.assert_allclose(gains, expected, rtol=1e-13, atol=1e-16)
