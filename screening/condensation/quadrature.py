@@ -60,7 +60,7 @@ import numba
 import numpy as np
 
 from screening.condensation.base import MomentKernel
-from screening.kernels.interpolation import hermite
+from screening.kernels.interpolation import hermite_weights
 from screening.kernels.signatures import moment_coefficients_signature
 from screening.model.points import flatten, point_key, select
 
@@ -263,10 +263,13 @@ def table_lookup_grid(t, values, slopes, c0, k0, t_lo, steps_per_unit, n):
     if u >= n - 1:
         return values[n - 1, 0], values[n - 1, 1], values[n - 1, 2]
     i = int(u)
-    s, step = u - i, 1.0 / steps_per_unit
-    e_c = hermite(values[i, 0], values[i + 1, 0], slopes[i, 0], slopes[i + 1, 0], s, step)
-    e_k = hermite(values[i, 1], values[i + 1, 1], slopes[i, 1], slopes[i + 1, 1], s, step)
-    d_c = hermite(values[i, 2], values[i + 1, 2], slopes[i, 2], slopes[i + 1, 2], s, step)
+    step = 1.0 / steps_per_unit
+    h00, h10, h01, h11 = hermite_weights(u - i)
+    h10 *= step                       # the slopes are per unit of t
+    h11 *= step
+    e_c = h00 * values[i, 0] + h01 * values[i + 1, 0] + h10 * slopes[i, 0] + h11 * slopes[i + 1, 0]
+    e_k = h00 * values[i, 1] + h01 * values[i + 1, 1] + h10 * slopes[i, 1] + h11 * slopes[i + 1, 1]
+    d_c = h00 * values[i, 2] + h01 * values[i + 1, 2] + h10 * slopes[i, 2] + h11 * slopes[i + 1, 2]
     return e_c, e_k, d_c
 
 

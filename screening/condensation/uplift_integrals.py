@@ -22,7 +22,7 @@ import numba
 import numpy as np
 from scipy import special
 
-from screening.kernels.interpolation import hermite
+from screening.kernels.interpolation import hermite_weights
 
 #: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
 X_LIMIT = 700.0
@@ -133,11 +133,14 @@ def uplift_integrals_log(t, values, slopes):
                 x * sx / _G52 * (1.0 - 0.6 * x))
     u = (t - T_LO) * STEPS_PER_UNIT
     i = min(int(u), values.shape[0] - 2)
-    s, step = u - i, 1.0 / STEPS_PER_UNIT
+    step = 1.0 / STEPS_PER_UNIT
+    h00, h10, h01, h11 = hermite_weights(u - i)
+    h10 *= step                       # the slopes are per unit of t
+    h11 *= step
     v0, v1, d0, d1 = values[i], values[i + 1], slopes[i], slopes[i + 1]
-    p_in = hermite(v0[0], v1[0], d0[0], d1[0], s, step)
-    tail_m12 = hermite(v0[1], v1[1], d0[1], d1[1], s, step)
-    tail_m32 = hermite(v0[2], v1[2], d0[2], d1[2], s, step)
-    p32 = hermite(v0[3], v1[3], d0[3], d1[3], s, step)
+    p_in = h00 * v0[0] + h01 * v1[0] + h10 * d0[0] + h11 * d1[0]
+    tail_m12 = h00 * v0[1] + h01 * v1[1] + h10 * d0[1] + h11 * d1[1]
+    tail_m32 = h00 * v0[2] + h01 * v1[2] + h10 * d0[2] + h11 * d1[2]
+    p32 = h00 * v0[3] + h01 * v1[3] + h10 * d0[3] + h11 * d1[3]
     # the tails underflow smoothly to zero at T_LO: keep their interpolants non-negative
     return p_in, max(tail_m12, 0.0), max(tail_m32, 0.0), p32
