@@ -1,4 +1,6 @@
-"""Command line: ``screening run | plot | info | fragility | tradeoff`` (one click parser).
+"""Command line: ``screening run | plot | info | fragility | tradeoff | simulate`` (one click parser).
+
+The record commands (``simulate``, ...) live in :mod:`screening.cli_records`.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
 dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
@@ -385,6 +387,9 @@ def cmd_info(result):
             raise damaged_data_error(result, exc) from None
     print(text)
     return EXIT_OK
+
+
+from screening import cli_records as _cli_records  # noqa: E402,F401 - registers simulate, fit-excitation
 
 
 if __name__ == "__main__":

@@ -1,0 +1,95 @@
+"""Commands of the engineer-facing record tools, registered on :data:`screening.cli.cli`.
+
+``screening simulate RECORD --study STUDY.toml --out RESULT.nc`` — deterministic response of the
+study's block on its bed to one record (netCDF + PNG).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from screening.cli import EXIT_OK, CommandError, _Choice, _say, _write_error, cli
+
+
+def _overrides(pairs):
+    out = {}
+    for text in pairs:
+        key, sep, value = text.partition("=")
+        if not sep:
+            raise CommandError(f"--set {text!r}: expected NAME=VALUE")
+        try:
+            out[key.strip()] = float(value)
+        except ValueError:
+            raise CommandError(f"--set {text!r}: {value!r} is not a number") from None
+    return out
+
+
+def _read(record, dt, units):
+    from screening.records import read_record
+
+    try:
+        return read_record(record, dt=dt, units=units)
+    except (ValueError, OSError) as exc:
+        raise CommandError(f"cannot read record {record}: {exc}") from None
+
+
+@cli.command("simulate", help="response of the study's block and bed to one ground-motion record "
+                              "(netCDF + PNG)")
+@click.argument("record")
+@click.option("--study", required=True, help="study file (TOML) giving the block and the bed")
+@click.option("--out", help="netCDF file (default <record-stem>_simulation.nc in the current folder; its folder "
+                            "must exist); the PNG goes next to it")
+@click.option("--model", type=_Choice(["coupled", "condensed"]), default="coupled",
+              help="coupled (eqs. 7-8, default) or condensed (eq. 22, the study's condensation)")
+@click.option("--dt", type=float, help="time step [s] of a one-column record")
+@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
+              help="acceleration units of a text record (default m/s2; AT2 files: from the header)")
+@click.option("--scale", type=float, default=1.0, help="factor on the record's accelerations (default 1)")
+@click.option("--case", help="case of the study (required when it has several)")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
+              help="value of a swept block/bed parameter (repeatable)")
+@click.option("--theta0", type=float, default=0.0, help="initial rotation [rad]")
+@click.option("--theta-dot0", type=float, default=0.0, help="initial angular velocity [rad/s]")
+@click.option("--t-end", type=float, help="end time [s] (default: the record's duration)")
+@click.option("--no-plots", is_flag=True, help="do not write the PNG")
+def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0, theta_dot0, t_end, no_plots):
+    from screening.records import Record
+    from screening.report.record_figures import plot_simulation
+    from screening.solvers.simulate import simulate
+    from screening.workflow.records_study import block_and_foundation
+    from screening.workflow.study import load_study
+    from screening.workflow.writer import check_output_path
+
+    rec = _read(record, dt, units)
+    if scale != 1.0:
+        rec = Record(rec.acceleration * scale, rec.dt, rec.name, rec.source, rec.units_in)
+    st = load_study(study)
+    block, foundation, chosen = block_and_foundation(st, case, _overrides(sets))
+    out = check_output_path(out or Path(f"{rec.name}_simulation.nc"))
+    try:
+        ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
+                      condensation=chosen.condensation if model == "condensed" else "paper", t_end=t_end)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    ds.attrs.update(study=str(study), record_scale=scale,
+                    history=f"screening simulate {record} --study {study} --model {model}")
+    tmp = out.with_name(out.name + ".tmp")
+    png_path = out.with_suffix(".png")
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
+        if not no_plots:
+            plot_simulation(ds, png_path)
+        tmp.replace(out)
+    except (OSError, RuntimeError) as exc:
+        tmp.unlink(missing_ok=True)
+        raise _write_error(out, exc) from None
+    print(out)
+    if not no_plots:
+        print(png_path)
+    over = (f"overturned at t = {float(ds['overturning_time']):.3f} s" if bool(ds["overturned"])
+            else f"peak |theta| = {float(ds['peak_abs_theta']):.4g} rad "
+                 f"({float(ds['peak_abs_theta']) / float(ds['slenderness']):.3f} of atan(b/h))")
+    _say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
+    return EXIT_OK
