@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from screening.cli import EXIT_OK, CommandError, _Choice, _say, _write_error, cli
 
@@ -92,4 +93,47 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
             else f"peak |theta| = {float(ds['peak_abs_theta']):.4g} rad "
                  f"({float(ds['peak_abs_theta']) / float(ds['slenderness']):.3f} of atan(b/h))")
     _say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
+    return EXIT_OK
+
+
+def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period):
+    """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML."""
+    from screening.analysis.im_fragility import fragility_over_im, write_csv, write_nrml
+    from screening.report.record_figures import plot_im_fragility
+    from screening.workflow.reader import open_result
+    from screening.workflow.writer import check_output_path
+    from screening import __version__
+
+    result = Path(result)
+    with open_result(result) as ds:
+        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
+        out = check_output_path(out or result.with_name(f"{stem}_fragility_{im}.nc"))
+        try:
+            frag, warnings = fragility_over_im(ds.load(), threshold, im, dim, relative_to, method, period)
+        except (ValueError, KeyError) as exc:
+            raise CommandError(str(exc).strip("'\"")) from None
+    frag.attrs.update(source_result=str(result), screening_version=__version__,
+                      history=f"screening fragility {result} --threshold {threshold} --im {im}"
+                              + (f" --relative-to {relative_to}" if relative_to else "")
+                              + (f" --period {period}" if period else ""))
+    written = []
+    try:
+        frag.to_netcdf(out, engine="netcdf4", encoding={c: {"_FillValue": None} for c in frag.coords})
+        written.append(out)
+        written.append(plot_im_fragility(frag, out.with_suffix(".png")))
+        written.append(write_csv(frag, out.with_suffix(".csv")))
+        try:
+            written.append(write_nrml(frag, out.with_suffix(".xml")))
+        except ValueError as exc:
+            warnings.append(f"no NRML file: {exc}")
+    except (OSError, RuntimeError) as exc:
+        raise _write_error(out, exc) from None
+    for path in written:
+        print(path)
+    for w in warnings:
+        _say(f"warning: {w}")
+    med = frag["median"]
+    if np.isfinite(med.values).any():
+        _say(f"lognormal fit over {frag.attrs['intensity_variable']}: median {float(med.median()):.4g} "
+             f"{med.attrs['units']}, beta {float(frag['beta'].median()):.3f} (medians over the other dims)")
     return EXIT_OK

@@ -204,6 +204,18 @@ SIMULATION = {
     "overturning_time": _v("s", "time at which |theta| first exceeded atan(b/h) (NaN if it did not)"),
 }
 
+#: Intensity measures of the inputs (:mod:`screening.analysis.intensity`) and of records.
+INTENSITY = {
+    "pga_median": _v("m s-2", "median peak ground acceleration of the modulated input (random-vibration theory)"),
+    "rms_acceleration": _v("m s-2", "root mean square ground acceleration over the record"),
+    "arias_intensity": _v("m s-1", "Arias intensity pi/(2 g) int a2 dt (expected value for stochastic inputs)"),
+    "sa_median": _v("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
+    "pga": _v("m s-2", "peak ground acceleration of the record"),
+    "sa": _v("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
+    "fit_flag": {"long_name": "state of the lognormal fit", "units": "1", "flag_values": [0, 1, 2],
+                 "flag_meanings": "ok non_positive_beta no_fit"},
+}
+
 #: Index and label coordinates.
 COORDINATES = {
     "t": TIME,
