@@ -137,3 +137,24 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
         _say(f"lognormal fit over {frag.attrs['intensity_variable']}: median {float(med.median()):.4g} "
              f"{med.attrs['units']}, beta {float(frag['beta'].median()):.3f} (medians over the other dims)")
     return EXIT_OK
+
+
+@cli.command("fit-excitation", help="estimate S0, omega_g, zeta_g, T1, T2 from a record and print the "
+                                    "[excitation] table of a study")
+@click.argument("record")
+@click.option("--dt", type=float, help="time step [s] of a one-column record")
+@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
+              help="acceleration units of a text record (default m/s2; AT2 files: from the header)")
+@click.option("--kind", type=_Choice(["kanai_tajimi", "white"]), default="kanai_tajimi",
+              help="excitation model (default kanai_tajimi)")
+@click.option("--cutoff", type=float, help="band limit [rad/s] of the study's synthesis (required for white)")
+def cmd_fit_excitation(record, dt, units, kind, cutoff):
+    from screening.analysis.fit_excitation import excitation_table, fit_excitation
+
+    rec = _read(record, dt, units)
+    try:
+        fit = fit_excitation(rec, kind=kind, cutoff=cutoff)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    print(excitation_table(fit))
+    return EXIT_OK

@@ -50,3 +50,16 @@ def test_simulate_needs_swept_value(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--set eps=VALUE" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x.nc").exists()
+
+
+def test_fit_excitation_prints_a_study_table(tmp_path, capsys):
+    from screening.cli import main as run
+    from screening.workflow.study import parse_study
+
+    _, record = _files(tmp_path)
+    assert run(["fit-excitation", str(record)]) == 0
+    table = capsys.readouterr().out
+    study = parse_study("[block]\nm = 1.0\nb = 0.1\nh = 0.3\n[foundation]\nk = 1e8\nlam = 1e9\n" + table)
+    assert study.cases[0].excitation == "kanai_tajimi"
+    assert run(["fit-excitation", str(record), "--kind", "white"]) == 2
+    assert "cutoff" in capsys.readouterr().err
