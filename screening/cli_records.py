@@ -158,3 +158,45 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
         raise CommandError(str(exc)) from None
     print(excitation_table(fit))
     return EXIT_OK
+
+
+@cli.command("cloud", help="cloud analysis: run the records of a study through the coupled model and fit a "
+                           "fragility over an intensity measure (netCDF, PNG, CSV, NRML)")
+@click.argument("study")
+@click.option("--out", help="netCDF file (default outputs/<study-stem>.nc, folder created if missing)")
+@click.option("--case", help="case of the study (required when it has several)")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
+              help="value of a swept block/bed parameter (repeatable)")
+@click.option("--quiet", is_flag=True, help="no progress lines")
+def cmd_cloud(study, out, case, sets, quiet):
+    from screening.analysis.im_fragility import write_csv, write_nrml
+    from screening.workflow.cloud import load_cloud_study, plot_cloud, run_cloud
+    from screening.workflow.writer import check_output_path
+
+    cloud = load_cloud_study(study)
+    if out is None:
+        out = Path("outputs") / f"{Path(study).stem}.nc"
+        out.parent.mkdir(exist_ok=True)
+    out = check_output_path(out)
+    ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say)
+    written = []
+    try:
+        ds.to_netcdf(out, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
+        written += [out, plot_cloud(ds, out.with_suffix(".png"))]
+        frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
+        written.append(write_csv(frag, out.with_suffix(".csv")))
+        try:
+            written.append(write_nrml(frag, out.with_suffix(".xml")))
+        except ValueError as exc:
+            warnings.append(f"no NRML file: {exc}")
+    except (OSError, RuntimeError) as exc:
+        raise _write_error(out, exc) from None
+    for path in written:
+        print(path)
+    for w in warnings:
+        _say(f"warning: {w}")
+    n = ds.sizes["record"]
+    _say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
+         f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['median']):.4g} "
+         f"{ds['median'].attrs['units']}, beta {float(ds['beta']):.3f}")
+    return EXIT_OK

@@ -173,7 +173,7 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     """OpenQuake NRML 0.5 fragility model: one continuous ``logncdf`` function per fitted curve,
     limit state ``theta_exceeds_threshold``.  Raises ``ValueError`` for an IM OpenQuake does not know."""
     name = frag["median"].attrs.get("intensity", "")
-    key = next((k for k, v in IMS.items() if v[0] == name), None)
+    key = next((k for k, v in IMS.items() if v[0] == name), {"pga": "pga", "sa": "sa"}.get(name))
     if key is None or IMS[key][2] is None:
         raise ValueError(f"OpenQuake has no intensity measure type for {name!r}; export CSV instead")
     imt = IMS[key][2]

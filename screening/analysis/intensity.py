@@ -264,3 +264,43 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
         if name in out:
             out[name].attrs.update(schema.attributes(name, schema.INTENSITY))
     return out
+
+
+# ----------------------------------------------------------------------------- records
+def oscillator_peak(acceleration, dt, period, damping=0.05):
+    """``max_t |u|`` [m] of ``u'' + 2 zeta w u' + w^2 u = -a`` from rest, for rows of ``acceleration``
+    [m s-2] sampled at ``dt`` [s]: the exact recurrence for piecewise-linear input (Nigam & Jennings 1969)."""
+    acc = np.atleast_2d(np.asarray(acceleration, dtype=float))
+    w = 2.0 * math.pi / float(period)
+    z = float(damping)
+    wd = w * math.sqrt(1.0 - z * z)
+    e = math.exp(-z * w * dt)
+    s, c = math.sin(wd * dt), math.cos(wd * dt)
+    r = z / math.sqrt(1.0 - z * z)
+    a11, a12 = e * (r * s + c), e * s / wd
+    a21, a22 = -w / math.sqrt(1.0 - z * z) * e * s, e * (c - r * s)
+    t1, t2 = (2.0 * z * z - 1.0) / (w * w * dt), 2.0 * z / (w**3 * dt)
+    b11 = e * ((t1 + z / w) * s / wd + (t2 + 1.0 / w**2) * c) - t2
+    b12 = -e * (t1 * s / wd + t2 * c) - 1.0 / w**2 + t2
+    b21 = e * ((t1 + z / w) * (c - r * s) - (t2 + 1.0 / w**2) * (wd * s + z * w * c)) + 1.0 / (w * w * dt)
+    b22 = -e * (t1 * (c - r * s) - t2 * (wd * s + z * w * c)) - 1.0 / (w * w * dt)
+    u = np.zeros(acc.shape[0])
+    v = np.zeros(acc.shape[0])
+    peak = np.zeros(acc.shape[0])
+    for j in range(acc.shape[1] - 1):
+        p0, p1 = acc[:, j], acc[:, j + 1]
+        u, v = a11 * u + a12 * v + b11 * p0 + b12 * p1, a21 * u + a22 * v + b21 * p0 + b22 * p1
+        np.maximum(peak, np.abs(u), out=peak)
+    return peak
+
+
+def record_measures(record, period=None, damping=0.05, g=G):
+    """Intensity measures of one :class:`~screening.records.Record`: ``pga`` [m s-2], ``rms_acceleration``
+    [m s-2], ``arias_intensity`` [m s-1] and with ``period`` [s] ``sa`` = ``w^2 max|u|`` [m s-2]."""
+    a = record.acceleration
+    energy = float(np.trapezoid(a * a, dx=record.dt))
+    out = {"pga": float(np.max(np.abs(a))), "rms_acceleration": math.sqrt(energy / record.duration),
+           "arias_intensity": math.pi / (2.0 * g) * energy}
+    if period is not None:
+        out["sa"] = (2.0 * math.pi / period) ** 2 * float(oscillator_peak(a, record.dt, period, damping)[0])
+    return out
