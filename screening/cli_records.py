@@ -27,6 +27,27 @@ def _overrides(pairs):
     return out
 
 
+def _write_fragility_files(ds, frag, out, plot, warnings):
+    """``ds`` as netCDF at ``out``, ``plot(ds, png)``, the fits of ``frag`` as CSV and (if OpenQuake knows the
+    IM) NRML next to it; prints the paths and the warnings."""
+    from screening.analysis.im_fragility import write_csv, write_nrml
+
+    written = []
+    try:
+        ds.to_netcdf(out, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
+        written += [out, plot(ds, out.with_suffix(".png")), write_csv(frag, out.with_suffix(".csv"))]
+        try:
+            written.append(write_nrml(frag, out.with_suffix(".xml")))
+        except ValueError as exc:
+            warnings.append(f"no NRML file: {exc}")
+    except (OSError, RuntimeError) as exc:
+        raise _write_error(out, exc) from None
+    for path in written:
+        print(path)
+    for w in warnings:
+        _say(f"warning: {w}")
+
+
 def _read(record, dt, units):
     from screening.records import read_record
 
@@ -98,7 +119,7 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
 
 def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period):
     """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML."""
-    from screening.analysis.im_fragility import fragility_over_im, write_csv, write_nrml
+    from screening.analysis.im_fragility import fragility_over_im
     from screening.report.record_figures import plot_im_fragility
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
@@ -116,22 +137,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
                       history=f"screening fragility {result} --threshold {threshold} --im {im}"
                               + (f" --relative-to {relative_to}" if relative_to else "")
                               + (f" --period {period}" if period else ""))
-    written = []
-    try:
-        frag.to_netcdf(out, engine="netcdf4", encoding={c: {"_FillValue": None} for c in frag.coords})
-        written.append(out)
-        written.append(plot_im_fragility(frag, out.with_suffix(".png")))
-        written.append(write_csv(frag, out.with_suffix(".csv")))
-        try:
-            written.append(write_nrml(frag, out.with_suffix(".xml")))
-        except ValueError as exc:
-            warnings.append(f"no NRML file: {exc}")
-    except (OSError, RuntimeError) as exc:
-        raise _write_error(out, exc) from None
-    for path in written:
-        print(path)
-    for w in warnings:
-        _say(f"warning: {w}")
+    _write_fragility_files(frag, frag, out, plot_im_fragility, warnings)
     med = frag["median"]
     if np.isfinite(med.values).any():
         _say(f"lognormal fit over {frag.attrs['intensity_variable']}: median {float(med.median()):.4g} "
@@ -169,7 +175,6 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
               help="value of a swept block/bed parameter (repeatable)")
 @click.option("--quiet", is_flag=True, help="no progress lines")
 def cmd_cloud(study, out, case, sets, quiet):
-    from screening.analysis.im_fragility import write_csv, write_nrml
     from screening.workflow.cloud import load_cloud_study, plot_cloud, run_cloud
     from screening.workflow.writer import check_output_path
 
@@ -179,22 +184,8 @@ def cmd_cloud(study, out, case, sets, quiet):
         out.parent.mkdir(exist_ok=True)
     out = check_output_path(out)
     ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say)
-    written = []
-    try:
-        ds.to_netcdf(out, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
-        written += [out, plot_cloud(ds, out.with_suffix(".png"))]
-        frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
-        written.append(write_csv(frag, out.with_suffix(".csv")))
-        try:
-            written.append(write_nrml(frag, out.with_suffix(".xml")))
-        except ValueError as exc:
-            warnings.append(f"no NRML file: {exc}")
-    except (OSError, RuntimeError) as exc:
-        raise _write_error(out, exc) from None
-    for path in written:
-        print(path)
-    for w in warnings:
-        _say(f"warning: {w}")
+    frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
+    _write_fragility_files(ds, frag, out, plot_cloud, warnings)
     n = ds.sizes["record"]
     _say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
          f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['median']):.4g} "
