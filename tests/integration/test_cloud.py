@@ -68,3 +68,9 @@ def test_cloud_cli_writes_all_files(folder, capsys):
     with xr.open_dataset(out) as ds:
         assert ds.attrs["intensity_variable"] == "pga"
     assert "records:" in capsys.readouterr().err
+
+
+def test_shipped_cloud_example_is_valid():
+    from pathlib import Path
+    cloud = load_cloud_study(Path(__file__).parents[2] / "studies" / "cloud_example.toml")
+    assert len(cloud.files) == 20 and cloud.im == "pga" and cloud.period == 0.5
