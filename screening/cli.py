@@ -1,6 +1,8 @@
-"""Command line: ``screening run | plot | info | fragility | tradeoff | simulate`` (one click parser).
+"""Command line: ``screening run | plot | info | fragility | tradeoff | simulate | fit-excitation | cloud``
+(one click parser).
 
-The record commands (``simulate``, ...) live in :mod:`screening.cli_records`.
+The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragility --im`` live in
+:mod:`screening.cli_records`.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
 dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
@@ -396,7 +398,7 @@ def cmd_info(result):
     return EXIT_OK
 
 
-from screening import cli_records as _cli_records  # noqa: E402,F401 - registers simulate, fit-excitation
+from screening import cli_records as _cli_records  # noqa: E402,F401 - registers simulate, fit-excitation, cloud
 
 
 if __name__ == "__main__":

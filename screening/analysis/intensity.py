@@ -206,6 +206,15 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
     from screening.model import Block, Foundation
     from screening.solvers.synthesis import default_cutoff
 
+    if "excitation" not in ds.attrs and "excitation" in ds.coords and ds["excitation"].dims == ("case",):
+        parts = []                                     # sweep whose cases differ in excitation or envelope
+        for i in range(ds.sizes["case"]):
+            one = ds.isel(case=i)
+            labels = {n: str(one[n].values) for n in ("excitation", "envelope") if n in one.coords}
+            parts.append(intensity_measures(one.drop_vars(list(labels)).assign_attrs(**{**ds.attrs, **labels}),
+                                            period, damping, cutoff).expand_dims("case"))
+        out = xr.concat(parts, "case", combine_attrs="override")
+        return out.assign_coords(case=ds["case"])
     kind = ds.attrs.get("excitation")
     envelope_kind = ds.attrs.get("envelope", "exponential")
     if kind not in ("white", "kanai_tajimi"):

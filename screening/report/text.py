@@ -44,6 +44,7 @@ def describe(ds, path="result"):
     if labels:
         lines.append("models: " + ", ".join(labels))
     lines.extend(bed_lines(ds))
+    lines.extend(intensity_lines(ds))
     t = ds["t"].values
     lines.append(f"time: {_fmt(float(t[0]))} .. {_fmt(float(t[-1]))} s, {t.size} output times")
 
@@ -130,4 +131,23 @@ def bed_lines(ds, max_points=400):
         v = np.array([s[key] for s in summaries], dtype=float)
         if np.isfinite(v).any():
             out.append(f"  {key:<23} {_fmt(float(np.nanmin(v)))} .. {_fmt(float(np.nanmax(v)))} {unit}")
+    return out
+
+
+def intensity_lines(ds):
+    """``input intensity`` lines: ranges of the RVT median PGA, RMS acceleration and Arias intensity of the
+    inputs (:func:`screening.analysis.intensity.intensity_measures`); nothing if they cannot be computed."""
+    from screening.analysis.intensity import intensity_measures
+
+    try:
+        im = intensity_measures(ds)
+    except (KeyError, ValueError):
+        return []
+    out = [f"input intensity (random-vibration theory, band limit: {im.attrs['cutoff_rad_s_source']}):"]
+    for name in ("pga_median", "rms_acceleration", "arias_intensity"):
+        v = np.asarray(im[name].values, dtype=float)
+        unit = im[name].attrs.get("units", "")
+        extra = f" ({_fmt(float(np.nanmin(v)) / 9.80665)} .. {_fmt(float(np.nanmax(v)) / 9.80665)} g)" \
+            if unit == "m s-2" else ""
+        out.append(f"  {name:<17} {_fmt(float(np.nanmin(v)))} .. {_fmt(float(np.nanmax(v)))} {unit}{extra}")
     return out

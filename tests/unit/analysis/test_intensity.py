@@ -88,3 +88,24 @@ def test_intensity_measures_of_a_linearize_dataset():
     from screening.solvers.synthesis import default_cutoff
     wc = default_cutoff(block, bed)
     assert float(default.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, wc), rel=1e-9)
+
+
+def test_intensity_measures_per_case_excitation():
+    """A sweep whose cases differ in the excitation kind stores it on ``case``: measured per case."""
+    import xarray as xr
+    from screening.report.text import intensity_lines
+
+    block = Block(m=8.67, b=0.035, h=0.21)
+    bed = Foundation(k=2.89e7, lam=8.95e8)
+    white = screening.linearize(block, bed, WhiteNoise(1e-4), t_end=2.0, dt=0.1)
+    kt = screening.linearize(block, bed, KanaiTajimi(1e-4, 15.0, 0.6), t_end=2.0, dt=0.1)
+    both = xr.concat([white.drop_vars(["omega_g", "zeta_g"], errors="ignore").expand_dims("case"),
+                      kt.expand_dims("case")], "case", coords="different", compat="equals", join="outer",
+                     combine_attrs="drop_conflicts")
+    both = both.assign_coords(case=[0, 1], excitation=("case", ["white", "kanai_tajimi"]))
+    both.attrs.pop("excitation", None)
+    im = I.intensity_measures(both, cutoff=CUTOFF)
+    assert float(im.pga_median.sel(case=0)) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 2.0, CUTOFF), rel=1e-9)
+    assert float(im.pga_median.sel(case=1)) == pytest.approx(
+        I.pga_median(KanaiTajimi(1e-4, 15.0, 0.6), 2.0, CUTOFF), rel=1e-9)
+    assert "pga_median" in "\n".join(intensity_lines(white))
