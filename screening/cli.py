@@ -401,5 +401,6 @@ def cmd_info(result):
 from screening import cli_records as _cli_records  # noqa: E402,F401 - registers simulate, fit-excitation, cloud
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":               # python -m screening.cli: the commands live on the imported module
+    from screening.cli import main as _main
+    sys.exit(_main())

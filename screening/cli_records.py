@@ -60,7 +60,8 @@ def _read(record, dt, units):
 @cli.command("simulate", help="response of the study's block and bed to one ground-motion record "
                               "(netCDF + PNG)")
 @click.argument("record")
-@click.option("--study", required=True, help="study file (TOML) giving the block and the bed")
+@click.option("--study", required=True, help="study file (TOML) giving the block and the bed (its excitation, "
+                                             "if any, is not used)")
 @click.option("--out", help="netCDF file (default <record-stem>_simulation.nc in the current folder; its folder "
                             "must exist); the PNG goes next to it")
 @click.option("--model", type=_Choice(["coupled", "condensed"]), default="coupled",
@@ -80,14 +81,13 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     from screening.records import Record
     from screening.report.record_figures import plot_simulation
     from screening.solvers.simulate import simulate
-    from screening.workflow.records_study import block_and_foundation
-    from screening.workflow.study import load_study
+    from screening.workflow.records_study import block_and_foundation, load_record_study
     from screening.workflow.writer import check_output_path
 
     rec = _read(record, dt, units)
     if scale != 1.0:
         rec = Record(rec.acceleration * scale, rec.dt, rec.name, rec.source, rec.units_in)
-    st = load_study(study)
+    st, _ = load_record_study(study)
     block, foundation, chosen = block_and_foundation(st, case, _overrides(sets))
     out = check_output_path(out or Path(f"{rec.name}_simulation.nc"))
     try:

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening.workflow.config import StudyError, check_keys, parse_toml, read_study_text
+from screening.workflow.config import StudyError, check_keys
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im")
 IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity"}
@@ -62,23 +62,17 @@ class CloudStudy:
 
 def load_cloud_study(path):
     """Read a cloud study; :class:`StudyError` with a one-line message naming the key on any problem."""
-    from screening.workflow import study as study_module
+    from screening.records import expand_records
+    from screening.workflow.records_study import load_record_study
 
-    text = read_study_text(path)
+    base, rec = load_record_study(path)
     root = Path(path).parent
-
-    def build(raw):
-        if "records" not in raw:
-            raise StudyError("records: required in a cloud study ([records] with files = ...)")
-        rec = raw.pop("records")
-        if not isinstance(rec, dict):
-            raise StudyError("records: must be a table")
+    if rec is None:
+        raise StudyError(f"{path}: records: required in a cloud study ([records] with files = ...)")
+    try:
         check_keys(rec, _RECORD_KEYS, "records.")
-        raw.setdefault("excitation", {"kind": "white", "S0": 1.0})     # unused: the records are the input
-        base = study_module._build(raw, text, Path(path).stem, str(path))
         if "files" not in rec:
             raise StudyError("records.files: required (a folder, a glob or a list of them)")
-        from screening.records import expand_records
         try:
             files = tuple(expand_records(rec["files"], root=str(root)))
         except (ValueError, TypeError) as exc:
@@ -100,12 +94,12 @@ def load_cloud_study(path):
             if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0
                                   or not math.isfinite(v)):
                 raise StudyError(f"records.{key}: must be a finite number > 0 (got {v!r})")
-        return CloudStudy(study=base, files=files, units=rec.get("units"), dt=rec.get("dt"),
-                          scale=float(rec.get("scale", 1.0)), model=model,
-                          period=None if period is None else float(period),
-                          threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im)
-
-    return parse_toml(text, str(path), build)
+    except StudyError as exc:
+        raise StudyError(f"{path}: {exc}") from None
+    return CloudStudy(study=base, files=files, units=rec.get("units"), dt=rec.get("dt"),
+                      scale=float(rec.get("scale", 1.0)), model=model,
+                      period=None if period is None else float(period),
+                      threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im)
 
 
 def run_record(block, foundation, record, model="coupled", condensation="paper", period=None):

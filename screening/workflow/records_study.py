@@ -8,7 +8,26 @@ case by name and the swept values by ``overrides`` (``{"eps": 6e7}``), with one-
 
 from __future__ import annotations
 
-from screening.workflow.config import NUMERIC, StudyError, build_models
+from pathlib import Path
+
+from screening.workflow.config import NUMERIC, StudyError, build_models, parse_toml, read_study_text
+
+
+def load_record_study(path):
+    """``(study, records)``: a study file read for a record analysis — its ``[records]`` table (``None``
+    if absent) taken out, and the ``[excitation]`` table optional (the records are the input)."""
+    from screening.workflow import study as study_module
+
+    text = read_study_text(path)
+
+    def build(raw):
+        records = raw.pop("records", None)
+        if records is not None and not isinstance(records, dict):
+            raise StudyError("records: must be a table")
+        raw.setdefault("excitation", {"kind": "white", "S0": 1.0})     # unused by record analyses
+        return study_module._build(raw, text, Path(path).stem, str(path)), records
+
+    return parse_toml(text, str(path), build)
 
 
 def pick_case(study, case=None):

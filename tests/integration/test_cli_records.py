@@ -63,3 +63,11 @@ def test_fit_excitation_prints_a_study_table(tmp_path, capsys):
     assert study.cases[0].excitation == "kanai_tajimi"
     assert run(["fit-excitation", str(record), "--kind", "white"]) == 2
     assert "cutoff" in capsys.readouterr().err
+
+
+def test_simulate_accepts_a_study_without_excitation_or_with_records(tmp_path):
+    _, record = _files(tmp_path)
+    study = tmp_path / "bed.toml"
+    study.write_text("[block]\nm = 8.67\nb = 0.035\nh = 0.21\n[foundation]\nk = 2.89e7\nlam = 8.95e8\n"
+                     "[records]\nfiles = '*.at2'\n")
+    assert main(["simulate", str(record), "--study", str(study), "--out", str(tmp_path / "s.nc"), "--no-plots"]) == 0
