@@ -9,9 +9,10 @@ from screening.condensation.api import (equivalent_coefficients, rocking_damping
 from screening.model import Block, Foundation
 from screening.solvers.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
+from screening.solvers.simulate import simulate
 
 __all__ = [
     "Block", "Foundation", "Envelope", "ConstantEnvelope", "WhiteNoise",
     "KanaiTajimi", "uplift_threshold", "rocking_damping", "rocking_stiffness",
-    "equivalent_coefficients", "uplift_probability", "linearize", "monte_carlo", "__version__",
+    "equivalent_coefficients", "uplift_probability", "linearize", "monte_carlo", "simulate", "__version__",
 ]

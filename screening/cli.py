@@ -1,4 +1,8 @@
-"""Command line: ``screening run | plot | info | fragility | tradeoff`` (one click parser).
+"""Command line: ``screening run | plot | info | fragility | tradeoff | simulate | fit-excitation | cloud``
+(one click parser).
+
+The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragility --im`` live in
+:mod:`screening.cli_records`.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
 dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
@@ -298,7 +302,14 @@ def cmd_plot(result, out_dir):
 @click.option("--dim", help="swept intensity of the fragility curve and its lognormal fit (default S0 if swept)")
 @click.option("--out", help="netCDF file (default <result-stem>_fragility.nc next to the result; "
                             "its folder must exist); the PNG goes next to it")
-def cmd_fragility(result, threshold, relative_to, method, dim, out):
+@click.option("--im", type=_Choice(["pga", "sa", "rms", "arias", "s0"]),
+              help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
+                   "export the fits as CSV and OpenQuake NRML next to the netCDF")
+@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
+def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
+    if im is not None or period is not None:
+        from screening.cli_records import fragility_over_im_command
+        return fragility_over_im_command(result, threshold, relative_to, method, dim, out, im or "sa", period)
     from screening.analysis.fragility import fragility_dataset
     from screening.report.figures import plot_fragility
     from screening.workflow.errors import SweepError
@@ -387,5 +398,9 @@ def cmd_info(result):
     return EXIT_OK
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+from screening import cli_records as _cli_records  # noqa: E402,F401 - registers simulate, fit-excitation, cloud
+
+
+if __name__ == "__main__":               # python -m screening.cli: the commands live on the imported module
+    from screening.cli import main as _main
+    sys.exit(_main())

@@ -189,6 +189,33 @@ TRADEOFF = {
     "sl_batched_cost": _v("s", "SL wall time per point in batched calls"),
 }
 
+#: Deterministic simulation of one record (:func:`screening.simulate`).
+SIMULATION = {
+    "theta": _v("rad", "rocking rotation (theta > 0 presses edge B, the +x side, into the bed)"),
+    "theta_dot": _v("rad s-1", "rocking angular velocity"),
+    "z_cb": _v("m", "indentation of the base centre into the bed (coupled model; 0 condensed)"),
+    "z_cb_dot": _v("m s-1", "indentation rate of the base centre (coupled model; 0 condensed)"),
+    "contact_regime": {"long_name": "contact regime", "units": "1", "flag_values": [-1, 0, 1, 2, 3],
+                       "flag_meanings": "none full_contact uplift_theta_positive uplift_theta_negative flight"},
+    "ground_acceleration": _v("m s-2", "horizontal ground acceleration (usual convention: > 0 towards +x)"),
+    "peak_abs_theta": _v("rad", "peak |theta| over the record (up to overturning or divergence)"),
+    "overturned": _v("1", "the block overturned (|theta| > atan(b/h))"),
+    "diverged": _v("1", "the integration diverged"),
+    "overturning_time": _v("s", "time at which |theta| first exceeded atan(b/h) (NaN if it did not)"),
+}
+
+#: Intensity measures of the inputs (:mod:`screening.analysis.intensity`) and of records.
+INTENSITY = {
+    "pga_median": _v("m s-2", "median peak ground acceleration of the modulated input (random-vibration theory)"),
+    "rms_acceleration": _v("m s-2", "root mean square ground acceleration over the record"),
+    "arias_intensity": _v("m s-1", "Arias intensity pi/(2 g) int a2 dt (expected value for stochastic inputs)"),
+    "sa_median": _v("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
+    "pga": _v("m s-2", "peak ground acceleration of the record"),
+    "sa": _v("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
+    "fit_flag": {"long_name": "state of the lognormal fit", "units": "1", "flag_values": [0, 1, 2],
+                 "flag_meanings": "ok non_positive_beta no_fit"},
+}
+
 #: Index and label coordinates.
 COORDINATES = {
     "t": TIME,

@@ -43,6 +43,8 @@ def describe(ds, path="result"):
     labels = [f"{k} = {ds.attrs[k]}" for k in ("contact", "condensation", "excitation", "envelope") if k in ds.attrs]
     if labels:
         lines.append("models: " + ", ".join(labels))
+    lines.extend(bed_lines(ds))
+    lines.extend(intensity_lines(ds))
     t = ds["t"].values
     lines.append(f"time: {_fmt(float(t[0]))} .. {_fmt(float(t[-1]))} s, {t.size} output times")
 
@@ -91,3 +93,61 @@ def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):
 
     return (f"peak var_theta rel. error {pct(rel)}, peak var_theta_dot {pct(rel_dot)}, "
             f"overturned {n_overturned}, diverged {n_diverged} of {n}")
+
+
+def bed_lines(ds, max_points=400):
+    """``block on its bed:`` lines of :func:`screening.beds.bed_summary` (ranges over the grid where the
+    block or bed is swept); nothing if the dataset lacks a parameter."""
+    import xarray as xr
+
+    from screening.analysis.fragility import parameter
+    from screening.beds import bed_summary, format_bed_summary
+    from screening.model import Block, Foundation
+
+    law = ds.attrs.get("contact", "hunt_crossley")
+    names = ("m", "b", "h", "I_cm", "g", "k", "lam" if law == "hunt_crossley" else "c", "eps")
+    try:
+        arrays = xr.broadcast(*(parameter(ds, n) for n in names))
+    except KeyError:
+        return []
+    flat = np.unique(np.column_stack([np.asarray(a.values, dtype=float).ravel() for a in arrays]), axis=0)
+    summaries = []
+    for row in flat[:max_points]:
+        p = dict(zip(names, row))
+        try:
+            bed = Foundation(k=p["k"], eps=p["eps"], **({"lam": p["lam"]} if "lam" in p else {"c": p["c"]}))
+            summaries.append(bed_summary(Block(m=p["m"], b=p["b"], h=p["h"], I_cm=p["I_cm"], g=p["g"]), bed))
+        except ValueError:
+            continue
+    if not summaries:
+        return []
+    if len(summaries) == 1:
+        return ["block on its bed:"] + ["  " + line for line in format_bed_summary(summaries[0])]
+    units = {"static_indentation": "m", "uplift_angle": "rad", "uplift_angle_exact": "rad", "slenderness": "rad",
+             "rocking_frequency": "rad/s", "vertical_frequency": "rad/s", "vertical_damping_ratio": "1",
+             "rocking_damping_ratio": "1"}
+    out = [f"block on its bed ({len(summaries)} block/bed combinations, min .. max):"]
+    for key, unit in units.items():
+        v = np.array([s[key] for s in summaries], dtype=float)
+        if np.isfinite(v).any():
+            out.append(f"  {key:<23} {_fmt(float(np.nanmin(v)))} .. {_fmt(float(np.nanmax(v)))} {unit}")
+    return out
+
+
+def intensity_lines(ds):
+    """``input intensity`` lines: ranges of the RVT median PGA, RMS acceleration and Arias intensity of the
+    inputs (:func:`screening.analysis.intensity.intensity_measures`); nothing if they cannot be computed."""
+    from screening.analysis.intensity import intensity_measures
+
+    try:
+        im = intensity_measures(ds)
+    except (KeyError, ValueError):
+        return []
+    out = [f"input intensity (random-vibration theory, band limit: {im.attrs['cutoff_rad_s_source']}):"]
+    for name in ("pga_median", "rms_acceleration", "arias_intensity"):
+        v = np.asarray(im[name].values, dtype=float)
+        unit = im[name].attrs.get("units", "")
+        extra = f" ({_fmt(float(np.nanmin(v)) / 9.80665)} .. {_fmt(float(np.nanmax(v)) / 9.80665)} g)" \
+            if unit == "m s-2" else ""
+        out.append(f"  {name:<17} {_fmt(float(np.nanmin(v)))} .. {_fmt(float(np.nanmax(v)))} {unit}{extra}")
+    return out

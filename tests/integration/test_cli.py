@@ -318,7 +318,7 @@ def test_tradeoff_subcommand_delegates_with_one_line_errors(tmp_path, capsys):
     (["run", "s.toml", "--complevel", "x"], "argument --complevel: must be an integer in 0..9 (got 'x')"),
     (["fragility", "r.nc", "--threshold", "1", "--method", "x"],
      "argument --method: invalid choice: 'x' (choose from 'vanmarcke', 'poisson')"),
-    (["launch"], "argument command: invalid choice: 'launch' (choose from 'run', 'plot', 'fragility', 'tradeoff', 'info')"),
+    (["launch"], "argument command: invalid choice: 'launch' (choose from 'run', 'plot', 'fragility', 'tradeoff', 'info'"),
     ([], "the following arguments are required: command (see 'screening --help')"),
     (["tradeoff"], "the following arguments are required: study (see 'screening tradeoff --help')"),
     (["tradeoff", "s.toml", "--bogus"], "unrecognized arguments: --bogus (see 'screening tradeoff --help')"),

@@ -75,8 +75,9 @@ def test_linear_range_and_dimension_order():
     np.testing.assert_array_equal(s.sweeps["k"], [1e7, 2e7, 3e7])
 
 
-#: Study files with their own format (``screening tradeoff``, tested in test_tradeoff_study.py).
-NOT_SWEEPS = ("speed_accuracy.toml",)
+#: Study files with their own format (``screening tradeoff``, tested in test_tradeoff_study.py;
+#: ``screening cloud``, tested in tests/integration/test_cloud.py).
+NOT_SWEEPS = ("speed_accuracy.toml", "cloud_example.toml")
 
 
 @pytest.mark.parametrize("path", [p for p in sorted(STUDIES.glob("*.toml")) if p.name not in NOT_SWEEPS],

@@ -1,0 +1,249 @@
+"""Deterministic response of a block on its bed to one ground-motion record.
+
+:func:`simulate` integrates the coupled model (eqs. 7–8 with the exact contact resultants)
+or the condensed SDOF (eq. 22) for a given, uniformly sampled horizontal ground
+acceleration, with the same compiled adaptive Dormand–Prince 5(4) integrator as the Monte
+Carlo engine (:func:`screening.solvers.mcs_kernels.integrate_sample`): one "sample" whose input
+row is the record.
+
+Sign convention
+---------------
+The record is taken in the usual convention: ``a_g(t) > 0`` accelerates the ground towards
+``+x``, so the block feels the inertial (d'Alembert) force ``-m a_g`` towards ``-x``.  The axis
+``+x`` points from edge ``A`` to edge ``B`` of the base, and ``theta > 0`` presses edge ``B``
+(``+x`` side) into the bed and lifts edge ``A`` (docs/method.md, "Coupled equations of
+motion").  Eq. (8) as implemented has ``+ m h x_g'' cos(theta)`` on its right-hand side, so
+its ``x_g''`` is the *inertial* acceleration of the block's frame: the kernel's input is
+
+    x_g''(t) = -a_g(t),
+
+converted once here.  A positive ground-acceleration pulse therefore first tips the block
+towards ``-x`` (``theta < 0``, edge ``A`` pressed), as a block on a braking truck tips forward.
+The response to ``-a_g`` is the mirror image: ``theta``, ``theta'`` change sign and ``z_cb`` is
+unchanged (the model is symmetric about the block's axis).
+
+Between samples the input is the cubic Hermite interpolant of the record with slopes from
+second-order finite differences (``numpy.gradient``); after the end of the record (if
+``t_end`` is longer) the ground is at rest.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+import xarray as xr
+from scipy import optimize
+
+from screening import condensation as condensations, schema
+from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
+                                       REGIME_UPLIFT_POSITIVE, contact_regime, contact_resultants,
+                                       static_indentation_exact)
+from screening.records import Record
+from screening.solvers import mcs_kernels as kern
+from screening.solvers.datasets import finish
+from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, state_scales
+from screening.status import DIVERGENCE_TEXT, DivergenceReason
+
+#: Code of ``contact_regime`` after overturning or divergence (no state).
+REGIME_NONE = -1
+
+SIGN_CONVENTION = ("ground_acceleration > 0 accelerates the ground towards +x (edge A -> edge B); theta > 0 "
+                   "presses edge B (+x side) into the bed; the kernel's x_g'' of eq. (8) is -ground_acceleration")
+
+
+def _check_scalar(name, value, lower=-math.inf):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < lower:
+        raise ValueError(f"parameter '{name}' must be a finite number >= {lower:g} (got {value!r})")
+    return float(value)
+
+
+def quasi_static_indentation(block, foundation, theta0):
+    """``z_cb`` [m] carrying the weight at rest at angle ``theta0`` [rad]: ``F_cb(theta0, 0, z_cb, 0) = m g``.
+
+    Equals :func:`~screening.physics.contact.static_indentation_exact` at ``theta0 = 0``.
+    """
+    if theta0 == 0.0:
+        return static_indentation_exact(block, foundation)
+    b = float(block.b)
+    weight = float(block.m * block.g)
+
+    def excess(z):
+        force, _ = contact_resultants(theta0, 0.0, z, 0.0, b, float(foundation.k), float(foundation.eps),
+                                      float(foundation.damping), foundation.winkler)
+        return float(force) - weight
+
+    lo = -b * abs(math.sin(theta0))          # flight boundary: no force
+    hi = max(static_indentation_exact(block, foundation), 1e-12) + b * abs(math.sin(theta0))
+    for _ in range(200):
+        if excess(hi) > 0.0:
+            break
+        hi = lo + 2.0 * (hi - lo)
+    else:
+        raise ValueError(f"the bed cannot carry the block at theta0={theta0!r} rad")
+    return float(optimize.brentq(excess, lo, hi, xtol=1e-15, rtol=1e-14))
+
+
+def _input(ground_acceleration, dt):
+    if isinstance(ground_acceleration, Record):
+        if dt is not None and not math.isclose(float(dt), ground_acceleration.dt, rel_tol=1e-9):
+            raise ValueError(f"parameter 'dt' ({dt!r}) differs from the record's time step ({ground_acceleration.dt!r})")
+        return ground_acceleration
+    if dt is None:
+        raise ValueError("parameter 'dt' [s] is required when 'ground_acceleration' is an array")
+    arr = np.asarray(ground_acceleration, dtype=float)
+    if arr.ndim != 1:
+        raise ValueError(f"parameter 'ground_acceleration' must be one-dimensional (got shape {arr.shape})")
+    return Record(arr, dt, name="record")
+
+
+def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", theta0=0.0, theta_dot0=0.0,
+             condensation="paper", t_end=None, output_dt=None, rtol=None, h_max=None, max_steps=20_000_000,
+             max_flight_time=0.5, overturn_resolution=200):
+    """Response of a block on a flexible bed to one ground-acceleration record.
+
+    Parameters
+    ----------
+    block : :class:`~screening.model.Block` with scalar fields (SI).
+    foundation : :class:`~screening.model.Foundation` with scalar fields (SI).
+    ground_acceleration : :class:`~screening.records.Record` or 1-d array [m/s2], horizontal ground
+        acceleration in the usual convention (positive: ground accelerates towards ``+x``; see
+        the module docstring), sampled at ``dt``.
+    dt : time step of the samples [s] (required for an array; taken from a Record).
+    model : ``"coupled"`` (eqs. 7–8, exact contact) or ``"condensed"`` (eq. 22 with ``condensation``).
+    theta0 : initial rotation [rad], ``|theta0| <`` slenderness.
+    theta_dot0 : initial angular velocity [rad/s].
+    condensation : condensation of the condensed model (``"paper"`` or ``"cubic"``).
+    t_end : end time [s] (default: the record's duration; longer: ground at rest afterwards).
+    output_dt : output step [s] (default ``dt``).
+    rtol : relative tolerance (default :data:`screening.solvers.montecarlo.DEFAULT_RTOL` of the model).
+    h_max : largest integration step [s] (default ``min(0.005 s, dt)``).
+    max_steps, max_flight_time : as for :func:`screening.monte_carlo`.
+    overturn_resolution : after overturning, the last output interval is integrated again on this
+        many sub-intervals to locate the overturning time.
+
+    Returns
+    -------
+    xarray.Dataset on ``t`` [s] with ``theta`` [rad], ``theta_dot`` [rad s-1], ``z_cb`` [m] and
+    ``z_cb_dot`` [m s-1] (the coupled model's vertical state; zero for the condensed model),
+    ``contact_regime`` (flags: full contact, uplift theta > 0, uplift theta < 0, flight; -1 after
+    overturning; condensed: uplift when ``|theta| > theta_ul``), the input ``ground_acceleration``
+    [m s-2], and scalars ``peak_abs_theta`` [rad], ``overturned``, ``diverged``,
+    ``overturning_time`` [s] (NaN if it did not overturn), ``theta_ul``, ``slenderness``.  After
+    overturning or divergence the states are NaN.  ``attrs["status"]``: ``"ok"``,
+    ``"overturned"`` or ``"diverged: <reason>"``; ``attrs["sign_convention"]`` states the convention.
+    """
+    record = _input(ground_acceleration, dt)
+    if model not in MODELS:
+        raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
+    cond = condensations.get(condensation)
+    if model == "coupled" and cond != condensations.get("paper"):
+        raise ValueError(f"parameter 'condensation' applies to model='condensed' only (got {cond.name!r})")
+    dt = record.dt
+    theta0 = _check_scalar("theta0", theta0)
+    theta_dot0 = _check_scalar("theta_dot0", theta_dot0)
+    slender = float(block.slenderness)
+    if abs(theta0) >= slender:
+        raise ValueError(f"parameter 'theta0' must be smaller in magnitude than the slenderness angle "
+                         f"{slender:.6g} rad (got {theta0!r})")
+    t_end = record.duration if t_end is None else _check_scalar("t_end", t_end, 0.0)
+    if t_end <= 0.0:
+        raise ValueError(f"parameter 't_end' must be > 0 (got {t_end!r})")
+    output_dt = dt if output_dt is None else _check_scalar("output_dt", output_dt, 0.0)
+    if output_dt <= 0.0:
+        raise ValueError(f"parameter 'output_dt' must be > 0 (got {output_dt!r})")
+    rtol = DEFAULT_RTOL[model] if rtol is None else _check_scalar("rtol", rtol, 0.0)
+    h_max = min(0.005, dt) if h_max is None else _check_scalar("h_max", h_max, 0.0)
+    cond.check(block, foundation)
+
+    # input on the record grid, padded with rest to cover t_end (plus two samples for the interpolant)
+    n_out = int(math.floor(t_end / output_dt + 1e-9)) + 1
+    times = output_dt * np.arange(n_out)
+    n_grid = max(record.acceleration.size, int(math.ceil(times[-1] / dt)) + 2)
+    a_g = np.zeros(n_grid)
+    a_g[:record.acceleration.size] = record.acceleration
+    kernel_acc = np.ascontiguousarray(-a_g[None, :])                        # the one sign conversion
+    kernel_rate = np.ascontiguousarray(np.gradient(kernel_acc[0], dt, edge_order=2)[None, :])
+
+    if model == "coupled":
+        y0 = np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])
+    else:
+        y0 = np.array([theta0, theta_dot0, 0.0, 0.0])
+    params = kern.model_record(block, foundation, cond, max_flight_time)
+    sdof = (cond if model == "condensed" else condensations.get("paper")).sdof_kernel(block, foundation)
+    integrate = kern.chunk_integrator(sdof.record.dtype)
+    scales = rtol * state_scales(block, foundation)
+    code = kern.MODEL_COUPLED if model == "coupled" else kern.MODEL_CONDENSED
+
+    def run(t_out, y_init):
+        out = [np.empty((1, t_out.size)) for _ in range(4)]
+        uplift = np.zeros((1, t_out.size), dtype=np.bool_)
+        peak, h_min = np.zeros(1), np.zeros(1)
+        status, reason, n_acc, n_rej = (np.zeros(1, dtype=np.int64) for _ in range(4))
+        integrate(code, sdof.damping_stiffness, sdof.record, kernel_acc, kernel_rate, dt,
+                  np.ascontiguousarray(t_out), params[None], np.ascontiguousarray(y_init, dtype=float), scales,
+                  rtol, h_max, int(max_steps), *out, uplift, peak, status, reason, n_acc, n_rej, h_min)
+        return [o[0] for o in out], int(status[0]), int(reason[0]), float(peak[0]), int(n_acc[0] + n_rej[0])
+
+    (theta, theta_dot, z_cb, z_cb_dot), status, reason, peak, n_steps = run(times, y0)
+    overturned = status == kern.STATUS_OVERTURNED
+    diverged = status == kern.STATUS_DIVERGED
+    t_over = math.nan
+    if overturned:
+        i = int(np.flatnonzero(np.isfinite(theta))[-1])
+        fine = times[i] + np.linspace(0.0, output_dt, int(overturn_resolution) + 1)
+        state = np.array([theta[i], theta_dot[i], z_cb[i], z_cb_dot[i]])
+        (f_theta, *_), _, _, _, _ = run(fine, state)
+        bad = np.flatnonzero(~np.isfinite(f_theta))
+        t_over = float(fine[bad[0]]) if bad.size else float(times[min(i + 1, n_out - 1)])
+
+    finite = np.isfinite(theta)
+    if model == "coupled":
+        regime = np.where(finite, contact_regime(np.nan_to_num(theta), np.nan_to_num(z_cb), float(block.b)),
+                          REGIME_NONE)
+    else:
+        theta_ul_c = float(cond.uplift_threshold(block, foundation))
+        up = np.where(theta >= 0.0, REGIME_UPLIFT_POSITIVE, REGIME_UPLIFT_NEGATIVE)
+        regime = np.where(finite, np.where(np.abs(np.nan_to_num(theta)) > theta_ul_c, up, REGIME_FULL_CONTACT),
+                          REGIME_NONE)
+    acc_out = np.interp(times, dt * np.arange(n_grid), a_g)
+    if model == "coupled":
+        try:
+            theta_ul = float(condensations.get("cubic").uplift_threshold(block, foundation))
+        except ValueError:
+            theta_ul = float(condensations.get("paper").uplift_threshold(block, foundation))
+    else:
+        theta_ul = float(cond.uplift_threshold(block, foundation))
+
+    status_text = "ok"
+    if overturned:
+        status_text = "overturned"
+    elif diverged:
+        status_text = f"diverged: {DIVERGENCE_TEXT[DivergenceReason(reason)]}"
+    coords = {"t": ("t", times)}
+    for name in ("m", "b", "h", "I_cm", "g"):
+        coords[name] = ((), float(getattr(block, name)))
+    coords["k"] = ((), float(foundation.k))
+    coords["lam" if foundation.law == "hunt_crossley" else "c"] = ((), float(foundation.damping))
+    coords["eps"] = ((), float(foundation.eps))
+    data = {
+        "theta": ("t", theta), "theta_dot": ("t", theta_dot), "z_cb": ("t", z_cb), "z_cb_dot": ("t", z_cb_dot),
+        "contact_regime": ("t", regime.astype(np.int8)), "ground_acceleration": ("t", acc_out),
+        "peak_abs_theta": ((), peak), "overturned": ((), bool(overturned)), "diverged": ((), bool(diverged)),
+        "overturning_time": ((), t_over), "theta_ul": ((), theta_ul), "slenderness": ((), slender),
+    }
+    attrs = {
+        "title": f"rocking response to record {record.name!r} ({model} model)",
+        "status": status_text, "model": model, "contact": foundation.law, "record": record.name,
+        "record_source": record.source, "record_units_in": record.units_in, "record_dt": dt,
+        "sign_convention": SIGN_CONVENTION, "theta0": theta0, "theta_dot0": theta_dot0,
+        "initial_z_cb": float(y0[2]), "rtol": rtol, "h_max": h_max, "n_steps": n_steps,
+        "integrator": "adaptive Dormand-Prince 5(4) (screening.solvers.mcs_kernels), steps land on output times; "
+                      "input: cubic Hermite of the record with finite-difference slopes",
+        "overturning_time_resolution": output_dt / int(overturn_resolution) if overturned else math.nan,
+    }
+    if model == "condensed":
+        attrs["condensation"] = cond.name
+    return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.SIMULATION)
+

@@ -1,0 +1,262 @@
+"""Cloud analysis: a study's block on its bed under an ensemble of recorded ground motions.
+
+A cloud study is a study file (block, foundation; the ``[excitation]`` table is optional and
+unused) with a ``[records]`` table::
+
+    [records]
+    files = "records/*.at2"      # a folder, a glob or a list of them, relative to the study file
+    units = "g"                  # of text records (AT2: from the header); "g", "m/s2", "cm/s2"
+    # dt = 0.01                  # s, for one-column records
+    scale = 1.0                  # factor on every record (optional)
+    model = "coupled"            # or "condensed"
+    period = 0.5                 # s, period of Sa(T, 5 %) (optional)
+    threshold = 0.2              # rotation threshold of the fragility ...
+    relative_to = "slenderness"  # ... as a fraction of atan(b/h) or "theta_ul", or "rad"
+    im = "pga"                   # intensity measure of the fragility: pga, sa, rms, arias
+
+Each record is integrated by :func:`screening.simulate` (the coupled model by default) and the
+result holds, on a ``record`` dimension, the peak ``|theta|``, the overturned flag, the
+exceedance (peak above the threshold, or overturned) and the record's intensity measures
+(:func:`screening.analysis.intensity.record_measures`).  The fragility is the lognormal curve
+``P(exceed | IM) = Phi(ln(IM / median) / beta)`` fitted by maximum likelihood to the
+exceed/not-exceed outcome of each record (Bernoulli likelihood; Baker 2015, "Efficient
+analytical fragility function fitting using dynamic structural analysis", Earthquake
+Spectra 31(1)).
+
+The records are run serially in this process (each is a few seconds of compiled
+integration); a dask version can reuse :func:`run_record` per task.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from screening.workflow.config import StudyError, check_keys
+
+_RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im")
+IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity"}
+
+
+@dataclass(frozen=True)
+class CloudStudy:
+    """A validated cloud study: the sweep :class:`~screening.workflow.study.Study` of its block and bed
+    and the ``[records]`` settings."""
+
+    study: object
+    files: tuple
+    units: str | None
+    dt: float | None
+    scale: float
+    model: str
+    period: float | None
+    threshold: float
+    relative_to: str
+    im: str
+
+
+def load_cloud_study(path):
+    """Read a cloud study; :class:`StudyError` with a one-line message naming the key on any problem."""
+    from screening.records import expand_records
+    from screening.workflow.records_study import load_record_study
+
+    base, rec = load_record_study(path)
+    root = Path(path).parent
+    if rec is None:
+        raise StudyError(f"{path}: records: required in a cloud study ([records] with files = ...)")
+    try:
+        check_keys(rec, _RECORD_KEYS, "records.")
+        if "files" not in rec:
+            raise StudyError("records.files: required (a folder, a glob or a list of them)")
+        try:
+            files = tuple(expand_records(rec["files"], root=str(root)))
+        except (ValueError, TypeError) as exc:
+            raise StudyError(f"records.files: {exc}") from None
+        model = rec.get("model", "coupled")
+        if model not in ("coupled", "condensed"):
+            raise StudyError(f"records.model: must be 'coupled' or 'condensed' (got {model!r})")
+        im = rec.get("im", "pga")
+        if im not in IMS:
+            raise StudyError(f"records.im: must be one of {', '.join(IMS)} (got {im!r})")
+        period = rec.get("period")
+        if im == "sa" and period is None:
+            raise StudyError("records.period: required with im = 'sa'")
+        relative_to = rec.get("relative_to", "slenderness")
+        if relative_to not in ("slenderness", "theta_ul", "rad"):
+            raise StudyError(f"records.relative_to: must be 'slenderness', 'theta_ul' or 'rad' (got {relative_to!r})")
+        for key in ("dt", "scale", "period", "threshold"):
+            v = rec.get(key)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0
+                                  or not math.isfinite(v)):
+                raise StudyError(f"records.{key}: must be a finite number > 0 (got {v!r})")
+    except StudyError as exc:
+        raise StudyError(f"{path}: {exc}") from None
+    return CloudStudy(study=base, files=files, units=rec.get("units"), dt=rec.get("dt"),
+                      scale=float(rec.get("scale", 1.0)), model=model,
+                      period=None if period is None else float(period),
+                      threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im)
+
+
+def run_record(block, foundation, record, model="coupled", condensation="paper", period=None):
+    """One record: ``dict`` of the peak ``|theta|``, overturned/diverged flags, overturning time and the
+    record's intensity measures."""
+    from screening.analysis.intensity import record_measures
+    from screening.solvers.simulate import simulate
+
+    ds = simulate(block, foundation, record, model=model, condensation=condensation, output_dt=max(record.dt, 0.01))
+    out = {"peak_abs_theta": float(ds["peak_abs_theta"]), "overturned": bool(ds["overturned"]),
+           "diverged": bool(ds["diverged"]), "overturning_time": float(ds["overturning_time"])}
+    out.update(record_measures(record, period=period))
+    return out
+
+
+def run_cloud(cloud, case=None, overrides=None, progress=None):
+    """Run every record of a :class:`CloudStudy`; returns the result dataset (see the module docstring)."""
+    from screening import schema
+    from screening.analysis.fragility import fit_lognormal_fragility
+    from screening.records import Record, read_record
+    from screening.workflow.records_study import block_and_foundation
+
+    block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
+    rows, names = [], []
+    for i, path in enumerate(cloud.files):
+        try:
+            rec = read_record(path, dt=cloud.dt, units=cloud.units)
+        except ValueError as exc:
+            raise StudyError(f"records.files: {exc}") from None
+        if cloud.scale != 1.0:
+            rec = Record(rec.acceleration * cloud.scale, rec.dt, rec.name, rec.source, rec.units_in)
+        rows.append(run_record(block, foundation, rec, cloud.model,
+                               chosen.condensation if cloud.model == "condensed" else "paper", cloud.period))
+        names.append(rec.name)
+        if progress:
+            progress(f"record {i + 1}/{len(cloud.files)} {rec.name}: peak |theta| {rows[-1]['peak_abs_theta']:.4g} rad"
+                     + (" (overturned)" if rows[-1]["overturned"] else ""))
+    slender = float(block.slenderness)
+    if cloud.relative_to == "slenderness":
+        level = cloud.threshold * slender
+    elif cloud.relative_to == "theta_ul":
+        from screening import condensation as condensations
+        level = cloud.threshold * float(condensations.get("paper").uplift_threshold(block, foundation))
+    else:
+        level = cloud.threshold
+    data = {k: ("record", np.array([r[k] for r in rows])) for k in rows[0]}
+    ds = xr.Dataset(data, coords={"record": ("record", np.arange(len(rows))),
+                                  "record_name": ("record", np.array(names, dtype=object))})
+    used = ~ds["diverged"].values
+    exceed = (ds["peak_abs_theta"].values > level) | ds["overturned"].values
+    ds["exceed"] = ("record", exceed)
+    ds["threshold_rad"] = ((), level)
+    ds["slenderness"] = ((), slender)
+    name = IMS[cloud.im]
+    im_values = ds[name].values
+    warnings = []
+    try:
+        if exceed[used].all() or not exceed[used].any():
+            raise ValueError("all records exceed" if exceed[used].all() else "no record exceeds")
+        median, beta = fit_lognormal_fragility(im_values[used], n_exceed=exceed[used].astype(float), n_total=1.0)
+    except ValueError as exc:
+        median, beta = math.nan, math.nan
+        warnings.append(f"no fragility fit: {exc} the threshold")
+    if flag_ok := (np.isfinite(beta) and beta > 0):
+        x_in, x_out = im_values[used][exceed[used]], im_values[used][~exceed[used]]
+        if x_in.min() > x_out.max():
+            warnings.append(f"the records are perfectly separated by {name} (every exceeding record has a larger "
+                            "IM than every other): beta is not identified (the likelihood grows as beta -> 0); "
+                            "add records near the median")
+    del flag_ok
+    if level >= slender:
+        warnings.append("the threshold is at or beyond the slenderness angle atan(b/h)")
+    flag = 0 if np.isfinite(beta) and beta > 0 else (1 if np.isfinite(beta) else 2)
+    if flag == 1:
+        warnings.append("the fitted beta is <= 0 (exceedance falls with the intensity measure)")
+    units = {"pga": "m s-2", "sa": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1"}
+    ds["median"] = ((), median if flag == 0 else math.nan, {"units": units[name], "intensity": name})
+    ds["beta"] = ((), beta if flag == 0 else math.nan, {"units": "1"})
+    ds["fit_flag"] = ((), np.int8(flag), {"flag_values": np.array([0, 1, 2], dtype=np.int8),
+                                          "flag_meanings": "ok non_positive_beta no_fit"})
+    for n in ("pga", "sa", "rms_acceleration", "arias_intensity"):
+        if n in ds:
+            ds[n].attrs.update(schema.attributes(n, schema.INTENSITY))
+    if "sa" in ds:
+        ds["sa"].attrs.update(period=cloud.period, damping_ratio=0.05)
+    for n, attrs in (("peak_abs_theta", {"units": "rad", "long_name": "peak |theta| over the record"}),
+                     ("overturned", {"long_name": "the block overturned"}),
+                     ("diverged", {"long_name": "the integration diverged (left out of the fit)"}),
+                     ("overturning_time", {"units": "s", "long_name": "overturning time (NaN if none)"}),
+                     ("exceed", {"long_name": "peak |theta| above the threshold, or overturned"}),
+                     ("threshold_rad", {"units": "rad", "long_name": "rotation threshold"}),
+                     ("slenderness", {"units": "rad", "long_name": "slenderness angle atan(b/h)"})):
+        ds[n].attrs.update(attrs)
+    ds.attrs.update(title=f"Cloud analysis: {cloud.study.title}", model=cloud.model, study=cloud.study.source,
+                    intensity_measure=cloud.im, intensity_variable=name, intensity_dim="record",
+                    threshold=cloud.threshold, relative_to=cloud.relative_to,
+                    fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",
+                    execution="serial, in process", warnings="; ".join(warnings) or "none",
+                    Conventions=schema.CONVENTIONS)
+    return ds, warnings
+
+
+def plot_cloud(ds, path):
+    """The cloud (peak |theta| / slenderness against the IM) and the fitted fragility curve."""
+    from scipy.special import ndtr
+
+    from screening.report.figures import _new_figure, save_figure
+
+    name = ds.attrs["intensity_variable"]
+    x = ds[name].values
+    fig = _new_figure(7.0, 7.5)
+    ax = fig.subplots(2, 1, sharex=True)
+    slender = float(ds["slenderness"])
+    ratio = np.where(ds["overturned"].values, np.nan, ds["peak_abs_theta"].values / slender)
+    ax[0].scatter(x[~ds["overturned"].values], ratio[~ds["overturned"].values], s=18, label="survived")
+    over = ds["overturned"].values
+    if over.any():
+        ax[0].scatter(x[over], np.ones(over.sum()), marker="x", color="C3", s=30, label="overturned (plotted at 1)")
+    ax[0].axhline(float(ds["threshold_rad"]) / slender, color="0.4", ls="--", lw=0.8, label="threshold")
+    ax[0].set_yscale("log")
+    ax[0].set_ylabel("peak |theta| / atan(b/h)")
+    ax[0].legend(fontsize=7)
+    ax[1].scatter(x, ds["exceed"].values.astype(float), s=18, color="k", label="records (exceed = 1)")
+    med, beta = float(ds["median"]), float(ds["beta"])
+    if np.isfinite(med):
+        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
+        ax[1].plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
+                   label=f"lognormal MLE: median {med:.3g} {ds['median'].attrs['units']}, beta {beta:.2f}")
+    ax[1].set_xscale("log")
+    from matplotlib.ticker import NullFormatter
+    ax[1].xaxis.set_minor_formatter(NullFormatter())
+    ax[1].set_ylim(-0.05, 1.05)
+    units = ds[name].attrs.get("units", "")
+    ax[1].set_xlabel(f"{name} [{units}]")
+    ax[1].set_ylabel("P(exceed)")
+    ax[1].legend(fontsize=7)
+    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
+    return save_figure(fig, path)
+
+
+def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, seed=0, dt=0.01):
+    """Write ``n_records`` synthesised records of ``excitation`` (spectral representation, seed ``seed``),
+    resampled to ``dt`` and multiplied by ``scales[i]``, as PEER-style ``.AT2`` files in ``folder``.
+
+    For examples and tests (no download): returns the file paths."""
+    from screening.records import Record, write_at2
+    from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
+
+    plan = spectral_plan(excitation, t_end, cutoff)
+    acc, _ = ground_acceleration_samples(excitation, plan, seed, np.arange(n_records))
+    t = np.arange(0.0, t_end + 0.5 * dt, dt)
+    os.makedirs(folder, exist_ok=True)
+    paths = []
+    for i in range(n_records):
+        a = np.interp(t, plan.times, acc[i]) * float(scales[i])
+        path = os.path.join(folder, f"synthetic_{i:02d}.at2")
+        write_at2(path, Record(a, dt, name=f"synthetic_{i:02d}"),
+                  title=f"screening synthetic record {i}, scale {float(scales[i]):g}", station=excitation.kind)
+        paths.append(path)
+    return paths

@@ -1,0 +1,70 @@
+"""The block and bed of a study for deterministic record analyses (``screening simulate``, cloud analysis).
+
+A study file describes one block and bed (or several ``[[case]]`` tables, or swept bed
+parameters); a record analysis needs one of them: :func:`block_and_foundation` picks the
+case by name and the swept values by ``overrides`` (``{"eps": 6e7}``), with one-line
+:class:`~screening.workflow.config.StudyError` messages.  The excitation tables are not used.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from screening.workflow.config import NUMERIC, StudyError, build_models, parse_toml, read_study_text
+
+
+def load_record_study(path):
+    """``(study, records)``: a study file read for a record analysis — its ``[records]`` table (``None``
+    if absent) taken out, and the ``[excitation]`` table optional (the records are the input)."""
+    from screening.workflow import study as study_module
+
+    text = read_study_text(path)
+
+    def build(raw):
+        records = raw.pop("records", None)
+        if records is not None and not isinstance(records, dict):
+            raise StudyError("records: must be a table")
+        raw.setdefault("excitation", {"kind": "white", "S0": 1.0})     # unused by record analyses
+        return study_module._build(raw, text, Path(path).stem, str(path)), records
+
+    return parse_toml(text, str(path), build)
+
+
+def pick_case(study, case=None):
+    """The :class:`~screening.workflow.config.Case` named ``case`` (the only one when ``None``)."""
+    if case is None:
+        if len(study.cases) > 1:
+            names = ", ".join(repr(c.name) for c in study.cases)
+            raise StudyError(f"the study has {len(study.cases)} cases; choose one with --case ({names})")
+        return study.cases[0]
+    for c in study.cases:
+        if c.name == case:
+            return c
+    raise StudyError(f"--case {case!r}: no such case (cases: {', '.join(repr(c.name) for c in study.cases)})")
+
+
+def block_and_foundation(study, case=None, overrides=None):
+    """``(block, foundation, case)`` of one configuration of ``study`` for a record analysis.
+
+    Swept block/bed parameters must be fixed in ``overrides`` (name -> value); swept excitation
+    parameters are ignored (the record is the excitation).
+    """
+    chosen = pick_case(study, case)
+    overrides = dict(overrides or {})
+    for key in overrides:
+        if key not in NUMERIC or NUMERIC[key][0] == "excitation":
+            raise StudyError(f"--set {key}: only block and foundation parameters can be set "
+                             f"({', '.join(k for k, v in NUMERIC.items() if v[0] != 'excitation')})")
+    values = {}
+    for key, swept in study.sweeps.items():
+        if NUMERIC[key][0] == "excitation":
+            values[key] = float(swept[0])               # not used: the record replaces the excitation
+        elif key not in overrides:
+            raise StudyError(f"{NUMERIC[key][0]}.{key} is swept in the study; fix it with --set {key}=VALUE "
+                             f"(swept values: {', '.join(f'{v:g}' for v in swept)})")
+    values.update(overrides)
+    try:
+        block, foundation, _ = build_models(chosen, values)
+    except (TypeError, ValueError) as exc:
+        raise StudyError(f"study {study.name}: {exc}") from None
+    return block, foundation, chosen
