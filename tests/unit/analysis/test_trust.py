@@ -1,0 +1,178 @@
+"""The per-point trust rule (screening.analysis.trust): synthetic indicators, held-out calibration, shipped file."""
+
+import json
+
+import numpy as np
+import pytest
+
+from screening import Block, Foundation, WhiteNoise, linearize
+from screening.analysis import trust
+from screening.status import PointStatus, Trust
+
+
+def rows(p, err, se=None, cond="paper", law="hardening", over=0.0, decay=1.0, sigma=0.01, margin=0.9):
+    p = np.asarray(p, dtype=float)
+    n = p.size
+
+    def full(x):
+        return np.broadcast_to(np.asarray(x), (n,)).copy()
+
+    return {"peak_p_uplift": p, "k_eq_margin": full(float(margin)), "sigma_ratio": full(float(sigma)),
+            "decay_excess": full(float(decay)), "error": np.asarray(err, dtype=float),
+            "error_se": full(0.02 if se is None else se), "overturned_fraction": full(float(over)),
+            "condensation": full(cond).astype(str), "bed_law": full(law).astype(str),
+            "point": np.array([f"pt{i}" for i in range(n)])}
+
+
+def concat(*parts):
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+
+
+SYNTHETIC = concat(
+    rows([0.001, 0.003, 0.02, 0.05], [-0.03, -0.05, -0.06, -0.08], law="softening"),
+    rows([0.15, 0.3], [-0.2, -0.35], law="softening"),
+    rows([0.001, 0.003], [-0.15, -0.14], law="hardening"),
+    rows([0.002, 0.004, 0.03, 0.05], [0.02, -0.04, 0.05, -0.03], law="linear"),
+    rows([0.5, 0.95], [-0.02, 0.01], law="linear"),             # trusted data at high uplift: must not raise trust
+    rows([0.99], [1.5], law="linear", decay=500.0),             # lock-in
+)
+
+
+def ind(p, decay=1.0, sigma=0.01, margin=0.9):
+    return {"peak_p_uplift": np.asarray(p, dtype=float), "k_eq_margin": np.full(np.shape(p), margin),
+            "sigma_ratio": np.full(np.shape(p), sigma), "decay_excess": np.full(np.shape(p), decay)}
+
+
+@pytest.fixture(scope="module")
+def table():
+    return trust.trust_table(None, rows=SYNTHETIC)
+
+
+def test_trusted_only_where_the_cell_errors_are_within_10_percent(table):
+    flag, lo, hi = trust.sl_trust(ind([0.001, 0.03]), table, eps=-6e5)
+    assert list(flag) == [Trust.trusted, Trust.trusted]
+    assert lo[0] == pytest.approx(-0.05 - 0.04) and hi[0] == pytest.approx(-0.03 + 0.04)
+    flag, _, _ = trust.sl_trust(ind([0.001]), table, eps=6e7)     # -15 % on the hardening bed
+    assert flag[0] == Trust.check
+    flag, _, _ = trust.sl_trust(ind([0.15]), table, eps=-6e5)
+    assert flag[0] == Trust.check                               # -20 %: check, not trusted
+    flag, _, _ = trust.sl_trust(ind([0.3]), table, eps=-6e5)
+    assert flag[0] == Trust.check
+
+
+@pytest.mark.parametrize("eps", [6e7, 0.0, -6e5])
+@pytest.mark.parametrize("cond", ["paper", "cubic"])
+def test_more_uplift_never_raises_trust(table, eps, cond):
+    p = np.linspace(0.0, 1.0, 501)
+    flag, _, _ = trust.sl_trust(ind(p), table, eps=eps, condensation=cond)
+    assert np.all(np.diff(flag.astype(int)) >= 0)
+
+
+def test_linear_high_uplift_stays_below_the_worst_lower_cell(table):
+    # the linear bed's 0.5 and 0.95 cells have good data, but the empty 0.08-0.45 bins are 'check'
+    flag, _, _ = trust.sl_trust(ind([0.003, 0.5, 0.95]), table, eps=0.0)
+    assert list(flag) == [Trust.trusted, Trust.check, Trust.check]
+
+
+def test_lock_in_is_untrusted(table):
+    flag, lo, hi = trust.sl_trust(ind([0.003, 0.003], decay=[1.0, 1e3]), table, eps=0.0)
+    assert flag[0] == Trust.trusted and flag[1] == Trust.untrusted
+    assert lo[1] == pytest.approx(1.5 - 0.04) and hi[1] == pytest.approx(1.5 + 0.04)
+
+
+@pytest.mark.parametrize("kw", [dict(sigma=0.5), dict(margin=0.1)])
+def test_near_toppling_is_untrusted(table, kw):
+    flag, _, _ = trust.sl_trust(ind([0.003], **kw), table, eps=0.0)
+    assert flag[0] == Trust.untrusted
+
+
+@pytest.mark.parametrize("status", [s for s in PointStatus if s != PointStatus.ok])
+def test_non_ok_status_is_untrusted_without_band(table, status):
+    flag, lo, hi = trust.sl_trust(ind([0.003, 0.003]), table, status=[int(status), 0], eps=0.0)
+    assert flag[0] == Trust.untrusted and np.isnan(lo[0]) and np.isnan(hi[0])
+    assert flag[1] == Trust.trusted
+
+
+def test_overturning_in_the_calibration_makes_the_cell_untrusted():
+    t = trust.trust_table(None, rows=rows([0.001, 0.002], [0.01, 0.02], over=0.05, law="linear"))
+    flag, _, _ = trust.sl_trust(ind([0.001]), t, eps=0.0)
+    assert flag[0] == Trust.untrusted
+
+
+def test_unknown_cells_are_check_with_the_pooled_band(table):
+    flag, lo, hi = trust.sl_trust(ind([0.003]), table, eps=0.0, condensation="other")
+    assert flag[0] == Trust.check and np.isfinite(lo[0]) and np.isfinite(hi[0])
+
+
+def test_trust_indicators():
+    out = trust.trust_indicators(0.2, 5.0, 10.0, 4e-6, 0.1, 1e-6, 1e-3)
+    assert out["k_eq_margin"] == pytest.approx(0.5)
+    assert out["sigma_ratio"] == pytest.approx(2e-3 / 0.1)
+    assert out["decay_excess"] == pytest.approx(0.25 / 1e-3)
+
+
+# ----------------------------------------------------------------------------- the shipped calibration
+@pytest.fixture(scope="module")
+def calibration():
+    try:
+        return trust.shipped_calibration()
+    except (FileNotFoundError, OSError):
+        pytest.skip("no shipped calibration file")
+
+
+def test_shipped_table_is_the_one_derived_from_the_shipped_file(calibration):
+    assert trust.trust_table(calibration) == json.loads(calibration.attrs["trust_table"])
+    assert calibration.sizes["point"] >= 30
+
+
+def test_shipped_trusted_cells_are_earned(calibration):
+    """Every calibration row the shipped rule labels trusted is within 10 % (and its band within 25 %)."""
+    r = trust.calibration_rows(calibration)
+    flag, lo, hi = trust.sl_trust(r, None, condensation=r["condensation"], eps=np.where(
+        r["bed_law"] == "hardening", 1.0, np.where(r["bed_law"] == "softening", -1.0, 0.0)))
+    t = flag == Trust.trusted
+    assert np.all(np.abs(r["error"][t]) <= trust.TRUSTED_ERROR)
+    assert np.all((lo[t] >= -trust.TRUSTED_BAND) & (hi[t] <= trust.TRUSTED_BAND))
+
+
+def _subset(r, keep):
+    return {k: v[keep] for k, v in r.items()}
+
+
+@pytest.mark.parametrize("part", [0, 1])
+def test_held_out_points_beyond_25_percent_are_never_trusted(calibration, part):
+    r = trust.calibration_rows(calibration)
+    names = sorted(set(r["point"].tolist()))
+    train_names = set(names[part::2])
+    train = np.isin(r["point"], list(train_names))
+    table = trust.trust_table(None, rows=_subset(r, train))
+    test = _subset(r, ~train)
+    eps = np.where(test["bed_law"] == "hardening", 1.0, np.where(test["bed_law"] == "softening", -1.0, 0.0))
+    flag, _, _ = trust.sl_trust(test, table, condensation=test["condensation"], eps=eps)
+    trusted = flag == Trust.trusted
+    beyond_10 = int(np.sum(trusted & (np.abs(test["error"]) > trust.TRUSTED_ERROR)))
+    print(f"held-out part {part}: {int(trusted.sum())} of {trusted.size} rows trusted, {beyond_10} beyond 10 %")
+    assert not np.any(trusted & (np.abs(test["error"]) > trust.TRUSTED_BAND))
+
+
+# ----------------------------------------------------------------------------- add_trust
+def test_add_trust_on_a_linearize_result():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=np.array([-6e5, 0.0, 6e7])),
+                   WhiteNoise(np.array([1e-7, 1e-5, 1e-2])))
+    table = trust.trust_table(None, rows=SYNTHETIC)
+    out = trust.add_trust(ds, table)
+    for name in ("sl_trust", "sl_error_low", "sl_error_high"):
+        assert out[name].dims == ds.peak_var_theta.dims
+    assert out.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
+    assert list(out.sl_trust.attrs["flag_values"]) == [0, 1, 2]
+    assert out.sl_error_low.attrs["units"] == "1"
+    flag = out.sl_trust.values
+    assert np.all(flag[ds.status.values != 0] == Trust.untrusted)
+    # more intensity never raises trust on one bed
+    assert np.all(np.diff(flag.astype(int), axis=1) >= 0)
+
+
+def test_add_trust_on_a_single_point():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(1e-7))
+    out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
+    assert out.sl_trust.ndim == 0 and int(out.sl_trust) in (0, 1, 2)
