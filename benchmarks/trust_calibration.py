@@ -107,6 +107,15 @@ POINTS = [
              [0.05, 0.5], samples=500),
     # museum statue (issue #16: SL over-predicts, lock-in after the shaking)
     *_family("statue_kt", "statue", STATUE, STATUE_BED, KT_STATUE, [0.05, 0.3, 0.8, 0.97], samples=500),
+    # past the bisection range: SL's k_eq margin collapses; on the statue SL holds the response after the
+    # shaking (lock-in: decay_excess 31 and 310), then topples (status 1)
+    _point("statue_kt_lockin1", "statue", STATUE, STATUE_BED, KT_STATUE, S0=0.0066, samples=500, note="lock-in"),
+    _point("statue_kt_lockin2", "statue", STATUE, STATUE_BED, KT_STATUE, S0=0.011, samples=500, note="lock-in"),
+    _point("statue_kt_topple", "statue", STATUE, STATUE_BED, KT_STATUE, S0=0.0275, samples=500,
+           note="SL topples"),
+    _point("paper_stiff9_white_margin", "stiff_bed", PAPER_BLOCK, dict(k=1e9, lam=1e10, eps=0.0), WHITE,
+           S0=3.67e-5, samples=500, note="k_eq margin 0.1"),
+    _point("heavy_white_margin", "heavy", HEAVY, HEAVY_BED, WHITE, S0=4.19e-4, samples=500, note="k_eq margin 0.08"),
     # heavy block (hospital equipment)
     *_family("heavy_white", "heavy", HEAVY, HEAVY_BED, WHITE, [0.01, 0.3, 0.8], samples=500),
     *_family("heavy_kt10", "heavy", HEAVY, HEAVY_BED, KT10, [0.3], samples=500),
@@ -262,6 +271,56 @@ def assemble(work, names):
     return ds
 
 
+def markdown_table(ds):
+    """The calibration table (one line per point and condensation) with the rule's flag and band, as markdown."""
+    from screening.analysis.trust import bed_law, sl_trust
+    from screening.status import Trust
+
+    table = json.loads(ds.attrs["trust_table"])
+    lines = ["| point | cond. | S0 [m2 s-3] | p_uplift | k_eq margin | sigma/slend. | decay excess | SL error vs "
+             "coupled (± SE) | overturned | flag | band |", "|" + "---|" * 11]
+    for point in ds.point.values:
+        for cond in ds.condensation.values:
+            r = ds.sel(point=point, condensation=cond)
+            if int(r.sl_status) == -2:
+                continue
+            ind = {k: float(r[f"sl_{k}"]) for k in ("peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess")}
+            flag, lo, hi = sl_trust(ind, table, status=int(r.sl_status), condensation=str(cond), eps=float(r.eps))
+            err = float(r.sl_error)
+            err_text = (f"{100 * err:+.0f} % ± {100 * float(r.sl_error_se):.0f}" if np.isfinite(err) else "n/a")
+            status = "" if int(r.sl_status) == 0 else f" (status {int(r.sl_status)})"
+            band = f"[{100 * float(lo):+.0f}, {100 * float(hi):+.0f}] %" if np.isfinite(lo) else "none"
+            lines.append(f"| {point} | {cond} | {float(r.S0):.3g} | {ind['peak_p_uplift']:.3f}{status} | "
+                         f"{ind['k_eq_margin']:.2f} | {ind['sigma_ratio']:.3g} | {ind['decay_excess']:.3g} | "
+                         f"{err_text} | {int(r.coupled_n_overturned)}/{int(r.coupled_n_samples)} | "
+                         f"{Trust(int(flag)).name} | {band} |")
+    return "\n".join(lines)
+
+
+def rule_table(ds):
+    """The rule's cells as markdown (flag, band, number of calibration rows)."""
+    from screening.analysis.trust import BED_LAWS, CONDENSATIONS, P_EDGES
+    from screening.status import Trust
+
+    table = json.loads(ds.attrs["trust_table"])
+    bins = [f"{P_EDGES[i]:g}–{P_EDGES[i + 1]:g}" for i in range(len(P_EDGES) - 1)]
+    lines = ["| condensation | bed | " + " | ".join(f"p_uplift {b}" for b in bins) + " |",
+             "|" + "---|" * (2 + len(bins))]
+    for cond in CONDENSATIONS:
+        for law in BED_LAWS:
+            cells = []
+            for b in range(len(bins)):
+                c = table["cells"][f"{cond}|{law}|{b}"]
+                band = (f"[{100 * c['band'][0]:+.0f}, {100 * c['band'][1]:+.0f}] %" if np.isfinite(c["band"][0])
+                        else "no band")
+                cells.append(f"{Trust(c['flag']).name} {band} (n={c['n']})")
+            lines.append(f"| {cond} | {law} | " + " | ".join(cells) + " |")
+    for name, o in table["overrides"].items():
+        band = f"[{100 * o['band'][0]:+.0f}, {100 * o['band'][1]:+.0f}] %" if np.isfinite(o["band"][0]) else "no band"
+        lines.append(f"\n{name}: untrusted, band {band} (n={o['n']})")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=1000, help="coupled MCS samples (points may ask fewer)")
@@ -273,6 +332,7 @@ def main(argv=None):
     parser.add_argument("--force", action="store_true", help="recompute points already in --work")
     parser.add_argument("--list", action="store_true", help="list the points and exit")
     parser.add_argument("--assemble-only", action="store_true", help="only build --out from --work")
+    parser.add_argument("--markdown", action="store_true", help="print the calibration and rule tables of --out")
     args = parser.parse_args(argv)
     names = args.points or [p["name"] for p in POINTS]
     unknown = sorted(set(names) - set(point_by_name()))
@@ -281,6 +341,12 @@ def main(argv=None):
     if args.list:
         for p in POINTS:
             print(p["name"], p["family"], p["excitation"], p["target"], p["factor"], p["note"])
+        return
+    if args.markdown:
+        with xr.open_dataset(args.out) as ds:
+            print(markdown_table(ds))
+            print()
+            print(rule_table(ds))
         return
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
