@@ -274,22 +274,34 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
     law = np.broadcast_to(bed_law(eps), shape)
     reg = regime(ind)
     bins = p_bin(ind["peak_p_uplift"])
-    flag = np.full(shape, int(Trust.untrusted), dtype=np.int8)
-    low = np.full(shape, np.nan)
-    high = np.full(shape, np.nan)
-    for idx in np.ndindex(shape):
-        if st[idx] != int(PointStatus.ok) or bins[idx] < 0:
-            continue                                    # untrusted, no band
-        if reg[idx] != "cell":
-            low[idx], high[idx] = table["overrides"][str(reg[idx])]["band"]
-            continue
-        entry = table["cells"].get(f"{cond[idx]}|{law[idx]}|{bins[idx]}")
-        if entry is None:                               # unknown condensation: never trusted
-            flag[idx] = int(Trust.check)
-            low[idx], high[idx] = table["pooled"][str(bins[idx])]
-            continue
-        flag[idx] = entry["flag"]
-        low[idx], high[idx] = entry["band"]
+    n_bins = len(table["p_edges"]) - 1
+    # the cells as arrays [condensation, bed law, bin]; index len(CONDENSATIONS): unknown condensation
+    tab_flag = np.full((len(CONDENSATIONS) + 1, len(BED_LAWS), n_bins), int(Trust.check), dtype=np.int8)
+    tab_band = np.full(tab_flag.shape + (2,), np.nan)
+    for b in range(n_bins):
+        tab_band[-1, :, b] = table["pooled"][str(b)]
+        for ci, c in enumerate(CONDENSATIONS):
+            for li, law_name in enumerate(BED_LAWS):
+                entry = table["cells"][f"{c}|{law_name}|{b}"]
+                tab_flag[ci, li, b] = entry["flag"]
+                tab_band[ci, li, b] = entry["band"]
+    ci = np.full(shape, len(CONDENSATIONS))
+    for k, c in enumerate(CONDENSATIONS):
+        ci[cond == c] = k
+    li = np.zeros(shape, dtype=int)
+    for k, law_name in enumerate(BED_LAWS):
+        li[law == law_name] = k
+    bi = np.clip(bins, 0, n_bins - 1)
+    flag = np.array(tab_flag[ci, li, bi], dtype=np.int8, ndmin=1).reshape(shape)
+    band = np.array(tab_band[ci, li, bi], ndmin=2).reshape(shape + (2,))
+    for name in OVERRIDES:
+        sel = reg == name
+        flag[sel] = int(Trust.untrusted)
+        band[sel] = table["overrides"][name]["band"]
+    stopped = (st != int(PointStatus.ok)) | (bins < 0)
+    flag[stopped] = int(Trust.untrusted)
+    band[stopped] = np.nan
+    low, high = band[..., 0], band[..., 1]
     return flag, low, high
 
 
