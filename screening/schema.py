@@ -71,7 +71,10 @@ LINEARIZATION = {
     "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
     "status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "solver status of the point"),
-    # trust of the point (screening.analysis.trust.add_trust)
+    # trust of the point (screening.analysis.trust.add_trust; k_eq_rest and var_theta_end stand in for the
+    # histories in files that do not store them)
+    "k_eq_rest": _v("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
+    "var_theta_end": _v("rad2", "variance of the rocking rotation at the end of the record"),
     "sl_trust": flag_attributes(Trust, "trust in the linearized peak var_theta (docs/method.md#trusting-a-point)"),
     "sl_error_low": _v("1", "lower end of the predicted relative error of SL's peak var_theta against the coupled "
                             "model (SL / MCS - 1)"),

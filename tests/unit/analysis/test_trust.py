@@ -176,3 +176,20 @@ def test_add_trust_on_a_single_point():
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(1e-7))
     out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
     assert out.sl_trust.ndim == 0 and int(out.sl_trust) in (0, 1, 2)
+
+
+def test_missing_indicators_never_trusted(table):
+    flag, _, _ = trust.sl_trust(ind([0.003, 0.003], decay=[1.0, np.nan]), table, eps=0.0)
+    assert list(flag) == [Trust.trusted, Trust.check]
+
+
+def test_add_trust_without_histories_is_never_trusted():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(np.array([1e-7, 1e-6])))
+    table = trust.trust_table(None, rows=SYNTHETIC)
+    full = trust.add_trust(ds, table)
+    bare = trust.add_trust(ds.drop_vars(["var_theta", "k_eq"]), table)
+    assert np.all(bare.sl_trust.values >= full.sl_trust.values)
+    assert not np.any(bare.sl_trust.values == Trust.trusted)
+    with_summaries = ds.drop_vars(["var_theta", "k_eq"]).assign(k_eq_rest=ds.k_eq.isel(t=0),
+                                                                 var_theta_end=ds.var_theta.isel(t=-1))
+    np.testing.assert_array_equal(trust.add_trust(with_summaries, table).sl_trust.values, full.sl_trust.values)
