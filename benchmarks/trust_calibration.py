@@ -100,6 +100,13 @@ POINTS = [
     *_family("paper_h_kt10", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": 6e7}, KT10, [0.05, 0.3, 0.7]),
     *_family("paper_s_kt10", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": -6e5}, KT10, [0.05, 0.3]),
     *_family("paper_0_kt10", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": 0.0}, KT10, [0.2]),
+    # more low-uplift points on the softening and linear paper bed (enough rows per cell for a held-out test)
+    *_family("paper_s_white", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": -6e5}, WHITE, [0.01, 0.06, 0.12]),
+    *_family("paper_s_kt40", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": -6e5}, KT40, [0.03, 0.1]),
+    *_family("paper_s_kt10", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": -6e5}, KT10, [0.01, 0.15]),
+    *_family("paper_0_white", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": 0.0}, WHITE, [0.01, 0.03]),
+    *_family("paper_0_kt40", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": 0.0}, KT40, [0.003, 0.03, 0.15]),
+    *_family("paper_0_kt10", "paper_bed", PAPER_BLOCK, {**PAPER_BED, "eps": 0.0}, KT10, [0.05]),
     # paper block on stiff beds
     *_family("paper_stiff9_white", "stiff_bed", PAPER_BLOCK, dict(k=1e9, lam=1e10, eps=0.0), WHITE,
              [0.01, 0.3, 0.8], samples=500),

@@ -28,8 +28,8 @@ The rule (:func:`sl_trust`), in this order (each step can only lower trust):
 3. ``sigma_ratio > SIGMA_LIMIT`` or ``k_eq_margin < MARGIN_LIMIT`` (near toppling) -> ``untrusted``;
    band of the calibration rows near toppling.
 4. Otherwise the point falls in a *cell* (condensation, bed law, bin of ``peak_p_uplift`` at
-   :data:`P_EDGES`).  The cell's band is ``[min(e - 2 se), max(e + 2 se)]`` over the calibration
-   rows in it (``e`` the measured error, ``se`` its Monte Carlo standard error).  The cell is
+   :data:`P_EDGES`).  The cell's band is ``[min(e - 2 se), max(e + 2 se)]`` (lower end clipped at
+   -1) over the calibration rows in it (``e`` the measured error, ``se`` its Monte Carlo standard error).  The cell is
    ``trusted`` only if it holds at least :data:`MIN_ROWS` rows, all with ``|e| <= 10 %``, no
    coupled sample overturned beyond :data:`OVERTURN_LIMIT`, and its band within ``+-25 %``;
    ``untrusted`` if any row has ``|e| > 50 %`` or overturns beyond the limit; ``check`` otherwise
@@ -187,7 +187,8 @@ def calibration_rows(ds):
 def _band(err, se):
     if err.size == 0:
         return [float("nan"), float("nan")]
-    return [float(np.min(err - N_SE * se)), float(np.max(err + N_SE * se))]
+    # SL / MCS - 1 >= -1: the lower end is clipped there
+    return [float(max(np.min(err - N_SE * se), -1.0)), float(np.max(err + N_SE * se))]
 
 
 def _cell_flag(err, se, over, band):

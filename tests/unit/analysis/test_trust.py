@@ -139,20 +139,45 @@ def _subset(r, keep):
     return {k: v[keep] for k, v in r.items()}
 
 
-@pytest.mark.parametrize("part", [0, 1])
-def test_held_out_points_beyond_25_percent_are_never_trusted(calibration, part):
-    r = trust.calibration_rows(calibration)
-    names = sorted(set(r["point"].tolist()))
-    train_names = set(names[part::2])
-    train = np.isin(r["point"], list(train_names))
+def _eps(r):
+    return np.where(r["bed_law"] == "hardening", 1.0, np.where(r["bed_law"] == "softening", -1.0, 0.0))
+
+
+def _held_out(r, train, label):
+    """Derive the cells from the rows ``train``, label the others; no held-out row beyond 25 % may be trusted."""
     table = trust.trust_table(None, rows=_subset(r, train))
     test = _subset(r, ~train)
-    eps = np.where(test["bed_law"] == "hardening", 1.0, np.where(test["bed_law"] == "softening", -1.0, 0.0))
-    flag, _, _ = trust.sl_trust(test, table, condensation=test["condensation"], eps=eps)
+    flag, _, _ = trust.sl_trust(test, table, condensation=test["condensation"], eps=_eps(test))
     trusted = flag == Trust.trusted
     beyond_10 = int(np.sum(trusted & (np.abs(test["error"]) > trust.TRUSTED_ERROR)))
-    print(f"held-out part {part}: {int(trusted.sum())} of {trusted.size} rows trusted, {beyond_10} beyond 10 %")
-    assert not np.any(trusted & (np.abs(test["error"]) > trust.TRUSTED_BAND))
+    print(f"held-out {label}: {int(trusted.sum())} of {trusted.size} rows trusted, {beyond_10} of them beyond 10 %")
+    assert not np.any(trusted & (np.abs(test["error"]) > trust.TRUSTED_BAND)), \
+        f"held-out rows beyond 25 % labelled trusted: {test['point'][trusted & (np.abs(test['error']) > 0.25)]}"
+    return int(trusted.sum()), beyond_10
+
+
+@pytest.mark.parametrize("part", [0, 1])
+def test_held_out_every_other_point(calibration, part):
+    r = trust.calibration_rows(calibration)
+    names = sorted(set(r["point"].tolist()))
+    _held_out(r, np.isin(r["point"], names[part::2]), f"every other point, part {part}")
+
+
+@pytest.mark.parametrize("kind", ["white", "kanai_tajimi"])
+def test_held_out_by_excitation_kind(calibration, kind):
+    r = trust.calibration_rows(calibration)
+    kinds = dict(zip(calibration.point.values.tolist(), calibration.excitation_kind.values.tolist()))
+    train = np.array([kinds[p] != kind for p in r["point"]])
+    _held_out(r, train, f"{kind} held out")
+
+
+def test_held_out_leave_one_point_out(calibration):
+    r = trust.calibration_rows(calibration)
+    total = beyond = 0
+    for name in sorted(set(r["point"].tolist())):
+        n, b = _held_out(r, r["point"] != name, name)
+        total, beyond = total + n, beyond + b
+    print(f"leave-one-point-out: {total} rows trusted, {beyond} beyond 10 %")
 
 
 # ----------------------------------------------------------------------------- add_trust
@@ -193,3 +218,12 @@ def test_add_trust_without_histories_is_never_trusted():
     with_summaries = ds.drop_vars(["var_theta", "k_eq"]).assign(k_eq_rest=ds.k_eq.isel(t=0),
                                                                  var_theta_end=ds.var_theta.isel(t=-1))
     np.testing.assert_array_equal(trust.add_trust(with_summaries, table).sl_trust.values, full.sl_trust.values)
+
+
+def test_shipped_rule_is_monotone_in_uplift(calibration):
+    p = np.linspace(0.0, 1.0, 1001)
+    for cond in trust.CONDENSATIONS:
+        for eps in (6e7, 0.0, -6e5):
+            flag, lo, hi = trust.sl_trust(ind(p), None, eps=eps, condensation=cond)
+            assert np.all(np.diff(flag.astype(int)) >= 0)
+            assert np.all(lo[np.isfinite(lo)] >= -1.0)
