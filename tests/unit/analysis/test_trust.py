@@ -227,3 +227,13 @@ def test_shipped_rule_is_monotone_in_uplift(calibration):
             flag, lo, hi = trust.sl_trust(ind(p), None, eps=eps, condensation=cond)
             assert np.all(np.diff(flag.astype(int)) >= 0)
             assert np.all(lo[np.isfinite(lo)] >= -1.0)
+
+
+def test_add_trust_with_the_shipped_rule(calibration):
+    """Softening paper bed at low intensity: trusted; the same block near toppling: untrusted."""
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
+                   WhiteNoise(np.array([1.14e-5, 9.79e-5, 1e-2])))
+    out = trust.add_trust(ds)
+    assert list(out.sl_trust.values) == [Trust.trusted, Trust.check, Trust.untrusted]
+    assert out.sl_error_low.values[0] < 0 < out.sl_error_high.values[0]
+    assert np.isnan(out.sl_error_low.values[2]) == (int(ds.status.values[2]) != 0)
