@@ -237,3 +237,21 @@ def test_add_trust_with_the_shipped_rule(calibration):
     assert list(out.sl_trust.values) == [Trust.trusted, Trust.check, Trust.untrusted]
     assert out.sl_error_low.values[0] < 0 < out.sl_error_high.values[0]
     assert np.isnan(out.sl_error_low.values[2]) == (int(ds.status.values[2]) != 0)
+
+
+def test_add_trust_result_writes_to_netcdf(tmp_path):
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(np.array([1e-7, 1e-2])))
+    out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
+    out.to_netcdf(tmp_path / "r.nc")
+    import xarray as xr
+    with xr.open_dataset(tmp_path / "r.nc") as back:
+        np.testing.assert_array_equal(back.sl_trust.values, out.sl_trust.values)
+        assert back.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
+
+
+def test_stationary_input_has_no_lock_in_signal():
+    from screening import ConstantEnvelope
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(1e-6, ConstantEnvelope()))
+    ind = trust.indicators_from_dataset(ds)
+    assert float(ind["decay_excess"]) == pytest.approx(float(ds.var_theta.isel(t=-1) / ds.peak_var_theta))
+    assert float(ind["decay_excess"]) <= 1.0 + 1e-9
