@@ -124,12 +124,12 @@ def bed_summary(block, foundation):
     full contact), ``vertical_damping_ratio`` [1] and ``rocking_damping_ratio`` [1] (full contact, at
     the static indentation)."""
     from screening import condensation as condensations
-    from screening.physics.contact import static_indentation_exact
+    from screening.physics.contact import rest_indentation
     from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
     m, b, h, g = float(block.m), float(block.b), float(block.h), float(block.g)
     k, d = float(foundation.k), float(foundation.damping)
-    z_st = static_indentation_exact(block, foundation)
+    z_st = rest_indentation(block, foundation)
     wv = vertical_frequency(block, foundation)
     wr = rocking_frequency(block, foundation)
     if foundation.winkler:

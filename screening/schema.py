@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import PointStatus, SampleState, SpotStatus, flag_attributes
+from screening.status import ContactRegime, PointStatus, SampleState, SpotStatus, Trust, flag_attributes
 
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"
@@ -71,6 +71,15 @@ LINEARIZATION = {
     "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
     "status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "solver status of the point"),
+    # trust of the point (screening.analysis.trust.add_trust; k_eq_rest and var_theta_end stand in for the
+    # histories in files that do not store them)
+    "k_eq_rest": _v("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
+    "var_theta_end": _v("rad2", "variance of the rocking rotation at the end of the record"),
+    "sl_trust": flag_attributes(Trust, "trust in the linearized peak var_theta (docs/method.md#trusting-a-point)"),
+    "sl_error_low": _v("1", "lower end of the predicted relative error of SL's peak var_theta against the coupled "
+                            "model (SL / MCS - 1)"),
+    "sl_error_high": _v("1", "upper end of the predicted relative error of SL's peak var_theta against the "
+                             "coupled model (SL / MCS - 1)"),
 }
 
 #: Sweep results: a point's status also says when its task failed.
@@ -195,8 +204,7 @@ SIMULATION = {
     "theta_dot": _v("rad s-1", "rocking angular velocity"),
     "z_cb": _v("m", "indentation of the base centre into the bed (coupled model; 0 condensed)"),
     "z_cb_dot": _v("m s-1", "indentation rate of the base centre (coupled model; 0 condensed)"),
-    "contact_regime": {"long_name": "contact regime", "units": "1", "flag_values": [-1, 0, 1, 2, 3],
-                       "flag_meanings": "none full_contact uplift_theta_positive uplift_theta_negative flight"},
+    "contact_regime": {**flag_attributes(ContactRegime, "contact regime"), "units": "1"},
     "ground_acceleration": _v("m s-2", "horizontal ground acceleration (usual convention: > 0 towards +x)"),
     "peak_abs_theta": _v("rad", "peak |theta| over the record (up to overturning or divergence)"),
     "overturned": _v("1", "the block overturned (|theta| > atan(b/h))"),
@@ -214,6 +222,37 @@ INTENSITY = {
     "sa": _v("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
     "fit_flag": {"long_name": "state of the lognormal fit", "units": "1", "flag_values": [0, 1, 2],
                  "flag_meanings": "ok non_positive_beta no_fit"},
+}
+
+#: Calibration of the trust rule (``benchmarks/trust_calibration.py`` -> ``screening/data/trust_calibration.nc``).
+TRUST_CALIBRATION = {
+    "point": {"long_name": "calibration point name"},
+    "condensation": {"long_name": "condensation of the SL run"},
+    "family": {"long_name": "block and bed family of the calibration point"},
+    "excitation_kind": {"long_name": "excitation kind"},
+    "contact": {"long_name": "contact law"},
+    "target_peak_p_uplift": _v("1", "target SL peak uplift probability used to find S0 (paper condensation)"),
+    "omega_g": {**PARAMETERS["omega_g"], "note": "NaN for white noise"},
+    "zeta_g": {**PARAMETERS["zeta_g"], "note": "NaN for white noise"},
+    "sl_peak_p_uplift": _v("1", "SL peak uplift probability"),
+    "sl_k_eq_margin": _v("1", "SL min_k_eq / k_eq at rest"),
+    "sl_sigma_ratio": _v("1", "SL sqrt(peak var_theta) / slenderness angle"),
+    "sl_decay_excess": _v("1", "SL (var_theta(t_end) / peak var_theta) / (q(t_end)^2 / max q^2)"),
+    "sl_peak_var_theta": _v("rad2", "SL peak var_theta"),
+    "sl_status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "SL solver status",
+                                 ) | {"note": "-2: the condensation does not apply to the point (no SL run)"},
+    "sl_error": _v("1", "relative error of SL's peak var_theta against coupled MCS, SL / MCS - 1"),
+    "sl_error_se": _v("1", "Monte Carlo standard error of sl_error"),
+    **{f"{model}_{name}": value for model in ("coupled", "condensed") for name, value in {
+        "peak_var_theta": _v("rad2", f"{model} MCS peak var_theta over surviving samples"),
+        "peak_var_theta_se": _v("rad2", f"standard error of the {model} MCS peak var_theta (at the peak time)"),
+        "n_overturned": _v("1", f"overturned {model} MCS samples"),
+        "n_diverged": _v("1", f"diverged {model} MCS samples"),
+        "n_samples": _v("1", f"{model} MCS samples"),
+        "peak_p_uplift": _v("1", f"{model} MCS peak uplift occupancy"),
+        "var_theta_end": _v("rad2", f"{model} MCS var_theta at the end of the record"),
+        "wall": _v("s", f"{model} MCS wall time"),
+    }.items()},
 }
 
 #: Index and label coordinates.

@@ -78,9 +78,22 @@ class SpotStatus(enum.IntEnum):
     task_failed = 1
 
 
+class Trust(enum.IntEnum):
+    """How far to trust a linearized point (:mod:`screening.analysis.trust`, docs/method.md#trusting-a-point)."""
+
+    #: the calibration shows SL within 10 % of the coupled model in this regime (band within 25 %)
+    trusted = 0
+    #: no evidence either way, or errors between 10 % and 50 %: check with coupled Monte Carlo
+    check = 1
+    #: SL stopped, locks in, is near toppling, or the calibration shows errors beyond 50 % / overturning
+    untrusted = 2
+
+
 class ContactRegime(enum.IntEnum):
     """Contact regime of the coupled model's base."""
 
+    #: no regime (after overturning or divergence)
+    none = -1
     full_contact = 0
     uplift_positive = 1
     uplift_negative = 2

@@ -82,11 +82,13 @@ import math
 import numba
 import numpy as np
 
+from screening.status import ContactRegime
+
 #: Integer codes of the contact regimes returned by :func:`contact_regime`.
-REGIME_FULL_CONTACT = 0
-REGIME_UPLIFT_POSITIVE = 1
-REGIME_UPLIFT_NEGATIVE = 2
-REGIME_FLIGHT = 3
+REGIME_FULL_CONTACT = int(ContactRegime.full_contact)
+REGIME_UPLIFT_POSITIVE = int(ContactRegime.uplift_positive)
+REGIME_UPLIFT_NEGATIVE = int(ContactRegime.uplift_negative)
+REGIME_FLIGHT = int(ContactRegime.flight)
 REGIME_NAMES = {REGIME_FULL_CONTACT: "full contact", REGIME_UPLIFT_POSITIVE: "uplift, theta > 0",
                 REGIME_UPLIFT_NEGATIVE: "uplift, theta < 0", REGIME_FLIGHT: "flight"}
 

@@ -39,15 +39,15 @@ from scipy import optimize
 from screening import condensation as condensations, schema
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
                                        REGIME_UPLIFT_POSITIVE, contact_regime, contact_resultants,
-                                       static_indentation_exact)
+                                       rest_indentation)
 from screening.records import Record
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.datasets import finish
 from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, state_scales
-from screening.status import DIVERGENCE_TEXT, DivergenceReason
+from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 
 #: Code of ``contact_regime`` after overturning or divergence (no state).
-REGIME_NONE = -1
+REGIME_NONE = int(ContactRegime.none)
 
 SIGN_CONVENTION = ("ground_acceleration > 0 accelerates the ground towards +x (edge A -> edge B); theta > 0 "
                    "presses edge B (+x side) into the bed; the kernel's x_g'' of eq. (8) is -ground_acceleration")
@@ -62,10 +62,10 @@ def _check_scalar(name, value, lower=-math.inf):
 def quasi_static_indentation(block, foundation, theta0):
     """``z_cb`` [m] carrying the weight at rest at angle ``theta0`` [rad]: ``F_cb(theta0, 0, z_cb, 0) = m g``.
 
-    Equals :func:`~screening.physics.contact.static_indentation_exact` at ``theta0 = 0``.
+    Equals :func:`~screening.physics.contact.rest_indentation` at ``theta0 = 0``.
     """
     if theta0 == 0.0:
-        return static_indentation_exact(block, foundation)
+        return rest_indentation(block, foundation)
     b = float(block.b)
     weight = float(block.m * block.g)
 
@@ -75,7 +75,7 @@ def quasi_static_indentation(block, foundation, theta0):
         return float(force) - weight
 
     lo = -b * abs(math.sin(theta0))          # flight boundary: no force
-    hi = max(static_indentation_exact(block, foundation), 1e-12) + b * abs(math.sin(theta0))
+    hi = max(rest_indentation(block, foundation), 1e-12) + b * abs(math.sin(theta0))
     for _ in range(200):
         if excess(hi) > 0.0:
             break

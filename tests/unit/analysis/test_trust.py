@@ -1,0 +1,257 @@
+"""The per-point trust rule (screening.analysis.trust): synthetic indicators, held-out calibration, shipped file."""
+
+import json
+
+import numpy as np
+import pytest
+
+from screening import Block, Foundation, WhiteNoise, linearize
+from screening.analysis import trust
+from screening.status import PointStatus, Trust
+
+
+def rows(p, err, se=None, cond="paper", law="hardening", over=0.0, decay=1.0, sigma=0.01, margin=0.9):
+    p = np.asarray(p, dtype=float)
+    n = p.size
+
+    def full(x):
+        return np.broadcast_to(np.asarray(x), (n,)).copy()
+
+    return {"peak_p_uplift": p, "k_eq_margin": full(float(margin)), "sigma_ratio": full(float(sigma)),
+            "decay_excess": full(float(decay)), "error": np.asarray(err, dtype=float),
+            "error_se": full(0.02 if se is None else se), "overturned_fraction": full(float(over)),
+            "condensation": full(cond).astype(str), "bed_law": full(law).astype(str),
+            "point": np.array([f"pt{i}" for i in range(n)])}
+
+
+def concat(*parts):
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+
+
+SYNTHETIC = concat(
+    rows([0.001, 0.003, 0.02, 0.05], [-0.03, -0.05, -0.06, -0.08], law="softening"),
+    rows([0.15, 0.3], [-0.2, -0.35], law="softening"),
+    rows([0.001, 0.003], [-0.15, -0.14], law="hardening"),
+    rows([0.002, 0.004, 0.03, 0.05], [0.02, -0.04, 0.05, -0.03], law="linear"),
+    rows([0.5, 0.95], [-0.02, 0.01], law="linear"),             # trusted data at high uplift: must not raise trust
+    rows([0.99], [1.5], law="linear", decay=500.0),             # lock-in
+)
+
+
+def ind(p, decay=1.0, sigma=0.01, margin=0.9):
+    return {"peak_p_uplift": np.asarray(p, dtype=float), "k_eq_margin": np.full(np.shape(p), margin),
+            "sigma_ratio": np.full(np.shape(p), sigma), "decay_excess": np.full(np.shape(p), decay)}
+
+
+@pytest.fixture(scope="module")
+def table():
+    return trust.trust_table(None, rows=SYNTHETIC)
+
+
+def test_trusted_only_where_the_cell_errors_are_within_10_percent(table):
+    flag, lo, hi = trust.sl_trust(ind([0.001, 0.03]), table, eps=-6e5)
+    assert list(flag) == [Trust.trusted, Trust.trusted]
+    assert lo[0] == pytest.approx(-0.05 - 0.04) and hi[0] == pytest.approx(-0.03 + 0.04)
+    flag, _, _ = trust.sl_trust(ind([0.001]), table, eps=6e7)     # -15 % on the hardening bed
+    assert flag[0] == Trust.check
+    flag, _, _ = trust.sl_trust(ind([0.15]), table, eps=-6e5)
+    assert flag[0] == Trust.check                               # -20 %: check, not trusted
+    flag, _, _ = trust.sl_trust(ind([0.3]), table, eps=-6e5)
+    assert flag[0] == Trust.check
+
+
+@pytest.mark.parametrize("eps", [6e7, 0.0, -6e5])
+@pytest.mark.parametrize("cond", ["paper", "cubic"])
+def test_more_uplift_never_raises_trust(table, eps, cond):
+    p = np.linspace(0.0, 1.0, 501)
+    flag, _, _ = trust.sl_trust(ind(p), table, eps=eps, condensation=cond)
+    assert np.all(np.diff(flag.astype(int)) >= 0)
+
+
+def test_linear_high_uplift_stays_below_the_worst_lower_cell(table):
+    # the linear bed's 0.5 and 0.95 cells have good data, but the empty 0.08-0.45 bins are 'check'
+    flag, _, _ = trust.sl_trust(ind([0.003, 0.5, 0.95]), table, eps=0.0)
+    assert list(flag) == [Trust.trusted, Trust.check, Trust.check]
+
+
+def test_lock_in_is_untrusted(table):
+    flag, lo, hi = trust.sl_trust(ind([0.003, 0.003], decay=[1.0, 1e3]), table, eps=0.0)
+    assert flag[0] == Trust.trusted and flag[1] == Trust.untrusted
+    assert lo[1] == pytest.approx(1.5 - 0.04) and hi[1] == pytest.approx(1.5 + 0.04)
+
+
+@pytest.mark.parametrize("kw", [dict(sigma=0.5), dict(margin=0.1)])
+def test_near_toppling_is_untrusted(table, kw):
+    flag, _, _ = trust.sl_trust(ind([0.003], **kw), table, eps=0.0)
+    assert flag[0] == Trust.untrusted
+
+
+@pytest.mark.parametrize("status", [s for s in PointStatus if s != PointStatus.ok])
+def test_non_ok_status_is_untrusted_without_band(table, status):
+    flag, lo, hi = trust.sl_trust(ind([0.003, 0.003]), table, status=[int(status), 0], eps=0.0)
+    assert flag[0] == Trust.untrusted and np.isnan(lo[0]) and np.isnan(hi[0])
+    assert flag[1] == Trust.trusted
+
+
+def test_overturning_in_the_calibration_makes_the_cell_untrusted():
+    t = trust.trust_table(None, rows=rows([0.001, 0.002], [0.01, 0.02], over=0.05, law="linear"))
+    flag, _, _ = trust.sl_trust(ind([0.001]), t, eps=0.0)
+    assert flag[0] == Trust.untrusted
+
+
+def test_unknown_cells_are_check_with_the_pooled_band(table):
+    flag, lo, hi = trust.sl_trust(ind([0.003]), table, eps=0.0, condensation="other")
+    assert flag[0] == Trust.check and np.isfinite(lo[0]) and np.isfinite(hi[0])
+
+
+def test_trust_indicators():
+    out = trust.trust_indicators(0.2, 5.0, 10.0, 4e-6, 0.1, 1e-6, 1e-3)
+    assert out["k_eq_margin"] == pytest.approx(0.5)
+    assert out["sigma_ratio"] == pytest.approx(2e-3 / 0.1)
+    assert out["decay_excess"] == pytest.approx(0.25 / 1e-3)
+
+
+# ----------------------------------------------------------------------------- the shipped calibration
+@pytest.fixture(scope="module")
+def calibration():
+    try:
+        return trust.shipped_calibration()
+    except (FileNotFoundError, OSError):
+        pytest.skip("no shipped calibration file")
+
+
+def test_shipped_table_is_the_one_derived_from_the_shipped_file(calibration):
+    assert trust.trust_table(calibration) == json.loads(calibration.attrs["trust_table"])
+    assert calibration.sizes["point"] >= 30
+
+
+def test_shipped_trusted_cells_are_earned(calibration):
+    """Every calibration row the shipped rule labels trusted is within 10 % (and its band within 25 %)."""
+    r = trust.calibration_rows(calibration)
+    flag, lo, hi = trust.sl_trust(r, None, condensation=r["condensation"], eps=np.where(
+        r["bed_law"] == "hardening", 1.0, np.where(r["bed_law"] == "softening", -1.0, 0.0)))
+    t = flag == Trust.trusted
+    assert np.all(np.abs(r["error"][t]) <= trust.TRUSTED_ERROR)
+    assert np.all((lo[t] >= -trust.TRUSTED_BAND) & (hi[t] <= trust.TRUSTED_BAND))
+
+
+def _subset(r, keep):
+    return {k: v[keep] for k, v in r.items()}
+
+
+def _eps(r):
+    return np.where(r["bed_law"] == "hardening", 1.0, np.where(r["bed_law"] == "softening", -1.0, 0.0))
+
+
+def _held_out(r, train, label):
+    """Derive the cells from the rows ``train``, label the others; no held-out row beyond 25 % may be trusted."""
+    table = trust.trust_table(None, rows=_subset(r, train))
+    test = _subset(r, ~train)
+    flag, _, _ = trust.sl_trust(test, table, condensation=test["condensation"], eps=_eps(test))
+    trusted = flag == Trust.trusted
+    beyond_10 = int(np.sum(trusted & (np.abs(test["error"]) > trust.TRUSTED_ERROR)))
+    print(f"held-out {label}: {int(trusted.sum())} of {trusted.size} rows trusted, {beyond_10} of them beyond 10 %")
+    assert not np.any(trusted & (np.abs(test["error"]) > trust.TRUSTED_BAND)), \
+        f"held-out rows beyond 25 % labelled trusted: {test['point'][trusted & (np.abs(test['error']) > 0.25)]}"
+    return int(trusted.sum()), beyond_10
+
+
+@pytest.mark.parametrize("part", [0, 1])
+def test_held_out_every_other_point(calibration, part):
+    r = trust.calibration_rows(calibration)
+    names = sorted(set(r["point"].tolist()))
+    _held_out(r, np.isin(r["point"], names[part::2]), f"every other point, part {part}")
+
+
+@pytest.mark.parametrize("kind", ["white", "kanai_tajimi"])
+def test_held_out_by_excitation_kind(calibration, kind):
+    r = trust.calibration_rows(calibration)
+    kinds = dict(zip(calibration.point.values.tolist(), calibration.excitation_kind.values.tolist()))
+    train = np.array([kinds[p] != kind for p in r["point"]])
+    _held_out(r, train, f"{kind} held out")
+
+
+def test_held_out_leave_one_point_out(calibration):
+    r = trust.calibration_rows(calibration)
+    total = beyond = 0
+    for name in sorted(set(r["point"].tolist())):
+        n, b = _held_out(r, r["point"] != name, name)
+        total, beyond = total + n, beyond + b
+    print(f"leave-one-point-out: {total} rows trusted, {beyond} beyond 10 %")
+
+
+# ----------------------------------------------------------------------------- add_trust
+def test_add_trust_on_a_linearize_result():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=np.array([-6e5, 0.0, 6e7])),
+                   WhiteNoise(np.array([1e-7, 1e-5, 1e-2])))
+    table = trust.trust_table(None, rows=SYNTHETIC)
+    out = trust.add_trust(ds, table)
+    for name in ("sl_trust", "sl_error_low", "sl_error_high"):
+        assert out[name].dims == ds.peak_var_theta.dims
+    assert out.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
+    assert list(out.sl_trust.attrs["flag_values"]) == [0, 1, 2]
+    assert out.sl_error_low.attrs["units"] == "1"
+    flag = out.sl_trust.values
+    assert np.all(flag[ds.status.values != 0] == Trust.untrusted)
+    # more intensity never raises trust on one bed
+    assert np.all(np.diff(flag.astype(int), axis=1) >= 0)
+
+
+def test_add_trust_on_a_single_point():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(1e-7))
+    out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
+    assert out.sl_trust.ndim == 0 and int(out.sl_trust) in (0, 1, 2)
+
+
+def test_missing_indicators_never_trusted(table):
+    flag, _, _ = trust.sl_trust(ind([0.003, 0.003], decay=[1.0, np.nan]), table, eps=0.0)
+    assert list(flag) == [Trust.trusted, Trust.check]
+
+
+def test_add_trust_without_histories_is_never_trusted():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(np.array([1e-7, 1e-6])))
+    table = trust.trust_table(None, rows=SYNTHETIC)
+    full = trust.add_trust(ds, table)
+    bare = trust.add_trust(ds.drop_vars(["var_theta", "k_eq"]), table)
+    assert np.all(bare.sl_trust.values >= full.sl_trust.values)
+    assert not np.any(bare.sl_trust.values == Trust.trusted)
+    with_summaries = ds.drop_vars(["var_theta", "k_eq"]).assign(k_eq_rest=ds.k_eq.isel(t=0),
+                                                                 var_theta_end=ds.var_theta.isel(t=-1))
+    np.testing.assert_array_equal(trust.add_trust(with_summaries, table).sl_trust.values, full.sl_trust.values)
+
+
+def test_shipped_rule_is_monotone_in_uplift(calibration):
+    p = np.linspace(0.0, 1.0, 1001)
+    for cond in trust.CONDENSATIONS:
+        for eps in (6e7, 0.0, -6e5):
+            flag, lo, hi = trust.sl_trust(ind(p), None, eps=eps, condensation=cond)
+            assert np.all(np.diff(flag.astype(int)) >= 0)
+            assert np.all(lo[np.isfinite(lo)] >= -1.0)
+
+
+def test_add_trust_with_the_shipped_rule(calibration):
+    """Softening paper bed at low intensity: trusted; the same block near toppling: untrusted."""
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
+                   WhiteNoise(np.array([1.14e-5, 9.79e-5, 1e-2])))
+    out = trust.add_trust(ds)
+    assert list(out.sl_trust.values) == [Trust.trusted, Trust.check, Trust.untrusted]
+    assert out.sl_error_low.values[0] < 0 < out.sl_error_high.values[0]
+    assert np.isnan(out.sl_error_low.values[2]) == (int(ds.status.values[2]) != 0)
+
+
+def test_add_trust_result_writes_to_netcdf(tmp_path):
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(np.array([1e-7, 1e-2])))
+    out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
+    out.to_netcdf(tmp_path / "r.nc")
+    import xarray as xr
+    with xr.open_dataset(tmp_path / "r.nc") as back:
+        np.testing.assert_array_equal(back.sl_trust.values, out.sl_trust.values)
+        assert back.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
+
+
+def test_stationary_input_has_no_lock_in_signal():
+    from screening import ConstantEnvelope
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(1e-6, ConstantEnvelope()))
+    ind = trust.indicators_from_dataset(ds)
+    assert float(ind["decay_excess"]) == pytest.approx(float(ds.var_theta.isel(t=-1) / ds.peak_var_theta))
+    assert float(ind["decay_excess"]) <= 1.0 + 1e-9
