@@ -36,7 +36,7 @@ Example (SI units throughout)::
     dt = 0.05                   # s, output step (default 0.05)
 
     [solver]
-    rtol = 1e-7                 # optional; max_steps optional
+    rtol = 1e-8                 # optional; max_steps optional
 
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
