@@ -136,7 +136,7 @@ def batch_solver(record_dtype):
 
 
 def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max=None,
-                  max_steps=DEFAULT_MAX_STEPS, condensation="paper"):
+                  max_steps=DEFAULT_MAX_STEPS, condensation="paper", histories=True):
     """Integrate the linearized moment equations for a batch of parameter points.
 
     Parameters
@@ -150,12 +150,15 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     condensation : a :class:`~screening.condensation.Condensation` or a registered name
         (``"paper"``: eqs. 17–25, default; ``"cubic"``: :mod:`screening.condensation.cubic`,
         raises ``ValueError`` for a softening bed that cannot carry the block through uplift).
+    histories : False: per-point summaries only (no dense output, no coefficient evaluations at
+        the output times; the history keys are absent from the result).
 
     Returns
     -------
     dict of numpy arrays: the time histories ``var_theta`` [rad^2], ``var_theta_dot``
     [rad^2/s^2], ``cov_theta_theta_dot`` [rad^2/s], ``c_eq`` [N m s/rad], ``k_eq`` [N m/rad],
-    ``p_uplift`` [1] of shape ``shape + (len(t_out),)`` (NaN after a point stopped), and per
+    ``p_uplift`` [1] of shape ``shape + (len(t_out),)`` (NaN after a point stopped; only if
+    ``histories``), and per
     point ``status`` (:class:`~screening.status.PointStatus`), ``t_stop`` [s], ``n_steps``,
     ``n_rejected``, ``peak_var_theta`` [rad^2] with ``t_peak_var_theta`` [s], ``peak_p_uplift``
     [1] and ``min_k_eq`` [N m/rad] (over the integrated span).
@@ -171,7 +174,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     if h_max is None:
         h_max = (t_out[-1] - t_out[0]) / 20.0
     osc = oscillator_records(block, foundation, excitation, cond)
-    hist = {name: np.full((n, nt), np.nan) for name in HISTORY_VARIABLES}
+    hist = {name: np.full((n if histories else 0, nt), np.nan) for name in HISTORY_VARIABLES}
     status = np.zeros(n, dtype=np.int8)
     t_stop = np.full(n, np.nan)
     n_steps = np.zeros(n, dtype=np.int64)
@@ -184,14 +187,14 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         kernel = cond.moment_kernel(select(block, part), select(foundation, part))
         solver = batch_solver(kernel.records.dtype)
         solver(kernel.coefficients, kernel.records, osc[part], kernel.tables,
-               kernel.table_index, kt, t_out, float(rtol), float(h_max), int(max_steps), True,
+               kernel.table_index, kt, t_out, float(rtol), float(h_max), int(max_steps), bool(histories),
                hist["var_theta"][part], hist["cov_theta_theta_dot"][part], hist["var_theta_dot"][part],
                hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], status[part], t_stop[part],
                n_steps[part], n_rejected[part], peak[part], t_peak[part], min_k[part])
     tu = osc["theta_ul"]
     with np.errstate(divide="ignore"):
         peak_p = np.where(peak > 0, erfc(tu / np.sqrt(2.0 * np.maximum(peak, 1e-300))), 0.0)
-    out = {name: a.reshape(shape + (nt,)) for name, a in hist.items()}
+    out = {name: a.reshape(shape + (nt,)) for name, a in hist.items()} if histories else {}
     out.update({
         "status": status.reshape(shape), "t_stop": t_stop.reshape(shape),
         "n_steps": n_steps.reshape(shape), "n_rejected": n_rejected.reshape(shape),

@@ -249,3 +249,15 @@ def test_linearize_reports_the_reach_beyond_the_capacity_angle(paper_block):
     expected = erfc(cap / np.sqrt(2 * float(ds.peak_var_theta)))
     assert ds.attrs["peak_p_beyond_capacity"] == pytest.approx(expected, rel=1e-12)
     assert 0.0 < ds.attrs["peak_p_beyond_capacity"] < 1.0
+
+
+@pytest.mark.parametrize("exc", [WhiteNoise(np.array([1e-5, 2.4e-3])), KanaiTajimi(np.array([1e-5, 2.4e-3]), 15.6, 0.6)])
+def test_summaries_without_histories_are_those_with_histories(paper_block, exc):
+    """histories=False skips the output stores only: every summary is bit for bit the same."""
+    t = output_times(20.0, 0.05)
+    bed = Foundation(2.89e7, 8.95e8, np.array([-6e5, 6e7]))
+    full = solve_moments(paper_block, bed, exc, t)
+    bare = solve_moments(paper_block, bed, exc, t, histories=False)
+    assert "var_theta" in full and not set(bare) & {"var_theta", "p_uplift", "c_eq"}
+    for key, value in bare.items():
+        np.testing.assert_array_equal(value, full[key], err_msg=key)
