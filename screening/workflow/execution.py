@@ -35,21 +35,24 @@ SUMMARY_INTS = ("n_steps", "n_rejected")
 MODEL_FLOATS = ("theta_ul", "slenderness")
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
+#: Linearization histories a spot check is compared against.
+SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 
 # ============================================================================ tasks
-def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps):
+def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
-    ``condensation`` is a :class:`screening.condensation.Condensation`.  Returns a dict of
-    1-d/2-d arrays over the batch: the histories as ``float32`` (points x time), the summaries
+    ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
+    variables to return (none: the solver skips its output stores).  Returns a dict of 1-d/2-d
+    arrays over the batch: those histories as ``float32`` (points x time), the summaries
     (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
-                        condensation=condensation)
+                        condensation=condensation, histories=bool(histories))
     shape = res["status"].shape
     n = res["status"].size
-    out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in HISTORY_VARIABLES}
+    out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in histories}
     out["status"] = res["status"].reshape(n).astype(np.int8)
     for name in SUMMARY_FLOATS:
         out[name] = res[name].reshape(n).astype(np.float64)
@@ -61,9 +64,9 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     return out
 
 
-def failed_result(n, nt):
+def failed_result(n, nt, histories=HISTORY_VARIABLES):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
-    out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in HISTORY_VARIABLES}
+    out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
     for name in SUMMARY_FLOATS + MODEL_FLOATS:
         out[name] = np.full(n, np.nan)
@@ -72,11 +75,13 @@ def failed_result(n, nt):
     return out
 
 
-def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
+def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
     ``condensation`` (a :class:`screening.condensation.Condensation`) applies to
-    ``model="condensed"`` only (the coupled model has none).
+    ``model="condensed"`` only (the coupled model has none).  ``linear = (t_out, rtol, max_steps)``:
+    also solve the linearization at the point and return its ``var_theta``, ``var_theta_dot``
+    histories as ``sl_var_theta``, ``sl_var_theta_dot`` (for a result that stores no histories).
     """
     from screening.solvers.montecarlo import monte_carlo
 
@@ -89,6 +94,12 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
                n_used=np.int32(samples - n_over - n_div),
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
+    if linear is not None:
+        t_out, rtol, max_steps = linear
+        res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
+                            condensation=condensation)
+        for name in SPOT_LINEAR:
+            out[f"sl_{name}"] = np.asarray(res[name], dtype=np.float64).reshape(-1)
     return out
 
 
@@ -103,6 +114,7 @@ def sample_state(overturned, diverged):
 def failed_spot(nt, samples):
     """Spot-check result of a task that failed: NaN histories, every sample ``diverged_or_failed``."""
     out = {name: np.full(nt, np.nan) for name in SPOT_HISTORIES}
+    out.update({f"sl_{name}": np.full(nt, np.nan) for name in SPOT_LINEAR})
     out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0),
                peak_abs_theta=np.full(samples, np.nan),
                sample_state=np.full(samples, SampleState.diverged_or_failed, dtype=np.int8))
@@ -114,15 +126,18 @@ def submit_batch(client, study, batch, key):
     """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times)."""
     case = study.cases[batch.case]
     return client.submit(solve_batch, *batch_models(study, batch), case.condensation_model, study.times,
-                         study.rtol, study.max_steps, retries=TASK_RETRIES, pure=False, key=key)
+                         study.rtol, study.max_steps, study.output.stored, retries=TASK_RETRIES, pure=False,
+                         key=key)
 
 
 def submit_spot(client, study, index, key):
     """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times)."""
     case, values = point_values(study, index)
     spec = study.mcs
+    stored = set(study.output.stored)
+    linear = None if stored.issuperset(SPOT_LINEAR) else (study.times, study.rtol, study.max_steps)
     return client.submit(spot_task, *build_models(study.cases[case], values), study.cases[case].condensation_model,
-                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, retries=TASK_RETRIES,
+                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, retries=TASK_RETRIES,
                          pure=False, key=key)
 
 

@@ -38,6 +38,10 @@ Example (SI units throughout)::
     [solver]
     rtol = 1e-8                 # optional; max_steps optional
 
+    [output]                    # optional: what the result stores besides the per-point summaries
+    histories = "all"           # or "none": summaries only (peaks and their times, p_uplift, k_eq, status)
+    variables = ["var_theta", "p_uplift"]   # with "all": the histories to store (default: all six)
+
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
     count = 3                   # with "auto": how many points
@@ -90,10 +94,10 @@ from types import MappingProxyType
 import numpy as np
 
 from screening import __version__
-from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL
+from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models,
-                                       check_keys, check_value, choice, integer, model_tables, name_string,
+                                       check_choice, check_keys, check_list, check_value, choice, integer, model_tables, name_string,
                                        numeric_table, parse_toml, read_study_text, resolve_case, table,
                                        time_table, title_and_description, type_name)
 
@@ -101,7 +105,9 @@ __all__ = ["Case", "SpotChecks", "Study", "StudyError", "build_models", "load_st
 
 MCS_MODELS = ("coupled", "condensed")
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case")
+             "case", "output")
+#: ``[output] histories``: every chosen history at every point, or none (summaries only).
+HISTORY_CHOICES = ("all", "none")
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
 LAYOUT_VERSION = 3
@@ -117,6 +123,19 @@ class SpotChecks:
     samples: int
     model: str
     seed: int
+
+
+@dataclass(frozen=True)
+class Output:
+    """The ``[output]`` table: ``histories`` (``"all"`` or ``"none"``) and the history ``variables``."""
+
+    histories: str = "all"
+    variables: tuple = HISTORY_VARIABLES
+
+    @property
+    def stored(self):
+        """The history variables the result holds (none with ``histories = "none"``)."""
+        return self.variables if self.histories == "all" else ()
 
 
 @dataclass(frozen=True)
@@ -142,6 +161,7 @@ class Study:
     mcs: SpotChecks | None = None
     description: str = ""
     _hash: str = field(default="", repr=False)
+    output: Output = Output()
 
     @property
     def swept_dims(self):
@@ -217,7 +237,7 @@ def _build(raw, text, name, source):
     return Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
-                 description=description, _hash=digest.hexdigest())
+                 description=description, _hash=digest.hexdigest(), output=_output(raw))
 
 
 def _cases(raw, base, sweeps):
@@ -270,6 +290,22 @@ def _solver(raw):
     if isinstance(max_steps, bool) or not isinstance(max_steps, int) or not 1 <= max_steps < 2**31:
         raise StudyError(f"solver.max_steps: must be an integer in 1..{2**31 - 1} (got {max_steps!r})")
     return rtol, max_steps
+
+
+def _output(raw):
+    tbl = table(raw, "output")
+    check_keys(tbl, ("histories", "variables"), "output.")
+    histories = choice(tbl, "histories", HISTORY_CHOICES, "output.", "all")
+    if "variables" not in tbl:
+        return Output(histories)
+    if histories != "all":
+        raise StudyError("output.variables: only with histories = 'all'")
+    names = check_list("output.variables", tbl["variables"])
+    for i, name in enumerate(names):
+        check_choice(f"output.variables[{i}]", name, HISTORY_VARIABLES)
+    if len(set(names)) != len(names):
+        raise StudyError("output.variables: a variable is listed twice")
+    return Output(histories, tuple(n for n in HISTORY_VARIABLES if n in names))
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape):

@@ -223,7 +223,7 @@ class _SweepRun:
                     part, ok = fut.result(), True
                 except Exception as exc:            # noqa: BLE001 - any task failure is recorded
                     self._task_failed(b, exc)
-                    part, ok = execution.failed_result(b.size, self.study.times.size), False
+                    part, ok = execution.failed_result(b.size, self.study.times.size, self.study.output.stored), False
                 fut.release()
                 self._write(b, part, save=ok)
                 del part

@@ -333,3 +333,32 @@ def test_complevel_changes_storage_not_values(client, tmp_path):
     with netCDF4.Dataset(tmp_path / "z0.nc") as nc0, netCDF4.Dataset(tmp_path / "z1.nc") as nc1:
         assert not nc0["var_theta"].filters()["zlib"] and nc1["var_theta"].filters()["zlib"]
     compare_files(tmp_path / "z1.nc", tmp_path / "z0.nc")
+
+
+# ----------------------------------------------------------------------------- [output]
+def test_history_free_result_has_the_summaries_and_spot_checks_of_the_full_one(client, tmp_path):
+    """histories = "none": no history variable, every summary identical, spot checks still compared."""
+    spots = '[mcs]\npoints = [{eps = 6e7, S0 = 2.4e-3}]\nsamples = 4\nmodel = "condensed"\n'
+    full, bare = tmp_path / "full.nc", tmp_path / "bare.nc"
+    run_sweep(parse_study(GRID + spots), full, client=client, progress=False, log=quiet)
+    run_sweep(parse_study(GRID + '[output]\nhistories = "none"\n' + spots), bare, client=client, progress=False,
+              log=quiet)
+    with xr.open_dataset(full) as f, xr.open_dataset(bare) as b:
+        assert "var_theta" in f and not {"var_theta", "p_uplift", "c_eq"} & set(b.data_vars)
+        assert b.attrs["output_histories"] == "none" and b.attrs["output_history_variables"] == ""
+        for name in ("status", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "n_steps",
+                     "mcs_var_theta", "mcs_peak_var_theta"):
+            np.testing.assert_array_equal(b[name].values, f[name].values, err_msg=name)
+        # the full file compares against float32 histories, the bare one against float64 ones
+        np.testing.assert_allclose(b["mcs_rel_error_peak_var_theta"].values, f["mcs_rel_error_peak_var_theta"].values,
+                                   rtol=1e-5)
+        assert np.all(np.isfinite(b["mcs_rel_error_peak_var_theta_dot"].values))
+
+
+def test_chosen_history_variables_only(client, tmp_path):
+    out = tmp_path / "some.nc"
+    run_sweep(parse_study(GRID + '[output]\nvariables = ["p_uplift"]\n'), out, client=client, progress=False,
+              log=quiet)
+    with xr.open_dataset(out) as ds:
+        assert "p_uplift" in ds and not {"var_theta", "k_eq"} & set(ds.data_vars)
+        assert ds["p_uplift"].dims == ("eps", "S0", "t") and ds.attrs["output_history_variables"] == "p_uplift"

@@ -340,3 +340,30 @@ def test_the_documented_example_parses():
     s = parse_study(textwrap.dedent(block), source="example")
     assert s.dims == ("eps", "S0") and s.shape == (3, 20)
     assert s.mcs.points == "auto" and s.mcs.count == 3
+
+
+# ----------------------------------------------------------------------------- [output]
+def test_output_table_chooses_the_stored_histories():
+    from screening.solvers.moments import HISTORY_VARIABLES
+
+    assert parse_study(BASE).output.stored == HISTORY_VARIABLES
+    assert parse_study(BASE + '[output]\nhistories = "none"\n').output.stored == ()
+    chosen = parse_study(BASE + '[output]\nvariables = ["p_uplift", "var_theta"]\n').output
+    assert chosen.histories == "all" and chosen.stored == ("var_theta", "p_uplift")   # canonical order
+    assert parse_study(BASE + '[output]\nhistories = "none"\n').key != parse_study(BASE).key
+
+
+@pytest.mark.parametrize("table, message", [
+    ('histories = "some"', r"^<string>: output\.histories: must be one of 'all', 'none' \(got 'some'\)$"),
+    ("histories = 1", r"^<string>: output\.histories: must be one of"),
+    ('variables = ["var_theta", "theta"]', r"^<string>: output\.variables\[1\]: must be one of 'var_theta'"),
+    ("variables = []", r"^<string>: output\.variables: empty list"),
+    ('variables = "var_theta"', r"^<string>: output\.variables: must be a list"),
+    ('variables = ["k_eq", "k_eq"]', r"^<string>: output\.variables: a variable is listed twice$"),
+    ('histories = "none"\nvariables = ["k_eq"]', r"^<string>: output\.variables: only with histories = 'all'$"),
+    ("dt = 0.1", r"^<string>: output\.dt: unknown key"),
+])
+def test_output_table_errors_name_the_key(table, message):
+    with pytest.raises(StudyError, match=message) as info:
+        parse_study(BASE + "[output]\n" + table + "\n")
+    assert "\n" not in str(info.value)
