@@ -40,16 +40,20 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 
 # ============================================================================ tasks
-def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES):
+def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
+                fragility=None):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
     variables to return (none: the solver skips its output stores).  Returns a dict of 1-d/2-d
     arrays over the batch: those histories as ``float32`` (points x time), the summaries
     (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
+    ``fragility`` (a :class:`~screening.workflow.study.Fragility`): also ``p_exceed`` (points x
+    thresholds) [1], from the float64 histories while they are in memory
+    (:func:`screening.analysis.fragility.exceedance_probability`).
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
-                        condensation=condensation, histories=bool(histories))
+                        condensation=condensation, histories=bool(histories) or fragility is not None)
     shape = res["status"].shape
     n = res["status"].size
     out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in histories}
@@ -61,12 +65,39 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
     for name in MODEL_FLOATS:
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
+    if fragility is not None:
+        out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     return out
 
 
-def failed_result(n, nt, histories=HISTORY_VARIABLES):
+def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
+    """``p_exceed`` [1] of a batch, points x thresholds, by the analysis layer's own function."""
+    import xarray as xr
+
+    from screening.analysis.fragility import exceedance_probability
+    from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
+
+    n = out["status"].size
+    flat = {name: np.asarray(value).reshape(n, -1) if name in HISTORY_VARIABLES else np.asarray(value).reshape(n)
+            for name, value in res.items()}
+
+    def on_points(value):
+        return xr.DataArray(np.broadcast_to(value, (n,)), dims="point") if np.ndim(value) else float(value)
+
+    parameters = {name: on_points(value) for name, value in model_fields(block, foundation, excitation).items()}
+    derived = {name: ("point", out[name]) for name in MODEL_FLOATS}
+    ds = linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
+    p = np.empty((n, len(fragility.thresholds)))
+    for j, threshold in enumerate(fragility.thresholds):
+        p[:, j] = exceedance_probability(ds, threshold, fragility.relative_to, fragility.method).values
+    return p
+
+
+def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
     out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
+    if fragility is not None:
+        out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
     for name in SUMMARY_FLOATS + MODEL_FLOATS:
         out[name] = np.full(n, np.nan)
@@ -126,8 +157,8 @@ def submit_batch(client, study, batch, key):
     """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times)."""
     case = study.cases[batch.case]
     return client.submit(solve_batch, *batch_models(study, batch), case.condensation_model, study.times,
-                         study.rtol, study.max_steps, study.output.stored, retries=TASK_RETRIES, pure=False,
-                         key=key)
+                         study.rtol, study.max_steps, study.output.stored, study.fragility, retries=TASK_RETRIES,
+                         pure=False, key=key)
 
 
 def submit_spot(client, study, index, key):

@@ -42,6 +42,11 @@ Example (SI units throughout)::
     histories = "all"           # or "none": summaries only (peaks and their times, p_uplift, k_eq, status)
     variables = ["var_theta", "p_uplift"]   # with "all": the histories to store (default: all six)
 
+    [fragility]                 # optional: exceedance probabilities computed on the workers
+    thresholds = [0.5, 1.0]     # rotations [rad], or fractions with relative_to
+    relative_to = "theta_ul"    # or "slenderness"; absent: absolute angles [rad]
+    method = "vanmarcke"        # or "poisson" (screening.analysis.fragility)
+
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
     count = 3                   # with "auto": how many points
@@ -98,6 +103,7 @@ from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_V
 from screening.solvers.timegrid import output_times
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models,
                                        check_choice, check_keys, check_list, check_value, choice, integer, model_tables, name_string,
+                                       number_list, required,
                                        numeric_table, parse_toml, read_study_text, resolve_case, table,
                                        time_table, title_and_description, type_name)
 
@@ -105,9 +111,11 @@ __all__ = ["Case", "SpotChecks", "Study", "StudyError", "build_models", "load_st
 
 MCS_MODELS = ("coupled", "condensed")
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case", "output")
+             "case", "output", "fragility")
 #: ``[output] histories``: every chosen history at every point, or none (summaries only).
 HISTORY_CHOICES = ("all", "none")
+FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
+FRAGILITY_METHODS = ("vanmarcke", "poisson")
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
 LAYOUT_VERSION = 3
@@ -139,6 +147,16 @@ class Output:
 
 
 @dataclass(frozen=True)
+class Fragility:
+    """The ``[fragility]`` table: ``thresholds`` (tuple; [rad], or fractions of ``relative_to``),
+    ``relative_to`` (``None``, ``"slenderness"`` or ``"theta_ul"``) and the up-crossing ``method``."""
+
+    thresholds: tuple
+    relative_to: str | None = None
+    method: str = "vanmarcke"
+
+
+@dataclass(frozen=True)
 class Study:
     """A validated study.
 
@@ -162,6 +180,7 @@ class Study:
     description: str = ""
     _hash: str = field(default="", repr=False)
     output: Output = Output()
+    fragility: Fragility | None = None
 
     @property
     def swept_dims(self):
@@ -237,7 +256,8 @@ def _build(raw, text, name, source):
     return Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
-                 description=description, _hash=digest.hexdigest(), output=_output(raw))
+                 description=description, _hash=digest.hexdigest(), output=_output(raw),
+                 fragility=_fragility(raw))
 
 
 def _cases(raw, base, sweeps):
@@ -306,6 +326,21 @@ def _output(raw):
     if len(set(names)) != len(names):
         raise StudyError("output.variables: a variable is listed twice")
     return Output(histories, tuple(n for n in HISTORY_VARIABLES if n in names))
+
+
+def _fragility(raw):
+    if "fragility" not in raw:
+        return None
+    tbl = table(raw, "fragility")
+    check_keys(tbl, ("thresholds", "relative_to", "method"), "fragility.")
+    thresholds = number_list("fragility.thresholds", required(tbl, "thresholds", "fragility."), lower=0.0)
+    if len(set(thresholds)) != len(thresholds):
+        raise StudyError("fragility.thresholds: a threshold is listed twice")
+    relative_to = tbl.get("relative_to")
+    if relative_to is not None:
+        check_choice("fragility.relative_to", relative_to, FRAGILITY_RELATIVE_TO)
+    method = choice(tbl, "method", FRAGILITY_METHODS, "fragility.", "vanmarcke")
+    return Fragility(thresholds, relative_to, method)
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape):

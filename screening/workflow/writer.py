@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import SWEEP, TIME, attributes, global_attributes
+from screening.schema import FRAGILITY, SWEEP, TIME, attributes, global_attributes
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (HISTORY_DTYPE, MODEL_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS,
@@ -151,10 +151,10 @@ class ResultFile:
             raise
 
     # -- definition
-    def _variable(self, name, dtype, dims, fill, coordinates="", **storage):
+    def _variable(self, name, dtype, dims, fill, coordinates="", table=SWEEP, **storage):
         """Create variable ``name`` with its schema attributes (and ``coordinates``)."""
         v = self.nc.createVariable(name, dtype, dims, fill_value=fill, **storage)
-        v.setncatts(attributes(name, SWEEP))
+        v.setncatts(attributes(name, table))
         if coordinates:
             v.coordinates = coordinates
         return v
@@ -201,6 +201,17 @@ class ResultFile:
             self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib)
         for name in SUMMARY_INTS:
             self._variable(name, "i4", dims, False, coordinates, **self.zlib)
+        frag = study.fragility
+        if frag is not None:
+            nc.createDimension("threshold", len(frag.thresholds))
+            v = nc.createVariable("threshold", "f8", ("threshold",), fill_value=False)
+            v.setncatts({"units": "rad" if frag.relative_to is None else "1",
+                         "long_name": "rotation threshold of p_exceed" + (
+                             "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")})
+            v[:] = np.asarray(frag.thresholds, dtype=float)
+            p = self._variable("p_exceed", "f8", dims + ("threshold",), np.nan, coordinates, table=FRAGILITY,
+                               **self.zlib)
+            p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
         nc.setncatts({**attrs, **labels})
 
     # -- data
@@ -215,6 +226,9 @@ class ResultFile:
                 nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (self.nt,))
             for name in POINT_VARIABLES:
                 nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
+            if "p_exceed" in result:
+                p = result["p_exceed"]
+                nc["p_exceed"][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
         self._unsynced += batch.size
         if self._unsynced >= SYNC_POINTS:
             nc.sync()           # compress and write the cached chunks now, while workers compute

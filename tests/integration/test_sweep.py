@@ -362,3 +362,39 @@ def test_chosen_history_variables_only(client, tmp_path):
     with xr.open_dataset(out) as ds:
         assert "p_uplift" in ds and not {"var_theta", "k_eq"} & set(ds.data_vars)
         assert ds["p_uplift"].dims == ("eps", "S0", "t") and ds.attrs["output_history_variables"] == "p_uplift"
+
+
+def test_fragility_on_the_workers_matches_the_analysis_of_the_full_histories(client, tmp_path):
+    """[fragility] with histories = "none": p_exceed stored per point and threshold, equal to
+    ds.rocking.exceedance_probability on a result that has the histories (float32 there)."""
+    frag = '[fragility]\nthresholds = [0.5, 2.0]\nrelative_to = "theta_ul"\n'
+    full, bare = tmp_path / "full.nc", tmp_path / "bare.nc"
+    run_sweep(parse_study(GRID), full, client=client, progress=False, log=quiet)
+    run_sweep(parse_study(GRID + '[output]\nhistories = "none"\n' + frag), bare, client=client, progress=False,
+              log=quiet)
+    with xr.open_dataset(full) as f, xr.open_dataset(bare) as b:
+        assert "var_theta" not in b and b["p_exceed"].dims == ("eps", "S0", "threshold")
+        np.testing.assert_array_equal(b["threshold"].values, [0.5, 2.0])
+        assert b["p_exceed"].attrs["units"] == "1" and b["p_exceed"].attrs["relative_to"] == "theta_ul"
+        for j, thr in enumerate((0.5, 2.0)):
+            ref = f.rocking.exceedance_probability(thr, relative_to="theta_ul").values
+            got = b["p_exceed"].values[..., j]
+            np.testing.assert_allclose(got, ref, rtol=1e-4, atol=1e-12)
+        p = b["p_exceed"].values
+        assert np.all(p[..., 0] >= p[..., 1]) and np.nanmax(p[..., 0]) > 0.1      # higher threshold, lower p
+
+
+def test_a_narrow_submission_window_gives_the_same_file(client, tmp_path, monkeypatch):
+    """Batches are submitted a few per worker at a time: one in flight gives the same result."""
+    import screening.workflow.sweep as sweep_module
+
+    study = parse_study(GRID)
+    run_sweep(study, tmp_path / "wide.nc", client=client, batch_size=3, progress=False, log=quiet)
+    monkeypatch.setattr(sweep_module, "IN_FLIGHT_PER_WORKER", 1)
+    seen = []
+    in_flight = []
+    report = run_sweep(study, tmp_path / "narrow.nc", client=client, batch_size=3, progress=False, log=quiet,
+                       on_batch=lambda b: (seen.append(b.index), in_flight.append(len(client.futures))))
+    assert sorted(seen) == list(range(report.n_batches)) and report.n_batches == 7
+    assert max(in_flight) <= len(client.nthreads()) + 1      # the window plus the next one being topped up
+    compare_files(tmp_path / "wide.nc", tmp_path / "narrow.nc")

@@ -367,3 +367,26 @@ def test_output_table_errors_name_the_key(table, message):
     with pytest.raises(StudyError, match=message) as info:
         parse_study(BASE + "[output]\n" + table + "\n")
     assert "\n" not in str(info.value)
+
+
+# ----------------------------------------------------------------------------- [fragility]
+def test_fragility_table():
+    frag = parse_study(BASE + '[fragility]\nthresholds = [0.5, 1.0]\nrelative_to = "theta_ul"\n').fragility
+    assert frag.thresholds == (0.5, 1.0) and frag.relative_to == "theta_ul" and frag.method == "vanmarcke"
+    assert parse_study(BASE).fragility is None
+    assert parse_study(BASE + '[fragility]\nthresholds = [0.01]\nmethod = "poisson"\n').fragility.relative_to is None
+
+
+@pytest.mark.parametrize("table, message", [
+    ("relative_to = 'theta_ul'", r"^<string>: fragility\.thresholds: required"),
+    ("thresholds = [0.5, -1.0]", r"^<string>: fragility\.thresholds\[1\]: "),
+    ("thresholds = []", r"^<string>: fragility\.thresholds: empty list"),
+    ("thresholds = [0.5, 0.5]", r"^<string>: fragility\.thresholds: a threshold is listed twice$"),
+    ("thresholds = [0.5]\nrelative_to = 'b'", r"^<string>: fragility\.relative_to: must be one of 'slenderness'"),
+    ("thresholds = [0.5]\nmethod = 'rice'", r"^<string>: fragility\.method: must be one of 'vanmarcke', 'poisson'"),
+    ("thresholds = [0.5]\nlevels = [1]", r"^<string>: fragility\.levels: unknown key"),
+])
+def test_fragility_table_errors_name_the_key(table, message):
+    with pytest.raises(StudyError, match=message) as info:
+        parse_study(BASE + "[fragility]\n" + table + "\n")
+    assert "\n" not in str(info.value)
