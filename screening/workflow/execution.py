@@ -110,9 +110,9 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
     ``condensation`` (a :class:`screening.condensation.Condensation`) applies to
-    ``model="condensed"`` only (the coupled model has none).  ``linear = (t_out, rtol, max_steps)``:
-    also solve the linearization at the point and return its ``var_theta``, ``var_theta_dot``
-    histories as ``sl_var_theta``, ``sl_var_theta_dot`` (for a result that stores no histories).
+    ``model="condensed"`` only (the coupled model has none).  ``linear = (t_out, rtol, max_steps,
+    names)``: also solve the linearization at the point and return its histories ``names`` as
+    ``sl_<name>`` (float64; for a result that does not store them on the grid).
     """
     from screening.solvers.montecarlo import monte_carlo
 
@@ -126,10 +126,10 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
     if linear is not None:
-        t_out, rtol, max_steps = linear
+        t_out, rtol, max_steps, names = linear
         res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
                             condensation=condensation)
-        for name in SPOT_LINEAR:
+        for name in names:
             out[f"sl_{name}"] = np.asarray(res[name], dtype=np.float64).reshape(-1)
     return out
 
@@ -142,10 +142,18 @@ def sample_state(overturned, diverged):
     return state
 
 
-def failed_spot(nt, samples):
+def spot_linear_names(study):
+    """The linearization histories a spot task must return: those the comparison needs but the grid
+    does not store, and those stored at the spots only (``[output] histories = "spots"``)."""
+    stored = set(study.output.stored)
+    wanted = set(study.output.at_spots) | set(SPOT_LINEAR) - stored
+    return tuple(name for name in HISTORY_VARIABLES if name in wanted)
+
+
+def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
     """Spot-check result of a task that failed: NaN histories, every sample ``diverged_or_failed``."""
     out = {name: np.full(nt, np.nan) for name in SPOT_HISTORIES}
-    out.update({f"sl_{name}": np.full(nt, np.nan) for name in SPOT_LINEAR})
+    out.update({f"sl_{name}": np.full(nt, np.nan) for name in linear_names})
     out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0),
                peak_abs_theta=np.full(samples, np.nan),
                sample_state=np.full(samples, SampleState.diverged_or_failed, dtype=np.int8))
@@ -165,8 +173,8 @@ def submit_spot(client, study, index, key):
     """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times)."""
     case, values = point_values(study, index)
     spec = study.mcs
-    stored = set(study.output.stored)
-    linear = None if stored.issuperset(SPOT_LINEAR) else (study.times, study.rtol, study.max_steps)
+    names = spot_linear_names(study)
+    linear = (study.times, study.rtol, study.max_steps, names) if names else None
     return client.submit(spot_task, *build_models(study.cases[case], values), study.cases[case].condensation_model,
                          spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, retries=TASK_RETRIES,
                          pure=False, key=key)

@@ -39,7 +39,8 @@ Example (SI units throughout)::
     rtol = 1e-8                 # optional; max_steps optional
 
     [output]                    # optional: what the result stores besides the per-point summaries
-    histories = "all"           # or "none": summaries only (peaks and their times, p_uplift, k_eq, status)
+    histories = "all"           # or "none": summaries only (peaks and their times, p_uplift, k_eq, status);
+                                # or "spots": histories only at the Monte Carlo spot points
     variables = ["var_theta", "p_uplift"]   # with "all": the histories to store (default: all six)
 
     [fragility]                 # optional: exceedance probabilities computed on the workers
@@ -112,8 +113,8 @@ __all__ = ["Case", "SpotChecks", "Study", "StudyError", "build_models", "load_st
 MCS_MODELS = ("coupled", "condensed")
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
              "case", "output", "fragility")
-#: ``[output] histories``: every chosen history at every point, or none (summaries only).
-HISTORY_CHOICES = ("all", "none")
+#: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
+HISTORY_CHOICES = ("all", "spots", "none")
 FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
 FRAGILITY_METHODS = ("vanmarcke", "poisson")
 
@@ -135,7 +136,8 @@ class SpotChecks:
 
 @dataclass(frozen=True)
 class Output:
-    """The ``[output]`` table: ``histories`` (``"all"`` or ``"none"``) and the history ``variables``."""
+    """The ``[output]`` table: ``histories`` (``"all"``, ``"spots"`` or ``"none"``) and the history
+    ``variables``."""
 
     histories: str = "all"
     variables: tuple = HISTORY_VARIABLES
@@ -144,6 +146,11 @@ class Output:
     def stored(self):
         """The history variables the result holds (none with ``histories = "none"``)."""
         return self.variables if self.histories == "all" else ()
+
+    @property
+    def at_spots(self):
+        """The history variables stored at the spot points only (``histories = "spots"``)."""
+        return self.variables if self.histories == "spots" else ()
 
 
 @dataclass(frozen=True)
@@ -253,11 +260,15 @@ def _build(raw, text, name, source):
     shape = ((len(cases),) if "case" in raw else ()) + tuple(len(v) for v in sweeps.values())
     mcs = _mcs(raw, sweeps, cases, "case" in raw, shape)
     digest = hashlib.sha256(f"{text}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode())
-    return Study(name=name, title=title, text=text, source=source,
+    study = Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
                  description=description, _hash=digest.hexdigest(), output=_output(raw),
                  fragility=_fragility(raw))
+    if study.output.histories == "spots" and study.mcs is None:
+        raise StudyError("output.histories: 'spots' stores the histories at the [mcs] spot points; "
+                         "give an [mcs] table (or histories = 'none')")
+    return study
 
 
 def _cases(raw, base, sweeps):
@@ -318,8 +329,8 @@ def _output(raw):
     histories = choice(tbl, "histories", HISTORY_CHOICES, "output.", "all")
     if "variables" not in tbl:
         return Output(histories)
-    if histories != "all":
-        raise StudyError("output.variables: only with histories = 'all'")
+    if histories == "none":
+        raise StudyError("output.variables: only with histories = 'all' or 'spots'")
     names = check_list("output.variables", tbl["variables"])
     for i, name in enumerate(names):
         check_choice(f"output.variables[{i}]", name, HISTORY_VARIABLES)

@@ -291,7 +291,8 @@ class _SweepRun:
                     results[i] = fut.result()
                 except Exception as exc:              # noqa: BLE001 - recorded as a failed spot check
                     log(f"warning: spot check {i} failed: {exception_line(exc)}")
-                    results[i] = execution.failed_spot(study.times.size, spec.samples)
+                    results[i] = execution.failed_spot(study.times.size, spec.samples,
+                                                       execution.spot_linear_names(study))
                     failed[i] = True
                 else:
                     try:                              # the resume record only: the result is kept

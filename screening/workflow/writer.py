@@ -263,6 +263,8 @@ class ResultFile:
 
         for name in SPOT_HISTORIES:
             var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
+        for name in study.output.at_spots:          # [output] histories = "spots"
+            var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
         for name in ("n_overturned", "n_diverged", "n_used"):
             var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
         for name in ("var_theta", "var_theta_dot"):

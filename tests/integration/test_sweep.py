@@ -398,3 +398,19 @@ def test_a_narrow_submission_window_gives_the_same_file(client, tmp_path, monkey
     assert sorted(seen) == list(range(report.n_batches)) and report.n_batches == 7
     assert max(in_flight) <= len(client.nthreads()) + 1      # the window plus the next one being topped up
     compare_files(tmp_path / "wide.nc", tmp_path / "narrow.nc")
+
+
+def test_spot_histories_are_those_of_the_full_result_at_the_spot(client, tmp_path):
+    """histories = "spots": no grid histories; the chosen ones at each spot point (float64)."""
+    spots = '[mcs]\npoints = [{eps = 6e7, S0 = 2.4e-3}]\nsamples = 4\nmodel = "condensed"\n'
+    full, some = tmp_path / "full.nc", tmp_path / "spots.nc"
+    run_sweep(parse_study(GRID + spots), full, client=client, progress=False, log=quiet)
+    run_sweep(parse_study(GRID + '[output]\nhistories = "spots"\nvariables = ["var_theta", "k_eq"]\n' + spots),
+              some, client=client, progress=False, log=quiet)
+    with xr.open_dataset(full) as f, xr.open_dataset(some) as s:
+        assert "var_theta" not in s and {"spot_var_theta", "spot_k_eq"} <= set(s.data_vars)
+        assert "spot_p_uplift" not in s and s["spot_k_eq"].dims == ("spot", "t")
+        assert s["spot_var_theta"].attrs["units"] == "rad2"
+        for name in ("var_theta", "k_eq"):
+            ref = f[name].sel(eps=6e7, S0=2.4e-3).values.astype(float)
+            np.testing.assert_allclose(s[f"spot_{name}"].values[0], ref, rtol=1e-6, equal_nan=True)

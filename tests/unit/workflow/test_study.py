@@ -354,13 +354,13 @@ def test_output_table_chooses_the_stored_histories():
 
 
 @pytest.mark.parametrize("table, message", [
-    ('histories = "some"', r"^<string>: output\.histories: must be one of 'all', 'none' \(got 'some'\)$"),
+    ('histories = "some"', r"^<string>: output\.histories: must be one of 'all', 'spots', 'none' \(got 'some'\)$"),
     ("histories = 1", r"^<string>: output\.histories: must be one of"),
     ('variables = ["var_theta", "theta"]', r"^<string>: output\.variables\[1\]: must be one of 'var_theta'"),
     ("variables = []", r"^<string>: output\.variables: empty list"),
     ('variables = "var_theta"', r"^<string>: output\.variables: must be a list"),
     ('variables = ["k_eq", "k_eq"]', r"^<string>: output\.variables: a variable is listed twice$"),
-    ('histories = "none"\nvariables = ["k_eq"]', r"^<string>: output\.variables: only with histories = 'all'$"),
+    ('histories = "none"\nvariables = ["k_eq"]', r"^<string>: output\.variables: only with histories = 'all' or 'spots'$"),
     ("dt = 0.1", r"^<string>: output\.dt: unknown key"),
 ])
 def test_output_table_errors_name_the_key(table, message):
@@ -390,3 +390,10 @@ def test_fragility_table_errors_name_the_key(table, message):
     with pytest.raises(StudyError, match=message) as info:
         parse_study(BASE + "[fragility]\n" + table + "\n")
     assert "\n" not in str(info.value)
+
+
+def test_spot_histories_need_spot_checks():
+    with pytest.raises(StudyError, match=r"^<string>: output\.histories: 'spots' stores the histories at the \[mcs\]"):
+        parse_study(BASE + '[output]\nhistories = "spots"\n')
+    study = parse_study(BASE + '[output]\nhistories = "spots"\nvariables = ["k_eq"]\n[mcs]\nsamples = 10\n')
+    assert study.output.stored == () and study.output.at_spots == ("k_eq",)
