@@ -353,6 +353,10 @@ def test_history_free_result_has_the_summaries_and_spot_checks_of_the_full_one(c
         np.testing.assert_allclose(b["mcs_rel_error_peak_var_theta"].values, f["mcs_rel_error_peak_var_theta"].values,
                                    rtol=1e-5)
         assert np.all(np.isfinite(b["mcs_rel_error_peak_var_theta_dot"].values))
+        from screening.report.figures import plot_result
+
+        names = sorted(p.name for p in plot_result(b, "bare", tmp_path))
+        assert names == ["bare_peaks.png", "bare_spots.png"]           # no history figures to draw
 
 
 def test_chosen_history_variables_only(client, tmp_path):
