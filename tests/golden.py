@@ -27,6 +27,27 @@ GOLDEN = ROOT / "tests" / "data" / "golden"
 
 SL_VARIABLES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift",
                 "status", "t_stop", "n_steps", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq")
+#: Solver tolerance the files were frozen with (the default of ``solve_moments`` until issue 12;
+#: neither ``quick.toml`` nor ``paper_cases.toml`` sets ``solver.rtol``): the recomputation uses it,
+#: so a change of the default tolerance does not count as a change of the numerics.
+FROZEN_SOLVER_RTOL = 1e-7
+
+#: Tolerances where the kernel numerics changed deliberately (issue 12); everything else, the
+#: Monte Carlo and trade-study parts included, is compared at rtol 1e-9.
+#:
+#: * SL histories: issue 12 stores the coefficient tables as per-interval cubic coefficients
+#:   instead of node values + slopes (the same cubic, rounded differently: ~1e-16 per lookup).
+#:   The adaptive solver carries such differences as its own local errors, far below its
+#:   tolerance, and the step counts, statuses and peaks are unchanged (rtol 1e-9 still holds
+#:   for them), but a history value near a zero crossing (``cov_theta_theta_dot``) or deep in
+#:   the ``erfc`` tail (``p_uplift``) moves by ~1e-6 of itself.  These are compared against the
+#:   point's own scale: ``|new - frozen| <= HISTORY_RTOL * max_t |frozen|`` (measured <= 8e-9).
+#: * ``sl_numerical_peak_error`` (a difference of two peaks divided by one, ~1e-6) inherits the
+#:   1e-16 differences of the peaks: absolute 1e-13 (measured 1.3e-15).
+HISTORY_RTOL = 1e-7
+HISTORY_VARIABLES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift")
+ABSOLUTE_TOLERANCE = {"sl_numerical_peak_error": 1e-13}
+
 MCS_VARIABLES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se", "peak_abs_theta",
                  "n_overturned", "n_diverged")
 
@@ -74,7 +95,7 @@ def _sl(study):
         idx = np.unravel_index(np.arange(per_case), study.swept_shape) if study.swept_dims else ()
         values = {name: study.sweeps[name][i] for name, i in zip(study.swept_dims, idx)}
         block, foundation, excitation = build_models(case, values)
-        res = solve_moments(block, foundation, excitation, study.times, rtol=study.rtol, max_steps=study.max_steps,
+        res = solve_moments(block, foundation, excitation, study.times, rtol=FROZEN_SOLVER_RTOL, max_steps=study.max_steps,
                             condensation=case.condensation)
         rows.append({name: np.asarray(res[name]).reshape(per_case, *np.shape(res[name])[len(np.shape(res["status"])):])
                      for name in SL_VARIABLES})

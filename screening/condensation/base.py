@@ -32,16 +32,16 @@ class SdofKernel(NamedTuple):
 class MomentKernel(NamedTuple):
     """What the compiled moment solver needs of a condensation, for a batch of points.
 
-    ``coefficients``: compiled ``(record, values, slopes, var_theta, cov) -> (c_eq, k_eq)``
+    ``coefficients``: compiled ``(record, table, var_theta, cov) -> (c_eq, k_eq)``
     (signature :func:`screening.kernels.signatures.moment_coefficients_signature`); ``records``: one
-    structured record per point; ``table_values``, ``table_slopes``: ``(n_tables, nodes, columns)``;
+    structured record per point; ``tables``: ``(n_tables, rows, columns)``, each a table of
+    per-interval cubic coefficients (:func:`screening.kernels.interpolation.cubic_coefficients`);
     ``table_index``: the table of each point.
     """
 
     coefficients: object
     records: np.ndarray
-    table_values: np.ndarray
-    table_slopes: np.ndarray
+    tables: np.ndarray
     table_index: np.ndarray
 
 

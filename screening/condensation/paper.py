@@ -181,9 +181,8 @@ class PaperCondensation(Condensation):
         from screening.condensation.paper_coefficients import equivalent_coefficients_jit, records
         from screening.condensation.uplift_integrals import coefficient_table
 
-        values, slopes = coefficient_table()
         rec = records(block, foundation)
-        return MomentKernel(equivalent_coefficients_jit, rec, values[None], slopes[None],
+        return MomentKernel(equivalent_coefficients_jit, rec, coefficient_table()[None],
                             np.zeros(rec.size, dtype=np.int64))
 
 

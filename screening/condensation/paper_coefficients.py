@@ -107,15 +107,15 @@ def records(block, foundation):
 
 
 @numba.njit(moment_coefficients_signature(RECORD), cache=True)
-def equivalent_coefficients_jit(p, values, slopes, var_theta, cov):
+def equivalent_coefficients_jit(p, table, var_theta, cov):
     """Compiled twin of :func:`equivalent_coefficients` from the moments ``var_theta`` [rad2], ``cov`` [rad2/s].
 
-    ``p``: a :data:`RECORD`; ``values``, ``slopes``: the universal table of
+    ``p``: a :data:`RECORD`; ``table``: the universal table of
     :func:`screening.condensation.uplift_integrals.coefficient_table`.  Finite at ``var_theta = 0``.
     """
     if var_theta > 0.0:
         p_in, tail_m12, tail_m32, p32 = uplift_integrals_log(0.5 * math.log(var_theta) - p.log_theta_ul,
-                                                             values, slopes)
+                                                             table)
     else:
         p_in, tail_m12, tail_m32, p32 = 1.0, 0.0, 0.0, 1.0
     r2 = var_theta / (p.theta_ul * p.theta_ul)

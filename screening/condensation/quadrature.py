@@ -42,15 +42,14 @@ unit, values and their exact ``t``-derivatives (same quadrature)::
     d e_c / dt = E[(C - C0) (x^2 - 1)],   d e_k / dt = E[(K - K0) x^2 (x^2 - 3)],
     d d_c / dt = E[(C - C0) (x^4 - 6 x^2 + 3)] / sigma^2
 
-read back by cubic Hermite interpolation (:func:`table_lookup_grid`; largest error against
+read back by cubic Hermite interpolation, stored as per-interval cubic coefficients
+(:func:`table_lookup_grid`; largest error against
 the direct quadrature 3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; a table costs
 ~20 ms per distinct point, ~1200 nodes for the paper's block).  Below ``T_LO``
 (``sigma < 6e-6 theta_ul``) ``e_c``, ``e_k`` follow ``f0 + (f(T_LO) - f0) (sigma/sigma_lo)^2`` and
 ``d_c`` is held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``);
 above ``t_hi`` (4 x the slenderness angle, where the moment solver has long stopped the
 point) the last values are held.
-
-Method and how it is checked: ``docs/method.md#quadrature-tables``.
 """
 
 from __future__ import annotations
@@ -60,7 +59,7 @@ import numba
 import numpy as np
 
 from screening.condensation.base import MomentKernel
-from screening.kernels.interpolation import hermite_weights
+from screening.kernels.interpolation import cubic, cubic_coefficients
 from screening.kernels.signatures import moment_coefficients_signature
 from screening.model.points import flatten, point_key, select
 
@@ -180,7 +179,7 @@ def table_size(block, foundation, cond):
     return (np.ceil((t_hi - T_LO) * STEPS_PER_UNIT).astype(int) + 1)[()]
 
 
-def coefficient_table(block, foundation, cond):
+def node_values(block, foundation, cond):
     """``(values, slopes)`` of shape ``(table_size, 3)`` for one scalar point (module docstring).
 
     Nodes at ``t = T_LO + i / STEPS_PER_UNIT``; depends on the point alone.
@@ -194,12 +193,19 @@ def coefficient_table(block, foundation, cond):
     return np.ascontiguousarray(values), np.ascontiguousarray(slopes)
 
 
-def coefficient_tables(block, foundation, cond):
-    """Tables of the points of flat (1-d) model fields: ``(values, slopes, index)``.
+def coefficient_table(block, foundation, cond):
+    """One scalar point's table: per-interval cubic coefficients ``(table_size, 12)`` of
+    :func:`node_values` (:func:`screening.kernels.interpolation.cubic_coefficients`)."""
+    values, slopes = node_values(block, foundation, cond)
+    return cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
 
-    ``values``, ``slopes``: ``(n_distinct, max size, 3)``, one :func:`coefficient_table` per
-    distinct point, zero-padded to the longest (the padding is never read:
-    :func:`table_lookup_grid` gets each point's :func:`table_size`); ``index[i]`` is point i's table.
+
+def coefficient_tables(block, foundation, cond):
+    """Tables of the points of flat (1-d) model fields: ``(tables, index)``.
+
+    ``tables``: ``(n_distinct, max size, 12)``, one :func:`coefficient_table` per distinct point,
+    zero-padded to the longest (the padding is never read: :func:`table_lookup_grid` gets each
+    point's :func:`table_size`); ``index[i]`` is point i's table.
     """
     n = np.size(block.m)
     index = np.empty(n, dtype=np.int64)
@@ -211,13 +217,11 @@ def coefficient_tables(block, foundation, cond):
             seen[key] = len(tables)
             tables.append(coefficient_table(blk, fnd, cond))
         index[i] = seen[key]
-    size = max(v.shape[0] for v, _ in tables)
-    values = np.zeros((len(tables), size, 3))
-    slopes = np.zeros((len(tables), size, 3))
-    for j, (v, sl) in enumerate(tables):
-        values[j, :v.shape[0]] = v
-        slopes[j, :v.shape[0]] = sl
-    return values, slopes, index
+    size = max(tb.shape[0] for tb in tables)
+    out = np.zeros((len(tables), size, tables[0].shape[1]))
+    for j, tb in enumerate(tables):
+        out[j, :tb.shape[0]] = tb
+    return out, index
 
 
 #: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units; the table grid in
@@ -228,57 +232,51 @@ RECORD = np.dtype([("log_theta_ul", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), (
 
 def moment_kernel(block, foundation, cond):
     """:class:`~screening.condensation.base.MomentKernel` of ``cond`` for flat (1-d) model fields."""
-    values, slopes, index = coefficient_tables(block, foundation, cond)
+    tables, index = coefficient_tables(block, foundation, cond)
     fields = {"log_theta_ul": np.log(cond.uplift_threshold(block, foundation)),
               "c_rest": cond.damping_at_rest(block, foundation), "k_rest": cond.stiffness_at_rest(block, foundation),
               "table_lo": T_LO, "table_rate": float(STEPS_PER_UNIT), "table_n": table_size(block, foundation, cond)}
     records = np.empty(index.size, dtype=RECORD)
     for name, value in fields.items():
         records[name] = np.broadcast_to(np.asarray(value, dtype=float), index.shape)
-    return MomentKernel(equivalent_coefficients_jit, records, values, slopes, index)
+    return MomentKernel(equivalent_coefficients_jit, records, tables, index)
 
 
-def table_lookup(t, values, slopes, c0, k0):
+def table_lookup(t, table, c0, k0):
     """``(e_c, e_k, d_c)`` at ``t = ln(sigma_theta / theta_ul)`` (``-inf`` allowed) from one point's table.
 
     ``c0``, ``k0``: ``C(0)`` [N m s/rad], ``K(0)`` [N m/rad], the limits at ``sigma = 0``.
     Python entry point of :func:`table_lookup_grid` on the grid of this module.
     """
-    return table_lookup_grid(t, values, slopes, c0, k0, T_LO, float(STEPS_PER_UNIT), values.shape[0])
+    return table_lookup_grid(t, table, c0, k0, T_LO, float(STEPS_PER_UNIT), table.shape[0])
 
 
 @numba.njit(cache=True, inline="always")
-def table_lookup_grid(t, values, slopes, c0, k0, t_lo, steps_per_unit, n):
+def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
     """Compiled :func:`table_lookup` on the grid ``t_lo + i / steps_per_unit`` of ``n`` nodes.
 
     The grid is passed at run time (not read from module constants) so that compiled
     callers cached by numba can never disagree with the tables built in Python; rows of
-    ``values`` beyond ``n`` (padding of stacked tables) are never read.
+    ``table`` beyond ``n`` (padding of stacked tables) are never read.
     """
     n = int(n)
     if t <= t_lo:
         f = math.exp(2.0 * (t - t_lo))                 # (sigma / sigma_lo)^2
-        return c0 + (values[0, 0] - c0) * f, k0 + (values[0, 1] - k0) * f, values[0, 2]
+        return c0 + (table[0, 0] - c0) * f, k0 + (table[0, 4] - k0) * f, table[0, 8]
     u = (t - t_lo) * steps_per_unit
     if u >= n - 1:
-        return values[n - 1, 0], values[n - 1, 1], values[n - 1, 2]
+        return table[n - 1, 0], table[n - 1, 4], table[n - 1, 8]   # the last node, held
     i = int(u)
-    step = 1.0 / steps_per_unit
-    h00, h10, h01, h11 = hermite_weights(u - i)
-    h10 *= step                       # the slopes are per unit of t
-    h11 *= step
-    e_c = h00 * values[i, 0] + h01 * values[i + 1, 0] + h10 * slopes[i, 0] + h11 * slopes[i + 1, 0]
-    e_k = h00 * values[i, 1] + h01 * values[i + 1, 1] + h10 * slopes[i, 1] + h11 * slopes[i + 1, 1]
-    d_c = h00 * values[i, 2] + h01 * values[i + 1, 2] + h10 * slopes[i, 2] + h11 * slopes[i + 1, 2]
-    return e_c, e_k, d_c
+    s = u - i
+    return cubic(table, i, 0, s), cubic(table, i, 1, s), cubic(table, i, 2, s)
 
 
 @numba.njit(moment_coefficients_signature(RECORD), cache=True)
-def equivalent_coefficients_jit(p, values, slopes, var_theta, cov):
+def equivalent_coefficients_jit(p, table, var_theta, cov):
     """Compiled twin of :func:`equivalent_coefficients`, from the moments ``var_theta`` [rad2] and
     ``cov`` [rad2/s], on one point's table: ``c_eq = e_c``, ``k_eq = e_k + cov d_c``."""
     t = 0.5 * math.log(var_theta) - p.log_theta_ul if var_theta > 0.0 else -math.inf
-    e_c, e_k, d_c = table_lookup_grid(t, values, slopes, p.c_rest, p.k_rest, p.table_lo, p.table_rate, p.table_n)
+    e_c, e_k, d_c = table_lookup_grid(t, table, p.c_rest, p.k_rest, p.table_lo, p.table_rate, p.table_n)
     return e_c, e_k + cov * d_c
 
 

@@ -6,11 +6,9 @@
 The sigma-dependent parts of ``c_eq`` and ``k_eq`` are universal functions of
 ``r = sigma_theta / theta_ul`` only (see :mod:`screening.condensation.paper_coefficients`), so they are
 tabulated once, for every block and foundation, on a uniform grid in ``t = ln r`` with
-their exact derivatives, and read back by cubic Hermite interpolation (error ~1e-12,
-tested against the closed forms).  Below the grid every tail is zero to double precision;
+their exact derivatives, and read back by cubic Hermite interpolation, stored as ready
+per-interval cubic coefficients (error ~1e-12, tested against the closed forms).  Below the grid every tail is zero to double precision;
 above it the small-``x`` series of the incomplete gamma functions is exact to rounding.
-
-Method and how it is checked: ``docs/method.md#tabulated-evaluation``.
 """
 
 from __future__ import annotations
@@ -22,7 +20,7 @@ import numba
 import numpy as np
 from scipy import special
 
-from screening.kernels.interpolation import hermite_weights
+from screening.kernels.interpolation import cubic, cubic_coefficients
 
 #: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
 X_LIMIT = 700.0
@@ -101,25 +99,32 @@ def _table_values_and_slopes(t):
     return values, slopes
 
 
-@lru_cache(maxsize=1)
-def coefficient_table():
+def node_values():
     """``(values, slopes)``, each of shape ``(n_nodes, 4)``, on the grid ``T_LO + i / STEPS_PER_UNIT``."""
     n = int(round((T_HI - T_LO) * STEPS_PER_UNIT)) + 1
     t = T_LO + np.arange(n) / STEPS_PER_UNIT
-    values, slopes = _table_values_and_slopes(t)
-    return np.ascontiguousarray(values), np.ascontiguousarray(slopes)
+    return _table_values_and_slopes(t)
+
+
+@lru_cache(maxsize=1)
+def coefficient_table():
+    """The universal table: per-interval cubic coefficients ``(n_nodes, 16)`` of :func:`node_values`
+    (:func:`screening.kernels.interpolation.cubic_coefficients`, slopes in ``t``)."""
+    values, slopes = node_values()
+    table = cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
+    return table
 
 
 @numba.njit(cache=True, inline="always")
-def uplift_integrals(r, values, slopes):
+def uplift_integrals(r, table):
     """``(p_in, tail_m12, tail_m32, P(3/2, x))`` at ``r = sigma_theta / theta_ul`` >= 0."""
     if not (r > 0.0):
         return 1.0, 0.0, 0.0, 1.0
-    return uplift_integrals_log(math.log(r), values, slopes)
+    return uplift_integrals_log(math.log(r), table)
 
 
 @numba.njit(cache=True, inline="always")
-def uplift_integrals_log(t, values, slopes):
+def uplift_integrals_log(t, table):
     """As :func:`uplift_integrals`, from ``t = ln(sigma_theta / theta_ul)`` (``-inf`` allowed)."""
     if t <= T_LO:
         return 1.0, 0.0, 0.0, 1.0
@@ -132,15 +137,11 @@ def uplift_integrals_log(t, values, slopes):
                 _C32 * r**-1.5 * 4.0 * (x**-0.25 - _G34 + x**0.75 / 3.0),
                 x * sx / _G52 * (1.0 - 0.6 * x))
     u = (t - T_LO) * STEPS_PER_UNIT
-    i = min(int(u), values.shape[0] - 2)
-    step = 1.0 / STEPS_PER_UNIT
-    h00, h10, h01, h11 = hermite_weights(u - i)
-    h10 *= step                       # the slopes are per unit of t
-    h11 *= step
-    v0, v1, d0, d1 = values[i], values[i + 1], slopes[i], slopes[i + 1]
-    p_in = h00 * v0[0] + h01 * v1[0] + h10 * d0[0] + h11 * d1[0]
-    tail_m12 = h00 * v0[1] + h01 * v1[1] + h10 * d0[1] + h11 * d1[1]
-    tail_m32 = h00 * v0[2] + h01 * v1[2] + h10 * d0[2] + h11 * d1[2]
-    p32 = h00 * v0[3] + h01 * v1[3] + h10 * d0[3] + h11 * d1[3]
+    i = min(int(u), table.shape[0] - 2)
+    s = u - i
+    p_in = cubic(table, i, P_IN, s)
+    tail_m12 = cubic(table, i, TAIL_M12, s)
+    tail_m32 = cubic(table, i, TAIL_M32, s)
+    p32 = cubic(table, i, P32, s)
     # the tails underflow smoothly to zero at T_LO: keep their interpolants non-negative
     return p_in, max(tail_m12, 0.0), max(tail_m32, 0.0), p32

@@ -88,3 +88,34 @@ def accepted_step_factor_log(log_err, log_err_old):
 def rejected_step_factor_log(log_err):
     """:func:`rejected_step_factor` from the logarithm of the error norm (the scalar integrator's form)."""
     return max(FAC_MIN, SAFETY * math.exp(-REJECT_EXPONENT * log_err))
+
+
+# Scalar forms of the tableau for the scalar-locals integrators (stage ``s`` = 1..7, zero entries
+# omitted): ``A<s><q>``, ``B<q>``, ``E<q>``, ``C<s>``.
+C2, C3, C4, C5 = (float(c) for c in C[1:5])
+A21 = float(A[1, 0])
+A31, A32 = (float(a) for a in A[2, :2])
+A41, A42, A43 = (float(a) for a in A[3, :3])
+A51, A52, A53, A54 = (float(a) for a in A[4, :4])
+A61, A62, A63, A64, A65 = (float(a) for a in A[5, :5])
+B1, B3, B4, B5, B6 = (float(B[i]) for i in (0, 2, 3, 4, 5))
+E1, E3, E4, E5, E6, E7 = (float(E[i]) for i in (0, 2, 3, 4, 5, 6))
+_P = [[float(v) for v in row] for row in P]
+(P10, P11, P12, P13), (P30, P31, P32, P33), (P40, P41, P42, P43), (P50, P51, P52, P53), \
+    (P60, P61, P62, P63), (P70, P71, P72, P73) = (_P[i] for i in (0, 2, 3, 4, 5, 6))
+
+
+@numba.njit(cache=True, inline="always")
+def dense_weights(theta):
+    """Weights ``(w1, w3, w4, w5, w6, w7)`` of the nonzero stages in :func:`dense_output` at ``theta``.
+
+    ``y(t + theta h) = y0 + h (K1 w1 + K3 w3 + K4 w4 + K5 w5 + K6 w6 + K7 w7)``, bit for bit the
+    value of :func:`dense_output` (same products and sums; stage 2 has zero weight).  One set of
+    weights serves every component.
+    """
+    return (theta * (P10 + theta * (P11 + theta * (P12 + theta * P13))),
+            theta * (P30 + theta * (P31 + theta * (P32 + theta * P33))),
+            theta * (P40 + theta * (P41 + theta * (P42 + theta * P43))),
+            theta * (P50 + theta * (P51 + theta * (P52 + theta * P53))),
+            theta * (P60 + theta * (P61 + theta * (P62 + theta * P63))),
+            theta * (P70 + theta * (P71 + theta * (P72 + theta * P73))))

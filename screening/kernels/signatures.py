@@ -12,7 +12,7 @@ import numba
 from numba import types
 
 FLOAT = types.float64
-TABLE = types.float64[:, ::1]
+TABLE = types.float64[:, ::1]   # per-interval cubic coefficients (screening.kernels.interpolation)
 
 
 def record_type(dtype):
@@ -21,8 +21,8 @@ def record_type(dtype):
 
 
 def moment_coefficients_signature(dtype):
-    """``(record, table_values, table_slopes, var_theta [rad2], cov [rad2/s]) -> (c_eq, k_eq)``."""
-    return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, TABLE, FLOAT, FLOAT)
+    """``(record, table, var_theta [rad2], cov [rad2/s]) -> (c_eq [N m s/rad], k_eq [N m/rad])``."""
+    return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, FLOAT, FLOAT)
 
 
 def sdof_coefficients_signature(dtype):

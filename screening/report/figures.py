@@ -230,7 +230,9 @@ def _map(ds, name, ydim, xdim, rest, ax, fig):
 
 
 def plot_spots(ds, path):
-    """Linearization vs Monte Carlo at the spot points; ``None`` if the result has none."""
+    """Linearization vs Monte Carlo at the spot points; ``None`` if the result has none.  The
+    linearization's history is drawn where the result stores it (on the grid, or as ``spot_<name>``
+    with ``[output] histories = "spots"``); the peak error is always in the title."""
     if "spot" not in ds.dims or ds.sizes["spot"] == 0:
         return None
     n = min(ds.sizes["spot"], 8)
@@ -240,16 +242,18 @@ def plot_spots(ds, path):
     for i in range(n):
         index = spot_index(ds, i)
         for ax, name in zip(axes[i], ("var_theta", "var_theta_dot")):
-            lin = np.asarray(ds[name].isel(index).values, dtype=float)
+            lin = (np.asarray(ds[name].isel(index).values, dtype=float) if name in ds.variables else
+                   np.asarray(ds[f"spot_{name}"].values[i], dtype=float) if f"spot_{name}" in ds.variables else None)
             mcs = np.asarray(ds[f"mcs_{name}"].values[i], dtype=float)
             se = np.asarray(ds[f"mcs_{name}_se"].values[i], dtype=float)
             ax.fill_between(t, mcs - 2 * se, mcs + 2 * se, color="C1", alpha=0.25, lw=0)
             ax.plot(t, mcs, color="C1", lw=1.0, label=f"Monte Carlo ({ds.attrs.get('mcs_model', '')}, "
                                                       f"{ds.attrs.get('mcs_samples', '')} samples) +-2 se")
-            ax.plot(t, lin, color="C0", lw=1.4, label="stochastic linearization")
+            if lin is not None:
+                ax.plot(t, lin, color="C0", lw=1.4, label="stochastic linearization")
             rel = float(ds[f"mcs_rel_error_peak_{name}"].values[i])
             ax.set_title(f"{point_label(ds, index)}: peak rel. error {100 * rel:+.1f} %", fontsize=8)
-            ax.set_ylabel(_label(ds, name))
+            ax.set_ylabel(_label(ds, name if name in ds.variables else f"mcs_{name}"))
             ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
     axes[-1, 0].set_xlabel("t [s]")
@@ -357,17 +361,23 @@ def plot_fragility(frag, dim, path, max_curves=8):
     return Path(path)
 
 
+#: Grid histories the spot-point panels draw.
+SPOT_PANEL_HISTORIES = ("c_eq", "k_eq", "var_theta", "var_theta_dot", "p_uplift")
+
+
 def plot_result(ds, stem, out_dir):
     """Write all figures of dataset ``ds`` as ``out_dir/<stem>_<kind>.png``; returns the paths.
 
     All or nothing: if one figure fails (unreadable data, failing write), the figures this
-    call created are removed before the error propagates.
+    call created are removed before the error propagates.  Figures of histories the result does
+    not store (``[output]`` of the study) are not drawn.
     """
     out_dir = Path(out_dir)
-    jobs = [(plot_histories, out_dir / f"{stem}_histories.png"),
-            (plot_peaks, out_dir / f"{stem}_peaks.png"),
-            (plot_spots, out_dir / f"{stem}_spots.png")]
-    n_spots = ds.sizes.get("spot", 0)
+    jobs = [(plot_histories, out_dir / f"{stem}_histories.png")] if set(HISTORY_PANELS) <= set(ds.variables) else []
+    jobs += [(plot_peaks, out_dir / f"{stem}_peaks.png"),
+             (plot_spots, out_dir / f"{stem}_spots.png")]
+    has_panels = set(SPOT_PANEL_HISTORIES) <= set(ds.variables)
+    n_spots = ds.sizes.get("spot", 0) if has_panels else 0
     for i in range(min(n_spots, MAX_SPOT_FIGURES)):
         path = out_dir / f"{stem}_spot{i}_{spot_file_label(ds, i)}.png"
         jobs.append((lambda d, p, i=i: plot_spot_panels(d, i, p), path))

@@ -137,14 +137,12 @@ def _in_uplift(model, theta, z_cb, p):
 LOG_1EM4 = math.log(1e-4)
 
 # The shared Dormand–Prince 5(4) tableau (screening.kernels.dopri) as scalars: 4 unrolled states.
-_C2, _C3, _C4, _C5 = (float(c) for c in dopri.C[1:5])
-_A21 = float(dopri.A[1, 0])
-_A31, _A32 = (float(a) for a in dopri.A[2, :2])
-_A41, _A42, _A43 = (float(a) for a in dopri.A[3, :3])
-_A51, _A52, _A53, _A54 = (float(a) for a in dopri.A[4, :4])
-_A61, _A62, _A63, _A64, _A65 = (float(a) for a in dopri.A[5, :5])
-_B1, _B3, _B4, _B5, _B6 = (float(dopri.B[i]) for i in (0, 2, 3, 4, 5))
-_E1, _E3, _E4, _E5, _E6, _E7 = (float(dopri.E[i]) for i in (0, 2, 3, 4, 5, 6))
+from screening.kernels.dopri import (  # noqa: E402  (scalar tableau, one home)
+    A21 as _A21, A31 as _A31, A32 as _A32, A41 as _A41, A42 as _A42, A43 as _A43,
+    A51 as _A51, A52 as _A52, A53 as _A53, A54 as _A54, A61 as _A61, A62 as _A62, A63 as _A63,
+    A64 as _A64, A65 as _A65, B1 as _B1, B3 as _B3, B4 as _B4, B5 as _B5, B6 as _B6,
+    C2 as _C2, C3 as _C3, C4 as _C4, C5 as _C5, E1 as _E1, E3 as _E3, E4 as _E4, E5 as _E5,
+    E6 as _E6, E7 as _E7)
 
 
 @numba.njit(cache=True)

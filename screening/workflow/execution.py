@@ -35,21 +35,28 @@ SUMMARY_INTS = ("n_steps", "n_rejected")
 MODEL_FLOATS = ("theta_ul", "slenderness")
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
+#: Linearization histories a spot check is compared against.
+SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 
 # ============================================================================ tasks
-def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps):
+def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
+                fragility=None):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
-    ``condensation`` is a :class:`screening.condensation.Condensation`.  Returns a dict of
-    1-d/2-d arrays over the batch: the histories as ``float32`` (points x time), the summaries
+    ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
+    variables to return (none: the solver skips its output stores).  Returns a dict of 1-d/2-d
+    arrays over the batch: those histories as ``float32`` (points x time), the summaries
     (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
+    ``fragility`` (a :class:`~screening.workflow.study.Fragility`): also ``p_exceed`` (points x
+    thresholds) [1], from the float64 histories while they are in memory
+    (:func:`screening.analysis.fragility.exceedance_probability`).
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
-                        condensation=condensation)
+                        condensation=condensation, histories=bool(histories) or fragility is not None)
     shape = res["status"].shape
     n = res["status"].size
-    out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in HISTORY_VARIABLES}
+    out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in histories}
     out["status"] = res["status"].reshape(n).astype(np.int8)
     for name in SUMMARY_FLOATS:
         out[name] = res[name].reshape(n).astype(np.float64)
@@ -58,12 +65,39 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
     for name in MODEL_FLOATS:
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
+    if fragility is not None:
+        out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     return out
 
 
-def failed_result(n, nt):
+def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
+    """``p_exceed`` [1] of a batch, points x thresholds, by the analysis layer's own function."""
+    import xarray as xr
+
+    from screening.analysis.fragility import exceedance_probability
+    from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
+
+    n = out["status"].size
+    flat = {name: np.asarray(value).reshape(n, -1) if name in HISTORY_VARIABLES else np.asarray(value).reshape(n)
+            for name, value in res.items()}
+
+    def on_points(value):
+        return xr.DataArray(np.broadcast_to(value, (n,)), dims="point") if np.ndim(value) else float(value)
+
+    parameters = {name: on_points(value) for name, value in model_fields(block, foundation, excitation).items()}
+    derived = {name: ("point", out[name]) for name in MODEL_FLOATS}
+    ds = linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
+    p = np.empty((n, len(fragility.thresholds)))
+    for j, threshold in enumerate(fragility.thresholds):
+        p[:, j] = exceedance_probability(ds, threshold, fragility.relative_to, fragility.method).values
+    return p
+
+
+def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
-    out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in HISTORY_VARIABLES}
+    out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
+    if fragility is not None:
+        out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
     for name in SUMMARY_FLOATS + MODEL_FLOATS:
         out[name] = np.full(n, np.nan)
@@ -72,11 +106,13 @@ def failed_result(n, nt):
     return out
 
 
-def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
+def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
     ``condensation`` (a :class:`screening.condensation.Condensation`) applies to
-    ``model="condensed"`` only (the coupled model has none).
+    ``model="condensed"`` only (the coupled model has none).  ``linear = (t_out, rtol, max_steps,
+    names)``: also solve the linearization at the point and return its histories ``names`` as
+    ``sl_<name>`` (float64; for a result that does not store them on the grid).
     """
     from screening.solvers.montecarlo import monte_carlo
 
@@ -89,6 +125,12 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
                n_used=np.int32(samples - n_over - n_div),
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
+    if linear is not None:
+        t_out, rtol, max_steps, names = linear
+        res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
+                            condensation=condensation)
+        for name in names:
+            out[f"sl_{name}"] = np.asarray(res[name], dtype=np.float64).reshape(-1)
     return out
 
 
@@ -100,9 +142,18 @@ def sample_state(overturned, diverged):
     return state
 
 
-def failed_spot(nt, samples):
+def spot_linear_names(study):
+    """The linearization histories a spot task must return: those the comparison needs but the grid
+    does not store, and those stored at the spots only (``[output] histories = "spots"``)."""
+    stored = set(study.output.stored)
+    wanted = set(study.output.at_spots) | set(SPOT_LINEAR) - stored
+    return tuple(name for name in HISTORY_VARIABLES if name in wanted)
+
+
+def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
     """Spot-check result of a task that failed: NaN histories, every sample ``diverged_or_failed``."""
     out = {name: np.full(nt, np.nan) for name in SPOT_HISTORIES}
+    out.update({f"sl_{name}": np.full(nt, np.nan) for name in linear_names})
     out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0),
                peak_abs_theta=np.full(samples, np.nan),
                sample_state=np.full(samples, SampleState.diverged_or_failed, dtype=np.int8))
@@ -114,15 +165,18 @@ def submit_batch(client, study, batch, key):
     """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times)."""
     case = study.cases[batch.case]
     return client.submit(solve_batch, *batch_models(study, batch), case.condensation_model, study.times,
-                         study.rtol, study.max_steps, retries=TASK_RETRIES, pure=False, key=key)
+                         study.rtol, study.max_steps, study.output.stored, study.fragility, retries=TASK_RETRIES,
+                         pure=False, key=key)
 
 
 def submit_spot(client, study, index, key):
     """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times)."""
     case, values = point_values(study, index)
     spec = study.mcs
+    names = spot_linear_names(study)
+    linear = (study.times, study.rtol, study.max_steps, names) if names else None
     return client.submit(spot_task, *build_models(study.cases[case], values), study.cases[case].condensation_model,
-                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, retries=TASK_RETRIES,
+                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, retries=TASK_RETRIES,
                          pure=False, key=key)
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from screening.solvers.moments import HISTORY_VARIABLES
 from screening.workflow.errors import SweepError, exception_line
 
 
@@ -12,8 +11,9 @@ class ResultError(SweepError):
     """A result file that cannot be read or is not a screening sweep result."""
 
 
-#: Variables every result file has (checked by :func:`open_result`).
-REQUIRED_VARIABLES = HISTORY_VARIABLES + ("status", "peak_var_theta", "peak_p_uplift", "min_k_eq")
+#: Variables every result file has (checked by :func:`open_result`); the histories are optional
+#: (``[output]`` of the study).
+REQUIRED_VARIABLES = ("status", "peak_var_theta", "peak_p_uplift", "min_k_eq")
 
 
 def open_result(path):

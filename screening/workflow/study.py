@@ -36,7 +36,17 @@ Example (SI units throughout)::
     dt = 0.05                   # s, output step (default 0.05)
 
     [solver]
-    rtol = 1e-7                 # optional; max_steps optional
+    rtol = 1e-8                 # optional; max_steps optional
+
+    [output]                    # optional: what the result stores besides the per-point summaries
+    histories = "all"           # or "none": summaries only (peaks and their times, p_uplift, k_eq, status);
+                                # or "spots": histories only at the Monte Carlo spot points
+    variables = ["var_theta", "p_uplift"]   # with "all": the histories to store (default: all six)
+
+    [fragility]                 # optional: exceedance probabilities computed on the workers
+    thresholds = [0.5, 1.0]     # rotations [rad], or fractions with relative_to
+    relative_to = "theta_ul"    # or "slenderness"; absent: absolute angles [rad]
+    method = "vanmarcke"        # or "poisson" (screening.analysis.fragility)
 
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
@@ -90,10 +100,11 @@ from types import MappingProxyType
 import numpy as np
 
 from screening import __version__
-from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL
+from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models,
-                                       check_keys, check_value, choice, integer, model_tables, name_string,
+                                       check_choice, check_keys, check_list, check_value, choice, integer, model_tables, name_string,
+                                       number_list, required,
                                        numeric_table, parse_toml, read_study_text, resolve_case, table,
                                        time_table, title_and_description, type_name)
 
@@ -101,7 +112,11 @@ __all__ = ["Case", "SpotChecks", "Study", "StudyError", "build_models", "load_st
 
 MCS_MODELS = ("coupled", "condensed")
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case")
+             "case", "output", "fragility")
+#: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
+HISTORY_CHOICES = ("all", "spots", "none")
+FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
+FRAGILITY_METHODS = ("vanmarcke", "poisson")
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
 LAYOUT_VERSION = 3
@@ -117,6 +132,35 @@ class SpotChecks:
     samples: int
     model: str
     seed: int
+
+
+@dataclass(frozen=True)
+class Output:
+    """The ``[output]`` table: ``histories`` (``"all"``, ``"spots"`` or ``"none"``) and the history
+    ``variables``."""
+
+    histories: str = "all"
+    variables: tuple = HISTORY_VARIABLES
+
+    @property
+    def stored(self):
+        """The history variables the result holds (none with ``histories = "none"``)."""
+        return self.variables if self.histories == "all" else ()
+
+    @property
+    def at_spots(self):
+        """The history variables stored at the spot points only (``histories = "spots"``)."""
+        return self.variables if self.histories == "spots" else ()
+
+
+@dataclass(frozen=True)
+class Fragility:
+    """The ``[fragility]`` table: ``thresholds`` (tuple; [rad], or fractions of ``relative_to``),
+    ``relative_to`` (``None``, ``"slenderness"`` or ``"theta_ul"``) and the up-crossing ``method``."""
+
+    thresholds: tuple
+    relative_to: str | None = None
+    method: str = "vanmarcke"
 
 
 @dataclass(frozen=True)
@@ -142,6 +186,8 @@ class Study:
     mcs: SpotChecks | None = None
     description: str = ""
     _hash: str = field(default="", repr=False)
+    output: Output = Output()
+    fragility: Fragility | None = None
 
     @property
     def swept_dims(self):
@@ -214,10 +260,15 @@ def _build(raw, text, name, source):
     shape = ((len(cases),) if "case" in raw else ()) + tuple(len(v) for v in sweeps.values())
     mcs = _mcs(raw, sweeps, cases, "case" in raw, shape)
     digest = hashlib.sha256(f"{text}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode())
-    return Study(name=name, title=title, text=text, source=source,
+    study = Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
-                 description=description, _hash=digest.hexdigest())
+                 description=description, _hash=digest.hexdigest(), output=_output(raw),
+                 fragility=_fragility(raw))
+    if study.output.histories == "spots" and study.mcs is None:
+        raise StudyError("output.histories: 'spots' stores the histories at the [mcs] spot points; "
+                         "give an [mcs] table (or histories = 'none')")
+    return study
 
 
 def _cases(raw, base, sweeps):
@@ -270,6 +321,37 @@ def _solver(raw):
     if isinstance(max_steps, bool) or not isinstance(max_steps, int) or not 1 <= max_steps < 2**31:
         raise StudyError(f"solver.max_steps: must be an integer in 1..{2**31 - 1} (got {max_steps!r})")
     return rtol, max_steps
+
+
+def _output(raw):
+    tbl = table(raw, "output")
+    check_keys(tbl, ("histories", "variables"), "output.")
+    histories = choice(tbl, "histories", HISTORY_CHOICES, "output.", "all")
+    if "variables" not in tbl:
+        return Output(histories)
+    if histories == "none":
+        raise StudyError("output.variables: only with histories = 'all' or 'spots'")
+    names = check_list("output.variables", tbl["variables"])
+    for i, name in enumerate(names):
+        check_choice(f"output.variables[{i}]", name, HISTORY_VARIABLES)
+    if len(set(names)) != len(names):
+        raise StudyError("output.variables: a variable is listed twice")
+    return Output(histories, tuple(n for n in HISTORY_VARIABLES if n in names))
+
+
+def _fragility(raw):
+    if "fragility" not in raw:
+        return None
+    tbl = table(raw, "fragility")
+    check_keys(tbl, ("thresholds", "relative_to", "method"), "fragility.")
+    thresholds = number_list("fragility.thresholds", required(tbl, "thresholds", "fragility."), lower=0.0)
+    if len(set(thresholds)) != len(thresholds):
+        raise StudyError("fragility.thresholds: a threshold is listed twice")
+    relative_to = tbl.get("relative_to")
+    if relative_to is not None:
+        check_choice("fragility.relative_to", relative_to, FRAGILITY_RELATIVE_TO)
+    method = choice(tbl, "method", FRAGILITY_METHODS, "fragility.", "vanmarcke")
+    return Fragility(thresholds, relative_to, method)
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape):

@@ -47,6 +47,8 @@ from screening.workflow.store import PartialStore
 from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, result_attributes
 
 MAX_FAILURE_MESSAGES = 5
+#: Outstanding batch tasks per worker (bounds the memory of client and scheduler).
+IN_FLIGHT_PER_WORKER = 3
 
 
 @dataclass
@@ -202,14 +204,32 @@ class _SweepRun:
 
         done = [b for b in batches if self.store.batch_path(b).exists()]
         done_set = set(done)
-        # submit what is missing first, so that workers compute while saved parts are merged
-        pending = {self._submit(b): b for b in batches if b not in done_set}
+        # submit what is missing first, so that workers compute while saved parts are merged; at most
+        # IN_FLIGHT_PER_WORKER tasks per worker are outstanding, so neither the client nor the
+        # scheduler holds the inputs or results of the whole grid
+        todo = iter([b for b in batches if b not in done_set])
+        window = IN_FLIGHT_PER_WORKER * max(self.report.n_workers, 1)
+        pending = {}
+        ready = as_completed()
+
+        def top_up():
+            while len(pending) < window:
+                b = next(todo, None)
+                if b is None:
+                    return
+                fut = self._submit(b)
+                pending[fut] = b
+                ready.add(fut)
+
+        top_up()
         with Progress(self.study.n_points, label="points", enabled=self.progress) as bar:
             resumed = 0
             for b in done:
                 part = self.store.load_batch(b)
                 if part is None:                    # unreadable or stale part: compute it again
-                    pending[self._submit(b, "-redo")] = b
+                    fut = self._submit(b, "-redo")
+                    pending[fut] = b
+                    ready.add(fut)
                     continue
                 self._write(b, part, save=False)
                 resumed += 1
@@ -217,14 +237,16 @@ class _SweepRun:
             if resumed:
                 self.log(f"resuming: {resumed} of {len(batches)} batches were already done in {self.store.dir}")
             self.report.n_resumed_batches = resumed
-            for fut in as_completed(list(pending)):
+            for fut in ready:
                 b = pending.pop(fut)
                 try:
                     part, ok = fut.result(), True
                 except Exception as exc:            # noqa: BLE001 - any task failure is recorded
                     self._task_failed(b, exc)
-                    part, ok = execution.failed_result(b.size, self.study.times.size), False
+                    part, ok = execution.failed_result(b.size, self.study.times.size, self.study.output.stored,
+                                                  self.study.fragility), False
                 fut.release()
+                top_up()                            # the next task runs while this batch is written
                 self._write(b, part, save=ok)
                 del part
                 bar.update(b.size)
@@ -269,7 +291,8 @@ class _SweepRun:
                     results[i] = fut.result()
                 except Exception as exc:              # noqa: BLE001 - recorded as a failed spot check
                     log(f"warning: spot check {i} failed: {exception_line(exc)}")
-                    results[i] = execution.failed_spot(study.times.size, spec.samples)
+                    results[i] = execution.failed_spot(study.times.size, spec.samples,
+                                                       execution.spot_linear_names(study))
                     failed[i] = True
                 else:
                     try:                              # the resume record only: the result is kept

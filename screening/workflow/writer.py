@@ -35,8 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import SWEEP, TIME, attributes, global_attributes
-from screening.solvers.moments import HISTORY_VARIABLES
+from screening.schema import FRAGILITY, SWEEP, TIME, attributes, global_attributes
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (HISTORY_DTYPE, MODEL_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS,
@@ -99,6 +98,8 @@ def result_attributes(study, created, batch_size):
         t_end=study.t_end,
         dt=study.dt,
         batch_size=np.int32(batch_size),
+        output_histories=study.output.histories,
+        output_history_variables=" ".join(study.output.stored),
     )
 
 
@@ -135,6 +136,7 @@ class ResultFile:
         self.study = study
         self.shape = study.shape
         self.nt = study.times.size
+        self.histories = study.output.stored
         self.status = np.full(study.n_points, PointStatus.task_failed, dtype=np.int8)
         self.peak_p_uplift = np.full(study.n_points, np.nan)
         import netCDF4                  # here, not at module level: workers never need it
@@ -149,10 +151,10 @@ class ResultFile:
             raise
 
     # -- definition
-    def _variable(self, name, dtype, dims, fill, coordinates="", **storage):
+    def _variable(self, name, dtype, dims, fill, coordinates="", table=SWEEP, **storage):
         """Create variable ``name`` with its schema attributes (and ``coordinates``)."""
         v = self.nc.createVariable(name, dtype, dims, fill_value=fill, **storage)
-        v.setncatts(attributes(name, SWEEP))
+        v.setncatts(attributes(name, table))
         if coordinates:
             v.coordinates = coordinates
         return v
@@ -191,7 +193,7 @@ class ResultFile:
             coords.append(name)
         coordinates = " ".join(coords)
 
-        for name in HISTORY_VARIABLES:
+        for name in self.histories:
             self._variable(name, "f4", dims + ("t",), HISTORY_DTYPE(np.nan), coordinates, **self.zlib,
                            shuffle=self.zlib["zlib"], chunksizes=_chunks(self.shape, self.nt))
         self._variable("status", "i1", dims, False, coordinates, **self.zlib)
@@ -199,6 +201,17 @@ class ResultFile:
             self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib)
         for name in SUMMARY_INTS:
             self._variable(name, "i4", dims, False, coordinates, **self.zlib)
+        frag = study.fragility
+        if frag is not None:
+            nc.createDimension("threshold", len(frag.thresholds))
+            v = nc.createVariable("threshold", "f8", ("threshold",), fill_value=False)
+            v.setncatts({"units": "rad" if frag.relative_to is None else "1",
+                         "long_name": "rotation threshold of p_exceed" + (
+                             "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")})
+            v[:] = np.asarray(frag.thresholds, dtype=float)
+            p = self._variable("p_exceed", "f8", dims + ("threshold",), np.nan, coordinates, table=FRAGILITY,
+                               **self.zlib)
+            p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
         nc.setncatts({**attrs, **labels})
 
     # -- data
@@ -209,10 +222,13 @@ class ResultFile:
         for slab, a, b in hyperslabs(batch.lo, batch.hi, self.shape):
             rows = slice(a - batch.lo, b - batch.lo)
             region = tuple(s.stop - s.start for s in slab)
-            for name in HISTORY_VARIABLES:
+            for name in self.histories:
                 nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (self.nt,))
             for name in POINT_VARIABLES:
                 nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
+            if "p_exceed" in result:
+                p = result["p_exceed"]
+                nc["p_exceed"][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
         self._unsynced += batch.size
         if self._unsynced >= SYNC_POINTS:
             nc.sync()           # compress and write the cached chunks now, while workers compute
@@ -247,10 +263,12 @@ class ResultFile:
 
         for name in SPOT_HISTORIES:
             var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
+        for name in study.output.at_spots:          # [output] histories = "spots"
+            var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
         for name in ("n_overturned", "n_diverged", "n_used"):
             var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
         for name in ("var_theta", "var_theta_dot"):
-            lin = [self.history(name, s) for s in spots]
+            lin = [r[f"sl_{name}"] if f"sl_{name}" in r else self.history(name, s) for r, s in zip(results, spots)]
             mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan
                                  for r in results])
             var(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak)

@@ -373,7 +373,7 @@ BAD_STUDIES = [
     ("T2 = T1", ("T2 = 2.0", "T2 = 4.0"), "excitation.T2: must be smaller than excitation.T1"),
     ("T2 > T1", ("T2 = 2.0", "T2 = 9.0"), "excitation.T2: must be smaller than excitation.T1"),
     ("unknown key", ("h = 0.21", "h = 0.21\ncolour = 1"), "block.colour: unknown key"),
-    ("unknown table", ("[time]", "[output]\nformat = 1\n[time]"), "output: unknown key"),
+    ("unknown table", ("[time]", "[outputs]\nformat = 1\n[time]"), "outputs: unknown key"),
     ("unknown range key", ("num = 3", "number = 3"), "excitation.S0.number: unknown key"),
     ("unknown solver key", ("rtol = 1e-7", "tol = 1e-7"), "solver.tol: unknown key"),
     ("empty list", ("eps = [-6e5, 6e7]", "eps = []"), "foundation.eps: empty list"),

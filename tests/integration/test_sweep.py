@@ -333,3 +333,88 @@ def test_complevel_changes_storage_not_values(client, tmp_path):
     with netCDF4.Dataset(tmp_path / "z0.nc") as nc0, netCDF4.Dataset(tmp_path / "z1.nc") as nc1:
         assert not nc0["var_theta"].filters()["zlib"] and nc1["var_theta"].filters()["zlib"]
     compare_files(tmp_path / "z1.nc", tmp_path / "z0.nc")
+
+
+# ----------------------------------------------------------------------------- [output]
+def test_history_free_result_has_the_summaries_and_spot_checks_of_the_full_one(client, tmp_path):
+    """histories = "none": no history variable, every summary identical, spot checks still compared."""
+    spots = '[mcs]\npoints = [{eps = 6e7, S0 = 2.4e-3}]\nsamples = 4\nmodel = "condensed"\n'
+    full, bare = tmp_path / "full.nc", tmp_path / "bare.nc"
+    run_sweep(parse_study(GRID + spots), full, client=client, progress=False, log=quiet)
+    run_sweep(parse_study(GRID + '[output]\nhistories = "none"\n' + spots), bare, client=client, progress=False,
+              log=quiet)
+    with xr.open_dataset(full) as f, xr.open_dataset(bare) as b:
+        assert "var_theta" in f and not {"var_theta", "p_uplift", "c_eq"} & set(b.data_vars)
+        assert b.attrs["output_histories"] == "none" and b.attrs["output_history_variables"] == ""
+        for name in ("status", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "n_steps",
+                     "mcs_var_theta", "mcs_peak_var_theta"):
+            np.testing.assert_array_equal(b[name].values, f[name].values, err_msg=name)
+        # the full file compares against float32 histories, the bare one against float64 ones
+        np.testing.assert_allclose(b["mcs_rel_error_peak_var_theta"].values, f["mcs_rel_error_peak_var_theta"].values,
+                                   rtol=1e-5)
+        assert np.all(np.isfinite(b["mcs_rel_error_peak_var_theta_dot"].values))
+        from screening.report.figures import plot_result
+
+        names = sorted(p.name for p in plot_result(b, "bare", tmp_path))
+        assert names == ["bare_peaks.png", "bare_spots.png"]           # no history figures to draw
+
+
+def test_chosen_history_variables_only(client, tmp_path):
+    out = tmp_path / "some.nc"
+    run_sweep(parse_study(GRID + '[output]\nvariables = ["p_uplift"]\n'), out, client=client, progress=False,
+              log=quiet)
+    with xr.open_dataset(out) as ds:
+        assert "p_uplift" in ds and not {"var_theta", "k_eq"} & set(ds.data_vars)
+        assert ds["p_uplift"].dims == ("eps", "S0", "t") and ds.attrs["output_history_variables"] == "p_uplift"
+
+
+def test_fragility_on_the_workers_matches_the_analysis_of_the_full_histories(client, tmp_path):
+    """[fragility] with histories = "none": p_exceed stored per point and threshold, equal to
+    ds.rocking.exceedance_probability on a result that has the histories (float32 there)."""
+    frag = '[fragility]\nthresholds = [0.5, 2.0]\nrelative_to = "theta_ul"\n'
+    full, bare = tmp_path / "full.nc", tmp_path / "bare.nc"
+    run_sweep(parse_study(GRID), full, client=client, progress=False, log=quiet)
+    run_sweep(parse_study(GRID + '[output]\nhistories = "none"\n' + frag), bare, client=client, progress=False,
+              log=quiet)
+    with xr.open_dataset(full) as f, xr.open_dataset(bare) as b:
+        assert "var_theta" not in b and b["p_exceed"].dims == ("eps", "S0", "threshold")
+        np.testing.assert_array_equal(b["threshold"].values, [0.5, 2.0])
+        assert b["p_exceed"].attrs["units"] == "1" and b["p_exceed"].attrs["relative_to"] == "theta_ul"
+        for j, thr in enumerate((0.5, 2.0)):
+            ref = f.rocking.exceedance_probability(thr, relative_to="theta_ul").values
+            got = b["p_exceed"].values[..., j]
+            np.testing.assert_allclose(got, ref, rtol=1e-4, atol=1e-12)
+        p = b["p_exceed"].values
+        assert np.all(p[..., 0] >= p[..., 1]) and np.nanmax(p[..., 0]) > 0.1      # higher threshold, lower p
+
+
+def test_a_narrow_submission_window_gives_the_same_file(client, tmp_path, monkeypatch):
+    """Batches are submitted a few per worker at a time: one in flight gives the same result."""
+    import screening.workflow.sweep as sweep_module
+
+    study = parse_study(GRID)
+    run_sweep(study, tmp_path / "wide.nc", client=client, batch_size=3, progress=False, log=quiet)
+    monkeypatch.setattr(sweep_module, "IN_FLIGHT_PER_WORKER", 1)
+    seen = []
+    in_flight = []
+    report = run_sweep(study, tmp_path / "narrow.nc", client=client, batch_size=3, progress=False, log=quiet,
+                       on_batch=lambda b: (seen.append(b.index), in_flight.append(len(client.futures))))
+    assert sorted(seen) == list(range(report.n_batches)) and report.n_batches == 7
+    assert max(in_flight) <= len(client.nthreads()) + 1      # the window plus the next one being topped up
+    compare_files(tmp_path / "wide.nc", tmp_path / "narrow.nc")
+
+
+def test_spot_histories_are_those_of_the_full_result_at_the_spot(client, tmp_path):
+    """histories = "spots": no grid histories; the chosen ones at each spot point (float64)."""
+    spots = '[mcs]\npoints = [{eps = 6e7, S0 = 2.4e-3}]\nsamples = 4\nmodel = "condensed"\n'
+    full, some = tmp_path / "full.nc", tmp_path / "spots.nc"
+    run_sweep(parse_study(GRID + spots), full, client=client, progress=False, log=quiet)
+    run_sweep(parse_study(GRID + '[output]\nhistories = "spots"\nvariables = ["var_theta", "k_eq"]\n' + spots),
+              some, client=client, progress=False, log=quiet)
+    with xr.open_dataset(full) as f, xr.open_dataset(some) as s:
+        assert "var_theta" not in s and {"spot_var_theta", "spot_k_eq"} <= set(s.data_vars)
+        assert "spot_p_uplift" not in s and s["spot_k_eq"].dims == ("spot", "t")
+        assert s["spot_var_theta"].attrs["units"] == "rad2"
+        for name in ("var_theta", "k_eq"):
+            ref = f[name].sel(eps=6e7, S0=2.4e-3).values.astype(float)
+            np.testing.assert_allclose(s[f"spot_{name}"].values[0], ref, rtol=1e-6, equal_nan=True)

@@ -213,7 +213,9 @@ def test_quadrature_engine_reproduces_the_paper_closed_forms(paper_block, any_fo
 
 
 def test_cubic_table_matches_direct_quadrature_between_nodes(paper_block, cubic_bed):
-    values, slopes = cl.coefficient_table(paper_block, cubic_bed, CUBIC)
+    values, slopes = cl.node_values(paper_block, cubic_bed, CUBIC)
+    table = cl.coefficient_table(paper_block, cubic_bed, CUBIC)
+    assert table.shape == (values.shape[0], 12)
     tu = cubic.uplift_threshold(paper_block, cubic_bed)
     c0 = float(cubic.damping_at_rest(paper_block, cubic_bed))
     k0 = float(cubic.stiffness_at_rest(paper_block, cubic_bed))
@@ -225,11 +227,11 @@ def test_cubic_table_matches_direct_quadrature_between_nodes(paper_block, cubic_
     e_c, e_k, d_c = cl.expectations(s, paper_block, cubic_bed, CUBIC)
     cov = 0.9 * s * s * math.sqrt(k0 / paper_block.m_sdof)     # a strongly correlated state
     for i, ti in enumerate(t):
-        got_c, got_k, got_d = cl.table_lookup(ti, values, slopes, c0, k0)
+        got_c, got_k, got_d = cl.table_lookup(ti, table, c0, k0)
         assert got_c == pytest.approx(e_c[i], rel=1e-6)
         # k_eq = e_k + cov d_c crosses zero at large sigma: absolute floor 1e-9 K(0)
         assert got_k + cov[i] * got_d == pytest.approx(e_k[i] + cov[i] * d_c[i], rel=1e-6, abs=1e-9 * k0)
-    assert cl.table_lookup(-np.inf, values, slopes, c0, k0)[:2] == (c0, k0)
+    assert cl.table_lookup(-np.inf, table, c0, k0)[:2] == (c0, k0)
     # nodes carry the exact d/d(ln sigma): check against central differences of the values
     h = 1.0 / cl.STEPS_PER_UNIT
     fd = (values[2:] - values[:-2]) / (2 * h)

@@ -8,7 +8,8 @@ from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, 
 from screening.condensation.uplift_integrals import coefficient_table
 from screening.condensation import get as get_condensation
 from screening.model.points import flatten
-from screening.solvers.moments import _rhs, oscillator_records, solve_moments
+from screening.solvers.moment_kernels import _kt_rhs
+from screening.solvers.moments import oscillator_records, solve_moments
 from screening.status import PointStatus
 from screening.model import Foundation
 from screening.solvers.timegrid import output_times
@@ -55,13 +56,13 @@ def test_kanai_tajimi_filter_block_of_the_moment_equations_is_stationary_at_clos
     cond = get_condensation("paper")
     kernel = cond.moment_kernel(block, bed)
     osc = oscillator_records(block, bed, exc, cond)
-    values, slopes = coefficient_table()
+    table = coefficient_table()
     var_u, var_ud, _ = kanai_tajimi_stationary_moments(S0, wg, zg)
     y = np.zeros(10)
     y[7], y[8], y[9] = var_u, 0.0, var_ud  # (22 23 33) entries
-    dy = np.zeros((7, 10))
-    _rhs(kernel.coefficients, kernel.records[0], values, slopes, osc[0], True, 0.0, y, dy, 0)
-    np.testing.assert_allclose(dy[0, 7:], 0.0, atol=1e-12 * var_ud * wg)
+    dy = np.zeros(10)
+    _kt_rhs(kernel.coefficients, kernel.records[0], table, osc[0], 0.0, y, dy)
+    np.testing.assert_allclose(dy[7:], 0.0, atol=1e-12 * var_ud * wg)
 
 
 @pytest.mark.parametrize("name", list(PAPER_CASES))
@@ -185,7 +186,7 @@ def test_cubic_linear_stationary_variance_uses_the_rest_indentation(paper_block,
 def test_compiled_cubic_coefficients_match_the_quadrature(paper_block, cubic_bed):
     (block, bed), _ = flatten(paper_block, cubic_bed)
     kernel = get_condensation("cubic").moment_kernel(block, bed)
-    values, slopes = kernel.table_values, kernel.table_slopes
+    tables = kernel.tables
     tu = cubic.uplift_threshold(paper_block, cubic_bed)
     assert kernel.records["log_theta_ul"][0] == np.log(tu)
     k_scale = cubic.stiffness_at_rest(paper_block, cubic_bed)
@@ -195,7 +196,7 @@ def test_compiled_cubic_coefficients_match_the_quadrature(paper_block, cubic_bed
         cov = rho * var * 40.0
         c_ref, k_ref = equivalent_coefficients_from_moments(var, cov, paper_block, cubic_bed, condensation="cubic")
         for i in range(var.size):
-            c, k = kernel.coefficients(kernel.records[0], values[0], slopes[0], var[i], cov[i])
+            c, k = kernel.coefficients(kernel.records[0], tables[0], var[i], cov[i])
             assert c == pytest.approx(c_ref[i], rel=1e-6)
             assert k == pytest.approx(k_ref[i], rel=1e-6, abs=1e-9 * k_scale)
 
@@ -263,8 +264,22 @@ def test_compiled_uplift_probability_and_envelope_are_their_numpy_references(pap
     np.testing.assert_allclose(res["p_uplift"][ok], ref, rtol=1e-12, atol=1e-300)
     (block, fnd, exc), _ = flatten(paper_block, bed, WhiteNoise(1e-4, Envelope(4.0, 2.0)))
     osc = oscillator_records(block, fnd, exc, get_condensation("paper"))[0]
-    gains = np.empty(7)
+    from screening.solvers.moment_kernels import initial_gain, stage_gains
+
+    gain = paper_block.m * paper_block.h / paper_block.m_sdof
     for t, h in ((0.0, 0.01), (2.7, 0.3), (19.5, 0.5)):
-        lyapunov._stage_gains(osc, t, h, gains)
-        expected = paper_block.m * paper_block.h / paper_block.m_sdof * Envelope(4.0, 2.0)(t + dopri.C * h)
-        np.testing.assert_allclose(gains, expected, rtol=1e-13, atol=1e-16)
+        got = np.array([initial_gain(osc, t), *stage_gains(osc, t, h)])
+        expected = gain * Envelope(4.0, 2.0)(t + np.array([0.0, *dopri.C[1:6]]) * h)
+        np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-16)
+
+
+@pytest.mark.parametrize("exc", [WhiteNoise(np.array([1e-5, 2.4e-3])), KanaiTajimi(np.array([1e-5, 2.4e-3]), 15.6, 0.6)])
+def test_summaries_without_histories_are_those_with_histories(paper_block, exc):
+    """histories=False skips the output stores only: every summary is bit for bit the same."""
+    t = output_times(20.0, 0.05)
+    bed = Foundation(2.89e7, 8.95e8, np.array([-6e5, 6e7]))
+    full = solve_moments(paper_block, bed, exc, t)
+    bare = solve_moments(paper_block, bed, exc, t, histories=False)
+    assert "var_theta" in full and not set(bare) & {"var_theta", "p_uplift", "c_eq"}
+    for key, value in bare.items():
+        np.testing.assert_array_equal(value, full[key], err_msg=key)

@@ -341,3 +341,60 @@ def test_the_documented_example_parses():
     s = parse_study(textwrap.dedent(block), source="example")
     assert s.dims == ("eps", "S0") and s.shape == (3, 20)
     assert s.mcs.points == "auto" and s.mcs.count == 3
+
+
+# ----------------------------------------------------------------------------- [output]
+def test_output_table_chooses_the_stored_histories():
+    from screening.solvers.moments import HISTORY_VARIABLES
+
+    assert parse_study(BASE).output.stored == HISTORY_VARIABLES
+    assert parse_study(BASE + '[output]\nhistories = "none"\n').output.stored == ()
+    chosen = parse_study(BASE + '[output]\nvariables = ["p_uplift", "var_theta"]\n').output
+    assert chosen.histories == "all" and chosen.stored == ("var_theta", "p_uplift")   # canonical order
+    assert parse_study(BASE + '[output]\nhistories = "none"\n').key != parse_study(BASE).key
+
+
+@pytest.mark.parametrize("table, message", [
+    ('histories = "some"', r"^<string>: output\.histories: must be one of 'all', 'spots', 'none' \(got 'some'\)$"),
+    ("histories = 1", r"^<string>: output\.histories: must be one of"),
+    ('variables = ["var_theta", "theta"]', r"^<string>: output\.variables\[1\]: must be one of 'var_theta'"),
+    ("variables = []", r"^<string>: output\.variables: empty list"),
+    ('variables = "var_theta"', r"^<string>: output\.variables: must be a list"),
+    ('variables = ["k_eq", "k_eq"]', r"^<string>: output\.variables: a variable is listed twice$"),
+    ('histories = "none"\nvariables = ["k_eq"]', r"^<string>: output\.variables: only with histories = 'all' or 'spots'$"),
+    ("dt = 0.1", r"^<string>: output\.dt: unknown key"),
+])
+def test_output_table_errors_name_the_key(table, message):
+    with pytest.raises(StudyError, match=message) as info:
+        parse_study(BASE + "[output]\n" + table + "\n")
+    assert "\n" not in str(info.value)
+
+
+# ----------------------------------------------------------------------------- [fragility]
+def test_fragility_table():
+    frag = parse_study(BASE + '[fragility]\nthresholds = [0.5, 1.0]\nrelative_to = "theta_ul"\n').fragility
+    assert frag.thresholds == (0.5, 1.0) and frag.relative_to == "theta_ul" and frag.method == "vanmarcke"
+    assert parse_study(BASE).fragility is None
+    assert parse_study(BASE + '[fragility]\nthresholds = [0.01]\nmethod = "poisson"\n').fragility.relative_to is None
+
+
+@pytest.mark.parametrize("table, message", [
+    ("relative_to = 'theta_ul'", r"^<string>: fragility\.thresholds: required"),
+    ("thresholds = [0.5, -1.0]", r"^<string>: fragility\.thresholds\[1\]: "),
+    ("thresholds = []", r"^<string>: fragility\.thresholds: empty list"),
+    ("thresholds = [0.5, 0.5]", r"^<string>: fragility\.thresholds: a threshold is listed twice$"),
+    ("thresholds = [0.5]\nrelative_to = 'b'", r"^<string>: fragility\.relative_to: must be one of 'slenderness'"),
+    ("thresholds = [0.5]\nmethod = 'rice'", r"^<string>: fragility\.method: must be one of 'vanmarcke', 'poisson'"),
+    ("thresholds = [0.5]\nlevels = [1]", r"^<string>: fragility\.levels: unknown key"),
+])
+def test_fragility_table_errors_name_the_key(table, message):
+    with pytest.raises(StudyError, match=message) as info:
+        parse_study(BASE + "[fragility]\n" + table + "\n")
+    assert "\n" not in str(info.value)
+
+
+def test_spot_histories_need_spot_checks():
+    with pytest.raises(StudyError, match=r"^<string>: output\.histories: 'spots' stores the histories at the \[mcs\]"):
+        parse_study(BASE + '[output]\nhistories = "spots"\n')
+    study = parse_study(BASE + '[output]\nhistories = "spots"\nvariables = ["k_eq"]\n[mcs]\nsamples = 10\n')
+    assert study.output.stored == () and study.output.at_spots == ("k_eq",)
