@@ -172,7 +172,12 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         with cli.make_context("screening", argv) as ctx:
-            return cli.invoke(ctx)
+            status = cli.invoke(ctx)
+        sys.stdout.flush()                      # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:                     # `screening info R.nc | head -1`: the reader has enough
+        _silence_stdout()
+        return EXIT_OK
     except click.exceptions.Exit as exc:            # --help / --version
         return exc.exit_code
     except click.UsageError as exc:
@@ -185,8 +190,29 @@ def main(argv=None):
         return EXIT_INTERRUPTED
 
 
+def _silence_stdout():
+    """Point stdout at /dev/null so that Python's final flush does not complain about the closed pipe."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # no real file descriptor (captured output)
+        pass
+
+
+_CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x09), *range(0x0b, 0x20), 0x7f, *range(0x80, 0xa0)]}
+
+
+def printable(text):
+    """``text`` with terminal control characters (escape sequences, carriage returns, C1 codes) shown
+    as ``\\xNN``: a result file's title or attributes must not drive the user's terminal."""
+    return str(text).translate(_CONTROL)
+
+
 def _error(message):
-    print(f"screening: error: {' '.join(str(message).split())}", file=sys.stderr)
+    print(f"screening: error: {printable(' '.join(str(message).split()))}", file=sys.stderr)
     return EXIT_USAGE
 
 
@@ -217,14 +243,14 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
 
     study = load_study(study)
     if out:
-        out = check_output_path(out)
+        out = check_output_path(out, inputs=(study.source,))
     else:                                    # the default folder is created (the README's `make run`)
         out = Path("outputs") / f"{study.name}.nc"
         try:
             out.parent.mkdir(exist_ok=True)
         except OSError as exc:
             raise SweepError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
-        check_output_path(out)
+        check_output_path(out, inputs=(study.source,))
     report = run_sweep(study, out, workers=workers or 2, scheduler=scheduler, batch_size=batch_size,
                        force=force, progress=not quiet, log=_say, complevel=complevel)
     if not report.reused:
@@ -313,7 +339,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out):
                              f"(swept: {', '.join(grid) or 'none'})")
         dim = dim or "S0"
         stem = result.name[:-3] if result.name.endswith(".nc") else result.name
-        out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"))
+        out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"), inputs=(result,))
         try:
             frag = fragility_dataset(ds, threshold, relative_to, method, dim).load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
@@ -383,7 +409,7 @@ def cmd_info(result):
             text = describe(ds, result)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
-    print(text)
+    print(printable(text))
     return EXIT_OK
 
 

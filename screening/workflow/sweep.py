@@ -89,7 +89,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     complevel : zlib level of the file, 1 (fastest, default) to 9; 0 stores uncompressed.
     """
     log = log or _stderr
-    out = check_output_path(out)
+    out = check_output_path(out, inputs=(study.source,))
     report = SweepReport(path=out, n_points=study.n_points)
     t_start = time.perf_counter()
     if not force and out.exists() and result_key(out) == study.key:

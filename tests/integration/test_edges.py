@@ -1,0 +1,235 @@
+"""Issue 13, "hold at every edge": each bug's reproducer and a neighbour.
+
+Study-file bounds are checked at parse time: one line naming the key and the allowed range,
+exit status 2, nothing written, and no allocation that depends on the size asked for
+(``tracemalloc`` sees numpy's buffers: the peak must stay small).
+"""
+
+import os
+import subprocess
+import sys
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from helpers import one_line_error
+
+from screening.cli import main
+from screening.workflow import limits
+from screening.workflow.study import StudyError, parse_study
+
+ROOT = Path(__file__).resolve().parents[2]
+
+STUDY = """
+title = "edges"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = [-6e5, 6e7]
+[excitation]
+kind = "white"
+S0 = {start = 2e-5, stop = 2.4e-3, num = 3, log = true}
+T1 = 4.0
+T2 = 2.0
+[time]
+t_end = 2.0
+dt = 0.05
+[mcs]
+samples = 4
+seed = 0
+"""
+
+R1000 = "{start = 1.0, stop = 2.0, num = 1000}"
+
+# id, (old, new) replacements, needle of the one-line message
+BOUNDS = [
+    # B1: 4 ranges x 1000 values (1e12 points) and its neighbour just above the configured limit
+    ("B1 grid 1e12 points", [("k = 2.89e7", f"k = {R1000}"), ("lam = 8.95e8", f"lam = {R1000}"),
+                              ("eps = [-6e5, 6e7]", f"eps = {R1000}"),
+                              ("S0 = {start = 2e-5, stop = 2.4e-3, num = 3, log = true}", f"S0 = {R1000}")],
+     "the grid has 1000000000 points"),
+    ("B1 neighbour: run.max_points", [("[mcs]", "[run]\nmax_points = 5\n[mcs]")],
+     "excitation.S0: the grid has 6 points (eps 2 x S0 3); at most run.max_points = 5"),
+    ("B1 max_points above the ceiling", [("[mcs]", "[run]\nmax_points = 1000000000000\n[mcs]")],
+     "run.max_points: must be an integer in 1..100000000"),
+    # B2
+    ("B2 num = 1e9", [("num = 3", "num = 1000000000")], "excitation.S0.num: must be an integer in 1..1000000"),
+    ("B2 num = 2**63-1", [("num = 3", f"num = {2**63 - 1}")], "excitation.S0.num: must be an integer in 1..1000000"),
+    ("B2 dt = 1e-9", [("dt = 0.05", "dt = 1e-9")], "time.t_end / time.dt: t_end / dt = 2e+09 output steps"),
+    ("B2 dt = 5e-324", [("dt = 0.05", "dt = 5e-324")], "output steps; at most 100000"),
+    # B3, B10, B8
+    ("B3 seed = 2**31", [("seed = 0", "seed = 2147483648")], "mcs.seed: must be an integer in 0..2147483647"),
+    ("B3 neighbour seed = 2**64", [("seed = 0", "seed = 18446744073709551616")], "mcs.seed: must be an integer in 0.."),
+    ("B10 samples = 1e9", [("samples = 4", "samples = 1000000000")], "mcs.samples: must be an integer in 2.."),
+    ("B10 neighbour samples x times", [("samples = 4", "samples = 999999"), ("t_end = 2.0", "t_end = 200.0")],
+     "mcs.samples: must be an integer in 2..12496 (at most 50000000 samples x 4001 output instants"),
+    ("B8 t_end = 1e6", [("t_end = 2.0", "t_end = 1e6")], "output steps; at most 100000"),
+    ("B8 neighbour t_end only", [("t_end = 2.0\ndt = 0.05", "t_end = 1e5")], "time.t_end: t_end / dt = 2e+06"),
+    # B16
+    ("B16 400-digit integer", [("m = 8.67", "m = " + "9" * 400)], "block.m: must be a finite number > 0 (got inf)"),
+    ("B16 neighbour: 400-digit num", [("num = 3", "num = " + "9" * 400)],
+     "excitation.S0.num: must be an integer in 1..1000000 (the grid limit run.max_points; got an integer of 400 digits)"),
+    ("B16 inline tables 5000 deep", [("[mcs]", "x = " + "{a = " * 5000 + "1" + "}" * 5000 + "\n[mcs]")],
+     "invalid TOML: arrays/tables nested 5000 deep"),
+    ("B16 neighbour: arrays 5000 deep", [("eps = [-6e5, 6e7]", "eps = " + "[" * 5000 + "]" * 5000)],
+     "invalid TOML: arrays/tables nested 5000 deep"),
+]
+
+
+def _listing(folder):
+    return sorted(str(p.relative_to(folder)) for p in Path(folder).rglob("*"))
+
+
+@pytest.mark.parametrize("edits, needle", [b[1:] for b in BOUNDS], ids=[b[0] for b in BOUNDS])
+def test_study_sizes_are_bounded_at_parse_time(tmp_path, capsys, edits, needle):
+    text = STUDY
+    for old, new in edits:
+        assert old in text
+        text = text.replace(old, new, 1)
+    study = tmp_path / "bad.toml"
+    study.write_text(text)
+    before = _listing(tmp_path)
+    tracemalloc.start()
+    try:
+        code = main(["run", str(study), "--out", str(tmp_path / "r.nc"), "--quiet"])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert code == 2
+    line = one_line_error(capsys.readouterr().err)
+    assert needle in line and str(study) in line
+    assert len(line) < 400
+    assert peak < 64 * 2**20                  # no array sized by the request
+    assert _listing(tmp_path) == before
+
+
+def test_limits_leave_ordinary_studies_alone():
+    study = parse_study(STUDY.replace("[mcs]", "[run]\nmax_points = 6\n[mcs]"))
+    assert study.n_points == 6 and study.mcs.seed == 0
+    study = parse_study(STUDY.replace("seed = 0", f"seed = {2**31 - 1}"))
+    assert study.mcs.seed == 2**31 - 1
+    assert limits.nesting_depth('a = "[[[[" # {{{{\nb = [[1], [2]]') == 2
+
+
+def test_default_batches_keep_one_task_within_its_memory_budget():
+    """B8 neighbour: the longest record allowed gets batches whose histories fit the task budget."""
+    from screening.solvers.moments import HISTORY_VARIABLES
+    from screening.workflow.grid import default_batch_size
+
+    study = parse_study(STUDY.replace("t_end = 2.0", "t_end = 5000.0")
+                        .replace("num = 3", "num = 1000"))     # 100001 instants, 2000 points
+    size = default_batch_size(study, 2)
+    assert size * len(study.times) * len(HISTORY_VARIABLES) * 8 <= limits.TASK_BYTES
+    assert size >= 1
+    short = parse_study(STUDY.replace("num = 3", "num = 1000"))
+    assert default_batch_size(short, 2) == 500                 # ordinary records: unchanged
+
+
+@pytest.mark.parametrize("condensation", ["paper", "cubic"])
+def test_equivalent_coefficients_keep_nan_moments_nan(condensation):
+    """B9: NaN moments gave the finite sigma = 0 coefficients (reproducer: sigma_theta = NaN;
+    neighbours: a NaN velocity, NaN inside an array, and the moment form)."""
+    from screening.condensation.api import equivalent_coefficients, equivalent_coefficients_from_moments
+    from screening.model import Block, Foundation
+
+    block, bed = Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
+    c, k = equivalent_coefficients(np.nan, 1.0, 0.5, block, bed, condensation)
+    assert np.isnan(c) and np.isnan(k)
+    c, k = equivalent_coefficients(np.array([np.nan, 0.01, 0.0]), 1.0, 0.5, block, bed, condensation)
+    assert np.isnan(c[0]) and np.isnan(k[0]) and np.all(np.isfinite(c[1:])) and np.all(np.isfinite(k[1:]))
+    c0, k0 = equivalent_coefficients(0.0, 1.0, 0.5, block, bed, condensation)
+    assert c[2] == pytest.approx(c0) and k[2] == pytest.approx(k0)
+    c, k = equivalent_coefficients(0.01, np.inf, 0.5, block, bed, condensation)
+    assert np.isnan(c) and np.isnan(k)
+    c, k = equivalent_coefficients_from_moments(np.array([np.nan, 1e-4, 1e-4]), np.array([0.0, np.nan, 0.0]),
+                                                block, bed, condensation)
+    assert np.isnan(c[:2]).all() and np.isnan(k[:2]).all() and np.isfinite(c[2]) and np.isfinite(k[2])
+
+
+# ----------------------------------------------------------------------------- output paths, pipes, terminals
+@pytest.fixture(scope="module")
+def result_file(client, tmp_path_factory):
+    """A small valid result (2 x 3 points), in a folder of its own."""
+    from helpers import quiet
+    from screening.workflow.sweep import run_sweep
+
+    out = tmp_path_factory.mktemp("result") / "res.nc"
+    run_sweep(parse_study(STUDY.replace("[mcs]\nsamples = 4\nseed = 0\n", "")), out, client=client,
+              progress=False, log=quiet)
+    return out
+
+
+def _cli(args, cwd, **kw):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "screening.cli", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120, **kw)
+
+
+@pytest.mark.parametrize("spelling", ["same", "dotted", "symlink"])
+def test_out_equal_to_the_study_file_is_refused(tmp_path, capsys, spelling):
+    """B13: ``--out`` naming the study file (as given, as ./x, through a link) overwrote the study."""
+    study = tmp_path / "s.nc"                  # a study named like a result: --out s.nc is plausible
+    study.write_text(STUDY)
+    out = {"same": study, "dotted": tmp_path / "." / "s.nc", "symlink": tmp_path / "link.nc"}[spelling]
+    if spelling == "symlink":
+        out.symlink_to(study)
+    assert main(["run", str(study), "--out", str(out), "--quiet", "--no-plots"]) == 2
+    assert "is the input file" in one_line_error(capsys.readouterr().err)
+    assert study.read_text() == STUDY
+
+
+def test_fragility_out_equal_to_the_result_is_refused(result_file, tmp_path, capsys):
+    """B13 neighbour: ``fragility --out`` naming the result it reads."""
+    before = result_file.read_bytes()
+    assert main(["fragility", str(result_file), "--threshold", "0.01", "--out", str(result_file)]) == 2
+    assert "is the input file" in one_line_error(capsys.readouterr().err)
+    assert result_file.read_bytes() == before
+
+
+@pytest.mark.parametrize("command", ["run", "fragility"])
+def test_fifo_as_output_is_refused_without_blocking(result_file, tmp_path, capsys, command):
+    """B17: a FIFO given as --out hung the run (opening it for writing blocks)."""
+    fifo = tmp_path / "out.nc"
+    os.mkfifo(fifo)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    args = (["run", str(study), "--quiet", "--no-plots"] if command == "run"
+            else ["fragility", str(result_file), "--threshold", "0.01"]) + ["--out", str(fifo)]
+    assert main(args) == 2
+    assert "is not a regular file" in one_line_error(capsys.readouterr().err)
+    assert fifo.is_fifo()
+
+
+def test_info_into_a_closed_pipe_is_quiet(result_file):
+    """B19: ``screening info R.nc | head -1`` printed a BrokenPipeError traceback."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(f"'{sys.executable}' -m screening.cli info '{result_file}' | head -1",
+                          shell=True, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and len(proc.stdout.splitlines()) == 1
+    assert proc.stderr == "", proc.stderr
+    # neighbour: --help into a closed pipe
+    proc = subprocess.run(f"'{sys.executable}' -m screening.cli run --help | head -c 10", shell=True, cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert proc.stderr == "", proc.stderr
+
+
+def test_info_escapes_terminal_control_characters_of_a_title(result_file, tmp_path, capsys):
+    """Control characters in a result's title (and other attributes) are shown escaped by info."""
+    import xarray as xr
+
+    forged = tmp_path / "forged.nc"
+    with xr.open_dataset(result_file) as ds:
+        ds = ds.load()
+    ds.attrs["title"] = "nice\x1b[2J\x1b]0;owned\x07\rtitle\x9b"
+    ds.attrs["study_text"] = ds.attrs.get("study_text", "") + "\x1b[31m"
+    ds.to_netcdf(forged)
+    assert main(["info", str(forged)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out and "\r" not in out and "\x9b" not in out
+    assert "\\x1b[2J" in out
