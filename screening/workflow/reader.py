@@ -49,3 +49,42 @@ def result_key(path):
             return nc.getncattr("study_sha256") if "study_sha256" in nc.ncattrs() else None
     except (OSError, RuntimeError, ValueError):
         return None
+
+
+#: Bytes read at a time when a whole result file is checked (:func:`verify_result`).
+VERIFY_BLOCK_BYTES = 32 * 2**20
+
+
+def verify_result(path, study):
+    """Why the result file ``path`` of ``study`` cannot be reused (a short reason), or ``None``.
+
+    A finished file with the study's key is still read through before it is reused (issue 13,
+    B12): the grid and time dimensions must have the study's sizes, every required variable must
+    be there, and every data chunk must decompress (damaged chunks raise in netCDF/HDF5).  The
+    data is read in blocks of about :data:`VERIFY_BLOCK_BYTES` along the first dimension.
+    """
+    import netCDF4
+    import numpy as np
+
+    expected = dict(zip(study.dims, study.shape), t=int(study.times.size))
+    try:
+        with netCDF4.Dataset(path) as nc:
+            nc.set_auto_mask(False)
+            for dim, size in expected.items():
+                if dim not in nc.dimensions or len(nc.dimensions[dim]) != size:
+                    return f"its dimension {dim!r} does not have the study's size {size}"
+            missing = [v for v in REQUIRED_VARIABLES if v not in nc.variables]
+            if missing:
+                return f"it lacks {', '.join(missing)}"
+            for var in nc.variables.values():
+                shape = var.shape
+                if not shape:
+                    var[...]
+                    continue
+                row = int(np.prod(shape[1:], dtype=np.int64)) * getattr(var.dtype, "itemsize", 8)
+                step = max(1, VERIFY_BLOCK_BYTES // max(row, 1))
+                for lo in range(0, shape[0], step):
+                    var[lo:lo + step]
+    except (OSError, RuntimeError, ValueError, IndexError, TypeError, KeyError) as exc:
+        return f"its data cannot be read ({exception_line(exc)})"
+    return None
