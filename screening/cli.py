@@ -347,13 +347,24 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out):
     frag.attrs.update(source_result=str(result), screening_version=__version__,
                       history=f"screening fragility {result} --threshold {threshold}"
                               + (f" --relative-to {relative_to}" if relative_to else ""))
-    tmp = out.with_name(out.name + ".tmp")
+    import os
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)   # never a planted link
+    except OSError as exc:
+        raise _write_error(out, exc) from None
+    os.close(fd)
+    tmp = Path(tmp)
     encoding = {name: {"_FillValue": None} for name in frag.coords}
     png_path = out.with_suffix(".png")
     png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
         png = plot_fragility(frag, dim, png_path)
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
         tmp.replace(out)                         # the netCDF appears last: both or neither
     except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
         tmp.unlink(missing_ok=True)

@@ -167,6 +167,9 @@ def dask_client(workers=2, scheduler=None, client=None):
     from distributed import Client, LocalCluster
 
     if scheduler:
+        from screening.workflow.connect import check_scheduler
+
+        check_scheduler(scheduler)                 # bounded handshake, sane peer, sane JSON file
         try:
             if str(scheduler).endswith(".json") and Path(scheduler).is_file():
                 c = Client(scheduler_file=str(scheduler), timeout=CONNECT_TIMEOUT)

@@ -31,7 +31,54 @@ def open_result(path):
     if missing or "t" not in ds.dims:
         ds.close()
         raise ResultError(f"{path}: not a screening sweep result (missing {', '.join(missing) or 't'})")
+    problem = layout_problem(ds)
+    if problem:
+        ds.close()
+        raise ResultError(f"{path}: not a screening sweep result ({problem})")
     return ds
+
+
+def layout_problem(ds):
+    """What is wrong with the layout of an opened result (a short phrase), or ``""`` (issue 13, B6/B20).
+
+    Checked from the header only (no data is read): the grid is the dimensions of ``status`` and
+    has at most :data:`~screening.workflow.limits.MAX_POINTS_CEILING` points, ``t`` has at least
+    one instant and at most :data:`~screening.workflow.limits.MAX_TIMES`, every history is
+    ``grid x t`` and every summary ``grid``, and ``status`` carries integer ``flag_values`` with one
+    word of ``flag_meanings`` each.
+    """
+    import numpy as np
+
+    from screening.workflow import limits
+
+    grid = tuple(ds["status"].dims)
+    if "t" in grid:
+        return "status varies over t"
+    n_points = int(np.prod([ds.sizes[d] for d in grid], dtype=np.float64))
+    if n_points > limits.MAX_POINTS_CEILING:
+        return f"its grid declares {n_points:.3g} points, more than the {limits.MAX_POINTS_CEILING} read"
+    nt = ds.sizes["t"]
+    if not 1 <= nt <= limits.MAX_TIMES:
+        return f"t has {nt} instants (1..{limits.MAX_TIMES} expected)"
+    for name in HISTORY_VARIABLES:
+        if tuple(ds[name].dims) != grid + ("t",):
+            return f"{name} has dimensions ({', '.join(ds[name].dims)}), not ({', '.join(grid + ('t',))})"
+    for name in REQUIRED_VARIABLES[len(HISTORY_VARIABLES):]:
+        if tuple(ds[name].dims) != grid:
+            return f"{name} has dimensions ({', '.join(ds[name].dims)}), not ({', '.join(grid)})"
+        if ds[name].dtype.kind not in "fiu":
+            return f"{name} is not numeric ({ds[name].dtype})"
+    if ds["status"].dtype.kind not in "iu":
+        return f"status is not an integer variable ({ds['status'].dtype})"
+    attrs = ds["status"].attrs
+    values, meanings = attrs.get("flag_values"), attrs.get("flag_meanings")
+    if values is None or meanings is None:
+        return "status has no flag_values / flag_meanings"
+    values = np.atleast_1d(np.asarray(values))
+    if values.ndim != 1 or values.dtype.kind not in "iu" or not isinstance(meanings, str) \
+            or len(meanings.split()) != values.size or values.size > 64:
+        return "the flag_values and flag_meanings of status do not match"
+    return ""
 
 
 def damaged_data_error(path, exc):

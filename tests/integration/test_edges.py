@@ -440,3 +440,224 @@ def test_ctrl_c_prints_one_line_and_no_worker_tracebacks(tmp_path, moment):
         return
     assert proc.returncode == 130, err
     assert lines == ["screening: interrupted; finished batches are kept, re-run the same command to resume"]
+
+
+# ----------------------------------------------------------------------------- readers and figures (B4, B6, B20)
+def test_all_flagged_study_writes_its_figures(client, tmp_path, capsys, monkeypatch):
+    """B4: a valid study whose points are all flagged (soft bed k = 1e4) wrote its result and then
+    plotting crashed ("Data cannot be log-scaled")."""
+    from helpers import quiet
+    from screening.workflow import sweep
+
+    study = tmp_path / "soft.toml"
+    study.write_text(STUDY.replace("k = 2.89e7", "k = 1e4").replace("eps = [-6e5, 6e7]", "eps = [-6e5, 0.0]").replace("[mcs]\nsamples = 4\nseed = 0\n", ""))
+    real = sweep.run_sweep
+    monkeypatch.setattr("screening.workflow.sweep.run_sweep",
+                        lambda *a, **kw: real(*a, **{**kw, "client": client}))
+    out = tmp_path / "soft.nc"
+    assert main(["run", str(study), "--out", str(out), "--quiet"]) == 0, capsys.readouterr().err
+    import xarray as xr
+    with xr.open_dataset(out) as ds:
+        assert (ds["status"].values != 0).all()
+    assert (tmp_path / "soft_peaks.png").is_file() and (tmp_path / "soft_histories.png").is_file()
+
+
+def _all_nan(src, dst):
+    import xarray as xr
+
+    with xr.open_dataset(src) as ds:
+        ds = ds.load()
+    for name in ds.data_vars:
+        if ds[name].dtype.kind == "f":
+            ds[name][...] = np.nan
+    ds["status"][...] = 3
+    ds.to_netcdf(dst)
+    return dst
+
+
+def test_plot_of_an_all_nan_result_writes_figures(result_file, tmp_path, capsys):
+    """B4 neighbour: ``screening plot`` on any all-NaN result."""
+    bad = _all_nan(result_file, tmp_path / "nan.nc")
+    assert main(["plot", str(bad)]) == 0, capsys.readouterr().err
+    assert (tmp_path / "nan_peaks.png").is_file()
+
+
+def _foreign(result_file, path, edit):
+    import xarray as xr
+
+    with xr.open_dataset(result_file) as ds:
+        ds = ds.load()
+    ds = edit(ds)
+    for name in ds.variables:
+        ds[name].encoding = {}
+    ds.to_netcdf(path)
+    return path
+
+
+def _drop_flags(ds):
+    ds["status"].attrs.pop("flag_values")
+    return ds
+
+
+def _bad_flag_shape(ds):
+    ds["status"].attrs["flag_values"] = np.array([0, 1], dtype=np.int8)
+    return ds
+
+
+FOREIGN = {
+    "no flag_values": _drop_flags,
+    "flag attributes of the wrong shape": _bad_flag_shape,
+    "t of length 0": lambda ds: ds.isel(t=slice(0, 0)),
+    "histories without t": lambda ds: ds.assign(var_theta=ds["var_theta"].isel(t=0)),
+    "float status": lambda ds: ds.assign(status=ds["status"].astype(float)),
+}
+
+
+@pytest.mark.parametrize("command", [["info"], ["plot"], ["fragility", "--threshold", "0.1"]],
+                         ids=["info", "plot", "fragility"])
+@pytest.mark.parametrize("edit", list(FOREIGN))
+def test_foreign_files_with_the_expected_names_are_one_line(result_file, tmp_path, capsys, command, edit):
+    """B6: foreign netCDF files carrying the expected variable names crashed info/plot/fragility
+    (KeyError flag_values, t of length 0, flag attributes of the wrong shape)."""
+    bad = _foreign(result_file, tmp_path / "foreign.nc", FOREIGN[edit])
+    before = _listing(tmp_path)
+    assert main([command[0], str(bad), *command[1:]]) == 2
+    assert "not a screening sweep result" in one_line_error(capsys.readouterr().err)
+    assert _listing(tmp_path) == before
+
+
+@pytest.mark.parametrize("command", ["info", "plot"])
+def test_small_file_declaring_a_huge_grid_is_refused_without_allocating(tmp_path, capsys, command):
+    """B20: a small file declaring a 2e8-point grid made info/plot allocate 1.5 GB."""
+    import netCDF4
+
+    from screening.solvers.moments import HISTORY_VARIABLES
+    from screening.workflow.reader import REQUIRED_VARIABLES
+
+    path = tmp_path / "huge.nc"
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.createDimension("eps", 20000)
+        nc.createDimension("S0", 10000)
+        nc.createDimension("t", 2)
+        for name in REQUIRED_VARIABLES:
+            dims = ("eps", "S0", "t") if name in HISTORY_VARIABLES else ("eps", "S0")
+            v = nc.createVariable(name, "i1" if name == "status" else "f4", dims, chunksizes=(1, 1, 1)[:len(dims)])
+            if name == "status":
+                v.flag_values = np.array([0, 1], dtype=np.int8)
+                v.flag_meanings = "ok bad"
+    assert path.stat().st_size < 100_000
+    tracemalloc.start()
+    try:
+        code = main([command, str(path)])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert code == 2
+    assert "declares 2e+08 points" in one_line_error(capsys.readouterr().err)
+    assert peak < 64 * 2**20
+
+
+def test_figures_and_fragility_do_not_write_through_planted_links(result_file, tmp_path, capsys):
+    """B11 neighbour: the temporary files of figures and of the fragility file were ``<path>.tmp``,
+    written through a link planted there."""
+    import shutil
+
+    res = tmp_path / "r.nc"
+    shutil.copy(result_file, res)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    for name in ("r_histories.png.tmp", "r_peaks.png.tmp", "r_fragility.nc.tmp", "r_fragility.png.tmp"):
+        (tmp_path / name).symlink_to(victim)
+    assert main(["plot", str(res)]) == 0
+    assert main(["fragility", str(res), "--threshold", "0.1"]) == 0
+    assert victim.read_text() == "precious"
+    assert (tmp_path / "r_fragility.nc").stat().st_mode & 0o044 == 0o044 & ~_umask()
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# ----------------------------------------------------------------------------- --scheduler (B5, B15)
+import contextlib
+import socket
+import threading
+
+
+@contextlib.contextmanager
+def _server(reply):
+    """A TCP server on 127.0.0.1 that accepts and sends ``reply`` (nothing: stays silent), bounded in time."""
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    srv.settimeout(20)
+    stop = threading.Event()
+    conns = []
+
+    def serve():
+        while not stop.is_set():
+            try:
+                conn, _ = srv.accept()
+            except OSError:
+                return
+            conns.append(conn)
+            if reply:
+                with contextlib.suppress(OSError):
+                    conn.sendall(reply)
+
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    try:
+        yield f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    finally:
+        stop.set()
+        srv.close()
+        for c in conns:
+            c.close()
+
+
+@pytest.mark.parametrize("reply, needle", [
+    (b"", "did not answer like a dask scheduler within"),                  # B5: silent server
+    (b"\xff" * 64, "is not a dask scheduler"),                             # B15: exabyte frame
+    (b"HTTP/1.1 400 Bad Request\r\n\r\n", "is not a dask scheduler"),     # B15 neighbour: a web server
+])
+def test_scheduler_that_is_not_dask_is_one_line_in_bounded_time(tmp_path, capsys, monkeypatch, reply, needle):
+    import time
+
+    monkeypatch.setattr("screening.workflow.connect.HANDSHAKE_TIMEOUT", 1.0)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    with _server(reply) as address:
+        start = time.monotonic()
+        assert main(["run", str(study), "--scheduler", address, "--out", str(tmp_path / "r.nc"), "--quiet"]) == 2
+        assert time.monotonic() - start < 15
+    assert needle in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "r.nc").exists() and not (tmp_path / "r.nc.partial").exists()
+
+
+@pytest.mark.parametrize("content, needle", [
+    ('{"address": 5}', 'has no "address" string'),
+    ("[1, 2]", 'has no "address" string'),
+    ("{not json", "cannot read the scheduler file"),
+    ("[" * 100000, "cannot read the scheduler file"),
+])
+def test_malformed_scheduler_file_is_one_line(tmp_path, capsys, content, needle):
+    """B15: a malformed scheduler JSON gave AssertionError/TypeError tracebacks."""
+    sched = tmp_path / "scheduler.json"
+    sched.write_text(content)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    assert main(["run", str(study), "--scheduler", str(sched), "--out", str(tmp_path / "r.nc"), "--quiet"]) == 2
+    assert needle in one_line_error(capsys.readouterr().err)
+
+
+def test_a_real_scheduler_passes_the_check():
+    import logging
+    from distributed import LocalCluster
+    from screening.workflow.connect import check_scheduler
+
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp://", dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster:
+        assert check_scheduler(cluster.scheduler_address, timeout=5) == cluster.scheduler_address
