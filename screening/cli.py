@@ -176,7 +176,12 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         with cli.make_context("screening", argv) as ctx:
-            return cli.invoke(ctx)
+            status = cli.invoke(ctx)
+        sys.stdout.flush()                      # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:                     # `screening info R.nc | head -1`: the reader has enough
+        _silence_stdout()
+        return EXIT_OK
     except click.exceptions.Exit as exc:            # --help / --version
         return exc.exit_code
     except click.UsageError as exc:
@@ -189,8 +194,29 @@ def main(argv=None):
         return EXIT_INTERRUPTED
 
 
+def _silence_stdout():
+    """Point stdout at /dev/null so that Python's final flush does not complain about the closed pipe."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # no real file descriptor (captured output)
+        pass
+
+
+_CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x09), *range(0x0b, 0x20), 0x7f, *range(0x80, 0xa0)]}
+
+
+def printable(text):
+    """``text`` with terminal control characters (escape sequences, carriage returns, C1 codes) shown
+    as ``\\xNN``: a result file's title or attributes must not drive the user's terminal."""
+    return str(text).translate(_CONTROL)
+
+
 def _error(message):
-    print(f"screening: error: {' '.join(str(message).split())}", file=sys.stderr)
+    print(f"screening: error: {printable(' '.join(str(message).split()))}", file=sys.stderr)
     return EXIT_USAGE
 
 
@@ -221,14 +247,14 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
 
     study = load_study(study)
     if out:
-        out = check_output_path(out)
+        out = check_output_path(out, inputs=(study.source,))
     else:                                    # the default folder is created (the README's `make run`)
         out = Path("outputs") / f"{study.name}.nc"
         try:
             out.parent.mkdir(exist_ok=True)
         except OSError as exc:
             raise SweepError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
-        check_output_path(out)
+        check_output_path(out, inputs=(study.source,))
     report = run_sweep(study, out, workers=workers or 2, scheduler=scheduler, batch_size=batch_size,
                        force=force, progress=not quiet, log=_say, complevel=complevel)
     if not report.reused:
@@ -324,7 +350,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
                              f"(swept: {', '.join(grid) or 'none'})")
         dim = dim or "S0"
         stem = result.name[:-3] if result.name.endswith(".nc") else result.name
-        out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"))
+        out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"), inputs=(result,))
         try:
             frag = fragility_dataset(ds, threshold, relative_to, method, dim).load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
@@ -332,13 +358,24 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     frag.attrs.update(source_result=str(result), screening_version=__version__,
                       history=f"screening fragility {result} --threshold {threshold}"
                               + (f" --relative-to {relative_to}" if relative_to else ""))
-    tmp = out.with_name(out.name + ".tmp")
+    import os
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)   # never a planted link
+    except OSError as exc:
+        raise _write_error(out, exc) from None
+    os.close(fd)
+    tmp = Path(tmp)
     encoding = {name: {"_FillValue": None} for name in frag.coords}
     png_path = out.with_suffix(".png")
     png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
         png = plot_fragility(frag, dim, png_path)
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
         tmp.replace(out)                         # the netCDF appears last: both or neither
     except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
         tmp.unlink(missing_ok=True)
@@ -394,7 +431,7 @@ def cmd_info(result):
             text = describe(ds, result)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
-    print(text)
+    print(printable(text))
     return EXIT_OK
 
 

@@ -57,11 +57,26 @@ def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation
 
     Returns
     -------
-    (c_eq, k_eq) : [N m s/rad], [N m/rad], broadcast over all array arguments.
+    (c_eq, k_eq) : [N m s/rad], [N m/rad], broadcast over all array arguments; NaN where a
+        moment is not finite (never the finite ``sigma = 0`` values).
     """
     s = np.asarray(sigma_theta, dtype=float)
     cov_over_s = np.asarray(rho, dtype=float) * np.asarray(sigma_theta_dot, dtype=float)
-    return get(condensation).equivalent_coefficients(s, cov_over_s, block, foundation)
+    return _finite_only(get(condensation).equivalent_coefficients, s, cov_over_s, block, foundation)
+
+
+def _finite_only(coefficients, s, cov_over_s, block, foundation):
+    """``coefficients(s, cov_over_s, ...)`` evaluated where both are finite, NaN elsewhere (issue 13 B9:
+    NaN moments must not come back as the coefficients of the block at rest)."""
+    bad = ~(np.isfinite(s) & np.isfinite(cov_over_s))
+    if not np.any(bad):
+        return coefficients(s, cov_over_s, block, foundation)
+    c_eq, k_eq = coefficients(np.where(bad, 0.0, s), np.where(bad, 0.0, cov_over_s), block, foundation)
+    c_eq, k_eq = np.array(c_eq, dtype=float), np.array(k_eq, dtype=float)
+    bad = np.broadcast_to(bad, c_eq.shape)
+    c_eq[bad] = np.nan
+    k_eq[bad] = np.nan
+    return c_eq[()], k_eq[()]
 
 
 def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation, condensation="paper"):
@@ -74,8 +89,8 @@ def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, 
     cov = np.asarray(cov_theta_theta_dot, dtype=float)
     s = np.sqrt(np.maximum(var_theta, 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
-        cov_over_s = np.where(s > 0.0, cov / s, 0.0)
-    return get(condensation).equivalent_coefficients(s, cov_over_s, block, foundation)
+        cov_over_s = np.where(s > 0.0, cov / s, np.where(np.isfinite(cov), 0.0, np.nan))
+    return _finite_only(get(condensation).equivalent_coefficients, s, cov_over_s, block, foundation)
 
 
 def uplift_probability(sigma_theta, block, foundation, condensation="paper"):

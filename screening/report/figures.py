@@ -102,13 +102,24 @@ def _new_figure(width, height):
     return fig
 
 
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def save_figure(fig, path):
     """Write ``fig`` as PNG to ``path`` atomically (``<path>.tmp`` then rename): a failing write
     (disk full, permission) leaves no partial file behind and raises the ``OSError``."""
+    import tempfile
+
     path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)   # never a planted link
+    tmp = Path(tmp)
     try:
-        fig.savefig(tmp, format="png")
+        with os.fdopen(fd, "wb") as fh:
+            fig.savefig(fh, format="png")
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -127,23 +138,37 @@ def plot_histories(ds, path, points=None):
     fig = _new_figure(8.0, 11.0)
     axes = fig.subplots(len(HISTORY_PANELS), 1, sharex=True)
     t = ds["t"].values
+    drawn = {name: [] for name in HISTORY_PANELS}
     for index in points:
         label = point_label(ds, index)
         for ax, name in zip(axes, HISTORY_PANELS):
             y = np.asarray(ds[name].isel(index).values, dtype=float)
             if name in LOG_PANELS:
                 y = np.where(y > 0, y, np.nan)
+            drawn[name].append(y)
             ax.plot(t, y, label=label, lw=1.2)
     for ax, name in zip(axes, HISTORY_PANELS):
         ax.set_ylabel(_label(ds, name))
-        if name in LOG_PANELS:
-            ax.set_yscale("log")
+        _scale(ax, drawn[name], log=name in LOG_PANELS)
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t [s]")
     axes[0].legend(fontsize=7, loc="best")
     fig.suptitle(f"{ds.attrs.get('title', '')}\nstochastic linearization: representative points", fontsize=9)
     save_figure(fig, path)
     return Path(path)
+
+
+def _scale(ax, drawn, log):
+    """Log y axis when asked and something finite and positive was drawn; otherwise a linear axis
+    with a note (a result whose points are all flagged, or all NaN, still gets its figures: B4)."""
+    values = np.concatenate([np.ravel(v) for v in drawn]) if drawn else np.array([])
+    finite = np.isfinite(values)
+    if not finite.any():
+        ax.text(0.5, 0.5, "no finite values (every point flagged or not computed)", transform=ax.transAxes,
+                ha="center", va="center", fontsize=8, color="0.4")
+        return
+    if log and (values[finite] > 0).any():
+        ax.set_yscale("log")
 
 
 def _ticks(ds, dim, n):
@@ -185,11 +210,10 @@ def _curves(ds, dim, axes):
             ax.set_yticks(ds["status"].attrs["flag_values"])
             ax.set_yticklabels(str(ds["status"].attrs["flag_meanings"]).split(), fontsize=7)
         else:
-            ax.plot(x, np.where(y > 0, y, np.nan) if name in LOG_PANELS else y, "o" if categorical else "o-",
-                    ms=4 if categorical else 3)
+            y = np.where(y > 0, y, np.nan) if name in LOG_PANELS else y
+            ax.plot(x, y, "o" if categorical else "o-", ms=4 if categorical else 3)
             ax.set_ylabel(_label(ds, name))
-            if name in LOG_PANELS:
-                ax.set_yscale("log")
+            _scale(ax, [y], log=name in LOG_PANELS)
         if categorical:
             ax.set_xticks(x)
             ax.set_xticklabels(_ticks(ds, dim, n), rotation=45, ha="right", fontsize=7)

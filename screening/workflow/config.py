@@ -29,6 +29,7 @@ from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.solvers.timegrid import output_times
+from screening.workflow import limits
 
 #: Parameters that may be swept (given as a list or a range).
 SWEEPABLE = ("eps", "S0", "k", "lam", "c", "omega_g", "zeta_g")
@@ -76,10 +77,19 @@ def read_study_text(path):
 
 def parse_toml(text, source, build):
     """``build(raw)`` on the parsed TOML ``text``; every :class:`StudyError` is prefixed with ``source``."""
+    if len(text) > limits.MAX_STUDY_CHARS:
+        raise StudyError(f"{source}: the study file has {len(text)} characters; at most "
+                         f"{limits.MAX_STUDY_CHARS} are read")
+    depth = limits.nesting_depth(text)
+    if depth > limits.MAX_NESTING:
+        raise StudyError(f"{source}: invalid TOML: arrays/tables nested {depth} deep; at most "
+                         f"{limits.MAX_NESTING} levels are read")
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{source}: invalid TOML: {one_line(exc)}") from None
+    except RecursionError:
+        raise StudyError(f"{source}: invalid TOML: nested too deep") from None
     try:
         return build(raw)
     except StudyError as exc:
@@ -131,7 +141,10 @@ def check_value(key, value, lower=None, inclusive=False, upper=None):
     """``value`` as a float: a finite number above ``lower`` and at most ``upper`` (each optional)."""
     if not is_number(value):
         raise StudyError(f"{key}: must be a number (got {type_name(value)})")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:                           # an integer with hundreds of digits
+        value = math.inf if value > 0 else -math.inf
     ok = math.isfinite(value)
     if ok and lower is not None:
         ok = value >= lower if inclusive else value > lower
@@ -147,15 +160,25 @@ def check_value(key, value, lower=None, inclusive=False, upper=None):
     return value
 
 
-def check_integer(key, value, lower):
-    """``value``: an integer (no float, no boolean) ``>= lower``."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < lower:
-        raise StudyError(f"{key}: must be an integer >= {lower} (got {value!r})")
+def check_integer(key, value, lower, upper=None):
+    """``value``: an integer (no float, no boolean) ``>= lower`` (and ``<= upper`` if given)."""
+    if (isinstance(value, bool) or not isinstance(value, int) or value < lower
+            or (upper is not None and value > upper)):
+        rng = f">= {lower}" if upper is None else f"in {lower}..{upper}"
+        raise StudyError(f"{key}: must be an integer {rng} (got {short_repr(value)})")
     return value
 
 
-def integer(tbl, key, default, lower, where):
-    return check_integer(f"{where}{key}", tbl.get(key, default), lower)
+def short_repr(value):
+    """``repr(value)``, shortened for integers of hundreds of digits."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        return f"an integer of {len(str(abs(value)))} digits"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def integer(tbl, key, default, lower, where, upper=None):
+    return check_integer(f"{where}{key}", tbl.get(key, default), lower, upper)
 
 
 def check_list(key, value):
@@ -213,6 +236,11 @@ def time_table(raw):
     check_keys(tbl, ("t_end", "dt"), "time.")
     t_end = check_value("time.t_end", tbl.get("t_end", 20.0), 0.0, False)
     dt = check_value("time.dt", tbl.get("dt", 0.05), 0.0, False)
+    steps = limits.output_steps(t_end, dt)
+    if not steps < limits.MAX_TIMES:           # checked before output_times builds the array
+        key = "time.t_end" if "dt" not in tbl else "time.dt" if "t_end" not in tbl else "time.t_end / time.dt"
+        raise StudyError(f"{key}: t_end / dt = {steps:.3g} output steps; at most {limits.MAX_TIMES - 1} "
+                         f"are allowed (got t_end={t_end!r}, dt={dt!r})")
     try:
         output_times(t_end, dt)
     except ValueError as exc:
@@ -269,8 +297,9 @@ def model_tables(raw, allowed=TABLE_KEYS):
     return tables
 
 
-def sweep_values(key, spec, lower, inclusive):
-    """Values of a swept parameter from a list or a range table (validated)."""
+def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS):
+    """Values of a swept parameter from a list or a range table (validated; a range has at most
+    ``max_num`` values, checked before the values are built)."""
     if isinstance(spec, list):
         values = number_list(key, spec, lower=lower, inclusive=inclusive)
     else:
@@ -278,7 +307,11 @@ def sweep_values(key, spec, lower, inclusive):
         for part in ("start", "stop", "num"):
             if part not in spec:
                 raise StudyError(f"{key}.{part}: required in a range (keys: start, stop, num, log)")
-        num = check_integer(f"{key}.num", spec["num"], 1)
+        num = spec["num"]
+        if isinstance(num, int) and not isinstance(num, bool) and num > max_num:
+            raise StudyError(f"{key}.num: must be an integer in 1..{max_num} (the grid limit run.max_points; "
+                             f"got {short_repr(num)})")
+        num = check_integer(f"{key}.num", num, 1)
         log = spec.get("log", False)
         if not isinstance(log, bool):
             raise StudyError(f"{key}.log: must be true or false (got {type_name(log)})")
@@ -302,9 +335,10 @@ def sweep_values(key, spec, lower, inclusive):
     return values
 
 
-def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE):
+def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=limits.DEFAULT_MAX_POINTS):
     """Scalars of one model table; swept entries go to ``sweeps`` (only when allowed: ``sweeps`` not
-    None and the key in ``sweepable``)."""
+    None and the key in ``sweepable``).  The grid of ``sweeps`` may have at most ``max_points``
+    points (checked as each swept parameter is added, before anything is built on the grid)."""
     scalars = {}
     for key, value in tbl.items():
         if key not in NUMERIC:
@@ -317,10 +351,24 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE):
                 raise StudyError(f"{full}: must be a number (got {type_name(value)}{only})")
             if sweeps is None:
                 raise StudyError(f"{full}: a case sets scalars only (sweep in the base tables)")
-            sweeps[key] = sweep_values(full, value, lower, inclusive)
+            sweeps[key] = sweep_values(full, value, lower, inclusive, max_points)
+            check_grid_size(sweeps, max_points, full)
         else:
             scalars[key] = check_value(full, value, lower, inclusive)
     return scalars
+
+
+def check_grid_size(sweeps, max_points, key, n_cases=1):
+    """:class:`StudyError` naming ``key`` if ``n_cases`` x the swept values exceed ``max_points``."""
+    sizes = [n_cases] if n_cases > 1 else []
+    sizes += [len(v) for v in sweeps.values() if v is not None]
+    n = math.prod(sizes)
+    if n > max_points:
+        names = (["case"] if n_cases > 1 else []) + [k for k, v in sweeps.items() if v is not None]
+        shape = " x ".join(f"{d} {s}" for d, s in zip(names, sizes))
+        raise StudyError(f"{key}: the grid has {n} points ({shape}); at most run.max_points = {max_points} "
+                         "are allowed (sweep fewer values, or raise [run] max_points)")
+    return n
 
 
 def resolve_case(name, tables, sweeps, where, inherited=frozenset()):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import time
 from pathlib import Path
 
@@ -192,6 +193,24 @@ def warm_up():
 
 
 @contextlib.contextmanager
+def deferred_interrupt():
+    """A Ctrl-C in this block is held back and raised as ``KeyboardInterrupt`` by the caller (the
+    yielded list is non-empty then), e.g. after a cluster has finished starting (issue 13, B18)."""
+    import signal
+    import threading
+
+    pressed = []
+    if threading.current_thread() is not threading.main_thread():
+        yield pressed
+        return
+    old = signal.signal(signal.SIGINT, lambda *_: pressed.append(True))
+    try:
+        yield pressed
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
 def dask_client(workers=2, scheduler=None, client=None):
     """A ``distributed.Client``: the given one, one connected to ``scheduler`` (an address
     or a scheduler JSON file), or a new ``LocalCluster`` of ``workers`` single-threaded
@@ -202,6 +221,9 @@ def dask_client(workers=2, scheduler=None, client=None):
     from distributed import Client, LocalCluster
 
     if scheduler:
+        from screening.workflow.connect import check_scheduler
+
+        check_scheduler(scheduler)                 # bounded handshake, sane peer, sane JSON file
         try:
             if str(scheduler).endswith(".json") and Path(scheduler).is_file():
                 c = Client(scheduler_file=str(scheduler), timeout=CONNECT_TIMEOUT)
@@ -221,9 +243,19 @@ def dask_client(workers=2, scheduler=None, client=None):
     try:
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
         # that port is taken (another run, another cluster): give it a free port on localhost instead
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR,
-                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+        os.environ["SCREENING_WORKER_IGNORES_SIGINT"] = "1"     # read by the workers (screening/__init__)
+        with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
+            try:
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=logging.ERROR,
+                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+            except Exception:                         # noqa: BLE001 - a worker hit by the Ctrl-C too
+                if pressed:
+                    raise KeyboardInterrupt from None
+                raise
+        if pressed:
+            cluster.close()
+            raise KeyboardInterrupt
     except Exception as exc:                          # noqa: BLE001 - dask raises RuntimeError & co
         raise SweepError(f"cannot start a local dask cluster of {workers} worker(s): "
                          f"{type(exc).__name__}: {exc}") from None

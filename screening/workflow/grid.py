@@ -15,6 +15,8 @@ import numpy as np
 from screening.model import Block
 from screening.schema import PARAMETERS
 from screening.status import PointStatus
+from screening.solvers.moments import HISTORY_VARIABLES
+from screening.workflow.limits import batch_budget
 from screening.workflow.study import build_models
 
 DEFAULT_BATCH = 500
@@ -35,9 +37,12 @@ class Batch:
 
 
 def default_batch_size(study, n_workers, target=DEFAULT_BATCH):
-    """Points per batch: about ``target``, at least 2 batches per worker, whole rows if possible."""
+    """Points per batch: about ``target``, at least 2 batches per worker, whole rows if possible, and
+    never more than the time histories of one task fit in :data:`~screening.workflow.limits.TASK_BYTES`."""
     per_case = study.points_per_case
-    size = max(1, min(target, math.ceil(study.n_points / max(2 * n_workers, 1)), per_case))
+    n_times = round(study.t_end / study.dt) + 1
+    size = max(1, min(target, math.ceil(study.n_points / max(2 * n_workers, 1)), per_case,
+                      batch_budget(n_times, len(HISTORY_VARIABLES))))
     n_last = study.swept_shape[-1] if study.swept_shape else 1
     if n_last <= size:
         size = (size // n_last) * n_last

@@ -31,7 +31,55 @@ def open_result(path):
     if missing or "t" not in ds.dims:
         ds.close()
         raise ResultError(f"{path}: not a screening sweep result (missing {', '.join(missing) or 't'})")
+    problem = layout_problem(ds)
+    if problem:
+        ds.close()
+        raise ResultError(f"{path}: not a screening sweep result ({problem})")
     return ds
+
+
+def layout_problem(ds):
+    """What is wrong with the layout of an opened result (a short phrase), or ``""`` (issue 13, B6/B20).
+
+    Checked from the header only (no data is read): the grid is the dimensions of ``status`` and
+    has at most :data:`~screening.workflow.limits.MAX_POINTS_CEILING` points, ``t`` has at least
+    one instant and at most :data:`~screening.workflow.limits.MAX_TIMES`, every history is
+    ``grid x t`` and every summary ``grid``, and ``status`` carries integer ``flag_values`` with one
+    word of ``flag_meanings`` each.
+    """
+    import numpy as np
+
+    from screening.solvers.moments import HISTORY_VARIABLES
+    from screening.workflow import limits
+
+    grid = tuple(ds["status"].dims)
+    if "t" in grid:
+        return "status varies over t"
+    n_points = int(np.prod([ds.sizes[d] for d in grid], dtype=np.float64))
+    if n_points > limits.MAX_POINTS_CEILING:
+        return f"its grid declares {n_points:.3g} points, more than the {limits.MAX_POINTS_CEILING} read"
+    nt = ds.sizes["t"]
+    if not 1 <= nt <= limits.MAX_TIMES:
+        return f"t has {nt} instants (1..{limits.MAX_TIMES} expected)"
+    for name in HISTORY_VARIABLES:                     # stored histories ([output] may leave them out)
+        if name in ds.variables and tuple(ds[name].dims) != grid + ("t",):
+            return f"{name} has dimensions ({', '.join(ds[name].dims)}), not ({', '.join(grid + ('t',))})"
+    for name in REQUIRED_VARIABLES:
+        if tuple(ds[name].dims) != grid:
+            return f"{name} has dimensions ({', '.join(ds[name].dims)}), not ({', '.join(grid)})"
+        if ds[name].dtype.kind not in "fiu":
+            return f"{name} is not numeric ({ds[name].dtype})"
+    if ds["status"].dtype.kind not in "iu":
+        return f"status is not an integer variable ({ds['status'].dtype})"
+    attrs = ds["status"].attrs
+    values, meanings = attrs.get("flag_values"), attrs.get("flag_meanings")
+    if values is None or meanings is None:
+        return "status has no flag_values / flag_meanings"
+    values = np.atleast_1d(np.asarray(values))
+    if values.ndim != 1 or values.dtype.kind not in "iu" or not isinstance(meanings, str) \
+            or len(meanings.split()) != values.size or values.size > 64:
+        return "the flag_values and flag_meanings of status do not match"
+    return ""
 
 
 def damaged_data_error(path, exc):
@@ -49,3 +97,42 @@ def result_key(path):
             return nc.getncattr("study_sha256") if "study_sha256" in nc.ncattrs() else None
     except (OSError, RuntimeError, ValueError):
         return None
+
+
+#: Bytes read at a time when a whole result file is checked (:func:`verify_result`).
+VERIFY_BLOCK_BYTES = 32 * 2**20
+
+
+def verify_result(path, study):
+    """Why the result file ``path`` of ``study`` cannot be reused (a short reason), or ``None``.
+
+    A finished file with the study's key is still read through before it is reused (issue 13,
+    B12): the grid and time dimensions must have the study's sizes, every required variable must
+    be there, and every data chunk must decompress (damaged chunks raise in netCDF/HDF5).  The
+    data is read in blocks of about :data:`VERIFY_BLOCK_BYTES` along the first dimension.
+    """
+    import netCDF4
+    import numpy as np
+
+    expected = dict(zip(study.dims, study.shape), t=int(study.times.size))
+    try:
+        with netCDF4.Dataset(path) as nc:
+            nc.set_auto_mask(False)
+            for dim, size in expected.items():
+                if dim not in nc.dimensions or len(nc.dimensions[dim]) != size:
+                    return f"its dimension {dim!r} does not have the study's size {size}"
+            missing = [v for v in REQUIRED_VARIABLES if v not in nc.variables]
+            if missing:
+                return f"it lacks {', '.join(missing)}"
+            for var in nc.variables.values():
+                shape = var.shape
+                if not shape:
+                    var[...]
+                    continue
+                row = int(np.prod(shape[1:], dtype=np.int64)) * getattr(var.dtype, "itemsize", 8)
+                step = max(1, VERIFY_BLOCK_BYTES // max(row, 1))
+                for lo in range(0, shape[0], step):
+                    var[lo:lo + step]
+    except (OSError, RuntimeError, ValueError, IndexError, TypeError, KeyError) as exc:
+        return f"its data cannot be read ({exception_line(exc)})"
+    return None

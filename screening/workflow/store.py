@@ -11,6 +11,7 @@ import contextlib
 import fcntl
 import json
 import os
+import stat
 import zipfile
 from pathlib import Path
 
@@ -41,11 +42,11 @@ class PartialStore:
     def open(self, key, layout, log):
         """Create/lock the folder; returns the manifest (with the batch layout to use)."""
         try:
-            self.dir.mkdir(exist_ok=True)
-            self._lock = open(self.dir / self.LOCK, "w")
+            self._make_dir()
+            self._lock = os.fdopen(_open_nofollow(self.dir / self.LOCK, os.O_RDWR | os.O_CREAT), "w")
         except OSError as exc:
             raise SweepError(f"cannot use the folder {self.dir} for partial results: "
-                             f"{exc.strerror or exc}") from None
+                             f"{_reason(exc)}") from None
         try:
             fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -54,16 +55,34 @@ class PartialStore:
             raise SweepError(f"another run is writing {self.out} (lock held on {self.dir})") from None
         old = self._read_manifest()
         if old is not None and old.get("key") == key:
-            self.manifest = old
-            return old
-        if old is not None or self._owned_files():
+            if _layout_ok(old, layout):
+                self.manifest = old
+                return old
+            log(f"discarding damaged partial results (manifest) in {self.dir}")
+        elif old is not None or self._owned_files():
             log(f"discarding partial results of a different study or version in {self.dir}")
-            self._clear()
+        self._clear()
         self.manifest = {"key": key, "screening_version": __version__, **layout}
         tmp = self.dir / (self.MANIFEST + ".tmp")
-        tmp.write_text(json.dumps(self.manifest, indent=1))
+        with _create(tmp) as fh:
+            fh.write(json.dumps(self.manifest, indent=1).encode())
         os.replace(tmp, self.dir / self.MANIFEST)
         return self.manifest
+
+    def _make_dir(self):
+        """Create ``self.dir`` (mode 0700) or accept an existing one only if it is a real directory
+        (not a symbolic link) owned by this user: files are created in it (issue 13, B11)."""
+        try:
+            self.dir.mkdir(mode=0o700)
+        except FileExistsError:
+            pass
+        st = os.lstat(self.dir)
+        if stat.S_ISLNK(st.st_mode):
+            raise OSError(0, "it is a symbolic link (remove it, or give another --out)")
+        if not stat.S_ISDIR(st.st_mode):
+            raise OSError(0, "it exists and is not a folder (remove it, or give another --out)")
+        if hasattr(os, "geteuid") and st.st_uid != os.geteuid():
+            raise OSError(0, f"it is owned by another user (uid {st.st_uid}); remove it, or give another --out")
 
     def close(self):
         if self._lock is not None:
@@ -94,20 +113,22 @@ class PartialStore:
     def save_batch(self, batch, result):
         self._save(self.batch_path(batch), result, lo=batch.lo, hi=batch.hi)
 
-    def load_batch(self, batch):
-        return self._load(self.batch_path(batch), lo=batch.lo, hi=batch.hi)
+    def load_batch(self, batch, template=None):
+        """Arrays of the saved part of ``batch``; ``None`` if absent, unreadable, not this study's or
+        (given ``template``, a result of the same batch) not of the same variables, shapes and kinds."""
+        return _like(self._load(self.batch_path(batch), lo=batch.lo, hi=batch.hi), template)
 
     def save_spot(self, i, index, result):
         self._save(self.spot_path(i), result, index=np.asarray(index, dtype=np.int64))
 
-    def load_spot(self, i, index):
-        return self._load(self.spot_path(i), index=np.asarray(index, dtype=np.int64))
+    def load_spot(self, i, index, template=None):
+        return _like(self._load(self.spot_path(i), index=np.asarray(index, dtype=np.int64)), template)
 
     # -- internals
     def _save(self, path, result, **check):
         tmp = path.with_name(path.name + ".tmp")
         try:
-            with open(tmp, "wb") as fh:
+            with _create(tmp) as fh:
                 np.savez(fh, __key__=np.asarray(self.manifest["key"]), **check, **result)
             os.replace(tmp, path)
         except BaseException:
@@ -129,9 +150,11 @@ class PartialStore:
 
     def _read_manifest(self):
         try:
-            return json.loads((self.dir / self.MANIFEST).read_text())
-        except (OSError, ValueError):
+            with os.fdopen(_open_nofollow(self.dir / self.MANIFEST, os.O_RDONLY), "rb") as fh:
+                manifest = json.loads(fh.read(1 << 20))
+        except (OSError, ValueError, RecursionError):
             return None
+        return manifest if isinstance(manifest, dict) else None
 
     def _owned_files(self):
         pats = ("batch-*.npz*", "spot-*.npz*", self.BUILDING + "*", self.MANIFEST + "*")
@@ -141,3 +164,54 @@ class PartialStore:
         for p in self._owned_files():
             with contextlib.suppress(FileNotFoundError):
                 p.unlink()
+
+
+# ----------------------------------------------------------------------------- safe files (issue 13)
+def _reason(exc):
+    if isinstance(exc, OSError) and exc.errno == 40:            # ELOOP: O_NOFOLLOW met a link
+        return "a symbolic link is in the way (remove it)"
+    return exc.strerror or str(exc)
+
+
+def _open_nofollow(path, flags, mode=0o600):
+    """``os.open`` that never follows a symbolic link at ``path`` and only accepts a regular file
+    (a FIFO or device planted there is refused, without blocking)."""
+    fd = os.open(path, flags | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, mode)
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(0, f"{path} is not a regular file")
+        os.set_blocking(fd, True)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def _create(path):
+    """A new file at ``path`` for writing (whatever was there, link or file, is removed first, the
+    new one created with ``O_EXCL``): a planted link cannot redirect the write."""
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(path)
+    return os.fdopen(_open_nofollow(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb")
+
+
+def _layout_ok(manifest, layout):
+    """A manifest whose key matches is used only if its layout is sane and the study's (B14)."""
+    size = manifest.get("batch_size")
+    if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size < 2**31:
+        return False
+    return all(manifest.get(k) == layout[k] for k in ("n_points", "shape") if k in layout)
+
+
+def _like(part, template):
+    """``part`` if it holds exactly the variables of ``template`` with the same shapes and dtype
+    kinds, else ``None`` (a damaged or foreign part is computed again, B14)."""
+    if part is None or template is None:
+        return part
+    if set(part) != set(template):
+        return None
+    for name, ref in template.items():
+        value, ref = np.asarray(part[name]), np.asarray(ref)
+        if value.shape != ref.shape or value.dtype.kind != ref.dtype.kind:
+            return None
+    return part

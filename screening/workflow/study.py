@@ -102,17 +102,18 @@ import numpy as np
 from screening import __version__
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
+from screening.workflow import limits
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models,
-                                       check_choice, check_keys, check_list, check_value, choice, integer, model_tables, name_string,
-                                       number_list, required,
-                                       numeric_table, parse_toml, read_study_text, resolve_case, table,
+                                       check_choice, check_grid_size, check_keys, check_list, check_value, choice,
+                                       integer, model_tables, name_string, number_list, numeric_table, parse_toml,
+                                       read_study_text, required, resolve_case, short_repr, table,
                                        time_table, title_and_description, type_name)
 
 __all__ = ["Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
 
 MCS_MODELS = ("coupled", "condensed")
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case", "output", "fragility")
+             "case", "output", "fragility", "run")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
 HISTORY_CHOICES = ("all", "spots", "none")
 FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
@@ -249,16 +250,19 @@ def parse_study(text, name="study", source="<string>"):
 def _build(raw, text, name, source):
     check_keys(raw, _TOP_KEYS, "")
     title, description = title_and_description(raw, f"Stochastic-linearization screening: {name}")
+    max_points = _run(raw)
     base = model_tables(raw)
     sweeps = {}
-    for tname, tbl in base.items():
-        numeric_table(tbl, tname, sweeps, "")   # validates values and collects sweeps
+    for tname, tbl in base.items():             # validates values and collects sweeps (grid size bounded)
+        numeric_table(tbl, tname, sweeps, "", max_points=max_points)
 
     cases = _cases(raw, base, sweeps)
+    if "case" in raw:
+        check_grid_size(sweeps, max_points, "case", n_cases=len(cases))
     t_end, dt = time_table(raw)
     rtol, max_steps = _solver(raw)
     shape = ((len(cases),) if "case" in raw else ()) + tuple(len(v) for v in sweeps.values())
-    mcs = _mcs(raw, sweeps, cases, "case" in raw, shape)
+    mcs = _mcs(raw, sweeps, cases, "case" in raw, shape, round(t_end / dt) + 1)
     digest = hashlib.sha256(f"{text}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode())
     study = Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
@@ -311,6 +315,13 @@ def _cases(raw, base, sweeps):
     return cases
 
 
+def _run(raw):
+    """``[run] max_points``: the largest grid the study may have (:mod:`screening.workflow.limits`)."""
+    tbl = table(raw, "run")
+    check_keys(tbl, ("max_points",), "run.")
+    return integer(tbl, "max_points", limits.DEFAULT_MAX_POINTS, 1, "run.", limits.MAX_POINTS_CEILING)
+
+
 def _solver(raw):
     tbl = table(raw, "solver")
     check_keys(tbl, ("rtol", "max_steps"), "solver.")
@@ -354,7 +365,7 @@ def _fragility(raw):
     return Fragility(thresholds, relative_to, method)
 
 
-def _mcs(raw, sweeps, cases, has_case_dim, shape):
+def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):
     if "mcs" not in raw:
         return None
     tbl = table(raw, "mcs")
@@ -362,8 +373,15 @@ def _mcs(raw, sweeps, cases, has_case_dim, shape):
     enabled = tbl.get("enabled", True)
     if not isinstance(enabled, bool):
         raise StudyError(f"mcs.enabled: must be true or false (got {type_name(enabled)})")
+    most = min(limits.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // n_times)
+    samples = tbl.get("samples", 200)
+    if isinstance(samples, int) and not isinstance(samples, bool) and samples > most:
+        raise StudyError(f"mcs.samples: must be an integer in 2..{most} (at most {limits.MAX_SAMPLE_VALUES} "
+                         f"samples x {n_times} output instants in one spot check; got {short_repr(samples)})"
+                         if most < limits.MAX_SAMPLES else
+                         f"mcs.samples: must be an integer in 2..{most} (got {short_repr(samples)})")
     samples = integer(tbl, "samples", 200, 2, "mcs.")
-    seed = integer(tbl, "seed", 0, 0, "mcs.")
+    seed = integer(tbl, "seed", 0, 0, "mcs.", limits.MAX_SEED)
     model = choice(tbl, "model", MCS_MODELS, "mcs.", "coupled")
     points = tbl.get("points", "auto")
     dims = (("case",) if has_case_dim else ()) + tuple(sweeps)

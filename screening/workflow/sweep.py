@@ -42,7 +42,7 @@ from screening.workflow import execution
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
 from screening.workflow.progress import Progress
-from screening.workflow.reader import result_key
+from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
 from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, result_attributes
 
@@ -91,16 +91,19 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     complevel : zlib level of the file, 1 (fastest, default) to 9; 0 stores uncompressed.
     """
     log = log or _stderr
-    out = check_output_path(out)
+    out = check_output_path(out, inputs=(study.source,))
     report = SweepReport(path=out, n_points=study.n_points)
     t_start = time.perf_counter()
     if not force and out.exists() and result_key(out) == study.key:
-        log(f"{out} is up to date (same study and screening {__version__}): reusing it")
-        report.reused = True
-        return report
+        problem = verify_result(out, study)
+        if problem is None:
+            log(f"{out} is up to date (same study and screening {__version__}): reusing it")
+            report.reused = True
+            return report
+        log(f"{out} is the result of this study but {problem}: computing it again")
     if batch_size is not None and (isinstance(batch_size, bool) or int(batch_size) != batch_size
-                                   or batch_size < 1):
-        raise SweepError(f"batch size must be an integer >= 1 (got {batch_size!r})")
+                                   or not 1 <= batch_size < 2**31):
+        raise SweepError(f"batch size must be an integer in 1..{2**31 - 1} (got {batch_size!r})")
     if client is None and not scheduler and (isinstance(workers, bool) or not isinstance(workers, int)
                                              or workers < 1):
         raise SweepError(f"the number of workers must be an integer >= 1 (got {workers!r})")
@@ -225,7 +228,7 @@ class _SweepRun:
         with Progress(self.study.n_points, label="points", enabled=self.progress) as bar:
             resumed = 0
             for b in done:
-                part = self.store.load_batch(b)
+                part = self.store.load_batch(b, execution.failed_result(b.size, self.study.times.size))
                 if part is None:                    # unreadable or stale part: compute it again
                     fut = self._submit(b, "-redo")
                     pending[fut] = b
@@ -279,7 +282,7 @@ class _SweepRun:
         token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"
         results, failed, pending = [None] * len(spots), [False] * len(spots), {}
         for i, index in enumerate(spots):
-            results[i] = store.load_spot(i, index)
+            results[i] = store.load_spot(i, index, execution.failed_spot(study.times.size, spec.samples))
             if results[i] is None:
                 pending[execution.submit_spot(self.client, study, index, key=f"spot_check-{token}-{i:04d}")] = i
         with Progress(len(spots), label=f"spot checks ({spec.model}, {spec.samples} samples)",

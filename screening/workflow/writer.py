@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -60,16 +61,37 @@ def grid_coordinate(dim):
     return AUX_GRID_COORDINATES.get(dim, dim)
 
 
-def check_output_path(out):
-    """Raise :class:`SweepError` unless ``out`` can be written (its folder must exist)."""
+def check_output_path(out, inputs=()):
+    """Raise :class:`SweepError` unless ``out`` can be written (its folder must exist).
+
+    ``out`` may not be one of the ``inputs`` (the study or result file a command reads, under any
+    spelling or link), nor an existing file that is not a regular file (a FIFO or a device would
+    block or be clobbered)."""
     out = Path(out)
+    for path in inputs:
+        if _same_file(out, path):
+            raise SweepError(f"output path {out} is the input file {path}; give another --out")
     if out.is_dir():
         raise SweepError(f"output path {out} is a directory")
+    try:
+        mode = out.stat().st_mode
+    except OSError:
+        mode = None
+    if mode is not None and not stat.S_ISREG(mode):
+        raise SweepError(f"output path {out} exists and is not a regular file (a FIFO, socket or device); "
+                         "give another --out")
     if not out.parent.is_dir():
         raise SweepError(f"output folder {out.parent} does not exist")
     if not os.access(out.parent, os.W_OK):
         raise SweepError(f"output folder {out.parent} is not writable")
     return out
+
+
+def _same_file(a, b):
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(os.path.abspath(a)) == Path(os.path.abspath(b))
 
 
 def result_attributes(study, created, batch_size):

@@ -1,0 +1,664 @@
+"""Issue 13, "hold at every edge": each bug's reproducer and a neighbour.
+
+Study-file bounds are checked at parse time: one line naming the key and the allowed range,
+exit status 2, nothing written, and no allocation that depends on the size asked for
+(``tracemalloc`` sees numpy's buffers: the peak must stay small).
+"""
+
+import os
+import subprocess
+import sys
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from helpers import one_line_error
+
+from screening.cli import main
+from screening.workflow import limits
+from screening.workflow.study import StudyError, parse_study
+
+ROOT = Path(__file__).resolve().parents[2]
+
+STUDY = """
+title = "edges"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = [-6e5, 6e7]
+[excitation]
+kind = "white"
+S0 = {start = 2e-5, stop = 2.4e-3, num = 3, log = true}
+T1 = 4.0
+T2 = 2.0
+[time]
+t_end = 2.0
+dt = 0.05
+[mcs]
+samples = 4
+seed = 0
+"""
+
+R1000 = "{start = 1.0, stop = 2.0, num = 1000}"
+
+# id, (old, new) replacements, needle of the one-line message
+BOUNDS = [
+    # B1: 4 ranges x 1000 values (1e12 points) and its neighbour just above the configured limit
+    ("B1 grid 1e12 points", [("k = 2.89e7", f"k = {R1000}"), ("lam = 8.95e8", f"lam = {R1000}"),
+                              ("eps = [-6e5, 6e7]", f"eps = {R1000}"),
+                              ("S0 = {start = 2e-5, stop = 2.4e-3, num = 3, log = true}", f"S0 = {R1000}")],
+     "the grid has 1000000000 points"),
+    ("B1 neighbour: run.max_points", [("[mcs]", "[run]\nmax_points = 5\n[mcs]")],
+     "excitation.S0: the grid has 6 points (eps 2 x S0 3); at most run.max_points = 5"),
+    ("B1 max_points above the ceiling", [("[mcs]", "[run]\nmax_points = 1000000000000\n[mcs]")],
+     "run.max_points: must be an integer in 1..100000000"),
+    # B2
+    ("B2 num = 1e9", [("num = 3", "num = 1000000000")], "excitation.S0.num: must be an integer in 1..1000000"),
+    ("B2 num = 2**63-1", [("num = 3", f"num = {2**63 - 1}")], "excitation.S0.num: must be an integer in 1..1000000"),
+    ("B2 dt = 1e-9", [("dt = 0.05", "dt = 1e-9")], "time.t_end / time.dt: t_end / dt = 2e+09 output steps"),
+    ("B2 dt = 5e-324", [("dt = 0.05", "dt = 5e-324")], "output steps; at most 100000"),
+    # B3, B10, B8
+    ("B3 seed = 2**31", [("seed = 0", "seed = 2147483648")], "mcs.seed: must be an integer in 0..2147483647"),
+    ("B3 neighbour seed = 2**64", [("seed = 0", "seed = 18446744073709551616")], "mcs.seed: must be an integer in 0.."),
+    ("B10 samples = 1e9", [("samples = 4", "samples = 1000000000")], "mcs.samples: must be an integer in 2.."),
+    ("B10 neighbour samples x times", [("samples = 4", "samples = 999999"), ("t_end = 2.0", "t_end = 200.0")],
+     "mcs.samples: must be an integer in 2..12496 (at most 50000000 samples x 4001 output instants"),
+    ("B8 t_end = 1e6", [("t_end = 2.0", "t_end = 1e6")], "output steps; at most 100000"),
+    ("B8 neighbour t_end only", [("t_end = 2.0\ndt = 0.05", "t_end = 1e5")], "time.t_end: t_end / dt = 2e+06"),
+    # B16
+    ("B16 400-digit integer", [("m = 8.67", "m = " + "9" * 400)], "block.m: must be a finite number > 0 (got inf)"),
+    ("B16 neighbour: 400-digit num", [("num = 3", "num = " + "9" * 400)],
+     "excitation.S0.num: must be an integer in 1..1000000 (the grid limit run.max_points; got an integer of 400 digits)"),
+    ("B16 inline tables 5000 deep", [("[mcs]", "x = " + "{a = " * 5000 + "1" + "}" * 5000 + "\n[mcs]")],
+     "invalid TOML: arrays/tables nested 5000 deep"),
+    ("B16 neighbour: arrays 5000 deep", [("eps = [-6e5, 6e7]", "eps = " + "[" * 5000 + "]" * 5000)],
+     "invalid TOML: arrays/tables nested 5000 deep"),
+]
+
+
+def _listing(folder):
+    return sorted(str(p.relative_to(folder)) for p in Path(folder).rglob("*"))
+
+
+@pytest.mark.parametrize("edits, needle", [b[1:] for b in BOUNDS], ids=[b[0] for b in BOUNDS])
+def test_study_sizes_are_bounded_at_parse_time(tmp_path, capsys, edits, needle):
+    text = STUDY
+    for old, new in edits:
+        assert old in text
+        text = text.replace(old, new, 1)
+    study = tmp_path / "bad.toml"
+    study.write_text(text)
+    before = _listing(tmp_path)
+    tracemalloc.start()
+    try:
+        code = main(["run", str(study), "--out", str(tmp_path / "r.nc"), "--quiet"])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert code == 2
+    line = one_line_error(capsys.readouterr().err)
+    assert needle in line and str(study) in line
+    assert len(line) < 400
+    assert peak < 64 * 2**20                  # no array sized by the request
+    assert _listing(tmp_path) == before
+
+
+def test_limits_leave_ordinary_studies_alone():
+    study = parse_study(STUDY.replace("[mcs]", "[run]\nmax_points = 6\n[mcs]"))
+    assert study.n_points == 6 and study.mcs.seed == 0
+    study = parse_study(STUDY.replace("seed = 0", f"seed = {2**31 - 1}"))
+    assert study.mcs.seed == 2**31 - 1
+    assert limits.nesting_depth('a = "[[[[" # {{{{\nb = [[1], [2]]') == 2
+
+
+def test_default_batches_keep_one_task_within_its_memory_budget():
+    """B8 neighbour: the longest record allowed gets batches whose histories fit the task budget."""
+    from screening.solvers.moments import HISTORY_VARIABLES
+    from screening.workflow.grid import default_batch_size
+
+    study = parse_study(STUDY.replace("t_end = 2.0", "t_end = 5000.0")
+                        .replace("num = 3", "num = 1000"))     # 100001 instants, 2000 points
+    size = default_batch_size(study, 2)
+    assert size * len(study.times) * len(HISTORY_VARIABLES) * 8 <= limits.TASK_BYTES
+    assert size >= 1
+    short = parse_study(STUDY.replace("num = 3", "num = 1000"))
+    assert default_batch_size(short, 2) == 500                 # ordinary records: unchanged
+
+
+@pytest.mark.parametrize("condensation", ["paper", "cubic"])
+def test_equivalent_coefficients_keep_nan_moments_nan(condensation):
+    """B9: NaN moments gave the finite sigma = 0 coefficients (reproducer: sigma_theta = NaN;
+    neighbours: a NaN velocity, NaN inside an array, and the moment form)."""
+    from screening.condensation.api import equivalent_coefficients, equivalent_coefficients_from_moments
+    from screening.model import Block, Foundation
+
+    block, bed = Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
+    c, k = equivalent_coefficients(np.nan, 1.0, 0.5, block, bed, condensation)
+    assert np.isnan(c) and np.isnan(k)
+    c, k = equivalent_coefficients(np.array([np.nan, 0.01, 0.0]), 1.0, 0.5, block, bed, condensation)
+    assert np.isnan(c[0]) and np.isnan(k[0]) and np.all(np.isfinite(c[1:])) and np.all(np.isfinite(k[1:]))
+    c0, k0 = equivalent_coefficients(0.0, 1.0, 0.5, block, bed, condensation)
+    assert c[2] == pytest.approx(c0) and k[2] == pytest.approx(k0)
+    c, k = equivalent_coefficients(0.01, np.inf, 0.5, block, bed, condensation)
+    assert np.isnan(c) and np.isnan(k)
+    c, k = equivalent_coefficients_from_moments(np.array([np.nan, 1e-4, 1e-4]), np.array([0.0, np.nan, 0.0]),
+                                                block, bed, condensation)
+    assert np.isnan(c[:2]).all() and np.isnan(k[:2]).all() and np.isfinite(c[2]) and np.isfinite(k[2])
+
+
+# ----------------------------------------------------------------------------- output paths, pipes, terminals
+@pytest.fixture(scope="module")
+def result_file(client, tmp_path_factory):
+    """A small valid result (2 x 3 points), in a folder of its own."""
+    from helpers import quiet
+    from screening.workflow.sweep import run_sweep
+
+    out = tmp_path_factory.mktemp("result") / "res.nc"
+    run_sweep(parse_study(STUDY.replace("[mcs]\nsamples = 4\nseed = 0\n", "")), out, client=client,
+              progress=False, log=quiet)
+    return out
+
+
+def _cli(args, cwd, **kw):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "screening.cli", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120, **kw)
+
+
+@pytest.mark.parametrize("spelling", ["same", "dotted", "symlink"])
+def test_out_equal_to_the_study_file_is_refused(tmp_path, capsys, spelling):
+    """B13: ``--out`` naming the study file (as given, as ./x, through a link) overwrote the study."""
+    study = tmp_path / "s.nc"                  # a study named like a result: --out s.nc is plausible
+    study.write_text(STUDY)
+    out = {"same": study, "dotted": tmp_path / "." / "s.nc", "symlink": tmp_path / "link.nc"}[spelling]
+    if spelling == "symlink":
+        out.symlink_to(study)
+    assert main(["run", str(study), "--out", str(out), "--quiet", "--no-plots"]) == 2
+    assert "is the input file" in one_line_error(capsys.readouterr().err)
+    assert study.read_text() == STUDY
+
+
+def test_fragility_out_equal_to_the_result_is_refused(result_file, tmp_path, capsys):
+    """B13 neighbour: ``fragility --out`` naming the result it reads."""
+    before = result_file.read_bytes()
+    assert main(["fragility", str(result_file), "--threshold", "0.01", "--out", str(result_file)]) == 2
+    assert "is the input file" in one_line_error(capsys.readouterr().err)
+    assert result_file.read_bytes() == before
+
+
+@pytest.mark.parametrize("command", ["run", "fragility"])
+def test_fifo_as_output_is_refused_without_blocking(result_file, tmp_path, capsys, command):
+    """B17: a FIFO given as --out hung the run (opening it for writing blocks)."""
+    fifo = tmp_path / "out.nc"
+    os.mkfifo(fifo)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    args = (["run", str(study), "--quiet", "--no-plots"] if command == "run"
+            else ["fragility", str(result_file), "--threshold", "0.01"]) + ["--out", str(fifo)]
+    assert main(args) == 2
+    assert "is not a regular file" in one_line_error(capsys.readouterr().err)
+    assert fifo.is_fifo()
+
+
+def test_info_into_a_closed_pipe_is_quiet(result_file):
+    """B19: ``screening info R.nc | head -1`` printed a BrokenPipeError traceback."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(f"'{sys.executable}' -m screening.cli info '{result_file}' | head -1",
+                          shell=True, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and len(proc.stdout.splitlines()) == 1
+    assert proc.stderr == "", proc.stderr
+    # neighbour: --help into a closed pipe
+    proc = subprocess.run(f"'{sys.executable}' -m screening.cli run --help | head -c 10", shell=True, cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert proc.stderr == "", proc.stderr
+
+
+def test_info_escapes_terminal_control_characters_of_a_title(result_file, tmp_path, capsys):
+    """Control characters in a result's title (and other attributes) are shown escaped by info."""
+    import xarray as xr
+
+    forged = tmp_path / "forged.nc"
+    with xr.open_dataset(result_file) as ds:
+        ds = ds.load()
+    ds.attrs["title"] = "nice\x1b[2J\x1b]0;owned\x07\rtitle\x9b"
+    ds.attrs["study_text"] = ds.attrs.get("study_text", "") + "\x1b[31m"
+    ds.to_netcdf(forged)
+    assert main(["info", str(forged)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out and "\r" not in out and "\x9b" not in out
+    assert "\\x1b[2J" in out
+
+
+# ----------------------------------------------------------------------------- the partial store (B11, B12, B14)
+def _interrupted(client, study, out, after=2, batch_size=3):
+    """Run ``study`` into ``out`` and stop after ``after`` saved batches (the partial folder stays)."""
+    from helpers import quiet
+    from screening.workflow.sweep import run_sweep
+
+    def stop(batch, seen=[]):
+        seen.append(batch.index)
+        if len(seen) == after:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, client=client, batch_size=batch_size, progress=False, log=quiet, on_batch=stop)
+
+
+@pytest.fixture(scope="module")
+def reference_grid(client, tmp_path_factory):
+    from helpers import GRID, quiet
+    from screening.workflow.sweep import run_sweep
+
+    out = tmp_path_factory.mktemp("ref") / "ref.nc"
+    run_sweep(parse_study(GRID), out, client=client, batch_size=3, progress=False, log=quiet)
+    return out
+
+
+def test_planted_lock_symlink_does_not_truncate_its_target(client, tmp_path, reference_grid):
+    """B11: ``<out>.partial/lock`` was opened with open(..., "w"), following a planted link."""
+    from helpers import GRID, compare_files, quiet
+    from screening.workflow.sweep import run_sweep
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    partial = tmp_path / "r.nc.partial"
+    partial.mkdir()
+    (partial / "lock").symlink_to(victim)
+    with pytest.raises(Exception, match="symbolic link"):
+        run_sweep(parse_study(GRID), tmp_path / "r.nc", client=client, progress=False, log=quiet)
+    assert victim.read_text() == "precious"
+    # neighbour: a planted link at the manifest's temporary file is replaced, not followed
+    (partial / "lock").unlink()
+    (partial / "manifest.json.tmp").symlink_to(victim)
+    run_sweep(parse_study(GRID), tmp_path / "r.nc", client=client, batch_size=3, progress=False, log=quiet)
+    assert victim.read_text() == "precious"
+    compare_files(reference_grid, tmp_path / "r.nc")
+
+
+@pytest.mark.parametrize("kind", ["symlink", "file"])
+def test_partial_folder_that_is_a_link_or_a_file_is_refused(client, tmp_path, capsys, kind):
+    """B11 neighbours: a partial folder that is a symbolic link (to a folder elsewhere) or not a folder."""
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    partial = tmp_path / "r.nc.partial"
+    if kind == "symlink":
+        partial.symlink_to(elsewhere)
+    else:
+        partial.write_text("x")
+    from screening.workflow.store import PartialStore
+    from screening.workflow.errors import SweepError
+
+    with pytest.raises(SweepError, match="symbolic link" if kind == "symlink" else "not a folder"):
+        PartialStore(tmp_path / "r.nc").open("k", {"n_points": 1, "shape": [1], "batch_size": 1}, print)
+    assert list(elsewhere.iterdir()) == []
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="needs root to make a folder owned by another user")
+def test_partial_folder_of_another_user_is_refused(tmp_path):
+    from screening.workflow.errors import SweepError
+    from screening.workflow.store import PartialStore
+
+    partial = tmp_path / "r.nc.partial"
+    partial.mkdir()
+    os.chown(partial, 12345, 12345)
+    with pytest.raises(SweepError, match="owned by another user"):
+        PartialStore(tmp_path / "r.nc").open("k", {"n_points": 1, "shape": [1], "batch_size": 1}, print)
+
+
+def test_damaged_finished_result_is_recomputed_not_reused(client, tmp_path, reference_grid):
+    """B12: a finished result with damaged data chunks was reused as up to date forever."""
+    from helpers import GRID, compare_files, quiet
+    from test_robustness import _corrupt_data
+    from screening.workflow.sweep import run_sweep
+
+    out = tmp_path / "r.nc"
+    _corrupt_data(reference_grid, out)
+    lines = []
+    report = run_sweep(parse_study(GRID), out, client=client, batch_size=3, progress=False, log=lines.append)
+    assert not report.reused and any("computing it again" in line for line in lines)
+    compare_files(reference_grid, out)
+    # neighbour: the intact file is reused
+    report = run_sweep(parse_study(GRID), out, client=client, batch_size=3, progress=False, log=quiet)
+    assert report.reused
+
+
+def test_result_with_the_key_but_another_grid_is_not_reused(client, tmp_path, reference_grid):
+    """B12 neighbour: a file carrying the study's key whose grid is not the study's (edited by hand)."""
+    import netCDF4
+    from helpers import GRID
+    from screening.workflow.reader import verify_result
+
+    other = tmp_path / "other.nc"
+    study = parse_study(GRID.replace("num = 5", "num = 4"))
+    with netCDF4.Dataset(reference_grid) as src:
+        key = src.getncattr("study_sha256")
+    assert verify_result(reference_grid, parse_study(GRID)) is None
+    assert "dimension 'S0'" in verify_result(reference_grid, study)
+
+
+def _part_edits():
+    def shape(d):
+        d["var_theta"] = d["var_theta"][:, :3]
+
+    def missing(d):
+        del d["p_uplift"]
+
+    def dtype(d):
+        d["status"] = np.array(["x"] * len(d["status"]))
+
+    return {"wrong shape": shape, "missing variable": missing, "wrong dtype": dtype}
+
+
+@pytest.mark.parametrize("edit", list(_part_edits()))
+def test_damaged_part_files_are_recomputed_on_resume(client, tmp_path, reference_grid, edit):
+    """B14: part files with the right key but a wrong shape / missing variable / wrong dtype gave a
+    traceback on every resume."""
+    from helpers import GRID, compare_files, quiet
+    from screening.workflow.sweep import run_sweep
+
+    study, out = parse_study(GRID), tmp_path / "r.nc"
+    _interrupted(client, study, out)
+    part = sorted((tmp_path / "r.nc.partial").glob("batch-*.npz"))[0]
+    with np.load(part) as f:
+        data = dict(f)
+    _part_edits()[edit](data)
+    with open(part, "wb") as fh:
+        np.savez(fh, **data)
+    report = run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet)
+    assert report.n_resumed_batches == 1
+    compare_files(reference_grid, out)
+
+
+@pytest.mark.parametrize("batch_size", [0, -3, "3", True, None, 10**30])
+def test_manifest_with_a_bad_batch_size_starts_again(client, tmp_path, reference_grid, batch_size):
+    """B14: a manifest whose key matches but whose batch_size is nonsense gave a traceback on resume."""
+    import json
+    from helpers import GRID, compare_files, quiet
+    from screening.workflow.sweep import run_sweep
+
+    study, out = parse_study(GRID), tmp_path / "r.nc"
+    _interrupted(client, study, out)
+    manifest = tmp_path / "r.nc.partial" / "manifest.json"
+    m = json.loads(manifest.read_text())
+    m["batch_size"] = batch_size
+    manifest.write_text(json.dumps(m))
+    lines = []
+    run_sweep(study, out, client=client, batch_size=3, progress=False, log=lines.append)
+    assert any("damaged partial results" in line for line in lines)
+    compare_files(reference_grid, out)
+
+
+def test_huge_batch_size_option_is_one_line(tmp_path, capsys):
+    """B14 neighbour: --batch-size 10**30 overflowed int32 when the file was created."""
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    assert main(["run", str(study), "--out", str(tmp_path / "r.nc"), "--batch-size", str(10**30),
+                 "--quiet", "--no-plots"]) == 2
+    assert "batch size must be an integer in 1..2147483647" in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "r.nc").exists()
+
+
+# ----------------------------------------------------------------------------- Ctrl-C (B18)
+@pytest.mark.parametrize("moment", ["workers up", "batches saved"])
+def test_ctrl_c_prints_one_line_and_no_worker_tracebacks(tmp_path, moment):
+    """B18: Ctrl-C (SIGINT to the whole process group, as a terminal sends it) printed the one-line
+    message plus the KeyboardInterrupt tracebacks of every worker."""
+    import signal
+    import time
+
+    study = tmp_path / "long.toml"
+    study.write_text(STUDY.replace("num = 3", "num = 400").replace("eps = [-6e5, 6e7]",
+                                                                    "eps = [-6e5, 0.0, 3e7, 6e7]"))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-m", "screening.cli", "run", str(study), "--out",
+                             str(tmp_path / "r.nc"), "--no-plots", "--quiet", "--batch-size", "20"],
+                            cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    deadline = time.monotonic() + 120
+    partial = tmp_path / "r.nc.partial"
+    while time.monotonic() < deadline and proc.poll() is None:
+        if moment == "workers up" and partial.is_dir():      # cluster started, workers warmed up
+            break
+        if moment == "batches saved" and len(list(partial.glob("batch-*.npz"))) >= 2:
+            break
+        time.sleep(0.02)
+    assert proc.poll() is None, proc.communicate()
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    if proc.returncode == 0:        # seen rarely under load: the run finished first (reported to the lead)
+        assert lines[-1].startswith("wrote "), err
+        return
+    assert proc.returncode == 130, err
+    assert lines == ["screening: interrupted; finished batches are kept, re-run the same command to resume"]
+
+
+# ----------------------------------------------------------------------------- readers and figures (B4, B6, B20)
+def test_all_flagged_study_writes_its_figures(client, tmp_path, capsys, monkeypatch):
+    """B4: a valid study whose points are all flagged (soft bed k = 1e4) wrote its result and then
+    plotting crashed ("Data cannot be log-scaled")."""
+    from helpers import quiet
+    from screening.workflow import sweep
+
+    study = tmp_path / "soft.toml"
+    study.write_text(STUDY.replace("k = 2.89e7", "k = 1e4").replace("eps = [-6e5, 6e7]", "eps = [-6e5, 0.0]").replace("[mcs]\nsamples = 4\nseed = 0\n", ""))
+    real = sweep.run_sweep
+    monkeypatch.setattr("screening.workflow.sweep.run_sweep",
+                        lambda *a, **kw: real(*a, **{**kw, "client": client}))
+    out = tmp_path / "soft.nc"
+    assert main(["run", str(study), "--out", str(out), "--quiet"]) == 0, capsys.readouterr().err
+    import xarray as xr
+    with xr.open_dataset(out) as ds:
+        assert (ds["status"].values != 0).all()
+    assert (tmp_path / "soft_peaks.png").is_file() and (tmp_path / "soft_histories.png").is_file()
+
+
+def _all_nan(src, dst):
+    import xarray as xr
+
+    with xr.open_dataset(src) as ds:
+        ds = ds.load()
+    for name in ds.data_vars:
+        if ds[name].dtype.kind == "f":
+            ds[name][...] = np.nan
+    ds["status"][...] = 3
+    ds.to_netcdf(dst)
+    return dst
+
+
+def test_plot_of_an_all_nan_result_writes_figures(result_file, tmp_path, capsys):
+    """B4 neighbour: ``screening plot`` on any all-NaN result."""
+    bad = _all_nan(result_file, tmp_path / "nan.nc")
+    assert main(["plot", str(bad)]) == 0, capsys.readouterr().err
+    assert (tmp_path / "nan_peaks.png").is_file()
+
+
+def _foreign(result_file, path, edit):
+    import xarray as xr
+
+    with xr.open_dataset(result_file) as ds:
+        ds = ds.load()
+    ds = edit(ds)
+    for name in ds.variables:
+        ds[name].encoding = {}
+    ds.to_netcdf(path)
+    return path
+
+
+def _drop_flags(ds):
+    ds["status"].attrs.pop("flag_values")
+    return ds
+
+
+def _bad_flag_shape(ds):
+    ds["status"].attrs["flag_values"] = np.array([0, 1], dtype=np.int8)
+    return ds
+
+
+FOREIGN = {
+    "no flag_values": _drop_flags,
+    "flag attributes of the wrong shape": _bad_flag_shape,
+    "t of length 0": lambda ds: ds.isel(t=slice(0, 0)),
+    "histories without t": lambda ds: ds.assign(var_theta=ds["var_theta"].isel(t=0)),
+    "float status": lambda ds: ds.assign(status=ds["status"].astype(float)),
+}
+
+
+@pytest.mark.parametrize("command", [["info"], ["plot"], ["fragility", "--threshold", "0.1"]],
+                         ids=["info", "plot", "fragility"])
+@pytest.mark.parametrize("edit", list(FOREIGN))
+def test_foreign_files_with_the_expected_names_are_one_line(result_file, tmp_path, capsys, command, edit):
+    """B6: foreign netCDF files carrying the expected variable names crashed info/plot/fragility
+    (KeyError flag_values, t of length 0, flag attributes of the wrong shape)."""
+    bad = _foreign(result_file, tmp_path / "foreign.nc", FOREIGN[edit])
+    before = _listing(tmp_path)
+    assert main([command[0], str(bad), *command[1:]]) == 2
+    assert "not a screening sweep result" in one_line_error(capsys.readouterr().err)
+    assert _listing(tmp_path) == before
+
+
+@pytest.mark.parametrize("command", ["info", "plot"])
+def test_small_file_declaring_a_huge_grid_is_refused_without_allocating(tmp_path, capsys, command):
+    """B20: a small file declaring a 2e8-point grid made info/plot allocate 1.5 GB."""
+    import netCDF4
+
+    from screening.solvers.moments import HISTORY_VARIABLES
+    from screening.workflow.reader import REQUIRED_VARIABLES
+
+    path = tmp_path / "huge.nc"
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.createDimension("eps", 20000)
+        nc.createDimension("S0", 10000)
+        nc.createDimension("t", 2)
+        nc.createVariable("t", "f8", ("t",))[:] = [0.0, 0.05]
+        for name in REQUIRED_VARIABLES + HISTORY_VARIABLES:
+            dims = ("eps", "S0", "t") if name in HISTORY_VARIABLES else ("eps", "S0")
+            v = nc.createVariable(name, "i1" if name == "status" else "f4", dims, chunksizes=(1, 1, 1)[:len(dims)])
+            if name == "status":
+                v.flag_values = np.array([0, 1], dtype=np.int8)
+                v.flag_meanings = "ok bad"
+    assert path.stat().st_size < 100_000
+    tracemalloc.start()
+    try:
+        code = main([command, str(path)])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert code == 2
+    assert "declares 2e+08 points" in one_line_error(capsys.readouterr().err)
+    assert peak < 64 * 2**20
+
+
+def test_figures_and_fragility_do_not_write_through_planted_links(result_file, tmp_path, capsys):
+    """B11 neighbour: the temporary files of figures and of the fragility file were ``<path>.tmp``,
+    written through a link planted there."""
+    import shutil
+
+    res = tmp_path / "r.nc"
+    shutil.copy(result_file, res)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    for name in ("r_histories.png.tmp", "r_peaks.png.tmp", "r_fragility.nc.tmp", "r_fragility.png.tmp"):
+        (tmp_path / name).symlink_to(victim)
+    assert main(["plot", str(res)]) == 0
+    assert main(["fragility", str(res), "--threshold", "0.1"]) == 0
+    assert victim.read_text() == "precious"
+    assert (tmp_path / "r_fragility.nc").stat().st_mode & 0o044 == 0o044 & ~_umask()
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# ----------------------------------------------------------------------------- --scheduler (B5, B15)
+import contextlib
+import socket
+import threading
+
+
+@contextlib.contextmanager
+def _server(reply):
+    """A TCP server on 127.0.0.1 that accepts and sends ``reply`` (nothing: stays silent), bounded in time."""
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    srv.settimeout(20)
+    stop = threading.Event()
+    conns = []
+
+    def serve():
+        while not stop.is_set():
+            try:
+                conn, _ = srv.accept()
+            except OSError:
+                return
+            conns.append(conn)
+            if reply:
+                with contextlib.suppress(OSError):
+                    conn.sendall(reply)
+
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    try:
+        yield f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    finally:
+        stop.set()
+        srv.close()
+        for c in conns:
+            c.close()
+
+
+@pytest.mark.parametrize("reply, needle", [
+    (b"", "did not answer like a dask scheduler within"),                  # B5: silent server
+    (b"\xff" * 64, "is not a dask scheduler"),                             # B15: exabyte frame
+    (b"HTTP/1.1 400 Bad Request\r\n\r\n", "is not a dask scheduler"),     # B15 neighbour: a web server
+])
+def test_scheduler_that_is_not_dask_is_one_line_in_bounded_time(tmp_path, capsys, monkeypatch, reply, needle):
+    import time
+
+    monkeypatch.setattr("screening.workflow.connect.HANDSHAKE_TIMEOUT", 1.0)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    with _server(reply) as address:
+        start = time.monotonic()
+        assert main(["run", str(study), "--scheduler", address, "--out", str(tmp_path / "r.nc"), "--quiet"]) == 2
+        assert time.monotonic() - start < 15
+    assert needle in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "r.nc").exists() and not (tmp_path / "r.nc.partial").exists()
+
+
+@pytest.mark.parametrize("content, needle", [
+    ('{"address": 5}', 'has no "address" string'),
+    ("[1, 2]", 'has no "address" string'),
+    ("{not json", "cannot read the scheduler file"),
+    ("[" * 100000, "cannot read the scheduler file"),
+])
+def test_malformed_scheduler_file_is_one_line(tmp_path, capsys, content, needle):
+    """B15: a malformed scheduler JSON gave AssertionError/TypeError tracebacks."""
+    sched = tmp_path / "scheduler.json"
+    sched.write_text(content)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    assert main(["run", str(study), "--scheduler", str(sched), "--out", str(tmp_path / "r.nc"), "--quiet"]) == 2
+    assert needle in one_line_error(capsys.readouterr().err)
+
+
+def test_a_real_scheduler_passes_the_check():
+    import logging
+    from distributed import LocalCluster
+    from screening.workflow.connect import check_scheduler
+
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp://", dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster:
+        assert check_scheduler(cluster.scheduler_address, timeout=5) == cluster.scheduler_address
