@@ -260,7 +260,9 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
     if not report.reused:
         counts = ", ".join(f"{k} {v}" for k, v in report.status_counts.items())
         spots = f", {report.n_spots} spot check(s)" if report.n_spots else ""
-        _say(f"wrote {out}: {report.n_points} points ({counts}){spots} in {report.timings['total']:.1f} s")
+        trust = ", ".join(f"{k} {v}" for k, v in report.trust_counts.items())
+        _say(f"wrote {out}: {report.n_points} points (status: {counts}; linearization against the coupled model: "
+             f"{trust}){spots} in {report.timings['total']:.1f} s")
     if not no_plots:
         stem = out.name[:-3] if out.name.endswith(".nc") else out.name
         pngs = [out.parent / f"{stem}_{k}.png" for k in ("histories", "peaks")]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import PointStatus, SpotStatus
+from screening.status import PointStatus, SpotStatus, Trust
 
 
 def _fmt(value):
@@ -54,6 +54,10 @@ def describe(ds, path="result"):
     counts = ", ".join(f"{m} {int(np.sum(status == c))}" for c, m in zip(codes, meanings)
                        if np.any(status == c))
     lines.append(f"status: {counts}")
+    if "sl_trust" in ds.variables:
+        trust = np.asarray(ds["sl_trust"].values).reshape(-1)
+        lines.append("linearization against the coupled model (docs/method.md#trusting-a-point): " + ", ".join(
+            f"{t.name} {int(np.sum(trust == t))}" for t in Trust if np.any(trust == t)))
     ok = status == PointStatus.ok
     lines.append(f"summary over the {int(ok.sum())} status-ok point(s) (min / median / max):")
     for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"):

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
-from screening.status import PointStatus, SampleState
+from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.grid import batch_models, point_values
 from screening.workflow.study import build_models
@@ -34,6 +34,8 @@ HISTORY_DTYPE = np.float32
 SUMMARY_FLOATS = ("t_stop", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq")
 SUMMARY_INTS = ("n_steps", "n_rejected")
 MODEL_FLOATS = ("theta_ul", "slenderness")
+#: The predicted band of SL's error against the coupled model (:mod:`screening.analysis.trust`).
+TRUST_FLOATS = ("sl_error_low", "sl_error_high")
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
 #: Linearization histories a spot check is compared against.
@@ -68,7 +70,32 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
     if fragility is not None:
         out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
+    out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out))
     return out
+
+
+def batch_trust(res, block, foundation, excitation, condensation, out, t_out):
+    """``sl_trust`` (:class:`screening.status.Trust`) and the error band of a batch, from what the
+    solver returned (without histories the lock-in indicator is unknown: at best ``check``)."""
+    from screening.analysis.trust import sl_trust, trust_indicators
+
+    n = out["status"].size
+
+    def on_points(value):          # a per-point array of the batch, or one value for all its points
+        value = np.asarray(value, dtype=float)
+        return np.full(n, value.item()) if value.size == 1 else value.reshape(n)
+
+    var_end = res["var_theta"].reshape(n, -1)[:, -1] if "var_theta" in res else np.full(n, np.nan)
+    q = excitation.envelope(np.asarray(t_out, dtype=float)[:, None])      # (t, points) or (t, 1)
+    q2 = np.asarray(q, dtype=float) ** 2
+    envelope_end = q2[-1] / np.maximum(q2.max(axis=0), 1e-300)
+    indicators = trust_indicators(out["peak_p_uplift"], out["min_k_eq"],
+                                  on_points(condensation.stiffness_at_rest(block, foundation)),
+                                  out["peak_var_theta"], out["slenderness"], var_end, on_points(envelope_end))
+    flag, low, high = sl_trust(indicators, status=out["status"], condensation=condensation.name,
+                               eps=on_points(foundation.eps))
+    return {"sl_trust": np.asarray(flag, dtype=np.int8), "sl_error_low": np.asarray(low, dtype=float),
+            "sl_error_high": np.asarray(high, dtype=float)}
 
 
 def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
@@ -100,10 +127,11 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None):
     if fragility is not None:
         out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
-    for name in SUMMARY_FLOATS + MODEL_FLOATS:
+    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS:
         out[name] = np.full(n, np.nan)
     for name in SUMMARY_INTS:
         out[name] = np.zeros(n, dtype=np.int32)
+    out["sl_trust"] = np.full(n, Trust.untrusted, dtype=np.int8)
     return out
 
 

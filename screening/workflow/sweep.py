@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.status import PointStatus
+from screening.status import PointStatus, Trust
 from screening.workflow import execution
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
@@ -63,6 +63,8 @@ class SweepReport:
     n_failed_batches: int = 0
     n_spots: int = 0
     status_counts: dict = field(default_factory=dict)
+    #: points per trust flag of the linearization (:class:`screening.status.Trust`)
+    trust_counts: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     n_workers: int = 0
 
@@ -257,6 +259,8 @@ class _SweepRun:
                     self.on_batch(b)
         codes, counts = np.unique(self.result.status, return_counts=True)
         self.report.status_counts = {PointStatus(int(c)).name: int(n) for c, n in zip(codes, counts)}
+        codes, counts = np.unique(self.result.sl_trust, return_counts=True)
+        self.report.trust_counts = {Trust(int(c)).name: int(n) for c, n in zip(codes, counts)}
 
     def _task_failed(self, b, exc):
         self.report.n_failed_batches += 1

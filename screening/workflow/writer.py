@@ -37,10 +37,10 @@ import numpy as np
 
 from screening import __version__
 from screening.schema import FRAGILITY, SWEEP, TIME, attributes, global_attributes
-from screening.status import PointStatus, SpotStatus
+from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (HISTORY_DTYPE, MODEL_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS,
-                                          SUMMARY_INTS)
+                                          SUMMARY_INTS, TRUST_FLOATS)
 from screening.workflow.grid import hyperslabs, parameter_table
 
 SYNC_POINTS = 2000            # points written between flushes of the file (compression overlaps compute)
@@ -53,7 +53,7 @@ TITLE_FALLBACK = "Stochastic-linearization screening"
 #: then wants the dimensions in T, Z, Y, X order (strict cf:1.8 check 2.4).
 AUX_GRID_COORDINATES = {"k": "k_value"}
 #: Per-point variables besides the histories, in file order.
-POINT_VARIABLES = ("status",) + SUMMARY_FLOATS + MODEL_FLOATS + SUMMARY_INTS
+POINT_VARIABLES = ("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + SUMMARY_INTS
 
 
 def grid_coordinate(dim):
@@ -160,6 +160,7 @@ class ResultFile:
         self.nt = study.times.size
         self.histories = study.output.stored
         self.status = np.full(study.n_points, PointStatus.task_failed, dtype=np.int8)
+        self.sl_trust = np.full(study.n_points, Trust.untrusted, dtype=np.int8)
         self.peak_p_uplift = np.full(study.n_points, np.nan)
         import netCDF4                  # here, not at module level: workers never need it
 
@@ -219,7 +220,8 @@ class ResultFile:
             self._variable(name, "f4", dims + ("t",), HISTORY_DTYPE(np.nan), coordinates, **self.zlib,
                            shuffle=self.zlib["zlib"], chunksizes=_chunks(self.shape, self.nt))
         self._variable("status", "i1", dims, False, coordinates, **self.zlib)
-        for name in SUMMARY_FLOATS + MODEL_FLOATS:
+        self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib)
+        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS:
             self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib)
         for name in SUMMARY_INTS:
             self._variable(name, "i4", dims, False, coordinates, **self.zlib)
@@ -256,6 +258,7 @@ class ResultFile:
             nc.sync()           # compress and write the cached chunks now, while workers compute
             self._unsynced = 0
         self.status[batch.lo:batch.hi] = result["status"]
+        self.sl_trust[batch.lo:batch.hi] = result["sl_trust"]
         self.peak_p_uplift[batch.lo:batch.hi] = result["peak_p_uplift"]
 
     def history(self, name, index):

@@ -18,6 +18,7 @@ from helpers import CASES, GRID, compare_files, quiet
 from screening.workflow import execution
 from screening.condensation.api import uplift_threshold
 from screening.solvers.moments import solve_moments
+from screening.solvers.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
 from screening.status import PointStatus
 from screening.workflow.errors import SweepError
@@ -418,3 +419,27 @@ def test_spot_histories_are_those_of_the_full_result_at_the_spot(client, tmp_pat
         for name in ("var_theta", "k_eq"):
             ref = f[name].sel(eps=6e7, S0=2.4e-3).values.astype(float)
             np.testing.assert_allclose(s[f"spot_{name}"].values[0], ref, rtol=1e-6, equal_nan=True)
+
+
+def test_every_point_carries_the_trust_flag_of_the_linearization(tmp_path, one_worker):
+    """sl_trust and its error band on the workers equal add_trust on the same points solved directly."""
+    from screening.analysis.trust import add_trust
+    from screening.status import Trust
+    from screening.workflow.reader import open_result
+
+    study = parse_study(GRID, name="trust")
+    out = tmp_path / "trust.nc"
+    report = run_sweep(study, out, client=one_worker, progress=False, log=quiet)
+    assert sum(report.trust_counts.values()) == study.n_points
+    with open_result(out) as ds:
+        ds = ds.load()
+    assert ds["sl_trust"].attrs["flag_meanings"] == "trusted check untrusted"
+    block, foundation, excitation = build_models(study.cases[0], {
+        "eps": study.sweeps["eps"], "S0": study.sweeps["S0"]})           # 1-d: dims eps and S0
+    direct = add_trust(linearize(block, foundation, excitation, t_end=study.t_end, dt=study.dt, rtol=study.rtol))
+    direct = direct.transpose("eps", "S0", ...)
+    np.testing.assert_array_equal(ds["sl_trust"].values, direct["sl_trust"].values)
+    for name in ("sl_error_low", "sl_error_high"):
+        np.testing.assert_allclose(ds[name].values, direct[name].values, rtol=1e-12, equal_nan=True)
+    assert set(np.unique(ds["sl_trust"].values)) <= {int(t) for t in Trust}
+    assert np.any(ds["sl_trust"].values != Trust.trusted)          # the heavy-uplift points are not trusted
