@@ -54,6 +54,7 @@ from importlib import resources
 import numpy as np
 import xarray as xr
 
+from screening.model.excitation import Envelope
 from screening.status import PointStatus, Trust
 
 #: Floor of the envelope's late fraction q(t_end)^2 / max q^2 (avoids dividing by ~0).
@@ -98,9 +99,7 @@ def envelope_fraction(ds):
     kind = ds.attrs.get("envelope", "exponential")
     if kind == "constant":
         return xr.DataArray(1.0)
-    t = ds["t"]
-    q = 4.0 * (np.exp(-t / ds["T1"]) - np.exp(-t / ds["T2"]))
-    q2 = q * q
+    q2 = Envelope(ds["T1"], ds["T2"])(ds["t"]) ** 2       # eq. (57), the model's own envelope
     return q2.isel(t=-1) / q2.max("t")
 
 

@@ -44,8 +44,10 @@ class Envelope:
                 f"parameter 'T2' must be smaller than 'T1' (0 < T2 < T1; got T1={self.T1!r}, T2={self.T2!r})")
 
     def __call__(self, t):
-        """``q(t)`` [1] at times ``t`` [s]."""
-        t = np.asarray(t, dtype=float)
+        """``q(t)`` [1] at times ``t`` [s] (an ``xarray.DataArray`` of times broadcasts by dimension name
+        with DataArray ``T1``, ``T2``)."""
+        if not hasattr(t, "dims"):
+            t = np.asarray(t, dtype=float)
         return 4.0 * (np.exp(-t / self.T1) - np.exp(-t / self.T2))
 
     @property
