@@ -44,7 +44,7 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 # ============================================================================ tasks
 def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
-                fragility=None):
+                fragility=None, trust_table=None):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
@@ -70,13 +70,18 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
     if fragility is not None:
         out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
-    out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out))
+    out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
     return out
 
 
-def batch_trust(res, block, foundation, excitation, condensation, out, t_out):
+def batch_trust(res, block, foundation, excitation, condensation, out, t_out, table=None):
     """``sl_trust`` (:class:`screening.status.Trust`) and the error band of a batch, from what the
-    solver returned (without histories the lock-in indicator is unknown: at best ``check``)."""
+    solver returned (without histories the lock-in indicator is unknown: at best ``check``).
+
+    ``table``: the rule (:func:`screening.analysis.trust.shipped_table`), read once by the client and
+    sent with the task: worker threads must not read netCDF while the client writes one (HDF5 is not
+    thread-safe).  None reads the shipped table here.
+    """
     from screening.analysis.trust import sl_trust, trust_indicators
 
     n = out["status"].size
@@ -92,7 +97,7 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out):
     indicators = trust_indicators(out["peak_p_uplift"], out["min_k_eq"],
                                   on_points(condensation.stiffness_at_rest(block, foundation)),
                                   out["peak_var_theta"], out["slenderness"], var_end, on_points(envelope_end))
-    flag, low, high = sl_trust(indicators, status=out["status"], condensation=condensation.name,
+    flag, low, high = sl_trust(indicators, calibration=table, status=out["status"], condensation=condensation.name,
                                eps=on_points(foundation.eps))
     return {"sl_trust": np.asarray(flag, dtype=np.int8), "sl_error_low": np.asarray(low, dtype=float),
             "sl_error_high": np.asarray(high, dtype=float)}
@@ -192,10 +197,12 @@ def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
 # ============================================================================ submission
 def submit_batch(client, study, batch, key):
     """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times)."""
+    from screening.analysis.trust import shipped_table
+
     case = study.cases[batch.case]
     return client.submit(solve_batch, *batch_models(study, batch), case.condensation_model, study.times,
-                         study.rtol, study.max_steps, study.output.stored, study.fragility, retries=TASK_RETRIES,
-                         pure=False, key=key)
+                         study.rtol, study.max_steps, study.output.stored, study.fragility, shipped_table(),
+                         retries=TASK_RETRIES, pure=False, key=key)
 
 
 def submit_spot(client, study, index, key):
