@@ -171,11 +171,13 @@ def main(argv=None):
     Ctrl-C (a blank line on stderr): every failure is mapped here to one line and a status.
     """
     from screening.workflow.errors import SweepError
+    from screening.workflow.interrupt import interrupt_guard
     from screening.workflow.study import StudyError
 
     argv = sys.argv[1:] if argv is None else list(argv)
+
     try:
-        with cli.make_context("screening", argv) as ctx:
+        with interrupt_guard(), cli.make_context("screening", argv) as ctx:
             status = cli.invoke(ctx)
         sys.stdout.flush()                      # a closed pipe shows here, not at interpreter exit
         return status

@@ -228,24 +228,6 @@ def warm_up():
 
 
 @contextlib.contextmanager
-def deferred_interrupt():
-    """A Ctrl-C in this block is held back and raised as ``KeyboardInterrupt`` by the caller (the
-    yielded list is non-empty then), e.g. after a cluster has finished starting (issue 13, B18)."""
-    import signal
-    import threading
-
-    pressed = []
-    if threading.current_thread() is not threading.main_thread():
-        yield pressed
-        return
-    old = signal.signal(signal.SIGINT, lambda *_: pressed.append(True))
-    try:
-        yield pressed
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
-@contextlib.contextmanager
 def dask_client(workers=2, scheduler=None, client=None):
     """A ``distributed.Client``: the given one, one connected to ``scheduler`` (an address
     or a scheduler JSON file), or a new ``LocalCluster`` of ``workers`` single-threaded
@@ -279,6 +261,8 @@ def dask_client(workers=2, scheduler=None, client=None):
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
         # that port is taken (another run, another cluster): give it a free port on localhost instead
         os.environ["SCREENING_WORKER_IGNORES_SIGINT"] = "1"     # read by the workers (screening/__init__)
+        from screening.workflow.interrupt import deferred_interrupt
+
         with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
             try:
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,

@@ -41,6 +41,7 @@ from screening.status import PointStatus, Trust
 from screening.workflow import execution
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
+from screening.workflow.interrupt import raise_if_interrupted
 from screening.workflow.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
@@ -255,6 +256,7 @@ class _SweepRun:
                 self._write(b, part, save=ok)
                 del part
                 bar.update(b.size)
+                raise_if_interrupted()              # a Ctrl-C swallowed by a GC callback stops here
                 if self.on_batch is not None:
                     self.on_batch(b)
         codes, counts = np.unique(self.result.status, return_counts=True)
@@ -310,12 +312,14 @@ class _SweepRun:
                             "would compute it again")
                 fut.release()
                 bar.update(1)
+                raise_if_interrupted()
         self.result.write_spots(spots, results, failed, spec)
         return len(spots)
 
     # -- the end
     def _finalize(self):
         """Close the file, flush it to disk and move it into place atomically."""
+        raise_if_interrupted()
         self.result.set_attrs(n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
         self.result.close()
         with open(self.store.building, "rb") as fh:

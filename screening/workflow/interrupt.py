@@ -1,0 +1,71 @@
+"""Ctrl-C handling for long runs: an interrupt is never lost and never printed as a traceback.
+
+Python raises ``KeyboardInterrupt`` wherever the main thread happens to be. When that is a garbage
+collector callback or a ``__del__`` (dask's ``GCDiagnosis`` registers one), the exception is
+"ignored": a traceback goes to stderr and the run carries on as if nothing was pressed.
+:func:`interrupt_guard` records every Ctrl-C, silences those ignored copies, and the run loops call
+:func:`raise_if_interrupted` between batches so that a swallowed interrupt still stops the run.
+"""
+import contextlib
+import signal
+import sys
+import threading
+
+_pressed = threading.Event()
+
+
+def interrupted():
+    """True once Ctrl-C was pressed inside :func:`interrupt_guard`."""
+    return _pressed.is_set()
+
+
+def raise_if_interrupted():
+    """Raise ``KeyboardInterrupt`` if a Ctrl-C was pressed (e.g. one swallowed by a GC callback)."""
+    if _pressed.is_set():
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def interrupt_guard():
+    """Record Ctrl-C while the block runs; still raise ``KeyboardInterrupt`` at once as usual.
+
+    Only acts in the main thread (signal handlers cannot be installed elsewhere)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _pressed.clear()
+
+    def on_sigint(signum, frame):
+        _pressed.set()
+        raise KeyboardInterrupt
+
+    def on_unraisable(unraisable, default=sys.unraisablehook):
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            _pressed.set()                  # swallowed where it was raised: remembered here instead
+            return
+        default(unraisable)
+
+    old_handler, old_hook = signal.signal(signal.SIGINT, on_sigint), sys.unraisablehook
+    sys.unraisablehook = on_unraisable
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old_handler)
+        sys.unraisablehook = old_hook
+        _pressed.clear()
+
+
+@contextlib.contextmanager
+def deferred_interrupt():
+    """A Ctrl-C in this block is held back and raised as ``KeyboardInterrupt`` by the caller (the
+    yielded list is non-empty then), e.g. after a cluster has finished starting (issue 13, B18)."""
+    pressed = []
+    if threading.current_thread() is not threading.main_thread():
+        yield pressed
+        return
+
+    old = signal.signal(signal.SIGINT, lambda *_: pressed.append(True))
+    try:
+        yield pressed
+    finally:
+        signal.signal(signal.SIGINT, old)
