@@ -2,9 +2,11 @@
 
 Python raises ``KeyboardInterrupt`` wherever the main thread happens to be. When that is a garbage
 collector callback or a ``__del__`` (dask's ``GCDiagnosis`` registers one), the exception is
-"ignored": a traceback goes to stderr and the run carries on as if nothing was pressed.
-:func:`interrupt_guard` records every Ctrl-C, silences those ignored copies, and the run loops call
-:func:`raise_if_interrupted` between batches so that a swallowed interrupt still stops the run.
+"ignored": a traceback goes to stderr and the run carries on as if nothing was pressed; inside
+dask's own waits (``Client.sync``) it makes dask log a traceback. :func:`interrupt_guard` records
+every Ctrl-C and silences the ignored copies; inside :func:`shielded` (a block that talks to dask)
+a Ctrl-C is only recorded and raised where it is safe: while :func:`interruptible` waits for the
+next result, between batches (:func:`raise_if_interrupted`) or when the block ends.
 """
 import contextlib
 import signal
@@ -12,6 +14,7 @@ import sys
 import threading
 
 _pressed = threading.Event()
+_depth = {"shielded": 0, "open": 0}
 
 
 def interrupted():
@@ -37,7 +40,8 @@ def interrupt_guard():
 
     def on_sigint(signum, frame):
         _pressed.set()
-        raise KeyboardInterrupt
+        if not _depth["shielded"] or _depth["open"]:
+            raise KeyboardInterrupt
 
     def on_unraisable(unraisable, default=sys.unraisablehook):
         if isinstance(unraisable.exc_value, KeyboardInterrupt):
@@ -53,6 +57,32 @@ def interrupt_guard():
         signal.signal(signal.SIGINT, old_handler)
         sys.unraisablehook = old_hook
         _pressed.clear()
+
+
+@contextlib.contextmanager
+def shielded():
+    """Inside this block a Ctrl-C is recorded, not raised where it lands (see the module docstring)."""
+    _depth["shielded"] += 1
+    try:
+        yield
+    finally:
+        _depth["shielded"] -= 1
+    raise_if_interrupted()
+
+
+def interruptible(iterable):
+    """Iterate, letting a Ctrl-C raise at once while waiting for the next item (also in :func:`shielded`)."""
+    iterator = iter(iterable)
+    while True:
+        raise_if_interrupted()
+        _depth["open"] += 1
+        try:
+            item = next(iterator)
+        except StopIteration:
+            return
+        finally:
+            _depth["open"] -= 1
+        yield item
 
 
 @contextlib.contextmanager

@@ -41,7 +41,7 @@ from screening.status import PointStatus, Trust
 from screening.workflow import execution
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
-from screening.workflow.interrupt import raise_if_interrupted
+from screening.workflow.interrupt import interruptible, raise_if_interrupted, shielded
 from screening.workflow.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
@@ -115,7 +115,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
 
     timings = report.timings
     t0 = time.perf_counter()
-    with execution.dask_client(workers, scheduler, client) as c:
+    with shielded(), execution.dask_client(workers, scheduler, client) as c:
         n_workers = len(c.nthreads()) or 1
         if client is None and not scheduler:
             c.wait_for_workers(workers)
@@ -243,7 +243,7 @@ class _SweepRun:
             if resumed:
                 self.log(f"resuming: {resumed} of {len(batches)} batches were already done in {self.store.dir}")
             self.report.n_resumed_batches = resumed
-            for fut in ready:
+            for fut in interruptible(ready):
                 b = pending.pop(fut)
                 try:
                     part, ok = fut.result(), True
@@ -294,7 +294,7 @@ class _SweepRun:
         with Progress(len(spots), label=f"spot checks ({spec.model}, {spec.samples} samples)",
                       enabled=self.progress and bool(pending)) as bar:
             bar.update(len(spots) - len(pending))
-            for fut in as_completed(list(pending)):
+            for fut in interruptible(as_completed(list(pending))):
                 i = pending.pop(fut)
                 try:
                     results[i] = fut.result()

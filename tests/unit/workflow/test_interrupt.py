@@ -5,8 +5,8 @@ import signal
 
 import pytest
 
-from screening.workflow.interrupt import (deferred_interrupt, interrupt_guard, interrupted,
-                                          raise_if_interrupted)
+from screening.workflow.interrupt import (deferred_interrupt, interrupt_guard, interruptible, interrupted,
+                                          raise_if_interrupted, shielded)
 
 
 class _RaisesInDel:
@@ -61,3 +61,41 @@ def test_deferred_interrupt_holds_the_press_back():
             pass
     assert pressed == [True]
     assert not interrupted()
+
+
+def _press():
+    os.kill(os.getpid(), signal.SIGINT)
+    for _ in range(10**5):              # the handler runs between bytecodes
+        pass
+
+
+def test_shielded_block_records_and_raises_only_where_safe():
+    reached = []
+    with pytest.raises(KeyboardInterrupt), interrupt_guard():
+        with shielded():
+            _press()                    # lands in "dask code": recorded only
+            reached.append("after the press")
+            for item in interruptible([1, 2]):
+                reached.append(item)    # never: the recorded press is raised before the first wait
+    assert reached == ["after the press"]
+
+
+def test_press_while_waiting_raises_at_once():
+    def waits():
+        yield 1
+        _press()                        # pressed while the next item is being waited for
+        reached.append("still waiting")
+        yield 2
+
+    reached = []
+    with pytest.raises(KeyboardInterrupt), interrupt_guard(), shielded():
+        for item in interruptible(waits()):
+            reached.append(item)
+    assert reached == [1]
+
+
+def test_shielded_block_raises_when_it_ends():
+    with pytest.raises(KeyboardInterrupt), interrupt_guard():
+        with shielded():
+            _press()
+        pytest.fail("the recorded press must be raised when the shielded block ends")
