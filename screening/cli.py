@@ -72,6 +72,16 @@ def _positive_int(text):
     return value
 
 
+def _worker_count(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= MAX_WORKERS:
+        raise ValueError(f"must be an integer in 0..{MAX_WORKERS} (got {text!r})")
+    return value
+
+
 def _positive_float(text):
     try:
         value = float(text)
@@ -88,7 +98,10 @@ def _zlib_level(text):
     return int(text)
 
 
+#: Most local worker processes a command starts.
+MAX_WORKERS = 256
 POSITIVE_INT = _Checked("integer", _positive_int)
+WORKER_COUNT = _Checked("integer", _worker_count)
 POSITIVE_FLOAT = _Checked("number", _positive_float)
 ZLIB_LEVEL = _Checked("0..9", _zlib_level)
 

@@ -11,7 +11,10 @@ from pathlib import Path
 import click
 import numpy as np
 
-from screening.cli import EXIT_OK, CommandError, _Choice, _say, _write_error, cli
+from screening.cli import EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error, cli
+
+#: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
+SERIAL_RECORDS = 4
 
 
 def _overrides(pairs):
@@ -173,9 +176,18 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
 @click.option("--case", help="case of the study (required when it has several)")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
               help="value of a swept block/bed parameter (repeatable)")
+@click.option("--workers", type=WORKER_COUNT, callback=_not_with("scheduler"),
+              help=f"local dask worker processes, one task per record; 0: in this process (default: 0 up to "
+                   f"{SERIAL_RECORDS} records, else 2)")
+@click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
+              help="use an existing dask cluster: scheduler address or scheduler JSON file")
 @click.option("--quiet", is_flag=True, help="no progress lines")
-def cmd_cloud(study, out, case, sets, quiet):
+def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
+    import contextlib
+
     from screening.workflow.cloud import load_cloud_study, plot_cloud, run_cloud
+    from screening.workflow.execution import dask_client
+    from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path
 
     cloud = load_cloud_study(study)
@@ -183,7 +195,15 @@ def cmd_cloud(study, out, case, sets, quiet):
         out = Path("outputs") / f"{Path(study).stem}.nc"
         out.parent.mkdir(exist_ok=True)
     out = check_output_path(out)
-    ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say)
+    if workers is None and not scheduler:
+        workers = 0 if len(cloud.files) <= SERIAL_RECORDS else 2
+    in_process = not scheduler and workers == 0
+    with contextlib.ExitStack() as stack:
+        client = None
+        if not in_process:
+            stack.enter_context(shielded())
+            client = stack.enter_context(dask_client(workers, scheduler))
+        ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client)
     frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
     _write_fragility_files(ds, frag, out, plot_cloud, warnings)
     n = ds.sizes["record"]

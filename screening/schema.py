@@ -224,6 +224,20 @@ INTENSITY = {
                  "flag_meanings": "ok non_positive_beta no_fit"},
 }
 
+#: Cloud analysis (:mod:`screening.workflow.cloud`): one row per record, then the fitted fragility.
+CLOUD = {
+    **{name: SIMULATION[name] for name in ("peak_abs_theta", "overturned", "overturning_time")},
+    "diverged": _v("1", "the integration diverged or its task failed (left out of the fit)"),
+    **{name: INTENSITY[name] for name in ("pga", "sa", "rms_acceleration", "arias_intensity", "fit_flag")},
+    "record": _v("1", "record index"),
+    "record_name": {"long_name": "record name"},
+    "exceed": _v("1", "peak |theta| above the threshold, or overturned"),
+    "threshold_rad": _v("rad", "rotation threshold"),
+    "slenderness": _v("rad", "slenderness angle atan(b/h)"),
+    "median": {"long_name": "median of the lognormal fragility curve (units of the intensity measure)"},
+    "beta": _v("1", "logarithmic standard deviation of the lognormal fragility curve"),
+}
+
 #: Calibration of the trust rule (``benchmarks/trust_calibration.py`` -> ``screening/data/trust_calibration.nc``).
 TRUST_CALIBRATION = {
     "point": {"long_name": "calibration point name"},

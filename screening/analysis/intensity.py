@@ -55,6 +55,8 @@ from screening.solvers.synthesis import envelope_rate
 
 #: Names of the measures (data variables of :func:`intensity_measures`) and their units.
 MEASURES = {"pga_median": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1", "sa_median": "m s-2"}
+#: Names of the measures of one record (:func:`record_measures`; ``sa`` only with a period).
+RECORD_MEASURES = ("pga", "rms_acceleration", "arias_intensity", "sa")
 #: Standard gravity used by the Arias intensity [m s-2].
 G = 9.80665
 N_TIMES = 4001

@@ -23,8 +23,9 @@ exceed/not-exceed outcome of each record (Bernoulli likelihood; Baker 2015, "Eff
 analytical fragility function fitting using dynamic structural analysis", Earthquake
 Spectra 31(1)).
 
-The records are run serially in this process (each is a few seconds of compiled
-integration); a dask version can reuse :func:`run_record` per task.
+The records run in this process, or as one dask task per record (``screening cloud --workers N``
+or ``--scheduler``; each record is a few seconds of compiled integration).  A record whose task
+fails is kept with NaN values and ``diverged`` set (left out of the fit) and named in the warnings.
 """
 
 from __future__ import annotations
@@ -115,28 +116,91 @@ def run_record(block, foundation, record, model="coupled", condensation="paper",
     return out
 
 
-def run_cloud(cloud, case=None, overrides=None, progress=None):
-    """Run every record of a :class:`CloudStudy`; returns the result dataset (see the module docstring)."""
-    from screening import schema
-    from screening.analysis.fragility import fit_lognormal_fragility
+def read_cloud_records(cloud):
+    """The records of a :class:`CloudStudy`, read and scaled (:class:`StudyError` naming the bad file)."""
     from screening.records import Record, read_record
-    from screening.workflow.records_study import block_and_foundation
 
-    block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
-    rows, names = [], []
-    for i, path in enumerate(cloud.files):
+    records = []
+    for path in cloud.files:
         try:
             rec = read_record(path, dt=cloud.dt, units=cloud.units)
         except ValueError as exc:
             raise StudyError(f"records.files: {exc}") from None
         if cloud.scale != 1.0:
             rec = Record(rec.acceleration * cloud.scale, rec.dt, rec.name, rec.source, rec.units_in)
-        rows.append(run_record(block, foundation, rec, cloud.model,
-                               chosen.condensation if cloud.model == "condensed" else "paper", cloud.period))
-        names.append(rec.name)
+        records.append(rec)
+    return records
+
+
+def failed_record(period=None):
+    """The row of a record whose task failed: NaN values, ``diverged`` (left out of the fit)."""
+    from screening.analysis.intensity import RECORD_MEASURES
+
+    row = {"peak_abs_theta": math.nan, "overturned": False, "diverged": True, "overturning_time": math.nan}
+    row.update({name: math.nan for name in RECORD_MEASURES if name != "sa" or period is not None})
+    return row
+
+
+def record_rows(block, foundation, records, model, condensation, period, client=None, progress=None):
+    """``run_record`` for every record, in this process (``client`` None) or as one dask task per record.
+
+    Returns ``(rows, failures)``: one dict per record in the order given, and the messages of the
+    records whose task failed (their rows come from :func:`failed_record`)."""
+    from screening.workflow.errors import exception_line
+    from screening.workflow.interrupt import interruptible
+
+    def said(i, row):
         if progress:
-            progress(f"record {i + 1}/{len(cloud.files)} {rec.name}: peak |theta| {rows[-1]['peak_abs_theta']:.4g} rad"
-                     + (" (overturned)" if rows[-1]["overturned"] else ""))
+            progress(f"record {i + 1}/{len(records)} {records[i].name}: peak |theta| {row['peak_abs_theta']:.4g} rad"
+                     + (" (overturned)" if row["overturned"] else ""))
+
+    rows, failures = [None] * len(records), []
+    if client is None:
+        for i, rec in enumerate(records):
+            rows[i] = run_record(block, foundation, rec, model, condensation, period)
+            said(i, rows[i])
+        return rows, failures
+    from distributed import as_completed
+
+    from screening.workflow.execution import TASK_RETRIES
+
+    pending = {client.submit(run_record, block, foundation, rec, model, condensation, period, pure=False,
+                             retries=TASK_RETRIES): i for i, rec in enumerate(records)}
+    for fut in interruptible(as_completed(list(pending))):
+        i = pending.pop(fut)
+        try:
+            rows[i] = fut.result()
+        except Exception as exc:                       # noqa: BLE001 - recorded, the record is left out
+            rows[i] = failed_record(period)
+            failures.append(f"record {records[i].name} failed: {exception_line(exc)}")
+        fut.release()
+        said(i, rows[i])
+    return rows, failures
+
+
+def run_cloud(cloud, case=None, overrides=None, progress=None, client=None):
+    """Run every record of a :class:`CloudStudy`; returns ``(dataset, warnings)`` (see the module docstring).
+
+    ``client``: a ``distributed.Client`` to run one task per record on (default: in this process)."""
+    from screening.workflow.records_study import block_and_foundation
+
+    block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
+    records = read_cloud_records(cloud)
+    rows, failures = record_rows(block, foundation, records, cloud.model,
+                                 chosen.condensation if cloud.model == "condensed" else "paper", cloud.period,
+                                 client, progress)
+    ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
+    ds.attrs["execution"] = "serial, in process" if client is None else \
+        f"dask, one task per record on {len(client.nthreads())} worker(s)"
+    return ds, failures + warnings
+
+
+def cloud_dataset(cloud, block, foundation, rows, names):
+    """The result dataset of a cloud analysis from its per-record ``rows``: the records, the
+    exceedance of each, and the maximum-likelihood lognormal fragility; returns ``(ds, warnings)``."""
+    from screening import schema
+    from screening.analysis.fragility import fit_lognormal_fragility
+
     slender = float(block.slenderness)
     if cloud.relative_to == "slenderness":
         level = cloud.threshold * slender
@@ -157,48 +221,37 @@ def run_cloud(cloud, case=None, overrides=None, progress=None):
     im_values = ds[name].values
     warnings = []
     try:
+        if not used.any():
+            raise ValueError("no record was integrated (all diverged or failed):")
         if exceed[used].all() or not exceed[used].any():
             raise ValueError("all records exceed" if exceed[used].all() else "no record exceeds")
         median, beta = fit_lognormal_fragility(im_values[used], n_exceed=exceed[used].astype(float), n_total=1.0)
     except ValueError as exc:
         median, beta = math.nan, math.nan
         warnings.append(f"no fragility fit: {exc} the threshold")
-    if flag_ok := (np.isfinite(beta) and beta > 0):
+    if np.isfinite(beta) and beta > 0:
         x_in, x_out = im_values[used][exceed[used]], im_values[used][~exceed[used]]
         if x_in.min() > x_out.max():
             warnings.append(f"the records are perfectly separated by {name} (every exceeding record has a larger "
                             "IM than every other): beta is not identified (the likelihood grows as beta -> 0); "
                             "add records near the median")
-    del flag_ok
     if level >= slender:
         warnings.append("the threshold is at or beyond the slenderness angle atan(b/h)")
     flag = 0 if np.isfinite(beta) and beta > 0 else (1 if np.isfinite(beta) else 2)
     if flag == 1:
         warnings.append("the fitted beta is <= 0 (exceedance falls with the intensity measure)")
-    units = {"pga": "m s-2", "sa": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1"}
-    ds["median"] = ((), median if flag == 0 else math.nan, {"units": units[name], "intensity": name})
-    ds["beta"] = ((), beta if flag == 0 else math.nan, {"units": "1"})
-    ds["fit_flag"] = ((), np.int8(flag), {"flag_values": np.array([0, 1, 2], dtype=np.int8),
-                                          "flag_meanings": "ok non_positive_beta no_fit"})
-    for n in ("pga", "sa", "rms_acceleration", "arias_intensity"):
-        if n in ds:
-            ds[n].attrs.update(schema.attributes(n, schema.INTENSITY))
+    ds["median"] = ((), median if flag == 0 else math.nan)
+    ds["beta"] = ((), beta if flag == 0 else math.nan)
+    ds["fit_flag"] = ((), np.int8(flag))
+    ds = schema.apply_schema(ds, schema.CLOUD)
+    ds["median"].attrs.update(units=ds[name].attrs["units"], intensity=name)
     if "sa" in ds:
         ds["sa"].attrs.update(period=cloud.period, damping_ratio=0.05)
-    for n, attrs in (("peak_abs_theta", {"units": "rad", "long_name": "peak |theta| over the record"}),
-                     ("overturned", {"long_name": "the block overturned"}),
-                     ("diverged", {"long_name": "the integration diverged (left out of the fit)"}),
-                     ("overturning_time", {"units": "s", "long_name": "overturning time (NaN if none)"}),
-                     ("exceed", {"long_name": "peak |theta| above the threshold, or overturned"}),
-                     ("threshold_rad", {"units": "rad", "long_name": "rotation threshold"}),
-                     ("slenderness", {"units": "rad", "long_name": "slenderness angle atan(b/h)"})):
-        ds[n].attrs.update(attrs)
     ds.attrs.update(title=f"Cloud analysis: {cloud.study.title}", model=cloud.model, study=cloud.study.source,
                     intensity_measure=cloud.im, intensity_variable=name, intensity_dim="record",
                     threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",
-                    execution="serial, in process", warnings="; ".join(warnings) or "none",
-                    Conventions=schema.CONVENTIONS)
+                    warnings="; ".join(warnings) or "none")
     return ds, warnings
 
 

@@ -74,3 +74,46 @@ def test_shipped_cloud_example_is_valid():
     from pathlib import Path
     cloud = load_cloud_study(Path(__file__).parents[2] / "studies" / "cloud_example.toml")
     assert len(cloud.files) == 20 and cloud.im == "pga" and cloud.period == 0.5
+
+
+def test_cloud_on_dask_equals_the_serial_run(folder, client):
+    (folder / "d.toml").write_text(STUDY.format(im="pga"))
+    cloud = load_cloud_study(folder / "d.toml")
+    serial, _ = run_cloud(cloud)
+    parallel, warnings = run_cloud(cloud, client=client)
+    assert parallel.attrs["execution"].startswith("dask, one task per record")
+    xr.testing.assert_identical(serial.drop_attrs(), parallel.drop_attrs())
+    assert ("; ".join(warnings) or "none") == serial.attrs["warnings"]
+
+
+def test_a_failed_record_task_is_kept_as_nan_and_left_out_of_the_fit(folder, client):
+    from screening.model import Block, Foundation
+    from screening.records import Record, read_record
+    from screening.workflow.cloud import cloud_dataset, record_rows
+
+    cloud = load_cloud_study(folder / "d.toml") if (folder / "d.toml").exists() else None
+    if cloud is None:
+        (folder / "d.toml").write_text(STUDY.format(im="pga"))
+        cloud = load_cloud_study(folder / "d.toml")
+    good = [read_record(path) for path in cloud.files]
+    bad = Record(np.array([0.0, 1.0, 0.0]), 0.01, "bad")
+    object.__setattr__(bad, "dt", -1.0)         # the reader refuses this; here a task meets it and fails
+    block, bed = Block(8.67, 0.035, 0.21), Foundation(2.89e7, lam=8.95e8, eps=6e7)
+    rows, failures = record_rows(block, bed, [bad, *good], "coupled", "paper", None, client=client)
+    assert len(failures) == 1 and failures[0].startswith("record bad failed: ValueError")
+    assert rows[0]["diverged"] and np.isnan(rows[0]["peak_abs_theta"]) and np.isnan(rows[0]["pga"])
+    ds, _ = cloud_dataset(cloud, block, bed, rows, ["bad"] + [r.name for r in good])
+    without, _ = cloud_dataset(cloud, block, bed, rows[1:], [r.name for r in good])
+    assert float(ds["median"]) == float(without["median"]) or np.isnan(float(without["median"]))
+
+
+def test_cloud_cli_runs_on_workers_and_checks_the_worker_count(folder, capsys):
+    (folder / "w.toml").write_text(STUDY.format(im="pga"))
+    assert main(["cloud", str(folder / "w.toml"), "--out", str(folder / "w.nc"), "--workers", "300"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--workers" in err[0] and "0..256" in err[0]
+    assert not (folder / "w.nc").exists()
+    assert main(["cloud", str(folder / "w.toml"), "--out", str(folder / "w.nc"), "--workers", "1", "--quiet"]) == 0
+    with xr.open_dataset(folder / "w.nc") as ds:
+        assert ds.attrs["execution"] == "dask, one task per record on 1 worker(s)"
+        assert ds["median"].attrs["units"] == "m s-2" and ds["peak_abs_theta"].attrs["units"] == "rad"
