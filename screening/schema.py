@@ -38,6 +38,8 @@ PARAMETERS = {
     "c": _v("N s m-2", "Winkler distributed viscous damping"),
     "eps": _v("m-2", "cubic stiffness parameter of the contact law"),
     "S0": _v("m2 s-3", "two-sided PSD level of the driving white noise, E[xi xi] = 2 pi S0 delta"),
+    "pga": _v("m s-2", "target median peak ground acceleration of the input (S0 follows from it, band-limited "
+                       "as the Monte Carlo synthesis)"),
     "omega_g": _v("rad s-1", "Kanai-Tajimi filter frequency"),
     "zeta_g": _v("1", "Kanai-Tajimi filter damping ratio"),
     "T1": _v("s", "envelope decay time T1"),

@@ -72,7 +72,7 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     p = exceedance_probability(ds, threshold, relative_to, method)
     grid = list(ds["status"].dims) if "status" in ds else list(p.dims)
     if dim is None:
-        dim = "S0" if "S0" in grid else None
+        dim = next((d for d in ("S0", "pga") if d in grid), None)
     if dim is None or dim not in p.dims:
         raise ValueError(f"--dim {dim!r} is not a swept dimension (swept: {', '.join(grid) or 'none'})")
     if p.sizes[dim] < 2:

@@ -43,6 +43,7 @@ Simulation of ground motion using the stochastic method, Pure Appl. Geophys. 160
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 
@@ -180,9 +181,32 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
 def s0_for_pga(excitation, target_pga, t_end, cutoff):
     """``S0`` [m2 s-3] giving the median PGA ``target_pga`` [m s-2] for the shape of ``excitation``
-    (its filter and envelope; its own ``S0`` is irrelevant): PGA is proportional to ``sqrt(S0)``."""
-    ref = pga_median(excitation, t_end, cutoff)
-    return float(excitation.S0) * (float(target_pga) / ref) ** 2
+    (its filter and envelope; its own ``S0`` is irrelevant), with band limit ``cutoff`` [rad/s] over a record of ``t_end`` [s].
+
+    PGA is proportional to ``sqrt(S0)``: ``S0 = (target_pga / pga_1)^2`` with ``pga_1`` the median PGA
+    at ``S0 = 1``.  ``target_pga``, ``cutoff`` and the excitation's ``omega_g``, ``zeta_g`` may be
+    arrays (broadcast together); :func:`pga_median` runs once per distinct filter and band limit.
+    """
+    omega = np.asarray(getattr(excitation, "omega_g", np.nan), dtype=float)
+    zeta = np.asarray(getattr(excitation, "zeta_g", np.nan), dtype=float)
+    target, cut, omega, zeta = np.broadcast_arrays(np.asarray(target_pga, dtype=float),
+                                                   np.asarray(cutoff, dtype=float), omega, zeta)
+    env = excitation.envelope
+    shape = (excitation.kind, env.kind, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
+                                          if env.kind == "exponential" else ()), float(t_end))
+    ref = np.empty(target.shape)
+    for index in np.ndindex(target.shape):
+        ref[index] = _unit_pga(*shape, float(omega[index]), float(zeta[index]), float(cut[index]))
+    out = (target / ref) ** 2
+    return float(out) if out.ndim == 0 else out
+
+
+@functools.lru_cache(maxsize=4096)
+def _unit_pga(kind, envelope_kind, *args):
+    """:func:`pga_median` [m s-2] at ``S0 = 1`` of one filter, envelope, ``t_end`` and band limit."""
+    *envelope, t_end, omega_g, zeta_g, cutoff = args
+    p = {"omega_g": omega_g, "zeta_g": zeta_g, **dict(zip(("T1", "T2"), envelope))}
+    return pga_median(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff)
 
 
 # ----------------------------------------------------------------------------- datasets

@@ -32,7 +32,7 @@ from screening.solvers.timegrid import output_times
 from screening.workflow import limits
 
 #: Parameters that may be swept (given as a list or a range).
-SWEEPABLE = ("eps", "S0", "k", "lam", "c", "omega_g", "zeta_g")
+SWEEPABLE = ("eps", "S0", "pga", "k", "lam", "c", "omega_g", "zeta_g")
 
 CONTACTS = ("hunt_crossley", "winkler")
 EXCITATIONS = ("white", "kanai_tajimi")
@@ -44,7 +44,7 @@ NUMERIC = {
     "I_cm": ("block", 0.0, False), "g": ("block", 0.0, False),
     "k": ("foundation", 0.0, False), "lam": ("foundation", 0.0, True),
     "c": ("foundation", 0.0, True), "eps": ("foundation", None, False),
-    "S0": ("excitation", 0.0, False), "omega_g": ("excitation", 0.0, False),
+    "S0": ("excitation", 0.0, False), "pga": ("excitation", 0.0, False), "omega_g": ("excitation", 0.0, False),
     "zeta_g": ("excitation", 0.0, False), "T1": ("excitation", 0.0, False),
     "T2": ("excitation", 0.0, False),
 }
@@ -52,7 +52,7 @@ NUMERIC = {
 TABLE_KEYS = {
     "block": ("m", "b", "h", "I_cm", "g"),
     "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
-    "excitation": ("kind", "S0", "omega_g", "zeta_g", "envelope", "T1", "T2"),
+    "excitation": ("kind", "S0", "pga", "omega_g", "zeta_g", "envelope", "T1", "T2"),
 }
 MODEL_TABLES = tuple(TABLE_KEYS)
 DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential", "eps": 0.0, "g": 9.81,
@@ -277,7 +277,7 @@ class Case:
 
 
 def applicable(contact, excitation, envelope):
-    names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0"}
+    names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga"}
     names.add("lam" if contact == "hunt_crossley" else "c")
     if excitation == "kanai_tajimi":
         names |= {"omega_g", "zeta_g"}
@@ -397,7 +397,12 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     for key in list(params) + list(sweeps):
         if key not in names:
             raise StudyError(f"{where}{NUMERIC[key][0]}.{key}: does not apply to {reason[key]}")
-    for key in sorted(names - set(params) - set(sweeps), key=list(NUMERIC).index):
+    given = set(params) | set(sweeps)
+    if {"S0", "pga"} <= given:
+        raise StudyError(f"{where}excitation.pga: give the intensity as S0 or as pga, not both")
+    if not {"S0", "pga"} & given:
+        raise StudyError(f"{where}excitation.S0: required (or give a target median PGA as excitation.pga [m s-2])")
+    for key in sorted(names - given - {"S0", "pga"}, key=list(NUMERIC).index):
         if key in DEFAULTS:
             params[key] = DEFAULTS[key]
         elif key != "I_cm":
@@ -457,17 +462,31 @@ def _foundation(case, p):
     return Foundation(k=p["k"], c=p["c"], eps=p["eps"])
 
 
-def build_models(case, values):
+def build_models(case, values, t_end=None):
     """Model objects for ``case`` with ``values`` (swept parameters, scalars or arrays) merged in.
 
     Returns ``(block, foundation, excitation)``; array fields broadcast as in
-    :func:`screening.solvers.moments.solve_moments`.
+    :func:`screening.solvers.moments.solve_moments`.  An intensity given as a target median PGA
+    (``pga`` [m s-2]) becomes the ``S0`` whose record of ``t_end`` [s] has that median PGA, band-limited
+    as the Monte Carlo synthesis of the point (:func:`screening.analysis.intensity.s0_for_pga`).
     """
     p = dict(case.params)
     p.update(values)
+    block, foundation = _block(p), _foundation(case, p)
     envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
-    if case.excitation == "white":
-        excitation = WhiteNoise(S0=p["S0"], envelope=envelope)
-    else:
-        excitation = KanaiTajimi(S0=p["S0"], omega_g=p["omega_g"], zeta_g=p["zeta_g"], envelope=envelope)
-    return _block(p), _foundation(case, p), excitation
+
+    def excitation(s0):
+        if case.excitation == "white":
+            return WhiteNoise(S0=s0, envelope=envelope)
+        return KanaiTajimi(S0=s0, omega_g=p["omega_g"], zeta_g=p["zeta_g"], envelope=envelope)
+
+    if "pga" in p:
+        from screening.analysis.intensity import s0_for_pga
+        from screening.solvers.synthesis import default_cutoff
+
+        if t_end is None:
+            raise ValueError("t_end is needed to turn a target PGA into S0")
+        cutoff = np.vectorize(lambda *bb: default_cutoff(Block(*bb[:5]), Foundation(k=bb[5], lam=0.0)))(
+            block.m, block.b, block.h, block.I_cm, block.g, foundation.k)
+        return block, foundation, excitation(s0_for_pga(excitation(1.0), p["pga"], t_end, cutoff))
+    return block, foundation, excitation(p["S0"])

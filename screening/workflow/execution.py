@@ -211,7 +211,7 @@ def submit_spot(client, study, index, key):
     spec = study.mcs
     names = spot_linear_names(study)
     linear = (study.times, study.rtol, study.max_steps, names) if names else None
-    return client.submit(spot_task, *build_models(study.cases[case], values), study.cases[case].condensation_model,
+    return client.submit(spot_task, *build_models(study.cases[case], values, study.t_end), study.cases[case].condensation_model,
                          spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, retries=TASK_RETRIES,
                          pure=False, key=key)
 

@@ -109,7 +109,7 @@ def point_values(study, index):
 
 def batch_models(study, batch):
     """``(block, foundation, excitation)`` with array fields for the points of ``batch``."""
-    return build_models(study.cases[batch.case], batch_values(study, batch))
+    return build_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
 
 def select_spots(study, status, peak_p_uplift):

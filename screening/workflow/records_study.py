@@ -64,7 +64,7 @@ def block_and_foundation(study, case=None, overrides=None):
                              f"(swept values: {', '.join(f'{v:g}' for v in swept)})")
     values.update(overrides)
     try:
-        block, foundation, _ = build_models(chosen, values)
+        block, foundation, _ = build_models(chosen, values, study.t_end)
     except (TypeError, ValueError) as exc:
         raise StudyError(f"study {study.name}: {exc}") from None
     return block, foundation, chosen

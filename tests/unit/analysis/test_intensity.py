@@ -60,6 +60,19 @@ def test_scaling_and_inverse():
     assert I.pga_median(KanaiTajimi(s0, 15.6, 0.6), T_END, CUTOFF) == pytest.approx(0.3 * 9.81, rel=1e-6)
 
 
+def test_s0_for_pga_broadcasts_over_targets_filters_and_band_limits():
+    omega = np.array([[10.0], [15.6]])
+    exc = KanaiTajimi(1e-3, omega, 0.6)
+    targets, cutoffs = np.array([1.0, 2.0, 3.0]), np.array([150.0, 200.0, 300.0])
+    s0 = I.s0_for_pga(exc, targets, T_END, cutoffs)
+    assert s0.shape == (2, 3)
+    for i, j in np.ndindex(s0.shape):
+        one = I.s0_for_pga(KanaiTajimi(1e-3, float(omega[i, 0]), 0.6), targets[j], T_END, cutoffs[j])
+        assert s0[i, j] == one
+        assert I.pga_median(KanaiTajimi(one, float(omega[i, 0]), 0.6), T_END, cutoffs[j]) == pytest.approx(
+            targets[j], rel=1e-6)
+
+
 def test_white_noise_moments_closed_form():
     lam0, lam1, lam2 = I.spectral_moments(WhiteNoise(2.0), 10.0)
     assert (lam0, lam1, lam2) == (40.0, 200.0, pytest.approx(4000.0 / 3.0))

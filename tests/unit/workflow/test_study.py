@@ -209,6 +209,34 @@ def test_build_models_structure():
     assert isinstance(excitation, WhiteNoise) and isinstance(excitation.envelope, ConstantEnvelope)
 
 
+def test_intensity_as_a_target_pga_gives_the_s0_of_that_median_pga():
+    from screening.analysis.intensity import pga_median
+    from screening.solvers.synthesis import default_cutoff
+
+    text = edit(BASE, "S0 = {start = 1e-5, stop = 1e-3, num = 5, log = true}", "pga = [0.5, 2.0]")
+    text = edit(text, 'kind = "white"', 'kind = "kanai_tajimi"\nomega_g = 15.6\nzeta_g = 0.6')
+    s = parse_study(text)
+    assert s.dims == ("eps", "pga") and s.shape == (3, 2)
+    pga = np.array([0.5, 2.0])
+    block, bed, excitation = build_models(s.cases[0], {"eps": 0.0, "pga": pga}, s.t_end)
+    cutoff = default_cutoff(block, bed)
+    for target, s0 in zip(pga, excitation.S0):         # an independent evaluation of the median PGA
+        assert pga_median(KanaiTajimi(s0, 15.6, 0.6), s.t_end, cutoff) == pytest.approx(target, rel=1e-9)
+    with pytest.raises(ValueError, match="t_end"):
+        build_models(s.cases[0], {"eps": 0.0, "pga": pga})
+
+
+@pytest.mark.parametrize("old_new, needle", [
+    (("S0 = {start = 1e-5, stop = 1e-3, num = 5, log = true}", "S0 = 1e-3\npga = 1.0"),
+     "excitation.pga: give the intensity as S0 or as pga, not both"),
+    (("S0 = {start = 1e-5, stop = 1e-3, num = 5, log = true}", ""), "excitation.S0: required (or give a target"),
+    (("S0 = {start = 1e-5, stop = 1e-3, num = 5, log = true}", "pga = -1.0"), "excitation.pga: must be"),
+])
+def test_intensity_keys_errors(old_new, needle):
+    with pytest.raises(StudyError, match=needle.replace("(", r"\(")):
+        parse_study(edit(BASE, *old_new))
+
+
 def test_spot_points_by_value_index_and_case():
     text = BASE + '[mcs]\npoints = [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 1}}]\nsamples = 10\n'
     s = parse_study(text)
