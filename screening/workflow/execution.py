@@ -265,8 +265,11 @@ def dask_client(workers=2, scheduler=None, client=None):
 
         with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
             try:
+                # dask's own log lines are silenced up to ERROR: what they report that matters (a failed
+                # or killed task) reaches the run as a task failure with its own one-line message; the
+                # rest is shutdown noise (a worker's heartbeat to a scheduler closed by Ctrl-C)
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=logging.ERROR,
+                                       dashboard_address=None, silence_logs=logging.CRITICAL,
                                        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
             except Exception:                         # noqa: BLE001 - a worker hit by the Ctrl-C too
                 if pressed:

@@ -1,7 +1,7 @@
 """Study files: a parameter study described in TOML, validated before any work is done.
 
 A study file holds one block, one foundation and one excitation; any of the parameters
-``eps``, ``S0``, ``k``, ``lam``, ``c``, ``omega_g`` and ``zeta_g`` may be *swept*: given as a
+``eps``, ``S0`` (or ``pga``), ``k``, ``lam``, ``c``, ``omega_g`` and ``zeta_g`` may be *swept*: given as a
 list of values or as a range ``{start, stop, num, log}`` (endpoints included, ``log = true``
 for geometric spacing).  Every swept parameter becomes a dimension of the result and the
 grid is the outer product of the swept values, in the order the keys appear in the file
@@ -27,6 +27,7 @@ Example (SI units throughout)::
     [excitation]
     kind = "white"              # or "kanai_tajimi" (then omega_g [rad/s], zeta_g [1])
     S0 = {start = 1e-5, stop = 1e-3, num = 20, log = true}   # m2 s-3 -> dimension "S0"
+    # pga = [0.5, 1.0, 2.0]     # m s-2, instead of S0: target median PGA -> dimension "pga"
     envelope = "exponential"    # q(t) = 4 (exp(-t/T1) - exp(-t/T2)); or "constant"
     T1 = 4.0                    # s
     T2 = 2.0                    # s
