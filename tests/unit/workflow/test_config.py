@@ -67,7 +67,7 @@ def test_resolve_case_and_build_models():
     block, foundation, excitation = config.build_models(case, {"eps": np.array([1.0, 2.0]), "S0": 1e-4})
     np.testing.assert_array_equal(foundation.eps, [1.0, 2.0])
     assert block.m == 8.67 and excitation.S0 == 1e-4
-    with pytest.raises(StudyError, match=r"^excitation\.S0: required$"):
+    with pytest.raises(StudyError, match=r"^excitation\.S0: required \(or give a target median PGA"):
         config.resolve_case("c", tables, {"eps": None}, "")
 
 
