@@ -9,8 +9,10 @@ integrators of one parameter point:
   theta', u_g, u_g')`` in fixed-size arrays with constant-length loops.
 
 Both run the same Dormand–Prince 5(4) pair, controller and dense output
-(:mod:`screening.kernels.dopri`) with the same arithmetic, operation for operation, as the
-general n-component loop they replace, so they reproduce its results bit for bit.  The
+(:mod:`screening.kernels.dopri`); the PI controller works on the logarithms of the error norms
+(one ``log`` and one ``exp`` per step instead of two powers) and the stage gains and the
+white-noise right-hand side multiply by reciprocals computed once instead of dividing (about 7 %
+less time per step; results change at the solver tolerance, ~1e-9 on peak ``var_theta``).  The
 condensation enters only through its compiled ``(c_eq, k_eq)`` function ``coefficients`` (a
 first-class function), its record ``cond`` and its table (``table``).
 
@@ -42,6 +44,9 @@ BEYOND_SLENDERNESS = PointStatus.sigma_theta_beyond_slenderness
 STEP_BUDGET = PointStatus.step_budget_exhausted
 NON_FINITE = PointStatus.non_finite_moments
 
+#: Logarithm of the previous error norm before the first step.
+LOG_ERR_START = math.log(1e-4)
+
 #: Bisection halvings locating the peak of var_theta inside a step (~6e-8 of a step).
 PEAK_HALVINGS = 24
 
@@ -56,9 +61,10 @@ def _exp_minus(x):
 
 
 @numba.njit(cache=True, inline="always")
-def _gain(osc, e1, e2, c):
-    """``m h q(t + c) / M`` from ``e1 = exp(-t/T1)``, ``e2 = exp(-t/T2)`` and the stage offset ``c`` [s]."""
-    return osc.gain * 4.0 * (e1 * _exp_minus(c / osc.T1) - e2 * _exp_minus(c / osc.T2))
+def _gain(osc, e1, e2, r1, r2, c):
+    """``m h q(t + c) / M`` from ``e1 = exp(-t/T1)``, ``e2 = exp(-t/T2)``, ``r1 = 1/T1``, ``r2 = 1/T2``
+    and the stage offset ``c`` [s]."""
+    return osc.gain * 4.0 * (e1 * _exp_minus(c * r1) - e2 * _exp_minus(c * r2))
 
 
 @numba.njit(cache=True, inline="always")
@@ -74,10 +80,13 @@ def stage_gains(osc, t, h):
     if osc.constant_envelope == 1.0:
         g = osc.gain
         return g, g, g, g, g
-    e1 = math.exp(-t / osc.T1)
-    e2 = math.exp(-t / osc.T2)
-    return (_gain(osc, e1, e2, C2 * h), _gain(osc, e1, e2, C3 * h), _gain(osc, e1, e2, C4 * h),
-            _gain(osc, e1, e2, dopri.C5 * h), _gain(osc, e1, e2, 1.0 * h))
+    r1 = 1.0 / osc.T1
+    r2 = 1.0 / osc.T2
+    e1 = math.exp(-t * r1)
+    e2 = math.exp(-t * r2)
+    return (_gain(osc, e1, e2, r1, r2, C2 * h), _gain(osc, e1, e2, r1, r2, C3 * h),
+            _gain(osc, e1, e2, r1, r2, C4 * h), _gain(osc, e1, e2, r1, r2, dopri.C5 * h),
+            _gain(osc, e1, e2, r1, r2, h))
 
 
 @numba.njit(cache=True, inline="always")
@@ -90,11 +99,12 @@ def p_uplift(osc, var_theta):
 
 # ---------------------------------------------------------------- white noise: 3 scalar moments
 @numba.njit(cache=True, inline="always")
-def _white_rhs(coefficients, cond, table, m, S0, alpha, y0, y1, y2):
-    """Eq. (45): ``(d var_theta, d cov, d var_theta_dot, c_eq, k_eq)`` at input gain ``alpha``."""
+def _white_rhs(coefficients, cond, table, inv_m, S0, alpha, y0, y1, y2):
+    """Eq. (45): ``(d var_theta, d cov, d var_theta_dot, c_eq, k_eq)`` at input gain ``alpha``
+    (``inv_m = 1 / m_sdof``)."""
     c_eq, k_eq = coefficients(cond, table, y0, y1)
-    kap = k_eq / m
-    gam = c_eq / m
+    kap = k_eq * inv_m
+    gam = c_eq * inv_m
     return (2.0 * y1, y2 - kap * y0 - gam * y1,
             -2.0 * kap * y1 - 2.0 * gam * y2 + 2.0 * math.pi * S0 * alpha * alpha, c_eq, k_eq)
 
@@ -131,7 +141,7 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
                       status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
     """One white-noise point into row ``i`` of the outputs (histories only if ``store``)."""
     s0, s1, s2 = _white_scales(osc)
-    m = osc.m_sdof
+    inv_m = 1.0 / osc.m_sdof
     S0 = osc.S0
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
@@ -139,7 +149,7 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
     y0 = 0.0
     y1 = 0.0
     y2 = 0.0
-    k1a, k1b, k1c, c0, k0 = _white_rhs(coefficients, cond, table, m, S0, initial_gain(osc, t), y0, y1, y2)
+    k1a, k1b, k1c, c0, k0 = _white_rhs(coefficients, cond, table, inv_m, S0, initial_gain(osc, t), y0, y1, y2)
     if store:
         _store_white(coefficients, cond, table, osc, i, 0, y0, y1, y2,
                      var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
@@ -149,7 +159,7 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
     lowest_k = k0
     steps = 0
     rejected = 0
-    err_old = 1e-4
+    log_err_old = LOG_ERR_START
     code = OK
     h = 0.0
     if not (k0 > 0.0):
@@ -167,27 +177,27 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
         z0 = y0 + h * (A21 * k1a)
         z1 = y1 + h * (A21 * k1b)
         z2 = y2 + h * (A21 * k1c)
-        k2a, k2b, k2c, _, _ = _white_rhs(coefficients, cond, table, m, S0, a2, z0, z1, z2)
+        k2a, k2b, k2c, _, _ = _white_rhs(coefficients, cond, table, inv_m, S0, a2, z0, z1, z2)
         z0 = y0 + h * (A31 * k1a + A32 * k2a)
         z1 = y1 + h * (A31 * k1b + A32 * k2b)
         z2 = y2 + h * (A31 * k1c + A32 * k2c)
-        k3a, k3b, k3c, _, _ = _white_rhs(coefficients, cond, table, m, S0, a3, z0, z1, z2)
+        k3a, k3b, k3c, _, _ = _white_rhs(coefficients, cond, table, inv_m, S0, a3, z0, z1, z2)
         z0 = y0 + h * (A41 * k1a + A42 * k2a + A43 * k3a)
         z1 = y1 + h * (A41 * k1b + A42 * k2b + A43 * k3b)
         z2 = y2 + h * (A41 * k1c + A42 * k2c + A43 * k3c)
-        k4a, k4b, k4c, _, _ = _white_rhs(coefficients, cond, table, m, S0, a4, z0, z1, z2)
+        k4a, k4b, k4c, _, _ = _white_rhs(coefficients, cond, table, inv_m, S0, a4, z0, z1, z2)
         z0 = y0 + h * (A51 * k1a + A52 * k2a + A53 * k3a + A54 * k4a)
         z1 = y1 + h * (A51 * k1b + A52 * k2b + A53 * k3b + A54 * k4b)
         z2 = y2 + h * (A51 * k1c + A52 * k2c + A53 * k3c + A54 * k4c)
-        k5a, k5b, k5c, _, _ = _white_rhs(coefficients, cond, table, m, S0, a5, z0, z1, z2)
+        k5a, k5b, k5c, _, _ = _white_rhs(coefficients, cond, table, inv_m, S0, a5, z0, z1, z2)
         z0 = y0 + h * (A61 * k1a + A62 * k2a + A63 * k3a + A64 * k4a + A65 * k5a)
         z1 = y1 + h * (A61 * k1b + A62 * k2b + A63 * k3b + A64 * k4b + A65 * k5b)
         z2 = y2 + h * (A61 * k1c + A62 * k2c + A63 * k3c + A64 * k4c + A65 * k5c)
-        k6a, k6b, k6c, _, _ = _white_rhs(coefficients, cond, table, m, S0, a6, z0, z1, z2)
+        k6a, k6b, k6c, _, _ = _white_rhs(coefficients, cond, table, inv_m, S0, a6, z0, z1, z2)
         n0 = y0 + h * (B1 * k1a + B3 * k3a + B4 * k4a + B5 * k5a + B6 * k6a)
         n1 = y1 + h * (B1 * k1b + B3 * k3b + B4 * k4b + B5 * k5b + B6 * k6b)
         n2 = y2 + h * (B1 * k1c + B3 * k3c + B4 * k4c + B5 * k5c + B6 * k6c)
-        k7a, k7b, k7c, c_new, k_new = _white_rhs(coefficients, cond, table, m, S0, a6, n0, n1, n2)
+        k7a, k7b, k7c, c_new, k_new = _white_rhs(coefficients, cond, table, inv_m, S0, a6, n0, n1, n2)
         ea = E1 * k1a + E3 * k3a + E4 * k4a + E5 * k5a + E6 * k6a + E7 * k7a
         eb = E1 * k1b + E3 * k3b + E4 * k4b + E5 * k5b + E6 * k6b + E7 * k7b
         ec = E1 * k1c + E3 * k3c + E4 * k4c + E5 * k5c + E6 * k6c + E7 * k7c
@@ -250,9 +260,9 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
         if y0 > osc.slenderness ** 2:
             code = BEYOND_SLENDERNESS
             break
-        err = max(err, 1e-10)
-        fac = dopri.accepted_step_factor(err, err_old)
-        err_old = err
+        log_err = math.log(max(err, 1e-10))
+        fac = dopri.accepted_step_factor_log(log_err, log_err_old)
+        log_err_old = log_err
         h = min(h * fac, h_max)
     status[i] = code
     t_stop[i] = t
@@ -375,7 +385,7 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
     lowest_k = k0
     steps = 0
     rejected = 0
-    err_old = 1e-4
+    log_err_old = LOG_ERR_START
     code = OK
     h = 0.0
     if not (k0 > 0.0):
@@ -466,9 +476,9 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
         if y[0] > osc.slenderness ** 2:
             code = BEYOND_SLENDERNESS
             break
-        err = max(err, 1e-10)
-        fac = dopri.accepted_step_factor(err, err_old)
-        err_old = err
+        log_err = math.log(max(err, 1e-10))
+        fac = dopri.accepted_step_factor_log(log_err, log_err_old)
+        log_err_old = log_err
         h = min(h * fac, h_max)
     status[i] = code
     t_stop[i] = t
