@@ -88,7 +88,18 @@ def _zlib_level(text):
     return int(text)
 
 
+def _non_negative_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise ValueError(f"must be an integer >= 0 (got {text!r})")
+    return value
+
+
 POSITIVE_INT = _Checked("integer", _positive_int)
+NON_NEGATIVE_INT = _Checked("integer", _non_negative_int)
 POSITIVE_FLOAT = _Checked("number", _positive_float)
 ZLIB_LEVEL = _Checked("0..9", _zlib_level)
 
@@ -231,8 +242,9 @@ def _say(msg):
 @click.argument("study")
 @click.option("--out", help="result file (default outputs/<study-stem>.nc, folder created if missing; "
                             "the folder of an explicit path must exist)")
-@click.option("--workers", type=POSITIVE_INT, callback=_not_with("scheduler"),
-              help="worker processes of the local dask cluster (default 2)")
+@click.option("--workers", type=NON_NEGATIVE_INT, callback=_not_with("scheduler"),
+              help="worker processes of the local dask cluster; 0 = in this process, no cluster (default: "
+                   "0 for at most 500 points and at most one Monte Carlo spot check, else 2)")
 @click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
 @click.option("--batch-size", type=POSITIVE_INT, help="points per task (default: about 500)")
@@ -257,7 +269,7 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
         except OSError as exc:
             raise SweepError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
         check_output_path(out, inputs=(study.source,))
-    report = run_sweep(study, out, workers=workers or 2, scheduler=scheduler, batch_size=batch_size,
+    report = run_sweep(study, out, workers=workers, scheduler=scheduler, batch_size=batch_size,
                        force=force, progress=not quiet, log=_say, complevel=complevel)
     if not report.reused:
         counts = ", ".join(f"{k} {v}" for k, v in report.status_counts.items())

@@ -165,7 +165,7 @@ def test_plot_into_missing_folder_exits_2(cli_result, tmp_path, capsys):
     assert "output folder" in one_line_error(capsys.readouterr().err)
 
 
-@pytest.mark.parametrize("argv, needle", [(["run", "x.toml", "--workers", "0"], "--workers"),
+@pytest.mark.parametrize("argv, needle", [(["run", "x.toml", "--workers", "-1"], "--workers"),
                                           (["run", "x.toml", "--workers", "2", "--scheduler", "a"], "not allowed"),
                                           (["launch"], "invalid choice"), ([], "required")])
 def test_usage_errors_are_one_line(capsys, argv, needle):
