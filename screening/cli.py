@@ -318,7 +318,8 @@ def _plot(result, out_dir):
 
 @cli.command("plot", help="write PNG figures of a result file")
 @click.argument("result")
-@click.option("--out-dir", help="folder for the figures (default: next to the result; must exist)")
+@click.option("--out-dir", help="folder for the figures (default: next to the result; created if missing, "
+                                "its parent must exist)")
 def cmd_plot(result, out_dir):
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import open_result
@@ -327,7 +328,12 @@ def cmd_plot(result, out_dir):
     open_result(result).close()                  # readable? (before touching the output folder)
     out_dir = Path(out_dir) if out_dir else result.parent
     if not out_dir.is_dir():
-        raise SweepError(f"output folder {out_dir} does not exist")
+        if not out_dir.parent.is_dir() or out_dir.exists() or out_dir.is_symlink():
+            raise SweepError(f"output folder {out_dir} does not exist and cannot be created here")
+        try:
+            out_dir.mkdir()
+        except OSError as exc:
+            raise SweepError(f"cannot create the output folder {out_dir}: {exc.strerror or exc}") from None
     for path in _plot(result, out_dir):
         print(path)
     return EXIT_OK
