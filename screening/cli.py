@@ -300,7 +300,7 @@ def _write_error(path, exc):
     return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
 
 
-def _plot(result, out_dir):
+def _plot(result, out_dir, response="var"):
     """All figures of ``result`` into ``out_dir`` (none left behind on failure, one-line errors)."""
     from screening.report.figures import plot_result
     from screening.workflow.reader import damaged_data_error, open_result
@@ -309,7 +309,7 @@ def _plot(result, out_dir):
     with open_result(result) as ds:
         stem = result.name[:-3] if result.name.endswith(".nc") else result.name
         try:
-            return plot_result(ds, stem, out_dir)
+            return plot_result(ds, stem, out_dir, response)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
         except OSError as exc:                  # the PNG could not be written
@@ -320,7 +320,10 @@ def _plot(result, out_dir):
 @click.argument("result")
 @click.option("--out-dir", help="folder for the figures (default: next to the result; created if missing, "
                                 "its parent must exist)")
-def cmd_plot(result, out_dir):
+@click.option("--response", type=_Choice(["var", "sigma", "fraction"]), default="var",
+              help="rotation drawn as its variance var_theta [rad2] (default), its standard deviation sigma_theta "
+                   "[rad], or sigma_theta as a fraction of the slenderness angle atan(b/h)")
+def cmd_plot(result, out_dir, response):
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import open_result
 
@@ -334,7 +337,11 @@ def cmd_plot(result, out_dir):
             out_dir.mkdir()
         except OSError as exc:
             raise SweepError(f"cannot create the output folder {out_dir}: {exc.strerror or exc}") from None
-    for path in _plot(result, out_dir):
+    if response == "fraction":
+        with open_result(result) as ds:
+            if "slenderness" not in ds.variables:
+                raise SweepError(f"--response fraction: {result} does not store the slenderness angle")
+    for path in _plot(result, out_dir, response):
         print(path)
     return EXIT_OK
 
@@ -375,6 +382,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
         out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"), inputs=(result,))
         try:
             frag = fragility_dataset(ds, threshold, relative_to, method, dim).load()
+            flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
     frag.attrs.update(source_result=str(result), screening_version=__version__,
@@ -394,7 +402,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
-        png = plot_fragility(frag, dim, png_path)
+        png = plot_fragility(frag, dim, png_path, flags=flags)
         mask = os.umask(0)
         os.umask(mask)
         os.chmod(tmp, 0o666 & ~mask)
