@@ -2,18 +2,25 @@
 
 __version__ = "0.1.0"
 
+import multiprocessing as _mp
 import os as _os
 
-if _os.environ.get("SCREENING_WORKER_IGNORES_SIGINT") == "1":
+#: a worker process of a local cluster (named before the child imports us)
+_DASK_WORKER = _mp.current_process().name.startswith("Dask Worker")
+
+if _DASK_WORKER and _os.environ.get("SCREENING_WORKER_IGNORES_SIGINT") == "1":
     # A worker process of the local cluster of `screening run` (the variable is set for them by
     # screening.workflow.execution.dask_client): the terminal's Ctrl-C reaches the whole process
     # group, and the client stops the run with one line and closes its workers itself, so a worker
     # ignores SIGINT instead of printing a traceback while it imports or computes (issue 13, B18).
-    import multiprocessing as _mp
     import signal as _signal
 
-    if _mp.current_process().name.startswith("Dask Worker"):    # named before the child imports us
-        _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
+    _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
+
+from screening.kernels.cache import announce_compilation as _announce_compilation
+
+if not _DASK_WORKER:       # a fresh clone compiles for a minute or two: say so before it starts
+    _announce_compilation()
 
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise

@@ -244,8 +244,9 @@ def _say(msg):
 @click.argument("study")
 @click.option("--out", help="result file (default outputs/<study-stem>.nc, folder created if missing; "
                             "the folder of an explicit path must exist)")
-@click.option("--workers", type=POSITIVE_INT, callback=_not_with("scheduler"),
-              help="worker processes of the local dask cluster (default 2)")
+@click.option("--workers", type=WORKER_COUNT, callback=_not_with("scheduler"),
+              help="worker processes of the local dask cluster; 0 = in this process, no cluster (default: "
+                   "0 for at most 500 points and at most one Monte Carlo spot check, else 2)")
 @click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
 @click.option("--batch-size", type=POSITIVE_INT, help="points per task (default: about 500)")
@@ -270,7 +271,7 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
         except OSError as exc:
             raise SweepError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
         check_output_path(out, inputs=(study.source,))
-    report = run_sweep(study, out, workers=workers or 2, scheduler=scheduler, batch_size=batch_size,
+    report = run_sweep(study, out, workers=workers, scheduler=scheduler, batch_size=batch_size,
                        force=force, progress=not quiet, log=_say, complevel=complevel)
     if not report.reused:
         counts = ", ".join(f"{k} {v}" for k, v in report.status_counts.items())
@@ -301,7 +302,7 @@ def _write_error(path, exc):
     return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
 
 
-def _plot(result, out_dir):
+def _plot(result, out_dir, response="var"):
     """All figures of ``result`` into ``out_dir`` (none left behind on failure, one-line errors)."""
     from screening.report.figures import plot_result
     from screening.workflow.reader import damaged_data_error, open_result
@@ -310,7 +311,7 @@ def _plot(result, out_dir):
     with open_result(result) as ds:
         stem = result.name[:-3] if result.name.endswith(".nc") else result.name
         try:
-            return plot_result(ds, stem, out_dir)
+            return plot_result(ds, stem, out_dir, response)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
         except OSError as exc:                  # the PNG could not be written
@@ -319,8 +320,12 @@ def _plot(result, out_dir):
 
 @cli.command("plot", help="write PNG figures of a result file")
 @click.argument("result")
-@click.option("--out-dir", help="folder for the figures (default: next to the result; must exist)")
-def cmd_plot(result, out_dir):
+@click.option("--out-dir", help="folder for the figures (default: next to the result; created if missing, "
+                                "its parent must exist)")
+@click.option("--response", type=_Choice(["var", "sigma", "fraction"]), default="var",
+              help="rotation drawn as its variance var_theta [rad2] (default), its standard deviation sigma_theta "
+                   "[rad], or sigma_theta as a fraction of the slenderness angle atan(b/h)")
+def cmd_plot(result, out_dir, response):
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import open_result
 
@@ -328,8 +333,17 @@ def cmd_plot(result, out_dir):
     open_result(result).close()                  # readable? (before touching the output folder)
     out_dir = Path(out_dir) if out_dir else result.parent
     if not out_dir.is_dir():
-        raise SweepError(f"output folder {out_dir} does not exist")
-    for path in _plot(result, out_dir):
+        if not out_dir.parent.is_dir() or out_dir.exists() or out_dir.is_symlink():
+            raise SweepError(f"output folder {out_dir} does not exist and cannot be created here")
+        try:
+            out_dir.mkdir()
+        except OSError as exc:
+            raise SweepError(f"cannot create the output folder {out_dir}: {exc.strerror or exc}") from None
+    if response == "fraction":
+        with open_result(result) as ds:
+            if "slenderness" not in ds.variables:
+                raise SweepError(f"--response fraction: {result} does not store the slenderness angle")
+    for path in _plot(result, out_dir, response):
         print(path)
     return EXIT_OK
 
@@ -370,6 +384,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
         out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"), inputs=(result,))
         try:
             frag = fragility_dataset(ds, threshold, relative_to, method, dim).load()
+            flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
     frag.attrs.update(source_result=str(result), screening_version=__version__,
@@ -389,7 +404,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
-        png = plot_fragility(frag, dim, png_path)
+        png = plot_fragility(frag, dim, png_path, flags=flags)
         mask = os.umask(0)
         os.umask(mask)
         os.chmod(tmp, 0o666 & ~mask)

@@ -29,6 +29,9 @@ class PointStatus(enum.IntEnum):
     step_budget_exhausted = 3
     #: the moments could not be kept finite
     non_finite_moments = 4
+    #: the point's scales (uplift angle squared, filter frequency cubed, ...) under- or overflow
+    #: float64: not integrated
+    beyond_float_range = 5
 
 
 class SampleStatus(enum.IntEnum):

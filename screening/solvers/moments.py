@@ -37,6 +37,7 @@ from screening.condensation import get as get_condensation
 from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
 from screening.model.points import flatten, select
 from screening.solvers.moment_kernels import solve_point_kt, solve_point_white
+from screening.status import PointStatus
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
 CHUNK = 256
@@ -91,6 +92,43 @@ def oscillator_records(block, foundation, excitation, cond):
     for name, value in fields.items():
         out[name] = np.broadcast_to(np.asarray(value, dtype=float), (n,))
     return out
+
+
+def in_float_range(osc, kt):
+    """Points of :data:`OSCILLATOR` records whose scales the compiled loops can form in float64.
+
+    The loops divide by ``theta_ul^2``, ``m_sdof`` and (Kanai–Tajimi) ``zeta_g omega_g^3`` and form
+    ``S0 gain^2``, ``k_rest / m_sdof`` and ``c_rest / m_sdof``: a point where one of them under- or
+    overflows (``k >= ~1e200``, ``m <= ~1e-200``, ``omega_g <= ~1e-150``) would stop the whole batch,
+    so it is flagged :attr:`~screening.status.PointStatus.beyond_float_range` instead.
+    """
+    tiny = np.finfo(float).tiny
+    with np.errstate(all="ignore"):
+        fields = np.stack([osc[name] for name in osc.dtype.names])
+        scales = np.stack([osc["theta_ul"] ** 2, osc["m_sdof"], osc["S0"] * osc["gain"] ** 2,
+                           np.abs(osc["k_rest"]) / osc["m_sdof"], np.abs(osc["c_rest"]) / osc["m_sdof"],
+                           osc["zeta_g"] * osc["omega_g"] ** 3 if kt else np.ones(osc.size)])
+        ok = np.all(np.isfinite(fields), axis=0) & np.all(np.isfinite(scales), axis=0)
+        ok &= (scales[0] >= tiny) & (scales[1] >= tiny) & (scales[5] >= tiny)
+    return ok
+
+
+def _solve_representable(representable, shape, block, foundation, excitation, t_out, rtol, h_max, max_steps,
+                         cond, histories):
+    """:func:`solve_moments` of the points :func:`in_float_range`; the others flagged, NaN, not integrated."""
+    n, nt = representable.size, t_out.size
+    out = {name: np.full((n, nt), np.nan) for name in HISTORY_VARIABLES} if histories else {}
+    out.update({name: np.full(n, np.nan) for name in SUMMARY_VARIABLES + ("n_rejected",)})
+    out["status"] = np.full(n, PointStatus.beyond_float_range, dtype=np.int8)
+    for name in ("n_steps", "n_rejected"):
+        out[name] = np.zeros(n, dtype=np.int64)
+    index = np.flatnonzero(representable)
+    if index.size:
+        part = solve_moments(select(block, index), select(foundation, index), select(excitation, index), t_out,
+                             rtol=rtol, h_max=h_max, max_steps=max_steps, condensation=cond, histories=histories)
+        for name, value in part.items():
+            out[name][index] = value
+    return {name: a.reshape(shape + a.shape[1:]) for name, a in out.items()}
 
 
 # ---------------------------------------------------------------- compiled batch
@@ -176,6 +214,10 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     if h_max is None:
         h_max = (t_out[-1] - t_out[0]) / 20.0
     osc = oscillator_records(block, foundation, excitation, cond)
+    representable = in_float_range(osc, kt)
+    if not representable.all():
+        return _solve_representable(representable, shape, block, foundation, excitation, t_out, rtol, h_max,
+                                    max_steps, cond, histories)
     hist = {name: np.full((n if histories else 0, nt), np.nan) for name in HISTORY_VARIABLES}
     status = np.zeros(n, dtype=np.int8)
     t_stop = np.full(n, np.nan)

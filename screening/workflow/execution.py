@@ -217,6 +217,19 @@ def submit_spot(client, study, index, key):
 
 
 # ============================================================================ cluster
+#: Default execution: in-process (``workers = 0``) for grids of at most this many points with at
+#: most one Monte Carlo spot check (under a second of solver work: starting worker processes and
+#: loading the solvers in each costs more), otherwise this many local worker processes.
+IN_PROCESS_MAX_POINTS = 500
+DEFAULT_WORKERS = 2
+
+
+def default_workers(study):
+    """Local workers for ``study`` when none are asked for: 0 (in-process) for a small study, else 2."""
+    spots = 0 if study.mcs is None else (study.mcs.count if study.mcs.points == "auto" else len(study.mcs.points))
+    return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
+
+
 def warm_up():
     """Import the solver and load its compiled code on a worker; returns the time taken [s]."""
     start = time.perf_counter()
@@ -231,7 +244,8 @@ def warm_up():
 def dask_client(workers=2, scheduler=None, client=None):
     """A ``distributed.Client``: the given one, one connected to ``scheduler`` (an address
     or a scheduler JSON file), or a new ``LocalCluster`` of ``workers`` single-threaded
-    processes (closed on exit)."""
+    processes (closed on exit); ``workers = 0``: one worker thread in this process (no process
+    started, the same tasks and futures, so one orchestration serves both)."""
     if client is not None:
         yield client
         return
@@ -256,6 +270,18 @@ def dask_client(workers=2, scheduler=None, client=None):
             yield c
         finally:
             c.close()
+        return
+    if workers == 0:
+        try:
+            cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
+                                   silence_logs=logging.ERROR, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+        except Exception as exc:                      # noqa: BLE001 - dask raises RuntimeError & co
+            raise SweepError(f"cannot start the in-process dask scheduler: {type(exc).__name__}: {exc}") from None
+        try:
+            with Client(cluster) as c:
+                yield c
+        finally:
+            cluster.close()
         return
     try:
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when

@@ -82,7 +82,9 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     ----------
     study : :class:`screening.workflow.study.Study`.
     out : path of the netCDF result; its folder must exist.
-    workers : worker processes of the local cluster (ignored with ``scheduler``/``client``).
+    workers : worker processes of the local cluster (ignored with ``scheduler``/``client``); 0: in
+        this process (one worker thread); None: 0 for a small study, else 2
+        (:func:`~screening.workflow.execution.default_workers`).
     scheduler : address (``tcp://host:port``) or scheduler file of an existing dask cluster.
     client : an existing ``distributed.Client`` to use (not closed).
     batch_size : points per task (default :func:`~screening.workflow.grid.default_batch_size`; a
@@ -107,9 +109,11 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     if batch_size is not None and (isinstance(batch_size, bool) or int(batch_size) != batch_size
                                    or not 1 <= batch_size < 2**31):
         raise SweepError(f"batch size must be an integer in 1..{2**31 - 1} (got {batch_size!r})")
+    if client is None and not scheduler and workers is None:
+        workers = execution.default_workers(study)
     if client is None and not scheduler and (isinstance(workers, bool) or not isinstance(workers, int)
-                                             or workers < 1):
-        raise SweepError(f"the number of workers must be an integer >= 1 (got {workers!r})")
+                                             or workers < 0):
+        raise SweepError(f"the number of workers must be an integer >= 0 (got {workers!r})")
     if isinstance(complevel, bool) or complevel not in range(10):
         raise SweepError(f"zlib level must be an integer in 0..9 (got {complevel!r})")
 
@@ -118,8 +122,8 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     with shielded(), execution.dask_client(workers, scheduler, client) as c:
         n_workers = len(c.nthreads()) or 1
         if client is None and not scheduler:
-            c.wait_for_workers(workers)
-            n_workers = workers
+            c.wait_for_workers(max(workers, 1))
+            n_workers = max(workers, 1)
         report.n_workers = n_workers
         timings["cluster_start"] = time.perf_counter() - t0
         t0 = time.perf_counter()

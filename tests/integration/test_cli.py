@@ -159,13 +159,18 @@ def test_unreadable_results_exit_2(tmp_path, capsys, command):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["corrupt.nc", "foreign.nc"]   # nothing written
 
 
-def test_plot_into_missing_folder_exits_2(cli_result, tmp_path, capsys):
-    code = main(["plot", str(cli_result / "outputs" / "study.nc"), "--out-dir", str(tmp_path / "nope")])
+def test_plot_into_missing_folder_creates_it(cli_result, tmp_path, capsys):
+    """The README's ``plot --out-dir figs``: a missing folder is created; one whose parent is missing
+    too is one line, exit 2."""
+    code = main(["plot", str(cli_result / "outputs" / "study.nc"), "--out-dir", str(tmp_path / "nope" / "deeper")])
     assert code == 2
     assert "output folder" in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "nope").exists()
+    assert main(["plot", str(cli_result / "outputs" / "study.nc"), "--out-dir", str(tmp_path / "figs")]) == 0
+    assert list((tmp_path / "figs").glob("*.png"))
 
 
-@pytest.mark.parametrize("argv, needle", [(["run", "x.toml", "--workers", "0"], "--workers"),
+@pytest.mark.parametrize("argv, needle", [(["run", "x.toml", "--workers", "-1"], "--workers"),
                                           (["run", "x.toml", "--workers", "2", "--scheduler", "a"], "not allowed"),
                                           (["launch"], "invalid choice"), ([], "required")])
 def test_usage_errors_are_one_line(capsys, argv, needle):

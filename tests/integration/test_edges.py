@@ -662,3 +662,66 @@ def test_a_real_scheduler_passes_the_check():
     with LocalCluster(n_workers=0, processes=False, protocol="tcp://", dashboard_address=None,
                       silence_logs=logging.ERROR) as cluster:
         assert check_scheduler(cluster.scheduler_address, timeout=5) == cluster.scheduler_address
+
+
+# ----------------------------------------------------------------------------- B7: a point beyond float64
+#: reproducers of the issue (field, extreme value, an ordinary value): the point's scales under- or
+#: overflow float64
+B7_POINTS = {"k 1e200": ("k", 1e200, 2.89e7), "m 1e-200": ("m", 1e-200, 8.67),
+             "omega_g 1e-150": ("omega_g", 1e-150, 15.0)}
+
+
+def _b7_models(field, value):
+    from screening import Block, Foundation, KanaiTajimi, WhiteNoise
+
+    given = {field: value}
+    blk = Block(**{"m": 8.67, "b": 0.035, "h": 0.21, **{k: v for k, v in given.items() if k == "m"}})
+    bed = Foundation(**{"k": 2.89e7, "lam": 8.95e8, "eps": 6e7, **{k: v for k, v in given.items() if k == "k"}})
+    if field != "omega_g":
+        return blk, bed, WhiteNoise(S0=2.4e-5)
+    return blk, bed, KanaiTajimi(S0=2.4e-5, omega_g=value, zeta_g=0.6)
+
+
+@pytest.mark.parametrize("name", list(B7_POINTS))
+def test_a_point_beyond_float_range_is_flagged_and_keeps_its_batch(name):
+    """B7: one extreme point raised ZeroDivisionError in the compiled kernel and took its batch down."""
+    from screening.solvers.moments import solve_moments
+    from screening.status import PointStatus
+
+    field, extreme, ordinary = B7_POINTS[name]
+    t = np.linspace(0.0, 2.0, 41)
+    alone = solve_moments(*_b7_models(field, extreme), t)
+    assert alone["status"] == PointStatus.beyond_float_range
+    assert np.isnan(alone["peak_var_theta"]) and np.all(np.isnan(alone["var_theta"]))
+    # beside an ordinary point (neighbour): that point is bit for bit its solo result
+    both = solve_moments(*_b7_models(field, np.array([ordinary, extreme])), t)
+    solo = solve_moments(*_b7_models(field, ordinary), t)
+    np.testing.assert_array_equal(both["status"], [PointStatus.ok, PointStatus.beyond_float_range])
+    for var in ("var_theta", "peak_var_theta", "n_steps"):
+        np.testing.assert_array_equal(both[var][0], solo[var])
+
+
+@pytest.mark.parametrize("field, value", [("k", 1e100), ("k", 1e150), ("m", 1e-100), ("omega_g", 1e-100)])
+def test_points_near_the_float_range_are_integrated_or_flagged(field, value):
+    """B7 neighbours: extreme but representable points finish with a status (no exception)."""
+    from screening import linearize
+    from screening.status import PointStatus
+
+    ds = linearize(*_b7_models(field, value), t_end=2.0)
+    assert int(ds["status"]) in {int(s) for s in PointStatus if s >= PointStatus.ok}
+
+
+def test_a_sweep_batch_with_a_point_beyond_float_range_keeps_its_other_points(client, tmp_path):
+    """B7 through a sweep: the extreme point is flagged in the file, its batch's other points are ok."""
+    import xarray as xr
+    from helpers import quiet
+    from screening.status import PointStatus
+    from screening.workflow.sweep import run_sweep
+
+    text = STUDY.replace("k = 2.89e7", "k = [2.89e7, 1e200]").replace("[mcs]\nsamples = 4\nseed = 0\n", "")
+    out = tmp_path / "b7.nc"
+    run_sweep(parse_study(text), out, client=client, progress=False, log=quiet)
+    with xr.open_dataset(out) as ds:
+        status = ds["status"].transpose("k", ...).values
+    assert (status[1] == PointStatus.beyond_float_range).all()
+    assert (status[0] == PointStatus.ok).all()

@@ -136,7 +136,7 @@ def test_dimensions_coordinates_and_units(results):
             assert ds[name].attrs["units"] == PARAMETERS[name]["units"]
         assert float(ds["m"]) == 8.67 and float(ds["T1"]) == 4.0
         assert ds["status"].attrs["flag_meanings"].split()[:2] == ["task_failed", "ok"]
-        np.testing.assert_array_equal(ds["status"].attrs["flag_values"], [-1, 0, 1, 2, 3, 4])
+        np.testing.assert_array_equal(ds["status"].attrs["flag_values"], [-1, 0, 1, 2, 3, 4, 5])
         assert ds["theta_ul"].values[0, 0, 0] == pytest.approx(8.67 * 9.81 / (2 * 0.035**2 * 2.0e7))
         assert ds["spot_S0"].attrs["units"] == "m2 s-3"
         assert ds["mcs_rel_error_peak_var_theta"].attrs["units"] == "1"

@@ -430,7 +430,7 @@ def _bad_arguments(tmp, result):
         (["run", str(tmp / "absent.toml")], "cannot read the study file"),
         (["run", str(tmp)], "cannot read the study file"),
         (["run", str(tmp / "latin1.toml")], "cannot read the study file"),
-        (["plot", str(result), "--out-dir", str(tmp / "missing")], "output folder"),
+        (["plot", str(result), "--out-dir", str(tmp / "missing" / "deeper")], "output folder"),   # parent missing
         (["plot", str(result), "--out-dir", str(tmp / "a_file")], "output folder"),
         (["fragility", str(result), "--threshold", "0"], "--threshold"),
         (["fragility", str(result), "--threshold", "inf"], "--threshold"),

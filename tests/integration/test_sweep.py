@@ -196,7 +196,7 @@ def test_bad_arguments_are_refused_before_any_work(tmp_path):
     with pytest.raises(SweepError, match="output folder .* does not exist"):
         run_sweep(parse_study(GRID), tmp_path / "nope" / "x.nc", client=object(), log=quiet)
     with pytest.raises(SweepError, match="number of workers"):
-        run_sweep(parse_study(GRID), tmp_path / "x.nc", workers=0, log=quiet)
+        run_sweep(parse_study(GRID), tmp_path / "x.nc", workers=-1, log=quiet)
     with pytest.raises(SweepError, match="zlib level"):
         run_sweep(parse_study(GRID), tmp_path / "x.nc", client=object(), complevel=12, log=quiet)
     with pytest.raises(SweepError, match="batch size"):

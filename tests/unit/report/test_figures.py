@@ -100,3 +100,110 @@ def test_representative_points_are_min_median_max_and_top_uplift():
 def test_labels_use_case_names_and_k_values():
     ds = synthetic(("case", "k"), (2, 3))
     assert point_label(ds, {"case": 1, "k": 2}) == "c1, k=3e+07"
+
+
+# ----------------------------------------------------------------------------- flagged and untrusted points
+from screening.report import figures  # noqa: E402
+from screening.status import PointStatus, Trust  # noqa: E402
+
+
+def _flagged(dims, sizes, spots=0):
+    """A synthetic result with one flagged point (status 1, a finite peak up to its stop), one
+    untrusted point and the slenderness angle."""
+    ds = synthetic(dims, sizes, spots=spots)
+    flat = ds["status"].values.reshape(-1)
+    flat[1] = PointStatus.k_eq_negative
+    trust = np.full(flat.shape, Trust.check, dtype=np.int8)
+    trust[1], trust[2], trust[0] = Trust.untrusted, Trust.untrusted, Trust.trusted
+    ds["sl_trust"] = (dims, trust.reshape(ds["status"].shape), attributes("sl_trust"))
+    ds["slenderness"] = ((), 0.1648, {"units": "rad"})
+    return ds
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The figures passed to ``save_figure`` (in order)."""
+    figs = []
+    monkeypatch.setattr(figures, "save_figure", lambda fig, path: figs.append(fig))
+    return figs
+
+
+def _texts(fig):
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    return [t.get_text() for legend in legends for t in legend.get_texts()]
+
+
+def test_curves_mask_flagged_points_and_mark_untrusted_ones(drawn):
+    ds = _flagged(("S0",), (7,))
+    figures.plot_peaks(ds, "unused.png")
+    fig = drawn[0]
+    peak_line = fig.axes[0].get_lines()[0]
+    y = np.asarray(peak_line.get_ydata(), dtype=float)
+    assert np.isnan(y[1]) and np.isfinite(y[[0, 2, 3]]).all()          # flagged: not an ordinary value
+    hollow = fig.axes[0].get_lines()[1]                                 # untrusted ring (status ok only)
+    np.testing.assert_array_equal(hollow.get_xdata(), ds["S0"].values[[2]])
+    crosses = fig.axes[0].get_lines()[2]
+    np.testing.assert_array_equal(crosses.get_xdata(), ds["S0"].values[[1]])
+    texts = _texts(fig)
+    assert "flagged (status != ok, not a value): 1" in texts and "linearization untrusted: 1" in texts
+    assert "k_eq_negative 1" in fig.get_suptitle() and "untrusted 2" in fig.get_suptitle()
+
+
+def test_maps_mask_flagged_cells_and_name_the_status_colours(drawn):
+    ds = _flagged(("eps", "S0"), (3, 4))
+    figures.plot_peaks(ds, "unused.png")
+    fig = drawn[0]
+    mesh = fig.axes[0].collections[0]
+    z = np.ma.getmaskarray(mesh.get_array()).reshape(3, 4)
+    assert z[0, 1] and not z[0, 0]                                      # flagged cell masked
+    assert len(fig.axes[0].collections) == 3                            # + flagged and untrusted hatches
+    status_bar = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"][-1]
+    labels = [t.get_text() for t in status_bar.get_yticklabels()]
+    assert labels == str(ds["status"].attrs["flag_meanings"]).split()
+    assert "linearization untrusted: 1" in _texts(fig)
+
+
+@pytest.mark.parametrize("response", ["sigma", "fraction"])
+def test_response_as_sigma_or_a_fraction_of_the_slenderness(drawn, response):
+    ds = _flagged(("S0",), (7,))
+    figures.plot_peaks(ds, "unused.png", response=response)
+    y = np.asarray(drawn[0].axes[0].get_lines()[0].get_ydata(), dtype=float)
+    expected = np.sqrt(ds["peak_var_theta"].values) / (0.1648 if response == "fraction" else 1.0)
+    np.testing.assert_allclose(y[[0, 2]], expected[[0, 2]], rtol=1e-12)
+    assert ("atan(b/h)" in drawn[0].axes[0].get_ylabel()) == (response == "fraction")
+
+
+def test_fraction_without_the_slenderness_is_a_clear_error(tmp_path):
+    with pytest.raises(ValueError, match="slenderness"):
+        figures.plot_result(synthetic(("S0",), (4,)), "r", tmp_path, response="fraction")
+
+
+def test_histories_and_spots_say_which_points_are_flagged_or_untrusted(drawn):
+    ds = _flagged(("S0",), (7,), spots=3)
+    figures.plot_histories(ds, "unused.png", points=[{"S0": 0}, {"S0": 1}, {"S0": 2}])
+    labels = [line.get_label() for line in drawn[0].axes[0].get_lines()]
+    assert labels[1].endswith("[flagged: k_eq_negative]") and labels[2].endswith("[linearization untrusted]")
+    assert drawn[0].axes[0].get_lines()[2].get_linestyle() == "--"
+    assert "untrusted 2" in drawn[0].get_suptitle()
+    figures.plot_spots(ds, "unused.png")
+    titles = [ax.get_title() for ax in drawn[1].axes]
+    assert "[linearization trusted]" in titles[0] and "[flagged: k_eq_negative]" in titles[2]
+
+
+def test_fragility_monte_carlo_points_take_the_colour_of_their_curve(drawn):
+    from matplotlib.colors import to_rgba
+
+    ds = _flagged(("eps", "S0"), (2, 5))
+    p = xr.DataArray(np.linspace(0, 1, 10).reshape(2, 5), dims=("eps", "S0"), coords={"eps": ds["eps"], "S0": ds["S0"]})
+    frag = xr.Dataset({"p_exceed": p, "mcs_p_exceed": ("spot", [0.2, 0.7]), "mcs_p_exceed_se": ("spot", [0.05, 0.05])},
+                      coords={"spot_eps": ("spot", ds["eps"].values[[0, 1]]), "spot_S0": ("spot", ds["S0"].values[[2, 3]])},
+                      attrs={"threshold": 0.02, "relative_to": "slenderness", "method": "vanmarcke"})
+    frag["S0"].attrs["units"] = "m2 s-3"
+    figures.plot_fragility(frag, "S0", "unused.png", flags=ds[["status", "sl_trust"]])
+    ax = drawn[0].axes[0]
+    curves = {line.get_label(): line.get_color() for line in ax.get_lines() if line.get_label().startswith("eps=")}
+    markers = [c for c in ax.containers]                                   # one errorbar per curve
+    assert len(markers) == 2
+    for container, eps in zip(markers, ds["eps"].values):
+        assert to_rgba(container.lines[0].get_color()) == to_rgba(curves[f"eps={eps:.3g}"])
+    assert any(t.startswith("flagged (status != ok): 1 of 10") for t in _texts(drawn[0]))
