@@ -17,11 +17,6 @@ if _DASK_WORKER and _os.environ.get("SCREENING_WORKER_IGNORES_SIGINT") == "1":
 
     _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
 
-from screening.kernels.cache import announce_compilation as _announce_compilation
-
-if not _DASK_WORKER:       # a fresh clone compiles for a minute or two: say so before it starts
-    _announce_compilation()
-
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,

@@ -209,6 +209,15 @@ def main(argv=None):
         return EXIT_INTERRUPTED
 
 
+def announce_compilation(quiet=False):
+    """One line on stderr before a command that computes, if numba will compile the solvers first
+    (a fresh clone: a minute or two that would otherwise look like a hang); nothing with ``quiet``."""
+    if not quiet:
+        from screening.kernels.cache import announce_compilation as announce
+
+        announce()
+
+
 def _silence_stdout():
     """Point stdout at /dev/null so that Python's final flush does not complain about the closed pipe."""
     import os
@@ -262,6 +271,7 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
     from screening.workflow.writer import check_output_path
 
     study = load_study(study)
+    announce_compilation(quiet)
     if out:
         out = check_output_path(out, inputs=(study.source,))
     else:                                    # the default folder is created (the README's `make run`)
@@ -437,6 +447,7 @@ def cmd_tradeoff(study, out_dir, quiet, from_nc):
 
     try:
         parsed = load_tradeoff_study(study)
+        announce_compilation(quiet or from_nc)
         if from_nc:
             ds, paths, rules = rerender_reports(parsed, out_dir)
         else:

@@ -11,7 +11,8 @@ from pathlib import Path
 import click
 import numpy as np
 
-from screening.cli import EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error, cli
+from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
+                           announce_compilation, cli)
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -93,6 +94,7 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     st, _ = load_record_study(study)
     block, foundation, chosen = block_and_foundation(st, case, _overrides(sets))
     out = check_output_path(out or Path(f"{rec.name}_simulation.nc"))
+    announce_compilation()
     try:
         ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
                       condensation=chosen.condensation if model == "condensed" else "paper", t_end=t_end)
@@ -195,6 +197,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
         out = Path("outputs") / f"{Path(study).stem}.nc"
         out.parent.mkdir(exist_ok=True)
     out = check_output_path(out)
+    announce_compilation(quiet)
     if workers is None and not scheduler:
         workers = 0 if len(cloud.files) <= SERIAL_RECORDS else 2
     in_process = not scheduler and workers == 0

@@ -64,3 +64,16 @@ def test_the_installed_package_is_warm_after_importing_it():
     sc.monte_carlo(sc.Block(m=8.67, b=0.035, h=0.21), sc.Foundation(k=2.89e7, lam=8.95e8),
                    sc.WhiteNoise(S0=1e-5), n_samples=2, t_end=0.2)
     assert not cache.cache_is_cold()
+
+
+def test_only_commands_that_compute_announce_it(package, monkeypatch, tmp_path, capsys):
+    """`screening info` compiles nothing and says nothing; `run` says it first, unless --quiet."""
+    from screening import cli
+
+    monkeypatch.setattr(cache, "cache_is_cold", lambda: True)
+    cli.announce_compilation(quiet=True)
+    assert capsys.readouterr().err == ""
+    cli.announce_compilation()
+    assert capsys.readouterr().err.startswith("screening: compiling the solvers with numba")
+    assert cli.main(["info", str(tmp_path / "missing.nc")]) == 2
+    assert "compiling" not in capsys.readouterr().err
