@@ -3,7 +3,7 @@
 Run::
 
     nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python benchmarks/heavy_uplift_diagnosis.py \
-        [--samples 200] [--detail 40] [--seed 0] [--figure outputs/heavy_uplift_diagnosis.png]
+        [--samples 200] [--detail 40] [--seed 0] [--figure docs/heavy_uplift_diagnosis.png]
 
 Prints the tables of ``docs/heavy_uplift.md`` and writes its figure.
 
@@ -206,6 +206,16 @@ def random_table(samples, n_detail, seed):
               f"{100 * (dv / cv - 1):+.0f} % ± {100 * dv / cv * np.hypot(cse / cv, dse / dv):.0f} | "
               f"{100 * (sl / dv - 1):+.0f} % ± {100 * sl / dv * dse / dv:.0f} | {100 * (sl / cv - 1):+.0f} % | "
               f"{cp:.2f} / {dp:.2f} |")
+    print("\n| family | SL(paper) p_uplift | condensed (virtual_work) vs coupled | SL(virtual_work) vs condensed "
+          "(virtual_work) | SL(virtual_work) vs coupled | SL(virtual_work) p_uplift |")
+    print("|---|---|---|---|---|---|")
+    for r in results:
+        cv, cse = r["coupled_paper"][:2]
+        dv, dse = r["condensed_virtual_work"][:2]
+        sl, st, sp = r["sl_virtual_work"]
+        print(f"| {r['family']} | {r['sl_paper'][2]:.2f} | {100 * (dv / cv - 1):+.0f} % ± "
+              f"{100 * dv / cv * np.hypot(cse / cv, dse / dv):.0f} | {100 * (sl / dv - 1):+.0f} % ± "
+              f"{100 * sl / dv * dse / dv:.0f}{'*' if st else ''} | {100 * (sl / cv - 1):+.0f} % | {sp:.2f} |")
     print(f"\n### Random shaking: corner-to-corner transitions ({n_detail} records per point, 2 ms output, t <= 12 s)\n")
     print("| family | SL(paper) p_uplift | time in full contact / uplift / flight: coupled | same: condensed (paper) | "
           "dissipated per transition / mean rocking energy: coupled | condensed (paper) | share dissipated in uplift: "
@@ -236,7 +246,7 @@ def figure(free_rows, random_rows, path):
     ax1.set_xscale("log")
     ax1.set_xlabel("release amplitude theta0 / theta_ul [1]")
     ax1.set_ylabel("amplitude ratio per half cycle [1]")
-    ax1.set_title("free rocking: loss per corner-to-corner transition")
+    ax1.set_title("free rocking: amplitude kept per corner-to-corner transition", fontsize=10)
     ax1.legend(fontsize=6.5, ncol=2)
     for key, label, color, marker in (("condensed_paper", "condensed MCS, paper", "tab:red", "s"),
                                       ("sl_paper", "SL, paper", "tab:red", "x"),
@@ -250,16 +260,16 @@ def figure(free_rows, random_rows, path):
             bad = (key.startswith("sl") and r[key][1] != 0) or r["coupled_paper"][2] > 0
             flagged.append(bad)
         xs, ys, flagged = np.array(xs), np.array(ys), np.array(flagged)
-        ax2.scatter(xs[~flagged], ys[~flagged], color=color, marker=marker, label=label)
+        ax2.scatter(xs, ys, color=color, marker=marker, label=label)
         if flagged.any():
-            ax2.scatter(xs[flagged], ys[flagged], facecolor="none", edgecolor="grey", marker="o", s=90,
-                        label=None)
+            ax2.scatter(xs[flagged], ys[flagged], facecolor="none", edgecolor="grey", marker="o", s=110)
     ax2.axhline(1.0, color="k", lw=0.8)
     ax2.axhspan(0.85, 1.15, color="0.9", zorder=0)
     ax2.set_yscale("log")
     ax2.set_xlabel("SL (paper) peak p_uplift [1]")
     ax2.set_ylabel("peak var_theta / coupled MCS [1]")
-    ax2.set_title("random shaking (grey ring: SL flagged or coupled samples overturned)")
+    ax2.set_title("random shaking, against coupled MCS\n(grey ring: SL flagged or coupled samples overturned)",
+                  fontsize=10)
     ax2.legend(fontsize=7)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -272,7 +282,7 @@ def main(argv=None):
     ap.add_argument("--samples", type=int, default=200)
     ap.add_argument("--detail", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--figure", type=Path, default=ROOT / "outputs" / "heavy_uplift_diagnosis.png")
+    ap.add_argument("--figure", type=Path, default=ROOT / "docs" / "heavy_uplift_diagnosis.png")
     args = ap.parse_args(argv)
     start = time.process_time()
     free_rows = free_rocking_table()

@@ -68,7 +68,8 @@ def make_excitation(exc, S0):
 
 
 def sl_peaks(block, bed, excitation):
-    """``{condensation: (peak var_theta, peak var_theta_dot, p_exceed, peak p_uplift, status, cpu s)}``."""
+    """``{condensation: (peak var_theta, peak var_theta_dot, p_exceed, peak p_uplift, status, cpu s,
+    var_theta(t_end) / peak var_theta)}``."""
     out = {}
     for cond in CONDENSATIONS:
         try:
@@ -78,8 +79,9 @@ def sl_peaks(block, bed, excitation):
         except ValueError:
             continue
         p_ex = [float(ds.rocking.exceedance_probability(x, relative_to="theta_ul")) for x in THRESHOLDS]
+        end = float(ds.var_theta.values[-1]) / float(ds.peak_var_theta)
         out[cond] = (float(ds.peak_var_theta), float(ds.var_theta_dot.max()), p_ex, float(ds.peak_p_uplift),
-                     int(ds.status), cpu)
+                     int(ds.status), cpu, end)
     return out
 
 
@@ -96,8 +98,9 @@ def calibration_table():
     cal = xr.open_dataset(CALIBRATION)
     print("\n### Trade-study and calibration points (stored coupled MCS)\n")
     print("| point | S0 [m2 s-3] | SL(paper) p_uplift | coupled MCS peak var_theta [rad2] | overturned | "
-          "paper | cubic | virtual_work | virtual_work p_uplift |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "paper | cubic | virtual_work | virtual_work p_uplift | var_theta(t_end) / peak: coupled, paper, "
+          "virtual_work |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     rows = []
     for name in cal.point.values:
         c = cal.sel(point=name)
@@ -119,12 +122,13 @@ def calibration_table():
                          n=int(c.coupled_n_samples), **{k: v[0] / mc - 1.0 for k, v in sl.items()},
                          **{k + "_status": v[4] for k, v in sl.items()}))
         print(f"| {name} | {float(c.S0):.3g} | {p_paper:.3f} | {mc:.3g} ± {se:.1g} | {int(c.coupled_n_overturned)}/"
-              f"{int(c.coupled_n_samples)} | " + " | ".join(cells) + f" | {sl['virtual_work'][3]:.2f} |")
+              f"{int(c.coupled_n_samples)} | " + " | ".join(cells) + f" | {sl['virtual_work'][3]:.2f} | "
+              f"{float(c.coupled_var_theta_end) / mc:.2g}, {sl['paper'][6]:.2g}, {sl['virtual_work'][6]:.2g} |")
     return rows
 
 
 def held_out_point(name, block_kw, bed_kw, exc, target, samples, seed, work):
-    path = work / f"{name}_{samples}_{seed}_v2.json"
+    path = work / f"{name}_{samples}_{seed}_v3.json"
     if path.exists():
         return json.loads(path.read_text())
     block, bed = Block(**block_kw), Foundation(**bed_kw)
@@ -153,7 +157,7 @@ def held_out_point(name, block_kw, bed_kw, exc, target, samples, seed, work):
     res["condensed_virtual_work"] = dict(var_theta=float(cv), var_theta_se=float(cv_se))
     sl = sl_peaks(block, bed, excitation)
     res["sl"] = {k: dict(var_theta=x[0], var_theta_dot=x[1], p_exceed=x[2], peak_p_uplift=x[3], status=x[4],
-                         cpu=x[5]) for k, x in sl.items()}
+                         cpu=x[5], end_over_peak=x[6]) for k, x in sl.items()}
     work.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(res, indent=1))
     return res
@@ -167,8 +171,9 @@ def held_out_table(samples, seed, work):
         print(f"  {name}: {time.time() - t0:.0f} s", flush=True)
     print(f"\n### Held-out points (coupled MCS {samples} samples, seed {seed})\n")
     print("| point | S0 [m2 s-3] | SL p_uplift paper / virtual_work | coupled peak var_theta [rad2] | overturned | "
-          "paper | cubic | virtual_work | condensed MCS (virtual_work) vs coupled |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "paper | cubic | virtual_work | condensed MCS (virtual_work) vs coupled | var_theta(t_end) / peak: "
+          "coupled, paper, virtual_work |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         c = r["coupled"]
         cells = [fmt(r["sl"][k]["var_theta"] / c["var_theta"] - 1.0,
@@ -177,7 +182,9 @@ def held_out_table(samples, seed, work):
         cv = r["condensed_virtual_work"]
         print(f"| {r['name']} | {r['S0']:.3g} | {r['sl']['paper']['peak_p_uplift']:.2f} / "
               f"{r['sl']['virtual_work']['peak_p_uplift']:.2f} | {c['var_theta']:.3g} ± {c['var_theta_se']:.1g} | "
-              f"{c['overturned']}/{c['n']} | " + " | ".join(cells) + f" | {fmt(cv['var_theta'] / c['var_theta'] - 1.0)} |")
+              f"{c['overturned']}/{c['n']} | " + " | ".join(cells) + f" | {fmt(cv['var_theta'] / c['var_theta'] - 1.0)} | "
+              f"{c['var_theta_end'] / c['var_theta']:.2g}, {r['sl']['paper']['end_over_peak']:.2g}, "
+              f"{r['sl']['virtual_work']['end_over_peak']:.2g} |")
     print("\n| point | coupled peak var_theta_dot [rad2 s-2] | paper | virtual_work | "
           + " | ".join(f"coupled P(max abs theta > {x:g} theta_ul) | paper | virtual_work" for x in THRESHOLDS) + " |")
     print("|---|---|---|---|" + "---|---|---|" * len(THRESHOLDS))
@@ -188,6 +195,9 @@ def held_out_table(samples, seed, work):
                f"{r['sl']['virtual_work']['p_exceed'][j]:.2f}" for j in range(len(THRESHOLDS))]
         print(f"| {r['name']} | {c['var_theta_dot']:.3g} ± {c['var_theta_dot_se']:.1g} | {dots[0]} | {dots[1]} | "
               + " | ".join(pex) + " |")
+    cpu = {k: np.median([r["sl"][k]["cpu"] for r in results if k in r["sl"]]) for k in CONDENSATIONS}
+    print("\nSL CPU per point, one point per call (tables built for it): "
+          + ", ".join(f"{k} {1e3 * v:.1f} ms" for k, v in cpu.items()) + " (median)")
     return results
 
 
