@@ -96,3 +96,12 @@ def test_registered_with_cubic_stiffness():
     assert cond.uplift_threshold(BLOCK, bed) == cubic.uplift_threshold(BLOCK, bed)
     with pytest.raises(ValueError, match="foundation.eps"):
         cond.check(BLOCK, Foundation(k=2.89e7, lam=8.95e8, eps=-5e7))
+
+
+def test_linear_winkler_bed_is_already_energy_consistent():
+    """With c zdot and eps = 0 the damping force vanishes along the quasi-static path (V = L/2), so the
+    moment-based damping of the paper's condensation is the dissipation: the two coincide."""
+    bed = Foundation(k=2.89e7, c=2e4, eps=0.0)
+    theta = np.linspace(-30, 30, 121) * float(paper.uplift_threshold(BLOCK, bed))
+    np.testing.assert_allclose(virtual_work.rocking_damping(theta, BLOCK, bed),
+                               paper.rocking_damping(theta, BLOCK, bed), rtol=1e-10)
