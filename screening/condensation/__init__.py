@@ -10,4 +10,4 @@ from screening.condensation.registry import get, names, register, unregister
 __all__ = ["Condensation", "get", "names", "register", "unregister"]
 
 # the built-in condensations register themselves
-from screening.condensation import paper as _paper, cubic as _cubic  # noqa: E402,F401,I001
+from screening.condensation import paper as _paper, cubic as _cubic, virtual_work as _virtual_work  # noqa: E402,F401,I001

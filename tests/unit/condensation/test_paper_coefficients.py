@@ -244,7 +244,7 @@ def test_cubic_table_matches_direct_quadrature_between_nodes(paper_block, cubic_
 @pytest.mark.parametrize("bad", ["exact", "", None])
 def test_linearization_rejects_unknown_condensation(paper_block, bad):
     bed = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic'\)"):
+    with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic', 'virtual_work'\)"):
         equivalent_coefficients(1e-3, 0.04, 0.0, paper_block, bed, condensation=bad)
     with pytest.raises(ValueError, match="'condensation'"):
         equivalent_coefficients_from_moments(1e-6, 0.0, paper_block, bed, condensation=bad)

@@ -218,7 +218,7 @@ def test_cubic_point_alone_or_in_batch_gives_identical_results(paper_block, monk
 
 def test_condensation_is_validated_before_any_work(paper_block):
     t = output_times(20.0, 0.05)
-    with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic'\)"):
+    with pytest.raises(ValueError, match=r"'condensation'.*\('paper', 'cubic', 'virtual_work'\)"):
         solve_moments(paper_block, Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), t, condensation="exact")
     with pytest.raises(ValueError, match="'condensation'"):
         linearize(paper_block, Foundation(2.89e7, 8.95e8), WhiteNoise(1e-4), condensation="Cubic")

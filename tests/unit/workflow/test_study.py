@@ -159,7 +159,7 @@ foundation.condensation = "cubic"
 
 
 @pytest.mark.parametrize("value, needle", [
-    ('"exact"', r"foundation\.condensation: must be one of 'paper', 'cubic' \(got 'exact'\)"),
+    ('"exact"', r"foundation\.condensation: must be one of 'paper', 'cubic', 'virtual_work' \(got 'exact'\)"),
     ("1", r"foundation\.condensation: must be one of .* \(got int\)"),
 ])
 def test_bad_condensation_names_the_key(value, needle):
