@@ -1,5 +1,5 @@
-"""Command line: ``screening run | plot | info | fragility | tradeoff | simulate | fit-excitation | cloud``
-(one click parser).
+"""Command line: ``screening run | export | plot | info | fragility | tradeoff | simulate |
+fit-excitation | cloud`` (one click parser).
 
 The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragility --im`` live in
 :mod:`screening.cli_records`.
@@ -8,6 +8,9 @@ The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragilit
 dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
 ``outputs/<study-stem>.nc``) plus PNG figures next to it.  An interrupted run restarted
 with the same command resumes; an unchanged study reuses its finished result.
+
+``--out PATH.zarr`` writes a zarr store instead, in place from the workers (large runs);
+``screening export RESULT.zarr RESULT.nc`` converts it to the netCDF file a direct run writes.
 
 ``screening plot RESULT.nc [--out-dir DIR]`` writes the figures; ``screening info RESULT.nc``
 prints the dimensions, swept parameters, status counts and summary statistics.
@@ -230,14 +233,15 @@ def _say(msg):
 @cli.command("run", help="run a study file (TOML) and write a netCDF result + PNG figures")
 @click.argument("study")
 @click.option("--out", help="result file (default outputs/<study-stem>.nc, folder created if missing; "
-                            "the folder of an explicit path must exist)")
+                            "the folder of an explicit path must exist); a path ending in .zarr is a zarr store "
+                            "written in place by the workers (large runs; 'screening export' converts it)")
 @click.option("--workers", type=POSITIVE_INT, callback=_not_with("scheduler"),
               help="worker processes of the local dask cluster (default 2)")
 @click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
 @click.option("--batch-size", type=POSITIVE_INT, help="points per task (default: about 500)")
 @click.option("--complevel", type=ZLIB_LEVEL, default="1",
-              help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
+              help="compression level (zlib; zstd for zarr): 1 (default, fastest) .. 9, 0 = uncompressed")
 @click.option("--force", is_flag=True, help="recompute even if the result is up to date")
 @click.option("--no-plots", is_flag=True, help="do not write the PNG figures")
 @click.option("--quiet", is_flag=True, help="no progress bar")
@@ -266,7 +270,7 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
         _say(f"wrote {out}: {report.n_points} points (status: {counts}; linearization against the coupled model: "
              f"{trust}){spots} in {report.timings['total']:.1f} s")
     if not no_plots:
-        stem = out.name[:-3] if out.name.endswith(".nc") else out.name
+        stem = _stem(out)
         pngs = [out.parent / f"{stem}_{k}.png" for k in ("histories", "peaks")]
         if not report.reused or not all(p.exists() for p in pngs):
             try:
@@ -282,6 +286,11 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
     return EXIT_OK
 
 
+def _stem(result):
+    """The name of a result without ``.nc`` / ``.zarr`` (for the names of its figures)."""
+    return result.stem if result.suffix in (".nc", ".zarr") else result.name
+
+
 def _write_error(path, exc):
     from screening.workflow.errors import SweepError, write_failure_reason
 
@@ -295,7 +304,7 @@ def _plot(result, out_dir):
 
     result = Path(result)
     with open_result(result) as ds:
-        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
+        stem = _stem(result)
         try:
             return plot_result(ds, stem, out_dir)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
@@ -421,6 +430,50 @@ def cmd_tradeoff(study, out_dir, quiet, from_nc):
         raise CommandError(f"cannot read the study file {study}: {err.strerror or err}") from None
     print(summary_text(parsed, ds, rules))
     print("wrote " + ", ".join(str(p) for p in paths.values()))
+    return EXIT_OK
+
+
+@cli.command("export", help="convert a zarr result (run --out RESULT.zarr) to the netCDF file a direct run writes")
+@click.argument("result")
+@click.argument("out")
+@click.option("--complevel", type=ZLIB_LEVEL, default="1",
+              help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
+def cmd_export(result, out, complevel):
+    import datetime as dt
+    import os
+    import tempfile
+
+    from screening.workflow.errors import SweepError
+    from screening.workflow.reader import open_result
+    from screening.workflow.writer import check_output_path
+    from screening.workflow.zarrfile import export_netcdf, is_zarr_store
+
+    result = Path(result)
+    if not is_zarr_store(result):
+        raise SweepError(f"{result}: not a zarr store (export converts the result of 'screening run --out "
+                         "RESULT.zarr' to netCDF)")
+    open_result(result).close()                   # a screening result? (before writing anything)
+    out = check_output_path(out, inputs=(result,))
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)   # never a planted link
+    except OSError as exc:
+        raise _write_error(out, exc) from None
+    os.close(fd)
+    tmp = Path(tmp)
+    now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
+    try:
+        export_netcdf(result, tmp, complevel, f"{now}: screening export {result} {out} (screening {__version__})")
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        tmp.replace(out)
+    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
+        tmp.unlink(missing_ok=True)
+        raise _write_error(out, exc) from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    print(out)
     return EXIT_OK
 
 

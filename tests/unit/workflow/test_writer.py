@@ -7,7 +7,7 @@ import pytest
 from helpers import CASES, GRID
 
 from screening import __version__
-from screening.schema import SWEEP, TIME, attributes, global_attributes
+from screening.schema import SWEEP, TIME, attributes, global_attributes, grid_coordinate_attributes
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import failed_result, failed_spot
@@ -40,7 +40,8 @@ def test_every_attribute_of_every_variable_comes_from_the_schema(tmp_path, text)
     with netCDF4.Dataset(write(study, tmp_path / "w.nc")) as nc:
         assert set(nc.variables) >= {"status", "theta_ul", "slenderness", "var_theta"}
         for name, var in nc.variables.items():
-            declared = TIME if name == "t" else attributes("k" if name == "k_value" else name, SWEEP)
+            declared = (TIME if name == "t" else grid_coordinate_attributes(name) if var.dimensions == ("k",)
+                        else attributes("k" if name == "k_value" else name, SWEEP))
             got = {k: var.getncattr(k) for k in var.ncattrs() if k not in ("coordinates", "_FillValue")}
             assert got.keys() == declared.keys(), name
             for key, value in declared.items():
