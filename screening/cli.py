@@ -433,6 +433,21 @@ def cmd_tradeoff(study, out_dir, quiet, from_nc):
     return EXIT_OK
 
 
+@cli.command("info", help="describe a result file")
+@click.argument("result")
+def cmd_info(result):
+    from screening.report.text import describe
+    from screening.workflow.reader import damaged_data_error, open_result
+
+    with open_result(result) as ds:
+        try:
+            text = describe(ds, result)
+        except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
+            raise damaged_data_error(result, exc) from None
+    print(printable(text))
+    return EXIT_OK
+
+
 @cli.command("export", help="convert a zarr result (run --out RESULT.zarr) to the netCDF file a direct run writes")
 @click.argument("result")
 @click.argument("out")
@@ -474,21 +489,6 @@ def cmd_export(result, out, complevel):
         tmp.unlink(missing_ok=True)
         raise
     print(out)
-    return EXIT_OK
-
-
-@cli.command("info", help="describe a result file")
-@click.argument("result")
-def cmd_info(result):
-    from screening.report.text import describe
-    from screening.workflow.reader import damaged_data_error, open_result
-
-    with open_result(result) as ds:
-        try:
-            text = describe(ds, result)
-        except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
-            raise damaged_data_error(result, exc) from None
-    print(printable(text))
     return EXIT_OK
 
 

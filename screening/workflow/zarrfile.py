@@ -84,11 +84,14 @@ def zarr_batch_size(shape, n_lead, target):
 
 # ----------------------------------------------------------------------------- the facade
 def _codecs(dtype, zlib, complevel, shuffle):
-    """Compression of a numeric variable: blosc/zstd at ``complevel`` (with byte shuffle if asked)."""
+    """Compression of a numeric variable where netCDF would use zlib: blosc/zstd at ``complevel`` (with
+    byte shuffle if asked); none where netCDF uses none; strings keep zarr's default."""
     from zarr.codecs import BloscCodec
 
-    if not zlib or np.dtype(dtype).kind not in "fiu":
-        return {} if np.dtype(dtype).kind not in "fiu" else {"compressors": None}
+    if np.dtype(dtype).kind not in "fiu":
+        return {}
+    if not zlib:
+        return {"compressors": None}
     return {"compressors": (BloscCodec(cname="zstd", clevel=int(complevel), shuffle="shuffle" if shuffle
                                        else "noshuffle", typesize=np.dtype(dtype).itemsize),)}
 
