@@ -4,7 +4,7 @@ The white-noise grid of ``bench_sweep.py`` (``n x n`` points, 20 s records, 401 
 with 2 local workers to a ``.nc`` and to a ``.zarr`` result, with ``[output] histories = "none"`` and
 ``"all"``, at each grid side given.  Prints points/s end to end, the peak RSS of the client and of
 the largest worker process (psutil, sampled every 0.1 s), the client's share of CPU time, the size
-on disk, and the zarr / netCDF ratios.
+on disk, and the zarr / netCDF ratios.  Every run is a fresh process (peak RSS is a high-water mark).
 
     .venv/bin/python benchmarks/bench_formats.py                       # 10,000 and 100,000 points
     .venv/bin/python benchmarks/bench_formats.py --sides 30 --histories none
@@ -15,8 +15,10 @@ The machine should be otherwise idle (2 cores): numbers on a shared machine are 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -51,14 +53,26 @@ def run_once(side, histories, suffix, tmp):
     return study.n_points, wall, rss.client, rss.worker, cpu, size
 
 
+def run_in_a_process(side, histories, suffix, tmp):
+    """:func:`run_once` in a new Python process (its own peak RSS)."""
+    proc = subprocess.run([sys.executable, __file__, "--one", str(side), histories, suffix, str(tmp)],
+                          capture_output=True, text=True, check=True)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sides", default="100,316", help="grid sides (points = side**2), comma-separated")
     parser.add_argument("--histories", default="none,all", help="[output] histories, comma-separated")
+    parser.add_argument("--one", nargs=4, metavar=("SIDE", "HISTORIES", "SUFFIX", "TMP"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    from screening.workflow.execution import warm_up
+    if args.one:
+        from screening.workflow.execution import warm_up
 
-    warm_up()                                          # the numba cache is loaded (or built) once here
+        warm_up()                                      # the numba cache is loaded before the clock starts
+        side, histories, suffix, tmp = args.one
+        print(json.dumps(run_once(int(side), histories, suffix, Path(tmp))))
+        return
     tmp = Path(tempfile.mkdtemp(prefix="bench-formats-", dir=os.environ.get("TMPDIR")))
     try:
         print(f"{'points':>8} {'histories':>9} {'format':>6} {'points/s':>9} {'client MiB':>10} "
@@ -67,7 +81,7 @@ def main(argv=None):
             for histories in args.histories.split(","):
                 rows = {}
                 for suffix in (".nc", ".zarr"):
-                    n, wall, client, worker, cpu, size = rows[suffix] = run_once(side, histories, suffix, tmp)
+                    n, wall, client, worker, cpu, size = rows[suffix] = run_in_a_process(side, histories, suffix, tmp)
                     print(f"{n:>8} {histories:>9} {suffix[1:]:>6} {n / wall:>9.0f} {client / 2**20:>10.1f} "
                           f"{worker / 2**20:>10.1f} {cpu:>12.1f} {size / 2**20:>9.1f}", flush=True)
                 nc, zr = rows[".nc"], rows[".zarr"]

@@ -84,6 +84,36 @@ def quiet(*_):
     """A ``log`` callback that drops the messages."""
 
 
+def stop_after(n, seen):
+    """An ``on_batch`` callback that appends each batch index to ``seen`` and presses Ctrl-C at the ``n``-th."""
+    def on_batch(batch):
+        seen.append(batch.index)
+        if len(seen) == n:
+            raise KeyboardInterrupt
+    return on_batch
+
+
+def failed_result_file(study, path, zarr_batch_size=None):
+    """A complete result of ``study`` (netCDF, or zarr with ``zarr_batch_size``) whose batches and spot
+    checks all failed: the writer alone, no solver, no dask."""
+    from screening.workflow.execution import failed_result, failed_spot
+    from screening.workflow.grid import plan_batches, select_spots
+    from screening.workflow.writer import ResultFile, result_attributes
+
+    result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4),
+                        zarr_batch_size=zarr_batch_size)
+    try:
+        for batch in plan_batches(study, 4):
+            result.write_batch(batch, failed_result(batch.size, study.times.size))
+        if study.mcs is not None:
+            spots = select_spots(study, result.status, result.peak_p_uplift)
+            result.write_spots(spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
+                               [True] * len(spots), study.mcs)
+    finally:
+        result.close()
+    return path
+
+
 def one_line_error(err):
     """The single stderr line of a CLI error (``screening: error: ...``), no traceback."""
     lines = [line for line in err.splitlines() if line.strip()]

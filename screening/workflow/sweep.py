@@ -224,6 +224,8 @@ class _SweepRun:
         if path.is_dir():
             try:
                 result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size, reopen=True)
+                for name in region_variables(study):  # every variable the workers write is there
+                    result.nc[name]
                 self.target = self.store.region_target(study.shape, study.output.stored, region_variables(study))
                 return result
             except Exception:                       # noqa: BLE001 - damaged metadata: start the store again

@@ -96,6 +96,11 @@ def _codecs(dtype, zlib, complevel, shuffle):
                                        else "noshuffle", typesize=np.dtype(dtype).itemsize),)}
 
 
+def _no_fill(fill):
+    """netCDF4's ``fill_value`` ``False`` (none) or ``None`` (the default, unused for what we store)."""
+    return fill is None or fill is False
+
+
 class _PendingVariable:
     """A variable defined but not yet created in the store: its attributes and any values set."""
 
@@ -107,7 +112,7 @@ class _PendingVariable:
 
     @property
     def shape(self):
-        return tuple(self._dataset.dimensions[d] for d in self.dims)
+        return tuple(self._dataset.dimension_size(d) for d in self.dims)
 
     def setncatts(self, attrs):
         self.attrs.update(attrs)
@@ -117,7 +122,7 @@ class _PendingVariable:
 
     def __setitem__(self, key, value):
         if self.values is None:
-            fill = self.fill if self.fill not in (None, False) else ("" if self.dtype.kind == "O" else 0)
+            fill = ("" if self.dtype.kind == "O" else 0) if _no_fill(self.fill) else self.fill
             self.__dict__["values"] = np.full(self.shape, fill, dtype=self.dtype)
         self.values[key] = value
 
@@ -135,11 +140,8 @@ class ZarrDataset:
     def __init__(self, path, mode="r+", grid=(), chunks=()):
         self.path = Path(path)
         self.grid, self.chunks = tuple(grid), tuple(chunks)
-        self.dimensions, self._pending, self._attrs = {}, {}, {}
+        self.dimensions, self._pending, self._attrs, self._arrays = {}, {}, {}, {}
         self._created, self._open, self._group = mode == "r+", True, None
-        if self._created:
-            for _, arr in self.group.arrays():
-                self.dimensions.update(zip(arr.metadata.dimension_names or (), arr.shape))
 
     @property
     def group(self):
@@ -157,6 +159,14 @@ class ZarrDataset:
     def createDimension(self, name, size):
         self.dimensions[name] = int(size)
 
+    def dimension_size(self, name):
+        """Size of dimension ``name`` (of an existing store: read from its arrays, once)."""
+        if name not in self.dimensions and self._created:
+            for _, arr in self.group.arrays():
+                for dim, size in zip(arr.metadata.dimension_names or (), arr.shape):
+                    self.dimensions.setdefault(dim, size)
+        return self.dimensions[name]
+
     def createVariable(self, name, dtype, dims, fill_value=None, zlib=False, complevel=1, shuffle=False,
                        chunksizes=None):
         var = _PendingVariable(self, name, dtype, dims, fill_value, (zlib, complevel, shuffle))
@@ -166,10 +176,12 @@ class ZarrDataset:
     def __getitem__(self, name):
         if name in self._pending:
             return self._pending[name]
-        import zarr
+        if name not in self._arrays:
+            import zarr
 
-        with zarr.config.set({"array.write_empty_chunks": True}):
-            return self.group[name]
+            with zarr.config.set({"array.write_empty_chunks": True}):
+                self._arrays[name] = self.group[name]
+        return self._arrays[name]
 
     def setncatts(self, attrs):
         if self._created:
@@ -192,7 +204,7 @@ class ZarrDataset:
             else:
                 data = v.values
             variables[name] = xr.Variable(v.dims, data, v.attrs)
-            enc = {"_FillValue": None if v.fill in (None, False) else v.fill, **_codecs(v.dtype, *v.storage)}
+            enc = {"_FillValue": None if _no_fill(v.fill) else v.fill, **_codecs(v.dtype, *v.storage)}
             if chunks:
                 enc["chunks"] = chunks
             encoding[name] = enc
@@ -202,6 +214,7 @@ class ZarrDataset:
                    consolidated=False, zarr_format=ZARR_FORMAT)
         self._pending.clear()
         self._created, self._group = True, None
+        self._arrays.clear()
 
     def _chunks(self, var):
         shape = var.shape

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, compare_files, quiet
+from helpers import CASES, GRID, compare_files, quiet, stop_after
 
 from screening.workflow import execution
 from screening.condensation.api import uplift_threshold
@@ -121,14 +121,8 @@ def test_interrupted_run_resumes_to_the_same_file(client, tmp_path):
 
     out = tmp_path / "run.nc"
     seen = []
-
-    def stop_after_two(batch):
-        seen.append(batch.index)
-        if len(seen) == 2:
-            raise KeyboardInterrupt
-
     with pytest.raises(KeyboardInterrupt):
-        run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet, on_batch=stop_after_two)
+        run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet, on_batch=stop_after(2, seen))
     partial = tmp_path / "run.nc.partial"
     assert not out.exists()
     assert sorted(p.name for p in partial.glob("batch-*.npz")) == sorted(

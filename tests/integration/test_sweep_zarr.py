@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, compare_files, quiet
+from helpers import CASES, GRID, compare_files, quiet, stop_after
 
 from screening.cli import main
 from screening.status import PointStatus
@@ -72,14 +72,8 @@ def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_pat
     run_sweep(study, ref, client=client, batch_size=5, progress=False, log=quiet)
     out = tmp_path / "run.zarr"
     seen = []
-
-    def stop_after_two(batch):
-        seen.append(batch.index)
-        if len(seen) == 2:
-            raise KeyboardInterrupt
-
     with pytest.raises(KeyboardInterrupt):
-        run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet, on_batch=stop_after_two)
+        run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet, on_batch=stop_after(2, seen))
     while any(client.processing().values()):     # tasks already running finish (and mark their batch)
         time.sleep(0.05)
     partial = tmp_path / "run.zarr.partial"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID
+from helpers import CASES, GRID, failed_result_file
 
 from screening.workflow.grid import hyperslabs, plan_batches
 from screening.workflow.study import parse_study
@@ -53,32 +53,12 @@ def test_chunks_are_as_large_as_the_batches_allow():
     assert zarr_batch_size((2, 10, 12), 1, 500) == 500
 
 
-def _failed_result(study, path, zarr_batch_size=None):
-    """A complete result of ``study`` whose batches and spot checks all failed."""
-    from screening.workflow.execution import failed_result, failed_spot
-    from screening.workflow.grid import select_spots
-    from screening.workflow.writer import ResultFile, result_attributes
-
-    result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4),
-                        zarr_batch_size=zarr_batch_size)
-    try:
-        for batch in plan_batches(study, 4):
-            result.write_batch(batch, failed_result(batch.size, study.times.size))
-        if study.mcs is not None:
-            spots = select_spots(study, result.status, result.peak_p_uplift)
-            result.write_spots(spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
-                               [True] * len(spots), study.mcs)
-    finally:
-        result.close()
-    return path
-
-
 @pytest.mark.parametrize("text", [CASES + SPOTS, GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]")],
                          ids=["cases_and_spots", "k_swept"])
 def test_the_zarr_form_opens_to_the_netcdf_form(tmp_path, text):
     study = parse_study(text, name="w", source="w.toml")
-    nc = _failed_result(study, tmp_path / "w.nc")
-    store = _failed_result(study, tmp_path / "w.zarr", zarr_batch_size=4)
+    nc = failed_result_file(study, tmp_path / "w.nc")
+    store = failed_result_file(study, tmp_path / "w.zarr", zarr_batch_size=4)
     with xr.open_dataset(nc) as a, xr.open_zarr(store) as b:
         xr.testing.assert_identical(a.load(), b.load())
 
