@@ -1,6 +1,11 @@
 """Shared pieces of the sweep, CLI and robustness tests: a small study grid and file checks."""
 
 import contextlib
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import xarray as xr
 
@@ -142,3 +147,38 @@ def in_process_client(n_workers=2):
     with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=False, dashboard_address=None,
                       scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, Client(cluster) as client:
         yield client
+
+
+@contextlib.contextmanager
+def dask_processes(folder, worker_args, n_workers=2):
+    """``dask scheduler`` on 127.0.0.1 (port chosen by the system) + ``n_workers`` ``dask worker``
+    processes (with ``worker_args``) found through a scheduler file in ``folder``; yields that file,
+    then terminates them (killed if they do not stop within 20 s)."""
+    import pytest
+
+    bin_dir = Path(sys.executable).parent
+    sched_file = folder / "scheduler.json"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    procs = [subprocess.Popen([str(bin_dir / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", str(sched_file)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists():
+            if time.monotonic() > deadline or procs[0].poll() is not None:
+                pytest.fail("dask scheduler did not start")
+            time.sleep(0.1)
+        for i in range(n_workers):
+            procs.append(subprocess.Popen([str(bin_dir / "dask"), "worker", "--scheduler-file", str(sched_file),
+                                           *worker_args, "--local-directory", str(folder / f"worker{i}")],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+        yield sched_file
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, compare_files, quiet, stop_after
+from helpers import CASES, GRID, compare_files, dask_processes, quiet, stop_after
 
 from screening.cli import main
 from screening.status import PointStatus
@@ -165,47 +165,23 @@ def test_info_and_plot_read_a_zarr_result(client, tmp_path, capsys):
 
 # ----------------------------------------------------------------------------- a real cluster
 @pytest.fixture
-def dask_processes(tmp_path):
-    """``dask scheduler`` + two ``dask worker --nworkers 1 --nthreads 1`` processes on 127.0.0.1, ports
-    chosen by the system, found through a scheduler file (killed afterwards)."""
-    sched_file = tmp_path / "scheduler.json"
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    procs = [subprocess.Popen([str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                               "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
-    try:
-        deadline = time.monotonic() + 60
-        while not sched_file.exists():
-            if time.monotonic() > deadline or procs[0].poll() is not None:
-                pytest.fail("dask scheduler did not start")
-            time.sleep(0.1)
-        for i in range(2):
-            procs.append(subprocess.Popen([str(BIN / "dask"), "worker", "--scheduler-file", str(sched_file),
-                                           "--nworkers", "1", "--nthreads", "1", "--host", "127.0.0.1",
-                                           "--dashboard-address", "127.0.0.1:0",
-                                           "--local-directory", str(tmp_path / f"worker{i}")],
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+def scheduler_file(tmp_path):
+    """``dask scheduler`` + two ``dask worker --nworkers 1 --nthreads 1`` (nanny) processes on 127.0.0.1,
+    ports chosen by the system, found through a scheduler file (terminated afterwards)."""
+    with dask_processes(tmp_path, ["--nworkers", "1", "--nthreads", "1", "--host", "127.0.0.1",
+                                   "--no-dashboard"]) as sched_file:
         yield sched_file
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
 
 
-def test_dask_scheduler_and_worker_processes_write_a_zarr_result(dask_processes, client, tmp_path):
+def test_dask_scheduler_and_worker_processes_write_a_zarr_result(scheduler_file, client, tmp_path):
     from distributed import Client
 
-    with Client(scheduler_file=str(dask_processes), timeout="30s") as probe:
+    with Client(scheduler_file=str(scheduler_file), timeout="30s") as probe:
         probe.wait_for_workers(2, timeout=60)
         worker_pids = set(probe.run(os.getpid).values())
     assert os.getpid() not in worker_pids and len(worker_pids) == 2
     study = parse_study(CASES)
-    report = run_sweep(study, tmp_path / "remote.zarr", scheduler=str(dask_processes), batch_size=2, progress=False,
+    report = run_sweep(study, tmp_path / "remote.zarr", scheduler=str(scheduler_file), batch_size=2, progress=False,
                        log=quiet)
     assert report.n_workers == 2 and report.status_counts == {"ok": 6}
     run_sweep(study, tmp_path / "local.nc", client=client, batch_size=3, progress=False, log=quiet)

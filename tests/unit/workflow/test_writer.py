@@ -10,8 +10,6 @@ from screening import __version__
 from screening.schema import SWEEP, TIME, attributes, global_attributes, grid_coordinate_attributes
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
-from screening.workflow.execution import failed_result, failed_spot
-from screening.workflow.grid import plan_batches, select_spots
 from screening.workflow.study import parse_study
 from screening.workflow.writer import ResultFile, check_output_path, relative_peak_error, result_attributes
 
