@@ -286,6 +286,29 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
     return EXIT_OK
 
 
+def _temporary_for(out):
+    """A new empty file next to ``out`` (never a planted link) to write ``out`` into."""
+    import os
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    except OSError as exc:
+        raise _write_error(out, exc) from None
+    os.close(fd)
+    return Path(tmp)
+
+
+def _publish(tmp, out):
+    """Give the written ``tmp`` the usual permissions (umask) and move it to ``out`` atomically."""
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(tmp, 0o666 & ~mask)
+    tmp.replace(out)
+
+
 def _stem(result):
     """The name of a result without ``.nc`` / ``.zarr`` (for the names of its figures)."""
     return result.stem if result.suffix in (".nc", ".zarr") else result.name
@@ -371,25 +394,14 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     frag.attrs.update(source_result=str(result), screening_version=__version__,
                       history=f"screening fragility {result} --threshold {threshold}"
                               + (f" --relative-to {relative_to}" if relative_to else ""))
-    import os
-    import tempfile
-
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)   # never a planted link
-    except OSError as exc:
-        raise _write_error(out, exc) from None
-    os.close(fd)
-    tmp = Path(tmp)
+    tmp = _temporary_for(out)
     encoding = {name: {"_FillValue": None} for name in frag.coords}
     png_path = out.with_suffix(".png")
     png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
         png = plot_fragility(frag, dim, png_path)
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        tmp.replace(out)                         # the netCDF appears last: both or neither
+        _publish(tmp, out)                       # the netCDF appears last: both or neither
     except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
         tmp.unlink(missing_ok=True)
         if not png_existed:
@@ -455,8 +467,6 @@ def cmd_info(result):
               help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
 def cmd_export(result, out, complevel):
     import datetime as dt
-    import os
-    import tempfile
 
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import open_result
@@ -469,19 +479,11 @@ def cmd_export(result, out, complevel):
                          "RESULT.zarr' to netCDF)")
     open_result(result).close()                   # a screening result? (before writing anything)
     out = check_output_path(out, inputs=(result,))
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)   # never a planted link
-    except OSError as exc:
-        raise _write_error(out, exc) from None
-    os.close(fd)
-    tmp = Path(tmp)
+    tmp = _temporary_for(out)
     now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
     try:
         export_netcdf(result, tmp, complevel, f"{now}: screening export {result} {out} (screening {__version__})")
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        tmp.replace(out)
+        _publish(tmp, out)
     except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
         tmp.unlink(missing_ok=True)
         raise _write_error(out, exc) from None

@@ -11,7 +11,7 @@ from screening.schema import SWEEP, TIME, attributes, global_attributes, grid_co
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
 from screening.workflow.study import parse_study
-from screening.workflow.writer import ResultFile, check_output_path, relative_peak_error, result_attributes
+from screening.workflow.writer import check_output_path, relative_peak_error
 
 SPOTS = '[mcs]\npoints = [{case = "soft_kt", S0 = 1e-4}, {case = "hard_white", S0 = 2.4e-3}]\nsamples = 3\n'
 K_SWEPT = GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]")
