@@ -112,6 +112,37 @@ def test_a_failed_batch_is_flagged_in_the_zarr_result(client, tmp_path, monkeypa
         assert np.all(np.isnan(ds["var_theta"].values[1])) and int(ds.attrs["n_failed_points"]) == 5
 
 
+def test_disk_full_in_the_zarr_store_keeps_the_marked_batches_and_resumes(client, tmp_path, monkeypatch):
+    """No space for batch 2 on, on the workers and on the client: one line naming the cause and the
+    kept batches; the same command then resumes."""
+    import errno
+
+    from screening.workflow import writer
+    from screening.workflow.errors import SweepError
+
+    study = parse_study(GRID)
+    ref = tmp_path / "ref.nc"
+    run_sweep(study, ref, client=client, batch_size=5, progress=False, log=quiet)
+    original = writer.write_region
+
+    def full_from_batch_2(nc, shape, histories, batch, result):
+        if batch.index >= 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "full.zarr.partial"))
+        original(nc, shape, histories, batch, result)
+
+    monkeypatch.setattr(writer, "write_region", full_from_batch_2)
+    with pytest.raises(SweepError) as info:
+        run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    message = str(info.value)
+    assert "\n" not in message and "No space left on device" in message and "re-run" in message
+    assert "the 2 finished batch(es) are kept in" in message and "full.zarr.partial" in message
+    assert not (tmp_path / "full.zarr").exists()
+    monkeypatch.setattr(writer, "write_region", original)
+    report = run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    assert report.n_resumed_batches == 2 and report.n_failed_batches == 0
+    _same(ref, tmp_path / "full.zarr")
+
+
 def test_a_finished_zarr_result_is_reused_then_replaced_by_another_study(client, tmp_path):
     study = parse_study(GRID)
     out = tmp_path / "u.zarr"
