@@ -233,6 +233,11 @@ def submit_spot(client, study, index, key):
 
 
 # ============================================================================ cluster
+def sees_folder(path):
+    """Whether the folder ``path`` exists for this worker (the workers write a zarr result in place)."""
+    return os.path.isdir(path)
+
+
 def warm_up():
     """Import the solver and load its compiled code on a worker; returns the time taken [s]."""
     start = time.perf_counter()

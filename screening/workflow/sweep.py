@@ -221,19 +221,25 @@ class _SweepRun:
         import shutil
 
         study, path = self.study, self.store.zarr_building
+        result = None
         if path.is_dir():
             try:
                 result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size, reopen=True)
                 for name in region_variables(study):  # every variable the workers write is there
                     result.nc[name]
-                self.target = self.store.region_target(study.shape, study.output.stored, region_variables(study))
-                return result
             except Exception:                       # noqa: BLE001 - damaged metadata: start the store again
                 self.log(f"discarding a damaged zarr store in {self.store.dir}")
-        self.store.forget_markers()
-        shutil.rmtree(path, ignore_errors=True)
-        result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size)
+                result = None
+        if result is None:
+            self.store.forget_markers()
+            shutil.rmtree(path, ignore_errors=True)
+            result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size)
         self.target = self.store.region_target(study.shape, study.output.stored, region_variables(study))
+        blind = [w for w, ok in self.client.run(execution.sees_folder, self.target.store).items() if not ok]
+        if blind:
+            raise SweepError(f"{len(blind)} dask worker(s) (e.g. {blind[0]}) do not see {self.store.dir}: the workers "
+                             "write a zarr result in place, so its folder must be at the same path on every worker "
+                             "(a shared file system); give a .nc --out (only the client writes it)")
         return result
 
     # -- linearization batches

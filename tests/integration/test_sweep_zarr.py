@@ -156,6 +156,15 @@ def test_a_finished_zarr_result_is_reused_then_replaced_by_another_study(client,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["u.zarr"]
 
 
+def test_workers_that_do_not_see_the_output_folder_are_a_one_line_error(client, tmp_path, monkeypatch):
+    from screening.workflow.errors import SweepError
+
+    monkeypatch.setattr(execution, "sees_folder", lambda path: False)
+    with pytest.raises(SweepError, match=r"2 dask worker\(s\) .* do not see .*shared file system"):
+        run_sweep(parse_study(GRID), tmp_path / "far.zarr", client=client, progress=False, log=quiet)
+    assert not (tmp_path / "far.zarr").exists()
+
+
 def test_a_folder_that_is_not_a_zarr_store_is_refused(tmp_path, capsys):
     (tmp_path / "x.zarr").mkdir()
     (tmp_path / "x.zarr" / "keep.txt").write_text("mine")
