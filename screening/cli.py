@@ -1,5 +1,5 @@
-"""Command line: ``screening run | plot | info | fragility | tradeoff | simulate | fit-excitation | cloud``
-(one click parser).
+"""Command line: ``screening run | export | plot | info | fragility | tradeoff | simulate |
+fit-excitation | cloud`` (one click parser).
 
 The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragility --im`` live in
 :mod:`screening.cli_records`.
@@ -8,6 +8,9 @@ The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragilit
 dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
 ``outputs/<study-stem>.nc``) plus PNG figures next to it.  An interrupted run restarted
 with the same command resumes; an unchanged study reuses its finished result.
+
+``--out PATH.zarr`` writes a zarr store instead, in place from the workers (large runs);
+``screening export RESULT.zarr RESULT.nc`` converts it to the netCDF file a direct run writes.
 
 ``screening plot RESULT.nc [--out-dir DIR]`` writes the figures; ``screening info RESULT.nc``
 prints the dimensions, swept parameters, status counts and summary statistics.
@@ -252,7 +255,8 @@ def _say(msg):
 @cli.command("run", help="run a study file (TOML) and write a netCDF result + PNG figures")
 @click.argument("study")
 @click.option("--out", help="result file (default outputs/<study-stem>.nc, folder created if missing; "
-                            "the folder of an explicit path must exist)")
+                            "the folder of an explicit path must exist); a path ending in .zarr is a zarr store "
+                            "written in place by the workers (large runs; 'screening export' converts it)")
 @click.option("--workers", type=WORKER_COUNT, callback=_not_with("scheduler"),
               help="worker processes of the local dask cluster; 0 = in this process, no cluster (default: "
                    "0 for at most 500 points and at most one Monte Carlo spot check, else 2)")
@@ -260,7 +264,7 @@ def _say(msg):
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
 @click.option("--batch-size", type=POSITIVE_INT, help="points per task (default: about 500)")
 @click.option("--complevel", type=ZLIB_LEVEL, default="1",
-              help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
+              help="compression level (zlib; zstd for zarr): 1 (default, fastest) .. 9, 0 = uncompressed")
 @click.option("--force", is_flag=True, help="recompute even if the result is up to date")
 @click.option("--no-plots", is_flag=True, help="do not write the PNG figures")
 @click.option("--quiet", is_flag=True, help="no progress bar")
@@ -290,7 +294,7 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
         _say(f"wrote {out}: {report.n_points} points (status: {counts}; linearization against the coupled model: "
              f"{trust}){spots} in {report.timings['total']:.1f} s")
     if not no_plots:
-        stem = out.name[:-3] if out.name.endswith(".nc") else out.name
+        stem = _stem(out)
         pngs = [out.parent / f"{stem}_{k}.png" for k in ("histories", "peaks")]
         if not report.reused or not all(p.exists() for p in pngs):
             try:
@@ -306,6 +310,34 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
     return EXIT_OK
 
 
+def _temporary_for(out):
+    """A new empty file next to ``out`` (never a planted link) to write ``out`` into."""
+    import os
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    except OSError as exc:
+        raise _write_error(out, exc) from None
+    os.close(fd)
+    return Path(tmp)
+
+
+def _publish(tmp, out):
+    """Give the written ``tmp`` the usual permissions (umask) and move it to ``out`` atomically."""
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(tmp, 0o666 & ~mask)
+    tmp.replace(out)
+
+
+def _stem(result):
+    """The name of a result without ``.nc`` / ``.zarr`` (for the names of its figures)."""
+    return result.stem if result.suffix in (".nc", ".zarr") else result.name
+
+
 def _write_error(path, exc):
     from screening.workflow.errors import SweepError, write_failure_reason
 
@@ -319,7 +351,7 @@ def _plot(result, out_dir, response="var"):
 
     result = Path(result)
     with open_result(result) as ds:
-        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
+        stem = _stem(result)
         try:
             return plot_result(ds, stem, out_dir, response)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
@@ -400,25 +432,14 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     frag.attrs.update(source_result=str(result), screening_version=__version__,
                       history=f"screening fragility {result} --threshold {threshold}"
                               + (f" --relative-to {relative_to}" if relative_to else ""))
-    import os
-    import tempfile
-
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)   # never a planted link
-    except OSError as exc:
-        raise _write_error(out, exc) from None
-    os.close(fd)
-    tmp = Path(tmp)
+    tmp = _temporary_for(out)
     encoding = {name: {"_FillValue": None} for name in frag.coords}
     png_path = out.with_suffix(".png")
     png_existed = png_path.exists()
     try:
         frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
         png = plot_fragility(frag, dim, png_path, flags=flags)
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        tmp.replace(out)                         # the netCDF appears last: both or neither
+        _publish(tmp, out)                       # the netCDF appears last: both or neither
     except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
         tmp.unlink(missing_ok=True)
         if not png_existed:
@@ -475,6 +496,40 @@ def cmd_info(result):
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
     print(printable(text))
+    return EXIT_OK
+
+
+@cli.command("export", help="convert a zarr result (run --out RESULT.zarr) to the netCDF file a direct run writes")
+@click.argument("result")
+@click.argument("out")
+@click.option("--complevel", type=ZLIB_LEVEL, default="1",
+              help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
+def cmd_export(result, out, complevel):
+    import datetime as dt
+
+    from screening.workflow.errors import SweepError
+    from screening.workflow.reader import open_result
+    from screening.workflow.writer import check_output_path
+    from screening.workflow.zarrfile import export_netcdf, is_zarr_store
+
+    result = Path(result)
+    if not is_zarr_store(result):
+        raise SweepError(f"{result}: not a zarr store (export converts the result of 'screening run --out "
+                         "RESULT.zarr' to netCDF)")
+    open_result(result).close()                   # a screening result? (before writing anything)
+    out = check_output_path(out, inputs=(result,))
+    tmp = _temporary_for(out)
+    now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
+    try:
+        export_netcdf(result, tmp, complevel, f"{now}: screening export {result} {out} (screening {__version__})")
+        _publish(tmp, out)
+    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
+        tmp.unlink(missing_ok=True)
+        raise _write_error(out, exc) from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    print(out)
     return EXIT_OK
 
 

@@ -281,7 +281,7 @@ COORDINATES = {
     "spot_case": _v("1", "case index of the spot point"),
     "spot_case_name": {"long_name": "case name of the spot point"},
     # model labels of each case, on dimension case (sweeps whose cases differ in them)
-    # a swept k is stored in k_value on dimension k (screening.workflow.sweep.AUX_GRID_COORDINATES)
+    # a swept k: its values with units in the auxiliary coordinate k_value (grid_coordinate_attributes)
     "k_value": PARAMETERS["k"],
     # string choices that differ between the cases of a sweep (coordinates on case)
     "contact": {"long_name": "contact model of the case"},
@@ -289,6 +289,25 @@ COORDINATES = {
     "excitation": {"long_name": "excitation model of the case"},
     "envelope": {"long_name": "envelope model of the case"},
 }
+
+
+#: Parameters in units of pressure.  CF (section 4.3) reads a coordinate variable in pressure units as a
+#: vertical axis, and a vertical axis must then be the rightmost dimension but for T, Y, X (section 2.4,
+#: a strict-check failure for every ``(grid..., t)`` variable).  Swept, such a parameter gets a coordinate
+#: variable without ``units`` (so that every tool can select on it by value) and its values with units in
+#: the auxiliary coordinate ``<name>_value``.
+PRESSURE_PARAMETERS = ("k",)
+
+
+def grid_coordinate_attributes(name):
+    """Attributes of the coordinate variable of swept parameter ``name`` in a sweep result
+    (those of :func:`attributes`, without ``units`` for :data:`PRESSURE_PARAMETERS`)."""
+    attrs = attributes(name)
+    if name in PRESSURE_PARAMETERS:
+        units = attrs.pop("units")
+        attrs["comment"] = (f"values in {units}; the units are on the auxiliary coordinate {name}_value (CF reads "
+                            "a coordinate variable in units of pressure as a vertical axis)")
+    return attrs
 
 
 def attributes(name, table=None):

@@ -1,6 +1,11 @@
 """Shared pieces of the sweep, CLI and robustness tests: a small study grid and file checks."""
 
 import contextlib
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import xarray as xr
 
@@ -84,6 +89,36 @@ def quiet(*_):
     """A ``log`` callback that drops the messages."""
 
 
+def stop_after(n, seen):
+    """An ``on_batch`` callback that appends each batch index to ``seen`` and presses Ctrl-C at the ``n``-th."""
+    def on_batch(batch):
+        seen.append(batch.index)
+        if len(seen) == n:
+            raise KeyboardInterrupt
+    return on_batch
+
+
+def failed_result_file(study, path, zarr_batch_size=None):
+    """A complete result of ``study`` (netCDF, or zarr with ``zarr_batch_size``) whose batches and spot
+    checks all failed: the writer alone, no solver, no dask."""
+    from screening.workflow.execution import failed_result, failed_spot
+    from screening.workflow.grid import plan_batches, select_spots
+    from screening.workflow.writer import ResultFile, result_attributes
+
+    result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4),
+                        zarr_batch_size=zarr_batch_size)
+    try:
+        for batch in plan_batches(study, 4):
+            result.write_batch(batch, failed_result(batch.size, study.times.size))
+        if study.mcs is not None:
+            spots = select_spots(study, result.status, result.peak_p_uplift)
+            result.write_spots(spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
+                               [True] * len(spots), study.mcs)
+    finally:
+        result.close()
+    return path
+
+
 def one_line_error(err):
     """The single stderr line of a CLI error (``screening: error: ...``), no traceback."""
     lines = [line for line in err.splitlines() if line.strip()]
@@ -112,3 +147,38 @@ def in_process_client(n_workers=2):
     with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=False, dashboard_address=None,
                       scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, Client(cluster) as client:
         yield client
+
+
+@contextlib.contextmanager
+def dask_processes(folder, worker_args, n_workers=2):
+    """``dask scheduler`` on 127.0.0.1 (port chosen by the system) + ``n_workers`` ``dask worker``
+    processes (with ``worker_args``) found through a scheduler file in ``folder``; yields that file,
+    then terminates them (killed if they do not stop within 20 s)."""
+    import pytest
+
+    bin_dir = Path(sys.executable).parent
+    sched_file = folder / "scheduler.json"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    procs = [subprocess.Popen([str(bin_dir / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", str(sched_file)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists():
+            if time.monotonic() > deadline or procs[0].poll() is not None:
+                pytest.fail("dask scheduler did not start")
+            time.sleep(0.1)
+        for i in range(n_workers):
+            procs.append(subprocess.Popen([str(bin_dir / "dask"), "worker", "--scheduler-file", str(sched_file),
+                                           *worker_args, "--local-directory", str(folder / f"worker{i}")],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+        yield sched_file
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()

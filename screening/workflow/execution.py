@@ -6,7 +6,9 @@ Monte Carlo spot check is one task, :func:`spot_task`.  Tasks are submitted with
 ``retries=TASK_RETRIES``; their results are plain dicts of numpy arrays (the batch record read
 by :class:`~screening.workflow.writer.ResultFile` and saved by
 :class:`~screening.workflow.store.PartialStore`).  Workers must be able to import
-:mod:`screening` (same environment); they never touch the disk.
+:mod:`screening` (same environment).  For a zarr result, :func:`solve_and_store_batch` also writes the
+batch into its region of the store and marks it done: the workers then need the store's folder
+(the same path on a shared file system), and return only the batch's summary.
 """
 
 from __future__ import annotations
@@ -72,6 +74,17 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
         out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
     return out
+
+
+def solve_and_store_batch(target, batch, *solve_args):
+    """The dask task of a zarr result: :func:`solve_batch`, then its arrays written into the region of
+    ``batch`` in the store and the batch marked done (:class:`~screening.workflow.store.RegionTarget`
+    ``target``); returns the :data:`~screening.workflow.writer.SUMMARY_VARIABLES` of the batch."""
+    from screening.workflow.writer import SUMMARY_VARIABLES
+
+    out = solve_batch(*solve_args)
+    target.write(batch, out)
+    return {name: out[name] for name in SUMMARY_VARIABLES}
 
 
 def batch_trust(res, block, foundation, excitation, condensation, out, t_out, table=None):
@@ -195,14 +208,17 @@ def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
 
 
 # ============================================================================ submission
-def submit_batch(client, study, batch, key):
-    """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times)."""
+def submit_batch(client, study, batch, key, target=None):
+    """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times); with a
+    :class:`~screening.workflow.store.RegionTarget` ``target``, :func:`solve_and_store_batch`."""
     from screening.analysis.trust import shipped_table
 
     case = study.cases[batch.case]
-    return client.submit(solve_batch, *batch_models(study, batch), case.condensation_model, study.times,
-                         study.rtol, study.max_steps, study.output.stored, study.fragility, shipped_table(),
-                         retries=TASK_RETRIES, pure=False, key=key)
+    args = (*batch_models(study, batch), case.condensation_model, study.times, study.rtol, study.max_steps,
+            study.output.stored, study.fragility, shipped_table())
+    if target is not None:
+        return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
+    return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)
 
 
 def submit_spot(client, study, index, key):
@@ -228,6 +244,11 @@ def default_workers(study):
     """Local workers for ``study`` when none are asked for: 0 (in-process) for a small study, else 2."""
     spots = 0 if study.mcs is None else (study.mcs.count if study.mcs.points == "auto" else len(study.mcs.points))
     return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
+
+
+def sees_folder(path):
+    """Whether the folder ``path`` exists for this worker (the workers write a zarr result in place)."""
+    return os.path.isdir(path)
 
 
 def warm_up():

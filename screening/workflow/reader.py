@@ -1,4 +1,5 @@
-"""Reading a sweep result back: :func:`open_result` checks that a file is a readable screening result."""
+"""Reading a sweep result back: :func:`open_result` checks that a file (or zarr store) is a readable
+screening result."""
 
 from __future__ import annotations
 
@@ -20,11 +21,14 @@ def open_result(path):
     """Open a result file lazily with xarray; :class:`ResultError` if unreadable or foreign."""
     import xarray as xr
 
+    from screening.workflow.zarrfile import is_zarr_store, open_zarr_result
+
     path = Path(path)
-    if not path.is_file():
+    zarr = is_zarr_store(path)
+    if not path.is_file() and not zarr:
         raise ResultError(f"{path}: no such result file")
     try:
-        ds = xr.open_dataset(path, engine="netcdf4")
+        ds = open_zarr_result(path) if zarr else xr.open_dataset(path, engine="netcdf4")
     except Exception as exc:                          # noqa: BLE001 - netCDF/HDF5 raise many types
         raise ResultError(f"{path}: cannot read the result file ({exception_line(exc)})") from None
     missing = [v for v in REQUIRED_VARIABLES if v not in ds.variables]
@@ -89,9 +93,17 @@ def damaged_data_error(path, exc):
 
 
 def result_key(path):
-    """The ``study_sha256`` attribute of an existing result file, or ``None``."""
+    """The ``study_sha256`` attribute of an existing result file (or zarr store), or ``None``."""
     import netCDF4
 
+    from screening.workflow.zarrfile import is_zarr_store, read_attrs
+
+    if is_zarr_store(path):
+        try:
+            key = read_attrs(path).get("study_sha256")
+        except Exception:                             # noqa: BLE001 - zarr raises many types on damage
+            return None
+        return key if isinstance(key, str) else None
     try:
         with netCDF4.Dataset(path) as nc:
             return nc.getncattr("study_sha256") if "study_sha256" in nc.ncattrs() else None
@@ -114,7 +126,14 @@ def verify_result(path, study):
     import netCDF4
     import numpy as np
 
+    from screening.workflow.zarrfile import check_store, is_zarr_store
+
     expected = dict(zip(study.dims, study.shape), t=int(study.times.size))
+    if is_zarr_store(path):
+        try:
+            return check_store(path, expected, REQUIRED_VARIABLES)
+        except Exception as exc:                      # noqa: BLE001 - zarr/codecs raise many types on damage
+            return f"its data cannot be read ({exception_line(exc)})"
     try:
         with netCDF4.Dataset(path) as nc:
             nc.set_auto_mask(False)

@@ -2,7 +2,10 @@
 
 The manifest records the study key (:attr:`Study.key`: a hash of the study text, the package version
 and the layout version) and the batch layout; an interrupted run re-started with the same command
-continues from the saved parts.  Only the client process touches this folder.
+continues from the saved parts.  Only the client process touches this folder -- except for a zarr
+result (``--out result.zarr``): the store is built in this folder by the workers, each of which
+marks a batch done (:class:`RegionTarget`) once its region is written, and the store with its
+markers is the resume record of the batches.
 """
 
 from __future__ import annotations
@@ -11,8 +14,10 @@ import contextlib
 import fcntl
 import json
 import os
+import shutil
 import stat
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +36,8 @@ class PartialStore:
     MANIFEST = "manifest.json"
     LOCK = "lock"
     BUILDING = "result.nc.building"
+    ZARR_BUILDING = "result.zarr.building"
+    DONE = "done"                 # markers of the batches written into the zarr store
 
     def __init__(self, out):
         self.out = Path(out)
@@ -103,6 +110,40 @@ class PartialStore:
     def building(self):
         return self.dir / self.BUILDING
 
+    @property
+    def zarr_building(self):
+        return self.dir / self.ZARR_BUILDING
+
+    # -- zarr: the store and its batch markers
+    def region_target(self, shape, histories, variables):
+        """The :class:`RegionTarget` of the zarr store being built (its marker folder created)."""
+        done = self.dir / self.DONE
+        with contextlib.suppress(FileExistsError):
+            done.mkdir(mode=0o700)
+        return RegionTarget(str(self.zarr_building.resolve()), str(done.resolve()), self.manifest["key"],
+                            tuple(shape), tuple(histories), tuple(variables))
+
+    def marker_path(self, batch):
+        return self.dir / self.DONE / f"batch-{batch.index:06d}.json"
+
+    def marker_ok(self, batch):
+        """Whether ``batch`` is marked done by a marker of this study whose chunk files are all there
+        with the sizes they had when the batch was written."""
+        try:
+            with os.fdopen(_open_nofollow(self.marker_path(batch), os.O_RDONLY), "rb") as fh:
+                marker = json.loads(fh.read(1 << 22))
+            if [marker.get(k) for k in ("key", "index", "lo", "hi")] != [self.manifest["key"], batch.index,
+                                                                         batch.lo, batch.hi]:
+                return False
+            files = marker["files"]
+            return bool(files) and all(size >= 0 and os.lstat(self.zarr_building / name).st_size == size
+                                       for name, size in files.items())
+        except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+            return False
+
+    def forget_markers(self):
+        shutil.rmtree(self.dir / self.DONE, ignore_errors=True)
+
     # -- parts
     def batch_path(self, batch):
         return self.dir / f"batch-{batch.index:06d}.npz"
@@ -157,11 +198,15 @@ class PartialStore:
         return manifest if isinstance(manifest, dict) else None
 
     def _owned_files(self):
-        pats = ("batch-*.npz*", "spot-*.npz*", self.BUILDING + "*", self.MANIFEST + "*")
+        pats = ("batch-*.npz*", "spot-*.npz*", self.BUILDING + "*", self.MANIFEST + "*", self.ZARR_BUILDING + "*",
+                self.DONE, "replaced.zarr")
         return [p for pat in pats for p in self.dir.glob(pat)]
 
     def _clear(self):
         for p in self._owned_files():
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p, ignore_errors=True)
+                continue
             with contextlib.suppress(FileNotFoundError):
                 p.unlink()
 
@@ -200,7 +245,7 @@ def _layout_ok(manifest, layout):
     size = manifest.get("batch_size")
     if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size < 2**31:
         return False
-    return all(manifest.get(k) == layout[k] for k in ("n_points", "shape") if k in layout)
+    return all(manifest.get(k) == layout[k] for k in ("n_points", "shape", "format") if k in layout)
 
 
 def _like(part, template):
@@ -215,3 +260,38 @@ def _like(part, template):
         if value.shape != ref.shape or value.dtype.kind != ref.dtype.kind:
             return None
     return part
+
+
+@dataclass(frozen=True)
+class RegionTarget:
+    """Where a worker writes a batch of a zarr result: the store, the marker folder, the study key,
+    the grid ``shape``, the stored ``histories`` and all ``variables`` of a region (sent with each task)."""
+
+    store: str
+    done: str
+    key: str
+    shape: tuple
+    histories: tuple
+    variables: tuple
+
+    def write(self, batch, result):
+        """Write ``result`` into the region of ``batch``, then mark the batch done (a marker holding the
+        sizes of the chunk files written, created atomically: a batch cut short has none)."""
+        from screening.workflow.grid import hyperslabs
+        from screening.workflow.writer import write_region
+        from screening.workflow.zarrfile import ZarrDataset
+
+        ds = ZarrDataset(self.store, "r+")
+        write_region(ds, self.shape, self.histories, batch, result)
+        slabs = [slab for slab, _, _ in hyperslabs(batch.lo, batch.hi, self.shape)]
+        files = ds.chunk_files(self.variables, slabs)
+        marker = {"key": self.key, "index": batch.index, "lo": batch.lo, "hi": batch.hi, "files": files}
+        path = Path(self.done) / f"batch-{batch.index:06d}.json"
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        try:
+            with _create(tmp) as fh:
+                fh.write(json.dumps(marker).encode())
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise

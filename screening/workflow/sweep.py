@@ -20,7 +20,13 @@
    :func:`screening.solvers.montecarlo.monte_carlo`; ``"auto"`` picks the status-ok points with the
    highest ``peak_p_uplift``.
 
-Only the client touches the disk, so workers of a remote cluster need no shared file system.
+Only the client touches the disk, so workers of a remote cluster need no shared file system --
+except for a zarr result (``out`` ending in ``.zarr``): the store is built in ``<out>.partial/`` by
+the workers, each writing and compressing the chunks of its own batches in place
+(:func:`screening.workflow.execution.solve_and_store_batch`) and marking them done; the client
+creates the store's metadata, keeps a few bytes per point, writes the spot checks and moves the
+finished store into place.  The store and its markers are the resume record of the batches.
+Workers of a remote cluster then need the folder at the same path (a shared file system).
 """
 
 from __future__ import annotations
@@ -45,7 +51,8 @@ from screening.workflow.interrupt import interruptible, raise_if_interrupted, sh
 from screening.workflow.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
-from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, result_attributes
+from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
+from screening.workflow.zarrfile import is_zarr_path, zarr_batch_size
 
 MAX_FAILURE_MESSAGES = 5
 #: Outstanding batch tasks per worker (bounds the memory of client and scheduler).
@@ -81,7 +88,8 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     Parameters
     ----------
     study : :class:`screening.workflow.study.Study`.
-    out : path of the netCDF result; its folder must exist.
+    out : path of the result, a netCDF file or (suffix ``.zarr``) a zarr store written by the workers;
+        its folder must exist.
     workers : worker processes of the local cluster (ignored with ``scheduler``/``client``); 0: in
         this process (one worker thread); None: 0 for a small study, else 2
         (:func:`~screening.workflow.execution.default_workers`).
@@ -93,7 +101,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     progress : show a progress bar on stderr.
     log : callable receiving one-line messages (default: stderr).
     on_batch : callable ``on_batch(batch)`` after each batch is saved (e.g. for monitoring).
-    complevel : zlib level of the file, 1 (fastest, default) to 9; 0 stores uncompressed.
+    complevel : compression level, 1 (fastest, default) to 9 (zlib; zstd for zarr); 0 stores uncompressed.
     """
     log = log or _stderr
     out = check_output_path(out, inputs=(study.source,))
@@ -116,6 +124,12 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
         raise SweepError(f"the number of workers must be an integer >= 0 (got {workers!r})")
     if isinstance(complevel, bool) or complevel not in range(10):
         raise SweepError(f"zlib level must be an integer in 0..9 (got {complevel!r})")
+    if is_zarr_path(out):
+        try:
+            import zarr  # noqa: F401
+        except ImportError:
+            raise SweepError(f"{out}: a zarr result needs the zarr package (Python >= 3.11); "
+                             "give a .nc path") from None
 
     timings = report.timings
     t0 = time.perf_counter()
@@ -133,8 +147,11 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
             raise SweepError(f"the dask workers cannot run the solver: {exception_line(exc)}") from None
         timings["warm_up"] = time.perf_counter() - t0
         try:
-            _SweepRun(c, study, out, progress, log, on_batch, report, complevel).run(
-                batch_size or default_batch_size(study, n_workers))
+            if batch_size is None:
+                batch_size = default_batch_size(study, n_workers)
+                if is_zarr_path(out):            # whole chunks per batch
+                    batch_size = zarr_batch_size(study.shape, int(study.has_case_dim), batch_size)
+            _SweepRun(c, study, out, progress, log, on_batch, report, complevel).run(batch_size)
         except (OSError, RuntimeError) as exc:
             if not is_write_error(exc):
                 raise
@@ -150,7 +167,7 @@ def _write_error_message(out, exc):
     partial = PartialStore(out).dir
     where = getattr(exc, "filename", None) or f"the results of {out}"
     reason = write_failure_reason(exc)
-    kept = len(list(partial.glob("batch-*.npz"))) if partial.is_dir() else 0
+    kept = len(list(partial.glob("batch-*.npz")) + list(partial.glob("done/batch-*.json"))) if partial.is_dir() else 0
     return (f"cannot write {where}: {reason}; the {kept} finished batch(es) are kept in {partial}: "
             "free some space or fix the permissions, then re-run the same command to resume")
 
@@ -165,20 +182,26 @@ class _SweepRun:
         self.token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"        # task keys unique per run
         self.store = PartialStore(out)
         self.write_time = 0.0
+        self.target = None              # zarr: where the workers write (store.RegionTarget)
 
     def run(self, batch_size):
         study, timings = self.study, self.report.timings
         layout = {"n_points": study.n_points, "shape": list(study.shape), "batch_size": int(batch_size),
                   "study_file": study.source}
+        if is_zarr_path(self.out):
+            layout["format"] = "zarr"
         manifest = self.store.open(study.key, layout, self.log)
         try:
             batches = plan_batches(study, manifest["batch_size"])
             self.report.n_batches = len(batches)
             created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-            with contextlib.suppress(FileNotFoundError):
-                self.store.building.unlink()
-            self.result = ResultFile(self.store.building, study,
-                                     result_attributes(study, created, manifest["batch_size"]), self.complevel)
+            attrs = result_attributes(study, created, manifest["batch_size"])
+            if is_zarr_path(self.out):
+                self.result = self._zarr_result(attrs, manifest["batch_size"])
+            else:
+                with contextlib.suppress(FileNotFoundError):
+                    self.store.building.unlink()
+                self.result = ResultFile(self.store.building, study, attrs, self.complevel)
             try:
                 t0 = time.perf_counter()
                 self._linearization(batches)
@@ -197,22 +220,77 @@ class _SweepRun:
             self.store.close()
         self.store.remove()
 
+    def _zarr_result(self, attrs, batch_size):
+        """The zarr store of the run: the one of an interrupted run with the same manifest, or a new one."""
+        import shutil
+
+        study, path = self.study, self.store.zarr_building
+        result = None
+        if path.is_dir():
+            try:
+                result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size, reopen=True)
+                for name in region_variables(study):  # every variable the workers write is there
+                    result.nc[name]
+            except Exception:                       # noqa: BLE001 - damaged metadata: start the store again
+                self.log(f"discarding a damaged zarr store in {self.store.dir}")
+                result = None
+        if result is None:
+            self.store.forget_markers()
+            shutil.rmtree(path, ignore_errors=True)
+            result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size)
+        self.target = self.store.region_target(study.shape, study.output.stored, region_variables(study))
+        blind = [w for w, ok in self.client.run(execution.sees_folder, self.target.store).items() if not ok]
+        if blind:
+            raise SweepError(f"{len(blind)} dask worker(s) (e.g. {blind[0]}) do not see {self.store.dir}: the workers "
+                             "write a zarr result in place, so its folder must be at the same path on every worker "
+                             "(a shared file system); give a .nc --out (only the client writes it)")
+        return result
+
     # -- linearization batches
     def _submit(self, batch, suffix=""):
-        return execution.submit_batch(self.client, self.study, batch,
+        return execution.submit_batch(self.client, self.study, batch, target=self.target,
                                       key=f"solve_batch-{self.token}-{batch.index:06d}{suffix}")
 
+    def _is_saved(self, batch):
+        if self.target is not None:
+            return self.store.marker_path(batch).exists()
+        return self.store.batch_path(batch).exists()
+
+    def _load_saved(self, batch):
+        """What was saved of ``batch`` (its arrays; for zarr its summary), or ``None`` if it must be redone."""
+        if self.target is None:
+            return self.store.load_batch(batch, execution.failed_result(batch.size, self.study.times.size,
+                                                                        self.study.output.stored,
+                                                                        self.study.fragility))
+        if not self.store.marker_ok(batch):
+            return None
+        try:
+            return self.result.read_summary(batch)
+        except Exception:                           # noqa: BLE001 - a damaged chunk: compute it again
+            return None
+
     def _write(self, batch, part, save):
+        """Write (netCDF) or record (zarr: the worker wrote it) a finished batch; ``save``: keep its part."""
         start = time.perf_counter()
-        if save:
-            self.store.save_batch(batch, part)
-        self.result.write_batch(batch, part)
+        if self.target is not None:
+            self.result.record(batch, part)
+        else:
+            if save:
+                self.store.save_batch(batch, part)
+            self.result.write_batch(batch, part)
+        self.write_time += time.perf_counter() - start
+
+    def _write_failed(self, batch):
+        """A batch whose task failed: NaN values and status ``task_failed`` in its region (not saved)."""
+        start = time.perf_counter()
+        self.result.write_batch(batch, execution.failed_result(batch.size, self.study.times.size,
+                                                               self.study.output.stored, self.study.fragility))
         self.write_time += time.perf_counter() - start
 
     def _linearization(self, batches):
         from distributed import as_completed
 
-        done = [b for b in batches if self.store.batch_path(b).exists()]
+        done = [b for b in batches if self._is_saved(b)]
         done_set = set(done)
         # submit what is missing first, so that workers compute while saved parts are merged; at most
         # IN_FLIGHT_PER_WORKER tasks per worker are outstanding, so neither the client nor the
@@ -235,7 +313,7 @@ class _SweepRun:
         with Progress(self.study.n_points, label="points", enabled=self.progress) as bar:
             resumed = 0
             for b in done:
-                part = self.store.load_batch(b, execution.failed_result(b.size, self.study.times.size))
+                part = self._load_saved(b)
                 if part is None:                    # unreadable or stale part: compute it again
                     fut = self._submit(b, "-redo")
                     pending[fut] = b
@@ -250,14 +328,16 @@ class _SweepRun:
             for fut in interruptible(ready):
                 b = pending.pop(fut)
                 try:
-                    part, ok = fut.result(), True
+                    part = fut.result()
                 except Exception as exc:            # noqa: BLE001 - any task failure is recorded
                     self._task_failed(b, exc)
-                    part, ok = execution.failed_result(b.size, self.study.times.size, self.study.output.stored,
-                                                  self.study.fragility), False
+                    part = None
                 fut.release()
                 top_up()                            # the next task runs while this batch is written
-                self._write(b, part, save=ok)
+                if part is None:
+                    self._write_failed(b)
+                else:
+                    self._write(b, part, save=True)
                 del part
                 bar.update(b.size)
                 raise_if_interrupted()              # a Ctrl-C swallowed by a GC callback stops here
@@ -322,10 +402,21 @@ class _SweepRun:
 
     # -- the end
     def _finalize(self):
-        """Close the file, flush it to disk and move it into place atomically."""
+        """Close the file, flush it to disk and move it into place atomically (a zarr store: renamed,
+        an older store at ``out`` removed after)."""
         raise_if_interrupted()
         self.result.set_attrs(n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
         self.result.close()
+        if self.target is not None:
+            import shutil
+
+            old = self.store.dir / "replaced.zarr"
+            shutil.rmtree(old, ignore_errors=True)
+            if self.out.is_dir() and not self.out.is_symlink():
+                os.replace(self.out, old)
+            os.replace(self.store.zarr_building, self.out)
+            shutil.rmtree(old, ignore_errors=True)
+            return
         with open(self.store.building, "rb") as fh:
             os.fsync(fh.fileno())
         os.replace(self.store.building, self.out)

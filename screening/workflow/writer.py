@@ -1,6 +1,9 @@
 """The CF-1.8 netCDF result file of a sweep, written batch by batch (:class:`ResultFile`).
 
-Every ``units``, ``long_name`` and flag attribute comes from :mod:`screening.schema`.
+Every ``units``, ``long_name`` and flag attribute comes from :mod:`screening.schema`.  The same
+class builds the zarr form of the result (``--out result.zarr``) on a
+:class:`~screening.workflow.zarrfile.ZarrDataset`, whose grid variables the workers write
+(:func:`write_region`).
 
 Storage: histories are ``float32`` (7 significant digits, half the disk and bandwidth of
 ``float64``; the solver tolerance is ``1e-7`` anyway), everything else ``float64`` or
@@ -13,11 +16,12 @@ File layout (checked with the IOOS compliance-checker in strict mode):
 
 * dimensions: ``case`` (if the study has cases), one per swept parameter (file order), ``t``,
   and ``spot`` / ``sample`` for the spot checks;
-* coordinates: the swept values (no ``_FillValue``) -- except ``k``, whose values are the
-  auxiliary coordinate ``k_value`` on dimension ``k`` (CF reads a coordinate variable in pressure
-  units as a vertical axis); ``case`` (index) with ``case_name``; ``t`` [s] (no ``axis = "T"``:
-  CF would then want a reference date in the units); fixed parameters as scalar coordinates, and
-  parameters that differ between cases on ``case`` (NaN where they do not apply);
+* coordinates: the swept values (no ``_FillValue``); a parameter in units of pressure (``k``) has
+  no ``units`` on its coordinate variable and its values with units in the auxiliary coordinate
+  ``k_value`` (CF reads a coordinate variable in pressure units as a vertical axis;
+  :func:`screening.schema.grid_coordinate_attributes`); ``case`` (index) with ``case_name``; ``t`` [s]
+  (no ``axis = "T"``: CF would then want a reference date in the units); fixed parameters as scalar
+  coordinates, and parameters that differ between cases on ``case`` (NaN where they do not apply);
 * data: the six histories on ``(grid..., t)``; per point ``status`` (flag variable), ``t_stop``,
   ``n_steps``, ``n_rejected``, ``peak_var_theta``, ``t_peak_var_theta``, ``peak_p_uplift``,
   ``min_k_eq``, ``theta_ul``, ``slenderness``; spot checks ``mcs_*`` on ``spot`` with the spot
@@ -36,7 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import FRAGILITY, SWEEP, TIME, attributes, global_attributes
+from screening.schema import (FRAGILITY, PRESSURE_PARAMETERS, SWEEP, TIME, attributes, global_attributes,
+                              grid_coordinate_attributes)
 from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (HISTORY_DTYPE, MODEL_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS,
@@ -47,18 +52,11 @@ SYNC_POINTS = 2000            # points written between flushes of the file (comp
 COMPLEVEL = 1
 TITLE_FALLBACK = "Stochastic-linearization screening"
 
-#: Swept parameters whose values are stored in an auxiliary coordinate ``<name>_value`` on
-#: dimension ``<name>`` instead of a coordinate variable ``<name>``: CF (section 4.3) takes a
-#: coordinate variable with pressure units (``k`` is in N m-2) for a vertical coordinate and
-#: then wants the dimensions in T, Z, Y, X order (strict cf:1.8 check 2.4).
-AUX_GRID_COORDINATES = {"k": "k_value"}
 #: Per-point variables besides the histories, in file order.
 POINT_VARIABLES = ("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + SUMMARY_INTS
-
-
-def grid_coordinate(dim):
-    """Name of the variable holding the values of grid dimension ``dim``."""
-    return AUX_GRID_COORDINATES.get(dim, dim)
+#: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
+#: itself returns only these.
+SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
 
 
 def check_output_path(out, inputs=()):
@@ -71,13 +69,17 @@ def check_output_path(out, inputs=()):
     for path in inputs:
         if _same_file(out, path):
             raise SweepError(f"output path {out} is the input file {path}; give another --out")
-    if out.is_dir():
+    from screening.workflow.zarrfile import is_zarr_path, is_zarr_store
+
+    if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
+        raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")
+    if out.is_dir() and not is_zarr_path(out):
         raise SweepError(f"output path {out} is a directory")
     try:
-        mode = out.stat().st_mode
+        mode = out.lstat().st_mode if is_zarr_path(out) else out.stat().st_mode
     except OSError:
         mode = None
-    if mode is not None and not stat.S_ISREG(mode):
+    if mode is not None and not stat.S_ISREG(mode) and not (is_zarr_path(out) and stat.S_ISDIR(mode)):
         raise SweepError(f"output path {out} exists and is not a regular file (a FIFO, socket or device); "
                          "give another --out")
     if not out.parent.is_dir():
@@ -134,7 +136,8 @@ def relative_peak_error(linear, mcs):
     return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan
 
 
-def _chunks(shape, nt):
+def history_chunks(shape, nt):
+    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values)."""
     if not shape:
         return (nt,)
     last = min(shape[-1], max(1, 2**18 // nt))
@@ -145,14 +148,41 @@ def _slab_key(slab):
     return slab if slab else Ellipsis
 
 
-class ResultFile:
-    """Build the CF-1.8 result file of ``study`` at ``path`` (netCDF4/HDF5), batch by batch.
+def write_region(nc, shape, histories, batch, result):
+    """Write the arrays of ``batch`` (``result`` of :func:`~screening.workflow.execution.solve_batch`:
+    flat over the batch) into their hyperslabs of the grid ``shape`` in ``nc`` (a ``netCDF4.Dataset`` or
+    a :class:`~screening.workflow.zarrfile.ZarrDataset`): the ``histories``, the
+    :data:`POINT_VARIABLES` and ``p_exceed`` if present."""
+    nt = None
+    for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
+        rows = slice(a - batch.lo, b - batch.lo)
+        region = tuple(s.stop - s.start for s in slab)
+        for name in histories:
+            nt = result[name].shape[1] if nt is None else nt
+            nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (nt,))
+        for name in POINT_VARIABLES:
+            nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
+        if "p_exceed" in result:
+            p = result["p_exceed"]
+            nc["p_exceed"][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
 
-    ``attrs``: the global attributes (:func:`result_attributes`).  Keeps the flat ``status`` and
-    ``peak_p_uplift`` of the grid in memory (for the spot selection); histories go straight to disk.
+
+def region_variables(study):
+    """Names of the variables :func:`write_region` writes for ``study``."""
+    return study.output.stored + POINT_VARIABLES + (("p_exceed",) if study.fragility is not None else ())
+
+
+class ResultFile:
+    """Build the CF-1.8 result of ``study`` at ``path``, batch by batch: a netCDF4/HDF5 file, or with
+    ``zarr_batch_size`` (the batch size of the run) a zarr store whose grid variables the workers
+    write (chunks of :func:`~screening.workflow.zarrfile.point_chunks`).
+
+    ``attrs``: the global attributes (:func:`result_attributes`); ``reopen``: open the zarr store of an
+    interrupted run instead of creating one.  Keeps the flat ``status``, ``sl_trust`` and
+    ``peak_p_uplift`` of the grid in memory (spot selection, run summary); histories go straight to disk.
     """
 
-    def __init__(self, path, study, attrs, complevel=COMPLEVEL):
+    def __init__(self, path, study, attrs, complevel=COMPLEVEL, zarr_batch_size=None, reopen=False):
         self.path = Path(path)
         self.zlib = {"zlib": complevel > 0, "complevel": max(complevel, 1)}
         self.study = study
@@ -162,13 +192,22 @@ class ResultFile:
         self.status = np.full(study.n_points, PointStatus.task_failed, dtype=np.int8)
         self.sl_trust = np.full(study.n_points, Trust.untrusted, dtype=np.int8)
         self.peak_p_uplift = np.full(study.n_points, np.nan)
-        import netCDF4                  # here, not at module level: workers never need it
-
         self._unsynced = 0
-        self.nc = netCDF4.Dataset(self.path, "w", format="NETCDF4")
+        if zarr_batch_size is not None:
+            from screening.workflow.zarrfile import ZarrDataset, point_chunks
+
+            chunks = point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
+            self.nc = ZarrDataset(self.path, "r+" if reopen else "w", study.dims, chunks)
+            if reopen:
+                return
+        else:
+            import netCDF4              # here, not at module level: workers never need it
+
+            self.nc = netCDF4.Dataset(self.path, "w", format="NETCDF4")
         self.nc.set_auto_mask(False)
         try:
             self._define(attrs)
+            self.nc.sync()
         except BaseException:
             self.nc.close()
             raise
@@ -194,11 +233,14 @@ class ResultFile:
                                                                              dtype=object)
         aux = []
         for name, values in study.sweeps.items():
-            v = nc.createVariable(grid_coordinate(name), "f8", (name,), fill_value=False)
-            v.setncatts(attributes(name))
+            v = nc.createVariable(name, "f8", (name,), fill_value=False)
+            v.setncatts(grid_coordinate_attributes(name))
             v[:] = values
-            if grid_coordinate(name) != name:
-                aux.append(grid_coordinate(name))
+            if name in PRESSURE_PARAMETERS:          # the values with units (schema.PRESSURE_PARAMETERS)
+                v = nc.createVariable(f"{name}_value", "f8", (name,), fill_value=False)
+                v.setncatts(attributes(f"{name}_value"))
+                v[:] = values
+                aux.append(f"{name}_value")
         v = nc.createVariable("t", "f8", ("t",), fill_value=False)
         v.setncatts(TIME)
         v[:] = study.times
@@ -218,7 +260,7 @@ class ResultFile:
 
         for name in self.histories:
             self._variable(name, "f4", dims + ("t",), HISTORY_DTYPE(np.nan), coordinates, **self.zlib,
-                           shuffle=self.zlib["zlib"], chunksizes=_chunks(self.shape, self.nt))
+                           shuffle=self.zlib["zlib"], chunksizes=history_chunks(self.shape, self.nt))
         self._variable("status", "i1", dims, False, coordinates, **self.zlib)
         self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib)
         for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS:
@@ -242,24 +284,27 @@ class ResultFile:
     def write_batch(self, batch, result):
         """Write the arrays of ``batch`` (as returned by :func:`~screening.workflow.execution.solve_batch`)
         into their regions."""
-        nc = self.nc
-        for slab, a, b in hyperslabs(batch.lo, batch.hi, self.shape):
-            rows = slice(a - batch.lo, b - batch.lo)
-            region = tuple(s.stop - s.start for s in slab)
-            for name in self.histories:
-                nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (self.nt,))
-            for name in POINT_VARIABLES:
-                nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
-            if "p_exceed" in result:
-                p = result["p_exceed"]
-                nc["p_exceed"][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
+        write_region(self.nc, self.shape, self.histories, batch, result)
         self._unsynced += batch.size
         if self._unsynced >= SYNC_POINTS:
-            nc.sync()           # compress and write the cached chunks now, while workers compute
+            self.nc.sync()      # compress and write the cached chunks now, while workers compute
             self._unsynced = 0
-        self.status[batch.lo:batch.hi] = result["status"]
-        self.sl_trust[batch.lo:batch.hi] = result["sl_trust"]
-        self.peak_p_uplift[batch.lo:batch.hi] = result["peak_p_uplift"]
+        self.record(batch, result)
+
+    def record(self, batch, summary):
+        """Keep the :data:`SUMMARY_VARIABLES` of ``batch`` (a worker wrote the rest)."""
+        self.status[batch.lo:batch.hi] = summary["status"]
+        self.sl_trust[batch.lo:batch.hi] = summary["sl_trust"]
+        self.peak_p_uplift[batch.lo:batch.hi] = summary["peak_p_uplift"]
+
+    def read_summary(self, batch):
+        """The :data:`SUMMARY_VARIABLES` of ``batch`` as stored (flat arrays)."""
+        out = {}
+        for name in SUMMARY_VARIABLES:
+            parts = [np.asarray(self.nc[name][_slab_key(slab)]).reshape(-1)
+                     for slab, _, _ in hyperslabs(batch.lo, batch.hi, self.shape)]
+            out[name] = np.concatenate(parts)
+        return out
 
     def history(self, name, index):
         """Stored history of ``name`` at grid index tuple ``index`` (float64)."""

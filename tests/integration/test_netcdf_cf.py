@@ -123,7 +123,10 @@ def test_dimensions_coordinates_and_units(results):
             assert ds[var].dims == (name,)
             assert ds[var].attrs["units"] == PARAMETERS[name]["units"]
             assert ds[var].attrs["long_name"] == PARAMETERS[name]["long_name"]
-        np.testing.assert_array_equal(ds["k_value"].values, [2.0e7, 2.89e7])   # k: auxiliary coordinate
+        # k (in pressure units): a coordinate variable without units, its values with units in k_value
+        np.testing.assert_array_equal(ds["k"].values, [2.0e7, 2.89e7])
+        np.testing.assert_array_equal(ds["k_value"].values, [2.0e7, 2.89e7])
+        assert "units" not in ds["k"].attrs and "N m-2" in ds["k"].attrs["comment"]
         assert "k_value" in ds["var_theta"].coords
         assert ds["t"].attrs["units"] == "s" and "axis" not in ds["t"].attrs
         np.testing.assert_allclose(ds["t"].values, np.arange(21) * 0.1)
@@ -142,9 +145,40 @@ def test_dimensions_coordinates_and_units(results):
         assert ds["mcs_rel_error_peak_var_theta"].attrs["units"] == "1"
 
 
+def test_every_swept_parameter_is_an_index_to_select_and_reduce_on(results):
+    """Issue 13: xarray selects by value and reduces over every swept parameter, k included."""
+    with xr.open_dataset(results["grid"]) as ds:
+        for dim in ("k", "eps", "S0"):
+            assert dim in ds.indexes
+            values = ds[dim].values
+            picked = ds["peak_var_theta"].sel({dim: values[1]})
+            np.testing.assert_array_equal(picked.values, ds["peak_var_theta"].isel({dim: 1}).values)
+            near = ds["peak_var_theta"].sel({dim: values[0] * (1 + 1e-9)}, method="nearest")
+            np.testing.assert_array_equal(near.values, ds["peak_var_theta"].isel({dim: 0}).values)
+            peak = ds["var_theta"].max(dim)
+            assert dim not in peak.dims and peak.sizes["t"] == ds.sizes["t"]
+        assert ds.sel(k=2.89e7, eps=6e7)["status"].dims == ("S0",)
+
+
+@pytest.mark.skipif(shutil.which("ncks") is None, reason="NCO (ncks) is not installed")
+def test_nco_selects_by_value_on_k(results, tmp_path):
+    out = tmp_path / "k.nc"
+    proc = subprocess.run(["ncks", "-O", "-d", "k,2.5e7,3.0e7", str(results["grid"]), str(out)],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_array_equal(ds["k"].values, [2.89e7])
+
+
+@pytest.mark.skipif(shutil.which("cdo") is None, reason="CDO is not installed")
+def test_cdo_reads_the_grid_without_warnings(results, tmp_path):
+    proc = subprocess.run(["cdo", "-s", "sinfon", str(results["grid"])], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and "Warning" not in proc.stderr, proc.stderr
+
+
 def test_storage_layout_and_global_attributes(results):
     with netCDF4.Dataset(results["grid"]) as nc:
-        for name in ("k_value", "eps", "S0", "t"):
+        for name in ("k", "k_value", "eps", "S0", "t"):
             assert "_FillValue" not in nc[name].ncattrs(), name
         for name in HISTORY_VARIABLES:
             assert nc[name].dtype == np.float32

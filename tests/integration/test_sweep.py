@@ -2,18 +2,13 @@
 ``dask scheduler`` + ``dask worker`` cluster.  The pure pieces are tested in tests/unit/workflow."""
 
 import json
-import os
-import subprocess
-import sys
-import time
-from pathlib import Path
 
 import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, compare_files, quiet
+from helpers import CASES, GRID, compare_files, dask_processes, quiet, stop_after
 
 from screening.workflow import execution
 from screening.condensation.api import uplift_threshold
@@ -26,8 +21,6 @@ from screening.workflow.reader import result_key
 from screening.workflow.store import PartialStore
 from screening.workflow.study import build_models, parse_study
 from screening.workflow.sweep import run_sweep
-
-BIN = Path(sys.executable).parent
 
 
 # ----------------------------------------------------------------------------- runs
@@ -121,14 +114,8 @@ def test_interrupted_run_resumes_to_the_same_file(client, tmp_path):
 
     out = tmp_path / "run.nc"
     seen = []
-
-    def stop_after_two(batch):
-        seen.append(batch.index)
-        if len(seen) == 2:
-            raise KeyboardInterrupt
-
     with pytest.raises(KeyboardInterrupt):
-        run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet, on_batch=stop_after_two)
+        run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet, on_batch=stop_after(2, seen))
     partial = tmp_path / "run.nc.partial"
     assert not out.exists()
     assert sorted(p.name for p in partial.glob("batch-*.npz")) == sorted(
@@ -269,32 +256,8 @@ def test_auto_spot_check_with_the_real_monte_carlo(client, tmp_path):
 @pytest.fixture
 def dask_cluster(tmp_path):
     """``dask scheduler`` + two ``dask worker`` processes on 127.0.0.1 (torn down afterwards)."""
-    sched_file = tmp_path / "scheduler.json"
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    procs = [subprocess.Popen([str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                               "--no-dashboard", "--scheduler-file", str(sched_file)],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
-    try:
-        deadline = time.monotonic() + 60
-        while not sched_file.exists():
-            if time.monotonic() > deadline or procs[0].poll() is not None:
-                pytest.fail("dask scheduler did not start")
-            time.sleep(0.1)
-        for _ in range(2):
-            procs.append(subprocess.Popen([str(BIN / "dask"), "worker", "--scheduler-file", str(sched_file),
-                                           "--nthreads", "1", "--no-nanny", "--no-dashboard", "--local-directory",
-                                           str(tmp_path)],
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+    with dask_processes(tmp_path, ["--nthreads", "1", "--no-nanny", "--no-dashboard"]) as sched_file:
         yield sched_file
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
 
 
 def test_existing_scheduler_with_two_worker_processes(dask_cluster, client, tmp_path):

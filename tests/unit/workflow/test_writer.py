@@ -4,34 +4,17 @@ import netCDF4
 import numpy as np
 import pytest
 
-from helpers import CASES, GRID
+from helpers import CASES, GRID, failed_result_file as write
 
 from screening import __version__
-from screening.schema import SWEEP, TIME, attributes, global_attributes
+from screening.schema import SWEEP, TIME, attributes, global_attributes, grid_coordinate_attributes
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
-from screening.workflow.execution import failed_result, failed_spot
-from screening.workflow.grid import plan_batches, select_spots
 from screening.workflow.study import parse_study
-from screening.workflow.writer import ResultFile, check_output_path, relative_peak_error, result_attributes
+from screening.workflow.writer import check_output_path, relative_peak_error
 
 SPOTS = '[mcs]\npoints = [{case = "soft_kt", S0 = 1e-4}, {case = "hard_white", S0 = 2.4e-3}]\nsamples = 3\n'
 K_SWEPT = GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]")
-
-
-def write(study, path):
-    """A complete file of ``study`` whose batches and spot checks all failed (no solver needed)."""
-    result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4))
-    try:
-        for batch in plan_batches(study, 4):
-            result.write_batch(batch, failed_result(batch.size, study.times.size))
-        if study.mcs is not None:
-            spots = select_spots(study, result.status, result.peak_p_uplift)
-            result.write_spots(spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
-                               [True] * len(spots), study.mcs)
-    finally:
-        result.close()
-    return path
 
 
 @pytest.mark.parametrize("text", [CASES + SPOTS, K_SWEPT], ids=["cases_and_spots", "k_swept"])
@@ -40,7 +23,8 @@ def test_every_attribute_of_every_variable_comes_from_the_schema(tmp_path, text)
     with netCDF4.Dataset(write(study, tmp_path / "w.nc")) as nc:
         assert set(nc.variables) >= {"status", "theta_ul", "slenderness", "var_theta"}
         for name, var in nc.variables.items():
-            declared = TIME if name == "t" else attributes("k" if name == "k_value" else name, SWEEP)
+            declared = (TIME if name == "t" else grid_coordinate_attributes(name) if var.dimensions == ("k",)
+                        else attributes("k" if name == "k_value" else name, SWEEP))
             got = {k: var.getncattr(k) for k in var.ncattrs() if k not in ("coordinates", "_FillValue")}
             assert got.keys() == declared.keys(), name
             for key, value in declared.items():

@@ -1,0 +1,375 @@
+"""The zarr form of a sweep result (``--out result.zarr``): written in place by the workers.
+
+:class:`ZarrDataset` is the part of ``netCDF4.Dataset`` that
+:class:`~screening.workflow.writer.ResultFile` uses, on a zarr (format 3) store, so that one piece
+of code (``ResultFile``) defines the layout, the variables and their CF attributes of both forms.
+Variables defined with ``createVariable`` are created at the next :meth:`ZarrDataset.sync` (xarray
+writes their metadata and any values that were set; the grid variables are left unwritten for the
+workers).  A grid variable is cut into chunks that each lie in one batch (:func:`point_chunks`),
+so that every worker compresses and writes whole chunks of its own, with no lock.
+
+:func:`export_netcdf` converts a finished store to the netCDF file a direct run writes.  netCDF4 /
+HDF5 files cannot be written from several processes, hence this second form for large runs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+ZARR_SUFFIX = ".zarr"
+ZARR_FORMAT = 3
+#: Bytes read at a time when a variable is copied (:func:`export_netcdf`) or checked.
+BLOCK_BYTES = 32 * 2**20
+
+
+def is_zarr_path(path):
+    """Whether ``path`` names a zarr result (by its suffix)."""
+    return Path(path).suffix == ZARR_SUFFIX
+
+
+def is_zarr_store(path):
+    """Whether ``path`` is a folder holding a zarr store (format 2 or 3)."""
+    path = Path(path)
+    return path.is_dir() and not path.is_symlink() and any((path / m).is_file() for m in ("zarr.json", ".zgroup"))
+
+
+# ----------------------------------------------------------------------------- chunks
+def point_chunks(shape, n_lead, batch_size):
+    """Chunk shape over the grid ``shape`` such that every chunk lies in one batch of ``batch_size``.
+
+    Batches are runs of ``batch_size`` points in C order that restart at each of the ``n_lead``
+    leading dimensions (``case``: 1, else 0; :func:`screening.workflow.grid.plan_batches`).  A chunk
+    is ``c`` indices of one swept dimension ``j`` times everything after it, ``c * inner(j)``
+    points, with ``c`` dividing that dimension's size (any ``c`` for the first swept dimension,
+    whose last chunk may be short) and the chunk's size dividing ``batch_size``.  The largest such
+    chunk is returned.
+    """
+    shape = tuple(int(n) for n in shape)
+    lead, swept = (1,) * n_lead, shape[n_lead:]
+    per_case = math.prod(swept)
+    if batch_size >= per_case:
+        return lead + swept
+    best, chunk = 1, lead + (1,) * len(swept)
+    for j, n in enumerate(swept):
+        inner = math.prod(swept[j + 1:])
+        fits = range(1, n + 1) if j == 0 else [d for d in range(1, n + 1) if n % d == 0]
+        c = max((d for d in fits if batch_size % (d * inner) == 0), default=0)
+        if c >= 1 and c * inner > best:
+            best, chunk = c * inner, lead + (1,) * j + (c,) + swept[j + 1:]
+    return chunk
+
+
+def zarr_batch_size(shape, n_lead, target):
+    """A batch size of at most ``target`` points that is a whole number of large chunks
+    (:func:`point_chunks`): the grid of a zarr result is then cut into few, large chunks."""
+    swept = tuple(shape)[n_lead:]
+    per_case = math.prod(swept)
+    if target >= per_case:
+        return target
+    best = 1
+    for j, n in enumerate(swept):
+        inner = math.prod(swept[j + 1:])
+        if j == 0:
+            c = min(n, target // inner)
+        else:
+            c = max((d for d in range(1, n + 1) if n % d == 0 and d * inner <= target), default=0)
+        best = max(best, c * inner)
+    return best * (target // best)
+
+
+# ----------------------------------------------------------------------------- the facade
+def _codecs(dtype, zlib, complevel, shuffle):
+    """Compression of a numeric variable where netCDF would use zlib: blosc/zstd at ``complevel`` (with
+    byte shuffle if asked); none where netCDF uses none; strings keep zarr's default."""
+    from zarr.codecs import BloscCodec
+
+    if np.dtype(dtype).kind not in "fiu":
+        return {}
+    if not zlib:
+        return {"compressors": None}
+    return {"compressors": (BloscCodec(cname="zstd", clevel=int(complevel), shuffle="shuffle" if shuffle
+                                       else "noshuffle", typesize=np.dtype(dtype).itemsize),)}
+
+
+def _no_fill(fill):
+    """netCDF4's ``fill_value`` ``False`` (none) or ``None`` (the default, unused for what we store)."""
+    return fill is None or fill is False
+
+
+class _PendingVariable:
+    """A variable defined but not yet created in the store: its attributes and any values set."""
+
+    def __init__(self, dataset, name, dtype, dims, fill, storage):
+        d = self.__dict__
+        d["_dataset"], d["name"], d["dims"], d["fill"], d["storage"] = dataset, name, tuple(dims), fill, storage
+        d["dtype"] = np.dtype(object) if dtype is str else np.dtype(dtype)
+        d["attrs"], d["values"] = {}, None
+
+    @property
+    def shape(self):
+        return tuple(self._dataset.dimension_size(d) for d in self.dims)
+
+    def setncatts(self, attrs):
+        self.attrs.update(attrs)
+
+    def __setattr__(self, name, value):          # ``var.coordinates = "..."`` as on netCDF4.Variable
+        self.attrs[name] = value
+
+    def __setitem__(self, key, value):
+        if self.values is None:
+            fill = ("" if self.dtype.kind == "O" else 0) if _no_fill(self.fill) else self.fill
+            self.__dict__["values"] = np.full(self.shape, fill, dtype=self.dtype)
+        self.values[key] = value
+
+    def __getitem__(self, key):
+        return self.values[key]
+
+
+class ZarrDataset:
+    """A zarr store with the methods of ``netCDF4.Dataset`` that :class:`ResultFile` calls.
+
+    ``mode``: ``"w"`` (a new store; the folder must not exist) or ``"r+"``.  ``chunks``: the chunk
+    shape over the grid dimensions ``grid`` (:func:`point_chunks`); other variables are one chunk.
+    """
+
+    def __init__(self, path, mode="r+", grid=(), chunks=()):
+        self.path = Path(path)
+        self.grid, self.chunks = tuple(grid), tuple(chunks)
+        self.dimensions, self._pending, self._attrs, self._arrays = {}, {}, {}, {}
+        self._created, self._open, self._group = mode == "r+", True, None
+
+    @property
+    def group(self):
+        if self._group is None:
+            import zarr
+
+            with zarr.config.set({"array.write_empty_chunks": True}):   # every chunk of a batch is a file
+                self._group = zarr.open_group(self.path, mode="r+", zarr_format=ZARR_FORMAT)
+        return self._group
+
+    # -- netCDF4.Dataset
+    def set_auto_mask(self, flag):
+        pass
+
+    def createDimension(self, name, size):
+        self.dimensions[name] = int(size)
+
+    def dimension_size(self, name):
+        """Size of dimension ``name`` (of an existing store: read from its arrays, once)."""
+        if name not in self.dimensions and self._created:
+            for _, arr in self.group.arrays():
+                for dim, size in zip(arr.metadata.dimension_names or (), arr.shape):
+                    self.dimensions.setdefault(dim, size)
+        return self.dimensions[name]
+
+    def createVariable(self, name, dtype, dims, fill_value=None, zlib=False, complevel=1, shuffle=False,
+                       chunksizes=None):
+        var = _PendingVariable(self, name, dtype, dims, fill_value, (zlib, complevel, shuffle))
+        self._pending[name] = var
+        return var
+
+    def __getitem__(self, name):
+        if name in self._pending:
+            return self._pending[name]
+        if name not in self._arrays:
+            import zarr
+
+            with zarr.config.set({"array.write_empty_chunks": True}):
+                self._arrays[name] = self.group[name]
+        return self._arrays[name]
+
+    def setncatts(self, attrs):
+        if self._created:
+            self.group.attrs.update({k: _json(v) for k, v in attrs.items()})
+        else:
+            self._attrs.update(attrs)
+
+    def sync(self):
+        """Create the pending variables (metadata, and the values that were set)."""
+        if self._created and not self._pending:
+            return
+        import dask.array as da
+        import xarray as xr
+
+        variables, encoding = {}, {}
+        for name, v in self._pending.items():
+            chunks = self._chunks(v)
+            if v.values is None:                    # a grid variable: the workers write it
+                data = da.zeros(v.shape, dtype=v.dtype, chunks=chunks or -1)
+            else:
+                data = v.values
+            variables[name] = xr.Variable(v.dims, data, v.attrs)
+            enc = {"_FillValue": None if _no_fill(v.fill) else v.fill, **_codecs(v.dtype, *v.storage)}
+            if chunks:
+                enc["chunks"] = chunks
+            encoding[name] = enc
+        # xarray replaces the global attributes on every write: give it those of the store
+        ds = xr.Dataset(variables, attrs=dict(self.group.attrs) if self._created else self._attrs)
+        ds.to_zarr(self.path, mode="a" if self._created else "w-", compute=False, encoding=encoding,
+                   consolidated=False, zarr_format=ZARR_FORMAT)
+        self._pending.clear()
+        self._created, self._group = True, None
+        self._arrays.clear()
+
+    def _chunks(self, var):
+        shape = var.shape
+        if not shape:
+            return None
+        if self.grid and var.dims[:len(self.grid)] == self.grid:
+            return self.chunks + shape[len(self.grid):]
+        return shape
+
+    def isopen(self):
+        return self._open
+
+    def close(self):
+        """Create what is pending and write the consolidated metadata (one read to open the store)."""
+        if self._open:
+            self._open = False
+            self.sync()
+            import zarr
+
+            with warnings_ignored():
+                zarr.consolidate_metadata(self.path, zarr_format=ZARR_FORMAT)
+
+    # -- batches
+    def chunk_files(self, names, slabs):
+        """``{relative path: size [bytes]}`` of the chunk files of variables ``names`` over the grid
+        ``slabs`` (tuples of slices; a file that is missing has size -1)."""
+        files = {}
+        for name in names:
+            arr = self[name]
+            for slab in slabs:
+                ranges = [range(s.start // c, (s.stop - 1) // c + 1) for s, c in zip(slab, arr.chunks)]
+                for index in np.ndindex(*[len(r) for r in ranges]):
+                    coords = tuple(r[i] for r, i in zip(ranges, index)) + (0,) * (arr.ndim - len(slab))
+                    key = f"{name}/{arr.metadata.encode_chunk_key(coords)}"
+                    try:
+                        files[key] = os.stat(self.path / key).st_size
+                    except OSError:
+                        files[key] = -1
+        return files
+
+
+@contextlib.contextmanager
+def warnings_ignored():
+    """zarr warns that consolidated metadata is not in the format 3 specification (yet): it is read by
+    xarray and zarr-python, and optional for other readers."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
+def _json(value):
+    """An attribute value as JSON (numpy scalars and arrays to Python)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+# ----------------------------------------------------------------------------- reading and export
+def open_zarr_result(path):
+    """The result store at ``path`` opened lazily with xarray."""
+    import xarray as xr
+
+    with warnings_ignored():
+        return xr.open_zarr(path, zarr_format=ZARR_FORMAT, consolidated=None)
+
+
+def read_attrs(path):
+    """The global attributes of the store at ``path`` (a dict; empty if it has none)."""
+    import zarr
+
+    with warnings_ignored():
+        return dict(zarr.open_group(path, mode="r").attrs)
+
+
+def check_store(path, expected_dims, required):
+    """Why the store at ``path`` cannot be reused (a short reason), or ``None``: ``expected_dims``
+    ``{name: size}``, ``required`` variable names; every chunk is read (a damaged one raises)."""
+    import zarr
+
+    with warnings_ignored():
+        group = zarr.open_group(path, mode="r")
+        arrays = dict(group.arrays())
+    dims = {}
+    for arr in arrays.values():
+        dims.update(zip(arr.metadata.dimension_names or (), arr.shape))
+    for dim, size in expected_dims.items():
+        if dims.get(dim) != size:
+            return f"its dimension {dim!r} does not have the study's size {size}"
+    missing = [v for v in required if v not in arrays]
+    if missing:
+        return f"it lacks {', '.join(missing)}"
+    for arr in arrays.values():
+        for block in _blocks(arr):
+            arr[block]
+    return None
+
+
+def _blocks(arr):
+    """Index tuples covering ``arr`` in blocks of about :data:`BLOCK_BYTES` along its first dimension."""
+    if not arr.shape:
+        yield ()
+        return
+    row = math.prod(arr.shape[1:]) * max(getattr(arr.dtype, "itemsize", 8), 8)
+    step = max(1, BLOCK_BYTES // max(row, 1))
+    for lo in range(0, arr.shape[0], step):
+        yield (slice(lo, lo + step),)
+
+
+def export_netcdf(src, dst, complevel, history):
+    """Write the zarr result ``src`` as the CF netCDF file ``dst`` (a new file), block by block.
+
+    Every variable keeps its dimensions, type, values and attributes (``flag_values`` in the type of
+    its variable, as CF wants); floats keep their NaN fill value.  Storage as in a direct run: zlib
+    at ``complevel``, byte shuffle and ``(1, ..., n, nt)`` chunks for the histories.  ``history``:
+    the line appended to the ``history`` attribute.
+    """
+    import netCDF4
+    import zarr
+
+    from screening.workflow.writer import history_chunks
+
+    with warnings_ignored():
+        group = zarr.open_group(src, mode="r")
+        arrays = dict(group.arrays())
+        attrs = dict(group.attrs)
+    grid = tuple(arrays["status"].metadata.dimension_names or ())
+    with netCDF4.Dataset(dst, "w", format="NETCDF4") as nc:
+        nc.set_auto_mask(False)
+        for arr in arrays.values():
+            for dim, size in zip(arr.metadata.dimension_names or (), arr.shape):
+                if dim not in nc.dimensions:
+                    nc.createDimension(dim, size)
+        for name, arr in arrays.items():
+            dims = tuple(arr.metadata.dimension_names or ())
+            var_attrs = dict(arr.attrs)
+            fill = np.nan if "_FillValue" in var_attrs and arr.dtype.kind == "f" else False
+            var_attrs.pop("_FillValue", None)
+            kind = arr.dtype.kind
+            dtype = str if kind in "OTU" else arr.dtype.newbyteorder("=")
+            storage = {}
+            if dims and dims != (name,) and kind in "fiu" and complevel > 0:
+                storage = {"zlib": True, "complevel": complevel}
+                if dims[:len(grid)] == grid and dims[len(grid):] == ("t",):
+                    storage.update(shuffle=True, chunksizes=history_chunks(arr.shape[:len(grid)], arr.shape[-1]))
+            var = nc.createVariable(name, dtype, dims, fill_value=None if dtype is str else fill, **storage)
+            if "flag_values" in var_attrs:
+                var_attrs["flag_values"] = np.asarray(var_attrs["flag_values"], dtype=dtype)
+            var.setncatts({k: np.asarray(v) if isinstance(v, list) else v for k, v in var_attrs.items()})
+            for block in _blocks(arr):
+                values = arr[block]
+                var[block if block else ...] = np.asarray(values, dtype=object) if dtype is str else values
+        if attrs.get("history"):
+            attrs["history"] = f"{attrs['history']}\n{history}"
+        nc.setncatts({k: np.asarray(v) if isinstance(v, list) else v for k, v in attrs.items()})

@@ -1,0 +1,228 @@
+"""Zarr results (``--out result.zarr``): written in place by the workers, resumed from the store's batch
+markers, identical to the netCDF result when opened with xarray and when exported
+(``screening export``); and a real ``dask scheduler`` + ``dask worker`` cluster writing one."""
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from helpers import CASES, GRID, compare_files, dask_processes, quiet, stop_after
+
+from screening.cli import main
+from screening.status import PointStatus
+from screening.workflow import execution
+from screening.workflow.reader import result_key
+from screening.workflow.study import parse_study
+from screening.workflow.sweep import run_sweep
+
+pytest.importorskip("zarr")
+
+BIN = Path(sys.executable).parent
+CHECKER = BIN / "compliance-checker"
+SPOTS = "[mcs]\npoints = \"auto\"\ncount = 2\nsamples = 6\nmodel = \"condensed\"\n"
+FRAGILITY = "[fragility]\nthresholds = [0.01, 0.02]\n"
+
+
+def _same(nc, store, ignore=()):
+    """The zarr store opens (xarray) to the values and attributes of the netCDF file."""
+    with xr.open_dataset(nc) as a, xr.open_zarr(store) as b:
+        a, b = a.load(), b.load()
+    for ds in (a, b):
+        for name in ("history", "date_created", *ignore):
+            ds.attrs.pop(name, None)
+    xr.testing.assert_identical(a, b)
+
+
+@pytest.mark.parametrize("text", [GRID + SPOTS, CASES, GRID + FRAGILITY + '[output]\nhistories = "none"\n'],
+                         ids=["grid_spots", "cases", "no_histories_fragility"])
+def test_the_zarr_result_is_the_netcdf_result(client, tmp_path, text):
+    study = parse_study(text, name="s", source="s.toml")
+    run_sweep(study, tmp_path / "r.nc", client=client, batch_size=5, progress=False, log=quiet)
+    report = run_sweep(study, tmp_path / "r.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    assert report.status_counts.get("ok") == study.n_points
+    assert not (tmp_path / "r.zarr.partial").exists()
+    _same(tmp_path / "r.nc", tmp_path / "r.zarr")
+    assert result_key(tmp_path / "r.zarr") == study.key
+
+
+def test_workers_write_the_zarr_chunks_and_return_only_summaries(client, tmp_path, monkeypatch):
+    """The client never receives the histories of a zarr run: it writes no batch region itself."""
+    from screening.workflow.writer import ResultFile
+
+    study = parse_study(GRID)
+    written = []
+    monkeypatch.setattr(ResultFile, "write_batch", lambda self, batch, result: written.append(batch))
+    run_sweep(study, tmp_path / "w.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    assert written == []
+    with xr.open_zarr(tmp_path / "w.zarr") as ds:
+        assert np.all(np.isfinite(ds["var_theta"].values[..., 1:]))
+        assert ds["var_theta"].encoding["chunks"] == (1, 5, 81)     # one chunk per batch of a row
+
+
+def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_path):
+    study = parse_study(GRID)
+    ref = tmp_path / "ref.nc"
+    run_sweep(study, ref, client=client, batch_size=5, progress=False, log=quiet)
+    out = tmp_path / "run.zarr"
+    seen = []
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet, on_batch=stop_after(2, seen))
+    while any(client.processing().values()):     # tasks already running finish (and mark their batch)
+        time.sleep(0.05)
+    partial = tmp_path / "run.zarr.partial"
+    assert not out.exists() and (partial / "result.zarr.building" / "zarr.json").is_file()
+    markers = sorted(p.name for p in (partial / "done").glob("batch-*.json"))
+    assert set(f"batch-{i:06d}.json" for i in seen) <= set(markers)
+    marker = json.loads((partial / "done" / f"batch-{seen[0]:06d}.json").read_text())
+    assert marker["key"] == study.key and all(size > 0 for size in marker["files"].values())
+
+    # damage one marked batch: its chunk file no longer has the size in the marker
+    damaged = seen[1]
+    chunk = partial / "result.zarr.building" / "var_theta" / "c" / str(damaged) / "0" / "0"
+    chunk.write_bytes(chunk.read_bytes()[:10])
+    messages = []
+    report = run_sweep(study, out, client=client, batch_size=2, progress=False, log=messages.append)
+    assert report.n_batches == 4                                   # the layout of the first attempt
+    assert report.n_resumed_batches == len(markers) - 1
+    assert not partial.exists()
+    _same(ref, out)
+
+
+def test_a_failed_batch_is_flagged_in_the_zarr_result(client, tmp_path, monkeypatch):
+    real = execution.solve_and_store_batch
+
+    def flaky(target, batch, *args):
+        if batch.index == 1:
+            raise FloatingPointError("synthetic failure")
+        return real(target, batch, *args)
+
+    monkeypatch.setattr(execution, "solve_and_store_batch", flaky)
+    report = run_sweep(parse_study(GRID), tmp_path / "f.zarr", client=client, batch_size=5, progress=False,
+                       log=quiet)
+    assert report.n_failed_batches == 1
+    with xr.open_zarr(tmp_path / "f.zarr") as ds:
+        assert np.all(ds["status"].values[1] == PointStatus.task_failed) and np.all(ds["status"].values[0] == 0)
+        assert np.all(np.isnan(ds["var_theta"].values[1])) and int(ds.attrs["n_failed_points"]) == 5
+
+
+def test_disk_full_in_the_zarr_store_keeps_the_marked_batches_and_resumes(client, tmp_path, monkeypatch):
+    """No space for batch 2 on, on the workers and on the client: one line naming the cause and the
+    kept batches; the same command then resumes."""
+    import errno
+
+    from screening.workflow import writer
+    from screening.workflow.errors import SweepError
+
+    study = parse_study(GRID)
+    ref = tmp_path / "ref.nc"
+    run_sweep(study, ref, client=client, batch_size=5, progress=False, log=quiet)
+    original = writer.write_region
+
+    def full_from_batch_2(nc, shape, histories, batch, result):
+        if batch.index >= 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "full.zarr.partial"))
+        original(nc, shape, histories, batch, result)
+
+    monkeypatch.setattr(writer, "write_region", full_from_batch_2)
+    with pytest.raises(SweepError) as info:
+        run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    message = str(info.value)
+    assert "\n" not in message and "No space left on device" in message and "re-run" in message
+    assert "the 2 finished batch(es) are kept in" in message and "full.zarr.partial" in message
+    assert not (tmp_path / "full.zarr").exists()
+    monkeypatch.setattr(writer, "write_region", original)
+    report = run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    assert report.n_resumed_batches == 2 and report.n_failed_batches == 0
+    _same(ref, tmp_path / "full.zarr")
+
+
+def test_a_finished_zarr_result_is_reused_then_replaced_by_another_study(client, tmp_path):
+    study = parse_study(GRID)
+    out = tmp_path / "u.zarr"
+    run_sweep(study, out, client=client, progress=False, log=quiet)
+    messages = []
+    assert run_sweep(study, out, client=client, progress=False, log=messages.append).reused
+    changed = parse_study(GRID.replace("t_end = 4.0", "t_end = 2.0"))
+    assert not run_sweep(changed, out, client=client, progress=False, log=quiet).reused
+    with xr.open_zarr(out) as ds:
+        assert ds.sizes["t"] == 41 and ds.attrs["study_sha256"] == changed.key
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["u.zarr"]
+
+
+def test_workers_that_do_not_see_the_output_folder_are_a_one_line_error(client, tmp_path, monkeypatch):
+    from screening.workflow.errors import SweepError
+
+    monkeypatch.setattr(execution, "sees_folder", lambda path: False)
+    with pytest.raises(SweepError, match=r"2 dask worker\(s\) .* do not see .*shared file system"):
+        run_sweep(parse_study(GRID), tmp_path / "far.zarr", client=client, progress=False, log=quiet)
+    assert not (tmp_path / "far.zarr").exists()
+
+
+def test_a_folder_that_is_not_a_zarr_store_is_refused(tmp_path, capsys):
+    (tmp_path / "x.zarr").mkdir()
+    (tmp_path / "x.zarr" / "keep.txt").write_text("mine")
+    study = tmp_path / "s.toml"
+    study.write_text(GRID)
+    assert main(["run", str(study), "--out", str(tmp_path / "x.zarr")]) == 2
+    assert "not a zarr store" in capsys.readouterr().err
+    assert (tmp_path / "x.zarr" / "keep.txt").read_text() == "mine"
+
+
+def test_export_gives_the_netcdf_file_of_a_direct_run(client, tmp_path, capsys):
+    study = parse_study(GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]") + SPOTS + FRAGILITY,
+                        name="e", source="e.toml")
+    run_sweep(study, tmp_path / "direct.nc", client=client, progress=False, log=quiet)
+    run_sweep(study, tmp_path / "e.zarr", client=client, progress=False, log=quiet)
+    assert main(["export", str(tmp_path / "e.zarr"), str(tmp_path / "exported.nc")]) == 0
+    assert capsys.readouterr().out.strip() == str(tmp_path / "exported.nc")
+    compare_files(tmp_path / "direct.nc", tmp_path / "exported.nc")
+    with xr.open_dataset(tmp_path / "exported.nc") as ds:
+        assert "screening export" in ds.attrs["history"].splitlines()[-1]
+        assert ds["status"].attrs["flag_values"].dtype == np.int8
+    if CHECKER.exists():
+        proc = subprocess.run([str(CHECKER), "--test=cf:1.8", "--criteria=strict", str(tmp_path / "exported.nc")],
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0 and "All tests passed!" in proc.stdout, proc.stdout + proc.stderr
+    # bad input: one line, exit 2, nothing written
+    assert main(["export", str(tmp_path / "direct.nc"), str(tmp_path / "x.nc")]) == 2
+    assert "not a zarr store" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
+
+
+def test_info_and_plot_read_a_zarr_result(client, tmp_path, capsys):
+    run_sweep(parse_study(GRID), tmp_path / "i.zarr", client=client, progress=False, log=quiet)
+    assert main(["info", str(tmp_path / "i.zarr")]) == 0
+    assert "ok" in capsys.readouterr().out
+    assert main(["plot", str(tmp_path / "i.zarr")]) == 0
+    assert (tmp_path / "i_peaks.png").is_file()
+
+
+# ----------------------------------------------------------------------------- a real cluster
+@pytest.fixture
+def scheduler_file(tmp_path):
+    """``dask scheduler`` + two ``dask worker --nworkers 1 --nthreads 1`` (nanny) processes on 127.0.0.1,
+    ports chosen by the system, found through a scheduler file (terminated afterwards)."""
+    with dask_processes(tmp_path, ["--nworkers", "1", "--nthreads", "1", "--host", "127.0.0.1",
+                                   "--no-dashboard"]) as sched_file:
+        yield sched_file
+
+
+def test_dask_scheduler_and_worker_processes_write_a_zarr_result(scheduler_file, client, tmp_path):
+    from distributed import Client
+
+    with Client(scheduler_file=str(scheduler_file), timeout="30s") as probe:
+        probe.wait_for_workers(2, timeout=60)
+        worker_pids = set(probe.run(os.getpid).values())
+    assert os.getpid() not in worker_pids and len(worker_pids) == 2
+    study = parse_study(CASES)
+    report = run_sweep(study, tmp_path / "remote.zarr", scheduler=str(scheduler_file), batch_size=2, progress=False,
+                       log=quiet)
+    assert report.n_workers == 2 and report.status_counts == {"ok": 6}
+    run_sweep(study, tmp_path / "local.nc", client=client, batch_size=3, progress=False, log=quiet)
+    _same(tmp_path / "local.nc", tmp_path / "remote.zarr", ignore=("batch_size",))
