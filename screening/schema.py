@@ -226,6 +226,15 @@ INTENSITY = {
                  "flag_meanings": "ok non_positive_beta no_fit"},
 }
 
+#: Per-point inputs of a sweep: the intensity measures of each point's excitation, and ``S0`` where it
+#: follows from a target PGA (``excitation.pga`` in the study).
+SWEEP_INPUTS = {
+    **{name: {**INTENSITY[name], "note": "band limit of the point's Monte Carlo synthesis "
+                                         "(screening.solvers.synthesis.default_cutoff)"}
+       for name in ("pga_median", "rms_acceleration", "arias_intensity")},
+    "S0": {**PARAMETERS["S0"], "note": "from the target median PGA of the grid point (excitation.pga)"},
+}
+
 #: Cloud analysis (:mod:`screening.workflow.cloud`): one row per record, then the fitted fragility.
 CLOUD = {
     **{name: SIMULATION[name] for name in ("peak_abs_theta", "overturned", "overturning_time")},

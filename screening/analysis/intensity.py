@@ -181,32 +181,55 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
 def s0_for_pga(excitation, target_pga, t_end, cutoff):
     """``S0`` [m2 s-3] giving the median PGA ``target_pga`` [m s-2] for the shape of ``excitation``
-    (its filter and envelope; its own ``S0`` is irrelevant), with band limit ``cutoff`` [rad/s] over a record of ``t_end`` [s].
+    (its filter and envelope; its own ``S0`` is irrelevant), with band limit ``cutoff`` [rad/s] over a
+    record of ``t_end`` [s].
 
     PGA is proportional to ``sqrt(S0)``: ``S0 = (target_pga / pga_1)^2`` with ``pga_1`` the median PGA
     at ``S0 = 1``.  ``target_pga``, ``cutoff`` and the excitation's ``omega_g``, ``zeta_g`` may be
     arrays (broadcast together); :func:`pga_median` runs once per distinct filter and band limit.
     """
+    target, unit = _per_unit_s0(excitation, target_pga, t_end, cutoff)
+    out = (target / unit[..., 0]) ** 2
+    return float(out) if out.ndim == 0 else out
+
+
+def input_measures(excitation, t_end, cutoff):
+    """``pga_median`` [m s-2], ``rms_acceleration`` [m s-2] and ``arias_intensity`` [m s-1] of every
+    point of ``excitation`` (array fields and ``cutoff`` [rad/s] broadcast together), as a dict.
+
+    Computed once per distinct filter and band limit at ``S0 = 1`` and scaled: the first two are
+    proportional to ``sqrt(S0)``, the Arias intensity to ``S0``."""
+    s0, unit = _per_unit_s0(excitation, excitation.S0, t_end, cutoff)
+    root = np.sqrt(s0)
+    return {"pga_median": root * unit[..., 0], "rms_acceleration": root * unit[..., 1],
+            "arias_intensity": s0 * unit[..., 2]}
+
+
+def _per_unit_s0(excitation, values, t_end, cutoff):
+    """``values`` broadcast with the filter and ``cutoff``, and the measures at ``S0 = 1`` (last axis:
+    pga, rms, arias) of every point."""
     omega = np.asarray(getattr(excitation, "omega_g", np.nan), dtype=float)
     zeta = np.asarray(getattr(excitation, "zeta_g", np.nan), dtype=float)
-    target, cut, omega, zeta = np.broadcast_arrays(np.asarray(target_pga, dtype=float),
+    values, cut, omega, zeta = np.broadcast_arrays(np.asarray(values, dtype=float),
                                                    np.asarray(cutoff, dtype=float), omega, zeta)
     env = excitation.envelope
     shape = (excitation.kind, env.kind, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
                                           if env.kind == "exponential" else ()), float(t_end))
-    ref = np.empty(target.shape)
-    for index in np.ndindex(target.shape):
-        ref[index] = _unit_pga(*shape, float(omega[index]), float(zeta[index]), float(cut[index]))
-    out = (target / ref) ** 2
-    return float(out) if out.ndim == 0 else out
+    unit = np.empty(values.shape + (3,))
+    for index in np.ndindex(values.shape):
+        unit[index] = _unit_measures(*shape, float(omega[index]), float(zeta[index]), float(cut[index]))
+    return values, unit
 
 
 @functools.lru_cache(maxsize=4096)
-def _unit_pga(kind, envelope_kind, *args):
-    """:func:`pga_median` [m s-2] at ``S0 = 1`` of one filter, envelope, ``t_end`` and band limit."""
+def _unit_measures(kind, envelope_kind, *args):
+    """``(pga_median, rms_acceleration, arias_intensity)`` at ``S0 = 1`` of one filter, envelope,
+    ``t_end`` and band limit."""
     *envelope, t_end, omega_g, zeta_g, cutoff = args
     p = {"omega_g": omega_g, "zeta_g": zeta_g, **dict(zip(("T1", "T2"), envelope))}
-    return pga_median(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff)
+    exc = _scalar_excitation(kind, envelope_kind, p)
+    return (pga_median(exc, t_end, cutoff), rms_acceleration(exc, t_end, cutoff),
+            arias_intensity(exc, t_end, cutoff))
 
 
 # ----------------------------------------------------------------------------- datasets

@@ -69,6 +69,15 @@ def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
     return float(factor) * max(rocking_frequency(block, foundation), vertical_frequency(block, foundation))
 
 
+def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
+    """:func:`default_cutoff` [rad/s] of every point of a block and bed with array fields."""
+    from screening.model import Block, Foundation
+
+    return np.vectorize(lambda m, b, h, I_cm, g, k: default_cutoff(Block(m, b, h, I_cm, g), Foundation(k=k, lam=0.0),
+                                                                  factor))(
+        block.m, block.b, block.h, block.I_cm, block.g, foundation.k)
+
+
 def envelope_rate(envelope, t):
     """Time derivative ``q'(t)`` [1/s] of the modulating function at ``t`` [s] (eq. 57)."""
     t = np.asarray(t, dtype=float)

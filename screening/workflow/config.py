@@ -482,11 +482,10 @@ def build_models(case, values, t_end=None):
 
     if "pga" in p:
         from screening.analysis.intensity import s0_for_pga
-        from screening.solvers.synthesis import default_cutoff
+        from screening.solvers.synthesis import default_cutoffs
 
         if t_end is None:
             raise ValueError("t_end is needed to turn a target PGA into S0")
-        cutoff = np.vectorize(lambda *bb: default_cutoff(Block(*bb[:5]), Foundation(k=bb[5], lam=0.0)))(
-            block.m, block.b, block.h, block.I_cm, block.g, foundation.k)
-        return block, foundation, excitation(s0_for_pga(excitation(1.0), p["pga"], t_end, cutoff))
+        s0 = s0_for_pga(excitation(1.0), p["pga"], t_end, default_cutoffs(block, foundation))
+        return block, foundation, excitation(s0)
     return block, foundation, excitation(p["S0"])

@@ -38,6 +38,10 @@ SUMMARY_INTS = ("n_steps", "n_rejected")
 MODEL_FLOATS = ("theta_ul", "slenderness")
 #: The predicted band of SL's error against the coupled model (:mod:`screening.analysis.trust`).
 TRUST_FLOATS = ("sl_error_low", "sl_error_high")
+#: Intensity measures of each point's input (random-vibration medians, :mod:`screening.analysis.intensity`).
+INTENSITY_FLOATS = ("pga_median", "rms_acceleration", "arias_intensity")
+#: Per-point model inputs returned only for studies that derive them (:attr:`Study.derived_inputs`).
+DERIVED_INPUTS = ("S0",)
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
 #: Linearization histories a spot check is compared against.
@@ -46,7 +50,7 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 # ============================================================================ tasks
 def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
-                fragility=None, trust_table=None):
+                fragility=None, trust_table=None, derived_inputs=()):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
@@ -55,7 +59,9 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     (``float64``/``int32``), ``status`` (``int8``), ``theta_ul`` and ``slenderness`` [rad].
     ``fragility`` (a :class:`~screening.workflow.study.Fragility`): also ``p_exceed`` (points x
     thresholds) [1], from the float64 histories while they are in memory
-    (:func:`screening.analysis.fragility.exceedance_probability`).
+    (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
+    :data:`INTENSITY_FLOATS` of each point's input, with the band limit of its Monte Carlo synthesis;
+    ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
                         condensation=condensation, histories=bool(histories) or fragility is not None)
@@ -73,7 +79,20 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     if fragility is not None:
         out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
+    out.update(batch_intensity(block, foundation, excitation, t_out, n))
+    for name in derived_inputs:
+        out[name] = np.broadcast_to(getattr(excitation, name), shape).reshape(n).astype(np.float64)
     return out
+
+
+def batch_intensity(block, foundation, excitation, t_out, n):
+    """The :data:`INTENSITY_FLOATS` [m s-2, m s-2, m s-1] of the ``n`` points of a batch."""
+    from screening.analysis.intensity import input_measures
+    from screening.solvers.synthesis import default_cutoffs
+
+    measures = input_measures(excitation, float(np.asarray(t_out)[-1]), default_cutoffs(block, foundation))
+    return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
+            else np.asarray(measures[name], dtype=np.float64).reshape(n) for name in INTENSITY_FLOATS}
 
 
 def solve_and_store_batch(target, batch, *solve_args):
@@ -139,13 +158,13 @@ def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
     return p
 
 
-def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None):
+def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=()):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
     out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
     if fragility is not None:
         out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
-    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS:
+    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + tuple(derived_inputs):
         out[name] = np.full(n, np.nan)
     for name in SUMMARY_INTS:
         out[name] = np.zeros(n, dtype=np.int32)
@@ -215,7 +234,7 @@ def submit_batch(client, study, batch, key, target=None):
 
     case = study.cases[batch.case]
     args = (*batch_models(study, batch), case.condensation_model, study.times, study.rtol, study.max_steps,
-            study.output.stored, study.fragility, shipped_table())
+            study.output.stored, study.fragility, shipped_table(), study.derived_inputs)
     if target is not None:
         return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)

@@ -192,6 +192,12 @@ class Study:
     fragility: Fragility | None = None
 
     @property
+    def derived_inputs(self):
+        """Model inputs that vary per point without being grid coordinates: ``("S0",)`` when the
+        intensity is given as a target PGA (``S0`` then follows per point), else ``()``."""
+        return ("S0",) if "pga" in self.sweeps or any("pga" in c.params for c in self.cases) else ()
+
+    @property
     def swept_dims(self):
         """Names of the swept parameters, in grid order."""
         return tuple(self.sweeps)

@@ -40,12 +40,12 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import (FRAGILITY, PRESSURE_PARAMETERS, SWEEP, TIME, attributes, global_attributes,
-                              grid_coordinate_attributes)
+from screening.schema import (FRAGILITY, PRESSURE_PARAMETERS, SWEEP, SWEEP_INPUTS, TIME, attributes,
+                              global_attributes, grid_coordinate_attributes)
 from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
-from screening.workflow.execution import (HISTORY_DTYPE, MODEL_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS,
-                                          SUMMARY_INTS, TRUST_FLOATS)
+from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSITY_FLOATS, MODEL_FLOATS,
+                                          SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
 from screening.workflow.grid import hyperslabs, parameter_table
 
 SYNC_POINTS = 2000            # points written between flushes of the file (compression overlaps compute)
@@ -53,7 +53,7 @@ COMPLEVEL = 1
 TITLE_FALLBACK = "Stochastic-linearization screening"
 
 #: Per-point variables besides the histories, in file order.
-POINT_VARIABLES = ("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + SUMMARY_INTS
+POINT_VARIABLES = ("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + SUMMARY_INTS
 #: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
 #: itself returns only these.
 SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
@@ -152,7 +152,7 @@ def write_region(nc, shape, histories, batch, result):
     """Write the arrays of ``batch`` (``result`` of :func:`~screening.workflow.execution.solve_batch`:
     flat over the batch) into their hyperslabs of the grid ``shape`` in ``nc`` (a ``netCDF4.Dataset`` or
     a :class:`~screening.workflow.zarrfile.ZarrDataset`): the ``histories``, the
-    :data:`POINT_VARIABLES` and ``p_exceed`` if present."""
+    :data:`POINT_VARIABLES`, and ``p_exceed`` and the ``DERIVED_INPUTS`` if present."""
     nt = None
     for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
         rows = slice(a - batch.lo, b - batch.lo)
@@ -160,7 +160,7 @@ def write_region(nc, shape, histories, batch, result):
         for name in histories:
             nt = result[name].shape[1] if nt is None else nt
             nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (nt,))
-        for name in POINT_VARIABLES:
+        for name in POINT_VARIABLES + tuple(n for n in DERIVED_INPUTS if n in result):
             nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
         if "p_exceed" in result:
             p = result["p_exceed"]
@@ -169,7 +169,8 @@ def write_region(nc, shape, histories, batch, result):
 
 def region_variables(study):
     """Names of the variables :func:`write_region` writes for ``study``."""
-    return study.output.stored + POINT_VARIABLES + (("p_exceed",) if study.fragility is not None else ())
+    return (study.output.stored + POINT_VARIABLES + study.derived_inputs
+            + (("p_exceed",) if study.fragility is not None else ()))
 
 
 class ResultFile:
@@ -263,8 +264,8 @@ class ResultFile:
                            shuffle=self.zlib["zlib"], chunksizes=history_chunks(self.shape, self.nt))
         self._variable("status", "i1", dims, False, coordinates, **self.zlib)
         self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib)
-        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS:
-            self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib)
+        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + study.derived_inputs:
+            self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib)
         for name in SUMMARY_INTS:
             self._variable(name, "i4", dims, False, coordinates, **self.zlib)
         frag = study.fragility

@@ -40,8 +40,11 @@ def _same(nc, store, ignore=()):
     xr.testing.assert_identical(a, b)
 
 
-@pytest.mark.parametrize("text", [GRID + SPOTS, CASES, GRID + FRAGILITY + '[output]\nhistories = "none"\n'],
-                         ids=["grid_spots", "cases", "no_histories_fragility"])
+PGA_GRID = GRID.replace("S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}", "pga = [0.5, 1.0, 2.0]")
+
+
+@pytest.mark.parametrize("text", [GRID + SPOTS, CASES, GRID + FRAGILITY + '[output]\nhistories = "none"\n', PGA_GRID],
+                         ids=["grid_spots", "cases", "no_histories_fragility", "pga_target"])
 def test_the_zarr_result_is_the_netcdf_result(client, tmp_path, text):
     study = parse_study(text, name="s", source="s.toml")
     run_sweep(study, tmp_path / "r.nc", client=client, batch_size=5, progress=False, log=quiet)
