@@ -5,15 +5,16 @@ The record commands (``simulate``, ``fit-excitation``, ``cloud``) and ``fragilit
 :mod:`screening.cli_records`.
 
 ``screening run STUDY.toml [--out PATH] [--workers N | --scheduler ADDRESS]`` runs a study on
-dask (:func:`screening.workflow.sweep.run_sweep`) and writes ``PATH`` (default
+dask (:func:`screening.workflow.sweep.run_sweep`; ``--workers 0``, the default for small
+studies, in this process) and writes ``PATH`` (default
 ``outputs/<study-stem>.nc``) plus PNG figures next to it.  An interrupted run restarted
 with the same command resumes; an unchanged study reuses its finished result.
 
 ``--out PATH.zarr`` writes a zarr store instead, in place from the workers (large runs);
 ``screening export RESULT.zarr RESULT.nc`` converts it to the netCDF file a direct run writes.
 
-``screening plot RESULT.nc [--out-dir DIR]`` writes the figures; ``screening info RESULT.nc``
-prints the dimensions, swept parameters, status counts and summary statistics.
+``screening plot RESULT.nc [--out-dir DIR] [--response var|sigma|fraction]`` writes the figures;
+``screening info RESULT.nc`` prints the dimensions, swept parameters, status counts and summary statistics.
 ``screening fragility RESULT.nc --threshold X [--relative-to slenderness|theta_ul]`` writes
 the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG).
 ``screening tradeoff STUDY.toml`` runs the speed-accuracy trade study (:mod:`screening.analysis.tradeoff`).

@@ -120,7 +120,8 @@ def test_units_and_long_names_come_from_the_one_schema(tiny_run):
         for key in ("units", "long_name"):
             assert ds[name].attrs.get(key) == declared.get(key), (name, key)
     assert ds.sl_status.attrs["flag_meanings"].split() == ["ok", "k_eq_negative", "sigma_theta_beyond_slenderness",
-                                                           "step_budget_exhausted", "non_finite_moments"]
+                                                           "step_budget_exhausted", "non_finite_moments",
+                                                           "beyond_float_range"]
     assert ds.cost.attrs["note"].startswith("sl: median of 1 single-point")       # per-run notes are kept
 
 
