@@ -5,7 +5,9 @@ replaced by this interpreter's ``-m screening.cli``) in a temporary folder holdi
 ``studies/``, in README order, each expected to exit 0.  Lines not run, and why:
 
 * ``make ...``: the set-up itself (this test runs inside it); ``make run`` is the next block's first line;
-* ``--scheduler``: needs a running dask scheduler (tested with one in ``test_edges.py``);
+* ``--scheduler``: needs a running dask scheduler (tested with one in ``test_edges.py``); the rest of the
+  distributed-run recipe (``dask scheduler``/``dask worker``, ``kill``, the export of its result) is run by
+  ``test_sweep_zarr.py`` with processes of its own;
 * ``tradeoff studies/speed_accuracy.toml``: ~10 minutes of Monte Carlo (the trade study has its own
   tests with a small study, ``tests/unit/analysis/test_tradeoff*.py``).
 
@@ -30,6 +32,9 @@ ROOT = Path(__file__).resolve().parents[2]
 SKIPPED = {
     "make ": "the set-up itself; this test runs inside it",
     "--scheduler": "needs a running dask scheduler",
+    ".venv/bin/dask ": "starts a dask scheduler or workers (test_sweep_zarr.py runs this recipe with its own processes)",
+    "kill %": "stops the scheduler and workers of the recipe",
+    "export outputs/quick.zarr": "exports the result of the skipped --scheduler run",
     "tradeoff studies/speed_accuracy.toml": "about 10 minutes of Monte Carlo; the trade study has its own tests",
 }
 
