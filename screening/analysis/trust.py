@@ -34,7 +34,9 @@ The rule (:func:`sl_trust`), in this order (each step can only lower trust):
    coupled sample overturned beyond :data:`OVERTURN_LIMIT`, and its band within ``+-25 %``;
    ``untrusted`` if any row has ``|e| > 50 %`` or overturns beyond the limit; ``check`` otherwise
    (including cells without data: their band is the pooled band of the ``p_uplift`` bin over
-   every condensation and bed, NaN if that is empty too).
+   every condensation and bed, NaN if that is empty too).  A condensation the calibration does not
+   hold (e.g. ``virtual_work``, whose errors differ from the paper's and the cubic's) is at best
+   ``check`` and gets no band (NaN): bands measured on other condensations do not describe it.
 5. Monotone in uplift: along increasing ``p_uplift`` bins of a (condensation, bed law), a cell's
    flag is the worst of its own and of every lower bin's — more uplift never raises trust.
 6. A point whose indicators cannot all be computed (NaN) is never ``trusted`` (at best ``check``).
@@ -283,7 +285,6 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
     tab_flag = np.full((len(CONDENSATIONS) + 1, len(BED_LAWS), n_bins), int(Trust.check), dtype=np.int8)
     tab_band = np.full(tab_flag.shape + (2,), np.nan)
     for b in range(n_bins):
-        tab_band[-1, :, b] = table["pooled"][str(b)]
         for ci, c in enumerate(CONDENSATIONS):
             for li, law_name in enumerate(BED_LAWS):
                 entry = table["cells"][f"{c}|{law_name}|{b}"]
@@ -302,6 +303,8 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
         sel = reg == name
         flag[sel] = int(Trust.untrusted)
         band[sel] = table["overrides"][name]["band"]
+    band[ci == len(CONDENSATIONS)] = np.nan             # not calibrated: no band
+
     # an indicator that could not be computed (e.g. a file without the histories) cannot clear the point
     unknown = ~np.isfinite(ind["decay_excess"]) | ~np.isfinite(ind["k_eq_margin"]) | ~np.isfinite(ind["sigma_ratio"])
     flag[unknown & (flag == int(Trust.trusted))] = int(Trust.check)

@@ -99,9 +99,13 @@ def test_overturning_in_the_calibration_makes_the_cell_untrusted():
     assert flag[0] == Trust.untrusted
 
 
-def test_unknown_cells_are_check_with_the_pooled_band(table):
-    flag, lo, hi = trust.sl_trust(ind([0.003]), table, eps=0.0, condensation="other")
-    assert flag[0] == Trust.check and np.isfinite(lo[0]) and np.isfinite(hi[0])
+def test_an_uncalibrated_condensation_is_at_best_check_and_has_no_band(table):
+    """Bands measured on the paper's and the cubic condensation do not describe another one
+    (virtual_work measured -2 % where the pooled band said [-100 %, -12 %])."""
+    flag, lo, hi = trust.sl_trust(ind([0.003, 0.9]), table, eps=0.0, condensation="virtual_work")
+    assert flag[0] == Trust.check and (flag != Trust.trusted).all() and np.isnan(lo).all() and np.isnan(hi).all()
+    known, klo, _ = trust.sl_trust(ind([0.003]), table, eps=0.0, condensation="paper")
+    assert np.isfinite(klo[0])
 
 
 def test_trust_indicators():
