@@ -1,0 +1,54 @@
+"""A sweep with ``[accuracy]`` escalates to Monte Carlo within its budget and stores consistent best estimates."""
+
+import numpy as np
+import xarray as xr
+
+from helpers import GRID
+
+from screening.analysis.correction import linearization_promises
+from screening.status import BestMethod, EscalationModel, PointStatus
+from screening.workflow.study import parse_study
+from screening.workflow.sweep import run_sweep
+
+TARGET = GRID.replace("t_end = 4.0", "t_end = 3.0") + """
+[accuracy]
+target = 0.15
+budget_s = 4
+"""
+
+
+def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp_path):
+    study = parse_study(TARGET)
+    messages = []
+    report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=messages.append)
+    info = report.accuracy
+    assert info["n_escalated"] >= 1 and info["n_candidates"] >= info["n_escalated"]
+    assert info["cpu_s"] <= study.accuracy.budget_s
+    assert any(m.startswith("accuracy (target 0.15):") for m in messages)
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        assert float(ds.attrs["accuracy_cpu_s"]) <= 4.0
+        assert float(ds["esc_cpu_time"].sum()) == np.float64(ds.attrs["accuracy_cpu_s"])
+        method = ds["best_method"].values.reshape(-1)
+        value = ds["best_peak_var_theta"].values.reshape(-1)
+        se = ds["best_peak_var_theta_se"].values.reshape(-1)
+        status = ds["status"].values.reshape(-1)
+        # the escalated points carry their own Monte Carlo, with the model that ran there
+        at = ds["esc_grid_index"].values
+        mc = np.where(ds["esc_model"].values == EscalationModel.condensed, BestMethod.condensed_monte_carlo,
+                      BestMethod.coupled_monte_carlo)
+        np.testing.assert_array_equal(method[at], mc)
+        np.testing.assert_array_equal(value[at], ds["esc_peak_var_theta"].values)
+        assert np.all(ds["esc_samples"].values >= 32)
+        assert np.all(ds["esc_n_used"].values + ds["esc_n_overturned"].values + ds["esc_n_diverged"].values
+                      == ds["esc_samples"].values)
+        # linearization only where the rule promises the target, never at a stopped point
+        promised = linearization_promises(ds["sl_trust"].values.reshape(-1), ds["sl_error_low"].values.reshape(-1),
+                                          ds["sl_error_high"].values.reshape(-1), 0.15)
+        assert np.all(promised[method == BestMethod.linearization])
+        assert np.all(status[method == BestMethod.linearization] == PointStatus.ok)
+        # a standard error exactly where an estimate is vouched for
+        reliable = method != BestMethod.unreliable
+        assert np.all(np.isfinite(se[reliable]) & (se[reliable] > 0)) and np.all(np.isnan(se[~reliable]))
+        assert ds["best_method"].attrs["flag_meanings"].split() == [m.name for m in BestMethod]
+        assert ds["best_peak_var_theta_se"].attrs["units"] == "rad2"
+
