@@ -151,6 +151,10 @@ FRAGILITY = {
     "mcs_p_exceed": _v("1", "probability that |theta| exceeds the threshold, from the Monte Carlo peaks"),
     "mcs_p_exceed_se": _v("1", "standard error of mcs_p_exceed (binomial)"),
     "threshold_rad": _v("rad", "rotation threshold"),
+    "best_p_exceed": _v("1", "probability that |theta| exceeds the threshold from the best estimates (Monte Carlo "
+                             "where it ran, else the Gaussian up-crossing of the corrected moments)"),
+    "best_p_exceed_low": _v("1", "lower end of the band of best_p_exceed (2 standard errors)"),
+    "best_p_exceed_high": _v("1", "upper end of the band of best_p_exceed (2 standard errors)"),
     "beta": _v("1", "lognormal dispersion beta of the fragility curve"),
 }
 
