@@ -2,11 +2,17 @@
 
 At the points where a sweep with ``[accuracy]`` ran Monte Carlo (:mod:`screening.analysis.escalation`)
 the log ratio ``y = log(MCS / SL)`` of a peak variance is known (with its Monte Carlo standard error).
-:func:`fit_correction` learns ``y`` as a linear function of standardised features of the point (the
-trust indicators and the swept parameters, :func:`point_features`) by ridge regression, choosing the
-ridge weight by leave-one-out; :func:`predict_correction` gives ``y`` and its standard error at
-every point.  :func:`best_estimates` combines everything into one estimate per point, with its
-standard error and where it comes from (:class:`screening.status.BestMethod`).
+:func:`fit_correction` learns ``y`` over standardised features of the points (the trust indicators
+and the swept parameters, :func:`point_features`) by nearest-neighbour regression in feature space,
+choosing the number of neighbours by leave-one-out; :func:`predict_correction` gives ``y``, its
+standard error (the leave-one-out errors of the neighbours used) and whether the point is close
+enough to the escalated ones to be reached at all.  :func:`best_estimates` combines everything
+into one estimate per point, with its standard error and where it comes from
+(:class:`screening.status.BestMethod`).
+
+Nearest neighbours rather than a global fit: the error of the linearization changes by regime
+(a few per cent below uplift, a factor 10-100 near toppling, the opposite sign under lock-in), which
+a smooth global model averages away; a local average with a local error estimate stays honest.
 
 Pure functions on numpy arrays; no I/O.  Method: ``docs/method.md#trusting-a-point``.
 """
@@ -19,45 +25,51 @@ import numpy as np
 
 from screening.status import BestMethod, EscalationModel, PointStatus, Trust
 
-#: Ridge weights tried by the leave-one-out choice (on standardised features).
-RIDGE_GRID = (1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0)
-#: Floor of the standard error of a log ratio in the weights of the fit [1] (model error beyond Monte Carlo noise).
-NOISE_FLOOR = 0.1
+#: Numbers of neighbours tried by the leave-one-out choice.
+NEIGHBOURS = (1, 2, 3, 4, 6, 8)
 #: A correction needs at least this many escalated points (fewer: no correction anywhere).
 MIN_POINTS = 4
-#: Leave-one-out RMS of the log ratio above which the correction is not trusted anywhere (a factor ~1.65).
-MAX_LOO_RMS = 0.5
-#: A point is reached by the correction if each of its standardised features lies within the range of
-#: the escalated points widened by this many standard deviations of the features (no extrapolation).
-REACH = 0.25
+#: Local standard error of the log ratio above which a corrected value is not vouched for (a factor ~1.65).
+MAX_SE = 0.5
+#: Floor of the standard error of a log ratio [1] (model error beyond Monte Carlo noise).
+NOISE_FLOOR = 0.05
+#: Added to neighbour distances in the weights (standardised units): a coincident point dominates, never divides by 0.
+DISTANCE_FLOOR = 1e-3
+#: A point is reached if its nearest escalated point is within this many times the spacing of the escalated
+#: points (90th percentile of the distances to their own nearest neighbour) in standardised feature space.
+REACH = 1.5
 
 
 @dataclass(frozen=True)
 class Correction:
-    """A fitted correction: ridge coefficients on standardised features, the leave-one-out check."""
+    """A fitted correction: the escalated points in standardised feature space and their leave-one-out errors."""
 
     mean: np.ndarray            # feature means
     scale: np.ndarray           # feature standard deviations (1 where constant)
-    coef: np.ndarray            # intercept first, then one per feature
-    gram_inv: np.ndarray        # (X'X + ridge I)^-1 of the design with intercept
-    ridge: float
-    loo_rms: float              # RMS of the leave-one-out residuals of y [1]
-    loo_residuals: np.ndarray
-    low: np.ndarray             # range of the standardised features of the fitted points
-    high: np.ndarray
-    n: int
+    z: np.ndarray               # standardised features of the fitted points
+    y: np.ndarray               # their log ratios
+    y_se: np.ndarray            # their Monte Carlo standard errors (floored)
+    k: int                      # neighbours
+    loo_residuals: np.ndarray   # y - prediction without the point
+    loo_rms: float              # RMS of loo_residuals [1]
+    spacing: float              # 90th percentile of the nearest-neighbour distances of the fitted points
+    nn_distance: np.ndarray     # distance of each fitted point to its nearest other fitted point
+
+    @property
+    def n(self):
+        return self.y.size
 
     @property
     def usable(self):
-        """True when enough points were fitted and the leave-one-out check passed."""
-        return self.n >= MIN_POINTS and np.isfinite(self.loo_rms) and self.loo_rms <= MAX_LOO_RMS
+        """True when enough points were fitted for a leave-one-out check."""
+        return self.n >= MIN_POINTS and np.isfinite(self.loo_rms)
 
 
 def point_features(features):
     """Stack a dict of per-point feature arrays into a (points x features) matrix [mixed units].
 
     Positive features spanning more than a factor 10 are taken in log10 (swept intensities and
-    stiffnesses); constant or all-NaN columns are dropped.
+    stiffnesses, the decay indicator); constant or all-NaN columns are dropped.
     """
     cols = []
     for value in features.values():
@@ -72,75 +84,93 @@ def point_features(features):
     return np.column_stack(cols) if cols else np.zeros((n, 0))
 
 
-def _design(z):
-    return np.column_stack([np.ones(len(z)), z])
+def _distances(a, b):
+    return np.sqrt(np.maximum(np.sum(a * a, 1)[:, None] + np.sum(b * b, 1)[None, :] - 2 * a @ b.T, 0.0))
 
 
-def _ridge(x, y, w, ridge):
-    p = x.shape[1]
-    penalty = ridge * np.eye(p)
-    penalty[0, 0] = 0.0                         # the intercept is not shrunk
-    xw = x * w[:, None]
-    gram_inv = np.linalg.inv(x.T @ xw + penalty)
-    coef = gram_inv @ xw.T @ y
-    hat = np.einsum("ij,jk,ik->i", x, gram_inv, xw)
-    loo = (y - x @ coef) / np.maximum(1.0 - hat, 1e-9)
-    return coef, gram_inv, loo
+def _neighbour_mean(d, y, w, k):
+    """Weighted mean of ``y`` over the ``k`` nearest columns of the distance matrix ``d`` (rows: targets);
+    weights ``w / (d + DISTANCE_FLOOR)``.  Returns the means and the neighbour indices."""
+    k = min(k, d.shape[1])
+    nearest = np.argsort(d, axis=1, kind="stable")[:, :k]
+    dn = np.take_along_axis(d, nearest, 1)
+    wn = w[nearest] / (dn + DISTANCE_FLOOR)
+    return np.sum(wn * y[nearest], 1) / np.sum(wn, 1), nearest
 
 
 def fit_correction(features, y, y_se=None):
     """Fit ``y`` [1] (log ratio MCS / SL at the escalated points) on ``features`` (points x features).
 
-    ``y_se`` [1]: the Monte Carlo standard error of each ``y`` (default 0); a point weighs
-    ``w = 1 / (y_se^2 + NOISE_FLOOR^2)``.  Rows with a non-finite value are dropped.  The ridge
-    weight is the one of :data:`RIDGE_GRID` with the smallest leave-one-out RMS.
+    ``y_se`` [1]: the Monte Carlo standard error of each ``y`` (default 0, floored at
+    :data:`NOISE_FLOOR`).  Rows with a non-finite value are dropped.
 
     Notes
     -----
-    ``y = b0 + sum_j b_j z_j`` with ``z_j = (x_j - mean_j) / sd_j``, minimising
-    ``sum_i w_i (y_i - X_i b)^2 + ridge |b_1..|^2``; leave-one-out residual ``e_i / (1 - H_ii)``,
-    ``H = X (X'WX + ridge I)^-1 X'W``; leave-one-out RMS ``sqrt(sum w e_loo^2 / sum w)``.
+    Prediction at ``x``: ``sum_i w_i y_i / sum_i w_i`` over the ``k`` escalated points nearest to ``x``
+    in standardised features ``z_j = (x_j - mean_j) / sd_j``, ``w_i = 1 / (y_se_i^2 (d_i + d0))``
+    (``d0`` = :data:`DISTANCE_FLOOR`).
+    ``k`` minimises the leave-one-out RMS (each point predicted from the others).
     """
     x = np.asarray(features, dtype=float)
     y = np.asarray(y, dtype=float).reshape(-1)
     y_se = np.zeros_like(y) if y_se is None else np.asarray(y_se, dtype=float).reshape(-1)
     ok = np.isfinite(y) & np.all(np.isfinite(x), axis=1) & np.isfinite(y_se)
-    x, y, w = x[ok], y[ok], 1.0 / (y_se[ok] ** 2 + NOISE_FLOOR ** 2)
+    x, y, y_se = x[ok], y[ok], np.maximum(y_se[ok], NOISE_FLOOR)
     n, p = x.shape
     mean = x.mean(axis=0) if n else np.zeros(p)
     scale = x.std(axis=0) if n else np.ones(p)
     scale = np.where(scale > 0, scale, 1.0)
     z = (x - mean) / scale
     if n < 2:
-        nan = np.full(p + 1, np.nan)
-        return Correction(mean, scale, nan, np.full((p + 1, p + 1), np.nan), np.nan, np.inf, np.full(n, np.nan),
-                          np.full(p, np.nan), np.full(p, np.nan), n)
+        return Correction(mean, scale, z, y, y_se, 1, np.full(n, np.nan), np.inf, np.nan, np.full(n, np.inf))
+    d = _distances(z, z)
+    np.fill_diagonal(d, np.inf)                  # leave one out: a point is never its own neighbour
+    w = 1.0 / y_se ** 2
     best = None
-    for ridge in RIDGE_GRID:
-        coef, gram_inv, loo = _ridge(_design(z), y, w, ridge)
-        rms = float(np.sqrt(np.sum(w * loo ** 2) / np.sum(w)))
+    for k in NEIGHBOURS:
+        if k > n - 1:
+            break
+        pred, _ = _neighbour_mean(d, y, w, k)
+        res = y - pred
+        rms = float(np.sqrt(np.mean(res ** 2)))
         if best is None or rms < best[0]:
-            best = (rms, ridge, coef, gram_inv, loo)
-    rms, ridge, coef, gram_inv, loo = best
-    return Correction(mean, scale, coef, gram_inv, ridge, rms, loo, z.min(axis=0), z.max(axis=0), n)
+            best = (rms, k, res)
+    rms, k, res = best
+    nn = d.min(axis=1)
+    return Correction(mean, scale, z, y, y_se, k, res, rms, float(np.quantile(nn, 0.9)), nn)
 
 
 def predict_correction(correction, features):
     """``(y, se, reached)`` at the points of ``features`` (points x features).
 
-    ``se`` [1] is the leave-one-out RMS inflated by the leverage of the point,
-    ``loo_rms sqrt(1 + x (X'X + ridge I)^-1 x')``; ``reached`` is false where a feature is outside the
-    fitted range widened by :data:`REACH` (the correction would extrapolate) or not finite.
+    ``se`` [1]: ``sqrt(mean((e_loo,i max(1, d_i / nn_i))^2) + mean((y_i - y)^2))`` over the neighbours
+    ``i`` used — their own leave-one-out errors ``e_loo,i`` (measured at their nearest-neighbour
+    distance ``nn_i``, scaled to the distance ``d_i`` of the point) and their disagreement at the
+    point —, floored at :data:`NOISE_FLOOR`; ``reached``: the nearest escalated point
+    is within :data:`REACH` spacings and the features are finite.
     """
     x = np.asarray(features, dtype=float)
     z = (x - correction.mean) / correction.scale
-    d = _design(z)
-    y = d @ correction.coef
-    lev = np.einsum("ij,jk,ik->i", d, correction.gram_inv, d)
-    se = correction.loo_rms * np.sqrt(1.0 + np.maximum(lev, 0.0))
-    reached = np.all(np.isfinite(z), axis=1) & np.all((z >= correction.low - REACH) & (z <= correction.high + REACH),
-                                                      axis=1)
-    return y, se, reached & np.isfinite(y)
+    finite = np.all(np.isfinite(z), axis=1)
+    n = x.shape[0]
+    y, se = np.full(n, np.nan), np.full(n, np.nan)
+    reached = np.zeros(n, dtype=bool)
+    if correction.n == 0 or not finite.any():
+        return y, se, reached
+    d = _distances(z[finite], correction.z)
+    pred, nearest = _neighbour_mean(d, correction.y, 1.0 / correction.y_se ** 2, correction.k)
+    y[finite] = pred
+    # the neighbours' own leave-one-out errors, and how much they disagree with each other here
+    # a leave-one-out residual was measured at the neighbour's own nearest-neighbour distance: for a point
+    # farther away it is scaled up linearly with the distance (a smooth correction changes linearly)
+    far = np.maximum(np.take_along_axis(d, nearest, 1) / np.maximum(correction.nn_distance[nearest], DISTANCE_FLOOR),
+                     1.0)
+    local = np.mean((correction.loo_residuals[nearest] * far) ** 2, axis=1)
+    spread = np.mean((correction.y[nearest] - pred[:, None]) ** 2, axis=1)
+    se[finite] = np.maximum(np.sqrt(local + spread), NOISE_FLOOR)
+    reach = REACH * correction.spacing if np.isfinite(correction.spacing) and correction.spacing > 0 else np.inf
+    reached[finite] = d.min(axis=1) <= max(reach, 1e-9)
+    return y, se, reached
 
 
 def linearization_promises(trust, low, high, target):
@@ -192,7 +222,7 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     correction = fit_correction(np.asarray(features)[escalated], np.where(ok[escalated], y, np.nan), y_se)
     if correction.usable:
         y_hat, y_se, reached = predict_correction(correction, features)
-        use = ok & ~promise & reached
+        use = ok & ~promise & reached & (y_se <= MAX_SE)
         value[use] = sl[use] * np.exp(y_hat[use])
         se[use] = value[use] * y_se[use]
         method[use] = int(BestMethod.corrected_linearization)
