@@ -345,7 +345,7 @@ class ResultFile:
         def var(name, dtype, dims, values, fill=np.nan):
             self._variable(name, dtype, dims, fill, coordinates, table=ACCURACY, **self.zlib)[...] = values
 
-        var("esc_grid_index", "i8", ("escalation",), np.asarray(flat_indices, dtype=np.int64), fill=False)
+        var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
         var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
         var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
         var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
