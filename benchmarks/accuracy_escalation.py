@@ -7,8 +7,8 @@ Run::
 
 Prints
 
-1. **Cost**: wall time of a ``--points`` sweep (eps x S0 on the paper block, 20 s records, histories of
-   var_theta and its rate only) without and with ``[accuracy] target, budget_s``, and the Monte Carlo CPU
+1. **Cost**: wall time of a ``--points`` sweep (the square eps x S0 grid of ``bench_sweep.py`` on the paper
+   block, 20 s records, storing the histories of var_theta, its rate, their covariance and k_eq) without and with ``[accuracy] target, budget_s``, and the Monte Carlo CPU
    seconds the escalation spent (and what it covered).
 2. **Accuracy table** on the calibration points of ``screening/data/trust_calibration.nc`` (the trade
    study's regimes plus heavy blocks, stiff beds, the museum statue and near-toppling points; their coupled
@@ -37,25 +37,8 @@ from screening.analysis.correction import best_estimates, point_features  # noqa
 from screening.analysis.trust import INDICATORS, calibration_rows, shipped_calibration, shipped_table, sl_trust  # noqa: E402
 from screening.status import BestMethod, EscalationModel, Trust  # noqa: E402
 
-SWEEP = """
-title = "accuracy benchmark: eps x S0, paper block"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = {{start = -6e5, stop = 6e7, num = {n_eps}}}
-[excitation]
-kind = "white"
-S0 = {{start = 1e-5, stop = 2.4e-3, num = {n_s0}, log = true}}
-[time]
-t_end = 20.0
-dt = 0.05
-[output]
-variables = ["var_theta", "var_theta_dot", "cov_theta_theta_dot", "k_eq"]
-"""
+#: The 100 x 100 (eps x S0) study of bench_sweep.py, storing the histories the trust rule and fragility read.
+OUTPUT = '[output]\nvariables = ["var_theta", "var_theta_dot", "cov_theta_theta_dot", "k_eq"]\n'
 
 
 def sweep_cost(points, budget, target, workers, work):
@@ -63,9 +46,11 @@ def sweep_cost(points, budget, target, workers, work):
     from screening.workflow.study import parse_study
     from screening.workflow.sweep import run_sweep
 
-    n_eps = max(int(round(np.sqrt(points / 10))), 1)
-    n_s0 = max(points // n_eps, 1)
-    text = SWEEP.format(n_eps=n_eps, n_s0=n_s0)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench_sweep import STUDY
+
+    n = max(int(round(np.sqrt(points))), 1)
+    text = STUDY.format(n=n, output=OUTPUT)
     work.mkdir(parents=True, exist_ok=True)
     times = {}
     reports = {}
@@ -75,7 +60,7 @@ def sweep_cost(points, budget, target, workers, work):
         reports[label] = run_sweep(study, work / f"bench_{label}.nc", workers=workers, force=True, progress=False,
                                    log=lambda m: print("   ", m, file=sys.stderr))
         times[label] = time.perf_counter() - start
-    return n_eps * n_s0, times, reports
+    return n * n, times, reports
 
 
 def accuracy_table(target):

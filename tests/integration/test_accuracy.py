@@ -73,3 +73,26 @@ def test_fragility_uses_monte_carlo_where_it_ran_and_the_band_elsewhere(client, 
     p, lo, hi = (frag[n].values[reliable] for n in ("best_p_exceed", "best_p_exceed_low", "best_p_exceed_high"))
     assert np.all((lo <= p + 1e-12) & (p <= hi + 1e-12))
     assert frag["best_p_exceed"].attrs["units"] == "1"
+
+
+def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkeypatch):
+    from screening.workflow import execution
+    from screening.workflow.sweep import _SweepRun
+
+    study = parse_study(TARGET)
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:              # everything computed, the file never moved into place
+        m.setattr(_SweepRun, "_finalize", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda msg: None)
+    calls = []
+    real = execution.submit_escalation
+    monkeypatch.setattr(execution, "submit_escalation", lambda *a, **k: calls.append(a) or real(*a, **k))
+    report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda msg: None)
+    assert calls == [] and report.accuracy["n_escalated"] >= 1     # every escalated point came from the record
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        assert ds.sizes["escalation"] == report.accuracy["n_escalated"]
+        assert np.all(np.isfinite(ds["esc_peak_var_theta"].values))
