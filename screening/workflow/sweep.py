@@ -500,7 +500,12 @@ class _SweepRun:
                         committed += cost
                     else:
                         results[j] = r
-                for j, r in gather(full).items():
+                finished = gather(full)
+                for j in full.values():
+                    if j not in finished:             # the full run failed: the pilot stays
+                        results[j] = pilot[j]
+                        continue
+                    r = finished[j]
                     spent += float(r["cpu_time"])
                     r["cpu_time"] = np.float64(r["cpu_time"] + pilot[j]["cpu_time"])
                     results[j] = r

@@ -317,12 +317,18 @@ class ResultFile:
         """Flat float64 values of per-point variable ``name`` over the grid (a history: at output index
         ``t_index``, or its maximum over time with ``None``)."""
         v = self.nc[name]
-        if "t" in v.dimensions:
-            values = v[..., t_index % self.nt] if t_index is not None else np.nanmax(
-                np.asarray(v[...], dtype=np.float64).reshape(-1, self.nt), axis=1)
-        else:
-            values = v[...]
-        return np.asarray(values, dtype=np.float64).reshape(-1)
+        if "t" not in v.dimensions:
+            return np.asarray(v[...], dtype=np.float64).reshape(-1)
+        if t_index is not None:
+            return np.asarray(v[..., t_index % self.nt], dtype=np.float64).reshape(-1)
+        out = np.full(self.study.n_points, np.nan)
+        step = max(SYNC_POINTS, 1)
+        for lo in range(0, self.study.n_points, step):          # a slab of histories at a time
+            for slab, a, b in hyperslabs(lo, min(lo + step, self.study.n_points), self.shape):
+                rows = np.asarray(v[slab + (slice(None),)], dtype=np.float64).reshape(b - a, self.nt)
+                finite = np.isfinite(rows).any(axis=1)
+                out[a:b][finite] = np.nanmax(rows[finite], axis=1)
+        return out
 
     def write_escalation(self, flat_indices, models, runs):
         """The ``[accuracy]`` Monte Carlo points on dimension ``escalation`` (``runs``: the dicts of

@@ -39,6 +39,8 @@ def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp
                       BestMethod.coupled_monte_carlo)
         np.testing.assert_array_equal(method[at], mc)
         np.testing.assert_array_equal(value[at], ds["esc_peak_var_theta"].values)
+        sl_dot = ds["var_theta_dot"].values.reshape(-1, ds.sizes["t"])[at]
+        np.testing.assert_array_equal(ds["esc_sl_peak_var_theta_dot"].values, np.nanmax(sl_dot, axis=1))
         assert np.all(ds["esc_samples"].values >= 32)
         assert np.all(ds["esc_n_used"].values + ds["esc_n_overturned"].values + ds["esc_n_diverged"].values
                       == ds["esc_samples"].values)
