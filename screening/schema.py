@@ -91,7 +91,9 @@ ACCURACY = {
     "best_peak_var_theta_dot": _v("rad2 s-2", "best estimate of the coupled model's peak variance of the rocking "
                                               "angular velocity"),
     "best_peak_var_theta_dot_se": _v("rad2 s-2", "standard error of best_peak_var_theta_dot"),
-    "best_method": flag_attributes(BestMethod, "source of the best estimates of the point"),
+    "best_method": flag_attributes(BestMethod, "source of the best estimate of peak var_theta at the point "
+                                               "(best_peak_var_theta_dot follows its own ratio; its standard error "
+                                               "is NaN where that cannot be vouched for)"),
     "escalation": _v("1", "escalated Monte Carlo point index"),
     "esc_sample": _v("1", "Monte Carlo sample index of an escalated point (input seeded with "
                           "default_rng([seed, sample]))"),
