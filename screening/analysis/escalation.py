@@ -6,7 +6,8 @@
   learns from the whole untrusted region, not only its extreme;
 * :func:`escalation_model` — condensed Monte Carlo where the calibration shows the condensed model
   within the target of the coupled one (only the linearization is in doubt), coupled otherwise;
-* :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run.
+* :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run;
+* :func:`affordable_points` — how many points the budget covers at that many samples.
 
 Pure functions on numpy arrays (the calibration dataset is passed in); no I/O.
 """
@@ -28,6 +29,8 @@ MIN_SAMPLES = 100
 MAX_SAMPLES = 4000
 #: At most this many escalated points (the correction needs a few dozen, not hundreds).
 MAX_POINTS = 48
+#: The budget is never spread over fewer points than this (the correction needs a few neighbours).
+MIN_COVER = 8
 #: The condensed model stands in for the coupled one where every calibration row of the (bed law,
 #: peak_p_uplift bin) cell, at least this many, has it within ``target / 2``.
 MIN_CONDENSED_ROWS = 2
@@ -120,3 +123,12 @@ def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES):
         return int(most)
     n = pilot_samples * (pilot_rel_se / (target / 2.0)) ** 2
     return int(min(max(math.ceil(n), MIN_SAMPLES), most))
+
+
+def affordable_points(budget_s, point_cost_s, most=MAX_POINTS):
+    """How many points a budget [s] covers at ``point_cost_s`` [s] each (pilot and full run), between
+    :data:`MIN_COVER` and ``most``: with a small budget, fewer points at the target's standard error
+    rather than many pilots of no use to anyone."""
+    if not (math.isfinite(point_cost_s) and point_cost_s > 0):
+        return int(most)
+    return int(min(max(math.floor(budget_s / point_cost_s), MIN_COVER), most))

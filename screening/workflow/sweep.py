@@ -424,6 +424,8 @@ class _SweepRun:
     def _escalation_runs(self, order, models):
         """Pilot then full Monte Carlo at the ``order`` ed points, wave by wave, within the CPU budget.
 
+        After the first wave, the points are cut to those the budget affords at the samples the target
+        needs (:func:`~screening.analysis.escalation.affordable_points`, in the covering order).
         Returns ``({position: result}, CPU seconds spent, failed tasks)``; a point whose full run does not
         fit in what is left of the budget keeps its pilot (fewer samples, larger standard error); points
         after the budget ran out are not run.  Finished points are kept in the resume record.
@@ -472,7 +474,8 @@ class _SweepRun:
         wave = 2 * max(self.report.n_workers, 1)
         with Progress(len(todo), label="accuracy: Monte Carlo at escalated points",
                       enabled=self.progress and bool(todo)) as bar:
-            for w in range(0, len(todo), wave):
+            w = 0
+            while w < len(todo):
                 pilots = {}
                 for j in todo[w:w + wave]:
                     guess = max(rates, default=0.0) * esc.PILOT_SAMPLES * COST_SAFETY * (len(pilots) + 1)
@@ -483,23 +486,31 @@ class _SweepRun:
                     break
                 pilot = gather(pilots)
                 spent += sum(float(r["cpu_time"]) for r in pilot.values())
-                full, committed = {}, 0.0
-                for j in sorted(pilot):
-                    r = pilot[j]
+                needed = {}
+                for j, r in pilot.items():
                     rate = float(r["cpu_time"]) / esc.PILOT_SAMPLES
                     rates.append(rate)
                     with np.errstate(divide="ignore", invalid="ignore"):
                         rel = float(r["peak_var_theta_se"] / r["peak_var_theta"])
-                    # a fair share of what is left for each point still to run: coverage first
+                    needed[j] = (rate, esc.samples_needed(rel, esc.PILOT_SAMPLES, acc.target, most))
+                if w == 0 and needed:
+                    # as many points as the budget affords at the samples the target needs (coverage and
+                    # accuracy both; never fewer than the correction needs)
+                    point_cost = float(np.median([(rate * n) * COST_SAFETY + rate * esc.PILOT_SAMPLES
+                                                  for rate, n in needed.values()]))
+                    todo = todo[:max(esc.affordable_points(acc.budget_s, point_cost), len(pilot))]
+                full, committed = {}, 0.0
+                for j in sorted(pilot):
+                    rate, n = needed[j]
+                    # a fair share of what is left for each point still to run
                     share = (acc.budget_s - spent - committed) / max(len(todo) - todo.index(j), 1)
-                    n = min(esc.samples_needed(rel, esc.PILOT_SAMPLES, acc.target, most),
-                            int(share / max(rate * COST_SAFETY, 1e-12)))
+                    n = min(n, int(share / max(rate * COST_SAFETY, 1e-12)))
                     cost = rate * n * COST_SAFETY
                     if n >= esc.MIN_SAMPLES and spent + committed + cost <= acc.budget_s:
                         full[submit(j, n, "full")] = j
                         committed += cost
                     else:
-                        results[j] = r
+                        results[j] = pilot[j]
                 finished = gather(full)
                 for j in full.values():
                     if j not in finished:             # the full run failed: the pilot stays
@@ -517,6 +528,7 @@ class _SweepRun:
                             self.log(f"warning: cannot save the resume record of escalated point {j} "
                                      f"({write_failure_reason(exc)})")
                 bar.update(len(todo[w:w + wave]))
+                w += wave
         return results, spent, failed
 
     # -- the end

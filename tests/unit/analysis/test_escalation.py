@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from screening.analysis.escalation import (MAX_SAMPLES, MIN_SAMPLES, condensed_cells, cover_points,
+from screening.analysis.escalation import (MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES, affordable_points, condensed_cells, cover_points,
                                            escalation_candidates, escalation_model, samples_needed)
 from screening.analysis.trust import shipped_calibration
 from screening.status import EscalationModel, PointStatus, Trust
@@ -50,3 +50,10 @@ def test_condensed_only_where_the_calibration_shows_it_close_to_coupled():
     assert models.tolist() == [c, k, k, k, k]          # hardening, cubic, lock-in, near toppling: coupled
     stopped = escalation_model(ind, np.full(5, int(PointStatus.k_eq_negative)), "paper", -6e5, cells)
     assert np.all(stopped == k)
+
+
+def test_affordable_points_trade_coverage_for_the_target():
+    assert affordable_points(600.0, 20.0) == 30
+    assert affordable_points(60.0, 20.0) == MIN_COVER           # never fewer than the correction needs
+    assert affordable_points(1e6, 1.0) == MAX_POINTS
+    assert affordable_points(60.0, float("nan")) == MAX_POINTS
