@@ -449,6 +449,7 @@ class _SweepRun:
                 results[j] = part
                 spent += float(part["cpu_time"])
         todo = [j for j in range(len(order)) if j not in results]
+        loaded, costs = list(results), []
 
         def submit(j, samples, what):
             model = EscalationModel(int(models[j])).name
@@ -493,12 +494,11 @@ class _SweepRun:
                     with np.errstate(divide="ignore", invalid="ignore"):
                         rel = float(r["peak_var_theta_se"] / r["peak_var_theta"])
                     needed[j] = (rate, esc.samples_needed(rel, esc.PILOT_SAMPLES, acc.target, most))
-                if w == 0 and needed:
-                    # as many points as the budget affords at the samples the target needs (coverage and
-                    # accuracy both; never fewer than the correction needs)
-                    point_cost = float(np.median([(rate * n) * COST_SAFETY + rate * esc.PILOT_SAMPLES
-                                                  for rate, n in needed.values()]))
-                    todo = todo[:max(esc.affordable_points(acc.budget_s, point_cost), len(pilot))]
+                # as many points as the budget affords at the samples the target needs (coverage and
+                # accuracy both; never fewer than the correction needs), re-estimated after every wave
+                costs += [rate * (n * COST_SAFETY + esc.PILOT_SAMPLES) for rate, n in needed.values()]
+                affordable = esc.affordable_points(acc.budget_s, float(np.median(costs)))
+                todo = todo[:max(affordable - len(loaded), w + len(pilot))]
                 full, committed = {}, 0.0
                 for j in sorted(pilot):
                     rate, n = needed[j]
@@ -506,7 +506,7 @@ class _SweepRun:
                     share = (acc.budget_s - spent - committed) / max(len(todo) - todo.index(j), 1)
                     n = min(n, int(share / max(rate * COST_SAFETY, 1e-12)))
                     cost = rate * n * COST_SAFETY
-                    if n >= esc.MIN_SAMPLES and spent + committed + cost <= acc.budget_s:
+                    if n >= 2 * esc.PILOT_SAMPLES and spent + committed + cost <= acc.budget_s:
                         full[submit(j, n, "full")] = j
                         committed += cost
                     else:
