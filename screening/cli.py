@@ -453,6 +453,14 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}"
          + (f"; lognormal median {dim} {float(frag['median'].median()):.3g}, "
             f"beta {float(frag['beta'].median()):.2f} (medians over the other dims)" if "median" in frag else ""))
+    if "best_p_exceed" in frag:
+        from screening.status import BestMethod
+
+        source = frag["best_method"].values
+        counts = ", ".join(f"{m.name} {int(np.sum(source == m))}" for m in BestMethod if np.any(source == m))
+        best = frag["best_p_exceed"].values
+        _say(f"best estimates ([accuracy]): best_p_exceed min {np.nanmin(best):.3g}, max {np.nanmax(best):.3g}, "
+             f"with the band best_p_exceed_low/high; from {counts}")
     return EXIT_OK
 
 

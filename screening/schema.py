@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import ContactRegime, PointStatus, SampleState, SpotStatus, Trust, flag_attributes
+from screening.status import (BestMethod, ContactRegime, EscalationModel, PointStatus, SampleState, SpotStatus, Trust,
+                              flag_attributes)
 
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"
@@ -84,6 +85,39 @@ LINEARIZATION = {
                              "coupled model (SL / MCS - 1)"),
 }
 
+#: Best estimates of a sweep with ``[accuracy]`` (:mod:`screening.analysis.correction`) and its escalated Monte
+#: Carlo points (dimension ``escalation``).
+ACCURACY = {
+    "best_peak_var_theta": _v("rad2", "best estimate of the coupled model's peak variance of the rocking rotation"),
+    "best_peak_var_theta_se": _v("rad2", "standard error of best_peak_var_theta"),
+    "best_peak_var_theta_dot": _v("rad2 s-2", "best estimate of the coupled model's peak variance of the rocking "
+                                              "angular velocity"),
+    "best_peak_var_theta_dot_se": _v("rad2 s-2", "standard error of best_peak_var_theta_dot"),
+    "best_method": flag_attributes(BestMethod, "source of the best estimate of peak var_theta at the point "
+                                               "(best_peak_var_theta_dot follows its own ratio; its standard error "
+                                               "is NaN where that cannot be vouched for)"),
+    "escalation": _v("1", "escalated Monte Carlo point index"),
+    "esc_sample": _v("1", "Monte Carlo sample index of an escalated point (input seeded with "
+                          "default_rng([seed, sample]))"),
+    "esc_case": _v("1", "case index of the escalated point"),
+    "esc_model": flag_attributes(EscalationModel, "Monte Carlo model of the escalated point"),
+    "esc_samples": _v("1", "Monte Carlo samples run at the escalated point"),
+    "esc_cpu_time": _v("s", "CPU time of the Monte Carlo run at the escalated point (pilot included)"),
+    "esc_sl_peak_var_theta": _v("rad2", "linearization peak var_theta at the escalated point"),
+    "esc_sl_peak_var_theta_dot": _v("rad2 s-2", "linearization peak var_theta_dot at the escalated point"),
+    "esc_peak_var_theta": _v("rad2", "Monte Carlo peak var_theta at the escalated point"),
+    "esc_peak_var_theta_se": _v("rad2", "standard error of esc_peak_var_theta (at the peak time)"),
+    "esc_peak_var_theta_dot": _v("rad2 s-2", "Monte Carlo peak var_theta_dot at the escalated point"),
+    "esc_peak_var_theta_dot_se": _v("rad2 s-2", "standard error of esc_peak_var_theta_dot (at the peak time)"),
+    "esc_n_overturned": _v("1", "overturned Monte Carlo samples at the escalated point"),
+    "esc_n_diverged": _v("1", "diverged Monte Carlo samples at the escalated point"),
+    "esc_n_used": _v("1", "Monte Carlo samples in the statistics at the escalated point"),
+    "esc_peak_abs_theta": _v("rad", "peak |theta| of each Monte Carlo sample at the escalated point (NaN beyond "
+                                    "esc_samples)"),
+    "esc_sample_state": flag_attributes(SampleState, "state of each Monte Carlo sample of the escalated point"),
+    "esc_grid_index": _v("1", "flat C-order grid index of the escalated point"),
+}
+
 #: Sweep results: a point's status also says when its task failed.
 SWEEP = {"status": flag_attributes(PointStatus, "solver status of the point")}
 
@@ -121,6 +155,10 @@ FRAGILITY = {
     "mcs_p_exceed": _v("1", "probability that |theta| exceeds the threshold, from the Monte Carlo peaks"),
     "mcs_p_exceed_se": _v("1", "standard error of mcs_p_exceed (binomial)"),
     "threshold_rad": _v("rad", "rotation threshold"),
+    "best_p_exceed": _v("1", "probability that |theta| exceeds the threshold from the best estimates (Monte Carlo "
+                             "where it ran, else the Gaussian up-crossing of the corrected moments)"),
+    "best_p_exceed_low": _v("1", "lower end of the band of best_p_exceed (2 standard errors)"),
+    "best_p_exceed_high": _v("1", "upper end of the band of best_p_exceed (2 standard errors)"),
     "beta": _v("1", "lognormal dispersion beta of the fragility curve"),
 }
 
@@ -327,7 +365,7 @@ def attributes(name, table=None):
     ``mcs_``.  Raises ``KeyError`` for an undeclared name.
     """
     tables = ([table] if table is not None else []) + [LINEARIZATION, PARAMETERS, DERIVED, COORDINATES,
-                                                       FRAGILITY]
+                                                       FRAGILITY, ACCURACY]
     for t in tables:
         if name in t:
             return dict(t[name])
@@ -336,6 +374,9 @@ def attributes(name, table=None):
     if name.startswith("spot_"):
         base = attributes(name[5:])
         return {**base, "long_name": f"{base['long_name']} at the spot point"}
+    if name.startswith("esc_"):
+        base = attributes(name[4:])
+        return {**base, "long_name": f"{base['long_name']} at the escalated point"}
     if name.startswith("median_") and name[7:] in PARAMETERS:
         base = PARAMETERS[name[7:]]
         return {"units": base["units"], "long_name": f"median {name[7:]} of the lognormal fragility curve"}

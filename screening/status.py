@@ -92,6 +92,29 @@ class Trust(enum.IntEnum):
     untrusted = 2
 
 
+class BestMethod(enum.IntEnum):
+    """Where a point's best estimate comes from (``[accuracy]``, :mod:`screening.analysis.correction`)."""
+
+    #: the linearization itself: the trust rule promises the target accuracy there
+    linearization = 0
+    #: the linearization times the correction learned from the escalated Monte Carlo points
+    corrected_linearization = 1
+    #: condensed Monte Carlo at the point (only the linearization was in doubt)
+    condensed_monte_carlo = 2
+    #: coupled Monte Carlo at the point
+    coupled_monte_carlo = 3
+    #: no estimate can be vouched for: the correction does not reach the point (or failed its leave-one-out
+    #: check) and no Monte Carlo ran there; the value is the linearization's, with a NaN standard error
+    unreliable = 4
+
+
+class EscalationModel(enum.IntEnum):
+    """Monte Carlo model run at an escalated point."""
+
+    condensed = 0
+    coupled = 1
+
+
 class ContactRegime(enum.IntEnum):
     """Contact regime of the coupled model's base."""
 

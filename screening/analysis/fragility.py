@@ -39,7 +39,7 @@ from scipy import optimize, special
 from screening import schema
 from screening.model.block import Block
 from screening.solvers.datasets import finish
-from screening.status import PointStatus, SampleState
+from screening.status import BestMethod, PointStatus, SampleState
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
 
@@ -367,6 +367,53 @@ def mcs_exceedance_at_spots(ds, level):
     return sample_exceedance(peaks, state == SampleState.overturned, state != SampleState.diverged_or_failed, level)
 
 
+def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
+    """Exceedance probability from the best estimates of a sweep with ``[accuracy]`` and its band.
+
+    Returns ``(p, low, high, source)`` on the grid: at escalated points the Monte Carlo fraction of
+    samples beyond the threshold (``esc_peak_abs_theta``; overturned samples count, diverged ones are
+    left out) with the band ``p +- 2 x`` its binomial standard error; elsewhere the up-crossing
+    probability of the linearized moments rescaled to the best estimates (``var_theta`` by
+    ``best_peak_var_theta / peak_var_theta``, ``var_theta_dot`` likewise, the covariance by the
+    geometric mean), with the band of the estimates at ``+-2`` standard errors.  ``source`` is
+    ``best_method``; where it is ``unreliable`` the probability is the linearization's and the band NaN.
+    """
+    sl_dot = ds["var_theta_dot"].max("t")
+    ratio = ds["best_peak_var_theta"] / ds["peak_var_theta"]
+    ratio_dot = (ds["best_peak_var_theta_dot"] / sl_dot).fillna(ratio)
+
+    def scaled(k):
+        r = ratio * (1 + k * ds["best_peak_var_theta_se"] / ds["best_peak_var_theta"])
+        rd = ratio_dot * (1 + k * (ds["best_peak_var_theta_dot_se"] / ds["best_peak_var_theta_dot"]).fillna(
+            ds["best_peak_var_theta_se"] / ds["best_peak_var_theta"]))
+        r, rd = r.clip(min=0.0), rd.clip(min=0.0)
+        return exceedance_probability(ds.assign(var_theta=ds["var_theta"] * r, var_theta_dot=ds["var_theta_dot"] * rd,
+                                                cov_theta_theta_dot=ds["cov_theta_theta_dot"] * np.sqrt(r * rd)),
+                                      threshold, relative_to, method)
+
+    source = ds["best_method"]
+    p, low, high = scaled(0.0), scaled(-2.0), scaled(2.0)
+    unreliable = source == BestMethod.unreliable
+    p = xr.where(unreliable, exceedance_probability(ds, threshold, relative_to, method), p)
+    low, high = low.where(~unreliable), high.where(~unreliable)
+    if "escalation" in ds.dims and ds.sizes["escalation"]:
+        level = threshold_angle(ds, threshold, relative_to)
+        grid = ds["status"].dims
+        at = np.unravel_index(ds["esc_grid_index"].values.astype(np.int64), ds["status"].shape)
+        where = {d: xr.DataArray(i, dims="escalation") for d, i in zip(grid, at)}
+        state = ds["esc_sample_state"].rename(esc_sample="sample")
+        p_mc, se = sample_exceedance(ds["esc_peak_abs_theta"].rename(esc_sample="sample"),
+                                     state == SampleState.overturned,
+                                     (state == SampleState.standing) | (state == SampleState.overturned),
+                                     level.isel({d: i for d, i in where.items() if d in level.dims}))
+        p, low, high = (a.transpose(*grid).copy() for a in xr.broadcast(p, low, high))
+        idx = tuple(at)
+        p.values[idx] = p_mc.values
+        low.values[idx] = np.clip(p_mc.values - 2 * se.values, 0.0, 1.0)
+        high.values[idx] = np.clip(p_mc.values + 2 * se.values, 0.0, 1.0)
+    return p, low, high, source
+
+
 def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="S0"):
     """The fragility result of a dataset: ``p_exceed`` over its dims, the rotation ``threshold_rad``
     and, when ``dim`` is swept with at least two points, the lognormal ``median`` and ``beta``.
@@ -386,5 +433,9 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
         if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
             out["mcs_p_exceed"], out["mcs_p_exceed_se"] = mcs_exceedance_at_spots(ds, level)
             out["p_exceed_at_spot"] = p.isel(spot_positions(ds)) if p.ndim else p.expand_dims(spot=ds.sizes["spot"])
+        if "best_method" in ds and all(n in ds for n in ("var_theta", "var_theta_dot", "cov_theta_theta_dot")):
+            best = best_exceedance(ds, threshold, relative_to, method)
+            for name, value in zip(("best_p_exceed", "best_p_exceed_low", "best_p_exceed_high", "best_method"), best):
+                out[name] = value.drop_vars([c for c in value.coords if c not in value.dims and c not in out.coords])
     out["threshold_rad"] = level
     return _finish(out, dim, threshold, relative_to, "monte_carlo" if is_monte_carlo(ds) else method)

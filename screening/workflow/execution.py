@@ -200,6 +200,32 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     return out
 
 
+def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
+    """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks and
+    the CPU time it took (``cpu_time`` [s], of the worker thread)."""
+    start = time.thread_time()
+    run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed)
+    out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples)}
+    for name in ("var_theta", "var_theta_dot"):
+        history, se = run[name], run[f"{name}_se"]
+        at = int(np.nanargmax(history)) if np.any(np.isfinite(history)) else -1
+        out[f"peak_{name}"] = np.float64(history[at] if at >= 0 else np.nan)
+        out[f"peak_{name}_se"] = np.float64(se[at] if at >= 0 else np.nan)
+    for name in ("n_overturned", "n_diverged", "n_used", "peak_abs_theta", "sample_state"):
+        out[name] = run[name]
+    return out
+
+
+def submit_escalation(client, study, flat_index, samples, model, key):
+    """Submit :func:`escalation_task` at flat grid index ``flat_index`` with ``samples`` samples of ``model``
+    (``"coupled"`` or ``"condensed"``; retried :data:`TASK_RETRIES` times)."""
+    index = tuple(int(i) for i in np.unravel_index(flat_index, study.shape))
+    case, values = point_values(study, index)
+    return client.submit(escalation_task, *build_models(study.cases[case], values),
+                         study.cases[case].condensation_model, int(samples), model, study.t_end, study.dt,
+                         study.accuracy.seed, retries=TASK_RETRIES, pure=False, key=key)
+
+
 def sample_state(overturned, diverged):
     """Per-sample :class:`~screening.status.SampleState` codes from the flags of a Monte Carlo run."""
     state = np.full(np.shape(overturned), SampleState.standing, dtype=np.int8)
@@ -277,6 +303,19 @@ def warm_up():
     from screening.model.excitation import WhiteNoise
 
     solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
+    return time.perf_counter() - start
+
+
+def warm_up_monte_carlo():
+    """Compile the Monte Carlo kernels on a worker (both models, two short samples); returns the time [s]."""
+    start = time.perf_counter()
+    from screening.model import Block, Foundation
+    from screening.model.excitation import WhiteNoise
+    from screening.solvers.montecarlo import monte_carlo
+
+    for model in ("coupled", "condensed"):
+        monte_carlo(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), n_samples=2,
+                    model=model, t_end=0.2, dt=0.1, progress=False)
     return time.perf_counter() - start
 
 

@@ -49,6 +49,11 @@ Example (SI units throughout)::
     relative_to = "theta_ul"    # or "slenderness"; absent: absolute angles [rad]
     method = "vanmarcke"        # or "poisson" (screening.analysis.fragility)
 
+    [accuracy]                  # optional: escalate to Monte Carlo where the trust rule cannot promise
+    target = 0.15               # relative error of peak var_theta (0 < target <= 1; absent: no escalation)
+    budget_s = 600              # CPU seconds of Monte Carlo at most (default 600)
+    seed = 0
+
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
     count = 3                   # with "auto": how many points
@@ -110,15 +115,19 @@ from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, bu
                                        read_study_text, required, resolve_case, short_repr, table,
                                        time_table, title_and_description, type_name)
 
-__all__ = ["Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
+__all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
 
 MCS_MODELS = ("coupled", "condensed")
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case", "output", "fragility", "run")
+             "case", "output", "fragility", "run", "accuracy")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
 HISTORY_CHOICES = ("all", "spots", "none")
 FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
 FRAGILITY_METHODS = ("vanmarcke", "poisson")
+
+#: ``[accuracy] budget_s``: default and ceiling [s] (a week of CPU).
+DEFAULT_BUDGET_S = 600.0
+MAX_BUDGET_S = 7 * 86400.0
 
 #: Version of the result layout: part of the study key, so old partial results are not mixed in.
 LAYOUT_VERSION = 3
@@ -166,6 +175,16 @@ class Fragility:
 
 
 @dataclass(frozen=True)
+class Accuracy:
+    """The ``[accuracy]`` table: ``target`` (relative error of peak var_theta [1]), ``budget_s`` (CPU
+    seconds of Monte Carlo [s]) and the Monte Carlo ``seed``."""
+
+    target: float
+    budget_s: float = DEFAULT_BUDGET_S
+    seed: int = 0
+
+
+@dataclass(frozen=True)
 class Study:
     """A validated study.
 
@@ -190,6 +209,7 @@ class Study:
     _hash: str = field(default="", repr=False)
     output: Output = Output()
     fragility: Fragility | None = None
+    accuracy: Accuracy | None = None
 
     @property
     def derived_inputs(self):
@@ -275,7 +295,7 @@ def _build(raw, text, name, source):
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
                  description=description, _hash=digest.hexdigest(), output=_output(raw),
-                 fragility=_fragility(raw))
+                 fragility=_fragility(raw), accuracy=_accuracy(raw))
     if study.output.histories == "spots" and study.mcs is None:
         raise StudyError("output.histories: 'spots' stores the histories at the [mcs] spot points; "
                          "give an [mcs] table (or histories = 'none')")
@@ -370,6 +390,18 @@ def _fragility(raw):
         check_choice("fragility.relative_to", relative_to, FRAGILITY_RELATIVE_TO)
     method = choice(tbl, "method", FRAGILITY_METHODS, "fragility.", "vanmarcke")
     return Fragility(thresholds, relative_to, method)
+
+
+def _accuracy(raw):
+    """``[accuracy]``: absent (or without ``target``) keeps today's behaviour (no escalation)."""
+    tbl = table(raw, "accuracy")
+    check_keys(tbl, ("target", "budget_s", "seed"), "accuracy.")
+    budget = check_value("accuracy.budget_s", tbl.get("budget_s", DEFAULT_BUDGET_S), 0.0, False, MAX_BUDGET_S)
+    seed = integer(tbl, "seed", 0, 0, "accuracy.", limits.MAX_SEED)
+    if "target" not in tbl:
+        return None
+    target = check_value("accuracy.target", tbl["target"], 0.0, False, 1.0)
+    return Accuracy(target, budget, seed)
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):

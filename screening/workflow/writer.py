@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import (FRAGILITY, PRESSURE_PARAMETERS, SWEEP, SWEEP_INPUTS, TIME, attributes,
+from screening.schema import (ACCURACY, FRAGILITY, PRESSURE_PARAMETERS, SWEEP, SWEEP_INPUTS, TIME, attributes,
                               global_attributes, grid_coordinate_attributes)
 from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
@@ -358,6 +358,76 @@ class ResultFile:
         nc.setncatts({"mcs_model": spec.model, "mcs_samples": np.int32(spec.samples),
                       "mcs_seed": np.int32(spec.seed), "mcs_selection": selection,
                       "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
+
+    def read(self, name, t_index=None):
+        """Flat float64 values of per-point variable ``name`` over the grid (a history: at output index
+        ``t_index``, or its maximum over time with ``None``)."""
+        v = self.nc[name]
+        if "t" not in v.dimensions:
+            return np.asarray(v[...], dtype=np.float64).reshape(-1)
+        if t_index is not None:
+            return np.asarray(v[..., t_index % self.nt], dtype=np.float64).reshape(-1)
+        out = np.full(self.study.n_points, np.nan)
+        step = max(SYNC_POINTS, 1)
+        for lo in range(0, self.study.n_points, step):          # a slab of histories at a time
+            for slab, a, b in hyperslabs(lo, min(lo + step, self.study.n_points), self.shape):
+                rows = np.asarray(v[slab + (slice(None),)], dtype=np.float64).reshape(b - a, self.nt)
+                finite = np.isfinite(rows).any(axis=1)
+                out[a:b][finite] = np.nanmax(rows[finite], axis=1)
+        return out
+
+    def write_escalation(self, flat_indices, models, runs):
+        """The ``[accuracy]`` Monte Carlo points on dimension ``escalation`` (``runs``: the dicts of
+        :func:`~screening.workflow.execution.escalation_task`; ``models``: their
+        :class:`~screening.status.EscalationModel` codes)."""
+        nc, study = self.nc, self.study
+        n = len(runs)
+        nc.createDimension("escalation", n)
+        most = max((int(r["samples"]) for r in runs), default=1)
+        nc.createDimension("esc_sample", most)
+        idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if n else [()] * len(self.shape)
+        coords = []
+        for axis, dim in enumerate(study.dims):
+            name = f"esc_{dim}"
+            values = np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]]
+            self._variable(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY)[:] = values
+            coords.append(name)
+        coordinates = " ".join(coords)
+
+        def var(name, dtype, dims, values, fill=np.nan):
+            self._variable(name, dtype, dims, fill, coordinates, table=ACCURACY, **self.zlib)[...] = values
+
+        var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
+        var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
+        var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
+        var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
+        for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
+            var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
+        at = np.asarray(flat_indices, dtype=np.int64)
+        var("esc_sl_peak_var_theta", "f8", ("escalation",), self.read("peak_var_theta")[at])
+        var("esc_sl_peak_var_theta_dot", "f8", ("escalation",),
+            self.read("var_theta_dot")[at] if "var_theta_dot" in self.histories else np.full(n, np.nan))
+        for name in ("n_overturned", "n_diverged", "n_used"):
+            var(f"esc_{name}", "i4", ("escalation",), np.array([r[name] for r in runs], dtype=np.int32), fill=False)
+        peaks = np.full((n, most), np.nan)
+        state = np.full((n, most), -1, dtype=np.int8)
+        for i, r in enumerate(runs):
+            peaks[i, :r["peak_abs_theta"].size] = r["peak_abs_theta"]
+            state[i, :r["sample_state"].size] = r["sample_state"]
+        var("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks)
+        var("esc_sample_state", "i1", ("escalation", "esc_sample"), state, fill=np.int8(-1))
+
+    def write_best(self, var_theta, var_theta_dot, method):
+        """Per-point best estimates: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat arrays,
+        ``method`` the flat :class:`~screening.status.BestMethod` codes."""
+        dims = self.study.dims
+        coordinates = self.nc["status"].getncattr("coordinates") if "coordinates" in self.nc["status"].ncattrs() else ""
+        for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot)):
+            for name, values in ((base, value), (f"{base}_se", se)):
+                v = self._variable(name, "f8", dims, np.nan, coordinates, table=ACCURACY, **self.zlib)
+                v[...] = np.asarray(values, dtype=float).reshape(self.shape)
+        v = self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, **self.zlib)
+        v[...] = np.asarray(method, dtype=np.int8).reshape(self.shape)
 
     def set_attrs(self, **attrs):
         self.nc.setncatts(attrs)

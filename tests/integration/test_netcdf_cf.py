@@ -43,6 +43,9 @@ points = "auto"
 count = 2
 samples = 6
 model = "condensed"
+[accuracy]
+target = 0.5
+budget_s = 1
 """
 
 CASES = """
@@ -71,6 +74,9 @@ excitation = {kind = "kanai_tajimi", S0 = 2e-4, omega_g = 10.0, zeta_g = 0.4}
 points = [{case = "filtered"}]
 samples = 4
 model = "condensed"
+[accuracy]
+target = 0.5
+budget_s = 1
 """
 
 SINGLE = """

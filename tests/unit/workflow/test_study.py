@@ -426,3 +426,26 @@ def test_spot_histories_need_spot_checks():
         parse_study(BASE + '[output]\nhistories = "spots"\n')
     study = parse_study(BASE + '[output]\nhistories = "spots"\nvariables = ["k_eq"]\n[mcs]\nsamples = 10\n')
     assert study.output.stored == () and study.output.at_spots == ("k_eq",)
+
+
+# ----------------------------------------------------------------------------- [accuracy]
+def test_accuracy_is_off_by_default_and_read_with_defaults():
+    assert parse_study(BASE).accuracy is None
+    acc = parse_study(BASE + "\n[accuracy]\ntarget = 0.15\n").accuracy
+    assert (acc.target, acc.budget_s, acc.seed) == (0.15, 600.0, 0)
+    acc = parse_study(BASE + "\n[accuracy]\ntarget = 0.05\nbudget_s = 30\nseed = 4\n").accuracy
+    assert (acc.target, acc.budget_s, acc.seed) == (0.05, 30.0, 4)
+    assert parse_study(BASE + "\n[accuracy]\nbudget_s = 30\n").accuracy is None     # no target: no escalation
+
+
+@pytest.mark.parametrize("line, needle", [
+    ("target = 0", r"accuracy\.target: must be a finite number > 0 and <= 1"),
+    ("target = 1.5", r"accuracy\.target: must be a finite number > 0 and <= 1"),
+    ("target = 'x'", r"accuracy\.target: must be a number"),
+    ("target = 0.1\nbudget_s = 0", r"accuracy\.budget_s: must be a finite number > 0 and <= 604800"),
+    ("target = 0.1\nseed = -1", r"accuracy\.seed"),
+    ("target = 0.1\nsamples = 3", r"accuracy\.samples: unknown key"),
+])
+def test_bad_accuracy_key_names_the_key_and_range(line, needle):
+    with pytest.raises(StudyError, match=needle):
+        parse_study(BASE + f"\n[accuracy]\n{line}\n")

@@ -1,0 +1,235 @@
+"""Corrected estimates everywhere: the linearization's error learned from the escalated Monte Carlo points.
+
+At the points where a sweep with ``[accuracy]`` ran Monte Carlo (:mod:`screening.analysis.escalation`)
+the log ratio ``y = log(MCS / SL)`` of a peak variance is known (with its Monte Carlo standard error).
+:func:`fit_correction` learns ``y`` over standardised features of the points (the trust indicators
+and the swept parameters, :func:`point_features`) by nearest-neighbour regression in feature space,
+choosing the number of neighbours by leave-one-out; :func:`predict_correction` gives ``y``, its
+standard error (the leave-one-out errors of the neighbours used) and whether the point is close
+enough to the escalated ones to be reached at all.  :func:`best_estimates` combines everything
+into one estimate per point, with its standard error and where it comes from
+(:class:`screening.status.BestMethod`).
+
+Nearest neighbours rather than a global fit: the error of the linearization changes by regime
+(a few per cent below uplift, a factor 10-100 near toppling, the opposite sign under lock-in), which
+a smooth global model averages away; a local average with a local error estimate stays honest.
+
+Pure functions on numpy arrays; no I/O.  Method: ``docs/method.md#trusting-a-point``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from screening.status import BestMethod, EscalationModel, PointStatus, Trust
+
+#: Numbers of neighbours tried by the leave-one-out choice.
+NEIGHBOURS = (1, 2, 3, 4, 6, 8)
+#: A correction needs at least this many escalated points (fewer: no correction anywhere).
+MIN_POINTS = 4
+#: Local standard error of the log ratio above which a corrected value is not vouched for (a factor ~1.65).
+MAX_SE = 0.5
+#: Floor of the standard error of a log ratio [1] (model error beyond Monte Carlo noise).
+NOISE_FLOOR = 0.05
+#: Added to neighbour distances in the weights (standardised units): a coincident point dominates, never divides by 0.
+DISTANCE_FLOOR = 1e-3
+#: A point is reached if its nearest escalated point is within this many times the spacing of the escalated
+#: points (90th percentile of the distances to their own nearest neighbour) in standardised feature space.
+REACH = 1.5
+
+
+@dataclass(frozen=True)
+class Correction:
+    """A fitted correction: the escalated points in standardised feature space and their leave-one-out errors."""
+
+    mean: np.ndarray            # feature means
+    scale: np.ndarray           # feature standard deviations (1 where constant)
+    z: np.ndarray               # standardised features of the fitted points
+    y: np.ndarray               # their log ratios
+    y_se: np.ndarray            # their Monte Carlo standard errors (floored)
+    k: int                      # neighbours
+    loo_residuals: np.ndarray   # y - prediction without the point
+    loo_rms: float              # RMS of loo_residuals [1]
+    spacing: float              # 90th percentile of the nearest-neighbour distances of the fitted points
+    nn_distance: np.ndarray     # distance of each fitted point to its nearest other fitted point
+
+    @property
+    def n(self):
+        return self.y.size
+
+    @property
+    def usable(self):
+        """True when enough points were fitted for a leave-one-out check."""
+        return self.n >= MIN_POINTS and np.isfinite(self.loo_rms)
+
+
+def point_features(features):
+    """Stack a dict of per-point feature arrays into a (points x features) matrix [mixed units].
+
+    Positive features spanning more than a factor 10 are taken in log10 (swept intensities and
+    stiffnesses, the decay indicator); constant or all-NaN columns are dropped.
+    """
+    cols = []
+    for value in features.values():
+        v = np.asarray(value, dtype=float).reshape(-1)
+        fin = v[np.isfinite(v)]
+        if fin.size == 0 or np.ptp(fin) == 0:
+            continue
+        if fin.min() > 0 and fin.max() / fin.min() > 10:
+            v = np.log10(np.where(v > 0, v, np.nan))
+        cols.append(v)
+    n = np.asarray(next(iter(features.values()))).size if features else 0
+    return np.column_stack(cols) if cols else np.zeros((n, 0))
+
+
+def _distances(a, b):
+    return np.sqrt(np.maximum(np.sum(a * a, 1)[:, None] + np.sum(b * b, 1)[None, :] - 2 * a @ b.T, 0.0))
+
+
+def _neighbour_mean(d, y, w, k):
+    """Weighted mean of ``y`` over the ``k`` nearest columns of the distance matrix ``d`` (rows: targets);
+    weights ``w / (d + DISTANCE_FLOOR)``.  Returns the means and the neighbour indices."""
+    k = min(k, d.shape[1])
+    nearest = np.argsort(d, axis=1, kind="stable")[:, :k]
+    dn = np.take_along_axis(d, nearest, 1)
+    wn = w[nearest] / (dn + DISTANCE_FLOOR)
+    return np.sum(wn * y[nearest], 1) / np.sum(wn, 1), nearest
+
+
+def fit_correction(features, y, y_se=None):
+    """Fit ``y`` [1] (log ratio MCS / SL at the escalated points) on ``features`` (points x features).
+
+    ``y_se`` [1]: the Monte Carlo standard error of each ``y`` (default 0, floored at
+    :data:`NOISE_FLOOR`).  Rows with a non-finite value are dropped.
+
+    Notes
+    -----
+    Prediction at ``x``: ``sum_i w_i y_i / sum_i w_i`` over the ``k`` escalated points nearest to ``x``
+    in standardised features ``z_j = (x_j - mean_j) / sd_j``, ``w_i = 1 / (y_se_i^2 (d_i + d0))``
+    (``d0`` = :data:`DISTANCE_FLOOR`).
+    ``k`` minimises the leave-one-out RMS (each point predicted from the others).
+    """
+    x = np.asarray(features, dtype=float)
+    y = np.asarray(y, dtype=float).reshape(-1)
+    y_se = np.zeros_like(y) if y_se is None else np.asarray(y_se, dtype=float).reshape(-1)
+    ok = np.isfinite(y) & np.all(np.isfinite(x), axis=1) & np.isfinite(y_se)
+    x, y, y_se = x[ok], y[ok], np.maximum(y_se[ok], NOISE_FLOOR)
+    n, p = x.shape
+    mean = x.mean(axis=0) if n else np.zeros(p)
+    scale = x.std(axis=0) if n else np.ones(p)
+    scale = np.where(scale > 0, scale, 1.0)
+    z = (x - mean) / scale
+    if n < 2:
+        return Correction(mean, scale, z, y, y_se, 1, np.full(n, np.nan), np.inf, np.nan, np.full(n, np.inf))
+    d = _distances(z, z)
+    np.fill_diagonal(d, np.inf)                  # leave one out: a point is never its own neighbour
+    w = 1.0 / y_se ** 2
+    best = None
+    for k in NEIGHBOURS:
+        if k > n - 1:
+            break
+        pred, _ = _neighbour_mean(d, y, w, k)
+        res = y - pred
+        rms = float(np.sqrt(np.mean(res ** 2)))
+        if best is None or rms < best[0]:
+            best = (rms, k, res)
+    rms, k, res = best
+    nn = d.min(axis=1)
+    return Correction(mean, scale, z, y, y_se, k, res, rms, float(np.quantile(nn, 0.9)), nn)
+
+
+def predict_correction(correction, features):
+    """``(y, se, reached)`` at the points of ``features`` (points x features).
+
+    ``se`` [1]: ``sqrt(mean((e_loo,i max(1, d_i / nn_i))^2) + mean((y_i - y)^2))`` over the neighbours
+    ``i`` used — their own leave-one-out errors ``e_loo,i`` (measured at their nearest-neighbour
+    distance ``nn_i``, scaled to the distance ``d_i`` of the point) and their disagreement at the
+    point —, floored at :data:`NOISE_FLOOR`; ``reached``: the nearest escalated point
+    is within :data:`REACH` spacings and the features are finite.
+    """
+    x = np.asarray(features, dtype=float)
+    z = (x - correction.mean) / correction.scale
+    finite = np.all(np.isfinite(z), axis=1)
+    n = x.shape[0]
+    y, se = np.full(n, np.nan), np.full(n, np.nan)
+    reached = np.zeros(n, dtype=bool)
+    if correction.n == 0 or not finite.any():
+        return y, se, reached
+    d = _distances(z[finite], correction.z)
+    pred, nearest = _neighbour_mean(d, correction.y, 1.0 / correction.y_se ** 2, correction.k)
+    y[finite] = pred
+    # the neighbours' own leave-one-out errors, and how much they disagree with each other here
+    # a leave-one-out residual was measured at the neighbour's own nearest-neighbour distance: for a point
+    # farther away it is scaled up linearly with the distance (a smooth correction changes linearly)
+    far = np.maximum(np.take_along_axis(d, nearest, 1) / np.maximum(correction.nn_distance[nearest], DISTANCE_FLOOR),
+                     1.0)
+    local = np.mean((correction.loo_residuals[nearest] * far) ** 2, axis=1)
+    spread = np.mean((correction.y[nearest] - pred[:, None]) ** 2, axis=1)
+    se[finite] = np.maximum(np.sqrt(local + spread), NOISE_FLOOR)
+    reach = REACH * correction.spacing if np.isfinite(correction.spacing) and correction.spacing > 0 else np.inf
+    reached[finite] = d.min(axis=1) <= max(reach, 1e-9)
+    return y, se, reached
+
+
+def linearization_promises(trust, low, high, target):
+    """True where the trust rule promises the target: ``trusted`` and the predicted band within ``+-target``."""
+    trust = np.asarray(trust)
+    with np.errstate(invalid="ignore"):
+        return (trust == int(Trust.trusted)) & (np.maximum(np.abs(low), np.abs(high)) <= target)
+
+
+def best_estimates(sl_peak, status, trust, low, high, target, features, escalated, mc_peak, mc_se, mc_model):
+    """Best estimate of a peak variance at every point: ``(value, se, method, correction)``.
+
+    Parameters
+    ----------
+    sl_peak : linearization peak per point [rad2 or rad2 s-2].  status : :class:`PointStatus` codes.
+    trust, low, high : ``sl_trust`` and its band per point.  target : relative error aimed at [1].
+    features : (points x features) from :func:`point_features`.
+    escalated : flat indices of the points with Monte Carlo; ``mc_peak``, ``mc_se`` [same units]
+        and ``mc_model`` (:class:`EscalationModel`) there.
+
+    Returns
+    -------
+    value, se : per point [units of ``sl_peak``]; ``se`` NaN where method is ``unreliable``.
+    method : :class:`BestMethod` codes (int8), in this order of preference: Monte Carlo at the point
+        (if it has a finite peak); the linearization where the rule promises the target (se: half the
+        band); the corrected linearization ``SL exp(y)`` (se ``value x se_y``) where the correction is
+        usable and reaches the point; else ``unreliable`` (value: SL's where it ran to the end, NaN
+        where it stopped).
+    correction : the fitted :class:`Correction`.
+    """
+    sl = np.asarray(sl_peak, dtype=float).reshape(-1)
+    n = sl.size
+    ok = (np.asarray(status).reshape(-1) == int(PointStatus.ok)) & np.isfinite(sl) & (sl > 0)
+    low, high = np.asarray(low, dtype=float).reshape(-1), np.asarray(high, dtype=float).reshape(-1)
+    value = np.where(ok, sl, np.nan)
+    se = np.full(n, np.nan)
+    method = np.full(n, int(BestMethod.unreliable), dtype=np.int8)
+
+    promise = ok & linearization_promises(np.asarray(trust).reshape(-1), low, high, target)
+    # the band is of SL / MCS - 1: MCS = SL / (1 + e); its half width stands for two standard errors
+    se[promise] = (sl * (np.maximum(np.abs(low), np.abs(high)) / 2.0))[promise]
+    method[promise] = int(BestMethod.linearization)
+
+    escalated = np.asarray(escalated, dtype=int)
+    mc_peak, mc_se = np.asarray(mc_peak, dtype=float), np.asarray(mc_se, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.log(mc_peak / sl[escalated])
+        y_se = mc_se / mc_peak
+    correction = fit_correction(np.asarray(features)[escalated], np.where(ok[escalated], y, np.nan), y_se)
+    if correction.usable:
+        y_hat, y_se, reached = predict_correction(correction, features)
+        use = ok & ~promise & reached & (y_se <= MAX_SE)
+        value[use] = sl[use] * np.exp(y_hat[use])
+        se[use] = value[use] * y_se[use]
+        method[use] = int(BestMethod.corrected_linearization)
+
+    have = np.isfinite(mc_peak) & (mc_peak > 0)
+    at = escalated[have]
+    value[at], se[at] = mc_peak[have], mc_se[have]
+    method[at] = np.where(np.asarray(mc_model)[have] == int(EscalationModel.condensed),
+                          int(BestMethod.condensed_monte_carlo), int(BestMethod.coupled_monte_carlo))
+    return value, se, method, correction

@@ -1,0 +1,134 @@
+"""Where, with which model and with how many samples a sweep with ``[accuracy]`` runs Monte Carlo.
+
+* :func:`escalation_candidates` — the points where the trust rule cannot promise the target;
+* :func:`cover_points` — points covering the candidates evenly in feature space (greedy maximin,
+  starting from the worst corner), so that the correction (:mod:`screening.analysis.correction`)
+  learns from the whole untrusted region, not only its extreme;
+* :func:`escalation_model` — condensed Monte Carlo where the calibration shows the condensed model
+  within the target of the coupled one (only the linearization is in doubt), coupled otherwise;
+* :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run;
+* :func:`affordable_points` — how many points the budget covers at that many samples.
+
+Pure functions on numpy arrays (the calibration dataset is passed in); no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from screening.analysis.correction import linearization_promises
+from screening.analysis.trust import bed_law, p_bin, regime
+from screening.status import EscalationModel, PointStatus
+
+#: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
+PILOT_SAMPLES = 32
+#: Bounds of the samples of the full run at an escalated point.
+MIN_SAMPLES = 100
+MAX_SAMPLES = 4000
+#: At most this many escalated points (the correction needs a few dozen, not hundreds).
+MAX_POINTS = 48
+#: The budget is never spread over fewer points than this (the correction needs a few neighbours).
+MIN_COVER = 8
+#: The condensed model stands in for the coupled one where every calibration row of the (bed law,
+#: peak_p_uplift bin) cell, at least this many, has it within ``target / 2``.
+MIN_CONDENSED_ROWS = 2
+
+
+def escalation_candidates(status, trust, low, high, target):
+    """True at the points to escalate: every point where the rule does not promise ``target``
+    (:func:`~screening.analysis.correction.linearization_promises`), the stopped ones included
+    (Monte Carlo is their only estimate)."""
+    status = np.asarray(status).reshape(-1)
+    return (status != int(PointStatus.task_failed)) & ~linearization_promises(trust, low, high, target).reshape(-1)
+
+
+def cover_points(features, candidates, priority, count):
+    """Flat indices of up to ``count`` candidate points covering them in feature space.
+
+    Greedy maximin on the standardised features (NaN treated as the column mean): the first point
+    has the highest ``priority`` (e.g. ``peak_p_uplift``: the worst corner), each next one is the
+    candidate farthest from those already chosen (ties: lowest index).
+    """
+    idx = np.flatnonzero(np.asarray(candidates).reshape(-1))
+    if idx.size == 0 or count < 1:
+        return np.zeros(0, dtype=int)
+    x = np.asarray(features, dtype=float)[idx]
+    if x.shape[1]:
+        mean = np.nanmean(np.where(np.isfinite(x), x, np.nan), axis=0)
+        mean = np.where(np.isfinite(mean), mean, 0.0)
+        x = np.where(np.isfinite(x), x, mean)
+        sd = x.std(axis=0)
+        x = (x - x.mean(axis=0)) / np.where(sd > 0, sd, 1.0)
+    prio = np.nan_to_num(np.asarray(priority, dtype=float).reshape(-1)[idx], nan=-np.inf)
+    first = int(np.argmax(prio))
+    chosen = [first]
+    dist = np.sum((x - x[first]) ** 2, axis=1)
+    while len(chosen) < min(count, idx.size):
+        nxt = int(np.argmax(dist))
+        if dist[nxt] <= 0:          # duplicates in feature space: take the next by priority
+            rest = np.setdiff1d(np.arange(idx.size), chosen)
+            nxt = int(rest[np.argmax(prio[rest])])
+        chosen.append(nxt)
+        dist = np.minimum(dist, np.sum((x - x[nxt]) ** 2, axis=1))
+        dist[chosen] = -1.0
+    return idx[np.array(chosen)]
+
+
+def condensed_cells(calibration, target):
+    """``{(bed law, bin): True}`` for the cells where condensed Monte Carlo may stand in for coupled.
+
+    ``calibration``: the calibration dataset (:func:`screening.analysis.trust.shipped_calibration`).
+    A cell qualifies when it holds at least :data:`MIN_CONDENSED_ROWS` points with a condensed run,
+    each within ``target / 2`` of the coupled peak var_theta, none with coupled overturning.
+    """
+    err = (calibration["condensed_peak_var_theta"] / calibration["coupled_peak_var_theta"] - 1.0).values
+    over = (calibration["coupled_n_overturned"] / calibration["coupled_n_samples"]).values
+    p = calibration["sl_peak_p_uplift"].sel(condensation="paper").values
+    laws, bins = bed_law(calibration["eps"].values), p_bin(p)
+    cells = {}
+    for law in np.unique(laws):
+        for b in np.unique(bins[bins >= 0]):
+            sel = (laws == law) & (bins == b) & np.isfinite(err)
+            ok = sel.sum() >= MIN_CONDENSED_ROWS and np.all(np.abs(err[sel]) <= target / 2) and np.all(over[sel] == 0)
+            cells[(str(law), int(b))] = bool(ok)
+    return cells
+
+
+def escalation_model(indicators, status, condensation, eps, cells):
+    """:class:`EscalationModel` per point: condensed where only the linearization is in doubt
+    (paper condensation, neither lock-in nor near toppling, SL ran to the end, a qualifying cell of
+    :func:`condensed_cells`), coupled otherwise."""
+    reg = regime(indicators)
+    bins = p_bin(indicators["peak_p_uplift"])
+    law = np.broadcast_to(bed_law(eps), bins.shape)
+    cond = np.broadcast_to(np.asarray(condensation, dtype=str), bins.shape)
+    st = np.broadcast_to(np.asarray(status), bins.shape)
+    good = np.array([cells.get((str(la), int(b)), False) for la, b in zip(law.ravel(), bins.ravel())],
+                    dtype=bool).reshape(bins.shape)
+    use = good & (reg == "cell") & (cond == "paper") & (st == int(PointStatus.ok))
+    return np.where(use, int(EscalationModel.condensed), int(EscalationModel.coupled)).astype(np.int8)
+
+
+def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES):
+    """Samples for a relative standard error ``target / 2`` of the peak, from a pilot's relative SE.
+
+    Notes
+    -----
+    The standard error falls as ``1/sqrt(n)``: ``n = n0 (se0 / (target / 2))^2``, clipped to
+    ``[MIN_SAMPLES, most]``; a pilot without a finite SE asks for ``most``.
+    """
+    if not math.isfinite(pilot_rel_se) or pilot_rel_se <= 0:
+        return int(most)
+    n = pilot_samples * (pilot_rel_se / (target / 2.0)) ** 2
+    return int(min(max(math.ceil(n), MIN_SAMPLES), most))
+
+
+def affordable_points(budget_s, point_cost_s, most=MAX_POINTS):
+    """How many points a budget [s] covers at ``point_cost_s`` [s] each (pilot and full run), between
+    :data:`MIN_COVER` and ``most``: with a small budget, fewer points at the target's standard error
+    rather than many pilots of no use to anyone."""
+    if not (math.isfinite(point_cost_s) and point_cost_s > 0):
+        return int(most)
+    return int(min(max(math.floor(budget_s / point_cost_s), MIN_COVER), most))

@@ -1,0 +1,104 @@
+"""A sweep with ``[accuracy]`` escalates to Monte Carlo within its budget and stores consistent best estimates."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from helpers import GRID
+
+from screening.analysis.correction import linearization_promises
+from screening.status import BestMethod, EscalationModel, PointStatus
+from screening.workflow.study import parse_study
+from screening.workflow.sweep import run_sweep
+
+TARGET = GRID.replace("t_end = 4.0", "t_end = 3.0") + """
+[accuracy]
+target = 0.15
+budget_s = 4
+"""
+
+
+def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp_path):
+    study = parse_study(TARGET)
+    messages = []
+    report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=messages.append)
+    info = report.accuracy
+    assert info["n_escalated"] >= 1 and info["n_candidates"] >= info["n_escalated"]
+    assert info["cpu_s"] <= study.accuracy.budget_s
+    assert any(m.startswith("accuracy (target 0.15):") for m in messages)
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        assert float(ds.attrs["accuracy_cpu_s"]) <= 4.0
+        assert float(ds["esc_cpu_time"].sum()) == pytest.approx(float(ds.attrs["accuracy_cpu_s"]), rel=1e-9)
+        method = ds["best_method"].values.reshape(-1)
+        value = ds["best_peak_var_theta"].values.reshape(-1)
+        se = ds["best_peak_var_theta_se"].values.reshape(-1)
+        status = ds["status"].values.reshape(-1)
+        # the escalated points carry their own Monte Carlo, with the model that ran there
+        at = ds["esc_grid_index"].values
+        mc = np.where(ds["esc_model"].values == EscalationModel.condensed, BestMethod.condensed_monte_carlo,
+                      BestMethod.coupled_monte_carlo)
+        np.testing.assert_array_equal(method[at], mc)
+        np.testing.assert_array_equal(value[at], ds["esc_peak_var_theta"].values)
+        sl_dot = ds["var_theta_dot"].values.reshape(-1, ds.sizes["t"])[at]
+        np.testing.assert_array_equal(ds["esc_sl_peak_var_theta_dot"].values, np.nanmax(sl_dot, axis=1))
+        assert np.all(ds["esc_samples"].values >= 32)
+        assert np.all(ds["esc_n_used"].values + ds["esc_n_overturned"].values + ds["esc_n_diverged"].values
+                      == ds["esc_samples"].values)
+        # linearization only where the rule promises the target, never at a stopped point
+        promised = linearization_promises(ds["sl_trust"].values.reshape(-1), ds["sl_error_low"].values.reshape(-1),
+                                          ds["sl_error_high"].values.reshape(-1), 0.15)
+        assert np.all(promised[method == BestMethod.linearization])
+        assert np.all(status[method == BestMethod.linearization] == PointStatus.ok)
+        # a standard error exactly where an estimate is vouched for
+        reliable = method != BestMethod.unreliable
+        assert np.all(np.isfinite(se[reliable]) & (se[reliable] > 0)) and np.all(np.isnan(se[~reliable]))
+        assert ds["best_method"].attrs["flag_meanings"].split() == [m.name for m in BestMethod]
+        assert ds["best_peak_var_theta_se"].attrs["units"] == "rad2"
+
+
+
+def test_fragility_uses_monte_carlo_where_it_ran_and_the_band_elsewhere(client, tmp_path):
+    from screening.analysis.fragility import fragility_dataset, sample_exceedance
+
+    study = parse_study(TARGET)
+    run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        frag = fragility_dataset(ds, 0.05, "slenderness").load()
+        at = np.unravel_index(ds["esc_grid_index"].values, ds["status"].shape)
+        state = ds["esc_sample_state"].rename(esc_sample="sample")
+        level = frag["threshold_rad"].values[at] if frag["threshold_rad"].ndim else float(frag["threshold_rad"])
+        p_mc, se = sample_exceedance(ds["esc_peak_abs_theta"].rename(esc_sample="sample"), state == 1,
+                                     (state == 0) | (state == 1), xr.DataArray(level, dims="escalation"))
+    np.testing.assert_allclose(frag["best_p_exceed"].values[at], p_mc.values)
+    np.testing.assert_allclose(frag["best_p_exceed_high"].values[at], np.clip(p_mc + 2 * se, 0, 1))
+    reliable = frag["best_method"].values != BestMethod.unreliable
+    p, lo, hi = (frag[n].values[reliable] for n in ("best_p_exceed", "best_p_exceed_low", "best_p_exceed_high"))
+    assert np.all((lo <= p + 1e-12) & (p <= hi + 1e-12))
+    assert frag["best_p_exceed"].attrs["units"] == "1"
+
+
+def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkeypatch):
+    from screening.workflow import execution
+    from screening.workflow.sweep import _SweepRun
+
+    study = parse_study(TARGET)
+    real = execution.submit_escalation
+    calls = []
+    monkeypatch.setattr(execution, "submit_escalation", lambda *a, **k: calls.append(int(a[2])) or real(*a, **k))
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:              # everything computed, the file never moved into place
+        m.setattr(_SweepRun, "_finalize", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda msg: None)
+    first = set(calls)
+    calls.clear()
+    report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda msg: None)
+    # no point of the record runs again; the resumed run may spend what is left of the budget elsewhere
+    assert first and not first & set(calls)
+    assert report.accuracy["cpu_s"] <= study.accuracy.budget_s
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        assert first <= set(ds["esc_grid_index"].values.tolist())
+        assert np.all(np.isfinite(ds["esc_peak_var_theta"].values))

@@ -1,0 +1,59 @@
+"""Choice of the escalated points, their model and sample count (screening.analysis.escalation)."""
+
+import numpy as np
+import pytest
+
+from screening.analysis.escalation import (MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES, affordable_points, condensed_cells, cover_points,
+                                           escalation_candidates, escalation_model, samples_needed)
+from screening.analysis.trust import shipped_calibration
+from screening.status import EscalationModel, PointStatus, Trust
+
+
+def test_candidates_are_the_points_the_rule_does_not_promise():
+    status = np.array([0, 0, 0, 1, -1])
+    trust = np.array([Trust.trusted, Trust.trusted, Trust.check, Trust.untrusted, Trust.untrusted])
+    low, high = np.array([-0.05, -0.2, -0.05, np.nan, np.nan]), np.array([0.05, 0.05, 0.05, np.nan, np.nan])
+    assert escalation_candidates(status, trust, low, high, 0.15).tolist() == [False, True, True, True, False]
+
+
+def test_cover_points_start_at_the_worst_corner_and_spread_over_the_region():
+    g = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0), indexing="ij"), -1).reshape(-1, 2)
+    candidates = g[:, 0] >= 5                               # the untrusted half
+    priority = g[:, 0] + g[:, 1]
+    chosen = cover_points(g, candidates, priority, 4)
+    assert chosen[0] == np.argmax(np.where(candidates, priority, -1))      # the worst corner first
+    assert np.all(candidates[chosen])
+    pts = g[chosen]
+    # the four corners of the candidate region, not a cluster around the worst one
+    assert np.ptp(pts[:, 0]) == 4 and np.ptp(pts[:, 1]) == 9
+    assert cover_points(g, np.zeros(100, bool), priority, 4).size == 0
+    assert cover_points(g, candidates, priority, 500).size == candidates.sum()
+
+
+def test_samples_scale_with_the_inverse_square_of_the_target():
+    # relative SE 0.3 with 32 samples -> (0.3 / 0.075)^2 x 32 = 512 for a target of 0.15
+    assert samples_needed(0.3, 32, 0.15) == 512
+    assert samples_needed(0.01, 32, 0.15) == MIN_SAMPLES
+    assert samples_needed(5.0, 32, 0.01) == MAX_SAMPLES
+    assert samples_needed(float("nan"), 32, 0.15, most=700) == 700
+
+
+def test_condensed_only_where_the_calibration_shows_it_close_to_coupled():
+    cells = condensed_cells(shipped_calibration(), 0.15)
+    assert cells[("softening", 0)] and not cells[("hardening", 0)]       # paper condensation errs on hardening beds
+    ind = {"peak_p_uplift": np.array([0.001, 0.001, 0.001, 0.001, 0.001]),
+           "k_eq_margin": np.array([0.9, 0.9, 0.9, 0.9, 0.1]), "sigma_ratio": np.full(5, 0.01),
+           "decay_excess": np.array([1.0, 1.0, 1.0, 50.0, 1.0])}
+    models = escalation_model(ind, np.array([0, 0, 0, 0, 0]), np.array(["paper", "paper", "cubic", "paper", "paper"]),
+                              np.array([-6e5, 6e7, -6e5, -6e5, -6e5]), cells)
+    c, k = int(EscalationModel.condensed), int(EscalationModel.coupled)
+    assert models.tolist() == [c, k, k, k, k]          # hardening, cubic, lock-in, near toppling: coupled
+    stopped = escalation_model(ind, np.full(5, int(PointStatus.k_eq_negative)), "paper", -6e5, cells)
+    assert np.all(stopped == k)
+
+
+def test_affordable_points_trade_coverage_for_the_target():
+    assert affordable_points(600.0, 20.0) == 30
+    assert affordable_points(60.0, 20.0) == MIN_COVER           # never fewer than the correction needs
+    assert affordable_points(1e6, 1.0) == MAX_POINTS
+    assert affordable_points(60.0, float("nan")) == MAX_POINTS
