@@ -130,6 +130,36 @@ class _PendingVariable:
         return self.values[key]
 
 
+class _StoredVariable:
+    """An array of the store with the ``netCDF4.Variable`` calls :class:`ResultFile` makes
+    (``dimensions``, ``ncattrs``, ``getncattr``, item reads and writes)."""
+
+    __slots__ = ("array",)
+
+    def __init__(self, array):
+        self.array = array
+
+    @property
+    def dimensions(self):
+        return tuple(self.array.metadata.dimension_names or ())
+
+    @property
+    def shape(self):
+        return self.array.shape
+
+    def ncattrs(self):
+        return list(self.array.attrs)
+
+    def getncattr(self, name):
+        return self.array.attrs[name]
+
+    def __getitem__(self, key):
+        return self.array[key]
+
+    def __setitem__(self, key, value):
+        self.array[key] = value
+
+
 class ZarrDataset:
     """A zarr store with the methods of ``netCDF4.Dataset`` that :class:`ResultFile` calls.
 
@@ -180,7 +210,7 @@ class ZarrDataset:
             import zarr
 
             with zarr.config.set({"array.write_empty_chunks": True}):
-                self._arrays[name] = self.group[name]
+                self._arrays[name] = _StoredVariable(self.group[name])
         return self._arrays[name]
 
     def setncatts(self, attrs):
@@ -243,7 +273,7 @@ class ZarrDataset:
         ``slabs`` (tuples of slices; a file that is missing has size -1)."""
         files = {}
         for name in names:
-            arr = self[name]
+            arr = self[name].array
             for slab in slabs:
                 ranges = [range(s.start // c, (s.stop - 1) // c + 1) for s, c in zip(slab, arr.chunks)]
                 for index in np.ndindex(*[len(r) for r in ranges]):

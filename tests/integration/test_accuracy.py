@@ -18,15 +18,18 @@ budget_s = 4
 """
 
 
-def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp_path):
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp_path, suffix):
+    if suffix == ".zarr":
+        pytest.importorskip("zarr")
     study = parse_study(TARGET)
     messages = []
-    report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=messages.append)
+    report = run_sweep(study, tmp_path / f"a{suffix}", client=client, progress=False, log=messages.append)
     info = report.accuracy
     assert info["n_escalated"] >= 1 and info["n_candidates"] >= info["n_escalated"]
     assert info["cpu_s"] <= study.accuracy.budget_s
     assert any(m.startswith("accuracy (target 0.15):") for m in messages)
-    with xr.open_dataset(tmp_path / "a.nc") as ds:
+    with xr.open_dataset(tmp_path / f"a{suffix}") as ds:
         assert float(ds.attrs["accuracy_cpu_s"]) <= 4.0
         assert float(ds["esc_cpu_time"].sum()) == pytest.approx(float(ds.attrs["accuracy_cpu_s"]), rel=1e-9)
         method = ds["best_method"].values.reshape(-1)
