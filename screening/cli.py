@@ -423,8 +423,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
             raise SweepError(f"--dim {dim!r} is not a swept dimension of {result} "
                              f"(swept: {', '.join(grid) or 'none'})")
         dim = dim or "S0"
-        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
-        out = check_output_path(out or result.with_name(f"{stem}_fragility.nc"), inputs=(result,))
+        out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility.nc"), inputs=(result,))
         try:
             frag = fragility_dataset(ds, threshold, relative_to, method, dim).load()
             flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()

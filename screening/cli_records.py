@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
-                           announce_compilation, cli)
+                           _stem, announce_compilation, cli)
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -132,8 +132,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 
     result = Path(result)
     with open_result(result) as ds:
-        stem = result.name[:-3] if result.name.endswith(".nc") else result.name
-        out = check_output_path(out or result.with_name(f"{stem}_fragility_{im}.nc"))
+        out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility_{im}.nc"))
         try:
             frag, warnings = fragility_over_im(ds.load(), threshold, im, dim, relative_to, method, period)
         except (ValueError, KeyError) as exc:

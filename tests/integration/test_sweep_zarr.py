@@ -229,3 +229,10 @@ def test_dask_scheduler_and_worker_processes_write_a_zarr_result(scheduler_file,
     assert report.n_workers == 2 and report.status_counts == {"ok": 6}
     run_sweep(study, tmp_path / "local.nc", client=client, batch_size=3, progress=False, log=quiet)
     _same(tmp_path / "local.nc", tmp_path / "remote.zarr", ignore=("batch_size",))
+
+
+def test_fragility_of_a_zarr_result_is_named_after_its_stem(client, tmp_path):
+    study = parse_study(GRID, name="s", source="s.toml")
+    run_sweep(study, tmp_path / "r.zarr", client=client, batch_size=5, progress=False, log=quiet)
+    assert main(["fragility", str(tmp_path / "r.zarr"), "--threshold", "0.2", "--relative-to", "slenderness"]) == 0
+    assert (tmp_path / "r_fragility.nc").exists() and not (tmp_path / "r.zarr_fragility.nc").exists()
