@@ -308,11 +308,12 @@ def _json(value):
 
 # ----------------------------------------------------------------------------- reading and export
 def open_zarr_result(path):
-    """The result store at ``path`` opened lazily with xarray."""
+    """The result store at ``path`` opened lazily with xarray, as a netCDF result opens: arrays read on
+    access, not dask arrays (the readers' computations are numpy's)."""
     import xarray as xr
 
     with warnings_ignored():
-        return xr.open_zarr(path, zarr_format=ZARR_FORMAT, consolidated=None)
+        return xr.open_zarr(path, zarr_format=ZARR_FORMAT, consolidated=None, chunks=None)
 
 
 def read_attrs(path):
