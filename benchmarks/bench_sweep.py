@@ -17,7 +17,8 @@ is shown separately), finalisation, shutdown; plus the PNG figures once.
 also given as a ratio to the single-core solver rate measured in the same run (the same solver
 work in one process, no dask, no I/O).  ``--rss`` runs 2 workers at each grid side given and
 prints the peak resident memory of the client and of the largest worker process (psutil,
-sampled every 0.1 s) and writes ``outputs/cost_curve.png``.
+sampled every 0.1 s), the client's growth in bytes per added point (the summary arrays it keeps
+are ~10 bytes per point) and writes ``outputs/cost_curve.png``.
 
 Targets: >= 1,000 points/s end to end with 2 workers; >= 1.5x from 1 to 2 workers.
 The machine should be otherwise idle (2 cores): numbers on a shared machine are noisy.
@@ -157,7 +158,8 @@ def rss_curve(sides, histories, complevel, tmp):
               f"{rows[-1][4] / 2**20:.1f} MiB", flush=True)
     base = rows[0]
     for n, _, client, worker, _ in rows[1:]:
-        print(f"  {n} vs {base[0]} points: client RSS x{client / base[2]:.2f}, worker RSS x{worker / base[3]:.2f}")
+        print(f"  {n} vs {base[0]} points: client RSS x{client / base[2]:.2f} "
+              f"({(client - base[2]) / (n - base[0]):.0f} bytes per added point), worker RSS x{worker / base[3]:.2f}")
     try:
         import matplotlib
 

@@ -9,7 +9,10 @@ Storage: histories are ``float32`` (7 significant digits, half the disk and band
 ``float64``; the solver tolerance is ``1e-7`` anyway), everything else ``float64`` or
 integers; zlib level 1 with byte shuffle (``complevel``; compression is the client's main
 cost, about 1.3 s per 10,000 points of 401 output times); chunks are ``(1, ..., n_last, nt)``
-and the file is synced every :data:`SYNC_POINTS` points.  A 10,000-point sweep with 20 s
+for histories and C-order runs of about :data:`POINT_CHUNK` points for everything else, each
+variable with a chunk cache of :data:`CACHED_CHUNKS` chunks (the netCDF default, 64 MiB per
+variable, would keep the written chunks of the whole grid in memory: client memory independent of
+the number of points), and the file is synced every :data:`SYNC_POINTS` points.  A 10,000-point sweep with 20 s
 records at 0.05 s is about 55 MB.
 
 File layout (checked with the IOOS compliance-checker in strict mode):
@@ -50,6 +53,10 @@ from screening.workflow.grid import hyperslabs, parameter_table
 
 SYNC_POINTS = 2000            # points written between flushes of the file (compression overlaps compute)
 COMPLEVEL = 1
+#: Points per chunk of a per-point variable (about; whole trailing dimensions first).
+POINT_CHUNK = 2**14
+#: Chunks each variable keeps in its cache: those the batches in flight are filling.
+CACHED_CHUNKS = 4
 TITLE_FALLBACK = "Stochastic-linearization screening"
 
 #: Per-point variables besides the histories, in file order.
@@ -142,6 +149,25 @@ def history_chunks(shape, nt):
         return (nt,)
     last = min(shape[-1], max(1, 2**18 // nt))
     return (1,) * (len(shape) - 1) + (last, nt)
+
+
+def _point_chunks(shape, target=POINT_CHUNK):
+    """Chunks of a per-point variable on ``shape``: C-order runs of about ``target`` points, so that
+    consecutive batches fill one chunk after the other."""
+    chunks = []
+    size = 1
+    for n in reversed(shape):
+        c = max(1, min(n, target // size))
+        chunks.insert(0, c)
+        size *= c
+    return tuple(chunks)
+
+
+def _storage(chunks, itemsize):
+    """``createVariable`` keywords for ``chunks`` with a cache of :data:`CACHED_CHUNKS` of them."""
+    if not chunks:
+        return {}
+    return {"chunksizes": chunks, "chunk_cache": CACHED_CHUNKS * itemsize * math.prod(chunks)}
 
 
 def _slab_key(slab):
@@ -261,13 +287,15 @@ class ResultFile:
 
         for name in self.histories:
             self._variable(name, "f4", dims + ("t",), HISTORY_DTYPE(np.nan), coordinates, **self.zlib,
-                           shuffle=self.zlib["zlib"], chunksizes=history_chunks(self.shape, self.nt))
-        self._variable("status", "i1", dims, False, coordinates, **self.zlib)
-        self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib)
+                           shuffle=self.zlib["zlib"], **_storage(history_chunks(self.shape, self.nt), 4))
+        chunks = _point_chunks(self.shape)
+        self._variable("status", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
+        self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
         for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + study.derived_inputs:
-            self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib)
+            self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib,
+                           **_storage(chunks, 8))
         for name in SUMMARY_INTS:
-            self._variable(name, "i4", dims, False, coordinates, **self.zlib)
+            self._variable(name, "i4", dims, False, coordinates, **self.zlib, **_storage(chunks, 4))
         frag = study.fragility
         if frag is not None:
             nc.createDimension("threshold", len(frag.thresholds))
@@ -276,8 +304,9 @@ class ResultFile:
                          "long_name": "rotation threshold of p_exceed" + (
                              "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")})
             v[:] = np.asarray(frag.thresholds, dtype=float)
+            n_thr = len(frag.thresholds)
             p = self._variable("p_exceed", "f8", dims + ("threshold",), np.nan, coordinates, table=FRAGILITY,
-                               **self.zlib)
+                               **self.zlib, **_storage(_point_chunks(self.shape, POINT_CHUNK // n_thr) + (n_thr,), 8))
             p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
         nc.setncatts({**attrs, **labels})
 

@@ -198,7 +198,7 @@ class ZarrDataset:
         return self.dimensions[name]
 
     def createVariable(self, name, dtype, dims, fill_value=None, zlib=False, complevel=1, shuffle=False,
-                       chunksizes=None):
+                       chunksizes=None, chunk_cache=None):
         var = _PendingVariable(self, name, dtype, dims, fill_value, (zlib, complevel, shuffle))
         self._pending[name] = var
         return var

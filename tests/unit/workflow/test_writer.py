@@ -11,7 +11,8 @@ from screening.schema import SWEEP, TIME, attributes, global_attributes, grid_co
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
 from screening.workflow.study import parse_study
-from screening.workflow.writer import check_output_path, relative_peak_error
+from screening.workflow.writer import (CACHED_CHUNKS, ResultFile, _point_chunks, check_output_path,
+                                       relative_peak_error, result_attributes)
 
 SPOTS = '[mcs]\npoints = [{case = "soft_kt", S0 = 1e-4}, {case = "hard_white", S0 = 2.4e-3}]\nsamples = 3\n'
 K_SWEPT = GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]")
@@ -55,3 +56,32 @@ def test_output_path_checks(tmp_path):
         check_output_path(tmp_path)
     with pytest.raises(SweepError, match="output folder .* does not exist"):
         check_output_path(tmp_path / "missing" / "r.nc")
+
+
+@pytest.mark.parametrize("shape, target, expected", [
+    ((1000, 1000), 2**14, (16, 1000)),       # whole rows first
+    ((3, 50_000), 2**14, (1, 16384)),        # part of a long row
+    ((4, 5, 6), 2**14, (4, 5, 6)),           # a small grid is one chunk
+    ((7,), 2, (2,)),
+])
+def test_point_chunks_are_c_order_runs_of_about_the_target(shape, target, expected):
+    chunks = _point_chunks(shape, target)
+    assert chunks == expected
+    assert np.prod(chunks) <= max(target, shape[-1])
+
+
+def test_per_point_variables_have_bounded_chunks_and_chunk_cache(tmp_path):
+    """The netCDF default chunk cache (64 MiB per variable) would hold the whole grid's summaries
+    in client memory: every gridded variable gets a cache of a few of its own chunks."""
+    study = parse_study(CASES, name="w", source="w.toml")
+    path = write(study, tmp_path / "w.nc")
+    result = ResultFile(tmp_path / "x.nc", study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4))
+    try:
+        for name in ("t_stop", "status", "n_steps", "var_theta"):
+            v = result.nc[name]
+            size = np.prod(v.chunking()) * v.dtype.itemsize
+            assert v.get_var_chunk_cache()[0] == CACHED_CHUNKS * size
+    finally:
+        result.close()
+    with netCDF4.Dataset(path) as nc:
+        assert nc["t_stop"].chunking() == list(_point_chunks(study.shape))
