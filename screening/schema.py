@@ -119,7 +119,6 @@ ACCURACY = {
 }
 
 #: Sweep results: a point's status also says when its task failed.
-SWEEP = {"status": flag_attributes(PointStatus, "solver status of the point")}
 
 #: Monte Carlo ensembles (``monte_carlo``); in sweeps the same names carry the prefix ``mcs_``.
 MONTE_CARLO = {
@@ -264,12 +263,17 @@ INTENSITY = {
                  "flag_meanings": "ok non_positive_beta no_fit"},
 }
 
-#: Per-point inputs of a sweep: the intensity measures of each point's excitation, and ``S0`` where it
-#: follows from a target PGA (``excitation.pga`` in the study).
-SWEEP_INPUTS = {
+#: Per-point variables of a sweep that no other table declares: the status and the intensity
+#: measures of each point's excitation.
+SWEEP = {
+    "status": flag_attributes(PointStatus, "solver status of the point"),
     **{name: {**INTENSITY[name], "note": "band limit of the point's Monte Carlo synthesis "
                                          "(screening.solvers.synthesis.default_cutoff)"}
        for name in ("pga_median", "rms_acceleration", "arias_intensity")},
+}
+
+#: Model inputs stored per point where the study derives them: ``S0`` from a target PGA (``excitation.pga``).
+SWEEP_INPUTS = {
     "S0": {**PARAMETERS["S0"], "note": "from the target median PGA of the grid point (excitation.pga)"},
 }
 

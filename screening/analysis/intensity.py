@@ -217,7 +217,10 @@ def _per_unit_s0(excitation, values, t_end, cutoff):
                                           if env.kind == "exponential" else ()), float(t_end))
     unit = np.empty(values.shape + (3,))
     for index in np.ndindex(values.shape):
-        unit[index] = _unit_measures(*shape, float(omega[index]), float(zeta[index]), float(cut[index]))
+        try:
+            unit[index] = _unit_measures(*shape, float(omega[index]), float(zeta[index]), float(cut[index]))
+        except (ArithmeticError, ValueError):          # scales beyond float64 (see PointStatus.beyond_float_range)
+            unit[index] = np.nan
     return values, unit
 
 

@@ -70,12 +70,17 @@ def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
 
 
 def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
-    """:func:`default_cutoff` [rad/s] of every point of a block and bed with array fields."""
+    """:func:`default_cutoff` [rad/s] of every point of a block and bed with array fields (NaN where the
+    point's scales are beyond float64)."""
     from screening.model import Block, Foundation
 
-    return np.vectorize(lambda m, b, h, I_cm, g, k: default_cutoff(Block(m, b, h, I_cm, g), Foundation(k=k, lam=0.0),
-                                                                  factor))(
-        block.m, block.b, block.h, block.I_cm, block.g, foundation.k)
+    def one(m, b, h, I_cm, g, k):
+        try:
+            return default_cutoff(Block(m, b, h, I_cm, g), Foundation(k=k, lam=0.0), factor)
+        except (ArithmeticError, ValueError):
+            return np.nan
+
+    return np.vectorize(one, otypes=[float])(block.m, block.b, block.h, block.I_cm, block.g, foundation.k)
 
 
 def envelope_rate(envelope, t):

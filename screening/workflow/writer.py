@@ -291,7 +291,9 @@ class ResultFile:
         chunks = _point_chunks(self.shape)
         self._variable("status", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
         self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
-        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + study.derived_inputs:
+        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS:
+            self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib, **_storage(chunks, 8))
+        for name in study.derived_inputs:
             self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib,
                            **_storage(chunks, 8))
         for name in SUMMARY_INTS:
