@@ -218,10 +218,16 @@ def _per_unit_s0(excitation, values, t_end, cutoff):
     unit = np.empty(values.shape + (3,))
     for index in np.ndindex(values.shape):
         try:
-            unit[index] = _unit_measures(*shape, float(omega[index]), float(zeta[index]), float(cut[index]))
+            unit[index] = _unit_measures(*shape, _key(omega[index]), _key(zeta[index]), float(cut[index]))
         except (ArithmeticError, ValueError):          # scales beyond float64 (see PointStatus.beyond_float_range)
             unit[index] = np.nan
     return values, unit
+
+
+def _key(value):
+    """A cache key of a filter parameter: None for NaN (white noise), which never equals itself."""
+    value = float(value)
+    return None if math.isnan(value) else value
 
 
 @functools.lru_cache(maxsize=4096)

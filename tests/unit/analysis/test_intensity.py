@@ -122,3 +122,15 @@ def test_intensity_measures_per_case_excitation():
     assert float(im.pga_median.sel(case=1)) == pytest.approx(
         I.pga_median(KanaiTajimi(1e-4, 15.0, 0.6), 2.0, CUTOFF), rel=1e-9)
     assert "pga_median" in "\n".join(intensity_lines(white))
+
+
+def test_input_measures_evaluate_once_per_distinct_filter_and_band_limit():
+    """White noise has no filter parameters (NaN): the cache must still hit (NaN != NaN as a key)."""
+    I._unit_measures.cache_clear()
+    s0 = np.geomspace(1e-5, 1e-3, 50)
+    out = I.input_measures(WhiteNoise(s0), T_END, np.full(50, CUTOFF))
+    assert I._unit_measures.cache_info().misses == 1
+    np.testing.assert_allclose(out["pga_median"], I.pga_median(WhiteNoise(1.0), T_END, CUTOFF) * np.sqrt(s0),
+                               rtol=1e-12)
+    np.testing.assert_allclose(out["arias_intensity"], I.arias_intensity(WhiteNoise(1.0), T_END, CUTOFF) * s0,
+                               rtol=1e-12)
