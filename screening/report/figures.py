@@ -376,9 +376,18 @@ def _cells(ax, mask, **style):
     """Hatch the cells of a map where ``mask`` (rows y, columns x) is true."""
     if not mask.any():
         return
+    # one hatched region per connected patch (a contour of the mask at 1/2, which runs along the cell
+    # edges), not one hatched cell per point: a 316 x 316 map drew in 76 s per cell, under a second so
     ny, nx = mask.shape
-    ax.pcolor(np.arange(nx + 1) - 0.5, np.arange(ny + 1) - 0.5, np.ma.masked_where(~mask, np.ones(mask.shape)),
-              linewidth=0, **style)
+    padded = np.pad(mask.astype(float), 1, mode="edge")
+    x = np.concatenate(([-0.5], np.arange(nx), [nx - 0.5]))
+    y = np.concatenate(([-0.5], np.arange(ny), [ny - 0.5]))
+    hatch, edgecolor = style.pop("hatch"), style.pop("edgecolor")
+    face = style.pop("cmap").colors[0]
+    patch = ax.contourf(x, y, padded, levels=[0.5, 1.5], colors=[face], hatches=[hatch])
+    for collection in getattr(patch, "collections", [patch]):
+        collection.set_edgecolor(edgecolor)
+        collection.set_linewidth(0)
 
 
 def _map(ds, name, ydim, xdim, rest, ax, fig, response="var"):
