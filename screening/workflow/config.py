@@ -414,7 +414,38 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     case = Case(name=name, contact=contact, excitation=kind, envelope=envelope,
                 params=MappingProxyType(params), condensation=condensation)
     _check_condensation(case, sweeps, where)
+    _check_target_pga(case, sweeps, where)
     return case
+
+
+#: Target median PGA [m s-2] a study may give (``excitation.pga``): about 1e-7 g to 100 g.
+PGA_RANGE = (1e-6, 1e3)
+#: Largest band limit [rad/s] from which a target PGA is turned into S0 (physical beds: below 1e5).
+CUTOFF_LIMIT = 1e8
+
+
+def _check_target_pga(case, sweeps, where):
+    """A target PGA must lie in :data:`PGA_RANGE`, and every bed of the grid must have the finite band
+    limit from which its ``S0`` follows (:func:`screening.solvers.synthesis.default_cutoff`)."""
+    if "pga" not in case.params and "pga" not in sweeps:
+        return
+    from screening.solvers.synthesis import default_cutoff
+
+    values = sweeps["pga"] if "pga" in sweeps else [case.params["pga"]]
+    for v in values if values is not None else ():
+        if not PGA_RANGE[0] <= v <= PGA_RANGE[1]:
+            raise StudyError(f"{where}excitation.pga: must be a number in {PGA_RANGE[0]:g}..{PGA_RANGE[1]:g} m s-2 "
+                             f"(got {float(v)!r})")
+    beds = sweeps["k"] if sweeps.get("k") is not None else [case.params.get("k")]
+    for k in beds:
+        try:
+            cutoff = default_cutoff(_block(case.params), Foundation(k=k, lam=0.0))
+        except (ArithmeticError, ValueError):
+            cutoff = math.nan
+        if not (math.isfinite(cutoff) and 0.0 < cutoff <= CUTOFF_LIMIT):
+            raise StudyError(f"{where}excitation.pga: S0 cannot follow from a target PGA at k = {float(k)!r} (the band "
+                             f"limit of its Monte Carlo synthesis, {cutoff:.3g} rad/s, is not in 0..{CUTOFF_LIMIT:g} "
+                             "rad/s); give S0 instead")
 
 
 def _check_condensation(case, sweeps, where):

@@ -158,6 +158,12 @@ def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
     return p
 
 
+def refused_batch(message):
+    """The task of a batch whose models could not be built on the client: fails with ``message``, so
+    that its points get status ``task_failed`` like any failed batch."""
+    raise ValueError(message)
+
+
 def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=()):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
     out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}

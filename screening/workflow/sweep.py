@@ -270,8 +270,11 @@ class _SweepRun:
 
     # -- linearization batches
     def _submit(self, batch, suffix=""):
-        return execution.submit_batch(self.client, self.study, batch, target=self.target,
-                                      key=f"solve_batch-{self.token}-{batch.index:06d}{suffix}")
+        key = f"solve_batch-{self.token}-{batch.index:06d}{suffix}"
+        try:
+            return execution.submit_batch(self.client, self.study, batch, target=self.target, key=key)
+        except ValueError as exc:      # its models cannot be built (e.g. S0 from a target PGA at extreme scales)
+            return self.client.submit(execution.refused_batch, str(exc), key=key, pure=False)
 
     def _is_saved(self, batch):
         if self.target is not None:

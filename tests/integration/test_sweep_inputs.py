@@ -46,3 +46,26 @@ def test_intensity_measures_per_point_match_the_dataset_evaluation(client, tmp_p
         assert ds[name].attrs["units"] == units
         expected = independent[name].broadcast_like(ds[name]).transpose(*ds[name].dims)
         np.testing.assert_allclose(ds[name], expected, rtol=1e-9)
+
+
+def test_a_batch_whose_models_cannot_be_built_is_flagged_and_the_run_goes_on(client, tmp_path, monkeypatch):
+    """A ValueError while the client builds a batch's models (e.g. S0 from a target PGA at extreme
+    scales) fails that batch like a failed task (status task_failed, one warning), never the run."""
+    from screening.workflow import execution
+
+    real = execution.batch_models
+
+    def refuses_the_second(study, batch):
+        if batch.index == 1:
+            raise ValueError("parameter 'S0' must be a finite number > 0 (got nan)")
+        return real(study, batch)
+
+    monkeypatch.setattr(execution, "batch_models", refuses_the_second)
+    study = parse_study(GRID, name="s", source="s.toml")
+    messages = []
+    run_sweep(study, tmp_path / "r.nc", client=client, batch_size=4, progress=False, log=messages.append)
+    with xr.open_dataset(tmp_path / "r.nc") as ds:
+        status = ds["status"].values.reshape(-1)
+    np.testing.assert_array_equal(status[4:8], -1)
+    assert (status[:4] != -1).all() and (status[8:] != -1).all()
+    assert any("batch 1" in m and "must be a finite number" in m for m in messages)
