@@ -167,8 +167,10 @@ def ensemble_statistics(theta, theta_dot, uplift, used):
 def _show_progress(progress, n_samples, chunk_size):
     if progress is None:
         return n_samples > chunk_size and hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
+    if callable(progress):
+        return False                    # the caller shows it
     if not isinstance(progress, bool):
-        raise ValueError(f"parameter 'progress' must be None, True or False (got {progress!r})")
+        raise ValueError(f"parameter 'progress' must be None, True, False or a function (got {progress!r})")
     return progress
 
 
@@ -191,7 +193,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     dt : OUTPUT step [s]; output times are ``output_times(t_end, dt)``.  The integration
         step is adaptive and finer (see ``rtol``, ``h_max``).
     seed : integer >= 0; sample ``i`` uses ``numpy.random.default_rng([seed, i])``.
-    progress : None (a bar on stderr for multi-chunk runs on a terminal), True or False.
+    progress : None (a bar on stderr for multi-chunk runs on a terminal), True or False; or a function
+        called with the number of samples done after each chunk (a sweep's spot checks report so).
     condensation : ``"paper"`` (eqs. 24–25) or ``"cubic"`` (:mod:`screening.condensation.cubic`):
         the ``C(theta)``, ``K(theta)`` of ``model="condensed"``.  ``"cubic"`` with
         ``model="coupled"`` raises (the coupled model is not condensed).  With ``"cubic"`` on
@@ -278,6 +281,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
                             theta_dot[sl], z_cb[:hi - lo], z_cb_dot[:hi - lo], uplift[sl], peak[sl], status[sl],
                             reason[sl], n_acc[sl], n_rej[sl], h_min[sl])
             bar.update(hi - lo)
+            if callable(progress):
+                progress(hi)
     wall = time.perf_counter() - start
 
     overturned = status == kern.STATUS_OVERTURNED

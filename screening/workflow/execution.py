@@ -178,19 +178,21 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
     return out
 
 
-def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None):
+def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None,
+              progress=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
     ``condensation`` (a :class:`screening.condensation.Condensation`) applies to
     ``model="condensed"`` only (the coupled model has none).  ``linear = (t_out, rtol, max_steps,
     names)``: also solve the linearization at the point and return its histories ``names`` as
-    ``sl_<name>`` (float64; for a result that does not store them on the grid).
+    ``sl_<name>`` (float64; for a result that does not store them on the grid).  ``progress = (topic,
+    spot)``: the samples done are sent as worker events ``{"spot": spot, "done": n}`` on ``topic``.
     """
     from screening.solvers.montecarlo import monte_carlo
 
     kw = {"condensation": condensation} if model == "condensed" else {}
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=t_end, dt=dt,
-                     seed=seed, **kw)
+                     seed=seed, progress=_sample_events(progress), **kw)
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
     n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
     out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
@@ -230,6 +232,20 @@ def submit_escalation(client, study, flat_index, samples, model, key):
     return client.submit(escalation_task, *build_models(study.cases[case], values),
                          study.cases[case].condensation_model, int(samples), model, study.t_end, study.dt,
                          study.accuracy.seed, retries=TASK_RETRIES, pure=False, key=key)
+
+
+def _sample_events(progress):
+    """A ``monte_carlo`` progress function sending worker events, or False (outside a worker: nothing)."""
+    if progress is None:
+        return False
+    from distributed import get_worker
+
+    try:
+        worker = get_worker()
+    except ValueError:
+        return False
+    topic, spot = progress
+    return lambda done: worker.log_event(topic, {"spot": int(spot), "done": int(done)})
 
 
 def sample_state(overturned, diverged):
@@ -272,15 +288,16 @@ def submit_batch(client, study, batch, key, target=None):
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)
 
 
-def submit_spot(client, study, index, key):
-    """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times)."""
+def submit_spot(client, study, index, key, progress=None):
+    """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times);
+    ``progress = (topic, spot)``: its samples are reported as worker events on ``topic``."""
     case, values = point_values(study, index)
     spec = study.mcs
     names = spot_linear_names(study)
     linear = (study.times, study.rtol, study.max_steps, names) if names else None
     return client.submit(spot_task, *build_models(study.cases[case], values, study.t_end), study.cases[case].condensation_model,
-                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, retries=TASK_RETRIES,
-                         pure=False, key=key)
+                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, progress,
+                         retries=TASK_RETRIES, pure=False, key=key)
 
 
 # ============================================================================ cluster

@@ -35,6 +35,7 @@ import contextlib
 import datetime as _dt
 import os
 import sys
+import threading
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -188,6 +189,21 @@ def _write_error_message(out, exc):
     kept = len(list(partial.glob("batch-*.npz")) + list(partial.glob("done/batch-*.json"))) if partial.is_dir() else 0
     return (f"cannot write {where}: {reason}; the {kept} finished batch(es) are kept in {partial}: "
             "free some space or fix the permissions, then re-run the same command to resume")
+
+
+class SampleCount:
+    """Samples done per spot check, fed to a progress bar from the client's thread and from worker
+    events (the client's event loop thread): each spot only counts up, under one lock."""
+
+    def __init__(self, bar, n_spots):
+        self.bar, self.done, self.lock = bar, [0] * n_spots, threading.Lock()
+
+    def set(self, spot, done):
+        with self.lock:
+            step = max(int(done) - self.done[spot], 0)
+            self.done[spot] += step
+            if step:
+                self.bar.update(step)
 
 
 class _SweepRun:
@@ -395,33 +411,42 @@ class _SweepRun:
             self.result.set_attrs(mcs_note="no spot checks: no status-ok point")
             return 0
         token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"
+        topic = f"screening-spot-samples-{token}"
         results, failed, pending = [None] * len(spots), [False] * len(spots), {}
         for i, index in enumerate(spots):
             results[i] = store.load_spot(i, index, execution.failed_spot(study.times.size, spec.samples))
             if results[i] is None:
-                pending[execution.submit_spot(self.client, study, index, key=f"spot_check-{token}-{i:04d}")] = i
-        with Progress(len(spots), label=f"spot checks ({spec.model}, {spec.samples} samples)",
+                pending[execution.submit_spot(self.client, study, index, key=f"spot_check-{token}-{i:04d}",
+                                              progress=(topic, i))] = i
+        with Progress(len(spots) * spec.samples, label=f"spot checks ({len(spots)} x {spec.model}, samples)",
                       enabled=self.progress and bool(pending)) as bar:
-            bar.update(len(spots) - len(pending))
-            for fut in interruptible(as_completed(list(pending))):
-                i = pending.pop(fut)
-                try:
-                    results[i] = fut.result()
-                except Exception as exc:              # noqa: BLE001 - recorded as a failed spot check
-                    log(f"warning: spot check {i} failed: {exception_line(exc)}")
-                    results[i] = execution.failed_spot(study.times.size, spec.samples,
-                                                       execution.spot_linear_names(study))
-                    failed[i] = True
-                else:
-                    try:                              # the resume record only: the result is kept
-                        store.save_spot(i, spots[i], results[i])
-                    except OSError as exc:
-                        log(f"warning: cannot save the resume record of spot check {i} "
-                            f"({write_failure_reason(exc)}); its result is kept, an interrupted run "
-                            "would compute it again")
-                fut.release()
-                bar.update(1)
-                raise_if_interrupted()
+            samples = SampleCount(bar, len(spots))
+            for i in range(len(spots)):
+                if results[i] is not None:
+                    samples.set(i, spec.samples)
+            self.client.subscribe_topic(topic, lambda event: samples.set(event[1]["spot"], event[1]["done"]))
+            try:
+                for fut in interruptible(as_completed(list(pending))):
+                    i = pending.pop(fut)
+                    try:
+                        results[i] = fut.result()
+                    except Exception as exc:              # noqa: BLE001 - recorded as a failed spot check
+                        log(f"warning: spot check {i} failed: {exception_line(exc)}")
+                        results[i] = execution.failed_spot(study.times.size, spec.samples,
+                                                           execution.spot_linear_names(study))
+                        failed[i] = True
+                    else:
+                        try:                              # the resume record only: the result is kept
+                            store.save_spot(i, spots[i], results[i])
+                        except OSError as exc:
+                            log(f"warning: cannot save the resume record of spot check {i} "
+                                f"({write_failure_reason(exc)}); its result is kept, an interrupted run "
+                                "would compute it again")
+                    fut.release()
+                    samples.set(i, spec.samples)
+                    raise_if_interrupted()
+            finally:
+                self.client.unsubscribe_topic(topic)
         self.result.write_spots(spots, results, failed, spec)
         return len(spots)
 
