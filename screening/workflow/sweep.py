@@ -45,7 +45,8 @@ import numpy as np
 
 from screening import __version__
 from screening.status import PointStatus, Trust
-from screening.workflow import execution, limits
+from screening.workflow import execution
+from screening.workflow.accuracy import escalate
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
 from screening.workflow.interrupt import interruptible, raise_if_interrupted, shielded
@@ -56,10 +57,6 @@ from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, 
 from screening.workflow.zarrfile import is_zarr_path, zarr_batch_size
 
 MAX_FAILURE_MESSAGES = 5
-#: Resume records of escalated points are spot parts numbered from here (after any spot check).
-ESCALATION_RECORD = 5000
-#: A full Monte Carlo run is started only if its predicted CPU time times this still fits the budget.
-COST_SAFETY = 1.25
 #: Outstanding batch tasks per worker (bounds the memory of client and scheduler).
 IN_FLIGHT_PER_WORKER = 3
 
@@ -78,7 +75,7 @@ class SweepReport:
     status_counts: dict = field(default_factory=dict)
     #: points per trust flag of the linearization (:class:`screening.status.Trust`)
     trust_counts: dict = field(default_factory=dict)
-    #: ``[accuracy]``: what the escalation did (:meth:`_SweepRun._escalate`)
+    #: ``[accuracy]``: what the escalation did (:func:`screening.workflow.accuracy.escalate`)
     accuracy: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     n_workers: int = 0
@@ -169,18 +166,6 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     return report
 
 
-def _accuracy_line(info):
-    """One line: what the ``[accuracy]`` escalation covered and what it could not."""
-    methods = ", ".join(f"{name} {n}" for name, n in info["methods"].items())
-    left = info["n_candidates"] - info["n_escalated"]
-    return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise; "
-            f"Monte Carlo at {info['n_escalated']} ({info['n_coupled']} coupled, {info['n_condensed']} condensed; "
-            f"{info['n_short']} short of the target's standard error) in {info['cpu_s']:.1f} of "
-            f"{info['budget_s']:g} CPU s; {left} without Monte Carlo"
-            f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "
-            f"best estimates: {methods}")
-
-
 def _write_error_message(out, exc):
     """One line: what could not be written, why, and that the finished batches are kept."""
     partial = PartialStore(out).dir
@@ -243,7 +228,7 @@ class _SweepRun:
                 timings["write"] = self.write_time
                 t0 = time.perf_counter()
                 if study.accuracy is not None:
-                    self._escalate()
+                    escalate(self)
                 timings["accuracy"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 if study.mcs is not None:
@@ -449,199 +434,6 @@ class _SweepRun:
                 self.client.unsubscribe_topic(topic)
         self.result.write_spots(spots, results, failed, spec)
         return len(spots)
-
-    # -- [accuracy]: Monte Carlo where the rule cannot promise the target, best estimates everywhere
-    def _point_table(self):
-        """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
-        features of the correction, condensation and eps, and SL's peaks."""
-        from screening.analysis.trust import trust_indicators
-        from screening.workflow.grid import Batch, batch_models, batch_values
-
-        study, res = self.study, self.result
-        n, per_case = study.n_points, study.points_per_case
-        cols = {name: np.empty(n) for name in ("k_rest", "eps", "envelope_end")}
-        cond = np.empty(n, dtype=object)
-        swept = {name: np.empty(n) for name in study.swept_dims}
-        for c, case in enumerate(study.cases):
-            whole = Batch(0, c, c * per_case, (c + 1) * per_case)
-            block, foundation, excitation = batch_models(study, whole)
-            rows = slice(whole.lo, whole.hi)
-            cols["k_rest"][rows] = case.condensation_model.stiffness_at_rest(block, foundation)
-            cols["eps"][rows] = foundation.eps
-            q2 = np.asarray(excitation.envelope(study.times), dtype=float) ** 2
-            cols["envelope_end"][rows] = q2[-1] / max(q2.max(), 1e-300)
-            cond[rows] = case.condensation_model.name
-            for name, values in batch_values(study, whole).items():
-                swept[name][rows] = values
-        peak = res.read("peak_var_theta")
-        var_end = res.read("var_theta", -1) if "var_theta" in study.output.stored else np.full(n, np.nan)
-        ind = trust_indicators(res.peak_p_uplift, res.read("min_k_eq"), cols["k_rest"], peak, res.read("slenderness"),
-                               var_end, cols["envelope_end"])
-        dot = res.read("var_theta_dot", None) if "var_theta_dot" in study.output.stored else np.full(n, np.nan)
-        features = {**swept, **({"case": np.repeat(np.arange(len(study.cases)), per_case)}
-                                if study.has_case_dim else {}), **ind}
-        return {"status": res.status, "trust": res.sl_trust, "low": res.read("sl_error_low"),
-                "high": res.read("sl_error_high"), "indicators": ind, "features": features,
-                "condensation": cond.astype(str), "eps": cols["eps"], "peak_var_theta": peak,
-                "peak_var_theta_dot": dot}
-
-    def _escalate(self):
-        """Escalate, write the escalated points and the best estimates; fills ``report.accuracy``."""
-        from screening.analysis import escalation as esc
-        from screening.analysis.correction import best_estimates, point_features
-        from screening.analysis.trust import shipped_calibration
-        from screening.status import BestMethod, EscalationModel
-
-        study, acc = self.study, self.study.accuracy
-        pts = self._point_table()
-        features = point_features(pts["features"])
-        candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
-        order = esc.cover_points(features, candidates, self.result.peak_p_uplift, esc.MAX_POINTS)
-        models = esc.escalation_model(pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
-                                      esc.condensed_cells(shipped_calibration(), acc.target))[order]
-        results, spent, failed = self._escalation_runs(order, models)
-        done = [j for j in range(len(order)) if j in results]
-        escalated, models = order[done], models[done]
-        runs = [results[j] for j in done]
-        self.result.write_escalation(escalated, models, runs)
-
-        best = {}
-        for name in ("var_theta", "var_theta_dot"):
-            mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
-            mc_se = np.array([r[f"peak_{name}_se"] for r in runs]) if runs else np.zeros(0)
-            value, se, method, corr = best_estimates(pts[f"peak_{name}"], pts["status"], pts["trust"], pts["low"],
-                                                     pts["high"], acc.target, features, escalated, mc, mc_se, models)
-            best[name] = (value, se, method, corr)
-        method = best["var_theta"][2]
-        self.result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
-
-        short = sum(1 for r in runs if not r["peak_var_theta_se"] <= acc.target / 2 * r["peak_var_theta"])
-        codes, counts = np.unique(method, return_counts=True)
-        info = {"target": acc.target, "budget_s": acc.budget_s, "cpu_s": spent,
-                "n_candidates": int(candidates.sum()), "n_selected": len(order), "n_escalated": len(runs),
-                "n_coupled": int(np.sum(models == EscalationModel.coupled)),
-                "n_condensed": int(np.sum(models == EscalationModel.condensed)), "n_short": short,
-                "n_failed": failed, "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
-                "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
-                "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
-        self.report.accuracy = info
-        self.result.set_attrs(
-            accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_cpu_s=spent,
-            accuracy_n_candidates=np.int32(info["n_candidates"]), accuracy_n_escalated=np.int32(len(runs)),
-            accuracy_n_short_of_target=np.int32(short), accuracy_n_unreliable=np.int32(info["n_unreliable"]),
-            accuracy_correction_loo_rms=info["loo_rms"],
-            accuracy_note=_accuracy_line(info))
-        self.log(_accuracy_line(info))
-
-    def _escalation_runs(self, order, models):
-        """Pilot then full Monte Carlo at the ``order`` ed points, wave by wave, within the CPU budget.
-
-        After the first wave, the points are cut to those the budget affords at the samples the target
-        needs (:func:`~screening.analysis.escalation.affordable_points`, in the covering order).
-        Returns ``({position: result}, CPU seconds spent, failed tasks)``; a point whose full run does not
-        fit in what is left of the budget keeps its pilot (fewer samples, larger standard error); points
-        after the budget ran out are not run.  Finished points are kept in the resume record.
-        """
-        from distributed import as_completed
-
-        from screening.analysis import escalation as esc
-        from screening.status import EscalationModel
-
-        study, store, acc = self.study, self.store, self.study.accuracy
-        most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)
-        token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"
-        results, spent, failed, rates = {}, 0.0, 0, []
-
-        def index_of(j):
-            return tuple(int(i) for i in np.unravel_index(order[j], study.shape))
-
-        for j in range(len(order)):
-            part = store.load_spot(ESCALATION_RECORD + j, index_of(j))
-            if part is not None and {"cpu_time", "peak_var_theta", "samples"} <= set(part):
-                results[j] = part
-                spent += float(part["cpu_time"])
-        todo = [j for j in range(len(order)) if j not in results]
-        loaded, costs = list(results), []
-
-        def submit(j, samples, what):
-            model = EscalationModel(int(models[j])).name
-            return execution.submit_escalation(self.client, study, int(order[j]), samples, model,
-                                               key=f"escalate-{what}-{token}-{j:04d}")
-
-        def gather(futures):
-            nonlocal failed
-            out = {}
-            for fut in as_completed(list(futures)):
-                j = futures[fut]
-                try:
-                    out[j] = fut.result()
-                except Exception as exc:          # noqa: BLE001 - the point stays uncovered
-                    failed += 1
-                    self.log(f"warning: Monte Carlo at escalated point {j} failed: {exception_line(exc)}")
-                fut.release()
-                raise_if_interrupted()
-            return out
-
-        if todo:
-            self.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
-        wave = 2 * max(self.report.n_workers, 1)
-        with Progress(len(todo), label="accuracy: Monte Carlo at escalated points",
-                      enabled=self.progress and bool(todo)) as bar:
-            w = 0
-            while w < len(todo):
-                pilots = {}
-                for j in todo[w:w + wave]:
-                    guess = max(rates, default=0.0) * esc.PILOT_SAMPLES * COST_SAFETY * (len(pilots) + 1)
-                    if spent + guess > acc.budget_s:
-                        break
-                    pilots[submit(j, esc.PILOT_SAMPLES, "pilot")] = j
-                if not pilots:
-                    break
-                pilot = gather(pilots)
-                spent += sum(float(r["cpu_time"]) for r in pilot.values())
-                needed = {}
-                for j, r in pilot.items():
-                    rate = float(r["cpu_time"]) / esc.PILOT_SAMPLES
-                    rates.append(rate)
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        rel = float(r["peak_var_theta_se"] / r["peak_var_theta"])
-                    needed[j] = (rate, esc.samples_needed(rel, esc.PILOT_SAMPLES, acc.target, most))
-                # as many points as the budget affords at the samples the target needs (coverage and
-                # accuracy both; never fewer than the correction needs), re-estimated after every wave
-                costs += [rate * (n * COST_SAFETY + esc.PILOT_SAMPLES) for rate, n in needed.values()]
-                affordable = esc.affordable_points(acc.budget_s, float(np.median(costs)))
-                todo = todo[:max(affordable - len(loaded), w + len(pilot))]
-                full, committed = {}, 0.0
-                for j in sorted(pilot):
-                    rate, n = needed[j]
-                    # a fair share of what is left for each point still to run
-                    share = (acc.budget_s - spent - committed) / max(len(todo) - todo.index(j), 1)
-                    n = min(n, int(share / max(rate * COST_SAFETY, 1e-12)))
-                    cost = rate * n * COST_SAFETY
-                    if n >= 2 * esc.PILOT_SAMPLES and spent + committed + cost <= acc.budget_s:
-                        full[submit(j, n, "full")] = j
-                        committed += cost
-                    else:
-                        results[j] = pilot[j]
-                finished = gather(full)
-                for j in full.values():
-                    if j not in finished:             # the full run failed: the pilot stays
-                        results[j] = pilot[j]
-                        continue
-                    r = finished[j]
-                    spent += float(r["cpu_time"])
-                    r["cpu_time"] = np.float64(r["cpu_time"] + pilot[j]["cpu_time"])
-                    results[j] = r
-                for j in pilot:
-                    if j in results:
-                        try:
-                            store.save_spot(ESCALATION_RECORD + j, index_of(j), results[j])
-                        except OSError as exc:
-                            self.log(f"warning: cannot save the resume record of escalated point {j} "
-                                     f"({write_failure_reason(exc)})")
-                bar.update(len(todo[w:w + wave]))
-                w += wave
-        return results, spent, failed
 
     # -- the end
     def _finalize(self):
