@@ -411,7 +411,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
         from screening.cli_records import fragility_over_im_command
         return fragility_over_im_command(result, threshold, relative_to, method, dim, out, im or "sa", period)
     from screening.analysis.fragility import fragility_dataset
-    from screening.report.figures import plot_fragility
+    from screening.report.fragility_figures import plot_fragility
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import damaged_data_error, open_result
     from screening.workflow.writer import check_output_path

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.report.figures import _new_figure, save_figure
+from screening.report.figure_base import new_figure, save_figure
 
 REGIME_LABELS = {0: "full contact", 1: "uplift +", 2: "uplift -", 3: "flight"}
 
 
 def plot_simulation(ds, path):
     """Ground acceleration, ``theta / slenderness`` (with ``+-theta_ul``), ``z_cb`` and the contact regime."""
-    fig = _new_figure(8.0, 8.5)
+    fig = new_figure(8.0, 8.5)
     ax = fig.subplots(4, 1, sharex=True)
     t = ds["t"].values
     ax[0].plot(t, ds["ground_acceleration"].values / 9.80665, lw=0.7, color="0.3")
@@ -52,7 +52,7 @@ def plot_im_fragility(frag, path, max_curves=8):
     med = frag["median"].transpose(*other).values.reshape(-1)
     beta = frag["beta"].transpose(*other).values.reshape(-1)
     picks = np.unique(np.linspace(0, flat_p.shape[0] - 1, min(max_curves, flat_p.shape[0])).round().astype(int))
-    fig = _new_figure(7.0, 4.8)
+    fig = new_figure(7.0, 4.8)
     ax = fig.subplots()
     shape = [p.sizes[d] for d in other]
     for n, j in enumerate(picks):

@@ -13,7 +13,7 @@ def _fmt(value):
 
 def describe(ds, path="result"):
     """Plain-text summary of a result dataset (what ``screening info`` prints)."""
-    from screening.report.figures import grid_dims, grid_units, grid_values, point_label, spot_index
+    from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
 
     dims = grid_dims(ds)
     lines = [f"{path}: {ds.attrs.get('title', '')}",

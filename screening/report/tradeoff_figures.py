@@ -1,7 +1,7 @@
 """Figures of the speed-accuracy trade study: error vs cost, and where SL stays within tolerance.
 
 Matplotlib object API with the Agg canvas (no pyplot state); files are written atomically by
-:func:`screening.report.figures.save_figure`.
+:func:`screening.report.figure_base.save_figure`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from matplotlib.lines import Line2D
 
 from screening.analysis.metrics import classify_error, rule_error
 from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
-from screening.report.figures import save_figure
+from screening.report.figure_base import save_figure
 
 DPI = 130
 

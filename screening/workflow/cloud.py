@@ -259,11 +259,11 @@ def plot_cloud(ds, path):
     """The cloud (peak |theta| / slenderness against the IM) and the fitted fragility curve."""
     from scipy.special import ndtr
 
-    from screening.report.figures import _new_figure, save_figure
+    from screening.report.figure_base import new_figure, save_figure
 
     name = ds.attrs["intensity_variable"]
     x = ds[name].values
-    fig = _new_figure(7.0, 7.5)
+    fig = new_figure(7.0, 7.5)
     ax = fig.subplots(2, 1, sharex=True)
     slender = float(ds["slenderness"])
     ratio = np.where(ds["overturned"].values, np.nan, ds["peak_abs_theta"].values / slender)

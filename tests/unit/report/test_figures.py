@@ -1,4 +1,4 @@
-"""Figures (screening.report.figures) on synthetic result datasets of every grid shape."""
+"""Figures (screening.report: figures, spot_figures, fragility_figures) on synthetic result datasets of every grid shape."""
 
 import numpy as np
 import pytest
@@ -7,8 +7,9 @@ from matplotlib.image import imread
 
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.schema import LINEARIZATION as VARIABLES
-from screening.report.figures import (plot_histories, plot_peaks, plot_result, plot_spots, point_label, spot_file_label,
-                             representative_points)
+from screening.report.figure_base import point_label
+from screening.report.figures import plot_histories, plot_peaks, plot_result, representative_points
+from screening.report.spot_figures import plot_spots, spot_file_label
 from screening.schema import attributes
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -103,7 +104,7 @@ def test_labels_use_case_names_and_k_values():
 
 
 # ----------------------------------------------------------------------------- flagged and untrusted points
-from screening.report import figures  # noqa: E402
+from screening.report import figures, fragility_figures, spot_figures  # noqa: E402
 from screening.status import PointStatus, Trust  # noqa: E402
 
 
@@ -124,7 +125,8 @@ def _flagged(dims, sizes, spots=0):
 def drawn(monkeypatch):
     """The figures passed to ``save_figure`` (in order)."""
     figs = []
-    monkeypatch.setattr(figures, "save_figure", lambda fig, path: figs.append(fig))
+    for module in (figures, spot_figures, fragility_figures):
+        monkeypatch.setattr(module, "save_figure", lambda fig, path: figs.append(fig))
     return figs
 
 
@@ -185,7 +187,7 @@ def test_histories_and_spots_say_which_points_are_flagged_or_untrusted(drawn):
     assert labels[1].endswith("[flagged: k_eq_negative]") and labels[2].endswith("[linearization untrusted]")
     assert drawn[0].axes[0].get_lines()[2].get_linestyle() == "--"
     assert "untrusted 2" in drawn[0].get_suptitle()
-    figures.plot_spots(ds, "unused.png")
+    spot_figures.plot_spots(ds, "unused.png")
     titles = [ax.get_title() for ax in drawn[1].axes]
     assert "[linearization trusted]" in titles[0] and "[flagged: k_eq_negative]" in titles[2]
 
@@ -199,7 +201,7 @@ def test_fragility_monte_carlo_points_take_the_colour_of_their_curve(drawn):
                       coords={"spot_eps": ("spot", ds["eps"].values[[0, 1]]), "spot_S0": ("spot", ds["S0"].values[[2, 3]])},
                       attrs={"threshold": 0.02, "relative_to": "slenderness", "method": "vanmarcke"})
     frag["S0"].attrs["units"] = "m2 s-3"
-    figures.plot_fragility(frag, "S0", "unused.png", flags=ds[["status", "sl_trust"]])
+    fragility_figures.plot_fragility(frag, "S0", "unused.png", flags=ds[["status", "sl_trust"]])
     ax = drawn[0].axes[0]
     curves = {line.get_label(): line.get_color() for line in ax.get_lines() if line.get_label().startswith("eps=")}
     markers = [c for c in ax.containers]                                   # one errorbar per curve

@@ -1,0 +1,185 @@
+"""What every figure of a result shares: flag masks and their legend, grid labels, the response
+drawn, figure creation and the atomic PNG write.
+
+Every figure marks what is flagged or untrusted: points whose ``status`` is not ``ok`` are masked
+(never drawn as ordinary values) and marked (grey hatched cells, grey crosses), points whose
+linearization is ``untrusted`` (``sl_trust``, :class:`~screening.status.Trust`) are hatched or drawn
+hollow, with a legend and the counts in the title (:func:`flag_summary`).  The response is drawn as
+``var_theta`` [rad2], as ``sigma_theta`` [rad] or as a fraction of the slenderness angle
+(``response = "var" | "sigma" | "fraction"``, :func:`response_values`).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from screening.status import PointStatus, Trust
+
+DPI = 110
+
+#: How the rotation response is drawn: its variance, its standard deviation, or that as a fraction
+#: of the slenderness angle atan(b/h).
+RESPONSES = ("var", "sigma", "fraction")
+#: Marks of flagged (status != ok) and untrusted (sl_trust == untrusted) points.
+FLAGGED_HATCH, UNTRUSTED_HATCH = "xx", "////"
+FLAGGED_COLOR, UNTRUSTED_COLOR = "0.55", "C3"
+
+
+# ----------------------------------------------------------------------------- flags and response
+def point_flags(ds, index=None, order=None):
+    """``(flagged, untrusted)`` boolean arrays over the grid (or its slice ``index``, dims in ``order``):
+    status not ``ok``; status ``ok`` but the linearization ``untrusted`` (all False without ``sl_trust``)."""
+    def values(name):
+        da = ds[name].isel(index) if index else ds[name]
+        return np.asarray((da.transpose(*order) if order else da).values)
+
+    flagged = values("status") != PointStatus.ok
+    if "sl_trust" not in ds.variables:
+        return flagged, np.zeros_like(flagged)
+    return flagged, (values("sl_trust") == Trust.untrusted) & ~flagged
+
+
+def flag_summary(ds):
+    """``"status: ok 95, k_eq_negative 5; linearization vs coupled model: trusted 3, check 29, untrusted
+    63"``: the counts over the whole grid (trust: "not stored" for files without ``sl_trust``)."""
+    codes, counts = np.unique(np.asarray(ds["status"].values), return_counts=True)
+    names = {int(m): m.name for m in PointStatus}
+    status = ", ".join(f"{names.get(int(c), int(c))} {n}" for c, n in zip(codes, counts))
+    if "sl_trust" in ds.variables:
+        trust = np.asarray(ds["sl_trust"].values)
+        text = ", ".join(f"{m.name} {int(np.sum(trust == m))}" for m in Trust)
+    else:
+        text = "not stored"
+    return f"status: {status}; linearization vs coupled model: {text}"
+
+
+def point_flag_text(ds, index):
+    """`` [flagged: <status>]``, `` [linearization <trust>]`` or ``""`` for one grid point."""
+    code = int(np.asarray(ds["status"].isel(index).values))
+    if code != PointStatus.ok:
+        return f" [flagged: {PointStatus(code).name if code in set(map(int, PointStatus)) else code}]"
+    if "sl_trust" in ds.variables:
+        trust = int(np.asarray(ds["sl_trust"].isel(index).values))
+        return f" [linearization {Trust(trust).name if trust in set(map(int, Trust)) else trust}]"
+    return ""
+
+
+def response_values(ds, da, kind, index=None):
+    """``(DataArray, label)``: ``da`` (a ``var_theta`` [rad2], already sliced at ``index``) drawn as the
+    variance, as ``sigma_theta`` [rad] or as ``sigma_theta / atan(b/h)`` [1] (``kind`` in
+    :data:`RESPONSES`; the slenderness sliced at ``index`` too and broadcast by dimension name)."""
+    if kind == "var":
+        return da, "var_theta [rad2]"
+    sigma = np.sqrt(da.where(da >= 0))
+    if kind == "sigma":
+        return sigma, "sigma_theta [rad]"
+    if kind != "fraction":
+        raise ValueError(f"response must be one of {RESPONSES} (got {kind!r})")
+    if "slenderness" not in ds.variables:
+        raise ValueError("response 'fraction' needs the slenderness angle, which this result does not store")
+    slender = ds["slenderness"]
+    slender = slender.isel({d: i for d, i in (index or {}).items() if d in slender.dims})
+    return sigma / slender, "sigma_theta / atan(b/h) [1]"
+
+
+def flag_legend(fig, ds, flagged, untrusted, curves=False):
+    """The figure legend of the marks, with their counts."""
+    if curves:
+        handles = [Line2D([], [], ls="", marker="x", color=FLAGGED_COLOR, label=f"flagged (status != ok, not a value): "
+                                                                                 f"{int(np.sum(flagged))}"),
+                   Line2D([], [], ls="", marker="o", mfc="none", mec=UNTRUSTED_COLOR,
+                          label=f"linearization untrusted: {int(np.sum(untrusted))}")]
+    else:
+        handles = [Patch(facecolor="0.9", edgecolor=FLAGGED_COLOR, hatch=FLAGGED_HATCH,
+                         label=f"flagged (status != ok, not a value): {int(np.sum(flagged))}"),
+                   Patch(facecolor="none", edgecolor=UNTRUSTED_COLOR, hatch=UNTRUSTED_HATCH,
+                         label=f"linearization untrusted: {int(np.sum(untrusted))}")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
+
+
+def grid_dims(ds):
+    """The grid dimensions of a result (the dimensions of ``status``)."""
+    return tuple(ds["status"].dims)
+
+
+def grid_values(ds, dim):
+    """Coordinate values of grid dimension ``dim`` (``k`` lives in ``k_value``; cases: index)."""
+    name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
+    return np.asarray(ds[name].values)
+
+
+def grid_units(ds, dim):
+    name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
+    return ds[name].attrs.get("units", "")
+
+
+def spot_index(ds, i):
+    """Grid index dict of spot point ``i``."""
+    index = {}
+    for dim in grid_dims(ds):
+        if dim == "case":
+            index[dim] = int(ds["spot_case"].values[i])
+        else:
+            index[dim] = int(np.argmin(np.abs(grid_values(ds, dim) - ds[f"spot_{dim}"].values[i])))
+    return index
+
+
+def is_log_spaced(values):
+    values = np.asarray(values, dtype=float)
+    return values.size > 2 and np.all(values > 0) and values.max() / values.min() > 50
+
+
+def point_label(ds, index):
+    """``"eps=6e+07, S0=2.4e-05"`` (or the case name) for a grid index dict."""
+    parts = []
+    for dim, i in index.items():
+        if dim == "case" and "case_name" in ds:
+            parts.append(str(ds["case_name"].values[i]))
+        else:
+            parts.append(f"{dim}={float(grid_values(ds, dim)[i]):.3g}")
+    return ", ".join(parts) if parts else "single point"
+
+
+
+
+def new_figure(width, height):
+    fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def save_figure(fig, path):
+    """Write ``fig`` as PNG to ``path`` atomically (``<path>.tmp`` then rename): a failing write
+    (disk full, permission) leaves no partial file behind and raises the ``OSError``."""
+    import tempfile
+
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)   # never a planted link
+    tmp = Path(tmp)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fig.savefig(fh, format="png")
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def axis_label(ds, name):
+    units = ds[name].attrs.get("units")
+    return f"{name} [{units}]" if units else name

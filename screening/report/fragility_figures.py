@@ -1,0 +1,99 @@
+"""The fragility figure: exceedance probabilities over a swept intensity, their lognormal fit and the
+Monte Carlo probabilities at the spot points, flagged and untrusted points marked."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from screening.report.figure_base import (
+    FLAGGED_COLOR, UNTRUSTED_COLOR, flag_summary, grid_units, grid_values, is_log_spaced, new_figure,
+    point_flags, point_label, save_figure)
+
+def plot_fragility(frag, dim, path, max_curves=8, flags=None):
+    """Fragility curves: ``p_exceed`` of a :func:`screening.analysis.fragility.fragility_dataset` along
+    the swept intensity ``dim`` (lognormal fit dashed), with the Monte Carlo probabilities at
+    the spot points (+-2 standard errors) in the colour of the curve they lie on (black when that
+    curve is not drawn).  Up to ``max_curves`` curves, the other grid dimensions sampled evenly.
+    ``flags``: the result's ``status`` (and ``sl_trust``) on the same grid: flagged points are
+    crossed grey, untrusted ones drawn hollow, counted in the legend.  ``None`` if ``dim`` is not a
+    dimension of ``p_exceed``."""
+    from scipy.special import ndtr
+
+    p = frag["p_exceed"]
+    if dim not in p.dims:
+        return None
+    other = [d for d in p.dims if d != dim]
+    flat = p.transpose(*other, dim).values.reshape(-1, p.sizes[dim])
+    if flags is not None:
+        flagged, untrusted = (a.reshape(flat.shape) for a in point_flags(flags, None, (*other, dim)))
+    else:
+        flagged = untrusted = np.zeros(flat.shape, dtype=bool)
+    picks = np.unique(np.linspace(0, flat.shape[0] - 1, min(max_curves, flat.shape[0])).round().astype(int))
+    x = grid_values(frag, dim)
+    fig = new_figure(7.0, 5.4)
+    ax = fig.subplots()
+    shape = [p.sizes[d] for d in other]
+    median = frag["median"].transpose(*other).values.reshape(-1) if "median" in frag else None
+    beta = frag["beta"].transpose(*other).values.reshape(-1) if "beta" in frag else None
+    xs = np.geomspace(x.min(), x.max(), 200) if np.all(x > 0) else np.linspace(x.min(), x.max(), 200)
+    colour = {}
+    for n, j in enumerate(picks):
+        colour[int(j)] = f"C{n}"
+        index = dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
+        label = point_label(frag, index) if other else "P(|theta| > threshold)"
+        ax.plot(x, flat[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=label)
+        ax.plot(x[untrusted[j]], flat[j][untrusted[j]], "o", ms=7, mfc="none", mec=UNTRUSTED_COLOR, mew=1.2)
+        ax.plot(x[flagged[j]], flat[j][flagged[j]], "x", ms=7, color=FLAGGED_COLOR, mew=1.5)
+        if median is not None and np.isfinite(median[j]) and np.isfinite(beta[j]):
+            ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), "--", color=f"C{n}", lw=0.9,
+                    label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}")
+    if "mcs_p_exceed" in frag and f"spot_{dim}" in frag:
+        pm, se = frag["mcs_p_exceed"].values, frag["mcs_p_exceed_se"].values
+        curve = _spot_curves(frag, other, shape)
+        for c in sorted(set(curve.tolist())):
+            on = curve == c
+            drawn = c in colour
+            ax.errorbar(frag[f"spot_{dim}"].values[on], pm[on], yerr=2 * se[on], fmt="s", ms=6, capsize=3,
+                        color=colour.get(c, "k"), mfc="white" if drawn else "k", mew=1.5,
+                        label="Monte Carlo (+-2 se)" + (f": {point_label(frag, _curve_index(other, shape, c))}"
+                                                        if other else "")
+                              + ("" if drawn else " (curve not drawn)"))
+    if flags is not None:
+        ax.plot([], [], "x", color=FLAGGED_COLOR, label=f"flagged (status != ok): {int(flagged.sum())} of {flagged.size}")
+        ax.plot([], [], "o", mfc="none", mec=UNTRUSTED_COLOR, label=f"linearization untrusted: {int(untrusted.sum())}")
+    if is_log_spaced(x):
+        ax.set_xscale("log")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel(f"{dim} [{grid_units(frag, dim)}]")
+    ax.set_ylabel("probability of exceedance [1]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    rel = frag.attrs.get("relative_to", "None")
+    what = (f"{frag.attrs['threshold']:.3g} rad" if rel == "None"
+            else f"{frag.attrs['threshold']:.3g} x {rel}")
+    summary = f"\n{flag_summary(flags)}" if flags is not None else ""
+    fig.suptitle(f"Fragility: P(max |theta| > {what}) over the record ({frag.attrs.get('method', '')}){summary}",
+                 fontsize=8)
+    save_figure(fig, path)
+    return Path(path)
+
+
+def _curve_index(other, shape, j):
+    return dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
+
+
+def _spot_curves(frag, other, shape):
+    """Flat index (over the dims ``other``) of the fragility curve each spot point lies on."""
+    n = frag.sizes["spot"]
+    if not other:
+        return np.zeros(n, dtype=int)
+    position = []
+    for d in other:
+        if d == "case":
+            position.append(np.asarray(frag["spot_case"].values, dtype=int))
+        else:
+            grid = grid_values(frag, d)
+            position.append(np.abs(grid[None, :] - np.asarray(frag[f"spot_{d}"].values)[:, None]).argmin(axis=1))
+    return np.ravel_multi_index(position, shape)
