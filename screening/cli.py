@@ -66,24 +66,19 @@ class _Choice(click.Choice):
         return value
 
 
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise ValueError(f"must be an integer >= 1 (got {text!r})")
-    return value
+def _integer_in(low, high=None):
+    """Parser of an integer ``>= low`` (and ``<= high``) for :class:`_Checked`."""
+    allowed = f"an integer >= {low}" if high is None else f"an integer in {low}..{high}"
 
-
-def _worker_count(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= MAX_WORKERS:
-        raise ValueError(f"must be an integer in 0..{MAX_WORKERS} (got {text!r})")
-    return value
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            value = low - 1
+        if value < low or (high is not None and value > high):
+            raise ValueError(f"must be {allowed} (got {text!r})")
+        return value
+    return parse
 
 
 def _positive_float(text):
@@ -104,8 +99,8 @@ def _zlib_level(text):
 
 #: Most local worker processes a command starts.
 MAX_WORKERS = 256
-POSITIVE_INT = _Checked("integer", _positive_int)
-WORKER_COUNT = _Checked("integer", _worker_count)
+POSITIVE_INT = _Checked("integer", _integer_in(1))
+WORKER_COUNT = _Checked("integer", _integer_in(0, MAX_WORKERS))
 POSITIVE_FLOAT = _Checked("number", _positive_float)
 ZLIB_LEVEL = _Checked("0..9", _zlib_level)
 
@@ -345,6 +340,55 @@ def _write_error(path, exc):
     return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
 
 
+def stamp_fragility(frag, result, **options):
+    """Record in ``frag``'s attributes where it comes from: the result file, the package version and the
+    ``screening fragility`` command line (options that are ``None`` left out)."""
+    flags = "".join(f" --{name.replace('_', '-')} {value}" for name, value in options.items() if value is not None)
+    frag.attrs.update(source_result=str(result), screening_version=__version__,
+                      history=f"screening fragility {result}{flags}")
+
+
+def lognormal_fit_text(frag, over, units=""):
+    """``"lognormal fit over <over>: median <m> [units], beta <b> (medians over the other dims)"``, or ``""``
+    where ``frag`` holds no finite fit."""
+    if "median" not in frag or not np.isfinite(frag["median"].values).any():
+        return ""
+    return (f"lognormal fit over {over}: median {float(frag['median'].median()):.4g}{' ' + units if units else ''}, "
+            f"beta {float(frag['beta'].median()):.3f} (medians over the other dims)")
+
+
+def write_fragility_files(ds, out, draw, extras=(), warnings=()):
+    """Write ``ds`` as netCDF at ``out``, its figure ``draw(png_path)`` next to it and each of ``extras``
+    (``(name, path, write)``: ``write(path)``; a ``ValueError`` there becomes the warning "no <name> file");
+    prints the paths and the warnings.  All or nothing: the netCDF appears last, and on a failing write the
+    files this call created are removed before the one-line error."""
+    warnings = list(warnings)
+    tmp = _temporary_for(out)
+    made = []
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
+        for name, path, write in [("PNG", out.with_suffix(".png"), draw), *extras]:
+            existed = path.exists()
+            try:
+                written = write(path)
+            except ValueError as exc:
+                warnings.append(f"no {name} file: {exc}")
+                continue
+            if written is not None:
+                made.append((Path(written), existed))
+        _publish(tmp, out)
+    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
+        tmp.unlink(missing_ok=True)
+        for path, existed in made:
+            if not existed:
+                path.unlink(missing_ok=True)
+        raise _write_error(out, exc) from None
+    for path in [out, *(path for path, _ in made)]:
+        print(path)
+    for w in warnings:
+        _say(f"warning: {w}")
+
+
 def _plot(result, out_dir, response="var"):
     """All figures of ``result`` into ``out_dir`` (none left behind on failure, one-line errors)."""
     from screening.report.figures import plot_result
@@ -429,29 +473,11 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
             flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
-    frag.attrs.update(source_result=str(result), screening_version=__version__,
-                      history=f"screening fragility {result} --threshold {threshold}"
-                              + (f" --relative-to {relative_to}" if relative_to else ""))
-    tmp = _temporary_for(out)
-    encoding = {name: {"_FillValue": None} for name in frag.coords}
-    png_path = out.with_suffix(".png")
-    png_existed = png_path.exists()
-    try:
-        frag.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
-        png = plot_fragility(frag, dim, png_path, flags=flags)
-        _publish(tmp, out)                       # the netCDF appears last: both or neither
-    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
-        tmp.unlink(missing_ok=True)
-        if not png_existed:
-            png_path.unlink(missing_ok=True)
-        raise _write_error(out, exc) from None
-    print(out)
-    if png is not None:
-        print(png)
+    stamp_fragility(frag, result, threshold=threshold, relative_to=relative_to)
+    write_fragility_files(frag, out, lambda path: plot_fragility(frag, dim, path, flags=flags))
     p = frag["p_exceed"].values
-    _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}"
-         + (f"; lognormal median {dim} {float(frag['median'].median()):.3g}, "
-            f"beta {float(frag['beta'].median()):.2f} (medians over the other dims)" if "median" in frag else ""))
+    fit = lognormal_fit_text(frag, dim)
+    _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}" + (f"; {fit}" if fit else ""))
     if "best_p_exceed" in frag:
         from screening.status import BestMethod
 

@@ -9,10 +9,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 
 from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
-                           _stem, announce_compilation, cli)
+                           _stem, announce_compilation, cli, lognormal_fit_text, stamp_fragility,
+                           write_fragility_files)
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -31,25 +31,12 @@ def _overrides(pairs):
     return out
 
 
-def _write_fragility_files(ds, frag, out, plot, warnings):
-    """``ds`` as netCDF at ``out``, ``plot(ds, png)``, the fits of ``frag`` as CSV and (if OpenQuake knows the
-    IM) NRML next to it; prints the paths and the warnings."""
+def _fit_files(frag, out):
+    """The fits of ``frag`` as CSV and (where OpenQuake knows the IM) NRML next to ``out``."""
     from screening.analysis.im_fragility import write_csv, write_nrml
 
-    written = []
-    try:
-        ds.to_netcdf(out, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
-        written += [out, plot(ds, out.with_suffix(".png")), write_csv(frag, out.with_suffix(".csv"))]
-        try:
-            written.append(write_nrml(frag, out.with_suffix(".xml")))
-        except ValueError as exc:
-            warnings.append(f"no NRML file: {exc}")
-    except (OSError, RuntimeError) as exc:
-        raise _write_error(out, exc) from None
-    for path in written:
-        print(path)
-    for w in warnings:
-        _say(f"warning: {w}")
+    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
+            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
 
 
 def _read(record, dt, units):
@@ -128,7 +115,6 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     from screening.report.record_figures import plot_im_fragility
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
-    from screening import __version__
 
     result = Path(result)
     with open_result(result) as ds:
@@ -137,15 +123,11 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
             frag, warnings = fragility_over_im(ds.load(), threshold, im, dim, relative_to, method, period)
         except (ValueError, KeyError) as exc:
             raise CommandError(str(exc).strip("'\"")) from None
-    frag.attrs.update(source_result=str(result), screening_version=__version__,
-                      history=f"screening fragility {result} --threshold {threshold} --im {im}"
-                              + (f" --relative-to {relative_to}" if relative_to else "")
-                              + (f" --period {period}" if period else ""))
-    _write_fragility_files(frag, frag, out, plot_im_fragility, warnings)
-    med = frag["median"]
-    if np.isfinite(med.values).any():
-        _say(f"lognormal fit over {frag.attrs['intensity_variable']}: median {float(med.median()):.4g} "
-             f"{med.attrs['units']}, beta {float(frag['beta'].median()):.3f} (medians over the other dims)")
+    stamp_fragility(frag, result, threshold=threshold, im=im, relative_to=relative_to, period=period)
+    write_fragility_files(frag, out, lambda path: plot_im_fragility(frag, path), _fit_files(frag, out), warnings)
+    fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["median"].attrs["units"])
+    if fit:
+        _say(fit)
     return EXIT_OK
 
 
@@ -207,7 +189,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
             client = stack.enter_context(dask_client(workers, scheduler))
         ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client)
     frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
-    _write_fragility_files(ds, frag, out, plot_cloud, warnings)
+    write_fragility_files(ds, out, lambda path: plot_cloud(ds, path), _fit_files(frag, out), warnings)
     n = ds.sizes["record"]
     _say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
          f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['median']):.4g} "
