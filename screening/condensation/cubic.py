@@ -346,7 +346,6 @@ def damping_stiffness_jit(p, theta):
             stiffness)
 
 
-
 class CubicCondensation(Condensation):
     """Static vertical balance including the cubic term, in both regimes (module docstring)."""
 
@@ -357,23 +356,12 @@ class CubicCondensation(Condensation):
     def check(self, block, foundation):
         check_bearing(block, foundation)
 
-    def uplift_threshold(self, block, foundation):
-        return uplift_threshold(block, foundation)
-
-    def capacity_angle(self, block, foundation):
-        return capacity_angle(block, foundation)
-
-    def rocking_damping(self, theta, block, foundation):
-        return rocking_damping(theta, block, foundation)
-
-    def rocking_stiffness(self, theta, block, foundation):
-        return rocking_stiffness(theta, block, foundation)
-
-    def damping_at_rest(self, block, foundation):
-        return damping_at_rest(block, foundation)
-
-    def stiffness_at_rest(self, block, foundation):
-        return stiffness_at_rest(block, foundation)
+    uplift_threshold = staticmethod(uplift_threshold)
+    capacity_angle = staticmethod(capacity_angle)
+    rocking_damping = staticmethod(rocking_damping)
+    rocking_stiffness = staticmethod(rocking_stiffness)
+    damping_at_rest = staticmethod(damping_at_rest)
+    stiffness_at_rest = staticmethod(stiffness_at_rest)
 
     def sdof_kernel(self, block, foundation):
         return SdofKernel(damping_stiffness_jit, sdof_record(block, foundation))

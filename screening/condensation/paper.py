@@ -153,14 +153,9 @@ class PaperCondensation(Condensation):
     name = "paper"
     description = "quasi-static z_cb from the linear static balance (eqs. 17-25)"
 
-    def uplift_threshold(self, block, foundation):
-        return uplift_threshold(block, foundation)
-
-    def rocking_damping(self, theta, block, foundation):
-        return rocking_damping(theta, block, foundation)
-
-    def rocking_stiffness(self, theta, block, foundation):
-        return rocking_stiffness(theta, block, foundation)
+    uplift_threshold = staticmethod(uplift_threshold)
+    rocking_damping = staticmethod(rocking_damping)
+    rocking_stiffness = staticmethod(rocking_stiffness)
 
     def damping_at_rest(self, block, foundation):
         return damping_inner(block, foundation)
