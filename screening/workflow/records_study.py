@@ -16,7 +16,7 @@ from screening.workflow.config import NUMERIC, StudyError, build_models, parse_t
 def load_record_study(path):
     """``(study, records)``: a study file read for a record analysis — its ``[records]`` table (``None``
     if absent) taken out, and the ``[excitation]`` table optional (the records are the input)."""
-    from screening.workflow import study as study_module
+    from screening.workflow.study import study_from_tables
 
     text = read_study_text(path)
 
@@ -25,7 +25,7 @@ def load_record_study(path):
         if records is not None and not isinstance(records, dict):
             raise StudyError("records: must be a table")
         raw.setdefault("excitation", {"kind": "white", "S0": 1.0})     # unused by record analyses
-        return study_module._build(raw, text, Path(path).stem, str(path)), records
+        return study_from_tables(raw, text, Path(path).stem, str(path)), records
 
     return parse_toml(text, str(path), build)
 

@@ -270,11 +270,13 @@ def load_study(path):
 
 def parse_study(text, name="study", source="<string>"):
     """Validate study ``text`` (TOML) and return a :class:`Study`."""
-    return parse_toml(text, source, lambda raw: _build(raw, text, name, source))
+    return parse_toml(text, source, lambda raw: study_from_tables(raw, text, name, source))
 
 
 # ----------------------------------------------------------------------------- building
-def _build(raw, text, name, source):
+def study_from_tables(raw, text, name, source):
+    """The :class:`Study` of a parsed study file ``raw`` (its TOML tables; ``text`` is kept for the result's
+    provenance); raises :class:`StudyError` with one line naming the key."""
     check_keys(raw, _TOP_KEYS, "")
     title, description = title_and_description(raw, f"Stochastic-linearization screening: {name}")
     max_points = _run(raw)
