@@ -138,6 +138,30 @@ def compare_files(a, b, ignore=()):
         xr.testing.assert_identical(da.load(), db.load())
 
 
+def assert_cdo_form_of(result, cdo_file):
+    """``cdo_file`` (``screening export --layout cdo``) holds every number of ``result``: the same values
+    with ``t`` first, ``p_exceed`` as ``p_exceed_<i>``, the strings as attributes (JSON lists)."""
+    import json
+
+    import numpy as np
+
+    from screening.workflow.reader import open_result
+
+    with open_result(result) as ds, xr.open_dataset(cdo_file, decode_times=False) as cdo:
+        for name, v in ds.variables.items():
+            if v.dtype.kind in "OSU":
+                where = cdo.attrs.get(name) or next(c.attrs[name] for c in cdo.variables.values() if name in c.attrs)
+                assert json.loads(where) == [str(s) for s in np.atleast_1d(v.values)], name
+            elif name == "p_exceed":
+                for i in range(v.sizes["threshold"]):
+                    np.testing.assert_array_equal(cdo[f"p_exceed_{i}"].values, v.isel(threshold=i).values)
+            else:
+                assert cdo[name].dims == (("t",) if "t" in v.dims else ()) + tuple(d for d in v.dims if d != "t")
+                np.testing.assert_array_equal(cdo[name].transpose(*v.dims).values, v.values, err_msg=name)
+                assert cdo[name].attrs.get("units") == v.attrs.get("units") or name == "t", name
+        assert cdo["t"].attrs["units"].startswith("seconds since") and cdo.attrs["layout"].startswith("CDO")
+
+
 @contextlib.contextmanager
 def in_process_client(n_workers=2):
     """A dask client on an in-process cluster (threads, no dashboard): fast, and monkeypatches
