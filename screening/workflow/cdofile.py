@@ -91,10 +91,20 @@ def string_attribute_target(name, dims, variables):
     return None
 
 
-def _grid_blocks(shape, row_values):
-    """Hyperslabs of the grid ``shape`` holding about :data:`BLOCK_VALUES` values of ``row_values`` each."""
+def grid_chunks(shape, row_values):
+    """Chunks over the grid ``shape`` of a variable with ``row_values`` values per point (C-order runs of
+    points, :data:`BLOCK_VALUES` values at most when the shape allows), and the points per block: whole
+    chunks of about :data:`BLOCK_VALUES` values, so that every chunk is written once, in full."""
+    from screening.workflow.writer import POINT_CHUNK, _point_chunks
+
+    chunks = _point_chunks(shape, max(1, min(POINT_CHUNK, BLOCK_VALUES // max(row_values, 1))))
+    points = math.prod(chunks)
+    return chunks, points * max(1, BLOCK_VALUES // (max(row_values, 1) * points))
+
+
+def _grid_blocks(shape, step):
+    """Hyperslabs of the grid ``shape`` of ``step`` points each (C order)."""
     n = math.prod(shape)
-    step = max(1, BLOCK_VALUES // max(row_values, 1))
     for lo in range(0, n, step):
         yield from (slab for slab, _, _ in hyperslabs(lo, min(lo + step, n), shape))
 
@@ -105,8 +115,6 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     :func:`select`).  ``history``: the line appended to the ``history`` attribute.  Raises
     :class:`SweepError` if more than :data:`MAX_GRID_DIMS` grid dimensions remain."""
     import netCDF4
-
-    from screening.workflow.writer import _point_chunks
 
     ds = select(ds, selection or {})
     grid = tuple(ds["status"].dims)
@@ -145,12 +153,14 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             dims = ("t",) + tuple(d for d in v.dims if d != "t") if "t" in v.dims else v.dims
             chunks = {}
             if on_grid:
-                chunks = {"chunksizes": ((1,) if "t" in dims else ()) + _point_chunks(shape)}
+                row = math.prod(ds.sizes[d] for d in extra)
+                grid_chunk, step = grid_chunks(shape, row)
+                chunks = {"chunksizes": (1,) + grid_chunk if extra == ("t",)
+                          else grid_chunk + tuple(ds.sizes[d] for d in extra)}
             out = nc.createVariable(name, dtype, dims, fill_value=fill, **storage, **chunks)
             out.setncatts(attrs)
             if on_grid:
-                row = math.prod(ds.sizes[d] for d in extra)
-                for slab in _grid_blocks(shape, row):
+                for slab in _grid_blocks(shape, step):
                     values = _encoded(v[slab].values, dtype, fill)
                     if extra == ("t",):
                         out[(slice(0, nt),) + slab] = np.moveaxis(values, -1, 0)
@@ -178,15 +188,14 @@ def export_cdo(ds, dst, complevel, history, selection=None):
 
 def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shape, storage):
     """``name`` on ``grid + (threshold,)`` as the variables ``<name>_<i>``, one per threshold."""
-    from screening.workflow.writer import _point_chunks
-
-    chunks = {"chunksizes": _point_chunks(shape)} if shape else {}
+    grid_chunk, step = grid_chunks(shape, thresholds.size)
+    chunks = {"chunksizes": grid_chunk} if shape else {}
     outs = []
     for i, value in enumerate(np.asarray(thresholds.values, dtype=float)):
         out = nc.createVariable(f"{name}_{i}", dtype, grid, fill_value=fill, **storage, **chunks)
         out.setncatts({**attrs, **cdo_threshold_attributes(value, thresholds.attrs)})
         outs.append(out)
-    for slab in _grid_blocks(shape, len(outs)):
+    for slab in _grid_blocks(shape, step):
         values = _encoded(v[slab].values, dtype, fill)
         for i, out in enumerate(outs):
             out[slab if slab else ...] = values[..., i]

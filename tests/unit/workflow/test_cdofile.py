@@ -44,13 +44,19 @@ def test_strings_go_to_the_variable_they_name_or_their_dimension():
     assert string_attribute_target("label", ("point",), variables) is None
 
 
-@pytest.mark.parametrize("shape", [(7,), (3, 5), (2, 3, 4), ()])
-def test_grid_blocks_cover_every_point_once_in_bounded_blocks(monkeypatch, shape):
-    monkeypatch.setattr(cdofile, "BLOCK_VALUES", 12)
+@pytest.mark.parametrize("shape", [(7,), (3, 5), (2, 3, 4), (), (40, 1000)])
+@pytest.mark.parametrize("row", [1, 4, 401])
+def test_blocks_are_whole_chunks_of_bounded_size_covering_every_point_once(monkeypatch, shape, row):
+    monkeypatch.setattr(cdofile, "BLOCK_VALUES", 4000)
+    chunks, step = cdofile.grid_chunks(shape, row)
+    per_chunk = math.prod(chunks)
+    assert step % per_chunk == 0 and (step * row <= 4000 or step == per_chunk == 1)
     seen = np.zeros(shape, dtype=int)
-    for slab in cdofile._grid_blocks(shape, 4):               # 4 values per point: 3 points a block
+    for slab in cdofile._grid_blocks(shape, step):
         block = seen[slab if slab else ...]
-        assert max(block.size, 1) <= 3
+        assert max(block.size, 1) <= step
+        if block.size >= per_chunk:                     # only the last block of the grid is short
+            assert all(n % c == 0 or n == c for n, c in zip(block.shape, chunks)), (block.shape, chunks)
         seen[slab if slab else ...] += 1
     assert np.all(seen == 1) and seen.size == math.prod(shape)
 
