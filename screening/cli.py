@@ -524,6 +524,7 @@ def cmd_info(result):
 def cmd_export(result, out, complevel, layout, selection):
     import datetime as dt
 
+    from screening.workflow import cdofile
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
@@ -535,12 +536,10 @@ def cmd_export(result, out, complevel, layout, selection):
     if layout == "cf" and not is_zarr_store(result):
         raise SweepError(f"{result}: not a zarr store (export converts the result of 'screening run --out "
                          "RESULT.zarr' to netCDF; --layout cdo converts any result)")
-    ds = open_result(result)                      # a screening result? (before writing anything)
+    # a screening result? (before writing anything)
+    ds = cdofile.open_source(result) if layout == "cdo" else open_result(result)
     try:
-        if layout == "cdo":
-            from screening.workflow.cdofile import parse_selection
-
-            selected = parse_selection(selection, ds["status"].dims)
+        selected = cdofile.parse_selection(selection, ds["status"].dims)
         out = check_output_path(out, inputs=(result,))
         tmp = _temporary_for(out)
         now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
@@ -548,9 +547,7 @@ def cmd_export(result, out, complevel, layout, selection):
         history = f"{now}: screening export {result} {out}{options} (screening {__version__})"
         try:
             if layout == "cdo":
-                from screening.workflow.cdofile import export_cdo
-
-                export_cdo(ds, tmp, complevel, history, selected)
+                cdofile.export_cdo(ds, tmp, complevel, history, selected)
             else:
                 export_netcdf(result, tmp, complevel, history)
             _publish(tmp, out)

@@ -37,8 +37,26 @@ from screening.workflow.grid import hyperslabs
 MAX_GRID_DIMS = 3
 #: Values read and written per block (memory of the export independent of the grid size).
 BLOCK_VALUES = 2**22
+#: netCDF chunk cache [bytes] of each variable of the result read (the default, 64 MiB, would keep up to that
+#: much of every history read in memory; the export reads each chunk about once).
+SOURCE_CACHE_BYTES = 4 * 2**20
 LAYOUT = ("CDO: t first and unlimited (seconds since a placeholder reference date), no coordinates attributes, "
           "string variables as attributes, p_exceed one variable per threshold (screening export --layout cdo)")
+
+
+def open_source(path):
+    """The result at ``path`` (:func:`~screening.workflow.reader.open_result`), its netCDF variables with a
+    chunk cache of :data:`SOURCE_CACHE_BYTES`: the memory of an export does not grow with the grid."""
+    import netCDF4
+
+    from screening.workflow.reader import open_result
+
+    saved = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(SOURCE_CACHE_BYTES)
+    try:
+        return open_result(path)
+    finally:
+        netCDF4.set_chunk_cache(*saved)
 
 
 def parse_selection(items, grid):
@@ -155,8 +173,8 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             if on_grid:
                 row = math.prod(ds.sizes[d] for d in extra)
                 grid_chunk, step = grid_chunks(shape, row)
-                chunks = {"chunksizes": (1,) + grid_chunk if extra == ("t",)
-                          else grid_chunk + tuple(ds.sizes[d] for d in extra)}
+                sizes = (1,) + grid_chunk if extra == ("t",) else grid_chunk + tuple(ds.sizes[d] for d in extra)
+                chunks = {"chunksizes": sizes, "chunk_cache": 2 * dtype.itemsize * math.prod(sizes)}
             out = nc.createVariable(name, dtype, dims, fill_value=fill, **storage, **chunks)
             out.setncatts(attrs)
             if on_grid:
@@ -189,7 +207,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
 def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shape, storage):
     """``name`` on ``grid + (threshold,)`` as the variables ``<name>_<i>``, one per threshold."""
     grid_chunk, step = grid_chunks(shape, thresholds.size)
-    chunks = {"chunksizes": grid_chunk} if shape else {}
+    chunks = {"chunksizes": grid_chunk, "chunk_cache": 2 * dtype.itemsize * math.prod(grid_chunk)} if shape else {}
     outs = []
     for i, value in enumerate(np.asarray(thresholds.values, dtype=float)):
         out = nc.createVariable(f"{name}_{i}", dtype, grid, fill_value=fill, **storage, **chunks)
