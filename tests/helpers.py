@@ -28,6 +28,26 @@ t_end = 4.0
 dt = 0.05
 """
 
+
+def study_text(edits=None, append="", base=GRID):
+    """A study file derived from ``base`` (default :data:`GRID`): each ``key: value`` of ``edits`` (TOML
+    source text) replaces the value on the line ``key = ...`` (``None`` drops the line); a ``"table.key"``
+    whose key has no line yet is added at the end of ``[table]``; ``append`` (more tables) goes last."""
+    lines = base.strip("\n").split("\n")
+    for key, value in (edits or {}).items():
+        table, _, name = key.rpartition(".")
+        at = [i for i, line in enumerate(lines) if line.split(" = ", 1)[0] == name]
+        if at and value is None:
+            del lines[at[0]]
+        elif at:
+            lines[at[0]] = f"{name} = {value}"
+        else:
+            header = lines.index(f"[{table}]")
+            end = next((i for i in range(header + 1, len(lines)) if lines[i].startswith("[")), len(lines))
+            lines.insert(end, f"{name} = {value}")
+    return "\n" + "\n".join(lines) + "\n" + append
+
+
 #: A small speed-accuracy trade study: one white-noise family, 2 points, 2 s records.
 TRADE_STUDY = """
 title = "t"
