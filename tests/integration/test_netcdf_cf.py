@@ -259,7 +259,7 @@ def test_cdo_selects_along_every_swept_parameter(results, cdo_files, tmp_path):
 
 @pytest.mark.skipif(not CHECKER.exists(), reason="IOOS compliance-checker is not installed in this environment "
                                                  "(pip install compliance-checker)")
-@pytest.mark.parametrize("name", ["grid", "cases"])
+@pytest.mark.parametrize("name", ["grid", "cases", "single"])
 def test_the_cdo_form_passes_the_cf18_strict_check(cdo_files, name):
     proc = subprocess.run([str(CHECKER), "--test=cf:1.8", "--criteria=strict", str(cdo_files[name])],
                           capture_output=True, text=True, timeout=300)
