@@ -28,6 +28,10 @@ CDO_TIME = {"units": "seconds since 1970-01-01 00:00:00", "calendar": "standard"
             "axis": "T", "long_name": TIME["long_name"],
             "comment": "seconds since the start of the excitation; the reference date is a placeholder (CDO needs "
                        "one), the record has no calendar date"}
+#: Global attribute ``layout`` of the CDO form.
+CDO_LAYOUT = ("CDO: t first and unlimited (seconds since a placeholder reference date), no coordinates "
+              "attributes, string variables as attributes, p_exceed one variable per threshold "
+              "(screening export --layout cdo)")
 
 
 def _v(units, long_name, **extra):

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from screening.schema import CDO_TIME, cdo_threshold_attributes
+from screening.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
 from screening.workflow.errors import SweepError
 from screening.workflow.grid import hyperslabs
 
@@ -40,8 +40,6 @@ BLOCK_VALUES = 2**22
 #: netCDF chunk cache [bytes] of each variable of the result read (the default, 64 MiB, would keep up to that
 #: much of every history read in memory; the export reads each chunk about once).
 SOURCE_CACHE_BYTES = 4 * 2**20
-LAYOUT = ("CDO: t first and unlimited (seconds since a placeholder reference date), no coordinates attributes, "
-          "string variables as attributes, p_exceed one variable per threshold (screening export --layout cdo)")
 
 
 def open_source(path):
@@ -201,7 +199,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
                 nc[target].setncattr(name, text)
         attrs = dict(ds.attrs)
         attrs["history"] = f"{attrs['history']}\n{history}" if attrs.get("history") else history
-        nc.setncatts({**attrs, **labels, "layout": LAYOUT})
+        nc.setncatts({**attrs, **labels, "layout": CDO_LAYOUT})
 
 
 def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shape, storage):
