@@ -11,7 +11,9 @@ studies, in this process) and writes ``PATH`` (default
 with the same command resumes; an unchanged study reuses its finished result.
 
 ``--out PATH.zarr`` writes a zarr store instead, in place from the workers (large runs);
-``screening export RESULT.zarr RESULT.nc`` converts it to the netCDF file a direct run writes.
+``screening export RESULT.zarr RESULT.nc`` converts it to the netCDF file a direct run writes;
+``screening export RESULT OUT.nc --layout cdo [--select DIM=VALUE]`` writes the form CDO reads
+(:mod:`screening.workflow.cdofile`).
 
 ``screening plot RESULT.nc [--out-dir DIR] [--response var|sigma|fraction]`` writes the figures;
 ``screening info RESULT.nc`` prints the dimensions, swept parameters, status counts and summary statistics.
@@ -533,36 +535,56 @@ def cmd_info(result):
     return EXIT_OK
 
 
-@cli.command("export", help="convert a zarr result (run --out RESULT.zarr) to the netCDF file a direct run writes")
+@cli.command("export", help="convert a zarr result (run --out RESULT.zarr) to the netCDF file a direct run writes, "
+                             "or (--layout cdo) any result to a netCDF file laid out for CDO")
 @click.argument("result")
 @click.argument("out")
 @click.option("--complevel", type=ZLIB_LEVEL, default="1",
               help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
-def cmd_export(result, out, complevel):
+@click.option("--layout", type=_Choice(["cf", "cdo"]), default="cf",
+              help="cf (default): the netCDF file of a direct run, from a zarr result; cdo: time first, for CDO "
+                   "(from a netCDF or zarr result; README, 'Other tools')")
+@click.option("--select", "selection", multiple=True, metavar="DIM=VALUE",
+              help="--layout cdo: keep only the swept value of DIM nearest VALUE (a case by name or index); "
+                   "repeatable; CDO reads at most 3 swept dimensions")
+def cmd_export(result, out, complevel, layout, selection):
     import datetime as dt
 
+    from screening.workflow import cdofile
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
     from screening.workflow.zarrfile import export_netcdf, is_zarr_store
 
     result = Path(result)
-    if not is_zarr_store(result):
+    if layout == "cf" and selection:
+        raise SweepError("--select applies to --layout cdo only")
+    if layout == "cf" and not is_zarr_store(result):
         raise SweepError(f"{result}: not a zarr store (export converts the result of 'screening run --out "
-                         "RESULT.zarr' to netCDF)")
-    open_result(result).close()                   # a screening result? (before writing anything)
-    out = check_output_path(out, inputs=(result,))
-    tmp = _temporary_for(out)
-    now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
+                         "RESULT.zarr' to netCDF; --layout cdo converts any result)")
+    # a screening result? (before writing anything)
+    ds = cdofile.open_source(result) if layout == "cdo" else open_result(result)
     try:
-        export_netcdf(result, tmp, complevel, f"{now}: screening export {result} {out} (screening {__version__})")
-        _publish(tmp, out)
-    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
-        tmp.unlink(missing_ok=True)
-        raise _write_error(out, exc) from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        selected = cdofile.parse_selection(selection, ds["status"].dims)
+        out = check_output_path(out, inputs=(result,))
+        tmp = _temporary_for(out)
+        now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
+        options = "".join([" --layout cdo"] * (layout == "cdo") + [f" --select {item}" for item in selection])
+        history = f"{now}: screening export {result} {out}{options} (screening {__version__})"
+        try:
+            if layout == "cdo":
+                cdofile.export_cdo(ds, tmp, complevel, history, selected)
+            else:
+                export_netcdf(result, tmp, complevel, history)
+            _publish(tmp, out)
+        except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
+            tmp.unlink(missing_ok=True)
+            raise _write_error(out, exc) from None
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+    finally:
+        ds.close()
     print(out)
     return EXIT_OK
 

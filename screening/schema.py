@@ -22,6 +22,17 @@ REFERENCE = ("Nonlinear dynamics of rocking rigid blocks under stochastic base e
 #: Time coordinate: named ``t``; no ``axis = "T"`` in files (CF would then want "units since epoch").
 TIME = {"units": "s", "long_name": "time since the start of the excitation"}
 
+#: Time coordinate of the CDO form of a result (:mod:`screening.workflow.cdofile`): the same seconds from a
+#: placeholder reference date (CDO keeps sub-second output times only with one; xarray decodes it to datetimes).
+CDO_TIME = {"units": "seconds since 1970-01-01 00:00:00", "calendar": "standard", "standard_name": "time",
+            "axis": "T", "long_name": TIME["long_name"],
+            "comment": "seconds since the start of the excitation; the reference date is a placeholder (CDO needs "
+                       "one), the record has no calendar date"}
+#: Global attribute ``layout`` of the CDO form.
+CDO_LAYOUT = ("CDO: t first and unlimited (seconds since a placeholder reference date), no coordinates "
+              "attributes, string variables as attributes, p_exceed one variable per threshold "
+              "(screening export --layout cdo)")
+
 
 def _v(units, long_name, **extra):
     return {"units": units, "long_name": long_name, **extra}
@@ -359,6 +370,14 @@ def grid_coordinate_attributes(name):
         attrs["comment"] = (f"values in {units}; the units are on the auxiliary coordinate {name}_value (CF reads "
                             "a coordinate variable in units of pressure as a vertical axis)")
     return attrs
+
+
+def cdo_threshold_attributes(value, threshold_attrs):
+    """Attributes that say which rotation threshold a per-threshold variable of the CDO form is at
+    (``threshold_attrs``: those of the ``threshold`` coordinate)."""
+    units = threshold_attrs.get("units", "1")
+    return {"threshold": float(value), "threshold_units": units,
+            "threshold_long_name": threshold_attrs.get("long_name", "rotation threshold")}
 
 
 def attributes(name, table=None):

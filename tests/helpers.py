@@ -28,6 +28,26 @@ t_end = 4.0
 dt = 0.05
 """
 
+
+def study_text(edits=None, append="", base=GRID):
+    """A study file derived from ``base`` (default :data:`GRID`): each ``key: value`` of ``edits`` (TOML
+    source text) replaces the value on the line ``key = ...`` (``None`` drops the line); a ``"table.key"``
+    whose key has no line yet is added at the end of ``[table]``; ``append`` (more tables) goes last."""
+    lines = base.strip("\n").split("\n")
+    for key, value in (edits or {}).items():
+        table, _, name = key.rpartition(".")
+        at = [i for i, line in enumerate(lines) if line.split(" = ", 1)[0] == name]
+        if at and value is None:
+            del lines[at[0]]
+        elif at:
+            lines[at[0]] = f"{name} = {value}"
+        else:
+            header = lines.index(f"[{table}]")
+            end = next((i for i in range(header + 1, len(lines)) if lines[i].startswith("[")), len(lines))
+            lines.insert(end, f"{name} = {value}")
+    return "\n" + "\n".join(lines) + "\n" + append
+
+
 #: A small speed-accuracy trade study: one white-noise family, 2 points, 2 s records.
 TRADE_STUDY = """
 title = "t"
@@ -136,6 +156,30 @@ def compare_files(a, b, ignore=()):
             for name in ("history", "date_created", "batch_size", *ignore):
                 ds.attrs.pop(name, None)
         xr.testing.assert_identical(da.load(), db.load())
+
+
+def assert_cdo_form_of(result, cdo_file):
+    """``cdo_file`` (``screening export --layout cdo``) holds every number of ``result``: the same values
+    with ``t`` first, ``p_exceed`` as ``p_exceed_<i>``, the strings as attributes (JSON lists)."""
+    import json
+
+    import numpy as np
+
+    from screening.workflow.reader import open_result
+
+    with open_result(result) as ds, xr.open_dataset(cdo_file, decode_times=False) as cdo:
+        for name, v in ds.variables.items():
+            if v.dtype.kind in "OSU":
+                where = cdo.attrs.get(name) or next(c.attrs[name] for c in cdo.variables.values() if name in c.attrs)
+                assert json.loads(where) == [str(s) for s in np.atleast_1d(v.values)], name
+            elif name == "p_exceed":
+                for i in range(v.sizes["threshold"]):
+                    np.testing.assert_array_equal(cdo[f"p_exceed_{i}"].values, v.isel(threshold=i).values)
+            else:
+                assert cdo[name].dims == (("t",) if "t" in v.dims else ()) + tuple(d for d in v.dims if d != "t")
+                np.testing.assert_array_equal(cdo[name].transpose(*v.dims).values, v.values, err_msg=name)
+                assert cdo[name].attrs.get("units") == v.attrs.get("units") or name == "t", name
+        assert cdo["t"].attrs["units"].startswith("seconds since") and cdo.attrs["layout"].startswith("CDO")
 
 
 @contextlib.contextmanager

@@ -12,6 +12,12 @@ import numpy as np
 from screening.validation import checked
 
 
+#: Half-width ``b`` and height ``h`` [m] a block may have: a micrometre to a kilometre.  Far beyond, the
+#: condensation's ``b^2`` and ``b^3`` leave float64 (``b <= ~1e-162``: the uplift threshold divides by
+#: zero; ``b, h >= ~1e103``: ``b^3`` and ``h^2`` overflow).
+LENGTH_RANGE = (1e-6, 1e3)
+
+
 @dataclass(frozen=True)
 class Block:
     """Rigid rectangular block of width ``2 b`` and height ``2 h``.
@@ -19,8 +25,8 @@ class Block:
     Parameters
     ----------
     m : mass [kg], > 0.
-    b : half-width of the base [m], > 0.
-    h : half-height, i.e. height of the centre of mass above the base [m], > 0.
+    b : half-width of the base [m], in :data:`LENGTH_RANGE`.
+    h : half-height, i.e. height of the centre of mass above the base [m], in :data:`LENGTH_RANGE`.
     I_cm : polar moment of inertia about the centre of mass [kg m^2], > 0.
         Defaults to ``m (b^2 + h^2) / 3`` (uniform rectangle).
     g : gravity [m/s^2], > 0.
@@ -33,8 +39,13 @@ class Block:
     g: float = 9.81
 
     def __post_init__(self):
-        for name in ("m", "b", "h", "g"):
+        for name in ("m", "g"):
             object.__setattr__(self, name, checked(name, getattr(self, name), lower=0.0))
+        low, high = LENGTH_RANGE
+        for name in ("b", "h"):
+            object.__setattr__(self, name, checked(name, getattr(self, name), lower=low, lower_inclusive=True,
+                                                   upper=high, upper_inclusive=True,
+                                                   range_text=f"a length in {low:g}..{high:g} m"))
         if self.I_cm is None:
             object.__setattr__(self, "I_cm", self.m * (self.b**2 + self.h**2) / 3.0)
         else:

@@ -27,6 +27,7 @@ import numpy as np
 from screening import condensation as condensations
 from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation
+from screening.model.block import LENGTH_RANGE
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.solvers.timegrid import output_times
 from screening.workflow import limits
@@ -38,15 +39,16 @@ CONTACTS = ("hunt_crossley", "winkler")
 EXCITATIONS = ("white", "kanai_tajimi")
 ENVELOPES = ("exponential", "constant")
 
-#: Numeric model parameters: (table, lower bound, lower bound inclusive).
+#: Numeric model parameters: (table, lower bound, lower bound inclusive, upper bound or None).
 NUMERIC = {
-    "m": ("block", 0.0, False), "b": ("block", 0.0, False), "h": ("block", 0.0, False),
-    "I_cm": ("block", 0.0, False), "g": ("block", 0.0, False),
-    "k": ("foundation", 0.0, False), "lam": ("foundation", 0.0, True),
-    "c": ("foundation", 0.0, True), "eps": ("foundation", None, False),
-    "S0": ("excitation", 0.0, False), "pga": ("excitation", 0.0, False), "omega_g": ("excitation", 0.0, False),
-    "zeta_g": ("excitation", 0.0, False), "T1": ("excitation", 0.0, False),
-    "T2": ("excitation", 0.0, False),
+    "m": ("block", 0.0, False, None), "b": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
+    "h": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
+    "I_cm": ("block", 0.0, False, None), "g": ("block", 0.0, False, None),
+    "k": ("foundation", 0.0, False, None), "lam": ("foundation", 0.0, True, None),
+    "c": ("foundation", 0.0, True, None), "eps": ("foundation", None, False, None),
+    "S0": ("excitation", 0.0, False, None), "pga": ("excitation", 0.0, False, None),
+    "omega_g": ("excitation", 0.0, False, None), "zeta_g": ("excitation", 0.0, False, None),
+    "T1": ("excitation", 0.0, False, None), "T2": ("excitation", 0.0, False, None),
 }
 #: Keys of the model tables of a sweep study (other study kinds allow a subset).
 TABLE_KEYS = {
@@ -297,11 +299,11 @@ def model_tables(raw, allowed=TABLE_KEYS):
     return tables
 
 
-def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS):
+def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS, upper=None):
     """Values of a swept parameter from a list or a range table (validated; a range has at most
     ``max_num`` values, checked before the values are built)."""
     if isinstance(spec, list):
-        values = number_list(key, spec, lower=lower, inclusive=inclusive)
+        values = number_list(key, spec, lower=lower, inclusive=inclusive, upper=upper)
     else:
         check_keys(spec, _RANGE_KEYS, f"{key}.")
         for part in ("start", "stop", "num"):
@@ -315,8 +317,8 @@ def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS)
         log = spec.get("log", False)
         if not isinstance(log, bool):
             raise StudyError(f"{key}.log: must be true or false (got {type_name(log)})")
-        start = check_value(f"{key}.start", spec["start"], lower, inclusive)
-        stop = check_value(f"{key}.stop", spec["stop"], lower, inclusive)
+        start = check_value(f"{key}.start", spec["start"], lower, inclusive, upper)
+        stop = check_value(f"{key}.stop", spec["stop"], lower, inclusive, upper)
         if log:
             if start <= 0.0 or stop <= 0.0:
                 raise StudyError(f"{key}: log = true needs start > 0 and stop > 0 (got {start!r}, {stop!r})")
@@ -343,7 +345,7 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=lim
     for key, value in tbl.items():
         if key not in NUMERIC:
             continue
-        _, lower, inclusive = NUMERIC[key]
+        _, lower, inclusive, upper = NUMERIC[key]
         full = f"{where}{tname}.{key}"
         if isinstance(value, (list, dict)):
             if key not in sweepable:
@@ -351,10 +353,10 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=lim
                 raise StudyError(f"{full}: must be a number (got {type_name(value)}{only})")
             if sweeps is None:
                 raise StudyError(f"{full}: a case sets scalars only (sweep in the base tables)")
-            sweeps[key] = sweep_values(full, value, lower, inclusive, max_points)
+            sweeps[key] = sweep_values(full, value, lower, inclusive, max_points, upper)
             check_grid_size(sweeps, max_points, full)
         else:
-            scalars[key] = check_value(full, value, lower, inclusive)
+            scalars[key] = check_value(full, value, lower, inclusive, upper)
     return scalars
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from helpers import one_line_error
+from helpers import one_line_error, study_text
 
 from screening.cli import main
 from screening.workflow import limits
@@ -22,28 +22,9 @@ from screening.workflow.study import StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[2]
 
-STUDY = """
-title = "edges"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = [-6e5, 6e7]
-[excitation]
-kind = "white"
-S0 = {start = 2e-5, stop = 2.4e-3, num = 3, log = true}
-T1 = 4.0
-T2 = 2.0
-[time]
-t_end = 2.0
-dt = 0.05
-[mcs]
-samples = 4
-seed = 0
-"""
+STUDY = study_text({"title": '"edges"', "eps": "[-6e5, 6e7]",
+                    "S0": "{start = 2e-5, stop = 2.4e-3, num = 3, log = true}", "excitation.T1": "4.0",
+                    "excitation.T2": "2.0", "t_end": "2.0"}, "[mcs]\nsamples = 4\nseed = 0\n")
 
 R1000 = "{start = 1.0, stop = 2.0, num = 1000}"
 
@@ -72,6 +53,11 @@ BOUNDS = [
     ("B8 t_end = 1e6", [("t_end = 2.0", "t_end = 1e6")], "output steps; at most 100000"),
     ("B8 neighbour t_end only", [("t_end = 2.0\ndt = 0.05", "t_end = 1e5")], "time.t_end: t_end / dt = 2e+06"),
     # B16
+    # block lengths beyond float64 in the condensation (ZeroDivisionError / OverflowError in every batch)
+    ("b = 1e-171", [("b = 0.035", "b = 1e-171")], "block.b: must be a finite number >= 1e-06 and <= 1000 (got 1e-171)"),
+    ("b = 1e150", [("b = 0.035", "b = 1e150")], "block.b: must be a finite number >= 1e-06 and <= 1000"),
+    ("h = 1e150", [("h = 0.21", "h = 1e150")], "block.h: must be a finite number >= 1e-06 and <= 1000"),
+    ("h neighbour just above", [("h = 0.21", "h = 1000.5")], "block.h: must be a finite number >= 1e-06 and <= 1000"),
     ("B16 400-digit integer", [("m = 8.67", "m = " + "9" * 400)], "block.m: must be a finite number > 0 (got inf)"),
     ("B16 neighbour: 400-digit num", [("num = 3", "num = " + "9" * 400)],
      "excitation.S0.num: must be an integer in 1..1000000 (the grid limit run.max_points; got an integer of 400 digits)"),
@@ -699,6 +685,24 @@ def test_a_point_beyond_float_range_is_flagged_and_keeps_its_batch(name):
     np.testing.assert_array_equal(both["status"], [PointStatus.ok, PointStatus.beyond_float_range])
     for var in ("var_theta", "peak_var_theta", "n_steps"):
         np.testing.assert_array_equal(both[var][0], solo[var])
+
+
+@pytest.mark.parametrize("b, h", [(1e-6, 0.21), (1e3, 0.21), (0.035, 1e-6), (0.035, 1e3), (1e-6, 1e3), (1e3, 1e-6)])
+def test_blocks_at_the_ends_of_the_length_range_finish_with_a_status(b, h):
+    """Neighbours of b <= ~1e-170 (ZeroDivisionError) and b, h >= ~1e150 (OverflowError), now refused:
+    the extreme lengths allowed are integrated or flagged, through the whole batch task."""
+    from screening.status import PointStatus
+    from screening.workflow.execution import solve_batch
+    from screening.workflow.grid import batch_models, plan_batches
+
+    study = parse_study(STUDY.replace("b = 0.035", f"b = {b!r}").replace("h = 0.21", f"h = {h!r}"))
+    batch = plan_batches(study, study.n_points)[0]
+    with np.errstate(all="ignore"):
+        out = solve_batch(*batch_models(study, batch), study.cases[0].condensation_model, study.times, study.rtol,
+                          study.max_steps)
+    assert set(out["status"].tolist()) <= {int(s) for s in PointStatus if s >= PointStatus.ok}
+    ok = out["status"] == PointStatus.ok
+    assert np.all(np.isfinite(out["peak_var_theta"][ok]))
 
 
 @pytest.mark.parametrize("field, value", [("k", 1e100), ("k", 1e150), ("m", 1e-100), ("omega_g", 1e-100)])

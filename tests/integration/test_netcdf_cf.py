@@ -12,8 +12,9 @@ import xarray as xr
 
 from screening import __version__
 from screening.solvers.moments import HISTORY_VARIABLES
-from helpers import in_process_client, quiet
+from helpers import assert_cdo_form_of, in_process_client, quiet
 
+from screening.cli import main
 from screening.schema import DERIVED, LINEARIZATION, PARAMETERS
 
 VARIABLES = {**LINEARIZATION, **DERIVED}
@@ -176,14 +177,93 @@ def test_nco_selects_by_value_on_k(results, tmp_path):
         np.testing.assert_array_equal(ds["k"].values, [2.89e7])
 
 
-@pytest.mark.skipif(shutil.which("cdo") is None, reason="CDO is not installed")
-@pytest.mark.xfail(reason="known limitation (issue 13, open): CDO 2.1 takes variables as (time, z, y, x) and "
-                          "finds no time axis in t [s] (no reference date, as CF would then require), so it "
-                          "skips the (grid..., t) histories with '4 dimensional variables without time "
-                          "dimension are not supported'", strict=False)
-def test_cdo_reads_the_grid_without_warnings(results, tmp_path):
-    proc = subprocess.run(["cdo", "-s", "sinfon", str(results["grid"])], capture_output=True, text=True, timeout=60)
+@pytest.fixture(scope="module")
+def cdo_files(results, tmp_path_factory):
+    """``screening export --layout cdo`` of each result."""
+    folder = tmp_path_factory.mktemp("cdo")
+    paths = {}
+    for name, path in results.items():
+        paths[name] = folder / f"{name}_cdo.nc"
+        assert main(["export", str(path), str(paths[name]), "--layout", "cdo"]) == 0
+    return paths
+
+
+def _cdo(*args):
+    proc = subprocess.run(["cdo", "-s", *map(str, args)], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0 and "Warning" not in proc.stderr, proc.stderr
+    return proc.stdout
+
+
+def test_the_result_itself_is_not_for_cdo(results):
+    """Measured reasons for the CDO form (issue 13): CDO takes (time, z, y, x) and finds no time axis
+    in t [s]; the result is laid out for xarray and CF (t last, CF coordinates)."""
+    with netCDF4.Dataset(results["grid"]) as nc:
+        assert nc["var_theta"].dimensions[-1] == "t" and not nc.dimensions["t"].isunlimited()
+        assert nc["t"].units == "s" and "k_value" in nc["var_theta"].coordinates
+
+
+@pytest.mark.parametrize("name", ["grid", "cases", "single"])
+def test_the_cdo_form_holds_every_value(results, cdo_files, name):
+    assert_cdo_form_of(results[name], cdo_files[name])
+    with xr.open_dataset(cdo_files[name]) as ds:        # a user's xarray: t decoded from the placeholder date
+        assert ds["t"].dtype.kind == "M"
+        assert "coordinates" not in ds["var_theta"].encoding
+
+
+@pytest.mark.skipif(shutil.which("cdo") is None, reason="CDO is not installed")
+@pytest.mark.parametrize("name", ["grid", "cases", "single"])
+def test_cdo_lists_every_history_of_the_cdo_form_without_warnings(results, cdo_files, name):
+    _cdo("sinfon", cdo_files[name])
+    names = _cdo("showname", cdo_files[name]).split()
+    assert set(HISTORY_VARIABLES) <= set(names), names
+    assert ("status" in names) == (name != "single")      # CDO takes no scalar variables as fields
+    with xr.open_dataset(results[name]) as ds:
+        assert int(_cdo("ntime", cdo_files[name])) == ds.sizes["t"]
+
+
+@pytest.mark.skipif(shutil.which("cdo") is None, reason="CDO is not installed")
+def test_cdo_reduces_over_time_as_xarray_does(results, cdo_files, tmp_path):
+    out = tmp_path / "timmax.nc"
+    _cdo("timmax", "-selname,var_theta,k_eq", cdo_files["grid"], out)
+    mean = tmp_path / "timmean.nc"
+    _cdo("timmean", "-selname,var_theta", cdo_files["grid"], mean)
+    with xr.open_dataset(results["grid"]) as ds, xr.open_dataset(out, decode_times=False) as peak, \
+            xr.open_dataset(mean, decode_times=False) as avg:
+        for name in ("var_theta", "k_eq"):
+            assert peak[name].sizes["t"] == 1
+            np.testing.assert_array_equal(peak[name].isel(t=0).transpose(*ds["status"].dims).values,
+                                          ds[name].max("t").values)
+        np.testing.assert_allclose(avg["var_theta"].isel(t=0).values, ds["var_theta"].mean("t").values, rtol=1e-6)
+
+
+@pytest.mark.skipif(shutil.which("cdo") is None, reason="CDO is not installed")
+def test_cdo_selects_along_every_swept_parameter(results, cdo_files, tmp_path):
+    """k (the first swept parameter) is CDO's z axis: sellevel by value; eps and S0 its y and x:
+    selindexbox (1-based indices)."""
+    level, box = tmp_path / "level.nc", tmp_path / "box.nc"
+    _cdo("sellevel,2.89e7", cdo_files["grid"], level)
+    _cdo("selindexbox,2,3,1,1", "-selname,var_theta,status", cdo_files["grid"], box)
+    with xr.open_dataset(results["grid"]) as ds, xr.open_dataset(level, decode_times=False) as a, \
+            xr.open_dataset(box, decode_times=False) as b:
+        np.testing.assert_array_equal(a["k"].values, [2.89e7])
+        np.testing.assert_array_equal(a["var_theta"].isel(k=0).transpose("eps", "S0", "t").values,
+                                      ds["var_theta"].sel(k=2.89e7).values)
+        np.testing.assert_allclose(a["t"].values, ds["t"].values)      # sub-second times kept
+        picked = ds.isel(eps=[0], S0=[1, 2])
+        np.testing.assert_array_equal(b["S0"].values, picked["S0"].values)
+        np.testing.assert_array_equal(b["var_theta"].transpose("k", "eps", "S0", "t").values,
+                                      picked["var_theta"].values)
+        np.testing.assert_array_equal(b["status"].isel(t=0).values if "t" in b["status"].dims else b["status"].values,
+                                      picked["status"].values)
+
+
+@pytest.mark.skipif(not CHECKER.exists(), reason="IOOS compliance-checker is not installed in this environment "
+                                                 "(pip install compliance-checker)")
+@pytest.mark.parametrize("name", ["grid", "cases", "single"])
+def test_the_cdo_form_passes_the_cf18_strict_check(cdo_files, name):
+    proc = subprocess.run([str(CHECKER), "--test=cf:1.8", "--criteria=strict", str(cdo_files[name])],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and "All tests passed!" in proc.stdout, proc.stdout + proc.stderr
 
 
 def test_storage_layout_and_global_attributes(results):
@@ -241,3 +321,39 @@ def test_slenderness_is_stored_per_point_from_the_model(results):
         assert ds["slenderness"].dims == ds["theta_ul"].dims == ("k", "eps", "S0")
         np.testing.assert_array_equal(ds["slenderness"].values, np.arctan2(0.035, 0.21))
         assert {k: ds["slenderness"].attrs[k] for k in ("units", "long_name")} == attributes("slenderness")
+
+
+FOUR_SWEPT = SINGLE.replace("k = 2.89e7\nlam = 8.95e8", "k = [2.0e7, 2.89e7]\nlam = [8.95e8, 1e9]\neps = [0.0, 6e7]").replace(
+    "S0 = 1e-4", "S0 = [1e-4, 2e-4]")
+
+
+def test_the_cdo_form_of_four_swept_parameters_needs_a_selection(tmp_path, capsys):
+    """CDO holds 3 dimensions besides time: with 4 swept parameters the export names them and asks for
+    --select; with one fixed, CDO reads the rest and its values are those of ds.sel."""
+    from helpers import one_line_error
+
+    result = tmp_path / "four.nc"
+    with in_process_client(1) as client:
+        run_sweep(parse_study(FOUR_SWEPT, name="four", source="four.toml"), result, client=client, progress=False,
+                  log=quiet)
+    out = tmp_path / "four_cdo.nc"
+    assert main(["export", str(result), str(out), "--layout", "cdo"]) == 2
+    line = one_line_error(capsys.readouterr().err)
+    assert "at most 3 dimensions besides time" in line and "(k, lam, eps, S0)" in line and "--select k=2e+07" in line
+    assert not out.exists()
+    for bad, said in ((["--select", "m=1"], "one of the swept dimensions (k, lam, eps, S0)"),
+                      (["--select", "k=nan"], "finite number"), (["--select", "k"], "expected DIM=VALUE")):
+        assert main(["export", str(result), str(out), "--layout", "cdo", *bad]) == 2
+        assert said in one_line_error(capsys.readouterr().err)
+    assert main(["export", str(result), str(out), "--select", "lam=1e9"]) == 2
+    assert "--layout cdo only" in one_line_error(capsys.readouterr().err)
+    assert main(["export", str(result), str(out), "--layout", "cdo", "--select", "lam=0.99e9"]) == 0
+    with xr.open_dataset(result) as ds, xr.open_dataset(out, decode_times=False) as cdo:
+        picked = ds.sel(lam=1e9)
+        assert cdo["var_theta"].dims == ("t", "k", "eps", "S0") and float(cdo["lam"]) == 1e9
+        np.testing.assert_array_equal(cdo["var_theta"].transpose("k", "eps", "S0", "t").values,
+                                      picked["var_theta"].values)
+        np.testing.assert_array_equal(cdo["status"].values, picked["status"].values)
+        assert "--select lam=0.99e9" in cdo.attrs["history"].splitlines()[-1]
+    if shutil.which("cdo"):
+        assert set(HISTORY_VARIABLES) <= set(_cdo("showname", out).split())

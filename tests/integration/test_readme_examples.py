@@ -11,6 +11,9 @@ replaced by this interpreter's ``-m screening.cli``) in a temporary folder holdi
 * ``tradeoff studies/speed_accuracy.toml``: ~10 minutes of Monte Carlo (the trade study has its own
   tests with a small study, ``tests/unit/analysis/test_tradeoff*.py``).
 
+Lines of other tools (:data:`TOOLS`: CDO, NCO) run where the tool is installed, each expected to exit 0
+without a warning (``test_netcdf_cf.py`` checks what they compute).
+
 The fast test shrinks the Monte Carlo of the copied study files (:data:`TINY`: fewer samples) and
 calls the command line in this process; the slow one runs every line as its own process on the
 studies as shipped.
@@ -37,6 +40,9 @@ SKIPPED = {
     "export outputs/quick.zarr": "exports the result of the skipped --scheduler run",
     "tradeoff studies/speed_accuracy.toml": "about 10 minutes of Monte Carlo; the trade study has its own tests",
 }
+
+#: other tools in the README's recipes: run when installed
+TOOLS = ("cdo", "ncks")
 
 #: edits of the copied study files that keep the fast test fast (Monte Carlo samples)
 TINY = {
@@ -79,6 +85,12 @@ def _run_examples(tmp_path, tiny, monkeypatch=None):
         if reason is not None:
             continue
         argv = shlex.split(line, comments=True)
+        if argv[0] in TOOLS:
+            if shutil.which(argv[0]) is not None:
+                proc = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+                assert proc.returncode == 0 and "Warning" not in proc.stderr, f"{line}\n{proc.stderr[-2000:]}"
+                ran.append(line)
+            continue
         assert argv[0] == ".venv/bin/screening", line
         if monkeypatch is not None:
             assert main(argv[1:]) == 0, line

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import GRID, NO_HTTP_PORT_8787, compare_files, one_line_error, quiet
+from helpers import GRID, NO_HTTP_PORT_8787, compare_files, one_line_error, quiet, study_text
 
 from screening.workflow import execution
 from screening.cli import main
@@ -50,25 +50,9 @@ HEAVY_WIDE = Block(1e4, 2.0, 0.4)
 
 
 #: A grid over the corners of the ranges: every status but non_finite_moments occurs.
-EXTREME = """
-title = "extreme corners"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = [1e4, 2.89e7, 1e10]
-lam = [0.0, 1e11]
-eps = [-1e7, 0.0, 1e9]
-[excitation]
-kind = "white"
-S0 = [1e-12, 2.4e-3, 1e8]
-[time]
-t_end = 4.0
-dt = 0.1
-[solver]
-max_steps = 20000
-"""
+EXTREME = study_text({"title": '"extreme corners"', "k": "[1e4, 2.89e7, 1e10]", "lam": "[0.0, 1e11]",
+                      "eps": "[-1e7, 0.0, 1e9]", "S0": "[1e-12, 2.4e-3, 1e8]", "dt": "0.1"},
+                     "[solver]\nmax_steps = 20000\n")
 
 
 def listing(folder):
@@ -269,27 +253,8 @@ def test_monte_carlo_at_the_corners_counts_samples_and_never_crashes(name, block
     assert (ds.attrs["diverged_reasons"] == "none") == (n_div == 0)
 
 
-ALL_OVERTURN = """
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = 6e7
-[excitation]
-kind = "white"
-envelope = "constant"
-S0 = [1e-5, 0.5]
-[time]
-t_end = 4.0
-dt = 0.05
-[mcs]
-points = [{S0 = 0.5}, {S0 = 1e-5}]
-samples = 4
-model = "condensed"
-"""
+ALL_OVERTURN = study_text({"title": None, "eps": "6e7", "excitation.envelope": '"constant"', "S0": "[1e-5, 0.5]"},
+                          '[mcs]\npoints = [{S0 = 0.5}, {S0 = 1e-5}]\nsamples = 4\nmodel = "condensed"\n')
 
 
 @pytest.fixture(scope="module")
@@ -324,37 +289,16 @@ def test_info_says_plainly_that_every_spot_sample_overturned(all_overturned, cap
 
 
 # ============================================================================ 4. bad input on the CLI
-STUDY = """
-title = "bad input"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = [-6e5, 6e7]
-[excitation]
-kind = "kanai_tajimi"
-omega_g = 10.0
-zeta_g = 0.4
-S0 = {start = 2e-5, stop = 2.4e-3, num = 3, log = true}
-T1 = 4.0
-T2 = 2.0
-[time]
-t_end = 2.0
-dt = 0.05
-[solver]
-rtol = 1e-7
-max_steps = 200000
-[mcs]
-samples = 4
-"""
+STUDY = study_text({"title": '"bad input"', "eps": "[-6e5, 6e7]", "kind": '"kanai_tajimi"',
+                    "excitation.omega_g": "10.0", "excitation.zeta_g": "0.4",
+                    "S0": "{start = 2e-5, stop = 2.4e-3, num = 3, log = true}", "excitation.T1": "4.0",
+                    "excitation.T2": "2.0", "t_end": "2.0"},
+                   "[solver]\nrtol = 1e-7\nmax_steps = 200000\n[mcs]\nsamples = 4\n")
 
 BAD_STUDIES = [
     # id, (old, new), what the message must name
     ("zero mass", ("m = 8.67", "m = 0.0"), "block.m: must be a finite number > 0"),
-    ("negative h", ("h = 0.21", "h = -0.21"), "block.h: must be a finite number > 0"),
+    ("negative h", ("h = 0.21", "h = -0.21"), "block.h: must be a finite number >= 1e-06 and <= 1000"),
     ("zero k", ("k = 2.89e7", "k = 0"), "foundation.k: must be a finite number > 0"),
     ("negative k", ("k = 2.89e7", "k = -1.0"), "foundation.k: must be a finite number > 0"),
     ("nan k", ("k = 2.89e7", "k = nan"), "foundation.k"),

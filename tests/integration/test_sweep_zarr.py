@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, compare_files, dask_processes, quiet, stop_after
+from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_processes, quiet, stop_after
 
 from screening.cli import main
 from screening.status import PointStatus
@@ -196,6 +196,13 @@ def test_export_gives_the_netcdf_file_of_a_direct_run(client, tmp_path, capsys):
     # bad input: one line, exit 2, nothing written
     assert main(["export", str(tmp_path / "direct.nc"), str(tmp_path / "x.nc")]) == 2
     assert "not a zarr store" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
+    # the CDO form (time first, p_exceed per threshold) from the zarr store and from the netCDF file
+    for source in ("e.zarr", "direct.nc"):
+        assert main(["export", str(tmp_path / source), str(tmp_path / f"{source}.cdo.nc"), "--layout", "cdo"]) == 0
+        assert_cdo_form_of(tmp_path / source, tmp_path / f"{source}.cdo.nc")
+    compare_files(tmp_path / "e.zarr.cdo.nc", tmp_path / "direct.nc.cdo.nc")
+    with xr.open_dataset(tmp_path / "e.zarr.cdo.nc", decode_times=False) as ds:
+        assert [float(ds[f"p_exceed_{i}"].attrs["threshold"]) for i in range(2)] == [0.01, 0.02]
 
 
 def test_info_and_plot_read_a_zarr_result(client, tmp_path, capsys):

@@ -77,7 +77,7 @@ SWEEP = TRADE_STUDY.split("[[family]]")[0] + '[excitation]\nkind = "white"\nS0 =
 @pytest.mark.parametrize("old, new, needle", [
     ("h = 0.21", "h = 0.21\nwidth = 3", "block.width: unknown key (allowed: m, b, h, I_cm, g)"),
     ("m = 8.67", 'm = "heavy"', "block.m: must be a number (got the string 'heavy')"),
-    ("b = 0.035", "b = -0.035", "block.b: must be a finite number > 0 (got -0.035)"),
+    ("b = 0.035", "b = -0.035", "block.b: must be a finite number >= 1e-06 and <= 1000 (got -0.035)"),
     ("h = 0.21\n", "", "block.h: required"),
     ("k = 2.89e7", "k = 0.0", "foundation.k: must be a finite number > 0 (got 0.0)"),
     ("lam = 8.95e8", "lam = 8.95e8\nc = 3.0", "foundation.c: does not apply to contact = 'hunt_crossley'"),

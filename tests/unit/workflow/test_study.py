@@ -348,7 +348,7 @@ BAD_EXTRA = [
     ("case sweeps", '[[case]]\nname = "a"\nfoundation.k = [1e7, 2e7]\n',
      "case 'a': foundation.k: a case sets scalars only"),
     ("case unknown key", '[[case]]\nname = "a"\ntime = {t_end = 3.0}\n', "case 'a': time: unknown key"),
-    ("case bad value", '[[case]]\nname = "a"\nblock.h = -1.0\n', "case 'a': block.h: must be a finite number > 0"),
+    ("case bad value", '[[case]]\nname = "a"\nblock.h = -1.0\n', "case 'a': block.h: must be a finite number >= 1e-06 and <= 1000"),
     ("base key used by no case", '[[case]]\nname = "a"\nfoundation = {contact = "winkler", c = 1.0}\n',
      "foundation.lam: does not apply to any case"),
 ]

@@ -1,0 +1,241 @@
+"""The CDO form of a sweep result (``screening export RESULT OUT --layout cdo``), streamed block by block.
+
+CDO (2.1) reads a variable as ``(time, z, y, x)``; the result file (:mod:`screening.workflow.writer`)
+is laid out for xarray and CF, and CDO cannot use it as it is (measured with CDO 2.1.1):
+
+* time must be the first dimension ("Time must be the first dimension! ... skipped variable") and
+  be recognised as time: an unlimited dimension, or units with a reference date;
+* with ``t`` in plain ``s``, CDO writes the times of its outputs truncated to whole seconds
+  (0.1 ... 0.9 s all become 0); with ``seconds since <date>`` they are kept, but xarray then decodes
+  ``t`` to datetimes;
+* every CF scalar or auxiliary coordinate named in a ``coordinates`` attribute (the fixed
+  parameters, ``k_value``, ``spot_*``, ``esc_*``) gives "Coordinates variable ... can't be assigned",
+  and string variables "Unsupported data type (char/string), skipped variable";
+* at most three dimensions besides time ("4 dimensional variables without time dimension are not
+  supported").
+
+So the CDO file has ``t`` first and unlimited with :data:`screening.schema.CDO_TIME` (the same
+seconds, from a placeholder reference date), no ``coordinates`` attributes (the parameters stay
+variables with their units), string variables as attributes of their dimension's variable
+(:func:`string_attribute_target`), ``p_exceed`` as one variable per threshold, and at most
+:data:`MAX_GRID_DIMS` grid dimensions (``select`` fixes the others).  The swept parameters are
+CDO's z (levels: ``sellevel`` by value), y and x (``selindexbox``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from screening.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
+from screening.workflow.errors import SweepError
+from screening.workflow.grid import hyperslabs
+
+#: Grid dimensions CDO can hold besides time (z, y, x).
+MAX_GRID_DIMS = 3
+#: Values read and written per block (memory of the export independent of the grid size).
+BLOCK_VALUES = 2**22
+#: netCDF chunk cache [bytes] of each variable of the result read (the default, 64 MiB, would keep up to that
+#: much of every history read in memory; the export reads each chunk about once).
+SOURCE_CACHE_BYTES = 4 * 2**20
+
+
+def open_source(path):
+    """The result at ``path`` (:func:`~screening.workflow.reader.open_result`), its netCDF variables with a
+    chunk cache of :data:`SOURCE_CACHE_BYTES`: the memory of an export does not grow with the grid."""
+    import netCDF4
+
+    from screening.workflow.reader import open_result
+
+    saved = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(SOURCE_CACHE_BYTES)
+    try:
+        return open_result(path)
+    finally:
+        netCDF4.set_chunk_cache(*saved)
+
+
+def parse_selection(items, grid):
+    """``{dim: value}`` from ``DIM=VALUE`` strings; ``dim`` a grid dimension, ``value`` a number (a
+    case name or index for ``case``).  :class:`SweepError` naming the item otherwise."""
+    out = {}
+    for item in items:
+        dim, sep, value = item.partition("=")
+        dim, value = dim.strip(), value.strip()
+        if not sep or dim not in grid:
+            raise SweepError(f"--select {item!r}: expected DIM=VALUE with DIM one of the swept dimensions "
+                             f"({', '.join(grid) or 'none'})")
+        if dim == "case":
+            out[dim] = int(value) if value.isdigit() else value
+            continue
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not math.isfinite(number):
+            raise SweepError(f"--select {item!r}: the value of {dim} must be a finite number")
+        out[dim] = number
+    return out
+
+
+def select(ds, selection):
+    """``ds`` at the nearest swept value of each ``{dim: value}`` (a case by name or index)."""
+    for dim, value in selection.items():
+        if dim == "case" and isinstance(value, str):
+            names = [str(n) for n in ds["case_name"].values]
+            if value not in names:
+                raise SweepError(f"--select case={value}: no such case (cases: {', '.join(names)})")
+            ds = ds.isel(case=names.index(value))
+        elif dim == "case":
+            if not 0 <= value < ds.sizes["case"]:
+                raise SweepError(f"--select case={value}: case index out of range 0..{ds.sizes['case'] - 1}")
+            ds = ds.isel(case=value)
+        else:
+            ds = ds.sel({dim: value}, method="nearest")
+    return ds
+
+
+def string_attribute_target(name, dims, variables):
+    """The variable that carries string variable ``name`` (on ``dims``) as an attribute in the CDO file:
+    ``<x>`` for ``<x>_name``, else the coordinate variable of its dimension (``None``: a global attribute)."""
+    if name.endswith("_name") and name[:-5] in variables:
+        return name[:-5]
+    if len(dims) == 1 and dims[0] in variables:
+        return dims[0]
+    return None
+
+
+def grid_chunks(shape, row_values):
+    """Chunks over the grid ``shape`` of a variable with ``row_values`` values per point (C-order runs of
+    points, :data:`BLOCK_VALUES` values at most when the shape allows), and the points per block: whole
+    chunks of about :data:`BLOCK_VALUES` values, so that every chunk is written once, in full."""
+    from screening.workflow.writer import POINT_CHUNK, _point_chunks
+
+    chunks = _point_chunks(shape, max(1, min(POINT_CHUNK, BLOCK_VALUES // max(row_values, 1))))
+    points = math.prod(chunks)
+    return chunks, points * max(1, BLOCK_VALUES // (max(row_values, 1) * points))
+
+
+def _grid_blocks(shape, step):
+    """Hyperslabs of the grid ``shape`` of ``step`` points each (C order)."""
+    n = math.prod(shape)
+    for lo in range(0, n, step):
+        yield from (slab for slab, _, _ in hyperslabs(lo, min(lo + step, n), shape))
+
+
+def export_cdo(ds, dst, complevel, history, selection=None):
+    """Write the opened result ``ds`` (:func:`~screening.workflow.reader.open_result`) at ``dst`` (a new
+    netCDF4 file) in the CDO layout (module docstring), after ``selection`` (``{dim: value}``,
+    :func:`select`).  ``history``: the line appended to the ``history`` attribute.  Raises
+    :class:`SweepError` if more than :data:`MAX_GRID_DIMS` grid dimensions remain."""
+    import netCDF4
+
+    ds = select(ds, selection or {})
+    grid = tuple(ds["status"].dims)
+    if len(grid) > MAX_GRID_DIMS:
+        raise SweepError(f"CDO reads at most {MAX_GRID_DIMS} dimensions besides time and this result has "
+                         f"{len(grid)} ({', '.join(grid)}): fix {len(grid) - MAX_GRID_DIMS} of them with "
+                         f"--select DIM=VALUE (e.g. --select {grid[0]}={_example(ds, grid[0])})")
+    shape = tuple(ds.sizes[d] for d in grid)
+    nt = ds.sizes["t"]
+    strings = {name: v for name, v in ds.variables.items() if v.dtype.kind in "OSU"}
+    zlib = {"zlib": True, "complevel": complevel} if complevel > 0 else {}
+    with netCDF4.Dataset(dst, "w", format="NETCDF4") as nc:
+        nc.set_auto_mask(False)
+        nc.createDimension("t", None)
+        for dim, size in ds.sizes.items():
+            if dim != "t":
+                nc.createDimension(dim, size)
+        t = nc.createVariable("t", "f8", ("t",), fill_value=False)
+        t.setncatts({**{k: v for k, v in ds["t"].attrs.items() if k != "units"}, **CDO_TIME})
+        t[:nt] = np.asarray(ds["t"].values, dtype=np.float64)
+        for name, v in ds.variables.items():
+            if name == "t" or name in strings:
+                continue
+            dtype = np.dtype(v.encoding.get("dtype", v.dtype)).newbyteorder("=")
+            fill = v.encoding.get("_FillValue")
+            fill = False if fill is None or (isinstance(fill, float) and dtype.kind != "f") else fill
+            attrs = {k: val for k, val in v.attrs.items() if k != "coordinates"}
+            if "flag_values" in attrs:
+                attrs["flag_values"] = np.asarray(attrs["flag_values"], dtype=dtype)
+            extra = _after_grid(name, v.dims, grid, ds.dims)
+            on_grid = extra is not None
+            storage = zlib if v.dims and v.dims != (name,) else {}
+            if on_grid and extra == ("threshold",):
+                _write_per_threshold(nc, name, v, ds["threshold"], dtype, fill, attrs, grid, shape, storage)
+                continue
+            dims = ("t",) + tuple(d for d in v.dims if d != "t") if "t" in v.dims else v.dims
+            chunks = {}
+            if on_grid:
+                row = math.prod(ds.sizes[d] for d in extra)
+                grid_chunk, step = grid_chunks(shape, row)
+                sizes = (1,) + grid_chunk if extra == ("t",) else grid_chunk + tuple(ds.sizes[d] for d in extra)
+                chunks = {"chunksizes": sizes, "chunk_cache": 2 * dtype.itemsize * math.prod(sizes)}
+            out = nc.createVariable(name, dtype, dims, fill_value=fill, **storage, **chunks)
+            out.setncatts(attrs)
+            if on_grid:
+                for slab in _grid_blocks(shape, step):
+                    values = _encoded(v[slab].values, dtype, fill)
+                    if extra == ("t",):
+                        out[(slice(0, nt),) + slab] = np.moveaxis(values, -1, 0)
+                    else:
+                        out[slab if slab else ...] = values
+            else:
+                values = _encoded(v.values, dtype, fill)
+                if "t" in v.dims:
+                    values = np.moveaxis(values, v.dims.index("t"), 0)
+                    out[(slice(0, nt),) + (slice(None),) * (values.ndim - 1)] = values
+                else:
+                    out[...] = values
+        labels = {}
+        for name, v in strings.items():
+            target = string_attribute_target(name, v.dims, nc.variables)
+            text = json.dumps([str(s) for s in np.atleast_1d(v.values)], ensure_ascii=False)
+            if target is None:
+                labels[name] = text
+            else:
+                nc[target].setncattr(name, text)
+        attrs = dict(ds.attrs)
+        attrs["history"] = f"{attrs['history']}\n{history}" if attrs.get("history") else history
+        nc.setncatts({**attrs, **labels, "layout": CDO_LAYOUT})
+
+
+def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shape, storage):
+    """``name`` on ``grid + (threshold,)`` as the variables ``<name>_<i>``, one per threshold."""
+    grid_chunk, step = grid_chunks(shape, thresholds.size)
+    chunks = {"chunksizes": grid_chunk, "chunk_cache": 2 * dtype.itemsize * math.prod(grid_chunk)} if shape else {}
+    outs = []
+    for i, value in enumerate(np.asarray(thresholds.values, dtype=float)):
+        out = nc.createVariable(f"{name}_{i}", dtype, grid, fill_value=fill, **storage, **chunks)
+        out.setncatts({**attrs, **cdo_threshold_attributes(value, thresholds.attrs)})
+        outs.append(out)
+    for slab in _grid_blocks(shape, step):
+        values = _encoded(v[slab].values, dtype, fill)
+        for i, out in enumerate(outs):
+            out[slab if slab else ...] = values[..., i]
+
+
+def _after_grid(name, dims, grid, all_dims):
+    """The dimensions of variable ``name`` after the grid ones, or ``None`` if it is not a grid variable
+    (a dimension's own coordinate, or a variable on other dimensions)."""
+    if name in all_dims or dims[:len(grid)] != grid:
+        return None
+    if not grid and dims not in (("t",), ("threshold",)):
+        return None
+    return dims[len(grid):]
+
+
+def _encoded(values, dtype, fill):
+    """``values`` in the stored ``dtype`` (an integer variable decoded to float with NaN: its ``fill``)."""
+    values = np.asarray(values)
+    if values.dtype.kind == "f" and dtype.kind in "iu" and fill is not False:
+        values = np.where(np.isnan(values), fill, values)
+    return values.astype(dtype, copy=False)
+
+
+def _example(ds, dim):
+    if dim == "case":
+        return str(ds["case_name"].values[0])
+    return f"{float(ds[dim].values[0]):.6g}"

@@ -1,0 +1,66 @@
+"""The CDO form of a result: selections, where strings go, blocks (the files: tests/integration/test_netcdf_cf.py)."""
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from screening.workflow import cdofile
+from screening.workflow.cdofile import parse_selection, select, string_attribute_target
+from screening.workflow.errors import SweepError
+
+
+def test_parse_selection_reads_numbers_and_cases():
+    assert parse_selection(["k = 2.89e7", "case=white"], ("case", "k")) == {"k": 2.89e7, "case": "white"}
+    assert parse_selection(["case=1"], ("case",)) == {"case": 1}
+    assert parse_selection([], ("k",)) == {}
+
+
+@pytest.mark.parametrize("item, said", [("k", "expected DIM=VALUE"), ("m=1", "swept dimensions (k, eps)"),
+                                        ("k=inf", "finite number"), ("k=abc", "finite number")])
+def test_parse_selection_names_the_bad_item(item, said):
+    with pytest.raises(SweepError, match="--select") as err:
+        parse_selection([item], ("k", "eps"))
+    assert said in str(err.value)
+
+
+def test_select_takes_the_nearest_value_and_cases_by_name_or_index():
+    ds = xr.Dataset({"status": (("case", "k"), np.arange(4).reshape(2, 2))},
+                    coords={"case": [0, 1], "case_name": ("case", ["white", "filtered"]), "k": [2e7, 3e7]})
+    assert int(select(ds, {"case": "filtered", "k": 2.9e7})["status"]) == 3
+    assert int(select(ds, {"case": 0, "k": 1.0})["status"]) == 0
+    with pytest.raises(SweepError, match="no such case"):
+        select(ds, {"case": "other"})
+    with pytest.raises(SweepError, match="out of range 0..1"):
+        select(ds, {"case": 2})
+
+
+def test_strings_go_to_the_variable_they_name_or_their_dimension():
+    variables = {"case", "spot_case"}
+    assert string_attribute_target("case_name", ("case",), variables) == "case"
+    assert string_attribute_target("spot_case_name", ("spot",), variables) == "spot_case"
+    assert string_attribute_target("excitation", ("case",), variables) == "case"
+    assert string_attribute_target("label", ("point",), variables) is None
+
+
+@pytest.mark.parametrize("shape", [(7,), (3, 5), (2, 3, 4), (), (40, 1000)])
+@pytest.mark.parametrize("row", [1, 4, 401])
+def test_blocks_are_whole_chunks_of_bounded_size_covering_every_point_once(monkeypatch, shape, row):
+    monkeypatch.setattr(cdofile, "BLOCK_VALUES", 4000)
+    chunks, step = cdofile.grid_chunks(shape, row)
+    per_chunk = math.prod(chunks)
+    assert step % per_chunk == 0 and (step * row <= 4000 or step == per_chunk == 1)
+    seen = np.zeros(shape, dtype=int)
+    for slab in cdofile._grid_blocks(shape, step):
+        block = seen[slab if slab else ...]
+        assert max(block.size, 1) <= step
+        if block.size >= per_chunk:                     # only the last block of the grid is short
+            assert all(n % c == 0 or n == c for n, c in zip(block.shape, chunks)), (block.shape, chunks)
+        seen[slab if slab else ...] += 1
+    assert np.all(seen == 1) and seen.size == math.prod(shape)
+
+
+def test_integers_decoded_to_float_get_their_fill_back():
+    out = cdofile._encoded(np.array([1.0, np.nan]), np.dtype("i1"), -1)
+    assert out.dtype == np.int8 and out.tolist() == [1, -1]
