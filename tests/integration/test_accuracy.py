@@ -65,6 +65,11 @@ def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp
         assert np.all(np.isfinite(se[reliable]) & (se[reliable] > 0)) and np.all(np.isnan(se[~reliable]))
         assert ds["best_method"].attrs["flag_meanings"].split() == [m.name for m in BestMethod]
         assert ds["best_peak_var_theta_se"].attrs["units"] == "rad2"
+        # info counts the best estimates by method
+        from screening.report.text import describe
+
+        counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
+        assert f"best estimates ([accuracy] target 0.15): {counts}; Monte Carlo at {at.size} point(s)" in describe(ds)
 
 
 
