@@ -120,10 +120,15 @@ def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkey
         assert np.all(np.isfinite(ds["esc_peak_var_theta"].values))
 
 
-def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path):
+def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monkeypatch):
     # the budget is planned on the cost model (integration steps), not on the measured CPU time: the same
     # points run with the same samples, so the best estimates are identical
+    from screening.workflow import accuracy
+
     study = parse_study(TARGET)
+    waits = []
+    real = accuracy.interruptible
+    monkeypatch.setattr(accuracy, "interruptible", lambda it: waits.append(1) or real(it))
     runs = []
     for name in ("a.nc", "b.nc"):
         run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
@@ -133,3 +138,4 @@ def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path):
                                                           "best_peak_var_theta_dot")})
     for key, value in runs[0].items():
         np.testing.assert_array_equal(value, runs[1][key], err_msg=key)
+    assert waits                                  # the waits for Monte Carlo results let a Ctrl-C through
