@@ -9,7 +9,8 @@ Prints
 
 1. **Cost**: wall time of a ``--points`` sweep (the square eps x S0 grid of ``bench_sweep.py`` on the paper
    block, 20 s records, storing the histories of var_theta, its rate, their covariance and k_eq) without and with ``[accuracy] target, budget_s``, and the Monte Carlo CPU
-   seconds the escalation spent (and what it covered).
+   seconds the escalation spent by the cost model and measured (and what it covered), and the ratio of
+   measured to estimated cost per escalated point (the cost model's calibration).
 2. **Accuracy table** on the calibration points of ``screening/data/trust_calibration.nc`` (the trade
    study's regimes plus heavy blocks, stiff beds, the museum statue and near-toppling points; their coupled
    Monte Carlo references, 1000 samples each, are read from the file, not recomputed): SL's
@@ -143,9 +144,22 @@ def main(argv=None):
     print(f"\n== cost: {n}-point sweep, {args.workers} worker(s), output in {work}")
     print(f"without [accuracy]: {times['without']:.1f} s wall")
     print(f"with [accuracy] target {args.target}, budget_s {args.budget:g}: {times['with']:.1f} s wall, "
-          f"Monte Carlo {acc['cpu_s']:.1f} CPU s at {acc['n_escalated']} of {acc['n_candidates']} candidate points "
+          f"Monte Carlo {acc['cost_s']:.1f} CPU s by the cost model, {acc['cpu_s']:.1f} CPU s measured, "
+          f"at {acc['n_escalated']} of {acc['n_candidates']} candidate points "
           f"({acc['n_coupled']} coupled, {acc['n_condensed']} condensed, {acc['n_short']} short of the target SE); "
           f"correction leave-one-out RMS {acc['loo_rms']:.2f}; best estimates: {acc['methods']}")
+    import xarray as xr
+
+    with xr.open_dataset(work / "bench_with.nc") as ds:
+        ratio = ds["esc_cpu_time"].values / ds["esc_cost"].values
+        for code, name in ((int(EscalationModel.coupled), "coupled"), (int(EscalationModel.condensed), "condensed")):
+            r = ratio[ds["esc_model"].values == code]
+            if r.size:
+                print(f"measured / estimated cost, {name}: median {np.median(r):.2f} (min {r.min():.2f}, "
+                      f"max {r.max():.2f}, {r.size} points)")
+        met = ds["esc_target_met"].values
+        print(f"target standard error reached at {int(met.sum())} of {met.size} escalated points; samples "
+              f"{int(ds['esc_samples'].min())}..{int(ds['esc_samples'].max())}")
     return 0
 
 

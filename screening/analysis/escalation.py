@@ -35,8 +35,9 @@ SAMPLE_SAFETY = 1.5
 #: Share of the budget the pilot and main runs may plan with; the rest is for the top-up round.
 MAIN_SHARE = 0.85
 #: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
-#: :class:`EscalationModel` (about 1.3x the median measured on the development machine, numba, one thread).
-STEP_COST_S = {EscalationModel.condensed: 0.4e-6, EscalationModel.coupled: 0.6e-6}
+#: :class:`EscalationModel` (about 1.2x the median measured on the development machine, 20 s records,
+#: numba, one thread; ``benchmarks/accuracy_escalation.py`` prints the measured / estimated ratio).
+STEP_COST_S = {EscalationModel.condensed: 0.35e-6, EscalationModel.coupled: 0.45e-6}
 #: Integration steps per second of record and sample assumed before any pilot ran (the stiffest
 #: calibration beds take ~6,000; the paper block ~1,100).
 PRIOR_STEPS_PER_S = 3000.0
