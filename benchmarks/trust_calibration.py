@@ -7,8 +7,9 @@ Run (regenerates ``screening/data/trust_calibration.nc``; the per-point results 
         [--samples 1000] [--seed 0] [--points NAME ...] [--out screening/data/trust_calibration.nc] \
         [--work outputs/trust_calibration] [--condensed] [--list] [--assemble-only] [--markdown]
 
-The shipped file was made with ``--samples 1000 --seed 0 --condensed`` (~15 min of coupled MCS
-and ~3 min of condensed MCS on one shared core).
+The shipped file was made with ``--samples 1000 --seed 0 --condensed`` (1000 coupled samples at
+every point; 24 min of coupled MCS and 3 min of condensed MCS, wall on one core of a shared 2-core
+machine).
 
 For every calibration point of :data:`POINTS` (a documented list: the trade study's regimes on the
 paper block and bed, extended to stiff beds, a heavy block, the museum statue, near-toppling and
