@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import (BestMethod, ContactRegime, EscalationModel, PointStatus, SampleState, SpotStatus, Trust,
-                              flag_attributes)
+from screening.status import (BestMethod, ContactRegime, EscalationModel, PointStatus, SampleState, SpotStatus,
+                              TargetMet, Trust, flag_attributes)
 
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"
@@ -113,7 +113,12 @@ ACCURACY = {
     "esc_case": _v("1", "case index of the escalated point"),
     "esc_model": flag_attributes(EscalationModel, "Monte Carlo model of the escalated point"),
     "esc_samples": _v("1", "Monte Carlo samples run at the escalated point"),
-    "esc_cpu_time": _v("s", "CPU time of the Monte Carlo run at the escalated point (pilot included)"),
+    "esc_cpu_time": _v("s", "CPU time of the Monte Carlo runs at the escalated point (pilot and top-up "
+                            "included), measured"),
+    "esc_cost": _v("s", "CPU time of the Monte Carlo runs at the escalated point estimated by the cost model "
+                        "from their integration steps (what the budget is planned on)"),
+    "esc_target_met": flag_attributes(TargetMet, "whether the standard error of esc_peak_var_theta reached "
+                                                 "target / 2 of the peak"),
     "esc_sl_peak_var_theta": _v("rad2", "linearization peak var_theta at the escalated point"),
     "esc_sl_peak_var_theta_dot": _v("rad2 s-2", "linearization peak var_theta_dot at the escalated point"),
     "esc_peak_var_theta": _v("rad2", "Monte Carlo peak var_theta at the escalated point"),

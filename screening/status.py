@@ -115,6 +115,14 @@ class EscalationModel(enum.IntEnum):
     coupled = 1
 
 
+class TargetMet(enum.IntEnum):
+    """Whether an escalated point's Monte Carlo reached the target's standard error (``target / 2`` of its peak)."""
+
+    #: the budget ran out (or a run failed) before the standard error came down to ``target / 2``
+    short_of_target = 0
+    target_met = 1
+
+
 class ContactRegime(enum.IntEnum):
     """Contact regime of the coupled model's base."""
 

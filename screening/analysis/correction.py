@@ -180,6 +180,16 @@ def linearization_promises(trust, low, high, target):
         return (trust == int(Trust.trusted)) & (np.maximum(np.abs(low), np.abs(high)) <= target)
 
 
+def within_band(y, low, high):
+    """True where the SL error implied by a log ratio ``y = log(MCS / SL)``, ``exp(-y) - 1``, lies in the
+    trust rule's band ``[low, high]`` (or there is no band): a correction that contradicts what the
+    calibration measured in the point's cell is not vouched for."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        implied = np.expm1(-np.asarray(y, dtype=float))
+        no_band = ~(np.isfinite(low) & np.isfinite(high))
+        return no_band | ((implied >= low) & (implied <= high))
+
+
 def best_estimates(sl_peak, status, trust, low, high, target, features, escalated, mc_peak, mc_se, mc_model):
     """Best estimate of a peak variance at every point: ``(value, se, method, correction)``.
 
@@ -197,7 +207,8 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     method : :class:`BestMethod` codes (int8), in this order of preference: Monte Carlo at the point
         (if it has a finite peak); the linearization where the rule promises the target (se: half the
         band); the corrected linearization ``SL exp(y)`` (se ``value x se_y``) where the correction is
-        usable and reaches the point; else ``unreliable`` (value: SL's where it ran to the end, NaN
+        usable, reaches the point, ``se_y <= MAX_SE`` and the SL error it implies lies in the trust
+        band (:func:`within_band`); else ``unreliable`` (value: SL's where it ran to the end, NaN
         where it stopped).
     correction : the fitted :class:`Correction`.
     """
@@ -222,7 +233,7 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     correction = fit_correction(np.asarray(features)[escalated], np.where(ok[escalated], y, np.nan), y_se)
     if correction.usable:
         y_hat, y_se, reached = predict_correction(correction, features)
-        use = ok & ~promise & reached & (y_se <= MAX_SE)
+        use = ok & ~promise & reached & (y_se <= MAX_SE) & within_band(y_hat, low, high)
         value[use] = sl[use] * np.exp(y_hat[use])
         se[use] = value[use] * y_se[use]
         method[use] = int(BestMethod.corrected_linearization)

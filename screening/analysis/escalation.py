@@ -6,7 +6,12 @@
   learns from the whole untrusted region, not only its extreme;
 * :func:`escalation_model` — condensed Monte Carlo where the calibration shows the condensed model
   within the target of the coupled one (only the linearization is in doubt), coupled otherwise;
-* :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run;
+* :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run
+  (or from the main run, for the top-up round), with a safety factor for heavy tails;
+* :func:`meets_target` — whether a run's standard error reached ``target / 2`` of its peak;
+* :func:`estimated_cost` — the deterministic cost model: CPU seconds estimated from a run's
+  integration steps (the budget is planned on it, so the escalated points and their samples do not
+  depend on the speed of the machine);
 * :func:`affordable_points` — how many points the budget covers at that many samples.
 
 Pure functions on numpy arrays (the calibration dataset is passed in); no I/O.
@@ -23,7 +28,19 @@ from screening.analysis.trust import bed_law, p_bin, regime
 from screening.status import EscalationModel, PointStatus
 
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
-PILOT_SAMPLES = 32
+PILOT_SAMPLES = 64
+#: Samples from the pilot's standard error are multiplied by this: a small pilot underestimates the
+#: spread of heavy-tailed peaks (with 32 samples and no factor, 34 of 41 points ended short).
+SAMPLE_SAFETY = 1.5
+#: Share of the budget the pilot and main runs may plan with; the rest is for the top-up round.
+MAIN_SHARE = 0.85
+#: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
+#: :class:`EscalationModel` (about 1.2x the median measured on the development machine, 20 s records,
+#: numba, one thread; ``benchmarks/accuracy_escalation.py`` prints the measured / estimated ratio).
+STEP_COST_S = {EscalationModel.condensed: 0.35e-6, EscalationModel.coupled: 0.45e-6}
+#: Integration steps per second of record and sample assumed before any pilot ran (the stiffest
+#: calibration beds take ~6,000; the paper block ~1,100).
+PRIOR_STEPS_PER_S = 3000.0
 #: Bounds of the samples of the full run at an escalated point.
 MIN_SAMPLES = 100
 MAX_SAMPLES = 4000
@@ -111,18 +128,43 @@ def escalation_model(indicators, status, condensation, eps, cells):
     return np.where(use, int(EscalationModel.condensed), int(EscalationModel.coupled)).astype(np.int8)
 
 
-def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES):
+def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety=SAMPLE_SAFETY):
     """Samples for a relative standard error ``target / 2`` of the peak, from a pilot's relative SE.
 
     Notes
     -----
-    The standard error falls as ``1/sqrt(n)``: ``n = n0 (se0 / (target / 2))^2``, clipped to
+    The standard error falls as ``1/sqrt(n)``: ``n = safety n0 (se0 / (target / 2))^2``, clipped to
     ``[MIN_SAMPLES, most]``; a pilot without a finite SE asks for ``most``.
     """
     if not math.isfinite(pilot_rel_se) or pilot_rel_se <= 0:
         return int(most)
-    n = pilot_samples * (pilot_rel_se / (target / 2.0)) ** 2
+    n = safety * pilot_samples * (pilot_rel_se / (target / 2.0)) ** 2
     return int(min(max(math.ceil(n), MIN_SAMPLES), most))
+
+
+def meets_target(peak, peak_se, target):
+    """True where a Monte Carlo peak's standard error is at most ``target / 2`` of the peak (two
+    standard errors within the target); False where either is not finite."""
+    peak, peak_se = np.asarray(peak, dtype=float), np.asarray(peak_se, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(peak) & np.isfinite(peak_se) & (peak > 0) & (peak_se <= target / 2.0 * peak)
+
+
+def estimated_cost(steps, model):
+    """Estimated CPU time [s] of a Monte Carlo run from its integration steps (all samples).
+
+    Notes
+    -----
+    ``cost = steps x STEP_COST_S[model]``.  The step count is fixed by the study, the seed and the
+    samples, so a budget planned on this cost selects the same points and samples on every machine.
+    """
+    return float(steps) * STEP_COST_S[EscalationModel(int(model))]
+
+
+def prior_cost(samples, t_end, model):
+    """Estimated CPU time [s] of ``samples`` samples of ``t_end`` [s] before any run at the point
+    (:data:`PRIOR_STEPS_PER_S` steps per second of record)."""
+    return estimated_cost(samples * t_end * PRIOR_STEPS_PER_S, model)
 
 
 def affordable_points(budget_s, point_cost_s, most=MAX_POINTS):

@@ -1,5 +1,6 @@
-"""The fragility figure: exceedance probabilities over a swept intensity, their lognormal fit and the
-Monte Carlo probabilities at the spot points, flagged and untrusted points marked."""
+"""The fragility figure: exceedance probabilities over a swept intensity, their lognormal fit, the
+Monte Carlo probabilities at the spot points and, for a result with ``[accuracy]``, the best estimates
+with their band and the method behind each point; flagged and untrusted points marked."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ import numpy as np
 from screening.report.figure_base import (
     FLAGGED_COLOR, UNTRUSTED_COLOR, flag_summary, grid_units, grid_values, is_log_spaced, new_figure,
     point_flags, point_label, save_figure)
+from screening.status import BestMethod
+
 
 def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     """Fragility curves: ``p_exceed`` of a :func:`screening.analysis.fragility.fragility_dataset` along
@@ -17,8 +20,11 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     the spot points (+-2 standard errors) in the colour of the curve they lie on (black when that
     curve is not drawn).  Up to ``max_curves`` curves, the other grid dimensions sampled evenly.
     ``flags``: the result's ``status`` (and ``sl_trust``) on the same grid: flagged points are
-    crossed grey, untrusted ones drawn hollow, counted in the legend.  ``None`` if ``dim`` is not a
-    dimension of ``p_exceed``."""
+    crossed grey, untrusted ones drawn hollow, counted in the legend.  Where ``frag`` has
+    ``best_p_exceed`` (``[accuracy]``), each drawn curve also gets its best estimates, the band
+    ``best_p_exceed_low..high`` shaded and one marker per :class:`~screening.status.BestMethod`
+    (points without a vouched estimate: a red ``?``, no band).  ``None`` if ``dim`` is not a dimension
+    of ``p_exceed``."""
     from scipy.special import ndtr
 
     p = frag["p_exceed"]
@@ -38,7 +44,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     median = frag["median"].transpose(*other).values.reshape(-1) if "median" in frag else None
     beta = frag["beta"].transpose(*other).values.reshape(-1) if "beta" in frag else None
     xs = np.geomspace(x.min(), x.max(), 200) if np.all(x > 0) else np.linspace(x.min(), x.max(), 200)
-    colour = {}
+    best = _best_arrays(frag, other, dim) if "best_p_exceed" in frag else None
+    colour, labelled = {}, set()
     for n, j in enumerate(picks):
         colour[int(j)] = f"C{n}"
         index = dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
@@ -46,6 +53,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
         ax.plot(x, flat[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=label)
         ax.plot(x[untrusted[j]], flat[j][untrusted[j]], "o", ms=7, mfc="none", mec=UNTRUSTED_COLOR, mew=1.2)
         ax.plot(x[flagged[j]], flat[j][flagged[j]], "x", ms=7, color=FLAGGED_COLOR, mew=1.5)
+        if best is not None:
+            _draw_best(ax, x, best, j, f"C{n}", labelled)
         if median is not None and np.isfinite(median[j]) and np.isfinite(beta[j]):
             ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), "--", color=f"C{n}", lw=0.9,
                     label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}")
@@ -60,6 +69,10 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
                         label="Monte Carlo (+-2 se)" + (f": {point_label(frag, _curve_index(other, shape, c))}"
                                                         if other else "")
                               + ("" if drawn else " (curve not drawn)"))
+    if best is not None:
+        method = best[3]
+        counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
+        ax.plot([], [], " ", label=f"best estimates (all points): {counts}")
     if flags is not None:
         ax.plot([], [], "x", color=FLAGGED_COLOR, label=f"flagged (status != ok): {int(flagged.sum())} of {flagged.size}")
         ax.plot([], [], "o", mfc="none", mec=UNTRUSTED_COLOR, label=f"linearization untrusted: {int(untrusted.sum())}")
@@ -78,6 +91,38 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
                  fontsize=8)
     save_figure(fig, path)
     return Path(path)
+
+
+#: Marker of a best estimate by its source (``best_method``).
+BEST_MARKERS = {BestMethod.linearization: ("o", "best: linearization"),
+                BestMethod.corrected_linearization: ("^", "best: corrected Gaussian (linearization x correction)"),
+                BestMethod.condensed_monte_carlo: ("s", "best: condensed Monte Carlo (binomial band)"),
+                BestMethod.coupled_monte_carlo: ("D", "best: coupled Monte Carlo (binomial band)"),
+                BestMethod.unreliable: ("$?$", "best: none vouched for (unreliable, no band)")}
+
+
+def _best_arrays(frag, other, dim):
+    """``best_p_exceed``, its band and ``best_method`` as (curves x points) arrays like ``p_exceed``."""
+    return tuple(frag[name].transpose(*other, dim).values.reshape(-1, frag.sizes[dim])
+                 for name in ("best_p_exceed", "best_p_exceed_low", "best_p_exceed_high", "best_method"))
+
+
+def _draw_best(ax, x, best, j, colour, labelled):
+    """Curve ``j`` 's best estimates: the band shaded, a marker per method (each legend entry once;
+    ``labelled`` holds the entries already made)."""
+    def once(label):
+        new = label not in labelled
+        labelled.add(label)
+        return label if new else None
+
+    p, low, high, method = (a[j] for a in best)
+    ax.fill_between(x, low, high, color=colour, alpha=0.15, lw=0, label=once("best estimate band (+-2 se)"))
+    for m, (marker, label) in BEST_MARKERS.items():
+        on = method == m
+        if on.any():
+            unreliable = m == BestMethod.unreliable
+            ax.plot(x[on], p[on], marker=marker, ms=9 if unreliable else 6, mfc="none",
+                    mec=UNTRUSTED_COLOR if unreliable else colour, mew=1.2, ls="none", label=once(label))
 
 
 def _curve_index(other, shape, j):

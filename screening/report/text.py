@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import PointStatus, SpotStatus, Trust
+from screening.status import BestMethod, PointStatus, SpotStatus, Trust
 
 
 def _fmt(value):
@@ -58,6 +58,8 @@ def describe(ds, path="result"):
         trust = np.asarray(ds["sl_trust"].values).reshape(-1)
         lines.append("linearization against the coupled model (docs/method.md#trusting-a-point): " + ", ".join(
             f"{t.name} {int(np.sum(trust == t))}" for t in Trust if np.any(trust == t)))
+    if "best_method" in ds.variables:
+        lines.append(best_line(ds))
     ok = status == PointStatus.ok
     lines.append(f"summary over the {int(ok.sum())} status-ok point(s) (min / median / max):")
     for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"):
@@ -78,6 +80,21 @@ def describe(ds, path="result"):
                 rel, rel_dot, over, div, int(ds["mcs_n_used"].values[i]),
                 bool("mcs_status" in ds and int(ds["mcs_status"].values[i]) != SpotStatus.ok)))
     return "\n".join(lines)
+
+
+def best_line(ds):
+    """The ``[accuracy]`` best estimates of a result in one line: counts by ``best_method`` and what the
+    escalation spent."""
+    method = np.asarray(ds["best_method"].values).reshape(-1)
+    counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
+    line = f"best estimates ([accuracy] target {ds.attrs.get('accuracy_target', float('nan')):g}): {counts}"
+    if "escalation" in ds.dims:
+        line += (f"; Monte Carlo at {ds.sizes['escalation']} point(s), "
+                 f"{int(ds.attrs.get('accuracy_n_short_of_target', 0))} short of the target's standard error, "
+                 f"{float(ds.attrs.get('accuracy_cost_s', float('nan'))):.1f} of "
+                 f"{float(ds.attrs.get('accuracy_budget_s', float('nan'))):g} CPU s by the cost model "
+                 f"({float(ds.attrs.get('accuracy_cpu_s', float('nan'))):.1f} s measured)")
+    return line
 
 
 def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):

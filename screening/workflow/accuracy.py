@@ -14,13 +14,13 @@ import numpy as np
 
 from screening.workflow import execution, limits
 from screening.workflow.errors import exception_line, write_failure_reason
-from screening.workflow.interrupt import raise_if_interrupted
+from screening.workflow.interrupt import interruptible
 from screening.workflow.progress import Progress
 
 #: Resume records of escalated points are spot parts numbered from here (after any spot check).
 ESCALATION_RECORD = 5000
-#: A full Monte Carlo run is started only if its predicted CPU time times this still fits the budget.
-COST_SAFETY = 1.25
+#: Escalated points per wave (fixed: the plan must not depend on the number of workers).
+WAVE = 4
 
 
 def point_table(run):
@@ -71,7 +71,7 @@ def escalate(run):
     order = esc.cover_points(features, candidates, run.result.peak_p_uplift, esc.MAX_POINTS)
     models = esc.escalation_model(pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
                                   esc.condensed_cells(shipped_calibration(), acc.target))[order]
-    results, spent, failed = escalation_runs(run, order, models)
+    results, cost, spent, failed = escalation_runs(run, order, models)
     done = [j for j in range(len(order)) if j in results]
     escalated, models = order[done], models[done]
     runs = [results[j] for j in done]
@@ -87,9 +87,9 @@ def escalate(run):
     method = best["var_theta"][2]
     run.result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
 
-    short = sum(1 for r in runs if not r["peak_var_theta_se"] <= acc.target / 2 * r["peak_var_theta"])
+    short = sum(1 for r in runs if not r["target_met"])
     codes, counts = np.unique(method, return_counts=True)
-    info = {"target": acc.target, "budget_s": acc.budget_s, "cpu_s": spent,
+    info = {"target": acc.target, "budget_s": acc.budget_s, "cost_s": cost, "cpu_s": spent,
             "n_candidates": int(candidates.sum()), "n_selected": len(order), "n_escalated": len(runs),
             "n_coupled": int(np.sum(models == EscalationModel.coupled)),
             "n_condensed": int(np.sum(models == EscalationModel.condensed)), "n_short": short,
@@ -98,7 +98,7 @@ def escalate(run):
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
     run.report.accuracy = info
     run.result.set_attrs(
-        accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_cpu_s=spent,
+        accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_cost_s=cost, accuracy_cpu_s=spent,
         accuracy_n_candidates=np.int32(info["n_candidates"]), accuracy_n_escalated=np.int32(len(runs)),
         accuracy_n_short_of_target=np.int32(short), accuracy_n_unreliable=np.int32(info["n_unreliable"]),
         accuracy_correction_loo_rms=info["loo_rms"],
@@ -106,13 +106,22 @@ def escalate(run):
     run.log(accuracy_line(info))
 
 def escalation_runs(run, order, models):
-    """Pilot then full Monte Carlo at the ``order`` ed points, wave by wave, within the CPU budget.
+    """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within the budget.
 
-    After the first wave, the points are cut to those the budget affords at the samples the target
-    needs (:func:`~screening.analysis.escalation.affordable_points`, in the covering order).
-    Returns ``({position: result}, CPU seconds spent, failed tasks)``; a point whose full run does not
-    fit in what is left of the budget keeps its pilot (fewer samples, larger standard error); points
-    after the budget ran out are not run.  Finished points are kept in the resume record.
+    The budget is planned on the deterministic cost model (:func:`~screening.analysis.escalation.estimated_cost`
+    of each run's integration steps), never on the measured CPU time, so the points run and their
+    samples are the same for a given study and seed on every machine.
+
+    1. Wave by wave (:data:`WAVE` points): a pilot of :data:`~screening.analysis.escalation.PILOT_SAMPLES`
+       samples, then the samples the target's standard error needs (with a safety factor), each point
+       given a fair share of the budget's :data:`~screening.analysis.escalation.MAIN_SHARE`; after each
+       wave the points are cut to those the budget affords (in the covering order).
+    2. Top-up: a point whose standard error is still above ``target / 2`` of its peak runs again with
+       the samples its main run's standard error asks for, while the whole budget allows.
+
+    Returns ``({position: result}, estimated cost [s], CPU seconds spent, failed tasks)``; each result
+    carries its total ``cpu_time``, ``cost_s`` and ``target_met``.  Finished points are kept in the
+    resume record.
     """
     from distributed import as_completed
 
@@ -122,18 +131,21 @@ def escalation_runs(run, order, models):
     study, store, acc = run.study, run.store, run.study.accuracy
     most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)
     token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"
-    results, spent, failed, rates = {}, 0.0, 0, []
+    results, failed = {}, 0
 
     def index_of(j):
         return tuple(int(i) for i in np.unravel_index(order[j], study.shape))
 
+    def cost(j, r):
+        return esc.estimated_cost(r["n_steps"], models[j])
+
     for j in range(len(order)):
         part = store.load_spot(ESCALATION_RECORD + j, index_of(j))
-        if part is not None and {"cpu_time", "peak_var_theta", "samples"} <= set(part):
+        if part is not None and {"cpu_time", "cost_s", "peak_var_theta", "samples", "n_steps"} <= set(part):
             results[j] = part
-            spent += float(part["cpu_time"])
     todo = [j for j in range(len(order)) if j not in results]
-    loaded, costs = list(results), []
+    loaded = len(results)
+    spent = sum(float(r["cost_s"]) for r in results.values())
 
     def submit(j, samples, what):
         model = EscalationModel(int(models[j])).name
@@ -143,7 +155,7 @@ def escalation_runs(run, order, models):
     def gather(futures):
         nonlocal failed
         out = {}
-        for fut in as_completed(list(futures)):
+        for fut in interruptible(as_completed(list(futures))):
             j = futures[fut]
             try:
                 out[j] = fut.result()
@@ -151,69 +163,93 @@ def escalation_runs(run, order, models):
                 failed += 1
                 run.log(f"warning: Monte Carlo at escalated point {j} failed: {exception_line(exc)}")
             fut.release()
-            raise_if_interrupted()
         return out
 
+    def keep(j, r, before=None):
+        """``r`` is the point's result from now on; CPU time and cost add up over its runs."""
+        r["cost_s"] = np.float64(cost(j, r) + (float(before["cost_s"]) if before is not None else 0.0))
+        r["cpu_time"] = np.float64(r["cpu_time"] + (float(before["cpu_time"]) if before is not None else 0.0))
+        results[j] = r
+
+    def save(js):
+        for j in js:
+            try:
+                store.save_spot(ESCALATION_RECORD + j, index_of(j), results[j])
+            except OSError as exc:
+                run.log(f"warning: cannot save the resume record of escalated point {j} "
+                         f"({write_failure_reason(exc)})")
+
+    def rel_se(r):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return float(r["peak_var_theta_se"] / r["peak_var_theta"])
+
+    main_budget = esc.MAIN_SHARE * acc.budget_s
     if todo:
         run.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
-    wave = 2 * max(run.report.n_workers, 1)
     with Progress(len(todo), label="accuracy: Monte Carlo at escalated points",
                   enabled=run.progress and bool(todo)) as bar:
-        w = 0
+        w, costs, pilot_costs = 0, [], []
         while w < len(todo):
-            pilots = {}
-            for j in todo[w:w + wave]:
-                guess = max(rates, default=0.0) * esc.PILOT_SAMPLES * COST_SAFETY * (len(pilots) + 1)
-                if spent + guess > acc.budget_s:
+            pilots, committed = {}, 0.0
+            for j in todo[w:w + WAVE]:
+                guess = max(pilot_costs, default=esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]))
+                if spent + committed + guess > main_budget:
                     break
                 pilots[submit(j, esc.PILOT_SAMPLES, "pilot")] = j
+                committed += guess
             if not pilots:
                 break
             pilot = gather(pilots)
-            spent += sum(float(r["cpu_time"]) for r in pilot.values())
             needed = {}
-            for j, r in pilot.items():
-                rate = float(r["cpu_time"]) / esc.PILOT_SAMPLES
-                rates.append(rate)
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    rel = float(r["peak_var_theta_se"] / r["peak_var_theta"])
-                needed[j] = (rate, esc.samples_needed(rel, esc.PILOT_SAMPLES, acc.target, most))
+            for j in sorted(pilot):
+                keep(j, pilot[j])
+                spent += float(pilot[j]["cost_s"])
+                pilot_costs.append(float(pilot[j]["cost_s"]))
+                rate = float(pilot[j]["cost_s"]) / esc.PILOT_SAMPLES
+                needed[j] = (rate, esc.samples_needed(rel_se(pilot[j]), esc.PILOT_SAMPLES, acc.target, most))
+                costs.append(rate * (needed[j][1] + esc.PILOT_SAMPLES))
             # as many points as the budget affords at the samples the target needs (coverage and
             # accuracy both; never fewer than the correction needs), re-estimated after every wave
-            costs += [rate * (n * COST_SAFETY + esc.PILOT_SAMPLES) for rate, n in needed.values()]
-            affordable = esc.affordable_points(acc.budget_s, float(np.median(costs)))
-            todo = todo[:max(affordable - len(loaded), w + len(pilot))]
+            affordable = esc.affordable_points(main_budget, float(np.median(costs))) if costs else len(todo)
+            todo = todo[:max(affordable - loaded, w + WAVE)]
             full, committed = {}, 0.0
             for j in sorted(pilot):
                 rate, n = needed[j]
                 # a fair share of what is left for each point still to run
-                share = (acc.budget_s - spent - committed) / max(len(todo) - todo.index(j), 1)
-                n = min(n, int(share / max(rate * COST_SAFETY, 1e-12)))
-                cost = rate * n * COST_SAFETY
-                if n >= 2 * esc.PILOT_SAMPLES and spent + committed + cost <= acc.budget_s:
+                left = todo[todo.index(j):]
+                share = (main_budget - spent - committed) / max(len(left), 1)
+                n = min(n, int(share / max(rate, 1e-300)))
+                if n >= 2 * esc.PILOT_SAMPLES and spent + committed + rate * n <= main_budget:
                     full[submit(j, n, "full")] = j
-                    committed += cost
-                else:
-                    results[j] = pilot[j]
+                    committed += rate * n
             finished = gather(full)
-            for j in full.values():
-                if j not in finished:             # the full run failed: the pilot stays
-                    results[j] = pilot[j]
-                    continue
-                r = finished[j]
-                spent += float(r["cpu_time"])
-                r["cpu_time"] = np.float64(r["cpu_time"] + pilot[j]["cpu_time"])
-                results[j] = r
-            for j in pilot:
-                if j in results:
-                    try:
-                        store.save_spot(ESCALATION_RECORD + j, index_of(j), results[j])
-                    except OSError as exc:
-                        run.log(f"warning: cannot save the resume record of escalated point {j} "
-                                 f"({write_failure_reason(exc)})")
-            bar.update(len(todo[w:w + wave]))
-            w += wave
-    return results, spent, failed
+            for j in sorted(finished):
+                spent += cost(j, finished[j])
+                keep(j, finished[j], before=pilot[j])
+            save(sorted(pilot))
+            bar.update(len(todo[w:w + WAVE]))
+            w += WAVE
+
+    # top-up: points still short of the target's standard error, in the covering order
+    topup, committed = {}, 0.0
+    for j in sorted(results):
+        r = results[j]
+        if esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target):
+            continue
+        n = esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
+        rate = cost(j, r) / max(int(r["samples"]), 1)
+        if n > int(r["samples"]) and spent + committed + rate * n <= acc.budget_s:
+            topup[submit(j, n, "topup")] = j
+            committed += rate * n
+    finished = gather(topup) if topup else {}
+    for j in sorted(finished):
+        spent += cost(j, finished[j])
+        keep(j, finished[j], before=results[j])
+    save(sorted(finished))
+    for r in results.values():
+        r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
+    cpu = sum(float(r["cpu_time"]) for r in results.values())
+    return results, spent, cpu, failed
 
 
 def accuracy_line(info):
@@ -222,7 +258,7 @@ def accuracy_line(info):
     left = info["n_candidates"] - info["n_escalated"]
     return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise; "
             f"Monte Carlo at {info['n_escalated']} ({info['n_coupled']} coupled, {info['n_condensed']} condensed; "
-            f"{info['n_short']} short of the target's standard error) in {info['cpu_s']:.1f} of "
-            f"{info['budget_s']:g} CPU s; {left} without Monte Carlo"
+            f"{info['n_short']} short of the target's standard error) for {info['cost_s']:.1f} of "
+            f"{info['budget_s']:g} CPU s by the cost model ({info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "
             f"best estimates: {methods}")

@@ -196,7 +196,7 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
     n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
     out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
-               n_used=np.int32(samples - n_over - n_div),
+               n_used=np.int32(samples - n_over - n_div), n_steps=np.int64(ds["n_steps"].values.sum()),
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
     if linear is not None:
@@ -209,8 +209,9 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
 
 
 def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
-    """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks and
-    the CPU time it took (``cpu_time`` [s], of the worker thread)."""
+    """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks,
+    the integration steps of all samples (``n_steps``, for the cost model) and the CPU time it took
+    (``cpu_time`` [s], of the worker thread)."""
     start = time.thread_time()
     run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed)
     out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples)}
@@ -219,7 +220,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
         at = int(np.nanargmax(history)) if np.any(np.isfinite(history)) else -1
         out[f"peak_{name}"] = np.float64(history[at] if at >= 0 else np.nan)
         out[f"peak_{name}_se"] = np.float64(se[at] if at >= 0 else np.nan)
-    for name in ("n_overturned", "n_diverged", "n_used", "peak_abs_theta", "sample_state"):
+    for name in ("n_overturned", "n_diverged", "n_used", "n_steps", "peak_abs_theta", "sample_state"):
         out[name] = run[name]
     return out
 

@@ -432,6 +432,9 @@ class ResultFile:
         var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
         var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
         var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
+        var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
+        var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
+            fill=False)
         for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
             var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
         at = np.asarray(flat_indices, dtype=np.int64)

@@ -7,7 +7,7 @@ import xarray as xr
 from helpers import GRID
 
 from screening.analysis.correction import linearization_promises
-from screening.status import BestMethod, EscalationModel, PointStatus
+from screening.status import BestMethod, EscalationModel, PointStatus, TargetMet
 from screening.workflow.study import parse_study
 from screening.workflow.sweep import run_sweep
 
@@ -27,11 +27,19 @@ def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp
     report = run_sweep(study, tmp_path / f"a{suffix}", client=client, progress=False, log=messages.append)
     info = report.accuracy
     assert info["n_escalated"] >= 1 and info["n_candidates"] >= info["n_escalated"]
-    assert info["cpu_s"] <= study.accuracy.budget_s
+    # the budget holds on the cost model; the measured CPU time is reported (a loose check: the cost
+    # model is ~1.3x the development machine's rate, a loaded CI machine may be slower)
+    assert info["cost_s"] <= study.accuracy.budget_s
+    assert 0 < info["cpu_s"] <= 3 * study.accuracy.budget_s
     assert any(m.startswith("accuracy (target 0.15):") for m in messages)
     with xr.open_dataset(tmp_path / f"a{suffix}") as ds:
-        assert float(ds.attrs["accuracy_cpu_s"]) <= 4.0
+        assert float(ds.attrs["accuracy_cost_s"]) <= 4.0
         assert float(ds["esc_cpu_time"].sum()) == pytest.approx(float(ds.attrs["accuracy_cpu_s"]), rel=1e-9)
+        assert float(ds["esc_cost"].sum()) == pytest.approx(float(ds.attrs["accuracy_cost_s"]), rel=1e-9)
+        # the per-point flag says whether the standard error reached target / 2 of the peak
+        met = ds["esc_peak_var_theta_se"].values <= 0.075 * ds["esc_peak_var_theta"].values
+        np.testing.assert_array_equal(ds["esc_target_met"].values == TargetMet.target_met, met)
+        assert int(ds.attrs["accuracy_n_short_of_target"]) == int(np.sum(~met))
         method = ds["best_method"].values.reshape(-1)
         value = ds["best_peak_var_theta"].values.reshape(-1)
         se = ds["best_peak_var_theta_se"].values.reshape(-1)
@@ -44,7 +52,7 @@ def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp
         np.testing.assert_array_equal(value[at], ds["esc_peak_var_theta"].values)
         sl_dot = ds["var_theta_dot"].values.reshape(-1, ds.sizes["t"])[at]
         np.testing.assert_array_equal(ds["esc_sl_peak_var_theta_dot"].values, np.nanmax(sl_dot, axis=1))
-        assert np.all(ds["esc_samples"].values >= 32)
+        assert np.all(ds["esc_samples"].values >= 64)
         assert np.all(ds["esc_n_used"].values + ds["esc_n_overturned"].values + ds["esc_n_diverged"].values
                       == ds["esc_samples"].values)
         # linearization only where the rule promises the target, never at a stopped point
@@ -57,6 +65,11 @@ def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp
         assert np.all(np.isfinite(se[reliable]) & (se[reliable] > 0)) and np.all(np.isnan(se[~reliable]))
         assert ds["best_method"].attrs["flag_meanings"].split() == [m.name for m in BestMethod]
         assert ds["best_peak_var_theta_se"].attrs["units"] == "rad2"
+        # info counts the best estimates by method
+        from screening.report.text import describe
+
+        counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
+        assert f"best estimates ([accuracy] target 0.15): {counts}; Monte Carlo at {at.size} point(s)" in describe(ds)
 
 
 
@@ -101,7 +114,28 @@ def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkey
     report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda msg: None)
     # no point of the record runs again; the resumed run may spend what is left of the budget elsewhere
     assert first and not first & set(calls)
-    assert report.accuracy["cpu_s"] <= study.accuracy.budget_s
+    assert report.accuracy["cost_s"] <= study.accuracy.budget_s
     with xr.open_dataset(tmp_path / "a.nc") as ds:
         assert first <= set(ds["esc_grid_index"].values.tolist())
         assert np.all(np.isfinite(ds["esc_peak_var_theta"].values))
+
+
+def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monkeypatch):
+    # the budget is planned on the cost model (integration steps), not on the measured CPU time: the same
+    # points run with the same samples, so the best estimates are identical
+    from screening.workflow import accuracy
+
+    study = parse_study(TARGET)
+    waits = []
+    real = accuracy.interruptible
+    monkeypatch.setattr(accuracy, "interruptible", lambda it: waits.append(1) or real(it))
+    runs = []
+    for name in ("a.nc", "b.nc"):
+        run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
+        with xr.open_dataset(tmp_path / name) as ds:
+            runs.append({k: ds[k].values.copy() for k in ("esc_grid_index", "esc_samples", "esc_cost", "best_method",
+                                                          "best_peak_var_theta", "best_peak_var_theta_se",
+                                                          "best_peak_var_theta_dot")})
+    for key, value in runs[0].items():
+        np.testing.assert_array_equal(value, runs[1][key], err_msg=key)
+    assert waits                                  # the waits for Monte Carlo results let a Ctrl-C through

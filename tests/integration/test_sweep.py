@@ -200,7 +200,7 @@ def fake_monte_carlo(block, foundation, excitation, n_samples=1000, model="coupl
             "var_theta_se": ("t", 0.1 * scale * t), "var_theta_dot_se": ("t", scale * t),
             "peak_abs_theta": ("sample", scale * np.arange(n_samples)),
             "overturned": ("sample", np.arange(n_samples) < 3), "diverged": ("sample", np.arange(n_samples) == 3),
-            "n_overturned": ((), 3), "n_diverged": ((), 1)}
+            "n_steps": ("sample", np.full(n_samples, 100)), "n_overturned": ((), 3), "n_diverged": ((), 1)}
     return xr.Dataset(data, coords={"t": t})
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from screening.analysis.correction import (MAX_SE, MIN_POINTS, best_estimates, fit_correction, point_features,
-                                           predict_correction)
+                                           predict_correction, within_band)
 from screening.status import BestMethod, EscalationModel, PointStatus, Trust
 
 
@@ -74,7 +74,7 @@ def test_best_estimates_label_every_point_and_never_invent():
     status[-1] = PointStatus.k_eq_negative
     trust = np.full(n, int(Trust.check))
     trust[:10] = Trust.trusted
-    low, high = np.full(n, -0.3), np.full(n, 0.3)
+    low, high = np.full(n, -0.3), np.full(n, 3.0)      # SL over-predicts by 35-270 %: inside the band
     low[:10], high[:10] = -0.05, 0.08                   # the rule promises 0.15 there
     x[5] = [9.0, 9.0]                                    # far outside the escalated points (but promised)
     x[150] = [9.0, 9.0]                                  # far outside: the correction must not reach it
@@ -93,3 +93,24 @@ def test_best_estimates_label_every_point_and_never_invent():
     for i in (150, n - 1):                               # extrapolation, stopped SL
         assert method[i] == BestMethod.unreliable and np.isnan(se[i])
     assert np.isnan(value[n - 1])
+
+
+def test_a_correction_that_contradicts_the_trust_band_is_not_vouched_for():
+    # y = log(MCS / SL) = 0.15 implies an SL error of exp(-0.15) - 1 = -14 %
+    assert within_band(np.array([0.15, 0.15, 0.15]), np.array([-0.2, -1.0, np.nan]),
+                       np.array([0.0, -0.158, np.nan])).tolist() == [True, False, True]
+    # the calibration's band says SL under-predicts by at least 30 % ([-1, -0.3]); the escalated points
+    # nearby say only ~10 %: the corrected value is not vouched for there (unreliable, NaN se)
+    rng = np.random.default_rng(5)
+    n = 60
+    x = rng.uniform(0, 1, size=(n, 2))
+    sl = np.full(n, 1e-6)
+    status, trust = np.zeros(n, dtype=int), np.full(n, int(Trust.untrusted))
+    low, high = np.full(n, -1.0), np.full(n, 0.5)
+    low[:5], high[:5] = -1.0, -0.3
+    esc = np.arange(10, 50)
+    mc = sl[esc] * 1.1 * (1 + 0.02 * rng.standard_normal(esc.size))
+    value, se, method, _ = best_estimates(sl, status, trust, low, high, 0.15, x, esc, mc, 0.02 * mc,
+                                          np.full(esc.size, int(EscalationModel.coupled)))
+    assert np.all(method[:5] == BestMethod.unreliable) and np.all(np.isnan(se[:5]))
+    assert np.all(method[50:] == BestMethod.corrected_linearization)

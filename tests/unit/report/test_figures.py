@@ -209,3 +209,32 @@ def test_fragility_monte_carlo_points_take_the_colour_of_their_curve(drawn):
     for container, eps in zip(markers, ds["eps"].values):
         assert to_rgba(container.lines[0].get_color()) == to_rgba(curves[f"eps={eps:.3g}"])
     assert any(t.startswith("flagged (status != ok): 1 of 10") for t in _texts(drawn[0]))
+
+
+def test_fragility_draws_the_best_estimate_band_and_says_which_method_gave_each_point(drawn):
+    from screening.report.fragility_figures import BEST_MARKERS
+    from screening.status import BestMethod
+
+    ds = _flagged(("S0",), (6,))
+    s0 = ds["S0"]
+    p = xr.DataArray(np.linspace(0.05, 0.9, 6), dims="S0", coords={"S0": s0})
+    method = np.array([BestMethod.linearization, BestMethod.corrected_linearization, BestMethod.coupled_monte_carlo,
+                       BestMethod.condensed_monte_carlo, BestMethod.unreliable, BestMethod.unreliable], dtype=np.int8)
+    low = (p - 0.05).where(method != BestMethod.unreliable)
+    frag = xr.Dataset({"p_exceed": p, "best_p_exceed": p + 0.01, "best_p_exceed_low": low,
+                       "best_p_exceed_high": low + 0.1, "best_method": ("S0", method)},
+                      attrs={"threshold": 0.02, "relative_to": "slenderness", "method": "vanmarcke"})
+    frag["S0"].attrs["units"] = "m2 s-3"
+    fragility_figures.plot_fragility(frag, "S0", "unused.png", flags=ds[["status", "sl_trust"]])
+    ax = drawn[0].axes[0]
+    texts = _texts(drawn[0])
+    for m in BestMethod:
+        marker, label = BEST_MARKERS[m]
+        assert label in texts
+        line = next(line for line in ax.get_lines() if line.get_label() == label)
+        np.testing.assert_array_equal(line.get_xdata(), s0.values[method == m])
+    assert "best estimate band (+-2 se)" in texts
+    assert any(t.startswith("best estimates (all points): linearization 1") and "unreliable 2" in t for t in texts)
+    band = next(c for c in ax.collections if c.get_label() == "best estimate band (+-2 se)")
+    assert band.get_paths()                                 # the shaded band exists (NaN where unreliable)
+    assert any(t.startswith("flagged (status != ok): 1") for t in texts)     # flag marks kept
