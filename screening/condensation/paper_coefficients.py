@@ -48,7 +48,7 @@ import numpy as np
 
 from screening.condensation.paper import damping_inner, uplift_threshold
 from screening.condensation.uplift_integrals import gaussian_uplift_integrals, uplift_integrals_q
-from screening.kernels.signatures import moment_coefficients_signature
+from screening.kernels.signatures import FMA, moment_coefficients_signature
 
 def coefficient_constants(block, foundation):
     """Parameter-only constants of the closed forms (SI): ``C1, K0, mgh, E0, theta_ul``."""
@@ -105,7 +105,7 @@ def records(block, foundation):
     return out
 
 
-@numba.njit(moment_coefficients_signature(RECORD), cache=True)
+@numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
 def equivalent_coefficients_jit(p, table, var_theta, cov):
     """Compiled twin of :func:`equivalent_coefficients` from the moments ``var_theta`` [rad2], ``cov`` [rad2/s].
 

@@ -1,7 +1,8 @@
 """The universal Gaussian uplift integrals of the paper's condensation, closed form and tabulated.
 
 :func:`gaussian_uplift_integrals` evaluates them in closed form (numpy, the reference);
-:func:`uplift_integrals_log` is the compiled twin the moment solver reads.
+:func:`uplift_integrals` (from ``r``) and :func:`uplift_integrals_q` (from ``q = r^2``, what the moment solver
+reads) are the compiled twins.
 
 The sigma-dependent parts of ``c_eq`` and ``k_eq`` are universal functions of
 ``r = sigma_theta / theta_ul`` only (see :mod:`screening.condensation.paper_coefficients`), so they are

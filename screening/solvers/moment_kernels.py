@@ -9,12 +9,17 @@ integrators of one parameter point:
   theta', u_g, u_g')`` in fixed-size arrays with constant-length loops.
 
 Both run the same Dormand–Prince 5(4) pair, controller and dense output
-(:mod:`screening.kernels.dopri`); the PI controller works on the logarithms of the error norms
-(one ``log`` and one ``exp`` per step instead of two powers) and the stage gains and the
-white-noise right-hand side multiply by reciprocals computed once instead of dividing (about 7 %
-less time per step; results change at the solver tolerance, ~1e-9 on peak ``var_theta``).  The
-condensation enters only through its compiled ``(c_eq, k_eq)`` function ``coefficients`` (a
-first-class function), its record ``cond`` and its table (``table``).
+(:mod:`screening.kernels.dopri`) and share every piece of step bookkeeping through the inlined
+helpers below (first step, trial step and step budget, accept/reject verdict, peak search,
+history stores, end of step with status and PI controller): only the state and its stages are
+written per state size.  The PI controller works on the logarithms of the error norms (one
+``log`` and one ``exp`` per step); the envelope's two exponentials are carried from step to step
+(:func:`envelope_state`, :func:`stage_gains`: no ``exp`` per step).  The condensation enters
+only through its compiled ``(c_eq, k_eq)`` function ``coefficients`` (a first-class function),
+its record ``cond`` and its table (``table``); the paper's reads its table without a logarithm
+(:mod:`screening.condensation.uplift_integrals`).  Cost (white noise, one core): ~190 ns per
+step, ~14 ns of it per ``coefficients`` call (six per step), ~15 ns the controller
+(``benchmarks/bench_linearization.py``).
 
 Histories are written only when ``store`` is true (output arrays with at least one row per point
 otherwise untouched): a screen without histories skips the dense output, the coefficient
@@ -32,6 +37,7 @@ from screening.kernels import dopri
 from screening.kernels.dopri import (
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
     B1, B3, B4, B5, B6, C2, C3, C4, E1, E3, E4, E5, E6, E7, dense_value)
+from screening.kernels.signatures import FMA
 from screening.model.excitation import stationary_filter_moments_jit
 from screening.status import PointStatus
 
@@ -245,7 +251,7 @@ def _white_scales(osc):
 SUMMARIES = ("status", "t_stop", "n_steps", "n_rejected", "peak_var_theta", "t_peak_var_theta", "min_k_eq")
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=FMA)
 def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
                       var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """One white-noise point; histories into row ``i`` of the outputs only if ``store``.  Returns the
@@ -389,7 +395,7 @@ def _kt_scales(osc, scale):
             idx += 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=FMA)
 def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
                    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """One Kanai–Tajimi point; histories into row ``i`` of the outputs only if ``store``.  Returns the
