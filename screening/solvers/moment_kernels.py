@@ -17,7 +17,7 @@ written per state size.  The PI controller works on the logarithms of the error 
 (:func:`envelope_state`, :func:`stage_gains`: no ``exp`` per step).  The condensation enters
 only through its compiled ``(c_eq, k_eq)`` function ``coefficients`` (a first-class function),
 its record ``cond`` and its table (``table``); the paper's reads its table without a logarithm
-(:mod:`screening.condensation.uplift_integrals`).  Cost (white noise, one core): ~190 ns per
+(:mod:`screening.condensation.uplift_integrals`).  Cost (white noise, one core): ~170 ns per
 step, ~14 ns of it per ``coefficients`` call (six per step), ~15 ns the controller
 (``benchmarks/bench_linearization.py``).
 
