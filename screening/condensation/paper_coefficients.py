@@ -42,14 +42,13 @@ Method and how it is checked: ``docs/method.md#closed-forms-for-the-paper-conden
 
 from __future__ import annotations
 
-import math
 
 import numba
 import numpy as np
 
 from screening.condensation.paper import damping_inner, uplift_threshold
-from screening.condensation.uplift_integrals import gaussian_uplift_integrals, uplift_integrals_log
-from screening.kernels.signatures import moment_coefficients_signature
+from screening.condensation.uplift_integrals import gaussian_uplift_integrals, uplift_integrals_q
+from screening.kernels.signatures import FMA, moment_coefficients_signature
 
 def coefficient_constants(block, foundation):
     """Parameter-only constants of the closed forms (SI): ``C1, K0, mgh, E0, theta_ul``."""
@@ -89,14 +88,14 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
 
 
 #: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units).
-RECORD = np.dtype([("theta_ul", "f8"), ("log_theta_ul", "f8"), ("C1", "f8"), ("K0", "f8"), ("mgh", "f8"),
+RECORD = np.dtype([("theta_ul", "f8"), ("inv_theta_ul2", "f8"), ("C1", "f8"), ("K0", "f8"), ("mgh", "f8"),
                    ("E0", "f8"), ("eps", "f8"), ("winkler", "f8")])
 
 
 def records(block, foundation):
     """One :data:`RECORD` per point of the (flat, 1-d) model fields."""
     const = coefficient_constants(block, foundation)
-    fields = {"theta_ul": const["theta_ul"], "log_theta_ul": np.log(const["theta_ul"]), "C1": const["C1"],
+    fields = {"theta_ul": const["theta_ul"], "inv_theta_ul2": 1.0 / const["theta_ul"] ** 2, "C1": const["C1"],
               "K0": const["K0"], "mgh": const["mgh"], "E0": const["E0"], "eps": foundation.eps,
               "winkler": 1.0 if foundation.winkler else 0.0}
     arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in fields.values()))
@@ -106,19 +105,15 @@ def records(block, foundation):
     return out
 
 
-@numba.njit(moment_coefficients_signature(RECORD), cache=True)
+@numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
 def equivalent_coefficients_jit(p, table, var_theta, cov):
     """Compiled twin of :func:`equivalent_coefficients` from the moments ``var_theta`` [rad2], ``cov`` [rad2/s].
 
     ``p``: a :data:`RECORD`; ``table``: the universal table of
     :func:`screening.condensation.uplift_integrals.coefficient_table`.  Finite at ``var_theta = 0``.
     """
-    if var_theta > 0.0:
-        p_in, tail_m12, tail_m32, p32 = uplift_integrals_log(0.5 * math.log(var_theta) - p.log_theta_ul,
-                                                             table)
-    else:
-        p_in, tail_m12, tail_m32, p32 = 1.0, 0.0, 0.0, 1.0
-    r2 = var_theta / (p.theta_ul * p.theta_ul)
+    q = var_theta * p.inv_theta_ul2                 # (sigma_theta / theta_ul)^2
+    p_in, tail_m12, tail_m32, p32 = uplift_integrals_q(q, table)
     if p.winkler == 0.0:
         c_shape = tail_m12
         coupling = 0.5 * tail_m12
@@ -129,5 +124,5 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     d_term = p.C1 * coupling * cov / var_theta if coupling > 0.0 else 0.0
     c_eq = p.C1 * (p_in + c_shape)
     k_eq = (p.K0 * (p_in + tail_m32) - p.mgh - d_term
-            + p.eps * p.E0 * (1.0 - 0.5 * p_in + 0.3 * r2 * p32 - 0.2 * tail_m12))
+            + p.eps * p.E0 * (1.0 - 0.5 * p_in + 0.3 * q * p32 - 0.2 * tail_m12))
     return c_eq, k_eq

@@ -60,7 +60,7 @@ import numpy as np
 
 from screening.condensation.base import MomentKernel
 from screening.kernels.interpolation import cubic, cubic_coefficients
-from screening.kernels.signatures import moment_coefficients_signature
+from screening.kernels.signatures import FMA, moment_coefficients_signature
 from screening.model.points import flatten, point_key, select
 
 #: Table grid in t = ln(sigma_theta / theta_ul).
@@ -271,7 +271,7 @@ def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
     return cubic(table, i, 0, s), cubic(table, i, 1, s), cubic(table, i, 2, s)
 
 
-@numba.njit(moment_coefficients_signature(RECORD), cache=True)
+@numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
 def equivalent_coefficients_jit(p, table, var_theta, cov):
     """Compiled twin of :func:`equivalent_coefficients`, from the moments ``var_theta`` [rad2] and
     ``cov`` [rad2/s], on one point's table: ``c_eq = e_c``, ``k_eq = e_k + cov d_c``."""

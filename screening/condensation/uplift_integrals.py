@@ -1,14 +1,19 @@
 """The universal Gaussian uplift integrals of the paper's condensation, closed form and tabulated.
 
 :func:`gaussian_uplift_integrals` evaluates them in closed form (numpy, the reference);
-:func:`uplift_integrals_log` is the compiled twin the moment solver reads.
+:func:`uplift_integrals` (from ``r``) and :func:`uplift_integrals_q` (from ``q = r^2``, what the moment solver
+reads) are the compiled twins.
 
 The sigma-dependent parts of ``c_eq`` and ``k_eq`` are universal functions of
 ``r = sigma_theta / theta_ul`` only (see :mod:`screening.condensation.paper_coefficients`), so they are
-tabulated once, for every block and foundation, on a uniform grid in ``t = ln r`` with
+tabulated once, for every block and foundation, in ``q = r^2 = var_theta / theta_ul^2`` with
 their exact derivatives, and read back by cubic Hermite interpolation, stored as ready
-per-interval cubic coefficients (error ~1e-12, tested against the closed forms).  Below the grid every tail is zero to double precision;
-above it the small-``x`` series of the incomplete gamma functions is exact to rounding.
+per-interval cubic coefficients (error ~1e-13, tested against the closed forms).  The grid is an
+octave grid (:func:`screening.kernels.interpolation.octave_grid`, :data:`MANTISSA_BITS` bits: the
+spacing in ``ln q`` is 1/1024 to 1/512), so the compiled lookup finds its interval from the bits of
+``q`` (no logarithm in the solver's right-hand side).  Below the grid (``x > 512``) every tail
+is below 1e-220 and the limits are exact to double precision; above it the small-``x`` series
+of the incomplete gamma functions is exact to rounding.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import numba
 import numpy as np
 from scipy import special
 
-from screening.kernels.interpolation import cubic, cubic_coefficients
+from screening.kernels.interpolation import cubic, cubic_coefficients, octave_first, octave_grid, octave_position_jit
 
 #: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
 X_LIMIT = 700.0
@@ -67,10 +72,18 @@ def gaussian_uplift_integrals(r):
     return out
 
 
-#: Grid in t = ln(sigma_theta / theta_ul).
-T_LO = -0.5 * math.log(2.0 * X_LIMIT)
-T_HI = 18.0
-STEPS_PER_UNIT = 512
+#: Octave grid in q = (sigma_theta / theta_ul)^2: 2^Q_OCTAVE_LO .. 2^Q_OCTAVE_HI (x = 1/(2 q) from 512
+#: down to 1e-16), MANTISSA_BITS bits of mantissa per node.
+Q_OCTAVE_LO = -10
+Q_OCTAVE_HI = 52
+MANTISSA_BITS = 9
+#: Interval index of the first node (:func:`screening.kernels.interpolation.octave_first`) and
+#: number of intervals.
+FIRST = octave_first(Q_OCTAVE_LO, MANTISSA_BITS)
+N_INTERVALS = (Q_OCTAVE_HI - Q_OCTAVE_LO) << MANTISSA_BITS
+#: The grid's ends in r = sigma_theta / theta_ul.
+R_LO = 2.0 ** (0.5 * Q_OCTAVE_LO)
+R_HI = 2.0 ** (0.5 * Q_OCTAVE_HI)
 
 # Columns of the table.
 P_IN, TAIL_M12, TAIL_M32, P32 = 0, 1, 2, 3
@@ -100,48 +113,44 @@ def _table_values_and_slopes(t):
 
 
 def node_values():
-    """``(values, slopes)``, each of shape ``(n_nodes, 4)``, on the grid ``T_LO + i / STEPS_PER_UNIT``."""
-    n = int(round((T_HI - T_LO) * STEPS_PER_UNIT)) + 1
-    t = T_LO + np.arange(n) / STEPS_PER_UNIT
-    return _table_values_and_slopes(t)
+    """``(q, values, slopes)`` on the octave grid in ``q = r^2`` (module docstring): values and slopes
+    ``d/dq`` of shape ``(N_INTERVALS + 1, 4)``."""
+    q = octave_grid(Q_OCTAVE_LO, Q_OCTAVE_HI, MANTISSA_BITS)
+    values, slopes_t = _table_values_and_slopes(0.5 * np.log(q))
+    return q, values, slopes_t / (2.0 * q[:, None])        # dt/dq = 1 / (2 q)
 
 
 @lru_cache(maxsize=1)
 def coefficient_table():
-    """The universal table: per-interval cubic coefficients ``(n_nodes, 16)`` of :func:`node_values`
-    (:func:`screening.kernels.interpolation.cubic_coefficients`, slopes in ``t``)."""
-    values, slopes = node_values()
-    table = cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
-    return table
+    """The universal table: per-interval cubic coefficients ``(N_INTERVALS + 1, 16)`` of :func:`node_values`
+    (:func:`screening.kernels.interpolation.cubic_coefficients`, variable ``q``)."""
+    q, values, slopes = node_values()
+    return cubic_coefficients(values, slopes, np.diff(q))
 
 
 @numba.njit(cache=True, inline="always")
 def uplift_integrals(r, table):
     """``(p_in, tail_m12, tail_m32, P(3/2, x))`` at ``r = sigma_theta / theta_ul`` >= 0."""
-    if not (r > 0.0):
-        return 1.0, 0.0, 0.0, 1.0
-    return uplift_integrals_log(math.log(r), table)
+    return uplift_integrals_q(r * r, table)
 
 
 @numba.njit(cache=True, inline="always")
-def uplift_integrals_log(t, table):
-    """As :func:`uplift_integrals`, from ``t = ln(sigma_theta / theta_ul)`` (``-inf`` allowed)."""
-    if t <= T_LO:
+def uplift_integrals_q(q, table):
+    """As :func:`uplift_integrals`, from ``q = r^2 = var_theta / theta_ul^2`` (any ``q <= 0``: the limits)."""
+    j, s = octave_position_jit(q, FIRST, MANTISSA_BITS)
+    if j < 0:
         return 1.0, 0.0, 0.0, 1.0
-    if t >= T_HI:
-        r = math.exp(t)
-        x = 0.5 / (r * r)
+    if j >= N_INTERVALS:
+        r = math.sqrt(q)
+        x = 0.5 / q
         sx = math.sqrt(x)
         return (2.0 / math.sqrt(math.pi) * sx * (1.0 - x / 3.0),
                 _C12 * r**-0.5 * (_G14 - 4.0 * x**0.25 + 0.8 * x**1.25),
                 _C32 * r**-1.5 * 4.0 * (x**-0.25 - _G34 + x**0.75 / 3.0),
                 x * sx / _G52 * (1.0 - 0.6 * x))
-    u = (t - T_LO) * STEPS_PER_UNIT
-    i = min(int(u), table.shape[0] - 2)
-    s = u - i
-    p_in = cubic(table, i, P_IN, s)
-    tail_m12 = cubic(table, i, TAIL_M12, s)
-    tail_m32 = cubic(table, i, TAIL_M32, s)
-    p32 = cubic(table, i, P32, s)
-    # the tails underflow smoothly to zero at T_LO: keep their interpolants non-negative
+    p_in = cubic(table, j, P_IN, s)
+    tail_m12 = cubic(table, j, TAIL_M12, s)
+    tail_m32 = cubic(table, j, TAIL_M32, s)
+    p32 = cubic(table, j, P32, s)
+    # keep the tails' interpolants non-negative near the grid's lower end
     return p_in, max(tail_m12, 0.0), max(tail_m32, 0.0), p32

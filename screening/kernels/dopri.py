@@ -51,6 +51,10 @@ FAC_MIN, FAC_MAX, SAFETY = 0.2, 5.0, 0.9
 ALPHA, BETA = 0.17, 0.04
 #: Exponent of the plain (I) controller after a rejected step: ``err^-1/5``.
 REJECT_EXPONENT = 0.2
+#: Logarithm of the "previous" error norm before the first step, and the floor of the error norm
+#: the controller sees.
+LOG_ERR_START = math.log(1e-4)
+ERR_FLOOR = 1e-10
 
 
 @numba.njit(cache=True, inline="always")
@@ -82,6 +86,14 @@ def accepted_step_factor(err, err_old):
 def accepted_step_factor_log(log_err, log_err_old):
     """:func:`accepted_step_factor` from the logarithms of the error norms (the scalar integrator's form)."""
     return min(FAC_MAX, max(FAC_MIN, SAFETY * math.exp(-ALPHA * log_err + BETA * log_err_old)))
+
+
+@numba.njit(cache=True, inline="always")
+def pi_step_factor(err, log_err_old):
+    """``(factor, log_err)`` after an accepted step of error norm ``err``: the PI factor of
+    :func:`accepted_step_factor_log` and the logarithm to pass as ``log_err_old`` next time."""
+    log_err = math.log(max(err, ERR_FLOOR))
+    return accepted_step_factor_log(log_err, log_err_old), log_err
 
 
 @numba.njit(cache=True, inline="always")
@@ -119,3 +131,11 @@ def dense_weights(theta):
             theta * (P50 + theta * (P51 + theta * (P52 + theta * P53))),
             theta * (P60 + theta * (P61 + theta * (P62 + theta * P63))),
             theta * (P70 + theta * (P71 + theta * (P72 + theta * P73))))
+
+
+@numba.njit(cache=True, inline="always")
+def dense_value(y0, k, h, theta):
+    """One component of the dense output at fraction ``theta`` of the step ``h``: ``y0`` at the step's
+    start, ``k = (K1, K3, K4, K5, K6, K7)`` its nonzero-weight stage derivatives (scalars)."""
+    w1, w3, w4, w5, w6, w7 = dense_weights(theta)
+    return y0 + h * (k[0] * w1 + k[1] * w3 + k[2] * w4 + k[3] * w5 + k[4] * w6 + k[5] * w7)

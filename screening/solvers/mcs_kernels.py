@@ -134,8 +134,6 @@ def _in_uplift(model, theta, z_cb, p):
     return abs(theta) > p.theta_ul
 
 
-LOG_1EM4 = math.log(1e-4)
-
 # The shared Dormand–Prince 5(4) tableau (screening.kernels.dopri) as scalars: 4 unrolled states.
 from screening.kernels.dopri import (  # noqa: E402  (scalar tableau, one home)
     A21 as _A21, A31 as _A31, A32 as _A32, A41 as _A41, A42 as _A42, A43 as _A43,
@@ -188,7 +186,7 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
     n_acc = 0
     n_rej = 0
     h_min_acc = np.inf
-    log_err_old = LOG_1EM4
+    log_err_old = dopri.LOG_ERR_START
     flight_start = -1.0
     k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, _hermite(row, acc, acc_dot, dt_grid, t), p)
     h = min(1e-4, h_max)
@@ -305,12 +303,11 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
             out_uplift[row, i_out] = _in_uplift(model, y0, y2, p)
             i_out += 1
         # --- next step size (PI control, Hairer's DOPRI5 constants)
-        log_err = math.log(max(err, 1e-10))
-        fac = dopri.accepted_step_factor_log(log_err, log_err_old)
+        fac, log_err = dopri.pi_step_factor(err, log_err_old)
         if rejected:
             fac = min(fac, 1.0)
         rejected = False
-        log_err_old = max(log_err, LOG_1EM4)
+        log_err_old = max(log_err, dopri.LOG_ERR_START)
         h_new = h * fac
         if landing and h_proposed > h:
             h_new = max(h_new, min(h_proposed, h_max))

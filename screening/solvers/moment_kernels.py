@@ -9,12 +9,17 @@ integrators of one parameter point:
   theta', u_g, u_g')`` in fixed-size arrays with constant-length loops.
 
 Both run the same Dormand–Prince 5(4) pair, controller and dense output
-(:mod:`screening.kernels.dopri`); the PI controller works on the logarithms of the error norms
-(one ``log`` and one ``exp`` per step instead of two powers) and the stage gains and the
-white-noise right-hand side multiply by reciprocals computed once instead of dividing (about 7 %
-less time per step; results change at the solver tolerance, ~1e-9 on peak ``var_theta``).  The
-condensation enters only through its compiled ``(c_eq, k_eq)`` function ``coefficients`` (a
-first-class function), its record ``cond`` and its table (``table``).
+(:mod:`screening.kernels.dopri`) and share every piece of step bookkeeping through the inlined
+helpers below (first step, trial step and step budget, accept/reject verdict, peak search,
+history stores, end of step with status and PI controller): only the state and its stages are
+written per state size.  The PI controller works on the logarithms of the error norms (one
+``log`` and one ``exp`` per step); the envelope's two exponentials are carried from step to step
+(:func:`envelope_state`, :func:`stage_gains`: no ``exp`` per step).  The condensation enters
+only through its compiled ``(c_eq, k_eq)`` function ``coefficients`` (a first-class function),
+its record ``cond`` and its table (``table``); the paper's reads its table without a logarithm
+(:mod:`screening.condensation.uplift_integrals`).  Cost (white noise, one core): ~170 ns per
+step, ~14 ns of it per ``coefficients`` call (six per step), ~15 ns the controller
+(``benchmarks/bench_linearization.py``).
 
 Histories are written only when ``store`` is true (output arrays with at least one row per point
 otherwise untouched): a screen without histories skips the dense output, the coefficient
@@ -31,7 +36,8 @@ import numpy as np
 from screening.kernels import dopri
 from screening.kernels.dopri import (
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
-    B1, B3, B4, B5, B6, C2, C3, C4, E1, E3, E4, E5, E6, E7, dense_weights)
+    B1, B3, B4, B5, B6, C2, C3, C4, E1, E3, E4, E5, E6, E7, dense_value)
+from screening.kernels.signatures import FMA
 from screening.model.excitation import stationary_filter_moments_jit
 from screening.status import PointStatus
 
@@ -43,9 +49,6 @@ K_EQ_NEGATIVE = PointStatus.k_eq_negative
 BEYOND_SLENDERNESS = PointStatus.sigma_theta_beyond_slenderness
 STEP_BUDGET = PointStatus.step_budget_exhausted
 NON_FINITE = PointStatus.non_finite_moments
-
-#: Logarithm of the previous error norm before the first step.
-LOG_ERR_START = math.log(1e-4)
 
 #: Bisection halvings locating the peak of var_theta inside a step (~6e-8 of a step).
 PEAK_HALVINGS = 24
@@ -61,32 +64,42 @@ def _exp_minus(x):
 
 
 @numba.njit(cache=True, inline="always")
-def _gain(osc, e1, e2, r1, r2, c):
-    """``m h q(t + c) / M`` from ``e1 = exp(-t/T1)``, ``e2 = exp(-t/T2)``, ``r1 = 1/T1``, ``r2 = 1/T2``
-    and the stage offset ``c`` [s]."""
-    return osc.gain * 4.0 * (e1 * _exp_minus(c * r1) - e2 * _exp_minus(c * r2))
+def envelope_rates(osc):
+    """``(1/T1, 1/T2)`` [1/s] of the envelope ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))``."""
+    return 1.0 / osc.T1, 1.0 / osc.T2
 
 
 @numba.njit(cache=True, inline="always")
-def initial_gain(osc, t):
-    """Input gain ``m h q(t) / M`` [1/m] at time ``t`` [s]."""
-    return osc.gain * (1.0 if osc.constant_envelope == 1.0 else
-                       4.0 * (math.exp(-t / osc.T1) - math.exp(-t / osc.T2)))
+def envelope_state(osc, t):
+    """``(exp(-t/T1), exp(-t/T2))`` at time ``t`` [s]: the envelope's state, carried from step to step
+    by the factors of :func:`stage_gains` (no ``exp`` per step)."""
+    r1, r2 = envelope_rates(osc)
+    return math.exp(-t * r1), math.exp(-t * r2)
 
 
 @numba.njit(cache=True, inline="always")
-def stage_gains(osc, t, h):
-    """Input gains at the stage times ``t + C_s h`` of stages 2..6 (stage 7 shares stage 6's time)."""
+def initial_gain(osc, e1, e2):
+    """Input gain ``m h q(t) / M`` [1/m] from the :func:`envelope_state` ``(e1, e2)`` at ``t``."""
+    return osc.gain * (1.0 if osc.constant_envelope == 1.0 else 4.0 * (e1 - e2))
+
+
+@numba.njit(cache=True, inline="always")
+def stage_gains(osc, e1, e2, h):
+    """Input gains at the stage times ``t + C_s h`` of stages 2..6 (stage 7 shares stage 6's time)
+    from the :func:`envelope_state` ``(e1, e2)`` at ``t``, and the factors ``(exp(-h/T1), exp(-h/T2))``
+    taking that state to ``t + h``: ``(a2, a3, a4, a5, a6, f1, f2)``."""
     if osc.constant_envelope == 1.0:
         g = osc.gain
-        return g, g, g, g, g
-    r1 = 1.0 / osc.T1
-    r2 = 1.0 / osc.T2
-    e1 = math.exp(-t * r1)
-    e2 = math.exp(-t * r2)
-    return (_gain(osc, e1, e2, r1, r2, C2 * h), _gain(osc, e1, e2, r1, r2, C3 * h),
-            _gain(osc, e1, e2, r1, r2, C4 * h), _gain(osc, e1, e2, r1, r2, dopri.C5 * h),
-            _gain(osc, e1, e2, r1, r2, h))
+        return g, g, g, g, g, 1.0, 1.0
+    r1, r2 = envelope_rates(osc)
+    g4 = 4.0 * osc.gain
+    f1 = _exp_minus(h * r1)
+    f2 = _exp_minus(h * r2)
+    return (g4 * (e1 * _exp_minus(C2 * h * r1) - e2 * _exp_minus(C2 * h * r2)),
+            g4 * (e1 * _exp_minus(C3 * h * r1) - e2 * _exp_minus(C3 * h * r2)),
+            g4 * (e1 * _exp_minus(C4 * h * r1) - e2 * _exp_minus(C4 * h * r2)),
+            g4 * (e1 * _exp_minus(dopri.C5 * h * r1) - e2 * _exp_minus(dopri.C5 * h * r2)),
+            g4 * (e1 * f1 - e2 * f2), f1, f2)
 
 
 @numba.njit(cache=True, inline="always")
@@ -95,6 +108,116 @@ def p_uplift(osc, var_theta):
     if var_theta <= 0.0:
         return 0.0
     return math.erfc(osc.theta_ul / math.sqrt(2.0 * var_theta))
+
+
+@numba.njit(cache=True, inline="always")
+def first_step(osc, k0, h_max, t, t_end):
+    """``(h, code, t_end)`` before the first step: a twentieth of the linear period at ``k_eq = k0``,
+    or no step at all (``K_EQ_NEGATIVE``, ``t_end = t``) if ``k0`` is not positive."""
+    if not (k0 > 0.0):
+        return 0.0, K_EQ_NEGATIVE, t
+    return min(h_max, 0.05 / math.sqrt(k0 / osc.m_sdof), t_end - t), OK, t_end
+
+
+@numba.njit(cache=True, inline="always")
+def trial_step(h, t, t_end, steps, max_steps):
+    """``(h, code)`` of the next trial step: ``h`` cut to end at ``t_end``; ``STEP_BUDGET`` once
+    ``steps`` (accepted and rejected) reach ``max_steps``."""
+    if t + h > t_end:
+        h = t_end - t
+    return h, (STEP_BUDGET if steps >= max_steps else OK)
+
+
+@numba.njit(cache=True, inline="always")
+def judge_step(err, finite, h, t_end):
+    """Verdict on a trial step of error norm ``err``: ``(accepted, h, rejected, code)``.
+
+    Not finite: retried at a fifth of ``h`` (not counted as rejected) until ``h`` reaches
+    ``1e-12 t_end``, then ``NON_FINITE``; ``err > 1``: rejected, retried at the controller's ``h``.
+    """
+    if not finite:
+        if h > 1e-12 * t_end:
+            return False, h * 0.2, 0, OK
+        return False, h, 0, NON_FINITE
+    if err > 1.0:
+        return False, h * dopri.rejected_step_factor(err), 1, OK
+    return True, h, 0, OK
+
+
+@numba.njit(cache=True, inline="always")
+def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err, log_err_old):
+    """After an accepted step ``[t, t + h]`` ending at ``var_theta`` [rad2], ``k_eq`` [N m/rad]:
+    ``(t + h, e1, e2, h, log_err_old, lowest_k, code)`` with the envelope state carried by
+    ``(f1, f2)``, the next step size (PI controller, at most ``h_max``) and the status
+    (``K_EQ_NEGATIVE``, ``BEYOND_SLENDERNESS`` or ``OK``)."""
+    if k_eq < lowest_k:
+        lowest_k = k_eq
+    code = OK
+    if not (k_eq > 0.0):
+        code = K_EQ_NEGATIVE
+    elif var_theta > osc.slenderness ** 2:
+        code = BEYOND_SLENDERNESS
+    fac, log_err_old = dopri.pi_step_factor(err, log_err_old)
+    return t + h, e1 * f1, e2 * f2, min(h * fac, h_max), log_err_old, lowest_k, code
+
+
+@numba.njit(cache=True, inline="always")
+def peak_in_step(t, h, v0, v1, c0, c1, kv, kc, best, best_t):
+    """Largest ``var_theta`` so far, ``(best, best_t)``, after the accepted step ``[t, t + h]``.
+
+    ``v0, v1`` and ``c0, c1``: ``var_theta`` and ``cov`` at the step's ends; ``kv``, ``kc``: their
+    dense-output stage derivatives (:func:`screening.kernels.dopri.dense_value`).  Inside the step
+    a maximum sits where ``d var_theta / dt = 2 cov`` changes sign from + to -, located by
+    bisection (only where the step could hold a new maximum).
+    """
+    bound = max(v0, v1) + h * max(abs(c0), abs(c1)) * 2.0
+    if c0 > 0.0 and c1 <= 0.0 and bound > best:
+        lo = 0.0
+        hi = 1.0
+        for _ in range(PEAK_HALVINGS):
+            mid = 0.5 * (lo + hi)
+            if dense_value(c0, kc, h, mid) > 0.0:
+                lo = mid
+            else:
+                hi = mid
+        v = dense_value(v0, kv, h, 0.5 * (lo + hi))
+        if v > best:
+            best = v
+            best_t = t + 0.5 * (lo + hi) * h
+    if v1 > best:
+        best = v1
+        best_t = t + h
+    return best, best_t
+
+
+@numba.njit(cache=True, inline="always")
+def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
+                  var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """Write the moments ``(var, cv, vd)`` and the coefficients at them into column ``k`` of row ``i``."""
+    var_theta[i, k] = var
+    cov[i, k] = cv
+    var_theta_dot[i, k] = vd
+    c, kk = coefficients(cond, table, var, cv)
+    c_eq_o[i, k] = c
+    k_eq_o[i, k] = kk
+    p_upl[i, k] = p_uplift(osc, var)
+
+
+@numba.njit(cache=True, inline="always")
+def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h, y, ks,
+                        var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """Store every output time inside the accepted step ``[t, t + h]`` from the dense output; returns
+    the next output index.  ``y``: ``(var_theta, cov, var_theta_dot)`` at ``t``; ``ks``: their
+    stage derivatives (three tuples for :func:`screening.kernels.dopri.dense_value`)."""
+    nt = t_out.shape[0]
+    t_new = t + h
+    while next_out < nt and t_out[next_out] <= t_new * (1.0 + 1e-14):
+        theta = (t_out[next_out] - t) / h
+        store_outputs(coefficients, cond, table, osc, i, next_out, dense_value(y[0], ks[0], h, theta),
+                      dense_value(y[1], ks[1], h, theta), dense_value(y[2], ks[2], h, theta),
+                      var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        next_out += 1
+    return next_out
 
 
 # ---------------------------------------------------------------- white noise: 3 scalar moments
@@ -123,57 +246,35 @@ def _white_scales(osc):
     return (max(v, SCALE_FLOOR), max(math.sqrt(v) * math.sqrt(vd), SCALE_FLOOR), max(vd, SCALE_FLOOR))
 
 
-@numba.njit(cache=True, inline="always")
-def _store_white(coefficients, cond, table, osc, i, k, y0, y1, y2,
-                 var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
-    var_theta[i, k] = y0
-    cov[i, k] = y1
-    var_theta_dot[i, k] = y2
-    c, kk = coefficients(cond, table, y0, y1)
-    c_eq_o[i, k] = c
-    k_eq_o[i, k] = kk
-    p_upl[i, k] = p_uplift(osc, y0)
+#: Per-point summaries a kernel returns: ``(status, t_stop, n_steps, n_rejected, peak_var_theta,
+#: t_peak_var_theta, min_k_eq)``.
+SUMMARIES = ("status", "t_stop", "n_steps", "n_rejected", "peak_var_theta", "t_peak_var_theta", "min_k_eq")
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=FMA)
 def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
-                      var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                      status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
-    """One white-noise point into row ``i`` of the outputs (histories only if ``store``)."""
-    s0, s1, s2 = _white_scales(osc)
+                      var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """One white-noise point; histories into row ``i`` of the outputs only if ``store``.  Returns the
+    :data:`SUMMARIES`."""
     inv_m = 1.0 / osc.m_sdof
     S0 = osc.S0
-    nt = t_out.shape[0]
-    t_end = t_out[nt - 1]
     t = t_out[0]
+    e1, e2 = envelope_state(osc, t)
     y0 = 0.0
     y1 = 0.0
     y2 = 0.0
-    k1a, k1b, k1c, c0, k0 = _white_rhs(coefficients, cond, table, inv_m, S0, initial_gain(osc, t), y0, y1, y2)
+    k1a, k1b, k1c, c0, k0 = _white_rhs(coefficients, cond, table, inv_m, S0, initial_gain(osc, e1, e2), y0, y1, y2)
     if store:
-        _store_white(coefficients, cond, table, osc, i, 0, y0, y1, y2,
-                     var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
-    next_out = 1
-    best = 0.0
-    best_t = t
-    lowest_k = k0
-    steps = 0
-    rejected = 0
-    log_err_old = LOG_ERR_START
-    code = OK
-    h = 0.0
-    if not (k0 > 0.0):
-        code = K_EQ_NEGATIVE
-        t_end = t  # no step is taken
-    else:
-        h = min(h_max, 0.05 / math.sqrt(k0 / osc.m_sdof), t_end - t)
+        store_outputs(coefficients, cond, table, osc, i, 0, y0, y1, y2,
+                      var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+    h, code, t_end = first_step(osc, k0, h_max, t, t_out[t_out.shape[0] - 1])
+    next_out, best, best_t, lowest_k, steps, rejected, log_err_old = 1, 0.0, t, k0, 0, 0, dopri.LOG_ERR_START
+    s0, s1, s2 = _white_scales(osc)                 # absolute-tolerance scales
     while t < t_end:
-        if steps >= max_steps:
-            code = STEP_BUDGET
+        h, code = trial_step(h, t, t_end, steps, max_steps)
+        if code != OK:
             break
-        if t + h > t_end:
-            h = t_end - t
-        a2, a3, a4, a5, a6 = stage_gains(osc, t, h)
+        a2, a3, a4, a5, a6, f1, f2 = stage_gains(osc, e1, e2, h)
         z0 = y0 + h * (A21 * k1a)
         z1 = y1 + h * (A21 * k1b)
         z2 = y2 + h * (A21 * k1c)
@@ -198,79 +299,32 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
         n1 = y1 + h * (B1 * k1b + B3 * k3b + B4 * k4b + B5 * k5b + B6 * k6b)
         n2 = y2 + h * (B1 * k1c + B3 * k3c + B4 * k4c + B5 * k5c + B6 * k6c)
         k7a, k7b, k7c, c_new, k_new = _white_rhs(coefficients, cond, table, inv_m, S0, a6, n0, n1, n2)
-        ea = E1 * k1a + E3 * k3a + E4 * k4a + E5 * k5a + E6 * k6a + E7 * k7a
-        eb = E1 * k1b + E3 * k3b + E4 * k4b + E5 * k5b + E6 * k6b + E7 * k7b
-        ec = E1 * k1c + E3 * k3c + E4 * k4c + E5 * k5c + E6 * k6c + E7 * k7c
-        ea = abs(h * ea) / (rtol * s0 + rtol * max(abs(y0), abs(n0)))
-        eb = abs(h * eb) / (rtol * s1 + rtol * max(abs(y1), abs(n1)))
-        ec = abs(h * ec) / (rtol * s2 + rtol * max(abs(y2), abs(n2)))
-        finite = (ea < 1e300) and (eb < 1e300) and (ec < 1e300)
+        ea = abs(h * (E1 * k1a + E3 * k3a + E4 * k4a + E5 * k5a + E6 * k6a + E7 * k7a))
+        eb = abs(h * (E1 * k1b + E3 * k3b + E4 * k4b + E5 * k5b + E6 * k6b + E7 * k7b))
+        ec = abs(h * (E1 * k1c + E3 * k3c + E4 * k4c + E5 * k5c + E6 * k6c + E7 * k7c))
+        ea = ea / (rtol * s0 + rtol * max(abs(y0), abs(n0)))
+        eb = eb / (rtol * s1 + rtol * max(abs(y1), abs(n1)))
+        ec = ec / (rtol * s2 + rtol * max(abs(y2), abs(n2)))
         err = max(max(max(0.0, ea), eb), ec)
         steps += 1
-        if not finite:
-            if h > 1e-12 * t_end:
-                h *= 0.2
-                continue
-            code = NON_FINITE
+        accepted, h, rejects, code = judge_step(err, (ea < 1e300) and (eb < 1e300) and (ec < 1e300), h, t_end)
+        rejected += rejects
+        if code != OK:
             break
-        if err > 1.0:
-            h *= dopri.rejected_step_factor(err)
-            rejected += 1
+        if not accepted:
             continue
-        # accepted step [t, t + h]
-        t_new = t + h
+        ks = ((k1a, k3a, k4a, k5a, k6a, k7a), (k1b, k3b, k4b, k5b, k6b, k7b), (k1c, k3c, k4c, k5c, k6c, k7c))
         if store:
-            while next_out < nt and t_out[next_out] <= t_new * (1.0 + 1e-14):
-                w1, w3, w4, w5, w6, w7 = dense_weights((t_out[next_out] - t) / h)
-                _store_white(coefficients, cond, table, osc, i, next_out,
-                             y0 + h * (k1a * w1 + k3a * w3 + k4a * w4 + k5a * w5 + k6a * w6 + k7a * w7),
-                             y1 + h * (k1b * w1 + k3b * w3 + k4b * w4 + k5b * w5 + k6b * w6 + k7b * w7),
-                             y2 + h * (k1c * w1 + k3c * w3 + k4c * w4 + k5c * w5 + k6c * w6 + k7c * w7),
-                             var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
-                next_out += 1
-        # peak of var_theta: d(var)/dt = 2 cov changes sign from + to -
-        # (only where the step could hold a new maximum)
-        bound = max(y0, n0) + h * max(abs(y1), abs(n1)) * 2.0
-        if y1 > 0.0 and n1 <= 0.0 and bound > best:
-            lo = 0.0
-            hi = 1.0
-            for _ in range(PEAK_HALVINGS):
-                mid = 0.5 * (lo + hi)
-                w1, w3, w4, w5, w6, w7 = dense_weights(mid)
-                if y1 + h * (k1b * w1 + k3b * w3 + k4b * w4 + k5b * w5 + k6b * w6 + k7b * w7) > 0.0:
-                    lo = mid
-                else:
-                    hi = mid
-            w1, w3, w4, w5, w6, w7 = dense_weights(0.5 * (lo + hi))
-            v = y0 + h * (k1a * w1 + k3a * w3 + k4a * w4 + k5a * w5 + k6a * w6 + k7a * w7)
-            if v > best:
-                best = v
-                best_t = t + 0.5 * (lo + hi) * h
-        if n0 > best:
-            best = n0
-            best_t = t_new
-        if k_new < lowest_k:
-            lowest_k = k_new
+            next_out = store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h, (y0, y1, y2), ks,
+                                           var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        best, best_t = peak_in_step(t, h, y0, n0, y1, n1, ks[0], ks[1], best, best_t)
         y0, y1, y2 = n0, n1, n2
         k1a, k1b, k1c = k7a, k7b, k7c
-        t = t_new
-        if not (k_new > 0.0):
-            code = K_EQ_NEGATIVE
+        t, e1, e2, h, log_err_old, lowest_k, code = end_of_step(osc, t, h, h_max, e1, e2, f1, f2, y0, k_new,
+                                                                lowest_k, err, log_err_old)
+        if code != OK:
             break
-        if y0 > osc.slenderness ** 2:
-            code = BEYOND_SLENDERNESS
-            break
-        log_err = math.log(max(err, 1e-10))
-        fac = dopri.accepted_step_factor_log(log_err, log_err_old)
-        log_err_old = log_err
-        h = min(h * fac, h_max)
-    status[i] = code
-    t_stop[i] = t
-    n_steps[i] = steps
-    n_rejected[i] = rejected
-    peak_var[i] = best
-    t_peak[i] = best_t
-    min_k_eq[i] = lowest_k
+    return code, t, steps, rejected, best, best_t, lowest_k
 
 
 # ---------------------------------------------------------------- Kanai-Tajimi: 10 moments
@@ -341,24 +395,11 @@ def _kt_scales(osc, scale):
             idx += 1
 
 
-@numba.njit(cache=True, inline="always")
-def _kt_dense(y, K1, K3, K4, K5, K6, K7, h, theta, j):
-    w1, w3, w4, w5, w6, w7 = dense_weights(theta)
-    return y[j] + h * (K1[j] * w1 + K3[j] * w3 + K4[j] * w4 + K5[j] * w5 + K6[j] * w6 + K7[j] * w7)
-
-
-@numba.njit(cache=True, inline="always")
-def _store_kt(coefficients, cond, table, osc, i, k, y0, y1, y4,
-              var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
-    _store_white(coefficients, cond, table, osc, i, k, y0, y1, y4,
-                 var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
-
-
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=FMA)
 def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
-                   var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                   status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
-    """One Kanai–Tajimi point into row ``i`` of the outputs (histories only if ``store``)."""
+                   var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """One Kanai–Tajimi point; histories into row ``i`` of the outputs only if ``store``.  Returns the
+    :data:`SUMMARIES`."""
     n = N_KT
     y = np.zeros(n)
     yn = np.empty(n)
@@ -371,35 +412,20 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
     K6 = np.empty(n)
     K7 = np.empty(n)
     scale = np.empty(n)
-    _kt_scales(osc, scale)
-    nt = t_out.shape[0]
-    t_end = t_out[nt - 1]
     t = t_out[0]
-    c0, k0 = _kt_rhs(coefficients, cond, table, osc, initial_gain(osc, t), y, K1)
+    e1, e2 = envelope_state(osc, t)
+    c0, k0 = _kt_rhs(coefficients, cond, table, osc, initial_gain(osc, e1, e2), y, K1)
     if store:
-        _store_kt(coefficients, cond, table, osc, i, 0, y[0], y[1], y[4],
-                  var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
-    next_out = 1
-    best = 0.0
-    best_t = t
-    lowest_k = k0
-    steps = 0
-    rejected = 0
-    log_err_old = LOG_ERR_START
-    code = OK
-    h = 0.0
-    if not (k0 > 0.0):
-        code = K_EQ_NEGATIVE
-        t_end = t  # no step is taken
-    else:
-        h = min(h_max, 0.05 / math.sqrt(k0 / osc.m_sdof), t_end - t)
+        store_outputs(coefficients, cond, table, osc, i, 0, y[0], y[1], y[4],
+                      var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+    h, code, t_end = first_step(osc, k0, h_max, t, t_out[t_out.shape[0] - 1])
+    next_out, best, best_t, lowest_k, steps, rejected, log_err_old = 1, 0.0, t, k0, 0, 0, dopri.LOG_ERR_START
+    _kt_scales(osc, scale)                           # absolute-tolerance scales
     while t < t_end:
-        if steps >= max_steps:
-            code = STEP_BUDGET
+        h, code = trial_step(h, t, t_end, steps, max_steps)
+        if code != OK:
             break
-        if t + h > t_end:
-            h = t_end - t
-        a2, a3, a4, a5, a6 = stage_gains(osc, t, h)
+        a2, a3, a4, a5, a6, f1, f2 = stage_gains(osc, e1, e2, h)
         for j in range(n):
             z[j] = y[j] + h * (A21 * K1[j])
         _kt_rhs(coefficients, cond, table, osc, a2, z, K2)
@@ -427,63 +453,24 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
                 finite = False
             err = max(err, e)
         steps += 1
-        if not finite:
-            if h > 1e-12 * t_end:
-                h *= 0.2
-                continue
-            code = NON_FINITE
+        accepted, h, rejects, code = judge_step(err, finite, h, t_end)
+        rejected += rejects
+        if code != OK:
             break
-        if err > 1.0:
-            h *= dopri.rejected_step_factor(err)
-            rejected += 1
+        if not accepted:
             continue
-        # accepted step [t, t + h]
-        t_new = t + h
+        kv = (K1[0], K3[0], K4[0], K5[0], K6[0], K7[0])
+        kc = (K1[1], K3[1], K4[1], K5[1], K6[1], K7[1])
         if store:
-            while next_out < nt and t_out[next_out] <= t_new * (1.0 + 1e-14):
-                theta = (t_out[next_out] - t) / h
-                _store_kt(coefficients, cond, table, osc, i, next_out,
-                          _kt_dense(y, K1, K3, K4, K5, K6, K7, h, theta, 0),
-                          _kt_dense(y, K1, K3, K4, K5, K6, K7, h, theta, 1),
-                          _kt_dense(y, K1, K3, K4, K5, K6, K7, h, theta, 4),
-                          var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
-                next_out += 1
-        bound = max(y[0], yn[0]) + h * max(abs(y[1]), abs(yn[1])) * 2.0
-        if y[1] > 0.0 and yn[1] <= 0.0 and bound > best:
-            lo = 0.0
-            hi = 1.0
-            for _ in range(PEAK_HALVINGS):
-                mid = 0.5 * (lo + hi)
-                if _kt_dense(y, K1, K3, K4, K5, K6, K7, h, mid, 1) > 0.0:
-                    lo = mid
-                else:
-                    hi = mid
-            v = _kt_dense(y, K1, K3, K4, K5, K6, K7, h, 0.5 * (lo + hi), 0)
-            if v > best:
-                best = v
-                best_t = t + 0.5 * (lo + hi) * h
-        if yn[0] > best:
-            best = yn[0]
-            best_t = t_new
-        if k_new < lowest_k:
-            lowest_k = k_new
+            kd = (K1[4], K3[4], K4[4], K5[4], K6[4], K7[4])
+            next_out = store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h,
+                                           (y[0], y[1], y[4]), (kv, kc, kd),
+                                           var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        best, best_t = peak_in_step(t, h, y[0], yn[0], y[1], yn[1], kv, kc, best, best_t)
         y, yn = yn, y
         K1, K7 = K7, K1
-        t = t_new
-        if not (k_new > 0.0):
-            code = K_EQ_NEGATIVE
+        t, e1, e2, h, log_err_old, lowest_k, code = end_of_step(osc, t, h, h_max, e1, e2, f1, f2, y[0], k_new,
+                                                                lowest_k, err, log_err_old)
+        if code != OK:
             break
-        if y[0] > osc.slenderness ** 2:
-            code = BEYOND_SLENDERNESS
-            break
-        log_err = math.log(max(err, 1e-10))
-        fac = dopri.accepted_step_factor_log(log_err, log_err_old)
-        log_err_old = log_err
-        h = min(h * fac, h_max)
-    status[i] = code
-    t_stop[i] = t
-    n_steps[i] = steps
-    n_rejected[i] = rejected
-    peak_var[i] = best
-    t_peak[i] = best_t
-    min_k_eq[i] = lowest_k
+    return code, t, steps, rejected, best, best_t, lowest_k

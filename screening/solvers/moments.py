@@ -143,13 +143,12 @@ def _solve_batch(coefficients, conds, osc, tables, table_index, kt, t_out, rtol,
     for i in range(osc.shape[0]):
         j = table_index[i]
         if kt:
-            solve_point_kt(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max,
-                           max_steps, store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                           status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq)
+            summary = solve_point_kt(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max, max_steps,
+                                     store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
         else:
-            solve_point_white(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max,
-                              max_steps, store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                              status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq)
+            summary = solve_point_white(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max, max_steps,
+                                        store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        status[i], t_stop[i], n_steps[i], n_rejected[i], peak_var[i], t_peak[i], min_k_eq[i] = summary
 
 
 _SOLVERS = {}

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from screening.condensation.uplift_integrals import T_HI, T_LO, coefficient_table, uplift_integrals
+from screening.condensation.uplift_integrals import R_HI, R_LO, coefficient_table, uplift_integrals
 from screening.condensation.api import equivalent_coefficients_from_moments
 from screening.condensation.uplift_integrals import gaussian_uplift_integrals
 from screening.condensation.paper_coefficients import equivalent_coefficients_jit, records
@@ -11,7 +11,7 @@ from screening.condensation.paper_coefficients import equivalent_coefficients_ji
 
 def test_table_matches_closed_forms_across_and_beyond_the_grid():
     table = coefficient_table()
-    r = np.exp(np.concatenate([np.linspace(T_LO - 2, T_HI + 3, 20011), [-np.inf]]))
+    r = np.exp(np.concatenate([np.linspace(np.log(R_LO) - 2, np.log(R_HI) + 3, 20011), [-np.inf]]))
     G = gaussian_uplift_integrals(r)
     inner_over_r2 = np.where(r > 0, G["inner_m2"] / np.where(r > 0, r, 1) ** 2, 1.0)
     for i, ri in enumerate(r):

@@ -264,13 +264,17 @@ def test_compiled_uplift_probability_and_envelope_are_their_numpy_references(pap
     np.testing.assert_allclose(res["p_uplift"][ok], ref, rtol=1e-12, atol=1e-300)
     (block, fnd, exc), _ = flatten(paper_block, bed, WhiteNoise(1e-4, Envelope(4.0, 2.0)))
     osc = oscillator_records(block, fnd, exc, get_condensation("paper"))[0]
-    from screening.solvers.moment_kernels import initial_gain, stage_gains
+    from screening.solvers.moment_kernels import envelope_state, initial_gain, stage_gains
 
     gain = paper_block.m * paper_block.h / paper_block.m_sdof
     for t, h in ((0.0, 0.01), (2.7, 0.3), (19.5, 0.5)):
-        got = np.array([initial_gain(osc, t), *stage_gains(osc, t, h)])
+        e1, e2 = envelope_state(osc, t)
+        *gains, f1, f2 = stage_gains(osc, e1, e2, h)
+        got = np.array([initial_gain(osc, e1, e2), *gains])
         expected = gain * Envelope(4.0, 2.0)(t + np.array([0.0, *dopri.C[1:6]]) * h)
         np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-16)
+        # the factors carry the envelope state to t + h
+        np.testing.assert_allclose([e1 * f1, e2 * f2], envelope_state(osc, t + h), rtol=1e-15)
 
 
 @pytest.mark.parametrize("exc", [WhiteNoise(np.array([1e-5, 2.4e-3])), KanaiTajimi(np.array([1e-5, 2.4e-3]), 15.6, 0.6)])
