@@ -388,7 +388,7 @@ def dask_client(workers=2, scheduler=None, client=None):
     try:
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
         # that port is taken (another run, another cluster): give it a free port on localhost instead
-        os.environ["SCREENING_WORKER_IGNORES_SIGINT"] = "1"     # read by the workers (screening/__init__)
+        os.environ["SCREENING_LOCAL_WORKER"] = "1"      # read by the workers (screening/__init__)
         from screening.workflow.interrupt import deferred_interrupt
 
         with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
