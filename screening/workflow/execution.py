@@ -412,5 +412,27 @@ def dask_client(workers=2, scheduler=None, client=None):
     try:
         with Client(cluster) as c:
             yield c
+    except KeyboardInterrupt:
+        stop_workers(cluster)
+        raise
     finally:
         cluster.close()
+
+
+def stop_workers(cluster, timeout=0.5):
+    """Stop the worker processes of a local ``cluster`` within about ``timeout`` [s] (after a Ctrl-C).
+
+    A worker closes only once its running task is done, and a task holds the GIL for most of
+    its time, so a graceful close takes a few task durations (seconds for a large batch): the
+    processes are asked to stop and killed if they do not within ``0.8 timeout``, not restarted.
+    """
+    import asyncio
+
+    async def stop_all():
+        nannies = list(cluster.workers.values())
+        for nanny in nannies:
+            nanny.close_gracefully(reason="screening-interrupted")      # not restarted when killed
+        await asyncio.gather(*(nanny.kill(timeout=timeout) for nanny in nannies), return_exceptions=True)
+
+    with contextlib.suppress(Exception):
+        cluster.sync(stop_all)
