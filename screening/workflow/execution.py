@@ -373,6 +373,23 @@ def dask_client(workers=2, scheduler=None, client=None):
         finally:
             c.close()
         return
+    import dask
+
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), _local_client(workers) as c:
+        yield c
+
+
+#: dask settings of a local cluster: its scheduler (in this process) keeps the last messages sent to
+#: each worker for debugging, 1,000 by default with the arguments of every task in them: a few only,
+#: or the client's memory grows with the number of batches (issue 12).
+LOCAL_CLUSTER_CONFIG = {"distributed.admin.low-level-log-length": 16}
+
+
+@contextlib.contextmanager
+def _local_client(workers):
+    """A client of a new local cluster of ``workers`` processes (0: one worker thread in this process)."""
+    from distributed import Client, LocalCluster
+
     if workers == 0:
         try:
             cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
