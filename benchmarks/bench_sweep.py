@@ -10,7 +10,7 @@ is shown separately), finalisation, shutdown; plus the PNG figures once.
     .venv/bin/python benchmarks/bench_sweep.py            # sweep function, 1 and 2 workers
     .venv/bin/python benchmarks/bench_sweep.py --cli      # through the `screening run` console script
     .venv/bin/python benchmarks/bench_sweep.py --n 50 --repeat 2 --complevel 0
-    .venv/bin/python benchmarks/bench_sweep.py --n 316 --histories none --workers 2   # 100,000 points
+    .venv/bin/python benchmarks/bench_sweep.py --n 316 --histories none --workers 2   # 100,000 points, 2 workers
     .venv/bin/python benchmarks/bench_sweep.py --rss 100,316,1000 --histories none   # peak RSS vs points
 
 ``--histories none`` adds ``[output] histories = "none"`` (summaries only).  The end-to-end rate is
@@ -194,7 +194,7 @@ def run_function(study, out, workers, complevel):
                        complevel=complevel)
     wall = time.perf_counter() - start
     assert report.status_counts.get("ok", 0) > 0 and report.n_failed_batches == 0
-    return wall, report.timings
+    return wall, {**report.timings, "batches": report.n_batches}
 
 
 def run_cli(study_path, out, workers, complevel):
@@ -213,6 +213,7 @@ def main(argv=None):
     parser.add_argument("--complevel", type=int, default=1, help="zlib level of the file (default 1; 0 = none)")
     parser.add_argument("--histories", choices=("all", "none"), default="all", help="[output] histories")
     parser.add_argument("--rss", help="comma-separated grid sides: peak RSS and points/s per size, 2 workers")
+    parser.add_argument("--workers", default="1,2", help="comma-separated worker counts to run (default 1,2)")
     args = parser.parse_args(argv)
 
     from screening.workflow.study import parse_study
@@ -239,7 +240,7 @@ def main(argv=None):
               f"({single_core:.0f} points/s on one core), {t2:.2f} s with 2 processes side by side -> at most "
               f"{ratio:.2f}x from 2 workers on this machine now")
         rows = {}
-        for workers in (1, 2):
+        for workers in sorted({int(v) for v in args.workers.split(",")}):
             best = None
             for _ in range(args.repeat):
                 wall, timings = (run_cli(study_path, out, workers, args.complevel) if args.cli
@@ -250,26 +251,31 @@ def main(argv=None):
             size = out.stat().st_size / 1e6
         print(f"result file: {size:.1f} MB")
         header = f"{'workers':>7} {'total':>7} {'pts/s':>7} " + " ".join(f"{p:>13}" for p in PHASES) \
-            + f" {'compute pts/s':>13}"
+            + f" {'compute pts/s':>13} {'batches':>7}"
         print(header)
         for workers, (wall, t) in rows.items():
             phases = " ".join(f"{t[p]:>12.2f}s" if p in t else f"{'-':>13}" for p in PHASES)
             compute_rate = f"{n_points / t['compute']:>13.0f}" if t else f"{'-':>13}"
-            print(f"{workers:>7} {wall:>6.2f}s {n_points / wall:>7.0f} {phases} {compute_rate}")
-        (w1, t1), (w2, t2) = rows[1], rows[2]
-        rate = n_points / w2
-        scaling = w1 / w2
-        print(f"end to end, 2 workers: {rate:.0f} points/s  (target >= 1000: {'PASS' if rate >= 1000 else 'FAIL'})")
-        print(f"end to end, 2 workers / single-core solver rate: {rate / single_core:.2f}  "
-              f"(target >= 1.6: {'PASS' if rate / single_core >= 1.6 else 'FAIL'})")
-        print(f"scaling 1 -> 2 workers, end to end: {scaling:.2f}x  "
-              f"(target >= 1.5: {'PASS' if scaling >= 1.5 else 'FAIL'})")
-        if t1 and t2:
-            print(f"scaling 1 -> 2 workers, compute phase: {t1['compute'] / t2['compute']:.2f}x")
-            fixed = t2["cluster_start"] + t2["warm_up"] + t2["finalize"] + t2["shutdown"]
-            print(f"2 workers: fixed costs (start-up, warm-up, finalize, shutdown) {fixed:.2f} s = "
-                  f"{100 * fixed / w2:.0f} % of the total; client write time {t2['write']:.2f} s "
-                  f"(overlaps the compute phase)")
+            print(f"{workers:>7} {wall:>6.2f}s {n_points / wall:>7.0f} {phases} {compute_rate} "
+                  f"{t.get('batches', '-'):>7}")
+        if 2 in rows:
+            w2, t2 = rows[2]
+            rate = n_points / w2
+            print(f"end to end, 2 workers: {rate:.0f} points/s  (target >= 1000: {'PASS' if rate >= 1000 else 'FAIL'})")
+            print(f"end to end, 2 workers / single-core solver rate: {rate / single_core:.2f}  "
+                  f"(target >= 1.6: {'PASS' if rate / single_core >= 1.6 else 'FAIL'})")
+            if t2:
+                fixed = t2["cluster_start"] + t2["warm_up"] + t2["finalize"] + t2["shutdown"]
+                print(f"2 workers: fixed costs (start-up, warm-up, finalize, shutdown) {fixed:.2f} s = "
+                      f"{100 * fixed / w2:.0f} % of the total; client write time {t2['write']:.2f} s "
+                      f"(overlaps the compute phase)")
+        if 1 in rows and 2 in rows:
+            (w1, t1), (w2, t2) = rows[1], rows[2]
+            scaling = w1 / w2
+            print(f"scaling 1 -> 2 workers, end to end: {scaling:.2f}x  "
+                  f"(target >= 1.5: {'PASS' if scaling >= 1.5 else 'FAIL'})")
+            if t1 and t2:
+                print(f"scaling 1 -> 2 workers, compute phase: {t1['compute'] / t2['compute']:.2f}x")
         if not args.cli:
             from screening.report.figures import plot_result
             from screening.workflow.reader import open_result

@@ -8,14 +8,19 @@ import os as _os
 #: a worker process of a local cluster (named before the child imports us)
 _DASK_WORKER = _mp.current_process().name.startswith("Dask Worker")
 
-if _DASK_WORKER and _os.environ.get("SCREENING_WORKER_IGNORES_SIGINT") == "1":
+if _DASK_WORKER and _os.environ.get("SCREENING_LOCAL_WORKER") == "1":
     # A worker process of the local cluster of `screening run` (the variable is set for them by
     # screening.workflow.execution.dask_client): the terminal's Ctrl-C reaches the whole process
     # group, and the client stops the run with one line and closes its workers itself, so a worker
     # ignores SIGINT instead of printing a traceback while it imports or computes (issue 13, B18).
+    import atexit as _atexit
     import signal as _signal
 
     _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
+    # When it exits (the worker closed, its work directory removed, its streams flushed by
+    # multiprocessing) it skips tearing down its modules: scipy, numba and xarray take ~0.5 s,
+    # which the client waits for at the end of every run (issue 12).
+    _atexit.register(_os._exit, 0)
 
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise

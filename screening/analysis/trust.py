@@ -242,8 +242,13 @@ def trust_table(calibration, rows=None):
 
 @functools.lru_cache(maxsize=1)
 def shipped_table():
-    """The table stored with the shipped calibration file (``attrs["trust_table"]``)."""
-    return json.loads(shipped_calibration().attrs["trust_table"])
+    """The table stored with the shipped calibration file (``attrs["trust_table"]``), read alone: a
+    sweep's client needs it before its first task, the dataset not at all."""
+    import netCDF4
+
+    path = resources.files("screening.data").joinpath(CALIBRATION_FILE)
+    with resources.as_file(path) as p, netCDF4.Dataset(p) as ds:
+        return json.loads(ds.getncattr("trust_table"))
 
 
 def shipped_calibration():

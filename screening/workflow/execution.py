@@ -374,6 +374,23 @@ def dask_client(workers=2, scheduler=None, client=None):
         finally:
             c.close()
         return
+    import dask
+
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), _local_client(workers) as c:
+        yield c
+
+
+#: dask settings of a local cluster: its scheduler (in this process) keeps the last messages sent to
+#: each worker for debugging, 1,000 by default with the arguments of every task in them: a few only,
+#: or the client's memory grows with the number of batches (issue 12).
+LOCAL_CLUSTER_CONFIG = {"distributed.admin.low-level-log-length": 16}
+
+
+@contextlib.contextmanager
+def _local_client(workers):
+    """A client of a new local cluster of ``workers`` processes (0: one worker thread in this process)."""
+    from distributed import Client, LocalCluster
+
     if workers == 0:
         try:
             cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
@@ -389,7 +406,7 @@ def dask_client(workers=2, scheduler=None, client=None):
     try:
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
         # that port is taken (another run, another cluster): give it a free port on localhost instead
-        os.environ["SCREENING_WORKER_IGNORES_SIGINT"] = "1"     # read by the workers (screening/__init__)
+        os.environ["SCREENING_LOCAL_WORKER"] = "1"      # read by the workers (screening/__init__)
         from screening.workflow.interrupt import deferred_interrupt
 
         with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
@@ -413,5 +430,27 @@ def dask_client(workers=2, scheduler=None, client=None):
     try:
         with Client(cluster) as c:
             yield c
+    except KeyboardInterrupt:
+        stop_workers(cluster)
+        raise
     finally:
         cluster.close()
+
+
+def stop_workers(cluster, timeout=0.5):
+    """Stop the worker processes of a local ``cluster`` within about ``timeout`` [s] (after a Ctrl-C).
+
+    A worker closes only once its running task is done, and a task holds the GIL for most of
+    its time, so a graceful close takes a few task durations (seconds for a large batch): the
+    processes are asked to stop and killed if they do not within ``0.8 timeout``, not restarted.
+    """
+    import asyncio
+
+    async def stop_all():
+        nannies = list(cluster.workers.values())
+        for nanny in nannies:
+            nanny.close_gracefully(reason="screening-interrupted")      # not restarted when killed
+        await asyncio.gather(*(nanny.kill(timeout=timeout) for nanny in nannies), return_exceptions=True)
+
+    with contextlib.suppress(Exception):
+        cluster.sync(stop_all)

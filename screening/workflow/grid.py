@@ -7,6 +7,7 @@ of the last dimension).  Nothing here touches dask or the disk.
 
 from __future__ import annotations
 
+import heapq
 import math
 from dataclasses import dataclass
 
@@ -19,7 +20,13 @@ from screening.solvers.moments import HISTORY_VARIABLES
 from screening.workflow.limits import batch_budget
 from screening.workflow.study import build_models
 
+#: Points per task when the histories are held in memory (stored, or needed for fragility).
 DEFAULT_BATCH = 500
+#: Most points per task when no histories are held: such a task holds only per-point summaries, so
+#: its size is set by the pace of the run (a task of a few seconds keeps progress and Ctrl-C prompt).
+HISTORY_FREE_BATCH = 10_000
+#: Tasks per worker a history-free grid is cut into (load balance at the end of the run).
+BATCHES_PER_WORKER = 8
 
 
 @dataclass(frozen=True)
@@ -36,17 +43,59 @@ class Batch:
         return self.hi - self.lo
 
 
-def default_batch_size(study, n_workers, target=DEFAULT_BATCH):
-    """Points per batch: about ``target``, at least 2 batches per worker, whole rows if possible, and
-    never more than the time histories of one task fit in :data:`~screening.workflow.limits.TASK_BYTES`."""
+def holds_histories(study):
+    """Whether a task of ``study`` holds time histories in memory: stored, or needed for ``[fragility]``."""
+    return bool(study.output.stored) or study.fragility is not None
+
+
+def default_batch_size(study, n_workers, target=None):
+    """Points per batch.
+
+    With histories in memory (:func:`holds_histories`): about ``target`` (default
+    :data:`DEFAULT_BATCH`), at least 2 batches per worker, whole rows of the last dimension if
+    possible.  Without: about :data:`BATCHES_PER_WORKER` batches per worker, from
+    :data:`DEFAULT_BATCH` to ``target`` (default :data:`HISTORY_FREE_BATCH`) points: the client's and
+    the scheduler's work per batch is fixed, so few large batches leave the cores to the workers;
+    whole rows if possible, the number of rows (within 25 %) that ends the run most evenly.
+    Never across a case, never more than the arrays over the output times of one task fit in
+    :data:`~screening.workflow.limits.TASK_BYTES` (6 histories per point, or one envelope).
+    """
     per_case = study.points_per_case
+    workers = max(int(n_workers), 1)
     n_times = round(study.t_end / study.dt) + 1
-    size = max(1, min(target, math.ceil(study.n_points / max(2 * n_workers, 1)), per_case,
-                      batch_budget(n_times, len(HISTORY_VARIABLES))))
+    spread = math.ceil(study.n_points / (2 * workers))
+    if holds_histories(study):
+        cap = min(DEFAULT_BATCH if target is None else target, spread)
+        size = cap
+        budget = batch_budget(n_times, len(HISTORY_VARIABLES))
+    else:
+        cap = min(HISTORY_FREE_BATCH if target is None else target, spread)
+        size = min(max(DEFAULT_BATCH, math.ceil(study.n_points / (BATCHES_PER_WORKER * workers))), cap)
+        budget = batch_budget(n_times, 1)
+    cap = max(1, min(cap, per_case, budget))
+    size = max(1, min(size, cap))
     n_last = study.swept_shape[-1] if study.swept_shape else 1
     if n_last <= size:
-        size = (size // n_last) * n_last
+        rows = size // n_last
+        if holds_histories(study):
+            size = rows * n_last
+        else:                           # within 25 % of the size: the row count that ends most evenly
+            low, high = max(1, (3 * rows) // 4), min(cap // n_last, (5 * rows) // 4 + 1)
+            candidates = range(low, max(high, low) + 1, max(1, (high - low) // 16))
+            size = n_last * min(candidates, key=lambda r: (_makespan(study, r * n_last, workers), -r))
     return size
+
+
+def _makespan(study, size, workers):
+    """Points the busiest of ``workers`` solves when the grid of ``study`` is cut into batches of
+    ``size`` (:func:`plan_batches`) handed out in order to whichever worker is free first (all
+    points taken to cost the same)."""
+    loads = [0] * workers
+    full, rest = divmod(study.points_per_case, size)
+    for _ in range(len(study.cases)):
+        for points in [size] * full + ([rest] if rest else []):
+            heapq.heapreplace(loads, loads[0] + points)
+    return max(loads)
 
 
 def plan_batches(study, batch_size):

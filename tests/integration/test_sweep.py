@@ -130,6 +130,23 @@ def test_interrupted_run_resumes_to_the_same_file(client, tmp_path):
     compare_files(ref, out)
 
 
+def test_the_local_scheduler_keeps_few_messages_per_worker(tmp_path):
+    """Its log of the messages sent to a worker holds task arguments: a few only, whatever the number
+    of batches (1,000 by default: client memory grew with the grid, issue 12)."""
+    from distributed import default_client
+
+    logged = []
+
+    def look(batch):
+        scheduler = default_client().cluster.scheduler
+        logged.append(max(len(s.recent_message_log) for s in scheduler.stream_comms.values()))
+
+    run_sweep(parse_study(GRID), tmp_path / "r.nc", workers=0, batch_size=1, progress=False, log=quiet,
+              on_batch=look)
+    cap = execution.LOCAL_CLUSTER_CONFIG["distributed.admin.low-level-log-length"]
+    assert len(logged) == 20 and max(logged) == cap < 20
+
+
 def test_unchanged_study_is_reused_and_changed_one_recomputed(client, tmp_path):
     study = parse_study(GRID)
     out = tmp_path / "r.nc"

@@ -48,6 +48,55 @@ def test_default_batch_size_is_whole_rows_and_spreads_work():
     assert default_batch_size(huge, 2) == grid.DEFAULT_BATCH
 
 
+def _history_free(rows, cols, extra=""):
+    """A white-noise grid of ``rows`` eps x ``cols`` S0 without stored histories."""
+    return parse_study(GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]", f"eps = {{start = -6e5, stop = 6e7, num = {rows}}}")
+                       .replace("num = 5", f"num = {cols}") + '[output]\nhistories = "none"\n' + extra)
+
+
+@pytest.mark.parametrize("rows, cols, workers", [(316, 316, 2), (100, 100, 2), (1000, 1000, 2), (200, 200, 4),
+                                                 (30, 1000, 2), (7, 3001, 3), (316, 316, 1)])
+def test_history_free_batches_are_few_large_whole_rows_that_end_evenly(rows, cols, workers):
+    """No histories in a task: about BATCHES_PER_WORKER batches per worker of DEFAULT_BATCH ..
+    HISTORY_FREE_BATCH points, whole rows where a row fits, and the busiest worker solves at most
+    one row more (or 3 % more) than an even share."""
+    study = _history_free(rows, cols)
+    size = default_batch_size(study, workers)
+    n_batches = len(plan_batches(study, size))
+    assert size <= grid.HISTORY_FREE_BATCH + cols
+    assert size >= min(grid.DEFAULT_BATCH, study.n_points / (2 * workers))
+    assert n_batches <= max(2 * grid.BATCHES_PER_WORKER * workers, 2 * study.n_points / grid.HISTORY_FREE_BATCH)
+    if cols <= size:
+        assert size % cols == 0
+    even = study.n_points / workers
+    assert grid._makespan(study, size, workers) <= max(even + cols, 1.03 * even)
+
+
+def test_batches_holding_histories_keep_the_ordinary_size():
+    """Fragility needs the histories in memory even when none are stored: ordinary batches."""
+    frag = _history_free(100, 100, "[fragility]\nthresholds = [0.01]\n")
+    assert default_batch_size(frag, 2) == grid.DEFAULT_BATCH
+    assert default_batch_size(_history_free(316, 316), 2) > grid.DEFAULT_BATCH
+    assert grid.holds_histories(frag) and not grid.holds_histories(_history_free(2, 2))
+
+
+def test_history_free_batches_fit_the_task_memory_budget():
+    """One envelope value per point and output instant is the most a history-free task holds."""
+    from screening.workflow import limits
+
+    study = parse_study(_history_free(100, 100).text.replace("t_end = 4.0", "t_end = 5000.0"))
+    size = default_batch_size(study, 2)
+    assert size * len(study.times) * 8 <= limits.TASK_BYTES
+
+
+def test_makespan_hands_batches_to_the_first_free_worker():
+    study = _history_free(1, 10)                     # 10 points: batches 3, 3, 3, 1
+    assert grid._makespan(study, 3, 2) == 6         # 3 + 3 | 3 + 1
+    assert grid._makespan(study, 5, 2) == 5
+    assert grid._makespan(study, 4, 3) == 4         # 4 | 4 | 2
+    assert grid._makespan(study, 10, 1) == 10
+
+
 def test_auto_spots_take_highest_uplift_among_ok_points():
     study = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 2\n')
     status = np.zeros(20, dtype=np.int8)
