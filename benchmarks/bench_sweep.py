@@ -51,6 +51,9 @@ t_end = 20.0
 dt = 0.05
 {output}"""
 
+#: Points of the grid the single-core solver rate is measured on (evenly spread over the flattened grid).
+CHECK_POINTS = 5000
+
 PHASES = ("cluster_start", "warm_up", "compute", "write", "finalize", "shutdown")
 
 
@@ -63,8 +66,9 @@ def jit_in_this_process():
     return time.perf_counter() - start
 
 
-def _solve_share(n, queue, histories=True):
-    """Solve ``n`` points of the benchmark grid in this process; put the time taken [s]."""
+def _solve_share(n, side, queue, histories=True):
+    """Solve ``n`` points evenly spread over the flattened ``side`` x ``side`` benchmark grid (the same mix of
+    cheap and costly points as the sweep) in this process; put the time taken [s]."""
     import numpy as np
 
     from screening.model.excitation import WhiteNoise
@@ -73,18 +77,20 @@ def _solve_share(n, queue, histories=True):
     from screening.solvers.timegrid import output_times
 
     t = output_times(20.0, 0.05)
-    models = (Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, np.linspace(-6e5, 6e7, n)),
-              WhiteNoise(np.geomspace(1e-5, 2.4e-3, n)))
+    flat = np.unique(np.linspace(0, side * side - 1, min(n, side * side)).round().astype(int))
+    i, j = np.unravel_index(flat, (side, side))
+    models = (Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, np.linspace(-6e5, 6e7, side)[i]),
+              WhiteNoise(np.geomspace(1e-5, 2.4e-3, side)[j]))
     solve_moments(models[0], Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), t[:3])   # load the JIT cache
     start = time.perf_counter()
     solve_moments(*models, t, histories=histories)
     queue.put(time.perf_counter() - start)
 
 
-def machine_scaling(n=2000, histories=True):
+def machine_scaling(n=CHECK_POINTS, side=100, histories=True):
     """The same solver work in 1 process, then in 2 concurrent processes (no dask, no I/O).
 
-    Returns ``(t1, t2, ratio)``: seconds for ``n`` points alone, the slower of two concurrent
+    Returns ``(t1, t2, ratio)``: seconds for ``n`` points of the ``side`` x ``side`` grid alone, the slower of two concurrent
     ``n``-point runs, and ``2 t1 / t2`` -- the best speed-up this machine can give 2 workers now.
     """
     import multiprocessing as mp
@@ -93,7 +99,7 @@ def machine_scaling(n=2000, histories=True):
     times = []
     for n_proc in (1, 2):
         queue = ctx.Queue()
-        procs = [ctx.Process(target=_solve_share, args=(n, queue, histories)) for _ in range(n_proc)]
+        procs = [ctx.Process(target=_solve_share, args=(n, side, queue, histories)) for _ in range(n_proc)]
         for p in procs:
             p.start()
         times.append(max(queue.get() for _ in procs))
@@ -234,9 +240,9 @@ def main(argv=None):
               f"best of {args.repeat}")
         print(f"numba: import + first call in this process (compiles only if the cache is stale): "
               f"{jit_in_this_process():.2f} s")
-        t1, t2, ratio = machine_scaling(histories=args.histories == "all")
-        single_core = 2000 / t1
-        print(f"machine check, solver only (no dask, no I/O): 2000 points in {t1:.2f} s alone "
+        t1, t2, ratio = machine_scaling(side=args.n, histories=args.histories == "all")
+        single_core = CHECK_POINTS / t1
+        print(f"machine check, solver only (no dask, no I/O): {CHECK_POINTS} points of the grid in {t1:.2f} s alone "
               f"({single_core:.0f} points/s on one core), {t2:.2f} s with 2 processes side by side -> at most "
               f"{ratio:.2f}x from 2 workers on this machine now")
         rows = {}

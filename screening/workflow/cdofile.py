@@ -111,9 +111,9 @@ def grid_chunks(shape, row_values):
     """Chunks over the grid ``shape`` of a variable with ``row_values`` values per point (C-order runs of
     points, :data:`BLOCK_VALUES` values at most when the shape allows), and the points per block: whole
     chunks of about :data:`BLOCK_VALUES` values, so that every chunk is written once, in full."""
-    from screening.workflow.writer import POINT_CHUNK, _point_chunks
+    from screening.workflow.writer import POINT_CHUNK, point_chunks
 
-    chunks = _point_chunks(shape, max(1, min(POINT_CHUNK, BLOCK_VALUES // max(row_values, 1))))
+    chunks = point_chunks(shape, max(1, min(POINT_CHUNK, BLOCK_VALUES // max(row_values, 1))))
     points = math.prod(chunks)
     return chunks, points * max(1, BLOCK_VALUES // (max(row_values, 1) * points))
 

@@ -153,7 +153,7 @@ def history_chunks(shape, nt):
     return (1,) * (len(shape) - 1) + (last, nt)
 
 
-def _point_chunks(shape, target=POINT_CHUNK):
+def point_chunks(shape, target=POINT_CHUNK):
     """Chunks of a per-point variable on ``shape``: C-order runs of about ``target`` points, so that
     consecutive batches fill one chunk after the other."""
     chunks = []
@@ -290,7 +290,7 @@ class ResultFile:
         for name in self.histories:
             self._variable(name, "f4", dims + ("t",), HISTORY_DTYPE(np.nan), coordinates, **self.zlib,
                            shuffle=self.zlib["zlib"], **_storage(history_chunks(self.shape, self.nt), 4))
-        chunks = _point_chunks(self.shape)
+        chunks = point_chunks(self.shape)
         self._variable("status", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
         self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
         for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS:
@@ -310,7 +310,7 @@ class ResultFile:
             v[:] = np.asarray(frag.thresholds, dtype=float)
             n_thr = len(frag.thresholds)
             p = self._variable("p_exceed", "f8", dims + ("threshold",), np.nan, coordinates, table=FRAGILITY,
-                               **self.zlib, **_storage(_point_chunks(self.shape, POINT_CHUNK // n_thr) + (n_thr,), 8))
+                               **self.zlib, **_storage(point_chunks(self.shape, POINT_CHUNK // n_thr) + (n_thr,), 8))
             p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
         nc.setncatts({**attrs, **labels})
 

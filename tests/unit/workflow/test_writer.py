@@ -11,7 +11,7 @@ from screening.schema import SWEEP, TIME, attributes, global_attributes, grid_co
 from screening.status import PointStatus, SpotStatus
 from screening.workflow.errors import SweepError
 from screening.workflow.study import parse_study
-from screening.workflow.writer import (CACHED_CHUNKS, ResultFile, _point_chunks, check_output_path,
+from screening.workflow.writer import (CACHED_CHUNKS, ResultFile, point_chunks, check_output_path,
                                        relative_peak_error, result_attributes)
 
 SPOTS = '[mcs]\npoints = [{case = "soft_kt", S0 = 1e-4}, {case = "hard_white", S0 = 2.4e-3}]\nsamples = 3\n'
@@ -65,7 +65,7 @@ def test_output_path_checks(tmp_path):
     ((7,), 2, (2,)),
 ])
 def test_point_chunks_are_c_order_runs_of_about_the_target(shape, target, expected):
-    chunks = _point_chunks(shape, target)
+    chunks = point_chunks(shape, target)
     assert chunks == expected
     assert np.prod(chunks) <= max(target, shape[-1])
 
@@ -84,4 +84,4 @@ def test_per_point_variables_have_bounded_chunks_and_chunk_cache(tmp_path):
     finally:
         result.close()
     with netCDF4.Dataset(path) as nc:
-        assert nc["t_stop"].chunking() == list(_point_chunks(study.shape))
+        assert nc["t_stop"].chunking() == list(point_chunks(study.shape))
