@@ -1,8 +1,13 @@
 """Every status code the package stores or returns: one enum per code space.
 
-Compiled kernels read the members as integer constants (numba supports ``IntEnum``); files store
-the integer with CF ``flag_values`` / ``flag_meanings`` made by :func:`flag_attributes`.
-Nothing else in the package spells a status number.
+The code spaces are declared once, as data, in ``screening/data/status_codes.toml``: each member's
+name, integer code and meaning.  This module turns each table into an :class:`enum.IntEnum` at
+import (``PointStatus``, ``SampleStatus``, ``DivergenceReason``, ``SampleState``, ``SpotStatus``,
+``Trust``, ``BestMethod``, ``EscalationModel``, ``TargetMet``, ``ContactRegime``); every member
+carries its ``meaning`` (plain language, for messages and documentation).  Compiled kernels read
+the members as integer constants (numba supports ``IntEnum``); files store the integer with CF
+``flag_values`` / ``flag_meanings`` made by :func:`flag_attributes`.  Nothing else in the package
+spells a status number.
 
 Method and how it is checked: ``docs/method.md#status-flags``.
 """
@@ -10,128 +15,43 @@ Method and how it is checked: ``docs/method.md#status-flags``.
 from __future__ import annotations
 
 import enum
+from importlib import resources
 
 import numpy as np
 
+try:
+    import tomllib
+except ModuleNotFoundError:                      # Python 3.10
+    import tomli as tomllib
 
-class PointStatus(enum.IntEnum):
-    """Outcome of the linearized moment integration of one parameter point."""
-
-    #: the sweep task holding the point failed even after its retries (no solver result)
-    task_failed = -1
-    #: integrated to the end of the record
-    ok = 0
-    #: the equivalent stiffness reached zero: the linearized model topples
-    k_eq_negative = 1
-    #: sigma_theta passed the slenderness angle: near-toppling, the Gaussian closure is meaningless
-    sigma_theta_beyond_slenderness = 2
-    #: the step budget (max_steps) ran out
-    step_budget_exhausted = 3
-    #: the moments could not be kept finite
-    non_finite_moments = 4
-    #: the point's scales (uplift angle squared, filter frequency cubed, ...) under- or overflow
-    #: float64: not integrated
-    beyond_float_range = 5
+#: The code-space tables, as read.
+CODE_SPACES = tomllib.loads(resources.files("screening.data").joinpath("status_codes.toml").read_text("utf-8"))
 
 
-class SampleStatus(enum.IntEnum):
-    """Outcome of one Monte Carlo sample."""
+def code_space(name):
+    """The :class:`enum.IntEnum` of table ``name`` of :data:`CODE_SPACES`, each member with its ``meaning``."""
+    table = dict(CODE_SPACES[name])
+    doc = table.pop("doc")
+    codes = enum.IntEnum(name, [(member, spec["code"]) for member, spec in table.items()], module=__name__)
+    codes.__doc__ = doc
+    for member in codes:
+        member.meaning = table[member.name]["meaning"]
+    return codes
 
-    ok = 0
-    overturned = 1
-    diverged = 2
 
-
-class DivergenceReason(enum.IntEnum):
-    """Why a Monte Carlo sample was stopped as diverged."""
-
-    none = 0
-    non_finite_state = 1
-    long_flight = 2
-    out_of_bounds = 3
-    step_underflow = 4
-    step_budget = 5
-    no_equilibrium = 6
-
+PointStatus = code_space("PointStatus")
+SampleStatus = code_space("SampleStatus")
+DivergenceReason = code_space("DivergenceReason")
+SampleState = code_space("SampleState")
+SpotStatus = code_space("SpotStatus")
+Trust = code_space("Trust")
+BestMethod = code_space("BestMethod")
+EscalationModel = code_space("EscalationModel")
+TargetMet = code_space("TargetMet")
+ContactRegime = code_space("ContactRegime")
 
 #: Plain-language text of the divergence reasons (messages to users).
-DIVERGENCE_TEXT = {
-    DivergenceReason.none: "none",
-    DivergenceReason.non_finite_state: "non-finite state",
-    DivergenceReason.long_flight: "flight longer than max_flight_time",
-    DivergenceReason.out_of_bounds: "state out of physical bounds",
-    DivergenceReason.step_underflow: "step size underflow",
-    DivergenceReason.step_budget: "step budget exhausted",
-    DivergenceReason.no_equilibrium: "|theta| beyond the capacity angle (no quasi-static equilibrium)",
-}
-
-
-class SampleState(enum.IntEnum):
-    """State of a stored Monte Carlo sample at the end of the record (spot checks)."""
-
-    standing = 0
-    overturned = 1
-    diverged_or_failed = 2
-
-
-class SpotStatus(enum.IntEnum):
-    """Outcome of a Monte Carlo spot check of a sweep."""
-
-    ok = 0
-    task_failed = 1
-
-
-class Trust(enum.IntEnum):
-    """How far to trust a linearized point (:mod:`screening.analysis.trust`, docs/method.md#trusting-a-point)."""
-
-    #: the calibration shows SL within 10 % of the coupled model in this regime (band within 25 %)
-    trusted = 0
-    #: no evidence either way, or errors between 10 % and 50 %: check with coupled Monte Carlo
-    check = 1
-    #: SL stopped, locks in, is near toppling, or the calibration shows errors beyond 50 % / overturning
-    untrusted = 2
-
-
-class BestMethod(enum.IntEnum):
-    """Where a point's best estimate comes from (``[accuracy]``, :mod:`screening.analysis.correction`)."""
-
-    #: the linearization itself: the trust rule promises the target accuracy there
-    linearization = 0
-    #: the linearization times the correction learned from the escalated Monte Carlo points
-    corrected_linearization = 1
-    #: condensed Monte Carlo at the point (only the linearization was in doubt)
-    condensed_monte_carlo = 2
-    #: coupled Monte Carlo at the point
-    coupled_monte_carlo = 3
-    #: no estimate can be vouched for: the correction does not reach the point (or failed its leave-one-out
-    #: check) and no Monte Carlo ran there; the value is the linearization's, with a NaN standard error
-    unreliable = 4
-
-
-class EscalationModel(enum.IntEnum):
-    """Monte Carlo model run at an escalated point."""
-
-    condensed = 0
-    coupled = 1
-
-
-class TargetMet(enum.IntEnum):
-    """Whether an escalated point's Monte Carlo reached the target's standard error (``target / 2`` of its peak)."""
-
-    #: the budget ran out (or a run failed) before the standard error came down to ``target / 2``
-    short_of_target = 0
-    target_met = 1
-
-
-class ContactRegime(enum.IntEnum):
-    """Contact regime of the coupled model's base."""
-
-    #: no regime (after overturning or divergence)
-    none = -1
-    full_contact = 0
-    uplift_positive = 1
-    uplift_negative = 2
-    flight = 3
+DIVERGENCE_TEXT = {reason: reason.meaning for reason in DivergenceReason}
 
 
 def flag_attributes(code_space, long_name, dtype=np.int8):
