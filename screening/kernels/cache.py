@@ -22,7 +22,7 @@ KEY_KERNELS = (("solvers/moments.py", "_solve_batch"), ("solvers/mcs_kernels.py"
 
 #: What the first compilation costs (measured on a fresh clone, 2 cores: ~75 s before the first
 #: point, ~20 s more for the Monte Carlo kernels).
-FIRST_COMPILE = "about 1-2 minutes"
+FIRST_COMPILE = "about 10-60 s"
 
 
 def _index_is_current(module, function):
