@@ -118,6 +118,20 @@ def stop_after(n, seen):
     return on_batch
 
 
+def interrupted_run(study, out, client, batch_size, n=2):
+    """Run ``study`` into ``out`` and press Ctrl-C after its ``n``-th finished batch; returns the
+    indices of the batches finished by then."""
+    import pytest
+
+    from screening.workflow.sweep import run_sweep
+
+    seen = []
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, client=client, batch_size=batch_size, progress=False, log=quiet,
+                  on_batch=stop_after(n, seen))
+    return seen
+
+
 def failed_result_file(study, path, zarr_batch_size=None):
     """A complete result of ``study`` (netCDF, or zarr with ``zarr_batch_size``) whose batches and spot
     checks all failed: the writer alone, no solver, no dask."""

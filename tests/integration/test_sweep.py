@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, compare_files, dask_processes, quiet, stop_after
+from helpers import CASES, GRID, compare_files, dask_processes, interrupted_run, quiet
 
 from screening.workflow import execution
 from screening.condensation.api import uplift_threshold
@@ -113,9 +113,7 @@ def test_interrupted_run_resumes_to_the_same_file(client, tmp_path):
     run_sweep(study, ref, client=client, batch_size=3, progress=False, log=quiet)
 
     out = tmp_path / "run.nc"
-    seen = []
-    with pytest.raises(KeyboardInterrupt):
-        run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet, on_batch=stop_after(2, seen))
+    seen = interrupted_run(study, out, client, batch_size=3)
     partial = tmp_path / "run.nc.partial"
     assert not out.exists()
     assert sorted(p.name for p in partial.glob("batch-*.npz")) == sorted(

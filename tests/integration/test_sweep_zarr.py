@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_processes, quiet, stop_after
+from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_processes, interrupted_run, quiet
 
 from screening.cli import main
 from screening.status import PointStatus
@@ -74,9 +74,7 @@ def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_pat
     ref = tmp_path / "ref.nc"
     run_sweep(study, ref, client=client, batch_size=5, progress=False, log=quiet)
     out = tmp_path / "run.zarr"
-    seen = []
-    with pytest.raises(KeyboardInterrupt):
-        run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet, on_batch=stop_after(2, seen))
+    seen = interrupted_run(study, out, client, batch_size=5)
     while any(client.processing().values()):     # tasks already running finish (and mark their batch)
         time.sleep(0.05)
     partial = tmp_path / "run.zarr.partial"
