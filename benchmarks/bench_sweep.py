@@ -1,7 +1,7 @@
 """Benchmark: a 10,000-point white-noise sweep (100 eps x 100 S0, 20 s records) end to end.
 
-Runs the sweep exactly as ``screening run`` does (:func:`screening.workflow.sweep.run_sweep`: local
-dask cluster, batches, streaming netCDF write, atomic rename) with 1 and then 2 worker
+Runs the sweep exactly as ``screening run`` does (:func:`screening.workflow.sweep.run_sweep`, timed in
+a fresh process: local dask cluster, batches, streaming netCDF write, atomic rename) with 1 and then 2 worker
 processes, and prints points per second end to end, the 1 -> 2 worker scaling, and where
 the time goes: cluster start-up, worker warm-up (imports + loading the numba cache),
 the compute phase (batches solved and streamed to disk; the client's write time inside it
@@ -156,7 +156,7 @@ def rss_curve(sides, histories, complevel, tmp):
         study = parse_study(STUDY.format(n=side, output=OUTPUT[histories]), name="bench")
         out = tmp / f"rss-{side}.nc"
         with RssSampler() as rss:
-            wall, _ = run_function(study, out, 2, complevel)
+            wall, _ = sweep_here(study, out, 2, complevel)
         rows.append((study.n_points, wall, rss.client, rss.worker, out.stat().st_size))
         out.unlink()
         print(f"{study.n_points:>9} points: {study.n_points / wall:7.0f} points/s, peak RSS client "
@@ -192,7 +192,8 @@ def rss_curve(sides, histories, complevel, tmp):
 OUTPUT = {"all": "", "none": '[output]\nhistories = "none"\n'}
 
 
-def run_function(study, out, workers, complevel):
+def sweep_here(study, out, workers, complevel):
+    """``run_sweep`` in this process: ``(wall [s], timings)``."""
     from screening.workflow.sweep import run_sweep
 
     start = time.perf_counter()
@@ -201,6 +202,28 @@ def run_function(study, out, workers, complevel):
     wall = time.perf_counter() - start
     assert report.status_counts.get("ok", 0) > 0 and report.n_failed_batches == 0
     return wall, {**report.timings, "batches": report.n_batches}
+
+
+def _run_sweep_child(study_path, out, workers, complevel, queue):
+    """Time ``run_sweep`` in this fresh process: its imports done, its solvers not yet loaded -- the
+    state of the ``screening run`` client when it starts the cluster (its workers are forked from it)."""
+    from screening.workflow.study import parse_study
+
+    study = parse_study(Path(study_path).read_text(), name="bench", source=str(study_path))
+    queue.put(sweep_here(study, out, workers, complevel))
+
+
+def run_function(study_path, out, workers, complevel):
+    """``run_sweep`` timed in a fresh process (see :func:`_run_sweep_child`): ``(wall [s], timings)``."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_run_sweep_child, args=(str(study_path), str(out), workers, complevel, queue))
+    proc.start()
+    result = queue.get()
+    proc.join()
+    return result
 
 
 def run_cli(study_path, out, workers, complevel):
@@ -250,7 +273,7 @@ def main(argv=None):
             best = None
             for _ in range(args.repeat):
                 wall, timings = (run_cli(study_path, out, workers, args.complevel) if args.cli
-                                 else run_function(study, out, workers, args.complevel))
+                                 else run_function(study_path, out, workers, args.complevel))
                 if best is None or wall < best[0]:
                     best = (wall, timings)
             rows[workers] = best

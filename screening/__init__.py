@@ -4,22 +4,32 @@ __version__ = "0.1.0"
 
 import multiprocessing as _mp
 import os as _os
+import signal as _signal
 
-#: a worker process of a local cluster (named before the child imports us)
-_DASK_WORKER = _mp.current_process().name.startswith("Dask Worker")
 
-if _DASK_WORKER and _os.environ.get("SCREENING_LOCAL_WORKER") == "1":
-    # A worker process of the local cluster of `screening run` (the variable is set for them by
-    # screening.workflow.execution.dask_client): the terminal's Ctrl-C reaches the whole process
-    # group, and the client stops the run with one line and closes its workers itself, so a worker
-    # ignores SIGINT instead of printing a traceback while it imports or computes (issue 13, B18).
+def quiet_local_worker(_=None):
+    """In a worker process of the local cluster of `screening run`: ignore SIGINT; whether it is one.
+
+    The client sets ``SCREENING_LOCAL_WORKER=1`` for its workers
+    (:func:`screening.workflow.execution.dask_client`).  The terminal's Ctrl-C reaches the whole
+    process group, and the client stops the run with one line and closes its workers itself, so a
+    worker ignores SIGINT instead of printing a traceback while it imports or computes (issue 13,
+    B18).  A spawned worker runs this when it imports screening, a forked one after the fork.
+    """
+    if (_mp.current_process().name.startswith("Dask Worker")
+            and _os.environ.get("SCREENING_LOCAL_WORKER") == "1"):
+        _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
+        return True
+    return False
+
+
+if quiet_local_worker():
+    # A spawned worker, when it exits (the worker closed, its work directory removed, its streams
+    # flushed by multiprocessing), skips tearing down its modules: scipy, numba and xarray take
+    # ~0.5 s, which the client would wait for at the end of every run (issue 12).  A forked one
+    # exits through os._exit already.
     import atexit as _atexit
-    import signal as _signal
 
-    _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
-    # When it exits (the worker closed, its work directory removed, its streams flushed by
-    # multiprocessing) it skips tearing down its modules: scipy, numba and xarray take ~0.5 s,
-    # which the client waits for at the end of every run (issue 12).
     _atexit.register(_os._exit, 0)
 
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor

@@ -428,6 +428,43 @@ def test_ctrl_c_prints_one_line_and_no_worker_tracebacks(tmp_path, moment):
     assert lines == ["screening: interrupted; finished batches are kept, re-run the same command to resume"]
 
 
+LOCAL_WORKERS_PROBE = """
+import signal, sys
+from screening.workflow import execution
+
+def probe():
+    inherited = "screening.solvers.moments" in sys.modules
+    import screening        # what every task of a sweep does first
+    return signal.getsignal(signal.SIGINT) == signal.SIG_IGN, inherited
+
+def state():
+    method = execution.worker_start_method()
+    with execution.dask_client(2) as c:
+        probes = list(c.run(probe).values())
+        spot = c.submit(execution.warm_up_monte_carlo, pure=False).result(timeout=120)
+    return method, probes, spot > 0
+
+print(state())
+execution.warm_up_monte_carlo()         # numba's parallel threads started in this process
+print(state())
+"""
+
+
+def test_local_workers_ignore_ctrl_c_are_forked_while_safe_and_run_monte_carlo():
+    """The workers of a local cluster ignore SIGINT (the client stops the run on a Ctrl-C).  On
+    Linux they are forked (they start with the client's modules: issue 12) unless the client has
+    started numba's parallel threads, which a forked worker could not use: then spawned, and a
+    Monte Carlo task still runs on them."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    out = subprocess.run([sys.executable, "-c", LOCAL_WORKERS_PROBE], env=env, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    first, second = (eval(line) for line in out.stdout.splitlines())   # noqa: S307 - our own printout
+    linux = sys.platform.startswith("linux")
+    assert first == ("fork" if linux else "spawn", [(True, linux)] * 2, True)
+    assert second == ("spawn", [(True, False)] * 2, True)
+
+
 # ----------------------------------------------------------------------------- readers and figures (B4, B6, B20)
 def test_all_flagged_study_writes_its_figures(client, tmp_path, capsys, monkeypatch):
     """B4: a valid study whose points are all flagged (soft bed k = 1e4) wrote its result and then
