@@ -551,7 +551,7 @@ def cmd_export(result, out, complevel, layout, selection):
     import datetime as dt
 
     from screening.workflow import cdofile
-    from screening.workflow.errors import SweepError
+    from screening.workflow.errors import ReadFailure, SweepError
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
     from screening.workflow.zarrfile import export_netcdf, is_zarr_store
@@ -577,6 +577,9 @@ def cmd_export(result, out, complevel, layout, selection):
             else:
                 export_netcdf(result, tmp, complevel, history)
             _publish(tmp, out)
+        except ReadFailure as exc:
+            tmp.unlink(missing_ok=True)
+            raise SweepError(f"cannot read {result}: {exc}; nothing written") from None
         except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
             tmp.unlink(missing_ok=True)
             raise _write_error(out, exc) from None

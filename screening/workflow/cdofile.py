@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from screening.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
-from screening.workflow.errors import SweepError
+from screening.workflow.errors import SweepError, read_values
 from screening.workflow.grid import hyperslabs
 
 #: Grid dimensions CDO can hold besides time (z, y, x).
@@ -177,13 +177,13 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             out.setncatts(attrs)
             if on_grid:
                 for slab in _grid_blocks(shape, step):
-                    values = _encoded(v[slab].values, dtype, fill)
+                    values = _encoded(read_values(lambda: v[slab].values), dtype, fill)
                     if extra == ("t",):
                         out[(slice(0, nt),) + slab] = np.moveaxis(values, -1, 0)
                     else:
                         out[slab if slab else ...] = values
             else:
-                values = _encoded(v.values, dtype, fill)
+                values = _encoded(read_values(lambda: v.values), dtype, fill)
                 if "t" in v.dims:
                     values = np.moveaxis(values, v.dims.index("t"), 0)
                     out[(slice(0, nt),) + (slice(None),) * (values.ndim - 1)] = values
@@ -212,7 +212,7 @@ def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shap
         out.setncatts({**attrs, **cdo_threshold_attributes(value, thresholds.attrs)})
         outs.append(out)
     for slab in _grid_blocks(shape, step):
-        values = _encoded(v[slab].values, dtype, fill)
+        values = _encoded(read_values(lambda: v[slab].values), dtype, fill)
         for i, out in enumerate(outs):
             out[slab if slab else ...] = values[..., i]
 

@@ -14,6 +14,19 @@ def exception_line(exc):
     return f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
 
 
+class ReadFailure(Exception):
+    """A value of a result could not be read while converting it (a damaged chunk, an I/O error):
+    the message is the reason; the command names the result, not the file it was writing."""
+
+
+def read_values(read):
+    """``read()`` (a value of a result being converted); its failure as :class:`ReadFailure`."""
+    try:
+        return read()
+    except (OSError, RuntimeError, ValueError) as exc:      # netCDF: RuntimeError; codecs: ValueError & co
+        raise ReadFailure(write_failure_reason(exc)) from exc
+
+
 def write_failure_reason(exc):
     """Why a write failed, on one line: the operating system's words when it gave any."""
     return exc.strerror if isinstance(exc, OSError) and exc.strerror else " ".join(str(exc).split())[:200]

@@ -369,6 +369,7 @@ def export_netcdf(src, dst, complevel, history):
     import netCDF4
     import zarr
 
+    from screening.workflow.errors import read_values
     from screening.workflow.writer import history_chunks
 
     with warnings_ignored():
@@ -399,7 +400,7 @@ def export_netcdf(src, dst, complevel, history):
                 var_attrs["flag_values"] = np.asarray(var_attrs["flag_values"], dtype=dtype)
             var.setncatts({k: np.asarray(v) if isinstance(v, list) else v for k, v in var_attrs.items()})
             for block in _blocks(arr):
-                values = arr[block]
+                values = read_values(lambda: arr[block])
                 var[block if block else ...] = np.asarray(values, dtype=object) if dtype is str else values
         if attrs.get("history"):
             attrs["history"] = f"{attrs['history']}\n{history}"

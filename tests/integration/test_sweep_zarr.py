@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_processes, interrupted_run, quiet
+from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_processes, interrupted_run, one_line_error, quiet
 
 from screening.cli import main
 from screening.status import PointStatus
@@ -241,3 +241,18 @@ def test_fragility_of_a_zarr_result_is_named_after_its_stem(client, tmp_path):
     run_sweep(study, tmp_path / "r.zarr", client=client, batch_size=5, progress=False, log=quiet)
     assert main(["fragility", str(tmp_path / "r.zarr"), "--threshold", "0.2", "--relative-to", "slenderness"]) == 0
     assert (tmp_path / "r_fragility.nc").exists() and not (tmp_path / "r.zarr_fragility.nc").exists()
+
+
+@pytest.mark.parametrize("layout", ["cf", "cdo"])
+def test_export_of_a_damaged_store_names_the_store_and_writes_nothing(client, tmp_path, capsys, layout):
+    """A chunk of the result damaged after the run: the export says it cannot read the result (it
+    used to say it could not write the output) and leaves no output behind."""
+    run_sweep(parse_study(GRID), tmp_path / "d.zarr", client=client, progress=False, log=quiet)
+    chunk = next(p for p in sorted((tmp_path / "d.zarr" / "var_theta").rglob("*")) if p.is_file()
+                 and p.name != "zarr.json")
+    chunk.write_bytes(chunk.read_bytes()[:10])
+    out = tmp_path / "out.nc"
+    assert main(["export", str(tmp_path / "d.zarr"), str(out), "--layout", layout]) == 2
+    err = one_line_error(capsys.readouterr().err)
+    assert f"cannot read {tmp_path / 'd.zarr'}: " in err and "nothing written" in err and "out.nc" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.zarr"]
