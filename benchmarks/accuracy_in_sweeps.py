@@ -1,0 +1,303 @@
+"""Best estimates of ``[accuracy]`` as the product makes them: one S0 sweep per calibration family (issue #14).
+
+Run (one sweep per family, about 15-30 min wall for all 14 families on a shared 2-core machine; a family
+whose result is up to date is reused, so an interrupted run resumes)::
+
+    flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python \
+        benchmarks/accuracy_in_sweeps.py [--families NAME ...] [--budget 120] [--target 0.15] [--grid 12] \
+        [--work outputs/accuracy_in_sweeps] [--force] [--table-only]
+
+``benchmarks/accuracy_escalation.py`` corrects each calibration point from the *other* calibration points,
+which belong to other blocks, beds and excitations: a stress test of the correction across families.  A
+study, though, sweeps one block, bed and excitation over the intensity and corrects its points from the
+escalated points of the *same* sweep.  This benchmark measures that.
+
+The paper-condensation calibration points of ``screening/data/trust_calibration.nc`` (those with SL status
+ok, the 58 of ``accuracy_escalation.py``) are grouped into *families* sharing block (m, b, h), bed (contact,
+k, lam, eps) and excitation (kind, omega_g, zeta_g); for each family a study (condensation ``paper``,
+exponential envelope T1 = 4 s, T2 = 2 s, 20 s records, output step 0.05 s, the histories the trust rule
+reads) sweeps ``S0`` over the sorted union of ``geomspace(min S0 / 1.5, max S0 * 1.5, --grid)`` and the
+family's calibration ``S0`` values, with ``[accuracy] target = --target, budget_s = --budget, seed = 0``,
+and runs on two local workers (``run_sweep``; result ``--work/<family>.nc``).
+
+At each calibration ``S0`` the best estimate (``best_peak_var_theta``, its standard error and
+``best_method``) is compared with the point's 1000-sample coupled Monte Carlo reference from the
+calibration file.  It *holds* as in ``accuracy_escalation.holds``: within the target, or
+``|best - MCS| <= 2 SE_best``; the second column also counts the reference's own noise:
+``|best - MCS| <= target MCS`` or ``<= 2 sqrt(SE_best^2 + SE_ref^2)``.  Prints the per-point table, counts
+(all points, escalated, corrected, unreliable; per family), the Monte Carlo CPU seconds of each family's
+escalation (cost model and measured) and its wall time; writes the table as markdown to
+``--work/table.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from accuracy_escalation import OUTPUT, holds  # noqa: E402
+
+from screening.status import BestMethod  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_WORK = ROOT / "outputs" / "accuracy_in_sweeps"
+#: The coordinates of the calibration file that define a family (a block, a bed, an excitation).
+FAMILY_KEYS = ("m", "b", "h", "contact", "k", "lam", "eps", "excitation_kind", "omega_g", "zeta_g")
+#: The grid's margin beyond the family's calibration intensities (factor on S0).
+MARGIN = 1.5
+SEED = 0
+
+
+def family_name(names):
+    """A family's name: the points' common name prefix up to its last ``_`` (``statue_kt_p0.05`` and
+    ``statue_kt_lockin1`` -> ``statue_kt``)."""
+    prefix = os.path.commonprefix(list(names))
+    return prefix.rsplit("_", 1)[0] if "_" in prefix else prefix
+
+
+def calibration_families():
+    """``{family: dict(points, S0, ref, ref_se, params)}`` of the paper-condensation calibration points
+    with SL status ok, in the file's order."""
+    from screening.analysis.trust import calibration_rows, shipped_calibration
+
+    cal = shipped_calibration()
+    rows = calibration_rows(cal)
+    names = np.asarray(rows["point"])[np.asarray(rows["condensation"]) == "paper"]
+    sel = cal.sel(point=names)
+    groups = {}
+    for i, name in enumerate(names):
+        key = tuple(_key_value(sel[c].values[i]) for c in FAMILY_KEYS)
+        groups.setdefault(key, []).append(i)
+    out = {}
+    for key, idx in groups.items():
+        params = dict(zip(FAMILY_KEYS, key))
+        fam = family_name(names[idx])
+        out[fam] = dict(points=[str(names[i]) for i in idx], S0=sel["S0"].values[idx].astype(float),
+                        ref=sel["coupled_peak_var_theta"].values[idx].astype(float),
+                        ref_se=sel["coupled_peak_var_theta_se"].values[idx].astype(float),
+                        ref_n=sel["coupled_n_samples"].values[idx].astype(float), params=params)
+    return out
+
+
+def _key_value(v):
+    v = v.item() if hasattr(v, "item") else v
+    if isinstance(v, float) and np.isnan(v):
+        return None
+    return v
+
+
+def sweep_values(S0, grid):
+    """The sorted union of ``geomspace(min S0 / MARGIN, max S0 * MARGIN, grid)`` and the calibration ``S0``
+    values themselves [m2 s-3]."""
+    S0 = np.asarray(S0, dtype=float)
+    base = np.geomspace(S0.min() / MARGIN, S0.max() * MARGIN, grid)
+    return np.unique(np.concatenate([base, S0]))
+
+
+def study_text(family, params, S0_values, target, budget):
+    """The TOML of the family's sweep over ``S0_values`` with ``[accuracy]``."""
+    p = params
+    lines = [f'title = "accuracy in sweeps: {family}"', "", "[block]", f"m = {p['m']!r}", f"b = {p['b']!r}",
+             f"h = {p['h']!r}", "", "[foundation]", f'contact = "{p["contact"]}"', 'condensation = "paper"',
+             f"k = {p['k']!r}", f"lam = {p['lam']!r}", f"eps = {p['eps']!r}", "", "[excitation]",
+             f'kind = "{p["excitation_kind"]}"']
+    if p["excitation_kind"] == "kanai_tajimi":
+        lines += [f"omega_g = {p['omega_g']!r}", f"zeta_g = {p['zeta_g']!r}"]
+    lines += ["S0 = [" + ", ".join(repr(float(s)) for s in S0_values) + "]", 'envelope = "exponential"',
+              "T1 = 4.0", "T2 = 2.0", "", "[time]", "t_end = 20.0", "dt = 0.05", "", OUTPUT,
+              "[accuracy]", f"target = {target!r}", f"budget_s = {budget!r}", f"seed = {SEED}", ""]
+    return "\n".join(lines)
+
+
+def run_family(family, fam, args):
+    """Run (or reuse) the family's sweep; returns the sidecar info (wall time, escalation report)."""
+    from screening.workflow.study import parse_study
+    from screening.workflow.sweep import run_sweep
+
+    out = args.work / f"{family}.nc"
+    side = args.work / f"{family}.json"
+    text = study_text(family, fam["params"], sweep_values(fam["S0"], args.grid), args.target, args.budget)
+    (args.work / f"{family}.toml").write_text(text)
+    study = parse_study(text, name=family)
+    start = time.perf_counter()
+    report = run_sweep(study, out, workers=2, force=args.force, progress=False,
+                       log=lambda m: print(f"    [{family}] {m}", file=sys.stderr, flush=True))
+    wall = time.perf_counter() - start
+    if report.reused and side.exists():
+        return json.loads(side.read_text())
+    info = dict(family=family, wall_s=wall, n_points=study.n_points, accuracy=report.accuracy)
+    side.write_text(json.dumps(info, indent=1, default=float))
+    return info
+
+
+def family_rows(family, fam, path, target):
+    """Per calibration point of the family: SL, band, trust, the best estimate and the reference."""
+    import xarray as xr
+
+    from screening.status import Trust
+
+    rows = []
+    with xr.open_dataset(path) as ds:
+        grid = ds["S0"].values
+        escalated = set(int(i) for i in ds["esc_grid_index"].values) if "esc_grid_index" in ds else set()
+        for name, s0, ref, ref_se, n in zip(fam["points"], fam["S0"], fam["ref"], fam["ref_se"], fam["ref_n"]):
+            i = int(np.argmin(np.abs(grid / s0 - 1)))
+            if not np.isclose(grid[i], s0, rtol=1e-9, atol=0):
+                raise SystemExit(f"{path}: no grid point at the calibration S0 {s0!r} of {name} (nearest {grid[i]!r})")
+            sl = float(ds["peak_var_theta"].values[i])
+            best = float(ds["best_peak_var_theta"].values[i])
+            se = float(ds["best_peak_var_theta_se"].values[i])
+            rows.append(dict(point=name, family=family, samples=int(n), sl_error=sl / ref - 1,
+                             low=float(ds["sl_error_low"].values[i]), high=float(ds["sl_error_high"].values[i]),
+                             trust=Trust(int(ds["sl_trust"].values[i])).name, best_error=best / ref - 1,
+                             best_rel_se=se / best, mc_rel_se=ref_se / ref,
+                             method=BestMethod(int(ds["best_method"].values[i])).name, escalated=i in escalated,
+                             best=best, best_se=se, ref=ref, ref_se=ref_se))
+        attrs = dict(cost_s=float(ds.attrs.get("accuracy_cost_s", np.nan)),
+                     cpu_s=float(ds.attrs.get("accuracy_cpu_s", np.nan)),
+                     n_escalated=int(ds.attrs.get("accuracy_n_escalated", len(escalated))),
+                     n_points=int(grid.size), budget_s=float(ds.attrs.get("accuracy_budget_s", np.nan)))
+    return rows, attrs
+
+
+def holds_with_reference(row, target):
+    """Within the target, or the error within 2 combined standard errors (the best estimate's and the
+    reference's: ``|best - MCS| <= 2 sqrt(SE_best^2 + SE_ref^2)``).  An ``unreliable`` point (NaN SE) holds
+    only if within the target."""
+    diff = abs(row["best"] - row["ref"])
+    return bool(diff <= target * row["ref"] or diff <= 2 * np.hypot(row["best_se"], row["ref_se"]))
+
+
+def _yes(ok, row):
+    return "yes" if ok else ("no (flagged)" if row["method"] == "unreliable" else "NO")
+
+
+COLUMNS = ("point", "family", "SL err", "band", "sl_trust", "best err", "best SE", "ref SE", "best_method",
+           "escalated", "holds", "holds (ref noise)")
+
+
+def table_lines(rows, target):
+    """The per-point table as text lines and as markdown lines."""
+    text = [f"{'point':26s} {'family':18s} {'SL err':>8s} {'band':>17s} {'sl_trust':>9s} | {'best err':>8s} "
+            f"{'best SE':>8s} {'ref SE':>6s} {'best_method':>24s} {'esc':>3s} {'holds':>12s} {'+ref noise':>12s}"]
+    md = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    for r in rows:
+        a, b = holds(r, target), holds_with_reference(r, target)
+        cells = (r["point"], r["family"], f"{r['sl_error']:+.1%}", f"[{r['low']:+.1%}, {r['high']:+.1%}]", r["trust"],
+                 f"{r['best_error']:+.1%}", f"{r['best_rel_se']:.1%}", f"{r['mc_rel_se']:.1%}", r["method"],
+                 "yes" if r["escalated"] else "no", _yes(a, r), _yes(b, r))
+        text.append(f"{cells[0]:26s} {cells[1]:18s} {cells[2]:>8s} {cells[3]:>17s} {cells[4]:>9s} | {cells[5]:>8s} "
+                    f"{cells[6]:>8s} {cells[7]:>6s} {cells[8]:>24s} {cells[9]:>3s} {cells[10]:>12s} {cells[11]:>12s}")
+        md.append("| " + " | ".join(cells) + " |")
+    return text, md
+
+
+def count_line(label, rows, target):
+    n = len(rows)
+    a = sum(holds(r, target) for r in rows)
+    b = sum(holds_with_reference(r, target) for r in rows)
+    return (f"{label:34s} {n:3d} points: holds {a:3d} ({a / max(n, 1):4.0%}), "
+            f"with reference noise {b:3d} ({b / max(n, 1):4.0%})")
+
+
+def summary_lines(rows, info, target):
+    """Counts on all points, escalated / corrected / unreliable ones, per family; cost per family."""
+    lines = [f"best estimate holds (within {target:.0%} or |error| <= 2 SE_best; second count: or <= 2 sqrt(SE_best^2 "
+             f"+ SE_ref^2)):", count_line("all", rows, target),
+             count_line("escalated here (Monte Carlo)", [r for r in rows if r["escalated"]], target),
+             count_line("corrected (not escalated, vouched)",
+                        [r for r in rows if not r["escalated"] and r["method"] != "unreliable"], target),
+             count_line("unreliable (flagged)", [r for r in rows if r["method"] == "unreliable"], target)]
+    sl_within = sum(abs(r["sl_error"]) <= target for r in rows)
+    lines.append(f"(SL itself within {target:.0%}: {sl_within} of {len(rows)})")
+    wrong = [r["point"] for r in rows if not holds(r, target) and r["method"] != "unreliable"]
+    lines.append(f"wrong without the unreliable flag: {len(wrong)}" + (f" ({', '.join(wrong)})" if wrong else ""))
+    lines += ["", "per family:", f"{'family':20s} {'grid':>4s} {'esc':>4s} {'MC cost s':>9s} {'MC CPU s':>8s} "
+              f"{'wall s':>7s}  holds / points (with ref noise)"]
+    total = dict(cost=0.0, cpu=0.0, wall=0.0)
+    for fam, (attrs, side) in info.items():
+        fr = [r for r in rows if r["family"] == fam]
+        a = sum(holds(r, target) for r in fr)
+        b = sum(holds_with_reference(r, target) for r in fr)
+        wall = float(side.get("wall_s", np.nan)) if side else np.nan
+        total["cost"] += attrs["cost_s"]
+        total["cpu"] += attrs["cpu_s"]
+        total["wall"] += wall
+        lines.append(f"{fam:20s} {attrs['n_points']:4d} {attrs['n_escalated']:4d} {attrs['cost_s']:9.1f} "
+                     f"{attrs['cpu_s']:8.1f} {wall:7.1f}  {a} / {len(fr)} ({b})")
+    lines.append(f"{'total':20s} {'':4s} {'':4s} {total['cost']:9.1f} {total['cpu']:8.1f} {total['wall']:7.1f}")
+    return lines
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--families", nargs="+", default=None, metavar="NAME", help="subset of families")
+    ap.add_argument("--budget", type=float, default=120.0, help="[accuracy] budget_s [s] of each sweep")
+    ap.add_argument("--target", type=float, default=0.15, help="[accuracy] target (relative error)")
+    ap.add_argument("--grid", type=int, default=12, help="geometric S0 values besides the calibration ones")
+    ap.add_argument("--work", type=Path, default=DEFAULT_WORK)
+    ap.add_argument("--force", action="store_true", help="recompute families whose result is up to date")
+    ap.add_argument("--table-only", action="store_true", help="only read the existing results")
+    args = ap.parse_args(argv)
+    if not 0 < args.target <= 1:
+        ap.error(f"--target must be in (0, 1] (got {args.target})")
+    if not args.budget > 0:
+        ap.error(f"--budget must be > 0 [s] (got {args.budget})")
+    if args.grid < 2:
+        ap.error(f"--grid must be >= 2 (got {args.grid})")
+    families = calibration_families()
+    chosen = args.families or list(families)
+    unknown = [f for f in chosen if f not in families]
+    if unknown:
+        ap.error(f"--families: unknown {', '.join(unknown)} (allowed: {', '.join(families)})")
+    args.work.mkdir(parents=True, exist_ok=True)
+
+    failed = {}
+    if not args.table_only:
+        for fam in chosen:
+            print(f"== {fam}: {len(families[fam]['points'])} calibration point(s)", file=sys.stderr, flush=True)
+            try:
+                run_family(fam, families[fam], args)
+            except Exception as exc:                # noqa: BLE001 - record and go on with the next family
+                import traceback
+
+                failed[fam] = traceback.format_exc()
+                print(f"== {fam} FAILED:\n{failed[fam]}", file=sys.stderr, flush=True)
+
+    rows, info = [], {}
+    for fam in chosen:
+        path = args.work / f"{fam}.nc"
+        if fam in failed or not path.exists():
+            continue
+        fr, attrs = family_rows(fam, families[fam], path, args.target)
+        side = args.work / f"{fam}.json"
+        rows += fr
+        info[fam] = (attrs, json.loads(side.read_text()) if side.exists() else None)
+    missing = [f for f in chosen if f not in info]
+    text, md = table_lines(rows, args.target)
+    summary = summary_lines(rows, info, args.target)
+    budgets = sorted({f"{attrs['budget_s']:g}" for attrs, _ in info.values()}) or [f"{args.budget:g}"]
+    head = (f"== best estimates in per-family S0 sweeps: target {args.target:.0%}, budget_s {' / '.join(budgets)} per "
+            f"sweep, grid {args.grid} + calibration S0, reference: 1000-sample coupled MCS")
+    print(head)
+    print("\n".join(text))
+    print()
+    print("\n".join(summary))
+    if missing:
+        print(f"\nno result for: {', '.join(missing)}" + (f" (failed: {', '.join(failed)})" if failed else ""))
+    (args.work / "table.md").write_text("\n".join([f"# {head[3:]}", "", *md, "", "```", *summary, "```", ""]))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
