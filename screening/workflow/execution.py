@@ -390,6 +390,10 @@ def dask_client(workers=2, scheduler=None, client=None):
 LOCAL_CLUSTER_CONFIG = {"distributed.admin.low-level-log-length": 16}
 
 
+#: dask's environment variable for how worker processes start (honoured when set)
+START_METHOD_VARIABLE = "DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD"
+
+
 def worker_start_method():
     """How the local cluster starts its worker processes: ``"fork"`` or ``"spawn"``.
 
@@ -397,10 +401,15 @@ def worker_start_method():
     the solvers) already imported instead of importing them again, about 1 s per run (issue 12).
     Fork only on Linux (unsafe on macOS, absent on Windows), and only while this process has not
     started numba's parallel threads (a Monte Carlo ran here): its OpenMP runtime cannot be used
-    by a forked child.
+    by a forked child.  A method set in the environment for dask
+    (``DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD=spawn``, e.g. in a notebook whose
+    threads make fork unsafe) is used as it is.
     """
+    import dask
     import numba.np.ufunc.parallel as numba_parallel
 
+    if os.environ.get(START_METHOD_VARIABLE):
+        return dask.config.get("distributed.worker.multiprocessing-method")
     if sys.platform.startswith("linux") and not getattr(numba_parallel, "_is_initialized", True):
         return "fork"
     return "spawn"

@@ -465,6 +465,21 @@ def test_local_workers_ignore_ctrl_c_are_forked_while_safe_and_run_monte_carlo()
     assert second == ("spawn", [(True, False)] * 2, True)
 
 
+def test_worker_start_method_set_for_dask_in_the_environment_is_used(monkeypatch):
+    import dask
+
+    from screening.workflow import execution
+
+    monkeypatch.setenv(execution.START_METHOD_VARIABLE, "spawn")
+    with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):   # as dask reads it at import
+        assert execution.worker_start_method() == "spawn"
+    monkeypatch.delenv(execution.START_METHOD_VARIABLE)
+    import numba.np.ufunc.parallel as numba_parallel
+
+    expected = "fork" if sys.platform.startswith("linux") and not numba_parallel._is_initialized else "spawn"
+    assert execution.worker_start_method() == expected
+
+
 # ----------------------------------------------------------------------------- readers and figures (B4, B6, B20)
 def test_all_flagged_study_writes_its_figures(client, tmp_path, capsys, monkeypatch):
     """B4: a valid study whose points are all flagged (soft bed k = 1e4) wrote its result and then
