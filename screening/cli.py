@@ -577,14 +577,12 @@ def cmd_export(result, out, complevel, layout, selection):
             else:
                 export_netcdf(result, tmp, complevel, history)
             _publish(tmp, out)
-        except ReadFailure as exc:
+        except BaseException as exc:
             tmp.unlink(missing_ok=True)
-            raise SweepError(f"cannot read {result}: {exc}; nothing written") from None
-        except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
-            tmp.unlink(missing_ok=True)
-            raise _write_error(out, exc) from None
-        except BaseException:
-            tmp.unlink(missing_ok=True)
+            if isinstance(exc, ReadFailure):
+                raise SweepError(f"cannot read {result}: {exc}; nothing written") from None
+            if isinstance(exc, (OSError, RuntimeError)):    # netCDF reports a failed write as RuntimeError
+                raise _write_error(out, exc) from None
             raise
     finally:
         ds.close()

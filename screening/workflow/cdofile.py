@@ -177,13 +177,13 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             out.setncatts(attrs)
             if on_grid:
                 for slab in _grid_blocks(shape, step):
-                    values = _encoded(read_values(lambda: v[slab].values), dtype, fill)
+                    values = _encoded(v[slab], dtype, fill)
                     if extra == ("t",):
                         out[(slice(0, nt),) + slab] = np.moveaxis(values, -1, 0)
                     else:
                         out[slab if slab else ...] = values
             else:
-                values = _encoded(read_values(lambda: v.values), dtype, fill)
+                values = _encoded(v, dtype, fill)
                 if "t" in v.dims:
                     values = np.moveaxis(values, v.dims.index("t"), 0)
                     out[(slice(0, nt),) + (slice(None),) * (values.ndim - 1)] = values
@@ -212,7 +212,7 @@ def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shap
         out.setncatts({**attrs, **cdo_threshold_attributes(value, thresholds.attrs)})
         outs.append(out)
     for slab in _grid_blocks(shape, step):
-        values = _encoded(read_values(lambda: v[slab].values), dtype, fill)
+        values = _encoded(v[slab], dtype, fill)
         for i, out in enumerate(outs):
             out[slab if slab else ...] = values[..., i]
 
@@ -227,9 +227,11 @@ def _after_grid(name, dims, grid, all_dims):
     return dims[len(grid):]
 
 
-def _encoded(values, dtype, fill):
-    """``values`` in the stored ``dtype`` (an integer variable decoded to float with NaN: its ``fill``)."""
-    values = np.asarray(values)
+def _encoded(var, dtype, fill):
+    """The values of ``var`` (read from the source: a failure is a
+    :class:`~screening.workflow.errors.ReadFailure`) in the stored
+    ``dtype`` (an integer variable decoded to float with NaN: its ``fill``)."""
+    values = np.asarray(read_values(lambda: var.values))
     if values.dtype.kind == "f" and dtype.kind in "iu" and fill is not False:
         values = np.where(np.isnan(values), fill, values)
     return values.astype(dtype, copy=False)

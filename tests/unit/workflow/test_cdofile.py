@@ -62,5 +62,5 @@ def test_blocks_are_whole_chunks_of_bounded_size_covering_every_point_once(monke
 
 
 def test_integers_decoded_to_float_get_their_fill_back():
-    out = cdofile._encoded(np.array([1.0, np.nan]), np.dtype("i1"), -1)
+    out = cdofile._encoded(xr.DataArray([1.0, np.nan]), np.dtype("i1"), -1)
     assert out.dtype == np.int8 and out.tolist() == [1, -1]
