@@ -64,7 +64,7 @@ def escalate(run):
     from screening.analysis.trust import shipped_calibration
     from screening.status import BestMethod, EscalationModel
 
-    study, acc = run.study, run.study.accuracy
+    acc = run.study.accuracy
     pts = point_table(run)
     features = point_features(pts["features"])
     candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
@@ -145,7 +145,10 @@ def escalation_runs(run, order, models):
             results[j] = part
     todo = [j for j in range(len(order)) if j not in results]
     loaded = len(results)
-    spent = sum(float(r["cost_s"]) for r in results.values())
+
+    def spent():
+        """Estimated cost [s] of every run so far (each result carries the cost of all its runs)."""
+        return sum(float(r["cost_s"]) for r in results.values())
 
     def submit(j, samples, what):
         model = EscalationModel(int(models[j])).name
@@ -193,7 +196,7 @@ def escalation_runs(run, order, models):
             pilots, committed = {}, 0.0
             for j in todo[w:w + WAVE]:
                 guess = max(pilot_costs, default=esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]))
-                if spent + committed + guess > main_budget:
+                if spent() + committed + guess > main_budget:
                     break
                 pilots[submit(j, esc.PILOT_SAMPLES, "pilot")] = j
                 committed += guess
@@ -203,7 +206,6 @@ def escalation_runs(run, order, models):
             needed = {}
             for j in sorted(pilot):
                 keep(j, pilot[j])
-                spent += float(pilot[j]["cost_s"])
                 pilot_costs.append(float(pilot[j]["cost_s"]))
                 rate = float(pilot[j]["cost_s"]) / esc.PILOT_SAMPLES
                 needed[j] = (rate, esc.samples_needed(rel_se(pilot[j]), esc.PILOT_SAMPLES, acc.target, most))
@@ -217,14 +219,13 @@ def escalation_runs(run, order, models):
                 rate, n = needed[j]
                 # a fair share of what is left for each point still to run
                 left = todo[todo.index(j):]
-                share = (main_budget - spent - committed) / max(len(left), 1)
+                share = (main_budget - spent() - committed) / max(len(left), 1)
                 n = min(n, int(share / max(rate, 1e-300)))
-                if n >= 2 * esc.PILOT_SAMPLES and spent + committed + rate * n <= main_budget:
+                if n >= 2 * esc.PILOT_SAMPLES and spent() + committed + rate * n <= main_budget:
                     full[submit(j, n, "full")] = j
                     committed += rate * n
             finished = gather(full)
             for j in sorted(finished):
-                spent += cost(j, finished[j])
                 keep(j, finished[j], before=pilot[j])
             save(sorted(pilot))
             bar.update(len(todo[w:w + WAVE]))
@@ -238,18 +239,17 @@ def escalation_runs(run, order, models):
             continue
         n = esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
         rate = cost(j, r) / max(int(r["samples"]), 1)
-        if n > int(r["samples"]) and spent + committed + rate * n <= acc.budget_s:
+        if n > int(r["samples"]) and spent() + committed + rate * n <= acc.budget_s:
             topup[submit(j, n, "topup")] = j
             committed += rate * n
     finished = gather(topup) if topup else {}
     for j in sorted(finished):
-        spent += cost(j, finished[j])
         keep(j, finished[j], before=results[j])
     save(sorted(finished))
     for r in results.values():
         r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
     cpu = sum(float(r["cpu_time"]) for r in results.values())
-    return results, spent, cpu, failed
+    return results, spent(), cpu, failed
 
 
 def accuracy_line(info):
