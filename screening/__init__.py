@@ -6,18 +6,21 @@ import multiprocessing as _mp
 import os as _os
 import signal as _signal
 
+#: Set to "1" by the client for the worker processes of its local cluster.
+LOCAL_WORKER_VARIABLE = "SCREENING_LOCAL_WORKER"
+
 
 def quiet_local_worker(_=None):
     """In a worker process of the local cluster of `screening run`: ignore SIGINT; whether it is one.
 
-    The client sets ``SCREENING_LOCAL_WORKER=1`` for its workers
+    The client sets :data:`LOCAL_WORKER_VARIABLE` to ``1`` for its workers
     (:func:`screening.workflow.execution.dask_client`).  The terminal's Ctrl-C reaches the whole
     process group, and the client stops the run with one line and closes its workers itself, so a
     worker ignores SIGINT instead of printing a traceback while it imports or computes (issue 13,
     B18).  A spawned worker runs this when it imports screening, a forked one after the fork.
     """
     if (_mp.current_process().name.startswith("Dask Worker")
-            and _os.environ.get("SCREENING_LOCAL_WORKER") == "1"):
+            and _os.environ.get(LOCAL_WORKER_VARIABLE) == "1"):
         _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
         return True
     return False

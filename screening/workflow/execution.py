@@ -355,7 +355,7 @@ def dask_client(workers=2, scheduler=None, client=None):
     if client is not None:
         yield client
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler:
         from screening.workflow.connect import check_scheduler
@@ -439,7 +439,7 @@ def _local_client(workers):
     try:
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
         # that port is taken (another run, another cluster): give it a free port on localhost instead
-        os.environ["SCREENING_LOCAL_WORKER"] = "1"      # read by the workers (screening/__init__)
+        os.environ[screening.LOCAL_WORKER_VARIABLE] = "1"      # read by the workers (screening/__init__)
         from screening.workflow.interrupt import deferred_interrupt
 
         with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
