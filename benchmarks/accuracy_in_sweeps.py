@@ -1,10 +1,11 @@
 """Best estimates of ``[accuracy]`` as the product makes them: one S0 sweep per calibration family (issue #14).
 
-Run (one sweep per family, about 15-30 min wall for all 14 families on a shared 2-core machine; a family
-whose result is up to date is reused, so an interrupted run resumes)::
+Run (one sweep per family; all 14 families took 16 min wall at ``--budget 120`` and 50 min at the package's
+default budget, 600 s, on a shared 2-core machine; a family whose result is up to date is reused, so an
+interrupted run resumes)::
 
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python \
-        benchmarks/accuracy_in_sweeps.py [--families NAME ...] [--budget 120] [--target 0.15] [--grid 12] \
+        benchmarks/accuracy_in_sweeps.py [--families NAME ...] [--budget 600] [--target 0.15] [--grid 12] \
         [--work outputs/accuracy_in_sweeps] [--force] [--table-only]
 
 ``benchmarks/accuracy_escalation.py`` corrects each calibration point from the *other* calibration points,
@@ -48,6 +49,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from accuracy_escalation import OUTPUT, holds  # noqa: E402
 
 from screening.status import BestMethod  # noqa: E402
+from screening.workflow.study import DEFAULT_BUDGET_S  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_WORK = ROOT / "outputs" / "accuracy_in_sweeps"
@@ -242,7 +244,8 @@ def summary_lines(rows, info, target):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--families", nargs="+", default=None, metavar="NAME", help="subset of families")
-    ap.add_argument("--budget", type=float, default=120.0, help="[accuracy] budget_s [s] of each sweep")
+    ap.add_argument("--budget", type=float, default=DEFAULT_BUDGET_S,
+                    help=f"[accuracy] budget_s [s] of each sweep (default {DEFAULT_BUDGET_S:g}, the package's)")
     ap.add_argument("--target", type=float, default=0.15, help="[accuracy] target (relative error)")
     ap.add_argument("--grid", type=int, default=12, help="geometric S0 values besides the calibration ones")
     ap.add_argument("--work", type=Path, default=DEFAULT_WORK)
@@ -268,7 +271,7 @@ def main(argv=None):
             print(f"== {fam}: {len(families[fam]['points'])} calibration point(s)", file=sys.stderr, flush=True)
             try:
                 run_family(fam, families[fam], args)
-            except Exception as exc:                # noqa: BLE001 - record and go on with the next family
+            except Exception:                # noqa: BLE001 - record and go on with the next family
                 import traceback
 
                 failed[fam] = traceback.format_exc()
