@@ -7,34 +7,33 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test test-fast test-tools clean
+.PHONY: run test test-slow clean
+
+# setuptools says "Editable installation ... be careful with folders named like the package" on every
+# editable install: information for packagers, noise for a user; silenced by its message, nothing else.
+PIP_INSTALL := PYTHONWARNINGS="ignore:Editable installation" $(BIN)/python -m pip install -q
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --upgrade pip >/dev/null
-	$(BIN)/python -m pip install -e .
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(PIP_INSTALL) -e .
 	touch $(STAMP)
 
 $(TEST_STAMP): $(STAMP) pyproject.toml
-	$(BIN)/python -m pip install -e '.[test]'
+	$(PIP_INSTALL) -e '.[test]'
 	touch $(TEST_STAMP)
 
 run: $(STAMP)
 	$(BIN)/screening run studies/quick.toml
 
-# ncdump (Debian netcdf-bin) for the `ncdump -h` test: installed when we are root with apt-get
-# (as on CI; said before it is done), otherwise that one test is skipped with a note.
-test-tools:
-	@command -v ncdump >/dev/null 2>&1 || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 && \
-	  echo "note: installing ncdump (Debian package netcdf-bin) with apt-get for the ncdump test" && \
-	  apt-get update -qq >/dev/null 2>&1 && apt-get install -y -qq netcdf-bin >/dev/null 2>&1; } || \
-	  echo "note: ncdump (Debian package netcdf-bin) is not installed: tests/test_netcdf_cf.py::test_ncdump_header_reads will be skipped"
+# `make test`: the suite a user runs in minutes (tests that need ncdump, CDO or NCO skip with a note
+# when the tool is absent; no test target installs system packages).  `make test-slow`: the
+# statistical and long-running tests (marked `slow`); CI runs both.
+test: $(TEST_STAMP)
+	$(BIN)/python -m pytest -m "not slow" --durations=10
 
-test: $(TEST_STAMP) test-tools
-	$(BIN)/python -m pytest
-
-test-fast: $(TEST_STAMP)
-	$(BIN)/python -m pytest -m "not slow"
+test-slow: $(TEST_STAMP)
+	$(BIN)/python -m pytest -m slow --durations=10
 
 clean:
 	rm -rf $(VENV) .pytest_cache

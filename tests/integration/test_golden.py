@@ -1,4 +1,9 @@
-"""The results frozen before the restructuring (``tests/golden.py``) are reproduced to rtol 1e-9."""
+"""Results frozen before the restructuring (``tests/golden.py``) are reproduced on any machine.
+
+Deterministic values to 10 x the solver's tolerance, Monte Carlo values as paired estimates
+(most samples to 1e-5, the moments within their sampling error): the reasons are in
+``tests/golden.py``, and ``python tests/golden.py --perturb`` shows both halves at work.
+"""
 
 import sys
 from pathlib import Path
@@ -10,26 +15,6 @@ import xarray as xr
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import golden  # noqa: E402
 
-RTOL = 1e-9
-
-
-def assert_same_values(new, frozen):
-    """rtol 1e-9, except the SL histories and one derived error (documented in ``tests/golden.py``)."""
-    assert set(frozen.data_vars) <= set(new.data_vars), set(frozen.data_vars) - set(new.data_vars)
-    for name, ref in frozen.data_vars.items():
-        got = new[name]
-        assert got.shape == ref.shape, name
-        got_v, ref_v = np.asarray(got.values, dtype=float), np.asarray(ref.values, dtype=float)
-        if name in golden.HISTORY_VARIABLES and ref.dims[-1:] == ("t",):
-            scale = np.nanmax(np.abs(ref_v), axis=-1, keepdims=True)
-            np.testing.assert_array_equal(np.isnan(got_v), np.isnan(ref_v), err_msg=name)
-            with np.errstate(invalid="ignore"):
-                excess = np.nanmax(np.abs(got_v - ref_v) - golden.HISTORY_RTOL * scale)
-            assert not excess > 0.0, name
-        else:
-            np.testing.assert_allclose(got_v, ref_v, rtol=RTOL, atol=golden.ABSOLUTE_TOLERANCE.get(name, 0.0),
-                                       equal_nan=True, err_msg=name)
-
 
 def frozen(name):
     with xr.open_dataset(golden.GOLDEN / f"{name}.nc") as ds:
@@ -37,28 +22,70 @@ def frozen(name):
 
 
 def test_quick_study_reproduces_the_frozen_values():
-    assert_same_values(golden.compute_quick(), frozen("quick"))
+    golden.compare(golden.compute_quick(), frozen("quick"))
 
 
 def test_paper_cases_reproduce_the_frozen_values():
-    assert_same_values(golden.compute_paper_cases(), frozen("paper_cases"))
+    golden.compare(golden.compute_paper_cases(), frozen("paper_cases"))
 
 
 def test_trade_study_small_case_reproduces_the_frozen_values(tmp_path):
-    assert_same_values(golden.compute_tradeoff(tmp_path), frozen("tradeoff"))
+    golden.compare_tradeoff(golden.compute_tradeoff(tmp_path), frozen("tradeoff"))
 
 
 def test_the_golden_files_hold_the_documented_content():
     quick, cases = frozen("quick"), frozen("paper_cases")
     assert quick.sizes["point"] == 100 and quick.sizes["t"] == 401
     assert cases.sizes["point"] == 8
-    assert int(quick.spot_n_overturned) > 0          # the heavy-uplift spot point of `make run`
+    assert int(quick.spot_n_overturned) > 0          # the heavy-uplift spot point of `make run`: chaotic samples
+    assert golden.mc_prefixes(quick) == ["spot"]
+    assert len(golden.mc_prefixes(cases)) == 6
     assert np.all(np.isfinite(cases.peak_var_theta.values))
-    with pytest.raises(AssertionError):
-        bumped = quick.copy(deep=True)
-        bumped["peak_var_theta"] = bumped.peak_var_theta * (1 + 1e-8)
-        assert_same_values(bumped, quick)
-    with pytest.raises(AssertionError, match="var_theta"):
-        bumped = quick.copy(deep=True)
-        bumped["var_theta"] = bumped.var_theta * (1 + 1e-6)
-        assert_same_values(bumped, quick)
+
+
+def _bumped(ds, name, factor):
+    out = ds.copy(deep=True)
+    out[name] = out[name] * factor
+    return out
+
+
+@pytest.mark.parametrize("name", ["peak_var_theta", "var_theta", "p_uplift"])
+def test_a_deterministic_change_of_ten_tolerances_fails(name):
+    quick = frozen("quick")
+    golden.compare(_bumped(quick, name, 1 + 0.5 * golden.DETERMINISTIC_RTOL), quick)   # within: holds
+    with pytest.raises(AssertionError, match=name):
+        golden.compare(_bumped(quick, name, 1 + 10 * golden.DETERMINISTIC_RTOL), quick)
+
+
+def test_the_monte_carlo_comparison_tolerates_chaotic_samples_and_catches_a_shift():
+    """40 % of the samples changed at random (what chaos near toppling does on another machine)
+    holds; every sample moved by 1 % (what a 1 % change of the bed does) fails; moments shifted by
+    5 standard errors fail; an overturned count off by far more than its binomial error fails."""
+    quick = frozen("quick")
+    rng = np.random.default_rng(0)
+    n = quick.sizes["spot_sample"]
+    chaotic = quick.copy(deep=True)
+    idx = rng.choice(n, size=int(0.4 * n), replace=False)
+    peaks = chaotic.spot_peak_abs_theta.values.copy()
+    peaks[idx] *= rng.uniform(0.5, 1.5, idx.size)
+    chaotic["spot_peak_abs_theta"] = ("spot_sample", peaks)
+    golden.compare(chaotic, quick)
+
+    with pytest.raises(AssertionError, match="median sample"):
+        golden.compare(_bumped(quick, "spot_peak_abs_theta", 1.01), quick)
+
+    shifted = quick.copy(deep=True)
+    shifted["spot_var_theta"] = quick.spot_var_theta + 5 * np.sqrt(2) * quick.spot_var_theta_se
+    with pytest.raises(AssertionError, match="standard errors"):
+        golden.compare(shifted, quick)
+
+    more = quick.copy(deep=True)
+    more["spot_n_overturned"] = quick.spot_n_overturned + 30
+    with pytest.raises(AssertionError, match="n_overturned"):
+        golden.compare(more, quick)
+
+
+@pytest.mark.slow
+def test_the_comparison_holds_under_last_bit_and_integrator_noise_and_fails_on_a_physics_change(capsys):
+    """Recomputes everything six times (about 1-2 minutes): see ``golden.perturb``."""
+    assert golden.perturb() == 0, capsys.readouterr().out
