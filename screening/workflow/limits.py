@@ -1,4 +1,4 @@
-"""Bounds on what a study may ask for, checked while the study file is parsed (issue 13).
+"""Bounds on what a study, a record or an API call may ask for, checked before any work.
 
 Every size a study sets — grid points, output steps, Monte Carlo samples, the seed — is checked
 against the limits below *before* any array is built, so that a typo such as ``num = 1e9`` or
@@ -30,8 +30,32 @@ MAX_SEED = 2**31 - 1
 MAX_STUDY_CHARS = 1_000_000
 #: Deepest nesting of tables/arrays in a study file (TOML's parser recurses).
 MAX_NESTING = 50
+#: Most history values (points x output instants x variables) one linearization call holds (0.8 GB).
+MAX_HISTORY_VALUES = 100_000_000
+#: Loosest relative tolerance of the adaptive integrators (a looser one gives no accuracy worth the name).
+MAX_RTOL = 1e-2
 #: Memory budget of the time histories of one linearization task [bytes].
 TASK_BYTES = 256 * 2**20
+#: Most ``[[case]]`` tables of a study (each is validated on its own).
+MAX_CASES = 1_000
+#: Most ``[fragility] thresholds`` (each costs a pass over the grid).
+MAX_THRESHOLDS = 100
+#: Largest study file [bytes] read (UTF-8: at most 4 bytes per character).
+MAX_STUDY_BYTES = 4 * MAX_STUDY_CHARS
+#: Largest record file [bytes] read (2 million samples in two columns of 15 digits; a
+#: strong-motion record is a few MB).
+MAX_RECORD_BYTES = 64 * 2**20
+#: Most samples of one record (and output instants of one simulation): 2.8 h at 200 Hz.
+MAX_RECORD_SAMPLES = 2_000_000
+#: Time step of a record [s]: ``MIN_RECORD_DT <= dt <= MAX_RECORD_DT``.
+MIN_RECORD_DT = 1e-6
+MAX_RECORD_DT = 1.0
+#: Factor on a record's accelerations (``--scale``, ``[records] scale``): ``0 < |scale| <= MAX_RECORD_SCALE``.
+MAX_RECORD_SCALE = 1_000.0
+#: Most record files of one cloud analysis.
+MAX_RECORD_FILES = 100_000
+#: Oscillator periods of Sa(T, 5 %) of a record [s] (``[records] period``).
+SA_PERIOD_RANGE = (1e-3, 100.0)
 
 
 def nesting_depth(text):
