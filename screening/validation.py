@@ -98,6 +98,14 @@ def checked(name, value, **kwargs):
 
 
 # ----------------------------------------------------------------------------- input files
+class InputFileError(ValueError):
+    """An input file that cannot be read: ``"<what> <path> <problem>"``; ``problem`` alone as attribute."""
+
+    def __init__(self, what, path, problem):
+        super().__init__(f"{what} {path} {problem}")
+        self.path, self.problem = path, problem
+
+
 def file_problem(path):
     """Why ``path`` cannot be read as an input file (words that follow the path: ``"does not exist"``,
     ``"is a folder, not a file"``, ...), or ``None`` if it is a regular file.
@@ -162,7 +170,7 @@ def read_input_bytes(path, what, max_bytes):
         except OSError as exc:
             problem = _cannot(exc)
     if problem is not None:
-        raise ValueError(f"{what} {path} {problem}")
+        raise InputFileError(what, path, problem)
     with os.fdopen(fd, "rb") as fh:
         info = os.fstat(fh.fileno())
         problem = _mode_problem(info.st_mode)        # replaced between the check and the open
@@ -173,7 +181,7 @@ def read_input_bytes(path, what, max_bytes):
             if len(data) > max_bytes:
                 problem = f"has more than {max_bytes} bytes; at most {max_bytes} are read"
     if problem is not None:
-        raise ValueError(f"{what} {path} {problem}")
+        raise InputFileError(what, path, problem)
     return data
 
 
@@ -183,4 +191,4 @@ def read_input_text(path, what, max_bytes):
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise ValueError(f"{what} {input_path(path)} is not UTF-8 text (byte {exc.start})") from None
+        raise InputFileError(what, input_path(path), f"is not UTF-8 text (byte {exc.start})") from None

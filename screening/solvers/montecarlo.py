@@ -73,7 +73,9 @@ DEFAULT_NUMERICS = {
 }
 
 # ----------------------------------------------------------------------------- validation
-def _check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo"):
+def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo"):
+    """``ValueError`` unless every numeric field of the model objects is a scalar (one point for
+    ``purpose``), and the excitation (if given) is white noise or Kanai–Tajimi."""
     fields = {"block." + n: getattr(block, n) for n in ("m", "b", "h", "I_cm", "g")}
     fields.update({"foundation." + n: getattr(foundation, n) for n in ("k", "eps")})
     fields["foundation.damping"] = foundation.damping
@@ -230,7 +232,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     seed = validate_seed(seed)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
-    _check_scalar_models(block, foundation, excitation)
+    check_scalar_models(block, foundation, excitation)
     opts = _check_numerics(numerics)
     if opts["rtol"] is None:
         opts["rtol"] = DEFAULT_RTOL[model]

@@ -42,7 +42,7 @@ from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIM
 from screening.records import Record
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.datasets import finish
-from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, _check_scalar_models, state_scales
+from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, check_scalar_models, state_scales
 from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 from screening.validation import check_integer, check_scalar
 from screening.workflow import limits
@@ -155,7 +155,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     if model == "coupled" and cond != condensations.get("paper"):
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only (got {cond.name!r})")
     dt = record.dt
-    _check_scalar_models(block, foundation)
+    check_scalar_models(block, foundation, purpose="simulate")
     theta0 = check_scalar("theta0", theta0)
     theta_dot0 = check_scalar("theta_dot0", theta_dot0)
     slender = float(block.slenderness)

@@ -59,13 +59,16 @@ SA_PERIOD_RANGE = (1e-3, 100.0)
 
 
 def nesting_depth(text):
-    """Upper bound of the nesting depth of ``[``/``{`` in ``text`` outside strings and comments.
+    """Upper bound of the nesting depth of ``text``: ``[``/``{`` and the parts of dotted keys
+    (``a.b.c = 1``, ``[a.b.c]``), outside strings and comments.
 
     A quick scan (not a TOML parser): brackets in strings and comments are skipped so that a
-    title such as ``"[[[["`` does not count; it only needs to be an upper bound of what the
-    parser will recurse into, cheap on any input.
+    title such as ``"[[[["`` does not count, and dots count only in keys (not in ``1.5``); it
+    only needs to be an upper bound of what the parser will build, cheap on any input.
     """
-    depth = deepest = 0
+    depth = deepest = dots = 0
+    stack = []                      # "[" of a table header, "a" of an array, "{" of an inline table
+    in_key = True                   # at the start of a line, after "{" or "," of an inline table
     i, n = 0, len(text)
     while i < n:
         ch = text[i]
@@ -74,27 +77,52 @@ def nesting_depth(text):
             i = n if j < 0 else j
             continue
         if ch in "\"'":
-            triple = text.startswith(ch * 3, i)
-            end = ch * 3 if triple else ch
-            j = i + len(end)
-            while j < n:
-                if ch == '"' and text[j] == "\\":
-                    j += 2
-                    continue
-                if text.startswith(end, j):
-                    break
-                if not triple and text[j] == "\n":
-                    break
-                j += 1
-            i = j + len(end)
+            i = _string_end(text, i)
             continue
-        if ch in "[{":
+        if ch == "\n":
+            if not stack:
+                in_key, dots = True, 0
+        elif ch == "." and (in_key or (stack and stack[-1] == "[")):
+            dots += 1
+            deepest = max(deepest, depth + dots + 1)
+        elif ch == "=" and in_key:
+            in_key, dots = False, 0
+        elif ch == "[":
+            stack.append("[" if in_key and not stack or stack and stack[-1] == "[" else "a")
             depth += 1
-            deepest = max(deepest, depth)
+        elif ch == "{":
+            stack.append("{")
+            depth += 1
+            in_key, dots = True, 0
         elif ch in "]}":
+            if stack:
+                stack.pop()
             depth = max(depth - 1, 0)
+            if not stack or stack[-1] != "{":
+                in_key = False
+        elif ch == "," and stack and stack[-1] == "{":
+            in_key, dots = True, 0
+        deepest = max(deepest, depth)
         i += 1
     return deepest
+
+
+def _string_end(text, i):
+    """Index just after the TOML string that starts at ``text[i]`` (a quote)."""
+    ch, n = text[i], len(text)
+    triple = text.startswith(ch * 3, i)
+    end = ch * 3 if triple else ch
+    j = i + len(end)
+    while j < n:
+        if ch == '"' and text[j] == "\\":
+            j += 2
+            continue
+        if text.startswith(end, j):
+            break
+        if not triple and text[j] == "\n":
+            break
+        j += 1
+    return j + len(end)
 
 
 def output_steps(t_end, dt):
