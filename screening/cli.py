@@ -339,7 +339,7 @@ def _stem(result):
 def _write_error(path, exc):
     from screening.workflow.errors import SweepError, write_failure_reason
 
-    return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc)}")
+    return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc, path)}")
 
 
 def stamp_fragility(frag, result, **options):

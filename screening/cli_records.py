@@ -16,6 +16,8 @@ from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_wi
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
+UNITS_HELP = ("acceleration units of the record (required for a text record unless a header line states them, "
+              "e.g. 'units: g' or 'acc [g]'; AT2: from its header, must agree)")
 
 
 def _overrides(pairs):
@@ -43,7 +45,7 @@ def _read(record, dt, units):
     from screening.records import read_record
 
     try:
-        return read_record(record, dt=dt, units=units)
+        return read_record(record, dt=dt, units=units, option="--units")
     except (ValueError, OSError) as exc:
         raise CommandError(f"cannot read record {record}: {exc}") from None
 
@@ -57,9 +59,9 @@ def _read(record, dt, units):
                             "must exist); the PNG goes next to it")
 @click.option("--model", type=_Choice(["coupled", "condensed"]), default="coupled",
               help="coupled (eqs. 7-8, default) or condensed (eq. 22, the study's condensation)")
-@click.option("--dt", type=float, help="time step [s] of a one-column record")
-@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
-              help="acceleration units of a text record (default m/s2; AT2 files: from the header)")
+@click.option("--dt", type=float, help="time step [s] of a one-column record (checked against a time column "
+                                      "or an AT2 header)")
+@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
 @click.option("--scale", type=float, default=1.0, help="factor on the record's accelerations (default 1)")
 @click.option("--case", help="case of the study (required when it has several)")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
@@ -69,15 +71,23 @@ def _read(record, dt, units):
 @click.option("--t-end", type=float, help="end time [s] (default: the record's duration)")
 @click.option("--no-plots", is_flag=True, help="do not write the PNG")
 def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0, theta_dot0, t_end, no_plots):
-    from screening.records import Record
+    from screening.records import check_scale
     from screening.report.record_figures import plot_simulation
-    from screening.solvers.simulate import simulate
+    from screening.solvers.simulate import simulate, simulation_times
     from screening.workflow.records_study import block_and_foundation, load_record_study
     from screening.workflow.writer import check_output_path
 
+    try:
+        scale = check_scale(scale, "--scale", signed=True)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
     rec = _read(record, dt, units)
     if scale != 1.0:
-        rec = Record(rec.acceleration * scale, rec.dt, rec.name, rec.source, rec.units_in)
+        rec = rec.scaled(scale)
+    try:
+        simulation_times(rec, t_end, None, "--t-end")
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
     st, _ = load_record_study(study)
     block, foundation, chosen = block_and_foundation(st, case, _overrides(sets))
     out = check_output_path(out or Path(f"{rec.name}_simulation.nc"))
@@ -134,9 +144,9 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 @cli.command("fit-excitation", help="estimate S0, omega_g, zeta_g, T1, T2 from a record and print the "
                                     "[excitation] table of a study")
 @click.argument("record")
-@click.option("--dt", type=float, help="time step [s] of a one-column record")
-@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
-              help="acceleration units of a text record (default m/s2; AT2 files: from the header)")
+@click.option("--dt", type=float, help="time step [s] of a one-column record (checked against a time column "
+                                      "or an AT2 header)")
+@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
 @click.option("--kind", type=_Choice(["kanai_tajimi", "white"]), default="kanai_tajimi",
               help="excitation model (default kanai_tajimi)")
 @click.option("--cutoff", type=float, help="band limit [rad/s] of the study's synthesis (required for white)")
@@ -164,8 +174,10 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
                    f"{SERIAL_RECORDS} records, else 2)")
 @click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
+@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
+              help="acceleration units of the study's text records (as [records] units; both given: must agree)")
 @click.option("--quiet", is_flag=True, help="no progress lines")
-def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
+def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     import contextlib
 
     from screening.workflow.cloud import load_cloud_study, plot_cloud, run_cloud
@@ -173,7 +185,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
     from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path
 
-    cloud = load_cloud_study(study)
+    cloud = load_cloud_study(study, units)
     if out is None:
         out = Path("outputs") / f"{Path(study).stem}.nc"
         out.parent.mkdir(exist_ok=True)

@@ -1,37 +1,50 @@
-"""Ground-motion records: readers for PEER NGA ``.AT2`` files, two-column and one-column text.
+"""Ground-motion records: readers for PEER NGA ``.AT2`` files and text/CSV records.
 
 One record is a :class:`Record`: a uniformly sampled horizontal ground acceleration [m/s2]
 in the usual sign convention (positive along the +x axis of the recording instrument; see
-:func:`screening.solvers.simulate.simulate` for how it drives the block), its time step
-``dt`` [s], a name and where it came from.
+:func:`screening.solvers.simulate.simulate` for how it drives the block), optionally a vertical
+one (positive upwards), its time step ``dt`` [s], a name and where it came from.
 
 Formats
 -------
 * **PEER NGA** ``.AT2`` (:func:`read_at2`): four header lines — title, event/station/component,
   ``ACCELERATION TIME SERIES IN UNITS OF G``, then either ``NPTS=  5590, DT=   .0050 SEC``
-  (NGA-West2) or ``5590    .0050    NPTS, DT`` (the older NGA-West1 layout) — followed by the
-  accelerations, any number per line, in ``g``.
-* **Two columns** (:func:`read_two_column`): time [s] and acceleration, separated by blanks,
-  tabs, commas or semicolons (``.csv`` or text); non-numeric leading lines (a header) and
-  ``#`` comments are skipped.  The time step must be uniform (relative spread < 1e-6 of
-  ``dt``, after rounding in the file's printed digits up to 1e-3 of ``dt``).
-* **One column** (:func:`read_single_column`): the accelerations only, one per line (or any
-  number per line), with the time step given.
+  (NGA-West2) or ``5590    .0050    NPTS, DT`` (the older NGA-West1 layout; the numbers are
+  taken in the order of the labels) — followed by the accelerations, any number per line.
+* **Text or CSV** (:func:`read_text_record`): numbers separated by blanks, tabs, commas or
+  semicolons.  Two columns are time [s] and horizontal acceleration, three columns time,
+  horizontal and vertical acceleration; the time step must be uniform (relative spread < 1e-3
+  of ``dt``) and a ``dt`` given as well must agree with it.  One column (or four and more
+  numbers per line, read row by row) holds accelerations only and needs ``dt``.
+  Non-numeric lines before the data are a header, after it a footer; ``#`` starts a comment.
+
+Every value is a plain decimal number (``-1.25``, ``.5E-03``, Fortran's ``1.0D-3``): ``nan``,
+``inf``, ``1_0`` or hexadecimal are refused, as are numbers after a footer line.  Errors name
+the file and the line number, never the line's content.  Files are checked before they are read
+(a regular file of at most :data:`~screening.workflow.limits.MAX_RECORD_BYTES`; a folder, FIFO or
+device is named as such) and a UTF-8 byte-order mark is dropped.
 
 Units of the acceleration: ``"g"`` (multiplied by :data:`STANDARD_GRAVITY`), ``"m/s2"`` or
-``"cm/s2"`` (``"gal"``).  :func:`read_record` picks the reader from the suffix (``.at2``) or
-from the number of columns, and takes the units from the AT2 header, else from ``units``.
+``"cm/s2"`` (``"gal"``).  They are never guessed: an AT2 file states them on its third line
+(``UNITS OF G``), a text record in a header or comment line (``units: g``, ``units = cm/s2``) or in
+its column titles (``time [s], acc [g]``, ``t (s); a (cm/s2)``), or the caller gives them
+(``units``); a record whose units are stated nowhere is refused, and units given by the caller
+must agree with those in the file.
 """
 
 from __future__ import annotations
 
 import glob as _glob
 import math
+import numbers
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from screening.validation import input_path, read_input_text
+from screening.workflow import limits
 
 #: Standard gravity [m/s2] used to convert records given in g.
 STANDARD_GRAVITY = 9.80665
@@ -40,21 +53,37 @@ STANDARD_GRAVITY = 9.80665
 UNITS = {"g": STANDARD_GRAVITY, "m/s2": 1.0, "m/s^2": 1.0, "m s-2": 1.0, "cm/s2": 0.01, "cm/s^2": 0.01,
          "gal": 0.01}
 
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?")
+#: A plain decimal number (optional sign, digits with an optional point, optional exponent; Fortran's
+#: ``D`` exponent too).  No ``nan``, ``inf``, hexadecimal or ``1_0``: Python's ``float`` accepts those.
+_PLAIN = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?"
+_NUMBER = re.compile(_PLAIN)
 _SEPARATORS = re.compile(r"[,;\s]+")
+#: A data line of a text record: plain numbers separated by blanks, tabs, commas or semicolons.
+_DATA_LINE = re.compile(rf"{_PLAIN}(?:[,;\s]+{_PLAIN})*[,;]?")
+#: A data line of an AT2 file: Fortran fixed-width fields may touch when a value is negative.
+_AT2_LINE = re.compile(rf"\s*{_PLAIN}(?:(?:[\s,]+|(?=[-+])){_PLAIN})*\s*")
+#: Units stated in a header or comment line: ``units: g``, ``units = m/s2``.
+_UNITS_STATEMENT = re.compile(r"\bunits?\s*[:=]\s*([^\s,;]+)", re.I)
+#: Units of a column title: ``acc [g]``, ``a (cm/s2)``.
+_BRACKETED = re.compile(r"[\[(]\s*([^\]()\[]{1,12}?)\s*[\])]")
+_TIME_UNITS = ("s", "sec", "second", "seconds")
 
 
 @dataclass(frozen=True)
 class Record:
-    """A uniformly sampled horizontal ground acceleration.
+    """A uniformly sampled ground acceleration: horizontal, and optionally vertical.
 
     Attributes
     ----------
-    acceleration : ground acceleration [m/s2], usual sign convention (positive along +x).
-    dt : time step [s], > 0.
+    acceleration : horizontal ground acceleration [m/s2], usual sign convention (positive along +x).
+    dt : time step [s], in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` of :mod:`screening.workflow.limits`.
     name : a short name (the file stem by default).
     source : the file read, or ``""``.
     units_in : the units of the file (``"g"``, ``"m/s2"``, ...).
+    metadata : header information (AT2 title and station).
+    vertical : vertical ground acceleration [m/s2] (positive upwards) on the same samples, or
+        ``None``.  Read from the third column of a text record; carried, not yet used by the
+        solvers (:func:`screening.simulate` drives the block with ``acceleration`` only).
     """
 
     acceleration: np.ndarray
@@ -63,18 +92,18 @@ class Record:
     source: str = ""
     units_in: str = "m/s2"
     metadata: dict = field(default_factory=dict)
+    vertical: np.ndarray | None = None
 
     def __post_init__(self):
-        acc = np.ascontiguousarray(np.asarray(self.acceleration, dtype=float).ravel())
-        if acc.size < 2:
-            raise ValueError(f"record {self.name!r} has {acc.size} sample(s); need at least 2")
-        if not np.all(np.isfinite(acc)):
-            raise ValueError(f"record {self.name!r} has non-finite accelerations")
-        dt = float(self.dt)
-        if not (dt > 0.0 and math.isfinite(dt)):
-            raise ValueError(f"record {self.name!r}: time step 'dt' must be a finite number > 0 (got {self.dt!r})")
+        acc = _samples(self.name, "acceleration", self.acceleration)
         object.__setattr__(self, "acceleration", acc)
-        object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "dt", check_time_step(self.dt, f"record {self.name!r}: time step 'dt'"))
+        if self.vertical is not None:
+            vert = _samples(self.name, "vertical", self.vertical)
+            if vert.size != acc.size:
+                raise ValueError(f"record {self.name!r}: 'vertical' has {vert.size} samples, 'acceleration' "
+                                 f"{acc.size}")
+            object.__setattr__(self, "vertical", vert)
 
     @property
     def times(self):
@@ -88,8 +117,14 @@ class Record:
 
     @property
     def pga(self):
-        """Peak ground acceleration ``max |a|`` [m/s2]."""
+        """Peak ground acceleration ``max |a|`` [m/s2] (horizontal)."""
         return float(np.max(np.abs(self.acceleration)))
+
+    def scaled(self, factor):
+        """The record with both components multiplied by ``factor`` (checked by :func:`check_scale`)."""
+        factor = check_scale(factor)
+        vertical = None if self.vertical is None else self.vertical * factor
+        return replace(self, acceleration=self.acceleration * factor, vertical=vertical)
 
     def to_dataarray(self):
         """The record as an ``xarray.DataArray`` on ``t`` [s] (CF attributes)."""
@@ -100,126 +135,301 @@ class Record:
                                    "record": self.name, "source": self.source})
 
 
+def _samples(name, what, values):
+    arr = np.asarray(values)
+    if arr.dtype.kind not in "iuf":
+        raise ValueError(f"record {name!r}: '{what}' must be numbers (got dtype {arr.dtype})")
+    if arr.size > limits.MAX_RECORD_SAMPLES:
+        raise ValueError(f"record {name!r} has {arr.size} samples; at most {limits.MAX_RECORD_SAMPLES}")
+    arr = np.ascontiguousarray(arr, dtype=float).ravel()
+    if arr.size < 2:
+        raise ValueError(f"record {name!r} has {arr.size} sample(s); need at least 2")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"record {name!r} has non-finite accelerations ('{what}')")
+    return arr
+
+
+def check_time_step(dt, what="parameter 'dt'"):
+    """``dt`` [s] as a float in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` (:mod:`screening.workflow.limits`)."""
+    lo, hi = limits.MIN_RECORD_DT, limits.MAX_RECORD_DT
+    ok = isinstance(dt, numbers.Real) and not isinstance(dt, (bool, np.bool_)) and lo <= float(dt) <= hi
+    if not ok:
+        raise ValueError(f"{what} must be a number of seconds in [{lo:g}, {hi:g}] (got {dt!r})")
+    return float(dt)
+
+
+def check_scale(scale, what="parameter 'scale'", signed=False):
+    """A factor on a record: finite, ``0 < scale <= MAX_RECORD_SCALE`` (``signed``: ``0 < |scale|``)."""
+    top = limits.MAX_RECORD_SCALE
+    ok = isinstance(scale, numbers.Real) and not isinstance(scale, (bool, np.bool_)) and math.isfinite(scale)
+    ok = ok and (0.0 < abs(scale) <= top if signed else 0.0 < scale <= top)
+    if not ok:
+        rng = f"0 < |scale| <= {top:g}" if signed else f"0 < scale <= {top:g}"
+        raise ValueError(f"{what} must be a finite number with {rng} (got {scale!r})")
+    return float(scale)
+
+
 def unit_factor(units):
     """Factor turning ``units`` into m/s2 (``"g"``, ``"m/s2"``, ``"cm/s2"``/``"gal"``)."""
-    key = str(units).strip().lower().replace(" ", "")
-    key = {"m/s**2": "m/s2", "ms-2": "m s-2", "cm/s**2": "cm/s2"}.get(key, key)
-    if key not in UNITS:
+    key = _unit_key(units)
+    if key is None:
         raise ValueError(f"parameter 'units' must be one of ('g', 'm/s2', 'cm/s2') (got {units!r})")
     return UNITS[key]
 
 
-def _numbers(text):
-    return [float(x.replace("D", "E").replace("d", "e")) for x in _NUMBER.findall(text)]
+def _unit_key(units):
+    key = str(units).strip().lower().replace(" ", "")
+    key = {"m/s**2": "m/s2", "ms-2": "m s-2", "cm/s**2": "cm/s2", "m/sec2": "m/s2", "cm/sec2": "cm/s2",
+           "m/s/s": "m/s2", "cm/s/s": "cm/s2"}.get(key, key)
+    return key if key in UNITS else None
 
 
 def _name(path):
     return os.path.splitext(os.path.basename(str(path)))[0]
 
 
-def read_at2(path):
-    """Read a PEER NGA ``.AT2`` file (both header layouts); accelerations converted from g to m/s2.
+def _read_text(path):
+    return read_input_text(path, "record file", limits.MAX_RECORD_BYTES)
 
-    Raises ``ValueError`` for a header without NPTS/DT or a sample count other than NPTS.
+
+def _stated_units(path, stated, given, option, hint="a header line such as 'units: g'"):
+    """The units of a record: ``given`` (the caller's option) and ``stated`` (``{line: units}`` read
+    from the file) must agree; neither: ``ValueError`` naming ``option`` and the header ``hint``."""
+    found = set(stated.values())
+    if len(found) > 1:
+        lines = ", ".join(str(n) for n in sorted(stated))
+        raise ValueError(f"{path}: lines {lines} state different acceleration units")
+    if given is not None:
+        unit_factor(given)
+        if found and _unit_key(given) != _unit_key(next(iter(found))):
+            line = min(stated)
+            raise ValueError(f"{path}: line {line} states the units {next(iter(found))!r} but {option} "
+                             f"{given!r} was given")
+        return given
+    if not found:
+        raise ValueError(f"{path}: the acceleration units are not stated; give {option} (g, m/s2 or cm/s2) "
+                         f"or {hint}")
+    return next(iter(found))
+
+
+def _header_units(line):
+    """Units stated on a header or comment line (``units: g`` or column titles ``acc [g]``), or ``None``.
+    Time units (``[s]``) are skipped; brackets holding anything else than a known unit are ignored."""
+    match = _UNITS_STATEMENT.search(line)
+    words = [match.group(1)] if match else _BRACKETED.findall(line)
+    found = {_unit_key(w) for w in words if w.strip().lower() not in _TIME_UNITS} - {None}
+    if match and not found:
+        raise ValueError("states acceleration units other than g, m/s2 or cm/s2")
+    if len(found) > 1:
+        raise ValueError("states two different acceleration units")
+    return next(iter(found)) if found else None
+
+
+def _layout(path, text, data_line, first=0):
+    """``(data, header, first_line)`` of a record's ``text``: the data lines (numbers only) with their
+    1-based line numbers, and the header/comment lines before them (``#`` comments anywhere).
+
+    Lines before the data that are not numbers are header lines; lines after it are a footer, and
+    numbers after a footer are refused (a line inside the data that is not numbers).  Errors name
+    the file and the line number, never the line's content."""
+    data, header, footer = [], [], None
+    for number, raw in enumerate(text.splitlines()[first:], start=first + 1):
+        line, _, comment = raw.partition("#")
+        line = line.strip()
+        if comment and not data:
+            header.append((number, comment))
+        if not line:
+            continue
+        if data_line.fullmatch(line):
+            if footer is not None:
+                raise ValueError(f"{path}, line {footer}: not a row of plain decimal numbers, inside the data "
+                                 f"(lines {data[0][0]} to {number})")
+            data.append((number, line))
+            if len(data) > limits.MAX_RECORD_SAMPLES:
+                raise ValueError(f"{path}: more than {limits.MAX_RECORD_SAMPLES} data lines")
+        elif data:
+            footer = footer or number
+        else:
+            header.append((number, line))
+    if not data:
+        raise ValueError(f"{path}: no data (no line of plain decimal numbers)")
+    return data, header
+
+
+def _float_array(path, tokens):
+    values = np.array([t.replace("D", "E").replace("d", "e") for t in tokens], dtype=float)
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{path}: a value overflows a float (larger than 1.8e308)")
+    return values
+
+
+def read_at2(path, units=None, option="units", dt=None):
+    """Read a PEER NGA ``.AT2`` file (both header layouts); accelerations converted to m/s2.
+
+    ``units``: the file's units when its third line does not state them (``... IN UNITS OF G``);
+    when both are given they must agree (``option``: how ``units`` is spelled in messages).
+    ``dt`` [s], if given, must agree with the header's DT.  Raises ``ValueError`` (file and line number) for a
+    header without NPTS and DT, a sample count other than NPTS, a token that is not a plain
+    decimal number, and numbers after a non-numeric footer line.
     """
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        lines = fh.read().splitlines()
-    if len(lines) < 4:
-        raise ValueError(f"{path}: not a PEER .AT2 file (fewer than 4 header lines)")
-    units_line = lines[2].upper()
-    units = "g"
-    if "UNITS OF" in units_line:
-        rest = units_line.split("UNITS OF", 1)[1].split()
-        word = rest[0] if rest else "G"
-        units = {"G": "g", "CM/S2": "cm/s2", "CM/SEC2": "cm/s2", "CM/S/S": "cm/s2", "M/S2": "m/s2"}.get(word, None)
-        if units is None:
-            raise ValueError(f"{path}: unknown units {word!r} in the AT2 header")
-    header = lines[3]
-    m_npts = re.search(r"NPTS\s*=\s*(\d+)", header, re.I)
-    m_dt = re.search(r"DT\s*=\s*(" + _NUMBER.pattern + ")", header, re.I)
-    if m_npts and m_dt:
-        npts, dt = int(m_npts.group(1)), float(m_dt.group(1))
-    else:
-        values = _numbers(header)
-        if len(values) < 2 or "NPTS" not in header.upper():
-            raise ValueError(f"{path}: AT2 header line 4 has no NPTS and DT ({header.strip()!r})")
-        npts, dt = int(values[0]), float(values[1])
-    data = np.array(_numbers(" ".join(lines[4:])), dtype=float)
-    if data.size != npts:
-        raise ValueError(f"{path}: the AT2 header says NPTS={npts} but the file has {data.size} values")
-    return Record(data * unit_factor(units), dt, name=_name(path), source=str(path), units_in=units,
+    lines = _read_text(path).splitlines()
+    if len(lines) < 5:
+        raise ValueError(f"{path}: not a PEER .AT2 file (fewer than 4 header lines and data)")
+    upper = lines[2].upper()
+    stated = {}
+    if "UNITS OF" in upper:
+        rest = upper.split("UNITS OF", 1)[1].split()
+        word = rest[0].strip(".,") if rest else ""
+        key = {"G": "g"}.get(word) or _unit_key(word.lower())
+        if key is None:
+            raise ValueError(f"{path}, line 3: units other than G, CM/S2 or M/S2")
+        stated[3] = key
+    units = _stated_units(path, stated, units, option, "a third line '... IN UNITS OF G'")
+    npts, step = _at2_npts_dt(path, lines[3])
+    if dt is not None and abs(check_time_step(dt) - step) > 1e-6 * step:
+        raise ValueError(f"{path}: the AT2 header gives DT = {step:g} s but dt = {dt!r} was given")
+    data, _ = _layout(path, "\n".join(lines), _AT2_LINE, first=4)
+    values = _float_array(path, [t for _, line in data for t in _NUMBER.findall(line)])
+    if values.size != npts:
+        raise ValueError(f"{path}: the AT2 header says NPTS={npts} but the file has {values.size} values")
+    return Record(values * unit_factor(units), step, name=_name(path), source=str(path), units_in=units,
                   metadata={"title": lines[0].strip(), "station": lines[1].strip()})
 
 
-def _numeric_rows(path):
-    rows = []
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for line in fh:
-            text = line.split("#", 1)[0].strip()
-            if not text:
-                continue
-            parts = [p for p in _SEPARATORS.split(text) if p]
-            try:
-                rows.append([float(p.replace("D", "E").replace("d", "e")) for p in parts])
-            except ValueError:
-                if rows:
-                    raise ValueError(f"{path}: non-numeric line after the data started: {line.strip()!r}")
-                continue                                        # header line
-    if not rows:
-        raise ValueError(f"{path}: no numeric data")
-    return rows
+def _at2_npts_dt(path, header):
+    """``(NPTS, DT)`` of AT2 header line 4: ``NPTS= 5590, DT= .0050 SEC`` or ``5590 .0050 NPTS, DT``
+    (the numbers in the order of the labels)."""
+    where = f"{path}, line 4"
+    m_npts = re.search(r"NPTS\s*=\s*([^\s,]+)", header, re.I)
+    m_dt = re.search(r"DT\s*=\s*([^\s,]+?)(?:SEC)?(?=[\s,]|$)", header, re.I)
+    if m_npts and m_dt:
+        npts_text, dt_text = m_npts.group(1), m_dt.group(1)
+    else:
+        labels = re.findall(r"\b(NPTS|DT)\b", header, re.I)
+        head = header[:re.search(r"\b(NPTS|DT)\b", header, re.I).start()] if labels else ""
+        values = [v for v in _SEPARATORS.split(head) if v]
+        if sorted(x.upper() for x in labels) != ["DT", "NPTS"] or len(values) != 2:
+            raise ValueError(f"{where}: expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT'")
+        given = dict(zip((x.upper() for x in labels), values))
+        npts_text, dt_text = given["NPTS"], given["DT"]
+    if not re.fullmatch(r"\d+", npts_text) or not 2 <= int(npts_text) <= limits.MAX_RECORD_SAMPLES:
+        raise ValueError(f"{where}: NPTS must be an integer in 2..{limits.MAX_RECORD_SAMPLES}")
+    if not _NUMBER.fullmatch(dt_text):
+        raise ValueError(f"{where}: DT is not a plain decimal number")
+    dt = float(dt_text.replace("D", "E").replace("d", "e"))
+    return int(npts_text), check_time_step(dt, f"{where}: DT")
 
 
-def read_two_column(path, units="m/s2"):
+def _columns(path, data):
+    """The data lines as a 2-d array of columns (1, 2 or 3 numbers per line, the same on every
+    line), or a 1-d stream when lines hold 4 or more numbers (the last line may hold fewer)."""
+    rows = [_SEPARATORS.split(line.strip(" \t,;")) for _, line in data]
+    width = len(rows[0])
+    if width <= 3:
+        for (number, _), row in zip(data, rows):
+            if len(row) != width:
+                raise ValueError(f"{path}, line {number}: {len(row)} numbers, but the data starts with "
+                                 f"{width} per line (line {data[0][0]})")
+        return _float_array(path, [t for row in rows for t in row]).reshape(-1, width)
+    for (number, _), row in zip(data[:-1], rows[:-1]):
+        if len(row) != width:
+            raise ValueError(f"{path}, line {number}: {len(row)} numbers, but the data starts with {width} "
+                             f"per line (line {data[0][0]})")
+    return _float_array(path, [t for row in rows for t in row])
+
+
+def _time_step(path, t, dt):
+    """The time step of a uniform time column ``t`` [s]; ``dt`` (if given) must agree with it."""
+    steps = np.diff(t)
+    if steps.size == 0 or np.any(steps <= 0.0):
+        raise ValueError(f"{path}: the time column must increase strictly")
+    step = (t[-1] - t[0]) / (t.size - 1)
+    if np.max(np.abs(steps - step)) > 1e-3 * step:
+        raise ValueError(f"{path}: the time step is not uniform (from {steps.min():g} to {steps.max():g} s); "
+                         f"resample the record first")
+    if dt is not None and abs(check_time_step(dt) - step) > 1e-3 * step:
+        raise ValueError(f"{path}: the time column gives a step of {step:g} s but dt = {dt!r} was given "
+                         f"(a record with a time column needs no dt)")
+    return step
+
+
+def read_text_record(path, dt=None, units=None, option="units"):
+    """Read a text or CSV record (see the module docstring for the layouts).
+
+    Parameters
+    ----------
+    path : the file.
+    dt : time step [s]; required for accelerations without a time column, checked against the
+        time column otherwise.
+    units : ``"g"``, ``"m/s2"`` or ``"cm/s2"``; required unless a header line states them, and
+        must agree with it.
+    option : how the caller's ``units`` is spelled in messages (``"--units"``, ``"records.units"``).
+    """
+    return _text_record(path, dt, units, option)[0]
+
+
+def _text_record(path, dt, units, option):
+    """``(record, columns)``: :func:`read_text_record` and the number of columns (0: a stream of
+    accelerations, several per line)."""
+    data, header = _layout(path, _read_text(path), _DATA_LINE)
+    stated = {}
+    for number, line in header:
+        try:
+            found = _header_units(line)
+        except ValueError as exc:
+            raise ValueError(f"{path}, line {number}: {exc}") from None
+        if found is not None:
+            stated[number] = found
+    units = _stated_units(path, stated, units, option)
+    values = _columns(path, data)
+    factor = unit_factor(units)
+    vertical = None
+    if values.ndim == 2 and values.shape[1] >= 2:
+        dt = _time_step(path, values[:, 0], dt)
+        acc = values[:, 1]
+        if values.shape[1] == 3:
+            vertical = values[:, 2] * factor
+    else:
+        if dt is None:
+            raise ValueError(f"{path}: accelerations without a time column need the time step 'dt' [s]")
+        acc = values.ravel()
+    record = Record(acc * factor, dt, name=_name(path), source=str(path), units_in=str(units), vertical=vertical)
+    return record, (values.shape[1] if values.ndim == 2 else 0)
+
+
+def read_two_column(path, units=None):
     """Read time [s] and acceleration columns (blank, tab, comma or semicolon separated).
 
     The time step must be uniform; the record starts at the first time given (shifted to 0).
     """
-    rows = _numeric_rows(path)
-    if any(len(r) != 2 for r in rows):
+    record, columns = _text_record(path, None, units, "units")
+    if columns != 2:
         raise ValueError(f"{path}: expected two columns (time, acceleration) on every data line")
-    data = np.array(rows)
-    t, a = data[:, 0], data[:, 1]
-    steps = np.diff(t)
-    if steps.size == 0 or np.any(steps <= 0.0):
-        raise ValueError(f"{path}: the time column must increase strictly")
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    if np.max(np.abs(steps - dt)) > 1e-3 * dt:
-        raise ValueError(f"{path}: the time step is not uniform (from {steps.min():g} to {steps.max():g} s); "
-                         f"resample the record first")
-    return Record(a * unit_factor(units), dt, name=_name(path), source=str(path), units_in=str(units))
+    return record
 
 
-def read_single_column(path, dt, units="m/s2"):
+def read_single_column(path, dt, units=None):
     """Read accelerations only (one or more per line) with the time step ``dt`` [s] given."""
     if dt is None:
         raise ValueError(f"{path}: a one-column record needs its time step 'dt' [s]")
-    rows = _numeric_rows(path)
-    values = np.array([v for r in rows for v in r], dtype=float)
-    return Record(values * unit_factor(units), float(dt), name=_name(path), source=str(path), units_in=str(units))
+    record, columns = _text_record(path, dt, units, "units")
+    if columns not in (0, 1):
+        raise ValueError(f"{path}: {columns} columns: the first is time; read it with read_record")
+    return record
 
 
-def read_record(path, dt=None, units=None):
+def read_record(path, dt=None, units=None, option="units"):
     """Read a record in any supported format (see the module docstring).
 
-    ``.at2`` files are PEER NGA (units from the header); otherwise two columns are time and
-    acceleration, one column needs ``dt`` [s].  ``units`` (``"g"``, ``"m/s2"``, ``"cm/s2"``)
-    defaults to ``"m/s2"`` for text files.
+    ``.at2`` files are PEER NGA (units from the header, or ``units`` when the header has none);
+    otherwise text or CSV (:func:`read_text_record`): units from ``units`` or a header line (a
+    record without stated units is refused, naming ``option``), a time column gives the time
+    step, accelerations alone need ``dt`` [s].
     """
-    path = str(path)
-    if not os.path.isfile(path):
-        raise ValueError(f"record file {path!r} does not exist")
+    path = input_path(path, "record file")
     if path.lower().endswith(".at2"):
-        return read_at2(path)
-    units = "m/s2" if units is None else units
-    rows = _numeric_rows(path)
-    width = {len(r) for r in rows}
-    if width == {2} and dt is None:
-        return read_two_column(path, units)
-    if dt is None:
-        raise ValueError(f"{path}: not two columns (time, acceleration); give the time step 'dt' for a "
-                         f"one-column record")
-    return read_single_column(path, dt, units)
+        return read_at2(path, units, option, dt)
+    return read_text_record(path, dt, units, option)
 
 
 def expand_records(spec, root="."):

@@ -1,11 +1,25 @@
-"""Input checks shared by the model objects: one clear ``ValueError`` per bad parameter."""
+"""Input checks shared by the model objects and the file readers: one clear ``ValueError`` per bad
+parameter or input file."""
 
 from __future__ import annotations
 
+import errno
 import numbers
+import os
+import stat
 
 import numpy as np
 import xarray as xr
+
+
+#: numpy dtype kinds that are not real numbers although ``float()`` accepts some of them: booleans,
+#: dates, durations, strings, bytes, complex and structured values.
+NOT_NUMBERS = "bMmUSVc"
+
+
+def _shown(value):
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=None,
@@ -22,12 +36,12 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
         if upper is not None:
             parts.append(f"{'<=' if upper_inclusive else '<'} {upper:g}")
         range_text = "a finite number" + (" " + " and ".join(parts) if parts else "")
-    if isinstance(value, (str, bytes)) or isinstance(value, bool):
-        raise ValueError(f"parameter '{name}' must be {range_text} (got {value!r})")
+    if isinstance(value, (str, bytes, bool, np.bool_)) or np.asarray(value).dtype.kind in NOT_NUMBERS:
+        raise ValueError(f"parameter '{name}' must be {range_text} (got {_shown(value)})")
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"parameter '{name}' must be {range_text} (got {value!r})") from None
+        raise ValueError(f"parameter '{name}' must be {range_text} (got {_shown(value)})") from None
     if arr.size == 0:
         raise ValueError(f"parameter '{name}' must be {range_text} (got an empty array)")
     bad = ~np.isfinite(arr)
@@ -39,6 +53,32 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
         shown = arr[bad].flat[0] if arr.ndim else float(arr)
         raise ValueError(f"parameter '{name}' must be {range_text} (got {shown!r})")
     return arr
+
+
+def check_scalar(name, value, **bounds):
+    """A finite scalar number in the range of ``bounds`` (as :func:`as_checked_array`) as a float;
+    arrays, booleans, dates and strings are refused with one line naming ``name``."""
+    arr = as_checked_array(name, value, **bounds)
+    if arr.ndim != 0:
+        raise ValueError(f"parameter '{name}' must be a single number (got an array of shape {arr.shape})")
+    return float(arr)
+
+
+def check_integer(name, value, lower, upper=None):
+    """An integer (no float, no boolean) ``>= lower`` (and ``<= upper``) as an ``int``."""
+    ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+    if not ok or value < lower or (upper is not None and value > upper):
+        rng = f">= {lower}" if upper is None else f"in {lower}..{upper}"
+        raise ValueError(f"parameter '{name}' must be an integer {rng} (got {_shown(value)})")
+    return int(value)
+
+
+def check_size(name, size, limit, what):
+    """``size`` (a count of array elements about to be allocated) at most ``limit``: ``ValueError``
+    naming the parameter ``name`` that sets it, before anything is allocated."""
+    if not size <= limit:
+        raise ValueError(f"parameter '{name}' asks for {size:.3g} {what}; at most {limit:.3g} (a bound on the "
+                         f"memory of one call)")
 
 
 def checked(name, value, **kwargs):
@@ -55,3 +95,100 @@ def checked(name, value, **kwargs):
     if arr.ndim == 0 and (isinstance(value, numbers.Number) or np.ndim(value) == 0):
         return float(arr)
     return arr
+
+
+# ----------------------------------------------------------------------------- input files
+class InputFileError(ValueError):
+    """An input file that cannot be read: ``"<what> <path> <problem>"``; ``problem`` alone as attribute."""
+
+    def __init__(self, what, path, problem):
+        super().__init__(f"{what} {path} {problem}")
+        self.path, self.problem = path, problem
+
+
+def file_problem(path):
+    """Why ``path`` cannot be read as an input file (words that follow the path: ``"does not exist"``,
+    ``"is a folder, not a file"``, ...), or ``None`` if it is a regular file.
+
+    Tells a missing file from a folder, a FIFO, a device, a socket, a broken link and a link loop
+    (``os.stat`` alone reports most of them as "does not exist" or not at all).
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return "is a broken symbolic link" if os.path.islink(path) else "does not exist"
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop"
+        return _cannot(exc)
+    return _mode_problem(mode)
+
+
+def _cannot(exc):
+    return f"cannot be read ({exc.strerror or exc.__class__.__name__})"
+
+
+def _mode_problem(mode):
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "is a folder, not a file"
+    if stat.S_ISFIFO(mode):
+        return "is a FIFO (named pipe), not a file"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "is a device, not a file"
+    if stat.S_ISSOCK(mode):
+        return "is a socket, not a file"
+    return "is not a regular file"
+
+
+def input_path(path, what="file"):
+    """``path`` as ``str`` (a ``bytes`` path decoded by the file-system encoding); ``ValueError`` for
+    anything else."""
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if not isinstance(path, (str, os.PathLike)):
+        raise ValueError(f"{what}: must be a path (got {type(path).__name__})")
+    path = os.fspath(path)
+    if "\0" in path:
+        raise ValueError(f"{what}: a path cannot contain a NUL character")
+    return path
+
+
+def read_input_bytes(path, what, max_bytes):
+    """The bytes of the regular file ``path`` (at most ``max_bytes``), checked before anything is read.
+
+    ``ValueError`` with one line (``"<what> <path>: <problem>"``) for a missing file, a folder, a FIFO,
+    a device, a link loop or a file larger than ``max_bytes``.  The file is opened without blocking
+    (a FIFO never hangs) and read with a bound, so a file that grows while it is read is refused too.
+    """
+    path = input_path(path, what)
+    problem = file_problem(path)
+    if problem is None:
+        try:
+            fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        except OSError as exc:
+            problem = _cannot(exc)
+    if problem is not None:
+        raise InputFileError(what, path, problem)
+    with os.fdopen(fd, "rb") as fh:
+        info = os.fstat(fh.fileno())
+        problem = _mode_problem(info.st_mode)        # replaced between the check and the open
+        if problem is None and info.st_size > max_bytes:
+            problem = f"has {info.st_size} bytes; at most {max_bytes} are read"
+        if problem is None:
+            data = fh.read(max_bytes + 1)
+            if len(data) > max_bytes:
+                problem = f"has more than {max_bytes} bytes; at most {max_bytes} are read"
+    if problem is not None:
+        raise InputFileError(what, path, problem)
+    return data
+
+
+def read_input_text(path, what, max_bytes):
+    """:func:`read_input_bytes` decoded as UTF-8 (a leading byte-order mark is dropped)."""
+    data = read_input_bytes(path, what, max_bytes)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputFileError(what, input_path(path), f"is not UTF-8 text (byte {exc.start})") from None

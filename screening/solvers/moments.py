@@ -38,6 +38,8 @@ from screening.kernels.signatures import function_type, moment_coefficients_sign
 from screening.model.points import flatten, select
 from screening.solvers.moment_kernels import solve_point_kt, solve_point_white
 from screening.status import PointStatus
+from screening.validation import check_integer, check_scalar, check_size
+from screening.workflow import limits
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
 CHUNK = 256
@@ -206,12 +208,16 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     t_out = np.ascontiguousarray(t_out, dtype=float)
     if t_out.ndim != 1 or t_out.size < 2 or np.any(np.diff(t_out) <= 0):
         raise ValueError("parameter 't_out' must be an increasing 1-d array of at least 2 times")
+    rtol = check_scalar("rtol", rtol, lower=0.0, upper=limits.MAX_RTOL, upper_inclusive=True)
+    max_steps = check_integer("max_steps", max_steps, 1)
     (block, foundation, excitation), shape = flatten(block, foundation, excitation)
     cond.check(block, foundation)
     kt = excitation.kind == "kanai_tajimi"
     n, nt = int(np.prod(shape, dtype=int)), t_out.size
-    if h_max is None:
-        h_max = (t_out[-1] - t_out[0]) / 20.0
+    if histories:
+        check_size("t_out", n * nt * len(HISTORY_VARIABLES), limits.MAX_HISTORY_VALUES,
+                   f"history values ({n} points x {nt} output times x {len(HISTORY_VARIABLES)})")
+    h_max = (t_out[-1] - t_out[0]) / 20.0 if h_max is None else check_scalar("h_max", h_max, lower=0.0)
     osc = oscillator_records(block, foundation, excitation, cond)
     representable = in_float_range(osc, kt)
     if not representable.all():

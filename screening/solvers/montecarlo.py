@@ -49,6 +49,8 @@ from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cu
                         spectral_plan, stationary_samples, validate_seed, vertical_frequency)
 from screening.solvers.timegrid import output_times
 from screening.solvers.datasets import monte_carlo_dataset
+from screening.validation import check_integer, check_size
+from screening.workflow import limits
 
 MODELS = ("coupled", "condensed")
 
@@ -71,22 +73,19 @@ DEFAULT_NUMERICS = {
 }
 
 # ----------------------------------------------------------------------------- validation
-def _check_integer(name, value, lower, text):
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < lower:
-        raise ValueError(f"parameter '{name}' must be {text} (got {value!r})")
-    return int(value)
-
-
-def _check_scalar_models(block, foundation, excitation):
+def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo"):
+    """``ValueError`` unless every numeric field of the model objects is a scalar (one point for
+    ``purpose``), and the excitation (if given) is white noise or Kanai–Tajimi."""
     fields = {"block." + n: getattr(block, n) for n in ("m", "b", "h", "I_cm", "g")}
     fields.update({"foundation." + n: getattr(foundation, n) for n in ("k", "eps")})
     fields["foundation.damping"] = foundation.damping
-    fields["excitation.S0"] = excitation.S0
+    if excitation is not None:
+        fields["excitation.S0"] = excitation.S0
     for name, value in fields.items():
         if np.ndim(value) != 0:
-            raise ValueError(f"parameter '{name}' must be a scalar for monte_carlo (got an array of shape "
+            raise ValueError(f"parameter '{name}' must be a scalar for {purpose} (got an array of shape "
                              f"{np.shape(value)}); loop over parameter points instead")
-    if excitation.kind not in ("white", "kanai_tajimi"):
+    if excitation is not None and excitation.kind not in ("white", "kanai_tajimi"):
         raise ValueError(f"parameter 'excitation' must be a WhiteNoise or KanaiTajimi (got kind {excitation.kind!r})")
 
 
@@ -103,15 +102,15 @@ def _check_numerics(numerics):
         return float(v)
 
     if opts["rtol"] is not None:
-        opts["rtol"] = positive("rtol", 1e-2)
+        opts["rtol"] = positive("rtol", limits.MAX_RTOL)
     if opts["cutoff"] is not None:
         opts["cutoff"] = positive("cutoff")
     opts["cutoff_factor"] = positive("cutoff_factor")
     opts["h_max"] = positive("h_max")
     opts["max_flight_time"] = positive("max_flight_time")
-    opts["oversampling"] = _check_integer("oversampling", opts["oversampling"], 2, "an integer >= 2")
-    opts["max_steps"] = _check_integer("max_steps", opts["max_steps"], 1, "an integer >= 1")
-    opts["chunk_size"] = _check_integer("chunk_size", opts["chunk_size"], 1, "an integer >= 1")
+    opts["oversampling"] = check_integer("oversampling", opts["oversampling"], 2)
+    opts["max_steps"] = check_integer("max_steps", opts["max_steps"], 1)
+    opts["chunk_size"] = check_integer("chunk_size", opts["chunk_size"], 1)
     return opts
 
 
@@ -223,7 +222,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         For a bad ``n_samples``, ``model``, ``condensation``, ``seed``, ``t_end``/``dt``, numerics
         option, or array-valued model parameters — before any work is done.
     """
-    n_samples = _check_integer("n_samples", n_samples, 2, "an integer >= 2")
+    n_samples = check_integer("n_samples", n_samples, 2)
     if model not in MODELS:
         raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
     cond = get_condensation(condensation)
@@ -233,13 +232,15 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     seed = validate_seed(seed)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
-    _check_scalar_models(block, foundation, excitation)
+    check_scalar_models(block, foundation, excitation)
     opts = _check_numerics(numerics)
     if opts["rtol"] is None:
         opts["rtol"] = DEFAULT_RTOL[model]
     show = _show_progress(progress, n_samples, opts["chunk_size"])
     y0 = initial_state(block, foundation, model)       # may raise for a bed that cannot carry the block
     cond.check(block, foundation)
+    check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
+    check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])

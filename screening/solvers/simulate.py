@@ -30,7 +30,6 @@ second-order finite differences (``numpy.gradient``); after the end of the recor
 from __future__ import annotations
 
 import math
-import numbers
 
 import numpy as np
 import xarray as xr
@@ -43,8 +42,13 @@ from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIM
 from screening.records import Record
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.datasets import finish
-from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, state_scales
+from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, check_scalar_models, state_scales
 from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
+from screening.validation import check_integer, check_scalar
+from screening.workflow import limits
+
+#: Most sub-intervals on which the overturning time is located.
+MAX_OVERTURN_RESOLUTION = 100_000
 
 #: Code of ``contact_regime`` after overturning or divergence (no state).
 REGIME_NONE = int(ContactRegime.none)
@@ -53,10 +57,20 @@ SIGN_CONVENTION = ("ground_acceleration > 0 accelerates the ground towards +x (e
                    "presses edge B (+x side) into the bed; the kernel's x_g'' of eq. (8) is -ground_acceleration")
 
 
-def _check_scalar(name, value, lower=-math.inf):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < lower:
-        raise ValueError(f"parameter '{name}' must be a finite number >= {lower:g} (got {value!r})")
-    return float(value)
+def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
+    """``(t_end, output_dt, n_out)`` of :func:`simulate` on ``record``, checked before anything is
+    allocated: ``t_end`` [s] > 0 (default the record's duration), ``output_dt`` [s] > 0 (default the
+    record's ``dt``), at most :data:`~screening.workflow.limits.MAX_RECORD_SAMPLES` output instants
+    and input samples.  ``t_end_name``: how ``t_end`` is spelled in messages (``"--t-end"``)."""
+    t_end = check_scalar(t_end_name, record.duration if t_end is None else t_end, lower=0.0)
+    output_dt = record.dt if output_dt is None else check_scalar("output_dt", output_dt, lower=0.0)
+    top = limits.MAX_RECORD_SAMPLES
+    for name, step in ((t_end_name, record.dt), ("output_dt", output_dt)):
+        steps = limits.output_steps(t_end, step)
+        if not steps < top:
+            raise ValueError(f"parameter '{name}': t_end / {'dt' if step is record.dt else 'output_dt'} = "
+                             f"{steps:.3g} steps; at most {top - 1} (t_end = {t_end:g} s)")
+    return t_end, output_dt, int(math.floor(t_end / output_dt + 1e-9)) + 1
 
 
 def quasi_static_indentation(block, foundation, theta0):
@@ -141,24 +155,23 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     if model == "coupled" and cond != condensations.get("paper"):
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only (got {cond.name!r})")
     dt = record.dt
-    theta0 = _check_scalar("theta0", theta0)
-    theta_dot0 = _check_scalar("theta_dot0", theta_dot0)
+    check_scalar_models(block, foundation, purpose="simulate")
+    theta0 = check_scalar("theta0", theta0)
+    theta_dot0 = check_scalar("theta_dot0", theta_dot0)
     slender = float(block.slenderness)
     if abs(theta0) >= slender:
         raise ValueError(f"parameter 'theta0' must be smaller in magnitude than the slenderness angle "
                          f"{slender:.6g} rad (got {theta0!r})")
-    t_end = record.duration if t_end is None else _check_scalar("t_end", t_end, 0.0)
-    if t_end <= 0.0:
-        raise ValueError(f"parameter 't_end' must be > 0 (got {t_end!r})")
-    output_dt = dt if output_dt is None else _check_scalar("output_dt", output_dt, 0.0)
-    if output_dt <= 0.0:
-        raise ValueError(f"parameter 'output_dt' must be > 0 (got {output_dt!r})")
-    rtol = DEFAULT_RTOL[model] if rtol is None else _check_scalar("rtol", rtol, 0.0)
-    h_max = min(0.005, dt) if h_max is None else _check_scalar("h_max", h_max, 0.0)
+    t_end, output_dt, n_out = simulation_times(record, t_end, output_dt)
+    rtol = DEFAULT_RTOL[model] if rtol is None else check_scalar("rtol", rtol, lower=0.0, upper=limits.MAX_RTOL,
+                                                                 upper_inclusive=True)
+    h_max = min(0.005, dt) if h_max is None else check_scalar("h_max", h_max, lower=0.0)
+    max_steps = check_integer("max_steps", max_steps, 1)
+    max_flight_time = check_scalar("max_flight_time", max_flight_time, lower=0.0)
+    overturn_resolution = check_integer("overturn_resolution", overturn_resolution, 1, MAX_OVERTURN_RESOLUTION)
     cond.check(block, foundation)
 
     # input on the record grid, padded with rest to cover t_end (plus two samples for the interpolant)
-    n_out = int(math.floor(t_end / output_dt + 1e-9)) + 1
     times = output_dt * np.arange(n_out)
     n_grid = max(record.acceleration.size, int(math.ceil(times[-1] / dt)) + 2)
     a_g = np.zeros(n_grid)

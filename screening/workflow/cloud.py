@@ -5,8 +5,9 @@ unused) with a ``[records]`` table::
 
     [records]
     files = "records/*.at2"      # a folder, a glob or a list of them, relative to the study file
-    units = "g"                  # of text records (AT2: from the header); "g", "m/s2", "cm/s2"
-    # dt = 0.01                  # s, for one-column records
+    units = "g"                  # "g", "m/s2", "cm/s2": required for text records whose header does not
+                                 # state them; AT2: from the header (must agree)
+    # dt = 0.01                  # s, for one-column records (checked against time columns, AT2 headers)
     scale = 1.0                  # factor on every record (optional)
     model = "coupled"            # or "condensed"
     period = 0.5                 # s, period of Sa(T, 5 %) (optional)
@@ -38,7 +39,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening.workflow.config import StudyError, check_keys
+from screening.workflow import limits
+from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im")
 IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity"}
@@ -61,9 +63,11 @@ class CloudStudy:
     im: str
 
 
-def load_cloud_study(path):
-    """Read a cloud study; :class:`StudyError` with a one-line message naming the key on any problem."""
-    from screening.records import expand_records
+def load_cloud_study(path, units=None):
+    """Read a cloud study; :class:`StudyError` with a one-line message naming the key on any problem.
+
+    ``units``: the ``--units`` of the command line (``[records] units`` if absent; both: must agree)."""
+    from screening.records import check_scale, check_time_step, expand_records, unit_factor
     from screening.workflow.records_study import load_record_study
 
     base, rec = load_record_study(path)
@@ -78,6 +82,10 @@ def load_cloud_study(path):
             files = tuple(expand_records(rec["files"], root=str(root)))
         except (ValueError, TypeError) as exc:
             raise StudyError(f"records.files: {exc}") from None
+        if not files:
+            raise StudyError("records.files: empty list (give a folder, a glob or a list of them)")
+        if len(files) > limits.MAX_RECORD_FILES:
+            raise StudyError(f"records.files: {len(files)} files; at most {limits.MAX_RECORD_FILES}")
         model = rec.get("model", "coupled")
         if model not in ("coupled", "condensed"):
             raise StudyError(f"records.model: must be 'coupled' or 'condensed' (got {model!r})")
@@ -90,14 +98,26 @@ def load_cloud_study(path):
         relative_to = rec.get("relative_to", "slenderness")
         if relative_to not in ("slenderness", "theta_ul", "rad"):
             raise StudyError(f"records.relative_to: must be 'slenderness', 'theta_ul' or 'rad' (got {relative_to!r})")
-        for key in ("dt", "scale", "period", "threshold"):
-            v = rec.get(key)
-            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0
-                                  or not math.isfinite(v)):
-                raise StudyError(f"records.{key}: must be a finite number > 0 (got {v!r})")
+        for key, check in (("dt", check_time_step), ("scale", check_scale)):
+            if key in rec:
+                try:
+                    check(rec[key], f"records.{key}:")
+                except ValueError as exc:
+                    raise StudyError(str(exc)) from None
+        if period is not None:
+            low, high = limits.SA_PERIOD_RANGE
+            period = check_value("records.period", period, lower=low, inclusive=True, upper=high)
+        if "threshold" in rec:
+            check_value("records.threshold", rec["threshold"], 0.0)
+        stated = rec.get("units")
+        if stated is not None:
+            check_choice("records.units", stated, ("g", "m/s2", "cm/s2", "gal"))
+            if units is not None and unit_factor(units) != unit_factor(stated):
+                raise StudyError(f"records.units: {stated!r}, but --units {units!r} was given")
+        units = units or stated
     except StudyError as exc:
         raise StudyError(f"{path}: {exc}") from None
-    return CloudStudy(study=base, files=files, units=rec.get("units"), dt=rec.get("dt"),
+    return CloudStudy(study=base, files=files, units=units, dt=rec.get("dt"),
                       scale=float(rec.get("scale", 1.0)), model=model,
                       period=None if period is None else float(period),
                       threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im)
@@ -118,17 +138,15 @@ def run_record(block, foundation, record, model="coupled", condensation="paper",
 
 def read_cloud_records(cloud):
     """The records of a :class:`CloudStudy`, read and scaled (:class:`StudyError` naming the bad file)."""
-    from screening.records import Record, read_record
+    from screening.records import read_record
 
     records = []
     for path in cloud.files:
         try:
-            rec = read_record(path, dt=cloud.dt, units=cloud.units)
+            rec = read_record(path, dt=cloud.dt, units=cloud.units, option="--units or records.units")
         except ValueError as exc:
             raise StudyError(f"records.files: {exc}") from None
-        if cloud.scale != 1.0:
-            rec = Record(rec.acceleration * cloud.scale, rec.dt, rec.name, rec.source, rec.units_in)
-        records.append(rec)
+        records.append(rec.scaled(cloud.scale) if cloud.scale != 1.0 else rec)
     return records
 
 

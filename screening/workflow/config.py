@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
@@ -30,6 +31,7 @@ from screening.model import Block, Foundation
 from screening.model.block import LENGTH_RANGE
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.solvers.timegrid import output_times
+from screening.validation import InputFileError, read_input_text
 from screening.workflow import limits
 
 #: Parameters that may be swept (given as a list or a range).
@@ -68,13 +70,18 @@ class StudyError(ValueError):
 
 # ----------------------------------------------------------------------------- reading
 def read_study_text(path):
-    """The text of the study file ``path``; :class:`StudyError` if it cannot be read."""
-    path = Path(path)
+    """The text of the study file ``path`` (UTF-8, a byte-order mark dropped); :class:`StudyError` if
+    it is not a regular file of at most :data:`~screening.workflow.limits.MAX_STUDY_BYTES` or cannot
+    be read (checked before reading: a FIFO or a device never blocks or fills the memory)."""
     try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise StudyError(f"{path}: cannot read the study file ({exc.__class__.__name__}: "
-                         f"{getattr(exc, 'strerror', None) or exc})") from None
+        return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)
+    except InputFileError as exc:
+        raise StudyError(f"{exc.path}: cannot read the study file ({exc.problem})") from None
+    except ValueError as exc:
+        raise StudyError(f"cannot read the study file ({one_line(exc)})") from None
+    except OSError as exc:
+        raise StudyError(f"{os.fsdecode(path)}: cannot read the study file ({exc.__class__.__name__}: "
+                         f"{exc.strerror or exc})") from None
 
 
 def parse_toml(text, source, build):
@@ -84,7 +91,8 @@ def parse_toml(text, source, build):
                          f"{limits.MAX_STUDY_CHARS} are read")
     depth = limits.nesting_depth(text)
     if depth > limits.MAX_NESTING:
-        raise StudyError(f"{source}: invalid TOML: arrays/tables nested {depth} deep; at most "
+        raise StudyError(f"{source}: invalid TOML: arrays/tables nested {depth} deep (parts of dotted keys "
+                         f"count as levels); at most "
                          f"{limits.MAX_NESTING} levels are read")
     try:
         raw = tomllib.loads(text)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import errno
+import os
 
 
 class SweepError(Exception):
@@ -27,9 +28,29 @@ def read_values(read):
         raise ReadFailure(write_failure_reason(exc)) from exc
 
 
-def write_failure_reason(exc):
-    """Why a write failed, on one line: the operating system's words when it gave any."""
-    return exc.strerror if isinstance(exc, OSError) and exc.strerror else " ".join(str(exc).split())[:200]
+#: Free space [bytes] below which a netCDF/HDF5 write failure is reported as a full disk.
+LOW_SPACE_BYTES = 64 * 2**20
+
+
+def write_failure_reason(exc, path=None):
+    """Why a write failed, on one line: the operating system's words when it gave any.
+
+    The netCDF/HDF5 library reports a full disk as ``NetCDF: HDF error``; with the ``path`` written,
+    the free space of its file system is looked up and named (a full disk said as such)."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    text = " ".join(str(exc).split())[:200]
+    if path is not None and text.startswith("NetCDF:"):
+        import shutil
+
+        try:
+            free = shutil.disk_usage(os.path.dirname(os.path.abspath(os.fspath(path))) or ".").free
+        except OSError:
+            return text
+        if free < LOW_SPACE_BYTES:
+            return f"no space left on the device ({free / 2**20:.1f} MiB free; the netCDF library said: {text})"
+        return f"{text} (the netCDF library gives no reason; {free / 2**30:.1f} GiB free on the device)"
+    return text
 
 
 #: errno values of a failing file system (full, quota, too large, read-only, permissions, I/O, gone).

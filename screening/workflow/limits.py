@@ -1,4 +1,4 @@
-"""Bounds on what a study may ask for, checked while the study file is parsed (issue 13).
+"""Bounds on what a study, a record or an API call may ask for, checked before any work.
 
 Every size a study sets — grid points, output steps, Monte Carlo samples, the seed — is checked
 against the limits below *before* any array is built, so that a typo such as ``num = 1e9`` or
@@ -30,18 +30,45 @@ MAX_SEED = 2**31 - 1
 MAX_STUDY_CHARS = 1_000_000
 #: Deepest nesting of tables/arrays in a study file (TOML's parser recurses).
 MAX_NESTING = 50
+#: Most history values (points x output instants x variables) one linearization call holds (0.8 GB).
+MAX_HISTORY_VALUES = 100_000_000
+#: Loosest relative tolerance of the adaptive integrators (a looser one gives no accuracy worth the name).
+MAX_RTOL = 1e-2
 #: Memory budget of the time histories of one linearization task [bytes].
 TASK_BYTES = 256 * 2**20
+#: Most ``[[case]]`` tables of a study (each is validated on its own).
+MAX_CASES = 1_000
+#: Most ``[fragility] thresholds`` (each costs a pass over the grid).
+MAX_THRESHOLDS = 100
+#: Largest study file [bytes] read (UTF-8: at most 4 bytes per character).
+MAX_STUDY_BYTES = 4 * MAX_STUDY_CHARS
+#: Largest record file [bytes] read (2 million samples in two columns of 15 digits; a
+#: strong-motion record is a few MB).
+MAX_RECORD_BYTES = 64 * 2**20
+#: Most samples of one record (and output instants of one simulation): 2.8 h at 200 Hz.
+MAX_RECORD_SAMPLES = 2_000_000
+#: Time step of a record [s]: ``MIN_RECORD_DT <= dt <= MAX_RECORD_DT``.
+MIN_RECORD_DT = 1e-6
+MAX_RECORD_DT = 1.0
+#: Factor on a record's accelerations (``--scale``, ``[records] scale``): ``0 < |scale| <= MAX_RECORD_SCALE``.
+MAX_RECORD_SCALE = 1_000.0
+#: Most record files of one cloud analysis.
+MAX_RECORD_FILES = 100_000
+#: Oscillator periods of Sa(T, 5 %) of a record [s] (``[records] period``).
+SA_PERIOD_RANGE = (1e-3, 100.0)
 
 
 def nesting_depth(text):
-    """Upper bound of the nesting depth of ``[``/``{`` in ``text`` outside strings and comments.
+    """Upper bound of the nesting depth of ``text``: ``[``/``{`` and the parts of dotted keys
+    (``a.b.c = 1``, ``[a.b.c]``), outside strings and comments.
 
     A quick scan (not a TOML parser): brackets in strings and comments are skipped so that a
-    title such as ``"[[[["`` does not count; it only needs to be an upper bound of what the
-    parser will recurse into, cheap on any input.
+    title such as ``"[[[["`` does not count, and dots count only in keys (not in ``1.5``); it
+    only needs to be an upper bound of what the parser will build, cheap on any input.
     """
-    depth = deepest = 0
+    depth = deepest = dots = 0
+    stack = []                      # "[" of a table header, "a" of an array, "{" of an inline table
+    in_key = True                   # at the start of a line, after "{" or "," of an inline table
     i, n = 0, len(text)
     while i < n:
         ch = text[i]
@@ -50,27 +77,52 @@ def nesting_depth(text):
             i = n if j < 0 else j
             continue
         if ch in "\"'":
-            triple = text.startswith(ch * 3, i)
-            end = ch * 3 if triple else ch
-            j = i + len(end)
-            while j < n:
-                if ch == '"' and text[j] == "\\":
-                    j += 2
-                    continue
-                if text.startswith(end, j):
-                    break
-                if not triple and text[j] == "\n":
-                    break
-                j += 1
-            i = j + len(end)
+            i = _string_end(text, i)
             continue
-        if ch in "[{":
+        if ch == "\n":
+            if not stack:
+                in_key, dots = True, 0
+        elif ch == "." and (in_key or (stack and stack[-1] == "[")):
+            dots += 1
+            deepest = max(deepest, depth + dots + 1)
+        elif ch == "=" and in_key:
+            in_key, dots = False, 0
+        elif ch == "[":
+            stack.append("[" if in_key and not stack or stack and stack[-1] == "[" else "a")
             depth += 1
-            deepest = max(deepest, depth)
+        elif ch == "{":
+            stack.append("{")
+            depth += 1
+            in_key, dots = True, 0
         elif ch in "]}":
+            if stack:
+                stack.pop()
             depth = max(depth - 1, 0)
+            if not stack or stack[-1] != "{":
+                in_key = False
+        elif ch == "," and stack and stack[-1] == "{":
+            in_key, dots = True, 0
+        deepest = max(deepest, depth)
         i += 1
     return deepest
+
+
+def _string_end(text, i):
+    """Index just after the TOML string that starts at ``text[i]`` (a quote)."""
+    ch, n = text[i], len(text)
+    triple = text.startswith(ch * 3, i)
+    end = ch * 3 if triple else ch
+    j = i + len(end)
+    while j < n:
+        if ch == '"' and text[j] == "\\":
+            j += 2
+            continue
+        if text.startswith(end, j):
+            break
+        if not triple and text[j] == "\n":
+            break
+        j += 1
+    return j + len(end)
 
 
 def output_steps(t_end, dt):

@@ -8,6 +8,7 @@ case by name and the swept values by ``overrides`` (``{"eps": 6e7}``), with one-
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from screening.workflow.config import NUMERIC, StudyError, build_models, parse_toml, read_study_text
@@ -19,6 +20,7 @@ def load_record_study(path):
     from screening.workflow.study import study_from_tables
 
     text = read_study_text(path)
+    path = os.fsdecode(path)
 
     def build(raw):
         records = raw.pop("records", None)

@@ -99,6 +99,7 @@ range, ``T2 >= T1``, ...) raises :class:`StudyError` with a one-line message nam
 from __future__ import annotations
 
 import hashlib
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -265,6 +266,7 @@ class Study:
 def load_study(path):
     """Read and validate a study file; raises :class:`StudyError` (also for unreadable files)."""
     text = read_study_text(path)
+    path = os.fsdecode(path)
     return parse_study(text, name=Path(path).stem, source=str(path))
 
 
@@ -311,6 +313,9 @@ def _cases(raw, base, sweeps):
     entries = raw["case"]
     if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
         raise StudyError("case: must be an array of tables ([[case]] entries)")
+    if len(entries) > limits.MAX_CASES:
+        raise StudyError(f"case: {len(entries)} [[case]] tables; at most {limits.MAX_CASES} (sweep a parameter "
+                         f"instead)")
     if not entries:
         raise StudyError("case: empty list (give at least one [[case]])")
     cases, seen, inherited, used = [], set(), set(), set()
@@ -384,7 +389,10 @@ def _fragility(raw):
         return None
     tbl = table(raw, "fragility")
     check_keys(tbl, ("thresholds", "relative_to", "method"), "fragility.")
-    thresholds = number_list("fragility.thresholds", required(tbl, "thresholds", "fragility."), lower=0.0)
+    given = required(tbl, "thresholds", "fragility.")
+    if isinstance(given, list) and len(given) > limits.MAX_THRESHOLDS:
+        raise StudyError(f"fragility.thresholds: {len(given)} thresholds; at most {limits.MAX_THRESHOLDS}")
+    thresholds = number_list("fragility.thresholds", given, lower=0.0)
     if len(set(thresholds)) != len(thresholds):
         raise StudyError("fragility.thresholds: a threshold is listed twice")
     relative_to = tbl.get("relative_to")

@@ -1,6 +1,7 @@
 """``screening simulate`` end to end on a record file written here."""
 
 import numpy as np
+import pytest
 import xarray as xr
 
 from screening.cli import main
@@ -71,3 +72,139 @@ def test_simulate_accepts_a_study_without_excitation_or_with_records(tmp_path):
     study.write_text("[block]\nm = 8.67\nb = 0.035\nh = 0.21\n[foundation]\nk = 2.89e7\nlam = 8.95e8\n"
                      "[records]\nfiles = '*.at2'\n")
     assert main(["simulate", str(record), "--study", str(study), "--out", str(tmp_path / "s.nc"), "--no-plots"]) == 0
+
+
+def _csv_in_g(tmp_path, pga_g=0.05, dt=0.005, columns=2):
+    t = np.arange(0.0, 4.0, dt)
+    a = pga_g * np.sin(2 * np.pi * 2.0 * t) * np.exp(-((t - 1.5) / 0.6) ** 2) / 0.9999
+    rows = [f"{ti:.4f},{ai:.7f}" + (f",{-0.5 * ai:.7f}" if columns == 3 else "") for ti, ai in zip(t, a)]
+    path = tmp_path / "rec.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return path, float(np.max(np.abs(a)))
+
+
+def _one_line(capsys):
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    return err
+
+
+def test_simulate_reads_two_columns_as_time_and_acceleration_whatever_dt_says(tmp_path, capsys):
+    study, _ = _files(tmp_path)
+    record, pga_g = _csv_in_g(tmp_path)
+    out = tmp_path / "s.nc"
+    base = ["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots", "--units", "g"]
+    assert main(base + ["--out", str(out), "--dt", "0.005"]) == 0
+    said = capsys.readouterr().err
+    assert f"PGA {pga_g:.3f} g" in said                     # not the time column read as accelerations
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["record_dt"] == 0.005 and ds.sizes["t"] == 800
+    assert main(base + ["--out", str(tmp_path / "t.nc"), "--dt", "0.01"]) == 2
+    assert "time column gives a step of 0.005 s but dt = 0.01" in _one_line(capsys)
+
+
+def test_text_records_need_their_units(tmp_path, capsys):
+    study, _ = _files(tmp_path)
+    record, _ = _csv_in_g(tmp_path)
+    assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots",
+                 "--out", str(tmp_path / "x.nc")]) == 2
+    assert "units are not stated; give --units (g, m/s2 or cm/s2)" in _one_line(capsys)
+    assert main(["fit-excitation", str(record)]) == 2
+    assert "give --units" in _one_line(capsys)
+    assert not (tmp_path / "x.nc").exists()
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--scale", "nan"], "--scale must be a finite number with 0 < |scale| <= 1000 (got nan)"),
+    (["--scale", "inf"], "--scale must be a finite number"),
+    (["--scale", "1e308"], "--scale must be a finite number"),
+    (["--t-end", "1e6"], "'--t-end': t_end / dt = 2e+08 steps; at most 1999999"),
+    (["--t-end", "-1"], "'--t-end' must be a finite number > 0"),
+])
+def test_simulate_options_are_checked_before_any_work(tmp_path, capsys, args, needle):
+    study, record = _files(tmp_path)
+    assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots",
+                 "--out", str(tmp_path / "x.nc")] + args) == 2
+    err = _one_line(capsys)
+    assert needle in err and "compiling" not in err
+
+
+@pytest.mark.parametrize("kind", ["folder", "fifo", "loop"])
+def test_a_record_path_says_what_it_is(tmp_path, capsys, kind):
+    import os
+
+    study, _ = _files(tmp_path)
+    path = tmp_path / "r.csv"
+    said = {"folder": "is a folder, not a file", "fifo": "is a FIFO (named pipe), not a file",
+            "loop": "is a symbolic link loop"}[kind]
+    if kind == "folder":
+        path.mkdir()
+    elif kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path.symlink_to(path)
+    assert main(["simulate", str(path), "--study", str(study), "--units", "g", "--out", str(tmp_path / "x.nc")]) == 2
+    assert said in _one_line(capsys)
+
+
+CLOUD = STUDY + """
+[records]
+files = {files}
+{extra}
+"""
+
+
+@pytest.mark.parametrize("files,extra,needle", [
+    ("[]", "", "records.files: empty list"),
+    ("'*.at2'", "scale = 1e308", "records.scale: must be a finite number with 0 < scale <= 1000"),
+    ("'*.at2'", "scale = nan", "records.scale: must be a finite number"),
+    ("'*.at2'", "im = 'sa'\nperiod = 1e-300", "records.period: must be a finite number >= 0.001 and <= 100"),
+    ("'*.at2'", "im = 'sa'\nperiod = 1e300", "records.period: must be a finite number >= 0.001 and <= 100"),
+    ("'*.at2'", "dt = 5.0", "records.dt: must be a number of seconds in [1e-06, 1]"),
+    ("'*.at2'", "units = 'furlongs'", "records.units: must be one of"),
+])
+def test_cloud_records_table_is_checked(tmp_path, capsys, files, extra, needle):
+    _files(tmp_path)
+    path = tmp_path / "cloud.toml"
+    path.write_text(CLOUD.format(files=files, extra=extra))
+    assert main(["cloud", str(path), "--set", "eps=6e7", "--out", str(tmp_path / "c.nc")]) == 2
+    assert needle in _one_line(capsys)
+
+
+def test_cloud_reads_a_csv_beside_a_one_column_file_as_time_and_acceleration(tmp_path, capsys):
+    from screening.workflow.cloud import load_cloud_study, read_cloud_records
+
+    _files(tmp_path)
+    csv, pga_g = _csv_in_g(tmp_path, columns=3)
+    (tmp_path / "one.txt").write_text("".join(f"{v:.6f}\n" for v in (0.01, -0.02, 0.03, 0.0)))
+    path = tmp_path / "cloud.toml"
+    path.write_text(CLOUD.format(files="['rec.csv', 'one.txt']", extra="dt = 0.005"))
+    assert main(["cloud", str(path), "--set", "eps=6e7", "--out", str(tmp_path / "c.nc")]) == 2
+    assert "give --units or records.units (g, m/s2 or cm/s2)" in _one_line(capsys)
+    cloud = load_cloud_study(path, units="g")
+    csv_rec, one = read_cloud_records(cloud)
+    assert csv_rec.acceleration.size == 800 and csv_rec.pga / 9.80665 == pytest.approx(pga_g, rel=1e-6)
+    assert csv_rec.vertical is not None and one.acceleration.size == 4
+    path.write_text(CLOUD.format(files="['rec.csv']", extra="units = 'm/s2'"))
+    assert main(["cloud", str(path), "--units", "g", "--set", "eps=6e7", "--out", str(tmp_path / "c.nc")]) == 2
+    assert "records.units: 'm/s2', but --units 'g' was given" in _one_line(capsys)
+
+
+@pytest.mark.parametrize("free,needle", [(0, "no space left on the device (0.0 MiB free; the netCDF library said: "
+                                              "NetCDF: HDF error)"),
+                                         (10 * 2**30, "NetCDF: HDF error (the netCDF library gives no reason; 10.0 GiB")])
+def test_a_full_disk_is_said_as_such(tmp_path, capsys, monkeypatch, free, needle):
+    import collections
+    import shutil
+
+    study, record = _files(tmp_path)
+
+    def hdf_error(self, *args, **kwargs):
+        raise RuntimeError("NetCDF: HDF error")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", hdf_error)
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(free + 1, 1, free))
+    assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots",
+                 "--out", str(tmp_path / "x.nc")]) == 2
+    assert needle in _one_line(capsys)

@@ -73,7 +73,7 @@ def test_two_column_non_uniform_raises(tmp_path):
     path = tmp_path / "rec.txt"
     path.write_text("0 0\n0.01 1\n0.03 2\n")
     with pytest.raises(ValueError, match="not uniform"):
-        read_record(path)
+        read_record(path, units="g")
 
 
 def test_single_column_with_dt(tmp_path):
@@ -83,7 +83,7 @@ def test_single_column_with_dt(tmp_path):
     assert rec.dt == 0.02
     np.testing.assert_allclose(rec.acceleration, ACC_G, atol=1e-7)
     with pytest.raises(ValueError, match="dt"):
-        read_record(path)
+        read_record(path, units="cm/s2")
     rec2 = read_single_column(path, 0.02, units="gal")
     np.testing.assert_allclose(rec2.acceleration, rec.acceleration)
 
