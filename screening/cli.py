@@ -554,7 +554,7 @@ def cmd_export(result, out, complevel, layout, selection):
     from screening.workflow.errors import ReadFailure, SweepError
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
-    from screening.workflow.zarrfile import export_netcdf, is_zarr_store
+    from screening.workflow.zarrfile import export_netcdf, is_zarr_store, store_problem
 
     result = Path(result)
     if layout == "cf" and selection:
@@ -562,7 +562,10 @@ def cmd_export(result, out, complevel, layout, selection):
     if layout == "cf" and not is_zarr_store(result):
         raise SweepError(f"{result}: not a zarr store (export converts the result of 'screening run --out "
                          "RESULT.zarr' to netCDF; --layout cdo converts any result)")
-    # a screening result? (before writing anything)
+    # a screening result? (before writing anything; every chunk of a zarr store checked)
+    problem = store_problem(result) if is_zarr_store(result) else None
+    if problem:
+        raise SweepError(f"cannot read {result}: {problem}; nothing written")
     ds = cdofile.open_source(result) if layout == "cdo" else open_result(result)
     try:
         selected = cdofile.parse_selection(selection, ds["status"].dims)
