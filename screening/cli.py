@@ -35,6 +35,8 @@ import click
 import numpy as np
 
 from screening import __version__
+from screening.atomicfile import publish as _publish
+from screening.atomicfile import temporary_beside
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -309,26 +311,12 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
 
 
 def _temporary_for(out):
-    """A new empty file next to ``out`` (never a planted link) to write ``out`` into."""
-    import os
-    import tempfile
-
+    """A new empty file next to ``out`` (never a planted link) to write ``out`` into
+    (:func:`screening.atomicfile.temporary_beside`; a failure as a one-line error)."""
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+        return temporary_beside(out)
     except OSError as exc:
         raise _write_error(out, exc) from None
-    os.close(fd)
-    return Path(tmp)
-
-
-def _publish(tmp, out):
-    """Give the written ``tmp`` the usual permissions (umask) and move it to ``out`` atomically."""
-    import os
-
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(tmp, 0o666 & ~mask)
-    tmp.replace(out)
 
 
 def _stem(result):
