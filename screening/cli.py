@@ -207,9 +207,21 @@ def main(argv=None):
     except (CommandError, StudyError, SweepError) as exc:
         return _error(str(exc))
     except KeyboardInterrupt:
-        print("screening: interrupted; finished batches are kept, re-run the same command to resume",
-              file=sys.stderr)
+        print(f"screening: interrupted; {interrupted_note(argv)}", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+#: Commands that keep their finished work when interrupted and resume from it.
+RESUMING_COMMANDS = ("run",)
+
+
+def interrupted_note(argv):
+    """What an interrupted command leaves: ``run`` keeps its finished batches; the others keep nothing
+    (their outputs are written whole at the end, or not at all)."""
+    command = next((a for a in argv if not a.startswith("-")), "")
+    if command in RESUMING_COMMANDS:
+        return "finished batches are kept, re-run the same command to resume"
+    return "nothing was kept, re-run the command to start again"
 
 
 def announce_compilation(quiet=False):

@@ -353,3 +353,14 @@ def test_links_planted_in_the_partial_folder_are_not_followed(client, tmp_path, 
     report = run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet)
     assert report.status_counts == {"ok": study.n_points}
     assert sorted(p.name for p in elsewhere.iterdir()) == ["keep.txt"]
+
+
+def test_export_into_its_own_store_is_refused(client, tmp_path, capsys):
+    out = tmp_path / "r.zarr"
+    run_sweep(parse_study(GRID), out, client=client, progress=False, log=quiet)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    for target in (out / "zarr.json", out / "status" / "x.nc"):
+        assert main(["export", str(out), str(target)]) == 2
+        assert "inside the input" in one_line_error(capsys.readouterr().err)
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert main(["info", str(out)]) == 0

@@ -108,3 +108,26 @@ def _umask():
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+@pytest.mark.parametrize("command", ["simulate", "cloud", "fit-excitation"])
+def test_ctrl_c_in_a_command_that_keeps_nothing_says_so(record_folder, tmp_path, capsys, monkeypatch, command):
+    import screening.analysis.fit_excitation
+    import screening.solvers.simulate
+    import screening.workflow.cloud
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    for module, name in ((screening.solvers.simulate, "simulate"), (screening.workflow.cloud, "run_cloud"),
+                         (screening.analysis.fit_excitation, "fit_excitation")):
+        monkeypatch.setattr(module, name, interrupted)
+    argv = {"simulate": ["simulate", str(record_folder / "pulse.at2"), "--study", str(record_folder / "bed.toml"),
+                         "--out", str(tmp_path / "s.nc")],
+            "cloud": ["cloud", str(record_folder / "cloud.toml"), "--out", str(tmp_path / "c.nc"), "--quiet",
+                      "--workers", "0"],
+            "fit-excitation": ["fit-excitation", str(record_folder / "pulse.at2")]}[command]
+    assert main(argv) == 130
+    assert [line for line in capsys.readouterr().err.splitlines() if line.strip()] == [
+        "screening: interrupted; nothing was kept, re-run the command to start again"]
+    assert list(tmp_path.iterdir()) == []
