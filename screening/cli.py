@@ -35,6 +35,8 @@ import click
 import numpy as np
 
 from screening import __version__
+from screening.atomicfile import publish as _publish
+from screening.atomicfile import temporary_beside
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -205,9 +207,21 @@ def main(argv=None):
     except (CommandError, StudyError, SweepError) as exc:
         return _error(str(exc))
     except KeyboardInterrupt:
-        print("screening: interrupted; finished batches are kept, re-run the same command to resume",
-              file=sys.stderr)
+        print(f"screening: interrupted; {interrupted_note(argv)}", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+#: Commands that keep their finished work when interrupted and resume from it.
+RESUMING_COMMANDS = ("run",)
+
+
+def interrupted_note(argv):
+    """What an interrupted command leaves: ``run`` keeps its finished batches; the others keep nothing
+    (their outputs are written whole at the end, or not at all)."""
+    command = next((a for a in argv if not a.startswith("-")), "")
+    if command in RESUMING_COMMANDS:
+        return "finished batches are kept, re-run the same command to resume"
+    return "nothing was kept, re-run the command to start again"
 
 
 def announce_compilation(quiet=False):
@@ -309,26 +323,12 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
 
 
 def _temporary_for(out):
-    """A new empty file next to ``out`` (never a planted link) to write ``out`` into."""
-    import os
-    import tempfile
-
+    """A new empty file next to ``out`` (never a planted link) to write ``out`` into
+    (:func:`screening.atomicfile.temporary_beside`; a failure as a one-line error)."""
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+        return temporary_beside(out)
     except OSError as exc:
         raise _write_error(out, exc) from None
-    os.close(fd)
-    return Path(tmp)
-
-
-def _publish(tmp, out):
-    """Give the written ``tmp`` the usual permissions (umask) and move it to ``out`` atomically."""
-    import os
-
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(tmp, 0o666 & ~mask)
-    tmp.replace(out)
 
 
 def _stem(result):
@@ -554,7 +554,7 @@ def cmd_export(result, out, complevel, layout, selection):
     from screening.workflow.errors import ReadFailure, SweepError
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
-    from screening.workflow.zarrfile import export_netcdf, is_zarr_store
+    from screening.workflow.zarrfile import export_netcdf, is_zarr_store, store_problem
 
     result = Path(result)
     if layout == "cf" and selection:
@@ -562,7 +562,10 @@ def cmd_export(result, out, complevel, layout, selection):
     if layout == "cf" and not is_zarr_store(result):
         raise SweepError(f"{result}: not a zarr store (export converts the result of 'screening run --out "
                          "RESULT.zarr' to netCDF; --layout cdo converts any result)")
-    # a screening result? (before writing anything)
+    # a screening result? (before writing anything; every chunk of a zarr store checked)
+    problem = store_problem(result) if is_zarr_store(result) else None
+    if problem:
+        raise SweepError(f"cannot read {result}: {problem}; nothing written")
     ds = cdofile.open_source(result) if layout == "cdo" else open_result(result)
     try:
         selected = cdofile.parse_selection(selection, ds["status"].dims)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import click
 
+from screening.atomicfile import atomic_path
 from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
                            _stem, announce_compilation, cli, lognormal_fit_text, stamp_fragility,
                            write_fragility_files)
@@ -90,7 +91,7 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
         raise CommandError(str(exc)) from None
     st, _ = load_record_study(study)
     block, foundation, chosen = block_and_foundation(st, case, _overrides(sets))
-    out = check_output_path(out or Path(f"{rec.name}_simulation.nc"))
+    out = check_output_path(out or Path(f"{rec.name}_simulation.nc"), inputs=(record, study))
     announce_compilation()
     try:
         ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
@@ -99,15 +100,13 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
         raise CommandError(str(exc)) from None
     ds.attrs.update(study=str(study), record_scale=scale,
                     history=f"screening simulate {record} --study {study} --model {model}")
-    tmp = out.with_name(out.name + ".tmp")
     png_path = out.with_suffix(".png")
     try:
-        ds.to_netcdf(tmp, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
-        if not no_plots:
-            plot_simulation(ds, png_path)
-        tmp.replace(out)
+        with atomic_path(out) as tmp:                   # never through a link planted at out or beside it
+            ds.to_netcdf(tmp, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
+            if not no_plots:
+                plot_simulation(ds, png_path)
     except (OSError, RuntimeError) as exc:
-        tmp.unlink(missing_ok=True)
         raise _write_error(out, exc) from None
     print(out)
     if not no_plots:
@@ -189,7 +188,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     if out is None:
         out = Path("outputs") / f"{Path(study).stem}.nc"
         out.parent.mkdir(exist_ok=True)
-    out = check_output_path(out)
+    out = check_output_path(out, inputs=(study, *cloud.files))
     announce_compilation(quiet)
     if workers is None and not scheduler:
         workers = 0 if len(cloud.files) <= SERIAL_RECORDS else 2

@@ -34,6 +34,7 @@ import xarray as xr
 
 from screening.analysis.fragility import (exceedance_probability, fit_lognormal_fragility, model_quantity,
                                           parameter, threshold_angle)
+from screening.atomicfile import atomic_open
 
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
 IMS = {
@@ -151,7 +152,7 @@ def write_csv(frag, path):
     name = frag["median"].attrs.get("intensity", "intensity")
     units = frag["median"].attrs.get("units", "")
     dims = list(frag["median"].dims)
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(dims + ["intensity_measure", "units", "median", "beta", "threshold_rad", "period_s"])
         period = frag[name].attrs.get("period", "") if name in frag else ""
@@ -196,6 +197,6 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
                   f'      <params ls="theta_exceeds_threshold" mean="{mean:.8g}" stddev="{std:.8g}"/>',
                   "    </fragilityFunction>"]
     lines += ["  </fragilityModel>", "</nrml>", ""]
-    with open(path, "w", encoding="utf-8") as fh:
+    with atomic_open(path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(lines))
     return path

@@ -11,7 +11,6 @@ hollow, with a legend and the counts in the title (:func:`flag_summary`).  The r
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -155,29 +154,14 @@ def new_figure(width, height):
     return fig
 
 
-def _umask():
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def save_figure(fig, path):
     """Write ``fig`` as PNG to ``path`` atomically (``<path>.tmp`` then rename): a failing write
     (disk full, permission) leaves no partial file behind and raises the ``OSError``."""
-    import tempfile
+    from screening.atomicfile import atomic_open
 
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)   # never a planted link
-    tmp = Path(tmp)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.savefig(fh, format="png")
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    with atomic_open(path, "wb") as fh:                 # never through a planted link
+        fig.savefig(fh, format="png")
+    return Path(path)
 
 
 def axis_label(ds, name):

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
+from screening.atomicfile import atomic_open, atomic_path
 from screening.analysis.metrics import derive_rules
 from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
 from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, write_csv
@@ -76,10 +77,11 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
     rules = derive_rules(ds, thr, metric, quantity)
     ds.attrs["rules"] = "\n".join(rule_text(r, metric, quantity) for r in rules)
     if write_nc:
-        to_file_layout(ds).to_netcdf(paths["nc"], encoding=file_encoding(ds))
+        with atomic_path(paths["nc"]) as tmp:
+            to_file_layout(ds).to_netcdf(tmp, encoding=file_encoding(ds))
     wall = float(ds.attrs.get("wall_time_s", float("nan")))
-    paths["md"].write_text(markdown_report(study, ds, rules) + f"\nTotal run time {wall:.0f} s.\n",
-                           encoding="utf-8")
+    with atomic_open(paths["md"], "w", encoding="utf-8") as fh:
+        fh.write(markdown_report(study, ds, rules) + f"\nTotal run time {wall:.0f} s.\n")
     write_csv(point_rows(ds), paths["csv"])
     plot_error_vs_cost(ds, paths["error_vs_cost"])
     plot_validity(ds, rules, thr, paths["validity"], metric, quantity)

@@ -14,6 +14,7 @@ import numpy as np
 from screening import __version__
 from screening.analysis.metrics import peak_with_se, relative_difference
 from screening.analysis.tradeoff_study import COMPARISONS, METHODS, QUANTITIES
+from screening.atomicfile import atomic_open
 from screening.status import PointStatus
 
 
@@ -124,7 +125,7 @@ def point_rows(ds):
 
 def write_csv(rows, path):
     """The per-point rows as CSV."""
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)

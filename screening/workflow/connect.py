@@ -4,9 +4,12 @@
 server that accepts and stays silent hung the run forever, and a peer that is not a dask scheduler
 made dask allocate whatever frame size its first bytes declared (exabytes).  A malformed scheduler
 JSON file gave AssertionError/TypeError tracebacks.  :func:`check_scheduler` reads the scheduler
-file with bounds, then opens one TCP connection and reads the first 8 bytes a dask scheduler sends
-on accept (the little-endian length of its handshake message) within :data:`HANDSHAKE_TIMEOUT`;
-silence, a closed connection or an implausible length is a one-line :class:`SweepError`.
+file with bounds, checks the address (``tcp://`` or ``host:port``; ``tls://`` only with dask's TLS
+settings; a port in 1..65535, a host name of at most :data:`MAX_HOST` characters), then opens one
+TCP connection and reads the whole handshake message a dask scheduler sends on accept (its
+little-endian length, the frame count and lengths, a msgpack map), all within
+:data:`HANDSHAKE_TIMEOUT` in total; silence, a closed connection, an implausible length or bytes
+that are not such a message are a one-line :class:`SweepError`.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from __future__ import annotations
 import json
 import socket
 import struct
+import time
 from pathlib import Path
 
 from screening.workflow.errors import SweepError
@@ -22,6 +26,10 @@ from screening.workflow.errors import SweepError
 HANDSHAKE_TIMEOUT = 10.0
 #: Largest handshake message accepted [bytes] (a real one is under 1 kB).
 MAX_HANDSHAKE = 1 << 20
+#: Longest host name accepted (a DNS name has at most 253 characters).
+MAX_HOST = 253
+#: dask's settings of a TLS client; ``tls://`` without them cannot connect.
+TLS_SETTINGS = ("distributed.comm.tls.client.cert", "distributed.comm.tls.ca-file")
 
 
 def scheduler_address(scheduler):
@@ -45,29 +53,81 @@ def check_scheduler(scheduler, timeout=None):
     other protocols are left to dask)."""
     timeout = HANDSHAKE_TIMEOUT if timeout is None else timeout
     address = scheduler_address(scheduler)
-    rest = address[len("tcp://"):] if address.startswith("tcp://") else address
-    if "://" in rest:
-        return address
+    shown = address if len(address) <= 80 else address[:80] + "..."
+    protocol, sep, rest = address.partition("://")
+    if not sep:
+        protocol, rest = "tcp", address
+    if protocol not in ("tcp", "tls"):
+        raise SweepError(f"the dask scheduler address {shown!r}: protocol {protocol[:20]!r}:// is not supported "
+                         "(tcp:// or tls://)")
     host, sep, port = rest.rpartition(":")
     host = host.strip("[]")
-    if not sep or not port.isdigit() or not host:
-        raise SweepError(f"the dask scheduler address {address!r} is not host:port or tcp://host:port")
+    if not sep or not host or not (port.isascii() and port.isdigit()) or len(port) > 5 \
+            or not 1 <= int(port) <= 65535:
+        raise SweepError(f"the dask scheduler address {shown!r} is not host:port or {protocol}://host:port "
+                         "with a port in 1..65535")
+    if len(host) > MAX_HOST or any(c.isspace() for c in host):
+        raise SweepError(f"the dask scheduler address {shown!r}: the host name is not a host name "
+                         f"(at most {MAX_HOST} characters, no spaces)")
+    if protocol == "tls":
+        import dask
+
+        if not all(dask.config.get(key, None) for key in TLS_SETTINGS):
+            raise SweepError(f"the dask scheduler address {shown!r} needs TLS settings: set "
+                             f"{' and '.join(TLS_SETTINGS)} in dask's configuration")
+        return address                              # the TLS handshake is dask's (bounded by its timeout)
+    deadline = time.monotonic() + timeout
     try:
         with socket.create_connection((host, int(port)), timeout=timeout) as sock:
-            sock.settimeout(timeout)
-            head = b""
-            while len(head) < 8:
-                chunk = sock.recv(8 - len(head))
-                if not chunk:
-                    raise SweepError(f"the server at {address} closed the connection: not a dask scheduler")
-                head += chunk
-    except socket.timeout:
-        raise SweepError(f"the server at {address} did not answer like a dask scheduler within "
+            (length,) = struct.unpack("<Q", _receive(sock, 8, deadline, shown))
+            if not 8 < length <= MAX_HANDSHAKE:
+                raise SweepError(f"the server at {shown} is not a dask scheduler (its first message declares "
+                                 f"{length} bytes)")
+            message = _receive(sock, length, deadline, shown)
+    except (socket.timeout, TimeoutError):
+        raise SweepError(f"the server at {shown} did not answer like a dask scheduler within "
                          f"{timeout:g} s") from None
-    except OSError as exc:
-        raise SweepError(f"cannot connect to the dask scheduler {address}: {exc.strerror or exc}") from None
-    (length,) = struct.unpack("<Q", head)
-    if not 0 < length <= MAX_HANDSHAKE:
-        raise SweepError(f"the server at {address} is not a dask scheduler (its first message declares "
-                         f"{length} bytes)")
+    except (OSError, UnicodeError, OverflowError, ValueError) as exc:
+        raise SweepError(f"cannot connect to the dask scheduler {shown}: "
+                         f"{getattr(exc, 'strerror', None) or exc}") from None
+    if not is_handshake(message):
+        raise SweepError(f"the server at {shown} is not a dask scheduler (its first message is not dask's "
+                         "handshake)")
     return address
+
+
+def _receive(sock, n, deadline, shown):
+    """``n`` bytes from ``sock`` before ``deadline`` (``time.monotonic``); a closed connection is a
+    :class:`SweepError`, the deadline ``socket.timeout``."""
+    data = bytearray()
+    while len(data) < n:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise socket.timeout
+        sock.settimeout(left)
+        chunk = sock.recv(min(n - len(data), 1 << 16))
+        if not chunk:
+            raise SweepError(f"the server at {shown} closed the connection: not a dask scheduler")
+        data += chunk
+    return bytes(data)
+
+
+def is_handshake(message):
+    """Whether ``message`` (the bytes after the length) is a dask handshake: a frame count, the frame
+    lengths adding up to the rest, and a first frame that is a msgpack map."""
+    import msgpack
+
+    if len(message) < 16:
+        return False
+    (n,) = struct.unpack_from("<Q", message)
+    if not 1 <= n <= (len(message) - 8) // 8:
+        return False
+    lengths = struct.unpack_from(f"<{n}Q", message, 8)
+    start = 8 + 8 * n
+    if sum(lengths) != len(message) - start:
+        return False
+    try:
+        head = msgpack.unpackb(message[start:start + lengths[0]], raw=False, strict_map_key=False)
+    except Exception:                                   # noqa: BLE001 - msgpack raises many types on junk
+        return False
+    return isinstance(head, dict)

@@ -26,7 +26,7 @@ import numpy as np
 import screening
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus, SampleState, Trust
-from screening.workflow.errors import SweepError
+from screening.workflow.errors import SweepError, exception_line
 from screening.workflow.grid import batch_models, point_values
 from screening.workflow.study import build_models
 
@@ -366,8 +366,8 @@ def dask_client(workers=2, scheduler=None, client=None):
                 c = Client(scheduler_file=str(scheduler), timeout=CONNECT_TIMEOUT)
             else:
                 c = Client(scheduler, timeout=CONNECT_TIMEOUT)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise SweepError(f"cannot connect to the dask scheduler {scheduler}: {exc}") from None
+        except Exception as exc:                   # noqa: BLE001 - a peer that changed since the check
+            raise SweepError(f"cannot connect to the dask scheduler {scheduler}: {exception_line(exc)}") from None
         try:
             try:
                 c.wait_for_workers(1, timeout=30)

@@ -21,12 +21,15 @@ def open_result(path):
     """Open a result file lazily with xarray; :class:`ResultError` if unreadable or foreign."""
     import xarray as xr
 
-    from screening.workflow.zarrfile import is_zarr_store, open_zarr_result
+    from screening.workflow.zarrfile import is_zarr_store, open_zarr_result, store_problem
 
     path = Path(path)
     zarr = is_zarr_store(path)
     if not path.is_file() and not zarr:
         raise ResultError(f"{path}: no such result file")
+    problem = store_problem(path, deep=False) if zarr else None
+    if problem:
+        raise ResultError(f"{path}: not a usable result: {problem}")
     try:
         ds = open_zarr_result(path) if zarr else xr.open_dataset(path, engine="netcdf4")
     except Exception as exc:                          # noqa: BLE001 - netCDF/HDF5 raise many types

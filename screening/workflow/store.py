@@ -24,6 +24,7 @@ import numpy as np
 
 from screening import __version__
 from screening.workflow.errors import SweepError
+from screening.workflow.zarrfile import file_check
 
 
 class PartialStore:
@@ -118,8 +119,7 @@ class PartialStore:
     def region_target(self, shape, histories, variables):
         """The :class:`RegionTarget` of the zarr store being built (its marker folder created)."""
         done = self.dir / self.DONE
-        with contextlib.suppress(FileExistsError):
-            done.mkdir(mode=0o700)
+        _own_folder(done)
         return RegionTarget(str(self.zarr_building.resolve()), str(done.resolve()), self.manifest["key"],
                             tuple(shape), tuple(histories), tuple(variables))
 
@@ -136,13 +136,34 @@ class PartialStore:
                                                                          batch.lo, batch.hi]:
                 return False
             files = marker["files"]
-            return bool(files) and all(size >= 0 and os.lstat(self.zarr_building / name).st_size == size
-                                       for name, size in files.items())
-        except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+            return bool(files) and all(check[0] >= 0 and file_check(self.zarr_building / name) == list(check)
+                                       for name, check in files.items())
+        except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError, IndexError):
             return False
 
+    def marked_files(self):
+        """``{chunk file: [size, checksum]}`` of every batch marker (for the completion mark)."""
+        files = {}
+        for path in sorted((self.dir / self.DONE).glob("batch-*.json")):
+            try:
+                with os.fdopen(_open_nofollow(path, os.O_RDONLY), "rb") as fh:
+                    marker = json.loads(fh.read(1 << 22))
+                if marker.get("key") == self.manifest["key"]:
+                    files.update(marker["files"])
+            except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+                continue
+        return files
+
+    def forget_marker(self, batch):
+        """Remove the marker of ``batch`` (its region is being written again)."""
+        with contextlib.suppress(FileNotFoundError):
+            self.marker_path(batch).unlink()
+
     def forget_markers(self):
-        shutil.rmtree(self.dir / self.DONE, ignore_errors=True)
+        done = self.dir / self.DONE
+        if done.is_symlink():
+            done.unlink()
+        shutil.rmtree(done, ignore_errors=True)
 
     # -- parts
     def batch_path(self, batch):
@@ -230,6 +251,17 @@ def _open_nofollow(path, flags, mode=0o600):
         os.close(fd)
         raise
     return fd
+
+
+def _own_folder(path):
+    """Make ``path`` a folder of this run: an existing real folder is kept; a link or anything else
+    planted there is removed (never followed) and a new folder (mode 0700) created."""
+    with contextlib.suppress(FileNotFoundError):
+        st = os.lstat(path)
+        if stat.S_ISDIR(st.st_mode):
+            return
+        os.unlink(path)
+    os.mkdir(path, 0o700)
 
 
 def _create(path):

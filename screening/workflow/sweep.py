@@ -54,7 +54,8 @@ from screening.workflow.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
 from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
-from screening.workflow.zarrfile import is_zarr_path, zarr_batch_size
+from screening.workflow.zarrfile import (foreign_files, is_zarr_path, remove_store, write_completion_mark,
+                                         zarr_batch_size)
 
 MAX_FAILURE_MESSAGES = 5
 #: Outstanding batch tasks per worker (bounds the memory of client and scheduler).
@@ -249,6 +250,8 @@ class _SweepRun:
 
         study, path = self.study, self.store.zarr_building
         result = None
+        if path.is_symlink() or (path.exists() and not path.is_dir()):    # planted in our folder: never followed
+            path.unlink()
         if path.is_dir():
             try:
                 result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size, reopen=True)
@@ -309,6 +312,8 @@ class _SweepRun:
     def _write_failed(self, batch):
         """A batch whose task failed: NaN values and status ``task_failed`` in its region (not saved)."""
         start = time.perf_counter()
+        if self.target is not None:
+            self.store.forget_marker(batch)
         self.result.write_batch(batch, execution.failed_result(batch.size, self.study.times.size,
                                                                self.study.output.stored, self.study.fragility))
         self.write_time += time.perf_counter() - start
@@ -341,6 +346,8 @@ class _SweepRun:
             for b in done:
                 part = self._load_saved(b)
                 if part is None:                    # unreadable or stale part: compute it again
+                    if self.target is not None:
+                        self.store.forget_marker(b)
                     fut = self._submit(b, "-redo")
                     pending[fut] = b
                     ready.add(fut)
@@ -436,6 +443,26 @@ class _SweepRun:
         return len(spots)
 
     # -- the end
+    def _publish_store(self):
+        """Mark the zarr store complete and move it to ``out``; a store already there is replaced only
+        if it holds nothing but what screening wrote (else a one-line error, the new store kept)."""
+        old = self.store.dir / "replaced.zarr"
+        if os.path.lexists(old):
+            remove_store(old)
+        write_completion_mark(self.store.zarr_building, self.store.marked_files())
+        if os.path.lexists(self.out):
+            foreign = foreign_files(self.out) if self.out.is_dir() and not self.out.is_symlink() else [self.out.name]
+            if foreign:
+                raise SweepError(f"{self.out} holds files screening did not write (e.g. {foreign[0]}); "
+                                 f"move them away and re-run the same command (the finished result is kept "
+                                 f"in {self.store.dir})")
+            os.replace(self.out, old)
+        os.replace(self.store.zarr_building, self.out)
+        if os.path.lexists(old) and not remove_store(old):
+            kept = self.out.with_name(f"{self.out.name}.replaced-{uuid.uuid4().hex[:8]}")
+            os.replace(old, kept)
+            self.log(f"warning: files written into the replaced {self.out} after it was checked are kept in {kept}")
+
     def _finalize(self):
         """Close the file, flush it to disk and move it into place atomically (a zarr store: renamed,
         an older store at ``out`` removed after)."""
@@ -443,14 +470,7 @@ class _SweepRun:
         self.result.set_attrs(n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
         self.result.close()
         if self.target is not None:
-            import shutil
-
-            old = self.store.dir / "replaced.zarr"
-            shutil.rmtree(old, ignore_errors=True)
-            if self.out.is_dir() and not self.out.is_symlink():
-                os.replace(self.out, old)
-            os.replace(self.store.zarr_building, self.out)
-            shutil.rmtree(old, ignore_errors=True)
+            self._publish_store()
             return
         with open(self.store.building, "rb") as fh:
             os.fsync(fh.fileno())

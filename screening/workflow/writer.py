@@ -78,10 +78,17 @@ def check_output_path(out, inputs=()):
     for path in inputs:
         if _same_file(out, path):
             raise SweepError(f"output path {out} is the input file {path}; give another --out")
-    from screening.workflow.zarrfile import is_zarr_path, is_zarr_store
+        if _inside(out, path):
+            raise SweepError(f"output path {out} is inside the input {path}; give another --out")
+    from screening.workflow.zarrfile import foreign_files, is_zarr_path, is_zarr_store
 
     if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
         raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")
+    if is_zarr_path(out) and is_zarr_store(out):
+        foreign = foreign_files(out)
+        if foreign:
+            raise SweepError(f"output path {out} holds files screening did not write as a finished result "
+                             f"(e.g. {foreign[0]}); only such a store is replaced: give another --out")
     if out.is_dir() and not is_zarr_path(out):
         raise SweepError(f"output path {out} is a directory")
     try:
@@ -96,6 +103,13 @@ def check_output_path(out, inputs=()):
     if not os.access(out.parent, os.W_OK):
         raise SweepError(f"output folder {out.parent} is not writable")
     return out
+
+
+def _inside(out, folder):
+    """Whether ``out`` lies inside the folder ``folder`` (links resolved)."""
+    if not os.path.isdir(folder):
+        return False
+    return Path(os.path.realpath(out.parent)).is_relative_to(os.path.realpath(folder))
 
 
 def _same_file(a, b):

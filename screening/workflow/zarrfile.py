@@ -15,8 +15,11 @@ HDF5 files cannot be written from several processes, hence this second form for 
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import json
 import math
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +28,10 @@ ZARR_SUFFIX = ".zarr"
 ZARR_FORMAT = 3
 #: Bytes read at a time when a variable is copied (:func:`export_netcdf`) or checked.
 BLOCK_BYTES = 32 * 2**20
+#: The completion mark of a finished store (:func:`write_completion_mark`), in its top folder.
+COMPLETION_MARK = "screening-complete.json"
+#: What a chunk that was never written reads as (zarr's fill value): a failure code, never ``ok``.
+ZARR_FILL = {"status": -1, "sl_trust": 2}     # PointStatus.task_failed, Trust.untrusted
 
 
 def is_zarr_path(path):
@@ -235,13 +242,15 @@ class ZarrDataset:
                 data = v.values
             variables[name] = xr.Variable(v.dims, data, v.attrs)
             enc = {"_FillValue": None if _no_fill(v.fill) else v.fill, **_codecs(v.dtype, *v.storage)}
+            if name in ZARR_FILL:
+                enc["fill_value"] = ZARR_FILL[name]
             if chunks:
                 enc["chunks"] = chunks
             encoding[name] = enc
         # xarray replaces the global attributes on every write: give it those of the store
         ds = xr.Dataset(variables, attrs=dict(self.group.attrs) if self._created else self._attrs)
         ds.to_zarr(self.path, mode="a" if self._created else "w-", compute=False, encoding=encoding,
-                   consolidated=False, zarr_format=ZARR_FORMAT)
+                   consolidated=False, zarr_format=ZARR_FORMAT, write_empty_chunks=True)
         self._pending.clear()
         self._created, self._group = True, None
         self._arrays.clear()
@@ -269,8 +278,8 @@ class ZarrDataset:
 
     # -- batches
     def chunk_files(self, names, slabs):
-        """``{relative path: size [bytes]}`` of the chunk files of variables ``names`` over the grid
-        ``slabs`` (tuples of slices; a file that is missing has size -1)."""
+        """``{relative path: [size [bytes], checksum]}`` of the chunk files of variables ``names`` over
+        the grid ``slabs`` (tuples of slices; a file that is missing has size -1, checksum ``""``)."""
         files = {}
         for name in names:
             arr = self[name].array
@@ -279,11 +288,137 @@ class ZarrDataset:
                 for index in np.ndindex(*[len(r) for r in ranges]):
                     coords = tuple(r[i] for r, i in zip(ranges, index)) + (0,) * (arr.ndim - len(slab))
                     key = f"{name}/{arr.metadata.encode_chunk_key(coords)}"
-                    try:
-                        files[key] = os.stat(self.path / key).st_size
-                    except OSError:
-                        files[key] = -1
+                    files[key] = file_check(self.path / key)
         return files
+
+
+# ----------------------------------------------------------------------------- integrity
+def file_check(path):
+    """``[size [bytes], checksum]`` of the regular file ``path`` (read without following a link), or
+    ``[-1, ""]`` if it is missing, a link or not a regular file."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
+    except OSError:
+        return [-1, ""]
+    with os.fdopen(fd, "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return [-1, ""]
+        digest, size = hashlib.blake2b(digest_size=16), 0
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+            size += len(block)
+    return [size, digest.hexdigest()]
+
+
+def store_entries(root):
+    """``(files, foreign)`` of the folder ``root``: the relative paths (``/``-separated) of its regular
+    files other than the completion mark, and those of its entries that are neither a regular file
+    nor a folder (links, FIFOs...)."""
+    files, foreign = [], []
+    root = Path(root)
+    for folder, dirs, names in os.walk(root):
+        rel = Path(folder).relative_to(root)
+        for name in list(dirs):
+            if os.path.islink(os.path.join(folder, name)):
+                foreign.append((rel / name).as_posix())
+                dirs.remove(name)
+        for name in names:
+            st = os.lstat(os.path.join(folder, name))
+            path = (rel / name).as_posix()
+            if not stat.S_ISREG(st.st_mode):
+                foreign.append(path)
+            elif path != COMPLETION_MARK:
+                files.append(path)
+    return sorted(files), foreign
+
+
+def write_completion_mark(root, known=None):
+    """Write the completion mark of the finished store ``root``: ``{"files": {path: [size, checksum]}}``
+    of every file of the store (``known``: checks already taken of some of them, used where the size
+    still matches).  Written last, atomically: a store without it was never finished."""
+    from screening.workflow.store import _create
+
+    known = known or {}
+    files, foreign = store_entries(root)
+    if foreign:
+        raise OSError(0, f"the zarr store {root} holds {foreign[0]}, which is not a regular file")
+    checks = {}
+    for path in files:
+        old = known.get(path)
+        if old is not None and old[0] == os.lstat(Path(root) / path).st_size:
+            checks[path] = list(old)
+        else:
+            checks[path] = file_check(Path(root) / path)
+    mark = Path(root) / COMPLETION_MARK
+    tmp = mark.with_name(mark.name + ".tmp")
+    with _create(tmp) as fh:
+        fh.write(json.dumps({"format": 1, "files": checks}).encode())
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, mark)
+
+
+def read_completion_mark(root):
+    """The files ``{path: [size, checksum]}`` of the completion mark of ``root``, or ``None`` if it has
+    none (or an unreadable one)."""
+    try:
+        fd = os.open(Path(root) / COMPLETION_MARK, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
+        with os.fdopen(fd, "rb") as fh:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                return None
+            mark = json.loads(fh.read(1 << 28))
+        files = mark["files"]
+    except (OSError, ValueError, KeyError, TypeError, RecursionError):
+        return None
+    ok = isinstance(files, dict) and all(isinstance(v, list) and len(v) == 2 for v in files.values())
+    return files if ok else None
+
+
+def store_problem(root, deep=True):
+    """Why the zarr store ``root`` is not a finished, intact result (a short phrase), or ``None``.
+
+    It must have its completion mark, and every file the mark lists must be there with its size
+    (and, ``deep``, its checksum: every chunk is read).  A missing chunk would otherwise read as the
+    fill value, a zeroed one as whatever it decodes to."""
+    files = read_completion_mark(root)
+    if files is None:
+        return ("it has no completion mark: the store of an interrupted run (re-run the same command to "
+                "finish it) or one screening did not write")
+    for path, (size, digest) in files.items():
+        full = Path(root) / path
+        try:
+            st = os.lstat(full)
+        except (OSError, ValueError):
+            return f"its file {path} is missing"
+        if not stat.S_ISREG(st.st_mode) or st.st_size != size:
+            return f"its file {path} has changed (size {st.st_size}, {size} bytes written)"
+        if deep and file_check(full) != [size, digest]:
+            return f"its file {path} has changed since it was written (checksum)"
+    return None
+
+
+def foreign_files(root):
+    """Entries of the folder ``root`` that screening did not write as a finished store (all of them
+    if it has no completion mark); ``[]`` when it may be replaced."""
+    files, foreign = store_entries(root)
+    mark = read_completion_mark(root)
+    if mark is None:
+        return foreign + files or [COMPLETION_MARK + " (missing)"]
+    return foreign + [f for f in files if f not in mark]
+
+
+def remove_store(root):
+    """Delete the files of the finished store ``root`` its completion mark lists, the mark, and the
+    folders left empty; anything else stays.  Returns whether ``root`` is gone."""
+    for path in read_completion_mark(root) or {}:
+        with contextlib.suppress(OSError, ValueError):
+            os.unlink(Path(root) / path)
+    with contextlib.suppress(OSError):
+        os.unlink(Path(root) / COMPLETION_MARK)
+    for folder, _, _ in sorted(os.walk(root), key=lambda entry: -len(entry[0])):
+        with contextlib.suppress(OSError):
+            os.rmdir(folder)
+    return not os.path.lexists(root)
 
 
 @contextlib.contextmanager
@@ -326,8 +461,13 @@ def read_attrs(path):
 
 def check_store(path, expected_dims, required):
     """Why the store at ``path`` cannot be reused (a short reason), or ``None``: ``expected_dims``
-    ``{name: size}``, ``required`` variable names; every chunk is read (a damaged one raises)."""
+    ``{name: size}``, ``required`` variable names; every file is checked against the completion mark
+    (:func:`store_problem`) and every chunk read (a damaged one raises)."""
     import zarr
+
+    problem = store_problem(path)
+    if problem:
+        return problem
 
     with warnings_ignored():
         group = zarr.open_group(path, mode="r")

@@ -702,6 +702,62 @@ def test_a_real_scheduler_passes_the_check():
         assert check_scheduler(cluster.scheduler_address, timeout=5) == cluster.scheduler_address
 
 
+def _handshake_length(n=58):
+    import struct
+
+    return struct.pack("<Q", n)
+
+
+@pytest.mark.parametrize("reply, needle", [
+    (_handshake_length(), "did not answer like a dask scheduler within"),        # a length, then silence
+    (_handshake_length() + b"\x07" * 58, "is not a dask scheduler"),            # a length, then junk
+    (_handshake_length(24) + _handshake_length(1) + _handshake_length(8) + b"\xc1" * 8,
+     "is not a dask scheduler"),                                                # frames, not msgpack
+])
+@pytest.mark.parametrize("how", ["address", "file", "cloud"])
+def test_a_scheduler_handshake_cut_short_or_junk_is_one_line_in_bounded_time(tmp_path, capsys, monkeypatch,
+                                                                              reply, needle, how):
+    import json
+    import time
+
+    monkeypatch.setattr("screening.workflow.connect.HANDSHAKE_TIMEOUT", 1.0)
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    with _server(reply) as address:
+        if how == "file":
+            (tmp_path / "scheduler.json").write_text(json.dumps({"address": address}))
+            address = str(tmp_path / "scheduler.json")
+        argv = (["cloud", str(study)] if how == "cloud" else ["run", str(study)]) + [
+            "--scheduler", address, "--out", str(tmp_path / "r.nc"), "--quiet"]
+        if how == "cloud":
+            from screening.records import Record, write_at2
+
+            (tmp_path / "rec").mkdir()
+            write_at2(tmp_path / "rec" / "a.at2", Record(np.sin(np.arange(200) * 0.1), 0.01))
+            study.write_text("[block]\nm = 8.67\nb = 0.035\nh = 0.21\n[foundation]\nk = 2.89e7\nlam = 8.95e8\n"
+                             'eps = 6e7\n[records]\nfiles = "rec"\n')
+        start = time.monotonic()
+        code = main(argv)
+        assert time.monotonic() - start < 15
+    assert code == 2 and needle in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "r.nc").exists()
+
+
+@pytest.mark.parametrize("address, needle", [
+    ("tls://127.0.0.1:8786", "needs TLS settings"),
+    ("ucx://127.0.0.1:8786", "is not supported"),
+    ("tcp://127.0.0.1:" + "9" * 20, "port in 1..65535"),
+    ("127.0.0.1:\u00b2", "port in 1..65535"),
+    ("tcp://" + "a" * 100_000 + ":8786", "host name"),
+])
+def test_scheduler_addresses_dask_cannot_use_are_one_line(tmp_path, capsys, address, needle):
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    assert main(["run", str(study), "--scheduler", address, "--out", str(tmp_path / "r.nc"), "--quiet"]) == 2
+    line = one_line_error(capsys.readouterr().err)
+    assert needle in line and len(line) < 400, line[:400]
+
+
 # ----------------------------------------------------------------------------- B7: a point beyond float64
 #: reproducers of the issue (field, extreme value, an ordinary value): the point's scales under- or
 #: overflow float64

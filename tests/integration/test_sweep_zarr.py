@@ -82,16 +82,19 @@ def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_pat
     markers = sorted(p.name for p in (partial / "done").glob("batch-*.json"))
     assert set(f"batch-{i:06d}.json" for i in seen) <= set(markers)
     marker = json.loads((partial / "done" / f"batch-{seen[0]:06d}.json").read_text())
-    assert marker["key"] == study.key and all(size > 0 for size in marker["files"].values())
+    assert marker["key"] == study.key and all(size > 0 and len(digest) == 32
+                                              for size, digest in marker["files"].values())
 
-    # damage one marked batch: its chunk file no longer has the size in the marker
-    damaged = seen[1]
-    chunk = partial / "result.zarr.building" / "var_theta" / "c" / str(damaged) / "0" / "0"
+    # damage marked batches: a chunk file cut short, and one zeroed at its size (only the checksum sees it)
+    building = partial / "result.zarr.building"
+    chunk = building / "var_theta" / "c" / str(seen[1]) / "0" / "0"
     chunk.write_bytes(chunk.read_bytes()[:10])
+    chunk = building / "status" / "c" / str(seen[0]) / "0"
+    chunk.write_bytes(bytes(chunk.stat().st_size))
     messages = []
     report = run_sweep(study, out, client=client, batch_size=2, progress=False, log=messages.append)
     assert report.n_batches == 4                                   # the layout of the first attempt
-    assert report.n_resumed_batches == len(markers) - 1
+    assert report.n_resumed_batches == len(markers) - 2
     assert not partial.exists()
     _same(ref, out)
 
@@ -256,3 +259,108 @@ def test_export_of_a_damaged_store_names_the_store_and_writes_nothing(client, tm
     err = one_line_error(capsys.readouterr().err)
     assert f"cannot read {tmp_path / 'd.zarr'}: " in err and "nothing written" in err and "out.nc" not in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.zarr"]
+
+
+def _status_chunk(store):
+    return next(p for p in sorted((store / "status" / "c").rglob("*")) if p.is_file())
+
+
+def test_a_finished_store_missing_a_chunk_is_neither_reused_nor_read_nor_exported(client, tmp_path, capsys):
+    """A deleted chunk would read as zarr's fill value: it is damage, seen by reuse, info and export, and
+    a never-written status chunk reads as task_failed, not ok."""
+    study = parse_study(GRID)
+    out = tmp_path / "m.zarr"
+    run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet)
+    chunk = _status_chunk(out)
+    chunk.unlink()
+    with xr.open_zarr(out) as ds:
+        assert np.all(ds["status"].values[0] == PointStatus.task_failed)
+    for argv in (["info", str(out)], ["export", str(out), str(tmp_path / "x.nc")],
+                 ["export", str(out), str(tmp_path / "x.nc"), "--layout", "cdo"]):
+        assert main(argv) == 2
+        err = one_line_error(capsys.readouterr().err)
+        assert "status/c/" in err and "missing" in err, err
+    assert not (tmp_path / "x.nc").exists()
+    messages = []
+    report = run_sweep(study, out, client=client, batch_size=5, progress=False, log=messages.append)
+    assert not report.reused and any("computing it again" in m and "missing" in m for m in messages)
+    assert report.status_counts == {"ok": study.n_points}
+    # a chunk zeroed at its size: only the checksum of the completion mark sees it
+    chunk = _status_chunk(out)
+    chunk.write_bytes(bytes(chunk.stat().st_size))
+    assert main(["export", str(out), str(tmp_path / "x.nc")]) == 2
+    assert "checksum" in one_line_error(capsys.readouterr().err)
+    assert not run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet).reused
+
+
+def test_the_store_of_an_interrupted_run_is_not_a_result(client, tmp_path, capsys):
+    study = parse_study(GRID)
+    interrupted_run(study, tmp_path / "i.zarr", client, batch_size=5)
+    building = tmp_path / "i.zarr.partial" / "result.zarr.building"
+    assert (building / "zarr.json").is_file()
+    for argv in (["export", str(building), str(tmp_path / "x.nc")], ["info", str(building)]):
+        assert main(argv) == 2
+        assert "no completion mark" in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_a_store_with_files_screening_did_not_write_is_never_replaced(client, tmp_path, capsys):
+    """``--out x.zarr`` over a finished store: replaced; over one holding a file of the user's: one line,
+    exit 2, the folder untouched -- also when the file appears during the run."""
+    study_file = tmp_path / "s.toml"
+    study_file.write_text(GRID)
+    out = tmp_path / "x.zarr"
+    run_sweep(parse_study(GRID), out, client=client, batch_size=5, progress=False, log=quiet)
+    (out / "notes.txt").write_text("mine")
+    before = sorted(p.relative_to(out) for p in out.rglob("*"))
+    assert main(["run", str(study_file), "--out", str(out), "--force", "--no-plots", "--workers", "0"]) == 2
+    assert "notes.txt" in one_line_error(capsys.readouterr().err)
+    assert sorted(p.relative_to(out) for p in out.rglob("*")) == before
+    assert (out / "notes.txt").read_text() == "mine"
+    # the user's file appears while the run computes: the finished result waits in the partial folder
+    (out / "notes.txt").unlink()
+    from screening.workflow.errors import SweepError
+
+    def add_notes(batch):
+        (out / "notes.txt").write_text("mine")
+
+    changed = parse_study(GRID.replace("t_end = 4.0", "t_end = 2.0"))
+    with pytest.raises(SweepError, match="notes.txt"):
+        run_sweep(changed, out, client=client, batch_size=5, progress=False, log=quiet, on_batch=add_notes)
+    assert (out / "notes.txt").read_text() == "mine"
+    (out / "notes.txt").unlink()
+    report = run_sweep(changed, out, client=client, batch_size=5, progress=False, log=quiet)
+    assert report.n_resumed_batches == report.n_batches
+    with xr.open_zarr(out) as ds:
+        assert ds.attrs["study_sha256"] == changed.key
+
+
+@pytest.mark.parametrize("entry", ["done", "result.zarr.building"])
+def test_links_planted_in_the_partial_folder_are_not_followed(client, tmp_path, entry):
+    study = parse_study(GRID)
+    out = tmp_path / "l.zarr"
+    interrupted_run(study, out, client, batch_size=5)
+    while any(client.processing().values()):     # tasks already running finish first
+        time.sleep(0.05)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "keep.txt").write_text("mine")
+    planted = tmp_path / "l.zarr.partial" / entry
+    import shutil
+
+    shutil.rmtree(planted)
+    planted.symlink_to(elsewhere, target_is_directory=True)
+    report = run_sweep(study, out, client=client, batch_size=5, progress=False, log=quiet)
+    assert report.status_counts == {"ok": study.n_points}
+    assert sorted(p.name for p in elsewhere.iterdir()) == ["keep.txt"]
+
+
+def test_export_into_its_own_store_is_refused(client, tmp_path, capsys):
+    out = tmp_path / "r.zarr"
+    run_sweep(parse_study(GRID), out, client=client, progress=False, log=quiet)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    for target in (out / "zarr.json", out / "status" / "x.nc"):
+        assert main(["export", str(out), str(target)]) == 2
+        assert "inside the input" in one_line_error(capsys.readouterr().err)
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert main(["info", str(out)]) == 0

@@ -152,3 +152,18 @@ def test_rerender_from_netcdf_and_bad_files_write_nothing(tiny_run):
     assert not (d / "out2").exists()
     with pytest.raises(FileNotFoundError, match="does not exist"):
         to.rerender_reports(d / "tiny.toml", d / "nowhere")
+
+
+def test_reports_are_never_written_through_planted_links(tiny_run, tmp_path):
+    """The .nc, .md and .csv of a trade study: a new file beside each and a rename (screening.atomicfile)."""
+    d, ds, _, _ = tiny_run
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / "out"
+    out.mkdir()
+    for suffix in (".nc", ".md", ".csv"):
+        (out / f"tiny{suffix}").symlink_to(victim)
+    paths, _ = to.write_reports(load_tradeoff_study(d / "tiny.toml"), ds.copy(), out, "tiny")
+    assert victim.read_text() == "precious"
+    for key in ("nc", "md", "csv"):
+        assert paths[key].is_file() and not paths[key].is_symlink() and paths[key].stat().st_size > 0

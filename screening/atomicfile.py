@@ -1,0 +1,50 @@
+"""Writing a file all or nothing, never through a planted link: the one helper every writer uses.
+
+The content goes to a new file made by :func:`tempfile.mkstemp` in the target's folder (a name no
+one can have planted a link at; created with ``O_EXCL``), which gets the usual permissions (the
+umask) and is renamed over the target: the target is replaced whole, a link at the target is
+replaced (not followed), and a failing write leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+
+
+def temporary_beside(path):
+    """A new empty file next to ``path`` (its name hidden and random) to write ``path`` into."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    return Path(tmp)
+
+
+def publish(tmp, path):
+    """Give the written ``tmp`` the permissions of a new file (umask) and rename it to ``path``."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(tmp, 0o666 & ~mask)
+    os.replace(tmp, path)
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a temporary path next to ``path`` to write; renamed to ``path`` if the block succeeds,
+    removed if it raises."""
+    tmp = temporary_beside(path)
+    try:
+        yield tmp
+        publish(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_open(path, mode="w", **kwargs):
+    """``open(path, mode, **kwargs)`` for writing, atomically (:func:`atomic_path`)."""
+    with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
+        yield fh
