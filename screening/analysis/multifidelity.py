@@ -141,7 +141,12 @@ def control_variate_estimate(y, x, x_extra=None, x_mean=None):
     return ControlVariateEstimate(mean, math.sqrt(max(var, 0.0)), ym, plain_se, alpha, rho, n, n_cheap)
 
 
-def optimal_ratio(correlation, cost_expensive, cost_cheap):
+#: Largest cheap-to-expensive sample ratio :func:`optimal_ratio` returns (a perfectly correlated
+#: pilot would ask for infinitely many cheap samples; a pilot's correlation of 1 is never exact).
+MAX_RATIO = 1000.0
+
+
+def optimal_ratio(correlation, cost_expensive, cost_cheap, max_ratio=MAX_RATIO):
     """Cheap samples per expensive sample that minimise the variance at a fixed budget.
 
     Parameters
@@ -150,11 +155,13 @@ def optimal_ratio(correlation, cost_expensive, cost_cheap):
         Correlation of the two models' per-sample values (from a pilot), in [-1, 1].
     cost_expensive, cost_cheap : float
         CPU seconds per sample of each model [s], > 0.
+    max_ratio : float
+        Upper bound of the result (default :data:`MAX_RATIO`).
 
     Returns
     -------
     float
-        ``r = N / n >= 1``; ``1.0`` means the cheap model is not worth running beyond the paired samples
+        ``r = N / n`` in ``[1, max_ratio]``; ``1.0`` means the cheap model is not worth running beyond the paired samples
         (and :func:`speedup` then says whether it is worth running at all).
 
     Notes
@@ -169,7 +176,7 @@ def optimal_ratio(correlation, cost_expensive, cost_cheap):
     rho2 = min(float(correlation) ** 2, 1.0 - 1e-12)
     if not (cost_expensive > 0 and cost_cheap > 0):
         raise ValueError("parameters 'cost_expensive' and 'cost_cheap' must be > 0 [s]")
-    return max(1.0, math.sqrt(cost_expensive * rho2 / (cost_cheap * (1.0 - rho2))))
+    return min(max_ratio, max(1.0, math.sqrt(cost_expensive * rho2 / (cost_cheap * (1.0 - rho2)))))
 
 
 def speedup(correlation, cost_expensive, cost_cheap, ratio=None):

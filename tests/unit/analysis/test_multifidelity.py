@@ -87,6 +87,13 @@ def test_the_optimal_ratio_minimises_variance_times_cost_by_brute_force():
         assert speedup(rho, c1, c2) == pytest.approx(c1 / work.min(), rel=1e-6)
 
 
+def test_a_perfect_pilot_correlation_asks_for_a_bounded_number_of_cheap_samples():
+    from screening.analysis.multifidelity import MAX_RATIO
+
+    assert optimal_ratio(1.0, 10.0, 1.0) == MAX_RATIO
+    assert optimal_ratio(1.0, 10.0, 1.0, max_ratio=50.0) == 50.0
+
+
 def test_the_cheap_model_is_not_worth_it_when_uncorrelated_or_as_expensive():
     assert optimal_ratio(0.0, 1.0, 0.01) == 1.0
     assert speedup(0.0, 1.0, 0.01) < 1.0
