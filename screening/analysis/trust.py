@@ -15,7 +15,7 @@ The rule reads only what the linearization computes for every point (:func:`trus
 * ``decay_excess = (var_theta(t_end) / peak var_theta) / (q(t_end)^2 / max q^2)`` — the variance
   retained at the end of the record over the envelope's retained power: about 1 (or below) when
   the response dies out with the shaking, >> 1 when SL holds the response after the shaking has
-  died out (the stiff-bed lock-in of issue #16: SL keeps ``p_uplift ~ 1`` while the coupled
+  died out (the stiff-bed lock-in: SL keeps ``p_uplift ~ 1`` while the coupled
   model decays to rest);
 * the solver ``status``, the condensation, and the bed law (sign of ``eps``: hardening, linear,
   softening).

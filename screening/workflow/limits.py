@@ -1,4 +1,4 @@
-"""Bounds on what a study may ask for, checked while the study file is parsed (issue 13).
+"""Bounds on what a study may ask for, checked while the study file is parsed.
 
 Every size a study sets — grid points, output steps, Monte Carlo samples, the seed — is checked
 against the limits below *before* any array is built, so that a typo such as ``num = 1e9`` or
