@@ -7,7 +7,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test test-fast test-tools clean
+.PHONY: run test test-fast test-tools docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,5 +36,10 @@ test: $(TEST_STAMP) test-tools
 test-fast: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m "not slow"
 
+# The documentation site (docs/*.md and the API pages from the docstrings) into site/, warnings as errors.
+docs: $(STAMP)
+	$(BIN)/python -m pip install -e '.[docs]'
+	$(BIN)/python -m mkdocs build --strict
+
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache site
