@@ -6,6 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
+DOCS_STAMP := $(VENV)/.installed-docs
 
 .PHONY: run test test-fast test-tools docs clean
 
@@ -37,8 +38,11 @@ test-fast: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m "not slow"
 
 # The documentation site (docs/*.md and the API pages from the docstrings) into site/, warnings as errors.
-docs: $(STAMP)
+$(DOCS_STAMP): $(STAMP) pyproject.toml
 	$(BIN)/python -m pip install -e '.[docs]'
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
 	$(BIN)/python -m mkdocs build --strict
 
 clean:
