@@ -6,9 +6,8 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
-DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: run test test-fast test-tools docs clean
+.PHONY: run test test-fast test-tools clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -37,13 +36,17 @@ test: $(TEST_STAMP) test-tools
 test-fast: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m "not slow"
 
-# The documentation site (docs/*.md and the API pages from the docstrings) into site/, warnings as errors.
+clean:
+	rm -rf $(VENV) .pytest_cache
+
+# `make docs`: the documentation site (docs/*.md and the API pages from the docstrings) into site/,
+# warnings as errors; the docs extras are installed once.
+.PHONY: docs
+DOCS_STAMP := $(VENV)/.installed-docs
+
 $(DOCS_STAMP): $(STAMP) pyproject.toml
-	$(BIN)/python -m pip install -e '.[docs]'
+	$(BIN)/python -m pip install -q -e '.[docs]'
 	touch $(DOCS_STAMP)
 
 docs: $(DOCS_STAMP)
 	$(BIN)/python -m mkdocs build --strict
-
-clean:
-	rm -rf $(VENV) .pytest_cache site
