@@ -10,7 +10,8 @@ alphabetically):
   longer program, with why);
 * every ```toml block: it must parse; one whose first line names a file (``# examples/statue.toml``)
   is that file: compared with the repository's copy when there is one (the quickstart's study is
-  ``examples/statue.toml``), else written into the working folder for the lines after it.
+  ``examples/statue.toml``), else written into the working folder for the lines after it; either
+  way it must load as a study.
 
 All run in one temporary folder holding copies of ``studies/`` and ``examples/``.  Lines not run, and
 why, are in :data:`SKIPPED`; lines of other tools (:data:`TOOLS`: CDO, NCO) run where the tool is
@@ -35,6 +36,8 @@ except ModuleNotFoundError:  # Python 3.10
 from pathlib import Path
 
 import pytest
+
+from screening.workflow.study import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -141,6 +144,7 @@ def _run(example, workspace, in_process):
             assert text == target.read_text(), f"{page} shows {named.group(1)} other than the file"
         else:
             (workspace / named.group(1)).write_text(text)
+        load_study(workspace / named.group(1))          # a study file shown whole loads and validates
         return
     cwd = os.getcwd()
     os.chdir(workspace)
