@@ -3,7 +3,7 @@
 Run:  NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/condensation_gap.py [--samples 1000] [--seed 0]
       [--cases 1 3 5 7] [--markdown]
 
-For the paper's eight cases (:mod:`screening.model.cases`, numbered 1–8 as in the README: Figs. 2–9)
+For the paper's eight cases (:mod:`screening.model.cases`, numbered 1–8 as in docs/validation.md: Figs. 2–9)
 prints the peak over the 20 s record of ``var_theta`` and of ``var_theta_dot`` from
 
 * ``coupled MCS``   — Monte Carlo of the full coupled model (eqs. 7–8), the reference;

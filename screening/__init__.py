@@ -16,8 +16,8 @@ def quiet_local_worker(_=None):
     The client sets :data:`LOCAL_WORKER_VARIABLE` to ``1`` for its workers
     (:func:`screening.workflow.execution.dask_client`).  The terminal's Ctrl-C reaches the whole
     process group, and the client stops the run with one line and closes its workers itself, so a
-    worker ignores SIGINT instead of printing a traceback while it imports or computes (issue 13,
-    B18).  A spawned worker runs this when it imports screening, a forked one after the fork.
+    worker ignores SIGINT instead of printing a traceback while it imports or computes.
+    A spawned worker runs this when it imports screening, a forked one after the fork.
     """
     if (_mp.current_process().name.startswith("Dask Worker")
             and _os.environ.get(LOCAL_WORKER_VARIABLE) == "1"):
@@ -29,7 +29,7 @@ def quiet_local_worker(_=None):
 if quiet_local_worker():
     # A spawned worker, when it exits (the worker closed, its work directory removed, its streams
     # flushed by multiprocessing), skips tearing down its modules: scipy, numba and xarray take
-    # ~0.5 s, which the client would wait for at the end of every run (issue 12).  A forked one
+    # ~0.5 s, which the client would wait for at the end of every run.  A forked one
     # exits through os._exit already.
     import atexit as _atexit
 

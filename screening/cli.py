@@ -543,7 +543,7 @@ def cmd_info(result):
               help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
 @click.option("--layout", type=_Choice(["cf", "cdo"]), default="cf",
               help="cf (default): the netCDF file of a direct run, from a zarr result; cdo: time first, for CDO "
-                   "(from a netCDF or zarr result; README, 'Other tools')")
+                   "(from a netCDF or zarr result; docs/outputs.md, 'Other tools')")
 @click.option("--select", "selection", multiple=True, metavar="DIM=VALUE",
               help="--layout cdo: keep only the swept value of DIM nearest VALUE (a case by name or index); "
                    "repeatable; CDO reads at most 3 swept dimensions")

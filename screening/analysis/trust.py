@@ -15,7 +15,7 @@ The rule reads only what the linearization computes for every point (:func:`trus
 * ``decay_excess = (var_theta(t_end) / peak var_theta) / (q(t_end)^2 / max q^2)`` — the variance
   retained at the end of the record over the envelope's retained power: about 1 (or below) when
   the response dies out with the shaking, >> 1 when SL holds the response after the shaking has
-  died out (the stiff-bed lock-in of issue #16: SL keeps ``p_uplift ~ 1`` while the coupled
+  died out (the stiff-bed lock-in: SL keeps ``p_uplift ~ 1`` while the coupled
   model decays to rest);
 * the solver ``status``, the condensation, and the bed law (sign of ``eps``: hardening, linear,
   softening).
@@ -113,11 +113,16 @@ def trust_indicators(peak_p_uplift, min_k_eq, k_eq_rest, peak_var_theta, slender
     ----------
     peak_p_uplift : SL peak uplift probability [1].
     min_k_eq, k_eq_rest : minimum and at-rest equivalent stiffness [N m rad-1].
-    peak_var_theta : SL peak var_theta [rad2].  slenderness : atan(b/h) [rad].
+    peak_var_theta : SL peak var_theta [rad2].
+    slenderness : atan(b/h) [rad].
     var_theta_end : SL var_theta at the end of the record [rad2].
     envelope_end_fraction : ``q(t_end)^2 / max q^2`` [1] (1 for stationary input).
 
-    Returns ``{"peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess"}`` (see the module docstring).
+    Returns
+    -------
+    dict
+        ``{"peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess"}`` (see the module docstring),
+        arrays broadcast to one shape.
     """
     peak = np.asarray(peak_var_theta, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -66,8 +66,8 @@ def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation
 
 
 def _finite_only(coefficients, s, cov_over_s, block, foundation):
-    """``coefficients(s, cov_over_s, ...)`` evaluated where both are finite, NaN elsewhere (issue 13 B9:
-    NaN moments must not come back as the coefficients of the block at rest)."""
+    """``coefficients(s, cov_over_s, ...)`` evaluated where both are finite, NaN elsewhere (NaN
+    moments must not come back as the coefficients of the block at rest)."""
     bad = ~(np.isfinite(s) & np.isfinite(cov_over_s))
     if not np.any(bad):
         return coefficients(s, cov_over_s, block, foundation)

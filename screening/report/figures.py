@@ -100,7 +100,7 @@ def plot_histories(ds, path, points=None, response="var"):
 
 def _scale(ax, drawn, log):
     """Log y axis when asked and something finite and positive was drawn; otherwise a linear axis
-    with a note (a result whose points are all flagged, or all NaN, still gets its figures: B4)."""
+    with a note (a result whose points are all flagged, or all NaN, still gets its figures)."""
     values = np.concatenate([np.ravel(v) for v in drawn]) if drawn else np.array([])
     finite = np.isfinite(values)
     if not finite.any():

@@ -1,4 +1,4 @@
-"""Checks of a ``--scheduler`` before dask is given it (issue 13, B5/B15).
+"""Checks of a ``--scheduler`` before dask is given it.
 
 ``distributed.Client(address, timeout=...)`` bounds the TCP connect but not the handshake: a
 server that accepts and stays silent hung the run forever, and a peer that is not a dask scheduler

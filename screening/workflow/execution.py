@@ -386,7 +386,7 @@ def dask_client(workers=2, scheduler=None, client=None):
 
 #: dask settings of a local cluster: its scheduler (in this process) keeps the last messages sent to
 #: each worker for debugging, 1,000 by default with the arguments of every task in them: a few only,
-#: or the client's memory grows with the number of batches (issue 12).
+#: or the client's memory grows with the number of batches.
 LOCAL_CLUSTER_CONFIG = {"distributed.admin.low-level-log-length": 16}
 
 
@@ -398,7 +398,7 @@ def worker_start_method():
     """How the local cluster starts its worker processes: ``"fork"`` or ``"spawn"``.
 
     Forked workers start with this process's modules (numpy, numba, scipy, xarray, distributed,
-    the solvers) already imported instead of importing them again, about 1 s per run (issue 12).
+    the solvers) already imported instead of importing them again, about 1 s per run.
     Fork only on Linux (unsafe on macOS, absent on Windows), and only while this process has not
     started numba's parallel threads (a Monte Carlo ran here): its OpenMP runtime cannot be used
     by a forked child.  A method set in the environment for dask

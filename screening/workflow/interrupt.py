@@ -88,7 +88,7 @@ def interruptible(iterable):
 @contextlib.contextmanager
 def deferred_interrupt():
     """A Ctrl-C in this block is held back and raised as ``KeyboardInterrupt`` by the caller (the
-    yielded list is non-empty then), e.g. after a cluster has finished starting (issue 13, B18)."""
+    yielded list is non-empty then), e.g. after a cluster has finished starting."""
     pressed = []
     if threading.current_thread() is not threading.main_thread():
         yield pressed

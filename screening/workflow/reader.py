@@ -46,7 +46,7 @@ def open_result(path):
 
 
 def layout_problem(ds):
-    """What is wrong with the layout of an opened result (a short phrase), or ``""`` (issue 13, B6/B20).
+    """What is wrong with the layout of an opened result (a short phrase), or ``""``.
 
     Checked from the header only (no data is read): the grid is the dimensions of ``status`` and
     has at most :data:`~screening.workflow.limits.MAX_POINTS_CEILING` points, ``t`` has at least
@@ -121,8 +121,8 @@ VERIFY_BLOCK_BYTES = 32 * 2**20
 def verify_result(path, study):
     """Why the result file ``path`` of ``study`` cannot be reused (a short reason), or ``None``.
 
-    A finished file with the study's key is still read through before it is reused (issue 13,
-    B12): the grid and time dimensions must have the study's sizes, every required variable must
+    A finished file with the study's key is still read through before it is reused: the
+    grid and time dimensions must have the study's sizes, every required variable must
     be there, and every data chunk must decompress (damaged chunks raise in netCDF/HDF5).  The
     data is read in blocks of about :data:`VERIFY_BLOCK_BYTES` along the first dimension.
     """

@@ -79,7 +79,7 @@ class PartialStore:
 
     def _make_dir(self):
         """Create ``self.dir`` (mode 0700) or accept an existing one only if it is a real directory
-        (not a symbolic link) owned by this user: files are created in it (issue 13, B11)."""
+        (not a symbolic link) owned by this user: files are created in it."""
         try:
             self.dir.mkdir(mode=0o700)
         except FileExistsError:
@@ -232,7 +232,7 @@ class PartialStore:
                 p.unlink()
 
 
-# ----------------------------------------------------------------------------- safe files (issue 13)
+# ----------------------------------------------------------------------------- safe files
 def _reason(exc):
     if isinstance(exc, OSError) and exc.errno == 40:            # ELOOP: O_NOFOLLOW met a link
         return "a symbolic link is in the way (remove it)"
@@ -273,7 +273,7 @@ def _create(path):
 
 
 def _layout_ok(manifest, layout):
-    """A manifest whose key matches is used only if its layout is sane and the study's (B14)."""
+    """A manifest whose key matches is used only if its layout is sane and the study's."""
     size = manifest.get("batch_size")
     if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size < 2**31:
         return False
@@ -282,7 +282,7 @@ def _layout_ok(manifest, layout):
 
 def _like(part, template):
     """``part`` if it holds exactly the variables of ``template`` with the same shapes and dtype
-    kinds, else ``None`` (a damaged or foreign part is computed again, B14)."""
+    kinds, else ``None`` (a damaged or foreign part is computed again)."""
     if part is None or template is None:
         return part
     if set(part) != set(template):

@@ -1,22 +1,26 @@
-"""The README's shell examples run as written, in order, in a fresh copy of the studies.
+"""The examples of the README and of the docs pages run as written, in order, one test per example.
 
-Every line of the README's ```bash blocks is run with the package's command line (``.venv/bin/screening``
-replaced by this interpreter's ``-m screening.cli``) in a temporary folder holding a copy of
-``studies/``, in README order, each expected to exit 0.  Lines not run, and why:
+What counts as an example, in README order and then the docs pages (:data:`PAGES` first, the others
+alphabetically):
 
-* ``make ...``: the set-up itself (this test runs inside it); ``make run`` is the next block's first line;
-* ``--scheduler``: needs a running dask scheduler (tested with one in ``test_edges.py``); the rest of the
-  distributed-run recipe (``dask scheduler``/``dask worker``, ``kill``, the export of its result) is run by
-  ``test_sweep_zarr.py`` with processes of its own;
-* ``tradeoff studies/speed_accuracy.toml``: ~10 minutes of Monte Carlo (the trade study has its own
-  tests with a small study, ``tests/unit/analysis/test_tradeoff*.py``).
+* every line of a ```bash block, run with the package's command line (``.venv/bin/screening``
+  replaced by :func:`screening.cli.main` in this process, or ``python -m screening.cli`` in the slow
+  test), each expected to exit 0;
+* every ```python block, run with ``exec`` (:data:`FRAGMENTS` lists the blocks that are fragments of a
+  longer program, with why);
+* every ```toml block: it must parse; one whose first line names a file (``# examples/statue.toml``)
+  is that file: compared with the repository's copy when there is one (the quickstart's study is
+  ``examples/statue.toml``), else written into the working folder for the lines after it; either
+  way it must load as a study.
 
-Lines of other tools (:data:`TOOLS`: CDO, NCO) run where the tool is installed, each expected to exit 0
-without a warning (``test_netcdf_cf.py`` checks what they compute).
+All run in one temporary folder holding copies of ``studies/`` and ``examples/``.  Lines not run, and
+why, are in :data:`SKIPPED`; lines of other tools (:data:`TOOLS`: CDO, NCO) run where the tool is
+installed, each expected to exit 0 without a warning (``test_netcdf_cf.py`` checks what they compute).
 
-The fast test shrinks the Monte Carlo of the copied study files (:data:`TINY`: fewer samples) and
-calls the command line in this process; the slow one runs every line as its own process on the
-studies as shipped.
+Each example is its own test, so a run shows its progress line by line and no test is silent for long.
+The fast tests shrink the Monte Carlo of the copied study files (:data:`TINY`: fewer samples and spot
+checks, shorter records; what is asserted here is that the examples run, not their numbers); the slow
+ones run every line as its own process on the studies as shipped.
 """
 
 import os
@@ -25,11 +29,20 @@ import shlex
 import shutil
 import subprocess
 import sys
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
 from pathlib import Path
 
 import pytest
 
+from screening.workflow.study import load_study
+
 ROOT = Path(__file__).resolve().parents[2]
+
+#: docs pages whose examples build on each other, in this order (after the README); then the others
+PAGES = ("README.md", "docs/cli.md", "docs/outputs.md", "docs/distributed.md")
 
 #: substring of a line -> why it is not run
 SKIPPED = {
@@ -41,84 +54,158 @@ SKIPPED = {
     "tradeoff studies/speed_accuracy.toml": "about 10 minutes of Monte Carlo; the trade study has its own tests",
 }
 
-#: other tools in the README's recipes: run when installed
+#: (page, substring of a python block) -> why the block is a fragment, not a program
+FRAGMENTS = {
+    ("docs/records.md", "RSN6_IMPVALL"): "needs a PEER record file and a block and bed defined before it",
+}
+
+#: other tools in the recipes: run when installed
 TOOLS = ("cdo", "ncks")
 
-#: edits of the copied study files that keep the fast test fast (Monte Carlo samples)
+#: edits of the copied study files that keep the fast tests fast (Monte Carlo samples)
 TINY = {
-    "fragility.toml": [("samples = 500", "samples = 20")],
-    "quick.toml": [("samples = 100", "samples = 20")],
+    "studies/fragility.toml": [("samples = 500", "samples = 4"), ("t_end = 20.0", "t_end = 5.0"),
+                               ("{index = {eps = 0, S0 = 18}}, {index = {eps = 0, S0 = 20}},\n", ""),
+                               ("{index = {eps = 1, S0 = 18}}, {index = {eps = 1, S0 = 20}},\n", "")],
+    "studies/quick.toml": [("samples = 100", "samples = 20")],
+    "examples/statue.toml": [("samples = 100", "samples = 10")],
 }
 
 
-def readme_commands():
-    """``[(line, reason or None)]``: every line of the README's bash blocks, with why it is skipped."""
-    text = (ROOT / "README.md").read_text()
-    lines = []
-    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
-        for line in block.splitlines():
-            if line.strip():
-                reason = next((why for key, why in SKIPPED.items() if key in line), None)
-                lines.append((line.strip(), reason))
-    return lines
+def _pages():
+    others = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs").glob("*.md"))
+    return list(PAGES) + [p for p in others if p not in PAGES]
 
 
-def _run_examples(tmp_path, tiny, monkeypatch=None):
-    """Run the README's lines in ``tmp_path``: in this process with :func:`screening.cli.main` when
-    ``monkeypatch`` is given (fast: no interpreter start per line), else as subprocesses."""
-    shutil.copytree(ROOT / "studies", tmp_path / "studies")
+def doc_examples():
+    """``[(page, kind, text, reason or None)]`` in document order; ``kind`` is bash, python or toml."""
+    examples = []
+    for page in _pages():
+        text = (ROOT / page).read_text()
+        for kind, block in re.findall(r"```(bash|python|toml)\n(.*?)```", text, flags=re.S):
+            if kind == "bash":
+                for line in block.splitlines():
+                    if line.strip():
+                        reason = next((why for key, why in SKIPPED.items() if key in line), None)
+                        examples.append((page, kind, line.strip(), reason))
+            else:
+                reason = next((why for (where, key), why in FRAGMENTS.items() if where == page and key in block),
+                              None)
+                examples.append((page, kind, block, reason))
+    return examples
+
+
+EXAMPLES = doc_examples()
+
+
+def _id(example):
+    page, kind, text, _ = example
+    first = text.strip().splitlines()[0] if text.strip() else ""
+    return f"{page}:{kind}:{re.sub(r'[^A-Za-z0-9_.=-]+', '_', first)[:60]}"
+
+
+def _workspace(path, tiny):
+    for folder in ("studies", "examples"):
+        shutil.copytree(ROOT / folder, path / folder)
+    (path / "outputs").mkdir()
     if tiny:
         for name, edits in TINY.items():
-            path = tmp_path / "studies" / name
-            text = path.read_text()
+            file = path / name
+            text = file.read_text()
             for old, new in edits:
                 assert old in text, (name, old)
                 text = text.replace(old, new)
-            path.write_text(text)
-    if monkeypatch is not None:
-        from screening.cli import main
+            file.write_text(text)
+    return path
 
-        monkeypatch.chdir(tmp_path)
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    ran = []
-    for line, reason in readme_commands():
-        if reason is not None:
-            continue
-        argv = shlex.split(line, comments=True)
-        if argv[0] in TOOLS:
-            if shutil.which(argv[0]) is not None:
-                proc = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=300)
-                assert proc.returncode == 0 and "Warning" not in proc.stderr, f"{line}\n{proc.stderr[-2000:]}"
-                ran.append(line)
-            continue
-        assert argv[0] == ".venv/bin/screening", line
-        if monkeypatch is not None:
-            assert main(argv[1:]) == 0, line
+
+@pytest.fixture(scope="module")
+def tiny_workspace(tmp_path_factory):
+    return _workspace(tmp_path_factory.mktemp("docs_examples"), tiny=True)
+
+
+@pytest.fixture(scope="module")
+def shipped_workspace(tmp_path_factory):
+    return _workspace(tmp_path_factory.mktemp("docs_examples_shipped"), tiny=False)
+
+
+def _run(example, workspace, in_process):
+    page, kind, text, reason = example
+    if reason is not None:
+        pytest.skip(reason)
+    if kind == "toml":
+        parsed = tomllib.loads(text)
+        named = re.match(r"#\s*(\S+\.toml)", text)
+        if named is None:
+            assert isinstance(parsed, dict)
+            return
+        target = ROOT / named.group(1)
+        if target.is_file():
+            assert text == target.read_text(), f"{page} shows {named.group(1)} other than the file"
         else:
-            proc = subprocess.run([sys.executable, "-m", "screening.cli", *argv[1:]], cwd=tmp_path, env=env,
+            (workspace / named.group(1)).write_text(text)
+        load_study(workspace / named.group(1))          # a study file shown whole loads and validates
+        return
+    cwd = os.getcwd()
+    os.chdir(workspace)
+    try:
+        if kind == "python":
+            exec(compile(text, f"<{page}>", "exec"), {"__name__": "__doc_example__"})
+            return
+        argv = shlex.split(text, comments=True)
+        if argv[0] in TOOLS:
+            if shutil.which(argv[0]) is None:
+                pytest.skip(f"{argv[0]} is not installed")
+            proc = subprocess.run(argv, capture_output=True, text=True, timeout=300)
+            assert proc.returncode == 0 and "Warning" not in proc.stderr, f"{text}\n{proc.stderr[-2000:]}"
+            return
+        assert argv[0] == ".venv/bin/screening", text
+        if in_process:
+            from screening.cli import main
+
+            assert main(argv[1:]) == 0, text
+        else:
+            env = {**os.environ, "PYTHONPATH": str(ROOT)}
+            proc = subprocess.run([sys.executable, "-m", "screening.cli", *argv[1:]], env=env,
                                   capture_output=True, text=True, timeout=900)
-            assert proc.returncode == 0, f"{line}\n{proc.stderr[-2000:]}"
-        ran.append(line)
-    return ran
+            assert proc.returncode == 0, f"{text}\n{proc.stderr[-2000:]}"
+    finally:
+        os.chdir(cwd)
 
 
-def test_readme_lists_what_it_skips():
-    """Every skipped line has a reason here, and most lines run."""
-    commands = readme_commands()
-    skipped = [line for line, reason in commands if reason]
-    assert any(line.startswith("make run") for line in skipped)
-    assert sum(reason is None for _, reason in commands) >= 8, commands
+def test_examples_are_found_and_most_run():
+    """Every skipped line has a reason here, the quickstart is among the examples, and most lines run."""
+    bash = [e for e in EXAMPLES if e[1] == "bash"]
+    assert any(line.startswith("make run") and reason for _, _, line, reason in bash)
+    assert sum(reason is None for *_, reason in bash) >= 12, bash
+    readme = [text for page, _, text, _ in EXAMPLES if page == "README.md"]
+    assert any("examples/statue.toml" in text and "--dim pga" not in text for text in readme)
+    assert any("fragility outputs/statue.nc" in text and "--dim pga" in text for text in readme)
+    assert any("beds.layer_stiffness" in text for text in readme)
 
 
-def test_readme_examples_run_in_order(tmp_path, monkeypatch):
-    ran = _run_examples(tmp_path, tiny=True, monkeypatch=monkeypatch)
-    assert (tmp_path / "outputs" / "quick.nc").is_file() and (tmp_path / "outputs" / "fragility.nc").is_file()
-    assert list((tmp_path / "figs").glob("quick_*.png"))
-    assert (tmp_path / "outputs" / "fragility_fragility.nc").is_file()
-    assert len(ran) >= 8
+def test_quickstart_is_at_most_40_lines():
+    text = (ROOT / "README.md").read_text()
+    quickstart = re.search(r"^## Quickstart.*?(?=^## )", text, flags=re.S | re.M).group(0)
+    assert len(quickstart.rstrip().splitlines()) <= 40
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=[_id(e) for e in EXAMPLES])
+def test_example_runs(example, tiny_workspace):
+    _run(example, tiny_workspace, in_process=True)
+
+
+def test_examples_wrote_what_they_say(tiny_workspace):
+    """After the examples above (same module, same folder): the files the pages name are there."""
+    out = tiny_workspace / "outputs"
+    for name in ("statue.nc", "statue_fragility.nc", "statue_fragility.png", "my_study.nc", "quick.nc",
+                 "fragility.nc", "fragility_fragility.nc"):
+        assert (out / name).is_file(), name
+    assert list((tiny_workspace / "figs").glob("quick_*.png"))
 
 
 @pytest.mark.slow
-def test_readme_examples_run_as_shipped(tmp_path):
+@pytest.mark.parametrize("example", EXAMPLES, ids=[_id(e) for e in EXAMPLES])
+def test_example_runs_as_shipped(example, shipped_workspace):
     """As a user types them: each line its own process, the studies as shipped."""
-    _run_examples(tmp_path, tiny=False)
+    _run(example, shipped_workspace, in_process=False)

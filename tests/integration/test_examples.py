@@ -1,0 +1,70 @@
+"""The studies and scripts of ``examples/``: the studies load and validate, their bed numbers are the
+ones their scripts derive from the materials, and the scripts run (on a tiny grid: 3 intensities,
+a few Monte Carlo samples) to a fragility curve over PGA."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from screening.workflow.study import load_study
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _script(name):
+    spec = importlib.util.spec_from_file_location(f"example_{name}", EXAMPLES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _tiny(name, tmp_path):
+    """The example's study with 3 intensities and 6 Monte Carlo samples, in ``tmp_path``."""
+    text = (EXAMPLES / f"{name}.toml").read_text()
+    for old, new in (("num = 13", "num = 3"), ("samples = 100", "samples = 6")):
+        assert old in text, (name, old)
+        text = text.replace(old, new)
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("name", ["statue", "cabinet"])
+def test_example_study_loads_with_the_beds_its_script_derives(name):
+    study = load_study(EXAMPLES / f"{name}.toml")
+    (case,) = study.cases
+    assert list(study.sweeps) == ["pga"] and len(study.sweeps["pga"]) == 13
+    k, lam = _script(name).bed()
+    # the study file gives the derived values to 3 significant digits
+    np.testing.assert_allclose([case.params["k"], case.params["lam"]], [k, lam], rtol=5e-3)
+    assert study.mcs.count == 1
+
+
+def test_example_studies_are_the_ones_described():
+    statue = load_study(EXAMPLES / "statue.toml").cases[0]
+    assert (statue.params["m"], statue.params["b"], statue.params["h"]) == (1200.0, 0.25, 0.9)
+    assert statue.params["eps"] == 0.0 and statue.excitation == "kanai_tajimi"
+    cabinet = load_study(EXAMPLES / "cabinet.toml").cases[0]
+    assert (cabinet.params["m"], cabinet.params["b"], cabinet.params["h"]) == (400.0, 0.3, 1.0)
+    assert cabinet.params["eps"] > 0 and cabinet.condensation == "cubic"       # hardening pads
+
+
+def test_statue_script_writes_a_fragility_curve_over_pga(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    fragility = _script("statue").main(_tiny("statue", tmp_path), str(tmp_path / "statue.nc"))
+    p = fragility["p_exceed"]
+    assert p.dims == ("pga",) and p.sizes["pga"] == 3
+    assert np.all((p.values >= 0) & (p.values <= 1)) and np.all(np.diff(p.values) >= 0)
+    assert (tmp_path / "statue_fragility.png").is_file()
+    assert "median PGA" in capsys.readouterr().out
+
+
+def test_cabinet_script_fits_its_fragility_in_python(tmp_path, capsys):
+    curves = _script("cabinet").main(_tiny("cabinet", tmp_path), str(tmp_path / "cabinet.nc"))
+    p = curves["p_exceed"]
+    assert p.dims == ("pga",) and p.sizes["pga"] == 3
+    assert np.all((p.values >= 0) & (p.values <= 1)) and np.all(np.diff(p.values) >= 0)
+    out = capsys.readouterr().out
+    assert "pads: k = 9.75e+09" in out and "trusted check untrusted" in out
