@@ -68,6 +68,7 @@ DEFAULT_NUMERICS = {
     "max_steps": 5_000_000,     # step budget per sample (accepted + rejected)
     "max_flight_time": 0.5,     # longest admissible continuous flight [s]
     "chunk_size": 64,           # samples synthesized and integrated per batch
+    "integrator": "dopri",      # "dopri" (explicit 5(4) pair) or "rodas" (linearly implicit 4(3) pair)
 }
 
 # ----------------------------------------------------------------------------- validation
@@ -112,6 +113,9 @@ def _check_numerics(numerics):
     opts["oversampling"] = _check_integer("oversampling", opts["oversampling"], 2, "an integer >= 2")
     opts["max_steps"] = _check_integer("max_steps", opts["max_steps"], 1, "an integer >= 1")
     opts["chunk_size"] = _check_integer("chunk_size", opts["chunk_size"], 1, "an integer >= 1")
+    if opts["integrator"] not in kern.INTEGRATORS:
+        raise ValueError(f"parameter 'integrator' must be one of {sorted(kern.INTEGRATORS)} "
+                         f"(got {opts['integrator']!r})")
     return opts
 
 
@@ -246,7 +250,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
     q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
-    params = kern.model_record(block, foundation, cond, opts["max_flight_time"])
+    params = kern.model_record(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
     sdof = cond.sdof_kernel(block, foundation) if model == "condensed" else \
         get_condensation("paper").sdof_kernel(block, foundation)         # not read by the coupled model
     integrate_chunk = kern.chunk_integrator(sdof.record.dtype)
