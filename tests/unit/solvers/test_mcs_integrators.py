@@ -232,3 +232,32 @@ def test_monte_carlo_rodas_matches_dopri_per_sample():
 def test_unknown_integrator_is_refused_before_any_work():
     with pytest.raises(ValueError, match="parameter 'integrator' must be one of"):
         monte_carlo(BLOCK, HC, WhiteNoise(S0=1e-5), n_samples=2, t_end=0.1, integrator="euler")
+
+
+# ---------------------------------------------------------------- the per-point choice
+def test_vertical_damping_ratio_matches_the_free_vibration_decay():
+    """The closed-form ratio against the logarithmic decrement of the integrated free vibration (Winkler)."""
+    zeta = mc.vertical_damping_ratio(BLOCK, WINKLER)
+    z_st = BLOCK.m * BLOCK.g / (2 * BLOCK.b * WINKLER.k)
+    w = math.sqrt(2 * BLOCK.b * WINKLER.k / BLOCK.m)
+    period = 2 * math.pi / (w * math.sqrt(1 - zeta**2))
+    t_out = np.array([0.0, period, 2 * period])
+    (_, _, z, _, _), _ = run_kernel("dopri", kern.MODEL_COUPLED, np.zeros(200), np.zeros(200), 1.0, t_out, WINKLER,
+                                    [0.0, 0.0, 0.5 * z_st, 0.0], rtol=1e-11)
+    decrement = math.log((z[0] - z_st) / (z[2] - z_st)) / 2
+    assert zeta == pytest.approx(decrement / math.sqrt(4 * math.pi**2 + decrement**2), rel=1e-6)
+
+
+def test_auto_takes_rodas_only_on_heavily_overdamped_beds():
+    statue = Block(m=600.0, b=0.2, h=0.8)
+    light = Foundation(k=1e10, lam=3e11, eps=0.0)                # zeta_v 0.06: the explicit pair
+    heavy = Foundation(k=1e10, lam=3e14, eps=0.0)                # zeta_v 57: RODAS
+    assert mc.vertical_damping_ratio(statue, light) < 0.1 < mc.RODAS_DAMPING_RATIO
+    assert mc.vertical_damping_ratio(statue, heavy) > mc.RODAS_DAMPING_RATIO
+    assert mc.choose_integrator(statue, light, "coupled") == "dopri"
+    assert mc.choose_integrator(statue, heavy, "coupled") == "rodas"
+    assert mc.choose_integrator(statue, heavy, "condensed") == "dopri"
+    assert mc.choose_integrator(statue, heavy, "coupled", "dopri") == "dopri"
+    assert mc.choose_integrator(BLOCK, HC, "coupled") == "dopri"    # the paper's bed keeps today's integrator
+    ds = monte_carlo(statue, heavy, WhiteNoise(S0=1e-4), n_samples=2, t_end=0.05, progress=False)
+    assert "Rosenbrock" in ds.attrs["integrator"]
