@@ -38,6 +38,11 @@ MAIN_SHARE = 0.85
 #: :class:`EscalationModel` (about 1.2x the median measured on the development machine, 20 s records,
 #: numba, one thread; ``benchmarks/accuracy_escalation.py`` prints the measured / estimated ratio).
 STEP_COST_S = {EscalationModel.condensed: 0.35e-6, EscalationModel.coupled: 0.45e-6}
+#: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
+#: rate of the input; ``benchmarks/bench_stiff_mcs.py`` measures 28-40 ns).  The input is band-limited at
+#: three times the larger of the rocking and vertical frequencies, so on a stiff bed the grid grows
+#: as ``sqrt(k)``: on the paper block at k = 1e10 it is ~690,000 points per 20 s sample.
+GRID_COST_S = 40e-9
 #: Integration steps per second of record and sample assumed before any pilot ran (the stiffest
 #: calibration beds take ~6,000; the paper block ~1,100).
 PRIOR_STEPS_PER_S = 3000.0
@@ -150,15 +155,17 @@ def meets_target(peak, peak_se, target):
         return np.isfinite(peak) & np.isfinite(peak_se) & (peak > 0) & (peak_se <= target / 2.0 * peak)
 
 
-def estimated_cost(steps, model):
-    """Estimated CPU time [s] of a Monte Carlo run from its integration steps (all samples).
+def estimated_cost(steps, model, grid_points=0):
+    """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
+    points (each summed over all samples).
 
     Notes
     -----
-    ``cost = steps x STEP_COST_S[model]``.  The step count is fixed by the study, the seed and the
-    samples, so a budget planned on this cost selects the same points and samples on every machine.
+    ``cost = steps x STEP_COST_S[model] + grid_points x GRID_COST_S``.  Both counts are fixed by the
+    study, the seed and the samples, so a budget planned on this cost selects the same points and
+    samples on every machine.
     """
-    return float(steps) * STEP_COST_S[EscalationModel(int(model))]
+    return float(steps) * STEP_COST_S[EscalationModel(int(model))] + float(grid_points) * GRID_COST_S
 
 
 def prior_cost(samples, t_end, model):
