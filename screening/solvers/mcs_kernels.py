@@ -124,17 +124,24 @@ def _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc, p):
     return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc, p), 0.0, 0.0
 
 
-@numba.njit(cache=True)
-def _hermite(row, acc, acc_dot, dt, t):
-    """Ground acceleration at ``t`` from grid values and rates of row ``row`` (cubic Hermite)."""
+@numba.njit(cache=True, inline="always")
+def _grid_interval(n, dt, t):
+    """``(j, s)``: the interval ``[j dt, (j + 1) dt]`` of a grid of ``n`` points holding ``t`` (the end
+    intervals beyond the grid) and the fraction ``s = t / dt - j``."""
     x = t / dt
     j = int(x)
-    n = acc.shape[1]
     if j > n - 2:
         j = n - 2
     if j < 0:
         j = 0
-    return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], x - j, dt)
+    return j, x - j
+
+
+@numba.njit(cache=True)
+def _hermite(row, acc, acc_dot, dt, t):
+    """Ground acceleration at ``t`` from grid values and rates of row ``row`` (cubic Hermite)."""
+    j, s = _grid_interval(acc.shape[1], dt, t)
+    return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
 
 
 @numba.njit(cache=True)
@@ -181,6 +188,15 @@ def _start_outputs(model, row, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_
         out_uplift[row, i] = False
 
 
+@numba.njit(cache=True, inline="always")
+def _start(model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """Outputs of row ``row`` started (:func:`_start_outputs`) and the integrator's counters:
+    ``(t, peak, status, reason, n_accepted, n_rejected, h_min_accepted, flight_start, h_floor, i_out)``."""
+    _start_outputs(model, row, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+    h_floor = 1e-12 * (t_out[t_out.shape[0] - 1] - t_out[0] + 1.0)
+    return t_out[0], abs(y0), STATUS_OK, REASON_NONE, 0, 0, np.inf, -1.0, h_floor, 1
+
+
 @numba.njit(cache=True)
 def _check_state(model, y0, y1, y2, t, flight_start, p):
     """``(status, reason, flight_start)`` after an accepted step to the state ``y`` at ``t``.
@@ -205,6 +221,64 @@ def _check_state(model, y0, y1, y2, t, flight_start, p):
     if a0 > p.theta_cap:                                   # cubic condensation, softening bed
         return STATUS_DIVERGED, REASON_NO_EQUILIBRIUM, flight_start
     return STATUS_OK, REASON_NONE, flight_start
+
+
+@numba.njit(cache=True, inline="always")
+def _landing(t, h, h_max, t_next):
+    """``(h, h_proposed, landing)``: the step ``min(h, h_max)`` shortened to land on ``t_next`` when
+    it would reach it (``landing``); ``h_proposed`` the step before shortening."""
+    h = min(h, h_max)
+    if t + h >= t_next - 1e-9 * h:
+        return t_next - t, h, True
+    return h, h, False
+
+
+@numba.njit(cache=True, inline="always")
+def _next_step(h, fac, landing, h_proposed, h_max):
+    """The step after an accepted step ``h`` with growth factor ``fac``; after a landing that had
+    shortened the step, at least the step proposed before the landing."""
+    h_new = h * fac
+    if landing and h_proposed > h:
+        h_new = max(h_new, min(h_proposed, h_max))
+    return h_new
+
+
+@numba.njit(cache=True, inline="always")
+def _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp):
+    """RMS over the ``n_comp`` integrated components of the local error ``e`` against
+    ``scale + rtol max(|y|, |y_new|)`` (accept at <= 1)."""
+    err = (_err_term(e0, y0, n0, s0, rtol) + _err_term(e1, y1, n1, s1, rtol)
+           + _err_term(e2, y2, n2, s2, rtol) + _err_term(e3, y3, n3, s3, rtol))
+    return math.sqrt(err / n_comp)
+
+
+@numba.njit(cache=True, inline="always")
+def _shrink(err, h, factor, h_floor):
+    """``(h_new, reason)`` after a rejected step: ``h factor`` (``h / 10`` for a non-finite error);
+    ``reason`` is ``REASON_NONE`` unless the step fell below ``h_floor`` (the sample diverged)."""
+    if not math.isfinite(err):
+        h = 0.1 * h
+        return h, REASON_NONFINITE if h < h_floor else REASON_NONE
+    h = h * factor
+    return h, REASON_STEP_UNDERFLOW if h < h_floor else REASON_NONE
+
+
+@numba.njit(cache=True, inline="always")
+def _accept(model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """Bookkeeping of an accepted step to the state ``y``: counts, smallest step, time, peak, status
+    checks and the output at a landing.  Returns ``(t, i_out, n_acc, h_min_acc, peak, status, reason,
+    flight_start)``."""
+    n_acc += 1
+    if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
+        h_min_acc = h
+    t = t_next if landing else t + h
+    peak = max(peak, abs(y0))
+    status, reason, flight_start = _check_state(model, y0, y1, y2, t, flight_start, p)
+    if status == STATUS_OK and landing:
+        _record(model, row, i_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+        i_out += 1
+    return t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start
 
 
 @numba.njit(cache=True)
@@ -239,32 +313,18 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
     y0, y1, y2, y3 = y_init[0], y_init[1], y_init[2], y_init[3]
     s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
     n_comp = 4.0 if model == MODEL_COUPLED else 2.0
-    t = t_out[0]
-    _start_outputs(model, row, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-    peak = abs(y0)
-    status = STATUS_OK
-    reason = REASON_NONE
-    n_acc = 0
-    n_rej = 0
-    h_min_acc = np.inf
+    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
+        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
     log_err_old = dopri.LOG_ERR_START
-    flight_start = -1.0
     k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, _hermite(row, acc, acc_dot, dt_grid, t), p)
     h = min(1e-4, h_max)
-    h_floor = 1e-12 * (t_out[n_out - 1] - t_out[0] + 1.0)
-    i_out = 1
     rejected = False
     while i_out < n_out:
         if n_acc + n_rej >= max_steps:
             status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
             break
         t_next = t_out[i_out]
-        h = min(h, h_max)
-        h_proposed = h
-        landing = False
-        if t + h >= t_next - 1e-9 * h:
-            h = t_next - t
-            landing = True
+        h, h_proposed, landing = _landing(t, h, h_max, t_next)
         # --- stages
         g0 = y0 + h * _A21 * k1_0
         g1 = y1 + h * _A21 * k1_1
@@ -306,49 +366,31 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
         e1 = h * (_E1 * k1_1 + _E3 * k3_1 + _E4 * k4_1 + _E5 * k5_1 + _E6 * k6_1 + _E7 * k7_1)
         e2 = h * (_E1 * k1_2 + _E3 * k3_2 + _E4 * k4_2 + _E5 * k5_2 + _E6 * k6_2 + _E7 * k7_2)
         e3 = h * (_E1 * k1_3 + _E3 * k3_3 + _E4 * k4_3 + _E5 * k5_3 + _E6 * k6_3 + _E7 * k7_3)
-        err = (_err_term(e0, y0, n0, s0, rtol) + _err_term(e1, y1, n1, s1, rtol)
-               + _err_term(e2, y2, n2, s2, rtol) + _err_term(e3, y3, n3, s3, rtol))
-        err = math.sqrt(err / n_comp)
-        if not math.isfinite(err):
+        err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
+        if not err <= 1.0:                                  # rejected (or not finite)
             n_rej += 1
-            h = 0.1 * h
             rejected = True
-            if h < h_floor:
-                status, reason = STATUS_DIVERGED, REASON_NONFINITE
-                break
-            continue
-        if err > 1.0:
-            n_rej += 1
-            h = h * dopri.rejected_step_factor_log(math.log(err))
-            rejected = True
-            if h < h_floor:
-                status, reason = STATUS_DIVERGED, REASON_STEP_UNDERFLOW
+            h, reason = _shrink(err, h, dopri.rejected_step_factor_log(math.log(err)) if math.isfinite(err)
+                                else 0.1, h_floor)
+            if reason != REASON_NONE:
+                status = STATUS_DIVERGED
                 break
             continue
         # --- accepted step
-        n_acc += 1
-        if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
-            h_min_acc = h
-        t = t_next if landing else t + h
         y0, y1, y2, y3 = n0, n1, n2, n3
         k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
-        peak = max(peak, abs(y0))
-        status, reason, flight_start = _check_state(model, y0, y1, y2, t, flight_start, p)
+        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
+            model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
         if status != STATUS_OK:
             break
-        if landing:
-            _record(model, row, i_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-            i_out += 1
         # --- next step size (PI control, Hairer's DOPRI5 constants)
         fac, log_err = dopri.pi_step_factor(err, log_err_old)
         if rejected:
             fac = min(fac, 1.0)
         rejected = False
         log_err_old = max(log_err, dopri.LOG_ERR_START)
-        h_new = h * fac
-        if landing and h_proposed > h:
-            h_new = max(h_new, min(h_proposed, h_max))
-        h = h_new
+        h = _next_step(h, fac, landing, h_proposed, h_max)
     if not math.isfinite(peak):
         peak = 0.0
     return status, reason, peak, n_acc, n_rej, h_min_acc
@@ -358,14 +400,8 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
 @numba.njit(cache=True)
 def _hermite_rate(row, acc, acc_dot, dt, t):
     """Rate of the ground acceleration at ``t`` [m/s^3]: derivative of :func:`_hermite`."""
-    x = t / dt
-    j = int(x)
-    n = acc.shape[1]
-    if j > n - 2:
-        j = n - 2
-    if j < 0:
-        j = 0
-    return hermite_rate(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], x - j, dt)
+    j, s = _grid_interval(acc.shape[1], dt, t)
+    return hermite_rate(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
 
 
 @numba.njit(cache=True)
@@ -419,18 +455,9 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
     coupled = model == MODEL_COUPLED
     n_comp = 4.0 if coupled else 2.0
     kz = 1.0 if coupled else 0.0
-    t = t_out[0]
-    _start_outputs(model, row, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-    peak = abs(y0)
-    status = STATUS_OK
-    reason = REASON_NONE
-    n_acc = 0
-    n_rej = 0
-    h_min_acc = np.inf
-    flight_start = -1.0
+    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
+        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
     h = min(1e-4, h_max)
-    h_floor = 1e-12 * (t_out[n_out - 1] - t_out[0] + 1.0)
-    i_out = 1
     rejected = False
     fresh = True                    # f, J, df/dt of the current state are still to be evaluated
     f0 = f1 = f2 = f3 = 0.0
@@ -461,12 +488,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
             ft1, ft3 = g1 * rate, g3 * rate
             fresh = False
         t_next = t_out[i_out]
-        h = min(h, h_max)
-        h_proposed = h
-        landing = False
-        if t + h >= t_next - 1e-9 * h:
-            h = t_next - t
-            landing = True
+        h, h_proposed, landing = _landing(t, h, h_max, t_next)
         e = _ro.GAMMA * h
         gi = 1.0 / e
         m11 = gi - j11 - e * j10
@@ -535,48 +557,29 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
             g2 + hi * (_ro.G61 * u12 + _ro.G62 * u22 + _ro.G63 * u32 + _ro.G64 * u42 + _ro.G65 * u52),
             g3 + hi * (_ro.G61 * u13 + _ro.G62 * u23 + _ro.G63 * u33 + _ro.G64 * u43 + _ro.G65 * u53))
         n0, n1, n2, n3 = v0 + u60, v1 + u61, v2 + u62, v3 + u63
-        err = (_err_term(u60, y0, n0, s0, rtol) + _err_term(u61, y1, n1, s1, rtol)
-               + _err_term(u62, y2, n2, s2, rtol) + _err_term(u63, y3, n3, s3, rtol))
-        err = math.sqrt(err / n_comp)
-        if not math.isfinite(err):
-            n_rej += 1
-            h = 0.1 * h
-            rejected = True
-            if h < h_floor:
-                status, reason = STATUS_DIVERGED, REASON_NONFINITE
-                break
-            continue
+        err = _error_norm(u60, u61, u62, u63, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
         fac = _ro.SAFETY * max(err, 1e-10) ** (-_ro.EXPONENT)
-        if err > 1.0:
+        if not err <= 1.0:                                  # rejected (or not finite)
             n_rej += 1
-            h = h * max(fac, _ro.FAC_MIN)
             rejected = True
-            if h < h_floor:
-                status, reason = STATUS_DIVERGED, REASON_STEP_UNDERFLOW
+            h, reason = _shrink(err, h, max(fac, _ro.FAC_MIN), h_floor)
+            if reason != REASON_NONE:
+                status = STATUS_DIVERGED
                 break
             continue
         # --- accepted step
-        n_acc += 1
-        if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
-            h_min_acc = h
-        t = t_next if landing else t + h
         y0, y1, y2, y3 = n0, n1, n2, n3
         fresh = True
-        peak = max(peak, abs(y0))
-        status, reason, flight_start = _check_state(model, y0, y1, y2, t, flight_start, p)
+        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
+            model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
         if status != STATUS_OK:
             break
-        if landing:
-            _record(model, row, i_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-            i_out += 1
         fac = min(max(fac, _ro.FAC_MIN), _ro.FAC_MAX)
         if rejected:
             fac = min(fac, 1.0)
         rejected = False
-        h_new = h * fac
-        if landing and h_proposed > h:
-            h_new = max(h_new, min(h_proposed, h_max))
-        h = h_new
+        h = _next_step(h, fac, landing, h_proposed, h_max)
     if not math.isfinite(peak):
         peak = 0.0
     return status, reason, peak, n_acc, n_rej, h_min_acc
