@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from screening.analysis.escalation import (GRID_COST_S, MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES,
-                                           PRIOR_STEPS_PER_S, STEP_COST_S, affordable_points, condensed_cells, cover_points,
+                                           PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR, STEP_COST_S, affordable_points, condensed_cells, cover_points,
                                            escalation_candidates, escalation_model, estimated_cost, meets_target,
                                            prior_cost, samples_needed)
 from screening.analysis.trust import shipped_calibration
@@ -108,3 +108,5 @@ def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     out = escalation_task(block, bed, motion, None, 3, "coupled", 0.2, 0.05, 0)
     plan = spectral_plan(motion, 0.2, default_cutoff(block, bed))
     assert int(out["n_grid"]) == 3 * plan.n_times                  # the grid the samples were synthesized on
+    assert not out["rodas"]                                          # a lightly damped bed: the explicit pair
+    assert estimated_cost(1000, k, 0, rodas=True) == pytest.approx(1000 * STEP_COST_S[k] * RODAS_STEP_FACTOR)
