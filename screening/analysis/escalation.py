@@ -35,16 +35,18 @@ SAMPLE_SAFETY = 1.5
 #: Share of the budget the pilot and main runs may plan with; the rest is for the top-up round.
 MAIN_SHARE = 0.85
 #: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
-#: :class:`EscalationModel` (about 1.2x the median measured on the development machine, 20 s records,
-#: numba, one thread; ``benchmarks/accuracy_escalation.py`` prints the measured / estimated ratio).
-STEP_COST_S = {EscalationModel.condensed: 0.35e-6, EscalationModel.coupled: 0.45e-6}
+#: :class:`EscalationModel` (explicit pair, 20 s records, numba, one thread).  With :data:`GRID_COST_S`
+#: fitted to the CPU time of the calibration beds by ``benchmarks/bench_stiff_mcs.py`` (relative least
+#: squares: 0.32 and 0.13 us per step, 55 ns per grid point; the step costs here are ~1.1x those); there the
+#: measured / predicted ratio is 0.79-1.24 on every bed, both models and both integrators.
+STEP_COST_S = {EscalationModel.condensed: 0.15e-6, EscalationModel.coupled: 0.35e-6}
 #: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
-#: rate of the input; ``benchmarks/bench_stiff_mcs.py`` measures 28-40 ns).  The input is band-limited at
-#: three times the larger of the rocking and vertical frequencies, so on a stiff bed the grid grows
-#: as ``sqrt(k)``: on the paper block at k = 1e10 it is ~690,000 points per 20 s sample.
-GRID_COST_S = 40e-9
+#: rate of the input).  The input is band-limited at three times the larger of the rocking and
+#: vertical frequencies, so on a stiff bed the grid grows as ``sqrt(k)``: on the paper block at
+#: k = 1e10 it is ~690,000 points per 20 s sample, and its synthesis costs as much as the integration.
+GRID_COST_S = 55e-9
 #: Cost model: a step of the linearly implicit pair (``integrator="rodas"``) in explicit steps (six
-#: stages and four Jacobian evaluations against six stages; measured 1.4-1.7).
+#: stages and four Jacobian evaluations against six stages; measured 1.64 coupled, 1.2 condensed).
 RODAS_STEP_FACTOR = 1.6
 #: Integration steps per second of record and sample assumed before any pilot ran (the stiffest
 #: calibration beds take ~6,000; the paper block ~1,100).

@@ -3,15 +3,19 @@
 Everything here is scalar numba code called once per sample (``prange`` over samples).
 The public, documented entry point is :func:`screening.solvers.montecarlo.monte_carlo`.
 
-Integrator: explicit Dormand–Prince 5(4) pair (FSAL, Hairer's PI step control), error
-measured component-wise against ``atol_i + rtol |y_i|`` with absolute scales set by the
-caller from the physics (``theta_ul``, static indentation, natural frequencies).  Steps
+Integrators: the explicit Dormand–Prince 5(4) pair (FSAL, Hairer's PI step control; the
+default and the reference) or the linearly implicit Rosenbrock pair RODAS 4(3) (L-stable, for
+beds whose damping makes the contact dynamics stiff), chosen per run by the ``integrator``
+field of the model record; both measure the error component-wise against ``atol_i + rtol |y_i|``
+with absolute scales set by the caller from the physics (``theta_ul``, static indentation,
+natural frequencies).  Steps
 are clipped to land exactly on the output instants.  The modulated ground acceleration
 ``q f`` and its exact rate ``q f' + q' f`` are given on the synthesis grid; between grid
 points the input is their cubic Hermite interpolant.  Samples are independent, so the
 ``prange`` loop gives the same numbers for any number of threads or chunking.
 
-Method and how it is checked: ``docs/method.md#coupled-and-condensed-models``.
+Method and how it is checked: ``docs/method.md#coupled-and-condensed-models`` and
+``docs/montecarlo_numerics.md`` (the two integrators, stiff beds, cost).
 """
 
 from __future__ import annotations
