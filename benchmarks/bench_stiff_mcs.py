@@ -19,7 +19,7 @@ Prints three tables:
    synthesis and integration.
 3. **Cost model** (:func:`screening.analysis.escalation.estimated_cost`): predicted / measured CPU for
    each calibration bed (``benchmarks/trust_calibration.py``'s families) and each run above, with the
-   synthesis-grid term and without it (the model before).
+   synthesis-grid term and with its steps term alone.
 
 CPU time is ``time.process_time`` of this process with one numba thread (JIT warm-up excluded).
 """
@@ -152,8 +152,8 @@ def calibration_table(n, ratios):
             ds, c = timed(block, bed, motion, n, model=model)
             record(ratios, f"calibration: {name} {model}", ds, model, n, block, bed, c)
     print(f"\n== 3. cost model: STEP_COST_S {dict((m.name, v) for m, v in esc.STEP_COST_S.items())}, "
-          f"RODAS_STEP_FACTOR {esc.RODAS_STEP_FACTOR:g}, GRID_COST_S {esc.GRID_COST_S:g} s; before: steps x STEP_COST_S")
-    print("| run | steps | grid points | measured CPU s | predicted s | measured / predicted | measured / predicted before |")
+          f"RODAS_STEP_FACTOR {esc.RODAS_STEP_FACTOR:g}, GRID_COST_S {esc.GRID_COST_S:g} s")
+    print("| run | steps | grid points | measured CPU s | predicted s | measured / predicted | measured / steps term alone |")
     print("|---|---|---|---|---|---|---|")
     for r in ratios:
         print(f"| {r['name']} | {r['steps']:.3g} | {r['grid']:.3g} | {r['cpu']:.2f} | {r['pred']:.2f} "
