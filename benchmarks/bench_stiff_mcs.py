@@ -85,14 +85,16 @@ def synthesis_cpu(block, foundation, excitation, n):
 def predicted(ds, model, n, block, foundation, with_grid=True):
     steps = int(ds["n_steps"].sum())
     grid = n * grid_points(T_END, default_cutoff(block, foundation)) if with_grid else 0
-    return esc.estimated_cost(steps, int(EscalationModel[model]), grid, ds.attrs["integrator"].startswith("adaptive Ros"))
+    rodas = ds.attrs["integrator"].startswith("adaptive Ros")
+    return esc.estimated_cost(steps, int(EscalationModel[model]), grid, rodas)
 
 
 def record(ratios, name, ds, model, n, block, foundation, cpu):
     """One row of the cost-model table: predicted with and without the grid term, and the counts."""
     ratios.append(dict(name=name, pred=predicted(ds, model, n, block, foundation), cpu=cpu,
                        old=float(ds["n_steps"].sum()) * esc.STEP_COST_S[EscalationModel[model]],
-                       steps=float(ds["n_steps"].sum()), grid=float(n * grid_points(T_END, default_cutoff(block, foundation))),
+                       steps=float(ds["n_steps"].sum()),
+                       grid=float(n * grid_points(T_END, default_cutoff(block, foundation))),
                        model=model, rodas=ds.attrs["integrator"].startswith("adaptive Ros")))
 
 
@@ -153,7 +155,8 @@ def calibration_table(n, ratios):
             record(ratios, f"calibration: {name} {model}", ds, model, n, block, bed, c)
     print(f"\n== 3. cost model: STEP_COST_S {dict((m.name, v) for m, v in esc.STEP_COST_S.items())}, "
           f"RODAS_STEP_FACTOR {esc.RODAS_STEP_FACTOR:g}, GRID_COST_S {esc.GRID_COST_S:g} s")
-    print("| run | steps | grid points | measured CPU s | predicted s | measured / predicted | measured / steps term alone |")
+    print("| run | steps | grid points | measured CPU s | predicted s | measured / predicted "
+          "| measured / steps term alone |")
     print("|---|---|---|---|---|---|---|")
     for r in ratios:
         print(f"| {r['name']} | {r['steps']:.3g} | {r['grid']:.3g} | {r['cpu']:.2f} | {r['pred']:.2f} "

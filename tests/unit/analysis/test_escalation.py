@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from screening.analysis.escalation import (GRID_COST_S, MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES,
-                                           PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR, STEP_COST_S, affordable_points, condensed_cells, cover_points,
-                                           escalation_candidates, escalation_model, estimated_cost, meets_target,
-                                           prior_cost, samples_needed)
+                                           PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR, STEP_COST_S, affordable_points,
+                                           condensed_cells, cover_points, escalation_candidates, escalation_model,
+                                           estimated_cost, meets_target, prior_cost, samples_needed)
 from screening.analysis.trust import shipped_calibration
 from screening.status import EscalationModel, PointStatus, Trust
 

@@ -1,8 +1,9 @@
 """The two sample integrators of the Monte Carlo engine held together, and against closed forms.
 
-``integrator="rodas"`` (linearly implicit Rosenbrock 4(3), :func:`~screening.solvers.mcs_kernels.integrate_sample_rodas`)
-against the explicit reference pair ``"dopri"`` on deterministic inputs (a sine pulse, a recorded motion)
-and both against the free vertical vibration of the block on its bed (a damped SDOF) and free fall.
+``integrator="rodas"`` (linearly implicit Rosenbrock 4(3),
+:func:`~screening.solvers.mcs_kernels.integrate_sample_rodas`) against the explicit reference pair
+``"dopri"`` on deterministic inputs (a sine pulse, a recorded motion), and both against the free
+vertical vibration of the block on its bed (a damped SDOF) and free fall.
 
 Tolerances: with ``rtol`` 1e-10 (reference) and 1e-9 (RODAS) the histories differ by 2e-8 (sine
 pulse) and 5e-8 (recorded motion) of their peak, per-sample peaks of a short Monte Carlo run with
