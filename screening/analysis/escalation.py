@@ -35,9 +35,19 @@ SAMPLE_SAFETY = 1.5
 #: Share of the budget the pilot and main runs may plan with; the rest is for the top-up round.
 MAIN_SHARE = 0.85
 #: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
-#: :class:`EscalationModel` (about 1.2x the median measured on the development machine, 20 s records,
-#: numba, one thread; ``benchmarks/accuracy_escalation.py`` prints the measured / estimated ratio).
-STEP_COST_S = {EscalationModel.condensed: 0.35e-6, EscalationModel.coupled: 0.45e-6}
+#: :class:`EscalationModel` (explicit pair, 20 s records, numba, one thread).  With :data:`GRID_COST_S`
+#: fitted to the CPU time of the calibration beds by ``benchmarks/bench_stiff_mcs.py`` (relative least
+#: squares: 0.32 and 0.13 us per step, 55 ns per grid point; the step costs here are ~1.1x those); there the
+#: measured / predicted ratio is 0.79-1.24 on every bed, both models and both integrators.
+STEP_COST_S = {EscalationModel.condensed: 0.15e-6, EscalationModel.coupled: 0.35e-6}
+#: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
+#: rate of the input).  The input is band-limited at three times the larger of the rocking and
+#: vertical frequencies, so on a stiff bed the grid grows as ``sqrt(k)``: on the paper block at
+#: k = 1e10 it is ~690,000 points per 20 s sample, and its synthesis costs as much as the integration.
+GRID_COST_S = 55e-9
+#: Cost model: a step of the linearly implicit pair (``integrator="rodas"``) in explicit steps (six
+#: stages and four Jacobian evaluations against six stages; measured 1.64 coupled, 1.2 condensed).
+RODAS_STEP_FACTOR = 1.6
 #: Integration steps per second of record and sample assumed before any pilot ran (the stiffest
 #: calibration beds take ~6,000; the paper block ~1,100).
 PRIOR_STEPS_PER_S = 3000.0
@@ -150,15 +160,18 @@ def meets_target(peak, peak_se, target):
         return np.isfinite(peak) & np.isfinite(peak_se) & (peak > 0) & (peak_se <= target / 2.0 * peak)
 
 
-def estimated_cost(steps, model):
-    """Estimated CPU time [s] of a Monte Carlo run from its integration steps (all samples).
+def estimated_cost(steps, model, grid_points=0, rodas=False):
+    """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
+    points (each summed over all samples); ``rodas``: the steps are the linearly implicit pair's.
 
     Notes
     -----
-    ``cost = steps x STEP_COST_S[model]``.  The step count is fixed by the study, the seed and the
-    samples, so a budget planned on this cost selects the same points and samples on every machine.
+    ``cost = steps x STEP_COST_S[model] (x RODAS_STEP_FACTOR) + grid_points x GRID_COST_S``.  The
+    counts are fixed by the study, the seed and the samples, so a budget planned on this cost
+    selects the same points and samples on every machine.
     """
-    return float(steps) * STEP_COST_S[EscalationModel(int(model))]
+    per_step = STEP_COST_S[EscalationModel(int(model))] * (RODAS_STEP_FACTOR if rodas else 1.0)
+    return float(steps) * per_step + float(grid_points) * GRID_COST_S
 
 
 def prior_cost(samples, t_end, model):

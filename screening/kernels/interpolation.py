@@ -115,3 +115,11 @@ def hermite(v0, v1, d0, d1, s, step):
     derivatives evaluated on the fly (for data that change every call, such as Monte Carlo samples)."""
     h00, h10, h01, h11 = hermite_weights(s)
     return h00 * v0 + h01 * v1 + step * (h10 * d0 + h11 * d1)
+
+
+@numba.njit(cache=True, inline="always")
+def hermite_rate(v0, v1, d0, d1, s, step):
+    """Time derivative of :func:`hermite` at fraction ``s`` (units of the values per unit of ``step``)."""
+    s2 = s * s
+    return (6.0 * (s - s2) * (v1 - v0) / step + (3.0 * s2 - 4.0 * s + 1.0) * d0
+            + (3.0 * s2 - 2.0 * s) * d1)

@@ -33,6 +33,13 @@ MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "
                           "p_uplift")
 
 
+#: The ``integrator`` attribute of a Monte Carlo dataset, by the ``integrator`` numerics option.
+INTEGRATOR_TEXT = {
+    "dopri": "adaptive Dormand-Prince 5(4), PI step control, steps land on output times",
+    "rodas": "adaptive Rosenbrock RODAS 4(3) (linearly implicit, L-stable), steps land on output times",
+}
+
+
 def model_fields(block, foundation, excitation):
     """The numeric fields of the model objects by parameter name, in the order of the objects.
 
@@ -157,7 +164,7 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
         "dt_output": dt,
         **model_labels(foundation, excitation),
         "statistics": "moments about the sample mean (ddof=1) over samples that neither overturned nor diverged",
-        "integrator": "adaptive Dormand-Prince 5(4), PI step control, steps land on output times",
+        "integrator": INTEGRATOR_TEXT[opts.get("integrator", "dopri")],
         "rtol": opts["rtol"],
         "h_max": opts["h_max"],
         "dt_integration_mean": float(t_end * accepted.size / max(accepted.sum(), 1)) if accepted.size else float("nan"),

@@ -3,15 +3,19 @@
 Everything here is scalar numba code called once per sample (``prange`` over samples).
 The public, documented entry point is :func:`screening.solvers.montecarlo.monte_carlo`.
 
-Integrator: explicit Dormand–Prince 5(4) pair (FSAL, Hairer's PI step control), error
-measured component-wise against ``atol_i + rtol |y_i|`` with absolute scales set by the
-caller from the physics (``theta_ul``, static indentation, natural frequencies).  Steps
+Integrators: the explicit Dormand–Prince 5(4) pair (FSAL, Hairer's PI step control; the
+default and the reference) or the linearly implicit Rosenbrock pair RODAS 4(3) (L-stable, for
+beds whose damping makes the contact dynamics stiff), chosen per run by the ``integrator``
+field of the model record; both measure the error component-wise against ``atol_i + rtol |y_i|``
+with absolute scales set by the caller from the physics (``theta_ul``, static indentation,
+natural frequencies).  Steps
 are clipped to land exactly on the output instants.  The modulated ground acceleration
 ``q f`` and its exact rate ``q f' + q' f`` are given on the synthesis grid; between grid
 points the input is their cubic Hermite interpolant.  Samples are independent, so the
 ``prange`` loop gives the same numbers for any number of threads or chunking.
 
-Method and how it is checked: ``docs/method.md#coupled-and-condensed-models``.
+Method and how it is checked: ``docs/method.md#coupled-and-condensed-models`` and
+``docs/montecarlo_numerics.md`` (the two integrators, stiff beds, cost).
 """
 
 from __future__ import annotations
@@ -24,7 +28,8 @@ import numpy as np
 from numba import types
 
 from screening.kernels import dopri
-from screening.kernels.interpolation import hermite
+from screening.kernels import rodas as _ro
+from screening.kernels.interpolation import hermite, hermite_rate
 from screening.kernels.signatures import function_type, record_type, sdof_coefficients_signature
 from screening.physics.contact import contact_resultants_trig_jit
 from screening.status import DivergenceReason, SampleStatus
@@ -55,11 +60,19 @@ MODEL = np.dtype([
     ("theta_cap", "f8"),         # capacity angle of the condensation [rad] (inf: none)
     ("max_flight", "f8"),        # longest flight before a sample is called diverged [s]
     ("z_max", "f8"), ("z_min", "f8"), ("rate_max", "f8"),   # physical bounds of the coupled state
+    ("integrator", "i8"),        # INTEGRATOR_DOPRI or INTEGRATOR_RODAS
 ])
 
+#: Integrators of a sample (the ``integrator`` field of :data:`MODEL`), by the name of the
+#: ``integrator`` numerics option.
+INTEGRATOR_DOPRI = 0
+INTEGRATOR_RODAS = 1
+INTEGRATORS = {"dopri": INTEGRATOR_DOPRI, "rodas": INTEGRATOR_RODAS}
 
-def model_record(block, foundation, cond, max_flight_time=0.5):
-    """The :data:`MODEL` record of scalar model objects; ``cond``: the condensation of condensed runs."""
+
+def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri"):
+    """The :data:`MODEL` record of scalar model objects; ``cond``: the condensation of condensed runs;
+    ``integrator``: a key of :data:`INTEGRATORS`."""
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     rec = np.zeros((), dtype=MODEL)
     values = dict(m=m, g=g, h=h, I_cm=float(block.I_cm), b=b, k=float(foundation.k), eps=float(foundation.eps),
@@ -69,7 +82,8 @@ def model_record(block, foundation, cond, max_flight_time=0.5):
                   theta_cap=float(cond.capacity_angle(block, foundation)), max_flight=float(max_flight_time),
                   z_max=b,                              # sinking half the base width into the bed: blown up
                   z_min=-2.0 * h,                       # jumping a block height off the bed: blown up
-                  rate_max=1e3 * math.sqrt(g / h))      # ~1000 x the free-fall rocking rate: blown up
+                  rate_max=1e3 * math.sqrt(g / h),      # ~1000 x the free-fall rocking rate: blown up
+                  integrator=INTEGRATORS[integrator])
     for name, value in values.items():
         rec[name] = value
     return rec
@@ -114,17 +128,24 @@ def _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc, p):
     return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc, p), 0.0, 0.0
 
 
-@numba.njit(cache=True)
-def _hermite(row, acc, acc_dot, dt, t):
-    """Ground acceleration at ``t`` from grid values and rates of row ``row`` (cubic Hermite)."""
+@numba.njit(cache=True, inline="always")
+def _grid_interval(n, dt, t):
+    """``(j, s)``: the interval ``[j dt, (j + 1) dt]`` of a grid of ``n`` points holding ``t`` (the end
+    intervals beyond the grid) and the fraction ``s = t / dt - j``."""
     x = t / dt
     j = int(x)
-    n = acc.shape[1]
     if j > n - 2:
         j = n - 2
     if j < 0:
         j = 0
-    return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], x - j, dt)
+    return j, x - j
+
+
+@numba.njit(cache=True)
+def _hermite(row, acc, acc_dot, dt, t):
+    """Ground acceleration at ``t`` from grid values and rates of row ``row`` (cubic Hermite)."""
+    j, s = _grid_interval(acc.shape[1], dt, t)
+    return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
 
 
 @numba.njit(cache=True)
@@ -151,59 +172,163 @@ def _err_term(e, y, ynew, scale, rtol):
 
 
 @numba.njit(cache=True)
+def _record(model, row, i, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    out_theta[row, i] = y0
+    out_theta_dot[row, i] = y1
+    out_z[row, i] = y2
+    out_z_dot[row, i] = y3
+    out_uplift[row, i] = _in_uplift(model, y0, y2, p)
+
+
+@numba.njit(cache=True)
+def _start_outputs(model, row, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """The initial state in column 0 of row ``row``, NaN (no uplift) in the others."""
+    _record(model, row, 0, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+    for i in range(1, out_theta.shape[1]):
+        out_theta[row, i] = np.nan
+        out_theta_dot[row, i] = np.nan
+        out_z[row, i] = np.nan
+        out_z_dot[row, i] = np.nan
+        out_uplift[row, i] = False
+
+
+@numba.njit(cache=True, inline="always")
+def _start(model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """Outputs of row ``row`` started (:func:`_start_outputs`) and the integrator's counters:
+    ``(t, peak, status, reason, n_accepted, n_rejected, h_min_accepted, flight_start, h_floor, i_out)``."""
+    _start_outputs(model, row, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+    h_floor = 1e-12 * (t_out[t_out.shape[0] - 1] - t_out[0] + 1.0)
+    return t_out[0], abs(y0), STATUS_OK, REASON_NONE, 0, 0, np.inf, -1.0, h_floor, 1
+
+
+@numba.njit(cache=True)
+def _check_state(model, y0, y1, y2, t, flight_start, p):
+    """``(status, reason, flight_start)`` after an accepted step to the state ``y`` at ``t``.
+
+    ``flight_start``: when the current flight began [s] (-1: in contact).
+    """
+    a0 = abs(y0)
+    if a0 > p.theta_over:
+        return STATUS_OVERTURNED, REASON_NONE, flight_start
+    if model == MODEL_COUPLED:
+        if y2 > p.z_max or y2 < p.z_min or abs(y1) > p.rate_max:
+            return STATUS_DIVERGED, REASON_OUT_OF_BOUNDS, flight_start
+        if y2 + p.b * abs(math.sin(y0)) <= 0.0:             # flight: no point in contact
+            if flight_start < 0.0:
+                return STATUS_OK, REASON_NONE, t
+            if t - flight_start > p.max_flight:
+                return STATUS_DIVERGED, REASON_LONG_FLIGHT, flight_start
+            return STATUS_OK, REASON_NONE, flight_start
+        return STATUS_OK, REASON_NONE, -1.0
+    if abs(y1) > p.rate_max:
+        return STATUS_DIVERGED, REASON_OUT_OF_BOUNDS, flight_start
+    if a0 > p.theta_cap:                                   # cubic condensation, softening bed
+        return STATUS_DIVERGED, REASON_NO_EQUILIBRIUM, flight_start
+    return STATUS_OK, REASON_NONE, flight_start
+
+
+@numba.njit(cache=True, inline="always")
+def _landing(t, h, h_max, t_next):
+    """``(h, h_proposed, landing)``: the step ``min(h, h_max)`` shortened to land on ``t_next`` when
+    it would reach it (``landing``); ``h_proposed`` the step before shortening."""
+    h = min(h, h_max)
+    if t + h >= t_next - 1e-9 * h:
+        return t_next - t, h, True
+    return h, h, False
+
+
+@numba.njit(cache=True, inline="always")
+def _next_step(h, fac, landing, h_proposed, h_max):
+    """The step after an accepted step ``h`` with growth factor ``fac``; after a landing that had
+    shortened the step, at least the step proposed before the landing."""
+    h_new = h * fac
+    if landing and h_proposed > h:
+        h_new = max(h_new, min(h_proposed, h_max))
+    return h_new
+
+
+@numba.njit(cache=True, inline="always")
+def _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp):
+    """RMS over the ``n_comp`` integrated components of the local error ``e`` against
+    ``scale + rtol max(|y|, |y_new|)`` (accept at <= 1)."""
+    err = (_err_term(e0, y0, n0, s0, rtol) + _err_term(e1, y1, n1, s1, rtol)
+           + _err_term(e2, y2, n2, s2, rtol) + _err_term(e3, y3, n3, s3, rtol))
+    return math.sqrt(err / n_comp)
+
+
+@numba.njit(cache=True, inline="always")
+def _shrink(err, h, factor, h_floor):
+    """``(h_new, reason)`` after a rejected step: ``h factor`` (``h / 10`` for a non-finite error);
+    ``reason`` is ``REASON_NONE`` unless the step fell below ``h_floor`` (the sample diverged)."""
+    if not math.isfinite(err):
+        h = 0.1 * h
+        return h, REASON_NONFINITE if h < h_floor else REASON_NONE
+    h = h * factor
+    return h, REASON_STEP_UNDERFLOW if h < h_floor else REASON_NONE
+
+
+@numba.njit(cache=True, inline="always")
+def _accept(model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """Bookkeeping of an accepted step to the state ``y``: counts, smallest step, time, peak, status
+    checks and the output at a landing.  Returns ``(t, i_out, n_acc, h_min_acc, peak, status, reason,
+    flight_start)``."""
+    n_acc += 1
+    if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
+        h_min_acc = h
+    t = t_next if landing else t + h
+    peak = max(peak, abs(y0))
+    status, reason, flight_start = _check_state(model, y0, y1, y2, t, flight_start, p)
+    if status == STATUS_OK and landing:
+        _record(model, row, i_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+        i_out += 1
+    return t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start
+
+
+@numba.njit(cache=True)
 def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale,
                      rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
     """Integrate one sample over ``t_out``; fill row ``row`` of the output arrays.
 
     ``conds[0]``, ``models[0]``: the condensation's and the model's records (see
-    :func:`_integrate_chunk`).  ``out_z``, ``out_z_dot`` receive ``z_cb``, ``z_cb'`` (zero for the
-    condensed model).
+    :func:`_integrate_chunk`); ``models[0].integrator`` picks the method, once per sample:
+    :func:`integrate_sample_dopri` (explicit) or :func:`integrate_sample_rodas` (linearly implicit).
+    ``out_z``, ``out_z_dot`` receive ``z_cb``, ``z_cb'`` (zero for the condensed model).
 
     Returns ``(status, reason, peak_abs_theta, n_accepted, n_rejected, h_min_accepted)``.
     After overturning or divergence the remaining outputs are NaN.
     """
+    if models[0].integrator == INTEGRATOR_RODAS:
+        return integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
+                                      y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
+                                      out_z_dot, out_uplift)
+    return integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
+                                  y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
+                                  out_z_dot, out_uplift)
+
+
+@numba.njit(cache=True)
+def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
+                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """:func:`integrate_sample` by the explicit Dormand–Prince 5(4) pair (the reference integrator)."""
     cond = conds[0]
     p = models[0]
     n_out = t_out.shape[0]
     y0, y1, y2, y3 = y_init[0], y_init[1], y_init[2], y_init[3]
     s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
     n_comp = 4.0 if model == MODEL_COUPLED else 2.0
-    t = t_out[0]
-    out_theta[row, 0] = y0
-    out_theta_dot[row, 0] = y1
-    out_z[row, 0] = y2
-    out_z_dot[row, 0] = y3
-    out_uplift[row, 0] = _in_uplift(model, y0, y2, p)
-    for i in range(1, n_out):
-        out_theta[row, i] = np.nan
-        out_theta_dot[row, i] = np.nan
-        out_z[row, i] = np.nan
-        out_z_dot[row, i] = np.nan
-        out_uplift[row, i] = False
-    peak = abs(y0)
-    status = STATUS_OK
-    reason = REASON_NONE
-    n_acc = 0
-    n_rej = 0
-    h_min_acc = np.inf
+    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
+        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
     log_err_old = dopri.LOG_ERR_START
-    flight_start = -1.0
     k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, _hermite(row, acc, acc_dot, dt_grid, t), p)
     h = min(1e-4, h_max)
-    h_floor = 1e-12 * (t_out[n_out - 1] - t_out[0] + 1.0)
-    i_out = 1
     rejected = False
     while i_out < n_out:
         if n_acc + n_rej >= max_steps:
             status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
             break
         t_next = t_out[i_out]
-        h = min(h, h_max)
-        h_proposed = h
-        landing = False
-        if t + h >= t_next - 1e-9 * h:
-            h = t_next - t
-            landing = True
+        h, h_proposed, landing = _landing(t, h, h_max, t_next)
         # --- stages
         g0 = y0 + h * _A21 * k1_0
         g1 = y1 + h * _A21 * k1_1
@@ -245,73 +370,220 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
         e1 = h * (_E1 * k1_1 + _E3 * k3_1 + _E4 * k4_1 + _E5 * k5_1 + _E6 * k6_1 + _E7 * k7_1)
         e2 = h * (_E1 * k1_2 + _E3 * k3_2 + _E4 * k4_2 + _E5 * k5_2 + _E6 * k6_2 + _E7 * k7_2)
         e3 = h * (_E1 * k1_3 + _E3 * k3_3 + _E4 * k4_3 + _E5 * k5_3 + _E6 * k6_3 + _E7 * k7_3)
-        err = (_err_term(e0, y0, n0, s0, rtol) + _err_term(e1, y1, n1, s1, rtol)
-               + _err_term(e2, y2, n2, s2, rtol) + _err_term(e3, y3, n3, s3, rtol))
-        err = math.sqrt(err / n_comp)
-        if not math.isfinite(err):
+        err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
+        if not err <= 1.0:                                  # rejected (or not finite)
             n_rej += 1
-            h = 0.1 * h
             rejected = True
-            if h < h_floor:
-                status, reason = STATUS_DIVERGED, REASON_NONFINITE
-                break
-            continue
-        if err > 1.0:
-            n_rej += 1
-            h = h * dopri.rejected_step_factor_log(math.log(err))
-            rejected = True
-            if h < h_floor:
-                status, reason = STATUS_DIVERGED, REASON_STEP_UNDERFLOW
+            h, reason = _shrink(err, h, dopri.rejected_step_factor_log(math.log(err)) if math.isfinite(err)
+                                else 0.1, h_floor)
+            if reason != REASON_NONE:
+                status = STATUS_DIVERGED
                 break
             continue
         # --- accepted step
-        n_acc += 1
-        if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
-            h_min_acc = h
-        t = t_next if landing else t + h
         y0, y1, y2, y3 = n0, n1, n2, n3
         k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
-        a0 = abs(y0)
-        if a0 > peak:
-            peak = a0
-        if a0 > p.theta_over:
-            status = STATUS_OVERTURNED
+        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
+            model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+        if status != STATUS_OK:
             break
-        if model == MODEL_COUPLED:
-            if (y2 > p.z_max or y2 < p.z_min or abs(y1) > p.rate_max):
-                status, reason = STATUS_DIVERGED, REASON_OUT_OF_BOUNDS
-                break
-            if y2 + p.b * abs(math.sin(y0)) <= 0.0:         # flight: no point in contact
-                if flight_start < 0.0:
-                    flight_start = t
-                elif t - flight_start > p.max_flight:
-                    status, reason = STATUS_DIVERGED, REASON_LONG_FLIGHT
-                    break
-            else:
-                flight_start = -1.0
-        elif abs(y1) > p.rate_max:
-            status, reason = STATUS_DIVERGED, REASON_OUT_OF_BOUNDS
-            break
-        elif a0 > p.theta_cap:                             # cubic condensation, softening bed
-            status, reason = STATUS_DIVERGED, REASON_NO_EQUILIBRIUM
-            break
-        if landing:
-            out_theta[row, i_out] = y0
-            out_theta_dot[row, i_out] = y1
-            out_z[row, i_out] = y2
-            out_z_dot[row, i_out] = y3
-            out_uplift[row, i_out] = _in_uplift(model, y0, y2, p)
-            i_out += 1
         # --- next step size (PI control, Hairer's DOPRI5 constants)
         fac, log_err = dopri.pi_step_factor(err, log_err_old)
         if rejected:
             fac = min(fac, 1.0)
         rejected = False
         log_err_old = max(log_err, dopri.LOG_ERR_START)
-        h_new = h * fac
-        if landing and h_proposed > h:
-            h_new = max(h_new, min(h_proposed, h_max))
-        h = h_new
+        h = _next_step(h, fac, landing, h_proposed, h_max)
+    if not math.isfinite(peak):
+        peak = 0.0
+    return status, reason, peak, n_acc, n_rej, h_min_acc
+
+
+# ----------------------------------------------------------------------------- linearly implicit integrator
+@numba.njit(cache=True)
+def _hermite_rate(row, acc, acc_dot, dt, t):
+    """Rate of the ground acceleration at ``t`` [m/s^3]: derivative of :func:`_hermite`."""
+    j, s = _grid_interval(acc.shape[1], dt, t)
+    return hermite_rate(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
+
+
+@numba.njit(cache=True)
+def input_gain(model, theta, p):
+    """``d(theta'', z_cb'')/d x_g''`` [rad/m, 1]: the right-hand side is linear in the input.
+
+    Coupled (eqs. 7–8 as in :func:`coupled_accelerations`): ``m h cos / (I_cm + m h^2 cos^2)`` and
+    ``-h sin`` times that; condensed (eq. 22): ``m h / m_sdof`` and 0.
+    """
+    if model == MODEL_COUPLED:
+        s = math.sin(theta)
+        c = math.cos(theta)
+        mh = p.m * p.h
+        g1 = mh * c / (p.I_cm + mh * p.h * c * c)
+        return g1, -p.h * s * g1
+    return p.m * p.h / p.m_sdof, 0.0
+
+
+@numba.njit(cache=True)
+def _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32, r0, r1, r2, r3):
+    """``u`` of ``(I / e - J) u = r`` for a Jacobian with kinematic rows ``(0, 1, 0, 0)``, ``(0, 0, 0, kz)``.
+
+    Rows 0 and 2 give ``u0 = e (r0 + u1)``, ``u2 = e (r2 + kz u3)``; the rest is the 2 x 2 system
+    ``[[m11, m13], [m31, m33]] (u1, u3) = (r1 + e (j10 r0 + j12 r2), r3 + e (j30 r0 + j32 r2))``
+    (Cramer's rule; ``m..`` from :func:`integrate_sample_rodas`).
+    """
+    q1 = r1 + e * (j10 * r0 + j12 * r2)
+    q3 = r3 + e * (j30 * r0 + j32 * r2)
+    det = m11 * m33 - m13 * m31
+    u1 = (q1 * m33 - m13 * q3) / det
+    u3 = (m11 * q3 - m31 * q1) / det
+    return e * (r0 + u1), u1, e * (r2 + kz * u3), u3
+
+
+@numba.njit(cache=True)
+def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
+                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+    """:func:`integrate_sample` by the Rosenbrock pair RODAS 4(3) (:mod:`screening.kernels.rodas`).
+
+    Linearly implicit: each step solves six linear systems with ``I / (gamma h) - J``, ``J`` the
+    Jacobian of the right-hand side at the step's start (forward differences in the state, one
+    evaluation per column; exact ``df/dt`` from the input's rate, :func:`input_gain`).  The
+    kinematic rows of ``J`` reduce each solve to a 2 x 2 system.  Same error norm, output landing,
+    status checks and return values as :func:`integrate_sample_dopri`.
+    """
+    cond = conds[0]
+    p = models[0]
+    n_out = t_out.shape[0]
+    y0, y1, y2, y3 = y_init[0], y_init[1], y_init[2], y_init[3]
+    s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
+    coupled = model == MODEL_COUPLED
+    n_comp = 4.0 if coupled else 2.0
+    kz = 1.0 if coupled else 0.0
+    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
+        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+    h = min(1e-4, h_max)
+    rejected = False
+    fresh = True                    # f, J, df/dt of the current state are still to be evaluated
+    f0 = f1 = f2 = f3 = 0.0
+    j10 = j11 = j12 = j13 = j30 = j31 = j32 = j33 = 0.0
+    ft1 = ft3 = 0.0
+    while i_out < n_out:
+        if n_acc + n_rej >= max_steps:
+            status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
+            break
+        if fresh:
+            acc_t = _hermite(row, acc, acc_dot, dt_grid, t)
+            f0, f1, f2, f3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc_t, p)
+            d = _ro.JACOBIAN_STEP * max(abs(y0), s0 / rtol)
+            _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0 + d, y1, y2, y3, acc_t, p)
+            j10, j30 = (a1 - f1) / d, (a3 - f3) / d
+            d = _ro.JACOBIAN_STEP * max(abs(y1), s1 / rtol)
+            _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1 + d, y2, y3, acc_t, p)
+            j11, j31 = (a1 - f1) / d, (a3 - f3) / d
+            if coupled:
+                d = _ro.JACOBIAN_STEP * max(abs(y2), s2 / rtol)
+                _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2 + d, y3, acc_t, p)
+                j12, j32 = (a1 - f1) / d, (a3 - f3) / d
+                d = _ro.JACOBIAN_STEP * max(abs(y3), s3 / rtol)
+                _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3 + d, acc_t, p)
+                j13, j33 = (a1 - f1) / d, (a3 - f3) / d
+            g1, g3 = input_gain(model, y0, p)
+            rate = _hermite_rate(row, acc, acc_dot, dt_grid, t)
+            ft1, ft3 = g1 * rate, g3 * rate
+            fresh = False
+        t_next = t_out[i_out]
+        h, h_proposed, landing = _landing(t, h, h_max, t_next)
+        e = _ro.GAMMA * h
+        gi = 1.0 / e
+        m11 = gi - j11 - e * j10
+        m13 = -j13 - e * kz * j12
+        m31 = -j31 - e * j30
+        m33 = gi - j33 - e * kz * j32
+        hi = 1.0 / h
+        # --- stage 1
+        u10, u11, u12, u13 = _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+                                               f0, f1 + _ro.D1 * h * ft1, f2, f3 + _ro.D1 * h * ft3)
+        # --- stage 2
+        a = _hermite(row, acc, acc_dot, dt_grid, t + _ro.C2 * h)
+        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, y0 + _ro.A21 * u10, y1 + _ro.A21 * u11,
+                              y2 + _ro.A21 * u12, y3 + _ro.A21 * u13, a, p)
+        u20, u21, u22, u23 = _rosenbrock_solve(
+            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+            g0 + hi * _ro.G21 * u10, g1 + hi * _ro.G21 * u11 + _ro.D2 * h * ft1,
+            g2 + hi * _ro.G21 * u12, g3 + hi * _ro.G21 * u13 + _ro.D2 * h * ft3)
+        # --- stage 3
+        a = _hermite(row, acc, acc_dot, dt_grid, t + _ro.C3 * h)
+        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
+                              y0 + _ro.A31 * u10 + _ro.A32 * u20, y1 + _ro.A31 * u11 + _ro.A32 * u21,
+                              y2 + _ro.A31 * u12 + _ro.A32 * u22, y3 + _ro.A31 * u13 + _ro.A32 * u23, a, p)
+        u30, u31, u32, u33 = _rosenbrock_solve(
+            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+            g0 + hi * (_ro.G31 * u10 + _ro.G32 * u20),
+            g1 + hi * (_ro.G31 * u11 + _ro.G32 * u21) + _ro.D3 * h * ft1,
+            g2 + hi * (_ro.G31 * u12 + _ro.G32 * u22),
+            g3 + hi * (_ro.G31 * u13 + _ro.G32 * u23) + _ro.D3 * h * ft3)
+        # --- stage 4
+        a = _hermite(row, acc, acc_dot, dt_grid, t + _ro.C4 * h)
+        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
+                              y0 + _ro.A41 * u10 + _ro.A42 * u20 + _ro.A43 * u30,
+                              y1 + _ro.A41 * u11 + _ro.A42 * u21 + _ro.A43 * u31,
+                              y2 + _ro.A41 * u12 + _ro.A42 * u22 + _ro.A43 * u32,
+                              y3 + _ro.A41 * u13 + _ro.A42 * u23 + _ro.A43 * u33, a, p)
+        u40, u41, u42, u43 = _rosenbrock_solve(
+            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+            g0 + hi * (_ro.G41 * u10 + _ro.G42 * u20 + _ro.G43 * u30),
+            g1 + hi * (_ro.G41 * u11 + _ro.G42 * u21 + _ro.G43 * u31) + _ro.D4 * h * ft1,
+            g2 + hi * (_ro.G41 * u12 + _ro.G42 * u22 + _ro.G43 * u32),
+            g3 + hi * (_ro.G41 * u13 + _ro.G42 * u23 + _ro.G43 * u33) + _ro.D4 * h * ft3)
+        # --- stage 5 (at t + h)
+        acc_end = _hermite(row, acc, acc_dot, dt_grid, t + h)
+        v0 = y0 + _ro.A51 * u10 + _ro.A52 * u20 + _ro.A53 * u30 + _ro.A54 * u40
+        v1 = y1 + _ro.A51 * u11 + _ro.A52 * u21 + _ro.A53 * u31 + _ro.A54 * u41
+        v2 = y2 + _ro.A51 * u12 + _ro.A52 * u22 + _ro.A53 * u32 + _ro.A54 * u42
+        v3 = y3 + _ro.A51 * u13 + _ro.A52 * u23 + _ro.A53 * u33 + _ro.A54 * u43
+        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, v0, v1, v2, v3, acc_end, p)
+        u50, u51, u52, u53 = _rosenbrock_solve(
+            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+            g0 + hi * (_ro.G51 * u10 + _ro.G52 * u20 + _ro.G53 * u30 + _ro.G54 * u40),
+            g1 + hi * (_ro.G51 * u11 + _ro.G52 * u21 + _ro.G53 * u31 + _ro.G54 * u41),
+            g2 + hi * (_ro.G51 * u12 + _ro.G52 * u22 + _ro.G53 * u32 + _ro.G54 * u42),
+            g3 + hi * (_ro.G51 * u13 + _ro.G52 * u23 + _ro.G53 * u33 + _ro.G54 * u43))
+        # --- stage 6 (at t + h): its increment is the error estimate
+        v0 += u50
+        v1 += u51
+        v2 += u52
+        v3 += u53
+        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, v0, v1, v2, v3, acc_end, p)
+        u60, u61, u62, u63 = _rosenbrock_solve(
+            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+            g0 + hi * (_ro.G61 * u10 + _ro.G62 * u20 + _ro.G63 * u30 + _ro.G64 * u40 + _ro.G65 * u50),
+            g1 + hi * (_ro.G61 * u11 + _ro.G62 * u21 + _ro.G63 * u31 + _ro.G64 * u41 + _ro.G65 * u51),
+            g2 + hi * (_ro.G61 * u12 + _ro.G62 * u22 + _ro.G63 * u32 + _ro.G64 * u42 + _ro.G65 * u52),
+            g3 + hi * (_ro.G61 * u13 + _ro.G62 * u23 + _ro.G63 * u33 + _ro.G64 * u43 + _ro.G65 * u53))
+        n0, n1, n2, n3 = v0 + u60, v1 + u61, v2 + u62, v3 + u63
+        err = _error_norm(u60, u61, u62, u63, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
+        fac = _ro.SAFETY * max(err, 1e-10) ** (-_ro.EXPONENT)
+        if not err <= 1.0:                                  # rejected (or not finite)
+            n_rej += 1
+            rejected = True
+            h, reason = _shrink(err, h, max(fac, _ro.FAC_MIN), h_floor)
+            if reason != REASON_NONE:
+                status = STATUS_DIVERGED
+                break
+            continue
+        # --- accepted step
+        y0, y1, y2, y3 = n0, n1, n2, n3
+        fresh = True
+        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
+            model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+        if status != STATUS_OK:
+            break
+        fac = min(max(fac, _ro.FAC_MIN), _ro.FAC_MAX)
+        if rejected:
+            fac = min(fac, 1.0)
+        rejected = False
+        h = _next_step(h, fac, landing, h_proposed, h_max)
     if not math.isfinite(peak):
         peak = 0.0
     return status, reason, peak, n_acc, n_rej, h_min_acc

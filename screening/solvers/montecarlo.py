@@ -14,7 +14,10 @@ Numerics (all overridable through ``**numerics``; recorded in the dataset attrib
   sample per loop iteration, ``prange`` over samples) with relative tolerance ``rtol``
   (default :data:`DEFAULT_RTOL`: 1e-7 coupled, 1e-6 condensed) and absolute scales
   ``rtol x (theta_ul, theta_ul w_r, z_st, z_st w_v)``; steps land exactly on the output
-  instants and never exceed ``h_max``;
+  instants and never exceed ``h_max``.  On a bed whose vertical mode is heavily overdamped
+  the coupled model takes the linearly implicit RODAS 4(3) pair instead, with the same
+  tolerances (``integrator``: ``"auto"``, the default, see :func:`choose_integrator`;
+  ``"dopri"`` or ``"rodas"`` to force one; ``docs/montecarlo_numerics.md``);
 * the input is band-limited to ``cutoff`` (default :func:`screening.solvers.synthesis.default_cutoff`,
   3 x the larger of the rocking and vertical frequencies) and read between its grid
   points by cubic Hermite interpolation;
@@ -70,7 +73,14 @@ DEFAULT_NUMERICS = {
     "max_steps": 5_000_000,     # step budget per sample (accepted + rejected)
     "max_flight_time": 0.5,     # longest admissible continuous flight [s]
     "chunk_size": 64,           # samples synthesized and integrated per batch
+    "integrator": "auto",       # "dopri" (explicit 5(4) pair), "rodas" (linearly implicit 4(3) pair) or
+                                # "auto" (per point: see choose_integrator)
 }
+
+#: ``integrator="auto"`` takes RODAS for the coupled model where the bed's vertical mode has at least
+#: this damping ratio (:func:`vertical_damping_ratio`), the explicit pair elsewhere.
+#: ``docs/montecarlo_numerics.md`` gives the measurements behind it.
+RODAS_DAMPING_RATIO = 20.0
 
 # ----------------------------------------------------------------------------- validation
 def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo"):
@@ -111,6 +121,9 @@ def _check_numerics(numerics):
     opts["oversampling"] = check_integer("oversampling", opts["oversampling"], 2)
     opts["max_steps"] = check_integer("max_steps", opts["max_steps"], 1)
     opts["chunk_size"] = check_integer("chunk_size", opts["chunk_size"], 1)
+    if opts["integrator"] not in (*kern.INTEGRATORS, "auto"):
+        raise ValueError(f"parameter 'integrator' must be one of {sorted((*kern.INTEGRATORS, 'auto'))} "
+                         f"(got {opts['integrator']!r})")
     return opts
 
 
@@ -122,6 +135,39 @@ def state_scales(block, foundation):
     z_st = float(block.m * block.g / (2.0 * block.b * foundation.k))
     w_r = max(rocking_frequency(block, foundation), 1.0)
     return np.array([tu, tu * w_r, z_st, z_st * vertical_frequency(block, foundation)])
+
+
+def vertical_damping_ratio(block, foundation):
+    """Damping ratio [1] of the block's vertical vibration on the bed at rest, ``c_v / (2 m w_v)``.
+
+    Notes
+    -----
+    About the rest indentation ``z0`` the bed acts as a vertical spring ``k_v = 2 b k`` and dashpot
+    ``c_v = 2 b lam z0`` (Hunt–Crossley, ``lam z zdot`` integrated over the base) or ``c_v = 2 b c``
+    (Winkler); ``w_v = sqrt(k_v / m)`` (:func:`~screening.solvers.synthesis.vertical_frequency`).
+    Above 1 the mode is overdamped and its fast decay rate ``~ c_v / m = 2 zeta w_v`` bounds an
+    explicit integrator's stable step.
+    """
+    b = float(block.b)
+    if foundation.winkler:
+        c_v = 2.0 * b * float(foundation.damping)
+    else:
+        c_v = 2.0 * b * float(foundation.damping) * float(rest_indentation(block, foundation))
+    return c_v / (2.0 * float(block.m) * vertical_frequency(block, foundation))
+
+
+def choose_integrator(block, foundation, model, integrator="auto"):
+    """The sample integrator (a key of :data:`~screening.solvers.mcs_kernels.INTEGRATORS`) of a run.
+
+    ``"auto"``: ``"rodas"`` for the coupled model on a bed whose vertical mode is overdamped beyond
+    :data:`RODAS_DAMPING_RATIO` (there the explicit pair's step is held by stability, not accuracy),
+    ``"dopri"`` otherwise; any other value is returned as given.
+    """
+    if integrator != "auto":
+        return integrator
+    if model == "coupled" and vertical_damping_ratio(block, foundation) >= RODAS_DAMPING_RATIO:
+        return "rodas"
+    return "dopri"
 
 
 def initial_state(block, foundation, model):
@@ -201,7 +247,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         are flagged diverged.
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
         ``cutoff_factor`` [1], ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
-        ``max_flight_time`` [s], ``chunk_size``.
+        ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``).
 
     Returns
     -------
@@ -241,13 +287,14 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     cond.check(block, foundation)
     check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
     check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
+    opts["integrator"] = choose_integrator(block, foundation, model, opts["integrator"])
 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
     q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
-    params = kern.model_record(block, foundation, cond, opts["max_flight_time"])
+    params = kern.model_record(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
     sdof = cond.sdof_kernel(block, foundation) if model == "condensed" else \
         get_condensation("paper").sdof_kernel(block, foundation)         # not read by the coupled model
     integrate_chunk = kern.chunk_integrator(sdof.record.dtype)

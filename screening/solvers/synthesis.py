@@ -160,6 +160,12 @@ def next_regular_length(n):
     return best
 
 
+def grid_points(t_end, cutoff, oversampling=OVERSAMPLING):
+    """Points of the synthesis grid of one sample: ``ceil(t_end / dt) + 2`` with the grid step
+    ``dt = pi / (oversampling cutoff)`` (``t_end`` [s], ``cutoff`` [rad/s])."""
+    return int(math.ceil(t_end / (math.pi / (oversampling * cutoff)))) + 2
+
+
 def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
     """Build the :class:`SpectralPlan` for ``excitation`` over ``[0, t_end]``.
 
@@ -175,7 +181,7 @@ def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
     if not oversampling >= 2:
         raise ValueError(f"parameter 'oversampling' must be >= 2 (got {oversampling!r})")
     dt = math.pi / (oversampling * cutoff)
-    n_times = int(math.ceil(t_end / dt)) + 2
+    n_times = grid_points(t_end, cutoff, oversampling)
     n_fft = next_regular_length(n_times)
     d_omega = 2.0 * math.pi / (n_fft * dt)
     n_freq = max(int(round(cutoff / d_omega)), 1)

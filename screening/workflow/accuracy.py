@@ -137,7 +137,7 @@ def escalation_runs(run, order, models):
         return tuple(int(i) for i in np.unravel_index(order[j], study.shape))
 
     def cost(j, r):
-        return esc.estimated_cost(r["n_steps"], models[j])
+        return esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
 
     for j in range(len(order)):
         part = store.load_spot(ESCALATION_RECORD + j, index_of(j))

@@ -213,11 +213,17 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
 
 def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
     """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks,
-    the integration steps of all samples (``n_steps``, for the cost model) and the CPU time it took
-    (``cpu_time`` [s], of the worker thread)."""
+    the integration steps and synthesis grid points of all samples and whether the steps were the
+    linearly implicit pair's (``n_steps``, ``n_grid``, ``rodas``, for the cost model) and the CPU time
+    it took (``cpu_time`` [s], of the worker thread)."""
+    from screening.solvers.montecarlo import choose_integrator
+    from screening.solvers.synthesis import default_cutoff, grid_points
+
     start = time.thread_time()
     run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed)
-    out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples)}
+    out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples),
+           "n_grid": np.int64(samples * grid_points(t_end, default_cutoff(block, foundation))),
+           "rodas": np.bool_(choose_integrator(block, foundation, model) == "rodas")}
     for name in ("var_theta", "var_theta_dot"):
         history, se = run[name], run[f"{name}_se"]
         at = int(np.nanargmax(history)) if np.any(np.isfinite(history)) else -1

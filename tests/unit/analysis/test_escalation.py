@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from screening.analysis.escalation import (MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES, PRIOR_STEPS_PER_S,
-                                           STEP_COST_S, affordable_points, condensed_cells, cover_points,
-                                           escalation_candidates, escalation_model, estimated_cost, meets_target,
-                                           prior_cost, samples_needed)
+from screening.analysis.escalation import (GRID_COST_S, MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES,
+                                           PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR, STEP_COST_S, affordable_points,
+                                           condensed_cells, cover_points, escalation_candidates, escalation_model,
+                                           estimated_cost, meets_target, prior_cost, samples_needed)
 from screening.analysis.trust import shipped_calibration
 from screening.status import EscalationModel, PointStatus, Trust
 
@@ -94,3 +94,19 @@ def test_cost_model_is_linear_in_the_steps_and_cheaper_for_the_condensed_model()
     assert estimated_cost(2_000_000, k) == pytest.approx(2_000_000 * STEP_COST_S[k], rel=1e-12)
     assert estimated_cost(1000, c) < estimated_cost(1000, k)
     assert prior_cost(64, 20.0, k) == pytest.approx(estimated_cost(64 * 20.0 * PRIOR_STEPS_PER_S, k), rel=1e-12)
+
+
+def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
+    from screening.model import Block, Foundation
+    from screening.model.excitation import WhiteNoise
+    from screening.solvers.synthesis import default_cutoff, spectral_plan
+    from screening.workflow.execution import escalation_task
+
+    k = EscalationModel.coupled
+    assert estimated_cost(1000, k, 5_000_000) == pytest.approx(1000 * STEP_COST_S[k] + 5e6 * GRID_COST_S, rel=1e-12)
+    block, bed, motion = Block(m=8.67, b=0.035, h=0.21), Foundation(k=1e9, lam=1e10, eps=0.0), WhiteNoise(S0=1e-5)
+    out = escalation_task(block, bed, motion, None, 3, "coupled", 0.2, 0.05, 0)
+    plan = spectral_plan(motion, 0.2, default_cutoff(block, bed))
+    assert int(out["n_grid"]) == 3 * plan.n_times                  # the grid the samples were synthesized on
+    assert not out["rodas"]                                          # a lightly damped bed: the explicit pair
+    assert estimated_cost(1000, k, 0, rodas=True) == pytest.approx(1000 * STEP_COST_S[k] * RODAS_STEP_FACTOR)

@@ -1,0 +1,199 @@
+"""Monte Carlo cost against bed stiffness, the two sample integrators, and the cost model, in one run.
+
+Run (one core, under the shared lock; about 8 minutes on the development machine):
+
+    flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD \\
+        .venv/bin/python benchmarks/bench_stiff_mcs.py [--samples 24]
+
+Prints three tables:
+
+1. **Stiff beds.**  The 600 kg statue block (m = 600 kg, b = 0.2 m, h = 0.8 m) on Hunt–Crossley beds
+   k = 1e8 … 1e11 N/m2 (lam = 30 k, eps = 0) under the statue's Kanai–Tajimi motion (S0 = 3e-3 m2/s3,
+   heavy uplift): CPU per sample and steps per sample of the explicit pair (``integrator="dopri"``,
+   the default) and of the linearly implicit RODAS pair (``integrator="rodas"``), each at the default
+   ``rtol``; and their accuracy against a tight-tolerance run (``dopri``, ``rtol = 1e-10``) on the same
+   samples: peak ``var_theta`` change in units of its standard error, and per-sample peak ``|theta|``
+   errors (median and largest, relative).
+2. **Paper block** (m = 8.67 kg, b = 0.035 m, h = 0.21 m, k = 2.89e7, lam = 8.95e8, eps = 6e7; white noise
+   S0 = 2.4e-4): CPU seconds per 1000 samples of the coupled and condensed models, split into input
+   synthesis and integration.
+3. **Cost model** (:func:`screening.analysis.escalation.estimated_cost`): predicted / measured CPU for
+   each calibration bed (``benchmarks/trust_calibration.py``'s families) and each run above, with the
+   synthesis-grid term and with its steps term alone.
+
+CPU time is ``time.process_time`` of this process with one numba thread (JIT warm-up excluded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from screening.analysis import escalation as esc  # noqa: E402
+from screening.model import Block, Foundation  # noqa: E402
+from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo  # noqa: E402
+from screening.solvers.synthesis import default_cutoff, grid_points, spectral_plan, stationary_samples  # noqa: E402
+from screening.status import EscalationModel  # noqa: E402
+
+ENVELOPE = Envelope(4.0, 2.0)
+STATUE = Block(m=600.0, b=0.2, h=0.8)
+STATUE_MOTION = KanaiTajimi(S0=3e-3, omega_g=15.6, zeta_g=0.6, envelope=ENVELOPE)
+PAPER = Block(m=8.67, b=0.035, h=0.21)
+PAPER_BED = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+PAPER_MOTION = WhiteNoise(S0=2.4e-4, envelope=ENVELOPE)
+#: The beds of the calibration (benchmarks/trust_calibration.py), with a motion that uplifts each.
+CALIBRATION = {
+    "paper bed": (PAPER, PAPER_BED, PAPER_MOTION),
+    "paper block, k=1e9": (PAPER, Foundation(k=1e9, lam=1e10, eps=0.0), WhiteNoise(S0=3e-5, envelope=ENVELOPE)),
+    "paper block, k=1e10": (PAPER, Foundation(k=1e10, lam=3e11, eps=0.0),
+                            KanaiTajimi(S0=1e-4, omega_g=10.0, zeta_g=0.4, envelope=ENVELOPE)),
+    "statue, k=1e10": (STATUE, Foundation(k=1e10, lam=3e11, eps=0.0), STATUE_MOTION),
+    "heavy, k=1e9": (Block(m=300.0, b=0.3, h=0.9), Foundation(k=1e9, lam=1e10, eps=0.0),
+                     WhiteNoise(S0=4e-4, envelope=ENVELOPE)),
+}
+T_END = 20.0
+
+
+SEED = [0]
+
+
+def timed(block, foundation, excitation, n, **kw):
+    """``(dataset, CPU seconds)`` of one Monte Carlo run."""
+    t0 = time.process_time()
+    ds = monte_carlo(block, foundation, excitation, n_samples=n, t_end=T_END, progress=False, seed=SEED[0], **kw)
+    return ds, time.process_time() - t0
+
+
+def synthesis_cpu(block, foundation, excitation, n):
+    """CPU seconds per sample of the input synthesis alone (FFT, modulation, rate)."""
+    plan = spectral_plan(excitation, T_END, default_cutoff(block, foundation))
+    q = excitation.envelope(plan.times)
+    t0 = time.process_time()
+    for lo in range(0, n, 64):
+        acc, acc_dot = stationary_samples(plan, 0, np.arange(lo, min(lo + 64, n)))
+        acc_dot *= q
+        acc *= q
+    return (time.process_time() - t0) / n
+
+
+def predicted(ds, model, n, block, foundation, with_grid=True):
+    steps = int(ds["n_steps"].sum())
+    grid = n * grid_points(T_END, default_cutoff(block, foundation)) if with_grid else 0
+    rodas = ds.attrs["integrator"].startswith("adaptive Ros")
+    return esc.estimated_cost(steps, int(EscalationModel[model]), grid, rodas)
+
+
+def record(ratios, name, ds, model, n, block, foundation, cpu):
+    """One row of the cost-model table: predicted with and without the grid term, and the counts."""
+    ratios.append(dict(name=name, pred=predicted(ds, model, n, block, foundation), cpu=cpu,
+                       old=float(ds["n_steps"].sum()) * esc.STEP_COST_S[EscalationModel[model]],
+                       steps=float(ds["n_steps"].sum()),
+                       grid=float(n * grid_points(T_END, default_cutoff(block, foundation))),
+                       model=model, rodas=ds.attrs["integrator"].startswith("adaptive Ros")))
+
+
+def peak_var(ds):
+    i = int(np.nanargmax(ds.var_theta.values))
+    return float(ds.var_theta[i]), float(ds.var_theta_se[i])
+
+
+def stiff_table(n, ratios):
+    print(f"\n== 1. statue block, lam = 30 k, Kanai-Tajimi S0 = {STATUE_MOTION.S0:g}; {n} samples x {T_END:g} s; "
+          f"default rtol {DEFAULT_RTOL['coupled']:g}; reference: dopri rtol 1e-10")
+    print("| k [N/m2] | dopri ms/sample | dopri steps | rodas ms/sample | rodas steps | rodas/dopri CPU "
+          "| cost vs k=1e8 (dopri) | dopri: d peak var / SE | dopri: sample peak err med / max "
+          "| rodas: d peak var / SE | rodas: sample peak err med / max |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    base = None
+    for k in (1e8, 1e9, 1e10, 1e11):
+        bed = Foundation(k=k, lam=30.0 * k, eps=0.0)
+        ref, _ = timed(STATUE, bed, STATUE_MOTION, n, rtol=1e-10)
+        ref_v, ref_se = peak_var(ref)
+        row, cpu = [], {}
+        for integrator in ("dopri", "rodas"):
+            ds, c = timed(STATUE, bed, STATUE_MOTION, n, integrator=integrator)
+            cpu[integrator] = c
+            record(ratios, f"statue k={k:g} {integrator}", ds, "coupled", n, STATUE, bed, c)
+            v, _ = peak_var(ds)
+            err = np.abs(ds.peak_abs_theta.values / ref.peak_abs_theta.values - 1.0)
+            row.append((1e3 * c / n, float(ds.n_steps.mean()), (v - ref_v) / ref_se, np.nanmedian(err),
+                        np.nanmax(err)))
+        base = base or row[0][0]
+        (dm, ds_, dv, de, dx), (rm, rs, rv, re_, rx) = row
+        print(f"| {k:.0e} | {dm:.1f} | {ds_:,.0f} | {rm:.1f} | {rs:,.0f} | {cpu['rodas'] / cpu['dopri']:.1f} "
+              f"| {dm / base:.1f} | {dv:+.2f} | {de:.1e} / {dx:.1e} | {rv:+.2f} | {re_:.1e} / {rx:.1e} |", flush=True)
+
+
+def paper_table(n, ratios):
+    print(f"\n== 2. paper block on the paper bed (eps = 6e7), white noise S0 = {PAPER_MOTION.S0:g}; {n} samples; "
+          f"CPU s per 1000 samples x {T_END:g} s")
+    print("| model | integrator | CPU s / 1000 | synthesis s / 1000 | integration s / 1000 | steps/sample "
+          "| us / step | peak var_theta (SE) |")
+    print("|---|---|---|---|---|---|---|---|")
+    synth = synthesis_cpu(PAPER, PAPER_BED, PAPER_MOTION, n)
+    for model in ("coupled", "condensed"):
+        for integrator in ("dopri", "rodas"):
+            ds, c = timed(PAPER, PAPER_BED, PAPER_MOTION, n, model=model, integrator=integrator)
+            record(ratios, f"paper bed {model} {integrator}", ds, model, n, PAPER, PAPER_BED, c)
+            steps = float(ds.n_steps.mean())
+            v, se = peak_var(ds)
+            per = 1e3 * c / n
+            print(f"| {model} | {integrator} | {per:.2f} | {1e3 * synth:.2f} | {per - 1e3 * synth:.2f} | {steps:,.0f} "
+                  f"| {1e6 * (c / n - synth) / steps:.3f} | {v:.4e} ({se:.1e}) |", flush=True)
+
+
+def calibration_table(n, ratios):
+    for name, (block, bed, motion) in CALIBRATION.items():
+        for model in ("coupled", "condensed"):
+            ds, c = timed(block, bed, motion, n, model=model)
+            record(ratios, f"calibration: {name} {model}", ds, model, n, block, bed, c)
+    print(f"\n== 3. cost model: STEP_COST_S {dict((m.name, v) for m, v in esc.STEP_COST_S.items())}, "
+          f"RODAS_STEP_FACTOR {esc.RODAS_STEP_FACTOR:g}, GRID_COST_S {esc.GRID_COST_S:g} s")
+    print("| run | steps | grid points | measured CPU s | predicted s | measured / predicted "
+          "| measured / steps term alone |")
+    print("|---|---|---|---|---|---|---|")
+    for r in ratios:
+        print(f"| {r['name']} | {r['steps']:.3g} | {r['grid']:.3g} | {r['cpu']:.2f} | {r['pred']:.2f} "
+              f"| {r['cpu'] / r['pred']:.2f} | {r['cpu'] / r['old']:.2f} |")
+    ratio = np.array([r["cpu"] / r["pred"] for r in ratios])
+    print(f"measured / predicted: {ratio.min():.2f} .. {ratio.max():.2f} over {ratio.size} runs "
+          f"({np.sum(np.abs(ratio - 1) <= 0.25)} within +-25 %)")
+    # least squares on the relative error: cpu = a_coupled steps_c + a_condensed steps_k + g grid (RODAS steps x f)
+    x = np.array([[r["steps"] * (r["model"] == "coupled") * (1 + 0.6 * r["rodas"]),
+                   r["steps"] * (r["model"] == "condensed") * (1 + 0.6 * r["rodas"]), r["grid"]] for r in ratios])
+    y = np.array([r["cpu"] for r in ratios])
+    coef, *_ = np.linalg.lstsq(x / y[:, None], np.ones_like(y), rcond=None)
+    print(f"relative least-squares fit (RODAS step = 1.6 explicit steps): coupled {coef[0]:.3g} s/step, "
+          f"condensed {coef[1]:.3g} s/step, grid {coef[2]:.3g} s/point")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=24, help="samples per run (the stiff-bed table)")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--cost-only", action="store_true", help="only the calibration beds of the cost model")
+    args = ap.parse_args()
+    SEED[0] = args.seed
+    import numba
+
+    t0 = time.perf_counter()
+    for integrator in ("dopri", "rodas"):
+        for model in ("coupled", "condensed"):
+            monte_carlo(PAPER, PAPER_BED, PAPER_MOTION, n_samples=2, t_end=0.2, model=model, integrator=integrator,
+                        progress=False)
+    print(f"numba threads {numba.get_num_threads()}; JIT warm-up {time.perf_counter() - t0:.1f} s")
+    ratios = []
+    if not args.cost_only:
+        stiff_table(args.samples, ratios)
+        paper_table(4 * args.samples, ratios)
+    calibration_table(args.samples, ratios)
+
+
+if __name__ == "__main__":
+    main()
