@@ -180,12 +180,13 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
 def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     import contextlib
 
-    from screening.workflow.cloud import load_cloud_study, plot_cloud, run_cloud
+    from screening.workflow.cloud import load_cloud_study, plot_cloud, read_cloud_records, run_cloud
     from screening.workflow.execution import dask_client
     from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path
 
     cloud = load_cloud_study(study, units)
+    records = read_cloud_records(cloud)                # every record checked before any work
     if out is None:
         out = Path("outputs") / f"{Path(study).stem}.nc"
         out.parent.mkdir(exist_ok=True)
@@ -199,7 +200,8 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
         if not in_process:
             stack.enter_context(shielded())
             client = stack.enter_context(dask_client(workers, scheduler))
-        ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client)
+        ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client,
+                                 records=records)
     frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
     write_fragility_files(ds, out, lambda path: plot_cloud(ds, path), _fit_files(frag, out), warnings)
     n = ds.sizes["record"]
