@@ -126,6 +126,15 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
 
+    if period is not None:
+        from screening.validation import check_scalar
+        from screening.workflow import limits
+
+        low, high = limits.SA_PERIOD_RANGE
+        try:
+            check_scalar("--period", period, lower=low, lower_inclusive=True, upper=high, upper_inclusive=True)
+        except ValueError as exc:
+            raise CommandError(str(exc)) from None
     result = Path(result)
     with open_result(result) as ds:
         out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility_{im}.nc"))

@@ -208,3 +208,10 @@ def test_a_full_disk_is_said_as_such(tmp_path, capsys, monkeypatch, free, needle
     assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots",
                  "--out", str(tmp_path / "x.nc")]) == 2
     assert needle in _one_line(capsys)
+
+
+@pytest.mark.parametrize("period", ["1e-300", "1e300", "0.0009"])
+def test_fragility_period_of_sa_is_bounded_before_the_result_is_read(tmp_path, capsys, period):
+    assert main(["fragility", str(tmp_path / "absent.nc"), "--threshold", "0.2", "--im", "sa",
+                 "--period", period]) == 2
+    assert "parameter '--period' must be a finite number >= 0.001 and <= 100" in _one_line(capsys)
