@@ -116,6 +116,8 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
             else f"peak |theta| = {float(ds['peak_abs_theta']):.4g} rad "
                  f"({float(ds['peak_abs_theta']) / float(ds['slenderness']):.3f} of atan(b/h))")
     _say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
+    if rec.vertical is not None:
+        _say(f"warning: {ds.attrs['record_vertical_component']}")
     return EXIT_OK
 
 

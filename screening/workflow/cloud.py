@@ -210,6 +210,13 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
                                  chosen.condensation if cloud.model == "condensed" else "paper", cloud.period,
                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
+    vertical = [rec.name for rec in records if rec.vertical is not None]
+    if vertical:
+        from screening.records import VERTICAL_NOT_USED
+
+        warnings.append(f"{len(vertical)} record(s) with a vertical component ({', '.join(vertical[:3])}"
+                        f"{', ...' if len(vertical) > 3 else ''}): {VERTICAL_NOT_USED}")
+        ds.attrs["warnings"] = "; ".join(warnings)
     ds.attrs["execution"] = "serial, in process" if client is None else \
         f"dask, one task per record on {len(client.nthreads())} worker(s)"
     return ds, failures + warnings
