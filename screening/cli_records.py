@@ -115,6 +115,8 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
             else f"peak |theta| = {float(ds['peak_abs_theta']):.4g} rad "
                  f"({float(ds['peak_abs_theta']) / float(ds['slenderness']):.3f} of atan(b/h))")
     _say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
+    if rec.vertical is not None:
+        _say(f"warning: {ds.attrs['record_vertical_component']}")
     return EXIT_OK
 
 
@@ -125,6 +127,15 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
 
+    if period is not None:
+        from screening.validation import check_scalar
+        from screening.workflow import limits
+
+        low, high = limits.SA_PERIOD_RANGE
+        try:
+            check_scalar("--period", period, lower=low, lower_inclusive=True, upper=high, upper_inclusive=True)
+        except ValueError as exc:
+            raise CommandError(str(exc)) from None
     result = Path(result)
     with open_result(result) as ds:
         out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility_{im}.nc"))
@@ -179,12 +190,13 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
 def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     import contextlib
 
-    from screening.workflow.cloud import load_cloud_study, plot_cloud, run_cloud
+    from screening.workflow.cloud import load_cloud_study, plot_cloud, read_cloud_records, run_cloud
     from screening.workflow.execution import dask_client
     from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path
 
     cloud = load_cloud_study(study, units)
+    records = read_cloud_records(cloud)                # every record checked before any work
     if out is None:
         out = Path("outputs") / f"{Path(study).stem}.nc"
         out.parent.mkdir(exist_ok=True)
@@ -198,7 +210,8 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
         if not in_process:
             stack.enter_context(shielded())
             client = stack.enter_context(dask_client(workers, scheduler))
-        ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client)
+        ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client,
+                                 records=records)
     frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
     write_fragility_files(ds, out, lambda path: plot_cloud(ds, path), _fit_files(frag, out), warnings)
     n = ds.sizes["record"]

@@ -135,6 +135,10 @@ class Record:
                                    "record": self.name, "source": self.source})
 
 
+#: What the solvers do with a record's vertical component (said wherever one is given).
+VERTICAL_NOT_USED = "the vertical component is carried but not used: the models take the horizontal one only"
+
+
 def _samples(name, what, values):
     arr = np.asarray(values)
     if arr.dtype.kind not in "iuf":
@@ -226,41 +230,83 @@ def _header_units(line):
 
 
 def _layout(path, text, data_line, first=0):
-    """``(data, header, first_line)`` of a record's ``text``: the data lines (numbers only) with their
-    1-based line numbers, and the header/comment lines before them (``#`` comments anywhere).
+    """``(data, header)`` of a record's ``text``: the data block (:class:`_Data`) and the header and
+    comment lines before it (``(line number, text)``).
 
-    Lines before the data that are not numbers are header lines; lines after it are a footer, and
-    numbers after a footer are refused (a line inside the data that is not numbers).  Errors name
-    the file and the line number, never the line's content."""
-    data, header, footer = [], [], None
-    for number, raw in enumerate(text.splitlines()[first:], start=first + 1):
-        line, _, comment = raw.partition("#")
-        line = line.strip()
-        if comment and not data:
-            header.append((number, comment))
-        if not line:
-            continue
-        if data_line.fullmatch(line):
-            if footer is not None:
-                raise ValueError(f"{path}, line {footer}: not a row of plain decimal numbers, inside the data "
-                                 f"(lines {data[0][0]} to {number})")
-            data.append((number, line))
-            if len(data) > limits.MAX_RECORD_SAMPLES:
-                raise ValueError(f"{path}: more than {limits.MAX_RECORD_SAMPLES} data lines")
-        elif data:
-            footer = footer or number
-        else:
-            header.append((number, line))
-    if not data:
+    The data runs from the first to the last line of numbers; lines before it that are not numbers
+    are a header, lines after it a footer.  A line inside the data that is not numbers is refused
+    (by :func:`_values`).  Lines from ``first`` (0-based) on are read."""
+    lines = text.splitlines()
+
+    def numbers(line):
+        return bool(data_line.fullmatch(line.partition("#")[0].strip()))
+
+    header, i = [], first
+    while i < len(lines) and not numbers(lines[i]):
+        line, _, comment = lines[i].partition("#")
+        header.extend((i + 1, part) for part in (comment, line.strip()) if part)
+        i += 1
+    if i == len(lines):
         raise ValueError(f"{path}: no data (no line of plain decimal numbers)")
-    return data, header
+    j = len(lines) - 1
+    while not numbers(lines[j]):
+        j -= 1
+    if j - i + 1 > limits.MAX_RECORD_SAMPLES:
+        raise ValueError(f"{path}: more than {limits.MAX_RECORD_SAMPLES} data lines")
+    return _Data(path, i + 1, lines[i:j + 1], data_line), header
 
 
-def _float_array(path, tokens):
-    values = np.array([t.replace("D", "E").replace("d", "e") for t in tokens], dtype=float)
-    if not np.all(np.isfinite(values)):
-        raise ValueError(f"{path}: a value overflows a float (larger than 1.8e308)")
-    return values
+#: Characters of a data block once comments are gone: digits, signs, points, exponents, separators.
+_DATA_CHARS = frozenset("0123456789+-.eEdD,; \t\n")
+#: Separators to blanks and Fortran's ``D`` exponent to ``E``.
+_NORMAL = str.maketrans({",": " ", ";": " ", "\t": " ", "D": "E", "d": "e"})
+#: A sign that follows a digit or a point: two Fortran fields that touch (AT2 files).
+_TOUCHING = re.compile(r"(?<=[0-9.])(?=[-+])")
+
+
+@dataclass
+class _Data:
+    """The data lines of a record: ``lines`` from line number ``start`` (1-based) on."""
+
+    path: str
+    start: int
+    lines: list
+    data_line: re.Pattern
+
+    def values(self, touching=False):
+        """``(values, widths)``: every number in the data (float64, row by row) and the count of
+        numbers on each line (0 on empty lines).  ``touching``: split Fortran fields that touch.
+
+        The fast path checks the characters of the whole block and lets numpy convert the
+        tokens (with only digits, signs, points and exponents, a token numpy takes is a plain
+        decimal number); any failure re-checks line by line to name the first bad line."""
+        text = "\n".join(self.lines)
+        if "#" in text:
+            text = re.sub(r"#[^\n]*", "", text)
+        if touching:
+            text = _TOUCHING.sub(" ", text)
+        if set(text) <= _DATA_CHARS:
+            text = text.translate(_NORMAL)
+            try:
+                values = np.array(text.split(), dtype=float)
+            except ValueError:
+                values = None
+            if values is not None:
+                if not np.all(np.isfinite(values)):
+                    raise ValueError(f"{self.path}: a value overflows a float (larger than 1.8e308)")
+                return values, np.array([len(line.split()) for line in text.split("\n")])
+        rows = []
+        for k, line in enumerate(self.lines):
+            line = line.partition("#")[0].strip()
+            if line and not self.data_line.fullmatch(line):
+                raise ValueError(f"{self.path}, line {self.start + k}: not a row of plain decimal numbers, inside "
+                                 f"the data (lines {self.start} to {self.start + len(self.lines) - 1})")
+            rows.append(_NUMBER.findall(line))
+        # every line is numbers, separated by characters the fast path does not know (a non-breaking space)
+        values = np.array([t.translate(_NORMAL) for row in rows for t in row], dtype=float)
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{self.path}: a value overflows a float (larger than 1.8e308)")
+        return values, np.array([len(row) for row in rows])
 
 
 def read_at2(path, units=None, option="units", dt=None):
@@ -289,7 +335,7 @@ def read_at2(path, units=None, option="units", dt=None):
     if dt is not None and abs(check_time_step(dt) - step) > 1e-6 * step:
         raise ValueError(f"{path}: the AT2 header gives DT = {step:g} s but dt = {dt!r} was given")
     data, _ = _layout(path, "\n".join(lines), _AT2_LINE, first=4)
-    values = _float_array(path, [t for _, line in data for t in _NUMBER.findall(line)])
+    values, _ = data.values(touching=True)
     if values.size != npts:
         raise ValueError(f"{path}: the AT2 header says NPTS={npts} but the file has {values.size} values")
     return Record(values * unit_factor(units), step, name=_name(path), source=str(path), units_in=units,
@@ -320,22 +366,20 @@ def _at2_npts_dt(path, header):
     return int(npts_text), check_time_step(dt, f"{where}: DT")
 
 
-def _columns(path, data):
-    """The data lines as a 2-d array of columns (1, 2 or 3 numbers per line, the same on every
-    line), or a 1-d stream when lines hold 4 or more numbers (the last line may hold fewer)."""
-    rows = [_SEPARATORS.split(line.strip(" \t,;")) for _, line in data]
-    width = len(rows[0])
-    if width <= 3:
-        for (number, _), row in zip(data, rows):
-            if len(row) != width:
-                raise ValueError(f"{path}, line {number}: {len(row)} numbers, but the data starts with "
-                                 f"{width} per line (line {data[0][0]})")
-        return _float_array(path, [t for row in rows for t in row]).reshape(-1, width)
-    for (number, _), row in zip(data[:-1], rows[:-1]):
-        if len(row) != width:
-            raise ValueError(f"{path}, line {number}: {len(row)} numbers, but the data starts with {width} "
-                             f"per line (line {data[0][0]})")
-    return _float_array(path, [t for row in rows for t in row])
+def _columns(data):
+    """The numbers of ``data`` (:class:`_Data`) as a 2-d array of columns (1, 2 or 3 numbers per line,
+    the same on every line), or a 1-d stream when lines hold 4 or more numbers (the last line may
+    hold fewer); empty lines are skipped."""
+    values, widths = data.values()
+    used = np.flatnonzero(widths)
+    width = int(widths[used[0]])
+    check = used if width <= 3 else used[:-1]
+    bad = check[widths[check] != width]
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(f"{data.path}, line {data.start + k}: {int(widths[k])} numbers, but the data starts with "
+                         f"{width} per line (line {data.start + int(used[0])})")
+    return values.reshape(-1, width) if width <= 3 else values
 
 
 def _time_step(path, t, dt):
@@ -381,7 +425,7 @@ def _text_record(path, dt, units, option):
         if found is not None:
             stated[number] = found
     units = _stated_units(path, stated, units, option)
-    values = _columns(path, data)
+    values = _columns(data)
     factor = unit_factor(units)
     vertical = None
     if values.ndim == 2 and values.shape[1] >= 2:

@@ -39,7 +39,7 @@ from screening import condensation as condensations, schema
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
                                        REGIME_UPLIFT_POSITIVE, contact_regime, contact_resultants,
                                        rest_indentation)
-from screening.records import Record
+from screening.records import VERTICAL_NOT_USED, Record
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.datasets import finish
 from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, check_scalar_models, state_scales
@@ -258,5 +258,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     }
     if model == "condensed":
         attrs["condensation"] = cond.name
+    if record.vertical is not None:
+        attrs["record_vertical_component"] = VERTICAL_NOT_USED
     return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.SIMULATION)
 

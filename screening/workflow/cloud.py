@@ -196,18 +196,27 @@ def record_rows(block, foundation, records, model, condensation, period, client=
     return rows, failures
 
 
-def run_cloud(cloud, case=None, overrides=None, progress=None, client=None):
+def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, records=None):
     """Run every record of a :class:`CloudStudy`; returns ``(dataset, warnings)`` (see the module docstring).
 
-    ``client``: a ``distributed.Client`` to run one task per record on (default: in this process)."""
+    ``client``: a ``distributed.Client`` to run one task per record on (default: in this process).
+    ``records``: the records already read by :func:`read_cloud_records` (read here if ``None``)."""
     from screening.workflow.records_study import block_and_foundation
 
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
-    records = read_cloud_records(cloud)
+    if records is None:
+        records = read_cloud_records(cloud)
     rows, failures = record_rows(block, foundation, records, cloud.model,
                                  chosen.condensation if cloud.model == "condensed" else "paper", cloud.period,
                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
+    vertical = [rec.name for rec in records if rec.vertical is not None]
+    if vertical:
+        from screening.records import VERTICAL_NOT_USED
+
+        warnings.append(f"{len(vertical)} record(s) with a vertical component ({', '.join(vertical[:3])}"
+                        f"{', ...' if len(vertical) > 3 else ''}): {VERTICAL_NOT_USED}")
+        ds.attrs["warnings"] = "; ".join(warnings)
     ds.attrs["execution"] = "serial, in process" if client is None else \
         f"dask, one task per record on {len(client.nthreads())} worker(s)"
     return ds, failures + warnings

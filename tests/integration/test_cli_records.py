@@ -208,3 +208,36 @@ def test_a_full_disk_is_said_as_such(tmp_path, capsys, monkeypatch, free, needle
     assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots",
                  "--out", str(tmp_path / "x.nc")]) == 2
     assert needle in _one_line(capsys)
+
+
+@pytest.mark.parametrize("period", ["1e-300", "1e300", "0.0009"])
+def test_fragility_period_of_sa_is_bounded_before_the_result_is_read(tmp_path, capsys, period):
+    assert main(["fragility", str(tmp_path / "absent.nc"), "--threshold", "0.2", "--im", "sa",
+                 "--period", period]) == 2
+    assert "parameter '--period' must be a finite number >= 0.001 and <= 100" in _one_line(capsys)
+
+
+def test_a_vertical_component_is_said_to_be_unused(tmp_path, capsys):
+    study, _ = _files(tmp_path)
+    record, pga_g = _csv_in_g(tmp_path, columns=3)
+    out = tmp_path / "v.nc"
+    assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots", "--units", "g",
+                 "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"PGA {pga_g:.3f} g" in err and "warning: the vertical component is carried but not used" in err
+    with xr.open_dataset(out) as ds:
+        assert "not used" in ds.attrs["record_vertical_component"]
+
+
+def test_cloud_warns_of_unused_vertical_components(tmp_path):
+    from screening.workflow.cloud import load_cloud_study, run_cloud
+
+    _files(tmp_path)
+    _csv_in_g(tmp_path, columns=3)
+    path = tmp_path / "cloud.toml"
+    path.write_text(CLOUD.format(files="['rec.csv', 'pulse.at2']", extra="units = 'g'"))
+    ds, warnings = run_cloud(load_cloud_study(path), overrides={"eps": 6e7})
+    said = [w for w in warnings if "vertical component" in w]
+    assert said == ["1 record(s) with a vertical component (rec): the vertical component is carried but not used: "
+                    "the models take the horizontal one only"]
+    assert said[0] in ds.attrs["warnings"]

@@ -249,3 +249,9 @@ def test_scale_checked(scale):
     with pytest.raises(ValueError, match=r"must be a finite number with 0 < scale <= 1000"):
         check_scale(scale)
     assert check_scale(-2.0, signed=True) == -2.0
+
+
+def test_separators_the_fast_path_does_not_know(tmp_path):
+    path = tmp_path / "r.txt"
+    path.write_text("".join(f"{t:.3f}\u00a0{a}\n" for t, a in zip(_times(), ACC_G)))     # non-breaking spaces
+    np.testing.assert_allclose(read_record(path, units="m/s2").acceleration, ACC_G)
