@@ -10,6 +10,7 @@ from pathlib import Path
 
 import click
 
+from screening.solvers import mc_registry
 from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
                            _stem, announce_compilation, cli, lognormal_fit_text, stamp_fragility,
                            write_fragility_files)
@@ -55,8 +56,9 @@ def _read(record, dt, units):
                                              "if any, is not used)")
 @click.option("--out", help="netCDF file (default <record-stem>_simulation.nc in the current folder; its folder "
                             "must exist); the PNG goes next to it")
-@click.option("--model", type=_Choice(["coupled", "condensed"]), default="coupled",
-              help="coupled (eqs. 7-8, default) or condensed (eq. 22, the study's condensation)")
+@click.option("--model", type=_Choice(list(mc_registry.names())), default="coupled",
+              help="coupled (eqs. 7-8, default), condensed (eq. 22, the study's condensation) or stiff_bed "
+                   "(rigid block on the quasi-static contact, docs/stiff_bed.md)")
 @click.option("--dt", type=float, help="time step [s] of a one-column record")
 @click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
               help="acceleration units of a text record (default m/s2; AT2 files: from the header)")

@@ -8,7 +8,7 @@ unused) with a ``[records]`` table::
     units = "g"                  # of text records (AT2: from the header); "g", "m/s2", "cm/s2"
     # dt = 0.01                  # s, for one-column records
     scale = 1.0                  # factor on every record (optional)
-    model = "coupled"            # or "condensed"
+    model = "coupled"            # or "condensed", "stiff_bed"
     period = 0.5                 # s, period of Sa(T, 5 %) (optional)
     threshold = 0.2              # rotation threshold of the fragility ...
     relative_to = "slenderness"  # ... as a fraction of atan(b/h) or "theta_ul", or "rad"
@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from screening.solvers import mc_registry
 from screening.workflow.config import StudyError, check_keys
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im")
@@ -79,8 +80,8 @@ def load_cloud_study(path):
         except (ValueError, TypeError) as exc:
             raise StudyError(f"records.files: {exc}") from None
         model = rec.get("model", "coupled")
-        if model not in ("coupled", "condensed"):
-            raise StudyError(f"records.model: must be 'coupled' or 'condensed' (got {model!r})")
+        if model not in mc_registry.names():
+            raise StudyError(f"records.model: must be one of {', '.join(mc_registry.names())} (got {model!r})")
         im = rec.get("im", "pga")
         if im not in IMS:
             raise StudyError(f"records.im: must be one of {', '.join(IMS)} (got {im!r})")
