@@ -259,3 +259,47 @@ def test_model_registry_lists_the_stiff_bed_model():
         mc_registry.get("rigid")
     with pytest.raises(ValueError, match="parameter 'transfer'"):
         StiffBedModel(transfer="constant")
+
+
+# ----------------------------------------------------------------------------- paired with the coupled model
+@pytest.mark.slow
+def test_paired_samples_in_full_contact_match_the_coupled_model():
+    """Same seeds, same synthesized ground motions: at an intensity where the statue on k = 1e10 mostly
+    stays in full contact, the samples that never lift in either model have the same peak rotation
+    (both are the linear rocking oscillator there; 1 % for the coupled model's second-order
+    vertical coupling), and the models agree on which samples lift at all (all but 2 of 64)."""
+    bed = _bed(STATUE, 1e10)
+    kw = dict(n_samples=64, seed=5, t_end=10.0, progress=False)
+    exc = screening.KanaiTajimi(2.5e-4, 15.6, 0.6)
+    ref = screening.monte_carlo(STATUE, bed, exc, model="coupled", **kw)
+    new = screening.monte_carlo(STATUE, bed, exc, model="stiff_bed", **kw)
+    tu = float(ref.theta_ul)
+    lifted_ref = ref.peak_abs_theta.values > tu
+    lifted_new = new.peak_abs_theta.values > tu
+    quiet = ~lifted_ref & ~lifted_new
+    assert 10 <= quiet.sum() <= 60                     # both regimes present
+    np.testing.assert_allclose(new.peak_abs_theta.values[quiet], ref.peak_abs_theta.values[quiet], rtol=0.01)
+    assert np.sum(lifted_ref != lifted_new) <= 2
+
+
+@pytest.mark.slow
+def test_exceedance_and_overturning_probabilities_match_the_coupled_model_on_a_stiff_bed():
+    """The statue on k = 1e10 at S0 = 0.02 (most samples rock, some overturn), 120 samples of each
+    model on the same ground motions: P(|theta| > a alpha), a = 0.05, 0.1, 0.3, 0.5, and P(overturn)
+    within max(0.03, 2.5 standard errors of the difference), the tolerance of the scene's validity
+    table (rocking responses are sensitive to the smallest perturbation, so the comparison is of
+    the probabilities, not of each sample)."""
+    bed = _bed(STATUE, 1e10)
+    kw = dict(n_samples=120, seed=11, progress=False)
+    exc = screening.KanaiTajimi(0.02, 15.6, 0.6)
+    alpha = STATUE.slenderness
+    probs = {}
+    for model in ("coupled", "stiff_bed"):
+        ds = screening.monte_carlo(STATUE, bed, exc, model=model, **kw)
+        peak, over = ds.peak_abs_theta.values, ds.overturned.values
+        probs[model] = np.array([np.mean((peak > a * alpha) | over) for a in (0.05, 0.1, 0.3, 0.5)]
+                                + [np.mean(over)])
+    p, q = probs["coupled"], probs["stiff_bed"]
+    se = np.sqrt((p * (1 - p) + q * (1 - q)) / 120)
+    assert 0.03 < p[-1] < 0.6 and p[2] < 0.9          # an informative intensity
+    assert np.all(np.abs(p - q) <= np.maximum(0.03, 2.5 * se)), (p, q)
