@@ -80,6 +80,15 @@ class MonteCarloModel(abc.ABC):
         """``(theta_ul [rad], attrs)``: the uplift angle the model's uplift flag refers to, and attributes
         saying where it comes from."""
 
+    def input_band(self, block, foundation):
+        """Band [rad/s] of the synthesized ground motion the model reads, or None (default) for all of it.
+
+        With a band, :func:`screening.solvers.montecarlo.monte_carlo` hands the model the same samples
+        (same seed, same synthesis) low-passed at the band on a coarser grid
+        (:func:`screening.solvers.synthesis.low_passed`).
+        """
+        return None
+
     def dataset_attributes(self, block, foundation, condensation):
         """Extra attributes of a Monte Carlo dataset of this model (default: none)."""
         return {}

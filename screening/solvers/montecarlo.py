@@ -44,8 +44,8 @@ from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.condensation import get as get_condensation
 from screening.solvers.mc_models import state_scales
 from screening.workflow.progress import Progress
-from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, spectral_plan,
-                                         stationary_samples, validate_seed)
+from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
+                                         spectral_plan, stationary_samples, validate_seed)
 from screening.solvers.timegrid import output_times
 from screening.solvers.datasets import monte_carlo_dataset
 
@@ -236,8 +236,11 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
-    q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
-    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
+    band = mc.input_band(block, foundation)
+    read_plan, stride = (plan, 1) if band is None else low_passed(plan, band)   # the model reads these samples
+    grid = read_plan.times[::stride]
+    q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
+    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)
     integrate_chunk = mc.integrator(block, foundation, cond, opts["max_flight_time"])
     scales = opts["rtol"] * mc.state_scales(block, foundation)
 
@@ -259,12 +262,14 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     with Progress(n_samples, label=f"monte_carlo[{model}]", enabled=show) as bar:
         for lo in range(0, n_samples, chunk):
             hi = min(lo + chunk, n_samples)
-            acc, acc_dot = stationary_samples(plan, seed, np.arange(lo, hi))
+            acc, acc_dot = stationary_samples(read_plan, seed, np.arange(lo, hi))
+            if stride > 1:
+                acc, acc_dot = np.ascontiguousarray(acc[:, ::stride]), np.ascontiguousarray(acc_dot[:, ::stride])
             acc_dot *= q                                    # d(q f)/dt = q f' + q' f
             acc_dot += q_dot * acc
             acc *= q
             sl = slice(lo, hi)
-            integrate_chunk(acc, acc_dot, plan.dt, times, y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"],
+            integrate_chunk(acc, acc_dot, stride * read_plan.dt, times, y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"],
                             theta[sl], theta_dot[sl], z_cb[:hi - lo], z_cb_dot[:hi - lo], uplift[sl], peak[sl],
                             status[sl], reason[sl], n_acc[sl], n_rej[sl], h_min[sl])
             bar.update(hi - lo)

@@ -79,7 +79,7 @@ from screening.kernels.dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53
 from screening.kernels.interpolation import hermite
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, get as get_model, register
-from screening.solvers.synthesis import rocking_frequency
+from screening.solvers.synthesis import CUTOFF_FACTOR, rocking_frequency
 
 __all__ = ["StiffBedModel", "STIFF_BED", "housner_restitution", "indentation_curvature", "linear_propagator",
            "rocking_coefficients", "rocking_acceleration", "potential", "transfer_table", "validity",
@@ -666,6 +666,9 @@ class _StiffIntegrator(ChunkIntegrator):
 
 
 TRANSFER_LAWS = ("bed", "housner", "none")
+BANDS = ("own", "full")
+#: Lowest frequency [rad/s] the model's own input band covers (10 Hz), whatever the bed.
+BAND_FLOOR = 2.0 * math.pi * 10.0
 
 
 class StiffBedModel(MonteCarloModel):
@@ -673,6 +676,11 @@ class StiffBedModel(MonteCarloModel):
 
     ``transfer``: ``"bed"`` (the bed-derived table, :func:`transfer_table`), ``"housner"``
     (Housner's ``r^2`` per transfer) or ``"none"`` (no transfer loss; used to build the table).
+    ``band``: ``"own"`` reads the Monte Carlo ground motions low-passed at
+    ``CUTOFF_FACTOR x max(w_r, 10 Hz)`` (``w_r`` the full-contact rocking frequency: the block in
+    full contact filters what lies above it, a rigid block in uplift responds to it like ``1/w^2``),
+    the same samples as the other models on a coarser grid; ``"full"`` reads them as the coupled
+    model does (its band is set by the vertical frequency).
     """
 
     name = "stiff_bed"
@@ -680,10 +688,18 @@ class StiffBedModel(MonteCarloModel):
                    "derived from the coupled model's free rocking (docs/stiff_bed.md)")
     default_rtol = 1e-7
 
-    def __init__(self, transfer="bed"):
+    def __init__(self, transfer="bed", band="own"):
         if transfer not in TRANSFER_LAWS:
             raise ValueError(f"parameter 'transfer' must be one of {TRANSFER_LAWS} (got {transfer!r})")
+        if band not in BANDS:
+            raise ValueError(f"parameter 'band' must be one of {BANDS} (got {band!r})")
         self.transfer = transfer
+        self.band = band
+
+    def input_band(self, block, foundation):
+        if self.band == "full":
+            return None
+        return CUTOFF_FACTOR * max(rocking_frequency(block, foundation), BAND_FLOOR)
 
     def check(self, block, foundation, condensation):
         check_standing(block, foundation)
@@ -719,8 +735,12 @@ class StiffBedModel(MonteCarloModel):
 
     def dataset_attributes(self, block, foundation, condensation):
         ratio, rule = validity(block, foundation)
+        band = self.input_band(block, foundation)
         return {"transfer_loss": self.transfer, "validity_rule": rule, "validity_ratio": ratio,
-                "m_sdof": float(block.m_sdof)}
+                "m_sdof": float(block.m_sdof),
+                "input_band_rad_s": float("nan") if band is None else float(band),
+                "input_band_note": "the model reads the synthesized samples low-passed at input_band_rad_s "
+                                   "(same seed and components below it)" if band is not None else "full band"}
 
 
 STIFF_BED = register(StiffBedModel())
