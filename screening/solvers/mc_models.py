@@ -93,7 +93,21 @@ class _KernelIntegrator(ChunkIntegrator):
                        out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min)
 
 
-class CoupledModel(MonteCarloModel):
+class _KernelModel(MonteCarloModel):
+    """A model of the 4-state kernel of :mod:`screening.solvers.mcs_kernels` (``code``: its model code)."""
+
+    code = -1
+
+    def state_scales(self, block, foundation):
+        return state_scales(block, foundation)
+
+    def integrator(self, block, foundation, condensation, max_flight_time):
+        cond = condensations.get(condensation if self.uses_condensation else "paper")
+        return _KernelIntegrator(self.code, cond.sdof_kernel(block, foundation),
+                                 kern.model_record(block, foundation, cond, max_flight_time))
+
+
+class CoupledModel(_KernelModel):
     """The full coupled rocking/vertical model (module docstring)."""
 
     name = "coupled"
@@ -104,6 +118,7 @@ class CoupledModel(MonteCarloModel):
     #: by ~0.15 standard errors).
     default_rtol = 1e-7
     vertical_state = True
+    code = kern.MODEL_COUPLED
 
     def check(self, block, foundation, condensation):
         if condensations.get(condensation) != condensations.get("paper"):
@@ -113,39 +128,24 @@ class CoupledModel(MonteCarloModel):
     def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
         return np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])
 
-    def state_scales(self, block, foundation):
-        return state_scales(block, foundation)
-
-    def integrator(self, block, foundation, condensation, max_flight_time):
-        paper = condensations.get("paper")
-        return _KernelIntegrator(kern.MODEL_COUPLED, paper.sdof_kernel(block, foundation),
-                                 kern.model_record(block, foundation, paper, max_flight_time))
-
     def uplift_threshold(self, block, foundation, condensation):
         return exact_uplift_threshold(block, foundation)
 
 
-class CondensedModel(MonteCarloModel):
+class CondensedModel(_KernelModel):
     """The condensed SDOF with a condensation's ``C(theta)``, ``K(theta)`` (module docstring)."""
 
     name = "condensed"
     description = "condensed SDOF (eq. 22) with a condensation's C(theta), K(theta)"
     default_rtol = 1e-6
     uses_condensation = True
+    code = kern.MODEL_CONDENSED
 
     def check(self, block, foundation, condensation):
         condensations.get(condensation).check(block, foundation)
 
     def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
         return np.array([theta0, theta_dot0, 0.0, 0.0])
-
-    def state_scales(self, block, foundation):
-        return state_scales(block, foundation)
-
-    def integrator(self, block, foundation, condensation, max_flight_time):
-        cond = condensations.get(condensation)
-        return _KernelIntegrator(kern.MODEL_CONDENSED, cond.sdof_kernel(block, foundation),
-                                 kern.model_record(block, foundation, cond, max_flight_time))
 
     def uplift_threshold(self, block, foundation, condensation):
         return float(condensations.get(condensation).uplift_threshold(block, foundation)), {}

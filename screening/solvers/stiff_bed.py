@@ -76,8 +76,8 @@ from screening.condensation import cubic
 from screening.kernels import dopri
 from screening.kernels.dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
                                      B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
-from screening.kernels.interpolation import hermite
 from screening.solvers import mcs_kernels as kern
+from screening.solvers.mcs_kernels import _err_term as _err2, _hermite as _input  # one home: input and error norm
 from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, get as get_model, register
 from screening.solvers.synthesis import CUTOFF_FACTOR, rocking_frequency
 
@@ -317,25 +317,6 @@ def transfer_ratio_jit(log_amp, log_eta, amp):
         j += 1
     f = (x - log_amp[j]) / (log_amp[j + 1] - log_amp[j])
     return math.exp(log_eta[j] + f * (log_eta[j + 1] - log_eta[j]))
-
-
-@numba.njit(cache=True)
-def _input(row, acc, acc_dot, dt, t):
-    x = t / dt
-    j = int(x)
-    n = acc.shape[1]
-    if j > n - 2:
-        j = n - 2
-    if j < 0:
-        j = 0
-    return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], x - j, dt)
-
-
-@numba.njit(cache=True)
-def _err2(e, y, ynew, scale, rtol):
-    sc = scale + rtol * max(abs(y), abs(ynew))
-    r = e / sc
-    return r * r
 
 
 @numba.njit(cache=True)
