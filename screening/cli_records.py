@@ -86,7 +86,8 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     announce_compilation()
     try:
         ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
-                      condensation=chosen.condensation if model == "condensed" else "paper", t_end=t_end)
+                      condensation=chosen.condensation if mc_registry.get(model).uses_condensation else "paper",
+                      t_end=t_end)
     except ValueError as exc:
         raise CommandError(str(exc)) from None
     ds.attrs.update(study=str(study), record_scale=scale,

@@ -188,7 +188,8 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None):
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
     records = read_cloud_records(cloud)
     rows, failures = record_rows(block, foundation, records, cloud.model,
-                                 chosen.condensation if cloud.model == "condensed" else "paper", cloud.period,
+                                 chosen.condensation if mc_registry.get(cloud.model).uses_condensation else "paper",
+                                 cloud.period,
                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
     ds.attrs["execution"] = "serial, in process" if client is None else \
