@@ -1,9 +1,11 @@
 """Monte Carlo reference: ensemble statistics of the rocking response under synthesized input.
 
-:func:`monte_carlo` integrates either the full coupled model (paper eqs. 7–8 with the
-exact contact resultants of :mod:`screening.physics.contact`) or the condensed SDOF (eq. 22 with
-eqs. 24–25, or with ``condensation="cubic"`` the ``C``, ``K`` of
-:mod:`screening.condensation.cubic`) for ``n_samples`` ground-acceleration samples
+:func:`monte_carlo` integrates a registered Monte Carlo model (:mod:`screening.solvers.mc_registry`,
+resolved once at set-up): the full coupled model (paper eqs. 7–8 with the exact contact
+resultants of :mod:`screening.physics.contact`), the condensed SDOF (eq. 22 with eqs. 24–25, or
+with ``condensation="cubic"`` the ``C``, ``K`` of :mod:`screening.condensation.cubic`) or the
+stiff-bed model (:mod:`screening.solvers.stiff_bed`, which reads the samples low-passed at its own
+band) for ``n_samples`` ground-acceleration samples
 synthesized by the spectral representation method (:mod:`screening.solvers.synthesis`), and
 returns the time histories of the ensemble moments of ``theta`` and ``theta'`` on the
 shared output grid (:func:`screening.solvers.timegrid.output_times`).

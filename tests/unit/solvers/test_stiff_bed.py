@@ -303,3 +303,11 @@ def test_exceedance_and_overturning_probabilities_match_the_coupled_model_on_a_s
     se = np.sqrt((p * (1 - p) + q * (1 - q)) / 120)
     assert 0.03 < p[-1] < 0.6 and p[2] < 0.9          # an informative intensity
     assert np.all(np.abs(p - q) <= np.maximum(0.03, 2.5 * se)), (p, q)
+
+
+def test_compiled_transfer_ratio_is_the_log_linear_interpolant_of_the_table():
+    log_amp = np.log(np.array([1e-5, 3e-5, 1e-3, 0.1]))
+    log_eta = np.log(np.array([1.0, 0.99, 0.95, 0.9]))
+    for amp in (5e-6, 1e-5, 2e-5, 4e-4, 0.05, 0.1, 0.3):
+        ref = math.exp(np.interp(math.log(amp), log_amp, log_eta))
+        assert sb.transfer_ratio_jit(log_amp, log_eta, amp) == pytest.approx(ref, rel=1e-14)
