@@ -11,6 +11,7 @@ from pathlib import Path
 import click
 
 from screening.atomicfile import atomic_path
+from screening.solvers import mc_registry
 from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
                            _stem, announce_compilation, cli, lognormal_fit_text, stamp_fragility,
                            write_fragility_files)
@@ -58,8 +59,9 @@ def _read(record, dt, units):
                                              "if any, is not used)")
 @click.option("--out", help="netCDF file (default <record-stem>_simulation.nc in the current folder; its folder "
                             "must exist); the PNG goes next to it")
-@click.option("--model", type=_Choice(["coupled", "condensed"]), default="coupled",
-              help="coupled (eqs. 7-8, default) or condensed (eq. 22, the study's condensation)")
+@click.option("--model", type=_Choice(list(mc_registry.names())), default="coupled",
+              help="coupled (eqs. 7-8, default), condensed (eq. 22, the study's condensation) or stiff_bed "
+                   "(rigid block on the quasi-static contact, docs/stiff_bed.md)")
 @click.option("--dt", type=float, help="time step [s] of a one-column record (checked against a time column "
                                       "or an AT2 header)")
 @click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
@@ -95,7 +97,8 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     announce_compilation()
     try:
         ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
-                      condensation=chosen.condensation if model == "condensed" else "paper", t_end=t_end)
+                      condensation=chosen.condensation if mc_registry.get(model).uses_condensation else "paper",
+                      t_end=t_end)
     except ValueError as exc:
         raise CommandError(str(exc)) from None
     ds.attrs.update(study=str(study), record_scale=scale,

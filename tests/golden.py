@@ -302,7 +302,7 @@ def _perturbed(scale_rtol=1.0, scale_k=1.0):
     import dataclasses
 
     from screening.analysis import tradeoff
-    from screening.solvers import montecarlo
+    from screening.solvers import mc_registry, montecarlo
     from screening.workflow import config, study
 
     @contextlib.contextmanager
@@ -313,13 +313,18 @@ def _perturbed(scale_rtol=1.0, scale_k=1.0):
             block, foundation, excitation = build(*args, **kwargs)
             return block, dataclasses.replace(foundation, k=foundation.k * scale_k), excitation
 
+        models = {name: mc_registry.get(name) for name in rtol}
         montecarlo.DEFAULT_RTOL.update({m: r * scale_rtol for m, r in rtol.items()})
+        for name, model in models.items():
+            model.default_rtol = rtol[name] * scale_rtol         # what monte_carlo reads
         for module in (config, study, tradeoff):
             module.build_models = build_scaled
         try:
             yield
         finally:
             montecarlo.DEFAULT_RTOL.update(rtol)
+            for name, model in models.items():
+                del model.default_rtol                            # back to the class's value
             for module in (config, study, tradeoff):
                 module.build_models = build
     return patched()

@@ -19,8 +19,8 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
-from screening import condensation as condensations, schema
-from screening.condensation.base import Condensation
+from screening import schema
+from screening.solvers import mc_registry
 from screening.model.points import numeric_fields
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
@@ -104,21 +104,6 @@ def linearization_dataset(result, times, dims, parameters, derived, attrs):
     return finish(xr.Dataset(data, coords=_coordinates(times, parameters), attrs=attrs))
 
 
-def _monte_carlo_theta_ul(block, foundation, model, condensation):
-    """``(theta_ul, attrs)``: of the condensation of a condensed run; for the coupled model the exact
-    static uplift angle (the ``"cubic"`` threshold), or the paper's for a softening bed that cannot
-    carry the block through uplift under ``"cubic"``."""
-    if model == "condensed":
-        return float(condensations.get(condensation).uplift_threshold(block, foundation)), {}
-    try:
-        return float(condensations.get("cubic").uplift_threshold(block, foundation)), {"theta_ul_condensation": "cubic"}
-    except ValueError as exc:
-        return (float(condensations.get("paper").uplift_threshold(block, foundation)),
-                {"theta_ul_condensation": "paper",
-                 "theta_ul_note": f"the exact (cubic) uplift angle does not exist here ({exc}); theta_ul is the "
-                                  f"paper's m g / (2 b^2 k)"})
-
-
 def _status_text(n_samples, n_overturned, n_diverged):
     n_used = n_samples - n_overturned - n_diverged
     if n_used >= 2:
@@ -134,21 +119,23 @@ def _status_text(n_samples, n_overturned, n_diverged):
 
 def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                         block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
-                        condensation="paper"):
+                        condensation="paper", mc_model=None):
     """The dataset of :func:`screening.solvers.montecarlo.monte_carlo` (see its docstring).
 
     ``stats``: the ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`);
     ``peak``, ``overturned``, ``diverged``, ``n_acc``, ``n_rej``, ``reason``, ``h_min``: per sample;
     ``n_over``, ``n_div``: counts; ``opts``: the numerics; ``plan``: the spectral plan of the input;
-    ``wall``: the integration time [s].
+    ``wall``: the integration time [s]; ``mc_model``: the :class:`~screening.solvers.mc_registry.MonteCarloModel`
+    (default: the registered ``model``), which gives ``theta_ul`` and its own attributes.
     """
+    mc = mc_registry.get(model if mc_model is None else mc_model)
 
     n_used = n_samples - n_over - n_div
     data = {name: ("t", stats[name]) for name in MONTE_CARLO_STATISTICS}
     data.update(peak_abs_theta=("sample", peak), overturned=("sample", overturned), diverged=("sample", diverged),
                 n_steps=("sample", n_acc + n_rej), n_overturned=((), n_over), n_diverged=((), n_div),
                 n_used=((), n_used))
-    theta_ul, theta_ul_attrs = _monte_carlo_theta_ul(block, foundation, model, condensation)
+    theta_ul, theta_ul_attrs = mc.uplift_threshold(block, foundation, condensation)
     data.update(theta_ul=((), theta_ul), slenderness=((), float(block.slenderness)))
     coords = _coordinates(times, model_fields(block, foundation, excitation))
     coords["sample"] = ("sample", np.arange(n_samples))
@@ -182,10 +169,5 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
         "wall_time_s": float(wall),
         **theta_ul_attrs,
     }
-    if model == "condensed":
-        cond = condensations.get(condensation)
-        attrs.update(condensation=cond.name, m_sdof=float(block.m_sdof),
-                     C1=float(cond.damping_at_rest(block, foundation)))
-        if type(cond).capacity_angle is not Condensation.capacity_angle:
-            attrs["theta_capacity"] = float(cond.capacity_angle(block, foundation))
+    attrs.update(mc.dataset_attributes(block, foundation, condensation))
     return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.MONTE_CARLO)

@@ -1,9 +1,11 @@
 """Monte Carlo reference: ensemble statistics of the rocking response under synthesized input.
 
-:func:`monte_carlo` integrates either the full coupled model (paper eqs. 7–8 with the
-exact contact resultants of :mod:`screening.physics.contact`) or the condensed SDOF (eq. 22 with
-eqs. 24–25, or with ``condensation="cubic"`` the ``C``, ``K`` of
-:mod:`screening.condensation.cubic`) for ``n_samples`` ground-acceleration samples
+:func:`monte_carlo` integrates a registered Monte Carlo model (:mod:`screening.solvers.mc_registry`,
+resolved once at set-up): the full coupled model (paper eqs. 7–8 with the exact contact
+resultants of :mod:`screening.physics.contact`), the condensed SDOF (eq. 22 with eqs. 24–25, or
+with ``condensation="cubic"`` the ``C``, ``K`` of :mod:`screening.condensation.cubic`) or the
+stiff-bed model (:mod:`screening.solvers.stiff_bed`, which reads the samples low-passed at its own
+band) for ``n_samples`` ground-acceleration samples
 synthesized by the spectral representation method (:mod:`screening.solvers.synthesis`), and
 returns the time histories of the ensemble moments of ``theta`` and ``theta'`` on the
 shared output grid (:func:`screening.solvers.timegrid.output_times`).
@@ -43,25 +45,26 @@ import time
 
 import numpy as np
 
-from screening.solvers import mcs_kernels as kern
+from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.condensation import get as get_condensation
-from screening.condensation.paper import uplift_threshold
 from screening.physics.contact import rest_indentation
+from screening.solvers.mc_models import state_scales
 from screening.workflow.progress import Progress
-from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
-                        spectral_plan, stationary_samples, validate_seed, vertical_frequency)
+from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
+                                         spectral_plan, stationary_samples, validate_seed, vertical_frequency)
 from screening.solvers.timegrid import output_times
 from screening.solvers.datasets import monte_carlo_dataset
 from screening.validation import check_integer, check_size
 from screening.workflow import limits
 
-MODELS = ("coupled", "condensed")
+#: The registered Monte Carlo models (:mod:`screening.solvers.mc_registry`).
+MODELS = mc_registry.names()
 
-#: Default relative tolerance per model.  The coupled model is tighter: near overturning its
-#: samples are sensitive to integration error (at 1e-6 about 4 % of the samples of the paper's
-#: S0 = 2.4e-3 case switch between overturned and survived against a 1e-9 reference, moving
-#: the survivors' peak variance by ~0.6 standard errors; at 1e-7 ~0.15 SE).
-DEFAULT_RTOL = {"coupled": 1e-7, "condensed": 1e-6}
+#: Default relative tolerance per model (each model's ``default_rtol``).  The coupled model is
+#: tighter: near overturning its samples are sensitive to integration error (at 1e-6 about 4 % of
+#: the samples of the paper's S0 = 2.4e-3 case switch between overturned and survived against a
+#: 1e-9 reference, moving the survivors' peak variance by ~0.6 standard errors; at 1e-7 ~0.15 SE).
+DEFAULT_RTOL = {name: mc_registry.get(name).default_rtol for name in MODELS}
 
 #: Default numerical settings (see the module docstring).
 DEFAULT_NUMERICS = {
@@ -128,15 +131,6 @@ def _check_numerics(numerics):
 
 
 # ----------------------------------------------------------------------------- set-up
-def state_scales(block, foundation):
-    """Absolute error scales of ``(theta, theta', z_cb, z_cb')``: ``theta_ul`` [rad], ``theta_ul w_r``
-    [rad/s], static indentation ``m g/(2 b k)`` [m] and ``z_st w_v`` [m/s]."""
-    tu = float(uplift_threshold(block, foundation))
-    z_st = float(block.m * block.g / (2.0 * block.b * foundation.k))
-    w_r = max(rocking_frequency(block, foundation), 1.0)
-    return np.array([tu, tu * w_r, z_st, z_st * vertical_frequency(block, foundation)])
-
-
 def vertical_damping_ratio(block, foundation):
     """Damping ratio [1] of the block's vertical vibration on the bed at rest, ``c_v / (2 m w_v)``.
 
@@ -171,10 +165,9 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
 
 def initial_state(block, foundation, model):
-    """Initial ``(theta, theta', z_cb, z_cb')``: static equilibrium (coupled) or rest (condensed)."""
-    if model == "coupled":
-        return np.array([0.0, 0.0, rest_indentation(block, foundation), 0.0])
-    return np.zeros(4)
+    """Initial ``(theta, theta', z_cb, z_cb')`` of a registered model at rest: static equilibrium
+    (coupled) or rest (the others)."""
+    return mc_registry.get(model).initial_state(block, foundation)
 
 
 # ----------------------------------------------------------------------------- statistics
@@ -233,7 +226,11 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         (horizontal ground acceleration ``q(t) xi(t)`` or ``q(t) z(t)``; ``S0`` [m^2/s^3] is the
         two-sided PSD level, ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``).
     n_samples : number of samples, integer >= 2.
-    model : ``"coupled"`` (eqs. 7–8, exact contact resultants) or ``"condensed"`` (eq. 22).
+    model : a registered Monte Carlo model (:mod:`screening.solvers.mc_registry`) or its name:
+        ``"coupled"`` (eqs. 7–8, exact contact resultants), ``"condensed"`` (eq. 22) or
+        ``"stiff_bed"`` (rigid block on the quasi-static contact with the bed-derived transfer
+        loss, :mod:`screening.solvers.stiff_bed`; a warning names its validity rule when the bed
+        is outside it).
     t_end : record length [s], > 0.
     dt : OUTPUT step [s]; output times are ``output_times(t_end, dt)``.  The integration
         step is adaptive and finer (see ``rtol``, ``h_max``).
@@ -269,22 +266,20 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         option, or array-valued model parameters — before any work is done.
     """
     n_samples = check_integer("n_samples", n_samples, 2)
-    if model not in MODELS:
-        raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
+    mc = mc_registry.get(model)
+    model = mc.name
     cond = get_condensation(condensation)
-    if model == "coupled" and cond != get_condensation("paper"):
-        raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
-                         f"(got condensation={cond.name!r} with model='coupled')")
     seed = validate_seed(seed)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
     check_scalar_models(block, foundation, excitation)
     opts = _check_numerics(numerics)
     if opts["rtol"] is None:
-        opts["rtol"] = DEFAULT_RTOL[model]
+        opts["rtol"] = mc.default_rtol
     show = _show_progress(progress, n_samples, opts["chunk_size"])
-    y0 = initial_state(block, foundation, model)       # may raise for a bed that cannot carry the block
+    y0 = mc.initial_state(block, foundation)           # may raise for a bed that cannot carry the block
     cond.check(block, foundation)
+    mc.check(block, foundation, cond)
     check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
     check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
     opts["integrator"] = choose_integrator(block, foundation, model, opts["integrator"])
@@ -292,14 +287,13 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
-    q = np.ascontiguousarray(excitation.envelope(plan.times), dtype=float)
-    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, plan.times), dtype=float)
-    params = kern.model_record(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
-    sdof = cond.sdof_kernel(block, foundation) if model == "condensed" else \
-        get_condensation("paper").sdof_kernel(block, foundation)         # not read by the coupled model
-    integrate_chunk = kern.chunk_integrator(sdof.record.dtype)
-    scales = opts["rtol"] * state_scales(block, foundation)
-    model_code = kern.MODEL_COUPLED if model == "coupled" else kern.MODEL_CONDENSED
+    band = mc.input_band(block, foundation)
+    read_plan, stride = (plan, 1) if band is None else low_passed(plan, band)   # the model reads these samples
+    grid = read_plan.times[::stride]
+    q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
+    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)
+    integrate_chunk = mc.integrator(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
+    scales = opts["rtol"] * mc.state_scales(block, foundation)
 
     n_t = times.size
     theta = np.empty((n_samples, n_t))
@@ -319,15 +313,16 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     with Progress(n_samples, label=f"monte_carlo[{model}]", enabled=show) as bar:
         for lo in range(0, n_samples, chunk):
             hi = min(lo + chunk, n_samples)
-            acc, acc_dot = stationary_samples(plan, seed, np.arange(lo, hi))
+            acc, acc_dot = stationary_samples(read_plan, seed, np.arange(lo, hi))
+            if stride > 1:
+                acc, acc_dot = np.ascontiguousarray(acc[:, ::stride]), np.ascontiguousarray(acc_dot[:, ::stride])
             acc_dot *= q                                    # d(q f)/dt = q f' + q' f
             acc_dot += q_dot * acc
             acc *= q
             sl = slice(lo, hi)
-            integrate_chunk(model_code, sdof.damping_stiffness, sdof.record, acc, acc_dot, plan.dt, times,
-                            params[None], y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"], theta[sl],
-                            theta_dot[sl], z_cb[:hi - lo], z_cb_dot[:hi - lo], uplift[sl], peak[sl], status[sl],
-                            reason[sl], n_acc[sl], n_rej[sl], h_min[sl])
+            integrate_chunk(acc, acc_dot, stride * read_plan.dt, times, y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"],
+                            theta[sl], theta_dot[sl], z_cb[:hi - lo], z_cb_dot[:hi - lo], uplift[sl], peak[sl],
+                            status[sl], reason[sl], n_acc[sl], n_rej[sl], h_min[sl])
             bar.update(hi - lo)
             if callable(progress):
                 progress(hi)
@@ -340,5 +335,5 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
     return monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                           block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
-                          h_min, wall, cond.name)
+                          h_min, wall, cond.name, mc)
 

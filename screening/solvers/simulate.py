@@ -33,16 +33,15 @@ import math
 
 import numpy as np
 import xarray as xr
-from scipy import optimize
 
 from screening import condensation as condensations, schema
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
-                                       REGIME_UPLIFT_POSITIVE, contact_regime, contact_resultants,
-                                       rest_indentation)
+                                       REGIME_UPLIFT_POSITIVE, contact_regime)
 from screening.records import VERTICAL_NOT_USED, Record
-from screening.solvers import mcs_kernels as kern
+from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.datasets import finish
-from screening.solvers.montecarlo import DEFAULT_RTOL, MODELS, check_scalar_models, state_scales
+from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
+from screening.solvers.montecarlo import check_scalar_models
 from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 from screening.validation import check_integer, check_scalar
 from screening.workflow import limits
@@ -73,32 +72,6 @@ def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
     return t_end, output_dt, int(math.floor(t_end / output_dt + 1e-9)) + 1
 
 
-def quasi_static_indentation(block, foundation, theta0):
-    """``z_cb`` [m] carrying the weight at rest at angle ``theta0`` [rad]: ``F_cb(theta0, 0, z_cb, 0) = m g``.
-
-    Equals :func:`~screening.physics.contact.rest_indentation` at ``theta0 = 0``.
-    """
-    if theta0 == 0.0:
-        return rest_indentation(block, foundation)
-    b = float(block.b)
-    weight = float(block.m * block.g)
-
-    def excess(z):
-        force, _ = contact_resultants(theta0, 0.0, z, 0.0, b, float(foundation.k), float(foundation.eps),
-                                      float(foundation.damping), foundation.winkler)
-        return float(force) - weight
-
-    lo = -b * abs(math.sin(theta0))          # flight boundary: no force
-    hi = max(rest_indentation(block, foundation), 1e-12) + b * abs(math.sin(theta0))
-    for _ in range(200):
-        if excess(hi) > 0.0:
-            break
-        hi = lo + 2.0 * (hi - lo)
-    else:
-        raise ValueError(f"the bed cannot carry the block at theta0={theta0!r} rad")
-    return float(optimize.brentq(excess, lo, hi, xtol=1e-15, rtol=1e-14))
-
-
 def _input(ground_acceleration, dt):
     if isinstance(ground_acceleration, Record):
         if dt is not None and not math.isclose(float(dt), ground_acceleration.dt, rel_tol=1e-9):
@@ -125,7 +98,9 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
         acceleration in the usual convention (positive: ground accelerates towards ``+x``; see
         the module docstring), sampled at ``dt``.
     dt : time step of the samples [s] (required for an array; taken from a Record).
-    model : ``"coupled"`` (eqs. 7–8, exact contact) or ``"condensed"`` (eq. 22 with ``condensation``).
+    model : a registered Monte Carlo model or its name (:mod:`screening.solvers.mc_registry`):
+        ``"coupled"`` (eqs. 7–8, exact contact), ``"condensed"`` (eq. 22 with ``condensation``) or
+        ``"stiff_bed"`` (:mod:`screening.solvers.stiff_bed`).
     theta0 : initial rotation [rad], ``|theta0| <`` slenderness.
     theta_dot0 : initial angular velocity [rad/s].
     condensation : condensation of the condensed model (``"paper"`` or ``"cubic"``).
@@ -149,10 +124,10 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     ``"overturned"`` or ``"diverged: <reason>"``; ``attrs["sign_convention"]`` states the convention.
     """
     record = _input(ground_acceleration, dt)
-    if model not in MODELS:
-        raise ValueError(f"parameter 'model' must be one of {MODELS} (got {model!r})")
+    mc = mc_registry.get(model)
+    model = mc.name
     cond = condensations.get(condensation)
-    if model == "coupled" and cond != condensations.get("paper"):
+    if not mc.uses_condensation and cond != condensations.get("paper"):
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only (got {cond.name!r})")
     dt = record.dt
     check_scalar_models(block, foundation, purpose="simulate")
@@ -163,13 +138,14 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
         raise ValueError(f"parameter 'theta0' must be smaller in magnitude than the slenderness angle "
                          f"{slender:.6g} rad (got {theta0!r})")
     t_end, output_dt, n_out = simulation_times(record, t_end, output_dt)
-    rtol = DEFAULT_RTOL[model] if rtol is None else check_scalar("rtol", rtol, lower=0.0, upper=limits.MAX_RTOL,
-                                                                 upper_inclusive=True)
+    rtol = mc.default_rtol if rtol is None else check_scalar("rtol", rtol, lower=0.0, upper=limits.MAX_RTOL,
+                                                              upper_inclusive=True)
     h_max = min(0.005, dt) if h_max is None else check_scalar("h_max", h_max, lower=0.0)
     max_steps = check_integer("max_steps", max_steps, 1)
     max_flight_time = check_scalar("max_flight_time", max_flight_time, lower=0.0)
     overturn_resolution = check_integer("overturn_resolution", overturn_resolution, 1, MAX_OVERTURN_RESOLUTION)
     cond.check(block, foundation)
+    mc.check(block, foundation, cond)
 
     # input on the record grid, padded with rest to cover t_end (plus two samples for the interpolant)
     times = output_dt * np.arange(n_out)
@@ -179,24 +155,17 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     kernel_acc = np.ascontiguousarray(-a_g[None, :])                        # the one sign conversion
     kernel_rate = np.ascontiguousarray(np.gradient(kernel_acc[0], dt, edge_order=2)[None, :])
 
-    if model == "coupled":
-        y0 = np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])
-    else:
-        y0 = np.array([theta0, theta_dot0, 0.0, 0.0])
-    params = kern.model_record(block, foundation, cond, max_flight_time)
-    sdof = (cond if model == "condensed" else condensations.get("paper")).sdof_kernel(block, foundation)
-    integrate = kern.chunk_integrator(sdof.record.dtype)
-    scales = rtol * state_scales(block, foundation)
-    code = kern.MODEL_COUPLED if model == "coupled" else kern.MODEL_CONDENSED
+    y0 = mc.initial_state(block, foundation, theta0, theta_dot0)
+    integrate = mc.integrator(block, foundation, cond, max_flight_time)
+    scales = rtol * mc.state_scales(block, foundation)
 
     def run(t_out, y_init):
         out = [np.empty((1, t_out.size)) for _ in range(4)]
         uplift = np.zeros((1, t_out.size), dtype=np.bool_)
         peak, h_min = np.zeros(1), np.zeros(1)
         status, reason, n_acc, n_rej = (np.zeros(1, dtype=np.int64) for _ in range(4))
-        integrate(code, sdof.damping_stiffness, sdof.record, kernel_acc, kernel_rate, dt,
-                  np.ascontiguousarray(t_out), params[None], np.ascontiguousarray(y_init, dtype=float), scales,
-                  rtol, h_max, int(max_steps), *out, uplift, peak, status, reason, n_acc, n_rej, h_min)
+        integrate(kernel_acc, kernel_rate, dt, np.ascontiguousarray(t_out), np.ascontiguousarray(y_init, dtype=float),
+                  scales, rtol, h_max, int(max_steps), *out, uplift, peak, status, reason, n_acc, n_rej, h_min)
         return [o[0] for o in out], int(status[0]), int(reason[0]), float(peak[0]), int(n_acc[0] + n_rej[0])
 
     (theta, theta_dot, z_cb, z_cb_dot), status, reason, peak, n_steps = run(times, y0)
@@ -212,22 +181,15 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
         t_over = float(fine[bad[0]]) if bad.size else float(times[min(i + 1, n_out - 1)])
 
     finite = np.isfinite(theta)
-    if model == "coupled":
+    theta_ul = mc.uplift_threshold(block, foundation, cond)[0]
+    if mc.vertical_state:
         regime = np.where(finite, contact_regime(np.nan_to_num(theta), np.nan_to_num(z_cb), float(block.b)),
                           REGIME_NONE)
     else:
-        theta_ul_c = float(cond.uplift_threshold(block, foundation))
         up = np.where(theta >= 0.0, REGIME_UPLIFT_POSITIVE, REGIME_UPLIFT_NEGATIVE)
-        regime = np.where(finite, np.where(np.abs(np.nan_to_num(theta)) > theta_ul_c, up, REGIME_FULL_CONTACT),
+        regime = np.where(finite, np.where(np.abs(np.nan_to_num(theta)) > theta_ul, up, REGIME_FULL_CONTACT),
                           REGIME_NONE)
     acc_out = np.interp(times, dt * np.arange(n_grid), a_g)
-    if model == "coupled":
-        try:
-            theta_ul = float(condensations.get("cubic").uplift_threshold(block, foundation))
-        except ValueError:
-            theta_ul = float(condensations.get("paper").uplift_threshold(block, foundation))
-    else:
-        theta_ul = float(cond.uplift_threshold(block, foundation))
 
     status_text = "ok"
     if overturned:
@@ -256,7 +218,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
                       "input: cubic Hermite of the record with finite-difference slopes",
         "overturning_time_resolution": output_dt / int(overturn_resolution) if overturned else math.nan,
     }
-    if model == "condensed":
+    if mc.uses_condensation:
         attrs["condensation"] = cond.name
     if record.vertical is not None:
         attrs["record_vertical_component"] = VERTICAL_NOT_USED

@@ -192,6 +192,29 @@ def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
                         n_times=n_times, amplitudes=amplitudes)
 
 
+def low_passed(plan, band):
+    """The same samples low-passed at ``band`` [rad/s], on a coarser grid: ``(plan_low, stride)``.
+
+    ``plan_low`` keeps the frequencies ``omega_k < band`` of ``plan`` (same ``d_omega``, same FFT
+    length, so with the same seed every kept component has the same amplitude and phase: the
+    phases of a sample are the first draws of its generator); read its samples at every
+    ``stride``-th grid point (the coarse step keeps the plan's oversampling of the kept band, and the
+    coarse grid still covers the record).  ``stride = 1`` and ``plan`` itself when ``band`` is not below half the
+    plan's cutoff.
+    """
+    n_keep = max(int(round(band / plan.d_omega)), 1)
+    if not n_keep * plan.d_omega < 0.5 * plan.cutoff:
+        return plan, 1
+    t_end = (plan.n_times - 2) * plan.dt
+    stride = max(int(plan.cutoff / (n_keep * plan.d_omega)), 1)
+    while stride > 1 and stride * (int(math.ceil(t_end / (stride * plan.dt))) + 1) >= plan.n_fft:
+        stride -= 1
+    n_times = stride * (int(math.ceil(t_end / (stride * plan.dt))) + 1) + 1
+    low = SpectralPlan(cutoff=float(n_keep * plan.d_omega), d_omega=plan.d_omega, n_fft=plan.n_fft, dt=plan.dt,
+                       n_times=n_times, amplitudes=plan.amplitudes[:n_keep].copy())
+    return low, stride
+
+
 def validate_seed(seed):
     """Return ``seed`` as a Python int after checking it is an integer >= 0 (else ``ValueError``)."""
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:

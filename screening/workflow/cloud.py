@@ -9,7 +9,7 @@ unused) with a ``[records]`` table::
                                  # state them; AT2: from the header (must agree)
     # dt = 0.01                  # s, for one-column records (checked against time columns, AT2 headers)
     scale = 1.0                  # factor on every record (optional)
-    model = "coupled"            # or "condensed"
+    model = "coupled"            # or "condensed", "stiff_bed"
     period = 0.5                 # s, period of Sa(T, 5 %) (optional)
     threshold = 0.2              # rotation threshold of the fragility ...
     relative_to = "slenderness"  # ... as a fraction of atan(b/h) or "theta_ul", or "rad"
@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from screening.solvers import mc_registry
 from screening.workflow import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
@@ -87,8 +88,8 @@ def load_cloud_study(path, units=None):
         if len(files) > limits.MAX_RECORD_FILES:
             raise StudyError(f"records.files: {len(files)} files; at most {limits.MAX_RECORD_FILES}")
         model = rec.get("model", "coupled")
-        if model not in ("coupled", "condensed"):
-            raise StudyError(f"records.model: must be 'coupled' or 'condensed' (got {model!r})")
+        if model not in mc_registry.names():
+            raise StudyError(f"records.model: must be one of {', '.join(mc_registry.names())} (got {model!r})")
         im = rec.get("im", "pga")
         if im not in IMS:
             raise StudyError(f"records.im: must be one of {', '.join(IMS)} (got {im!r})")
@@ -207,7 +208,8 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     if records is None:
         records = read_cloud_records(cloud)
     rows, failures = record_rows(block, foundation, records, cloud.model,
-                                 chosen.condensation if cloud.model == "condensed" else "paper", cloud.period,
+                                 chosen.condensation if mc_registry.get(cloud.model).uses_condensation else "paper",
+                                 cloud.period,
                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
     vertical = [rec.name for rec in records if rec.vertical is not None]

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import screening
+from screening.solvers import mc_registry
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError, exception_line
@@ -185,15 +186,15 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
               progress=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
-    ``condensation`` (a :class:`screening.condensation.Condensation`) applies to
-    ``model="condensed"`` only (the coupled model has none).  ``linear = (t_out, rtol, max_steps,
+    ``condensation`` (a :class:`screening.condensation.Condensation`) applies to a model that uses one
+    (``model="condensed"``; the others have none).  ``linear = (t_out, rtol, max_steps,
     names)``: also solve the linearization at the point and return its histories ``names`` as
     ``sl_<name>`` (float64; for a result that does not store them on the grid).  ``progress = (topic,
     spot)``: the samples done are sent as worker events ``{"spot": spot, "done": n}`` on ``topic``.
     """
     from screening.solvers.montecarlo import monte_carlo
 
-    kw = {"condensation": condensation} if model == "condensed" else {}
+    kw = {"condensation": condensation} if mc_registry.get(model).uses_condensation else {}
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=t_end, dt=dt,
                      seed=seed, progress=_sample_events(progress), **kw)
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}

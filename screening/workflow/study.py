@@ -58,7 +58,7 @@ Example (SI units throughout)::
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
     count = 3                   # with "auto": how many points
     samples = 200
-    model = "coupled"           # or "condensed"
+    model = "coupled"           # or "condensed", "stiff_bed" (docs/stiff_bed.md)
     seed = 0
 
 Named cases
@@ -108,6 +108,7 @@ import numpy as np
 
 from screening import __version__
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
+from screening.solvers import mc_registry
 from screening.solvers.timegrid import output_times
 from screening.workflow import limits
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models,
@@ -118,7 +119,8 @@ from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, bu
 
 __all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
 
-MCS_MODELS = ("coupled", "condensed")
+#: The Monte Carlo models a study may name (the registered ones, :mod:`screening.solvers.mc_registry`).
+MCS_MODELS = mc_registry.names()
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
              "case", "output", "fragility", "run", "accuracy")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.

@@ -1,0 +1,165 @@
+"""The coupled and the condensed Monte Carlo models behind :mod:`screening.solvers.mc_registry`.
+
+Both run on the compiled 4-state integrator of :mod:`screening.solvers.mcs_kernels` (selected
+there by an integer model code, resolved here once):
+
+* ``"coupled"``: the full model, paper eqs. 7–8 with the exact contact resultants of
+  :mod:`screening.physics.contact` (states ``theta, theta', z_cb, z_cb'``), from static
+  equilibrium;
+* ``"condensed"``: the SDOF eq. 22 with a condensation's ``C(theta)``, ``K(theta)``
+  (:mod:`screening.condensation`), from rest.
+
+Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import optimize
+
+from screening import condensation as condensations
+from screening.condensation.paper import uplift_threshold as paper_uplift_threshold
+from screening.physics.contact import contact_resultants, rest_indentation
+from screening.solvers import mcs_kernels as kern
+from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, register
+from screening.solvers.synthesis import rocking_frequency, vertical_frequency
+
+__all__ = ["COUPLED", "CONDENSED", "state_scales", "exact_uplift_threshold", "quasi_static_indentation"]
+
+
+def state_scales(block, foundation):
+    """Absolute error scales of ``(theta, theta', z_cb, z_cb')``: ``theta_ul`` [rad], ``theta_ul w_r``
+    [rad/s], static indentation ``m g/(2 b k)`` [m] and ``z_st w_v`` [m/s]."""
+    tu = float(paper_uplift_threshold(block, foundation))
+    z_st = float(block.m * block.g / (2.0 * block.b * foundation.k))
+    w_r = max(rocking_frequency(block, foundation), 1.0)
+    return np.array([tu, tu * w_r, z_st, z_st * vertical_frequency(block, foundation)])
+
+
+def exact_uplift_threshold(block, foundation):
+    """``(theta_ul [rad], attrs)``: the exact static uplift angle (the ``"cubic"`` threshold), or the
+    paper's ``m g / (2 b^2 k)`` for a softening bed that cannot carry the block through uplift under
+    ``"cubic"`` (then ``attrs`` says so)."""
+    try:
+        return float(condensations.get("cubic").uplift_threshold(block, foundation)), {"theta_ul_condensation": "cubic"}
+    except ValueError as exc:
+        return (float(condensations.get("paper").uplift_threshold(block, foundation)),
+                {"theta_ul_condensation": "paper",
+                 "theta_ul_note": f"the exact (cubic) uplift angle does not exist here ({exc}); theta_ul is the "
+                                  f"paper's m g / (2 b^2 k)"})
+
+
+def quasi_static_indentation(block, foundation, theta0):
+    """``z_cb`` [m] carrying the weight at rest at angle ``theta0`` [rad]: ``F_cb(theta0, 0, z_cb, 0) = m g``.
+
+    Equals :func:`~screening.physics.contact.rest_indentation` at ``theta0 = 0``.
+    """
+    if theta0 == 0.0:
+        return rest_indentation(block, foundation)
+    b = float(block.b)
+    weight = float(block.m * block.g)
+
+    def excess(z):
+        force, _ = contact_resultants(theta0, 0.0, z, 0.0, b, float(foundation.k), float(foundation.eps),
+                                      float(foundation.damping), foundation.winkler)
+        return float(force) - weight
+
+    lo = -b * abs(math.sin(theta0))          # flight boundary: no force
+    hi = max(rest_indentation(block, foundation), 1e-12) + b * abs(math.sin(theta0))
+    for _ in range(200):
+        if excess(hi) > 0.0:
+            break
+        hi = lo + 2.0 * (hi - lo)
+    else:
+        raise ValueError(f"the bed cannot carry the block at theta0={theta0!r} rad")
+    return float(optimize.brentq(excess, lo, hi, xtol=1e-15, rtol=1e-14))
+
+
+class _KernelIntegrator(ChunkIntegrator):
+    """:func:`screening.solvers.mcs_kernels.chunk_integrator` with the model code and records bound."""
+
+    def __init__(self, code, sdof, params):
+        self.code = code
+        self.sdof = sdof
+        self.params = params[None]
+        self.integrate = kern.chunk_integrator(sdof.record.dtype)
+
+    def __call__(self, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
+                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min):
+        self.integrate(self.code, self.sdof.damping_stiffness, self.sdof.record, acc, acc_dot, dt_grid, t_out,
+                       self.params, y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
+                       out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min)
+
+
+class _KernelModel(MonteCarloModel):
+    """A model of the 4-state kernel of :mod:`screening.solvers.mcs_kernels` (``code``: its model code)."""
+
+    code = -1
+
+    def state_scales(self, block, foundation):
+        return state_scales(block, foundation)
+
+    def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
+        cond = condensations.get(condensation if self.uses_condensation else "paper")
+        return _KernelIntegrator(self.code, cond.sdof_kernel(block, foundation),
+                                 kern.model_record(block, foundation, cond, max_flight_time, sample_integrator))
+
+
+class CoupledModel(_KernelModel):
+    """The full coupled rocking/vertical model (module docstring)."""
+
+    name = "coupled"
+    description = "coupled rocking and vertical motion, exact contact resultants (eqs. 7-8)"
+    #: Tighter than the condensed model: near overturning its samples are sensitive to integration
+    #: error (at 1e-6 about 4 % of the samples of the paper's S0 = 2.4e-3 case switch between
+    #: overturned and survived against a 1e-9 reference; at 1e-7 the survivors' peak variance moves
+    #: by ~0.15 standard errors).
+    default_rtol = 1e-7
+    vertical_state = True
+    code = kern.MODEL_COUPLED
+
+    def check(self, block, foundation, condensation):
+        if condensations.get(condensation) != condensations.get("paper"):
+            raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
+                             f"(got condensation={condensations.get(condensation).name!r} with model='coupled')")
+
+    def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
+        return np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])
+
+    def uplift_threshold(self, block, foundation, condensation):
+        return exact_uplift_threshold(block, foundation)
+
+
+class CondensedModel(_KernelModel):
+    """The condensed SDOF with a condensation's ``C(theta)``, ``K(theta)`` (module docstring)."""
+
+    name = "condensed"
+    description = "condensed SDOF (eq. 22) with a condensation's C(theta), K(theta)"
+    default_rtol = 1e-6
+    uses_condensation = True
+    code = kern.MODEL_CONDENSED
+
+    def check(self, block, foundation, condensation):
+        condensations.get(condensation).check(block, foundation)
+
+    def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
+        return np.array([theta0, theta_dot0, 0.0, 0.0])
+
+    def uplift_threshold(self, block, foundation, condensation):
+        return float(condensations.get(condensation).uplift_threshold(block, foundation)), {}
+
+    def dataset_attributes(self, block, foundation, condensation):
+        cond = condensations.get(condensation)
+        attrs = dict(condensation=cond.name, m_sdof=float(block.m_sdof),
+                     C1=float(cond.damping_at_rest(block, foundation)))
+        if type(cond).capacity_angle is not condensations.Condensation.capacity_angle:
+            attrs["theta_capacity"] = float(cond.capacity_angle(block, foundation))
+        return attrs
+
+
+COUPLED = register(CoupledModel())
+CONDENSED = register(CondensedModel())
+
+from screening.solvers import stiff_bed  # noqa: E402,F401  (registers "stiff_bed")

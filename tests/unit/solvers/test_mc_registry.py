@@ -1,0 +1,105 @@
+"""The Monte Carlo model registry (screening.solvers.mc_registry): a model registered from outside the
+package runs through monte_carlo and simulate, and every place that chooses a model takes the
+registered names (studies, cloud studies, the simulate command)."""
+
+import numpy as np
+import pytest
+
+import screening
+from screening.model import Block, Foundation
+from screening.model.excitation import WhiteNoise
+from screening.solvers import mc_registry
+from screening.solvers.mc_models import CondensedModel
+from screening.workflow.study import StudyError, parse_study
+
+BLOCK = Block(m=8.67, b=0.035, h=0.21)
+BED = Foundation(k=2.89e7, lam=8.95e8)
+
+
+class _Doubled(CondensedModel):
+    """A toy model: the condensed model with every angle reported doubled (the engine must use it)."""
+
+    name = "toy_doubled"
+
+    def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
+        inner = super().integrator(block, foundation, condensation, max_flight_time)
+
+        def run(*args):
+            inner(*args)
+            args[9][...] *= 2.0            # out_theta
+            args[14][...] *= 2.0           # peak
+        return run
+
+
+@pytest.fixture
+def toy():
+    model = mc_registry.register(_Doubled())
+    yield model
+    mc_registry.unregister(model.name)
+
+
+def test_a_registered_model_runs_in_monte_carlo_and_simulate(toy):
+    kw = dict(n_samples=4, t_end=1.0, dt=0.1, seed=3, progress=False)
+    base = screening.monte_carlo(BLOCK, BED, WhiteNoise(1e-4), model="condensed", **kw)
+    doubled = screening.monte_carlo(BLOCK, BED, WhiteNoise(1e-4), model="toy_doubled", **kw)
+    np.testing.assert_array_equal(doubled.peak_abs_theta.values, 2.0 * base.peak_abs_theta.values)
+    np.testing.assert_allclose(doubled.var_theta.values, 4.0 * base.var_theta.values, rtol=1e-12)
+    assert doubled.attrs["model"] == "toy_doubled"
+    a_g = np.sin(np.linspace(0, 20, 200))
+    s_base = screening.simulate(BLOCK, BED, a_g, dt=0.01, model="condensed")
+    s_toy = screening.simulate(BLOCK, BED, a_g, dt=0.01, model=toy)
+    np.testing.assert_array_equal(s_toy.theta.values, 2.0 * s_base.theta.values)
+
+
+def test_unknown_model_is_refused_listing_the_registered_ones():
+    with pytest.raises(ValueError, match=r"parameter 'model' must be one of \('coupled', 'condensed', 'stiff_bed'"):
+        screening.monte_carlo(BLOCK, BED, WhiteNoise(1e-4), model="rigid", n_samples=2)
+
+
+STUDY = """
+[block]
+m = 1200.0
+b = 0.25
+h = 0.9
+[foundation]
+contact = "hunt_crossley"
+k = 1e10
+lam = 2e11
+[excitation]
+kind = "white"
+S0 = [1e-3, 2e-3]
+[time]
+t_end = 2.0
+dt = 0.05
+[mcs]
+model = MODEL
+"""
+
+
+def test_study_accepts_the_stiff_bed_model_and_lists_the_allowed_values():
+    assert parse_study(STUDY.replace("MODEL", '"stiff_bed"')).mcs.model == "stiff_bed"
+    with pytest.raises(StudyError, match="mcs.model: must be one of.*stiff_bed"):
+        parse_study(STUDY.replace("MODEL", '"rigid"'))
+
+
+def test_low_passed_samples_are_the_same_realization_without_its_high_band():
+    """A model with its own input band reads the coupled model's samples with the components above the
+    band removed: against the full plan with those amplitudes zeroed (1e-12), on a grid that keeps
+    the plan's oversampling of the kept band and covers the record."""
+    import dataclasses
+
+    from screening.solvers.synthesis import OVERSAMPLING, low_passed, spectral_plan, stationary_samples
+
+    plan = spectral_plan(screening.KanaiTajimi(0.02, 15.6, 0.6), 20.0, 6000.0)
+    low, stride = low_passed(plan, 800.0)
+    assert stride > 1 and abs(low.cutoff - 800.0) <= plan.d_omega
+    assert stride * plan.dt <= np.pi / (OVERSAMPLING * low.cutoff) * (1 + 1e-12)
+    assert (low.n_times - 1) * plan.dt >= 20.0 + stride * plan.dt - 1e-9
+    zeroed = dataclasses.replace(plan, n_times=low.n_times,
+                                 amplitudes=np.where(np.arange(plan.n_frequencies) < low.n_frequencies,
+                                                     plan.amplitudes, 0.0))
+    a, ad = stationary_samples(low, 4, [0, 3])
+    b, bd = stationary_samples(zeroed, 4, [0, 3])
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
+    np.testing.assert_allclose(ad, bd, rtol=0, atol=1e-12 * np.abs(bd).max())
+    assert low_passed(plan, 4000.0) == (plan, 1)            # not below half the cutoff: the plan itself

@@ -1,0 +1,313 @@
+"""The stiff-bed model (screening.solvers.stiff_bed) against independent computations: its compiled
+twins against the numpy reference, the exact full-contact propagator against a fine ODE solution,
+Housner's rigid block on an infinitely stiff bed (energy ratio per impact, period against the closed
+form and the energy-integral quadrature), the bed-derived transfer loss against the coupled model's
+free rocking, the quasi-static tilt against the condensation's moment law and the coupled model,
+mirror symmetry, and bad input."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from scipy.integrate import quad, solve_ivp
+
+import screening
+from screening.beds import lam_from_vertical_damping
+from screening.condensation import cubic
+from screening.model import Block, Foundation
+from screening.solvers import mc_registry, stiff_bed as sb
+from screening.solvers.stiff_bed import StiffBedModel
+
+STATUE = Block(m=1200.0, b=0.25, h=0.9)
+SLENDER = Block(m=500.0, b=0.1, h=1.0)
+
+
+def _bed(block, k, eps=0.0, zeta_v=0.05):
+    return Foundation(k=k, lam=float(lam_from_vertical_damping(k, block.m, block.b, zeta_v)), eps=eps)
+
+
+BEDS = [_bed(STATUE, 1e10), Foundation(k=2.1e9, lam=1e10, eps=2e9), Foundation(k=1e10, c=2e6),
+        Foundation(k=1e8, lam=1e9, eps=-1e5)]
+
+
+def _free(model, block, bed, theta0, t_end, output_dt=1e-4):
+    ds = screening.simulate(block, bed, np.zeros(3), dt=t_end / 2, t_end=t_end, theta0=theta0, model=model,
+                            output_dt=output_dt)
+    return ds.t.values, ds.theta.values, ds.theta_dot.values
+
+
+def _crossings(t, theta):
+    """Times [s] of the sign changes of theta (linear interpolation between outputs)."""
+    i = np.flatnonzero(np.sign(theta[1:]) != np.sign(theta[:-1]))
+    return t[i] - theta[i] * (t[i + 1] - t[i]) / (theta[i + 1] - theta[i])
+
+
+def _extreme_after_first_crossing(t, theta):
+    i = np.flatnonzero(np.sign(theta) != np.sign(theta[0]))[0]
+    j = np.flatnonzero(np.sign(theta[i:]) != np.sign(theta[i]))
+    seg = theta[i:i + j[0]] if j.size else theta[i:]
+    return float(np.max(np.abs(seg)))
+
+
+# ----------------------------------------------------------------------------- compiled twins
+@pytest.mark.parametrize("bed", BEDS, ids=["hc", "hardening", "winkler", "softening"])
+def test_compiled_acceleration_equals_the_numpy_reference(bed):
+    sp = sb.stiff_record(STATUE, bed)[0]
+    cp = cubic.sdof_record(STATUE, bed)[0]
+    tu = float(cubic.uplift_threshold(STATUE, bed))
+    for theta in (0.0, 0.3 * tu, -tu, 1.5 * tu, -20 * tu, 1e-3, -0.05, 0.2):
+        for theta_dot in (0.0, 0.4, -2.0):
+            ref = float(sb.rocking_acceleration(theta, theta_dot, 1.7, STATUE, bed))
+            jit = sb.rocking_acceleration_jit(sp, cp, theta, theta_dot, 1.7)
+            assert jit == pytest.approx(ref, rel=1e-9, abs=1e-9)   # Q: bed moment minus gravity cancel
+
+
+@pytest.mark.parametrize("bed", BEDS[:2] + BEDS[3:], ids=["hc", "hardening", "softening"])
+def test_indentation_curvature_is_the_derivative_of_the_condensation_slope(bed):
+    tu = float(cubic.uplift_threshold(STATUE, bed))
+    for a in (0.2 * tu, 0.8 * tu, 1.3 * tu, 10 * tu, 1e-3, 0.1):
+        d = 1e-6 * a
+        slope = lambda x: float(cubic.quasi_static_indentation(x, STATUE, bed)[1])  # noqa: E731
+        fd = (slope(a + d) - slope(a - d)) / (2 * d)
+        assert float(sb.indentation_curvature(a, STATUE, bed)) == pytest.approx(fd, rel=1e-5, abs=1e-9 * abs(fd) + 1e-12)
+        z, dz = cubic.quasi_static_indentation(a, STATUE, bed)
+        jit = sb.indentation_curvature_jit(cubic.sdof_record(STATUE, bed)[0], a, float(z), float(dz),
+                                           float(z) + STATUE.b * a)
+        assert jit == pytest.approx(float(sb.indentation_curvature(a, STATUE, bed)), rel=1e-12)
+
+
+def test_linear_propagator_against_a_fine_ode_solution():
+    m0, c0, k0, mh, dt = 1320.0, 5e3, 1.04e8, 1080.0, 4e-4
+    phi, gamma = sb.linear_propagator(m0, c0, k0, mh, dt)
+    u0, u1, d0, d1 = 1.3, -0.7, 2e3, -4e3
+    x0 = np.array([2e-6, -3e-4])
+
+    def u(t):
+        return screening.kernels.interpolation.hermite(u0, u1, d0, d1, t / dt, dt)
+
+    sol = solve_ivp(lambda t, y: [y[1], (mh * u(t) - c0 * y[1] - k0 * y[0]) / m0], (0, dt), x0, rtol=1e-12,
+                    atol=1e-18, method="DOP853")
+    exact = phi @ x0 + gamma @ np.array([u0, u1, dt * d0, dt * d1])
+    np.testing.assert_allclose(exact, sol.y[:, -1], rtol=1e-9)
+
+
+def test_kernel_free_rocking_matches_the_numpy_reference_ode():
+    """Uplift phase from rest at 0.2 rad to just before the first transfer: the compiled model against
+    solve_ivp on :func:`rocking_acceleration`."""
+    bed = BEDS[0]
+    t, theta, _ = _free(StiffBedModel(transfer="none"), STATUE, bed, 0.2, 0.4, output_dt=0.01)
+    sol = solve_ivp(lambda s, y: [y[1], float(sb.rocking_acceleration(y[0], y[1], 0.0, STATUE, bed))], (0, 0.4),
+                    [0.2, 0.0], t_eval=t, rtol=1e-11, atol=1e-13, method="DOP853")
+    assert np.all(theta > 0.0)
+    np.testing.assert_allclose(theta, sol.y[0], rtol=0, atol=2e-6 * 0.2)
+
+
+# ----------------------------------------------------------------------------- Housner's limit
+RIGID = Foundation(k=1e15, lam=0.0)
+
+
+def test_housner_restitution_from_angular_momentum():
+    """r = 1 - 1.5 sin^2 alpha equals (I_O - 2 m b^2) / I_O for the uniform block."""
+    i_o = STATUE.I_cm + STATUE.m * (STATUE.b**2 + STATUE.h**2)
+    assert sb.housner_restitution(STATUE) == pytest.approx((i_o - 2 * STATUE.m * STATUE.b**2) / i_o, rel=1e-14)
+
+
+@pytest.mark.parametrize("theta0_over_alpha", [0.3, 0.6])
+def test_infinitely_stiff_bed_loses_housner_energy_ratio_per_impact(theta0_over_alpha):
+    alpha = STATUE.slenderness
+    theta0 = theta0_over_alpha * alpha
+    t, theta, _ = _free(StiffBedModel(transfer="housner"), STATUE, RIGID, theta0, 3.0, output_dt=2e-5)
+    theta1 = _extreme_after_first_crossing(t, theta)
+    ratio = sb.potential(theta1, STATUE, RIGID) / sb.potential(theta0, STATUE, RIGID)
+    assert ratio == pytest.approx(sb.housner_restitution(STATUE) ** 2, rel=2e-3)
+
+
+def test_free_rocking_period_on_a_rigid_bed_against_quadrature_and_housner():
+    """Loss-free rocking of a slender block from theta0 = 0.2 alpha: the quarter period against the
+    quadrature of the energy integral int dtheta / sqrt(2 (V(theta0) - V(theta)) / m_eff(theta))
+    (tolerance 2e-4, the output resolution) and against Housner's closed form
+    (1/p) arccosh(1 / (1 - theta0/alpha)), p^2 = m g R / I_O, exact for the linearized slender block:
+    the model keeps O(theta) terms in the inertia, so within 1.5 %."""
+    block, alpha = SLENDER, SLENDER.slenderness
+    theta0 = 0.2 * alpha
+    t, theta, _ = _free(StiffBedModel(transfer="none"), block, RIGID, theta0, 6.0, output_dt=2e-4)
+    quarter = _crossings(t, theta)[0]
+    v0 = sb.potential(theta0, block, RIGID)
+
+    def integrand(th):
+        m_eff = float(sb.rocking_coefficients(th, block, RIGID)[0])
+        return 1.0 / math.sqrt(2.0 * max(v0 - sb.potential(th, block, RIGID), 1e-300) / m_eff)
+
+    # the singularity at theta0 is integrable like (theta0 - theta)^-1/2: substitute theta = theta0 (1 - s^2)
+    quadrature, _ = quad(lambda s: integrand(theta0 * (1 - s * s)) * 2 * theta0 * s, 0.0, 1.0, limit=200)
+    assert quarter == pytest.approx(quadrature, rel=2e-4)
+    radius = math.hypot(block.b, block.h)
+    i_o = block.I_cm + block.m * radius**2
+    p = math.sqrt(block.m * block.g * radius / i_o)
+    housner = math.acosh(1.0 / (1.0 - theta0 / alpha)) / p
+    assert quarter == pytest.approx(housner, rel=0.015)
+
+
+# ----------------------------------------------------------------------------- transfer loss from the bed
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [1e10, 1e11])
+def test_bed_derived_transfer_loss_reproduces_the_coupled_free_rocking(k):
+    """Between the table's nodes (geometric mid-points), the model's next amplitude after one transfer
+    against the coupled model's: within 2 % of the amplitude (the interpolation error of the table)."""
+    bed = _bed(STATUE, k)
+    amps = sb.transfer_table(STATUE, bed)[4]
+    for a0 in np.sqrt(amps[2:-1] * amps[3:])[::2]:
+        t_end = sb._half_period_estimate(a0, STATUE, bed)
+        out = {}
+        for model in ("coupled", "stiff_bed"):
+            t, theta, _ = _free(model, STATUE, bed, a0, t_end, output_dt=t_end / 20000)
+            out[model] = _extreme_after_first_crossing(t, theta)
+        assert out["stiff_bed"] == pytest.approx(out["coupled"], rel=0.02), a0
+
+
+def test_bed_derived_loss_grows_with_amplitude_and_with_stiffness_towards_housner():
+    """The loss depends on the amplitude (none at the smallest, the most at 0.7 alpha; non-increasing
+    energy ratio within 0.005) and, at large rotations, grows with the bed's stiffness towards, and
+    stays short of, Housner's plastic impact r^2 (0.80 for the statue; 0.92, 0.88, 0.85 measured)."""
+    last = []
+    for k in (1e10, 1e11, 1e12):
+        eta = np.exp(sb.transfer_table(STATUE, _bed(STATUE, k))[1])
+        assert eta[1] == 1.0 and eta[-1] < 0.95
+        assert np.all(np.diff(eta) < 0.005)
+        last.append(eta[-1])
+    assert last[0] > last[1] > last[2] > sb.housner_restitution(STATUE) ** 2
+
+
+# ----------------------------------------------------------------------------- quasi-static tilt
+@pytest.mark.parametrize("bed", [BEDS[0], BEDS[1]], ids=["hc", "hardening"])
+def test_quasi_static_tilt_against_the_condensation_moment_law_and_the_coupled_model(bed):
+    """A slowly ramped constant ground acceleration a = 0.85 g b/h (above the uplift onset g b/(3h)):
+    the settled tilt solves cos(theta) (K(s) s + m g h s) - m g h sin(theta) = m h cos(theta) a,
+    s = sin(theta), with the cubic condensation's K (brentq on the stable, rising branch of the
+    moment law), and agrees with the coupled model's settled tilt."""
+    a_g = 0.85 * STATUE.g * STATUE.b / STATUE.h
+    dt = 1e-3
+    t = np.arange(0.0, 8.0, dt)
+    ramp = -a_g * np.clip(t / 3.0, 0.0, 1.0) ** 2 * (3 - 2 * np.clip(t / 3.0, 0.0, 1.0))   # inertial x_g'' = +a_g
+    mgh = STATUE.m * STATUE.g * STATUE.h
+
+    def residual(th):
+        s = math.sin(th)
+        bed_moment = math.cos(th) * (float(cubic.restoring_moment(s, STATUE, bed)) + mgh * s)
+        return bed_moment - mgh * s - STATUE.m * STATUE.h * math.cos(th) * a_g
+
+    from scipy.optimize import brentq
+    tu = float(cubic.uplift_threshold(STATUE, bed))
+    grid = np.geomspace(tu, STATUE.slenderness, 400)
+    first = np.flatnonzero(np.array([residual(x) for x in grid]) > 0.0)[0]       # the rising branch
+    expected = brentq(residual, grid[first - 1], grid[first], xtol=1e-15)
+    tilt = {}
+    for model in ("stiff_bed", "coupled"):
+        ds = screening.simulate(STATUE, bed, ramp, dt=dt, model=model, output_dt=0.01)
+        tilt[model] = float(ds.theta.sel(t=slice(4.0, None)).mean())      # lightly damped in uplift: average
+    assert tilt["stiff_bed"] == pytest.approx(expected, rel=1e-3)
+    assert tilt["coupled"] == pytest.approx(expected, rel=3e-3)
+    assert expected > 5 * tu
+
+
+def test_uplift_starts_at_the_condensation_threshold():
+    """Settled tilt under a constant ground acceleration just below and above the onset (the
+    acceleration that holds the block at theta_ul): below it stays in full contact, above it lifts."""
+    bed = BEDS[0]
+    tu = float(cubic.uplift_threshold(STATUE, bed))
+    onset = float(cubic.restoring_moment(tu, STATUE, bed)) / (STATUE.m * STATUE.h)
+    assert onset == pytest.approx(STATUE.g * STATUE.b / (3 * STATUE.h), rel=1e-3)
+    dt = 1e-3
+    t = np.arange(0.0, 4.0, dt)
+    for factor, lifted in ((0.98, False), (1.02, True)):
+        ramp = -factor * onset * np.clip(t / 2.0, 0.0, 1.0)
+        ds = screening.simulate(STATUE, bed, ramp, dt=dt, model="stiff_bed", output_dt=0.1)
+        assert (abs(float(ds.theta.values[-1])) > tu) == lifted
+
+
+# ----------------------------------------------------------------------------- symmetry, bad input
+def test_mirror_symmetry():
+    rng = np.random.default_rng(3)
+    a_g = np.convolve(rng.standard_normal(4000), np.ones(25) / 5.0, mode="same") * 1.5
+    bed = BEDS[0]
+    pos = screening.simulate(STATUE, bed, a_g, dt=2e-3, model="stiff_bed", output_dt=0.01)
+    neg = screening.simulate(STATUE, bed, -a_g, dt=2e-3, model="stiff_bed", output_dt=0.01)
+    assert float(pos.peak_abs_theta) > 10 * float(pos.theta_ul)       # it rocks
+    np.testing.assert_allclose(neg.theta.values, -pos.theta.values, rtol=0, atol=1e-12)
+
+
+def test_soft_bed_warns_naming_the_validity_rule():
+    soft = Foundation(k=2e6, lam=1e7)
+    with pytest.warns(UserWarning, match=r"theta_ul / atan\(b/h\) <= 0.05"):
+        screening.simulate(STATUE, soft, np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        screening.simulate(STATUE, BEDS[0], np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
+
+
+def test_block_that_cannot_stand_is_refused_naming_the_parameter():
+    too_soft = Foundation(k=1e5, lam=1e6)              # (2/3) b^3 k < m g h
+    with pytest.raises(ValueError, match=r"parameter 'foundation.k'.*cannot stand"):
+        screening.simulate(STATUE, too_soft, np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
+
+
+def test_model_registry_lists_the_stiff_bed_model():
+    assert mc_registry.names()[:3] == ("coupled", "condensed", "stiff_bed")
+    assert mc_registry.get("stiff_bed") is sb.STIFF_BED
+    with pytest.raises(ValueError, match="parameter 'model' must be one of .*stiff_bed"):
+        mc_registry.get("rigid")
+    with pytest.raises(ValueError, match="parameter 'transfer'"):
+        StiffBedModel(transfer="constant")
+
+
+# ----------------------------------------------------------------------------- paired with the coupled model
+@pytest.mark.slow
+def test_paired_samples_in_full_contact_match_the_coupled_model():
+    """Same seeds, same synthesized ground motions: at an intensity where the statue on k = 1e10 mostly
+    stays in full contact, the samples that never lift in either model have the same peak rotation
+    (both are the linear rocking oscillator there; 1 % for the coupled model's second-order
+    vertical coupling), and the models agree on which samples lift at all (all but 2 of 64)."""
+    bed = _bed(STATUE, 1e10)
+    kw = dict(n_samples=64, seed=5, t_end=10.0, progress=False)
+    exc = screening.KanaiTajimi(2.5e-4, 15.6, 0.6)
+    ref = screening.monte_carlo(STATUE, bed, exc, model="coupled", **kw)
+    new = screening.monte_carlo(STATUE, bed, exc, model="stiff_bed", **kw)
+    tu = float(ref.theta_ul)
+    lifted_ref = ref.peak_abs_theta.values > tu
+    lifted_new = new.peak_abs_theta.values > tu
+    quiet = ~lifted_ref & ~lifted_new
+    assert 10 <= quiet.sum() <= 60                     # both regimes present
+    np.testing.assert_allclose(new.peak_abs_theta.values[quiet], ref.peak_abs_theta.values[quiet], rtol=0.01)
+    assert np.sum(lifted_ref != lifted_new) <= 2
+
+
+@pytest.mark.slow
+def test_exceedance_and_overturning_probabilities_match_the_coupled_model_on_a_stiff_bed():
+    """The statue on k = 1e10 at S0 = 0.02 (most samples rock, some overturn), 120 samples of each
+    model on the same ground motions: P(|theta| > a alpha), a = 0.05, 0.1, 0.3, 0.5, and P(overturn)
+    within max(0.03, 2.5 standard errors of the difference), the tolerance of the scene's validity
+    table (rocking responses are sensitive to the smallest perturbation, so the comparison is of
+    the probabilities, not of each sample)."""
+    bed = _bed(STATUE, 1e10)
+    kw = dict(n_samples=120, seed=11, progress=False)
+    exc = screening.KanaiTajimi(0.02, 15.6, 0.6)
+    alpha = STATUE.slenderness
+    probs = {}
+    for model in ("coupled", "stiff_bed"):
+        ds = screening.monte_carlo(STATUE, bed, exc, model=model, **kw)
+        peak, over = ds.peak_abs_theta.values, ds.overturned.values
+        probs[model] = np.array([np.mean((peak > a * alpha) | over) for a in (0.05, 0.1, 0.3, 0.5)]
+                                + [np.mean(over)])
+    p, q = probs["coupled"], probs["stiff_bed"]
+    se = np.sqrt((p * (1 - p) + q * (1 - q)) / 120)
+    assert 0.03 < p[-1] < 0.6 and p[2] < 0.9          # an informative intensity
+    assert np.all(np.abs(p - q) <= np.maximum(0.03, 2.5 * se)), (p, q)
+
+
+def test_compiled_transfer_ratio_is_the_log_linear_interpolant_of_the_table():
+    log_amp = np.log(np.array([1e-5, 3e-5, 1e-3, 0.1]))
+    log_eta = np.log(np.array([1.0, 0.99, 0.95, 0.9]))
+    for amp in (5e-6, 1e-5, 2e-5, 4e-4, 0.05, 0.1, 0.3):
+        ref = math.exp(np.interp(math.log(amp), log_amp, log_eta))
+        assert sb.transfer_ratio_jit(log_amp, log_eta, amp) == pytest.approx(ref, rel=1e-14)
