@@ -32,7 +32,7 @@ BEDS = [_bed(STATUE, 1e10), Foundation(k=2.1e9, lam=1e10, eps=2e9), Foundation(k
 
 
 def _free(model, block, bed, theta0, t_end, output_dt=1e-4):
-    ds = screening.simulate(block, bed, np.zeros(3), dt=t_end / 2, t_end=t_end, theta0=theta0, model=model,
+    ds = screening.simulate(block, bed, np.zeros(3), dt=min(t_end / 2, 0.5), t_end=t_end, theta0=theta0, model=model,
                             output_dt=output_dt)
     return ds.t.values, ds.theta.values, ds.theta_dot.values
 
