@@ -364,3 +364,19 @@ def test_export_into_its_own_store_is_refused(client, tmp_path, capsys):
         assert "inside the input" in one_line_error(capsys.readouterr().err)
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert main(["info", str(out)]) == 0
+
+
+def test_a_damaged_store_is_one_line_without_asyncio_noise(client, tmp_path):
+    """Chunks damaged at their size (the cheap check of info/plot cannot see them): zarr's abandoned
+    concurrent reads must not print pages of asyncio reports after the one-line error."""
+    out = tmp_path / "n.zarr"
+    run_sweep(parse_study(GRID), out, client=client, batch_size=1, progress=False, log=quiet)
+    for chunk in (out / "status" / "c").rglob("*"):
+        if chunk.is_file():
+            chunk.write_bytes(b"\x01" * chunk.stat().st_size)
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    for command in ("info", "plot"):
+        proc = subprocess.run([sys.executable, "-m", "screening.cli", command, str(out)], capture_output=True,
+                              text=True, env=env, timeout=300)
+        assert proc.returncode == 2
+        assert "damaged" in one_line_error(proc.stderr)
