@@ -139,3 +139,20 @@ def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monke
     for key, value in runs[0].items():
         np.testing.assert_array_equal(value, runs[1][key], err_msg=key)
     assert waits                                  # the waits for Monte Carlo results let a Ctrl-C through
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_accuracy_on_a_one_point_grid(client, tmp_path, suffix):
+    """A study without swept parameters: its escalation has no grid coordinate to write."""
+    if suffix == ".zarr":
+        pytest.importorskip("zarr")
+    text = TARGET.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = 3e7").replace(
+        "S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}", "S0 = 2.4e-3")
+    study = parse_study(text)
+    assert study.shape == ()
+    report = run_sweep(study, tmp_path / f"one{suffix}", client=client, progress=False, log=lambda m: None)
+    assert report.accuracy["n_escalated"] == 1
+    with xr.open_dataset(tmp_path / f"one{suffix}") as ds:
+        assert ds["esc_grid_index"].values.tolist() == [0]
+        assert ds["best_method"].values.item() in (BestMethod.coupled_monte_carlo, BestMethod.condensed_monte_carlo)
+        assert ds["best_peak_var_theta"].values.item() == ds["esc_peak_var_theta"].values.item()
