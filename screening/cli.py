@@ -217,11 +217,11 @@ RESUMING_COMMANDS = ("run",)
 
 def interrupted_note(argv):
     """What an interrupted command leaves: ``run`` keeps its finished batches; the others keep nothing
-    (their outputs are written whole at the end, or not at all)."""
+    to resume from (their files are written whole, each at its end)."""
     command = next((a for a in argv if not a.startswith("-")), "")
     if command in RESUMING_COMMANDS:
         return "finished batches are kept, re-run the same command to resume"
-    return "nothing was kept, re-run the command to start again"
+    return "nothing is kept to resume from, re-run the command to start again"
 
 
 def announce_compilation(quiet=False):

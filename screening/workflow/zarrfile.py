@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from screening.status import PointStatus, Trust
+
 ZARR_SUFFIX = ".zarr"
 ZARR_FORMAT = 3
 #: Bytes read at a time when a variable is copied (:func:`export_netcdf`) or checked.
@@ -31,7 +33,7 @@ BLOCK_BYTES = 32 * 2**20
 #: The completion mark of a finished store (:func:`write_completion_mark`), in its top folder.
 COMPLETION_MARK = "screening-complete.json"
 #: What a chunk that was never written reads as (zarr's fill value): a failure code, never ``ok``.
-ZARR_FILL = {"status": -1, "sl_trust": 2}     # PointStatus.task_failed, Trust.untrusted
+ZARR_FILL = {"status": int(PointStatus.task_failed), "sl_trust": int(Trust.untrusted)}
 
 
 def is_zarr_path(path):
