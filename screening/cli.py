@@ -217,11 +217,11 @@ RESUMING_COMMANDS = ("run",)
 
 def interrupted_note(argv):
     """What an interrupted command leaves: ``run`` keeps its finished batches; the others keep nothing
-    (their outputs are written whole at the end, or not at all)."""
+    to resume from (their files are written whole, each at its end)."""
     command = next((a for a in argv if not a.startswith("-")), "")
     if command in RESUMING_COMMANDS:
         return "finished batches are kept, re-run the same command to resume"
-    return "nothing was kept, re-run the command to start again"
+    return "nothing is kept to resume from, re-run the command to start again"
 
 
 def announce_compilation(quiet=False):
@@ -255,8 +255,21 @@ def printable(text):
 
 
 def _error(message):
+    _quiet_abandoned_reads()
     print(f"screening: error: {printable(' '.join(str(message).split()))}", file=sys.stderr)
     return EXIT_USAGE
+
+
+def _quiet_abandoned_reads():
+    """After a failed read of a zarr store, its other chunk reads (tasks of zarr's event loop) are
+    abandoned; asyncio would report each of them at exit ("Task was destroyed but it is pending",
+    "Future exception was never retrieved", "coroutine ... was never awaited"): the one-line error
+    already said what failed."""
+    import logging
+    import warnings
+
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL + 1)
+    warnings.filterwarnings("ignore", message="coroutine .* was never awaited", category=RuntimeWarning)
 
 
 def _say(msg):

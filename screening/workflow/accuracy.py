@@ -8,6 +8,7 @@ report) after the linearization and before the spot checks.
 
 from __future__ import annotations
 
+import contextlib
 import uuid
 
 import numpy as np
@@ -17,8 +18,11 @@ from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
 from screening.workflow.progress import Progress
 
-#: Resume records of escalated points are spot parts numbered from here (after any spot check).
+#: Resume records of escalated points are spot parts numbered from here (after any spot check): the
+#: point's result after its waves, its top-up run, and the planner's state after each wave.
 ESCALATION_RECORD = 5000
+TOPUP_RECORD = ESCALATION_RECORD + 1000
+PLANNER_RECORD = ESCALATION_RECORD - 1
 #: Escalated points per wave (fixed: the plan must not depend on the number of workers).
 WAVE = 4
 
@@ -120,8 +124,9 @@ def escalation_runs(run, order, models):
        the samples its main run's standard error asks for, while the whole budget allows.
 
     Returns ``({position: result}, estimated cost [s], CPU seconds spent, failed tasks)``; each result
-    carries its total ``cpu_time``, ``cost_s`` and ``target_met``.  Finished points are kept in the
-    resume record.
+    carries its total ``cpu_time``, ``cost_s`` and ``target_met``.  Finished points, the planner's state
+    after each wave (points planned, waves done, costs seen) and the top-up runs are kept in the resume
+    record, so that an interrupted run resumes to the same result.
     """
     from distributed import as_completed
 
@@ -139,12 +144,22 @@ def escalation_runs(run, order, models):
     def cost(j, r):
         return esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
 
-    for j in range(len(order)):
-        part = store.load_spot(ESCALATION_RECORD + j, index_of(j))
-        if part is not None and {"cpu_time", "cost_s", "peak_var_theta", "samples", "n_steps"} <= set(part):
+    def load(record, j):
+        part = store.load_spot(record + j, index_of(j))
+        ok = part is not None and {"cpu_time", "cost_s", "peak_var_theta", "samples", "n_steps"} <= set(part)
+        return part if ok else None
+
+    plan = store.load_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64))
+    if plan is not None and {"todo", "w", "costs", "pilot_costs", "loaded"} <= set(plan):
+        todo, w, loaded = [int(j) for j in plan["todo"]], int(plan["w"]), int(plan["loaded"])
+        costs, pilot_costs = [float(c) for c in plan["costs"]], [float(c) for c in plan["pilot_costs"]]
+        waves_done = set(todo[:w])
+    else:                                                   # no wave finished: the plan starts afresh
+        todo, w, loaded, costs, pilot_costs, waves_done = list(range(len(order))), 0, 0, [], [], set()
+    for j in waves_done:
+        part = load(ESCALATION_RECORD, j)
+        if part is not None:
             results[j] = part
-    todo = [j for j in range(len(order)) if j not in results]
-    loaded = len(results)
 
     def spent():
         """Estimated cost [s] of every run so far (each result carries the cost of all its runs)."""
@@ -186,12 +201,16 @@ def escalation_runs(run, order, models):
         with np.errstate(divide="ignore", invalid="ignore"):
             return float(r["peak_var_theta_se"] / r["peak_var_theta"])
 
+    def save_plan():
+        store.save_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64),
+                        {"todo": np.asarray(todo, dtype=np.int64), "w": np.int64(w), "loaded": np.int64(loaded),
+                         "costs": np.asarray(costs, dtype=float), "pilot_costs": np.asarray(pilot_costs, dtype=float)})
+
     main_budget = esc.MAIN_SHARE * acc.budget_s
-    if todo:
+    if w < len(todo):
         run.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
-    with Progress(len(todo), label="accuracy: Monte Carlo at escalated points",
-                  enabled=run.progress and bool(todo)) as bar:
-        w, costs, pilot_costs = 0, [], []
+    with Progress(len(todo) - w, label="accuracy: Monte Carlo at escalated points",
+                  enabled=run.progress and w < len(todo)) as bar:
         while w < len(todo):
             pilots, committed = {}, 0.0
             for j in todo[w:w + WAVE]:
@@ -230,9 +249,18 @@ def escalation_runs(run, order, models):
             save(sorted(pilot))
             bar.update(len(todo[w:w + WAVE]))
             w += WAVE
+            try:
+                save_plan()
+            except OSError as exc:
+                run.log(f"warning: cannot save the resume record of the escalation plan ({write_failure_reason(exc)})")
+        if w < len(todo):                                   # the budget ended the waves: the plan is final
+            todo = todo[:w]
+            with contextlib.suppress(OSError):
+                save_plan()
 
     # top-up: points still short of the target's standard error, in the covering order
-    topup, committed = {}, 0.0
+    # (each top-up run is kept apart from the point's result: the plan is made from the waves' results alone)
+    topup, committed, finished = {}, 0.0, {}
     for j in sorted(results):
         r = results[j]
         if esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target):
@@ -240,12 +268,21 @@ def escalation_runs(run, order, models):
         n = esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
         rate = cost(j, r) / max(int(r["samples"]), 1)
         if n > int(r["samples"]) and spent() + committed + rate * n <= acc.budget_s:
-            topup[submit(j, n, "topup")] = j
+            part = load(TOPUP_RECORD, j)
+            if part is not None and int(part["samples"]) == n:
+                finished[j] = part
+            else:
+                topup[submit(j, n, "topup")] = j
             committed += rate * n
-    finished = gather(topup) if topup else {}
+    ran = gather(topup) if topup else {}
+    for j in sorted(ran):
+        try:
+            store.save_spot(TOPUP_RECORD + j, index_of(j), ran[j])
+        except OSError as exc:
+            run.log(f"warning: cannot save the resume record of escalated point {j} ({write_failure_reason(exc)})")
+    finished.update(ran)
     for j in sorted(finished):
         keep(j, finished[j], before=results[j])
-    save(sorted(finished))
     for r in results.values():
         r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
     cpu = sum(float(r["cpu_time"]) for r in results.values())

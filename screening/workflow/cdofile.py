@@ -68,7 +68,7 @@ def parse_selection(items, grid):
             raise SweepError(f"--select {item!r}: expected DIM=VALUE with DIM one of the swept dimensions "
                              f"({', '.join(grid) or 'none'})")
         if dim == "case":
-            out[dim] = int(value) if value.isdigit() else value
+            out[dim] = int(value) if value.isascii() and value.isdigit() else value
             continue
         try:
             number = float(value)
@@ -92,6 +92,9 @@ def select(ds, selection):
             if not 0 <= value < ds.sizes["case"]:
                 raise SweepError(f"--select case={value}: case index out of range 0..{ds.sizes['case'] - 1}")
             ds = ds.isel(case=value)
+        elif ds[dim].dtype.kind not in "iuf":
+            raise SweepError(f"--select {dim}={value}: the values of {dim} are not numbers ({ds[dim].dtype}); "
+                             "nothing to select the nearest from")
         else:
             ds = ds.sel({dim: value}, method="nearest")
     return ds
@@ -132,6 +135,8 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     :class:`SweepError` if more than :data:`MAX_GRID_DIMS` grid dimensions remain."""
     import netCDF4
 
+    from screening.workflow.zarrfile import netcdf_attributes
+
     ds = select(ds, selection or {})
     grid = tuple(ds["status"].dims)
     if len(grid) > MAX_GRID_DIMS:
@@ -149,7 +154,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             if dim != "t":
                 nc.createDimension(dim, size)
         t = nc.createVariable("t", "f8", ("t",), fill_value=False)
-        t.setncatts({**{k: v for k, v in ds["t"].attrs.items() if k != "units"}, **CDO_TIME})
+        t.setncatts(netcdf_attributes({**{k: v for k, v in ds["t"].attrs.items() if k != "units"}, **CDO_TIME}))
         t[:nt] = np.asarray(ds["t"].values, dtype=np.float64)
         for name, v in ds.variables.items():
             if name == "t" or name in strings:
@@ -157,9 +162,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             dtype = np.dtype(v.encoding.get("dtype", v.dtype)).newbyteorder("=")
             fill = v.encoding.get("_FillValue")
             fill = False if fill is None or (isinstance(fill, float) and dtype.kind != "f") else fill
-            attrs = {k: val for k, val in v.attrs.items() if k != "coordinates"}
-            if "flag_values" in attrs:
-                attrs["flag_values"] = np.asarray(attrs["flag_values"], dtype=dtype)
+            attrs = netcdf_attributes({k: val for k, val in v.attrs.items() if k != "coordinates"}, dtype, name)
             extra = _after_grid(name, v.dims, grid, ds.dims)
             on_grid = extra is not None
             storage = zlib if v.dims and v.dims != (name,) else {}
@@ -199,7 +202,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
                 nc[target].setncattr(name, text)
         attrs = dict(ds.attrs)
         attrs["history"] = f"{attrs['history']}\n{history}" if attrs.get("history") else history
-        nc.setncatts({**attrs, **labels, "layout": CDO_LAYOUT})
+        nc.setncatts(netcdf_attributes({**attrs, **labels, "layout": CDO_LAYOUT}))
 
 
 def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shape, storage):

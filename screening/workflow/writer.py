@@ -432,7 +432,8 @@ class ResultFile:
         nc.createDimension("escalation", n)
         most = max((int(r["samples"]) for r in runs), default=1)
         nc.createDimension("esc_sample", most)
-        idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if n else [()] * len(self.shape)
+        idx = (np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if n and self.shape
+               else [()] * len(self.shape))             # a one-point grid has no grid dimension
         coords = []
         for axis, dim in enumerate(study.dims):
             name = f"esc_{dim}"

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from screening.status import PointStatus, Trust
+
 ZARR_SUFFIX = ".zarr"
 ZARR_FORMAT = 3
 #: Bytes read at a time when a variable is copied (:func:`export_netcdf`) or checked.
@@ -31,7 +33,7 @@ BLOCK_BYTES = 32 * 2**20
 #: The completion mark of a finished store (:func:`write_completion_mark`), in its top folder.
 COMPLETION_MARK = "screening-complete.json"
 #: What a chunk that was never written reads as (zarr's fill value): a failure code, never ``ok``.
-ZARR_FILL = {"status": -1, "sl_trust": 2}     # PointStatus.task_failed, Trust.untrusted
+ZARR_FILL = {"status": int(PointStatus.task_failed), "sl_trust": int(Trust.untrusted)}
 
 
 def is_zarr_path(path):
@@ -498,6 +500,40 @@ def _blocks(arr):
         yield (slice(lo, lo + step),)
 
 
+def netcdf_attributes(attrs, dtype=None, where="the result"):
+    """``attrs`` as netCDF can store them: lists as arrays, ``None`` dropped, JSON objects and lists
+    netCDF cannot type (nested, mixed) as JSON text; ``flag_values`` in ``dtype`` (a
+    :class:`~screening.workflow.errors.SweepError` naming ``where`` if they are not a flat list of
+    numbers)."""
+    from screening.workflow.errors import SweepError
+
+    out = {}
+    for name, value in attrs.items():
+        if value is None:
+            continue
+        if isinstance(value, (bool, np.bool_)):
+            value = int(value)
+        if name == "flag_values" and dtype is not None:
+            try:
+                flags = np.asarray(value, dtype=dtype)
+                if flags.ndim > 1:
+                    raise ValueError
+            except (TypeError, ValueError, OverflowError):
+                raise SweepError(f"the flag_values of {where} are not a flat list of numbers of its type "
+                                 f"({dtype}); cannot export it") from None
+            out[name] = flags
+        elif isinstance(value, (dict, list, tuple)):
+            array = None
+            with contextlib.suppress(TypeError, ValueError, OverflowError):
+                array = np.asarray(value)
+            ok = array is not None and array.ndim == 1 and array.size and (
+                array.dtype.kind in "iuf" or array.dtype.kind == "U" and all(isinstance(v, str) for v in value))
+            out[name] = array if ok else json.dumps(value, ensure_ascii=False, default=str)
+        else:
+            out[name] = value
+    return out
+
+
 def export_netcdf(src, dst, complevel, history):
     """Write the zarr result ``src`` as the CF netCDF file ``dst`` (a new file), block by block.
 
@@ -536,12 +572,10 @@ def export_netcdf(src, dst, complevel, history):
                 if dims[:len(grid)] == grid and dims[len(grid):] == ("t",):
                     storage.update(shuffle=True, chunksizes=history_chunks(arr.shape[:len(grid)], arr.shape[-1]))
             var = nc.createVariable(name, dtype, dims, fill_value=None if dtype is str else fill, **storage)
-            if "flag_values" in var_attrs:
-                var_attrs["flag_values"] = np.asarray(var_attrs["flag_values"], dtype=dtype)
-            var.setncatts({k: np.asarray(v) if isinstance(v, list) else v for k, v in var_attrs.items()})
+            var.setncatts(netcdf_attributes(var_attrs, None if dtype is str else dtype, name))
             for block in _blocks(arr):
                 values = read_values(lambda: arr[block])
                 var[block if block else ...] = np.asarray(values, dtype=object) if dtype is str else values
         if attrs.get("history"):
             attrs["history"] = f"{attrs['history']}\n{history}"
-        nc.setncatts({k: np.asarray(v) if isinstance(v, list) else v for k, v in attrs.items()})
+        nc.setncatts(netcdf_attributes(attrs))

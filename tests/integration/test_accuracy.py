@@ -139,3 +139,57 @@ def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monke
     for key, value in runs[0].items():
         np.testing.assert_array_equal(value, runs[1][key], err_msg=key)
     assert waits                                  # the waits for Monte Carlo results let a Ctrl-C through
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_accuracy_on_a_one_point_grid(client, tmp_path, suffix):
+    """A study without swept parameters: its escalation has no grid coordinate to write."""
+    if suffix == ".zarr":
+        pytest.importorskip("zarr")
+    text = TARGET.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = 3e7").replace(
+        "S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}", "S0 = 2.4e-3")
+    study = parse_study(text)
+    assert study.shape == ()
+    report = run_sweep(study, tmp_path / f"one{suffix}", client=client, progress=False, log=lambda m: None)
+    assert report.accuracy["n_escalated"] == 1
+    with xr.open_dataset(tmp_path / f"one{suffix}") as ds:
+        assert ds["esc_grid_index"].values.tolist() == [0]
+        assert ds["best_method"].values.item() in (BestMethod.coupled_monte_carlo, BestMethod.condensed_monte_carlo)
+        assert ds["best_peak_var_theta"].values.item() == ds["esc_peak_var_theta"].values.item()
+
+
+def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client, tmp_path, monkeypatch):
+    """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
+    record: the resumed run escalates the same points with the same samples and the same estimates."""
+    from screening.workflow import accuracy, execution
+    from screening.workflow.store import PartialStore
+
+    study = parse_study(TARGET.replace("budget_s = 4", "budget_s = 10"))
+    real_submit = execution.submit_escalation
+    keys = []
+    monkeypatch.setattr(execution, "submit_escalation",
+                        lambda *a, **k: keys.append(k["key"].split("-")[1]) or real_submit(*a, **k))
+    run_sweep(study, tmp_path / "ref.nc", client=client, progress=False, log=lambda m: None)
+    assert keys.count("topup") >= 1, keys                    # the study has a top-up round to interrupt
+    real_save = PartialStore.save_spot
+    saved = []
+    keys.clear()
+
+    def killed_while_saving_the_top_ups(self, i, index, result):
+        if i >= accuracy.TOPUP_RECORD:
+            saved.append(i)
+            if len(saved) == keys.count("topup"):
+                raise KeyboardInterrupt
+        return real_save(self, i, index, result)
+
+    with monkeypatch.context() as m:
+        m.setattr(PartialStore, "save_spot", killed_while_saving_the_top_ups)
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
+    keys.clear()
+    run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
+    assert keys == ["topup"]                                 # only the top-up not kept runs again
+    with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / "a.nc") as ds:
+        for name in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
+                     "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
+            np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)

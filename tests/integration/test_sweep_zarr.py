@@ -364,3 +364,49 @@ def test_export_into_its_own_store_is_refused(client, tmp_path, capsys):
         assert "inside the input" in one_line_error(capsys.readouterr().err)
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert main(["info", str(out)]) == 0
+
+
+def test_a_damaged_store_is_one_line_without_asyncio_noise(client, tmp_path):
+    """Chunks damaged at their size (the cheap check of info/plot cannot see them): zarr's abandoned
+    concurrent reads must not print pages of asyncio reports after the one-line error."""
+    out = tmp_path / "n.zarr"
+    run_sweep(parse_study(GRID), out, client=client, batch_size=1, progress=False, log=quiet)
+    for chunk in (out / "status" / "c").rglob("*"):
+        if chunk.is_file():
+            chunk.write_bytes(b"\x01" * chunk.stat().st_size)
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    for command in ("info", "plot"):
+        proc = subprocess.run([sys.executable, "-m", "screening.cli", command, str(out)], capture_output=True,
+                              text=True, env=env, timeout=300)
+        assert proc.returncode == 2
+        assert "damaged" in one_line_error(proc.stderr)
+
+
+def test_export_of_foreign_attributes(client, tmp_path, capsys):
+    """A JSON object as a variable attribute and a null global attribute (zarr holds both, netCDF neither)
+    are exported as JSON text / left out; ragged flag_values are one line, exit 2."""
+    import zarr
+
+    from screening.workflow.zarrfile import write_completion_mark
+
+    out = tmp_path / "f.zarr"
+    run_sweep(parse_study(GRID), out, client=client, progress=False, log=quiet)
+    group = zarr.open_group(out, mode="r+")
+    group["peak_var_theta"].attrs["provenance"] = {"tool": "other", "n": [1, 2]}
+    group.attrs["empty"] = None
+    zarr.consolidate_metadata(out)
+    write_completion_mark(out)                   # as if the foreign tool had finished the store
+    for layout in ("cf", "cdo"):
+        target = tmp_path / f"{layout}.nc"
+        assert main(["export", str(out), str(target), "--layout", layout]) == 0, capsys.readouterr().err
+        with xr.open_dataset(target, decode_times=False) as ds:
+            assert json.loads(ds["peak_var_theta"].attrs["provenance"]) == {"tool": "other", "n": [1, 2]}
+            assert "empty" not in ds.attrs
+    capsys.readouterr()
+    group["sl_trust"].attrs["flag_values"] = [[0, 1], [2]]
+    zarr.consolidate_metadata(out)
+    write_completion_mark(out)
+    for layout in ("cf", "cdo"):
+        assert main(["export", str(out), str(tmp_path / "x.nc"), "--layout", layout]) == 2
+        assert "flag_values of sl_trust" in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "x.nc").exists()

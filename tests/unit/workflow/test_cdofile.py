@@ -36,6 +36,30 @@ def test_select_takes_the_nearest_value_and_cases_by_name_or_index():
         select(ds, {"case": 2})
 
 
+def test_a_case_index_is_plain_digits_and_a_string_coordinate_is_one_line():
+    """Foreign content: ``case=²`` (a digit to ``str.isdigit``, not to ``int``) and a swept dimension whose
+    values are strings were tracebacks."""
+    assert parse_selection(["case=\u00b2"], ("case",)) == {"case": "\u00b2"}
+    ds = xr.Dataset({"status": (("case", "k"), np.arange(4).reshape(2, 2))},
+                    coords={"case": [0, 1], "case_name": ("case", ["white", "filtered"]), "k": ["soft", "stiff"]})
+    with pytest.raises(SweepError, match="no such case"):
+        select(ds, {"case": "\u00b2"})
+    with pytest.raises(SweepError, match=r"--select k=2.0: the values of k are not numbers"):
+        select(ds, parse_selection(["k=2"], ("case", "k")))
+
+
+def test_attributes_netcdf_cannot_hold_become_json_and_ragged_flags_are_refused():
+    from screening.workflow.zarrfile import netcdf_attributes
+
+    out = netcdf_attributes({"meta": {"a": [1, 2]}, "gone": None, "mixed": [1, "x"], "nested": [[1], [2, 3]],
+                             "values": [1, 2], "flag": True, "text": "t"})
+    assert out["meta"] == '{"a": [1, 2]}' and "gone" not in out and out["mixed"] == '[1, "x"]'
+    assert out["nested"] == "[[1], [2, 3]]" and out["values"].tolist() == [1, 2] and out["flag"] == 1
+    assert netcdf_attributes({"flag_values": [0, 1]}, np.dtype("i1"))["flag_values"].dtype == np.int8
+    with pytest.raises(SweepError, match="flag_values of status are not a flat list"):
+        netcdf_attributes({"flag_values": [[0, 1], [2]]}, np.dtype("i1"), "status")
+
+
 def test_strings_go_to_the_variable_they_name_or_their_dimension():
     variables = {"case", "spot_case"}
     assert string_attribute_target("case_name", ("case",), variables) == "case"
