@@ -41,7 +41,11 @@ def test_simulate_writes_netcdf_and_png(tmp_path, capsys):
         assert float(ds["eps"]) == 6e7
         assert ds.attrs["status"] in ("ok", "overturned")
         assert "sign_convention" in ds.attrs
+        peak = float(ds["peak_abs_theta"])
     assert "PGA" in capsys.readouterr().err
+    assert main(["info", str(out)]) == 0                 # info describes the file instead of refusing it
+    text = capsys.readouterr().out
+    assert "(simulation file)" in text and (f"peak |theta| {peak:.4g} rad" in text or "overturned at" in text)
 
 
 def test_simulate_needs_swept_value(tmp_path, capsys):
