@@ -316,6 +316,12 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
              f"    <description>{description}: P(max |theta| &gt; threshold) fitted by screening over "
              f"{name}</description>",
              f"    <limitStates>{' '.join(states)}</limitStates>"]
+    fixed = {n: float(frag[n]) for n in frag.coords if frag[n].ndim == 0 and frag[n].dtype.kind in "fi"
+             and n not in ("threshold",)}
+    if fixed:
+        lines.append(_comment("every function: the block and bed of " + ", ".join(
+            f"{n} = {v:g}{' ' + frag[n].attrs['units'] if frag[n].attrs.get('units') else ''}"
+            for n, v in fixed.items()) + "; the function id names the swept values"))
     for fid, by_state in by_taxonomy.items():
         missing = [f"{s}: {by_state[s]['flag'].name} ({by_state[s]['reason']})" for s in states
                    if by_state[s]["flag"] != FitFlag.ok]

@@ -100,6 +100,8 @@ def test_nrml_holds_both_limit_states_per_bed(results):
     model = ET.parse(out.with_suffix(".xml")).getroot().find("n:fragilityModel", NS)
     functions = model.findall("n:fragilityFunction", NS)
     assert sorted(f.get("id") for f in functions) == ["screening_k=2.89e+07", "screening_k=5e+06"]
+    assert "<!-- every function: the block and bed of m = 8.67 kg, b = 0.035 m, h = 0.21 m" in \
+        out.with_suffix(".xml").read_text()
     for f in functions:
         means = [float(p.get("mean")) for p in f.findall("n:params", NS)]
         assert [p.get("ls") for p in f.findall("n:params", NS)] == ["theta_0.02_slenderness", "theta_0.05_slenderness"]
