@@ -16,9 +16,11 @@ with the same command resumes; an unchanged study reuses its finished result.
 (:mod:`screening.workflow.cdofile`).
 
 ``screening plot RESULT.nc [--out-dir DIR] [--response var|sigma|fraction]`` writes the figures;
-``screening info RESULT.nc`` prints the dimensions, swept parameters, status counts and summary statistics.
-``screening fragility RESULT.nc --threshold X [--relative-to slenderness|theta_ul]`` writes
-the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG).
+``screening info RESULT.nc`` prints the dimensions, swept parameters, status counts and summary statistics
+(and describes the files of ``simulate``, ``cloud`` and ``fragility``).
+``screening fragility RESULT.nc --threshold X [--threshold Y ...] [--relative-to slenderness|theta_ul]`` writes
+the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG), one limit
+state per threshold, all files as one set (docs/fragility.md).
 ``screening tradeoff STUDY.toml`` runs the speed-accuracy trade study (:mod:`screening.analysis.tradeoff`).
 
 User errors (bad options, bad study file, missing output folder, unreadable result file,
@@ -504,7 +506,8 @@ def cmd_plot(result, out_dir, response):
                             "its folder must exist); the PNG goes next to it")
 @click.option("--im", type=_Choice(["pga", "sa", "rms", "arias", "s0"]),
               help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
-                   "export the fits as CSV and OpenQuake NRML next to the netCDF")
+                   "export the fits as CSV (a row per curve), pelicun CSV and OpenQuake NRML next to the netCDF "
+                   "(docs/fragility.md)")
 @click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
 @click.option("--modelling-dispersion", "modelling", type=POSITIVE_FLOAT,
               help="modelling dispersion beta_m [1] combined with each fitted beta by the square root of the sum of "
