@@ -29,11 +29,13 @@ of fit is reported as the largest gap between the Husid curves of the record and
 envelope, and the zero-crossing rates of the record (5-95 % Husid) and of the fitted process.
 
 Accuracy (``benchmarks/fit_excitation_recovery.py``: three Kanai-Tajimi models, 20 synthesised
-records of 30 s each; median over the records of estimate / true - 1): ``S0_peak`` +1 %, +6 %,
--7 %; ``omega_g`` -3 %, -1 %, -1 %; ``zeta_g`` +5 %, -1 %, +2 %; the fitted model's RVT median PGA
--3 %, -0 %, -4 %; ``T1`` -7 %, -13 %, +1 % and ``T2`` +3 %, +18 %, +4 % (the two envelope times trade
-off against each other along the Husid curve; what they predict together is stable).  One record's
-estimates scatter by 10-35 % (10-90 % range), ``T2`` by up to 70 %.
+records of 30 s each; median over the records of estimate / true - 1, and the bootstrap standard
+error of that median): ``S0_peak`` +1 +- 6 %, +8 +- 9 %, -7 +- 5 %; ``omega_g`` -3, -1, -1 % (+- 1-4 %);
+``zeta_g`` +5, -1, +2 % (+- 2-4 %); the fitted model's RVT median PGA -3, -0, -3 % (+- 2-3 %); ``T1``
+-9, -14, +0 % and ``T2`` +5, +21, +4 % with standard errors of 8-14 % and 18-25 %: one record pins
+the two envelope times down only to -35..+70 % (they trade off along the Husid curve), so 20 records
+cannot hold their medians to 10 % (the soft-soil ``T1``, ``T2`` are 1.7 and 1.1 standard errors
+out); what they predict together (``S0_peak``, the PGA) is stable.
 """
 
 from __future__ import annotations
