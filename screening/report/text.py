@@ -209,8 +209,13 @@ def describe_product(ds, path="file"):
         return "\n".join(lines)
     if kind == "cloud":
         n = ds.sizes["record"]
-        lines.append(f"{n} record(s): {int(ds['exceed'].sum())} exceed the threshold, "
+        stripes = f" x {ds.sizes['level']} stripe(s) ({ds.attrs.get('intensity_variable', '?')} levels)" \
+            if "level" in ds.dims else ""
+        lines.append(f"{n} record(s){stripes}: {int(ds['exceed'].sum())} run(s) exceed the threshold, "
                      f"{int(ds['overturned'].sum())} overturned, {int(ds['diverged'].sum())} left out (diverged)")
+        if "beta_se" in ds:
+            lines.append(f"standard errors (binomial likelihood): median {_fmt(float(ds['fit_median_se']))}, "
+                         f"beta {_fmt(float(ds['beta_se']))}")
     else:
         p = np.asarray(ds["p_exceed"].values if "p_exceed" in ds else ds["mcs_p_exceed"].values, dtype=float)
         lines.append(f"threshold {ds.attrs.get('threshold', '?')} (relative to {ds.attrs.get('relative_to', '?')}), "

@@ -155,6 +155,8 @@ def test_multiple_stripe_analysis_scales_every_record_to_every_level(folder, cap
             rows = list(csv.DictReader(out.with_suffix(".csv").open()))
             assert len(rows) == 1 and rows[0]["intensity_measure"] == "stripe_pga"
     assert out.with_suffix(".png").stat().st_size > 10_000
+    assert main(["info", str(out)]) == 0
+    assert "8 record(s) x 3 stripe(s) (stripe_pga levels)" in capsys.readouterr().out
 
 
 def test_levels_must_be_increasing_positive(folder):
