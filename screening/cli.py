@@ -436,6 +436,16 @@ def fragility_figures(frag, out, dim, flags=None):
     return entries
 
 
+def fit_files(frag, out):
+    """The entries of :func:`write_file_set` for the fits of ``frag``: CSV (a row per curve), pelicun CSV
+    and (where OpenQuake knows the intensity) NRML next to ``out``."""
+    from screening.analysis.im_fragility import write_csv, write_nrml, write_pelicun_csv
+
+    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
+            ("pelicun CSV", out.with_name(f"{out.stem}_pelicun.csv"), lambda path: write_pelicun_csv(frag, path)),
+            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
+
+
 def write_fragility_files(ds, out, figures, extras=(), warnings=()):
     """Write ``ds`` as netCDF at ``out``, its ``figures`` and each of ``extras`` (entries ``(name, path,
     write)``) as one set (:func:`write_file_set`)."""
@@ -546,7 +556,8 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
     warnings = [] if dim in grid and frag.sizes[dim] >= 2 else [
         f"no fragility curve and no fit: {result} sweeps no intensity with two values or more (swept: "
         f"{', '.join(grid) or 'none'}); --dim names the swept intensity"]
-    write_fragility_files(frag, out, fragility_figures(frag, out, dim, flags), warnings=warnings)
+    write_fragility_files(frag, out, fragility_figures(frag, out, dim, flags),
+                          fit_files(frag, out) if "fit_median" in frag else (), warnings=warnings)
     p = frag["p_exceed"].values
     fit = lognormal_fit_text(frag, dim, frag["fit_median"].attrs.get("units", "") if "fit_median" in frag else "")
     _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}" + (f"; {fit}" if fit else ""))

@@ -12,7 +12,7 @@ import click
 
 from screening.cli import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, _Choice, _not_with, _say,
                            _stem, _write_error, announce_compilation, cli, fragility_figures, lognormal_fit_text,
-                           stamp_fragility, write_file_set, write_fragility_files)
+                           fit_files, stamp_fragility, write_file_set, write_fragility_files)
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -29,16 +29,6 @@ def _overrides(pairs):
         except ValueError:
             raise CommandError(f"--set {text!r}: {value!r} is not a number") from None
     return out
-
-
-def _fit_files(frag, out):
-    """The fits of ``frag`` as CSV (a row per curve), pelicun CSV and (where OpenQuake knows the IM) NRML
-    next to ``out``."""
-    from screening.analysis.im_fragility import write_csv, write_nrml, write_pelicun_csv
-
-    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
-            ("pelicun CSV", out.with_name(f"{out.stem}_pelicun.csv"), lambda path: write_pelicun_csv(frag, path)),
-            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
 
 
 def _read(record, dt, units):
@@ -137,7 +127,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold), im=im,
                     relative_to=relative_to, period=period, modelling_dispersion=modelling)
     write_fragility_files(frag, out, fragility_figures(frag, out, frag.attrs["intensity_dim"], flags),
-                          _fit_files(frag, out), warnings)
+                          fit_files(frag, out), warnings)
     fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["fit_median"].attrs["units"])
     if fit:
         _say(fit)
@@ -217,7 +207,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
     frag = ds[["fit_median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
     if cloud.levels:
         write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_stripes(ds, path))],
-                              _fit_files(frag, out), warnings)
+                              fit_files(frag, out), warnings)
         _say(f"{ds.sizes['level']} stripes x {ds.sizes['record']} records: {int(ds['n_exceed'].sum())} of "
              f"{int(ds['n_used'].sum())} runs exceed; fragility over {ds.attrs['intensity_variable']}: median "
              f"{float(ds['fit_median']):.4g} +- {float(ds['fit_median_se']):.2g} {ds['fit_median'].attrs['units']}, "
@@ -225,7 +215,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
         return EXIT_OK
     demand = ("demand CSV", out.with_name(f"{out.stem}_demand.csv"), lambda path: write_demand_csv(ds, path))
     write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_cloud(ds, path))],
-                          [demand, *_fit_files(frag, out)], warnings)
+                          [demand, *fit_files(frag, out)], warnings)
     n = ds.sizes["record"]
     _say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
          f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['fit_median']):.4g} "

@@ -58,6 +58,11 @@ def test_fragility_defaults_to_the_swept_pga_and_names_the_fit_fit_median(result
         assert frag["fit_median"].dims == ("k",) and frag["fit_median"].attrs["intensity"] == "pga"
         assert frag["fit_median"].attrs["units"] == "m s-2" and np.all(frag["fit_flag"] == FitFlag.ok)
     assert out.with_suffix(".png").stat().st_size > 10_000
+    # the fits over the swept (target median) PGA go out as CSV, pelicun CSV and NRML (PGA in g)
+    rows = list(csv.DictReader(out.with_suffix(".csv").open()))
+    assert [r["intensity_measure"] for r in rows] == ["pga", "pga"] and all(r["fit_flag"] == "ok" for r in rows)
+    imls = ET.parse(out.with_suffix(".xml")).getroot().find("n:fragilityModel/n:fragilityFunction/n:imls", NS)
+    assert imls.get("imt") == "PGA" and float(imls.get("maxIML")) == pytest.approx(4.0 / 9.80665, rel=1e-5)
     assert main(["info", str(out)]) == 0                 # info describes the fragility file
     text = capsys.readouterr().out
     assert "(fragility file)" in text and "lognormal fit over pga: 2 of 2 curve(s) fitted" in text
