@@ -205,15 +205,15 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, quiet):
             client = stack.enter_context(dask_client(workers, scheduler))
         ds, warnings = run(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client)
     frag = ds[["fit_median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
+    demand = ("demand CSV", out.with_name(f"{out.stem}_demand.csv"), lambda path: write_demand_csv(ds, path))
     if cloud.levels:
         write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_stripes(ds, path))],
-                              fit_files(frag, out), warnings)
+                              [demand, *fit_files(frag, out)], warnings)
         _say(f"{ds.sizes['level']} stripes x {ds.sizes['record']} records: {int(ds['n_exceed'].sum())} of "
              f"{int(ds['n_used'].sum())} runs exceed; fragility over {ds.attrs['intensity_variable']}: median "
              f"{float(ds['fit_median']):.4g} +- {float(ds['fit_median_se']):.2g} {ds['fit_median'].attrs['units']}, "
              f"beta {float(ds['beta']):.3f} +- {float(ds['beta_se']):.3f} (standard errors)")
         return EXIT_OK
-    demand = ("demand CSV", out.with_name(f"{out.stem}_demand.csv"), lambda path: write_demand_csv(ds, path))
     write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_cloud(ds, path))],
                           [demand, *fit_files(frag, out)], warnings)
     n = ds.sizes["record"]

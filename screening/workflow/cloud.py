@@ -448,24 +448,32 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
 
 
 def write_demand_csv(ds, path):
-    """The per-record demands of a cloud analysis as CSV, one row per record: its name, its intensity
-    measures, the peak ``|theta|`` [rad] and as a fraction of the slenderness angle, and the flags
-    (overturned, diverged: left out of the fit, exceed) - the table a PSDM or a pelicun demand
-    sample is built from.  Headers carry the units in brackets."""
+    """The per-record demands of a cloud analysis as CSV, one row per record (per level and record for a
+    multiple-stripe analysis, with the ``level`` column): its name, its intensity measures, the peak
+    ``|theta|`` [rad] and as a fraction of the slenderness angle, and the flags (overturned, diverged:
+    left out of the fit, exceed) - the table a PSDM or a pelicun demand sample is built from.  Headers
+    carry the units in brackets."""
     import csv
 
     from screening.analysis.intensity import RECORD_MEASURES
 
     ims = [name for name in RECORD_MEASURES if name in ds]
     slender = float(ds["slenderness"])
+    stripes = "level" in ds.dims
+    flat = ds.stack(run=("level", "record")) if stripes else ds.rename(record="run").assign_coords(
+        record=("run", ds["record"].values))
     with open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
-        w.writerow(["record", "record_name"] + [f"{n} [{ds[n].attrs.get('units', '')}]" for n in ims]
+        w.writerow(([f"level [{ds['level'].attrs.get('units', '')}]"] if stripes else []) + ["record", "record_name"]
+                   + [f"{n} [{ds[n].attrs.get('units', '')}]" for n in ims]
                    + ["peak_abs_theta [rad]", "peak_abs_theta / slenderness [1]", "overturned", "diverged", "exceed"])
-        for i in range(ds.sizes["record"]):
-            peak = float(ds["peak_abs_theta"].values[i])
-            w.writerow([int(ds["record"].values[i]), str(ds["record_name"].values[i])]
-                       + [f"{float(ds[n].values[i]):.8g}" for n in ims]
+        names = ds["record_name"].values
+        for i in range(flat.sizes["run"]):
+            one = flat.isel(run=i)
+            record = int(one["record"].values)
+            peak = float(one["peak_abs_theta"].values)
+            w.writerow(([f"{float(one['level'].values):.8g}"] if stripes else []) + [record, str(names[record])]
+                       + [f"{float(one[n].values):.8g}" for n in ims]
                        + [f"{peak:.8g}", f"{peak / slender:.6g}"]
-                       + [int(bool(ds[n].values[i])) for n in ("overturned", "diverged", "exceed")])
+                       + [int(bool(one[n].values)) for n in ("overturned", "diverged", "exceed")])
     return path

@@ -157,6 +157,9 @@ def test_multiple_stripe_analysis_scales_every_record_to_every_level(folder, cap
     assert out.with_suffix(".png").stat().st_size > 10_000
     assert main(["info", str(out)]) == 0
     assert "8 record(s) x 3 stripe(s) (stripe_pga levels)" in capsys.readouterr().out
+    demand = list(csv.DictReader(folder.joinpath("msa_demand.csv").open()))
+    assert len(demand) == 24 and [float(r["level [m s-2]"]) for r in demand[::8]] == levels
+    np.testing.assert_allclose([float(r["pga [m s-2]"]) for r in demand], np.repeat(levels, 8), rtol=1e-7)
 
 
 def test_levels_must_be_increasing_positive(folder):
