@@ -14,10 +14,11 @@ import tempfile
 from pathlib import Path
 
 
-def temporary_beside(path):
-    """A new empty file next to ``path`` (its name hidden and random) to write ``path`` into."""
+def temporary_beside(path, suffix=""):
+    """A new empty file next to ``path`` (its name hidden and random, ending in ``.tmp`` and ``suffix``:
+    for writers that read the format from the name) to write ``path`` into."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
     os.close(fd)
     return Path(tmp)
 

@@ -16,9 +16,11 @@ with the same command resumes; an unchanged study reuses its finished result.
 (:mod:`screening.workflow.cdofile`).
 
 ``screening plot RESULT.nc [--out-dir DIR] [--response var|sigma|fraction]`` writes the figures;
-``screening info RESULT.nc`` prints the dimensions, swept parameters, status counts and summary statistics.
-``screening fragility RESULT.nc --threshold X [--relative-to slenderness|theta_ul]`` writes
-the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG).
+``screening info RESULT.nc`` prints the dimensions, swept parameters, status counts and summary statistics
+(and describes the files of ``simulate``, ``cloud`` and ``fragility``).
+``screening fragility RESULT.nc --threshold X [--threshold Y ...] [--relative-to slenderness|theta_ul]`` writes
+the probability of exceeding the rotation over the grid (netCDF) and fragility curves (PNG), one limit
+state per threshold, all files as one set (docs/fragility.md).
 ``screening tradeoff STUDY.toml`` runs the speed-accuracy trade study (:mod:`screening.analysis.tradeoff`).
 
 User errors (bad options, bad study file, missing output folder, unreadable result file,
@@ -335,11 +337,12 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
     return EXIT_OK
 
 
-def _temporary_for(out):
-    """A new empty file next to ``out`` (never a planted link) to write ``out`` into
+def _temporary_for(out, suffix=""):
+    """A new empty file next to ``out`` (never a planted link) to write ``out`` into; its name ends in
+    ``.tmp`` and ``suffix`` (writers that read the format from the name)
     (:func:`screening.atomicfile.temporary_beside`; a failure as a one-line error)."""
     try:
-        return temporary_beside(out)
+        return temporary_beside(out, suffix)
     except OSError as exc:
         raise _write_error(out, exc) from None
 
@@ -364,44 +367,105 @@ def stamp_fragility(frag, result, **options):
 
 
 def lognormal_fit_text(frag, over, units=""):
-    """``"lognormal fit over <over>: median <m> [units], beta <b> (medians over the other dims)"``, or ``""``
-    where ``frag`` holds no finite fit."""
-    if "median" not in frag or not np.isfinite(frag["median"].values).any():
+    """``"lognormal fit over <over>: 3 of 5 curve(s) fitted (...); median <m> [units], beta <b> (medians
+    over the fitted curves)"``, or ``""`` where ``frag`` has no fit (no swept intensity)."""
+    from screening.analysis.im_fragility import curve_count_text
+
+    if "fit_median" not in frag:
         return ""
-    return (f"lognormal fit over {over}: median {float(frag['median'].median()):.4g}{' ' + units if units else ''}, "
-            f"beta {float(frag['beta'].median()):.3f} (medians over the other dims)")
+    text = f"lognormal fit over {over}: {curve_count_text(frag)}"
+    if not np.isfinite(frag["fit_median"].values).any():
+        return text
+    return (f"{text}; median {float(frag['fit_median'].median()):.4g}{' ' + units if units else ''}, "
+            f"beta {float(frag['beta'].median()):.3f} (medians over the fitted curves)")
 
 
-def write_fragility_files(ds, out, draw, extras=(), warnings=()):
-    """Write ``ds`` as netCDF at ``out``, its figure ``draw(png_path)`` next to it and each of ``extras``
-    (``(name, path, write)``: ``write(path)``; a ``ValueError`` there becomes the warning "no <name> file");
-    prints the paths and the warnings.  All or nothing: the netCDF appears last, and on a failing write the
-    files this call created are removed before the one-line error."""
+def write_file_set(files, warnings=()):
+    """Write a set of files that belong together, all or none: ``files`` is a list of ``(name, path,
+    write)`` and ``write(tmp)`` writes the file into the new temporary ``tmp`` (a
+    :class:`~screening.analysis.im_fragility.NoExport` there means this file has no content: the warning
+    "no <name> file: ..." and, so that the folder holds only what this command produced, an older file at ``path`` is removed).  Every file is written to a
+    temporary next to its path first; only when all are written are they renamed into place (the first
+    of ``files`` last).  On any failure (or Ctrl-C) every temporary is removed and nothing is published;
+    a write error becomes the one-line error.  Prints the paths written and the warnings."""
+    from screening.analysis.im_fragility import NoExport
+
     warnings = list(warnings)
-    tmp = _temporary_for(out)
-    made = []
+    done, drop = [], []
     try:
-        ds.to_netcdf(tmp, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
-        for name, path, write in [("PNG", out.with_suffix(".png"), draw), *extras]:
-            existed = path.exists()
+        for name, path, write in files:
+            tmp = _temporary_for(path, suffix=path.suffix)
+            done.append((tmp, path))
             try:
-                written = write(path)
-            except ValueError as exc:
+                write(tmp)
+            except NoExport as exc:
                 warnings.append(f"no {name} file: {exc}")
-                continue
-            if written is not None:
-                made.append((Path(written), existed))
-        _publish(tmp, out)
-    except (OSError, RuntimeError) as exc:      # netCDF reports a failed write as RuntimeError
-        tmp.unlink(missing_ok=True)
-        for path, existed in made:
-            if not existed:
-                path.unlink(missing_ok=True)
-        raise _write_error(out, exc) from None
-    for path in [out, *(path for path, _ in made)]:
+                done.pop()
+                tmp.unlink(missing_ok=True)
+                drop.append(path)
+    except BaseException as exc:
+        for tmp, _ in done:
+            tmp.unlink(missing_ok=True)
+        if isinstance(exc, (OSError, RuntimeError)):    # netCDF reports a failed write as RuntimeError
+            raise _write_error(files[0][1], exc) from None
+        raise
+    for tmp, path in done[::-1]:
+        _publish(tmp, path)
+    for path in drop:
+        if path.is_file() and not path.is_symlink():
+            path.unlink()
+            warnings.append(f"removed {path} of an earlier run (this run has no such file)")
+    for _, path in done:
         print(path)
     for w in warnings:
         _say(f"warning: {w}")
+
+
+def _drawn(path):
+    """The path a figure function returned; :class:`~screening.analysis.im_fragility.NoExport` (no figure
+    file) where it drew none."""
+    from screening.analysis.im_fragility import NoExport
+
+    if path is None:
+        raise NoExport("nothing to draw")
+    return path
+
+
+def fragility_figures(frag, out, dim, flags=None):
+    """The PNG entries of :func:`write_file_set` for a fragility dataset: ``<out>.png``, or with several
+    limit states one ``<out-stem>_<limit state>.png`` each
+    (:func:`~screening.report.fragility_figures.plot_fragility`)."""
+    from screening.report.fragility_figures import plot_fragility
+
+    def draw(one):
+        return lambda path: _drawn(plot_fragility(one, dim, path, flags=flags))
+
+    if "limit_state" not in frag.dims:
+        return [("PNG", out.with_suffix(".png"), draw(frag))]
+    entries = []
+    for i, name in enumerate(frag["limit_state"].values):
+        one = frag.isel(limit_state=i).assign_attrs(threshold=float(frag["threshold"].values[i]))
+        entries.append((f"PNG of {name}", out.with_name(f"{out.stem}_{name}.png"), draw(one)))
+    return entries
+
+
+def fit_files(frag, out):
+    """The entries of :func:`write_file_set` for the fits of ``frag``: CSV (a row per curve), pelicun CSV
+    and (where OpenQuake knows the intensity) NRML next to ``out``."""
+    from screening.analysis.im_fragility import write_csv, write_nrml, write_pelicun_csv
+
+    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
+            ("pelicun CSV", out.with_name(f"{out.stem}_pelicun.csv"), lambda path: write_pelicun_csv(frag, path)),
+            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
+
+
+def write_fragility_files(ds, out, figures, extras=(), warnings=()):
+    """Write ``ds`` as netCDF at ``out``, its ``figures`` and each of ``extras`` (entries ``(name, path,
+    write)``) as one set (:func:`write_file_set`)."""
+    def netcdf(path):
+        ds.to_netcdf(path, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})
+
+    write_file_set([("netCDF", out, netcdf), *figures, *extras], warnings)
 
 
 def _plot(result, out_dir, response="var"):
@@ -452,25 +516,35 @@ def cmd_plot(result, out_dir, response):
 
 @cli.command("fragility", help="probability of exceeding a rotation: netCDF + PNG fragility curves")
 @click.argument("result")
-@click.option("--threshold", type=POSITIVE_FLOAT, required=True,
-              help="rotation threshold: in rad, or a fraction of the angle named by --relative-to")
+@click.option("--threshold", type=POSITIVE_FLOAT, required=True, multiple=True,
+              help="rotation threshold: in rad, or a fraction of the angle named by --relative-to; repeat it for "
+                   "several limit states (one fragility model, a figure per limit state)")
 @click.option("--relative-to", type=_Choice(["slenderness", "theta_ul"]),
               help="threshold as a fraction of the slenderness angle atan(b/h) or of theta_ul")
 @click.option("--method", type=_Choice(["vanmarcke", "poisson"]), default="vanmarcke",
               help="up-crossing approximation (default vanmarcke)")
-@click.option("--dim", help="swept intensity of the fragility curve and its lognormal fit (default S0 if swept)")
+@click.option("--dim", help="swept intensity of the fragility curve and its lognormal fit (default: S0 or pga, "
+                           "whichever is swept)")
 @click.option("--out", help="netCDF file (default <result-stem>_fragility.nc next to the result; "
                             "its folder must exist); the PNG goes next to it")
 @click.option("--im", type=_Choice(["pga", "sa", "rms", "arias", "s0"]),
               help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
-                   "export the fits as CSV and OpenQuake NRML next to the netCDF")
+                   "export the fits as CSV (a row per curve), pelicun CSV and OpenQuake NRML next to the netCDF "
+                   "(docs/fragility.md)")
 @click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
-def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
+@click.option("--modelling-dispersion", "modelling", type=POSITIVE_FLOAT,
+              help="modelling dispersion beta_m [1] combined with each fitted beta by the square root of the sum of "
+                   "squares (the fitted one kept as beta_fit)")
+def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, modelling):
+    threshold = sorted(threshold)
+    if len(set(threshold)) < len(threshold):
+        raise CommandError(f"--threshold: the same value given twice ({', '.join(f'{t:g}' for t in threshold)})")
     if im is not None or period is not None:
         from screening.cli_records import fragility_over_im_command
-        return fragility_over_im_command(result, threshold, relative_to, method, dim, out, im or "sa", period)
-    from screening.analysis.fragility import fragility_dataset
-    from screening.report.fragility_figures import plot_fragility
+        return fragility_over_im_command(result, threshold, relative_to, method, dim, out, im or "sa", period,
+                                         modelling)
+    from screening.analysis.fragility import fragility_dataset, with_modelling_dispersion
+    from screening.analysis.im_fragility import default_dim, stack_limit_states
     from screening.workflow.errors import SweepError
     from screening.workflow.reader import damaged_data_error, open_result
     from screening.workflow.writer import check_output_path
@@ -481,17 +555,24 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
         if dim is not None and dim not in grid:
             raise SweepError(f"--dim {dim!r} is not a swept dimension of {result} "
                              f"(swept: {', '.join(grid) or 'none'})")
-        dim = dim or "S0"
+        dim = dim or default_dim(grid) or "S0"
         out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility.nc"), inputs=(result,))
         try:
-            frag = fragility_dataset(ds, threshold, relative_to, method, dim).load()
+            frag = stack_limit_states([fragility_dataset(ds, t, relative_to, method, dim).load() for t in threshold],
+                                      threshold, relative_to)
             flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
-    stamp_fragility(frag, result, threshold=threshold, relative_to=relative_to)
-    write_fragility_files(frag, out, lambda path: plot_fragility(frag, dim, path, flags=flags))
+    frag = with_modelling_dispersion(frag, modelling)
+    stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold),
+                    relative_to=relative_to, modelling_dispersion=modelling)
+    warnings = [] if dim in grid and frag.sizes[dim] >= 2 else [
+        f"no fragility curve and no fit: {result} sweeps no intensity with two values or more (swept: "
+        f"{', '.join(grid) or 'none'}); --dim names the swept intensity"]
+    write_fragility_files(frag, out, fragility_figures(frag, out, dim, flags),
+                          fit_files(frag, out) if "fit_median" in frag else (), warnings=warnings)
     p = frag["p_exceed"].values
-    fit = lognormal_fit_text(frag, dim)
+    fit = lognormal_fit_text(frag, dim, frag["fit_median"].attrs.get("units", "") if "fit_median" in frag else "")
     _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}" + (f"; {fit}" if fit else ""))
     if "best_p_exceed" in frag:
         from screening.status import BestMethod
@@ -533,19 +614,41 @@ def cmd_tradeoff(study, out_dir, quiet, from_nc):
     return EXIT_OK
 
 
-@cli.command("info", help="describe a result file")
+@cli.command("info", help="describe a result file (of run, simulate, cloud or fragility)")
 @click.argument("result")
 def cmd_info(result):
     from screening.report.text import describe
-    from screening.workflow.reader import damaged_data_error, open_result
+    from screening.workflow.reader import ResultError, damaged_data_error, open_result
 
-    with open_result(result) as ds:
+    try:
+        ds = open_result(result)
+    except ResultError as exc:
+        text = _describe_product(result)
+        if text is None:
+            raise exc from None
+        print(printable(text))
+        return EXIT_OK
+    with ds:
         try:
             text = describe(ds, result)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
     print(printable(text))
     return EXIT_OK
+
+
+def _describe_product(path):
+    """:func:`~screening.report.text.describe_product` of the file at ``path`` (a file of ``simulate``,
+    ``cloud`` or ``fragility``), or ``None`` when it is not one (or cannot be read)."""
+    import xarray as xr
+
+    from screening.report.text import describe_product
+
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return describe_product(ds, path)
+    except Exception:                               # noqa: BLE001 - not ours: the sweep reader's message stands
+        return None
 
 
 @cli.command("export", help="convert a zarr result (run --out RESULT.zarr) to the netCDF file a direct run writes, "

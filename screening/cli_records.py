@@ -12,9 +12,9 @@ import click
 
 from screening.atomicfile import atomic_path
 from screening.solvers import mc_registry
-from screening.cli import (EXIT_OK, WORKER_COUNT, CommandError, _Choice, _not_with, _say, _write_error,
-                           _stem, announce_compilation, cli, lognormal_fit_text, stamp_fragility,
-                           write_fragility_files)
+from screening.cli import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, _Choice, _not_with, _say,
+                           _stem, _write_error, announce_compilation, cli, fragility_figures, lognormal_fit_text,
+                           fit_files, stamp_fragility, write_file_set, write_fragility_files)
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -33,14 +33,6 @@ def _overrides(pairs):
         except ValueError:
             raise CommandError(f"--set {text!r}: {value!r} is not a number") from None
     return out
-
-
-def _fit_files(frag, out):
-    """The fits of ``frag`` as CSV and (where OpenQuake knows the IM) NRML next to ``out``."""
-    from screening.analysis.im_fragility import write_csv, write_nrml
-
-    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
-            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
 
 
 def _read(record, dt, units):
@@ -123,10 +115,10 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     return EXIT_OK
 
 
-def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period):
+def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period, modelling=None):
     """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML."""
-    from screening.analysis.im_fragility import fragility_over_im
-    from screening.report.record_figures import plot_im_fragility
+    from screening.analysis.fragility import with_modelling_dispersion
+    from screening.analysis.im_fragility import fragility_over_im, stack_limit_states
     from screening.workflow.reader import open_result
     from screening.workflow.writer import check_output_path
 
@@ -143,12 +135,23 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     with open_result(result) as ds:
         out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility_{im}.nc"))
         try:
-            frag, warnings = fragility_over_im(ds.load(), threshold, im, dim, relative_to, method, period)
+            ds = ds.load()
+            frags, warnings = [], []
+            for t in threshold:
+                one, said = fragility_over_im(ds, t, im, dim, relative_to, method, period)
+                frags.append(one)
+                warnings += [w for w in said if w not in warnings]
+            frag = stack_limit_states(frags, threshold, relative_to)
         except (ValueError, KeyError) as exc:
             raise CommandError(str(exc).strip("'\"")) from None
-    stamp_fragility(frag, result, threshold=threshold, im=im, relative_to=relative_to, period=period)
-    write_fragility_files(frag, out, lambda path: plot_im_fragility(frag, path), _fit_files(frag, out), warnings)
-    fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["median"].attrs["units"])
+        flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load() \
+            if "status" in ds.variables else None
+    frag = with_modelling_dispersion(frag, modelling)
+    stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold), im=im,
+                    relative_to=relative_to, period=period, modelling_dispersion=modelling)
+    write_fragility_files(frag, out, fragility_figures(frag, out, frag.attrs["intensity_dim"], flags),
+                          fit_files(frag, out), warnings)
+    fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["fit_median"].attrs["units"])
     if fit:
         _say(fit)
     return EXIT_OK
@@ -162,16 +165,27 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 @click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
 @click.option("--kind", type=_Choice(["kanai_tajimi", "white"]), default="kanai_tajimi",
               help="excitation model (default kanai_tajimi)")
-@click.option("--cutoff", type=float, help="band limit [rad/s] of the study's synthesis (required for white)")
-def cmd_fit_excitation(record, dt, units, kind, cutoff):
+@click.option("--cutoff", type=POSITIVE_FLOAT, help="band limit [rad/s] of the study's synthesis (required for white)")
+@click.option("--figure", help="PNG of the fit: the record's Husid curve and spectrum against the fitted model's "
+                               "(its folder must exist)")
+def cmd_fit_excitation(record, dt, units, kind, cutoff, figure):
     from screening.analysis.fit_excitation import excitation_table, fit_excitation
+    from screening.workflow.writer import check_output_path
 
+    if figure is not None:
+        figure = check_output_path(figure, inputs=(record,))
     rec = _read(record, dt, units)
     try:
         fit = fit_excitation(rec, kind=kind, cutoff=cutoff)
-    except ValueError as exc:
-        raise CommandError(str(exc)) from None
+    except (ValueError, ArithmeticError) as exc:
+        raise CommandError(f"cannot fit {record}: {exc}") from None
+    if figure is not None:
+        from screening.report.record_figures import plot_excitation_fit
+
+        write_file_set([("PNG", figure, lambda path: plot_excitation_fit(rec, fit, path))])
     print(excitation_table(fit))
+    for flag in fit["flags"]:
+        _say(f"warning: {flag}")
     return EXIT_OK
 
 
@@ -193,7 +207,8 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff):
 def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     import contextlib
 
-    from screening.workflow.cloud import load_cloud_study, plot_cloud, read_cloud_records, run_cloud
+    from screening.workflow.cloud import (load_cloud_study, plot_cloud, plot_stripes, read_cloud_records, run_cloud,
+                                          run_stripes, write_demand_csv)
     from screening.workflow.execution import dask_client
     from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path
@@ -206,19 +221,30 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     out = check_output_path(out, inputs=(study, *cloud.files))
     announce_compilation(quiet)
     if workers is None and not scheduler:
-        workers = 0 if len(cloud.files) <= SERIAL_RECORDS else 2
+        workers = 0 if len(cloud.files) * max(len(cloud.levels), 1) <= SERIAL_RECORDS else 2
     in_process = not scheduler and workers == 0
+    run = run_stripes if cloud.levels else run_cloud
     with contextlib.ExitStack() as stack:
         client = None
         if not in_process:
             stack.enter_context(shielded())
             client = stack.enter_context(dask_client(workers, scheduler))
-        ds, warnings = run_cloud(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client,
-                                 records=records)
-    frag = ds[["median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
-    write_fragility_files(ds, out, lambda path: plot_cloud(ds, path), _fit_files(frag, out), warnings)
+        ds, warnings = run(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client,
+                           records=records)
+    frag = ds[["fit_median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
+    demand = ("demand CSV", out.with_name(f"{out.stem}_demand.csv"), lambda path: write_demand_csv(ds, path))
+    if cloud.levels:
+        write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_stripes(ds, path))],
+                              [demand, *fit_files(frag, out)], warnings)
+        _say(f"{ds.sizes['level']} stripes x {ds.sizes['record']} records: {int(ds['n_exceed'].sum())} of "
+             f"{int(ds['n_used'].sum())} runs exceed; fragility over {ds.attrs['intensity_variable']}: median "
+             f"{float(ds['fit_median']):.4g} +- {float(ds['fit_median_se']):.2g} {ds['fit_median'].attrs['units']}, "
+             f"beta {float(ds['beta']):.3f} +- {float(ds['beta_se']):.3f} (standard errors)")
+        return EXIT_OK
+    write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_cloud(ds, path))],
+                          [demand, *fit_files(frag, out)], warnings)
     n = ds.sizes["record"]
     _say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
-         f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['median']):.4g} "
-         f"{ds['median'].attrs['units']}, beta {float(ds['beta']):.3f}")
+         f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['fit_median']):.4g} "
+         f"{ds['fit_median'].attrs['units']}, beta {float(ds['beta']):.3f}")
     return EXIT_OK

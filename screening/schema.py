@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import (BestMethod, ContactRegime, EscalationModel, PointStatus, SampleState, SpotStatus,
+from screening.status import (BestMethod, ContactRegime, EscalationModel, FitFlag, PointStatus, SampleState, SpotStatus,
                               TargetMet, Trust, flag_attributes)
 
 CONVENTIONS = "CF-1.8"
@@ -175,6 +175,9 @@ FRAGILITY = {
     "best_p_exceed_low": _v("1", "lower end of the band of best_p_exceed (2 standard errors)"),
     "best_p_exceed_high": _v("1", "upper end of the band of best_p_exceed (2 standard errors)"),
     "beta": _v("1", "lognormal dispersion beta of the fragility curve"),
+    "fit_median": {"long_name": "median of the lognormal fragility curve (units of the intensity it is fitted over)"},
+    "fit_flag": {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"},
+    "fit_n_unvouched": _v("1", "points of the curve whose linearized value is untrusted and has no best estimate"),
 }
 
 #: Speed-accuracy trade study (:mod:`screening.analysis.tradeoff`): its variables and label coordinates.
@@ -275,16 +278,15 @@ INTENSITY = {
     "sa_median": _v("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
     "pga": _v("m s-2", "peak ground acceleration of the record"),
     "sa": _v("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
-    "fit_flag": {"long_name": "state of the lognormal fit", "units": "1", "flag_values": [0, 1, 2],
-                 "flag_meanings": "ok non_positive_beta no_fit"},
+    "fit_flag": FRAGILITY["fit_flag"],
 }
 
 #: Per-point variables of a sweep that no other table declares: the status and the intensity
 #: measures of each point's excitation.
 SWEEP = {
     "status": flag_attributes(PointStatus, "solver status of the point"),
-    **{name: {**INTENSITY[name], "note": "band limit of the point's Monte Carlo synthesis "
-                                         "(screening.solvers.synthesis.default_cutoff)"}
+    **{name: {**INTENSITY[name], "note": "ground motion band-limited to the excitation's band_limit_hz "
+                                         "(global attribute; default 25 Hz), whatever the bed"}
        for name in ("pga_median", "rms_acceleration", "arias_intensity")},
 }
 
@@ -303,8 +305,13 @@ CLOUD = {
     "exceed": _v("1", "peak |theta| above the threshold, or overturned"),
     "threshold_rad": _v("rad", "rotation threshold"),
     "slenderness": _v("rad", "slenderness angle atan(b/h)"),
-    "median": {"long_name": "median of the lognormal fragility curve (units of the intensity measure)"},
-    "beta": _v("1", "logarithmic standard deviation of the lognormal fragility curve"),
+    "level": _v("1", "intensity level of the stripe (units of the intensity measure)"),
+    "n_exceed": _v("1", "records exceeding the threshold at the level"),
+    "n_used": _v("1", "records integrated at the level (not diverged)"),
+    "fit_median_se": _v("1", "standard error of fit_median (observed information; units of the intensity)"),
+    "beta_se": _v("1", "standard error of beta (observed information)"),
+    **{f"stripe_{name}": _v("1", f"{name} of the stripe (records scaled to it)") for name in
+       ("pga", "sa", "rms_acceleration", "arias_intensity")},
 }
 
 #: Calibration of the trust rule (``benchmarks/trust_calibration.py`` -> ``screening/data/trust_calibration.nc``).

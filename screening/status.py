@@ -3,7 +3,7 @@
 The code spaces are declared once, as data, in ``screening/data/status_codes.toml``: each member's
 name, integer code and meaning.  This module turns each table into an :class:`enum.IntEnum` at
 import (``PointStatus``, ``SampleStatus``, ``DivergenceReason``, ``SampleState``, ``SpotStatus``,
-``Trust``, ``BestMethod``, ``EscalationModel``, ``TargetMet``, ``ContactRegime``); every member
+``Trust``, ``BestMethod``, ``EscalationModel``, ``TargetMet``, ``ContactRegime``, ``FitFlag``); every member
 carries its ``meaning`` (plain language, for messages and documentation).  Compiled kernels read
 the members as integer constants (numba supports ``IntEnum``); files store the integer with CF
 ``flag_values`` / ``flag_meanings`` made by :func:`flag_attributes`.  Nothing else in the package
@@ -49,6 +49,7 @@ BestMethod = code_space("BestMethod")
 EscalationModel = code_space("EscalationModel")
 TargetMet = code_space("TargetMet")
 ContactRegime = code_space("ContactRegime")
+FitFlag = code_space("FitFlag")
 
 #: Plain-language text of the divergence reasons (messages to users).
 DIVERGENCE_TEXT = {reason: reason.meaning for reason in DivergenceReason}

@@ -30,6 +30,7 @@ Method and how it is checked: ``docs/method.md#fragility``.
 
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -39,7 +40,7 @@ from scipy import optimize, special
 from screening import schema
 from screening.model.block import Block
 from screening.solvers.datasets import finish
-from screening.status import BestMethod, PointStatus, SampleState
+from screening.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
 
@@ -128,6 +129,93 @@ def mcs_exceedance_probability(peak_abs_theta, level, overturned=None):
 def lognormal_fragility(intensity, median, beta):
     """``Phi(ln(intensity / median) / beta)`` [1]."""
     return _Phi(np.log(np.asarray(intensity, dtype=float) / median) / beta)
+
+
+def binomial_nll(log_median, log_beta, intensity, n_exceed, n_total):
+    """Negative log-likelihood [1] of ``n_exceed`` exceedances in ``n_total`` trials at each ``intensity``
+    under the lognormal fragility with ``median = exp(log_median)``, ``beta = exp(log_beta)``."""
+    p = np.clip(lognormal_fragility(intensity, np.exp(log_median), np.exp(log_beta)), 1e-300, 1.0)
+    q = np.clip(1.0 - lognormal_fragility(intensity, np.exp(log_median), np.exp(log_beta)), 1e-300, 1.0)
+    return -float(np.sum(n_exceed * np.log(p) + (n_total - n_exceed) * np.log(q)))
+
+
+def fit_binomial_fragility(intensity, n_exceed, n_total):
+    """Maximum-likelihood lognormal fragility of stripes of trials, with standard errors.
+
+    Parameters
+    ----------
+    intensity : array [units of the IM], > 0, the level of each stripe.
+    n_exceed, n_total : arrays [1], exceedances and trials (records) at each level (``n_total``
+        broadcasts).
+
+    Returns
+    -------
+    dict with ``median`` [IM units], ``beta`` [1], their standard errors ``median_se``, ``beta_se``
+    (NaN where the information matrix is singular: perfectly separated stripes) and ``n_trials``.
+
+    Notes
+    -----
+    The likelihood is ``prod_j C(n_j, z_j) p_j^z_j (1 - p_j)^(n_j - z_j)``, ``p_j = Phi(ln(x_j / median)
+    / beta)`` (Baker 2015, eq. 11), maximised over ``(ln median, ln beta)`` by Nelder-Mead.  The standard
+    errors come from the observed information: the inverse of the Hessian of the negative
+    log-likelihood at the optimum (central differences in ``(ln median, ln beta)``), carried to
+    ``median`` and ``beta`` by the delta method (``se(median) = median se(ln median)``).
+
+    References
+    ----------
+    Baker, J. W. (2015) Efficient analytical fragility function fitting using dynamic structural
+    analysis, Earthquake Spectra 31(1), 579-599.
+    """
+    x = np.asarray(intensity, dtype=float).ravel()
+    k = np.asarray(n_exceed, dtype=float).ravel()
+    n = np.broadcast_to(np.asarray(n_total, dtype=float), k.shape)
+    if x.size != k.size or not (np.all(np.isfinite(x)) and np.all(x > 0)):
+        raise ValueError("parameter 'intensity' must hold one finite value > 0 per stripe")
+    if not (np.all(k >= 0) and np.all(k <= n)):
+        raise ValueError("parameter 'n_exceed' must lie in 0..n_total at every stripe")
+    if k.sum() == 0 or k.sum() == n.sum():
+        raise ValueError("every trial exceeds, or none does: the fragility is not identified")
+
+    def nll(v):
+        return binomial_nll(v[0], v[1], x, k, n)
+
+    start = [math.log(float(np.exp(np.average(np.log(x), weights=np.maximum(k, 1e-9))))), math.log(0.4)]
+    best = optimize.minimize(nll, start, method="Nelder-Mead",
+                             options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 8000}).x
+    h = 1e-4
+    hess = np.empty((2, 2))
+    for i in range(2):
+        for j in range(2):
+            ei, ej = np.eye(2)[i] * h, np.eye(2)[j] * h
+            hess[i, j] = (nll(best + ei + ej) - nll(best + ei - ej) - nll(best - ei + ej) + nll(best - ei - ej)) \
+                / (4 * h * h)
+    try:
+        cov = np.linalg.inv(hess)
+        se = np.sqrt(np.diag(cov)) if np.all(np.diag(cov) > 0) else np.full(2, np.nan)
+    except np.linalg.LinAlgError:
+        se = np.full(2, np.nan)
+    median, beta = float(np.exp(best[0])), float(np.exp(best[1]))
+    return {"median": median, "beta": beta, "median_se": median * float(se[0]), "beta_se": beta * float(se[1]),
+            "n_trials": int(n.sum())}
+
+
+def total_dispersion(beta, modelling):
+    """``sqrt(beta^2 + beta_m^2)`` [1]: a fitted (record-to-record) dispersion ``beta`` combined with a
+    modelling dispersion ``beta_m`` by the square root of the sum of squares (FEMA P-58; the two sources
+    taken independent and lognormal)."""
+    beta = beta if isinstance(beta, xr.DataArray) else np.asarray(beta, dtype=float)
+    return np.sqrt(beta * beta + float(modelling) ** 2)
+
+
+def with_modelling_dispersion(frag, modelling):
+    """A fragility dataset whose ``beta`` is the fitted one combined with the modelling dispersion
+    ``modelling`` [1] (:func:`total_dispersion`); the fitted one kept as ``beta_fit``."""
+    if modelling is None or modelling == 0:
+        return frag
+    out = frag.assign(beta_fit=frag["beta"].assign_attrs(long_name="fitted (record-to-record) dispersion"))
+    out["beta"] = total_dispersion(frag["beta"], modelling).assign_attrs(
+        frag["beta"].attrs, note=f"SRSS of beta_fit and the modelling dispersion {float(modelling):g}")
+    return out.assign_attrs(modelling_dispersion=float(modelling))
 
 
 def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=None):
@@ -273,35 +361,100 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
     return p.rename("p_exceed").assign_attrs(schema.attributes("p_exceed"), method=method)
 
 
-def _lognormal_fit(p, intensity, dim):
-    """``(median, beta)`` of the lognormal fit of ``p`` along ``dim`` at the ``intensity`` values."""
-    def _fit(prob):
-        try:
-            return np.array(fit_lognormal_fragility(intensity, prob))
-        except ValueError:
-            return np.array([np.nan, np.nan])
+def fit_fragility_curve(intensity, probability):
+    """``(median, beta, flag)`` of the lognormal fragility curve of one set of points.
 
-    fit = xr.apply_ufunc(_fit, p, input_core_dims=[[dim]], output_core_dims=[["fit"]], vectorize=True)
-    return fit.isel(fit=0, drop=True), fit.isel(fit=1, drop=True)
+    ``intensity`` [units of the IM] and ``probability`` [1] are 1-d; the fit is
+    :func:`fit_lognormal_fragility` (least squares on the probit scale).  ``flag`` is a
+    :class:`screening.status.FitFlag`: where it is not ``ok`` (no finite value, never or always
+    exceeded, fewer than two points strictly between, ``beta <= 0``) median and beta are NaN.
+    """
+    im = np.asarray(intensity, dtype=float).ravel()
+    p = np.asarray(probability, dtype=float).ravel()
+    finite = np.isfinite(p) & np.isfinite(im) & (im > 0)
+    if not finite.any():
+        return np.nan, np.nan, FitFlag.no_values
+    if np.all(p[finite] <= 1e-6):
+        return np.nan, np.nan, FitFlag.never_exceeded
+    if np.all(p[finite] >= 1 - 1e-6):
+        return np.nan, np.nan, FitFlag.always_exceeded
+    try:
+        median, beta = fit_lognormal_fragility(im[finite], p[finite])
+    except ValueError:
+        return np.nan, np.nan, FitFlag.no_fit
+    if not beta > 0:
+        return np.nan, np.nan, FitFlag.non_positive_beta
+    return median, beta, FitFlag.ok
 
 
-def _fragility(ds, p, dim):
-    """``{"p_exceed", "median", "beta"}`` of ``p`` along the swept intensity ``dim`` (unfinished dataset)."""
-    if dim not in p.dims:
-        raise ValueError(f"parameter 'dim' must be a swept dimension of the dataset (got {dim!r}; have {list(p.dims)})")
-    median, beta = _lognormal_fit(p, parameter(ds, dim).values, dim)
-    return xr.Dataset({"p_exceed": p, f"median_{dim}": median, "beta": beta})
+def fit_curves(p, intensity, dim):
+    """The lognormal fit of every curve of ``p`` along ``dim`` over ``intensity`` (a DataArray broadcast
+    against ``p``, or the values along ``dim``): a Dataset of ``fit_median``, ``beta`` and ``fit_flag``
+    (:class:`~screening.status.FitFlag`) over the other dimensions."""
+    x = intensity if isinstance(intensity, xr.DataArray) else xr.DataArray(np.asarray(intensity), dims=dim)
+    x, p = xr.broadcast(x, p)
+
+    def _fit(xv, pv):
+        return np.array(fit_fragility_curve(xv, pv), dtype=float)
+
+    fit = xr.apply_ufunc(_fit, x, p, input_core_dims=[[dim], [dim]], output_core_dims=[["fit"]], vectorize=True)
+    fit = fit.drop_vars([c for c in fit.coords if dim in fit[c].dims or c == dim], errors="ignore")
+    return xr.Dataset({"fit_median": fit.isel(fit=0, drop=True), "beta": fit.isel(fit=1, drop=True),
+                       "fit_flag": fit.isel(fit=2, drop=True).astype(np.int8)})
+
+
+def unvouched_points(ds):
+    """Grid points whose linearized value is ``untrusted`` and has no best estimate (no ``[accuracy]``, or
+    ``best_method`` ``unreliable``), status ``ok``: a fit through them stands on numbers nobody vouches for.
+    All False where the dataset stores no ``sl_trust``."""
+    if "sl_trust" not in ds.variables:
+        return xr.zeros_like(ds["status"] if "status" in ds.variables else xr.DataArray(False), dtype=bool)
+    bad = ds["sl_trust"] == Trust.untrusted
+    if "status" in ds.variables:
+        bad = bad & (ds["status"] == PointStatus.ok)
+    if "best_method" in ds.variables:
+        bad = bad & (ds["best_method"] == BestMethod.unreliable)
+    return bad.drop_vars([c for c in bad.coords if c not in bad.dims]).rename("unvouched")
+
+
+def fitted_probability(frag):
+    """The probability a fragility fit uses: ``best_p_exceed`` where ``[accuracy]`` vouches for it
+    (``best_method`` not ``unreliable``), else ``p_exceed``."""
+    p = frag["p_exceed"]
+    if "best_p_exceed" not in frag:
+        return p
+    vouched = (frag["best_method"] != BestMethod.unreliable) & np.isfinite(frag["best_p_exceed"])
+    return xr.where(vouched, frag["best_p_exceed"], p)
+
+
+def add_fit(out, ds, intensity, dim):
+    """``out`` (a fragility Dataset with ``p_exceed``) with the fit of every curve along ``dim`` over
+    ``intensity`` (:func:`fit_curves` of :func:`fitted_probability`) and ``fit_n_unvouched``, the number
+    of the curve's points in :func:`unvouched_points` of the result ``ds``."""
+    fit = fit_curves(fitted_probability(out), intensity, dim)
+    unvouched = unvouched_points(ds)
+    count = unvouched.sum(dim) if dim in unvouched.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
+    fit["fit_n_unvouched"] = count.astype(np.int32).broadcast_like(fit["fit_flag"])
+    out = out.drop_vars([n for n in fit.data_vars if n in out]).merge(fit, compat="override")
+    return out.assign_attrs(fit_source="best_p_exceed where [accuracy] vouches for it, else p_exceed"
+                            if "best_p_exceed" in out else "p_exceed")
 
 
 def _finish(out, dim, threshold, relative_to, method):
-    """The schema's metadata, ``median_<dim>`` renamed ``median`` (units of ``dim``), and the attributes."""
+    """The schema's metadata, the fit's ``intensity``, and the attributes."""
     out = finish(out, table=schema.FRAGILITY)
-    if f"median_{dim}" in out:
-        out = out.rename({f"median_{dim}": "median"})
-        out["median"].attrs["intensity"] = dim
+    if "fit_median" in out:
+        out["fit_median"].attrs.update(intensity=dim, units=grid_units_of(out, dim))
     out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
                      title="Probability that |theta| exceeds a rotation during the record")
     return out
+
+
+def grid_units_of(ds, dim):
+    """Units of the swept ``dim`` (its coordinate's ``units``; the schema's for a model parameter)."""
+    if dim in ds.variables and "units" in ds[dim].attrs:
+        return ds[dim].attrs["units"]
+    return schema.PARAMETERS.get(dim, {}).get("units", "")
 
 
 def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke"):
@@ -311,7 +464,10 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
     units of ``dim``; ``median.attrs["intensity"]`` names it) and ``beta`` [1] over the other dims.
     """
     p = exceedance_probability(ds, threshold, relative_to, method)
-    return _finish(_fragility(ds, p, dim), dim, threshold, relative_to, method)
+    if dim not in p.dims:
+        raise ValueError(f"parameter 'dim' must be a swept dimension of the dataset (got {dim!r}; have {list(p.dims)})")
+    out = add_fit(xr.Dataset({"p_exceed": p}), ds, parameter(ds, dim), dim)
+    return _finish(out, dim, threshold, relative_to, method)
 
 
 @xr.register_dataset_accessor("rocking")
@@ -429,7 +585,7 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
         out = xr.Dataset({"mcs_p_exceed": p.drop_vars("mcs_p_exceed_se"), "mcs_p_exceed_se": p["mcs_p_exceed_se"]})
     else:
         p = exceedance_probability(ds, threshold, relative_to, method)
-        out = _fragility(ds, p, dim) if dim in p.dims and p.sizes[dim] >= 2 else xr.Dataset({"p_exceed": p})
+        out = xr.Dataset({"p_exceed": p})
         if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
             out["mcs_p_exceed"], out["mcs_p_exceed_se"] = mcs_exceedance_at_spots(ds, level)
             out["p_exceed_at_spot"] = p.isel(spot_positions(ds)) if p.ndim else p.expand_dims(spot=ds.sizes["spot"])
@@ -437,5 +593,7 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
             best = best_exceedance(ds, threshold, relative_to, method)
             for name, value in zip(("best_p_exceed", "best_p_exceed_low", "best_p_exceed_high", "best_method"), best):
                 out[name] = value.drop_vars([c for c in value.coords if c not in value.dims and c not in out.coords])
+    if "p_exceed" in out and dim in out["p_exceed"].dims and out.sizes[dim] >= 2:
+        out = add_fit(out, ds, parameter(ds, dim), dim)
     out["threshold_rad"] = level
     return _finish(out, dim, threshold, relative_to, "monte_carlo" if is_monte_carlo(ds) else method)

@@ -32,9 +32,9 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import xarray as xr
 
-from screening.analysis.fragility import (exceedance_probability, fit_lognormal_fragility, model_quantity,
-                                          parameter, threshold_angle)
+from screening.analysis.fragility import model_quantity, parameter
 from screening.atomicfile import atomic_open
+from screening.status import FitFlag
 
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
 IMS = {
@@ -44,8 +44,6 @@ IMS = {
     "arias": ("arias_intensity", "m s-1", "IA", 1.0),
     "s0": ("S0", "m2 s-3", None, None),
 }
-
-FIT_OK, FIT_NEGATIVE_BETA, FIT_NONE = 0, 1, 2
 
 
 def _im_values(ds, im, period, cutoff):
@@ -58,30 +56,36 @@ def _im_values(ds, im, period, cutoff):
     return measures[IMS[im][0]], measures
 
 
+def default_dim(grid):
+    """The swept intensity a fragility is drawn along by default: ``S0`` or ``pga``, whichever the grid
+    sweeps (``None`` if neither)."""
+    return next((d for d in ("S0", "pga") if d in grid), None)
+
+
 def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, method="vanmarcke", period=None,
                       cutoff=None):
     """Exceedance probability along ``dim`` fitted over the intensity measure ``im``.
 
-    Returns ``(fragility dataset, warnings)``: ``p_exceed`` and the IM (``pga_median``, ...) over
-    the dataset's dimensions, ``median`` [IM units] (``attrs["intensity"]``), ``beta`` [1] and
-    ``fit_flag`` (0 ok, 1 beta <= 0, 2 no fit) over the other dimensions, ``threshold_rad``.
+    Returns ``(fragility dataset, warnings)``: the :func:`~screening.analysis.fragility.fragility_dataset`
+    of the result (``p_exceed``, best estimates and Monte Carlo spot values where the result has them)
+    with the IM (``pga_median``, ...) over the dataset's dimensions and the fit over the IM:
+    ``fit_median`` [IM units] (``attrs["intensity"]``), ``beta`` [1], ``fit_flag``
+    (:class:`~screening.status.FitFlag`) and ``fit_n_unvouched`` over the other dimensions.
     Raises ``ValueError`` for an unknown ``im``, a ``dim`` that is not swept or not an intensity
     dimension, or an IM that is not strictly increasing along ``dim``.
     """
+    from screening.analysis.fragility import add_fit, fragility_dataset
+
     if im not in IMS:
         raise ValueError(f"--im must be one of {', '.join(IMS)} (got {im!r})")
-    p = exceedance_probability(ds, threshold, relative_to, method)
-    grid = list(ds["status"].dims) if "status" in ds else list(p.dims)
-    if dim is None:
-        dim = next((d for d in ("S0", "pga") if d in grid), None)
-    if dim is None or dim not in p.dims:
+    grid = list(ds["status"].dims) if "status" in ds else [d for d in ds["var_theta"].dims if d != "t"]
+    dim = dim if dim is not None else default_dim(grid)
+    if dim is None or dim not in grid:
         raise ValueError(f"--dim {dim!r} is not a swept dimension (swept: {', '.join(grid) or 'none'})")
-    if p.sizes[dim] < 2:
+    if ds.sizes[dim] < 2:
         raise ValueError(f"--dim {dim!r} has one value: nothing to fit")
     values, _ = _im_values(ds, im, period, cutoff)
     name = IMS[im][0]
-    values = values.broadcast_like(p.isel({d: 0 for d in p.dims if d != dim}, drop=True)) \
-        if dim not in values.dims else values
     if dim not in values.dims:
         raise ValueError(f"--dim {dim!r} is not an intensity dimension: {name} does not vary along it")
     step = values.diff(dim)
@@ -90,33 +94,17 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     if not bool((step > 0).all()):
         raise ValueError(f"{name} is not strictly increasing along --dim {dim!r}: a lognormal fit over it "
                          f"has no meaning")
-    im_b, p_b = xr.broadcast(values, p)
-    im_b = im_b.transpose(*p.dims)
-
-    def _fit(x, prob):
-        try:
-            return np.array(fit_lognormal_fragility(x, prob))
-        except ValueError:
-            return np.array([np.nan, np.nan])
-
-    fit = xr.apply_ufunc(_fit, im_b, p_b, input_core_dims=[[dim], [dim]], output_core_dims=[["fit"]],
-                         vectorize=True)
-    median, beta = fit.isel(fit=0, drop=True), fit.isel(fit=1, drop=True)
-    flag = xr.where(np.isnan(beta), FIT_NONE, xr.where(beta <= 0, FIT_NEGATIVE_BETA, FIT_OK)).astype(np.int8)
+    frag = fragility_dataset(ds, threshold, relative_to, method, dim)
     units = IMS[im][1]
-    out = xr.Dataset({"p_exceed": p, name: im_b.assign_attrs(units=units),
-                      "median": median.where(flag == FIT_OK).assign_attrs(units=units, intensity=name),
-                      "beta": beta.where(flag == FIT_OK).assign_attrs(units="1"),
-                      "fit_flag": flag.assign_attrs(flag_values=np.array([0, 1, 2], dtype=np.int8),
-                                                    flag_meanings="ok non_positive_beta no_fit"),
-                      "threshold_rad": threshold_angle(ds, threshold, relative_to)})
+    values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
+    out = add_fit(frag.assign({name: values}), ds, values, dim)
+    out["fit_median"].attrs.update(units=units, intensity=name)
     if period is not None and im == "sa":
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
-    out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim, threshold=float(threshold),
-                     relative_to=str(relative_to), method=method,
+    out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim,
                      title="Probability that |theta| exceeds a rotation, fitted over an intensity measure")
     warnings = []
-    n_neg = int((flag == FIT_NEGATIVE_BETA).sum())
+    n_neg = int((out["fit_flag"] == FitFlag.non_positive_beta).sum())
     if n_neg:
         warnings.append(f"{n_neg} fit(s) have beta <= 0 (probability falling with {name}); flagged in fit_flag "
                         "and left out of the exports")
@@ -130,38 +118,164 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     return out, warnings
 
 
+#: Variables of a fragility dataset that do not depend on the threshold (the intensities, the source).
+THRESHOLD_FREE = ("best_method", *(v[0] for v in IMS.values()))
+
+
+class NoExport(ValueError):
+    """A file of a fragility's set that this fragility cannot fill (an IM OpenQuake does not know, nothing
+    drawn): the set is written without it, with a warning."""
+
+
+def limit_state_name(threshold, relative_to=None):
+    """The name of the limit state "``|theta|`` exceeds ``threshold``": ``theta_0.1_slenderness``,
+    ``theta_0.002_rad`` (no spaces: NRML lists limit states separated by blanks)."""
+    return f"theta_{float(threshold):g}_{relative_to or 'rad'}"
+
+
+def stack_limit_states(frags, thresholds, relative_to=None):
+    """Fragility datasets of the same result at increasing ``thresholds`` as one dataset with the
+    dimension ``limit_state`` (names by :func:`limit_state_name`, coordinate ``threshold``): the
+    variables that depend on the threshold gain the dimension, the others (intensities) stay as they are.
+    One threshold: that dataset unchanged."""
+    if len(frags) == 1:
+        return frags[0]
+    names = [limit_state_name(t, relative_to) for t in thresholds]
+    varying = [n for n in frags[0].data_vars if n not in THRESHOLD_FREE]
+    out = xr.concat(frags, dim="limit_state", data_vars=varying, coords="minimal", compat="equals",
+                    combine_attrs="override")
+    out = out.assign_coords(limit_state=("limit_state", names),
+                            threshold=("limit_state", np.asarray(thresholds, dtype=float),
+                                       {"long_name": "threshold of the limit state (see relative_to)"}))
+    out.attrs["threshold"] = ", ".join(f"{float(t):g}" for t in thresholds)
+    return out
+
+
 # ----------------------------------------------------------------------------- export
-def _curves(frag):
-    """``[(labels dict, median, beta)]`` of the fits flagged ok."""
-    median, beta = frag["median"], frag["beta"]
-    flag = frag["fit_flag"] if "fit_flag" in frag else xr.zeros_like(median, dtype=np.int8)
-    rows = []
+def _label_text(labels):
+    return ", ".join(f"{d} = {v:g}" if isinstance(v, float) else f"{d} = {v}" for d, v in labels.items())
+
+
+def curve_table(frag):
+    """Every curve of a fragility dataset, fitted or not: a list of dicts with ``labels`` (the other
+    dimensions' values, ``limit_state`` included where the dataset has several), ``median``, ``beta``,
+    ``flag`` (:class:`~screening.status.FitFlag`), ``reason`` (``""`` when fitted), ``n_unvouched``
+    (points of the curve whose linearized value is untrusted without a best estimate) and the
+    rotation ``threshold_rad`` [rad] of the curve (its range ``"lo..hi"`` if it varies along the curve)."""
+    median, beta = frag["fit_median"], frag["beta"]
+    flag = frag["fit_flag"]
+    unvouched = frag["fit_n_unvouched"] if "fit_n_unvouched" in frag else xr.zeros_like(flag, dtype=np.int32)
+    th = frag["threshold_rad"]
     dims = list(median.dims)
+    rows = []
     for index in np.ndindex(*median.shape) if dims else [()]:
         sel = dict(zip(dims, index))
-        if int(flag[sel]) != FIT_OK or not np.isfinite(float(median[sel])):
-            continue
         labels = {d: frag[d].values[i].item() if d in frag.coords else i for d, i in sel.items()}
-        rows.append((labels, float(median[sel]), float(beta[sel])))
+        code = FitFlag(int(flag[sel]))
+        t = np.unique(np.asarray(th.isel({d: i for d, i in sel.items() if d in th.dims}).values, dtype=float))
+        t = t[np.isfinite(t)]
+        rows.append({"labels": labels, "median": float(median[sel]), "beta": float(beta[sel]), "flag": code,
+                     "reason": "" if code == FitFlag.ok else code.meaning, "n_unvouched": int(unvouched[sel]),
+                     "threshold_rad": (f"{t[0]:.8g}" if t.size == 1 else f"{t.min():.8g}..{t.max():.8g}"
+                                       if t.size else "")})
     return rows
 
 
+def curve_count_text(frag):
+    """``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 fitted through untrusted points
+    without a best estimate"``: the printed line's count."""
+    rows = curve_table(frag)
+    fitted = [r for r in rows if r["flag"] == FitFlag.ok]
+    missing = [r["flag"] for r in rows if r["flag"] != FitFlag.ok]
+    text = f"{len(fitted)} of {len(rows)} curve(s) fitted"
+    if missing:
+        counts = ", ".join(f"{f.name} {missing.count(f)}" for f in FitFlag if f in missing)
+        text += f" ({len(missing)} without a fit: {counts})"
+    shaky = sum(1 for r in fitted if r["n_unvouched"])
+    if shaky:
+        text += (f"; {shaky} fitted through untrusted linearized points without a best estimate "
+                 "(fit_n_unvouched; run with [accuracy] to replace them)")
+    return text
+
+
+def _intensity(frag):
+    name = frag["fit_median"].attrs.get("intensity", "intensity")
+    period = frag[name].attrs.get("period", "") if name in frag else ""
+    return name, frag["fit_median"].attrs.get("units", ""), period
+
+
 def write_csv(frag, path):
-    """One row per fitted curve: other dimensions, ``im``, ``units``, ``median``, ``beta``, threshold."""
-    rows = _curves(frag)
-    name = frag["median"].attrs.get("intensity", "intensity")
-    units = frag["median"].attrs.get("units", "")
-    dims = list(frag["median"].dims)
+    """One row per curve, fitted or not: the other dimensions, ``intensity_measure``, ``units``,
+    ``median``, ``beta`` (empty without a fit), ``fit_flag`` and the ``reason`` there is no fit,
+    ``n_unvouched`` (points fitted through untrusted linearized values without a best estimate),
+    ``threshold_rad`` and ``period_s``."""
+    name, units, period = _intensity(frag)
+    dims = list(frag["fit_median"].dims)
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
-        w.writerow(dims + ["intensity_measure", "units", "median", "beta", "threshold_rad", "period_s"])
-        period = frag[name].attrs.get("period", "") if name in frag else ""
-        th = frag["threshold_rad"]
-        for labels, median, beta in rows:
-            t = float(th.sel({d: v for d, v in labels.items() if d in th.dims}) if th.ndim else th)
-            w.writerow([labels[d] for d in dims] + [name, units, f"{median:.8g}", f"{beta:.6g}", f"{t:.8g}",
-                        period])
+        w.writerow(dims + ["intensity_measure", "units", "median", "beta", "fit_flag", "reason", "n_unvouched",
+                           "threshold_rad", "period_s"])
+        for r in curve_table(frag):
+            ok = r["flag"] == FitFlag.ok
+            w.writerow([r["labels"][d] for d in dims]
+                       + [name, units, f"{r['median']:.8g}" if ok else "", f"{r['beta']:.6g}" if ok else "",
+                          r["flag"].name, r["reason"], r["n_unvouched"], r["threshold_rad"], period])
     return path
+
+
+def write_pelicun_csv(frag, path):
+    """The fits in pelicun's fragility-database layout: one row per component (``ID``: the other
+    dimensions' values), ``Demand-Type`` the IM in pelicun's words (``Peak Ground Acceleration`` in g,
+    ``Spectral Acceleration`` in g, else the IM's own name and units), and for each limit state
+    ``LS<i>-Family`` = ``lognormal``, ``LS<i>-Theta_0`` = median, ``LS<i>-Theta_1`` = beta.  A curve
+    without a fit is a row with empty parameters and its reason in ``Comment``."""
+    name, units, period = _intensity(frag)
+    key = _im_key(name)
+    factor, unit_out = (IMS[key][3], "g") if key in ("pga", "sa") else (1.0, units)
+    demand = {"pga": "Peak Ground Acceleration", "sa": f"Spectral Acceleration ({period:g} s)" if period else
+              "Spectral Acceleration"}.get(key, name)
+    rows = curve_table(frag)
+    states = [str(v) for v in frag["limit_state"].values] if "limit_state" in frag["fit_median"].dims else [
+        str(frag.attrs.get("limit_state", "theta_exceeds_threshold"))]
+    components = {}
+    for r in rows:
+        labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
+        state = str(r["labels"].get("limit_state", states[0]))
+        components.setdefault(_taxonomy(labels), {})[state] = r
+    header = ["ID", "Demand-Type", "Demand-Unit", "Incomplete", "Comment"]
+    for i in range(1, len(states) + 1):
+        header += [f"LS{i}-Family", f"LS{i}-Theta_0", f"LS{i}-Theta_1"]
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for cid, by_state in components.items():
+            row, notes = [cid, demand, unit_out], []
+            cells = []
+            for state in states:
+                r = by_state[state]
+                if r["flag"] == FitFlag.ok:
+                    cells += ["lognormal", f"{r['median'] * factor:.8g}", f"{r['beta']:.6g}"]
+                else:
+                    cells += ["", "", ""]
+                    notes.append(f"{state}: no fit ({r['flag'].name})")
+                if r["n_unvouched"]:
+                    notes.append(f"{state}: fitted through {r['n_unvouched']} untrusted point(s) without a best "
+                                 "estimate")
+            w.writerow(row + [int(bool(notes) and any("no fit" in n for n in notes)), "; ".join(notes)] + cells)
+    return path
+
+
+def _im_key(name):
+    """The ``--im`` key of an intensity variable: ``pga_median`` (RVT), ``pga`` (a record's),
+    ``stripe_pga`` (a multiple-stripe level) -> ``pga``; ``None`` for another name."""
+    base = name.removeprefix("stripe_")
+    return next((k for k, v in IMS.items() if base in (v[0], k) or (k == "rms" and base == "rms_acceleration")
+                 or (k == "arias" and base == "arias_intensity")), None)
+
+
+def _taxonomy(labels):
+    """The taxonomy id of a curve: ``screening`` and the values of the swept dimensions that name it."""
+    return "screening" + "".join(f"_{d}={v:g}" if isinstance(v, float) else f"_{d}={v}" for d, v in labels.items())
 
 
 def nrml_parameters(median, beta):
@@ -170,32 +284,61 @@ def nrml_parameters(median, beta):
     return mean, mean * math.sqrt(math.expm1(beta * beta))
 
 
+def _comment(text):
+    return "    <!-- " + text.replace("--", "- -") + " -->"
+
+
 def write_nrml(frag, path, model_id="screening_rocking", description="rocking blocks on flexible beds"):
-    """OpenQuake NRML 0.5 fragility model: one continuous ``logncdf`` function per fitted curve,
-    limit state ``theta_exceeds_threshold``.  Raises ``ValueError`` for an IM OpenQuake does not know."""
-    name = frag["median"].attrs.get("intensity", "")
-    key = next((k for k, v in IMS.items() if v[0] == name), {"pga": "pga", "sa": "sa"}.get(name))
+    """OpenQuake NRML 0.5 fragility model: one continuous ``logncdf`` function per swept block/bed (its
+    taxonomy id names the values of the other dimensions), with one ``params`` per limit state (the
+    ``limit_state`` dimension where the dataset has several, else ``theta_exceeds_threshold``).  A
+    taxonomy with a limit state that has no fit is left out and named in a comment with the reason; a fit
+    through untrusted points without a best estimate is named in a comment.  Raises ``ValueError`` for an
+    IM OpenQuake does not know."""
+    name, _, period = _intensity(frag)
+    key = _im_key(name)
     if key is None or IMS[key][2] is None:
-        raise ValueError(f"OpenQuake has no intensity measure type for {name!r}; export CSV instead")
+        raise NoExport(f"OpenQuake has no intensity measure type for {name!r}; export CSV instead")
     imt = IMS[key][2]
     if imt == "SA":
-        imt = f"SA({float(frag[name].attrs['period']):g})"
+        imt = f"SA({float(period):g})"
     factor = IMS[key][3]
     values = frag[name].values[np.isfinite(frag[name].values)] * factor
     lo, hi = float(values.min()), float(values.max())
+    several = "limit_state" in frag["fit_median"].dims
+    states = [str(v) for v in frag["limit_state"].values] if several else ["theta_exceeds_threshold"]
+    by_taxonomy = {}
+    for r in curve_table(frag):
+        labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
+        by_taxonomy.setdefault(_taxonomy(labels), {})[str(r["labels"].get("limit_state", states[0]))] = r
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              '<nrml xmlns="http://openquake.org/xmlns/nrml/0.5">',
              f'  <fragilityModel id={quoteattr(model_id)} assetCategory="buildings" lossCategory="contents">',
              f"    <description>{description}: P(max |theta| &gt; threshold) fitted by screening over "
              f"{name}</description>",
-             "    <limitStates>theta_exceeds_threshold</limitStates>"]
-    for labels, median, beta in _curves(frag):
-        fid = "screening" + "".join(f"_{d}={v:g}" if isinstance(v, float) else f"_{d}={v}" for d, v in labels.items())
-        mean, std = nrml_parameters(median * factor, beta)
+             f"    <limitStates>{' '.join(states)}</limitStates>"]
+    fixed = {n: float(frag[n]) for n in frag.coords if frag[n].ndim == 0 and frag[n].dtype.kind in "fi"
+             and n not in ("threshold",)}
+    if fixed:
+        lines.append(_comment("every function: the block and bed of " + ", ".join(
+            f"{n} = {v:g}{' ' + frag[n].attrs['units'] if frag[n].attrs.get('units') else ''}"
+            for n, v in fixed.items()) + "; the function id names the swept values"))
+    for fid, by_state in by_taxonomy.items():
+        missing = [f"{s}: {by_state[s]['flag'].name} ({by_state[s]['reason']})" for s in states
+                   if by_state[s]["flag"] != FitFlag.ok]
+        if missing:
+            lines.append(_comment(f"no fragility function for {fid}: " + "; ".join(missing)))
+            continue
+        for s in states:
+            if by_state[s]["n_unvouched"]:
+                lines.append(_comment(f"{fid} {s}: fitted through {by_state[s]['n_unvouched']} untrusted "
+                                      "linearized point(s) without a best estimate"))
         lines += [f'    <fragilityFunction id={quoteattr(fid)} format="continuous" shape="logncdf">',
-                  f'      <imls imt="{imt}" minIML="{lo:.6g}" maxIML="{hi:.6g}"/>',
-                  f'      <params ls="theta_exceeds_threshold" mean="{mean:.8g}" stddev="{std:.8g}"/>',
-                  "    </fragilityFunction>"]
+                  f'      <imls imt="{imt}" minIML="{lo:.6g}" maxIML="{hi:.6g}"/>']
+        for s in states:
+            mean, std = nrml_parameters(by_state[s]["median"] * factor, by_state[s]["beta"])
+            lines.append(f'      <params ls="{s}" mean="{mean:.8g}" stddev="{std:.8g}"/>')
+        lines.append("    </fragilityFunction>")
     lines += ["  </fragilityModel>", "</nrml>", ""]
     with atomic_open(path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(lines))

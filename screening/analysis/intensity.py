@@ -2,9 +2,14 @@
 
 The ground acceleration of a study point is ``a(t) = q(t) f(t)``: the envelope ``q``
 (:mod:`screening.model.excitation`) times a zero-mean stationary Gaussian process ``f`` with
-two-sided PSD ``S(omega)`` band-limited to ``|omega| <= omega_c``, exactly as the Monte Carlo
-synthesis draws it (:mod:`screening.solvers.synthesis`; white noise has finite variance only
-because of this band limit, so its PGA grows like ``sqrt(omega_c)``).  With the spectral
+two-sided PSD ``S(omega)`` band-limited to ``|omega| <= omega_c``.  The band limit is the ground
+motion's (:data:`GROUND_BAND_LIMIT_HZ`, 25 Hz, or the study's ``excitation.band_limit_hz``): the
+same nominal PGA is then the same ground motion under a statue on mortar and a cabinet on pads.
+White noise has finite variance only because of this band limit (its PGA grows like
+``sqrt(omega_c)``); the linearization does not see it (white noise drives the model at every
+frequency), and the Monte Carlo synthesis (:mod:`screening.solvers.synthesis`) band-limits at 3 x
+the bed's frequencies for numerics, so a synthesised white-noise record is broader-band, with a
+larger PGA, than the ground motion its point is labelled with.  With the spectral
 moments ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega``:
 
 * ``rms_acceleration`` [m s-2] = ``sqrt(lambda_0 int_0^T q^2 dt / T)``, the root mean square of
@@ -58,13 +63,27 @@ from screening.solvers.synthesis import envelope_rate
 MEASURES = {"pga_median": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1", "sa_median": "m s-2"}
 #: Names of the measures of one record (:func:`record_measures`; ``sa`` only with a period).
 RECORD_MEASURES = ("pga", "rms_acceleration", "arias_intensity", "sa")
+#: Default ground-motion band limit [Hz] of a stochastic input: the band its intensity measures (and a
+#: target PGA) refer to.  Strong-motion records are processed to about 25 Hz (low-pass corners of 20-30 Hz,
+#: e.g. the PEER NGA processing); above it a rock-site acceleration spectrum has little energy (the
+#: ``kappa`` decay).  A property of the ground motion, not of what stands on it: the Monte Carlo
+#: synthesis may extend its own band for numerics (3 x the bed's frequencies), the label stays this one.
+GROUND_BAND_LIMIT_HZ = 25.0
 #: Standard gravity used by the Arias intensity [m s-2].
 G = 9.80665
 N_TIMES = 4001
 
 
+def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
+    """The band limit ``omega_c = 2 pi f`` [rad/s] of a ground motion band-limited to ``band_limit_hz`` [Hz]."""
+    return 2.0 * math.pi * float(band_limit_hz)
+
+
 def spectral_moments(excitation, cutoff):
     """``(lambda_0, lambda_1, lambda_2)`` of the unmodulated input band-limited to ``cutoff`` [rad/s].
+
+    ``ArithmeticError`` where the quadrature of a Kanai-Tajimi moment does not converge (a filter so
+    narrow, ``zeta_g`` ~ 1e-9, that its peak escapes the quadrature).
 
     ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega``: [m2 s-4], [m2 s-5], [m2 s-6].
     """
@@ -74,8 +93,10 @@ def spectral_moments(excitation, cutoff):
         return 2.0 * s0 * wc, s0 * wc**2, 2.0 * s0 * wc**3 / 3.0
     out = []
     for i in range(3):
-        val, _ = integrate.quad(lambda w: w**i * float(excitation.psd(w)), 0.0, wc, limit=400,
-                                points=[float(excitation.omega_g)], epsrel=1e-11)
+        val, _, *problem = integrate.quad(lambda w: w**i * float(excitation.psd(w)), 0.0, wc, limit=400,
+                                          points=[float(excitation.omega_g)], epsrel=1e-11, full_output=1)
+        if len(problem) > 1:                       # quad's message: the integral did not converge
+            raise ArithmeticError(f"spectral moment lambda_{i}: {' '.join(str(problem[1]).split())}")
         out.append(2.0 * val)
     return tuple(out)
 
@@ -189,7 +210,8 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
     arrays (broadcast together); :func:`pga_median` runs once per distinct filter and band limit.
     """
     target, unit = _per_unit_s0(excitation, target_pga, t_end, cutoff)
-    out = (target / unit[..., 0]) ** 2
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):     # NaN / inf: not derivable
+        out = (target / unit[..., 0]) ** 2
     return float(out) if out.ndim == 0 else out
 
 
@@ -255,14 +277,12 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
 
     Reads ``S0``, ``omega_g``, ``zeta_g``, ``T1``, ``T2`` (coordinates), the ``excitation`` and
     ``envelope`` attributes, ``t_end`` (last ``t``) and the band limit: ``cutoff`` [rad/s], else
-    the dataset's ``cutoff_rad_s`` attribute, else the Monte Carlo default
-    (:func:`screening.solvers.synthesis.default_cutoff` of each point's block and bed).  Returns a
+    the dataset's ``cutoff_rad_s`` attribute, else the ground-motion band limit of its
+    ``band_limit_hz`` attribute (default :data:`GROUND_BAND_LIMIT_HZ`): never the block's or bed's.  Returns a
     Dataset with ``pga_median``, ``rms_acceleration``, ``arias_intensity`` and, with ``period``
     [s], ``sa_median`` (attribute ``period``), on the dimensions of the parameters they depend on.
     """
     from screening.analysis.fragility import parameter
-    from screening.model import Block, Foundation
-    from screening.solvers.synthesis import default_cutoff
 
     if "excitation" not in ds.attrs and "excitation" in ds.coords and ds["excitation"].dims == ("case",):
         parts = []                                     # sweep whose cases differ in excitation or envelope
@@ -281,18 +301,14 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
     names = ["S0"] + (["omega_g", "zeta_g"] if kind == "kanai_tajimi" else []) + \
         (["T1", "T2"] if envelope_kind == "exponential" else [])
     fields = {n: parameter(ds, n) for n in names}
+    cutoff_source = "given"
     if cutoff is None and "cutoff_rad_s" in ds.attrs:
         cutoff = float(ds.attrs["cutoff_rad_s"])
     if cutoff is None:
-        bed = {n: parameter(ds, n) for n in ("m", "b", "h", "I_cm", "g", "k") if n in ds.variables}
-        cut = xr.apply_ufunc(
-            lambda m, b, h, I, g, k: np.vectorize(lambda *a: default_cutoff(
-                Block(m=a[0], b=a[1], h=a[2], I_cm=a[3], g=a[4]), Foundation(k=a[5], lam=0.0)))(m, b, h, I, g, k),
-            bed["m"], bed["b"], bed["h"], bed["I_cm"], bed["g"], bed["k"])
-        cutoff_source = "Monte Carlo default: 3 x max(rocking, vertical frequency) of each point"
-    else:
-        cut = xr.DataArray(float(cutoff))
-        cutoff_source = "given"
+        hz = float(ds.attrs.get("band_limit_hz", GROUND_BAND_LIMIT_HZ))
+        cutoff = ground_cutoff(hz)
+        cutoff_source = f"the ground motion's, {hz:g} Hz" + ("" if "band_limit_hz" in ds.attrs else " (default)")
+    cut = xr.DataArray(float(cutoff))
     shape_fields = {n: v for n, v in fields.items() if n != "S0"}
     args = xr.broadcast(*(list(shape_fields.values()) + [cut])) if shape_fields else [cut]
     keys = list(shape_fields)

@@ -32,39 +32,48 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
         return None
     other = [d for d in p.dims if d != dim]
     flat = p.transpose(*other, dim).values.reshape(-1, p.sizes[dim])
+    name = frag.attrs.get("intensity_variable")
+    if name:                                    # fitted over an intensity measure: its values per curve
+        xflat = frag[name].broadcast_like(p).transpose(*other, dim).values.reshape(flat.shape)
+    else:
+        xflat = np.broadcast_to(grid_values(frag, dim), flat.shape)
     if flags is not None:
         flagged, untrusted = (a.reshape(flat.shape) for a in point_flags(flags, None, (*other, dim)))
     else:
         flagged = untrusted = np.zeros(flat.shape, dtype=bool)
     picks = np.unique(np.linspace(0, flat.shape[0] - 1, min(max_curves, flat.shape[0])).round().astype(int))
-    x = grid_values(frag, dim)
     fig = new_figure(7.0, 5.4)
     ax = fig.subplots()
     shape = [p.sizes[d] for d in other]
-    median = frag["median"].transpose(*other).values.reshape(-1) if "median" in frag else None
-    beta = frag["beta"].transpose(*other).values.reshape(-1) if "beta" in frag else None
-    xs = np.geomspace(x.min(), x.max(), 200) if np.all(x > 0) else np.linspace(x.min(), x.max(), 200)
+    median, beta, unvouched = (frag[v].transpose(*other).values.reshape(-1) if v in frag else None
+                               for v in ("fit_median", "beta", "fit_n_unvouched"))
     best = _best_arrays(frag, other, dim) if "best_p_exceed" in frag else None
     colour, labelled = {}, set()
     for n, j in enumerate(picks):
         colour[int(j)] = f"C{n}"
         index = dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
         label = point_label(frag, index) if other else "P(|theta| > threshold)"
+        x = xflat[j]
         ax.plot(x, flat[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=label)
         ax.plot(x[untrusted[j]], flat[j][untrusted[j]], "o", ms=7, mfc="none", mec=UNTRUSTED_COLOR, mew=1.2)
         ax.plot(x[flagged[j]], flat[j][flagged[j]], "x", ms=7, color=FLAGGED_COLOR, mew=1.5)
         if best is not None:
             _draw_best(ax, x, best, j, f"C{n}", labelled)
         if median is not None and np.isfinite(median[j]) and np.isfinite(beta[j]):
-            ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), "--", color=f"C{n}", lw=0.9,
-                    label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}")
+            xs = np.geomspace(np.nanmin(x), np.nanmax(x), 200)
+            shaky = unvouched is not None and unvouched[j] > 0
+            ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), ":" if shaky else "--", color=f"C{n}",
+                    lw=1.4 if shaky else 0.9,
+                    label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}"
+                          + (f" [through {int(unvouched[j])} untrusted point(s) without a best estimate]"
+                             if shaky else ""))
     if "mcs_p_exceed" in frag and f"spot_{dim}" in frag:
         pm, se = frag["mcs_p_exceed"].values, frag["mcs_p_exceed_se"].values
         curve = _spot_curves(frag, other, shape)
         for c in sorted(set(curve.tolist())):
             on = curve == c
             drawn = c in colour
-            ax.errorbar(frag[f"spot_{dim}"].values[on], pm[on], yerr=2 * se[on], fmt="s", ms=6, capsize=3,
+            ax.errorbar(xflat[c][_spot_position(frag, dim)[on]], pm[on], yerr=2 * se[on], fmt="s", ms=6, capsize=3,
                         color=colour.get(c, "k"), mfc="white" if drawn else "k", mew=1.5,
                         label="Monte Carlo (+-2 se)" + (f": {point_label(frag, _curve_index(other, shape, c))}"
                                                         if other else "")
@@ -76,10 +85,14 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     if flags is not None:
         ax.plot([], [], "x", color=FLAGGED_COLOR, label=f"flagged (status != ok): {int(flagged.sum())} of {flagged.size}")
         ax.plot([], [], "o", mfc="none", mec=UNTRUSTED_COLOR, label=f"linearization untrusted: {int(untrusted.sum())}")
-    if is_log_spaced(x):
+    if is_log_spaced(grid_values(frag, dim)) or name:
         ax.set_xscale("log")
     ax.set_ylim(-0.02, 1.02)
-    ax.set_xlabel(f"{dim} [{grid_units(frag, dim)}]")
+    if name:
+        extra = f", T = {frag[name].attrs['period']:g} s" if "period" in frag[name].attrs else ""
+        ax.set_xlabel(f"{name} [{frag[name].attrs.get('units', '')}]{extra} (swept along {dim})")
+    else:
+        ax.set_xlabel(f"{dim} [{grid_units(frag, dim)}]")
     ax.set_ylabel("probability of exceedance [1]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
@@ -87,7 +100,9 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     what = (f"{frag.attrs['threshold']:.3g} rad" if rel == "None"
             else f"{frag.attrs['threshold']:.3g} x {rel}")
     summary = f"\n{flag_summary(flags)}" if flags is not None else ""
-    fig.suptitle(f"Fragility: P(max |theta| > {what}) over the record ({frag.attrs.get('method', '')}){summary}",
+    over = f" over {name}" if name else ""
+    fig.suptitle(f"Fragility{over}: P(max |theta| > {what}) over the record ({frag.attrs.get('method', '')})"
+                 f"{summary}",
                  fontsize=8)
     save_figure(fig, path)
     return Path(path)
@@ -129,16 +144,17 @@ def _curve_index(other, shape, j):
     return dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
 
 
+def _spot_position(frag, d):
+    """Index along the grid dimension ``d`` of each spot point."""
+    if d == "case":
+        return np.asarray(frag["spot_case"].values, dtype=int)
+    grid = grid_values(frag, d)
+    return np.abs(grid[None, :] - np.asarray(frag[f"spot_{d}"].values)[:, None]).argmin(axis=1)
+
+
 def _spot_curves(frag, other, shape):
     """Flat index (over the dims ``other``) of the fragility curve each spot point lies on."""
     n = frag.sizes["spot"]
     if not other:
         return np.zeros(n, dtype=int)
-    position = []
-    for d in other:
-        if d == "case":
-            position.append(np.asarray(frag["spot_case"].values, dtype=int))
-        else:
-            grid = grid_values(frag, d)
-            position.append(np.abs(grid[None, :] - np.asarray(frag[f"spot_{d}"].values)[:, None]).argmin(axis=1))
-    return np.ravel_multi_index(position, shape)
+    return np.ravel_multi_index([_spot_position(frag, d) for d in other], shape)

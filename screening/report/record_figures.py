@@ -1,4 +1,4 @@
-"""Figures of deterministic record analyses: one simulation's time histories, a cloud analysis."""
+"""Figures of deterministic record analyses: one simulation's time histories."""
 
 from __future__ import annotations
 
@@ -38,39 +38,38 @@ def plot_simulation(ds, path):
     return save_figure(fig, path)
 
 
-def plot_im_fragility(frag, path, max_curves=8):
-    """``p_exceed`` against the intensity measure of :func:`screening.analysis.im_fragility.fragility_over_im`
-    (lognormal fits dashed), up to ``max_curves`` curves over the other dimensions."""
-    from scipy.special import ndtr
+def plot_excitation_fit(record, fit, path):
+    """The goodness of a :func:`screening.analysis.fit_excitation.fit_excitation`: the record's Husid curve
+    against the fitted envelope's, and its smoothed periodogram against the fitted spectrum."""
+    from screening.analysis.fit_excitation import _kt_shape, _q2_integral, husid, smoothed_psd
 
-    name, dim = frag.attrs["intensity_variable"], frag.attrs["intensity_dim"]
-    p = frag["p_exceed"]
-    x = frag[name].transpose(*p.dims)
-    other = [d for d in p.dims if d != dim]
-    flat_p = p.transpose(*other, dim).values.reshape(-1, p.sizes[dim])
-    flat_x = x.transpose(*other, dim).values.reshape(-1, p.sizes[dim])
-    med = frag["median"].transpose(*other).values.reshape(-1)
-    beta = frag["beta"].transpose(*other).values.reshape(-1)
-    picks = np.unique(np.linspace(0, flat_p.shape[0] - 1, min(max_curves, flat_p.shape[0])).round().astype(int))
-    fig = new_figure(7.0, 4.8)
-    ax = fig.subplots()
-    shape = [p.sizes[d] for d in other]
-    for n, j in enumerate(picks):
-        index = dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
-        label = ", ".join(f"{d} = {frag[d].values[i]:.3g}" for d, i in index.items()) or "P(exceed)"
-        ax.plot(flat_x[j], flat_p[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=label)
-        if np.isfinite(med[j]):
-            xs = np.geomspace(np.nanmin(flat_x[j]), np.nanmax(flat_x[j]), 200)
-            ax.plot(xs, ndtr(np.log(xs / med[j]) / beta[j]), "--", color=f"C{n}", lw=0.9,
-                    label=f"lognormal: median {med[j]:.3g}, beta {beta[j]:.2f}")
-    ax.set_xscale("log")
-    ax.set_ylim(-0.02, 1.02)
-    units = frag[name].attrs.get("units", "")
-    extra = f", T = {frag[name].attrs['period']:g} s" if "period" in frag[name].attrs else ""
-    ax.set_xlabel(f"{name} [{units}]{extra}")
-    ax.set_ylabel("probability of exceedance [1]")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.suptitle(f"Fragility over {name} (threshold {frag.attrs.get('threshold', ''):g}, "
-                 f"relative to {frag.attrs.get('relative_to', 'None')})", fontsize=9)
+    a = record.acceleration - record.acceleration.mean()
+    t = np.arange(a.size) * record.dt
+    fig = new_figure(7.0, 7.0)
+    ax = fig.subplots(2, 1)
+    model = _q2_integral(t, fit["T1"], fit["T2"])
+    ax[0].plot(t, husid(a, record.dt), color="k", lw=1.0, label="record")
+    ax[0].plot(t, model / model[-1], "--", color="C1", lw=1.2,
+               label=f"fitted envelope T1 = {fit['T1']:.3g} s, T2 = {fit['T2']:.3g} s")
+    ax[0].set_xlabel("t [s]")
+    ax[0].set_ylabel("Husid curve [1]")
+    ax[0].set_title(f"worst gap {fit['husid_max_deviation']:.3f}; zero crossings {fit['zero_crossing_rate_record']:.3g}"
+                    f"/s (record) vs {fit['zero_crossing_rate_model']:.3g}/s (model)", fontsize=8)
+    ax[0].legend(fontsize=7)
+    from screening.records import Record
+
+    w, s = smoothed_psd(Record(a, record.dt), fit["T1"], fit["T2"])
+    use = w > 0
+    ax[1].loglog(w[use], s[use], color="k", lw=0.8, label="record (smoothed periodogram / 2 pi int q^2)")
+    shape = _kt_shape(w[use], fit["omega_g"], fit["zeta_g"]) if fit["kind"] == "kanai_tajimi" else np.ones(use.sum())
+    ax[1].loglog(w[use], fit["S0"] * shape, "--", color="C1", lw=1.2,
+                 label=f"fitted {fit['kind']}: S0 = {fit['S0']:.3g} m2 s-3"
+                       + (f", omega_g = {fit['omega_g']:.3g} rad/s, zeta_g = {fit['zeta_g']:.3g}"
+                          if fit["kind"] == "kanai_tajimi" else ""))
+    ax[1].set_xlabel("omega [rad/s]")
+    ax[1].set_ylabel("S [m2 s-3]")
+    ax[1].legend(fontsize=7)
+    flags = fit.get("flags", [])
+    fig.suptitle(f"fit-excitation: {record.name}" + (f"\n{len(flags)} warning(s): see the command's output"
+                                                     if flags else ""), fontsize=9)
     return save_figure(fig, path)

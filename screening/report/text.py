@@ -172,3 +172,63 @@ def intensity_lines(ds):
             if unit == "m s-2" else ""
         out.append(f"  {name:<17} {_fmt(float(np.nanmin(v)))} .. {_fmt(float(np.nanmax(v)))} {unit}{extra}")
     return out
+
+
+#: Largest variable (values) of a file ``info`` describes as a product of simulate, cloud or fragility.
+PRODUCT_MAX_VALUES = 50_000_000
+
+
+def product_kind(ds):
+    """Which other screening file ``ds`` is: ``"fragility"``, ``"cloud"``, ``"simulation"``, or ``None``."""
+    names = set(ds.variables)
+    if "status" in names or any(v.size > PRODUCT_MAX_VALUES for v in ds.variables.values()):
+        return None                 # a (damaged) sweep result, or a file too big to be one of these
+    if "record" in ds.dims and "exceed" in names:
+        return "cloud"
+    if "p_exceed" in names or ("mcs_p_exceed" in names and "threshold_rad" in names):
+        return "fragility"
+    if {"theta", "peak_abs_theta"} <= names and "t" in ds.dims:
+        return "simulation"
+    return None
+
+
+def describe_product(ds, path="file"):
+    """Plain-text summary of a file of ``screening simulate``, ``cloud`` or ``fragility`` (what ``screening
+    info`` prints for them); ``None`` for a file that is none of these."""
+    kind = product_kind(ds)
+    if kind is None:
+        return None
+    lines = [f"{path}: {ds.attrs.get('title', '')} ({kind} file)",
+             f"  screening {ds.attrs.get('screening_version', '?')}; {ds.attrs.get('history', '')}".rstrip("; ")]
+    lines.append("dimensions: " + (", ".join(f"{d} ({n})" for d, n in ds.sizes.items()) or "none"))
+    if kind == "simulation":
+        over = (f"overturned at t = {float(ds['overturning_time']):.4g} s" if bool(ds["overturned"]) else
+                f"peak |theta| {float(ds['peak_abs_theta']):.4g} rad")
+        lines.append(f"record {ds.attrs.get('record', '?')}, {ds.attrs.get('model', '?')} model, "
+                     f"status {ds.attrs.get('status', '?')}: {over}")
+        return "\n".join(lines)
+    if kind == "cloud":
+        n = ds.sizes["record"]
+        stripes = f" x {ds.sizes['level']} stripe(s) ({ds.attrs.get('intensity_variable', '?')} levels)" \
+            if "level" in ds.dims else ""
+        lines.append(f"{n} record(s){stripes}: {int(ds['exceed'].sum())} run(s) exceed the threshold, "
+                     f"{int(ds['overturned'].sum())} overturned, {int(ds['diverged'].sum())} left out (diverged)")
+        if "beta_se" in ds:
+            lines.append(f"standard errors (binomial likelihood): median {_fmt(float(ds['fit_median_se']))}, "
+                         f"beta {_fmt(float(ds['beta_se']))}")
+    else:
+        p = np.asarray(ds["p_exceed"].values if "p_exceed" in ds else ds["mcs_p_exceed"].values, dtype=float)
+        lines.append(f"threshold {ds.attrs.get('threshold', '?')} (relative to {ds.attrs.get('relative_to', '?')}), "
+                     f"method {ds.attrs.get('method', '?')}; P(exceed) over {p.size} value(s): "
+                     f"min {_fmt(float(np.nanmin(p)))}, max {_fmt(float(np.nanmax(p)))}"
+                     if np.isfinite(p).any() else "P(exceed): no finite value")
+    if "fit_median" in ds:
+        from screening.analysis.im_fragility import curve_count_text
+
+        units = ds["fit_median"].attrs.get("units", "")
+        fit = f"lognormal fit over {ds['fit_median'].attrs.get('intensity', '?')}: {curve_count_text(ds)}"
+        if np.isfinite(ds["fit_median"].values).any():
+            fit += (f"; median {_fmt(float(ds['fit_median'].median()))} {units}, "
+                    f"beta {_fmt(float(ds['beta'].median()))} (medians over the fitted curves)")
+        lines.append(fit)
+    return "\n".join(lines)

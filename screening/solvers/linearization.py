@@ -96,7 +96,8 @@ def on_own_dims(function, fields, names, block, foundation):
 
 
 # ----------------------------------------------------------------------------- entry point
-def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL, condensation="paper"):
+def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL, condensation="paper",
+              trust=True):
     """Time-varying second-order rocking statistics by stochastic linearization (sections 2.4–2.6).
 
     Parameters
@@ -110,6 +111,8 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     condensation : a registered condensation (:func:`screening.condensation.get`): ``"paper"``
         (eqs. 17–25, default) or ``"cubic"`` (static balance with the cubic term); recorded in
         ``attrs["condensation"]``.
+    trust : add ``sl_trust`` and the predicted error band ``sl_error_low``/``sl_error_high`` of the
+        linearization against the coupled model (:func:`screening.analysis.trust.add_trust`; default).
 
     Returns
     -------
@@ -149,4 +152,9 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
             derived.update(theta_capacity=capacity, peak_p_beyond_capacity=beyond)
         else:
             attrs.update(theta_capacity=float(capacity), peak_p_beyond_capacity=float(beyond))
-    return linearization_dataset(res, t, dims, fields, derived, attrs)
+    ds = linearization_dataset(res, t, dims, fields, derived, attrs)
+    if not trust:
+        return ds
+    from screening.analysis.trust import add_trust
+
+    return add_trust(ds)

@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import abc
 
-import numpy as np
-
 __all__ = ["ChunkIntegrator", "MonteCarloModel", "get", "names", "register", "unregister"]
 
 

@@ -48,7 +48,6 @@ import numpy as np
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.condensation import get as get_condensation
 from screening.physics.contact import rest_indentation
-from screening.solvers.mc_models import state_scales
 from screening.workflow.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
                                          spectral_plan, stationary_samples, validate_seed, vertical_frequency)

@@ -31,7 +31,7 @@ def point_table(run):
     """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
     features of the correction, condensation and eps, and SL's peaks."""
     from screening.analysis.trust import trust_indicators
-    from screening.workflow.grid import Batch, batch_models, batch_values
+    from screening.workflow.grid import Batch, batch_point_models, batch_values
 
     study, res = run.study, run.result
     n, per_case = study.n_points, study.points_per_case
@@ -40,7 +40,7 @@ def point_table(run):
     swept = {name: np.empty(n) for name in study.swept_dims}
     for c, case in enumerate(study.cases):
         whole = Batch(0, c, c * per_case, (c + 1) * per_case)
-        block, foundation, excitation = batch_models(study, whole)
+        block, foundation, excitation, _ = batch_point_models(study, whole)
         rows = slice(whole.lo, whole.hi)
         cols["k_rest"][rows] = case.condensation_model.stiffness_at_rest(block, foundation)
         cols["eps"][rows] = foundation.eps

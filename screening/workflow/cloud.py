@@ -40,10 +40,13 @@ import numpy as np
 import xarray as xr
 
 from screening.solvers import mc_registry
+from screening.status import FitFlag
 from screening.workflow import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
-_RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im")
+_RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels")
+#: Most IM levels of a multiple-stripe analysis.
+MAX_LEVELS = 100
 IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity"}
 
 
@@ -62,6 +65,7 @@ class CloudStudy:
     threshold: float
     relative_to: str
     im: str
+    levels: tuple = ()
 
 
 def load_cloud_study(path, units=None):
@@ -116,12 +120,26 @@ def load_cloud_study(path, units=None):
             if units is not None and unit_factor(units) != unit_factor(stated):
                 raise StudyError(f"records.units: {stated!r}, but --units {units!r} was given")
         units = units or stated
+        levels = _levels(rec.get("levels"), im)
     except StudyError as exc:
         raise StudyError(f"{path}: {exc}") from None
     return CloudStudy(study=base, files=files, units=units, dt=rec.get("dt"),
                       scale=float(rec.get("scale", 1.0)), model=model,
                       period=None if period is None else float(period),
-                      threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im)
+                      threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im, levels=levels)
+
+
+def _levels(value, im):
+    """``[records] levels``: the IM levels [units of ``im``] of a multiple-stripe analysis (``()``: a cloud)."""
+    if value is None:
+        return ()
+    units = {"pga": "m s-2", "sa": "m s-2", "rms": "m s-2", "arias": "m s-1"}[im]
+    ok = isinstance(value, list) and 2 <= len(value) <= MAX_LEVELS and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in value)
+    if not ok or any(b <= a for a, b in zip(value, value[1:])):
+        raise StudyError(f"records.levels: must be a list of 2..{MAX_LEVELS} increasing finite numbers > 0 "
+                         f"[{units}] (got {value!r})")
+    return tuple(float(v) for v in value)
 
 
 def run_record(block, foundation, record, model="coupled", condensation="paper", period=None):
@@ -224,6 +242,121 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     return ds, failures + warnings
 
 
+def threshold_level(cloud, block, foundation):
+    """The rotation threshold [rad] of a cloud study on ``block`` and ``foundation``."""
+    if cloud.relative_to == "slenderness":
+        return cloud.threshold * float(block.slenderness)
+    if cloud.relative_to == "theta_ul":
+        from screening import condensation as condensations
+        return cloud.threshold * float(condensations.get("paper").uplift_threshold(block, foundation))
+    return cloud.threshold
+
+
+def scaled_to(record, im, level, period=None):
+    """``record`` scaled so that its intensity measure ``im`` equals ``level``: the factor is
+    ``level / IM`` (PGA, Sa, RMS are proportional to the scale), ``sqrt(level / IM)`` for Arias."""
+    from screening.analysis.intensity import record_measures
+    from screening.records import Record
+
+    value = record_measures(record, period=period)[IMS[im]]
+    factor = level / value if im != "arias" else math.sqrt(level / value)
+    return Record(record.acceleration * factor, record.dt, record.name, record.source, record.units_in)
+
+
+def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, records=None):
+    """Multiple-stripe analysis: every record scaled to every IM level of ``cloud.levels``, run, and the
+    exceedances at each level fitted by the binomial likelihood with standard errors
+    (:func:`screening.analysis.fragility.fit_binomial_fragility`).  Returns ``(dataset, warnings)``."""
+    from screening.workflow.records_study import block_and_foundation
+
+    block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
+    records = read_cloud_records(cloud) if records is None else records
+    scaled = [scaled_to(rec, cloud.im, level, cloud.period) for level in cloud.levels for rec in records]
+    condensation = chosen.condensation if mc_registry.get(cloud.model).uses_condensation else "paper"
+    rows, failures = record_rows(block, foundation, scaled, cloud.model, condensation, cloud.period, client,
+                                 progress)
+    ds, warnings = stripe_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
+    return ds, failures + warnings
+
+
+def stripe_dataset(cloud, block, foundation, rows, names):
+    """The result of a multiple-stripe analysis from its rows (level-major): per level and record the
+    peak, flags and exceedance; per level the counts; the binomial fit with its standard errors."""
+    from screening import schema
+    from screening.analysis.fragility import fit_binomial_fragility
+
+    levels, n_rec = np.asarray(cloud.levels), len(names)
+    level = threshold_level(cloud, block, foundation)
+    grid = {k: (("level", "record"), np.array([r[k] for r in rows]).reshape(levels.size, n_rec)) for k in rows[0]}
+    ds = xr.Dataset(grid, coords={"level": ("level", levels), "record": ("record", np.arange(n_rec)),
+                                  "record_name": ("record", np.array(names, dtype=object))})
+    used = ~ds["diverged"].values
+    exceed = ((ds["peak_abs_theta"].values > level) | ds["overturned"].values) & used
+    ds["exceed"] = (("level", "record"), exceed)
+    ds["n_exceed"] = ("level", exceed.sum(axis=1))
+    ds["n_used"] = ("level", used.sum(axis=1))
+    ds["threshold_rad"] = ((), level)
+    ds["slenderness"] = ((), float(block.slenderness))
+    name = IMS[cloud.im]
+    warnings, flag = [], FitFlag.ok
+    fit = {"median": math.nan, "beta": math.nan, "median_se": math.nan, "beta_se": math.nan}
+    try:
+        fit = fit_binomial_fragility(levels, ds["n_exceed"].values, ds["n_used"].values)
+    except ValueError as exc:
+        flag = FitFlag.never_exceeded if not exceed.any() else FitFlag.always_exceeded if exceed[used].all() \
+            else FitFlag.no_fit
+        warnings.append(f"no fragility fit: {exc}")
+    if flag == FitFlag.ok and not np.isfinite(fit["beta_se"]):
+        warnings.append("the standard errors are not defined (the stripes separate exceeding from not exceeding "
+                        "perfectly): add levels near the median")
+    ds["fit_median"] = ((), fit["median"])
+    ds["beta"] = ((), fit["beta"])
+    ds["fit_median_se"] = ((), fit["median_se"])
+    ds["beta_se"] = ((), fit["beta_se"])
+    ds["fit_flag"] = ((), np.int8(flag))
+    ds["stripe_" + name] = ("level", levels)
+    ds = schema.apply_schema(ds, schema.CLOUD)
+    units = ds[name].attrs["units"]
+    for v in ("fit_median", "fit_median_se", "stripe_" + name, "level"):
+        ds[v].attrs.update(units=units)
+    ds["fit_median"].attrs["intensity"] = "stripe_" + name
+    ds.attrs.update(title=f"Multiple-stripe analysis: {cloud.study.title}", model=cloud.model,
+                    study=cloud.study.source, intensity_measure=cloud.im, intensity_variable="stripe_" + name,
+                    intensity_dim="level", threshold=cloud.threshold, relative_to=cloud.relative_to,
+                    fit="lognormal, binomial maximum likelihood over the stripes (Baker 2015), standard errors "
+                        "from the observed information", warnings="; ".join(warnings) or "none")
+    return ds, warnings
+
+
+def plot_stripes(ds, path):
+    """The fraction of records exceeding at each level (+-2 binomial standard errors) and the fitted curve."""
+    from scipy.special import ndtr
+
+    from screening.report.figure_base import new_figure, save_figure
+
+    x = ds["level"].values
+    n, k = ds["n_used"].values, ds["n_exceed"].values
+    frac = np.where(n > 0, k / np.maximum(n, 1), np.nan)
+    se = np.sqrt(frac * (1 - frac) / np.maximum(n, 1))
+    fig = new_figure(7.0, 4.8)
+    ax = fig.subplots()
+    ax.errorbar(x, frac, yerr=2 * se, fmt="s", color="k", capsize=3, label="stripes: fraction exceeding (+-2 se)")
+    med, beta = float(ds["fit_median"]), float(ds["beta"])
+    if np.isfinite(med):
+        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
+        ax.plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
+                label=f"binomial MLE: median {med:.3g} +- {float(ds['fit_median_se']):.2g}, "
+                      f"beta {beta:.2f} +- {float(ds['beta_se']):.2f}")
+    ax.set_xscale("log")
+    ax.set_ylim(-0.05, 1.05)
+    name = ds.attrs["intensity_variable"]
+    ax.set_xlabel(f"{name} [{ds[name].attrs.get('units', '')}]")
+    ax.set_ylabel("P(exceed)")
+    ax.legend(fontsize=7)
+    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
+    return save_figure(fig, path)
+
+
 def cloud_dataset(cloud, block, foundation, rows, names):
     """The result dataset of a cloud analysis from its per-record ``rows``: the records, the
     exceedance of each, and the maximum-likelihood lognormal fragility; returns ``(ds, warnings)``."""
@@ -231,13 +364,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     from screening.analysis.fragility import fit_lognormal_fragility
 
     slender = float(block.slenderness)
-    if cloud.relative_to == "slenderness":
-        level = cloud.threshold * slender
-    elif cloud.relative_to == "theta_ul":
-        from screening import condensation as condensations
-        level = cloud.threshold * float(condensations.get("paper").uplift_threshold(block, foundation))
-    else:
-        level = cloud.threshold
+    level = threshold_level(cloud, block, foundation)
     data = {k: ("record", np.array([r[k] for r in rows])) for k in rows[0]}
     ds = xr.Dataset(data, coords={"record": ("record", np.arange(len(rows))),
                                   "record_name": ("record", np.array(names, dtype=object))})
@@ -266,14 +393,19 @@ def cloud_dataset(cloud, block, foundation, rows, names):
                             "add records near the median")
     if level >= slender:
         warnings.append("the threshold is at or beyond the slenderness angle atan(b/h)")
-    flag = 0 if np.isfinite(beta) and beta > 0 else (1 if np.isfinite(beta) else 2)
-    if flag == 1:
+    if np.isfinite(beta):
+        flag = FitFlag.ok if beta > 0 else FitFlag.non_positive_beta
+    elif used.any() and (exceed[used].all() or not exceed[used].any()):
+        flag = FitFlag.always_exceeded if exceed[used].all() else FitFlag.never_exceeded
+    else:
+        flag = FitFlag.no_values if not used.any() else FitFlag.no_fit
+    if flag == FitFlag.non_positive_beta:
         warnings.append("the fitted beta is <= 0 (exceedance falls with the intensity measure)")
-    ds["median"] = ((), median if flag == 0 else math.nan)
-    ds["beta"] = ((), beta if flag == 0 else math.nan)
+    ds["fit_median"] = ((), median if flag == FitFlag.ok else math.nan)
+    ds["beta"] = ((), beta if flag == FitFlag.ok else math.nan)
     ds["fit_flag"] = ((), np.int8(flag))
     ds = schema.apply_schema(ds, schema.CLOUD)
-    ds["median"].attrs.update(units=ds[name].attrs["units"], intensity=name)
+    ds["fit_median"].attrs.update(units=ds[name].attrs["units"], intensity=name)
     if "sa" in ds:
         ds["sa"].attrs.update(period=cloud.period, damping_ratio=0.05)
     ds.attrs.update(title=f"Cloud analysis: {cloud.study.title}", model=cloud.model, study=cloud.study.source,
@@ -305,11 +437,11 @@ def plot_cloud(ds, path):
     ax[0].set_ylabel("peak |theta| / atan(b/h)")
     ax[0].legend(fontsize=7)
     ax[1].scatter(x, ds["exceed"].values.astype(float), s=18, color="k", label="records (exceed = 1)")
-    med, beta = float(ds["median"]), float(ds["beta"])
+    med, beta = float(ds["fit_median"]), float(ds["beta"])
     if np.isfinite(med):
         xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
         ax[1].plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
-                   label=f"lognormal MLE: median {med:.3g} {ds['median'].attrs['units']}, beta {beta:.2f}")
+                   label=f"lognormal MLE: median {med:.3g} {ds['fit_median'].attrs['units']}, beta {beta:.2f}")
     ax[1].set_xscale("log")
     from matplotlib.ticker import NullFormatter
     ax[1].xaxis.set_minor_formatter(NullFormatter())
@@ -342,3 +474,35 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
                   title=f"screening synthetic record {i}, scale {float(scales[i]):g}", station=excitation.kind)
         paths.append(path)
     return paths
+
+
+def write_demand_csv(ds, path):
+    """The per-record demands of a cloud analysis as CSV, one row per record (per level and record for a
+    multiple-stripe analysis, with the ``level`` column): its name, its intensity measures, the peak
+    ``|theta|`` [rad] and as a fraction of the slenderness angle, and the flags (overturned, diverged:
+    left out of the fit, exceed) - the table a PSDM or a pelicun demand sample is built from.  Headers
+    carry the units in brackets."""
+    import csv
+
+    from screening.analysis.intensity import RECORD_MEASURES
+
+    ims = [name for name in RECORD_MEASURES if name in ds]
+    slender = float(ds["slenderness"])
+    stripes = "level" in ds.dims
+    flat = ds.stack(run=("level", "record")) if stripes else ds.rename(record="run").assign_coords(
+        record=("run", ds["record"].values))
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(([f"level [{ds['level'].attrs.get('units', '')}]"] if stripes else []) + ["record", "record_name"]
+                   + [f"{n} [{ds[n].attrs.get('units', '')}]" for n in ims]
+                   + ["peak_abs_theta [rad]", "peak_abs_theta / slenderness [1]", "overturned", "diverged", "exceed"])
+        names = ds["record_name"].values
+        for i in range(flat.sizes["run"]):
+            one = flat.isel(run=i)
+            record = int(one["record"].values)
+            peak = float(one["peak_abs_theta"].values)
+            w.writerow(([f"{float(one['level'].values):.8g}"] if stripes else []) + [record, str(names[record])]
+                       + [f"{float(one[n].values):.8g}" for n in ims]
+                       + [f"{peak:.8g}", f"{peak / slender:.6g}"]
+                       + [int(bool(one[n].values)) for n in ("overturned", "diverged", "exceed")])
+    return path

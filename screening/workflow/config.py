@@ -28,6 +28,7 @@ import numpy as np
 from screening import condensation as condensations
 from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation
+from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.model.block import LENGTH_RANGE
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.solvers.timegrid import output_times
@@ -51,16 +52,17 @@ NUMERIC = {
     "S0": ("excitation", 0.0, False, None), "pga": ("excitation", 0.0, False, None),
     "omega_g": ("excitation", 0.0, False, None), "zeta_g": ("excitation", 0.0, False, None),
     "T1": ("excitation", 0.0, False, None), "T2": ("excitation", 0.0, False, None),
+    "band_limit_hz": ("excitation", 0.0, False, 1e5),
 }
 #: Keys of the model tables of a sweep study (other study kinds allow a subset).
 TABLE_KEYS = {
     "block": ("m", "b", "h", "I_cm", "g"),
     "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
-    "excitation": ("kind", "S0", "pga", "omega_g", "zeta_g", "envelope", "T1", "T2"),
+    "excitation": ("kind", "S0", "pga", "omega_g", "zeta_g", "envelope", "T1", "T2", "band_limit_hz"),
 }
 MODEL_TABLES = tuple(TABLE_KEYS)
 DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential", "eps": 0.0, "g": 9.81,
-            "T1": 4.0, "T2": 2.0}
+            "T1": 4.0, "T2": 2.0, "band_limit_hz": GROUND_BAND_LIMIT_HZ}
 _RANGE_KEYS = ("start", "stop", "num", "log")
 
 
@@ -287,7 +289,7 @@ class Case:
 
 
 def applicable(contact, excitation, envelope):
-    names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga"}
+    names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga", "band_limit_hz"}
     names.add("lam" if contact == "hunt_crossley" else "c")
     if excitation == "kanai_tajimi":
         names |= {"omega_g", "zeta_g"}
@@ -430,32 +432,18 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
 
 #: Target median PGA [m s-2] a study may give (``excitation.pga``): about 1e-7 g to 100 g.
 PGA_RANGE = (1e-6, 1e3)
-#: Largest band limit [rad/s] from which a target PGA is turned into S0 (physical beds: below 1e5).
-CUTOFF_LIMIT = 1e8
 
 
 def _check_target_pga(case, sweeps, where):
-    """A target PGA must lie in :data:`PGA_RANGE`, and every bed of the grid must have the finite band
-    limit from which its ``S0`` follows (:func:`screening.solvers.synthesis.default_cutoff`)."""
+    """A target PGA must lie in :data:`PGA_RANGE` (its ``S0`` follows with the excitation's own band limit
+    ``band_limit_hz``, whatever the bed)."""
     if "pga" not in case.params and "pga" not in sweeps:
         return
-    from screening.solvers.synthesis import default_cutoff
-
     values = sweeps["pga"] if "pga" in sweeps else [case.params["pga"]]
     for v in values if values is not None else ():
         if not PGA_RANGE[0] <= v <= PGA_RANGE[1]:
             raise StudyError(f"{where}excitation.pga: must be a number in {PGA_RANGE[0]:g}..{PGA_RANGE[1]:g} m s-2 "
                              f"(got {float(v)!r})")
-    beds = sweeps["k"] if sweeps.get("k") is not None else [case.params.get("k")]
-    for k in beds:
-        try:
-            cutoff = default_cutoff(_block(case.params), Foundation(k=k, lam=0.0))
-        except (ArithmeticError, ValueError):
-            cutoff = math.nan
-        if not (math.isfinite(cutoff) and 0.0 < cutoff <= CUTOFF_LIMIT):
-            raise StudyError(f"{where}excitation.pga: S0 cannot follow from a target PGA at k = {float(k)!r} (the band "
-                             f"limit of its Monte Carlo synthesis, {cutoff:.3g} rad/s, is not in 0..{CUTOFF_LIMIT:g} "
-                             "rad/s); give S0 instead")
 
 
 def _check_condensation(case, sweeps, where):
@@ -508,9 +496,30 @@ def build_models(case, values, t_end=None):
 
     Returns ``(block, foundation, excitation)``; array fields broadcast as in
     :func:`screening.solvers.moments.solve_moments`.  An intensity given as a target median PGA
-    (``pga`` [m s-2]) becomes the ``S0`` whose record of ``t_end`` [s] has that median PGA, band-limited
-    as the Monte Carlo synthesis of the point (:func:`screening.analysis.intensity.s0_for_pga`).
+    (``pga`` [m s-2]) becomes the ``S0`` whose record of ``t_end`` [s] has that median PGA
+    (:func:`screening.analysis.intensity.s0_for_pga`, with the excitation's ground-motion band limit);
+    ``ValueError`` where a point's ``S0`` cannot be derived (:func:`build_point_models` flags them instead).
     """
+    block, foundation, excitation, underivable = build_point_models(case, values, t_end)
+    if np.any(underivable):
+        raise ValueError("excitation.pga: S0 cannot be derived from the target PGA at "
+                         f"{int(np.sum(underivable))} point(s) (the median PGA per unit S0 is zero, infinite or "
+                         "cannot be computed for their filter and envelope)")
+    return block, foundation, excitation
+
+
+def case_cutoff(case):
+    """The ground-motion band limit [rad/s] of a case's excitation (``excitation.band_limit_hz``, default
+    :data:`~screening.analysis.intensity.GROUND_BAND_LIMIT_HZ`): the band its intensity measures and a
+    target PGA refer to, whatever stands on the ground."""
+    return ground_cutoff(case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ))
+
+
+def build_point_models(case, values, t_end=None):
+    """:func:`build_models` that flags instead of refusing: ``(block, foundation, excitation, underivable)``,
+    ``underivable`` a boolean array (broadcast with the fields; ``False`` without a target PGA) of the
+    points whose ``S0`` cannot follow from the target PGA; their excitation carries ``S0 = 1`` as a
+    placeholder (the caller flags them and discards what is computed there)."""
     p = dict(case.params)
     p.update(values)
     block, foundation = _block(p), _foundation(case, p)
@@ -523,10 +532,12 @@ def build_models(case, values, t_end=None):
 
     if "pga" in p:
         from screening.analysis.intensity import s0_for_pga
-        from screening.solvers.synthesis import default_cutoffs
 
         if t_end is None:
             raise ValueError("t_end is needed to turn a target PGA into S0")
-        s0 = s0_for_pga(excitation(1.0), p["pga"], t_end, default_cutoffs(block, foundation))
-        return block, foundation, excitation(s0)
-    return block, foundation, excitation(p["S0"])
+        s0 = np.asarray(s0_for_pga(excitation(1.0), p["pga"], t_end, case_cutoff(case)))
+        with np.errstate(invalid="ignore"):
+            underivable = ~(np.isfinite(s0) & (s0 > 0))
+        s0 = np.where(underivable, 1.0, s0)
+        return block, foundation, excitation(float(s0) if s0.ndim == 0 else s0), underivable
+    return block, foundation, excitation(p["S0"]), np.zeros((), dtype=bool)

@@ -28,8 +28,8 @@ from screening.solvers import mc_registry
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError, exception_line
-from screening.workflow.grid import batch_models, point_values
-from screening.workflow.study import build_models
+from screening.workflow.grid import batch_point_models, point_values
+from screening.workflow.study import build_models, case_cutoff
 
 CONNECT_TIMEOUT = "15s"
 TASK_RETRIES = 2
@@ -54,7 +54,7 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 # ============================================================================ tasks
 def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
-                fragility=None, trust_table=None, derived_inputs=()):
+                fragility=None, trust_table=None, derived_inputs=(), underivable=None, cutoff=None):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
@@ -64,8 +64,11 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     ``fragility`` (a :class:`~screening.workflow.study.Fragility`): also ``p_exceed`` (points x
     thresholds) [1], from the float64 histories while they are in memory
     (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
-    :data:`INTENSITY_FLOATS` of each point's input, with the band limit of its Monte Carlo synthesis;
-    ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.
+    :data:`INTENSITY_FLOATS` of each point's input, with the ground-motion band limit ``cutoff`` [rad/s]
+    of the excitation (default :func:`screening.analysis.intensity.ground_cutoff`);
+    ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.  ``underivable``
+    (boolean per point, or None): points whose ``S0`` could not follow from their target PGA (their
+    excitation holds a placeholder): status ``beyond_float_range``, NaN values, ``sl_trust`` untrusted.
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
                         condensation=condensation, histories=bool(histories) or fragility is not None)
@@ -83,18 +86,34 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     if fragility is not None:
         out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
-    out.update(batch_intensity(block, foundation, excitation, t_out, n))
+    out.update(batch_intensity(excitation, t_out, n, cutoff))
     for name in derived_inputs:
         out[name] = np.broadcast_to(getattr(excitation, name), shape).reshape(n).astype(np.float64)
+    if underivable is not None:
+        out = flag_points(out, np.broadcast_to(underivable, shape).reshape(n))
     return out
 
 
-def batch_intensity(block, foundation, excitation, t_out, n):
-    """The :data:`INTENSITY_FLOATS` [m s-2, m s-2, m s-1] of the ``n`` points of a batch."""
-    from screening.analysis.intensity import input_measures
-    from screening.solvers.synthesis import default_cutoffs
+def flag_points(out, bad):
+    """A batch result with the points ``bad`` (boolean per point) flagged ``beyond_float_range``: NaN
+    values, zero counts, ``sl_trust`` untrusted (what :func:`failed_result` gives a failed batch)."""
+    out = {name: np.array(value) for name, value in out.items()}
+    for name, value in out.items():
+        if value.dtype.kind == "f":
+            value[bad] = np.nan
+        elif name in SUMMARY_INTS:
+            value[bad] = 0
+    out["status"][bad] = PointStatus.beyond_float_range
+    out["sl_trust"][bad] = Trust.untrusted
+    return out
 
-    measures = input_measures(excitation, float(np.asarray(t_out)[-1]), default_cutoffs(block, foundation))
+
+def batch_intensity(excitation, t_out, n, cutoff=None):
+    """The :data:`INTENSITY_FLOATS` [m s-2, m s-2, m s-1] of the ``n`` points of a batch, band-limited to
+    ``cutoff`` [rad/s] (default: :func:`screening.analysis.intensity.ground_cutoff`)."""
+    from screening.analysis.intensity import ground_cutoff, input_measures
+
+    measures = input_measures(excitation, float(np.asarray(t_out)[-1]), ground_cutoff() if cutoff is None else cutoff)
     return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
             else np.asarray(measures[name], dtype=np.float64).reshape(n) for name in INTENSITY_FLOATS}
 
@@ -240,7 +259,7 @@ def submit_escalation(client, study, flat_index, samples, model, key):
     (``"coupled"`` or ``"condensed"``; retried :data:`TASK_RETRIES` times)."""
     index = tuple(int(i) for i in np.unravel_index(flat_index, study.shape))
     case, values = point_values(study, index)
-    return client.submit(escalation_task, *build_models(study.cases[case], values),
+    return client.submit(escalation_task, *build_models(study.cases[case], values, study.t_end),
                          study.cases[case].condensation_model, int(samples), model, study.t_end, study.dt,
                          study.accuracy.seed, retries=TASK_RETRIES, pure=False, key=key)
 
@@ -292,8 +311,10 @@ def submit_batch(client, study, batch, key, target=None):
     from screening.analysis.trust import shipped_table
 
     case = study.cases[batch.case]
-    args = (*batch_models(study, batch), case.condensation_model, study.times, study.rtol, study.max_steps,
-            study.output.stored, study.fragility, shipped_table(), study.derived_inputs)
+    block, foundation, excitation, underivable = batch_point_models(study, batch)
+    args = (block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
+            study.output.stored, study.fragility, shipped_table(), study.derived_inputs,
+            underivable if np.any(underivable) else None, case_cutoff(case))
     if target is not None:
         return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)

@@ -18,7 +18,7 @@ from screening.schema import PARAMETERS
 from screening.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.workflow.limits import batch_budget
-from screening.workflow.study import build_models
+from screening.workflow.study import build_models, build_point_models
 
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
 DEFAULT_BATCH = 500
@@ -161,12 +161,21 @@ def batch_models(study, batch):
     return build_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
 
+def batch_point_models(study, batch):
+    """:func:`batch_models` and the points whose ``S0`` cannot follow from a target PGA
+    (:func:`~screening.workflow.config.build_point_models`): ``(block, foundation, excitation, underivable)``."""
+    return build_point_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
+
+
 def select_spots(study, status, peak_p_uplift):
     """Grid index tuples of the Monte Carlo spot points.
 
-    Explicit points are returned as given; ``"auto"`` takes the ``count`` points with
-    ``status == ok`` and the highest ``peak_p_uplift`` (ties: lowest flat index first).
-    ``status`` and ``peak_p_uplift`` are flat arrays over the grid.
+    Explicit points are returned as given.  ``"auto"`` takes ``count`` points with ``status == ok``:
+    the first at the highest ``peak_p_uplift`` (ties: lowest flat index first), the others where the
+    linearization's errors are largest, at intermediate intensity: one nearest each of the uplift levels
+    ``top x (count - k) / count`` (``k = 1 .. count - 1``; ``top`` the highest uplift), each preferring,
+    among the points within 0.05 of its level, a block/bed not yet visited (so that softening and
+    hardening beds both get a check).  ``status`` and ``peak_p_uplift`` are flat arrays over the grid.
     """
     spec = study.mcs
     if spec is None:
@@ -174,8 +183,37 @@ def select_spots(study, status, peak_p_uplift):
     if spec.points != "auto":
         return list(spec.points)
     ok = np.flatnonzero((status == PointStatus.ok) & np.isfinite(peak_p_uplift))
-    order = ok[np.argsort(-peak_p_uplift[ok], kind="stable")][:spec.count]
-    return [tuple(int(i) for i in np.unravel_index(j, study.shape)) for j in order]
+    if not ok.size or not spec.count:
+        return []
+    order = ok[np.argsort(-peak_p_uplift[ok], kind="stable")]
+    chosen = [int(order[0])]
+    top = float(peak_p_uplift[order[0]])
+    beds = _bed_keys(study)
+    free = np.ones(ok.size, dtype=bool)
+    free[np.searchsorted(ok, chosen[0])] = False
+    for k in range(1, min(spec.count, ok.size)):
+        level = top * (spec.count - k) / spec.count
+        distance = np.where(free, np.abs(peak_p_uplift[ok] - level), np.inf)
+        near = free & (distance <= distance.min() + 0.05)
+        fresh = near & ~np.isin(beds[ok], beds[chosen])
+        pool = fresh if fresh.any() else near
+        pick = int(np.argmin(np.where(pool, distance, np.inf)))
+        free[pick] = False
+        chosen.append(int(ok[pick]))
+    return [tuple(int(i) for i in np.unravel_index(j, study.shape)) for j in chosen]
+
+
+def _bed_keys(study):
+    """For each flat grid index, a number naming its case and swept block/bed parameters (the excitation
+    dimensions left out): points with equal numbers stand on the same block and bed."""
+    from screening.workflow.config import NUMERIC
+
+    shape = study.shape
+    keep = [i for i, d in enumerate(study.dims) if d == "case" or NUMERIC.get(d, ("",))[0] != "excitation"]
+    if not keep:
+        return np.zeros(int(np.prod(shape, dtype=np.int64)), dtype=np.int64)
+    index = np.unravel_index(np.arange(int(np.prod(shape, dtype=np.int64))), shape)
+    return np.ravel_multi_index([index[i] for i in keep], [shape[i] for i in keep])
 
 
 def parameter_table(study):

@@ -111,7 +111,7 @@ from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_V
 from screening.solvers import mc_registry
 from screening.solvers.timegrid import output_times
 from screening.workflow import limits
-from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models,
+from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models, build_point_models, case_cutoff,
                                        check_choice, check_grid_size, check_keys, check_list, check_value, choice,
                                        integer, model_tables, name_string, number_list, numeric_table, parse_toml,
                                        read_study_text, required, resolve_case, short_repr, table,

@@ -144,10 +144,18 @@ def result_attributes(study, created, batch_size):
         max_steps=np.int32(study.max_steps),
         t_end=study.t_end,
         dt=study.dt,
+        **band_limit_attribute(study),
         batch_size=np.int32(batch_size),
         output_histories=study.output.histories,
         output_history_variables=" ".join(study.output.stored),
     )
+
+
+def band_limit_attribute(study):
+    """``{"band_limit_hz": f}``: the ground-motion band limit [Hz] the intensity measures of the result refer
+    to, when every case has the same; ``{}`` otherwise."""
+    limits = {float(case.params.get("band_limit_hz", math.nan)) for case in study.cases}
+    return {"band_limit_hz": limits.pop()} if len(limits) == 1 and all(math.isfinite(v) for v in limits) else {}
 
 
 def relative_peak_error(linear, mcs):

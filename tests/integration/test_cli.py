@@ -247,9 +247,9 @@ def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_res
         expected = exceedance_probability(res, 5.0, "theta_ul").values
         np.testing.assert_array_equal(frag["p_exceed"].values, expected)
         assert frag["p_exceed"].dims == ("eps", "S0") and frag["p_exceed"].attrs["units"] == "1"
-        assert frag["median"].dims == ("eps",) and frag["beta"].dims == ("eps",)
-        assert frag["median"].attrs["units"] == PARAMETERS["S0"]["units"]
-        assert np.nanmin(expected) < 1e-6 and np.nanmax(expected) > 0.99 and np.all(np.isfinite(frag["median"]))
+        assert frag["fit_median"].dims == ("eps",) and frag["beta"].dims == ("eps",)
+        assert frag["fit_median"].attrs["units"] == PARAMETERS["S0"]["units"]
+        assert np.nanmin(expected) < 1e-6 and np.nanmax(expected) > 0.99 and np.all(np.isfinite(frag["fit_median"]))
         # the Monte Carlo spot point: same probability from its per-sample peaks
         i = int(np.argmin(np.abs(res["eps"].values - float(res["spot_eps"][0]))))
         j = int(np.argmin(np.abs(res["S0"].values - float(res["spot_S0"][0]))))

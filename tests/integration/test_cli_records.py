@@ -42,7 +42,11 @@ def test_simulate_writes_netcdf_and_png(tmp_path, capsys):
         assert float(ds["eps"]) == 6e7
         assert ds.attrs["status"] in ("ok", "overturned")
         assert "sign_convention" in ds.attrs
+        peak = float(ds["peak_abs_theta"])
     assert "PGA" in capsys.readouterr().err
+    assert main(["info", str(out)]) == 0                 # info describes the file instead of refusing it
+    text = capsys.readouterr().out
+    assert "(simulation file)" in text and (f"peak |theta| {peak:.4g} rad" in text or "overturned at" in text)
 
 
 def test_simulate_needs_swept_value(tmp_path, capsys):
@@ -64,6 +68,29 @@ def test_fit_excitation_prints_a_study_table(tmp_path, capsys):
     assert study.cases[0].excitation == "kanai_tajimi"
     assert run(["fit-excitation", str(record), "--kind", "white"]) == 2
     assert "cutoff" in capsys.readouterr().err
+
+
+def test_fit_excitation_checks_its_inputs_in_one_line_and_draws_its_fit(tmp_path, capsys):
+    """--cutoff 0 / -5 / nan, a constant record: exit 2 with one line before any work; --figure draws
+    the Husid curve and the spectrum; the pulse record (a short harmonic burst) is flagged."""
+    from helpers import one_line_error
+
+    from screening.cli import main as run
+
+    _, record = _files(tmp_path)
+    for bad in ("0", "-5", "nan"):
+        assert run(["fit-excitation", str(record), "--kind", "white", "--cutoff", bad]) == 2
+        assert "--cutoff" in one_line_error(capsys.readouterr().err)
+    flat = tmp_path / "flat.txt"
+    flat.write_text("\n".join(["0.1"] * 500))
+    assert run(["fit-excitation", str(flat), "--dt", "0.01", "--units", "m/s2"]) == 2
+    assert "constant" in one_line_error(capsys.readouterr().err)
+    png = tmp_path / "fit.png"
+    assert run(["fit-excitation", str(record), "--figure", str(png)]) == 0
+    captured = capsys.readouterr()
+    assert png.stat().st_size > 10_000 and "# fit: Husid curves" in captured.out
+    assert "warning:" in captured.err                     # a 2 Hz burst is no Kanai-Tajimi record
+    assert [p.name for p in tmp_path.iterdir() if ".tmp" in p.name] == []
 
 
 def test_simulate_accepts_a_study_without_excitation_or_with_records(tmp_path):

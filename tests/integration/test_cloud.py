@@ -39,12 +39,12 @@ def test_cloud_dataset_and_fit(folder):
     (folder / "s.toml").write_text(STUDY.format(im="sa"))
     ds, warnings = run_cloud(load_cloud_study(folder / "s.toml"))
     assert ds.sizes["record"] == 8
-    for name in ("peak_abs_theta", "overturned", "exceed", "pga", "sa", "arias_intensity", "median", "beta"):
+    for name in ("peak_abs_theta", "overturned", "exceed", "pga", "sa", "arias_intensity", "fit_median", "beta"):
         assert name in ds
     assert ds["sa"].attrs["period"] == 0.5
     exceed = ds["exceed"].values
     if 0 < exceed.sum() < exceed.size:
-        assert np.isfinite(float(ds["median"])) or ds["fit_flag"] != 0
+        assert np.isfinite(float(ds["fit_median"])) or ds["fit_flag"] != 0
     # the exceedance definition: peak above the threshold or overturned
     level = float(ds["threshold_rad"])
     np.testing.assert_array_equal(exceed, (ds["peak_abs_theta"].values > level) | ds["overturned"].values)
@@ -67,7 +67,18 @@ def test_cloud_cli_writes_all_files(folder, capsys):
         assert out.with_suffix(suffix).exists()
     with xr.open_dataset(out) as ds:
         assert ds.attrs["intensity_variable"] == "pga"
+        peaks, pga, names = ds["peak_abs_theta"].values, ds["pga"].values, ds["record_name"].values
     assert "records:" in capsys.readouterr().err
+    # the per-record demands, one row per record, as stored
+    import csv
+    rows = list(csv.DictReader(folder.joinpath("cloud_demand.csv").open()))
+    assert [r["record_name"] for r in rows] == [str(n) for n in names]
+    np.testing.assert_allclose([float(r["peak_abs_theta [rad]"]) for r in rows], peaks, rtol=1e-7)
+    np.testing.assert_allclose([float(r["pga [m s-2]"]) for r in rows], pga, rtol=1e-7)
+    # and `info` describes the file instead of refusing it
+    assert main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "(cloud file)" in text and f"{len(rows)} record(s):" in text
 
 
 def test_shipped_cloud_example_is_valid():
@@ -104,7 +115,7 @@ def test_a_failed_record_task_is_kept_as_nan_and_left_out_of_the_fit(folder, cli
     assert rows[0]["diverged"] and np.isnan(rows[0]["peak_abs_theta"]) and np.isnan(rows[0]["pga"])
     ds, _ = cloud_dataset(cloud, block, bed, rows, ["bad"] + [r.name for r in good])
     without, _ = cloud_dataset(cloud, block, bed, rows[1:], [r.name for r in good])
-    assert float(ds["median"]) == float(without["median"]) or np.isnan(float(without["median"]))
+    assert float(ds["fit_median"]) == float(without["fit_median"]) or np.isnan(float(without["fit_median"]))
 
 
 def test_cloud_cli_runs_on_workers_and_checks_the_worker_count(folder, capsys):
@@ -116,4 +127,42 @@ def test_cloud_cli_runs_on_workers_and_checks_the_worker_count(folder, capsys):
     assert main(["cloud", str(folder / "w.toml"), "--out", str(folder / "w.nc"), "--workers", "1", "--quiet"]) == 0
     with xr.open_dataset(folder / "w.nc") as ds:
         assert ds.attrs["execution"] == "dask, one task per record on 1 worker(s)"
-        assert ds["median"].attrs["units"] == "m s-2" and ds["peak_abs_theta"].attrs["units"] == "rad"
+        assert ds["fit_median"].attrs["units"] == "m s-2" and ds["peak_abs_theta"].attrs["units"] == "rad"
+
+
+def test_multiple_stripe_analysis_scales_every_record_to_every_level(folder, capsys):
+    """[records] levels: each record scaled to each PGA level (its PGA is then the level), the
+    exceedances counted per stripe and fitted by the binomial likelihood with standard errors."""
+    import csv
+
+    from screening.analysis.fragility import fit_binomial_fragility
+
+    levels = [0.5, 1.5, 4.5]
+    (folder / "msa.toml").write_text(STUDY.format(im="pga") + f"levels = {levels}\n")
+    out = folder / "msa.nc"
+    assert main(["cloud", str(folder / "msa.toml"), "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "3 stripes x 8 records" in err
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_allclose(ds["pga"].values, np.repeat(np.array(levels)[:, None], 8, axis=1), rtol=1e-9)
+        k, n = ds["n_exceed"].values, ds["n_used"].values
+        assert np.all(np.diff(k) >= 0)                  # stronger shaking, no fewer exceedances
+        np.testing.assert_array_equal(k, (ds["exceed"].values & ~ds["diverged"].values).sum(axis=1))
+        if 0 < k.sum() < n.sum():
+            fit = fit_binomial_fragility(levels, k, n)
+            assert float(ds["fit_median"]) == pytest.approx(fit["median"], rel=1e-12)
+            assert float(ds["beta_se"]) == pytest.approx(fit["beta_se"], rel=1e-12, nan_ok=True)
+            rows = list(csv.DictReader(out.with_suffix(".csv").open()))
+            assert len(rows) == 1 and rows[0]["intensity_measure"] == "stripe_pga"
+    assert out.with_suffix(".png").stat().st_size > 10_000
+    assert main(["info", str(out)]) == 0
+    assert "8 record(s) x 3 stripe(s) (stripe_pga levels)" in capsys.readouterr().out
+    demand = list(csv.DictReader(folder.joinpath("msa_demand.csv").open()))
+    assert len(demand) == 24 and [float(r["level [m s-2]"]) for r in demand[::8]] == levels
+    np.testing.assert_allclose([float(r["pga [m s-2]"]) for r in demand], np.repeat(levels, 8), rtol=1e-7)
+
+
+def test_levels_must_be_increasing_positive(folder):
+    (folder / "bad_levels.toml").write_text(STUDY.format(im="pga") + "levels = [2.0, 1.0]\n")
+    with pytest.raises(StudyError, match="records.levels: must be a list of 2..100 increasing"):
+        load_cloud_study(folder / "bad_levels.toml")

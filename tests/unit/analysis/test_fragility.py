@@ -97,7 +97,7 @@ def test_fragility_curve_over_s0_from_a_batch():
     S0 = np.logspace(-6, -3, 13)
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(S0))
     curve = ds.rocking.fragility_curve(0.5, dim="S0", relative_to="theta_ul")
-    p, median, beta = curve["p_exceed"], curve["median"], curve["beta"]
+    p, median, beta = curve["p_exceed"], curve["fit_median"], curve["beta"]
     assert p.dims == ("S0",) and np.all(np.diff(p.values) >= 0)
     assert S0[0] < float(median) < S0[-1] and 0 < float(beta) < 5
     assert median.attrs["units"] == PARAMETERS["S0"]["units"] and beta.attrs["units"] == "1"
@@ -170,9 +170,9 @@ def test_accessor_on_a_broadcast_linearization_equals_point_by_point_results():
                 assert float(p[i, j]) == pytest.approx(
                     float(one.rocking.exceedance_probability(threshold, relative_to)), rel=1e-9, abs=1e-15)
     curve = ds.rocking.fragility_curve(2.0, dim="S0", relative_to="theta_ul")
-    assert curve["median"].dims == ("eps",) and curve["median"].attrs["intensity"] == "S0"
+    assert curve["fit_median"].dims == ("eps",) and curve["fit_median"].attrs["intensity"] == "S0"
     frag = ds.rocking.fragility_dataset(2.0, relative_to="theta_ul")
-    assert set(frag.data_vars) == {"p_exceed", "median", "beta", "threshold_rad"}
+    assert set(frag.data_vars) == {"p_exceed", "fit_median", "beta", "fit_flag", "fit_n_unvouched", "threshold_rad"}
     np.testing.assert_array_equal(frag["threshold_rad"].values, 2.0 * ds["theta_ul"].values)
 
 
@@ -243,7 +243,7 @@ def test_fragility_of_cases_with_different_blocks(geometry_sweep, threshold, rel
         ds = ds.load()
     assert ds["b"].dims == ("case",) and len(set(ds["b"].values)) == 3
     frag = fragility_dataset(ds, threshold, relative_to)
-    assert frag["p_exceed"].dims == ("case", "S0") and frag["median"].dims == ("case",)
+    assert frag["p_exceed"].dims == ("case", "S0") and frag["fit_median"].dims == ("case",)
     if relative_to == "slenderness":                       # stored per point: atan(b/h) of each case
         per_case = xr.DataArray(np.arctan2(ds["b"].values, ds["h"].values), dims="case")
         np.testing.assert_allclose(ds["slenderness"].values, per_case.broadcast_like(ds["slenderness"]).values,
@@ -271,7 +271,7 @@ def test_fragility_command_on_cases_with_different_blocks(geometry_sweep, tmp_pa
                  "--out", str(out)]) == 0
     with open_result(geometry_sweep) as ds, xr.open_dataset(out) as frag:
         expected = fragility_dataset(ds, float(threshold), relative_to)
-        assert frag["p_exceed"].dims == ("case", "S0") and frag["median"].dims == ("case",)
+        assert frag["p_exceed"].dims == ("case", "S0") and frag["fit_median"].dims == ("case",)
         np.testing.assert_array_equal(frag["p_exceed"].values, expected["p_exceed"].values)
         np.testing.assert_array_equal(frag["threshold_rad"].values, expected["threshold_rad"].values)
-        assert frag["median"].attrs["units"] == PARAMETERS["S0"]["units"]
+        assert frag["fit_median"].attrs["units"] == PARAMETERS["S0"]["units"]

@@ -31,12 +31,12 @@ def test_pga_fit_is_the_s0_fit_transformed(result):
     by_s0, _ = fragility_over_im(result, 0.1, "s0", relative_to="slenderness")
     by_pga, warnings = fragility_over_im(result, 0.1, "pga", relative_to="slenderness")
     assert not warnings
-    ok = np.isfinite(by_s0["median"].values)
+    ok = np.isfinite(by_s0["fit_median"].values)
     assert ok.any()
     np.testing.assert_allclose(by_pga["beta"].values[ok], by_s0["beta"].values[ok] / 2, rtol=1e-9)
     pga_per_sqrt_s0 = (by_pga["pga_median"] / np.sqrt(by_pga["S0"])).isel(S0=0)
-    np.testing.assert_allclose(by_pga["median"].values[ok],
-                               (pga_per_sqrt_s0 * np.sqrt(by_s0["median"])).values[ok], rtol=1e-9)
+    np.testing.assert_allclose(by_pga["fit_median"].values[ok],
+                               (pga_per_sqrt_s0 * np.sqrt(by_s0["fit_median"])).values[ok], rtol=1e-9)
 
 
 def test_refuses_non_intensity_and_non_monotone(result):
@@ -64,9 +64,11 @@ def test_flags_negative_beta_and_threshold_beyond_slenderness(result):
 def test_csv_and_nrml_exports(result, tmp_path):
     frag, _ = fragility_over_im(result, 0.1, "pga", relative_to="slenderness")
     rows = list(csv.DictReader(open(write_csv(frag, tmp_path / "f.csv"))))
-    ok = np.isfinite(frag["median"].values)
-    assert len(rows) == ok.sum() and rows[0]["intensity_measure"] == "pga_median" and rows[0]["units"] == "m s-2"
-    assert float(rows[0]["median"]) == pytest.approx(float(frag["median"].values[ok][0]), rel=1e-7)
+    ok = np.isfinite(frag["fit_median"].values)
+    assert len(rows) == ok.size and rows[0]["intensity_measure"] == "pga_median" and rows[0]["units"] == "m s-2"
+    fitted = [r for r in rows if r["fit_flag"] == "ok"]
+    assert len(fitted) == ok.sum()
+    assert float(fitted[0]["median"]) == pytest.approx(float(frag["fit_median"].values[ok][0]), rel=1e-7)
     root = ET.parse(write_nrml(frag, tmp_path / "f.xml")).getroot()
     ns = {"n": "http://openquake.org/xmlns/nrml/0.5"}
     fun = root.find("n:fragilityModel/n:fragilityFunction", ns)
@@ -76,7 +78,7 @@ def test_csv_and_nrml_exports(result, tmp_path):
     # OpenQuake's reading of (mean, stddev) reproduces the fitted curve, IM in g
     sigma = math.sqrt(math.log(1 + (std / mean) ** 2))
     mu = mean**2 / math.sqrt(std**2 + mean**2)
-    median_g = float(frag["median"].values[ok][0]) / 9.80665
+    median_g = float(frag["fit_median"].values[ok][0]) / 9.80665
     assert stats.lognorm.cdf(median_g, sigma, scale=mu) == pytest.approx(0.5, abs=1e-7)
     assert sigma == pytest.approx(float(frag["beta"].values[ok][0]), rel=1e-7)
     assert nrml_parameters(1.0, 0.0) == (1.0, 0.0)
@@ -91,3 +93,18 @@ def test_cli_fragility_im(result, tmp_path, capsys):
     assert "lognormal fit over pga_median" in capsys.readouterr().err
     assert main(["fragility", str(path), "--threshold", "0.1", "--im", "pga", "--dim", "eps"]) == 2
     assert "not an intensity dimension" in capsys.readouterr().err
+
+
+def test_linearize_results_carry_trust_and_fits_count_the_untrusted_points(result, tmp_path):
+    """screening.linearize returns sl_trust and its band by default; a fit counts the untrusted points of
+    its curve (no [accuracy] here: none has a best estimate) and the CSV and NRML say so."""
+    assert {"sl_trust", "sl_error_low", "sl_error_high"} <= set(result.data_vars)
+    frag, _ = fragility_over_im(result, 0.1, "pga", relative_to="slenderness")
+    untrusted = ((result["sl_trust"] == 2) & (result["status"] == 0)).sum("S0")
+    np.testing.assert_array_equal(frag["fit_n_unvouched"].values, untrusted.transpose(*frag["fit_n_unvouched"].dims))
+    rows = list(csv.DictReader(open(write_csv(frag, tmp_path / "f.csv"))))
+    assert [int(r["n_unvouched"]) for r in rows] == list(untrusted.values)
+    text = open(write_nrml(frag, tmp_path / "f.xml")).read()
+    fitted = frag["fit_flag"].values == 0
+    shaky = int(np.sum(fitted & (frag["fit_n_unvouched"].values > 0)))
+    assert text.count("untrusted linearized point(s) without a best estimate") == shaky

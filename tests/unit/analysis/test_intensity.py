@@ -97,10 +97,12 @@ def test_intensity_measures_of_a_linearize_dataset():
     assert float(im.pga_median[1] / im.pga_median[0]) == pytest.approx(2.0, rel=1e-9)
     assert float(im.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, CUTOFF), rel=1e-9)
     assert im["sa_median"].attrs["period"] == 0.5 and im["pga_median"].attrs["units"] == "m s-2"
-    default = I.intensity_measures(ds)                      # Monte Carlo default cutoff of the point
-    from screening.solvers.synthesis import default_cutoff
-    wc = default_cutoff(block, bed)
+    default = I.intensity_measures(ds)                      # the ground motion's band limit, 25 Hz
+    wc = 2.0 * np.pi * 25.0
     assert float(default.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, wc), rel=1e-9)
+    assert "25 Hz" in default.attrs["cutoff_rad_s_source"]
+    wider = I.intensity_measures(ds.assign_attrs(band_limit_hz=50.0))
+    assert float(wider.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, 2 * wc), rel=1e-9)
 
 
 def test_intensity_measures_per_case_excitation():

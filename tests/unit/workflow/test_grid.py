@@ -97,12 +97,12 @@ def test_makespan_hands_batches_to_the_first_free_worker():
     assert grid._makespan(study, 10, 1) == 10
 
 
-def test_auto_spots_take_highest_uplift_among_ok_points():
+def test_auto_spots_take_highest_uplift_among_ok_points_then_half_of_it():
     study = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 2\n')
     status = np.zeros(20, dtype=np.int8)
     upl = np.linspace(0.0, 0.5, 20)
     status[19] = 1                                  # the highest uplift point is not ok: skipped
-    assert select_spots(study, status, upl) == [(3, 3), (3, 2)]
+    assert select_spots(study, status, upl) == [(3, 3), (1, 4)]       # upl 0.474, then the nearest to 0.237
     status[:] = 1
     assert select_spots(study, status, upl) == []
 
@@ -129,3 +129,18 @@ def test_parameter_table_splits_constants_per_case_values_and_labels():
     assert "S0" not in constants and "S0" not in per_case                  # swept
     assert labels == {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential"}
     assert case_labels == {"excitation": ["white", "kanai_tajimi"]}
+
+
+def test_auto_spots_also_visit_intermediate_uplift_on_other_beds():
+    """The first spot at the highest uplift (where the linearization is closest to the truth), the others
+    at intermediate uplift levels, each on a block/bed not yet visited when one is near its level."""
+    study = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 3\n')      # eps (4) x S0 (5)
+    upl = np.tile(np.linspace(0.0, 0.8, 5), 4) * np.repeat([1.0, 0.98, 0.96, 0.94], 5)
+    status = np.zeros(20, dtype=np.int8)
+    spots = select_spots(study, status, upl)
+    assert spots[0] == (0, 4)                                           # the highest uplift first
+    levels = [upl[np.ravel_multi_index(s, (4, 5))] for s in spots[1:]]
+    assert levels[0] == pytest.approx(0.8 * 2 / 3, abs=0.1) and levels[1] == pytest.approx(0.8 / 3, abs=0.1)
+    assert len({s[0] for s in spots}) == 3                              # three different beds (eps)
+    one = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 1\n')
+    assert select_spots(one, status, upl) == [(0, 4)]
