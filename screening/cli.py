@@ -448,10 +448,10 @@ def cmd_plot(result, out_dir, response):
 @click.option("--dim", help="swept intensity of the fragility curve and its lognormal fit (default S0 if swept)")
 @click.option("--out", help="netCDF file (default <result-stem>_fragility.nc next to the result; "
                             "its folder must exist); the PNG goes next to it")
-@click.option("--im", type=_Choice(["pga", "sa", "rms", "arias", "s0"]),
+@click.option("--im", type=_Choice(["pga", "sa", "pgv", "avgsa", "rms", "arias", "s0"]),
               help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
                    "export the fits as CSV and OpenQuake NRML next to the netCDF")
-@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
+@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa and --im avgsa")
 def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
     if im is not None or period is not None:
         from screening.cli_records import fragility_over_im_command

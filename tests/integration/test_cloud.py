@@ -51,7 +51,7 @@ def test_cloud_dataset_and_fit(folder):
 
 
 def test_cloud_study_errors(folder):
-    (folder / "bad.toml").write_text(STUDY.format(im="pgv"))
+    (folder / "bad.toml").write_text(STUDY.format(im="pgd"))
     with pytest.raises(StudyError, match="records.im"):
         load_cloud_study(folder / "bad.toml")
     (folder / "bad2.toml").write_text(STUDY.format(im="pga").replace('files = "rec"', 'files = "nothing/*.at2"'))
