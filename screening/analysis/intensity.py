@@ -26,7 +26,13 @@ moments ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega``:
   with the filter in its stationary state as in the synthesis) and the white-noise bandwidth of
   the oscillator (:func:`~screening.analysis.fragility.oscillator_bandwidth`).  The Lyapunov
   equation does not see the band limit: valid for ``omega_n`` well below ``omega_c`` (a
-  ``UserWarning`` is raised when ``omega_n > omega_c / 2``).
+  ``UserWarning`` is raised when ``omega_n > omega_c / 2``);
+* ``pgv_median`` [m s-1]: median peak velocity after a 2nd-order Butterworth high-pass at
+  ``omega_low`` (default 0.1 Hz: the velocity of white or Kanai-Tajimi noise has unbounded variance
+  at low frequency), from the exact evolutionary-spectrum covariance of the modulated input's
+  velocity (:func:`velocity_covariance`, any PSD) and the same first-passage formula;
+* ``avgsa_median`` [m s-2]: geometric mean of ``sa_median`` over 10 periods log-spaced in
+  ``[0.2 T, 1.5 T]`` (the median of AvgSA when the log-peaks are jointly normal).
 
 Every measure is proportional to ``sqrt(S0)`` (Arias: to ``S0``), so
 :func:`s0_for_pga` inverts a target PGA exactly.
