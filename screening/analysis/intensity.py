@@ -461,25 +461,9 @@ def envelope_exponentials(envelope):
     raise ValueError(f"envelope kind {envelope.kind!r} has no exponential form (exponential or constant)")
 
 
-def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=1001, d_omega=0.02,
-                        split=40.0):
-    """``(t [s], var_v [m2 s-2], var_v_dot [m2 s-4], cov [m2 s-3])`` of the high-passed ground velocity of
-    the modulated input, started at rest at ``t = 0``.
-
-    Notes
-    -----
-    With ``G(s) = s / (s^2 + sqrt(2) omega_low s + omega_low^2)`` (velocity of the high-passed
-    acceleration), its impulse response ``h`` and ``M(t, omega) = int_0^t h(t - s) q(s) e^{i omega s} ds``,
-    the velocity of ``a = q f`` has ``var v(t) = int S(omega) |M(t, omega)|^2 d omega`` (Priestley's
-    evolutionary spectrum), and ``v' = q f - sqrt(2) omega_low v - omega_low^2 x`` likewise with
-    ``dM/dt``.  For ``q = sum_j a_j e^{-t/tau_j}`` and the poles ``r_k`` of ``G`` with residues ``c_k``,
-    ``M = sum_j a_j sum_k c_k (e^{p_j t} - e^{r_k t}) / (p_j - r_k)``, ``p_j = i omega - 1/tau_j``:
-    exact, on a grid of step ``d_omega`` [rad/s] up to ``split omega_low``.  Above it the velocity is
-    local (``M ~ q(t) G(i omega) e^{i omega t}``) and the quasi-stationary moments are used:
-    ``q^2 mu_0``, ``q^2 mu_2 + q'^2 mu_0``, ``q q' mu_0`` of that band (:func:`velocity_spectral_moments`).
-    """
-    wl, wc = float(omega_low), float(cutoff)
-    ws = min(wc, split * wl)
+def _low_band_velocity(excitation, t_end, wl, ws, n_times, d_omega):
+    """``(t, var_v, var_v_dot, cov)`` of the band ``|omega| <= ws`` by the closed-form evolutionary spectrum
+    (:func:`velocity_covariance`)."""
     t = _times(t_end, n_times)
     amps, rates = envelope_exponentials(excitation.envelope)
     r = wl * np.array([-1.0 + 1.0j, -1.0 - 1.0j]) / math.sqrt(2.0)          # poles of G
@@ -509,6 +493,38 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
         var_v += np.sum(wt * np.abs(m) ** 2, axis=0)
         var_a += np.sum(wt * np.abs(md) ** 2, axis=0)
         cov += np.sum(wt * (m * np.conj(md)).real, axis=0)
+    return t, var_v, var_a, cov
+
+
+_low_band_velocity_cached = functools.lru_cache(maxsize=256)(_low_band_velocity)
+
+
+def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=1001, d_omega=0.02,
+                        split=40.0):
+    """``(t [s], var_v [m2 s-2], var_v_dot [m2 s-4], cov [m2 s-3])`` of the high-passed ground velocity of
+    the modulated input, started at rest at ``t = 0``.
+
+    Notes
+    -----
+    With ``G(s) = s / (s^2 + sqrt(2) omega_low s + omega_low^2)`` (velocity of the high-passed
+    acceleration), its impulse response ``h`` and ``M(t, omega) = int_0^t h(t - s) q(s) e^{i omega s} ds``,
+    the velocity of ``a = q f`` has ``var v(t) = int S(omega) |M(t, omega)|^2 d omega`` (Priestley's
+    evolutionary spectrum), and ``v' = q f - sqrt(2) omega_low v - omega_low^2 x`` likewise with
+    ``dM/dt``.  For ``q = sum_j a_j e^{-t/tau_j}`` and the poles ``r_k`` of ``G`` with residues ``c_k``,
+    ``M = sum_j a_j sum_k c_k (e^{p_j t} - e^{r_k t}) / (p_j - r_k)``, ``p_j = i omega - 1/tau_j``:
+    exact, on a grid of step ``d_omega`` [rad/s] up to ``split omega_low``.  Above it the velocity is
+    local (``M ~ q(t) G(i omega) e^{i omega t}``) and the quasi-stationary moments are used:
+    ``q^2 mu_0``, ``q^2 mu_2 + q'^2 mu_0``, ``q q' mu_0`` of that band (:func:`velocity_spectral_moments`).
+    """
+    wl, wc = float(omega_low), float(cutoff)
+    ws = min(wc, split * wl)
+    args = (excitation, float(t_end), wl, ws, int(n_times), float(d_omega))
+    try:
+        low = _low_band_velocity_cached(*args)
+    except TypeError:                                   # an excitation with array fields is not hashable
+        low = _low_band_velocity(*args)
+    t, var_v, var_a, cov = (x.copy() for x in low)
+    q = excitation.envelope(t)
     if wc > ws:
         (h0, _, h2), (l0, _, l2) = velocity_spectral_moments(excitation, wc, wl), \
             velocity_spectral_moments(excitation, ws, wl)

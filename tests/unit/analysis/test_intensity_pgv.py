@@ -65,6 +65,9 @@ def test_velocity_covariance_reaches_the_stationary_moments():
     assert var_v[-1] == pytest.approx(mu0, rel=1e-4)
     assert var_a[-1] == pytest.approx(mu2, rel=1e-4)
     assert abs(cov[-1]) < 1e-4 * math.sqrt(mu0 * mu2)
+    again = I.velocity_covariance(exc, 40.0, CUTOFF)                 # the cached low band is not altered
+    np.testing.assert_array_equal(again[1], var_v)
+    assert I.velocity_covariance(exc, 40.0, 2 * CUTOFF)[1][-1] > var_v[-1]
 
 
 @pytest.mark.parametrize("freq", [0.1, 1.0])
