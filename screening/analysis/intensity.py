@@ -59,6 +59,7 @@ from scipy import integrate, optimize
 
 from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, vanmarcke_factor
 from screening.solvers.synthesis import envelope_rate
+from screening.validation import checked
 
 #: Names of the measures (data variables of :func:`intensity_measures`) and their units.
 MEASURES = {"pga_median": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1", "sa_median": "m s-2",
@@ -577,6 +578,7 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW):
     Processing of strong-motion accelerograms: needs, options and consequences, Soil Dyn. Earthq. Eng.
     25, 93-115.
     """
+    checked("omega_low", omega_low, lower=0.0, upper=float(cutoff))
     mu0, mu1, mu2 = velocity_spectral_moments(excitation, cutoff, omega_low)
     t, var_v, var_a, cov = velocity_covariance(excitation, t_end, cutoff, omega_low)
     delta = math.sqrt(max(1.0 - mu1**2 / (mu0 * mu2), 0.0))
@@ -638,6 +640,7 @@ def record_velocity(acceleration, dt, omega_low=OMEGA_LOW):
     omega_low^2)`` (:func:`highpass_gain`), the filter of :func:`pgv_median`.
     """
     from scipy import signal
+    checked("omega_low", omega_low, lower=0.0, upper=math.pi / float(dt))
     acc = np.atleast_2d(np.asarray(acceleration, dtype=float))
     sos = signal.butter(2, float(omega_low) / (2.0 * math.pi), btype="highpass", fs=1.0 / float(dt), output="sos")
     return integrate.cumulative_trapezoid(signal.sosfilt(sos, acc, axis=-1), dx=float(dt), axis=-1, initial=0.0)

@@ -195,3 +195,10 @@ def test_pgv_and_avgsa_medians_against_1000_synthesised_records(name, samples):
         med, se = np.median(s[key]), median_standard_error(s[key])
         assert se < 0.01 * med
         assert abs(pred[key] - med) < 3 * se + model[key] * med, (key, pred[key], med, se)
+
+
+def test_a_high_pass_corner_outside_the_band_is_refused():
+    with pytest.raises(ValueError, match="parameter 'omega_low' must be a finite number > 0 and < 100"):
+        I.pgv_median(WhiteNoise(1.0), 5.0, 100.0, omega_low=0.0)
+    with pytest.raises(ValueError, match="parameter 'omega_low'"):
+        I.record_velocity(np.ones(10), 0.01, omega_low=400.0)
