@@ -527,11 +527,11 @@ def cmd_plot(result, out_dir, response):
                            "whichever is swept)")
 @click.option("--out", help="netCDF file (default <result-stem>_fragility.nc next to the result; "
                             "its folder must exist); the PNG goes next to it")
-@click.option("--im", type=_Choice(["pga", "sa", "rms", "arias", "s0"]),
+@click.option("--im", type=_Choice(["pga", "sa", "pgv", "avgsa", "rms", "arias", "s0"]),
               help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
                    "export the fits as CSV (a row per curve), pelicun CSV and OpenQuake NRML next to the netCDF "
                    "(docs/fragility.md)")
-@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
+@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa and --im avgsa")
 @click.option("--modelling-dispersion", "modelling", type=POSITIVE_FLOAT,
               help="modelling dispersion beta_m [1] combined with each fitted beta by the square root of the sum of "
                    "squares (the fitted one kept as beta_fit)")

@@ -276,7 +276,15 @@ INTENSITY = {
     "rms_acceleration": _v("m s-2", "root mean square ground acceleration over the record"),
     "arias_intensity": _v("m s-1", "Arias intensity pi/(2 g) int a2 dt (expected value for stochastic inputs)"),
     "sa_median": _v("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
+    "pgv_median": _v("m s-1", "median peak ground velocity of the modulated input, 2nd-order Butterworth "
+                              "high-pass at omega_low (random-vibration theory)"),
+    "avgsa_median": _v("m s-2", "median average spectral acceleration: geometric mean of Sa(T_i, 5 %) over 10 "
+                                "periods log-spaced in [0.2 T, 1.5 T]"),
     "pga": _v("m s-2", "peak ground acceleration of the record"),
+    "pgv": _v("m s-1", "peak ground velocity of the record (2nd-order Butterworth high-pass at 0.1 Hz, "
+                       "trapezoidal integration)"),
+    "avgsa": _v("m s-2", "average spectral acceleration of the record: geometric mean of Sa(T_i, 5 %) over 10 "
+                         "periods log-spaced in [0.2 T, 1.5 T]"),
     "sa": _v("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
     "fit_flag": FRAGILITY["fit_flag"],
 }
@@ -299,7 +307,8 @@ SWEEP_INPUTS = {
 CLOUD = {
     **{name: SIMULATION[name] for name in ("peak_abs_theta", "overturned", "overturning_time")},
     "diverged": _v("1", "the integration diverged or its task failed (left out of the fit)"),
-    **{name: INTENSITY[name] for name in ("pga", "sa", "rms_acceleration", "arias_intensity", "fit_flag")},
+    **{name: INTENSITY[name] for name in ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa",
+                                          "fit_flag")},
     "record": _v("1", "record index"),
     "record_name": {"long_name": "record name"},
     "exceed": _v("1", "peak |theta| above the threshold, or overturned"),

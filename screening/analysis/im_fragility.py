@@ -4,7 +4,8 @@
 (:func:`screening.analysis.fragility.exceedance_probability`) along a swept dimension of the
 excitation (usually ``S0``) and fits the lognormal curve ``P = Phi(ln(IM / median) / beta)``
 over the intensity measure of each point (:mod:`screening.analysis.intensity`): ``pga``
-(median PGA), ``sa`` (median Sa(T, 5 %), needs a period), ``rms``, ``arias`` or ``s0``.
+(median PGA), ``sa`` (median Sa(T, 5 %), needs a period), ``pgv`` (median PGV, high-passed at
+0.1 Hz), ``avgsa`` (median AvgSA over 0.2-1.5 T, needs a period), ``rms``, ``arias`` or ``s0``.
 
 Refusals and flags (a fit others will load must mean what it says):
 
@@ -20,7 +21,8 @@ Exports: :func:`write_csv` (one row per fitted curve: the other dimensions' valu
 name and units, median, beta) and :func:`write_nrml` (OpenQuake NRML 0.5 ``fragilityModel``
 with continuous ``logncdf`` functions; OpenQuake parametrises them by the *mean* and *standard
 deviation* of the lognormal capacity, ``mean = median exp(beta^2/2)``,
-``stddev = mean sqrt(exp(beta^2) - 1)``, and reads PGA and SA in g, Arias intensity ``IA`` in m/s).
+``stddev = mean sqrt(exp(beta^2) - 1)``, and reads PGA, SA and AvgSA in g, PGV in cm/s, Arias
+intensity ``IA`` in m/s).
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ from screening.status import FitFlag
 IMS = {
     "pga": ("pga_median", "m s-2", "PGA", 1.0 / 9.80665),
     "sa": ("sa_median", "m s-2", "SA", 1.0 / 9.80665),
+    "pgv": ("pgv_median", "m s-1", "PGV", 100.0),
+    "avgsa": ("avgsa_median", "m s-2", "AvgSA", 1.0 / 9.80665),
     "rms": ("rms_acceleration", "m s-2", None, None),
     "arias": ("arias_intensity", "m s-1", "IA", 1.0),
     "s0": ("S0", "m2 s-3", None, None),
@@ -50,9 +54,9 @@ def _im_values(ds, im, period, cutoff):
     from screening.analysis.intensity import intensity_measures
     if im == "s0":
         return parameter(ds, "S0"), None
-    if im == "sa" and period is None:
-        raise ValueError("--im sa needs the oscillator period (--period SECONDS)")
-    measures = intensity_measures(ds, period=period if im == "sa" else None, cutoff=cutoff)
+    if im in ("sa", "avgsa") and period is None:
+        raise ValueError(f"--im {im} needs the oscillator period (--period SECONDS)")
+    measures = intensity_measures(ds, period=period if im in ("sa", "avgsa") else None, cutoff=cutoff)
     return measures[IMS[im][0]], measures
 
 
@@ -99,7 +103,7 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
     out = add_fit(frag.assign({name: values}), ds, values, dim)
     out["fit_median"].attrs.update(units=units, intensity=name)
-    if period is not None and im == "sa":
+    if period is not None and im in ("sa", "avgsa"):
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
     out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim,
                      title="Probability that |theta| exceeds a rotation, fitted over an intensity measure")
@@ -300,8 +304,8 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     if key is None or IMS[key][2] is None:
         raise NoExport(f"OpenQuake has no intensity measure type for {name!r}; export CSV instead")
     imt = IMS[key][2]
-    if imt == "SA":
-        imt = f"SA({float(period):g})"
+    if imt in ("SA", "AvgSA"):
+        imt = f"{imt}({float(period):g})"
     factor = IMS[key][3]
     values = frag[name].values[np.isfinite(frag[name].values)] * factor
     lo, hi = float(values.min()), float(values.max())

@@ -156,8 +156,8 @@ def bed_lines(ds, max_points=400):
 
 
 def intensity_lines(ds):
-    """``input intensity`` lines: ranges of the RVT median PGA, RMS acceleration and Arias intensity of the
-    inputs (:func:`screening.analysis.intensity.intensity_measures`); nothing if they cannot be computed."""
+    """``input intensity`` lines: ranges of the RVT median PGA, RMS acceleration, Arias intensity and median
+    PGV (0.1 Hz high-pass) of the inputs (:func:`screening.analysis.intensity.intensity_measures`); nothing if they cannot be computed."""
     from screening.analysis.intensity import intensity_measures
 
     try:
@@ -165,7 +165,7 @@ def intensity_lines(ds):
     except (KeyError, ValueError):
         return []
     out = [f"input intensity (random-vibration theory, band limit: {im.attrs['cutoff_rad_s_source']}):"]
-    for name in ("pga_median", "rms_acceleration", "arias_intensity"):
+    for name in ("pga_median", "rms_acceleration", "arias_intensity", "pgv_median"):
         v = np.asarray(im[name].values, dtype=float)
         unit = im[name].attrs.get("units", "")
         extra = f" ({_fmt(float(np.nanmin(v)) / 9.80665)} .. {_fmt(float(np.nanmax(v)) / 9.80665)} g)" \

@@ -13,7 +13,7 @@ unused) with a ``[records]`` table::
     period = 0.5                 # s, period of Sa(T, 5 %) (optional)
     threshold = 0.2              # rotation threshold of the fragility ...
     relative_to = "slenderness"  # ... as a fraction of atan(b/h) or "theta_ul", or "rad"
-    im = "pga"                   # intensity measure of the fragility: pga, sa, rms, arias
+    im = "pga"                   # intensity measure of the fragility: pga, sa, rms, arias, pgv, avgsa
 
 Each record is integrated by :func:`screening.simulate` (the coupled model by default) and the
 result holds, on a ``record`` dimension, the peak ``|theta|``, the overturned flag, the
@@ -47,7 +47,8 @@ from screening.workflow.config import StudyError, check_choice, check_keys, chec
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels")
 #: Most IM levels of a multiple-stripe analysis.
 MAX_LEVELS = 100
-IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity"}
+IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity", "pgv": "pgv",
+       "avgsa": "avgsa"}
 
 
 @dataclass(frozen=True)
@@ -98,8 +99,8 @@ def load_cloud_study(path, units=None):
         if im not in IMS:
             raise StudyError(f"records.im: must be one of {', '.join(IMS)} (got {im!r})")
         period = rec.get("period")
-        if im == "sa" and period is None:
-            raise StudyError("records.period: required with im = 'sa'")
+        if im in ("sa", "avgsa") and period is None:
+            raise StudyError(f"records.period: required with im = {im!r}")
         relative_to = rec.get("relative_to", "slenderness")
         if relative_to not in ("slenderness", "theta_ul", "rad"):
             raise StudyError(f"records.relative_to: must be 'slenderness', 'theta_ul' or 'rad' (got {relative_to!r})")
@@ -171,10 +172,10 @@ def read_cloud_records(cloud):
 
 def failed_record(period=None):
     """The row of a record whose task failed: NaN values, ``diverged`` (left out of the fit)."""
-    from screening.analysis.intensity import RECORD_MEASURES
+    from screening.analysis.intensity import PERIOD_MEASURES, RECORD_MEASURES
 
     row = {"peak_abs_theta": math.nan, "overturned": False, "diverged": True, "overturning_time": math.nan}
-    row.update({name: math.nan for name in RECORD_MEASURES if name != "sa" or period is not None})
+    row.update({name: math.nan for name in RECORD_MEASURES if name not in PERIOD_MEASURES or period is not None})
     return row
 
 
@@ -406,8 +407,9 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     ds["fit_flag"] = ((), np.int8(flag))
     ds = schema.apply_schema(ds, schema.CLOUD)
     ds["fit_median"].attrs.update(units=ds[name].attrs["units"], intensity=name)
-    if "sa" in ds:
-        ds["sa"].attrs.update(period=cloud.period, damping_ratio=0.05)
+    for name_with_period in ("sa", "avgsa"):
+        if name_with_period in ds:
+            ds[name_with_period].attrs.update(period=cloud.period, damping_ratio=0.05)
     ds.attrs.update(title=f"Cloud analysis: {cloud.study.title}", model=cloud.model, study=cloud.study.source,
                     intensity_measure=cloud.im, intensity_variable=name, intensity_dim="record",
                     threshold=cloud.threshold, relative_to=cloud.relative_to,

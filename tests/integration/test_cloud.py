@@ -39,9 +39,11 @@ def test_cloud_dataset_and_fit(folder):
     (folder / "s.toml").write_text(STUDY.format(im="sa"))
     ds, warnings = run_cloud(load_cloud_study(folder / "s.toml"))
     assert ds.sizes["record"] == 8
-    for name in ("peak_abs_theta", "overturned", "exceed", "pga", "sa", "arias_intensity", "fit_median", "beta"):
+    for name in ("peak_abs_theta", "overturned", "exceed", "pga", "sa", "arias_intensity", "pgv", "avgsa",
+                 "fit_median", "beta"):
         assert name in ds
-    assert ds["sa"].attrs["period"] == 0.5
+    assert ds["sa"].attrs["period"] == 0.5 and ds["avgsa"].attrs["period"] == 0.5
+    assert ds["pgv"].attrs["units"] == "m s-1" and ds["avgsa"].attrs["units"] == "m s-2"
     exceed = ds["exceed"].values
     if 0 < exceed.sum() < exceed.size:
         assert np.isfinite(float(ds["fit_median"])) or ds["fit_flag"] != 0
@@ -51,22 +53,25 @@ def test_cloud_dataset_and_fit(folder):
 
 
 def test_cloud_study_errors(folder):
-    (folder / "bad.toml").write_text(STUDY.format(im="pgv"))
+    (folder / "bad.toml").write_text(STUDY.format(im="pgd"))
     with pytest.raises(StudyError, match="records.im"):
         load_cloud_study(folder / "bad.toml")
+    (folder / "bad3.toml").write_text(STUDY.format(im="avgsa").replace("period = 0.5\n", ""))
+    with pytest.raises(StudyError, match="records.period: required with im = 'avgsa'"):
+        load_cloud_study(folder / "bad3.toml")
     (folder / "bad2.toml").write_text(STUDY.format(im="pga").replace('files = "rec"', 'files = "nothing/*.at2"'))
     with pytest.raises(StudyError, match="records.files"):
         load_cloud_study(folder / "bad2.toml")
 
 
 def test_cloud_cli_writes_all_files(folder, capsys):
-    (folder / "p.toml").write_text(STUDY.format(im="pga"))
+    (folder / "p.toml").write_text(STUDY.format(im="pgv"))
     out = folder / "cloud.nc"
     assert main(["cloud", str(folder / "p.toml"), "--out", str(out), "--quiet"]) == 0
     for suffix in (".nc", ".png", ".csv"):
         assert out.with_suffix(suffix).exists()
     with xr.open_dataset(out) as ds:
-        assert ds.attrs["intensity_variable"] == "pga"
+        assert ds.attrs["intensity_variable"] == "pgv"
         peaks, pga, names = ds["peak_abs_theta"].values, ds["pga"].values, ds["record_name"].values
     assert "records:" in capsys.readouterr().err
     # the per-record demands, one row per record, as stored

@@ -30,3 +30,36 @@ def sample_measures(excitation, t_end, cutoff, n_samples, period, seed=0):
         pga.append(hermite_peaks(acc, rate, plan.dt))
         sa.append((2 * math.pi / period) ** 2 * oscillator_peaks(acc, plan.dt, period))
     return np.concatenate(pga), np.concatenate(sa)
+
+
+def sample_all_measures(excitation, t_end, cutoff, n_samples, period, seed=0, chunk=100):
+    """Every intensity measure of ``n_samples`` synthesised records, as a dict of arrays: ``pga``
+    (continuous peak), ``pgv`` (:func:`~screening.analysis.intensity.record_velocity`), ``sa`` and
+    ``avgsa`` at ``period``, ``rms_acceleration`` and ``arias_intensity`` (record by record)."""
+    from screening.analysis.intensity import G, record_avgsa, record_velocity
+
+    plan = spectral_plan(excitation, t_end, cutoff)
+    n = int(round(t_end / plan.dt)) + 1
+    out = {k: [] for k in ("pga", "pgv", "sa", "avgsa", "rms_acceleration", "arias_intensity")}
+    for lo in range(0, n_samples, chunk):
+        acc, rate = ground_acceleration_samples(excitation, plan, seed, np.arange(lo, min(lo + chunk, n_samples)))
+        acc, rate = acc[:, :n], rate[:, :n]
+        energy = np.trapezoid(acc * acc, dx=plan.dt, axis=1)
+        out["pga"].append(hermite_peaks(acc, rate, plan.dt))
+        out["pgv"].append(np.max(np.abs(record_velocity(acc, plan.dt)), axis=1))
+        out["sa"].append((2 * math.pi / period) ** 2 * oscillator_peaks(acc, plan.dt, period))
+        out["avgsa"].append(record_avgsa(acc, plan.dt, period))
+        out["rms_acceleration"].append(np.sqrt(energy / t_end))
+        out["arias_intensity"].append(math.pi / (2 * G) * energy)
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def median_standard_error(x):
+    """Distribution-free standard error of the sample median of ``x``: half the width of the
+    95 % order-statistic interval ``x_(n/2 -+ 1.96 sqrt(n)/2)`` over 1.96 (binomial count below the
+    median; ~ 1.2533 sigma / sqrt(n) for normal data)."""
+    x = np.sort(np.asarray(x, dtype=float))
+    n = x.size
+    half = 1.96 * math.sqrt(n) / 2.0
+    lo, hi = int(math.floor(n / 2 - half)), int(math.ceil(n / 2 + half))
+    return (x[min(hi, n - 1)] - x[max(lo, 0)]) / (2.0 * 1.96)

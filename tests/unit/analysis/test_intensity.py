@@ -123,7 +123,8 @@ def test_intensity_measures_per_case_excitation():
     assert float(im.pga_median.sel(case=0)) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 2.0, CUTOFF), rel=1e-9)
     assert float(im.pga_median.sel(case=1)) == pytest.approx(
         I.pga_median(KanaiTajimi(1e-4, 15.0, 0.6), 2.0, CUTOFF), rel=1e-9)
-    assert "pga_median" in "\n".join(intensity_lines(white))
+    lines = "\n".join(intensity_lines(white))
+    assert "pga_median" in lines and "pgv_median" in lines and "m s-1" in lines
 
 
 def test_input_measures_evaluate_once_per_distinct_filter_and_band_limit():
