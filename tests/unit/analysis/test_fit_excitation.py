@@ -84,8 +84,10 @@ def test_records_that_cannot_be_fitted_are_refused_in_one_line(make, needle):
 
 def test_time_step_and_cutoff_are_checked():
     a = np.random.default_rng(0).normal(size=3000)
+    with pytest.raises(ValueError, match="'dt' must be a number of seconds"):
+        fit_excitation(Record(a, 1e300))               # refused by the record itself
     with pytest.raises(ValueError, match="dt must be in 1e-05..1 s"):
-        fit_excitation(Record(a, 1e300))
+        fit_excitation(Record(a, 5e-6))                # a valid record, too finely sampled to fit
     for bad in (0.0, -5.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="cutoff"):
             fit_excitation(Record(a, 0.01), kind="white", cutoff=bad)
