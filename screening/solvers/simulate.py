@@ -38,7 +38,7 @@ from scipy import optimize
 
 from screening import condensation as condensations, schema
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
-                                       REGIME_UPLIFT_POSITIVE, contact_regime, contact_resultants,
+                                       REGIME_UPLIFT_POSITIVE, contact_regime, law_constants, law_resultants,
                                        rest_indentation)
 from screening.records import Record
 from screening.solvers import mcs_kernels as kern
@@ -70,8 +70,7 @@ def quasi_static_indentation(block, foundation, theta0):
     weight = float(block.m * block.g)
 
     def excess(z):
-        force, _ = contact_resultants(theta0, 0.0, z, 0.0, b, float(foundation.k), float(foundation.eps),
-                                      float(foundation.damping), foundation.winkler)
+        force, _ = law_resultants(theta0, 0.0, z, 0.0, b, *law_constants(foundation))
         return float(force) - weight
 
     lo = -b * abs(math.sin(theta0))          # flight boundary: no force
@@ -225,7 +224,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     for name in ("m", "b", "h", "I_cm", "g"):
         coords[name] = ((), float(getattr(block, name)))
     coords["k"] = ((), float(foundation.k))
-    coords["lam" if foundation.law == "hunt_crossley" else "c"] = ((), float(foundation.damping))
+    coords[foundation.contact_law.parameter] = ((), float(foundation.damping))
     coords["eps"] = ((), float(foundation.eps))
     data = {
         "theta": ("t", theta), "theta_dot": ("t", theta_dot), "z_cb": ("t", z_cb), "z_cb_dot": ("t", z_cb_dot),

@@ -24,7 +24,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from screening import condensation as condensations
+from screening import condensation as condensations, laws
 from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation
 from screening.model.block import LENGTH_RANGE
@@ -35,7 +35,6 @@ from screening.workflow import limits
 #: Parameters that may be swept (given as a list or a range).
 SWEEPABLE = ("eps", "S0", "pga", "k", "lam", "c", "omega_g", "zeta_g")
 
-CONTACTS = ("hunt_crossley", "winkler")
 EXCITATIONS = ("white", "kanai_tajimi")
 ENVELOPES = ("exponential", "constant")
 
@@ -280,7 +279,7 @@ class Case:
 
 def applicable(contact, excitation, envelope):
     names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga"}
-    names.add("lam" if contact == "hunt_crossley" else "c")
+    names.add(laws.get(contact).parameter)
     if excitation == "kanai_tajimi":
         names |= {"omega_g", "zeta_g"}
     if envelope == "exponential":
@@ -382,7 +381,7 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     excitation / envelope.
     """
     block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
-    contact = choice(foundation, "contact", CONTACTS, f"{where}foundation.", DEFAULTS["contact"])
+    contact = choice(foundation, "contact", laws.names(), f"{where}foundation.", DEFAULTS["contact"])
     kind = choice(excitation, "kind", EXCITATIONS, f"{where}excitation.")
     envelope = choice(excitation, "envelope", ENVELOPES, f"{where}excitation.", DEFAULTS["envelope"])
     condensation = choice(foundation, "condensation", condensation_names(), f"{where}foundation.",
@@ -394,7 +393,7 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
         params.update(numeric_table(tbl, tname, None, where))
     structure = {"contact": f"contact = {contact!r}", "kind": f"kind = {kind!r}",
                  "envelope": f"envelope = {envelope!r}"}
-    reason = {"lam": structure["contact"], "c": structure["contact"], "omega_g": structure["kind"],
+    reason = {**dict.fromkeys(laws.DAMPING_FIELDS, structure["contact"]), "omega_g": structure["kind"],
               "zeta_g": structure["kind"], "T1": structure["envelope"], "T2": structure["envelope"]}
     for key in list(params) + list(sweeps):
         if key not in names:
@@ -490,9 +489,8 @@ def _block(p):
 
 
 def _foundation(case, p):
-    if case.contact == "hunt_crossley":
-        return Foundation(k=p["k"], lam=p["lam"], eps=p["eps"])
-    return Foundation(k=p["k"], c=p["c"], eps=p["eps"])
+    damping = laws.get(case.contact).parameter
+    return Foundation(k=p["k"], eps=p["eps"], law=case.contact, **{damping: p[damping]})
 
 
 def build_models(case, values, t_end=None):
