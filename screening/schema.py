@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening import laws
+from screening import excitations, laws
 from screening.status import (BestMethod, ContactRegime, EscalationModel, PointStatus, SampleState, SpotStatus,
                               TargetMet, Trust, flag_attributes)
 
@@ -52,8 +52,7 @@ PARAMETERS = {
     "S0": _v("m2 s-3", "two-sided PSD level of the driving white noise, E[xi xi] = 2 pi S0 delta"),
     "pga": _v("m s-2", "target median peak ground acceleration of the input (S0 follows from it, band-limited "
                        "as the Monte Carlo synthesis)"),
-    "omega_g": _v("rad s-1", "Kanai-Tajimi filter frequency"),
-    "zeta_g": _v("1", "Kanai-Tajimi filter damping ratio"),
+    **{name: _v(p.units, p.long_name) for name, p in excitations.parameters().items()},   # the excitations'
     "T1": _v("s", "envelope decay time T1"),
     "T2": _v("s", "envelope rise time T2"),
 }

@@ -43,6 +43,7 @@ import numpy as np
 from screening.solvers import mcs_kernels as kern
 from screening.condensation import get as get_condensation
 from screening.condensation.paper import uplift_threshold
+from screening.excitations import Excitation, names as excitation_names
 from screening.physics.contact import rest_indentation
 from screening.workflow.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, rocking_frequency,
@@ -86,8 +87,13 @@ def _check_scalar_models(block, foundation, excitation):
         if np.ndim(value) != 0:
             raise ValueError(f"parameter '{name}' must be a scalar for monte_carlo (got an array of shape "
                              f"{np.shape(value)}); loop over parameter points instead")
-    if excitation.kind not in ("white", "kanai_tajimi"):
-        raise ValueError(f"parameter 'excitation' must be a WhiteNoise or KanaiTajimi (got kind {excitation.kind!r})")
+    if not isinstance(excitation, Excitation):
+        raise ValueError(f"parameter 'excitation' must be an excitation of screening.excitations "
+                         f"(one of {excitation_names()}; got {type(excitation).__name__})")
+    for name in excitation.parameters:
+        if np.ndim(getattr(excitation, name)) != 0:
+            raise ValueError(f"parameter 'excitation.{name}' must be a scalar for monte_carlo (got an array of "
+                             f"shape {np.shape(getattr(excitation, name))}); loop over parameter points instead")
 
 
 def _check_numerics(numerics):
