@@ -22,6 +22,8 @@ from typing import NamedTuple
 import numpy as np
 from scipy import integrate
 
+from screening.validation import checked
+
 
 class Parameter(NamedTuple):
     """A numeric parameter of an excitation (besides ``S0``): its CF attributes and allowed range
@@ -94,6 +96,15 @@ class Excitation:
     description = ""
     #: ``{name: Parameter}`` of the numeric parameters besides ``S0`` (study keys, sweepable)
     parameters = {}
+
+    def __post_init__(self):
+        """Validate ``S0`` (> 0) and the :attr:`parameters` (their declared ranges); one line naming the
+        parameter and its range otherwise."""
+        object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
+        for name, p in self.parameters.items():
+            object.__setattr__(self, name, checked(name, getattr(self, name), lower=p.lower,
+                                                   lower_inclusive=p.lower_inclusive, upper=p.upper,
+                                                   upper_inclusive=True))
 
     def filter(self):
         """:class:`Filter` of this excitation (array fields: one set per element, leading axes)."""

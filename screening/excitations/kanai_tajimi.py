@@ -12,7 +12,6 @@ import numpy as np
 from screening.excitations.base import Excitation, Filter, Parameter
 from screening.excitations.registry import register
 from screening.model.excitation import ConstantEnvelope, Envelope
-from screening.validation import checked
 
 
 def kanai_tajimi_filter(omega_g, zeta_g):
@@ -63,10 +62,6 @@ class KanaiTajimi(Excitation):
     parameters = {"omega_g": Parameter("rad s-1", "Kanai-Tajimi filter frequency"),
                   "zeta_g": Parameter("1", "Kanai-Tajimi filter damping ratio")}
 
-    def __post_init__(self):
-        object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
-        object.__setattr__(self, "omega_g", checked("omega_g", self.omega_g, lower=0.0))
-        object.__setattr__(self, "zeta_g", checked("zeta_g", self.zeta_g, lower=0.0))
 
     def filter(self):
         return kanai_tajimi_filter(self.omega_g, self.zeta_g)

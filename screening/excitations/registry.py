@@ -4,33 +4,24 @@ readers); the solvers use the excitation object's filter and PSD, never its kind
 from __future__ import annotations
 
 from screening.excitations.base import Excitation
+from screening.registry import Registry
 
-_REGISTRY: dict[str, type] = {}
+_REGISTRY = Registry("kind")
 
 
 def register(cls):
     """Add an :class:`Excitation` subclass under its ``kind`` (usable as a class decorator)."""
     if not (isinstance(cls, type) and issubclass(cls, Excitation)) or not cls.kind:
         raise TypeError(f"register() takes an Excitation subclass with a kind (got {cls!r})")
-    _REGISTRY[cls.kind] = cls
-    return cls
+    return _REGISTRY.add(cls.kind, cls)
 
 
-def unregister(kind):
-    """Remove a registered excitation (tests that register their own)."""
-    _REGISTRY.pop(kind, None)
-
-
-def names():
-    """Registered kinds, in registration order."""
-    return tuple(_REGISTRY)
-
-
-def get(kind):
-    """The excitation class of a registered ``kind``; ``ValueError`` naming the registered kinds otherwise."""
-    if isinstance(kind, str) and kind in _REGISTRY:
-        return _REGISTRY[kind]
-    raise ValueError(f"parameter 'kind' must be one of {names()} (got {kind!r})")
+#: Remove a registered excitation (tests that register their own).
+unregister = _REGISTRY.remove
+#: Registered kinds, in registration order.
+names = _REGISTRY.names
+#: The excitation class of a registered ``kind``; ``ValueError`` naming the registered kinds otherwise.
+get = _REGISTRY.get
 
 
 def parameters():

@@ -9,7 +9,6 @@ import numpy as np
 from screening.excitations.base import Excitation, Filter
 from screening.excitations.registry import register
 from screening.model.excitation import ConstantEnvelope, Envelope
-from screening.validation import checked
 
 
 @register
@@ -27,8 +26,6 @@ class WhiteNoise(Excitation):
     description = "modulated white noise (eq. 39)"
     parameters = {}
 
-    def __post_init__(self):
-        object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
 
     def filter(self):
         """No state: ``A``, ``B``, ``C`` empty, ``D = 1``."""

@@ -40,10 +40,13 @@ class ContactLaw(abc.ABC):
     #: CF attributes of the damping coefficient
     attributes: dict = {}
 
-    @abc.abstractmethod
+    #: the law's numpy function ``(z [m], z_dot [m/s], coefficient) -> F_d [N/m]`` (a staticmethod)
+    pressure = None
+
     def damping_pressure(self, z, z_dot, coefficient):
         """Damping part of the contact pressure ``F_d`` [N/m] at indentation ``z`` [m] (> 0) and rate
-        ``z_dot`` [m/s], for the damping ``coefficient`` in :attr:`attributes` ``units``."""
+        ``z_dot`` [m/s], for the damping ``coefficient`` in :attr:`attributes` ``units`` (:attr:`pressure`)."""
+        return type(self).pressure(z, z_dot, coefficient)
 
     @abc.abstractmethod
     def damping_weights(self, coefficient):

@@ -30,8 +30,7 @@ class HuntCrossley(ContactLaw):
     parameter = "lam"
     attributes = {"units": "N s m-4", "long_name": "Hunt-Crossley distributed damping"}
 
-    def damping_pressure(self, z, z_dot, coefficient):
-        return hunt_crossley_damping(z, z_dot, coefficient)
+    pressure = staticmethod(hunt_crossley_damping)
 
     def damping_weights(self, coefficient):
         return 0.0 * coefficient, coefficient

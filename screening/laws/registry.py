@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from screening.laws.base import DAMPING_FIELDS, ContactLaw
+from screening.registry import Registry
 
-_REGISTRY: dict[str, ContactLaw] = {}
+_REGISTRY = Registry("law", lambda item: isinstance(item, ContactLaw))
 
 
 def _check_weights(law):
@@ -36,30 +37,16 @@ def register(law):
         raise ValueError(f"contact law {law.name!r}: parameter must be one of {DAMPING_FIELDS} "
                          f"(got {law.parameter!r})")
     _check_weights(law)
-    _REGISTRY[law.name] = law
-    return law
+    return _REGISTRY.add(law.name, law)
 
 
-def unregister(name):
-    """Remove a registered law (tests that register their own)."""
-    _REGISTRY.pop(name, None)
-
-
-def names():
-    """Registered names, in registration order."""
-    return tuple(_REGISTRY)
-
-
-def get(law):
-    """The :class:`ContactLaw` for a registered name (an instance is returned as it is).
-
-    Raises ``ValueError`` naming the parameter and the registered names otherwise.
-    """
-    if isinstance(law, ContactLaw):
-        return law
-    if isinstance(law, str) and law in _REGISTRY:
-        return _REGISTRY[law]
-    raise ValueError(f"parameter 'law' must be one of {names()} (got {law!r})")
+#: Remove a registered law (tests that register their own).
+unregister = _REGISTRY.remove
+#: Registered names, in registration order.
+names = _REGISTRY.names
+#: The :class:`ContactLaw` for a registered name (an instance is returned as it is); ``ValueError`` naming
+#: the parameter and the registered names otherwise.
+get = _REGISTRY.get
 
 
 def parameters():

@@ -30,8 +30,7 @@ class Winkler(ContactLaw):
     parameter = "c"
     attributes = {"units": "N s m-2", "long_name": "Winkler distributed viscous damping"}
 
-    def damping_pressure(self, z, z_dot, coefficient):
-        return winkler_damping(z, z_dot, coefficient)
+    pressure = staticmethod(winkler_damping)
 
     def damping_weights(self, coefficient):
         return coefficient, 0.0 * coefficient
