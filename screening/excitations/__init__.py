@@ -5,6 +5,7 @@ from screening.excitations.base import Excitation, Filter, Parameter, stationary
 from screening.excitations.registry import build, get, names, parameters, register, unregister
 from screening.excitations.white import WhiteNoise
 from screening.excitations.kanai_tajimi import KanaiTajimi
+from screening.excitations.clough_penzien import CloughPenzien
 
 __all__ = ["Excitation", "Filter", "Parameter", "stationary_covariance", "transfer_psd", "build", "get", "names",
-           "parameters", "register", "unregister", "WhiteNoise", "KanaiTajimi"]
+           "parameters", "register", "unregister", "WhiteNoise", "KanaiTajimi", "CloughPenzien"]

@@ -4,10 +4,10 @@ the Lyapunov right-hand side ``A P + P A^T + 2 pi S0 b b^T`` of the augmented sy
 import numpy as np
 import pytest
 
-from screening.excitations import KanaiTajimi, WhiteNoise
+from screening.excitations import CloughPenzien, KanaiTajimi, WhiteNoise
 from screening.solvers.moment_kernels import augmented_rhs, augmented_system, lyapunov_rhs, packed_size
 
-EXCITATIONS = [WhiteNoise(2e-4), KanaiTajimi(2e-4, 15.0, 0.6)]
+EXCITATIONS = [WhiteNoise(2e-4), KanaiTajimi(2e-4, 15.0, 0.6), CloughPenzien(2e-4, 15.0, 0.6, 1.5, 0.8)]
 
 
 @pytest.mark.parametrize("exc", EXCITATIONS, ids=lambda e: e.kind)
