@@ -7,6 +7,24 @@ registered ones (``parameter '<axis>' must be one of (...) (got ...)``).
 from __future__ import annotations
 
 
+class NamedModel:
+    """Mixin of the registered model objects (condensations, contact laws): equal when of the same class
+    with the same state (a copy sent to a worker equals the original), hashed by class and ``name``,
+    shown as ``<{axis} {name!r}>`` with the class attribute ``axis``."""
+
+    axis = "model"
+    name = ""
+
+    def __eq__(self, other):
+        return type(other) is type(self) and other.__dict__ == self.__dict__
+
+    def __hash__(self):
+        return hash((type(self), self.name))
+
+    def __repr__(self):
+        return f"<{self.axis} {self.name!r}>"
+
+
 class Registry:
     """Registered models of one axis, in registration order.
 

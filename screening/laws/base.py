@@ -19,11 +19,13 @@ import abc
 
 import numpy as np
 
+from screening.registry import NamedModel
+
 #: Damping fields of :class:`screening.model.Foundation` a law may take its coefficient from.
 DAMPING_FIELDS = ("lam", "c")
 
 
-class ContactLaw(abc.ABC):
+class ContactLaw(NamedModel, abc.ABC):
     """A contact law: its damping pressure, its weights on the basis pressures, its parameter.
 
     Subclasses set :attr:`name`, :attr:`parameter` (the :class:`~screening.model.Foundation` field
@@ -31,6 +33,7 @@ class ContactLaw(abc.ABC):
     (the CF attributes of that coefficient: ``units``, ``long_name``).
     """
 
+    axis = "contact law"
     #: registry name (``Foundation(law=...)``, ``contact = ...`` in studies)
     name: str = ""
     #: one line for attributes and reports
@@ -57,12 +60,3 @@ class ContactLaw(abc.ABC):
         w_rate, w_ind = self.damping_weights(np.asarray(getattr(foundation, self.parameter), dtype=float))
         w_rate, w_ind = np.broadcast_arrays(np.asarray(w_rate, dtype=float), np.asarray(w_ind, dtype=float))
         return w_rate[()], w_ind[()]
-
-    def __eq__(self, other):
-        return type(other) is type(self) and other.__dict__ == self.__dict__
-
-    def __hash__(self):
-        return hash((type(self), self.name))
-
-    def __repr__(self):
-        return f"<contact law {self.name!r}>"

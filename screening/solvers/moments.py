@@ -30,6 +30,8 @@ Method and how it is checked: ``docs/method.md#moment-equations``.
 from __future__ import annotations
 
 
+import dataclasses
+
 import numba
 import numpy as np
 from numba import types
@@ -107,17 +109,24 @@ class FilterArrays:
         self.states = nf
         if nf == 0:
             self.scale = np.zeros((n, 0))
+            self.unit_variances = np.ones((n, 0))
             return
         with np.errstate(all="ignore"):
             w = np.sqrt(np.abs(osc["k_rest"]) / osc["m_sdof"])
             psd = np.asarray(excitation.psd(np.where(w > 0.0, w, 1.0)), dtype=float)
-            cov = np.broadcast_to(excitation.stationary_covariance(), (n, nf, nf))
+            # stationary covariance of the filter states per unit S0: finite and positive unless a filter
+            # frequency is beyond float64 (an intensity beyond it is the solver's to flag)
+            unit = np.broadcast_to(dataclasses.replace(excitation, S0=np.ones(n)).stationary_covariance(),
+                                   (n, nf, nf))
+            self.unit_variances = np.diagonal(unit, axis1=-2, axis2=-1)
+            cov = unit * osc["S0"][:, None, None]
             self.scale = np.array(filtered_scales(osc, cov, np.broadcast_to(psd, (n,))), dtype=float, order="C")
 
     def select(self, part):
         out = object.__new__(FilterArrays)
         out.A, out.B, out.C, out.D, out.scale = (a[part] for a in (self.A, self.B, self.C, self.D, self.scale))
         out.states = self.states
+        out.unit_variances = self.unit_variances[part]
         return out
 
 
@@ -136,9 +145,9 @@ def in_float_range(osc, filters):
                            np.abs(osc["k_rest"]) / osc["m_sdof"], np.abs(osc["c_rest"]) / osc["m_sdof"]])
         ok = np.all(np.isfinite(fields), axis=0) & np.all(np.isfinite(scales), axis=0)
         ok &= (scales[0] >= tiny) & (scales[1] >= tiny)
-        for a in (filters.A, filters.B, filters.C, filters.scale):
+        for a in (filters.A, filters.B, filters.C, filters.unit_variances):
             ok &= np.all(np.isfinite(a.reshape(a.shape[0], -1)), axis=1)
-        ok &= np.all(filters.scale > np.finfo(float).tiny, axis=1) if filters.states else True
+        ok &= np.all(filters.unit_variances >= tiny, axis=1)
     return ok
 
 

@@ -42,3 +42,24 @@ def test_filter_block_of_the_reference_vanishes_at_the_stationary_covariance(exc
     P[2:, 2:] = exc.stationary_covariance()
     rhs = lyapunov_rhs(P, A, b, exc.S0)
     np.testing.assert_allclose(rhs[2:, 2:], 0.0, atol=1e-12 * np.abs(P[2:, 2:]).max() * np.abs(filt.A).max())
+
+
+def test_white_noise_fast_path_is_the_reference_without_filter_states():
+    """The 3-moment loop's right-hand side (eq. 45) is the reference with ``n_f = 0``, ``D = 1``."""
+    from screening import condensation
+    from screening.condensation.uplift_integrals import coefficient_table
+    from screening.model import Block, Foundation
+    from screening.model.points import flatten
+    from screening.solvers.moment_kernels import _white_rhs
+
+    exc = WhiteNoise(3e-4)
+    (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
+    kernel = condensation.get("paper").moment_kernel(block, bed)
+    table = coefficient_table()
+    m_sdof, alpha = float(block.m_sdof[0]), 2.3
+    y = (2e-5, 1e-4, 0.3)                                     # var_theta, cov, var_theta_dot
+    *dy, c_eq, k_eq = _white_rhs(kernel.coefficients, kernel.records[0], table, 1.0 / m_sdof, exc.S0, alpha, *y)
+    assert (c_eq, k_eq) == kernel.coefficients(kernel.records[0], table, y[0], y[1])
+    A, b = augmented_system(k_eq, c_eq, m_sdof, alpha, exc.filter())
+    expected = lyapunov_rhs(np.array([[y[0], y[1]], [y[1], y[2]]]), A, b, exc.S0)
+    np.testing.assert_allclose(dy, expected[np.triu_indices(2)], rtol=1e-12)
