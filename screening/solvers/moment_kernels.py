@@ -399,11 +399,51 @@ def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
 
 
 @numba.njit(cache=True, inline="always")
-def _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, alpha, y, dy, P, M):
-    """:func:`augmented_rhs` at the coefficients of the moments ``y``; returns ``(c_eq, k_eq)``."""
+def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
+    """:func:`augmented_rhs` written out for a filter of two states (Kanai–Tajimi): the 10 packed
+    entries ``(00 01 02 03 11 12 13 22 23 33)`` of ``(theta, theta', x0, x1)``, no work arrays."""
+    c00, c01, c02, c03, c11, c12, c13, c22, c23, c33 = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9]
+    g0 = alpha * fc[0]
+    g1 = alpha * fc[1]
+    f00, f01, f10, f11 = fa[0, 0], fa[0, 1], fa[1, 0], fa[1, 1]
+    # rows 1, 2, 3 of A P (row 0 is row 1 of P)
+    a10 = -kap * c00 - gam * c01 + g0 * c02 + g1 * c03
+    a11 = -kap * c01 - gam * c11 + g0 * c12 + g1 * c13
+    a12 = -kap * c02 - gam * c12 + g0 * c22 + g1 * c23
+    a13 = -kap * c03 - gam * c13 + g0 * c23 + g1 * c33
+    a20 = f00 * c02 + f01 * c03
+    a21 = f00 * c12 + f01 * c13
+    a22 = f00 * c22 + f01 * c23
+    a23 = f00 * c23 + f01 * c33
+    a30 = f10 * c02 + f11 * c03
+    a31 = f10 * c12 + f11 * c13
+    a32 = f10 * c22 + f11 * c23
+    a33 = f10 * c23 + f11 * c33
+    b1 = alpha * fd
+    b2 = fb[0]
+    b3 = fb[1]
+    dy[0] = 2.0 * c01
+    dy[1] = c11 + a10
+    dy[2] = c12 + a20
+    dy[3] = c13 + a30
+    dy[4] = 2.0 * a11 + q * b1 * b1
+    dy[5] = a12 + a21 + q * b1 * b2
+    dy[6] = a13 + a31 + q * b1 * b3
+    dy[7] = 2.0 * a22 + q * b2 * b2
+    dy[8] = a23 + a32 + q * b2 * b3
+    dy[9] = 2.0 * a33 + q * b3 * b3
+
+
+@numba.njit(cache=True, inline="always")
+def _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, alpha, y, dy, P, M):
+    """:func:`augmented_rhs` (:func:`augmented_rhs_two_states` for two filter states) at the
+    coefficients of the moments ``y``; returns ``(c_eq, k_eq)``."""
     c_eq, k_eq = coefficients(cond, table, y[0], y[1])
     m = osc.m_sdof
-    augmented_rhs(k_eq / m, c_eq / m, alpha, 2.0 * math.pi * osc.S0, fa, fb, fc, fd, y, dy, P, M)
+    if n == 10:
+        augmented_rhs_two_states(k_eq / m, c_eq / m, alpha, 2.0 * math.pi * osc.S0, fa, fb, fc, fd, y, dy)
+    else:
+        augmented_rhs(k_eq / m, c_eq / m, alpha, 2.0 * math.pi * osc.S0, fa, fb, fc, fd, y, dy, P, M)
     return c_eq, k_eq
 
 
@@ -431,8 +471,26 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
     """One point driven through a shaping filter (``fa, fb, fc, fd``: its ``A, B, C, D``), the packed
     covariance of ``(theta, theta', x)`` as the state; ``scale``: its absolute-tolerance scales
     (:func:`filtered_scales`).  Histories into row ``i`` only if ``store``.  Returns the :data:`SUMMARIES`."""
+    return _filtered_steps(packed_size(fa.shape[0] + 2), coefficients, cond, table, osc, fa, fb, fc, fd, scale,
+                           t_out, rtol, h_max, max_steps, store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o,
+                           p_upl)
+
+
+@numba.njit(cache=True, fastmath=FMA)
+def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                           store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """:func:`solve_point_filtered` for a filter of two states (Kanai–Tajimi): the 10 moments in loops of
+    constant length (unrolled by the compiler) and :func:`augmented_rhs_two_states`."""
+    return _filtered_steps(10, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                           store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+
+
+@numba.njit(cache=True, inline="always")
+def _filtered_steps(n, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                    store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """The step loop of :func:`solve_point_filtered` for ``n`` packed moments (inlined: a constant ``n``
+    gives constant-length loops)."""
     nn = fa.shape[0] + 2
-    n = packed_size(nn)
     i11 = nn                                          # packed index of (1, 1): var_theta_dot
     P = np.empty((nn, nn))
     M = np.empty((nn, nn))
@@ -448,7 +506,7 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
     K7 = np.empty(n)
     t = t_out[0]
     e1, e2 = envelope_state(osc, t)
-    c0, k0 = _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, initial_gain(osc, e1, e2), y, K1, P, M)
+    c0, k0 = _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, initial_gain(osc, e1, e2), y, K1, P, M)
     if store:
         store_outputs(coefficients, cond, table, osc, i, 0, y[0], y[1], y[i11],
                       var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
@@ -461,22 +519,22 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
         a2, a3, a4, a5, a6, f1, f2 = stage_gains(osc, e1, e2, h)
         for j in range(n):
             z[j] = y[j] + h * (A21 * K1[j])
-        _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, a2, z, K2, P, M)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a2, z, K2, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A31 * K1[j] + A32 * K2[j])
-        _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, a3, z, K3, P, M)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a3, z, K3, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A41 * K1[j] + A42 * K2[j] + A43 * K3[j])
-        _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, a4, z, K4, P, M)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a4, z, K4, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A51 * K1[j] + A52 * K2[j] + A53 * K3[j] + A54 * K4[j])
-        _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, a5, z, K5, P, M)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a5, z, K5, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A61 * K1[j] + A62 * K2[j] + A63 * K3[j] + A64 * K4[j] + A65 * K5[j])
-        _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, a6, z, K6, P, M)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a6, z, K6, P, M)
         for j in range(n):
             yn[j] = y[j] + h * (B1 * K1[j] + B3 * K3[j] + B4 * K4[j] + B5 * K5[j] + B6 * K6[j])
-        c_new, k_new = _filtered_rhs(coefficients, cond, table, osc, fa, fb, fc, fd, a6, yn, K7, P, M)
+        c_new, k_new = _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a6, yn, K7, P, M)
         err = 0.0
         finite = True
         for j in range(n):

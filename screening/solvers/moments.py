@@ -40,7 +40,8 @@ from scipy.special import erfc
 from screening.condensation import get as get_condensation
 from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
 from screening.model.points import flatten, select
-from screening.solvers.moment_kernels import filtered_scales, solve_point_filtered, solve_point_white
+from screening.solvers.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
+                                              solve_point_white)
 from screening.status import PointStatus
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
@@ -177,12 +178,16 @@ def _solve_batch(coefficients, conds, osc, tables, table_index, fa, fb, fc, fd, 
 
     The step loop is specialised by state size (:mod:`screening.solvers.moment_kernels`): 3 scalar
     moments for an input without filter states (white noise), the packed covariance of the
-    augmented system otherwise (``fa, fb, fc, fd``: the filter of each point).  Histories are
-    written only if ``store``.
+    augmented system otherwise (``fa, fb, fc, fd``: the filter of each point; constant-length loops
+    for two filter states).  Histories are written only if ``store``.
     """
     for i in range(osc.shape[0]):
         j = table_index[i]
-        if fa.shape[1] > 0:
+        if fa.shape[1] == 2:
+            summary = solve_point_two_states(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
+                                             scale[i], t_out, rtol, h_max, max_steps,
+                                             store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        elif fa.shape[1] > 0:
             summary = solve_point_filtered(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
                                            scale[i], t_out, rtol, h_max, max_steps,
                                            store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
@@ -272,7 +277,8 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         solver = batch_solver(kernel.records.dtype)
         f = filters.select(part)
         solver(kernel.coefficients, kernel.records, osc[part], kernel.tables,
-               kernel.table_index, f.A, f.B, f.C, f.D, f.scale, t_out, float(rtol), float(h_max), int(max_steps), bool(histories),
+               kernel.table_index, f.A, f.B, f.C, f.D, f.scale, t_out, float(rtol), float(h_max), int(max_steps),
+               bool(histories),
                hist["var_theta"][part], hist["cov_theta_theta_dot"][part], hist["var_theta_dot"][part],
                hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], status[part], t_stop[part],
                n_steps[part], n_rejected[part], peak[part], t_peak[part], min_k[part])

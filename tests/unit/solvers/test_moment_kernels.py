@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from screening.excitations import CloughPenzien, KanaiTajimi, WhiteNoise
-from screening.solvers.moment_kernels import augmented_rhs, augmented_system, lyapunov_rhs, packed_size
+from screening.solvers.moment_kernels import (augmented_rhs, augmented_rhs_two_states, augmented_system, lyapunov_rhs,
+                                              packed_size)
 
 EXCITATIONS = [WhiteNoise(2e-4), KanaiTajimi(2e-4, 15.0, 0.6), CloughPenzien(2e-4, 15.0, 0.6, 1.5, 0.8)]
 
@@ -29,6 +30,11 @@ def test_compiled_rhs_is_the_matrix_product_reference(exc, seed):
                   np.empty((n, n)), np.empty((n, n)))
     np.testing.assert_allclose(dy, expected[iu], rtol=1e-12, atol=1e-13 * np.abs(expected).max())
     np.testing.assert_allclose(expected, expected.T, rtol=1e-14, atol=1e-15 * np.abs(expected).max())
+    if n == 4:                                                # the written-out two-state twin
+        dy2 = np.empty(packed_size(n))
+        augmented_rhs_two_states(k_eq / m_sdof, c_eq / m_sdof, alpha, 2.0 * np.pi * exc.S0, fa, fb, fc,
+                                 float(filt.D), y, dy2)
+        np.testing.assert_allclose(dy2, expected[iu], rtol=1e-12, atol=1e-13 * np.abs(expected).max())
 
 
 @pytest.mark.parametrize("exc", EXCITATIONS[1:], ids=lambda e: e.kind)
