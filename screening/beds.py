@@ -128,14 +128,13 @@ def bed_summary(block, foundation):
     from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
     m, b, h, g = float(block.m), float(block.b), float(block.h), float(block.g)
-    k, d = float(foundation.k), float(foundation.damping)
+    k = float(foundation.k)
     z_st = rest_indentation(block, foundation)
     wv = vertical_frequency(block, foundation)
     wr = rocking_frequency(block, foundation)
-    if foundation.winkler:
-        c_v, c_r = 2.0 * b * d, 2.0 / 3.0 * d * b**3
-    else:
-        c_v, c_r = 2.0 * b * d * z_st, 2.0 / 3.0 * d * b**3 * z_st
+    w_rate, w_ind = (float(w) for w in foundation.damping_weights)
+    damping_at_rest = w_rate + w_ind * z_st              # zdot (w_rate + w_ind z) at z = z_st
+    c_v, c_r = 2.0 * b * damping_at_rest, 2.0 / 3.0 * damping_at_rest * b**3
     k_r = 2.0 / 3.0 * b**3 * k - m * g * h
     try:
         exact = float(condensations.get("cubic").uplift_threshold(block, foundation))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from screening import excitations, laws
 from screening.status import (BestMethod, ContactRegime, EscalationModel, FitFlag, PointStatus, SampleState, SpotStatus,
                               TargetMet, Trust, flag_attributes)
 
@@ -46,14 +47,12 @@ PARAMETERS = {
     "I_cm": _v("kg m2", "moment of inertia about the centre of mass"),
     "g": _v("m s-2", "gravitational acceleration"),
     "k": _v("N m-2", "distributed foundation stiffness"),
-    "lam": _v("N s m-4", "Hunt-Crossley distributed damping"),
-    "c": _v("N s m-2", "Winkler distributed viscous damping"),
+    **{name: _v(a["units"], a["long_name"]) for name, a in laws.parameters().items()},   # the contact laws'
     "eps": _v("m-2", "cubic stiffness parameter of the contact law"),
     "S0": _v("m2 s-3", "two-sided PSD level of the driving white noise, E[xi xi] = 2 pi S0 delta"),
     "pga": _v("m s-2", "target median peak ground acceleration of the input (S0 follows from it, band-limited "
                        "as the Monte Carlo synthesis)"),
-    "omega_g": _v("rad s-1", "Kanai-Tajimi filter frequency"),
-    "zeta_g": _v("1", "Kanai-Tajimi filter damping ratio"),
+    **{name: _v(p.units, p.long_name) for name, p in excitations.parameters().items()},   # the excitations'
     "T1": _v("s", "envelope decay time T1"),
     "T2": _v("s", "envelope rise time T2"),
 }

@@ -97,18 +97,7 @@ def spectral_moments(excitation, cutoff):
 
     ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega``: [m2 s-4], [m2 s-5], [m2 s-6].
     """
-    wc = float(cutoff)
-    if excitation.kind == "white":
-        s0 = float(excitation.S0)
-        return 2.0 * s0 * wc, s0 * wc**2, 2.0 * s0 * wc**3 / 3.0
-    out = []
-    for i in range(3):
-        val, _, *problem = integrate.quad(lambda w: w**i * float(excitation.psd(w)), 0.0, wc, limit=400,
-                                          points=[float(excitation.omega_g)], epsrel=1e-11, full_output=1)
-        if len(problem) > 1:                       # quad's message: the integral did not converge
-            raise ArithmeticError(f"spectral moment lambda_{i}: {' '.join(str(problem[1]).split())}")
-        out.append(2.0 * val)
-    return tuple(out)
+    return tuple(excitation.spectral_moment(i, float(cutoff), epsrel=1e-11) for i in range(3))
 
 
 def _times(t_end, n=N_TIMES):
@@ -160,37 +149,29 @@ def pga_median(excitation, t_end, cutoff):
 
 def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIMES):
     """``(t, var_u [m2], var_u_dot [m2 s-2], cov [m2 s-1])`` of a linear oscillator driven by ``-a(t)``
-    (Lyapunov equation; Kanai-Tajimi filter states included and started stationary)."""
+    (Lyapunov equation of the excitation's filter states and the oscillator, the filter started in its
+    stationary state: :meth:`screening.excitations.Excitation.filter`)."""
     wn = 2.0 * math.pi / float(period)
     z = float(damping)
     S0 = float(excitation.S0)
     env = excitation.envelope
-    if excitation.kind == "white":
-        def A(t):
-            return np.array([[0.0, 1.0], [-wn * wn, -2.0 * z * wn]])
-        B = np.array([0.0, 1.0])
-        P0 = np.zeros((2, 2))
-        iu = 0
-    else:
-        wg, zg = float(excitation.omega_g), float(excitation.zeta_g)
-
-        def A(t):
-            q = float(env(t))
-            return np.array([[0.0, 1.0, 0.0, 0.0], [-wg * wg, -2.0 * zg * wg, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0],
-                             [q * wg * wg, q * 2.0 * zg * wg, -wn * wn, -2.0 * z * wn]])
-        B = np.array([0.0, -1.0, 0.0, 0.0])
-        P0 = np.zeros((4, 4))
-        P0[0, 0] = math.pi * S0 / (2.0 * zg * wg**3)
-        P0[1, 1] = math.pi * S0 / (2.0 * zg * wg)
-        iu = 2
-    n = P0.shape[0]
-    BB = 2.0 * math.pi * S0 * np.outer(B, B)
+    A_f, B_f, C_f, D_f = (np.asarray(m, dtype=float) for m in excitation.filter())
+    iu = A_f.shape[0]                       # states: the filter's, then (u, u')
+    n = iu + 2
+    P0 = np.zeros((n, n))
+    if iu:
+        P0[:iu, :iu] = excitation.stationary_covariance()
+    base = np.zeros((n, n))
+    base[:iu, :iu] = A_f
+    base[iu:, iu:] = [[0.0, 1.0], [-wn * wn, -2.0 * z * wn]]
 
     def rhs(t, y):
         P = y.reshape(n, n)
-        a = A(t)
-        Q = BB * (float(env(t)) ** 2 if excitation.kind == "white" else 1.0)
-        return (a @ P + P @ a.T + Q).ravel()
+        q = float(env(t))
+        a = base.copy()
+        a[iu + 1, :iu] = -q * C_f            # u'' = ... - q (C x + D w)
+        b = np.concatenate([B_f, [0.0, -q * float(D_f)]])
+        return (a @ P + P @ a.T + 2.0 * math.pi * S0 * np.outer(b, b)).ravel()
 
     t = _times(t_end, n_times)
     sol = integrate.solve_ivp(rhs, (0.0, float(t_end)), P0.ravel(), t_eval=t, rtol=1e-8,
@@ -240,34 +221,27 @@ def input_measures(excitation, t_end, cutoff):
 def _per_unit_s0(excitation, values, t_end, cutoff):
     """``values`` broadcast with the filter and ``cutoff``, and the measures at ``S0 = 1`` (last axis:
     pga, rms, arias) of every point."""
-    omega = np.asarray(getattr(excitation, "omega_g", np.nan), dtype=float)
-    zeta = np.asarray(getattr(excitation, "zeta_g", np.nan), dtype=float)
-    values, cut, omega, zeta = np.broadcast_arrays(np.asarray(values, dtype=float),
-                                                   np.asarray(cutoff, dtype=float), omega, zeta)
+    names = tuple(excitation.parameters)
+    values, cut, *filt = np.broadcast_arrays(np.asarray(values, dtype=float), np.asarray(cutoff, dtype=float),
+                                             *(np.asarray(getattr(excitation, n), dtype=float) for n in names))
     env = excitation.envelope
-    shape = (excitation.kind, env.kind, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
-                                          if env.kind == "exponential" else ()), float(t_end))
+    shape = (excitation.kind, env.kind, names, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
+                                                 if env.kind == "exponential" else ()), float(t_end))
     unit = np.empty(values.shape + (3,))
     for index in np.ndindex(values.shape):
         try:
-            unit[index] = _unit_measures(*shape, _key(omega[index]), _key(zeta[index]), float(cut[index]))
+            unit[index] = _unit_measures(*shape, tuple(float(f[index]) for f in filt), float(cut[index]))
         except (ArithmeticError, ValueError):          # scales beyond float64 (see PointStatus.beyond_float_range)
             unit[index] = np.nan
     return values, unit
 
 
-def _key(value):
-    """A cache key of a filter parameter: None for NaN (white noise), which never equals itself."""
-    value = float(value)
-    return None if math.isnan(value) else value
-
-
 @functools.lru_cache(maxsize=4096)
-def _unit_measures(kind, envelope_kind, *args):
-    """``(pga_median, rms_acceleration, arias_intensity)`` at ``S0 = 1`` of one filter, envelope,
-    ``t_end`` and band limit."""
-    *envelope, t_end, omega_g, zeta_g, cutoff = args
-    p = {"omega_g": omega_g, "zeta_g": zeta_g, **dict(zip(("T1", "T2"), envelope))}
+def _unit_measures(kind, envelope_kind, names, *args):
+    """``(pga_median, rms_acceleration, arias_intensity)`` at ``S0 = 1`` of one filter (parameters
+    ``names`` with ``values``), envelope, ``t_end`` and band limit."""
+    *envelope, t_end, values, cutoff = args
+    p = {**dict(zip(names, values)), **dict(zip(("T1", "T2"), envelope))}
     exc = _scalar_excitation(kind, envelope_kind, p)
     return (pga_median(exc, t_end, cutoff), rms_acceleration(exc, t_end, cutoff),
             arias_intensity(exc, t_end, cutoff))
@@ -275,11 +249,10 @@ def _unit_measures(kind, envelope_kind, *args):
 
 # ----------------------------------------------------------------------------- datasets
 def _scalar_excitation(kind, envelope_kind, p):
-    from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
+    from screening import excitations
+    from screening.model.excitation import ConstantEnvelope, Envelope
     env = Envelope(p["T1"], p["T2"]) if envelope_kind == "exponential" else ConstantEnvelope()
-    if kind == "white":
-        return WhiteNoise(1.0, env)
-    return KanaiTajimi(1.0, p["omega_g"], p["zeta_g"], env)
+    return excitations.build(kind, 1.0, p, env)
 
 
 def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
@@ -304,12 +277,14 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
                                             period, damping, cutoff).expand_dims("case"))
         out = xr.concat(parts, "case", combine_attrs="override")
         return out.assign_coords(case=ds["case"])
+    from screening import excitations
+
     kind = ds.attrs.get("excitation")
     envelope_kind = ds.attrs.get("envelope", "exponential")
-    if kind not in ("white", "kanai_tajimi"):
-        raise ValueError(f"dataset attribute 'excitation' must be 'white' or 'kanai_tajimi' (got {kind!r})")
+    if kind not in excitations.names():
+        raise ValueError(f"dataset attribute 'excitation' must be one of {excitations.names()} (got {kind!r})")
     t_end = float(ds["t"].values[-1])
-    names = ["S0"] + (["omega_g", "zeta_g"] if kind == "kanai_tajimi" else []) + \
+    names = ["S0"] + list(excitations.get(kind).parameters) + \
         (["T1", "T2"] if envelope_kind == "exponential" else [])
     fields = {n: parameter(ds, n) for n in names}
     cutoff_source = "given"

@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from screening import laws
 from screening.analysis.metrics import compare, peak_with_se, relative_difference, time_averaged_relative_error
 from screening.analysis.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
                                                load_tradeoff_study)
@@ -447,10 +448,8 @@ def build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time)
         "envelope_T1": p["T1"], "envelope_T2": p["T2"],
         "t_end": study.t_end, "dt": study.dt,
     }
-    if "lam" in p:
-        attrs["foundation_lam"] = p["lam"]
-    else:
-        attrs["foundation_c"] = p["c"]
+    damping = laws.get(case.contact).parameter
+    attrs[f"foundation_{damping}"] = p[damping]
     return apply_schema(xr.Dataset(dv, coords=coords, attrs=attrs), table=TRADEOFF)
 
 

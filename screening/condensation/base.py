@@ -16,6 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from screening.registry import NamedModel
+
 
 class SdofKernel(NamedTuple):
     """What the compiled Monte Carlo integrator needs of a condensation (condensed model).
@@ -45,8 +47,10 @@ class MomentKernel(NamedTuple):
     table_index: np.ndarray
 
 
-class Condensation(abc.ABC):
+class Condensation(NamedModel, abc.ABC):
     """A quasi-static condensation of the coupled model.  Subclasses set :attr:`name`."""
+
+    axis = "condensation"
 
     #: registry name (the value of ``condensation`` in studies and function arguments)
     name: str = ""
@@ -105,13 +109,3 @@ class Condensation(abc.ABC):
         Monte Carlo.  A condensation without one cannot run ``monte_carlo(model="condensed")``."""
         raise NotImplementedError(f"condensation {self.name!r} has no compiled C(theta), K(theta) "
                                   "(Condensation.sdof_kernel) for the condensed Monte Carlo")
-
-    def __eq__(self, other):
-        """Equal when of the same class with the same state (a copy sent to a worker equals the original)."""
-        return type(other) is type(self) and other.__dict__ == self.__dict__
-
-    def __hash__(self):
-        return hash((type(self), self.name))
-
-    def __repr__(self):
-        return f"<condensation {self.name!r}>"

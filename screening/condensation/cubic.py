@@ -221,17 +221,12 @@ def rocking_damping(theta, block, foundation):
     """
     z, dz, v, a, uplift = _indentation_state(theta, block, foundation)
     b = block.b
-    if not foundation.winkler:
-        lam = foundation.lam
-        c_in = 2.0 / 3.0 * lam * b**3 * (z + a * dz)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            c_up = lam / (12.0 * a**3) * (3.0 * b**4 * a**4 + 4.0 * b**3 * z * a**3 + z**4
-                                          + 2.0 * a * dz * v * v * (2.0 * b * a - z))
-    else:
-        c = foundation.c
-        c_in = 2.0 / 3.0 * c * b**3 + 0.0 * a
-        with np.errstate(divide="ignore", invalid="ignore"):
-            c_up = c / (a * a) * (0.5 * dz * v * (b * a - z) + (b**3 * a**3 + z**3) / (3.0 * a))
+    w_rate, w_ind = foundation.damping_weights          # zdot (w_rate + w_ind z)
+    c_in = (2.0 / 3.0 * w_rate * b**3 + 0.0 * a) + 2.0 / 3.0 * w_ind * b**3 * (z + a * dz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c_up = (w_rate / (a * a) * (0.5 * dz * v * (b * a - z) + (b**3 * a**3 + z**3) / (3.0 * a))
+                + w_ind / (12.0 * a**3) * (3.0 * b**4 * a**4 + 4.0 * b**3 * z * a**3 + z**4
+                                           + 2.0 * a * dz * v * v * (2.0 * b * a - z)))
     return np.where(uplift, c_up, c_in)[()]
 
 
@@ -256,11 +251,11 @@ def restoring_moment(theta, block, foundation):
 
 
 def damping_at_rest(block, foundation):
-    """``C(0)`` [N m s/rad]: ``(2/3) lam b^3 z0`` (Hunt–Crossley) or ``(2/3) c b^3`` (Winkler)."""
-    if not foundation.winkler:
-        return 2.0 / 3.0 * foundation.lam * block.b**3 * rest_indentation(block, foundation)
+    """``C(0)`` [N m s/rad]: ``(2/3) b^3 (w_rate + w_indentation z0)`` (Hunt–Crossley ``(2/3) lam b^3 z0``,
+    Winkler ``(2/3) c b^3``)."""
     check_bearing(block, foundation)
-    return 2.0 / 3.0 * foundation.c * block.b**3
+    w_rate, w_ind = foundation.damping_weights
+    return 2.0 / 3.0 * w_rate * block.b**3 + 2.0 / 3.0 * w_ind * block.b**3 * rest_indentation(block, foundation)
 
 
 def stiffness_at_rest(block, foundation):
@@ -270,11 +265,11 @@ def stiffness_at_rest(block, foundation):
     return 2.0 / 3.0 * b**3 * k - block.m * block.g * block.h + 2.0 * foundation.eps * k * b**3 * z0 * z0
 
 
-#: Per-point parameters of the compiled twins (SI units): block, bed (``damping``: lam or c),
+#: Per-point parameters of the compiled twins (SI units): block, bed (the law's damping weights),
 #: threshold, ``z_lin`` (eq. 17), rest indentation ``z_rest`` and ``z_curv = dz/d(theta^2)`` at rest
 #: (the Newton start of the no-uplift balance).
 SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("m", "f8"), ("g", "f8"), ("h", "f8"), ("b", "f8"), ("k", "f8"),
-                        ("eps", "f8"), ("damping", "f8"), ("winkler", "f8"), ("z_lin", "f8"), ("z_rest", "f8"),
+                        ("eps", "f8"), ("w_rate", "f8"), ("w_indentation", "f8"), ("z_lin", "f8"), ("z_rest", "f8"),
                         ("z_curv", "f8")])
 
 
@@ -284,8 +279,8 @@ def sdof_record(block, foundation):
     z0 = float(rest_indentation(block, foundation))
     rec = np.zeros(1, dtype=SDOF_RECORD)
     values = dict(theta_ul=float(uplift_threshold(block, foundation)), m=float(block.m), g=float(block.g),
-                  h=float(block.h), b=b, k=float(foundation.k), eps=eps, damping=float(foundation.damping),
-                  winkler=1.0 if foundation.winkler else 0.0,
+                  h=float(block.h), b=b, k=float(foundation.k), eps=eps, w_rate=float(foundation.damping_weights[0]),
+                  w_indentation=float(foundation.damping_weights[1]),
                   z_lin=float(linear_indentation(block, foundation)), z_rest=z0,
                   z_curv=-eps * b * b * z0 / (1.0 + 3.0 * eps * z0 * z0))
     for name, value in values.items():
@@ -326,23 +321,20 @@ def damping_stiffness_jit(p, theta):
     K [N m/rad])`` at ``theta`` [rad], one indentation solve for both; ``p`` an :data:`SDOF_RECORD`."""
     a = abs(theta)
     z, dz, v = quasi_static_indentation_jit(p, a)
-    b, k, eps, lam = p.b, p.k, p.eps, p.damping
+    b, k, eps, w_rate, w_ind = p.b, p.k, p.eps, p.w_rate, p.w_indentation
     mgh = p.m * p.g * p.h
     b3 = b * b * b
     if a <= p.theta_ul:
         stiffness = 2.0 / 3.0 * b3 * k - mgh + eps * k * (2.0 * b3 * z * z + 0.4 * b3 * b * b * a * a)
-        if p.winkler != 0.0:
-            return 2.0 / 3.0 * lam * b3, stiffness
-        return 2.0 / 3.0 * lam * b3 * (z + a * dz), stiffness
+        return 2.0 / 3.0 * w_rate * b3 + 2.0 / 3.0 * w_ind * b3 * (z + a * dz), stiffness
     ba = b * a
     a3 = a * a * a
     v2 = v * v
     stiffness = (k * v2 * (2.0 * ba - z) / 6.0 + eps * k * v2 * v2 * (4.0 * ba - z) / 20.0) / a3 - mgh
-    if p.winkler != 0.0:
-        return lam / (a * a) * (0.5 * dz * v * (ba - z) + (ba * ba * ba + z * z * z) / (3.0 * a)), stiffness
     ba2 = ba * ba
     z2 = z * z
-    return (lam / (12.0 * a3) * (3.0 * ba2 * ba2 + 4.0 * ba2 * ba * z + z2 * z2 + 2.0 * a * dz * v2 * (2.0 * ba - z)),
+    return (w_rate / (a * a) * (0.5 * dz * v * (ba - z) + (ba * ba * ba + z * z * z) / (3.0 * a))
+            + w_ind / (12.0 * a3) * (3.0 * ba2 * ba2 + 4.0 * ba2 * ba * z + z2 * z2 + 2.0 * a * dz * v2 * (2.0 * ba - z)),
             stiffness)
 
 

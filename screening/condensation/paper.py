@@ -55,11 +55,17 @@ def static_indentation(theta, block, foundation):
     return np.where(theta <= uplift_threshold(block, foundation), inner, outer)
 
 
+def damping_inner_parts(block, foundation):
+    """No-uplift rocking damping of the two basis pressures of the law [N m s/rad]:
+    ``(2/3) w_rate b^3`` (``zdot``, Winkler) and ``w_indentation b^2 m g / (3 k)`` (``z zdot``, eq. 24)."""
+    w_rate, w_ind = foundation.damping_weights
+    return 2.0 / 3.0 * w_rate * block.b**3, w_ind * block.b**2 * block.m * block.g / (3.0 * foundation.k)
+
+
 def damping_inner(block, foundation):
     """No-uplift rocking damping ``C_1`` [N m s/rad] (eq. 24; Winkler: ``(2/3) c b^3``)."""
-    if not foundation.winkler:
-        return foundation.lam * block.b**2 * block.m * block.g / (3.0 * foundation.k)
-    return 2.0 / 3.0 * foundation.c * block.b**3
+    rate, indentation = damping_inner_parts(block, foundation)
+    return rate + indentation
 
 
 def rocking_damping(theta, block, foundation):
@@ -71,11 +77,10 @@ def rocking_damping(theta, block, foundation):
     mg, b, k = block.m * block.g, block.b, foundation.k
     tu = uplift_threshold(block, foundation)
     c1 = damping_inner(block, foundation) + 0.0 * theta
-    with np.errstate(divide="ignore"):
-        if not foundation.winkler:
-            c2 = foundation.lam * b / 12.0 * (2.0 * mg / k) ** 1.5 * theta**-0.5
-        else:
-            c2 = foundation.c / 12.0 * (2.0 * mg / k) ** 1.5 * theta**-1.5
+    w_rate, w_ind = foundation.damping_weights
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c2 = (w_rate / 12.0 * (2.0 * mg / k) ** 1.5 * theta**-1.5
+              + w_ind * b / 12.0 * (2.0 * mg / k) ** 1.5 * theta**-0.5)
     return np.where(theta <= tu, c1, c2)
 
 
@@ -103,27 +108,23 @@ def restoring_moment(theta, block, foundation):
 
 
 #: Per-point parameters of :func:`damping_stiffness_jit` (SI units): ``C = C1`` inside the threshold,
-#: ``C2 |theta|^-1/2`` (Winkler ``|theta|^-3/2``) outside; ``K = K1_0 + K1_2 theta^2`` inside,
+#: ``C2_rate |theta|^-3/2 + C2_indentation |theta|^-1/2`` outside (the law's two basis pressures); ``K = K1_0 + K1_2 theta^2`` inside,
 #: ``MGB/|theta| - K2_32 |theta|^-3/2 - K2_12 |theta|^-1/2 + K2_0`` outside (eqs. 24–25).
-SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("winkler", "f8"), ("C1", "f8"), ("C2", "f8"), ("K1_0", "f8"),
+SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("C1", "f8"), ("C2_rate", "f8"), ("C2_indentation", "f8"), ("K1_0", "f8"),
                         ("K1_2", "f8"), ("MGB", "f8"), ("K2_32", "f8"), ("K2_12", "f8"), ("K2_0", "f8")])
 
 
 def sdof_record(block, foundation):
     """The :data:`SDOF_RECORD` of scalar model objects (a 1-element array)."""
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
-    k, eps, damping = float(foundation.k), float(foundation.eps), float(foundation.damping)
-    winkler = foundation.winkler
+    k, eps = float(foundation.k), float(foundation.eps)
+    w_rate, w_ind = (float(w) for w in foundation.damping_weights)
     mg = m * g
     rec = np.zeros(1, dtype=SDOF_RECORD)
     rec["theta_ul"] = uplift_threshold(block, foundation)
-    rec["winkler"] = 1.0 if winkler else 0.0
-    if winkler:
-        rec["C1"] = 2.0 / 3.0 * damping * b**3
-        rec["C2"] = damping / 12.0 * (2.0 * mg / k) ** 1.5            # x |theta|^-3/2
-    else:
-        rec["C1"] = damping * b * b * mg / (3.0 * k)
-        rec["C2"] = damping * b / 12.0 * (2.0 * mg / k) ** 1.5        # x |theta|^-1/2
+    rec["C1"] = 2.0 / 3.0 * w_rate * b**3 + w_ind * b * b * mg / (3.0 * k)
+    rec["C2_rate"] = w_rate / 12.0 * (2.0 * mg / k) ** 1.5            # x |theta|^-3/2
+    rec["C2_indentation"] = w_ind * b / 12.0 * (2.0 * mg / k) ** 1.5  # x |theta|^-1/2
     rec["K1_0"] = 2.0 / 3.0 * b**3 * k - mg * h + eps * mg * mg * b / (2.0 * k)
     rec["K1_2"] = eps * 0.4 * k * b**5
     rec["MGB"] = mg * b
@@ -142,9 +143,7 @@ def damping_stiffness_jit(p, theta):
         return p.C1, p.K1_0 + p.K1_2 * theta * theta
     r = 1.0 / math.sqrt(a)
     stiffness = p.MGB * r * r - p.K2_32 * r * r * r - p.K2_12 * r + p.K2_0
-    if p.winkler != 0.0:
-        return p.C2 * r * r * r, stiffness
-    return p.C2 * r, stiffness
+    return p.C2_rate * r * r * r + p.C2_indentation * r, stiffness
 
 
 class PaperCondensation(Condensation):

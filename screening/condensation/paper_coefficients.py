@@ -46,15 +46,19 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from screening.condensation.paper import damping_inner, uplift_threshold
+from screening.condensation.paper import damping_inner_parts, uplift_threshold
 from screening.condensation.uplift_integrals import gaussian_uplift_integrals, uplift_integrals_q
 from screening.kernels.signatures import FMA, moment_coefficients_signature
 
 def coefficient_constants(block, foundation):
-    """Parameter-only constants of the closed forms (SI): ``C1, K0, mgh, E0, theta_ul``."""
+    """Parameter-only constants of the closed forms (SI): ``C1`` (and its parts ``C1_rate``,
+    ``C1_indentation`` of the law's two basis pressures), ``K0, mgh, E0, theta_ul``."""
     m, g, b, h, k = block.m, block.g, block.b, block.h, foundation.k
+    c1_rate, c1_indentation = damping_inner_parts(block, foundation)
     return {
-        "C1": damping_inner(block, foundation),
+        "C1": c1_rate + c1_indentation,
+        "C1_rate": c1_rate,
+        "C1_indentation": c1_indentation,
         "K0": 2.0 / 3.0 * b**3 * k,
         "mgh": m * g * h,
         "E0": (m * g) ** 2 * b / k,
@@ -75,12 +79,11 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
     const = coefficient_constants(block, foundation)
     tu = const["theta_ul"]
     G = gaussian_uplift_integrals(s / tu)
-    hunt_crossley = not foundation.winkler
-    c_shape = G["tail_m12"] if hunt_crossley else G["tail_m32"]
-    coupling = 0.5 * G["tail_m12_r"] if hunt_crossley else 1.5 * G["tail_m32_r"]
-    c_eq = const["C1"] * (G["p_in"] + c_shape)
+    c1_rate, c1_ind = const["C1_rate"], const["C1_indentation"]
+    c_eq = c1_rate * (G["p_in"] + G["tail_m32"]) + c1_ind * (G["p_in"] + G["tail_m12"])
+    coupling = c1_rate * (1.5 * G["tail_m32_r"]) + c1_ind * (0.5 * G["tail_m12_r"])
     k_eq = (const["K0"] * (G["p_in"] + G["tail_m32"]) - const["mgh"]
-            - const["C1"] * coupling * cov_over_s / tu
+            - coupling * cov_over_s / tu
             + foundation.eps * const["E0"] * (0.5 * G["p_in"] + G["p_out"]
                                               + 0.3 * G["inner_m2"] - 0.2 * G["tail_m12"]))
     c_eq, k_eq = np.broadcast_arrays(c_eq, k_eq)
@@ -88,16 +91,16 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
 
 
 #: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units).
-RECORD = np.dtype([("theta_ul", "f8"), ("inv_theta_ul2", "f8"), ("C1", "f8"), ("K0", "f8"), ("mgh", "f8"),
-                   ("E0", "f8"), ("eps", "f8"), ("winkler", "f8")])
+RECORD = np.dtype([("theta_ul", "f8"), ("inv_theta_ul2", "f8"), ("C1_rate", "f8"), ("C1_indentation", "f8"),
+                   ("K0", "f8"), ("mgh", "f8"), ("E0", "f8"), ("eps", "f8")])
 
 
 def records(block, foundation):
     """One :data:`RECORD` per point of the (flat, 1-d) model fields."""
     const = coefficient_constants(block, foundation)
-    fields = {"theta_ul": const["theta_ul"], "inv_theta_ul2": 1.0 / const["theta_ul"] ** 2, "C1": const["C1"],
-              "K0": const["K0"], "mgh": const["mgh"], "E0": const["E0"], "eps": foundation.eps,
-              "winkler": 1.0 if foundation.winkler else 0.0}
+    fields = {"theta_ul": const["theta_ul"], "inv_theta_ul2": 1.0 / const["theta_ul"] ** 2,
+              "C1_rate": const["C1_rate"], "C1_indentation": const["C1_indentation"],
+              "K0": const["K0"], "mgh": const["mgh"], "E0": const["E0"], "eps": foundation.eps}
     arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in fields.values()))
     out = np.empty(arrays[0].size, dtype=RECORD)
     for name, a in zip(fields, arrays):
@@ -114,15 +117,11 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     """
     q = var_theta * p.inv_theta_ul2                 # (sigma_theta / theta_ul)^2
     p_in, tail_m12, tail_m32, p32 = uplift_integrals_q(q, table)
-    if p.winkler == 0.0:
-        c_shape = tail_m12
-        coupling = 0.5 * tail_m12
-    else:
-        c_shape = tail_m32
-        coupling = 1.5 * tail_m32
-    # D = C1 * coupling * cov / sigma^2, finite at sigma = 0 (coupling vanishes first)
-    d_term = p.C1 * coupling * cov / var_theta if coupling > 0.0 else 0.0
-    c_eq = p.C1 * (p_in + c_shape)
+    # the law's two basis pressures: zdot (tails |theta|^-3/2) and z zdot (|theta|^-1/2)
+    coupling = p.C1_rate * (1.5 * tail_m32) + p.C1_indentation * (0.5 * tail_m12)
+    # D = coupling * cov / sigma^2, finite at sigma = 0 (the tails vanish first)
+    d_term = coupling * cov / var_theta if tail_m12 > 0.0 or tail_m32 > 0.0 else 0.0
+    c_eq = p.C1_rate * (p_in + tail_m32) + p.C1_indentation * (p_in + tail_m12)
     k_eq = (p.K0 * (p_in + tail_m32) - p.mgh - d_term
             + p.eps * p.E0 * (1.0 - 0.5 * p_in + 0.3 * q * p32 - 0.2 * tail_m12))
     return c_eq, k_eq

@@ -4,35 +4,21 @@ once, at set-up (study parsing, ``linearize``, ``monte_carlo``); nothing downstr
 from __future__ import annotations
 
 from screening.condensation.base import Condensation
+from screening.registry import Registry
 
-_REGISTRY: dict[str, Condensation] = {}
+_REGISTRY = Registry("condensation", lambda item: isinstance(item, Condensation))
+
+#: Remove a registered condensation (tests that register their own).
+unregister = _REGISTRY.remove
+#: Registered names, in registration order.
+names = _REGISTRY.names
+#: The :class:`Condensation` for a registered name (an instance is returned as it is); ``ValueError``
+#: naming the parameter and the registered names otherwise.
+get = _REGISTRY.get
 
 
 def register(condensation):
     """Add a :class:`Condensation` instance under its ``name`` (a later one with the same name replaces it)."""
     if not isinstance(condensation, Condensation):
         raise TypeError(f"register() takes a Condensation instance (got {type(condensation).__name__})")
-    _REGISTRY[condensation.name] = condensation
-    return condensation
-
-
-def unregister(name):
-    """Remove a registered condensation (tests that register their own)."""
-    _REGISTRY.pop(name, None)
-
-
-def names():
-    """Registered names, in registration order."""
-    return tuple(_REGISTRY)
-
-
-def get(condensation):
-    """The :class:`Condensation` for a registered name (an instance is returned as it is).
-
-    Raises ``ValueError`` naming the parameter and the registered names otherwise.
-    """
-    if isinstance(condensation, Condensation):
-        return condensation
-    if isinstance(condensation, str) and condensation in _REGISTRY:
-        return _REGISTRY[condensation]
-    raise ValueError(f"parameter 'condensation' must be one of {names()} (got {condensation!r})")
+    return _REGISTRY.add(condensation.name, condensation)

@@ -73,16 +73,13 @@ def rocking_damping(theta, block, foundation):
     v = z + b * a
     uplift = a > cubic.uplift_threshold(block, foundation)
     V = zp + b
+    w_rate, w_ind = foundation.damping_weights          # zdot (w_rate + w_ind z)
     with np.errstate(divide="ignore", invalid="ignore"):
-        if not foundation.winkler:
-            lam = foundation.lam
-            c_in = lam * (2.0 * b * z * zp * zp + 2.0 / 3.0 * b**3 * z + 4.0 / 3.0 * b**3 * a * zp)
-            c_up = lam * (V * V * v * v / (2.0 * a) - V * v**3 / (3.0 * a * a) + v**4 / (12.0 * a**3))
-        else:
-            c = foundation.c
-            length = v / a
-            c_in = c * (2.0 * b * zp * zp + 2.0 / 3.0 * b**3)
-            c_up = c * (V * V * length - V * length * length + length**3 / 3.0)
+        length = v / a
+        c_in = (w_rate * (2.0 * b * zp * zp + 2.0 / 3.0 * b**3)
+                + w_ind * (2.0 * b * z * zp * zp + 2.0 / 3.0 * b**3 * z + 4.0 / 3.0 * b**3 * a * zp))
+        c_up = (w_rate * (V * V * length - V * length * length + length**3 / 3.0)
+                + w_ind * (V * V * v * v / (2.0 * a) - V * v**3 / (3.0 * a * a) + v**4 / (12.0 * a**3)))
     return np.where(uplift, c_up, c_in)[()]
 
 
@@ -93,18 +90,16 @@ def damping_stiffness_jit(p, theta):
     a = abs(theta)
     z, zp, v = cubic.quasi_static_indentation_jit(p, a)
     _, stiffness = cubic.damping_stiffness_jit(p, theta)
-    b, lam = p.b, p.damping
+    b, w_rate, w_ind = p.b, p.w_rate, p.w_indentation
     b3 = b * b * b
     if a <= p.theta_ul:
-        if p.winkler != 0.0:
-            return lam * (2.0 * b * zp * zp + 2.0 / 3.0 * b3), stiffness
-        return lam * (2.0 * b * z * zp * zp + 2.0 / 3.0 * b3 * z + 4.0 / 3.0 * b3 * a * zp), stiffness
+        return (w_rate * (2.0 * b * zp * zp + 2.0 / 3.0 * b3)
+                + w_ind * (2.0 * b * z * zp * zp + 2.0 / 3.0 * b3 * z + 4.0 / 3.0 * b3 * a * zp)), stiffness
     V = zp + b
-    if p.winkler != 0.0:
-        length = v / a
-        return lam * (V * V * length - V * length * length + length * length * length / 3.0), stiffness
+    length = v / a
     v2 = v * v
-    return lam * (V * V * v2 / (2.0 * a) - V * v2 * v / (3.0 * a * a) + v2 * v2 / (12.0 * a * a * a)), stiffness
+    return (w_rate * (V * V * length - V * length * length + length * length * length / 3.0)
+            + w_ind * (V * V * v2 / (2.0 * a) - V * v2 * v / (3.0 * a * a) + v2 * v2 / (12.0 * a * a * a))), stiffness
 
 
 class VirtualWorkCondensation(Condensation):

@@ -1,4 +1,4 @@
-"""Stochastic ground excitation: envelopes, modulated white noise, Kanai–Tajimi noise.
+"""Stochastic ground excitation: the envelopes (the excitations are in :mod:`screening.excitations`).
 
 Intensity convention (paper eq. 39): the driving white noise has
 ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``, i.e. ``S0`` [m^2/s^3] is the constant level of
@@ -11,10 +11,8 @@ Method and how it is checked: ``docs/method.md#excitation``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 
 from screening.validation import checked
@@ -72,74 +70,15 @@ class ConstantEnvelope:
         return ENVELOPE_CODES[self.kind], 1.0, 0.5
 
 
-@dataclass(frozen=True)
-class WhiteNoise:
-    """Modulated Gaussian white noise ``q(t) xi(t)`` (eq. 39).
-
-    ``S0`` [m^2/s^3]: two-sided PSD level of ``xi``, ``E[xi(t) xi(s)] = 2 pi S0 delta(t-s)``; > 0.
-    """
-
-    S0: float
-    envelope: Envelope | ConstantEnvelope = field(default_factory=Envelope)
-
-    kind = "white"
-
-    def __post_init__(self):
-        object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
-
-    def psd(self, omega):
-        """Two-sided PSD of the unmodulated input [m^2/s^3] at ``omega`` [rad/s]."""
-        return self.S0 * np.ones_like(np.asarray(omega, dtype=float))
+_MOVED = {"WhiteNoise": "white", "KanaiTajimi": "kanai_tajimi", "kanai_tajimi_stationary_moments": "kanai_tajimi",
+          "stationary_filter_moments_jit": "kanai_tajimi"}
 
 
-@dataclass(frozen=True)
-class KanaiTajimi:
-    """Modulated Kanai–Tajimi noise ``q(t) z(t)`` (eqs. 47–50).
+def __getattr__(name):
+    """The excitations themselves live in :mod:`screening.excitations` (one module each); their old
+    names here keep working."""
+    if name in _MOVED:
+        import importlib
 
-    Parameters
-    ----------
-    S0 : two-sided PSD level of the white noise driving the filter [m^2/s^3], > 0.
-    omega_g : filter (soil) natural frequency [rad/s], > 0.
-    zeta_g : filter damping ratio [1], > 0.
-    envelope : modulating function.
-    """
-
-    S0: float
-    omega_g: float
-    zeta_g: float
-    envelope: Envelope | ConstantEnvelope = field(default_factory=Envelope)
-
-    kind = "kanai_tajimi"
-
-    def __post_init__(self):
-        object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
-        object.__setattr__(self, "omega_g", checked("omega_g", self.omega_g, lower=0.0))
-        object.__setattr__(self, "zeta_g", checked("zeta_g", self.zeta_g, lower=0.0))
-
-    def psd(self, omega):
-        """Two-sided PSD of the filter output ``z`` [m^2/s^3] at ``omega`` [rad/s] (eq. 50)."""
-        w = np.asarray(omega, dtype=float)
-        wg, zg = self.omega_g, self.zeta_g
-        num = wg**4 + 4.0 * zg**2 * wg**2 * w**2
-        den = (w**2 - wg**2) ** 2 + 4.0 * zg**2 * wg**2 * w**2
-        return self.S0 * num / den
-
-
-def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
-    """Stationary variances of the Kanai–Tajimi filter (eq. 49) under ``2 pi S0`` white noise.
-
-    Returns ``(var_u [m^2], var_u_dot [m^2/s^2], var_z [m^2/s^4])``: ``var_u = pi S0 / (2 zeta_g omega_g^3)``,
-    ``var_u_dot = pi S0 / (2 zeta_g omega_g)`` and the output
-    ``var_z = pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)``; ``cov(u, u_dot) = 0``.
-    ``S0`` [m^2/s^3], ``omega_g`` [rad/s], ``zeta_g`` [1].
-    """
-    var_u = np.pi * S0 / (2.0 * zeta_g * omega_g**3)
-    var_u_dot = np.pi * S0 / (2.0 * zeta_g * omega_g)
-    var_z = np.pi * S0 * omega_g * (1.0 + 4.0 * zeta_g**2) / (2.0 * zeta_g)
-    return var_u, var_u_dot, var_z
-
-
-@numba.njit(cache=True)
-def stationary_filter_moments_jit(S0, omega_g, zeta_g):
-    """Compiled twin of :func:`kanai_tajimi_stationary_moments`: ``(var_u [m^2], var_u_dot [m^2/s^2])``."""
-    return math.pi * S0 / (2.0 * zeta_g * omega_g**3), math.pi * S0 / (2.0 * zeta_g * omega_g)
+        return getattr(importlib.import_module(f"screening.excitations.{_MOVED[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

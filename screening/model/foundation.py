@@ -15,9 +15,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from screening import laws
+from screening.laws.base import DAMPING_FIELDS
 from screening.validation import checked
 
-CONTACT_LAWS = ("hunt_crossley", "winkler")
+
+def __getattr__(name):
+    if name == "CONTACT_LAWS":                       # the registered laws, at the time of asking
+        return laws.names()
+    raise AttributeError(name)
 
 
 @dataclass(frozen=True)
@@ -37,7 +43,8 @@ class Foundation:
         per unit indentation rate), >= 0.
     eps : cubic stiffness parameter [1/m^2]; any finite sign (``> 0`` hardening, ``< 0`` softening).
     c : Winkler dashpot [N s/m^2] (per unit length per unit rate), >= 0.
-    law : ``"hunt_crossley"`` or ``"winkler"`` (:data:`CONTACT_LAWS`).
+    law : a registered contact law (:func:`screening.laws.names`: ``"hunt_crossley"``, ``"winkler"``);
+        the law names the field (``lam`` or ``c``) that holds its damping coefficient.
     """
 
     k: float
@@ -50,11 +57,10 @@ class Foundation:
         law = self.law
         if law is None:
             law = "winkler" if self.c is not None and self.lam is None else "hunt_crossley"
-        if law not in CONTACT_LAWS:
-            raise ValueError(f"parameter 'law' must be one of {CONTACT_LAWS} (got {law!r})")
-        own, other = ("lam", "c") if law == "hunt_crossley" else ("c", "lam")
-        if getattr(self, other) is not None:
-            raise ValueError(f"parameter '{other}' does not apply to law={law!r} (give '{own}')")
+        own = laws.get(law).parameter
+        for other in DAMPING_FIELDS:
+            if other != own and getattr(self, other) is not None:
+                raise ValueError(f"parameter '{other}' does not apply to law={law!r} (give '{own}')")
         if getattr(self, own) is None:
             raise ValueError(f"parameter '{own}' is required for law={law!r} (a finite number >= 0)")
         object.__setattr__(self, "law", law)
@@ -63,13 +69,25 @@ class Foundation:
         object.__setattr__(self, "eps", checked("eps", self.eps))
 
     @property
+    def contact_law(self):
+        """The registered :class:`~screening.laws.ContactLaw` of :attr:`law`."""
+        return laws.get(self.law)
+
+    @property
     def damping(self):
-        """The damping coefficient of the law: ``lam`` [N s/m^4] or ``c`` [N s/m^2]."""
-        return self.lam if self.law == "hunt_crossley" else self.c
+        """The damping coefficient of the law: ``lam`` [N s/m^4], ``c`` [N s/m^2], ... (its ``parameter``)."""
+        return getattr(self, self.contact_law.parameter)
+
+    @property
+    def damping_weights(self):
+        """``(w_rate [N s m-2], w_indentation [N s m-3])``: the damping pressure is
+        ``zdot (w_rate + w_indentation z)`` (:meth:`screening.laws.ContactLaw.damping_weights`)."""
+        return self.contact_law.weights(self)
 
     @property
     def winkler(self):
-        """True for the Winkler law (linear dashpot ``c zdot``)."""
+        """True for the Winkler law (kept for callers outside the package; the solvers use
+        :attr:`damping_weights`)."""
         return self.law == "winkler"
 
 
@@ -77,16 +95,14 @@ def contact_pressure(z, z_dot, foundation):
     """Normal contact force per unit base length, eqs. (3)–(4) [N/m].
 
     ``z`` [m] is the local indentation (positive into the bed), ``z_dot`` [m/s] its rate.
-    Hunt–Crossley: ``k z + eps k z^3 + lam z z_dot``; Winkler: ``k z + eps k z^3 + c z_dot``.
+    ``k z + eps k z^3`` plus the damping pressure of the law (Hunt–Crossley ``lam z z_dot``,
+    Winkler ``c z_dot``, :meth:`screening.laws.ContactLaw.damping_pressure`).
     Zero where ``z < 0`` (no tension, no contact).  The dashpot may pull
     (``F_n < 0``) while ``z > 0``, as in the paper's law.
     """
     z = np.asarray(z, dtype=float)
     z_dot = np.asarray(z_dot, dtype=float)
     k, eps = foundation.k, foundation.eps
-    if not foundation.winkler:
-        damping = foundation.lam * z * z_dot
-    else:
-        damping = foundation.c * z_dot
+    damping = foundation.contact_law.damping_pressure(z, z_dot, foundation.damping)
     force = k * z + eps * k * z**3 + damping
     return np.where(z > 0.0, force, 0.0)

@@ -94,9 +94,16 @@ REGIME_NAMES = {REGIME_FULL_CONTACT: "full contact", REGIME_UPLIFT_POSITIVE: "up
 
 
 def foundation_constants(foundation):
-    """``(k, eps, damping, winkler)`` of a foundation object as plain floats and a bool."""
-    winkler = foundation.winkler
-    return float(foundation.k), float(foundation.eps), float(foundation.damping), winkler
+    """``(k, eps, damping, winkler)`` of a Hunt–Crossley or Winkler foundation as plain floats and a bool
+    (the arguments of :func:`contact_resultants` after ``b``; see :func:`law_constants` for any law)."""
+    return float(foundation.k), float(foundation.eps), float(foundation.damping), foundation.law == "winkler"
+
+
+def law_constants(foundation):
+    """``(k, eps, w_rate, w_indentation)`` of a foundation object as plain floats (the arguments of
+    :func:`law_resultants` after ``b``)."""
+    w_rate, w_indentation = foundation.damping_weights
+    return float(foundation.k), float(foundation.eps), float(w_rate), float(w_indentation)
 
 
 def corner_indentations(theta, z_cb, b):
@@ -131,6 +138,14 @@ def contact_length(theta, z_cb, b):
 
 
 def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler=False):
+    """Resultants for a Hunt–Crossley (``winkler=False``) or Winkler bed: :func:`law_resultants` with the
+    weights of that law (``damping`` = ``lam`` [N s/m^4] or ``c`` [N s/m^2]).  Kept for callers that
+    hold a damping and a flag; the solvers pass the law's weights."""
+    w_rate, w_indentation = (damping, 0.0) if winkler else (0.0, damping)
+    return law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation)
+
+
+def law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
     """Resultant contact force ``F_cb`` [N] and moment ``M_cb`` [N m] (eqs. 5–6), exact.
 
     Vectorised over all array arguments (broadcast).  See the module docstring for the
@@ -145,13 +160,19 @@ def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, win
     b : half-width of the base [m].
     k : bed stiffness [N/m^2].
     eps : cubic stiffness parameter [1/m^2].
-    damping : ``lam`` [N s/m^4] for Hunt–Crossley (``lam z zdot``) or ``c`` [N s/m^2] for
-        Winkler (``c zdot``, ``winkler=True``).
-    winkler : bool, which damping law.
+    w_rate, w_indentation : weights [N s m-2], [N s m-3] of the law's damping pressure
+        ``zdot (w_rate + w_indentation z)`` (:attr:`screening.model.Foundation.damping_weights`:
+        Winkler ``(c, 0)``, Hunt–Crossley ``(0, lam)``).
 
     Returns
     -------
     (F_cb, M_cb) : arrays [N], [N m]; both zero in flight.
+
+    Notes
+    -----
+    ``F_cb = k int z + eps k int z^3 + w_rate int zdot + w_indentation int z zdot`` and
+    ``M_cb = sigma cos(theta) (k int z r + eps k int z^3 r + w_rate int zdot r + w_indentation int z zdot r)``
+    over the contact zone, each integral exact from its end values (module docstring).
     """
     theta = np.asarray(theta, dtype=float)
     theta_dot = np.asarray(theta_dot, dtype=float)
@@ -178,16 +199,14 @@ def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, win
     int_z3r = P * ((z1**3 * r1 + z2**3 * r2) / 5.0 + (z1**3 * r2 + z2**3 * r1) / 20.0
                    + 3.0 * (z1 * z1 * z2 * r1 + z1 * z2 * z2 * r2) / 20.0
                    + (z1 * z1 * z2 * r2 + z1 * z2 * z2 * r1) / 10.0)
-    if winkler:
-        int_d = P * (v1 + v2) / 2.0
-        int_dr = P * (2.0 * v1 * r1 + v1 * r2 + v2 * r1 + 2.0 * v2 * r2) / 6.0
-    else:
-        int_d = P * (2.0 * z1 * v1 + z1 * v2 + z2 * v1 + 2.0 * z2 * v2) / 6.0
-        int_dr = P * ((z1 * v1 * r1 + z2 * v2 * r2) / 4.0
-                      + (z1 * v1 * r2 + z1 * v2 * r1 + z2 * v1 * r1
-                         + z1 * v2 * r2 + z2 * v1 * r2 + z2 * v2 * r1) / 12.0)
-    force = k * int_z + eps * k * int_z3 + damping * int_d
-    moment = sigma * c * (k * int_zr + eps * k * int_z3r + damping * int_dr)
+    int_v = P * (v1 + v2) / 2.0
+    int_vr = P * (2.0 * v1 * r1 + v1 * r2 + v2 * r1 + 2.0 * v2 * r2) / 6.0
+    int_zv = P * (2.0 * z1 * v1 + z1 * v2 + z2 * v1 + 2.0 * z2 * v2) / 6.0
+    int_zvr = P * ((z1 * v1 * r1 + z2 * v2 * r2) / 4.0
+                   + (z1 * v1 * r2 + z1 * v2 * r1 + z2 * v1 * r1
+                      + z1 * v2 * r2 + z2 * v1 * r2 + z2 * v2 * r1) / 12.0)
+    force = k * int_z + eps * k * int_z3 + (w_rate * int_v + w_indentation * int_zv)
+    moment = sigma * c * (k * int_zr + eps * k * int_z3r + (w_rate * int_vr + w_indentation * int_zvr))
     force = np.where(in_contact, force, 0.0)
     moment = np.where(in_contact, moment, 0.0)
     return force, moment
@@ -236,17 +255,31 @@ def rest_indentation(block, foundation):
 # ----------------------------------------------------------------------------- compiled
 @numba.njit(cache=True)
 def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """Compiled scalar :func:`contact_resultants`: returns ``(F_cb [N], M_cb [N m])``.
-
-    Same arguments and units; ``winkler`` is a bool.
-    """
+    """Compiled scalar :func:`contact_resultants` (Hunt–Crossley or Winkler by the bool ``winkler``):
+    returns ``(F_cb [N], M_cb [N m])``; kept for callers that hold a flag (see :func:`law_resultants_jit`)."""
     return contact_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
-                                   damping, winkler)
+                                       damping, winkler)
 
 
 @numba.njit(cache=True)
 def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """:func:`contact_resultants_jit` from ``s = sin(theta)``, ``c = cos(theta)`` (``|theta| < pi/2``).
+    """:func:`contact_resultants_jit` from ``s = sin(theta)``, ``c = cos(theta)``: :func:`law_resultants_trig_jit`
+    with the weights of the Winkler (``winkler`` true) or Hunt–Crossley law."""
+    if winkler:
+        return law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, 0.0)
+    return law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, 0.0, damping)
+
+
+@numba.njit(cache=True)
+def law_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
+    """Compiled scalar :func:`law_resultants`: returns ``(F_cb [N], M_cb [N m])``; same arguments and units."""
+    return law_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
+                                   w_rate, w_indentation)
+
+
+@numba.njit(cache=True)
+def law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
+    """:func:`law_resultants_jit` from ``s = sin(theta)``, ``c = cos(theta)`` (``|theta| < pi/2``).
 
     Used by the Monte Carlo integrator, which needs ``sin`` and ``cos`` anyway.
     """
@@ -273,14 +306,12 @@ def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damp
     int_zr = P * (2.0 * z1 * r1 + z1 * r2 + z2 * r1 + 2.0 * z2 * r2) / 6.0
     int_z3r = P * ((z1s * z1 * r1 + z2s * z2 * r2) * 0.2 + (z1s * z1 * r2 + z2s * z2 * r1) * 0.05
                    + 0.15 * (z1s * z2 * r1 + z1 * z2s * r2) + 0.1 * (z1s * z2 * r2 + z1 * z2s * r1))
-    if winkler:
-        int_d = P * (v1 + v2) * 0.5
-        int_dr = P * (2.0 * v1 * r1 + v1 * r2 + v2 * r1 + 2.0 * v2 * r2) / 6.0
-    else:
-        int_d = P * (2.0 * z1 * v1 + z1 * v2 + z2 * v1 + 2.0 * z2 * v2) / 6.0
-        int_dr = P * ((z1 * v1 * r1 + z2 * v2 * r2) * 0.25
-                      + (z1 * v1 * r2 + z1 * v2 * r1 + z2 * v1 * r1
-                         + z1 * v2 * r2 + z2 * v1 * r2 + z2 * v2 * r1) / 12.0)
-    force = k * int_z + eps * k * int_z3 + damping * int_d
-    moment = sigma * c * (k * int_zr + eps * k * int_z3r + damping * int_dr)
+    int_v = P * (v1 + v2) * 0.5
+    int_vr = P * (2.0 * v1 * r1 + v1 * r2 + v2 * r1 + 2.0 * v2 * r2) / 6.0
+    int_zv = P * (2.0 * z1 * v1 + z1 * v2 + z2 * v1 + 2.0 * z2 * v2) / 6.0
+    int_zvr = P * ((z1 * v1 * r1 + z2 * v2 * r2) * 0.25
+                   + (z1 * v1 * r2 + z1 * v2 * r1 + z2 * v1 * r1
+                      + z1 * v2 * r2 + z2 * v1 * r2 + z2 * v2 * r1) / 12.0)
+    force = k * int_z + eps * k * int_z3 + (w_rate * int_v + w_indentation * int_zv)
+    moment = sigma * c * (k * int_zr + eps * k * int_z3r + (w_rate * int_vr + w_indentation * int_zvr))
     return force, moment

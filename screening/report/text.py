@@ -125,8 +125,14 @@ def bed_lines(ds, max_points=400):
     from screening.beds import bed_summary, format_bed_summary
     from screening.model import Block, Foundation
 
+    from screening import laws
+
     law = ds.attrs.get("contact", "hunt_crossley")
-    names = ("m", "b", "h", "I_cm", "g", "k", "lam" if law == "hunt_crossley" else "c", "eps")
+    try:
+        damping = laws.get(law).parameter
+    except ValueError:
+        return []
+    names = ("m", "b", "h", "I_cm", "g", "k", damping, "eps")
     try:
         arrays = xr.broadcast(*(parameter(ds, n) for n in names))
     except KeyError:
@@ -136,7 +142,7 @@ def bed_lines(ds, max_points=400):
     for row in flat[:max_points]:
         p = dict(zip(names, row))
         try:
-            bed = Foundation(k=p["k"], eps=p["eps"], **({"lam": p["lam"]} if "lam" in p else {"c": p["c"]}))
+            bed = Foundation(k=p["k"], eps=p["eps"], law=law, **{damping: p[damping]})
             summaries.append(bed_summary(Block(m=p["m"], b=p["b"], h=p["h"], I_cm=p["I_cm"], g=p["g"]), bed))
         except ValueError:
             continue

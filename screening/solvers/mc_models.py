@@ -21,7 +21,7 @@ from scipy import optimize
 
 from screening import condensation as condensations
 from screening.condensation.paper import uplift_threshold as paper_uplift_threshold
-from screening.physics.contact import contact_resultants, rest_indentation
+from screening.physics.contact import law_constants, law_resultants, rest_indentation
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, register
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
@@ -62,8 +62,7 @@ def quasi_static_indentation(block, foundation, theta0):
     weight = float(block.m * block.g)
 
     def excess(z):
-        force, _ = contact_resultants(theta0, 0.0, z, 0.0, b, float(foundation.k), float(foundation.eps),
-                                      float(foundation.damping), foundation.winkler)
+        force, _ = law_resultants(theta0, 0.0, z, 0.0, b, *law_constants(foundation))
         return float(force) - weight
 
     lo = -b * abs(math.sin(theta0))          # flight boundary: no force

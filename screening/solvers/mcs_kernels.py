@@ -31,7 +31,7 @@ from screening.kernels import dopri
 from screening.kernels import rodas as _ro
 from screening.kernels.interpolation import hermite, hermite_rate
 from screening.kernels.signatures import function_type, record_type, sdof_coefficients_signature
-from screening.physics.contact import contact_resultants_trig_jit
+from screening.physics.contact import law_resultants_trig_jit
 from screening.status import DivergenceReason, SampleStatus
 
 #: Which equations a sample integrates.
@@ -53,7 +53,7 @@ REASON_NO_EQUILIBRIUM = int(DivergenceReason.no_equilibrium)
 #: Per-sample-run parameters of the compiled kernels (SI units), built by :func:`model_record`.
 MODEL = np.dtype([
     ("m", "f8"), ("g", "f8"), ("h", "f8"), ("I_cm", "f8"), ("b", "f8"),      # block
-    ("k", "f8"), ("eps", "f8"), ("damping", "f8"), ("winkler", "f8"),        # bed (damping: lam or c)
+    ("k", "f8"), ("eps", "f8"), ("w_rate", "f8"), ("w_indentation", "f8"),  # bed (law's weights)
     ("m_sdof", "f8"),                                                        # I_cm + m h^2 [kg m2]
     ("theta_over", "f8"),        # overturning angle atan(b/h) [rad]
     ("theta_ul", "f8"),          # uplift threshold of the condensation [rad] (condensed uplift flag)
@@ -76,7 +76,7 @@ def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     rec = np.zeros((), dtype=MODEL)
     values = dict(m=m, g=g, h=h, I_cm=float(block.I_cm), b=b, k=float(foundation.k), eps=float(foundation.eps),
-                  damping=float(foundation.damping), winkler=1.0 if foundation.winkler else 0.0,
+                  w_rate=float(foundation.damping_weights[0]), w_indentation=float(foundation.damping_weights[1]),
                   m_sdof=float(block.m_sdof), theta_over=float(block.slenderness),
                   theta_ul=float(cond.uplift_threshold(block, foundation)),
                   theta_cap=float(cond.capacity_angle(block, foundation)), max_flight=float(max_flight_time),
@@ -101,8 +101,8 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p):
     m, g, h = p.m, p.g, p.h
     s = math.sin(theta)
     c = math.cos(theta)
-    force, moment = contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.damping,
-                                            p.winkler != 0.0)
+    force, moment = law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.w_rate,
+                                            p.w_indentation)
     mh = m * h
     theta_ddot = ((mh * x_g_ddot * c - moment + h * force * s + mh * h * theta_dot * theta_dot * s * c)
                   / (p.I_cm + mh * h * c * c))

@@ -5,8 +5,10 @@ integrators of one parameter point:
 
 * :func:`solve_point_white`: modulated white noise, the 3 moments ``(var_theta, cov,
   var_theta_dot)`` held in scalar locals (no arrays, no runtime-length loops);
-* :func:`solve_point_kt`: Kanai–Tajimi, the 10 entries of the 4x4 covariance of ``(theta,
-  theta', u_g, u_g')`` in fixed-size arrays with constant-length loops.
+* :func:`solve_point_filtered`: an input shaped by a linear filter (Kanai–Tajimi, Clough–Penzien,
+  any :class:`screening.excitations.Excitation` with filter states), the packed covariance of
+  ``(theta, theta', x)`` (10 entries for Kanai–Tajimi, 21 for Clough–Penzien) from the filter's
+  state-space matrices (:func:`augmented_rhs`, numpy reference :func:`lyapunov_rhs`).
 
 Both run the same Dormand–Prince 5(4) pair, controller and dense output
 (:mod:`screening.kernels.dopri`) and share every piece of step bookkeeping through the inlined
@@ -38,7 +40,6 @@ from screening.kernels.dopri import (
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
     B1, B3, B4, B5, B6, C2, C3, C4, E1, E3, E4, E5, E6, E7, dense_value)
 from screening.kernels.signatures import FMA
-from screening.model.excitation import stationary_filter_moments_jit
 from screening.status import PointStatus
 
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
@@ -327,80 +328,172 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
     return code, t, steps, rejected, best, best_t, lowest_k
 
 
-# ---------------------------------------------------------------- Kanai-Tajimi: 10 moments
-#: Independent entries of the 4x4 symmetric covariance, stored as (00 01 02 03 11 12 13 22 23 33).
-N_KT = 10
+# ---------------------------------------------------------------- filtered input: the augmented system
+@numba.njit(cache=True)
+def packed_size(n):
+    """Independent entries of an ``n x n`` symmetric covariance (the state of :func:`solve_point_filtered`)."""
+    return n * (n + 1) // 2
+
+
+def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
+    """Drift matrix ``A`` [n x n] and noise vector ``b`` [n] of the oscillator driven by a filtered input,
+    state ``(theta, theta', x)`` with ``x`` the ``n_f`` filter states (numpy reference).
+
+    ``theta'' = -(k_eq theta + c_eq theta') / m_sdof + alpha (C x + D w)``, ``x' = A_f x + B_f w``:
+    ``A = [[0, 1, 0], [-k_eq/m_sdof, -c_eq/m_sdof, alpha C], [0, 0, A_f]]``, ``b = [0, alpha D, B_f]``.
+    ``filt``: a scalar :class:`screening.excitations.Filter`; ``alpha`` the input gain ``m h q(t) / m_sdof`` [1/m].
+    """
+    A_f, B_f, C_f, D_f = (np.asarray(m, dtype=float) for m in filt)
+    nf = A_f.shape[-1]
+    A = np.zeros((nf + 2, nf + 2))
+    A[0, 1] = 1.0
+    A[1, 0], A[1, 1] = -k_eq / m_sdof, -c_eq / m_sdof
+    A[1, 2:] = alpha * C_f
+    A[2:, 2:] = A_f
+    b = np.concatenate([[0.0, alpha * float(D_f)], B_f])
+    return A, b
+
+
+def lyapunov_rhs(P, A, b, S0):
+    """Right-hand side of the moment equations ``dP/dt = A P + P A^T + 2 pi S0 b b^T`` (eqs. 45, 51;
+    numpy reference of :func:`augmented_rhs`).  ``P`` [n x n] covariance, ``S0`` [m2 s-3]."""
+    return A @ P + P @ A.T + 2.0 * math.pi * S0 * np.outer(b, b)
 
 
 @numba.njit(cache=True, inline="always")
-def _kt_rhs(coefficients, cond, table, osc, alpha, y, dy):
-    """Eq. (51) into ``dy``; returns ``(c_eq, k_eq)`` at ``y`` (``alpha``: input gain at the stage time)."""
-    c_eq, k_eq = coefficients(cond, table, y[0], y[1])
-    m = osc.m_sdof
-    kap = k_eq / m
-    gam = c_eq / m
-    wg = osc.omega_g
-    zg = osc.zeta_g
-    w2 = wg * wg
-    b2 = alpha * w2
-    b3 = 2.0 * alpha * zg * wg
-    c00, c01, c02, c03, c11, c12, c13, c22, c23, c33 = (
-        y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9])
-    # A = Q C, rows of Q: [0 1 0 0], [-kap -gam -b2 -b3], [0 0 0 1], [0 0 -w2 -2 zg wg]
-    a10 = -kap * c00 - gam * c01 - b2 * c02 - b3 * c03
-    a11 = -kap * c01 - gam * c11 - b2 * c12 - b3 * c13
-    a12 = -kap * c02 - gam * c12 - b2 * c22 - b3 * c23
-    a13 = -kap * c03 - gam * c13 - b2 * c23 - b3 * c33
-    two_zw = 2.0 * zg * wg
-    a30 = -w2 * c02 - two_zw * c03
-    a31 = -w2 * c12 - two_zw * c13
-    a32 = -w2 * c22 - two_zw * c23
-    a33 = -w2 * c23 - two_zw * c33
-    # dC = A + A^T + D, rows 0 and 2 of A are rows 1 and 3 of C
-    dy[0] = 2.0 * c01
-    dy[1] = c11 + a10
-    dy[2] = c12 + c03
-    dy[3] = c13 + a30
-    dy[4] = 2.0 * a11
-    dy[5] = a12 + c13
-    dy[6] = a13 + a31
-    dy[7] = 2.0 * c23
-    dy[8] = c33 + a32
-    dy[9] = 2.0 * a33 + 2.0 * math.pi * osc.S0
-    return c_eq, k_eq
+def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
+    """Compiled :func:`lyapunov_rhs` on the packed covariance ``y`` (rows of the upper triangle) into ``dy``.
 
-
-@numba.njit(cache=True, inline="always")
-def _kt_scales(osc, scale):
-    """Absolute-tolerance scales of the 10 moments from the linear oscillator under the filter."""
-    m = osc.m_sdof
-    w2 = abs(osc.k_rest) / m
-    if w2 <= 0.0:
-        w2 = 1.0
-    zw = max(0.5 * osc.c_rest / m, 0.05)
-    wg = osc.omega_g
-    zg = osc.zeta_g
-    num = wg**4 + 4.0 * zg * zg * wg * wg * w2
-    den = (w2 - wg * wg) ** 2 + 4.0 * zg * zg * wg * wg * w2
-    s_eff = osc.S0 * num / den
-    g2 = osc.gain ** 2
-    vd = math.pi * s_eff * g2 / (2.0 * zw)
-    d0 = vd / w2
-    d2, d3 = stationary_filter_moments_jit(osc.S0, wg, zg)
-    diag = (d0, vd, d2, d3)
+    ``kap = k_eq / m_sdof``, ``gam = c_eq / m_sdof``, ``alpha`` the input gain, ``q = 2 pi S0``;
+    ``fa, fb, fc, fd`` the filter's ``A, B, C, D``; ``P``, ``M``: ``n x n`` work arrays.  Rows 0 and 2..
+    of ``A P`` are read from ``P`` and the filter; zero entries of ``A`` are never multiplied.
+    """
+    n = P.shape[0]
+    nf = n - 2
     idx = 0
-    for i in range(4):
-        for j in range(i, 4):
-            scale[idx] = max(math.sqrt(diag[i]) * math.sqrt(diag[j]), SCALE_FLOOR)   # no S0^2 underflow
+    for i in range(n):
+        for j in range(i, n):
+            P[i, j] = y[idx]
+            P[j, i] = y[idx]
+            idx += 1
+    for j in range(n):
+        M[0, j] = P[1, j]
+        s = -kap * P[0, j] - gam * P[1, j]
+        for k in range(nf):
+            s = s + (alpha * fc[k]) * P[2 + k, j]
+        M[1, j] = s
+        for r in range(nf):
+            s = 0.0
+            for k in range(nf):
+                if fa[r, k] != 0.0:
+                    s = s + fa[r, k] * P[2 + k, j]
+            M[2 + r, j] = s
+    b1 = alpha * fd
+    idx = 0
+    for i in range(n):
+        bi = b1 if i == 1 else (fb[i - 2] if i >= 2 else 0.0)
+        for j in range(i, n):
+            bj = b1 if j == 1 else (fb[j - 2] if j >= 2 else 0.0)
+            dy[idx] = M[i, j] + M[j, i] + q * bi * bj
             idx += 1
 
 
+@numba.njit(cache=True, inline="always")
+def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
+    """:func:`augmented_rhs` written out for a filter of two states (Kanai–Tajimi): the 10 packed
+    entries ``(00 01 02 03 11 12 13 22 23 33)`` of ``(theta, theta', x0, x1)``, no work arrays."""
+    c00, c01, c02, c03, c11, c12, c13, c22, c23, c33 = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9]
+    g0 = alpha * fc[0]
+    g1 = alpha * fc[1]
+    f00, f01, f10, f11 = fa[0, 0], fa[0, 1], fa[1, 0], fa[1, 1]
+    # rows 1, 2, 3 of A P (row 0 is row 1 of P)
+    a10 = -kap * c00 - gam * c01 + g0 * c02 + g1 * c03
+    a11 = -kap * c01 - gam * c11 + g0 * c12 + g1 * c13
+    a12 = -kap * c02 - gam * c12 + g0 * c22 + g1 * c23
+    a13 = -kap * c03 - gam * c13 + g0 * c23 + g1 * c33
+    a20 = f00 * c02 + f01 * c03
+    a21 = f00 * c12 + f01 * c13
+    a22 = f00 * c22 + f01 * c23
+    a23 = f00 * c23 + f01 * c33
+    a30 = f10 * c02 + f11 * c03
+    a31 = f10 * c12 + f11 * c13
+    a32 = f10 * c22 + f11 * c23
+    a33 = f10 * c23 + f11 * c33
+    b1 = alpha * fd
+    b2 = fb[0]
+    b3 = fb[1]
+    dy[0] = 2.0 * c01
+    dy[1] = c11 + a10
+    dy[2] = c12 + a20
+    dy[3] = c13 + a30
+    dy[4] = 2.0 * a11 + q * b1 * b1
+    dy[5] = a12 + a21 + q * b1 * b2
+    dy[6] = a13 + a31 + q * b1 * b3
+    dy[7] = 2.0 * a22 + q * b2 * b2
+    dy[8] = a23 + a32 + q * b2 * b3
+    dy[9] = 2.0 * a33 + q * b3 * b3
+
+
+@numba.njit(cache=True, inline="always")
+def _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, alpha, y, dy, P, M):
+    """:func:`augmented_rhs` (:func:`augmented_rhs_two_states` for two filter states) at the
+    coefficients of the moments ``y``; returns ``(c_eq, k_eq)``."""
+    c_eq, k_eq = coefficients(cond, table, y[0], y[1])
+    m = osc.m_sdof
+    if n == 10:
+        augmented_rhs_two_states(k_eq / m, c_eq / m, alpha, 2.0 * math.pi * osc.S0, fa, fb, fc, fd, y, dy)
+    else:
+        augmented_rhs(k_eq / m, c_eq / m, alpha, 2.0 * math.pi * osc.S0, fa, fb, fc, fd, y, dy, P, M)
+    return c_eq, k_eq
+
+
+def filtered_scales(osc, filter_covariance, psd_at_rocking):
+    """Absolute-tolerance scales of the packed moments of every point, ``(n_points, n (n+1)/2)``.
+
+    The oscillator's entries from the linear oscillator at rest under the input's PSD at its
+    frequency (``psd_at_rocking`` [m2 s-3], one per point), the filter's from its stationary
+    covariance ``filter_covariance`` [..., n_f, n_f]; ``sqrt(d_i) sqrt(d_j)`` (no ``S0^2`` underflow).
+    """
+    m = osc["m_sdof"]
+    w2 = np.abs(osc["k_rest"]) / m
+    w2 = np.where(w2 <= 0.0, 1.0, w2)
+    zw = np.maximum(0.5 * osc["c_rest"] / m, 0.05)
+    vd = math.pi * psd_at_rocking * osc["gain"] ** 2 / (2.0 * zw)
+    diag = np.concatenate([np.stack([vd / w2, vd], -1), np.diagonal(filter_covariance, axis1=-2, axis2=-1)], -1)
+    root = np.sqrt(diag)
+    iu = np.triu_indices(diag.shape[-1])
+    return np.maximum(root[:, iu[0]] * root[:, iu[1]], SCALE_FLOOR)
+
+
 @numba.njit(cache=True, fastmath=FMA)
-def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
-                   var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
-    """One Kanai–Tajimi point; histories into row ``i`` of the outputs only if ``store``.  Returns the
-    :data:`SUMMARIES`."""
-    n = N_KT
+def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                         store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """One point driven through a shaping filter (``fa, fb, fc, fd``: its ``A, B, C, D``), the packed
+    covariance of ``(theta, theta', x)`` as the state; ``scale``: its absolute-tolerance scales
+    (:func:`filtered_scales`).  Histories into row ``i`` only if ``store``.  Returns the :data:`SUMMARIES`."""
+    return _filtered_steps(packed_size(fa.shape[0] + 2), coefficients, cond, table, osc, fa, fb, fc, fd, scale,
+                           t_out, rtol, h_max, max_steps, store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o,
+                           p_upl)
+
+
+@numba.njit(cache=True, fastmath=FMA)
+def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                           store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """:func:`solve_point_filtered` for a filter of two states (Kanai–Tajimi): the 10 moments in loops of
+    constant length (unrolled by the compiler) and :func:`augmented_rhs_two_states`."""
+    return _filtered_steps(10, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                           store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+
+
+@numba.njit(cache=True, inline="always")
+def _filtered_steps(n, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
+                    store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
+    """The step loop of :func:`solve_point_filtered` for ``n`` packed moments (inlined: a constant ``n``
+    gives constant-length loops)."""
+    nn = fa.shape[0] + 2
+    i11 = nn                                          # packed index of (1, 1): var_theta_dot
+    P = np.empty((nn, nn))
+    M = np.empty((nn, nn))
     y = np.zeros(n)
     yn = np.empty(n)
     z = np.empty(n)
@@ -411,16 +504,14 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
     K5 = np.empty(n)
     K6 = np.empty(n)
     K7 = np.empty(n)
-    scale = np.empty(n)
     t = t_out[0]
     e1, e2 = envelope_state(osc, t)
-    c0, k0 = _kt_rhs(coefficients, cond, table, osc, initial_gain(osc, e1, e2), y, K1)
+    c0, k0 = _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, initial_gain(osc, e1, e2), y, K1, P, M)
     if store:
-        store_outputs(coefficients, cond, table, osc, i, 0, y[0], y[1], y[4],
+        store_outputs(coefficients, cond, table, osc, i, 0, y[0], y[1], y[i11],
                       var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
     h, code, t_end = first_step(osc, k0, h_max, t, t_out[t_out.shape[0] - 1])
     next_out, best, best_t, lowest_k, steps, rejected, log_err_old = 1, 0.0, t, k0, 0, 0, dopri.LOG_ERR_START
-    _kt_scales(osc, scale)                           # absolute-tolerance scales
     while t < t_end:
         h, code = trial_step(h, t, t_end, steps, max_steps)
         if code != OK:
@@ -428,22 +519,22 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
         a2, a3, a4, a5, a6, f1, f2 = stage_gains(osc, e1, e2, h)
         for j in range(n):
             z[j] = y[j] + h * (A21 * K1[j])
-        _kt_rhs(coefficients, cond, table, osc, a2, z, K2)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a2, z, K2, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A31 * K1[j] + A32 * K2[j])
-        _kt_rhs(coefficients, cond, table, osc, a3, z, K3)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a3, z, K3, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A41 * K1[j] + A42 * K2[j] + A43 * K3[j])
-        _kt_rhs(coefficients, cond, table, osc, a4, z, K4)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a4, z, K4, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A51 * K1[j] + A52 * K2[j] + A53 * K3[j] + A54 * K4[j])
-        _kt_rhs(coefficients, cond, table, osc, a5, z, K5)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a5, z, K5, P, M)
         for j in range(n):
             z[j] = y[j] + h * (A61 * K1[j] + A62 * K2[j] + A63 * K3[j] + A64 * K4[j] + A65 * K5[j])
-        _kt_rhs(coefficients, cond, table, osc, a6, z, K6)
+        _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a6, z, K6, P, M)
         for j in range(n):
             yn[j] = y[j] + h * (B1 * K1[j] + B3 * K3[j] + B4 * K4[j] + B5 * K5[j] + B6 * K6[j])
-        c_new, k_new = _kt_rhs(coefficients, cond, table, osc, a6, yn, K7)
+        c_new, k_new = _filtered_rhs(n, coefficients, cond, table, osc, fa, fb, fc, fd, a6, yn, K7, P, M)
         err = 0.0
         finite = True
         for j in range(n):
@@ -462,9 +553,9 @@ def solve_point_kt(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps
         kv = (K1[0], K3[0], K4[0], K5[0], K6[0], K7[0])
         kc = (K1[1], K3[1], K4[1], K5[1], K6[1], K7[1])
         if store:
-            kd = (K1[4], K3[4], K4[4], K5[4], K6[4], K7[4])
+            kd = (K1[i11], K3[i11], K4[i11], K5[i11], K6[i11], K7[i11])
             next_out = store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h,
-                                           (y[0], y[1], y[4]), (kv, kc, kd),
+                                           (y[0], y[1], y[i11]), (kv, kc, kd),
                                            var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
         best, best_t = peak_in_step(t, h, y[0], yn[0], y[1], yn[1], kv, kc, best, best_t)
         y, yn = yn, y

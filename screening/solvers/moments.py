@@ -3,9 +3,11 @@
 The moment equations ``dC/dt = P C + C P^T + D`` (eq. 45; eq. 51 with the Kanai–Tajimi
 filter) have ``P`` built from ``c_eq`` and ``k_eq`` evaluated at the current moments, so
 the whole system is one nonlinear ODE in the independent covariance entries: 3 for
-modulated white noise (``var_theta, cov, var_theta_dot``), 10 for Kanai–Tajimi (the 4x4
-symmetric covariance of ``theta, theta', u_g, u_g'``).  Only what the excitation needs is
-integrated.
+modulated white noise (``var_theta, cov, var_theta_dot``), ``(n_f + 2)(n_f + 3)/2`` for an
+excitation with ``n_f`` filter states (10 for Kanai–Tajimi: the 4x4 symmetric covariance of
+``theta, theta', u_g, u_g'``).  The excitation enters only through its filter's state-space
+matrices (:meth:`screening.excitations.Excitation.filter`), its PSD at the rocking frequency and
+its stationary covariance (tolerance scales); the compiled loop never looks at its kind.
 
 :func:`solve_moments` integrates a batch of parameter points in one compiled call:
 an embedded Dormand–Prince 5(4) pair per point, with absolute tolerances scaled to the
@@ -28,6 +30,8 @@ Method and how it is checked: ``docs/method.md#moment-equations``.
 from __future__ import annotations
 
 
+import dataclasses
+
 import numba
 import numpy as np
 from numba import types
@@ -36,7 +40,8 @@ from scipy.special import erfc
 from screening.condensation import get as get_condensation
 from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
 from screening.model.points import flatten, select
-from screening.solvers.moment_kernels import solve_point_kt, solve_point_white
+from screening.solvers.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
+                                              solve_point_white)
 from screening.status import PointStatus
 from screening.validation import check_integer, check_scalar, check_size
 from screening.workflow import limits
@@ -58,8 +63,6 @@ OSCILLATOR = np.dtype([
     ("c_rest", "f8"),             # C(0) [N m s/rad]
     ("k_rest", "f8"),             # K(0) [N m/rad]
     ("S0", "f8"),                 # two-sided PSD level of the driving white noise [m2/s3]
-    ("omega_g", "f8"),            # Kanai-Tajimi filter frequency [rad/s] (1 for white noise)
-    ("zeta_g", "f8"),             # Kanai-Tajimi filter damping [1] (1 for white noise)
     ("constant_envelope", "f8"),  # 1: q(t) = 1, 0: q(t) = 4 (exp(-t/T1) - exp(-t/T2))
     ("T1", "f8"), ("T2", "f8"),   # envelope times [s]
     ("slenderness", "f8"),        # atan(b/h) [rad]: sigma_theta beyond it stops the point
@@ -72,7 +75,6 @@ SUMMARY_VARIABLES = ("status", "t_stop", "n_steps", "peak_var_theta", "t_peak_va
 
 def oscillator_records(block, foundation, excitation, cond):
     """One :data:`OSCILLATOR` record per point of flat (1-d) model fields."""
-    kt = excitation.kind == "kanai_tajimi"
     env = excitation.envelope
     constant = env.kind == "constant"
     fields = {
@@ -82,8 +84,6 @@ def oscillator_records(block, foundation, excitation, cond):
         "c_rest": cond.damping_at_rest(block, foundation),
         "k_rest": cond.stiffness_at_rest(block, foundation),
         "S0": excitation.S0,
-        "omega_g": excitation.omega_g if kt else 1.0,
-        "zeta_g": excitation.zeta_g if kt else 1.0,
         "constant_envelope": 1.0 if constant else 0.0,
         "T1": 1.0 if constant else env.T1,
         "T2": 0.5 if constant else env.T2,
@@ -96,22 +96,61 @@ def oscillator_records(block, foundation, excitation, cond):
     return out
 
 
-def in_float_range(osc, kt):
+class FilterArrays:
+    """The excitation's filter for the compiled loops, one row per point: ``A`` (n, n_f, n_f), ``B``,
+    ``C`` (n, n_f), ``D`` (n,) and the absolute-tolerance scales of the packed moments (n, m)
+    (:func:`screening.solvers.moment_kernels.filtered_scales`; empty for white noise)."""
+
+    def __init__(self, excitation, osc):
+        n = osc.size
+        filt = excitation.filter()
+        nf = np.shape(filt.A)[-1]
+        self.A = np.array(np.broadcast_to(filt.A, (n, nf, nf)), dtype=float, order="C")
+        self.B = np.array(np.broadcast_to(filt.B, (n, nf)), dtype=float, order="C")
+        self.C = np.array(np.broadcast_to(filt.C, (n, nf)), dtype=float, order="C")
+        self.D = np.array(np.broadcast_to(filt.D, (n,)), dtype=float, order="C")
+        self.states = nf
+        if nf == 0:
+            self.scale = np.zeros((n, 0))
+            self.unit_variances = np.ones((n, 0))
+            return
+        with np.errstate(all="ignore"):
+            w = np.sqrt(np.abs(osc["k_rest"]) / osc["m_sdof"])
+            psd = np.asarray(excitation.psd(np.where(w > 0.0, w, 1.0)), dtype=float)
+            # stationary covariance of the filter states per unit S0: finite and positive unless a filter
+            # frequency is beyond float64 (an intensity beyond it is the solver's to flag)
+            unit = np.broadcast_to(dataclasses.replace(excitation, S0=np.ones(n)).stationary_covariance(),
+                                   (n, nf, nf))
+            self.unit_variances = np.diagonal(unit, axis1=-2, axis2=-1)
+            cov = unit * osc["S0"][:, None, None]
+            self.scale = np.array(filtered_scales(osc, cov, np.broadcast_to(psd, (n,))), dtype=float, order="C")
+
+    def select(self, part):
+        out = object.__new__(FilterArrays)
+        out.A, out.B, out.C, out.D, out.scale = (a[part] for a in (self.A, self.B, self.C, self.D, self.scale))
+        out.states = self.states
+        out.unit_variances = self.unit_variances[part]
+        return out
+
+
+def in_float_range(osc, filters):
     """Points of :data:`OSCILLATOR` records whose scales the compiled loops can form in float64.
 
-    The loops divide by ``theta_ul^2``, ``m_sdof`` and (Kanai–Tajimi) ``zeta_g omega_g^3`` and form
-    ``S0 gain^2``, ``k_rest / m_sdof`` and ``c_rest / m_sdof``: a point where one of them under- or
-    overflows (``k >= ~1e200``, ``m <= ~1e-200``, ``omega_g <= ~1e-150``) would stop the whole batch,
-    so it is flagged :attr:`~screening.status.PointStatus.beyond_float_range` instead.
+    The loops divide by ``theta_ul^2`` and ``m_sdof`` and form ``S0 gain^2``, ``k_rest / m_sdof``,
+    ``c_rest / m_sdof`` and the filter's stationary moments (:class:`FilterArrays`): a point where one
+    of them under- or overflows (``k >= ~1e200``, ``m <= ~1e-200``, a filter frequency ``<= ~1e-150``)
+    would stop the whole batch, so it is flagged :attr:`~screening.status.PointStatus.beyond_float_range`.
     """
     tiny = np.finfo(float).tiny
     with np.errstate(all="ignore"):
         fields = np.stack([osc[name] for name in osc.dtype.names])
         scales = np.stack([osc["theta_ul"] ** 2, osc["m_sdof"], osc["S0"] * osc["gain"] ** 2,
-                           np.abs(osc["k_rest"]) / osc["m_sdof"], np.abs(osc["c_rest"]) / osc["m_sdof"],
-                           osc["zeta_g"] * osc["omega_g"] ** 3 if kt else np.ones(osc.size)])
+                           np.abs(osc["k_rest"]) / osc["m_sdof"], np.abs(osc["c_rest"]) / osc["m_sdof"]])
         ok = np.all(np.isfinite(fields), axis=0) & np.all(np.isfinite(scales), axis=0)
-        ok &= (scales[0] >= tiny) & (scales[1] >= tiny) & (scales[5] >= tiny)
+        ok &= (scales[0] >= tiny) & (scales[1] >= tiny)
+        for a in (filters.A, filters.B, filters.C, filters.unit_variances):
+            ok &= np.all(np.isfinite(a.reshape(a.shape[0], -1)), axis=1)
+        ok &= np.all(filters.unit_variances >= tiny, axis=1)
     return ok
 
 
@@ -134,19 +173,26 @@ def _solve_representable(representable, shape, block, foundation, excitation, t_
 
 
 # ---------------------------------------------------------------- compiled batch
-def _solve_batch(coefficients, conds, osc, tables, table_index, kt, t_out, rtol, h_max, max_steps,
-                 store, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
+def _solve_batch(coefficients, conds, osc, tables, table_index, fa, fb, fc, fd, scale, t_out, rtol, h_max,
+                 max_steps, store, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
                  status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
     """Every point of a batch (compiled per condensation record type by :func:`batch_solver`).
 
     The step loop is specialised by state size (:mod:`screening.solvers.moment_kernels`): 3 scalar
-    moments for white noise, 10 for Kanai–Tajimi.  Histories are written only if ``store``.
+    moments for an input without filter states (white noise), the packed covariance of the
+    augmented system otherwise (``fa, fb, fc, fd``: the filter of each point; constant-length loops
+    for two filter states).  Histories are written only if ``store``.
     """
     for i in range(osc.shape[0]):
         j = table_index[i]
-        if kt:
-            summary = solve_point_kt(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max, max_steps,
-                                     store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        if fa.shape[1] == 2:
+            summary = solve_point_two_states(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
+                                             scale[i], t_out, rtol, h_max, max_steps,
+                                             store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
+        elif fa.shape[1] > 0:
+            summary = solve_point_filtered(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
+                                           scale[i], t_out, rtol, h_max, max_steps,
+                                           store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
         else:
             summary = solve_point_white(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max, max_steps,
                                         store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
@@ -170,7 +216,7 @@ def batch_solver(record_dtype):
         cond = record_type(record_dtype)
         sig = types.void(function_type(moment_coefficients_signature(record_dtype)),
                          types.Array(cond, 1, "C"), types.Array(record_type(OSCILLATOR), 1, "C"), a3,
-                         types.int64[::1], types.boolean, a1, f8, f8, i8, types.boolean, a2, a2, a2, a2, a2, a2,
+                         types.int64[::1], a3, a2, a2, a1, a2, a1, f8, f8, i8, types.boolean, a2, a2, a2, a2, a2, a2,
                          types.int8[::1], a1, types.int64[::1], types.int64[::1], a1, a1, a1)
         _SOLVERS[record_dtype] = numba.njit(sig, cache=True)(_solve_batch)
     return _SOLVERS[record_dtype]
@@ -212,14 +258,14 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     max_steps = check_integer("max_steps", max_steps, 1)
     (block, foundation, excitation), shape = flatten(block, foundation, excitation)
     cond.check(block, foundation)
-    kt = excitation.kind == "kanai_tajimi"
     n, nt = int(np.prod(shape, dtype=int)), t_out.size
     if histories:
         check_size("t_out", n * nt * len(HISTORY_VARIABLES), limits.MAX_HISTORY_VALUES,
                    f"history values ({n} points x {nt} output times x {len(HISTORY_VARIABLES)})")
     h_max = (t_out[-1] - t_out[0]) / 20.0 if h_max is None else check_scalar("h_max", h_max, lower=0.0)
     osc = oscillator_records(block, foundation, excitation, cond)
-    representable = in_float_range(osc, kt)
+    filters = FilterArrays(excitation, osc)
+    representable = in_float_range(osc, filters)
     if not representable.all():
         return _solve_representable(representable, shape, block, foundation, excitation, t_out, rtol, h_max,
                                     max_steps, cond, histories)
@@ -235,8 +281,10 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         part = slice(lo, min(lo + CHUNK, n))
         kernel = cond.moment_kernel(select(block, part), select(foundation, part))
         solver = batch_solver(kernel.records.dtype)
+        f = filters.select(part)
         solver(kernel.coefficients, kernel.records, osc[part], kernel.tables,
-               kernel.table_index, kt, t_out, float(rtol), float(h_max), int(max_steps), bool(histories),
+               kernel.table_index, f.A, f.B, f.C, f.D, f.scale, t_out, float(rtol), float(h_max), int(max_steps),
+               bool(histories),
                hist["var_theta"][part], hist["cov_theta_theta_dot"][part], hist["var_theta_dot"][part],
                hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], status[part], t_stop[part],
                n_steps[part], n_rejected[part], peak[part], t_peak[part], min_k[part])

@@ -47,6 +47,7 @@ import numpy as np
 
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.condensation import get as get_condensation
+from screening.excitations import Excitation, names as excitation_names
 from screening.physics.contact import rest_indentation
 from screening.workflow.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
@@ -97,8 +98,13 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
         if np.ndim(value) != 0:
             raise ValueError(f"parameter '{name}' must be a scalar for {purpose} (got an array of shape "
                              f"{np.shape(value)}); loop over parameter points instead")
-    if excitation is not None and excitation.kind not in ("white", "kanai_tajimi"):
-        raise ValueError(f"parameter 'excitation' must be a WhiteNoise or KanaiTajimi (got kind {excitation.kind!r})")
+    if excitation is not None and not isinstance(excitation, Excitation):
+        raise ValueError(f"parameter 'excitation' must be an excitation of screening.excitations "
+                         f"(one of {excitation_names()}; got {type(excitation).__name__})")
+    for name in (excitation.parameters if excitation is not None else ()):
+        if np.ndim(getattr(excitation, name)) != 0:
+            raise ValueError(f"parameter 'excitation.{name}' must be a scalar for monte_carlo (got an array of "
+                             f"shape {np.shape(getattr(excitation, name))}); loop over parameter points instead")
 
 
 def _check_numerics(numerics):
@@ -142,10 +148,8 @@ def vertical_damping_ratio(block, foundation):
     explicit integrator's stable step.
     """
     b = float(block.b)
-    if foundation.winkler:
-        c_v = 2.0 * b * float(foundation.damping)
-    else:
-        c_v = 2.0 * b * float(foundation.damping) * float(rest_indentation(block, foundation))
+    w_rate, w_indentation = foundation.damping_weights      # the law's damping zdot (w_rate + w_indentation z)
+    c_v = 2.0 * b * (float(w_rate) + float(w_indentation) * float(rest_indentation(block, foundation)))
     return c_v / (2.0 * float(block.m) * vertical_frequency(block, foundation))
 
 

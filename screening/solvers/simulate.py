@@ -200,7 +200,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     for name in ("m", "b", "h", "I_cm", "g"):
         coords[name] = ((), float(getattr(block, name)))
     coords["k"] = ((), float(foundation.k))
-    coords["lam" if foundation.law == "hunt_crossley" else "c"] = ((), float(foundation.damping))
+    coords[foundation.contact_law.parameter] = ((), float(foundation.damping))
     coords["eps"] = ((), float(foundation.eps))
     data = {
         "theta": ("t", theta), "theta_dot": ("t", theta_dot), "z_cb": ("t", z_cb), "z_cb_dot": ("t", z_cb_dot),

@@ -564,15 +564,16 @@ def _half_period_estimate(amplitude, block, foundation):
 
 def _bed_key(block, foundation):
     return (float(block.m), float(block.g), float(block.h), float(block.b), float(block.I_cm), float(foundation.k),
-            float(foundation.eps), float(foundation.damping), bool(foundation.winkler))
+            float(foundation.eps), float(foundation.damping), str(foundation.law))
 
 
 @functools.lru_cache(maxsize=64)
 def _transfer_table_cached(key):
     from screening.model import Block, Foundation
-    m, g, h, b, i_cm, k, eps, damping, winkler = key
+    from screening import laws
+    m, g, h, b, i_cm, k, eps, damping, law = key
     block = Block(m=m, b=b, h=h, I_cm=i_cm, g=g)
-    foundation = Foundation(k=k, eps=eps, **({"c": damping} if winkler else {"lam": damping}))
+    foundation = Foundation(k=k, eps=eps, law=law, **{laws.get(law).parameter: damping})
     return _compute_transfer_table(block, foundation)
 
 

@@ -39,7 +39,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sfft
-from scipy import integrate
 
 
 #: Default cutoff = CUTOFF_FACTOR x the larger of the rocking and vertical frequencies.
@@ -95,11 +94,7 @@ def envelope_rate(envelope, t):
 def band_limited_variance(excitation, cutoff):
     """``int_{-omega_c}^{omega_c} S(omega) d omega`` [m^2/s^4]: stationary variance of the
     unmodulated input band-limited to ``cutoff`` [rad/s] (``2 S0 omega_c`` for white noise)."""
-    if excitation.kind == "white":
-        return 2.0 * excitation.S0 * cutoff
-    value, _ = integrate.quad(lambda w: float(excitation.psd(w)), 0.0, cutoff, limit=400,
-                              points=[excitation.omega_g], epsrel=1e-12)
-    return 2.0 * value
+    return excitation.spectral_moment(0, cutoff, epsrel=1e-12)
 
 
 @dataclass(frozen=True)

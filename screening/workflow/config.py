@@ -25,21 +25,22 @@ from types import MappingProxyType
 
 import numpy as np
 
-from screening import condensation as condensations
+from screening import condensation as condensations, excitations, laws
 from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation
 from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.model.block import LENGTH_RANGE
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
+from screening.model.excitation import ConstantEnvelope, Envelope
 from screening.solvers.timegrid import output_times
 from screening.validation import InputFileError, read_input_text
 from screening.workflow import limits
 
+#: Numeric parameters of the registered excitations besides S0 (``omega_g``, ``zeta_g``, ...).
+EXCITATION_PARAMETERS = excitations.parameters()
 #: Parameters that may be swept (given as a list or a range).
-SWEEPABLE = ("eps", "S0", "pga", "k", "lam", "c", "omega_g", "zeta_g")
+SWEEPABLE = ("eps", "S0", "pga", "k", "lam", "c", *EXCITATION_PARAMETERS)
 
-CONTACTS = ("hunt_crossley", "winkler")
-EXCITATIONS = ("white", "kanai_tajimi")
+EXCITATIONS = excitations.names()
 ENVELOPES = ("exponential", "constant")
 
 #: Numeric model parameters: (table, lower bound, lower bound inclusive, upper bound or None).
@@ -50,7 +51,7 @@ NUMERIC = {
     "k": ("foundation", 0.0, False, None), "lam": ("foundation", 0.0, True, None),
     "c": ("foundation", 0.0, True, None), "eps": ("foundation", None, False, None),
     "S0": ("excitation", 0.0, False, None), "pga": ("excitation", 0.0, False, None),
-    "omega_g": ("excitation", 0.0, False, None), "zeta_g": ("excitation", 0.0, False, None),
+    **{name: ("excitation", p.lower, p.lower_inclusive, p.upper) for name, p in EXCITATION_PARAMETERS.items()},
     "T1": ("excitation", 0.0, False, None), "T2": ("excitation", 0.0, False, None),
     "band_limit_hz": ("excitation", 0.0, False, 1e5),
 }
@@ -58,7 +59,7 @@ NUMERIC = {
 TABLE_KEYS = {
     "block": ("m", "b", "h", "I_cm", "g"),
     "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
-    "excitation": ("kind", "S0", "pga", "omega_g", "zeta_g", "envelope", "T1", "T2", "band_limit_hz"),
+    "excitation": ("kind", "S0", "pga", *EXCITATION_PARAMETERS, "envelope", "T1", "T2", "band_limit_hz"),
 }
 MODEL_TABLES = tuple(TABLE_KEYS)
 DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential", "eps": 0.0, "g": 9.81,
@@ -290,9 +291,8 @@ class Case:
 
 def applicable(contact, excitation, envelope):
     names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga", "band_limit_hz"}
-    names.add("lam" if contact == "hunt_crossley" else "c")
-    if excitation == "kanai_tajimi":
-        names |= {"omega_g", "zeta_g"}
+    names.add(laws.get(contact).parameter)
+    names |= set(excitations.get(excitation).parameters)
     if envelope == "exponential":
         names |= {"T1", "T2"}
     return names
@@ -392,7 +392,7 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     excitation / envelope.
     """
     block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
-    contact = choice(foundation, "contact", CONTACTS, f"{where}foundation.", DEFAULTS["contact"])
+    contact = choice(foundation, "contact", laws.names(), f"{where}foundation.", DEFAULTS["contact"])
     kind = choice(excitation, "kind", EXCITATIONS, f"{where}excitation.")
     envelope = choice(excitation, "envelope", ENVELOPES, f"{where}excitation.", DEFAULTS["envelope"])
     condensation = choice(foundation, "condensation", condensation_names(), f"{where}foundation.",
@@ -404,8 +404,9 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
         params.update(numeric_table(tbl, tname, None, where))
     structure = {"contact": f"contact = {contact!r}", "kind": f"kind = {kind!r}",
                  "envelope": f"envelope = {envelope!r}"}
-    reason = {"lam": structure["contact"], "c": structure["contact"], "omega_g": structure["kind"],
-              "zeta_g": structure["kind"], "T1": structure["envelope"], "T2": structure["envelope"]}
+    reason = {**dict.fromkeys(laws.DAMPING_FIELDS, structure["contact"]),
+              **dict.fromkeys(EXCITATION_PARAMETERS, structure["kind"]),
+              "T1": structure["envelope"], "T2": structure["envelope"]}
     for key in list(params) + list(sweeps):
         if key not in names:
             raise StudyError(f"{where}{NUMERIC[key][0]}.{key}: does not apply to {reason[key]}")
@@ -486,9 +487,8 @@ def _block(p):
 
 
 def _foundation(case, p):
-    if case.contact == "hunt_crossley":
-        return Foundation(k=p["k"], lam=p["lam"], eps=p["eps"])
-    return Foundation(k=p["k"], c=p["c"], eps=p["eps"])
+    damping = laws.get(case.contact).parameter
+    return Foundation(k=p["k"], eps=p["eps"], law=case.contact, **{damping: p[damping]})
 
 
 def build_models(case, values, t_end=None):
@@ -526,9 +526,7 @@ def build_point_models(case, values, t_end=None):
     envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
 
     def excitation(s0):
-        if case.excitation == "white":
-            return WhiteNoise(S0=s0, envelope=envelope)
-        return KanaiTajimi(S0=s0, omega_g=p["omega_g"], zeta_g=p["zeta_g"], envelope=envelope)
+        return excitations.build(case.excitation, s0, p, envelope)
 
     if "pga" in p:
         from screening.analysis.intensity import s0_for_pga

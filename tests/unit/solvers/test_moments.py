@@ -8,7 +8,7 @@ from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, 
 from screening.condensation.uplift_integrals import coefficient_table
 from screening.condensation import get as get_condensation
 from screening.model.points import flatten
-from screening.solvers.moment_kernels import _kt_rhs
+from screening.solvers.moment_kernels import augmented_rhs
 from screening.solvers.moments import oscillator_records, solve_moments
 from screening.status import PointStatus
 from screening.model import Foundation
@@ -53,15 +53,14 @@ def test_kanai_tajimi_filter_block_of_the_moment_equations_is_stationary_at_clos
     """The filter entries of the 4x4 Lyapunov right-hand side vanish at the closed-form moments."""
     S0, wg, zg = 2e-4, 10.0, 0.4
     (block, bed, exc), _ = flatten(paper_block, Foundation(2.89e7, 8.95e8), KanaiTajimi(S0, wg, zg))
-    cond = get_condensation("paper")
-    kernel = cond.moment_kernel(block, bed)
-    osc = oscillator_records(block, bed, exc, cond)
-    table = coefficient_table()
     var_u, var_ud, _ = kanai_tajimi_stationary_moments(S0, wg, zg)
     y = np.zeros(10)
     y[7], y[8], y[9] = var_u, 0.0, var_ud  # (22 23 33) entries
     dy = np.zeros(10)
-    _kt_rhs(kernel.coefficients, kernel.records[0], table, osc[0], 0.0, y, dy)
+    filt = exc.filter()
+    fa, fb, fc = (np.ascontiguousarray(m[0]) for m in filt[:3])
+    augmented_rhs(1e3, 1.0, 0.0, 2.0 * np.pi * S0, fa, fb, fc, float(filt.D[0]), y, dy, np.empty((4, 4)),
+                  np.empty((4, 4)))
     np.testing.assert_allclose(dy[7:], 0.0, atol=1e-12 * var_ud * wg)
 
 

@@ -1,0 +1,135 @@
+"""The interface every excitation implements (see ``docs/architecture_models.md``).
+
+An excitation is the modulated ground acceleration ``q(t) a(t)`` where ``a`` is the output of a
+linear time-invariant filter driven by Gaussian white noise ``w`` of two-sided PSD ``S0``
+(``E[w(t) w(s)] = 2 pi S0 delta(t - s)``)::
+
+    x' = A x + B w,        a = C x + D w
+
+with ``n_f`` filter states ``x`` (``n_f = 0`` and ``D = 1``: white noise).  The filter, as the
+matrices ``(A, B, C, D)``, is all the moment equations need (the augmented Lyapunov system of
+:mod:`screening.solvers.moment_equations`); its PSD ``S(omega) = S0 |C (i omega - A)^-1 B + D|^2``
+is what the Monte Carlo synthesis and the intensity measures need.  An excitation class declares
+its parameters (study keys with their allowed ranges and CF attributes); it is registered by its
+``kind``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from scipy import integrate
+
+from screening.validation import checked
+
+
+class Parameter(NamedTuple):
+    """A numeric parameter of an excitation (besides ``S0``): its CF attributes and allowed range
+    (``lower`` bound, inclusive or not; ``upper`` bound or None)."""
+
+    units: str
+    long_name: str
+    lower: float = 0.0
+    lower_inclusive: bool = False
+    upper: float | None = None
+
+
+class Filter(NamedTuple):
+    """State-space matrices of an excitation's shaping filter, one set per point (leading axes).
+
+    ``A`` [..., n_f, n_f] [1/s], ``B`` [..., n_f], ``C`` [..., n_f], ``D`` [...]: ``x' = A x + B w``,
+    ``a = C x + D w`` (units follow the states; ``a`` in m/s^2 for ``w`` in m/s^2).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+
+
+def transfer_psd(filt, S0, omega):
+    """Two-sided PSD ``S0 |C (i omega - A)^-1 B + D|^2`` [m^2/s^3] of a filter's output at ``omega``
+    [rad/s] (scalar filter: no leading axes; ``omega`` any shape)."""
+    omega = np.asarray(omega, dtype=float)
+    A, B, C, D = (np.asarray(m, dtype=float) for m in filt)
+    n = A.shape[-1]
+    flat = omega.reshape(-1)
+    if n == 0:
+        h = np.full(flat.shape, complex(D))
+    else:
+        eye = np.eye(n)
+        h = np.array([C @ np.linalg.solve(1j * w * eye - A, B) for w in flat]) + D
+    return (S0 * np.abs(h) ** 2).reshape(omega.shape)
+
+
+def stationary_covariance(filt, S0):
+    """Stationary covariance of the filter states [..., n_f, n_f]: the solution of
+    ``A P + P A^T + 2 pi S0 B B^T = 0`` (Kronecker form, batched over the leading axes).
+
+    Notes
+    -----
+    ``vec(A P + P A^T) = (I (x) A + A (x) I) vec(P)``; solved per point with :func:`numpy.linalg.solve`.
+    """
+    A = np.asarray(filt.A, dtype=float)
+    B = np.asarray(filt.B, dtype=float)
+    n = A.shape[-1]
+    lead = A.shape[:-2]
+    eye = np.eye(n)
+    kron = np.einsum("ij,...kl->...ikjl", eye, A).reshape(lead + (n * n, n * n)) \
+        + np.einsum("...ij,kl->...ikjl", A, eye).reshape(lead + (n * n, n * n))
+    q = 2.0 * math.pi * np.asarray(S0, dtype=float)[..., None, None] * B[..., :, None] * B[..., None, :]
+    rhs = -np.swapaxes(q, -1, -2).reshape(lead + (n * n, 1))
+    p = np.linalg.solve(kron, rhs)[..., 0].reshape(lead + (n, n))
+    return np.swapaxes(p, -1, -2)
+
+
+class Excitation:
+    """Base of the excitation classes (frozen dataclasses with fields ``S0``, the :attr:`parameters`
+    and ``envelope``).  Subclasses set :attr:`kind`, :attr:`description`, :attr:`parameters` and
+    implement :meth:`filter`; :meth:`psd` defaults to the filter's transfer function."""
+
+    #: registry name (``kind = ...`` in studies, the ``excitation`` attribute of results)
+    kind = ""
+    #: one line for attributes and reports
+    description = ""
+    #: ``{name: Parameter}`` of the numeric parameters besides ``S0`` (study keys, sweepable)
+    parameters = {}
+
+    def __post_init__(self):
+        """Validate ``S0`` (> 0) and the :attr:`parameters` (their declared ranges); one line naming the
+        parameter and its range otherwise."""
+        object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
+        for name, p in self.parameters.items():
+            object.__setattr__(self, name, checked(name, getattr(self, name), lower=p.lower,
+                                                   lower_inclusive=p.lower_inclusive, upper=p.upper,
+                                                   upper_inclusive=True))
+
+    def filter(self):
+        """:class:`Filter` of this excitation (array fields: one set per element, leading axes)."""
+        raise NotImplementedError
+
+    def psd(self, omega):
+        """Two-sided PSD of the unmodulated input [m^2/s^3] at ``omega`` [rad/s] (scalar fields)."""
+        return transfer_psd(self.filter(), float(self.S0), omega)
+
+    def psd_peaks(self):
+        """Frequencies [rad/s] where :meth:`psd` may peak (break points for quadrature)."""
+        return [float(getattr(self, name)) for name, p in self.parameters.items() if p.units == "rad s-1"]
+
+    def stationary_covariance(self):
+        """Stationary covariance of the filter states (:func:`stationary_covariance`)."""
+        return stationary_covariance(self.filter(), self.S0)
+
+    def spectral_moment(self, order, cutoff, epsrel=1e-11):
+        """``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega`` of the unmodulated input
+        band-limited to ``cutoff`` [rad/s] (``i = order``; [m2 s-4], [m2 s-5], [m2 s-6] for i = 0, 1, 2),
+        by adaptive quadrature with :meth:`psd_peaks` as break points (scalar fields).  Raises
+        ``ArithmeticError`` where the quadrature does not converge (a degenerate filter: the point is
+        flagged by the caller, never given a wrong moment)."""
+        value, _, *problem = integrate.quad(lambda w: w**order * float(self.psd(w)), 0.0, float(cutoff), limit=400,
+                                            points=self.psd_peaks() or None, epsrel=epsrel, full_output=1)
+        if len(problem) > 1:                       # quad's message: the integral did not converge
+            raise ArithmeticError(f"spectral moment lambda_{order}: {' '.join(str(problem[1]).split())}")
+        return 2.0 * value

@@ -1,0 +1,71 @@
+"""The compiled moment equations (screening.solvers.moment_kernels) against their numpy reference:
+the Lyapunov right-hand side ``A P + P A^T + 2 pi S0 b b^T`` of the augmented system as matrix products."""
+
+import numpy as np
+import pytest
+
+from screening.excitations import CloughPenzien, KanaiTajimi, WhiteNoise
+from screening.solvers.moment_kernels import (augmented_rhs, augmented_rhs_two_states, augmented_system, lyapunov_rhs,
+                                              packed_size)
+
+EXCITATIONS = [WhiteNoise(2e-4), KanaiTajimi(2e-4, 15.0, 0.6), CloughPenzien(2e-4, 15.0, 0.6, 1.5, 0.8)]
+
+
+@pytest.mark.parametrize("exc", EXCITATIONS, ids=lambda e: e.kind)
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_compiled_rhs_is_the_matrix_product_reference(exc, seed):
+    rng = np.random.default_rng(seed)
+    filt = exc.filter()
+    n = np.shape(filt.A)[-1] + 2
+    root = rng.normal(size=(n, n)) * np.logspace(-3, 0, n)
+    P = root @ root.T                                         # a covariance (symmetric, positive)
+    k_eq, c_eq, m_sdof, alpha = rng.uniform(10.0, 100.0), rng.uniform(0.01, 0.5), rng.uniform(0.1, 1.0), 3.7
+    A, b = augmented_system(k_eq, c_eq, m_sdof, alpha, filt)
+    expected = lyapunov_rhs(P, A, b, exc.S0)
+    iu = np.triu_indices(n)
+    y = np.ascontiguousarray(P[iu])
+    dy = np.empty(packed_size(n))
+    fa, fb, fc = (np.ascontiguousarray(m, dtype=float) for m in filt[:3])
+    augmented_rhs(k_eq / m_sdof, c_eq / m_sdof, alpha, 2.0 * np.pi * exc.S0, fa, fb, fc, float(filt.D), y, dy,
+                  np.empty((n, n)), np.empty((n, n)))
+    np.testing.assert_allclose(dy, expected[iu], rtol=1e-12, atol=1e-13 * np.abs(expected).max())
+    np.testing.assert_allclose(expected, expected.T, rtol=1e-14, atol=1e-15 * np.abs(expected).max())
+    if n == 4:                                                # the written-out two-state twin
+        dy2 = np.empty(packed_size(n))
+        augmented_rhs_two_states(k_eq / m_sdof, c_eq / m_sdof, alpha, 2.0 * np.pi * exc.S0, fa, fb, fc,
+                                 float(filt.D), y, dy2)
+        np.testing.assert_allclose(dy2, expected[iu], rtol=1e-12, atol=1e-13 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("exc", EXCITATIONS[1:], ids=lambda e: e.kind)
+def test_filter_block_of_the_reference_vanishes_at_the_stationary_covariance(exc):
+    """The filter rows of the Lyapunov right-hand side are zero at the filter's stationary covariance
+    (whatever the oscillator does: the filter does not feel it)."""
+    filt = exc.filter()
+    nf = np.shape(filt.A)[-1]
+    A, b = augmented_system(50.0, 0.1, 0.5, 2.0, filt)
+    P = np.eye(nf + 2) * 1e-6
+    P[2:, 2:] = exc.stationary_covariance()
+    rhs = lyapunov_rhs(P, A, b, exc.S0)
+    np.testing.assert_allclose(rhs[2:, 2:], 0.0, atol=1e-12 * np.abs(P[2:, 2:]).max() * np.abs(filt.A).max())
+
+
+def test_white_noise_fast_path_is_the_reference_without_filter_states():
+    """The 3-moment loop's right-hand side (eq. 45) is the reference with ``n_f = 0``, ``D = 1``."""
+    from screening import condensation
+    from screening.condensation.uplift_integrals import coefficient_table
+    from screening.model import Block, Foundation
+    from screening.model.points import flatten
+    from screening.solvers.moment_kernels import _white_rhs
+
+    exc = WhiteNoise(3e-4)
+    (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
+    kernel = condensation.get("paper").moment_kernel(block, bed)
+    table = coefficient_table()
+    m_sdof, alpha = float(block.m_sdof[0]), 2.3
+    y = (2e-5, 1e-4, 0.3)                                     # var_theta, cov, var_theta_dot
+    *dy, c_eq, k_eq = _white_rhs(kernel.coefficients, kernel.records[0], table, 1.0 / m_sdof, exc.S0, alpha, *y)
+    assert (c_eq, k_eq) == kernel.coefficients(kernel.records[0], table, y[0], y[1])
+    A, b = augmented_system(k_eq, c_eq, m_sdof, alpha, exc.filter())
+    expected = lyapunov_rhs(np.array([[y[0], y[1]], [y[1], y[2]]]), A, b, exc.S0)
+    np.testing.assert_allclose(dy, expected[np.triu_indices(2)], rtol=1e-12)
