@@ -161,10 +161,16 @@ def test_accuracy_on_a_one_point_grid(client, tmp_path, suffix):
 def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client, tmp_path, monkeypatch):
     """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
     record: the resumed run escalates the same points with the same samples and the same estimates."""
+    from screening.analysis import escalation
     from screening.workflow import accuracy, execution
     from screening.workflow.store import PartialStore
 
-    study = parse_study(TARGET.replace("budget_s = 4", "budget_s = 10"))
+    # a top-up round whatever the models' errors: no point meets the target, a top-up asks for a few samples more
+    real_needed = escalation.samples_needed
+    monkeypatch.setattr(escalation, "meets_target", lambda *a, **k: False)
+    monkeypatch.setattr(escalation, "samples_needed", lambda se, n0, *a, **k: n0 + 16 if n0 != escalation.PILOT_SAMPLES
+                        else real_needed(se, n0, *a, **k))
+    study = parse_study(TARGET)
     real_submit = execution.submit_escalation
     keys = []
     monkeypatch.setattr(execution, "submit_escalation",
@@ -189,7 +195,21 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     keys.clear()
     run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
     assert keys == ["topup"]                                 # only the top-up not kept runs again
-    with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / "a.nc") as ds:
-        for name in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
-                     "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
-            np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
+    # killed after its top-up was kept: nothing runs again
+    from screening.workflow.sweep import _SweepRun
+
+    def killed(self):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(_SweepRun, "_finalize", killed)
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(study, tmp_path / "b.nc", client=client, progress=False, log=lambda m: None)
+    keys.clear()
+    run_sweep(study, tmp_path / "b.nc", client=client, progress=False, log=lambda m: None)
+    assert keys == []
+    for name in ("a.nc", "b.nc"):
+        with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / name) as ds:
+            for var in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
+                        "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
+                np.testing.assert_array_equal(ds[var].values, ref[var].values, err_msg=f"{name} {var}")
