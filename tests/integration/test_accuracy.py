@@ -179,7 +179,18 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     assert keys.count("topup") >= 1, keys                    # the study has a top-up round to interrupt
     real_save = PartialStore.save_spot
     saved = []
-    keys.clear()
+
+    def killed_then_resumed(name, owner, method, replacement):
+        """Run into ``name`` with ``owner.method`` replaced (it raises KeyboardInterrupt), then resume;
+        returns the kinds of the Monte Carlo tasks the resumed run submitted."""
+        keys.clear()
+        with monkeypatch.context() as m:
+            m.setattr(owner, method, replacement)
+            with pytest.raises(KeyboardInterrupt):
+                run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
+        keys.clear()
+        run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
+        return list(keys)
 
     def killed_while_saving_the_top_ups(self, i, index, result):
         if i >= accuracy.TOPUP_RECORD:
@@ -188,26 +199,15 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
                 raise KeyboardInterrupt
         return real_save(self, i, index, result)
 
-    with monkeypatch.context() as m:
-        m.setattr(PartialStore, "save_spot", killed_while_saving_the_top_ups)
-        with pytest.raises(KeyboardInterrupt):
-            run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
-    keys.clear()
-    run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
-    assert keys == ["topup"]                                 # only the top-up not kept runs again
+    # only the top-up not kept runs again
+    assert killed_then_resumed("a.nc", PartialStore, "save_spot", killed_while_saving_the_top_ups) == ["topup"]
     # killed after its top-up was kept: nothing runs again
     from screening.workflow.sweep import _SweepRun
 
     def killed(self):
         raise KeyboardInterrupt
 
-    with monkeypatch.context() as m:
-        m.setattr(_SweepRun, "_finalize", killed)
-        with pytest.raises(KeyboardInterrupt):
-            run_sweep(study, tmp_path / "b.nc", client=client, progress=False, log=lambda m: None)
-    keys.clear()
-    run_sweep(study, tmp_path / "b.nc", client=client, progress=False, log=lambda m: None)
-    assert keys == []
+    assert killed_then_resumed("b.nc", _SweepRun, "_finalize", killed) == []
     for name in ("a.nc", "b.nc"):
         with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / name) as ds:
             for var in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
