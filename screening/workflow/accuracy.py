@@ -145,9 +145,11 @@ def escalation_runs(run, order, models):
         return esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
 
     def load(record, j):
+        """A kept result (``ESCALATION_RECORD``: with the cost of all its runs) or top-up run of point ``j``."""
         part = store.load_spot(record + j, index_of(j))
-        ok = part is not None and {"cpu_time", "cost_s", "peak_var_theta", "samples", "n_steps"} <= set(part)
-        return part if ok else None
+        needed = {"cpu_time", "peak_var_theta", "samples", "n_steps"} | ({"cost_s"} if record == ESCALATION_RECORD
+                                                                          else set())
+        return part if part is not None and needed <= set(part) else None
 
     plan = store.load_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64))
     if plan is not None and {"todo", "w", "costs", "pilot_costs", "loaded"} <= set(plan):

@@ -161,10 +161,16 @@ def test_accuracy_on_a_one_point_grid(client, tmp_path, suffix):
 def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client, tmp_path, monkeypatch):
     """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
     record: the resumed run escalates the same points with the same samples and the same estimates."""
+    from screening.analysis import escalation
     from screening.workflow import accuracy, execution
     from screening.workflow.store import PartialStore
 
-    study = parse_study(TARGET.replace("budget_s = 4", "budget_s = 10"))
+    # a top-up round whatever the models' errors: no point meets the target, a top-up asks for a few samples more
+    real_needed = escalation.samples_needed
+    monkeypatch.setattr(escalation, "meets_target", lambda *a, **k: False)
+    monkeypatch.setattr(escalation, "samples_needed", lambda se, n0, *a, **k: n0 + 16 if n0 != escalation.PILOT_SAMPLES
+                        else real_needed(se, n0, *a, **k))
+    study = parse_study(TARGET)
     real_submit = execution.submit_escalation
     keys = []
     monkeypatch.setattr(execution, "submit_escalation",
@@ -173,7 +179,18 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     assert keys.count("topup") >= 1, keys                    # the study has a top-up round to interrupt
     real_save = PartialStore.save_spot
     saved = []
-    keys.clear()
+
+    def killed_then_resumed(name, owner, method, replacement):
+        """Run into ``name`` with ``owner.method`` replaced (it raises KeyboardInterrupt), then resume;
+        returns the kinds of the Monte Carlo tasks the resumed run submitted."""
+        keys.clear()
+        with monkeypatch.context() as m:
+            m.setattr(owner, method, replacement)
+            with pytest.raises(KeyboardInterrupt):
+                run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
+        keys.clear()
+        run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
+        return list(keys)
 
     def killed_while_saving_the_top_ups(self, i, index, result):
         if i >= accuracy.TOPUP_RECORD:
@@ -182,14 +199,17 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
                 raise KeyboardInterrupt
         return real_save(self, i, index, result)
 
-    with monkeypatch.context() as m:
-        m.setattr(PartialStore, "save_spot", killed_while_saving_the_top_ups)
-        with pytest.raises(KeyboardInterrupt):
-            run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
-    keys.clear()
-    run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
-    assert keys == ["topup"]                                 # only the top-up not kept runs again
-    with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / "a.nc") as ds:
-        for name in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
-                     "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
-            np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
+    # only the top-up not kept runs again
+    assert killed_then_resumed("a.nc", PartialStore, "save_spot", killed_while_saving_the_top_ups) == ["topup"]
+    # killed after its top-up was kept: nothing runs again
+    from screening.workflow.sweep import _SweepRun
+
+    def killed(self):
+        raise KeyboardInterrupt
+
+    assert killed_then_resumed("b.nc", _SweepRun, "_finalize", killed) == []
+    for name in ("a.nc", "b.nc"):
+        with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / name) as ds:
+            for var in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
+                        "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
+                np.testing.assert_array_equal(ds[var].values, ref[var].values, err_msg=f"{name} {var}")

@@ -128,6 +128,7 @@ def test_ctrl_c_in_a_command_that_keeps_nothing_says_so(record_folder, tmp_path,
                       "--workers", "0"],
             "fit-excitation": ["fit-excitation", str(record_folder / "pulse.at2")]}[command]
     assert main(argv) == 130
-    assert [line for line in capsys.readouterr().err.splitlines() if line.strip()] == [
-        "screening: interrupted; nothing is kept to resume from, re-run the command to start again"]
+    lines = [line for line in capsys.readouterr().err.splitlines()
+             if line.strip() and not line.startswith("screening: compiling")]     # a fresh numba cache says so
+    assert lines == ["screening: interrupted; nothing is kept to resume from, re-run the command to start again"]
     assert list(tmp_path.iterdir()) == []
