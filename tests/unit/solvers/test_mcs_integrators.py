@@ -26,6 +26,7 @@ from screening.physics.contact import rest_indentation
 from screening.records import read_record
 from screening.solvers import mcs_kernels as kern
 from screening.solvers import montecarlo as mc
+from screening.solvers.mc_models import state_scales
 from screening.solvers.montecarlo import monte_carlo
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
@@ -47,7 +48,7 @@ def run_kernel(integrator, model, acc, acc_dot, dt_grid, t_out, foundation, y_in
     cond = get_condensation(condensation)
     p = kern.model_record(block, foundation, cond, 0.5, integrator)
     sdof = cond.sdof_kernel(block, foundation)
-    scale = rtol * mc.state_scales(block, foundation)
+    scale = rtol * state_scales(block, foundation)
     kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, acc, acc_dot, dt_grid,
                                              t_out, p[None], np.asarray(y_init, float), scale, rtol, h_max, 10**8,
                                              *outs, uplift, *flags)
