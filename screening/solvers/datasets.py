@@ -58,9 +58,9 @@ def _coordinates(times, parameters):
     return coords
 
 
-def _declared(name):
+def _declared(name, table=None):
     try:
-        schema.attributes(name)
+        schema.attributes(name, table)
     except KeyError:
         return False
     return True
@@ -72,7 +72,7 @@ def finish(ds, table=None):
 
     Every producer of a dataset ends with it.  An undeclared data variable still raises ``KeyError``.
     """
-    foreign = [name for name in ds.coords if not _declared(name)]
+    foreign = [name for name in ds.coords if not _declared(name, table)]
     return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c].variable for c in foreign})
 
 
@@ -127,24 +127,32 @@ def _status_text(n_samples, n_overturned, n_diverged):
 
 def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                         block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
-                        condensation="paper"):
+                        condensation="paper", thresholds=None):
     """The dataset of :func:`screening.solvers.montecarlo.monte_carlo` (see its docstring).
 
     ``stats``: the ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`);
     ``peak``, ``overturned``, ``diverged``, ``n_acc``, ``n_rej``, ``reason``, ``h_min``: per sample;
     ``n_over``, ``n_div``: counts; ``opts``: the numerics; ``plan``: the spectral plan of the input;
-    ``wall``: the integration time [s].
+    ``wall``: the integration time [s]; ``thresholds``: rotations [rad] of ``p_exceed`` (None: none).
     """
+    from screening.analysis.probabilities import sample_probabilities
 
     n_used = n_samples - n_over - n_div
     data = {name: ("t", stats[name]) for name in MONTE_CARLO_STATISTICS}
     data.update(peak_abs_theta=("sample", peak), overturned=("sample", overturned), diverged=("sample", diverged),
                 n_steps=("sample", n_acc + n_rej), n_overturned=((), n_over), n_diverged=((), n_div),
                 n_used=((), n_used))
+    levels = () if thresholds is None else tuple(float(a) for a in thresholds)
+    prob = sample_probabilities(peak, overturned, ~diverged, levels)
+    data.update(p_overturn=((), prob["p_overturn"]), p_overturn_se=((), prob["p_overturn_se"]))
+    if thresholds is not None:
+        data.update(p_exceed=("threshold", prob["p_exceed"]), p_exceed_se=("threshold", prob["p_exceed_se"]))
     theta_ul, theta_ul_attrs = _monte_carlo_theta_ul(block, foundation, model, condensation)
     data.update(theta_ul=((), theta_ul), slenderness=((), float(block.slenderness)))
     coords = _coordinates(times, model_fields(block, foundation, excitation))
     coords["sample"] = ("sample", np.arange(n_samples))
+    if thresholds is not None:
+        coords["threshold"] = ("threshold", np.array(levels, dtype=float))
     reasons = sorted({DIVERGENCE_TEXT[DivergenceReason(int(r))] for r in reason[diverged]})
     accepted = n_acc[~overturned & ~diverged]
     attrs = {
