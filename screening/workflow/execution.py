@@ -43,6 +43,9 @@ MODEL_FLOATS = ("theta_ul", "slenderness")
 TRUST_FLOATS = ("sl_error_low", "sl_error_high")
 #: Intensity measures of each point's input (random-vibration medians, :mod:`screening.analysis.intensity`).
 INTENSITY_FLOATS = ("pga_median", "rms_acceleration", "arias_intensity")
+#: The quasi-static uplift acceleration of each point's block and bed [m s-2] and the probability that its
+#: input exceeds it during the record [1] (:func:`screening.analysis.intensity.rocking_start_probability`).
+ROCKING_FLOATS = ("uplift_acceleration", "p_rocking_start")
 #: Per-point model inputs returned only for studies that derive them (:attr:`Study.derived_inputs`).
 DERIVED_INPUTS = ("S0",)
 #: Histories of a spot check.
@@ -63,7 +66,8 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     ``fragility`` (a :class:`~screening.workflow.study.Fragility`): also ``p_exceed`` (points x
     thresholds) [1], from the float64 histories while they are in memory
     (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
-    :data:`INTENSITY_FLOATS` of each point's input, with the band limit of its Monte Carlo synthesis;
+    :data:`INTENSITY_FLOATS` of each point's input, with the band limit of its Monte Carlo synthesis, and the
+    :data:`ROCKING_FLOATS` (:func:`batch_rocking_start`);
     ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.
     """
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
@@ -83,6 +87,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
         out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
     out.update(batch_intensity(block, foundation, excitation, t_out, n))
+    out.update(batch_rocking_start(block, foundation, excitation, condensation, t_out, n))
     for name in derived_inputs:
         out[name] = np.broadcast_to(getattr(excitation, name), shape).reshape(n).astype(np.float64)
     return out
@@ -96,6 +101,24 @@ def batch_intensity(block, foundation, excitation, t_out, n):
     measures = input_measures(excitation, float(np.asarray(t_out)[-1]), default_cutoffs(block, foundation))
     return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
             else np.asarray(measures[name], dtype=np.float64).reshape(n) for name in INTENSITY_FLOATS}
+
+
+def batch_rocking_start(block, foundation, excitation, condensation, t_out, n):
+    """The :data:`ROCKING_FLOATS` of the ``n`` points of a batch (band limit of their Monte Carlo synthesis)."""
+    from screening.analysis.intensity import rocking_start_probability
+    from screening.analysis.probabilities import uplift_acceleration
+    from screening.solvers.synthesis import default_cutoffs
+
+    try:
+        with np.errstate(all="ignore"):
+            a_ul = uplift_acceleration(block, foundation, condensation)
+            p = rocking_start_probability(excitation, float(np.asarray(t_out)[-1]),
+                                          default_cutoffs(block, foundation), a_ul)
+    except (ArithmeticError, ValueError):       # a bed the condensation cannot carry: the solver flags it
+        a_ul = p = np.nan
+    return {name: np.broadcast_to(np.asarray(value, dtype=np.float64), (n,)).copy() if np.size(value) != n
+            else np.asarray(value, dtype=np.float64).reshape(n)
+            for name, value in (("uplift_acceleration", a_ul), ("p_rocking_start", p))}
 
 
 def solve_and_store_batch(target, batch, *solve_args):
@@ -173,7 +196,7 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
     if fragility is not None:
         out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
-    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + tuple(derived_inputs):
+    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS + tuple(derived_inputs):
         out[name] = np.full(n, np.nan)
     for name in SUMMARY_INTS:
         out[name] = np.zeros(n, dtype=np.int32)

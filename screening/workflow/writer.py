@@ -50,7 +50,7 @@ from screening.schema import (ACCURACY, FRAGILITY, PRESSURE_PARAMETERS, SWEEP, S
 from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSITY_FLOATS, MODEL_FLOATS,
-                                          SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
+                                          ROCKING_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
 from screening.workflow.grid import hyperslabs, parameter_table
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
@@ -62,7 +62,8 @@ CACHED_CHUNKS = 4
 TITLE_FALLBACK = "Stochastic-linearization screening"
 
 #: Per-point variables besides the histories, in file order.
-POINT_VARIABLES = ("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + SUMMARY_INTS
+POINT_VARIABLES = (("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS
+                   + ROCKING_FLOATS + SUMMARY_INTS)
 #: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
 #: itself returns only these.
 SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
@@ -293,7 +294,7 @@ class ResultFile:
         chunks = point_chunks(self.shape)
         self._variable("status", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
         self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
-        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS:
+        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS:
             self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib, **_storage(chunks, 8))
         for name in study.derived_inputs:
             self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib,
