@@ -46,6 +46,8 @@ INTENSITY_FLOATS = ("pga_median", "rms_acceleration", "arias_intensity")
 #: The quasi-static uplift acceleration of each point's block and bed [m s-2] and the probability that its
 #: input exceeds it during the record [1] (:func:`screening.analysis.intensity.rocking_start_probability`).
 ROCKING_FLOATS = ("uplift_acceleration", "p_rocking_start")
+#: The linearization's probability of overturning and its standard error (:func:`batch_probabilities`).
+PROBABILITY_FLOATS = ("p_overturn", "p_overturn_se")
 #: Per-point model inputs returned only for studies that derive them (:attr:`Study.derived_inputs`).
 DERIVED_INPUTS = ("S0",)
 #: Histories of a spot check.
@@ -56,7 +58,7 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 # ============================================================================ tasks
 def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
-                fragility=None, trust_table=None, derived_inputs=()):
+                fragility=None, trust_table=None, derived_inputs=(), probabilities=False):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
@@ -68,10 +70,13 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
     :data:`INTENSITY_FLOATS` of each point's input, with the band limit of its Monte Carlo synthesis, and the
     :data:`ROCKING_FLOATS` (:func:`batch_rocking_start`);
-    ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.
+    ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.  ``probabilities``
+    (:func:`wants_probabilities`): also the linearization's :data:`PROBABILITY_FLOATS` and, with
+    ``fragility``, ``p_exceed_se`` (:func:`batch_probabilities`).
     """
+    probabilities = probabilities or fragility is not None
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
-                        condensation=condensation, histories=bool(histories) or fragility is not None)
+                        condensation=condensation, histories=bool(histories) or probabilities)
     shape = res["status"].shape
     n = res["status"].size
     out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in histories}
@@ -83,9 +88,9 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
     for name in MODEL_FLOATS:
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
-    if fragility is not None:
-        out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
+    if probabilities:
+        out.update(batch_probabilities(res, block, foundation, excitation, out, t_out, fragility))
     out.update(batch_intensity(block, foundation, excitation, t_out, n))
     out.update(batch_rocking_start(block, foundation, excitation, condensation, t_out, n))
     for name in derived_inputs:
@@ -161,11 +166,10 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, ta
             "sl_error_high": np.asarray(high, dtype=float)}
 
 
-def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
-    """``p_exceed`` [1] of a batch, points x thresholds, by the analysis layer's own function."""
+def _batch_dataset(res, block, foundation, excitation, out, t_out):
+    """The linearization dataset of a batch (dimension ``point``) from the solver's float64 arrays."""
     import xarray as xr
 
-    from screening.analysis.fragility import exceedance_probability
     from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
 
     n = out["status"].size
@@ -177,11 +181,53 @@ def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
 
     parameters = {name: on_points(value) for name, value in model_fields(block, foundation, excitation).items()}
     derived = {name: ("point", out[name]) for name in MODEL_FLOATS}
-    ds = linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
-    p = np.empty((n, len(fragility.thresholds)))
-    for j, threshold in enumerate(fragility.thresholds):
-        p[:, j] = exceedance_probability(ds, threshold, fragility.relative_to, fragility.method).values
-    return p
+    return linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
+
+
+def batch_probabilities(res, block, foundation, excitation, out, t_out, fragility=None):
+    """The linearization's probabilities of a batch, by the analysis layer's own function
+    (:func:`screening.analysis.fragility.exceedance_probability`, the up-crossing ``method`` of
+    ``fragility``, else Vanmarcke's): ``p_overturn`` (``|theta|`` beyond ``atan(b/h)``) and ``p_overturn_se``,
+    and with ``fragility`` ``p_exceed`` and ``p_exceed_se`` (points x thresholds) [1].
+
+    The standard errors are a quarter of the change of the probability across the point's trust band
+    ``[sl_error_low, sl_error_high]`` of ``SL / MCS - 1`` (both variances divided by ``1 + e``; the band stands
+    for two standard errors each way); NaN where the band is not finite or reaches ``e <= -1``.
+    """
+    import xarray as xr
+
+    from screening.analysis.fragility import exceedance_probability
+
+    ds = _batch_dataset(res, block, foundation, excitation, out, t_out)
+    method = fragility.method if fragility is not None else "vanmarcke"
+    levels = [(1.0, "slenderness")] + ([(t, fragility.relative_to) for t in fragility.thresholds]
+                                       if fragility is not None else [])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        edges = [1.0 / (1.0 + out["sl_error_high"]), 1.0 / (1.0 + out["sl_error_low"])]
+    usable = np.all([np.isfinite(e) & (e > 0) for e in edges], axis=0)
+
+    def scaled(factor):
+        f = xr.DataArray(np.where(usable, factor, 1.0), dims="point")
+        return ds.assign(var_theta=ds["var_theta"] * f, var_theta_dot=ds["var_theta_dot"] * f,
+                         cov_theta_theta_dot=ds["cov_theta_theta_dot"] * f)
+
+    variants = [ds] + [scaled(e) for e in edges]
+    n = out["status"].size
+    p, se = np.empty((n, len(levels))), np.empty((n, len(levels)))
+    for j, (threshold, relative_to) in enumerate(levels):
+        lo, hi = (exceedance_probability(d, threshold, relative_to, method).values for d in variants[1:])
+        p[:, j] = exceedance_probability(ds, threshold, relative_to, method).values
+        se[:, j] = np.where(usable, np.abs(hi - lo) / 4.0, np.nan)
+    result = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
+    if fragility is not None:
+        result.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
+    return result
+
+
+def wants_probabilities(study):
+    """Whether the points of ``study`` carry ``p_overturn`` (and, with ``[fragility]``, ``p_exceed``) with
+    their standard errors and source: with ``[accuracy]`` or ``[fragility]``."""
+    return study.accuracy is not None or study.fragility is not None
 
 
 def refused_batch(message):
@@ -190,11 +236,14 @@ def refused_batch(message):
     raise ValueError(message)
 
 
-def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=()):
+def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=(), probabilities=False):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
     out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
     if fragility is not None:
         out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
+        out["p_exceed_se"] = np.full((n, len(fragility.thresholds)), np.nan)
+    if probabilities or fragility is not None:
+        out.update({name: np.full(n, np.nan) for name in PROBABILITY_FLOATS})
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
     for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS + tuple(derived_inputs):
         out[name] = np.full(n, np.nan)
@@ -309,7 +358,7 @@ def submit_batch(client, study, batch, key, target=None):
 
     case = study.cases[batch.case]
     args = (*batch_models(study, batch), case.condensation_model, study.times, study.rtol, study.max_steps,
-            study.output.stored, study.fragility, shipped_table(), study.derived_inputs)
+            study.output.stored, study.fragility, shipped_table(), study.derived_inputs, wants_probabilities(study))
     if target is not None:
         return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)
