@@ -439,8 +439,9 @@ def cmd_plot(result, out_dir, response):
 
 @cli.command("fragility", help="probability of exceeding a rotation: netCDF + PNG fragility curves")
 @click.argument("result")
-@click.option("--threshold", type=POSITIVE_FLOAT, required=True,
-              help="rotation threshold: in rad, or a fraction of the angle named by --relative-to")
+@click.option("--threshold", type=POSITIVE_FLOAT,
+              help="rotation threshold: in rad, or a fraction of the angle named by --relative-to (required but "
+                   "with --limit-state overturn)")
 @click.option("--relative-to", type=_Choice(["slenderness", "theta_ul"]),
               help="threshold as a fraction of the slenderness angle atan(b/h) or of theta_ul")
 @click.option("--method", type=_Choice(["vanmarcke", "poisson"]), default="vanmarcke",
@@ -452,7 +453,19 @@ def cmd_plot(result, out_dir, response):
               help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
                    "export the fits as CSV and OpenQuake NRML next to the netCDF")
 @click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
-def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period):
+@click.option("--limit-state", type=_Choice(["exceed", "overturn"]), default="exceed",
+              help="exceed (default): |theta| beyond --threshold; overturn: the probability of overturning "
+                   "(p_overturn of a study with [accuracy] or [fragility]), fitted over --im (default s0)")
+def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, limit_state):
+    if limit_state == "overturn":
+        if threshold is not None or relative_to is not None:
+            raise click.UsageError("--threshold and --relative-to do not apply to --limit-state overturn "
+                                   "(its threshold is atan(b/h))")
+        from screening.cli_records import fragility_over_im_command
+        return fragility_over_im_command(result, None, None, method, dim, out, im or ("sa" if period else "s0"),
+                                         period, limit_state)
+    if threshold is None:
+        raise click.UsageError("--threshold is required (unless --limit-state overturn)")
     if im is not None or period is not None:
         from screening.cli_records import fragility_over_im_command
         return fragility_over_im_command(result, threshold, relative_to, method, dim, out, im or "sa", period)

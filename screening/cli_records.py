@@ -109,8 +109,9 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     return EXIT_OK
 
 
-def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period):
-    """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML."""
+def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period, limit_state="exceed"):
+    """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML;
+    ``limit_state="overturn"``: of the probability of overturning."""
     from screening.analysis.im_fragility import fragility_over_im
     from screening.report.record_figures import plot_im_fragility
     from screening.workflow.reader import open_result
@@ -118,12 +119,15 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 
     result = Path(result)
     with open_result(result) as ds:
-        out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility_{im}.nc"))
+        stem = "overturn" if limit_state == "overturn" else "fragility"
+        out = check_output_path(out or result.with_name(f"{_stem(result)}_{stem}_{im}.nc"))
         try:
-            frag, warnings = fragility_over_im(ds.load(), threshold, im, dim, relative_to, method, period)
+            frag, warnings = fragility_over_im(ds.load(), threshold, im, dim, relative_to, method, period,
+                                               limit_state=limit_state)
         except (ValueError, KeyError) as exc:
             raise CommandError(str(exc).strip("'\"")) from None
-    stamp_fragility(frag, result, threshold=threshold, im=im, relative_to=relative_to, period=period)
+    stamp_fragility(frag, result, threshold=threshold, im=im, relative_to=relative_to, period=period,
+                    limit_state=None if limit_state == "exceed" else limit_state)
     write_fragility_files(frag, out, lambda path: plot_im_fragility(frag, path), _fit_files(frag, out), warnings)
     fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["median"].attrs["units"])
     if fit:

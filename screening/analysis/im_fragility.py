@@ -45,6 +45,8 @@ IMS = {
 }
 
 FIT_OK, FIT_NEGATIVE_BETA, FIT_NONE = 0, 1, 2
+#: Limit states of a fragility: name -> the limit state's label in the exports (NRML ``limitStates``).
+LIMIT_STATES = {"exceed": "theta_exceeds_threshold", "overturn": "overturn"}
 
 
 def _im_values(ds, im, period, cutoff):
@@ -58,7 +60,7 @@ def _im_values(ds, im, period, cutoff):
 
 
 def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, method="vanmarcke", period=None,
-                      cutoff=None):
+                      cutoff=None, limit_state="exceed"):
     """Exceedance probability along ``dim`` fitted over the intensity measure ``im``.
 
     Returns ``(fragility dataset, warnings)``: ``p_exceed`` and the IM (``pga_median``, ...) over
@@ -66,10 +68,27 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     ``fit_flag`` (0 ok, 1 beta <= 0, 2 no fit) over the other dimensions, ``threshold_rad``.
     Raises ``ValueError`` for an unknown ``im``, a ``dim`` that is not swept or not an intensity
     dimension, or an IM that is not strictly increasing along ``dim``.
+
+    ``limit_state="overturn"``: the probability of overturning instead
+    (:func:`screening.analysis.probabilities.overturning_probability`; ``threshold`` and ``relative_to``
+    are not used, ``threshold_rad`` is ``atan(b/h)``), stored as ``p_exceed`` with the attribute
+    ``limit_state`` and exported with that limit state.
     """
     if im not in IMS:
         raise ValueError(f"--im must be one of {', '.join(IMS)} (got {im!r})")
-    p = exceedance_probability(ds, threshold, relative_to, method)
+    if limit_state not in LIMIT_STATES:
+        raise ValueError(f"--limit-state must be one of {', '.join(LIMIT_STATES)} (got {limit_state!r})")
+    warnings = []
+    if limit_state == "overturn":
+        from screening.analysis.probabilities import overturning_probability
+
+        p, note = overturning_probability(ds, method)
+        p = p.rename("p_exceed")
+        if note:
+            warnings.append(f"overturning: {note}")
+        threshold, relative_to = 1.0, "slenderness"
+    else:
+        p = exceedance_probability(ds, threshold, relative_to, method)
     grid = list(ds["status"].dims) if "status" in ds else list(p.dims)
     if dim is None:
         dim = next((d for d in ("S0", "pga") if d in grid), None)
@@ -108,25 +127,35 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
                       "beta": beta.where(flag == FIT_OK).assign_attrs(units="1"),
                       "fit_flag": flag.assign_attrs(flag_values=np.array([0, 1, 2], dtype=np.int8),
                                                     flag_meanings="ok non_positive_beta no_fit"),
-                      "threshold_rad": threshold_angle(ds, threshold, relative_to)})
+                      "threshold_rad": _per_curve(threshold_angle(ds, threshold, relative_to), dim)})
     if period is not None and im == "sa":
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
     out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim, threshold=float(threshold),
-                     relative_to=str(relative_to), method=method,
-                     title="Probability that |theta| exceeds a rotation, fitted over an intensity measure")
-    warnings = []
+                     relative_to=str(relative_to), method=method, limit_state=limit_state,
+                     title="Probability that |theta| exceeds a rotation, fitted over an intensity measure"
+                     if limit_state == "exceed" else "Probability of overturning, fitted over an intensity measure")
+    if limit_state == "overturn":
+        out["p_exceed"].attrs.update(long_name="probability that the block overturns during the record")
     n_neg = int((flag == FIT_NEGATIVE_BETA).sum())
     if n_neg:
         warnings.append(f"{n_neg} fit(s) have beta <= 0 (probability falling with {name}); flagged in fit_flag "
                         "and left out of the exports")
     try:
         slender = model_quantity(ds, "slenderness")
-        if bool((out["threshold_rad"] >= slender).any()):
+        if limit_state == "exceed" and bool((out["threshold_rad"] >= slender).any()):
             warnings.append("the threshold is at or beyond the slenderness angle atan(b/h): the rigid block "
                             "overturns there; P(exceed) is then not a rocking measure")
     except KeyError:
         pass
     return out, warnings
+
+
+def _per_curve(angle, dim):
+    """A threshold angle read from the grid (``slenderness``, ``theta_ul``) once per curve: dropped along the
+    intensity ``dim`` where it does not change along it (a block's angles do not depend on the shaking)."""
+    if dim in angle.dims and bool((angle.diff(dim) == 0).all()):
+        return angle.isel({dim: 0}, drop=True)
+    return angle
 
 
 # ----------------------------------------------------------------------------- export
@@ -177,6 +206,7 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     if key is None or IMS[key][2] is None:
         raise ValueError(f"OpenQuake has no intensity measure type for {name!r}; export CSV instead")
     imt = IMS[key][2]
+    limit_state = LIMIT_STATES[frag.attrs.get("limit_state", "exceed")]
     if imt == "SA":
         imt = f"SA({float(frag[name].attrs['period']):g})"
     factor = IMS[key][3]
@@ -187,13 +217,13 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
              f'  <fragilityModel id={quoteattr(model_id)} assetCategory="buildings" lossCategory="contents">',
              f"    <description>{description}: P(max |theta| &gt; threshold) fitted by screening over "
              f"{name}</description>",
-             "    <limitStates>theta_exceeds_threshold</limitStates>"]
+             f"    <limitStates>{limit_state}</limitStates>"]
     for labels, median, beta in _curves(frag):
         fid = "screening" + "".join(f"_{d}={v:g}" if isinstance(v, float) else f"_{d}={v}" for d, v in labels.items())
         mean, std = nrml_parameters(median * factor, beta)
         lines += [f'    <fragilityFunction id={quoteattr(fid)} format="continuous" shape="logncdf">',
                   f'      <imls imt="{imt}" minIML="{lo:.6g}" maxIML="{hi:.6g}"/>',
-                  f'      <params ls="theta_exceeds_threshold" mean="{mean:.8g}" stddev="{std:.8g}"/>',
+                  f'      <params ls="{limit_state}" mean="{mean:.8g}" stddev="{std:.8g}"/>',
                   "    </fragilityFunction>"]
     lines += ["  </fragilityModel>", "</nrml>", ""]
     with open(path, "w", encoding="utf-8") as fh:

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.status import BestMethod, ProbabilitySource, Trust, probability_sources
+from screening.status import BestMethod, ProbabilitySource, SampleState, Trust, probability_sources
 
 #: ``z`` of the Agresti-Coull interval (about 95 %, ``p_tilde +- Z se``).
 Z = 2.0
@@ -167,3 +167,65 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
     src[ok & (best == int(BestMethod.linearization))] = int(ProbabilitySource.linearization_gaussian)
     src[ok & (best == int(BestMethod.corrected_linearization))] = int(ProbabilitySource.corrected_linearization_gaussian)
     return src
+
+
+def overturning_probability(ds, method="vanmarcke"):
+    """``(p_overturn, note)`` [1] of a result dataset, on its grid, for a fragility over an intensity.
+
+    A sweep with ``[accuracy]`` or ``[fragility]`` stores ``p_overturn`` with ``p_source``: that estimate,
+    NaN where ``p_source`` is ``unreliable`` (a fit must not learn from numbers nothing vouches for).  A
+    :func:`screening.monte_carlo` result: its ``p_overturn``.  Any other result (no stored estimate): the
+    Gaussian up-crossing of ``atan(b/h)`` by the linearization's moments
+    (:func:`screening.analysis.fragility.exceedance_probability`, ``method``), which nothing vouches for
+    near toppling.  ``note``: a one-line caveat, or ``""`` when there is none.
+    """
+    from screening.analysis.fragility import exceedance_probability
+
+    if "p_overturn" in ds.variables and "p_source" in ds.variables:
+        unreliable = ds["p_source"] == int(ProbabilitySource.unreliable)
+        n = int(unreliable.sum())
+        note = f"{n} point(s) whose p_source is unreliable left out of the fit" if n else ""
+        return ds["p_overturn"].where(~unreliable), note
+    if "p_overturn" in ds.variables:
+        return ds["p_overturn"], ""
+    p = exceedance_probability(ds, 1.0, "slenderness", method)
+    return p, ("the result stores no p_overturn: the linearization's Gaussian up-crossing of atan(b/h), which "
+               "nothing vouches for near toppling (run the study with [accuracy] or [fragility])")
+
+
+#: A Monte Carlo point where more than this fraction of the samples overturned is near toppling: its
+#: variances are over the survivors only and move from run to run; its probabilities are the answer.
+TOPPLING_FRACTION = 0.05
+
+
+def spot_check_probabilities(ds):
+    """``p_overturn`` and, where the result has ``[fragility]`` thresholds, ``p_exceed`` of each Monte Carlo
+    spot check of a sweep result, from its stored sample peaks and states (``mcs_peak_abs_theta``,
+    ``mcs_sample_state``).
+
+    Returns a dict of arrays over ``spot``: ``p_overturn``, ``p_overturn_se``, ``near_toppling``
+    (``p_overturn > TOPPLING_FRACTION``), and ``p_exceed``, ``p_exceed_se`` (spot x thresholds) with
+    ``thresholds`` (the values of the result's ``threshold`` coordinate, ``()`` without) and ``relative_to``.
+    """
+    from screening.analysis.fragility import spot_positions
+
+    state = np.asarray(ds["mcs_sample_state"].values)
+    peaks = np.asarray(ds["mcs_peak_abs_theta"].values, dtype=float)
+    relative_to = str(ds["p_exceed"].attrs.get("relative_to", "None")) if "p_exceed" in ds.variables else "None"
+    thresholds = (np.asarray(ds["threshold"].values, dtype=float) if "threshold" in ds.variables
+                  and "p_exceed" in ds.variables else np.zeros(0))
+    scale = (np.ones(ds.sizes["spot"]) if relative_to == "None" else
+             np.broadcast_to(ds[relative_to].isel({d: i for d, i in spot_positions(ds).items()
+                                                   if d in ds[relative_to].dims}).values, (ds.sizes["spot"],)))
+    levels = scale[:, None] * thresholds[None, :]
+    got = sample_probabilities(peaks, state == SampleState.overturned,
+                               (state == SampleState.standing) | (state == SampleState.overturned), levels)
+    with np.errstate(invalid="ignore"):
+        got["near_toppling"] = got["p_overturn"] > TOPPLING_FRACTION
+    got.update(thresholds=tuple(thresholds), relative_to=relative_to)
+    return got
+
+
+def probability_text(p, se):
+    """``"0.43 +- 0.05"`` (or ``"n/a"``)."""
+    return f"{p:.3g} +- {se:.2g}" if np.isfinite(p) else "n/a"

@@ -244,6 +244,7 @@ class _SweepRun:
 
                     self.report.probabilities = finish_probabilities(self)
                     self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
+                    self.log(probabilities_line(self.report.probabilities))
                 t0 = time.perf_counter()
                 self._finalize()
                 timings["finalize"] = time.perf_counter() - t0

@@ -99,6 +99,19 @@ def test_fragility_study_points_carry_probabilities_and_the_spot_check_replaces_
     np.testing.assert_array_equal(src[rest], np.where(trusted[rest], ProbabilitySource.linearization_gaussian,
                                                       ProbabilitySource.unreliable))
     assert np.all(np.isnan(ds["p_overturn_se"].values[rest & ~trusted]))
+    # the text summary puts the probabilities, with their standard errors, beside the spot check's variances
+    from screening.analysis.probabilities import probability_text, spot_check_probabilities
+    from screening.report.text import describe
+
+    prob = spot_check_probabilities(ds)
+    assert prob["p_overturn"][0] == pytest.approx(over, abs=1e-15)
+    np.testing.assert_allclose(prob["p_exceed"][0], exc, atol=1e-15)
+    text = describe(ds)
+    spot_line = next(line for line in text.splitlines() if "peak var_theta rel. error" in line)
+    assert f"P(overturn) {probability_text(over, float(ds['p_overturn_se'][spot]))}" in spot_line
+    assert f"P(|theta| > 0.3 slenderness) {probability_text(exc[1], ds['p_exceed_se'].values[spot][1])}" in spot_line
+    assert spot_line.endswith(" *") == (over > 0.05)
+    assert "by source: " in text and "probability that rocking starts" in text
     assert report.probabilities == {name: int(np.sum(src == code)) for name, code in
                                     (("unreliable", 0), ("linearization_gaussian", 1), ("monte_carlo_coupled", 10))
                                     if np.any(src == code)}
@@ -125,3 +138,43 @@ def test_p_rocking_start_is_the_closed_form_at_every_point(client, tmp_path):
         p = ds["p_rocking_start"].values
         assert np.all(np.diff(p, axis=1) >= 0) and p.min() < 0.5 < p.max()       # grows with S0
         assert ds["p_rocking_start"].attrs["units"] == "1" and ds["uplift_acceleration"].attrs["units"] == "m s-2"
+
+
+OVERTURNING = GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = 6e7").replace(
+    "S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}", "S0 = [6e-4, 1.2e-3, 2.4e-3, 4.8e-3]").replace(
+    "t_end = 4.0", "t_end = 20.0").replace("dt = 0.05", "dt = 0.1") + FRAGILITY + """
+[mcs]
+points = [{index = {S0 = 0}}, {index = {S0 = 1}}, {index = {S0 = 2}}, {index = {S0 = 3}}]
+samples = 40
+"""
+
+
+@pytest.mark.slow
+def test_fragility_over_pga_for_the_overturning_limit_state(client, tmp_path):
+    """screening fragility --im pga --limit-state overturn fits p_overturn over the median PGA (points whose
+    p_source is unreliable left out) and exports the limit state "overturn"; --threshold is refused."""
+    import csv
+
+    from screening.analysis.fragility import fit_lognormal_fragility
+    from screening.cli import main
+
+    result = tmp_path / "o.nc"
+    (tmp_path / "o.toml").write_text(OVERTURNING)
+    run_sweep(parse_study(OVERTURNING), result, client=client, progress=False, log=lambda m: None)
+    assert main(["fragility", str(result), "--im", "pga", "--limit-state", "overturn"]) == 0
+    with xr.open_dataset(result) as ds:
+        p = ds["p_overturn"].where(ds["p_source"] != ProbabilitySource.unreliable).values
+        pga = ds["pga_median"].values
+    assert np.sum((p > 0) & (p < 1)) >= 2 and np.all(np.diff(p[np.isfinite(p)]) >= 0)
+    median, beta = fit_lognormal_fragility(pga, p)
+    with open(tmp_path / "o_overturn_pga.csv") as fh:
+        row = next(csv.DictReader(fh))
+    assert float(row["median"]) == pytest.approx(median, rel=1e-6) and float(row["beta"]) == pytest.approx(beta, rel=1e-5)
+    assert pga[p < 0.5].max() < median < pga[p > 0.5].min()
+    assert float(row["threshold_rad"]) == pytest.approx(np.arctan(0.035 / 0.21), rel=1e-7)     # 8 digits in the CSV
+    xml = (tmp_path / "o_overturn_pga.xml").read_text()
+    assert "<limitStates>overturn</limitStates>" in xml and 'ls="overturn"' in xml
+    with xr.open_dataset(tmp_path / "o_overturn_pga.nc") as frag:
+        assert frag.attrs["limit_state"] == "overturn"
+        np.testing.assert_array_equal(frag["p_exceed"].values, p)
+    assert main(["fragility", str(result), "--im", "pga", "--limit-state", "overturn", "--threshold", "0.1"]) == 2
