@@ -94,6 +94,7 @@ def finish_probabilities(run):
     from screening.analysis.probabilities import source_codes
 
     study, res = run.study, run.result
+    res.nc.sync()                   # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
     thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0
     p = np.column_stack([res.read("p_overturn")] + ([np.asarray(res.nc["p_exceed"][...], dtype=float).reshape(n, -1)]

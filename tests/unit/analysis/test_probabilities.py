@@ -82,6 +82,9 @@ def test_every_monte_carlo_model_has_its_own_source_code():
     assert [int(v) for v in attrs["flag_values"]] == sorted(codes.values())
     with pytest.raises(ValueError, match="parameter 'model'"):
         monte_carlo_source("no_such_model")
+    # every model the [accuracy] escalation can run is a Monte Carlo model with a code
+    from screening.status import EscalationModel
+    assert {m.name for m in EscalationModel} <= set(MODELS)
 
 
 def test_sources_before_monte_carlo():
