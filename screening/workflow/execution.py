@@ -192,7 +192,8 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
 
     The standard errors are a quarter of the change of the probability across the point's trust band
     ``[sl_error_low, sl_error_high]`` of ``SL / MCS - 1`` (both variances divided by ``1 + e``; the band stands
-    for two standard errors each way); NaN where the band is not finite or reaches ``e <= -1``.
+    for two standard errors each way), at the ``trusted`` points (the only ones where it is used); NaN elsewhere
+    and where the band is not finite or reaches ``e <= -1``.
     """
     import xarray as xr
 
@@ -204,20 +205,24 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
                                        if fragility is not None else [])
     with np.errstate(divide="ignore", invalid="ignore"):
         edges = [1.0 / (1.0 + out["sl_error_high"]), 1.0 / (1.0 + out["sl_error_low"])]
-    usable = np.all([np.isfinite(e) & (e > 0) for e in edges], axis=0)
+    # a standard error only where the linearization's estimate can be vouched for at all (trusted points)
+    usable = np.all([np.isfinite(e) & (e > 0) for e in edges], axis=0) & (out["sl_trust"] == Trust.trusted)
+    at = np.flatnonzero(usable)
+    sub = ds.isel(point=at)
 
     def scaled(factor):
-        f = xr.DataArray(np.where(usable, factor, 1.0), dims="point")
-        return ds.assign(var_theta=ds["var_theta"] * f, var_theta_dot=ds["var_theta_dot"] * f,
-                         cov_theta_theta_dot=ds["cov_theta_theta_dot"] * f)
+        f = xr.DataArray(factor[at], dims="point")
+        return sub.assign(var_theta=sub["var_theta"] * f, var_theta_dot=sub["var_theta_dot"] * f,
+                          cov_theta_theta_dot=sub["cov_theta_theta_dot"] * f)
 
-    variants = [ds] + [scaled(e) for e in edges]
+    variants = [scaled(e) for e in edges] if at.size else []
     n = out["status"].size
-    p, se = np.empty((n, len(levels))), np.empty((n, len(levels)))
+    p, se = np.empty((n, len(levels))), np.full((n, len(levels)), np.nan)
     for j, (threshold, relative_to) in enumerate(levels):
-        lo, hi = (exceedance_probability(d, threshold, relative_to, method).values for d in variants[1:])
         p[:, j] = exceedance_probability(ds, threshold, relative_to, method).values
-        se[:, j] = np.where(usable, np.abs(hi - lo) / 4.0, np.nan)
+        if variants:
+            lo, hi = (exceedance_probability(d, threshold, relative_to, method).values for d in variants)
+            se[at, j] = np.abs(hi - lo) / 4.0
     result = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if fragility is not None:
         result.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
