@@ -320,9 +320,8 @@ class _SweepRun:
     def _write_failed(self, batch):
         """A batch whose task failed: NaN values and status ``task_failed`` in its region (not saved)."""
         start = time.perf_counter()
-        self.result.write_batch(batch, execution.failed_result(
-            batch.size, self.study.times.size, self.study.output.stored, self.study.fragility,
-            probabilities=execution.wants_probabilities(self.study)))
+        self.result.write_batch(batch, execution.failed_result(batch.size, self.study.times.size,
+                                                               self.study.output.stored, self.study.fragility))
         self.write_time += time.perf_counter() - start
 
     def _linearization(self, batches):
