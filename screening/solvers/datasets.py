@@ -127,32 +127,24 @@ def _status_text(n_samples, n_overturned, n_diverged):
 
 def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                         block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
-                        condensation="paper", thresholds=None):
+                        condensation="paper"):
     """The dataset of :func:`screening.solvers.montecarlo.monte_carlo` (see its docstring).
 
     ``stats``: the ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`);
     ``peak``, ``overturned``, ``diverged``, ``n_acc``, ``n_rej``, ``reason``, ``h_min``: per sample;
     ``n_over``, ``n_div``: counts; ``opts``: the numerics; ``plan``: the spectral plan of the input;
-    ``wall``: the integration time [s]; ``thresholds``: rotations [rad] of ``p_exceed`` (None: none).
+    ``wall``: the integration time [s].
     """
-    from screening.analysis.probabilities import sample_probabilities
 
     n_used = n_samples - n_over - n_div
     data = {name: ("t", stats[name]) for name in MONTE_CARLO_STATISTICS}
     data.update(peak_abs_theta=("sample", peak), overturned=("sample", overturned), diverged=("sample", diverged),
                 n_steps=("sample", n_acc + n_rej), n_overturned=((), n_over), n_diverged=((), n_div),
                 n_used=((), n_used))
-    levels = () if thresholds is None else tuple(float(a) for a in thresholds)
-    prob = sample_probabilities(peak, overturned, ~diverged, levels)
-    data.update(p_overturn=((), prob["p_overturn"]), p_overturn_se=((), prob["p_overturn_se"]))
-    if thresholds is not None:
-        data.update(p_exceed=("threshold", prob["p_exceed"]), p_exceed_se=("threshold", prob["p_exceed_se"]))
     theta_ul, theta_ul_attrs = _monte_carlo_theta_ul(block, foundation, model, condensation)
     data.update(theta_ul=((), theta_ul), slenderness=((), float(block.slenderness)))
     coords = _coordinates(times, model_fields(block, foundation, excitation))
     coords["sample"] = ("sample", np.arange(n_samples))
-    if thresholds is not None:
-        coords["threshold"] = ("threshold", np.array(levels, dtype=float))
     reasons = sorted({DIVERGENCE_TEXT[DivergenceReason(int(r))] for r in reason[diverged]})
     accepted = n_acc[~overturned & ~diverged]
     attrs = {
@@ -190,3 +182,21 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
         if type(cond).capacity_angle is not Condensation.capacity_angle:
             attrs["theta_capacity"] = float(cond.capacity_angle(block, foundation))
     return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.MONTE_CARLO)
+
+
+def with_probabilities(ds, thresholds=None):
+    """A :func:`screening.monte_carlo` dataset with the probabilities of its samples: ``p_overturn`` and
+    ``p_overturn_se`` [1], and with ``thresholds`` (rotations [rad]) ``p_exceed`` and ``p_exceed_se`` [1] on the
+    coordinate ``threshold`` [rad] (:func:`screening.analysis.probabilities.sample_probabilities` over the
+    samples that did not diverge; overturned samples exceed every threshold)."""
+    from screening.analysis.probabilities import sample_probabilities
+
+    levels = np.asarray(() if thresholds is None else thresholds, dtype=float)
+    prob = sample_probabilities(ds["peak_abs_theta"].values, ds["overturned"].values, ~ds["diverged"].values, levels)
+    data = {"p_overturn": ((), prob["p_overturn"]), "p_overturn_se": ((), prob["p_overturn_se"])}
+    coords = {}
+    if thresholds is not None:
+        data.update(p_exceed=("threshold", prob["p_exceed"]), p_exceed_se=("threshold", prob["p_exceed_se"]))
+        coords["threshold"] = ("threshold", levels)
+    added = finish(xr.Dataset(data, coords=coords), table=schema.MONTE_CARLO)
+    return ds.assign_coords({name: added[name] for name in coords}).assign({name: added[name] for name in data})

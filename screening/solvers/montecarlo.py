@@ -190,6 +190,22 @@ def _check_thresholds(thresholds):
     return tuple(out)
 
 
+def _with_probabilities(run):
+    """``run`` (the Monte Carlo engine) with its ``thresholds`` checked before any work and the probabilities of
+    its samples added to its dataset (:func:`screening.solvers.datasets.with_probabilities`)."""
+    import functools
+
+    @functools.wraps(run)
+    def monte_carlo(*args, thresholds=None, **kwargs):
+        from screening.solvers.datasets import with_probabilities
+
+        thresholds = _check_thresholds(thresholds)
+        return with_probabilities(run(*args, **kwargs), thresholds)
+
+    return monte_carlo
+
+
+@_with_probabilities
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
                 seed=0, progress=None, condensation="paper", thresholds=None, **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
@@ -252,7 +268,6 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
                          f"(got condensation={cond.name!r} with model='coupled')")
     seed = validate_seed(seed)
-    thresholds = _check_thresholds(thresholds)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
     _check_scalar_models(block, foundation, excitation)
@@ -314,5 +329,5 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
     return monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                           block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
-                          h_min, wall, cond.name, thresholds)
+                          h_min, wall, cond.name)
 
