@@ -3,10 +3,10 @@
 Run::
 
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python \\
-        benchmarks/bench_probabilities.py [--points 200]
+        benchmarks/bench_probabilities.py
 
-Prints the wall time of one batch task (:func:`screening.workflow.execution.solve_batch`) of the paper
-block over an eps x S0 grid (20 s records, 0.05 s output, all histories): plain (every sweep: the
+Prints the wall time of one batch task (:func:`screening.workflow.execution.solve_batch`) of the whole grid of
+``studies/quick.toml`` (paper block, 10 x 10 eps x S0, 20 s records, 0.05 s output, all histories): plain (every sweep: the
 linearization, trust, intensity measures and ``p_rocking_start``), with ``p_overturn`` (``[accuracy]``),
 and with ``p_overturn`` and two ``[fragility]`` thresholds; and the first-call cost of the crossing
 tables of ``p_rocking_start`` (one per distinct input and band limit).  Best of three runs each.
@@ -16,27 +16,10 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
-STUDY = """
-title = "probabilities cost"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = {{start = -6e5, stop = 6e7, num = 10}}
-[excitation]
-kind = "white"
-S0 = {{start = 1e-5, stop = 2.4e-3, num = {n_s0}, log = true}}
-[time]
-t_end = 20.0
-dt = 0.05
-[fragility]
-thresholds = [0.1, 0.5]
-relative_to = "slenderness"
-"""
+#: The quick study (100 points) with two ``[fragility]`` thresholds.
+FRAGILITY = '\n[fragility]\nthresholds = [0.1, 0.5]\nrelative_to = "slenderness"\n'
 
 
 def main():
@@ -45,10 +28,9 @@ def main():
     from screening.workflow.grid import batch_models, plan_batches
     from screening.workflow.study import parse_study
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--points", type=int, default=200, help="points of the batch (a multiple of 10)")
-    args = parser.parse_args()
-    study = parse_study(STUDY.format(n_s0=max(args.points // 10, 1)))
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
+    source = Path(__file__).resolve().parent.parent / "studies" / "quick.toml"
+    study = parse_study(source.read_text() + FRAGILITY, source=str(source))
     batch = plan_batches(study, study.n_points)[0]
     models = batch_models(study, batch)
     cond = study.cases[0].condensation_model
