@@ -5,11 +5,11 @@ Run::
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python \\
         benchmarks/bench_probabilities.py
 
-Prints the wall time of one batch task (:func:`screening.workflow.execution.solve_batch`) of the whole grid of
-``studies/quick.toml`` (paper block, 10 x 10 eps x S0, 20 s records, 0.05 s output, all histories): plain (every sweep: the
-linearization, trust, intensity measures and ``p_rocking_start``), with ``p_overturn`` (``[accuracy]``),
-and with ``p_overturn`` and two ``[fragility]`` thresholds; and the first-call cost of the crossing
-tables of ``p_rocking_start`` (one per distinct input and band limit).  Best of three runs each.
+Prints the wall time of one batch task (:func:`screening.workflow.execution.solve_batch`) of the whole grid
+of ``studies/quick.toml`` (paper block, 10 x 10 eps x S0, 20 s records, 0.05 s output, all histories):
+plain (every sweep: the linearization, trust, intensity measures and ``p_rocking_start``), with
+``p_overturn`` (``[accuracy]``), and with ``p_overturn`` and two ``[fragility]`` thresholds; and the
+first-call cost of the crossing tables of ``p_rocking_start`` (one per distinct input and band limit).  Best of three runs each.
 """
 
 from __future__ import annotations

@@ -165,7 +165,8 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
         return src
     best = np.asarray(best_method)
     src[ok & (best == int(BestMethod.linearization))] = int(ProbabilitySource.linearization_gaussian)
-    src[ok & (best == int(BestMethod.corrected_linearization))] = int(ProbabilitySource.corrected_linearization_gaussian)
+    corrected = int(ProbabilitySource.corrected_linearization_gaussian)
+    src[ok & (best == int(BestMethod.corrected_linearization))] = corrected
     return src
 
 

@@ -68,7 +68,8 @@ def plot_im_fragility(frag, path, max_curves=8):
     units = frag[name].attrs.get("units", "")
     extra = f", T = {frag[name].attrs['period']:g} s" if "period" in frag[name].attrs else ""
     ax.set_xlabel(f"{name} [{units}]{extra}")
-    ax.set_ylabel(f"probability of {'overturning' if frag.attrs.get('limit_state') == 'overturn' else 'exceedance'} [1]")
+    overturn = frag.attrs.get("limit_state") == "overturn"
+    ax.set_ylabel(f"probability of {'overturning' if overturn else 'exceedance'} [1]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.suptitle(f"Fragility over {name} (threshold {frag.attrs.get('threshold', ''):g}, "

@@ -72,9 +72,10 @@ def describe(ds, path="result"):
         from screening.analysis.probabilities import TOPPLING_FRACTION, probability_text, spot_check_probabilities
 
         prob = spot_check_probabilities(ds) if "mcs_sample_state" in ds.variables else None
+        star = ("" if prob is None else f"; * more than {100 * TOPPLING_FRACTION:g} % overturned: the variances are "
+                "over the survivors only, the probabilities are the answer")
         lines.append(f"Monte Carlo spot checks ({ds.attrs.get('mcs_model')}, {ds.attrs.get('mcs_samples')} "
-                     f"samples, seed {ds.attrs.get('mcs_seed')}; probabilities +- 1 standard error"
-                     f"{'' if prob is None else f'; * more than {100 * TOPPLING_FRACTION:g} % overturned: the variances are over the survivors only, the probabilities are the answer'}):")
+                     f"samples, seed {ds.attrs.get('mcs_seed')}; probabilities +- 1 standard error{star}):")
         for i in range(ds.sizes["spot"]):
             index = spot_index(ds, i)
             rel = float(ds["mcs_rel_error_peak_var_theta"].values[i])
@@ -85,8 +86,9 @@ def describe(ds, path="result"):
                 rel, rel_dot, over, div, int(ds["mcs_n_used"].values[i]),
                 bool("mcs_status" in ds and int(ds["mcs_status"].values[i]) != SpotStatus.ok)))
             if prob is not None:
-                exceed = "".join(f", P(|theta| > {a:g}{'' if prob['relative_to'] == 'None' else ' ' + prob['relative_to']})"
-                                 f" {probability_text(prob['p_exceed'][i, j], prob['p_exceed_se'][i, j])}"
+                rel = "" if prob["relative_to"] == "None" else " " + prob["relative_to"]
+                exceed = "".join(f", P(|theta| > {a:g}{rel}) "
+                                 f"{probability_text(prob['p_exceed'][i, j], prob['p_exceed_se'][i, j])}"
                                  for j, a in enumerate(prob["thresholds"]))
                 lines[-1] += (f"; P(overturn) {probability_text(prob['p_overturn'][i], prob['p_overturn_se'][i])}"
                               f"{exceed}{' *' if prob['near_toppling'][i] else ''}")

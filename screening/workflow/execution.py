@@ -250,7 +250,8 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
     if probabilities or fragility is not None:
         out.update({name: np.full(n, np.nan) for name in PROBABILITY_FLOATS})
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
-    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS + tuple(derived_inputs):
+    for name in (SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS
+                 + tuple(derived_inputs)):
         out[name] = np.full(n, np.nan)
     for name in SUMMARY_INTS:
         out[name] = np.zeros(n, dtype=np.int32)

@@ -50,7 +50,8 @@ from screening.schema import (ACCURACY, FRAGILITY, PRESSURE_PARAMETERS, PROBABIL
 from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSITY_FLOATS, MODEL_FLOATS,
-                                          PROBABILITY_FLOATS, ROCKING_FLOATS, SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
+                                          PROBABILITY_FLOATS, ROCKING_FLOATS,
+                                          SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
 from screening.workflow.grid import hyperslabs, parameter_table
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
