@@ -319,7 +319,9 @@ def _per_unit_s0(excitation, values, t_end, cutoff):
     zeta = np.asarray(getattr(excitation, "zeta_g", np.nan), dtype=float)
     values, cut, omega, zeta = np.broadcast_arrays(np.asarray(values, dtype=float),
                                                    np.asarray(cutoff, dtype=float), omega, zeta)
-    shape = _shape_key(excitation, t_end)
+    env = excitation.envelope
+    shape = (excitation.kind, env.kind, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
+                                          if env.kind == "exponential" else ()), float(t_end))
     unit = np.empty(values.shape + (3,))
     for index in np.ndindex(values.shape):
         try:
