@@ -516,9 +516,10 @@ def cmd_plot(result, out_dir, response):
 
 @cli.command("fragility", help="probability of exceeding a rotation: netCDF + PNG fragility curves")
 @click.argument("result")
-@click.option("--threshold", type=POSITIVE_FLOAT, required=True, multiple=True,
+@click.option("--threshold", type=POSITIVE_FLOAT, multiple=True,
               help="rotation threshold: in rad, or a fraction of the angle named by --relative-to; repeat it for "
-                   "several limit states (one fragility model, a figure per limit state)")
+                   "several limit states (one fragility model, a figure per limit state); required but with "
+                   "--limit-state overturn")
 @click.option("--relative-to", type=_Choice(["slenderness", "theta_ul"]),
               help="threshold as a fraction of the slenderness angle atan(b/h) or of theta_ul")
 @click.option("--method", type=_Choice(["vanmarcke", "poisson"]), default="vanmarcke",
@@ -535,7 +536,19 @@ def cmd_plot(result, out_dir, response):
 @click.option("--modelling-dispersion", "modelling", type=POSITIVE_FLOAT,
               help="modelling dispersion beta_m [1] combined with each fitted beta by the square root of the sum of "
                    "squares (the fitted one kept as beta_fit)")
-def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, modelling):
+@click.option("--limit-state", type=_Choice(["exceed", "overturn"]), default="exceed",
+              help="exceed (default): |theta| beyond --threshold; overturn: the probability of overturning "
+                   "(p_overturn of a study with [accuracy] or [fragility]), fitted over --im (default s0)")
+def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, modelling, limit_state):
+    if limit_state == "overturn":
+        if threshold or relative_to is not None:
+            raise click.UsageError("--threshold and --relative-to do not apply to --limit-state overturn "
+                                   "(its threshold is atan(b/h))")
+        from screening.cli_records import fragility_over_im_command
+        return fragility_over_im_command(result, (), None, method, dim, out, im or ("sa" if period else "s0"),
+                                         period, modelling, limit_state)
+    if not threshold:
+        raise click.UsageError("--threshold is required (unless --limit-state overturn)")
     threshold = sorted(threshold)
     if len(set(threshold)) < len(threshold):
         raise CommandError(f"--threshold: the same value given twice ({', '.join(f'{t:g}' for t in threshold)})")

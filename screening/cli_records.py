@@ -115,8 +115,10 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     return EXIT_OK
 
 
-def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period, modelling=None):
-    """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML."""
+def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period, modelling=None,
+                              limit_state="exceed"):
+    """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML;
+    ``limit_state="overturn"``: of the probability of overturning (``threshold`` is then empty)."""
     from screening.analysis.fragility import with_modelling_dispersion
     from screening.analysis.im_fragility import fragility_over_im, stack_limit_states
     from screening.workflow.reader import open_result
@@ -133,22 +135,24 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
             raise CommandError(str(exc)) from None
     result = Path(result)
     with open_result(result) as ds:
-        out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility_{im}.nc"))
+        stem = "overturn" if limit_state == "overturn" else "fragility"
+        out = check_output_path(out or result.with_name(f"{_stem(result)}_{stem}_{im}.nc"))
         try:
             ds = ds.load()
             frags, warnings = [], []
-            for t in threshold:
-                one, said = fragility_over_im(ds, t, im, dim, relative_to, method, period)
+            for t in (threshold if limit_state == "exceed" else (None,)):
+                one, said = fragility_over_im(ds, t, im, dim, relative_to, method, period, limit_state=limit_state)
                 frags.append(one)
                 warnings += [w for w in said if w not in warnings]
-            frag = stack_limit_states(frags, threshold, relative_to)
+            frag = stack_limit_states(frags, threshold, relative_to) if limit_state == "exceed" else frags[0]
         except (ValueError, KeyError) as exc:
             raise CommandError(str(exc).strip("'\"")) from None
         flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load() \
             if "status" in ds.variables else None
     frag = with_modelling_dispersion(frag, modelling)
-    stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold), im=im,
-                    relative_to=relative_to, period=period, modelling_dispersion=modelling)
+    stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold) or None, im=im,
+                    relative_to=relative_to, period=period, modelling_dispersion=modelling,
+                    limit_state=None if limit_state == "exceed" else limit_state)
     write_fragility_files(frag, out, fragility_figures(frag, out, frag.attrs["intensity_dim"], flags),
                           fit_files(frag, out), warnings)
     fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["fit_median"].attrs["units"])

@@ -160,6 +160,13 @@ MONTE_CARLO = {
                                             "against Monte Carlo, (max_t lin - max_t mcs) / max_t mcs"),
     "sample_state": flag_attributes(SampleState, "state of each Monte Carlo sample at the end of the record"),
     "status": flag_attributes(SpotStatus, "status of the Monte Carlo spot check"),
+    # screening.analysis.probabilities.sample_probabilities (over the samples that did not diverge)
+    "p_overturn": _v("1", "fraction of the Monte Carlo samples that overturned (|theta| > atan(b/h))"),
+    "p_overturn_se": _v("1", "standard error of p_overturn (binomial, Agresti-Coull)"),
+    "p_exceed": _v("1", "fraction of the Monte Carlo samples whose peak |theta| exceeds the threshold "
+                        "(overturned samples count)"),
+    "p_exceed_se": _v("1", "standard error of p_exceed (binomial, Agresti-Coull)"),
+    "threshold": _v("rad", "rotation threshold of p_exceed"),
 }
 
 #: Fragility (exceedance of a rotation threshold).
@@ -178,6 +185,35 @@ FRAGILITY = {
     "fit_flag": {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"},
     "fit_n_unvouched": _v("1", "points of the curve whose linearized value is untrusted and has no best estimate"),
 }
+
+#: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
+#: ``[fragility]`` (:mod:`screening.workflow.probabilities`), and the closed-form probability that rocking
+#: starts at all (every point; :func:`screening.analysis.intensity.rocking_start_probability`).
+#: ``p_exceed`` itself is declared in :data:`FRAGILITY`; ``p_source`` by :func:`probability_source_attributes`.
+PROBABILITIES = {
+    "p_overturn": _v("1", "probability that the block overturns during the record (|theta| > atan(b/h)), from "
+                          "the model named by p_source"),
+    "p_overturn_se": _v("1", "standard error of p_overturn (Monte Carlo: binomial, Agresti-Coull; Gaussian: "
+                             "from the band of the moments; NaN where p_source is unreliable)"),
+    "p_exceed_se": _v("1", "standard error of p_exceed (Monte Carlo: binomial, Agresti-Coull; Gaussian: from the "
+                           "band of the moments; NaN where p_source is unreliable)"),
+    "p_rocking_start": _v("1", "probability that the ground acceleration exceeds the bed's uplift acceleration "
+                               "at least once during the record (random-vibration theory, closed form)"),
+    "uplift_acceleration": _v("m s-2", "quasi-static ground acceleration at which the block starts to rock "
+                                       "(g b/(3 h) on a linear Winkler bed)"),
+}
+
+
+def probability_source_attributes():
+    """CF flag attributes of ``p_source``: one value per source, a Monte Carlo model's from the models
+    :func:`screening.monte_carlo` knows (read when asked: the solvers import this module)."""
+    from screening.analysis.probabilities import source_codes
+
+    codes = sorted(source_codes().items(), key=lambda item: item[1])
+    return {"units": "1", "long_name": "model that produced p_overturn and p_exceed at the point",
+            "flag_values": np.array([c for _, c in codes], dtype=np.int8),
+            "flag_meanings": " ".join(name for name, _ in codes)}
+
 
 #: Speed-accuracy trade study (:mod:`screening.analysis.tradeoff`): its variables and label coordinates.
 TRADEOFF = {
@@ -407,8 +443,10 @@ def attributes(name, table=None):
     ``spot_`` (their value at a Monte Carlo spot point); Monte Carlo names with the prefix
     ``mcs_``.  Raises ``KeyError`` for an undeclared name.
     """
+    if name == "p_source":
+        return probability_source_attributes()
     tables = ([table] if table is not None else []) + [LINEARIZATION, PARAMETERS, DERIVED, COORDINATES,
-                                                       FRAGILITY, ACCURACY]
+                                                       FRAGILITY, ACCURACY, PROBABILITIES]
     for t in tables:
         if name in t:
             return dict(t[name])

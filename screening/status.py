@@ -3,7 +3,8 @@
 The code spaces are declared once, as data, in ``screening/data/status_codes.toml``: each member's
 name, integer code and meaning.  This module turns each table into an :class:`enum.IntEnum` at
 import (``PointStatus``, ``SampleStatus``, ``DivergenceReason``, ``SampleState``, ``SpotStatus``,
-``Trust``, ``BestMethod``, ``EscalationModel``, ``TargetMet``, ``ContactRegime``, ``FitFlag``); every member
+``Trust``, ``BestMethod``, ``EscalationModel``, ``TargetMet``, ``ContactRegime``, ``FitFlag``,
+``ProbabilitySource``); every member
 carries its ``meaning`` (plain language, for messages and documentation).  Compiled kernels read
 the members as integer constants (numba supports ``IntEnum``); files store the integer with CF
 ``flag_values`` / ``flag_meanings`` made by :func:`flag_attributes`.  Nothing else in the package
@@ -50,9 +51,20 @@ EscalationModel = code_space("EscalationModel")
 TargetMet = code_space("TargetMet")
 ContactRegime = code_space("ContactRegime")
 FitFlag = code_space("FitFlag")
+ProbabilitySource = code_space("ProbabilitySource")
+
+#: Code of the first Monte Carlo model of :data:`ProbabilitySource` (the others follow in their order).
+MONTE_CARLO_SOURCE_BASE = 10
 
 #: Plain-language text of the divergence reasons (messages to users).
 DIVERGENCE_TEXT = {reason: reason.meaning for reason in DivergenceReason}
+
+
+def probability_sources(models):
+    """``{name: code}`` of every :data:`ProbabilitySource`, with ``monte_carlo_<model>`` for each of ``models``
+    (the Monte Carlo model names, in their registered order) from :data:`MONTE_CARLO_SOURCE_BASE` up."""
+    return {**{m.name: int(m) for m in ProbabilitySource},
+            **{f"monte_carlo_{model}": MONTE_CARLO_SOURCE_BASE + i for i, model in enumerate(models)}}
 
 
 def flag_attributes(code_space, long_name, dtype=np.int8):

@@ -174,7 +174,8 @@ def compare_files(a, b, ignore=()):
 
 def assert_cdo_form_of(result, cdo_file):
     """``cdo_file`` (``screening export --layout cdo``) holds every number of ``result``: the same values
-    with ``t`` first, ``p_exceed`` as ``p_exceed_<i>``, the strings as attributes (JSON lists)."""
+    with ``t`` first, ``p_exceed`` (and every variable on ``threshold``) as ``p_exceed_<i>``, the strings as
+    attributes (JSON lists)."""
     import json
 
     import numpy as np
@@ -186,9 +187,9 @@ def assert_cdo_form_of(result, cdo_file):
             if v.dtype.kind in "OSU":
                 where = cdo.attrs.get(name) or next(c.attrs[name] for c in cdo.variables.values() if name in c.attrs)
                 assert json.loads(where) == [str(s) for s in np.atleast_1d(v.values)], name
-            elif name == "p_exceed":
+            elif "threshold" in v.dims and name != "threshold":
                 for i in range(v.sizes["threshold"]):
-                    np.testing.assert_array_equal(cdo[f"p_exceed_{i}"].values, v.isel(threshold=i).values)
+                    np.testing.assert_array_equal(cdo[f"{name}_{i}"].values, v.isel(threshold=i).values)
             else:
                 assert cdo[name].dims == (("t",) if "t" in v.dims else ()) + tuple(d for d in v.dims if d != "t")
                 np.testing.assert_array_equal(cdo[name].transpose(*v.dims).values, v.values, err_msg=name)

@@ -67,7 +67,7 @@ def default_dim(grid):
 
 
 def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, method="vanmarcke", period=None,
-                      cutoff=None):
+                      cutoff=None, limit_state="exceed"):
     """Exceedance probability along ``dim`` fitted over the intensity measure ``im``.
 
     Returns ``(fragility dataset, warnings)``: the :func:`~screening.analysis.fragility.fragility_dataset`
@@ -77,6 +77,11 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     (:class:`~screening.status.FitFlag`) and ``fit_n_unvouched`` over the other dimensions.
     Raises ``ValueError`` for an unknown ``im``, a ``dim`` that is not swept or not an intensity
     dimension, or an IM that is not strictly increasing along ``dim``.
+
+    ``limit_state="overturn"``: the probability of overturning instead
+    (:func:`screening.analysis.probabilities.overturning_probability`; ``threshold`` and ``relative_to``
+    are not used, ``threshold_rad`` is ``atan(b/h)``), stored as ``p_exceed`` with the attribute
+    ``limit_state`` and exported with that limit state.
     """
     from screening.analysis.fragility import add_fit, fragility_dataset
 
@@ -98,29 +103,45 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     if not bool((step > 0).all()):
         raise ValueError(f"{name} is not strictly increasing along --dim {dim!r}: a lognormal fit over it "
                          f"has no meaning")
-    frag = fragility_dataset(ds, threshold, relative_to, method, dim)
+    if limit_state not in LIMIT_STATES:
+        raise ValueError(f"--limit-state must be one of {', '.join(LIMIT_STATES)} (got {limit_state!r})")
+    warnings = []
+    if limit_state == "overturn":
+        from screening.analysis.probabilities import overturning_probability
+
+        p, note = overturning_probability(ds, method)
+        warnings += [f"overturning: {note}"] if note else []
+        frag = xr.Dataset({"p_exceed": p.rename("p_exceed").assign_attrs(
+                               long_name="probability that the block overturns during the record", units="1"),
+                           "threshold_rad": model_quantity(ds, "slenderness")})
+    else:
+        frag = fragility_dataset(ds, threshold, relative_to, method, dim)
     units = IMS[im][1]
     values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
     out = add_fit(frag.assign({name: values}), ds, values, dim)
     out["fit_median"].attrs.update(units=units, intensity=name)
     if period is not None and im in ("sa", "avgsa"):
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
-    out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim,
-                     title="Probability that |theta| exceeds a rotation, fitted over an intensity measure")
-    warnings = []
+    out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim, limit_state=limit_state,
+                     title="Probability that |theta| exceeds a rotation, fitted over an intensity measure"
+                     if limit_state == "exceed" else "Probability of overturning, fitted over an intensity measure")
     n_neg = int((out["fit_flag"] == FitFlag.non_positive_beta).sum())
     if n_neg:
         warnings.append(f"{n_neg} fit(s) have beta <= 0 (probability falling with {name}); flagged in fit_flag "
                         "and left out of the exports")
     try:
         slender = model_quantity(ds, "slenderness")
-        if bool((out["threshold_rad"] >= slender).any()):
+        if limit_state == "exceed" and bool((out["threshold_rad"] >= slender).any()):
             warnings.append("the threshold is at or beyond the slenderness angle atan(b/h): the rigid block "
                             "overturns there; P(exceed) is then not a rocking measure")
     except KeyError:
         pass
     return out, warnings
 
+
+#: Limit states of :func:`fragility_over_im`: ``exceed`` (``|theta|`` beyond a threshold, named by
+#: :func:`limit_state_name`) or ``overturn`` (the block overturns; NRML limit state ``overturn``).
+LIMIT_STATES = ("exceed", "overturn")
 
 #: Variables of a fragility dataset that do not depend on the threshold (the intensities, the source).
 THRESHOLD_FREE = ("best_method", *(v[0] for v in IMS.values()))
@@ -129,6 +150,11 @@ THRESHOLD_FREE = ("best_method", *(v[0] for v in IMS.values()))
 class NoExport(ValueError):
     """A file of a fragility's set that this fragility cannot fill (an IM OpenQuake does not know, nothing
     drawn): the set is written without it, with a warning."""
+
+
+def _single_state(frag):
+    """The exported name of the one limit state of a fragility without a ``limit_state`` dimension."""
+    return "overturn" if frag.attrs.get("limit_state") == "overturn" else "theta_exceeds_threshold"
 
 
 def limit_state_name(threshold, relative_to=None):
@@ -240,7 +266,7 @@ def write_pelicun_csv(frag, path):
               "Spectral Acceleration"}.get(key, name)
     rows = curve_table(frag)
     states = [str(v) for v in frag["limit_state"].values] if "limit_state" in frag["fit_median"].dims else [
-        str(frag.attrs.get("limit_state", "theta_exceeds_threshold"))]
+        _single_state(frag)]
     components = {}
     for r in rows:
         labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
@@ -310,7 +336,7 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     values = frag[name].values[np.isfinite(frag[name].values)] * factor
     lo, hi = float(values.min()), float(values.max())
     several = "limit_state" in frag["fit_median"].dims
-    states = [str(v) for v in frag["limit_state"].values] if several else ["theta_exceeds_threshold"]
+    states = [str(v) for v in frag["limit_state"].values] if several else [_single_state(frag)]
     by_taxonomy = {}
     for r in curve_table(frag):
         labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}

@@ -82,6 +82,8 @@ GROUND_BAND_LIMIT_HZ = 25.0
 #: Standard gravity used by the Arias intensity [m s-2].
 G = 9.80665
 N_TIMES = 4001
+#: Points evaluated together by :func:`rocking_start_probability`.
+CHUNK_POINTS = 64
 
 
 def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
@@ -137,14 +139,120 @@ def median_peak(t, var, var_dot, cov, bandwidth, probability=0.5):
     return math.exp(optimize.brentq(excess, lo, hi, xtol=1e-10))
 
 
-def pga_median(excitation, t_end, cutoff):
-    """Median peak ground acceleration [m s-2] of the modulated input (see the module docstring)."""
+def input_moments(excitation, t_end, cutoff):
+    """``(t, var a, var a', cov(a, a'), delta)`` of the modulated, band-limited ground acceleration on
+    :data:`N_TIMES` times over ``[0, t_end]`` [s, m2 s-4, m2 s-6, m2 s-5, 1] (see the module docstring)."""
     lam0, lam1, lam2 = spectral_moments(excitation, cutoff)
     t = _times(t_end)
     q = excitation.envelope(t)
     qd = envelope_rate(excitation.envelope, t)
     delta = math.sqrt(max(1.0 - lam1**2 / (lam0 * lam2), 0.0))
-    return median_peak(t, q * q * lam0, q * q * lam2 + qd * qd * lam0, q * qd * lam0, delta)
+    return t, q * q * lam0, q * q * lam2 + qd * qd * lam0, q * qd * lam0, delta
+
+
+def pga_median(excitation, t_end, cutoff):
+    """Median peak ground acceleration [m s-2] of the modulated input (see the module docstring)."""
+    return median_peak(*input_moments(excitation, t_end, cutoff))
+
+
+def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, method="poisson"):
+    """Probability [1] that ``|a_g|`` exceeds ``uplift_acceleration`` [m s-2] at least once over ``[0, t_end]``.
+
+    Parameters
+    ----------
+    excitation : a registered excitation (:mod:`screening.excitations`; array fields broadcast with the others).
+    t_end : record length [s].
+    cutoff : band limit of the ground motion [rad s-1] (:func:`ground_cutoff`, the one its PGA refers to).
+    uplift_acceleration : ground acceleration at which the block starts to rock [m s-2]
+        (:func:`screening.analysis.probabilities.uplift_acceleration`).
+    method : ``"poisson"`` (default: independent crossings) or ``"vanmarcke"`` (clumped crossings, the
+        assumption of :func:`pga_median`).
+
+    Returns
+    -------
+    float or array over the broadcast points.
+
+    Notes
+    -----
+    The distribution of the peak ground acceleration of which :func:`pga_median` is the median:
+    ``P(max_t |a| > x) = 1 - exp(-int_0^T nu(x, t) dt)`` with Rice's double-barrier rate ``nu`` of the
+    non-stationary pair ``(a, a')`` (:func:`screening.analysis.fragility.exceedance_probability_from_moments`).
+    Ground acceleration is broad-band (bandwidth ``delta`` 0.5 for band-limited white noise, 0.65 for
+    the Kanai-Tajimi point of the tests), so its crossings barely clump: against 2,000 synthesised
+    records the Poisson form is within 2.5 binomial standard errors at probabilities 0.05-0.95, where
+    Vanmarcke's correction is up to 0.08 (12 standard errors) low at the middle of the distribution
+    (``tests/unit/analysis/test_intensity.py``).  The moments
+    scale with ``S0``, so one evaluation per distinct filter, envelope and band limit at ``S0 = 1``
+    serves every point, at the level ``x / sqrt(S0)``.
+
+    References
+    ----------
+    Vanmarcke, E. H. (1975), see the module docstring.
+    """
+    if method not in ("poisson", "vanmarcke"):
+        raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
+    s0 = np.asarray(excitation.S0, dtype=float)
+    level, s0, cut = np.broadcast_arrays(np.asarray(uplift_acceleration, dtype=float), s0,
+                                         np.asarray(cutoff, dtype=float))
+    names = tuple(excitation.parameters)
+    filt = [np.broadcast_to(np.asarray(getattr(excitation, n), dtype=float), level.shape) for n in names]
+    out = np.full(level.shape, np.nan)
+    keys = {}
+    for index in np.ndindex(level.shape):
+        keys.setdefault((tuple(float(f[index]) for f in filt), float(cut[index])), []).append(index)
+    for (values, wc), points in keys.items():
+        try:
+            x_grid, log_crossings = _unit_crossings(*_shape_key(excitation, t_end), names, values, wc, method)
+        except (ArithmeticError, ValueError):          # scales beyond float64: NaN
+            continue
+        rows = tuple(np.array(i) for i in zip(*points)) if level.ndim else ()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = level[rows] / np.sqrt(s0[rows])
+            crossings = np.exp(np.interp(x, x_grid, log_crossings, right=-np.inf))
+            out[rows] = np.where(np.isfinite(x), -np.expm1(-crossings), np.nan)
+    return float(out) if out.ndim == 0 else out
+
+
+#: Levels per unit peak standard deviation of the table of :func:`_unit_crossings`, and its extent.
+CROSSING_STEP, CROSSING_EXTENT = 0.02, 12.0
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_crossings(*args):
+    """``(x, log int_0^T nu(x, t) dt)`` at ``S0 = 1`` of one filter, envelope, ``t_end``, band limit and method,
+    tabulated at levels ``x`` every :data:`CROSSING_STEP` peak standard deviations (``log`` of the expected
+    crossings is nearly quadratic in ``x``: linear interpolation errs by about ``step^2 / 8``, 5e-5 relative;
+    beyond the table, 12 peak standard deviations, the probability is below 1e-28 and read as 0)."""
+    from screening.analysis.fragility import exceedance_probability_from_moments
+
+    *shape, method = args
+    t, var, var_dot, cov, delta = _unit_input_moments(*shape)
+    x = np.arange(0.0, CROSSING_EXTENT, CROSSING_STEP) * math.sqrt(float(np.max(var)))
+    crossings = np.empty_like(x)
+    for lo in range(0, x.size, CHUNK_POINTS):              # bounded memory: levels x N_TIMES at a time
+        p = exceedance_probability_from_moments(t, var, var_dot, cov, x[lo:lo + CHUNK_POINTS, None], method=method,
+                                                bandwidth=delta)
+        crossings[lo:lo + CHUNK_POINTS] = -np.log1p(-np.minimum(p, 1.0 - 1e-16))    # certain beyond ~37
+    with np.errstate(divide="ignore"):
+        log_crossings = np.log(crossings)
+    keep = np.isfinite(log_crossings)                     # the levels no record reaches are read as 0
+    return x[keep], log_crossings[keep]
+
+
+def _shape_key(excitation, t_end):
+    """Cache key of the filter kind, envelope and record length of ``excitation``."""
+    env = excitation.envelope
+    return (excitation.kind, env.kind, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
+                                         if env.kind == "exponential" else ()), float(t_end))
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_input_moments(kind, envelope_kind, *args):
+    """:func:`input_moments` at ``S0 = 1`` of one filter (parameters ``names`` with ``values``),
+    envelope, ``t_end`` and band limit."""
+    *envelope, t_end, names, values, cutoff = args
+    p = {**dict(zip(names, values)), **dict(zip(("T1", "T2"), envelope))}
+    return input_moments(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff)
 
 
 def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIMES):

@@ -22,6 +22,7 @@ def plot_spots(ds, path):
     if "spot" not in ds.dims or ds.sizes["spot"] == 0:
         return None
     n = min(ds.sizes["spot"], 8)
+    prob = _spot_probabilities(ds)
     fig = new_figure(10.0, 2.6 * n + 0.8)
     axes = np.atleast_2d(fig.subplots(n, 2, sharex=True, squeeze=False))
     t = ds["t"].values
@@ -38,8 +39,10 @@ def plot_spots(ds, path):
             if lin is not None:
                 ax.plot(t, lin, color="C0", lw=1.4, label="stochastic linearization")
             rel = float(ds[f"mcs_rel_error_peak_{name}"].values[i])
-            ax.set_title(f"{point_label(ds, index)}{point_flag_text(ds, index)}: peak rel. error {100 * rel:+.1f} %",
-                         fontsize=8)
+            ax.set_title(f"{point_label(ds, index)}{point_flag_text(ds, index)}: peak rel. error {100 * rel:+.1f} %"
+                         + (f"\n{_probability_text(prob, i)[0 if name == 'var_theta' else 1]}" if prob is not None
+                            else ""), fontsize=8,
+                         color="C3" if prob is not None and prob["near_toppling"][i] else "black")
             ax.set_ylabel(axis_label(ds, name if name in ds.variables else f"mcs_{name}"))
             ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
@@ -48,6 +51,26 @@ def plot_spots(ds, path):
     fig.suptitle(f"{ds.attrs.get('title', '')}\nspot checks against Monte Carlo\n{flag_summary(ds)}", fontsize=8)
     save_figure(fig, path)
     return Path(path)
+
+
+def _spot_probabilities(ds):
+    """:func:`screening.analysis.probabilities.spot_check_probabilities`, or None for a result without sample states."""
+    from screening.analysis.probabilities import spot_check_probabilities
+
+    return spot_check_probabilities(ds) if "mcs_sample_state" in ds.variables else None
+
+
+def _probability_text(prob, i):
+    """``(P(overturn) p +- se [NEAR TOPPLING ...], P(|theta| > a) p +- se, ...)`` of spot ``i``."""
+    from screening.analysis.probabilities import TOPPLING_FRACTION, probability_text
+
+    rel = "" if prob["relative_to"] == "None" else f" {prob['relative_to']}"
+    over = f"P(overturn) {probability_text(prob['p_overturn'][i], prob['p_overturn_se'][i])}"
+    if prob["near_toppling"][i]:
+        over += f"\nNEAR TOPPLING (> {100 * TOPPLING_FRACTION:g} % overturned: variances over the survivors only)"
+    exceed = "\n".join(f"P(|theta| > {a:g}{rel}) {probability_text(prob['p_exceed'][i, j], prob['p_exceed_se'][i, j])}"
+                       for j, a in enumerate(prob["thresholds"]))
+    return over, exceed
 
 
 #: Two-sided 95 % normal quantile, for the Monte Carlo bands of :func:`plot_spot_panels`.
@@ -95,8 +118,12 @@ def plot_spot_panels(ds, i, path):
     ax_p.set_xlabel("t [s]")
     ax_vd.set_xlabel("t [s]")
     over = int(ds["mcs_n_overturned"].values[i])
+    prob = _spot_probabilities(ds)
     fig.suptitle(f"{point_label(ds, index)}{point_flag_text(ds, index)}  ({over} of {ds.attrs.get('mcs_samples', '?')} "
-                 "Monte Carlo samples overturned, excluded from the ensemble)", fontsize=9)
+                 "Monte Carlo samples overturned, excluded from the ensemble)"
+                 + ("\n" + "\n".join(t for t in _probability_text(prob, i) if t) if prob is not None else ""),
+                 fontsize=8,
+                 color="C3" if prob is not None and prob["near_toppling"][i] else "black")
     save_figure(fig, path)
     return Path(path)
 

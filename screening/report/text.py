@@ -67,9 +67,15 @@ def describe(ds, path="result"):
         units = ds[name].attrs.get("units", "")
         if v.size:
             lines.append(f"  {name:<17} {_fmt(v.min())} / {_fmt(float(np.median(v)))} / {_fmt(v.max())} {units}")
+    lines.extend(probability_lines(ds))
     if "spot" in ds.dims and ds.sizes["spot"]:
+        from screening.analysis.probabilities import TOPPLING_FRACTION, probability_text, spot_check_probabilities
+
+        prob = spot_check_probabilities(ds) if "mcs_sample_state" in ds.variables else None
+        star = ("" if prob is None else f"; * more than {100 * TOPPLING_FRACTION:g} % overturned: the variances are "
+                "over the survivors only, the probabilities are the answer")
         lines.append(f"Monte Carlo spot checks ({ds.attrs.get('mcs_model')}, {ds.attrs.get('mcs_samples')} "
-                     f"samples, seed {ds.attrs.get('mcs_seed')}):")
+                     f"samples, seed {ds.attrs.get('mcs_seed')}; probabilities +- 1 standard error{star}):")
         for i in range(ds.sizes["spot"]):
             index = spot_index(ds, i)
             rel = float(ds["mcs_rel_error_peak_var_theta"].values[i])
@@ -79,7 +85,41 @@ def describe(ds, path="result"):
             lines.append(f"  {point_label(ds, index)}: " + _spot_summary(
                 rel, rel_dot, over, div, int(ds["mcs_n_used"].values[i]),
                 bool("mcs_status" in ds and int(ds["mcs_status"].values[i]) != SpotStatus.ok)))
+            if prob is not None:
+                rel = "" if prob["relative_to"] == "None" else " " + prob["relative_to"]
+                exceed = "".join(f", P(|theta| > {a:g}{rel}) "
+                                 f"{probability_text(prob['p_exceed'][i, j], prob['p_exceed_se'][i, j])}"
+                                 for j, a in enumerate(prob["thresholds"]))
+                lines[-1] += (f"; P(overturn) {probability_text(prob['p_overturn'][i], prob['p_overturn_se'][i])}"
+                              f"{exceed}{' *' if prob['near_toppling'][i] else ''}")
     return "\n".join(lines)
+
+
+def probability_lines(ds):
+    """Where the points' ``p_overturn`` and ``p_exceed`` come from (``p_source``), their ranges, the points near
+    toppling, and the range of ``p_rocking_start``; ``[]`` for a result without them."""
+    from screening.analysis.probabilities import TOPPLING_FRACTION, source_codes
+
+    lines = []
+    if "p_source" in ds.variables:
+        source = np.asarray(ds["p_source"].values).reshape(-1)
+        names = {code: name for name, code in source_codes().items()}
+        counts = ", ".join(f"{names.get(int(c), c)} {int(np.sum(source == c))}" for c in np.unique(source))
+        p = np.asarray(ds["p_overturn"].values, dtype=float).reshape(-1)
+        vouched = np.isfinite(np.asarray(ds["p_overturn_se"].values, dtype=float).reshape(-1))
+        near = int(np.sum(vouched & (p > TOPPLING_FRACTION)))
+        lines.append(f"probability of overturning and of exceedance (p_overturn, p_exceed, with *_se) by source: "
+                     f"{counts}")
+        if vouched.any():
+            lines.append(f"  p_overturn where vouched for: {_fmt(float(p[vouched].min()))} .. "
+                         f"{_fmt(float(p[vouched].max()))}; {near} point(s) above {100 * TOPPLING_FRACTION:g} % "
+                         "(near toppling: read the probabilities, not the variances over the survivors)")
+    if "p_rocking_start" in ds.variables:
+        p = np.asarray(ds["p_rocking_start"].values, dtype=float).reshape(-1)
+        if np.isfinite(p).any():
+            lines.append(f"probability that rocking starts (ground acceleration beyond the uplift acceleration): "
+                         f"{_fmt(float(np.nanmin(p)))} .. {_fmt(float(np.nanmax(p)))}")
+    return lines
 
 
 def best_line(ds):

@@ -65,9 +65,9 @@ def _coordinates(times, parameters):
     return coords
 
 
-def _declared(name):
+def _declared(name, table=None):
     try:
-        schema.attributes(name)
+        schema.attributes(name, table)
     except KeyError:
         return False
     return True
@@ -79,7 +79,7 @@ def finish(ds, table=None):
 
     Every producer of a dataset ends with it.  An undeclared data variable still raises ``KeyError``.
     """
-    foreign = [name for name in ds.coords if not _declared(name)]
+    foreign = [name for name in ds.coords if not _declared(name, table)]
     return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c].variable for c in foreign})
 
 
@@ -171,3 +171,21 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
     }
     attrs.update(mc.dataset_attributes(block, foundation, condensation))
     return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.MONTE_CARLO)
+
+
+def with_probabilities(ds, thresholds=None):
+    """A :func:`screening.monte_carlo` dataset with the probabilities of its samples: ``p_overturn`` and
+    ``p_overturn_se`` [1], and with ``thresholds`` (rotations [rad]) ``p_exceed`` and ``p_exceed_se`` [1] on the
+    coordinate ``threshold`` [rad] (:func:`screening.analysis.probabilities.sample_probabilities` over the
+    samples that did not diverge; overturned samples exceed every threshold)."""
+    from screening.analysis.probabilities import sample_probabilities
+
+    levels = np.asarray(() if thresholds is None else thresholds, dtype=float)
+    prob = sample_probabilities(ds["peak_abs_theta"].values, ds["overturned"].values, ~ds["diverged"].values, levels)
+    data = {"p_overturn": ((), prob["p_overturn"]), "p_overturn_se": ((), prob["p_overturn_se"])}
+    coords = {}
+    if thresholds is not None:
+        data.update(p_exceed=("threshold", prob["p_exceed"]), p_exceed_se=("threshold", prob["p_exceed_se"]))
+        coords["threshold"] = ("threshold", levels)
+    added = finish(xr.Dataset(data, coords=coords), table=schema.MONTE_CARLO)
+    return ds.assign_coords({name: added[name] for name in coords}).assign({name: added[name] for name in data})

@@ -216,8 +216,39 @@ def _show_progress(progress, n_samples, chunk_size):
 
 
 # ----------------------------------------------------------------------------- entry point
+def _check_thresholds(thresholds):
+    """``thresholds`` as a tuple of rotations [rad] (None stays None)."""
+    if thresholds is None:
+        return None
+    values = np.atleast_1d(np.asarray(thresholds, dtype=object))
+    out = []
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not (0.0 < v < math.inf):
+            raise ValueError(f"parameter 'thresholds' must be rotations [rad] in (0, inf) (got {thresholds!r})")
+        out.append(float(v))
+    if not out or len(set(out)) != len(out):
+        raise ValueError(f"parameter 'thresholds' must list distinct rotations [rad] in (0, inf) (got {thresholds!r})")
+    return tuple(out)
+
+
+def _with_probabilities(run):
+    """``run`` (the Monte Carlo engine) with its ``thresholds`` checked before any work and the probabilities of
+    its samples added to its dataset (:func:`screening.solvers.datasets.with_probabilities`)."""
+    import functools
+
+    @functools.wraps(run)
+    def monte_carlo(*args, thresholds=None, **kwargs):
+        from screening.solvers.datasets import with_probabilities
+
+        thresholds = _check_thresholds(thresholds)
+        return with_probabilities(run(*args, **kwargs), thresholds)
+
+    return monte_carlo
+
+
+@_with_probabilities
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
-                seed=0, progress=None, condensation="paper", **numerics):
+                seed=0, progress=None, condensation="paper", thresholds=None, **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
 
     Parameters
@@ -245,6 +276,10 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         ``model="coupled"`` raises (the coupled model is not condensed).  With ``"cubic"`` on
         a softening bed, samples passing the capacity angle (no quasi-static equilibrium)
         are flagged diverged.
+    thresholds : rotations [rad] > 0 (a number or a sequence of distinct ones): the result also has
+        ``p_exceed`` and ``p_exceed_se`` on the coordinate ``threshold`` [rad], the fraction of the
+        samples that did not diverge whose peak ``|theta|`` exceeds each (overturned samples count)
+        and its binomial standard error (:func:`screening.analysis.probabilities.sample_probabilities`).
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
         ``cutoff_factor`` [1], ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
         ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``).
@@ -258,14 +293,16 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     ``p_uplift`` [1] (coupled: either base edge out of contact, ``z_cb < b |sin theta|``;
     condensed: ``|theta| > theta_ul``), per-sample ``peak_abs_theta`` [rad] (maximum of
     ``|theta|`` over the accepted steps, up to overturning or divergence), ``overturned``,
-    ``diverged``, ``n_steps`` and scalars ``n_overturned``, ``n_diverged``, ``n_used``.
+    ``diverged``, ``n_steps`` and scalars ``n_overturned``, ``n_diverged``, ``n_used``, ``p_overturn``
+    [1] (fraction of the samples that did not diverge that overturned) and its standard error
+    ``p_overturn_se`` [1] (Agresti-Coull; docs/outputs_probabilities.md).
     ``attrs["status"]`` is ``"ok"`` or says plainly why the statistics are NaN;
     ``attrs["condensation"]`` names the condensation of a condensed run.
 
     Raises
     ------
     ValueError
-        For a bad ``n_samples``, ``model``, ``condensation``, ``seed``, ``t_end``/``dt``, numerics
+        For a bad ``n_samples``, ``model``, ``condensation``, ``seed``, ``thresholds``, ``t_end``/``dt``, numerics
         option, or array-valued model parameters — before any work is done.
     """
     n_samples = check_integer("n_samples", n_samples, 2)

@@ -80,6 +80,7 @@ def escalate(run):
     escalated, models = order[done], models[done]
     runs = [results[j] for j in done]
     run.result.write_escalation(escalated, models, runs)
+    run.escalated = (escalated, models, runs)          # their sample peaks: screening.workflow.probabilities
 
     best = {}
     for name in ("var_theta", "var_theta_dot"):

@@ -44,6 +44,11 @@ MODEL_FLOATS = ("theta_ul", "slenderness")
 TRUST_FLOATS = ("sl_error_low", "sl_error_high")
 #: Intensity measures of each point's input (random-vibration medians, :mod:`screening.analysis.intensity`).
 INTENSITY_FLOATS = ("pga_median", "rms_acceleration", "arias_intensity")
+#: The quasi-static uplift acceleration of each point's block and bed [m s-2] and the probability that its
+#: input exceeds it during the record [1] (:func:`screening.analysis.intensity.rocking_start_probability`).
+ROCKING_FLOATS = ("uplift_acceleration", "p_rocking_start")
+#: The linearization's probability of overturning and its standard error (:func:`batch_probabilities`).
+PROBABILITY_FLOATS = ("p_overturn", "p_overturn_se")
 #: Per-point model inputs returned only for studies that derive them (:attr:`Study.derived_inputs`).
 DERIVED_INPUTS = ("S0",)
 #: Histories of a spot check.
@@ -54,7 +59,8 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 # ============================================================================ tasks
 def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
-                fragility=None, trust_table=None, derived_inputs=(), underivable=None, cutoff=None):
+                fragility=None, trust_table=None, derived_inputs=(), underivable=None, cutoff=None,
+                probabilities=False):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
     ``condensation`` is a :class:`screening.condensation.Condensation`; ``histories``: the history
@@ -65,13 +71,17 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     thresholds) [1], from the float64 histories while they are in memory
     (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
     :data:`INTENSITY_FLOATS` of each point's input, with the ground-motion band limit ``cutoff`` [rad/s]
-    of the excitation (default :func:`screening.analysis.intensity.ground_cutoff`);
+    of the excitation (default :func:`screening.analysis.intensity.ground_cutoff`), and the
+    :data:`ROCKING_FLOATS` (:func:`batch_rocking_start`, same band limit);
     ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.  ``underivable``
     (boolean per point, or None): points whose ``S0`` could not follow from their target PGA (their
     excitation holds a placeholder): status ``beyond_float_range``, NaN values, ``sl_trust`` untrusted.
+    ``probabilities`` (:func:`wants_probabilities`): also the linearization's :data:`PROBABILITY_FLOATS` and,
+    with ``fragility``, ``p_exceed_se`` (:func:`batch_probabilities`).
     """
+    probabilities = probabilities or fragility is not None
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
-                        condensation=condensation, histories=bool(histories) or fragility is not None)
+                        condensation=condensation, histories=bool(histories) or probabilities)
     shape = res["status"].shape
     n = res["status"].size
     out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in histories}
@@ -83,10 +93,11 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
     for name in MODEL_FLOATS:
         out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
-    if fragility is not None:
-        out["p_exceed"] = batch_exceedance(res, block, foundation, excitation, out, t_out, fragility)
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
+    if probabilities:
+        out.update(batch_probabilities(res, block, foundation, excitation, out, t_out, fragility))
     out.update(batch_intensity(excitation, t_out, n, cutoff))
+    out.update(batch_rocking_start(block, foundation, excitation, condensation, t_out, n, cutoff))
     for name in derived_inputs:
         out[name] = np.broadcast_to(getattr(excitation, name), shape).reshape(n).astype(np.float64)
     if underivable is not None:
@@ -116,6 +127,24 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
     measures = input_measures(excitation, float(np.asarray(t_out)[-1]), ground_cutoff() if cutoff is None else cutoff)
     return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
             else np.asarray(measures[name], dtype=np.float64).reshape(n) for name in INTENSITY_FLOATS}
+
+
+def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, cutoff=None):
+    """The :data:`ROCKING_FLOATS` of the ``n`` points of a batch, band-limited to the ground motion's
+    ``cutoff`` [rad/s] (default :func:`screening.analysis.intensity.ground_cutoff`: the band its PGA refers to)."""
+    from screening.analysis.intensity import ground_cutoff, rocking_start_probability
+    from screening.analysis.probabilities import uplift_acceleration
+
+    try:
+        with np.errstate(all="ignore"):
+            a_ul = uplift_acceleration(block, foundation, condensation)
+            p = rocking_start_probability(excitation, float(np.asarray(t_out)[-1]),
+                                          ground_cutoff() if cutoff is None else cutoff, a_ul)
+    except (ArithmeticError, ValueError):       # a bed the condensation cannot carry: the solver flags it
+        a_ul = p = np.nan
+    return {name: np.broadcast_to(np.asarray(value, dtype=np.float64), (n,)).copy() if np.size(value) != n
+            else np.asarray(value, dtype=np.float64).reshape(n)
+            for name, value in (("uplift_acceleration", a_ul), ("p_rocking_start", p))}
 
 
 def solve_and_store_batch(target, batch, *solve_args):
@@ -158,11 +187,10 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, ta
             "sl_error_high": np.asarray(high, dtype=float)}
 
 
-def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
-    """``p_exceed`` [1] of a batch, points x thresholds, by the analysis layer's own function."""
+def _batch_dataset(res, block, foundation, excitation, out, t_out):
+    """The linearization dataset of a batch (dimension ``point``) from the solver's float64 arrays."""
     import xarray as xr
 
-    from screening.analysis.fragility import exceedance_probability
     from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
 
     n = out["status"].size
@@ -174,11 +202,58 @@ def batch_exceedance(res, block, foundation, excitation, out, t_out, fragility):
 
     parameters = {name: on_points(value) for name, value in model_fields(block, foundation, excitation).items()}
     derived = {name: ("point", out[name]) for name in MODEL_FLOATS}
-    ds = linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
-    p = np.empty((n, len(fragility.thresholds)))
-    for j, threshold in enumerate(fragility.thresholds):
-        p[:, j] = exceedance_probability(ds, threshold, fragility.relative_to, fragility.method).values
-    return p
+    return linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
+
+
+def batch_probabilities(res, block, foundation, excitation, out, t_out, fragility=None):
+    """The linearization's probabilities of a batch, by the analysis layer's own function
+    (:func:`screening.analysis.fragility.exceedance_probability`, the up-crossing ``method`` of
+    ``fragility``, else Vanmarcke's): ``p_overturn`` (``|theta|`` beyond ``atan(b/h)``) and ``p_overturn_se``,
+    and with ``fragility`` ``p_exceed`` and ``p_exceed_se`` (points x thresholds) [1].
+
+    The standard errors are a quarter of the change of the probability across the point's trust band
+    ``[sl_error_low, sl_error_high]`` of ``SL / MCS - 1`` (both variances divided by ``1 + e``; the band stands
+    for two standard errors each way), at the ``trusted`` points (the only ones where it is used); NaN elsewhere
+    and where the band is not finite or reaches ``e <= -1``.
+    """
+    import xarray as xr
+
+    from screening.analysis.fragility import exceedance_probability
+
+    ds = _batch_dataset(res, block, foundation, excitation, out, t_out)
+    method = fragility.method if fragility is not None else "vanmarcke"
+    levels = [(1.0, "slenderness")] + ([(t, fragility.relative_to) for t in fragility.thresholds]
+                                       if fragility is not None else [])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        edges = [1.0 / (1.0 + out["sl_error_high"]), 1.0 / (1.0 + out["sl_error_low"])]
+    # a standard error only where the linearization's estimate can be vouched for at all (trusted points)
+    usable = np.all([np.isfinite(e) & (e > 0) for e in edges], axis=0) & (out["sl_trust"] == Trust.trusted)
+    at = np.flatnonzero(usable)
+    sub = ds.isel(point=at)
+
+    def scaled(factor):
+        f = xr.DataArray(factor[at], dims="point")
+        return sub.assign(var_theta=sub["var_theta"] * f, var_theta_dot=sub["var_theta_dot"] * f,
+                          cov_theta_theta_dot=sub["cov_theta_theta_dot"] * f)
+
+    variants = [scaled(e) for e in edges] if at.size else []
+    n = out["status"].size
+    p, se = np.empty((n, len(levels))), np.full((n, len(levels)), np.nan)
+    for j, (threshold, relative_to) in enumerate(levels):
+        p[:, j] = exceedance_probability(ds, threshold, relative_to, method).values
+        if variants:
+            lo, hi = (exceedance_probability(d, threshold, relative_to, method).values for d in variants)
+            se[at, j] = np.abs(hi - lo) / 4.0
+    result = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
+    if fragility is not None:
+        result.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
+    return result
+
+
+def wants_probabilities(study):
+    """Whether the points of ``study`` carry ``p_overturn`` (and, with ``[fragility]``, ``p_exceed``) with
+    their standard errors and source: with ``[accuracy]`` or ``[fragility]``."""
+    return study.accuracy is not None or study.fragility is not None
 
 
 def refused_batch(message):
@@ -187,13 +262,17 @@ def refused_batch(message):
     raise ValueError(message)
 
 
-def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=()):
+def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=(), probabilities=False):
     """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
     out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
     if fragility is not None:
         out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
+        out["p_exceed_se"] = np.full((n, len(fragility.thresholds)), np.nan)
+    if probabilities or fragility is not None:
+        out.update({name: np.full(n, np.nan) for name in PROBABILITY_FLOATS})
     out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
-    for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + tuple(derived_inputs):
+    for name in (SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS
+                 + tuple(derived_inputs)):
         out[name] = np.full(n, np.nan)
     for name in SUMMARY_INTS:
         out[name] = np.zeros(n, dtype=np.int32)
@@ -314,7 +393,7 @@ def submit_batch(client, study, batch, key, target=None):
     block, foundation, excitation, underivable = batch_point_models(study, batch)
     args = (block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
             study.output.stored, study.fragility, shipped_table(), study.derived_inputs,
-            underivable if np.any(underivable) else None, case_cutoff(case))
+            underivable if np.any(underivable) else None, case_cutoff(case), wants_probabilities(study))
     if target is not None:
         return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)

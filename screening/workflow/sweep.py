@@ -78,6 +78,9 @@ class SweepReport:
     trust_counts: dict = field(default_factory=dict)
     #: ``[accuracy]``: what the escalation did (:func:`screening.workflow.accuracy.escalate`)
     accuracy: dict = field(default_factory=dict)
+    #: ``[accuracy]`` or ``[fragility]``: points per source of p_overturn / p_exceed
+    #: (:func:`screening.workflow.probabilities.finish_probabilities`)
+    probabilities: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     n_workers: int = 0
 
@@ -203,6 +206,8 @@ class _SweepRun:
         self.store = PartialStore(out)
         self.write_time = 0.0
         self.target = None              # zarr: where the workers write (store.RegionTarget)
+        self.escalated = None           # [accuracy]: (flat indices, models, runs) of the escalated points
+        self.spot_runs = None           # [mcs]: (grid indices, results) of the spot checks
 
     def run(self, batch_size):
         study, timings = self.study, self.report.timings
@@ -235,6 +240,12 @@ class _SweepRun:
                 if study.mcs is not None:
                     self.report.n_spots = self._spot_checks()
                 timings["mcs"] = time.perf_counter() - t0
+                if execution.wants_probabilities(study):
+                    from screening.workflow.probabilities import finish_probabilities, probabilities_line
+
+                    self.report.probabilities = finish_probabilities(self)
+                    self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
+                    self.log(probabilities_line(self.report.probabilities))
                 t0 = time.perf_counter()
                 self._finalize()
                 timings["finalize"] = time.perf_counter() - t0
@@ -288,9 +299,9 @@ class _SweepRun:
     def _load_saved(self, batch):
         """What was saved of ``batch`` (its arrays; for zarr its summary), or ``None`` if it must be redone."""
         if self.target is None:
-            return self.store.load_batch(batch, execution.failed_result(batch.size, self.study.times.size,
-                                                                        self.study.output.stored,
-                                                                        self.study.fragility))
+            return self.store.load_batch(batch, execution.failed_result(
+                batch.size, self.study.times.size, self.study.output.stored, self.study.fragility,
+                probabilities=execution.wants_probabilities(self.study)))
         if not self.store.marker_ok(batch):
             return None
         try:
@@ -440,6 +451,7 @@ class _SweepRun:
             finally:
                 self.client.unsubscribe_topic(topic)
         self.result.write_spots(spots, results, failed, spec)
+        self.spot_runs = (spots, results)
         return len(spots)
 
     # -- the end

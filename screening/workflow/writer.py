@@ -45,11 +45,12 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import (ACCURACY, FRAGILITY, PRESSURE_PARAMETERS, SWEEP, SWEEP_INPUTS, TIME, attributes,
-                              global_attributes, grid_coordinate_attributes)
+from screening.schema import (ACCURACY, FRAGILITY, PRESSURE_PARAMETERS, PROBABILITIES, SWEEP, SWEEP_INPUTS, TIME,
+                              attributes, global_attributes, grid_coordinate_attributes)
 from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSITY_FLOATS, MODEL_FLOATS,
+                                          PROBABILITY_FLOATS, ROCKING_FLOATS,
                                           SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
 from screening.workflow.grid import hyperslabs, parameter_table
 
@@ -62,7 +63,8 @@ CACHED_CHUNKS = 4
 TITLE_FALLBACK = "Stochastic-linearization screening"
 
 #: Per-point variables besides the histories, in file order.
-POINT_VARIABLES = ("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + SUMMARY_INTS
+POINT_VARIABLES = (("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS
+                   + ROCKING_FLOATS + SUMMARY_INTS)
 #: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
 #: itself returns only these.
 SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
@@ -210,17 +212,21 @@ def write_region(nc, shape, histories, batch, result):
         for name in histories:
             nt = result[name].shape[1] if nt is None else nt
             nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (nt,))
-        for name in POINT_VARIABLES + tuple(n for n in DERIVED_INPUTS if n in result):
+        for name in POINT_VARIABLES + tuple(n for n in DERIVED_INPUTS + PROBABILITY_FLOATS if n in result):
             nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
-        if "p_exceed" in result:
-            p = result["p_exceed"]
-            nc["p_exceed"][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
+        for name in ("p_exceed", "p_exceed_se"):
+            if name in result:
+                p = result[name]
+                nc[name][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
 
 
 def region_variables(study):
     """Names of the variables :func:`write_region` writes for ``study``."""
+    from screening.workflow.execution import wants_probabilities
+
     return (study.output.stored + POINT_VARIABLES + study.derived_inputs
-            + (("p_exceed",) if study.fragility is not None else ()))
+            + (PROBABILITY_FLOATS if wants_probabilities(study) else ())
+            + (("p_exceed", "p_exceed_se") if study.fragility is not None else ()))
 
 
 class ResultFile:
@@ -315,7 +321,7 @@ class ResultFile:
         chunks = point_chunks(self.shape)
         self._variable("status", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
         self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
-        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS:
+        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS:
             self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib, **_storage(chunks, 8))
         for name in study.derived_inputs:
             self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib,
@@ -331,9 +337,14 @@ class ResultFile:
                              "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")})
             v[:] = np.asarray(frag.thresholds, dtype=float)
             n_thr = len(frag.thresholds)
-            p = self._variable("p_exceed", "f8", dims + ("threshold",), np.nan, coordinates, table=FRAGILITY,
-                               **self.zlib, **_storage(point_chunks(self.shape, POINT_CHUNK // n_thr) + (n_thr,), 8))
-            p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
+            for name, table in (("p_exceed", FRAGILITY), ("p_exceed_se", PROBABILITIES)):
+                p = self._variable(name, "f8", dims + ("threshold",), np.nan, coordinates, table=table, **self.zlib,
+                                   **_storage(point_chunks(self.shape, POINT_CHUNK // n_thr) + (n_thr,), 8))
+                p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
+        if frag is not None or study.accuracy is not None:
+            for name in PROBABILITY_FLOATS:
+                self._variable(name, "f8", dims, np.nan, coordinates, table=PROBABILITIES, **self.zlib,
+                               **_storage(chunks, 8))
         nc.setncatts({**attrs, **labels})
 
     # -- data
@@ -487,6 +498,17 @@ class ResultFile:
                 v[...] = np.asarray(values, dtype=float).reshape(self.shape)
         v = self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, **self.zlib)
         v[...] = np.asarray(method, dtype=np.int8).reshape(self.shape)
+
+    def write_probabilities(self, values, source):
+        """Per-point probabilities after the Monte Carlo stages: ``values`` maps ``p_overturn``,
+        ``p_overturn_se`` (flat) and ``p_exceed``, ``p_exceed_se`` (flat x thresholds) to their final values;
+        ``source`` the flat ``p_source`` codes (:func:`screening.schema.probability_source_attributes`)."""
+        for name, value in values.items():
+            value = np.asarray(value, dtype=float)
+            self.nc[name][...] = value.reshape(self.shape + value.shape[1:])
+        coordinates = self.nc["status"].getncattr("coordinates") if "coordinates" in self.nc["status"].ncattrs() else ""
+        v = self._variable("p_source", "i1", self.study.dims, False, coordinates, **self.zlib)
+        v[...] = np.asarray(source, dtype=np.int8).reshape(self.shape)
 
     def set_attrs(self, **attrs):
         self.nc.setncatts(attrs)

@@ -50,6 +50,8 @@ def no_work(monkeypatch):
     (dict(t_end=-1.0), "t_end"), (dict(dt=0.0), "dt"), (dict(dt=0.03), "dt"),
     (dict(rtol=0.0), "rtol"), (dict(chunk_size=0), "chunk_size"), (dict(cutoff=-5.0), "cutoff"),
     (dict(progress="yes"), "progress"), (dict(max_steps=1.5), "max_steps"),
+    (dict(thresholds=-0.01), "thresholds"), (dict(thresholds=[0.01, 0.01]), "thresholds"),
+    (dict(thresholds=["a"]), "thresholds"), (dict(thresholds=[]), "thresholds"),
 ])
 def test_bad_arguments_raise_before_any_work(no_work, kwargs, name):
     args = dict(n_samples=10**12, model="coupled", seed=0)     # a huge run if validation were late
@@ -286,6 +288,20 @@ def test_overturned_samples_are_excluded_from_the_statistics():
     assert np.all(ds.peak_abs_theta.values[~over] <= SLENDERNESS)
     # the statistics of the survivors are bounded by their own peaks
     assert float(ds.var_theta.max()) <= float((ds.peak_abs_theta.values[~over] ** 2).max())
+
+
+def test_overturning_and_exceedance_probabilities_count_the_samples():
+    """p_overturn and p_exceed of the dataset against a direct count of its own per-sample flags and peaks
+    (overturned samples exceed every threshold)."""
+    ds = small_run(n_samples=12, t_end=20.0, dt=0.1, excitation=WhiteNoise(S0=2.4e-3, envelope=Envelope(4.0, 2.0)),
+                   thresholds=[0.2 * SLENDERNESS, 0.6 * SLENDERNESS])
+    over, peaks = ds.overturned.values, ds.peak_abs_theta.values
+    assert 0 < over.sum() < 12 and float(ds.p_overturn) == over.sum() / 12
+    for j, a in enumerate(ds.threshold.values):
+        assert float(ds.p_exceed[j]) == np.sum(over | (peaks > a)) / 12
+    assert ds.p_exceed.dims == ("threshold",) and ds.threshold.attrs["units"] == "rad"
+    assert ds.p_overturn_se.attrs["units"] == "1" and 0 < float(ds.p_overturn_se) < 0.2
+    assert "p_exceed" not in small_run() and "p_overturn" in small_run()
 
 
 def test_diverged_samples_are_flagged_not_fatal():

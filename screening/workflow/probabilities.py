@@ -1,0 +1,142 @@
+"""The probabilities of overturning and of exceedance at every point of a sweep, after its Monte Carlo stages.
+
+With ``[accuracy]`` or ``[fragility]`` the workers store the linearization's Gaussian up-crossing
+estimates (``p_overturn`` and, per ``[fragility]`` threshold, ``p_exceed``) with standard errors from the
+trust band (:func:`screening.workflow.execution.batch_probabilities`).  :func:`finish_probabilities` runs
+on the client once the escalated points and the spot checks are in, and leaves at every point the
+estimate of the best model that ran there, recorded in ``p_source``
+(:func:`screening.analysis.probabilities.source_codes`):
+
+1. Monte Carlo where it ran (escalated points and spot checks; the run with more usable samples where
+   both did): the fractions of the samples, overturned samples counting as exceeding every threshold
+   (:func:`screening.analysis.probabilities.sample_probabilities`);
+2. the linearization's estimate where the trust rule vouches for it (``linearization_gaussian``);
+3. with ``[accuracy]``, where the correction reaches the point: the up-crossing of the moments rescaled
+   to the corrected best estimates (:func:`screening.analysis.fragility.best_exceedance`; needs the
+   histories in the result);
+4. elsewhere ``unreliable``: the linearization's number stays, its standard error is NaN.
+
+Outputs and their meaning: ``docs/outputs_probabilities.md``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from screening.analysis.probabilities import choose_sources, monte_carlo_source, sample_probabilities
+from screening.status import EscalationModel, PointStatus, ProbabilitySource, SampleState
+
+#: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
+CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
+
+
+def monte_carlo_runs(run):
+    """``[(flat index, model name, peak_abs_theta, sample_state)]`` of the escalated points and the spot checks."""
+    out = []
+    if getattr(run, "escalated", None) is not None:
+        flat, models, results = run.escalated
+        for i, code, r in zip(flat, models, results):
+            out.append((int(i), EscalationModel(int(code)).name, r["peak_abs_theta"], r["sample_state"]))
+    if getattr(run, "spot_runs", None) is not None:
+        spots, results = run.spot_runs
+        for index, r in zip(spots, results):
+            out.append((int(np.ravel_multi_index(index, run.study.shape)) if index else 0, run.study.mcs.model,
+                        r["peak_abs_theta"], r["sample_state"]))
+    return out
+
+
+def levels_at(study, theta_ul, slenderness):
+    """Rotations [rad] of ``p_overturn`` and of each ``[fragility]`` threshold at points with these angles
+    (points x (1 + thresholds))."""
+    cols = [np.asarray(slenderness, dtype=float)]
+    frag = study.fragility
+    for threshold in (frag.thresholds if frag is not None else ()):
+        scale = {None: 1.0, "slenderness": slenderness, "theta_ul": theta_ul}[frag.relative_to]
+        cols.append(threshold * np.asarray(scale, dtype=float) * np.ones_like(cols[0]))
+    return np.stack(cols, axis=-1)
+
+
+def corrected_estimates(run, points):
+    """``(p, se)`` (points x levels) of the up-crossing of the moments rescaled to the best estimates at the
+    flat indices ``points``; None where the result does not store the histories it needs."""
+    import xarray as xr
+
+    from screening.analysis.fragility import best_exceedance
+    from screening.workflow.grid import point_values
+    from screening.workflow.study import build_models
+
+    study, res = run.study, run.result
+    if not points.size or not set(CORRECTION_HISTORIES) <= set(study.output.stored):
+        return None
+    index = [tuple(int(i) for i in np.unravel_index(p, study.shape)) for p in points]
+    data = {name: (("point", "t"), np.stack([res.history(name, ix) for ix in index])) for name in CORRECTION_HISTORIES}
+    for name in ("peak_var_theta", "best_peak_var_theta", "best_peak_var_theta_se", "best_peak_var_theta_dot",
+                 "best_peak_var_theta_dot_se", "theta_ul", "slenderness", "status", "best_method"):
+        data[name] = ("point", res.read(name)[points])
+    blocks = [build_models(study.cases[case], values)[0] for case, values in (point_values(study, ix) for ix in index)]
+    for name in ("m", "I_cm", "h"):
+        data[name] = ("point", np.array([float(getattr(b, name)) for b in blocks]))
+    ds = xr.Dataset(data, coords={"t": study.times})
+    ds["status"] = ds["status"].astype(np.int8)
+    frag = study.fragility
+    method = frag.method if frag is not None else "vanmarcke"
+    asked = [(1.0, "slenderness")] + ([(t, frag.relative_to) for t in frag.thresholds] if frag is not None else [])
+    p, se = np.empty((points.size, len(asked))), np.empty((points.size, len(asked)))
+    for j, (threshold, relative_to) in enumerate(asked):
+        value, low, high, _ = best_exceedance(ds, threshold, relative_to, method)
+        p[:, j], se[:, j] = value.values, (high - low).values / 4.0
+    return p, se
+
+
+def finish_probabilities(run):
+    """Replace the workers' linearization estimates by the best ones and write ``p_source``; returns
+    ``{source name: points}``."""
+    from screening.analysis.probabilities import source_codes
+
+    study, res = run.study, run.result
+    res.nc.sync()                   # a zarr store creates the variables defined since (best estimates) here
+    n = study.n_points
+    thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0
+    p = np.column_stack([res.read("p_overturn")] + ([np.asarray(res.nc["p_exceed"][...], dtype=float).reshape(n, -1)]
+                                                   if thresholds else []))
+    se = np.column_stack([res.read("p_overturn_se")] + (
+        [np.asarray(res.nc["p_exceed_se"][...], dtype=float).reshape(n, -1)] if thresholds else []))
+    low, high = res.read("sl_error_low"), res.read("sl_error_high")
+    best = res.read("best_method").astype(np.int8) if study.accuracy is not None else None
+    source = choose_sources(res.status == PointStatus.ok, res.sl_trust, np.isfinite(low) & np.isfinite(high), best)
+
+    corrected = np.flatnonzero(source == ProbabilitySource.corrected_linearization_gaussian)
+    estimate = corrected_estimates(run, corrected)
+    if estimate is None:
+        source[corrected] = ProbabilitySource.unreliable
+    else:
+        p[corrected], se[corrected] = estimate
+    unreliable = source == ProbabilitySource.unreliable
+    se[unreliable] = np.nan
+
+    levels = levels_at(study, res.read("theta_ul"), res.read("slenderness"))
+    used = np.zeros(n)
+    for flat, model, peaks, state in monte_carlo_runs(run):
+        state = np.asarray(state)
+        valid = (state == SampleState.standing) | (state == SampleState.overturned)
+        if valid.sum() <= used[flat]:
+            continue
+        got = sample_probabilities(np.asarray(peaks, dtype=float), state == SampleState.overturned, valid,
+                                   levels[flat, 1:])
+        p[flat] = np.concatenate([[got["p_overturn"]], got["p_exceed"]])
+        se[flat] = np.concatenate([[got["p_overturn_se"]], got["p_exceed_se"]])
+        source[flat] = monte_carlo_source(model)
+        used[flat] = valid.sum()
+
+    values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
+    if thresholds:
+        values.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
+    res.write_probabilities(values, source)
+    names = {code: name for name, code in source_codes().items()}
+    codes, counts = np.unique(source, return_counts=True)
+    return {names[int(c)]: int(k) for c, k in zip(codes, counts)}
+
+
+def probabilities_line(counts):
+    """One line: where the points' p_overturn / p_exceed come from."""
+    return "probabilities (p_overturn, p_exceed) by source: " + ", ".join(f"{name} {k}" for name, k in counts.items())
