@@ -35,7 +35,7 @@ def main(study=HERE / "cabinet.toml", out="outputs/cabinet.nc"):
     with xr.open_dataset(out) as result:
         curves = result.rocking.fragility_curve(0.3, dim="pga", relative_to="slenderness").load()
         trust = result["sl_trust"].load()
-    print(f"P(|theta| > 0.3 atan(b/h)): median PGA {float(curves['median']):.3g} m s-2, "
+    print(f"P(|theta| > 0.3 atan(b/h)): median PGA {float(curves['fit_median']):.3g} m s-2, "
           f"beta {float(curves['beta']):.3g}; linearization {trust.attrs['flag_meanings']}: "
           + ", ".join(str(int((trust == v).sum())) for v in trust.attrs["flag_values"]))
     return curves

@@ -37,7 +37,7 @@ def main(study=HERE / "statue.toml", out="outputs/statue.nc"):
         raise SystemExit("no fragility curve")
     with xr.open_dataset(curve) as fragility:
         fragility.load()
-    print(f"median PGA {float(fragility['median']):.3g} m s-2, beta {float(fragility['beta']):.3g}")
+    print(f"median PGA {float(fragility['fit_median']):.3g} m s-2, beta {float(fragility['beta']):.3g}")
     return fragility
 
 

@@ -73,7 +73,8 @@ def corrected_estimates(run, points):
     for name in ("peak_var_theta", "best_peak_var_theta", "best_peak_var_theta_se", "best_peak_var_theta_dot",
                  "best_peak_var_theta_dot_se", "theta_ul", "slenderness", "status", "best_method"):
         data[name] = ("point", res.read(name)[points])
-    blocks = [build_models(study.cases[case], values)[0] for case, values in (point_values(study, ix) for ix in index)]
+    blocks = [build_models(study.cases[case], values, study.t_end)[0]
+              for case, values in (point_values(study, ix) for ix in index)]
     for name in ("m", "I_cm", "h"):
         data[name] = ("point", np.array([float(getattr(b, name)) for b in blocks]))
     ds = xr.Dataset(data, coords={"t": study.times})

@@ -141,19 +141,6 @@ class PartialStore:
         except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError, IndexError):
             return False
 
-    def marked_files(self):
-        """``{chunk file: [size, checksum]}`` of every batch marker (for the completion mark)."""
-        files = {}
-        for path in sorted((self.dir / self.DONE).glob("batch-*.json")):
-            try:
-                with os.fdopen(_open_nofollow(path, os.O_RDONLY), "rb") as fh:
-                    marker = json.loads(fh.read(1 << 22))
-                if marker.get("key") == self.manifest["key"]:
-                    files.update(marker["files"])
-            except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
-                continue
-        return files
-
     def forget_marker(self, batch):
         """Remove the marker of ``batch`` (its region is being written again)."""
         with contextlib.suppress(FileNotFoundError):

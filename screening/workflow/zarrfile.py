@@ -334,23 +334,15 @@ def store_entries(root):
     return sorted(files), foreign
 
 
-def write_completion_mark(root, known=None):
+def write_completion_mark(root):
     """Write the completion mark of the finished store ``root``: ``{"files": {path: [size, checksum]}}``
-    of every file of the store (``known``: checks already taken of some of them, used where the size
-    still matches).  Written last, atomically: a store without it was never finished."""
+    of every file of the store.  Written last, atomically: a store without it was never finished."""
     from screening.workflow.store import _create
 
-    known = known or {}
     files, foreign = store_entries(root)
     if foreign:
         raise OSError(0, f"the zarr store {root} holds {foreign[0]}, which is not a regular file")
-    checks = {}
-    for path in files:
-        old = known.get(path)
-        if old is not None and old[0] == os.lstat(Path(root) / path).st_size:
-            checks[path] = list(old)
-        else:
-            checks[path] = file_check(Path(root) / path)
+    checks = {path: file_check(Path(root) / path) for path in files}
     mark = Path(root) / COMPLETION_MARK
     tmp = mark.with_name(mark.name + ".tmp")
     with _create(tmp) as fh:

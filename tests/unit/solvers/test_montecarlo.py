@@ -18,6 +18,7 @@ from screening.condensation.paper import damping_inner, rocking_damping, rocking
 from screening.physics.contact import contact_resultants, rest_indentation
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.model import Block, Foundation
+from screening.solvers.mc_models import state_scales
 from screening.solvers.montecarlo import ensemble_statistics, monte_carlo
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
@@ -136,7 +137,7 @@ def _run_kernel(model, acc, t_out, foundation, y_init, rtol=1e-8, dt_grid=1e-3, 
     cond = get_condensation(condensation)
     p = kern.model_record(BLOCK, foundation, cond, max_flight_time)
     sdof = cond.sdof_kernel(BLOCK, foundation)
-    scale = rtol * mc.state_scales(BLOCK, foundation)
+    scale = rtol * state_scales(BLOCK, foundation)
     kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, acc, np.zeros_like(acc),
                                              dt_grid, t_out, p[None], np.asarray(y_init, float), scale, rtol, 0.005,
                                              10**7, *outs, uplift, *flags)
