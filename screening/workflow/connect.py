@@ -28,6 +28,8 @@ HANDSHAKE_TIMEOUT = 10.0
 MAX_HANDSHAKE = 1 << 20
 #: Longest host name accepted (a DNS name has at most 253 characters).
 MAX_HOST = 253
+#: Largest scheduler JSON file read [bytes] (a scheduler with thousands of workers writes a few MB).
+MAX_SCHEDULER_FILE = 64 << 20
 #: dask's settings of a TLS client; ``tls://`` without them cannot connect.
 TLS_SETTINGS = ("distributed.comm.tls.client.cert", "distributed.comm.tls.ca-file")
 
@@ -37,9 +39,16 @@ def scheduler_address(scheduler):
     text = str(scheduler)
     if text.endswith(".json") and Path(text).is_file():
         try:
+            size = Path(text).stat().st_size
+            if size > MAX_SCHEDULER_FILE:
+                raise SweepError(f"the scheduler file {text} has {size} bytes; at most {MAX_SCHEDULER_FILE} "
+                                 "(a dask scheduler file lists the scheduler and its workers)")
             with open(text, "rb") as fh:
-                info = json.loads(fh.read(1 << 20))
-        except (OSError, ValueError, RecursionError) as exc:
+                info = json.loads(fh.read(MAX_SCHEDULER_FILE + 1))
+        except ValueError as exc:
+            raise SweepError(f"the scheduler file {text} is not valid JSON ({' '.join(str(exc).split())[:120]})") \
+                from None
+        except (OSError, RecursionError) as exc:
             raise SweepError(f"cannot read the scheduler file {text}: {exc.__class__.__name__}") from None
         address = info.get("address") if isinstance(info, dict) else None
         if not isinstance(address, str) or not address:

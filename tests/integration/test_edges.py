@@ -679,7 +679,7 @@ def test_scheduler_that_is_not_dask_is_one_line_in_bounded_time(tmp_path, capsys
 @pytest.mark.parametrize("content, needle", [
     ('{"address": 5}', 'has no "address" string'),
     ("[1, 2]", 'has no "address" string'),
-    ("{not json", "cannot read the scheduler file"),
+    ("{not json", "is not valid JSON"),
     ("[" * 100000, "cannot read the scheduler file"),
 ])
 def test_malformed_scheduler_file_is_one_line(tmp_path, capsys, content, needle):
@@ -690,6 +690,24 @@ def test_malformed_scheduler_file_is_one_line(tmp_path, capsys, content, needle)
     study.write_text(STUDY)
     assert main(["run", str(study), "--scheduler", str(sched), "--out", str(tmp_path / "r.nc"), "--quiet"]) == 2
     assert needle in one_line_error(capsys.readouterr().err)
+
+
+def test_a_valid_scheduler_file_of_several_megabytes_gives_its_address(tmp_path):
+    """A scheduler with many workers writes a large file: a 2 MB one was read as 'JSONDecodeError'."""
+    import json
+
+    from screening.workflow.connect import MAX_SCHEDULER_FILE, scheduler_address
+    from screening.workflow.errors import SweepError
+
+    workers = {f"tcp://10.0.{i // 250}.{i % 250}:40000": {"name": f"w{i}", "memory_limit": 4e9} for i in range(40000)}
+    sched = tmp_path / "scheduler.json"
+    sched.write_text(json.dumps({"type": "Scheduler", "address": "tcp://127.0.0.1:8786", "workers": workers}))
+    assert sched.stat().st_size > 1 << 21
+    assert scheduler_address(sched) == "tcp://127.0.0.1:8786"
+    with open(sched, "r+b") as fh:
+        fh.truncate(MAX_SCHEDULER_FILE + 1)
+    with pytest.raises(SweepError, match="at most"):
+        scheduler_address(sched)
 
 
 def test_a_real_scheduler_passes_the_check():
