@@ -113,7 +113,8 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
         warnings += [f"overturning: {note}"] if note else []
         frag = xr.Dataset({"p_exceed": p.rename("p_exceed").assign_attrs(
                                long_name="probability that the block overturns during the record", units="1"),
-                           "threshold_rad": model_quantity(ds, "slenderness")})
+                           "threshold_rad": model_quantity(ds, "slenderness")},
+                          attrs={"threshold": 1.0, "relative_to": "slenderness", "method": method})
     else:
         frag = fragility_dataset(ds, threshold, relative_to, method, dim)
     units = IMS[im][1]

@@ -93,7 +93,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
         ax.set_xlabel(f"{name} [{frag[name].attrs.get('units', '')}]{extra} (swept along {dim})")
     else:
         ax.set_xlabel(f"{dim} [{grid_units(frag, dim)}]")
-    ax.set_ylabel("probability of exceedance [1]")
+    overturn = frag.attrs.get("limit_state") == "overturn"
+    ax.set_ylabel(f"probability of {'overturning' if overturn else 'exceedance'} [1]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     rel = frag.attrs.get("relative_to", "None")
@@ -101,7 +102,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
             else f"{frag.attrs['threshold']:.3g} x {rel}")
     summary = f"\n{flag_summary(flags)}" if flags is not None else ""
     over = f" over {name}" if name else ""
-    fig.suptitle(f"Fragility{over}: P(max |theta| > {what}) over the record ({frag.attrs.get('method', '')})"
+    event = "overturning, max |theta| > atan(b/h)" if overturn else f"max |theta| > {what}"
+    fig.suptitle(f"Fragility{over}: P({event}) over the record ({frag.attrs.get('method', '')})"
                  f"{summary}",
                  fontsize=8)
     save_figure(fig, path)
