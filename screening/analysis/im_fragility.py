@@ -120,6 +120,10 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     units = IMS[im][1]
     values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
     out = add_fit(frag.assign({name: values}), ds, values, dim)
+    if limit_state == "overturn" and "p_source" in ds.variables:
+        # stored probabilities carry their source: the unreliable ones were left out above, every fitted
+        # point is vouched for (Monte Carlo, or a trusted or corrected linearization)
+        out["fit_n_unvouched"] = xr.zeros_like(out["fit_n_unvouched"])
     out["fit_median"].attrs.update(units=units, intensity=name)
     if period is not None and im in ("sa", "avgsa"):
         out[name].attrs.update(period=float(period), damping_ratio=0.05)

@@ -52,7 +52,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     for n, j in enumerate(picks):
         colour[int(j)] = f"C{n}"
         index = dict(zip(other, (int(i) for i in np.unravel_index(j, shape)))) if other else {}
-        label = point_label(frag, index) if other else "P(|theta| > threshold)"
+        label = point_label(frag, index) if other else (
+            "P(overturn)" if frag.attrs.get("limit_state") == "overturn" else "P(|theta| > threshold)")
         x = xflat[j]
         ax.plot(x, flat[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=label)
         ax.plot(x[untrusted[j]], flat[j][untrusted[j]], "o", ms=7, mfc="none", mec=UNTRUSTED_COLOR, mew=1.2)
