@@ -265,13 +265,22 @@ def _error(message):
 def _quiet_abandoned_reads():
     """After a failed read of a zarr store, its other chunk reads (tasks of zarr's event loop) are
     abandoned; asyncio would report each of them at exit ("Task was destroyed but it is pending",
-    "Future exception was never retrieved", "coroutine ... was never awaited"): the one-line error
+    "Future exception was never retrieved", "coroutine ... was never awaited", "Event loop is closed"
+    through the unraisable hook): the one-line error
     already said what failed."""
     import logging
     import warnings
 
     logging.getLogger("asyncio").setLevel(logging.CRITICAL + 1)
     warnings.filterwarnings("ignore", message="coroutine .* was never awaited", category=RuntimeWarning)
+
+    def on_unraisable(unraisable, default=sys.unraisablehook):
+        # an abandoned read closed after zarr's loop: "Exception ignored in <coroutine ...>: Event loop is closed"
+        if isinstance(unraisable.exc_value, RuntimeError) and "Event loop is closed" in str(unraisable.exc_value):
+            return
+        default(unraisable)
+
+    sys.unraisablehook = on_unraisable
 
 
 def _say(msg):
