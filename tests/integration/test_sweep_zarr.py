@@ -4,6 +4,7 @@ markers, identical to the netCDF result when opened with xarray and when exporte
 
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -139,11 +140,14 @@ def test_disk_full_in_the_zarr_store_keeps_the_marked_batches_and_resumes(client
         run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
     message = str(info.value)
     assert "\n" not in message and "No space left on device" in message and "re-run" in message
-    assert "the 2 finished batch(es) are kept in" in message and "full.zarr.partial" in message
+    # batches 0 and 1 run beside batch 2 on the two workers: when batch 2 fails, 0, 1 or 2 of them are done
+    kept = re.search(r"the (\d+) finished batch\(es\) are kept in \S*full\.zarr\.partial", message)
+    assert kept is not None and 0 <= int(kept.group(1)) <= 2, message
     assert not (tmp_path / "full.zarr").exists()
     monkeypatch.setattr(writer, "write_region", original)
     report = run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
-    assert report.n_resumed_batches == 2 and report.n_failed_batches == 0
+    # what was kept is resumed (a batch still running at the failure may have finished since)
+    assert int(kept.group(1)) <= report.n_resumed_batches <= 2 and report.n_failed_batches == 0
     _same(ref, tmp_path / "full.zarr")
 
 
