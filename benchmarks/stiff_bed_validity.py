@@ -112,12 +112,78 @@ def report(results, samples):
     return "\n".join(lines)
 
 
+def _paired_se(x, y):
+    """Standard error of the mean of the paired differences ``x - y`` (same samples)."""
+    d = np.asarray(x, dtype=float) - np.asarray(y, dtype=float)
+    return float(np.std(d, ddof=1) / np.sqrt(d.size))
+
+
+def band_and_cost(samples, seed, models=("stiff_bed", "auto")):
+    """The band table: on the statue's ``k = 1e10`` and ``1e11`` beds, the coupled model at its default band
+    (3 x the vertical frequency) and reading the same samples low-passed at the ground's band limit
+    (``band=``), and the cheap ``models`` (on the ground's band by default), all on the same samples:
+    the probabilities, peak var_theta, CPU per sample (one numba thread: run with NUMBA_NUM_THREADS=1)
+    and the coupled / model cost ratio, with the paired differences against the coupled default."""
+    from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff
+
+    statue = Block(**STATUE)
+    band = ground_cutoff(GROUND_BAND_LIMIT_HZ)
+    lines = ["| bed | model | band [rad/s] | " + " | ".join(f"P(>{a:g} alpha)" for a in FRACTIONS)
+             + " | P(overturn) | peak var_theta [rad2] | worst paired diff / tol | CPU per sample [ms] "
+             "| coupled / model |", "|" + "---|" * 11]
+    for k in (1e10, 1e11):
+        bed = _bed(statue, k)
+        excitation = KanaiTajimi(0.015, FILTER["omega_g"], FILTER["zeta_g"])
+        kw = dict(n_samples=samples, seed=seed, progress=False, t_end=20.0)
+        runs = [("coupled", "coupled", {}), ("coupled", "coupled", {"band": band})]
+        runs += [(m, m, {}) for m in models]
+        ref = None
+        for label, model, extra in runs:
+            start = time.process_time()
+            ds = monte_carlo(statue, bed, excitation, model=model, **kw, **extra)
+            cpu = (time.process_time() - start) / samples
+            alpha = float(statue.slenderness)
+            peak, over = ds.peak_abs_theta.values, ds.overturned.values
+            ind = np.array([(peak > a * alpha) | over for a in FRACTIONS] + [over], dtype=float)
+            p = ind.mean(axis=1)
+            se = np.sqrt(p * (1 - p) / samples)
+            i_peak = int(np.nanargmax(ds.var_theta.values))
+            var, var_se = float(ds.var_theta.values[i_peak]), float(ds.var_theta_se.values[i_peak])
+            if ref is None:
+                ref, verdict, ratio_ref = (ind, cpu), "", cpu
+            else:
+                diff = np.abs(p - ref[0].mean(axis=1))
+                tol = np.array([max(0.03, 2.5 * _paired_se(x, y)) for x, y in zip(ind, ref[0])])
+                worst = int(np.argmax(diff / tol))
+                verdict = f"{diff[worst]:.3f} / {tol[worst]:.3f} " + ("ok" if np.all(diff <= tol) else "FAILS")
+            lines.append(f"| statue k={k:.0e} | {ds.attrs['model']} ({label}) | {ds.attrs['input_band_rad_s']:.0f} | "
+                         f"{_fmt(p, se)} | {var:.3g} ± {var_se:.2g} | {verdict} | {1e3 * cpu:.2f} | "
+                         f"{ratio_ref / cpu:.1f} |")
+            print(lines[-1], flush=True)
+    lines.append(f"\n{samples} samples per row, seed {seed}; Kanai-Tajimi S0 = 0.015 m2/s3, omega_g = "
+                 f"{FILTER['omega_g']} rad/s, zeta_g = {FILTER['zeta_g']}; tolerance max(0.03, 2.5 paired SE) on the "
+                 f"difference to the coupled model at its default band.")
+    return "\n".join(lines)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=200)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--only", help="run only the beds whose label contains one of these comma-separated texts")
+    parser.add_argument("--band", action="store_true",
+                        help="print the band and cost table instead (statue k=1e10, 1e11; see band_and_cost)")
+    parser.add_argument("--models", default="stiff_bed,auto", help="cheap models of the band table")
     args = parser.parse_args()
+    if args.band:
+        monte_carlo(Block(**STATUE), _bed(Block(**STATUE), 1e10), KanaiTajimi(1e-3, 15.6, 0.6), n_samples=2,
+                    t_end=0.2, dt=0.1, progress=False, model="stiff_bed")        # compile outside the timings
+        monte_carlo(Block(**STATUE), _bed(Block(**STATUE), 1e10), KanaiTajimi(1e-3, 15.6, 0.6), n_samples=2,
+                    t_end=0.2, dt=0.1, progress=False, model="coupled")
+        for k in (1e10, 1e11):
+            stiff_bed.transfer_table(Block(**STATUE), _bed(Block(**STATUE), k))
+        print(band_and_cost(args.samples, args.seed, tuple(args.models.split(","))))
+        return
     chosen = [c for c in cases() if args.only is None or any(t in c[0] for t in args.only.split(","))]
     monte_carlo(Block(**STATUE), _bed(Block(**STATUE), 1e10), KanaiTajimi(1e-3, 15.6, 0.6), n_samples=2,
                 t_end=0.2, dt=0.1, progress=False, model="stiff_bed")            # compile outside the timings

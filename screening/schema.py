@@ -215,6 +215,16 @@ def probability_source_attributes():
             "flag_meanings": " ".join(name for name, _ in codes)}
 
 
+def monte_carlo_model_attributes():
+    """CF flag attributes of the per-spot ``mcs_model``: the Monte Carlo model that ran there (with ``model =
+    "auto"`` the one chosen for the point), one value per registered model (read when asked)."""
+    from screening.solvers import mc_registry
+
+    names = mc_registry.names()
+    return {"units": "1", "long_name": "Monte Carlo model that produced the spot point's statistics",
+            "flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}
+
+
 #: Speed-accuracy trade study (:mod:`screening.analysis.tradeoff`): its variables and label coordinates.
 TRADEOFF = {
     # coordinates
@@ -445,6 +455,8 @@ def attributes(name, table=None):
     """
     if name == "p_source":
         return probability_source_attributes()
+    if name == "mcs_model":
+        return monte_carlo_model_attributes()
     tables = ([table] if table is not None else []) + [LINEARIZATION, PARAMETERS, DERIVED, COORDINATES,
                                                        FRAGILITY, ACCURACY, PROBABILITIES]
     for t in tables:

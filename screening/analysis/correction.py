@@ -241,6 +241,7 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     have = np.isfinite(mc_peak) & (mc_peak > 0)
     at = escalated[have]
     value[at], se[at] = mc_peak[have], mc_se[have]
-    method[at] = np.where(np.asarray(mc_model)[have] == int(EscalationModel.condensed),
-                          int(BestMethod.condensed_monte_carlo), int(BestMethod.coupled_monte_carlo))
+    by_model = {int(EscalationModel.condensed): int(BestMethod.condensed_monte_carlo),
+                int(EscalationModel.stiff_bed): int(BestMethod.stiff_bed_monte_carlo)}
+    method[at] = [by_model.get(int(m), int(BestMethod.coupled_monte_carlo)) for m in np.asarray(mc_model)[have]]
     return value, se, method, correction

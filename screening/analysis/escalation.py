@@ -6,6 +6,8 @@
   learns from the whole untrusted region, not only its extreme;
 * :func:`escalation_model` — condensed Monte Carlo where the calibration shows the condensed model
   within the target of the coupled one (only the linearization is in doubt), coupled otherwise;
+* :func:`auto_escalation_model` — with ``model = "auto"``, the stiff-bed model where its measured
+  validity holds (:mod:`screening.solvers.model_choice`), the choice above elsewhere;
 * :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run
   (or from the main run, for the top-up round), with a safety factor for heavy tails;
 * :func:`meets_target` — whether a run's standard error reached ``target / 2`` of its peak;
@@ -39,7 +41,10 @@ MAIN_SHARE = 0.85
 #: fitted to the CPU time of the calibration beds by ``benchmarks/bench_stiff_mcs.py`` (relative least
 #: squares: 0.32 and 0.13 us per step, 55 ns per grid point; the step costs here are ~1.1x those); there the
 #: measured / predicted ratio is 0.79-1.24 on every bed, both models and both integrators.
-STEP_COST_S = {EscalationModel.condensed: 0.15e-6, EscalationModel.coupled: 0.35e-6}
+STEP_COST_S = {EscalationModel.condensed: 0.15e-6, EscalationModel.coupled: 0.35e-6,
+               # stiff-bed model: CPU per sample / steps per sample on the statue's k = 1e10 bed
+               # (benchmarks/stiff_bed_validity.py --band: 6.1 ms, 12,000 steps, 0.3 ms of them synthesis)
+               EscalationModel.stiff_bed: 0.47e-6}
 #: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
 #: rate of the input).  The input is band-limited at three times the larger of the rocking and
 #: vertical frequencies, so on a stiff bed the grid grows as ``sqrt(k)``: on the paper block at
@@ -136,6 +141,16 @@ def escalation_model(indicators, status, condensation, eps, cells):
                     dtype=bool).reshape(bins.shape)
     use = good & (reg == "cell") & (cond == "paper") & (st == int(PointStatus.ok))
     return np.where(use, int(EscalationModel.condensed), int(EscalationModel.coupled)).astype(np.int8)
+
+
+def auto_escalation_model(calibrated, chosen):
+    """:class:`EscalationModel` per point with ``[accuracy] model = "auto"``: the model the measured validity rule
+    picks (:func:`screening.solvers.model_choice.choose`, ``chosen``: its model names per point) where that
+    is the stiff-bed model, else the calibration's choice ``calibrated`` (:func:`escalation_model`: condensed
+    where its cells qualify, coupled otherwise)."""
+    chosen = np.asarray(chosen, dtype=str)
+    return np.where(chosen == "stiff_bed", int(EscalationModel.stiff_bed),
+                    np.asarray(calibrated)).astype(np.int8)
 
 
 def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety=SAMPLE_SAFETY):

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import abc
 
-__all__ = ["ChunkIntegrator", "MonteCarloModel", "get", "names", "register", "unregister"]
+__all__ = ["ChunkIntegrator", "MonteCarloModel", "check_validity", "code", "get", "names", "register", "unregister"]
 
 
 class ChunkIntegrator(abc.ABC):
@@ -80,6 +80,11 @@ class MonteCarloModel(abc.ABC):
         """``(theta_ul [rad], attrs)``: the uplift angle the model's uplift flag refers to, and attributes
         saying where it comes from."""
 
+    def validity_problem(self, block, foundation, excitation=None):
+        """``None`` where the model may run at the point, else one line naming the validity rule it is outside
+        (:func:`screening.monte_carlo` warns with it, or refuses with ``strict_validity=True``); default None."""
+        return None
+
     def input_band(self, block, foundation):
         """Band [rad/s] of the synthesized ground motion the model reads, or None (default) for all of it.
 
@@ -103,6 +108,19 @@ class MonteCarloModel(abc.ABC):
         return f"<Monte Carlo model {self.name!r}>"
 
 
+def check_validity(model, block, foundation, excitation=None, strict=False):
+    """Warn (``UserWarning``) with the model's :meth:`MonteCarloModel.validity_problem` at the point, or with
+    ``strict`` raise ``ValueError`` with it; nothing where the model is within its validity."""
+    problem = model.validity_problem(block, foundation, excitation)
+    if problem is None:
+        return
+    if strict:
+        raise ValueError(problem)
+    import warnings
+
+    warnings.warn(problem, stacklevel=4)
+
+
 _REGISTRY: dict[str, MonteCarloModel] = {}
 
 
@@ -122,6 +140,11 @@ def unregister(name):
 def names():
     """Registered names, in registration order."""
     return tuple(_REGISTRY)
+
+
+def code(name):
+    """The code of a registered model in per-point records (``mcs_model``): its position in :func:`names`."""
+    return names().index(get(name).name)
 
 
 def get(model):

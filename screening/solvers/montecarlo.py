@@ -46,6 +46,7 @@ import time
 import numpy as np
 
 from screening.solvers import mc_registry, mcs_kernels as kern
+from screening.solvers.model_choice import resolve as resolve_model
 from screening.condensation import get as get_condensation
 from screening.excitations import Excitation, names as excitation_names
 from screening.physics.contact import rest_indentation
@@ -71,6 +72,8 @@ DEFAULT_NUMERICS = {
     "rtol": None,               # relative tolerance of the adaptive pair [1]; None -> DEFAULT_RTOL[model]
     "cutoff": None,             # band limit of the input [rad/s]; None -> cutoff_factor x max frequency
     "cutoff_factor": CUTOFF_FACTOR,
+    "band": None,               # band [rad/s] the model reads: the samples low-passed there (same seed and
+                                # components below it); None -> the model's own (MonteCarloModel.input_band)
     "oversampling": OVERSAMPLING,
     "h_max": 0.005,             # largest integration step [s]
     "max_steps": 5_000_000,     # step budget per sample (accepted + rejected)
@@ -123,6 +126,8 @@ def _check_numerics(numerics):
         opts["rtol"] = positive("rtol", limits.MAX_RTOL)
     if opts["cutoff"] is not None:
         opts["cutoff"] = positive("cutoff")
+    if opts["band"] is not None:
+        opts["band"] = positive("band")
     opts["cutoff_factor"] = positive("cutoff_factor")
     opts["h_max"] = positive("h_max")
     opts["max_flight_time"] = positive("max_flight_time")
@@ -248,7 +253,7 @@ def _with_probabilities(run):
 
 @_with_probabilities
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
-                seed=0, progress=None, condensation="paper", thresholds=None, **numerics):
+                seed=0, progress=None, condensation="paper", thresholds=None, strict_validity=False, **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
 
     Parameters
@@ -264,7 +269,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         ``"coupled"`` (eqs. 7–8, exact contact resultants), ``"condensed"`` (eq. 22) or
         ``"stiff_bed"`` (rigid block on the quasi-static contact with the bed-derived transfer
         loss, :mod:`screening.solvers.stiff_bed`; a warning names its validity rule when the bed
-        is outside it).
+        is outside it); or ``"auto"``: the cheapest model whose measured validity holds at the point
+        (:mod:`screening.solvers.model_choice`, resolved once here; ``attrs["model"]`` names the one that ran).
     t_end : record length [s], > 0.
     dt : OUTPUT step [s]; output times are ``output_times(t_end, dt)``.  The integration
         step is adaptive and finer (see ``rtol``, ``h_max``).
@@ -280,8 +286,13 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         ``p_exceed`` and ``p_exceed_se`` on the coordinate ``threshold`` [rad], the fraction of the
         samples that did not diverge whose peak ``|theta|`` exceeds each (overturned samples count)
         and its binomial standard error (:func:`screening.analysis.probabilities.sample_probabilities`).
+    strict_validity : with True, a model asked for outside its measured validity
+        (:meth:`~screening.solvers.mc_registry.MonteCarloModel.validity_problem`) raises ``ValueError``
+        naming the rule instead of warning.
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
-        ``cutoff_factor`` [1], ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
+        ``cutoff_factor`` [1], ``band`` [rad/s] (the model reads the samples low-passed at this band,
+        the same realizations as every other model of the same seed and cutoff below it; default the
+        model's own, :meth:`~screening.solvers.mc_registry.MonteCarloModel.input_band`), ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
         ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``).
 
     Returns
@@ -306,13 +317,15 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         option, or array-valued model parameters — before any work is done.
     """
     n_samples = check_integer("n_samples", n_samples, 2)
-    mc = mc_registry.get(model)
+    if not isinstance(strict_validity, bool):
+        raise ValueError(f"parameter 'strict_validity' must be True or False (got {strict_validity!r})")
+    check_scalar_models(block, foundation, excitation)
+    mc = resolve_model(model, block, foundation, excitation)
     model = mc.name
     cond = get_condensation(condensation)
     seed = validate_seed(seed)
     times = output_times(t_end, dt)
     t_end, dt = float(t_end), float(dt)
-    check_scalar_models(block, foundation, excitation)
     opts = _check_numerics(numerics)
     if opts["rtol"] is None:
         opts["rtol"] = mc.default_rtol
@@ -320,6 +333,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     y0 = mc.initial_state(block, foundation)           # may raise for a bed that cannot carry the block
     cond.check(block, foundation)
     mc.check(block, foundation, cond)
+    mc_registry.check_validity(mc, block, foundation, excitation, strict_validity)
     check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
     check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
     opts["integrator"] = choose_integrator(block, foundation, model, opts["integrator"])
@@ -327,9 +341,9 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
                                                                               opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
-    band = mc.input_band(block, foundation)
-    read_plan, stride = (plan, 1) if band is None else low_passed(plan, band)   # the model reads these samples
-    grid = read_plan.times[::stride]
+    band = opts["band"] if opts["band"] is not None else mc.input_band(block, foundation)
+    read_plan = plan if band is None else low_passed(plan, band)[0]     # the model reads these samples
+    grid = read_plan.times
     q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)
     integrate_chunk = mc.integrator(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
@@ -354,13 +368,11 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         for lo in range(0, n_samples, chunk):
             hi = min(lo + chunk, n_samples)
             acc, acc_dot = stationary_samples(read_plan, seed, np.arange(lo, hi))
-            if stride > 1:
-                acc, acc_dot = np.ascontiguousarray(acc[:, ::stride]), np.ascontiguousarray(acc_dot[:, ::stride])
             acc_dot *= q                                    # d(q f)/dt = q f' + q' f
             acc_dot += q_dot * acc
             acc *= q
             sl = slice(lo, hi)
-            integrate_chunk(acc, acc_dot, stride * read_plan.dt, times, y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"],
+            integrate_chunk(acc, acc_dot, read_plan.dt, times, y0, scales, opts["rtol"], opts["h_max"], opts["max_steps"],
                             theta[sl], theta_dot[sl], z_cb[:hi - lo], z_cb_dot[:hi - lo], uplift[sl], peak[sl],
                             status[sl], reason[sl], n_acc[sl], n_rej[sl], h_min[sl])
             bar.update(hi - lo)
@@ -373,7 +385,12 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     used = ~(overturned | diverged)
     stats = ensemble_statistics(theta, theta_dot, uplift, used)
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
-    return monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
-                          block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
-                          h_min, wall, cond.name, mc)
+    ds = monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
+                             block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
+                             h_min, wall, cond.name, mc)
+    ds.attrs.update(input_band_rad_s=float(read_plan.cutoff), input_grid_points=int(read_plan.n_times),
+                    input_band_note="the model read the synthesized samples (cutoff_rad_s) low-passed at "
+                                    "input_band_rad_s: same seed, same components below it" if read_plan is not plan
+                                    else "the model read the synthesized samples up to cutoff_rad_s")
+    return ds
 

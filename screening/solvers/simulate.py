@@ -41,6 +41,7 @@ from screening.records import VERTICAL_NOT_USED, Record
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.datasets import finish
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
+from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.montecarlo import check_scalar_models
 from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 from screening.validation import check_integer, check_scalar
@@ -124,13 +125,13 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     ``"overturned"`` or ``"diverged: <reason>"``; ``attrs["sign_convention"]`` states the convention.
     """
     record = _input(ground_acceleration, dt)
-    mc = mc_registry.get(model)
+    check_scalar_models(block, foundation, purpose="simulate")
+    mc = resolve_model(model, block, foundation)        # "auto": no rule is measured on records (the fallback)
     model = mc.name
     cond = condensations.get(condensation)
     if not mc.uses_condensation and cond != condensations.get("paper"):
         raise ValueError(f"parameter 'condensation' applies to model='condensed' only (got {cond.name!r})")
     dt = record.dt
-    check_scalar_models(block, foundation, purpose="simulate")
     theta0 = check_scalar("theta0", theta0)
     theta_dot0 = check_scalar("theta_dot0", theta_dot0)
     slender = float(block.slenderness)
@@ -146,6 +147,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     overturn_resolution = check_integer("overturn_resolution", overturn_resolution, 1, MAX_OVERTURN_RESOLUTION)
     cond.check(block, foundation)
     mc.check(block, foundation, cond)
+    mc_registry.check_validity(mc, block, foundation)
 
     # input on the record grid, padded with rest to cover t_end (plus two samples for the interpolant)
     times = output_dt * np.arange(n_out)

@@ -190,23 +190,30 @@ def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
 def low_passed(plan, band):
     """The same samples low-passed at ``band`` [rad/s], on a coarser grid: ``(plan_low, stride)``.
 
-    ``plan_low`` keeps the frequencies ``omega_k < band`` of ``plan`` (same ``d_omega``, same FFT
-    length, so with the same seed every kept component has the same amplitude and phase: the
-    phases of a sample are the first draws of its generator); read its samples at every
-    ``stride``-th grid point (the coarse step keeps the plan's oversampling of the kept band, and the
-    coarse grid still covers the record).  ``stride = 1`` and ``plan`` itself when ``band`` is not below half the
-    plan's cutoff.
+    ``plan_low`` keeps the frequencies ``omega_k < band`` of ``plan`` (same ``d_omega``, so with the
+    same seed every kept component has the same amplitude and phase: the phases of a sample are the
+    first draws of its generator) on the grid ``j stride dt`` of ``plan`` (``plan_low.dt = stride
+    plan.dt``), with its own FFT of length ``plan.n_fft / stride``: ``stride`` divides the FFT length,
+    keeps at least the plan's oversampling of the kept band, and the coarse grid still covers the
+    record, so synthesizing the low-passed samples costs in proportion to their own grid, not to
+    ``plan``'s.  ``stride = 1`` and ``plan`` itself when ``band`` is not below half the plan's cutoff.
     """
     n_keep = max(int(round(band / plan.d_omega)), 1)
     if not n_keep * plan.d_omega < 0.5 * plan.cutoff:
         return plan, 1
     t_end = (plan.n_times - 2) * plan.dt
-    stride = max(int(plan.cutoff / (n_keep * plan.d_omega)), 1)
-    while stride > 1 and stride * (int(math.ceil(t_end / (stride * plan.dt))) + 1) >= plan.n_fft:
-        stride -= 1
-    n_times = stride * (int(math.ceil(t_end / (stride * plan.dt))) + 1) + 1
-    low = SpectralPlan(cutoff=float(n_keep * plan.d_omega), d_omega=plan.d_omega, n_fft=plan.n_fft, dt=plan.dt,
-                       n_times=n_times, amplitudes=plan.amplitudes[:n_keep].copy())
+    largest = max(int(plan.cutoff / (n_keep * plan.d_omega)), 1)
+    stride = 1
+    for s in range(largest, 1, -1):
+        n_times = int(math.ceil(t_end / (s * plan.dt))) + 2
+        if plan.n_fft % s == 0 and n_times <= plan.n_fft // s and 2 * n_keep < plan.n_fft // s:
+            stride = s
+            break
+    if stride == 1:
+        return plan, 1
+    low = SpectralPlan(cutoff=float(n_keep * plan.d_omega), d_omega=plan.d_omega, n_fft=plan.n_fft // stride,
+                       dt=stride * plan.dt, n_times=int(math.ceil(t_end / (stride * plan.dt))) + 2,
+                       amplitudes=plan.amplitudes[:n_keep].copy())
     return low, stride
 
 

@@ -73,8 +73,9 @@ def escalate(run):
     features = point_features(pts["features"])
     candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
     order = esc.cover_points(features, candidates, run.result.peak_p_uplift, esc.MAX_POINTS)
-    models = esc.escalation_model(pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
-                                  esc.condensed_cells(shipped_calibration(), acc.target))[order]
+    models = escalation_models(run, order, esc.escalation_model(
+        pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
+        esc.condensed_cells(shipped_calibration(), acc.target))[order])
     results, cost, spent, failed = escalation_runs(run, order, models)
     done = [j for j in range(len(order)) if j in results]
     escalated, models = order[done], models[done]
@@ -97,7 +98,8 @@ def escalate(run):
     info = {"target": acc.target, "budget_s": acc.budget_s, "cost_s": cost, "cpu_s": spent,
             "n_candidates": int(candidates.sum()), "n_selected": len(order), "n_escalated": len(runs),
             "n_coupled": int(np.sum(models == EscalationModel.coupled)),
-            "n_condensed": int(np.sum(models == EscalationModel.condensed)), "n_short": short,
+            "n_condensed": int(np.sum(models == EscalationModel.condensed)),
+            "n_stiff_bed": int(np.sum(models == EscalationModel.stiff_bed)), "n_short": short,
             "n_failed": failed, "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
             "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
@@ -109,6 +111,29 @@ def escalate(run):
         accuracy_correction_loo_rms=info["loo_rms"],
         accuracy_note=accuracy_line(info))
     run.log(accuracy_line(info))
+
+def escalation_models(run, order, calibrated):
+    """:class:`~screening.status.EscalationModel` of the ``order`` ed points: with ``[accuracy] model = "auto"``
+    the measured validity rule's choice per point where it is the stiff-bed model, the calibration's
+    (``calibrated``) elsewhere (:func:`~screening.analysis.escalation.auto_escalation_model`); an explicit model
+    at every point.  Resolved once here: the tasks receive the model's name."""
+    from screening.analysis.escalation import auto_escalation_model
+    from screening.solvers.model_choice import AUTO, choose
+    from screening.status import EscalationModel
+    from screening.workflow.grid import point_values
+    from screening.workflow.study import build_models
+
+    study = run.study
+    model = getattr(study.accuracy, "model", AUTO)
+    if model != AUTO:
+        return np.full(len(order), int(EscalationModel[model]), dtype=np.int8)
+    chosen = []
+    for flat in order:
+        case, values = point_values(study, tuple(int(i) for i in np.unravel_index(int(flat), study.shape)))
+        block, foundation, excitation = build_models(study.cases[case], values, study.t_end)
+        chosen.append(choose(block, foundation, excitation.kind)[0])
+    return auto_escalation_model(calibrated, chosen)
+
 
 def escalation_runs(run, order, models):
     """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within the budget.
@@ -168,10 +193,14 @@ def escalation_runs(run, order, models):
         """Estimated cost [s] of every run so far (each result carries the cost of all its runs)."""
         return sum(float(r["cost_s"]) for r in results.values())
 
+    topic = f"screening-escalation-samples-{token}"
+    samples_done, subscribed = {}, False
+
     def submit(j, samples, what):
         model = EscalationModel(int(models[j])).name
         return execution.submit_escalation(run.client, study, int(order[j]), samples, model,
-                                           key=f"escalate-{what}-{token}-{j:04d}")
+                                           key=f"escalate-{what}-{token}-{j:04d}",
+                                           progress=(topic, 3 * j + ("pilot", "full", "topup").index(what)))
 
     def gather(futures):
         nonlocal failed
@@ -212,8 +241,15 @@ def escalation_runs(run, order, models):
     main_budget = esc.MAIN_SHARE * acc.budget_s
     if w < len(todo):
         run.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
-    with Progress(len(todo) - w, label="accuracy: Monte Carlo at escalated points",
-                  enabled=run.progress and w < len(todo)) as bar:
+    label = "accuracy: Monte Carlo at escalated points"
+    with Progress(len(todo) - w, label=label, enabled=run.progress and w < len(todo)) as bar:
+        def count(event):            # per-sample progress of the running points (worker events)
+            samples_done[event[1]["spot"]] = max(samples_done.get(event[1]["spot"], 0), int(event[1]["done"]))
+            bar.label = f"{label} ({sum(samples_done.values())} samples done)"
+
+        if w < len(todo):
+            run.client.subscribe_topic(topic, count)
+            subscribed = True
         while w < len(todo):
             pilots, committed = {}, 0.0
             for j in todo[w:w + WAVE]:
@@ -289,6 +325,9 @@ def escalation_runs(run, order, models):
     for r in results.values():
         r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
     cpu = sum(float(r["cpu_time"]) for r in results.values())
+    if subscribed:
+        with contextlib.suppress(Exception):        # noqa: BLE001 - only the display
+            run.client.unsubscribe_topic(topic)
     return results, spent(), cpu, failed
 
 
@@ -297,7 +336,8 @@ def accuracy_line(info):
     methods = ", ".join(f"{name} {n}" for name, n in info["methods"].items())
     left = info["n_candidates"] - info["n_escalated"]
     return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise; "
-            f"Monte Carlo at {info['n_escalated']} ({info['n_coupled']} coupled, {info['n_condensed']} condensed; "
+            f"Monte Carlo at {info['n_escalated']} ({info['n_coupled']} coupled, {info['n_condensed']} condensed"
+            + (f", {info['n_stiff_bed']} stiff-bed" if info.get("n_stiff_bed") else "") + "; "
             f"{info['n_short']} short of the target's standard error) for {info['cost_s']:.1f} of "
             f"{info['budget_s']:g} CPU s by the cost model ({info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "

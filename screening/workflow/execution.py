@@ -290,12 +290,16 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     ``sl_<name>`` (float64; for a result that does not store them on the grid).  ``progress = (topic,
     spot)``: the samples done are sent as worker events ``{"spot": spot, "done": n}`` on ``topic``.
     """
+    from screening.solvers.model_choice import resolve
     from screening.solvers.montecarlo import monte_carlo
 
-    kw = {"condensation": condensation} if mc_registry.get(model).uses_condensation else {}
-    ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=t_end, dt=dt,
+    mc = resolve(model, block, foundation, excitation)          # "auto": once, for this point
+    kw = {"condensation": condensation} if mc.uses_condensation else {}
+    ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=mc, t_end=t_end, dt=dt,
                      seed=seed, progress=_sample_events(progress), **kw)
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
+    out["mcs_model"] = np.int8(mc_registry.code(mc.name))
+    out["n_grid"] = np.int64(samples * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
     n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
     out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
                n_used=np.int32(samples - n_over - n_div), n_steps=np.int64(ds["n_steps"].values.sum()),
@@ -310,19 +314,17 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     return out
 
 
-def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed):
+def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, progress=None):
     """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks,
     the integration steps and synthesis grid points of all samples and whether the steps were the
     linearly implicit pair's (``n_steps``, ``n_grid``, ``rodas``, for the cost model) and the CPU time
-    it took (``cpu_time`` [s], of the worker thread)."""
+    it took (``cpu_time`` [s], of the worker thread).  ``progress``: as for :func:`spot_task`."""
     from screening.solvers.montecarlo import choose_integrator
-    from screening.solvers.synthesis import default_cutoff, grid_points
 
     start = time.thread_time()
-    run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed)
+    run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, progress=progress)
     out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples),
-           "n_grid": np.int64(samples * grid_points(t_end, default_cutoff(block, foundation))),
-           "rodas": np.bool_(choose_integrator(block, foundation, model) == "rodas")}
+           "n_grid": run["n_grid"], "rodas": np.bool_(choose_integrator(block, foundation, model) == "rodas")}
     for name in ("var_theta", "var_theta_dot"):
         history, se = run[name], run[f"{name}_se"]
         at = int(np.nanargmax(history)) if np.any(np.isfinite(history)) else -1
@@ -333,14 +335,15 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     return out
 
 
-def submit_escalation(client, study, flat_index, samples, model, key):
+def submit_escalation(client, study, flat_index, samples, model, key, progress=None):
     """Submit :func:`escalation_task` at flat grid index ``flat_index`` with ``samples`` samples of ``model``
-    (``"coupled"`` or ``"condensed"``; retried :data:`TASK_RETRIES` times)."""
+    (a registered Monte Carlo model's name; retried :data:`TASK_RETRIES` times); ``progress = (topic, run)``:
+    the samples done are sent as worker events (:func:`spot_task`)."""
     index = tuple(int(i) for i in np.unravel_index(flat_index, study.shape))
     case, values = point_values(study, index)
     return client.submit(escalation_task, *build_models(study.cases[case], values, study.t_end),
                          study.cases[case].condensation_model, int(samples), model, study.t_end, study.dt,
-                         study.accuracy.seed, retries=TASK_RETRIES, pure=False, key=key)
+                         study.accuracy.seed, progress, retries=TASK_RETRIES, pure=False, key=key)
 
 
 def _sample_events(progress):

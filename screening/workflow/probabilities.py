@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from screening.analysis.probabilities import choose_sources, monte_carlo_source, sample_probabilities
+from screening.solvers import mc_registry
 from screening.status import EscalationModel, PointStatus, ProbabilitySource, SampleState
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
@@ -40,7 +41,8 @@ def monte_carlo_runs(run):
     if getattr(run, "spot_runs", None) is not None:
         spots, results = run.spot_runs
         for index, r in zip(spots, results):
-            out.append((int(np.ravel_multi_index(index, run.study.shape)) if index else 0, run.study.mcs.model,
+            out.append((int(np.ravel_multi_index(index, run.study.shape)) if index else 0,
+                        mc_registry.names()[int(r["mcs_model"])] if "mcs_model" in r else run.study.mcs.model,
                         r["peak_abs_theta"], r["sample_state"]))
     return out
 

@@ -102,13 +102,13 @@ import hashlib
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
+from types import MappingProxyType, SimpleNamespace
 
 import numpy as np
 
 from screening import __version__
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
-from screening.solvers import mc_registry
+from screening.solvers import mc_registry, model_choice
 from screening.solvers.timegrid import output_times
 from screening.workflow import limits
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models, build_point_models, case_cutoff,
@@ -119,8 +119,9 @@ from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, bu
 
 __all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
 
-#: The Monte Carlo models a study may name (the registered ones, :mod:`screening.solvers.mc_registry`).
-MCS_MODELS = mc_registry.names()
+#: The Monte Carlo models a study may name (the registered ones, :mod:`screening.solvers.mc_registry`, and
+#: ``"auto"``: per point the cheapest one whose measured validity holds, :mod:`screening.solvers.model_choice`).
+MCS_MODELS = model_choice.choices()
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
              "case", "output", "fragility", "run", "accuracy")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
@@ -146,6 +147,7 @@ class SpotChecks:
     samples: int
     model: str
     seed: int
+    strict_validity: bool = False
 
 
 @dataclass(frozen=True)
@@ -180,11 +182,14 @@ class Fragility:
 @dataclass(frozen=True)
 class Accuracy:
     """The ``[accuracy]`` table: ``target`` (relative error of peak var_theta [1]), ``budget_s`` (CPU
-    seconds of Monte Carlo [s]) and the Monte Carlo ``seed``."""
+    seconds of Monte Carlo [s]), the Monte Carlo ``seed`` and ``model``: ``"auto"`` (the stiff-bed model
+    where its measured validity holds, elsewhere condensed where the calibration shows it within the
+    target, else coupled) or a registered model run at every escalated point."""
 
     target: float
     budget_s: float = DEFAULT_BUDGET_S
     seed: int = 0
+    model: str = "auto"
 
 
 @dataclass(frozen=True)
@@ -301,7 +306,7 @@ def study_from_tables(raw, text, name, source):
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
                  description=description, _hash=digest.hexdigest(), output=_output(raw),
-                 fragility=_fragility(raw), accuracy=_accuracy(raw))
+                 fragility=_fragility(raw), accuracy=_accuracy(raw, cases, sweeps))
     if study.output.histories == "spots" and study.mcs is None:
         raise StudyError("output.histories: 'spots' stores the histories at the [mcs] spot points; "
                          "give an [mcs] table (or histories = 'none')")
@@ -404,23 +409,25 @@ def _fragility(raw):
     return Fragility(thresholds, relative_to, method)
 
 
-def _accuracy(raw):
+def _accuracy(raw, cases=(), sweeps=None):
     """``[accuracy]``: absent (or without ``target``) keeps today's behaviour (no escalation)."""
     tbl = table(raw, "accuracy")
-    check_keys(tbl, ("target", "budget_s", "seed"), "accuracy.")
+    check_keys(tbl, ("target", "budget_s", "seed", "model"), "accuracy.")
     budget = check_value("accuracy.budget_s", tbl.get("budget_s", DEFAULT_BUDGET_S), 0.0, False, MAX_BUDGET_S)
     seed = integer(tbl, "seed", 0, 0, "accuracy.", limits.MAX_SEED)
+    model = choice(tbl, "model", MCS_MODELS, "accuracy.", model_choice.AUTO)
     if "target" not in tbl:
         return None
     target = check_value("accuracy.target", tbl["target"], 0.0, False, 1.0)
-    return Accuracy(target, budget, seed)
+    check_model_validity(model, cases, sweeps or {}, False, "accuracy.")
+    return Accuracy(target, budget, seed, model)
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):
     if "mcs" not in raw:
         return None
     tbl = table(raw, "mcs")
-    check_keys(tbl, ("enabled", "points", "count", "samples", "model", "seed"), "mcs.")
+    check_keys(tbl, ("enabled", "points", "count", "samples", "model", "seed", "strict_validity"), "mcs.")
     enabled = tbl.get("enabled", True)
     if not isinstance(enabled, bool):
         raise StudyError(f"mcs.enabled: must be true or false (got {type_name(enabled)})")
@@ -433,7 +440,12 @@ def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):
                          f"mcs.samples: must be an integer in 2..{most} (got {short_repr(samples)})")
     samples = integer(tbl, "samples", 200, 2, "mcs.")
     seed = integer(tbl, "seed", 0, 0, "mcs.", limits.MAX_SEED)
-    model = choice(tbl, "model", MCS_MODELS, "mcs.", "coupled")
+    model = choice(tbl, "model", MCS_MODELS, "mcs.", model_choice.AUTO)
+    strict = tbl.get("strict_validity", False)
+    if not isinstance(strict, bool):
+        raise StudyError(f"mcs.strict_validity: must be true or false (got {type_name(strict)})")
+    if enabled:
+        check_model_validity(model, cases, sweeps, strict, "mcs.")
     points = tbl.get("points", "auto")
     dims = (("case",) if has_case_dim else ()) + tuple(sweeps)
     if points == "auto":
@@ -451,7 +463,40 @@ def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):
         raise StudyError(f"mcs.points: must be 'auto' or a list of tables (got {type_name(points)})")
     if not enabled:
         return None
-    return SpotChecks(points=points, count=count, samples=samples, model=model, seed=seed)
+    return SpotChecks(points=points, count=count, samples=samples, model=model, seed=seed, strict_validity=strict)
+
+
+def check_model_validity(model, cases, sweeps, strict, where):
+    """A Monte Carlo ``model`` named explicitly must be within its measured validity
+    (:meth:`~screening.solvers.mc_registry.MonteCarloModel.validity_problem`) at every grid point's block and bed:
+    with ``strict`` a :class:`StudyError` naming the rule and the first point outside it, else a ``UserWarning``
+    saying so (the run goes on).  ``"auto"`` is never outside (it picks per point)."""
+    import warnings
+
+    from screening.workflow.config import _block, _foundation
+
+    if model == model_choice.AUTO:
+        return
+    mc = mc_registry.get(model)
+    sweeps = {n: v for n, v in sweeps.items() if NUMERIC[n][0] != "excitation" and v is not None}
+    names = list(sweeps)
+    for case in cases:
+        kind = SimpleNamespace(kind=case.excitation)        # validity rules read the excitation's kind only
+        seen = 0
+        for j in np.ndindex(*(len(sweeps[n]) for n in names)) if names else [()]:
+            values = {n: float(sweeps[n][i]) for n, i in zip(names, j)}
+            p = {**case.params, **values}
+            problem = mc.validity_problem(_block(p), _foundation(case, p), kind)
+            if problem is None:
+                continue
+            at = ", ".join(f"{n} = {v!r}" for n, v in values.items()) or "every point"
+            if strict:
+                raise StudyError(f"{where}model: {problem}; at {at} (strict_validity = true)")
+            seen += 1
+            if seen == 1:
+                warnings.warn(f"{where}model: {problem}; at {at}", UserWarning, stacklevel=2)
+
+
 
 
 def _spot_index(i, entry, dims, sweeps, cases, shape):

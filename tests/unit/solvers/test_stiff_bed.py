@@ -239,7 +239,8 @@ def test_mirror_symmetry():
 
 def test_soft_bed_warns_naming_the_validity_rule():
     soft = Foundation(k=2e6, lam=1e7)
-    with pytest.warns(UserWarning, match=r"theta_ul / atan\(b/h\) <= 0.05"):
+    with pytest.warns(UserWarning, match=r"'stiff_bed' outside its measured validity: theta_ul_over_slenderness = "
+                                         r"\S+ outside the measured \[0, 0.05\].*model_choice.toml"):
         screening.simulate(STATUE, soft, np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -256,7 +256,7 @@ def test_spot_points_by_value_index_and_case():
     text = BASE + '[mcs]\npoints = [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 1}}]\nsamples = 10\n'
     s = parse_study(text)
     assert s.mcs.points == ((2, 4), (0, 1))
-    assert s.mcs.model == "coupled" and s.mcs.seed == 0 and s.mcs.samples == 10
+    assert s.mcs.model == "auto" and s.mcs.seed == 0 and s.mcs.samples == 10      # the default: per point
     s = parse_study(BASE + '[mcs]\npoints = "auto"\ncount = 2\n')
     assert s.mcs.points == "auto" and s.mcs.count == 2
     assert parse_study(BASE + "[mcs]\nenabled = false\n").mcs is None
