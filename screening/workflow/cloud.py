@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening.solvers import mc_registry
+from screening.solvers import model_choice
 from screening.status import FitFlag
 from screening.workflow import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
@@ -93,8 +93,8 @@ def load_cloud_study(path, units=None):
         if len(files) > limits.MAX_RECORD_FILES:
             raise StudyError(f"records.files: {len(files)} files; at most {limits.MAX_RECORD_FILES}")
         model = rec.get("model", "coupled")
-        if model not in mc_registry.names():
-            raise StudyError(f"records.model: must be one of {', '.join(mc_registry.names())} (got {model!r})")
+        if model not in model_choice.choices():
+            raise StudyError(f"records.model: must be one of {', '.join(model_choice.choices())} (got {model!r})")
         im = rec.get("im", "pga")
         if im not in IMS:
             raise StudyError(f"records.im: must be one of {', '.join(IMS)} (got {im!r})")
@@ -227,7 +227,7 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     if records is None:
         records = read_cloud_records(cloud)
     rows, failures = record_rows(block, foundation, records, cloud.model,
-                                 chosen.condensation if mc_registry.get(cloud.model).uses_condensation else "paper",
+                                 chosen.condensation if model_choice.resolve(cloud.model, block, foundation).uses_condensation else "paper",
                                  cloud.period,
                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
@@ -273,7 +273,7 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
     records = read_cloud_records(cloud) if records is None else records
     scaled = [scaled_to(rec, cloud.im, level, cloud.period) for level in cloud.levels for rec in records]
-    condensation = chosen.condensation if mc_registry.get(cloud.model).uses_condensation else "paper"
+    condensation = chosen.condensation if model_choice.resolve(cloud.model, block, foundation).uses_condensation else "paper"
     rows, failures = record_rows(block, foundation, scaled, cloud.model, condensation, cloud.period, client,
                                  progress)
     ds, warnings = stripe_dataset(cloud, block, foundation, rows, [rec.name for rec in records])

@@ -48,3 +48,28 @@ def test_spot_check_runs_the_stiff_bed_model(client, tmp_path):
                           progress=False)
     np.testing.assert_array_equal(spot, direct.peak_abs_theta.values)
     assert not np.array_equal(spot, coupled.peak_abs_theta.values)
+
+
+def test_auto_spot_checks_record_the_model_chosen_per_point(client, tmp_path):
+    """model = "auto" (the default): the stiff bed gets the stiff-bed model, the soft one (theta_ul / atan(b/h)
+    = 0.17) the coupled model; the file's per-spot mcs_model says which, with CF flag attributes."""
+    from screening.solvers import mc_registry
+
+    text = (STATUE.replace('model = "stiff_bed"\n', "").replace("k = 1e10", "k = [2e6, 1e10]")
+            .replace("points = [{S0 = 0.015}]", "points = [{S0 = 0.015, k = 1e10}, {S0 = 0.015, k = 2e6}]"))
+    study = parse_study(text)
+    assert study.mcs.model == "auto"
+    out = tmp_path / "a.nc"
+    run_sweep(study, out, client=client, progress=False, log=quiet)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["mcs_model"] == "auto"
+        codes = ds["mcs_model"].values
+        meanings = ds["mcs_model"].attrs["flag_meanings"].split()
+        assert list(ds["mcs_model"].attrs["flag_values"]) == list(range(len(meanings)))
+        spot = ds["mcs_peak_abs_theta"].values[0]
+    assert [meanings[c] for c in codes] == ["stiff_bed", "coupled"]
+    assert meanings == list(mc_registry.names())
+    block, foundation, excitation = build_models(study.cases[0], {"S0": 0.015, "k": 1e10})
+    direct = monte_carlo(block, foundation, excitation, n_samples=6, model="stiff_bed", t_end=4.0, dt=0.05, seed=2,
+                         progress=False)
+    np.testing.assert_array_equal(spot, direct.peak_abs_theta.values)

@@ -8,7 +8,7 @@ from screening.analysis.escalation import (GRID_COST_S, MAX_POINTS, MAX_SAMPLES,
                                            condensed_cells, cover_points, escalation_candidates, escalation_model,
                                            estimated_cost, meets_target, prior_cost, samples_needed)
 from screening.analysis.trust import shipped_calibration
-from screening.status import EscalationModel, PointStatus, Trust
+from screening.status import BestMethod, EscalationModel, PointStatus, Trust
 
 
 def test_candidates_are_the_points_the_rule_does_not_promise():
@@ -110,3 +110,27 @@ def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     assert int(out["n_grid"]) == 3 * plan.n_times                  # the grid the samples were synthesized on
     assert not out["rodas"]                                          # a lightly damped bed: the explicit pair
     assert estimated_cost(1000, k, 0, rodas=True) == pytest.approx(1000 * STEP_COST_S[k] * RODAS_STEP_FACTOR)
+
+
+def test_auto_escalation_takes_the_stiff_bed_model_only_where_the_rule_picks_it():
+    from screening.analysis.escalation import auto_escalation_model
+
+    calibrated = np.array([EscalationModel.condensed, EscalationModel.coupled, EscalationModel.coupled], dtype=np.int8)
+    got = auto_escalation_model(calibrated, ["coupled", "stiff_bed", "coupled"])
+    np.testing.assert_array_equal(got, [EscalationModel.condensed, EscalationModel.stiff_bed, EscalationModel.coupled])
+    assert got.dtype == np.int8
+    assert STEP_COST_S[EscalationModel.stiff_bed] > 0
+
+
+def test_best_method_names_the_stiff_bed_monte_carlo():
+    from screening.analysis.correction import best_estimates
+
+    n = 3
+    value, se, method, _ = best_estimates(np.ones(n), np.zeros(n, dtype=np.int8), np.zeros(n, dtype=np.int8),
+                                          np.full(n, -0.5), np.full(n, 0.5), 0.15, np.zeros((n, 1)),
+                                          np.array([0, 1, 2]), np.array([2.0, 3.0, 4.0]), np.array([0.1, 0.1, 0.1]),
+                                          np.array([EscalationModel.stiff_bed, EscalationModel.condensed,
+                                                    EscalationModel.coupled]))
+    np.testing.assert_array_equal(method, [BestMethod.stiff_bed_monte_carlo, BestMethod.condensed_monte_carlo,
+                                           BestMethod.coupled_monte_carlo])
+    np.testing.assert_array_equal(value, [2.0, 3.0, 4.0])

@@ -105,3 +105,23 @@ def test_low_passed_samples_are_the_same_realization_without_its_high_band():
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
     np.testing.assert_allclose(ad, bd, rtol=0, atol=1e-12 * np.abs(bd).max())
     assert low_passed(plan, 4000.0) == (plan, 1)            # not below half the cutoff: the plan itself
+
+
+def test_band_option_low_passes_what_any_model_reads_and_is_recorded():
+    """``band=`` gives every model the same samples low-passed at that band (the coupled model as the stiff-bed
+    model's judge on the same ground motions); at or above half the cutoff it is the full plan itself."""
+    from screening.solvers.montecarlo import monte_carlo
+
+    block, bed = screening.Block(m=1200.0, b=0.25, h=0.9), screening.Foundation(k=1e10, lam=2e11)
+    motion = screening.KanaiTajimi(0.015, 15.6, 0.6)
+    kw = dict(n_samples=3, t_end=1.0, dt=0.05, progress=False, seed=5)
+    full = monte_carlo(block, bed, motion, model="coupled", **kw)
+    same = monte_carlo(block, bed, motion, model="coupled", band=0.6 * full.attrs["cutoff_rad_s"], **kw)
+    low = monte_carlo(block, bed, motion, model="coupled", band=157.0, **kw)
+    np.testing.assert_array_equal(same.peak_abs_theta.values, full.peak_abs_theta.values)
+    assert same.attrs["input_band_rad_s"] == full.attrs["cutoff_rad_s"]
+    assert abs(low.attrs["input_band_rad_s"] - 157.0) <= full.attrs["d_omega_rad_s"]
+    assert low.attrs["input_grid_points"] < full.attrs["input_grid_points"] / 10
+    assert not np.array_equal(low.peak_abs_theta.values, full.peak_abs_theta.values)
+    with pytest.raises(ValueError, match="parameter 'band'"):
+        monte_carlo(block, bed, motion, model="coupled", band=-1.0, **kw)

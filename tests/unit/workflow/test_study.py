@@ -464,3 +464,31 @@ def test_accuracy_is_off_by_default_and_read_with_defaults():
 def test_bad_accuracy_key_names_the_key_and_range(line, needle):
     with pytest.raises(StudyError, match=needle):
         parse_study(BASE + f"\n[accuracy]\n{line}\n")
+
+
+STATUE_STUDY = STUDIES / "statue_accuracy.toml"
+
+
+def test_mcs_and_accuracy_default_to_auto_and_accept_the_registered_models():
+    text = STATUE_STUDY.read_text() + "\n[mcs]\ncount = 1\n"
+    s = parse_study(text)
+    assert s.mcs.model == "auto" and s.accuracy.model == "auto" and s.mcs.strict_validity is False
+    s = parse_study(text.replace("target = 0.15", 'target = 0.15\nmodel = "coupled"'))
+    assert s.accuracy.model == "coupled"
+    with pytest.raises(StudyError, match=r"accuracy.model: must be one of .*'auto'"):
+        parse_study(text.replace("target = 0.15", 'target = 0.15\nmodel = "rigid"'))
+
+
+def test_strict_validity_refuses_the_stiff_bed_model_outside_its_rule_in_one_line_before_any_work():
+    soft = (STATUE_STUDY.read_text().replace("k = 1e10 ", "k = {start = 3e6, stop = 1e10, num = 3, log = true} ")
+            + '\n[mcs]\ncount = 1\nmodel = "stiff_bed"\n')
+    with pytest.warns(UserWarning, match=r"mcs.model: model 'stiff_bed' outside its measured validity"):
+        parse_study(soft)                                   # not strict: a warning, the study loads
+    with pytest.raises(StudyError) as err:
+        parse_study(soft + "strict_validity = true\n")
+    text = str(err.value)
+    assert "\n" not in text and "theta_ul_over_slenderness" in text and "model_choice.toml" in text
+    assert "k = 3000000.0" in text and "strict_validity = true" in text       # the first point outside
+    parse_study(soft.replace("k = {start = 3e6,", "k = {start = 3e9,") + "strict_validity = true\n")   # inside
+    with pytest.raises(StudyError, match="mcs.strict_validity: must be true or false"):
+        parse_study(soft + "strict_validity = 1\n")
