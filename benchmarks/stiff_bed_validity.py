@@ -9,13 +9,19 @@ largest difference in units of the standard error of the difference (unpaired bo
 ``sqrt(se_1^2 + se_2^2)``) against the issue's tolerance ``max(0.03, 2.5 SE)``, and the integration
 cost per sample of each model (kernel wall time / samples, this machine, shared cores).
 ``stiff_bed`` is the registered model: it reads the same samples low-passed at its own band
-(3 x its full-contact rocking frequency, at least 3 x 10 Hz x 2 pi) on a coarser grid; ``stiff_bed full
+(``max(1.5 w_r, 25 Hz)``, ``w_r`` its full-contact rocking frequency) on a coarser grid; ``stiff_bed full
 band`` reads them exactly as the coupled model does (its grid set by the vertical frequency), which
 shows what the band costs and what it changes.
 
-Run (about 10 minutes at 200 samples)::
+``--band`` prints instead the band and cost table of ``model = "auto"`` (:func:`band_and_cost`): on the
+statue's ``k = 1e10`` and ``1e11`` beds, the coupled model at its default band and reading the same
+samples at the ground's band limit (25 Hz), and the cheap models, with paired differences, CPU per
+sample and the coupled / model cost ratio in one run.
+
+Run (about 10 minutes at 200 samples; the band table about 4 minutes of CPU at 500 samples)::
 
     PYTHONPATH=. python benchmarks/stiff_bed_validity.py --samples 200
+    NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/stiff_bed_validity.py --band --samples 500
 """
 
 from __future__ import annotations
