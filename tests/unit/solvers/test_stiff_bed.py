@@ -268,19 +268,23 @@ def test_paired_samples_in_full_contact_match_the_coupled_model():
     """Same seeds, same synthesized ground motions: at an intensity where the statue on k = 1e10 mostly
     stays in full contact, the samples that never lift in either model have the same peak rotation
     (both are the linear rocking oscillator there; 1 % for the coupled model's second-order
-    vertical coupling), and the models agree on which samples lift at all (all but 2 of 64)."""
+    vertical coupling) when both read the stiff-bed model's band, and 3 % with the coupled model on its
+    own full band (the components above 1.5 x the full-contact rocking frequency, measured 1.6 %); the
+    models agree on which samples lift at all (all but 2 of 64)."""
     bed = _bed(STATUE, 1e10)
     kw = dict(n_samples=64, seed=5, t_end=10.0, progress=False)
     exc = screening.KanaiTajimi(2.5e-4, 15.6, 0.6)
-    ref = screening.monte_carlo(STATUE, bed, exc, model="coupled", **kw)
     new = screening.monte_carlo(STATUE, bed, exc, model="stiff_bed", **kw)
-    tu = float(ref.theta_ul)
-    lifted_ref = ref.peak_abs_theta.values > tu
-    lifted_new = new.peak_abs_theta.values > tu
-    quiet = ~lifted_ref & ~lifted_new
-    assert 10 <= quiet.sum() <= 60                     # both regimes present
-    np.testing.assert_allclose(new.peak_abs_theta.values[quiet], ref.peak_abs_theta.values[quiet], rtol=0.01)
-    assert np.sum(lifted_ref != lifted_new) <= 2
+    tu = float(new.theta_ul)
+    for ref, tol in ((screening.monte_carlo(STATUE, bed, exc, model="coupled", band=new.attrs["input_band_rad_s"],
+                                            **kw), 0.01),
+                     (screening.monte_carlo(STATUE, bed, exc, model="coupled", **kw), 0.03)):
+        lifted_ref = ref.peak_abs_theta.values > tu
+        lifted_new = new.peak_abs_theta.values > tu
+        quiet = ~lifted_ref & ~lifted_new
+        assert 10 <= quiet.sum() <= 60                     # both regimes present
+        np.testing.assert_allclose(new.peak_abs_theta.values[quiet], ref.peak_abs_theta.values[quiet], rtol=tol)
+        assert np.sum(lifted_ref != lifted_new) <= 2
 
 
 @pytest.mark.slow
