@@ -171,3 +171,15 @@ def test_levels_must_be_increasing_positive(folder):
     (folder / "bad_levels.toml").write_text(STUDY.format(im="pga") + "levels = [2.0, 1.0]\n")
     with pytest.raises(StudyError, match="records.levels: must be a list of 2..100 increasing"):
         load_cloud_study(folder / "bad_levels.toml")
+
+
+def test_cloud_with_model_auto_runs_the_fallback_on_records(folder):
+    """No validity rule is measured on records: model = "auto" runs the coupled model (same peaks)."""
+    (folder / "auto.toml").write_text(STUDY.format(im="pga").replace('files = "rec"', 'files = "rec"\nmodel = "auto"'))
+    (folder / "coupled.toml").write_text(STUDY.format(im="pga"))
+    auto, _ = run_cloud(load_cloud_study(folder / "auto.toml"))
+    coupled, _ = run_cloud(load_cloud_study(folder / "coupled.toml"))
+    np.testing.assert_array_equal(auto["peak_abs_theta"].values, coupled["peak_abs_theta"].values)
+    (folder / "rigid.toml").write_text(STUDY.format(im="pga").replace('files = "rec"', 'files = "rec"\nmodel = "rigid"'))
+    with pytest.raises(StudyError, match="records.model: must be one of .*auto"):
+        load_cloud_study(folder / "rigid.toml")
