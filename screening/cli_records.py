@@ -126,7 +126,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 
     if period is not None:
         from screening.validation import check_scalar
-        from screening.workflow import limits
+        from screening import limits
 
         low, high = limits.SA_PERIOD_RANGE
         try:

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from screening.validation import input_path, read_input_text
-from screening.workflow import limits
+from screening import limits
 
 #: Standard gravity [m/s2] used to convert records given in g.
 STANDARD_GRAVITY = 9.80665

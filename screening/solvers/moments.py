@@ -44,7 +44,7 @@ from screening.solvers.moment_kernels import (filtered_scales, solve_point_filte
                                               solve_point_white)
 from screening.status import PointStatus
 from screening.validation import check_integer, check_scalar, check_size
-from screening.workflow import limits
+from screening import limits
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
 CHUNK = 256

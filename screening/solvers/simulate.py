@@ -44,7 +44,7 @@ from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  
 from screening.solvers.montecarlo import check_scalar_models
 from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 from screening.validation import check_integer, check_scalar
-from screening.workflow import limits
+from screening import limits
 
 #: Most sub-intervals on which the overturning time is located.
 MAX_OVERTURN_RESOLUTION = 100_000

@@ -41,7 +41,7 @@ import xarray as xr
 
 from screening.solvers import mc_registry
 from screening.status import FitFlag
-from screening.workflow import limits
+from screening import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels")

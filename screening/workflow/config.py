@@ -33,7 +33,7 @@ from screening.model.block import LENGTH_RANGE
 from screening.model.excitation import ConstantEnvelope, Envelope
 from screening.solvers.timegrid import output_times
 from screening.validation import InputFileError, read_input_text
-from screening.workflow import limits
+from screening import limits
 
 #: Numeric parameters of the registered excitations besides S0 (``omega_g``, ``zeta_g``, ...).
 EXCITATION_PARAMETERS = excitations.parameters()
@@ -74,7 +74,7 @@ class StudyError(ValueError):
 # ----------------------------------------------------------------------------- reading
 def read_study_text(path):
     """The text of the study file ``path`` (UTF-8, a byte-order mark dropped); :class:`StudyError` if
-    it is not a regular file of at most :data:`~screening.workflow.limits.MAX_STUDY_BYTES` or cannot
+    it is not a regular file of at most :data:`~screening.limits.MAX_STUDY_BYTES` or cannot
     be read (checked before reading: a FIFO or a device never blocks or fills the memory)."""
     try:
         return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)

@@ -17,7 +17,7 @@ from screening.model import Block
 from screening.schema import PARAMETERS
 from screening.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.workflow.limits import batch_budget
+from screening.limits import batch_budget
 from screening.workflow.study import build_models, build_point_models
 
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
@@ -58,7 +58,7 @@ def default_batch_size(study, n_workers, target=None):
     the scheduler's work per batch is fixed, so few large batches leave the cores to the workers;
     whole rows if possible, the number of rows (within 25 %) that ends the run most evenly.
     Never across a case, never more than the arrays over the output times of one task fit in
-    :data:`~screening.workflow.limits.TASK_BYTES` (6 histories per point, or one envelope).
+    :data:`~screening.limits.TASK_BYTES` (6 histories per point, or one envelope).
     """
     per_case = study.points_per_case
     workers = max(int(n_workers), 1)

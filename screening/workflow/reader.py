@@ -49,15 +49,15 @@ def layout_problem(ds):
     """What is wrong with the layout of an opened result (a short phrase), or ``""``.
 
     Checked from the header only (no data is read): the grid is the dimensions of ``status`` and
-    has at most :data:`~screening.workflow.limits.MAX_POINTS_CEILING` points, ``t`` has at least
-    one instant and at most :data:`~screening.workflow.limits.MAX_TIMES`, every history is
+    has at most :data:`~screening.limits.MAX_POINTS_CEILING` points, ``t`` has at least
+    one instant and at most :data:`~screening.limits.MAX_TIMES`, every history is
     ``grid x t`` and every summary ``grid``, and ``status`` carries integer ``flag_values`` with one
     word of ``flag_meanings`` each.
     """
     import numpy as np
 
     from screening.solvers.moments import HISTORY_VARIABLES
-    from screening.workflow import limits
+    from screening import limits
 
     grid = tuple(ds["status"].dims)
     if "t" in grid:

@@ -17,7 +17,7 @@ import pytest
 from helpers import one_line_error, study_text
 
 from screening.cli import main
-from screening.workflow import limits
+from screening import limits
 from screening.workflow.study import StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[2]
