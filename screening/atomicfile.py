@@ -13,6 +13,8 @@ import os
 import tempfile
 from pathlib import Path
 
+__all__ = ["temporary_beside", "publish", "atomic_path", "atomic_open"]
+
 
 def temporary_beside(path, suffix=""):
     """A new empty file next to ``path`` (its name hidden and random, ending in ``.tmp`` and ``suffix``:

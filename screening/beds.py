@@ -27,6 +27,10 @@ import math
 
 import numpy as np
 
+__all__ = ["TYPICAL", "oedometric_modulus", "pad_compression_modulus", "layer_stiffness", "hunt_crossley_lambda",
+           "c_from_vertical_damping", "lam_from_vertical_damping", "restitution_from_damping_ratio",
+           "fit_backbone", "bed_summary", "format_bed_summary"]
+
 #: Indicative material ranges (SI), see docs/beds.md for the sources and caveats.
 TYPICAL = {
     "lime mortar": {"E": (0.5e9, 5e9), "nu": (0.15, 0.25), "zeta_v": (0.02, 0.05)},

@@ -40,6 +40,12 @@ from screening import __version__
 from screening.atomicfile import publish as _publish
 from screening.atomicfile import temporary_beside
 
+__all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
+           "WORKER_COUNT", "POSITIVE_FLOAT", "ZLIB_LEVEL", "cli", "main", "RESUMING_COMMANDS", "interrupted_note",
+           "announce_compilation", "printable", "cmd_run", "stamp_fragility", "lognormal_fit_text",
+           "write_file_set", "fragility_figures", "fit_files", "write_fragility_files", "cmd_plot",
+           "cmd_fragility", "cmd_tradeoff", "cmd_info", "cmd_export"]
+
 EXIT_OK = 0
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130

@@ -16,6 +16,9 @@ from screening.cli import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, 
                            _stem, _write_error, announce_compilation, cli, fragility_figures, lognormal_fit_text,
                            fit_files, stamp_fragility, write_file_set, write_fragility_files)
 
+__all__ = ["SERIAL_RECORDS", "UNITS_HELP", "cmd_simulate", "fragility_over_im_command", "cmd_fit_excitation",
+           "cmd_cloud"]
+
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
 UNITS_HELP = ("acceleration units of the record (required for a text record unless a header line states them, "

@@ -6,6 +6,8 @@ import sys
 import threading
 import time
 
+__all__ = ["LINE_STEP", "LINE_INTERVAL", "Progress"]
+
 #: Without a terminal (a log file, CI, a pipe): one line per this fraction of the work ...
 LINE_STEP = 0.1
 #: ... or after this many seconds without one [s].

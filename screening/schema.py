@@ -15,6 +15,12 @@ from screening import excitations, laws
 from screening.status import (BestMethod, ContactRegime, EscalationModel, FitFlag, PointStatus, SampleState, SpotStatus,
                               TargetMet, Trust, flag_attributes, probability_sources)
 
+__all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
+           "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
+           "probability_source_attributes", "TRADEOFF", "SIMULATION", "INTENSITY", "SWEEP", "SWEEP_INPUTS",
+           "CLOUD", "TRUST_CALIBRATION", "COORDINATES", "PRESSURE_PARAMETERS", "grid_coordinate_attributes",
+           "cdo_threshold_attributes", "attributes", "global_attributes", "apply_schema"]
+
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"
 REFERENCE = ("Nonlinear dynamics of rocking rigid blocks under stochastic base excitation: stochastic "

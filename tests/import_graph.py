@@ -269,3 +269,21 @@ def without_all(graph):
 def sizes(graph):
     """``[(lines, module)]``, largest first."""
     return sorted(((len(p.read_text().splitlines()), m) for m, p in graph.modules.items()), reverse=True)
+
+
+def read_exceptions(text=None):
+    """``(upward, circles)`` allowed by the architecture page's table of exceptions: the set of
+    ``(source, target)`` upward imports and the list of module sets an import circle may stay within."""
+    text = ARCHITECTURE.read_text() if text is None else text
+    section = text.split("## Exceptions to the layers", 1)[1].split("\n## ", 1)[0]
+    up, circles = set(), []
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 3 or cells[1] not in ("upward", "circle"):
+            continue
+        modules = re.findall(r"`([\w.]+)`", cells[0])
+        if cells[1] == "upward":
+            up.add(tuple(modules))
+        else:
+            circles.append(frozenset(modules))
+    return up, circles

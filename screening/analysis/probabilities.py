@@ -24,6 +24,10 @@ import numpy as np
 from screening.solvers.estimates import Z, binomial_estimate, sample_probabilities
 from screening.status import BestMethod, ProbabilitySource, SampleState, Trust, probability_sources
 
+__all__ = ["uplift_acceleration", "source_codes", "monte_carlo_source", "choose_sources",
+           "overturning_probability", "TOPPLING_FRACTION", "spot_check_probabilities", "probability_text", "Z",
+           "binomial_estimate", "sample_probabilities"]
+
 
 def uplift_acceleration(block, foundation, condensation):
     """Ground acceleration [m s-2] at which the block starts to rock: the quasi-static tilt reaches the

@@ -112,6 +112,11 @@ from screening.physics.contact import linear_indentation, rising_root
 from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
+__all__ = ["SOFTENING_LIMIT", "bearing_load", "check_bearing", "rest_indentation", "uplift_threshold",
+           "capacity_angle", "in_equilibrium", "quasi_static_indentation", "rocking_damping", "rocking_stiffness",
+           "restoring_moment", "damping_at_rest", "stiffness_at_rest", "SDOF_RECORD", "sdof_record",
+           "quasi_static_indentation_jit", "damping_stiffness_jit", "CubicCondensation", "CUBIC"]
+
 #: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
 SOFTENING_LIMIT = 2.0 / 27.0
 

@@ -84,6 +84,12 @@ import numpy as np
 
 from screening.status import ContactRegime
 
+__all__ = ["REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
+           "REGIME_NAMES", "foundation_constants", "law_constants", "corner_indentations", "contact_regime",
+           "contact_length", "contact_resultants", "law_resultants", "linear_indentation", "rising_root",
+           "rest_indentation", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
+           "law_resultants_trig_jit"]
+
 #: Integer codes of the contact regimes returned by :func:`contact_regime`.
 REGIME_FULL_CONTACT = int(ContactRegime.full_contact)
 REGIME_UPLIFT_POSITIVE = int(ContactRegime.uplift_positive)

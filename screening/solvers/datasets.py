@@ -26,6 +26,9 @@ from screening.solvers.estimates import sample_probabilities
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
 
+__all__ = ["LINEARIZATION_SUMMARIES", "MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
+           "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
+
 #: Per-point summaries of the linearization (beside ``status``).
 LINEARIZATION_SUMMARIES = ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "t_stop", "n_steps")
 

@@ -42,6 +42,13 @@ from screening.kernels.dopri import (
 from screening.kernels.signatures import FMA
 from screening.status import PointStatus
 
+__all__ = ["SCALE_FLOOR", "OK", "K_EQ_NEGATIVE", "BEYOND_SLENDERNESS", "STEP_BUDGET", "NON_FINITE",
+           "PEAK_HALVINGS", "envelope_rates", "envelope_state", "initial_gain", "stage_gains", "p_uplift",
+           "first_step", "trial_step", "judge_step", "end_of_step", "peak_in_step", "store_outputs",
+           "store_dense_outputs", "SUMMARIES", "solve_point_white", "packed_size", "augmented_system",
+           "lyapunov_rhs", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
+           "solve_point_two_states"]
+
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
 SCALE_FLOOR = 1e-300
 

@@ -46,6 +46,9 @@ from screening.status import PointStatus
 from screening.validation import check_integer, check_scalar, check_size
 from screening import limits
 
+__all__ = ["CHUNK", "DEFAULT_RTOL", "DEFAULT_MAX_STEPS", "OSCILLATOR", "HISTORY_VARIABLES", "SUMMARY_VARIABLES",
+           "oscillator_records", "FilterArrays", "in_float_range", "batch_solver", "solve_moments"]
+
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
 CHUNK = 256
 

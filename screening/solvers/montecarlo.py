@@ -57,6 +57,9 @@ from screening.solvers.datasets import monte_carlo_dataset
 from screening.validation import check_integer, check_size
 from screening import limits
 
+__all__ = ["MODELS", "DEFAULT_RTOL", "DEFAULT_NUMERICS", "RODAS_DAMPING_RATIO", "check_scalar_models",
+           "vertical_damping_ratio", "choose_integrator", "initial_state", "ensemble_statistics", "monte_carlo"]
+
 #: The registered Monte Carlo models (:mod:`screening.solvers.mc_registry`).
 MODELS = mc_registry.names()
 

@@ -46,6 +46,8 @@ from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 from screening.validation import check_integer, check_scalar
 from screening import limits
 
+__all__ = ["MAX_OVERTURN_RESOLUTION", "REGIME_NONE", "SIGN_CONVENTION", "simulation_times", "simulate"]
+
 #: Most sub-intervals on which the overturning time is located.
 MAX_OVERTURN_RESOLUTION = 100_000
 

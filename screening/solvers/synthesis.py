@@ -40,6 +40,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+__all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
+           "default_cutoffs", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
+           "grid_points", "spectral_plan", "low_passed", "validate_seed", "sample_phases", "stationary_samples",
+           "ground_acceleration_samples", "ground_acceleration"]
+
 
 #: Default cutoff = CUTOFF_FACTOR x the larger of the rocking and vertical frequencies.
 CUTOFF_FACTOR = 3.0

@@ -7,6 +7,8 @@ import numpy as np
 from screening.validation import checked
 from screening import limits
 
+__all__ = ["output_times"]
+
 
 def output_times(t_end=20.0, dt=0.05):
     """Output instants ``0, dt, 2 dt, ..., t_end`` [s].

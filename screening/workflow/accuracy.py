@@ -19,6 +19,9 @@ from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
 from screening.progress import Progress
 
+__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "point_table", "escalate",
+           "escalation_runs", "accuracy_line"]
+
 #: Resume records of escalated points are spot parts numbered from here (after any spot check): the
 #: point's result after its waves, its top-up run, and the planner's state after each wave.
 ESCALATION_RECORD = 5000

@@ -15,6 +15,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
+
+__all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NUMERIC", "TABLE_KEYS",
+           "MODEL_TABLES", "DEFAULTS", "StudyError", "read_study_text", "parse_toml", "one_line", "type_name",
+           "table", "check_keys", "required", "is_number", "check_value", "check_integer", "short_repr", "integer",
+           "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
+           "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
+           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "build_models", "case_cutoff",
+           "build_point_models"]
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport

@@ -20,6 +20,10 @@ from screening.solvers.moments import HISTORY_VARIABLES
 from screening.limits import batch_budget
 from screening.workflow.study import build_models, build_point_models
 
+__all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
+           "default_batch_size", "plan_batches", "hyperslabs", "batch_values", "point_values", "batch_models",
+           "batch_point_models", "select_spots", "parameter_table"]
+
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
 DEFAULT_BATCH = 500
 #: Most points per task when no histories are held: such a task holds only per-point summaries, so

@@ -7,6 +7,9 @@ from pathlib import Path
 
 from screening.workflow.errors import SweepError, exception_line
 
+__all__ = ["ResultError", "REQUIRED_VARIABLES", "open_result", "layout_problem", "damaged_data_error",
+           "result_key", "VERIFY_BLOCK_BYTES", "verify_result"]
+
 
 class ResultError(SweepError):
     """A result file that cannot be read or is not a screening sweep result."""

@@ -26,6 +26,8 @@ from screening import __version__
 from screening.workflow.errors import SweepError
 from screening.workflow.zarrfile import file_check
 
+__all__ = ["PartialStore", "RegionTarget"]
+
 
 class PartialStore:
     """``<out>.partial/``: manifest, one ``.npz`` per finished batch / spot, the file being built.

@@ -57,6 +57,8 @@ from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, 
 from screening.workflow.zarrfile import (foreign_files, is_zarr_path, remove_store, write_completion_mark,
                                          zarr_batch_size)
 
+__all__ = ["MAX_FAILURE_MESSAGES", "IN_FLIGHT_PER_WORKER", "SweepReport", "run_sweep", "SampleCount"]
+
 MAX_FAILURE_MESSAGES = 5
 #: Outstanding batch tasks per worker (bounds the memory of client and scheduler).
 IN_FLIGHT_PER_WORKER = 3

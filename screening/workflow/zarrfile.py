@@ -26,6 +26,12 @@ import numpy as np
 
 from screening.status import PointStatus, Trust
 
+__all__ = ["ZARR_SUFFIX", "ZARR_FORMAT", "BLOCK_BYTES", "COMPLETION_MARK", "ZARR_FILL", "is_zarr_path",
+           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrDataset", "file_check", "store_entries",
+           "write_completion_mark", "read_completion_mark", "store_problem", "foreign_files", "remove_store",
+           "warnings_ignored", "open_zarr_result", "read_attrs", "check_store", "netcdf_attributes",
+           "export_netcdf"]
+
 ZARR_SUFFIX = ".zarr"
 ZARR_FORMAT = 3
 #: Bytes read at a time when a variable is copied (:func:`export_netcdf`) or checked.
