@@ -267,7 +267,7 @@ def stiffness_at_rest(block, foundation):
     """``K(0)`` [N m/rad] ``= (2/3) b^3 k - m g h + 2 eps k b^3 z0^2``."""
     z0 = rest_indentation(block, foundation)
     b, k = block.b, foundation.k
-    return 2.0 / 3.0 * b**3 * k - block.m * block.g * block.h + 2.0 * foundation.eps * k * b**3 * z0 * z0
+    return contact.linear_rocking_stiffness(block, foundation) + 2.0 * foundation.eps * k * b**3 * z0 * z0
 
 
 #: Per-point parameters of the compiled twins (SI units): block, bed (the law's damping weights),

@@ -81,6 +81,7 @@ from screening.condensation.base import Condensation, MomentKernel, SdofKernel
 from screening.condensation.registry import register
 from screening.condensation.uplift_integrals import coefficient_table, gaussian_uplift_integrals, uplift_integrals_q
 from screening.kernels.signatures import FMA, moment_coefficients_signature, sdof_coefficients_signature
+from screening.physics.contact import linear_rocking_stiffness
 
 __all__ = ["uplift_threshold", "static_indentation", "damping_inner_parts", "damping_inner", "rocking_damping",
            "rocking_stiffness", "restoring_moment", "SDOF_RECORD", "sdof_record", "damping_stiffness_jit",
@@ -287,7 +288,7 @@ class PaperCondensation(Condensation):
 
     def stiffness_at_rest(self, block, foundation):
         e0 = (block.m * block.g) ** 2 * block.b / foundation.k
-        return 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h + 0.5 * foundation.eps * e0
+        return linear_rocking_stiffness(block, foundation) + 0.5 * foundation.eps * e0
 
     def equivalent_coefficients(self, sigma_theta, cov_over_sigma, block, foundation):
         return equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation)
