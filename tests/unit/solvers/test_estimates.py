@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from screening.solvers.estimates import Z, binomial_estimate, sample_probabilities
+from screening.solvers.estimates import binomial_estimate, sample_probabilities
 
 
 def test_sample_probabilities_equal_a_direct_count_on_synthetic_peaks():
