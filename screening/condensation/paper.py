@@ -142,7 +142,7 @@ def rocking_stiffness(theta, block, foundation):
     m, g, b, h, k, eps = block.m, block.g, block.b, block.h, foundation.k, foundation.eps
     mg = m * g
     tu = uplift_threshold(block, foundation)
-    k1 = 2.0 / 3.0 * b**3 * k - mg * h + eps * (mg**2 * b / (2.0 * k) + 0.4 * k * b**5 * theta**2)
+    k1 = linear_rocking_stiffness(block, foundation) + eps * (mg**2 * b / (2.0 * k) + 0.4 * k * b**5 * theta**2)
     with np.errstate(divide="ignore", invalid="ignore"):
         k2 = (mg * (b / a - np.sqrt(2.0 * mg * k) / (3.0 * k) * a**-1.5 - h)
               + eps * (mg**2 * b / k - mg**2 / (5.0 * k) * np.sqrt(2.0 * mg / k) * a**-0.5))
@@ -173,7 +173,7 @@ def sdof_record(block, foundation):
     rec["C1"] = 2.0 / 3.0 * w_rate * b**3 + w_ind * b * b * mg / (3.0 * k)
     rec["C2_rate"] = w_rate / 12.0 * (2.0 * mg / k) ** 1.5            # x |theta|^-3/2
     rec["C2_indentation"] = w_ind * b / 12.0 * (2.0 * mg / k) ** 1.5  # x |theta|^-1/2
-    rec["K1_0"] = 2.0 / 3.0 * b**3 * k - mg * h + eps * mg * mg * b / (2.0 * k)
+    rec["K1_0"] = float(linear_rocking_stiffness(block, foundation)) + eps * mg * mg * b / (2.0 * k)
     rec["K1_2"] = eps * 0.4 * k * b**5
     rec["MGB"] = mg * b
     rec["K2_32"] = mg * math.sqrt(2.0 * mg * k) / (3.0 * k)
