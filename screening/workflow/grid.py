@@ -22,7 +22,7 @@ from screening.workflow.study import build_models, build_point_models
 
 __all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
            "default_batch_size", "plan_batches", "hyperslabs", "batch_values", "point_values", "batch_models",
-           "batch_point_models", "select_spots", "parameter_table"]
+           "batch_point_models", "select_spots", "parameter_table", "history_chunks"]
 
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
 DEFAULT_BATCH = 500
@@ -251,3 +251,11 @@ def parameter_table(study):
         else:
             case_labels[name] = col
     return constants, per_case, labels, case_labels
+
+
+def history_chunks(shape, nt):
+    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values)."""
+    if not shape:
+        return (nt,)
+    last = min(shape[-1], max(1, 2**18 // nt))
+    return (1,) * (len(shape) - 1) + (last, nt)

@@ -53,7 +53,7 @@ from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSI
                                           PROBABILITY_FLOATS, ROCKING_FLOATS,
                                           SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, SUMMARY_VARIABLES,
                                           TRUST_FLOATS)
-from screening.workflow.grid import hyperslabs, parameter_table
+from screening.workflow.grid import history_chunks, hyperslabs, parameter_table
 
 __all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "POINT_VARIABLES",
            "SUMMARY_VARIABLES", "check_output_path", "result_attributes", "band_limit_attribute",
@@ -170,14 +170,6 @@ def relative_peak_error(linear, mcs):
         return math.nan
     ref = np.nanmax(mcs)
     return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan
-
-
-def history_chunks(shape, nt):
-    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values)."""
-    if not shape:
-        return (nt,)
-    last = min(shape[-1], max(1, 2**18 // nt))
-    return (1,) * (len(shape) - 1) + (last, nt)
 
 
 def point_chunks(shape, target=POINT_CHUNK):
