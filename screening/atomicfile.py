@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from pathlib import Path
+
+__all__ = ["temporary_beside", "publish", "atomic_path", "atomic_open", "open_nofollow", "create_new"]
 
 
 def temporary_beside(path, suffix=""):
@@ -49,3 +52,25 @@ def atomic_open(path, mode="w", **kwargs):
     """``open(path, mode, **kwargs)`` for writing, atomically (:func:`atomic_path`)."""
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
         yield fh
+
+
+def open_nofollow(path, flags, mode=0o600):
+    """``os.open`` that never follows a symbolic link at ``path`` and only accepts a regular file
+    (a FIFO or device planted there is refused, without blocking)."""
+    fd = os.open(path, flags | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, mode)
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(0, f"{path} is not a regular file")
+        os.set_blocking(fd, True)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def create_new(path):
+    """A new file at ``path`` for writing (whatever was there, link or file, is removed first, the
+    new one created with ``O_EXCL``): a planted link cannot redirect the write."""
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(path)
+    return os.fdopen(open_nofollow(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb")

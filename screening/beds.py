@@ -27,6 +27,10 @@ import math
 
 import numpy as np
 
+__all__ = ["TYPICAL", "oedometric_modulus", "pad_compression_modulus", "layer_stiffness", "hunt_crossley_lambda",
+           "c_from_vertical_damping", "lam_from_vertical_damping", "restitution_from_damping_ratio",
+           "fit_backbone", "bed_summary", "format_bed_summary"]
+
 #: Indicative material ranges (SI), see docs/beds.md for the sources and caveats.
 TYPICAL = {
     "lime mortar": {"E": (0.5e9, 5e9), "nu": (0.15, 0.25), "zeta_v": (0.02, 0.05)},
@@ -124,10 +128,10 @@ def bed_summary(block, foundation):
     full contact), ``vertical_damping_ratio`` [1] and ``rocking_damping_ratio`` [1] (full contact, at
     the static indentation)."""
     from screening import condensation as condensations
-    from screening.physics.contact import rest_indentation
+    from screening.physics.contact import linear_rocking_stiffness, rest_indentation
     from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-    m, b, h, g = float(block.m), float(block.b), float(block.h), float(block.g)
+    m, b = float(block.m), float(block.b)
     k = float(foundation.k)
     z_st = rest_indentation(block, foundation)
     wv = vertical_frequency(block, foundation)
@@ -135,7 +139,7 @@ def bed_summary(block, foundation):
     w_rate, w_ind = (float(w) for w in foundation.damping_weights)
     damping_at_rest = w_rate + w_ind * z_st              # zdot (w_rate + w_ind z) at z = z_st
     c_v, c_r = 2.0 * b * damping_at_rest, 2.0 / 3.0 * damping_at_rest * b**3
-    k_r = 2.0 / 3.0 * b**3 * k - m * g * h
+    k_r = float(linear_rocking_stiffness(block, foundation))
     try:
         exact = float(condensations.get("cubic").uplift_threshold(block, foundation))
     except ValueError:

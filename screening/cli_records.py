@@ -1,4 +1,4 @@
-"""Commands of the engineer-facing record tools, registered on :data:`screening.cli.cli`.
+"""Commands of the engineer-facing record tools, registered on the group :data:`screening.cli_base.cli`.
 
 ``screening simulate RECORD --study STUDY.toml --out RESULT.nc`` — deterministic response of the
 study's block on its bed to one record (netCDF + PNG).
@@ -12,9 +12,13 @@ import click
 
 from screening.atomicfile import atomic_path
 from screening.solvers import mc_registry
-from screening.cli import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, _Choice, _not_with, _say,
-                           _stem, _write_error, announce_compilation, cli, fragility_figures, lognormal_fit_text,
-                           fit_files, stamp_fragility, write_file_set, write_fragility_files)
+from screening.cli_base import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, _Choice, _not_with, _say,
+                                _stem, _write_error, announce_compilation, cli, fragility_figures,
+                                lognormal_fit_text, fit_files, stamp_fragility, write_file_set,
+                                write_fragility_files)
+
+__all__ = ["SERIAL_RECORDS", "UNITS_HELP", "cmd_simulate", "fragility_over_im_command", "cmd_fit_excitation",
+           "cmd_cloud"]
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -126,7 +130,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 
     if period is not None:
         from screening.validation import check_scalar
-        from screening.workflow import limits
+        from screening import limits
 
         low, high = limits.SA_PERIOD_RANGE
         try:

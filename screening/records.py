@@ -44,7 +44,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from screening.validation import input_path, read_input_text
-from screening.workflow import limits
+from screening import limits
+
+__all__ = ["STANDARD_GRAVITY", "UNITS", "Record", "VERTICAL_NOT_USED", "check_time_step", "check_scale",
+           "unit_factor", "read_at2", "read_text_record", "read_two_column", "read_single_column", "read_record",
+           "expand_records", "write_at2"]
 
 #: Standard gravity [m/s2] used to convert records given in g.
 STANDARD_GRAVITY = 9.80665

@@ -6,6 +6,8 @@ registered ones (``parameter '<axis>' must be one of (...) (got ...)``).
 
 from __future__ import annotations
 
+__all__ = ["NamedModel", "Registry"]
+
 
 class NamedModel:
     """Mixin of the registered model objects (condensations, contact laws): equal when of the same class

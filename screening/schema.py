@@ -13,7 +13,13 @@ import numpy as np
 
 from screening import excitations, laws
 from screening.status import (BestMethod, ContactRegime, EscalationModel, FitFlag, PointStatus, SampleState, SpotStatus,
-                              TargetMet, Trust, flag_attributes)
+                              TargetMet, Trust, flag_attributes, probability_sources)
+
+__all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
+           "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
+           "probability_source_attributes", "TRADEOFF", "SIMULATION", "INTENSITY", "SWEEP", "SWEEP_INPUTS",
+           "CLOUD", "TRUST_CALIBRATION", "COORDINATES", "PRESSURE_PARAMETERS", "grid_coordinate_attributes",
+           "cdo_threshold_attributes", "attributes", "global_attributes", "apply_schema"]
 
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"
@@ -206,10 +212,11 @@ PROBABILITIES = {
 
 def probability_source_attributes():
     """CF flag attributes of ``p_source``: one value per source, a Monte Carlo model's from the models
-    :func:`screening.monte_carlo` knows (read when asked: the solvers import this module)."""
-    from screening.analysis.probabilities import source_codes
+    :func:`screening.monte_carlo` knows (the Monte Carlo registry and its compiled models are
+    loaded when asked, not when the schema is)."""
+    from screening.solvers import mc_registry
 
-    codes = sorted(source_codes().items(), key=lambda item: item[1])
+    codes = sorted(probability_sources(mc_registry.names()).items(), key=lambda item: item[1])
     return {"units": "1", "long_name": "model that produced p_overturn and p_exceed at the point",
             "flag_values": np.array([c for _, c in codes], dtype=np.int8),
             "flag_meanings": " ".join(name for name, _ in codes)}

@@ -11,6 +11,9 @@ import stat
 import numpy as np
 import xarray as xr
 
+__all__ = ["NOT_NUMBERS", "as_checked_array", "check_scalar", "check_integer", "check_size", "checked",
+           "InputFileError", "file_problem", "input_path", "read_input_bytes", "read_input_text"]
+
 
 #: numpy dtype kinds that are not real numbers although ``float()`` accepts some of them: booleans,
 #: dates, durations, strings, bytes, complex and structured values.
@@ -50,7 +53,7 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
     if upper is not None:
         bad |= (arr > upper) if upper_inclusive else (arr >= upper)
     if np.any(bad):
-        shown = arr[bad].flat[0] if arr.ndim else float(arr)
+        shown = float(arr[bad].flat[0]) if arr.ndim else float(arr)
         raise ValueError(f"parameter '{name}' must be {range_text} (got {shown!r})")
     return arr
 

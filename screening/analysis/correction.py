@@ -25,6 +25,10 @@ import numpy as np
 
 from screening.status import BestMethod, EscalationModel, PointStatus, Trust
 
+__all__ = ["NEIGHBOURS", "MIN_POINTS", "MAX_SE", "NOISE_FLOOR", "DISTANCE_FLOOR", "REACH", "Correction",
+           "point_features", "fit_correction", "predict_correction", "linearization_promises", "within_band",
+           "best_estimates"]
+
 #: Numbers of neighbours tried by the leave-one-out choice.
 NEIGHBOURS = (1, 2, 3, 4, 6, 8)
 #: A correction needs at least this many escalated points (fewer: no correction anywhere).

@@ -29,6 +29,11 @@ from screening.analysis.correction import linearization_promises
 from screening.analysis.trust import bed_law, p_bin, regime
 from screening.status import EscalationModel, PointStatus
 
+__all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "MAIN_SHARE", "STEP_COST_S", "GRID_COST_S", "RODAS_STEP_FACTOR",
+           "PRIOR_STEPS_PER_S", "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MIN_COVER", "MIN_CONDENSED_ROWS",
+           "escalation_candidates", "cover_points", "condensed_cells", "escalation_model", "samples_needed",
+           "meets_target", "estimated_cost", "prior_cost", "affordable_points"]
+
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
 PILOT_SAMPLES = 64
 #: Samples from the pilot's standard error are multiplied by this: a small pilot underestimates the

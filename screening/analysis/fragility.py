@@ -42,6 +42,14 @@ from screening.model.block import Block
 from screening.solvers.datasets import finish
 from screening.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
 
+__all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "exceedance_probability_from_moments",
+           "mcs_exceedance_probability", "lognormal_fragility", "binomial_nll", "fit_binomial_fragility",
+           "total_dispersion", "with_modelling_dispersion", "fit_lognormal_fragility", "parameter",
+           "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
+           "sample_exceedance", "exceedance_probability", "fit_fragility_curve", "fit_curves", "unvouched_points",
+           "fitted_probability", "add_fit", "grid_units_of", "fragility_curve", "RockingAccessor",
+           "spot_positions", "mcs_exceedance_at_spots", "best_exceedance", "fragility_dataset"]
+
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
 
 

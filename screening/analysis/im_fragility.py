@@ -38,6 +38,10 @@ from screening.analysis.fragility import model_quantity, parameter
 from screening.atomicfile import atomic_open
 from screening.status import FitFlag
 
+__all__ = ["IMS", "default_dim", "fragility_over_im", "LIMIT_STATES", "THRESHOLD_FREE", "NoExport",
+           "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text", "write_csv",
+           "write_pelicun_csv", "nrml_parameters", "write_nrml"]
+
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
 IMS = {
     "pga": ("pga_median", "m s-2", "PGA", 1.0 / 9.80665),

@@ -66,6 +66,14 @@ from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, 
 from screening.solvers.synthesis import envelope_rate
 from screening.validation import checked
 
+__all__ = ["MEASURES", "RECORD_MEASURES", "PERIOD_MEASURES", "GROUND_BAND_LIMIT_HZ", "G", "N_TIMES",
+           "CHUNK_POINTS", "ground_cutoff", "spectral_moments", "rms_acceleration", "arias_intensity",
+           "median_peak", "input_moments", "pga_median", "rocking_start_probability", "CROSSING_STEP",
+           "CROSSING_EXTENT", "oscillator_covariance", "sa_median", "s0_for_pga", "input_measures",
+           "intensity_measures", "oscillator_peak", "record_measures", "OMEGA_LOW", "AVGSA_N_PERIODS",
+           "AVGSA_RANGE", "highpass_gain", "velocity_spectral_moments", "envelope_exponentials",
+           "velocity_covariance", "pgv_median", "avgsa_periods", "avgsa_median", "record_velocity", "record_avgsa"]
+
 #: Names of the measures (data variables of :func:`intensity_measures`) and their units.
 MEASURES = {"pga_median": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1", "sa_median": "m s-2",
             "pgv_median": "m s-1", "avgsa_median": "m s-2"}

@@ -58,6 +58,10 @@ from screening.solvers.timegrid import output_times
 from screening.status import PointStatus
 from screening.workflow.config import StudyError, build_models
 
+__all__ = ["round_significant", "calibrate_intensity", "Point", "build_points", "point_models", "time_call",
+           "solve_sl", "run_sl", "run_mcs", "warm_up", "set_threads", "measure_grid", "grid_errors",
+           "measure_convergence", "measure_sl_numerics", "build_dataset", "run_tradeoff", "rerender_reports"]
+
 
 # ============================================================================ model set-up
 def round_significant(x, digits=3):

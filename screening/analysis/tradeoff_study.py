@@ -23,6 +23,9 @@ from screening.workflow.config import (EXCITATIONS, NUMERIC, TABLE_KEYS, Case, S
                                        read_study_text, required, resolve_case, table, time_table,
                                        title_and_description, type_name)
 
+__all__ = ["METHODS", "MCS_MODELS", "COMPARISONS", "QUANTITIES", "MODEL_KEYS", "Family", "TradeoffStudy",
+           "load_tradeoff_study", "parse_tradeoff_study"]
+
 #: The methods compared: stochastic linearization and Monte Carlo on the condensed / coupled model.
 METHODS = ("sl", "condensed_mcs", "coupled_mcs")
 MCS_MODELS = ("condensed", "coupled")

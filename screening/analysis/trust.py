@@ -59,6 +59,12 @@ import xarray as xr
 from screening.model.excitation import Envelope
 from screening.status import PointStatus, Trust
 
+__all__ = ["ENVELOPE_FLOOR", "P_EDGES", "DECAY_LIMIT", "SIGMA_LIMIT", "MARGIN_LIMIT", "TRUSTED_ERROR",
+           "TRUSTED_BAND", "UNTRUSTED_ERROR", "N_SE", "MIN_ROWS", "OVERTURN_LIMIT", "BED_LAWS", "CONDENSATIONS",
+           "INDICATORS", "OVERRIDES", "CALIBRATION_FILE", "bed_law", "envelope_fraction", "trust_indicators",
+           "indicators_from_dataset", "error_of", "p_bin", "regime", "calibration_rows", "trust_table",
+           "shipped_table", "shipped_calibration", "sl_trust", "trust_attributes", "add_trust"]
+
 #: Floor of the envelope's late fraction q(t_end)^2 / max q^2 (avoids dividing by ~0).
 ENVELOPE_FLOOR = 1e-12
 #: Edges of the peak p_uplift bins of the cells.

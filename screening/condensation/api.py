@@ -13,6 +13,9 @@ import numpy as np
 from screening.condensation.registry import get
 from screening.condensation.uplift_integrals import gaussian_uplift_integrals
 
+__all__ = ["uplift_threshold", "rocking_damping", "rocking_stiffness", "restoring_moment", "rocking_acceleration",
+           "equivalent_coefficients", "equivalent_coefficients_from_moments", "uplift_probability"]
+
 
 def uplift_threshold(block, foundation, condensation="paper"):
     """Uplift threshold ``theta_ul`` [rad] (eq. 19 for ``"paper"``)."""

@@ -12,39 +12,13 @@ Method and how it is checked: ``docs/method.md#quasi-static-condensation``.
 from __future__ import annotations
 
 import abc
-from typing import NamedTuple
 
 import numpy as np
 
+from screening.kernels.signatures import MomentKernel, SdofKernel
 from screening.registry import NamedModel
 
-
-class SdofKernel(NamedTuple):
-    """What the compiled Monte Carlo integrator needs of a condensation (condensed model).
-
-    ``damping_stiffness``: compiled ``(record, theta) -> (C, K)`` (signature
-    :func:`screening.kernels.signatures.sdof_coefficients_signature`); ``record``: a 1-element
-    structured array of its parameters.
-    """
-
-    damping_stiffness: object
-    record: np.ndarray
-
-
-class MomentKernel(NamedTuple):
-    """What the compiled moment solver needs of a condensation, for a batch of points.
-
-    ``coefficients``: compiled ``(record, table, var_theta, cov) -> (c_eq, k_eq)``
-    (signature :func:`screening.kernels.signatures.moment_coefficients_signature`); ``records``: one
-    structured record per point; ``tables``: ``(n_tables, rows, columns)``, each a table of
-    per-interval cubic coefficients (:func:`screening.kernels.interpolation.cubic_coefficients`);
-    ``table_index``: the table of each point.
-    """
-
-    coefficients: object
-    records: np.ndarray
-    tables: np.ndarray
-    table_index: np.ndarray
+__all__ = ["Condensation", "MomentKernel", "SdofKernel"]
 
 
 class Condensation(NamedModel, abc.ABC):

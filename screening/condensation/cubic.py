@@ -112,6 +112,11 @@ from screening.physics.contact import linear_indentation, rising_root
 from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
+__all__ = ["SOFTENING_LIMIT", "bearing_load", "check_bearing", "rest_indentation", "uplift_threshold",
+           "capacity_angle", "in_equilibrium", "quasi_static_indentation", "rocking_damping", "rocking_stiffness",
+           "restoring_moment", "damping_at_rest", "stiffness_at_rest", "SDOF_RECORD", "sdof_record",
+           "quasi_static_indentation_jit", "damping_stiffness_jit", "CubicCondensation", "CUBIC"]
+
 #: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
 SOFTENING_LIMIT = 2.0 / 27.0
 
@@ -262,7 +267,7 @@ def stiffness_at_rest(block, foundation):
     """``K(0)`` [N m/rad] ``= (2/3) b^3 k - m g h + 2 eps k b^3 z0^2``."""
     z0 = rest_indentation(block, foundation)
     b, k = block.b, foundation.k
-    return 2.0 / 3.0 * b**3 * k - block.m * block.g * block.h + 2.0 * foundation.eps * k * b**3 * z0 * z0
+    return contact.linear_rocking_stiffness(block, foundation) + 2.0 * foundation.eps * k * b**3 * z0 * z0
 
 
 #: Per-point parameters of the compiled twins (SI units): block, bed (the law's damping weights),

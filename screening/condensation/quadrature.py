@@ -58,10 +58,14 @@ import math
 import numba
 import numpy as np
 
-from screening.condensation.base import MomentKernel
 from screening.kernels.interpolation import cubic, cubic_coefficients
-from screening.kernels.signatures import FMA, moment_coefficients_signature
+from screening.kernels.signatures import FMA, MomentKernel, moment_coefficients_signature
 from screening.model.points import flatten, point_key, select
+
+__all__ = ["T_LO", "STEPS_PER_UNIT", "GAUSS_ORDER", "J_INNER", "SIGMA_SPAN", "theta_quadrature",
+           "gaussian_expectations", "expectations", "table_size", "node_values", "coefficient_table",
+           "coefficient_tables", "RECORD", "moment_kernel", "table_lookup", "table_lookup_grid",
+           "equivalent_coefficients_jit", "equivalent_coefficients"]
 
 #: Table grid in t = ln(sigma_theta / theta_ul).
 T_LO = -12.0

@@ -6,6 +6,8 @@ from __future__ import annotations
 from screening.condensation.base import Condensation
 from screening.registry import Registry
 
+__all__ = ["unregister", "names", "get", "register"]
+
 _REGISTRY = Registry("condensation", lambda item: isinstance(item, Condensation))
 
 #: Remove a registered condensation (tests that register their own).

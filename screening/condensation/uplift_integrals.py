@@ -27,6 +27,10 @@ from scipy import special
 
 from screening.kernels.interpolation import cubic, cubic_coefficients, octave_first, octave_grid, octave_position_jit
 
+__all__ = ["X_LIMIT", "gaussian_uplift_integrals", "Q_OCTAVE_LO", "Q_OCTAVE_HI", "MANTISSA_BITS", "FIRST",
+           "N_INTERVALS", "R_LO", "R_HI", "P_IN", "TAIL_M12", "TAIL_M32", "P32", "N_FUNCS", "node_values",
+           "coefficient_table", "uplift_integrals", "uplift_integrals_q"]
+
 #: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
 X_LIMIT = 700.0
 

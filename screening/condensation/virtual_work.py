@@ -60,6 +60,8 @@ from screening.condensation.base import Condensation, SdofKernel
 from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
+__all__ = ["rocking_damping", "damping_stiffness_jit", "VirtualWorkCondensation", "VIRTUAL_WORK"]
+
 
 def rocking_damping(theta, block, foundation):
     """Energy-consistent rocking damping ``C(theta)`` [N m s/rad] (module docstring).

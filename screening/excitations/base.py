@@ -24,6 +24,8 @@ from scipy import integrate
 
 from screening.validation import checked
 
+__all__ = ["Parameter", "Filter", "transfer_psd", "stationary_covariance", "Excitation"]
+
 
 class Parameter(NamedTuple):
     """A numeric parameter of an excitation (besides ``S0``): its CF attributes and allowed range

@@ -25,6 +25,8 @@ from screening.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_psd
 from screening.excitations.registry import register
 from screening.model.excitation import ConstantEnvelope, Envelope
 
+__all__ = ["clough_penzien_filter", "clough_penzien_psd", "CloughPenzien"]
+
 
 def clough_penzien_filter(omega_g, zeta_g, omega_f, zeta_f):
     """State-space matrices ``(A, B, C, D)`` of the Clough–Penzien filter, states ``(u, u', v, v')``.

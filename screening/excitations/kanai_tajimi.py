@@ -13,6 +13,9 @@ from screening.excitations.base import Excitation, Filter, Parameter
 from screening.excitations.registry import register
 from screening.model.excitation import ConstantEnvelope, Envelope
 
+__all__ = ["kanai_tajimi_filter", "kanai_tajimi_psd", "KanaiTajimi", "kanai_tajimi_stationary_moments",
+           "stationary_filter_moments_jit"]
+
 
 def kanai_tajimi_filter(omega_g, zeta_g):
     """State-space matrices of the Kanai–Tajimi filter, states ``(u [m s], u' [m])`` for ``w`` in m/s^2.

@@ -6,6 +6,8 @@ from __future__ import annotations
 from screening.excitations.base import Excitation
 from screening.registry import Registry
 
+__all__ = ["register", "unregister", "names", "get", "parameters", "build"]
+
 _REGISTRY = Registry("kind")
 
 

@@ -10,6 +10,8 @@ from screening.excitations.base import Excitation, Filter
 from screening.excitations.registry import register
 from screening.model.excitation import ConstantEnvelope, Envelope
 
+__all__ = ["WhiteNoise"]
+
 
 @register
 @dataclass(frozen=True)

@@ -14,6 +14,8 @@ import os
 import sys
 from pathlib import Path
 
+__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation"]
+
 _PACKAGE = Path(__file__).resolve().parents[1]
 
 #: ``(module path, function)`` of the kernels compiled on a first run: the moment solver and the

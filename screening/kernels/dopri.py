@@ -19,6 +19,12 @@ import math
 import numba
 import numpy as np
 
+__all__ = ["A", "C", "B", "E", "P", "FAC_MIN", "FAC_MAX", "SAFETY", "ALPHA", "BETA", "REJECT_EXPONENT",
+           "LOG_ERR_START", "ERR_FLOOR", "dense_output", "rejected_step_factor", "accepted_step_factor",
+           "accepted_step_factor_log", "pi_step_factor", "rejected_step_factor_log", "C2", "C3", "C4", "C5", "A21",
+           "A31", "A32", "A41", "A42", "A43", "A51", "A52", "A53", "A54", "A61", "A62", "A63", "A64", "A65", "B1",
+           "B3", "B4", "B5", "B6", "E1", "E3", "E4", "E5", "E6", "E7", "dense_weights", "dense_value"]
+
 #: Stage coefficients a_sq (rows: stages 2..6).
 A = np.array([
     [0.0, 0, 0, 0, 0],

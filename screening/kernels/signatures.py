@@ -1,4 +1,5 @@
-"""Numba types of the functions a condensation hands to the compiled solvers.
+"""Numba types of the functions a condensation hands to the compiled solvers, and the records
+(:class:`SdofKernel`, :class:`MomentKernel`) that carry them.
 
 A condensation's compiled functions take its own parameter record (a numpy structured dtype,
 one record per parameter point) and are passed to the solvers as first-class functions with
@@ -8,8 +9,14 @@ closure or a dispatcher argument would never hit numba's cache).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
+import numpy as np
 from numba import types
+
+__all__ = ["FMA", "FLOAT", "TABLE", "record_type", "moment_coefficients_signature", "sdof_coefficients_signature",
+           "function_type", "SdofKernel", "MomentKernel"]
 
 #: Floating-point flags of the moment solver's step loops and the coefficient functions they call:
 #: LLVM may fuse a multiply and an add into one FMA instruction where the CPU has one (shorter
@@ -39,3 +46,31 @@ def sdof_coefficients_signature(dtype):
 def function_type(signature):
     """The first-class function type of a compiled function with ``signature``."""
     return types.FunctionType(signature)
+
+
+class SdofKernel(NamedTuple):
+    """What the compiled Monte Carlo integrator needs of a condensation (condensed model).
+
+    ``damping_stiffness``: compiled ``(record, theta) -> (C, K)`` (signature
+    :func:`screening.kernels.signatures.sdof_coefficients_signature`); ``record``: a 1-element
+    structured array of its parameters.
+    """
+
+    damping_stiffness: object
+    record: np.ndarray
+
+
+class MomentKernel(NamedTuple):
+    """What the compiled moment solver needs of a condensation, for a batch of points.
+
+    ``coefficients``: compiled ``(record, table, var_theta, cov) -> (c_eq, k_eq)``
+    (signature :func:`screening.kernels.signatures.moment_coefficients_signature`); ``records``: one
+    structured record per point; ``tables``: ``(n_tables, rows, columns)``, each a table of
+    per-interval cubic coefficients (:func:`screening.kernels.interpolation.cubic_coefficients`);
+    ``table_index``: the table of each point.
+    """
+
+    coefficients: object
+    records: np.ndarray
+    tables: np.ndarray
+    table_index: np.ndarray

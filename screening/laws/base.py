@@ -21,6 +21,8 @@ import numpy as np
 
 from screening.registry import NamedModel
 
+__all__ = ["DAMPING_FIELDS", "ContactLaw"]
+
 #: Damping fields of :class:`screening.model.Foundation` a law may take its coefficient from.
 DAMPING_FIELDS = ("lam", "c")
 

@@ -11,6 +11,8 @@ import numpy as np
 from screening.laws.base import ContactLaw
 from screening.laws.registry import register
 
+__all__ = ["hunt_crossley_damping", "HuntCrossley", "HUNT_CROSSLEY"]
+
 
 def hunt_crossley_damping(z, z_dot, lam):
     """Hunt–Crossley damping pressure ``lam z zdot`` [N/m] (eq. 4).

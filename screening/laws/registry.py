@@ -8,6 +8,8 @@ import numpy as np
 from screening.laws.base import DAMPING_FIELDS, ContactLaw
 from screening.registry import Registry
 
+__all__ = ["register", "unregister", "names", "get", "parameters"]
+
 _REGISTRY = Registry("law", lambda item: isinstance(item, ContactLaw))
 
 

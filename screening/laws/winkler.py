@@ -11,6 +11,8 @@ import numpy as np
 from screening.laws.base import ContactLaw
 from screening.laws.registry import register
 
+__all__ = ["winkler_damping", "Winkler", "WINKLER"]
+
 
 def winkler_damping(z, z_dot, c):
     """Winkler (linear dashpot) damping pressure ``c zdot`` [N/m].

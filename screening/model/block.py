@@ -11,6 +11,8 @@ import numpy as np
 
 from screening.validation import checked
 
+__all__ = ["LENGTH_RANGE", "Block"]
+
 
 #: Half-width ``b`` and height ``h`` [m] a block may have: a micrometre to a kilometre.  Far beyond, the
 #: condensation's ``b^2`` and ``b^3`` leave float64 (``b <= ~1e-162``: the uplift threshold divides by

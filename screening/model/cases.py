@@ -10,6 +10,8 @@ from __future__ import annotations
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
 from screening.model import Block, Foundation
 
+__all__ = ["PAPER_BLOCK", "PAPER_BED", "PAPER_CASES", "paper_case"]
+
 PAPER_BLOCK = dict(m=8.67, b=0.035, h=0.21)
 PAPER_BED = dict(k=2.89e7, lam=8.95e8)
 

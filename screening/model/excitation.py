@@ -17,6 +17,8 @@ import numpy as np
 
 from screening.validation import checked
 
+__all__ = ["ENVELOPE_CODES", "Envelope", "ConstantEnvelope"]
+
 #: Integer codes of the envelope kinds, as the compiled solvers see them.
 ENVELOPE_CODES = {"exponential": 0, "constant": 1}
 

@@ -19,6 +19,8 @@ from screening import laws
 from screening.laws.base import DAMPING_FIELDS
 from screening.validation import checked
 
+__all__ = ["Foundation", "contact_pressure"]
+
 
 def __getattr__(name):
     if name == "CONTACT_LAWS":                       # the registered laws, at the time of asking

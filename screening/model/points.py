@@ -13,6 +13,8 @@ import functools
 
 import numpy as np
 
+__all__ = ["numeric_fields", "broadcast_shape", "flatten", "select", "point_key"]
+
 
 @functools.lru_cache(maxsize=None)
 def _field_names(cls):

@@ -84,6 +84,12 @@ import numpy as np
 
 from screening.status import ContactRegime
 
+__all__ = ["linear_rocking_stiffness", "REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
+           "REGIME_NAMES", "foundation_constants", "law_constants", "corner_indentations", "contact_regime",
+           "contact_length", "contact_resultants", "law_resultants", "linear_indentation", "rising_root",
+           "rest_indentation", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
+           "law_resultants_trig_jit"]
+
 #: Integer codes of the contact regimes returned by :func:`contact_regime`.
 REGIME_FULL_CONTACT = int(ContactRegime.full_contact)
 REGIME_UPLIFT_POSITIVE = int(ContactRegime.uplift_positive)
@@ -215,6 +221,24 @@ def law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indent
 def linear_indentation(block, foundation):
     """Static indentation of the base centre by the linear law alone, ``z_lin = m g / (2 b k)`` [m] (eq. 17)."""
     return block.m * block.g / (2.0 * block.b * foundation.k)
+
+
+def linear_rocking_stiffness(block, foundation):
+    """Rocking stiffness at rest without the cubic term, ``K0 - m g h = (2/3) b^3 k - m g h`` [N m/rad].
+
+    Parameters
+    ----------
+    block : the rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]).
+    foundation : the bed (``k`` [N m-2]).
+
+    Notes
+    -----
+    ``K(0)`` of every condensation at ``eps = 0`` (eqs. 22 and 25 at ``theta = 0``): the bed's
+    restoring moment ``(2/3) b^3 k theta`` in full contact less the overturning moment of the
+    weight ``m g h theta``.  A condensation adds its own ``eps`` term; the block rocks about its
+    rest position only where this is positive.
+    """
+    return 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h
 
 
 def rising_root(alpha, beta, rhs, max_iter=100):

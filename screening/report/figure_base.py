@@ -21,6 +21,11 @@ from matplotlib.patches import Patch
 
 from screening.status import PointStatus, Trust
 
+__all__ = ["DPI", "RESPONSES", "FLAGGED_HATCH", "UNTRUSTED_HATCH", "FLAGGED_COLOR", "UNTRUSTED_COLOR",
+           "point_flags", "flag_summary", "point_flag_text", "response_values", "flag_legend", "grid_dims",
+           "grid_values", "grid_units", "spot_index", "is_log_spaced", "point_label", "new_figure", "save_figure",
+           "axis_label"]
+
 DPI = 110
 
 #: How the rotation response is drawn: its variance, its standard deviation, or that as a fraction

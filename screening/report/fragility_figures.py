@@ -13,6 +13,8 @@ from screening.report.figure_base import (
     point_flags, point_label, save_figure)
 from screening.status import BestMethod
 
+__all__ = ["plot_fragility", "BEST_MARKERS"]
+
 
 def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     """Fragility curves: ``p_exceed`` of a :func:`screening.analysis.fragility.fragility_dataset` along

@@ -6,6 +6,8 @@ import numpy as np
 
 from screening.report.figure_base import new_figure, save_figure
 
+__all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit"]
+
 REGIME_LABELS = {0: "full contact", 1: "uplift +", 2: "uplift -", 3: "flight"}
 
 

@@ -15,6 +15,8 @@ import numpy as np
 from screening.report.figure_base import (
     axis_label, flag_summary, new_figure, point_flag_text, point_label, save_figure, spot_index)
 
+__all__ = ["plot_spots", "Z95", "MAX_SPOT_FIGURES", "spot_file_label", "plot_spot_panels", "SPOT_PANEL_HISTORIES"]
+
 def plot_spots(ds, path):
     """Linearization vs Monte Carlo at the spot points; ``None`` if the result has none.  The
     linearization's history is drawn where the result stores it (on the grid, or as ``spot_<name>``

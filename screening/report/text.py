@@ -6,6 +6,9 @@ import numpy as np
 
 from screening.status import BestMethod, PointStatus, SpotStatus, Trust
 
+__all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
+           "product_kind", "describe_product"]
+
 
 def _fmt(value):
     return f"{value:.4g}" if isinstance(value, (float, np.floating)) else str(value)

@@ -15,6 +15,8 @@ from screening.analysis.metrics import classify_error, rule_error
 from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
 from screening.report.figure_base import save_figure
 
+__all__ = ["DPI", "plot_error_vs_cost", "study_n", "plot_validity"]
+
 DPI = 130
 
 

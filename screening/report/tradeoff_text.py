@@ -17,6 +17,9 @@ from screening.analysis.tradeoff_study import COMPARISONS, METHODS, QUANTITIES
 from screening.atomicfile import atomic_open
 from screening.status import PointStatus
 
+__all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary", "markdown_report",
+           "summary_text"]
+
 
 def rule_text(rule, metric, quantity):
     """One-line statement of a rule from :func:`derive_rules`."""

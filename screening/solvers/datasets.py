@@ -22,8 +22,12 @@ import xarray as xr
 from screening import schema
 from screening.solvers import mc_registry
 from screening.model.points import numeric_fields
+from screening.solvers.estimates import sample_probabilities
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
+
+__all__ = ["LINEARIZATION_SUMMARIES", "MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
+           "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
 
 #: Per-point summaries of the linearization (beside ``status``).
 LINEARIZATION_SUMMARIES = ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "t_stop", "n_steps")
@@ -176,10 +180,8 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
 def with_probabilities(ds, thresholds=None):
     """A :func:`screening.monte_carlo` dataset with the probabilities of its samples: ``p_overturn`` and
     ``p_overturn_se`` [1], and with ``thresholds`` (rotations [rad]) ``p_exceed`` and ``p_exceed_se`` [1] on the
-    coordinate ``threshold`` [rad] (:func:`screening.analysis.probabilities.sample_probabilities` over the
+    coordinate ``threshold`` [rad] (:func:`screening.solvers.estimates.sample_probabilities` over the
     samples that did not diverge; overturned samples exceed every threshold)."""
-    from screening.analysis.probabilities import sample_probabilities
-
     levels = np.asarray(() if thresholds is None else thresholds, dtype=float)
     prob = sample_probabilities(ds["peak_abs_theta"].values, ds["overturned"].values, ~ds["diverged"].values, levels)
     data = {"p_overturn": ((), prob["p_overturn"]), "p_overturn_se": ((), prob["p_overturn_se"])}

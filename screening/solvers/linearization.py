@@ -22,6 +22,8 @@ from screening.solvers.datasets import linearization_dataset, model_fields, mode
 from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
 
+__all__ = ["METHOD", "labelled_fields", "broadcast_fields", "with_fields", "on_own_dims", "linearize"]
+
 METHOD = "stochastic linearization + Lyapunov moment equations"
 
 

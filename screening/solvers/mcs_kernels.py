@@ -34,6 +34,12 @@ from screening.kernels.signatures import function_type, record_type, sdof_coeffi
 from screening.physics.contact import law_resultants_trig_jit
 from screening.status import DivergenceReason, SampleStatus
 
+__all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "STATUS_OK", "STATUS_OVERTURNED", "STATUS_DIVERGED", "REASON_NONE",
+           "REASON_NONFINITE", "REASON_LONG_FLIGHT", "REASON_OUT_OF_BOUNDS", "REASON_STEP_UNDERFLOW",
+           "REASON_STEP_BUDGET", "REASON_NO_EQUILIBRIUM", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
+           "INTEGRATORS", "model_record", "coupled_accelerations", "condensed_acceleration", "integrate_sample",
+           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "chunk_integrator"]
+
 #: Which equations a sample integrates.
 MODEL_COUPLED = 0
 MODEL_CONDENSED = 1

@@ -34,6 +34,7 @@ import math
 
 import numba
 import numpy as np
+from scipy import special
 
 from screening.kernels import dopri
 from screening.kernels.dopri import (
@@ -41,6 +42,13 @@ from screening.kernels.dopri import (
     B1, B3, B4, B5, B6, C2, C3, C4, E1, E3, E4, E5, E6, E7, dense_value)
 from screening.kernels.signatures import FMA
 from screening.status import PointStatus
+
+__all__ = ["uplift_occupancy", "SCALE_FLOOR", "OK", "K_EQ_NEGATIVE", "BEYOND_SLENDERNESS", "STEP_BUDGET", "NON_FINITE",
+           "PEAK_HALVINGS", "envelope_rates", "envelope_state", "initial_gain", "stage_gains", "p_uplift",
+           "first_step", "trial_step", "judge_step", "end_of_step", "peak_in_step", "store_outputs",
+           "store_dense_outputs", "SUMMARIES", "solve_point_white", "packed_size", "augmented_system",
+           "lyapunov_rhs", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
+           "solve_point_two_states"]
 
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
 SCALE_FLOOR = 1e-300
@@ -103,9 +111,29 @@ def stage_gains(osc, e1, e2, h):
             g4 * (e1 * f1 - e2 * f2), f1, f2)
 
 
+def uplift_occupancy(theta_ul, var_theta):
+    """Uplift occupancy ``P(|theta| > theta_ul) = erfc(theta_ul / sqrt(2 var_theta))`` [1] (eq. 58).
+
+    Parameters
+    ----------
+    theta_ul : uplift angle [rad] (array-like).
+    var_theta : variance of the zero-mean Gaussian rotation [rad2] (broadcast with ``theta_ul``); 0 where
+        it is not positive.
+
+    Notes
+    -----
+    The numpy reference of the compiled :func:`p_uplift`, which the step loops evaluate at every
+    output instant; :mod:`screening.solvers.moments` applies it to the peak variance.
+    """
+    var_theta = np.asarray(var_theta, dtype=float)
+    with np.errstate(divide="ignore"):
+        return np.where(var_theta > 0, special.erfc(theta_ul / np.sqrt(2.0 * np.maximum(var_theta, 1e-300))), 0.0)
+
+
 @numba.njit(cache=True, inline="always")
 def p_uplift(osc, var_theta):
-    """Uplift occupancy ``erfc(theta_ul / sqrt(2 var_theta))`` [1] (eq. 58)."""
+    """Uplift occupancy ``erfc(theta_ul / sqrt(2 var_theta))`` [1] (eq. 58): compiled twin of
+    :func:`uplift_occupancy`."""
     if var_theta <= 0.0:
         return 0.0
     return math.erfc(osc.theta_ul / math.sqrt(2.0 * var_theta))

@@ -35,16 +35,18 @@ import dataclasses
 import numba
 import numpy as np
 from numba import types
-from scipy.special import erfc
 
 from screening.condensation import get as get_condensation
 from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
 from screening.model.points import flatten, select
 from screening.solvers.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
-                                              solve_point_white)
+                                              solve_point_white, uplift_occupancy)
 from screening.status import PointStatus
 from screening.validation import check_integer, check_scalar, check_size
-from screening.workflow import limits
+from screening import limits
+
+__all__ = ["CHUNK", "DEFAULT_RTOL", "DEFAULT_MAX_STEPS", "OSCILLATOR", "HISTORY_VARIABLES", "SUMMARY_VARIABLES",
+           "oscillator_records", "FilterArrays", "in_float_range", "batch_solver", "solve_moments"]
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
 CHUNK = 256
@@ -289,8 +291,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
                hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], status[part], t_stop[part],
                n_steps[part], n_rejected[part], peak[part], t_peak[part], min_k[part])
     tu = osc["theta_ul"]
-    with np.errstate(divide="ignore"):
-        peak_p = np.where(peak > 0, erfc(tu / np.sqrt(2.0 * np.maximum(peak, 1e-300))), 0.0)
+    peak_p = uplift_occupancy(tu, peak)
     out = {name: a.reshape(shape + (nt,)) for name, a in hist.items()} if histories else {}
     out.update({
         "status": status.reshape(shape), "t_stop": t_stop.reshape(shape),

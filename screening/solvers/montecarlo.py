@@ -50,13 +50,16 @@ from screening.solvers.model_choice import resolve as resolve_model
 from screening.condensation import get as get_condensation
 from screening.excitations import Excitation, names as excitation_names
 from screening.physics.contact import rest_indentation
-from screening.workflow.progress import Progress
+from screening.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
                                          spectral_plan, stationary_samples, validate_seed, vertical_frequency)
 from screening.solvers.timegrid import output_times
 from screening.solvers.datasets import monte_carlo_dataset
 from screening.validation import check_integer, check_size
-from screening.workflow import limits
+from screening import limits
+
+__all__ = ["MODELS", "DEFAULT_RTOL", "DEFAULT_NUMERICS", "RODAS_DAMPING_RATIO", "check_scalar_models",
+           "vertical_damping_ratio", "choose_integrator", "initial_state", "ensemble_statistics", "monte_carlo"]
 
 #: The registered Monte Carlo models (:mod:`screening.solvers.mc_registry`).
 MODELS = mc_registry.names()

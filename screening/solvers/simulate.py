@@ -45,7 +45,9 @@ from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.montecarlo import check_scalar_models
 from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
 from screening.validation import check_integer, check_scalar
-from screening.workflow import limits
+from screening import limits
+
+__all__ = ["MAX_OVERTURN_RESOLUTION", "REGIME_NONE", "SIGN_CONVENTION", "simulation_times", "simulate"]
 
 #: Most sub-intervals on which the overturning time is located.
 MAX_OVERTURN_RESOLUTION = 100_000

@@ -40,6 +40,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from screening.physics.contact import linear_rocking_stiffness
+
+__all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
+           "default_cutoffs", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
+           "grid_points", "spectral_plan", "low_passed", "validate_seed", "sample_phases", "stationary_samples",
+           "ground_acceleration_samples", "ground_acceleration"]
+
 
 #: Default cutoff = CUTOFF_FACTOR x the larger of the rocking and vertical frequencies.
 CUTOFF_FACTOR = 3.0
@@ -53,7 +60,7 @@ def rocking_frequency(block, foundation):
     ``eps`` is ignored (it adds ``eps m^2 g^2 b / (2 k)`` to the stiffness).  Zero if the
     linear rocking stiffness is not positive.
     """
-    stiffness = 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h
+    stiffness = linear_rocking_stiffness(block, foundation)
     return math.sqrt(max(float(stiffness), 0.0) / float(block.m_sdof))
 
 

@@ -5,14 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from screening.validation import checked
-from screening.workflow import limits
+from screening import limits
+
+__all__ = ["output_times"]
 
 
 def output_times(t_end=20.0, dt=0.05):
     """Output instants ``0, dt, 2 dt, ..., t_end`` [s].
 
     ``t_end`` [s] > 0 and ``dt`` [s] in ``(0, t_end]``, at most ``MAX_TIMES - 1`` steps
-    (:mod:`screening.workflow.limits`); ``t_end`` must be a whole number of
+    (:mod:`screening.limits`); ``t_end`` must be a whole number of
     steps (to 1e-9 relative) so that every method reports on the same grid.
     """
     t_end = checked("t_end", t_end, lower=0.0)

@@ -13,10 +13,14 @@ import uuid
 
 import numpy as np
 
-from screening.workflow import execution, limits
+from screening import limits
+from screening.workflow import execution
 from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
-from screening.workflow.progress import Progress
+from screening.progress import Progress
+
+__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "point_table", "escalate",
+           "escalation_runs", "accuracy_line"]
 
 #: Resume records of escalated points are spot parts numbered from here (after any spot check): the
 #: point's result after its waves, its top-up run, and the planner's state after each wave.

@@ -33,6 +33,9 @@ from screening.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
 from screening.workflow.errors import SweepError, read_values
 from screening.workflow.grid import hyperslabs
 
+__all__ = ["MAX_GRID_DIMS", "BLOCK_VALUES", "SOURCE_CACHE_BYTES", "open_source", "parse_selection", "select",
+           "string_attribute_target", "grid_chunks", "export_cdo"]
+
 #: Grid dimensions CDO can hold besides time (z, y, x).
 MAX_GRID_DIMS = 3
 #: Values read and written per block (memory of the export independent of the grid size).

@@ -41,8 +41,13 @@ import xarray as xr
 
 from screening.solvers import model_choice
 from screening.status import FitFlag
-from screening.workflow import limits
+from screening import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
+
+__all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "run_record", "read_cloud_records",
+           "failed_record", "record_rows", "run_cloud", "threshold_level", "scaled_to", "run_stripes",
+           "stripe_dataset", "plot_stripes", "cloud_dataset", "plot_cloud", "synthesise_records",
+           "write_demand_csv"]
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels")
 #: Most IM levels of a multiple-stripe analysis.

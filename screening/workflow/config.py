@@ -15,6 +15,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
+
+__all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NUMERIC", "TABLE_KEYS",
+           "MODEL_TABLES", "DEFAULTS", "StudyError", "read_study_text", "parse_toml", "one_line", "type_name",
+           "table", "check_keys", "required", "is_number", "check_value", "check_integer", "short_repr", "integer",
+           "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
+           "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
+           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "build_models", "case_cutoff",
+           "build_point_models"]
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
@@ -33,7 +41,7 @@ from screening.model.block import LENGTH_RANGE
 from screening.model.excitation import ConstantEnvelope, Envelope
 from screening.solvers.timegrid import output_times
 from screening.validation import InputFileError, read_input_text
-from screening.workflow import limits
+from screening import limits
 
 #: Numeric parameters of the registered excitations besides S0 (``omega_g``, ``zeta_g``, ...).
 EXCITATION_PARAMETERS = excitations.parameters()
@@ -74,7 +82,7 @@ class StudyError(ValueError):
 # ----------------------------------------------------------------------------- reading
 def read_study_text(path):
     """The text of the study file ``path`` (UTF-8, a byte-order mark dropped); :class:`StudyError` if
-    it is not a regular file of at most :data:`~screening.workflow.limits.MAX_STUDY_BYTES` or cannot
+    it is not a regular file of at most :data:`~screening.limits.MAX_STUDY_BYTES` or cannot
     be read (checked before reading: a FIFO or a device never blocks or fills the memory)."""
     try:
         return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)

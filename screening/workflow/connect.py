@@ -22,6 +22,9 @@ from pathlib import Path
 
 from screening.workflow.errors import SweepError
 
+__all__ = ["HANDSHAKE_TIMEOUT", "MAX_HANDSHAKE", "MAX_HOST", "MAX_SCHEDULER_FILE", "TLS_SETTINGS",
+           "scheduler_address", "check_scheduler", "is_handshake"]
+
 #: Seconds to wait for the connection and for the scheduler's first bytes.
 HANDSHAKE_TIMEOUT = 10.0
 #: Largest handshake message accepted [bytes] (a real one is under 1 kB).

@@ -5,6 +5,9 @@ from __future__ import annotations
 import errno
 import os
 
+__all__ = ["SweepError", "exception_line", "ReadFailure", "read_values", "LOW_SPACE_BYTES", "write_failure_reason",
+           "is_write_error"]
+
 
 class SweepError(Exception):
     """A problem with the run set-up (output location, lock, cluster); one-line message."""

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import multiprocessing.util
 import os
 import sys
 import time
@@ -23,13 +22,22 @@ from pathlib import Path
 
 import numpy as np
 
-import screening
 from screening.solvers import mc_registry
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError, exception_line
 from screening.workflow.grid import batch_point_models, point_values
 from screening.workflow.study import build_models, case_cutoff
+
+__all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "HISTORY_DTYPE", "SUMMARY_FLOATS", "SUMMARY_INTS", "MODEL_FLOATS",
+           "TRUST_FLOATS", "INTENSITY_FLOATS", "ROCKING_FLOATS", "PROBABILITY_FLOATS", "DERIVED_INPUTS",
+           "SPOT_HISTORIES", "SPOT_LINEAR", "SUMMARY_VARIABLES", "solve_batch", "flag_points", "batch_intensity",
+           "batch_rocking_start", "solve_and_store_batch", "batch_trust", "batch_probabilities",
+           "wants_probabilities", "refused_batch", "failed_result", "spot_task", "escalation_task",
+           "submit_escalation", "sample_state", "spot_linear_names", "failed_spot", "submit_batch", "submit_spot",
+           "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers", "sees_folder", "warm_up",
+           "warm_up_monte_carlo", "dask_client", "LOCAL_CLUSTER_CONFIG", "START_METHOD_VARIABLE", "WORKER_SETUP",
+           "worker_start_method", "stop_workers"]
 
 CONNECT_TIMEOUT = "15s"
 TASK_RETRIES = 2
@@ -55,6 +63,9 @@ DERIVED_INPUTS = ("S0",)
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
 #: Linearization histories a spot check is compared against.
 SPOT_LINEAR = ("var_theta", "var_theta_dot")
+#: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
+#: itself returns only these.
+SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
 
 
 # ============================================================================ tasks
@@ -150,9 +161,7 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
 def solve_and_store_batch(target, batch, *solve_args):
     """The dask task of a zarr result: :func:`solve_batch`, then its arrays written into the region of
     ``batch`` in the store and the batch marked done (:class:`~screening.workflow.store.RegionTarget`
-    ``target``); returns the :data:`~screening.workflow.writer.SUMMARY_VARIABLES` of the batch."""
-    from screening.workflow.writer import SUMMARY_VARIABLES
-
+    ``target``); returns the :data:`SUMMARY_VARIABLES` of the batch."""
     out = solve_batch(*solve_args)
     target.write(batch, out)
     return {name: out[name] for name in SUMMARY_VARIABLES}
@@ -525,8 +534,8 @@ def worker_start_method():
     return "spawn"
 
 
-#: a forked worker ignores SIGINT like a spawned one (which does it when it imports screening)
-multiprocessing.util.register_after_fork(screening.quiet_local_worker, screening.quiet_local_worker)
+#: The module whose ``dask_setup`` every worker process of a local cluster runs when it starts.
+WORKER_SETUP = "screening.workflow.interrupt"
 
 
 @contextlib.contextmanager
@@ -549,7 +558,6 @@ def _local_client(workers):
     try:
         # the scheduler's HTTP server binds 8787 even without a dashboard, and warns on stderr when
         # that port is taken (another run, another cluster): give it a free port on localhost instead
-        os.environ[screening.LOCAL_WORKER_VARIABLE] = "1"      # read by the workers (screening/__init__)
         from screening.workflow.interrupt import deferred_interrupt
 
         with deferred_interrupt() as pressed:     # a half-started cluster closes noisily: finish starting
@@ -559,7 +567,8 @@ def _local_client(workers):
                 # rest is shutdown noise (a worker's heartbeat to a scheduler closed by Ctrl-C)
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                        dashboard_address=None, silence_logs=logging.CRITICAL,
-                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+                                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                                       preload=[WORKER_SETUP])
             except Exception:                         # noqa: BLE001 - a worker hit by the Ctrl-C too
                 if pressed:
                     raise KeyboardInterrupt from None

@@ -17,8 +17,12 @@ from screening.model import Block
 from screening.schema import PARAMETERS
 from screening.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.workflow.limits import batch_budget
+from screening.limits import batch_budget
 from screening.workflow.study import build_models, build_point_models
+
+__all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
+           "default_batch_size", "plan_batches", "hyperslabs", "batch_values", "point_values", "batch_models",
+           "batch_point_models", "select_spots", "parameter_table", "history_chunks"]
 
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
 DEFAULT_BATCH = 500
@@ -58,7 +62,7 @@ def default_batch_size(study, n_workers, target=None):
     the scheduler's work per batch is fixed, so few large batches leave the cores to the workers;
     whole rows if possible, the number of rows (within 25 %) that ends the run most evenly.
     Never across a case, never more than the arrays over the output times of one task fit in
-    :data:`~screening.workflow.limits.TASK_BYTES` (6 histories per point, or one envelope).
+    :data:`~screening.limits.TASK_BYTES` (6 histories per point, or one envelope).
     """
     per_case = study.points_per_case
     workers = max(int(n_workers), 1)
@@ -247,3 +251,11 @@ def parameter_table(study):
         else:
             case_labels[name] = col
     return constants, per_case, labels, case_labels
+
+
+def history_chunks(shape, nt):
+    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values)."""
+    if not shape:
+        return (nt,)
+    last = min(shape[-1], max(1, 2**18 // nt))
+    return (1,) * (len(shape) - 1) + (last, nt)

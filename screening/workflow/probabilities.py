@@ -27,6 +27,9 @@ from screening.analysis.probabilities import choose_sources, monte_carlo_source,
 from screening.solvers import mc_registry
 from screening.status import EscalationModel, PointStatus, ProbabilitySource, SampleState
 
+__all__ = ["CORRECTION_HISTORIES", "monte_carlo_runs", "levels_at", "corrected_estimates", "finish_probabilities",
+           "probabilities_line"]
+
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
 

@@ -7,6 +7,9 @@ from pathlib import Path
 
 from screening.workflow.errors import SweepError, exception_line
 
+__all__ = ["ResultError", "REQUIRED_VARIABLES", "open_result", "layout_problem", "damaged_data_error",
+           "result_key", "VERIFY_BLOCK_BYTES", "verify_result"]
+
 
 class ResultError(SweepError):
     """A result file that cannot be read or is not a screening sweep result."""
@@ -49,15 +52,15 @@ def layout_problem(ds):
     """What is wrong with the layout of an opened result (a short phrase), or ``""``.
 
     Checked from the header only (no data is read): the grid is the dimensions of ``status`` and
-    has at most :data:`~screening.workflow.limits.MAX_POINTS_CEILING` points, ``t`` has at least
-    one instant and at most :data:`~screening.workflow.limits.MAX_TIMES`, every history is
+    has at most :data:`~screening.limits.MAX_POINTS_CEILING` points, ``t`` has at least
+    one instant and at most :data:`~screening.limits.MAX_TIMES`, every history is
     ``grid x t`` and every summary ``grid``, and ``status`` carries integer ``flag_values`` with one
     word of ``flag_meanings`` each.
     """
     import numpy as np
 
     from screening.solvers.moments import HISTORY_VARIABLES
-    from screening.workflow import limits
+    from screening import limits
 
     grid = tuple(ds["status"].dims)
     if "t" in grid:

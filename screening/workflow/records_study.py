@@ -13,6 +13,8 @@ from pathlib import Path
 
 from screening.workflow.config import NUMERIC, StudyError, build_models, parse_toml, read_study_text
 
+__all__ = ["load_record_study", "pick_case", "block_and_foundation"]
+
 
 def load_record_study(path):
     """``(study, records)``: a study file read for a record analysis — its ``[records]`` table (``None``

@@ -23,8 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
+from screening.atomicfile import create_new as _create
+from screening.atomicfile import open_nofollow as _open_nofollow
 from screening.workflow.errors import SweepError
 from screening.workflow.zarrfile import file_check
+
+__all__ = ["PartialStore", "RegionTarget"]
 
 
 class PartialStore:
@@ -226,20 +230,6 @@ def _reason(exc):
     return exc.strerror or str(exc)
 
 
-def _open_nofollow(path, flags, mode=0o600):
-    """``os.open`` that never follows a symbolic link at ``path`` and only accepts a regular file
-    (a FIFO or device planted there is refused, without blocking)."""
-    fd = os.open(path, flags | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, mode)
-    try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise OSError(0, f"{path} is not a regular file")
-        os.set_blocking(fd, True)
-    except BaseException:
-        os.close(fd)
-        raise
-    return fd
-
-
 def _own_folder(path):
     """Make ``path`` a folder of this run: an existing real folder is kept; a link or anything else
     planted there is removed (never followed) and a new folder (mode 0700) created."""
@@ -249,14 +239,6 @@ def _own_folder(path):
             return
         os.unlink(path)
     os.mkdir(path, 0o700)
-
-
-def _create(path):
-    """A new file at ``path`` for writing (whatever was there, link or file, is removed first, the
-    new one created with ``O_EXCL``): a planted link cannot redirect the write."""
-    with contextlib.suppress(FileNotFoundError):
-        os.unlink(path)
-    return os.fdopen(_open_nofollow(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb")
 
 
 def _layout_ok(manifest, layout):

@@ -110,7 +110,7 @@ from screening import __version__
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers import mc_registry, model_choice
 from screening.solvers.timegrid import output_times
-from screening.workflow import limits
+from screening import limits
 from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models, build_point_models, case_cutoff,
                                        check_choice, check_grid_size, check_keys, check_list, check_value, choice,
                                        integer, model_tables, name_string, number_list, numeric_table, parse_toml,
@@ -357,7 +357,7 @@ def _cases(raw, base, sweeps):
 
 
 def _run(raw):
-    """``[run] max_points``: the largest grid the study may have (:mod:`screening.workflow.limits`)."""
+    """``[run] max_points``: the largest grid the study may have (:mod:`screening.limits`)."""
     tbl = table(raw, "run")
     check_keys(tbl, ("max_points",), "run.")
     return integer(tbl, "max_points", limits.DEFAULT_MAX_POINTS, 1, "run.", limits.MAX_POINTS_CEILING)

@@ -50,12 +50,14 @@ from screening.workflow.accuracy import escalate
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
 from screening.workflow.interrupt import interruptible, raise_if_interrupted, shielded
-from screening.workflow.progress import Progress
+from screening.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
 from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
 from screening.workflow.zarrfile import (foreign_files, is_zarr_path, remove_store, write_completion_mark,
                                          zarr_batch_size)
+
+__all__ = ["MAX_FAILURE_MESSAGES", "IN_FLIGHT_PER_WORKER", "SweepReport", "run_sweep", "SampleCount"]
 
 MAX_FAILURE_MESSAGES = 5
 #: Outstanding batch tasks per worker (bounds the memory of client and scheduler).

@@ -51,8 +51,14 @@ from screening.status import PointStatus, SpotStatus, Trust
 from screening.workflow.errors import SweepError
 from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSITY_FLOATS, MODEL_FLOATS,
                                           PROBABILITY_FLOATS, ROCKING_FLOATS,
-                                          SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, TRUST_FLOATS)
-from screening.workflow.grid import hyperslabs, parameter_table
+                                          SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, SUMMARY_VARIABLES,
+                                          TRUST_FLOATS)
+from screening.workflow.grid import history_chunks, hyperslabs, parameter_table
+
+__all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "POINT_VARIABLES",
+           "SUMMARY_VARIABLES", "check_output_path", "result_attributes", "band_limit_attribute",
+           "relative_peak_error", "history_chunks", "point_chunks", "write_region", "region_variables",
+           "ResultFile"]
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
 COMPLEVEL = 1
@@ -65,9 +71,6 @@ TITLE_FALLBACK = "Stochastic-linearization screening"
 #: Per-point variables besides the histories, in file order.
 POINT_VARIABLES = (("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS
                    + ROCKING_FLOATS + SUMMARY_INTS)
-#: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
-#: itself returns only these.
-SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
 
 
 def check_output_path(out, inputs=()):
@@ -167,14 +170,6 @@ def relative_peak_error(linear, mcs):
         return math.nan
     ref = np.nanmax(mcs)
     return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan
-
-
-def history_chunks(shape, nt):
-    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values)."""
-    if not shape:
-        return (nt,)
-    last = min(shape[-1], max(1, 2**18 // nt))
-    return (1,) * (len(shape) - 1) + (last, nt)
 
 
 def point_chunks(shape, target=POINT_CHUNK):

@@ -24,7 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
+from screening.atomicfile import create_new
 from screening.status import PointStatus, Trust
+
+__all__ = ["ZARR_SUFFIX", "ZARR_FORMAT", "BLOCK_BYTES", "COMPLETION_MARK", "ZARR_FILL", "is_zarr_path",
+           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrDataset", "file_check", "store_entries",
+           "write_completion_mark", "read_completion_mark", "store_problem", "foreign_files", "remove_store",
+           "warnings_ignored", "open_zarr_result", "read_attrs", "check_store", "netcdf_attributes",
+           "export_netcdf"]
 
 ZARR_SUFFIX = ".zarr"
 ZARR_FORMAT = 3
@@ -337,15 +344,13 @@ def store_entries(root):
 def write_completion_mark(root):
     """Write the completion mark of the finished store ``root``: ``{"files": {path: [size, checksum]}}``
     of every file of the store.  Written last, atomically: a store without it was never finished."""
-    from screening.workflow.store import _create
-
     files, foreign = store_entries(root)
     if foreign:
         raise OSError(0, f"the zarr store {root} holds {foreign[0]}, which is not a regular file")
     checks = {path: file_check(Path(root) / path) for path in files}
     mark = Path(root) / COMPLETION_MARK
     tmp = mark.with_name(mark.name + ".tmp")
-    with _create(tmp) as fh:
+    with create_new(tmp) as fh:
         fh.write(json.dumps({"format": 1, "files": checks}).encode())
         fh.flush()
         os.fsync(fh.fileno())
@@ -538,7 +543,7 @@ def export_netcdf(src, dst, complevel, history):
     import zarr
 
     from screening.workflow.errors import read_values
-    from screening.workflow.writer import history_chunks
+    from screening.workflow.grid import history_chunks
 
     with warnings_ignored():
         group = zarr.open_group(src, mode="r")

@@ -214,3 +214,21 @@ def test_printed_eq11_eq12_cubic_terms_are_exact():
     z_b = z + B * s
     assert f_eps == pytest.approx(eps * K * z_b**4 / (4 * s), rel=1e-9)
     assert -m_eps == pytest.approx(eps * K * z_b**4 * (4 * B * s - z) * c / (20 * s**2), rel=1e-9)
+
+
+def test_the_linear_rocking_stiffness_is_k_at_rest_of_every_condensation_without_the_cubic_term():
+    """One home for ``(2/3) b^3 k - m g h``: each condensation's ``K(0)`` at ``eps = 0``, by its own
+    function at ``theta = 0`` and by its ``stiffness_at_rest``; the rocking frequency squares to it."""
+    from screening import condensation
+    from screening.model import Block, Foundation
+    from screening.physics.contact import linear_rocking_stiffness
+    from screening.solvers.synthesis import rocking_frequency
+
+    block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    k0 = linear_rocking_stiffness(block, bed)
+    assert k0 == pytest.approx(2 / 3 * 0.035**3 * 2.89e7 - 8.67 * block.g * 0.21, rel=1e-15) and k0 > 0
+    for name in condensation.names():
+        cond = condensation.get(name)
+        assert float(cond.rocking_stiffness(0.0, block, bed)) == pytest.approx(k0, rel=1e-12), name
+        assert float(cond.stiffness_at_rest(block, bed)) == pytest.approx(k0, rel=1e-12), name
+    assert rocking_frequency(block, bed) ** 2 * block.m_sdof == pytest.approx(k0, rel=1e-14)

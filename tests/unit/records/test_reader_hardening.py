@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from screening.records import STANDARD_GRAVITY, Record, check_scale, read_at2, read_record, read_single_column
-from screening.workflow import limits
+from screening import limits
 
 DT = 0.005
 ACC_G = np.array([0.01, -0.02, 0.05, 0.03, -0.04, 0.0, 0.02])

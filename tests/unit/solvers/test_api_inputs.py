@@ -9,7 +9,7 @@ from screening.model import Block, Foundation
 from screening.model.excitation import Envelope, WhiteNoise
 from screening.records import Record
 from screening.solvers.moments import solve_moments
-from screening.workflow import limits
+from screening import limits
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 BED = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)

@@ -69,3 +69,29 @@ def test_white_noise_fast_path_is_the_reference_without_filter_states():
     A, b = augmented_system(k_eq, c_eq, m_sdof, alpha, exc.filter())
     expected = lyapunov_rhs(np.array([[y[0], y[1]], [y[1], y[2]]]), A, b, exc.S0)
     np.testing.assert_allclose(dy, expected[np.triu_indices(2)], rtol=1e-12)
+
+
+def test_the_uplift_occupancy_is_the_gaussian_tail_beyond_the_uplift_angle_in_both_twins():
+    """eq. 58 three ways: the numpy reference, its compiled twin and a quadrature of the Gaussian density;
+    0 for a variance that is not positive; the condensation API's closed form agrees."""
+    from scipy import integrate
+
+    from screening.condensation.api import uplift_probability
+    from screening.model import Block, Foundation
+    from screening.solvers.moment_kernels import p_uplift, uplift_occupancy
+
+    theta_ul, record = 2e-4, np.zeros(1, dtype=[("theta_ul", "f8")])
+    record["theta_ul"] = theta_ul
+    for var in (1e-9, 4e-8, 1e-6):
+        sigma = np.sqrt(var)
+        tail = 2 * integrate.quad(lambda x: np.exp(-x * x / (2 * var)) / (sigma * np.sqrt(2 * np.pi)), theta_ul,
+                                  theta_ul + 40 * sigma, epsabs=0, epsrel=1e-12)[0]
+        reference = float(uplift_occupancy(theta_ul, var))
+        assert reference == pytest.approx(tail, rel=1e-8)
+        assert p_uplift(record[0], var) == pytest.approx(reference, rel=1e-14)
+    np.testing.assert_array_equal(uplift_occupancy(theta_ul, np.array([0.0, -1.0])), [0.0, 0.0])
+    assert p_uplift(record[0], 0.0) == 0.0
+    block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    tu = float(block.m * block.g / (2 * block.b**2 * bed.k))
+    assert float(uplift_probability(np.sqrt(4e-8), block, bed)) == pytest.approx(float(uplift_occupancy(tu, 4e-8)),
+                                                                                 rel=1e-12)

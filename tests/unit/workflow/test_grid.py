@@ -82,7 +82,7 @@ def test_batches_holding_histories_keep_the_ordinary_size():
 
 def test_history_free_batches_fit_the_task_memory_budget():
     """One envelope value per point and output instant is the most a history-free task holds."""
-    from screening.workflow import limits
+    from screening import limits
 
     study = parse_study(_history_free(100, 100).text.replace("t_end = 4.0", "t_end = 5000.0"))
     size = default_batch_size(study, 2)

@@ -2,8 +2,8 @@
 
 import io
 
-from screening.workflow import progress
-from screening.workflow.progress import Progress
+from screening import progress
+from screening.progress import Progress
 
 
 class _Clock:

@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from screening.workflow import limits
+from screening import limits
 from screening.workflow.study import StudyError, load_study, parse_study
 
 BASE = """title = "inputs"

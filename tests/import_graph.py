@@ -1,0 +1,289 @@
+"""The package's import graph read with ``ast``: layers, upward imports, circles, deferred imports.
+
+Shared by ``tests/unit/test_layers.py`` (which fails on what the architecture page does not allow)
+and ``benchmarks/structure.py`` (which prints the structure numbers).  The layer of each module is
+read from the module table of ``docs/architecture.md``: the one map of the package.
+"""
+
+import ast
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "screening"
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+
+#: The layers from the bottom (imported by all) to the top (imports all), as named in the table.
+LAYERS = ("foundations", "model", "physics", "model axes", "kernels", "solvers", "analysis", "workflow",
+          "applications", "report", "cli")
+
+
+@dataclass(frozen=True)
+class Import:
+    """One import of a package module by another: where, and whether it sits inside a function."""
+
+    source: str
+    target: str
+    line: int
+    deferred: bool
+
+
+@dataclass
+class Graph:
+    """Every module of the package (dotted, without ``screening.``) and its imports of the package."""
+
+    modules: dict = field(default_factory=dict)      # module -> Path
+    imports: list = field(default_factory=list)      # [Import]
+
+    def edges(self, deferred=None):
+        """``{(source, target)}``, of all imports, the top-level ones (False) or the deferred (True)."""
+        return {(i.source, i.target) for i in self.imports
+                if i.source != i.target and (deferred is None or i.deferred == deferred)}
+
+
+def module_name(path):
+    """``screening/a/b.py`` -> ``a.b``; a package's ``__init__.py`` -> the package (``a``, or ``""``)."""
+    parts = list(path.relative_to(PACKAGE).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _resolve(name, modules):
+    """The package module that ``screening.<name>`` names: the module itself or its package."""
+    while name and name not in modules:
+        name = name.rpartition(".")[0]
+    return name
+
+
+def _inside_function(tree):
+    """Ids of the import nodes that sit inside a function body (executed on call, not on import)."""
+    inside = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            inside.update(id(n) for n in ast.walk(node) if isinstance(n, (ast.Import, ast.ImportFrom)))
+    return inside
+
+
+def _type_checking_only(tree):
+    """Ids of the import nodes under ``if TYPE_CHECKING:`` (never executed)."""
+    skipped = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skipped.update(id(n) for n in ast.walk(node) if isinstance(n, (ast.Import, ast.ImportFrom)))
+    return skipped
+
+
+def _targets(node, source, is_package, modules):
+    """The package modules an import node names."""
+    if isinstance(node, ast.Import):
+        return [n.name for n in node.names]
+    if node.level:
+        base = source.split(".") if source else []
+        base = base if is_package else base[:-1]
+        base = base[:len(base) - (node.level - 1)] if node.level > 1 else base
+        prefix = "screening." + ".".join(base + ([node.module] if node.module else []))
+    else:
+        prefix = node.module or ""
+    prefix = prefix.rstrip(".")
+    names = [f"{prefix}.{alias.name}" for alias in node.names]
+    # ``from screening.a import b``: b may be a submodule or a name defined in ``a``.
+    return [n if _resolve(n[len("screening."):], modules) == n[len("screening."):] else prefix for n in names]
+
+
+def read_graph(package=PACKAGE):
+    """Parse every module of the package; every import of the package by a package module."""
+    graph = Graph()
+    for path in sorted(package.rglob("*.py")):
+        graph.modules[module_name(path)] = path
+    for name, path in graph.modules.items():
+        tree = ast.parse(path.read_text(), str(path))
+        inside, skipped = _inside_function(tree), _type_checking_only(tree)
+        for node in ast.walk(tree):
+            if not isinstance(node, (ast.Import, ast.ImportFrom)) or id(node) in skipped:
+                continue
+            for target in _targets(node, name, path.name == "__init__.py", graph.modules):
+                if target != "screening" and not target.startswith("screening."):
+                    continue
+                resolved = _resolve(target[len("screening."):], graph.modules)
+                graph.imports.append(Import(name, resolved, node.lineno, id(node) in inside))
+    graph.imports = list(dict.fromkeys(graph.imports))        # one per module named, not per name
+    return graph
+
+
+def read_layers(text=None):
+    """``{module or package prefix: layer}`` from the module table of the architecture page.
+
+    A row's first cell names the layer (an empty cell keeps the one above); its second cell names
+    one or more modules in backticks.  A name ending in ``.*`` stands for a whole package.
+    """
+    text = ARCHITECTURE.read_text() if text is None else text
+    layers, layer = {}, None
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 3 or not line.startswith("|") or cells[0] == "layer" or cells[1].startswith("---"):
+            continue
+        if cells[0]:
+            layer = cells[0]
+        if layer not in LAYERS:
+            continue
+        for module in re.findall(r"`([\w.*]+)`", cells[1]):
+            layers[module] = layer
+    return layers
+
+
+def layer_of(module, layers):
+    """The layer of a module: its own row, else its package's ``pkg.*`` row; a package's ``__init__``
+    is in the layer of its package row."""
+    if module in layers:
+        return layers[module]
+    parts = module.split(".")
+    for n in range(len(parts), 0, -1):
+        star = ".".join(parts[:n]) + ".*"
+        if star in layers:
+            return layers[star]
+    return None
+
+
+def upward(graph, layers):
+    """Imports that run from a lower layer up to a higher one: ``[(Import, source layer, target layer)]``.
+
+    ``screening/__init__.py`` (the public face, which gathers the API) and the package
+    ``__init__`` files that re-export their package are above every layer and not counted.
+    """
+    rank = {name: n for n, name in enumerate(LAYERS)}
+    found = []
+    for imp in graph.imports:
+        if imp.source == "" or graph.modules[imp.source].name == "__init__.py" and imp.target.startswith(imp.source + "."):
+            continue
+        a, b = layer_of(imp.source, layers), layer_of(imp.target, layers)
+        if a and b and rank[b] > rank[a]:
+            found.append((imp, a, b))
+    return found
+
+
+def cycles(edges):
+    """The strongly connected components of more than one module (the import circles), sorted."""
+    graph = {}
+    for a, b in edges:
+        graph.setdefault(a, set()).add(b)
+        graph.setdefault(b, set())
+    index, low, stack, on_stack, found, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        # Tarjan's algorithm, iterative so that a deep graph cannot overflow the stack.
+        work = [(v, iter(sorted(graph[v])))]
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        while work:
+            node, children = work[-1]
+            for child in children:
+                if child not in index:
+                    index[child] = low[child] = counter[0]
+                    counter[0] += 1
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                    break
+                if child in on_stack:
+                    low[node] = min(low[node], index[child])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[node])
+                if low[node] == index[node]:
+                    component = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        component.append(w)
+                        if w == node:
+                            break
+                    if len(component) > 1:
+                        found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(found)
+
+
+def package_edges(graph):
+    """Imports between modules, leaving out those of a package ``__init__`` into its own package
+    and those into ``screening/__init__`` (the public face): what a circle is counted on."""
+    edges = set()
+    for a, b in graph.edges():
+        if b == "" or a == "":
+            continue
+        if graph.modules[a].name == "__init__.py" and b.startswith(a + "."):
+            continue
+        edges.add((a, b))
+    return edges
+
+
+def _reaches(edges, start, goal):
+    """Whether ``goal`` is reachable from ``start`` along ``edges``."""
+    seen, todo = {start}, [start]
+    while todo:
+        node = todo.pop()
+        if node == goal:
+            return True
+        for a, b in edges:
+            if a == node and b not in seen:
+                seen.add(b)
+                todo.append(b)
+    return False
+
+
+def dodging(graph):
+    """Deferred imports that dodge a circle: moved to the top, they would close one."""
+    top = package_edges(graph) & graph.edges(deferred=False)
+    return [imp for imp in graph.imports
+            if imp.deferred and (imp.source, imp.target) in package_edges(graph)
+            and _reaches(top, imp.target, imp.source)]
+
+
+def public_modules(graph):
+    """Modules with no leading underscore in their path and some content (not an empty ``__init__``)."""
+    return [name for name, path in graph.modules.items()
+            if not any(part.startswith("_") for part in name.split(".")) and path.read_text().strip()]
+
+
+def without_all(graph):
+    """Public modules that do not define ``__all__``."""
+    missing = []
+    for name in public_modules(graph):
+        path = graph.modules[name]
+        tree = ast.parse(path.read_text())
+        names = {t.id for node in tree.body if isinstance(node, (ast.Assign, ast.AnnAssign))
+                 for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
+                 if isinstance(t, ast.Name)}
+        if "__all__" not in names:
+            missing.append(name)
+    return missing
+
+
+def sizes(graph):
+    """``[(lines, module)]``, largest first."""
+    return sorted(((len(p.read_text().splitlines()), m) for m, p in graph.modules.items()), reverse=True)
+
+
+def read_exceptions(text=None):
+    """``(upward, circles)`` allowed by the architecture page's table of exceptions: the set of
+    ``(source, target)`` upward imports and the list of module sets an import circle may stay within."""
+    text = ARCHITECTURE.read_text() if text is None else text
+    section = text.split("## Exceptions to the layers", 1)[1].split("\n## ", 1)[0]
+    up, circles = set(), []
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 3 or cells[1] not in ("upward", "circle"):
+            continue
+        modules = re.findall(r"`([\w.]+)`", cells[0])
+        if cells[1] == "upward":
+            up.add(tuple(modules))
+        else:
+            circles.append(frozenset(modules))
+    return up, circles

@@ -1,0 +1,112 @@
+"""The public face of the package: importing it does nothing but import, and every source module has
+a test module of its own name."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import import_graph as ig
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: Imports every module of the package in a fresh interpreter that looks like a worker process of a
+#: local cluster (the process name and environment an import-time worker setup would react to), and
+#: prints what changed: signal handlers, exit handlers, threads.
+PROBE = """
+import atexit, importlib, multiprocessing, pkgutil, signal, sys, threading
+
+multiprocessing.current_process().name = "Dask Worker process (from Nanny)"
+by_screening = []            # (what, module) of every exit handler, signal handler or thread the package sets up
+
+
+def watch(owner, name):
+    original = getattr(owner, name)
+
+    def wrapper(*args, **kwargs):
+        caller = sys._getframe(1).f_globals.get("__name__", "")
+        if caller.split(".")[0] == "screening":
+            by_screening.append((name, caller))
+        return original(*args, **kwargs)
+    setattr(owner, name, wrapper)
+
+
+watch(atexit, "register")
+watch(signal, "signal")
+watch(threading.Thread, "start")
+
+
+def handlers():
+    return {s: signal.getsignal(s) for s in signal.valid_signals() if signal.getsignal(s) is not None}
+
+
+before = (handlers(), sorted(t.name for t in threading.enumerate()))
+import screening
+modules = [m.name for m in pkgutil.walk_packages(screening.__path__, "screening.")]
+for name in modules:
+    importlib.import_module(name)
+after = (handlers(), sorted(t.name for t in threading.enumerate()))
+changed = {s: (before[0].get(s), h) for s, h in after[0].items() if before[0].get(s) != h}
+print(len(modules), repr(changed), repr(by_screening), [t for t in after[1] if t not in before[1]])
+"""
+
+
+def test_importing_the_package_changes_no_signal_handler_exit_handler_or_thread():
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "SCREENING_LOCAL_WORKER": "1"}
+    out = subprocess.run([sys.executable, "-c", PROBE], env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    count, rest = out.stdout.split(" ", 1)
+    assert int(count) >= 90, out.stdout                 # every module was imported
+    assert rest.strip() == "{} [] []", out.stdout       # no handler changed, none set up by screening, no thread
+
+
+def test_the_worker_setup_runs_as_a_dask_preload_only():
+    """A worker of a local cluster ignores SIGINT through dask's preload hook, not through an import."""
+    from screening.workflow import execution, interrupt
+
+    assert execution.WORKER_SETUP == interrupt.__name__ and callable(interrupt.dask_setup)
+
+
+#: Source modules without a test module of their own name, each with its reason.
+UNTESTED = {
+    "condensation.paper": "tested as test_paper_condensation.py and test_paper_coefficients.py",
+    "condensation.api": "tested through the public functions in test_paper_coefficients.py, test_moments.py, "
+                        "test_core_extremes.py",
+    "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
+    "condensation.cubic": "tested in test_linearization.py, test_moments.py, test_datasets.py, test_fragility.py",
+    "condensation.quadrature": "tested against the closed forms in test_paper_coefficients.py and by "
+                               "test_toy_condensation.py",
+    "model.block": "tested in tests/unit/model/test_model.py",
+    "model.foundation": "tested in tests/unit/model/test_model.py and test_toy_contact_law.py",
+    "records": "tested as tests/unit/records/test_readers.py and test_reader_hardening.py",
+    "schema": "tested as test_netcdf_cf.py (CF compliance of every result) and test_writers.py",
+    "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_integrators.py, test_montecarlo.py",
+    "solvers.mcs_kernels": "tested as test_mcs_integrators.py (against scipy) and test_montecarlo.py",
+    "report.figure_base": "tested in tests/unit/report/test_figures.py",
+    "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
+    "report.spot_figures": "tested in tests/unit/report/test_figures.py",
+    "report.record_figures": "tested through the commands in test_cli_records.py and test_cloud.py",
+    "report.text": "tested through `screening info` in test_cli.py, test_accuracy.py, test_sweep_probabilities.py",
+    "report.tradeoff_figures": "tested through run_tradeoff in test_tradeoff.py",
+    "report.tradeoff_files": "tested through run_tradeoff in test_tradeoff.py",
+    "report.tradeoff_text": "tested in test_tradeoff.py and test_metrics.py",
+    "workflow.connect": "tested through --scheduler in test_edges.py and test_robustness.py",
+    "workflow.reader": "tested through the commands in test_cli.py, test_edges.py, test_robustness.py",
+    "workflow.records_study": "tested through the record commands in test_cli_records.py and test_cloud.py",
+}
+
+
+def _has_test(module, tests):
+    """``a.b`` is tested by ``test_b.py`` or, where names repeat across packages (test basenames are
+    unique in this suite), by ``test_a_b.py``."""
+    return f"test_{module.rsplit('.', 1)[-1]}" in tests or f"test_{module.replace('.', '_')}" in tests
+
+
+def test_every_source_module_has_a_test_module_of_its_own_name():
+    tests = {p.stem for p in (ROOT / "tests").rglob("test_*.py")}
+    graph = ig.read_graph()
+    modules = [m for m, p in graph.modules.items() if m and p.name != "__init__.py"]
+    missing = sorted(m for m in modules if not _has_test(m, tests) and m not in UNTESTED)
+    assert not missing, missing
+    stale = sorted(m for m in UNTESTED if m not in modules or _has_test(m, tests))
+    assert not stale, stale
