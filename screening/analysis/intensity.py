@@ -63,6 +63,7 @@ import xarray as xr
 from scipy import integrate, optimize
 
 from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, vanmarcke_factor
+from screening.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.solvers.synthesis import envelope_rate
 from screening.validation import checked
 
@@ -81,22 +82,11 @@ MEASURES = {"pga_median": "m s-2", "rms_acceleration": "m s-2", "arias_intensity
 RECORD_MEASURES = ("pga", "rms_acceleration", "arias_intensity", "sa", "pgv", "avgsa")
 #: The measures that need an oscillator period (input and record names).
 PERIOD_MEASURES = ("sa_median", "avgsa_median", "sa", "avgsa")
-#: Default ground-motion band limit [Hz] of a stochastic input: the band its intensity measures (and a
-#: target PGA) refer to.  Strong-motion records are processed to about 25 Hz (low-pass corners of 20-30 Hz,
-#: e.g. the PEER NGA processing); above it a rock-site acceleration spectrum has little energy (the
-#: ``kappa`` decay).  A property of the ground motion, not of what stands on it: the Monte Carlo
-#: synthesis may extend its own band for numerics (3 x the bed's frequencies), the label stays this one.
-GROUND_BAND_LIMIT_HZ = 25.0
 #: Standard gravity used by the Arias intensity [m s-2].
 G = 9.80665
 N_TIMES = 4001
 #: Points evaluated together by :func:`rocking_start_probability`.
 CHUNK_POINTS = 64
-
-
-def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
-    """The band limit ``omega_c = 2 pi f`` [rad/s] of a ground motion band-limited to ``band_limit_hz`` [Hz]."""
-    return 2.0 * math.pi * float(band_limit_hz)
 
 
 def spectral_moments(excitation, cutoff):

@@ -24,7 +24,20 @@ from scipy import integrate
 
 from screening.validation import checked
 
-__all__ = ["Parameter", "Filter", "transfer_psd", "stationary_covariance", "Excitation"]
+__all__ = ["GROUND_BAND_LIMIT_HZ", "ground_cutoff", "Parameter", "Filter", "transfer_psd", "stationary_covariance",
+           "Excitation"]
+
+#: Default ground-motion band limit [Hz] of a stochastic input: the band its intensity measures (and a
+#: target PGA) refer to.  Strong-motion records are processed to about 25 Hz (low-pass corners of 20-30 Hz,
+#: e.g. the PEER NGA processing); above it a rock-site acceleration spectrum has little energy (the
+#: ``kappa`` decay).  A property of the ground motion, not of what stands on it: the Monte Carlo
+#: synthesis may extend its own band for numerics (3 x the bed's frequencies), the label stays this one.
+GROUND_BAND_LIMIT_HZ = 25.0
+
+
+def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
+    """The band limit ``omega_c = 2 pi f`` [rad/s] of a ground motion band-limited to ``band_limit_hz`` [Hz]."""
+    return 2.0 * math.pi * float(band_limit_hz)
 
 
 class Parameter(NamedTuple):

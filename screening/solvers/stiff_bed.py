@@ -680,7 +680,7 @@ class StiffBedModel(MonteCarloModel):
     ``max(ROCKING_BAND_FACTOR w_r, ground band)`` (``w_r`` the full-contact rocking frequency: in full
     contact the block is an oscillator at ``w_r`` and filters what lies above it, a rigid block in uplift
     responds to an input component at ``w`` like ``1/w^2``; the ground band
-    :data:`screening.analysis.intensity.GROUND_BAND_LIMIT_HZ` is the band the intensity measures refer
+    :data:`screening.excitations.base.GROUND_BAND_LIMIT_HZ` is the band the intensity measures refer
     to); ``"ground"`` the ground band alone (cheaper, but on mortar-stiff beds it misses the input that
     starts the rocking through the full-contact resonance); ``"full"`` all of them, as the coupled model
     reads them (its band is set by the vertical frequency).  ``monte_carlo(..., band=...)`` overrides
@@ -701,7 +701,7 @@ class StiffBedModel(MonteCarloModel):
         self.band = band
 
     def input_band(self, block, foundation):
-        from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff
+        from screening.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
 
         if self.band == "full":
             return None

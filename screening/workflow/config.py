@@ -36,7 +36,7 @@ import numpy as np
 from screening import condensation as condensations, excitations, laws
 from screening.condensation import names as condensation_names
 from screening.model import Block, Foundation
-from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff
+from screening.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.model.block import LENGTH_RANGE
 from screening.model.excitation import ConstantEnvelope, Envelope
 from screening.solvers.timegrid import output_times
