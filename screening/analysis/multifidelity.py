@@ -33,7 +33,7 @@ import numpy as np
 __all__ = ["ControlVariateEstimate", "conditional_mean_influence", "control_variate_estimate",
            "control_variate_functional", "multifidelity_probabilities", "multifidelity_variance", "optimal_ratio",
            "Allocation", "allocate", "MIN_GAIN",
-           "speedup", "variance_influence"]
+           "cost_ratio_needed", "speedup", "variance_influence"]
 
 
 @dataclass(frozen=True)
@@ -459,3 +459,38 @@ def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN
     rho2 = min(float(correlation) ** 2, 1.0)
     n = max(3, math.ceil(n_plain * (1.0 - (1.0 - 1.0 / r) * rho2)))
     return Allocation("multifidelity", n, max(n, math.ceil(r * n)), r, gain)
+
+
+def cost_ratio_needed(correlation, target_speedup):
+    """Expensive-to-cheap cost ratio at which the two-fidelity estimate reaches ``target_speedup``.
+
+    Parameters
+    ----------
+    correlation : float
+        Correlation of the two models' per-sample values, in [-1, 1].
+    target_speedup : float
+        The :func:`speedup` asked for, > 1.
+
+    Returns
+    -------
+    float
+        ``c_expensive / c_cheap`` [1]; ``math.inf`` where no cost ratio reaches it
+        (``target_speedup >= 1 / (1 - rho^2)``, the speed-up of free cheap samples).
+
+    Notes
+    -----
+    At the optimal ratio the cost times the variance per expensive sample is
+    :math:`(\\sqrt{c_1 (1 - \\rho^2)} + \\rho \\sqrt{c_2})^2` ([1], section 3.4), so the speed-up is
+    :math:`S = 1 / (\\sqrt{1 - \\rho^2} + \\rho / \\sqrt{w})^2` with :math:`w = c_1 / c_2`, and
+    :math:`w = \\rho^2 / (S^{-1/2} - \\sqrt{1 - \\rho^2})^2`.  (Without the bound :data:`MAX_RATIO`
+    and where the optimal ratio exceeds 1.)
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    """
+    rho = abs(float(correlation))
+    if not target_speedup > 1:
+        raise ValueError(f"parameter 'target_speedup' must be > 1 (got {target_speedup!r})")
+    gap = 1.0 / math.sqrt(target_speedup) - math.sqrt(max(1.0 - rho * rho, 0.0))
+    return math.inf if gap <= 0 else rho * rho / (gap * gap)

@@ -45,6 +45,7 @@ import time
 
 import numpy as np
 
+from screening import schema
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.condensation import get as get_condensation
 from screening.excitations import Excitation, names as excitation_names
@@ -248,7 +249,7 @@ def _with_probabilities(run):
 
 @_with_probabilities
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
-                seed=0, progress=None, condensation="paper", thresholds=None, **numerics):
+                seed=0, progress=None, condensation="paper", thresholds=None, sample_histories=False, **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
 
     Parameters
@@ -280,6 +281,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         ``p_exceed`` and ``p_exceed_se`` on the coordinate ``threshold`` [rad], the fraction of the
         samples that did not diverge whose peak ``|theta|`` exceeds each (overturned samples count)
         and its binomial standard error (:func:`screening.analysis.probabilities.sample_probabilities`).
+    sample_histories : bool; True adds ``theta_sample`` (sample, t) [rad], every sample's rotation on the
+        output times (for estimators on the samples, e.g. :mod:`screening.analysis.multifidelity`).
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
         ``cutoff_factor`` [1], ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
         ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``).
@@ -306,6 +309,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         option, or array-valued model parameters — before any work is done.
     """
     n_samples = check_integer("n_samples", n_samples, 2)
+    if not isinstance(sample_histories, (bool, np.bool_)):
+        raise ValueError(f"parameter 'sample_histories' must be True or False (got {sample_histories!r})")
     mc = mc_registry.get(model)
     model = mc.name
     cond = get_condensation(condensation)
@@ -373,7 +378,10 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     used = ~(overturned | diverged)
     stats = ensemble_statistics(theta, theta_dot, uplift, used)
     n_over, n_div = int(overturned.sum()), int(diverged.sum())
-    return monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
-                          block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
-                          h_min, wall, cond.name, mc)
+    ds = monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
+                             block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan,
+                             h_min, wall, cond.name, mc)
+    if sample_histories:
+        ds["theta_sample"] = (("sample", "t"), theta, schema.attributes("theta_sample", schema.MONTE_CARLO))
+    return ds
 

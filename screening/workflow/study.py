@@ -53,6 +53,7 @@ Example (SI units throughout)::
     target = 0.15               # relative error of peak var_theta (0 < target <= 1; absent: no escalation)
     budget_s = 600              # CPU seconds of Monte Carlo at most (default 600)
     seed = 0
+    multifidelity = false       # true: pair coupled runs with the condensed model where it pays (docs/multifidelity.md)
 
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
@@ -180,11 +181,13 @@ class Fragility:
 @dataclass(frozen=True)
 class Accuracy:
     """The ``[accuracy]`` table: ``target`` (relative error of peak var_theta [1]), ``budget_s`` (CPU
-    seconds of Monte Carlo [s]) and the Monte Carlo ``seed``."""
+    seconds of Monte Carlo [s]), the Monte Carlo ``seed`` and ``multifidelity`` (pair the coupled runs
+    with a cheap model where the pilot says it pays: :mod:`screening.analysis.multifidelity`)."""
 
     target: float
     budget_s: float = DEFAULT_BUDGET_S
     seed: int = 0
+    multifidelity: bool = False
 
 
 @dataclass(frozen=True)
@@ -407,13 +410,16 @@ def _fragility(raw):
 def _accuracy(raw):
     """``[accuracy]``: absent (or without ``target``) keeps today's behaviour (no escalation)."""
     tbl = table(raw, "accuracy")
-    check_keys(tbl, ("target", "budget_s", "seed"), "accuracy.")
+    check_keys(tbl, ("target", "budget_s", "seed", "multifidelity"), "accuracy.")
     budget = check_value("accuracy.budget_s", tbl.get("budget_s", DEFAULT_BUDGET_S), 0.0, False, MAX_BUDGET_S)
     seed = integer(tbl, "seed", 0, 0, "accuracy.", limits.MAX_SEED)
     if "target" not in tbl:
         return None
     target = check_value("accuracy.target", tbl["target"], 0.0, False, 1.0)
-    return Accuracy(target, budget, seed)
+    paired = tbl.get("multifidelity", False)
+    if not isinstance(paired, bool):
+        raise StudyError(f"accuracy.multifidelity: must be true or false (got {type_name(paired)})")
+    return Accuracy(target, budget, seed, paired)
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):

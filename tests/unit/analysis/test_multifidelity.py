@@ -279,3 +279,18 @@ def test_plain_monte_carlo_where_the_cheap_model_does_not_pay(rho, c_lo):
     a = allocate(rho, 1.0, c_lo, 500)
     assert (a.estimator, a.n_expensive, a.n_cheap) == ("plain", 500, 0)
     assert not math.isfinite(rho) or speedup(rho, 1.0, c_lo) < MIN_GAIN
+
+
+@pytest.mark.parametrize("rho, target", [(0.9, 3.0), (0.95, 3.0), (0.99, 5.0), (0.9, 1.5)])
+def test_the_cost_ratio_needed_gives_the_speedup_asked_for(rho, target):
+    from screening.analysis.multifidelity import cost_ratio_needed
+
+    w = cost_ratio_needed(rho, target)
+    assert speedup(rho, w, 1.0) == pytest.approx(target, rel=1e-6)          # independent: the brute-force-tested one
+
+
+def test_no_cost_ratio_beats_free_cheap_samples():
+    from screening.analysis.multifidelity import cost_ratio_needed
+
+    assert cost_ratio_needed(0.8, 1 / (1 - 0.64) + 0.01) == math.inf
+    assert cost_ratio_needed(0.5, 1.2) < math.inf
