@@ -294,3 +294,23 @@ def test_no_cost_ratio_beats_free_cheap_samples():
 
     assert cost_ratio_needed(0.8, 1 / (1 - 0.64) + 0.01) == math.inf
     assert cost_ratio_needed(0.5, 1.2) < math.inf
+
+
+def test_the_escalation_plans_a_paired_point_from_its_pilot_on_the_cost_model():
+    """Costs per sample from the cost model's steps (coupled 1e5 steps at 0.35 us, condensed 1e4 at 0.15 us per
+    sample: ratio 23), never fewer coupled samples than the pilot's, plain where the gain is too small."""
+    from screening.analysis import escalation as esc
+    from screening.analysis.multifidelity import allocate
+    from screening.status import EscalationModel
+
+    pilot = {"n_steps": 64 * 100_000, "n_grid": 0, "rodas": False, "cheap_n_steps": 64 * 10_000, "cheap_n_grid": 0,
+             "correlation": 0.99}
+    c_hi = esc.estimated_cost(100_000, EscalationModel.coupled)
+    c_lo = esc.estimated_cost(10_000, EscalationModel.condensed)
+    assert c_hi / c_lo == pytest.approx(0.35 / 0.015)
+    plan = esc.paired_plan(pilot, EscalationModel.coupled, 64, 5000)
+    assert plan == allocate(0.99, c_hi, c_lo, 5000) and plan.estimator == "multifidelity" and plan.n_expensive > 64
+    small = esc.paired_plan(pilot, EscalationModel.coupled, 64, 100)
+    assert small.n_expensive == 64 and small.n_cheap >= allocate(0.99, c_hi, c_lo, 100).n_cheap
+    assert esc.paired_plan({**pilot, "correlation": 0.5}, EscalationModel.coupled, 64, 1000).estimator == "plain"
+    assert esc.paired_model(EscalationModel.condensed) is None
