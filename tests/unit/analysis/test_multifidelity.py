@@ -345,3 +345,19 @@ def test_the_two_fidelity_variance_of_engine_samples_is_unbiased_and_its_error_h
     assert abs(np.mean(est) - ref.var_theta.values[k]) <= 4 * math.hypot(scatter / math.sqrt(30),
                                                                           ref.var_theta_se.values[k])
     assert scatter / np.mean(ses) == pytest.approx(1.0, abs=0.4)
+
+
+def test_the_engines_sample_histories_are_the_ones_behind_its_variance():
+    from screening.model import Block, Foundation, WhiteNoise
+    from screening.model.cases import PAPER_BED, PAPER_BLOCK
+    from screening.solvers.montecarlo import monte_carlo
+
+    args = (Block(**PAPER_BLOCK), Foundation(eps=6e7, **PAPER_BED), WhiteNoise(S0=1e-3))
+    ds = monte_carlo(*args, n_samples=6, model="condensed", t_end=1.0, sample_histories=True)
+    used = ~(ds.overturned.values | ds.diverged.values)
+    np.testing.assert_allclose(ds.theta_sample.values[used].var(axis=0, ddof=1), ds.var_theta.values,
+                               rtol=1e-12, atol=1e-300)
+    assert ds.theta_sample.attrs["units"] == "rad" and "theta_sample" not in monte_carlo(
+        *args, n_samples=2, model="condensed", t_end=0.2)
+    with pytest.raises(ValueError, match="'sample_histories' must be True or False"):
+        monte_carlo(*args, n_samples=2, sample_histories=1)
