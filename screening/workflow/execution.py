@@ -325,7 +325,8 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
     Returns ``(arrays, extra)``: :func:`spot_arrays` of the expensive run with ``var_theta`` and ``var_theta_se``
     the two-fidelity estimate (:func:`screening.analysis.multifidelity.multifidelity_variance`; ``var_theta_dot``
     stays the plain one), and the cheap run's ``cheap_*`` results, the correlation of the influence values at the
-    peak of var_theta and the :class:`~screening.status.EscalationEstimator` code."""
+    peak of var_theta and the :class:`~screening.status.EscalationEstimator` code.  Where the cheap model refuses
+    the point (``ValueError`` before any work) the result is the plain one, with ``cheap_samples`` 0."""
     from screening.analysis.multifidelity import multifidelity_variance
     from screening.solvers.montecarlo import monte_carlo
     from screening.solvers.synthesis import default_cutoff, grid_points
@@ -336,8 +337,14 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
         return monte_carlo(block, foundation, excitation, n_samples=n, model=name, t_end=t_end, dt=dt, seed=seed,
                            sample_histories=True, **kw)
 
-    hi, lo = run(model, condensation, int(samples)), run(cheap_model, cheap_condensation, int(cheap_samples))
-    out, cheap = spot_arrays(hi), spot_arrays(lo)
+    hi = run(model, condensation, int(samples))
+    out = spot_arrays(hi)
+    try:
+        lo = run(cheap_model, cheap_condensation, int(cheap_samples))
+    except ValueError:                  # the cheap model cannot carry this block on this bed: plain Monte Carlo
+        return out, {"estimator": np.int8(EscalationEstimator.plain_monte_carlo), "cheap_samples": np.int32(0),
+                     "correlation": np.float64(np.nan)}
+    cheap = spot_arrays(lo)
     valid_hi = ~(hi["overturned"].values | hi["diverged"].values)
     valid_lo = ~(lo["overturned"].values | lo["diverged"].values)
     est = multifidelity_variance(hi["theta_sample"].values, valid_hi, lo["theta_sample"].values, valid_lo)

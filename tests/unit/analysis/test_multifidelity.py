@@ -361,3 +361,29 @@ def test_the_engines_sample_histories_are_the_ones_behind_its_variance():
         *args, n_samples=2, model="condensed", t_end=0.2)
     with pytest.raises(ValueError, match="'sample_histories' must be True or False"):
         monte_carlo(*args, n_samples=2, sample_histories=1)
+
+
+def test_a_paired_escalation_run_falls_back_to_plain_where_the_cheap_model_refuses_the_point():
+    from screening.model import Block, Foundation, WhiteNoise
+    from screening.model.cases import PAPER_BED, PAPER_BLOCK
+    from screening.solvers import mc_registry
+    from screening.solvers.mc_models import CondensedModel
+    from screening.status import EscalationEstimator
+    from screening.workflow.execution import escalation_task
+
+    class Refuses(CondensedModel):
+        name = "refuses_every_bed"
+
+        def check(self, block, foundation, condensation):
+            raise ValueError("parameter 'foundation' is outside this model's range")
+
+    mc_registry.register(Refuses())
+    try:
+        args = (Block(**PAPER_BLOCK), Foundation(eps=6e7, **PAPER_BED), WhiteNoise(S0=1e-3), "paper", 4, "condensed",
+                0.3, 0.05, 0)
+        paired = escalation_task(*args, cheap=("refuses_every_bed", "paper", 8))
+        plain = escalation_task(*args)
+    finally:
+        mc_registry.unregister("refuses_every_bed")
+    assert paired["estimator"] == EscalationEstimator.plain_monte_carlo and paired["cheap_samples"] == 0
+    assert paired["peak_var_theta"] == plain["peak_var_theta"] and paired["peak_var_theta_se"] == plain["peak_var_theta_se"]
