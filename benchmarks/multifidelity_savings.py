@@ -167,7 +167,8 @@ def main(argv=None):
                     help="the cheap model at --points: 'condensed:CONDENSATION' or a registered Monte Carlo model name")
     ap.add_argument("--points", default=None, help="comma-separated calibration points, 'all' or 'none'")
     ap.add_argument("--stiff-points", default=None, help="calibration points run with the stiff-bed model, or 'none'")
-    ap.add_argument("--beds", default=None, help="beds of stiff_bed_validity.py run with the stiff-bed model, or 'none'")
+    ap.add_argument("--beds", default=None,
+                    help="beds of stiff_bed_validity.py run with the stiff-bed model, or 'none'")
     args = ap.parse_args(argv)
     with xr.open_dataset(CALIBRATION) as ds:
         cal = ds.load()

@@ -241,7 +241,8 @@ def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturne
     peak_y, peak_x = np.asarray(peak_y, dtype=float), np.asarray(peak_x, dtype=float)
     n = peak_y.size
     if peak_x.size < n:
-        raise ValueError(f"parameter 'peak_x' must hold at least the {n} paired samples of 'peak_y' (got {peak_x.size})")
+        raise ValueError(f"parameter 'peak_x' must hold at least the {n} paired samples of 'peak_y' "
+                         f"(got {peak_x.size})")
     over_y, over_x = np.asarray(overturned_y, dtype=bool), np.asarray(overturned_x, dtype=bool)
     v_y, v_x = np.asarray(valid_y, dtype=bool), np.asarray(valid_x, dtype=bool)
     out = []

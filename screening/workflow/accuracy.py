@@ -263,7 +263,8 @@ def escalation_runs(run, order, models):
                 share = (main_budget - spent() - committed) / max(len(left), 1)
                 n = min(wanted, int(share / max(rate, 1e-300)))
                 n_cheap = math.ceil(n_cheap * n / wanted) if n_cheap else 0
-                big = n_cheap >= 2 * esc.PILOT_SAMPLES and n >= esc.PILOT_SAMPLES if n_cheap else n >= 2 * esc.PILOT_SAMPLES
+                big = (n_cheap >= 2 * esc.PILOT_SAMPLES and n >= esc.PILOT_SAMPLES) if n_cheap else (
+                    n >= 2 * esc.PILOT_SAMPLES)
                 if big and spent() + committed + rate * n <= main_budget:
                     full[submit(j, n, "full", n_cheap)] = j
                     committed += rate * n

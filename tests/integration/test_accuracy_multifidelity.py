@@ -74,7 +74,8 @@ def test_the_pilot_decides_by_the_fallback_rule(client, tmp_path, monkeypatch):
     run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
     pilot, plan = plans[0]
     c_hi = esc.estimated_cost(pilot["n_steps"], EscalationModel.coupled, pilot["n_grid"]) / esc.PILOT_SAMPLES
-    c_lo = esc.estimated_cost(pilot["cheap_n_steps"], EscalationModel.condensed, pilot["cheap_n_grid"]) / esc.PILOT_SAMPLES
+    c_lo = (esc.estimated_cost(pilot["cheap_n_steps"], EscalationModel.condensed, pilot["cheap_n_grid"])
+            / esc.PILOT_SAMPLES)
     gain = speedup(float(pilot["correlation"]), c_hi, c_lo)
     print(f"pilot: rho {float(pilot['correlation']):.3f}, cost ratio {c_hi / c_lo:.2f}, predicted gain {gain:.2f}, "
           f"plan {plan}")

@@ -386,4 +386,5 @@ def test_a_paired_escalation_run_falls_back_to_plain_where_the_cheap_model_refus
     finally:
         mc_registry.unregister("refuses_every_bed")
     assert paired["estimator"] == EscalationEstimator.plain_monte_carlo and paired["cheap_samples"] == 0
-    assert paired["peak_var_theta"] == plain["peak_var_theta"] and paired["peak_var_theta_se"] == plain["peak_var_theta_se"]
+    assert (paired["peak_var_theta"], paired["peak_var_theta_se"]) == (plain["peak_var_theta"],
+                                                                       plain["peak_var_theta_se"])
