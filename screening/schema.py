@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from screening import excitations, laws
-from screening.status import (BestMethod, ContactRegime, EscalationModel, FitFlag, PointStatus, SampleState, SpotStatus,
-                              TargetMet, Trust, flag_attributes, probability_sources)
+from screening.status import (BestMethod, ContactRegime, EscalationEstimator, EscalationModel, FitFlag, PointStatus,
+                              SampleState, SpotStatus, TargetMet, Trust, flag_attributes, probability_sources)
 
 __all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
            "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
@@ -118,6 +118,11 @@ ACCURACY = {
     "esc_case": _v("1", "case index of the escalated point"),
     "esc_model": flag_attributes(EscalationModel, "Monte Carlo model of the escalated point"),
     "esc_samples": _v("1", "Monte Carlo samples run at the escalated point"),
+    "esc_estimator": flag_attributes(EscalationEstimator, "estimator of esc_peak_var_theta and of the point's "
+                                                          "p_overturn and p_exceed"),
+    "esc_cheap_samples": _v("1", "samples of the cheaper paired model at the escalated point (0: plain Monte Carlo)"),
+    "esc_correlation": _v("1", "correlation of the paired models' influence values of var_theta at its peak time "
+                               "(NaN without a paired model)"),
     "esc_cpu_time": _v("s", "CPU time of the Monte Carlo runs at the escalated point (pilot and top-up "
                             "included), measured"),
     "esc_cost": _v("s", "CPU time of the Monte Carlo runs at the escalated point estimated by the cost model "
@@ -151,6 +156,8 @@ MONTE_CARLO = {
     "p_uplift": _v("1", "fraction of Monte Carlo samples in uplift"),
     "peak_abs_theta": _v("rad", "peak |theta| of each Monte Carlo sample over the record (up to overturning "
                                 "or divergence)"),
+    "theta_sample": _v("rad", "rotation of each Monte Carlo sample on the output times (meaningless after the "
+                              "sample overturned or diverged)"),
     "overturned": _v("1", "Monte Carlo sample overturned (|theta| > atan(b/h))"),
     "diverged": _v("1", "Monte Carlo sample diverged (excluded from the statistics)"),
     "n_steps": _v("1", "integration steps of the sample (accepted + rejected)"),
@@ -199,9 +206,11 @@ FRAGILITY = {
 PROBABILITIES = {
     "p_overturn": _v("1", "probability that the block overturns during the record (|theta| > atan(b/h)), from "
                           "the model named by p_source"),
-    "p_overturn_se": _v("1", "standard error of p_overturn (Monte Carlo: binomial, Agresti-Coull; Gaussian: "
+    "p_overturn_se": _v("1", "standard error of p_overturn (Monte Carlo: binomial, Agresti-Coull, or the "
+                             "two-fidelity estimate's where esc_estimator says multifidelity; Gaussian: "
                              "from the band of the moments; NaN where p_source is unreliable)"),
-    "p_exceed_se": _v("1", "standard error of p_exceed (Monte Carlo: binomial, Agresti-Coull; Gaussian: from the "
+    "p_exceed_se": _v("1", "standard error of p_exceed (Monte Carlo: binomial, Agresti-Coull, or the two-fidelity "
+                           "estimate's where esc_estimator says multifidelity; Gaussian: from the "
                            "band of the moments; NaN where p_source is unreliable)"),
     "p_rocking_start": _v("1", "probability that the ground acceleration exceeds the bed's uplift acceleration "
                                "at least once during the record (random-vibration theory, closed form)"),

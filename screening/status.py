@@ -3,7 +3,7 @@
 The code spaces are declared once, as data, in ``screening/data/status_codes.toml``: each member's
 name, integer code and meaning.  This module turns each table into an :class:`enum.IntEnum` at
 import (``PointStatus``, ``SampleStatus``, ``DivergenceReason``, ``SampleState``, ``SpotStatus``,
-``Trust``, ``BestMethod``, ``EscalationModel``, ``TargetMet``, ``ContactRegime``, ``FitFlag``,
+``Trust``, ``BestMethod``, ``EscalationModel``, ``EscalationEstimator``, ``TargetMet``, ``ContactRegime``, ``FitFlag``,
 ``ProbabilitySource``); every member
 carries its ``meaning`` (plain language, for messages and documentation).  Compiled kernels read
 the members as integer constants (numba supports ``IntEnum``); files store the integer with CF
@@ -53,6 +53,7 @@ SpotStatus = code_space("SpotStatus")
 Trust = code_space("Trust")
 BestMethod = code_space("BestMethod")
 EscalationModel = code_space("EscalationModel")
+EscalationEstimator = code_space("EscalationEstimator")
 TargetMet = code_space("TargetMet")
 ContactRegime = code_space("ContactRegime")
 FitFlag = code_space("FitFlag")

@@ -10,7 +10,13 @@ estimate's sampling error that the cheap model explains, at the cheap model's pr
 * :func:`optimal_ratio` — how many cheap samples per expensive one minimise the variance at a
   given cost (and whether the cheap model is worth running at all);
 * :func:`speedup` — CPU saved at equal standard error against plain Monte Carlo of the expensive
-  model alone.
+  model alone;
+* :func:`control_variate_functional` — the same for a smooth functional of the samples (delta method on
+  its influence values), with :func:`multifidelity_variance` (the ensemble variance history behind
+  peak var_theta) and :func:`multifidelity_probabilities` (``p_overturn``, ``p_exceed``, conditional on
+  the valid samples as in the engine);
+* :func:`allocate` — expensive and cheap samples for a target standard error, or plain Monte Carlo
+  where the predicted gain is below :data:`MIN_GAIN` (the fallback rule).
 
 Pure functions on numpy arrays; no model is run here.  The quantities are means of per-sample
 values: an exceedance probability is the mean of the indicator ``peak |theta| > a`` (overturned
@@ -24,7 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ControlVariateEstimate", "control_variate_estimate", "optimal_ratio", "speedup"]
+__all__ = ["ControlVariateEstimate", "conditional_mean_influence", "control_variate_estimate",
+           "control_variate_functional", "multifidelity_probabilities", "multifidelity_variance", "optimal_ratio",
+           "Allocation", "allocate", "MIN_GAIN",
+           "cost_ratio_needed", "speedup", "variance_influence"]
 
 
 @dataclass(frozen=True)
@@ -53,13 +62,199 @@ class ControlVariateEstimate:
     n_cheap: float
 
 
-def _moments(y, x):
-    n = y.size
-    ym, xm = y.mean(), x.mean()
-    var_y = float(np.sum((y - ym) ** 2) / (n - 1))
-    var_x = float(np.sum((x - xm) ** 2) / (n - 1))
-    cov = float(np.sum((y - ym) * (x - xm)) / (n - 1))
-    return float(ym), float(xm), var_y, var_x, cov
+def _influence_moments(psi_y, psi_x):
+    """Sample variances and covariance (``ddof = 1``) of influence values along axis 0."""
+    n = psi_y.shape[0]
+    dy, dx = psi_y - psi_y.mean(axis=0), psi_x - psi_x.mean(axis=0)
+    return (np.sum(dy * dy, axis=0) / (n - 1), np.sum(dx * dx, axis=0) / (n - 1), np.sum(dy * dx, axis=0) / (n - 1))
+
+
+def control_variate_functional(value_y, influence_y, value_x, value_x_all, influence_x, n_cheap):
+    """Control-variate estimate of a smooth functional of the expensive model's distribution (delta method).
+
+    Parameters
+    ----------
+    value_y : float or ndarray
+        The functional from the ``n`` expensive samples (e.g. their sample variance at each time).
+    influence_y : ndarray, shape (n, ...)
+        Its per-sample influence values (first-order terms of the delta method; see Notes).
+    value_x, value_x_all : float or ndarray
+        The cheap model's functional from its ``n`` paired samples and from all ``n_cheap`` of them.
+    influence_x : ndarray, shape (n, ...)
+        The cheap model's influence values on the paired samples.
+    n_cheap : float
+        Cheap samples behind ``value_x_all`` (``>= n``; ``math.inf`` where ``value_x_all`` is exact).
+
+    Returns
+    -------
+    ControlVariateEstimate
+        With array fields where the functional is an array (one estimate per trailing index).
+
+    Notes
+    -----
+    A functional :math:`F` of the sample distribution is, to first order, the mean of its influence
+    values :math:`\\psi_i` (:math:`\\hat F - F \\approx \\bar\\psi`); a conditional mean
+    :math:`F = E[v g] / E[v]` over the valid samples (``v`` = 1) has :math:`\\psi_i = v_i (g_i - F) / \\bar v`,
+    a variance the same with :math:`g_i = (\\theta_i - \\mu)^2`.  The two-fidelity estimate and its variance
+    are those of the mean (eq. (2.7) in [1]) with the influence values in place of the samples ([2], section 3):
+
+    .. math:: \\hat F = \\hat F_y^{(n)} - \\alpha (\\hat F_x^{(n)} - \\hat F_x^{(N)}), \\quad
+              \\alpha = \\frac{\\widehat{\\mathrm{cov}}(\\psi_y, \\psi_x)}{\\widehat{\\mathrm{var}}(\\psi_x)}, \\quad
+              \\mathrm{Var}\\,\\hat F \\approx \\frac{\\mathrm{var}(\\psi_y)}{n}\\,[1 - (1 - n/N)\\rho_\\psi^2].
+
+    Where ``influence_x`` or ``influence_y`` is constant (no information) the weight is 0 and the plain
+    estimate is returned.
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [2] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
+       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
+       683-706, 2018.
+    """
+    psi_y, psi_x = np.asarray(influence_y, dtype=float), np.asarray(influence_x, dtype=float)
+    n = psi_y.shape[0]
+    var_y, var_x, cov = _influence_moments(psi_y, psi_x)
+    fraction = 1.0 if math.isinf(n_cheap) else 1.0 - n / n_cheap
+    informative = (var_x > 0) & (var_y > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        alpha = np.where(informative, cov / np.where(informative, var_x, 1.0), 0.0)
+        rho = np.where(informative, cov / np.sqrt(np.where(informative, var_x * var_y, 1.0)), np.nan)
+    value_y = np.asarray(value_y, dtype=float)
+    mean = value_y - alpha * (np.asarray(value_x, dtype=float) - np.asarray(value_x_all, dtype=float))
+    plain_se = np.sqrt(var_y / n)
+    rho2 = np.where(informative, np.minimum(np.nan_to_num(rho) ** 2, 1.0), 0.0)
+    se = np.sqrt(np.maximum(var_y / n * (1.0 - fraction * rho2), 0.0))
+    out = [mean, se, value_y, plain_se, alpha, rho]
+    if value_y.ndim == 0:
+        out = [float(a) for a in out]
+    return ControlVariateEstimate(*out, n, n_cheap)
+
+
+def conditional_mean_influence(g, valid=None):
+    """The mean of ``g`` over the valid samples and its per-sample influence values.
+
+    Parameters
+    ----------
+    g : ndarray, shape (n, ...)
+        Per-sample values (samples on axis 0; any value where ``valid`` is False).
+    valid : ndarray of bool, shape (n,), optional
+        The samples in the estimate (default: all).
+
+    Returns
+    -------
+    (value, influence) : the mean over the valid samples (NaN without any) and ``v_i (g_i - value) / mean(v)``.
+    """
+    g = np.asarray(g, dtype=float)
+    v = np.ones(g.shape[0], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    vv = v.reshape(v.shape + (1,) * (g.ndim - 1))
+    k = int(v.sum())
+    if k == 0:
+        nan = np.full(g.shape[1:], np.nan)
+        return nan, np.zeros_like(g)
+    value = np.where(vv, g, 0.0).sum(axis=0) / k
+    return value, np.where(vv, g - value, 0.0) * (g.shape[0] / k)
+
+
+def variance_influence(theta, valid=None):
+    """Ensemble variance (``ddof = 1``, about the sample mean, over the valid samples) and its influence values.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (n, n_t)
+        Per-sample histories [rad] (samples on axis 0).
+    valid : ndarray of bool, shape (n,), optional
+        Samples in the ensemble (the Monte Carlo engine leaves out overturned and diverged ones).
+
+    Returns
+    -------
+    (variance [rad2], influence [rad2]) of shapes ``(n_t,)`` and ``(n, n_t)``; NaN variance with fewer
+    than two valid samples.
+
+    Notes
+    -----
+    The influence of the variance :math:`\\sigma^2 = E[(\\theta - \\mu)^2]` is
+    :math:`(\\theta_i - \\mu)^2 - \\sigma^2` (the centring's own influence is second order), divided by the
+    valid fraction for the conditional variance: its variance over ``n`` is the engine's standard error
+    :math:`(m_4 - s^4) / n_{valid}` to first order.
+    """
+    theta = np.asarray(theta, dtype=float)
+    v = np.ones(theta.shape[0], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    k = int(v.sum())
+    if k < 2:
+        return np.full(theta.shape[1:], np.nan), np.zeros_like(theta)
+    mu = theta[v].mean(axis=0)
+    _, influence = conditional_mean_influence((theta - mu) ** 2, v)
+    return np.sum((theta[v] - mu) ** 2, axis=0) / (k - 1), influence
+
+
+def multifidelity_variance(theta_y, valid_y, theta_x, valid_x):
+    """Two-fidelity estimate of the ensemble variance history of the expensive model.
+
+    Parameters
+    ----------
+    theta_y : ndarray, shape (n, n_t)
+        The expensive model's histories [rad].
+    valid_y : ndarray of bool, shape (n,)
+        Its samples in the ensemble (neither overturned nor diverged).
+    theta_x : ndarray, shape (N, n_t)
+        The cheap model's histories [rad] on the same ground motions for its first ``n`` rows (``N >= n``).
+    valid_x : ndarray of bool, shape (N,)
+        The cheap model's samples in its ensemble.
+
+    Returns
+    -------
+    ControlVariateEstimate
+        Array fields of shape ``(n_t,)`` [rad2]: :func:`control_variate_functional` with the influence
+        values of :func:`variance_influence`.
+    """
+    theta_y, theta_x = np.asarray(theta_y, dtype=float), np.asarray(theta_x, dtype=float)
+    n = theta_y.shape[0]
+    if theta_x.shape[0] < n or theta_x.shape[1:] != theta_y.shape[1:]:
+        raise ValueError(f"parameter 'theta_x' must hold at least the {n} paired histories of 'theta_y' on the same "
+                         f"times (got shape {theta_x.shape} against {theta_y.shape})")
+    valid_x = np.asarray(valid_x, dtype=bool)
+    value_y, psi_y = variance_influence(theta_y, valid_y)
+    value_x, psi_x = variance_influence(theta_x[:n], valid_x[:n])
+    value_x_all, _ = variance_influence(theta_x, valid_x)
+    return control_variate_functional(value_y, psi_y, value_x, value_x_all, psi_x, theta_x.shape[0])
+
+
+def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturned_x, valid_x, levels=()):
+    """Two-fidelity ``p_overturn`` and ``p_exceed(a)`` of the expensive model from paired per-sample peaks.
+
+    Parameters
+    ----------
+    peak_y, overturned_y, valid_y : ndarray, shape (n,)
+        The expensive model's peak ``|theta|`` [rad], overturned flags and valid samples (not diverged).
+    peak_x, overturned_x, valid_x : ndarray, shape (N,)
+        The cheap model's, the first ``n`` on the same ground motions.
+    levels : sequence of float
+        Rotation thresholds [rad] of ``p_exceed``.
+
+    Returns
+    -------
+    list of ControlVariateEstimate
+        ``[p_overturn, p_exceed(levels[0]), ...]`` [1]: conditional means over the valid samples of the
+        indicators (:func:`conditional_mean_influence`; an overturned sample exceeds every level).
+    """
+    peak_y, peak_x = np.asarray(peak_y, dtype=float), np.asarray(peak_x, dtype=float)
+    n = peak_y.size
+    if peak_x.size < n:
+        raise ValueError(f"parameter 'peak_x' must hold at least the {n} paired samples of 'peak_y' "
+                         f"(got {peak_x.size})")
+    over_y, over_x = np.asarray(overturned_y, dtype=bool), np.asarray(overturned_x, dtype=bool)
+    v_y, v_x = np.asarray(valid_y, dtype=bool), np.asarray(valid_x, dtype=bool)
+    out = []
+    for level in (None, *levels):
+        with np.errstate(invalid="ignore"):
+            g_y = over_y if level is None else over_y | (peak_y > level)
+            g_x = over_x if level is None else over_x | (peak_x > level)
+        value_y, psi_y = conditional_mean_influence(g_y.astype(float), v_y)
+        value_x, psi_x = conditional_mean_influence(g_x[:n].astype(float), v_x[:n])
+        value_x_all, _ = conditional_mean_influence(g_x.astype(float), v_x)
+        out.append(control_variate_functional(value_y, psi_y, value_x, value_x_all, psi_x, peak_x.size))
+    return out
 
 
 def control_variate_estimate(y, x, x_extra=None, x_mean=None):
@@ -121,24 +316,15 @@ def control_variate_estimate(y, x, x_extra=None, x_mean=None):
     if x_mean is not None and x_extra is not None:
         raise ValueError("give either 'x_extra' (cheap samples) or 'x_mean' (the cheap model's exact mean), not both")
     n = y.size
-    ym, xm, var_y, var_x, cov = _moments(y, x)
-    plain_se = math.sqrt(var_y / n)
     if x_mean is not None:
-        mu_x, n_cheap, fraction = float(x_mean), math.inf, 1.0
+        mu_x, n_cheap = float(x_mean), math.inf
     else:
         extra = np.zeros(0) if x_extra is None else np.asarray(x_extra, dtype=float).reshape(-1)
         if not np.all(np.isfinite(extra)):
             raise ValueError("parameter 'x_extra' must be finite")
         n_cheap = n + extra.size
         mu_x = float((x.sum() + extra.sum()) / n_cheap)
-        fraction = 1.0 - n / n_cheap
-    if var_x <= 0.0 or var_y <= 0.0:
-        return ControlVariateEstimate(ym, plain_se, ym, plain_se, 0.0, math.nan, n, n_cheap)
-    alpha = cov / var_x
-    rho = cov / math.sqrt(var_x * var_y)
-    mean = ym - alpha * (xm - mu_x)
-    var = var_y / n * (1.0 - fraction * rho * rho)
-    return ControlVariateEstimate(mean, math.sqrt(max(var, 0.0)), ym, plain_se, alpha, rho, n, n_cheap)
+    return control_variate_functional(y.mean(), y - y.mean(), x.mean(), mu_x, x - x.mean(), n_cheap)
 
 
 #: Largest cheap-to-expensive sample ratio :func:`optimal_ratio` returns (a perfectly correlated
@@ -205,3 +391,107 @@ def speedup(correlation, cost_expensive, cost_cheap, ratio=None):
     rho2 = min(float(correlation) ** 2, 1.0)
     variance_factor = 1.0 - (1.0 - 1.0 / r) * rho2
     return cost_expensive / ((cost_expensive + r * cost_cheap) * variance_factor)
+
+
+#: The cheap model runs beyond its paired pilot samples only where the predicted :func:`speedup` from
+#: the pilot's correlation and costs is at least this (the margin covers the pilot's error in the
+#: correlation: about ``(1 - rho^2) / sqrt(n)``, 0.024 at ``rho = 0.9`` and 64 pilot samples).
+MIN_GAIN = 1.2
+
+
+@dataclass(frozen=True)
+class Allocation:
+    """The result of :func:`allocate`.
+
+    Attributes
+    ----------
+    estimator : ``"multifidelity"`` or ``"plain"`` (plain Monte Carlo of the expensive model).
+    n_expensive, n_cheap : samples of each model (``n_cheap`` 0 for ``"plain"``; else ``>= n_expensive``,
+        the first ``n_expensive`` paired).
+    ratio : cheap samples per expensive one (1 for ``"plain"``).
+    gain : predicted CPU of plain Monte Carlo over this allocation's at equal standard error.
+    """
+
+    estimator: str
+    n_expensive: int
+    n_cheap: int
+    ratio: float
+    gain: float
+
+
+def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN, max_ratio=MAX_RATIO):
+    """Samples of the expensive and the cheap model for the standard error of ``n_plain`` plain samples.
+
+    Parameters
+    ----------
+    correlation : float
+        Pilot correlation of the two models' influence values of the quantity planned for, in [-1, 1]
+        (NaN: no information, plain).
+    cost_expensive, cost_cheap : float
+        Cost per sample of each model [s], > 0.
+    n_plain : int
+        Expensive samples plain Monte Carlo needs for the target standard error.
+    min_gain : float
+        The least predicted :func:`speedup` worth the cheap model (default :data:`MIN_GAIN`).
+    max_ratio : float
+        Bound of the cheap-to-expensive ratio (:func:`optimal_ratio`).
+
+    Returns
+    -------
+    Allocation
+
+    Notes
+    -----
+    With ``r`` from :func:`optimal_ratio`, the two-fidelity variance per expensive sample is
+    :math:`\\sigma^2 [1 - (1 - 1/r) \\rho^2]`, so ``n = ceil(n_plain [1 - (1 - 1/r) rho^2])`` expensive and
+    ``ceil(r n)`` cheap samples give the plain standard error.  Rule: plain Monte Carlo (``n_plain``
+    samples, no cheap run beyond the pilot) unless the predicted speed-up is at least ``min_gain``; the
+    estimator is then never planned worse than plain Monte Carlo.
+    """
+    n_plain = int(n_plain)
+    if not (cost_expensive > 0 and cost_cheap > 0):
+        raise ValueError("parameters 'cost_expensive' and 'cost_cheap' must be > 0 [s]")
+    if not math.isfinite(correlation):
+        return Allocation("plain", n_plain, 0, 1.0, 1.0)
+    r = optimal_ratio(correlation, cost_expensive, cost_cheap, max_ratio)
+    gain = speedup(correlation, cost_expensive, cost_cheap, r)
+    if gain < min_gain:
+        return Allocation("plain", n_plain, 0, 1.0, 1.0)
+    rho2 = min(float(correlation) ** 2, 1.0)
+    n = max(3, math.ceil(n_plain * (1.0 - (1.0 - 1.0 / r) * rho2)))
+    return Allocation("multifidelity", n, max(n, math.ceil(r * n)), r, gain)
+
+
+def cost_ratio_needed(correlation, target_speedup):
+    """Expensive-to-cheap cost ratio at which the two-fidelity estimate reaches ``target_speedup``.
+
+    Parameters
+    ----------
+    correlation : float
+        Correlation of the two models' per-sample values, in [-1, 1].
+    target_speedup : float
+        The :func:`speedup` asked for, > 1.
+
+    Returns
+    -------
+    float
+        ``c_expensive / c_cheap`` [1]; ``math.inf`` where no cost ratio reaches it
+        (``target_speedup >= 1 / (1 - rho^2)``, the speed-up of free cheap samples).
+
+    Notes
+    -----
+    At the optimal ratio the cost times the variance per expensive sample is
+    :math:`(\\sqrt{c_1 (1 - \\rho^2)} + \\rho \\sqrt{c_2})^2` ([1], section 3.4), so the speed-up is
+    :math:`S = 1 / (\\sqrt{1 - \\rho^2} + \\rho / \\sqrt{w})^2` with :math:`w = c_1 / c_2`, and
+    :math:`w = \\rho^2 / (S^{-1/2} - \\sqrt{1 - \\rho^2})^2`.  (Without the bound :data:`MAX_RATIO`
+    and where the optimal ratio exceeds 1.)
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    """
+    rho = abs(float(correlation))
+    if not target_speedup > 1:
+        raise ValueError(f"parameter 'target_speedup' must be > 1 (got {target_speedup!r})")
+    gap = 1.0 / math.sqrt(target_speedup) - math.sqrt(max(1.0 - rho * rho, 0.0))
+    return math.inf if gap <= 0 else rho * rho / (gap * gap)

@@ -45,6 +45,7 @@ import time
 
 import numpy as np
 
+from screening import schema
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.condensation import get as get_condensation
@@ -256,7 +257,8 @@ def _with_probabilities(run):
 
 @_with_probabilities
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
-                seed=0, progress=None, condensation="paper", thresholds=None, strict_validity=False, **numerics):
+                seed=0, progress=None, condensation="paper", thresholds=None, strict_validity=False,
+                sample_histories=False, **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
 
     Parameters
@@ -292,6 +294,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     strict_validity : with True, a model asked for outside its measured validity
         (:meth:`~screening.solvers.mc_registry.MonteCarloModel.validity_problem`) raises ``ValueError``
         naming the rule instead of warning.
+    sample_histories : bool; True adds ``theta_sample`` (sample, t) [rad], every sample's rotation on the
+        output times (for estimators on the samples, e.g. :mod:`screening.analysis.multifidelity`).
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
         ``cutoff_factor`` [1], ``band`` [rad/s] (the model reads the samples low-passed at this band,
         the same realizations as every other model of the same seed and cutoff below it; default the
@@ -322,6 +326,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     n_samples = check_integer("n_samples", n_samples, 2)
     if not isinstance(strict_validity, bool):
         raise ValueError(f"parameter 'strict_validity' must be True or False (got {strict_validity!r})")
+    if not isinstance(sample_histories, (bool, np.bool_)):
+        raise ValueError(f"parameter 'sample_histories' must be True or False (got {sample_histories!r})")
     check_scalar_models(block, foundation, excitation)
     mc = resolve_model(model, block, foundation, excitation)
     model = mc.name
@@ -395,5 +401,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
                     input_band_note="the model read the synthesized samples (cutoff_rad_s) low-passed at "
                                     "input_band_rad_s: same seed, same components below it" if read_plan is not plan
                                     else "the model read the synthesized samples up to cutoff_rad_s")
+    if sample_histories:
+        ds["theta_sample"] = (("sample", "t"), theta, schema.attributes("theta_sample", schema.MONTE_CARLO))
     return ds
 

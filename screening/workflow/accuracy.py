@@ -9,6 +9,7 @@ report) after the linearization and before the spot checks.
 from __future__ import annotations
 
 import contextlib
+import math
 import uuid
 
 import numpy as np
@@ -70,7 +71,7 @@ def escalate(run):
     from screening.analysis import escalation as esc
     from screening.analysis.correction import best_estimates, point_features
     from screening.analysis.trust import shipped_calibration
-    from screening.status import BestMethod, EscalationModel
+    from screening.status import BestMethod, EscalationEstimator, EscalationModel
 
     acc = run.study.accuracy
     pts = point_table(run)
@@ -104,6 +105,7 @@ def escalate(run):
             "n_coupled": int(np.sum(models == EscalationModel.coupled)),
             "n_condensed": int(np.sum(models == EscalationModel.condensed)),
             "n_stiff_bed": int(np.sum(models == EscalationModel.stiff_bed)), "n_short": short,
+            "n_multifidelity": sum(1 for r in runs if int(r.get("estimator", 0)) == EscalationEstimator.multifidelity),
             "n_failed": failed, "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
             "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
@@ -161,7 +163,7 @@ def escalation_runs(run, order, models):
     from distributed import as_completed
 
     from screening.analysis import escalation as esc
-    from screening.status import EscalationModel
+    from screening.status import EscalationEstimator, EscalationModel
 
     study, store, acc = run.study, run.store, run.study.accuracy
     most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)
@@ -171,8 +173,17 @@ def escalation_runs(run, order, models):
     def index_of(j):
         return tuple(int(i) for i in np.unravel_index(order[j], study.shape))
 
-    def cost(j, r):
-        return esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
+    def cost(j, r, cheap=True):
+        """Estimated cost [s] of run ``r`` at point ``j`` (``cheap``: with its paired cheaper model's samples)."""
+        c = esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
+        if cheap and int(r.get("cheap_samples", 0)) > 0:
+            c += esc.estimated_cost(r["cheap_n_steps"], esc.PAIRED_MODEL[2], r["cheap_n_grid"])
+        return c
+
+    def partner(j):
+        """``(model, condensation)`` paired with point ``j``'s runs, or None (plain Monte Carlo only)."""
+        pair = esc.paired_model(models[j]) if acc.multifidelity else None
+        return None if pair is None else pair[:2]
 
     def load(record, j):
         """A kept result (``ESCALATION_RECORD``: with the cost of all its runs) or top-up run of point ``j``."""
@@ -200,10 +211,11 @@ def escalation_runs(run, order, models):
     topic = f"screening-escalation-samples-{token}"
     samples_done, subscribed = {}, False
 
-    def submit(j, samples, what):
+    def submit(j, samples, what, cheap_samples=0):
         model = EscalationModel(int(models[j])).name
+        cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
         return execution.submit_escalation(run.client, study, int(order[j]), samples, model,
-                                           key=f"escalate-{what}-{token}-{j:04d}",
+                                           key=f"escalate-{what}-{token}-{j:04d}", cheap=cheap,
                                            progress=(topic, 3 * j + ("pilot", "full", "topup").index(what)))
 
     def gather(futures):
@@ -260,7 +272,7 @@ def escalation_runs(run, order, models):
                 guess = max(pilot_costs, default=esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]))
                 if spent() + committed + guess > main_budget:
                     break
-                pilots[submit(j, esc.PILOT_SAMPLES, "pilot")] = j
+                pilots[submit(j, esc.PILOT_SAMPLES, "pilot", esc.PILOT_SAMPLES if partner(j) else 0)] = j
                 committed += guess
             if not pilots:
                 break
@@ -269,22 +281,32 @@ def escalation_runs(run, order, models):
             for j in sorted(pilot):
                 keep(j, pilot[j])
                 pilot_costs.append(float(pilot[j]["cost_s"]))
-                rate = float(pilot[j]["cost_s"]) / esc.PILOT_SAMPLES
-                needed[j] = (rate, esc.samples_needed(rel_se(pilot[j]), esc.PILOT_SAMPLES, acc.target, most))
-                costs.append(rate * (needed[j][1] + esc.PILOT_SAMPLES))
+                n = esc.samples_needed(rel_se(pilot[j]), esc.PILOT_SAMPLES, acc.target, most)
+                rate, n_cheap = cost(j, pilot[j], cheap=False) / esc.PILOT_SAMPLES, 0
+                if int(pilot[j].get("cheap_samples", 0)) > 0:       # a paired pilot: multi-fidelity if it pays
+                    plan = esc.paired_plan(pilot[j], models[j], esc.PILOT_SAMPLES, n)
+                    if plan.estimator == "multifidelity":
+                        rate_cheap = (cost(j, pilot[j]) - cost(j, pilot[j], cheap=False)) / esc.PILOT_SAMPLES
+                        n, n_cheap = plan.n_expensive, plan.n_cheap
+                        rate += rate_cheap * n_cheap / n          # per expensive sample, its cheap ones included
+                needed[j] = (rate, n, n_cheap)
+                costs.append(rate * n + float(pilot[j]["cost_s"]))
             # as many points as the budget affords at the samples the target needs (coverage and
             # accuracy both; never fewer than the correction needs), re-estimated after every wave
             affordable = esc.affordable_points(main_budget, float(np.median(costs))) if costs else len(todo)
             todo = todo[:max(affordable - loaded, w + WAVE)]
             full, committed = {}, 0.0
             for j in sorted(pilot):
-                rate, n = needed[j]
-                # a fair share of what is left for each point still to run
+                rate, wanted, n_cheap = needed[j]
+                # a fair share of what is left for each point still to run (a paired run keeps its ratio)
                 left = todo[todo.index(j):]
                 share = (main_budget - spent() - committed) / max(len(left), 1)
-                n = min(n, int(share / max(rate, 1e-300)))
-                if n >= 2 * esc.PILOT_SAMPLES and spent() + committed + rate * n <= main_budget:
-                    full[submit(j, n, "full")] = j
+                n = min(wanted, int(share / max(rate, 1e-300)))
+                n_cheap = math.ceil(n_cheap * n / wanted) if n_cheap else 0
+                big = (n_cheap >= 2 * esc.PILOT_SAMPLES and n >= esc.PILOT_SAMPLES) if n_cheap else (
+                    n >= 2 * esc.PILOT_SAMPLES)
+                if big and spent() + committed + rate * n <= main_budget:
+                    full[submit(j, n, "full", n_cheap)] = j
                     committed += rate * n
             finished = gather(full)
             for j in sorted(finished):
@@ -310,12 +332,14 @@ def escalation_runs(run, order, models):
             continue
         n = esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
         rate = cost(j, r) / max(int(r["samples"]), 1)
+        paired = int(r.get("estimator", EscalationEstimator.plain_monte_carlo)) == EscalationEstimator.multifidelity
+        n_cheap = math.ceil(int(r["cheap_samples"]) * n / int(r["samples"])) if paired else 0
         if n > int(r["samples"]) and spent() + committed + rate * n <= acc.budget_s:
             part = load(TOPUP_RECORD, j)
-            if part is not None and int(part["samples"]) == n:
+            if part is not None and int(part["samples"]) == n and int(part.get("cheap_samples", 0)) == n_cheap:
                 finished[j] = part
             else:
-                topup[submit(j, n, "topup")] = j
+                topup[submit(j, n, "topup", n_cheap)] = j
             committed += rate * n
     ran = gather(topup) if topup else {}
     for j in sorted(ran):
@@ -342,6 +366,7 @@ def accuracy_line(info):
     return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise; "
             f"Monte Carlo at {info['n_escalated']} ({info['n_coupled']} coupled, {info['n_condensed']} condensed"
             + (f", {info['n_stiff_bed']} stiff-bed" if info.get("n_stiff_bed") else "") + "; "
+            + (f"{info['n_multifidelity']} multi-fidelity; " if info.get("n_multifidelity") else "") +
             f"{info['n_short']} short of the target's standard error) for {info['cost_s']:.1f} of "
             f"{info['budget_s']:g} CPU s by the cost model ({info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "

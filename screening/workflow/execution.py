@@ -289,6 +289,21 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
     return out
 
 
+def spot_arrays(ds):
+    """A Monte Carlo dataset reduced to the arrays of a spot check: the histories, the sample counts, the
+    integration steps of all samples and the synthesis grid points they read, the per-sample peaks and states,
+    and the Monte Carlo model that ran (``mcs_model``, its registry code)."""
+    out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
+    n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
+    out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
+               n_used=np.int32(ds.sizes["sample"] - n_over - n_div), n_steps=np.int64(ds["n_steps"].values.sum()),
+               peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
+               sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
+    out["mcs_model"] = np.int8(mc_registry.code(ds.attrs["model"]))
+    out["n_grid"] = np.int64(ds.sizes["sample"] * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
+    return out
+
+
 def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None,
               progress=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
@@ -306,14 +321,7 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     kw = {"condensation": condensation} if mc.uses_condensation else {}
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=mc, t_end=t_end, dt=dt,
                      seed=seed, progress=_sample_events(progress), **kw)
-    out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
-    out["mcs_model"] = np.int8(mc_registry.code(mc.name))
-    out["n_grid"] = np.int64(samples * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
-    n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
-    out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
-               n_used=np.int32(samples - n_over - n_div), n_steps=np.int64(ds["n_steps"].values.sum()),
-               peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
-               sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
+    out = spot_arrays(ds)
     if linear is not None:
         t_out, rtol, max_steps, names = linear
         res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
@@ -323,15 +331,71 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     return out
 
 
-def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, progress=None):
+def paired_escalation(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, cheap_model,
+                      cheap_condensation, cheap_samples, progress=None):
+    """``samples`` samples of ``model`` and ``cheap_samples`` (``>= samples``) of the registered ``cheap_model`` (with
+    ``cheap_condensation`` where it reads one) on the same ground motions (the first ``samples`` paired).
+
+    Returns ``(arrays, extra)``: :func:`spot_arrays` of the expensive run with ``var_theta`` and ``var_theta_se``
+    the two-fidelity estimate (:func:`screening.analysis.multifidelity.multifidelity_variance`; ``var_theta_dot``
+    stays the plain one), and the cheap run's ``cheap_*`` results, the correlation of the influence values at the
+    peak of var_theta and the :class:`~screening.status.EscalationEstimator` code.  Where the cheap model refuses
+    the point (``ValueError`` before any work) the result is the plain one, with ``cheap_samples`` 0.
+    ``progress``: the expensive run's samples, as for :func:`spot_task`."""
+    from screening.analysis.multifidelity import multifidelity_variance
+    from screening.solvers.montecarlo import monte_carlo
+    from screening.status import EscalationEstimator
+
+    def run(name, cond, n, events=None):
+        kw = {"condensation": cond} if mc_registry.get(name).uses_condensation else {}
+        return monte_carlo(block, foundation, excitation, n_samples=n, model=name, t_end=t_end, dt=dt, seed=seed,
+                           sample_histories=True, progress=events, **kw)
+
+    hi = run(model, condensation, int(samples), _sample_events(progress))
+    out = spot_arrays(hi)
+    try:
+        lo = run(cheap_model, cheap_condensation, int(cheap_samples))
+    except ValueError:                  # the cheap model cannot carry this block on this bed: plain Monte Carlo
+        return out, {"estimator": np.int8(EscalationEstimator.plain_monte_carlo), "cheap_samples": np.int32(0),
+                     "correlation": np.float64(np.nan)}
+    cheap = spot_arrays(lo)
+    valid_hi = ~(hi["overturned"].values | hi["diverged"].values)
+    valid_lo = ~(lo["overturned"].values | lo["diverged"].values)
+    est = multifidelity_variance(hi["theta_sample"].values, valid_hi, lo["theta_sample"].values, valid_lo)
+    out["var_theta"], out["var_theta_se"] = np.asarray(est.mean, dtype=float), np.asarray(est.se, dtype=float)
+    at = int(np.nanargmax(est.mean)) if np.any(np.isfinite(est.mean)) else -1
+    code = EscalationEstimator.multifidelity if cheap_samples > samples else EscalationEstimator.plain_monte_carlo
+    extra = {"estimator": np.int8(code), "cheap_samples": np.int32(cheap_samples),
+             "cheap_n_steps": cheap["n_steps"],
+             "cheap_n_grid": cheap["n_grid"],
+             "correlation": np.float64(est.correlation[at] if at >= 0 else np.nan),
+             "cheap_peak_abs_theta": cheap["peak_abs_theta"], "cheap_sample_state": cheap["sample_state"]}
+    return out, extra
+
+
+def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, cheap=None,
+                    progress=None):
     """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks,
     the integration steps and synthesis grid points of all samples and whether the steps were the
     linearly implicit pair's (``n_steps``, ``n_grid``, ``rodas``, for the cost model) and the CPU time
-    it took (``cpu_time`` [s], of the worker thread).  ``progress``: as for :func:`spot_task`."""
+    it took (``cpu_time`` [s], of the worker thread).
+
+    ``cheap = (model, condensation, samples)``: a cheaper registered model also runs on the same ground
+    motions (:func:`paired_escalation`); peak var_theta is then the two-fidelity estimate and the result
+    carries the cheap run's per-sample peaks for the probabilities.  ``estimator`` says which estimate it is.
+    ``progress``: as for :func:`spot_task`.
+    """
     from screening.solvers.montecarlo import choose_integrator
+    from screening.status import EscalationEstimator
 
     start = time.thread_time()
-    run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, progress=progress)
+    if cheap is None:
+        run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, progress=progress)
+        extra = {"estimator": np.int8(EscalationEstimator.plain_monte_carlo), "cheap_samples": np.int32(0),
+                 "correlation": np.float64(np.nan)}
+    else:
+        run, extra = paired_escalation(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
+                                       *cheap, progress=progress)
     out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples),
            "n_grid": run["n_grid"], "rodas": np.bool_(choose_integrator(block, foundation, model) == "rodas")}
     for name in ("var_theta", "var_theta_dot"):
@@ -341,18 +405,20 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
         out[f"peak_{name}_se"] = np.float64(se[at] if at >= 0 else np.nan)
     for name in ("n_overturned", "n_diverged", "n_used", "n_steps", "peak_abs_theta", "sample_state"):
         out[name] = run[name]
+    out.update(extra)
     return out
 
 
-def submit_escalation(client, study, flat_index, samples, model, key, progress=None):
+def submit_escalation(client, study, flat_index, samples, model, key, cheap=None, progress=None):
     """Submit :func:`escalation_task` at flat grid index ``flat_index`` with ``samples`` samples of ``model``
-    (a registered Monte Carlo model's name; retried :data:`TASK_RETRIES` times); ``progress = (topic, run)``:
-    the samples done are sent as worker events (:func:`spot_task`)."""
+    (a registered Monte Carlo model's name; ``cheap``: the paired model of :func:`escalation_task`; retried
+    :data:`TASK_RETRIES` times); ``progress = (topic, run)``: the samples done are sent as worker events
+    (:func:`spot_task`)."""
     index = tuple(int(i) for i in np.unravel_index(flat_index, study.shape))
     case, values = point_values(study, index)
     return client.submit(escalation_task, *build_models(study.cases[case], values, study.t_end),
                          study.cases[case].condensation_model, int(samples), model, study.t_end, study.dt,
-                         study.accuracy.seed, progress, retries=TASK_RETRIES, pure=False, key=key)
+                         study.accuracy.seed, cheap, progress, retries=TASK_RETRIES, pure=False, key=key)
 
 
 def _sample_events(progress):

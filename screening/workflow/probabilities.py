@@ -25,7 +25,7 @@ import numpy as np
 
 from screening.analysis.probabilities import choose_sources, monte_carlo_source, sample_probabilities
 from screening.solvers import mc_registry
-from screening.status import EscalationModel, PointStatus, ProbabilitySource, SampleState
+from screening.status import EscalationEstimator, EscalationModel, PointStatus, ProbabilitySource, SampleState
 
 __all__ = ["CORRECTION_HISTORIES", "monte_carlo_runs", "levels_at", "corrected_estimates", "finish_probabilities",
            "probabilities_line"]
@@ -35,19 +35,49 @@ CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_
 
 
 def monte_carlo_runs(run):
-    """``[(flat index, model name, peak_abs_theta, sample_state)]`` of the escalated points and the spot checks."""
+    """``[(flat index, model name, peak_abs_theta, sample_state, paired)]`` of the escalated points and the spot
+    checks; ``paired``: ``(peak_abs_theta, sample_state)`` of the cheaper model paired with a multi-fidelity
+    escalated point, else None."""
     out = []
     if getattr(run, "escalated", None) is not None:
         flat, models, results = run.escalated
         for i, code, r in zip(flat, models, results):
-            out.append((int(i), EscalationModel(int(code)).name, r["peak_abs_theta"], r["sample_state"]))
+            paired = (r["cheap_peak_abs_theta"], r["cheap_sample_state"]) if (
+                int(r.get("estimator", EscalationEstimator.plain_monte_carlo)) == EscalationEstimator.multifidelity) \
+                else None
+            out.append((int(i), EscalationModel(int(code)).name, r["peak_abs_theta"], r["sample_state"], paired))
     if getattr(run, "spot_runs", None) is not None:
         spots, results = run.spot_runs
         for index, r in zip(spots, results):
             out.append((int(np.ravel_multi_index(index, run.study.shape)) if index else 0,
                         mc_registry.names()[int(r["mcs_model"])] if "mcs_model" in r else run.study.mcs.model,
-                        r["peak_abs_theta"], r["sample_state"]))
+                        r["peak_abs_theta"], r["sample_state"], None))
     return out
+
+
+def paired_probabilities(peaks, state, paired, levels):
+    """``(p, se)`` [1] of ``[p_overturn, p_exceed(levels)...]`` from a multi-fidelity escalated point's samples
+    and its paired cheaper model's (:func:`screening.analysis.multifidelity.multifidelity_probabilities`);
+    where a level carries no information in the pair (both models constant over the paired samples) the plain
+    binomial estimate of the point's own samples."""
+    from screening.analysis.multifidelity import multifidelity_probabilities
+
+    state, cheap_peaks, cheap_state = np.asarray(state), np.asarray(paired[0], dtype=float), np.asarray(paired[1])
+
+    def flags(s):
+        return s == SampleState.overturned, (s == SampleState.standing) | (s == SampleState.overturned)
+
+    over, valid = flags(state)
+    cheap_over, cheap_valid = flags(cheap_state)
+    peaks = np.asarray(peaks, dtype=float)
+    plain = sample_probabilities(peaks, over, valid, levels)
+    p = np.concatenate([[plain["p_overturn"]], plain["p_exceed"]])
+    se = np.concatenate([[plain["p_overturn_se"]], plain["p_exceed_se"]])
+    for k, est in enumerate(multifidelity_probabilities(peaks, over, valid, cheap_peaks, cheap_over, cheap_valid,
+                                                        levels)):
+        if np.isfinite(est.correlation):
+            p[k], se[k] = min(max(est.mean, 0.0), 1.0), est.se
+    return p, se
 
 
 def levels_at(study, theta_ul, slenderness):
@@ -122,15 +152,18 @@ def finish_probabilities(run):
 
     levels = levels_at(study, res.read("theta_ul"), res.read("slenderness"))
     used = np.zeros(n)
-    for flat, model, peaks, state in monte_carlo_runs(run):
+    for flat, model, peaks, state, paired in monte_carlo_runs(run):
         state = np.asarray(state)
         valid = (state == SampleState.standing) | (state == SampleState.overturned)
         if valid.sum() <= used[flat]:
             continue
-        got = sample_probabilities(np.asarray(peaks, dtype=float), state == SampleState.overturned, valid,
-                                   levels[flat, 1:])
-        p[flat] = np.concatenate([[got["p_overturn"]], got["p_exceed"]])
-        se[flat] = np.concatenate([[got["p_overturn_se"]], got["p_exceed_se"]])
+        if paired is not None:
+            p[flat], se[flat] = paired_probabilities(peaks, state, paired, levels[flat, 1:])
+        else:
+            got = sample_probabilities(np.asarray(peaks, dtype=float), state == SampleState.overturned, valid,
+                                       levels[flat, 1:])
+            p[flat] = np.concatenate([[got["p_overturn"]], got["p_exceed"]])
+            se[flat] = np.concatenate([[got["p_overturn_se"]], got["p_exceed_se"]])
         source[flat] = monte_carlo_source(model)
         used[flat] = valid.sum()
 

@@ -53,6 +53,7 @@ Example (SI units throughout)::
     target = 0.15               # relative error of peak var_theta (0 < target <= 1; absent: no escalation)
     budget_s = 600              # CPU seconds of Monte Carlo at most (default 600)
     seed = 0
+    multifidelity = false       # true: pair coupled runs with the condensed model where it pays (docs/multifidelity.md)
 
     [mcs]                       # optional Monte Carlo spot checks
     points = "auto"             # or [{eps = 6e7, S0 = 1e-3}, {index = {eps = 0, S0 = 19}}]
@@ -182,14 +183,16 @@ class Fragility:
 @dataclass(frozen=True)
 class Accuracy:
     """The ``[accuracy]`` table: ``target`` (relative error of peak var_theta [1]), ``budget_s`` (CPU
-    seconds of Monte Carlo [s]), the Monte Carlo ``seed`` and ``model``: ``"auto"`` (the stiff-bed model
+    seconds of Monte Carlo [s]), the Monte Carlo ``seed``, ``model``: ``"auto"`` (the stiff-bed model
     where its measured validity holds, elsewhere condensed where the calibration shows it within the
-    target, else coupled) or a registered model run at every escalated point."""
+    target, else coupled) or a registered model run at every escalated point, and ``multifidelity`` (pair
+    the coupled runs with a cheap model where the pilot says it pays: :mod:`screening.analysis.multifidelity`)."""
 
     target: float
     budget_s: float = DEFAULT_BUDGET_S
     seed: int = 0
     model: str = "auto"
+    multifidelity: bool = False
 
 
 @dataclass(frozen=True)
@@ -412,7 +415,7 @@ def _fragility(raw):
 def _accuracy(raw, cases=(), sweeps=None):
     """``[accuracy]``: absent (or without ``target``) keeps today's behaviour (no escalation)."""
     tbl = table(raw, "accuracy")
-    check_keys(tbl, ("target", "budget_s", "seed", "model"), "accuracy.")
+    check_keys(tbl, ("target", "budget_s", "seed", "model", "multifidelity"), "accuracy.")
     budget = check_value("accuracy.budget_s", tbl.get("budget_s", DEFAULT_BUDGET_S), 0.0, False, MAX_BUDGET_S)
     seed = integer(tbl, "seed", 0, 0, "accuracy.", limits.MAX_SEED)
     model = choice(tbl, "model", MCS_MODELS, "accuracy.", model_choice.AUTO)
@@ -420,7 +423,10 @@ def _accuracy(raw, cases=(), sweeps=None):
         return None
     target = check_value("accuracy.target", tbl["target"], 0.0, False, 1.0)
     check_model_validity(model, cases, sweeps or {}, False, "accuracy.")
-    return Accuracy(target, budget, seed, model)
+    paired = tbl.get("multifidelity", False)
+    if not isinstance(paired, bool):
+        raise StudyError(f"accuracy.multifidelity: must be true or false (got {type_name(paired)})")
+    return Accuracy(target, budget, seed, model, paired)
 
 
 def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):

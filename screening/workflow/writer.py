@@ -465,6 +465,12 @@ class ResultFile:
         var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
         var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
         var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
+        var("esc_estimator", "i1", ("escalation",), np.array([r.get("estimator", 0) for r in runs], dtype=np.int8),
+            fill=False)
+        var("esc_cheap_samples", "i4", ("escalation",), np.array([r.get("cheap_samples", 0) for r in runs],
+                                                                  dtype=np.int32), fill=False)
+        var("esc_correlation", "f8", ("escalation",), np.array([r.get("correlation", np.nan) for r in runs],
+                                                                dtype=float))
         var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
         var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
         var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
