@@ -9,7 +9,8 @@ Prints four tables:
 
 0. **What sets the step.**  The statue block on beds k = 1e8 … 1e11 (below) at the default input band
    (3 x the larger of the rocking and vertical frequencies) and at the ground's band (an explicit cutoff
-   at ``GROUND_BAND_LIMIT_HZ``, 25 Hz): CPU per sample split into synthesis and integration, steps,
+   at ``GROUND_BAND_LIMIT_HZ``, 25 Hz), and at the default band on a synthesis grid of oversampling 2
+   instead of the default 4 (half the grid points the synthesis computes): CPU per sample split into synthesis and integration, steps,
    rejected steps, the mean accepted step times the vertical frequency ``h w_v`` against the explicit
    pair's stability bound on that mode (:func:`screening.kernels.dopri.stability_bound` at the mode's
    damping ratio), and the peak ``var_theta`` (how much of the answer comes from the input above the
@@ -49,7 +50,7 @@ from screening.kernels.dopri import stability_bound  # noqa: E402
 from screening.model import Block, Foundation  # noqa: E402
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
 from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo, vertical_damping_ratio  # noqa: E402
-from screening.solvers.synthesis import (default_cutoff, grid_points, spectral_plan, stationary_samples,  # noqa: E402
+from screening.solvers.synthesis import (OVERSAMPLING, default_cutoff, grid_points, spectral_plan, stationary_samples,  # noqa: E402
                                          vertical_frequency)
 from screening.status import EscalationModel  # noqa: E402
 
@@ -87,9 +88,9 @@ def timed(block, foundation, excitation, n, repeat=None, **kw):
     return ds, float(np.median(cpu))
 
 
-def synthesis_cpu(block, foundation, excitation, n, cutoff=None):
+def synthesis_cpu(block, foundation, excitation, n, cutoff=None, oversampling=OVERSAMPLING):
     """CPU seconds per sample of the input synthesis alone (FFT, modulation, rate), median of ``REPEAT``."""
-    plan = spectral_plan(excitation, T_END, cutoff or default_cutoff(block, foundation))
+    plan = spectral_plan(excitation, T_END, cutoff or default_cutoff(block, foundation), oversampling)
     q = excitation.envelope(plan.times)
     cpu = []
     for _ in range(REPEAT[0]):
@@ -106,18 +107,18 @@ def rodas_run(ds):
     return ds.attrs["integrator"].startswith("adaptive Ros")
 
 
-def predicted(ds, model, n, block, foundation, with_grid=True):
+def predicted(ds, model, n, block, foundation, with_grid=True, oversampling=OVERSAMPLING):
     steps = int(ds["n_steps"].sum())
-    grid = n * grid_points(T_END, ds.attrs["cutoff_rad_s"]) if with_grid else 0
+    grid = n * grid_points(T_END, ds.attrs["cutoff_rad_s"], oversampling) if with_grid else 0
     return esc.estimated_cost(steps, int(EscalationModel[model]), grid, rodas_run(ds))
 
 
-def record(ratios, name, ds, model, n, block, foundation, cpu, calibration=False):
+def record(ratios, name, ds, model, n, block, foundation, cpu, calibration=False, oversampling=OVERSAMPLING):
     """One row of the cost-model table: predicted with and without the grid term, and the counts."""
-    ratios.append(dict(name=name, pred=predicted(ds, model, n, block, foundation), cpu=cpu,
-                       old=predicted(ds, model, n, block, foundation, with_grid=False),
+    ratios.append(dict(name=name, pred=predicted(ds, model, n, block, foundation, oversampling=oversampling),
+                       cpu=cpu, old=predicted(ds, model, n, block, foundation, with_grid=False),
                        steps=float(ds["n_steps"].sum()),
-                       grid=float(n * grid_points(T_END, ds.attrs["cutoff_rad_s"])),
+                       grid=float(n * grid_points(T_END, ds.attrs["cutoff_rad_s"], oversampling)),
                        model=model, rodas=rodas_run(ds), calibration=calibration))
 
 
@@ -134,20 +135,24 @@ def step_table(n, ratios):
     print(f"\n== 0. what sets the step: statue block, lam = 30 k; {n} samples x {T_END:g} s; default rtol; "
           f"default band (3 x max(w_r, w_v)) against the ground's band {GROUND_BAND_LIMIT_HZ:g} Hz "
           f"(cutoff {band:.0f} rad/s)")
-    print("| k [N/m2] | w_v [rad/s] | band [rad/s] | integrator | synthesis ms/sample | integration ms/sample "
-          "| steps | rejected | h w_v | DOPRI bound on h w_v | peak var_theta |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| k [N/m2] | w_v [rad/s] | band [rad/s] | oversampling | integrator | synthesis ms/sample "
+          "| integration ms/sample | steps | rejected | h w_v | DOPRI bound on h w_v | peak var_theta |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for k in (1e8, 1e9, 1e10, 1e11):
         bed = Foundation(k=k, lam=30.0 * k, eps=0.0)
         w_v = vertical_frequency(STATUE, bed)
         bound = stability_bound(vertical_damping_ratio(STATUE, bed))
-        for cutoff, integrators in ((default_cutoff(STATUE, bed), ("dopri",)), (band, ("dopri", "rodas"))):
-            synth = synthesis_cpu(STATUE, bed, STATUE_MOTION, n, cutoff)
+        default = default_cutoff(STATUE, bed)
+        for cutoff, oversampling, integrators in ((default, OVERSAMPLING, ("dopri",)), (default, 2, ("dopri",)),
+                                                  (band, OVERSAMPLING, ("dopri", "rodas"))):
+            synth = synthesis_cpu(STATUE, bed, STATUE_MOTION, n, cutoff, oversampling)
             for integrator in integrators:
-                ds, c = timed(STATUE, bed, STATUE_MOTION, n, integrator=integrator, cutoff=cutoff)
-                record(ratios, f"statue k={k:g} {integrator} band {cutoff:.0f}", ds, "coupled", n, STATUE, bed, c)
+                ds, c = timed(STATUE, bed, STATUE_MOTION, n, integrator=integrator, cutoff=cutoff,
+                              oversampling=oversampling)
+                record(ratios, f"statue k={k:g} {integrator} band {cutoff:.0f} x{oversampling}", ds, "coupled", n,
+                       STATUE, bed, c, oversampling=oversampling)
                 h = ds.attrs["dt_integration_mean"]
-                print(f"| {k:.0e} | {w_v:,.0f} | {cutoff:,.0f} | {integrator} | {1e3 * synth:.2f} "
+                print(f"| {k:.0e} | {w_v:,.0f} | {cutoff:,.0f} | {oversampling} | {integrator} | {1e3 * synth:.2f} "
                       f"| {1e3 * (c / n - synth):.2f} | {float(ds.n_steps.mean()):,.0f} | {rejected_fraction(ds):.1%} "
                       f"| {h * w_v:.2f} | {bound:.2f} | {float(np.nanmax(ds.var_theta)):.3e} |", flush=True)
 
