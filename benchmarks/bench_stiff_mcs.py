@@ -22,7 +22,9 @@ Prints four tables:
    ``rtol``; and their accuracy against a tight-tolerance run (``dopri``, ``rtol = 1e-10``) on the same
    samples: peak ``var_theta`` change in units of its standard error, and per-sample peak ``|theta|``
    errors (median and largest, relative).
-2. **Paper block** (m = 8.67 kg, b = 0.035 m, h = 0.21 m, k = 2.89e7, lam = 8.95e8, eps = 6e7; white noise
+2. **Paper block**, first a per-part profile of one step (compiled loops of 2 M calls: the cubic
+   Hermite reading of the input, the coupled right-hand side in full contact and in uplift, ``sin`` and
+   ``cos``), then (m = 8.67 kg, b = 0.035 m, h = 0.21 m, k = 2.89e7, lam = 8.95e8, eps = 6e7; white noise
    S0 = 2.4e-4): CPU seconds per 1000 samples of the coupled and condensed models, split into input
    synthesis and integration.
 3. **Cost model** (:func:`screening.analysis.escalation.estimated_cost`): predicted / measured CPU for
@@ -42,6 +44,9 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
+import math  # noqa: E402
+
+import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
 from screening.analysis import escalation as esc  # noqa: E402
@@ -49,6 +54,9 @@ from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff  # 
 from screening.kernels.dopri import stability_bound  # noqa: E402
 from screening.model import Block, Foundation  # noqa: E402
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.condensation import get as get_condensation  # noqa: E402
+from screening.solvers import mcs_kernels as kern  # noqa: E402
+from screening.solvers.mc_models import quasi_static_indentation  # noqa: E402
 from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo, vertical_damping_ratio  # noqa: E402
 from screening.solvers.synthesis import (OVERSAMPLING, default_cutoff, grid_points, spectral_plan, stationary_samples,  # noqa: E402
                                          vertical_frequency)
@@ -189,6 +197,69 @@ def stiff_table(n, ratios):
               f"| {dm / base:.1f} | {dv:+.2f} | {de:.1e} / {dx:.1e} | {rv:+.2f} | {re_:.1e} / {rx:.1e} |", flush=True)
 
 
+@numba.njit(cache=True)
+def _loop_hermite(acc, acc_dot, dt, n):
+    total = 0.0
+    t_span = dt * (acc.shape[1] - 1)
+    t = 0.0
+    for _ in range(n):                   # marching through the record, as the stages do
+        t += 0.37 * dt
+        if t >= t_span:
+            t -= t_span
+        total += kern._hermite(0, acc, acc_dot, dt, t)
+    return total
+
+
+@numba.njit(cache=True)
+def _loop_rhs(models, theta, z_cb, n):
+    total = 0.0
+    for i in range(n):
+        a1, a3 = kern.coupled_accelerations(theta * (1.0 + 1e-9 * i), 0.01, z_cb, 1e-4, 0.5, models[0])
+        total += a1 + a3
+    return total
+
+
+@numba.njit(cache=True)
+def _loop_trig(theta, n):
+    total = 0.0
+    for i in range(n):
+        x = theta * (1.0 + 1e-9 * i)
+        total += math.sin(x) + math.cos(x)
+    return total
+
+
+def per_call_ns(fn, *args, n=2_000_000):
+    """CPU nanoseconds per iteration of a compiled loop of ``n`` calls (median of ``REPEAT``; compiled first)."""
+    fn(*args, 10)
+    cpu = []
+    for _ in range(REPEAT[0]):
+        t0 = time.process_time()
+        fn(*args, n)
+        cpu.append(time.process_time() - t0)
+    return 1e9 * float(np.median(cpu)) / n
+
+
+def profile_table():
+    """Per-part cost of one evaluation of the coupled right-hand side on the paper block."""
+    plan = spectral_plan(PAPER_MOTION, T_END, default_cutoff(PAPER, PAPER_BED))
+    acc, acc_dot = stationary_samples(plan, 0, np.arange(1))
+    models = kern.model_record(PAPER, PAPER_BED, get_condensation("paper"))[None]
+    theta_ul = float(models[0]["theta_ul"])
+    contact = (0.3 * theta_ul, quasi_static_indentation(PAPER, PAPER_BED, 0.3 * theta_ul))
+    uplift = (3.0 * theta_ul, quasi_static_indentation(PAPER, PAPER_BED, 3.0 * theta_ul))
+    parts = {"cubic Hermite input": per_call_ns(_loop_hermite, acc, acc_dot, plan.dt),
+             "coupled right-hand side, full contact (sin, cos, resultants, equations)":
+                 per_call_ns(_loop_rhs, models, *contact),
+             "coupled right-hand side, uplift": per_call_ns(_loop_rhs, models, *uplift),
+             "of which sin + cos": per_call_ns(_loop_trig, contact[0])}
+    print("\n== 2a. per-part profile (paper block; ns per call, compiled loops of 2 M calls)")
+    print("| part | ns |")
+    print("|---|---|")
+    for name, ns in parts.items():
+        print(f"| {name} | {ns:.1f} |")
+    return parts
+
+
 def paper_table(n, ratios):
     print(f"\n== 2. paper block on the paper bed (eps = 6e7), white noise S0 = {PAPER_MOTION.S0:g}; {n} samples; "
           f"CPU s per 1000 samples x {T_END:g} s")
@@ -254,6 +325,7 @@ def main():
     if not args.cost_only:
         step_table(args.samples, ratios)
         stiff_table(args.samples, ratios)
+        profile_table()
         paper_table(4 * args.samples, ratios)
     calibration_table(args.samples, ratios)
 
