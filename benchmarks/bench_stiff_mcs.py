@@ -118,7 +118,7 @@ def rodas_run(ds):
 def predicted(ds, model, n, block, foundation, with_grid=True, oversampling=OVERSAMPLING):
     steps = int(ds["n_steps"].sum())
     grid = n * grid_points(T_END, ds.attrs["cutoff_rad_s"], oversampling) if with_grid else 0
-    return esc.estimated_cost(steps, int(EscalationModel[model]), grid, rodas_run(ds))
+    return esc.estimated_cost(steps, int(EscalationModel[model]), grid, rodas_run(ds), n)
 
 
 def record(ratios, name, ds, model, n, block, foundation, cpu, calibration=False, oversampling=OVERSAMPLING):
@@ -127,7 +127,7 @@ def record(ratios, name, ds, model, n, block, foundation, cpu, calibration=False
                        cpu=cpu, old=predicted(ds, model, n, block, foundation, with_grid=False),
                        steps=float(ds["n_steps"].sum()),
                        grid=float(n * grid_points(T_END, ds.attrs["cutoff_rad_s"], oversampling)),
-                       model=model, rodas=rodas_run(ds), calibration=calibration))
+                       model=model, rodas=rodas_run(ds), calibration=calibration, samples=n))
 
 
 def rejected_fraction(ds):
@@ -284,7 +284,8 @@ def calibration_table(n, ratios):
             ds, c = timed(block, bed, motion, n, model=model)
             record(ratios, f"calibration: {name} {model}", ds, model, n, block, bed, c, calibration=True)
     print(f"\n== 3. cost model: STEP_COST_S {dict((m.name, v) for m, v in esc.STEP_COST_S.items())}, "
-          f"RODAS_STEP_FACTOR {esc.RODAS_STEP_FACTOR:g}, GRID_COST_S {esc.GRID_COST_S:g} s")
+          f"RODAS_STEP_FACTOR {esc.RODAS_STEP_FACTOR:g}, GRID_COST_S {esc.GRID_COST_S:g} s "
+          f"+ GRID_DOUBLING_COST_S {esc.GRID_DOUBLING_COST_S:g} s per doubling of {esc.GRID_REFERENCE_POINTS} points")
     print("| run | steps | grid points | measured CPU s | predicted s | measured / predicted "
           "| measured / steps term alone |")
     print("|---|---|---|---|---|---|---|")
@@ -295,13 +296,16 @@ def calibration_table(n, ratios):
         ratio = np.array([r["cpu"] / r["pred"] for r in rows])
         print(f"measured / predicted, {label}: {ratio.min():.2f} .. {ratio.max():.2f} over {ratio.size} runs "
               f"({np.sum(np.abs(ratio - 1) <= 0.25)} within +-25 %)")
-    # least squares on the relative error: cpu = a_coupled steps_c + a_condensed steps_k + g grid (RODAS steps x f)
-    x = np.array([[r["steps"] * (r["model"] == "coupled") * (1 + 0.6 * r["rodas"]),
-                   r["steps"] * (r["model"] == "condensed") * (1 + 0.6 * r["rodas"]), r["grid"]] for r in ratios])
+    # least squares on the relative error: cpu = a_coupled steps_c + a_condensed steps_k
+    #   + grid (g + g2 log2(grid per sample / reference)), RODAS steps x RODAS_STEP_FACTOR
+    f = esc.RODAS_STEP_FACTOR
+    x = np.array([[r["steps"] * (r["model"] == "coupled") * (f if r["rodas"] else 1.0),
+                   r["steps"] * (r["model"] == "condensed") * (f if r["rodas"] else 1.0), r["grid"],
+                   r["grid"] * np.log2(r["grid"] / r["samples"] / esc.GRID_REFERENCE_POINTS)] for r in ratios])
     y = np.array([r["cpu"] for r in ratios])
     coef, *_ = np.linalg.lstsq(x / y[:, None], np.ones_like(y), rcond=None)
-    print(f"relative least-squares fit (RODAS step = 1.6 explicit steps): coupled {coef[0]:.3g} s/step, "
-          f"condensed {coef[1]:.3g} s/step, grid {coef[2]:.3g} s/point")
+    print(f"relative least-squares fit (RODAS step = {f:g} explicit steps): coupled {coef[0]:.3g} s/step, "
+          f"condensed {coef[1]:.3g} s/step, grid {coef[2]:.3g} s/point + {coef[3]:.3g} s/point per doubling")
 
 
 def main():

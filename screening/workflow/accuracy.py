@@ -143,7 +143,8 @@ def escalation_runs(run, order, models):
         return tuple(int(i) for i in np.unravel_index(order[j], study.shape))
 
     def cost(j, r):
-        return esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
+        return esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)),
+                                  int(r.get("samples", 1)))
 
     def load(record, j):
         """A kept result (``ESCALATION_RECORD``: with the cost of all its runs) or top-up run of point ``j``."""
