@@ -1,19 +1,19 @@
 """Monte Carlo cost against bed stiffness, the two sample integrators, and the cost model, in one run.
 
-Run (one core, under the shared lock; about 8 minutes on the development machine):
+Run (one core, under the shared lock; about 10 minutes on the loaded development machine):
 
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD \\
-        .venv/bin/python benchmarks/bench_stiff_mcs.py [--samples 24]
+        .venv/bin/python benchmarks/bench_stiff_mcs.py [--samples 24] [--repeat 3]
 
-Prints four tables:
+Prints five tables:
 
 0. **What sets the step.**  The statue block on beds k = 1e8 … 1e11 (below) at the default input band
    (3 x the larger of the rocking and vertical frequencies) and at the ground's band (an explicit cutoff
    at ``GROUND_BAND_LIMIT_HZ``, 25 Hz), and at the default band on a synthesis grid of oversampling 2
-   instead of the default 4 (half the grid points the synthesis computes): CPU per sample split into synthesis and integration, steps,
-   rejected steps, the mean accepted step times the vertical frequency ``h w_v`` against the explicit
-   pair's stability bound on that mode (:func:`screening.kernels.dopri.stability_bound` at the mode's
-   damping ratio), and the peak ``var_theta`` (how much of the answer comes from the input above the
+   instead of the default 4 (half the grid points the synthesis computes): CPU per sample split into
+   synthesis and integration, steps, rejected steps, the mean accepted step times the vertical
+   frequency ``h w_v`` against the explicit pair's stability bound on that mode
+   (:func:`screening.kernels.dopri.stability_bound` at the mode's damping ratio), and the peak ``var_theta`` (how much of the answer comes from the input above the
    ground's band).
 1. **Stiff beds.**  The 600 kg statue block (m = 600 kg, b = 0.2 m, h = 0.8 m) on Hunt–Crossley beds
    k = 1e8 … 1e11 N/m2 (lam = 30 k, eps = 0) under the statue's Kanai–Tajimi motion (S0 = 3e-3 m2/s3,
@@ -58,8 +58,8 @@ from screening.condensation import get as get_condensation  # noqa: E402
 from screening.solvers import mcs_kernels as kern  # noqa: E402
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: E402
 from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo, vertical_damping_ratio  # noqa: E402
-from screening.solvers.synthesis import (OVERSAMPLING, default_cutoff, grid_points, spectral_plan, stationary_samples,  # noqa: E402
-                                         vertical_frequency)
+from screening.solvers.synthesis import (OVERSAMPLING, default_cutoff, grid_points,  # noqa: E402
+                                         spectral_plan, stationary_samples, vertical_frequency)
 from screening.status import EscalationModel  # noqa: E402
 
 ENVELOPE = Envelope(4.0, 2.0)
