@@ -13,8 +13,8 @@ Prints five tables:
    instead of the default 4 (half the grid points the synthesis computes): CPU per sample split into
    synthesis and integration, steps, rejected steps, the mean accepted step times the vertical
    frequency ``h w_v`` against the explicit pair's stability bound on that mode
-   (:func:`screening.kernels.dopri.stability_bound` at the mode's damping ratio), and the peak ``var_theta`` (how much of the answer comes from the input above the
-   ground's band).
+   (:func:`screening.kernels.dopri.stability_bound` at the mode's damping ratio), and the peak
+   ``var_theta`` (how much of the answer comes from the input above the ground's band).
 1. **Stiff beds.**  The 600 kg statue block (m = 600 kg, b = 0.2 m, h = 0.8 m) on Hunt–Crossley beds
    k = 1e8 … 1e11 N/m2 (lam = 30 k, eps = 0) under the statue's Kanai–Tajimi motion (S0 = 3e-3 m2/s3,
    heavy uplift): CPU per sample and steps per sample of the explicit pair (``integrator="dopri"``,
