@@ -45,20 +45,27 @@ SAMPLE_SAFETY = 1.5
 #: Share of the budget the pilot and main runs may plan with; the rest is for the top-up round.
 MAIN_SHARE = 0.85
 #: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
-#: :class:`EscalationModel` (explicit pair, 20 s records, numba, one thread).  With :data:`GRID_COST_S`
-#: fitted to the CPU time of the calibration beds by ``benchmarks/bench_stiff_mcs.py`` (relative least
-#: squares: 0.32 and 0.13 us per step, 55 ns per grid point; the step costs here are ~1.1x those); there the
-#: measured / predicted ratio is 0.79-1.24 on every bed, both models and both integrators.
-STEP_COST_S = {EscalationModel.condensed: 0.15e-6, EscalationModel.coupled: 0.35e-6,
+#: :class:`EscalationModel` (explicit pair, 20 s records, numba, one thread).  With the grid terms
+#: below, fitted to the median CPU time of 38 runs (the calibration beds, the statue block on k = 1e8
+#: ... 1e11, both integrators, both models) by ``benchmarks/bench_stiff_mcs.py`` (relative least
+#: squares); there the measured / predicted ratio is 0.87-1.16 on every run.
+STEP_COST_S = {EscalationModel.condensed: 0.14e-6, EscalationModel.coupled: 0.41e-6,
                # stiff-bed model: its exact full-contact steps cost ~20 ns, its adaptive steps in uplift ~1 us,
                # so the mean depends on the uplift; 0.2 us fits the escalated points of the statue on k = 1e10
                # (studies/statue_accuracy.toml at PGA 1-5.5 m/s2: 10.5 CPU s measured, 25.4 s predicted at 0.47 us)
                EscalationModel.stiff_bed: 0.2e-6}
 #: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
-#: rate of the input).  The input is band-limited at three times the larger of the rocking and
-#: vertical frequencies, so on a stiff bed the grid grows as ``sqrt(k)``: on the paper block at
-#: k = 1e10 it is ~690,000 points per 20 s sample, and its synthesis costs as much as the integration.
-GRID_COST_S = 55e-9
+#: rate of the input) for a grid of :data:`GRID_REFERENCE_POINTS` points per sample.  The input is
+#: band-limited at three times the larger of the rocking and vertical frequencies, so on a stiff bed
+#: the grid grows as ``sqrt(k)``: on the paper block at k = 1e10 it is ~690,000 points per 20 s
+#: sample, and its synthesis costs as much as the integration.
+GRID_COST_S = 39e-9
+#: Cost model: CPU seconds added per grid point each time a sample's grid doubles (the FFT's
+#: ``log2 n`` passes and a working set that outgrows the caches): a point of a 690,000-point grid
+#: costs ~85 ns against ~40 ns on the paper bed's 37,000.
+GRID_DOUBLING_COST_S = 10.5e-9
+#: Grid points per sample at which a point costs :data:`GRID_COST_S`.
+GRID_REFERENCE_POINTS = 2**15
 #: Cost model: a step of the linearly implicit pair (``integrator="rodas"``) in explicit steps (six
 #: stages and four Jacobian evaluations against six stages; measured 1.64 coupled, 1.2 condensed).
 RODAS_STEP_FACTOR = 1.6
@@ -184,18 +191,33 @@ def meets_target(peak, peak_se, target):
         return np.isfinite(peak) & np.isfinite(peak_se) & (peak > 0) & (peak_se <= target / 2.0 * peak)
 
 
-def estimated_cost(steps, model, grid_points=0, rodas=False):
-    """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
-    points (each summed over all samples); ``rodas``: the steps are the linearly implicit pair's.
+def grid_point_cost(points_per_sample):
+    """Estimated CPU time [s] per point of a synthesis grid of ``points_per_sample`` points.
 
     Notes
     -----
-    ``cost = steps x STEP_COST_S[model] (x RODAS_STEP_FACTOR) + grid_points x GRID_COST_S``.  The
-    counts are fixed by the study, the seed and the samples, so a budget planned on this cost
-    selects the same points and samples on every machine.
+    ``GRID_COST_S + GRID_DOUBLING_COST_S log2(n / GRID_REFERENCE_POINTS)``, not below half of
+    ``GRID_COST_S`` (the passes over the grid that do not grow with it).
+    """
+    n = max(float(points_per_sample), 1.0)
+    return max(GRID_COST_S + GRID_DOUBLING_COST_S * math.log2(n / GRID_REFERENCE_POINTS), 0.5 * GRID_COST_S)
+
+
+def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1):
+    """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
+    points (each summed over its ``samples`` samples); ``rodas``: the steps are the linearly implicit
+    pair's.
+
+    Notes
+    -----
+    ``cost = steps x STEP_COST_S[model] (x RODAS_STEP_FACTOR) + grid_points x grid_point_cost(grid_points /
+    samples)``.  The counts are fixed by the study, the seed and the samples, so a budget planned on
+    this cost selects the same points and samples on every machine.
     """
     per_step = STEP_COST_S[EscalationModel(int(model))] * (RODAS_STEP_FACTOR if rodas else 1.0)
-    return float(steps) * per_step + float(grid_points) * GRID_COST_S
+    grid = float(grid_points)
+    per_point = grid_point_cost(grid / max(int(samples), 1)) if grid > 0 else 0.0
+    return float(steps) * per_step + grid * per_point
 
 
 def prior_cost(samples, t_end, model):
@@ -236,8 +258,9 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
     """
     from screening.analysis.multifidelity import allocate
 
-    c_hi = estimated_cost(pilot["n_steps"], model, pilot["n_grid"], bool(pilot["rodas"])) / pilot_samples
-    c_lo = estimated_cost(pilot["cheap_n_steps"], PAIRED_MODEL[2], pilot["cheap_n_grid"]) / pilot_samples
+    c_hi = estimated_cost(pilot["n_steps"], model, pilot["n_grid"], bool(pilot["rodas"]), pilot_samples) / pilot_samples
+    c_lo = estimated_cost(pilot["cheap_n_steps"], PAIRED_MODEL[2], pilot["cheap_n_grid"], False,
+                          int(pilot.get("cheap_samples", pilot_samples))) / pilot_samples
     plan = allocate(float(pilot["correlation"]), max(c_hi, 1e-300), max(c_lo, 1e-300), n_plain)
     if plan.estimator == "plain" or plan.n_expensive >= pilot_samples:
         return plan

@@ -145,3 +145,53 @@ def dense_value(y0, k, h, theta):
     start, ``k = (K1, K3, K4, K5, K6, K7)`` its nonzero-weight stage derivatives (scalars)."""
     w1, w3, w4, w5, w6, w7 = dense_weights(theta)
     return y0 + h * (k[0] * w1 + k[1] * w3 + k[2] * w4 + k[3] * w5 + k[4] * w6 + k[5] * w7)
+
+
+# ----------------------------------------------------------------------------- linear stability (Python)
+def stability_function(z):
+    """Stability function ``R(z) = 1 + z b^T (I - z A)^-1 1`` of the 5th-order solution [1].
+
+    One step of the pair on ``y' = lambda y`` multiplies ``y`` by ``R(h lambda)``; ``z = h lambda``
+    (complex, scalar or array).  A polynomial of degree 6 (six stages; the FSAL stage does not enter
+    the solution).
+
+    References
+    ----------
+    Hairer, Norsett & Wanner, *Solving ODEs I*, 2nd ed., Springer 1993, sec. IV.2.
+    """
+    a = np.pad(A, ((0, 0), (0, 1)))               # the six stages of the solution, square
+    z = np.asarray(z, dtype=complex)
+    out = np.empty(z.shape, dtype=complex)
+    ones = np.ones(6)
+    for idx, zi in np.ndenumerate(z):
+        out[idx] = 1.0 + zi * (B @ np.linalg.solve(np.eye(6) - zi * a, ones))
+    return out[()] if out.ndim == 0 else out
+
+
+def stability_bound(zeta, r_max=10.0, n_grid=20_000):
+    """Largest ``h w`` [1] for which a step of the pair is stable on a linear mode of natural frequency
+    ``w`` and damping ratio ``zeta >= 0``: the first ``|h lambda|`` along the mode's eigenvalue at which
+    ``|R(h lambda)|`` exceeds 1, divided by ``|lambda| / w``.
+
+    Notes
+    -----
+    Underdamped (``zeta < 1``): ``lambda = w (-zeta + i sqrt(1 - zeta^2))``, ``|lambda| = w``.
+    Overdamped: the fast root ``lambda = -w (zeta + sqrt(zeta^2 - 1))`` bounds the step.  The ray is
+    scanned on ``n_grid`` points up to ``r_max`` and the crossing refined by bisection; ``inf`` if
+    none.  Above this ``h w`` an explicit step is held by stability, below it by accuracy.
+    """
+    zeta = float(zeta)
+    if zeta < 1.0:
+        direction, magnitude = complex(-zeta, math.sqrt(1.0 - zeta * zeta)), 1.0
+    else:
+        direction, magnitude = -1.0 + 0j, zeta + math.sqrt(zeta * zeta - 1.0)
+    r = np.linspace(r_max / n_grid, r_max, n_grid)
+    unstable = np.abs(stability_function(r * direction)) > 1.0
+    if not unstable.any():
+        return math.inf
+    i = int(np.argmax(unstable))
+    lo, hi = (r[i - 1] if i > 0 else 0.0), r[i]
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if abs(stability_function(mid * direction)) <= 1.0 else (lo, mid)
+    return lo / magnitude

@@ -175,9 +175,11 @@ def escalation_runs(run, order, models):
 
     def cost(j, r, cheap=True):
         """Estimated cost [s] of run ``r`` at point ``j`` (``cheap``: with its paired cheaper model's samples)."""
-        c = esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)))
+        c = esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)),
+                               int(r.get("samples", 1)))
         if cheap and int(r.get("cheap_samples", 0)) > 0:
-            c += esc.estimated_cost(r["cheap_n_steps"], esc.PAIRED_MODEL[2], r["cheap_n_grid"])
+            c += esc.estimated_cost(r["cheap_n_steps"], esc.PAIRED_MODEL[2], r["cheap_n_grid"], False,
+                                    int(r["cheap_samples"]))
         return c
 
     def partner(j):

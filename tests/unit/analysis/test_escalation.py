@@ -3,10 +3,11 @@
 import numpy as np
 import pytest
 
-from screening.analysis.escalation import (GRID_COST_S, MAX_POINTS, MAX_SAMPLES, MIN_COVER, MIN_SAMPLES,
-                                           PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR, STEP_COST_S, affordable_points,
-                                           condensed_cells, cover_points, escalation_candidates, escalation_model,
-                                           estimated_cost, meets_target, prior_cost, samples_needed)
+from screening.analysis.escalation import (GRID_COST_S, GRID_DOUBLING_COST_S, GRID_REFERENCE_POINTS, MAX_POINTS,
+                                           MAX_SAMPLES, MIN_COVER, MIN_SAMPLES, PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR,
+                                           STEP_COST_S, affordable_points, condensed_cells, cover_points,
+                                           escalation_candidates, escalation_model, estimated_cost, grid_point_cost,
+                                           meets_target, prior_cost, samples_needed)
 from screening.analysis.trust import shipped_calibration
 from screening.status import BestMethod, EscalationModel, PointStatus, Trust
 
@@ -103,7 +104,14 @@ def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     from screening.workflow.execution import escalation_task
 
     k = EscalationModel.coupled
-    assert estimated_cost(1000, k, 5_000_000) == pytest.approx(1000 * STEP_COST_S[k] + 5e6 * GRID_COST_S, rel=1e-12)
+    n = GRID_REFERENCE_POINTS
+    assert estimated_cost(1000, k, n) == pytest.approx(1000 * STEP_COST_S[k] + n * GRID_COST_S, rel=1e-12)
+    # a point costs more on a larger grid (one GRID_DOUBLING_COST_S per doubling), the same for any number of
+    # samples: 100 samples of n points cost 100 x one sample's synthesis
+    assert grid_point_cost(8 * n) - grid_point_cost(n) == pytest.approx(3 * GRID_DOUBLING_COST_S, rel=1e-12)
+    assert estimated_cost(0, k, 100 * 8 * n, samples=100) == pytest.approx(100 * estimated_cost(0, k, 8 * n), rel=1e-12)
+    assert estimated_cost(0, k, 100 * 8 * n, samples=100) < estimated_cost(0, k, 100 * 8 * n)
+    assert grid_point_cost(1) > 0.0
     block, bed, motion = Block(m=8.67, b=0.035, h=0.21), Foundation(k=1e9, lam=1e10, eps=0.0), WhiteNoise(S0=1e-5)
     out = escalation_task(block, bed, motion, None, 3, "coupled", 0.2, 0.05, 0)
     plan = spectral_plan(motion, 0.2, default_cutoff(block, bed))
