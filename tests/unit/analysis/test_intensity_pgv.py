@@ -134,7 +134,7 @@ def test_intensity_measures_add_pgv_and_avgsa():
     im = I.intensity_measures(ds, period=0.5, cutoff=CUTOFF)
     one = KanaiTajimi(1e-4, 15.0, 0.6)
     assert float(im.pgv_median[0]) == pytest.approx(I.pgv_median(one, 5.0, CUTOFF), rel=1e-9)
-    assert float(im.avgsa_median[0]) == pytest.approx(I.avgsa_median(one, 0.5, 5.0), rel=1e-9)
+    assert float(im.avgsa_median[0]) == pytest.approx(I.avgsa_median(one, 0.5, 5.0, cutoff=CUTOFF), rel=1e-9)
     for name in ("pgv_median", "avgsa_median", "sa_median"):
         assert float(im[name][1] / im[name][0]) == pytest.approx(2.0, rel=1e-9)
     assert im["pgv_median"].attrs["units"] == "m s-1" and im["avgsa_median"].attrs["period"] == 0.5
