@@ -32,12 +32,11 @@ envelope, and the zero-crossing rates of the record (5-95 % Husid) and of the fi
 
 Accuracy (``benchmarks/fit_excitation_recovery.py``: three Kanai-Tajimi models, 20 synthesised
 records of 30 s each; median over the records of estimate / true - 1, and the bootstrap standard
-error of that median): ``S0_peak`` +1 +- 6 %, +8 +- 9 %, -7 +- 5 %; ``omega_g`` -3, -1, -1 % (+- 1-4 %);
-``zeta_g`` +5, -1, +2 % (+- 2-4 %); the fitted model's RVT median PGA -3, -0, -3 % (+- 2-3 %); ``T1``
--9, -14, +0 % and ``T2`` +5, +21, +4 % with standard errors of 8-14 % and 18-25 %: one record pins
-the two envelope times down only to -35..+70 % (they trade off along the Husid curve), so 20 records
-cannot hold their medians to 10 % (the soft-soil ``T1``, ``T2`` are 1.7 and 1.1 standard errors
-out); what they predict together (``S0_peak``, the PGA) is stable.
+error of that median): ``S0_peak`` +2 +- 6 %, +3 +- 9 %, -10 +- 4 %; ``omega_g`` -3, -1, -1 % (+- 1-4 %);
+``zeta_g`` +5, -1, +2 % (+- 2-4 %); ``T1`` -1, -3, -0 % (+- 0.4-2 %); ``T2`` +2, +4, +2 % (+- 3-5 %);
+the fitted model's RVT median PGA -2, -1, -5 % (+- 2-3 %).  A least-squares fit of the Husid curve
+alone left the soft-soil ``T1``, ``T2`` at -14 % and +21 %.  Single records scatter more (``T2``
+-20..+50 %, 10-90 %); what they predict together (``S0_peak``, the PGA) is stable.
 """
 
 from __future__ import annotations

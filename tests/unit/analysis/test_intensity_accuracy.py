@@ -92,16 +92,18 @@ def test_pga_median_against_1000_records(name, samples):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(POINTS))
 def test_sa_and_avgsa_medians_against_1000_records(name, samples):
-    """Sa(T) and AvgSA(T) within 3 standard errors plus 2.5 % (the skew of the log-peaks and the
-    transient of an oscillator started at rest); the soft-soil AvgSA was 7 % low with the white-noise
-    oscillator bandwidth (its stiff oscillators respond at the input's 5 rad/s, a broad response)."""
+    """Sa(T) within 3 standard errors plus 2.5 % (measured -1 to -2.3 %: the transient of an oscillator
+    started at rest), AvgSA(T) within 3 standard errors plus 1 % (measured within 0.5 %); the soft-soil
+    AvgSA was 7 % low with the white-noise oscillator bandwidth (its stiff oscillators respond at the
+    input's 5 rad/s, a broad response), and 2 % high on the broadband inputs with the band-limited
+    bandwidth above half the band limit."""
     exc, period = POINTS[name]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sa = I.sa_median(exc, period, T_END, cutoff=CUTOFF)
         avgsa = I.avgsa_median(exc, period, T_END, cutoff=CUTOFF)
     _assert_within(sa, samples[name]["sa"], 0.025)
-    _assert_within(avgsa, samples[name]["avgsa"], 0.025)
+    _assert_within(avgsa, samples[name]["avgsa"], 0.01)
 
 
 @pytest.mark.slow
