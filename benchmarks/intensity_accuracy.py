@@ -1,6 +1,6 @@
 """Accuracy of the random-vibration (RVT) intensity measures against synthesised records.
 
-For a white-noise and two Kanai-Tajimi points (default envelope T1 = 4 s, T2 = 2 s, record 20 s,
+For a white-noise, two Kanai-Tajimi and a Clough-Penzien point (default envelope T1 = 4 s, T2 = 2 s, record 20 s,
 band limit 100 rad/s), prints the RVT median of PGA, PGV, Sa(T), AvgSA(T) and the expected RMS
 acceleration and Arias intensity against the same measure over N records drawn exactly as the Monte
 Carlo draws them (screening.solvers.synthesis): the sample median with its standard error
@@ -22,13 +22,17 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "unit" / "analysis"))
 from intensity_reference import median_standard_error, sample_all_measures  # noqa: E402
 
+from screening import excitations  # noqa: E402
 from screening.analysis import intensity as I  # noqa: E402
-from screening.model.excitation import KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
 
 T_END, CUTOFF = 20.0, 100.0
 POINTS = (("white noise", WhiteNoise(1e-3), 0.5),
           ("Kanai-Tajimi 15.6 rad/s, 0.6", KanaiTajimi(1e-3, 15.6, 0.6), 0.3),
-          ("Kanai-Tajimi 5 rad/s, 0.3", KanaiTajimi(1e-3, 5.0, 0.3), 1.0))
+          ("Kanai-Tajimi 5 rad/s, 0.3", KanaiTajimi(1e-3, 5.0, 0.3), 1.0),
+          ("Clough-Penzien KT 15.6, f 1.56",
+           excitations.build("clough_penzien", 1e-3, {"omega_g": 15.6, "zeta_g": 0.6, "omega_f": 1.56, "zeta_f": 0.6},
+                             Envelope()), 0.3))
 
 
 def rvt(exc, period):

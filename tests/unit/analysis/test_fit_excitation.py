@@ -1,9 +1,9 @@
 """fit-excitation recovers the parameters of synthesised Kanai-Tajimi records.
 
 20 records of 30 s (seed 3, fixed).  Measured: medians of the estimates -3 % (omega_g), +5 %
-(zeta_g), -9 % (T1), +5 % (T2); the fitted models' RVT median PGA -3 % (median over records) of the
-true model's.  Tolerances below are about twice the measured errors (the median of 20 records
-has a sampling error of roughly 1.25 x the single-record scatter / sqrt(20): 5-8 %).
+(zeta_g), -1 % (T1), +2 % (T2); the fitted models' RVT median PGA -3 % (median over records) of the
+true model's (benchmarks/fit_excitation_recovery.py).  Tolerances below are about twice the measured
+errors (the median of 20 records has a sampling error of roughly 1.25 x the single-record scatter / sqrt(20): 5-8 %).
 """
 
 import numpy as np
@@ -103,10 +103,11 @@ def test_harmonic_record_and_dc_offset_are_flagged(fits):
     n = int(round(30.0 / plan.dt)) + 1
     shifted = fit_excitation(Record(acc[0][:n] + 0.5, plan.dt))
     assert any("DC offset" in f for f in shifted["flags"])
-    # the offset is removed before the fit: same estimates as the record without it
+    # the offset is removed before the fit: same estimates as the record without it (to the rounding of
+    # the envelope deviance, flat to 1e-12 over 1e-5 in log T: the offset itself would move them by %)
     plain = fit_excitation(Record(acc[0][:n] - acc[0][:n].mean(), plan.dt))
     for key in ("S0", "omega_g", "zeta_g", "T1", "T2"):
-        assert shifted[key] == pytest.approx(plain[key], rel=1e-6)
+        assert shifted[key] == pytest.approx(plain[key], rel=1e-4)
 
 
 def test_degenerate_envelope_is_flagged_and_the_peak_intensity_kept():
@@ -117,8 +118,47 @@ def test_degenerate_envelope_is_flagged_and_the_peak_intensity_kept():
     acc, _ = ground_acceleration_samples(true, plan, 5, np.arange(4))
     n = int(round(30.0 / plan.dt)) + 1
     fits_ = [fit_excitation(Record(a[:n], plan.dt)) for a in acc]
-    assert all(any("nearly degenerate" in f for f in fit["flags"]) for fit in fits_)
+    # every fit with T1 / T2 < 1.1 is flagged; a record may also be fitted as well by a non-degenerate
+    # envelope of the same shape (seed 5: one of four, T1 = 4.05 s, T2 = 2.29 s), whose S0 then means what
+    # it says (within a factor 2 of S0_peak)
+    for fit in fits_:
+        degenerate = fit["T1"] / fit["T2"] < 1.1
+        assert degenerate == any("nearly degenerate" in f for f in fit["flags"])
+        assert degenerate or fit["S0_peak"] <= fit["S0"] <= 2 * fit["S0_peak"]
+    assert sum(fit["T1"] / fit["T2"] < 1.1 for fit in fits_) >= 3
     from screening.analysis.fit_excitation import envelope_peak
     peak = 1.0 * envelope_peak(3.303, 3.290) ** 2
     assert np.median([f["S0_peak"] for f in fits_]) == pytest.approx(peak, rel=0.3)
     assert np.median([f["S0"] for f in fits_]) > 10 * np.median([f["S0_peak"] for f in fits_])
+
+
+def test_envelope_of_a_modulated_sine_is_recovered():
+    """Window energies of ``q(t) sin(omega t)`` with many cycles per window are ``Q_k / 2``: the deviance
+    is minimal at the true envelope, which the fit returns (to the ripple of the windows' partial cycles)."""
+    from screening.analysis.fit_excitation import fit_envelope
+    t = np.arange(0, 30.0, 0.002)
+    for T1, T2 in ((6.0, 2.5), (2.5, 1.0), (4.0, 3.0)):
+        q = 4.0 * (np.exp(-t / T1) - np.exp(-t / T2))
+        fit = fit_envelope(Record(q * np.sin(2 * np.pi * 37.0 * t), 0.002))
+        assert fit == pytest.approx((T1, T2), rel=0.01)
+
+
+SOFT = KanaiTajimi(5e-3, 8.0, 0.4, Envelope(6.0, 2.5))
+
+
+@pytest.mark.slow
+def test_soft_soil_envelope_times_and_pga_recovered_within_10_percent():
+    """20 soft-soil records of 30 s (seed 3, as the benchmark): the median T1 and T2 within 10 % (the
+    least-squares fit of the Husid curve left them -14 % and +21 %, standard errors 8 % and 12 %); the
+    fitted models' median PGA within 10 %.  Measured: T1 -3 %, T2 +4 %, PGA within 4 %."""
+    plan = spectral_plan(SOFT, 30.0, 200.0)
+    acc, _ = ground_acceleration_samples(SOFT, plan, 3, np.arange(20))
+    n = int(round(30.0 / plan.dt)) + 1
+    fits_ = [fit_excitation(Record(a[:n], plan.dt)) for a in acc]
+    assert np.median([f["T1"] for f in fits_]) == pytest.approx(6.0, rel=0.10)
+    assert np.median([f["T2"] for f in fits_]) == pytest.approx(2.5, rel=0.10)
+    cut = 2 * np.pi * 25.0
+    true = pga_median(SOFT, 30.0, cut)
+    pga = [pga_median(KanaiTajimi(f["S0"], f["omega_g"], f["zeta_g"], Envelope(f["T1"], f["T2"])), 30.0, cut)
+           for f in fits_]
+    assert np.median(pga) == pytest.approx(true, rel=0.10)
