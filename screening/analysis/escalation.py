@@ -259,8 +259,9 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
     from screening.analysis.multifidelity import allocate
 
     c_hi = estimated_cost(pilot["n_steps"], model, pilot["n_grid"], bool(pilot["rodas"]), pilot_samples) / pilot_samples
+    cheap_samples = max(int(pilot.get("cheap_samples", pilot_samples)), 1)
     c_lo = estimated_cost(pilot["cheap_n_steps"], PAIRED_MODEL[2], pilot["cheap_n_grid"], False,
-                          int(pilot.get("cheap_samples", pilot_samples))) / pilot_samples
+                          cheap_samples) / cheap_samples
     plan = allocate(float(pilot["correlation"]), max(c_hi, 1e-300), max(c_lo, 1e-300), n_plain)
     if plan.estimator == "plain" or plan.n_expensive >= pilot_samples:
         return plan
