@@ -131,6 +131,9 @@ def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, 
 
         m_sdof theta'' = m h x_g'' - C(theta / lam) theta' - K(theta / lam) theta + m h a_v theta
     """
+    if a_v == 0.0:                                  # the horizontal-only path: no divisions
+        damping, stiffness = damping_stiffness(cond, theta)
+        return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta) / p.m_sdof
     lam = max(1.0 + a_v / p.g, GRAVITY_RATIO_MIN)
     damping, stiffness = damping_stiffness(cond, theta / lam)
     return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta + p.m * p.h * a_v * theta) / p.m_sdof
@@ -174,7 +177,7 @@ def _vertical_row(row, vertical):
     return np.int64(row) if vertical.shape[0] > 1 else np.int64(0)     # prange rows may be unsigned
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _hermite(row, acc, acc_dot, dt, t):
     """Ground input ``(x_g'', a_v)`` [m/s^2] at ``t``: ``acc = (horizontal, vertical)`` grid values and
     ``acc_dot`` their rates (:func:`_channel` each; a vertical channel of no columns reads 0)."""
@@ -448,7 +451,7 @@ def _channel_rate(row, acc, acc_dot, dt, t):
     return hermite_rate(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _hermite_rate(row, acc, acc_dot, dt, t):
     """Rates of the ground input ``(x_g'', a_v)`` at ``t`` [m/s^3]: derivative of :func:`_hermite`."""
     horizontal = _channel_rate(row, acc[0], acc_dot[0], dt, t)
