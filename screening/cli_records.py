@@ -69,7 +69,10 @@ def _read(record, dt, units):
 @click.option("--theta-dot0", type=float, default=0.0, help="initial angular velocity [rad/s]")
 @click.option("--t-end", type=float, help="end time [s] (default: the record's duration)")
 @click.option("--no-plots", is_flag=True, help="do not write the PNG")
-def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0, theta_dot0, t_end, no_plots):
+@click.option("--no-vertical", is_flag=True, help="leave out the record's vertical component (default: a "
+                                                   "two-component record drives the block with both)")
+def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0, theta_dot0, t_end, no_plots,
+                 no_vertical):
     from screening.records import check_scale
     from screening.report.record_figures import plot_simulation
     from screening.solvers.simulate import simulate, simulation_times
@@ -94,11 +97,12 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
     try:
         ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
                       condensation=chosen.condensation if mc_registry.get(model).uses_condensation else "paper",
-                      t_end=t_end)
+                      t_end=t_end, vertical=not no_vertical)
     except ValueError as exc:
         raise CommandError(str(exc)) from None
     ds.attrs.update(study=str(study), record_scale=scale,
-                    history=f"screening simulate {record} --study {study} --model {model}")
+                    history=f"screening simulate {record} --study {study} --model {model}"
+                            + (" --no-vertical" if no_vertical else ""))
     png_path = out.with_suffix(".png")
     try:
         with atomic_path(out) as tmp:                   # never through a link planted at out or beside it
@@ -115,7 +119,8 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
                  f"({float(ds['peak_abs_theta']) / float(ds['slenderness']):.3f} of atan(b/h))")
     _say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
     if rec.vertical is not None:
-        _say(f"warning: {ds.attrs['record_vertical_component']}")
+        lift = " (g + a_v < 0: the block lifts off)" if bool(ds.get("lift_off", False)) else ""
+        _say(f"vertical component: {ds.attrs['vertical_ground_motion']}{lift}")
     return EXIT_OK
 
 
@@ -212,7 +217,9 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff, figure):
 @click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
               help="acceleration units of the study's text records (as [records] units; both given: must agree)")
 @click.option("--quiet", is_flag=True, help="no progress lines")
-def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
+@click.option("--no-vertical", is_flag=True, help="leave out the records' vertical components (as [records] "
+                                                   "vertical = false)")
+def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet, no_vertical):
     import contextlib
 
     from screening.workflow.cloud import (load_cloud_study, plot_cloud, plot_stripes, read_cloud_records, run_cloud,
@@ -221,7 +228,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet):
     from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path
 
-    cloud = load_cloud_study(study, units)
+    cloud = load_cloud_study(study, units, vertical=not no_vertical)
     records = read_cloud_records(cloud)                # every record checked before any work
     if out is None:
         out = Path("outputs") / f"{Path(study).stem}.nc"

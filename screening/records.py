@@ -139,10 +139,6 @@ class Record:
                                    "record": self.name, "source": self.source})
 
 
-#: What the solvers do with a record's vertical component (said wherever one is given).
-VERTICAL_NOT_USED = "the vertical component is carried but not used: the models take the horizontal one only"
-
-
 def _samples(name, what, values):
     arr = np.asarray(values)
     if arr.dtype.kind not in "iuf":

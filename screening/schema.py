@@ -325,6 +325,10 @@ SIMULATION = {
     "z_cb_dot": _v("m s-1", "indentation rate of the base centre (coupled model; 0 condensed)"),
     "contact_regime": {**flag_attributes(ContactRegime, "contact regime"), "units": "1"},
     "ground_acceleration": _v("m s-2", "horizontal ground acceleration (usual convention: > 0 towards +x)"),
+    "vertical_ground_acceleration": _v("m s-2", "vertical ground acceleration that entered the model (> 0 up: "
+                                                "g + a_v acts on the block)"),
+    "lift_off": _v("1", "g + a_v < 0 somewhere in the record: the ground pulls away from the block (coupled: "
+                        "flight; condensed and stiff-bed: stopped, diverged with reason lift_off)"),
     "peak_abs_theta": _v("rad", "peak |theta| over the record (up to overturning or divergence)"),
     "overturned": _v("1", "the block overturned (|theta| > atan(b/h))"),
     "diverged": _v("1", "the integration diverged"),
@@ -368,6 +372,7 @@ SWEEP_INPUTS = {
 CLOUD = {
     **{name: SIMULATION[name] for name in ("peak_abs_theta", "overturned", "overturning_time")},
     "diverged": _v("1", "the integration diverged or its task failed (left out of the fit)"),
+    "lift_off": SIMULATION["lift_off"],
     **{name: INTENSITY[name] for name in ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa",
                                           "fit_flag")},
     "record": _v("1", "record index"),

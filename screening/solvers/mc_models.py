@@ -86,8 +86,11 @@ class _KernelIntegrator(ChunkIntegrator):
         self.integrate = kern.chunk_integrator(sdof.record.dtype)
 
     def __call__(self, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
-                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min):
-        self.integrate(self.code, self.sdof.damping_stiffness, self.sdof.record, acc, acc_dot, dt_grid, t_out,
+                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min,
+                 vertical=None):
+        vacc, vrate = (kern.NO_VERTICAL, kern.NO_VERTICAL) if vertical is None else vertical
+        self.integrate(self.code, self.sdof.damping_stiffness, self.sdof.record, (acc, vacc), (acc_dot, vrate), dt_grid,
+                       t_out,
                        self.params, y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
                        out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min)
 

@@ -30,17 +30,23 @@ class ChunkIntegrator(abc.ABC):
 
         integrator(acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max, max_steps,
                    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift,
-                   peak, status, reason, n_accepted, n_rejected, h_min)
+                   peak, status, reason, n_accepted, n_rejected, h_min, vertical=None)
 
     ``acc``, ``acc_dot``: ``(n_rows, n_grid)`` inertial ground acceleration ``x_g''`` [m/s2] and its
     rate [m/s3] on the grid ``j dt_grid`` [s]; ``t_out`` [s] the output instants; ``y_init`` the
     initial ``(theta, theta', z_cb, z_cb')``; ``scale`` the absolute tolerances of the 4 states;
-    ``rtol`` [1]; ``h_max`` [s]; ``max_steps`` the step budget per sample.
+    ``rtol`` [1]; ``h_max`` [s]; ``max_steps`` the step budget per sample.  ``vertical``: None (no
+    vertical ground motion) or the pair ``(a_v, a_v')`` of the vertical ground acceleration [m/s2]
+    (positive up) and its rate [m/s3] on the same grid, ``(n_rows, n_grid)`` or ``(1, n_grid)`` (one
+    for every row), passed only when a record has a vertical component (a model without it then
+    fails with ``TypeError``); a model that cannot leave the ground stops a sample where
+    ``g + a_v < 0`` (diverged, reason ``lift_off``).
     """
 
     @abc.abstractmethod
     def __call__(self, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
-                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min):
+                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min,
+                 vertical=None):
         """Integrate every row of ``acc``; fill the outputs (class docstring)."""
 
 

@@ -55,6 +55,14 @@ REASON_OUT_OF_BOUNDS = int(DivergenceReason.out_of_bounds)
 REASON_STEP_UNDERFLOW = int(DivergenceReason.step_underflow)
 REASON_STEP_BUDGET = int(DivergenceReason.step_budget)
 REASON_NO_EQUILIBRIUM = int(DivergenceReason.no_equilibrium)
+REASON_LIFT_OFF = int(DivergenceReason.lift_off)
+
+#: Smallest gravity ratio ``(g + a_v) / g`` the condensed laws are evaluated at (a sample whose ratio
+#: falls below zero is stopped as lifted off at the end of the step).
+GRAVITY_RATIO_MIN = 1e-3
+
+#: "No vertical channel": the vertical ground acceleration and rate of a run without one (read as 0).
+NO_VERTICAL = np.zeros((1, 0))
 
 #: Per-sample-run parameters of the compiled kernels (SI units), built by :func:`model_record`.
 MODEL = np.dtype([
@@ -97,12 +105,14 @@ def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri
 
 # ----------------------------------------------------------------------------- right-hand sides
 @numba.njit(cache=True)
-def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p):
-    """``(theta'', z_cb'')`` [rad/s^2, m/s^2] of the coupled eqs. (7)–(8) with ``z_g'' = 0``.
+def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0):
+    """``(theta'', z_cb'')`` [rad/s^2, m/s^2] of the coupled eqs. (7)–(8).
 
     Eliminating ``z_cb''`` from (8) with (7):
     ``(I_cm + m h^2 cos^2) theta'' = m h x_g'' cos - M_cb + h F_cb sin + m h^2 theta'^2 sin cos``,
-    ``z_cb'' = g - F_cb/m - h (theta'^2 cos + theta'' sin)``.
+    ``z_cb'' = g + a_v - F_cb/m - h (theta'^2 cos + theta'' sin)``, with ``a_v`` [m/s^2] the vertical
+    ground acceleration (positive up): in the ground's frame it adds to gravity, and ``z_cb`` (down) is
+    relative to the ground, so it enters the vertical equation only (docs/method.md).
     """
     m, g, h = p.m, p.g, p.h
     s = math.sin(theta)
@@ -112,26 +122,36 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p):
     mh = m * h
     theta_ddot = ((mh * x_g_ddot * c - moment + h * force * s + mh * h * theta_dot * theta_dot * s * c)
                   / (p.I_cm + mh * h * c * c))
-    z_ddot = g - force / m - h * (theta_dot * theta_dot * c + theta_ddot * s)
+    z_ddot = (g + a_v) - force / m - h * (theta_dot * theta_dot * c + theta_ddot * s)
     return theta_ddot, z_ddot
 
 
 @numba.njit(cache=True)
-def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, p):
+def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, p, a_v=0.0):
     """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22): ``(m h x_g'' - C theta' - K theta) / m_sdof``.
 
     ``damping_stiffness(cond, theta) -> (C, K)``: the condensation's compiled function and record.
+    A vertical ground acceleration ``a_v`` [m/s^2] (positive up) scales the weight by
+    ``lam = (g + a_v) / g``; the laws are read at ``theta / lam`` and the weight's moment gains
+    ``m h a_v theta`` (docs/method.md, "Vertical ground acceleration")::
+
+        m_sdof theta'' = m h x_g'' - C(theta / lam) theta' - K(theta / lam) theta + m h a_v theta
     """
-    damping, stiffness = damping_stiffness(cond, theta)
-    return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta) / p.m_sdof
+    if a_v == 0.0:                                  # the horizontal-only path: no divisions
+        damping, stiffness = damping_stiffness(cond, theta)
+        return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta) / p.m_sdof
+    lam = max(1.0 + a_v / p.g, GRAVITY_RATIO_MIN)
+    damping, stiffness = damping_stiffness(cond, theta / lam)
+    return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta + p.m * p.h * a_v * theta) / p.m_sdof
 
 
 @numba.njit(cache=True)
 def _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc, p):
+    """Right-hand side at the state ``y`` under the ground input ``acc = (x_g'', a_v)`` [m/s^2]."""
     if model == MODEL_COUPLED:
-        a1, a3 = coupled_accelerations(y0, y1, y2, y3, acc, p)
+        a1, a3 = coupled_accelerations(y0, y1, y2, y3, acc[0], p, acc[1])
         return y1, a1, y3, a3
-    return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc, p), 0.0, 0.0
+    return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc[0], p, acc[1]), 0.0, 0.0
 
 
 @numba.njit(cache=True, inline="always")
@@ -148,10 +168,30 @@ def _grid_interval(n, dt, t):
 
 
 @numba.njit(cache=True)
-def _hermite(row, acc, acc_dot, dt, t):
-    """Ground acceleration at ``t`` from grid values and rates of row ``row`` (cubic Hermite)."""
+def _channel(row, acc, acc_dot, dt, t):
+    """One channel of the ground acceleration at ``t`` from grid values and rates of row ``row`` (cubic
+    Hermite)."""
     j, s = _grid_interval(acc.shape[1], dt, t)
     return hermite(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
+
+
+@numba.njit(cache=True, inline="always")
+def _vertical_row(row, vertical):
+    """Row of the vertical channel read by sample ``row`` (-1: none, read as 0; a single row: every sample's)."""
+    if vertical.shape[1] == 0:
+        return np.int64(-1)
+    return np.int64(row) if vertical.shape[0] > 1 else np.int64(0)     # prange rows may be unsigned
+
+
+@numba.njit(cache=True, inline="always")
+def _hermite(row, acc, acc_dot, dt, t):
+    """Ground input ``(x_g'', a_v)`` [m/s^2] at ``t``: ``acc = (horizontal, vertical)`` grid values and
+    ``acc_dot`` their rates (:func:`_channel` each; a vertical channel of no columns reads 0)."""
+    horizontal = _channel(row, acc[0], acc_dot[0], dt, t)
+    vrow = _vertical_row(row, acc[1])
+    if vrow < 0:
+        return horizontal, 0.0
+    return horizontal, _channel(vrow, acc[1], acc_dot[1], dt, t)
 
 
 @numba.njit(cache=True)
@@ -208,14 +248,17 @@ def _start(model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z
 
 
 @numba.njit(cache=True)
-def _check_state(model, y0, y1, y2, t, flight_start, p):
+def _check_state(model, y0, y1, y2, t, flight_start, p, a_v):
     """``(status, reason, flight_start)`` after an accepted step to the state ``y`` at ``t``.
 
-    ``flight_start``: when the current flight began [s] (-1: in contact).
+    ``flight_start``: when the current flight began [s] (-1: in contact); ``a_v`` [m/s^2] the vertical
+    ground acceleration at ``t`` (the condensed model cannot leave the ground: ``g + a_v < 0`` stops it).
     """
     a0 = abs(y0)
     if a0 > p.theta_over:
         return STATUS_OVERTURNED, REASON_NONE, flight_start
+    if model != MODEL_COUPLED and p.g + a_v < 0.0:
+        return STATUS_DIVERGED, REASON_LIFT_OFF, flight_start
     if model == MODEL_COUPLED:
         if y2 > p.z_max or y2 < p.z_min or abs(y1) > p.rate_max:
             return STATUS_DIVERGED, REASON_OUT_OF_BOUNDS, flight_start
@@ -275,16 +318,16 @@ def _shrink(err, h, factor, h_floor):
 
 @numba.njit(cache=True, inline="always")
 def _accept(model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
-    """Bookkeeping of an accepted step to the state ``y``: counts, smallest step, time, peak, status
-    checks and the output at a landing.  Returns ``(t, i_out, n_acc, h_min_acc, peak, status, reason,
-    flight_start)``."""
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, a_v):
+    """Bookkeeping of an accepted step to the state ``y`` (``a_v``: the vertical ground acceleration at
+    its end): counts, smallest step, time, peak, status checks and the output at a landing.  Returns
+    ``(t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start)``."""
     n_acc += 1
     if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
         h_min_acc = h
     t = t_next if landing else t + h
     peak = max(peak, abs(y0))
-    status, reason, flight_start = _check_state(model, y0, y1, y2, t, flight_start, p)
+    status, reason, flight_start = _check_state(model, y0, y1, y2, t, flight_start, p, a_v)
     if status == STATUS_OK and landing:
         _record(model, row, i_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
         i_out += 1
@@ -391,7 +434,7 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
         k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
             model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1])
         if status != STATUS_OK:
             break
         # --- next step size (PI control, Hairer's DOPRI5 constants)
@@ -408,10 +451,20 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
 
 # ----------------------------------------------------------------------------- linearly implicit integrator
 @numba.njit(cache=True)
-def _hermite_rate(row, acc, acc_dot, dt, t):
-    """Rate of the ground acceleration at ``t`` [m/s^3]: derivative of :func:`_hermite`."""
+def _channel_rate(row, acc, acc_dot, dt, t):
+    """Rate of one channel at ``t`` [m/s^3]: derivative of :func:`_channel`."""
     j, s = _grid_interval(acc.shape[1], dt, t)
     return hermite_rate(acc[row, j], acc[row, j + 1], acc_dot[row, j], acc_dot[row, j + 1], s, dt)
+
+
+@numba.njit(cache=True, inline="always")
+def _hermite_rate(row, acc, acc_dot, dt, t):
+    """Rates of the ground input ``(x_g'', a_v)`` at ``t`` [m/s^3]: derivative of :func:`_hermite`."""
+    horizontal = _channel_rate(row, acc[0], acc_dot[0], dt, t)
+    vrow = _vertical_row(row, acc[1])
+    if vrow < 0:
+        return horizontal, 0.0
+    return horizontal, _channel_rate(vrow, acc[1], acc_dot[1], dt, t)
 
 
 @numba.njit(cache=True)
@@ -428,6 +481,15 @@ def input_gain(model, theta, p):
         g1 = mh * c / (p.I_cm + mh * p.h * c * c)
         return g1, -p.h * s * g1
     return p.m * p.h / p.m_sdof, 0.0
+
+
+@numba.njit(cache=True)
+def vertical_gain(model, theta, p):
+    """``d(theta'', z_cb'')/d a_v`` [rad/m, 1]: coupled ``(0, 1)``; condensed ``m h theta / m_sdof`` and 0
+    (the weight's moment; the law's dependence through ``theta / lam`` is left out of this rate)."""
+    if model == MODEL_COUPLED:
+        return 0.0, 1.0
+    return p.m * p.h * theta / p.m_sdof, 0.0
 
 
 @numba.njit(cache=True)
@@ -494,8 +556,9 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
                 _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3 + d, acc_t, p)
                 j13, j33 = (a1 - f1) / d, (a3 - f3) / d
             g1, g3 = input_gain(model, y0, p)
-            rate = _hermite_rate(row, acc, acc_dot, dt_grid, t)
-            ft1, ft3 = g1 * rate, g3 * rate
+            v1, v3 = vertical_gain(model, y0, p)
+            rate, rate_v = _hermite_rate(row, acc, acc_dot, dt_grid, t)
+            ft1, ft3 = g1 * rate + v1 * rate_v, g3 * rate + v3 * rate_v
             fresh = False
         t_next = t_out[i_out]
         h, h_proposed, landing = _landing(t, h, h_max, t_next)
@@ -582,7 +645,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
         fresh = True
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
             model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1])
         if status != STATUS_OK:
             break
         fac = min(max(fac, _ro.FAC_MIN), _ro.FAC_MAX)
@@ -601,12 +664,14 @@ def _integrate_chunk(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_o
     """Integrate every row of ``acc`` (one sample per row) in parallel; fills the outputs.
 
     ``damping_stiffness``, ``conds[0]``: the condensation's compiled ``(C, K)`` and its record
-    (read by ``model = MODEL_CONDENSED`` only); ``acc``, ``acc_dot``: ground acceleration [m/s^2]
-    and its rate [m/s^3] on the grid ``j dt_grid``; ``t_out`` output times [s]; ``models[0]``: the
+    (read by ``model = MODEL_CONDENSED`` only); ``acc``, ``acc_dot``: the pairs ``(horizontal,
+    vertical)`` of ground accelerations [m/s^2] and rates [m/s^3] on the grid ``j dt_grid`` (the
+    inertial ``x_g''`` one row per sample; the vertical ``a_v``, positive up, one row per sample, one
+    row for all, or :data:`NO_VERTICAL`); ``t_out`` output times [s]; ``models[0]``: the
     :data:`MODEL` record; ``y_init`` the initial ``(theta, theta', z_cb, z_cb')``; ``scale``
     absolute tolerances.  Compiled per condensation record type by :func:`chunk_integrator`.
     """
-    for row in numba.prange(acc.shape[0]):
+    for row in numba.prange(acc[0].shape[0]):
         st, rs, pk, na, nr, hm = integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out,
                                                   models, y_init, scale, rtol, h_max, max_steps, out_theta,
                                                   out_theta_dot, out_z, out_z_dot, out_uplift)
@@ -631,9 +696,10 @@ def chunk_integrator(record_dtype):
         f8, i8 = types.float64, types.int64
         a1 = types.float64[::1]
         a2 = types.float64[:, ::1]
+        channels = types.UniTuple(a2, 2)                 # (horizontal, vertical) ground input
         a2_rows = types.Array(types.float64, 2, "C")
         sig = types.void(i8, function_type(sdof_coefficients_signature(record_dtype)),
-                         types.Array(record_type(record_dtype), 1, "C"), a2, a2, f8, a1,
+                         types.Array(record_type(record_dtype), 1, "C"), channels, channels, f8, a1,
                          types.Array(record_type(MODEL), 1, "C"), a1, a1, f8, f8, i8,
                          a2_rows, a2_rows, a2_rows, a2_rows, types.Array(types.boolean, 2, "C"),
                          a1, types.int64[::1], types.int64[::1], types.int64[::1], types.int64[::1], a1)

@@ -22,6 +22,12 @@ towards ``-x`` (``theta < 0``, edge ``A`` pressed), as a block on a braking truc
 The response to ``-a_g`` is the mirror image: ``theta``, ``theta'`` change sign and ``z_cb`` is
 unchanged (the model is symmetric about the block's axis).
 
+A record's vertical component ``a_v(t)`` (positive up, :attr:`screening.records.Record.vertical`)
+enters the models as a change of gravity, ``g -> g + a_v(t)`` in the block's frame
+(docs/method.md, "Vertical ground acceleration"); ``vertical=False`` leaves it out.  Where
+``g + a_v < 0`` the ground pulls away faster than the block falls: the coupled model flies and
+lands; the condensed and stiff-bed models stop (diverged, reason ``lift_off``).
+
 Between samples the input is the cubic Hermite interpolant of the record with slopes from
 second-order finite differences (``numpy.gradient``); after the end of the record (if
 ``t_end`` is longer) the ground is at rest.
@@ -37,7 +43,7 @@ import xarray as xr
 from screening import condensation as condensations, schema
 from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
                                        REGIME_UPLIFT_POSITIVE, contact_regime)
-from screening.records import VERTICAL_NOT_USED, Record
+from screening.records import Record
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.datasets import finish
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
@@ -75,6 +81,15 @@ def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
     return t_end, output_dt, int(math.floor(t_end / output_dt + 1e-9)) + 1
 
 
+def vertical_text(record, used):
+    """What became of ``record``'s vertical component (the ``vertical_ground_motion`` attribute)."""
+    if record.vertical is None:
+        return "none (the record has no vertical component)"
+    if not used:
+        return "left out (vertical = false): the models took the horizontal component only"
+    return "used: g + a_v(t) acts on the block and its bed (docs/method.md, 'Vertical ground acceleration')"
+
+
 def _input(ground_acceleration, dt):
     if isinstance(ground_acceleration, Record):
         if dt is not None and not math.isclose(float(dt), ground_acceleration.dt, rel_tol=1e-9):
@@ -90,7 +105,7 @@ def _input(ground_acceleration, dt):
 
 def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", theta0=0.0, theta_dot0=0.0,
              condensation="paper", t_end=None, output_dt=None, rtol=None, h_max=None, max_steps=20_000_000,
-             max_flight_time=0.5, overturn_resolution=200):
+             max_flight_time=0.5, overturn_resolution=200, vertical=True):
     """Response of a block on a flexible bed to one ground-acceleration record.
 
     Parameters
@@ -114,6 +129,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     max_steps, max_flight_time : as for :func:`screening.monte_carlo`.
     overturn_resolution : after overturning, the last output interval is integrated again on this
         many sub-intervals to locate the overturning time.
+    vertical : use the record's vertical component when it has one (True, default), or leave it out.
 
     Returns
     -------
@@ -125,6 +141,8 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     ``overturning_time`` [s] (NaN if it did not overturn), ``theta_ul``, ``slenderness``.  After
     overturning or divergence the states are NaN.  ``attrs["status"]``: ``"ok"``,
     ``"overturned"`` or ``"diverged: <reason>"``; ``attrs["sign_convention"]`` states the convention.
+    ``attrs["vertical_ground_motion"]`` says whether a vertical component was used; when it was,
+    ``vertical_ground_acceleration`` [m s-2] holds it and ``lift_off`` whether ``g + a_v < 0`` anywhere.
     """
     record = _input(ground_acceleration, dt)
     check_scalar_models(block, foundation, purpose="simulate")
@@ -158,6 +176,13 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     a_g[:record.acceleration.size] = record.acceleration
     kernel_acc = np.ascontiguousarray(-a_g[None, :])                        # the one sign conversion
     kernel_rate = np.ascontiguousarray(np.gradient(kernel_acc[0], dt, edge_order=2)[None, :])
+    use_vertical = bool(vertical) and record.vertical is not None
+    vertical_input = None
+    if use_vertical:
+        a_v = np.zeros(n_grid)
+        a_v[:record.vertical.size] = record.vertical                         # positive up, no sign change
+        vertical_input = (np.ascontiguousarray(a_v[None, :]),
+                          np.ascontiguousarray(np.gradient(a_v, dt, edge_order=2)[None, :]))
 
     y0 = mc.initial_state(block, foundation, theta0, theta_dot0)
     integrate = mc.integrator(block, foundation, cond, max_flight_time)
@@ -169,7 +194,8 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
         peak, h_min = np.zeros(1), np.zeros(1)
         status, reason, n_acc, n_rej = (np.zeros(1, dtype=np.int64) for _ in range(4))
         integrate(kernel_acc, kernel_rate, dt, np.ascontiguousarray(t_out), np.ascontiguousarray(y_init, dtype=float),
-                  scales, rtol, h_max, int(max_steps), *out, uplift, peak, status, reason, n_acc, n_rej, h_min)
+                  scales, rtol, h_max, int(max_steps), *out, uplift, peak, status, reason, n_acc, n_rej, h_min,
+                  **({} if vertical_input is None else {"vertical": vertical_input}))
         return [o[0] for o in out], int(status[0]), int(reason[0]), float(peak[0]), int(n_acc[0] + n_rej[0])
 
     (theta, theta_dot, z_cb, z_cb_dot), status, reason, peak, n_steps = run(times, y0)
@@ -224,7 +250,9 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     }
     if mc.uses_condensation:
         attrs["condensation"] = cond.name
-    if record.vertical is not None:
-        attrs["record_vertical_component"] = VERTICAL_NOT_USED
+    attrs["vertical_ground_motion"] = vertical_text(record, use_vertical)
+    if use_vertical:
+        data["vertical_ground_acceleration"] = ("t", np.interp(times, dt * np.arange(n_grid), vertical_input[0][0]))
+        data["lift_off"] = ((), bool(np.any(float(block.g) + record.vertical < 0.0)))
     return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.SIMULATION)
 

@@ -134,19 +134,36 @@ def indentation_curvature(theta, block, foundation):
     return np.where(up, curv_up, curv_in)[()]
 
 
-def rocking_coefficients(theta, block, foundation):
+def gravity_ratio(a_v, g):
+    """``lam = (g + a_v) / g`` [1]: the weight under a vertical ground acceleration ``a_v`` [m/s2]
+    (positive up), held at :data:`~screening.solvers.mcs_kernels.GRAVITY_RATIO_MIN` or above (below 0
+    the block lifts off, which the model stops)."""
+    return np.maximum(1.0 + np.asarray(a_v, dtype=float) / g, kern.GRAVITY_RATIO_MIN)
+
+
+def rocking_coefficients(theta, block, foundation, a_v=0.0):
     """``(m_eff [kg m2], dm_eff/dtheta [kg m2/rad], Q [N m], C_eff [N m s/rad])`` of the stiff-bed model.
 
     ``m_eff`` the inertia on the quasi-static contact, ``Q`` the restoring generalized moment
     (bed moment minus gravity), ``C_eff = cos^2(theta) C(|sin theta|)`` the damping (module
-    docstring).  ``theta`` [rad], vectorised.
+    docstring).  ``theta`` [rad], vectorised; ``a_v`` [m/s2] the vertical ground acceleration.
+
+    Notes
+    -----
+    Under ``a_v`` the weight is ``lam m g``, ``lam = (g + a_v) / g``.  On the linear Winkler bed the
+    contact law is similar in the weight: ``Z(a; lam) = lam Z(a / lam)``, the bed moment
+    ``B(a; lam) = lam B(a / lam)`` (``B = (K + m g h) a``), the rate damping ``C(a; lam) = C(a / lam)``;
+    so the laws are read at ``a / lam``, ``Z''`` divided by ``lam``, and gravity's moment is
+    ``lam m g h sin(theta)`` (docs/stiff_bed.md, "Vertical ground acceleration").
     """
     theta = np.asarray(theta, dtype=float)
+    lam = gravity_ratio(a_v, float(block.g))
     s, c = np.sin(theta), np.cos(theta)
     sigma = np.where(theta >= 0.0, 1.0, -1.0)
     a = np.abs(s)
-    z, dz = cubic.quasi_static_indentation(a, block, foundation)
-    d2z = indentation_curvature(a, block, foundation)
+    al = a / lam
+    z, dz = cubic.quasi_static_indentation(al, block, foundation)
+    d2z = indentation_curvature(al, block, foundation) / lam
     m, h = float(block.m), float(block.h)
     mgh = m * float(block.g) * h
     z_t = sigma * c * dz
@@ -154,18 +171,19 @@ def rocking_coefficients(theta, block, foundation):
     u = z_t + h * s
     m_eff = float(block.I_cm) + m * (h * h * c * c + u * u)
     dm_eff = m * (-2.0 * h * h * c * s + 2.0 * u * (z_tt + h * c))
-    q = sigma * c * (cubic.rocking_stiffness(a, block, foundation) * a + mgh * a) - mgh * s
-    c_eff = c * c * cubic.rocking_damping(a, block, foundation)
+    q = sigma * c * (cubic.rocking_stiffness(al, block, foundation) * a + mgh * a) - lam * mgh * s
+    c_eff = c * c * cubic.rocking_damping(al, block, foundation)
     return m_eff, dm_eff, q, c_eff
 
 
-def rocking_acceleration(theta, theta_dot, x_g_ddot, block, foundation):
+def rocking_acceleration(theta, theta_dot, x_g_ddot, block, foundation, a_v=0.0):
     """``theta''`` [rad/s2] of the stiff-bed model (module docstring), without the transfer loss.
 
     ``theta`` [rad], ``theta_dot`` [rad/s], ``x_g_ddot`` inertial ground acceleration [m/s2]
-    (the kernels' convention, :mod:`screening.solvers.simulate`); vectorised.
+    (the kernels' convention, :mod:`screening.solvers.simulate`), ``a_v`` vertical ground
+    acceleration [m/s2] (positive up; :func:`rocking_coefficients`); vectorised.
     """
-    m_eff, dm_eff, q, c_eff = rocking_coefficients(theta, block, foundation)
+    m_eff, dm_eff, q, c_eff = rocking_coefficients(theta, block, foundation, a_v)
     theta_dot = np.asarray(theta_dot, dtype=float)
     return ((block.m * block.h * np.cos(theta) * x_g_ddot - q - c_eff * theta_dot - 0.5 * dm_eff * theta_dot ** 2)
             / m_eff)
@@ -297,22 +315,41 @@ def indentation_curvature_jit(cp, a, z, dz, v):
 
 
 @numba.njit(cache=True)
-def rocking_acceleration_jit(sp, cp, theta, theta_dot, x_g_ddot):
+def rocking_acceleration_jit(sp, cp, theta, theta_dot, x_g_ddot, a_v=0.0):
     """Compiled :func:`rocking_acceleration` (``sp`` a :data:`STIFF` record, ``cp`` the cubic condensation's)."""
     s = math.sin(theta)
     c = math.cos(theta)
     sigma = 1.0 if theta >= 0.0 else -1.0
     a = sigma * s
-    z, dz, v = cubic.quasi_static_indentation_jit(cp, a)
-    d2z = indentation_curvature_jit(cp, a, z, dz, v)
-    damping, stiffness = cubic.damping_stiffness_jit(cp, a)
+    lam = max(1.0 + a_v / sp.g, kern.GRAVITY_RATIO_MIN)
+    al = a / lam
+    z, dz, v = cubic.quasi_static_indentation_jit(cp, al)
+    d2z = indentation_curvature_jit(cp, al, z, dz, v) / lam
+    damping, stiffness = cubic.damping_stiffness_jit(cp, al)
     m, h = sp.m, sp.h
     mgh = m * sp.g * h
     u = sigma * c * dz + h * s
     m_eff = sp.I_cm + m * (h * h * c * c + u * u)
     dm_eff = m * (-2.0 * h * h * c * s + 2.0 * u * (c * c * d2z - a * dz + h * c))
-    q = sigma * c * (stiffness * a + mgh * a) - mgh * s
+    q = sigma * c * (stiffness * a + mgh * a) - lam * mgh * s
     return (m * h * c * x_g_ddot - q - c * c * damping * theta_dot - 0.5 * dm_eff * theta_dot * theta_dot) / m_eff
+
+
+@numba.njit(cache=True, inline="always")
+def _accel(sp, cp, theta, theta_dot, acc):
+    """:func:`rocking_acceleration_jit` under the ground input ``acc = (x_g'', a_v)``."""
+    return rocking_acceleration_jit(sp, cp, theta, theta_dot, acc[0], acc[1])
+
+
+@numba.njit(cache=True)
+def _vertical_quiet(row, acc, acc_dot, j):
+    """True when the vertical channel is zero over grid interval ``j`` (values and rates): the exact
+    full-contact propagator holds there."""
+    vrow = kern._vertical_row(row, acc[1])
+    if vrow < 0:
+        return True
+    v, r = acc[1], acc_dot[1]
+    return v[vrow, j] == 0.0 and v[vrow, j + 1] == 0.0 and r[vrow, j] == 0.0 and r[vrow, j + 1] == 0.0
 
 
 @numba.njit(cache=True)
@@ -340,11 +377,12 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
     """Integrate one sample of the stiff-bed model over ``t_out``; fill row ``row`` of the outputs.
 
     ``prop``: ``(2, 6)``, :func:`linear_propagator` ``[Phi | Gamma]`` for the grid step ``dt_grid``;
-    ``log_amp``, ``log_eta``: the transfer table.  Returns ``(status, reason, peak_abs_theta,
+    ``log_amp``, ``log_eta``: the transfer table; ``acc``, ``acc_dot``: the ``(horizontal, vertical)``
+    ground input of :func:`screening.solvers.mcs_kernels._integrate_chunk`.  Returns ``(status, reason, peak_abs_theta,
     n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as accepted steps).
     """
     n_out = t_out.shape[0]
-    n_grid = acc.shape[1]
+    n_grid = acc[0].shape[1]
     y0, y1 = y_init[0], y_init[1]
     s0, s1 = scale[0], scale[1]
     tu = sp.theta_ul
@@ -380,12 +418,13 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
         t_next = t_out[i_out]
         full = abs(y0) <= tu
         old0 = y0
-        if at_grid and full and jg + 1 < n_grid and (jg + 1) * dt_grid < t_next - 1e-9 * dt_grid:
+        if at_grid and full and jg + 1 < n_grid and (jg + 1) * dt_grid < t_next - 1e-9 * dt_grid \
+                and _vertical_quiet(row, acc, acc_dot, jg):
             # --- exact full-contact interval
-            u0 = acc[row, jg]
-            u1 = acc[row, jg + 1]
-            u2 = dt_grid * acc_dot[row, jg]
-            u3 = dt_grid * acc_dot[row, jg + 1]
+            u0 = acc[0][row, jg]
+            u1 = acc[0][row, jg + 1]
+            u2 = dt_grid * acc_dot[0][row, jg]
+            u3 = dt_grid * acc_dot[0][row, jg + 1]
             n0 = prop[0, 0] * y0 + prop[0, 1] * y1 + prop[0, 2] * u0 + prop[0, 3] * u1 + prop[0, 4] * u2 \
                 + prop[0, 5] * u3
             if abs(n0) <= tu:
@@ -408,7 +447,7 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
         # --- adaptive step, landing on the next output instant (and on the next grid point in full contact)
         if stale:
             k1_0 = y1
-            k1_1 = rocking_acceleration_jit(sp, cp, y0, y1, _input(row, acc, acc_dot, dt_grid, t))
+            k1_1 = _accel(sp, cp, y0, y1, _input(row, acc, acc_dot, dt_grid, t))
             stale = False
         target = t_next
         to_grid = False
@@ -425,28 +464,28 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
         g0 = y0 + h * A21 * k1_0
         g1 = y1 + h * A21 * k1_1
         k2_0 = g1
-        k2_1 = rocking_acceleration_jit(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C2 * h))
+        k2_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C2 * h))
         g0 = y0 + h * (A31 * k1_0 + A32 * k2_0)
         g1 = y1 + h * (A31 * k1_1 + A32 * k2_1)
         k3_0 = g1
-        k3_1 = rocking_acceleration_jit(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C3 * h))
+        k3_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C3 * h))
         g0 = y0 + h * (A41 * k1_0 + A42 * k2_0 + A43 * k3_0)
         g1 = y1 + h * (A41 * k1_1 + A42 * k2_1 + A43 * k3_1)
         k4_0 = g1
-        k4_1 = rocking_acceleration_jit(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C4 * h))
+        k4_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C4 * h))
         g0 = y0 + h * (A51 * k1_0 + A52 * k2_0 + A53 * k3_0 + A54 * k4_0)
         g1 = y1 + h * (A51 * k1_1 + A52 * k2_1 + A53 * k3_1 + A54 * k4_1)
         k5_0 = g1
-        k5_1 = rocking_acceleration_jit(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C5 * h))
+        k5_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C5 * h))
         g0 = y0 + h * (A61 * k1_0 + A62 * k2_0 + A63 * k3_0 + A64 * k4_0 + A65 * k5_0)
         g1 = y1 + h * (A61 * k1_1 + A62 * k2_1 + A63 * k3_1 + A64 * k4_1 + A65 * k5_1)
         acc_end = _input(row, acc, acc_dot, dt_grid, t + h)
         k6_0 = g1
-        k6_1 = rocking_acceleration_jit(sp, cp, g0, g1, acc_end)
+        k6_1 = _accel(sp, cp, g0, g1, acc_end)
         n0 = y0 + h * (B1 * k1_0 + B3 * k3_0 + B4 * k4_0 + B5 * k5_0 + B6 * k6_0)
         n1 = y1 + h * (B1 * k1_1 + B3 * k3_1 + B4 * k4_1 + B5 * k5_1 + B6 * k6_1)
         k7_0 = n1
-        k7_1 = rocking_acceleration_jit(sp, cp, n0, n1, acc_end)
+        k7_1 = _accel(sp, cp, n0, n1, acc_end)
         e0 = h * (E1 * k1_0 + E3 * k3_0 + E4 * k4_0 + E5 * k5_0 + E6 * k6_0 + E7 * k7_0)
         e1 = h * (E1 * k1_1 + E3 * k3_1 + E4 * k4_1 + E5 * k5_1 + E6 * k6_1 + E7 * k7_1)
         err = math.sqrt(0.5 * (_err2(e0, y0, n0, s0, rtol) + _err2(e1, y1, n1, s1, rtol)))
@@ -481,7 +520,7 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
             if amp > tu:
                 y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
                 k1_0 = y1
-                k1_1 = rocking_acceleration_jit(sp, cp, y0, y1, acc_end)
+                k1_1 = _accel(sp, cp, y0, y1, acc_end)
             amp = 0.0
         a0 = abs(y0)
         amp = max(amp, a0)
@@ -496,10 +535,13 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
         if a0 > sp.theta_cap:
             status, reason = kern.STATUS_DIVERGED, kern.REASON_NO_EQUILIBRIUM
             break
+        if sp.g + acc_end[1] < 0.0:                    # the block lifts off: not this model's
+            status, reason = kern.STATUS_DIVERGED, kern.REASON_LIFT_OFF
+            break
         if landing and not to_grid:
             out_theta[row, i_out] = y0
             out_theta_dot[row, i_out] = y1
-            out_uplift[row, i_out] = a0 > tu
+            out_uplift[row, i_out] = a0 > tu * (1.0 + acc_end[1] / sp.g)
             i_out += 1
         fac, log_err = dopri.pi_step_factor(err, log_err_old)
         if rejected:
@@ -520,7 +562,7 @@ def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out
                     max_steps, out_theta, out_theta_dot, out_uplift, peak, status, reason, n_accepted, n_rejected,
                     h_min):
     """:func:`integrate_sample` for every row of ``acc`` (``prange`` over samples)."""
-    for row in numba.prange(acc.shape[0]):
+    for row in numba.prange(acc[0].shape[0]):
         st, rs, pk, na, nr, hm = integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                                                   t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
                                                   out_theta_dot, out_uplift)
@@ -654,10 +696,12 @@ class _StiffIntegrator(ChunkIntegrator):
         return self._prop[dt]
 
     def __call__(self, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
-                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min):
-        integrate_chunk(self.sp, self.cp, self.propagator(float(dt_grid)), self.log_amp, self.log_eta, acc, acc_dot,
-                        float(dt_grid), t_out, y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot,
-                        out_uplift, peak, status, reason, n_accepted, n_rejected, h_min)
+                 out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min,
+                 vertical=None):
+        vacc, vrate = (kern.NO_VERTICAL, kern.NO_VERTICAL) if vertical is None else vertical
+        integrate_chunk(self.sp, self.cp, self.propagator(float(dt_grid)), self.log_amp, self.log_eta, (acc, vacc),
+                        (acc_dot, vrate), float(dt_grid), t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
+                        out_theta_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min)
         out_z[...] = 0.0
         out_z_dot[...] = 0.0
 

@@ -14,6 +14,7 @@ unused) with a ``[records]`` table::
     threshold = 0.2              # rotation threshold of the fragility ...
     relative_to = "slenderness"  # ... as a fraction of atan(b/h) or "theta_ul", or "rad"
     im = "pga"                   # intensity measure of the fragility: pga, sa, rms, arias, pgv, avgsa
+    vertical = true              # use the records' vertical components where they have one (false: leave out)
 
 Each record is integrated by :func:`screening.simulate` (the coupled model by default) and the
 result holds, on a ``record`` dimension, the peak ``|theta|``, the overturned flag, the
@@ -49,7 +50,8 @@ __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "run_record", 
            "stripe_dataset", "plot_stripes", "cloud_dataset", "plot_cloud", "synthesise_records",
            "write_demand_csv"]
 
-_RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels")
+_RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels",
+                "vertical")
 #: Most IM levels of a multiple-stripe analysis.
 MAX_LEVELS = 100
 IMS = {"pga": "pga", "sa": "sa", "rms": "rms_acceleration", "arias": "arias_intensity", "pgv": "pgv",
@@ -72,12 +74,15 @@ class CloudStudy:
     relative_to: str
     im: str
     levels: tuple = ()
+    vertical: bool = True
 
 
-def load_cloud_study(path, units=None):
+def load_cloud_study(path, units=None, vertical=True):
     """Read a cloud study; :class:`StudyError` with a one-line message naming the key on any problem.
 
-    ``units``: the ``--units`` of the command line (``[records] units`` if absent; both: must agree)."""
+    ``units``: the ``--units`` of the command line (``[records] units`` if absent; both: must agree).
+    ``vertical``: False (``--no-vertical``) leaves the records' vertical components out whatever
+    ``[records] vertical`` says."""
     from screening.records import check_scale, check_time_step, expand_records, unit_factor
     from screening.workflow.records_study import load_record_study
 
@@ -127,12 +132,16 @@ def load_cloud_study(path, units=None):
                 raise StudyError(f"records.units: {stated!r}, but --units {units!r} was given")
         units = units or stated
         levels = _levels(rec.get("levels"), im)
+        use_vertical = rec.get("vertical", True)
+        if not isinstance(use_vertical, bool):
+            raise StudyError(f"records.vertical: must be true or false (got {use_vertical!r})")
     except StudyError as exc:
         raise StudyError(f"{path}: {exc}") from None
     return CloudStudy(study=base, files=files, units=units, dt=rec.get("dt"),
                       scale=float(rec.get("scale", 1.0)), model=model,
                       period=None if period is None else float(period),
-                      threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im, levels=levels)
+                      threshold=float(rec.get("threshold", 0.2)), relative_to=relative_to, im=im, levels=levels,
+                      vertical=bool(vertical and use_vertical))
 
 
 def _levels(value, im):
@@ -156,13 +165,17 @@ def run_record(block, foundation, record, model="coupled", condensation="paper",
 
     ds = simulate(block, foundation, record, model=model, condensation=condensation, output_dt=max(record.dt, 0.01))
     out = {"peak_abs_theta": float(ds["peak_abs_theta"]), "overturned": bool(ds["overturned"]),
-           "diverged": bool(ds["diverged"]), "overturning_time": float(ds["overturning_time"])}
+           "diverged": bool(ds["diverged"]), "overturning_time": float(ds["overturning_time"]),
+           "lift_off": bool(ds["lift_off"]) if "lift_off" in ds else False}
     out.update(record_measures(record, period=period))
     return out
 
 
 def read_cloud_records(cloud):
-    """The records of a :class:`CloudStudy`, read and scaled (:class:`StudyError` naming the bad file)."""
+    """The records of a :class:`CloudStudy`, read and scaled (:class:`StudyError` naming the bad file);
+    without their vertical components when the study leaves them out."""
+    from dataclasses import replace
+
     from screening.records import read_record
 
     records = []
@@ -171,6 +184,7 @@ def read_cloud_records(cloud):
             rec = read_record(path, dt=cloud.dt, units=cloud.units, option="--units or records.units")
         except ValueError as exc:
             raise StudyError(f"records.files: {exc}") from None
+        rec = rec if cloud.vertical else replace(rec, vertical=None)
         records.append(rec.scaled(cloud.scale) if cloud.scale != 1.0 else rec)
     return records
 
@@ -179,7 +193,8 @@ def failed_record(period=None):
     """The row of a record whose task failed: NaN values, ``diverged`` (left out of the fit)."""
     from screening.analysis.intensity import PERIOD_MEASURES, RECORD_MEASURES
 
-    row = {"peak_abs_theta": math.nan, "overturned": False, "diverged": True, "overturning_time": math.nan}
+    row = {"peak_abs_theta": math.nan, "overturned": False, "diverged": True, "overturning_time": math.nan,
+           "lift_off": False}
     row.update({name: math.nan for name in RECORD_MEASURES if name not in PERIOD_MEASURES or period is not None})
     return row
 
@@ -231,21 +246,33 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
     if records is None:
         records = read_cloud_records(cloud)
+    mc = model_choice.resolve(cloud.model, block, foundation)           # "auto": once, for this block and bed
     rows, failures = record_rows(block, foundation, records, cloud.model,
-                                 chosen.condensation if model_choice.resolve(cloud.model, block, foundation).uses_condensation else "paper",
-                                 cloud.period,
+                                 chosen.condensation if mc.uses_condensation else "paper", cloud.period,
                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
-    vertical = [rec.name for rec in records if rec.vertical is not None]
-    if vertical:
-        from screening.records import VERTICAL_NOT_USED
-
-        warnings.append(f"{len(vertical)} record(s) with a vertical component ({', '.join(vertical[:3])}"
-                        f"{', ...' if len(vertical) > 3 else ''}): {VERTICAL_NOT_USED}")
+    ds.attrs["vertical_ground_motion"] = vertical_summary(cloud, records)
+    lifted = [rec.name for rec, row in zip(records, rows) if row["lift_off"]]
+    if lifted:
+        stopped = "flew and landed" if mc.vertical_state else \
+            "stopped there (diverged: left out of the fit)"
+        warnings.append(f"{len(lifted)} record(s) lift the block off (g + a_v < 0: {', '.join(lifted[:3])}"
+                        f"{', ...' if len(lifted) > 3 else ''}); the {mc.name} model {stopped}")
         ds.attrs["warnings"] = "; ".join(warnings)
     ds.attrs["execution"] = "serial, in process" if client is None else \
         f"dask, one task per record on {len(client.nthreads())} worker(s)"
     return ds, failures + warnings
+
+
+def vertical_summary(cloud, records):
+    """What became of the records' vertical components (the ``vertical_ground_motion`` attribute)."""
+    n = sum(rec.vertical is not None for rec in records)
+    if not cloud.vertical:
+        return "left out (vertical = false or --no-vertical): the models took the horizontal components only"
+    if n == 0:
+        return "none (no record has a vertical component)"
+    return (f"used for the {n} of {len(records)} record(s) that have one: g + a_v(t) acts on the block and its bed "
+            f"(docs/method.md, 'Vertical ground acceleration')")
 
 
 def threshold_level(cloud, block, foundation):
@@ -266,7 +293,9 @@ def scaled_to(record, im, level, period=None):
 
     value = record_measures(record, period=period)[IMS[im]]
     factor = level / value if im != "arias" else math.sqrt(level / value)
-    return Record(record.acceleration * factor, record.dt, record.name, record.source, record.units_in)
+    vertical = None if record.vertical is None else record.vertical * factor     # both components alike
+    return Record(record.acceleration * factor, record.dt, record.name, record.source, record.units_in,
+                  vertical=vertical)
 
 
 def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, records=None):

@@ -6,6 +6,7 @@ import xarray as xr
 
 from screening.cli import main
 from screening.records import Record, write_at2
+from screening.workflow.config import StudyError
 
 STUDY = """
 title = "record CLI"
@@ -244,27 +245,67 @@ def test_fragility_period_of_sa_is_bounded_before_the_result_is_read(tmp_path, c
     assert "parameter '--period' must be a finite number >= 0.001 and <= 100" in _one_line(capsys)
 
 
-def test_a_vertical_component_is_said_to_be_unused(tmp_path, capsys):
+def test_a_vertical_component_is_used_unless_left_out(tmp_path, capsys):
+    """The record's vertical component (-0.5 x the horizontal, in g) drives the block unless --no-vertical:
+    both files say which, and the vertical history is stored with its units where it was used."""
     study, _ = _files(tmp_path)
     record, pga_g = _csv_in_g(tmp_path, columns=3)
-    out = tmp_path / "v.nc"
-    assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots", "--units", "g",
-                 "--out", str(out)]) == 0
-    err = capsys.readouterr().err
-    assert f"PGA {pga_g:.3f} g" in err and "warning: the vertical component is carried but not used" in err
-    with xr.open_dataset(out) as ds:
-        assert "not used" in ds.attrs["record_vertical_component"]
+    peaks = {}
+    for flag in ([], ["--no-vertical"]):
+        out = tmp_path / f"v{len(flag)}.nc"
+        assert main(["simulate", str(record), "--study", str(study), "--set", "eps=6e7", "--no-plots", "--units", "g",
+                     "--out", str(out), *flag]) == 0
+        err = capsys.readouterr().err
+        assert f"PGA {pga_g:.3f} g" in err and "vertical component: " + ("left out" if flag else "used") in err
+        with xr.open_dataset(out) as ds:
+            assert ds.attrs["vertical_ground_motion"].startswith("left out" if flag else "used")
+            assert ("vertical_ground_acceleration" in ds) is not bool(flag)
+            if not flag:
+                assert ds["vertical_ground_acceleration"].attrs["units"] == "m s-2"
+                np.testing.assert_allclose(ds["vertical_ground_acceleration"], -0.5 * ds["ground_acceleration"],
+                                           atol=1e-6)
+                assert not bool(ds["lift_off"])
+            peaks[bool(flag)] = ds["theta"].values
+    assert not np.array_equal(peaks[True], peaks[False])        # the vertical component changed the response
 
 
-def test_cloud_warns_of_unused_vertical_components(tmp_path):
+def test_cloud_uses_vertical_components_unless_left_out(tmp_path):
     from screening.workflow.cloud import load_cloud_study, run_cloud
 
     _files(tmp_path)
     _csv_in_g(tmp_path, columns=3)
     path = tmp_path / "cloud.toml"
     path.write_text(CLOUD.format(files="['rec.csv', 'pulse.at2']", extra="units = 'g'"))
-    ds, warnings = run_cloud(load_cloud_study(path), overrides={"eps": 6e7})
-    said = [w for w in warnings if "vertical component" in w]
-    assert said == ["1 record(s) with a vertical component (rec): the vertical component is carried but not used: "
-                    "the models take the horizontal one only"]
-    assert said[0] in ds.attrs["warnings"]
+    used, _ = run_cloud(load_cloud_study(path), overrides={"eps": 6e7})
+    assert used.attrs["vertical_ground_motion"].startswith("used for the 1 of 2 record(s)")
+    left, _ = run_cloud(load_cloud_study(path, vertical=False), overrides={"eps": 6e7})
+    assert left.attrs["vertical_ground_motion"].startswith("left out")
+    peak_used, peak_left = used["peak_abs_theta"].values, left["peak_abs_theta"].values
+    assert peak_used[1] == peak_left[1]                          # the one-component AT2 record: no change
+    assert peak_used[0] != peak_left[0]
+    path.write_text(CLOUD.format(files="['rec.csv']", extra="units = 'g'\nvertical = false"))
+    assert not load_cloud_study(path).vertical
+    path.write_text(CLOUD.format(files="['rec.csv']", extra="units = 'g'\nvertical = 'yes'"))
+    with pytest.raises(StudyError, match="records.vertical: must be true or false"):
+        load_cloud_study(path)
+
+
+@pytest.mark.parametrize("model,said", [("condensed", "stopped there (diverged: left out of the fit)"),
+                                        ("coupled", "flew and landed")])
+def test_a_record_that_lifts_the_block_off_is_one_warning_line(tmp_path, model, said):
+    """A vertical pulse to -1.5 g: the record is flagged ``lift_off``; the condensed model stops it (diverged),
+    the coupled block flies and lands; one warning line says which, never a crash."""
+    from screening.workflow.cloud import load_cloud_study, run_cloud
+
+    _files(tmp_path)
+    t = np.arange(0.0, 2.0, 0.002)
+    a_v = np.where(np.abs(t - 1.0) < 0.05, -1.5 * np.cos(np.pi * (t - 1.0) / 0.1), 0.0)
+    a_h = 0.01 * np.sin(2 * np.pi * 2.0 * t)
+    (tmp_path / "up.csv").write_text("\n".join(f"{ti:.4f},{hi:.6f},{vi:.6f}" for ti, hi, vi in zip(t, a_h, a_v)) + "\n")
+    path = tmp_path / "cloud.toml"
+    path.write_text(CLOUD.format(files="['up.csv', 'pulse.at2']", extra=f"units = 'g'\nmodel = '{model}'"))
+    ds, warnings = run_cloud(load_cloud_study(path), overrides={"eps": 0.0})
+    assert ds["lift_off"].values.tolist() == [True, False]
+    assert ds["diverged"].values.tolist() == [model == "condensed", False]
+    assert [w for w in warnings if "lift the block off" in w] == [
+        f"1 record(s) lift the block off (g + a_v < 0: up); the {model} model {said}"]

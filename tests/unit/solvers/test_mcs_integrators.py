@@ -49,9 +49,10 @@ def run_kernel(integrator, model, acc, acc_dot, dt_grid, t_out, foundation, y_in
     p = kern.model_record(block, foundation, cond, 0.5, integrator)
     sdof = cond.sdof_kernel(block, foundation)
     scale = rtol * state_scales(block, foundation)
-    kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, acc, acc_dot, dt_grid,
-                                             t_out, p[None], np.asarray(y_init, float), scale, rtol, h_max, 10**8,
-                                             *outs, uplift, *flags)
+    none = kern.NO_VERTICAL
+    kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, (acc, none), (acc_dot, none),
+                                             dt_grid, t_out, p[None], np.asarray(y_init, float), scale, rtol, h_max,
+                                             10**8, *outs, uplift, *flags)
     return [o[0] for o in outs] + [uplift[0]], dict(peak=flags[0][0], status=int(flags[1][0]),
                                                     reason=int(flags[2][0]), steps=int(flags[3][0] + flags[4][0]))
 

@@ -138,9 +138,10 @@ def _run_kernel(model, acc, t_out, foundation, y_init, rtol=1e-8, dt_grid=1e-3, 
     p = kern.model_record(BLOCK, foundation, cond, max_flight_time)
     sdof = cond.sdof_kernel(BLOCK, foundation)
     scale = rtol * state_scales(BLOCK, foundation)
-    kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, acc, np.zeros_like(acc),
-                                             dt_grid, t_out, p[None], np.asarray(y_init, float), scale, rtol, 0.005,
-                                             10**7, *outs, uplift, *flags)
+    kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, (acc, kern.NO_VERTICAL),
+                                             (np.zeros_like(acc), kern.NO_VERTICAL), dt_grid, t_out, p[None],
+                                             np.asarray(y_init, float), scale, rtol, 0.005, 10**7, *outs, uplift,
+                                             *flags)
     return outs, flags
 
 
