@@ -80,7 +80,7 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
     ds.attrs["rules"] = "\n".join(rule_text(r, metric, quantity) for r in rules)
     if write_nc:
         with atomic_path(paths["nc"]) as tmp:
-            to_file_layout(ds).to_netcdf(tmp, encoding=file_encoding(ds))
+            to_file_layout(ds).to_netcdf(tmp, engine="netcdf4", encoding=file_encoding(ds))
     wall = float(ds.attrs.get("wall_time_s", float("nan")))
     with atomic_open(paths["md"], "w", encoding="utf-8") as fh:
         fh.write(markdown_report(study, ds, rules) + f"\nTotal run time {wall:.0f} s.\n")

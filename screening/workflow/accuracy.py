@@ -223,7 +223,7 @@ def escalation_runs(run, order, models):
     def gather(futures):
         nonlocal failed
         out = {}
-        for fut in interruptible(as_completed(list(futures))):
+        for fut in interruptible(as_completed(list(futures), loop=run.client.loop)):
             j = futures[fut]
             try:
                 out[j] = fut.result()

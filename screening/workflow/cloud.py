@@ -224,7 +224,7 @@ def record_rows(block, foundation, records, model, condensation, period, client=
 
     pending = {client.submit(run_record, block, foundation, rec, model, condensation, period, pure=False,
                              retries=TASK_RETRIES): i for i, rec in enumerate(records)}
-    for fut in interruptible(as_completed(list(pending))):
+    for fut in interruptible(as_completed(list(pending), loop=client.loop)):
         i = pending.pop(fut)
         try:
             rows[i] = fut.result()

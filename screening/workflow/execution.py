@@ -536,7 +536,12 @@ def dask_client(workers=2, scheduler=None, client=None):
     """A ``distributed.Client``: the given one, one connected to ``scheduler`` (an address
     or a scheduler JSON file), or a new ``LocalCluster`` of ``workers`` single-threaded
     processes (closed on exit); ``workers = 0``: one worker thread in this process (no process
-    started, the same tasks and futures, so one orchestration serves both)."""
+    started, the same tasks and futures, so one orchestration serves both).
+
+    A client made here is never dask's default: the run submits to it by name, and a caller's later
+    dask or xarray work in the same process does not go to a cluster this function has closed (with
+    some library versions a closed default client made xarray's next ``to_netcdf`` fail with "IOLoop
+    is closed" and the one after it hang)."""
     if client is not None:
         yield client
         return
@@ -548,9 +553,9 @@ def dask_client(workers=2, scheduler=None, client=None):
         check_scheduler(scheduler)                 # bounded handshake, sane peer, sane JSON file
         try:
             if str(scheduler).endswith(".json") and Path(scheduler).is_file():
-                c = Client(scheduler_file=str(scheduler), timeout=CONNECT_TIMEOUT)
+                c = Client(scheduler_file=str(scheduler), timeout=CONNECT_TIMEOUT, set_as_default=False)
             else:
-                c = Client(scheduler, timeout=CONNECT_TIMEOUT)
+                c = Client(scheduler, timeout=CONNECT_TIMEOUT, set_as_default=False)
         except Exception as exc:                   # noqa: BLE001 - a peer that changed since the check
             raise SweepError(f"cannot connect to the dask scheduler {scheduler}: {exception_line(exc)}") from None
         try:
@@ -616,7 +621,7 @@ def _local_client(workers):
         except Exception as exc:                      # noqa: BLE001 - dask raises RuntimeError & co
             raise SweepError(f"cannot start the in-process dask scheduler: {type(exc).__name__}: {exc}") from None
         try:
-            with Client(cluster) as c:
+            with Client(cluster, set_as_default=False) as c:
                 yield c
         finally:
             cluster.close()
@@ -646,7 +651,7 @@ def _local_client(workers):
         raise SweepError(f"cannot start a local dask cluster of {workers} worker(s): "
                          f"{type(exc).__name__}: {exc}") from None
     try:
-        with Client(cluster) as c:
+        with Client(cluster, set_as_default=False) as c:
             yield c
     except KeyboardInterrupt:
         stop_workers(cluster)

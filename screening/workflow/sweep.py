@@ -342,7 +342,7 @@ class _SweepRun:
         todo = iter([b for b in batches if b not in done_set])
         window = IN_FLIGHT_PER_WORKER * max(self.report.n_workers, 1)
         pending = {}
-        ready = as_completed()
+        ready = as_completed(loop=self.client.loop)
 
         def top_up():
             while len(pending) < window:
@@ -431,7 +431,7 @@ class _SweepRun:
                     samples.set(i, spec.samples)
             self.client.subscribe_topic(topic, lambda event: samples.set(event[1]["spot"], event[1]["done"]))
             try:
-                for fut in interruptible(as_completed(list(pending))):
+                for fut in interruptible(as_completed(list(pending), loop=self.client.loop)):
                     i = pending.pop(fut)
                     try:
                         results[i] = fut.result()

@@ -10,6 +10,7 @@ from helpers import GRID
 from screening import condensation
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus, SampleState
+from screening.workflow import execution
 from screening.workflow.execution import failed_result, failed_spot, sample_state, solve_batch
 from screening.workflow.grid import batch_models, plan_batches
 from screening.workflow.study import parse_study
@@ -52,3 +53,16 @@ def test_sample_state_codes():
     div = np.array([False, True, False, False])
     np.testing.assert_array_equal(sample_state(over, div), [SampleState.overturned, SampleState.diverged_or_failed,
                                                             SampleState.standing, SampleState.standing])
+
+
+def test_the_local_client_is_never_made_dask_s_default():
+    """A run's client is used by name only: inside and after the run, dask's default client and its
+    scheduler setting are what they were (a closed default client breaks a caller's later xarray writes)."""
+    import dask
+    from distributed.client import _get_global_client
+
+    before = (_get_global_client(), dask.config.get("scheduler", None))
+    with execution.dask_client(0) as c:
+        assert c.submit(sum, [1, 2]).result() == 3
+        assert (_get_global_client(), dask.config.get("scheduler", None)) == before
+    assert (_get_global_client(), dask.config.get("scheduler", None)) == before
