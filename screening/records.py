@@ -46,7 +46,7 @@ import numpy as np
 from screening.validation import input_path, read_input_text
 from screening import limits
 
-__all__ = ["STANDARD_GRAVITY", "UNITS", "Record", "VERTICAL_NOT_USED", "check_time_step", "check_scale",
+__all__ = ["STANDARD_GRAVITY", "UNITS", "Record", "check_time_step", "check_scale",
            "unit_factor", "read_at2", "read_text_record", "read_two_column", "read_single_column", "read_record",
            "expand_records", "write_at2"]
 

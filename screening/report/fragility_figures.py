@@ -118,6 +118,7 @@ BEST_MARKERS = {BestMethod.linearization: ("o", "best: linearization"),
                 BestMethod.corrected_linearization: ("^", "best: corrected Gaussian (linearization x correction)"),
                 BestMethod.condensed_monte_carlo: ("s", "best: condensed Monte Carlo (binomial band)"),
                 BestMethod.coupled_monte_carlo: ("D", "best: coupled Monte Carlo (binomial band)"),
+                BestMethod.stiff_bed_monte_carlo: ("P", "best: stiff-bed Monte Carlo (binomial band)"),
                 BestMethod.unreliable: ("$?$", "best: none vouched for (unreliable, no band)")}
 
 

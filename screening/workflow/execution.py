@@ -291,15 +291,13 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
 
 def spot_arrays(ds):
     """A Monte Carlo dataset reduced to the arrays of a spot check: the histories, the sample counts, the
-    integration steps of all samples and the synthesis grid points they read, the per-sample peaks and states,
-    and the Monte Carlo model that ran (``mcs_model``, its registry code)."""
+    integration steps of all samples and the synthesis grid points they read, the per-sample peaks and states."""
     out = {name: np.asarray(ds[name].values, dtype=np.float64) for name in SPOT_HISTORIES}
     n_over, n_div = int(ds["n_overturned"]), int(ds["n_diverged"])
     out.update(n_overturned=np.int32(n_over), n_diverged=np.int32(n_div),
                n_used=np.int32(ds.sizes["sample"] - n_over - n_div), n_steps=np.int64(ds["n_steps"].values.sum()),
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
-    out["mcs_model"] = np.int8(mc_registry.code(ds.attrs["model"]))
     out["n_grid"] = np.int64(ds.sizes["sample"] * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
     return out
 
@@ -322,6 +320,7 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=mc, t_end=t_end, dt=dt,
                      seed=seed, progress=_sample_events(progress), **kw)
     out = spot_arrays(ds)
+    out["mcs_model"] = np.int8(mc_registry.code(mc.name))
     if linear is not None:
         t_out, rtol, max_steps, names = linear
         res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,

@@ -225,7 +225,7 @@ def fake_monte_carlo(block, foundation, excitation, n_samples=1000, model="coupl
             "peak_abs_theta": ("sample", scale * np.arange(n_samples)),
             "overturned": ("sample", np.arange(n_samples) < 3), "diverged": ("sample", np.arange(n_samples) == 3),
             "n_steps": ("sample", np.full(n_samples, 100)), "n_overturned": ((), 3), "n_diverged": ((), 1)}
-    return xr.Dataset(data, coords={"t": t})
+    return xr.Dataset(data, coords={"t": t}, attrs={"input_grid_points": 1024, "model": str(model)})
 
 
 def test_spot_checks_store_monte_carlo_on_the_spot_dimension(client, tmp_path, monkeypatch):

@@ -297,8 +297,8 @@ def test_no_cost_ratio_beats_free_cheap_samples():
 
 
 def test_the_escalation_plans_a_paired_point_from_its_pilot_on_the_cost_model():
-    """Costs per sample from the cost model's steps (coupled 1e5 steps at 0.35 us, condensed 1e4 at 0.15 us per
-    sample: ratio 23), never fewer coupled samples than the pilot's, plain where the gain is too small."""
+    """Costs per sample from the cost model's steps (coupled 1e5 steps, condensed 1e4, each at its
+    STEP_COST_S), never fewer coupled samples than the pilot's, plain where the gain is too small."""
     from screening.analysis import escalation as esc
     from screening.analysis.multifidelity import allocate
     from screening.status import EscalationModel
@@ -307,7 +307,8 @@ def test_the_escalation_plans_a_paired_point_from_its_pilot_on_the_cost_model():
              "correlation": 0.99}
     c_hi = esc.estimated_cost(100_000, EscalationModel.coupled)
     c_lo = esc.estimated_cost(10_000, EscalationModel.condensed)
-    assert c_hi / c_lo == pytest.approx(0.35 / 0.015)
+    step = esc.STEP_COST_S
+    assert c_hi / c_lo == pytest.approx(10.0 * step[EscalationModel.coupled] / step[EscalationModel.condensed])
     plan = esc.paired_plan(pilot, EscalationModel.coupled, 64, 5000)
     assert plan == allocate(0.99, c_hi, c_lo, 5000) and plan.estimator == "multifidelity" and plan.n_expensive > 64
     small = esc.paired_plan(pilot, EscalationModel.coupled, 64, 100)

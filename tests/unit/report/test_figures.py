@@ -219,7 +219,8 @@ def test_fragility_draws_the_best_estimate_band_and_says_which_method_gave_each_
     s0 = ds["S0"]
     p = xr.DataArray(np.linspace(0.05, 0.9, 6), dims="S0", coords={"S0": s0})
     method = np.array([BestMethod.linearization, BestMethod.corrected_linearization, BestMethod.coupled_monte_carlo,
-                       BestMethod.condensed_monte_carlo, BestMethod.unreliable, BestMethod.unreliable], dtype=np.int8)
+                       BestMethod.condensed_monte_carlo, BestMethod.stiff_bed_monte_carlo, BestMethod.unreliable],
+                      dtype=np.int8)
     low = (p - 0.05).where(method != BestMethod.unreliable)
     frag = xr.Dataset({"p_exceed": p, "best_p_exceed": p + 0.01, "best_p_exceed_low": low,
                        "best_p_exceed_high": low + 0.1, "best_method": ("S0", method)},
@@ -234,7 +235,7 @@ def test_fragility_draws_the_best_estimate_band_and_says_which_method_gave_each_
         line = next(line for line in ax.get_lines() if line.get_label() == label)
         np.testing.assert_array_equal(line.get_xdata(), s0.values[method == m])
     assert "best estimate band (+-2 se)" in texts
-    assert any(t.startswith("best estimates (all points): linearization 1") and "unreliable 2" in t for t in texts)
+    assert any(t.startswith("best estimates (all points): linearization 1") and "unreliable 1" in t for t in texts)
     band = next(c for c in ax.collections if c.get_label() == "best estimate band (+-2 se)")
     assert band.get_paths()                                 # the shaded band exists (NaN where unreliable)
     assert any(t.startswith("flagged (status != ok): 1") for t in texts)     # flag marks kept
