@@ -474,6 +474,8 @@ def attributes(name, table=None):
     ``spot_`` (their value at a Monte Carlo spot point); Monte Carlo names with the prefix
     ``mcs_``.  Raises ``KeyError`` for an undeclared name.
     """
+    if table is not None and name in table:         # the table asked for first (the trade study's
+        return dict(table[name])                    # ``mcs_model`` is a label dimension, not the flag)
     if name == "p_source":
         return probability_source_attributes()
     if name == "mcs_model":
