@@ -49,13 +49,40 @@ def reference_model(block, foundation, timing, coupled_radians=COUPLED_RADIANS):
 
 def point_intensity(block, foundation, shape, timing, p_target, factor):
     """``S0`` [m2 s-3]: the paper-condensation linearization's peak uplift probability reaches ``p_target``
-    (:func:`screening.analysis.tradeoff.calibrate_intensity`), times ``factor``."""
+    (:func:`screening.analysis.tradeoff.calibrate_intensity`), times ``factor``; where the linearization stops
+    before reaching it, the last intensity at which it does not stop (:func:`last_stable_intensity`), times
+    ``factor``."""
     from screening.analysis.tradeoff import calibrate_intensity
     from screening.solvers.timegrid import output_times
 
-    S0 = calibrate_intensity(block, foundation, lambda s: atlas.make_excitation(shape, timing, s), float(p_target),
-                             output_times(timing["t_end"], timing["dt"]))
+    make = lambda s: atlas.make_excitation(shape, timing, s)                 # noqa: E731
+    t_out = output_times(timing["t_end"], timing["dt"])
+    try:
+        S0 = calibrate_intensity(block, foundation, make, float(p_target), t_out)
+    except ValueError:
+        S0 = last_stable_intensity(block, foundation, make, t_out)
     return float(S0 * factor)
+
+
+def last_stable_intensity(block, foundation, make_exc, t_out, log10_bounds=(-10.0, 1.0), xtol=1e-3):
+    """The largest ``S0`` [m2 s-3] (to ``xtol`` in log10) at which the paper linearization still ends with status
+    ok: the intensity of a point whose target uplift probability the linearization cannot reach (it stops
+    first).  ``ValueError`` if it stops at the lower bound already."""
+    from screening.solvers.moments import solve_moments
+    from screening.status import PointStatus
+
+    def ok(log_s0):
+        return int(solve_moments(block, foundation, make_exc(10.0 ** log_s0), t_out)["status"]) == PointStatus.ok
+
+    lo, hi = log10_bounds
+    if not ok(lo):
+        raise ValueError(f"the linearization stops at S0 = 1e{lo:g} m2 s-3 already")
+    if ok(hi):
+        return 10.0 ** hi
+    while hi - lo > xtol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return 10.0 ** lo
 
 
 def _finite(x):
@@ -124,7 +151,18 @@ def evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIAN
     out["S0"] = S0
     out["sl"] = {c: linearization_row(block, foundation, excitation, timing, c) for c in CONDENSATIONS}
     model = reference_model(block, foundation, timing, coupled_radians)
-    out["mc"] = monte_carlo_row(block, foundation, excitation, timing, model, samples, int(seed) + int(index))
+    try:
+        out["mc"] = monte_carlo_row(block, foundation, excitation, timing, model, samples, int(seed) + int(index))
+    except (ValueError, ArithmeticError) as exc:
+        if model == "coupled":
+            out["mc"] = {"model": model, "error": " ".join(str(exc).split())[:200]}
+        else:                                   # the stiff-bed model cannot be set up here: the full model judges
+            out["mc_note"] = f"{model}: {' '.join(str(exc).split())[:160]}"
+            try:
+                out["mc"] = monte_carlo_row(block, foundation, excitation, timing, "coupled", samples,
+                                            int(seed) + int(index))
+            except (ValueError, ArithmeticError) as exc2:
+                out["mc"] = {"model": "coupled", "error": " ".join(str(exc2).split())[:200]}
     out.update(cpu=time.process_time() - c0, wall=time.perf_counter() - t0)
     return out
 
@@ -196,12 +234,14 @@ def assemble(results, attrs=None):
 
     for name in ("peak_var_theta", "peak_var_theta_se", "t_peak_var_theta", "peak_p_uplift", "cpu"):
         data[f"mc_{name}"] = ("point", mc(name))
+    data["mc_error"] = ("point", np.array([(r.get("mc", {}).get("error", "") or r.get("mc_note", "")) for r in results],
+                                          dtype=object))
     data["mc_model"] = ("point", np.array([r.get("mc", {}).get("model", "") for r in results], dtype=object))
     peaks = np.full((n, n_s), np.nan, dtype=np.float32)
     state = np.full((n, n_s), -1, dtype=np.int8)
     for i, r in enumerate(results):
         m = r.get("mc")
-        if m:
+        if m and "peak_abs_theta" in m:
             k = len(m["peak_abs_theta"])
             peaks[i, :k] = m["peak_abs_theta"]
             state[i, :k] = np.where(m["diverged"], 2, np.where(m["overturned"], 1, 0))
@@ -279,6 +319,9 @@ VARIABLES = {
     "mc_peak_var_theta_se": ("rad2", "standard error of the reference peak var_theta"),
     "mc_t_peak_var_theta": ("s", "time of the reference peak var_theta"),
     "mc_peak_p_uplift": ("1", "reference peak uplift occupancy"),
+    "mc_error": ("1", "why the reference could not run, or why the stiff-bed model gave way to the coupled one"),
+    "point_error": ("1", "why the point's intensity could not be set (empty: it was)"),
+    "mc_model": ("1", "the reference Monte Carlo model"),
     "mc_cpu": ("s", "CPU time of the reference Monte Carlo"),
     "point_cpu": ("s", "CPU time of the whole point"),
     "mc_peak_abs_theta": ("rad", "per-sample peak |theta| of the reference (up to overturning)"),

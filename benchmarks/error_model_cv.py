@@ -1,0 +1,121 @@
+"""Grouped cross-validation of the error model (:mod:`screening.analysis.error_model`) on the error atlas.
+
+Run::
+
+    nice -n 5 env PYTHONPATH=$PWD .venv/bin/python benchmarks/error_model_cv.py \
+        [--atlas screening/data/error_atlas.nc] [--folds 0] [--coverage 0.9] [--markdown]
+
+For each condensation, the atlas families are split into folds (``--folds 0``: one family per fold,
+leave-one-family-out); the model is fitted on the other folds and predicts the held-out points.
+Printed per condensation and error:
+
+* ``coverage``: fraction of held-out points whose measured error lies in the 90 % interval (goal >= 88 %);
+  ``coverage_se``: the same with the interval widened by the point's own Monte Carlo standard error
+  (the measured error carries the reference's sampling noise, the true one does not);
+* ``width``: median interval width; for the variance as a fraction of the corrected estimate,
+  ``exp(high) - exp(low)`` over ``exp(estimate)`` (goal <= 25 %); for probabilities in probability;
+* ``trusted`` / ``bad trusted``: held-out points the model labels trusted (:func:`~screening.analysis.error_model.
+  trust_from_interval`) and, of those, how many have a measured |SL / MC - 1| > 25 % beyond 2 MC standard
+  errors (goal: none);
+* the cost of a prediction per point [us] and the best condensation by region of peak p_uplift.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_ATLAS = ROOT / "screening" / "data" / "error_atlas.nc"
+
+
+def grouped_cv(x, y, groups, folds, coverage):
+    from screening.analysis.error_model import fit_error_model, predict
+
+    fam = np.unique(groups[np.isfinite(y)])
+    if folds and folds < len(fam):
+        rng = np.random.default_rng(0)
+        assign = dict(zip(rng.permutation(fam), np.arange(len(fam)) % folds))
+    else:
+        assign = {f: i for i, f in enumerate(fam)}
+    fold = np.array([assign.get(g, -1) for g in groups])
+    est, lo, hi = (np.full(len(y), np.nan) for _ in range(3))
+    for k in np.unique(fold[fold >= 0]):
+        test = fold == k
+        m = fit_error_model(x[~test], y[~test], groups[~test], coverage=coverage)
+        est[test], lo[test], hi[test] = predict(m, x[test])
+    return est, lo, hi
+
+
+def main(argv=None):
+    import xarray as xr
+
+    from screening.analysis import error_model as em
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--atlas", default=str(DEFAULT_ATLAS))
+    ap.add_argument("--folds", type=int, default=0)
+    ap.add_argument("--coverage", type=float, default=0.9)
+    args = ap.parse_args(argv)
+    ds = xr.load_dataset(args.atlas)
+    groups = ds["family"].values
+    print(f"atlas: {ds.sizes['point']} points, {len(np.unique(groups))} families, "
+          f"{ds.attrs.get('cpu_hours', float('nan'))} CPU h; folds: "
+          f"{args.folds or 'one family each'}")
+    print(f"{'condensation':13s} {'error':16s} {'n':>5s} {'coverage':>8s} {'cov+se':>7s} {'width':>7s} "
+          f"{'trusted':>7s} {'bad':>4s}")
+    best = {}
+    for cond in ds["condensation"].values:
+        x = em.atlas_features(ds, cond)
+        t = em.targets(ds, cond)
+        y, y_se = t["log_var_ratio"], t["log_var_ratio_se"]
+        est, lo, hi = grouped_cv(x, y, groups, args.folds, args.coverage)
+        ok = np.isfinite(y) & np.isfinite(est)
+        inside = (y >= lo) & (y <= hi)
+        inside_se = (y >= lo - y_se) & (y <= hi + y_se)
+        width = (np.exp(hi) - np.exp(lo)) / np.exp(est)
+        trusted = em.trust_from_interval(lo, hi) == 0
+        rel = np.exp(y) - 1
+        bad = trusted & ok & (np.abs(rel) - 2 * y_se * np.exp(y) > em.TRUSTED_ERROR)
+        print(f"{cond:13s} {'log var ratio':16s} {ok.sum():5d} {inside[ok].mean():8.3f} {inside_se[ok].mean():7.3f} "
+              f"{np.median(width[ok]):7.3f} {int((trusted & ok).sum()):7d} {int(bad.sum()):4d}")
+        best[cond] = (y, est, ok)
+        for j, level in enumerate(ds["level"].values):
+            yp, se = t["p_exceed_diff"][:, j], t["p_exceed_diff_se"][:, j]
+            e2, l2, h2 = grouped_cv(x, yp, groups, args.folds, args.coverage)
+            okp = np.isfinite(yp) & np.isfinite(e2)
+            ins = (yp >= l2) & (yp <= h2)
+            ins_se = (yp >= l2 - se) & (yp <= h2 + se)
+            print(f"{cond:13s} {'p_exceed ' + format(level, 'g') + ' alpha':16s} {okp.sum():5d} {ins[okp].mean():8.3f} "
+                  f"{ins_se[okp].mean():7.3f} {np.median((h2 - l2)[okp]):7.3f}")
+    # cost of a prediction
+    x = em.atlas_features(ds, "paper")
+    y = em.targets(ds, "paper")["log_var_ratio"]
+    m = em.fit_error_model(x, y, groups)
+    xq = np.tile(x[np.all(np.isfinite(x), axis=1)], (10, 1))[:10_000]
+    t0 = time.perf_counter()
+    em.predict(m, xq)
+    per = (time.perf_counter() - t0) / len(xq)
+    print(f"error model cost: {per * 1e6:.1f} us per point ({len(xq)} points, {int(np.isfinite(y).sum())} atlas rows)")
+    # best condensation by p_uplift region (measured |log error|)
+    p = ds["sl_peak_p_uplift"].sel(condensation="paper").values
+    edges = (0.0, 0.05, 0.2, 0.5, 0.8, 0.95, 1.01)
+    print("best condensation by the paper linearization's peak p_uplift (median |SL/MC - 1|, n):")
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = (p >= a) & (p < b)
+        cells = []
+        for cond, (y, _, ok) in best.items():
+            s = sel & ok
+            cells.append((np.median(np.abs(np.exp(y[s]) - 1)) if s.any() else np.nan, cond, int(s.sum())))
+        text = "  ".join(f"{c}: {v:.3f} ({k})" for v, c, k in cells)
+        win = min((c for c in cells if np.isfinite(c[0])), default=(np.nan, "-", 0))[1]
+        print(f"  p_uplift [{a:g}, {b:g}): {text}  -> {win}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

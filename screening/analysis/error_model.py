@@ -1,0 +1,234 @@
+"""An error model of the linearization learnt from the error atlas, with predictive intervals.
+
+For one condensation, the error of a linearized point is predicted from what the linearization
+computes at that point (its trust indicators) and from the point's dimensionless inputs
+(:data:`FEATURES`; :func:`features`).  The model (:func:`fit_error_model`, :func:`predict`) is
+
+* a *local linear regression*: at a query ``x`` the estimate is the intercept of the weighted least
+  squares fit of the atlas errors ``y_i`` on ``x_i - x`` with Gaussian kernel weights
+  ``w_i = exp(-|x_i - x|^2 / (2 h^2))`` in standardised features (plus a small ridge that pulls the
+  slopes to zero where the neighbourhood is thin);
+* a *normalised conformal interval*: ``estimate +- q s(x)``, where ``s(x)`` is the kernel-weighted RMS
+  (bandwidth ``SCALE_FACTOR h``) of the atlas points' *out-of-family* residuals -- each atlas point
+  predicted by a fit that has not seen its family -- and ``q`` is the
+  ``ceil((n + 1) coverage) / n`` quantile of ``|r_i| / s_i`` over the atlas, with ``s_i`` again
+  computed without the point's own family.  The interval is therefore calibrated for a *new* system
+  (a family the atlas does not hold), not for a point next to one the atlas measured.
+
+The bandwidth ``h`` is chosen among :data:`BANDWIDTHS` by the out-of-family squared error.
+
+Errors modelled (:func:`targets`): ``log(SL peak var_theta / MC peak var_theta)`` [1] and, per
+exceedance level, ``SL p_exceed - MC p_exceed`` [1].  A relative error interval on the variance is
+``exp(low) - 1 .. exp(high) - 1``.
+
+Cost: one query costs ``O(n_atlas d^2)`` floating-point operations (about 10 microseconds per point
+in batches, ``benchmarks/error_model_cv.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+#: The features, in order: the linearization's indicators and the point's dimensionless inputs.
+FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",
+            "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau")
+#: Candidate bandwidths (in standardised feature units, times sqrt(number of features)).
+BANDWIDTHS = (0.15, 0.25, 0.4, 0.6, 1.0)
+#: Bandwidth of the residual scale over that of the estimate.
+SCALE_FACTOR = 1.5
+#: Ridge on the slopes of the local fit (in standardised units).
+RIDGE = 1e-2
+#: Weight (in atlas points) of the pooled residual scale in the local one: far from the atlas the scale
+#: tends to the pooled scale instead of to the nearest few residuals.
+PRIOR_WEIGHT = 1.0
+#: Floor of the residual scale s(x) [1] (the Monte Carlo noise never vanishes).
+SCALE_FLOOR = 1e-3
+#: Queries per batch (bounds the memory of one batch to ~ BATCH x n_atlas x d floats).
+BATCH = 256
+
+
+def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul, zeta_v, e, kind, omega_g_p, tau):
+    """The ``(n, len(FEATURES))`` feature matrix [1] of points (array-likes broadcast to ``n``).
+
+    Parameters
+    ----------
+    peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess : the linearization's indicators
+        (:func:`screening.analysis.trust.trust_indicators`) [1].
+    alpha : slenderness [rad]. r_ul : theta_ul / alpha [1]. zeta_v : vertical damping ratio [1].
+    e : eps z0^2 [1]. kind : ``"white"`` or ``"kanai_tajimi"`` (array of str).
+    omega_g_p : filter frequency over Housner's p [1] (ignored for white noise). tau : T1 p [1].
+
+    Notes
+    -----
+    ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
+    ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
+    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``.
+    """
+    p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
+    kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
+    cols = [np.log(p / (1 - p)),
+            np.log(np.maximum(np.asarray(sigma_ratio, dtype=float), 1e-6)),
+            np.log(np.maximum(1.0 - np.asarray(k_eq_margin, dtype=float), 1e-4)),
+            np.clip(np.log(np.maximum(np.asarray(decay_excess, dtype=float), 1e-300)), -5.0, 10.0),
+            np.asarray(alpha, dtype=float), np.log(np.asarray(r_ul, dtype=float)),
+            np.log(np.asarray(zeta_v, dtype=float)), np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
+            np.where(kt > 0, np.log(np.where(kt > 0, np.asarray(omega_g_p, dtype=float), 1.0)), 0.0),
+            np.log(np.asarray(tau, dtype=float))]
+    cols = np.broadcast_arrays(*cols)
+    return np.stack([np.asarray(c, dtype=float).ravel() for c in cols], axis=1)
+
+
+def atlas_features(ds, condensation):
+    """:func:`features` of every point of an atlas dataset under one condensation."""
+    s = ds.sel(condensation=condensation)
+    return features(s["sl_peak_p_uplift"].values, s["sl_sigma_ratio"].values, s["sl_k_eq_margin"].values,
+                    s["sl_decay_excess"].values, ds["alpha"].values, ds["r_ul"].values, ds["zeta_v"].values,
+                    ds["e"].values, ds["kind"].values.astype(str), ds["omega_g_p"].values, ds["tau"].values)
+
+
+def targets(ds, condensation):
+    """``{"log_var_ratio": (n,), "p_exceed_diff": (n, n_levels)}`` [1] of an atlas under one condensation, and
+    their Monte Carlo standard errors (``"log_var_ratio_se"``, ``"p_exceed_diff_se"``); NaN where a side is
+    missing (the linearization stopped, no Monte Carlo survivor)."""
+    s = ds.sel(condensation=condensation)
+    ok = s["sl_status"].values == 0
+    sl, mc = s["sl_peak_var_theta"].values, ds["mc_peak_var_theta"].values
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.where(ok & (sl > 0) & (mc > 0), np.log(sl / mc), np.nan)
+        y_se = ds["mc_peak_var_theta_se"].values / mc
+    d = np.where(ok[:, None], s["sl_p_exceed"].values - ds["mc_p_exceed"].values, np.nan)
+    return {"log_var_ratio": y, "log_var_ratio_se": np.where(np.isfinite(y), y_se, np.nan),
+            "p_exceed_diff": d, "p_exceed_diff_se": ds["mc_p_exceed_se"].values}
+
+
+class ErrorModel(NamedTuple):
+    """A fitted error model (:func:`fit_error_model`): standardised training features ``x`` and errors ``y``,
+    the standardisation (``center``, ``width``), the bandwidth ``h``, the out-of-family residuals ``r``, the
+    conformal factor ``q`` and the interval's ``coverage``."""
+
+    x: np.ndarray
+    y: np.ndarray
+    center: np.ndarray
+    width: np.ndarray
+    h: float
+    r: np.ndarray
+    q: float
+    coverage: float
+
+
+def _weights(xq, x, h, mask=None):
+    """Kernel weights ``(m, n)``, each row scaled so that its largest usable weight is 1 (no underflow far
+    from the atlas: there the nearest points carry the estimate)."""
+    d2 = np.sum((xq[:, None, :] - x[None, :, :]) ** 2, axis=-1)
+    if mask is not None:
+        d2 = np.where(mask, d2, np.inf)
+    d2min = np.min(d2, axis=1, keepdims=True)
+    return np.exp(-0.5 * (d2 - np.where(np.isfinite(d2min), d2min, 0.0)) / (h * h))
+
+
+def local_linear(xq, x, y, h, ridge=RIDGE, mask=None):
+    """Local linear estimates [units of ``y``] at standardised queries ``xq`` ``(m, d)`` from ``(x, y)``.
+
+    ``mask`` ``(m, n)``: True where a training point may be used for that query (default all).
+    Where no training point carries weight the estimate is the weighted (or plain) mean.
+    """
+    m, d = xq.shape
+    out = np.empty(m)
+    reg = ridge * np.eye(d + 1)
+    reg[0, 0] = 0.0
+    for lo in range(0, m, BATCH):
+        q = xq[lo:lo + BATCH]
+        w = _weights(q, x, h, None if mask is None else mask[lo:lo + BATCH])
+        sw = w.sum(axis=1)
+        z = x[None, :, :] - q[:, None, :]                                   # (b, n, d)
+        zz = np.concatenate([np.ones(z.shape[:2] + (1,)), z], axis=-1)      # (b, n, d+1)
+        a = np.einsum("bn,bni,bnj->bij", w, zz, zz) + reg * np.maximum(sw, 1e-300)[:, None, None]
+        rhs = np.einsum("bn,bni,n->bi", w, zz, y)
+        try:
+            est = np.linalg.solve(a, rhs[..., None])[..., 0][:, 0]
+        except np.linalg.LinAlgError:                    # a degenerate neighbourhood: the weighted mean
+            est = np.full(len(q), np.nan)
+        mean = (w @ y) / sw
+        out[lo:lo + BATCH] = np.where(np.isfinite(est), est, mean)
+    return out
+
+
+def _local_scale(xq, x, r, h, mask=None):
+    w = np.exp(-0.5 * np.sum((xq[:, None, :] - x[None, :, :]) ** 2, axis=-1) / (SCALE_FACTOR * h) ** 2)
+    if mask is not None:
+        w = w * mask
+    sw = w.sum(axis=1)
+    pooled = math.sqrt(float(np.mean(r * r)))
+    s = np.sqrt((w @ (r * r) + pooled**2 * PRIOR_WEIGHT) / (sw + PRIOR_WEIGHT))   # shrunk to the pooled scale
+    return np.maximum(s, SCALE_FLOOR)
+
+
+def _out_of_family(x, y, groups, h):
+    r = np.empty_like(y)
+    for g in np.unique(groups):
+        held = groups == g
+        r[held] = y[held] - local_linear(x[held], x[~held], y[~held], h)
+    return r
+
+
+def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS):
+    """Fit the error model of one method and one error (module docstring).
+
+    Parameters
+    ----------
+    x : ``(n, d)`` features (:func:`features`). y : ``(n,)`` errors [1]; rows with a NaN are dropped.
+    groups : ``(n,)`` family ids (a family is held out whole).
+    coverage : nominal coverage of the predictive interval, in (0, 1).
+    bandwidths : candidate bandwidths (times ``sqrt(d)``, in standardised features).
+
+    Returns
+    -------
+    ErrorModel
+    """
+    if not 0.0 < coverage < 1.0:
+        raise ValueError(f"parameter 'coverage' must be in (0, 1) (got {coverage!r})")
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    groups = np.asarray(groups)
+    keep = np.isfinite(y) & np.all(np.isfinite(x), axis=1)
+    x, y, groups = x[keep], y[keep], groups[keep]
+    if len(np.unique(groups)) < 2:
+        raise ValueError("parameter 'groups' must hold at least two families with finite errors")
+    center = np.median(x, axis=0)
+    width = np.std(x, axis=0)
+    width = np.where(width > 0, width, 1.0)
+    xs = (x - center) / width
+    d = x.shape[1]
+    best = None
+    for b in bandwidths:
+        h = b * math.sqrt(d)
+        r = _out_of_family(xs, y, groups, h)
+        mse = float(np.mean(r * r))
+        if best is None or mse < best[0]:
+            best = (mse, h, r)
+    _, h, r = best
+    other = groups[:, None] != groups[None, :]
+    s = _local_scale(xs, xs, r, h, mask=other)
+    n = len(y)
+    level = min(1.0, math.ceil((n + 1) * coverage) / n)
+    q = float(np.quantile(np.abs(r) / s, level))
+    return ErrorModel(xs, y, center, width, h, r, q, float(coverage))
+
+
+def predict(model, x):
+    """``(estimate, low, high)`` [units of the error] at the points ``x`` ``(m, d)`` (:func:`features`).
+
+    NaN where a feature is not finite.
+    """
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    ok = np.all(np.isfinite(x), axis=1)
+    est = np.full(len(x), np.nan)
+    half = np.full(len(x), np.nan)
+    if ok.any():
+        xs = (x[ok] - model.center) / model.width
+        est[ok] = local_linear(xs, model.x, model.y, model.h)
+        half[ok] = model.q * _local_scale(xs, model.x, model.r, model.h)
+    return est, est - half, est + half

@@ -1,0 +1,78 @@
+"""The error model: local linear regression with out-of-family conformal intervals."""
+
+import numpy as np
+import pytest
+
+from screening.analysis import error_model as em
+
+
+def test_local_linear_reproduces_a_linear_function_exactly():
+    # a local linear fit without ridge is exact on a plane whatever the weights
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(200, 3))
+    coef = np.array([0.3, -1.2, 2.0])
+    y = 0.7 + x @ coef
+    xq = rng.normal(size=(40, 3)) * 1.5
+    got = em.local_linear(xq, x, y, h=0.8, ridge=0.0)
+    assert np.allclose(got, 0.7 + xq @ coef, atol=1e-9)
+
+
+def test_local_linear_is_the_weighted_least_squares_intercept():
+    # independent computation: numpy lstsq on sqrt(w)-scaled rows, one query at a time
+    rng = np.random.default_rng(2)
+    x = rng.uniform(-1, 1, size=(80, 2))
+    y = np.sin(3 * x[:, 0]) + x[:, 1] ** 2
+    xq = rng.uniform(-1, 1, size=(5, 2))
+    got = em.local_linear(xq, x, y, h=0.3, ridge=0.0)
+    for i, q in enumerate(xq):
+        w = np.exp(-0.5 * np.sum((x - q) ** 2, axis=1) / 0.09)
+        z = np.column_stack([np.ones(len(x)), x - q]) * np.sqrt(w)[:, None]
+        beta = np.linalg.lstsq(z, y * np.sqrt(w), rcond=None)[0]
+        assert got[i] == pytest.approx(beta[0], rel=1e-8, abs=1e-10)
+
+
+def _synthetic(rng, n_families, per_family):
+    fam = np.repeat(np.arange(n_families), per_family)
+    centre = rng.uniform(-2, 2, size=(n_families, 2))
+    x = centre[fam] + 0.3 * rng.normal(size=(len(fam), 2))
+    scale = 0.05 + 0.1 * (x[:, 0] > 0)                        # heteroscedastic: twice the noise on one side
+    y = 0.2 * x[:, 0] - 0.1 * x[:, 1] ** 2 + scale * rng.normal(size=len(fam))
+    return x, y, fam, scale
+
+
+def test_interval_covers_new_families_at_the_nominal_rate():
+    rng = np.random.default_rng(3)
+    x, y, fam, _ = _synthetic(rng, 40, 20)
+    model = em.fit_error_model(x, y, fam, coverage=0.9)
+    xt, yt, _, scale = _synthetic(rng, 100, 20)              # 2000 points of 100 new families
+    est, lo, hi = em.predict(model, xt)
+    cover = np.mean((yt >= lo) & (yt <= hi))
+    # binomial SE of the coverage over 2000 test points ~0.007, plus the calibration's own spread from 800
+    # training points (~0.011): 3 SE of both
+    assert abs(cover - 0.9) < 0.04
+    # the interval follows the local noise: wider where the noise is twice as large
+    width = hi - lo
+    assert np.median(width[xt[:, 0] > 0.5]) > 1.5 * np.median(width[xt[:, 0] < -0.5])
+
+
+def test_predict_gives_nan_for_missing_features_and_fit_checks_its_inputs():
+    rng = np.random.default_rng(4)
+    x, y, fam, _ = _synthetic(rng, 10, 10)
+    model = em.fit_error_model(x, y, fam)
+    xq = np.array([[0.0, np.nan], [0.1, 0.2]])
+    est, lo, hi = em.predict(model, xq)
+    assert np.isnan(est[0]) and np.isnan(lo[0]) and np.isfinite(est[1]) and lo[1] < est[1] < hi[1]
+    with pytest.raises(ValueError, match="coverage"):
+        em.fit_error_model(x, y, fam, coverage=1.5)
+    with pytest.raises(ValueError, match="groups"):
+        em.fit_error_model(x, y, np.zeros(len(y)))
+
+
+def test_features_transforms():
+    f = em.features(0.5, 0.1, 0.75, 1.0, 0.2, 0.01, 0.1, 0.0, np.array(["white", "kanai_tajimi"]),
+                    np.array([np.nan, 2.0]), 10.0)
+    assert f.shape == (2, len(em.FEATURES))
+    col = dict(zip(em.FEATURES, f.T))
+    assert np.allclose(col["logit_p_uplift"], 0.0)
+    assert np.allclose(col["log_margin_loss"], np.log(0.25))
+    assert np.allclose(col["kanai_tajimi"], [0, 1]) and np.allclose(col["log_omega_g_p"], [0, np.log(2.0)])
