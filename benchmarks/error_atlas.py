@@ -126,7 +126,8 @@ def main(argv=None):
     from screening.atomicfile import atomic_path
 
     cpu_h = sum(r.get("cpu", 0.0) for r in results) / 3600
-    command = ("benchmarks/error_atlas.py " + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    given = [a for a in (argv if argv is not None else sys.argv[1:]) if a != "--assemble-only"]
+    command = ("benchmarks/error_atlas.py " + " ".join(given)).strip()
     ds = assemble(results, attrs={"command": command, "versions": versions(), "design_points": args.points,
                                   "design_seed": args.seed, "samples": args.samples,
                                   "points_finished": len(results), "cpu_hours": round(cpu_h, 3)})

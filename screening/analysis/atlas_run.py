@@ -28,6 +28,9 @@ CONDENSATIONS = ("paper", "cubic", "virtual_work")
 #: The coupled model is the reference unless its cost (vertical-mode radians over the record,
 #: ``w_v t_end``) exceeds this and the stiff-bed model's validity rule holds.
 COUPLED_RADIANS = 30_000.0
+#: Where the stiff-bed model cannot be set up (softening beds whose capacity it cannot reach), the coupled
+#: model judges the point if ``w_v t_end`` is at most this; beyond, the point has no reference.
+FALLBACK_RADIANS = 60_000.0
 INDICATORS = ("peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess")
 
 
@@ -158,6 +161,14 @@ def evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIAN
             out["mc"] = {"model": model, "error": " ".join(str(exc).split())[:200]}
         else:                                   # the stiff-bed model cannot be set up here: the full model judges
             out["mc_note"] = f"{model}: {' '.join(str(exc).split())[:160]}"
+            from screening.solvers.synthesis import vertical_frequency
+
+            radians = vertical_frequency(block, foundation) * timing["t_end"]
+            if radians > FALLBACK_RADIANS:
+                out["mc"] = {"model": "coupled", "error": f"the stiff-bed model cannot run here and the coupled one "
+                                                          f"is beyond the campaign's budget ({radians:.3g} rad)"}
+                out.update(cpu=time.process_time() - c0, wall=time.perf_counter() - t0)
+                return out
             try:
                 out["mc"] = monte_carlo_row(block, foundation, excitation, timing, "coupled", samples,
                                             int(seed) + int(index))
@@ -298,6 +309,8 @@ VARIABLES = {
     "tau": ("1", "envelope time T1 times Housner's p"),
     "p_target": ("1", "peak uplift probability of the paper linearization the intensity was set to"),
     "factor": ("1", "factor on S0 past the target (past toppling)"),
+    "kind": ("1", "excitation kind: white or kanai_tajimi"),
+    "bed_law": ("1", "bed law from the sign of eps: softening, linear or hardening"),
     "family": ("1", "family id (slenderness bin, r_ul bin, bed law, excitation kind)"),
     "S0": ("m2 s-3", "two-sided PSD level of the driving white noise"),
     "w_r_p": ("1", "rocking frequency on the bed over Housner's p"),

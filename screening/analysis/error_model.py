@@ -5,8 +5,8 @@ computes at that point (its trust indicators) and from the point's dimensionless
 (:data:`FEATURES`; :func:`features`).  The model (:func:`fit_error_model`, :func:`predict`) is
 
 * a *local linear regression*: at a query ``x`` the estimate is the intercept of the weighted least
-  squares fit of the atlas errors ``y_i`` on ``x_i - x`` with Gaussian kernel weights
-  ``w_i = exp(-|x_i - x|^2 / (2 h^2))`` in standardised features (plus a small ridge that pulls the
+  squares fit of the atlas errors ``y_i`` on ``x_i - x`` over the :data:`NEIGHBOURS` nearest atlas
+  points, with Gaussian kernel weights ``w_i = exp(-|x_i - x|^2 / (2 h^2))`` in standardised features (plus a small ridge that pulls the
   slopes to zero where the neighbourhood is thin);
 * a *normalised conformal interval*: ``estimate +- q s(x)``, where ``s(x)`` is the kernel-weighted RMS
   (bandwidth ``SCALE_FACTOR h``) of the atlas points' *out-of-family* residuals -- each atlas point
@@ -21,8 +21,8 @@ Errors modelled (:func:`targets`): ``log(SL peak var_theta / MC peak var_theta)`
 exceedance level, ``SL p_exceed - MC p_exceed`` [1].  A relative error interval on the variance is
 ``exp(low) - 1 .. exp(high) - 1``.
 
-Cost: one query costs ``O(n_atlas d^2)`` floating-point operations (about 10 microseconds per point
-in batches, ``benchmarks/error_model_cv.py``).
+Cost: one query costs ``O(NEIGHBOURS d^2 + n_atlas d)`` floating-point operations (a few tens of
+microseconds per point in batches, ``benchmarks/error_model_cv.py``).
 """
 
 from __future__ import annotations
@@ -46,8 +46,8 @@ RIDGE = 1e-2
 PRIOR_WEIGHT = 1.0
 #: Floor of the residual scale s(x) [1] (the Monte Carlo noise never vanishes).
 SCALE_FLOOR = 1e-3
-#: Queries per batch (bounds the memory of one batch to ~ BATCH x n_atlas x d floats).
-BATCH = 256
+#: Atlas points the local fit at a query uses (its nearest ones).
+NEIGHBOURS = 64
 
 
 def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul, zeta_v, e, kind, omega_g_p, tau):
@@ -119,45 +119,45 @@ class ErrorModel(NamedTuple):
     coverage: float
 
 
-def _weights(xq, x, h, mask=None):
-    """Kernel weights ``(m, n)``, each row scaled so that its largest usable weight is 1 (no underflow far
-    from the atlas: there the nearest points carry the estimate)."""
-    d2 = np.sum((xq[:, None, :] - x[None, :, :]) ** 2, axis=-1)
-    if mask is not None:
-        d2 = np.where(mask, d2, np.inf)
-    d2min = np.min(d2, axis=1, keepdims=True)
-    return np.exp(-0.5 * (d2 - np.where(np.isfinite(d2min), d2min, 0.0)) / (h * h))
-
-
-def local_linear(xq, x, y, h, ridge=RIDGE, mask=None):
+def local_linear(xq, x, y, h, ridge=RIDGE, neighbours=NEIGHBOURS):
     """Local linear estimates [units of ``y``] at standardised queries ``xq`` ``(m, d)`` from ``(x, y)``.
 
-    ``mask`` ``(m, n)``: True where a training point may be used for that query (default all).
-    Where no training point carries weight the estimate is the weighted (or plain) mean.
+    The fit at a query uses its ``neighbours`` nearest training points (all of them if fewer) with Gaussian
+    weights of bandwidth ``h``, scaled so that the nearest carries weight 1 (no underflow far from the
+    atlas).  Where the weighted normal equations are singular the estimate is the weighted mean.
     """
+    from scipy.spatial import cKDTree
+
+    xq = np.atleast_2d(np.asarray(xq, dtype=float))
     m, d = xq.shape
-    out = np.empty(m)
+    k = int(min(neighbours, len(x)))
+    dist, idx = cKDTree(x).query(xq, k)
+    dist, idx = dist.reshape(m, k), idx.reshape(m, k)
+    d2 = dist * dist
+    w = np.exp(-0.5 * (d2 - d2[:, :1]) / (h * h))                           # (m, k)
+    z = x[idx] - xq[:, None, :]                                             # (m, k, d)
+    zz = np.concatenate([np.ones((m, k, 1)), z], axis=-1)                   # (m, k, d+1)
+    zw = zz * w[..., None]
     reg = ridge * np.eye(d + 1)
     reg[0, 0] = 0.0
-    for lo in range(0, m, BATCH):
-        q = xq[lo:lo + BATCH]
-        w = _weights(q, x, h, None if mask is None else mask[lo:lo + BATCH])
-        sw = w.sum(axis=1)
-        z = x[None, :, :] - q[:, None, :]                                   # (b, n, d)
-        zz = np.concatenate([np.ones(z.shape[:2] + (1,)), z], axis=-1)      # (b, n, d+1)
-        a = np.einsum("bn,bni,bnj->bij", w, zz, zz) + reg * np.maximum(sw, 1e-300)[:, None, None]
-        rhs = np.einsum("bn,bni,n->bi", w, zz, y)
-        try:
-            est = np.linalg.solve(a, rhs[..., None])[..., 0][:, 0]
-        except np.linalg.LinAlgError:                    # a degenerate neighbourhood: the weighted mean
-            est = np.full(len(q), np.nan)
-        mean = (w @ y) / sw
-        out[lo:lo + BATCH] = np.where(np.isfinite(est), est, mean)
-    return out
+    sw = w.sum(axis=1)
+    a = np.swapaxes(zw, 1, 2) @ zz + reg * sw[:, None, None]
+    rhs = np.swapaxes(zw, 1, 2) @ y[idx][..., None]
+    mean = np.sum(w * y[idx], axis=1) / sw
+    try:
+        est = np.linalg.solve(a, rhs)[:, 0, 0]
+    except np.linalg.LinAlgError:                     # a degenerate neighbourhood somewhere: one at a time
+        est = np.array([np.linalg.lstsq(a[i], rhs[i], rcond=None)[0][0, 0] for i in range(m)])
+    return np.where(np.isfinite(est), est, mean)
+
+
+def _sq_distances(xq, x):
+    d2 = np.sum(xq * xq, axis=1)[:, None] + np.sum(x * x, axis=1)[None, :] - 2.0 * xq @ x.T
+    return np.maximum(d2, 0.0)
 
 
 def _local_scale(xq, x, r, h, mask=None):
-    w = np.exp(-0.5 * np.sum((xq[:, None, :] - x[None, :, :]) ** 2, axis=-1) / (SCALE_FACTOR * h) ** 2)
+    w = np.exp(-0.5 * _sq_distances(xq, x) / (SCALE_FACTOR * h) ** 2)
     if mask is not None:
         w = w * mask
     sw = w.sum(axis=1)
@@ -232,3 +232,98 @@ def predict(model, x):
         est[ok] = local_linear(xs, model.x, model.y, model.h)
         half[ok] = model.q * _local_scale(xs, model.x, model.r, model.h)
     return est, est - half, est + half
+
+
+#: A point is trusted when its whole predicted interval of ``SL / MC - 1`` lies within +-TRUSTED_ERROR [1]
+#: and untrusted when the whole interval lies beyond +-UNTRUSTED_ERROR [1].
+TRUSTED_ERROR = 0.25
+UNTRUSTED_ERROR = 0.5
+
+
+def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=UNTRUSTED_ERROR):
+    """:class:`screening.status.Trust` codes [int8] from a predicted interval ``[low, high]`` of
+    ``log(SL / MC)`` [1]: ``trusted`` (0) when ``exp(low) - 1 >= -trusted_error`` and ``exp(high) - 1 <=
+    trusted_error``; ``untrusted`` (2) when the interval lies wholly beyond ``+-untrusted_error`` or is not
+    finite; ``check`` (1) otherwise."""
+    from screening.status import Trust
+
+    low = np.asarray(low, dtype=float)
+    high = np.asarray(high, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        rel_lo, rel_hi = np.expm1(low), np.expm1(high)
+        trusted = (rel_lo >= -trusted_error) & (rel_hi <= trusted_error)
+        beyond = (rel_hi < -untrusted_error) | (rel_lo > untrusted_error)
+    finite = np.isfinite(low) & np.isfinite(high)
+    return np.where(~finite | beyond, int(Trust.untrusted),
+                    np.where(trusted, int(Trust.trusted), int(Trust.check))).astype(np.int8)
+
+
+def dataset_features(ds):
+    """:func:`features` of every point of a :func:`screening.linearize` (or sweep) dataset, from its
+    indicators and its parameter coordinates, on the dataset's dimensions: ``(features, dims)``.
+
+    Notes
+    -----
+    ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)``; ``e = eps z0^2`` with ``z0 = m g / (2 b k)``;
+    ``zeta_v = c_v / (2 m w_v)``, ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b (w_rate + w_indentation z_rest)``
+    with ``z_rest`` the root of ``z + eps z^3 = z0`` (Newton from ``z0``); ``p = sqrt(m g R / (I_cm + m
+    R^2))``; ``omega_g / p``; ``tau = T1 p`` (a constant envelope: ``T1 = inf`` is clipped to ``1e6 / p``).
+    """
+    import xarray as xr
+
+    from screening.analysis.trust import indicators_from_dataset
+
+    ind = indicators_from_dataset(ds)
+    c = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm") if name in ds.variables}
+    m, b, h, g, k = c["m"], c["b"], c["h"], c["g"], c["k"]
+    eps = c.get("eps", xr.DataArray(0.0))
+    i_cm = c.get("I_cm", m * (b**2 + h**2) / 3.0)
+    alpha = np.arctan2(b, h)
+    z0 = m * g / (2.0 * b * k)
+    z = z0
+    for _ in range(50):
+        z = z - (z + eps * z**3 - z0) / (1.0 + 3.0 * eps * z**2)
+    if ds.attrs.get("contact", "hunt_crossley") == "winkler":
+        c_v = 2.0 * b * ds["c"]
+    else:
+        c_v = 2.0 * b * ds["lam"] * z
+    w_v = np.sqrt(2.0 * b * k / m)
+    R = np.hypot(b, h)
+    p = np.sqrt(m * g * R / (i_cm + m * R**2))
+    kind = ds.attrs.get("excitation", "white")
+    omega = ds["omega_g"] / p if "omega_g" in ds.variables else xr.DataArray(np.nan)
+    tau = ds["T1"] * p if "T1" in ds.variables else 1e6 + 0.0 * p
+    parts = [ind["peak_p_uplift"], ind["sigma_ratio"], ind["k_eq_margin"], ind["decay_excess"], alpha,
+             m * g / (2.0 * b**2 * k * alpha), c_v / (2.0 * m * w_v), eps * z0**2, omega, tau]
+    parts = xr.broadcast(*[xr.DataArray(v) if not isinstance(v, xr.DataArray) else v for v in parts])
+    dims = parts[0].dims
+    vals = [np.asarray(v.transpose(*dims).values, dtype=float).ravel() for v in parts]
+    x = features(*vals[:8], np.full(vals[0].size, kind), vals[8], vals[9])
+    return x, dims, parts[0].transpose(*dims).shape
+
+
+def with_error_model(ds, model):
+    """``ds`` (a :func:`screening.linearize` dataset of the condensation ``model`` was fitted for) with the
+    error model's ``sl_trust`` (:func:`trust_from_interval`), ``sl_error`` (the estimate of ``SL / MC - 1``)
+    and its interval ``sl_error_low``, ``sl_error_high`` [1]; points whose status is not ok are untrusted
+    with NaN band.  Not the default rule (:func:`screening.analysis.trust.add_trust` is)."""
+    import xarray as xr
+
+    from screening.status import PointStatus, Trust
+
+    x, dims, shape = dataset_features(ds)
+    est, low, high = predict(model, x)
+    status = np.broadcast_to(np.asarray(ds["status"].transpose(*[d for d in dims if d in ds["status"].dims]).values),
+                             shape).ravel() if "status" in ds.variables else np.zeros(x.shape[0], dtype=int)
+    bad = status != int(PointStatus.ok)
+    est, low, high = (np.where(bad, np.nan, a) for a in (est, low, high))
+    trust = np.where(bad, int(Trust.untrusted), trust_from_interval(low, high)).astype(np.int8)
+
+    def arr(values, units, long_name):
+        return xr.DataArray(values.reshape(shape), dims=dims, attrs={"units": units, "long_name": long_name})
+
+    return ds.assign(
+        sl_trust=arr(trust, "1", "trust from the error atlas model (0 trusted, 1 check, 2 untrusted)"),
+        sl_error=arr(np.expm1(est), "1", "predicted SL / MC - 1 of peak var_theta (error atlas model)"),
+        sl_error_low=arr(np.expm1(low), "1", "lower end of the predicted interval of SL / MC - 1"),
+        sl_error_high=arr(np.expm1(high), "1", "upper end of the predicted interval of SL / MC - 1"))
