@@ -33,24 +33,6 @@ ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_ATLAS = ROOT / "screening" / "data" / "error_atlas.nc"
 
 
-def grouped_cv(x, y, groups, folds, coverage):
-    from screening.analysis.error_model import fit_error_model, predict
-
-    fam = np.unique(groups[np.isfinite(y)])
-    if folds and folds < len(fam):
-        rng = np.random.default_rng(0)
-        assign = dict(zip(rng.permutation(fam), np.arange(len(fam)) % folds))
-    else:
-        assign = {f: i for i, f in enumerate(fam)}
-    fold = np.array([assign.get(g, -1) for g in groups])
-    est, lo, hi = (np.full(len(y), np.nan) for _ in range(3))
-    for k in np.unique(fold[fold >= 0]):
-        test = fold == k
-        m = fit_error_model(x[~test], y[~test], groups[~test], coverage=coverage)
-        est[test], lo[test], hi[test] = predict(m, x[test])
-    return est, lo, hi
-
-
 def main(argv=None):
     import xarray as xr
 
@@ -69,11 +51,13 @@ def main(argv=None):
     print(f"{'condensation':13s} {'error':16s} {'n':>5s} {'coverage':>8s} {'cov+se':>7s} {'width':>7s} "
           f"{'trusted':>7s} {'bad':>4s}")
     best = {}
+    n_used = np.maximum(ds["mc_n_samples"].values - ds["mc_n_diverged"].values, 1)
+    p_over = ds["mc_n_overturned"].values / n_used
     for cond in ds["condensation"].values:
         x = em.atlas_features(ds, cond)
         t = em.targets(ds, cond)
-        y, y_se = t["log_var_ratio"], t["log_var_ratio_se"]
-        est, lo, hi = grouped_cv(x, y, groups, args.folds, args.coverage)
+        y, y_se = np.clip(t["log_var_ratio"], -em.LOG_CLIP, em.LOG_CLIP), t["log_var_ratio_se"]
+        est, lo, hi = em.grouped_cross_validation(x, y, groups, args.folds, args.coverage, clip=em.LOG_CLIP)
         ok = np.isfinite(y) & np.isfinite(est)
         inside = (y >= lo) & (y <= hi)
         inside_se = (y >= lo - y_se) & (y <= hi + y_se)
@@ -83,10 +67,18 @@ def main(argv=None):
         bad = trusted & ok & (np.abs(rel) - 2 * y_se * np.exp(y) > em.TRUSTED_ERROR)
         print(f"{cond:13s} {'log var ratio':16s} {ok.sum():5d} {inside[ok].mean():8.3f} {inside_se[ok].mean():7.3f} "
               f"{np.median(width[ok]):7.3f} {int((trusted & ok).sum()):7d} {int(bad.sum()):4d}")
+        standing = ok & (p_over <= 0.05)
+        print(f"{cond:13s} {'  MC p_over<=5%':16s} {standing.sum():5d} {inside[standing].mean():8.3f} "
+              f"{inside_se[standing].mean():7.3f} {np.median(width[standing]):7.3f} "
+              f"{int((trusted & standing).sum()):7d} {int((bad & standing).sum()):4d}")
+        low_up = standing & (ds["sl_peak_p_uplift"].sel(condensation=cond).values < 0.5)
+        print(f"{cond:13s} {'  and p_up<0.5':16s} {low_up.sum():5d} {inside[low_up].mean():8.3f} "
+              f"{inside_se[low_up].mean():7.3f} {np.median(width[low_up]):7.3f} "
+              f"{int((trusted & low_up).sum()):7d} {int((bad & low_up).sum()):4d}")
         best[cond] = (y, est, ok)
         for j, level in enumerate(ds["level"].values):
             yp, se = t["p_exceed_diff"][:, j], t["p_exceed_diff_se"][:, j]
-            e2, l2, h2 = grouped_cv(x, yp, groups, args.folds, args.coverage)
+            e2, l2, h2 = em.grouped_cross_validation(x, yp, groups, args.folds, args.coverage)
             okp = np.isfinite(yp) & np.isfinite(e2)
             ins = (yp >= l2) & (yp <= h2)
             ins_se = (yp >= l2 - se) & (yp <= h2 + se)
@@ -95,7 +87,7 @@ def main(argv=None):
     # cost of a prediction
     x = em.atlas_features(ds, "paper")
     y = em.targets(ds, "paper")["log_var_ratio"]
-    m = em.fit_error_model(x, y, groups)
+    m = em.fit_error_model(x, y, groups, clip=em.LOG_CLIP)
     finite = x[np.all(np.isfinite(x), axis=1)]
     rng = np.random.default_rng(0)
     xq = finite[rng.integers(0, len(finite), 10_000)] * (1 + 0.01 * rng.normal(size=(10_000, x.shape[1])))

@@ -8,8 +8,8 @@ computes at that point (its trust indicators) and from the point's dimensionless
   squares fit of the atlas errors ``y_i`` on ``x_i - x`` over the :data:`NEIGHBOURS` nearest atlas
   points, with Gaussian kernel weights ``w_i = exp(-|x_i - x|^2 / (2 h^2))`` in standardised features (plus a small ridge that pulls the
   slopes to zero where the neighbourhood is thin);
-* a *normalised conformal interval*: ``estimate +- q s(x)``, where ``s(x)`` is the kernel-weighted RMS
-  (bandwidth ``SCALE_FACTOR h``) of the atlas points' *out-of-family* residuals -- each atlas point
+* a *normalised conformal interval*: ``estimate +- q s(x)``, where ``s(x)`` is the RMS over the
+  :data:`SCALE_NEIGHBOURS` nearest atlas points of their *out-of-family* residuals -- each atlas point
   predicted by a fit that has not seen its family -- and ``q`` is the
   ``ceil((n + 1) coverage) / n`` quantile of ``|r_i| / s_i`` over the atlas, with ``s_i`` again
   computed without the point's own family.  The interval is therefore calibrated for a *new* system
@@ -37,8 +37,10 @@ FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_e
             "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau")
 #: Candidate bandwidths (in standardised feature units, times sqrt(number of features)).
 BANDWIDTHS = (0.15, 0.25, 0.4, 0.6, 1.0)
-#: Bandwidth of the residual scale over that of the estimate.
-SCALE_FACTOR = 1.5
+#: Clip of ``log(SL / MC)`` [1] in the fit (a factor of 4 either way).
+LOG_CLIP = math.log(4.0)
+#: Out-of-family residuals the local scale s(x) is the RMS of (the nearest ones).
+SCALE_NEIGHBOURS = 12
 #: Ridge on the slopes of the local fit (in standardised units).
 RIDGE = 1e-2
 #: Weight (in atlas points) of the pooled residual scale in the local one: far from the atlas the scale
@@ -156,14 +158,21 @@ def _sq_distances(xq, x):
     return np.maximum(d2, 0.0)
 
 
-def _local_scale(xq, x, r, h, mask=None):
-    w = np.exp(-0.5 * _sq_distances(xq, x) / (SCALE_FACTOR * h) ** 2)
-    if mask is not None:
-        w = w * mask
-    sw = w.sum(axis=1)
-    pooled = math.sqrt(float(np.mean(r * r)))
-    s = np.sqrt((w @ (r * r) + pooled**2 * PRIOR_WEIGHT) / (sw + PRIOR_WEIGHT))   # shrunk to the pooled scale
-    return np.maximum(s, SCALE_FLOOR)
+def _local_scale(xq, x, r, mask=None, neighbours=None):
+    """RMS [units of ``r``] of the residuals ``r`` of the ``neighbours`` training points nearest each query
+    (where ``mask`` allows), shrunk towards the pooled (median) mean square with the weight of :data:`PRIOR_WEIGHT` points."""
+    k = int(min(neighbours or SCALE_NEIGHBOURS, len(x)))
+    pooled2 = float(np.median(r * r))
+    out = np.empty(len(xq))
+    for lo in range(0, len(xq), 1024):
+        d2 = _sq_distances(xq[lo:lo + 1024], x)
+        if mask is not None:
+            d2 = np.where(mask[lo:lo + 1024], d2, np.inf)
+        idx = np.argpartition(d2, k - 1, axis=1)[:, :k]
+        usable = np.isfinite(np.take_along_axis(d2, idx, axis=1))
+        r2 = np.where(usable, (r * r)[idx], 0.0)
+        out[lo:lo + 1024] = np.sqrt((r2.sum(axis=1) + PRIOR_WEIGHT * pooled2) / (usable.sum(axis=1) + PRIOR_WEIGHT))
+    return np.maximum(out, SCALE_FLOOR)
 
 
 def _out_of_family(x, y, groups, h):
@@ -174,7 +183,7 @@ def _out_of_family(x, y, groups, h):
     return r
 
 
-def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS):
+def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None):
     """Fit the error model of one method and one error (module docstring).
 
     Parameters
@@ -183,6 +192,9 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS):
     groups : ``(n,)`` family ids (a family is held out whole).
     coverage : nominal coverage of the predictive interval, in (0, 1).
     bandwidths : candidate bandwidths (times ``sqrt(d)``, in standardised features).
+    clip : errors are clipped to ``[-clip, clip]`` before the fit (None: not clipped); :data:`LOG_CLIP` for
+        ``log(SL / MC)``: beyond a factor of 4 either way a point is untrusted whatever the exact factor, and
+        the few such errors would otherwise set the interval everywhere near them.
 
     Returns
     -------
@@ -195,6 +207,8 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS):
     groups = np.asarray(groups)
     keep = np.isfinite(y) & np.all(np.isfinite(x), axis=1)
     x, y, groups = x[keep], y[keep], groups[keep]
+    if clip is not None:
+        y = np.clip(y, -clip, clip)
     if len(np.unique(groups)) < 2:
         raise ValueError("parameter 'groups' must hold at least two families with finite errors")
     center = np.median(x, axis=0)
@@ -211,7 +225,7 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS):
             best = (mse, h, r)
     _, h, r = best
     other = groups[:, None] != groups[None, :]
-    s = _local_scale(xs, xs, r, h, mask=other)
+    s = _local_scale(xs, xs, r, mask=other)
     n = len(y)
     level = min(1.0, math.ceil((n + 1) * coverage) / n)
     q = float(np.quantile(np.abs(r) / s, level))
@@ -230,8 +244,34 @@ def predict(model, x):
     if ok.any():
         xs = (x[ok] - model.center) / model.width
         est[ok] = local_linear(xs, model.x, model.y, model.h)
-        half[ok] = model.q * _local_scale(xs, model.x, model.r, model.h)
+        half[ok] = model.q * _local_scale(xs, model.x, model.r)
     return est, est - half, est + half
+
+
+def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None):
+    """``(estimate, low, high)`` of every point predicted by a model fitted without its fold of families.
+
+    ``folds = 0``: each family is its own fold (leave one family out); otherwise the families are dealt at
+    random (seed 0) into ``folds`` folds.  NaN where ``y`` or a feature is not finite.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    groups = np.asarray(groups)
+    fam = np.unique(groups[np.isfinite(y)])
+    if folds and folds < len(fam):
+        rng = np.random.default_rng(0)
+        assign = dict(zip(rng.permutation(fam).tolist(), (np.arange(len(fam)) % folds).tolist()))
+    else:
+        assign = {f: i for i, f in enumerate(fam.tolist())}
+    fold = np.array([assign.get(g, -1) for g in groups.tolist()])
+    est, low, high = (np.full(len(y), np.nan) for _ in range(3))
+    for k in np.unique(fold[fold >= 0]):
+        test = fold == k
+        if len(np.unique(groups[~test & np.isfinite(y)])) < 2:
+            continue
+        model = fit_error_model(x[~test], y[~test], groups[~test], coverage=coverage, clip=clip)
+        est[test], low[test], high[test] = predict(model, x[test])
+    return est, low, high
 
 
 #: A point is trusted when its whole predicted interval of ``SL / MC - 1`` lies within +-TRUSTED_ERROR [1]

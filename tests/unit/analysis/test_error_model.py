@@ -76,3 +76,77 @@ def test_features_transforms():
     assert np.allclose(col["logit_p_uplift"], 0.0)
     assert np.allclose(col["log_margin_loss"], np.log(0.25))
     assert np.allclose(col["kanai_tajimi"], [0, 1]) and np.allclose(col["log_omega_g_p"], [0, np.log(2.0)])
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    from importlib import resources
+
+    import xarray as xr
+
+    with resources.as_file(resources.files("screening.data") / "error_atlas.nc") as path:
+        return xr.load_dataset(path)
+
+
+def test_dataset_features_recompute_the_atlas_features(shipped):
+    # two independent paths: the atlas's design groups, and the coordinates of a linearization dataset
+    from screening.analysis import atlas
+    from screening.solvers.linearization import linearize
+
+    g = atlas.groups_of(shipped["u"].values)
+    x_atlas = em.atlas_features(shipped, "paper")
+    done = 0
+    for i in range(shipped.sizes["point"]):
+        if not np.isfinite(shipped["S0"].values[i]) or shipped["sl_status"].values[i, 0] != 0:
+            continue
+        block, foundation, shape, timing = atlas.physical_point(g, i)
+        ds = linearize(block, foundation, atlas.make_excitation(shape, timing, float(shipped["S0"].values[i])),
+                       t_end=timing["t_end"], dt=timing["dt"], condensation="paper")
+        x, dims, shape_out = em.dataset_features(ds)
+        assert dims == () and x.shape == (1, len(em.FEATURES))
+        assert np.allclose(x[0], x_atlas[i], rtol=1e-6, atol=1e-9), (i, x[0] - x_atlas[i])
+        done += 1
+        if done == 3:
+            break
+    assert done == 3
+
+
+def test_with_error_model_labels_a_sweep(shipped):
+    from screening.analysis import atlas
+    from screening.solvers.linearization import linearize
+    from screening.status import Trust
+
+    model = em.fit_error_model(em.atlas_features(shipped, "paper"), em.targets(shipped, "paper")["log_var_ratio"],
+                               shipped["family"].values)
+    g = atlas.groups_of(shipped["u"].values)
+    i = int(np.flatnonzero(np.isfinite(shipped["S0"].values))[0])
+    block, foundation, shape, timing = atlas.physical_point(g, i)
+    S0 = float(shipped["S0"].values[i]) * np.array([0.1, 1.0, 30.0])
+    ds = linearize(block, foundation, atlas.make_excitation(shape, timing, S0), t_end=timing["t_end"],
+                   dt=timing["dt"])
+    out = em.with_error_model(ds, model)
+    x, _, _ = em.dataset_features(ds)
+    est, lo, hi = em.predict(model, x)
+    ok = ds["status"].values == 0
+    assert np.allclose(out["sl_error"].values[ok], np.expm1(est[ok]))
+    assert np.array_equal(out["sl_trust"].values[ok], em.trust_from_interval(lo, hi)[ok])
+    assert np.all(out["sl_trust"].values[~ok] == int(Trust.untrusted))
+    assert np.all(np.isnan(out["sl_error_low"].values[~ok]))
+
+
+def test_trust_from_interval():
+    lo = np.log([0.9, 0.7, 0.3, 1.6, np.nan])
+    hi = np.log([1.2, 1.1, 0.45, 2.0, 1.0])
+    assert list(em.trust_from_interval(lo, hi)) == [0, 1, 2, 2, 2]
+
+
+def test_a_held_out_family_is_never_trusted_beyond_25_percent(shipped):
+    # leave one family out: a point the model (fitted without its family) calls trusted has a measured
+    # |SL / MC - 1| within 25 % up to two Monte Carlo standard errors
+    for cond in shipped["condensation"].values:
+        t = em.targets(shipped, cond)
+        y, se = t["log_var_ratio"], t["log_var_ratio_se"]
+        est, lo, hi = em.grouped_cross_validation(em.atlas_features(shipped, cond), y, shipped["family"].values)
+        trusted = (em.trust_from_interval(lo, hi) == 0) & np.isfinite(y)
+        excess = np.abs(np.expm1(y)) - 2 * se * np.exp(y)
+        assert not np.any(trusted & (excess > em.TRUSTED_ERROR)), (cond, np.flatnonzero(trusted & (excess > 0.25)))
