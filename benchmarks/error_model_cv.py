@@ -76,6 +76,16 @@ def main(argv=None):
               f"{inside_se[low_up].mean():7.3f} {np.median(width[low_up]):7.3f} "
               f"{int((trusted & low_up).sum()):7d} {int((bad & low_up).sum()):4d}")
         best[cond] = (y, est, ok)
+        rule = ds["sl_trust"].sel(condensation=cond).values
+        lo_r, hi_r = (ds[n].sel(condensation=cond).values for n in ("sl_error_low", "sl_error_high"))
+        rel_true = np.expm1(t["log_var_ratio"])
+        has_band = ok & np.isfinite(lo_r)
+        in_band = (rel_true >= lo_r) & (rel_true <= hi_r)
+        print(f"{cond:13s} {'  shipped rule':16s} trusted {int(((rule == 0) & ok).sum())} (beyond 25 %: "
+              f"{int(((rule == 0) & ok & (np.abs(rel_true) - 2 * y_se * np.exp(t['log_var_ratio']) > 0.25)).sum())}), "
+              f"check {int(((rule == 1) & ok).sum())}, untrusted {int(((rule == 2) & ok).sum())}; its band covers "
+              f"{in_band[has_band].mean() if has_band.any() else float('nan'):.3f} of {int(has_band.sum())}, median "
+              f"width {np.median((hi_r - lo_r)[has_band]) if has_band.any() else float('nan'):.3f}")
         for j, level in enumerate(ds["level"].values):
             yp, se = t["p_exceed_diff"][:, j], t["p_exceed_diff_se"][:, j]
             e2, l2, h2 = em.grouped_cross_validation(x, yp, groups, args.folds, args.coverage)

@@ -12,7 +12,8 @@ computes at that point (its trust indicators) and from the point's dimensionless
   :data:`SCALE_NEIGHBOURS` nearest atlas points of their *out-of-family* residuals -- each atlas point
   predicted by a fit that has not seen its family -- and ``q`` is the
   ``ceil((n + 1) coverage) / n`` quantile of ``|r_i| / s_i`` over the atlas, with ``s_i`` again
-  computed without the point's own family.  The interval is therefore calibrated for a *new* system
+  computed without the point's own family; ``q`` is calibrated apart in each regime of peak uplift
+  probability (:data:`P_REGIMES`, Mondrian conformal prediction).  The interval is therefore calibrated for a *new* system
   (a family the atlas does not hold), not for a point next to one the atlas measured.
 
 The bandwidth ``h`` is chosen among :data:`BANDWIDTHS` by the out-of-family squared error.
@@ -27,6 +28,7 @@ microseconds per point in batches, ``benchmarks/error_model_cv.py``).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -37,6 +39,11 @@ FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_e
             "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau")
 #: Candidate bandwidths (in standardised feature units, times sqrt(number of features)).
 BANDWIDTHS = (0.15, 0.25, 0.4, 0.6, 1.0)
+#: Edges of the peak uplift probability between the regimes whose conformal factors are calibrated apart
+#: (Mondrian conformal prediction: the coverage holds in each regime, not only on average), and the fewest
+#: atlas points a regime needs for its own factor (else the pooled one).
+P_REGIMES = (0.2, 0.7)
+MIN_REGIME = 20
 #: Clip of ``log(SL / MC)`` [1] in the fit (a factor of 4 either way).
 LOG_CLIP = math.log(4.0)
 #: Out-of-family residuals the local scale s(x) is the RMS of (the nearest ones).
@@ -117,7 +124,7 @@ class ErrorModel(NamedTuple):
     width: np.ndarray
     h: float
     r: np.ndarray
-    q: float
+    q: np.ndarray
     coverage: float
 
 
@@ -175,6 +182,12 @@ def _local_scale(xq, x, r, mask=None, neighbours=None):
     return np.maximum(out, SCALE_FLOOR)
 
 
+def uplift_regime(x):
+    """Regime index [int] of feature rows: the bin of the peak uplift probability (:data:`P_REGIMES` edges)."""
+    p = 1.0 / (1.0 + np.exp(-np.asarray(x, dtype=float)[:, FEATURES.index("logit_p_uplift")]))
+    return np.searchsorted(np.asarray(P_REGIMES), p, side="right")
+
+
 def _out_of_family(x, y, groups, h):
     r = np.empty_like(y)
     for g in np.unique(groups):
@@ -227,8 +240,13 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
     other = groups[:, None] != groups[None, :]
     s = _local_scale(xs, xs, r, mask=other)
     n = len(y)
-    level = min(1.0, math.ceil((n + 1) * coverage) / n)
-    q = float(np.quantile(np.abs(r) / s, level))
+    ratio = np.abs(r) / s
+    regime = uplift_regime(x)
+    q = np.empty(len(P_REGIMES) + 1)
+    for c in range(len(q)):
+        mine = ratio[regime == c] if np.count_nonzero(regime == c) >= MIN_REGIME else ratio
+        level = min(1.0, math.ceil((len(mine) + 1) * coverage) / len(mine))
+        q[c] = float(np.quantile(mine, level))
     return ErrorModel(xs, y, center, width, h, r, q, float(coverage))
 
 
@@ -244,7 +262,7 @@ def predict(model, x):
     if ok.any():
         xs = (x[ok] - model.center) / model.width
         est[ok] = local_linear(xs, model.x, model.y, model.h)
-        half[ok] = model.q * _local_scale(xs, model.x, model.r)
+        half[ok] = model.q[uplift_regime(x[ok])] * _local_scale(xs, model.x, model.r)
     return est, est - half, est + half
 
 
@@ -296,6 +314,26 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
     finite = np.isfinite(low) & np.isfinite(high)
     return np.where(~finite | beyond, int(Trust.untrusted),
                     np.where(trusted, int(Trust.trusted), int(Trust.check))).astype(np.int8)
+
+
+ATLAS_FILE = "error_atlas.nc"
+
+
+@functools.lru_cache(maxsize=None)
+def shipped_model(condensation="paper"):
+    """The error model of ``log(SL / MC)`` of one condensation fitted on the shipped atlas
+    (``screening/data/error_atlas.nc``, :data:`LOG_CLIP`); cached per process."""
+    from importlib import resources
+
+    import xarray as xr
+
+    with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
+        ds = xr.load_dataset(path)
+    if condensation not in ds["condensation"].values:
+        raise ValueError(f"parameter 'condensation' must be one of {list(ds['condensation'].values)} "
+                         f"(got {condensation!r})")
+    return fit_error_model(atlas_features(ds, condensation), targets(ds, condensation)["log_var_ratio"],
+                           ds["family"].values, clip=LOG_CLIP)
 
 
 def dataset_features(ds):

@@ -116,8 +116,10 @@ def test_with_error_model_labels_a_sweep(shipped):
     from screening.solvers.linearization import linearize
     from screening.status import Trust
 
-    model = em.fit_error_model(em.atlas_features(shipped, "paper"), em.targets(shipped, "paper")["log_var_ratio"],
-                               shipped["family"].values)
+    model = em.shipped_model("paper")
+    assert model.x.shape[0] == int(np.isfinite(em.targets(shipped, "paper")["log_var_ratio"]).sum())
+    with pytest.raises(ValueError, match="condensation"):
+        em.shipped_model("nonsense")
     g = atlas.groups_of(shipped["u"].values)
     i = int(np.flatnonzero(np.isfinite(shipped["S0"].values))[0])
     block, foundation, shape, timing = atlas.physical_point(g, i)
@@ -150,3 +152,28 @@ def test_a_held_out_family_is_never_trusted_beyond_25_percent(shipped):
         trusted = (em.trust_from_interval(lo, hi) == 0) & np.isfinite(y)
         excess = np.abs(np.expm1(y)) - 2 * se * np.exp(y)
         assert not np.any(trusted & (excess > em.TRUSTED_ERROR)), (cond, np.flatnonzero(trusted & (excess > 0.25)))
+
+
+def test_uplift_regimes_calibrate_their_own_factor():
+    # two regimes with noise 0.05 and 0.5: each regime's interval covers its own points at ~90 %
+    rng = np.random.default_rng(5)
+    n_fam, per = 60, 10
+    fam = np.repeat(np.arange(n_fam), per)
+    p = np.where(rng.uniform(size=n_fam) < 0.5, 0.05, 0.9)[fam]
+    x = em.features(p, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(fam), "white"), np.nan, 10.0)
+    x = x + 0.01 * rng.normal(size=x.shape)
+    noise = np.where(p < 0.2, 0.05, 0.5)
+    model = em.fit_error_model(x, noise * rng.normal(size=len(fam)), fam)
+    assert list(em.uplift_regime(x[:1])) in ([0], [2])
+    assert model.q.shape == (len(em.P_REGIMES) + 1,)
+    ft = np.repeat(np.arange(200), 10)
+    pt = np.where(rng.uniform(size=200) < 0.5, 0.05, 0.9)[ft]
+    xt = em.features(pt, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(ft), "white"), np.nan, 10.0)
+    xt = xt + 0.01 * rng.normal(size=xt.shape)
+    yt = np.where(pt < 0.2, 0.05, 0.5) * rng.normal(size=len(ft))
+    est, lo, hi = em.predict(model, xt)
+    for low in (True, False):
+        sel = (pt < 0.2) == low
+        # ~1000 test points per regime (binomial SE 0.01) and ~300 calibration points (SE ~0.017): 3 SE of both
+        assert abs(np.mean((yt[sel] >= lo[sel]) & (yt[sel] <= hi[sel])) - 0.9) < 0.06
+    assert np.median((hi - lo)[pt > 0.5]) > 5 * np.median((hi - lo)[pt < 0.2])
