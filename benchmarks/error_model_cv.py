@@ -109,16 +109,20 @@ def main(argv=None):
     # best condensation by p_uplift region (measured |log error|)
     p = ds["sl_peak_p_uplift"].sel(condensation="paper").values
     edges = (0.0, 0.05, 0.2, 0.5, 0.8, 0.95, 1.01)
-    print("best condensation by the paper linearization's peak p_uplift (median |SL/MC - 1|, n):")
+    print("best condensation by the paper linearization's peak p_uplift, points where every condensation and the "
+          "reference have a value (median |SL/MC - 1|; fraction within 25 %; n):")
+    common = np.logical_and.reduce([ok for _, _, ok in best.values()])
     for a, b in zip(edges[:-1], edges[1:]):
-        sel = (p >= a) & (p < b)
+        sel = (p >= a) & (p < b) & common
         cells = []
-        for cond, (y, _, ok) in best.items():
-            s = sel & ok
-            cells.append((np.median(np.abs(np.exp(y[s]) - 1)) if s.any() else np.nan, cond, int(s.sum())))
-        text = "  ".join(f"{c}: {v:.3f} ({k})" for v, c, k in cells)
+        for cond, (y, _, _) in best.items():
+            rel = np.abs(np.expm1(y[sel]))
+            cells.append((np.median(rel) if sel.any() else np.nan, cond, np.mean(rel <= 0.25) if sel.any() else np.nan))
+        text = "  ".join(f"{c}: {v:.3f}, {w:.2f}" for v, c, w in cells)
         win = min((c for c in cells if np.isfinite(c[0])), default=(np.nan, "-", 0))[1]
-        print(f"  p_uplift [{a:g}, {b:g}): {text}  -> {win}")
+        print(f"  [{a:g}, {b:g}) n={int(sel.sum()):3d}: {text}  -> {win}")
+    stopped = {str(cond): int((ds["sl_status"].sel(condensation=cond).values != 0).sum()) for cond in best}
+    print(f"linearization stopped (status not ok) at: {stopped} of {ds.sizes['point']} points")
     return 0
 
 
