@@ -1,0 +1,130 @@
+"""Grouped cross-validation of the error model (:mod:`screening.analysis.error_model`) on the error atlas.
+
+Run::
+
+    nice -n 5 env PYTHONPATH=$PWD .venv/bin/python benchmarks/error_model_cv.py \
+        [--atlas screening/data/error_atlas.nc] [--folds 0] [--coverage 0.9] [--markdown]
+
+For each condensation, the atlas families are split into folds (``--folds 0``: one family per fold,
+leave-one-family-out); the model is fitted on the other folds and predicts the held-out points.
+Printed per condensation and error:
+
+* ``coverage``: fraction of held-out points whose measured error lies in the 90 % interval (goal >= 88 %);
+  ``coverage_se``: the same with the interval widened by the point's own Monte Carlo standard error
+  (the measured error carries the reference's sampling noise, the true one does not);
+* ``width``: median interval width; for the variance as a fraction of the corrected estimate,
+  ``exp(high) - exp(low)`` over ``exp(estimate)`` (goal <= 25 %); for probabilities in probability;
+* ``trusted`` / ``bad trusted``: held-out points the model labels trusted (:func:`~screening.analysis.error_model.
+  trust_from_interval`) and, of those, how many have a measured |SL / MC - 1| > 25 % beyond 2 MC standard
+  errors (goal: none);
+* the cost of a prediction per point [us] and the best condensation by region of peak p_uplift.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_ATLAS = ROOT / "screening" / "data" / "error_atlas.nc"
+
+
+def main(argv=None):
+    import xarray as xr
+
+    from screening.analysis import error_model as em
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--atlas", default=str(DEFAULT_ATLAS))
+    ap.add_argument("--folds", type=int, default=0)
+    ap.add_argument("--coverage", type=float, default=0.9)
+    args = ap.parse_args(argv)
+    ds = xr.load_dataset(args.atlas)
+    groups = ds["family"].values
+    print(f"atlas: {ds.sizes['point']} points, {len(np.unique(groups))} families, "
+          f"{ds.attrs.get('cpu_hours', float('nan'))} CPU h; folds: "
+          f"{args.folds or 'one family each'}")
+    print(f"{'condensation':13s} {'error':16s} {'n':>5s} {'coverage':>8s} {'cov+se':>7s} {'width':>7s} "
+          f"{'trusted':>7s} {'bad':>4s}")
+    best = {}
+    n_used = np.maximum(ds["mc_n_samples"].values - ds["mc_n_diverged"].values, 1)
+    p_over = ds["mc_n_overturned"].values / n_used
+    for cond in ds["condensation"].values:
+        x = em.atlas_features(ds, cond)
+        t = em.targets(ds, cond)
+        y, y_se = np.clip(t["log_var_ratio"], -em.LOG_CLIP, em.LOG_CLIP), t["log_var_ratio_se"]
+        est, lo, hi = em.grouped_cross_validation(x, y, groups, args.folds, args.coverage, clip=em.LOG_CLIP)
+        ok = np.isfinite(y) & np.isfinite(est)
+        inside = (y >= lo) & (y <= hi)
+        inside_se = (y >= lo - y_se) & (y <= hi + y_se)
+        width = (np.exp(hi) - np.exp(lo)) / np.exp(est)
+        trusted = em.trust_from_interval(lo, hi) == 0
+        rel = np.exp(y) - 1
+        bad = trusted & ok & (np.abs(rel) - 2 * y_se * np.exp(y) > em.TRUSTED_ERROR)
+        print(f"{cond:13s} {'log var ratio':16s} {ok.sum():5d} {inside[ok].mean():8.3f} {inside_se[ok].mean():7.3f} "
+              f"{np.median(width[ok]):7.3f} {int((trusted & ok).sum()):7d} {int(bad.sum()):4d}")
+        standing = ok & (p_over <= 0.05)
+        print(f"{cond:13s} {'  MC p_over<=5%':16s} {standing.sum():5d} {inside[standing].mean():8.3f} "
+              f"{inside_se[standing].mean():7.3f} {np.median(width[standing]):7.3f} "
+              f"{int((trusted & standing).sum()):7d} {int((bad & standing).sum()):4d}")
+        low_up = standing & (ds["sl_peak_p_uplift"].sel(condensation=cond).values < 0.5)
+        print(f"{cond:13s} {'  and p_up<0.5':16s} {low_up.sum():5d} {inside[low_up].mean():8.3f} "
+              f"{inside_se[low_up].mean():7.3f} {np.median(width[low_up]):7.3f} "
+              f"{int((trusted & low_up).sum()):7d} {int((bad & low_up).sum()):4d}")
+        best[cond] = (y, est, ok)
+        rule = ds["sl_trust"].sel(condensation=cond).values
+        lo_r, hi_r = (ds[n].sel(condensation=cond).values for n in ("sl_error_low", "sl_error_high"))
+        rel_true = np.expm1(t["log_var_ratio"])
+        has_band = ok & np.isfinite(lo_r)
+        in_band = (rel_true >= lo_r) & (rel_true <= hi_r)
+        print(f"{cond:13s} {'  shipped rule':16s} trusted {int(((rule == 0) & ok).sum())} (beyond 25 %: "
+              f"{int(((rule == 0) & ok & (np.abs(rel_true) - 2 * y_se * np.exp(t['log_var_ratio']) > 0.25)).sum())}), "
+              f"check {int(((rule == 1) & ok).sum())}, untrusted {int(((rule == 2) & ok).sum())}; its band covers "
+              f"{in_band[has_band].mean() if has_band.any() else float('nan'):.3f} of {int(has_band.sum())}, median "
+              f"width {np.median((hi_r - lo_r)[has_band]) if has_band.any() else float('nan'):.3f}")
+        for j, level in enumerate(ds["level"].values):
+            yp, se = t["p_exceed_diff"][:, j], t["p_exceed_diff_se"][:, j]
+            e2, l2, h2 = em.grouped_cross_validation(x, yp, groups, args.folds, args.coverage)
+            okp = np.isfinite(yp) & np.isfinite(e2)
+            ins = (yp >= l2) & (yp <= h2)
+            ins_se = (yp >= l2 - se) & (yp <= h2 + se)
+            print(f"{cond:13s} {'p_exceed ' + format(level, 'g') + ' alpha':16s} {okp.sum():5d} {ins[okp].mean():8.3f} "
+                  f"{ins_se[okp].mean():7.3f} {np.median((h2 - l2)[okp]):7.3f}")
+    # cost of a prediction
+    x = em.atlas_features(ds, "paper")
+    y = em.targets(ds, "paper")["log_var_ratio"]
+    m = em.fit_error_model(x, y, groups, clip=em.LOG_CLIP)
+    finite = x[np.all(np.isfinite(x), axis=1)]
+    rng = np.random.default_rng(0)
+    xq = finite[rng.integers(0, len(finite), 10_000)] * (1 + 0.01 * rng.normal(size=(10_000, x.shape[1])))
+    t0 = time.process_time()
+    em.predict(m, xq)
+    per = (time.process_time() - t0) / len(xq)
+    print(f"error model cost: {per * 1e6:.1f} us CPU per point ({len(xq)} points, {int(np.isfinite(y).sum())} "
+          f"atlas rows; the linearization: ~200 us)")
+    # best condensation by p_uplift region (measured |log error|)
+    p = ds["sl_peak_p_uplift"].sel(condensation="paper").values
+    edges = (0.0, 0.05, 0.2, 0.5, 0.8, 0.95, 1.01)
+    print("best condensation by the paper linearization's peak p_uplift, points where every condensation and the "
+          "reference have a value (median |SL/MC - 1|; fraction within 25 %; n):")
+    common = np.logical_and.reduce([ok for _, _, ok in best.values()])
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = (p >= a) & (p < b) & common
+        cells = []
+        for cond, (y, _, _) in best.items():
+            rel = np.abs(np.expm1(y[sel]))
+            cells.append((np.median(rel) if sel.any() else np.nan, cond, np.mean(rel <= 0.25) if sel.any() else np.nan))
+        text = "  ".join(f"{c}: {v:.3f}, {w:.2f}" for v, c, w in cells)
+        win = min((c for c in cells if np.isfinite(c[0])), default=(np.nan, "-", 0))[1]
+        print(f"  [{a:g}, {b:g}) n={int(sel.sum()):3d}: {text}  -> {win}")
+    stopped = {str(cond): int((ds["sl_status"].sel(condensation=cond).values != 0).sum()) for cond in best}
+    print(f"linearization stopped (status not ok) at: {stopped} of {ds.sizes['point']} points")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,407 @@
+"""An error model of the linearization learnt from the error atlas, with predictive intervals.
+
+For one condensation, the error of a linearized point is predicted from what the linearization
+computes at that point (its trust indicators) and from the point's dimensionless inputs
+(:data:`FEATURES`; :func:`features`).  The model (:func:`fit_error_model`, :func:`predict`) is
+
+* a *local linear regression*: at a query ``x`` the estimate is the intercept of the weighted least
+  squares fit of the atlas errors ``y_i`` on ``x_i - x`` over the :data:`NEIGHBOURS` nearest atlas
+  points, with Gaussian kernel weights ``w_i = exp(-|x_i - x|^2 / (2 h^2))`` in standardised features (plus a small ridge that pulls the
+  slopes to zero where the neighbourhood is thin);
+* a *normalised conformal interval*: ``estimate +- q s(x)``, where ``s(x)`` is the RMS over the
+  :data:`SCALE_NEIGHBOURS` nearest atlas points of their *out-of-family* residuals -- each atlas point
+  predicted by a fit that has not seen its family -- and ``q`` is the
+  ``ceil((n + 1) coverage) / n`` quantile of ``|r_i| / s_i`` over the atlas, with ``s_i`` again
+  computed without the point's own family; ``q`` is calibrated apart in each regime of peak uplift
+  probability (:data:`P_REGIMES`, Mondrian conformal prediction).  The interval is therefore calibrated for a *new* system
+  (a family the atlas does not hold), not for a point next to one the atlas measured.
+
+The bandwidth ``h`` is chosen among :data:`BANDWIDTHS` by the out-of-family squared error.
+
+Errors modelled (:func:`targets`): ``log(SL peak var_theta / MC peak var_theta)`` [1] and, per
+exceedance level, ``SL p_exceed - MC p_exceed`` [1].  A relative error interval on the variance is
+``exp(low) - 1 .. exp(high) - 1``.
+
+Cost: one query costs ``O(NEIGHBOURS d^2 + n_atlas d)`` floating-point operations (a few tens of
+microseconds per point in batches, ``benchmarks/error_model_cv.py``).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+#: The features, in order: the linearization's indicators and the point's dimensionless inputs.
+FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",
+            "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau")
+#: Candidate bandwidths (in standardised feature units, times sqrt(number of features)).
+BANDWIDTHS = (0.15, 0.25, 0.4, 0.6, 1.0)
+#: Edges of the peak uplift probability between the regimes whose conformal factors are calibrated apart
+#: (Mondrian conformal prediction: the coverage holds in each regime, not only on average), and the fewest
+#: atlas points a regime needs for its own factor (else the pooled one).
+P_REGIMES = (0.2, 0.7)
+MIN_REGIME = 20
+#: Clip of ``log(SL / MC)`` [1] in the fit (a factor of 4 either way).
+LOG_CLIP = math.log(4.0)
+#: Out-of-family residuals the local scale s(x) is the RMS of (the nearest ones).
+SCALE_NEIGHBOURS = 12
+#: Ridge on the slopes of the local fit (in standardised units).
+RIDGE = 1e-2
+#: Weight (in atlas points) of the pooled residual scale in the local one: far from the atlas the scale
+#: tends to the pooled scale instead of to the nearest few residuals.
+PRIOR_WEIGHT = 1.0
+#: Floor of the residual scale s(x) [1] (the Monte Carlo noise never vanishes).
+SCALE_FLOOR = 1e-3
+#: Atlas points the local fit at a query uses (its nearest ones).
+NEIGHBOURS = 64
+
+
+def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul, zeta_v, e, kind, omega_g_p, tau):
+    """The ``(n, len(FEATURES))`` feature matrix [1] of points (array-likes broadcast to ``n``).
+
+    Parameters
+    ----------
+    peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess : the linearization's indicators
+        (:func:`screening.analysis.trust.trust_indicators`) [1].
+    alpha : slenderness [rad]. r_ul : theta_ul / alpha [1]. zeta_v : vertical damping ratio [1].
+    e : eps z0^2 [1]. kind : ``"white"`` or ``"kanai_tajimi"`` (array of str).
+    omega_g_p : filter frequency over Housner's p [1] (ignored for white noise). tau : T1 p [1].
+
+    Notes
+    -----
+    ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
+    ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
+    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``.
+    """
+    p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
+    kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
+    cols = [np.log(p / (1 - p)),
+            np.log(np.maximum(np.asarray(sigma_ratio, dtype=float), 1e-6)),
+            np.log(np.maximum(1.0 - np.asarray(k_eq_margin, dtype=float), 1e-4)),
+            np.clip(np.log(np.maximum(np.asarray(decay_excess, dtype=float), 1e-300)), -5.0, 10.0),
+            np.asarray(alpha, dtype=float), np.log(np.asarray(r_ul, dtype=float)),
+            np.log(np.asarray(zeta_v, dtype=float)), np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
+            np.where(kt > 0, np.log(np.where(kt > 0, np.asarray(omega_g_p, dtype=float), 1.0)), 0.0),
+            np.log(np.asarray(tau, dtype=float))]
+    cols = np.broadcast_arrays(*cols)
+    return np.stack([np.asarray(c, dtype=float).ravel() for c in cols], axis=1)
+
+
+def atlas_features(ds, condensation):
+    """:func:`features` of every point of an atlas dataset under one condensation."""
+    s = ds.sel(condensation=condensation)
+    return features(s["sl_peak_p_uplift"].values, s["sl_sigma_ratio"].values, s["sl_k_eq_margin"].values,
+                    s["sl_decay_excess"].values, ds["alpha"].values, ds["r_ul"].values, ds["zeta_v"].values,
+                    ds["e"].values, ds["kind"].values.astype(str), ds["omega_g_p"].values, ds["tau"].values)
+
+
+def targets(ds, condensation):
+    """``{"log_var_ratio": (n,), "p_exceed_diff": (n, n_levels)}`` [1] of an atlas under one condensation, and
+    their Monte Carlo standard errors (``"log_var_ratio_se"``, ``"p_exceed_diff_se"``); NaN where a side is
+    missing (the linearization stopped, no Monte Carlo survivor)."""
+    s = ds.sel(condensation=condensation)
+    ok = s["sl_status"].values == 0
+    sl, mc = s["sl_peak_var_theta"].values, ds["mc_peak_var_theta"].values
+    with np.errstate(divide="ignore", invalid="ignore"):
+        y = np.where(ok & (sl > 0) & (mc > 0), np.log(sl / mc), np.nan)
+        y_se = ds["mc_peak_var_theta_se"].values / mc
+    d = np.where(ok[:, None], s["sl_p_exceed"].values - ds["mc_p_exceed"].values, np.nan)
+    return {"log_var_ratio": y, "log_var_ratio_se": np.where(np.isfinite(y), y_se, np.nan),
+            "p_exceed_diff": d, "p_exceed_diff_se": ds["mc_p_exceed_se"].values}
+
+
+class ErrorModel(NamedTuple):
+    """A fitted error model (:func:`fit_error_model`): standardised training features ``x`` and errors ``y``,
+    the standardisation (``center``, ``width``), the bandwidth ``h``, the out-of-family residuals ``r``, the
+    conformal factor ``q`` and the interval's ``coverage``."""
+
+    x: np.ndarray
+    y: np.ndarray
+    center: np.ndarray
+    width: np.ndarray
+    h: float
+    r: np.ndarray
+    q: np.ndarray
+    coverage: float
+
+
+def local_linear(xq, x, y, h, ridge=RIDGE, neighbours=NEIGHBOURS):
+    """Local linear estimates [units of ``y``] at standardised queries ``xq`` ``(m, d)`` from ``(x, y)``.
+
+    The fit at a query uses its ``neighbours`` nearest training points (all of them if fewer) with Gaussian
+    weights of bandwidth ``h``, scaled so that the nearest carries weight 1 (no underflow far from the
+    atlas).  Where the weighted normal equations are singular the estimate is the weighted mean.
+    """
+    from scipy.spatial import cKDTree
+
+    xq = np.atleast_2d(np.asarray(xq, dtype=float))
+    m, d = xq.shape
+    k = int(min(neighbours, len(x)))
+    dist, idx = cKDTree(x).query(xq, k)
+    dist, idx = dist.reshape(m, k), idx.reshape(m, k)
+    d2 = dist * dist
+    w = np.exp(-0.5 * (d2 - d2[:, :1]) / (h * h))                           # (m, k)
+    z = x[idx] - xq[:, None, :]                                             # (m, k, d)
+    zz = np.concatenate([np.ones((m, k, 1)), z], axis=-1)                   # (m, k, d+1)
+    zw = zz * w[..., None]
+    reg = ridge * np.eye(d + 1)
+    reg[0, 0] = 0.0
+    sw = w.sum(axis=1)
+    a = np.swapaxes(zw, 1, 2) @ zz + reg * sw[:, None, None]
+    rhs = np.swapaxes(zw, 1, 2) @ y[idx][..., None]
+    mean = np.sum(w * y[idx], axis=1) / sw
+    try:
+        est = np.linalg.solve(a, rhs)[:, 0, 0]
+    except np.linalg.LinAlgError:                     # a degenerate neighbourhood somewhere: one at a time
+        est = np.array([np.linalg.lstsq(a[i], rhs[i], rcond=None)[0][0, 0] for i in range(m)])
+    return np.where(np.isfinite(est), est, mean)
+
+
+def _sq_distances(xq, x):
+    d2 = np.sum(xq * xq, axis=1)[:, None] + np.sum(x * x, axis=1)[None, :] - 2.0 * xq @ x.T
+    return np.maximum(d2, 0.0)
+
+
+def _local_scale(xq, x, r, mask=None, neighbours=None):
+    """RMS [units of ``r``] of the residuals ``r`` of the ``neighbours`` training points nearest each query
+    (where ``mask`` allows), shrunk towards the pooled (median) mean square with the weight of :data:`PRIOR_WEIGHT` points."""
+    k = int(min(neighbours or SCALE_NEIGHBOURS, len(x)))
+    pooled2 = float(np.median(r * r))
+    out = np.empty(len(xq))
+    for lo in range(0, len(xq), 1024):
+        d2 = _sq_distances(xq[lo:lo + 1024], x)
+        if mask is not None:
+            d2 = np.where(mask[lo:lo + 1024], d2, np.inf)
+        idx = np.argpartition(d2, k - 1, axis=1)[:, :k]
+        usable = np.isfinite(np.take_along_axis(d2, idx, axis=1))
+        r2 = np.where(usable, (r * r)[idx], 0.0)
+        out[lo:lo + 1024] = np.sqrt((r2.sum(axis=1) + PRIOR_WEIGHT * pooled2) / (usable.sum(axis=1) + PRIOR_WEIGHT))
+    return np.maximum(out, SCALE_FLOOR)
+
+
+def uplift_regime(x):
+    """Regime index [int] of feature rows: the bin of the peak uplift probability (:data:`P_REGIMES` edges)."""
+    p = 1.0 / (1.0 + np.exp(-np.asarray(x, dtype=float)[:, FEATURES.index("logit_p_uplift")]))
+    return np.searchsorted(np.asarray(P_REGIMES), p, side="right")
+
+
+def _out_of_family(x, y, groups, h):
+    r = np.empty_like(y)
+    for g in np.unique(groups):
+        held = groups == g
+        r[held] = y[held] - local_linear(x[held], x[~held], y[~held], h)
+    return r
+
+
+def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None):
+    """Fit the error model of one method and one error (module docstring).
+
+    Parameters
+    ----------
+    x : ``(n, d)`` features (:func:`features`). y : ``(n,)`` errors [1]; rows with a NaN are dropped.
+    groups : ``(n,)`` family ids (a family is held out whole).
+    coverage : nominal coverage of the predictive interval, in (0, 1).
+    bandwidths : candidate bandwidths (times ``sqrt(d)``, in standardised features).
+    clip : errors are clipped to ``[-clip, clip]`` before the fit (None: not clipped); :data:`LOG_CLIP` for
+        ``log(SL / MC)``: beyond a factor of 4 either way a point is untrusted whatever the exact factor, and
+        the few such errors would otherwise set the interval everywhere near them.
+
+    Returns
+    -------
+    ErrorModel
+    """
+    if not 0.0 < coverage < 1.0:
+        raise ValueError(f"parameter 'coverage' must be in (0, 1) (got {coverage!r})")
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    groups = np.asarray(groups)
+    keep = np.isfinite(y) & np.all(np.isfinite(x), axis=1)
+    x, y, groups = x[keep], y[keep], groups[keep]
+    if clip is not None:
+        y = np.clip(y, -clip, clip)
+    if len(np.unique(groups)) < 2:
+        raise ValueError("parameter 'groups' must hold at least two families with finite errors")
+    center = np.median(x, axis=0)
+    width = np.std(x, axis=0)
+    width = np.where(width > 0, width, 1.0)
+    xs = (x - center) / width
+    d = x.shape[1]
+    best = None
+    for b in bandwidths:
+        h = b * math.sqrt(d)
+        r = _out_of_family(xs, y, groups, h)
+        mse = float(np.mean(r * r))
+        if best is None or mse < best[0]:
+            best = (mse, h, r)
+    _, h, r = best
+    other = groups[:, None] != groups[None, :]
+    s = _local_scale(xs, xs, r, mask=other)
+    n = len(y)
+    ratio = np.abs(r) / s
+    regime = uplift_regime(x)
+    q = np.empty(len(P_REGIMES) + 1)
+    for c in range(len(q)):
+        mine = ratio[regime == c] if np.count_nonzero(regime == c) >= MIN_REGIME else ratio
+        level = min(1.0, math.ceil((len(mine) + 1) * coverage) / len(mine))
+        q[c] = float(np.quantile(mine, level))
+    return ErrorModel(xs, y, center, width, h, r, q, float(coverage))
+
+
+def predict(model, x):
+    """``(estimate, low, high)`` [units of the error] at the points ``x`` ``(m, d)`` (:func:`features`).
+
+    NaN where a feature is not finite.
+    """
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    ok = np.all(np.isfinite(x), axis=1)
+    est = np.full(len(x), np.nan)
+    half = np.full(len(x), np.nan)
+    if ok.any():
+        xs = (x[ok] - model.center) / model.width
+        est[ok] = local_linear(xs, model.x, model.y, model.h)
+        half[ok] = model.q[uplift_regime(x[ok])] * _local_scale(xs, model.x, model.r)
+    return est, est - half, est + half
+
+
+def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None):
+    """``(estimate, low, high)`` of every point predicted by a model fitted without its fold of families.
+
+    ``folds = 0``: each family is its own fold (leave one family out); otherwise the families are dealt at
+    random (seed 0) into ``folds`` folds.  NaN where ``y`` or a feature is not finite.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    groups = np.asarray(groups)
+    fam = np.unique(groups[np.isfinite(y)])
+    if folds and folds < len(fam):
+        rng = np.random.default_rng(0)
+        assign = dict(zip(rng.permutation(fam).tolist(), (np.arange(len(fam)) % folds).tolist()))
+    else:
+        assign = {f: i for i, f in enumerate(fam.tolist())}
+    fold = np.array([assign.get(g, -1) for g in groups.tolist()])
+    est, low, high = (np.full(len(y), np.nan) for _ in range(3))
+    for k in np.unique(fold[fold >= 0]):
+        test = fold == k
+        if len(np.unique(groups[~test & np.isfinite(y)])) < 2:
+            continue
+        model = fit_error_model(x[~test], y[~test], groups[~test], coverage=coverage, clip=clip)
+        est[test], low[test], high[test] = predict(model, x[test])
+    return est, low, high
+
+
+#: A point is trusted when its whole predicted interval of ``SL / MC - 1`` lies within +-TRUSTED_ERROR [1]
+#: and untrusted when the whole interval lies beyond +-UNTRUSTED_ERROR [1].
+TRUSTED_ERROR = 0.25
+UNTRUSTED_ERROR = 0.5
+
+
+def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=UNTRUSTED_ERROR):
+    """:class:`screening.status.Trust` codes [int8] from a predicted interval ``[low, high]`` of
+    ``log(SL / MC)`` [1]: ``trusted`` (0) when ``exp(low) - 1 >= -trusted_error`` and ``exp(high) - 1 <=
+    trusted_error``; ``untrusted`` (2) when the interval lies wholly beyond ``+-untrusted_error`` or is not
+    finite; ``check`` (1) otherwise."""
+    from screening.status import Trust
+
+    low = np.asarray(low, dtype=float)
+    high = np.asarray(high, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        rel_lo, rel_hi = np.expm1(low), np.expm1(high)
+        trusted = (rel_lo >= -trusted_error) & (rel_hi <= trusted_error)
+        beyond = (rel_hi < -untrusted_error) | (rel_lo > untrusted_error)
+    finite = np.isfinite(low) & np.isfinite(high)
+    return np.where(~finite | beyond, int(Trust.untrusted),
+                    np.where(trusted, int(Trust.trusted), int(Trust.check))).astype(np.int8)
+
+
+ATLAS_FILE = "error_atlas.nc"
+
+
+@functools.lru_cache(maxsize=None)
+def shipped_model(condensation="paper"):
+    """The error model of ``log(SL / MC)`` of one condensation fitted on the shipped atlas
+    (``screening/data/error_atlas.nc``, :data:`LOG_CLIP`); cached per process."""
+    from importlib import resources
+
+    import xarray as xr
+
+    with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
+        ds = xr.load_dataset(path)
+    if condensation not in ds["condensation"].values:
+        raise ValueError(f"parameter 'condensation' must be one of {list(ds['condensation'].values)} "
+                         f"(got {condensation!r})")
+    return fit_error_model(atlas_features(ds, condensation), targets(ds, condensation)["log_var_ratio"],
+                           ds["family"].values, clip=LOG_CLIP)
+
+
+def dataset_features(ds):
+    """:func:`features` of every point of a :func:`screening.linearize` (or sweep) dataset, from its
+    indicators and its parameter coordinates, on the dataset's dimensions: ``(features, dims)``.
+
+    Notes
+    -----
+    ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)``; ``e = eps z0^2`` with ``z0 = m g / (2 b k)``;
+    ``zeta_v = c_v / (2 m w_v)``, ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b (w_rate + w_indentation z_rest)``
+    with ``z_rest`` the root of ``z + eps z^3 = z0`` (Newton from ``z0``); ``p = sqrt(m g R / (I_cm + m
+    R^2))``; ``omega_g / p``; ``tau = T1 p`` (a constant envelope: ``T1 = inf`` is clipped to ``1e6 / p``).
+    """
+    import xarray as xr
+
+    from screening.analysis.trust import indicators_from_dataset
+
+    ind = indicators_from_dataset(ds)
+    c = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm") if name in ds.variables}
+    m, b, h, g, k = c["m"], c["b"], c["h"], c["g"], c["k"]
+    eps = c.get("eps", xr.DataArray(0.0))
+    i_cm = c.get("I_cm", m * (b**2 + h**2) / 3.0)
+    alpha = np.arctan2(b, h)
+    z0 = m * g / (2.0 * b * k)
+    z = z0
+    for _ in range(50):
+        z = z - (z + eps * z**3 - z0) / (1.0 + 3.0 * eps * z**2)
+    if ds.attrs.get("contact", "hunt_crossley") == "winkler":
+        c_v = 2.0 * b * ds["c"]
+    else:
+        c_v = 2.0 * b * ds["lam"] * z
+    w_v = np.sqrt(2.0 * b * k / m)
+    R = np.hypot(b, h)
+    p = np.sqrt(m * g * R / (i_cm + m * R**2))
+    kind = ds.attrs.get("excitation", "white")
+    omega = ds["omega_g"] / p if "omega_g" in ds.variables else xr.DataArray(np.nan)
+    tau = ds["T1"] * p if "T1" in ds.variables else 1e6 + 0.0 * p
+    parts = [ind["peak_p_uplift"], ind["sigma_ratio"], ind["k_eq_margin"], ind["decay_excess"], alpha,
+             m * g / (2.0 * b**2 * k * alpha), c_v / (2.0 * m * w_v), eps * z0**2, omega, tau]
+    parts = xr.broadcast(*[xr.DataArray(v) if not isinstance(v, xr.DataArray) else v for v in parts])
+    dims = parts[0].dims
+    vals = [np.asarray(v.transpose(*dims).values, dtype=float).ravel() for v in parts]
+    x = features(*vals[:8], np.full(vals[0].size, kind), vals[8], vals[9])
+    return x, dims, parts[0].transpose(*dims).shape
+
+
+def with_error_model(ds, model):
+    """``ds`` (a :func:`screening.linearize` dataset of the condensation ``model`` was fitted for) with the
+    error model's ``sl_trust`` (:func:`trust_from_interval`), ``sl_error`` (the estimate of ``SL / MC - 1``)
+    and its interval ``sl_error_low``, ``sl_error_high`` [1]; points whose status is not ok are untrusted
+    with NaN band.  Not the default rule (:func:`screening.analysis.trust.add_trust` is)."""
+    import xarray as xr
+
+    from screening.status import PointStatus, Trust
+
+    x, dims, shape = dataset_features(ds)
+    est, low, high = predict(model, x)
+    status = np.broadcast_to(np.asarray(ds["status"].transpose(*[d for d in dims if d in ds["status"].dims]).values),
+                             shape).ravel() if "status" in ds.variables else np.zeros(x.shape[0], dtype=int)
+    bad = status != int(PointStatus.ok)
+    est, low, high = (np.where(bad, np.nan, a) for a in (est, low, high))
+    trust = np.where(bad, int(Trust.untrusted), trust_from_interval(low, high)).astype(np.int8)
+
+    def arr(values, units, long_name):
+        return xr.DataArray(values.reshape(shape), dims=dims, attrs={"units": units, "long_name": long_name})
+
+    return ds.assign(
+        sl_trust=arr(trust, "1", "trust from the error atlas model (0 trusted, 1 check, 2 untrusted)"),
+        sl_error=arr(np.expm1(est), "1", "predicted SL / MC - 1 of peak var_theta (error atlas model)"),
+        sl_error_low=arr(np.expm1(low), "1", "lower end of the predicted interval of SL / MC - 1"),
+        sl_error_high=arr(np.expm1(high), "1", "upper end of the predicted interval of SL / MC - 1"))

@@ -1,0 +1,88 @@
+"""The shipped error atlas: reproducible in structure from the assembler, its points from the campaign."""
+
+from importlib import resources
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from screening.analysis import atlas, atlas_run
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    with resources.as_file(resources.files("screening.data") / "error_atlas.nc") as path:
+        return xr.load_dataset(path)
+
+
+#: two cheap points of the 1024-point design (coupled reference, ~1 s each at 500 samples)
+CHEAP = (102, 867)
+
+
+@pytest.fixture(scope="module")
+def fresh():
+    u = atlas.design(1024, seed=0)
+    return [atlas_run.evaluate_point(i, u[i], samples=16, seed=0) for i in CHEAP]
+
+
+def test_shipped_atlas_has_the_structure_the_assembler_makes(shipped, fresh):
+    ds = atlas_run.assemble(fresh)
+    assert set(ds.data_vars) == set(shipped.data_vars)
+    for name in ds.data_vars:
+        assert ds[name].dims == shipped[name].dims, name
+        assert ds[name].attrs.get("units") == shipped[name].attrs.get("units"), name
+        assert "long_name" in shipped[name].attrs, name
+    assert list(shipped["condensation"].values) == list(atlas_run.CONDENSATIONS)
+    assert np.allclose(shipped["level"].values, atlas_run.LEVELS)
+    for key in ("command", "versions", "design_points", "design_seed", "samples", "cpu_hours"):
+        assert key in shipped.attrs, key
+    assert shipped.attrs["command"].startswith("benchmarks/error_atlas.py")
+
+
+def test_shipped_design_coordinates_are_the_design(shipped):
+    u = atlas.design(int(shipped.attrs["design_points"]), seed=int(shipped.attrs["design_seed"]))
+    idx = shipped["point"].values
+    assert np.allclose(shipped["u"].values, u[idx])
+    g = atlas.groups_of(u[idx])
+    assert np.allclose(shipped["alpha"].values, g["alpha"]) and np.allclose(shipped["r_ul"].values, g["r_ul"])
+    assert np.array_equal(shipped["family"].values, atlas.family_of(g))
+    assert set(np.unique(shipped["mc_model"].values.astype(str))) <= {"coupled", "stiff_bed", ""}
+
+
+def test_shipped_exceedance_is_the_count_of_the_shipped_samples(shipped):
+    # independent count: overturned samples exceed every level, diverged ones are left out
+    peaks = shipped["mc_peak_abs_theta"].values.astype(float)
+    state = shipped["mc_sample_state"].values
+    for i in range(0, shipped.sizes["point"], max(1, shipped.sizes["point"] // 25)):
+        used = (state[i] == 0) | (state[i] == 1)
+        if not used.any():
+            continue
+        for j, x in enumerate(shipped["level"].values):
+            level = x * shipped["alpha"].values[i]
+            hits = ((peaks[i] > level) & used) | (state[i] == 1)
+            assert shipped["mc_p_exceed"].values[i, j] == pytest.approx(hits.sum() / used.sum(), abs=1e-12)
+
+
+def test_fresh_points_reproduce_the_design_and_the_intensity(fresh):
+    # the intensity was set so that the paper linearization reaches the target peak uplift probability (+-10 %)
+    u = atlas.design(1024, seed=0)
+    for i, r in zip(CHEAP, fresh):
+        g = atlas.groups_of(u[i][None, :])
+        assert r["sl"]["paper"]["peak_p_uplift"] == pytest.approx(g["p_target"][0] * 1.0, rel=0.1)
+        assert len(r["mc"]["peak_abs_theta"]) == 16
+
+
+@pytest.mark.slow
+def test_recomputed_points_match_the_shipped_ones_within_sampling_error(shipped):
+    u = atlas.design(int(shipped.attrs["design_points"]), seed=int(shipped.attrs["design_seed"]))
+    for i in CHEAP:
+        if i not in shipped["point"].values:
+            continue
+        r = atlas_run.evaluate_point(i, u[i], samples=int(shipped.attrs["samples"]),
+                                     seed=int(shipped.attrs["design_seed"]))
+        s = shipped.sel(point=i)
+        se = float(s["mc_peak_var_theta_se"])
+        # the same seeds: equal up to the integrator's rounding; 3 standard errors bound a rebuilt toolchain
+        assert r["mc"]["peak_var_theta"] == pytest.approx(float(s["mc_peak_var_theta"]), abs=3 * se)
+        assert r["sl"]["paper"]["peak_var_theta"] == pytest.approx(
+            float(s["sl_peak_var_theta"].sel(condensation="paper")), rel=1e-6)

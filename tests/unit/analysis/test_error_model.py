@@ -1,0 +1,179 @@
+"""The error model: local linear regression with out-of-family conformal intervals."""
+
+import numpy as np
+import pytest
+
+from screening.analysis import error_model as em
+
+
+def test_local_linear_reproduces_a_linear_function_exactly():
+    # a local linear fit without ridge is exact on a plane whatever the weights
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(200, 3))
+    coef = np.array([0.3, -1.2, 2.0])
+    y = 0.7 + x @ coef
+    xq = rng.normal(size=(40, 3)) * 1.5
+    got = em.local_linear(xq, x, y, h=0.8, ridge=0.0)
+    assert np.allclose(got, 0.7 + xq @ coef, atol=1e-9)
+
+
+def test_local_linear_is_the_weighted_least_squares_intercept():
+    # independent computation: numpy lstsq on sqrt(w)-scaled rows, one query at a time
+    rng = np.random.default_rng(2)
+    x = rng.uniform(-1, 1, size=(80, 2))
+    y = np.sin(3 * x[:, 0]) + x[:, 1] ** 2
+    xq = rng.uniform(-1, 1, size=(5, 2))
+    got = em.local_linear(xq, x, y, h=0.3, ridge=0.0, neighbours=len(x))
+    for i, q in enumerate(xq):
+        w = np.exp(-0.5 * np.sum((x - q) ** 2, axis=1) / 0.09)
+        z = np.column_stack([np.ones(len(x)), x - q]) * np.sqrt(w)[:, None]
+        beta = np.linalg.lstsq(z, y * np.sqrt(w), rcond=None)[0]
+        assert got[i] == pytest.approx(beta[0], rel=1e-8, abs=1e-10)
+
+
+def _synthetic(rng, n_families, per_family):
+    fam = np.repeat(np.arange(n_families), per_family)
+    centre = rng.uniform(-2, 2, size=(n_families, 2))
+    x = centre[fam] + 0.3 * rng.normal(size=(len(fam), 2))
+    scale = 0.05 + 0.1 * (x[:, 0] > 0)                        # heteroscedastic: twice the noise on one side
+    y = 0.2 * x[:, 0] - 0.1 * x[:, 1] ** 2 + scale * rng.normal(size=len(fam))
+    return x, y, fam, scale
+
+
+def test_interval_covers_new_families_at_the_nominal_rate():
+    rng = np.random.default_rng(3)
+    x, y, fam, _ = _synthetic(rng, 40, 20)
+    model = em.fit_error_model(x, y, fam, coverage=0.9)
+    xt, yt, _, scale = _synthetic(rng, 100, 20)              # 2000 points of 100 new families
+    est, lo, hi = em.predict(model, xt)
+    cover = np.mean((yt >= lo) & (yt <= hi))
+    # binomial SE of the coverage over 2000 test points ~0.007, plus the calibration's own spread from 800
+    # training points (~0.011): 3 SE of both
+    assert abs(cover - 0.9) < 0.04
+    # the interval follows the local noise: wider where the noise is twice as large
+    width = hi - lo
+    assert np.median(width[xt[:, 0] > 0.5]) > 1.5 * np.median(width[xt[:, 0] < -0.5])
+
+
+def test_predict_gives_nan_for_missing_features_and_fit_checks_its_inputs():
+    rng = np.random.default_rng(4)
+    x, y, fam, _ = _synthetic(rng, 10, 10)
+    model = em.fit_error_model(x, y, fam)
+    xq = np.array([[0.0, np.nan], [0.1, 0.2]])
+    est, lo, hi = em.predict(model, xq)
+    assert np.isnan(est[0]) and np.isnan(lo[0]) and np.isfinite(est[1]) and lo[1] < est[1] < hi[1]
+    with pytest.raises(ValueError, match="coverage"):
+        em.fit_error_model(x, y, fam, coverage=1.5)
+    with pytest.raises(ValueError, match="groups"):
+        em.fit_error_model(x, y, np.zeros(len(y)))
+
+
+def test_features_transforms():
+    f = em.features(0.5, 0.1, 0.75, 1.0, 0.2, 0.01, 0.1, 0.0, np.array(["white", "kanai_tajimi"]),
+                    np.array([np.nan, 2.0]), 10.0)
+    assert f.shape == (2, len(em.FEATURES))
+    col = dict(zip(em.FEATURES, f.T))
+    assert np.allclose(col["logit_p_uplift"], 0.0)
+    assert np.allclose(col["log_margin_loss"], np.log(0.25))
+    assert np.allclose(col["kanai_tajimi"], [0, 1]) and np.allclose(col["log_omega_g_p"], [0, np.log(2.0)])
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    from importlib import resources
+
+    import xarray as xr
+
+    with resources.as_file(resources.files("screening.data") / "error_atlas.nc") as path:
+        return xr.load_dataset(path)
+
+
+def test_dataset_features_recompute_the_atlas_features(shipped):
+    # two independent paths: the atlas's design groups, and the coordinates of a linearization dataset
+    from screening.analysis import atlas
+    from screening.solvers.linearization import linearize
+
+    g = atlas.groups_of(shipped["u"].values)
+    x_atlas = em.atlas_features(shipped, "paper")
+    done = 0
+    for i in range(shipped.sizes["point"]):
+        if not np.isfinite(shipped["S0"].values[i]) or shipped["sl_status"].values[i, 0] != 0:
+            continue
+        block, foundation, shape, timing = atlas.physical_point(g, i)
+        ds = linearize(block, foundation, atlas.make_excitation(shape, timing, float(shipped["S0"].values[i])),
+                       t_end=timing["t_end"], dt=timing["dt"], condensation="paper")
+        x, dims, shape_out = em.dataset_features(ds)
+        assert dims == () and x.shape == (1, len(em.FEATURES))
+        assert np.allclose(x[0], x_atlas[i], rtol=1e-6, atol=1e-9), (i, x[0] - x_atlas[i])
+        done += 1
+        if done == 3:
+            break
+    assert done == 3
+
+
+def test_with_error_model_labels_a_sweep(shipped):
+    from screening.analysis import atlas
+    from screening.solvers.linearization import linearize
+    from screening.status import Trust
+
+    model = em.shipped_model("paper")
+    assert model.x.shape[0] == int(np.isfinite(em.targets(shipped, "paper")["log_var_ratio"]).sum())
+    with pytest.raises(ValueError, match="condensation"):
+        em.shipped_model("nonsense")
+    g = atlas.groups_of(shipped["u"].values)
+    i = int(np.flatnonzero(np.isfinite(shipped["S0"].values))[0])
+    block, foundation, shape, timing = atlas.physical_point(g, i)
+    S0 = float(shipped["S0"].values[i]) * np.array([0.1, 1.0, 30.0])
+    ds = linearize(block, foundation, atlas.make_excitation(shape, timing, S0), t_end=timing["t_end"],
+                   dt=timing["dt"])
+    out = em.with_error_model(ds, model)
+    x, _, _ = em.dataset_features(ds)
+    est, lo, hi = em.predict(model, x)
+    ok = ds["status"].values == 0
+    assert np.allclose(out["sl_error"].values[ok], np.expm1(est[ok]))
+    assert np.array_equal(out["sl_trust"].values[ok], em.trust_from_interval(lo, hi)[ok])
+    assert np.all(out["sl_trust"].values[~ok] == int(Trust.untrusted))
+    assert np.all(np.isnan(out["sl_error_low"].values[~ok]))
+
+
+def test_trust_from_interval():
+    lo = np.log([0.9, 0.7, 0.3, 1.6, np.nan])
+    hi = np.log([1.2, 1.1, 0.45, 2.0, 1.0])
+    assert list(em.trust_from_interval(lo, hi)) == [0, 1, 2, 2, 2]
+
+
+def test_a_held_out_family_is_never_trusted_beyond_25_percent(shipped):
+    # leave one family out: a point the model (fitted without its family) calls trusted has a measured
+    # |SL / MC - 1| within 25 % up to two Monte Carlo standard errors
+    for cond in shipped["condensation"].values:
+        t = em.targets(shipped, cond)
+        y, se = t["log_var_ratio"], t["log_var_ratio_se"]
+        est, lo, hi = em.grouped_cross_validation(em.atlas_features(shipped, cond), y, shipped["family"].values)
+        trusted = (em.trust_from_interval(lo, hi) == 0) & np.isfinite(y)
+        excess = np.abs(np.expm1(y)) - 2 * se * np.exp(y)
+        assert not np.any(trusted & (excess > em.TRUSTED_ERROR)), (cond, np.flatnonzero(trusted & (excess > 0.25)))
+
+
+def test_uplift_regimes_calibrate_their_own_factor():
+    # two regimes with noise 0.05 and 0.5: each regime's interval covers its own points at ~90 %
+    rng = np.random.default_rng(5)
+    n_fam, per = 60, 10
+    fam = np.repeat(np.arange(n_fam), per)
+    p = np.where(rng.uniform(size=n_fam) < 0.5, 0.05, 0.9)[fam]
+    x = em.features(p, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(fam), "white"), np.nan, 10.0)
+    x = x + 0.01 * rng.normal(size=x.shape)
+    noise = np.where(p < 0.2, 0.05, 0.5)
+    model = em.fit_error_model(x, noise * rng.normal(size=len(fam)), fam)
+    assert list(em.uplift_regime(x[:1])) in ([0], [2])
+    assert model.q.shape == (len(em.P_REGIMES) + 1,)
+    ft = np.repeat(np.arange(200), 10)
+    pt = np.where(rng.uniform(size=200) < 0.5, 0.05, 0.9)[ft]
+    xt = em.features(pt, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(ft), "white"), np.nan, 10.0)
+    xt = xt + 0.01 * rng.normal(size=xt.shape)
+    yt = np.where(pt < 0.2, 0.05, 0.5) * rng.normal(size=len(ft))
+    est, lo, hi = em.predict(model, xt)
+    for low in (True, False):
+        sel = (pt < 0.2) == low
+        # ~1000 test points per regime (binomial SE 0.01) and ~300 calibration points (SE ~0.017): 3 SE of both
+        assert abs(np.mean((yt[sel] >= lo[sel]) & (yt[sel] <= hi[sel])) - 0.9) < 0.06
+    assert np.median((hi - lo)[pt > 0.5]) > 5 * np.median((hi - lo)[pt < 0.2])
