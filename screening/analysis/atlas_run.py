@@ -21,6 +21,10 @@ import numpy as np
 
 from screening.analysis import atlas
 
+__all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
+           "point_intensity", "last_stable_intensity", "linearization_row", "monte_carlo_row", "evaluate_point",
+           "assemble", "mc_exceedance", "VARIABLES"]
+
 #: Exceedance levels as fractions of the slenderness angle [1].
 LEVELS = (0.05, 0.1, 0.2, 0.5, 1.0)
 #: Condensations evaluated at every point.
@@ -47,7 +51,7 @@ def reference_model(block, foundation, timing, coupled_radians=COUPLED_RADIANS):
     if vertical_frequency(block, foundation) * timing["t_end"] <= coupled_radians:
         return "coupled"
     ratio, _ = stiff_bed.validity(block, foundation)
-    return "stiff_bed" if ratio <= stiff_bed.VALIDITY_LIMIT else "coupled"
+    return "stiff_bed" if ratio <= stiff_bed.validity_limit() else "coupled"
 
 
 def point_intensity(block, foundation, shape, timing, p_target, factor):

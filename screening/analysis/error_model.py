@@ -34,6 +34,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+__all__ = ["FEATURES", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
+           "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets", "ErrorModel",
+           "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
+           "TRUSTED_ERROR", "UNTRUSTED_ERROR", "trust_from_interval", "ATLAS_FILE", "shipped_model",
+           "dataset_features", "with_error_model"]
+
 #: The features, in order: the linearization's indicators and the point's dimensionless inputs.
 FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",
             "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau")
