@@ -200,11 +200,14 @@ def assert_cdo_form_of(result, cdo_file):
 @contextlib.contextmanager
 def in_process_client(n_workers=2):
     """A dask client on an in-process cluster (threads, no dashboard): fast, and monkeypatches
-    reach the tasks."""
+    reach the tasks. Never made dask's default, as the package's own clients are not: with
+    distributed 2025.10 a closed default client stays the default and a later xarray write fails
+    ("IOLoop is closed")."""
     from distributed import Client, LocalCluster
 
     with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=False, dashboard_address=None,
-                      scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, Client(cluster) as client:
+                      scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, \
+            Client(cluster, set_as_default=False) as client:
         yield client
 
 

@@ -782,7 +782,8 @@ def test_worker_process_killed_mid_sweep_the_batch_is_retried(tmp_path):
     study = parse_study(BIG)
     killed = {}
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                      silence_logs=50, scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, Client(cluster) as c:
+                      silence_logs=50, scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, \
+            Client(cluster, set_as_default=False) as c:
         def kill_a_busy_worker(batch):
             if killed:
                 return
@@ -836,7 +837,7 @@ def test_real_write_failure_file_size_limit(tmp_path, limit, kept, reason):
     reference = tmp_path / "reference.nc"
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
                       scheduler_kwargs=NO_HTTP_PORT_8787) as cluster, \
-            Client(cluster) as client:
+            Client(cluster, set_as_default=False) as client:
         run_sweep(parse_study(BIG, name="big", source=str(study_file)), reference, client=client, batch_size=10,
                   progress=False, log=quiet)
     compare_files(reference, out)
