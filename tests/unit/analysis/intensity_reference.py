@@ -52,14 +52,3 @@ def sample_all_measures(excitation, t_end, cutoff, n_samples, period, seed=0, ch
         out["rms_acceleration"].append(np.sqrt(energy / t_end))
         out["arias_intensity"].append(math.pi / (2 * G) * energy)
     return {k: np.concatenate(v) for k, v in out.items()}
-
-
-def median_standard_error(x):
-    """Distribution-free standard error of the sample median of ``x``: half the width of the
-    95 % order-statistic interval ``x_(n/2 -+ 1.96 sqrt(n)/2)`` over 1.96 (binomial count below the
-    median; ~ 1.2533 sigma / sqrt(n) for normal data)."""
-    x = np.sort(np.asarray(x, dtype=float))
-    n = x.size
-    half = 1.96 * math.sqrt(n) / 2.0
-    lo, hi = int(math.floor(n / 2 - half)), int(math.ceil(n / 2 + half))
-    return (x[min(hi, n - 1)] - x[max(lo, 0)]) / (2.0 * 1.96)

@@ -22,7 +22,7 @@ from screening.analysis.fragility import oscillator_bandwidth
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
 
 sys.path.insert(0, str(Path(__file__).parent))
-from intensity_reference import median_standard_error, sample_all_measures, sample_measures  # noqa: E402
+from intensity_reference import sample_all_measures, sample_measures  # noqa: E402
 
 T_END, CUTOFF, N = 20.0, 100.0, 1000
 CP = excitations.build("clough_penzien", 1e-3, {"omega_g": 15.6, "zeta_g": 0.6, "omega_f": 1.56, "zeta_f": 0.6},
@@ -74,7 +74,7 @@ def samples():
 
 
 def _assert_within(pred, sample, model_error=0.0):
-    med, se = float(np.median(sample)), median_standard_error(sample)
+    med, se = float(np.median(sample)), I.median_standard_error(sample)
     assert se < 0.015 * med
     assert abs(pred - med) <= 3 * se + model_error * med, (pred, med, se, (pred / med - 1))
 
