@@ -1,10 +1,9 @@
-"""PGV and AvgSA: the random-vibration medians against independent computations and synthesised records.
-
-Independent references written here: the velocity variance of modulated white noise as a time-domain
-convolution integral (``2 pi S0 int h^2 q^2 ds``, impulse response by scipy.signal), the high-passed
-velocity of a record by an ODE solution (scipy RK45) and the closed-form steady state, and Sa by a
-frequency-domain oscillator (FFT).  The slow tests draw 1,000 records per point exactly as the Monte
-Carlo does; their tolerances are stated in the test docstrings.
+"""PGV and AvgSA of the inputs: the simulated PGV median (reproducible, proportional to sqrt(S0), against
+1,000 records of another seed), AvgSA as the geometric mean of Sa medians, both in the datasets and
+the fragility over them.  The independent references of the velocity moments are in
+test_intensity_rvt.py, those of the record measures in test_intensity_records.py.  The slow tests
+draw 1,000 records per point exactly as the Monte Carlo does; their tolerances are stated in the test
+docstrings.
 """
 
 import math
@@ -15,110 +14,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from scipy import signal
-from scipy.integrate import solve_ivp
 
 import screening
 from screening.analysis import intensity as I
 from screening.analysis.im_fragility import fragility_over_im, write_nrml
 from screening.cli import main
 from screening.model import Block, Foundation
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from screening.records import Record
+from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
 
 sys.path.insert(0, str(Path(__file__).parent))
 from intensity_reference import sample_all_measures  # noqa: E402
 
-WL = I.OMEGA_LOW
 T_END, CUTOFF, N = 20.0, 100.0, 1000
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
-
-
-def test_white_noise_velocity_moment_closed_form():
-    """mu_0 = pi S0 / (sqrt(2) omega_low) without band limit; the band limit removes ~2 S0 / omega_c."""
-    mu0 = I.velocity_spectral_moments(WhiteNoise(2.0), 1e4)[0]
-    assert mu0 == pytest.approx(math.pi * 2.0 / (math.sqrt(2.0) * WL) - 2 * 2.0 / 1e4, rel=1e-6)
-    assert I.highpass_gain(WL) == pytest.approx(0.5) and I.highpass_gain(0.0) == 0.0
-
-
-def test_velocity_variance_against_a_time_domain_convolution():
-    """var v(t) = 2 pi S0 int_0^t h(t-s)^2 q(s)^2 ds for white noise (h: impulse response of
-    s / (s^2 + sqrt(2) wl s + wl^2)); agreement 1e-3 (trapezoid on 2,000 points per second)."""
-    exc = WhiteNoise(1.0, Envelope(4.0, 2.0))
-    t, var_v, _, cov = I.velocity_covariance(exc, 12.0, 1e4)
-    tau = np.linspace(0.0, 12.0, 24001)
-    _, h = signal.impulse(signal.lti([1.0, 0.0], [1.0, math.sqrt(2) * WL, WL * WL]), T=tau)
-    for tk in (1.0, 3.0, 6.0, 12.0):
-        s = tau[tau <= tk]
-        ref = 2 * math.pi * np.trapezoid(h[:s.size][::-1] ** 2 * exc.envelope(s) ** 2, s)
-        assert np.interp(tk, t, var_v) == pytest.approx(ref, rel=1e-3)
-    # cov(v, v') = (1/2) d var_v / dt
-    np.testing.assert_allclose(cov[1:-1], 0.5 * np.gradient(var_v, t)[1:-1], rtol=2e-2,
-                               atol=2e-3 * np.max(np.abs(cov)))
-
-
-def test_velocity_covariance_reaches_the_stationary_moments():
-    """Constant envelope, 40 s >> 1/omega_low: var v -> mu_0, var v' -> mu_2 (quad), cov -> 0."""
-    exc = KanaiTajimi(1.0, 15.6, 0.6, ConstantEnvelope())
-    mu0, _, mu2 = I.velocity_spectral_moments(exc, CUTOFF)
-    t, var_v, var_a, cov = I.velocity_covariance(exc, 40.0, CUTOFF)
-    assert var_v[-1] == pytest.approx(mu0, rel=1e-4)
-    assert var_a[-1] == pytest.approx(mu2, rel=1e-4)
-    assert abs(cov[-1]) < 1e-4 * math.sqrt(mu0 * mu2)
-    again = I.velocity_covariance(exc, 40.0, CUTOFF)                 # the cached low band is not altered
-    np.testing.assert_array_equal(again[1], var_v)
-    assert I.velocity_covariance(exc, 40.0, 2 * CUTOFF)[1][-1] > var_v[-1]
-
-
-@pytest.mark.parametrize("freq", [0.1, 1.0])
-def test_record_velocity_against_an_ode_and_the_steady_state(freq):
-    """Ramped sine at the corner (0.1 Hz) and above it: the filtered, integrated record against
-    x'' + sqrt(2) wl x' + wl^2 x = a, v = x' (RK45, rtol 1e-10) within 2e-3 (bilinear transform and
-    trapezoid at dt = 5 ms), and its late amplitude against A w / sqrt(w^4 + wl^4)."""
-    w, amp, dt = 2 * math.pi * freq, 3.0, 0.005
-    t_end = 120.0 if freq < 0.5 else 40.0
-    t = np.arange(0.0, t_end, dt)
-
-    def acc(s):
-        return amp * np.sin(w * s) * np.minimum(s / (0.25 * t_end), 1.0) ** 2
-
-    ref = solve_ivp(lambda s, y: [y[1], acc(s) - math.sqrt(2) * WL * y[1] - WL * WL * y[0]], (0.0, t[-1]),
-                    [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=0.02).y[1]
-    v = I.record_velocity(acc(t), dt)[0]
-    assert np.max(np.abs(v - ref)) < 2e-3 * np.max(np.abs(ref))
-    late = t > 0.75 * t_end
-    assert np.max(np.abs(ref[late])) == pytest.approx(amp * w / math.sqrt(w**4 + WL**4), rel=2e-3)
-    assert I.record_measures(Record(acc(t), dt))["pgv"] == pytest.approx(np.max(np.abs(v)))
-
-
-def _fft_oscillator_peak(a, dt, period, zeta=0.05):
-    """max |u| of u'' + 2 zeta wn u' + wn^2 u = -a by the frequency response (zero-padded FFT)."""
-    n = 1 << int(math.ceil(math.log2(4 * a.size)))
-    w = 2 * math.pi * np.fft.rfftfreq(n, dt)
-    wn = 2 * math.pi / period
-    u = np.fft.irfft(-np.fft.rfft(a, n) / (wn * wn - w * w + 2j * zeta * wn * w), n)[:a.size]
-    return np.max(np.abs(u))
-
-
-@pytest.mark.parametrize("period", [0.5, 0.8])
-def test_sa_and_avgsa_against_a_frequency_domain_oscillator(period):
-    """Sine at 2 Hz (resonant for T = 0.5 s, off resonance for 0.8 s) ramped up and down over 20 s
-    (sin^2 ramps, no transient to speak of), then 10 s of rest: Sa and AvgSA of record_measures against
-    the FFT oscillator (1e-3), and the steady-state amplitude A / sqrt((wn^2 - w^2)^2 + (2 zeta wn w)^2)
-    against the closed form (2e-3)."""
-    dt, wf, amp = 0.002, 2 * math.pi * 2.0, 1.5
-    t = np.arange(0.0, 80.0, dt)
-    a = amp * np.sin(wf * t) * np.sin(0.5 * np.pi * np.clip(np.minimum(t, 70.0 - t) / 20.0, 0.0, 1.0)) ** 2
-    m = I.record_measures(Record(a, dt), period=period)
-    wn = 2 * math.pi / period
-    assert m["sa"] == pytest.approx(wn * wn * _fft_oscillator_peak(a, dt, period), rel=1e-3)
-    ref = [(2 * math.pi / p) ** 2 * _fft_oscillator_peak(a, dt, p) for p in I.avgsa_periods(period)]
-    assert m["avgsa"] == pytest.approx(math.exp(np.mean(np.log(ref))), rel=1e-3)
-    steady = amp / math.sqrt((wn * wn - wf * wf) ** 2 + (2 * 0.05 * wn * wf) ** 2)
-    assert m["sa"] == pytest.approx(wn * wn * steady, rel=2e-3)
-    periods = I.avgsa_periods(period)
-    assert periods.size == 10 and periods[0] == pytest.approx(0.2 * period) and periods[-1] == pytest.approx(
-        1.5 * period)
 
 
 def test_avgsa_median_is_the_geometric_mean_of_sa_medians():
@@ -168,36 +76,6 @@ def test_fragility_over_pgv_and_avgsa(result, tmp_path, capsys):
     capsys.readouterr()
     assert main(["fragility", str(path), "--threshold", "0.1", "--im", "avgsa"]) == 2
     assert "--period" in capsys.readouterr().err
-
-
-def test_median_standard_error_against_the_normal_closed_form_and_the_scatter_of_medians():
-    """For normal data the order-statistic standard error tends to sqrt(pi/2) sigma / sqrt(n); checked on
-    one sample of 20,000 (its own sampling error ~3 %: tolerance 10 %) and against the standard
-    deviation of the medians of 400 independent samples of 1,000 (that spread is itself known to
-    ~1 / sqrt(2 x 400) = 3.5 %: tolerance 12 %)."""
-    rng = np.random.default_rng(7)
-    assert I.median_standard_error(rng.normal(0.0, 2.0, 20_000)) == pytest.approx(
-        math.sqrt(math.pi / 2) * 2.0 / math.sqrt(20_000), rel=0.10)
-    draws = rng.gumbel(1.0, 0.3, (400, 1000))                 # skewed, like peaks
-    spread = np.std(np.median(draws, axis=1), ddof=1)
-    assert np.mean([I.median_standard_error(d) for d in draws]) == pytest.approx(spread, rel=0.12)
-
-
-def test_synthesised_velocity_variance_against_the_evolutionary_spectrum():
-    """The variance over 2,000 synthesised records of the high-passed velocity at 3, 6 and 12 s (sample
-    variance: relative standard error sqrt(2 / n) = 3.2 %) against the exact non-stationary variance of
-    velocity_covariance (evolutionary spectrum, closed form): within 3 standard errors.  The records
-    of simulated_pgv are therefore the velocity whose variance the closed form gives."""
-    from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
-    exc = KanaiTajimi(1.0, 15.6, 0.6, Envelope(4.0, 2.0))
-    t_end, cutoff, n = 12.0, 60.0, 2000
-    plan = spectral_plan(exc, t_end, cutoff)
-    acc, _ = ground_acceleration_samples(exc, plan, 3, np.arange(n))
-    v = I.record_velocity(acc, plan.dt)
-    t, var_v, _, _ = I.velocity_covariance(exc, t_end, plan.cutoff)
-    for tk in (3.0, 6.0, 12.0):
-        ref = np.interp(tk, t, var_v)
-        assert np.var(v[:, int(round(tk / plan.dt))]) == pytest.approx(ref, rel=3 * math.sqrt(2 / n))
 
 
 def test_simulated_pgv_is_reproducible_cached_and_proportional_to_sqrt_s0():
