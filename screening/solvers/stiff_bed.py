@@ -47,7 +47,9 @@ Numerics.  Full contact (``|theta| <= theta_ul``) is the linear oscillator
 stiff small-rotation frequency never sets the step.  Everywhere else (uplift, and intervals that
 contain an output instant or leave full contact) the adaptive Dormand–Prince 5(4) pair of the
 other models integrates the nonlinear equation; steps in full contact land on grid points to hand
-back to the exact propagator.  A sample is overturned when ``|theta| > atan(b/h)``, diverged when
+back to the exact propagator.  A step that crosses zero after the block has rocked and would end in
+uplift on the other side is shortened to the crossing, so the transfer's velocity ratio is applied
+in full contact (``StiffBedModel(locate=False)``: at the end of the step that crossed zero).  A sample is overturned when ``|theta| > atan(b/h)``, diverged when
 its state stops being finite or its rate exceeds ``1000 sqrt(g/h)``, when it passes the capacity
 angle of a softening bed, or when the step budget runs out.
 
