@@ -36,6 +36,7 @@ import numba
 import numpy as np
 from scipy import special
 
+from screening.condensation.api import equivalent_coefficients_from_moments
 from screening.kernels import dopri
 from screening.kernels.dopri import (
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
@@ -47,7 +48,7 @@ __all__ = ["uplift_occupancy", "SCALE_FLOOR", "OK", "K_EQ_NEGATIVE", "BEYOND_SLE
            "PEAK_HALVINGS", "envelope_rates", "envelope_state", "initial_gain", "stage_gains", "p_uplift",
            "first_step", "trial_step", "judge_step", "end_of_step", "peak_in_step", "store_outputs",
            "store_dense_outputs", "SUMMARIES", "solve_point_white", "packed_size", "augmented_system",
-           "lyapunov_rhs", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
+           "lyapunov_rhs", "moment_equations", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
            "solve_point_two_states"]
 
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
@@ -386,6 +387,68 @@ def lyapunov_rhs(P, A, b, S0):
     """Right-hand side of the moment equations ``dP/dt = A P + P A^T + 2 pi S0 b b^T`` (eqs. 45, 51;
     numpy reference of :func:`augmented_rhs`).  ``P`` [n x n] covariance, ``S0`` [m2 s-3]."""
     return A @ P + P @ A.T + 2.0 * math.pi * S0 * np.outer(b, b)
+
+
+def moment_equations(t, P, block, foundation, excitation, condensation="paper"):
+    """Right-hand side ``dP/dt`` of the linearized moment equations at time ``t`` (numpy reference).
+
+    The whole nonlinear system that the compiled step loops integrate, written as matrix products:
+    the equivalent coefficients at the current moments, the augmented drift matrix and noise vector
+    at the current input gain, and the Lyapunov right-hand side.
+
+    Parameters
+    ----------
+    t : float
+        Time [s] (the envelope ``q(t)`` scales the input).
+    P : numpy.ndarray
+        Covariance [n x n] of the state ``(theta, theta', x)`` ([rad2], [rad2 s-1], [rad2 s-2] for
+        the rocking entries; ``x`` the ``n_f`` filter states of the excitation, ``n = n_f + 2``).
+    block : screening.model.Block
+        The rigid block, scalar fields (``m`` [kg], ``b``, ``h`` [m], ``m_sdof`` [kg m2]).
+    foundation : screening.model.Foundation
+        The bed, scalar fields.
+    excitation : screening.excitations.Excitation
+        The input, scalar fields (``S0`` [m2 s-3], its envelope and its shaping filter).
+    condensation : str or screening.condensation.Condensation, optional
+        The condensation whose equivalent coefficients close the equations (default ``"paper"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``dP/dt`` [n x n], symmetric, in the units of ``P`` per second.
+
+    Notes
+    -----
+    ``dP/dt = A P + P A^T + 2 pi S0 b b^T`` with
+    ``A = [[0, 1, 0], [-k_eq/M, -c_eq/M, alpha C_f], [0, 0, A_f]]``, ``b = [0, alpha D_f, B_f]``,
+    ``alpha = m h q(t) / M`` and ``(c_eq, k_eq)`` the condensation's equivalent coefficients at
+    ``(P[0, 0], P[0, 1])`` (eq. (31) in [1]): eq. (45) in [1] for white noise, eq. (51) for the
+    Kanai-Tajimi filter, any filter :func:`augmented_system` accepts.  The compiled loops
+    :func:`solve_point_white` and :func:`solve_point_filtered` integrate the same equations on the
+    packed upper triangle.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.model import Block, Foundation
+    >>> from screening.excitations import WhiteNoise
+    >>> P = np.diag([1e-8, 1e-4])
+    >>> dP = moment_equations(0.0, P, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                       WhiteNoise(1e-4))
+    >>> bool(np.allclose(dP, dP.T)), dP.shape
+    (True, (2, 2))
+    """
+    P = np.asarray(P, dtype=float)
+    c_eq, k_eq = equivalent_coefficients_from_moments(P[0, 0], P[0, 1], block, foundation, condensation)
+    alpha = block.m * block.h / block.m_sdof * excitation.envelope(t)
+    A, b = augmented_system(float(k_eq), float(c_eq), float(block.m_sdof), float(alpha), excitation.filter())
+    return lyapunov_rhs(P, A, b, excitation.S0)
 
 
 @numba.njit(cache=True, inline="always")
