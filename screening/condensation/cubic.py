@@ -108,7 +108,8 @@ import numpy as np
 
 from screening.condensation.base import Condensation, SdofKernel
 from screening.physics import contact
-from screening.physics.contact import linear_indentation, rising_root
+from screening.physics.contact import (UPLIFT_BEARING_LIMIT, bearing_load, exact_uplift_angle, linear_indentation,
+                                       rising_root)
 from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
@@ -117,16 +118,9 @@ __all__ = ["SOFTENING_LIMIT", "bearing_load", "check_bearing", "rest_indentation
            "restoring_moment", "damping_at_rest", "stiffness_at_rest", "SDOF_RECORD", "sdof_record",
            "quasi_static_indentation_jit", "damping_stiffness_jit", "CubicCondensation", "CUBIC"]
 
-#: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
-SOFTENING_LIMIT = 2.0 / 27.0
-
-
-
-def bearing_load(block, foundation):
-    """``-eps z_lin^2`` [1]: the bed carries the block through uplift onset while this stays
-    below :data:`SOFTENING_LIMIT` (module docstring); broadcast over array parameters."""
-    eps = np.asarray(foundation.eps, dtype=float)
-    return -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
+#: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists
+#: (:data:`screening.physics.contact.UPLIFT_BEARING_LIMIT`).
+SOFTENING_LIMIT = UPLIFT_BEARING_LIMIT
 
 
 def check_bearing(block, foundation):
@@ -158,8 +152,7 @@ def uplift_threshold(block, foundation):
     (eq. 19 generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
     """
     check_bearing(block, foundation)
-    y = rising_root(2.0 * np.asarray(foundation.eps, dtype=float), 1.0, linear_indentation(block, foundation))
-    return (y / block.b)[()]
+    return exact_uplift_angle(block, foundation)
 
 
 def capacity_angle(block, foundation):
