@@ -19,6 +19,8 @@ import pytest
 COVERED = [
     "screening.beds",
     "screening.condensation.api",
+    "screening.condensation.cubic",
+    "screening.condensation.paper",
     "screening.excitations.base",
     "screening.excitations.clough_penzien",
     "screening.excitations.kanai_tajimi",
