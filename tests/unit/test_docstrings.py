@@ -21,6 +21,8 @@ COVERED = [
     "screening.condensation.api",
     "screening.condensation.cubic",
     "screening.condensation.paper",
+    "screening.condensation.uplift_integrals",
+    "screening.condensation.virtual_work",
     "screening.excitations.base",
     "screening.excitations.clough_penzien",
     "screening.excitations.kanai_tajimi",
