@@ -26,6 +26,7 @@ COVERED = [
     "screening.excitations.base",
     "screening.excitations.clough_penzien",
     "screening.excitations.kanai_tajimi",
+    "screening.kernels.dopri",
     "screening.physics.contact",
     "screening.solvers.mc_models",
     "screening.solvers.moments",
