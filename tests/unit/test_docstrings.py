@@ -27,6 +27,7 @@ COVERED = [
     "screening.excitations.clough_penzien",
     "screening.excitations.kanai_tajimi",
     "screening.kernels.dopri",
+    "screening.kernels.interpolation",
     "screening.physics.contact",
     "screening.solvers.mc_models",
     "screening.solvers.moments",
