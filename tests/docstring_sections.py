@@ -95,7 +95,11 @@ def package_modules():
     import screening
 
     names = ["screening"] + [m.name for m in pkgutil.walk_packages(screening.__path__, "screening.")]
-    return [importlib.import_module(name) for name in names]
+    modules = {}
+    for name in names:                       # a former home is the moved module itself: counted once
+        module = importlib.import_module(name)
+        modules.setdefault(module.__name__, module)
+    return list(modules.values())
 
 
 def coverage():
