@@ -62,10 +62,45 @@ def _Phi(x):
 
 
 def upcrossing_rate(var_theta, var_theta_dot, cov_theta_theta_dot, level):
-    """Mean rate [1/s] of outward crossings of ``|theta| = level`` (Rice, both barriers).
+    """Mean rate [s-1] of outward crossings of ``|theta| = level`` (Rice, both barriers).
 
-    ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1],
-    ``level`` [rad] > 0; arrays broadcast.  Zero where ``var_theta = 0``.
+    Parameters
+    ----------
+    var_theta : array_like
+        Variance of the rotation [rad2].
+    var_theta_dot : array_like
+        Variance of the rotation rate [rad2 s-2].
+    cov_theta_theta_dot : array_like
+        Their covariance [rad2 s-1].
+    level : array_like
+        Barrier ``a`` [rad] > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``nu`` [s-1], broadcast over the arguments; zero where ``var_theta = 0``.
+
+    Notes
+    -----
+    Rice's formula [2] for a zero-mean Gaussian ``(theta, theta')`` with the moments the linearization
+    carries (eq. (44) in [1]): ``nu = 2 p(a) E[(theta')^+ | theta = a]`` with ``p(a)`` the Gaussian density of
+    ``theta`` at ``a`` and the conditional velocity of mean ``a cov / var_theta`` and variance
+    ``var_theta_dot - cov^2 / var_theta``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nu = upcrossing_rate(1e-6, 1e-2, 0.0, 1e-3)
+    >>> bool(np.isclose(nu, np.sqrt(1e-2 / 1e-6) / np.pi * np.exp(-0.5)))
+    True
     """
     v = np.asarray(var_theta, dtype=float)
     vd = np.asarray(var_theta_dot, dtype=float)
@@ -84,7 +119,36 @@ def upcrossing_rate(var_theta, var_theta_dot, cov_theta_theta_dot, level):
 
 
 def oscillator_bandwidth(zeta):
-    """Spectral bandwidth ``delta`` [1] of a white-noise driven linear oscillator of damping ratio ``zeta`` (0 < zeta < 1)."""
+    """Spectral bandwidth ``delta`` [1] of a white-noise driven linear oscillator.
+
+    Parameters
+    ----------
+    zeta : array_like
+        Damping ratio [1], 0 < zeta < 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``delta = sqrt(1 - lambda_1^2 / (lambda_0 lambda_2))`` [1] of the oscillator's response spectrum.
+
+    Notes
+    -----
+    In closed form ``1 - delta^2 = (1 - (2/pi) atan(zeta / sqrt(1 - zeta^2)))^2 / (1 - zeta^2)`` [2]; the
+    bandwidth of the linearized rocking response (eq. (26) in [1]) enters :func:`vanmarcke_factor`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42 (1975) 215-220.
+
+    Examples
+    --------
+    >>> f"{float(oscillator_bandwidth(0.05)):.4f}"
+    '0.2456'
+    """
     z = np.clip(np.asarray(zeta, dtype=float), 1e-12, 1 - 1e-12)
     q = np.sqrt(1.0 - z * z)
     ratio = (1.0 - 2.0 / np.pi * np.arctan(z / q)) ** 2 / (1.0 - z * z)
@@ -92,7 +156,44 @@ def oscillator_bandwidth(zeta):
 
 
 def vanmarcke_factor(var_theta, level, bandwidth):
-    """Vanmarcke's clumping correction [1] to the double-barrier Poisson rate."""
+    """Vanmarcke's clumping correction [3] to the double-barrier Poisson rate.
+
+    Parameters
+    ----------
+    var_theta : array_like
+        Variance of the rotation [rad2].
+    level : array_like
+        Barrier ``a`` [rad] > 0.
+    bandwidth : array_like
+        Spectral bandwidth ``delta`` [1] of the response (:func:`oscillator_bandwidth`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(1 - exp(-sqrt(pi/2) delta^1.2 r)) / (1 - exp(-r^2 / 2))`` [1], ``r = a / sigma_theta``; zero where
+        ``var_theta = 0``.
+
+    Notes
+    -----
+    The factor of [3] that corrects the Poisson rate of :func:`upcrossing_rate` for crossings in clumps of
+    a narrow-band response (the linearized rocking response of eq. (26) in [1]); ``delta^1.2`` is
+    Vanmarcke's empirical exponent.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+    .. [3] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42 (1975) 215-220.
+
+    Examples
+    --------
+    >>> f"{float(vanmarcke_factor(1e-6, 2e-3, 0.2)):.4f}"
+    '0.3523'
+    """
     v = np.asarray(var_theta, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         r = np.asarray(level, dtype=float) / np.sqrt(np.where(v > 0, v, np.nan))
@@ -121,9 +222,39 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
 
 
 def mcs_exceedance_probability(peak_abs_theta, level, overturned=None):
-    """Fraction of Monte Carlo samples whose peak ``|theta|`` [rad] exceeds ``level`` [rad].
+    """Fraction of Monte Carlo samples whose peak ``|theta|`` exceeds a level, with its standard error.
 
-    Overturned samples count as exceedances.  Returns ``(p, standard_error)``.
+    Parameters
+    ----------
+    peak_abs_theta : array_like
+        Per-sample peak ``|theta|`` [rad].
+    level : float
+        Rotation [rad].
+    overturned : array_like, optional
+        Per-sample overturning flags (bool); overturned samples count as exceedances.
+
+    Returns
+    -------
+    p : float
+        The fraction [1].
+    standard_error : float
+        Its binomial standard error ``sqrt(p (1 - p) / n)`` [1].
+
+    Notes
+    -----
+    The Monte Carlo reference of :func:`exceedance_probability_from_moments`, from the samples of the
+    equations of motion (eqs. (7)-(8) or (22) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> mcs_exceedance_probability([1e-3, 3e-3, 5e-3, 0.0], 2e-3, overturned=[False, False, False, True])
+    (0.75, 0.21650635094610965)
     """
     peaks = np.asarray(peak_abs_theta, dtype=float)
     hit = peaks > level
@@ -135,13 +266,84 @@ def mcs_exceedance_probability(peak_abs_theta, level, overturned=None):
 
 
 def lognormal_fragility(intensity, median, beta):
-    """``Phi(ln(intensity / median) / beta)`` [1]."""
+    """Lognormal fragility curve ``Phi(ln(intensity / median) / beta)`` [1].
+
+    Parameters
+    ----------
+    intensity : array_like
+        Intensity measure [its units] > 0.
+    median : float or array_like
+        Median capacity [units of the intensity].
+    beta : float or array_like
+        Logarithmic standard deviation (dispersion) [1].
+
+    Returns
+    -------
+    numpy.ndarray
+        Probability of exceedance [1].
+
+    Notes
+    -----
+    The standard form of [2], eq. (1); fitted to the exceedance probabilities of the linearization
+    (eqs. (44)-(45) of [1] through :func:`exceedance_probability_from_moments`) or of Monte Carlo.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> [f"{p:.4f}" for p in lognormal_fragility([0.5, 1.0, 2.0], 1.0, 0.4)]
+    ['0.0416', '0.5000', '0.9584']
+    """
     return _Phi(np.log(np.asarray(intensity, dtype=float) / median) / beta)
 
 
 def binomial_nll(log_median, log_beta, intensity, n_exceed, n_total):
-    """Negative log-likelihood [1] of ``n_exceed`` exceedances in ``n_total`` trials at each ``intensity``
-    under the lognormal fragility with ``median = exp(log_median)``, ``beta = exp(log_beta)``."""
+    """Negative log-likelihood [1] of stripes of exceedances under a lognormal fragility.
+
+    Parameters
+    ----------
+    log_median : float
+        ``ln median`` [ln of the intensity's units].
+    log_beta : float
+        ``ln beta`` [1].
+    intensity : array_like
+        Intensity of each stripe [its units] > 0.
+    n_exceed : array_like
+        Exceedances at each intensity [1].
+    n_total : array_like
+        Trials at each intensity [1].
+
+    Returns
+    -------
+    float
+        ``-sum(z ln p + (n - z) ln(1 - p))`` [1] with ``p`` of :func:`lognormal_fragility` (the binomial
+        coefficients left out).
+
+    Notes
+    -----
+    The likelihood of [2], eq. (11), on the log scale of its parameters, minimised by
+    :func:`fit_binomial_fragility`; the exceedances come from the samples of the equations of motion of [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f"{binomial_nll(0.0, -0.9163, np.array([0.5, 1.0, 2.0]), np.array([1, 5, 9]), 10):.4f}"
+    '14.0568'
+    """
     p = np.clip(lognormal_fragility(intensity, np.exp(log_median), np.exp(log_beta)), 1e-300, 1.0)
     q = np.clip(1.0 - lognormal_fragility(intensity, np.exp(log_median), np.exp(log_beta)), 1e-300, 1.0)
     return -float(np.sum(n_exceed * np.log(p) + (n_total - n_exceed) * np.log(q)))
@@ -164,15 +366,24 @@ def fit_binomial_fragility(intensity, n_exceed, n_total):
     Notes
     -----
     The likelihood is ``prod_j C(n_j, z_j) p_j^z_j (1 - p_j)^(n_j - z_j)``, ``p_j = Phi(ln(x_j / median)
-    / beta)`` (Baker 2015, eq. 11), maximised over ``(ln median, ln beta)`` by Nelder-Mead.  The standard
+    / beta)`` ([2], eq. (11)), maximised over ``(ln median, ln beta)`` by Nelder-Mead.  The standard
     errors come from the observed information: the inverse of the Hessian of the negative
     log-likelihood at the optimum (central differences in ``(ln median, ln beta)``), carried to
     ``median`` and ``beta`` by the delta method (``se(median) = median se(ln median)``).
 
     References
     ----------
-    Baker, J. W. (2015) Efficient analytical fragility function fitting using dynamic structural
-    analysis, Earthquake Spectra 31(1), 579-599.
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> fit = fit_binomial_fragility([0.5, 1.0, 2.0], [1, 5, 9], 10)
+    >>> f"{fit['median']:.3f} {fit['beta']:.3f} {fit['n_trials']}"
+    '1.000 0.541 30'
     """
     x = np.asarray(intensity, dtype=float).ravel()
     k = np.asarray(n_exceed, dtype=float).ravel()
@@ -208,9 +419,39 @@ def fit_binomial_fragility(intensity, n_exceed, n_total):
 
 
 def total_dispersion(beta, modelling):
-    """``sqrt(beta^2 + beta_m^2)`` [1]: a fitted (record-to-record) dispersion ``beta`` combined with a
-    modelling dispersion ``beta_m`` by the square root of the sum of squares (FEMA P-58; the two sources
-    taken independent and lognormal)."""
+    """A fitted dispersion combined with a modelling dispersion, ``sqrt(beta^2 + beta_m^2)`` [1].
+
+    Parameters
+    ----------
+    beta : float, array_like or xarray.DataArray
+        Fitted (record-to-record) dispersion [1].
+    modelling : float
+        Modelling dispersion ``beta_m`` [1].
+
+    Returns
+    -------
+    numpy.ndarray or xarray.DataArray
+        The total dispersion [1], like ``beta``.
+
+    Notes
+    -----
+    The square root of the sum of squares of FEMA P-58 [2]: the two sources taken independent and
+    lognormal.  The modelling dispersion stands for the linearization's error against the equations of
+    motion of [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] FEMA P-58-1, Seismic Performance Assessment of Buildings, Volume 1 - Methodology, Federal
+       Emergency Management Agency (2012).
+
+    Examples
+    --------
+    >>> f"{float(total_dispersion(0.3, 0.4)):.2f}"
+    '0.50'
+    """
     beta = beta if isinstance(beta, xr.DataArray) else np.asarray(beta, dtype=float)
     return np.sqrt(beta * beta + float(modelling) ** 2)
 
@@ -227,10 +468,50 @@ def with_modelling_dispersion(frag, modelling):
 
 
 def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=None):
-    """Fit ``(median, beta)`` of a lognormal fragility curve.
+    """Fit ``(median, beta)`` of a lognormal fragility curve to probabilities or to counts.
 
-    Either to probabilities (least squares on the probit scale where ``0 < p < 1``) or,
-    with ``n_exceed`` of ``n_total`` samples per intensity, by binomial maximum likelihood.
+    Parameters
+    ----------
+    intensity : array_like
+        Intensity measure of each point [its units] > 0.
+    probability : array_like, optional
+        Exceedance probabilities [1] (least squares on the probit scale where ``0 < p < 1``).
+    n_exceed : array_like, optional
+        Exceedances per intensity [1] (binomial maximum likelihood instead).
+    n_total : array_like, optional
+        Samples per intensity [1], with ``n_exceed``.
+
+    Returns
+    -------
+    median : float
+        [units of the intensity].
+    beta : float
+        [1].
+
+    Raises
+    ------
+    ValueError
+        With fewer than two probabilities strictly between 0 and 1.
+
+    Notes
+    -----
+    Probit regression ``Phi^-1(p) = (ln x - ln median) / beta`` or the binomial likelihood of [2], eq. (11);
+    the probabilities come from the linearization of [1] or from Monte Carlo.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> p = lognormal_fragility([0.5, 1.0, 2.0], 1.2, 0.5)
+    >>> median, beta = fit_lognormal_fragility([0.5, 1.0, 2.0], p)
+    >>> f"{median:.4f} {beta:.4f}"
+    '1.2000 0.5000'
     """
     im = np.asarray(intensity, dtype=float).ravel()
     if n_exceed is not None:

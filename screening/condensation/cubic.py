@@ -108,7 +108,8 @@ import numpy as np
 
 from screening.condensation.base import Condensation, SdofKernel
 from screening.physics import contact
-from screening.physics.contact import linear_indentation, rising_root
+from screening.physics.contact import (UPLIFT_BEARING_LIMIT, bearing_load, exact_uplift_angle, linear_indentation,
+                                       rising_root)
 from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
@@ -117,23 +118,49 @@ __all__ = ["SOFTENING_LIMIT", "bearing_load", "check_bearing", "rest_indentation
            "restoring_moment", "damping_at_rest", "stiffness_at_rest", "SDOF_RECORD", "sdof_record",
            "quasi_static_indentation_jit", "damping_stiffness_jit", "CubicCondensation", "CUBIC"]
 
-#: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists.
-SOFTENING_LIMIT = 2.0 / 27.0
-
-
-
-def bearing_load(block, foundation):
-    """``-eps z_lin^2`` [1]: the bed carries the block through uplift onset while this stays
-    below :data:`SOFTENING_LIMIT` (module docstring); broadcast over array parameters."""
-    eps = np.asarray(foundation.eps, dtype=float)
-    return -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
+#: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists
+#: (:data:`screening.physics.contact.UPLIFT_BEARING_LIMIT`).
+SOFTENING_LIMIT = UPLIFT_BEARING_LIMIT
 
 
 def check_bearing(block, foundation):
-    """Raise ``ValueError`` if a softening bed cannot carry the block through uplift onset.
+    """Refuse a softening bed that cannot carry the block through the onset of uplift.
 
-    The condition is ``|eps| z_lin^2 < 2/27`` (module docstring); any element of array
-    parameters failing it raises.  ``eps >= 0`` always passes.
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    None
+        Returns only when every point passes.
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    The condition is ``|eps| z_lin^2 < 2/27`` (:data:`SOFTENING_LIMIT`, :func:`bearing_load`; ``z_lin`` of
+    eq. (17) in [1]); any element of array parameters failing it raises.  ``eps >= 0`` always passes.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> check_bearing(block, bed) is None
+    True
     """
     eps = np.asarray(foundation.eps, dtype=float)
     load = bearing_load(block, foundation)
@@ -145,27 +172,121 @@ def check_bearing(block, foundation):
 
 
 def rest_indentation(block, foundation):
-    """Static indentation at rest ``z0`` [m] (:func:`screening.physics.contact.rest_indentation`), for a bed
-    the cubic condensation can carry through uplift onset (:func:`check_bearing`)."""
+    """Static indentation at rest ``z0`` [m] of a bed the cubic condensation can carry.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``z0`` [m] (:func:`screening.physics.contact.rest_indentation`).
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    Eq. (13) in [1] at rest, cubic term included, after :func:`check_bearing`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> f"{float(rest_indentation(block, bed)):.4e}"
+    '3.8594e-05'
+    """
     check_bearing(block, foundation)
     return contact.rest_indentation(block, foundation)
 
 
 def uplift_threshold(block, foundation):
-    """Uplift threshold ``theta_ul`` [rad]: ``y = b theta_ul`` solves ``2 eps y^3 + y = z_lin``.
+    """Uplift threshold ``theta_ul`` [rad] of the cubic condensation: the exact static uplift angle.
 
-    The rotation at which the quasi-static ``z_cb(theta)`` of eq. (13) reaches ``b theta``
-    (eq. 19 generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``theta_ul`` [rad] (:func:`screening.physics.contact.exact_uplift_angle`).
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    ``y = b theta_ul`` solves ``2 eps y^3 + y = z_lin``: the rotation at which the quasi-static ``z_cb(theta)``
+    of eq. (13) in [1] reaches ``b theta`` (eq. (19) generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> f"{float(uplift_threshold(block, bed)):.4e}"
+    '1.0372e-03'
     """
     check_bearing(block, foundation)
-    y = rising_root(2.0 * np.asarray(foundation.eps, dtype=float), 1.0, linear_indentation(block, foundation))
-    return (y / block.b)[()]
+    return exact_uplift_angle(block, foundation)
 
 
 def capacity_angle(block, foundation):
-    """Capacity angle ``theta_cap = k / (4 |eps| m g)`` [rad] of a softening bed; ``inf`` for ``eps >= 0``.
+    """Capacity angle ``theta_cap`` [rad] of a softening bed; ``inf`` for ``eps >= 0``.
 
-    Beyond it the uplift balance ``(k/(2a)) v^2 + (eps k/(4a)) v^4 = m g`` (eq. 15) has no root.
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``theta_cap = k / (4 |eps| m g)`` [rad].
+
+    Notes
+    -----
+    Beyond it the uplift balance ``(k/(2a)) v^2 + (eps k/(4a)) v^4 = m g`` (eq. (15) in [1], ``a = |theta|``)
+    has no root: no quasi-static equilibrium exists.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> f"{float(capacity_angle(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5))):.4f}"
+    '0.1416'
     """
     eps = np.asarray(foundation.eps, dtype=float)
     with np.errstate(divide="ignore"):
@@ -174,18 +295,80 @@ def capacity_angle(block, foundation):
 
 
 def in_equilibrium(theta, block, foundation):
-    """True where a quasi-static vertical equilibrium exists, ``|theta| <= theta_cap`` [bool]."""
+    """Where a quasi-static vertical equilibrium exists, ``|theta| <= theta_cap``.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean, broadcast over ``theta`` and the model's fields.
+
+    Notes
+    -----
+    :func:`capacity_angle` from the uplift balance eq. (15) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> in_equilibrium([0.1, 0.2], Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5)).tolist()
+    [True, False]
+    """
     return np.abs(np.asarray(theta, dtype=float)) <= capacity_angle(block, foundation)
 
 
 def quasi_static_indentation(theta, block, foundation):
-    """Quasi-static base-centre indentation and its slope, ``(z_cb [m], dz_cb/d|theta| [m/rad])``.
+    """Quasi-static base-centre indentation and its slope in the cubic condensation.
 
-    ``z_cb`` is (Q1) below ``theta_ul`` and (Q2) above it (module docstring); beyond the
-    capacity angle of a softening bed the contact is held at its peak load and the slope
-    reported is 0 (no equilibrium to follow; module docstring).  ``theta`` [rad],
-    vectorised over ``theta`` and array model parameters.  ``z_cb`` is even in ``theta``;
-    ``dz_cb/dtheta = sign(theta) * (second output)``.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    z_cb : numpy.ndarray
+        Indentation of the base centre [m], even in ``theta``.
+    slope : numpy.ndarray
+        ``dz_cb/d|theta|`` [m/rad]; ``dz_cb/dtheta = sign(theta) * slope``.
+
+    Notes
+    -----
+    ``z_cb`` solves the static vertical balance with the cubic term: ``eps z^3 + (1 + eps b^2 theta^2) z =
+    z_lin`` below ``theta_ul`` (eq. (13) in [1]) and the uplift balance eq. (15) above it; beyond the
+    capacity angle of a softening bed the contact is held at its peak load and the slope reported is 0
+    (module docstring).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> z, dz = quasi_static_indentation([0.0, 2e-3], block, bed)
+    >>> [f"{v:.4e}" for v in z]
+    ['3.8594e-05', '2.6027e-05']
     """
     return _indentation_state(theta, block, foundation)[:2]
 
@@ -219,10 +402,45 @@ def _indentation_state(theta, block, foundation):
 
 
 def rocking_damping(theta, block, foundation):
-    """Rocking damping ``C(theta)`` [N m s/rad] of the cubic condensation (module docstring).
+    """Rocking damping ``C(theta)`` [N m s/rad] of the cubic condensation.
 
-    ``theta`` [rad]; vectorised over theta and array model parameters.  Includes the
-    quasi-static rate ``zdot_cb = z_cb'(theta) theta'``.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``C(theta)`` [N m s/rad], broadcast over ``theta`` and the model's fields.
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    Eqs. (14) and (16) in [1] re-derived with the quasi-static rate ``zdot_cb = (dz/dtheta) theta'`` and the
+    law's damping pressure (module docstring); with ``eps = 0`` it is eq. (24).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
+    ['0.9873', '0.02667']
     """
     z, dz, v, a, uplift = _indentation_state(theta, block, foundation)
     b = block.b
@@ -236,9 +454,45 @@ def rocking_damping(theta, block, foundation):
 
 
 def rocking_stiffness(theta, block, foundation):
-    """Secant rocking stiffness ``K(theta)`` [N m/rad] of the cubic condensation (module docstring).
+    """Secant rocking stiffness ``K(theta)`` [N m/rad] of the cubic condensation.
 
-    ``theta`` [rad]; the restoring moment is ``K(theta) theta``.  Same for both beds.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K(theta)`` [N m/rad]; the restoring moment is ``K(theta) theta``.  Same for both laws.
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    ``K_in = (2/3) b^3 k - m g h + eps k (2 b^3 z^2 + (2/5) b^5 a^2)`` (eq. (14) in [1]) and ``K_up`` of
+    eq. (16), at the quasi-static ``z`` of :func:`quasi_static_indentation`; with ``eps = 0`` it is eq. (25).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> [f"{k:.4g}" for k in rocking_stiffness([0.0, 0.01], block, bed)]
+    ['1030', '239.7']
     """
     z, _, v, a, uplift = _indentation_state(theta, block, foundation)
     b, k, eps = block.b, foundation.k, foundation.eps
@@ -250,21 +504,131 @@ def rocking_stiffness(theta, block, foundation):
 
 
 def restoring_moment(theta, block, foundation):
-    """Restoring moment ``K(theta) theta`` [N m] of the cubic condensation."""
+    """Restoring moment ``K(theta) theta`` [N m] of the cubic condensation.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K(theta) theta`` [N m], odd in ``theta``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    The conservative term of eq. (22) in [1] with ``K`` of :func:`rocking_stiffness`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> f"{float(restoring_moment(1e-3, block, bed)):.4g}"
+    '1.042'
+    """
     theta = np.asarray(theta, dtype=float)
     return (rocking_stiffness(theta, block, foundation) * theta)[()]
 
 
 def damping_at_rest(block, foundation):
-    """``C(0)`` [N m s/rad]: ``(2/3) b^3 (w_rate + w_indentation z0)`` (Hunt–Crossley ``(2/3) lam b^3 z0``,
-    Winkler ``(2/3) c b^3``)."""
+    """Rocking damping at rest ``C(0)`` [N m s/rad] of the cubic condensation.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``(2/3) b^3 (w_rate + w_indentation z0)`` (Hunt–Crossley ``(2/3) lam b^3 z0``, Winkler ``(2/3) c b^3``).
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    Eq. (14) in [1] at ``theta = 0`` with the rest indentation ``z0`` (eq. (13)).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> f"{float(damping_at_rest(block, bed)):.4g}"
+    '0.9873'
+    """
     check_bearing(block, foundation)
     w_rate, w_ind = foundation.damping_weights
     return 2.0 / 3.0 * w_rate * block.b**3 + 2.0 / 3.0 * w_ind * block.b**3 * rest_indentation(block, foundation)
 
 
 def stiffness_at_rest(block, foundation):
-    """``K(0)`` [N m/rad] ``= (2/3) b^3 k - m g h + 2 eps k b^3 z0^2``."""
+    """Rocking stiffness at rest ``K(0)`` [N m/rad] of the cubic condensation.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``(2/3) b^3 k - m g h + 2 eps k b^3 z0^2`` [N m/rad].
+
+    Raises
+    ------
+    ValueError
+        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
+        uplift (:func:`check_bearing`).
+
+    Notes
+    -----
+    Eq. (14) in [1] at ``theta = 0`` with the rest indentation ``z0`` (eq. (13)); its ``eps = 0`` part is
+    :func:`screening.physics.contact.linear_rocking_stiffness`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> f"{float(stiffness_at_rest(block, bed)):.4g}"
+    '1030'
+    """
     z0 = rest_indentation(block, foundation)
     b, k = block.b, foundation.k
     return contact.linear_rocking_stiffness(block, foundation) + 2.0 * foundation.eps * k * b**3 * z0 * z0
@@ -279,7 +643,38 @@ SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("m", "f8"), ("g", "f8"), ("h", "f8"
 
 
 def sdof_record(block, foundation):
-    """The :data:`SDOF_RECORD` of scalar model objects (a 1-element array)."""
+    """The :data:`SDOF_RECORD` of scalar model objects, for the compiled twins.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    numpy.ndarray
+        A 1-element :data:`SDOF_RECORD` (SI units).
+
+    Notes
+    -----
+    The block, the bed, the threshold, ``z_lin`` (eq. (17) in [1]) and the rest indentation with its
+    curvature (the Newton start of the balance of eq. (13)).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> f"{sdof_record(block, bed)['theta_ul'][0]:.4e}"
+    '1.0372e-03'
+    """
     b, eps = float(block.b), float(foundation.eps)
     z0 = float(rest_indentation(block, foundation))
     rec = np.zeros(1, dtype=SDOF_RECORD)
@@ -295,8 +690,42 @@ def sdof_record(block, foundation):
 
 @numba.njit(cache=True)
 def quasi_static_indentation_jit(p, a):
-    """Compiled quasi-static ``(z_cb [m], dz_cb/da [m/rad], v = b a + z_cb [m])`` of the cubic
-    condensation at ``a = |theta|`` (compiled twin of :func:`quasi_static_indentation`, ``p`` an :data:`SDOF_RECORD`)."""
+    """Compiled twin of :func:`quasi_static_indentation` at ``a = |theta|``.
+
+    Parameters
+    ----------
+    p : numpy.void
+        An :data:`SDOF_RECORD` (:func:`sdof_record`).
+    a : float
+        Absolute rotation [rad].
+
+    Returns
+    -------
+    z_cb : float
+        [m].
+    slope : float
+        ``dz_cb/da`` [m/rad].
+    v : float
+        Compressed-edge indentation ``b a + z_cb`` [m].
+
+    Notes
+    -----
+    Newton on the balance of eq. (13) in [1] below ``theta_ul``, the closed-form root of eq. (15) above.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> z, dz, v = quasi_static_indentation_jit(sdof_record(block, bed)[0], 2e-3)
+    >>> bool(abs(z - quasi_static_indentation(2e-3, block, bed)[0]) < 1e-12 * z)
+    True
+    """
     b, eps = p.b, p.eps
     if a <= p.theta_ul:
         # eps z^3 + beta z = z_lin, beta = 1 + eps b^2 a^2: Newton from the Taylor start
@@ -322,8 +751,40 @@ def quasi_static_indentation_jit(p, a):
 
 @numba.njit(sdof_coefficients_signature(SDOF_RECORD), cache=True)
 def damping_stiffness_jit(p, theta):
-    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`: ``(C [N m s/rad],
-    K [N m/rad])`` at ``theta`` [rad], one indentation solve for both; ``p`` an :data:`SDOF_RECORD`."""
+    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`.
+
+    Parameters
+    ----------
+    p : numpy.void
+        An :data:`SDOF_RECORD` (:func:`sdof_record`).
+    theta : float
+        Rotation [rad].
+
+    Returns
+    -------
+    C : float
+        Rocking damping [N m s/rad].
+    K : float
+        Secant rocking stiffness [N m/rad].
+
+    Notes
+    -----
+    Eqs. (14) and (16) in [1] with one indentation solve for both (:func:`quasi_static_indentation_jit`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> C, K = damping_stiffness_jit(sdof_record(block, bed)[0], 0.01)
+    >>> bool(abs(K - rocking_stiffness(0.01, block, bed)) < 1e-9 * abs(K))
+    True
+    """
     a = abs(theta)
     z, dz, v = quasi_static_indentation_jit(p, a)
     b, k, eps, w_rate, w_ind = p.b, p.k, p.eps, p.w_rate, p.w_indentation

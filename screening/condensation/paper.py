@@ -90,12 +90,76 @@ __all__ = ["uplift_threshold", "static_indentation", "damping_inner_parts", "dam
 
 
 def uplift_threshold(block, foundation):
-    """Static uplift angle ``theta_ul = m g / (2 b^2 k)`` [rad] (eq. 19)."""
+    """Static uplift angle ``theta_ul`` [rad] of the paper's condensation.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``theta_ul = m g / (2 b^2 k)`` [rad].
+
+    Notes
+    -----
+    Eq. (19) in [1]: the rotation at which the linear static indentation ``m g / (2 b k)`` (eq. (17))
+    equals ``b theta``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{uplift_threshold(block, bed):.4e}"
+    '1.2012e-03'
+    """
     return block.m * block.g / (2.0 * block.b**2 * foundation.k)
 
 
 def static_indentation(theta, block, foundation):
-    """Quasi-static vertical displacement of the base centre ``z_st(theta)`` [m] (eqs. 17–18)."""
+    """Quasi-static vertical displacement of the base centre ``z_st(theta)`` [m].
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``m g / (2 b k)`` for ``|theta| <= theta_ul`` (eq. (17) in [1]) and
+        ``sqrt(2 m g |theta| / k) - b |theta|`` beyond (eq. (18)).
+
+    Notes
+    -----
+    The linear static balance in full contact and in uplift; continuous at ``theta_ul`` (eq. (19)).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{z:.4e}" for z in static_indentation([0.0, 2e-3], block, bed)]
+    ['4.2043e-05', '3.8499e-05']
+    """
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
     inner = mg / (2.0 * b * k) + 0.0 * theta
@@ -104,22 +168,115 @@ def static_indentation(theta, block, foundation):
 
 
 def damping_inner_parts(block, foundation):
-    """No-uplift rocking damping of the two basis pressures of the law [N m s/rad]:
-    ``(2/3) w_rate b^3`` (``zdot``, Winkler) and ``w_indentation b^2 m g / (3 k)`` (``z zdot``, eq. 24)."""
+    """No-uplift rocking damping of the law's two basis pressures [N m s/rad].
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    rate : numpy.ndarray or float
+        ``(2/3) w_rate b^3`` (the ``zdot`` pressure, Winkler).
+    indentation : numpy.ndarray or float
+        ``w_indentation b^2 m g / (3 k)`` (the ``z zdot`` pressure, Hunt–Crossley).
+
+    Notes
+    -----
+    The no-uplift branch of eq. (24) in [1] is the ``z zdot`` part; the Winkler dashpot adds the ``zdot``
+    part.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{c:.4g}" for c in damping_inner_parts(block, bed)]
+    ['0', '1.076']
+    """
     w_rate, w_ind = foundation.damping_weights
     return 2.0 / 3.0 * w_rate * block.b**3, w_ind * block.b**2 * block.m * block.g / (3.0 * foundation.k)
 
 
 def damping_inner(block, foundation):
-    """No-uplift rocking damping ``C_1`` [N m s/rad] (eq. 24; Winkler: ``(2/3) c b^3``)."""
+    """No-uplift rocking damping ``C_1`` [N m s/rad].
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``C_1`` [N m s/rad]: the sum of :func:`damping_inner_parts`.
+
+    Notes
+    -----
+    ``lam b^2 m g / (3 k)`` for Hunt–Crossley, eq. (24) in [1]; ``(2/3) c b^3`` for Winkler.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{damping_inner(block, bed):.4g}"
+    '1.076'
+    """
     rate, indentation = damping_inner_parts(block, foundation)
     return rate + indentation
 
 
 def rocking_damping(theta, block, foundation):
-    """Piecewise rocking damping ``C(theta)`` [N m s/rad] (eq. 24; Winkler: module doc).
+    """Piecewise rocking damping ``C(theta)`` [N m s/rad] of the paper's condensation.
 
-    ``theta`` [rad]; vectorised over theta and parameter arrays.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``C(theta)`` [N m s/rad], broadcast over ``theta`` and the model's fields.
+
+    Notes
+    -----
+    ``C_1`` (:func:`damping_inner`) for ``|theta| <= theta_ul``; beyond,
+    ``w_rate (2 m g / k)^(3/2) |theta|^(-3/2) / 12 + w_indentation b (2 m g / k)^(3/2) |theta|^(-1/2) / 12``:
+    eq. (24) in [1] for Hunt–Crossley, its Winkler form from the module docstring.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
+    ['1.076', '0.3728']
     """
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
@@ -133,9 +290,40 @@ def rocking_damping(theta, block, foundation):
 
 
 def rocking_stiffness(theta, block, foundation):
-    """Piecewise secant rocking stiffness ``K(theta)`` [N m/rad] (eq. 25).
+    """Piecewise secant rocking stiffness ``K(theta)`` [N m/rad] of the paper's condensation.
 
-    ``theta`` [rad]; the restoring moment is ``K(theta) theta``.  Same for both beds.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K(theta)`` [N m/rad]; the restoring moment is ``K(theta) theta``.  Same for both laws.
+
+    Notes
+    -----
+    Eq. (25) in [1]: ``(2/3) b^3 k - m g h + eps (m^2 g^2 b / (2 k) + (2/5) k b^5 theta^2)`` for
+    ``|theta| <= theta_ul``, ``m g (b/|theta| - sqrt(2 m g k) |theta|^(-3/2) / (3 k) - h) +
+    eps (m^2 g^2 b / k - m^2 g^2 sqrt(2 m g / k) |theta|^(-1/2) / (5 k))`` beyond.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{k:.4g}" for k in rocking_stiffness([0.0, 0.01], block, bed)]
+    ['808.2', '211']
     """
     theta = np.asarray(theta, dtype=float)
     a = np.abs(theta)
@@ -150,7 +338,39 @@ def rocking_stiffness(theta, block, foundation):
 
 
 def restoring_moment(theta, block, foundation):
-    """Restoring moment ``K(theta) theta`` [N m] of the condensed model (eq. 22)."""
+    """Restoring moment ``K(theta) theta`` [N m] of the paper's condensation.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K(theta) theta`` [N m], odd in ``theta``.
+
+    Notes
+    -----
+    The conservative term of eq. (22) in [1] with ``K`` of eq. (25).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{float(restoring_moment(1e-3, block, bed)):.4g}"
+    '0.8082'
+    """
     theta = np.asarray(theta, dtype=float)
     return rocking_stiffness(theta, block, foundation) * theta
 
@@ -163,7 +383,38 @@ SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("C1", "f8"), ("C2_rate", "f8"), ("C
 
 
 def sdof_record(block, foundation):
-    """The :data:`SDOF_RECORD` of scalar model objects (a 1-element array)."""
+    """The :data:`SDOF_RECORD` of scalar model objects: the constants of ``C`` and ``K``.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    numpy.ndarray
+        A 1-element :data:`SDOF_RECORD` (SI units) for :func:`damping_stiffness_jit`.
+
+    Notes
+    -----
+    The parameter-only factors of eqs. (24)-(25) in [1], so that the compiled twin evaluates ``C`` and
+    ``K`` with one square root.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{sdof_record(block, bed)['C1'][0]:.4g}"
+    '1.076'
+    """
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     k, eps = float(foundation.k), float(foundation.eps)
     w_rate, w_ind = (float(w) for w in foundation.damping_weights)
@@ -184,8 +435,40 @@ def sdof_record(block, foundation):
 
 @numba.njit(sdof_coefficients_signature(SDOF_RECORD), cache=True)
 def damping_stiffness_jit(p, theta):
-    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`: ``(C [N m s/rad], K [N m/rad])``
-    at ``theta`` [rad], ``p`` an :data:`SDOF_RECORD`."""
+    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`.
+
+    Parameters
+    ----------
+    p : numpy.void
+        An :data:`SDOF_RECORD` (:func:`sdof_record`).
+    theta : float
+        Rotation [rad].
+
+    Returns
+    -------
+    C : float
+        Rocking damping [N m s/rad].
+    K : float
+        Secant rocking stiffness [N m/rad].
+
+    Notes
+    -----
+    Eqs. (24)-(25) in [1] from the record's constants; the condensed Monte Carlo's ``C``, ``K``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> C, K = damping_stiffness_jit(sdof_record(block, bed)[0], 0.01)
+    >>> bool(abs(C - rocking_damping(0.01, block, bed)) < 1e-12 * C)
+    True
+    """
     a = abs(theta)
     if a <= p.theta_ul:
         return p.C1, p.K1_0 + p.K1_2 * theta * theta
@@ -197,8 +480,38 @@ def damping_stiffness_jit(p, theta):
 # ---------------------------------------------------------------- equivalent linear coefficients (section 2.4)
 
 def coefficient_constants(block, foundation):
-    """Parameter-only constants of the closed forms (SI): ``C1`` (and its parts ``C1_rate``,
-    ``C1_indentation`` of the law's two basis pressures), ``K0, mgh, E0, theta_ul``."""
+    """Parameter-only constants of the closed-form equivalent coefficients (SI).
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    dict
+        ``C1`` [N m s/rad] (and its parts ``C1_rate``, ``C1_indentation``), ``K0 = (2/3) b^3 k`` [N m/rad],
+        ``mgh`` [N m], ``E0 = (m g)^2 b / k`` [N m] and ``theta_ul`` [rad].
+
+    Notes
+    -----
+    The factors of eqs. (35)-(36) in [1] that do not depend on the moments.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{coefficient_constants(block, bed)['K0']:.4g}"
+    '826.1'
+    """
     m, g, b, h, k = block.m, block.g, block.b, block.h, foundation.k
     c1_rate, c1_indentation = damping_inner_parts(block, foundation)
     return {
@@ -213,12 +526,46 @@ def coefficient_constants(block, foundation):
 
 
 def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
-    """Closed-form ``(c_eq [N m s/rad], k_eq [N m/rad])`` of the paper's condensation (eqs. 35–36 corrected).
+    """Closed-form equivalent damping and stiffness of the paper's condensation.
 
-    ``sigma_theta`` [rad] >= 0 and ``cov_over_sigma = cov(theta, theta') / sigma_theta`` [rad/s]
-    (``rho sigma_theta_dot``); broadcast with array model parameters.  The module docstring
-    gives the formulas; :func:`equivalent_coefficients_jit` is the compiled twin the moment
-    solver uses (same formulas, the Gaussian integrals read from :mod:`~screening.condensation.uplift_integrals`).
+    Parameters
+    ----------
+    sigma_theta : array_like
+        Standard deviation of the rotation [rad], >= 0.
+    cov_over_sigma : array_like
+        ``cov(theta, theta') / sigma_theta = rho sigma_theta_dot`` [rad s-1].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    c_eq : numpy.ndarray
+        [N m s/rad], broadcast with the model's fields.
+    k_eq : numpy.ndarray
+        [N m/rad].
+
+    Notes
+    -----
+    Eqs. (35)-(36) in [1], with the corrections of ``docs/method.md`` (module docstring): the Gaussian
+    expectations of eq. (31) of the piecewise ``C``, ``K`` (eqs. (24)-(25)) through the universal uplift
+    integrals of :mod:`~screening.condensation.uplift_integrals`; :func:`equivalent_coefficients_jit` is the
+    compiled twin.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> c_eq, k_eq = equivalent_coefficients(2e-3, 0.0, block, bed)
+    >>> f"{float(c_eq):.4g} {float(k_eq):.4g}"
+    '0.9243 560.7'
     """
     s = np.asarray(sigma_theta, dtype=float)
     cov_over_s = np.asarray(cov_over_sigma, dtype=float)
@@ -242,7 +589,37 @@ RECORD = np.dtype([("theta_ul", "f8"), ("inv_theta_ul2", "f8"), ("C1_rate", "f8"
 
 
 def records(block, foundation):
-    """One :data:`RECORD` per point of the (flat, 1-d) model fields."""
+    """One :data:`RECORD` per point: the constants of the compiled closed forms.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); flat (1-d) or scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); flat (1-d) or scalar fields.
+
+    Returns
+    -------
+    numpy.ndarray
+        Structured array of :data:`RECORD` (SI units), one per point.
+
+    Notes
+    -----
+    :func:`coefficient_constants` laid out for :func:`equivalent_coefficients_jit` (eqs. (35)-(36) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> records(block, bed)["theta_ul"].round(7).tolist()
+    [0.0012012]
+    """
     const = coefficient_constants(block, foundation)
     fields = {"theta_ul": const["theta_ul"], "inv_theta_ul2": 1.0 / const["theta_ul"] ** 2,
               "C1_rate": const["C1_rate"], "C1_indentation": const["C1_indentation"],
@@ -256,10 +633,46 @@ def records(block, foundation):
 
 @numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
 def equivalent_coefficients_jit(p, table, var_theta, cov):
-    """Compiled twin of :func:`equivalent_coefficients` from the moments ``var_theta`` [rad2], ``cov`` [rad2/s].
+    """Compiled twin of :func:`equivalent_coefficients` from the moments.
 
-    ``p``: a :data:`RECORD`; ``table``: the universal table of
-    :func:`screening.condensation.uplift_integrals.coefficient_table`.  Finite at ``var_theta = 0``.
+    Parameters
+    ----------
+    p : numpy.void
+        A :data:`RECORD` (:func:`records`).
+    table : numpy.ndarray
+        The universal table of :func:`screening.condensation.uplift_integrals.coefficient_table`.
+    var_theta : float
+        Variance of the rotation [rad2].
+    cov : float
+        Covariance of the rotation and its rate [rad2 s-1].
+
+    Returns
+    -------
+    c_eq : float
+        [N m s/rad].
+    k_eq : float
+        [N m/rad].
+
+    Notes
+    -----
+    Eqs. (35)-(36) in [1] (corrected) with the Gaussian integrals read from the table; finite at
+    ``var_theta = 0``, the start of every integration of eq. (45).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> from screening.condensation.uplift_integrals import coefficient_table
+    >>> c_eq, k_eq = equivalent_coefficients_jit(records(block, bed)[0], coefficient_table(), 4e-6, 0.0)
+    >>> c0, k0 = equivalent_coefficients(2e-3, 0.0, block, bed)
+    >>> bool(abs(c_eq - c0) < 1e-6 * c0 and abs(k_eq - k0) < 1e-6 * abs(k0))
+    True
     """
     q = var_theta * p.inv_theta_ul2                 # (sigma_theta / theta_ul)^2
     p_in, tail_m12, tail_m32, p32 = uplift_integrals_q(q, table)

@@ -44,11 +44,39 @@ def _upper_gamma(a, x):
 
 
 def gaussian_uplift_integrals(r):
-    """The dimensionless Gaussian integrals of the module table at ``r = sigma_theta/theta_ul``.
+    """The dimensionless Gaussian uplift integrals at ``r = sigma_theta / theta_ul``, closed form.
 
-    Returns a dict of arrays ``p_in, p_out, tail_m12, tail_m32, inner_m2`` and the
-    velocity-coupling versions ``tail_m12_r = tail_m12 / r`` and ``tail_m32_r = tail_m32 / r``
-    (finite, and zero, at ``r = 0``).  Exact limits are used where ``x > X_LIMIT``.
+    Parameters
+    ----------
+    r : array_like
+        ``sigma_theta / theta_ul`` [1], >= 0.
+
+    Returns
+    -------
+    dict
+        Arrays [1] ``p_in`` (``P(|theta| <= theta_ul)``), ``p_out`` (its complement, eq. (58) in [1]),
+        ``tail_m12``, ``tail_m32`` (the expectations of ``(|theta|/theta_ul)^(-1/2)`` and ``^(-3/2)`` over the
+        uplift tails), ``inner_m2`` and the velocity-coupling versions ``tail_m12_r = tail_m12 / r`` and
+        ``tail_m32_r = tail_m32 / r`` (finite, and zero, at ``r = 0``).
+
+    Notes
+    -----
+    With ``x = 1 / (2 r^2)``: ``p_in = erf(sqrt(x))``, ``p_out = erfc(sqrt(x))`` and the tails through the
+    upper incomplete gamma function ``Gamma(1/4, x)`` (eqs. (35)-(38) in [1]); exact limits where
+    ``x > X_LIMIT``.  The compiled twins :func:`uplift_integrals` and :func:`uplift_integrals_q` read them from
+    the table of :func:`coefficient_table`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> g = gaussian_uplift_integrals(1.0)
+    >>> f"{float(g['p_in']):.4f} {float(g['p_out']):.4f}"
+    '0.6827 0.3173'
     """
     r = np.asarray(r, dtype=float)
     with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
@@ -117,8 +145,35 @@ def _table_values_and_slopes(t):
 
 
 def node_values():
-    """``(q, values, slopes)`` on the octave grid in ``q = r^2`` (module docstring): values and slopes
-    ``d/dq`` of shape ``(N_INTERVALS + 1, 4)``."""
+    """The tabulated functions and their slopes on the octave grid in ``q = r^2`` (fixed by
+    :data:`Q_OCTAVE_LO`, :data:`Q_OCTAVE_HI` and :data:`MANTISSA_BITS`).
+
+    Returns
+    -------
+    q : numpy.ndarray
+        The nodes ``q = var_theta / theta_ul^2`` [1].
+    values : numpy.ndarray
+        ``(N_INTERVALS + 1, 4)``: ``p_in``, ``tail_m12``, ``tail_m32``, ``P(3/2, x)`` at the nodes [1].
+    slopes : numpy.ndarray
+        Their exact derivatives ``d/dq``, same shape.
+
+    Notes
+    -----
+    The universal functions of eqs. (35)-(36) in [1] (:func:`gaussian_uplift_integrals`) and their exact
+    derivatives, for the cubic Hermite table.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> q, values, slopes = node_values()
+    >>> values.shape == slopes.shape == (q.size, 4)
+    True
+    """
     q = octave_grid(Q_OCTAVE_LO, Q_OCTAVE_HI, MANTISSA_BITS)
     values, slopes_t = _table_values_and_slopes(0.5 * np.log(q))
     return q, values, slopes_t / (2.0 * q[:, None])        # dt/dq = 1 / (2 q)
@@ -126,21 +181,114 @@ def node_values():
 
 @lru_cache(maxsize=1)
 def coefficient_table():
-    """The universal table: per-interval cubic coefficients ``(N_INTERVALS + 1, 16)`` of :func:`node_values`
-    (:func:`screening.kernels.interpolation.cubic_coefficients`, variable ``q``)."""
+    """The universal table of the Gaussian uplift integrals: per-interval cubic coefficients.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N_INTERVALS + 1, 16)``: the cubic coefficients of :func:`node_values` in ``q``
+        (:func:`screening.kernels.interpolation.cubic_coefficients`).
+
+    Notes
+    -----
+    The sigma-dependent parts of eqs. (35)-(36) in [1] depend on ``r = sigma_theta / theta_ul`` only, so one
+    table serves every point (interpolation error ~1e-13).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> coefficient_table().shape[1]
+    16
+    """
     q, values, slopes = node_values()
     return cubic_coefficients(values, slopes, np.diff(q))
 
 
 @numba.njit(cache=True, inline="always")
 def uplift_integrals(r, table):
-    """``(p_in, tail_m12, tail_m32, P(3/2, x))`` at ``r = sigma_theta / theta_ul`` >= 0."""
+    """Compiled Gaussian uplift integrals at ``r = sigma_theta / theta_ul``, from the table.
+
+    Parameters
+    ----------
+    r : float
+        ``sigma_theta / theta_ul`` [1], >= 0.
+    table : numpy.ndarray
+        The table of :func:`coefficient_table`.
+
+    Returns
+    -------
+    p_in : float
+        ``P(|theta| <= theta_ul)`` [1].
+    tail_m12 : float
+        Uplift tail of ``(|theta|/theta_ul)^(-1/2)`` [1].
+    tail_m32 : float
+        Uplift tail of ``(|theta|/theta_ul)^(-3/2)`` [1].
+    p32 : float
+        ``P(3/2, x)``, the regularised lower incomplete gamma function at ``x = 1/(2 r^2)`` [1].
+
+    Notes
+    -----
+    The compiled twin of :func:`gaussian_uplift_integrals` (eqs. (35)-(38) in [1]), :func:`uplift_integrals_q`
+    at ``q = r^2``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> p_in, *_ = uplift_integrals(1.0, coefficient_table())
+    >>> bool(abs(p_in - float(gaussian_uplift_integrals(1.0)["p_in"])) < 1e-12)
+    True
+    """
     return uplift_integrals_q(r * r, table)
 
 
 @numba.njit(cache=True, inline="always")
 def uplift_integrals_q(q, table):
-    """As :func:`uplift_integrals`, from ``q = r^2 = var_theta / theta_ul^2`` (any ``q <= 0``: the limits)."""
+    """Compiled Gaussian uplift integrals from ``q = r^2 = var_theta / theta_ul^2``, what the moment solver reads.
+
+    Parameters
+    ----------
+    q : float
+        ``var_theta / theta_ul^2`` [1]; any ``q <= 0`` gives the limits.
+    table : numpy.ndarray
+        The table of :func:`coefficient_table`.
+
+    Returns
+    -------
+    p_in : float
+        ``P(|theta| <= theta_ul)`` [1].
+    tail_m12 : float
+        Uplift tail of ``(|theta|/theta_ul)^(-1/2)`` [1].
+    tail_m32 : float
+        Uplift tail of ``(|theta|/theta_ul)^(-3/2)`` [1].
+    p32 : float
+        ``P(3/2, x)``, the regularised lower incomplete gamma function at ``x = 1/(2 r^2)`` [1].
+
+    Notes
+    -----
+    Cubic Hermite interpolation on the octave grid (the interval from the bits of ``q``, no logarithm);
+    series beyond the grid.  The integrals of eqs. (35)-(38) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> uplift_integrals_q(0.0, coefficient_table())
+    (1.0, 0.0, 0.0, 1.0)
+    """
     j, s = octave_position_jit(q, FIRST, MANTISSA_BITS)
     if j < 0:
         return 1.0, 0.0, 0.0, 1.0

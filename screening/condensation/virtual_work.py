@@ -64,10 +64,42 @@ __all__ = ["rocking_damping", "damping_stiffness_jit", "VirtualWorkCondensation"
 
 
 def rocking_damping(theta, block, foundation):
-    """Energy-consistent rocking damping ``C(theta)`` [N m s/rad] (module docstring).
+    """Energy-consistent rocking damping ``C(theta)`` [N m s/rad] of the ``"virtual_work"`` condensation.
 
-    ``theta`` [rad]; vectorised over theta and array model parameters.  ``C theta'^2`` is the
-    power dissipated in the bed when ``z_cb`` follows its quasi-static path.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``C(theta)`` [N m s/rad], broadcast over ``theta`` and the model's fields.
+
+    Notes
+    -----
+    ``C theta'^2`` is the power dissipated in the bed, ``2 D`` of the Rayleigh function
+    ``D = (1/2) int zdot (w_rate + w_indentation z) zdot`` over the contact zone with
+    ``zdot(u) = (z_cb'(theta) + u) theta'`` along the quasi-static path of the cubic condensation: the
+    generalised force of the law of eqs. (3)-(4) in [1] on the one remaining coordinate (the paper's
+    eq. (24) takes the moment about the base centre instead; module docstring).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
+    ['1.076', '0.1292']
     """
     z, zp = cubic.quasi_static_indentation(theta, block, foundation)
     b = block.b
@@ -87,8 +119,41 @@ def rocking_damping(theta, block, foundation):
 
 @numba.njit(sdof_coefficients_signature(cubic.SDOF_RECORD), cache=True)
 def damping_stiffness_jit(p, theta):
-    """Compiled twin of :func:`rocking_damping` and of the cubic ``K``: ``(C [N m s/rad], K [N m/rad])``
-    at ``theta`` [rad]; ``p`` a :data:`screening.condensation.cubic.SDOF_RECORD`."""
+    """Compiled twin of :func:`rocking_damping` and of the cubic ``K``.
+
+    Parameters
+    ----------
+    p : numpy.void
+        A :data:`screening.condensation.cubic.SDOF_RECORD`.
+    theta : float
+        Rotation [rad].
+
+    Returns
+    -------
+    C : float
+        Rocking damping [N m s/rad].
+    K : float
+        Secant rocking stiffness [N m/rad] (that of the cubic condensation, eqs. (14) and (16) in [1]).
+
+    Notes
+    -----
+    The dissipation-consistent damping of :func:`rocking_damping` from one indentation solve.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.condensation import cubic
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> C, K = damping_stiffness_jit(cubic.sdof_record(block, bed)[0], 0.01)
+    >>> bool(abs(C - rocking_damping(0.01, block, bed)) < 1e-9 * C)
+    True
+    """
     a = abs(theta)
     z, zp, v = cubic.quasi_static_indentation_jit(p, a)
     _, stiffness = cubic.damping_stiffness_jit(p, theta)

@@ -36,7 +36,35 @@ GROUND_BAND_LIMIT_HZ = 25.0
 
 
 def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
-    """The band limit ``omega_c = 2 pi f`` [rad/s] of a ground motion band-limited to ``band_limit_hz`` [Hz]."""
+    """The band limit ``omega_c = 2 pi f`` [rad s-1] of a ground motion band-limited to ``f``.
+
+    Parameters
+    ----------
+    band_limit_hz : float, optional
+        Band limit ``f`` [Hz] (default :data:`GROUND_BAND_LIMIT_HZ`, 25 Hz).
+
+    Returns
+    -------
+    float
+        ``omega_c`` [rad s-1].
+
+    Notes
+    -----
+    The frequency up to which the intensity measures integrate the input's spectrum; strong-motion
+    records are processed to about this band (module constant's comment).  The modulated inputs of
+    [1] (eqs. (39) and (47)) are not band-limited; their intensity measures are.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> f"{ground_cutoff():.4f}"
+    '157.0796'
+    """
     return 2.0 * math.pi * float(band_limit_hz)
 
 
@@ -65,8 +93,40 @@ class Filter(NamedTuple):
 
 
 def transfer_psd(filt, S0, omega):
-    """Two-sided PSD ``S0 |C (i omega - A)^-1 B + D|^2`` [m^2/s^3] of a filter's output at ``omega``
-    [rad/s] (scalar filter: no leading axes; ``omega`` any shape)."""
+    """Two-sided PSD of a shaping filter's output [m2 s-3] (scalar filter: no leading axes).
+
+    Parameters
+    ----------
+    filt : screening.excitations.Filter
+        The filter's ``(A, B, C, D)``.
+    S0 : float
+        Two-sided PSD level of the driving white noise [m2 s-3].
+    omega : array_like
+        Circular frequency [rad s-1], any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``S0 |C (i omega - A)^-1 B + D|^2`` [m2 s-3], shaped like ``omega``.
+
+    Notes
+    -----
+    The squared gain of the filter's transfer function times the input's level: eq. (50) in [1] for the
+    Kanai–Tajimi filter.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.excitations.kanai_tajimi import kanai_tajimi_filter, kanai_tajimi_psd
+    >>> f = kanai_tajimi_filter(10.0, 0.4)
+    >>> bool(abs(transfer_psd(f, 1e-3, 7.0) - kanai_tajimi_psd(7.0, 1e-3, 10.0, 0.4)) < 1e-15)
+    True
+    """
     omega = np.asarray(omega, dtype=float)
     A, B, C, D = (np.asarray(m, dtype=float) for m in filt)
     n = A.shape[-1]
@@ -80,12 +140,38 @@ def transfer_psd(filt, S0, omega):
 
 
 def stationary_covariance(filt, S0):
-    """Stationary covariance of the filter states [..., n_f, n_f]: the solution of
-    ``A P + P A^T + 2 pi S0 B B^T = 0`` (Kronecker form, batched over the leading axes).
+    """Stationary covariance of a filter's states, batched over the leading axes.
+
+    Parameters
+    ----------
+    filt : screening.excitations.Filter
+        The filter's ``(A, B, C, D)``, ``A`` [..., n_f, n_f], ``B`` [..., n_f].
+    S0 : array_like
+        Two-sided PSD level of the driving white noise [m2 s-3], broadcast with the leading axes.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``P`` [..., n_f, n_f] in the squared units of the states.
 
     Notes
     -----
-    ``vec(A P + P A^T) = (I (x) A + A (x) I) vec(P)``; solved per point with :func:`numpy.linalg.solve`.
+    The solution of ``A P + P A^T + 2 pi S0 B B^T = 0``, the stationary form of the Lyapunov equation
+    (eq. (51) in [1]) for the filter block; in Kronecker form ``vec(A P + P A^T) = (I (x) A + A (x) I)
+    vec(P)``, solved per point with :func:`numpy.linalg.solve`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.excitations.kanai_tajimi import kanai_tajimi_filter
+    >>> P = stationary_covariance(kanai_tajimi_filter(10.0, 0.4), 1e-3)
+    >>> [f"{v:.4g}" for v in (P[0, 0], P[1, 1])]
+    ['3.927e-06', '0.0003927']
     """
     A = np.asarray(filt.A, dtype=float)
     B = np.asarray(filt.B, dtype=float)

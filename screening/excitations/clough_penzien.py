@@ -31,9 +31,39 @@ __all__ = ["clough_penzien_filter", "clough_penzien_psd", "CloughPenzien"]
 def clough_penzien_filter(omega_g, zeta_g, omega_f, zeta_f):
     """State-space matrices ``(A, B, C, D)`` of the Clough–Penzien filter, states ``(u, u', v, v')``.
 
+    Parameters
+    ----------
+    omega_g : array_like
+        Kanai–Tajimi (soil) filter frequency [rad s-1], > 0.
+    zeta_g : array_like
+        Kanai–Tajimi filter damping ratio [1], > 0.
+    omega_f : array_like
+        High-pass filter frequency [rad s-1], > 0.
+    zeta_f : array_like
+        High-pass filter damping ratio [1], > 0.
+
+    Returns
+    -------
+    screening.excitations.Filter
+        ``A`` [.., 4, 4], ``B``, ``C`` [.., 4], ``D`` [..]: arrays broadcast into the leading axes.
+
+    Notes
+    -----
     ``A = [[0, 1, 0, 0], [-wg^2, -2 zg wg, 0, 0], [0, 0, 0, 1], [-wg^2, -2 zg wg, -wf^2, -2 zf wf]]``,
-    ``B = [0, -1, 0, 0]``, ``C = [-wg^2, -2 zg wg, -wf^2, -2 zf wf]``, ``D = 0``.  Frequencies
-    [rad/s], damping ratios [1]; arrays broadcast (leading axes of the result).
+    ``B = [0, -1, 0, 0]``, ``C = [-wg^2, -2 zg wg, -wf^2, -2 zf wf]``, ``D = 0``: the Kanai–Tajimi filter
+    of eqs. (47)-(49) in [1] followed by the second-order high-pass of [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+
+    Examples
+    --------
+    >>> clough_penzien_filter(15.0, 0.6, 1.5, 0.8).C
+    array([-225.  ,  -18.  ,   -2.25,   -2.4 ])
     """
     wg, zg, wf, zf = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (omega_g, zeta_g, omega_f, zeta_f)))
     zero, one = np.zeros_like(wg), np.ones_like(wg)
@@ -44,7 +74,46 @@ def clough_penzien_filter(omega_g, zeta_g, omega_f, zeta_f):
 
 
 def clough_penzien_psd(omega, S0, omega_g, zeta_g, omega_f, zeta_f):
-    """Two-sided Clough–Penzien PSD [m^2/s^3] at ``omega`` [rad/s] (module docstring)."""
+    """Two-sided Clough–Penzien power spectral density [m2 s-3].
+
+    Parameters
+    ----------
+    omega : array_like
+        Circular frequency [rad s-1].
+    S0 : array_like
+        Two-sided PSD level of the driving white noise [m2 s-3].
+    omega_g : array_like
+        Kanai–Tajimi (soil) filter frequency [rad s-1], > 0.
+    zeta_g : array_like
+        Kanai–Tajimi filter damping ratio [1], > 0.
+    omega_f : array_like
+        High-pass filter frequency [rad s-1], > 0.
+    zeta_f : array_like
+        High-pass filter damping ratio [1], > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``S(omega)`` [m2 s-3], broadcast over the arguments.
+
+    Notes
+    -----
+    The Kanai–Tajimi PSD (eq. (50) in [1]) times the high-pass ``omega^4 / ((omega_f^2 - omega^2)^2 +
+    4 zeta_f^2 omega_f^2 omega^2)`` of [2], which removes the Kanai–Tajimi spectrum's finite value at
+    ``omega = 0`` (the cure of its long-period bias).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+
+    Examples
+    --------
+    >>> [f"{s:.4g}" for s in clough_penzien_psd([0.0, 15.0], 1e-3, 15.0, 0.6, 1.5, 0.8)]
+    ['0', '0.001685']
+    """
     w2 = np.asarray(omega, dtype=float) ** 2
     high_pass = w2 * w2 / ((omega_f**2 - w2) ** 2 + 4.0 * zeta_f**2 * omega_f**2 * w2)
     return kanai_tajimi_psd(omega, S0, omega_g, zeta_g) * high_pass

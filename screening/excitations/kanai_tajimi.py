@@ -18,12 +18,37 @@ __all__ = ["kanai_tajimi_filter", "kanai_tajimi_psd", "KanaiTajimi", "kanai_taji
 
 
 def kanai_tajimi_filter(omega_g, zeta_g):
-    """State-space matrices of the Kanai–Tajimi filter, states ``(u [m s], u' [m])`` for ``w`` in m/s^2.
+    """State-space matrices of the Kanai–Tajimi filter, states ``(u [m s], u' [m])`` for ``w`` in m s-2.
 
+    Parameters
+    ----------
+    omega_g : array_like
+        Filter (soil) natural frequency [rad s-1], > 0.
+    zeta_g : array_like
+        Filter damping ratio [1], > 0.
+
+    Returns
+    -------
+    screening.excitations.Filter
+        ``(A, B, C, D)`` [.., 2, 2], [.., 2], [.., 2], [..]: arrays broadcast into the leading axes.
+
+    Notes
+    -----
     ``A = [[0, 1], [-omega_g^2, -2 zeta_g omega_g]]``, ``B = [0, -1]``,
-    ``C = [-omega_g^2, -2 zeta_g omega_g]``, ``D = 0`` (eqs. 47–49; the output is
-    ``a = u'' + w = -(omega_g^2 u + 2 zeta_g omega_g u')``).  ``omega_g`` [rad/s], ``zeta_g`` [1],
-    arrays broadcast (leading axes of the result).
+    ``C = [-omega_g^2, -2 zeta_g omega_g]``, ``D = 0``: eqs. (47)-(49) in [1], the output
+    ``a = u'' + w = -(omega_g^2 u + 2 zeta_g omega_g u')`` (eq. (48) with the sign of ``w`` folded into ``B``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> kanai_tajimi_filter(10.0, 0.4).A
+    array([[   0.,    1.],
+           [-100.,   -8.]])
     """
     wg, zg = np.broadcast_arrays(np.asarray(omega_g, dtype=float), np.asarray(zeta_g, dtype=float))
     zero, one = np.zeros_like(wg), np.ones_like(wg)
@@ -33,8 +58,40 @@ def kanai_tajimi_filter(omega_g, zeta_g):
 
 
 def kanai_tajimi_psd(omega, S0, omega_g, zeta_g):
-    """Two-sided Kanai–Tajimi PSD [m^2/s^3] at ``omega`` [rad/s] (eq. 50):
-    ``S0 (omega_g^4 + 4 zeta_g^2 omega_g^2 omega^2) / ((omega^2 - omega_g^2)^2 + 4 zeta_g^2 omega_g^2 omega^2)``."""
+    """Two-sided Kanai–Tajimi power spectral density [m2 s-3].
+
+    Parameters
+    ----------
+    omega : array_like
+        Circular frequency [rad s-1].
+    S0 : array_like
+        Two-sided PSD level of the driving white noise [m2 s-3].
+    omega_g : array_like
+        Filter (soil) natural frequency [rad s-1], > 0.
+    zeta_g : array_like
+        Filter damping ratio [1], > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``S(omega)`` [m2 s-3], broadcast over the arguments.
+
+    Notes
+    -----
+    ``S0 (omega_g^4 + 4 zeta_g^2 omega_g^2 omega^2) / ((omega^2 - omega_g^2)^2 + 4 zeta_g^2 omega_g^2
+    omega^2)``, eq. (50) in [1]; the transfer function of :func:`kanai_tajimi_filter`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> [f"{s:.4g}" for s in kanai_tajimi_psd([0.0, 10.0], 1e-3, 10.0, 0.4)]
+    ['0.001', '0.002562']
+    """
     w = np.asarray(omega, dtype=float)
     wg, zg = omega_g, zeta_g
     num = wg**4 + 4.0 * zg**2 * wg**2 * w**2
@@ -82,12 +139,42 @@ class KanaiTajimi(Excitation):
 
 
 def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
-    """Stationary variances of the Kanai–Tajimi filter (eq. 49) under ``2 pi S0`` white noise.
+    """Stationary variances of the Kanai–Tajimi filter under white noise of PSD ``S0``.
 
-    Returns ``(var_u [m^2], var_u_dot [m^2/s^2], var_z [m^2/s^4])``: ``var_u = pi S0 / (2 zeta_g omega_g^3)``,
-    ``var_u_dot = pi S0 / (2 zeta_g omega_g)`` and the output
-    ``var_z = pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)``; ``cov(u, u_dot) = 0``.
-    ``S0`` [m^2/s^3], ``omega_g`` [rad/s], ``zeta_g`` [1].
+    Parameters
+    ----------
+    S0 : array_like
+        Two-sided PSD level of the driving white noise [m2 s-3].
+    omega_g : array_like
+        Filter (soil) natural frequency [rad s-1], > 0.
+    zeta_g : array_like
+        Filter damping ratio [1], > 0.
+
+    Returns
+    -------
+    var_u : numpy.ndarray or float
+        ``pi S0 / (2 zeta_g omega_g^3)`` [m2].
+    var_u_dot : numpy.ndarray or float
+        ``pi S0 / (2 zeta_g omega_g)`` [m2 s-2].
+    var_z : numpy.ndarray or float
+        Variance of the output ``pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)`` [m2 s-4]; ``cov(u, u') = 0``.
+
+    Notes
+    -----
+    The stationary solution of the filter block of the Lyapunov equation (eqs. (49) and (51) in [1])
+    under ``E[w(t) w(s)] = 2 pi S0 delta(t - s)``; ``var_z`` is the integral of eq. (50) over all
+    frequencies.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> [f"{v:.4g}" for v in kanai_tajimi_stationary_moments(1e-3, 10.0, 0.4)]
+    ['3.927e-06', '0.0003927', '0.0644']
     """
     var_u = np.pi * S0 / (2.0 * zeta_g * omega_g**3)
     var_u_dot = np.pi * S0 / (2.0 * zeta_g * omega_g)
@@ -97,5 +184,37 @@ def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
 
 @numba.njit(cache=True)
 def stationary_filter_moments_jit(S0, omega_g, zeta_g):
-    """Compiled twin of :func:`kanai_tajimi_stationary_moments`: ``(var_u [m^2], var_u_dot [m^2/s^2])``."""
+    """Compiled twin of :func:`kanai_tajimi_stationary_moments` (the filter's two variances).
+
+    Parameters
+    ----------
+    S0 : float
+        Two-sided PSD level of the driving white noise [m2 s-3].
+    omega_g : float
+        Filter natural frequency [rad s-1].
+    zeta_g : float
+        Filter damping ratio [1].
+
+    Returns
+    -------
+    var_u : float
+        [m2].
+    var_u_dot : float
+        [m2 s-2].
+
+    Notes
+    -----
+    ``pi S0 / (2 zeta_g omega_g^3)`` and ``pi S0 / (2 zeta_g omega_g)`` (eqs. (49) and (51) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> stationary_filter_moments_jit(1e-3, 10.0, 0.4) == kanai_tajimi_stationary_moments(1e-3, 10.0, 0.4)[:2]
+    True
+    """
     return math.pi * S0 / (2.0 * zeta_g * omega_g**3), math.pi * S0 / (2.0 * zeta_g * omega_g)

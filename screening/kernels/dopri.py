@@ -67,7 +67,42 @@ ERR_FLOOR = 1e-10
 def dense_output(y0, K, h, theta, j):
     """Component ``j`` of the dense-output polynomial at fraction ``theta`` of the step ``h``.
 
-    ``y0``: state at the start of the step; ``K``: the 7 stage derivatives (rows).
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        State at the start of the step.
+    K : numpy.ndarray
+        The 7 stage derivatives (rows), one column per component.
+    h : float
+        Step size [s].
+    theta : float
+        Fraction of the step [1], in [0, 1].
+    j : int
+        Component.
+
+    Returns
+    -------
+    float
+        ``y_j(t + theta h)`` of the 4th-order continuous extension.
+
+    Notes
+    -----
+    ``y(t + theta h) = y0 + h sum_i K_i theta (P_i0 + theta (P_i1 + theta (P_i2 + theta P_i3)))`` with the
+    dense-output coefficients :data:`P` of the pair [2]; exact at both ends of the step.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> K = np.ones((7, 1))                         # y' = 1: the polynomial is y0 + theta h
+    >>> f"{dense_output(np.zeros(1), K, 0.5, 0.3, 0):.12f}"
+    '0.150000000000'
     """
     acc = 0.0
     for i in range(7):
@@ -78,33 +113,179 @@ def dense_output(y0, K, h, theta, j):
 
 @numba.njit(cache=True, inline="always")
 def rejected_step_factor(err):
-    """Step factor after a rejected step with error norm ``err > 1``."""
+    """Step factor after a rejected step.
+
+    Parameters
+    ----------
+    err : float
+        Error norm [1], > 1.
+
+    Returns
+    -------
+    float
+        ``max(FAC_MIN, SAFETY err^(-1/5))`` [1].
+
+    Notes
+    -----
+    The plain (I) controller of a 5th-order pair after a rejection [2].
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> f"{rejected_step_factor(32.0):.2f}"
+    '0.45'
+    """
     return max(FAC_MIN, SAFETY * err**-REJECT_EXPONENT)
 
 
 @numba.njit(cache=True, inline="always")
 def accepted_step_factor(err, err_old):
-    """PI step factor after an accepted step (``err``, ``err_old``: current and previous error norms)."""
+    """PI step factor after an accepted step.
+
+    Parameters
+    ----------
+    err : float
+        Current error norm [1].
+    err_old : float
+        Previous error norm [1].
+
+    Returns
+    -------
+    float
+        ``SAFETY err^-ALPHA err_old^BETA`` [1], within ``[FAC_MIN, FAC_MAX]``.
+
+    Notes
+    -----
+    The PI controller of Hairer's DOPRI5 [2] (exponents :data:`ALPHA`, :data:`BETA`).
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> f"{accepted_step_factor(1.0, 1.0):.2f}"
+    '0.90'
+    """
     return min(FAC_MAX, max(FAC_MIN, SAFETY * err**-ALPHA * err_old**BETA))
 
 
 @numba.njit(cache=True, inline="always")
 def accepted_step_factor_log(log_err, log_err_old):
-    """:func:`accepted_step_factor` from the logarithms of the error norms (the scalar integrator's form)."""
+    """:func:`accepted_step_factor` from the logarithms of the error norms.
+
+    Parameters
+    ----------
+    log_err : float
+        ``ln`` of the current error norm.
+    log_err_old : float
+        ``ln`` of the previous error norm.
+
+    Returns
+    -------
+    float
+        The PI step factor [1].
+
+    Notes
+    -----
+    The scalar integrators' form of the PI controller of [2]: one ``exp`` per step.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> import math
+    >>> math.isclose(accepted_step_factor_log(math.log(0.5), math.log(0.2)), accepted_step_factor(0.5, 0.2),
+    ...              rel_tol=1e-14)
+    True
+    """
     return min(FAC_MAX, max(FAC_MIN, SAFETY * math.exp(-ALPHA * log_err + BETA * log_err_old)))
 
 
 @numba.njit(cache=True, inline="always")
 def pi_step_factor(err, log_err_old):
-    """``(factor, log_err)`` after an accepted step of error norm ``err``: the PI factor of
-    :func:`accepted_step_factor_log` and the logarithm to pass as ``log_err_old`` next time."""
+    """The PI step factor after an accepted step, and the logarithm to carry to the next.
+
+    Parameters
+    ----------
+    err : float
+        Error norm of the accepted step [1].
+    log_err_old : float
+        ``ln`` of the previous error norm.
+
+    Returns
+    -------
+    factor : float
+        The PI step factor [1] of :func:`accepted_step_factor_log`.
+    log_err : float
+        ``ln max(err, ERR_FLOOR)``, the next step's ``log_err_old``.
+
+    Notes
+    -----
+    The PI controller of [2]; the error norm is floored at :data:`ERR_FLOOR`.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> factor, log_err = pi_step_factor(1.0, LOG_ERR_START)
+    >>> f"{factor:.4f} {log_err:.1f}"
+    '0.6226 0.0'
+    """
     log_err = math.log(max(err, ERR_FLOOR))
     return accepted_step_factor_log(log_err, log_err_old), log_err
 
 
 @numba.njit(cache=True, inline="always")
 def rejected_step_factor_log(log_err):
-    """:func:`rejected_step_factor` from the logarithm of the error norm (the scalar integrator's form)."""
+    """:func:`rejected_step_factor` from the logarithm of the error norm.
+
+    Parameters
+    ----------
+    log_err : float
+        ``ln`` of the error norm (> 0: the step was rejected).
+
+    Returns
+    -------
+    float
+        ``max(FAC_MIN, SAFETY exp(-log_err / 5))`` [1].
+
+    Notes
+    -----
+    The scalar integrators' form of the I controller of [2].
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> import math
+    >>> math.isclose(rejected_step_factor_log(math.log(32.0)), rejected_step_factor(32.0), rel_tol=1e-14)
+    True
+    """
     return max(FAC_MIN, SAFETY * math.exp(-REJECT_EXPONENT * log_err))
 
 
@@ -125,11 +306,35 @@ _P = [[float(v) for v in row] for row in P]
 
 @numba.njit(cache=True, inline="always")
 def dense_weights(theta):
-    """Weights ``(w1, w3, w4, w5, w6, w7)`` of the nonzero stages in :func:`dense_output` at ``theta``.
+    """Weights of the nonzero stages in :func:`dense_output` at fraction ``theta`` of a step.
 
-    ``y(t + theta h) = y0 + h (K1 w1 + K3 w3 + K4 w4 + K5 w5 + K6 w6 + K7 w7)``, bit for bit the
-    value of :func:`dense_output` (same products and sums; stage 2 has zero weight).  One set of
-    weights serves every component.
+    Parameters
+    ----------
+    theta : float
+        Fraction of the step [1], in [0, 1].
+
+    Returns
+    -------
+    tuple of float
+        ``(w1, w3, w4, w5, w6, w7)`` [1]: ``y(t + theta h) = y0 + h (K1 w1 + K3 w3 + K4 w4 + K5 w5 + K6 w6 + K7 w7)``.
+
+    Notes
+    -----
+    Bit for bit the value of :func:`dense_output` (same products and sums; stage 2 has zero weight); one
+    set of weights serves every component.  At ``theta = 1`` they are the 5th-order weights :data:`B` [1].
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> w = dense_weights(1.0)
+    >>> bool(abs(w[0] - B[0]) < 1e-15 and abs(w[5]) < 1e-15)
+    True
     """
     return (theta * (P10 + theta * (P11 + theta * (P12 + theta * P13))),
             theta * (P30 + theta * (P31 + theta * (P32 + theta * P33))),
@@ -141,8 +346,40 @@ def dense_weights(theta):
 
 @numba.njit(cache=True, inline="always")
 def dense_value(y0, k, h, theta):
-    """One component of the dense output at fraction ``theta`` of the step ``h``: ``y0`` at the step's
-    start, ``k = (K1, K3, K4, K5, K6, K7)`` its nonzero-weight stage derivatives (scalars)."""
+    """One component of the dense output at fraction ``theta`` of a step.
+
+    Parameters
+    ----------
+    y0 : float
+        The component at the start of the step.
+    k : tuple of float
+        ``(K1, K3, K4, K5, K6, K7)``: its nonzero-weight stage derivatives.
+    h : float
+        Step size [s].
+    theta : float
+        Fraction of the step [1], in [0, 1].
+
+    Returns
+    -------
+    float
+        The component at ``t + theta h``.
+
+    Notes
+    -----
+    :func:`dense_output` on scalars, with :func:`dense_weights` [2].
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> f"{dense_value(0.0, (1.0, 1.0, 1.0, 1.0, 1.0, 1.0), 0.5, 0.3):.12f}"
+    '0.150000000000'
+    """
     w1, w3, w4, w5, w6, w7 = dense_weights(theta)
     return y0 + h * (k[0] * w1 + k[1] * w3 + k[2] * w4 + k[3] * w5 + k[4] * w6 + k[5] * w7)
 

@@ -87,7 +87,7 @@ from screening.status import ContactRegime
 __all__ = ["linear_rocking_stiffness", "REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
            "REGIME_NAMES", "foundation_constants", "law_constants", "corner_indentations", "contact_regime",
            "contact_length", "contact_resultants", "law_resultants", "linear_indentation", "rising_root",
-           "rest_indentation", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
+           "rest_indentation", "UPLIFT_BEARING_LIMIT", "bearing_load", "exact_uplift_angle", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
            "law_resultants_trig_jit"]
 
 #: Integer codes of the contact regimes returned by :func:`contact_regime`.
@@ -100,23 +100,121 @@ REGIME_NAMES = {REGIME_FULL_CONTACT: "full contact", REGIME_UPLIFT_POSITIVE: "up
 
 
 def foundation_constants(foundation):
-    """``(k, eps, damping, winkler)`` of a Hunt–Crossley or Winkler foundation as plain floats and a bool
-    (the arguments of :func:`contact_resultants` after ``b``; see :func:`law_constants` for any law)."""
+    """The constants of a Hunt–Crossley or Winkler bed as plain numbers.
+
+    Parameters
+    ----------
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    k : float
+        Bed stiffness [N m-2].
+    eps : float
+        Cubic stiffness parameter [m-2].
+    damping : float
+        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+    winkler : bool
+        True for a Winkler bed.
+
+    Notes
+    -----
+    The arguments of :func:`contact_resultants` after ``b``, for the laws of eqs. (3)-(4) in [1]; see
+    :func:`law_constants` for any registered law.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> foundation_constants(bed)
+    (28900000.0, 0.0, 895000000.0, False)
+    """
     return float(foundation.k), float(foundation.eps), float(foundation.damping), foundation.law == "winkler"
 
 
 def law_constants(foundation):
-    """``(k, eps, w_rate, w_indentation)`` of a foundation object as plain floats (the arguments of
-    :func:`law_resultants` after ``b``)."""
+    """The constants of a bed of any contact law as plain numbers.
+
+    Parameters
+    ----------
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    k : float
+        Bed stiffness [N m-2].
+    eps : float
+        Cubic stiffness parameter [m-2].
+    w_rate : float
+        Weight of the rate in the damping pressure [N s m-2].
+    w_indentation : float
+        Weight of the rate times the indentation [N s m-3].
+
+    Notes
+    -----
+    The arguments of :func:`law_resultants` after ``b``: the damping pressure of the law is
+    ``zdot (w_rate + w_indentation z)`` (Winkler ``(c, 0)``, Hunt–Crossley ``(0, lam)``, eq. (3) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> law_constants(bed)
+    (28900000.0, 0.0, 0.0, 895000000.0)
+    """
     w_rate, w_indentation = foundation.damping_weights
     return float(foundation.k), float(foundation.eps), float(w_rate), float(w_indentation)
 
 
 def corner_indentations(theta, z_cb, b):
-    """Indentations of the compressed and of the lifted base edge [m] (eqs. 1–2).
+    """Indentations of the compressed and of the lifted base edge [m].
 
-    ``z_c = z_cb + b |sin theta|`` (edge B for ``theta >= 0``, A otherwise) and
-    ``z_f = z_cb - b |sin theta|``.  ``theta`` [rad], ``z_cb`` [m], ``b`` [m].
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    z_cb : array_like
+        Indentation of the base centre [m], positive into the bed.
+    b : float or array_like
+        Half-width of the base [m].
+
+    Returns
+    -------
+    z_c : numpy.ndarray
+        Indentation of the compressed edge [m] (edge B for ``theta >= 0``, A otherwise).
+    z_f : numpy.ndarray
+        Indentation of the lifted edge [m]; negative in uplift.
+
+    Notes
+    -----
+    ``z_c = z_cb + b |sin theta|``, ``z_f = z_cb - b |sin theta|``: the linear indentation field of
+    eqs. (1)-(2) in [1] at the two edges.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> z_c, z_f = corner_indentations(1e-3, 2e-5, 0.035)
+    >>> f"{float(z_c):.3e} {float(z_f):.3e}"
+    '5.500e-05 -1.500e-05'
     """
     a = np.abs(np.sin(np.asarray(theta, dtype=float)))
     z_cb = np.asarray(z_cb, dtype=float)
@@ -124,7 +222,40 @@ def corner_indentations(theta, z_cb, b):
 
 
 def contact_regime(theta, z_cb, b):
-    """Contact regime code (``REGIME_*``) for rotation ``theta`` [rad] and indentation ``z_cb`` [m]."""
+    """Contact regime code (``REGIME_*``) of a rotated, indented base.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    z_cb : array_like
+        Indentation of the base centre [m], positive into the bed.
+    b : float or array_like
+        Half-width of the base [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        :data:`REGIME_FULL_CONTACT`, :data:`REGIME_UPLIFT_POSITIVE`, :data:`REGIME_UPLIFT_NEGATIVE` or
+        :data:`REGIME_FLIGHT` (integer codes of :class:`screening.status.ContactRegime`).
+
+    Notes
+    -----
+    Full contact while the lifted edge is indented (``z_f >= 0``), flight once the compressed edge is
+    not (``z_c <= 0``), uplift between (:func:`corner_indentations`; the regimes of eqs. (9)-(12) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> codes = contact_regime([0.0, 1e-3, -1e-3, 1e-3], [2e-5, 2e-5, 2e-5, -1e-4], 0.035)
+    >>> [REGIME_NAMES[int(r)] for r in codes]
+    ['full contact', 'uplift, theta > 0', 'uplift, theta < 0', 'flight']
+    """
     theta = np.asarray(theta, dtype=float)
     z_c, z_f = corner_indentations(theta, z_cb, b)
     uplift = np.where(theta >= 0.0, REGIME_UPLIFT_POSITIVE, REGIME_UPLIFT_NEGATIVE)
@@ -132,9 +263,37 @@ def contact_regime(theta, z_cb, b):
 
 
 def contact_length(theta, z_cb, b):
-    """Length of the contact zone ``P`` [m] measured from the compressed edge (0 in flight).
+    """Length of the contact zone [m], measured from the compressed edge.
 
-    ``2 b`` in full contact, ``z_c / |sin theta|`` in uplift (eq. 6 text), ``0`` in flight.
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    z_cb : array_like
+        Indentation of the base centre [m], positive into the bed.
+    b : float or array_like
+        Half-width of the base [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``P`` [m]: ``2 b`` in full contact, ``z_c / |sin theta|`` in uplift, 0 in flight.
+
+    Notes
+    -----
+    In uplift the contact ends where the indentation field reaches zero, ``eta_U = z_cb / sin(theta) + b``
+    (text of eq. (6) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> [f"{p:.4g}" for p in contact_length([0.0, 1e-3, 1e-3], [2e-5, 2e-5, -1e-4], 0.035)]
+    ['0.07', '0.055', '0']
     """
     a = np.abs(np.sin(np.asarray(theta, dtype=float)))
     z_c, z_f = corner_indentations(theta, z_cb, b)
@@ -144,41 +303,110 @@ def contact_length(theta, z_cb, b):
 
 
 def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler=False):
-    """Resultants for a Hunt–Crossley (``winkler=False``) or Winkler bed: :func:`law_resultants` with the
-    weights of that law (``damping`` = ``lam`` [N s/m^4] or ``c`` [N s/m^2]).  Kept for callers that
-    hold a damping and a flag; the solvers pass the law's weights."""
+    """Contact force and moment of a Hunt–Crossley or Winkler bed, chosen by a flag.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad] (positive clockwise, edge B compressed).
+    theta_dot : array_like
+        Rotation rate [rad s-1].
+    z_cb : array_like
+        Indentation of the base centre [m], positive into the bed.
+    z_cb_dot : array_like
+        Its rate [m s-1].
+    b : float or array_like
+        Half-width of the base [m].
+    k : float or array_like
+        Bed stiffness [N m-2].
+    eps : float or array_like
+        Cubic stiffness parameter [m-2].
+    damping : float or array_like
+        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+    winkler : bool, optional
+        True for a Winkler bed (default False: Hunt–Crossley).
+
+    Returns
+    -------
+    F_cb : numpy.ndarray
+        Resultant contact force [N].
+    M_cb : numpy.ndarray
+        Resultant moment about the base centre [N m].
+
+    Notes
+    -----
+    :func:`law_resultants` with the weights ``(0, lam)`` or ``(c, 0)``: eqs. (5)-(6) in [1], exact.
+    Kept for callers that hold a damping and a flag; the solvers pass the law's weights.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> F, M = contact_resultants(0.0, 0.0, 4.2e-5, 0.0, 0.035, 2.89e7, 0.0, 8.95e8)
+    >>> f"{float(F):.4g} {float(M):.4g}"
+    '84.97 0'
+    """
     w_rate, w_indentation = (damping, 0.0) if winkler else (0.0, damping)
     return law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation)
 
 
 def law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
-    """Resultant contact force ``F_cb`` [N] and moment ``M_cb`` [N m] (eqs. 5–6), exact.
+    """Resultant contact force ``F_cb`` [N] and moment ``M_cb`` [N m] of any contact law, exact.
 
     Vectorised over all array arguments (broadcast).  See the module docstring for the
     derivation and the regime-by-regime formulas.
 
     Parameters
     ----------
-    theta : rotation [rad] (positive clockwise, edge B compressed).
-    theta_dot : rotation rate [rad/s].
-    z_cb : indentation of the base centre [m], positive into the bed.
-    z_cb_dot : its rate [m/s].
-    b : half-width of the base [m].
-    k : bed stiffness [N/m^2].
-    eps : cubic stiffness parameter [1/m^2].
-    w_rate, w_indentation : weights [N s m-2], [N s m-3] of the law's damping pressure
-        ``zdot (w_rate + w_indentation z)`` (:attr:`screening.model.Foundation.damping_weights`:
+    theta : array_like
+        Rotation [rad] (positive clockwise, edge B compressed).
+    theta_dot : array_like
+        Rotation rate [rad s-1].
+    z_cb : array_like
+        Indentation of the base centre [m], positive into the bed.
+    z_cb_dot : array_like
+        Its rate [m s-1].
+    b : float or array_like
+        Half-width of the base [m].
+    k : float or array_like
+        Bed stiffness [N m-2].
+    eps : float or array_like
+        Cubic stiffness parameter [m-2].
+    w_rate : float or array_like
+        Weight [N s m-2] of the rate in the law's damping pressure ``zdot (w_rate + w_indentation z)``.
+    w_indentation : float or array_like
+        Weight [N s m-3] of the rate times the indentation (:attr:`screening.model.Foundation.damping_weights`:
         Winkler ``(c, 0)``, Hunt–Crossley ``(0, lam)``).
 
     Returns
     -------
-    (F_cb, M_cb) : arrays [N], [N m]; both zero in flight.
+    F_cb : numpy.ndarray
+        Resultant contact force [N]; zero in flight.
+    M_cb : numpy.ndarray
+        Resultant moment about the base centre [N m]; zero in flight.
 
     Notes
     -----
     ``F_cb = k int z + eps k int z^3 + w_rate int zdot + w_indentation int z zdot`` and
     ``M_cb = sigma cos(theta) (k int z r + eps k int z^3 r + w_rate int zdot r + w_indentation int z zdot r)``
-    over the contact zone, each integral exact from its end values (module docstring).
+    over the contact zone, each integral exact from its end values (module docstring): eqs. (5)-(6)
+    in [1] with the law of eqs. (3)-(4), without small-angle approximations.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> F, M = law_resultants(1e-3, 0.0, 2e-5, 0.0, 0.035, 2.89e7, 0.0, 0.0, 8.95e8)
+    >>> f"{float(F):.4g} {float(M):.4g}"
+    '43.71 0.7285'
     """
     theta = np.asarray(theta, dtype=float)
     theta_dot = np.asarray(theta_dot, dtype=float)
@@ -219,7 +447,37 @@ def law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indent
 
 
 def linear_indentation(block, foundation):
-    """Static indentation of the base centre by the linear law alone, ``z_lin = m g / (2 b k)`` [m] (eq. 17)."""
+    """Static indentation of the base centre by the linear law alone, ``z_lin`` [m].
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``z_lin = m g / (2 b k)`` [m].
+
+    Notes
+    -----
+    Eq. (17) in [1]: the weight carried by the uniform pressure ``k z`` over the base ``2 b``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{float(linear_indentation(block, bed)):.4e}"
+    '4.2043e-05'
+    """
     return block.m * block.g / (2.0 * block.b * foundation.k)
 
 
@@ -228,15 +486,35 @@ def linear_rocking_stiffness(block, foundation):
 
     Parameters
     ----------
-    block : the rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]).
-    foundation : the bed (``k`` [N m-2]).
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``(2/3) b^3 k - m g h`` [N m/rad].
 
     Notes
     -----
-    ``K(0)`` of every condensation at ``eps = 0`` (eqs. 22 and 25 at ``theta = 0``): the bed's
+    ``K(0)`` of every condensation at ``eps = 0`` (eqs. (22) and (25) in [1] at ``theta = 0``): the bed's
     restoring moment ``(2/3) b^3 k theta`` in full contact less the overturning moment of the
     weight ``m g h theta``.  A condensation adds its own ``eps`` term; the block rocks about its
     rest position only where this is positive.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{float(linear_rocking_stiffness(block, bed)):.4g}"
+    '808.2'
     """
     return 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h
 
@@ -244,10 +522,39 @@ def linear_rocking_stiffness(block, foundation):
 def rising_root(alpha, beta, rhs, max_iter=100):
     """Root of ``alpha z^3 + beta z = rhs`` on the rising branch (``beta + 3 alpha z^2 > 0``).
 
-    Newton from ``z = rhs / beta``: for ``alpha >= 0`` the cubic is convex and the start lies
-    right of the root, for ``alpha < 0`` concave with the start left of it, so the iterates
-    converge monotonically (no overshoot onto the falling branch).  Vectorised; SI units of
-    the caller (``z`` and ``rhs`` [m], ``alpha`` [1/m^2], ``beta`` [1]).
+    Parameters
+    ----------
+    alpha : array_like
+        Cubic coefficient [m-2] (caller's units: ``z`` and ``rhs`` [m]).
+    beta : array_like
+        Linear coefficient [1], positive.
+    rhs : array_like
+        Right-hand side [m].
+    max_iter : int, optional
+        Largest number of Newton steps (default 100).
+
+    Returns
+    -------
+    numpy.ndarray
+        The root [m], broadcast over the arguments.
+
+    Notes
+    -----
+    Newton from ``z = rhs / beta``: for ``alpha >= 0`` the cubic is convex and the start lies right of
+    the root, for ``alpha < 0`` concave with the start left of it, so the iterates converge
+    monotonically (no overshoot onto the falling branch).  It solves the static balances of eq. (13)
+    in [1] (:func:`rest_indentation`, :func:`exact_uplift_angle`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> f"{float(rising_root(1.0, 1.0, 2.0)):.12f}"
+    '1.000000000000'
     """
     alpha, beta, rhs = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (alpha, beta, rhs)))
     z = rhs / beta
@@ -260,11 +567,40 @@ def rising_root(alpha, beta, rhs, max_iter=100):
 
 
 def rest_indentation(block, foundation):
-    """Static indentation of the base centre at rest ``z0`` [m], cubic term included (eq. 13, theta = 0).
+    """Static indentation of the base centre at rest ``z0`` [m], cubic term included.
 
-    The root of ``2 b k (z + eps z^3) = m g``, i.e. ``eps z0^3 + z0 = z_lin``, on the rising
-    (stable) branch.  Vectorised.  Raises ``ValueError`` when a softening bed cannot carry the
-    weight at all: ``|eps| z_lin^2 >= 4/27``.
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``z0`` [m], the root of ``eps z0^3 + z0 = z_lin`` on the rising (stable) branch.
+
+    Raises
+    ------
+    ValueError
+        When a softening bed cannot carry the weight at all: ``|eps| z_lin^2 >= 4/27``.
+
+    Notes
+    -----
+    Eq. (13) in [1] at rest (``theta = 0``): ``2 b k (z + eps z^3) = m g``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> f"{float(rest_indentation(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7))):.6e}"
+    '3.859378e-05'
     """
     z_lin = linear_indentation(block, foundation)
     eps = np.asarray(foundation.eps, dtype=float)
@@ -276,19 +612,205 @@ def rest_indentation(block, foundation):
     return rising_root(eps, 1.0, z_lin)[()]
 
 
+#: Largest bearing load ``|eps| z_lin^2`` [1] of a softening bed that carries the block through the onset
+#: of uplift (:func:`exact_uplift_angle`); it carries the weight at rest up to ``4/27``.
+UPLIFT_BEARING_LIMIT = 2.0 / 27.0
+
+
+def bearing_load(block, foundation):
+    """Bearing load ``-eps z_lin^2`` [1] of the bed under the block's weight.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2]); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``-eps (m g / (2 b k))^2`` [1], broadcast over the model's fields: positive for a softening
+        bed, which carries the block through the onset of uplift only below :data:`UPLIFT_BEARING_LIMIT`.
+
+    Notes
+    -----
+    The cubic balance ``2 eps y^3 + y = z_lin`` of :func:`exact_uplift_angle` has a root on its rising
+    branch only while ``-2 eps z_lin^2 < 4/27``, i.e. ``-eps z_lin^2 < 2/27``; ``z_lin`` is eq. (17) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.model import Block, Foundation
+    >>> load = bearing_load(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5))
+    >>> f"{float(load):.3g}"
+    '0.00106'
+    """
+    eps = np.asarray(foundation.eps, dtype=float)
+    return -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
+
+
+def exact_uplift_angle(block, foundation):
+    """Exact static uplift angle ``theta_ul`` [rad] of a block on a bed with a cubic term.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2]); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``theta_ul`` [rad], broadcast over the model's fields; NaN where a softening bed cannot carry
+        the block through the onset of uplift (:func:`bearing_load` at or above
+        :data:`UPLIFT_BEARING_LIMIT`).
+
+    Notes
+    -----
+    The rotation at which the lifted edge of the base reaches the bed surface in static equilibrium:
+    with ``y = b theta_ul`` the base-centre indentation, the static vertical balance of eq. (13) in [1],
+    ``2 b k z_cb + 2 b eps k z_cb (z_cb^2 + b^2 theta^2) = m g`` at ``z_cb = b theta``, gives
+    ``2 eps y^3 + y = z_lin``, ``z_lin = m g / (2 b k)`` (eq. (17) in [1]), solved on its rising branch.  For ``eps = 0``
+    it is eq. (19) in [1], ``m g / (2 b^2 k)``.  The ``"cubic"`` condensation uses it as its threshold;
+    the coupled Monte Carlo labels uplift with it.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.model import Block, Foundation
+    >>> block = Block(m=8.67, b=0.035, h=0.21)
+    >>> f"{float(exact_uplift_angle(block, Foundation(k=2.89e7, lam=8.95e8))):.4e}"
+    '1.2012e-03'
+    >>> f"{float(exact_uplift_angle(block, Foundation(k=2.89e7, lam=8.95e8, eps=6e7))):.4e}"
+    '1.0372e-03'
+    """
+    eps = np.asarray(foundation.eps, dtype=float)
+    carried = bearing_load(block, foundation) < UPLIFT_BEARING_LIMIT
+    y = rising_root(2.0 * np.where(carried, eps, 0.0), 1.0, linear_indentation(block, foundation))
+    return np.where(carried, y / block.b, np.nan)[()]
+
+
 # ----------------------------------------------------------------------------- compiled
 @numba.njit(cache=True)
 def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """Compiled scalar :func:`contact_resultants` (Hunt–Crossley or Winkler by the bool ``winkler``):
-    returns ``(F_cb [N], M_cb [N m])``; kept for callers that hold a flag (see :func:`law_resultants_jit`)."""
+    """Compiled scalar :func:`contact_resultants` (Hunt–Crossley or Winkler by a flag).
+
+    Parameters
+    ----------
+    theta : float
+        Rotation [rad].
+    theta_dot : float
+        Rotation rate [rad s-1].
+    z_cb : float
+        Indentation of the base centre [m], positive into the bed.
+    z_cb_dot : float
+        Its rate [m s-1].
+    b : float
+        Half-width of the base [m].
+    k : float
+        Bed stiffness [N m-2].
+    eps : float
+        Cubic stiffness parameter [m-2].
+    damping : float
+        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+    winkler : bool
+        True for a Winkler bed.
+
+    Returns
+    -------
+    F_cb : float
+        Resultant contact force [N].
+    M_cb : float
+        Resultant moment about the base centre [N m].
+
+    Notes
+    -----
+    Eqs. (5)-(6) in [1], exact; the compiled twin of :func:`contact_resultants`, kept for callers that hold a
+    flag (the solvers use :func:`law_resultants_jit`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import math
+    >>> F, M = contact_resultants_jit(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8, False)
+    >>> F0, M0 = contact_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8)
+    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
+    True
+    """
     return contact_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                        damping, winkler)
 
 
 @numba.njit(cache=True)
 def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """:func:`contact_resultants_jit` from ``s = sin(theta)``, ``c = cos(theta)``: :func:`law_resultants_trig_jit`
-    with the weights of the Winkler (``winkler`` true) or Hunt–Crossley law."""
+    """:func:`contact_resultants_jit` from ``sin(theta)`` and ``cos(theta)``.
+
+    Parameters
+    ----------
+    s : float
+        ``sin(theta)`` [1] of the rotation, ``|theta| < pi/2``.
+    c : float
+        ``cos(theta)`` [1].
+    theta_dot : float
+        Rotation rate [rad s-1].
+    z_cb : float
+        Indentation of the base centre [m], positive into the bed.
+    z_cb_dot : float
+        Its rate [m s-1].
+    b : float
+        Half-width of the base [m].
+    k : float
+        Bed stiffness [N m-2].
+    eps : float
+        Cubic stiffness parameter [m-2].
+    damping : float
+        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+    winkler : bool
+        True for a Winkler bed.
+
+    Returns
+    -------
+    F_cb : float
+        Resultant contact force [N].
+    M_cb : float
+        Resultant moment about the base centre [N m].
+
+    Notes
+    -----
+    Eqs. (5)-(6) in [1]: :func:`law_resultants_trig_jit` with the weights of the Winkler (``winkler`` true)
+    or Hunt–Crossley law.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import math
+    >>> F, M = contact_resultants_trig_jit(math.sin(1e-3), math.cos(1e-3), 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8, False)
+    >>> F0, M0 = contact_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8)
+    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
+    True
+    """
     if winkler:
         return law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, 0.0)
     return law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, 0.0, damping)
@@ -296,16 +818,109 @@ def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damp
 
 @numba.njit(cache=True)
 def law_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
-    """Compiled scalar :func:`law_resultants`: returns ``(F_cb [N], M_cb [N m])``; same arguments and units."""
+    """Compiled scalar :func:`law_resultants`: the contact force and moment of any contact law.
+
+    Parameters
+    ----------
+    theta : float
+        Rotation [rad].
+    theta_dot : float
+        Rotation rate [rad s-1].
+    z_cb : float
+        Indentation of the base centre [m], positive into the bed.
+    z_cb_dot : float
+        Its rate [m s-1].
+    b : float
+        Half-width of the base [m].
+    k : float
+        Bed stiffness [N m-2].
+    eps : float
+        Cubic stiffness parameter [m-2].
+    w_rate : float
+        Weight [N s m-2] of the rate in the damping pressure.
+    w_indentation : float
+        Weight [N s m-3] of the rate times the indentation.
+
+    Returns
+    -------
+    F_cb : float
+        Resultant contact force [N].
+    M_cb : float
+        Resultant moment about the base centre [N m].
+
+    Notes
+    -----
+    Eqs. (5)-(6) in [1], exact; the compiled twin of :func:`law_resultants` (same arguments and units).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import math
+    >>> F, M = law_resultants_jit(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
+    >>> F0, M0 = law_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
+    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
+    True
+    """
     return law_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                    w_rate, w_indentation)
 
 
 @numba.njit(cache=True)
 def law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
-    """:func:`law_resultants_jit` from ``s = sin(theta)``, ``c = cos(theta)`` (``|theta| < pi/2``).
+    """:func:`law_resultants_jit` from ``sin(theta)`` and ``cos(theta)`` (``|theta| < pi/2``).
 
-    Used by the Monte Carlo integrator, which needs ``sin`` and ``cos`` anyway.
+    Parameters
+    ----------
+    s : float
+        ``sin(theta)`` [1] of the rotation, ``|theta| < pi/2``.
+    c : float
+        ``cos(theta)`` [1].
+    theta_dot : float
+        Rotation rate [rad s-1].
+    z_cb : float
+        Indentation of the base centre [m], positive into the bed.
+    z_cb_dot : float
+        Its rate [m s-1].
+    b : float
+        Half-width of the base [m].
+    k : float
+        Bed stiffness [N m-2].
+    eps : float
+        Cubic stiffness parameter [m-2].
+    w_rate : float
+        Weight [N s m-2] of the rate in the damping pressure.
+    w_indentation : float
+        Weight [N s m-3] of the rate times the indentation.
+
+    Returns
+    -------
+    F_cb : float
+        Resultant contact force [N].
+    M_cb : float
+        Resultant moment about the base centre [N m].
+
+    Notes
+    -----
+    Eqs. (5)-(6) in [1]; used by the Monte Carlo integrator, which needs ``sin`` and ``cos`` anyway.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import math
+    >>> F, M = law_resultants_trig_jit(math.sin(1e-3), math.cos(1e-3), 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
+    >>> F0, M0 = law_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
+    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
+    True
     """
     sigma = 1.0 if s >= 0.0 else -1.0
     a = sigma * s

@@ -104,16 +104,27 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
 
     Parameters
     ----------
-    block, foundation, excitation : model objects.  Each numeric field may be a scalar, a 1-d numpy
-        array (a dimension named after the parameter, with the values as coordinate) or an
-        :class:`xarray.DataArray` (its own dimensions and coordinates); the fields are broadcast by
-        dimension name and all points are integrated in one batched call.
-    t_end : record length [s]. dt : output step [s] (the solver is adaptive and finer).
-    rtol : solver relative tolerance.
-    condensation : a registered condensation (:func:`screening.condensation.get`): ``"paper"``
-        (eqs. 17–25, default) or ``"cubic"`` (static balance with the cubic term); recorded in
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ...).  Each numeric field of the three model
+        objects may be a scalar, a 1-d numpy array (a dimension named after the parameter, with the
+        values as coordinate) or an :class:`xarray.DataArray` (its own dimensions and coordinates);
+        the fields are broadcast by dimension name and all points are integrated in one batched call.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping), fields as for ``block``.
+    excitation : screening.excitations.Excitation
+        The input (``S0`` [m2 s-3], its parameters and envelope), fields as for ``block``.
+    t_end : float, optional
+        Record length [s] (default 20).
+    dt : float, optional
+        Output step [s] (default 0.05; the solver is adaptive and finer).
+    rtol : float, optional
+        Solver relative tolerance [1].
+    condensation : str or screening.condensation.Condensation, optional
+        A registered condensation (:func:`screening.condensation.get`): ``"paper"`` (eqs. (17)-(25) in
+        [1], default) or ``"cubic"`` (static balance with the cubic term); recorded in
         ``attrs["condensation"]``.
-    trust : add ``sl_trust`` and the predicted error band ``sl_error_low``/``sl_error_high`` of the
+    trust : bool, optional
+        Add ``sl_trust`` and the predicted error band ``sl_error_low``/``sl_error_high`` of the
         linearization against the coupled model (:func:`screening.analysis.trust.add_trust`; default).
 
     Returns
@@ -131,6 +142,29 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     equilibrium beyond it; ``inf`` otherwise) adds ``theta_capacity`` [rad] and
     ``peak_p_beyond_capacity``, the Gaussian probability ``P(|theta| > theta_capacity)`` at the
     peak ``var_theta``: attributes for one point, variables for a grid.
+
+    Notes
+    -----
+    The condensed equation ``m_sdof theta'' + C(theta) theta' + K(theta) theta = m h a_g`` (eq. (22) in
+    [1]) is replaced by its equivalent linear system with ``c_eq(t)``, ``k_eq(t)`` (eq. (26)), the
+    Gaussian expectations of eq. (31) at the current moments, and the covariance follows the Lyapunov
+    equation (eq. (45); eq. (51) for a filtered input), integrated by
+    :func:`screening.solvers.moments.solve_moments`; ``p_uplift`` is eq. (58).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([1e-5, 1e-4])), t_end=10.0, dt=0.5, trust=False)
+    >>> ds["peak_var_theta"].dims, [f"{v:.3e}" for v in ds["peak_var_theta"].values]
+    (('S0',), ['1.160e-07', '1.372e-06'])
     """
     cond = condensations.get(condensation)
     t = output_times(t_end, dt)

@@ -21,7 +21,7 @@ from scipy import optimize
 
 from screening import condensation as condensations
 from screening.condensation.paper import uplift_threshold as paper_uplift_threshold
-from screening.physics.contact import law_constants, law_resultants, rest_indentation
+from screening.physics.contact import exact_uplift_angle, law_constants, law_resultants, rest_indentation
 from screening.solvers import mcs_kernels as kern
 from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, register
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
@@ -30,8 +30,40 @@ __all__ = ["COUPLED", "CONDENSED", "state_scales", "exact_uplift_threshold", "qu
 
 
 def state_scales(block, foundation):
-    """Absolute error scales of ``(theta, theta', z_cb, z_cb')``: ``theta_ul`` [rad], ``theta_ul w_r``
-    [rad/s], static indentation ``m g/(2 b k)`` [m] and ``z_st w_v`` [m/s]."""
+    """Absolute error scales of the Monte Carlo state ``(theta, theta', z_cb, z_cb')``.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``[theta_ul, theta_ul w_r, z_st, z_st w_v]``: [rad], [rad s-1], [m], [m s-1], with ``theta_ul``
+        of eq. (19) in [1], ``z_st = m g / (2 b k)`` of eq. (17) and the rocking and vertical
+        frequencies ``w_r``, ``w_v`` (``w_r`` at least 1 rad s-1).
+
+    Notes
+    -----
+    The integrators scale their absolute tolerance by these: the state's natural sizes at the onset
+    of uplift.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{s:.3g}" for s in state_scales(block, bed)]
+    ['0.0012', '0.0477', '4.2e-05', '0.0203']
+    """
     tu = float(paper_uplift_threshold(block, foundation))
     z_st = float(block.m * block.g / (2.0 * block.b * foundation.k))
     w_r = max(rocking_frequency(block, foundation), 1.0)
@@ -39,22 +71,93 @@ def state_scales(block, foundation):
 
 
 def exact_uplift_threshold(block, foundation):
-    """``(theta_ul [rad], attrs)``: the exact static uplift angle (the ``"cubic"`` threshold), or the
-    paper's ``m g / (2 b^2 k)`` for a softening bed that cannot carry the block through uplift under
-    ``"cubic"`` (then ``attrs`` says so)."""
-    try:
-        return float(condensations.get("cubic").uplift_threshold(block, foundation)), {"theta_ul_condensation": "cubic"}
-    except ValueError as exc:
-        return (float(condensations.get("paper").uplift_threshold(block, foundation)),
-                {"theta_ul_condensation": "paper",
-                 "theta_ul_note": f"the exact (cubic) uplift angle does not exist here ({exc}); theta_ul is the "
-                                  f"paper's m g / (2 b^2 k)"})
+    """The uplift angle that labels the coupled model's samples, with the attributes saying which.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    theta_ul : float
+        The exact static uplift angle [rad] (:func:`screening.physics.contact.exact_uplift_angle`, the
+        ``"cubic"`` threshold), or the paper's ``m g / (2 b^2 k)`` (eq. (19) in [1]) for a softening
+        bed that cannot carry the block through uplift.
+    attrs : dict
+        ``theta_ul_condensation`` (``"cubic"`` or ``"paper"``) and, for the fallback, ``theta_ul_note``.
+
+    Notes
+    -----
+    The coupled model has no threshold of its own; the exact angle is where its static balance
+    (eq. (13) in [1]) lifts the far edge.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> tu, attrs = exact_uplift_threshold(block, bed)
+    >>> f"{tu:.4e}", attrs
+    ('1.2012e-03', {'theta_ul_condensation': 'cubic'})
+    """
+    tu = float(exact_uplift_angle(block, foundation))
+    if math.isfinite(tu):
+        return tu, {"theta_ul_condensation": "cubic"}
+    return (float(paper_uplift_threshold(block, foundation)),
+            {"theta_ul_condensation": "paper",
+             "theta_ul_note": "the exact (cubic) uplift angle does not exist here (the softening bed cannot carry "
+                              "the block through the onset of uplift: |eps| (m g/(2 b k))^2 >= 2/27); theta_ul is "
+                              "the paper's m g / (2 b^2 k)"})
 
 
 def quasi_static_indentation(block, foundation, theta0):
-    """``z_cb`` [m] carrying the weight at rest at angle ``theta0`` [rad]: ``F_cb(theta0, 0, z_cb, 0) = m g``.
+    """Base-centre indentation ``z_cb`` [m] carrying the weight at rest at a given rotation.
 
-    Equals :func:`~screening.physics.contact.rest_indentation` at ``theta0 = 0``.
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    theta0 : float
+        Rotation [rad].
+
+    Returns
+    -------
+    float
+        ``z_cb`` [m] with ``F_cb(theta0, 0, z_cb, 0) = m g`` (exact contact resultant, eq. (5) in [1]);
+        :func:`~screening.physics.contact.rest_indentation` at ``theta0 = 0``.
+
+    Raises
+    ------
+    ValueError
+        When the bed cannot carry the block at ``theta0``.
+
+    Notes
+    -----
+    The initial vertical state of a coupled sample started at ``theta0``: the root in ``z_cb`` of the
+    vertical balance by Brent's method, bracketed from the flight boundary ``z_cb = -b |sin theta0|``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{quasi_static_indentation(block, bed, 0.0):.4e} {quasi_static_indentation(block, bed, 2e-3):.4e}"
+    '4.2043e-05 3.8499e-05'
     """
     if theta0 == 0.0:
         return rest_indentation(block, foundation)

@@ -36,6 +36,7 @@ import numba
 import numpy as np
 from scipy import special
 
+from screening.condensation.api import equivalent_coefficients_from_moments
 from screening.kernels import dopri
 from screening.kernels.dopri import (
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
@@ -47,7 +48,7 @@ __all__ = ["uplift_occupancy", "SCALE_FLOOR", "OK", "K_EQ_NEGATIVE", "BEYOND_SLE
            "PEAK_HALVINGS", "envelope_rates", "envelope_state", "initial_gain", "stage_gains", "p_uplift",
            "first_step", "trial_step", "judge_step", "end_of_step", "peak_in_step", "store_outputs",
            "store_dense_outputs", "SUMMARIES", "solve_point_white", "packed_size", "augmented_system",
-           "lyapunov_rhs", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
+           "lyapunov_rhs", "moment_equations", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
            "solve_point_two_states"]
 
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
@@ -112,18 +113,35 @@ def stage_gains(osc, e1, e2, h):
 
 
 def uplift_occupancy(theta_ul, var_theta):
-    """Uplift occupancy ``P(|theta| > theta_ul) = erfc(theta_ul / sqrt(2 var_theta))`` [1] (eq. 58).
+    """Uplift occupancy ``P(|theta| > theta_ul)`` [1] of a zero-mean Gaussian rotation of given variance.
 
     Parameters
     ----------
-    theta_ul : uplift angle [rad] (array-like).
-    var_theta : variance of the zero-mean Gaussian rotation [rad2] (broadcast with ``theta_ul``); 0 where
-        it is not positive.
+    theta_ul : array_like
+        Uplift angle [rad].
+    var_theta : array_like
+        Variance of the rotation [rad2] (broadcast with ``theta_ul``); 0 where it is not positive.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``erfc(theta_ul / sqrt(2 var_theta))`` [1].
 
     Notes
     -----
-    The numpy reference of the compiled :func:`p_uplift`, which the step loops evaluate at every
-    output instant; :mod:`screening.solvers.moments` applies it to the peak variance.
+    Eq. (58) in [1].  The numpy reference of the compiled :func:`p_uplift`, which the step loops evaluate
+    at every output instant; :mod:`screening.solvers.moments` applies it to the peak variance.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> [f"{p:.4f}" for p in uplift_occupancy(1e-3, [0.0, 1e-6, 4e-6])]
+    ['0.0000', '0.3173', '0.6171']
     """
     var_theta = np.asarray(var_theta, dtype=float)
     with np.errstate(divide="ignore"):
@@ -364,12 +382,46 @@ def packed_size(n):
 
 
 def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
-    """Drift matrix ``A`` [n x n] and noise vector ``b`` [n] of the oscillator driven by a filtered input,
-    state ``(theta, theta', x)`` with ``x`` the ``n_f`` filter states (numpy reference).
+    """Drift matrix and noise vector of the linearized oscillator driven through a shaping filter.
 
-    ``theta'' = -(k_eq theta + c_eq theta') / m_sdof + alpha (C x + D w)``, ``x' = A_f x + B_f w``:
-    ``A = [[0, 1, 0], [-k_eq/m_sdof, -c_eq/m_sdof, alpha C], [0, 0, A_f]]``, ``b = [0, alpha D, B_f]``.
-    ``filt``: a scalar :class:`screening.excitations.Filter`; ``alpha`` the input gain ``m h q(t) / m_sdof`` [1/m].
+    Parameters
+    ----------
+    k_eq : float
+        Equivalent stiffness [N m/rad].
+    c_eq : float
+        Equivalent damping [N m s/rad].
+    m_sdof : float
+        Rotational inertia about the rocking edge [kg m2].
+    alpha : float
+        Input gain ``m h q(t) / m_sdof`` [m-1].
+    filt : screening.excitations.Filter
+        A scalar filter ``(A_f, B_f, C_f, D_f)`` of ``n_f`` states.
+
+    Returns
+    -------
+    A : numpy.ndarray
+        Drift matrix [n x n], ``n = n_f + 2``, state ``(theta, theta', x)``.
+    b : numpy.ndarray
+        Noise vector [n].
+
+    Notes
+    -----
+    ``theta'' = -(k_eq theta + c_eq theta') / m_sdof + alpha (C_f x + D_f w)``, ``x' = A_f x + B_f w``:
+    ``A = [[0, 1, 0], [-k_eq/m_sdof, -c_eq/m_sdof, alpha C_f], [0, 0, A_f]]``, ``b = [0, alpha D_f, B_f]``;
+    eq. (42) in [1] for white noise (``n_f = 0``, ``D_f = 1``), eq. (52) for the Kanai–Tajimi filter.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.excitations import WhiteNoise
+    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, WhiteNoise(1e-4).filter())
+    >>> A.tolist(), b.tolist()
+    ([[0.0, 1.0], [-1600.0, -2.0]], [0.0, 3.5])
     """
     A_f, B_f, C_f, D_f = (np.asarray(m, dtype=float) for m in filt)
     nf = A_f.shape[-1]
@@ -383,9 +435,104 @@ def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
 
 
 def lyapunov_rhs(P, A, b, S0):
-    """Right-hand side of the moment equations ``dP/dt = A P + P A^T + 2 pi S0 b b^T`` (eqs. 45, 51;
-    numpy reference of :func:`augmented_rhs`).  ``P`` [n x n] covariance, ``S0`` [m2 s-3]."""
+    """Right-hand side of the moment equations as matrix products (numpy reference of :func:`augmented_rhs`).
+
+    Parameters
+    ----------
+    P : numpy.ndarray
+        Covariance [n x n] of the augmented state.
+    A : numpy.ndarray
+        Drift matrix [n x n] (:func:`augmented_system`).
+    b : numpy.ndarray
+        Noise vector [n].
+    S0 : float
+        Two-sided PSD level of the driving white noise [m2 s-3].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``dP/dt = A P + P A^T + 2 pi S0 b b^T`` [n x n].
+
+    Notes
+    -----
+    Eq. (45) in [1] (white noise, with eq. (46)) and eq. (51) (the filtered input, with eq. (55)).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> dP = lyapunov_rhs(np.zeros((2, 2)), np.array([[0.0, 1.0], [-1600.0, -2.0]]), np.array([0.0, 3.5]), 1e-4)
+    >>> f"{dP[1, 1]:.6f}"
+    '0.007697'
+    """
     return A @ P + P @ A.T + 2.0 * math.pi * S0 * np.outer(b, b)
+
+
+def moment_equations(t, P, block, foundation, excitation, condensation="paper"):
+    """Right-hand side ``dP/dt`` of the linearized moment equations at time ``t`` (numpy reference).
+
+    The whole nonlinear system that the compiled step loops integrate, written as matrix products:
+    the equivalent coefficients at the current moments, the augmented drift matrix and noise vector
+    at the current input gain, and the Lyapunov right-hand side.
+
+    Parameters
+    ----------
+    t : float
+        Time [s] (the envelope ``q(t)`` scales the input).
+    P : numpy.ndarray
+        Covariance [n x n] of the state ``(theta, theta', x)`` ([rad2], [rad2 s-1], [rad2 s-2] for
+        the rocking entries; ``x`` the ``n_f`` filter states of the excitation, ``n = n_f + 2``).
+    block : screening.model.Block
+        The rigid block, scalar fields (``m`` [kg], ``b``, ``h`` [m], ``m_sdof`` [kg m2]).
+    foundation : screening.model.Foundation
+        The bed, scalar fields.
+    excitation : screening.excitations.Excitation
+        The input, scalar fields (``S0`` [m2 s-3], its envelope and its shaping filter).
+    condensation : str or screening.condensation.Condensation, optional
+        The condensation whose equivalent coefficients close the equations (default ``"paper"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``dP/dt`` [n x n], symmetric, in the units of ``P`` per second.
+
+    Notes
+    -----
+    ``dP/dt = A P + P A^T + 2 pi S0 b b^T`` with
+    ``A = [[0, 1, 0], [-k_eq/M, -c_eq/M, alpha C_f], [0, 0, A_f]]``, ``b = [0, alpha D_f, B_f]``,
+    ``alpha = m h q(t) / M`` and ``(c_eq, k_eq)`` the condensation's equivalent coefficients at
+    ``(P[0, 0], P[0, 1])`` (eq. (31) in [1]): eq. (45) in [1] for white noise, eq. (51) for the
+    Kanai-Tajimi filter, any filter :func:`augmented_system` accepts.  The compiled loops
+    :func:`solve_point_white` and :func:`solve_point_filtered` integrate the same equations on the
+    packed upper triangle.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.model import Block, Foundation
+    >>> from screening.excitations import WhiteNoise
+    >>> P = np.diag([1e-8, 1e-4])
+    >>> dP = moment_equations(0.0, P, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                       WhiteNoise(1e-4))
+    >>> bool(np.allclose(dP, dP.T)), dP.shape
+    (True, (2, 2))
+    """
+    P = np.asarray(P, dtype=float)
+    c_eq, k_eq = equivalent_coefficients_from_moments(P[0, 0], P[0, 1], block, foundation, condensation)
+    alpha = block.m * block.h / block.m_sdof * excitation.envelope(t)
+    A, b = augmented_system(float(k_eq), float(c_eq), float(block.m_sdof), float(alpha), excitation.filter())
+    return lyapunov_rhs(P, A, b, excitation.S0)
 
 
 @numba.njit(cache=True, inline="always")

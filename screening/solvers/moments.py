@@ -76,7 +76,46 @@ SUMMARY_VARIABLES = ("status", "t_stop", "n_steps", "peak_var_theta", "t_peak_va
 
 
 def oscillator_records(block, foundation, excitation, cond):
-    """One :data:`OSCILLATOR` record per point of flat (1-d) model fields."""
+    """One :data:`OSCILLATOR` record per point: the condensed oscillator and its input, for the compiled loops.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block, flat (1-d) or scalar fields.
+    foundation : screening.model.Foundation
+        The bed, flat or scalar fields.
+    excitation : screening.excitations.Excitation
+        The input, flat or scalar fields.
+    cond : screening.condensation.Condensation
+        The condensation (its threshold, ``C(0)`` and ``K(0)``).
+
+    Returns
+    -------
+    numpy.ndarray
+        Structured array of :data:`OSCILLATOR` (``m_sdof`` [kg m2], ``gain`` [m-1], ``theta_ul`` [rad],
+        ``c_rest`` [N m s/rad], ``k_rest`` [N m/rad], ``S0`` [m2 s-3], the envelope, ``slenderness`` [rad]).
+
+    Notes
+    -----
+    ``m_sdof = I_cm + m h^2`` (eq. (23) in [1]), input gain ``m h / m_sdof`` (eq. (43)), envelope
+    ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57)).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.model.points import flatten
+    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                                WhiteNoise(1e-4))
+    >>> rec = oscillator_records(block, bed, exc, condensation.get("paper"))
+    >>> f"{rec['gain'][0]:.4g} {rec['k_rest'][0]:.4g}"
+    '3.547 808.2'
+    """
     env = excitation.envelope
     constant = env.kind == "constant"
     fields = {
@@ -136,12 +175,42 @@ class FilterArrays:
 
 
 def in_float_range(osc, filters):
-    """Points of :data:`OSCILLATOR` records whose scales the compiled loops can form in float64.
+    """Points whose scales the compiled loops can form in float64.
 
-    The loops divide by ``theta_ul^2`` and ``m_sdof`` and form ``S0 gain^2``, ``k_rest / m_sdof``,
-    ``c_rest / m_sdof`` and the filter's stationary moments (:class:`FilterArrays`): a point where one
-    of them under- or overflows (``k >= ~1e200``, ``m <= ~1e-200``, a filter frequency ``<= ~1e-150``)
-    would stop the whole batch, so it is flagged :attr:`~screening.status.PointStatus.beyond_float_range`.
+    Parameters
+    ----------
+    osc : numpy.ndarray
+        :data:`OSCILLATOR` records, one per point.
+    filters : FilterArrays
+        The excitation's filter of every point.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean per point: False where ``theta_ul^2``, ``m_sdof``, ``S0 gain^2``, ``k_rest / m_sdof``,
+        ``c_rest / m_sdof`` or the filter's stationary moments under- or overflow (``k >= ~1e200``,
+        ``m <= ~1e-200``, a filter frequency ``<= ~1e-150``).
+
+    Notes
+    -----
+    The loops divide by ``theta_ul^2`` (eq. (19) in [1]) and ``m_sdof``; a point beyond float range would
+    stop the whole batch, so it is flagged :attr:`~screening.status.PointStatus.beyond_float_range` instead.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.model.points import flatten
+    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21),
+    ...                                Foundation(k=[2.89e7, 1e300], lam=8.95e8), WhiteNoise(1e-4))
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
+    >>> in_float_range(osc, FilterArrays(exc, osc)).tolist()
+    [True, False]
     """
     tiny = np.finfo(float).tiny
     with np.errstate(all="ignore"):
@@ -205,10 +274,38 @@ _SOLVERS = {}
 
 
 def batch_solver(record_dtype):
-    """The compiled :func:`_solve_batch` for a condensation whose records have ``record_dtype``.
+    """The compiled batch integrator of the moment equations for one condensation record type.
 
-    Compiled once per record type with an explicit signature (the condensation's coefficient
-    function is a first-class argument), so numba caches it on disk like any other kernel.
+    Parameters
+    ----------
+    record_dtype : numpy.dtype
+        The dtype of the condensation's per-point records (:meth:`~screening.condensation.Condensation.moment_kernel`).
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher
+        ``_solve_batch`` compiled once per record type with an explicit signature (the condensation's
+        coefficient function is a first-class argument), so numba caches it on disk like any other kernel.
+
+    Notes
+    -----
+    It integrates eq. (45) in [1] (white noise) or eq. (51) (a filtered input) for every point of a
+    batch (:func:`screening.solvers.moment_kernels.moment_equations` is their numpy reference).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, condensation
+    >>> from screening.model.points import flatten
+    >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))
+    >>> dtype = condensation.get("paper").moment_kernel(block, bed).records.dtype
+    >>> batch_solver(dtype) is batch_solver(dtype)
+    True
     """
     if record_dtype not in _SOLVERS:
         f8, i8 = types.float64, types.int64
@@ -230,27 +327,60 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
 
     Parameters
     ----------
-    block, foundation, excitation : model objects whose fields may be arrays (broadcast).
-    t_out : increasing output times [s], starting at the initial time (zero covariance).
-    rtol : relative tolerance of the Dormand–Prince pair (absolute tolerances are ``rtol``
-        times the linear stationary moments of each point).
-    h_max : largest step [s]; default ``(t_out[-1] - t_out[0]) / 20``.
-    max_steps : step budget per point (accepted + rejected).
-    condensation : a :class:`~screening.condensation.Condensation` or a registered name
-        (``"paper"``: eqs. 17–25, default; ``"cubic"``: :mod:`screening.condensation.cubic`,
-        raises ``ValueError`` for a softening bed that cannot carry the block through uplift).
-    histories : False: per-point summaries only (no dense output, no coefficient evaluations at
-        the output times; the history keys are absent from the result).
+    block : screening.model.Block
+        The rigid block; fields may be arrays (broadcast).
+    foundation : screening.model.Foundation
+        The bed; fields may be arrays (broadcast).
+    excitation : screening.excitations.Excitation
+        The input (``S0`` [m2 s-3], its envelope and filter); fields may be arrays (broadcast).
+    t_out : array_like
+        Increasing output times [s], starting at the initial time (zero covariance).
+    rtol : float, optional
+        Relative tolerance of the Dormand–Prince pair (absolute tolerances are ``rtol`` times the linear
+        stationary moments of each point; default :data:`DEFAULT_RTOL`).
+    h_max : float, optional
+        Largest step [s]; default ``(t_out[-1] - t_out[0]) / 20``.
+    max_steps : int, optional
+        Step budget per point (accepted + rejected).
+    condensation : str or screening.condensation.Condensation, optional
+        A condensation or a registered name (``"paper"``: eqs. (17)-(25) in [1], default; ``"cubic"``:
+        :mod:`screening.condensation.cubic`, raises ``ValueError`` for a softening bed that cannot carry
+        the block through uplift).
+    histories : bool, optional
+        False: per-point summaries only (no dense output, no coefficient evaluations at the output
+        times; the history keys are absent from the result).
 
     Returns
     -------
-    dict of numpy arrays: the time histories ``var_theta`` [rad^2], ``var_theta_dot``
-    [rad^2/s^2], ``cov_theta_theta_dot`` [rad^2/s], ``c_eq`` [N m s/rad], ``k_eq`` [N m/rad],
-    ``p_uplift`` [1] of shape ``shape + (len(t_out),)`` (NaN after a point stopped; only if
-    ``histories``), and per
-    point ``status`` (:class:`~screening.status.PointStatus`), ``t_stop`` [s], ``n_steps``,
-    ``n_rejected``, ``peak_var_theta`` [rad^2] with ``t_peak_var_theta`` [s], ``peak_p_uplift``
-    [1] and ``min_k_eq`` [N m/rad] (over the integrated span).
+    dict
+        Numpy arrays: the time histories ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2],
+        ``cov_theta_theta_dot`` [rad2 s-1], ``c_eq`` [N m s/rad], ``k_eq`` [N m/rad], ``p_uplift`` [1] of
+        shape ``shape + (len(t_out),)`` (NaN after a point stopped; only if ``histories``), and per point
+        ``status`` (:class:`~screening.status.PointStatus`), ``t_stop`` [s], ``n_steps``, ``n_rejected``,
+        ``peak_var_theta`` [rad2] with ``t_peak_var_theta`` [s], ``peak_p_uplift`` [1] and ``min_k_eq``
+        [N m/rad] (over the integrated span).
+
+    Notes
+    -----
+    The Lyapunov equation ``dC/dt = P C + C P^T + E[v v^T]`` (eq. (45) in [1]; eq. (51) for a filtered
+    input) with ``P`` built from the equivalent coefficients at the current moments (eq. (31)), one
+    nonlinear ODE in the independent covariance entries; ``p_uplift`` is eq. (58).  Numpy reference of
+    the right-hand side: :func:`screening.solvers.moment_kernels.moment_equations`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> res = solve_moments(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4),
+    ...                     np.linspace(0.0, 10.0, 11))
+    >>> f"{res['peak_var_theta']:.3e} {res['t_peak_var_theta']:.2f} {res['status']}"
+    '1.372e-06 3.42 0'
     """
     cond = get_condensation(condensation)
     t_out = np.ascontiguousarray(t_out, dtype=float)

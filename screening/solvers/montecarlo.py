@@ -94,8 +94,49 @@ RODAS_DAMPING_RATIO = 20.0
 
 # ----------------------------------------------------------------------------- validation
 def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo"):
-    """``ValueError`` unless every numeric field of the model objects is a scalar (one point for
-    ``purpose``), and the excitation (if given) is white noise or Kanai–Tajimi."""
+    """Refuse model objects that are not one point, before any work.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    excitation : screening.excitations.Excitation, optional
+        The input (``S0`` [m2 s-3] and its parameters), if the caller has one.
+    purpose : str, optional
+        The caller's name in the message (default ``"monte_carlo"``).
+
+    Returns
+    -------
+    None
+        Returns only when every numeric field is a scalar and the excitation is a registered one.
+
+    Raises
+    ------
+    ValueError
+        One line naming the array-valued parameter (or the unknown excitation).
+
+    Notes
+    -----
+    A Monte Carlo run integrates the equations of motion of one block on one bed (eqs. (7)-(8) or (22)
+    in [1]); grids of points are the linearization's (:func:`screening.linearize`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation
+    >>> check_scalar_models(Block(m=8.67, b=0.035, h=0.21), Foundation(k=np.array([1e7, 2e7]), lam=8.95e8))
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'foundation.k' must be a scalar for monte_carlo (got an array of shape (2,)); loop over parameter points instead
+    """
     fields = {"block." + n: getattr(block, n) for n in ("m", "b", "h", "I_cm", "g")}
     fields.update({"foundation." + n: getattr(foundation, n) for n in ("k", "eps")})
     fields["foundation.damping"] = foundation.damping
@@ -148,13 +189,38 @@ def _check_numerics(numerics):
 def vertical_damping_ratio(block, foundation):
     """Damping ratio [1] of the block's vertical vibration on the bed at rest, ``c_v / (2 m w_v)``.
 
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    float
+        ``zeta_v`` [1]; above 1 the vertical mode is overdamped.
+
     Notes
     -----
-    About the rest indentation ``z0`` the bed acts as a vertical spring ``k_v = 2 b k`` and dashpot
-    ``c_v = 2 b lam z0`` (Hunt–Crossley, ``lam z zdot`` integrated over the base) or ``c_v = 2 b c``
-    (Winkler); ``w_v = sqrt(k_v / m)`` (:func:`~screening.solvers.synthesis.vertical_frequency`).
-    Above 1 the mode is overdamped and its fast decay rate ``~ c_v / m = 2 zeta w_v`` bounds an
-    explicit integrator's stable step.
+    About the rest indentation ``z0`` (eq. (13) in [1] at rest) the bed acts as a vertical spring
+    ``k_v = 2 b k`` and dashpot ``c_v = 2 b lam z0`` (Hunt–Crossley, ``lam z zdot`` integrated over the
+    base, eq. (9)) or ``c_v = 2 b c`` (Winkler); ``w_v = sqrt(k_v / m)``
+    (:func:`~screening.solvers.synthesis.vertical_frequency`).  The fast decay rate ``~ c_v / m = 2 zeta w_v``
+    of an overdamped mode bounds an explicit integrator's stable step (:func:`choose_integrator`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{vertical_damping_ratio(block, bed):.3g}"
+    '0.314'
     """
     b = float(block.b)
     w_rate, w_indentation = foundation.damping_weights      # the law's damping zdot (w_rate + w_indentation z)
@@ -165,9 +231,40 @@ def vertical_damping_ratio(block, foundation):
 def choose_integrator(block, foundation, model, integrator="auto"):
     """The sample integrator (a key of :data:`~screening.solvers.mcs_kernels.INTEGRATORS`) of a run.
 
-    ``"auto"``: ``"rodas"`` for the coupled model on a bed whose vertical mode is overdamped beyond
-    :data:`RODAS_DAMPING_RATIO` (there the explicit pair's step is held by stability, not accuracy),
-    ``"dopri"`` otherwise; any other value is returned as given.
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    model : str
+        The resolved Monte Carlo model's name.
+    integrator : str, optional
+        ``"auto"`` (default), ``"dopri"`` or ``"rodas"``.
+
+    Returns
+    -------
+    str
+        ``"auto"``: ``"rodas"`` for the coupled model on a bed whose vertical mode is overdamped beyond
+        :data:`RODAS_DAMPING_RATIO` (there the explicit pair's step is held by stability, not accuracy),
+        ``"dopri"`` otherwise; any other value as given.
+
+    Notes
+    -----
+    The stiffness comes from the bed's vertical dashpot in eqs. (7)-(8) of [1] (:func:`vertical_damping_ratio`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> choose_integrator(block, bed, "coupled"), choose_integrator(block, bed, "coupled", "rodas")
+    ('dopri', 'rodas')
     """
     if integrator != "auto":
         return integrator
@@ -177,19 +274,86 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
 
 def initial_state(block, foundation, model):
-    """Initial ``(theta, theta', z_cb, z_cb')`` of a registered model at rest: static equilibrium
-    (coupled) or rest (the others)."""
+    """Initial state ``(theta, theta', z_cb, z_cb')`` of a registered Monte Carlo model at rest.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    model : str or screening.solvers.mc_registry.MonteCarloModel
+        A registered model or its name.
+
+    Returns
+    -------
+    numpy.ndarray
+        [rad], [rad s-1], [m], [m s-1]: static equilibrium for the coupled model (``z_cb`` the rest
+        indentation of eq. (13) in [1]), rest for the others.
+
+    Notes
+    -----
+    Every sample starts from this state; the input starts at ``t = 0`` with the envelope (eq. (57) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> [f"{v:.4g}" for v in initial_state(block, bed, "coupled")]
+    ['0', '0', '4.204e-05', '0']
+    """
     return mc_registry.get(model).initial_state(block, foundation)
 
 
 # ----------------------------------------------------------------------------- statistics
 def ensemble_statistics(theta, theta_dot, uplift, used):
-    """Ensemble moments over the rows ``used`` of ``(n_samples, n_times)`` arrays.
+    """Ensemble moments over the used samples of ``(n_samples, n_times)`` arrays.
 
-    Variances and the covariance are about the sample mean with ``ddof = 1``.  The standard
-    error of a sample variance ``s^2`` is ``sqrt((m4 - (n-3)/(n-1) s^4) / n)`` with ``m4`` the
-    fourth central sample moment (no Gaussian assumption).  With fewer than two rows every
-    statistic is NaN.
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        Rotations [rad], one row per sample.
+    theta_dot : numpy.ndarray
+        Rotation rates [rad s-1], same shape.
+    uplift : numpy.ndarray
+        Whether each sample is in uplift at each time (bool), same shape.
+    used : numpy.ndarray
+        Boolean per sample: the rows that enter the statistics.
+
+    Returns
+    -------
+    dict
+        ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1], their standard
+        errors ``var_theta_se``, ``var_theta_dot_se`` and ``p_uplift`` [1], one value per time; NaN with
+        fewer than two rows.
+
+    Notes
+    -----
+    Variances and the covariance are about the sample mean with ``ddof = 1``.  The standard error of a
+    sample variance ``s^2`` is ``sqrt((m4 - (n-3)/(n-1) s^4) / n)`` with ``m4`` the fourth central sample
+    moment (no Gaussian assumption) [2].  These are the Monte Carlo counterparts of the moments of eq. (44)
+    in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Stuart and J. K. Ord, Kendall's Advanced Theory of Statistics, vol. 1, 6th ed., Arnold (1994).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.array([[0.0], [1.0], [2.0], [3.0]])
+    >>> stats = ensemble_statistics(x, 2 * x, x > 1.5, np.ones(4, bool))
+    >>> float(stats["var_theta"][0]), float(stats["cov_theta_theta_dot"][0]), float(stats["p_uplift"][0])
+    (1.6666666666666667, 3.3333333333333335, 0.5)
     """
     n = int(np.count_nonzero(used))
     n_t = theta.shape[1]
@@ -322,6 +486,27 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     ValueError
         For a bad ``n_samples``, ``model``, ``condensation``, ``seed``, ``thresholds``, ``t_end``/``dt``, numerics
         option, or array-valued model parameters — before any work is done.
+
+    Notes
+    -----
+    Each sample integrates the coupled equations of motion (eqs. (7)-(8) in [1] with the exact contact
+    resultants of eqs. (5)-(6)) or the condensed eq. (22) under one realization of the input
+    (spectral representation of its PSD, eqs. (39) or (47)-(50), modulated by eq. (57)); the moments are
+    ensemble statistics of the samples, the reference of the linearization (section 3 of [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, monte_carlo
+    >>> ds = monte_carlo(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4),
+    ...                  n_samples=8, t_end=2.0, dt=0.5, model="condensed")
+    >>> int(ds["n_used"]), ds["var_theta"].sizes["t"], ds.attrs["status"]
+    (8, 5, 'ok')
     """
     n_samples = check_integer("n_samples", n_samples, 2)
     if not isinstance(strict_validity, bool):

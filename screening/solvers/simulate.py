@@ -66,10 +66,51 @@ SIGN_CONVENTION = ("ground_acceleration > 0 accelerates the ground towards +x (e
 
 
 def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
-    """``(t_end, output_dt, n_out)`` of :func:`simulate` on ``record``, checked before anything is
-    allocated: ``t_end`` [s] > 0 (default the record's duration), ``output_dt`` [s] > 0 (default the
-    record's ``dt``), at most :data:`~screening.workflow.limits.MAX_RECORD_SAMPLES` output instants
-    and input samples.  ``t_end_name``: how ``t_end`` is spelled in messages (``"--t-end"``)."""
+    """The time grid of :func:`simulate` on a record, checked before anything is allocated.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The ground-acceleration record (its ``dt`` [s] and ``duration`` [s]).
+    t_end : float, optional
+        End time [s] > 0 (default the record's duration).
+    output_dt : float, optional
+        Output step [s] > 0 (default the record's ``dt``).
+    t_end_name : str, optional
+        How ``t_end`` is spelled in messages (``"--t-end"`` for the command line).
+
+    Returns
+    -------
+    t_end : float
+        [s].
+    output_dt : float
+        [s].
+    n_out : int
+        Number of output instants, at most :data:`~screening.limits.MAX_RECORD_SAMPLES`.
+
+    Raises
+    ------
+    ValueError
+        One line naming the parameter when a value or the number of steps is out of range.
+
+    Notes
+    -----
+    The outputs are ``0, output_dt, ...`` up to ``t_end``; the record is read as the ground acceleration
+    of eq. (8) in [1] and is zero after its end.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.records import Record
+    >>> simulation_times(Record(np.zeros(1001), 0.01, name="quiet"), output_dt=0.05)
+    (10.0, 0.05, 201)
+    """
     t_end = check_scalar(t_end_name, record.duration if t_end is None else t_end, lower=0.0)
     output_dt = record.dt if output_dt is None else check_scalar("output_dt", output_dt, lower=0.0)
     top = limits.MAX_RECORD_SAMPLES
@@ -143,6 +184,28 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     ``"overturned"`` or ``"diverged: <reason>"``; ``attrs["sign_convention"]`` states the convention.
     ``attrs["vertical_ground_motion"]`` says whether a vertical component was used; when it was,
     ``vertical_ground_acceleration`` [m s-2] holds it and ``lift_off`` whether ``g + a_v < 0`` anywhere.
+
+    Notes
+    -----
+    ``"coupled"``: the equations of motion of the block on its bed, eqs. (7)-(8) in [1] with the exact
+    contact resultants of eqs. (5)-(6) (:func:`screening.physics.contact.law_resultants`);
+    ``"condensed"``: eq. (22) with the condensation's ``C(theta)``, ``K(theta)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, simulate
+    >>> t = np.arange(0.0, 2.0, 0.01)
+    >>> ds = simulate(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...               2.0 * np.sin(2 * np.pi * 2.0 * t), dt=0.01, model="condensed")
+    >>> ds.attrs["status"], f"{float(ds['peak_abs_theta']):.3e}"
+    ('overturned', '1.669e-01')
     """
     record = _input(ground_acceleration, dt)
     check_scalar_models(block, foundation, purpose="simulate")

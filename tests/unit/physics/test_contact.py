@@ -232,3 +232,45 @@ def test_the_linear_rocking_stiffness_is_k_at_rest_of_every_condensation_without
         assert float(cond.rocking_stiffness(0.0, block, bed)) == pytest.approx(k0, rel=1e-12), name
         assert float(cond.stiffness_at_rest(block, bed)) == pytest.approx(k0, rel=1e-12), name
     assert rocking_frequency(block, bed) ** 2 * block.m_sdof == pytest.approx(k0, rel=1e-14)
+
+
+@pytest.mark.parametrize("eps", [6e7, 0.0, -6e5, -2e7])
+def test_the_exact_uplift_angle_is_where_the_lifted_edge_leaves_the_bed_in_static_balance(eps):
+    """An independent computation: the static base-centre indentation carrying the weight at each small
+    rotation (quadrature of the contact pressure of eqs. 3-4 over the base, root in ``z``), and the rotation
+    at which it equals ``b theta`` (the lifted edge at the surface), both by brentq.  ``eps = 0``: eq. 19."""
+    from scipy.optimize import brentq
+
+    from screening.physics.contact import exact_uplift_angle
+
+    bed = Foundation(k=K, lam=8.95e8, eps=eps)
+
+    def weight_carried(z_cb, theta):                        # small angles: z(u) = z_cb + u theta
+        return quad(lambda u: float(contact_pressure(z_cb + u * theta, 0.0, bed)), -B, B, epsabs=0, epsrel=1e-13)[0]
+
+    def resting_indentation(theta):
+        return brentq(lambda z: weight_carried(z, theta) - BLOCK.m * BLOCK.g, -B * theta, 2 * Z_ST, xtol=1e-18,
+                      rtol=1e-14)
+
+    reference = brentq(lambda th: resting_indentation(th) - B * th, 1e-6, 3e-3, xtol=1e-16, rtol=1e-13)
+    assert float(exact_uplift_angle(BLOCK, bed)) == pytest.approx(reference, rel=1e-9)
+    if eps == 0.0:
+        assert float(exact_uplift_angle(BLOCK, bed)) == pytest.approx(BLOCK.m * BLOCK.g / (2 * B**2 * K), rel=1e-15)
+
+
+def test_the_exact_uplift_angle_is_nan_where_a_softening_bed_cannot_carry_the_block_through_uplift():
+    """Per point: NaN beyond the bearing limit |eps| z_lin^2 = 2/27, finite just below it; the cubic
+    condensation's threshold is this angle and refuses the bed instead."""
+    from screening.condensation import cubic
+    from screening.physics.contact import UPLIFT_BEARING_LIMIT, bearing_load, exact_uplift_angle
+
+    limit_eps = -UPLIFT_BEARING_LIMIT / Z_ST**2
+    bed = Foundation(k=K, lam=8.95e8, eps=np.array([0.999 * limit_eps, 1.001 * limit_eps]))
+    angle = exact_uplift_angle(BLOCK, bed)
+    assert np.isfinite(angle[0]) and np.isnan(angle[1])
+    np.testing.assert_allclose(bearing_load(BLOCK, bed), [0.999 * UPLIFT_BEARING_LIMIT, 1.001 * UPLIFT_BEARING_LIMIT],
+                               rtol=1e-12)
+    ok = Foundation(k=K, lam=8.95e8, eps=0.999 * limit_eps)
+    assert cubic.uplift_threshold(BLOCK, ok) == exact_uplift_angle(BLOCK, ok)
+    with pytest.raises(ValueError, match="cannot carry"):
+        cubic.uplift_threshold(BLOCK, Foundation(k=K, lam=8.95e8, eps=1.001 * limit_eps))

@@ -95,3 +95,93 @@ def test_the_uplift_occupancy_is_the_gaussian_tail_beyond_the_uplift_angle_in_bo
     tu = float(block.m * block.g / (2 * block.b**2 * bed.k))
     assert float(uplift_probability(np.sqrt(4e-8), block, bed)) == pytest.approx(float(uplift_occupancy(tu, 4e-8)),
                                                                                  rel=1e-12)
+
+
+def _random_covariance(rng, scales):
+    """A random covariance with standard deviations ``scales`` (a random correlation matrix between them)."""
+    root = rng.normal(size=(scales.size, scales.size))
+    cov = root @ root.T
+    d = np.sqrt(np.diag(cov))
+    return cov / np.outer(d, d) * np.outer(scales, scales)
+
+
+@pytest.mark.parametrize("condensation", ["paper", "cubic"])
+@pytest.mark.parametrize("exc", EXCITATIONS, ids=lambda e: e.kind)
+def test_compiled_right_hand_side_at_its_coefficients_is_the_numpy_moment_equations(exc, condensation):
+    """The right-hand side the compiled loops integrate (coefficients from the condensation's compiled
+    function, Lyapunov products written out) against :func:`moment_equations` (coefficients from the
+    condensation's numpy functions, matrix products) on random states from no uplift to heavy uplift, at
+    a time inside the envelope's rise."""
+    from screening import condensation as condensations
+    from screening.model import Block, Foundation
+    from screening.model.points import flatten
+    from screening.solvers.moment_kernels import _filtered_rhs, _white_rhs, moment_equations
+    from screening.solvers.moments import oscillator_records
+
+    block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    cond = condensations.get(condensation)
+    (fb, ff, fe), _ = flatten(block, bed, exc)
+    kernel = cond.moment_kernel(fb, ff)
+    osc = oscillator_records(fb, ff, fe, cond)[0]
+    table = kernel.tables[kernel.table_index[0]]
+    filt = exc.filter()
+    nf = np.shape(filt.A)[-1]
+    fa, fbm, fc = (np.ascontiguousarray(m, dtype=float) for m in filt[:3])
+    t = 1.3
+    alpha = osc["gain"] * exc.envelope(t)
+    tu, w = float(osc["theta_ul"]), np.sqrt(osc["k_rest"] / osc["m_sdof"])
+    filter_sd = np.sqrt(np.diag(exc.stationary_covariance())) if nf else np.zeros(0)
+    rng = np.random.default_rng(7)
+    for ratio in (0.1, 1.0, 3.0, 10.0):                       # sigma_theta / theta_ul
+        s = ratio * tu
+        P = _random_covariance(rng, np.concatenate([[s, s * w], filter_sd]))
+        expected = moment_equations(t, P, block, bed, exc, condensation)
+        iu = np.triu_indices(nf + 2)
+        if nf == 0:
+            *dy, _, _ = _white_rhs(kernel.coefficients, kernel.records[0], table, 1.0 / osc["m_sdof"], osc["S0"],
+                                   alpha, P[0, 0], P[0, 1], P[1, 1])
+        else:
+            dy = np.empty(packed_size(nf + 2))
+            _filtered_rhs(dy.size, kernel.coefficients, kernel.records[0], table, osc, fa, fbm, fc, float(filt.D),
+                          alpha, np.ascontiguousarray(P[iu]), dy, np.empty((nf + 2,) * 2), np.empty((nf + 2,) * 2))
+        # the compiled coefficients interpolate tables (closed form: 1e-9; quadrature: 1e-6 relative)
+        tol = 1e-7 if condensation == "paper" else 1e-5
+        np.testing.assert_allclose(dy, expected[iu], rtol=tol, atol=tol * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("exc", [WhiteNoise(4e-4), KanaiTajimi(4e-4, 15.0, 0.6), CloughPenzien(4e-4, 15.0, 0.6, 1.5, 0.8)],
+                         ids=lambda e: e.kind)
+def test_the_compiled_solver_follows_an_independent_integration_of_the_moment_equations(exc):
+    """The whole compiled solver (step loop, envelope gains, dense output) against scipy's ``solve_ivp``
+    (DOP853, tight tolerances) of the numpy :func:`moment_equations`, through the onset of uplift (the
+    coefficients change along the way: the equations are nonlinear)."""
+    from scipy import integrate
+
+    from screening.model import Block, Foundation
+    from screening.solvers.moment_kernels import moment_equations
+    from screening.solvers.moments import solve_moments
+    from screening.solvers.timegrid import output_times
+
+    block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    t_out = output_times(8.0, 0.25)
+    res = solve_moments(block, bed, exc, t_out, rtol=1e-10)
+    n = np.shape(exc.filter().A)[-1] + 2
+    iu = np.triu_indices(n)
+
+    def rhs(t, y):
+        P = np.zeros((n, n))
+        P[iu] = y
+        P = P + np.triu(P, 1).T
+        return moment_equations(t, P, block, bed, exc)[iu]
+
+    # absolute tolerances from each entry's size: the peak rocking moments, the filter's stationary ones
+    sizes = np.concatenate([[res["var_theta"].max(), res["var_theta_dot"].max()],
+                            np.diag(exc.stationary_covariance()) if n > 2 else []])
+    atol = 1e-10 * np.sqrt(sizes[iu[0]] * sizes[iu[1]])
+    ref = integrate.solve_ivp(rhs, (0.0, t_out[-1]), np.zeros(iu[0].size), method="DOP853", t_eval=t_out,
+                              rtol=1e-10, atol=atol)
+    assert ref.success
+    var_theta = ref.y[0]
+    assert res["p_uplift"].max() > 0.1                        # uplift is reached: the coefficients move
+    np.testing.assert_allclose(res["var_theta"], var_theta, rtol=1e-6, atol=1e-6 * var_theta.max())
+    np.testing.assert_allclose(res["var_theta_dot"], ref.y[n], rtol=1e-6, atol=1e-6 * ref.y[n].max())
