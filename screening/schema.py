@@ -467,6 +467,8 @@ def attributes(name, table=None):
     if name.startswith("esc_"):
         base = attributes(name[4:])
         return {**base, "long_name": f"{base['long_name']} at the escalated point"}
+    if name in OUTPUTS:                             # a sweep-grid variable no table lists
+        return dict(OUTPUTS[name].attrs)
     if name.startswith("median_") and name[7:] in PARAMETERS:
         base = PARAMETERS[name[7:]]
         return {"units": base["units"], "long_name": f"median {name[7:]} of the lognormal fragility curve"}

@@ -130,13 +130,12 @@ def finish_probabilities(run):
     from screening.analysis.probabilities import source_codes
 
     study, res = run.study, run.result
-    res.nc.sync()                   # a zarr store creates the variables defined since (best estimates) here
+    res.commit()                    # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
     thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0
-    p = np.column_stack([res.read("p_overturn")] + ([np.asarray(res.nc["p_exceed"][...], dtype=float).reshape(n, -1)]
-                                                   if thresholds else []))
+    p = np.column_stack([res.read("p_overturn")] + ([res.read_all("p_exceed").reshape(n, -1)] if thresholds else []))
     se = np.column_stack([res.read("p_overturn_se")] + (
-        [np.asarray(res.nc["p_exceed_se"][...], dtype=float).reshape(n, -1)] if thresholds else []))
+        [res.read_all("p_exceed_se").reshape(n, -1)] if thresholds else []))
     low, high = res.read("sl_error_low"), res.read("sl_error_high")
     best = res.read("best_method").astype(np.int8) if study.accuracy is not None else None
     source = choose_sources(res.status == PointStatus.ok, res.sl_trust, np.isfinite(low) & np.isfinite(high), best)

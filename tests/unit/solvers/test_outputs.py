@@ -66,3 +66,11 @@ def test_the_solver_lists_come_from_the_declarations():
     assert set(outputs.linearize_variables()) < set(outputs.solver_summaries())
     assert "n_rejected" in outputs.solver_summaries() and "n_rejected" not in outputs.linearize_variables()
     assert outputs.client_variables() == ("status", "sl_trust", "peak_p_uplift")
+
+
+def test_schema_finds_a_variable_only_the_registry_declares(monkeypatch):
+    toy = outputs.Output("toy_margin", "trust", "f8", {"units": "1", "long_name": "a toy margin"})
+    monkeypatch.setitem(outputs.OUTPUTS, toy.name, toy)
+    assert schema.attributes("toy_margin") == {"units": "1", "long_name": "a toy margin"}
+    with pytest.raises(KeyError, match="not declared"):
+        schema.attributes("toy_margin_2")
