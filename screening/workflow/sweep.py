@@ -246,7 +246,8 @@ class _SweepRun:
                 if execution.wants_probabilities(study):
                     from screening.workflow.probabilities import finish_probabilities, probabilities_line
 
-                    self.report.probabilities = finish_probabilities(self)
+                    self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
+                                                                     self.spot_runs)
                     self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
                     self.log(probabilities_line(self.report.probabilities))
                 t0 = time.perf_counter()
