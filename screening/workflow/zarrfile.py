@@ -194,11 +194,16 @@ class ZarrFormat:
         return name in self._pending or self._created and name in {n for n, _ in self.group.arrays()}
 
     def _array(self, name):
+        """Array ``name`` of the store, writing every chunk as a file (an empty one too): asked of the array
+        itself where zarr can (zarr's global configuration is shared by the worker threads of a process:
+        one thread's ``config.set`` ending while another opens an array left that one without it)."""
         if name not in self._arrays:
             import zarr
 
             with zarr.config.set({"array.write_empty_chunks": True}):
-                self._arrays[name] = self.group[name]
+                arr = self.group[name]
+            with_config = getattr(arr, "with_config", None)
+            self._arrays[name] = arr if with_config is None else with_config({"write_empty_chunks": True})
         return self._arrays[name]
 
     # -- data
