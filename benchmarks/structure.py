@@ -5,12 +5,50 @@ import).  The layers are read from the module table of ``docs/architecture.md``;
 shared with ``tests/unit/test_layers.py`` (``tests/import_graph.py``).
 """
 
+import ast
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import import_graph as ig  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1] / "screening"
+#: The modules on the write path of a sweep result, from the solvers to the result formats and ``info``.
+OUTPUT_PATH = ("schema.py", "solvers/outputs.py", "solvers/moment_kernels.py", "solvers/moments.py",
+               "solvers/datasets.py", "workflow/execution.py", "workflow/writer.py", "workflow/zarrfile.py",
+               "workflow/store.py", "report/text.py")
+#: Calls that declare an output variable (its name the first argument).
+DECLARATIONS = ("Output", "_history")
+#: Output variables whose mentions are counted: a history, a flag, a probability and a solver summary.
+OUTPUT_SAMPLES = ("var_theta", "sl_trust", "p_overturn", "min_k_eq")
+
+
+def output_mentions(name, lists_only=False):
+    """``{module: n}``: the string constants equal to ``name`` in each module of :data:`OUTPUT_PATH`
+    (``lists_only``: only those in a tuple, list, set, as a dict key or declaring it (:data:`DECLARATIONS`):
+    the lists of names; not the reads ``values["name"]`` nor other call arguments)."""
+    out = {}
+    for module in OUTPUT_PATH:
+        path = ROOT / module
+        if not path.exists():
+            continue
+        n = 0
+        for parent in ast.walk(ast.parse(path.read_text())):
+            if lists_only and isinstance(parent, (ast.Tuple, ast.List, ast.Set)):
+                children = parent.elts
+            elif lists_only and isinstance(parent, ast.Dict):
+                children = [k for k in parent.keys if k is not None]
+            elif lists_only and isinstance(parent, ast.Call) and getattr(parent.func, "id", "") in DECLARATIONS:
+                children = parent.args[:1]
+            elif not lists_only and isinstance(parent, ast.Constant):
+                children = [parent]
+            else:
+                continue
+            n += sum(isinstance(c, ast.Constant) and c.value == name for c in children)
+        if n:
+            out[module] = n
+    return out
 
 
 def main(verbose=False):
@@ -33,6 +71,12 @@ def main(verbose=False):
     print(f"imports inside functions: {len(deferred)}; of them dodging a circle: {len(dodging)}")
     print(f"modules without __all__: {len(missing_all)} of {len(public)}")
     print("largest modules (lines): " + ", ".join(f"{m} {n}" for n, m in sizes[:5]))
+    mentions = {name: output_mentions(name) for name in OUTPUT_SAMPLES}
+    lists = {name: output_mentions(name, lists_only=True) for name in OUTPUT_SAMPLES}
+    print("places naming each output variable on the write path (string constants, in files): " + ", ".join(
+        f"{name} {sum(m.values())} in {len(m)}" for name, m in mentions.items()))
+    print("  of them in lists of names (tuples, lists, sets, dict keys, declarations): " + ", ".join(
+        f"{name} {sum(m.values())} in {len(m)}" for name, m in lists.items()))
     if verbose:
         for imp, a, b in up:
             print(f"  up   {imp.source}:{imp.line} ({a}) -> {imp.target} ({b}){' [in a function]' if imp.deferred else ''}")
@@ -40,6 +84,9 @@ def main(verbose=False):
             print(f"  dodge {imp.source}:{imp.line} -> {imp.target}")
         for m in missing_all:
             print(f"  no __all__: {m}")
+        for name, m in mentions.items():
+            print(f"  {name}: " + ", ".join(f"{module} {n}" for module, n in m.items())
+                  + "; in lists: " + ", ".join(f"{module} {n}" for module, n in lists[name].items()))
 
 
 if __name__ == "__main__":

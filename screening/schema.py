@@ -12,8 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from screening import excitations, laws
+from screening.solvers.outputs import OUTPUTS
 from screening.status import (BestMethod, ContactRegime, EscalationEstimator, EscalationModel, FitFlag, PointStatus,
-                              SampleState, SpotStatus, TargetMet, Trust, flag_attributes, probability_sources)
+                              SampleState, SpotStatus, TargetMet, flag_attributes, probability_sources)
 
 __all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
            "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
@@ -45,6 +46,16 @@ def _v(units, long_name, **extra):
     return {"units": units, "long_name": long_name, **extra}
 
 
+def _declared(*names):
+    """The attributes of the sweep-grid variables ``names`` as :mod:`screening.solvers.outputs` declares them."""
+    return {name: dict(OUTPUTS[name].attrs) for name in names}
+
+
+def _plain(attrs):
+    """Declared attributes without the sweep's ``note``."""
+    return {k: v for k, v in attrs.items() if k != "note"}
+
+
 #: Model parameters (coordinates, swept or scalar).
 PARAMETERS = {
     "m": _v("kg", "block mass"),
@@ -55,7 +66,7 @@ PARAMETERS = {
     "k": _v("N m-2", "distributed foundation stiffness"),
     **{name: _v(a["units"], a["long_name"]) for name, a in laws.parameters().items()},   # the contact laws'
     "eps": _v("m-2", "cubic stiffness parameter of the contact law"),
-    "S0": _v("m2 s-3", "two-sided PSD level of the driving white noise, E[xi xi] = 2 pi S0 delta"),
+    "S0": _plain(OUTPUTS["S0"].attrs),
     "pga": _v("m s-2", "target median peak ground acceleration of the input (S0 follows from it, band-limited "
                        "as the Monte Carlo synthesis)"),
     **{name: _v(p.units, p.long_name) for name, p in excitations.parameters().items()},   # the excitations'
@@ -65,8 +76,7 @@ PARAMETERS = {
 
 #: Quantities derived from the model (stored beside the parameters, never re-derived downstream).
 DERIVED = {
-    "theta_ul": _v("rad", "static uplift threshold angle of the condensation"),
-    "slenderness": _v("rad", "slenderness angle atan(b/h), the rigid-block overturning angle"),
+    **_declared("theta_ul", "slenderness"),
     "m_sdof": _v("kg m2", "rotational inertia about the rocking edge, I_cm + m h2"),
     "theta_capacity": _v("rad", "capacity angle of the condensation (no quasi-static equilibrium beyond; "
                                 "inf if none)"),
@@ -74,31 +84,17 @@ DERIVED = {
 
 #: Linearization (stochastic linearization + Lyapunov moments).
 LINEARIZATION = {
-    "var_theta": _v("rad2", "variance of the rocking rotation"),
-    "var_theta_dot": _v("rad2 s-2", "variance of the rocking angular velocity"),
-    "cov_theta_theta_dot": _v("rad2 s-1", "covariance of rocking rotation and angular velocity"),
-    "c_eq": _v("N m s rad-1", "equivalent linear rocking damping"),
-    "k_eq": _v("N m rad-1", "equivalent linear rocking stiffness"),
-    "p_uplift": _v("1", "probability of uplift (|theta| > theta_ul)"),
-    "t_stop": _v("s", "time at which the integration of the point stopped"),
-    "n_steps": _v("1", "number of solver steps (accepted and rejected)"),
-    "n_rejected": _v("1", "number of rejected solver steps"),
-    "peak_var_theta": _v("rad2", "peak variance of the rocking rotation"),
-    "t_peak_var_theta": _v("s", "time of the peak rotation variance"),
-    "peak_p_uplift": _v("1", "peak probability of uplift"),
-    "min_k_eq": _v("N m rad-1", "minimum equivalent linear rocking stiffness"),
+    **_declared("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift", "t_stop", "n_steps",
+                "n_rejected", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"),
     "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
+    # a linearize() result: the statuses the solver gives (a sweep's status also says when its task failed)
     "status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "solver status of the point"),
     # trust of the point (screening.analysis.trust.add_trust; k_eq_rest and var_theta_end stand in for the
     # histories in files that do not store them)
     "k_eq_rest": _v("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
     "var_theta_end": _v("rad2", "variance of the rocking rotation at the end of the record"),
-    "sl_trust": flag_attributes(Trust, "trust in the linearized peak var_theta (docs/method.md#trusting-a-point)"),
-    "sl_error_low": _v("1", "lower end of the predicted relative error of SL's peak var_theta against the coupled "
-                            "model (SL / MCS - 1)"),
-    "sl_error_high": _v("1", "upper end of the predicted relative error of SL's peak var_theta against the "
-                             "coupled model (SL / MCS - 1)"),
+    **_declared("sl_trust", "sl_error_low", "sl_error_high"),
 }
 
 #: Best estimates of a sweep with ``[accuracy]`` (:mod:`screening.analysis.correction`) and its escalated Monte
@@ -184,7 +180,7 @@ MONTE_CARLO = {
 
 #: Fragility (exceedance of a rotation threshold).
 FRAGILITY = {
-    "p_exceed": _v("1", "probability that |theta| exceeds the threshold during the record"),
+    **_declared("p_exceed"),
     "p_exceed_at_spot": _v("1", "Gaussian probability that |theta| exceeds the threshold, at the spot point"),
     "mcs_p_exceed": _v("1", "probability that |theta| exceeds the threshold, from the Monte Carlo peaks"),
     "mcs_p_exceed_se": _v("1", "standard error of mcs_p_exceed (binomial)"),
@@ -203,20 +199,7 @@ FRAGILITY = {
 #: ``[fragility]`` (:mod:`screening.workflow.probabilities`), and the closed-form probability that rocking
 #: starts at all (every point; :func:`screening.analysis.intensity.rocking_start_probability`).
 #: ``p_exceed`` itself is declared in :data:`FRAGILITY`; ``p_source`` by :func:`probability_source_attributes`.
-PROBABILITIES = {
-    "p_overturn": _v("1", "probability that the block overturns during the record (|theta| > atan(b/h)), from "
-                          "the model named by p_source"),
-    "p_overturn_se": _v("1", "standard error of p_overturn (Monte Carlo: binomial, Agresti-Coull, or the "
-                             "two-fidelity estimate's where esc_estimator says multifidelity; Gaussian: "
-                             "from the band of the moments; NaN where p_source is unreliable)"),
-    "p_exceed_se": _v("1", "standard error of p_exceed (Monte Carlo: binomial, Agresti-Coull, or the two-fidelity "
-                           "estimate's where esc_estimator says multifidelity; Gaussian: from the "
-                           "band of the moments; NaN where p_source is unreliable)"),
-    "p_rocking_start": _v("1", "probability that the ground acceleration exceeds the bed's uplift acceleration "
-                               "at least once during the record (random-vibration theory, closed form)"),
-    "uplift_acceleration": _v("m s-2", "quasi-static ground acceleration at which the block starts to rock "
-                                       "(g b/(3 h) on a linear Winkler bed)"),
-}
+PROBABILITIES = _declared("p_overturn", "p_overturn_se", "p_exceed_se", "p_rocking_start", "uplift_acceleration")
 
 
 def probability_source_attributes():
@@ -337,9 +320,7 @@ SIMULATION = {
 
 #: Intensity measures of the inputs (:mod:`screening.analysis.intensity`) and of records.
 INTENSITY = {
-    "pga_median": _v("m s-2", "median peak ground acceleration of the modulated input (random-vibration theory)"),
-    "rms_acceleration": _v("m s-2", "root mean square ground acceleration over the record"),
-    "arias_intensity": _v("m s-1", "Arias intensity pi/(2 g) int a2 dt (expected value for stochastic inputs)"),
+    **{name: _plain(OUTPUTS[name].attrs) for name in ("pga_median", "rms_acceleration", "arias_intensity")},
     "sa_median": _v("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
     "pgv_median": _v("m s-1", "median peak ground velocity of the modulated input, 2nd-order Butterworth "
                               "high-pass at omega_low (random-vibration theory)"),
@@ -354,19 +335,12 @@ INTENSITY = {
     "fit_flag": FRAGILITY["fit_flag"],
 }
 
-#: Per-point variables of a sweep that no other table declares: the status and the intensity
-#: measures of each point's excitation.
-SWEEP = {
-    "status": flag_attributes(PointStatus, "solver status of the point"),
-    **{name: {**INTENSITY[name], "note": "ground motion band-limited to the excitation's band_limit_hz "
-                                         "(global attribute; default 25 Hz), whatever the bed"}
-       for name in ("pga_median", "rms_acceleration", "arias_intensity")},
-}
+#: Per-point variables of a sweep that no other table declares: the status (with the failed tasks) and the
+#: intensity measures of each point's excitation.
+SWEEP = _declared("status", "pga_median", "rms_acceleration", "arias_intensity")
 
 #: Model inputs stored per point where the study derives them: ``S0`` from a target PGA (``excitation.pga``).
-SWEEP_INPUTS = {
-    "S0": {**PARAMETERS["S0"], "note": "from the target median PGA of the grid point (excitation.pga)"},
-}
+SWEEP_INPUTS = _declared("S0")
 
 #: Cloud analysis (:mod:`screening.workflow.cloud`): one row per record, then the fitted fragility.
 CLOUD = {
@@ -493,6 +467,8 @@ def attributes(name, table=None):
     if name.startswith("esc_"):
         base = attributes(name[4:])
         return {**base, "long_name": f"{base['long_name']} at the escalated point"}
+    if name in OUTPUTS:                             # a sweep-grid variable no table lists
+        return dict(OUTPUTS[name].attrs)
     if name.startswith("median_") and name[7:] in PARAMETERS:
         base = PARAMETERS[name[7:]]
         return {"units": base["units"], "long_name": f"median {name[7:]} of the lognormal fragility curve"}

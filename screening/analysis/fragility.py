@@ -43,6 +43,7 @@ from screening.solvers.datasets import finish
 from screening.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
 
 __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "exceedance_probability_from_moments",
+           "linearized_exceedance",
            "mcs_exceedance_probability", "lognormal_fragility", "binomial_nll", "fit_binomial_fragility",
            "total_dispersion", "with_modelling_dispersion", "fit_lognormal_fragility", "parameter",
            "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
@@ -219,6 +220,37 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
     elif method != "poisson":
         raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
     return -np.expm1(-np.trapezoid(rate, np.asarray(t, dtype=float), axis=axis))
+
+
+def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq, k_eq, m_sdof, status, level,
+                          method="vanmarcke"):
+    """``P(max_t |theta| > level)`` [1] of each point from the linearization's plain arrays.
+
+    The moments [rad2, rad2 s-2, rad2 s-1] and ``c_eq`` [N m s rad-1], ``k_eq`` [N m rad-1] are on
+    ``(points, t)`` (``t`` [s]), ``m_sdof`` [kg m2], ``status`` (:class:`~screening.status.PointStatus`)
+    and ``level`` [rad] per point.  The up-crossing approximation ``method`` (``"poisson"`` or
+    ``"vanmarcke"``, whose bandwidth follows from the equivalent damping ratio
+    ``c_eq / (2 sqrt(k_eq m_sdof))``, 0.05 where undefined) on the Gaussian moments (NaN read as 0);
+    probability 1 at the points whose linearized model became unstable (``k_eq_negative``,
+    ``sigma_theta_beyond_slenderness``), NaN at the other points that are not ``ok``.  What
+    :func:`exceedance_probability` gives on a dataset of the same points.
+    """
+    if method not in ("poisson", "vanmarcke"):
+        raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
+    moments = [np.where(np.isnan(a), 0.0, a) for a in (np.asarray(var_theta, dtype=float),
+                                                      np.asarray(var_theta_dot, dtype=float),
+                                                      np.asarray(cov_theta_theta_dot, dtype=float))]
+    level = np.broadcast_to(np.asarray(level, dtype=float)[:, None], moments[0].shape)
+    bandwidth = None
+    if method == "vanmarcke":
+        k_eq = np.asarray(k_eq, dtype=float)
+        zeta = np.asarray(c_eq, dtype=float) / (2.0 * np.sqrt(np.where(k_eq > 0, k_eq, np.nan)
+                                                               * np.asarray(m_sdof, dtype=float)[:, None]))
+        bandwidth = oscillator_bandwidth(np.where(np.isnan(zeta), 0.05, zeta))
+    p = exceedance_probability_from_moments(t, *moments, level, method=method, bandwidth=bandwidth)
+    status = np.asarray(status)
+    unstable = np.isin(status, [PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness])
+    return np.where(unstable, 1.0, np.where(status == PointStatus.ok, p, np.nan))
 
 
 def mcs_exceedance_probability(peak_abs_theta, level, overturned=None):

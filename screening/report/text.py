@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from screening.solvers.outputs import info_variables
 from screening.status import BestMethod, PointStatus, SpotStatus, Trust
 
 __all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
@@ -65,7 +66,7 @@ def describe(ds, path="result"):
         lines.append(best_line(ds))
     ok = status == PointStatus.ok
     lines.append(f"summary over the {int(ok.sum())} status-ok point(s) (min / median / max):")
-    for name in ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"):
+    for name in info_variables():
         v = np.asarray(ds[name].values, dtype=float).reshape(-1)[ok]
         units = ds[name].attrs.get("units", "")
         if v.size:

@@ -23,14 +23,11 @@ from screening import schema
 from screening.solvers import mc_registry
 from screening.model.points import numeric_fields
 from screening.solvers.estimates import sample_probabilities
-from screening.solvers.moments import HISTORY_VARIABLES
+from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
 
-__all__ = ["LINEARIZATION_SUMMARIES", "MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
+__all__ = ["MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
            "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
-
-#: Per-point summaries of the linearization (beside ``status``).
-LINEARIZATION_SUMMARIES = ("peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq", "t_stop", "n_steps")
 
 #: Ensemble statistics of a Monte Carlo run, on ``t``.
 MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",
@@ -103,7 +100,7 @@ def linearization_dataset(result, times, dims, parameters, derived, attrs):
     """
     dims = tuple(dims)
     data = {name: (dims + ("t",), result[name]) for name in HISTORY_VARIABLES}
-    data.update({name: (dims, result[name]) for name in LINEARIZATION_SUMMARIES + ("status",)})
+    data.update({name: (dims, result[name]) for name in linearize_variables()})
     data.update(derived)
     return finish(xr.Dataset(data, coords=_coordinates(times, parameters), attrs=attrs))
 

@@ -41,11 +41,12 @@ from screening.kernels.signatures import function_type, moment_coefficients_sign
 from screening.model.points import flatten, select
 from screening.solvers.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
                                               solve_point_white, uplift_occupancy)
+from screening.solvers.outputs import HISTORY_VARIABLES, solver_summaries
 from screening.status import PointStatus
 from screening.validation import check_integer, check_scalar, check_size
 from screening import limits
 
-__all__ = ["CHUNK", "DEFAULT_RTOL", "DEFAULT_MAX_STEPS", "OSCILLATOR", "HISTORY_VARIABLES", "SUMMARY_VARIABLES",
+__all__ = ["CHUNK", "DEFAULT_RTOL", "DEFAULT_MAX_STEPS", "OSCILLATOR", "HISTORY_VARIABLES",
            "oscillator_records", "FilterArrays", "in_float_range", "batch_solver", "solve_moments"]
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
@@ -69,10 +70,6 @@ OSCILLATOR = np.dtype([
     ("T1", "f8"), ("T2", "f8"),   # envelope times [s]
     ("slenderness", "f8"),        # atan(b/h) [rad]: sigma_theta beyond it stops the point
 ])
-
-HISTORY_VARIABLES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift")
-SUMMARY_VARIABLES = ("status", "t_stop", "n_steps", "peak_var_theta", "t_peak_var_theta",
-                     "peak_p_uplift", "min_k_eq")
 
 
 def oscillator_records(block, foundation, excitation, cond):
@@ -230,7 +227,7 @@ def _solve_representable(representable, shape, block, foundation, excitation, t_
     """:func:`solve_moments` of the points :func:`in_float_range`; the others flagged, NaN, not integrated."""
     n, nt = representable.size, t_out.size
     out = {name: np.full((n, nt), np.nan) for name in HISTORY_VARIABLES} if histories else {}
-    out.update({name: np.full(n, np.nan) for name in SUMMARY_VARIABLES + ("n_rejected",)})
+    out.update({name: np.full(n, np.nan) for name in solver_summaries()})
     out["status"] = np.full(n, PointStatus.beyond_float_range, dtype=np.int8)
     for name in ("n_steps", "n_rejected"):
         out[name] = np.zeros(n, dtype=np.int64)

@@ -2,8 +2,9 @@
 within the CPU budget, then best estimates at every point (:mod:`screening.analysis.escalation`,
 :mod:`screening.analysis.correction`).
 
-:func:`escalate` runs on the sweep's run object (its client, study, resume store, result file, log and
-report) after the linearization and before the spot checks.
+:func:`escalate` runs after the linearization and before the spot checks on a :class:`Stage`: the client,
+the study, the resume record, the result being built, the log and the progress switch (plain values, not
+the sweep's run object); it returns the escalated points and what it did.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import math
 import uuid
+from typing import NamedTuple
 
 import numpy as np
 
@@ -20,7 +22,7 @@ from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
 from screening.progress import Progress
 
-__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "point_table", "escalate",
+__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "Stage", "point_table", "escalate",
            "escalation_runs", "accuracy_line"]
 
 #: Resume records of escalated points are spot parts numbered from here (after any spot check): the
@@ -32,13 +34,26 @@ PLANNER_RECORD = ESCALATION_RECORD - 1
 WAVE = 4
 
 
-def point_table(run):
+class Stage(NamedTuple):
+    """What the ``[accuracy]`` stage works with: the dask ``client``, the ``study``, the resume record
+    ``store`` (:class:`~screening.workflow.store.PartialStore`), the ``result`` being built
+    (:class:`~screening.workflow.writer.ResultFile`), the ``log`` function and whether to show ``progress``."""
+
+    client: object
+    study: object
+    store: object
+    result: object
+    log: object
+    progress: bool
+
+
+def point_table(stage):
     """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
     features of the correction, condensation and eps, and SL's peaks."""
     from screening.analysis.trust import trust_indicators
     from screening.workflow.grid import Batch, batch_point_models, batch_values
 
-    study, res = run.study, run.result
+    study, res = stage.study, stage.result
     n, per_case = study.n_points, study.points_per_case
     cols = {name: np.empty(n) for name in ("k_rest", "eps", "envelope_end")}
     cond = np.empty(n, dtype=object)
@@ -66,27 +81,31 @@ def point_table(run):
             "condensation": cond.astype(str), "eps": cols["eps"], "peak_var_theta": peak,
             "peak_var_theta_dot": dot}
 
-def escalate(run):
-    """Escalate, write the escalated points and the best estimates; fills ``report.accuracy``."""
+def escalate(stage):
+    """Escalate, write the escalated points and the best estimates into ``stage.result``.
+
+    ``stage``: a :class:`Stage`.  Returns ``((flat indices, models, runs), info)``: the escalated points with
+    their :class:`~screening.status.EscalationModel` codes and the dicts of
+    :func:`~screening.workflow.execution.escalation_task` (their sample peaks feed
+    :mod:`screening.workflow.probabilities`), and what the escalation did (the run report's ``accuracy``)."""
     from screening.analysis import escalation as esc
     from screening.analysis.correction import best_estimates, point_features
     from screening.analysis.trust import shipped_calibration
     from screening.status import BestMethod, EscalationEstimator, EscalationModel
 
-    acc = run.study.accuracy
-    pts = point_table(run)
+    acc = stage.study.accuracy
+    pts = point_table(stage)
     features = point_features(pts["features"])
     candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
-    order = esc.cover_points(features, candidates, run.result.peak_p_uplift, esc.MAX_POINTS)
-    models = escalation_models(run, order, esc.escalation_model(
+    order = esc.cover_points(features, candidates, stage.result.peak_p_uplift, esc.MAX_POINTS)
+    models = escalation_models(stage, order, esc.escalation_model(
         pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
         esc.condensed_cells(shipped_calibration(), acc.target))[order])
-    results, cost, spent, failed = escalation_runs(run, order, models)
+    results, cost, spent, failed = escalation_runs(stage, order, models)
     done = [j for j in range(len(order)) if j in results]
     escalated, models = order[done], models[done]
     runs = [results[j] for j in done]
-    run.result.write_escalation(escalated, models, runs)
-    run.escalated = (escalated, models, runs)          # their sample peaks: screening.workflow.probabilities
+    stage.result.write_escalation(escalated, models, runs)
 
     best = {}
     for name in ("var_theta", "var_theta_dot"):
@@ -96,7 +115,7 @@ def escalate(run):
                                                  pts["high"], acc.target, features, escalated, mc, mc_se, models)
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
-    run.result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
+    stage.result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
 
     short = sum(1 for r in runs if not r["target_met"])
     codes, counts = np.unique(method, return_counts=True)
@@ -109,16 +128,16 @@ def escalate(run):
             "n_failed": failed, "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
             "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
-    run.report.accuracy = info
-    run.result.set_attrs(
+    stage.result.set_attrs(
         accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_cost_s=cost, accuracy_cpu_s=spent,
         accuracy_n_candidates=np.int32(info["n_candidates"]), accuracy_n_escalated=np.int32(len(runs)),
         accuracy_n_short_of_target=np.int32(short), accuracy_n_unreliable=np.int32(info["n_unreliable"]),
         accuracy_correction_loo_rms=info["loo_rms"],
         accuracy_note=accuracy_line(info))
-    run.log(accuracy_line(info))
+    stage.log(accuracy_line(info))
+    return (escalated, models, runs), info
 
-def escalation_models(run, order, calibrated):
+def escalation_models(stage, order, calibrated):
     """:class:`~screening.status.EscalationModel` of the ``order`` ed points: with ``[accuracy] model = "auto"``
     the measured validity rule's choice per point where it is the stiff-bed model, the calibration's
     (``calibrated``) elsewhere (:func:`~screening.analysis.escalation.auto_escalation_model`); an explicit model
@@ -129,7 +148,7 @@ def escalation_models(run, order, calibrated):
     from screening.workflow.grid import point_values
     from screening.workflow.study import build_models
 
-    study = run.study
+    study = stage.study
     model = getattr(study.accuracy, "model", AUTO)
     if model != AUTO:
         return np.full(len(order), int(EscalationModel[model]), dtype=np.int8)
@@ -141,7 +160,7 @@ def escalation_models(run, order, calibrated):
     return auto_escalation_model(calibrated, chosen)
 
 
-def escalation_runs(run, order, models):
+def escalation_runs(stage, order, models):
     """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within the budget.
 
     The budget is planned on the deterministic cost model (:func:`~screening.analysis.escalation.estimated_cost`
@@ -165,7 +184,7 @@ def escalation_runs(run, order, models):
     from screening.analysis import escalation as esc
     from screening.status import EscalationEstimator, EscalationModel
 
-    study, store, acc = run.study, run.store, run.study.accuracy
+    study, store, acc = stage.study, stage.store, stage.study.accuracy
     most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)
     token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"
     results, failed = {}, 0
@@ -216,20 +235,20 @@ def escalation_runs(run, order, models):
     def submit(j, samples, what, cheap_samples=0):
         model = EscalationModel(int(models[j])).name
         cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
-        return execution.submit_escalation(run.client, study, int(order[j]), samples, model,
+        return execution.submit_escalation(stage.client, study, int(order[j]), samples, model,
                                            key=f"escalate-{what}-{token}-{j:04d}", cheap=cheap,
                                            progress=(topic, 3 * j + ("pilot", "full", "topup").index(what)))
 
     def gather(futures):
         nonlocal failed
         out = {}
-        for fut in interruptible(as_completed(list(futures), loop=run.client.loop)):
+        for fut in interruptible(as_completed(list(futures), loop=stage.client.loop)):
             j = futures[fut]
             try:
                 out[j] = fut.result()
             except Exception as exc:          # noqa: BLE001 - the point stays uncovered
                 failed += 1
-                run.log(f"warning: Monte Carlo at escalated point {j} failed: {exception_line(exc)}")
+                stage.log(f"warning: Monte Carlo at escalated point {j} failed: {exception_line(exc)}")
             fut.release()
         return out
 
@@ -244,7 +263,7 @@ def escalation_runs(run, order, models):
             try:
                 store.save_spot(ESCALATION_RECORD + j, index_of(j), results[j])
             except OSError as exc:
-                run.log(f"warning: cannot save the resume record of escalated point {j} "
+                stage.log(f"warning: cannot save the resume record of escalated point {j} "
                          f"({write_failure_reason(exc)})")
 
     def rel_se(r):
@@ -258,15 +277,15 @@ def escalation_runs(run, order, models):
 
     main_budget = esc.MAIN_SHARE * acc.budget_s
     if w < len(todo):
-        run.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
+        stage.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
     label = "accuracy: Monte Carlo at escalated points"
-    with Progress(len(todo) - w, label=label, enabled=run.progress and w < len(todo)) as bar:
+    with Progress(len(todo) - w, label=label, enabled=stage.progress and w < len(todo)) as bar:
         def count(event):            # per-sample progress of the running points (worker events)
             samples_done[event[1]["spot"]] = max(samples_done.get(event[1]["spot"], 0), int(event[1]["done"]))
             bar.label = f"{label} ({sum(samples_done.values())} samples done)"
 
         if w < len(todo):
-            run.client.subscribe_topic(topic, count)
+            stage.client.subscribe_topic(topic, count)
             subscribed = True
         while w < len(todo):
             pilots, committed = {}, 0.0
@@ -319,7 +338,8 @@ def escalation_runs(run, order, models):
             try:
                 save_plan()
             except OSError as exc:
-                run.log(f"warning: cannot save the resume record of the escalation plan ({write_failure_reason(exc)})")
+                stage.log("warning: cannot save the resume record of the escalation plan "
+                          f"({write_failure_reason(exc)})")
         if w < len(todo):                                   # the budget ended the waves: the plan is final
             todo = todo[:w]
             with contextlib.suppress(OSError):
@@ -348,7 +368,7 @@ def escalation_runs(run, order, models):
         try:
             store.save_spot(TOPUP_RECORD + j, index_of(j), ran[j])
         except OSError as exc:
-            run.log(f"warning: cannot save the resume record of escalated point {j} ({write_failure_reason(exc)})")
+            stage.log(f"warning: cannot save the resume record of escalated point {j} ({write_failure_reason(exc)})")
     finished.update(ran)
     for j in sorted(finished):
         keep(j, finished[j], before=results[j])
@@ -357,7 +377,7 @@ def escalation_runs(run, order, models):
     cpu = sum(float(r["cpu_time"]) for r in results.values())
     if subscribed:
         with contextlib.suppress(Exception):        # noqa: BLE001 - only the display
-            run.client.unsubscribe_topic(topic)
+            stage.client.unsubscribe_topic(topic)
     return results, spent(), cpu, failed
 
 

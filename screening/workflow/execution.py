@@ -23,16 +23,15 @@ from pathlib import Path
 import numpy as np
 
 from screening.solvers import mc_registry
-from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
+from screening.solvers.moments import solve_moments
+from screening.solvers.outputs import HISTORY_VARIABLES, OUTPUTS, client_variables, of_stage, selected
 from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError, exception_line
 from screening.workflow.grid import batch_point_models, point_values
 from screening.workflow.study import build_models, case_cutoff
 
-__all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "HISTORY_DTYPE", "SUMMARY_FLOATS", "SUMMARY_INTS", "MODEL_FLOATS",
-           "TRUST_FLOATS", "INTENSITY_FLOATS", "ROCKING_FLOATS", "PROBABILITY_FLOATS", "DERIVED_INPUTS",
-           "SPOT_HISTORIES", "SPOT_LINEAR", "SUMMARY_VARIABLES", "solve_batch", "flag_points", "batch_intensity",
-           "batch_rocking_start", "solve_and_store_batch", "batch_trust", "batch_probabilities",
+__all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "SPOT_HISTORIES", "SPOT_LINEAR", "solve_batch", "flag_points",
+           "batch_intensity", "batch_rocking_start", "solve_and_store_batch", "batch_trust", "batch_probabilities",
            "wants_probabilities", "refused_batch", "failed_result", "spot_task", "escalation_task",
            "submit_escalation", "sample_state", "spot_linear_names", "failed_spot", "submit_batch", "submit_spot",
            "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers", "sees_folder", "warm_up",
@@ -42,30 +41,10 @@ __all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "HISTORY_DTYPE", "SUMMARY_FLOATS",
 CONNECT_TIMEOUT = "15s"
 TASK_RETRIES = 2
 
-#: Histories are stored as float32 (7 significant digits; the solver tolerance is 1e-7).
-HISTORY_DTYPE = np.float32
-#: Per-point summaries of the solver (float64 and int32) and per-point model quantities (float64).
-SUMMARY_FLOATS = ("t_stop", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq")
-SUMMARY_INTS = ("n_steps", "n_rejected")
-MODEL_FLOATS = ("theta_ul", "slenderness")
-#: The predicted band of SL's error against the coupled model (:mod:`screening.analysis.trust`).
-TRUST_FLOATS = ("sl_error_low", "sl_error_high")
-#: Intensity measures of each point's input (random-vibration medians, :mod:`screening.analysis.intensity`).
-INTENSITY_FLOATS = ("pga_median", "rms_acceleration", "arias_intensity")
-#: The quasi-static uplift acceleration of each point's block and bed [m s-2] and the probability that its
-#: input exceeds it during the record [1] (:func:`screening.analysis.intensity.rocking_start_probability`).
-ROCKING_FLOATS = ("uplift_acceleration", "p_rocking_start")
-#: The linearization's probability of overturning and its standard error (:func:`batch_probabilities`).
-PROBABILITY_FLOATS = ("p_overturn", "p_overturn_se")
-#: Per-point model inputs returned only for studies that derive them (:attr:`Study.derived_inputs`).
-DERIVED_INPUTS = ("S0",)
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
 #: Linearization histories a spot check is compared against.
 SPOT_LINEAR = ("var_theta", "var_theta_dot")
-#: What the client keeps of every point (spot selection, run summary); a worker that writes its batch
-#: itself returns only these.
-SUMMARY_VARIABLES = ("status", "sl_trust", "peak_p_uplift")
 
 
 # ============================================================================ tasks
@@ -81,36 +60,31 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     ``fragility`` (a :class:`~screening.workflow.study.Fragility`): also ``p_exceed`` (points x
     thresholds) [1], from the float64 histories while they are in memory
     (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
-    :data:`INTENSITY_FLOATS` of each point's input, with the ground-motion band limit ``cutoff`` [rad/s]
-    of the excitation (default :func:`screening.analysis.intensity.ground_cutoff`), and the
-    :data:`ROCKING_FLOATS` (:func:`batch_rocking_start`, same band limit);
-    ``derived_inputs`` (names in :data:`DERIVED_INPUTS`): those inputs per point.  ``underivable``
+    intensity measures of each point's input (:func:`batch_intensity`), with the ground-motion band limit
+    ``cutoff`` [rad/s] of the excitation (default :func:`screening.analysis.intensity.ground_cutoff`), and the
+    probability that rocking starts (:func:`batch_rocking_start`, same band limit);
+    ``derived_inputs`` (names of the ``inputs`` stage): those inputs per point.  ``underivable``
     (boolean per point, or None): points whose ``S0`` could not follow from their target PGA (their
     excitation holds a placeholder): status ``beyond_float_range``, NaN values, ``sl_trust`` untrusted.
-    ``probabilities`` (:func:`wants_probabilities`): also the linearization's :data:`PROBABILITY_FLOATS` and,
-    with ``fragility``, ``p_exceed_se`` (:func:`batch_probabilities`).
+    ``probabilities`` (:func:`wants_probabilities`): also the linearization's ``p_overturn``,
+    ``p_overturn_se`` and, with ``fragility``, ``p_exceed_se`` (:func:`batch_probabilities`).
     """
     probabilities = probabilities or fragility is not None
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
                         condensation=condensation, histories=bool(histories) or probabilities)
     shape = res["status"].shape
     n = res["status"].size
-    out = {name: res[name].reshape(n, -1).astype(HISTORY_DTYPE) for name in histories}
-    out["status"] = res["status"].reshape(n).astype(np.int8)
-    for name in SUMMARY_FLOATS:
-        out[name] = res[name].reshape(n).astype(np.float64)
-    for name in SUMMARY_INTS:
-        out[name] = res[name].reshape(n).astype(np.int32)
+    out = {name: OUTPUTS[name].cast(res[name], shape) for name in histories}
+    out.update({o.name: o.cast(res[o.name], shape) for o in of_stage("linearize") if o.shape == "point"})
     model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
-    for name in MODEL_FLOATS:
-        out[name] = np.broadcast_to(model[name], shape).reshape(n).astype(np.float64)
+    out.update({o.name: o.cast(model[o.name], shape) for o in of_stage("model")})
     out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
     if probabilities:
         out.update(batch_probabilities(res, block, foundation, excitation, out, t_out, fragility))
     out.update(batch_intensity(excitation, t_out, n, cutoff))
     out.update(batch_rocking_start(block, foundation, excitation, condensation, t_out, n, cutoff))
     for name in derived_inputs:
-        out[name] = np.broadcast_to(getattr(excitation, name), shape).reshape(n).astype(np.float64)
+        out[name] = OUTPUTS[name].cast(getattr(excitation, name), shape)
     if underivable is not None:
         out = flag_points(out, np.broadcast_to(underivable, shape).reshape(n))
     return out
@@ -121,27 +95,26 @@ def flag_points(out, bad):
     values, zero counts, ``sl_trust`` untrusted (what :func:`failed_result` gives a failed batch)."""
     out = {name: np.array(value) for name, value in out.items()}
     for name, value in out.items():
-        if value.dtype.kind == "f":
-            value[bad] = np.nan
-        elif name in SUMMARY_INTS:
-            value[bad] = 0
+        value[bad] = OUTPUTS[name].failed
     out["status"][bad] = PointStatus.beyond_float_range
-    out["sl_trust"][bad] = Trust.untrusted
     return out
 
 
 def batch_intensity(excitation, t_out, n, cutoff=None):
-    """The :data:`INTENSITY_FLOATS` [m s-2, m s-2, m s-1] of the ``n`` points of a batch, band-limited to
+    """The intensity measures of the ``n`` points of a batch (the ``intensity`` stage of
+    :mod:`screening.solvers.outputs`: [m s-2, m s-2, m s-1]), band-limited to
     ``cutoff`` [rad/s] (default: :func:`screening.analysis.intensity.ground_cutoff`)."""
     from screening.analysis.intensity import ground_cutoff, input_measures
 
     measures = input_measures(excitation, float(np.asarray(t_out)[-1]), ground_cutoff() if cutoff is None else cutoff)
     return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
-            else np.asarray(measures[name], dtype=np.float64).reshape(n) for name in INTENSITY_FLOATS}
+            else np.asarray(measures[name], dtype=np.float64).reshape(n)
+            for name in (o.name for o in of_stage("intensity"))}
 
 
 def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, cutoff=None):
-    """The :data:`ROCKING_FLOATS` of the ``n`` points of a batch, band-limited to the ground motion's
+    """The uplift acceleration [m s-2] and the probability that rocking starts [1] of the ``n`` points of a
+    batch (the ``rocking`` stage of :mod:`screening.solvers.outputs`), band-limited to the ground motion's
     ``cutoff`` [rad/s] (default :func:`screening.analysis.intensity.ground_cutoff`: the band its PGA refers to)."""
     from screening.analysis.intensity import ground_cutoff, rocking_start_probability
     from screening.analysis.probabilities import uplift_acceleration
@@ -161,10 +134,11 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
 def solve_and_store_batch(target, batch, *solve_args):
     """The dask task of a zarr result: :func:`solve_batch`, then its arrays written into the region of
     ``batch`` in the store and the batch marked done (:class:`~screening.workflow.store.RegionTarget`
-    ``target``); returns the :data:`SUMMARY_VARIABLES` of the batch."""
+    ``target``); returns what the client keeps of the batch
+    (:func:`screening.solvers.outputs.client_variables`)."""
     out = solve_batch(*solve_args)
     target.write(batch, out)
-    return {name: out[name] for name in SUMMARY_VARIABLES}
+    return {name: out[name] for name in client_variables()}
 
 
 def batch_trust(res, block, foundation, excitation, condensation, out, t_out, table=None):
@@ -196,27 +170,9 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, ta
             "sl_error_high": np.asarray(high, dtype=float)}
 
 
-def _batch_dataset(res, block, foundation, excitation, out, t_out):
-    """The linearization dataset of a batch (dimension ``point``) from the solver's float64 arrays."""
-    import xarray as xr
-
-    from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
-
-    n = out["status"].size
-    flat = {name: np.asarray(value).reshape(n, -1) if name in HISTORY_VARIABLES else np.asarray(value).reshape(n)
-            for name, value in res.items()}
-
-    def on_points(value):
-        return xr.DataArray(np.broadcast_to(value, (n,)), dims="point") if np.ndim(value) else float(value)
-
-    parameters = {name: on_points(value) for name, value in model_fields(block, foundation, excitation).items()}
-    derived = {name: ("point", out[name]) for name in MODEL_FLOATS}
-    return linearization_dataset(flat, t_out, ("point",), parameters, derived, model_labels(foundation, excitation))
-
-
 def batch_probabilities(res, block, foundation, excitation, out, t_out, fragility=None):
-    """The linearization's probabilities of a batch, by the analysis layer's own function
-    (:func:`screening.analysis.fragility.exceedance_probability`, the up-crossing ``method`` of
+    """The linearization's probabilities of a batch, by the analysis layer's own function on the solver's
+    float64 arrays (:func:`screening.analysis.fragility.linearized_exceedance`, the up-crossing ``method`` of
     ``fragility``, else Vanmarcke's): ``p_overturn`` (``|theta|`` beyond ``atan(b/h)``) and ``p_overturn_se``,
     and with ``fragility`` ``p_exceed`` and ``p_exceed_se`` (points x thresholds) [1].
 
@@ -225,33 +181,35 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
     for two standard errors each way), at the ``trusted`` points (the only ones where it is used); NaN elsewhere
     and where the band is not finite or reaches ``e <= -1``.
     """
-    import xarray as xr
+    from screening.analysis.fragility import linearized_exceedance
 
-    from screening.analysis.fragility import exceedance_probability
-
-    ds = _batch_dataset(res, block, foundation, excitation, out, t_out)
+    n = out["status"].size
+    shape = res["status"].shape
+    t = np.asarray(t_out, dtype=float)
+    moments = [np.asarray(res[name], dtype=float).reshape(n, -1)
+               for name in ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")]
+    m_sdof = np.broadcast_to(np.asarray(block.m_sdof, dtype=float), shape).reshape(n)
+    status = np.asarray(res["status"]).reshape(n)
     method = fragility.method if fragility is not None else "vanmarcke"
-    levels = [(1.0, "slenderness")] + ([(t, fragility.relative_to) for t in fragility.thresholds]
+    levels = [(1.0, "slenderness")] + ([(x, fragility.relative_to) for x in fragility.thresholds]
                                        if fragility is not None else [])
     with np.errstate(divide="ignore", invalid="ignore"):
         edges = [1.0 / (1.0 + out["sl_error_high"]), 1.0 / (1.0 + out["sl_error_low"])]
     # a standard error only where the linearization's estimate can be vouched for at all (trusted points)
     usable = np.all([np.isfinite(e) & (e > 0) for e in edges], axis=0) & (out["sl_trust"] == Trust.trusted)
     at = np.flatnonzero(usable)
-    sub = ds.isel(point=at)
 
-    def scaled(factor):
-        f = xr.DataArray(factor[at], dims="point")
-        return sub.assign(var_theta=sub["var_theta"] * f, var_theta_dot=sub["var_theta_dot"] * f,
-                          cov_theta_theta_dot=sub["cov_theta_theta_dot"] * f)
+    def probability(rows, level, factor=1.0):         # the three moments scaled by ``factor``
+        var, var_dot, cov, c_eq, k_eq = (a[rows] for a in moments)
+        return linearized_exceedance(t, var * factor, var_dot * factor, cov * factor, c_eq, k_eq, m_sdof[rows],
+                                     status[rows], level[rows], method)
 
-    variants = [scaled(e) for e in edges] if at.size else []
-    n = out["status"].size
     p, se = np.empty((n, len(levels))), np.full((n, len(levels)), np.nan)
     for j, (threshold, relative_to) in enumerate(levels):
-        p[:, j] = exceedance_probability(ds, threshold, relative_to, method).values
-        if variants:
-            lo, hi = (exceedance_probability(d, threshold, relative_to, method).values for d in variants)
+        level = np.full(n, float(threshold)) if relative_to is None else float(threshold) * out[relative_to]
+        p[:, j] = probability(slice(None), level)
+        if at.size:
+            lo, hi = (probability(at, level, e[at][:, None]) for e in edges)
             se[at, j] = np.abs(hi - lo) / 4.0
     result = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if fragility is not None:
@@ -272,21 +230,11 @@ def refused_batch(message):
 
 
 def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=(), probabilities=False):
-    """Batch result for ``n`` points whose task failed: status ``task_failed``, NaN values."""
-    out = {name: np.full((n, nt), np.nan, dtype=HISTORY_DTYPE) for name in histories}
-    if fragility is not None:
-        out["p_exceed"] = np.full((n, len(fragility.thresholds)), np.nan)
-        out["p_exceed_se"] = np.full((n, len(fragility.thresholds)), np.nan)
-    if probabilities or fragility is not None:
-        out.update({name: np.full(n, np.nan) for name in PROBABILITY_FLOATS})
-    out["status"] = np.full(n, PointStatus.task_failed, dtype=np.int8)
-    for name in (SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS
-                 + tuple(derived_inputs)):
-        out[name] = np.full(n, np.nan)
-    for name in SUMMARY_INTS:
-        out[name] = np.zeros(n, dtype=np.int32)
-    out["sl_trust"] = np.full(n, Trust.untrusted, dtype=np.int8)
-    return out
+    """Batch result for ``n`` points whose task failed: each declared variable's failed value (status
+    ``task_failed``, NaN values, zero counts, ``sl_trust`` untrusted)."""
+    n_thresholds = len(fragility.thresholds) if fragility is not None else 0
+    return {o.name: o.failed_array(n, nt, n_thresholds)
+            for o in selected(histories, derived_inputs, probabilities, fragility is not None)}
 
 
 def spot_arrays(ds):

@@ -34,23 +34,24 @@ __all__ = ["CORRECTION_HISTORIES", "monte_carlo_runs", "levels_at", "corrected_e
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
 
 
-def monte_carlo_runs(run):
-    """``[(flat index, model name, peak_abs_theta, sample_state, paired)]`` of the escalated points and the spot
-    checks; ``paired``: ``(peak_abs_theta, sample_state)`` of the cheaper model paired with a multi-fidelity
-    escalated point, else None."""
+def monte_carlo_runs(study, escalated=None, spot_runs=None):
+    """``[(flat index, model name, peak_abs_theta, sample_state, paired)]`` of the escalated points
+    (``escalated``: ``(flat indices, models, runs)`` of :func:`screening.workflow.accuracy.escalate`) and the
+    spot checks (``spot_runs``: ``(grid indices, results)``) of ``study``; ``paired``: ``(peak_abs_theta,
+    sample_state)`` of the cheaper model paired with a multi-fidelity escalated point, else None."""
     out = []
-    if getattr(run, "escalated", None) is not None:
-        flat, models, results = run.escalated
+    if escalated is not None:
+        flat, models, results = escalated
         for i, code, r in zip(flat, models, results):
             paired = (r["cheap_peak_abs_theta"], r["cheap_sample_state"]) if (
                 int(r.get("estimator", EscalationEstimator.plain_monte_carlo)) == EscalationEstimator.multifidelity) \
                 else None
             out.append((int(i), EscalationModel(int(code)).name, r["peak_abs_theta"], r["sample_state"], paired))
-    if getattr(run, "spot_runs", None) is not None:
-        spots, results = run.spot_runs
+    if spot_runs is not None:
+        spots, results = spot_runs
         for index, r in zip(spots, results):
-            out.append((int(np.ravel_multi_index(index, run.study.shape)) if index else 0,
-                        mc_registry.names()[int(r["mcs_model"])] if "mcs_model" in r else run.study.mcs.model,
+            out.append((int(np.ravel_multi_index(index, study.shape)) if index else 0,
+                        mc_registry.names()[int(r["mcs_model"])] if "mcs_model" in r else study.mcs.model,
                         r["peak_abs_theta"], r["sample_state"], None))
     return out
 
@@ -91,16 +92,16 @@ def levels_at(study, theta_ul, slenderness):
     return np.stack(cols, axis=-1)
 
 
-def corrected_estimates(run, points):
+def corrected_estimates(study, res, points):
     """``(p, se)`` (points x levels) of the up-crossing of the moments rescaled to the best estimates at the
-    flat indices ``points``; None where the result does not store the histories it needs."""
+    flat indices ``points`` of the result ``res`` of ``study``; None where the result does not store the
+    histories it needs."""
     import xarray as xr
 
     from screening.analysis.fragility import best_exceedance
     from screening.workflow.grid import point_values
     from screening.workflow.study import build_models
 
-    study, res = run.study, run.result
     if not points.size or not set(CORRECTION_HISTORIES) <= set(study.output.stored):
         return None
     index = [tuple(int(i) for i in np.unravel_index(p, study.shape)) for p in points]
@@ -124,25 +125,24 @@ def corrected_estimates(run, points):
     return p, se
 
 
-def finish_probabilities(run):
-    """Replace the workers' linearization estimates by the best ones and write ``p_source``; returns
-    ``{source name: points}``."""
+def finish_probabilities(study, res, escalated=None, spot_runs=None):
+    """Replace the workers' linearization estimates in the result ``res`` of ``study`` by the best ones and
+    write ``p_source``; ``escalated`` and ``spot_runs``: the Monte Carlo runs (:func:`monte_carlo_runs`).
+    Returns ``{source name: points}``."""
     from screening.analysis.probabilities import source_codes
 
-    study, res = run.study, run.result
-    res.nc.sync()                   # a zarr store creates the variables defined since (best estimates) here
+    res.commit()                    # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
     thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0
-    p = np.column_stack([res.read("p_overturn")] + ([np.asarray(res.nc["p_exceed"][...], dtype=float).reshape(n, -1)]
-                                                   if thresholds else []))
+    p = np.column_stack([res.read("p_overturn")] + ([res.read_all("p_exceed").reshape(n, -1)] if thresholds else []))
     se = np.column_stack([res.read("p_overturn_se")] + (
-        [np.asarray(res.nc["p_exceed_se"][...], dtype=float).reshape(n, -1)] if thresholds else []))
+        [res.read_all("p_exceed_se").reshape(n, -1)] if thresholds else []))
     low, high = res.read("sl_error_low"), res.read("sl_error_high")
     best = res.read("best_method").astype(np.int8) if study.accuracy is not None else None
     source = choose_sources(res.status == PointStatus.ok, res.sl_trust, np.isfinite(low) & np.isfinite(high), best)
 
     corrected = np.flatnonzero(source == ProbabilitySource.corrected_linearization_gaussian)
-    estimate = corrected_estimates(run, corrected)
+    estimate = corrected_estimates(study, res, corrected)
     if estimate is None:
         source[corrected] = ProbabilitySource.unreliable
     else:
@@ -152,7 +152,7 @@ def finish_probabilities(run):
 
     levels = levels_at(study, res.read("theta_ul"), res.read("slenderness"))
     used = np.zeros(n)
-    for flat, model, peaks, state, paired in monte_carlo_runs(run):
+    for flat, model, peaks, state, paired in monte_carlo_runs(study, escalated, spot_runs):
         state = np.asarray(state)
         valid = (state == SampleState.standing) | (state == SampleState.overturned)
         if valid.sum() <= used[flat]:

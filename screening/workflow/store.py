@@ -276,23 +276,12 @@ class RegionTarget:
     variables: tuple
 
     def write(self, batch, result):
-        """Write ``result`` into the region of ``batch``, then mark the batch done (a marker holding the
-        sizes of the chunk files written, created atomically: a batch cut short has none)."""
-        from screening.workflow.grid import hyperslabs
+        """Write ``result`` into the region of ``batch``, then mark the batch done
+        (:meth:`~screening.workflow.zarrfile.ZarrFormat.mark_done`: a marker holding the sizes and checksums
+        of the chunk files written, created atomically: a batch cut short has none)."""
         from screening.workflow.writer import write_region
-        from screening.workflow.zarrfile import ZarrDataset
+        from screening.workflow.zarrfile import ZarrFormat
 
-        ds = ZarrDataset(self.store, "r+")
-        write_region(ds, self.shape, self.histories, batch, result)
-        slabs = [slab for slab, _, _ in hyperslabs(batch.lo, batch.hi, self.shape)]
-        files = ds.chunk_files(self.variables, slabs)
-        marker = {"key": self.key, "index": batch.index, "lo": batch.lo, "hi": batch.hi, "files": files}
-        path = Path(self.done) / f"batch-{batch.index:06d}.json"
-        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        try:
-            with _create(tmp) as fh:
-                fh.write(json.dumps(marker).encode())
-            os.replace(tmp, path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
+        fmt = ZarrFormat(self.store, "r+")
+        write_region(fmt, self.shape, self.histories, batch, result)
+        fmt.mark_done(batch, target=self)

@@ -46,7 +46,7 @@ import numpy as np
 from screening import __version__
 from screening.status import PointStatus, Trust
 from screening.workflow import execution
-from screening.workflow.accuracy import escalate
+from screening.workflow.accuracy import Stage, escalate
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
 from screening.workflow.interrupt import interruptible, raise_if_interrupted, shielded
@@ -236,7 +236,8 @@ class _SweepRun:
                 timings["write"] = self.write_time
                 t0 = time.perf_counter()
                 if study.accuracy is not None:
-                    escalate(self)
+                    self.escalated, self.report.accuracy = escalate(
+                        Stage(self.client, study, self.store, self.result, self.log, self.progress))
                 timings["accuracy"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 if study.mcs is not None:
@@ -245,7 +246,8 @@ class _SweepRun:
                 if execution.wants_probabilities(study):
                     from screening.workflow.probabilities import finish_probabilities, probabilities_line
 
-                    self.report.probabilities = finish_probabilities(self)
+                    self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
+                                                                     self.spot_runs)
                     self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
                     self.log(probabilities_line(self.report.probabilities))
                 t0 = time.perf_counter()
@@ -269,7 +271,7 @@ class _SweepRun:
             try:
                 result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size, reopen=True)
                 for name in region_variables(study):  # every variable the workers write is there
-                    result.nc[name]
+                    result.format.dims(name)
             except Exception:                       # noqa: BLE001 - damaged metadata: start the store again
                 self.log(f"discarding a damaged zarr store in {self.store.dir}")
                 result = None

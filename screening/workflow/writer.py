@@ -1,9 +1,12 @@
 """The CF-1.8 netCDF result file of a sweep, written batch by batch (:class:`ResultFile`).
 
-Every ``units``, ``long_name`` and flag attribute comes from :mod:`screening.schema`.  The same
-class builds the zarr form of the result (``--out result.zarr``) on a
-:class:`~screening.workflow.zarrfile.ZarrDataset`, whose grid variables the workers write
-(:func:`write_region`).
+Every grid variable is laid out from its declaration (:mod:`screening.solvers.outputs`), every other
+``units``, ``long_name`` and flag attribute comes from :mod:`screening.schema`.  :class:`ResultFile` lays
+out the result on a result format, a small interface of its own: ``define`` a variable, ``write`` a
+region (:func:`write_region` writes a batch's), ``mark_done`` a batch, ``commit``, ``finish``.
+:class:`NetcdfFormat` implements it on netCDF4 (this file, written by the client), and
+:class:`~screening.workflow.zarrfile.ZarrFormat` on a zarr store (``--out result.zarr``, whose grid
+variables the workers write).
 
 Storage: histories are ``float32`` (7 significant digits, half the disk and bandwidth of
 ``float64``; the solver tolerance is ``1e-7`` anyway), everything else ``float64`` or
@@ -45,18 +48,16 @@ from pathlib import Path
 import numpy as np
 
 from screening import __version__
-from screening.schema import (ACCURACY, FRAGILITY, PRESSURE_PARAMETERS, PROBABILITIES, SWEEP, SWEEP_INPUTS, TIME,
-                              attributes, global_attributes, grid_coordinate_attributes)
-from screening.status import PointStatus, SpotStatus, Trust
+from screening.schema import (ACCURACY, PRESSURE_PARAMETERS, SWEEP, TIME, attributes, global_attributes,
+                              grid_coordinate_attributes)
+from screening.solvers.outputs import GRID_OUTPUTS, client_variables, selected
+from screening.status import SpotStatus
 from screening.workflow.errors import SweepError
-from screening.workflow.execution import (DERIVED_INPUTS, HISTORY_DTYPE, INTENSITY_FLOATS, MODEL_FLOATS,
-                                          PROBABILITY_FLOATS, ROCKING_FLOATS,
-                                          SPOT_HISTORIES, SUMMARY_FLOATS, SUMMARY_INTS, SUMMARY_VARIABLES,
-                                          TRUST_FLOATS)
+from screening.workflow.execution import SPOT_HISTORIES
 from screening.workflow.grid import history_chunks, hyperslabs, parameter_table
 
-__all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "POINT_VARIABLES",
-           "SUMMARY_VARIABLES", "check_output_path", "result_attributes", "band_limit_attribute",
+__all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
+           "NetcdfFormat", "result_attributes", "band_limit_attribute",
            "relative_peak_error", "history_chunks", "point_chunks", "write_region", "region_variables",
            "ResultFile"]
 
@@ -67,10 +68,6 @@ POINT_CHUNK = 2**14
 #: Chunks each variable keeps in its cache: those the batches in flight are filling.
 CACHED_CHUNKS = 4
 TITLE_FALLBACK = "Stochastic-linearization screening"
-
-#: Per-point variables besides the histories, in file order.
-POINT_VARIABLES = (("status", "sl_trust") + SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS
-                   + ROCKING_FLOATS + SUMMARY_INTS)
 
 
 def check_output_path(out, inputs=()):
@@ -184,214 +181,307 @@ def point_chunks(shape, target=POINT_CHUNK):
     return tuple(chunks)
 
 
-def _storage(chunks, itemsize):
-    """``createVariable`` keywords for ``chunks`` with a cache of :data:`CACHED_CHUNKS` of them."""
-    if not chunks:
-        return {}
-    return {"chunksizes": chunks, "chunk_cache": CACHED_CHUNKS * itemsize * math.prod(chunks)}
-
-
 def _slab_key(slab):
     return slab if slab else Ellipsis
 
 
-def write_region(nc, shape, histories, batch, result):
+def write_region(fmt, shape, histories, batch, result):
     """Write the arrays of ``batch`` (``result`` of :func:`~screening.workflow.execution.solve_batch`:
-    flat over the batch) into their hyperslabs of the grid ``shape`` in ``nc`` (a ``netCDF4.Dataset`` or
-    a :class:`~screening.workflow.zarrfile.ZarrDataset`): the ``histories``, the
-    :data:`POINT_VARIABLES`, and ``p_exceed`` and the ``DERIVED_INPUTS`` if present."""
-    nt = None
+    flat over the batch) into their hyperslabs of the grid ``shape`` of the result format ``fmt``
+    (:class:`NetcdfFormat` or :class:`~screening.workflow.zarrfile.ZarrFormat`): the stored ``histories``
+    and every other declared variable (:mod:`screening.solvers.outputs`): those a result always holds,
+    the others if present."""
+    names = set(histories)
+    outputs = [o for o in GRID_OUTPUTS if o.name in names or o.shape != "history" and
+               (o.when == "always" or o.name in result)]
     for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
         rows = slice(a - batch.lo, b - batch.lo)
         region = tuple(s.stop - s.start for s in slab)
-        for name in histories:
-            nt = result[name].shape[1] if nt is None else nt
-            nc[name][slab + (slice(None),)] = result[name][rows].reshape(region + (nt,))
-        for name in POINT_VARIABLES + tuple(n for n in DERIVED_INPUTS + PROBABILITY_FLOATS if n in result):
-            nc[name][_slab_key(slab)] = result[name][rows].reshape(region)
-        for name in ("p_exceed", "p_exceed_se"):
-            if name in result:
-                p = result[name]
-                nc[name][slab + (slice(None),)] = p[rows].reshape(region + (p.shape[1],))
+        for o in outputs:
+            values = result[o.name]
+            if o.shape == "point":
+                fmt.write(o.name, _slab_key(slab), values[rows].reshape(region))
+            else:
+                fmt.write(o.name, slab + (slice(None),), values[rows].reshape(region + (values.shape[1],)))
 
 
 def region_variables(study):
     """Names of the variables :func:`write_region` writes for ``study``."""
+    return tuple(o.name for o in _outputs(study))
+
+
+def _outputs(study):
+    """The declared grid variables the result of ``study`` holds, in file order."""
     from screening.workflow.execution import wants_probabilities
 
-    return (study.output.stored + POINT_VARIABLES + study.derived_inputs
-            + (PROBABILITY_FLOATS if wants_probabilities(study) else ())
-            + (("p_exceed", "p_exceed_se") if study.fragility is not None else ()))
+    return selected(study.output.stored, study.derived_inputs, wants_probabilities(study), study.fragility is not None)
+
+
+class NetcdfFormat:
+    """The netCDF4/HDF5 form of a result, written by the client alone: the result-format interface
+    :class:`ResultFile` drives (``dimension``, ``define``, ``write`` a region, ``mark_done``, ``commit``,
+    ``finish``; ``read``, ``dims``, ``attrs``, ``set_attrs``), as
+    :class:`~screening.workflow.zarrfile.ZarrFormat` is for zarr.
+
+    ``complevel``: zlib level of the compressed variables; a file with histories is synced every
+    :data:`SYNC_POINTS` points marked done.
+    """
+
+    def __init__(self, path, complevel=COMPLEVEL):
+        import netCDF4              # here, not at module level: workers never need it
+
+        self.dataset = netCDF4.Dataset(path, "w", format="NETCDF4")
+        self.dataset.set_auto_mask(False)
+        self.complevel = complevel
+        self._unsynced = 0
+
+    # -- definition
+    def dimension(self, name, size):
+        self.dataset.createDimension(name, size)
+
+    def dimension_size(self, name):
+        return len(self.dataset.dimensions[name])
+
+    def define(self, name, dtype, dims, attrs, fill=False, values=None, compress=False, shuffle=None, chunks=None):
+        """Create variable ``name`` with its attributes (and ``values``): zlib-compressed where
+        ``compress`` (``shuffle``: byte shuffle; None, netCDF's default), in ``chunks`` with a chunk cache
+        of :data:`CACHED_CHUNKS` of them."""
+        storage = {"zlib": self.complevel > 0, "complevel": max(self.complevel, 1)} if compress else {}
+        if shuffle is not None:
+            storage["shuffle"] = shuffle
+        if chunks:
+            storage.update(chunksizes=chunks,
+                           chunk_cache=CACHED_CHUNKS * np.dtype(dtype).itemsize * math.prod(chunks))
+        v = self.dataset.createVariable(name, dtype, dims, fill_value=fill, **storage)
+        v.setncatts(attrs)
+        if values is not None:
+            v[slice(None) if dtype is str else Ellipsis] = values
+
+    def has(self, name):
+        return name in self.dataset.variables
+
+    # -- data
+    def write(self, name, key, values):
+        """Write ``values`` into the region ``key`` of variable ``name``."""
+        self.dataset[name][key] = values
+
+    def read(self, name, key=Ellipsis):
+        return self.dataset[name][key]
+
+    def dims(self, name):
+        return self.dataset[name].dimensions
+
+    def attrs(self, name):
+        v = self.dataset[name]
+        return {key: v.getncattr(key) for key in v.ncattrs()}
+
+    def set_attrs(self, attrs):
+        self.dataset.setncatts(attrs)
+
+    def mark_done(self, batch, points=0, target=None):
+        """``batch`` is written (``points``: its points with histories): compress and write the cached
+        chunks every :data:`SYNC_POINTS` such points, while the workers compute.  (``target``: for the
+        zarr form only.)"""
+        self._unsynced += points
+        if self._unsynced >= SYNC_POINTS:
+            self.commit()
+            self._unsynced = 0
+
+    def commit(self):
+        self.dataset.sync()
+
+    def is_open(self):
+        return self.dataset.isopen()
+
+    def finish(self):
+        if self.dataset.isopen():
+            self.dataset.close()
 
 
 class ResultFile:
-    """Build the CF-1.8 result of ``study`` at ``path``, batch by batch: a netCDF4/HDF5 file, or with
-    ``zarr_batch_size`` (the batch size of the run) a zarr store whose grid variables the workers
-    write (chunks of :func:`~screening.workflow.zarrfile.point_chunks`).
+    """Build the CF-1.8 result of ``study`` at ``path``, batch by batch: a netCDF4/HDF5 file
+    (:class:`NetcdfFormat`), or with ``zarr_batch_size`` (the batch size of the run) a zarr store whose
+    grid variables the workers write (:class:`~screening.workflow.zarrfile.ZarrFormat`, chunks of
+    :func:`~screening.workflow.zarrfile.point_chunks`).  It speaks to the format only through their
+    shared interface.
 
     ``attrs``: the global attributes (:func:`result_attributes`); ``reopen``: open the zarr store of an
-    interrupted run instead of creating one.  Keeps the flat ``status``, ``sl_trust`` and
-    ``peak_p_uplift`` of the grid in memory (spot selection, run summary); histories go straight to disk.
+    interrupted run instead of creating one.  Keeps what the client keeps of every point
+    (:func:`screening.solvers.outputs.client_variables`: spot selection, run summary) in memory;
+    histories go straight to disk.
     """
 
     def __init__(self, path, study, attrs, complevel=COMPLEVEL, zarr_batch_size=None, reopen=False):
         self.path = Path(path)
-        self.zlib = {"zlib": complevel > 0, "complevel": max(complevel, 1)}
         self.study = study
         self.shape = study.shape
         self.nt = study.times.size
         self.histories = study.output.stored
-        self.status = np.full(study.n_points, PointStatus.task_failed, dtype=np.int8)
-        self.sl_trust = np.full(study.n_points, Trust.untrusted, dtype=np.int8)
-        self.peak_p_uplift = np.full(study.n_points, np.nan)
-        self._unsynced = 0
+        #: What the client keeps of every point (:func:`screening.solvers.outputs.client_variables`), flat.
+        self.kept = {o.name: o.failed_array(study.n_points) for o in GRID_OUTPUTS if o.client}
         if zarr_batch_size is not None:
-            from screening.workflow.zarrfile import ZarrDataset, point_chunks
+            from screening.workflow.zarrfile import ZarrFormat, point_chunks
 
             chunks = point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
-            self.nc = ZarrDataset(self.path, "r+" if reopen else "w", study.dims, chunks)
+            self.format = ZarrFormat(self.path, "r+" if reopen else "w", study.dims, chunks, complevel)
             if reopen:
                 return
         else:
-            import netCDF4              # here, not at module level: workers never need it
-
-            self.nc = netCDF4.Dataset(self.path, "w", format="NETCDF4")
-        self.nc.set_auto_mask(False)
+            self.format = NetcdfFormat(self.path, complevel)
         try:
             self._define(attrs)
-            self.nc.sync()
+            self.format.commit()
         except BaseException:
-            self.nc.close()
+            self.format.finish()
             raise
 
+    @property
+    def nc(self):
+        """The format's own dataset (a ``netCDF4.Dataset`` or a zarr group), for inspection."""
+        return self.format.dataset
+
     # -- definition
-    def _variable(self, name, dtype, dims, fill, coordinates="", table=SWEEP, **storage):
-        """Create variable ``name`` with its schema attributes (and ``coordinates``)."""
-        v = self.nc.createVariable(name, dtype, dims, fill_value=fill, **storage)
-        v.setncatts(attributes(name, table))
+    def _variable(self, name, dtype, dims, fill, coordinates="", table=SWEEP, values=None, **storage):
+        """Define variable ``name`` with its schema attributes (and ``coordinates``)."""
+        attrs = attributes(name, table)
         if coordinates:
-            v.coordinates = coordinates
-        return v
+            attrs["coordinates"] = coordinates
+        self.format.define(name, dtype, dims, attrs, fill, values, **storage)
 
     def _define(self, attrs):
-        nc, study = self.nc, self.study
+        fmt, study = self.format, self.study
         dims = study.dims
         for dim, n in zip(dims, self.shape):
-            nc.createDimension(dim, n)
-        nc.createDimension("t", self.nt)
+            fmt.dimension(dim, n)
+        fmt.dimension("t", self.nt)
         if study.has_case_dim:
-            self._variable("case", "i4", ("case",), False)[:] = np.arange(len(study.cases), dtype=np.int32)
-            self._variable("case_name", str, ("case",), None)[:] = np.array([c.name for c in study.cases],
-                                                                             dtype=object)
+            self._variable("case", "i4", ("case",), False, values=np.arange(len(study.cases), dtype=np.int32))
+            self._variable("case_name", str, ("case",), None, values=np.array([c.name for c in study.cases],
+                                                                              dtype=object))
         aux = []
         for name, values in study.sweeps.items():
-            v = nc.createVariable(name, "f8", (name,), fill_value=False)
-            v.setncatts(grid_coordinate_attributes(name))
-            v[:] = values
+            fmt.define(name, "f8", (name,), grid_coordinate_attributes(name), values=values)
             if name in PRESSURE_PARAMETERS:          # the values with units (schema.PRESSURE_PARAMETERS)
-                v = nc.createVariable(f"{name}_value", "f8", (name,), fill_value=False)
-                v.setncatts(attributes(f"{name}_value"))
-                v[:] = values
+                fmt.define(f"{name}_value", "f8", (name,), attributes(f"{name}_value"), values=values)
                 aux.append(f"{name}_value")
-        v = nc.createVariable("t", "f8", ("t",), fill_value=False)
-        v.setncatts(TIME)
-        v[:] = study.times
+        fmt.define("t", "f8", ("t",), TIME, values=study.times)
 
         constants, per_case, labels, case_labels = parameter_table(study)
         coords = (["case_name"] if study.has_case_dim else []) + aux
         for name, value in constants.items():
-            self._variable(name, "f8", (), False)[...] = value
+            self._variable(name, "f8", (), False, values=value)
             coords.append(name)
         for name, values in per_case.items():
-            self._variable(name, "f8", ("case",), np.nan)[:] = values
+            self._variable(name, "f8", ("case",), np.nan, values=values)
             coords.append(name)
         for name, values in case_labels.items():
-            self._variable(name, str, ("case",), None)[:] = np.array(values, dtype=object)
+            self._variable(name, str, ("case",), None, values=np.array(values, dtype=object))
             coords.append(name)
         coordinates = " ".join(coords)
 
-        for name in self.histories:
-            self._variable(name, "f4", dims + ("t",), HISTORY_DTYPE(np.nan), coordinates, **self.zlib,
-                           shuffle=self.zlib["zlib"], **_storage(history_chunks(self.shape, self.nt), 4))
-        chunks = point_chunks(self.shape)
-        self._variable("status", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
-        self._variable("sl_trust", "i1", dims, False, coordinates, **self.zlib, **_storage(chunks, 1))
-        for name in SUMMARY_FLOATS + MODEL_FLOATS + TRUST_FLOATS + INTENSITY_FLOATS + ROCKING_FLOATS:
-            self._variable(name, "f8", dims, np.nan, coordinates, **self.zlib, **_storage(chunks, 8))
-        for name in study.derived_inputs:
-            self._variable(name, "f8", dims, np.nan, coordinates, table=SWEEP_INPUTS, **self.zlib,
-                           **_storage(chunks, 8))
-        for name in SUMMARY_INTS:
-            self._variable(name, "i4", dims, False, coordinates, **self.zlib, **_storage(chunks, 4))
         frag = study.fragility
-        if frag is not None:
-            nc.createDimension("threshold", len(frag.thresholds))
-            v = nc.createVariable("threshold", "f8", ("threshold",), fill_value=False)
-            v.setncatts({"units": "rad" if frag.relative_to is None else "1",
-                         "long_name": "rotation threshold of p_exceed" + (
-                             "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")})
-            v[:] = np.asarray(frag.thresholds, dtype=float)
-            n_thr = len(frag.thresholds)
-            for name, table in (("p_exceed", FRAGILITY), ("p_exceed_se", PROBABILITIES)):
-                p = self._variable(name, "f8", dims + ("threshold",), np.nan, coordinates, table=table, **self.zlib,
-                                   **_storage(point_chunks(self.shape, POINT_CHUNK // n_thr) + (n_thr,), 8))
-                p.setncatts({"method": frag.method, "relative_to": str(frag.relative_to)})
-        if frag is not None or study.accuracy is not None:
-            for name in PROBABILITY_FLOATS:
-                self._variable(name, "f8", dims, np.nan, coordinates, table=PROBABILITIES, **self.zlib,
-                               **_storage(chunks, 8))
-        nc.setncatts({**attrs, **labels})
+        for output in _outputs(study):
+            if output.shape == "threshold" and not fmt.has("threshold"):
+                fmt.dimension("threshold", len(frag.thresholds))
+                fmt.define("threshold", "f8", ("threshold",), {
+                    "units": "rad" if frag.relative_to is None else "1",
+                    "long_name": "rotation threshold of p_exceed" + (
+                        "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")},
+                    values=np.asarray(frag.thresholds, dtype=float))
+            extra = ({"method": frag.method, "relative_to": str(frag.relative_to)} if output.shape == "threshold"
+                     else {})
+            self._declare(output, coordinates, extra)
+        fmt.set_attrs({**attrs, **labels})
+
+    def _declare(self, output, coordinates, extra):
+        """Define the grid variable of the declaration ``output`` (:mod:`screening.solvers.outputs`): its
+        dimensions, type, fill value, attributes (with ``coordinates`` and ``extra``), compression and
+        chunks."""
+        dims = self.study.dims
+        if output.shape == "history":
+            dims += ("t",)
+            storage = {"shuffle": self.format.complevel > 0, "chunks": history_chunks(self.shape, self.nt)}
+        elif output.shape == "threshold":
+            n = self.format.dimension_size("threshold")
+            dims += ("threshold",)
+            storage = {"chunks": point_chunks(self.shape, POINT_CHUNK // n) + (n,)}
+        else:
+            storage = {"chunks": point_chunks(self.shape)}
+        attrs = dict(output.attrs)
+        if coordinates:
+            attrs["coordinates"] = coordinates
+        self.format.define(output.name, output.dtype, dims, {**attrs, **extra}, output.fill, compress=True, **storage)
+
+    def _coordinates(self):
+        """The ``coordinates`` attribute of the grid variables."""
+        return self.format.attrs("status").get("coordinates", "")
 
     # -- data
     def write_batch(self, batch, result):
         """Write the arrays of ``batch`` (as returned by :func:`~screening.workflow.execution.solve_batch`)
-        into their regions."""
-        write_region(self.nc, self.shape, self.histories, batch, result)
-        self._unsynced += batch.size if self.histories else 0
-        if self._unsynced >= SYNC_POINTS:
-            self.nc.sync()      # compress and write the cached chunks now, while workers compute
-            self._unsynced = 0
+        into their regions, and mark it done."""
+        write_region(self.format, self.shape, self.histories, batch, result)
+        self.format.mark_done(batch, batch.size if self.histories else 0)
         self.record(batch, result)
 
+    @property
+    def status(self):
+        return self.kept["status"]
+
+    @property
+    def sl_trust(self):
+        return self.kept["sl_trust"]
+
+    @property
+    def peak_p_uplift(self):
+        return self.kept["peak_p_uplift"]
+
     def record(self, batch, summary):
-        """Keep the :data:`SUMMARY_VARIABLES` of ``batch`` (a worker wrote the rest)."""
-        self.status[batch.lo:batch.hi] = summary["status"]
-        self.sl_trust[batch.lo:batch.hi] = summary["sl_trust"]
-        self.peak_p_uplift[batch.lo:batch.hi] = summary["peak_p_uplift"]
+        """Keep what the client keeps of ``batch`` (a worker wrote the rest)."""
+        for name, values in self.kept.items():
+            values[batch.lo:batch.hi] = summary[name]
 
     def read_summary(self, batch):
-        """The :data:`SUMMARY_VARIABLES` of ``batch`` as stored (flat arrays)."""
+        """What the client keeps of ``batch``, as stored (flat arrays)."""
         out = {}
-        for name in SUMMARY_VARIABLES:
-            parts = [np.asarray(self.nc[name][_slab_key(slab)]).reshape(-1)
+        for name in client_variables():
+            parts = [np.asarray(self.format.read(name, _slab_key(slab))).reshape(-1)
                      for slab, _, _ in hyperslabs(batch.lo, batch.hi, self.shape)]
             out[name] = np.concatenate(parts)
         return out
 
     def history(self, name, index):
         """Stored history of ``name`` at grid index tuple ``index`` (float64)."""
-        return np.asarray(self.nc[name][tuple(index) + (slice(None),)], dtype=np.float64)
+        return np.asarray(self.format.read(name, tuple(index) + (slice(None),)), dtype=np.float64)
+
+    def has(self, name):
+        """Whether the result defines variable ``name``."""
+        return self.format.has(name)
+
+    def commit(self):
+        """Create what was defined since (a zarr store creates its variables here)."""
+        self.format.commit()
 
     def write_spots(self, spots, results, failed, spec):
         """Spot-check variables on dimension ``spot`` (``spots``: grid index tuples; ``results``: the
         dicts of :func:`~screening.workflow.execution.spot_task`; ``failed``: flags)."""
-        nc, study = self.nc, self.study
-        nc.createDimension("spot", len(spots))
+        fmt, study = self.format, self.study
+        fmt.dimension("spot", len(spots))
         coords = []
         for axis, dim in enumerate(study.dims):
             idx = np.array([s[axis] for s in spots])
             if dim == "case":
-                self._variable("spot_case", "i4", ("spot",), False)[:] = idx.astype(np.int32)
-                self._variable("spot_case_name", str, ("spot",), None)[:] = np.array(
-                    [study.cases[i].name for i in idx], dtype=object)
+                self._variable("spot_case", "i4", ("spot",), False, values=idx.astype(np.int32))
+                self._variable("spot_case_name", str, ("spot",), None, values=np.array(
+                    [study.cases[i].name for i in idx], dtype=object))
                 coords += ["spot_case", "spot_case_name"]
             else:
-                self._variable(f"spot_{dim}", "f8", ("spot",), False)[:] = study.sweeps[dim][idx]
+                self._variable(f"spot_{dim}", "f8", ("spot",), False, values=study.sweeps[dim][idx])
                 coords.append(f"spot_{dim}")
         coordinates = " ".join(coords)
 
         def var(name, dtype, dims, values, fill=np.nan):
-            self._variable(name, dtype, dims, fill, coordinates, **self.zlib)[...] = values
+            self._variable(name, dtype, dims, fill, coordinates, values=values, compress=True)
 
         for name in SPOT_HISTORIES:
             var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
@@ -406,8 +496,8 @@ class ResultFile:
             var(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak)
             var(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
                 np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]))
-        nc.createDimension("sample", spec.samples)
-        self._variable("sample", "i4", ("sample",), False)[:] = np.arange(spec.samples, dtype=np.int32)
+        fmt.dimension("sample", spec.samples)
+        self._variable("sample", "i4", ("sample",), False, values=np.arange(spec.samples, dtype=np.int32))
         var("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]))
         var("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
             fill=False)
@@ -419,48 +509,53 @@ class ResultFile:
         selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "
                      "the Gaussian closure is least trustworthy)" if spec.points == "auto"
                      else "explicit points of the study file")
-        nc.setncatts({"mcs_model": spec.model, "mcs_samples": np.int32(spec.samples),
-                      "mcs_seed": np.int32(spec.seed), "mcs_selection": selection,
-                      "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
+        fmt.set_attrs({"mcs_model": spec.model, "mcs_samples": np.int32(spec.samples),
+                       "mcs_seed": np.int32(spec.seed), "mcs_selection": selection,
+                       "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
 
     def read(self, name, t_index=None):
         """Flat float64 values of per-point variable ``name`` over the grid (a history: at output index
         ``t_index``, or its maximum over time with ``None``)."""
-        v = self.nc[name]
-        if "t" not in v.dimensions:
-            return np.asarray(v[...], dtype=np.float64).reshape(-1)
+        if "t" not in self.format.dims(name):
+            return np.asarray(self.format.read(name), dtype=np.float64).reshape(-1)
         if t_index is not None:
-            return np.asarray(v[..., t_index % self.nt], dtype=np.float64).reshape(-1)
+            return np.asarray(self.format.read(name, (Ellipsis, t_index % self.nt)), dtype=np.float64).reshape(-1)
         out = np.full(self.study.n_points, np.nan)
         step = max(SYNC_POINTS, 1)
         for lo in range(0, self.study.n_points, step):          # a slab of histories at a time
             for slab, a, b in hyperslabs(lo, min(lo + step, self.study.n_points), self.shape):
-                rows = np.asarray(v[slab + (slice(None),)], dtype=np.float64).reshape(b - a, self.nt)
+                rows = np.asarray(self.format.read(name, slab + (slice(None),)), dtype=np.float64).reshape(
+                    b - a, self.nt)
                 finite = np.isfinite(rows).any(axis=1)
                 out[a:b][finite] = np.nanmax(rows[finite], axis=1)
         return out
+
+    def read_all(self, name):
+        """The stored values of variable ``name`` (float64, its own shape)."""
+        return np.asarray(self.format.read(name), dtype=float)
 
     def write_escalation(self, flat_indices, models, runs):
         """The ``[accuracy]`` Monte Carlo points on dimension ``escalation`` (``runs``: the dicts of
         :func:`~screening.workflow.execution.escalation_task`; ``models``: their
         :class:`~screening.status.EscalationModel` codes)."""
-        nc, study = self.nc, self.study
+        fmt, study = self.format, self.study
         n = len(runs)
-        nc.createDimension("escalation", n)
+        fmt.dimension("escalation", n)
         most = max((int(r["samples"]) for r in runs), default=1)
-        nc.createDimension("esc_sample", most)
+        fmt.dimension("esc_sample", most)
         idx = (np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if n and self.shape
                else [()] * len(self.shape))             # a one-point grid has no grid dimension
         coords = []
         for axis, dim in enumerate(study.dims):
             name = f"esc_{dim}"
             values = np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]]
-            self._variable(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY)[:] = values
+            self._variable(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY,
+                           values=values)
             coords.append(name)
         coordinates = " ".join(coords)
 
         def var(name, dtype, dims, values, fill=np.nan):
-            self._variable(name, dtype, dims, fill, coordinates, table=ACCURACY, **self.zlib)[...] = values
+            self._variable(name, dtype, dims, fill, coordinates, table=ACCURACY, values=values, compress=True)
 
         var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
         var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
@@ -495,13 +590,13 @@ class ResultFile:
         """Per-point best estimates: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat arrays,
         ``method`` the flat :class:`~screening.status.BestMethod` codes."""
         dims = self.study.dims
-        coordinates = self.nc["status"].getncattr("coordinates") if "coordinates" in self.nc["status"].ncattrs() else ""
+        coordinates = self._coordinates()
         for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot)):
             for name, values in ((base, value), (f"{base}_se", se)):
-                v = self._variable(name, "f8", dims, np.nan, coordinates, table=ACCURACY, **self.zlib)
-                v[...] = np.asarray(values, dtype=float).reshape(self.shape)
-        v = self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, **self.zlib)
-        v[...] = np.asarray(method, dtype=np.int8).reshape(self.shape)
+                self._variable(name, "f8", dims, np.nan, coordinates, table=ACCURACY, compress=True,
+                               values=np.asarray(values, dtype=float).reshape(self.shape))
+        self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, compress=True,
+                       values=np.asarray(method, dtype=np.int8).reshape(self.shape))
 
     def write_probabilities(self, values, source):
         """Per-point probabilities after the Monte Carlo stages: ``values`` maps ``p_overturn``,
@@ -509,14 +604,12 @@ class ResultFile:
         ``source`` the flat ``p_source`` codes (:func:`screening.schema.probability_source_attributes`)."""
         for name, value in values.items():
             value = np.asarray(value, dtype=float)
-            self.nc[name][...] = value.reshape(self.shape + value.shape[1:])
-        coordinates = self.nc["status"].getncattr("coordinates") if "coordinates" in self.nc["status"].ncattrs() else ""
-        v = self._variable("p_source", "i1", self.study.dims, False, coordinates, **self.zlib)
-        v[...] = np.asarray(source, dtype=np.int8).reshape(self.shape)
+            self.format.write(name, Ellipsis, value.reshape(self.shape + value.shape[1:]))
+        self._variable("p_source", "i1", self.study.dims, False, self._coordinates(), compress=True,
+                       values=np.asarray(source, dtype=np.int8).reshape(self.shape))
 
     def set_attrs(self, **attrs):
-        self.nc.setncatts(attrs)
+        self.format.set_attrs(attrs)
 
     def close(self):
-        if self.nc.isopen():
-            self.nc.close()
+        self.format.finish()

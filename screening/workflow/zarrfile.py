@@ -1,11 +1,12 @@
 """The zarr form of a sweep result (``--out result.zarr``): written in place by the workers.
 
-:class:`ZarrDataset` is the part of ``netCDF4.Dataset`` that
-:class:`~screening.workflow.writer.ResultFile` uses, on a zarr (format 3) store, so that one piece
-of code (``ResultFile``) defines the layout, the variables and their CF attributes of both forms.
-Variables defined with ``createVariable`` are created at the next :meth:`ZarrDataset.sync` (xarray
-writes their metadata and any values that were set; the grid variables are left unwritten for the
-workers).  A grid variable is cut into chunks that each lie in one batch (:func:`point_chunks`),
+:class:`ZarrFormat` is the zarr (format 3) implementation of the result-format interface that
+:class:`~screening.workflow.writer.ResultFile` drives (define, write a region, mark a batch done,
+finish; :class:`~screening.workflow.writer.NetcdfFormat` is the netCDF one), so that one piece of code
+(``ResultFile``) lays out the variables of both forms, with the CF attributes of their declarations.
+Variables defined are created at the next :meth:`ZarrFormat.commit` (xarray writes their metadata and
+any values written; the grid variables are left unwritten for the workers).  A grid variable is cut
+into chunks that each lie in one batch (:func:`point_chunks`),
 so that every worker compresses and writes whole chunks of its own, with no lock.
 
 :func:`export_netcdf` converts a finished store to the netCDF file a direct run writes.  netCDF4 /
@@ -25,10 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from screening.atomicfile import create_new
-from screening.status import PointStatus, Trust
+from screening.solvers.outputs import GRID_OUTPUTS
 
 __all__ = ["ZARR_SUFFIX", "ZARR_FORMAT", "BLOCK_BYTES", "COMPLETION_MARK", "ZARR_FILL", "is_zarr_path",
-           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrDataset", "file_check", "store_entries",
+           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrFormat", "file_check", "store_entries",
            "write_completion_mark", "read_completion_mark", "store_problem", "foreign_files", "remove_store",
            "warnings_ignored", "open_zarr_result", "read_attrs", "check_store", "netcdf_attributes",
            "export_netcdf"]
@@ -39,8 +40,9 @@ ZARR_FORMAT = 3
 BLOCK_BYTES = 32 * 2**20
 #: The completion mark of a finished store (:func:`write_completion_mark`), in its top folder.
 COMPLETION_MARK = "screening-complete.json"
-#: What a chunk that was never written reads as (zarr's fill value): a failure code, never ``ok``.
-ZARR_FILL = {"status": int(PointStatus.task_failed), "sl_trust": int(Trust.untrusted)}
+#: What a chunk that was never written reads as (zarr's fill value): for a flag, the value of a failed
+#: point (:mod:`screening.solvers.outputs`), never ``ok``.
+ZARR_FILL = {o.name: int(o.failed) for o in GRID_OUTPUTS if o.is_flag}
 
 
 def is_zarr_path(path):
@@ -98,7 +100,7 @@ def zarr_batch_size(shape, n_lead, target):
     return best * (target // best)
 
 
-# ----------------------------------------------------------------------------- the facade
+# ----------------------------------------------------------------------------- the result format
 def _codecs(dtype, zlib, complevel, shuffle):
     """Compression of a numeric variable where netCDF would use zlib: blosc/zstd at ``complevel`` (with
     byte shuffle if asked); none where netCDF uses none; strings keep zarr's default."""
@@ -113,79 +115,44 @@ def _codecs(dtype, zlib, complevel, shuffle):
 
 
 def _no_fill(fill):
-    """netCDF4's ``fill_value`` ``False`` (none) or ``None`` (the default, unused for what we store)."""
+    """A ``fill`` of ``False`` (none) or ``None`` (unused for what we store)."""
     return fill is None or fill is False
 
 
-class _PendingVariable:
-    """A variable defined but not yet created in the store: its attributes and any values set."""
+class _Pending:
+    """A variable defined but not yet created in the store: its attributes and any values written."""
 
-    def __init__(self, dataset, name, dtype, dims, fill, storage):
-        d = self.__dict__
-        d["_dataset"], d["name"], d["dims"], d["fill"], d["storage"] = dataset, name, tuple(dims), fill, storage
-        d["dtype"] = np.dtype(object) if dtype is str else np.dtype(dtype)
-        d["attrs"], d["values"] = {}, None
+    def __init__(self, fmt, name, dtype, dims, fill, attrs, storage):
+        self.format, self.name, self.dims, self.fill, self.storage = fmt, name, tuple(dims), fill, storage
+        self.dtype = np.dtype(object) if dtype is str else np.dtype(dtype)
+        self.attrs, self.values = dict(attrs), None
 
     @property
     def shape(self):
-        return tuple(self._dataset.dimension_size(d) for d in self.dims)
+        return tuple(self.format.dimension_size(d) for d in self.dims)
 
-    def setncatts(self, attrs):
-        self.attrs.update(attrs)
-
-    def __setattr__(self, name, value):          # ``var.coordinates = "..."`` as on netCDF4.Variable
-        self.attrs[name] = value
-
-    def __setitem__(self, key, value):
+    def write(self, key, values):
         if self.values is None:
             fill = ("" if self.dtype.kind == "O" else 0) if _no_fill(self.fill) else self.fill
-            self.__dict__["values"] = np.full(self.shape, fill, dtype=self.dtype)
-        self.values[key] = value
-
-    def __getitem__(self, key):
-        return self.values[key]
+            self.values = np.full(self.shape, fill, dtype=self.dtype)
+        self.values[key] = values
 
 
-class _StoredVariable:
-    """An array of the store with the ``netCDF4.Variable`` calls :class:`ResultFile` makes
-    (``dimensions``, ``ncattrs``, ``getncattr``, item reads and writes)."""
+class ZarrFormat:
+    """The zarr (format 3) form of a result: the result-format interface of
+    :class:`~screening.workflow.writer.ResultFile` (``dimension``, ``define``, ``write`` a region,
+    ``mark_done``, ``commit``, ``finish``; ``read``, ``dims``, ``attrs``, ``set_attrs``) on a zarr store.
 
-    __slots__ = ("array",)
-
-    def __init__(self, array):
-        self.array = array
-
-    @property
-    def dimensions(self):
-        return tuple(self.array.metadata.dimension_names or ())
-
-    @property
-    def shape(self):
-        return self.array.shape
-
-    def ncattrs(self):
-        return list(self.array.attrs)
-
-    def getncattr(self, name):
-        return self.array.attrs[name]
-
-    def __getitem__(self, key):
-        return self.array[key]
-
-    def __setitem__(self, key, value):
-        self.array[key] = value
-
-
-class ZarrDataset:
-    """A zarr store with the methods of ``netCDF4.Dataset`` that :class:`ResultFile` calls.
-
-    ``mode``: ``"w"`` (a new store; the folder must not exist) or ``"r+"``.  ``chunks``: the chunk
-    shape over the grid dimensions ``grid`` (:func:`point_chunks`); other variables are one chunk.
+    ``mode``: ``"w"`` (a new store; the folder must not exist) or ``"r+"``.  ``chunks``: the chunk shape
+    over the grid dimensions ``grid`` (:func:`point_chunks`); other variables are one chunk.
+    ``complevel``: blosc/zstd level of the compressed variables.  Variables defined are created at the
+    next :meth:`commit` (xarray writes their metadata and any values written; the grid variables are
+    left unwritten for the workers).
     """
 
-    def __init__(self, path, mode="r+", grid=(), chunks=()):
+    def __init__(self, path, mode="r+", grid=(), chunks=(), complevel=1):
         self.path = Path(path)
-        self.grid, self.chunks = tuple(grid), tuple(chunks)
+        self.grid, self.chunks, self.complevel = tuple(grid), tuple(chunks), complevel
         self.dimensions, self._pending, self._attrs, self._arrays = {}, {}, {}, {}
         self._created, self._open, self._group = mode == "r+", True, None
 
@@ -198,11 +165,10 @@ class ZarrDataset:
                 self._group = zarr.open_group(self.path, mode="r+", zarr_format=ZARR_FORMAT)
         return self._group
 
-    # -- netCDF4.Dataset
-    def set_auto_mask(self, flag):
-        pass
+    dataset = group
 
-    def createDimension(self, name, size):
+    # -- definition
+    def dimension(self, name, size):
         self.dimensions[name] = int(size)
 
     def dimension_size(self, name):
@@ -213,30 +179,87 @@ class ZarrDataset:
                     self.dimensions.setdefault(dim, size)
         return self.dimensions[name]
 
-    def createVariable(self, name, dtype, dims, fill_value=None, zlib=False, complevel=1, shuffle=False,
-                       chunksizes=None, chunk_cache=None):
-        var = _PendingVariable(self, name, dtype, dims, fill_value, (zlib, complevel, shuffle))
+    def define(self, name, dtype, dims, attrs, fill=False, values=None, compress=False, shuffle=None, chunks=None):
+        """Define variable ``name`` (created at the next :meth:`commit`): compressed where ``compress``
+        (byte shuffle if ``shuffle``); ``chunks`` (netCDF's) are not used: a grid variable is chunked by
+        batch."""
+        zlib = compress and self.complevel > 0
+        var = _Pending(self, name, dtype, dims, fill, attrs, (zlib, max(self.complevel, 1) if compress else 1,
+                                                               bool(shuffle)))
         self._pending[name] = var
-        return var
+        if values is not None:
+            var.write(Ellipsis, values)
 
-    def __getitem__(self, name):
-        if name in self._pending:
-            return self._pending[name]
+    def has(self, name):
+        return name in self._pending or self._created and name in {n for n, _ in self.group.arrays()}
+
+    def _array(self, name):
+        """Array ``name`` of the store, writing every chunk as a file (an empty one too): asked of the array
+        itself where zarr can (zarr's global configuration is shared by the worker threads of a process:
+        one thread's ``config.set`` ending while another opens an array left that one without it)."""
         if name not in self._arrays:
             import zarr
 
             with zarr.config.set({"array.write_empty_chunks": True}):
-                self._arrays[name] = _StoredVariable(self.group[name])
+                arr = self.group[name]
+            with_config = getattr(arr, "with_config", None)
+            self._arrays[name] = arr if with_config is None else with_config({"write_empty_chunks": True})
         return self._arrays[name]
 
-    def setncatts(self, attrs):
+    # -- data
+    def write(self, name, key, values):
+        """Write ``values`` into the region ``key`` of variable ``name``."""
+        if name in self._pending:
+            self._pending[name].write(key, values)
+        else:
+            self._array(name)[key] = values
+
+    def read(self, name, key=Ellipsis):
+        if name in self._pending:
+            return self._pending[name].values[key]
+        return self._array(name)[key]
+
+    def dims(self, name):
+        if name in self._pending:
+            return self._pending[name].dims
+        return tuple(self._array(name).metadata.dimension_names or ())
+
+    def attrs(self, name):
+        if name in self._pending:
+            return dict(self._pending[name].attrs)
+        return dict(self._array(name).attrs)
+
+    def set_attrs(self, attrs):
         if self._created:
             self.group.attrs.update({k: _json(v) for k, v in attrs.items()})
         else:
             self._attrs.update(attrs)
 
-    def sync(self):
-        """Create the pending variables (metadata, and the values that were set)."""
+    def mark_done(self, batch, points=0, target=None):
+        """Mark ``batch`` done in the marker folder of ``target`` (a
+        :class:`~screening.workflow.store.RegionTarget`: a worker wrote the batch), once its region is
+        written: a marker holding the size and checksum of every chunk file of the batch, created
+        atomically (a batch cut short has none).  Without ``target`` (the client wrote a failed batch's
+        values) nothing is marked: a resumed run computes the batch again.  (``points``: for netCDF only.)"""
+        if target is None:
+            return
+        from screening.workflow.grid import hyperslabs
+
+        slabs = [slab for slab, _, _ in hyperslabs(batch.lo, batch.hi, target.shape)]
+        marker = {"key": target.key, "index": batch.index, "lo": batch.lo, "hi": batch.hi,
+                  "files": self.chunk_files(target.variables, slabs)}
+        path = Path(target.done) / f"batch-{batch.index:06d}.json"
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        try:
+            with create_new(tmp) as fh:
+                fh.write(json.dumps(marker).encode())
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+
+    def commit(self):
+        """Create the pending variables (metadata, and the values that were written)."""
         if self._created and not self._pending:
             return
         import dask.array as da
@@ -272,14 +295,14 @@ class ZarrDataset:
             return self.chunks + shape[len(self.grid):]
         return shape
 
-    def isopen(self):
+    def is_open(self):
         return self._open
 
-    def close(self):
+    def finish(self):
         """Create what is pending and write the consolidated metadata (one read to open the store)."""
         if self._open:
             self._open = False
-            self.sync()
+            self.commit()
             import zarr
 
             with warnings_ignored():
@@ -291,7 +314,7 @@ class ZarrDataset:
         the grid ``slabs`` (tuples of slices; a file that is missing has size -1, checksum ``""``)."""
         files = {}
         for name in names:
-            arr = self[name].array
+            arr = self._array(name)
             for slab in slabs:
                 ranges = [range(s.start // c, (s.stop - 1) // c + 1) for s, c in zip(slab, arr.chunks)]
                 for index in np.ndindex(*[len(r) for r in ranges]):

@@ -275,3 +275,26 @@ def test_fragility_command_on_cases_with_different_blocks(geometry_sweep, tmp_pa
         np.testing.assert_array_equal(frag["p_exceed"].values, expected["p_exceed"].values)
         np.testing.assert_array_equal(frag["threshold_rad"].values, expected["threshold_rad"].values)
         assert frag["fit_median"].attrs["units"] == PARAMETERS["S0"]["units"]
+
+
+@pytest.mark.parametrize("method", ["vanmarcke", "poisson"])
+def test_linearized_exceedance_on_plain_arrays_is_the_dataset_function(method):
+    """The batch task's plain-array twin gives what exceedance_probability gives on the dataset, point by point,
+    unstable points included (probability 1)."""
+    from screening.analysis.fragility import exceedance_probability, linearized_exceedance
+
+    S0 = xr.DataArray([1e-5, 3e-4, 2.4e-3, 2e-2], dims="S0")
+    block = Block(8.67, 0.035, 0.21)
+    ds = linearize(block, Foundation(2.89e7, 8.95e8, 0.0), WhiteNoise(S0), t_end=3.0)
+    n = ds.sizes["S0"]
+    flat = {name: ds[name].transpose("S0", "t").values for name in
+            ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")}
+    for threshold in (0.2, 0.6):
+        ref = exceedance_probability(ds, threshold, "slenderness", method).values
+        got = linearized_exceedance(ds["t"].values, *flat.values(), np.full(n, block.m_sdof), ds["status"].values,
+                                    threshold * np.broadcast_to(ds["slenderness"].values, (n,)), method)
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=0)
+        assert np.isfinite(ref).any() and (np.isnan(ref) == np.isnan(got)).all()
+    with pytest.raises(ValueError, match="method"):
+        linearized_exceedance(ds["t"].values, *flat.values(), np.full(n, block.m_sdof), ds["status"].values,
+                              np.ones(n), "rice")
