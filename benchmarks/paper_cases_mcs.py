@@ -2,7 +2,7 @@
 
 Run:  NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/paper_cases_mcs.py [--samples 1000] [--write]
 
-Block m = 8.67 kg, b = 0.035 m, h = 0.21 m; bed k = 2.89e7 N/m^2, lam = 8.95e8 N s/m^4;
+Block m = 8.67 kg, b = 0.035 m, h = 0.21 m; bed k = 2.89e7 N/m^2, lam = 8.95e8 N s/m^3;
 envelope T1 = 4 s, T2 = 2 s; t_end = 20 s.  Cases 5–8 use the eps of the figure captions
 (6e7 and -6e5 m^-2; the text of section 3 says 2e7 and -2e5, see docs/method.md#values-of-eps-in-section-3).  Intensity
 convention: E[xi(t) xi(s)] = 2 pi S0 delta(t - s) (two-sided PSD level S0).

@@ -21,7 +21,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def bed(m=400.0, b=0.3, depth=0.6, thickness=0.020):
-    """``(k [N m-2], lam [N s m-4])`` of bonded pads (E 4 MPa, shape factor 8, vertical damping 10 %)."""
+    """``(k [N m-2], lam [N s m-3])`` of bonded pads (E 4 MPa, shape factor 8, vertical damping 10 %)."""
     modulus = beds.pad_compression_modulus(E=4e6, shape_factor=8, kappa=0.75)
     k = beds.layer_stiffness(modulus, thickness=thickness, depth=depth)
     return k, beds.lam_from_vertical_damping(k, m=m, b=b, zeta_v=0.10)
@@ -30,7 +30,7 @@ def bed(m=400.0, b=0.3, depth=0.6, thickness=0.020):
 def main(study=HERE / "cabinet.toml", out="outputs/cabinet.nc"):
     """Run the study in this process and return the fragility curves over PGA (``[fragility]`` thresholds)."""
     k, lam = bed()
-    print(f"pads: k = {k:.3g} N m-2, lam = {lam:.3g} N s m-4")
+    print(f"pads: k = {k:.3g} N m-2, lam = {lam:.3g} N s m-3")
     run_sweep(load_study(study), out, workers=0)
     with xr.open_dataset(out) as result:
         curves = result.rocking.fragility_curve(0.3, dim="pga", relative_to="slenderness").load()

@@ -161,7 +161,7 @@ def layer_stiffness(modulus, thickness, depth):
 
 
 def hunt_crossley_lambda(k, restitution, impact_velocity, model="hunt_crossley"):
-    """Hunt–Crossley damping ``lam`` [N s m-4] from a coefficient of restitution.
+    """Hunt–Crossley damping ``lam`` [N s m-3] from a coefficient of restitution.
 
     Parameters
     ----------
@@ -177,7 +177,7 @@ def hunt_crossley_lambda(k, restitution, impact_velocity, model="hunt_crossley")
     Returns
     -------
     numpy.ndarray
-        ``lam = alpha k`` [N s m-4].
+        ``lam = alpha k`` [N s m-3].
 
     Raises
     ------
@@ -260,7 +260,7 @@ def c_from_vertical_damping(k, m, b, zeta_v):
 
 
 def lam_from_vertical_damping(k, m, b, zeta_v, g=9.81):
-    """Hunt–Crossley ``lam`` [N s m-4] giving a vertical damping ratio about the static indentation.
+    """Hunt–Crossley ``lam`` [N s m-3] giving a vertical damping ratio about the static indentation.
 
     Parameters
     ----------
@@ -278,7 +278,7 @@ def lam_from_vertical_damping(k, m, b, zeta_v, g=9.81):
     Returns
     -------
     numpy.ndarray or float
-        ``lam = c / z_st`` [N s m-4] with ``c`` of :func:`c_from_vertical_damping`.
+        ``lam = c / z_st`` [N s m-3] with ``c`` of :func:`c_from_vertical_damping`.
 
     Notes
     -----

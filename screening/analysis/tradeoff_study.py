@@ -112,7 +112,7 @@ def parse_tradeoff_study(text, source="<string>"):
 
     * ``title``; ``[block]`` ``m`` [kg], ``b`` [m] (half-width), ``h`` [m] (centre-of-mass
       height), optional ``I_cm`` [kg m2], ``g`` [m s-2];
-    * ``[foundation]`` ``contact`` ("hunt_crossley" with ``lam`` [N s m-4] or "winkler" with
+    * ``[foundation]`` ``contact`` ("hunt_crossley" with ``lam`` [N s m-3] or "winkler" with
       ``c`` [N s m-2]), ``k`` [N m-2], optional ``condensation`` ("paper" or "cubic");
     * ``[excitation]`` ``envelope = "exponential"``, ``T1``, ``T2`` [s] (shared by all families);
     * ``[time]`` ``t_end``, ``dt`` [s];

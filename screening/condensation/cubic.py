@@ -10,7 +10,7 @@ Here ``z_cb(theta)`` is the root of the full static vertical balance instead, in
 regimes, and ``C(theta)``, ``K(theta)`` follow from eqs. (14) and (16) with it.
 
 Symbols and units (SI): ``m`` [kg], ``g`` [m/s^2], ``b`` half-width [m], ``h`` height of the
-centre of mass [m], ``k`` [N/m^2], ``eps`` [1/m^2], ``lam`` [N s/m^4] (Hunt–Crossley) or ``c``
+centre of mass [m], ``k`` [N/m^2], ``eps`` [1/m^2], ``lam`` [N s/m^3] (Hunt–Crossley) or ``c``
 [N s/m^2] (Winkler), ``theta`` [rad], ``a = |theta|``, ``z = z_cb`` [m] (positive into the
 bed), ``z_lin = m g / (2 b k)`` [m] (eq. 17).  Everything is even in ``theta`` (``C``, ``K``,
 ``z_cb``) by the mirror symmetry of the base, so the formulas are written for ``a``.

@@ -23,7 +23,7 @@ the paper's eq. 25).  The quasi-static ``z_cb(theta)`` is the cubic condensation
 
 Symbols and units (SI): ``a = |theta|`` [rad], ``z = z_cb`` [m], ``zp = dz_cb/da`` [m/rad],
 ``v = z + b a`` the compressed-edge indentation [m], ``V = zp + b = dv/da`` [m/rad], ``b`` [m],
-``lam`` [N s/m^4], ``c`` [N s/m^2].
+``lam`` [N s/m^3], ``c`` [N s/m^2].
 
 Equations (contact zone: ``u`` from ``-b`` to ``b`` without uplift; the length ``L = v / a``
 from the compressed edge with uplift, ``s`` the distance from it, ``z(s) = v - a s``,

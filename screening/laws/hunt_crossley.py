@@ -1,6 +1,6 @@
 """The (generalised) Hunt–Crossley contact law: damping pressure ``lam z zdot`` (paper eq. 4).
 
-``lam`` [N s m-4] is the damping per unit base length, per unit indentation and per unit
+``lam`` [N s m-3] is the damping per unit base length, per unit indentation and per unit
 indentation rate; with ``eps = 0`` the law is the plain Hunt–Crossley law.
 """
 
@@ -21,7 +21,7 @@ def hunt_crossley_damping(z, z_dot, lam):
     ----------
     z : indentation [m] (> 0 in contact).
     z_dot : indentation rate [m/s].
-    lam : damping coefficient [N s m-4], >= 0.
+    lam : damping coefficient [N s m-3], >= 0.
     """
     return lam * np.asarray(z, dtype=float) * np.asarray(z_dot, dtype=float)
 
@@ -30,7 +30,7 @@ class HuntCrossley(ContactLaw):
     name = "hunt_crossley"
     description = "Hunt-Crossley damping lam z zdot"
     parameter = "lam"
-    attributes = {"units": "N s m-4", "long_name": "Hunt-Crossley distributed damping"}
+    attributes = {"units": "N s m-3", "long_name": "Hunt-Crossley distributed damping"}
 
     pressure = staticmethod(hunt_crossley_damping)
 

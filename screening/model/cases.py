@@ -1,6 +1,6 @@
 """The paper's reference configurations (section 3), as model objects.
 
-Block: m = 8.67 kg, b = 0.035 m, h = 0.21 m; bed k = 2.89e7 N/m^2, lam = 8.95e8 N s/m^4;
+Block: m = 8.67 kg, b = 0.035 m, h = 0.21 m; bed k = 2.89e7 N/m^2, lam = 8.95e8 N s/m^3;
 envelope T1 = 4 s, T2 = 2 s; records of 20 s.  The eps values are those of the figure
 captions (the text of section 3 gives 2e7 / -2e5 for configurations 3 and 4: docs/method.md#values-of-eps-in-section-3).
 """

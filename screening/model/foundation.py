@@ -3,7 +3,7 @@
 Every parameter may be a Python float or a numpy array; arrays broadcast against each
 other so that the physics functions downstream are vectorised over parameter points.
 All quantities are SI.  The contact law gives a force per unit base length [N/m], so
-``k`` is in N/m^2, the Hunt–Crossley ``lam`` in N s/m^4, the Winkler dashpot ``c`` in
+``k`` is in N/m^2, the Hunt–Crossley ``lam`` in N s/m^3, the Winkler dashpot ``c`` in
 N s/m^2 and ``eps`` in 1/m^2.
 
 Method and how it is checked: ``docs/method.md#contact-law``.
@@ -41,7 +41,7 @@ class Foundation:
     Parameters
     ----------
     k : distributed stiffness [N/m^2] (force per unit base length per unit indentation), > 0.
-    lam : Hunt–Crossley damping [N s/m^4] (per unit length, per unit indentation and
+    lam : Hunt–Crossley damping [N s/m^3] (per unit length, per unit indentation and
         per unit indentation rate), >= 0.
     eps : cubic stiffness parameter [1/m^2]; any finite sign (``> 0`` hardening, ``< 0`` softening).
     c : Winkler dashpot [N s/m^2] (per unit length per unit rate), >= 0.
@@ -77,7 +77,7 @@ class Foundation:
 
     @property
     def damping(self):
-        """The damping coefficient of the law: ``lam`` [N s/m^4], ``c`` [N s/m^2], ... (its ``parameter``)."""
+        """The damping coefficient of the law: ``lam`` [N s/m^3], ``c`` [N s/m^2], ... (its ``parameter``)."""
         return getattr(self, self.contact_law.parameter)
 
     @property

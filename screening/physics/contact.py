@@ -70,7 +70,7 @@ full contact ``F = 2 b c zdot_cb``, ``M = (2/3) c b^3 c^2 theta_dot``.
 
 Units: ``theta`` [rad], ``theta_dot`` [rad/s], ``z_cb`` [m] (indentation of the base centre,
 positive into the bed), ``zdot_cb`` [m/s], ``b`` [m], ``k`` [N/m^2], ``eps`` [1/m^2],
-``damping`` = ``lam`` [N s/m^4] (Hunt–Crossley) or ``c`` [N s/m^2] (Winkler).
+``damping`` = ``lam`` [N s/m^3] (Hunt–Crossley) or ``c`` [N s/m^2] (Winkler).
 
 Method and how it is checked: ``docs/method.md#contact-regimes-and-resultants``.
 """
@@ -114,7 +114,7 @@ def foundation_constants(foundation):
     eps : float
         Cubic stiffness parameter [m-2].
     damping : float
-        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
     winkler : bool
         True for a Winkler bed.
 
@@ -322,7 +322,7 @@ def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, win
     eps : float or array_like
         Cubic stiffness parameter [m-2].
     damping : float or array_like
-        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
     winkler : bool, optional
         True for a Winkler bed (default False: Hunt–Crossley).
 
@@ -724,7 +724,7 @@ def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping,
     eps : float
         Cubic stiffness parameter [m-2].
     damping : float
-        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
     winkler : bool
         True for a Winkler bed.
 
@@ -781,7 +781,7 @@ def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damp
     eps : float
         Cubic stiffness parameter [m-2].
     damping : float
-        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
+        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
     winkler : bool
         True for a Winkler bed.
 

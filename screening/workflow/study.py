@@ -21,7 +21,7 @@ Example (SI units throughout)::
     contact = "hunt_crossley"   # or "winkler" (then give c instead of lam)
     condensation = "paper"      # or "cubic" (static balance with the eps term; see below)
     k = 2.89e7                  # N m-2
-    lam = 8.95e8                # N s m-4
+    lam = 8.95e8                # N s m-3
     eps = [-6e5, 0.0, 6e7]      # m-2: a list -> dimension "eps"
 
     [excitation]

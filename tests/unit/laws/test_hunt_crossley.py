@@ -13,5 +13,5 @@ def test_the_pressure_grows_with_the_indentation_and_vanishes_without_it():
 
 def test_the_law_is_registered_with_its_parameter_and_cf_units():
     assert (HUNT_CROSSLEY.name, HUNT_CROSSLEY.parameter, HUNT_CROSSLEY.attributes["units"]) == \
-        ("hunt_crossley", "lam", "N s m-4")
+        ("hunt_crossley", "lam", "N s m-3")
     assert HUNT_CROSSLEY.damping_weights(3.0) == (0.0, 3.0)
