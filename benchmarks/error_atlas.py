@@ -10,7 +10,8 @@ Run (regenerates ``screening/data/error_atlas.nc``)::
 
 Each point's result is written atomically to ``--work/point_NNNNN.json``; a re-run skips the points
 already there (so an interrupted campaign resumes where it stopped, on this machine or a cluster),
-then assembles every finished point into ``--out``.  ``--resume-from FILE`` resumes from an assembled
+then assembles every finished point into ``--out``, with the error model fitted on them
+(:func:`screening.analysis.error_model.fitted_variables`).  ``--resume-from FILE`` resumes from an assembled
 atlas instead of (or besides) the JSON folder: the points already in FILE count as done and their rows
 are kept as they are in the new ``--out`` (a point present both in FILE and as a JSON is taken from the
 JSON); the CPU hours add up.  ``--pilot N`` runs N points spread over the
@@ -69,6 +70,7 @@ def resumed_rows(path, indices):
 
     with xr.open_dataset(path) as ds:
         keep = np.isin(ds["point"].values, np.asarray(indices))
+        ds = ds.drop_vars([name for name in ds.variables if name.startswith("em_")])   # refitted at assembly
         return ds.isel(point=np.flatnonzero(keep)).load()
 
 
@@ -178,6 +180,9 @@ def main(argv=None):
     if ds is None:
         print("error: no finished point to assemble", file=sys.stderr)
         return 1
+    from screening.analysis.error_model import fitted_variables
+
+    ds = ds.assign(fitted_variables(ds))          # the shipped error model, stored so that it is not refitted
     ds.attrs = {k: v for k, v in ds.attrs.items() if k in ("title", "Conventions", "levels_relative_to")}
     ds.attrs.update({"command": command, "versions": versions(), "design_points": args.points,
                      "design_seed": args.seed, "samples": args.samples,

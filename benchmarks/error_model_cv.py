@@ -12,6 +12,9 @@ Printed per condensation and error:
 * ``coverage``: fraction of held-out points whose measured error lies in the 90 % interval (goal >= 88 %);
   ``coverage_se``: the same with the interval widened by the point's own Monte Carlo standard error
   (the measured error carries the reference's sampling noise, the true one does not);
+* ``cov raw``: the same against the *unclipped* measured error, with an interval end that reaches the fit's
+  clip (a factor 4) open (:func:`~screening.analysis.error_model.open_ended`, as the product reports it);
+  ``open``: the fraction of such intervals;
 * ``width``: median interval width; for the variance as a fraction of the corrected estimate,
   ``exp(high) - exp(low)`` over ``exp(estimate)`` (goal <= 25 %); for probabilities in probability;
 * ``trusted`` / ``bad trusted``: held-out points the model labels trusted (:func:`~screening.analysis.error_model.
@@ -48,8 +51,8 @@ def main(argv=None):
     print(f"atlas: {ds.sizes['point']} points, {len(np.unique(groups))} families, "
           f"{ds.attrs.get('cpu_hours', float('nan'))} CPU h; folds: "
           f"{args.folds or 'one family each'}")
-    print(f"{'condensation':13s} {'error':16s} {'n':>5s} {'coverage':>8s} {'cov+se':>7s} {'width':>7s} "
-          f"{'trusted':>7s} {'bad':>4s}")
+    print(f"{'condensation':13s} {'error':16s} {'n':>5s} {'coverage':>8s} {'cov+se':>7s} {'cov raw':>7s} {'open':>5s} "
+          f"{'width':>7s} {'trusted':>7s} {'bad':>4s}")
     best = {}
     n_used = np.maximum(ds["mc_n_samples"].values - ds["mc_n_diverged"].values, 1)
     p_over = ds["mc_n_overturned"].values / n_used
@@ -61,20 +64,32 @@ def main(argv=None):
         ok = np.isfinite(y) & np.isfinite(est)
         inside = (y >= lo) & (y <= hi)
         inside_se = (y >= lo - y_se) & (y <= hi + y_se)
+        _, lo_o, hi_o = em.open_ended(est, lo, hi)
+        y_raw = t["log_var_ratio"]
+        inside_raw = (y_raw >= lo_o) & (y_raw <= hi_o)
+        is_open = ~np.isfinite(lo_o) | ~np.isfinite(hi_o)
         width = (np.exp(hi) - np.exp(lo)) / np.exp(est)
         trusted = em.trust_from_interval(lo, hi) == 0
         rel = np.exp(y) - 1
         bad = trusted & ok & (np.abs(rel) - 2 * y_se * np.exp(y) > em.TRUSTED_ERROR)
-        print(f"{cond:13s} {'log var ratio':16s} {ok.sum():5d} {inside[ok].mean():8.3f} {inside_se[ok].mean():7.3f} "
-              f"{np.median(width[ok]):7.3f} {int((trusted & ok).sum()):7d} {int(bad.sum()):4d}")
+        def row(label, sel):
+            print(f"{cond:13s} {label:16s} {sel.sum():5d} {inside[sel].mean():8.3f} {inside_se[sel].mean():7.3f} "
+                  f"{inside_raw[sel].mean():7.3f} {is_open[sel].mean():5.2f} {np.median(width[sel]):7.3f} "
+                  f"{int((trusted & sel).sum()):7d} {int((bad & sel).sum()):4d}")
+
+        row("log var ratio", ok)
         standing = ok & (p_over <= 0.05)
-        print(f"{cond:13s} {'  MC p_over<=5%':16s} {standing.sum():5d} {inside[standing].mean():8.3f} "
-              f"{inside_se[standing].mean():7.3f} {np.median(width[standing]):7.3f} "
-              f"{int((trusted & standing).sum()):7d} {int((bad & standing).sum()):4d}")
-        low_up = standing & (ds["sl_peak_p_uplift"].sel(condensation=cond).values < 0.5)
-        print(f"{cond:13s} {'  and p_up<0.5':16s} {low_up.sum():5d} {inside[low_up].mean():8.3f} "
-              f"{inside_se[low_up].mean():7.3f} {np.median(width[low_up]):7.3f} "
-              f"{int((trusted & low_up).sum()):7d} {int((bad & low_up).sum()):4d}")
+        row("  MC p_over<=5%", standing)
+        p_cond = ds["sl_peak_p_uplift"].sel(condensation=cond).values
+        row("  and p_up<0.5", standing & (p_cond < 0.5))
+        regime = np.searchsorted(np.asarray(em.P_REGIMES), p_cond, side="right")
+        for k, label in enumerate(("  p_up<0.2", "  p_up 0.2-0.7", "  p_up>=0.7")):
+            row(label, ok & (regime == k))
+        # the reference's own sampling error alone: a 90 % interval of the measured error no narrower than
+        # 2 sinh(1.645 se) as a fraction of the estimate
+        print(f"{cond:13s} {'  MC noise floor':16s} median width from the reference's SE alone "
+              f"{np.median(2 * np.sinh(1.6449 * y_se[ok])):.3f} (p_up<0.2 / 0.2-0.7 / >=0.7: " + " / ".join(
+                  f"{np.median(2 * np.sinh(1.6449 * y_se[ok & (regime == k)])):.3f}" for k in range(3)) + ")")
         best[cond] = (y, est, ok)
         rule = ds["sl_trust"].sel(condensation=cond).values
         lo_r, hi_r = (ds[n].sel(condensation=cond).values for n in ("sl_error_low", "sl_error_high"))
@@ -102,7 +117,7 @@ def main(argv=None):
     rng = np.random.default_rng(0)
     xq = finite[rng.integers(0, len(finite), 10_000)] * (1 + 0.01 * rng.normal(size=(10_000, x.shape[1])))
     t0 = time.process_time()
-    em.predict(m, xq)
+    em.interval_trust(m, xq)
     per = (time.process_time() - t0) / len(xq)
     print(f"error model cost: {per * 1e6:.1f} us CPU per point ({len(xq)} points, {int(np.isfinite(y).sum())} "
           f"atlas rows; the linearization: ~200 us)")
