@@ -405,7 +405,8 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     ----------
     fields : mapping of parameter name to value (numpy arrays, xarray DataArrays or numbers): ``m`` [kg],
         ``b``, ``h`` [m], ``g`` [m s-2], ``k`` [N m-3], and where present ``eps`` [m-2], ``I_cm`` [kg m2],
-        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-3] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s].
+        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-3] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s]
+        (a missing damping field gives a NaN ``zeta_v``).
     contact : ``"hunt_crossley"`` or ``"winkler"``.  excitation : the excitation kind.
 
     Returns
@@ -429,7 +430,7 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     z = z0
     for _ in range(50):
         z = z - (z + eps * z**3 - z0) / (1.0 + 3.0 * eps * z**2)
-    c_v = 2.0 * b * fields["c"] if contact == "winkler" else 2.0 * b * fields["lam"] * z
+    c_v = 2.0 * b * fields.get("c", np.nan) if contact == "winkler" else 2.0 * b * fields.get("lam", np.nan) * z
     w_v = np.sqrt(2.0 * b * k / m)
     R = np.hypot(b, h)
     p = np.sqrt(m * g * R / (i_cm + m * R**2))
