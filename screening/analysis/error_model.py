@@ -511,7 +511,8 @@ def interval_trust(model, x, status=None, covered=True):
 
     ``status`` (:class:`screening.status.PointStatus` codes, None: all ok): a point whose status is not ok is
     ``untrusted`` with a NaN estimate and band.  An interval end that reaches the fit's clip is open
-    (:func:`open_ended`: ``low = -1`` or ``high = inf``).  ``covered`` (bool, broadcast to the points): False where the
+    (:func:`open_ended`: ``low = -1`` or ``high = inf``) and the point ``untrusted``: near it the atlas measured
+    errors beyond a factor 4.  ``covered`` (bool, broadcast to the points): False where the
     point's model lies outside what the atlas samples (another excitation kind or contact law); such points,
     and points whose inputs lie outside the atlas's range (:func:`inside_atlas`), are at best ``check``.  A
     point whose status is ok but whose features are not all finite (an indicator could not be computed) is
@@ -525,6 +526,7 @@ def interval_trust(model, x, status=None, covered=True):
         np.broadcast_to(np.asarray(status), (len(x),)) != int(PointStatus.ok)
     est, low, high = (np.where(bad, np.nan, a) for a in (est, low, high))
     flag = np.where(bad, int(Trust.untrusted), trust_from_interval(low, high)).astype(np.int8)
+    flag[np.isinf(low) | np.isinf(high)] = int(Trust.untrusted)     # the atlas measured errors beyond a factor 4
     flag[~bad & ~np.all(np.isfinite(x), axis=1)] = int(Trust.check)
     outside = ~(inside_atlas(model, x) & np.broadcast_to(np.asarray(covered, dtype=bool), (len(x),)))
     flag[outside & (flag == int(Trust.trusted))] = int(Trust.check)

@@ -9,8 +9,8 @@ Every linearized point gets
 :func:`add_trust` (the product's rule, used by :func:`screening.linearize` and on a sweep's workers through
 :func:`error_model_trust`) takes them from the error atlas model (:mod:`screening.analysis.error_model`,
 ``docs/error_atlas.md``): the model's 90 % interval of ``SL / MC - 1`` per condensation; ``trusted`` when it
-lies within +-25 %, ``untrusted`` when it lies wholly beyond +-50 % or SL stopped, ``check`` otherwise and
-at best ``check`` outside what the atlas samples.
+lies within +-25 %, ``untrusted`` when it lies wholly beyond +-50 %, reaches a factor 4 (open) or SL stopped,
+``check`` otherwise and at best ``check`` outside what the atlas samples.
 
 The *cell rule* below (:func:`sl_trust`, :func:`add_cell_trust`), calibrated on 59 hand-placed points, no
 longer labels points: it is kept for ``benchmarks/trust_calibration.py``, for comparison, and its
@@ -354,7 +354,8 @@ def add_trust(ds, models=None):
     ``sl_error_high`` on the dimensions of ``peak_var_theta``, from the error atlas model
     (:func:`screening.analysis.error_model.interval_trust`): the predicted 90 % interval of ``SL / MC - 1``
     of peak var_theta; ``trusted`` when it lies within +-25 %, ``untrusted`` when it lies wholly beyond
-    +-50 % or the point's status is not ok, ``check`` otherwise (and at best ``check`` outside the atlas).
+    +-50 %, reaches a factor 4 (open) or the point's status is not ok, ``check`` otherwise (and at best
+    ``check`` outside the atlas).
 
     ``models``: ``{condensation: ErrorModel}`` (None: the shipped models,
     :func:`screening.analysis.error_model.shipped_model`).  The condensation comes from
