@@ -139,7 +139,45 @@ def main(argv=None):
         print(f"  [{a:g}, {b:g}) n={int(sel.sum()):3d}: {text}  -> {win}")
     stopped = {str(cond): int((ds["sl_status"].sel(condensation=cond).values != 0).sum()) for cond in best}
     print(f"linearization stopped (status not ok) at: {stopped} of {ds.sizes['point']} points")
+    print_stops(ds, edges)
     return 0
+
+
+def print_stops(ds, edges):
+    """Each condensation on every point with a reference, a stop counted as a miss: per bin of the paper
+    linearization's peak p_uplift, median |SL/MC - 1| where it runs / fraction of the bin within 25 % /
+    stops; and where virtual_work stops but paper runs, how wrong paper is and how often the reference
+    overturns."""
+    mc = ds["mc_peak_var_theta"].values
+    ref = np.isfinite(mc) & (mc > 0)
+    conds = [str(c) for c in ds["condensation"].values]
+    st = {c: ds["sl_status"].sel(condensation=c).values for c in conds}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        err = {c: np.abs(ds["sl_peak_var_theta"].sel(condensation=c).values / mc - 1) for c in conds}
+    p = ds["sl_peak_p_uplift"].sel(condensation="paper").values
+    print(f"every point with a reference ({int(ref.sum())}), a stop counted as a miss:")
+    for c in conds:
+        ok = ref & (st[c] == 0)
+        print(f"  {c:13s} stops {int(np.sum(ref & (st[c] != 0))):4d}, within 25 % {np.sum(err[c][ok] <= 0.25) / ref.sum():.3f}, "
+              f"median |SL/MC - 1| where it runs {np.median(err[c][ok]):.3f}")
+    print("  peak p_uplift (paper) | n | " + " | ".join(f"{c}: median / within 25 % / stops" for c in conds))
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = ref & (p >= a) & (p < b)
+        cells = []
+        for c in conds:
+            e = err[c][sel & (st[c] == 0)]
+            cells.append(f"{np.median(e) if e.size else np.nan:.3f} / {np.sum(e <= 0.25) / max(sel.sum(), 1):.2f} / "
+                         f"{int(np.sum(sel & (st[c] != 0)))}")
+        print(f"  [{a:g}, {b:g}) | {int(sel.sum())} | " + " | ".join(cells))
+    n_used = np.maximum(ds["mc_n_samples"].values - ds["mc_n_diverged"].values, 1)
+    over = ds["mc_n_overturned"].values / n_used
+    for other in conds[1:]:
+        sel = ref & (st[other] != 0) & (st["paper"] == 0)
+        if sel.any():
+            e = err["paper"][sel]
+            print(f"  {other} stops, paper runs: {int(sel.sum())} points; paper |SL/MC - 1| median {np.median(e):.3f}, "
+                  f"within 25 % {np.mean(e <= 0.25):.3f}, beyond 50 % {np.mean(e > 0.5):.3f}; the reference overturns "
+                  f"> 5 % of its samples at {np.mean(over[sel] > 0.05):.3f} of them (median {np.median(over[sel]):.3f})")
 
 
 if __name__ == "__main__":
