@@ -247,7 +247,6 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
     _, h, r = best
     other = groups[:, None] != groups[None, :]
     s = _local_scale(xs, xs, r, mask=other)
-    n = len(y)
     ratio = np.abs(r) / s
     regime = uplift_regime(x)
     q = np.empty(len(P_REGIMES) + 1)
