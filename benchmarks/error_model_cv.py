@@ -3,7 +3,7 @@
 Run::
 
     nice -n 5 env PYTHONPATH=$PWD .venv/bin/python benchmarks/error_model_cv.py \
-        [--atlas screening/data/error_atlas.nc] [--folds 0] [--coverage 0.9] [--variance-only]
+        [--atlas screening/data/error_atlas.nc] [--folds 0] [--coverage 0.9] [--variance-only] [--experiments]
 
 For each condensation, the atlas families are split into folds (``--folds 0``: one family per fold,
 leave-one-family-out); the model is fitted on the other folds and predicts the held-out points.
@@ -46,8 +46,13 @@ def main(argv=None):
     ap.add_argument("--folds", type=int, default=0)
     ap.add_argument("--coverage", type=float, default=0.9)
     ap.add_argument("--variance-only", action="store_true", help="skip the exceedance probabilities (5 x faster)")
+    ap.add_argument("--experiments", action="store_true",
+                    help="only the feature-set experiments (indicators alone below p_uplift 0.2; + log I_S, log w_v/p)")
     args = ap.parse_args(argv)
     ds = xr.load_dataset(args.atlas)
+    if args.experiments:
+        feature_experiments(ds)
+        return 0
     groups = ds["family"].values
     print(f"atlas: {ds.sizes['point']} points, {len(np.unique(groups))} families, "
           f"{ds.attrs.get('cpu_hours', float('nan'))} CPU h; folds: "
@@ -141,6 +146,39 @@ def main(argv=None):
     print(f"linearization stopped (status not ok) at: {stopped} of {ds.sizes['point']} points")
     print_stops(ds, edges)
     return 0
+
+
+def feature_experiments(ds):
+    """Leave one family out with other feature sets (log var ratio): the eleven features, plus ``log I_S`` and
+    ``log w_v/p``, the four indicators alone, and the hybrid (indicators alone below a peak p_uplift of 0.2,
+    thirteen features above); coverage, median width per regime, trusted and wrongly trusted points."""
+    from screening.analysis import error_model as em
+
+    groups = ds["family"].values
+    for cond in ds["condensation"].values:
+        x = em.atlas_features(ds, cond)
+        t = em.targets(ds, cond)
+        y, y_se = t["log_var_ratio"], t["log_var_ratio_se"]
+        yc = np.clip(y, -em.LOG_CLIP, em.LOG_CLIP)
+        regime = np.searchsorted(np.asarray(em.P_REGIMES), ds["sl_peak_p_uplift"].sel(condensation=cond).values,
+                                 side="right")
+        more = np.column_stack([x, np.log(ds["I_S"].values), np.log(ds["w_v_p"].values)])
+        runs = {"11 features": em.grouped_cross_validation(x, y, groups, clip=em.LOG_CLIP),
+                "+ log I_S, log w_v/p": em.grouped_cross_validation(more, y, groups, clip=em.LOG_CLIP),
+                "4 indicators": em.grouped_cross_validation(x[:, :4], y, groups, clip=em.LOG_CLIP)}
+        runs["hybrid"] = tuple(np.where(regime == 0, a, b) for a, b in zip(runs["4 indicators"],
+                                                                          runs["+ log I_S, log w_v/p"]))
+        for label, (est, lo, hi) in runs.items():
+            ok = np.isfinite(y) & np.isfinite(est)
+            width = (np.exp(hi) - np.exp(lo)) / np.exp(est)
+            inside = (yc >= lo) & (yc <= hi)
+            trusted = (em.trust_from_interval(lo, hi) == 0) & ok
+            bad = trusted & (np.abs(np.expm1(yc)) - 2 * y_se * np.exp(yc) > em.TRUSTED_ERROR)
+            print(f"{str(cond):13s} {label:22s} coverage {inside[ok].mean():.3f} (" + " / ".join(
+                f"{inside[ok & (regime == k)].mean():.3f}" for k in range(3)) + f"), median width "
+                f"{np.median(width[ok]):.3f} (" + " / ".join(f"{np.median(width[ok & (regime == k)]):.3f}"
+                                                             for k in range(3)) +
+                f"), trusted {int(trusted.sum())}, beyond 25 %: {int(bad.sum())}", flush=True)
 
 
 def print_stops(ds, edges):
