@@ -294,6 +294,11 @@ def test_interval_trust_flags_from_the_interval():
     wide, _ = _flat_model(1.0)
     flag, _, low, high = em.interval_trust(wide, q[:1])
     assert flag[0] != Trust.trusted and (low[0] < -0.25 or high[0] > 0.25)
+    # +-100 % noise: the interval (about +-1.6 in log) reaches the fit's clip (a factor 4) both ways: it is
+    # open and the point untrusted
+    _, lo_log, hi_log = em.predict(wide, q[:1])
+    assert lo_log[0] <= -em.LOG_CLIP and hi_log[0] >= em.LOG_CLIP
+    assert flag[0] == Trust.untrusted and low[0] == -1.0 and high[0] == np.inf
 
 
 def test_add_trust_is_the_shipped_error_model():
