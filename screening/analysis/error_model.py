@@ -73,7 +73,7 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     Parameters
     ----------
     peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess : the linearization's indicators
-        (:func:`screening.analysis.trust.trust_indicators`) [1].
+        (:func:`screening.analysis.indicators.trust_indicators`) [1].
     alpha : slenderness [rad]. r_ul : theta_ul / alpha [1]. zeta_v : vertical damping ratio [1].
     e : eps z0^2 [1]. kind : ``"white"`` or ``"kanai_tajimi"`` (array of str).
     omega_g_p : filter frequency over Housner's p [1] (ignored for white noise). tau : T1 p [1].
@@ -444,7 +444,7 @@ def dataset_features(ds):
     ``(features, dims, shape)``."""
     import xarray as xr
 
-    from screening.analysis.trust import indicators_from_dataset
+    from screening.analysis.indicators import indicators_from_dataset
 
     ind = indicators_from_dataset(ds)
     fields = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm", "lam", "c", "omega_g", "T1")
@@ -462,7 +462,7 @@ def dataset_features(ds):
 
 def model_features(indicators, block, foundation, excitation):
     """:func:`features` ``(n, len(FEATURES))`` of ``n`` points given as model objects (fields scalar or
-    ``(n,)``) and their :func:`screening.analysis.trust.trust_indicators` (``(n,)`` arrays)."""
+    ``(n,)``) and their :func:`screening.analysis.indicators.trust_indicators` (``(n,)`` arrays)."""
     from screening.solvers.datasets import model_fields, model_labels
 
     labels = model_labels(foundation, excitation)

@@ -108,13 +108,6 @@ def test_an_uncalibrated_condensation_is_at_best_check_and_has_no_band(table):
     assert np.isfinite(klo[0])
 
 
-def test_trust_indicators():
-    out = trust.trust_indicators(0.2, 5.0, 10.0, 4e-6, 0.1, 1e-6, 1e-3)
-    assert out["k_eq_margin"] == pytest.approx(0.5)
-    assert out["sigma_ratio"] == pytest.approx(2e-3 / 0.1)
-    assert out["decay_excess"] == pytest.approx(0.25 / 1e-3)
-
-
 # ----------------------------------------------------------------------------- the shipped calibration
 @pytest.fixture(scope="module")
 def calibration():
