@@ -7,6 +7,20 @@ interrupted run resumes)::
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python \
         benchmarks/accuracy_in_sweeps.py [--families NAME ...] [--budget 600] [--target 0.15] [--grid 12] \
         [--work outputs/accuracy_in_sweeps] [--force] [--table-only]
+    ... benchmarks/accuracy_in_sweeps.py --atlas screening/data/error_atlas.nc [--condensation paper] \
+        [--sweep-points 10000] [--budget 600] [--target 0.15]
+
+``--atlas FILE``: the error atlas's held-out points instead of the calibration families.  Each atlas point
+is predicted by the error model fitted *without its family* (grouped cross-validation,
+:func:`screening.analysis.error_model.grouped_cross_validation`), and its best estimate is what
+``[accuracy]`` makes of a point of a large sweep where no Monte Carlo ran
+(:func:`screening.analysis.correction.best_estimates` with no escalated point: the linearization where its
+band promises the target, else the atlas-corrected linearization, else ``unreliable``); it is compared with
+the atlas's 500-sample reference.  Prints the fraction ``unreliable``, the fraction of points that need
+Monte Carlo (the atlas interval wider than the target), and the hold rate (within the target or within 2
+reported SE; and with the reference's own SE).  ``--sweep-points N`` (> 0) also runs the ``N``-point sweep of
+``benchmarks/accuracy_escalation.py`` (the eps x S0 grid of ``bench_sweep.py``) with ``[accuracy]`` and
+``--budget`` and prints its best-estimate methods and unreliable fraction.
 
 ``benchmarks/accuracy_escalation.py`` corrects each calibration point from the *other* calibration points,
 which belong to other blocks, beds and excitations: a stress test of the correction across families.  A
@@ -241,6 +255,108 @@ def summary_lines(rows, info, target):
     return lines
 
 
+def atlas_rows(atlas, condensation, target):
+    """Per atlas point (with a reference and the linearization at status ok or stopped): the best estimate of a
+    point of a sweep without Monte Carlo there, from the error model fitted without the point's family."""
+    import xarray as xr
+
+    from screening.analysis import error_model as em
+    from screening.analysis.correction import best_estimates
+
+    ds = xr.load_dataset(atlas)
+    s = ds.sel(condensation=condensation)
+    t = em.targets(ds, condensation)
+    x = em.atlas_features(ds, condensation)
+    est, lo, hi = em.grouped_cross_validation(x, t["log_var_ratio"], ds["family"].values, clip=em.LOG_CLIP)
+    # the model's interval at every point whose features are finite, whether or not its error is known
+    missing = ~np.isfinite(est) & np.all(np.isfinite(x), axis=1)
+    if missing.any():
+        for fam in np.unique(ds["family"].values[missing]):
+            held = ds["family"].values == fam
+            train = ~held & np.isfinite(t["log_var_ratio"])
+            model = em.fit_error_model(x[train], t["log_var_ratio"][train], ds["family"].values[train], clip=em.LOG_CLIP)
+            pick = held & missing
+            est[pick], lo[pick], hi[pick] = em.predict(model, x[pick])
+    status = s["sl_status"].values.astype(int)
+    est, lo, hi = em.open_ended(est, lo, hi)
+    low, high = np.where(status == 0, np.expm1(lo), np.nan), np.where(status == 0, np.expm1(hi), np.nan)
+    trust = np.where(status == 0, em.trust_from_interval(lo, hi), 2)
+    sl = s["sl_peak_var_theta"].values
+    n = sl.size
+    value, se, method, _ = best_estimates(sl, status, trust, low, high, target, np.zeros((n, 1)),
+                                          np.zeros(0, dtype=int), np.zeros(0), np.zeros(0), np.zeros(0))
+    ref, ref_se = ds["mc_peak_var_theta"].values, ds["mc_peak_var_theta_se"].values
+    keep = np.isfinite(ref) & (ref > 0)
+    return dict(value=value[keep], se=se[keep], method=method[keep], ref=ref[keep], ref_se=ref_se[keep],
+                needs_mc=~(linearization_or_atlas(trust, low, high, target) & (status == 0))[keep],
+                status=status[keep], p=s["sl_peak_p_uplift"].values[keep])
+
+
+def linearization_or_atlas(trust, low, high, target):
+    """True where [accuracy] needs no Monte Carlo at a point (:func:`screening.analysis.escalation.escalation_candidates`
+    is False)."""
+    from screening.analysis.correction import atlas_promises, linearization_promises
+
+    return linearization_promises(trust, low, high, target) | atlas_promises(low, high, target)
+
+
+def atlas_summary(r, target, label):
+    """Printed lines: unreliable fraction, Monte Carlo need and hold rates of :func:`atlas_rows`."""
+    n = r["value"].size
+    with np.errstate(invalid="ignore", divide="ignore"):
+        err = r["value"] / r["ref"] - 1
+        within = np.abs(err) <= target
+        by_se = np.abs(r["value"] - r["ref"]) <= 2 * r["se"]
+        by_both = np.abs(r["value"] - r["ref"]) <= 2 * np.sqrt(r["se"] ** 2 + r["ref_se"] ** 2)
+    holds = within | by_se
+    holds_ref = within | by_both
+    unreliable = r["method"] == BestMethod.unreliable
+    stopped = r["status"] != 0
+    lines = [f"{label}: {n} held-out atlas points with a reference",
+             f"  unreliable (no Monte Carlo at the point): {unreliable.sum()} ({unreliable.mean():.1%}); of which the "
+             f"linearization stopped: {np.sum(unreliable & stopped)}; atlas interval too wide (se > MAX_SE): "
+             f"{np.sum(unreliable & ~stopped)}",
+             f"  need Monte Carlo (atlas interval wider than the target {target:.0%}, or stopped): "
+             f"{r['needs_mc'].sum()} ({r['needs_mc'].mean():.1%})",
+             f"  best estimate holds (within {target:.0%} or 2 reported SE): {holds.sum()} of {n} ({holds.mean():.1%}); "
+             f"with the reference's SE: {holds_ref.sum()} ({holds_ref.mean():.1%}); on the vouched-for points: "
+             f"{np.sum(holds & ~unreliable)} of {np.sum(~unreliable)} ({np.mean(holds[~unreliable]):.1%}), with the "
+             f"reference's SE {np.mean(holds_ref[~unreliable]):.1%}",
+             f"  within the target itself: {within.sum()} ({within.mean():.1%}); by method: " + ", ".join(
+                 f"{BestMethod(int(c)).name} {k}" for c, k in zip(*np.unique(r["method"], return_counts=True)))]
+    for lo, hi in ((0, 0.2), (0.2, 0.7), (0.7, 1.01)):
+        b = (r["p"] >= lo) & (r["p"] < hi) & ~unreliable
+        if b.any():
+            lines.append(f"  peak p_uplift {lo:g}-{hi:g}: {b.sum()} vouched-for points, hold {np.mean(holds[b]):.1%} "
+                         f"(with the reference's SE {np.mean(holds_ref[b]):.1%}), median reported relative SE "
+                         f"{np.median(r['se'][b] / r['value'][b]):.1%}")
+    return lines
+
+
+def sweep_unreliable(points, budget, target, work, workers=2):
+    """Printed lines of the ``points``-point sweep of ``accuracy_escalation.py`` (the eps x S0 grid of
+    ``bench_sweep.py``) run with ``[accuracy] target, budget_s``."""
+    from bench_sweep import STUDY
+
+    from screening.workflow.study import parse_study
+    from screening.workflow.sweep import run_sweep
+
+    n = max(int(round(np.sqrt(points))), 1)
+    study = parse_study(STUDY.format(n=n, output=OUTPUT) + f"\n[accuracy]\ntarget = {target}\nbudget_s = {budget}\n",
+                        name="atlas_sweep")
+    work.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    report = run_sweep(study, work / "atlas_sweep.nc", workers=workers, force=True, progress=False,
+                       log=lambda m: print("   ", m, file=sys.stderr))
+    wall = time.perf_counter() - start
+    acc = report.accuracy
+    total = n * n
+    return [f"{total}-point sweep, [accuracy] target {target}, budget_s {budget:g}: {wall:.0f} s wall, "
+            f"{acc['n_candidates']} points need Monte Carlo ({acc['n_candidates'] / total:.1%}), Monte Carlo at "
+            f"{acc['n_escalated']} ({acc['cost_s']:.0f} CPU s by the cost model, {acc['cpu_s']:.0f} measured)",
+            f"  unreliable: {acc['n_unreliable']} ({acc['n_unreliable'] / total:.1%}); best estimates: {acc['methods']}"]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--families", nargs="+", default=None, metavar="NAME", help="subset of families")
@@ -251,6 +367,9 @@ def main(argv=None):
     ap.add_argument("--work", type=Path, default=DEFAULT_WORK)
     ap.add_argument("--force", action="store_true", help="recompute families whose result is up to date")
     ap.add_argument("--table-only", action="store_true", help="only read the existing results")
+    ap.add_argument("--atlas", type=Path, default=None, help="held-out points of this error atlas instead")
+    ap.add_argument("--condensation", default="paper", help="with --atlas: the condensation (default paper)")
+    ap.add_argument("--sweep-points", type=int, default=0, help="with --atlas: also run a sweep of this many points")
     args = ap.parse_args(argv)
     if not 0 < args.target <= 1:
         ap.error(f"--target must be in (0, 1] (got {args.target})")
@@ -258,6 +377,14 @@ def main(argv=None):
         ap.error(f"--budget must be > 0 [s] (got {args.budget})")
     if args.grid < 2:
         ap.error(f"--grid must be >= 2 (got {args.grid})")
+    if args.atlas is not None:
+        print(f"== [accuracy] at held-out atlas points ({args.atlas}, condensation {args.condensation}, target "
+              f"{args.target:.0%}; no Monte Carlo at the point)")
+        print("\n".join(atlas_summary(atlas_rows(args.atlas, args.condensation, args.target), args.target,
+                                      args.condensation)))
+        if args.sweep_points > 0:
+            print("\n".join(sweep_unreliable(args.sweep_points, args.budget, args.target, args.work)))
+        return 0
     families = calibration_families()
     chosen = args.families or list(families)
     unknown = [f for f in chosen if f not in families]

@@ -23,7 +23,7 @@ FRAGILITY = '\n[fragility]\nthresholds = [0.1, 0.5]\nrelative_to = "slenderness"
 
 
 def main():
-    from screening.analysis.trust import shipped_table
+    from screening.analysis.trust import trust_models
     from screening.workflow.execution import batch_rocking_start, solve_batch
     from screening.workflow.grid import batch_models, plan_batches
     from screening.workflow.study import parse_study
@@ -38,7 +38,7 @@ def main():
     batch_rocking_start(*models, cond, study.times, batch.size)
     print(f"p_rocking_start crossing tables, first call: {time.perf_counter() - start:.3f} s "
           f"for 10 beds (10 band limits)")
-    table = shipped_table()
+    table = trust_models(cond.name)
     base = (*models, cond, study.times, study.rtol, study.max_steps, study.output.stored)
     solve_batch(*base, None, table)                                  # compile and warm the caches
     for label, fragility, probabilities in (("plain", None, False), ("with p_overturn", None, True),

@@ -5,11 +5,16 @@ Run (regenerates ``screening/data/error_atlas.nc``)::
 
     nice -n 5 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python benchmarks/error_atlas.py \
         [--points 1024] [--samples 500] [--seed 0] [--workers 1 | --scheduler ADDRESS_OR_FILE] \
-        [--work outputs/error_atlas] [--out screening/data/error_atlas.nc] [--pilot N] [--assemble-only]
+        [--work outputs/error_atlas] [--out screening/data/error_atlas.nc] [--pilot N] [--assemble-only] \
+        [--resume-from screening/data/error_atlas.nc]
 
 Each point's result is written atomically to ``--work/point_NNNNN.json``; a re-run skips the points
 already there (so an interrupted campaign resumes where it stopped, on this machine or a cluster),
-then assembles every finished point into ``--out``.  ``--pilot N`` runs N points spread over the
+then assembles every finished point into ``--out``, with the error model fitted on them
+(:func:`screening.analysis.error_model.fitted_variables`).  ``--resume-from FILE`` resumes from an assembled
+atlas instead of (or besides) the JSON folder: the points already in FILE count as done and their rows
+are kept as they are in the new ``--out`` (a point present both in FILE and as a JSON is taken from the
+JSON); the CPU hours add up.  ``--pilot N`` runs N points spread over the
 design (every ``points // N``-th) and prints the CPU per point by reference model, to size a campaign.
 Progress (points done, CPU per point, ETA) is printed as points complete.
 """
@@ -57,6 +62,36 @@ def load(work, indices):
     return out
 
 
+def resumed_rows(path, indices):
+    """The points of the assembled atlas ``path`` whose index is in ``indices`` (``None`` if no path)."""
+    if not path:
+        return None
+    import xarray as xr
+
+    with xr.open_dataset(path) as ds:
+        keep = np.isin(ds["point"].values, np.asarray(indices))
+        ds = ds.drop_vars([name for name in ds.variables if name.startswith("em_")])   # refitted at assembly
+        return ds.isel(point=np.flatnonzero(keep)).load()
+
+
+def merge_rows(resumed, ds):
+    """``ds`` (freshly assembled points) with the rows of ``resumed`` whose point it lacks, sorted by point."""
+    import xarray as xr
+
+    if resumed is None or resumed.sizes["point"] == 0:
+        return ds
+    old = resumed.isel(point=np.flatnonzero(~np.isin(resumed["point"].values, ds["point"].values)))
+    if ds.sizes["point"] == 0:
+        return old
+    old = old.assign_coords(condensation=ds["condensation"].values, axis=ds["axis"].values)
+    merged = xr.concat([old, ds], dim="point", data_vars="minimal", coords="minimal", compat="override",
+                       join="override", combine_attrs="override").sortby("point")
+    for name in merged.variables:
+        src = ds if name in ds.variables else old
+        merged[name].attrs = dict(src[name].attrs)
+    return merged
+
+
 def versions():
     import importlib.metadata as md
 
@@ -75,6 +110,7 @@ def main(argv=None):
     ap.add_argument("--out", default=str(DEFAULT_OUT))
     ap.add_argument("--pilot", type=int, default=0)
     ap.add_argument("--assemble-only", action="store_true")
+    ap.add_argument("--resume-from", default=None)
     args = ap.parse_args(argv)
     if args.points < 1 or args.samples < 2:
         print("error: --points must be >= 1 and --samples >= 2", file=sys.stderr)
@@ -88,9 +124,16 @@ def main(argv=None):
     indices = list(range(args.points))
     if args.pilot:
         indices = indices[:: max(1, args.points // args.pilot)][: args.pilot]
-    todo = [i for i in indices if not point_path(work, i).exists()]
+    resumed = resumed_rows(args.resume_from, indices)
+    if resumed is not None and int(resumed.attrs.get("samples", args.samples)) != args.samples:
+        print(f"error: --resume-from has {resumed.attrs['samples']} samples per point, not --samples "
+              f"{args.samples}", file=sys.stderr)
+        return 2
+    in_file = set() if resumed is None else {int(i) for i in resumed["point"].values}
+    todo = [i for i in indices if not point_path(work, i).exists() and i not in in_file]
     print(f"error atlas: {len(indices)} points x {args.samples} samples; {len(indices) - len(todo)} already in "
-          f"{work}, {len(todo)} to run", flush=True)
+          f"{work}" + (f" or {args.resume_from}" if resumed is not None else "") + f", {len(todo)} to run",
+          flush=True)
     t0 = time.time()
     if todo and not args.assemble_only:
         from distributed import as_completed
@@ -128,14 +171,27 @@ def main(argv=None):
     cpu_h = sum(r.get("cpu", 0.0) for r in results) / 3600
     given = [a for a in (argv if argv is not None else sys.argv[1:]) if a != "--assemble-only"]
     command = ("benchmarks/error_atlas.py " + " ".join(given)).strip()
-    ds = assemble(results, attrs={"command": command, "versions": versions(), "design_points": args.points,
-                                  "design_seed": args.seed, "samples": args.samples,
-                                  "points_finished": len(results), "cpu_hours": round(cpu_h, 3)})
+    ds = assemble(results, attrs={}) if results else None
+    if resumed is not None:
+        fresh = {int(r["index"]) for r in results}
+        kept = ~np.isin(resumed["point"].values, list(fresh))
+        cpu_h += float(np.nansum(resumed["point_cpu"].values[kept])) / 3600
+        ds = merge_rows(resumed, ds) if ds is not None else resumed
+    if ds is None:
+        print("error: no finished point to assemble", file=sys.stderr)
+        return 1
+    from screening.analysis.error_model import fitted_variables
+
+    ds = ds.assign(fitted_variables(ds))          # the shipped error model, stored so that it is not refitted
+    ds.attrs = {k: v for k, v in ds.attrs.items() if k in ("title", "Conventions", "levels_relative_to")}
+    ds.attrs.update({"command": command, "versions": versions(), "design_points": args.points,
+                     "design_seed": args.seed, "samples": args.samples,
+                     "points_finished": int(ds.sizes["point"]), "cpu_hours": round(cpu_h, 3)})
     enc = {name: {"zlib": True, "complevel": 5} for name in ds.data_vars if ds[name].dtype != object}
     out = Path(args.out)
     with atomic_path(out) as tmp:
         ds.to_netcdf(tmp, encoding=enc)
-    print(f"wrote {out}: {len(results)} of {args.points} points, {cpu_h:.2f} CPU h, "
+    print(f"wrote {out}: {ds.sizes['point']} of {args.points} points, {cpu_h:.2f} CPU h, "
           f"{out.stat().st_size / 1e6:.1f} MB", flush=True)
     return 0
 

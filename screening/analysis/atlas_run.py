@@ -98,15 +98,17 @@ def _finite(x):
 
 
 def linearization_row(block, foundation, excitation, timing, condensation):
-    """Peak ``var_theta`` [rad2], status, trust indicators, the shipped rule's ``sl_trust`` and band, and
-    ``p_exceed`` at :data:`LEVELS` of one condensation (``{"error": ...}`` if it does not apply)."""
+    """Peak ``var_theta`` [rad2], status, trust indicators, the cell rule's ``sl_trust`` and band
+    (:func:`screening.analysis.trust.add_cell_trust`: the rule the atlas's first campaign recorded; the error
+    model is learnt from the atlas, so it is not recorded in it), and ``p_exceed`` at :data:`LEVELS` of one
+    condensation (``{"error": ...}`` if it does not apply)."""
     from screening.analysis.fragility import exceedance_probability
-    from screening.analysis.trust import indicators_from_dataset
+    from screening.analysis.trust import add_cell_trust, indicators_from_dataset
     from screening.solvers.linearization import linearize
 
     try:
-        ds = linearize(block, foundation, excitation, t_end=timing["t_end"], dt=timing["dt"],
-                       condensation=condensation)
+        ds = add_cell_trust(linearize(block, foundation, excitation, t_end=timing["t_end"], dt=timing["dt"],
+                                      condensation=condensation, trust=False))
     except ValueError as exc:
         return {"error": " ".join(str(exc).split())[:200]}
     row = {name: _finite(np.asarray(v)) for name, v in indicators_from_dataset(ds).items()}
@@ -327,10 +329,10 @@ VARIABLES = {
     "sl_k_eq_margin": ("1", "min k_eq / k_eq at rest"),
     "sl_sigma_ratio": ("1", "sqrt(peak var_theta) / slenderness"),
     "sl_decay_excess": ("1", "variance retained at the end over the envelope's retained power"),
-    "sl_error_low": ("1", "lower end of the shipped trust rule's band of SL / MC - 1"),
-    "sl_error_high": ("1", "upper end of the shipped trust rule's band of SL / MC - 1"),
+    "sl_error_low": ("1", "lower end of the cell trust rule's band of SL / MC - 1"),
+    "sl_error_high": ("1", "upper end of the cell trust rule's band of SL / MC - 1"),
     "sl_status": ("1", "linearization status (0 ok; -2 condensation does not apply)"),
-    "sl_trust": ("1", "shipped trust rule (0 trusted, 1 check, 2 untrusted; -1 not computed)"),
+    "sl_trust": ("1", "cell trust rule (0 trusted, 1 check, 2 untrusted; -1 not computed)"),
     "sl_p_exceed": ("1", "linearization P(max |theta| > level x slenderness), Vanmarcke up-crossing"),
     "mc_peak_var_theta": ("rad2", "reference Monte Carlo peak var_theta over the surviving samples"),
     "mc_peak_var_theta_se": ("rad2", "standard error of the reference peak var_theta"),

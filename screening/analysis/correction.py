@@ -27,7 +27,7 @@ from screening.status import BestMethod, EscalationModel, PointStatus, Trust
 
 __all__ = ["NEIGHBOURS", "MIN_POINTS", "MAX_SE", "NOISE_FLOOR", "DISTANCE_FLOOR", "REACH", "Correction",
            "point_features", "fit_correction", "predict_correction", "linearization_promises", "within_band",
-           "best_estimates"]
+           "INTERVAL_Z", "atlas_correction", "atlas_promises", "best_estimates"]
 
 #: Numbers of neighbours tried by the leave-one-out choice.
 NEIGHBOURS = (1, 2, 3, 4, 6, 8)
@@ -42,6 +42,9 @@ DISTANCE_FLOOR = 1e-3
 #: A point is reached if its nearest escalated point is within this many times the spacing of the escalated
 #: points (90th percentile of the distances to their own nearest neighbour) in standardised feature space.
 REACH = 1.5
+#: Standard normal quantile of the error atlas model's two-sided 90 % interval: its half width in
+#: ``log(SL / MC)`` is this many standard errors.
+INTERVAL_Z = 1.6448536269514722
 
 
 @dataclass(frozen=True)
@@ -184,6 +187,32 @@ def linearization_promises(trust, low, high, target):
         return (trust == int(Trust.trusted)) & (np.maximum(np.abs(low), np.abs(high)) <= target)
 
 
+def atlas_correction(low, high):
+    """``(y, se)`` [1]: the error atlas model's correction ``y = log(MCS / SL)`` of a point and its standard
+    error, from its predicted 90 % interval ``[low, high]`` of ``SL / MCS - 1`` (``sl_error_low``,
+    ``sl_error_high``).
+
+    Notes
+    -----
+    The interval is symmetric in ``log(SL / MCS)`` about the estimate (``estimate +- q s``,
+    :mod:`screening.analysis.error_model`): ``y = -(log(1 + low) + log(1 + high)) / 2`` and
+    ``se = (log(1 + high) - log(1 + low)) / (2 z)``, ``z`` = :data:`INTERVAL_Z`.  NaN where the interval is not
+    finite or reaches ``SL / MCS - 1 <= -1``.
+    """
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        a, b = np.log1p(np.where(low > -1, low, np.nan)), np.log1p(np.where(high > -1, high, np.nan))
+    return -(a + b) / 2.0, (b - a) / (2.0 * INTERVAL_Z)
+
+
+def atlas_promises(low, high, target):
+    """True where the atlas-corrected linearization (:func:`atlas_correction`) is within ``target`` at the
+    interval's 90 %: ``exp(z se) - 1 <= target``.  Monte Carlo is needed only elsewhere."""
+    _, se = atlas_correction(low, high)
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(se) & (np.expm1(INTERVAL_Z * se) <= target)
+
+
 def within_band(y, low, high):
     """True where the SL error implied by a log ratio ``y = log(MCS / SL)``, ``exp(-y) - 1``, lies in the
     trust rule's band ``[low, high]`` (or there is no band): a correction that contradicts what the
@@ -194,7 +223,8 @@ def within_band(y, low, high):
         return no_band | ((implied >= low) & (implied <= high))
 
 
-def best_estimates(sl_peak, status, trust, low, high, target, features, escalated, mc_peak, mc_se, mc_model):
+def best_estimates(sl_peak, status, trust, low, high, target, features, escalated, mc_peak, mc_se, mc_model,
+                   atlas=True):
     """Best estimate of a peak variance at every point: ``(value, se, method, correction)``.
 
     Parameters
@@ -204,16 +234,19 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     features : (points x features) from :func:`point_features`.
     escalated : flat indices of the points with Monte Carlo; ``mc_peak``, ``mc_se`` [same units]
         and ``mc_model`` (:class:`EscalationModel`) there.
+    atlas : use the error atlas model's correction (its interval is of peak var_theta: False for other peaks).
 
     Returns
     -------
     value, se : per point [units of ``sl_peak``]; ``se`` NaN where method is ``unreliable``.
     method : :class:`BestMethod` codes (int8), in this order of preference: Monte Carlo at the point
         (if it has a finite peak); the linearization where the rule promises the target (se: half the
-        band); the corrected linearization ``SL exp(y)`` (se ``value x se_y``) where the correction is
+        band); the corrected linearization ``SL exp(y)`` (se ``value x se_y``) by whichever of two
+        corrections has the smaller ``se_y``: the study's own (the escalated points') where it is
         usable, reaches the point, ``se_y <= MAX_SE`` and the SL error it implies lies in the trust
-        band (:func:`within_band`); else ``unreliable`` (value: SL's where it ran to the end, NaN
-        where it stopped).
+        band (:func:`within_band`), or the error atlas model's (:func:`atlas_correction`) where
+        ``se_y <= MAX_SE``; else ``unreliable`` (value: SL's where it ran to the end, NaN where it
+        stopped).
     correction : the fitted :class:`Correction`.
     """
     sl = np.asarray(sl_peak, dtype=float).reshape(-1)
@@ -232,15 +265,20 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     escalated = np.asarray(escalated, dtype=int)
     mc_peak, mc_se = np.asarray(mc_peak, dtype=float), np.asarray(mc_se, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
-        y = np.log(mc_peak / sl[escalated])
-        y_se = mc_se / mc_peak
-    correction = fit_correction(np.asarray(features)[escalated], np.where(ok[escalated], y, np.nan), y_se)
+        y_mc = np.log(mc_peak / sl[escalated])
+        y_mc_se = mc_se / mc_peak
+    correction = fit_correction(np.asarray(features)[escalated], np.where(ok[escalated], y_mc, np.nan), y_mc_se)
+    # the error atlas model's correction, and the study's own where that is sharper
+    y_hat, y_se = atlas_correction(low, high) if atlas else (np.full(n, np.nan), np.full(n, np.inf))
+    y_se = np.where(np.isfinite(y_hat) & np.isfinite(y_se), y_se, np.inf)
     if correction.usable:
-        y_hat, y_se, reached = predict_correction(correction, features)
-        use = ok & ~promise & reached & (y_se <= MAX_SE) & within_band(y_hat, low, high)
-        value[use] = sl[use] * np.exp(y_hat[use])
-        se[use] = value[use] * y_se[use]
-        method[use] = int(BestMethod.corrected_linearization)
+        own, own_se, reached = predict_correction(correction, features)
+        better = reached & (own_se <= MAX_SE) & within_band(own, low, high) & (own_se < y_se)
+        y_hat, y_se = np.where(better, own, y_hat), np.where(better, own_se, y_se)
+    use = ok & ~promise & (y_se <= MAX_SE)
+    value[use] = sl[use] * np.exp(y_hat[use])
+    se[use] = value[use] * y_se[use]
+    method[use] = int(BestMethod.corrected_linearization)
 
     have = np.isfinite(mc_peak) & (mc_peak > 0)
     at = escalated[have]

@@ -38,7 +38,9 @@ __all__ = ["FEATURES", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCA
            "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets", "ErrorModel",
            "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
            "TRUSTED_ERROR", "UNTRUSTED_ERROR", "trust_from_interval", "ATLAS_FILE", "shipped_model",
-           "dataset_features", "with_error_model"]
+           "parameter_groups", "dataset_features", "model_features", "INPUT_FEATURES", "ATLAS_KINDS",
+           "ATLAS_CONTACTS", "inside_atlas", "interval_trust", "with_error_model", "N_REGIMES",
+           "fitted_variables", "model_from_atlas", "open_ended"]
 
 #: The features, in order: the linearization's indicators and the point's dimensionless inputs.
 FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",
@@ -71,7 +73,7 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     Parameters
     ----------
     peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess : the linearization's indicators
-        (:func:`screening.analysis.trust.trust_indicators`) [1].
+        (:func:`screening.analysis.indicators.trust_indicators`) [1].
     alpha : slenderness [rad]. r_ul : theta_ul / alpha [1]. zeta_v : vertical damping ratio [1].
     e : eps z0^2 [1]. kind : ``"white"`` or ``"kanai_tajimi"`` (array of str).
     omega_g_p : filter frequency over Housner's p [1] (ignored for white noise). tau : T1 p [1].
@@ -245,7 +247,6 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
     _, h, r = best
     other = groups[:, None] != groups[None, :]
     s = _local_scale(xs, xs, r, mask=other)
-    n = len(y)
     ratio = np.abs(r) / s
     regime = uplift_regime(x)
     q = np.empty(len(P_REGIMES) + 1)
@@ -307,8 +308,8 @@ UNTRUSTED_ERROR = 0.5
 def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=UNTRUSTED_ERROR):
     """:class:`screening.status.Trust` codes [int8] from a predicted interval ``[low, high]`` of
     ``log(SL / MC)`` [1]: ``trusted`` (0) when ``exp(low) - 1 >= -trusted_error`` and ``exp(high) - 1 <=
-    trusted_error``; ``untrusted`` (2) when the interval lies wholly beyond ``+-untrusted_error`` or is not
-    finite; ``check`` (1) otherwise."""
+    trusted_error``; ``untrusted`` (2) when the interval lies wholly beyond ``+-untrusted_error`` or is NaN;
+    ``check`` (1) otherwise (an infinite end is an open interval, :func:`open_ended`)."""
     from screening.status import Trust
 
     low = np.asarray(low, dtype=float)
@@ -317,7 +318,7 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
         rel_lo, rel_hi = np.expm1(low), np.expm1(high)
         trusted = (rel_lo >= -trusted_error) & (rel_hi <= trusted_error)
         beyond = (rel_hi < -untrusted_error) | (rel_lo > untrusted_error)
-    finite = np.isfinite(low) & np.isfinite(high)
+    finite = ~np.isnan(low) & ~np.isnan(high)          # an open end (+-inf, :func:`open_ended`) is an answer
     return np.where(~finite | beyond, int(Trust.untrusted),
                     np.where(trusted, int(Trust.trusted), int(Trust.check))).astype(np.int8)
 
@@ -325,60 +326,133 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
 ATLAS_FILE = "error_atlas.nc"
 
 
+#: Regimes of peak uplift probability of the conformal factors (dimension ``regime`` of the stored model).
+N_REGIMES = len(P_REGIMES) + 1
+
+
+def fitted_variables(ds):
+    """The error model of ``log(SL / MC)`` of every condensation of an atlas dataset (:func:`fit_error_model`,
+    :data:`LOG_CLIP`), as variables to store with it: ``em_residual`` (point, condensation; the out-of-family
+    residuals, NaN where a point is not fitted), ``em_bandwidth`` (condensation) and ``em_q`` (condensation,
+    regime).  :func:`model_from_atlas` rebuilds the model from them without refitting."""
+    import xarray as xr
+
+    conds = [str(c) for c in ds["condensation"].values]
+    res = np.full((ds.sizes["point"], len(conds)), np.nan)
+    h, q = np.full(len(conds), np.nan), np.full((len(conds), N_REGIMES), np.nan)
+    for j, c in enumerate(conds):
+        x, y, keep = _atlas_rows(ds, c)
+        model = fit_error_model(x, y, ds["family"].values, clip=LOG_CLIP)
+        res[np.flatnonzero(keep), j] = model.r
+        h[j], q[j] = model.h, model.q
+    return {"em_residual": xr.DataArray(res, dims=("point", "condensation"), attrs={
+                "units": "1", "long_name": "out-of-family residual of log(SL / MC) of the error model"}),
+            "em_bandwidth": xr.DataArray(h, dims="condensation", attrs={
+                "units": "1", "long_name": "bandwidth of the error model's local linear fit (standardised features)"}),
+            "em_q": xr.DataArray(q, dims=("condensation", "regime"), attrs={
+                "units": "1", "long_name": "conformal factor of the error model's 90 % interval per uplift regime"})}
+
+
+def _atlas_rows(ds, condensation):
+    x = atlas_features(ds, condensation)
+    y = targets(ds, condensation)["log_var_ratio"]
+    keep = np.isfinite(y) & np.all(np.isfinite(x), axis=1)
+    return x, y, keep
+
+
+def model_from_atlas(ds, condensation):
+    """The error model of ``log(SL / MC)`` of one condensation of an atlas dataset: rebuilt from its stored fit
+    (:func:`fitted_variables`) where the file has one, else fitted (:func:`fit_error_model`)."""
+    if condensation not in ds["condensation"].values:
+        raise ValueError(f"parameter 'condensation' must be one of {[str(c) for c in ds['condensation'].values]} "
+                         f"(got {condensation!r})")
+    x, y, keep = _atlas_rows(ds, condensation)
+    if "em_residual" not in ds.variables:
+        return fit_error_model(x, y, ds["family"].values, clip=LOG_CLIP)
+    r = ds["em_residual"].sel(condensation=condensation).values
+    if not np.array_equal(np.isfinite(r), keep):
+        raise ValueError("the atlas's stored error model does not match its points: refit it (fitted_variables)")
+    x, y = x[keep], np.clip(y[keep], -LOG_CLIP, LOG_CLIP)
+    center = np.median(x, axis=0)
+    width = np.std(x, axis=0)
+    width = np.where(width > 0, width, 1.0)
+    return ErrorModel((x - center) / width, y, center, width, float(ds["em_bandwidth"].sel(condensation=condensation)),
+                      r[keep], ds["em_q"].sel(condensation=condensation).values.astype(float), 0.9)
+
+
 @functools.lru_cache(maxsize=None)
 def shipped_model(condensation="paper"):
-    """The error model of ``log(SL / MC)`` of one condensation fitted on the shipped atlas
-    (``screening/data/error_atlas.nc``, :data:`LOG_CLIP`); cached per process."""
+    """The error model of ``log(SL / MC)`` of one condensation from the shipped atlas
+    (``screening/data/error_atlas.nc``, :func:`model_from_atlas`); cached per process."""
     from importlib import resources
 
     import xarray as xr
 
-    with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
-        ds = xr.load_dataset(path)
-    if condensation not in ds["condensation"].values:
-        raise ValueError(f"parameter 'condensation' must be one of {list(ds['condensation'].values)} "
-                         f"(got {condensation!r})")
-    return fit_error_model(atlas_features(ds, condensation), targets(ds, condensation)["log_var_ratio"],
-                           ds["family"].values, clip=LOG_CLIP)
+    names = ["u", "alpha", "r_ul", "zeta_v", "e", "kind", "omega_g_p", "tau", "family", "sl_status",
+             "sl_peak_var_theta", "sl_peak_p_uplift", "sl_sigma_ratio", "sl_k_eq_margin", "sl_decay_excess",
+             "sl_p_exceed", "mc_peak_var_theta", "mc_peak_var_theta_se", "mc_p_exceed", "mc_p_exceed_se",
+             "em_residual", "em_bandwidth", "em_q"]
+    with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path, xr.open_dataset(path) as ds:
+        ds = ds[[n for n in names if n in ds.variables]].load()
+    return model_from_atlas(ds, condensation)
 
 
-def dataset_features(ds):
-    """:func:`features` of every point of a :func:`screening.linearize` (or sweep) dataset, from its
-    indicators and its parameter coordinates, on the dataset's dimensions: ``(features, dims)``.
+def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
+    """The point's dimensionless inputs of :func:`features` from its model parameters.
+
+    Parameters
+    ----------
+    fields : mapping of parameter name to value (numpy arrays, xarray DataArrays or numbers): ``m`` [kg],
+        ``b``, ``h`` [m], ``g`` [m s-2], ``k`` [N m-3], and where present ``eps`` [m-2], ``I_cm`` [kg m2],
+        ``lam`` [N s m-4] (Hunt–Crossley) or ``c`` [N s m-3] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s]
+        (a missing damping field gives a NaN ``zeta_v``).
+    contact : ``"hunt_crossley"`` or ``"winkler"``.  excitation : the excitation kind.
+
+    Returns
+    -------
+    dict
+        ``alpha`` [rad], ``r_ul``, ``zeta_v``, ``e``, ``omega_g_p``, ``tau`` [1] (same types as ``fields``).
 
     Notes
     -----
     ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)``; ``e = eps z0^2`` with ``z0 = m g / (2 b k)``;
-    ``zeta_v = c_v / (2 m w_v)``, ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b (w_rate + w_indentation z_rest)``
-    with ``z_rest`` the root of ``z + eps z^3 = z0`` (Newton from ``z0``); ``p = sqrt(m g R / (I_cm + m
-    R^2))``; ``omega_g / p``; ``tau = T1 p`` (a constant envelope: ``T1 = inf`` is clipped to ``1e6 / p``).
+    ``zeta_v = c_v / (2 m w_v)``, ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b lam z_rest`` (Hunt–Crossley;
+    ``z_rest`` the root of ``z + eps z^3 = z0``, Newton from ``z0``) or ``2 b c`` (Winkler); ``p = sqrt(m g R /
+    (I_cm + m R^2))``; ``omega_g / p`` (NaN without a filter); ``tau = T1 p`` (without ``T1``, a constant
+    envelope: ``1e6``).
     """
-    import xarray as xr
-
-    from screening.analysis.trust import indicators_from_dataset
-
-    ind = indicators_from_dataset(ds)
-    c = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm") if name in ds.variables}
-    m, b, h, g, k = c["m"], c["b"], c["h"], c["g"], c["k"]
-    eps = c.get("eps", xr.DataArray(0.0))
-    i_cm = c.get("I_cm", m * (b**2 + h**2) / 3.0)
+    m, b, h, g, k = (fields[name] for name in ("m", "b", "h", "g", "k"))
+    eps = fields.get("eps", 0.0)
+    i_cm = fields.get("I_cm", m * (b**2 + h**2) / 3.0)
     alpha = np.arctan2(b, h)
     z0 = m * g / (2.0 * b * k)
     z = z0
     for _ in range(50):
         z = z - (z + eps * z**3 - z0) / (1.0 + 3.0 * eps * z**2)
-    if ds.attrs.get("contact", "hunt_crossley") == "winkler":
-        c_v = 2.0 * b * ds["c"]
-    else:
-        c_v = 2.0 * b * ds["lam"] * z
+    c_v = 2.0 * b * fields.get("c", np.nan) if contact == "winkler" else 2.0 * b * fields.get("lam", np.nan) * z
     w_v = np.sqrt(2.0 * b * k / m)
     R = np.hypot(b, h)
     p = np.sqrt(m * g * R / (i_cm + m * R**2))
+    return {"alpha": alpha, "r_ul": m * g / (2.0 * b**2 * k * alpha), "zeta_v": c_v / (2.0 * m * w_v),
+            "e": eps * z0**2, "omega_g_p": fields["omega_g"] / p if "omega_g" in fields else np.nan + 0.0 * p,
+            "tau": fields["T1"] * p if "T1" in fields else 1e6 + 0.0 * p}
+
+
+def dataset_features(ds):
+    """:func:`features` of every point of a :func:`screening.linearize` (or sweep) dataset, from its
+    indicators and its parameter coordinates (:func:`parameter_groups`), on the dataset's dimensions:
+    ``(features, dims, shape)``."""
+    import xarray as xr
+
+    from screening.analysis.indicators import indicators_from_dataset
+
+    ind = indicators_from_dataset(ds)
+    fields = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm", "lam", "c", "omega_g", "T1")
+              if name in ds.variables}
     kind = ds.attrs.get("excitation", "white")
-    omega = ds["omega_g"] / p if "omega_g" in ds.variables else xr.DataArray(np.nan)
-    tau = ds["T1"] * p if "T1" in ds.variables else 1e6 + 0.0 * p
-    parts = [ind["peak_p_uplift"], ind["sigma_ratio"], ind["k_eq_margin"], ind["decay_excess"], alpha,
-             m * g / (2.0 * b**2 * k * alpha), c_v / (2.0 * m * w_v), eps * z0**2, omega, tau]
+    grp = parameter_groups(fields, ds.attrs.get("contact", "hunt_crossley"), kind)
+    parts = [ind["peak_p_uplift"], ind["sigma_ratio"], ind["k_eq_margin"], ind["decay_excess"],
+             *(grp[name] for name in ("alpha", "r_ul", "zeta_v", "e", "omega_g_p", "tau"))]
     parts = xr.broadcast(*[xr.DataArray(v) if not isinstance(v, xr.DataArray) else v for v in parts])
     dims = parts[0].dims
     vals = [np.asarray(v.transpose(*dims).values, dtype=float).ravel() for v in parts]
@@ -386,28 +460,97 @@ def dataset_features(ds):
     return x, dims, parts[0].transpose(*dims).shape
 
 
-def with_error_model(ds, model):
-    """``ds`` (a :func:`screening.linearize` dataset of the condensation ``model`` was fitted for) with the
-    error model's ``sl_trust`` (:func:`trust_from_interval`), ``sl_error`` (the estimate of ``SL / MC - 1``)
-    and its interval ``sl_error_low``, ``sl_error_high`` [1]; points whose status is not ok are untrusted
-    with NaN band.  Not the default rule (:func:`screening.analysis.trust.add_trust` is)."""
-    import xarray as xr
+def model_features(indicators, block, foundation, excitation):
+    """:func:`features` ``(n, len(FEATURES))`` of ``n`` points given as model objects (fields scalar or
+    ``(n,)``) and their :func:`screening.analysis.indicators.trust_indicators` (``(n,)`` arrays)."""
+    from screening.solvers.datasets import model_fields, model_labels
 
+    labels = model_labels(foundation, excitation)
+    grp = parameter_groups(model_fields(block, foundation, excitation), labels["contact"], labels["excitation"])
+    n = np.size(indicators["peak_p_uplift"])
+    col = {name: np.broadcast_to(np.asarray(v, dtype=float), (n,)) for name, v in grp.items()}
+    return features(indicators["peak_p_uplift"], indicators["sigma_ratio"], indicators["k_eq_margin"],
+                    indicators["decay_excess"], col["alpha"], col["r_ul"], col["zeta_v"], col["e"],
+                    np.full(n, labels["excitation"]), col["omega_g_p"], col["tau"])
+
+
+#: Features of the point's inputs (not the linearization's indicators): outside the atlas's range of any of
+#: them a point is never ``trusted`` (the interval is calibrated for systems like the atlas's).
+INPUT_FEATURES = FEATURES[4:]
+#: Excitation kinds and contact laws the atlas samples.
+ATLAS_KINDS = ("white", "kanai_tajimi")
+ATLAS_CONTACTS = ("hunt_crossley",)
+
+
+def inside_atlas(model, x):
+    """True [bool] where every input feature (:data:`INPUT_FEATURES`) of the rows ``x`` lies within the range
+    the model's atlas points span."""
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    cols = [FEATURES.index(name) for name in INPUT_FEATURES]
+    train = model.x[:, cols] * model.width[cols] + model.center[cols]
+    lo, hi = train.min(axis=0), train.max(axis=0)
+    pad = 1e-9 * np.maximum(np.abs(lo), np.abs(hi)) + 1e-12
+    with np.errstate(invalid="ignore"):
+        return np.all((x[:, cols] >= lo - pad) & (x[:, cols] <= hi + pad), axis=1)
+
+
+def open_ended(est, low, high, clip=LOG_CLIP):
+    """``(est, low, high)`` [1] of ``log(SL / MC)`` with an end of the interval that reaches the fit's clip
+    (``+-clip``, :data:`LOG_CLIP`) made infinite: the model is fitted on errors clipped there, so such an
+    interval says "beyond a factor 4", not how far (on held-out families the interval covers the unclipped
+    error at a third of such points, against 95 % elsewhere)."""
+    low = np.where(np.asarray(low, dtype=float) <= -clip, -np.inf, low)
+    high = np.where(np.asarray(high, dtype=float) >= clip, np.inf, high)
+    return est, low, high
+
+
+def interval_trust(model, x, status=None, covered=True):
+    """``(flag, estimate, low, high)`` of points: the :class:`screening.status.Trust` code [int8] and the
+    predicted ``SL / MC - 1`` of peak var_theta with its interval [1] (:func:`predict`, :func:`trust_from_interval`).
+
+    ``status`` (:class:`screening.status.PointStatus` codes, None: all ok): a point whose status is not ok is
+    ``untrusted`` with a NaN estimate and band.  An interval end that reaches the fit's clip is open
+    (:func:`open_ended`: ``low = -1`` or ``high = inf``) and the point ``untrusted``: near it the atlas measured
+    errors beyond a factor 4.  ``covered`` (bool, broadcast to the points): False where the
+    point's model lies outside what the atlas samples (another excitation kind or contact law); such points,
+    and points whose inputs lie outside the atlas's range (:func:`inside_atlas`), are at best ``check``.  A
+    point whose status is ok but whose features are not all finite (an indicator could not be computed) is
+    ``check`` with a NaN band.
+    """
     from screening.status import PointStatus, Trust
 
-    x, dims, shape = dataset_features(ds)
-    est, low, high = predict(model, x)
-    status = np.broadcast_to(np.asarray(ds["status"].transpose(*[d for d in dims if d in ds["status"].dims]).values),
-                             shape).ravel() if "status" in ds.variables else np.zeros(x.shape[0], dtype=int)
-    bad = status != int(PointStatus.ok)
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    est, low, high = open_ended(*predict(model, x))
+    bad = np.zeros(len(x), dtype=bool) if status is None else \
+        np.broadcast_to(np.asarray(status), (len(x),)) != int(PointStatus.ok)
     est, low, high = (np.where(bad, np.nan, a) for a in (est, low, high))
-    trust = np.where(bad, int(Trust.untrusted), trust_from_interval(low, high)).astype(np.int8)
+    flag = np.where(bad, int(Trust.untrusted), trust_from_interval(low, high)).astype(np.int8)
+    flag[np.isinf(low) | np.isinf(high)] = int(Trust.untrusted)     # the atlas measured errors beyond a factor 4
+    flag[~bad & ~np.all(np.isfinite(x), axis=1)] = int(Trust.check)
+    outside = ~(inside_atlas(model, x) & np.broadcast_to(np.asarray(covered, dtype=bool), (len(x),)))
+    flag[outside & (flag == int(Trust.trusted))] = int(Trust.check)
+    with np.errstate(over="ignore"):
+        return flag, np.expm1(est), np.expm1(low), np.expm1(high)
+
+
+def with_error_model(ds, model):
+    """``ds`` (a :func:`screening.linearize` dataset of the condensation ``model`` was fitted for) with the
+    error model's ``sl_trust``, ``sl_error`` (the estimate of ``SL / MC - 1``) and its interval
+    ``sl_error_low``, ``sl_error_high`` [1] (:func:`interval_trust`)."""
+    import xarray as xr
+
+    x, dims, shape = dataset_features(ds)
+    status = np.broadcast_to(np.asarray(ds["status"].transpose(*[d for d in dims if d in ds["status"].dims]).values),
+                             shape).ravel() if "status" in ds.variables else None
+    covered = ds.attrs.get("excitation", "white") in ATLAS_KINDS and \
+        ds.attrs.get("contact", "hunt_crossley") in ATLAS_CONTACTS
+    flag, est, low, high = interval_trust(model, x, status, covered)
 
     def arr(values, units, long_name):
         return xr.DataArray(values.reshape(shape), dims=dims, attrs={"units": units, "long_name": long_name})
 
     return ds.assign(
-        sl_trust=arr(trust, "1", "trust from the error atlas model (0 trusted, 1 check, 2 untrusted)"),
-        sl_error=arr(np.expm1(est), "1", "predicted SL / MC - 1 of peak var_theta (error atlas model)"),
-        sl_error_low=arr(np.expm1(low), "1", "lower end of the predicted interval of SL / MC - 1"),
-        sl_error_high=arr(np.expm1(high), "1", "upper end of the predicted interval of SL / MC - 1"))
+        sl_trust=arr(flag, "1", "trust from the error atlas model (0 trusted, 1 check, 2 untrusted)"),
+        sl_error=arr(est, "1", "predicted SL / MC - 1 of peak var_theta (error atlas model)"),
+        sl_error_low=arr(low, "1", "lower end of the predicted interval of SL / MC - 1"),
+        sl_error_high=arr(high, "1", "upper end of the predicted interval of SL / MC - 1"))

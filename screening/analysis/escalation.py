@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from screening.analysis.correction import linearization_promises
+from screening.analysis.correction import atlas_promises, linearization_promises
 from screening.analysis.trust import bed_law, p_bin, regime
 from screening.status import EscalationModel, PointStatus
 
@@ -85,11 +85,14 @@ MIN_CONDENSED_ROWS = 2
 
 
 def escalation_candidates(status, trust, low, high, target):
-    """True at the points to escalate: every point where the rule does not promise ``target``
-    (:func:`~screening.analysis.correction.linearization_promises`), the stopped ones included
-    (Monte Carlo is their only estimate)."""
+    """True at the points to escalate: every point where neither the linearization
+    (:func:`~screening.analysis.correction.linearization_promises`) nor the atlas-corrected linearization
+    (:func:`~screening.analysis.correction.atlas_promises`: the error atlas interval narrower than the
+    target) promises ``target``, the stopped ones included (Monte Carlo is their only estimate)."""
     status = np.asarray(status).reshape(-1)
-    return (status != int(PointStatus.task_failed)) & ~linearization_promises(trust, low, high, target).reshape(-1)
+    promised = linearization_promises(trust, low, high, target).reshape(-1) | \
+        (atlas_promises(low, high, target).reshape(-1) & (status == int(PointStatus.ok)))
+    return (status != int(PointStatus.task_failed)) & ~promised
 
 
 def cover_points(features, candidates, priority, count):

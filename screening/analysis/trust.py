@@ -1,12 +1,22 @@
-"""How far to trust a linearized point: the per-point trust rule, calibrated on Monte Carlo.
+"""How far to trust a linearized point, calibrated on Monte Carlo.
 
 Every linearized point gets
 
 * ``sl_trust`` (:class:`screening.status.Trust`): ``trusted`` (0), ``check`` (1), ``untrusted`` (2);
 * ``sl_error_low``, ``sl_error_high``: a predicted band of SL's relative error on peak
-  ``var_theta`` against the coupled model, ``SL / coupled MCS - 1`` [1].
+  ``var_theta`` against Monte Carlo, ``SL / MCS - 1`` [1].
 
-The rule reads only what the linearization computes for every point (:func:`trust_indicators`):
+:func:`add_trust` (the product's rule, used by :func:`screening.linearize` and on a sweep's workers through
+:func:`error_model_trust`) takes them from the error atlas model (:mod:`screening.analysis.error_model`,
+``docs/error_atlas.md``): the model's 90 % interval of ``SL / MC - 1`` per condensation; ``trusted`` when it
+lies within +-25 %, ``untrusted`` when it lies wholly beyond +-50 %, reaches a factor 4 (open) or SL stopped,
+``check`` otherwise and at best ``check`` outside what the atlas samples.
+
+The *cell rule* below (:func:`sl_trust`, :func:`add_cell_trust`), calibrated on 59 hand-placed points, no
+longer labels points: it is kept for ``benchmarks/trust_calibration.py``, for comparison, and its
+calibration file still decides where ``[accuracy]`` may run condensed Monte Carlo
+(:func:`screening.analysis.escalation.condensed_cells`).  It reads the indicators
+(:func:`trust_indicators`, which the error model reads too):
 
 * ``peak_p_uplift`` — SL's peak uplift probability;
 * ``k_eq_margin = min k_eq / k_eq(0)`` — how far the equivalent stiffness dropped (``k_eq(0)`` is
@@ -20,7 +30,7 @@ The rule reads only what the linearization computes for every point (:func:`trus
 * the solver ``status``, the condensation, and the bed law (sign of ``eps``: hardening, linear,
   softening).
 
-The rule (:func:`sl_trust`), in this order (each step can only lower trust):
+The cell rule (:func:`sl_trust`), in this order (each step can only lower trust):
 
 1. ``status != ok`` -> ``untrusted``, no band (NaN): SL stopped (toppling or numerics).
 2. ``decay_excess > DECAY_LIMIT`` (lock-in) -> ``untrusted``; band of the calibration rows
@@ -56,17 +66,16 @@ from importlib import resources
 import numpy as np
 import xarray as xr
 
-from screening.model.excitation import Envelope
+from screening.analysis.indicators import ENVELOPE_FLOOR, envelope_fraction, indicators_from_dataset, trust_indicators
 from screening.status import PointStatus, Trust
 
 __all__ = ["ENVELOPE_FLOOR", "P_EDGES", "DECAY_LIMIT", "SIGMA_LIMIT", "MARGIN_LIMIT", "TRUSTED_ERROR",
            "TRUSTED_BAND", "UNTRUSTED_ERROR", "N_SE", "MIN_ROWS", "OVERTURN_LIMIT", "BED_LAWS", "CONDENSATIONS",
            "INDICATORS", "OVERRIDES", "CALIBRATION_FILE", "bed_law", "envelope_fraction", "trust_indicators",
            "indicators_from_dataset", "error_of", "p_bin", "regime", "calibration_rows", "trust_table",
-           "shipped_table", "shipped_calibration", "sl_trust", "trust_attributes", "add_trust"]
+           "shipped_table", "shipped_calibration", "sl_trust", "trust_attributes", "add_trust", "trust_models", "error_model_trust",
+           "add_cell_trust"]
 
-#: Floor of the envelope's late fraction q(t_end)^2 / max q^2 (avoids dividing by ~0).
-ENVELOPE_FLOOR = 1e-12
 #: Edges of the peak p_uplift bins of the cells.
 P_EDGES = (0.0, 0.007, 0.08, 0.2, 0.45, 0.9, np.inf)
 #: decay_excess above this: SL holds the response after the shaking (lock-in).
@@ -100,63 +109,6 @@ def bed_law(eps):
     """``"hardening"`` (eps > 0), ``"linear"`` (eps == 0) or ``"softening"`` (eps < 0), elementwise."""
     eps = np.asarray(eps, dtype=float)
     return np.where(eps > 0, "hardening", np.where(eps < 0, "softening", "linear"))
-
-
-def envelope_fraction(ds):
-    """``q(t_end)^2 / max_t q(t)^2`` of a dataset's envelope on its output times (1 for a constant one)."""
-    kind = ds.attrs.get("envelope", "exponential")
-    if kind == "constant":
-        return xr.DataArray(1.0)
-    q2 = Envelope(ds["T1"], ds["T2"])(ds["t"]) ** 2       # eq. (57), the model's own envelope
-    return q2.isel(t=-1) / q2.max("t")
-
-
-def trust_indicators(peak_p_uplift, min_k_eq, k_eq_rest, peak_var_theta, slenderness, var_theta_end,
-                     envelope_end_fraction):
-    """The numeric indicators of the rule (numpy arrays, broadcast against each other).
-
-    Parameters
-    ----------
-    peak_p_uplift : SL peak uplift probability [1].
-    min_k_eq, k_eq_rest : minimum and at-rest equivalent stiffness [N m rad-1].
-    peak_var_theta : SL peak var_theta [rad2].
-    slenderness : atan(b/h) [rad].
-    var_theta_end : SL var_theta at the end of the record [rad2].
-    envelope_end_fraction : ``q(t_end)^2 / max q^2`` [1] (1 for stationary input).
-
-    Returns
-    -------
-    dict
-        ``{"peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess"}`` (see the module docstring),
-        arrays broadcast to one shape.
-    """
-    peak = np.asarray(peak_var_theta, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        margin = np.asarray(min_k_eq, dtype=float) / np.asarray(k_eq_rest, dtype=float)
-        sigma_ratio = np.sqrt(peak) / np.asarray(slenderness, dtype=float)
-        retained = np.asarray(var_theta_end, dtype=float) / peak
-        decay = retained / np.maximum(np.asarray(envelope_end_fraction, dtype=float), ENVELOPE_FLOOR)
-    out = {"peak_p_uplift": np.asarray(peak_p_uplift, dtype=float), "k_eq_margin": margin,
-           "sigma_ratio": sigma_ratio, "decay_excess": decay}
-    shape = np.broadcast_shapes(*(v.shape for v in out.values()))
-    return {k: np.broadcast_to(v, shape) for k, v in out.items()}
-
-
-def indicators_from_dataset(ds):
-    """:func:`trust_indicators` of a :func:`screening.linearize` (or sweep) dataset, as DataArrays on the
-    dimensions of ``peak_var_theta``."""
-    dims = ds["peak_var_theta"].dims
-    peak = ds["peak_var_theta"]
-
-    def on(x):
-        return xr.DataArray(x).broadcast_like(peak).transpose(*dims).values
-
-    nan = xr.DataArray(np.nan)
-    k_rest = ds["k_eq"].isel(t=0) if "k_eq" in ds.variables else ds.get("k_eq_rest", nan)
-    var_end = ds["var_theta"].isel(t=-1) if "var_theta" in ds.variables else ds.get("var_theta_end", nan)
-    ind = trust_indicators(on(ds["peak_p_uplift"]), on(ds["min_k_eq"]), on(k_rest), on(peak),
-                           on(ds["slenderness"]), on(var_end), on(envelope_fraction(ds)))
-    return {name: xr.DataArray(np.array(v), dims=dims) for name, v in ind.items()}
 
 
 # ----------------------------------------------------------------------------- calibration -> table
@@ -338,9 +290,86 @@ def trust_attributes():
     return {name: schema.attributes(name) for name in ("sl_trust", "sl_error_low", "sl_error_high")}
 
 
-def add_trust(ds, calibration=None):
+def add_trust(ds, models=None):
     """``ds`` (a :func:`screening.linearize` or sweep result) with ``sl_trust``, ``sl_error_low`` and
-    ``sl_error_high`` on the dimensions of ``peak_var_theta``.
+    ``sl_error_high`` on the dimensions of ``peak_var_theta``, from the error atlas model
+    (:func:`screening.analysis.error_model.interval_trust`): the predicted 90 % interval of ``SL / MC - 1``
+    of peak var_theta; ``trusted`` when it lies within +-25 %, ``untrusted`` when it lies wholly beyond
+    +-50 %, reaches a factor 4 (open) or the point's status is not ok, ``check`` otherwise (and at best
+    ``check`` outside the atlas).
+
+    ``models``: ``{condensation: ErrorModel}`` (None: the shipped models,
+    :func:`screening.analysis.error_model.shipped_model`).  The condensation comes from
+    ``attrs["condensation"]`` or a ``condensation`` coordinate (sweeps whose cases differ in it).
+    Without the histories (nor the per-point ``k_eq_rest``, ``var_theta_end``) the margin and decay
+    indicators are NaN: a point whose status is ok is then ``check`` with a NaN band.
+    """
+    from screening.analysis import error_model as em
+
+    dims = ds["peak_var_theta"].dims
+    peak = ds["peak_var_theta"]
+
+    def on(x):
+        return np.asarray(xr.DataArray(x).broadcast_like(peak).transpose(*dims).values)
+
+    x, x_dims, shape = em.dataset_features(ds)
+    x = xr.DataArray(x.reshape(shape + (x.shape[1],)), dims=x_dims + ("feature",)).broadcast_like(peak)
+    x = x.transpose(*dims, "feature").values.reshape(-1, len(em.FEATURES))
+    cond = ds["condensation"] if "condensation" in ds.variables else ds.attrs.get("condensation", "paper")
+    cond = on(cond).astype(str).reshape(-1) if isinstance(cond, xr.DataArray) else np.full(len(x), str(cond))
+    status = on(ds["status"]).reshape(-1)
+    covered = ds.attrs.get("excitation", "white") in em.ATLAS_KINDS and \
+        ds.attrs.get("contact", "hunt_crossley") in em.ATLAS_CONTACTS
+    flag, low, high = error_model_trust(x, status, cond, covered, models)
+    attrs = trust_attributes()
+    shape = peak.shape
+    return ds.assign(sl_trust=xr.DataArray(flag.reshape(shape), dims=dims, attrs=attrs["sl_trust"]),
+                     sl_error_low=xr.DataArray(low.reshape(shape), dims=dims, attrs=attrs["sl_error_low"]),
+                     sl_error_high=xr.DataArray(high.reshape(shape), dims=dims, attrs=attrs["sl_error_high"]))
+
+
+def trust_models(*condensations):
+    """``{condensation: ErrorModel}`` of the shipped error models of the given condensations (those the atlas
+    does not hold are left out: their points are at best ``check``)."""
+    from screening.analysis.error_model import shipped_model
+
+    out = {}
+    for name in condensations:
+        try:
+            out[name] = shipped_model(name)
+        except ValueError:
+            pass
+    return out
+
+
+def error_model_trust(x, status, condensation, covered=True, models=None):
+    """``(flag, low, high)`` [int8, 1, 1] of flat points from their error-model features ``x`` ``(n,
+    len(FEATURES))``, status and condensation (a name or ``(n,)`` names), by each condensation's model
+    (``models`` as in :func:`add_trust`; a condensation without a model: ``check`` at best, NaN band)."""
+    from screening.analysis import error_model as em
+
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    n = len(x)
+    cond = np.broadcast_to(np.asarray(condensation, dtype=str), (n,))
+    status = np.broadcast_to(np.asarray(status), (n,))
+    covered = np.broadcast_to(np.asarray(covered, dtype=bool), (n,))
+    flag = np.where(status != int(PointStatus.ok), int(Trust.untrusted), int(Trust.check)).astype(np.int8)
+    low, high = np.full(n, np.nan), np.full(n, np.nan)
+    for name in np.unique(cond):
+        sel = cond == name
+        try:
+            model = em.shipped_model(str(name)) if models is None else models[str(name)]
+        except (KeyError, ValueError):
+            continue
+        flag[sel], _, low[sel], high[sel] = em.interval_trust(model, x[sel], status[sel], covered[sel])
+    return flag, low, high
+
+
+def add_cell_trust(ds, calibration=None):
+    """``ds`` (a :func:`screening.linearize` or sweep result) with ``sl_trust``, ``sl_error_low`` and
+    ``sl_error_high`` on the dimensions of ``peak_var_theta`` by the *cell rule* (:func:`sl_trust`, the
+    59-point calibration): kept for the calibration benchmark and comparisons; the product's rule is
+    :func:`add_trust` (the error atlas model).
 
     Reads ``peak_p_uplift``, ``min_k_eq``, ``k_eq`` (at ``t = 0``; or a per-point ``k_eq_rest``),
     ``peak_var_theta``, ``var_theta`` (at ``t_end``; or a per-point ``var_theta_end``),

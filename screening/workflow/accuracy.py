@@ -112,7 +112,8 @@ def escalate(stage):
         mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
         mc_se = np.array([r[f"peak_{name}_se"] for r in runs]) if runs else np.zeros(0)
         value, se, method, corr = best_estimates(pts[f"peak_{name}"], pts["status"], pts["trust"], pts["low"],
-                                                 pts["high"], acc.target, features, escalated, mc, mc_se, models)
+                                                 pts["high"], acc.target, features, escalated, mc, mc_se, models,
+                                                 atlas=name == "var_theta")
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
     stage.result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)

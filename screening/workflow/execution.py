@@ -49,7 +49,7 @@ SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 # ============================================================================ tasks
 def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_steps, histories=HISTORY_VARIABLES,
-                fragility=None, trust_table=None, derived_inputs=(), underivable=None, cutoff=None,
+                fragility=None, trust_models=None, derived_inputs=(), underivable=None, cutoff=None,
                 probabilities=False):
     """The dask task: one vectorised :func:`solve_moments` call on a batch of points.
 
@@ -78,7 +78,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     out.update({o.name: o.cast(res[o.name], shape) for o in of_stage("linearize") if o.shape == "point"})
     model = {"theta_ul": condensation.uplift_threshold(block, foundation), "slenderness": block.slenderness}
     out.update({o.name: o.cast(model[o.name], shape) for o in of_stage("model")})
-    out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_table))
+    out.update(batch_trust(res, block, foundation, excitation, condensation, out, t_out, trust_models))
     if probabilities:
         out.update(batch_probabilities(res, block, foundation, excitation, out, t_out, fragility))
     out.update(batch_intensity(excitation, t_out, n, cutoff))
@@ -141,15 +141,17 @@ def solve_and_store_batch(target, batch, *solve_args):
     return {name: out[name] for name in client_variables()}
 
 
-def batch_trust(res, block, foundation, excitation, condensation, out, t_out, table=None):
+def batch_trust(res, block, foundation, excitation, condensation, out, t_out, models=None):
     """``sl_trust`` (:class:`screening.status.Trust`) and the error band of a batch, from what the
-    solver returned (without histories the lock-in indicator is unknown: at best ``check``).
+    solver returned, by the error atlas model (:func:`screening.analysis.trust.error_model_trust`; without
+    histories the decay indicator is unknown: at best ``check``).
 
-    ``table``: the rule (:func:`screening.analysis.trust.shipped_table`), read once by the client and
-    sent with the task: worker threads must not read netCDF while the client writes one (HDF5 is not
-    thread-safe).  None reads the shipped table here.
+    ``models``: ``{condensation: ErrorModel}`` (:func:`screening.analysis.error_model.shipped_model`), read
+    once by the client and sent with the task: worker threads must not read netCDF while the client writes
+    one (HDF5 is not thread-safe).  None reads the shipped model here.
     """
-    from screening.analysis.trust import sl_trust, trust_indicators
+    from screening.analysis import error_model as em
+    from screening.analysis.trust import error_model_trust, trust_indicators
 
     n = out["status"].size
 
@@ -164,8 +166,9 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, ta
     indicators = trust_indicators(out["peak_p_uplift"], out["min_k_eq"],
                                   on_points(condensation.stiffness_at_rest(block, foundation)),
                                   out["peak_var_theta"], out["slenderness"], var_end, on_points(envelope_end))
-    flag, low, high = sl_trust(indicators, calibration=table, status=out["status"], condensation=condensation.name,
-                               eps=on_points(foundation.eps))
+    covered = excitation.kind in em.ATLAS_KINDS and foundation.law in em.ATLAS_CONTACTS
+    flag, low, high = error_model_trust(em.model_features(indicators, block, foundation, excitation), out["status"],
+                                        condensation.name, covered, models)
     return {"sl_trust": np.asarray(flag, dtype=np.int8), "sl_error_low": np.asarray(low, dtype=float),
             "sl_error_high": np.asarray(high, dtype=float)}
 
@@ -412,12 +415,12 @@ def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
 def submit_batch(client, study, batch, key, target=None):
     """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times); with a
     :class:`~screening.workflow.store.RegionTarget` ``target``, :func:`solve_and_store_batch`."""
-    from screening.analysis.trust import shipped_table
+    from screening.analysis.trust import trust_models
 
     case = study.cases[batch.case]
     block, foundation, excitation, underivable = batch_point_models(study, batch)
     args = (block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
-            study.output.stored, study.fragility, shipped_table(), study.derived_inputs,
+            study.output.stored, study.fragility, trust_models(case.condensation_model.name), study.derived_inputs,
             underivable if np.any(underivable) else None, case_cutoff(case), wants_probabilities(study))
     if target is not None:
         return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)

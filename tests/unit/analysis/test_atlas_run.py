@@ -27,7 +27,8 @@ def fresh():
 
 def test_shipped_atlas_has_the_structure_the_assembler_makes(shipped, fresh):
     ds = atlas_run.assemble(fresh)
-    assert set(ds.data_vars) == set(shipped.data_vars)
+    stored_fit = {"em_residual", "em_bandwidth", "em_q"}           # the error model, fitted at assembly
+    assert set(ds.data_vars) | stored_fit == set(shipped.data_vars)
     for name in ds.data_vars:
         assert ds[name].dims == shipped[name].dims, name
         assert ds[name].attrs.get("units") == shipped[name].attrs.get("units"), name
@@ -86,3 +87,28 @@ def test_recomputed_points_match_the_shipped_ones_within_sampling_error(shipped)
         assert r["mc"]["peak_var_theta"] == pytest.approx(float(s["mc_peak_var_theta"]), abs=3 * se)
         assert r["sl"]["paper"]["peak_var_theta"] == pytest.approx(
             float(s["sl_peak_var_theta"].sel(condensation="paper")), rel=1e-6)
+
+
+def test_a_campaign_resumed_from_the_file_keeps_its_rows(shipped, tmp_path):
+    # benchmarks/error_atlas.py --resume-from: the points of an assembled atlas count as done, their rows are
+    # kept as they are, and fresh points (here: the other half of the same file) are merged in point order
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "benchmarks"))
+    import error_atlas
+
+    path = tmp_path / "atlas.nc"
+    shipped.to_netcdf(path)
+    points = shipped["point"].values
+    first = error_atlas.resumed_rows(path, points[: len(points) // 2])
+    assert not any(name.startswith("em_") for name in first.variables)       # the fit is redone at assembly
+    bare = shipped.drop_vars(["em_residual", "em_bandwidth", "em_q"])
+    second = bare.isel(point=slice(len(points) // 2, None))
+    merged = error_atlas.merge_rows(first, second)
+    xr.testing.assert_identical(merged, bare)
+    # a fresh row replaces the resumed one of the same point
+    fresh = bare.isel(point=[0]).assign(S0=bare["S0"].isel(point=[0]) * 2)
+    again = error_atlas.merge_rows(first, fresh)
+    assert again.sizes["point"] == first.sizes["point"]
+    assert float(again["S0"].sel(point=points[0])) == 2 * float(bare["S0"].sel(point=points[0]))

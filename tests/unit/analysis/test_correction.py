@@ -114,3 +114,38 @@ def test_a_correction_that_contradicts_the_trust_band_is_not_vouched_for():
                                           np.full(esc.size, int(EscalationModel.coupled)))
     assert np.all(method[:5] == BestMethod.unreliable) and np.all(np.isnan(se[:5]))
     assert np.all(method[50:] == BestMethod.corrected_linearization)
+
+
+def test_atlas_correction_is_the_centre_of_the_interval_in_log():
+    from screening.analysis.correction import INTERVAL_Z, atlas_correction, atlas_promises
+
+    # an interval est +- 1.645 s in log(SL / MC): est = log 0.6, s = 0.1
+    est, s = np.log(0.6), 0.1
+    low, high = np.expm1(est - INTERVAL_Z * s), np.expm1(est + INTERVAL_Z * s)
+    y, se = atlas_correction(np.array([low, -1.0, np.nan]), np.array([high, 0.2, 0.1]))
+    assert y[0] == pytest.approx(-est) and se[0] == pytest.approx(s)
+    assert np.all(np.isnan(y[1:]))
+    # exp(1.645 x 0.1) - 1 = 0.179: promises 0.2, not 0.15
+    assert atlas_promises(low, high, 0.2) and not atlas_promises(low, high, 0.15)
+
+
+def test_best_estimates_use_the_atlas_correction_without_monte_carlo():
+    from screening.analysis.correction import INTERVAL_Z, MAX_SE
+
+    rng = np.random.default_rng(6)
+    n = 30
+    sl = np.full(n, 2e-6)
+    est, s = np.log(2.0), np.where(np.arange(n) < 20, 0.1, 1.2 * MAX_SE)     # SL over-predicts by a factor 2
+    low, high = np.expm1(est - INTERVAL_Z * s), np.expm1(est + INTERVAL_Z * s)
+    status, trust = np.zeros(n, dtype=int), np.full(n, int(Trust.check))
+    value, se, method, corr = best_estimates(sl, status, trust, low, high, 0.15, rng.uniform(size=(n, 2)),
+                                             np.zeros(0, dtype=int), np.zeros(0), np.zeros(0), np.zeros(0))
+    assert not corr.usable
+    assert np.all(method[:20] == BestMethod.corrected_linearization)
+    np.testing.assert_allclose(value[:20], 1e-6)
+    np.testing.assert_allclose(se[:20], 1e-6 * 0.1)
+    assert np.all(method[20:] == BestMethod.unreliable) and np.all(np.isnan(se[20:]))
+    # the same interval for another peak (atlas=False): no atlas correction
+    _, _, method, _ = best_estimates(sl, status, trust, low, high, 0.15, rng.uniform(size=(n, 2)),
+                                     np.zeros(0, dtype=int), np.zeros(0), np.zeros(0), np.zeros(0), atlas=False)
+    assert np.all(method == BestMethod.unreliable)

@@ -137,9 +137,19 @@ def test_with_error_model_labels_a_sweep(shipped):
 
 
 def test_trust_from_interval():
-    lo = np.log([0.9, 0.7, 0.3, 1.6, np.nan])
-    hi = np.log([1.2, 1.1, 0.45, 2.0, 1.0])
-    assert list(em.trust_from_interval(lo, hi)) == [0, 1, 2, 2, 2]
+    lo = np.log([0.9, 0.7, 0.3, 1.6, np.nan, 0.0, 0.0, 1.6])
+    hi = np.log([1.2, 1.1, 0.45, 2.0, 1.0, 0.45, 1.1, np.inf])
+    assert list(em.trust_from_interval(lo, hi)) == [0, 1, 2, 2, 2, 2, 1, 2]
+
+
+def test_an_interval_reaching_the_clip_is_open():
+    est, lo, hi = em.open_ended(np.array([0.0, -1.0, 1.0]), np.array([-0.2, -em.LOG_CLIP, 0.5]),
+                                np.array([0.2, -0.5, em.LOG_CLIP + 0.1]))
+    assert list(lo) == [-0.2, -np.inf, 0.5] and list(hi) == [0.2, -0.5, np.inf]
+    from screening.analysis.correction import atlas_correction
+
+    y, se = atlas_correction(np.expm1(lo), np.expm1(hi))
+    assert np.isfinite(se[0]) and not np.isfinite(se[1]) and not np.isfinite(se[2])
 
 
 def test_a_held_out_family_is_never_trusted_beyond_25_percent(shipped):
@@ -177,3 +187,28 @@ def test_uplift_regimes_calibrate_their_own_factor():
         # ~1000 test points per regime (binomial SE 0.01) and ~300 calibration points (SE ~0.017): 3 SE of both
         assert abs(np.mean((yt[sel] >= lo[sel]) & (yt[sel] <= hi[sel])) - 0.9) < 0.06
     assert np.median((hi - lo)[pt > 0.5]) > 5 * np.median((hi - lo)[pt < 0.2])
+
+
+@pytest.mark.slow
+def test_the_stored_model_is_the_one_refitted_from_the_file(shipped):
+    # the shipped file stores the fit (residuals, bandwidth, conformal factors); refitting from its points
+    # must give the same model the product uses
+    assert {"em_residual", "em_bandwidth", "em_q"} <= set(shipped.data_vars)
+    bare = shipped.drop_vars(["em_residual", "em_bandwidth", "em_q"])
+    for cond in shipped["condensation"].values:
+        stored, refit = em.model_from_atlas(shipped, cond), em.model_from_atlas(bare, cond)
+        assert stored.h == refit.h
+        for a, b in zip(stored[:-2], refit[:-2]):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(stored.q, refit.q, rtol=1e-12)
+        shipped_one = em.shipped_model(str(cond))
+        np.testing.assert_array_equal(shipped_one.r, stored.r)
+
+
+def test_a_stored_fit_of_other_points_is_refused(shipped):
+    res = shipped["em_residual"].copy()
+    first = int(np.flatnonzero(np.isfinite(res.sel(condensation="paper").values))[0])
+    res.loc[{"condensation": "paper"}] = np.where(np.arange(res.sizes["point"]) == first, np.nan,
+                                                  res.sel(condensation="paper").values)
+    with pytest.raises(ValueError, match="refit"):
+        em.model_from_atlas(shipped.assign(em_residual=res), "paper")

@@ -108,13 +108,6 @@ def test_an_uncalibrated_condensation_is_at_best_check_and_has_no_band(table):
     assert np.isfinite(klo[0])
 
 
-def test_trust_indicators():
-    out = trust.trust_indicators(0.2, 5.0, 10.0, 4e-6, 0.1, 1e-6, 1e-3)
-    assert out["k_eq_margin"] == pytest.approx(0.5)
-    assert out["sigma_ratio"] == pytest.approx(2e-3 / 0.1)
-    assert out["decay_excess"] == pytest.approx(0.25 / 1e-3)
-
-
 # ----------------------------------------------------------------------------- the shipped calibration
 @pytest.fixture(scope="module")
 def calibration():
@@ -184,12 +177,12 @@ def test_held_out_leave_one_point_out(calibration):
     print(f"leave-one-point-out: {total} rows trusted, {beyond} beyond 10 %")
 
 
-# ----------------------------------------------------------------------------- add_trust
-def test_add_trust_on_a_linearize_result():
+# ----------------------------------------------------------------------------- add_cell_trust
+def test_add_cell_trust_on_a_linearize_result():
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=np.array([-6e5, 0.0, 6e7])),
                    WhiteNoise(np.array([1e-7, 1e-5, 1e-2])))
     table = trust.trust_table(None, rows=SYNTHETIC)
-    out = trust.add_trust(ds, table)
+    out = trust.add_cell_trust(ds, table)
     for name in ("sl_trust", "sl_error_low", "sl_error_high"):
         assert out[name].dims == ds.peak_var_theta.dims
     assert out.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
@@ -201,9 +194,9 @@ def test_add_trust_on_a_linearize_result():
     assert np.all(np.diff(flag.astype(int), axis=1) >= 0)
 
 
-def test_add_trust_on_a_single_point():
+def test_add_cell_trust_on_a_single_point():
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(1e-7))
-    out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
+    out = trust.add_cell_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
     assert out.sl_trust.ndim == 0 and int(out.sl_trust) in (0, 1, 2)
 
 
@@ -212,16 +205,16 @@ def test_missing_indicators_never_trusted(table):
     assert list(flag) == [Trust.trusted, Trust.check]
 
 
-def test_add_trust_without_histories_is_never_trusted():
+def test_add_cell_trust_without_histories_is_never_trusted():
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(np.array([1e-7, 1e-6])))
     table = trust.trust_table(None, rows=SYNTHETIC)
-    full = trust.add_trust(ds, table)
-    bare = trust.add_trust(ds.drop_vars(["var_theta", "k_eq"]), table)
+    full = trust.add_cell_trust(ds, table)
+    bare = trust.add_cell_trust(ds.drop_vars(["var_theta", "k_eq"]), table)
     assert np.all(bare.sl_trust.values >= full.sl_trust.values)
     assert not np.any(bare.sl_trust.values == Trust.trusted)
     with_summaries = ds.drop_vars(["var_theta", "k_eq"]).assign(k_eq_rest=ds.k_eq.isel(t=0),
                                                                  var_theta_end=ds.var_theta.isel(t=-1))
-    np.testing.assert_array_equal(trust.add_trust(with_summaries, table).sl_trust.values, full.sl_trust.values)
+    np.testing.assert_array_equal(trust.add_cell_trust(with_summaries, table).sl_trust.values, full.sl_trust.values)
 
 
 def test_shipped_rule_is_monotone_in_uplift(calibration):
@@ -233,19 +226,19 @@ def test_shipped_rule_is_monotone_in_uplift(calibration):
             assert np.all(lo[np.isfinite(lo)] >= -1.0)
 
 
-def test_add_trust_with_the_shipped_rule(calibration):
+def test_add_cell_trust_with_the_shipped_rule(calibration):
     """Softening paper bed at low intensity: trusted; the same block near toppling: untrusted."""
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
-                   WhiteNoise(np.array([1.14e-5, 9.79e-5, 1e-2])))
-    out = trust.add_trust(ds)
+                   WhiteNoise(np.array([1.14e-5, 9.79e-5, 1e-2])), trust=False)
+    out = trust.add_cell_trust(ds)
     assert list(out.sl_trust.values) == [Trust.trusted, Trust.check, Trust.untrusted]
     assert out.sl_error_low.values[0] < 0 < out.sl_error_high.values[0]
     assert np.isnan(out.sl_error_low.values[2]) == (int(ds.status.values[2]) != 0)
 
 
-def test_add_trust_result_writes_to_netcdf(tmp_path):
+def test_add_cell_trust_result_writes_to_netcdf(tmp_path):
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), WhiteNoise(np.array([1e-7, 1e-2])))
-    out = trust.add_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
+    out = trust.add_cell_trust(ds, trust.trust_table(None, rows=SYNTHETIC))
     out.to_netcdf(tmp_path / "r.nc")
     import xarray as xr
     with xr.open_dataset(tmp_path / "r.nc") as back:
@@ -259,3 +252,98 @@ def test_stationary_input_has_no_lock_in_signal():
     ind = trust.indicators_from_dataset(ds)
     assert float(ind["decay_excess"]) == pytest.approx(float(ds.var_theta.isel(t=-1) / ds.peak_var_theta))
     assert float(ind["decay_excess"]) <= 1.0 + 1e-9
+
+
+# ----------------------------------------------------------------------------- add_trust: the error atlas model
+def _flat_model(noise, seed=0):
+    """An error model fitted on synthetic atlas rows: 30 families, the error N(0, noise) everywhere."""
+    from screening.analysis import error_model as em
+
+    rng = np.random.default_rng(seed)
+    fam = np.repeat(np.arange(30), 10)
+    x = em.features(rng.uniform(0.001, 0.9, fam.size), rng.uniform(0.001, 0.2, fam.size), rng.uniform(0.3, 1, fam.size),
+                    rng.uniform(0.5, 2, fam.size), rng.uniform(0.1, 0.45, fam.size), 10 ** rng.uniform(-4, -0.6, fam.size),
+                    10 ** rng.uniform(-1.7, 0, fam.size), rng.uniform(-1e-3, 1.0, fam.size),
+                    np.where(rng.uniform(size=fam.size) < 0.5, "white", "kanai_tajimi"),
+                    10 ** rng.uniform(-0.3, 1.3, fam.size), 10 ** rng.uniform(0.7, 1.5, fam.size))
+    return em.fit_error_model(x, noise * rng.normal(size=fam.size), fam), x
+
+
+def test_interval_trust_flags_from_the_interval():
+    from screening.analysis import error_model as em
+
+    model, x = _flat_model(0.01)
+    q = x[:4].copy()
+    q[2, em.FEATURES.index("log_tau")] = np.log(1e6)          # a constant envelope: outside the atlas
+    q[3, em.FEATURES.index("log_decay_excess")] = np.nan         # an indicator that could not be computed
+    flag, est, low, high = em.interval_trust(model, q, status=[0, 3, 0, 0])
+    # +-1 % noise: the interval is a few per cent wide, so the point inside is trusted
+    assert flag[0] == Trust.trusted and -0.25 < low[0] < est[0] < high[0] < 0.25
+    assert flag[1] == Trust.untrusted and np.isnan(low[1]) and np.isnan(est[1])
+    assert flag[2] == Trust.check and np.isfinite(low[2])
+    assert flag[3] == Trust.check and np.isnan(low[3])
+    assert em.interval_trust(model, q[:1], covered=False)[0][0] == Trust.check
+    # +-100 % noise: never trusted, intervals beyond +-25 %
+    wide, _ = _flat_model(1.0)
+    flag, _, low, high = em.interval_trust(wide, q[:1])
+    assert flag[0] != Trust.trusted and (low[0] < -0.25 or high[0] > 0.25)
+    # +-100 % noise: the interval (about +-1.6 in log) reaches the fit's clip (a factor 4) both ways: it is
+    # open and the point untrusted
+    _, lo_log, hi_log = em.predict(wide, q[:1])
+    assert lo_log[0] <= -em.LOG_CLIP and hi_log[0] >= em.LOG_CLIP
+    assert flag[0] == Trust.untrusted and low[0] == -1.0 and high[0] == np.inf
+
+
+def test_add_trust_is_the_shipped_error_model():
+    from screening.analysis import error_model as em
+
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=np.array([-6e5, 0.0, 6e7])),
+                   WhiteNoise(np.array([1e-7, 1e-5, 1e-2])), trust=False)
+    out = trust.add_trust(ds)
+    assert out.sl_trust.dims == ds.peak_var_theta.dims
+    assert out.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
+    x, dims, shape = em.dataset_features(ds)
+    flag, est, low, high = em.interval_trust(em.shipped_model("paper"), x,
+                                             ds.status.transpose(*dims).values.ravel())
+    np.testing.assert_array_equal(out.sl_trust.transpose(*dims).values.ravel(), flag)
+    np.testing.assert_allclose(out.sl_error_low.transpose(*dims).values.ravel(), low)
+    np.testing.assert_allclose(out.sl_error_high.transpose(*dims).values.ravel(), high)
+    stopped = ds.status.values != 0
+    assert np.all(out.sl_trust.values[stopped] == Trust.untrusted)
+    assert np.all(np.isnan(out.sl_error_low.values[stopped]))
+    ok = ~stopped
+    assert np.all(out.sl_error_low.values[ok] < out.sl_error_high.values[ok])
+    # linearize adds the same by default
+    np.testing.assert_array_equal(linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=0.0),
+                                            WhiteNoise(1e-5)).sl_trust.values,
+                                  out.sl_trust.sel(eps=0.0, S0=1e-5).values)
+
+
+def test_add_trust_by_condensation_and_without_histories():
+    ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=0.0),
+                   WhiteNoise(np.array([1e-7, 1e-5])), condensation="virtual_work", trust=False)
+    narrow, _ = _flat_model(0.01)
+    wide, _ = _flat_model(1.0)
+    a = trust.add_trust(ds, {"virtual_work": narrow})
+    b = trust.add_trust(ds, {"virtual_work": wide})
+    assert np.all((b.sl_error_high - b.sl_error_low).values > 5 * (a.sl_error_high - a.sl_error_low).values)
+    none = trust.add_trust(ds, {"paper": narrow})                   # no model of this condensation
+    assert np.all(none.sl_trust.values == Trust.check) and np.all(np.isnan(none.sl_error_low.values))
+    bare = trust.add_trust(ds.drop_vars(["var_theta", "k_eq"]))
+    assert np.all(bare.sl_trust.values == Trust.check) and np.all(np.isnan(bare.sl_error_high.values))
+    with_summaries = ds.drop_vars(["var_theta", "k_eq"]).assign(k_eq_rest=ds.k_eq.isel(t=0),
+                                                                 var_theta_end=ds.var_theta.isel(t=-1))
+    np.testing.assert_array_equal(trust.add_trust(with_summaries).sl_trust.values, trust.add_trust(ds).sl_trust.values)
+
+
+def test_model_features_of_objects_equal_those_of_the_dataset():
+    from screening import KanaiTajimi
+    from screening.analysis import error_model as em
+
+    block = Block(8.67, 0.035, 0.21)
+    foundation = Foundation(k=2.89e7, lam=8.95e8, eps=-6e5)
+    excitation = KanaiTajimi(1e-5, omega_g=15.0, zeta_g=0.4)
+    ds = linearize(block, foundation, excitation, trust=False)
+    x, _, _ = em.dataset_features(ds)
+    ind = {k: np.atleast_1d(v.values) for k, v in trust.indicators_from_dataset(ds).items()}
+    np.testing.assert_allclose(em.model_features(ind, block, foundation, excitation), x, rtol=1e-12)
