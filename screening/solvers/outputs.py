@@ -93,6 +93,8 @@ def _history(name, units, long_name):
 
 _BAND = ("ground motion band-limited to the excitation's band_limit_hz (global attribute; default 25 Hz), "
          "whatever the bed")
+_OPEN_BAND = ("the 90 % interval of the error atlas model (docs/error_atlas.md); -1 (low) or inf (high) where "
+              "the interval reaches the range the model was fitted on: open, the point untrusted")
 _PROBABILITY_SE = ("(Monte Carlo: binomial, Agresti-Coull, or the two-fidelity estimate's where esc_estimator "
                    "says multifidelity; Gaussian: from the band of the moments; NaN where p_source is unreliable)")
 
@@ -124,9 +126,9 @@ GRID_OUTPUTS = (
     Output("slenderness", "model", "f8", _v("rad", "slenderness angle atan(b/h), the rigid-block overturning angle")),
     # the trust rule's predicted error band
     Output("sl_error_low", "trust", "f8", _v("1", "lower end of the predicted relative error of SL's peak var_theta "
-                                                  "against the coupled model (SL / MCS - 1)")),
+                                                  "against the coupled model (SL / MCS - 1)", note=_OPEN_BAND)),
     Output("sl_error_high", "trust", "f8", _v("1", "upper end of the predicted relative error of SL's peak var_theta "
-                                                   "against the coupled model (SL / MCS - 1)")),
+                                                   "against the coupled model (SL / MCS - 1)", note=_OPEN_BAND)),
     # intensity measures of each point's input
     Output("pga_median", "intensity", "f8", _v("m s-2", "median peak ground acceleration of the modulated input "
                                                         "(random-vibration theory)", note=_BAND)),
