@@ -356,7 +356,7 @@ def compare(case, ref, m):
     ok_p = ok_p and bool(np.isfinite(diff).all())
     return dict(row, p=p, se=se, p_ref=p_ref, se_ref=se_ref, diff=diff, tol=tol, worst=worst, ok_p=ok_p,
                 var_ratio=var_ratio, ok_var=ok_var, passed=ok_p and ok_var, cost_ratio=cost, n=n, error=None,
-                status=m.get("status"))
+                status=m.get("status"), sl_cpu=m.get("cpu"))
 
 
 # ----------------------------------------------------------------------------- the band table
@@ -481,7 +481,7 @@ def summary(rows):
     """Pass/fail matrix: one line per case, one column per cheap model: the verdict and the worst probability
     difference in units of its tolerance (signed), and the peak var_theta ratio where that fails."""
     cheap = [m for m in MODELS if m != "coupled"]
-    head = "| case | theta_ul/alpha | w_v/w_r | P(overturn) coupled | " + " | ".join(cheap) + " |"
+    head = "| case | theta_ul/alpha | w_v/w_r | zeta_v | P(overturn) coupled | " + " | ".join(cheap) + " |"
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     by_case = {}
     for r in rows:
@@ -501,15 +501,43 @@ def summary(rows):
             return text + ("" if r["ok_var"] else f" (var x{r['var_ratio']:.2f})")
 
         lines.append(f"| {c['bed']}, {c['excitation']}, {c['level']} | {ind['theta_ul_over_slenderness']:.2g} | "
-                     f"{ind['vertical_over_rocking']:.3g} | {ref['p_ref'][-1]:.3f} | "
+                     f"{ind['vertical_over_rocking']:.3g} | {ind['vertical_damping_ratio']:.2g} | "
+                     f"{ref['p_ref'][-1]:.3f} | "
                      + " | ".join(cell(m) for m in cheap) + " |")
+    return "\n".join(lines)
+
+
+def cost_table(rows):
+    """CPU per sample of each Monte Carlo model (one numba thread) and the coupled / model ratio, per case; the
+    linearization's CPU per run [s] and the coupled model's CPU for all its samples over it."""
+    mc_names = [m for m in MC_MODELS if m != "coupled"]
+    head = ("| case | coupled [ms] | " + " | ".join(f"{m} [ms] (ratio)" for m in mc_names)
+            + " | linearization paper [s] (ratio) |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    by_case = {}
+    for r in rows:
+        by_case.setdefault(r["case"]["id"], {})[r["model"]] = r
+    for cells in by_case.values():
+        c = cells["coupled"]["case"]
+
+        def cell(name):
+            r = cells.get(name)
+            if r is None or r.get("error") or r["cpu_ms"] is None:
+                return ""
+            return f"{r['cpu_ms']:.1f} ({r['cost_ratio']:.2g})"
+
+        sl = cells.get("linearization paper")
+        sl_text = "" if sl is None or sl.get("error") else f"{sl['sl_cpu']:.2f} ({sl['cost_ratio']:.3g})"
+        lines.append(f"| {c['bed']}, {c['excitation']}, {c['level']} | {cells['coupled']['cpu_ms']:.1f} | "
+                     + " | ".join(cell(m) for m in mc_names) + f" | {sl_text} |")
     return "\n".join(lines)
 
 
 #: Columns of the shipped table (``screening/data/stiff_bed_validity.csv``).
 CSV_COLUMNS = ("case", "bed", "block", "m", "b", "h", "k", "eps", "lam", "excitation", "omega_g", "zeta_g", "level",
                "pga_over_rigid_uplift", "pga_over_uplift", "S0", "theta_ul_over_slenderness", "slenderness",
-               "vertical_over_rocking", "model", "n_samples", *PROBABILITIES, *(f"{p}_coupled" for p in PROBABILITIES),
+               "vertical_over_rocking", "vertical_damping_ratio", "model", "n_samples", *PROBABILITIES,
+               *(f"{p}_coupled" for p in PROBABILITIES),
                *(f"diff_{p}" for p in PROBABILITIES), *(f"tol_{p}" for p in PROBABILITIES), "n_overturned_coupled",
                "var_ratio", "passed", "cpu_ms_per_sample", "coupled_over_model_cost", "note")
 
@@ -525,7 +553,8 @@ def csv_rows(rows):
                     zeta_g=c["zeta_g"] if c["zeta_g"] is not None else "", level=c["level"],
                     pga_over_rigid_uplift=c["pga_ratio"], pga_over_uplift=ind["pga_over_uplift"], S0=c["S0"],
                     theta_ul_over_slenderness=ind["theta_ul_over_slenderness"], slenderness=ind["slenderness"],
-                    vertical_over_rocking=ind["vertical_over_rocking"], model=r["model"])
+                    vertical_over_rocking=ind["vertical_over_rocking"],
+                    vertical_damping_ratio=ind["vertical_damping_ratio"], model=r["model"])
         if r.get("error"):
             out.append(dict(base, passed=False, note="refused: " + r["error"][:120].replace(",", ";")))
             continue
@@ -552,7 +581,7 @@ def write_csv(rows, path, command):
     writer = csv.DictWriter(buf, fieldnames=CSV_COLUMNS, lineterminator="\n")
     writer.writeheader()
     for row in csv_rows(rows):
-        writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})
+        writer.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in row.items()})
     with atomic_open(path) as fh:
         fh.write(buf.getvalue())
 
@@ -620,6 +649,25 @@ def passing_bounds(rows, model, indicator):
     return out
 
 
+def rule_check(rows):
+    """Lines: for each model of the shipped rule (``screening/data/model_choice.toml``), the measured cases inside
+    it, those that failed, and each indicator's measured range inside it (the rule must lie within it)."""
+    from screening.solvers.model_choice import rules
+
+    lines = []
+    for rule in rules()[0]:
+        inside = [r for r in rows if r["model"] == rule.model and r["case"]["excitation"] in rule.excitations
+                  and all(lo <= r["indicators"][n] <= hi for n, (lo, hi) in rule.bounds_for(r["case"]["excitation"]))]
+        failed = [f"{r['case']['id']}" for r in inside if not r["passed"]]
+        ranges = ", ".join(f"{n} [{min(r['indicators'][n] for r in inside):.3g}, "
+                           f"{max(r['indicators'][n] for r in inside):.3g}] (rule [{lo:g}, {hi:g}])"
+                           for n, (lo, hi) in rule.bounds) if inside else ""
+        lines.append(f"shipped rule of {rule.model}: {len(inside)} measured cases inside, "
+                     + (f"FAILED: {failed}" if failed else "all pass")
+                     + (f"; measured inside: {ranges}" if ranges else ""))
+    return lines
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=1000)
@@ -662,9 +710,13 @@ def main():
     rows = table_rows(args.work, chosen)
     print(summary(rows))
     print()
+    print(cost_table(rows))
+    print()
     print(markdown(rows))
     for name in ("stiff_bed", "stiff_bed housner", *[m for m in MODELS if m.startswith(("condensed", "lin"))]):
         print(f"{name}: passes throughout theta_ul/alpha in {passing_bounds(rows, name, 'theta_ul_over_slenderness')}")
+    for line in rule_check(rows):
+        print(line)
     if args.csv:
         write_csv(rows, args.csv, "NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/stiff_bed_validity.py "
                   f"--samples {args.samples} --seed {args.seed} --work {args.work}")
