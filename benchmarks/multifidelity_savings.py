@@ -137,7 +137,7 @@ def stiff_beds(labels):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import stiff_bed_validity as sbv
 
-    known = {label: (block, bed, KanaiTajimi(S0=s0, **sbv.FILTER)) for label, block, bed, s0 in sbv.cases()}
+    known = {label: (block, bed, KanaiTajimi(S0=s0, **sbv.FILTER)) for label, block, bed, s0 in sbv.scene_beds()}
     unknown = sorted(set(labels) - set(known))
     if unknown:
         raise SystemExit(f"unknown bed(s) {unknown}; known: {sorted(known)}")

@@ -51,12 +51,14 @@ def test_spot_check_runs_the_stiff_bed_model(client, tmp_path):
 
 
 def test_auto_spot_checks_record_the_model_chosen_per_point(client, tmp_path):
-    """model = "auto" (the default): the stiff bed gets the stiff-bed model, the soft one (theta_ul / atan(b/h)
-    = 0.17) the coupled model; the file's per-spot mcs_model says which, with CF flag attributes."""
+    """model = "auto" (the default): a bed inside the measured rule (k = 3e6 with a vertical damping ratio of
+    0.05) gets the stiff-bed model, the stiff bed (outside it under Kanai-Tajimi) the coupled model; the file's
+    per-spot mcs_model says which, with CF flag attributes."""
     from screening.solvers import mc_registry
 
-    text = (STATUE.replace('model = "stiff_bed"\n', "").replace("k = 1e10", "k = [2e6, 1e10]")
-            .replace("points = [{S0 = 0.015}]", "points = [{S0 = 0.015, k = 1e10}, {S0 = 0.015, k = 2e6}]"))
+    text = (STATUE.replace('model = "stiff_bed"\n', "").replace("k = 1e10", "k = [3e6, 1e10]")
+            .replace("lam = 2e11", "lam = 1081203.03")
+            .replace("points = [{S0 = 0.015}]", "points = [{S0 = 0.015, k = 3e6}, {S0 = 0.015, k = 1e10}]"))
     study = parse_study(text)
     assert study.mcs.model == "auto"
     out = tmp_path / "a.nc"
@@ -69,7 +71,7 @@ def test_auto_spot_checks_record_the_model_chosen_per_point(client, tmp_path):
         spot = ds["mcs_peak_abs_theta"].values[0]
     assert [meanings[c] for c in codes] == ["stiff_bed", "coupled"]
     assert meanings == list(mc_registry.names())
-    block, foundation, excitation = build_models(study.cases[0], {"S0": 0.015, "k": 1e10})
+    block, foundation, excitation = build_models(study.cases[0], {"S0": 0.015, "k": 3e6})
     direct = monte_carlo(block, foundation, excitation, n_samples=6, model="stiff_bed", t_end=4.0, dt=0.05, seed=2,
                          progress=False)
     np.testing.assert_array_equal(spot, direct.peak_abs_theta.values)

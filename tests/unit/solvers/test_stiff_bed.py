@@ -238,13 +238,13 @@ def test_mirror_symmetry():
 
 
 def test_soft_bed_warns_naming_the_validity_rule():
-    soft = Foundation(k=2e6, lam=1e7)
+    soft = Foundation(k=1.1e6, lam=1e7)                 # theta_ul / atan(b/h) = 0.32: softer than any bed measured
     with pytest.warns(UserWarning, match=r"'stiff_bed' outside its measured validity: theta_ul_over_slenderness = "
-                                         r"\S+ outside the measured \[0, 0.05\].*model_choice.toml"):
+                                         r"\S+ outside the measured \[\S+, \S+\].*model_choice.toml"):
         screening.simulate(STATUE, soft, np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        screening.simulate(STATUE, BEDS[0], np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
+        screening.simulate(STATUE, _bed(STATUE, 3e6), np.zeros(3), dt=0.01, model="stiff_bed", t_end=0.05)
 
 
 def test_block_that_cannot_stand_is_refused_naming_the_parameter():

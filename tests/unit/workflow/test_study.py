@@ -480,7 +480,7 @@ def test_mcs_and_accuracy_default_to_auto_and_accept_the_registered_models():
 
 
 def test_strict_validity_refuses_the_stiff_bed_model_outside_its_rule_in_one_line_before_any_work():
-    soft = (STATUE_STUDY.read_text().replace("k = 1e10 ", "k = {start = 3e6, stop = 1e10, num = 3, log = true} ")
+    soft = (STATUE_STUDY.read_text().replace("k = 1e10 ", "k = {start = 1.1e6, stop = 1e10, num = 3, log = true} ")
             + '\n[mcs]\ncount = 1\nmodel = "stiff_bed"\n')
     with pytest.warns(UserWarning, match=r"mcs.model: model 'stiff_bed' outside its measured validity"):
         parse_study(soft)                                   # not strict: a warning, the study loads
@@ -488,7 +488,8 @@ def test_strict_validity_refuses_the_stiff_bed_model_outside_its_rule_in_one_lin
         parse_study(soft + "strict_validity = true\n")
     text = str(err.value)
     assert "\n" not in text and "theta_ul_over_slenderness" in text and "model_choice.toml" in text
-    assert "k = 3000000.0" in text and "strict_validity = true" in text       # the first point outside
-    parse_study(soft.replace("k = {start = 3e6,", "k = {start = 3e9,") + "strict_validity = true\n")   # inside
+    assert "k = 1100000.0" in text and "strict_validity = true" in text       # the first point outside
+    inside = STATUE_STUDY.read_text().replace("k = 1e10 ", "k = 3e6 ").replace("lam = 2.08e11", "lam = 1081203.03")
+    parse_study(inside + '\n[mcs]\ncount = 1\nmodel = "stiff_bed"\nstrict_validity = true\n')     # inside
     with pytest.raises(StudyError, match="mcs.strict_validity: must be true or false"):
         parse_study(soft + "strict_validity = 1\n")
