@@ -38,20 +38,21 @@ FALLBACK_RADIANS = 60_000.0
 INDICATORS = ("peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess")
 
 
-def reference_model(block, foundation, timing, coupled_radians=COUPLED_RADIANS):
+def reference_model(block, foundation, timing, excitation_kind, coupled_radians=COUPLED_RADIANS):
     """``"coupled"`` or ``"stiff_bed"``: the Monte Carlo model that judges a point.
 
     The coupled model (the full model) wherever it is affordable: ``w_v t_end <= coupled_radians``
-    (its step count follows the vertical mode); beyond, the stiff-bed model where its validity rule
-    holds (:func:`screening.solvers.stiff_bed.validity`), else the coupled model all the same.
+    (its step count follows the vertical mode); beyond, the stiff-bed model where its measured validity
+    rule vouches for it (:func:`screening.solvers.model_choice.vouches`, with the excitation's kind
+    ``excitation_kind``), else the coupled model all the same.
     """
-    from screening.solvers import stiff_bed
+    from screening.solvers.model_choice import rule_of, vouches
     from screening.solvers.synthesis import vertical_frequency
 
     if vertical_frequency(block, foundation) * timing["t_end"] <= coupled_radians:
         return "coupled"
-    ratio, _ = stiff_bed.validity(block, foundation)
-    return "stiff_bed" if ratio <= stiff_bed.validity_limit() else "coupled"
+    held, _ = vouches(rule_of("stiff_bed"), block, foundation, excitation_kind)
+    return "stiff_bed" if held else "coupled"
 
 
 def point_intensity(block, foundation, shape, timing, p_target, factor):
@@ -159,7 +160,7 @@ def evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIAN
     excitation = atlas.make_excitation(shape, timing, S0)
     out["S0"] = S0
     out["sl"] = {c: linearization_row(block, foundation, excitation, timing, c) for c in CONDENSATIONS}
-    model = reference_model(block, foundation, timing, coupled_radians)
+    model = reference_model(block, foundation, timing, excitation.kind, coupled_radians)
     try:
         out["mc"] = monte_carlo_row(block, foundation, excitation, timing, model, samples, int(seed) + int(index))
     except (ValueError, ArithmeticError) as exc:
