@@ -52,7 +52,7 @@ MAIN_SHARE = 0.85
 #: squares); there the measured / predicted ratio is 0.87-1.16 on every run.
 STEP_COST_S = {EscalationModel.condensed: 0.14e-6, EscalationModel.coupled: 0.41e-6,
                # stiff-bed model, only where the run's full-contact share is not known (estimated_cost's
-               # ``full_contact``): one cost per step does not hold for it (measured / predicted 0.3-1.6 over
+               # ``full_contact``): one cost per step does not hold for it (measured / predicted 0.26-2.7 over
                # intensity); with the share, STIFF_BED_EXACT_COST_S and STIFF_BED_ADAPTIVE_COST_S below
                EscalationModel.stiff_bed: 0.2e-6}
 #: Cost model of the stiff-bed model: CPU seconds per input grid interval advanced exactly in full contact
@@ -62,14 +62,16 @@ STEP_COST_S = {EscalationModel.condensed: 0.14e-6, EscalationModel.coupled: 0.41
 #: grid intervals) and ``A`` the adaptive steps (uplift, output instants, entering and leaving contact);
 #: as the uplift grows ``E`` falls and ``A`` rises, and one adaptive step of up to ``h_max`` can replace
 #: several grid intervals, so the steps fall while the cost rises.  Fitted (relative least squares, the
-#: grid term fixed) by ``benchmarks/bench_stiff_mcs.py --stiff-bed`` on the statue (k = 1e8, 1e10, 1e11)
-#: and the cabinet's pads from no uplift to near toppling: docs/montecarlo_numerics.md, "Cost model of
-#: the stiff-bed model".
-STIFF_BED_EXACT_COST_S = 0.1e-6
-STIFF_BED_ADAPTIVE_COST_S = 0.6e-6
+#: synthesis term :func:`grid_point_cost` fixed) to the 64 runs of ``benchmarks/bench_stiff_mcs.py --stiff-bed
+#: --samples 128 --repeat 3`` at seeds 0 and 7 (the statue on k = 1e8, 1e10, 1e11 and the cabinet's pads,
+#: each from no uplift to near toppling, 128 and 16 samples, median CPU of three): 27 ns, 0.59 us and 47 ms;
+#: the figures and the check on a fresh seed are in docs/montecarlo_numerics.md, "Cost model of the
+#: stiff-bed model".
+STIFF_BED_EXACT_COST_S = 27e-9
+STIFF_BED_ADAPTIVE_COST_S = 0.59e-6
 #: Cost model of the stiff-bed model: CPU seconds per run, whatever its samples (the input plan, the
-#: full-contact propagator, the dataset): a 4-sample run costs about 10x a sample's integration.
-STIFF_BED_RUN_COST_S = 0.05
+#: full-contact propagator's five matrix exponentials, the dataset): as much as 30 samples in full contact.
+STIFF_BED_RUN_COST_S = 0.047
 #: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
 #: rate of the input) for a grid of :data:`GRID_REFERENCE_POINTS` points per sample.  The input is
 #: band-limited at three times the larger of the rocking and vertical frequencies, so on a stiff bed
