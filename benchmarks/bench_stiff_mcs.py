@@ -335,7 +335,7 @@ def stiff_bed_cost_table(n_samples):
           f"STIFF_BED_RUN_COST_S {esc.STIFF_BED_RUN_COST_S:g} s, grid term of the coupled model")
     print("| bed | S0 [m2/s3] | samples | steps/sample | grid intervals/sample | full-contact share | overturned "
           "| measured ms/sample | predicted ms/sample | measured / predicted | single cost: measured / predicted |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")                   # validity warnings: not the subject here
         t0 = time.perf_counter()
