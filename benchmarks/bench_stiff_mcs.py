@@ -31,6 +31,14 @@ Prints five tables:
    each calibration bed (``benchmarks/trust_calibration.py``'s families) and each run above, with the
    synthesis-grid term and with its steps term alone.
 
+With ``--stiff-bed``, instead: **the stiff-bed model's cost model**
+(:func:`screening.analysis.escalation.estimated_cost` with the run's
+:func:`~screening.analysis.escalation.full_contact_share`) on the statue (k = 1e8, 1e10, 1e11) and the
+cabinet's pads (``benchmarks/bench_stiff_bed_cost.py``'s beds) at ``STIFF_SCALES`` times each bed's
+intensity (from no uplift to near toppling): steps, grid intervals and full-contact share per sample,
+measured and predicted CPU and their ratio per run, the single-cost model's ratio beside it, and the
+relative least-squares fit of the two stiff-bed constants (the grid term fixed).
+
 CPU time is ``time.process_time`` of this process with one numba thread (JIT warm-up excluded); each
 timed run is repeated ``--repeat`` times (default 3) and the median taken, which keeps the timing noise
 of this shared machine (about 20 % between identical single runs) out of the cost-model ratios.
@@ -308,17 +316,79 @@ def calibration_table(n, ratios):
           f"condensed {coef[1]:.3g} s/step, grid {coef[2]:.3g} s/point + {coef[3]:.3g} s/point per doubling")
 
 
+#: Multiples of each bed's intensity (bench_stiff_bed_cost.beds) in the stiff-bed table: no uplift to near toppling.
+STIFF_SCALES = (0.003, 0.03, 0.1, 0.3, 1.0, 3.0)
+
+
+def stiff_bed_cost_table(n_samples):
+    """The stiff-bed model's cost model against measured CPU over intensity (module docstring)."""
+    import warnings
+
+    from bench_stiff_bed_cost import beds
+
+    from screening.solvers import stiff_bed
+
+    rows = []
+    print(f"\n== stiff-bed cost model: {n_samples} samples x {T_END:g} s per run (and {max(n_samples // 8, 1)} "
+          f"at two intensities), output dt 0.05 s, seed {SEED[0]}, median CPU of {REPEAT[0]}; STIFF_BED_EXACT_COST_S "
+          f"{esc.STIFF_BED_EXACT_COST_S:g} s, STIFF_BED_ADAPTIVE_COST_S {esc.STIFF_BED_ADAPTIVE_COST_S:g} s, "
+          f"STIFF_BED_RUN_COST_S {esc.STIFF_BED_RUN_COST_S:g} s, grid term of the coupled model")
+    print("| bed | S0 [m2/s3] | samples | steps/sample | grid intervals/sample | full-contact share | overturned "
+          "| measured ms/sample | predicted ms/sample | measured / predicted | single cost: measured / predicted |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")                   # validity warnings: not the subject here
+        t0 = time.perf_counter()
+        _, block, bed, s0 = beds()[0]
+        monte_carlo(block, bed, KanaiTajimi(S0=s0, omega_g=15.6, zeta_g=0.6, envelope=ENVELOPE), n_samples=2,
+                    t_end=0.2, model="stiff_bed", progress=False)
+        print(f"numba threads {numba.get_num_threads()}; JIT warm-up {time.perf_counter() - t0:.1f} s")
+        for label, block, bed, s0 in beds():
+            stiff_bed.transfer_table(block, bed)           # once per bed, as a worker's cache does
+            for scale, n in [(s, n_samples) for s in STIFF_SCALES] + [(STIFF_SCALES[0], max(n_samples // 8, 1)),
+                                                                         (STIFF_SCALES[-2], max(n_samples // 8, 1))]:
+                motion = KanaiTajimi(S0=s0 * scale, omega_g=15.6, zeta_g=0.6, envelope=ENVELOPE)
+                ds, cpu = timed(block, bed, motion, n, model="stiff_bed", dt=0.05)
+                steps, grid = float(ds["n_steps"].sum()), float(n * int(ds.attrs["input_grid_points"]))
+                n_used = n - int(ds["n_overturned"]) - int(ds["n_diverged"])
+                share = esc.full_contact_share(ds["p_uplift"].values, n_used, n)
+                code = int(EscalationModel.stiff_bed)
+                pred = esc.estimated_cost(steps, code, grid, False, n, full_contact=share)
+                single = esc.estimated_cost(steps, code, grid, False, n)
+                rows.append(dict(steps=steps, grid=grid, share=share, cpu=cpu, n=n,
+                                 synth=grid * esc.grid_point_cost(grid / n)))
+                print(f"| {label} | {s0 * scale:.3g} | {n} | {steps / n:,.0f} | {grid / n - 1:,.0f} | {share:.3f} "
+                      f"| {int(ds['n_overturned'])} | {1e3 * cpu / n:.2f} | {1e3 * pred / n:.2f} | {cpu / pred:.2f} "
+                      f"| {cpu / single:.2f} |", flush=True)
+    ratio = np.array([r["cpu"] for r in rows]) / np.array(
+        [esc.estimated_cost(r["steps"], int(EscalationModel.stiff_bed), r["grid"], False, r["n"],
+                            full_contact=r["share"]) for r in rows])
+    print(f"measured / predicted: {ratio.min():.2f} .. {ratio.max():.2f} over {ratio.size} runs "
+          f"({np.sum(np.abs(ratio - 1) <= 0.25)} within +-25 %)")
+    exact = np.array([min(r["share"] * (r["grid"] - r["n"]), r["steps"]) for r in rows])
+    x = np.c_[exact, np.array([r["steps"] for r in rows]) - exact, np.ones(len(rows))]
+    y = np.array([r["cpu"] - r["synth"] for r in rows])
+    cpu = np.array([r["cpu"] for r in rows])
+    coef, *_ = np.linalg.lstsq(x / cpu[:, None], y / cpu, rcond=None)
+    print(f"relative least-squares fit (grid term fixed): exact interval {coef[0]:.3g} s, adaptive step "
+          f"{coef[1]:.3g} s, run {coef[2]:.3g} s")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=24, help="samples per run (the stiff-bed table)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--cost-only", action="store_true", help="only the calibration beds of the cost model")
+    ap.add_argument("--stiff-bed", action="store_true", help="only the stiff-bed model's cost model over intensity")
     ap.add_argument("--repeat", type=int, default=3, help="identical runs per timing (the median is taken)")
     args = ap.parse_args()
     SEED[0] = args.seed
     REPEAT[0] = args.repeat
     import numba
 
+    if args.stiff_bed:
+        stiff_bed_cost_table(args.samples)
+        return
     t0 = time.perf_counter()
     for integrator in ("dopri", "rodas"):
         for model in ("coupled", "condensed"):

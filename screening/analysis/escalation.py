@@ -33,9 +33,10 @@ from screening.analysis.trust import bed_law, p_bin, regime
 from screening.status import EscalationModel, PointStatus
 
 __all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "MAIN_SHARE", "STEP_COST_S", "GRID_COST_S", "RODAS_STEP_FACTOR",
-           "PRIOR_STEPS_PER_S", "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MIN_COVER", "MIN_CONDENSED_ROWS",
+           "PRIOR_STEPS_PER_S", "STIFF_BED_EXACT_COST_S", "STIFF_BED_ADAPTIVE_COST_S", "STIFF_BED_RUN_COST_S",
+           "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MIN_COVER", "MIN_CONDENSED_ROWS",
            "escalation_candidates", "cover_points", "condensed_cells", "escalation_model", "samples_needed",
-           "meets_target", "estimated_cost", "prior_cost", "affordable_points"]
+           "meets_target", "estimated_cost", "full_contact_share", "prior_cost", "affordable_points"]
 
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
 PILOT_SAMPLES = 64
@@ -50,10 +51,27 @@ MAIN_SHARE = 0.85
 #: ... 1e11, both integrators, both models) by ``benchmarks/bench_stiff_mcs.py`` (relative least
 #: squares); there the measured / predicted ratio is 0.87-1.16 on every run.
 STEP_COST_S = {EscalationModel.condensed: 0.14e-6, EscalationModel.coupled: 0.41e-6,
-               # stiff-bed model: its exact full-contact steps cost ~20 ns, its adaptive steps in uplift ~1 us,
-               # so the mean depends on the uplift; 0.2 us fits the escalated points of the statue on k = 1e10
-               # (studies/statue_accuracy.toml at PGA 1-5.5 m/s2: 10.5 CPU s measured, 25.4 s predicted at 0.47 us)
+               # stiff-bed model, only where the run's full-contact share is not known (estimated_cost's
+               # ``full_contact``): one cost per step does not hold for it (measured / predicted 0.26-2.7 over
+               # intensity); with the share, STIFF_BED_EXACT_COST_S and STIFF_BED_ADAPTIVE_COST_S below
                EscalationModel.stiff_bed: 0.2e-6}
+#: Cost model of the stiff-bed model: CPU seconds per input grid interval advanced exactly in full contact
+#: (a 2x6 product, the check of the vertical input, the bookkeeping), and per adaptive step (accepted or
+#: rejected: six evaluations of the contact's moment law and indentation).  Its steps follow the uplift,
+#: not a fixed rate: ``steps = E + A`` with ``E`` the exact intervals (about the full-contact share of the
+#: grid intervals) and ``A`` the adaptive steps (uplift, output instants, entering and leaving contact);
+#: as the uplift grows ``E`` falls and ``A`` rises, and one adaptive step of up to ``h_max`` can replace
+#: several grid intervals, so the steps fall while the cost rises.  Fitted (relative least squares, the
+#: synthesis term :func:`grid_point_cost` fixed) to the 64 runs of ``benchmarks/bench_stiff_mcs.py --stiff-bed
+#: --samples 128 --repeat 3`` at seeds 0 and 7 (the statue on k = 1e8, 1e10, 1e11 and the cabinet's pads,
+#: each from no uplift to near toppling, 128 and 16 samples, median CPU of three): 27 ns, 0.59 us and 47 ms;
+#: the figures and the check on a fresh seed are in docs/montecarlo_numerics.md, "Cost model of the
+#: stiff-bed model".
+STIFF_BED_EXACT_COST_S = 27e-9
+STIFF_BED_ADAPTIVE_COST_S = 0.59e-6
+#: Cost model of the stiff-bed model: CPU seconds per run, whatever its samples (the input plan, the
+#: full-contact propagator's five matrix exponentials, the dataset): as much as 30 samples in full contact.
+STIFF_BED_RUN_COST_S = 0.047
 #: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
 #: rate of the input) for a grid of :data:`GRID_REFERENCE_POINTS` points per sample.  The input is
 #: band-limited at three times the larger of the rocking and vertical frequencies, so on a stiff bed
@@ -206,20 +224,52 @@ def grid_point_cost(points_per_sample):
     return max(GRID_COST_S + GRID_DOUBLING_COST_S * math.log2(n / GRID_REFERENCE_POINTS), 0.5 * GRID_COST_S)
 
 
-def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1):
+def full_contact_share(p_uplift, n_used, samples):
+    """Share [1] of a run's input grid intervals the stiff-bed model advances exactly (in full contact):
+    the time mean of the run's uplift occupancy ``p_uplift`` [1] (its history over the output instants,
+    over the samples used) taken out, times the share of the samples used (an overturned or diverged
+    sample stops early; counted as stopped at once).
+
+    Notes
+    -----
+    ``(1 - mean_t p_uplift(t)) n_used / samples``, clipped to ``[0, 1]``; ``n_used / samples`` where
+    ``p_uplift`` has no finite value (0 when every sample overturned or diverged: all steps adaptive).
+    """
+    p = np.asarray(p_uplift, dtype=float)
+    p = p[np.isfinite(p)]
+    used = min(max(float(n_used) / max(int(samples), 1), 0.0), 1.0)
+    if p.size == 0:
+        return used
+    return float(min(max((1.0 - float(np.mean(p))) * used, 0.0), 1.0))
+
+
+def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_contact=None):
     """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
     points (each summed over its ``samples`` samples); ``rodas``: the steps are the linearly implicit
-    pair's.
+    pair's; ``full_contact`` (stiff-bed model only): :func:`full_contact_share` of the run.
 
     Notes
     -----
     ``cost = steps x STEP_COST_S[model] (x RODAS_STEP_FACTOR) + grid_points x grid_point_cost(grid_points /
-    samples)``.  The counts are fixed by the study, the seed and the samples, so a budget planned on
-    this cost selects the same points and samples on every machine.
+    samples)``.  For the stiff-bed model with ``full_contact = f`` the steps term is split into its
+    exact full-contact intervals ``E`` and adaptive steps ``A``::
+
+        E = min(f (grid_points - samples), steps),   A = steps - E
+        steps term = E x STIFF_BED_EXACT_COST_S + A x STIFF_BED_ADAPTIVE_COST_S + STIFF_BED_RUN_COST_S
+
+    (``grid_points - samples``: the grid intervals of all samples).  The counts are fixed by the study,
+    the seed and the samples, so a budget planned on this cost selects the same points and samples on
+    every machine.
     """
-    per_step = STEP_COST_S[EscalationModel(int(model))] * (RODAS_STEP_FACTOR if rodas else 1.0)
+    model = EscalationModel(int(model))
     grid = float(grid_points)
     per_point = grid_point_cost(grid / max(int(samples), 1)) if grid > 0 else 0.0
+    if model == EscalationModel.stiff_bed and full_contact is not None:
+        f = min(max(float(full_contact), 0.0), 1.0)
+        exact = min(f * max(grid - max(int(samples), 1), 0.0), float(steps))
+        return (exact * STIFF_BED_EXACT_COST_S + (float(steps) - exact) * STIFF_BED_ADAPTIVE_COST_S
+                + STIFF_BED_RUN_COST_S + grid * per_point)
+    per_step = STEP_COST_S[model] * (RODAS_STEP_FACTOR if rodas else 1.0)
     return float(steps) * per_step + grid * per_point
 
 

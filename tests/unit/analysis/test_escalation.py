@@ -124,6 +124,53 @@ def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     assert estimated_cost(1000, k, 0, rodas=True) == pytest.approx(1000 * STEP_COST_S[k] * RODAS_STEP_FACTOR)
 
 
+def test_stiff_bed_cost_splits_exact_intervals_from_adaptive_steps_as_documented():
+    from screening.analysis.escalation import (STIFF_BED_ADAPTIVE_COST_S, STIFF_BED_EXACT_COST_S,
+                                               STIFF_BED_RUN_COST_S)
+
+    sb = EscalationModel.stiff_bed
+    samples, points = 64, 15_596                     # the statue's k = 1e10 grid per sample
+    grid = samples * points
+    intervals = samples * (points - 1)
+    synth = grid * grid_point_cost(points)
+    # the documented formula, term by term: E = min(f x intervals, steps), A = steps - E
+    for f, steps in ((1.0, 1_023_000), (0.5, 700_000), (0.05, 460_000), (0.9, 10_000), (0.0, 300_000)):
+        exact = min(f * intervals, steps)
+        expected = exact * STIFF_BED_EXACT_COST_S + (steps - exact) * STIFF_BED_ADAPTIVE_COST_S \
+            + STIFF_BED_RUN_COST_S + synth
+        assert estimated_cost(steps, sb, grid, samples=samples, full_contact=f) == pytest.approx(expected, rel=1e-12)
+    # finite and non-negative on the whole range; more steps cost more; at equal steps, a larger full-contact
+    # share (more exact intervals, each cheaper than an adaptive step) costs less
+    shares = np.linspace(0.0, 1.0, 21)
+    for steps in (0, 1000, 500_000, 5_000_000):
+        cost = np.array([estimated_cost(steps, sb, grid, samples=samples, full_contact=f) for f in shares])
+        assert np.all(np.isfinite(cost)) and np.all(cost > 0)
+        assert np.all(np.diff(cost) <= 0.0)
+    steps = np.linspace(0, 3e6, 31)
+    for f in (0.0, 0.3, 1.0):
+        cost = np.array([estimated_cost(s, sb, grid, samples=samples, full_contact=f) for s in steps])
+        assert np.all(np.diff(cost) > 0.0)
+    assert STIFF_BED_EXACT_COST_S < STIFF_BED_ADAPTIVE_COST_S
+    # a share outside [0, 1] is clipped, not extrapolated
+    assert estimated_cost(5e5, sb, grid, samples=samples, full_contact=1.7) == estimated_cost(
+        5e5, sb, grid, samples=samples, full_contact=1.0)
+    # without the share: the single cost per step
+    assert estimated_cost(1000, sb) == pytest.approx(1000 * STEP_COST_S[sb], rel=1e-12)
+
+
+def test_full_contact_share_is_the_mean_occupancy_out_of_the_used_samples():
+    from screening.analysis.escalation import full_contact_share
+
+    rng = np.random.default_rng(3)
+    uplift = rng.random((40, 401)) < np.linspace(0.0, 0.8, 401)       # samples x instants, uplift flags
+    p = uplift.mean(axis=0)
+    # independent count: instants in full contact over all instants of the used samples
+    assert full_contact_share(p, 40, 40) == pytest.approx(np.count_nonzero(~uplift) / uplift.size, rel=1e-12)
+    assert full_contact_share(p, 30, 40) == pytest.approx(0.75 * np.count_nonzero(~uplift) / uplift.size, rel=1e-12)
+    assert full_contact_share(np.full(5, np.nan), 0, 8) == 0.0      # every sample overturned: nothing exact
+    assert full_contact_share(np.zeros(5), 8, 8) == 1.0
+
+
 def test_auto_escalation_takes_the_stiff_bed_model_only_where_the_rule_picks_it():
     from screening.analysis.escalation import auto_escalation_model
 
