@@ -14,7 +14,7 @@ import numba
 import numpy as np
 
 from screening.condensation import cubic
-from screening.solvers import mcs_kernels as kern
+from screening.solvers.mcs_equations import GRAVITY_RATIO_MIN
 
 __all__ = ["housner_restitution", "indentation_curvature", "gravity_ratio", "rocking_coefficients",
            "rocking_acceleration", "potential", "STIFF", "stiff_record", "indentation_curvature_jit",
@@ -66,9 +66,9 @@ def indentation_curvature(theta, block, foundation):
 
 def gravity_ratio(a_v, g):
     """``lam = (g + a_v) / g`` [1]: the weight under a vertical ground acceleration ``a_v`` [m/s2]
-    (positive up), held at :data:`~screening.solvers.mcs_kernels.GRAVITY_RATIO_MIN` or above (below 0
+    (positive up), held at :data:`~screening.solvers.mcs_equations.GRAVITY_RATIO_MIN` or above (below 0
     the block lifts off, which the model stops)."""
-    return np.maximum(1.0 + np.asarray(a_v, dtype=float) / g, kern.GRAVITY_RATIO_MIN)
+    return np.maximum(1.0 + np.asarray(a_v, dtype=float) / g, GRAVITY_RATIO_MIN)
 
 
 def rocking_coefficients(theta, block, foundation, a_v=0.0):
@@ -184,7 +184,7 @@ def rocking_acceleration_jit(sp, cp, theta, theta_dot, x_g_ddot, a_v=0.0):
     c = math.cos(theta)
     sigma = 1.0 if theta >= 0.0 else -1.0
     a = sigma * s
-    lam = max(1.0 + a_v / sp.g, kern.GRAVITY_RATIO_MIN)
+    lam = max(1.0 + a_v / sp.g, GRAVITY_RATIO_MIN)
     al = a / lam
     z, dz, v = cubic.quasi_static_indentation_jit(cp, al)
     d2z = indentation_curvature_jit(cp, al, z, dz, v) / lam
