@@ -80,18 +80,6 @@ def test_hermite_rate_is_the_derivative_of_the_interpolant():
     assert hermite_rate(v0, v1, d0, d1, 1.0, step) == pytest.approx(d1, rel=1e-12)
 
 
-@pytest.mark.parametrize("theta", [0.0, 0.01, -0.07])
-def test_input_gain_is_the_derivative_of_the_accelerations(theta):
-    p = kern.model_record(BLOCK, HC, get_condensation("paper"))[()]
-    z = rest_indentation(BLOCK, HC)
-    a0 = kern.coupled_accelerations(theta, 0.3, z, 1e-4, 0.0, p)
-    a1 = kern.coupled_accelerations(theta, 0.3, z, 1e-4, 1.0, p)
-    g1, g3 = kern.input_gain(kern.MODEL_COUPLED, theta, p)
-    assert g1 == pytest.approx(a1[0] - a0[0], rel=1e-9)          # the accelerations are linear in x_g''
-    assert g3 == pytest.approx(a1[1] - a0[1], rel=1e-9, abs=1e-12)
-    assert kern.input_gain(kern.MODEL_CONDENSED, theta, p) == pytest.approx((BLOCK.m * BLOCK.h / BLOCK.m_sdof, 0.0))
-
-
 # ---------------------------------------------------------------- free vertical vibration: a damped SDOF
 @pytest.mark.parametrize("integrator", ["dopri", "rodas"])
 def test_free_vertical_vibration_matches_the_damped_sdof(integrator):

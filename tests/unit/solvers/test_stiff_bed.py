@@ -1,5 +1,5 @@
-"""The stiff-bed model (screening.solvers.stiff_bed) against independent computations: its compiled
-twins against the numpy reference, the exact full-contact propagator against a fine ODE solution,
+"""The stiff-bed model (screening.solvers.stiff_bed) against independent computations (its compiled
+twins and contact law: test_stiff_bed_contact.py; its integrator: test_stiff_bed_kernels.py):
 Housner's rigid block on an infinitely stiff bed (energy ratio per impact, period against the closed
 form and the energy-integral quadrature), the bed-derived transfer loss against the coupled model's
 free rocking, the quasi-static tilt against the condensation's moment law and the coupled model,
@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.integrate import quad, solve_ivp
+from scipy.integrate import quad
 
 import screening
 from screening.beds import lam_from_vertical_damping
@@ -51,66 +51,8 @@ def _extreme_after_first_crossing(t, theta):
 
 
 # ----------------------------------------------------------------------------- compiled twins
-@pytest.mark.parametrize("bed", BEDS, ids=["hc", "hardening", "winkler", "softening"])
-def test_compiled_acceleration_equals_the_numpy_reference(bed):
-    sp = sb.stiff_record(STATUE, bed)[0]
-    cp = cubic.sdof_record(STATUE, bed)[0]
-    tu = float(cubic.uplift_threshold(STATUE, bed))
-    for theta in (0.0, 0.3 * tu, -tu, 1.5 * tu, -20 * tu, 1e-3, -0.05, 0.2):
-        for theta_dot in (0.0, 0.4, -2.0):
-            ref = float(sb.rocking_acceleration(theta, theta_dot, 1.7, STATUE, bed))
-            jit = sb.rocking_acceleration_jit(sp, cp, theta, theta_dot, 1.7)
-            assert jit == pytest.approx(ref, rel=1e-9, abs=1e-9)   # Q: bed moment minus gravity cancel
-
-
-@pytest.mark.parametrize("bed", BEDS[:2] + BEDS[3:], ids=["hc", "hardening", "softening"])
-def test_indentation_curvature_is_the_derivative_of_the_condensation_slope(bed):
-    tu = float(cubic.uplift_threshold(STATUE, bed))
-    for a in (0.2 * tu, 0.8 * tu, 1.3 * tu, 10 * tu, 1e-3, 0.1):
-        d = 1e-6 * a
-        slope = lambda x: float(cubic.quasi_static_indentation(x, STATUE, bed)[1])  # noqa: E731
-        fd = (slope(a + d) - slope(a - d)) / (2 * d)
-        assert float(sb.indentation_curvature(a, STATUE, bed)) == pytest.approx(fd, rel=1e-5, abs=1e-9 * abs(fd) + 1e-12)
-        z, dz = cubic.quasi_static_indentation(a, STATUE, bed)
-        jit = sb.indentation_curvature_jit(cubic.sdof_record(STATUE, bed)[0], a, float(z), float(dz),
-                                           float(z) + STATUE.b * a)
-        assert jit == pytest.approx(float(sb.indentation_curvature(a, STATUE, bed)), rel=1e-12)
-
-
-def test_linear_propagator_against_a_fine_ode_solution():
-    m0, c0, k0, mh, dt = 1320.0, 5e3, 1.04e8, 1080.0, 4e-4
-    phi, gamma = sb.linear_propagator(m0, c0, k0, mh, dt)
-    u0, u1, d0, d1 = 1.3, -0.7, 2e3, -4e3
-    x0 = np.array([2e-6, -3e-4])
-
-    def u(t):
-        return screening.kernels.interpolation.hermite(u0, u1, d0, d1, t / dt, dt)
-
-    sol = solve_ivp(lambda t, y: [y[1], (mh * u(t) - c0 * y[1] - k0 * y[0]) / m0], (0, dt), x0, rtol=1e-12,
-                    atol=1e-18, method="DOP853")
-    exact = phi @ x0 + gamma @ np.array([u0, u1, dt * d0, dt * d1])
-    np.testing.assert_allclose(exact, sol.y[:, -1], rtol=1e-9)
-
-
-def test_kernel_free_rocking_matches_the_numpy_reference_ode():
-    """Uplift phase from rest at 0.2 rad to just before the first transfer: the compiled model against
-    solve_ivp on :func:`rocking_acceleration`."""
-    bed = BEDS[0]
-    t, theta, _ = _free(StiffBedModel(transfer="none"), STATUE, bed, 0.2, 0.4, output_dt=0.01)
-    sol = solve_ivp(lambda s, y: [y[1], float(sb.rocking_acceleration(y[0], y[1], 0.0, STATUE, bed))], (0, 0.4),
-                    [0.2, 0.0], t_eval=t, rtol=1e-11, atol=1e-13, method="DOP853")
-    assert np.all(theta > 0.0)
-    np.testing.assert_allclose(theta, sol.y[0], rtol=0, atol=2e-6 * 0.2)
-
-
 # ----------------------------------------------------------------------------- Housner's limit
 RIGID = Foundation(k=1e15, lam=0.0)
-
-
-def test_housner_restitution_from_angular_momentum():
-    """r = 1 - 1.5 sin^2 alpha equals (I_O - 2 m b^2) / I_O for the uniform block."""
-    i_o = STATUE.I_cm + STATUE.m * (STATUE.b**2 + STATUE.h**2)
-    assert sb.housner_restitution(STATUE) == pytest.approx((i_o - 2 * STATUE.m * STATUE.b**2) / i_o, rel=1e-14)
 
 
 @pytest.mark.parametrize("theta0_over_alpha", [0.3, 0.6])
@@ -308,11 +250,3 @@ def test_exceedance_and_overturning_probabilities_match_the_coupled_model_on_a_s
     se = np.sqrt((p * (1 - p) + q * (1 - q)) / 120)
     assert 0.03 < p[-1] < 0.6 and p[2] < 0.9          # an informative intensity
     assert np.all(np.abs(p - q) <= np.maximum(0.03, 2.5 * se)), (p, q)
-
-
-def test_compiled_transfer_ratio_is_the_log_linear_interpolant_of_the_table():
-    log_amp = np.log(np.array([1e-5, 3e-5, 1e-3, 0.1]))
-    log_eta = np.log(np.array([1.0, 0.99, 0.95, 0.9]))
-    for amp in (5e-6, 1e-5, 2e-5, 4e-4, 0.05, 0.1, 0.3):
-        ref = math.exp(np.interp(math.log(amp), log_amp, log_eta))
-        assert sb.transfer_ratio_jit(log_amp, log_eta, amp) == pytest.approx(ref, rel=1e-14)

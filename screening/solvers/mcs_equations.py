@@ -1,0 +1,148 @@
+"""The equations a Monte Carlo sample integrates (:mod:`screening.solvers.mcs_kernels` runs them): the
+per-run model record, the compiled right-hand sides of the coupled eqs. (7)–(8) and the condensed eq. (22)
+under horizontal and vertical ground acceleration, their input gains, and the uplift test.
+
+Method: ``docs/method.md#coupled-and-condensed-models``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from screening.physics.contact import law_resultants_trig_jit
+
+__all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "GRAVITY_RATIO_MIN", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
+           "INTEGRATORS", "model_record", "coupled_accelerations", "condensed_acceleration", "input_gain",
+           "vertical_gain"]
+
+#: Which equations a sample integrates.
+MODEL_COUPLED = 0
+MODEL_CONDENSED = 1
+
+#: Smallest gravity ratio ``(g + a_v) / g`` the condensed laws are evaluated at (a sample whose ratio
+#: falls below zero is stopped as lifted off at the end of the step).
+GRAVITY_RATIO_MIN = 1e-3
+
+#: Per-sample-run parameters of the compiled kernels (SI units), built by :func:`model_record`.
+MODEL = np.dtype([
+    ("m", "f8"), ("g", "f8"), ("h", "f8"), ("I_cm", "f8"), ("b", "f8"),      # block
+    ("k", "f8"), ("eps", "f8"), ("w_rate", "f8"), ("w_indentation", "f8"),  # bed (law's weights)
+    ("m_sdof", "f8"),                                                        # I_cm + m h^2 [kg m2]
+    ("theta_over", "f8"),        # overturning angle atan(b/h) [rad]
+    ("theta_ul", "f8"),          # uplift threshold of the condensation [rad] (condensed uplift flag)
+    ("theta_cap", "f8"),         # capacity angle of the condensation [rad] (inf: none)
+    ("max_flight", "f8"),        # longest flight before a sample is called diverged [s]
+    ("z_max", "f8"), ("z_min", "f8"), ("rate_max", "f8"),   # physical bounds of the coupled state
+    ("integrator", "i8"),        # INTEGRATOR_DOPRI or INTEGRATOR_RODAS
+])
+
+#: Integrators of a sample (the ``integrator`` field of :data:`MODEL`), by the name of the
+#: ``integrator`` numerics option.
+INTEGRATOR_DOPRI = 0
+INTEGRATOR_RODAS = 1
+INTEGRATORS = {"dopri": INTEGRATOR_DOPRI, "rodas": INTEGRATOR_RODAS}
+
+
+def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri"):
+    """The :data:`MODEL` record of scalar model objects; ``cond``: the condensation of condensed runs;
+    ``integrator``: a key of :data:`INTEGRATORS`."""
+    m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
+    rec = np.zeros((), dtype=MODEL)
+    values = dict(m=m, g=g, h=h, I_cm=float(block.I_cm), b=b, k=float(foundation.k), eps=float(foundation.eps),
+                  w_rate=float(foundation.damping_weights[0]), w_indentation=float(foundation.damping_weights[1]),
+                  m_sdof=float(block.m_sdof), theta_over=float(block.slenderness),
+                  theta_ul=float(cond.uplift_threshold(block, foundation)),
+                  theta_cap=float(cond.capacity_angle(block, foundation)), max_flight=float(max_flight_time),
+                  z_max=b,                              # sinking half the base width into the bed: blown up
+                  z_min=-2.0 * h,                       # jumping a block height off the bed: blown up
+                  rate_max=1e3 * math.sqrt(g / h),      # ~1000 x the free-fall rocking rate: blown up
+                  integrator=INTEGRATORS[integrator])
+    for name, value in values.items():
+        rec[name] = value
+    return rec
+
+
+# ----------------------------------------------------------------------------- right-hand sides
+@numba.njit(cache=True)
+def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0):
+    """``(theta'', z_cb'')`` [rad/s^2, m/s^2] of the coupled eqs. (7)–(8).
+
+    Eliminating ``z_cb''`` from (8) with (7):
+    ``(I_cm + m h^2 cos^2) theta'' = m h x_g'' cos - M_cb + h F_cb sin + m h^2 theta'^2 sin cos``,
+    ``z_cb'' = g + a_v - F_cb/m - h (theta'^2 cos + theta'' sin)``, with ``a_v`` [m/s^2] the vertical
+    ground acceleration (positive up): in the ground's frame it adds to gravity, and ``z_cb`` (down) is
+    relative to the ground, so it enters the vertical equation only (docs/method.md).
+    """
+    m, g, h = p.m, p.g, p.h
+    s = math.sin(theta)
+    c = math.cos(theta)
+    force, moment = law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.w_rate,
+                                            p.w_indentation)
+    mh = m * h
+    theta_ddot = ((mh * x_g_ddot * c - moment + h * force * s + mh * h * theta_dot * theta_dot * s * c)
+                  / (p.I_cm + mh * h * c * c))
+    z_ddot = (g + a_v) - force / m - h * (theta_dot * theta_dot * c + theta_ddot * s)
+    return theta_ddot, z_ddot
+
+
+@numba.njit(cache=True)
+def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, p, a_v=0.0):
+    """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22): ``(m h x_g'' - C theta' - K theta) / m_sdof``.
+
+    ``damping_stiffness(cond, theta) -> (C, K)``: the condensation's compiled function and record.
+    A vertical ground acceleration ``a_v`` [m/s^2] (positive up) scales the weight by
+    ``lam = (g + a_v) / g``; the laws are read at ``theta / lam`` and the weight's moment gains
+    ``m h a_v theta`` (docs/method.md, "Vertical ground acceleration")::
+
+        m_sdof theta'' = m h x_g'' - C(theta / lam) theta' - K(theta / lam) theta + m h a_v theta
+    """
+    if a_v == 0.0:                                  # the horizontal-only path: no divisions
+        damping, stiffness = damping_stiffness(cond, theta)
+        return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta) / p.m_sdof
+    lam = max(1.0 + a_v / p.g, GRAVITY_RATIO_MIN)
+    damping, stiffness = damping_stiffness(cond, theta / lam)
+    return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta + p.m * p.h * a_v * theta) / p.m_sdof
+
+
+@numba.njit(cache=True)
+def _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc, p):
+    """Right-hand side at the state ``y`` under the ground input ``acc = (x_g'', a_v)`` [m/s^2]."""
+    if model == MODEL_COUPLED:
+        a1, a3 = coupled_accelerations(y0, y1, y2, y3, acc[0], p, acc[1])
+        return y1, a1, y3, a3
+    return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc[0], p, acc[1]), 0.0, 0.0
+
+
+@numba.njit(cache=True)
+def _in_uplift(model, theta, z_cb, p):
+    if model == MODEL_COUPLED:
+        return z_cb - p.b * abs(math.sin(theta)) < 0.0
+    return abs(theta) > p.theta_ul
+
+
+@numba.njit(cache=True)
+def input_gain(model, theta, p):
+    """``d(theta'', z_cb'')/d x_g''`` [rad/m, 1]: the right-hand side is linear in the input.
+
+    Coupled (eqs. 7–8 as in :func:`coupled_accelerations`): ``m h cos / (I_cm + m h^2 cos^2)`` and
+    ``-h sin`` times that; condensed (eq. 22): ``m h / m_sdof`` and 0.
+    """
+    if model == MODEL_COUPLED:
+        s = math.sin(theta)
+        c = math.cos(theta)
+        mh = p.m * p.h
+        g1 = mh * c / (p.I_cm + mh * p.h * c * c)
+        return g1, -p.h * s * g1
+    return p.m * p.h / p.m_sdof, 0.0
+
+
+@numba.njit(cache=True)
+def vertical_gain(model, theta, p):
+    """``d(theta'', z_cb'')/d a_v`` [rad/m, 1]: coupled ``(0, 1)``; condensed ``m h theta / m_sdof`` and 0
+    (the weight's moment; the law's dependence through ``theta / lam`` is left out of this rate)."""
+    if model == MODEL_COUPLED:
+        return 0.0, 1.0
+    return p.m * p.h * theta / p.m_sdof, 0.0

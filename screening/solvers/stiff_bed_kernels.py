@@ -1,0 +1,304 @@
+"""The compiled sample integrator of the stiff-bed model (:mod:`screening.solvers.stiff_bed`): the exact
+full-contact propagator (numpy) it steps with, the transfer-loss table reader, and the adaptive
+Dormand–Prince loop over a chunk of samples (numerics: the stiff-bed model's module docstring and
+``docs/stiff_bed.md``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from scipy import linalg
+
+from screening.kernels import dopri
+from screening.kernels.dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
+                                     B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
+from screening.solvers import mcs_kernels as kern
+from screening.solvers.mcs_inputs import _hermite as _input, _vertical_row   # one home: the input
+from screening.solvers.mcs_kernels import _err_term as _err2                   # one home: the error norm
+from screening.solvers.stiff_bed_contact import rocking_acceleration_jit
+
+__all__ = ["linear_propagator", "transfer_ratio_jit", "integrate_sample", "integrate_chunk"]
+
+
+def linear_propagator(m0, c0, k0, mh, dt):
+    """Exact one-interval map of the full-contact oscillator ``m0 x'' + c0 x' + k0 x = mh u(t)``.
+
+    The input ``u`` is the cubic Hermite interpolant over ``[0, dt]`` [s] of the node values
+    ``u0, u1`` and rates ``d0, d1``.  Returns ``(Phi, Gamma)``, ``(2, 2)`` and ``(2, 4)``:
+    ``(x, x')(dt) = Phi (x, x')(0) + Gamma (u0, u1, dt d0, dt d1)``.
+
+    Notes
+    -----
+    ``Phi = exp(A dt)``, ``A = [[0, 1], [-k0/m0, -c0/m0]]``.  The response to the forcing
+    ``tau^n / n!`` is the state part of ``exp(M_n dt) e_3`` with the augmented generator
+    ``M_n = [[A, B e_n^T], [0, J]]``, ``B = (0, mh/m0)``, ``J`` the shift ``w_i' = w_{i-1}``
+    (``w_i = tau^i / i!``); the Hermite basis ``(1 - 3x^2 + 2x^3, 3x^2 - 2x^3, x - 2x^2 + x^3,
+    x^3 - x^2)``, ``x = tau / dt``, is a combination of those monomials.
+    """
+    a_mat = np.array([[0.0, 1.0], [-k0 / m0, -c0 / m0]])
+    phi = linalg.expm(a_mat * dt)
+    shift = np.diag(np.ones(3), -1)
+    mono = np.empty((2, 4))
+    for n in range(4):
+        gen = np.zeros((6, 6))
+        gen[:2, :2] = a_mat
+        gen[1, 2 + n] = mh / m0
+        gen[2:, 2:] = shift
+        mono[:, n] = linalg.expm(gen * dt)[:2, 2] * math.factorial(n) / dt ** n
+    basis = np.array([[1.0, 0.0, -3.0, 2.0], [0.0, 0.0, 3.0, -2.0], [0.0, 1.0, -2.0, 1.0], [0.0, 0.0, -1.0, 1.0]])
+    return phi, mono @ basis.T
+
+
+@numba.njit(cache=True, inline="always")
+def _accel(sp, cp, theta, theta_dot, acc):
+    """:func:`rocking_acceleration_jit` under the ground input ``acc = (x_g'', a_v)``."""
+    return rocking_acceleration_jit(sp, cp, theta, theta_dot, acc[0], acc[1])
+
+
+@numba.njit(cache=True)
+def _vertical_quiet(row, acc, acc_dot, j):
+    """True when the vertical channel is zero over grid interval ``j`` (values and rates): the exact
+    full-contact propagator holds there."""
+    vrow = _vertical_row(row, acc[1])
+    if vrow < 0:
+        return True
+    v, r = acc[1], acc_dot[1]
+    return v[vrow, j] == 0.0 and v[vrow, j + 1] == 0.0 and r[vrow, j] == 0.0 and r[vrow, j + 1] == 0.0
+
+
+@numba.njit(cache=True)
+def transfer_ratio_jit(log_amp, log_eta, amp):
+    """Energy ratio ``eta`` [1] of a transfer after a half cycle of amplitude ``amp`` [rad]: linear in
+    ``log amp`` between the table's nodes, 1 below the first node, the last value above the last."""
+    if amp <= 0.0:
+        return 1.0
+    x = math.log(amp)
+    n = log_amp.shape[0]
+    if x <= log_amp[0]:
+        return math.exp(log_eta[0])
+    if x >= log_amp[n - 1]:
+        return math.exp(log_eta[n - 1])
+    j = 0
+    while log_amp[j + 1] < x:
+        j += 1
+    f = (x - log_amp[j]) / (log_amp[j + 1] - log_amp[j])
+    return math.exp(log_eta[j] + f * (log_eta[j + 1] - log_eta[j]))
+
+
+@numba.njit(cache=True)
+def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max,
+                     max_steps, out_theta, out_theta_dot, out_uplift):
+    """Integrate one sample of the stiff-bed model over ``t_out``; fill row ``row`` of the outputs.
+
+    ``prop``: ``(2, 6)``, :func:`linear_propagator` ``[Phi | Gamma]`` for the grid step ``dt_grid``;
+    ``log_amp``, ``log_eta``: the transfer table; ``acc``, ``acc_dot``: the ``(horizontal, vertical)``
+    ground input of :func:`screening.solvers.mcs_kernels._integrate_chunk`.  Returns ``(status, reason, peak_abs_theta,
+    n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as accepted steps).
+    """
+    n_out = t_out.shape[0]
+    n_grid = acc[0].shape[1]
+    y0, y1 = y_init[0], y_init[1]
+    s0, s1 = scale[0], scale[1]
+    tu = sp.theta_ul
+    t = t_out[0]
+    out_theta[row, 0] = y0
+    out_theta_dot[row, 0] = y1
+    out_uplift[row, 0] = abs(y0) > tu
+    for i in range(1, n_out):
+        out_theta[row, i] = np.nan
+        out_theta_dot[row, i] = np.nan
+        out_uplift[row, i] = False
+    peak = abs(y0)
+    amp = abs(y0)
+    status = kern.STATUS_OK
+    reason = kern.REASON_NONE
+    n_acc = 0
+    n_rej = 0
+    h_min_acc = np.inf
+    log_err_old = dopri.LOG_ERR_START
+    jg = int(math.floor(t / dt_grid + 1e-9))
+    at_grid = abs(t - jg * dt_grid) <= 1e-9 * dt_grid
+    k1_0 = 0.0
+    k1_1 = 0.0
+    stale = True
+    h = min(1e-4, h_max)
+    h_floor = 1e-12 * (t_out[n_out - 1] - t_out[0] + 1.0)
+    i_out = 1
+    rejected = False
+    locating = False
+    while i_out < n_out:
+        if n_acc + n_rej >= max_steps:
+            status, reason = kern.STATUS_DIVERGED, kern.REASON_STEP_BUDGET
+            break
+        t_next = t_out[i_out]
+        full = abs(y0) <= tu
+        old0 = y0
+        if at_grid and full and jg + 1 < n_grid and (jg + 1) * dt_grid < t_next - 1e-9 * dt_grid \
+                and _vertical_quiet(row, acc, acc_dot, jg):
+            # --- exact full-contact interval
+            u0 = acc[0][row, jg]
+            u1 = acc[0][row, jg + 1]
+            u2 = dt_grid * acc_dot[0][row, jg]
+            u3 = dt_grid * acc_dot[0][row, jg + 1]
+            n0 = prop[0, 0] * y0 + prop[0, 1] * y1 + prop[0, 2] * u0 + prop[0, 3] * u1 + prop[0, 4] * u2 \
+                + prop[0, 5] * u3
+            if abs(n0) <= tu:
+                n1 = prop[1, 0] * y0 + prop[1, 1] * y1 + prop[1, 2] * u0 + prop[1, 3] * u1 + prop[1, 4] * u2 \
+                    + prop[1, 5] * u3
+                jg += 1
+                t = jg * dt_grid
+                y0, y1 = n0, n1
+                n_acc += 1
+                if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
+                    if amp > tu:
+                        y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                    amp = 0.0
+                a0 = abs(y0)
+                amp = max(amp, a0)
+                if a0 > peak:
+                    peak = a0
+                stale = True                    # the first stage of the next adaptive step
+                continue
+        # --- adaptive step, landing on the next output instant (and on the next grid point in full contact)
+        if stale:
+            k1_0 = y1
+            k1_1 = _accel(sp, cp, y0, y1, _input(row, acc, acc_dot, dt_grid, t))
+            stale = False
+        target = t_next
+        to_grid = False
+        j_next = jg + 1 if at_grid else int(math.floor(t / dt_grid)) + 1
+        if full and j_next < n_grid and j_next * dt_grid < t_next - 1e-9 * dt_grid:
+            target = j_next * dt_grid
+            to_grid = True
+        h = min(h, h_max)
+        h_proposed = h
+        landing = False
+        if t + h >= target - 1e-9 * h:
+            h = target - t
+            landing = True
+        g0 = y0 + h * A21 * k1_0
+        g1 = y1 + h * A21 * k1_1
+        k2_0 = g1
+        k2_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C2 * h))
+        g0 = y0 + h * (A31 * k1_0 + A32 * k2_0)
+        g1 = y1 + h * (A31 * k1_1 + A32 * k2_1)
+        k3_0 = g1
+        k3_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C3 * h))
+        g0 = y0 + h * (A41 * k1_0 + A42 * k2_0 + A43 * k3_0)
+        g1 = y1 + h * (A41 * k1_1 + A42 * k2_1 + A43 * k3_1)
+        k4_0 = g1
+        k4_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C4 * h))
+        g0 = y0 + h * (A51 * k1_0 + A52 * k2_0 + A53 * k3_0 + A54 * k4_0)
+        g1 = y1 + h * (A51 * k1_1 + A52 * k2_1 + A53 * k3_1 + A54 * k4_1)
+        k5_0 = g1
+        k5_1 = _accel(sp, cp, g0, g1, _input(row, acc, acc_dot, dt_grid, t + C5 * h))
+        g0 = y0 + h * (A61 * k1_0 + A62 * k2_0 + A63 * k3_0 + A64 * k4_0 + A65 * k5_0)
+        g1 = y1 + h * (A61 * k1_1 + A62 * k2_1 + A63 * k3_1 + A64 * k4_1 + A65 * k5_1)
+        acc_end = _input(row, acc, acc_dot, dt_grid, t + h)
+        k6_0 = g1
+        k6_1 = _accel(sp, cp, g0, g1, acc_end)
+        n0 = y0 + h * (B1 * k1_0 + B3 * k3_0 + B4 * k4_0 + B5 * k5_0 + B6 * k6_0)
+        n1 = y1 + h * (B1 * k1_1 + B3 * k3_1 + B4 * k4_1 + B5 * k5_1 + B6 * k6_1)
+        k7_0 = n1
+        k7_1 = _accel(sp, cp, n0, n1, acc_end)
+        e0 = h * (E1 * k1_0 + E3 * k3_0 + E4 * k4_0 + E5 * k5_0 + E6 * k6_0 + E7 * k7_0)
+        e1 = h * (E1 * k1_1 + E3 * k3_1 + E4 * k4_1 + E5 * k5_1 + E6 * k6_1 + E7 * k7_1)
+        err = math.sqrt(0.5 * (_err2(e0, y0, n0, s0, rtol) + _err2(e1, y1, n1, s1, rtol)))
+        if not math.isfinite(err):
+            n_rej += 1
+            h = 0.1 * h
+            rejected = True
+            if h < h_floor:
+                status, reason = kern.STATUS_DIVERGED, kern.REASON_NONFINITE
+                break
+            continue
+        if err > 1.0:
+            n_rej += 1
+            h = h * dopri.rejected_step_factor_log(math.log(err))
+            rejected = True
+            if h < h_floor:
+                status, reason = kern.STATUS_DIVERGED, kern.REASON_STEP_UNDERFLOW
+                break
+            continue
+        if sp.locate != 0.0 and amp > tu and old0 * n0 < 0.0 and abs(n0) > tu:
+            # a transfer whose step ends in uplift on the other side: shorten the step to the crossing
+            # (linear estimate, repeated until the step ends in full contact) so the velocity ratio
+            # is applied where the block passes through full contact, not a step later
+            n_rej += 1
+            h = h * min(max(old0 / (old0 - n0), 0.01), 0.99)
+            locating = True
+            if h < h_floor:
+                status, reason = kern.STATUS_DIVERGED, kern.REASON_STEP_UNDERFLOW
+                break
+            continue
+        n_acc += 1
+        if h < h_min_acc and not landing and not locating and n_acc > 10:
+            h_min_acc = h
+        locating = False
+        t = target if landing else t + h
+        if landing and to_grid:
+            jg = j_next
+            at_grid = True
+        else:
+            at_grid = False
+        y0, y1 = n0, n1
+        k1_0, k1_1 = k7_0, k7_1
+        if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
+            if amp > tu:
+                y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                k1_0 = y1
+                k1_1 = _accel(sp, cp, y0, y1, acc_end)
+            amp = 0.0
+        a0 = abs(y0)
+        amp = max(amp, a0)
+        if a0 > peak:
+            peak = a0
+        if a0 > sp.theta_over:
+            status = kern.STATUS_OVERTURNED
+            break
+        if abs(y1) > sp.rate_max or not math.isfinite(y1):
+            status, reason = kern.STATUS_DIVERGED, kern.REASON_OUT_OF_BOUNDS
+            break
+        if a0 > sp.theta_cap:
+            status, reason = kern.STATUS_DIVERGED, kern.REASON_NO_EQUILIBRIUM
+            break
+        if sp.g + acc_end[1] < 0.0:                    # the block lifts off: not this model's
+            status, reason = kern.STATUS_DIVERGED, kern.REASON_LIFT_OFF
+            break
+        if landing and not to_grid:
+            out_theta[row, i_out] = y0
+            out_theta_dot[row, i_out] = y1
+            out_uplift[row, i_out] = a0 > tu * (1.0 + acc_end[1] / sp.g)
+            i_out += 1
+        fac, log_err = dopri.pi_step_factor(err, log_err_old)
+        if rejected:
+            fac = min(fac, 1.0)
+        rejected = False
+        log_err_old = max(log_err, dopri.LOG_ERR_START)
+        h_new = h * fac
+        if landing and h_proposed > h:
+            h_new = max(h_new, min(h_proposed, h_max))
+        h = h_new
+    if not math.isfinite(peak):
+        peak = 0.0
+    return status, reason, peak, n_acc, n_rej, h_min_acc
+
+
+@numba.njit(cache=True, parallel=True)
+def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max,
+                    max_steps, out_theta, out_theta_dot, out_uplift, peak, status, reason, n_accepted, n_rejected,
+                    h_min):
+    """:func:`integrate_sample` for every row of ``acc`` (``prange`` over samples)."""
+    for row in numba.prange(acc[0].shape[0]):
+        st, rs, pk, na, nr, hm = integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
+                                                  t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
+                                                  out_theta_dot, out_uplift)
+        status[row] = st
+        reason[row] = rs
+        peak[row] = pk
+        n_accepted[row] = na
+        n_rejected[row] = nr
+        h_min[row] = hm
