@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from screening.analysis.escalation import full_contact_share
 from screening.solvers import mc_registry
 from screening.solvers.moments import solve_moments
 from screening.solvers.outputs import HISTORY_VARIABLES, OUTPUTS, client_variables, of_stage, selected
@@ -250,6 +251,8 @@ def spot_arrays(ds):
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
     out["n_grid"] = np.int64(ds.sizes["sample"] * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
+    # the share of the used samples' time in full contact (the stiff-bed model's cost model)
+    out["full_contact"] = np.float64(full_contact_share(ds["p_uplift"].values, int(out["n_used"]), ds.sizes["sample"]))
     return out
 
 

@@ -66,3 +66,29 @@ def test_the_local_client_is_never_made_dask_s_default():
         assert c.submit(sum, [1, 2]).result() == 3
         assert (_get_global_client(), dask.config.get("scheduler", None)) == before
     assert (_get_global_client(), dask.config.get("scheduler", None)) == before
+
+
+def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads():
+    """A hand-made Monte Carlo dataset of 4 samples (one overturned): ``full_contact`` is the mean over
+    time of 1 - p_uplift, scaled to the used samples, and the stiff-bed cost estimate changes with it."""
+    import xarray as xr
+
+    from screening.analysis import escalation as esc
+
+    t = np.linspace(0.0, 1.0, 5)
+    p = np.array([0.0, 0.25, 0.5, 0.25, 0.0])
+    histories = {name: ("t", np.zeros(t.size)) for name in execution.SPOT_HISTORIES}
+    histories["p_uplift"] = ("t", p)
+    ds = xr.Dataset({**histories,
+                     "n_overturned": ((), 1), "n_diverged": ((), 0), "n_steps": ("sample", np.full(4, 1000)),
+                     "peak_abs_theta": ("sample", np.ones(4)), "overturned": ("sample", [False, True, False, False]),
+                     "diverged": ("sample", np.zeros(4, bool))},
+                    coords={"t": t, "sample": np.arange(4)}, attrs={"input_grid_points": 64})
+    out = execution.spot_arrays(ds)
+    expected = (1.0 - p.mean()) * 3 / 4
+    assert out["full_contact"] == pytest.approx(expected, rel=1e-12)
+    assert out["full_contact"] == pytest.approx(esc.full_contact_share(p, 3, 4), rel=1e-12)
+    model = esc.EscalationModel.stiff_bed
+    with_share = esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4, full_contact=out["full_contact"])
+    without = esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4)
+    assert np.isfinite(with_share) and with_share > 0 and with_share != pytest.approx(without)
