@@ -37,6 +37,7 @@ COVERED = [
     "screening.laws.registry",
     "screening.laws.winkler",
     "screening.physics.contact",
+    "screening.report.figure_base",
     "screening.report.text",
     "screening.solvers.mc_models",
     "screening.solvers.moments",
