@@ -677,7 +677,7 @@ def model_quantity(ds, name):
     Notes
     -----
     ``slenderness = atan(b / h)`` and ``m_sdof = I_cm + m h^2`` (the rocking inertia about the
-    base centre, eq. (7) in [1]).
+    base centre, eq. (23) in [1]).
 
     References
     ----------
@@ -768,7 +768,7 @@ def equivalent_damping_ratio(ds):
     Notes
     -----
     ``zeta_eq = c_eq / (2 sqrt(k_eq M))`` with ``M = I_cm + m h^2``, the equivalent linear system of
-    eq. (40) in [1].
+    eq. (42) in [1].
 
     References
     ----------

@@ -38,6 +38,8 @@ COVERED = [
     "screening.laws.winkler",
     "screening.physics.contact",
     "screening.report.figure_base",
+    "screening.report.figures",
+    "screening.report.fragility_figures",
     "screening.report.text",
     "screening.solvers.mc_models",
     "screening.solvers.moments",
