@@ -18,6 +18,7 @@ import pytest
 #: Modules whose every public function has a full numpydoc docstring with a running example.
 COVERED = [
     "screening.analysis.fragility",
+    "screening.analysis.metrics",
     "screening.beds",
     "screening.condensation.api",
     "screening.condensation.cubic",
