@@ -19,6 +19,7 @@ import pytest
 COVERED = [
     "screening.analysis.fragility",
     "screening.analysis.metrics",
+    "screening.analysis.multifidelity",
     "screening.beds",
     "screening.condensation.api",
     "screening.condensation.cubic",
