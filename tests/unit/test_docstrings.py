@@ -20,6 +20,7 @@ COVERED = [
     "screening.analysis.fragility",
     "screening.analysis.metrics",
     "screening.analysis.multifidelity",
+    "screening.analysis.probabilities",
     "screening.beds",
     "screening.condensation.api",
     "screening.condensation.cubic",
