@@ -19,6 +19,7 @@ import pytest
 COVERED = [
     "screening.analysis.correction",
     "screening.analysis.fragility",
+    "screening.analysis.im_fragility",
     "screening.analysis.metrics",
     "screening.analysis.multifidelity",
     "screening.analysis.probabilities",
