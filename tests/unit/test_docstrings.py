@@ -18,6 +18,7 @@ import pytest
 #: Modules whose every public function has a full numpydoc docstring with a running example.
 COVERED = [
     "screening.analysis.correction",
+    "screening.analysis.fit_excitation",
     "screening.analysis.fragility",
     "screening.analysis.im_fragility",
     "screening.analysis.metrics",
