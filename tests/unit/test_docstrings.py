@@ -24,6 +24,7 @@ COVERED = [
     "screening.analysis.metrics",
     "screening.analysis.multifidelity",
     "screening.analysis.probabilities",
+    "screening.analysis.tradeoff_study",
     "screening.beds",
     "screening.condensation.api",
     "screening.condensation.cubic",
