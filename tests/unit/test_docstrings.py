@@ -73,6 +73,7 @@ PARTIAL = {
     "screening.report.spot_figures": ("spot_file_label", "plot_spots"),
     "screening.report.tradeoff_figures": ("study_n",),
     "screening.report.tradeoff_files": ("to_file_layout", "from_file_layout", "file_encoding", "output_paths"),
+    "screening.report.tradeoff_text": ("rule_text", "recommendation", "write_csv", "cost_summary"),
     "screening.solvers.linearization": ("linearize",),
     "screening.solvers.moment_kernels": ("uplift_occupancy", "augmented_system", "lyapunov_rhs",
                                          "moment_equations"),
