@@ -77,6 +77,29 @@ def point_features(features):
 
     Positive features spanning more than a factor 10 are taken in log10 (swept intensities and
     stiffnesses, the decay indicator); constant or all-NaN columns are dropped.
+
+    Parameters
+    ----------
+    features : dict of str to array_like
+        One array per feature, one value per point (each in its own SI unit).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(points, kept features)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
+       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+
+    Examples
+    --------
+    >>> point_features({"S0": [1e-5, 1e-4, 1e-3], "eps": [0.0, 0.0, 0.0], "r": [0.1, 0.2, 0.4]}).tolist()
+    [[-5.0, 0.1], [-4.0, 0.2], [-3.0, 0.4]]
     """
     cols = []
     for value in features.values():
@@ -106,17 +129,46 @@ def _neighbour_mean(d, y, w, k):
 
 
 def fit_correction(features, y, y_se=None):
-    """Fit ``y`` [1] (log ratio MCS / SL at the escalated points) on ``features`` (points x features).
+    """Fit the log ratio ``y = log(MCS / SL)`` [1] at the escalated points on their features.
 
-    ``y_se`` [1]: the Monte Carlo standard error of each ``y`` (default 0, floored at
-    :data:`NOISE_FLOOR`).  Rows with a non-finite value are dropped.
+    Rows with a non-finite value are dropped.
+
+    Parameters
+    ----------
+    features : array_like
+        ``(points, features)`` from :func:`point_features`.
+    y : array_like
+        Log ratio per point [1].
+    y_se : array_like, optional
+        The Monte Carlo standard error of each ``y`` [1] (default 0, floored at :data:`NOISE_FLOOR`).
+
+    Returns
+    -------
+    Correction
+        The standardised points, the chosen ``k`` and the leave-one-out errors.
 
     Notes
     -----
     Prediction at ``x``: ``sum_i w_i y_i / sum_i w_i`` over the ``k`` escalated points nearest to ``x``
     in standardised features ``z_j = (x_j - mean_j) / sd_j``, ``w_i = 1 / (y_se_i^2 (d_i + d0))``
     (``d0`` = :data:`DISTANCE_FLOOR`).
-    ``k`` minimises the leave-one-out RMS (each point predicted from the others).
+    ``k`` minimises the leave-one-out RMS (each point predicted from the others) [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
+       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.linspace(0.0, 1.0, 8)[:, None]
+    >>> corr = fit_correction(x, 0.5 * x[:, 0], np.full(8, 0.01))
+    >>> corr.k, corr.n, bool(corr.usable), f"{corr.loo_rms:.4f}"
+    (2, 8, True, '0.0476')
     """
     x = np.asarray(features, dtype=float)
     y = np.asarray(y, dtype=float).reshape(-1)
@@ -148,13 +200,43 @@ def fit_correction(features, y, y_se=None):
 
 
 def predict_correction(correction, features):
-    """``(y, se, reached)`` at the points of ``features`` (points x features).
+    """The correction, its standard error and whether it reaches, at new points.
 
-    ``se`` [1]: ``sqrt(mean((e_loo,i max(1, d_i / nn_i))^2) + mean((y_i - y)^2))`` over the neighbours
-    ``i`` used — their own leave-one-out errors ``e_loo,i`` (measured at their nearest-neighbour
-    distance ``nn_i``, scaled to the distance ``d_i`` of the point) and their disagreement at the
-    point —, floored at :data:`NOISE_FLOOR`; ``reached``: the nearest escalated point
-    is within :data:`REACH` spacings and the features are finite.
+    Parameters
+    ----------
+    correction : Correction
+        From :func:`fit_correction`.
+    features : array_like
+        ``(points, features)``, the columns of the fit.
+
+    Returns
+    -------
+    y : numpy.ndarray
+        Predicted log ratio [1] (NaN where the features are not finite).
+    se : numpy.ndarray
+        ``sqrt(mean((e_loo,i max(1, d_i / nn_i))^2) + mean((y_i - y)^2))`` [1] over the neighbours ``i``
+        used — their own leave-one-out errors ``e_loo,i`` (measured at their nearest-neighbour
+        distance ``nn_i``, scaled to the distance ``d_i`` of the point) and their disagreement at the
+        point —, floored at :data:`NOISE_FLOOR`.
+    reached : numpy.ndarray of bool
+        The nearest escalated point is within :data:`REACH` spacings and the features are finite.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
+       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x = np.linspace(0.0, 1.0, 8)[:, None]
+    >>> corr = fit_correction(x, 0.5 * x[:, 0], np.full(8, 0.01))
+    >>> y, se, reached = predict_correction(corr, np.array([[0.5], [5.0]]))
+    >>> f"{y[0]:.3f}", float(se[0]), reached.tolist()
+    ('0.250', 0.05, [True, False])
     """
     x = np.asarray(features, dtype=float)
     z = (x - correction.mean) / correction.scale
@@ -181,23 +263,75 @@ def predict_correction(correction, features):
 
 
 def linearization_promises(trust, low, high, target):
-    """True where the trust rule promises the target: ``trusted`` and the predicted band within ``+-target``."""
+    """True where the trust rule promises the target: ``trusted`` and the predicted band within ``+-target``.
+
+    Parameters
+    ----------
+    trust : array_like of int
+        ``sl_trust`` codes (:class:`~screening.status.Trust`).
+    low, high : array_like
+        The predicted band of the SL error ``SL / MCS - 1`` [1].
+    target : float
+        The relative error aimed at [1].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Per point.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
+       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+
+    Examples
+    --------
+    >>> from screening.status import Trust
+    >>> linearization_promises([Trust.trusted, Trust.trusted, Trust.untrusted], [-0.05, -0.2, -0.01],
+    ...                        [0.05, 0.1, 0.01], 0.1).tolist()
+    [True, False, False]
+    """
     trust = np.asarray(trust)
     with np.errstate(invalid="ignore"):
         return (trust == int(Trust.trusted)) & (np.maximum(np.abs(low), np.abs(high)) <= target)
 
 
 def atlas_correction(low, high):
-    """``(y, se)`` [1]: the error atlas model's correction ``y = log(MCS / SL)`` of a point and its standard
-    error, from its predicted 90 % interval ``[low, high]`` of ``SL / MCS - 1`` (``sl_error_low``,
-    ``sl_error_high``).
+    """The error atlas model's correction of a point and its standard error, from its interval.
+
+    Parameters
+    ----------
+    low, high : array_like
+        The predicted 90 % interval of ``SL / MCS - 1`` [1] per point (``sl_error_low``,
+        ``sl_error_high``).
+
+    Returns
+    -------
+    y, se : numpy.ndarray
+        The correction ``y = log(MCS / SL)`` [1] and its standard error [1]; NaN where the interval is
+        not finite or reaches ``SL / MCS - 1 <= -1`` (open).
 
     Notes
     -----
     The interval is symmetric in ``log(SL / MCS)`` about the estimate (``estimate +- q s``,
     :mod:`screening.analysis.error_model`): ``y = -(log(1 + low) + log(1 + high)) / 2`` and
-    ``se = (log(1 + high) - log(1 + low)) / (2 z)``, ``z`` = :data:`INTERVAL_Z`.  NaN where the interval is not
-    finite or reaches ``SL / MCS - 1 <= -1``.
+    ``se = (log(1 + high) - log(1 + low)) / (2 z)``, ``z`` = :data:`INTERVAL_Z`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y, se = atlas_correction([-0.2, -1.0], [0.1, np.inf])
+    >>> np.round(y, 4).tolist(), np.round(se, 4).tolist()
+    ([0.0639, nan], [0.0968, nan])
     """
     low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -206,17 +340,67 @@ def atlas_correction(low, high):
 
 
 def atlas_promises(low, high, target):
-    """True where the atlas-corrected linearization (:func:`atlas_correction`) is within ``target`` at the
-    interval's 90 %: ``exp(z se) - 1 <= target``.  Monte Carlo is needed only elsewhere."""
+    """Where the atlas-corrected linearization is within the target: Monte Carlo is needed only elsewhere.
+
+    Parameters
+    ----------
+    low, high : array_like
+        The predicted 90 % interval of ``SL / MCS - 1`` [1] per point.
+    target : float
+        Relative error aimed at [1].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True where ``exp(z se) - 1 <= target`` (``se`` of :func:`atlas_correction`, ``z`` =
+        :data:`INTERVAL_Z`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> atlas_promises([-0.2, -0.05], [0.1, 0.05], 0.15).tolist()
+    [False, True]
+    """
     _, se = atlas_correction(low, high)
     with np.errstate(invalid="ignore"):
         return np.isfinite(se) & (np.expm1(INTERVAL_Z * se) <= target)
 
 
 def within_band(y, low, high):
-    """True where the SL error implied by a log ratio ``y = log(MCS / SL)``, ``exp(-y) - 1``, lies in the
-    trust rule's band ``[low, high]`` (or there is no band): a correction that contradicts what the
-    calibration measured in the point's cell is not vouched for."""
+    """True where the SL error implied by a log ratio lies in the trust rule's band (or there is no band).
+
+    A correction that contradicts what the calibration measured in the point's cell is not vouched for.
+
+    Parameters
+    ----------
+    y : array_like
+        Log ratio ``log(MCS / SL)`` [1]; the SL error it implies is ``exp(-y) - 1``.
+    low, high : array_like
+        The band of the SL error [1] (NaN: no band).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Per point.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
+       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+
+    Examples
+    --------
+    >>> within_band([0.0, 1.0, 1.0], [-0.1, -0.1, float("nan")], [0.1, 0.1, float("nan")]).tolist()
+    [True, False, True]
+    """
     with np.errstate(invalid="ignore", over="ignore"):
         implied = np.expm1(-np.asarray(y, dtype=float))
         no_band = ~(np.isfinite(low) & np.isfinite(high))
@@ -229,25 +413,63 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
 
     Parameters
     ----------
-    sl_peak : linearization peak per point [rad2 or rad2 s-2].  status : :class:`PointStatus` codes.
-    trust, low, high : ``sl_trust`` and its band per point.  target : relative error aimed at [1].
-    features : (points x features) from :func:`point_features`.
-    escalated : flat indices of the points with Monte Carlo; ``mc_peak``, ``mc_se`` [same units]
-        and ``mc_model`` (:class:`EscalationModel`) there.
-    atlas : use the error atlas model's correction (its interval is of peak var_theta: False for other peaks).
+    sl_peak : array_like
+        Linearization peak per point [rad2 or rad2 s-2].
+    status : array_like of int
+        :class:`PointStatus` codes.
+    trust : array_like of int
+        ``sl_trust`` codes.
+    low, high : array_like
+        The trust band of the SL error per point [1].
+    target : float
+        Relative error aimed at [1].
+    features : array_like
+        ``(points, features)`` from :func:`point_features`.
+    escalated : array_like of int
+        Flat indices of the points with Monte Carlo.
+    mc_peak, mc_se : array_like
+        The Monte Carlo peak and its standard error there [same units as ``sl_peak``].
+    mc_model : array_like of int
+        The model run there (:class:`EscalationModel`).
+    atlas : bool
+        Use the error atlas model's correction (its interval is of peak var_theta: False for other peaks).
 
     Returns
     -------
-    value, se : per point [units of ``sl_peak``]; ``se`` NaN where method is ``unreliable``.
-    method : :class:`BestMethod` codes (int8), in this order of preference: Monte Carlo at the point
-        (if it has a finite peak); the linearization where the rule promises the target (se: half the
-        band); the corrected linearization ``SL exp(y)`` (se ``value x se_y``) by whichever of two
-        corrections has the smaller ``se_y``: the study's own (the escalated points') where it is
-        usable, reaches the point, ``se_y <= MAX_SE`` and the SL error it implies lies in the trust
-        band (:func:`within_band`), or the error atlas model's (:func:`atlas_correction`) where
+    value, se : numpy.ndarray
+        Per point [units of ``sl_peak``]; ``se`` NaN where method is ``unreliable``.
+    method : numpy.ndarray of int8
+        :class:`BestMethod` codes, in this order of preference: Monte Carlo at the point (if it has a
+        finite peak); the linearization where the rule promises the target (se: half the band); the
+        corrected linearization ``SL exp(y)`` (se ``value x se_y``) by whichever of two corrections has
+        the smaller ``se_y``: the study's own (the escalated points') where it is usable, reaches the
+        point, ``se_y <= MAX_SE`` and the SL error it implies lies in the trust band
+        (:func:`within_band`), or the error atlas model's (:func:`atlas_correction`) where
         ``se_y <= MAX_SE``; else ``unreliable`` (value: SL's where it ran to the end, NaN where it
         stopped).
-    correction : the fitted :class:`Correction`.
+    correction : Correction
+        The fitted correction.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
+       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+
+    Examples
+    --------
+    One trusted point, one escalated to condensed Monte Carlo, three corrected from the error atlas
+    model's interval (too few escalated points for the study's own correction):
+
+    >>> import numpy as np
+    >>> from screening.status import BestMethod, EscalationModel
+    >>> value, se, method, corr = best_estimates(
+    ...     [1.0, 2.0, 3.0, 4.0, 5.0], [0] * 5, [0, 2, 2, 2, 2], [-0.05] + [-0.5] * 4, [0.05] + [0.5] * 4, 0.1,
+    ...     np.arange(5.0)[:, None], [4], [6.0], [0.3], [EscalationModel.condensed])
+    >>> [round(v, 3) for v in value.tolist()], [BestMethod(m).name for m in method[[0, 1, 4]]]
+    ([1.0, 2.309, 3.464, 4.619, 6.0], ['linearization', 'corrected_linearization', 'condensed_monte_carlo'])
     """
     sl = np.asarray(sl_peak, dtype=float).reshape(-1)
     n = sl.size

@@ -150,6 +150,19 @@ def fit_envelope(record, window=ENERGY_WINDOW):
     McCullagh, P. & Nelder, J. A. (1989) Generalized Linear Models, 2nd ed., Chapman & Hall, ch. 8-9
     (Gamma quasi-likelihood).  Husid, R. (1969) Analisis de terremotos: analisis general, Revista del
     IDIEM 8, 21-42.
+
+
+    Examples
+    --------
+    Modulated white noise with ``T1 = 4`` s, ``T2 = 2`` s:
+
+    >>> import numpy as np
+    >>> from screening.records import Record
+    >>> t = np.arange(0.0, 20.0, 0.01)
+    >>> a = 4 * (np.exp(-t / 4) - np.exp(-t / 2)) * np.random.default_rng(1).normal(size=t.size)
+    >>> T1, T2 = fit_envelope(Record(a, 0.01, "synthetic"))
+    >>> f"{T1:.2f} {T2:.2f}"
+    '3.66 2.44'
     """
     t = record.times
     curve = husid(record.acceleration, record.dt)
@@ -173,8 +186,49 @@ def _kt_shape(w, wg, zg):
 
 
 def smoothed_psd(record, T1, T2, smooth=2.0):
-    """``(omega [rad/s], S_hat [m2 s-3])``: the periodogram normalised by ``2 pi int q^2``, smoothed by a
-    moving average ``smooth`` [rad/s] wide."""
+    """The record's periodogram normalised by ``2 pi int q^2``, smoothed by a moving average.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record (acceleration [m s-2], time step [s]).
+    T1, T2 : float
+        The envelope [s] (eq. 57).
+    smooth : float
+        Width of the moving average [rad/s].
+
+    Returns
+    -------
+    omega : numpy.ndarray
+        Frequencies [rad/s].
+    S_hat : numpy.ndarray
+        The estimated two-sided PSD [m2 s-3].
+
+    Notes
+    -----
+    For a slowly modulated process ``E|A(omega)|^2 = 2 pi S(omega) int q^2 dt``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from screening.records import Record
+    >>> rng, dt, wg, zg = np.random.default_rng(1), 0.01, 15.0, 0.6
+    >>> t = np.arange(0.0, 30.0, dt)
+    >>> _, z, _ = signal.lsim(([2 * zg * wg, wg**2], [1, 2 * zg * wg, wg**2]), rng.normal(size=t.size) / np.sqrt(dt), t)
+    >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * z, dt, "synthetic")
+    >>> w, s = smoothed_psd(rec, 4.0, 2.0)
+    >>> w.size, f"{w[1]:.4f}"
+    (1501, '0.2094')
+    """
     a = record.acceleration
     n = a.size
     spec = np.fft.rfft(a) * record.dt
@@ -186,7 +240,55 @@ def smoothed_psd(record, T1, T2, smooth=2.0):
 
 
 def fit_spectral_shape(record, T1, T2, band=(1.0, None), smooth=2.0):
-    """``(omega_g [rad/s], zeta_g [1])`` of the Kanai-Tajimi shape fitted to the smoothed periodogram."""
+    """The Kanai-Tajimi shape fitted to the smoothed periodogram.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record (acceleration [m s-2], time step [s]).
+    T1, T2 : float
+        The envelope [s] (eq. 57).
+    band : tuple of float
+        ``(low, high)`` [rad/s] of the fitted band; ``high`` None: the lower of 20 Hz and half the Nyquist
+        frequency.
+    smooth : float
+        Width of the moving average [rad/s] (:func:`smoothed_psd`).
+
+    Returns
+    -------
+    omega_g : float
+        Filter frequency [rad/s].
+    zeta_g : float
+        Filter damping ratio [1].
+
+    Notes
+    -----
+    Least squares on log scale of the shape ``(wg^4 + 4 zg^2 wg^2 w^2) / ((w^2 - wg^2)^2 + 4 zg^2 wg^2 w^2)``
+    (eq. (50) in [1]) with its level free.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    A record synthesised with ``omega_g = 15`` rad/s, ``zeta_g = 0.6``:
+
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from screening.records import Record
+    >>> rng, dt, wg, zg = np.random.default_rng(1), 0.01, 15.0, 0.6
+    >>> t = np.arange(0.0, 30.0, dt)
+    >>> _, z, _ = signal.lsim(([2 * zg * wg, wg**2], [1, 2 * zg * wg, wg**2]), rng.normal(size=t.size) / np.sqrt(dt), t)
+    >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * z, dt, "synthetic")
+    >>> wg, zg = fit_spectral_shape(rec, 4.0, 2.0)
+    >>> f"{wg:.1f} {zg:.2f}"
+    '14.1 0.58'
+    """
     w, s = smoothed_psd(record, T1, T2, smooth)
     hi = band[1] if band[1] is not None else min(0.5 * math.pi / record.dt, DEFAULT_BAND_TOP)
     use = (w >= band[0]) & (w <= hi) & (s > 0)
@@ -228,10 +330,47 @@ MAX_SPIKE_SHARE = 0.5
 
 
 def checked_record(record):
-    """The accelerations of ``record`` [m s-2] ready to fit, and the flags raised: ``ValueError`` (one
-    line naming the problem and its allowed range) for a time step outside :data:`DT_RANGE`, fewer than
-    :data:`MIN_SAMPLES` samples, a non-finite value, a constant record, or one whose energy sits in a
-    few samples (an impulse, a spike); a DC offset is removed and flagged."""
+    """The accelerations of a record ready to fit, and the flags raised.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record (acceleration [m s-2], time step [s]).
+
+    Returns
+    -------
+    acceleration : numpy.ndarray
+        [m s-2], a DC offset removed.
+    flags : list of str
+        Plain-language warnings (the DC offset removed).
+
+    Raises
+    ------
+    ValueError
+        One line naming the problem and its allowed range: a time step outside :data:`DT_RANGE`, fewer
+        than :data:`MIN_SAMPLES` samples, a non-finite value, a constant record, or one whose energy sits
+        in a few samples (an impulse, a spike).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.records import Record
+    >>> a, flags = checked_record(Record(np.sin(np.arange(200.0)) + 1.0, 0.01, "offset"))
+    >>> f"{a.mean():.2e}" , flags[0][:20]
+    ('...e-1...', 'a DC offset of 1 m s')
+    >>> checked_record(Record(np.ones(200), 0.01, "flat"))
+    Traceback (most recent call last):
+    ...
+    ValueError: the record is constant (no shaking about its mean): nothing to fit
+    """
     dt = float(record.dt)
     if not DT_RANGE[0] <= dt <= DT_RANGE[1]:
         raise ValueError(f"record time step dt must be in {DT_RANGE[0]:g}..{DT_RANGE[1]:g} s (got {dt:.3g})")
@@ -258,14 +397,71 @@ def checked_record(record):
 
 
 def envelope_peak(T1, T2):
-    """``max_t q(t)`` [1] of ``q = 4 (exp(-t/T1) - exp(-t/T2))``, at ``t* = ln(T1/T2) T1 T2 / (T1 - T2)``."""
+    """``max_t q(t)`` [1] of ``q = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. 57).
+
+    Parameters
+    ----------
+    T1, T2 : float
+        The envelope's time constants [s], ``T1 > T2 > 0``.
+
+    Returns
+    -------
+    float
+        The peak [1], at ``t* = ln(T1/T2) T1 T2 / (T1 - T2)``.
+
+    Notes
+    -----
+    The envelope of eq. (57) in [1]; its peak is 1 only for ``T1 = 2 T2``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> envelope_peak(4.0, 2.0), f"{envelope_peak(3.303, 3.290):.4f}"
+    (1.0, '0.0058')
+    """
     t = math.log(T1 / T2) * T1 * T2 / (T1 - T2)
     return 4.0 * (math.exp(-t / T1) - math.exp(-t / T2))
 
 
 def zero_crossing_rate(acceleration, dt, husid=None):
-    """Zero crossings per second [1/s] of ``acceleration`` over its strong-motion part (5-95 % of the
-    Husid curve ``husid``, the whole record without it)."""
+    """Zero crossings per second [1/s] of an acceleration over its strong-motion part.
+
+    Parameters
+    ----------
+    acceleration : array_like
+        [m s-2].
+    dt : float
+        Time step [s].
+    husid : array_like, optional
+        Its Husid curve [1]: the strong-motion part is 5-95 % of it (the whole record without it).
+
+    Returns
+    -------
+    float
+        The rate [1/s].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(0.0, 10.0, 0.001)
+    >>> f"{zero_crossing_rate(np.sin(2 * np.pi * 3.0 * t + 0.1), 0.001):.2f}"
+    '6.00'
+    """
     a = np.asarray(acceleration, dtype=float)
     lo, hi = 0, a.size - 1
     if husid is not None:
@@ -282,16 +478,82 @@ def cumulative_energy(acceleration, dt):
 
 
 def husid(acceleration, dt):
-    """The normalised Husid curve ``int_0^t a^2 / int_0^T a^2`` [1] at the samples (trapezoidal rule)."""
+    """The normalised Husid curve ``int_0^t a^2 / int_0^T a^2`` [1] at the samples (trapezoidal rule).
+
+    Parameters
+    ----------
+    acceleration : array_like
+        [m s-2].
+    dt : float
+        Time step [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        From 0 to 1 [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [3] R. Husid, "Analisis de terremotos: analisis general", Revista del IDIEM 8 (1969) 21-42.
+
+    Examples
+    --------
+    >>> husid([1.0, 1.0, 1.0], 0.1).tolist()
+    [0.0, 0.5, 1.0]
+    """
     energy = cumulative_energy(acceleration, dt)
     return energy / energy[-1]
 
 
 def goodness_of_fit(acceleration, dt, fit, band_top):
-    """``{"husid_max_deviation", "zero_crossing_rate_record", "zero_crossing_rate_model"}``: the largest
-    gap [1] between the record's Husid curve and the fitted envelope's, and the zero-crossing rates [1/s]
-    of the record (strong-motion part) and of the fitted stationary process band-limited to ``band_top``
-    [rad/s] (``sqrt(lambda_2 / lambda_0) / pi``, Rice)."""
+    """How well a fitted excitation describes the record.
+
+    Parameters
+    ----------
+    acceleration : array_like
+        The record [m s-2].
+    dt : float
+        Time step [s].
+    fit : dict
+        A :func:`fit_excitation` result (``kind``, ``T1``, ``T2`` [s], ``omega_g`` [rad/s], ``zeta_g`` [1]).
+    band_top : float
+        Band limit [rad/s] of the model's zero-crossing rate.
+
+    Returns
+    -------
+    dict
+        ``husid_max_deviation`` [1], the largest gap between the record's Husid curve and the fitted
+        envelope's; ``zero_crossing_rate_record`` [1/s] (strong-motion part) and
+        ``zero_crossing_rate_model`` [1/s] of the fitted stationary process band-limited to
+        ``band_top`` (``sqrt(lambda_2 / lambda_0) / pi``, Rice).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from screening.records import Record
+    >>> rng, dt, wg, zg = np.random.default_rng(1), 0.01, 15.0, 0.6
+    >>> t = np.arange(0.0, 30.0, dt)
+    >>> _, z, _ = signal.lsim(([2 * zg * wg, wg**2], [1, 2 * zg * wg, wg**2]), rng.normal(size=t.size) / np.sqrt(dt), t)
+    >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * z, dt, "synthetic")
+    >>> fit = {"kind": "kanai_tajimi", "T1": 4.0, "T2": 2.0, "omega_g": 15.0, "zeta_g": 0.6}
+    >>> g = goodness_of_fit(rec.acceleration, rec.dt, fit, 2 * np.pi * 20.0)
+    >>> [f"{g[k]:.2f}" for k in ("husid_max_deviation", "zero_crossing_rate_record", "zero_crossing_rate_model")]
+    ['0.25', '9.27', '9.65']
+    """
     from screening.analysis.intensity import spectral_moments
     from screening.model.excitation import KanaiTajimi, WhiteNoise
 
@@ -306,17 +568,60 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
 
 
 def fit_excitation(record, kind="kanai_tajimi", cutoff=None, band=(1.0, None), smooth=2.0):
-    """Estimate the study excitation from ``record`` (:class:`~screening.records.Record`).
+    """Estimate the study excitation from a record.
 
-    Returns a dict ``kind``, ``S0`` [m2 s-3] (the study's, for the envelope of eq. 57), ``S0_peak``
-    [m2 s-3] (the intensity at the envelope's peak, ``S0 max_t q^2``: the number that means what it says,
-    stable where ``T1 ~ T2`` makes ``S0`` compensate a vanishing envelope), ``omega_g`` [rad/s],
-    ``zeta_g`` [1] (Kanai-Tajimi), ``T1``, ``T2`` [s], ``arias_intensity`` [m/s] of the record, the
-    goodness of fit (:func:`goodness_of_fit`), ``flags`` (a list of plain-language warnings: DC offset
-    removed, degenerate envelope, near-harmonic filter, poor Husid match) and ``method``.
-    ``kind="white"`` needs the band limit ``cutoff`` [rad/s] the study's Monte Carlo will use.
-    ``ValueError`` (one line) for a record that cannot be fitted (:func:`checked_record`) or a bad
-    parameter.
+    ``kind="white"`` needs the band limit ``cutoff`` the study's Monte Carlo will use.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record (acceleration [m s-2], time step [s]); ``TypeError`` for anything else.
+    kind : {"kanai_tajimi", "white"}
+        The excitation fitted.
+    cutoff : float, optional
+        Band limit [rad/s] of a white-noise study, in 0..1e7.
+    band : tuple of float
+        ``(low, high)`` [rad/s] of the spectral fit (:func:`fit_spectral_shape`).
+    smooth : float
+        Width [rad/s] of the periodogram's moving average.
+
+    Returns
+    -------
+    dict
+        ``kind``, ``S0`` [m2 s-3] (the study's, for the envelope of eq. 57), ``S0_peak`` [m2 s-3] (the
+        intensity at the envelope's peak, ``S0 max_t q^2``: stable where ``T1 ~ T2`` makes ``S0``
+        compensate a vanishing envelope), ``omega_g`` [rad/s], ``zeta_g`` [1] (Kanai-Tajimi), ``T1``,
+        ``T2`` [s], ``arias_intensity`` [m/s] of the record, the goodness of fit
+        (:func:`goodness_of_fit`), ``flags`` (plain-language warnings: DC offset removed, degenerate
+        envelope, near-harmonic filter, poor Husid match) and ``method``.  ``ValueError`` (one line)
+        for a record that cannot be fitted (:func:`checked_record`) or a bad parameter.
+
+    Notes
+    -----
+    ``S0`` equates the model's expected Arias intensity with the record's:
+    ``int a^2 dt = var_z(S0) int q^2 dt`` with ``var_z = pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)``
+    (the Kanai-Tajimi filter of eqs. (47)-(50) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy import signal
+    >>> from screening.records import Record
+    >>> rng, dt, wg, zg = np.random.default_rng(1), 0.01, 15.0, 0.6
+    >>> t = np.arange(0.0, 30.0, dt)
+    >>> _, z, _ = signal.lsim(([2 * zg * wg, wg**2], [1, 2 * zg * wg, wg**2]), rng.normal(size=t.size) / np.sqrt(dt), t)
+    >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * z, dt, "synthetic")
+    >>> fit = fit_excitation(rec)
+    >>> f"{fit['omega_g']:.1f} {fit['zeta_g']:.2f}", fit["kind"]
+    ('14.1 0.58', 'kanai_tajimi')
     """
     if not isinstance(record, Record):
         raise TypeError("fit_excitation() takes a screening.records.Record")
@@ -366,7 +671,37 @@ def fit_excitation(record, kind="kanai_tajimi", cutoff=None, band=(1.0, None), s
 
 
 def excitation_table(fit):
-    """The ``[excitation]`` table of a study (TOML text) for a :func:`fit_excitation` result."""
+    """The ``[excitation]`` table of a study (TOML text) for a :func:`fit_excitation` result.
+
+    Parameters
+    ----------
+    fit : dict
+        A :func:`fit_excitation` result (``S0`` [m2 s-3], ``omega_g`` [rad/s], ``zeta_g`` [1], ``T1``,
+        ``T2`` [s], ...).
+
+    Returns
+    -------
+    str
+        Comments (method, Arias intensity, goodness of fit, warnings) and the table.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> fit = {"kind": "kanai_tajimi", "method": "by hand", "arias_intensity": 1.0, "S0_peak": 0.1, "S0": 0.1,
+    ...        "omega_g": 15.0, "zeta_g": 0.6, "T1": 4.0, "T2": 2.0}
+    >>> print("\\n".join(excitation_table(fit).splitlines()[2:6]))
+    [excitation]
+    kind = "kanai_tajimi"
+    S0 = 0.1        # m2 s-3 (two-sided)
+    omega_g = 15   # rad/s
+    """
     lines = [f"# fitted by screening fit-excitation: {fit['method']}",
              f"# record Arias intensity {fit['arias_intensity']:.4g} m/s; peak intensity S0_peak = S0 max q^2 = "
              f"{fit['S0_peak']:.4g} m2 s-3"]

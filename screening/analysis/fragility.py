@@ -208,9 +208,47 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
                                         method="vanmarcke", bandwidth=None, axis=-1):
     """``P(max_t |theta| > level)`` [1] over the record sampled at times ``t`` [s].
 
-    ``method``: ``"poisson"`` or ``"vanmarcke"`` (needs ``bandwidth``, same shape as the
-    moments or broadcastable).  The hazard is integrated by the trapezoidal rule along
-    ``axis``.
+    Parameters
+    ----------
+    t : array_like
+        Output times [s], along ``axis``.
+    var_theta, var_theta_dot, cov_theta_theta_dot : array_like
+        Moments of the rotation [rad2], the rotation rate [rad2 s-2] and their covariance [rad2 s-1].
+    level : array_like
+        Barrier ``a`` [rad] > 0.
+    method : {"vanmarcke", "poisson"}
+        Clumped (Vanmarcke) or independent (Poisson) crossings.
+    bandwidth : array_like, optional
+        Bandwidth ``delta`` [1] of the equivalent oscillator; required with ``"vanmarcke"``.
+    axis : int
+        The time axis of the moments.
+
+    Returns
+    -------
+    numpy.ndarray
+        The probability [1]; ``ValueError`` for a bad ``method`` or a missing ``bandwidth``.
+
+    Notes
+    -----
+    The hazard ``h(t) = nu(a, t)`` (Poisson) or ``nu(a, t) F_V(t)`` (Vanmarcke's clumping factor)
+    is integrated by the trapezoidal rule: ``P = 1 - exp(-int_0^T h dt)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42 (1975) 215-220.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 10.0, 11)
+    >>> ones = np.ones_like(t)
+    >>> p = exceedance_probability_from_moments(t, 1e-6 * ones, 1e-2 * ones, 0 * ones, 3e-3, method="poisson")
+    >>> bool(np.isclose(p, -np.expm1(-10.0 * upcrossing_rate(1e-6, 1e-2, 0.0, 3e-3))))
+    True
     """
     rate = upcrossing_rate(var_theta, var_theta_dot, cov_theta_theta_dot, level)
     if method == "vanmarcke":
@@ -226,14 +264,58 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
                           method="vanmarcke"):
     """``P(max_t |theta| > level)`` [1] of each point from the linearization's plain arrays.
 
-    The moments [rad2, rad2 s-2, rad2 s-1] and ``c_eq`` [N m s rad-1], ``k_eq`` [N m rad-1] are on
-    ``(points, t)`` (``t`` [s]), ``m_sdof`` [kg m2], ``status`` (:class:`~screening.status.PointStatus`)
-    and ``level`` [rad] per point.  The up-crossing approximation ``method`` (``"poisson"`` or
-    ``"vanmarcke"``, whose bandwidth follows from the equivalent damping ratio
-    ``c_eq / (2 sqrt(k_eq m_sdof))``, 0.05 where undefined) on the Gaussian moments (NaN read as 0);
-    probability 1 at the points whose linearized model became unstable (``k_eq_negative``,
-    ``sigma_theta_beyond_slenderness``), NaN at the other points that are not ``ok``.  What
-    :func:`exceedance_probability` gives on a dataset of the same points.
+    What :func:`exceedance_probability` gives on a dataset of the same points, without building one.
+
+    Parameters
+    ----------
+    t : array_like
+        Output times [s].
+    var_theta, var_theta_dot, cov_theta_theta_dot : array_like
+        The Gaussian moments on ``(points, t)`` [rad2, rad2 s-2, rad2 s-1]; NaN read as 0.
+    c_eq, k_eq : array_like
+        Equivalent damping [N m s rad-1] and stiffness [N m rad-1] on ``(points, t)``.
+    m_sdof : array_like
+        Rocking inertia per point [kg m2].
+    status : array_like of int
+        :class:`~screening.status.PointStatus` per point.
+    level : array_like
+        Threshold per point [rad].
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation; Vanmarcke's bandwidth follows from the equivalent damping ratio
+        ``c_eq / (2 sqrt(k_eq m_sdof))`` (0.05 where undefined).
+
+    Returns
+    -------
+    numpy.ndarray
+        Probability per point [1]: 1 where the linearized model became unstable (``k_eq_negative``,
+        ``sigma_theta_beyond_slenderness``), NaN at the other points that are not ``ok``.
+
+    Notes
+    -----
+    With the Poisson assumption, ``P = 1 - exp(-int_0^T 2 nu+(t) exp(-a^2 / (2 var_theta)) dt)``,
+    ``nu+ = sqrt(var_theta_dot var_theta - cov^2) / (2 pi var_theta)`` [2]; the variances are those of
+    the Lyapunov equation, eq. (45) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    Stationary moments (sigma 0.01 rad, sigma_dot 0.1 rad/s) over 10 s, level 3 sigma: Poisson gives
+    ``1 - exp(-10 x 2 x 1.59 x exp(-4.5)) = 0.298``; a point with ``k_eq_negative`` gets 1:
+
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> ones = np.ones((2, t.size))
+    >>> p = linearized_exceedance(t, 1e-4 * ones, 1e-2 * ones, 0 * ones, 0.1 * ones, 10.0 * ones,
+    ...                           np.ones(2), [0, 1], np.full(2, 0.03), method="poisson")
+    >>> np.round(p, 3).tolist()
+    [0.298, 1.0]
     """
     if method not in ("poisson", "vanmarcke"):
         raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
@@ -489,8 +571,40 @@ def total_dispersion(beta, modelling):
 
 
 def with_modelling_dispersion(frag, modelling):
-    """A fragility dataset whose ``beta`` is the fitted one combined with the modelling dispersion
-    ``modelling`` [1] (:func:`total_dispersion`); the fitted one kept as ``beta_fit``."""
+    """A fragility dataset whose ``beta`` combines the fitted and the modelling dispersion.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility result with ``beta`` [1].
+    modelling : float or None
+        Modelling dispersion ``beta_m`` [1]; None or 0 returns ``frag`` unchanged.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``beta`` = :func:`total_dispersion` of the fitted one and ``modelling``; the fitted one kept as
+        ``beta_fit``; attribute ``modelling_dispersion``.
+
+    Notes
+    -----
+    ``beta = sqrt(beta_fit^2 + beta_m^2)`` (square root of the sum of squares) [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] FEMA P-58-1, Seismic Performance Assessment of Buildings, Volume 1 - Methodology, Federal
+       Emergency Management Agency (2012).
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> out = with_modelling_dispersion(xr.Dataset({"beta": 0.3}), 0.4)
+    >>> float(out["beta"]), float(out["beta_fit"])
+    (0.5, 0.3)
+    """
     if modelling is None or modelling == 0:
         return frag
     out = frag.assign(beta_fit=frag["beta"].assign_attrs(long_name="fitted (record-to-record) dispersion"))
@@ -570,8 +684,38 @@ def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=
 
 # ------------------------------------------------------------------ xarray layer
 def parameter(ds, name):
-    """A model parameter of a dataset: its coordinate (a swept ``k`` of a sweep file is ``k_value``,
-    :data:`screening.workflow.sweep.AUX_GRID_COORDINATES`)."""
+    """A model parameter of a dataset: its coordinate.
+
+    A swept ``k`` of a sweep file is stored as ``k_value``
+    (:data:`screening.workflow.sweep.AUX_GRID_COORDINATES`); both names are looked up.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result.
+    name : str
+        The parameter (``S0`` [m2 s-3], ``k`` [N m-2], ...).
+
+    Returns
+    -------
+    xarray.DataArray
+        Its values in SI units; ``KeyError`` when the dataset does not record it.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> parameter(ds, "S0").values.tolist()[:2], float(parameter(ds, "k"))
+    ([0.0003, 0.0004], 28900000.0)
+    """
     for var in (name, f"{name}_value"):
         if var in ds.variables:
             return ds[var]
@@ -593,7 +737,38 @@ def model_quantity(ds, name):
     recomputed.  Fallback for files written before ``slenderness`` was stored (and for ``m_sdof``,
     which no dataset stores): the :class:`~screening.model.Block` property evaluated on the
     parameter coordinates.  ``theta_ul`` depends on the condensation and has no fallback.
-    Raises ``KeyError`` naming what is missing.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result dataset.
+    name : str
+        ``"theta_ul"`` [rad], ``"slenderness"`` [rad] or ``"m_sdof"`` [kg m2].
+
+    Returns
+    -------
+    xarray.DataArray
+        The quantity; ``KeyError`` naming what is missing.
+
+    Notes
+    -----
+    ``slenderness = atan(b / h)`` and ``m_sdof = I_cm + m h^2`` (the rocking inertia about the
+    base centre, eq. (23) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> f"{float(model_quantity(ds, 'slenderness')):.4f} {float(model_quantity(ds, 'm_sdof')):.4f}"
+    '0.1651 0.5133'
     """
     if name in ds.variables:
         return ds[name]
@@ -611,10 +786,41 @@ RELATIVE_TO = (None, "slenderness", "theta_ul")
 
 
 def threshold_angle(ds, threshold, relative_to=None):
-    """The rotation [rad] meant by ``threshold``: absolute, or a fraction of the slenderness
-    angle ``atan(b/h)`` (``relative_to="slenderness"``) or of the uplift angle ``theta_ul`` of the
-    condensation that produced the dataset (``"theta_ul"``), both read from the dataset (per
-    point where they vary)."""
+    """The rotation [rad] meant by ``threshold``.
+
+    Absolute, or a fraction of the slenderness angle ``atan(b/h)`` (``relative_to="slenderness"``)
+    or of the uplift angle ``theta_ul`` of the condensation that produced the dataset
+    (``"theta_ul"``), both read from the dataset (per point where they vary).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result dataset.
+    threshold : float
+        The threshold: [rad] when absolute, else a fraction [1].
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+
+    Returns
+    -------
+    xarray.DataArray
+        The rotation [rad]; ``ValueError`` for another ``relative_to``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> f"{float(threshold_angle(ds, 0.5, 'slenderness')):.5f}", float(threshold_angle(ds, 0.01))
+    ('0.08257', 0.01)
+    """
     if relative_to not in RELATIVE_TO:
         raise ValueError(f"parameter 'relative_to' must be None, 'slenderness' or 'theta_ul' (got {relative_to!r})")
     if relative_to is None:
@@ -623,20 +829,108 @@ def threshold_angle(ds, threshold, relative_to=None):
 
 
 def equivalent_damping_ratio(ds):
-    """``zeta_eq(t) = c_eq / (2 sqrt(k_eq M))`` [1] along the record (``M = I_cm + m h^2``)."""
+    """The damping ratio of the equivalent linear oscillator along the record.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization result with ``c_eq`` [N m s rad-1] and ``k_eq`` [N m rad-1].
+
+    Returns
+    -------
+    xarray.DataArray
+        ``zeta_eq(t)`` [1]; NaN where ``k_eq <= 0``.
+
+    Notes
+    -----
+    ``zeta_eq = c_eq / (2 sqrt(k_eq M))`` with ``M = I_cm + m h^2``, the equivalent linear system of
+    eq. (42) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> [f"{z:.4f}" for z in equivalent_damping_ratio(ds).isel(t=-1).values[:2]]
+    ['0.0265', '0.0265']
+    """
     k_eq = ds["k_eq"].where(ds["k_eq"] > 0)
     return ds["c_eq"] / (2.0 * np.sqrt(k_eq * model_quantity(ds, "m_sdof")))
 
 
 def is_monte_carlo(ds):
-    """True for a :func:`screening.monte_carlo` result (per-sample peaks on ``sample``)."""
+    """True for a :func:`screening.monte_carlo` result (per-sample peaks on ``sample``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result dataset.
+
+    Returns
+    -------
+    bool
+        Whether ``peak_abs_theta`` [rad] is stored per sample.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> is_monte_carlo(xr.Dataset({"peak_abs_theta": ("sample", [1e-3, 2e-3])})), is_monte_carlo(xr.Dataset())
+    (True, False)
+    """
     return "peak_abs_theta" in ds.variables and "sample" in ds["peak_abs_theta"].dims
 
 
 def sample_exceedance(peaks, overturned, valid, level):
-    """``(p, standard_error)`` [1] over the dimension ``sample``: the fraction of the ``valid`` samples
-    whose peak ``|theta|`` exceeds ``level`` (overturned samples count as exceedances), with its
-    binomial standard error.  NaN where no sample is valid."""
+    """The fraction of the valid samples whose peak ``|theta|`` exceeds ``level``, with its standard error.
+
+    Parameters
+    ----------
+    peaks : xarray.DataArray
+        Peak ``|theta|`` [rad] per sample (dimension ``sample``).
+    overturned : xarray.DataArray of bool
+        Overturned samples (they count as exceedances).
+    valid : xarray.DataArray of bool
+        Samples that count at all.
+    level : float or xarray.DataArray
+        The rotation [rad].
+
+    Returns
+    -------
+    p, standard_error : xarray.DataArray
+        Over the other dimensions [1]; NaN where no sample is valid.
+
+    Notes
+    -----
+    ``p = n_exceed / n_valid`` and the binomial standard error ``sqrt(p (1 - p) / n_valid)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> peaks = xr.DataArray([1e-3, 3e-3, 5e-3, 0.0], dims="sample")
+    >>> over = xr.DataArray([False, False, False, True], dims="sample")
+    >>> p, se = sample_exceedance(peaks, over, xr.ones_like(over), 2e-3)
+    >>> float(p), f"{float(se):.4f}"
+    (0.75, '0.2165')
+    """
     n = valid.sum("sample")
     n = n.where(n > 0)
     p = (((peaks > level) | overturned) & valid).sum("sample") / n
@@ -660,6 +954,44 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
     are NaN.  Monte Carlo results: the fraction of the samples that did not diverge whose peak
     ``|theta|`` exceeds the threshold (overturned samples count), named ``mcs_p_exceed``, with its
     binomial standard error as the coordinate ``mcs_p_exceed_se`` (``method`` is not used).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result.
+    threshold : float
+        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation (:func:`exceedance_probability_from_moments`).
+
+    Returns
+    -------
+    xarray.DataArray
+        ``p_exceed`` (or ``mcs_p_exceed``) [1].
+
+    Notes
+    -----
+    ``P = 1 - exp(-int_0^T h(t) dt)`` with the Rice rate of eq. (44) in [1] times, for
+    ``"vanmarcke"``, Vanmarcke's factor [2] at the bandwidth of :func:`equivalent_damping_ratio`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42 (1975) 215-220.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> [f"{p:.4f}" for p in exceedance_probability(ds, 0.01).values]
+    ['0.0062', '0.1035', '0.6853', '0.9558', '0.9997']
     """
     level = threshold_angle(ds, threshold, relative_to)
     if is_monte_carlo(ds):
@@ -685,10 +1017,42 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
 def fit_fragility_curve(intensity, probability):
     """``(median, beta, flag)`` of the lognormal fragility curve of one set of points.
 
-    ``intensity`` [units of the IM] and ``probability`` [1] are 1-d; the fit is
-    :func:`fit_lognormal_fragility` (least squares on the probit scale).  ``flag`` is a
-    :class:`screening.status.FitFlag`: where it is not ``ok`` (no finite value, never or always
-    exceeded, fewer than two points strictly between, ``beta <= 0``) median and beta are NaN.
+    Parameters
+    ----------
+    intensity : array_like
+        Intensity measure [units of the IM], 1-d.
+    probability : array_like
+        Exceedance probability [1] at each intensity.
+
+    Returns
+    -------
+    median : float
+        [units of the IM]; NaN where ``flag`` is not ``ok``.
+    beta : float
+        Lognormal dispersion [1]; NaN where ``flag`` is not ``ok``.
+    flag : screening.status.FitFlag
+        ``ok``, or why there is no fit (no finite value, never or always exceeded, fewer than two
+        points strictly between, ``beta <= 0``).
+
+    Notes
+    -----
+    :func:`fit_lognormal_fragility`: least squares of ``Phi^-1(P) = (ln IM - ln median) / beta``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> median, beta, flag = fit_fragility_curve([0.5, 1.0, 2.0], lognormal_fragility([0.5, 1.0, 2.0], 1.2, 0.5))
+    >>> f"{median:.3f} {beta:.3f} {flag.name}"
+    '1.200 0.500 ok'
+    >>> fit_fragility_curve([0.5, 1.0], [0.0, 0.0])[2].name
+    'never_exceeded'
     """
     im = np.asarray(intensity, dtype=float).ravel()
     p = np.asarray(probability, dtype=float).ravel()
@@ -709,9 +1073,44 @@ def fit_fragility_curve(intensity, probability):
 
 
 def fit_curves(p, intensity, dim):
-    """The lognormal fit of every curve of ``p`` along ``dim`` over ``intensity`` (a DataArray broadcast
-    against ``p``, or the values along ``dim``): a Dataset of ``fit_median``, ``beta`` and ``fit_flag``
-    (:class:`~screening.status.FitFlag`) over the other dimensions."""
+    """The lognormal fit of every curve of ``p`` along ``dim``.
+
+    Parameters
+    ----------
+    p : xarray.DataArray
+        Exceedance probability [1] with dimension ``dim``.
+    intensity : xarray.DataArray or array_like
+        The intensity [units of the IM]: a DataArray broadcast against ``p``, or the values along ``dim``.
+    dim : str
+        The swept intensity dimension.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``fit_median`` [units of the IM], ``beta`` [1] and ``fit_flag``
+        (:class:`~screening.status.FitFlag`) over the other dimensions.
+
+    Notes
+    -----
+    Each curve is fitted by :func:`fit_fragility_curve`, ``P(IM) = Phi(ln(IM / median) / beta)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> im = [0.5, 1.0, 2.0]
+    >>> p = xr.DataArray(lognormal_fragility(im, 1.2, 0.5), dims="S0")
+    >>> fit = fit_curves(p, im, "S0")
+    >>> f"{float(fit['fit_median']):.3f} {float(fit['beta']):.3f} {int(fit['fit_flag'])}"
+    '1.200 0.500 0'
+    """
     x = intensity if isinstance(intensity, xr.DataArray) else xr.DataArray(np.asarray(intensity), dims=dim)
     x, p = xr.broadcast(x, p)
 
@@ -725,9 +1124,37 @@ def fit_curves(p, intensity, dim):
 
 
 def unvouched_points(ds):
-    """Grid points whose linearized value is ``untrusted`` and has no best estimate (no ``[accuracy]``, or
-    ``best_method`` ``unreliable``), status ``ok``: a fit through them stands on numbers nobody vouches for.
-    All False where the dataset stores no ``sl_trust``."""
+    """Grid points whose linearized value nobody vouches for.
+
+    Their ``sl_trust`` is ``untrusted``, their status ``ok`` and they have no best estimate (no
+    ``[accuracy]``, or ``best_method`` ``unreliable``): a fit through them stands on numbers nobody
+    vouches for.  All False where the dataset stores no ``sl_trust``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization or sweep result.
+
+    Returns
+    -------
+    xarray.DataArray of bool
+        ``unvouched`` [-] over the grid.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"sl_trust": ("S0", [Trust.untrusted, Trust.trusted]),
+    ...                  "status": ("S0", [PointStatus.ok, PointStatus.ok])})
+    >>> unvouched_points(ds).values.tolist()
+    [True, False]
+    """
     if "sl_trust" not in ds.variables:
         return xr.zeros_like(ds["status"] if "status" in ds.variables else xr.DataArray(False), dtype=bool)
     bad = ds["sl_trust"] == Trust.untrusted
@@ -739,8 +1166,36 @@ def unvouched_points(ds):
 
 
 def fitted_probability(frag):
-    """The probability a fragility fit uses: ``best_p_exceed`` where ``[accuracy]`` vouches for it
-    (``best_method`` not ``unreliable``), else ``p_exceed``."""
+    """The probability a fragility fit uses.
+
+    ``best_p_exceed`` where ``[accuracy]`` vouches for it (``best_method`` not ``unreliable``), else
+    ``p_exceed``.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset with ``p_exceed`` [1] (and optionally ``best_p_exceed`` [1], ``best_method``).
+
+    Returns
+    -------
+    xarray.DataArray
+        The probability [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import BestMethod
+    >>> frag = xr.Dataset({"p_exceed": ("S0", [0.1, 0.2]), "best_p_exceed": ("S0", [0.15, 0.25]),
+    ...                    "best_method": ("S0", [BestMethod.unreliable, BestMethod.condensed_monte_carlo])})
+    >>> fitted_probability(frag).values.tolist()
+    [0.1, 0.25]
+    """
     p = frag["p_exceed"]
     if "best_p_exceed" not in frag:
         return p
@@ -749,9 +1204,44 @@ def fitted_probability(frag):
 
 
 def add_fit(out, ds, intensity, dim):
-    """``out`` (a fragility Dataset with ``p_exceed``) with the fit of every curve along ``dim`` over
-    ``intensity`` (:func:`fit_curves` of :func:`fitted_probability`) and ``fit_n_unvouched``, the number
-    of the curve's points in :func:`unvouched_points` of the result ``ds``."""
+    """A fragility Dataset with the lognormal fit of every curve along ``dim``.
+
+    Parameters
+    ----------
+    out : xarray.Dataset
+        A fragility Dataset with ``p_exceed`` [1].
+    ds : xarray.Dataset
+        The result it was computed from (for :func:`unvouched_points`).
+    intensity : xarray.DataArray or array_like
+        The intensity [units of the IM] along ``dim``.
+    dim : str
+        The swept intensity dimension.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``out`` with :func:`fit_curves` of :func:`fitted_probability` (``fit_median``, ``beta``,
+        ``fit_flag``) and ``fit_n_unvouched``, the number of the curve's unvouched points.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import xarray as xr
+    >>> out = add_fit(xr.Dataset({"p_exceed": exceedance_probability(ds, 0.01)}), ds, ds["S0"], "S0")
+    >>> f"{float(out['fit_median']):.3e} {float(out['beta']):.3f} {int(out['fit_n_unvouched'])}"
+    '5.381e-04 0.235 0'
+    """
     fit = fit_curves(fitted_probability(out), intensity, dim)
     unvouched = unvouched_points(ds)
     count = unvouched.sum(dim) if dim in unvouched.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
@@ -772,7 +1262,32 @@ def _finish(out, dim, threshold, relative_to, method):
 
 
 def grid_units_of(ds, dim):
-    """Units of the swept ``dim`` (its coordinate's ``units``; the schema's for a model parameter)."""
+    """Units of the swept ``dim``: its coordinate's ``units``, else the schema's for a model parameter.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result dataset.
+    dim : str
+        A grid dimension or model parameter.
+
+    Returns
+    -------
+    str
+        CF units (``"m2 s-3"`` for ``S0``); ``""`` when unknown.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> grid_units_of(xr.Dataset(), "S0"), grid_units_of(xr.Dataset(), "k")
+    ('m2 s-3', 'N m-2')
+    """
     if dim in ds.variables and "units" in ds[dim].attrs:
         return ds[dim].attrs["units"]
     return schema.PARAMETERS.get(dim, {}).get("units", "")
@@ -781,8 +1296,46 @@ def grid_units_of(ds, dim):
 def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke"):
     """Exceedance probability along the intensity ``dim`` and its lognormal fit.
 
-    Returns a Dataset with ``p_exceed`` [1] over the dims of the dataset, and ``median`` (in the
-    units of ``dim``; ``median.attrs["intensity"]`` names it) and ``beta`` [1] over the other dims.
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result swept over ``dim``.
+    threshold : float
+        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
+    dim : str
+        The swept intensity (default ``S0`` [m2 s-3]); ``ValueError`` if not a dimension.
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``p_exceed`` [1] over the dims of the dataset, and ``fit_median`` (in the units of ``dim``;
+        ``fit_median.attrs["intensity"]`` names it), ``beta`` [1] and ``fit_flag`` over the other dims.
+
+    Notes
+    -----
+    ``P(IM) = Phi(ln(IM / median) / beta)`` fitted to :func:`exceedance_probability`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> curve = fragility_curve(ds, 0.01)
+    >>> f"{float(curve['fit_median']):.3e} {float(curve['beta']):.3f}", curve["fit_median"].attrs["units"]
+    ('5.381e-04 0.235', 'm2 s-3')
     """
     p = exceedance_probability(ds, threshold, relative_to, method)
     if dim not in p.dims:
@@ -815,8 +1368,30 @@ class RockingAccessor:
 def spot_positions(ds):
     """Integer positions of the Monte Carlo spot points along each grid dimension.
 
-    Returns a dict ``{dim: DataArray over spot}`` for ``ds.isel(...)`` (pointwise), from the
-    ``spot_<dim>`` coordinates of a sweep result (``spot_case`` holds the case index).
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with ``status`` on the grid and ``spot_<dim>`` coordinates (``spot_case`` holds
+        the case index; other ones the parameter value in SI units).
+
+    Returns
+    -------
+    dict of str to xarray.DataArray
+        ``{dim: positions over spot}`` for a pointwise ``ds.isel(...)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"status": ("S0", [0, 0, 0])}, coords={"S0": [1e-4, 2e-4, 4e-4],
+    ...                 "spot_S0": ("spot", [4e-4, 1e-4])})
+    >>> spot_positions(ds)["S0"].values.tolist()
+    [2, 0]
     """
     positions = {}
     for dim in ds["status"].dims:
@@ -831,12 +1406,38 @@ def spot_positions(ds):
 
 
 def mcs_exceedance_at_spots(ds, level):
-    """Probability [1] that ``|theta|`` exceeds ``level`` [rad] from the per-sample peaks of the
-    Monte Carlo spot checks (``mcs_peak_abs_theta``, ``mcs_sample_state`` of a sweep result).
+    """Probability [1] that ``|theta|`` exceeds ``level`` from the Monte Carlo spot checks of a sweep.
 
-    Overturned samples count as exceedances; diverged or failed samples are left out.
-    ``level`` may vary over the grid (it is taken at each spot point).  Returns
-    ``(p, standard_error)`` over ``spot``.
+    From the per-sample peaks ``mcs_peak_abs_theta`` and ``mcs_sample_state``.  Overturned samples
+    count as exceedances; diverged or failed samples are left out.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with spot checks (:func:`spot_positions`).
+    level : xarray.DataArray
+        The rotation [rad]; may vary over the grid (it is taken at each spot point).
+
+    Returns
+    -------
+    p, standard_error : xarray.DataArray
+        Over ``spot`` [1] (:func:`sample_exceedance`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"status": ("S0", [0, 0]),
+    ...                  "mcs_peak_abs_theta": (("spot", "sample"), [[1e-3, 3e-3], [3e-3, 4e-3]])},
+    ...                 coords={"S0": [1e-4, 2e-4], "spot_S0": ("spot", [1e-4, 2e-4])})
+    >>> p, se = mcs_exceedance_at_spots(ds, xr.DataArray(2e-3))
+    >>> p.values.tolist()
+    [0.5, 1.0]
     """
     level = level.isel({d: i for d, i in spot_positions(ds).items() if d in level.dims})
     peaks = ds["mcs_peak_abs_theta"]
@@ -845,15 +1446,57 @@ def mcs_exceedance_at_spots(ds, level):
 
 
 def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
-    """Exceedance probability from the best estimates of a sweep with ``[accuracy]`` and its band.
+    """Exceedance probability from the best estimates of a sweep with ``[accuracy]``, and its band.
 
-    Returns ``(p, low, high, source)`` on the grid: at escalated points the Monte Carlo fraction of
-    samples beyond the threshold (``esc_peak_abs_theta``; overturned samples count, diverged ones are
-    left out) with the band ``p +- 2 x`` its binomial standard error; elsewhere the up-crossing
-    probability of the linearized moments rescaled to the best estimates (``var_theta`` by
-    ``best_peak_var_theta / peak_var_theta``, ``var_theta_dot`` likewise, the covariance by the
-    geometric mean), with the band of the estimates at ``+-2`` standard errors.  ``source`` is
-    ``best_method``; where it is ``unreliable`` the probability is the linearization's and the band NaN.
+    At escalated points the Monte Carlo fraction of samples beyond the threshold
+    (``esc_peak_abs_theta``; overturned samples count, diverged ones are left out) with the band
+    ``p +- 2 x`` its binomial standard error; elsewhere the up-crossing probability of the linearized
+    moments rescaled to the best estimates (``var_theta`` by ``best_peak_var_theta / peak_var_theta``,
+    ``var_theta_dot`` likewise, the covariance by the geometric mean), with the band of the estimates
+    at ``+-2`` standard errors.  Where ``best_method`` is ``unreliable`` the probability is the
+    linearization's and the band NaN.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with the moments, ``peak_var_theta`` [rad2] and the best estimates
+        ``best_peak_var_theta`` [rad2], ``best_peak_var_theta_dot`` [rad2 s-2], their standard errors
+        and ``best_method``.
+    threshold : float
+        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation.
+
+    Returns
+    -------
+    p, low, high : xarray.DataArray
+        The probability [1] and its band [1] on the grid.
+    source : xarray.DataArray
+        ``best_method`` (:class:`~screening.status.BestMethod`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    Best estimates 10 % above the linearization, with a 5 % standard error:
+
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> best, best_dot = 1.1 * ds["peak_var_theta"], 1.1 * ds["var_theta_dot"].max("t")
+    >>> ds = ds.assign(best_peak_var_theta=best, best_peak_var_theta_se=0.05 * best,
+    ...                best_peak_var_theta_dot=best_dot, best_peak_var_theta_dot_se=0.05 * best_dot,
+    ...                best_method=("S0", np.zeros(5, dtype=np.int8)))
+    >>> p, low, high, source = best_exceedance(ds, 0.01)
+    >>> bool((p >= exceedance_probability(ds, 0.01)).all()), bool(((low <= p) & (p <= high)).all())
+    (True, True)
     """
     sl_dot = ds["var_theta_dot"].max("t")
     ratio = ds["best_peak_var_theta"] / ds["peak_var_theta"]
@@ -892,13 +1535,50 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
 
 
 def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="S0"):
-    """The fragility result of a dataset: ``p_exceed`` over its dims, the rotation ``threshold_rad``
-    and, when ``dim`` is swept with at least two points, the lognormal ``median`` and ``beta``.
+    """The fragility result of a dataset.
 
-    At Monte Carlo spot points of a sweep (``spot`` dimension with per-sample ``mcs_peak_abs_theta``),
-    the same probability from the sample peaks (``mcs_p_exceed`` and its standard error
-    ``mcs_p_exceed_se``) is put beside the Gaussian one (``p_exceed_at_spot``).  For a Monte Carlo
-    result: ``mcs_p_exceed`` and ``mcs_p_exceed_se``.
+    ``p_exceed`` over its dims, the rotation ``threshold_rad`` and, when ``dim`` is swept with at
+    least two points, the lognormal ``fit_median`` and ``beta``.  At Monte Carlo spot points of a
+    sweep (``spot`` dimension with per-sample ``mcs_peak_abs_theta``), the same probability from the
+    sample peaks (``mcs_p_exceed`` and its standard error ``mcs_p_exceed_se``) is put beside the
+    Gaussian one (``p_exceed_at_spot``).  For a Monte Carlo result: ``mcs_p_exceed`` and
+    ``mcs_p_exceed_se``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result.
+    threshold : float
+        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation.
+    dim : str
+        The intensity the curve is fitted over (default ``S0`` [m2 s-3]).
+
+    Returns
+    -------
+    xarray.Dataset
+        The variables of the schema's fragility table, with CF attributes.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> frag = fragility_dataset(ds, 0.01)
+    >>> float(frag["threshold_rad"]), [f"{p:.4f}" for p in frag["p_exceed"].values[:2]]
+    (0.01, ['0.0062', '0.1035'])
     """
     level = threshold_angle(ds, threshold, relative_to)
     if is_monte_carlo(ds):

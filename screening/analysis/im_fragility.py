@@ -65,8 +65,31 @@ def _im_values(ds, im, period, cutoff):
 
 
 def default_dim(grid):
-    """The swept intensity a fragility is drawn along by default: ``S0`` or ``pga``, whichever the grid
-    sweeps (``None`` if neither)."""
+    """The swept intensity a fragility is drawn along by default.
+
+    Parameters
+    ----------
+    grid : sequence of str
+        The swept dimensions.
+
+    Returns
+    -------
+    str or None
+        ``S0`` [m2 s-3] or ``pga`` [m s-2], whichever the grid sweeps (``None`` if neither).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> default_dim(["eps", "S0"]), default_dim(["k"])
+    ('S0', None)
+    """
     return next((d for d in ("S0", "pga") if d in grid), None)
 
 
@@ -74,18 +97,69 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
                       cutoff=None, limit_state="exceed"):
     """Exceedance probability along ``dim`` fitted over the intensity measure ``im``.
 
-    Returns ``(fragility dataset, warnings)``: the :func:`~screening.analysis.fragility.fragility_dataset`
-    of the result (``p_exceed``, best estimates and Monte Carlo spot values where the result has them)
-    with the IM (``pga_median``, ...) over the dataset's dimensions and the fit over the IM:
-    ``fit_median`` [IM units] (``attrs["intensity"]``), ``beta`` [1], ``fit_flag``
-    (:class:`~screening.status.FitFlag`) and ``fit_n_unvouched`` over the other dimensions.
-    Raises ``ValueError`` for an unknown ``im``, a ``dim`` that is not swept or not an intensity
-    dimension, or an IM that is not strictly increasing along ``dim``.
+    The :func:`~screening.analysis.fragility.fragility_dataset` of the result (``p_exceed``, best
+    estimates and Monte Carlo spot values where the result has them) with the IM (``pga_median``, ...)
+    over the dataset's dimensions and the fit over the IM.  ``limit_state="overturn"``: the probability
+    of overturning instead (:func:`screening.analysis.probabilities.overturning_probability`;
+    ``threshold`` and ``relative_to`` are not used, ``threshold_rad`` is ``atan(b/h)``), stored as
+    ``p_exceed`` with the attribute ``limit_state`` and exported with that limit state.
 
-    ``limit_state="overturn"``: the probability of overturning instead
-    (:func:`screening.analysis.probabilities.overturning_probability`; ``threshold`` and ``relative_to``
-    are not used, ``threshold_rad`` is ``atan(b/h)``), stored as ``p_exceed`` with the attribute
-    ``limit_state`` and exported with that limit state.
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result.
+    threshold : float
+        The threshold, [rad] or a fraction [1] (``relative_to``).
+    im : str
+        A key of :data:`IMS` (``pga`` [m s-2], ``sa``, ``pgv`` [m s-1], ``avgsa``, ``rms``, ``arias``, ``s0``).
+    dim : str, optional
+        The swept intensity dimension (default :func:`default_dim`).
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation.
+    period : float, optional
+        Oscillator period [s] of ``sa`` and ``avgsa``.
+    cutoff : float, optional
+        Band limit [rad/s] of the random-vibration intensity measures.
+    limit_state : {"exceed", "overturn"}
+        :data:`LIMIT_STATES`.
+
+    Returns
+    -------
+    fragility : xarray.Dataset
+        With ``fit_median`` [IM units] (``attrs["intensity"]``), ``beta`` [1], ``fit_flag``
+        (:class:`~screening.status.FitFlag`) and ``fit_n_unvouched`` over the other dimensions.
+    warnings : list of str
+        Fits with ``beta <= 0``, thresholds beyond the slenderness angle, unreliable points left out.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``im``, a ``dim`` that is not swept or not an intensity dimension, or an IM
+        that is not strictly increasing along ``dim``.
+
+    Notes
+    -----
+    ``P(IM) = Phi(ln(IM / median) / beta)`` [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> frag, warnings = fragility_over_im(ds, 0.01, im="pga")
+    >>> f"{float(frag['fit_median']):.4f} {float(frag['beta']):.4f}", frag["fit_median"].attrs["units"], warnings
+    ('1.2374 0.1175', 'm s-2', [])
     """
     from screening.analysis.fragility import add_fit, fragility_dataset
 
@@ -167,16 +241,78 @@ def _single_state(frag):
 
 
 def limit_state_name(threshold, relative_to=None):
-    """The name of the limit state "``|theta|`` exceeds ``threshold``": ``theta_0.1_slenderness``,
-    ``theta_0.002_rad`` (no spaces: NRML lists limit states separated by blanks)."""
+    """The name of the limit state "``|theta|`` exceeds ``threshold``".
+
+    No spaces: NRML lists limit states separated by blanks.
+
+    Parameters
+    ----------
+    threshold : float
+        The threshold, [rad] or a fraction [1].
+    relative_to : str, optional
+        What it is a fraction of (None: radians).
+
+    Returns
+    -------
+    str
+        E.g. ``theta_0.1_slenderness``, ``theta_0.002_rad``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> limit_state_name(0.1, "slenderness"), limit_state_name(0.002)
+    ('theta_0.1_slenderness', 'theta_0.002_rad')
+    """
     return f"theta_{float(threshold):g}_{relative_to or 'rad'}"
 
 
 def stack_limit_states(frags, thresholds, relative_to=None):
-    """Fragility datasets of the same result at increasing ``thresholds`` as one dataset with the
-    dimension ``limit_state`` (names by :func:`limit_state_name`, coordinate ``threshold``): the
-    variables that depend on the threshold gain the dimension, the others (intensities) stay as they are.
-    One threshold: that dataset unchanged."""
+    """Fragility datasets of the same result at increasing thresholds as one dataset over ``limit_state``.
+
+    The variables that depend on the threshold gain the dimension ``limit_state`` (names by
+    :func:`limit_state_name`, coordinate ``threshold``); the others (intensities) stay as they are.
+    One threshold: that dataset unchanged.
+
+    Parameters
+    ----------
+    frags : list of xarray.Dataset
+        Fragility datasets (:func:`fragility_over_im`), one per threshold.
+    thresholds : sequence of float
+        Their thresholds, [rad] or fractions [1].
+    relative_to : str, optional
+        What the thresholds are fractions of.
+
+    Returns
+    -------
+    xarray.Dataset
+        The stacked dataset.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> frags = [fragility_over_im(ds, a)[0] for a in (0.01, 0.015)]
+    >>> both = stack_limit_states(frags, [0.01, 0.015])
+    >>> both["limit_state"].values.tolist(), [f"{m:.3f}" for m in both["fit_median"].values]
+    (['theta_0.01_rad', 'theta_0.015_rad'], ['1.237', '1.514'])
+    """
     if len(frags) == 1:
         return frags[0]
     names = [limit_state_name(t, relative_to) for t in thresholds]
@@ -196,11 +332,40 @@ def _label_text(labels):
 
 
 def curve_table(frag):
-    """Every curve of a fragility dataset, fitted or not: a list of dicts with ``labels`` (the other
-    dimensions' values, ``limit_state`` included where the dataset has several), ``median``, ``beta``,
-    ``flag`` (:class:`~screening.status.FitFlag`), ``reason`` (``""`` when fitted), ``n_unvouched``
-    (points of the curve whose linearized value is untrusted without a best estimate) and the
-    rotation ``threshold_rad`` [rad] of the curve (its range ``"lo..hi"`` if it varies along the curve)."""
+    """Every curve of a fragility dataset, fitted or not.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset with ``fit_median``, ``beta``, ``fit_flag`` and ``threshold_rad``.
+
+    Returns
+    -------
+    list of dict
+        ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
+        several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.status.FitFlag`),
+        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value
+        is untrusted without a best estimate) and the rotation ``threshold_rad`` [rad] of the curve
+        (its range ``"lo..hi"`` if it varies along the curve).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> row = curve_table(fragility_over_im(ds, 0.01)[0])[0]
+    >>> row["labels"], f"{row['median']:.4f}", row["flag"].name, row["threshold_rad"]
+    ({}, '1.2374', 'ok', '0.01')
+    """
     median, beta = frag["fit_median"], frag["beta"]
     flag = frag["fit_flag"]
     unvouched = frag["fit_n_unvouched"] if "fit_n_unvouched" in frag else xr.zeros_like(flag, dtype=np.int32)
@@ -221,8 +386,36 @@ def curve_table(frag):
 
 
 def curve_count_text(frag):
-    """``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 fitted through untrusted points
-    without a best estimate"``: the printed line's count."""
+    """How many curves were fitted, as the printed line says it.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+
+    Returns
+    -------
+    str
+        E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 fitted through untrusted
+        points without a best estimate"``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> curve_count_text(fragility_over_im(ds, 0.01)[0])
+    '1 of 1 curve(s) fitted'
+    """
     rows = curve_table(frag)
     fitted = [r for r in rows if r["flag"] == FitFlag.ok]
     missing = [r["flag"] for r in rows if r["flag"] != FitFlag.ok]
@@ -244,10 +437,44 @@ def _intensity(frag):
 
 
 def write_csv(frag, path):
-    """One row per curve, fitted or not: the other dimensions, ``intensity_measure``, ``units``,
-    ``median``, ``beta`` (empty without a fit), ``fit_flag`` and the ``reason`` there is no fit,
-    ``n_unvouched`` (points fitted through untrusted linearized values without a best estimate),
-    ``threshold_rad`` and ``period_s``."""
+    """Write the fits as CSV, one row per curve, fitted or not.
+
+    Columns: the other dimensions, ``intensity_measure``, ``units``, ``median``, ``beta`` (empty without
+    a fit), ``fit_flag`` and the ``reason`` there is no fit, ``n_unvouched`` (points fitted through
+    untrusted linearized values without a best estimate), ``threshold_rad`` and ``period_s``.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+    path : str or os.PathLike
+        The CSV file (written atomically).
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     print(write_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text().strip())
+    intensity_measure,units,median,beta,fit_flag,reason,n_unvouched,threshold_rad,period_s
+    pga_median,m s-2,1.2373924,0.117537,ok,,0,0.01,
+    """
     name, units, period = _intensity(frag)
     dims = list(frag["fit_median"].dims)
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
@@ -263,11 +490,48 @@ def write_csv(frag, path):
 
 
 def write_pelicun_csv(frag, path):
-    """The fits in pelicun's fragility-database layout: one row per component (``ID``: the other
-    dimensions' values), ``Demand-Type`` the IM in pelicun's words (``Peak Ground Acceleration`` in g,
-    ``Spectral Acceleration`` in g, else the IM's own name and units), and for each limit state
-    ``LS<i>-Family`` = ``lognormal``, ``LS<i>-Theta_0`` = median, ``LS<i>-Theta_1`` = beta.  A curve
-    without a fit is a row with empty parameters and its reason in ``Comment``."""
+    """Write the fits in pelicun's fragility-database layout.
+
+    One row per component (``ID``: the other dimensions' values), ``Demand-Type`` the IM in pelicun's
+    words (``Peak Ground Acceleration`` in g, ``Spectral Acceleration`` in g, else the IM's own name and
+    units), and for each limit state ``LS<i>-Family`` = ``lognormal``, ``LS<i>-Theta_0`` = median,
+    ``LS<i>-Theta_1`` = beta.  A curve without a fit is a row with empty parameters and its reason in
+    ``Comment``.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset over an IM.
+    path : str or os.PathLike
+        The CSV file (written atomically).
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [3] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
+       loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     text = write_pelicun_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text()
+    >>> text.splitlines()[1]
+    'screening,Peak Ground Acceleration,g,0,,lognormal,0.12617891,0.117537'
+    """
     name, units, period = _intensity(frag)
     key = _im_key(name)
     factor, unit_out = (IMS[key][3], "g") if key in ("pga", "sa") else (1.0, units)
@@ -318,7 +582,40 @@ def _taxonomy(labels):
 
 
 def nrml_parameters(median, beta):
-    """OpenQuake ``logncdf`` ``(mean, stddev)`` of a lognormal capacity with ``median`` and ``beta``."""
+    """OpenQuake ``logncdf`` ``(mean, stddev)`` of a lognormal capacity with ``median`` and ``beta``.
+
+    Parameters
+    ----------
+    median : float
+        Median capacity [IM units].
+    beta : float
+        Lognormal dispersion [1].
+
+    Returns
+    -------
+    mean, stddev : float
+        Mean and standard deviation of the capacity [IM units].
+
+    Notes
+    -----
+    ``mean = median exp(beta^2 / 2)``, ``stddev = mean sqrt(exp(beta^2) - 1)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
+       functions), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> mean, std = nrml_parameters(0.5, 0.4)
+    >>> f"{mean:.4f} {std:.4f}"
+    '0.5416 0.2256'
+    """
     mean = median * math.exp(0.5 * beta * beta)
     return mean, mean * math.sqrt(math.expm1(beta * beta))
 
@@ -328,12 +625,57 @@ def _comment(text):
 
 
 def write_nrml(frag, path, model_id="screening_rocking", description="rocking blocks on flexible beds"):
-    """OpenQuake NRML 0.5 fragility model: one continuous ``logncdf`` function per swept block/bed (its
-    taxonomy id names the values of the other dimensions), with one ``params`` per limit state (the
-    ``limit_state`` dimension where the dataset has several, else ``theta_exceeds_threshold``).  A
-    taxonomy with a limit state that has no fit is left out and named in a comment with the reason; a fit
-    through untrusted points without a best estimate is named in a comment.  Raises ``ValueError`` for an
-    IM OpenQuake does not know."""
+    """Write the fits as an OpenQuake NRML 0.5 fragility model.
+
+    One continuous ``logncdf`` function per swept block/bed (its taxonomy id names the values of the
+    other dimensions), with one ``params`` per limit state (the ``limit_state`` dimension where the
+    dataset has several, else ``theta_exceeds_threshold``).  A taxonomy with a limit state that has no
+    fit is left out and named in a comment with the reason; a fit through untrusted points without a
+    best estimate is named in a comment.  Raises :class:`NoExport` (a ``ValueError``) for an IM
+    OpenQuake does not know.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset over an IM.
+    path : str or os.PathLike
+        The XML file (written atomically).
+    model_id : str
+        The ``fragilityModel`` id.
+    description : str
+        Its description.
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    Notes
+    -----
+    Parameters by :func:`nrml_parameters`; PGA, SA and AvgSA in g, PGV in cm/s, ``IA`` in m/s.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
+       functions), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     xml = write_nrml(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.xml").read_text()
+    >>> [line.strip() for line in xml.splitlines() if "<params" in line]
+    ['<params ls="theta_exceeds_threshold" mean="0.1270535" stddev="0.014985216"/>']
+    """
     name, _, period = _intensity(frag)
     key = _im_key(name)
     if key is None or IMS[key][2] is None:

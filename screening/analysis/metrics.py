@@ -37,9 +37,33 @@ _trapezoid = getattr(np, "trapezoid", None) or np.trapz     # numpy >= 2 renamed
 def peak_with_se(values, se=None, axis=-1):
     """Peak ``max_t values`` over the finite entries and the standard error at the peak time.
 
-    ``values`` [any unit] has time along ``axis``; ``se`` (same shape, same unit) is the
-    standard error of each entry (None: the estimate is deterministic, SE 0).  Returns
-    ``(peak, se_at_peak)``; both NaN where no entry is finite.
+    Parameters
+    ----------
+    values : array_like
+        A history [any unit], time along ``axis``.
+    se : array_like, optional
+        Standard error of each entry (same shape, same unit); None: the estimate is deterministic, SE 0.
+    axis : int
+        The time axis.
+
+    Returns
+    -------
+    peak, se_at_peak : float or numpy.ndarray
+        In the unit of ``values``; both NaN where no entry is finite.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> peak_with_se([1.0, 3.0, np.nan, 2.0], [0.1, 0.2, 0.3, 0.4])
+    (3.0, 0.2)
     """
     v = np.asarray(values, dtype=float)
     v = np.moveaxis(v, axis, -1)
@@ -61,7 +85,31 @@ def peak_with_se(values, se=None, axis=-1):
 
 
 def relative_difference(estimate, reference):
-    """``estimate / reference - 1`` [1]; NaN where the reference is zero or not finite."""
+    """``estimate / reference - 1`` [1]; NaN where the reference is zero or not finite.
+
+    Parameters
+    ----------
+    estimate, reference : float or array_like
+        Same unit (any).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The relative difference [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> relative_difference(1.1, 1.0) - 0.1 < 1e-12, relative_difference([2.0, 1.0], [1.0, 0.0]).tolist()
+    (True, [1.0, nan])
+    """
     e = np.asarray(estimate, dtype=float)
     r = np.asarray(reference, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -70,7 +118,33 @@ def relative_difference(estimate, reference):
 
 
 def peak_relative_error(estimate, reference, axis=-1):
-    """Relative error of the peak over time: ``max_t estimate / max_t reference - 1`` [1]."""
+    """Relative error of the peak over time: ``max_t estimate / max_t reference - 1`` [1].
+
+    Parameters
+    ----------
+    estimate, reference : array_like
+        Histories [same unit], time along ``axis``.
+    axis : int
+        The time axis.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The relative error [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> peak_relative_error([1.0, 2.5, 2.0], [1.0, 2.0, 1.5])
+    0.25
+    """
     return relative_difference(peak_with_se(estimate, axis=axis)[0], peak_with_se(reference, axis=axis)[0])
 
 
@@ -81,9 +155,33 @@ def _common_mask(a, b):
 def time_averaged_relative_error(estimate, reference, t):
     """``int |estimate - reference| dt / int |reference| dt`` [1] (trapezoidal rule).
 
-    Time runs along the last axis, on the grid ``t`` [s].  Only the instants where both
-    histories are finite count (e.g. the part of the record where the Monte Carlo ensemble
-    is defined); NaN if that leaves nothing or ``int |reference| = 0``.
+    Only the instants where both histories are finite count (e.g. the part of the record where
+    the Monte Carlo ensemble is defined).
+
+    Parameters
+    ----------
+    estimate, reference : array_like
+        Histories [same unit], time along the last axis.
+    t : array_like
+        The time grid [s].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The error [1]; NaN if nothing is left or ``int |reference| = 0``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> time_averaged_relative_error([1.1, 1.1, 1.1], [1.0, 1.0, 1.0], [0.0, 1.0, 2.0])
+    0.10000000000000009
     """
     a = np.asarray(estimate, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -99,9 +197,42 @@ def time_averaged_relative_error(estimate, reference, t):
 def time_averaged_relative_se(se, reference, t, estimate=None):
     """Time-averaged relative standard error ``int SE dt / int |reference| dt`` [1].
 
-    The noise floor of :func:`time_averaged_relative_error`: same mask (where ``reference``
-    and, if given, ``estimate`` are finite).  Pure sampling noise gives a time-averaged
-    error of about ``sqrt(2/pi) ~ 0.8`` times this value.
+    The noise floor of :func:`time_averaged_relative_error`, on the same mask (where ``reference``
+    and, if given, ``estimate`` are finite).  Pure sampling noise gives a time-averaged error of
+    about ``sqrt(2/pi) ~ 0.8`` times this value.
+
+    Parameters
+    ----------
+    se : array_like
+        Standard error of the histories [unit of ``reference``].
+    reference : array_like
+        The reference history, time along the last axis.
+    t : array_like
+        The time grid [s].
+    estimate : array_like, optional
+        The estimate (its NaNs are masked too).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The noise floor [1].
+
+    Notes
+    -----
+    ``E|N(0, s^2)| = s sqrt(2/pi)`` gives the factor 0.8.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> time_averaged_relative_se([0.05, 0.05, 0.05], [1.0, 1.0, 1.0], [0.0, 1.0, 2.0])
+    0.05
     """
     s = np.asarray(se, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -116,15 +247,66 @@ def time_averaged_relative_se(se, reference, t, estimate=None):
 
 
 def combined_se(*standard_errors):
-    """Standard errors added in quadrature, ``sqrt(sum se_i^2)`` (independent estimates;
-    conservative for positively correlated ones such as two models on the same samples)."""
+    """Standard errors added in quadrature, ``sqrt(sum se_i^2)``.
+
+    Exact for independent estimates; conservative for positively correlated ones such as two
+    models on the same samples.
+
+    Parameters
+    ----------
+    *standard_errors : float or array_like
+        The standard errors [same unit].
+
+    Returns
+    -------
+    numpy.ndarray
+        The combined standard error [same unit].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> float(combined_se(0.3, 0.4))
+    0.5
+    """
     return np.sqrt(sum(np.asarray(s, dtype=float) ** 2 for s in standard_errors))
 
 
 def is_significant(difference, se, k=2.0):
     """``|difference| > k se``: the difference is larger than the sampling noise (default 2 SE).
 
-    False where either is NaN.
+    Parameters
+    ----------
+    difference : float or array_like
+        A difference [any unit].
+    se : float or array_like
+        Its standard error [same unit].
+    k : float
+        How many standard errors [1].
+
+    Returns
+    -------
+    bool or numpy.ndarray of bool
+        False where either is NaN.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> is_significant(0.3, 0.1), is_significant(0.15, 0.1), is_significant(float("nan"), 0.1)
+    (True, False, False)
     """
     d = np.abs(np.asarray(difference, dtype=float))
     s = np.asarray(se, dtype=float)
@@ -135,9 +317,36 @@ def is_significant(difference, se, k=2.0):
 def classify_error(error, relative_se, threshold, k=2.0):
     """Class of a relative error against a tolerance ``threshold`` [1].
 
-    Returns ``"within"`` if ``|error| + k se <= threshold``, ``"outside"`` if
-    ``|error| - k se > threshold``, ``"ambiguous"`` otherwise (the tolerance lies within
-    ``k`` standard errors), and ``"undefined"`` for a NaN error.
+    Parameters
+    ----------
+    error : float
+        The relative error [1].
+    relative_se : float
+        Its standard error [1] (NaN counts as 0).
+    threshold : float
+        The tolerance [1].
+    k : float
+        How many standard errors [1].
+
+    Returns
+    -------
+    str
+        ``"within"`` if ``|error| + k se <= threshold``, ``"outside"`` if ``|error| - k se >
+        threshold``, ``"ambiguous"`` otherwise (the tolerance lies within ``k`` standard errors), and
+        ``"undefined"`` for a NaN error.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> [classify_error(e, 0.02, 0.10) for e in (0.05, -0.2, 0.09, float("nan"))]
+    ['within', 'outside', 'ambiguous', 'undefined']
     """
     e, s = abs(float(error)), float(relative_se)
     if not math.isfinite(e):
@@ -153,12 +362,38 @@ def classify_error(error, relative_se, threshold, k=2.0):
 def threshold_rule(indicator, passed, direction="below"):
     """The largest one-sided region of a scalar indicator in which every point passed.
 
-    ``indicator`` [any unit] and boolean ``passed`` per point (a NaN error counts as failed).
-    ``direction="below"``: returns ``(X, n_covered)`` with ``X`` the smallest indicator value
-    among the failed points (``inf`` if none failed) and ``n_covered`` the number of points
-    with ``indicator < X`` (all of which passed).  ``direction="above"``: ``X`` the largest
-    indicator value among the failed points (``-inf`` if none) and the points with
-    ``indicator > X``.
+    Parameters
+    ----------
+    indicator : array_like
+        The indicator per point [any unit].
+    passed : array_like of bool
+        Whether each point passed (a NaN error counts as failed).
+    direction : {"below", "above"}
+        ``"below"``: ``X`` the smallest indicator value among the failed points (``inf`` if none
+        failed) and the points with ``indicator < X``; ``"above"``: ``X`` the largest indicator value
+        among the failed points (``-inf`` if none) and the points with ``indicator > X``.
+
+    Returns
+    -------
+    bound : float
+        ``X`` [unit of the indicator].
+    n_covered : int
+        The number of points inside (all of which passed).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> threshold_rule([0.1, 0.2, 0.3, 0.4], [True, True, False, True])
+    (0.3, 2)
+    >>> threshold_rule([0.1, 0.2, 0.3, 0.4], [True, True, False, True], "above")
+    (0.3, 1)
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -174,7 +409,35 @@ def threshold_rule(indicator, passed, direction="below"):
 
 
 def rule_error(peak_error, time_avg_error, metric="peak"):
-    """The error a validity rule is judged on: ``|peak|``, ``time_avg`` or the worse of the two."""
+    """The error a validity rule is judged on: ``|peak|``, ``time_avg`` or the worse of the two.
+
+    Parameters
+    ----------
+    peak_error : array_like
+        Peak relative error [1] (signed).
+    time_avg_error : array_like
+        Time-averaged relative error [1].
+    metric : {"peak", "time_avg", "worst"}
+        :data:`RULE_METRICS`; ``ValueError`` otherwise.
+
+    Returns
+    -------
+    numpy.ndarray
+        The error [1] (NaN for ``"worst"`` where either is NaN).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> rule_error([-0.2, 0.05], [0.1, 0.3], "worst").tolist()
+    [0.2, 0.3]
+    """
     p = np.abs(np.asarray(peak_error, dtype=float))
     ta = np.asarray(time_avg_error, dtype=float)
     if metric == "peak":
@@ -189,9 +452,36 @@ def rule_error(peak_error, time_avg_error, metric="peak"):
 def compare(estimate, reference, t, est_se=None, ref_se=None):
     """All error measures of one history against a reference, as a dict (units [1]).
 
-    ``peak_rel_error``, ``peak_rel_se`` (SE of the difference of the peaks over the reference
-    peak), ``peak_significant`` (``|diff| > 2 SE``), ``time_avg_rel_error``,
-    ``time_avg_rel_se`` (noise floor) and ``time_avg_significant`` (error > 2 x floor).
+    Parameters
+    ----------
+    estimate, reference : array_like
+        Histories [same unit] on the time grid ``t``.
+    t : array_like
+        The time grid [s].
+    est_se, ref_se : array_like, optional
+        Their Monte Carlo standard errors [same unit]; None for a deterministic history.
+
+    Returns
+    -------
+    dict
+        ``peak_estimate``, ``peak_reference`` [unit of the histories], ``peak_rel_error``,
+        ``peak_rel_se`` (SE of the difference of the peaks over the reference peak),
+        ``peak_significant`` (``|diff| > 2 SE``), ``time_avg_rel_error``, ``time_avg_rel_se`` (noise
+        floor) and ``time_avg_significant`` (error > 2 x floor).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> out = compare([1.0, 2.4, 2.0], [1.0, 2.0, 1.8], [0.0, 1.0, 2.0], ref_se=[0.01, 0.05, 0.05])
+    >>> f"{out['peak_rel_error']:.2f} {out['peak_rel_se']:.3f}", out["peak_significant"]
+    ('0.20 0.025', True)
     """
     pe, se_e = peak_with_se(estimate, est_se)
     pr, se_r = peak_with_se(reference, ref_se)
@@ -211,13 +501,40 @@ def compare(estimate, reference, t, est_se=None, ref_se=None):
 def safe_indicator_range(indicator, passed, tie=0.05):
     """Conservative upper bound of a "safe below" region of an indicator, from tested points.
 
-    ``indicator`` [any unit] and boolean ``passed`` per point.  Returns ``(p_safe, n_safe,
-    i_fail)``: ``i_fail`` the index of the failing point with the smallest indicator (None if
-    nothing failed); ``p_safe`` the largest indicator value of a passing point below that
-    failure, where values within a relative ``tie`` of the failure count as the same tested
-    level (so a level at which some points pass and some fail is not called safe); ``n_safe``
-    the number of points with ``indicator <= p_safe`` (all passed).  ``p_safe`` is NaN when
-    no tested level is safe.
+    Values within a relative ``tie`` of the first failure count as the same tested level (so a
+    level at which some points pass and some fail is not called safe).
+
+    Parameters
+    ----------
+    indicator : array_like
+        The indicator per point [any unit].
+    passed : array_like of bool
+        Whether each point passed.
+    tie : float
+        Relative tolerance [1] of "the same tested level".
+
+    Returns
+    -------
+    p_safe : float
+        The largest indicator value of a passing point below the first failure; NaN when no tested
+        level is safe.
+    n_safe : int
+        The number of points with ``indicator <= p_safe`` (all passed).
+    i_fail : int or None
+        The index of the failing point with the smallest indicator (None if nothing failed).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> safe_indicator_range([0.1, 0.2, 0.3, 0.305], [True, True, True, False])
+    (0.2, 2, 3)
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -235,7 +552,31 @@ def safe_indicator_range(indicator, passed, tie=0.05):
 
 
 def rule_groups(eps):
-    """Point groups a rule is derived for: ``"all"`` and, with 2–4 distinct ``eps``, one per bed."""
+    """Point groups a rule is derived for: ``"all"`` and, with 2–4 distinct ``eps``, one per bed.
+
+    Parameters
+    ----------
+    eps : array_like
+        The cubic stiffness parameter of each point [m-2].
+
+    Returns
+    -------
+    dict of str to numpy.ndarray of bool
+        ``{group name: mask}``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> {name: mask.tolist() for name, mask in rule_groups([6e7, 6e7, -6e5]).items()}
+    {'all': [True, True, True], 'eps=6e+07': [True, True, False], 'eps=-600000': [False, False, True]}
+    """
     eps = np.asarray(eps, dtype=float)
     groups = {"all": np.ones(eps.size, dtype=bool)}
     values = list(dict.fromkeys(eps.tolist()))
@@ -248,12 +589,52 @@ def rule_groups(eps):
 def derive_rules(ds, thresholds=(0.10, 0.25), metric="peak", quantity="var_theta", tie=0.05):
     """Validity rules of SL derived from a trade-study dataset.
 
-    For each reference (condensed, coupled MCS), threshold [1] and point group
-    (:func:`rule_groups`): the safe range of SL peak p_uplift (:func:`safe_indicator_range`)
-    and of the k_eq margin (:func:`threshold_rule`, "above"), judged on :func:`rule_error`
-    of ``quantity``.  Returns a list of dicts: ``reference``, ``threshold``, ``group``, ``n``,
-    ``n_pass``, ``p_safe``, ``n_safe``, ``p_max`` (largest tested p), ``fail_p``,
-    ``fail_name``, ``fail_error`` (the first failure in p), ``margin_bound``, ``n_margin``.
+    For each reference (condensed, coupled MCS), threshold and point group (:func:`rule_groups`):
+    the safe range of SL peak p_uplift (:func:`safe_indicator_range`) and of the k_eq margin
+    (:func:`threshold_rule`, "above"), judged on :func:`rule_error` of ``quantity``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset (``sl_peak_p_uplift`` [1], ``k_eq_margin`` [1], ``point_name``, ``eps``
+        [m-2], ``peak_rel_error`` and ``time_avg_rel_error`` [1] over ``comparison``, ``quantity``,
+        ``point``).
+    thresholds : sequence of float
+        Tolerances [1].
+    metric : {"peak", "time_avg", "worst"}
+        The error judged (:func:`rule_error`).
+    quantity : str
+        The quantity judged (``"var_theta"`` [rad2] or ``"var_theta_dot"`` [rad2 s-2]).
+    tie : float
+        Relative tolerance [1] of :func:`safe_indicator_range`.
+
+    Returns
+    -------
+    list of dict
+        ``reference``, ``threshold``, ``group``, ``n``, ``n_pass``, ``p_safe``, ``n_safe``, ``p_max``
+        (largest tested p), ``fail_p``, ``fail_name``, ``fail_error`` (the first failure in p),
+        ``margin_bound``, ``n_margin``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
+    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
+    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
+    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err))},
+    ...                 coords={"comparison": ["sl_vs_condensed", "sl_vs_coupled"], "quantity": ["var_theta"]})
+    >>> rule = derive_rules(ds, thresholds=(0.10,))[1]
+    >>> rule["reference"], rule["p_safe"], rule["n_safe"], rule["fail_name"], rule["margin_bound"]
+    ('coupled', 0.4, 2, 'c', 0.2)
     """
     p_all = ds.sl_peak_p_uplift.values
     margin_all = ds.k_eq_margin.values

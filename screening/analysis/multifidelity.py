@@ -111,6 +111,19 @@ def control_variate_functional(value_y, influence_y, value_x, value_x_all, influ
     .. [2] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
        estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
        683-706, 2018.
+
+
+    Examples
+    --------
+    The mean as the functional (influence values ``g_i - mean``), the cheap mean known exactly:
+
+    >>> import math
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> g = rng.normal(size=200); gx = g + 0.1 * rng.normal(size=200)
+    >>> est = control_variate_functional(g.mean(), g - g.mean(), gx.mean(), 0.0, gx - gx.mean(), math.inf)
+    >>> bool(est.se < 0.2 * est.plain_se)
+    True
     """
     psi_y, psi_x = np.asarray(influence_y, dtype=float), np.asarray(influence_x, dtype=float)
     n = psi_y.shape[0]
@@ -144,6 +157,24 @@ def conditional_mean_influence(g, valid=None):
     Returns
     -------
     (value, influence) : the mean over the valid samples (NaN without any) and ``v_i (g_i - value) / mean(v)``.
+
+
+    Notes
+    -----
+    For ``F = E[v g] / E[v]`` the first-order influence is ``psi_i = v_i (g_i - F) / mean(v)``
+    (section 3 of [1]).
+
+    References
+    ----------
+    .. [1] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
+       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
+       683-706, 2018.
+
+    Examples
+    --------
+    >>> value, psi = conditional_mean_influence([1.0, 2.0, 3.0, 10.0], [True, True, True, False])
+    >>> float(value), [round(float(p), 4) for p in psi]
+    (2.0, [-1.3333, 0.0, 1.3333, 0.0])
     """
     g = np.asarray(g, dtype=float)
     v = np.ones(g.shape[0], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
@@ -177,6 +208,20 @@ def variance_influence(theta, valid=None):
     :math:`(\\theta_i - \\mu)^2 - \\sigma^2` (the centring's own influence is second order), divided by the
     valid fraction for the conditional variance: its variance over ``n`` is the engine's standard error
     :math:`(m_4 - s^4) / n_{valid}` to first order.
+
+
+    References
+    ----------
+    .. [1] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
+       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
+       683-706, 2018.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> var, psi = variance_influence(np.array([[0.0], [1.0], [2.0]]))
+    >>> var.tolist(), [round(float(p), 4) for p in psi.ravel()]
+    ([1.0], [0.3333, -0.6667, 0.3333])
     """
     theta = np.asarray(theta, dtype=float)
     v = np.ones(theta.shape[0], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
@@ -207,6 +252,23 @@ def multifidelity_variance(theta_y, valid_y, theta_x, valid_x):
     ControlVariateEstimate
         Array fields of shape ``(n_t,)`` [rad2]: :func:`control_variate_functional` with the influence
         values of :func:`variance_influence`.
+
+
+    References
+    ----------
+    .. [1] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
+       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
+       683-706, 2018.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> x = rng.normal(size=(200, 3)); y = x + 0.1 * rng.normal(size=(200, 3))
+    >>> x_all = np.vstack([x, rng.normal(size=(800, 3))])
+    >>> est = multifidelity_variance(y, np.ones(200, bool), x_all, np.ones(1000, bool))
+    >>> bool(np.all(est.se < est.plain_se)), est.n_cheap
+    (True, 1000)
     """
     theta_y, theta_x = np.asarray(theta_y, dtype=float), np.asarray(theta_x, dtype=float)
     n = theta_y.shape[0]
@@ -237,6 +299,23 @@ def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturne
     list of ControlVariateEstimate
         ``[p_overturn, p_exceed(levels[0]), ...]`` [1]: conditional means over the valid samples of the
         indicators (:func:`conditional_mean_influence`; an overturned sample exceeds every level).
+
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
+       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> peak_y = rng.uniform(0.0, 0.01, 200)
+    >>> peak_x = np.concatenate([1.05 * peak_y, rng.uniform(0.0, 0.0105, 800)])
+    >>> p_over, p_exceed = multifidelity_probabilities(peak_y, np.zeros(200, bool), np.ones(200, bool), peak_x,
+    ...                                                np.zeros(1000, bool), np.ones(1000, bool), levels=(0.005,))
+    >>> p_over.mean, bool(p_exceed.se < p_exceed.plain_se)
+    (0.0, True)
     """
     peak_y, peak_x = np.asarray(peak_y, dtype=float), np.asarray(peak_x, dtype=float)
     n = peak_y.size
@@ -358,6 +437,12 @@ def optimal_ratio(correlation, cost_expensive, cost_cheap, max_ratio=MAX_RATIO):
     References
     ----------
     .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+
+
+    Examples
+    --------
+    >>> f"{optimal_ratio(0.9, 1.0, 0.01):.2f}", optimal_ratio(0.1, 1.0, 0.5)
+    ('20.65', 1.0)
     """
     rho2 = min(float(correlation) ** 2, 1.0 - 1e-12)
     if not (cost_expensive > 0 and cost_cheap > 0):
@@ -386,6 +471,17 @@ def speedup(correlation, cost_expensive, cost_cheap, ratio=None):
     -----
     Per expensive sample the two-fidelity estimate costs :math:`c_1 + r c_2` and has the variance
     :math:`\\sigma^2 [1 - (1 - 1/r) \\rho^2]`; plain Monte Carlo costs :math:`c_1` for :math:`\\sigma^2`.
+
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
+       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+
+    Examples
+    --------
+    >>> f"{speedup(0.9, 1.0, 0.01):.3f}"
+    '3.616'
     """
     r = optimal_ratio(correlation, cost_expensive, cost_cheap) if ratio is None else float(ratio)
     rho2 = min(float(correlation) ** 2, 1.0)
@@ -447,6 +543,20 @@ def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN
     ``ceil(r n)`` cheap samples give the plain standard error.  Rule: plain Monte Carlo (``n_plain``
     samples, no cheap run beyond the pilot) unless the predicted speed-up is at least ``min_gain``; the
     estimator is then never planned worse than plain Monte Carlo.
+
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
+       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+
+    Examples
+    --------
+    >>> a = allocate(0.9, 1.0, 0.01, 1000)
+    >>> a.estimator, a.n_expensive, a.n_cheap
+    ('multifidelity', 230, 4749)
+    >>> allocate(0.2, 1.0, 0.01, 1000).estimator
+    'plain'
     """
     n_plain = int(n_plain)
     if not (cost_expensive > 0 and cost_cheap > 0):
@@ -489,6 +599,13 @@ def cost_ratio_needed(correlation, target_speedup):
     References
     ----------
     .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+
+
+    Examples
+    --------
+    >>> w = cost_ratio_needed(0.9, 3.0)
+    >>> f"{w:.2f}", f"{speedup(0.9, w, 1.0):.3f}", cost_ratio_needed(0.5, 2.0)
+    ('40.48', '3.000', inf)
     """
     rho = abs(float(correlation))
     if not target_speedup > 1:

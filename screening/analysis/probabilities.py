@@ -35,15 +35,40 @@ def uplift_acceleration(block, foundation, condensation):
 
     Parameters
     ----------
-    block, foundation : :class:`~screening.model.Block`, bed (array fields broadcast).
-    condensation : :class:`~screening.condensation.base.Condensation` of the bed's moment law.
+    block : screening.model.Block
+        The block (``m`` [kg], ``h`` [m], ...; array fields broadcast).
+    foundation : screening.model.Foundation
+        Its bed (``k`` [N m-2], ...).
+    condensation : screening.condensation.base.Condensation
+        The condensation of the bed's moment law.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``a_ul`` [m s-2].
 
     Notes
     -----
     The condensed equation of motion ``M theta'' + C theta' + K(theta) theta = -m h a_g`` at rest gives
     ``a_ul = K(theta_ul) theta_ul / (m h)``.  On a linear Winkler bed ``K = 2 k b^3 / 3 - m g h`` and
-    ``theta_ul = m g / (2 b^2 k)``, so ``a_ul = g b / (3 h) - g theta_ul``: the resultant of the bed's
-    pressure reaches the edge of the kern of the base, a third of the half-width from the centre.
+    ``theta_ul = m g / (2 b^2 k)`` (eq. (19) in [1]), so ``a_ul = g b / (3 h) - g theta_ul``: the
+    resultant of the bed's pressure reaches the edge of the kern of the base, a third of the half-width
+    from the centre.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.condensation.registry import get
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> a_ul = uplift_acceleration(block, bed, get("paper"))
+    >>> f"{float(a_ul):.4f}", f"{block.g * block.b / (3 * block.h) - block.g * 1.2012e-3:.4f}"
+    ('0.5332', '0.5332')
     """
     theta_ul = condensation.uplift_threshold(block, foundation)
     moment = condensation.restoring_moment(theta_ul, block, foundation)
@@ -51,16 +76,57 @@ def uplift_acceleration(block, foundation, condensation):
 
 
 def source_codes():
-    """``{name: code}`` of the values of ``p_source``: those of :data:`~screening.status.ProbabilitySource`
-    and ``monte_carlo_<model>`` for every registered Monte Carlo model (:mod:`screening.solvers.mc_registry`)."""
+    """The codes of the values of ``p_source``.
+
+    Those of :data:`~screening.status.ProbabilitySource` and ``monte_carlo_<model>`` for every registered
+    Monte Carlo model (:mod:`screening.solvers.mc_registry`).
+
+    Returns
+    -------
+    dict of str to int
+        ``{name: code}`` [-].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> codes = source_codes()
+    >>> codes["unreliable"], codes["linearization_gaussian"], codes["monte_carlo_coupled"]
+    (0, 1, 10)
+    """
     from screening.solvers import mc_registry
 
     return probability_sources(mc_registry.names())
 
 
 def monte_carlo_source(model):
-    """The ``p_source`` code of Monte Carlo ``model`` (a name in :data:`screening.solvers.montecarlo.MODELS`).
-    Raises ``ValueError`` for a model it does not know."""
+    """The ``p_source`` code of a Monte Carlo model.
+
+    Parameters
+    ----------
+    model : str
+        A name in :data:`screening.solvers.montecarlo.MODELS`; ``ValueError`` for a model it does not know.
+
+    Returns
+    -------
+    int
+        The code [-] (:func:`source_codes`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> monte_carlo_source("coupled") == source_codes()["monte_carlo_coupled"]
+    True
+    """
     codes = source_codes()
     if f"monte_carlo_{model}" not in codes:
         raise ValueError(f"parameter 'model' must be a Monte Carlo model, one of "
@@ -73,18 +139,35 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
 
     Parameters
     ----------
-    status_ok : True where the linearization ran to the end.
-    trust : ``sl_trust`` codes (:class:`~screening.status.Trust`).
-    band_finite : True where the trust band of the point is finite.
-    best_method : ``best_method`` codes of ``[accuracy]`` (:class:`~screening.status.BestMethod`) or None.
+    status_ok : array_like of bool
+        True where the linearization ran to the end.
+    trust : array_like of int
+        ``sl_trust`` codes (:class:`~screening.status.Trust`).
+    band_finite : array_like of bool
+        True where the trust band of the point is finite.
+    best_method : array_like of int, optional
+        ``best_method`` codes of ``[accuracy]`` (:class:`~screening.status.BestMethod`) or None.
 
     Returns
     -------
-    int8 array of :data:`~screening.status.ProbabilitySource` codes: with ``[accuracy]``,
-    ``linearization_gaussian`` where the rule promises the target, ``corrected_linearization_gaussian``
-    where the correction reaches the point, else ``unreliable``; without it, ``linearization_gaussian``
-    where the point is ``trusted`` with a finite band, else ``unreliable``.  Monte Carlo points are
-    set by the caller (:func:`monte_carlo_source`).
+    numpy.ndarray of int8
+        :data:`~screening.status.ProbabilitySource` codes [-]: with ``[accuracy]``,
+        ``linearization_gaussian`` where the rule promises the target, ``corrected_linearization_gaussian``
+        where the correction reaches the point, else ``unreliable``; without it, ``linearization_gaussian``
+        where the point is ``trusted`` with a finite band, else ``unreliable``.  Monte Carlo points are
+        set by the caller (:func:`monte_carlo_source`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.status import Trust
+    >>> choose_sources([True, True, False], [Trust.trusted, Trust.untrusted, Trust.trusted], [True, True, True])
+    array([1, 0, 0], dtype=int8)
     """
     ok = np.asarray(status_ok, dtype=bool)
     src = np.full(ok.shape, int(ProbabilitySource.unreliable), dtype=np.int8)
@@ -100,14 +183,41 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
 
 
 def overturning_probability(ds, method="vanmarcke"):
-    """``(p_overturn, note)`` [1] of a result dataset, on its grid, for a fragility over an intensity.
+    """The probability of overturning [1] of a result dataset, on its grid, for a fragility over an intensity.
 
     A sweep with ``[accuracy]`` or ``[fragility]`` stores ``p_overturn`` with ``p_source``: that estimate,
     NaN where ``p_source`` is ``unreliable`` (a fit must not learn from numbers nothing vouches for).  A
     :func:`screening.monte_carlo` result: its ``p_overturn``.  Any other result (no stored estimate): the
     Gaussian up-crossing of ``atan(b/h)`` by the linearization's moments
     (:func:`screening.analysis.fragility.exceedance_probability`, ``method``), which nothing vouches for
-    near toppling.  ``note``: a one-line caveat, or ``""`` when there is none.
+    near toppling.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation of the fallback.
+
+    Returns
+    -------
+    p_overturn : xarray.DataArray
+        The probability [1].
+    note : str
+        A one-line caveat, or ``""`` when there is none.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> p, note = overturning_probability(xr.Dataset({"p_overturn": ("S0", [0.1, 0.3])}))
+    >>> p.values.tolist(), note
+    ([0.1, 0.3], '')
     """
     from screening.analysis.fragility import exceedance_probability
 
@@ -129,13 +239,41 @@ TOPPLING_FRACTION = 0.05
 
 
 def spot_check_probabilities(ds):
-    """``p_overturn`` and, where the result has ``[fragility]`` thresholds, ``p_exceed`` of each Monte Carlo
-    spot check of a sweep result, from its stored sample peaks and states (``mcs_peak_abs_theta``,
-    ``mcs_sample_state``).
+    """The probabilities of each Monte Carlo spot check of a sweep result, from its sample peaks and states.
 
-    Returns a dict of arrays over ``spot``: ``p_overturn``, ``p_overturn_se``, ``near_toppling``
-    (``p_overturn > TOPPLING_FRACTION``), and ``p_exceed``, ``p_exceed_se`` (spot x thresholds) with
-    ``thresholds`` (the values of the result's ``threshold`` coordinate, ``()`` without) and ``relative_to``.
+    ``p_overturn`` and, where the result has ``[fragility]`` thresholds, ``p_exceed``, from the stored
+    ``mcs_peak_abs_theta`` [rad] and ``mcs_sample_state`` (diverged or failed samples left out).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with spot checks.
+
+    Returns
+    -------
+    dict
+        Arrays over ``spot``: ``p_overturn``, ``p_overturn_se`` [1], ``near_toppling``
+        (``p_overturn > TOPPLING_FRACTION``), and ``p_exceed``, ``p_exceed_se`` [1] (spot x thresholds)
+        with ``thresholds`` (the values of the result's ``threshold`` coordinate, ``()`` without) and
+        ``relative_to``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import SampleState
+    >>> ds = xr.Dataset({"status": ("S0", [0, 0]),
+    ...                  "mcs_peak_abs_theta": (("spot", "sample"), [[1e-3, 3e-3, 0.2, 1e-3], [1e-3] * 4]),
+    ...                  "mcs_sample_state": (("spot", "sample"), [[0, 0, SampleState.overturned, 0], [0] * 4])},
+    ...                 coords={"S0": [1e-4, 2e-4], "spot_S0": ("spot", [1e-4, 2e-4])})
+    >>> prob = spot_check_probabilities(ds)
+    >>> prob["p_overturn"].tolist(), prob["near_toppling"].tolist(), prob["thresholds"]
+    ([0.25, 0.0], [True, False], ())
     """
     from screening.analysis.fragility import spot_positions
 
@@ -157,5 +295,29 @@ def spot_check_probabilities(ds):
 
 
 def probability_text(p, se):
-    """``"0.43 +- 0.05"`` (or ``"n/a"``)."""
+    """A probability and its standard error as text: ``"0.43 +- 0.05"`` (or ``"n/a"``).
+
+    Parameters
+    ----------
+    p : float
+        The probability [1].
+    se : float
+        Its standard error [1].
+
+    Returns
+    -------
+    str
+        Three significant digits for ``p``, two for ``se``; ``"n/a"`` where ``p`` is not finite.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> probability_text(0.4321, 0.0512), probability_text(float("nan"), 0.1)
+    ('0.432 +- 0.051', 'n/a')
+    """
     return f"{p:.3g} +- {se:.2g}" if np.isfinite(p) else "n/a"

@@ -101,7 +101,33 @@ class TradeoffStudy:
 
 
 def load_tradeoff_study(path):
-    """Read and validate a trade-study file (see :func:`parse_tradeoff_study`)."""
+    """Read and validate a trade-study file (see :func:`parse_tradeoff_study`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file (SI units throughout).
+
+    Returns
+    -------
+    TradeoffStudy
+        The validated study; :class:`StudyError` names any bad key.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    The study shipped with the repository:
+
+    >>> import pathlib, screening
+    >>> study = load_tradeoff_study(pathlib.Path(screening.__file__).parents[1] / "studies" / "speed_accuracy.toml")
+    >>> [f.name for f in study.families], study.t_end, study.mcs["samples"]
+    (['white', 'kt40', 'kt10'], 20.0, 1000)
+    """
     return parse_tradeoff_study(read_study_text(path), source=str(path))
 
 
@@ -128,6 +154,34 @@ def parse_tradeoff_study(text, source="<string>"):
       (one of ``samples``), ``models`` (subset of "coupled", "condensed");
     * ``[rule]`` ``thresholds`` [1] (list), ``metric`` ("peak", "time_avg" or "worst"),
       ``quantity`` ("var_theta" or "var_theta_dot").
+
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    source : str
+        Where it came from (in error messages).
+
+    Returns
+    -------
+    TradeoffStudy
+        The validated study.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.workflow.config import StudyError
+    >>> try:
+    ...     parse_tradeoff_study("title = 1")
+    ... except StudyError as exc:
+    ...     print(exc)
+    <string>: title: must be a string (got int)
     """
     return parse_toml(text, source, lambda raw: _build(raw, text, source))
 

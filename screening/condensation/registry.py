@@ -20,7 +20,40 @@ get = _REGISTRY.get
 
 
 def register(condensation):
-    """Add a :class:`Condensation` instance under its ``name`` (a later one with the same name replaces it)."""
+    """Add a :class:`Condensation` instance under its ``name`` (a later one with the same name replaces it).
+
+    Parameters
+    ----------
+    condensation : Condensation
+        The condensation (an instance of a
+        :class:`~screening.condensation.base.Condensation` subclass).
+
+    Returns
+    -------
+    Condensation
+        ``condensation`` itself.
+
+    Raises
+    ------
+    TypeError
+        For anything that is not a ``Condensation`` instance.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733 (the paper's condensation, eqs. 13-22).
+
+    Examples
+    --------
+    >>> paper = get("paper")
+    >>> register(paper) is paper, names()[0]
+    (True, 'paper')
+    >>> register("paper")
+    Traceback (most recent call last):
+    ...
+    TypeError: register() takes a Condensation instance (got str)
+    """
     if not isinstance(condensation, Condensation):
         raise TypeError(f"register() takes a Condensation instance (got {type(condensation).__name__})")
     return _REGISTRY.add(condensation.name, condensation)

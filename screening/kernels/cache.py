@@ -43,6 +43,24 @@ def cache_is_cold():
 
     Only the cache next to the package is looked at: with ``NUMBA_CACHE_DIR`` set, or a package
     folder numba cannot write to (it then caches elsewhere), the answer is False (nothing said).
+
+    Returns
+    -------
+    bool
+        Whether the first run will compile (about 10-60 s [s] per fresh cache).
+
+    References
+    ----------
+    .. [1] Numba documentation, "Notes on caching",
+       https://numba.readthedocs.io/en/stable/developer/caching.html
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> with mock.patch.dict(os.environ, {"NUMBA_CACHE_DIR": "/elsewhere"}):   # numba caches elsewhere
+    ...     cache_is_cold()
+    False
     """
     if os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("NUMBA_DISABLE_JIT") == "1":
         return False
@@ -52,7 +70,32 @@ def cache_is_cold():
 
 
 def announce_compilation(stream=None):
-    """Print one line on ``stream`` (default stderr) if :func:`cache_is_cold`; returns whether it did."""
+    """Print one line on ``stream`` if :func:`cache_is_cold`; returns whether it did.
+
+    Parameters
+    ----------
+    stream : file-like, optional
+        Where to write [-]; default ``sys.stderr``.  A closed or broken stream is ignored.
+
+    Returns
+    -------
+    bool
+        True if the line was due (the cache is cold), False otherwise.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Notes on caching",
+       https://numba.readthedocs.io/en/stable/developer/caching.html
+
+    Examples
+    --------
+    >>> import io, os
+    >>> from unittest import mock
+    >>> out = io.StringIO()
+    >>> with mock.patch.dict(os.environ, {"NUMBA_CACHE_DIR": "/elsewhere"}):   # nothing to announce
+    ...     announce_compilation(out), out.getvalue()
+    (False, '')
+    """
     if not cache_is_cold():
         return False
     stream = stream if stream is not None else sys.stderr

@@ -29,22 +29,119 @@ TABLE = types.float64[:, ::1]   # per-interval cubic coefficients (screening.ker
 
 
 def record_type(dtype):
-    """The numba type of one record of the structured ``dtype``."""
+    """The numba type of one record of a structured dtype.
+
+    Parameters
+    ----------
+    dtype : numpy.dtype
+        A structured dtype of float fields (a condensation's parameters, each in SI units).
+
+    Returns
+    -------
+    numba.types.Record
+        The record type numba compiles against.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Supported NumPy features: structured scalars and record arrays",
+       https://numba.readthedocs.io/en/stable/reference/numpysupported.html
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rec = record_type(np.dtype([("k", "f8"), ("b", "f8")]))
+    >>> list(rec.fields), rec.size
+    (['k', 'b'], 16)
+    """
     return numba.from_dtype(dtype)
 
 
 def moment_coefficients_signature(dtype):
-    """``(record, table, var_theta [rad2], cov [rad2/s]) -> (c_eq [N m s/rad], k_eq [N m/rad])``."""
+    """The signature of a condensation's compiled equivalent-coefficient function.
+
+    ``(record, table, var_theta [rad2], cov [rad2/s]) -> (c_eq [N m s/rad], k_eq [N m/rad])``.
+
+    Parameters
+    ----------
+    dtype : numpy.dtype
+        The condensation's parameter record dtype.
+
+    Returns
+    -------
+    numba.core.typing.templates.Signature
+        The explicit signature; the table is a C-contiguous 2-d float64 array of per-interval
+        cubic coefficients.
+
+    References
+    ----------
+    .. [1] Numba documentation, "First-class function objects",
+       https://numba.readthedocs.io/en/stable/reference/types.html#functions
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sig = moment_coefficients_signature(np.dtype([("k", "f8")]))
+    >>> str(sig.return_type), len(sig.args)
+    ('UniTuple(float64 x 2)', 4)
+    """
     return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, FLOAT, FLOAT)
 
 
 def sdof_coefficients_signature(dtype):
-    """``(record, theta [rad]) -> (C(theta) [N m s/rad], K(theta) [N m/rad])``."""
+    """The signature of a condensation's compiled state-dependent damping and stiffness.
+
+    ``(record, theta [rad]) -> (C(theta) [N m s/rad], K(theta) [N m/rad])``.
+
+    Parameters
+    ----------
+    dtype : numpy.dtype
+        The condensation's parameter record dtype.
+
+    Returns
+    -------
+    numba.core.typing.templates.Signature
+        The explicit signature.
+
+    References
+    ----------
+    .. [1] Numba documentation, "First-class function objects",
+       https://numba.readthedocs.io/en/stable/reference/types.html#functions
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sig = sdof_coefficients_signature(np.dtype([("k", "f8")]))
+    >>> str(sig.return_type), str(sig.args[1])
+    ('UniTuple(float64 x 2)', 'float64')
+    """
     return types.UniTuple(FLOAT, 2)(record_type(dtype), FLOAT)
 
 
 def function_type(signature):
-    """The first-class function type of a compiled function with ``signature``."""
+    """The first-class function type of a compiled function with a given signature.
+
+    Parameters
+    ----------
+    signature : numba.core.typing.templates.Signature
+        E.g. :func:`sdof_coefficients_signature` of a record dtype.
+
+    Returns
+    -------
+    numba.types.FunctionType
+        The type a solver declares for its function argument.
+
+    References
+    ----------
+    .. [1] Numba documentation, "First-class function objects",
+       https://numba.readthedocs.io/en/stable/reference/types.html#functions
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ftype = function_type(sdof_coefficients_signature(np.dtype([("k", "f8")])))
+    >>> type(ftype).__name__
+    'FunctionType'
+    """
     return types.FunctionType(signature)
 
 

@@ -19,9 +19,36 @@ def hunt_crossley_damping(z, z_dot, lam):
 
     Parameters
     ----------
-    z : indentation [m] (> 0 in contact).
-    z_dot : indentation rate [m/s].
-    lam : damping coefficient [N s m-3], >= 0.
+    z : float or array_like
+        Indentation [m] (> 0 in contact).
+    z_dot : float or array_like
+        Indentation rate [m/s].
+    lam : float
+        Damping coefficient [N s m-3], >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Damping pressure per unit base length [N/m], broadcast over ``z`` and ``z_dot``.
+
+    Notes
+    -----
+    The damping part of the contact law, eq. (4) in [1]:
+
+    .. math:: p_d = \\lambda\\, z\\, \\dot z
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
+       vibroimpact", J. Appl. Mech. 42(2) (1975) 440-445.
+
+    Examples
+    --------
+    >>> hunt_crossley_damping([1e-3, 2e-3], [0.1, -0.1], 8.95e8)
+    array([  89500., -179000.])
     """
     return lam * np.asarray(z, dtype=float) * np.asarray(z_dot, dtype=float)
 

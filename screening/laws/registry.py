@@ -30,8 +30,46 @@ def _check_weights(law):
 def register(law):
     """Add a :class:`ContactLaw` instance under its ``name`` (a later one with the same name replaces it).
 
-    Raises ``TypeError`` for anything else and ``ValueError`` when its :attr:`~ContactLaw.parameter` is
-    not a Foundation damping field or its pressure does not match its weights.
+    Parameters
+    ----------
+    law : ContactLaw
+        The law; its ``parameter`` must be a Foundation damping field (``lam`` [N s m-3] or ``c``
+        [N s m-2]) and its ``damping_pressure`` [N m-1] must equal ``zdot (w_rate + w_indentation z)``
+        of its ``damping_weights`` (checked at 16 random points to 1e-12).
+
+    Returns
+    -------
+    ContactLaw
+        ``law`` itself.
+
+    Raises
+    ------
+    TypeError
+        For anything that is not a ``ContactLaw`` instance.
+    ValueError
+        When its parameter is not a damping field or its pressure does not match its weights.
+
+    Notes
+    -----
+    The solvers integrate one damping pressure only, linear in the indentation rate and at most
+    linear in the indentation: ``p_d = zdot (w_rate + w_indentation z)``; Hunt–Crossley (eq. (4) in
+    [1]) has ``w_rate = 0, w_indentation = lam``, Winkler ``w_rate = c, w_indentation = 0``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.laws.winkler import WINKLER
+    >>> register(WINKLER) is WINKLER
+    True
+    >>> register("winkler")
+    Traceback (most recent call last):
+    ...
+    TypeError: register() takes a ContactLaw instance (got str)
     """
     if not isinstance(law, ContactLaw):
         raise TypeError(f"register() takes a ContactLaw instance (got {type(law).__name__})")
@@ -52,5 +90,23 @@ get = _REGISTRY.get
 
 
 def parameters():
-    """``{damping field: CF attributes}`` of the registered laws."""
+    """The CF attributes of the damping field of every registered law.
+
+    Returns
+    -------
+    dict of str to dict
+        ``{damping field: {"units": ..., "long_name": ...}}``, e.g. ``lam`` in [N s m-3] and ``c`` in
+        [N s m-2], in registration order.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733 (the Hunt–Crossley law, eq. 4).
+
+    Examples
+    --------
+    >>> {field: attrs["units"] for field, attrs in parameters().items()}
+    {'lam': 'N s m-3', 'c': 'N s m-2'}
+    """
     return {law.parameter: dict(law.attributes) for law in _REGISTRY.values()}

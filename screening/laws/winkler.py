@@ -19,9 +19,35 @@ def winkler_damping(z, z_dot, c):
 
     Parameters
     ----------
-    z : indentation [m] (> 0 in contact; the pressure does not depend on it).
-    z_dot : indentation rate [m/s].
-    c : dashpot coefficient [N s m-2], >= 0.
+    z : float or array_like
+        Indentation [m] (> 0 in contact; the pressure does not depend on it, only its shape).
+    z_dot : float or array_like
+        Indentation rate [m/s].
+    c : float
+        Dashpot coefficient [N s m-2], >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Damping pressure per unit base length [N/m], broadcast over ``z`` and ``z_dot``.
+
+    Notes
+    -----
+    .. math:: p_d = c\\, \\dot z
+
+    the Winkler counterpart of the Hunt–Crossley term ``lam z zdot`` of eq. (4) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] E. Winkler, Die Lehre von der Elasticitaet und Festigkeit, Dominicus, Prague (1867).
+
+    Examples
+    --------
+    >>> winkler_damping([1e-3, 2e-3], [0.1, -0.1], 2.0e5)
+    array([ 20000., -20000.])
     """
     return c * np.asarray(z_dot, dtype=float) + 0.0 * np.asarray(z, dtype=float)
 

@@ -38,8 +38,40 @@ FLAGGED_COLOR, UNTRUSTED_COLOR = "0.55", "C3"
 
 # ----------------------------------------------------------------------------- flags and response
 def point_flags(ds, index=None, order=None):
-    """``(flagged, untrusted)`` boolean arrays over the grid (or its slice ``index``, dims in ``order``):
-    status not ``ok``; status ``ok`` but the linearization ``untrusted`` (all False without ``sl_trust``)."""
+    """The flagged and the untrusted points over the grid (or its slice ``index``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with ``status`` (and optionally ``sl_trust``) on the grid.
+    index : dict of str to int, optional
+        A slice of the grid (``ds.isel(index)``).
+    order : sequence of str, optional
+        The order of the dimensions of the arrays returned.
+
+    Returns
+    -------
+    flagged : numpy.ndarray of bool
+        Status not ``ok``.
+    untrusted : numpy.ndarray of bool
+        Status ``ok`` but the linearization ``untrusted`` (all False without ``sl_trust``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> [a.tolist() for a in point_flags(ds)]
+    [[False, True, False], [False, False, True]]
+    """
     def values(name):
         da = ds[name].isel(index) if index else ds[name]
         return np.asarray((da.transpose(*order) if order else da).values)
@@ -51,8 +83,35 @@ def point_flags(ds, index=None, order=None):
 
 
 def flag_summary(ds):
-    """``"status: ok 95, k_eq_negative 5; linearization vs coupled model: trusted 3, check 29, untrusted
-    63"``: the counts over the whole grid (trust: "not stored" for files without ``sl_trust``)."""
+    """The counts of the status and trust codes over the whole grid, in one line.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with ``status`` (and optionally ``sl_trust``).
+
+    Returns
+    -------
+    str
+        E.g. ``"status: ok 95, k_eq_negative 5; linearization vs coupled model: trusted 3, check 29,
+        untrusted 63"`` (trust: "not stored" for files without ``sl_trust``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> flag_summary(ds)
+    'status: ok 2, k_eq_negative 1; linearization vs coupled model: trusted 2, check 0, untrusted 1'
+    """
     codes, counts = np.unique(np.asarray(ds["status"].values), return_counts=True)
     names = {int(m): m.name for m in PointStatus}
     status = ", ".join(f"{names.get(int(c), int(c))} {n}" for c, n in zip(codes, counts))
@@ -65,7 +124,36 @@ def flag_summary(ds):
 
 
 def point_flag_text(ds, index):
-    """`` [flagged: <status>]``, `` [linearization <trust>]`` or ``""`` for one grid point."""
+    """The flag of one grid point as text: `` [flagged: <status>]``, `` [linearization <trust>]`` or ``""``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with ``status`` (and optionally ``sl_trust``).
+    index : dict of str to int
+        The grid point.
+
+    Returns
+    -------
+    str
+        The text, with a leading space when not empty.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> point_flag_text(ds, {"S0": 1}), point_flag_text(ds, {"S0": 2})
+    (' [flagged: k_eq_negative]', ' [linearization untrusted]')
+    """
     code = int(np.asarray(ds["status"].isel(index).values))
     if code != PointStatus.ok:
         return f" [flagged: {PointStatus(code).name if code in set(map(int, PointStatus)) else code}]"
@@ -76,9 +164,41 @@ def point_flag_text(ds, index):
 
 
 def response_values(ds, da, kind, index=None):
-    """``(DataArray, label)``: ``da`` (a ``var_theta`` [rad2], already sliced at ``index``) drawn as the
-    variance, as ``sigma_theta`` [rad] or as ``sigma_theta / atan(b/h)`` [1] (``kind`` in
-    :data:`RESPONSES`; the slenderness sliced at ``index`` too and broadcast by dimension name)."""
+    """The rotation response as drawn, with its axis label.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The result (its ``slenderness`` [rad] for ``kind="fraction"``).
+    da : xarray.DataArray
+        A ``var_theta`` [rad2], already sliced at ``index``.
+    kind : {"var", "sigma", "fraction"}
+        The variance [rad2], ``sigma_theta`` [rad] or ``sigma_theta / atan(b/h)`` [1]
+        (:data:`RESPONSES`); ``ValueError`` otherwise.
+    index : dict of str to int, optional
+        The slice of the grid ``da`` was taken at (the slenderness is sliced alike).
+
+    Returns
+    -------
+    values : xarray.DataArray
+        The response; NaN where the variance is negative.
+    label : str
+        Its axis label with units.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"slenderness": 0.2})
+    >>> values, label = response_values(ds, xr.DataArray([1e-4, 4e-4], dims="S0"), "fraction")
+    >>> [round(float(v), 6) for v in values], label
+    ([0.05, 0.1], 'sigma_theta / atan(b/h) [1]')
+    """
     if kind == "var":
         return da, "var_theta [rad2]"
     sigma = np.sqrt(da.where(da >= 0))
@@ -94,7 +214,35 @@ def response_values(ds, da, kind, index=None):
 
 
 def flag_legend(fig, ds, flagged, untrusted, curves=False):
-    """The figure legend of the marks, with their counts."""
+    """Add the figure legend of the marks of flagged and untrusted points, with their counts.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (constrained layout: the legend goes below the axes).
+    ds : xarray.Dataset
+        The result drawn (unused by the legend itself; kept for a uniform call).
+    flagged, untrusted : array_like of bool
+        The marks (:func:`point_flags`); their counts [-] are shown.
+    curves : bool
+        Markers (line plots) rather than hatched patches (maps).
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] J. D. Hunter, "Matplotlib: A 2D graphics environment", Computing in Science & Engineering 9(3)
+       (2007) 90-95.
+
+    Examples
+    --------
+    >>> fig = new_figure(4.0, 3.0)
+    >>> flag_legend(fig, None, [True, False], [False, False])
+    >>> [t.get_text() for t in fig.legends[0].get_texts()]
+    ['flagged (status != ok, not a value): 1', 'linearization untrusted: 0']
+    """
     if curves:
         handles = [Line2D([], [], ls="", marker="x", color=FLAGGED_COLOR, label=f"flagged (status != ok, not a value): "
                                                                                  f"{int(np.sum(flagged))}"),
@@ -109,23 +257,138 @@ def flag_legend(fig, ds, flagged, untrusted, curves=False):
 
 
 def grid_dims(ds):
-    """The grid dimensions of a result (the dimensions of ``status``)."""
+    """The grid dimensions of a result (the dimensions of ``status``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with ``status``.
+
+    Returns
+    -------
+    tuple of str
+        The dimension names.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> grid_dims(ds)
+    ('S0',)
+    """
     return tuple(ds["status"].dims)
 
 
 def grid_values(ds, dim):
-    """Coordinate values of grid dimension ``dim`` (``k`` lives in ``k_value``; cases: index)."""
+    """Coordinate values of grid dimension ``dim`` (``k`` lives in ``k_value``; cases: index).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result.
+    dim : str
+        A grid dimension.
+
+    Returns
+    -------
+    numpy.ndarray
+        Its values in SI units (e.g. ``S0`` [m2 s-3]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> grid_values(ds, "S0").tolist()
+    [0.0001, 0.0002, 0.0004]
+    """
     name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
     return np.asarray(ds[name].values)
 
 
 def grid_units(ds, dim):
+    """The CF units of grid dimension ``dim`` (``k`` lives in ``k_value``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result.
+    dim : str
+        A grid dimension.
+
+    Returns
+    -------
+    str
+        Its ``units`` attribute (e.g. ``"m2 s-3"`` for ``S0``); ``""`` when it has none.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> grid_units(ds, "S0")
+    'm2 s-3'
+    """
     name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
     return ds[name].attrs.get("units", "")
 
 
 def spot_index(ds, i):
-    """Grid index dict of spot point ``i``."""
+    """The grid index of Monte Carlo spot point ``i`` (the grid point nearest its ``spot_<dim>`` values).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with spot checks.
+    i : int
+        The spot point.
+
+    Returns
+    -------
+    dict of str to int
+        ``{dim: position}``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> spot_index(ds.assign_coords(spot_S0=("spot", [2e-4])), 0)
+    {'S0': 1}
+    """
     index = {}
     for dim in grid_dims(ds):
         if dim == "case":
@@ -136,12 +399,64 @@ def spot_index(ds, i):
 
 
 def is_log_spaced(values):
+    """Whether a grid axis is better drawn on a log scale: more than two positive values spanning > 50 x.
+
+    Parameters
+    ----------
+    values : array_like
+        The axis values (any units).
+
+    Returns
+    -------
+    bool
+        True for a log axis.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> bool(is_log_spaced([1e-5, 1e-4, 1e-3])), bool(is_log_spaced([1.0, 2.0, 3.0]))
+    (True, False)
+    """
     values = np.asarray(values, dtype=float)
     return values.size > 2 and np.all(values > 0) and values.max() / values.min() > 50
 
 
 def point_label(ds, index):
-    """``"eps=6e+07, S0=2.4e-05"`` (or the case name) for a grid index dict."""
+    """A grid point as text: ``"eps=6e+07, S0=2.4e-05"`` (or the case name).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result.
+    index : dict of str to int
+        The grid point.
+
+    Returns
+    -------
+    str
+        The label (values in SI units, 3 significant digits); ``"single point"`` for an empty index.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> point_label(ds, {"S0": 2}), point_label(ds, {})
+    ('S0=0.0004', 'single point')
+    """
     parts = []
     for dim, i in index.items():
         if dim == "case" and "case_name" in ds:
@@ -154,14 +469,64 @@ def point_label(ds, index):
 
 
 def new_figure(width, height):
+    """A matplotlib figure with constrained layout and an Agg canvas (no pyplot, no display).
+
+    Parameters
+    ----------
+    width, height : float
+        Size [inch].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, at :data:`DPI` dots per inch.
+
+    References
+    ----------
+    .. [1] J. D. Hunter, "Matplotlib: A 2D graphics environment", Computing in Science & Engineering 9(3)
+       (2007) 90-95.
+
+    Examples
+    --------
+    >>> fig = new_figure(4.0, 3.0)
+    >>> [float(x) for x in fig.get_size_inches()], float(fig.dpi)
+    ([4.0, 3.0], 110.0)
+    """
     fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
 
 
 def save_figure(fig, path):
-    """Write ``fig`` as PNG to ``path`` atomically (``<path>.tmp`` then rename): a failing write
-    (disk full, permission) leaves no partial file behind and raises the ``OSError``."""
+    """Write ``fig`` as PNG to ``path`` atomically (``<path>.tmp`` then rename).
+
+    A failing write (disk full, permission) leaves no partial file behind and raises the ``OSError``.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        The PNG file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    References
+    ----------
+    .. [1] J. D. Hunter, "Matplotlib: A 2D graphics environment", Computing in Science & Engineering 9(3)
+       (2007) 90-95.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     out = save_figure(new_figure(2.0, 2.0), pathlib.Path(tmp) / "f.png")
+    ...     out.read_bytes()[:4], sorted(p.name for p in pathlib.Path(tmp).iterdir())
+    (b'\\x89PNG', ['f.png'])
+    """
     from screening.atomicfile import atomic_open
 
     with atomic_open(path, "wb") as fh:                 # never through a planted link
@@ -170,5 +535,35 @@ def save_figure(fig, path):
 
 
 def axis_label(ds, name):
+    """The axis label of a variable: ``"name [units]"``, or its name when it has no units.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result.
+    name : str
+        A variable or coordinate.
+
+    Returns
+    -------
+    str
+        The label.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.status import PointStatus, Trust
+    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
+    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
+    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
+    >>> axis_label(ds, "S0"), axis_label(ds, "status")
+    ('S0 [m2 s-3]', 'status')
+    """
     units = ds[name].attrs.get("units")
     return f"{name} [{units}]" if units else name

@@ -36,8 +36,38 @@ PEAK_PANELS = ("peak_var_theta", "peak_p_uplift", "min_k_eq", "status")
 LOG_PANELS = ("var_theta", "var_theta_dot", "peak_var_theta")
 
 def representative_points(ds, n=4):
-    """Up to ``n`` grid index dicts: status-ok points with the smallest, median and largest
-    ``peak_var_theta`` and the largest ``peak_p_uplift`` (any points if none is ok)."""
+    """Up to ``n`` grid points worth drawing as time histories.
+
+    The status-ok points with the smallest, median and largest ``peak_var_theta`` [rad2] and the
+    largest ``peak_p_uplift`` [1] (any points if none is ok), without repeats.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization or sweep result.
+    n : int
+        At most this many points.
+
+    Returns
+    -------
+    list of dict
+        Grid index dicts ``{dim: position}``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> representative_points(ds)
+    [{'S0': 0}, {'S0': 2}, {'S0': 4}]
+    """
     dims = grid_dims(ds)
     shape = ds["status"].shape
     status = np.asarray(ds["status"].values).reshape(-1)
@@ -59,9 +89,49 @@ def representative_points(ds, n=4):
 
 
 def plot_histories(ds, path, points=None, response="var"):
-    """Time histories at ``points`` (grid index dicts; default :func:`representative_points`); the
-    rotation panel as ``response`` (:data:`RESPONSES`).  A flagged point is drawn grey and dotted up
-    to where it stopped, an untrusted one dashed; both say so in the legend."""
+    """Time histories of the linearization at a few grid points, as a PNG.
+
+    Panels ``var_theta`` (drawn as ``response``), ``var_theta_dot`` [rad2 s-2], ``c_eq``
+    [N m s rad-1], ``k_eq`` [N m rad-1] and ``p_uplift`` [1] against ``t`` [s].  A flagged point is
+    drawn grey and dotted up to where it stopped, an untrusted one dashed; both say so in the legend.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result storing the histories.
+    path : str or os.PathLike
+        The PNG file (written atomically).
+    points : list of dict, optional
+        Grid index dicts; default :func:`representative_points`.
+    response : {"var", "sigma", "fraction"}
+        How the rotation is drawn (:data:`~screening.report.figure_base.RESPONSES`).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Notes
+    -----
+    The moments are those of the Lyapunov equation of the linearized system, eq. (45) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_histories(ds, pathlib.Path(tmp) / "h.png", response="sigma").read_bytes()[:4]
+    b'\\x89PNG'
+    """
     points = representative_points(ds) if points is None else points
     fig = new_figure(8.0, 11.0)
     axes = fig.subplots(len(HISTORY_PANELS), 1, sharex=True)
@@ -121,9 +191,42 @@ def _ticks(ds, dim, n):
 
 
 def plot_peaks(ds, path, response="var"):
-    """Peak statistics over the grid (the rotation as ``response``, :data:`RESPONSES`); ``None``
-    (nothing written) for a single-point result.  Flagged points are masked and hatched grey,
-    untrusted ones hatched red (maps) or drawn hollow (curves); the status colours are named."""
+    """Peak statistics over the grid as a PNG: curves along one swept dimension, maps over two.
+
+    The rotation is drawn as ``response``; flagged points are masked and hatched grey, untrusted ones
+    hatched red (maps) or drawn hollow (curves); the status colours are named.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization or sweep result (``peak_var_theta`` [rad2], ``peak_p_uplift`` [1], ...).
+    path : str or os.PathLike
+        The PNG file (written atomically).
+    response : {"var", "sigma", "fraction"}
+        How the rotation is drawn.
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``path``; ``None`` (nothing written) for a single-point result.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_peaks(ds, pathlib.Path(tmp) / "p.png").name, plot_peaks(ds.isel(S0=0), pathlib.Path(tmp) / "q.png")
+    ('p.png', None)
+    """
     dims = grid_dims(ds)
     if not dims:
         return None
@@ -258,11 +361,44 @@ def _map(ds, name, ydim, xdim, rest, ax, fig, response="var"):
 
 
 def plot_result(ds, stem, out_dir, response="var"):
-    """Write all figures of dataset ``ds`` as ``out_dir/<stem>_<kind>.png``; returns the paths.
+    """Write all figures of a result as ``out_dir/<stem>_<kind>.png``.
 
-    All or nothing: if one figure fails (unreadable data, failing write), the figures this
-    call created are removed before the error propagates.  Figures of histories the result does
-    not store (``[output]`` of the study) are not drawn.
+    All or nothing: if one figure fails (unreadable data, failing write), the figures this call
+    created are removed before the error propagates.  Figures of histories the result does not store
+    (``[output]`` of the study) are not drawn.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization or sweep result.
+    stem : str
+        The file-name stem.
+    out_dir : str or os.PathLike
+        The folder.
+    response : {"var", "sigma", "fraction"}
+        How the rotation is drawn; ``ValueError`` otherwise.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     [p.name for p in plot_result(ds, "demo", tmp)]
+    ['demo_histories.png', 'demo_peaks.png']
     """
     out_dir = Path(out_dir)
     if response not in RESPONSES:

@@ -17,16 +17,60 @@ __all__ = ["plot_fragility", "BEST_MARKERS"]
 
 
 def plot_fragility(frag, dim, path, max_curves=8, flags=None):
-    """Fragility curves: ``p_exceed`` of a :func:`screening.analysis.fragility.fragility_dataset` along
-    the swept intensity ``dim`` (lognormal fit dashed), with the Monte Carlo probabilities at
-    the spot points (+-2 standard errors) in the colour of the curve they lie on (black when that
-    curve is not drawn).  Up to ``max_curves`` curves, the other grid dimensions sampled evenly.
-    ``flags``: the result's ``status`` (and ``sl_trust``) on the same grid: flagged points are
-    crossed grey, untrusted ones drawn hollow, counted in the legend.  Where ``frag`` has
+    """Fragility curves as a PNG, with their lognormal fits and the Monte Carlo checks.
+
+    ``p_exceed`` of a :func:`screening.analysis.fragility.fragility_dataset` along the swept intensity
+    ``dim`` (lognormal fit dashed), with the Monte Carlo probabilities at the spot points (+-2
+    standard errors) in the colour of the curve they lie on (black when that curve is not drawn).
+    Up to ``max_curves`` curves, the other grid dimensions sampled evenly.  Where ``frag`` has
     ``best_p_exceed`` (``[accuracy]``), each drawn curve also gets its best estimates, the band
     ``best_p_exceed_low..high`` shaded and one marker per :class:`~screening.status.BestMethod`
-    (points without a vouched estimate: a red ``?``, no band).  ``None`` if ``dim`` is not a dimension
-    of ``p_exceed``."""
+    (points without a vouched estimate: a red ``?``, no band).
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset (``p_exceed`` [1], ``fit_median`` in the units of ``dim``, ``beta`` [1]).
+    dim : str
+        The swept intensity (e.g. ``S0`` [m2 s-3]).
+    path : str or os.PathLike
+        The PNG file (written atomically).
+    max_curves : int
+        At most this many curves.
+    flags : xarray.Dataset, optional
+        The result's ``status`` (and ``sl_trust``) on the same grid: flagged points are crossed grey,
+        untrusted ones drawn hollow, counted in the legend.
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``path``; ``None`` if ``dim`` is not a dimension of ``p_exceed``.
+
+    Notes
+    -----
+    The fit drawn is ``P(IM) = Phi(ln(IM / median) / beta)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> import tempfile, pathlib
+    >>> from screening.analysis.fragility import fragility_dataset
+    >>> frag = fragility_dataset(ds, 0.01)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_fragility(frag, "S0", pathlib.Path(tmp) / "f.png").name, plot_fragility(frag, "k", "x.png")
+    ('f.png', None)
+    """
     from scipy.special import ndtr
 
     p = frag["p_exceed"]

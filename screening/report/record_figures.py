@@ -12,7 +12,39 @@ REGIME_LABELS = {0: "full contact", 1: "uplift +", 2: "uplift -", 3: "flight"}
 
 
 def plot_simulation(ds, path):
-    """Ground acceleration, ``theta / slenderness`` (with ``+-theta_ul``), ``z_cb`` and the contact regime."""
+    """A simulation as a PNG: ground acceleration, ``theta / slenderness`` (with ``+-theta_ul``), ``z_cb``
+    and the contact regime.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`screening.simulate` result (``t`` [s], ``ground_acceleration`` [m s-2], ``theta`` [rad],
+        ``z_cb`` [m], the regime; the coupled model's or the condensed one's).
+    path : str or os.PathLike
+        The PNG file (written atomically).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from screening import Block, Foundation, simulate
+    >>> t = np.arange(0.0, 2.0, 0.01)
+    >>> ds = simulate(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...               2.0 * np.sin(2 * np.pi * 2.0 * t), dt=0.01, model="condensed")
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_simulation(ds, pathlib.Path(tmp) / "sim.png").read_bytes()[:4]
+    b'\\x89PNG'
+    """
     fig = new_figure(8.0, 8.5)
     ax = fig.subplots(4, 1, sharex=True)
     t = ds["t"].values
@@ -41,8 +73,44 @@ def plot_simulation(ds, path):
 
 
 def plot_excitation_fit(record, fit, path):
-    """The goodness of a :func:`screening.analysis.fit_excitation.fit_excitation`: the record's Husid curve
-    against the fitted envelope's, and its smoothed periodogram against the fitted spectrum."""
+    """The goodness of a :func:`screening.analysis.fit_excitation.fit_excitation` as a PNG.
+
+    The record's Husid curve against the fitted envelope's, and its smoothed periodogram against the
+    fitted spectrum.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record (acceleration [m s-2], time step [s]).
+    fit : dict
+        Its :func:`~screening.analysis.fit_excitation.fit_excitation` result (``T1``, ``T2`` [s],
+        ``S0`` [m2 s-3], ...).
+    path : str or os.PathLike
+        The PNG file (written atomically).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Husid, "Analisis de terremotos: analisis general", Revista del IDIEM 8 (1969) 21-42.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from screening.records import Record
+    >>> from screening.analysis.fit_excitation import fit_excitation
+    >>> t = np.arange(0.0, 20.0, 0.01)
+    >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * np.random.default_rng(1).normal(size=t.size), 0.01, "x")
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_excitation_fit(rec, fit_excitation(rec), pathlib.Path(tmp) / "fit.png").name
+    'fit.png'
+    """
     from screening.analysis.fit_excitation import _kt_shape, _q2_integral, husid, smoothed_psd
 
     a = record.acceleration - record.acceleration.mean()

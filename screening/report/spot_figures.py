@@ -18,9 +18,35 @@ from screening.report.figure_base import (
 __all__ = ["plot_spots", "Z95", "MAX_SPOT_FIGURES", "spot_file_label", "plot_spot_panels", "SPOT_PANEL_HISTORIES"]
 
 def plot_spots(ds, path):
-    """Linearization vs Monte Carlo at the spot points; ``None`` if the result has none.  The
-    linearization's history is drawn where the result stores it (on the grid, or as ``spot_<name>``
-    with ``[output] histories = "spots"``); the peak error is always in the title."""
+    """Linearization vs Monte Carlo at the spot points, as a PNG.
+
+    The linearization's history is drawn where the result stores it (on the grid, or as
+    ``spot_<name>`` with ``[output] histories = "spots"``); the peak error is always in the title.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result (``var_theta`` [rad2] and the Monte Carlo ``mcs_*`` variables over ``spot``).
+    path : str or os.PathLike
+        The PNG file (written atomically).
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``path``; ``None`` (nothing written) if the result has no spot point.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> plot_spots(xr.Dataset({"status": ("S0", [0])}), "never_written.png") is None
+    True
+    """
     if "spot" not in ds.dims or ds.sizes["spot"] == 0:
         return None
     n = min(ds.sizes["spot"], 8)
@@ -81,7 +107,35 @@ MAX_SPOT_FIGURES = 12
 
 
 def spot_file_label(ds, i):
-    """File-name label of spot point ``i``: its case name, or its grid values."""
+    """File-name label of spot point ``i``: its case name, or its grid values.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with spot checks.
+    i : int
+        The spot point.
+
+    Returns
+    -------
+    str
+        Letters, digits and ``._-+`` only (values in SI units).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"status": (("eps", "S0"), [[0, 0], [0, 0]])},
+    ...                 coords={"eps": [0.0, 6e7], "S0": [1e-4, 2e-4], "spot_eps": ("spot", [6e7]),
+    ...                         "spot_S0": ("spot", [1e-4])})
+    >>> spot_file_label(ds, 0)
+    'eps_6e+07__S0_0.0001'
+    """
     label = point_label(ds, spot_index(ds, i)).replace(", ", "__").replace("=", "_")
     return "".join(c if c.isalnum() or c in "._-+" else "_" for c in label) or f"spot{i}"
 

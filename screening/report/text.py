@@ -16,7 +16,37 @@ def _fmt(value):
 
 
 def describe(ds, path="result"):
-    """Plain-text summary of a result dataset (what ``screening info`` prints)."""
+    """Plain-text summary of a result dataset (what ``screening info`` prints).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization or sweep result (``status``, ``t`` [s], the peak moments).
+    path : str
+        The name shown on the first line.
+
+    Returns
+    -------
+    str
+        Lines on the grid, the fixed parameters (SI units), the models, the block on its bed, the
+        input intensity, the status counts, the ranges of ``peak_var_theta`` [rad2] and friends, the
+        probabilities and the Monte Carlo spot checks.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> print(describe(ds, "demo.nc").splitlines()[4])
+      S0       5 values, 0.0003 .. 0.0012 m2 s-3
+    """
     from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
 
     dims = grid_dims(ds)
@@ -100,8 +130,35 @@ def describe(ds, path="result"):
 
 
 def probability_lines(ds):
-    """Where the points' ``p_overturn`` and ``p_exceed`` come from (``p_source``), their ranges, the points near
-    toppling, and the range of ``p_rocking_start``; ``[]`` for a result without them."""
+    """Lines on the probabilities stored on the points of a result.
+
+    Where the points' ``p_overturn`` and ``p_exceed`` come from (``p_source``), their ranges, the
+    points near toppling, and the range of ``p_rocking_start``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result.
+
+    Returns
+    -------
+    list of str
+        The lines (probabilities [1]); ``[]`` for a result without them.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> probability_lines(xr.Dataset({"p_rocking_start": ("S0", [0.01, 0.25])}))
+    ['probability that rocking starts (ground acceleration beyond the uplift acceleration): 0.01 .. 0.25']
+    >>> probability_lines(xr.Dataset())
+    []
+    """
     from screening.analysis.probabilities import TOPPLING_FRACTION, source_codes
 
     lines = []
@@ -127,8 +184,33 @@ def probability_lines(ds):
 
 
 def best_line(ds):
-    """The ``[accuracy]`` best estimates of a result in one line: counts by ``best_method`` and what the
-    escalation spent."""
+    """The ``[accuracy]`` best estimates of a result in one line.
+
+    Counts by ``best_method`` and, where points were escalated, what the escalation spent [CPU s].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with ``best_method`` and the ``accuracy_*`` attributes.
+
+    Returns
+    -------
+    str
+        The line.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"best_method": ("S0", [0, 0, 1])}, attrs={"accuracy_target": 0.1})
+    >>> best_line(ds)
+    'best estimates ([accuracy] target 0.1): linearization 2, corrected_linearization 1'
+    """
     method = np.asarray(ds["best_method"].values).reshape(-1)
     counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
     line = f"best estimates ([accuracy] target {ds.attrs.get('accuracy_target', float('nan')):g}): {counts}"
@@ -161,8 +243,41 @@ def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):
 
 
 def bed_lines(ds, max_points=400):
-    """``block on its bed:`` lines of :func:`screening.beds.bed_summary` (ranges over the grid where the
-    block or bed is swept); nothing if the dataset lacks a parameter."""
+    """``block on its bed:`` lines of :func:`screening.beds.bed_summary`.
+
+    Ranges over the grid where the block or bed is swept; nothing if the dataset lacks a parameter.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with the block and bed parameters (``m`` [kg], ``b``, ``h`` [m], ``k`` [N m-2], ...).
+    max_points : int
+        At most this many block/bed combinations are summarised.
+
+    Returns
+    -------
+    list of str
+        The lines (indentation [mm], angles [rad], frequencies [rad/s], damping ratios [1]).
+
+    Notes
+    -----
+    The uplift angle is ``theta_ul = m g / (2 b^2 k)``, eq. (19) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> bed_lines(ds)[2]
+    '  uplift angle        0.001201 rad (paper m g/(2 b^2 k)), 0.001201 rad exact'
+    """
     import xarray as xr
 
     from screening.analysis.fragility import parameter
@@ -206,8 +321,39 @@ def bed_lines(ds, max_points=400):
 
 
 def intensity_lines(ds):
-    """``input intensity`` lines: ranges of the RVT median PGA, RMS acceleration, Arias intensity and median
-    PGV (0.1 Hz high-pass) of the inputs (:func:`screening.analysis.intensity.intensity_measures`); nothing if they cannot be computed."""
+    """``input intensity`` lines of the inputs of a result.
+
+    Ranges of the RVT median PGA, RMS acceleration, Arias intensity and median PGV (0.1 Hz
+    high-pass) (:func:`screening.analysis.intensity.intensity_measures`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result with its excitation parameters (``S0`` [m2 s-3], ...).
+
+    Returns
+    -------
+    list of str
+        The lines (accelerations [m s-2] and [g], Arias intensity and PGV [m s-1]); nothing if they
+        cannot be computed.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> intensity_lines(ds)[2]
+    '  rms_acceleration  0.2201 .. 0.4402 m s-2 (0.02245 .. 0.04489 g)'
+    """
     from screening.analysis.intensity import intensity_measures
 
     try:
@@ -229,7 +375,31 @@ PRODUCT_MAX_VALUES = 50_000_000
 
 
 def product_kind(ds):
-    """Which other screening file ``ds`` is: ``"fragility"``, ``"cloud"``, ``"simulation"``, or ``None``."""
+    """Which other screening file ``ds`` is.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An opened file.
+
+    Returns
+    -------
+    str or None
+        ``"fragility"``, ``"cloud"``, ``"simulation"``, or ``None`` (a sweep result, or a variable of
+        more than :data:`PRODUCT_MAX_VALUES` values [-]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> product_kind(xr.Dataset({"p_exceed": ("S0", [0.1, 0.5])})), product_kind(xr.Dataset({"status": 0}))
+    ('fragility', None)
+    """
     names = set(ds.variables)
     if "status" in names or any(v.size > PRODUCT_MAX_VALUES for v in ds.variables.values()):
         return None                 # a (damaged) sweep result, or a file too big to be one of these
@@ -243,8 +413,39 @@ def product_kind(ds):
 
 
 def describe_product(ds, path="file"):
-    """Plain-text summary of a file of ``screening simulate``, ``cloud`` or ``fragility`` (what ``screening
-    info`` prints for them); ``None`` for a file that is none of these."""
+    """Plain-text summary of a file of ``screening simulate``, ``cloud`` or ``fragility``.
+
+    What ``screening info`` prints for them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The opened file.
+    path : str
+        The name shown on the first line.
+
+    Returns
+    -------
+    str or None
+        The summary (threshold [rad], probabilities [1], fitted median in the units of the
+        intensity); ``None`` for a file that is none of these (:func:`product_kind`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False)
+    >>> from screening.analysis.fragility import fragility_dataset
+    >>> print(describe_product(fragility_dataset(ds, 0.01), "frag.nc").splitlines()[-1])
+    lognormal fit over S0: 1 of 1 curve(s) fitted; median 0.0005381 m2 s-3, beta 0.2351 (medians over the fitted curves)
+    """
     kind = product_kind(ds)
     if kind is None:
         return None

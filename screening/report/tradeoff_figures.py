@@ -105,7 +105,30 @@ def plot_error_vs_cost(ds, path):
 
 
 def study_n(ds):
-    """Sample count of the tolerance sub-study (from the dataset)."""
+    """Sample count of the tolerance sub-study (from the dataset).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset (attribute ``tol_samples``).
+
+    Returns
+    -------
+    int or str
+        The count [-], or ``"?"`` when the dataset does not say.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> study_n(xr.Dataset(attrs={"tol_samples": 500})), study_n(xr.Dataset())
+    (500, '?')
+    """
     return int(ds.attrs.get("tol_samples", 0)) or "?"
 
 

@@ -25,8 +25,34 @@ LABEL_DIMS = ("approach", "mcs_model", "comparison", "quantity", "cv_model")
 
 
 def to_file_layout(ds):
-    """The dataset as written: string-labelled dimensions -> ``<dim>_name`` auxiliary
-    coordinates, integer index coordinates as int32."""
+    """The dataset as written: string-labelled dimensions as ``<dim>_name`` auxiliary coordinates.
+
+    Integer index coordinates become int32.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset (in memory).
+
+    Returns
+    -------
+    xarray.Dataset
+        The file layout (CF coordinate variables are numeric).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"cost": ("approach", [0.01, 2.0])}, coords={"approach": ["sl", "coupled_mcs"]})
+    >>> out = to_file_layout(ds)
+    >>> "approach" in out.coords, out["approach_name"].values.tolist()
+    (False, ['sl', 'coupled_mcs'])
+    """
     out = ds.copy()
     for d in LABEL_DIMS:
         if d in out.coords:
@@ -42,7 +68,31 @@ def to_file_layout(ds):
 
 
 def from_file_layout(ds):
-    """Inverse of :func:`to_file_layout`: string labels back as dimension coordinates."""
+    """Inverse of :func:`to_file_layout`: string labels back as dimension coordinates.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset as read from its file.
+
+    Returns
+    -------
+    xarray.Dataset
+        With ``ds.sel(approach="sl")`` possible again.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"cost": ("approach", [0.01, 2.0])}, coords={"approach": ["sl", "coupled_mcs"]})
+    >>> float(from_file_layout(to_file_layout(ds))["cost"].sel(approach="sl"))
+    0.01
+    """
     out = ds.copy()
     for d in LABEL_DIMS:
         name = f"{d}_name"
@@ -53,7 +103,30 @@ def from_file_layout(ds):
 
 
 def file_encoding(ds):
-    """netCDF encoding: no fill value on coordinates (CF 2.5.1), compression on the histories."""
+    """netCDF encoding: no fill value on float coordinates (CF 2.5.1), compression on the histories.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset in file layout.
+
+    Returns
+    -------
+    dict
+        ``{variable: encoding}`` for :meth:`xarray.Dataset.to_netcdf`.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 2.5.1
+       (missing data), https://cfconventions.org
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> enc = file_encoding(xr.Dataset(coords={"S0": [1e-4, 2e-4]}))
+    >>> enc["S0"], enc["var_theta"]
+    ({'_FillValue': None}, {'zlib': True, 'complevel': 4})
+    """
     enc = {name: {"_FillValue": None} for name in ds.coords if ds[name].dtype.kind == "f"}
     for name in ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se", "p_uplift"):
         enc[name] = {"zlib": True, "complevel": 4}
@@ -61,7 +134,31 @@ def file_encoding(ds):
 
 
 def output_paths(out_dir, stem):
-    """The files a trade study writes: ``nc``, ``md``, ``csv``, ``error_vs_cost``, ``validity``."""
+    """The files a trade study writes: ``nc``, ``md``, ``csv``, ``error_vs_cost``, ``validity``.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        The folder.
+    stem : str
+        The file-name stem.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The paths.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> sorted(p.name for p in output_paths("out", "trade").values())
+    ['trade.csv', 'trade.md', 'trade.nc', 'trade_error_vs_cost.png', 'trade_validity.png']
+    """
     out = Path(out_dir)
     return {"nc": out / f"{stem}.nc", "md": out / f"{stem}.md", "csv": out / f"{stem}.csv",
             "error_vs_cost": out / f"{stem}_error_vs_cost.png", "validity": out / f"{stem}_validity.png"}

@@ -22,7 +22,42 @@ __all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summa
 
 
 def rule_text(rule, metric, quantity):
-    """One-line statement of a rule from :func:`derive_rules`."""
+    """One-line statement of a rule from :func:`~screening.analysis.metrics.derive_rules`.
+
+    Parameters
+    ----------
+    rule : dict
+        One rule (``reference``, ``threshold`` [1], ``group``, ``p_safe`` [1], ...).
+    metric : {"peak", "time_avg", "worst"}
+        The error the rule was judged on.
+    quantity : str
+        The quantity judged (``var_theta`` [rad2] or ``var_theta_dot`` [rad2 s-2]).
+
+    Returns
+    -------
+    str
+        The statement.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> from screening.analysis.metrics import derive_rules
+    >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
+    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
+    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
+    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err))},
+    ...                 coords={"comparison": ["sl_vs_condensed", "sl_vs_coupled"], "quantity": ["var_theta"]})
+    >>> rules = derive_rules(ds, thresholds=(0.10,))
+    >>> print(rule_text(rules[1], "peak", "var_theta"))
+    [all] SL within 10% of coupled MCS (peak var_theta): for SL peak p_uplift <= 0.4 (2 tested points, all pass); first failure at p = 0.8 (c: +50 %); 2/3 pass overall; margin rule min_k_eq/k_eq(0) > 0.20 covers 2 points
+    """
     what = {"peak": f"peak {quantity}", "time_avg": f"time-averaged {quantity}",
             "worst": f"peak and time-averaged {quantity}"}[metric]
     head = f"[{rule['group']}] SL within {rule['threshold']:.0%} of {rule['reference']} MCS ({what})"
@@ -46,6 +81,36 @@ def recommendation(rules):
 
     Uses the loosest threshold against coupled MCS (where SL alone is acceptable) and the
     tightest against condensed MCS (where the linearization itself is accurate).
+
+    Parameters
+    ----------
+    rules : list of dict
+        From :func:`~screening.analysis.metrics.derive_rules` (thresholds [1]).
+
+    Returns
+    -------
+    str
+        The recommendation.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> from screening.analysis.metrics import derive_rules
+    >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
+    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
+    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
+    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err))},
+    ...                 coords={"comparison": ["sl_vs_condensed", "sl_vs_coupled"], "quantity": ["var_theta"]})
+    >>> rules = derive_rules(ds, thresholds=(0.10,))
+    >>> recommendation(rules)[:72]
+    'Use SL alone for SL peak p_uplift <= 0.4: there it stays within 10% of c'
     """
     def pick(ref, thr_fn):
         cands = [r for r in rules if r["group"] == "all" and r["reference"] == ref]
@@ -127,7 +192,34 @@ def point_rows(ds):
 
 
 def write_csv(rows, path):
-    """The per-point rows as CSV."""
+    """Write the per-point rows as CSV (atomically).
+
+    Parameters
+    ----------
+    rows : list of dict
+        From :func:`point_rows` (the keys of the first row are the columns; costs [s], errors [1]).
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     write_csv([{"point": "a", "cost_sl": 0.01}], pathlib.Path(tmp) / "t.csv")
+    ...     print((pathlib.Path(tmp) / "t.csv").read_text().strip())
+    point,cost_sl
+    a,0.01
+    """
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
@@ -135,7 +227,32 @@ def write_csv(rows, path):
 
 
 def cost_summary(ds):
-    """Median / min / max cost per point of each method [s] and the ratios to SL."""
+    """Median / min / max cost per point of each method [s].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset (``cost`` [s] over ``approach`` and ``point``, ``sl_batched_cost`` [s]).
+
+    Returns
+    -------
+    dict of str to tuple of float
+        ``{method: (median, min, max)}`` [s], ``sl_batched`` included.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"cost": (("approach", "point"), [[0.01, 0.02], [1.0, 3.0], [5.0, 7.0]]),
+    ...                  "sl_batched_cost": 0.001}, coords={"approach": ["sl", "condensed_mcs", "coupled_mcs"]})
+    >>> cost_summary(ds)["coupled_mcs"], cost_summary(ds)["sl_batched"]
+    ((6.0, 5.0, 7.0), (0.001, 0.001, 0.001))
+    """
     out = {}
     for m in METHODS:
         c = ds.cost.sel(approach=m).values
