@@ -5,9 +5,10 @@ band limit 100 rad/s), prints the RVT median of PGA, PGV, Sa(T), AvgSA(T) and th
 acceleration and Arias intensity against the same measure over N records drawn exactly as the Monte
 Carlo draws them (screening.solvers.synthesis): the sample median with its standard error
 (distribution-free, order statistics) for the peaks, the sample mean with its standard error for
-the Arias intensity and sqrt(mean(int a^2 dt) / T) for the RMS.  The PGV median is itself the median
-of records synthesised with another seed (intensity.simulated_pgv): its SE combines both sampling
-errors; the row "pgv rvt" is the first-passage (RVT) estimate it replaced.
+the Arias intensity and sqrt(mean(int a^2 dt) / T) for the RMS.  The PGA and PGV medians are themselves
+medians of records synthesised with another seed (intensity.simulated_pga, simulated_pgv): their SE
+combines both sampling errors; the rows "pga rvt" and "pgv rvt" are the first-passage (RVT) estimates
+they replaced.
 
     flock /work/bench.lock nice -n 10 python benchmarks/intensity_accuracy.py --n 1000
 """
@@ -40,7 +41,8 @@ POINTS = (("white noise", WhiteNoise(1e-3), 0.5),
 def rvt(exc, period):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return {"pga": I.pga_median(exc, T_END, CUTOFF), "pgv": I.pgv_median(exc, T_END, CUTOFF),
+        return {"pga": I.pga_median(exc, T_END, CUTOFF), "pga_rvt": I.pga_median(exc, T_END, CUTOFF, method="rvt"),
+                "pga_se": I.simulated_pga(exc, T_END, CUTOFF)[1], "pgv": I.pgv_median(exc, T_END, CUTOFF),
                 "pgv_rvt": I.pgv_median(exc, T_END, CUTOFF, method="rvt"),
                 "pgv_se": I.simulated_pgv(exc, T_END, CUTOFF)[1],
                 "sa": I.sa_median(exc, period, T_END, cutoff=CUTOFF),
@@ -63,8 +65,9 @@ def main(argv=None):
         pred = rvt(exc, period)
         t1 = time.perf_counter()
         s = sample_all_measures(exc, T_END, CUTOFF, args.n, period, seed=args.seed)
-        s["pgv_rvt"] = s["pgv"]
-        for name, units in (("pga", "m/s2"), ("pgv", "m/s"), ("pgv_rvt", "m/s"), ("sa", "m/s2"), ("avgsa", "m/s2"),
+        s["pgv_rvt"], s["pga_rvt"] = s["pgv"], s["pga"]
+        for name, units in (("pga", "m/s2"), ("pga_rvt", "m/s2"), ("pgv", "m/s"), ("pgv_rvt", "m/s"), ("sa", "m/s2"),
+                            ("avgsa", "m/s2"),
                             ("rms_acceleration", "m/s2"), ("arias_intensity", "m/s")):
             x = s[name]
             if name == "arias_intensity":
@@ -75,9 +78,10 @@ def main(argv=None):
                 se, stat = 0.5 * e.std(ddof=1) / math.sqrt(e.size) / ref, "rms"
             else:
                 ref, se, stat = np.median(x), I.median_standard_error(x), "median"
-                if name == "pgv":                           # both are sample medians
-                    se = math.hypot(se, pred["pgv_se"])
-            tag = {"sa": f"Sa({period:g} s)", "avgsa": f"AvgSA({period:g} s)", "pgv_rvt": "pgv rvt"}.get(name, name)
+                if name in ("pga", "pgv"):                  # both are sample medians
+                    se = math.hypot(se, pred[name + "_se"])
+            tag = {"sa": f"Sa({period:g} s)", "avgsa": f"AvgSA({period:g} s)", "pgv_rvt": "pgv rvt",
+                   "pga_rvt": "pga rvt"}.get(name, name)
             print(f"{label:30s} {tag + ' ' + stat:18s} {units:6s} {pred[name]:10.4g} {ref:10.4g} {se:9.2g} "
                   f"{pred[name] / ref - 1:+9.2%} {(pred[name] - ref) / se:+6.1f}")
         print(f"{'':30s} (RVT {t1 - t0:.1f} s, records {time.perf_counter() - t1:.1f} s)")

@@ -569,7 +569,7 @@ def write_pelicun_csv(frag, path):
 
 
 def _im_key(name):
-    """The ``--im`` key of an intensity variable: ``pga_median`` (RVT), ``pga`` (a record's),
+    """The ``--im`` key of an intensity variable: ``pga_median`` (a point's input), ``pga`` (a record's),
     ``stripe_pga`` (a multiple-stripe level) -> ``pga``; ``None`` for another name."""
     base = name.removeprefix("stripe_")
     return next((k for k, v in IMS.items() if base in (v[0], k) or (k == "rms" and base == "rms_acceleration")

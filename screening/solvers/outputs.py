@@ -131,7 +131,7 @@ GRID_OUTPUTS = (
                                                    "against the coupled model (SL / MCS - 1)", note=_OPEN_BAND)),
     # intensity measures of each point's input
     Output("pga_median", "intensity", "f8", _v("m s-2", "median peak ground acceleration of the modulated input "
-                                                        "(random-vibration theory)", note=_BAND)),
+                                                        "(2000 records synthesised per excitation shape)", note=_BAND)),
     Output("rms_acceleration", "intensity", "f8", _v("m s-2", "root mean square ground acceleration over the record",
                                                      note=_BAND)),
     Output("arias_intensity", "intensity", "f8", _v("m s-1", "Arias intensity pi/(2 g) int a2 dt (expected value for "

@@ -4,18 +4,9 @@ import math
 
 import numpy as np
 
+from screening.analysis.intensity import continuous_peak as hermite_peaks
 from screening.analysis.intensity import oscillator_peak as oscillator_peaks  # validated against an ODE
 from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
-
-
-def hermite_peaks(acc, rate, dt, refine=8):
-    """``max_t |a(t)|`` per row of the cubic Hermite interpolant (values and exact rates on the grid)."""
-    peak = np.max(np.abs(acc), axis=1)
-    a0, a1, d0, d1 = acc[:, :-1], acc[:, 1:], rate[:, :-1] * dt, rate[:, 1:] * dt
-    for u in np.linspace(0.0, 1.0, refine + 1)[1:-1]:
-        h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-        peak = np.maximum(peak, np.max(np.abs(h00 * a0 + h10 * d0 + h01 * a1 + h11 * d1), axis=1))
-    return peak
 
 
 def sample_measures(excitation, t_end, cutoff, n_samples, period, seed=0):
