@@ -286,7 +286,7 @@ def atlas_rows(atlas, condensation, target):
     value, se, method, _ = best_estimates(sl, status, trust, low, high, target, np.zeros((n, 1)),
                                           np.zeros(0, dtype=int), np.zeros(0), np.zeros(0), np.zeros(0))
     ref, ref_se = ds["mc_peak_var_theta"].values, ds["mc_peak_var_theta_se"].values
-    keep = np.isfinite(ref) & (ref > 0)
+    keep = np.isfinite(ref) & (ref > 0) & em.valid_reference(ds)
     return dict(value=value[keep], se=se[keep], method=method[keep], ref=ref[keep], ref_se=ref_se[keep],
                 needs_mc=~(linearization_or_atlas(trust, low, high, target) & (status == 0))[keep],
                 status=status[keep], p=s["sl_peak_p_uplift"].values[keep])

@@ -68,9 +68,12 @@ def resumed_rows(path, indices):
         return None
     import xarray as xr
 
+    from screening.analysis.atlas_run import REFERENCE_VALIDITY
+
     with xr.open_dataset(path) as ds:
         keep = np.isin(ds["point"].values, np.asarray(indices))
-        ds = ds.drop_vars([name for name in ds.variables if name.startswith("em_")])   # refitted at assembly
+        ds = ds.drop_vars([name for name in ds.variables if name.startswith("em_")       # refitted at assembly
+                           or name in REFERENCE_VALIDITY])                                 # judged again
         return ds.isel(point=np.flatnonzero(keep)).load()
 
 
@@ -165,7 +168,7 @@ def main(argv=None):
         print(f"pilot: all {len(allc)} points mean {np.mean(allc):.2f} s -> {args.points} points "
               f"{np.mean(allc) * args.points / 3600:.2f} CPU h")
         return 0
-    from screening.analysis.atlas_run import assemble
+    from screening.analysis.atlas_run import REFERENCE_VALIDITY, assemble, reference_validity
     from screening.atomicfile import atomic_path
 
     cpu_h = sum(r.get("cpu", 0.0) for r in results) / 3600
@@ -176,10 +179,11 @@ def main(argv=None):
         fresh = {int(r["index"]) for r in results}
         kept = ~np.isin(resumed["point"].values, list(fresh))
         cpu_h += float(np.nansum(resumed["point_cpu"].values[kept])) / 3600
-        ds = merge_rows(resumed, ds) if ds is not None else resumed
+        ds = merge_rows(resumed, ds.drop_vars(list(REFERENCE_VALIDITY))) if ds is not None else resumed
     if ds is None:
         print("error: no finished point to assemble", file=sys.stderr)
         return 1
+    ds = ds.assign(reference_validity(ds))        # every row judged by the validity rules as they stand now
     from screening.analysis.error_model import fitted_variables
 
     ds = ds.assign(fitted_variables(ds))          # the shipped error model, stored so that it is not refitted

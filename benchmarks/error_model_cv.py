@@ -186,8 +186,10 @@ def print_stops(ds, edges):
     linearization's peak p_uplift, median |SL/MC - 1| where it runs / fraction of the bin within 25 % /
     stops; and where virtual_work stops but paper runs, how wrong paper is and how often the reference
     overturns."""
+    from screening.analysis import error_model as em
+
     mc = ds["mc_peak_var_theta"].values
-    ref = np.isfinite(mc) & (mc > 0)
+    ref = np.isfinite(mc) & (mc > 0) & em.valid_reference(ds)   # one outside its model's validity is none
     conds = [str(c) for c in ds["condensation"].values]
     st = {c: ds["sl_status"].sel(condensation=c).values for c in conds}
     with np.errstate(invalid="ignore", divide="ignore"):

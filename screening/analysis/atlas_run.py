@@ -23,7 +23,7 @@ from screening.analysis import atlas
 
 __all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
            "point_intensity", "last_stable_intensity", "linearization_row", "monte_carlo_row", "evaluate_point",
-           "assemble", "mc_exceedance", "VARIABLES"]
+           "assemble", "reference_validity", "REFERENCE_VALIDITY", "OUTSIDE_RULE", "mc_exceedance", "VARIABLES"]
 
 #: Exceedance levels as fractions of the slenderness angle [1].
 LEVELS = (0.05, 0.1, 0.2, 0.5, 1.0)
@@ -36,6 +36,10 @@ COUPLED_RADIANS = 30_000.0
 #: model judges the point if ``w_v t_end`` is at most this; beyond, the point has no reference.
 FALLBACK_RADIANS = 60_000.0
 INDICATORS = ("peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess")
+#: Why a point whose reference ran has no valid reference (followed by the model and the failing indicator).
+OUTSIDE_RULE = "reference outside its measured validity (model_choice.toml)"
+#: The variables of :func:`reference_validity` (judged again whenever an atlas is assembled).
+REFERENCE_VALIDITY = ("mc_reference_valid", "mc_reference_note")
 
 
 def reference_model(block, foundation, timing, excitation_kind, coupled_radians=COUPLED_RADIANS):
@@ -279,9 +283,44 @@ def assemble(results, attrs=None):
     for name, (units, long) in VARIABLES.items():
         if name in ds.variables:
             ds[name].attrs.update(units=units, long_name=long)
+    ds = ds.assign(reference_validity(ds))
     ds.attrs.update({"title": "error atlas of the stochastic linearization against Monte Carlo",
                      "Conventions": "CF-1.8", "levels_relative_to": "slenderness"}, **(attrs or {}))
     return ds
+
+
+def reference_validity(ds):
+    """``{"mc_reference_valid", "mc_reference_note"}``: per point of an atlas dataset, whether its reference
+    Monte Carlo is valid there, judged with the measured validity rules as they stand now.
+
+    ``mc_reference_valid`` is 1 where the reference ran (``mc_n_samples > 0``) with the fallback model (the
+    coupled model, the full one: it has no rule) or with a model whose rule
+    (:func:`screening.solvers.model_choice.vouches`, with the point's excitation kind) holds at the point, and 0
+    otherwise; ``mc_reference_note`` says why a reference that ran is not valid (:data:`OUTSIDE_RULE`, the model
+    and the first indicator out of its interval), empty elsewhere.  A point whose reference is not valid has no
+    error (:func:`screening.analysis.error_model.targets`): it enters neither the error model nor its
+    cross-validation.
+    """
+    import xarray as xr
+
+    from screening.solvers.model_choice import rule_of, rules, vouches
+
+    fallback = rules()[1]
+    g = atlas.groups_of(np.asarray(ds["u"].values, dtype=float))
+    models = ds["mc_model"].values.astype(str)
+    ran = ds["mc_n_samples"].values > 0
+    valid = ran.copy()
+    note = np.full(ds.sizes["point"], "", dtype=object)
+    for i in np.flatnonzero(ran & (models != fallback)):
+        block, foundation, shape, _ = atlas.physical_point(g, i)
+        held, why = vouches(rule_of(models[i]), block, foundation, shape["kind"])
+        if not held:
+            valid[i] = False
+            note[i] = f"{models[i]} {OUTSIDE_RULE}: {why}"
+    return {"mc_reference_valid": xr.DataArray(valid.astype(np.int8), dims="point", attrs={
+                "units": "1", "long_name": VARIABLES["mc_reference_valid"][1]}),
+            "mc_reference_note": xr.DataArray(note, dims="point", attrs={
+                "units": "1", "long_name": VARIABLES["mc_reference_note"][1]})}
 
 
 def mc_exceedance(peaks, state, levels):
@@ -342,6 +381,9 @@ VARIABLES = {
     "mc_error": ("1", "why the reference could not run, or why the stiff-bed model gave way to the coupled one"),
     "point_error": ("1", "why the point's intensity could not be set (empty: it was)"),
     "mc_model": ("1", "the reference Monte Carlo model"),
+    "mc_reference_valid": ("1", "1 where the reference ran with a model valid at the point by the measured "
+                                "validity rules (model_choice.toml), 0 otherwise"),
+    "mc_reference_note": ("1", "why a reference that ran is not valid at the point (empty: it is, or none ran)"),
     "mc_cpu": ("s", "CPU time of the reference Monte Carlo"),
     "point_cpu": ("s", "CPU time of the whole point"),
     "mc_peak_abs_theta": ("rad", "per-sample peak |theta| of the reference (up to overturning)"),

@@ -35,7 +35,8 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = ["FEATURES", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
-           "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets", "ErrorModel",
+           "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets",
+           "valid_reference", "ErrorModel",
            "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
            "TRUSTED_ERROR", "UNTRUSTED_ERROR", "trust_from_interval", "ATLAS_FILE", "shipped_model",
            "parameter_groups", "dataset_features", "model_features", "INPUT_FEATURES", "ATLAS_KINDS",
@@ -109,9 +110,10 @@ def atlas_features(ds, condensation):
 def targets(ds, condensation):
     """``{"log_var_ratio": (n,), "p_exceed_diff": (n, n_levels)}`` [1] of an atlas under one condensation, and
     their Monte Carlo standard errors (``"log_var_ratio_se"``, ``"p_exceed_diff_se"``); NaN where a side is
-    missing (the linearization stopped, no Monte Carlo survivor)."""
+    missing (the linearization stopped, no Monte Carlo survivor) or the reference is not valid at the point
+    (``mc_reference_valid`` 0, :func:`screening.analysis.atlas_run.reference_validity`)."""
     s = ds.sel(condensation=condensation)
-    ok = s["sl_status"].values == 0
+    ok = (s["sl_status"].values == 0) & valid_reference(ds)
     sl, mc = s["sl_peak_var_theta"].values, ds["mc_peak_var_theta"].values
     with np.errstate(divide="ignore", invalid="ignore"):
         y = np.where(ok & (sl > 0) & (mc > 0), np.log(sl / mc), np.nan)
@@ -119,6 +121,15 @@ def targets(ds, condensation):
     d = np.where(ok[:, None], s["sl_p_exceed"].values - ds["mc_p_exceed"].values, np.nan)
     return {"log_var_ratio": y, "log_var_ratio_se": np.where(np.isfinite(y), y_se, np.nan),
             "p_exceed_diff": d, "p_exceed_diff_se": ds["mc_p_exceed_se"].values}
+
+
+def valid_reference(ds):
+    """True per point of an atlas dataset whose reference Monte Carlo, if it ran, may judge the linearization:
+    ``mc_reference_valid`` 1 (:func:`screening.analysis.atlas_run.reference_validity`); every point of an atlas
+    that does not record it."""
+    if "mc_reference_valid" not in ds.variables:
+        return np.ones(ds.sizes["point"], dtype=bool)
+    return ds["mc_reference_valid"].values == 1
 
 
 class ErrorModel(NamedTuple):
@@ -391,7 +402,7 @@ def shipped_model(condensation="paper"):
     names = ["u", "alpha", "r_ul", "zeta_v", "e", "kind", "omega_g_p", "tau", "family", "sl_status",
              "sl_peak_var_theta", "sl_peak_p_uplift", "sl_sigma_ratio", "sl_k_eq_margin", "sl_decay_excess",
              "sl_p_exceed", "mc_peak_var_theta", "mc_peak_var_theta_se", "mc_p_exceed", "mc_p_exceed_se",
-             "em_residual", "em_bandwidth", "em_q"]
+             "mc_reference_valid", "em_residual", "em_bandwidth", "em_q"]
     with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path, xr.open_dataset(path) as ds:
         ds = ds[[n for n in names if n in ds.variables]].load()
     return model_from_atlas(ds, condensation)

@@ -102,13 +102,41 @@ def test_a_campaign_resumed_from_the_file_keeps_its_rows(shipped, tmp_path):
     shipped.to_netcdf(path)
     points = shipped["point"].values
     first = error_atlas.resumed_rows(path, points[: len(points) // 2])
-    assert not any(name.startswith("em_") for name in first.variables)       # the fit is redone at assembly
-    bare = shipped.drop_vars(["em_residual", "em_bandwidth", "em_q"])
+    # the fit and the references' validity are redone at assembly
+    assert not any(name.startswith("em_") or name in atlas_run.REFERENCE_VALIDITY for name in first.variables)
+    bare = shipped.drop_vars(["em_residual", "em_bandwidth", "em_q", *atlas_run.REFERENCE_VALIDITY])
     second = bare.isel(point=slice(len(points) // 2, None))
     merged = error_atlas.merge_rows(first, second)
     xr.testing.assert_identical(merged, bare)
+    judged = atlas_run.reference_validity(merged)
+    for name in atlas_run.REFERENCE_VALIDITY:
+        np.testing.assert_array_equal(judged[name].values, shipped[name].values.astype(judged[name].dtype))
     # a fresh row replaces the resumed one of the same point
     fresh = bare.isel(point=[0]).assign(S0=bare["S0"].isel(point=[0]) * 2)
     again = error_atlas.merge_rows(first, fresh)
     assert again.sizes["point"] == first.sizes["point"]
     assert float(again["S0"].sel(point=points[0])) == 2 * float(bare["S0"].sel(point=points[0]))
+
+
+def test_no_point_whose_reference_is_outside_its_rule_enters_the_fit(shipped):
+    # judged again here from the design coordinates with the measured rules: a reference run with a model
+    # the rule does not vouch for at the point has no error, so it has no residual in the stored fit
+    from screening.analysis import error_model as em
+    from screening.solvers.model_choice import rule_of, rules, vouches
+
+    g = atlas.groups_of(shipped["u"].values)
+    models = shipped["mc_model"].values.astype(str)
+    ran = shipped["mc_n_samples"].values > 0
+    outside = np.zeros(shipped.sizes["point"], dtype=bool)
+    for i in np.flatnonzero(ran & (models != rules()[1])):
+        block, foundation, shape, _ = atlas.physical_point(g, i)
+        outside[i] = not vouches(rule_of(models[i]), block, foundation, shape["kind"])[0]
+    assert outside.sum() > 0                                   # the campaign ran such points (the stiff-bed ones)
+    np.testing.assert_array_equal(shipped["mc_reference_valid"].values == 1, ran & ~outside)
+    notes = shipped["mc_reference_note"].values.astype(str)
+    assert all(atlas_run.OUTSIDE_RULE in n for n in notes[outside]) and not any(notes[~outside])
+    assert np.isfinite(shipped["mc_peak_var_theta"].values[outside]).any()   # they have a value, left unused
+    for cond in shipped["condensation"].values:
+        assert not np.isfinite(shipped["em_residual"].sel(condensation=cond).values[outside]).any(), cond
+        assert not np.isfinite(em.targets(shipped, cond)["log_var_ratio"][outside]).any(), cond
+        assert not np.isfinite(em.targets(shipped, cond)["p_exceed_diff"][outside]).any(), cond

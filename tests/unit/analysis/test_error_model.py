@@ -212,3 +212,17 @@ def test_a_stored_fit_of_other_points_is_refused(shipped):
                                                   res.sel(condensation="paper").values)
     with pytest.raises(ValueError, match="refit"):
         em.model_from_atlas(shipped.assign(em_residual=res), "paper")
+
+
+def test_a_reference_marked_invalid_has_no_error(shipped):
+    # flipping one fitted point's reference to invalid removes its errors and nothing else
+    y = em.targets(shipped, "paper")["log_var_ratio"]
+    i = int(np.flatnonzero(np.isfinite(y))[0])
+    valid = shipped["mc_reference_valid"].copy()
+    valid[i] = 0
+    t = em.targets(shipped.assign(mc_reference_valid=valid), "paper")
+    assert np.isnan(t["log_var_ratio"][i]) and np.isnan(t["p_exceed_diff"][i]).all()
+    others = np.arange(y.size) != i
+    np.testing.assert_array_equal(t["log_var_ratio"][others], y[others])
+    with pytest.raises(ValueError, match="refit"):
+        em.model_from_atlas(shipped.assign(mc_reference_valid=valid), "paper")
