@@ -15,7 +15,8 @@ import argparse
 import os
 import time
 
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+if __name__ == "__main__":   # as a script only: a test importing this module leaves the environment alone
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 

@@ -28,7 +28,8 @@ import os
 import time
 from pathlib import Path
 
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+if __name__ == "__main__":   # as a script only: a test importing this module leaves the environment alone
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402

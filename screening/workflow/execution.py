@@ -251,8 +251,9 @@ def spot_arrays(ds):
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
     out["n_grid"] = np.int64(ds.sizes["sample"] * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
-    # the share of the used samples' time in full contact (the stiff-bed model's cost model)
-    out["full_contact"] = np.float64(full_contact_share(ds["p_uplift"].values, int(out["n_used"]), ds.sizes["sample"]))
+    # the share of the used samples' time in full contact (the stiff-bed model's cost model; NaN: not known)
+    out["full_contact"] = (np.float64(full_contact_share(ds["p_uplift"].values, int(out["n_used"]), ds.sizes["sample"]))
+                           if "p_uplift" in ds else np.float64(np.nan))
     return out
 
 

@@ -95,8 +95,14 @@ def test_a_campaign_resumed_from_the_file_keeps_its_rows(shipped, tmp_path):
     import sys
     from pathlib import Path
 
+    import os
+
+    threads = os.environ.get("NUMBA_NUM_THREADS")
     sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "benchmarks"))
     import error_atlas
+    # importing the campaign script leaves the environment alone (numba refuses a thread count that changes
+    # under its launched pool, which failed every later compilation of the test session)
+    assert os.environ.get("NUMBA_NUM_THREADS") == threads
 
     path = tmp_path / "atlas.nc"
     shipped.to_netcdf(path)
