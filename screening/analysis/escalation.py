@@ -246,7 +246,7 @@ def full_contact_share(p_uplift, n_used, samples):
 def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_contact=None):
     """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
     points (each summed over its ``samples`` samples); ``rodas``: the steps are the linearly implicit
-    pair's; ``full_contact`` (stiff-bed model only): :func:`full_contact_share` of the run.
+    pair's; ``full_contact`` (stiff-bed model only): :func:`full_contact_share` of the run (None or NaN: not known).
 
     Notes
     -----
@@ -264,7 +264,7 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     model = EscalationModel(int(model))
     grid = float(grid_points)
     per_point = grid_point_cost(grid / max(int(samples), 1)) if grid > 0 else 0.0
-    if model == EscalationModel.stiff_bed and full_contact is not None:
+    if model == EscalationModel.stiff_bed and full_contact is not None and np.isfinite(full_contact):
         f = min(max(float(full_contact), 0.0), 1.0)
         exact = min(f * max(grid - max(int(samples), 1), 0.0), float(steps))
         return (exact * STIFF_BED_EXACT_COST_S + (float(steps) - exact) * STIFF_BED_ADAPTIVE_COST_S

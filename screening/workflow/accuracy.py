@@ -196,7 +196,7 @@ def escalation_runs(stage, order, models):
     def cost(j, r, cheap=True):
         """Estimated cost [s] of run ``r`` at point ``j`` (``cheap``: with its paired cheaper model's samples)."""
         c = esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)),
-                               int(r.get("samples", 1)), full_contact=_known(r.get("full_contact")))
+                               int(r.get("samples", 1)), full_contact=r.get("full_contact"))
         if cheap and int(r.get("cheap_samples", 0)) > 0:
             c += esc.estimated_cost(r["cheap_n_steps"], esc.PAIRED_MODEL[2], r["cheap_n_grid"], False,
                                     int(r["cheap_samples"]))
@@ -394,8 +394,3 @@ def accuracy_line(info):
             f"{info['budget_s']:g} CPU s by the cost model ({info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "
             f"best estimates: {methods}")
-
-
-def _known(value):
-    """``value`` as a float, or None where it is missing or NaN (a record without it)."""
-    return None if value is None or not np.isfinite(value) else float(value)

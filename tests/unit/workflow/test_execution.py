@@ -94,4 +94,6 @@ def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads
     assert np.isfinite(with_share) and with_share > 0 and with_share != pytest.approx(without)
     # a run that did not keep p_uplift: the share is unknown (NaN), and the cost model falls back
     del ds["p_uplift"]
-    assert np.isnan(execution.spot_arrays(ds)["full_contact"])
+    unknown = execution.spot_arrays(ds)["full_contact"]
+    assert np.isnan(unknown)
+    assert esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4, full_contact=unknown) == without
