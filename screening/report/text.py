@@ -90,7 +90,7 @@ def describe(ds, path="result"):
     lines.append(f"status: {counts}")
     if "sl_trust" in ds.variables:
         trust = np.asarray(ds["sl_trust"].values).reshape(-1)
-        lines.append("linearization against the coupled model (docs/method.md#trusting-a-point): " + ", ".join(
+        lines.append("linearization against the coupled model (docs/trust.md): " + ", ".join(
             f"{t.name} {int(np.sum(trust == t))}" for t in Trust if np.any(trust == t)))
     if "best_method" in ds.variables:
         lines.append(best_line(ds))

@@ -110,7 +110,7 @@ GRID_OUTPUTS = (
     Output("status", "linearize", "i1", flag_attributes(PointStatus, "solver status of the point"),
            failed=PointStatus.task_failed, client=True, linearize=True),
     Output("sl_trust", "trust", "i1", flag_attributes(Trust, "trust in the linearized peak var_theta "
-                                                             "(docs/method.md#trusting-a-point)"),
+                                                             "(docs/trust.md)"),
            failed=Trust.untrusted, client=True),
     Output("t_stop", "linearize", "f8", _v("s", "time at which the integration of the point stopped"), linearize=True),
     Output("peak_var_theta", "linearize", "f8", _v("rad2", "peak variance of the rocking rotation"), info=True,
