@@ -25,6 +25,7 @@ COVERED = [
     "screening.analysis.multifidelity",
     "screening.analysis.probabilities",
     "screening.analysis.tradeoff_study",
+    "screening.atomicfile",
     "screening.beds",
     "screening.condensation.api",
     "screening.condensation.cubic",
