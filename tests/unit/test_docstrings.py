@@ -57,6 +57,7 @@ COVERED = [
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
+    "screening.validation",
 ]
 
 
