@@ -44,6 +44,7 @@ COVERED = [
     "screening.laws.hunt_crossley",
     "screening.laws.registry",
     "screening.laws.winkler",
+    "screening.limits",
     "screening.model.cases",
     "screening.model.foundation",
     "screening.model.points",
@@ -57,6 +58,7 @@ COVERED = [
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
+    "screening.status",
     "screening.validation",
 ]
 
