@@ -49,6 +49,7 @@ COVERED = [
     "screening.model.foundation",
     "screening.model.points",
     "screening.physics.contact",
+    "screening.records",
     "screening.report.figure_base",
     "screening.report.figures",
     "screening.report.fragility_figures",
