@@ -30,6 +30,7 @@ COVERED = [
     "screening.condensation.api",
     "screening.condensation.cubic",
     "screening.condensation.paper",
+    "screening.condensation.quadrature",
     "screening.condensation.registry",
     "screening.condensation.uplift_integrals",
     "screening.condensation.virtual_work",
