@@ -56,6 +56,7 @@ COVERED = [
     "screening.report.fragility_figures",
     "screening.report.record_figures",
     "screening.report.text",
+    "screening.schema",
     "screening.solvers.mc_models",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
