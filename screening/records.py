@@ -86,8 +86,8 @@ class Record:
     units_in : the units of the file (``"g"``, ``"m/s2"``, ...).
     metadata : header information (AT2 title and station).
     vertical : vertical ground acceleration [m/s2] (positive upwards) on the same samples, or
-        ``None``.  Read from the third column of a text record; carried, not yet used by the
-        solvers (:func:`screening.simulate` drives the block with ``acceleration`` only).
+        ``None``.  Read from the third column of a text record; :func:`screening.simulate` drives
+        the block with it as a change of gravity ``g -> g + a_v(t)`` unless ``vertical=False``.
     """
 
     acceleration: np.ndarray

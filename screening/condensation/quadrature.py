@@ -21,7 +21,7 @@ with three functions of ``sigma`` alone (``x = theta / sigma``, ``C0 = C(0)``)::
 form ``Cov^-1 E[g y]`` of eq. (31), correct across the kinks at ``+-theta_ul``.  Limits at
 ``sigma -> 0``: ``e_c -> C(0)``, ``e_k -> K(0)`` (the no-uplift values) and
 ``d_c -> 2 C_2`` for ``C = C0 + C_2 theta^2 + ...``, all finite.  For the paper's ``C``, ``K``
-the same formulas reproduce the closed forms of :mod:`screening.condensation.paper_coefficients`.
+the same formulas reproduce the closed forms of :mod:`screening.condensation.paper`.
 
 Quadrature (``E[f] = 2 int_0^inf f(theta) phi_sigma(theta) dtheta``, ``C``, ``K`` even): one node
 set in ``theta`` per parameter point, Gauss–Legendre (:data:`GAUSS_ORDER` nodes) on panels
