@@ -63,7 +63,7 @@ def paper_case(name):
        https://doi.org/10.1016/j.jsv.2026.119733
     .. [2] H. Tajimi, "A statistical method of determining the maximum response of a building
        structure during an earthquake", Proc. 2nd World Conference on Earthquake Engineering,
-       Tokyo, vol. 2 (1960) 781-798.
+       Tokyo and Kyoto, vol. 2 (1960).
 
     Examples
     --------
