@@ -18,8 +18,43 @@ __all__ = ["temporary_beside", "publish", "atomic_path", "atomic_open", "open_no
 
 
 def temporary_beside(path, suffix=""):
-    """A new empty file next to ``path`` (its name hidden and random, ending in ``.tmp`` and ``suffix``:
-    for writers that read the format from the name) to write ``path`` into."""
+    """A new empty file next to ``path``, to write ``path`` into.
+
+    Its name is hidden and random (``.<name>.<random>.tmp<suffix>``), made by
+    :func:`tempfile.mkstemp` with ``O_EXCL`` in ``path``'s folder, so no one can have planted a link
+    at it; ``suffix`` serves writers that read the format from the name (``".nc"``, ``".png"``).
+    The file is created and closed; :func:`publish` renames it over ``path``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to be written [-]; its folder must exist.
+    suffix : str, default ""
+        Appended after ``.tmp`` [-].
+
+    Returns
+    -------
+    pathlib.Path
+        The new empty file, in ``path``'s folder.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md.
+    .. [2] Python documentation, ``tempfile.mkstemp``,
+       https://docs.python.org/3/library/tempfile.html#tempfile.mkstemp
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     tmp = temporary_beside(Path(folder) / "result.nc", suffix=".nc")
+    ...     tmp.parent == Path(folder), tmp.name.startswith(".result.nc."), tmp.name.endswith(".tmp.nc")
+    ...     tmp.stat().st_size
+    (True, True, True)
+    0
+    """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
     os.close(fd)
@@ -27,7 +62,44 @@ def temporary_beside(path, suffix=""):
 
 
 def publish(tmp, path):
-    """Give the written ``tmp`` the permissions of a new file (umask) and rename it to ``path``."""
+    """Give the written ``tmp`` the permissions of a new file (umask) and rename it to ``path``.
+
+    :func:`tempfile.mkstemp` makes files readable by their owner only; a published file gets the
+    mode ``0o666 & ~umask`` an ordinary ``open`` would give it.  The rename (``os.replace``) is
+    atomic on one file system: a reader sees the old file or the new one, never a part, and a link
+    at ``path`` is replaced, not followed.
+
+    Parameters
+    ----------
+    tmp : str or path-like
+        The written file [-], in ``path``'s folder (:func:`temporary_beside`).
+    path : str or path-like
+        Its final name [-].
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md.
+    .. [2] IEEE Std 1003.1-2017 (POSIX.1-2017), ``rename()``,
+       https://pubs.opengroup.org/onlinepubs/9699919799/functions/rename.html
+
+    Examples
+    --------
+    >>> import os, stat, tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     target = Path(folder) / "a.txt"
+    ...     tmp = temporary_beside(target)
+    ...     _ = tmp.write_text("done")
+    ...     publish(tmp, target)
+    ...     mask = os.umask(0); _ = os.umask(mask)
+    ...     target.read_text(), tmp.exists(), stat.S_IMODE(target.stat().st_mode) == 0o666 & ~mask
+    ('done', False, True)
+    """
     mask = os.umask(0)
     os.umask(mask)
     os.chmod(tmp, 0o666 & ~mask)
@@ -37,7 +109,43 @@ def publish(tmp, path):
 @contextlib.contextmanager
 def atomic_path(path):
     """Yield a temporary path next to ``path`` to write; renamed to ``path`` if the block succeeds,
-    removed if it raises."""
+    removed if it raises.
+
+    For writers that open the file themselves (netCDF, PNG): the block writes the yielded path,
+    and ``path`` then holds the whole new content, or (on any exception, Ctrl-C included) what it
+    held before.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write [-]; its folder must exist.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file to write (:func:`temporary_beside`), published by :func:`publish`.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     target = Path(folder) / "a.txt"
+    ...     _ = target.write_text("old")
+    ...     try:
+    ...         with atomic_path(target) as tmp:
+    ...             _ = tmp.write_text("half")
+    ...             raise RuntimeError("the writer failed")
+    ...     except RuntimeError:
+    ...         pass
+    ...     target.read_text(), sorted(p.name for p in Path(folder).iterdir())
+    ('old', ['a.txt'])
+    """
     tmp = temporary_beside(path)
     try:
         yield tmp
@@ -49,14 +157,92 @@ def atomic_path(path):
 
 @contextlib.contextmanager
 def atomic_open(path, mode="w", **kwargs):
-    """``open(path, mode, **kwargs)`` for writing, atomically (:func:`atomic_path`)."""
+    """``open(path, mode, **kwargs)`` for writing, atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write [-].
+    mode : str, default "w"
+        A writing mode of :func:`open` (``"w"``, ``"wb"``) [-].
+    **kwargs
+        Passed to :func:`open` (``encoding``, ``newline``).
+
+    Yields
+    ------
+    file object
+        The open temporary file; ``path`` gets its content when the block ends without an exception.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     target = Path(folder) / "table.csv"
+    ...     with atomic_open(target, encoding="utf-8") as fh:
+    ...         _ = fh.write("a,b\\n1,2\\n")
+    ...         target.exists()                       # nothing at the target until the block ends
+    ...     target.read_text(encoding="utf-8").splitlines()
+    False
+    ['a,b', '1,2']
+    """
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
         yield fh
 
 
 def open_nofollow(path, flags, mode=0o600):
     """``os.open`` that never follows a symbolic link at ``path`` and only accepts a regular file
-    (a FIFO or device planted there is refused, without blocking)."""
+    (a FIFO or device planted there is refused, without blocking).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to open [-].
+    flags : int
+        ``os.O_*`` flags [-]; ``O_NOFOLLOW``, ``O_CLOEXEC`` and ``O_NONBLOCK`` are added (the
+        descriptor is set blocking again once the file is known to be regular).
+    mode : int, default 0o600
+        The permissions of a file it creates [-] (before the umask).
+
+    Returns
+    -------
+    int
+        An open file descriptor (the caller closes it).
+
+    Raises
+    ------
+    OSError
+        ``path`` is a symbolic link (``ELOOP``), missing, or not a regular file.
+
+    References
+    ----------
+    .. [1] IEEE Std 1003.1-2017 (POSIX.1-2017), ``open()`` (``O_NOFOLLOW``, ``O_NONBLOCK``),
+       https://pubs.opengroup.org/onlinepubs/9699919799/functions/open.html
+    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     real = Path(folder) / "real.txt"
+    ...     _ = real.write_text("x")
+    ...     link = Path(folder) / "link.txt"
+    ...     link.symlink_to(real)
+    ...     fd = open_nofollow(real, os.O_RDONLY); os.read(fd, 1); os.close(fd)
+    ...     try:
+    ...         open_nofollow(link, os.O_RDONLY)
+    ...     except OSError:
+    ...         print("the link is refused")
+    b'x'
+    the link is refused
+    """
     fd = os.open(path, flags | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, mode)
     try:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
@@ -70,7 +256,39 @@ def open_nofollow(path, flags, mode=0o600):
 
 def create_new(path):
     """A new file at ``path`` for writing (whatever was there, link or file, is removed first, the
-    new one created with ``O_EXCL``): a planted link cannot redirect the write."""
+    new one created with ``O_EXCL``): a planted link cannot redirect the write.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to create [-]; created with mode ``0o600`` (before the umask).
+
+    Returns
+    -------
+    io.BufferedWriter
+        The new file, open for writing bytes.
+
+    References
+    ----------
+    .. [1] IEEE Std 1003.1-2017 (POSIX.1-2017), ``open()`` (``O_CREAT | O_EXCL``),
+       https://pubs.opengroup.org/onlinepubs/9699919799/functions/open.html
+    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     victim = Path(folder) / "victim.txt"
+    ...     _ = victim.write_text("keep")
+    ...     planted = Path(folder) / "out.bin"
+    ...     planted.symlink_to(victim)
+    ...     with create_new(planted) as fh:
+    ...         _ = fh.write(b"new")
+    ...     victim.read_text(), planted.is_symlink(), planted.read_bytes()
+    ('keep', False, b'new')
+    """
     with contextlib.suppress(FileNotFoundError):
         os.unlink(path)
     return os.fdopen(open_nofollow(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb")

@@ -55,6 +55,30 @@ def main(argv=None):
 
     Parses and runs like ``cli.main(standalone_mode=False)``, without click's own handling of
     Ctrl-C (a blank line on stderr): every failure is mapped here to one line and a status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: :data:`EXIT_OK` (0), :data:`EXIT_USAGE` (2: a user error, one line
+        ``screening: error: ...`` on stderr, nothing written) or :data:`EXIT_INTERRUPTED` (130: Ctrl-C).
+
+    References
+    ----------
+    .. [1] screening documentation, "The command line", docs/cli.md.
+    .. [2] screening documentation, "Robustness and the limits of the method", docs/limits.md,
+       section "Bad input and faults".
+
+    Examples
+    --------
+    A result file that does not exist is a user error: one line on stderr, status 2.
+
+    >>> main(["info", "/nonexistent/result.nc"])
+    2
     """
     from screening.workflow.errors import SweepError
     from screening.workflow.interrupt import interrupt_guard
@@ -87,7 +111,31 @@ RESUMING_COMMANDS = ("run",)
 
 def interrupted_note(argv):
     """What an interrupted command leaves: ``run`` keeps its finished batches; the others keep nothing
-    to resume from (their files are written whole, each at its end)."""
+    to resume from (their files are written whole, each at its end).
+
+    Parameters
+    ----------
+    argv : list of str
+        The command line after the program name.
+
+    Returns
+    -------
+    str
+        The words printed after ``interrupted`` when Ctrl-C stops the command.
+
+    References
+    ----------
+    .. [1] screening documentation, "The command line", docs/cli.md.
+    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
+       them", docs/outputs_storage.md, section "The resume record of `run`".
+
+    Examples
+    --------
+    >>> interrupted_note(["run", "study.toml"])
+    'finished batches are kept, re-run the same command to resume'
+    >>> interrupted_note(["--quiet", "plot", "result.nc"])
+    'nothing is kept to resume from, re-run the command to start again'
+    """
     command = next((a for a in argv if not a.startswith("-")), "")
     if command in RESUMING_COMMANDS:
         return "finished batches are kept, re-run the same command to resume"
@@ -111,7 +159,30 @@ _CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x09), *range(0x0b, 0x20), 0
 
 def printable(text):
     """``text`` with terminal control characters (escape sequences, carriage returns, C1 codes) shown
-    as ``\\xNN``: a result file's title or attributes must not drive the user's terminal."""
+    as ``\\xNN``: a result file's title or attributes must not drive the user's terminal.
+
+    Parameters
+    ----------
+    text : object
+        What to print (converted with ``str``).
+
+    Returns
+    -------
+    str
+        The text with the C0 control characters but tab and newline, DEL and the C1 codes
+        (U+0080-U+009F) replaced by ``\\xNN``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The command line", docs/cli.md.
+    .. [2] ECMA-48, Control Functions for Coded Character Sets, 5th ed., Ecma International (1991)
+       (C0 and C1 control characters, escape sequences).
+
+    Examples
+    --------
+    >>> print(printable("title\\x1b[31m red\\r"))
+    title\\x1b[31m red\\x0d
+    """
     return str(text).translate(_CONTROL)
 
 

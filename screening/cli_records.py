@@ -127,7 +127,65 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
 def fragility_over_im_command(result, threshold, relative_to, method, dim, out, im, period, modelling=None,
                               limit_state="exceed"):
     """``screening fragility RESULT --im IM``: netCDF, PNG, CSV and (where OpenQuake knows the IM) NRML;
-    ``limit_state="overturn"``: of the probability of overturning (``threshold`` is then empty)."""
+    ``limit_state="overturn"``: of the probability of overturning (``threshold`` is then empty).
+
+    The options are checked before the result is read; the files are written as one set
+    (:func:`~screening.cli_base.write_fragility_files`), the paths printed on stdout and the
+    lognormal fit summarised on stderr.
+
+    Parameters
+    ----------
+    result : str or path-like
+        The result file (netCDF or zarr) of a sweep.
+    threshold : sequence of float
+        The rotation thresholds [rad] (or fractions of the angle named by ``relative_to`` [-]), one
+        limit state each; empty for ``limit_state="overturn"``.
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation.
+    dim : str or None
+        The swept intensity dimension (default: ``S0`` or ``pga``, whichever is swept).
+    out : str or None
+        The netCDF file (default ``<result-stem>_fragility_<im>.nc`` next to the result).
+    im : {"pga", "sa", "pgv", "avgsa", "rms", "arias", "s0"}
+        The intensity measure the curves are fitted over (``pga`` [m s-2], ``pgv`` [m s-1], ...).
+    period : float or None
+        The oscillator period [s] of ``sa`` and ``avgsa``, in ``SA_PERIOD_RANGE`` (1e-3..100 s) of
+        :mod:`screening.limits`.
+    modelling : float, optional
+        A modelling dispersion ``beta_m`` [-] combined with each fitted ``beta`` (square root of
+        the sum of squares).
+    limit_state : {"exceed", "overturn"}, default "exceed"
+        Exceeding the thresholds, or overturning.
+
+    Returns
+    -------
+    int
+        :data:`~screening.cli_base.EXIT_OK` (0).
+
+    Raises
+    ------
+    screening.cli_base.CommandError
+        A bad option or a result the fit cannot use (one line, exit status 2 in :func:`screening.cli.main`).
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md.
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    A period outside the range is refused before the result is opened:
+
+    >>> try:
+    ...     fragility_over_im_command("result.nc", (0.01,), None, "vanmarcke", None, None, "sa", 500.0)
+    ... except CommandError as exc:
+    ...     print(exc)
+    parameter '--period' must be a finite number >= 0.001 and <= 100 (got 500.0)
+    """
     from screening.analysis.fragility import with_modelling_dispersion
     from screening.analysis.im_fragility import fragility_over_im, stack_limit_states
     from screening.workflow.reader import open_result

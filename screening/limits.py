@@ -71,6 +71,30 @@ def nesting_depth(text):
     A quick scan (not a TOML parser): brackets in strings and comments are skipped so that a
     title such as ``"[[[["`` does not count, and dots count only in keys (not in ``1.5``); it
     only needs to be an upper bound of what the parser will build, cheap on any input.
+
+    Parameters
+    ----------
+    text : str
+        A study file's text (TOML).
+
+    Returns
+    -------
+    int
+        An upper bound of its nesting depth [-], compared with :data:`MAX_NESTING`.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md,
+       section "What is bounded".
+    .. [2] T. Preston-Werner et al., "TOML: Tom's Obvious Minimal Language", version 1.0.0,
+       https://toml.io/en/v1.0.0
+
+    Examples
+    --------
+    >>> nesting_depth('a.b.c = 1')                            # a dotted key: three tables deep
+    3
+    >>> nesting_depth('x = [[1, 2], [3]]\\ntitle = "[[[["')     # brackets in a string do not count
+    2
     """
     depth = deepest = dots = 0
     stack = []                      # "[" of a table header, "a" of an array, "{" of an inline table
@@ -132,7 +156,31 @@ def _string_end(text, i):
 
 
 def output_steps(t_end, dt):
-    """``t_end / dt`` as a float (``inf`` when it overflows); no array is built."""
+    """``t_end / dt`` as a float (``inf`` when it overflows); no array is built.
+
+    Parameters
+    ----------
+    t_end : float
+        The end time of the output [s].
+    dt : float
+        The output time step [s].
+
+    Returns
+    -------
+    float
+        The number of output steps [-] (the output has one instant more), compared with
+        :data:`MAX_TIMES`; ``inf`` for ``dt = 0`` or an overflow.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md,
+       section "What is bounded".
+
+    Examples
+    --------
+    >>> output_steps(20.0, 0.01), output_steps(20.0, 0.0)
+    (2000.0, inf)
+    """
     try:
         ratio = t_end / dt
     except (OverflowError, ZeroDivisionError):
@@ -141,5 +189,32 @@ def output_steps(t_end, dt):
 
 
 def batch_budget(n_times, n_variables=6, budget=TASK_BYTES):
-    """Most points per task whose time histories (``n_variables`` float64 per instant) fit ``budget``."""
+    """Most points per task whose time histories (``n_variables`` float64 per instant) fit ``budget``.
+
+    Parameters
+    ----------
+    n_times : int
+        Output instants per point [-].
+    n_variables : int, default 6
+        Histories stored per point [-].
+    budget : int, default TASK_BYTES
+        Memory of one task's histories [bytes] (256 MiB).
+
+    Returns
+    -------
+    int
+        ``budget // (8 n_times n_variables)``, at least 1 [-].
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md,
+       section "What is bounded".
+
+    Examples
+    --------
+    >>> batch_budget(2001)                     # 20 s at 0.01 s: 2,794 points x 2,001 x 6 x 8 B <= 256 MiB
+    2794
+    >>> batch_budget(10**9)                    # never fewer than one point
+    1
+    """
     return max(1, int(budget // (8 * max(int(n_times), 1) * max(int(n_variables), 1))))

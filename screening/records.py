@@ -21,7 +21,7 @@ Formats
 Every value is a plain decimal number (``-1.25``, ``.5E-03``, Fortran's ``1.0D-3``): ``nan``,
 ``inf``, ``1_0`` or hexadecimal are refused, as are numbers after a footer line.  Errors name
 the file and the line number, never the line's content.  Files are checked before they are read
-(a regular file of at most :data:`~screening.workflow.limits.MAX_RECORD_BYTES`; a folder, FIFO or
+(a regular file of at most :data:`~screening.limits.MAX_RECORD_BYTES`; a folder, FIFO or
 device is named as such) and a UTF-8 byte-order mark is dropped.
 
 Units of the acceleration: ``"g"`` (multiplied by :data:`STANDARD_GRAVITY`), ``"m/s2"`` or
@@ -80,14 +80,14 @@ class Record:
     Attributes
     ----------
     acceleration : horizontal ground acceleration [m/s2], usual sign convention (positive along +x).
-    dt : time step [s], in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` of :mod:`screening.workflow.limits`.
+    dt : time step [s], in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` of :mod:`screening.limits`.
     name : a short name (the file stem by default).
     source : the file read, or ``""``.
     units_in : the units of the file (``"g"``, ``"m/s2"``, ...).
     metadata : header information (AT2 title and station).
     vertical : vertical ground acceleration [m/s2] (positive upwards) on the same samples, or
-        ``None``.  Read from the third column of a text record; carried, not yet used by the
-        solvers (:func:`screening.simulate` drives the block with ``acceleration`` only).
+        ``None``.  Read from the third column of a text record; :func:`screening.simulate` drives
+        the block with it as a change of gravity ``g -> g + a_v(t)`` unless ``vertical=False``.
     """
 
     acceleration: np.ndarray
@@ -154,7 +154,39 @@ def _samples(name, what, values):
 
 
 def check_time_step(dt, what="parameter 'dt'"):
-    """``dt`` [s] as a float in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` (:mod:`screening.workflow.limits`)."""
+    """``dt`` [s] as a float in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` (:mod:`screening.limits`).
+
+    Parameters
+    ----------
+    dt : float
+        A record's time step [s]; a boolean is refused.
+    what : str, default "parameter 'dt'"
+        How ``dt`` is named in the message [-].
+
+    Returns
+    -------
+    float
+        ``dt`` [s].
+
+    Raises
+    ------
+    ValueError
+        ``"<what> must be a number of seconds in [1e-06, 1] (got ...)"``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> check_time_step(0.005)
+    0.005
+    >>> check_time_step(2)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'dt' must be a number of seconds in [1e-06, 1] (got 2)
+    """
     lo, hi = limits.MIN_RECORD_DT, limits.MAX_RECORD_DT
     ok = isinstance(dt, numbers.Real) and not isinstance(dt, (bool, np.bool_)) and lo <= float(dt) <= hi
     if not ok:
@@ -163,7 +195,41 @@ def check_time_step(dt, what="parameter 'dt'"):
 
 
 def check_scale(scale, what="parameter 'scale'", signed=False):
-    """A factor on a record: finite, ``0 < scale <= MAX_RECORD_SCALE`` (``signed``: ``0 < |scale|``)."""
+    """A factor on a record: finite, ``0 < scale <= MAX_RECORD_SCALE`` (``signed``: ``0 < |scale|``).
+
+    Parameters
+    ----------
+    scale : float
+        The factor on the accelerations [-].
+    what : str, default "parameter 'scale'"
+        How ``scale`` is named in the message [-].
+    signed : bool, default False
+        Allow a negative factor (a record mirrored), ``0 < |scale| <= MAX_RECORD_SCALE``.
+
+    Returns
+    -------
+    float
+        ``scale`` [-].
+
+    Raises
+    ------
+    ValueError
+        Not a finite number in the range.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> check_scale(2), check_scale(-1.0, signed=True)
+    (2.0, -1.0)
+    >>> check_scale(-1.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'scale' must be a finite number with 0 < scale <= 1000 (got -1.0)
+    """
     top = limits.MAX_RECORD_SCALE
     ok = isinstance(scale, numbers.Real) and not isinstance(scale, (bool, np.bool_)) and math.isfinite(scale)
     ok = ok and (0.0 < abs(scale) <= top if signed else 0.0 < scale <= top)
@@ -174,7 +240,41 @@ def check_scale(scale, what="parameter 'scale'", signed=False):
 
 
 def unit_factor(units):
-    """Factor turning ``units`` into m/s2 (``"g"``, ``"m/s2"``, ``"cm/s2"``/``"gal"``)."""
+    """Factor turning ``units`` into m/s2 (``"g"``, ``"m/s2"``, ``"cm/s2"``/``"gal"``).
+
+    Case and blanks are ignored, and the spellings ``m/s^2``, ``m s-2``, ``m/s**2``, ``m/sec2``,
+    ``m/s/s`` (and their ``cm`` forms) are accepted; ``"g"`` is standard gravity,
+    :data:`STANDARD_GRAVITY` = 9.80665 m/s2.
+
+    Parameters
+    ----------
+    units : str
+        The units of a record's accelerations.
+
+    Returns
+    -------
+    float
+        The factor [m s-2 per unit]: 9.80665 for g, 1 for m/s2, 0.01 for cm/s2.
+
+    Raises
+    ------
+    ValueError
+        Units other than g, m/s2 or cm/s2.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> unit_factor("g"), unit_factor("CM/S2"), unit_factor("gal"), unit_factor("m s-2")
+    (9.80665, 0.01, 0.01, 1.0)
+    >>> unit_factor("ft/s2")
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'units' must be one of ('g', 'm/s2', 'cm/s2') (got 'ft/s2')
+    """
     key = _unit_key(units)
     if key is None:
         raise ValueError(f"parameter 'units' must be one of ('g', 'm/s2', 'cm/s2') (got {units!r})")
@@ -317,6 +417,56 @@ def read_at2(path, units=None, option="units", dt=None):
     ``dt`` [s], if given, must agree with the header's DT.  Raises ``ValueError`` (file and line number) for a
     header without NPTS and DT, a sample count other than NPTS, a token that is not a plain
     decimal number, and numbers after a non-numeric footer line.
+
+    The header is four lines: a title, the event/station/component, ``ACCELERATION TIME SERIES
+    IN UNITS OF G`` (the units: ``G``, ``CM/S2`` or ``M/S2``) and ``NPTS=  5590, DT=   .0050 SEC``
+    (NGA-West2) or ``5590    .0050    NPTS, DT`` (NGA-West1); then the accelerations, any number
+    per line (Fortran fields that touch, ``0.1-0.2``, are split).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.AT2`` file.
+    units : {"g", "m/s2", "cm/s2"}, optional
+        The file's acceleration units, needed only when its third line does not state them; if
+        both are given they must agree.
+    option : str, default "units"
+        How ``units`` is spelled in messages (``"--units"``, ``"records.units"``) [-].
+    dt : float, optional
+        The time step [s] the caller expects; must agree with the header's DT (relative 1e-6).
+
+    Returns
+    -------
+    Record
+        The horizontal accelerations in m/s2, ``dt`` [s] from the header, ``name`` the file stem,
+        ``units_in`` the file's units, ``metadata`` the title and station lines.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file (and the line number): see above.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+    .. [2] T. D. Ancheta et al., "NGA-West2 database", Earthquake Spectra 30(3) (2014) 989-1005
+       (the PEER ``.AT2`` record format).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "RSN1_TEST.AT2"
+    ...     _ = path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\\n"
+    ...                         "Test event, station, 090\\n"
+    ...                         "ACCELERATION TIME SERIES IN UNITS OF G\\n"
+    ...                         "NPTS=      4, DT=   .0100 SEC\\n"
+    ...                         "  0.1000E+00 -0.2000E+00  0.0000E+00  0.4000E+00\\n")
+    ...     record = read_at2(path)
+    >>> record.name, record.dt, record.units_in, record.acceleration.round(6).tolist()   # g -> m/s2
+    ('RSN1_TEST', 0.01, 'g', [0.980665, -1.96133, 0.0, 3.92266])
     """
     lines = _read_text(path).splitlines()
     if len(lines) < 5:
@@ -402,12 +552,57 @@ def read_text_record(path, dt=None, units=None, option="units"):
 
     Parameters
     ----------
-    path : the file.
-    dt : time step [s]; required for accelerations without a time column, checked against the
+    path : str or bytes or path-like
+        The text or CSV file.
+    dt : float, optional
+        The time step [s]: required for accelerations without a time column, checked against the
         time column otherwise.
-    units : ``"g"``, ``"m/s2"`` or ``"cm/s2"``; required unless a header line states them, and
-        must agree with it.
-    option : how the caller's ``units`` is spelled in messages (``"--units"``, ``"records.units"``).
+    units : {"g", "m/s2", "cm/s2"}, optional
+        The acceleration units: required unless a header line states them, and must agree with it.
+    option : str, default "units"
+        How the caller's ``units`` is spelled in messages (``"--units"``, ``"records.units"``) [-].
+
+    Notes
+    -----
+    Units are never guessed: an AT2 file states them on its third line (``... IN UNITS OF G``);
+    a text record states them in a header or comment line before the data (``units: g``,
+    ``units = cm/s2``) or in its column titles (``time [s], acc [g]``, ``t (s); a (cm/s2)``);
+    otherwise the caller declares them with ``units`` (``--units`` on the command line,
+    ``[records] units`` in a study).  A record whose units are stated nowhere is refused; units
+    given and units stated must agree.
+
+    Two columns are time [s] and the horizontal acceleration, three columns time, horizontal and
+    vertical acceleration (the time step from the time column, uniform within 1e-3 of it); one
+    column, or four and more numbers per line read row by row, are accelerations only and need
+    ``dt``.
+
+    Returns
+    -------
+    Record
+        The accelerations in m/s2 (``vertical`` from a third column, else None), ``dt`` [s],
+        ``name`` the file stem, ``units_in`` the units read or given.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file (and the line number): units stated nowhere or disagreeing, a
+        time step missing or not uniform, a row that is not plain decimal numbers.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "station.csv"
+    ...     _ = path.write_text("time [s], acc [cm/s2]\\n0.00, 10\\n0.02, -20\\n0.04, 5\\n")
+    ...     record = read_text_record(path)                      # units from the column titles
+    >>> record.dt, record.units_in, record.acceleration.tolist()
+    (0.02, 'cm/s2', [0.1, -0.2, 0.05])
     """
     return _text_record(path, dt, units, option)[0]
 
@@ -445,6 +640,40 @@ def read_two_column(path, units=None):
     """Read time [s] and acceleration columns (blank, tab, comma or semicolon separated).
 
     The time step must be uniform; the record starts at the first time given (shifted to 0).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file: two numbers per data line, time [s] and acceleration.
+    units : {"g", "m/s2", "cm/s2"}, optional
+        The acceleration units, required unless the file states them (``units: g`` or a column
+        title ``acc [g]`` before the data); if both are given they must agree.
+
+    Returns
+    -------
+    Record
+        The accelerations in m/s2, ``dt`` [s] from the time column.
+
+    Raises
+    ------
+    ValueError
+        Not two columns, units stated nowhere or disagreeing, a non-uniform time step.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "a.txt"
+    ...     _ = path.write_text("1.00 0.1\\n1.01 0.2\\n1.02 -0.1\\n")
+    ...     record = read_two_column(path, units="g")
+    >>> round(record.dt, 12), record.pga                           # PGA [m/s2] = 0.2 g
+    (0.01, 1.96133)
     """
     record, columns = _text_record(path, None, units, "units")
     if columns != 2:
@@ -453,7 +682,44 @@ def read_two_column(path, units=None):
 
 
 def read_single_column(path, dt, units=None):
-    """Read accelerations only (one or more per line) with the time step ``dt`` [s] given."""
+    """Read accelerations only (one or more per line) with the time step ``dt`` [s] given.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file: accelerations only, one per line, or several per line read row by row.
+    dt : float
+        The time step [s], in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` of :mod:`screening.limits`.
+    units : {"g", "m/s2", "cm/s2"}, optional
+        The acceleration units, required unless a header line before the data states them
+        (``units: g``); if both are given they must agree.
+
+    Returns
+    -------
+    Record
+        The accelerations in m/s2 with the time step ``dt`` [s].
+
+    Raises
+    ------
+    ValueError
+        ``dt`` missing, a time column found (two or three columns), units stated nowhere.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "a.txt"
+    ...     _ = path.write_text("# units = m/s2\\n0.1 0.2 0.3 0.4\\n0.5 0.6\\n")
+    ...     record = read_single_column(path, dt=0.005)
+    >>> record.acceleration.size, record.duration                  # six samples: 5 x 0.005 s
+    (6, 0.025)
+    """
     if dt is None:
         raise ValueError(f"{path}: a one-column record needs its time step 'dt' [s]")
     record, columns = _text_record(path, dt, units, "units")
@@ -469,6 +735,54 @@ def read_record(path, dt=None, units=None, option="units"):
     otherwise text or CSV (:func:`read_text_record`): units from ``units`` or a header line (a
     record without stated units is refused, naming ``option``), a time column gives the time
     step, accelerations alone need ``dt`` [s].
+
+    Parameters
+    ----------
+    path : str or bytes or path-like
+        The record file (``.at2``, any case, is read as AT2).
+    dt : float, optional
+        The time step [s]: required for accelerations without a time column, checked against
+        the time column or the AT2 header otherwise.
+    units : {"g", "m/s2", "cm/s2"}, optional
+        The acceleration units, needed when the file does not state them.
+    option : str, default "units"
+        How ``units`` is spelled in messages (``"--units"``, ``"records.units"``) [-].
+
+    Returns
+    -------
+    Record
+        The accelerations in m/s2 and the time step [s].
+
+    Notes
+    -----
+    Units are never guessed: an AT2 file states them on its third line (``... IN UNITS OF G``);
+    a text record states them in a header or comment line before the data (``units: g``,
+    ``units = cm/s2``) or in its column titles (``time [s], acc [g]``, ``t (s); a (cm/s2)``);
+    otherwise the caller declares them with ``units`` (``--units`` on the command line,
+    ``[records] units`` in a study).  A record whose units are stated nowhere is refused; units
+    given and units stated must agree.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+    .. [2] T. D. Ancheta et al., "NGA-West2 database", Earthquake Spectra 30(3) (2014) 989-1005
+       (the PEER ``.AT2`` record format).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "a.dat"
+    ...     _ = path.write_text("0.1\\n-0.3\\n0.2\\n")
+    ...     try:
+    ...         read_record(path, dt=0.01, option="--units")       # units stated nowhere: refused
+    ...     except ValueError as exc:
+    ...         print(str(exc).split(": ", 1)[1])
+    ...     read_record(path, dt=0.01, units="g").pga               # declared: 0.3 g [m/s2]
+    the acceleration units are not stated; give --units (g, m/s2 or cm/s2) or a header line such as 'units: g'
+    2.941995
     """
     path = input_path(path, "record file")
     if path.lower().endswith(".at2"):
@@ -478,7 +792,41 @@ def read_record(path, dt=None, units=None, option="units"):
 
 def expand_records(spec, root="."):
     """Files of a record list: a folder (every ``.at2``/``.csv``/``.txt``/``.dat`` in it), a glob or
-    a list of these, relative to ``root``; sorted, duplicates dropped."""
+    a list of these, relative to ``root``; sorted, duplicates dropped.
+
+    Parameters
+    ----------
+    spec : str or path-like or list of them
+        A folder, a file, a glob pattern (``"records/*.AT2"``) or a list of these.
+    root : str or path-like, default "."
+        The folder relative paths are taken from (the study file's folder).
+
+    Returns
+    -------
+    list of str
+        The files, sorted within each item, in the order of the items, each file once.
+
+    Raises
+    ------
+    ValueError
+        An item that matches no file.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as root:
+    ...     os.mkdir(os.path.join(root, "records"))
+    ...     for name in ("b.at2", "a.AT2", "notes.md"):
+    ...         open(os.path.join(root, "records", name), "w").close()
+    ...     files = expand_records(["records", "records/a.AT2"], root=root)   # a folder, then a file again
+    ...     [os.path.relpath(f, root) for f in files]
+    ['records/a.AT2', 'records/b.at2']
+    """
     items = [spec] if isinstance(spec, (str, os.PathLike)) else list(spec)
     found = []
     for item in items:
@@ -501,7 +849,46 @@ def expand_records(spec, root="."):
 
 
 def write_at2(path, record, title="screening synthetic record", station="synthetic"):
-    """Write ``record`` as a PEER NGA-West2 style ``.AT2`` file in g (5 values per line)."""
+    """Write ``record`` as a PEER NGA-West2 style ``.AT2`` file in g (5 values per line).
+
+    :func:`read_at2` reads it back (to the 8 significant digits written).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write (overwritten).
+    record : Record
+        The record; its accelerations [m/s2] are written in g (:data:`STANDARD_GRAVITY`).
+    title : str, default "screening synthetic record"
+        Header line 2, first part [-].
+    station : str, default "synthetic"
+        Header line 2, second part [-].
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
+       docs/records.md (sections "Units" and "Files").
+    .. [2] T. D. Ancheta et al., "NGA-West2 database", Earthquake Spectra 30(3) (2014) 989-1005
+       (the PEER ``.AT2`` record format).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "pulse.AT2"
+    ...     write_at2(path, Record([0.0, 9.80665, -4.903325], 0.01))
+    ...     lines = path.read_text().splitlines()
+    ...     again = read_at2(path)
+    >>> lines[2], lines[3]
+    ('ACCELERATION TIME SERIES IN UNITS OF G', 'NPTS=       3, DT= 0.010000 SEC')
+    >>> again.acceleration.tolist()                                 # back in m/s2
+    [0.0, 9.80665, -4.903325]
+    """
     acc_g = record.acceleration / STANDARD_GRAVITY
     with open(path, "w", encoding="utf-8") as fh:
         fh.write("PEER NGA STRONG MOTION DATABASE RECORD\n")

@@ -205,7 +205,29 @@ PROBABILITIES = _declared("p_overturn", "p_overturn_se", "p_exceed_se", "p_rocki
 def probability_source_attributes():
     """CF flag attributes of ``p_source``: one value per source, a Monte Carlo model's from the models
     :func:`screening.monte_carlo` knows (the Monte Carlo registry and its compiled models are
-    loaded when asked, not when the schema is)."""
+    loaded when asked, not when the schema is).
+
+    Returns
+    -------
+    dict
+        ``units`` (``"1"``), ``long_name``, ``flag_values`` (int8 codes of
+        :func:`screening.status.probability_sources`) and ``flag_meanings`` (the source names, in
+        the order of the values).
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
+       (section 3.5, flags).
+    .. [2] screening documentation, "What a result holds", docs/outputs.md.
+
+    Examples
+    --------
+    >>> attrs = probability_source_attributes()
+    >>> attrs["flag_meanings"].split()[:3], attrs["flag_values"][:3].tolist()
+    (['unreliable', 'linearization_gaussian', 'corrected_linearization_gaussian'], [0, 1, 2])
+    >>> "monte_carlo_coupled" in attrs["flag_meanings"].split()
+    True
+    """
     from screening.solvers import mc_registry
 
     codes = sorted(probability_sources(mc_registry.names()).items(), key=lambda item: item[1])
@@ -424,7 +446,41 @@ PRESSURE_PARAMETERS = ("k",)
 
 def grid_coordinate_attributes(name):
     """Attributes of the coordinate variable of swept parameter ``name`` in a sweep result
-    (those of :func:`attributes`, without ``units`` for :data:`PRESSURE_PARAMETERS`)."""
+    (those of :func:`attributes`, without ``units`` for :data:`PRESSURE_PARAMETERS`).
+
+    CF reads a coordinate variable in units of pressure (``k`` [N m-2]) as a vertical axis; such a
+    swept parameter's coordinate variable gets a ``comment`` naming its units instead, and the
+    units go on the auxiliary coordinate ``<name>_value``.
+
+    Parameters
+    ----------
+    name : str
+        A declared parameter (``"h"``, ``"k"``, ``"S0"``, ...).
+
+    Returns
+    -------
+    dict
+        ``long_name`` and ``units`` (or, for :data:`PRESSURE_PARAMETERS`, ``comment`` instead of
+        ``units``).
+
+    Raises
+    ------
+    KeyError
+        ``name`` is not declared.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
+       (sections 2.4 and 4.3, vertical coordinate).
+    .. [2] screening documentation, "What a result holds", docs/outputs.md.
+
+    Examples
+    --------
+    >>> grid_coordinate_attributes("h")
+    {'units': 'm', 'long_name': 'height of the centre of mass above the base'}
+    >>> "units" in grid_coordinate_attributes("k"), grid_coordinate_attributes("k")["comment"][:15]
+    (False, 'values in N m-2')
+    """
     attrs = attributes(name)
     if name in PRESSURE_PARAMETERS:
         units = attrs.pop("units")
@@ -435,7 +491,32 @@ def grid_coordinate_attributes(name):
 
 def cdo_threshold_attributes(value, threshold_attrs):
     """Attributes that say which rotation threshold a per-threshold variable of the CDO form is at
-    (``threshold_attrs``: those of the ``threshold`` coordinate)."""
+    (``threshold_attrs``: those of the ``threshold`` coordinate).
+
+    Parameters
+    ----------
+    value : float
+        The threshold, in the units of the ``threshold`` coordinate ([rad], or [1] relative).
+    threshold_attrs : dict
+        The attributes of the ``threshold`` coordinate (``units``, ``long_name``).
+
+    Returns
+    -------
+    dict
+        ``threshold`` (float), ``threshold_units`` (default ``"1"``) and ``threshold_long_name``.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
+       (section 3.1, units).
+    .. [2] screening documentation, "What a result holds", docs/outputs.md, section "Other tools:
+       xarray, NCO, CDO".
+
+    Examples
+    --------
+    >>> cdo_threshold_attributes(0.01, MONTE_CARLO["threshold"])
+    {'threshold': 0.01, 'threshold_units': 'rad', 'threshold_long_name': 'rotation threshold of p_exceed'}
+    """
     units = threshold_attrs.get("units", "1")
     return {"threshold": float(value), "threshold_units": units,
             "threshold_long_name": threshold_attrs.get("long_name", "rotation threshold")}
@@ -447,6 +528,37 @@ def attributes(name, table=None):
     Parameters and derived quantities are found by their own names and with the prefix
     ``spot_`` (their value at a Monte Carlo spot point); Monte Carlo names with the prefix
     ``mcs_``.  Raises ``KeyError`` for an undeclared name.
+
+    Parameters
+    ----------
+    name : str
+        A variable or coordinate name.
+    table : dict, optional
+        A producer's own table (``MONTE_CARLO``, ``TRADEOFF``, ...), tried first.
+
+    Returns
+    -------
+    dict
+        A copy of its attributes: ``units`` (UDUNITS spelling, ``"1"`` dimensionless), ``long_name``,
+        and the flag attributes of a status variable.
+
+    Raises
+    ------
+    KeyError
+        ``name`` is not declared.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
+       (sections 3.1-3.2, units and long_name).
+    .. [2] screening documentation, "What a result holds", docs/outputs.md.
+
+    Examples
+    --------
+    >>> attributes("k")
+    {'units': 'N m-2', 'long_name': 'distributed foundation stiffness'}
+    >>> attributes("spot_h")["long_name"]
+    'height of the centre of mass above the base at the spot point'
     """
     if table is not None and name in table:         # the table asked for first (the trade study's
         return dict(table[name])                    # ``mcs_model`` is a label dimension, not the flag)
@@ -476,7 +588,34 @@ def attributes(name, table=None):
 
 
 def global_attributes(version, **extra):
-    """Global attributes common to every dataset (``Conventions``, intensity convention, version)."""
+    """Global attributes common to every dataset (``Conventions``, intensity convention, version).
+
+    Parameters
+    ----------
+    version : str
+        The package version that made the dataset.
+    **extra
+        More global attributes (``title``, ``source``, ...).
+
+    Returns
+    -------
+    dict
+        ``Conventions`` (``"CF-1.8"``), ``intensity_convention`` (how ``S0`` is defined: two-sided
+        PSD, ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``), ``screening_version``, ``references``
+        and ``extra``.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
+       (section 2.6, global attributes).
+    .. [2] screening documentation, "What a result holds", docs/outputs.md.
+
+    Examples
+    --------
+    >>> attrs = global_attributes("1.2.3", title="a sweep")
+    >>> attrs["Conventions"], attrs["screening_version"], attrs["title"]
+    ('CF-1.8', '1.2.3', 'a sweep')
+    """
     return {"Conventions": CONVENTIONS, "intensity_convention": INTENSITY_CONVENTION,
             "screening_version": version, "references": REFERENCE, **extra}
 
@@ -487,6 +626,44 @@ def apply_schema(ds, table=None, **global_attrs):
     ``table``: the producer's own table (e.g. :data:`MONTE_CARLO` for ``monte_carlo``) tried before the
     shared ones.  Existing attributes other than ``units``, ``long_name`` and flags are kept.
     Raises ``KeyError`` naming any variable that is not declared.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A producer's dataset.
+    table : dict, optional
+        The producer's own table, tried before the shared ones (:func:`attributes`).
+    **global_attrs
+        Global attributes beside those of :func:`global_attributes`.
+
+    Returns
+    -------
+    xarray.Dataset
+        A copy of ``ds`` with ``units``/``long_name`` (and flags, their values in the variable's
+        dtype) on every variable and coordinate, and the global attributes.
+
+    Raises
+    ------
+    KeyError
+        A variable or coordinate that is not declared.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
+       (all of it: units, long_name, flags, global attributes).
+    .. [2] screening documentation, "What a result holds", docs/outputs.md.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> ds = xr.Dataset({"theta_ul": ("h", [1e-3, 2e-3])}, coords={"h": [0.21, 0.3]})
+    >>> out = apply_schema(ds, title="example")
+    >>> out["theta_ul"].attrs["units"], out["h"].attrs["units"], out.attrs["Conventions"], out.attrs["title"]
+    ('rad', 'm', 'CF-1.8', 'example')
+    >>> apply_schema(xr.Dataset({"foo": ("x", [1.0])}))
+    Traceback (most recent call last):
+    ...
+    KeyError: "variable 'foo' is not declared in screening.schema"
     """
     from screening import __version__
 

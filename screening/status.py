@@ -35,7 +35,40 @@ CODE_SPACES = tomllib.loads(resources.files("screening.data").joinpath("status_c
 
 
 def code_space(name):
-    """The :class:`enum.IntEnum` of table ``name`` of :data:`CODE_SPACES`, each member with its ``meaning``."""
+    """The :class:`enum.IntEnum` of table ``name`` of :data:`CODE_SPACES`, each member with its ``meaning``.
+
+    The table's ``doc`` becomes the enum's docstring; every other entry is a member, its ``code``
+    the integer value and its ``meaning`` (plain language) an attribute.
+
+    Parameters
+    ----------
+    name : str
+        A table of ``screening/data/status_codes.toml`` (``"PointStatus"``, ``"Trust"``, ...).
+
+    Returns
+    -------
+    enum.IntEnum
+        A new enum named ``name``.
+
+    Raises
+    ------
+    KeyError
+        No such table.
+
+    References
+    ----------
+    .. [1] screening documentation, "Method", docs/method.md, section "Status flags".
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags),
+       https://cfconventions.org
+
+    Examples
+    --------
+    >>> trust = code_space("Trust")
+    >>> [(m.name, int(m)) for m in trust]
+    [('trusted', 0), ('check', 1), ('untrusted', 2)]
+    >>> PointStatus.ok.meaning
+    'integrated to the end of the record'
+    """
     table = dict(CODE_SPACES[name])
     doc = table.pop("doc")
     codes = enum.IntEnum(name, [(member, spec["code"]) for member, spec in table.items()], module=__name__)
@@ -68,14 +101,65 @@ DIVERGENCE_TEXT = {reason: reason.meaning for reason in DivergenceReason}
 
 def probability_sources(models):
     """``{name: code}`` of every :data:`ProbabilitySource`, with ``monte_carlo_<model>`` for each of ``models``
-    (the Monte Carlo model names, in their registered order) from :data:`MONTE_CARLO_SOURCE_BASE` up."""
+    (the Monte Carlo model names, in their registered order) from :data:`MONTE_CARLO_SOURCE_BASE` up.
+
+    Parameters
+    ----------
+    models : sequence of str
+        The Monte Carlo model names, in their registered order.
+
+    Returns
+    -------
+    dict
+        ``{source name: integer code}``: the codes of ``probability_source`` in result files.
+
+    References
+    ----------
+    .. [1] screening documentation, "Method", docs/method.md, section "Status flags".
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags),
+       https://cfconventions.org
+
+    Examples
+    --------
+    >>> probability_sources(["coupled", "condensed"])            # doctest: +NORMALIZE_WHITESPACE
+    {'unreliable': 0, 'linearization_gaussian': 1, 'corrected_linearization_gaussian': 2,
+     'monte_carlo_coupled': 10, 'monte_carlo_condensed': 11}
+    """
     return {**{m.name: int(m) for m in ProbabilitySource},
             **{f"monte_carlo_{model}": MONTE_CARLO_SOURCE_BASE + i for i, model in enumerate(models)}}
 
 
 def flag_attributes(code_space, long_name, dtype=np.int8):
     """CF flag attributes ``{long_name, flag_values, flag_meanings}`` of an enum or a list of its members
-    (sorted by value)."""
+    (sorted by value).
+
+    Parameters
+    ----------
+    code_space : enum.IntEnum or iterable of its members
+        The codes a variable may hold.
+    long_name : str
+        The variable's CF ``long_name`` [-].
+    dtype : numpy dtype, default numpy.int8
+        The type of ``flag_values`` (that of the stored variable).
+
+    Returns
+    -------
+    dict
+        ``long_name``; ``flag_values``, the codes as an array of ``dtype``; ``flag_meanings``, the
+        member names separated by blanks, in the order of the values.
+
+    References
+    ----------
+    .. [1] screening documentation, "Method", docs/method.md, section "Status flags".
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags),
+       https://cfconventions.org
+
+    Examples
+    --------
+    >>> attrs = flag_attributes(Trust, "trust of the linearization")
+    >>> attrs["flag_values"].tolist(), attrs["flag_meanings"], attrs["flag_values"].dtype
+    ([0, 1, 2], 'trusted check untrusted', dtype('int8'))
+    """
     members = sorted(code_space, key=int)
     return {"long_name": long_name,
             "flag_values": np.array([int(m) for m in members], dtype=dtype),

@@ -31,6 +31,46 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
 
     Raises ``ValueError`` naming ``name`` and the allowed range for strings, NaN/inf and
     out-of-range values (any element of an array).
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, as the user wrote it (it opens the message) [-].
+    value : float or array_like
+        The value, in the parameter's own SI unit; booleans, strings, bytes, dates, durations and
+        complex values are refused.
+    lower, upper : float, optional
+        The bounds, in the unit of ``value``; None: unbounded.
+    lower_inclusive, upper_inclusive : bool, default False
+        Whether a bound itself is allowed.
+    range_text : str, optional
+        The allowed range in words for the message (default: built from the bounds, e.g.
+        ``"a finite number > 0"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` as a float array (0-d for a scalar), unit unchanged.
+
+    Raises
+    ------
+    ValueError
+        ``"parameter '<name>' must be <range> (got <value>)"`` for the first bad element, or for an
+        empty array.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> as_checked_array("k", [2.89e7, 5e7], lower=0.0).tolist()
+    [28900000.0, 50000000.0]
+    >>> as_checked_array("k", [2.89e7, -1.0], lower=0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'k' must be a finite number > 0 (got -1.0)
     """
     if range_text is None:
         parts = []
@@ -60,7 +100,42 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
 
 def check_scalar(name, value, **bounds):
     """A finite scalar number in the range of ``bounds`` (as :func:`as_checked_array`) as a float;
-    arrays, booleans, dates and strings are refused with one line naming ``name``."""
+    arrays, booleans, dates and strings are refused with one line naming ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, for the message [-].
+    value : float
+        The value, in the parameter's own SI unit.
+    **bounds
+        ``lower``, ``upper``, ``lower_inclusive``, ``upper_inclusive``, ``range_text`` of
+        :func:`as_checked_array`.
+
+    Returns
+    -------
+    float
+        ``value``, unit unchanged.
+
+    Raises
+    ------
+    ValueError
+        One line naming ``name``: not a number, not finite, out of range, or an array.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> check_scalar("T1", 4, lower=0.0)                  # [s]
+    4.0
+    >>> check_scalar("T1", [4.0, 5.0], lower=0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'T1' must be a single number (got an array of shape (2,))
+    """
     arr = as_checked_array(name, value, **bounds)
     if arr.ndim != 0:
         raise ValueError(f"parameter '{name}' must be a single number (got an array of shape {arr.shape})")
@@ -68,7 +143,43 @@ def check_scalar(name, value, **bounds):
 
 
 def check_integer(name, value, lower, upper=None):
-    """An integer (no float, no boolean) ``>= lower`` (and ``<= upper``) as an ``int``."""
+    """An integer (no float, no boolean) ``>= lower`` (and ``<= upper``) as an ``int``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, for the message [-].
+    value : int
+        The value [-]; a float such as ``3.0`` or a boolean is refused.
+    lower : int
+        The smallest allowed value [-].
+    upper : int, optional
+        The largest allowed value [-]; None: unbounded.
+
+    Returns
+    -------
+    int
+        ``value``.
+
+    Raises
+    ------
+    ValueError
+        ``"parameter '<name>' must be an integer >= <lower>"`` (or ``in <lower>..<upper>``).
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> check_integer("seed", 7, 0, 2**31 - 1)
+    7
+    >>> check_integer("samples", 10.0, 1)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'samples' must be an integer >= 1 (got 10.0)
+    """
     ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
     if not ok or value < lower or (upper is not None and value > upper):
         rng = f">= {lower}" if upper is None else f"in {lower}..{upper}"
@@ -78,7 +189,43 @@ def check_integer(name, value, lower, upper=None):
 
 def check_size(name, size, limit, what):
     """``size`` (a count of array elements about to be allocated) at most ``limit``: ``ValueError``
-    naming the parameter ``name`` that sets it, before anything is allocated."""
+    naming the parameter ``name`` that sets it, before anything is allocated.
+
+    Parameters
+    ----------
+    name : str
+        The parameter that sets the size, for the message [-].
+    size : int or float
+        The number of elements asked for [-].
+    limit : int or float
+        The largest allowed number [-].
+    what : str
+        What is counted, in words (``"output steps"``) [-].
+
+    Returns
+    -------
+    None
+        Nothing: the check passes silently.
+
+    Raises
+    ------
+    ValueError
+        ``size > limit`` (or ``size`` is NaN).
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> check_size("duration", 1e5, 1e5, "output steps") is None
+    True
+    >>> check_size("duration", 2e5, 1e5, "output steps")
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'duration' asks for 2e+05 output steps; at most 1e+05 (a bound on the memory of one call)
+    """
     if not size <= limit:
         raise ValueError(f"parameter '{name}' asks for {size:.3g} {what}; at most {limit:.3g} (a bound on the "
                          f"memory of one call)")
@@ -90,6 +237,39 @@ def checked(name, value, **kwargs):
     An :class:`xarray.DataArray` is checked on its values and given back as a float DataArray
     (dims and coordinates kept): the model objects then carry labelled parameters, which
     :func:`screening.linearize` broadcasts by dimension name.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, for the message [-].
+    value : float or array_like or xarray.DataArray
+        The value, in the parameter's own SI unit.
+    **kwargs
+        The bounds of :func:`as_checked_array`.
+
+    Returns
+    -------
+    float or numpy.ndarray or xarray.DataArray
+        A float for a scalar, a float array for an array, a float64 DataArray for a DataArray
+        (unit unchanged).
+
+    Raises
+    ------
+    ValueError
+        As :func:`as_checked_array`.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> checked("h", 0.21, lower=0.0)
+    0.21
+    >>> checked("h", xr.DataArray([1, 2], dims="h")).dtype
+    dtype('float64')
     """
     if isinstance(value, xr.DataArray):
         as_checked_array(name, value.values, **kwargs)
@@ -115,6 +295,31 @@ def file_problem(path):
 
     Tells a missing file from a folder, a FIFO, a device, a socket, a broken link and a link loop
     (``os.stat`` alone reports most of them as "does not exist" or not at all).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The input file [-].
+
+    Returns
+    -------
+    str or None
+        The problem in words, or None for a regular file.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     link = Path(folder) / "gone.at2"
+    ...     link.symlink_to(Path(folder) / "missing")
+    ...     file_problem(folder), file_problem(link), file_problem(Path(folder) / "none.at2")
+    ('is a folder, not a file', 'is a broken symbolic link', 'does not exist')
     """
     try:
         mode = os.stat(path).st_mode
@@ -147,7 +352,40 @@ def _mode_problem(mode):
 
 def input_path(path, what="file"):
     """``path`` as ``str`` (a ``bytes`` path decoded by the file-system encoding); ``ValueError`` for
-    anything else."""
+    anything else.
+
+    Parameters
+    ----------
+    path : str or bytes or path-like
+        The path [-].
+    what : str, default "file"
+        What the file is, for the message (``"record"``, ``"study file"``) [-].
+
+    Returns
+    -------
+    str
+        The path.
+
+    Raises
+    ------
+    ValueError
+        ``path`` is not a path (a number, None) or contains a NUL character.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> input_path(Path("records") / "a.at2"), input_path(b"a.at2")
+    ('records/a.at2', 'a.at2')
+    >>> input_path(3, "record")
+    Traceback (most recent call last):
+    ...
+    ValueError: record: must be a path (got int)
+    """
     if isinstance(path, bytes):
         path = os.fsdecode(path)
     if not isinstance(path, (str, os.PathLike)):
@@ -164,6 +402,45 @@ def read_input_bytes(path, what, max_bytes):
     ``ValueError`` with one line (``"<what> <path>: <problem>"``) for a missing file, a folder, a FIFO,
     a device, a link loop or a file larger than ``max_bytes``.  The file is opened without blocking
     (a FIFO never hangs) and read with a bound, so a file that grows while it is read is refused too.
+
+    Parameters
+    ----------
+    path : str or bytes or path-like
+        The input file [-].
+    what : str
+        What the file is, for the message (``"record"``) [-].
+    max_bytes : int
+        The largest file accepted [bytes].
+
+    Returns
+    -------
+    bytes
+        The file's content.
+
+    Raises
+    ------
+    InputFileError
+        (a ``ValueError``) ``"<what> <path> <problem>"``, the problem also as ``.problem``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "a.txt"
+    ...     _ = path.write_bytes(b"0.1 0.2")
+    ...     print(read_input_bytes(path, "record", 100))
+    ...     try:
+    ...         read_input_bytes(path, "record", 4)
+    ...     except InputFileError as exc:
+    ...         print(exc.problem)
+    b'0.1 0.2'
+    has 7 bytes; at most 4 are read
     """
     path = input_path(path, what)
     problem = file_problem(path)
@@ -189,7 +466,42 @@ def read_input_bytes(path, what, max_bytes):
 
 
 def read_input_text(path, what, max_bytes):
-    """:func:`read_input_bytes` decoded as UTF-8 (a leading byte-order mark is dropped)."""
+    """:func:`read_input_bytes` decoded as UTF-8 (a leading byte-order mark is dropped).
+
+    Parameters
+    ----------
+    path : str or bytes or path-like
+        The input file [-].
+    what : str
+        What the file is, for the message [-].
+    max_bytes : int
+        The largest file accepted [bytes].
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    InputFileError
+        As :func:`read_input_bytes`, or ``"is not UTF-8 text (byte <n>)"``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
+       (sections "What is bounded" and "Bad input and faults").
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "a.txt"
+    ...     _ = path.write_bytes(b"\\xef\\xbb\\xbfdt = 0.01")           # a byte-order mark first
+    ...     read_input_text(path, "record", 100)
+    'dt = 0.01'
+    """
     data = read_input_bytes(path, what, max_bytes)
     try:
         return data.decode("utf-8-sig")

@@ -29,7 +29,48 @@ PAPER_CASES = {
 
 
 def paper_case(name):
-    """``(block, foundation, excitation)`` of a paper case (omega_g = 10 rad/s, zeta_g = 0.4)."""
+    """``(block, foundation, excitation)`` of a paper case (omega_g = 10 rad/s, zeta_g = 0.4).
+
+    The reference configurations of section 3 of [1]_: the block ``PAPER_BLOCK`` (m = 8.67 kg,
+    b = 0.035 m, h = 0.21 m) on the Hunt-Crossley bed ``PAPER_BED`` (k = 2.89e7 N/m^2,
+    lam = 8.95e8 N s/m^3) with the case's ``eps``, shaken by a white noise or a Kanai-Tajimi
+    process (omega_g = 10 rad/s, zeta_g = 0.4) of intensity ``S0`` under the envelope
+    T1 = 4 s, T2 = 2 s.  The ``eps`` values are those of the figure captions.
+
+    Parameters
+    ----------
+    name : str
+        A key of ``PAPER_CASES`` (``"fig2_white_hardening_low"`` ... ``"fig9_kt_softening_high"``).
+
+    Returns
+    -------
+    block : screening.model.Block
+        The paper's block (SI units).
+    foundation : screening.model.Foundation
+        The bed, ``eps`` [1/m^2] of the case.
+    excitation : screening.model.excitation.WhiteNoise or screening.model.excitation.KanaiTajimi
+        The ground motion, ``S0`` [m^2/s^3] of the case.
+
+    Raises
+    ------
+    KeyError
+        ``name`` is not a paper case.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] H. Tajimi, "A statistical method of determining the maximum response of a building
+       structure during an earthquake", Proc. 2nd World Conference on Earthquake Engineering,
+       Tokyo and Kyoto, vol. 2 (1960).
+
+    Examples
+    --------
+    >>> block, bed, excitation = paper_case("fig6_kt_hardening_low")
+    >>> block.h, bed.k, bed.eps, type(excitation).__name__, excitation.S0
+    (0.21, 28900000.0, 60000000.0, 'KanaiTajimi', 0.00025)
+    """
     eps, kind, S0, _ = PAPER_CASES[name]
     block = Block(**PAPER_BLOCK)
     foundation = Foundation(eps=eps, **PAPER_BED)

@@ -101,6 +101,49 @@ def contact_pressure(z, z_dot, foundation):
     Winkler ``c z_dot``, :meth:`screening.laws.ContactLaw.damping_pressure`).
     Zero where ``z < 0`` (no tension, no contact).  The dashpot may pull
     (``F_n < 0``) while ``z > 0``, as in the paper's law.
+
+    Parameters
+    ----------
+    z : array_like
+        Local indentation [m], positive into the bed.
+    z_dot : array_like
+        Its rate [m/s]; broadcasts against ``z``.
+    foundation : Foundation
+        The bed: ``k`` [N/m^2], ``eps`` [1/m^2] and the damping of its law (``lam`` [N s/m^3] or
+        ``c`` [N s/m^2]).
+
+    Returns
+    -------
+    numpy.ndarray
+        The normal force per unit base length ``F_n`` [N/m], the broadcast shape of the inputs.
+
+    Notes
+    -----
+    Eq. (3) in [1]_, with the Hunt-Crossley damping of [2]_, and eq. (4), no tension:
+
+    .. math::
+
+        F_n = k z + \\varepsilon k z^3 + \\lambda z \\dot z \\quad (z > 0), \\qquad F_n = 0 \\quad (z \\le 0)
+
+    The Winkler law [3]_ replaces :math:`\\lambda z \\dot z` by :math:`c \\dot z`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
+       vibroimpact", J. Appl. Mech. 42(2) (1975) 440-445.
+    .. [3] E. Winkler, Die Lehre von der Elasticitaet und Festigkeit, Dominicus, Prague (1867).
+
+    Examples
+    --------
+    >>> bed = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> z = 1e-4                                                     # 0.1 mm into the bed
+    >>> float(contact_pressure(z, 0.0, bed)) == 2.89e7 * z * (1 + 6e7 * z**2)
+    True
+    >>> contact_pressure([-1e-4, 1e-4], [0.01, 0.01], bed).tolist()   # no tension; 2890 + 1734 + 895 [N/m]
+    [0.0, 5519.0]
     """
     z = np.asarray(z, dtype=float)
     z_dot = np.asarray(z_dot, dtype=float)

@@ -143,7 +143,64 @@ def spot_file_label(ds, i):
 def plot_spot_panels(ds, i, path):
     """The paper's panels at spot point ``i`` (its figs. 2-9): ``c_eq(t)`` and ``k_eq(t)``;
     ``var_theta(t)`` and ``var_theta_dot(t)`` of the linearization with the Monte Carlo
-    ensemble and its 95 % confidence band (+-1.96 standard errors); ``p_uplift(t)``."""
+    ensemble and its 95 % confidence band (+-1.96 standard errors); ``p_uplift(t)``.
+
+    The title names the point, its flags, the Monte Carlo samples that overturned (excluded from
+    the ensemble) and, where the result stores the sample states, the probabilities of overturning
+    and of exceedance with their standard errors.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with spot checks and grid histories (:data:`SPOT_PANEL_HISTORIES`: ``c_eq``
+        [N m s/rad], ``k_eq`` [N m/rad], ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2],
+        ``p_uplift`` [1]) and the Monte Carlo ``mcs_*`` variables over ``spot``.
+    i : int
+        The spot point.
+    path : str or os.PathLike
+        The PNG file (written atomically).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Notes
+    -----
+    The band is ``mcs +- Z95 se`` with ``Z95 = 1.959964``, the two-sided 95 % quantile of the normal
+    distribution, and ``se`` the standard error of the Monte Carlo variance estimate;
+    ``p_uplift = P(|theta| > theta_ul)`` is eq. (58) in [1]_.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. D. Hunter, "Matplotlib: A 2D graphics environment", Computing in Science & Engineering 9(3)
+       (2007) 90-95.
+
+    Examples
+    --------
+    A made-up result: two intensities, the second one checked by Monte Carlo.
+
+    >>> import tempfile, pathlib
+    >>> import xarray as xr
+    >>> t = np.linspace(0.0, 10.0, 21)
+    >>> grid = lambda v: (("S0", "t"), np.tile(v, (2, 1)))
+    >>> spot = lambda v: (("spot", "t"), v[None, :])
+    >>> ds = xr.Dataset({"c_eq": grid(np.ones(t.size)), "k_eq": grid(np.full(t.size, 1000.0)),
+    ...                  "var_theta": grid(1e-6 * t), "var_theta_dot": grid(1e-4 * t), "p_uplift": grid(0.01 * t),
+    ...                  "mcs_var_theta": spot(1.1e-6 * t), "mcs_var_theta_se": spot(1e-8 * t),
+    ...                  "mcs_var_theta_dot": spot(1.1e-4 * t), "mcs_var_theta_dot_se": spot(1e-6 * t),
+    ...                  "mcs_rel_error_peak_var_theta": ("spot", [-0.09]),
+    ...                  "mcs_rel_error_peak_var_theta_dot": ("spot", [-0.09]),
+    ...                  "mcs_n_overturned": ("spot", [0]), "status": ("S0", [0, 0])},
+    ...                 coords={"S0": [1e-4, 2e-4], "t": t, "spot_S0": ("spot", [2e-4])})
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     png = plot_spot_panels(ds, 0, pathlib.Path(tmp) / "spot.png")
+    ...     png.name, png.read_bytes()[:4]
+    ('spot.png', b'\\x89PNG')
+    """
     index = spot_index(ds, i)
     t = ds["t"].values
     fig = new_figure(10.0, 7.5)

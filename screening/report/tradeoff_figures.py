@@ -15,7 +15,7 @@ from screening.analysis.metrics import classify_error, rule_error
 from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
 from screening.report.figure_base import save_figure
 
-__all__ = ["DPI", "plot_error_vs_cost", "study_n", "plot_validity"]
+__all__ = ["DPI", "study_n", "plot_validity"]
 
 DPI = 130
 
@@ -134,7 +134,70 @@ def study_n(ds):
 
 def plot_validity(ds, rules, thresholds, path, metric="peak", quantity="var_theta"):
     """Map of SL's error class (within the smaller / larger threshold / beyond) against coupled
-    and condensed MCS, over SL peak p_uplift (x, log) and the k_eq margin (y)."""
+    and condensed MCS, over SL peak p_uplift (x, log) and the k_eq margin (y).
+
+    One marker per point (its shape the point's family; filled for a hardening bed, a ring for a
+    softening one), labelled with its error (``?`` where a threshold lies within two standard
+    errors, the overturned fraction of coupled MCS where there is one); dashed lines at the
+    largest SL peak p_uplift up to which every point passes (the rules of the ``all`` group).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset: ``sl_peak_p_uplift`` [1], ``k_eq_margin`` [1], ``family``, ``eps``
+        [m-2], ``peak_rel_error``, ``time_avg_rel_error``, ``peak_rel_se`` [1] over ``comparison``
+        (in the order of ``COMPARISONS``), ``quantity`` (of ``QUANTITIES``) and ``point``, and
+        ``overturned_fraction`` [1] over ``mcs_model``.
+    rules : list of dict
+        From :func:`screening.analysis.metrics.derive_rules`.
+    thresholds : sequence of float
+        The tolerances [1]; the first and last set the colours.
+    path : str or os.PathLike
+        The PNG file (written atomically).
+    metric : {"peak", "time_avg", "worst"}, default "peak"
+        The error shown (:func:`screening.analysis.metrics.rule_error`).
+    quantity : {"var_theta", "var_theta_dot"}, default "var_theta"
+        The quantity whose error is shown.
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. D. Hunter, "Matplotlib: A 2D graphics environment", Computing in Science & Engineering 9(3)
+       (2007) 90-95.
+
+    Examples
+    --------
+    A made-up study of three points:
+
+    >>> import numpy as np, xarray as xr
+    >>> from screening.analysis.metrics import derive_rules
+    >>> from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+    >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
+    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
+    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
+    ...                  "family": ("point", ["hardening", "hardening", "softening"]),
+    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "peak_rel_se": (("comparison", "quantity", "point"), np.full(err.shape, 0.01)),
+    ...                  "overturned_fraction": (("mcs_model", "point"), np.zeros((2, 3))),
+    ...                  "cost": (("approach", "point"), [[0.01, 0.02, 0.02], [1.0, 3.0, 2.0], [5.0, 7.0, 6.0]]),
+    ...                  "sl_batched_cost": 0.001},
+    ...                 coords={"comparison": list(COMPARISONS), "quantity": list(QUANTITIES),
+    ...                         "mcs_model": ["coupled", "condensed"],
+    ...                         "approach": ["sl", "condensed_mcs", "coupled_mcs"]}, attrs={"wall_time_s": 42.0})
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     png = pathlib.Path(tmp) / "validity.png"
+    ...     plot_validity(ds, derive_rules(ds, (0.10, 0.25)), (0.10, 0.25), png)
+    ...     png.read_bytes()[:4]
+    b'\\x89PNG'
+    """
     t1, t2 = thresholds[0], thresholds[-1]
     x = ds.sl_peak_p_uplift.values
     y = ds.k_eq_margin.values

@@ -17,7 +17,7 @@ from screening.analysis.tradeoff_study import COMPARISONS, METHODS, QUANTITIES
 from screening.atomicfile import atomic_open
 from screening.status import PointStatus
 
-__all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary", "markdown_report",
+__all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary",
            "summary_text"]
 
 
@@ -158,7 +158,63 @@ def _sci(x, digits=3):
 
 
 def point_rows(ds):
-    """Per-point accuracy rows (list of dicts) for the markdown/CSV trade table."""
+    """Per-point accuracy rows (list of dicts) for the markdown/CSV trade table.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A trade-study dataset: per ``point`` its ``point_name``, ``eps`` [m-2], ``S0`` [m2 s-3],
+        ``sl_peak_p_uplift`` [1], ``k_eq_margin`` [1], ``sl_status``, ``overturned_fraction`` [1]
+        over ``mcs_model``; ``var_theta``, ``var_theta_se`` [rad2] over ``approach`` and ``t``;
+        ``peak_rel_error``, ``time_avg_rel_error`` [1] and their ``*_significant`` flags over
+        ``comparison`` and ``quantity``; ``cost`` [s] over ``approach``.
+
+    Returns
+    -------
+    list of dict
+        One row per point: its parameters, SL status, overturned fractions, the peak ``var_theta``
+        of each method with its standard error [rad2] (``sl_peak``, ``cond_peak``, ``coup_peak``,
+        ...), the relative errors [1] of each comparison with their significance
+        (``sl_vs_coupled_var_theta_peak``, ``..._sig``, ...) and the costs ``cost_<method>`` [s].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    A made-up study of three points:
+
+    >>> import numpy as np, xarray as xr
+    >>> from screening.analysis.metrics import derive_rules
+    >>> from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+    >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
+    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
+    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
+    ...                  "family": ("point", ["hardening", "hardening", "softening"]),
+    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "peak_rel_se": (("comparison", "quantity", "point"), np.full(err.shape, 0.01)),
+    ...                  "overturned_fraction": (("mcs_model", "point"), np.zeros((2, 3))),
+    ...                  "cost": (("approach", "point"), [[0.01, 0.02, 0.02], [1.0, 3.0, 2.0], [5.0, 7.0, 6.0]]),
+    ...                  "sl_batched_cost": 0.001},
+    ...                 coords={"comparison": list(COMPARISONS), "quantity": list(QUANTITIES),
+    ...                         "mcs_model": ["coupled", "condensed"],
+    ...                         "approach": ["sl", "condensed_mcs", "coupled_mcs"]}, attrs={"wall_time_s": 42.0})
+    >>> t_grid = np.linspace(0.0, 1e-6, 5)
+    >>> vt = np.array([1.0, 1.1, 1.2])[:, None, None] * t_grid * np.ones((1, 3, 1))   # sl, condensed, coupled
+    >>> ds = ds.assign(peak_significant=ds.peak_rel_error > 0.1, time_avg_significant=ds.time_avg_rel_error > 0.1,
+    ...                var_theta=(("approach", "point", "t"), vt), var_theta_se=(("approach", "point", "t"), 0.01 * vt),
+    ...                S0=("point", [1e-4, 2e-4, 3e-4]), sl_status=("point", [0, 0, 0]))
+    >>> rows = point_rows(ds)
+    >>> row = rows[2]
+    >>> len(rows), row["point"], row["sl_vs_coupled_var_theta_peak"], row["sl_vs_coupled_var_theta_peak_sig"]
+    (3, 'c', 0.5, True)
+    >>> row["coup_peak"], row["cost_coupled_mcs"], row["sl_status"]
+    (1.2e-06, 6.0, 'ok')
+    """
     rows = []
     comp = {c: i for i, c in enumerate(ds.comparison.values)}
     for j in range(ds.sizes["point"]):
@@ -370,7 +426,62 @@ def markdown_report(study, ds, rules):
 
 
 def summary_text(study, ds, rules):
-    """Costs, cost ratios and the derived rules as printable text."""
+    """Costs, cost ratios and the derived rules as printable text.
+
+    What ``screening tradeoff`` prints at its end: the median cost per point of each method and
+    their ratio (:func:`cost_summary`), the recommendation (:func:`recommendation`), one line per
+    rule (:func:`rule_text`) and the run time of the study.
+
+    Parameters
+    ----------
+    study : object
+        The trade study (:func:`screening.analysis.tradeoff_study.load_tradeoff_study`): its
+        ``mcs["samples"]`` and ``rule["metric"]``, ``rule["quantity"]`` are used.
+    ds : xarray.Dataset
+        The trade-study dataset (``cost`` [s] over ``approach`` and ``point``, ``sl_batched_cost``
+        [s], the attribute ``wall_time_s`` [s]).
+    rules : list of dict
+        From :func:`screening.analysis.metrics.derive_rules`.
+
+    Returns
+    -------
+    str
+        The lines (costs in ms for SL, s for Monte Carlo).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    A made-up study of three points:
+
+    >>> import numpy as np, xarray as xr
+    >>> from screening.analysis.metrics import derive_rules
+    >>> from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+    >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
+    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
+    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
+    ...                  "family": ("point", ["hardening", "hardening", "softening"]),
+    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), err),
+    ...                  "peak_rel_se": (("comparison", "quantity", "point"), np.full(err.shape, 0.01)),
+    ...                  "overturned_fraction": (("mcs_model", "point"), np.zeros((2, 3))),
+    ...                  "cost": (("approach", "point"), [[0.01, 0.02, 0.02], [1.0, 3.0, 2.0], [5.0, 7.0, 6.0]]),
+    ...                  "sl_batched_cost": 0.001},
+    ...                 coords={"comparison": list(COMPARISONS), "quantity": list(QUANTITIES),
+    ...                         "mcs_model": ["coupled", "condensed"],
+    ...                         "approach": ["sl", "condensed_mcs", "coupled_mcs"]}, attrs={"wall_time_s": 42.0})
+    >>> import types
+    >>> study = types.SimpleNamespace(mcs={"samples": 200}, rule={"metric": "peak", "quantity": "var_theta"})
+    >>> lines = summary_text(study, ds, derive_rules(ds, thresholds=(0.10,))).splitlines()
+    >>> print(lines[0])
+    cost per point (median, one core): SL 20.00 ms, condensed MCS 2.00 s, coupled MCS 6.00 s (200 samples) -> SL : condensed : coupled = 1 : 100 : 300
+    >>> print(lines[-1])
+    total run time of the study 42 s
+    """
     cs = cost_summary(ds)
     lines = [f"cost per point (median, one core): SL {1e3 * cs['sl'][0]:.2f} ms, condensed MCS "
              f"{cs['condensed_mcs'][0]:.2f} s, coupled MCS {cs['coupled_mcs'][0]:.2f} s "
