@@ -49,10 +49,12 @@ COVERED = [
     "screening.report.fragility_figures",
     "screening.report.record_figures",
     "screening.report.text",
+    "screening.solvers.estimates",
     "screening.solvers.mc_models",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
+    "screening.solvers.timegrid",
 ]
 
 
