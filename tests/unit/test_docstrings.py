@@ -51,6 +51,7 @@ COVERED = [
     "screening.report.text",
     "screening.solvers.estimates",
     "screening.solvers.mc_models",
+    "screening.solvers.mc_registry",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
