@@ -49,6 +49,7 @@ COVERED = [
     "screening.report.fragility_figures",
     "screening.report.record_figures",
     "screening.report.text",
+    "screening.solvers.datasets",
     "screening.solvers.estimates",
     "screening.solvers.mc_models",
     "screening.solvers.mc_registry",
