@@ -55,6 +55,7 @@ COVERED = [
     "screening.solvers.mc_registry",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
+    "screening.solvers.outputs",
     "screening.solvers.simulate",
     "screening.solvers.timegrid",
 ]
