@@ -53,6 +53,7 @@ COVERED = [
     "screening.solvers.estimates",
     "screening.solvers.mc_models",
     "screening.solvers.mc_registry",
+    "screening.solvers.model_choice",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.outputs",
