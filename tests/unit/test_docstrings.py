@@ -51,6 +51,7 @@ COVERED = [
     "screening.report.text",
     "screening.solvers.datasets",
     "screening.solvers.estimates",
+    "screening.solvers.linearization",
     "screening.solvers.mc_models",
     "screening.solvers.mc_registry",
     "screening.solvers.model_choice",
@@ -80,7 +81,6 @@ PARTIAL = {
     "screening.report.tradeoff_figures": ("study_n",),
     "screening.report.tradeoff_files": ("to_file_layout", "from_file_layout", "file_encoding", "output_paths"),
     "screening.report.tradeoff_text": ("rule_text", "recommendation", "write_csv", "cost_summary"),
-    "screening.solvers.linearization": ("linearize",),
     "screening.solvers.moment_kernels": ("uplift_occupancy", "augmented_system", "lyapunov_rhs",
                                          "moment_equations"),
 }
