@@ -59,6 +59,7 @@ COVERED = [
     "screening.solvers.montecarlo",
     "screening.solvers.outputs",
     "screening.solvers.simulate",
+    "screening.solvers.synthesis",
     "screening.solvers.timegrid",
 ]
 
