@@ -54,6 +54,7 @@ COVERED = [
     "screening.solvers.linearization",
     "screening.solvers.mc_models",
     "screening.solvers.mc_registry",
+    "screening.solvers.mcs_equations",
     "screening.solvers.model_choice",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
