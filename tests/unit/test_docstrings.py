@@ -56,6 +56,7 @@ COVERED = [
     "screening.solvers.mc_registry",
     "screening.solvers.mcs_equations",
     "screening.solvers.model_choice",
+    "screening.solvers.moment_kernels",
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.outputs",
@@ -83,8 +84,6 @@ PARTIAL = {
     "screening.report.tradeoff_figures": ("study_n",),
     "screening.report.tradeoff_files": ("to_file_layout", "from_file_layout", "file_encoding", "output_paths"),
     "screening.report.tradeoff_text": ("rule_text", "recommendation", "write_csv", "cost_summary"),
-    "screening.solvers.moment_kernels": ("uplift_occupancy", "augmented_system", "lyapunov_rhs",
-                                         "moment_equations"),
 }
 
 
