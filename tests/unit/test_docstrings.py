@@ -55,6 +55,7 @@ COVERED = [
     "screening.solvers.mc_models",
     "screening.solvers.mc_registry",
     "screening.solvers.mcs_equations",
+    "screening.solvers.mcs_kernels",
     "screening.solvers.model_choice",
     "screening.solvers.moment_kernels",
     "screening.solvers.moments",
