@@ -315,12 +315,8 @@ def vertical_gain(model, theta, p):
 
     Parameters
     ----------
-    model : int
-        :data:`MODEL_COUPLED` or :data:`MODEL_CONDENSED`.
-    theta : float
-        Rotation [rad].
-    p : numpy.record
-        The :data:`MODEL` record (:func:`model_record`).
+    model, theta, p : int, float, numpy.record
+        As :func:`input_gain`: the model code, the rotation [rad] and the :data:`MODEL` record.
 
     Returns
     -------

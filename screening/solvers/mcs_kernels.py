@@ -287,47 +287,18 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
 
     Parameters
     ----------
-    model : int
-        :data:`MODEL_COUPLED` or :data:`MODEL_CONDENSED`.
-    damping_stiffness : numba function
-        The condensation's compiled ``(cond, theta) -> (C, K)`` (read by the condensed model only).
-    conds : numpy.ndarray
-        One-element array of the condensation's record.
-    row : int
-        The sample (row of ``acc`` and of the outputs).
-    acc : tuple of numpy.ndarray
-        ``(horizontal, vertical)`` ground accelerations [m/s^2] on the grid ``j dt_grid``: the inertial
-        ``x_g''`` one row per sample; the vertical ``a_v`` (positive up) one row per sample, one row for
-        all, or ``NO_VERTICAL``.
-    acc_dot : tuple of numpy.ndarray
-        Their rates [m/s^3], same layout.
-    dt_grid : float
-        Step of the input grid [s] (cubic Hermite interpolation in between).
-    t_out : numpy.ndarray
-        Output times [s].
-    models : numpy.ndarray
-        One-element array of the :data:`MODEL` record (:func:`model_record`).
-    y_init : numpy.ndarray
-        Initial ``(theta, theta', z_cb, z_cb')`` [rad, rad/s, m, m/s].
-    scale : numpy.ndarray
-        Absolute error scales of the four states (times ``rtol``).
-    rtol : float
-        Relative tolerance [1].
-    h_max : float
-        Largest step [s].
-    max_steps : int
-        Step budget of the sample.
-    out_theta, out_theta_dot, out_z, out_z_dot : numpy.ndarray
-        Histories (samples x output times) [rad, rad/s, m, m/s], row ``row`` written in place
-        (``z_cb`` columns zero for the condensed model; NaN after overturning or divergence).
-    out_uplift : numpy.ndarray of bool
-        Uplift flag at the output times, same layout.
+    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
+        As :func:`integrate_sample`.
+    rtol, h_max, max_steps : float, float, int
+        As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
 
     Returns
     -------
     tuple
-        ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected, h_min_accepted [s])``: status
-        ``STATUS_OK``, ``STATUS_OVERTURNED`` or ``STATUS_DIVERGED`` with a ``REASON_*`` code.
+        As :func:`integrate_sample`: ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected,
+        h_min_accepted [s])``.
 
     Notes
     -----
@@ -470,47 +441,18 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
 
     Parameters
     ----------
-    model : int
-        :data:`MODEL_COUPLED` or :data:`MODEL_CONDENSED`.
-    damping_stiffness : numba function
-        The condensation's compiled ``(cond, theta) -> (C, K)`` (read by the condensed model only).
-    conds : numpy.ndarray
-        One-element array of the condensation's record.
-    row : int
-        The sample (row of ``acc`` and of the outputs).
-    acc : tuple of numpy.ndarray
-        ``(horizontal, vertical)`` ground accelerations [m/s^2] on the grid ``j dt_grid``: the inertial
-        ``x_g''`` one row per sample; the vertical ``a_v`` (positive up) one row per sample, one row for
-        all, or ``NO_VERTICAL``.
-    acc_dot : tuple of numpy.ndarray
-        Their rates [m/s^3], same layout.
-    dt_grid : float
-        Step of the input grid [s] (cubic Hermite interpolation in between).
-    t_out : numpy.ndarray
-        Output times [s].
-    models : numpy.ndarray
-        One-element array of the :data:`MODEL` record (:func:`model_record`).
-    y_init : numpy.ndarray
-        Initial ``(theta, theta', z_cb, z_cb')`` [rad, rad/s, m, m/s].
-    scale : numpy.ndarray
-        Absolute error scales of the four states (times ``rtol``).
-    rtol : float
-        Relative tolerance [1].
-    h_max : float
-        Largest step [s].
-    max_steps : int
-        Step budget of the sample.
-    out_theta, out_theta_dot, out_z, out_z_dot : numpy.ndarray
-        Histories (samples x output times) [rad, rad/s, m, m/s], row ``row`` written in place
-        (``z_cb`` columns zero for the condensed model; NaN after overturning or divergence).
-    out_uplift : numpy.ndarray of bool
-        Uplift flag at the output times, same layout.
+    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
+        As :func:`integrate_sample`.
+    rtol, h_max, max_steps : float, float, int
+        As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
 
     Returns
     -------
     tuple
-        ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected, h_min_accepted [s])``: status
-        ``STATUS_OK``, ``STATUS_OVERTURNED`` or ``STATUS_DIVERGED`` with a ``REASON_*`` code.
+        As :func:`integrate_sample`: ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected,
+        h_min_accepted [s])``.
 
     Notes
     -----

@@ -100,11 +100,9 @@ def envelope_rates(osc):
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> envelope_rates(osc)
     (0.25, 0.5)
     """
@@ -137,13 +135,11 @@ def envelope_state(osc, t):
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> e1, e2 = envelope_state(osc, 1.0)
-    >>> f"{4 * (e1 - e2):.6f}", f"{float(exc.envelope(1.0)[0]):.6f}"           # q(1 s) both ways
+    >>> f"{4 * (e1 - e2):.6f}", f"{float(exc.envelope(1.0)):.6f}"           # q(1 s) both ways
     ('0.689080', '0.689080')
     """
     r1, r2 = envelope_rates(osc)
@@ -179,12 +175,10 @@ def initial_gain(osc, e1, e2):
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
-    >>> f"{initial_gain(osc, *envelope_state(osc, 1.0)):.6f}", f"{osc['gain'] * float(exc.envelope(1.0)[0]):.6f}"
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> f"{initial_gain(osc, *envelope_state(osc, 1.0)):.6f}", f"{osc['gain'] * float(exc.envelope(1.0)):.6f}"
     ('2.444029', '2.444029')
     """
     return osc.gain * (1.0 if osc.constant_envelope == 1.0 else 4.0 * (e1 - e2))
@@ -227,14 +221,12 @@ def stage_gains(osc, e1, e2, h):
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> e1, e2 = envelope_state(osc, 1.0)
     >>> *gains, f1, f2 = stage_gains(osc, e1, e2, 0.1)
-    >>> f"{gains[-1]:.6f}", f"{osc['gain'] * float(exc.envelope(1.1)[0]):.6f}"   # stage 6 sits at t + h
+    >>> f"{gains[-1]:.6f}", f"{osc['gain'] * float(exc.envelope(1.1)):.6f}"   # stage 6 sits at t + h
     ('2.590898', '2.590898')
     >>> bool(np.allclose((e1 * f1, e2 * f2), envelope_state(osc, 1.1), rtol=1e-14))
     True
@@ -319,11 +311,9 @@ def p_uplift(osc, var_theta):
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> f"{p_uplift(osc, 1e-6):.12f}", f"{float(uplift_occupancy(osc['theta_ul'], 1e-6)):.12f}"
     ('0.229664132095', '0.229664132095')
     >>> p_uplift(osc, 0.0)
@@ -371,11 +361,9 @@ def first_step(osc, k0, h_max, t, t_end):
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> h, code, _ = first_step(osc, 808.2, 0.1, 0.0, 20.0)
     >>> f"{h:.6e}", f"{0.05 / np.sqrt(808.2 / osc['m_sdof']):.6e}", code.name
     ('1.260119e-03', '1.260119e-03', 'ok')
@@ -543,11 +531,9 @@ def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> out = end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 1e-6, 800.0, 808.0, 0.5, 0.0)
     >>> round(out[0], 12), round(out[1], 12), round(out[2], 12), out[5], out[6].name
     (1.1, 0.45, 0.285, 800.0, 'ok')
@@ -671,11 +657,9 @@ def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> import numba
     >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))         # constant c_eq, k_eq
     >>> out = [np.zeros((1, 3)) for _ in range(6)]
@@ -740,11 +724,9 @@ def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))                      # T1 = 4 s, T2 = 2 s
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> import numba
     >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))
     >>> out = [np.zeros((1, 4)) for _ in range(6)]
@@ -1363,38 +1345,23 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
 
     Parameters
     ----------
-    coefficients : numba function
-        The condensation's compiled ``(cond, table, var_theta, cov) -> (c_eq, k_eq)``.
-    cond : numpy.record
-        Its record for the point.
-    table : numpy.ndarray
-        Its table.
-    osc : numpy.record
-        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
+    coefficients, cond, table, osc : various
+        The condensation's compiled coefficients, its record and table, the point's oscillator record,
+        as :func:`solve_point_white`.
     fa, fb, fc, fd : numpy.ndarray or float
         The filter's ``A`` (n_f x n_f), ``B``, ``C`` (n_f) and ``D``.
     scale : numpy.ndarray
         Absolute-tolerance scales of the packed moments (:func:`filtered_scales`).
-    t_out : numpy.ndarray
-        Output times [s].
-    rtol : float
-        Relative tolerance [1].
-    h_max : float
-        Largest step [s].
-    max_steps : int
-        Step budget.
-    store : bool
-        Whether to write the histories.
-    i : int
-        Row of the outputs.
+    t_out, rtol, h_max, max_steps, store, i : various
+        Output times [s], relative tolerance [1], largest step [s], step budget, whether to write the
+        histories and their row, as :func:`solve_point_white`.
     var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
-        History arrays (points x output times) [rad^2, rad^2/s, rad^2/s^2, N m s/rad, N m/rad, 1].
+        History arrays (points x output times), as :func:`solve_point_white`.
 
     Returns
     -------
     tuple
-        :data:`SUMMARIES`: ``(status, t_stop [s], n_steps, n_rejected, peak_var_theta [rad^2],
-        t_peak_var_theta [s], min_k_eq [N m/rad])``.
+        :data:`SUMMARIES`, as :func:`solve_point_white`.
 
     Notes
     -----
@@ -1429,32 +1396,10 @@ def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale
 
     Parameters
     ----------
-    coefficients : numba function
-        The condensation's compiled ``(cond, table, var_theta, cov) -> (c_eq, k_eq)``.
-    cond : numpy.record
-        Its record for the point.
-    table : numpy.ndarray
-        Its table.
-    osc : numpy.record
-        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
-    fa, fb, fc, fd : numpy.ndarray or float
-        The filter's ``A`` (2 x 2), ``B``, ``C`` (2) and ``D``.
-    scale : numpy.ndarray
-        Absolute-tolerance scales of the 10 packed moments (:func:`filtered_scales`).
-    t_out : numpy.ndarray
-        Output times [s].
-    rtol : float
-        Relative tolerance [1].
-    h_max : float
-        Largest step [s].
-    max_steps : int
-        Step budget.
-    store : bool
-        Whether to write the histories.
-    i : int
-        Row of the outputs.
+    coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps, store, i : various
+        As :func:`solve_point_filtered`, for a filter of two states (``fa`` 2 x 2, 10 packed moments).
     var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
-        History arrays (points x output times) [rad^2, rad^2/s, rad^2/s^2, N m s/rad, N m/rad, 1].
+        History arrays (points x output times), as :func:`solve_point_filtered`.
 
     Returns
     -------
