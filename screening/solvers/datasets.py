@@ -139,7 +139,8 @@ def finish(ds, table=None):
     ds : xarray.Dataset
         The dataset, its variables named as in :mod:`screening.schema`.
     table : dict, optional
-        The schema table of the variables (e.g. ``schema.MONTE_CARLO``); default the linearization's.
+        The producer's own schema table (e.g. ``schema.MONTE_CARLO``), tried before the shared ones;
+        default none (the shared declarations only).
 
     Returns
     -------
