@@ -27,7 +27,7 @@ from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
 
 __all__ = ["MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
-           "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
+           "finish", "linearization_dataset", "with_probabilities"]
 
 #: Ensemble statistics of a Monte Carlo run, on ``t``.
 MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",
@@ -44,14 +44,67 @@ INTEGRATOR_TEXT = {
 def model_fields(block, foundation, excitation):
     """The numeric fields of the model objects by parameter name, in the order of the objects.
 
-    The names are those of :data:`screening.schema.PARAMETERS` (``lam`` or ``c`` by contact law,
-    ``omega_g``, ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
+    What a result stores as coordinates: the block's, the bed's and the excitation's numbers under
+    the names of :data:`screening.schema.PARAMETERS` (``lam`` or ``c`` by contact law, ``omega_g``,
+    ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (``m`` [kg], ``b``, ``h`` [m], ``I_cm`` [kg m^2], ``g`` [m/s^2]).
+    foundation : screening.Foundation
+        The bed (``k`` [N/m^2], ``lam`` [N s/m^3] or ``c`` [N s/m^2], ``eps`` [1]).
+    excitation : Excitation
+        The ground motion (``S0`` [m^2/s^3], filter and envelope parameters).
+
+    Returns
+    -------
+    dict
+        Parameter name -> value (float or array, SI as in :data:`screening.schema.PARAMETERS`).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` (the parameters as coordinates of a result).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> fields = model_fields(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4))
+    >>> list(fields)
+    ['m', 'b', 'h', 'I_cm', 'g', 'k', 'lam', 'eps', 'S0', 'T1', 'T2']
+    >>> fields["k"], fields["S0"]
+    (28900000.0, 0.0001)
     """
     return numeric_fields(block, foundation, excitation)
 
 
 def model_labels(foundation, excitation):
-    """The string choices of the model objects: ``contact``, ``excitation``, ``envelope``."""
+    """The string choices of the model objects: ``contact``, ``excitation``, ``envelope``.
+
+    They are global attributes of a result (a string is no coordinate).
+
+    Parameters
+    ----------
+    foundation : screening.Foundation
+        The bed (its contact law name, ``law``).
+    excitation : Excitation
+        The ground motion (its ``kind`` and its envelope's ``kind``).
+
+    Returns
+    -------
+    dict of str
+        ``{"contact": ..., "excitation": ..., "envelope": ...}``.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` (the attributes of a result).
+
+    Examples
+    --------
+    >>> from screening import Foundation, KanaiTajimi
+    >>> model_labels(Foundation(k=2.89e7, lam=8.95e8), KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6))
+    {'contact': 'hunt_crossley', 'excitation': 'kanai_tajimi', 'envelope': 'exponential'}
+    """
     return {"contact": foundation.law, "excitation": excitation.kind, "envelope": excitation.envelope.kind}
 
 
@@ -78,25 +131,92 @@ def finish(ds, table=None):
     """:func:`screening.schema.apply_schema` on ``ds``, leaving alone the coordinates the schema does not
     declare (labels the caller brought along on its own DataArrays: they keep their own attributes).
 
-    Every producer of a dataset ends with it.  An undeclared data variable still raises ``KeyError``.
+    Every producer of a dataset ends with it, so every variable of every result has its CF ``units``
+    and ``long_name`` from one table.  An undeclared data variable still raises ``KeyError``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset, its variables named as in :mod:`screening.schema`.
+    table : dict, optional
+        The producer's own schema table (e.g. ``schema.MONTE_CARLO``), tried before the shared ones;
+        default none (the shared declarations only).
+
+    Returns
+    -------
+    xarray.Dataset
+        A new dataset with the schema's attributes on its declared variables and the global attributes
+        (``Conventions``, ``references``, ...).
+
+    Raises
+    ------
+    KeyError
+        For a data variable the schema does not declare.
+
+    References
+    ----------
+    .. [1] CF Conventions, "NetCDF Climate and Forecast (CF) Metadata Conventions", version 1.8,
+       https://cfconventions.org/
+    .. [2] The package's documentation, ``docs/outputs.md`` (the variables and their units).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = finish(xr.Dataset({"var_theta": ("t", np.zeros(3))}, coords={"t": [0.0, 0.5, 1.0], "k": 2.89e7}))
+    >>> ds["var_theta"].attrs["units"], ds["k"].attrs["units"], ds.attrs["Conventions"]
+    ('rad2', 'N m-2', 'CF-1.8')
     """
     foreign = [name for name in ds.coords if not _declared(name, table)]
     return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c].variable for c in foreign})
 
 
 def linearization_dataset(result, times, dims, parameters, derived, attrs):
-    """The dataset of :func:`screening.linearize`.
+    """The dataset of :func:`screening.linearize`: the solver's plain arrays labelled again.
+
+    Histories go on ``dims + ("t",)``, per-point summaries on ``dims``, parameters become coordinates,
+    derived quantities data variables; :func:`finish` adds units and long names.
 
     Parameters
     ----------
-    result : dict of numpy arrays from :func:`screening.solvers.moments.solve_moments`, the
-        histories on ``dims + ("t",)`` and the summaries on ``dims``.
-    times : output times [s].
-    dims : names of the grid dimensions (``()`` for one point).
-    parameters : parameter name -> value (float or DataArray on some of ``dims``), stored as coordinates.
-    derived : name -> value (float or DataArray on some of ``dims``), stored as data variables
-        (``theta_ul``, ``slenderness``, ...).
-    attrs : global attributes (string choices, method, tolerances).
+    result : dict of numpy.ndarray
+        From :func:`screening.solvers.moments.solve_moments`: the histories
+        (:data:`screening.solvers.outputs.HISTORY_VARIABLES`) on ``dims + ("t",)`` and the summaries
+        (:func:`screening.solvers.outputs.linearize_variables`) on ``dims``.
+    times : array_like of float
+        Output times [s].
+    dims : tuple of str
+        Names of the grid dimensions (``()`` for one point).
+    parameters : dict
+        Parameter name -> value (float or DataArray on some of ``dims``, SI), stored as coordinates.
+    derived : dict
+        Name -> value (float or DataArray on some of ``dims``), stored as data variables
+        (``theta_ul`` [rad], ``slenderness`` [rad], ...).
+    attrs : dict
+        Global attributes (string choices, method, tolerances).
+
+    Returns
+    -------
+    xarray.Dataset
+        The labelled result, with CF units (:func:`finish`).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/outputs.md`` (what a result holds).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
+    >>> res = {name: np.zeros((2, 5)) for name in HISTORY_VARIABLES}
+    >>> res.update({name: np.zeros(2) for name in linearize_variables()})
+    >>> S0 = xr.DataArray([1e-5, 1e-4], dims="S0")
+    >>> ds = linearization_dataset(res, np.linspace(0.0, 1.0, 5), ("S0",), {"m": 8.67, "S0": S0},
+    ...                            {"theta_ul": ((), 1e-3)}, {"contact": "hunt_crossley"})
+    >>> ds["var_theta"].dims, ds["S0"].attrs["units"], float(ds["m"]), ds.attrs["contact"]
+    (('S0', 't'), 'm2 s-3', 8.67, 'hunt_crossley')
     """
     dims = tuple(dims)
     data = {name: (dims + ("t",), result[name]) for name in HISTORY_VARIABLES}
@@ -177,8 +297,46 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
 def with_probabilities(ds, thresholds=None):
     """A :func:`screening.monte_carlo` dataset with the probabilities of its samples: ``p_overturn`` and
     ``p_overturn_se`` [1], and with ``thresholds`` (rotations [rad]) ``p_exceed`` and ``p_exceed_se`` [1] on the
-    coordinate ``threshold`` [rad] (:func:`screening.solvers.estimates.sample_probabilities` over the
-    samples that did not diverge; overturned samples exceed every threshold)."""
+    coordinate ``threshold`` [rad].
+
+    The estimates are :func:`screening.solvers.estimates.sample_probabilities` over the samples that
+    did not diverge; overturned samples exceed every threshold.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A Monte Carlo result, with ``peak_abs_theta`` [rad], ``overturned`` and ``diverged`` on ``sample``.
+    thresholds : array_like of float, optional
+        Rotation thresholds [rad]; None (default) adds ``p_overturn`` only.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` with ``p_overturn``, ``p_overturn_se`` [1] and, with thresholds, ``p_exceed``,
+        ``p_exceed_se`` [1] on ``threshold`` [rad].
+
+    Notes
+    -----
+    ``p_overturn = #overturned / N`` and ``p_exceed(a) = #(max_t |theta| > a or overturned) / N`` over
+    the ``N`` samples that did not diverge, with Agresti-Coull standard errors
+    (:func:`screening.solvers.estimates.binomial_estimate`).
+
+    References
+    ----------
+    .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
+       of binomial proportions", The American Statistician 52(2) (1998) 119-126.
+    .. [2] The package's documentation, ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> mc = xr.Dataset({"peak_abs_theta": ("sample", [0.01, 0.05, 0.3, 0.02]),
+    ...                  "overturned": ("sample", [False, False, True, False]),
+    ...                  "diverged": ("sample", [False, False, False, True])})
+    >>> out = with_probabilities(mc, thresholds=[0.02, 0.1])
+    >>> float(out["p_overturn"]), out["p_exceed"].values.round(4), out["threshold"].attrs["units"]
+    (0.3333333333333333, array([0.6667, 0.3333]), 'rad')
+    """
     levels = np.asarray(() if thresholds is None else thresholds, dtype=float)
     prob = sample_probabilities(ds["peak_abs_theta"].values, ds["overturned"].values, ~ds["diverged"].values, levels)
     data = {"p_overturn": ((), prob["p_overturn"]), "p_overturn_se": ((), prob["p_overturn_se"])}

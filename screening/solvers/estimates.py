@@ -22,19 +22,31 @@ Z = 2.0
 def binomial_estimate(hits, n):
     """Fraction ``p = hits / n`` [1] of Bernoulli trials and its standard error [1].
 
+    The fraction of Monte Carlo samples that overturned (or exceeded a rotation) and how far it
+    may be from the true probability: an Agresti-Coull error, which stays positive when no sample
+    (or every sample) hit.
+
     Parameters
     ----------
-    hits : number of successes (array-like, >= 0).
-    n : number of trials (array-like, broadcast with ``hits``); NaN where ``n = 0``.
+    hits : array_like of int
+        Number of successes [-], ``>= 0``.
+    n : array_like of int
+        Number of trials [-], broadcast with ``hits``; NaN results where ``n = 0``.
 
     Returns
     -------
-    p, se : arrays [1].
+    p : numpy.ndarray or float
+        The fraction ``hits / n`` [1] (a scalar for scalar input).
+    se : numpy.ndarray or float
+        Its Agresti-Coull standard error [1].
 
     Notes
     -----
-    The estimate is the unbiased ``p = k / n``.  Its standard error is the Agresti-Coull one,
-    ``se = sqrt(p~ (1 - p~) / (n + z^2))`` with ``p~ = (k + z^2 / 2) / (n + z^2)`` and ``z = 2``
+    The estimate is the unbiased ``p = k / n``.  Its standard error is the Agresti-Coull one [1]_,
+
+    .. math:: se = \\sqrt{\\tilde p (1 - \\tilde p) / (n + z^2)}, \\qquad
+              \\tilde p = (k + z^2 / 2) / (n + z^2), \\quad z = 2
+
     (:data:`Z`): ``p~ +- 2 se`` is the Agresti-Coull 95 % interval.  Unlike the Wald error
     ``sqrt(p (1 - p) / n)`` it does not vanish when no sample (or every sample) overturned: at
     ``k = 0`` it is about ``1.4 / n``, so ``p + 2 se`` bounds ``p`` by about ``3 / n`` as the rule of
@@ -42,8 +54,20 @@ def binomial_estimate(hits, n):
 
     References
     ----------
-    Agresti, A. and Coull, B. A. (1998) Approximate is better than "exact" for interval estimation
-    of binomial proportions, The American Statistician 52(2), 119-126.
+    .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
+       of binomial proportions", The American Statistician 52(2) (1998) 119-126.
+       https://doi.org/10.1080/00031305.1998.10480550
+
+    Examples
+    --------
+    >>> p, se = binomial_estimate(25, 100)
+    >>> float(p), round(float(se), 4)      # p~ = 27/104: sqrt(p~ (1 - p~) / 104)
+    (0.25, 0.043)
+    >>> p, se = binomial_estimate(0, 1000)                 # no hit: a positive error all the same
+    >>> float(p), round(float(se), 5)
+    (0.0, 0.00141)
+    >>> binomial_estimate([3, 0], [10, 0])[0]              # no trial: NaN
+    array([0.3, nan])
     """
     k = np.asarray(hits, dtype=float)
     n = np.asarray(n, dtype=float)
@@ -57,23 +81,51 @@ def binomial_estimate(hits, n):
 def sample_probabilities(peak_abs_theta, overturned, valid, levels=()):
     """``p_overturn`` and ``p_exceed`` of a Monte Carlo run from its per-sample peaks.
 
+    Counts the valid samples that overturned and, per threshold, those whose peak rotation passed
+    it, and turns the counts into fractions with :func:`binomial_estimate`.  An overturned sample
+    counts as exceeding every threshold; samples not valid (diverged, task failed) are left out.
+
     Parameters
     ----------
-    peak_abs_theta : peak ``|theta|`` [rad] of each sample over the record, samples on the LAST axis.
-    overturned : True for the samples that overturned (same shape).
-    valid : True for the samples in the estimate (not diverged, task not failed; same shape).
-    levels : rotation thresholds [rad], shape ``(L,)`` or the leading shape of the peaks plus ``(L,)``.
+    peak_abs_theta : array_like of float
+        Peak ``max_t |theta|`` [rad] of each sample over the record, samples on the LAST axis.
+    overturned : array_like of bool
+        True for the samples that overturned (same shape).
+    valid : array_like of bool
+        True for the samples in the estimate (not diverged, task not failed; same shape).
+    levels : array_like of float, optional
+        Rotation thresholds [rad], shape ``(L,)`` or the leading shape of the peaks plus ``(L,)``.
 
     Returns
     -------
-    dict with ``p_overturn``, ``p_overturn_se`` (leading shape) and ``p_exceed``, ``p_exceed_se``
-    (leading shape + ``(L,)``), all [1], from :func:`binomial_estimate` over the valid samples;
-    NaN where no sample is valid.
+    dict of numpy.ndarray
+        ``p_overturn``, ``p_overturn_se`` (leading shape) and ``p_exceed``, ``p_exceed_se``
+        (leading shape + ``(L,)``), all [1], from :func:`binomial_estimate` over the valid samples;
+        NaN where no sample is valid.
 
     Notes
     -----
-    ``p_overturn = #(overturned & valid) / #valid``; ``p_exceed(a) = #((max|theta| > a or overturned)
-    & valid) / #valid``: an overturned sample has passed every rotation on its way down.
+    With ``N`` the number of valid samples, ``p_overturn = #(overturned & valid) / N`` and
+    ``p_exceed(a) = #((max_t |theta| > a or overturned) & valid) / N``: an overturned sample has
+    passed every rotation on its way down.  These are the Monte Carlo estimates the judge holds the
+    linearization's probabilities against (section 3 of [1]_ compares the two methods).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
+       of binomial proportions", The American Statistician 52(2) (1998) 119-126.
+
+    Examples
+    --------
+    >>> out = sample_probabilities([0.01, 0.03, 0.2, 0.05], overturned=[False, False, True, False],
+    ...                            valid=[True, True, True, False], levels=[0.02, 0.1])
+    >>> float(out["p_overturn"])                          # 1 of the 3 valid samples overturned
+    0.3333333333333333
+    >>> out["p_exceed"]                                   # 2 of 3 passed 0.02 rad, 1 of 3 passed 0.1 rad
+    array([0.66666667, 0.33333333])
     """
     peaks = np.asarray(peak_abs_theta, dtype=float)
     over = np.asarray(overturned, dtype=bool) & np.asarray(valid, dtype=bool)

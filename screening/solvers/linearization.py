@@ -22,7 +22,7 @@ from screening.solvers.datasets import linearization_dataset, model_fields, mode
 from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
 
-__all__ = ["METHOD", "labelled_fields", "broadcast_fields", "with_fields", "on_own_dims", "linearize"]
+__all__ = ["METHOD", "linearize"]
 
 METHOD = "stochastic linearization + Lyapunov moment equations"
 
@@ -121,8 +121,8 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
         Solver relative tolerance [1].
     condensation : str or screening.condensation.Condensation, optional
         A registered condensation (:func:`screening.condensation.get`): ``"paper"`` (eqs. (17)-(25) in
-        [1], default) or ``"cubic"`` (static balance with the cubic term); recorded in
-        ``attrs["condensation"]``.
+        [1], default), ``"cubic"`` (static balance with the cubic term) or ``"virtual_work"`` (heavy
+        uplift, docs/models.md); recorded in ``attrs["condensation"]``.
     trust : bool, optional
         Add ``sl_trust`` and the predicted error band ``sl_error_low``/``sl_error_high`` of the
         linearization against the coupled model (:func:`screening.analysis.trust.add_trust`; default).

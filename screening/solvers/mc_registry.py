@@ -116,7 +116,48 @@ class MonteCarloModel(abc.ABC):
 
 def check_validity(model, block, foundation, excitation=None, strict=False):
     """Warn (``UserWarning``) with the model's :meth:`MonteCarloModel.validity_problem` at the point, or with
-    ``strict`` raise ``ValueError`` with it; nothing where the model is within its validity."""
+    ``strict`` raise ``ValueError`` with it; nothing where the model is within its validity.
+
+    A model may carry a measured validity (the stiff-bed model does, docs/stiff_bed_validity.md);
+    the engines call this once per run, before any sample is integrated, so a point outside it is
+    said (or refused) up front.
+
+    Parameters
+    ----------
+    model : MonteCarloModel
+        The model (e.g. ``get("stiff_bed")``).
+    block : screening.Block
+        The block (SI: ``m`` [kg], ``b``, ``h`` [m]).
+    foundation : screening.Foundation
+        The bed (``k`` [N/m^2], ``lam`` [N s/m^3]).
+    excitation : Excitation, optional
+        The point's excitation (its kind may be part of the rule), or None for a record.
+    strict : bool, optional
+        Raise instead of warning.
+
+    Returns
+    -------
+    None
+        Nothing; the model's one-line problem is a ``UserWarning``, or with ``strict`` a ``ValueError``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/stiff_bed_validity.md`` (the measured validity of a model).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> check_validity(get("coupled"), block, bed, strict=True) is None     # the coupled model holds everywhere
+    True
+    >>> check_validity(get("stiff_bed"), block, bed, strict=True)           # the paper's bed is not stiff enough
+    Traceback (most recent call last):
+    ...
+    ValueError: model 'stiff_bed' outside its measured validity: ...
+    """
     problem = model.validity_problem(block, foundation, excitation)
     if problem is None:
         return
@@ -131,7 +172,45 @@ _REGISTRY: dict[str, MonteCarloModel] = {}
 
 
 def register(model):
-    """Add a :class:`MonteCarloModel` instance under its ``name`` (a later one with the same name replaces it)."""
+    """Add a :class:`MonteCarloModel` instance under its ``name`` (a later one with the same name replaces it).
+
+    After it, the name is accepted wherever a Monte Carlo model is (``monte_carlo(model=...)``,
+    ``[mcs] model`` of a study, ``screening simulate --model``).  A new model is one module with a
+    :class:`MonteCarloModel` subclass and a call to ``register``.
+
+    Parameters
+    ----------
+    model : MonteCarloModel
+        The model (an instance of a :class:`MonteCarloModel` subclass; its :attr:`~MonteCarloModel.name`
+        is the registry key).
+
+    Returns
+    -------
+    MonteCarloModel
+        ``model`` itself.
+
+    Raises
+    ------
+    TypeError
+        For anything that is not a ``MonteCarloModel`` instance.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/stiff_bed.md`` (a model added through this registry).
+
+    Examples
+    --------
+    >>> coupled = get("coupled")
+    >>> register(coupled) is coupled, names()[0]
+    (True, 'coupled')
+    >>> register("coupled")
+    Traceback (most recent call last):
+    ...
+    TypeError: register() takes a MonteCarloModel instance (got str)
+    """
     if not isinstance(model, MonteCarloModel):
         raise TypeError(f"register() takes a MonteCarloModel instance (got {type(model).__name__})")
     _REGISTRY[model.name] = model
@@ -139,24 +218,120 @@ def register(model):
 
 
 def unregister(name):
-    """Remove a registered model (tests that register their own)."""
+    """Remove a registered model (tests that register their own); an unknown name is ignored.
+
+    Parameters
+    ----------
+    name : str
+        The registry name of the model.
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` (the registry of Monte Carlo models).
+
+    Examples
+    --------
+    >>> class Toy(get("coupled").__class__):
+    ...     name = "toy"
+    >>> _ = register(Toy())
+    >>> names()[-1]
+    'toy'
+    >>> unregister("toy")
+    >>> "toy" in names()
+    False
+    """
     _REGISTRY.pop(name, None)
 
 
 def names():
-    """Registered names, in registration order."""
+    """Registered names, in registration order (the built-in ``coupled``, ``condensed``, ``stiff_bed`` first).
+
+    Returns
+    -------
+    tuple of str
+        The names :func:`get` accepts; their positions are the model codes of :func:`code`.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` (``mcs_model``: flag values in registry order).
+
+    Examples
+    --------
+    >>> names()[:3]
+    ('coupled', 'condensed', 'stiff_bed')
+    """
     return tuple(_REGISTRY)
 
 
 def code(name):
-    """The code of a registered model in per-point records (``mcs_model``): its position in :func:`names`."""
+    """The code of a registered model in per-point records (``mcs_model``): its position in :func:`names`.
+
+    Parameters
+    ----------
+    name : str or MonteCarloModel
+        A registered name, or a registered model instance.
+
+    Returns
+    -------
+    int
+        The model's index in :func:`names` [-] (the flag value of ``mcs_model`` in a result).
+
+    Raises
+    ------
+    ValueError
+        For a name that is not registered (from :func:`get`).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` (``mcs_model``: flag values in registry order).
+
+    Examples
+    --------
+    >>> code("coupled"), code("condensed"), code(get("stiff_bed"))
+    (0, 1, 2)
+    """
     return names().index(get(name).name)
 
 
 def get(model):
     """The :class:`MonteCarloModel` for a registered name (an instance is returned as it is).
 
-    Raises ``ValueError`` naming the parameter and the registered names otherwise.
+    The one place a model name becomes a model: every run resolves it here, once, at set-up.
+
+    Parameters
+    ----------
+    model : str or MonteCarloModel
+        A registered name (:func:`names`) or a model instance.
+
+    Returns
+    -------
+    MonteCarloModel
+        The registered model (or ``model`` itself for an instance).
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter and the registered names, for anything else.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/models.md`` (the Monte Carlo models).
+
+    Examples
+    --------
+    >>> get("coupled").name, get("coupled").vertical_state, get("condensed").vertical_state
+    ('coupled', True, False)
+    >>> get("rigid")
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'model' must be one of ('coupled', 'condensed', 'stiff_bed'...) (got 'rigid')
     """
     if isinstance(model, MonteCarloModel):
         return model

@@ -47,8 +47,50 @@ INTEGRATORS = {"dopri": INTEGRATOR_DOPRI, "rodas": INTEGRATOR_RODAS}
 
 
 def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri"):
-    """The :data:`MODEL` record of scalar model objects; ``cond``: the condensation of condensed runs;
-    ``integrator``: a key of :data:`INTEGRATORS`."""
+    """The :data:`MODEL` record of scalar model objects: every number a compiled sample integration reads.
+
+    Built once per run; the kernels read the block, the bed's law weights, ``m_sdof``, the
+    overturning, uplift and capacity angles, the flight limit, the physical bounds of the coupled
+    state and the integrator from it.
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields: ``m`` [kg], ``b``, ``h`` [m], ``I_cm`` [kg m^2], ``g`` [m/s^2]).
+    foundation : screening.Foundation
+        The bed (scalar fields: ``k`` [N/m^2], ``eps`` [1/m^2], its damping weights).
+    cond : screening.condensation.Condensation
+        The condensation of condensed runs (its uplift threshold and capacity angle are stored).
+    max_flight_time : float, optional
+        Longest flight [s] before a sample is called diverged.
+    integrator : str, optional
+        A key of :data:`INTEGRATORS` (``"dopri"`` or ``"rodas"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        A 0-d record of dtype :data:`MODEL` (SI units).
+
+    Notes
+    -----
+    ``m_sdof = I_cm + m h^2`` (eq. (22) in [1]_), ``theta_over = atan(b / h)``, ``theta_ul`` of the
+    condensation (eq. (19) for the paper's); the bounds ``z_max = b``, ``z_min = -2 h`` and
+    ``rate_max = 1000 sqrt(g / h)`` flag a blown-up coupled state.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> rec = model_record(block, bed, condensation.get("paper"), integrator="rodas")
+    >>> f"{rec['m_sdof']:.5f} {rec['theta_ul']:.4e}", int(rec["integrator"]) == INTEGRATOR_RODAS
+    ('0.51334 1.2012e-03', True)
+    """
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     rec = np.zeros((), dtype=MODEL)
     values = dict(m=m, g=g, h=h, I_cm=float(block.I_cm), b=b, k=float(foundation.k), eps=float(foundation.eps),
@@ -70,11 +112,60 @@ def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri
 def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0):
     """``(theta'', z_cb'')`` [rad/s^2, m/s^2] of the coupled eqs. (7)–(8).
 
-    Eliminating ``z_cb''`` from (8) with (7):
+    The right-hand side of the coupled Monte Carlo model: the block's rocking and vertical motion
+    on the bed, contact resultants integrated in closed form over the actual contact zone
+    (:func:`screening.physics.contact.law_resultants_trig_jit`).
+
+    Parameters
+    ----------
+    theta : float
+        Rotation [rad].
+    theta_dot : float
+        Angular velocity [rad/s].
+    z_cb : float
+        Indentation of the base centre [m] (positive down, relative to the ground).
+    z_cb_dot : float
+        Its rate [m/s].
+    x_g_ddot : float
+        Horizontal ground acceleration [m/s^2].
+    p : numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+    a_v : float, optional
+        Vertical ground acceleration [m/s^2], positive up.
+
+    Returns
+    -------
+    theta_ddot : float
+        Angular acceleration [rad/s^2].
+    z_ddot : float
+        Vertical acceleration of the base centre [m/s^2].
+
+    Notes
+    -----
+    Eliminating ``z_cb''`` from eq. (8) in [1]_ with eq. (7):
     ``(I_cm + m h^2 cos^2) theta'' = m h x_g'' cos - M_cb + h F_cb sin + m h^2 theta'^2 sin cos``,
-    ``z_cb'' = g + a_v - F_cb/m - h (theta'^2 cos + theta'' sin)``, with ``a_v`` [m/s^2] the vertical
+    ``z_cb'' = g + a_v - F_cb/m - h (theta'^2 cos + theta'' sin)``, with ``a_v`` the vertical
     ground acceleration (positive up): in the ground's frame it adds to gravity, and ``z_cb`` (down) is
-    relative to the ground, so it enters the vertical equation only (docs/method.md).
+    relative to the ground, so it enters the vertical equation only (docs/method.md).  The printed
+    resultants of eqs. (10)-(12) are corrected (docs/method.md, "Corrections to the printed equations").
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> p = model_record(block, bed, condensation.get("paper"))[()]
+    >>> z_st = 8.67 * 9.81 / (2 * 0.035 * 2.89e7)                   # static indentation m g / (2 b k)
+    >>> coupled_accelerations(0.0, 0.0, z_st, 0.0, 0.0, p)          # at rest: in balance
+    (0.0, 0.0)
+    >>> a, _ = coupled_accelerations(0.0, 0.0, z_st, 0.0, 1.0, p)   # 1 m/s2: m h / (I_cm + m h^2)
+    >>> f"{a:.6f}", f"{8.67 * 0.21 / block.m_sdof:.6f}"
+    ('3.546798', '3.546798')
     """
     m, g, h = p.m, p.g, p.h
     s = math.sin(theta)
@@ -92,12 +183,52 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0
 def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, p, a_v=0.0):
     """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22): ``(m h x_g'' - C theta' - K theta) / m_sdof``.
 
-    ``damping_stiffness(cond, theta) -> (C, K)``: the condensation's compiled function and record.
-    A vertical ground acceleration ``a_v`` [m/s^2] (positive up) scales the weight by
-    ``lam = (g + a_v) / g``; the laws are read at ``theta / lam`` and the weight's moment gains
-    ``m h a_v theta`` (docs/method.md, "Vertical ground acceleration")::
+    Parameters
+    ----------
+    damping_stiffness : numba function
+        The condensation's compiled ``(cond, theta) -> (C, K)`` (:class:`~screening.kernels.signatures.SdofKernel`).
+    cond : numpy.record
+        Its record.
+    theta : float
+        Rotation [rad].
+    theta_dot : float
+        Angular velocity [rad/s].
+    x_g_ddot : float
+        Horizontal ground acceleration [m/s^2].
+    p : numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+    a_v : float, optional
+        Vertical ground acceleration [m/s^2], positive up.
+
+    Returns
+    -------
+    float
+        ``theta''`` [rad/s^2].
+
+    Notes
+    -----
+    Eq. (22) in [1]_ with ``C(theta)``, ``K(theta)`` of eqs. (24)-(25) (or the chosen condensation's).
+    A vertical ground acceleration scales the weight by ``lam = (g + a_v) / g``; the laws are read at
+    ``theta / lam`` and the weight's moment gains ``m h a_v theta`` (docs/method.md, "Vertical ground
+    acceleration")::
 
         m_sdof theta'' = m h x_g'' - C(theta / lam) theta' - K(theta / lam) theta + m h a_v theta
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, condensation
+    >>> block, bed, paper = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), condensation.get("paper")
+    >>> p, kernel = model_record(block, bed, paper)[()], paper.sdof_kernel(block, bed)
+    >>> a = condensed_acceleration(kernel.damping_stiffness, kernel.record[0], 1e-4, 0.0, 1.0, p)
+    >>> by_hand = (8.67 * 0.21 * 1.0 - paper.restoring_moment(1e-4, block, bed)) / block.m_sdof
+    >>> f"{a:.8f}", f"{by_hand:.8f}"
+    ('3.38935790', '3.38935790')
     """
     if a_v == 0.0:                                  # the horizontal-only path: no divisions
         damping, stiffness = damping_stiffness(cond, theta)
@@ -127,8 +258,46 @@ def _in_uplift(model, theta, z_cb, p):
 def input_gain(model, theta, p):
     """``d(theta'', z_cb'')/d x_g''`` [rad/m, 1]: the right-hand side is linear in the input.
 
-    Coupled (eqs. 7–8 as in :func:`coupled_accelerations`): ``m h cos / (I_cm + m h^2 cos^2)`` and
-    ``-h sin`` times that; condensed (eq. 22): ``m h / m_sdof`` and 0.
+    The linearly implicit integrator reads the exact time derivative of the right-hand side as this
+    gain times the input's rate.
+
+    Parameters
+    ----------
+    model : int
+        :data:`MODEL_COUPLED` or :data:`MODEL_CONDENSED`.
+    theta : float
+        Rotation [rad].
+    p : numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+
+    Returns
+    -------
+    tuple of float
+        ``(d theta''/d x_g'' [rad/m], d z_cb''/d x_g'' [1])``.
+
+    Notes
+    -----
+    Coupled (eqs. (7)-(8) in [1]_ as in :func:`coupled_accelerations`): ``m h cos / (I_cm + m h^2 cos^2)``
+    and ``-h sin`` times that; condensed (eq. (22)): ``m h / m_sdof`` and 0.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> p = model_record(block, bed, condensation.get("paper"))[()]
+    >>> [f"{g:.6f}" for g in input_gain(MODEL_CONDENSED, 0.01, p)]               # m h / m_sdof, 0
+    ['3.546798', '0.000000']
+    >>> g1, g2 = input_gain(MODEL_COUPLED, 0.01, p)
+    >>> a0, z0 = coupled_accelerations(0.01, 0.0, 1e-4, 0.0, 0.0, p)              # a finite difference
+    >>> a1, z1 = coupled_accelerations(0.01, 0.0, 1e-4, 0.0, 1.0, p)
+    >>> f"{g1:.6f} {a1 - a0:.6f}", f"{g2:.6f} {z1 - z0:.6f}"
+    ('3.546885 3.546885', '-0.007448 -0.007448')
     """
     if model == MODEL_COUPLED:
         s = math.sin(theta)
@@ -142,7 +311,39 @@ def input_gain(model, theta, p):
 @numba.njit(cache=True)
 def vertical_gain(model, theta, p):
     """``d(theta'', z_cb'')/d a_v`` [rad/m, 1]: coupled ``(0, 1)``; condensed ``m h theta / m_sdof`` and 0
-    (the weight's moment; the law's dependence through ``theta / lam`` is left out of this rate)."""
+    (the weight's moment; the law's dependence through ``theta / lam`` is left out of this rate).
+
+    Parameters
+    ----------
+    model, theta, p : int, float, numpy.record
+        As :func:`input_gain`: the model code, the rotation [rad] and the :data:`MODEL` record.
+
+    Returns
+    -------
+    tuple of float
+        ``(d theta''/d a_v [rad/m], d z_cb''/d a_v [1])``.
+
+    Notes
+    -----
+    From :func:`coupled_accelerations` (``a_v`` enters ``z_cb''`` only) and the condensed equation of
+    :func:`condensed_acceleration` (eq. (22) in [1]_ with the weight's moment ``m h a_v theta``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> p = model_record(block, bed, condensation.get("paper"))[()]
+    >>> vertical_gain(MODEL_COUPLED, 0.01, p)
+    (0.0, 1.0)
+    >>> f"{vertical_gain(MODEL_CONDENSED, 0.01, p)[0]:.6f}", f"{8.67 * 0.21 * 0.01 / block.m_sdof:.6f}"
+    ('0.035468', '0.035468')
+    """
     if model == MODEL_COUPLED:
         return 0.0, 1.0
     return p.m * p.h * theta / p.m_sdof, 0.0

@@ -198,13 +198,75 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
                      rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
     """Integrate one sample over ``t_out``; fill row ``row`` of the output arrays.
 
-    ``conds[0]``, ``models[0]``: the condensation's and the model's records (see
-    :func:`_integrate_chunk`); ``models[0].integrator`` picks the method, once per sample:
-    :func:`integrate_sample_dopri` (explicit) or :func:`integrate_sample_rodas` (linearly implicit).
-    ``out_z``, ``out_z_dot`` receive ``z_cb``, ``z_cb'`` (zero for the condensed model).
+    ``models[0].integrator`` picks the method, once per sample: :func:`integrate_sample_dopri`
+    (explicit) or :func:`integrate_sample_rodas` (linearly implicit).  After overturning or
+    divergence the remaining outputs are NaN.
 
-    Returns ``(status, reason, peak_abs_theta, n_accepted, n_rejected, h_min_accepted)``.
-    After overturning or divergence the remaining outputs are NaN.
+    Parameters
+    ----------
+    model : int
+        :data:`MODEL_COUPLED` or :data:`MODEL_CONDENSED`.
+    damping_stiffness : numba function
+        The condensation's compiled ``(cond, theta) -> (C, K)`` (read by the condensed model only).
+    conds : numpy.ndarray
+        One-element array of the condensation's record.
+    row : int
+        The sample (row of ``acc`` and of the outputs).
+    acc : tuple of numpy.ndarray
+        ``(horizontal, vertical)`` ground accelerations [m/s^2] on the grid ``j dt_grid``: the inertial
+        ``x_g''`` one row per sample; the vertical ``a_v`` (positive up) one row per sample, one row for
+        all, or ``NO_VERTICAL``.
+    acc_dot : tuple of numpy.ndarray
+        Their rates [m/s^3], same layout.
+    dt_grid : float
+        Step of the input grid [s] (cubic Hermite interpolation in between).
+    t_out : numpy.ndarray
+        Output times [s].
+    models : numpy.ndarray
+        One-element array of the :data:`MODEL` record (:func:`model_record`).
+    y_init : numpy.ndarray
+        Initial ``(theta, theta', z_cb, z_cb')`` [rad, rad/s, m, m/s].
+    scale : numpy.ndarray
+        Absolute error scales of the four states (times ``rtol``).
+    rtol : float
+        Relative tolerance [1].
+    h_max : float
+        Largest step [s].
+    max_steps : int
+        Step budget of the sample.
+    out_theta, out_theta_dot, out_z, out_z_dot : numpy.ndarray
+        Histories (samples x output times) [rad, rad/s, m, m/s], row ``row`` written in place
+        (``z_cb`` columns zero for the condensed model; NaN after overturning or divergence).
+    out_uplift : numpy.ndarray of bool
+        Uplift flag at the output times, same layout.
+
+    Returns
+    -------
+    tuple
+        ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected, h_min_accepted [s])``: status
+        ``STATUS_OK``, ``STATUS_OVERTURNED`` or ``STATUS_DIVERGED`` with a ``REASON_*`` code.
+
+    Notes
+    -----
+    The equations are the coupled eqs. (7)-(8) in [1]_ or the condensed eq. (22)
+    (:mod:`screening.solvers.mcs_equations`).  Compiling the kernel takes tens of seconds, so the
+    example shows its interface; ``tests/unit/solvers/test_mcs_integrators.py`` holds it against scipy.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` (the two integrators).
+
+    Examples
+    --------
+    >>> import inspect
+    >>> params = list(inspect.signature(integrate_sample.py_func).parameters)
+    >>> params[:4], len(params)
+    (['model', 'damping_stiffness', 'conds', 'row'], 19)
+    >>> STATUS_OK, STATUS_OVERTURNED, STATUS_DIVERGED
+    (0, 1, 2)
     """
     if models[0].integrator == INTEGRATOR_RODAS:
         return integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
@@ -218,7 +280,46 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
 @numba.njit(cache=True)
 def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
                            scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
-    """:func:`integrate_sample` by the explicit Dormand–Prince 5(4) pair (the reference integrator)."""
+    """:func:`integrate_sample` by the explicit Dormand–Prince 5(4) pair (the reference integrator).
+
+    FSAL, Hairer's PI step control, the error measured component-wise against
+    ``atol_i + rtol |y_i|``; steps land exactly on the output instants.
+
+    Parameters
+    ----------
+    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
+        As :func:`integrate_sample`.
+    rtol, h_max, max_steps : float, float, int
+        As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
+
+    Returns
+    -------
+    tuple
+        As :func:`integrate_sample`: ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected,
+        h_min_accepted [s])``.
+
+    Notes
+    -----
+    The Dormand-Prince 5(4) pair [1]_ with the PI controller of [2]_ on the equations of
+    :mod:`screening.solvers.mcs_equations`.  Compiling the kernel takes tens of seconds, so the
+    example shows its interface.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> import inspect
+    >>> (list(inspect.signature(integrate_sample_dopri.py_func).parameters)
+    ...  == list(inspect.signature(integrate_sample.py_func).parameters))
+    True
+    """
     cond = conds[0]
     p = models[0]
     n_out = t_out.shape[0]
@@ -337,6 +438,43 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
     evaluation per column; exact ``df/dt`` from the input's rate, :func:`input_gain`).  The
     kinematic rows of ``J`` reduce each solve to a 2 x 2 system.  Same error norm, output landing,
     status checks and return values as :func:`integrate_sample_dopri`.
+
+    Parameters
+    ----------
+    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
+        As :func:`integrate_sample`.
+    rtol, h_max, max_steps : float, float, int
+        As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
+
+    Returns
+    -------
+    tuple
+        As :func:`integrate_sample`: ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected,
+        h_min_accepted [s])``.
+
+    Notes
+    -----
+    RODAS, the L-stable Rosenbrock method of order 4 with an embedded order-3 error estimate
+    (``gamma = 0.25``), section IV.7 of [1]_; for beds whose damping makes the contact dynamics stiff
+    (docs/montecarlo_numerics.md).  Compiling the kernel takes tens of seconds, so the example shows
+    its interface.
+
+    References
+    ----------
+    .. [1] E. Hairer and G. Wanner, Solving Ordinary Differential Equations II: Stiff and
+       Differential-Algebraic Problems, 2nd ed., Springer (1996), section IV.7.
+    .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` ("The linearly implicit pair
+       (RODAS 4(3))").
+
+    Examples
+    --------
+    >>> import inspect
+    >>> from screening.kernels import rodas
+    >>> rodas.GAMMA, (list(inspect.signature(integrate_sample_rodas.py_func).parameters)
+    ...               == list(inspect.signature(integrate_sample.py_func).parameters))
+    (0.25, True)
     """
     cond = conds[0]
     p = models[0]
@@ -506,10 +644,45 @@ _INTEGRATORS = {}
 
 
 def chunk_integrator(record_dtype):
-    """The compiled :func:`_integrate_chunk` for a condensation whose records have ``record_dtype``.
+    """The compiled chunk integrator (every row of the input in parallel, one sample per row) for a
+    condensation whose records have ``record_dtype``.
 
     Explicit signature (the condensation's ``(C, K)`` function is a first-class argument), so it
-    is compiled once per record type and cached on disk.
+    is compiled once per record type and cached on disk; samples are independent, so the
+    ``prange`` loop gives the same numbers for any number of threads.
+
+    Parameters
+    ----------
+    record_dtype : numpy.dtype
+        The dtype of the condensation's records (:class:`~screening.kernels.signatures.SdofKernel`).
+
+    Returns
+    -------
+    numba dispatcher
+        ``integrate(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_out, models, y_init,
+        scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, peak,
+        status, reason, n_accepted, n_rejected, h_min)``: fills the outputs, returns None.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Automatic parallelization with @jit",
+       https://numba.readthedocs.io/en/stable/user/parallel.html
+    .. [2] The package's documentation, ``docs/montecarlo_numerics.md``.
+
+    Examples
+    --------
+    Its signature, without compiling (``numba.njit`` mocked):
+
+    >>> import numpy as np
+    >>> from unittest import mock
+    >>> toy = np.dtype([("c", "f8"), ("k", "f8")])
+    >>> with mock.patch("numba.njit") as njit, mock.patch.dict(_INTEGRATORS):
+    ...     first, again = chunk_integrator(toy), chunk_integrator(toy)
+    >>> first is again, njit.call_count, njit.call_args.kwargs        # built once per record type
+    (True, 1, {'cache': True, 'parallel': True})
+    >>> sig = njit.call_args.args[0]
+    >>> len(sig.args), str(sig.return_type)
+    (24, 'none')
     """
     if record_dtype not in _INTEGRATORS:
         f8, i8 = types.float64, types.int64

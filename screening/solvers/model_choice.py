@@ -72,7 +72,46 @@ class Rule:
 
 
 def parse_rules(raw):
-    """``(rules, fallback)`` from the parsed TOML of a rule file; ``ValueError`` naming the entry for a bad one."""
+    """``(rules, fallback)`` from the parsed TOML of a rule file; ``ValueError`` naming the entry for a bad one.
+
+    Checks every entry before any point is run: a registered model name, at least one indicator of
+    :data:`INDICATORS` with finite ``[low, high]``, the excitation kinds measured, and per-kind
+    intervals (``by_excitation``) inside the common ones.
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed TOML (``fallback``: a registered model, default ``"coupled"``; ``model``: a list of
+        tables with ``name``, ``excitations``, indicator intervals and optionally ``benchmark``,
+        ``measured``, ``note``, ``by_excitation``).
+
+    Returns
+    -------
+    rules : tuple of Rule
+        One :class:`Rule` per ``[[model]]`` table, in file order.
+    fallback : str
+        The model chosen where no rule holds.
+
+    Raises
+    ------
+    ValueError
+        One line naming the bad entry and what it must be.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/model_choice.md`` ("The rule is data").
+
+    Examples
+    --------
+    >>> raw = {"model": [{"name": "condensed", "excitations": ["white"], "vertical_damping_ratio": [0.2, 0.5]}]}
+    >>> chosen, fallback = parse_rules(raw)
+    >>> chosen[0].model, chosen[0].bound("vertical_damping_ratio"), fallback
+    ('condensed', (0.2, 0.5), 'coupled')
+    >>> parse_rules({"model": [{"name": "condensed", "excitations": ["white"], "slenderness": [0.3, 0.1]}]})
+    Traceback (most recent call last):
+    ...
+    ValueError: model choice: model[0].slenderness must be [low, high] with finite low <= high (got [0.3, 0.1])
+    """
     fallback = raw.get("fallback", "coupled")
     if fallback not in mc_registry.names():
         raise ValueError(f"model choice: 'fallback' must be a registered model {mc_registry.names()} (got {fallback!r})")
@@ -135,13 +174,44 @@ def rules():
 def indicators(block, foundation):
     """The dimensionless indicators of :data:`INDICATORS` at one point (scalar model objects, SI).
 
+    What a rule bounds: numbers the point already has, cheap to compute, with no Monte Carlo run.
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields: ``m`` [kg], ``b``, ``h`` [m]).
+    foundation : screening.Foundation
+        The bed (scalar fields: ``k`` [N/m^2], ``eps`` [1/m^2], its damping).
+
+    Returns
+    -------
+    dict of float
+        ``theta_ul_over_slenderness`` [1], ``slenderness`` [rad], ``vertical_over_rocking`` [1] and
+        ``vertical_damping_ratio`` [1].
+
     Notes
     -----
     ``theta_ul`` is the uplift angle of the cubic condensation's quasi-static contact
-    (:func:`screening.condensation.cubic.uplift_threshold`, ``m g / (2 b^2 k)`` for ``eps = 0``);
-    the frequencies are :func:`~screening.solvers.synthesis.vertical_frequency` and
+    (:func:`screening.condensation.cubic.uplift_threshold`, ``m g / (2 b^2 k)`` for ``eps = 0``, eq. (19)
+    in [1]_); the slenderness is ``atan(b / h)``; the frequencies are
+    :func:`~screening.solvers.synthesis.vertical_frequency` (``sqrt(2 b k / m)``) and
     :func:`~screening.solvers.synthesis.rocking_frequency` (``inf`` where the block cannot stand); the damping
     ratio is :func:`vertical_damping_ratio`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/model_choice.md``.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> ind = indicators(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))
+    >>> {name: round(value, 4) for name, value in ind.items()}       # theta_ul = m g / (2 b^2 k) = 1.2e-3 rad
+    {'theta_ul_over_slenderness': 0.0073, 'slenderness': 0.1651, 'vertical_over_rocking': 12.1739,
+     'vertical_damping_ratio': 0.3145}
     """
     alpha = float(block.slenderness)
     w_r = rocking_frequency(block, foundation)
@@ -156,21 +226,51 @@ def vertical_damping_ratio(block, foundation, g=9.81):
 
     Parameters
     ----------
-    block : :class:`~screening.model.Block` (scalar fields; ``m`` [kg], ``b`` [m]).
-    foundation : bed (scalar fields; ``k`` [N m-2] and the damping of its contact law).
-    g : gravity [m s-2].
+    block : screening.Block
+        The block (scalar fields; ``m`` [kg], ``b`` [m]).
+    foundation : screening.Foundation
+        The bed (scalar fields; ``k`` [N m-2] and the damping of its contact law).
+    g : float, optional
+        Gravity [m s-2].
+
+    Returns
+    -------
+    float
+        ``zeta_v`` [1]; above 1 the vertical mode is overdamped.
 
     Notes
     -----
     The damping pressure of every law is ``zdot (w_rate + w_indentation z)``
-    (:attr:`screening.model.Foundation.damping_weights`); about the static indentation of the linear bed
-    ``z_st = m g / (2 b k)`` it is the dashpot ``c = w_rate + w_indentation z_st`` per unit length, and over
-    the base ``2 b c = 2 zeta_v sqrt(2 b k m)``:
+    (:attr:`screening.model.Foundation.damping_weights`; Hunt-Crossley [2]_: ``w_indentation = lam``); about
+    the static indentation of the linear bed ``z_st = m g / (2 b k)`` it is the dashpot
+    ``c = w_rate + w_indentation z_st`` per unit length, and over the base ``2 b c = 2 zeta_v sqrt(2 b k m)``
+    (the viscous damping ratio of a single degree of freedom [3]_):
 
         zeta_v = b (w_rate + w_indentation z_st) / sqrt(2 b k m)
 
     the inverse of :func:`screening.beds.c_from_vertical_damping` (Winkler ``c``) and
-    :func:`screening.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).
+    :func:`screening.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).  The contact law is eqs.
+    (3)-(4) in [1]_.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
+       vibroimpact", J. Appl. Mech. 42 (1975) 440-445.
+    .. [3] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.beds import lam_from_vertical_damping
+    >>> block = Block(m=8.67, b=0.035, h=0.21)
+    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)):.4f}"     # the paper's bed
+    '0.3145'
+    >>> lam = float(lam_from_vertical_damping(2.89e7, 8.67, 0.035, 0.05))           # and back
+    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=lam)):.6f}"
+    '0.050000'
     """
     m, b, k = float(block.m), float(block.b), float(foundation.k)
     w_rate, w_ind = (float(w) for w in foundation.damping_weights)
@@ -179,7 +279,37 @@ def vertical_damping_ratio(block, foundation, g=9.81):
 
 
 def rule_of(model):
-    """The shipped :class:`Rule` of ``model`` (a registered name); ``KeyError`` for a model without one."""
+    """The shipped :class:`Rule` of ``model`` (a registered name); ``KeyError`` for a model without one.
+
+    Parameters
+    ----------
+    model : str
+        A registered Monte Carlo model name.
+
+    Returns
+    -------
+    Rule
+        Its measured validity, from :data:`RULE_FILE`.
+
+    Raises
+    ------
+    KeyError
+        For a model without a measured rule (the coupled and condensed models).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed_validity.md`` (the measurements behind the rule).
+
+    Examples
+    --------
+    >>> rule = rule_of("stiff_bed")
+    >>> rule.model, rule.benchmark, "white" in rule.excitations
+    ('stiff_bed', 'benchmarks/stiff_bed_validity.py', True)
+    >>> rule_of("condensed")
+    Traceback (most recent call last):
+    ...
+    KeyError: "no measured rule for Monte Carlo model 'condensed' in model_choice.toml"
+    """
     for rule in rules()[0]:
         if rule.model == model:
             return rule
@@ -188,9 +318,48 @@ def rule_of(model):
 
 def vouches(rule, block, foundation, excitation_kind, check_excitation=True):
     """``(True, "")`` where ``rule`` holds at the point, else ``(False, why)``: the first indicator out of its
-    measured interval, or an excitation kind not measured (``excitation_kind``: the excitation's
-    ``kind``, ``None`` for ground-motion records; not checked with ``check_excitation=False``, where the
-    point needs the intervals of one of the measured kinds)."""
+    measured interval, or an excitation kind not measured.
+
+    Parameters
+    ----------
+    rule : Rule
+        The measured validity of one model.
+    block : screening.Block
+        The block (scalar fields, SI).
+    foundation : screening.Foundation
+        The bed (scalar fields, SI).
+    excitation_kind : str or None
+        The excitation's ``kind`` (``"white"``, ``"kanai_tajimi"``, ...), ``None`` for ground-motion records.
+    check_excitation : bool, optional
+        Check the kind; with False the point needs the intervals of one of the measured kinds.
+
+    Returns
+    -------
+    ok : bool
+        Whether the rule holds at the point.
+    why : str
+        ``""``, or one line naming the indicator (its value and interval) or the kind outside the rule.
+
+    Notes
+    -----
+    A rule holds where every indicator ``x_i`` of :func:`indicators` lies in its closed interval,
+    ``low_i <= x_i <= high_i`` (the common interval narrowed by the excitation kind's, where given).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/model_choice.md`` ("The rule is data").
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)   # zeta_v = 0.31
+    >>> (rule,), _ = parse_rules({"model": [{"name": "condensed", "excitations": ["white"],
+    ...                                      "vertical_damping_ratio": [0.2, 0.5]}]})
+    >>> vouches(rule, block, bed, "white")
+    (True, '')
+    >>> vouches(rule, block, bed, None)
+    (False, "excitation 'record' not among those measured for condensed ['white']")
+    """
     if check_excitation and excitation_kind not in rule.excitations:
         return False, (f"excitation {excitation_kind or 'record'!r} not among those measured for {rule.model} "
                        f"{list(rule.excitations)}")
@@ -209,8 +378,38 @@ def vouches(rule, block, foundation, excitation_kind, check_excitation=True):
 def choose(block, foundation, excitation_kind, rule_set=None):
     """``(model name, reason)``: the first model of the rule vouched for at the point, else the fallback.
 
-    ``rule_set``: ``(rules, fallback)`` (default the shipped :func:`rules`); ``excitation_kind``: the
-    excitation's ``kind`` (``None`` for records).
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields, SI).
+    foundation : screening.Foundation
+        The bed (scalar fields, SI).
+    excitation_kind : str or None
+        The excitation's ``kind`` (``None`` for records).
+    rule_set : tuple, optional
+        ``(rules, fallback)`` as :func:`parse_rules` returns; default the shipped :func:`rules`.
+
+    Returns
+    -------
+    name : str
+        The registered model chosen.
+    reason : str
+        One line saying why (the benchmark that vouches, or why each rule failed).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/model_choice.md``.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> choose(block, bed, "white")[0]                      # the paper's bed: no cheaper model is vouched for
+    'coupled'
+    >>> toy = parse_rules({"model": [{"name": "condensed", "excitations": ["white"],
+    ...                               "vertical_damping_ratio": [0.2, 0.5]}]})
+    >>> choose(block, bed, "white", toy)
+    ('condensed', 'condensed: its measured validity holds ()')
     """
     chosen, fallback = rules() if rule_set is None else rule_set
     why = []
@@ -224,8 +423,35 @@ def choose(block, foundation, excitation_kind, rule_set=None):
 
 def resolve(model, block, foundation, excitation=None):
     """The :class:`~screening.solvers.mc_registry.MonteCarloModel` of ``model`` at one point: ``"auto"`` by
-    :func:`choose` (``excitation``: the point's excitation, ``None`` for records), any other name or
-    instance by :func:`screening.solvers.mc_registry.get`."""
+    :func:`choose`, any other name or instance by :func:`screening.solvers.mc_registry.get`.
+
+    Parameters
+    ----------
+    model : str or MonteCarloModel
+        ``"auto"`` (:data:`AUTO`), a registered name or a model instance.
+    block : screening.Block
+        The block (scalar fields, SI).
+    foundation : screening.Foundation
+        The bed (scalar fields, SI).
+    excitation : Excitation, optional
+        The point's excitation (its ``kind`` is read), ``None`` for records.
+
+    Returns
+    -------
+    MonteCarloModel
+        The model the point runs with.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/model_choice.md``.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> resolve("auto", block, bed, WhiteNoise(1e-4)).name, resolve("condensed", block, bed).name
+    ('coupled', 'condensed')
+    """
     if isinstance(model, str) and model == AUTO:
         kind = getattr(excitation, "kind", None) if excitation is not None else None
         return mc_registry.get(choose(block, foundation, kind)[0])
@@ -233,5 +459,20 @@ def resolve(model, block, foundation, excitation=None):
 
 
 def choices():
-    """The values ``model`` accepts: the registered models and :data:`AUTO`."""
+    """The values ``model`` accepts: the registered models and :data:`AUTO`.
+
+    Returns
+    -------
+    tuple of str
+        :func:`screening.solvers.mc_registry.names`, then ``"auto"``.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/model_choice.md``.
+
+    Examples
+    --------
+    >>> choices()[0], choices()[-1]
+    ('coupled', 'auto')
+    """
     return (*mc_registry.names(), AUTO)

@@ -75,21 +75,112 @@ def _exp_minus(x):
 
 @numba.njit(cache=True, inline="always")
 def envelope_rates(osc):
-    """``(1/T1, 1/T2)`` [1/s] of the envelope ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))``."""
+    """``(1/T1, 1/T2)`` [1/s] of the envelope ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))``.
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record (``T1``, ``T2`` [s]).
+
+    Returns
+    -------
+    tuple of float
+        ``(1/T1, 1/T2)`` [1/s].
+
+    Notes
+    -----
+    The decay rates of the two exponentials of eq. (57) in [1]_.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> envelope_rates(osc)
+    (0.25, 0.5)
+    """
     return 1.0 / osc.T1, 1.0 / osc.T2
 
 
 @numba.njit(cache=True, inline="always")
 def envelope_state(osc, t):
     """``(exp(-t/T1), exp(-t/T2))`` at time ``t`` [s]: the envelope's state, carried from step to step
-    by the factors of :func:`stage_gains` (no ``exp`` per step)."""
+    by the factors of :func:`stage_gains` (no ``exp`` per step).
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record (``T1``, ``T2`` [s]).
+    t : float
+        Time [s].
+
+    Returns
+    -------
+    tuple of float
+        ``(e1, e2) = (exp(-t/T1), exp(-t/T2))`` [1]; ``q(t) = 4 (e1 - e2)`` (eq. (57) in [1]_).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> e1, e2 = envelope_state(osc, 1.0)
+    >>> f"{4 * (e1 - e2):.6f}", f"{float(exc.envelope(1.0)):.6f}"           # q(1 s) both ways
+    ('0.689080', '0.689080')
+    """
     r1, r2 = envelope_rates(osc)
     return math.exp(-t * r1), math.exp(-t * r2)
 
 
 @numba.njit(cache=True, inline="always")
 def initial_gain(osc, e1, e2):
-    """Input gain ``m h q(t) / M`` [1/m] from the :func:`envelope_state` ``(e1, e2)`` at ``t``."""
+    """Input gain ``m h q(t) / M`` [1/m] from the :func:`envelope_state` ``(e1, e2)`` at ``t``.
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record (``gain = m h / m_sdof`` [1/m]).
+    e1, e2 : float
+        The envelope state ``exp(-t/T1)``, ``exp(-t/T2)`` [1] at ``t``.
+
+    Returns
+    -------
+    float
+        ``alpha(t) = m h q(t) / m_sdof`` [1/m] (``m h / m_sdof`` for a constant envelope).
+
+    Notes
+    -----
+    The gain of eq. (43) in [1]_ with the envelope of eq. (57).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> f"{initial_gain(osc, *envelope_state(osc, 1.0)):.6f}", f"{osc['gain'] * float(exc.envelope(1.0)):.6f}"
+    ('2.444029', '2.444029')
+    """
     return osc.gain * (1.0 if osc.constant_envelope == 1.0 else 4.0 * (e1 - e2))
 
 
@@ -97,7 +188,49 @@ def initial_gain(osc, e1, e2):
 def stage_gains(osc, e1, e2, h):
     """Input gains at the stage times ``t + C_s h`` of stages 2..6 (stage 7 shares stage 6's time)
     from the :func:`envelope_state` ``(e1, e2)`` at ``t``, and the factors ``(exp(-h/T1), exp(-h/T2))``
-    taking that state to ``t + h``: ``(a2, a3, a4, a5, a6, f1, f2)``."""
+    taking that state to ``t + h``: ``(a2, a3, a4, a5, a6, f1, f2)``.
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
+    e1, e2 : float
+        The envelope state at ``t`` [1].
+    h : float
+        Step size [s].
+
+    Returns
+    -------
+    tuple of float
+        ``(a2, a3, a4, a5, a6)`` [1/m], the gains ``m h q(t + C_s h) / m_sdof`` at the Dormand-Prince
+        stage times, then ``(f1, f2)`` [1].
+
+    Notes
+    -----
+    ``q(t + c h) = 4 (e1 exp(-c h/T1) - e2 exp(-c h/T2))`` (eq. (57) in [1]_); the stage nodes ``C_s``
+    are Dormand and Prince's [2]_.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> e1, e2 = envelope_state(osc, 1.0)
+    >>> *gains, f1, f2 = stage_gains(osc, e1, e2, 0.1)
+    >>> f"{gains[-1]:.6f}", f"{osc['gain'] * float(exc.envelope(1.1)):.6f}"   # stage 6 sits at t + h
+    ('2.590898', '2.590898')
+    >>> bool(np.allclose((e1 * f1, e2 * f2), envelope_state(osc, 1.1), rtol=1e-14))
+    True
+    """
     if osc.constant_envelope == 1.0:
         g = osc.gain
         return g, g, g, g, g, 1.0, 1.0
@@ -151,7 +284,41 @@ def uplift_occupancy(theta_ul, var_theta):
 @numba.njit(cache=True, inline="always")
 def p_uplift(osc, var_theta):
     """Uplift occupancy ``erfc(theta_ul / sqrt(2 var_theta))`` [1] (eq. 58): compiled twin of
-    :func:`uplift_occupancy`."""
+    :func:`uplift_occupancy`.
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record (``theta_ul`` [rad]).
+    var_theta : float
+        Variance of the rotation [rad^2]; 0 returned where it is not positive.
+
+    Returns
+    -------
+    float
+        ``P(|theta| > theta_ul)`` [1] of a zero-mean Gaussian rotation.
+
+    Notes
+    -----
+    Eq. (58) in [1]_.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> f"{p_uplift(osc, 1e-6):.12f}", f"{float(uplift_occupancy(osc['theta_ul'], 1e-6)):.12f}"
+    ('0.229664132095', '0.229664132095')
+    >>> p_uplift(osc, 0.0)
+    0.0
+    """
     if var_theta <= 0.0:
         return 0.0
     return math.erfc(osc.theta_ul / math.sqrt(2.0 * var_theta))
@@ -160,7 +327,49 @@ def p_uplift(osc, var_theta):
 @numba.njit(cache=True, inline="always")
 def first_step(osc, k0, h_max, t, t_end):
     """``(h, code, t_end)`` before the first step: a twentieth of the linear period at ``k_eq = k0``,
-    or no step at all (``K_EQ_NEGATIVE``, ``t_end = t``) if ``k0`` is not positive."""
+    or no step at all (``K_EQ_NEGATIVE``, ``t_end = t``) if ``k0`` is not positive.
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record (``m_sdof`` [kg m^2]).
+    k0 : float
+        Equivalent stiffness at the start [N m/rad].
+    h_max : float
+        Largest step [s].
+    t : float
+        Start time [s].
+    t_end : float
+        End time [s].
+
+    Returns
+    -------
+    h : float
+        First trial step [s], ``min(h_max, 0.05 / sqrt(k0 / m_sdof), t_end - t)``.
+    code : PointStatus
+        ``OK`` or ``K_EQ_NEGATIVE``.
+    t_end : float
+        The end time [s] (``t`` when no step is taken).
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> h, code, _ = first_step(osc, 808.2, 0.1, 0.0, 20.0)
+    >>> f"{h:.6e}", f"{0.05 / np.sqrt(808.2 / osc['m_sdof']):.6e}", code.name
+    ('1.260119e-03', '1.260119e-03', 'ok')
+    >>> first_step(osc, -1.0, 0.1, 3.0, 20.0)[1:]
+    (<PointStatus.k_eq_negative: 1>, 3.0)
+    """
     if not (k0 > 0.0):
         return 0.0, K_EQ_NEGATIVE, t
     return min(h_max, 0.05 / math.sqrt(k0 / osc.m_sdof), t_end - t), OK, t_end
@@ -169,7 +378,43 @@ def first_step(osc, k0, h_max, t, t_end):
 @numba.njit(cache=True, inline="always")
 def trial_step(h, t, t_end, steps, max_steps):
     """``(h, code)`` of the next trial step: ``h`` cut to end at ``t_end``; ``STEP_BUDGET`` once
-    ``steps`` (accepted and rejected) reach ``max_steps``."""
+    ``steps`` (accepted and rejected) reach ``max_steps``.
+
+    Parameters
+    ----------
+    h : float
+        Proposed step [s].
+    t : float
+        Current time [s].
+    t_end : float
+        End time [s].
+    steps : int
+        Steps taken so far (accepted and rejected).
+    max_steps : int
+        Step budget of the point.
+
+    Returns
+    -------
+    h : float
+        The step [s], at most ``t_end - t``.
+    code : PointStatus
+        ``OK`` or ``STEP_BUDGET``.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> h, code = trial_step(0.5, 19.8, 20.0, 10, 100)
+    >>> round(h, 12), code.name
+    (0.2, 'ok')
+    >>> trial_step(0.1, 1.0, 20.0, 100, 100)[1].name
+    'step_budget_exhausted'
+    """
     if t + h > t_end:
         h = t_end - t
     return h, (STEP_BUDGET if steps >= max_steps else OK)
@@ -181,6 +426,50 @@ def judge_step(err, finite, h, t_end):
 
     Not finite: retried at a fifth of ``h`` (not counted as rejected) until ``h`` reaches
     ``1e-12 t_end``, then ``NON_FINITE``; ``err > 1``: rejected, retried at the controller's ``h``.
+
+    Parameters
+    ----------
+    err : float
+        Error norm of the trial step [1] (1 is the tolerance).
+    finite : bool
+        Whether every error component was finite.
+    h : float
+        The trial step [s].
+    t_end : float
+        End time [s].
+
+    Returns
+    -------
+    accepted : bool
+        Whether the step is accepted.
+    h : float
+        The step [s] (to retry with, if not accepted).
+    rejected : int
+        1 for a step rejected on its error, else 0.
+    code : PointStatus
+        ``OK`` or ``NON_FINITE``.
+
+    Notes
+    -----
+    A rejected step shrinks by ``max(0.2, 0.9 err^(-1/5))`` (:func:`screening.kernels.dopri.rejected_step_factor`),
+    the standard controller of an order-5 pair [2]_.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> judge_step(0.5, True, 0.1, 20.0)[:3]
+    (True, 0.1, 0)
+    >>> accepted, h, rejected, _ = judge_step(2.0, True, 0.1, 20.0)
+    >>> accepted, f"{h:.6f}", f"{0.1 * max(0.2, 0.9 * 2.0 ** -0.2):.6f}", rejected
+    (False, '0.078350', '0.078350', 1)
+    >>> judge_step(0.0, False, 1e-12, 20.0)[3].name
+    'non_finite_moments'
     """
     if not finite:
         if h > 1e-12 * t_end:
@@ -195,8 +484,62 @@ def judge_step(err, finite, h, t_end):
 def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err, log_err_old):
     """After an accepted step ``[t, t + h]`` ending at ``var_theta`` [rad2], ``k_eq`` [N m/rad]:
     ``(t + h, e1, e2, h, log_err_old, lowest_k, code)`` with the envelope state carried by
-    ``(f1, f2)``, the next step size (PI controller, at most ``h_max``) and the status
-    (``K_EQ_NEGATIVE``, ``BEYOND_SLENDERNESS`` or ``OK``)."""
+    ``(f1, f2)``, the next step size (PI controller, at most ``h_max``) and the status.
+
+    Parameters
+    ----------
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record (``slenderness`` [rad]).
+    t : float
+        Start of the accepted step [s].
+    h : float
+        Its size [s].
+    h_max : float
+        Largest step [s].
+    e1, e2 : float
+        Envelope state at ``t`` [1] (:func:`envelope_state`).
+    f1, f2 : float
+        Factors taking it to ``t + h`` [1] (:func:`stage_gains`).
+    var_theta : float
+        Rotation variance at ``t + h`` [rad^2].
+    k_eq : float
+        Equivalent stiffness at ``t + h`` [N m/rad].
+    lowest_k : float
+        Lowest ``k_eq`` so far [N m/rad].
+    err : float
+        Error norm of the step [1].
+    log_err_old : float
+        Logarithm of the previous accepted error norm (the PI controller's memory).
+
+    Returns
+    -------
+    tuple
+        ``(t + h, e1 f1, e2 f2, h_next, log_err, lowest_k, code)``; ``code`` is ``K_EQ_NEGATIVE`` for
+        ``k_eq <= 0``, ``BEYOND_SLENDERNESS`` for ``var_theta > slenderness^2``, else ``OK``.
+
+    Notes
+    -----
+    The PI step-size controller [2]_ (:func:`screening.kernels.dopri.pi_step_factor`).
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> out = end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 1e-6, 800.0, 808.0, 0.5, 0.0)
+    >>> round(out[0], 12), round(out[1], 12), round(out[2], 12), out[5], out[6].name
+    (1.1, 0.45, 0.285, 800.0, 'ok')
+    >>> end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 0.03, 800.0, 808.0, 0.5, 0.0)[6].name  # sigma > 0.165 rad
+    'sigma_theta_beyond_slenderness'
+    """
     if k_eq < lowest_k:
         lowest_k = k_eq
     code = OK
@@ -212,10 +555,50 @@ def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err
 def peak_in_step(t, h, v0, v1, c0, c1, kv, kc, best, best_t):
     """Largest ``var_theta`` so far, ``(best, best_t)``, after the accepted step ``[t, t + h]``.
 
-    ``v0, v1`` and ``c0, c1``: ``var_theta`` and ``cov`` at the step's ends; ``kv``, ``kc``: their
-    dense-output stage derivatives (:func:`screening.kernels.dopri.dense_value`).  Inside the step
-    a maximum sits where ``d var_theta / dt = 2 cov`` changes sign from + to -, located by
-    bisection (only where the step could hold a new maximum).
+    Inside the step a maximum sits where ``d var_theta / dt = 2 cov`` changes sign from + to -, located
+    by bisection on the dense output (only where the step could hold a new maximum).
+
+    Parameters
+    ----------
+    t : float
+        Start of the step [s].
+    h : float
+        Its size [s].
+    v0, v1 : float
+        ``var_theta`` at the step's ends [rad^2].
+    c0, c1 : float
+        ``cov(theta, theta')`` at the step's ends [rad^2/s].
+    kv, kc : tuple of float
+        Their six dense-output stage derivatives (:func:`screening.kernels.dopri.dense_value`).
+    best : float
+        Largest ``var_theta`` before the step [rad^2].
+    best_t : float
+        Its time [s].
+
+    Returns
+    -------
+    best : float
+        Largest ``var_theta`` [rad^2] up to ``t + h``.
+    best_t : float
+        Its time [s] (to ~6e-8 of a step, :data:`PEAK_HALVINGS`).
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    A step over which ``var_theta = 1 - (t - 0.5)^2`` (so ``cov = -(t - 0.5)``), its stage derivatives
+    exact: the peak 1 at ``t = 0.5``.
+
+    >>> nodes = (0.0, 0.3, 0.8, 8 / 9, 1.0, 1.0)                   # stages 1, 3, 4, 5, 6, 7
+    >>> kv, kc = tuple(-2.0 * (c - 0.5) for c in nodes), (-1.0,) * 6
+    >>> best, best_t = peak_in_step(0.0, 1.0, 0.75, 0.75, 0.5, -0.5, kv, kc, 0.0, 0.0)
+    >>> round(best, 12), round(best_t, 6)
+    (1.0, 0.5)
     """
     bound = max(v0, v1) + h * max(abs(c0), abs(c1)) * 2.0
     if c0 > 0.0 and c1 <= 0.0 and bound > best:
@@ -240,7 +623,50 @@ def peak_in_step(t, h, v0, v1, c0, c1, kv, kc, best, best_t):
 @numba.njit(cache=True, inline="always")
 def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
                   var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
-    """Write the moments ``(var, cv, vd)`` and the coefficients at them into column ``k`` of row ``i``."""
+    """Write the moments ``(var, cv, vd)`` and the coefficients at them into column ``k`` of row ``i``.
+
+    Parameters
+    ----------
+    coefficients : numba function
+        The condensation's compiled ``(cond, table, var_theta, cov) -> (c_eq, k_eq)``.
+    cond : numpy.record
+        Its record.
+    table : numpy.ndarray
+        Its table.
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
+    i : int
+        Row (point) of the outputs.
+    k : int
+        Column (output time) of the outputs.
+    var, cv, vd : float
+        ``var_theta`` [rad^2], ``cov`` [rad^2/s], ``var_theta_dot`` [rad^2/s^2].
+    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
+        The history arrays (points x output times), written in place; ``p_upl`` gets eq. (58) in [1]_.
+
+    Returns
+    -------
+    None
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> import numba
+    >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))         # constant c_eq, k_eq
+    >>> out = [np.zeros((1, 3)) for _ in range(6)]
+    >>> store_outputs(toy, 0.0, 0.0, osc, 0, 1, 1e-6, 0.0, 1e-3, *out)
+    >>> [float(a[0, 1]) for a in out[:5]], f"{out[5][0, 1]:.4f}"
+    ([1e-06, 0.0, 0.001, 1.0, 2.0], '0.2297')
+    """
     var_theta[i, k] = var
     cov[i, k] = cv
     var_theta_dot[i, k] = vd
@@ -254,8 +680,63 @@ def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
 def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h, y, ks,
                         var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """Store every output time inside the accepted step ``[t, t + h]`` from the dense output; returns
-    the next output index.  ``y``: ``(var_theta, cov, var_theta_dot)`` at ``t``; ``ks``: their
-    stage derivatives (three tuples for :func:`screening.kernels.dopri.dense_value`)."""
+    the next output index.
+
+    Parameters
+    ----------
+    coefficients : numba function
+        The condensation's compiled ``(cond, table, var_theta, cov) -> (c_eq, k_eq)``.
+    cond : numpy.record
+        Its record.
+    table : numpy.ndarray
+        Its table.
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
+    i : int
+        Row (point) of the outputs.
+    next_out : int
+        Index of the next output time to write.
+    t_out : numpy.ndarray
+        Output times [s].
+    t : float
+        Start of the step [s].
+    h : float
+        Its size [s].
+    y : tuple of float
+        ``(var_theta, cov, var_theta_dot)`` at ``t``.
+    ks : tuple of tuple
+        Their stage derivatives (three tuples for :func:`screening.kernels.dopri.dense_value`).
+    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
+        The history arrays (points x output times), written in place (:func:`store_outputs`).
+
+    Returns
+    -------
+    int
+        The index of the first output time after ``t + h``.
+
+    References
+    ----------
+    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise, condensation
+    >>> from screening.solvers.moments import oscillator_records
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
+    >>> import numba
+    >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))
+    >>> out = [np.zeros((1, 4)) for _ in range(6)]
+    >>> still = ((0.0,) * 6,) * 3                                         # moments constant over the step
+    >>> store_dense_outputs.py_func(toy, 0.0, 0.0, osc, 0, 1, np.array([0.0, 0.5, 1.0, 1.5]), 0.0, 1.0,
+    ...                             (1e-6, 0.0, 1e-3), still, *out)        # writes t = 0.5 and 1.0
+    3
+    >>> out[0][0].tolist()
+    [0.0, 1e-06, 1e-06, 0.0]
+    """
     nt = t_out.shape[0]
     t_new = t + h
     while next_out < nt and t_out[next_out] <= t_new * (1.0 + 1e-14):
@@ -302,7 +783,66 @@ SUMMARIES = ("status", "t_stop", "n_steps", "n_rejected", "peak_var_theta", "t_p
 def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
                       var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """One white-noise point; histories into row ``i`` of the outputs only if ``store``.  Returns the
-    :data:`SUMMARIES`."""
+    :data:`SUMMARIES`.
+
+    Integrates the three moments ``(var_theta, cov, var_theta_dot)`` of the linearized oscillator
+    under modulated white noise by the Dormand-Prince 5(4) pair with PI control and dense output,
+    from rest at ``t_out[0]`` to ``t_out[-1]``, stopping at the first bad status.
+
+    Parameters
+    ----------
+    coefficients : numba function
+        The condensation's compiled ``(cond, table, var_theta, cov) -> (c_eq, k_eq)``.
+    cond : numpy.record
+        Its record for the point.
+    table : numpy.ndarray
+        Its table.
+    osc : numpy.record
+        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
+    t_out : numpy.ndarray
+        Output times [s].
+    rtol : float
+        Relative tolerance [1].
+    h_max : float
+        Largest step [s].
+    max_steps : int
+        Step budget.
+    store : bool
+        Whether to write the histories.
+    i : int
+        Row of the outputs.
+    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
+        History arrays (points x output times) [rad^2, rad^2/s, rad^2/s^2, N m s/rad, N m/rad, 1].
+
+    Returns
+    -------
+    tuple
+        :data:`SUMMARIES`: ``(status, t_stop [s], n_steps, n_rejected, peak_var_theta [rad^2],
+        t_peak_var_theta [s], min_k_eq [N m/rad])``.
+
+    Notes
+    -----
+    Eq. (45) in [1]_ with the diffusion of eq. (46):
+    ``d var/dt = 2 cov``, ``d cov/dt = vd - (k_eq var + c_eq cov) / m_sdof``,
+    ``d vd/dt = -2 (k_eq cov + c_eq vd) / m_sdof + 2 pi S0 alpha(t)^2``; numpy reference:
+    :func:`moment_equations`.  Compiling it takes tens of seconds, so the example shows its interface.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+
+    Examples
+    --------
+    >>> import inspect
+    >>> list(inspect.signature(solve_point_white.py_func).parameters)[:5]
+    ['coefficients', 'cond', 'table', 'osc', 't_out']
+    >>> SUMMARIES[0], SUMMARIES[4]
+    ('status', 'peak_var_theta')
+    """
     inv_m = 1.0 / osc.m_sdof
     S0 = osc.S0
     t = t_out[0]
@@ -377,7 +917,29 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
 # ---------------------------------------------------------------- filtered input: the augmented system
 @numba.njit(cache=True)
 def packed_size(n):
-    """Independent entries of an ``n x n`` symmetric covariance (the state of :func:`solve_point_filtered`)."""
+    """Independent entries of an ``n x n`` symmetric covariance (the state of :func:`solve_point_filtered`).
+
+    Parameters
+    ----------
+    n : int
+        Dimension of the augmented state ``(theta, theta', x)`` (``n_f + 2``).
+
+    Returns
+    -------
+    int
+        ``n (n + 1) / 2``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> packed_size(2), packed_size(4), packed_size(6)          # white noise, Kanai-Tajimi, Clough-Penzien
+    (3, 10, 21)
+    """
     return n * (n + 1) // 2
 
 
@@ -539,9 +1101,57 @@ def moment_equations(t, P, block, foundation, excitation, condensation="paper"):
 def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
     """Compiled :func:`lyapunov_rhs` on the packed covariance ``y`` (rows of the upper triangle) into ``dy``.
 
-    ``kap = k_eq / m_sdof``, ``gam = c_eq / m_sdof``, ``alpha`` the input gain, ``q = 2 pi S0``;
-    ``fa, fb, fc, fd`` the filter's ``A, B, C, D``; ``P``, ``M``: ``n x n`` work arrays.  Rows 0 and 2..
-    of ``A P`` are read from ``P`` and the filter; zero entries of ``A`` are never multiplied.
+    Rows 0 and 2.. of ``A P`` are read from ``P`` and the filter; zero entries of ``A`` are never
+    multiplied.
+
+    Parameters
+    ----------
+    kap : float
+        ``k_eq / m_sdof`` [1/s^2].
+    gam : float
+        ``c_eq / m_sdof`` [1/s].
+    alpha : float
+        Input gain ``m h q(t) / m_sdof`` [1/m].
+    q : float
+        ``2 pi S0`` [m^2/s^3].
+    fa, fb, fc, fd : numpy.ndarray or float
+        The filter's ``A`` (n_f x n_f), ``B``, ``C`` (n_f) and ``D``.
+    y : numpy.ndarray
+        Packed covariance, ``n (n + 1) / 2`` entries.
+    dy : numpy.ndarray
+        Its rate, written in place.
+    P, M : numpy.ndarray
+        ``n x n`` work arrays.
+
+    Returns
+    -------
+    None
+
+    Notes
+    -----
+    ``dP/dt = A P + P A^T + 2 pi S0 b b^T``: eq. (45) in [1]_ for white noise, eq. (51) with eq. (55) for a
+    filtered input (:func:`augmented_system` builds ``A`` and ``b``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    Against the numpy reference :func:`lyapunov_rhs`, Kanai-Tajimi input:
+
+    >>> from screening.excitations import KanaiTajimi
+    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6).filter()
+    >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
+    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
+    >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
+    >>> iu, dy = np.triu_indices(4), np.zeros(10)
+    >>> augmented_rhs(1600.0, 2.0, 3.5, 2 * np.pi * 1e-4, fa, fb, fc, float(fd), C[iu], dy,
+    ...               np.empty((4, 4)), np.empty((4, 4)))
+    >>> bool(np.allclose(dy, lyapunov_rhs(C, A, b, 1e-4)[iu], rtol=1e-13, atol=0))
+    True
     """
     n = P.shape[0]
     nf = n - 2
@@ -576,7 +1186,51 @@ def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
 @numba.njit(cache=True, inline="always")
 def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
     """:func:`augmented_rhs` written out for a filter of two states (Kanai–Tajimi): the 10 packed
-    entries ``(00 01 02 03 11 12 13 22 23 33)`` of ``(theta, theta', x0, x1)``, no work arrays."""
+    entries ``(00 01 02 03 11 12 13 22 23 33)`` of ``(theta, theta', x0, x1)``, no work arrays.
+
+    Parameters
+    ----------
+    kap : float
+        ``k_eq / m_sdof`` [1/s^2].
+    gam : float
+        ``c_eq / m_sdof`` [1/s].
+    alpha : float
+        Input gain ``m h q(t) / m_sdof`` [1/m].
+    q : float
+        ``2 pi S0`` [m^2/s^3].
+    fa, fb, fc, fd : numpy.ndarray or float
+        The filter's ``A`` (2 x 2), ``B``, ``C`` (2) and ``D``.
+    y : numpy.ndarray
+        Packed covariance, 10 entries.
+    dy : numpy.ndarray
+        Its rate, written in place.
+
+    Returns
+    -------
+    None
+
+    Notes
+    -----
+    Eq. (51) in [1]_ with eqs. (52)-(55) (the Kanai-Tajimi filter), as :func:`lyapunov_rhs`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.excitations import KanaiTajimi
+    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6).filter()
+    >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
+    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
+    >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
+    >>> iu, dy = np.triu_indices(4), np.zeros(10)
+    >>> augmented_rhs_two_states(1600.0, 2.0, 3.5, 2 * np.pi * 1e-4, fa, fb, fc, float(fd), C[iu], dy)
+    >>> bool(np.allclose(dy, lyapunov_rhs(C, A, b, 1e-4)[iu], rtol=1e-13, atol=0))
+    True
+    """
     c00, c01, c02, c03, c11, c12, c13, c22, c23, c33 = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9]
     g0 = alpha * fc[0]
     g1 = alpha * fc[1]
@@ -626,8 +1280,50 @@ def filtered_scales(osc, filter_covariance, psd_at_rocking):
     """Absolute-tolerance scales of the packed moments of every point, ``(n_points, n (n+1)/2)``.
 
     The oscillator's entries from the linear oscillator at rest under the input's PSD at its
-    frequency (``psd_at_rocking`` [m2 s-3], one per point), the filter's from its stationary
-    covariance ``filter_covariance`` [..., n_f, n_f]; ``sqrt(d_i) sqrt(d_j)`` (no ``S0^2`` underflow).
+    frequency, the filter's from its stationary covariance; ``sqrt(d_i) sqrt(d_j)`` (no ``S0^2``
+    underflow).
+
+    Parameters
+    ----------
+    osc : numpy.ndarray
+        :data:`screening.solvers.moments.OSCILLATOR` records, one per point.
+    filter_covariance : numpy.ndarray
+        Stationary covariance of the filter states [..., n_f, n_f].
+    psd_at_rocking : numpy.ndarray
+        The input's two-sided PSD at the rocking frequency [m^2/s^3], one per point.
+
+    Returns
+    -------
+    numpy.ndarray
+        Scales ``(n_points, n (n + 1) / 2)`` in the units of each packed moment, at least :data:`SCALE_FLOOR`.
+
+    Notes
+    -----
+    The stationary linear oscillator of frequency ``w`` and damping ratio ``zeta`` under white noise of
+    two-sided PSD ``S`` and gain ``alpha`` has ``E[theta'^2] = pi S alpha^2 / (2 zeta w)`` and
+    ``E[theta^2] = E[theta'^2] / w^2`` (random vibration of a single degree of freedom [2]_, with the
+    spectrum convention of eq. (39) in [1]_); ``zeta w`` is held at least 0.05 [1/s].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, KanaiTajimi, condensation
+    >>> from screening.model.points import flatten
+    >>> from screening.solvers.moments import oscillator_records
+    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                                KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6))
+    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
+    >>> w = np.sqrt(osc["k_rest"] / osc["m_sdof"])
+    >>> scale = filtered_scales(osc, exc.stationary_covariance(), exc.psd(w))
+    >>> vd = np.pi * exc.psd(w) * osc["gain"] ** 2 / (2 * max(0.5 * osc["c_rest"][0] / osc["m_sdof"][0], 0.05))
+    >>> scale.shape, bool(np.isclose(scale[0, 4], vd[0])), bool(np.isclose(scale[0, 0], vd[0] / w[0] ** 2))
+    ((1, 10), True, True)
     """
     m = osc["m_sdof"]
     w2 = np.abs(osc["k_rest"]) / m
@@ -645,7 +1341,48 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
                          store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """One point driven through a shaping filter (``fa, fb, fc, fd``: its ``A, B, C, D``), the packed
     covariance of ``(theta, theta', x)`` as the state; ``scale``: its absolute-tolerance scales
-    (:func:`filtered_scales`).  Histories into row ``i`` only if ``store``.  Returns the :data:`SUMMARIES`."""
+    (:func:`filtered_scales`).  Histories into row ``i`` only if ``store``.  Returns the :data:`SUMMARIES`.
+
+    Parameters
+    ----------
+    coefficients, cond, table, osc : various
+        The condensation's compiled coefficients, its record and table, the point's oscillator record,
+        as :func:`solve_point_white`.
+    fa, fb, fc, fd : numpy.ndarray or float
+        The filter's ``A`` (n_f x n_f), ``B``, ``C`` (n_f) and ``D``.
+    scale : numpy.ndarray
+        Absolute-tolerance scales of the packed moments (:func:`filtered_scales`).
+    t_out, rtol, h_max, max_steps, store, i : various
+        Output times [s], relative tolerance [1], largest step [s], step budget, whether to write the
+        histories and their row, as :func:`solve_point_white`.
+    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
+        History arrays (points x output times), as :func:`solve_point_white`.
+
+    Returns
+    -------
+    tuple
+        :data:`SUMMARIES`, as :func:`solve_point_white`.
+
+    Notes
+    -----
+    Eq. (51) in [1]_ with eq. (55), on the packed upper triangle (:func:`augmented_rhs`; numpy reference
+    :func:`moment_equations`).  Compiling it takes tens of seconds, so the example shows its interface.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+
+    Examples
+    --------
+    >>> import inspect
+    >>> names = list(inspect.signature(solve_point_filtered.py_func).parameters)
+    >>> names[4:9], len(names)
+    (['fa', 'fb', 'fc', 'fd', 'scale'], 21)
+    """
     return _filtered_steps(packed_size(fa.shape[0] + 2), coefficients, cond, table, osc, fa, fb, fc, fd, scale,
                            t_out, rtol, h_max, max_steps, store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o,
                            p_upl)
@@ -655,7 +1392,38 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
 def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
                            store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """:func:`solve_point_filtered` for a filter of two states (Kanai–Tajimi): the 10 moments in loops of
-    constant length (unrolled by the compiler) and :func:`augmented_rhs_two_states`."""
+    constant length (unrolled by the compiler) and :func:`augmented_rhs_two_states`.
+
+    Parameters
+    ----------
+    coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps, store, i : various
+        As :func:`solve_point_filtered`, for a filter of two states (``fa`` 2 x 2, 10 packed moments).
+    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
+        History arrays (points x output times), as :func:`solve_point_filtered`.
+
+    Returns
+    -------
+    tuple
+        :data:`SUMMARIES`, as :func:`solve_point_filtered`.
+
+    Notes
+    -----
+    Eq. (51) in [1]_ with eqs. (52)-(55).  Compiling it takes tens of seconds, so the example shows its
+    interface.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import inspect
+    >>> (list(inspect.signature(solve_point_two_states.py_func).parameters)
+    ...  == list(inspect.signature(solve_point_filtered.py_func).parameters))
+    True
+    """
     return _filtered_steps(10, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
                            store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
 

@@ -169,14 +169,68 @@ HISTORY_VARIABLES = tuple(o.name for o in GRID_OUTPUTS if o.shape == "history")
 
 
 def of_stage(*stages):
-    """The declarations filled by ``stages``, in file order."""
+    """The declarations filled by ``stages``, in file order.
+
+    Each stage of a run (:data:`STAGES`) fills its own variables; the batch task asks here which.
+
+    Parameters
+    ----------
+    *stages : str
+        Names from :data:`STAGES` (``"linearize"``, ``"model"``, ``"trust"``, ...).
+
+    Returns
+    -------
+    tuple of Output
+        The :class:`Output` declarations of those stages, in file order.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/architecture.md`` ("Adding an output variable").
+
+    Examples
+    --------
+    >>> [o.name for o in of_stage("model")]
+    ['theta_ul', 'slenderness']
+    >>> [(o.name, o.attrs["units"]) for o in of_stage("trust") if o.dtype == "f8"][0]
+    ('sl_error_low', '1')
+    """
     return tuple(o for o in GRID_OUTPUTS if o.stage in stages)
 
 
 def selected(histories=HISTORY_VARIABLES, derived=(), probabilities=False, fragility=False):
     """The declarations a result holds: the ``histories`` it stores, the ``derived`` inputs, the probabilities
     (``probabilities``: with ``[accuracy]`` or ``[fragility]``) and the exceedance ones (``fragility``), in
-    file order (the histories in the order of ``histories``)."""
+    file order (the histories in the order of ``histories``).
+
+    Parameters
+    ----------
+    histories : sequence of str, optional
+        The histories the study stores (``[output]``), from :data:`HISTORY_VARIABLES`; default all.
+    derived : sequence of str, optional
+        The inputs the study derives per point (e.g. ``("S0",)`` from a target PGA).
+    probabilities : bool, optional
+        Whether the result holds ``p_overturn`` and its error (``[accuracy]`` or ``[fragility]``).
+    fragility : bool, optional
+        Whether it also holds ``p_exceed`` on ``threshold`` (``[fragility]``; implies ``probabilities``).
+
+    Returns
+    -------
+    tuple of Output
+        The declarations, histories first in the order asked, then the others in file order.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` (the variables of a result).
+
+    Examples
+    --------
+    >>> names = [o.name for o in selected(histories=("p_uplift", "var_theta"))]
+    >>> names[:3], "p_overturn" in names
+    (['p_uplift', 'var_theta', 'status'], False)
+    >>> names = [o.name for o in selected(histories=(), fragility=True, derived=("S0",))]
+    >>> "var_theta" in names, "S0" in names, names[-4:]
+    (False, True, ['p_exceed', 'p_exceed_se', 'p_overturn', 'p_overturn_se'])
+    """
     wanted = {"always": True, "probabilities": probabilities or fragility, "fragility": fragility}
     chosen = [OUTPUTS[name] for name in histories]
     chosen += [o for o in GRID_OUTPUTS if o.when not in ("histories", "derived") and wanted[o.when]
@@ -185,25 +239,109 @@ def selected(histories=HISTORY_VARIABLES, derived=(), probabilities=False, fragi
 
 
 def client_variables():
-    """Names the client keeps for every point (a worker that writes its batch itself returns only these)."""
+    """Names the client keeps for every point (a worker that writes its batch itself returns only these).
+
+    Returns
+    -------
+    tuple of str
+        The variables declared with ``client=True``, in file order (spot selection and run summary
+        read them).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` ("Memory": what the client holds).
+
+    Examples
+    --------
+    >>> client_variables()[:2], "var_theta" in client_variables()
+    (('status', 'sl_trust'), False)
+    """
     return tuple(o.name for o in GRID_OUTPUTS if o.client)
 
 
 def info_variables():
-    """Names ``screening info`` summarises over the status-ok points."""
+    """Names ``screening info`` summarises over the status-ok points.
+
+    Returns
+    -------
+    tuple of str
+        The variables declared with ``info=True``, in file order.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/cli.md`` (``screening info``).
+
+    Examples
+    --------
+    >>> "peak_var_theta" in info_variables(), "status" in info_variables()
+    (True, False)
+    """
     return tuple(o.name for o in GRID_OUTPUTS if o.info)
 
 
 def solver_summaries():
-    """Per-point names the moment solver returns besides its histories."""
+    """Per-point names the moment solver returns besides its histories.
+
+    Returns
+    -------
+    tuple of str
+        The ``"point"``-shaped variables of the ``linearize`` stage, in file order.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/method.md`` ("Moment solver", "Status flags").
+
+    Examples
+    --------
+    >>> solver_summaries()[:3], "n_rejected" in solver_summaries()
+    (('status', 't_stop', 'peak_var_theta'), True)
+    """
     return tuple(o.name for o in of_stage("linearize") if o.shape == "point")
 
 
 def linearize_variables():
-    """Per-point names :func:`screening.linearize` returns besides the histories and the model quantities."""
+    """Per-point names :func:`screening.linearize` returns besides the histories and the model quantities.
+
+    Returns
+    -------
+    tuple of str
+        The solver summaries declared with ``linearize=True`` (``n_rejected`` is a sweep's only).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` (the variables of a result).
+
+    Examples
+    --------
+    >>> set(linearize_variables()) < set(solver_summaries()), "n_rejected" in linearize_variables()
+    (True, False)
+    """
     return tuple(o.name for o in of_stage("linearize") if o.shape == "point" and o.linearize)
 
 
 def failed_value(name):
-    """The value of ``name`` at a point whose task failed."""
+    """The value of ``name`` at a point whose task failed.
+
+    NaN for a float, the flag ``task_failed`` for ``status``, 0 for step counts: a failed point is
+    marked, never silently a number.
+
+    Parameters
+    ----------
+    name : str
+        A declared variable (a key of :data:`OUTPUTS`).
+
+    Returns
+    -------
+    float or int
+        Its value at a failed point (in the variable's units).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/outputs.md`` ("Status flags").
+
+    Examples
+    --------
+    >>> failed_value("var_theta"), int(failed_value("status")), failed_value("n_steps")
+    (nan, -1, 0)
+    """
     return OUTPUTS[name].failed

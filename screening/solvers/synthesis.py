@@ -57,27 +57,147 @@ OVERSAMPLING = 4
 def rocking_frequency(block, foundation):
     """Small-amplitude rocking frequency ``sqrt(((2/3) b^3 k - m g h) / m_sdof)`` [rad/s] (eqs. 22, 25).
 
-    ``eps`` is ignored (it adds ``eps m^2 g^2 b / (2 k)`` to the stiffness).  Zero if the
-    linear rocking stiffness is not positive.
+    The natural frequency of the condensed rocking equation in full contact at rest: one of the two
+    scales that set the band of the synthesized ground motion (:func:`default_cutoff`).
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields: ``m`` [kg], ``b``, ``h`` [m], ``g`` [m/s^2], ``m_sdof`` [kg m^2]).
+    foundation : screening.Foundation
+        The bed (scalar fields: ``k`` [N/m^2]).
+
+    Returns
+    -------
+    float
+        ``omega_r`` [rad/s]; zero if the linear rocking stiffness is not positive.
+
+    Notes
+    -----
+    ``omega_r = sqrt(K_0 / m_sdof)`` with ``K_0 = (2/3) b^3 k - m g h``, the stiffness of eq. (25) in
+    [1]_ at ``theta = 0`` without the cubic term (``eps`` is ignored: it adds ``eps m^2 g^2 b / (2 k)``),
+    and ``m_sdof = I_cm + m h^2`` of eq. (22).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import math
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{rocking_frequency(block, bed):.4f}"
+    '39.6787'
+    >>> K0 = 2 / 3 * 0.035**3 * 2.89e7 - 8.67 * 9.81 * 0.21
+    >>> f"{math.sqrt(K0 / (block.I_cm + 8.67 * 0.21**2)):.4f}"          # by hand
+    '39.6787'
     """
     stiffness = linear_rocking_stiffness(block, foundation)
     return math.sqrt(max(float(stiffness), 0.0) / float(block.m_sdof))
 
 
 def vertical_frequency(block, foundation):
-    """Vertical (bouncing) frequency of the block on the bed, ``sqrt(2 b k / m)`` [rad/s] (eq. 13)."""
+    """Vertical (bouncing) frequency of the block on the bed, ``sqrt(2 b k / m)`` [rad/s] (eq. 13).
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields: ``m`` [kg], ``b`` [m]).
+    foundation : screening.Foundation
+        The bed (scalar fields: ``k`` [N/m^2]).
+
+    Returns
+    -------
+    float
+        ``omega_v`` [rad/s].
+
+    Notes
+    -----
+    The linear part of the vertical equation (eq. (13) in [1]_) in full contact: the base ``2 b``
+    on a bed of stiffness ``k`` per unit length is a spring ``2 b k`` [N/m] under the mass ``m``,
+    ``omega_v = sqrt(2 b k / m)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> f"{vertical_frequency(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)):.2f}"
+    '483.05'
+    """
     return math.sqrt(2.0 * float(block.b) * float(foundation.k) / float(block.m))
 
 
 def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
     """Band limit ``omega_c`` [rad/s] of the synthesized input: ``factor`` x the larger of
-    :func:`rocking_frequency` and :func:`vertical_frequency`."""
+    :func:`rocking_frequency` and :func:`vertical_frequency`.
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields, SI).
+    foundation : screening.Foundation
+        The bed (scalar fields, SI).
+    factor : float, optional
+        Multiple of the larger natural frequency [1] (default :data:`CUTOFF_FACTOR`, 3).
+
+    Returns
+    -------
+    float
+        ``omega_c = factor max(omega_r, omega_v)`` [rad/s].
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{default_cutoff(block, bed):.2f}", f"{3 * vertical_frequency(block, bed):.2f}"   # the vertical mode rules
+    ('1449.14', '1449.14')
+    """
     return float(factor) * max(rocking_frequency(block, foundation), vertical_frequency(block, foundation))
 
 
 def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
     """:func:`default_cutoff` [rad/s] of every point of a block and bed with array fields (NaN where the
-    point's scales are beyond float64)."""
+    point's scales are beyond float64).
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block, fields scalars or arrays that broadcast together (SI).
+    foundation : screening.Foundation
+        The bed, ``k`` [N/m^2] a scalar or an array broadcast with the block's fields.
+    factor : float, optional
+        Multiple of the larger natural frequency [1] (default :data:`CUTOFF_FACTOR`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``omega_c`` [rad/s] per point, the broadcast shape of the fields.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation
+    >>> default_cutoffs(Block(m=8.67, b=0.035, h=0.21), Foundation(k=np.array([2.89e7, 1e9]), lam=8.95e8)).round(1)
+    array([1449.1, 8524.3])
+    """
     from screening.model import Block, Foundation
 
     def one(m, b, h, I_cm, g, k):
@@ -90,7 +210,43 @@ def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
 
 
 def envelope_rate(envelope, t):
-    """Time derivative ``q'(t)`` [1/s] of the modulating function at ``t`` [s] (eq. 57)."""
+    """Time derivative ``q'(t)`` [1/s] of the modulating function at ``t`` [s] (eq. 57).
+
+    The synthesis needs the exact rate of the modulated input ``d(q f)/dt = q' f + q f'`` for the
+    cubic Hermite interpolation between grid points.
+
+    Parameters
+    ----------
+    envelope : Envelope
+        The modulating function (``kind`` ``"exponential"`` with ``T1``, ``T2`` [s], or ``"constant"``).
+    t : array_like of float
+        Times [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``q'(t)`` [1/s], the shape of ``t`` (zeros for a constant envelope).
+
+    Notes
+    -----
+    From ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57) in [1]_):
+    ``q'(t) = 4 (-exp(-t/T1) / T1 + exp(-t/T2) / T2)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import WhiteNoise
+    >>> env = WhiteNoise(1e-4).envelope                       # T1 = 4 s, T2 = 2 s
+    >>> envelope_rate(env, [0.0, 1.0]).round(6)
+    array([1.      , 0.434261])
+    >>> round(float((env(1.0 + 1e-6) - env(1.0 - 1e-6)) / 2e-6), 6)   # central difference of q
+    0.434261
+    """
     t = np.asarray(t, dtype=float)
     if envelope.kind == "constant":
         return np.zeros_like(t)
@@ -100,7 +256,40 @@ def envelope_rate(envelope, t):
 
 def band_limited_variance(excitation, cutoff):
     """``int_{-omega_c}^{omega_c} S(omega) d omega`` [m^2/s^4]: stationary variance of the
-    unmodulated input band-limited to ``cutoff`` [rad/s] (``2 S0 omega_c`` for white noise)."""
+    unmodulated input band-limited to ``cutoff`` [rad/s] (``2 S0 omega_c`` for white noise).
+
+    Parameters
+    ----------
+    excitation : Excitation
+        The input (two-sided PSD ``S(omega)`` [m^2/s^3], :meth:`psd`).
+    cutoff : float
+        Band limit ``omega_c`` [rad/s].
+
+    Returns
+    -------
+    float
+        The variance [m^2/s^4] (adaptive quadrature, relative tolerance 1e-12).
+
+    Notes
+    -----
+    With ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)`` (eq. (39) in [1]_) the spectrum is two-sided,
+    ``S = S0`` for white noise and eq. (50) for Kanai-Tajimi; the variance of the band ``|omega| <= omega_c``
+    is ``int S d omega``, which :attr:`SpectralPlan.stationary_variance` approximates by the midpoint rule.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening import WhiteNoise
+    >>> round(band_limited_variance(WhiteNoise(1e-4), 100.0), 12)           # 2 S0 omega_c
+    0.02
+    """
     return excitation.spectral_moment(0, cutoff, epsrel=1e-12)
 
 
@@ -147,7 +336,33 @@ class SpectralPlan:
 
 
 def next_regular_length(n):
-    """Smallest ``2^a 3^b 5^c >= n``: FFT lengths with only small prime factors are fastest."""
+    """Smallest ``2^a 3^b 5^c >= n``: FFT lengths with only small prime factors are fastest.
+
+    Parameters
+    ----------
+    n : int
+        The least length wanted, ``>= 1``.
+
+    Returns
+    -------
+    int
+        The smallest 5-smooth integer ``>= n``.
+
+    References
+    ----------
+    .. [1] J. W. Cooley and J. W. Tukey, "An algorithm for the machine calculation of complex Fourier
+       series", Math. Comput. 19 (1965) 297-301.
+    .. [2] SciPy documentation, ``scipy.fft.next_fast_len``,
+       https://docs.scipy.org/doc/scipy/reference/generated/scipy.fft.next_fast_len.html
+
+    Examples
+    --------
+    >>> from scipy import fft
+    >>> [next_regular_length(n) for n in (7, 1001, 1025, 2549)]
+    [8, 1024, 1080, 2560]
+    >>> all(next_regular_length(n) == fft.next_fast_len(n, real=True) for n in range(1, 3000))
+    True
+    """
     best = 1 << max(int(n - 1).bit_length(), 0)
     p5 = 1
     while p5 < best:
@@ -164,17 +379,81 @@ def next_regular_length(n):
 
 def grid_points(t_end, cutoff, oversampling=OVERSAMPLING):
     """Points of the synthesis grid of one sample: ``ceil(t_end / dt) + 2`` with the grid step
-    ``dt = pi / (oversampling cutoff)`` (``t_end`` [s], ``cutoff`` [rad/s])."""
+    ``dt = pi / (oversampling cutoff)``.
+
+    Parameters
+    ----------
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit ``omega_c`` [rad/s].
+    oversampling : int, optional
+        Grid points per Nyquist step ``pi / omega_c`` [1] (default :data:`OVERSAMPLING`, 4).
+
+    Returns
+    -------
+    int
+        Number of grid points [-], covering ``[0, t_end]`` plus one.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
+
+    Examples
+    --------
+    >>> import math
+    >>> grid_points(20.0, 100.0), math.ceil(20.0 / (math.pi / 400.0)) + 2
+    (2549, 2549)
+    """
     return int(math.ceil(t_end / (math.pi / (oversampling * cutoff)))) + 2
 
 
 def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
     """Build the :class:`SpectralPlan` for ``excitation`` over ``[0, t_end]``.
 
-    ``t_end`` [s] > 0, ``cutoff`` [rad/s] > 0, ``oversampling`` >= 2 (grid step
-    ``pi / (oversampling cutoff)``).  The FFT length is the next fast length covering the
-    record, so the sample period ``2 pi / d_omega`` is at least ``t_end``; ``N`` is the
-    nearest integer to ``cutoff / d_omega``.
+    The FFT length is the next fast length covering the record, so the sample period
+    ``2 pi / d_omega`` is at least ``t_end``; ``N`` is the nearest integer to ``cutoff / d_omega``.
+
+    Parameters
+    ----------
+    excitation : Excitation
+        The input (its two-sided PSD ``S(omega)`` [m^2/s^3]).
+    t_end : float
+        Record length [s], ``> 0``.
+    cutoff : float
+        Requested band limit [rad/s], ``> 0`` (rounded to whole bins).
+    oversampling : int, optional
+        ``>= 2``: grid step ``pi / (oversampling cutoff)`` [s] (default :data:`OVERSAMPLING`).
+
+    Returns
+    -------
+    SpectralPlan
+        The frequency and time grids and the amplitudes ``A_k`` [m/s^2].
+
+    Raises
+    ------
+    ValueError
+        One line naming the parameter, for a bad ``cutoff``, ``t_end`` or ``oversampling``.
+
+    Notes
+    -----
+    ``f(t) = sqrt(2) sum_k A_k cos(omega_k t + phi_k)`` with ``A_k = sqrt(2 S(omega_k) d_omega)`` and
+    midpoint frequencies ``omega_k = (k + 1/2) d_omega`` [1]_; its ensemble variance ``sum A_k^2`` is
+    the midpoint rule for :func:`band_limited_variance` (exact for white noise).
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening import WhiteNoise
+    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=20.0, cutoff=100.0)
+    >>> plan.n_fft, plan.n_times, plan.n_frequencies, round(plan.d_omega, 4)
+    (2560, 2549, 320, 0.3125)
+    >>> round(plan.stationary_variance, 12), round(band_limited_variance(WhiteNoise(1e-4), plan.cutoff), 12)
+    (0.02, 0.02)
     """
     if not (np.isfinite(cutoff) and cutoff > 0.0):
         raise ValueError(f"parameter 'cutoff' must be a finite number > 0 rad/s (got {cutoff!r})")
@@ -204,6 +483,41 @@ def low_passed(plan, band):
     keeps at least the plan's oversampling of the kept band, and the coarse grid still covers the
     record, so synthesizing the low-passed samples costs in proportion to their own grid, not to
     ``plan``'s.  ``stride = 1`` and ``plan`` itself when ``band`` is not below half the plan's cutoff.
+
+    Parameters
+    ----------
+    plan : SpectralPlan
+        The full-band plan (:func:`spectral_plan`).
+    band : float
+        Band limit of the model that reads the samples [rad/s].
+
+    Returns
+    -------
+    plan_low : SpectralPlan
+        The low-passed plan (``plan`` itself where no coarser grid pays).
+    stride : int
+        Grid points of ``plan`` per point of ``plan_low`` [-].
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] The package's documentation, ``docs/model_choice.md`` ("Same ground motions, and the band each
+       model reads").
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import WhiteNoise
+    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=20.0, cutoff=100.0)
+    >>> low, stride = low_passed(plan, 20.0)
+    >>> stride, low.n_fft, low.n_frequencies, bool(np.array_equal(low.amplitudes, plan.amplitudes[:64]))
+    (5, 512, 64, True)
+    >>> part, _ = stationary_samples(low, 0, [3])                # sample 3 keeps its phases in the kept band
+    >>> direct = np.sqrt(2) * np.sum(low.amplitudes * np.cos(low.omega * low.times[7]
+    ...                                                       + sample_phases(0, 3, plan.n_frequencies)[:64]))
+    >>> bool(np.isclose(part[0, 7], direct))
+    True
     """
     n_keep = max(int(round(band / plan.d_omega)), 1)
     if not n_keep * plan.d_omega < 0.5 * plan.cutoff:
@@ -225,14 +539,78 @@ def low_passed(plan, band):
 
 
 def validate_seed(seed):
-    """Return ``seed`` as a Python int after checking it is an integer >= 0 (else ``ValueError``)."""
+    """Return ``seed`` as a Python int after checking it is an integer >= 0 (else ``ValueError``).
+
+    Parameters
+    ----------
+    seed : int
+        The run's seed (any integral type; not a bool), ``>= 0``.
+
+    Returns
+    -------
+    int
+        ``seed`` as a Python int.
+
+    Raises
+    ------
+    ValueError
+        One line naming the parameter.
+
+    References
+    ----------
+    .. [1] NumPy documentation, "Random Generator", ``numpy.random.default_rng``,
+       https://numpy.org/doc/stable/reference/random/generator.html
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> validate_seed(np.int64(3))
+    3
+    >>> validate_seed(-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'seed' must be an integer >= 0 (got -1)
+    """
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise ValueError(f"parameter 'seed' must be an integer >= 0 (got {seed!r})")
     return int(seed)
 
 
 def sample_phases(seed, index, n_frequencies):
-    """Random phases ``phi_k`` [rad], ``k = 0..N-1``, of sample ``index`` (``default_rng([seed, index])``)."""
+    """Random phases ``phi_k`` [rad], ``k = 0..N-1``, of sample ``index`` (``default_rng([seed, index])``).
+
+    A sample's phases depend on the run's seed and its own index only, so a sample is the same
+    however the samples are split into chunks or workers.
+
+    Parameters
+    ----------
+    seed : int
+        The run's seed, ``>= 0``.
+    index : int
+        The sample's index in the run, ``>= 0``.
+    n_frequencies : int
+        Number ``N`` of phases.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``N`` phases [rad], independent and uniform on ``[0, 2 pi)``.
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] NumPy documentation, "Random Generator", https://numpy.org/doc/stable/reference/random/generator.html
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> phases = sample_phases(0, 5, 4)
+    >>> phases.shape, bool(np.all((0 <= phases) & (phases < 2 * np.pi)))
+    ((4,), True)
+    >>> bool(np.array_equal(sample_phases(0, 5, 4), np.random.default_rng([0, 5]).uniform(0, 2 * np.pi, 4)))
+    True
+    """
     rng = np.random.default_rng([int(seed), int(index)])
     return rng.uniform(0.0, 2.0 * np.pi, n_frequencies)
 
@@ -240,13 +618,51 @@ def sample_phases(seed, index, n_frequencies):
 def stationary_samples(plan, seed, sample_indices):
     """Unmodulated samples ``f`` [m/s^2] and their rates ``f'`` [m/s^3] on ``plan.times``.
 
-    Returns two arrays of shape ``(len(sample_indices), plan.n_times)``; row ``r`` is
-    sample ``sample_indices[r]`` of the run ``seed``.
+    Row ``r`` is sample ``sample_indices[r]`` of the run ``seed``; both come from one complex FFT.
 
-    With ``c_k = sqrt(2) A_k exp(i phi_k)`` and ``w_k = (k + 1/2) d_omega``, one complex
-    FFT gives both: ``f + i f' = sum_k [c_k (1 - w_k) e^{+i w_k t} + conj(c_k) (1 + w_k) e^{-i w_k t}] / 2``,
+    Parameters
+    ----------
+    plan : SpectralPlan
+        The frequency and time grids (:func:`spectral_plan`).
+    seed : int
+        The run's seed, ``>= 0``.
+    sample_indices : array_like of int
+        Indices of the samples in the run.
+
+    Returns
+    -------
+    values : numpy.ndarray
+        ``f`` [m/s^2], shape ``(len(sample_indices), plan.n_times)``.
+    rates : numpy.ndarray
+        ``f'`` [m/s^3], same shape.
+
+    Notes
+    -----
+    ``f(t) = sqrt(2) sum_k A_k cos(omega_k t + phi_k)`` [1]_.  With ``c_k = sqrt(2) A_k exp(i phi_k)``
+    and ``w_k = (k + 1/2) d_omega``, one complex FFT gives both:
+    ``f + i f' = sum_k [c_k (1 - w_k) e^{+i w_k t} + conj(c_k) (1 + w_k) e^{-i w_k t}] / 2``,
     and after the factor ``e^{i d_omega t / 2}`` the two exponentials sit on FFT bins ``k``
     and ``-(k + 1)``.
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import WhiteNoise
+    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=2.0, cutoff=100.0)
+    >>> f, f_dot = stationary_samples(plan, seed=0, sample_indices=[0, 1])
+    >>> f.shape == f_dot.shape == (2, plan.n_times)
+    True
+    >>> t, phi = plan.times[40], sample_phases(0, 1, plan.n_frequencies)      # the cosine sum, directly
+    >>> arg = plan.omega * t + phi
+    >>> bool(np.isclose(f[1, 40], np.sqrt(2) * np.sum(plan.amplitudes * np.cos(arg))))
+    True
+    >>> bool(np.isclose(f_dot[1, 40], -np.sqrt(2) * np.sum(plan.amplitudes * plan.omega * np.sin(arg))))
+    True
     """
     indices = np.atleast_1d(np.asarray(sample_indices, dtype=np.int64))
     n, M = plan.n_frequencies, plan.n_fft
@@ -264,7 +680,47 @@ def stationary_samples(plan, seed, sample_indices):
 def ground_acceleration_samples(excitation, plan, seed, sample_indices):
     """Modulated ground acceleration ``q(t) f(t)`` [m/s^2] and its rate [m/s^3] on ``plan.times``.
 
-    Shape ``(len(sample_indices), plan.n_times)`` each; see :func:`stationary_samples`.
+    Parameters
+    ----------
+    excitation : Excitation
+        The input (its envelope ``q(t)``).
+    plan : SpectralPlan
+        The grids of the stationary process (:func:`spectral_plan` of ``excitation``).
+    seed : int
+        The run's seed, ``>= 0``.
+    sample_indices : array_like of int
+        Indices of the samples in the run.
+
+    Returns
+    -------
+    acceleration : numpy.ndarray
+        ``x_g'' = q f`` [m/s^2], shape ``(len(sample_indices), plan.n_times)``.
+    rate : numpy.ndarray
+        ``q' f + q f'`` [m/s^3], same shape.
+
+    Notes
+    -----
+    ``x_g''(t) = q(t) f(t)``: eq. (39) in [1]_ (white noise) or eq. (47) (a filtered input), with the
+    envelope of eq. (57); ``f`` from :func:`stationary_samples`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import WhiteNoise
+    >>> noise = WhiteNoise(1e-4)
+    >>> plan = spectral_plan(noise, t_end=2.0, cutoff=100.0)
+    >>> acc, rate = ground_acceleration_samples(noise, plan, 0, [0])
+    >>> f, _ = stationary_samples(plan, 0, [0])
+    >>> float(acc[0, 0]), bool(np.allclose(acc, noise.envelope(plan.times) * f))    # q(0) = 0
+    (0.0, True)
     """
     values, rates = stationary_samples(plan, seed, sample_indices)
     t = plan.times
@@ -274,7 +730,47 @@ def ground_acceleration_samples(excitation, plan, seed, sample_indices):
 
 
 def ground_acceleration(excitation, t_end, cutoff, n_samples, seed=0, oversampling=OVERSAMPLING):
-    """Convenience wrapper: ``(times [s], acceleration [m/s^2] of shape (n_samples, n_times), plan)``."""
+    """Convenience wrapper: the times, ``n_samples`` modulated ground accelerations and their plan.
+
+    Parameters
+    ----------
+    excitation : Excitation
+        The input (two-sided PSD [m^2/s^3] and envelope).
+    t_end : float
+        Record length [s], ``> 0``.
+    cutoff : float
+        Band limit [rad/s], ``> 0``.
+    n_samples : int
+        Number of samples (indices ``0 .. n_samples - 1``).
+    seed : int, optional
+        The run's seed, ``>= 0``.
+    oversampling : int, optional
+        Grid points per Nyquist step [1] (default :data:`OVERSAMPLING`).
+
+    Returns
+    -------
+    times : numpy.ndarray
+        Grid times [s], ``plan.times``.
+    acceleration : numpy.ndarray
+        ``x_g''`` [m/s^2], shape ``(n_samples, plan.n_times)``.
+    plan : SpectralPlan
+        The grids used.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening import WhiteNoise
+    >>> t, acc, plan = ground_acceleration(WhiteNoise(1e-4), t_end=20.0, cutoff=100.0, n_samples=2, seed=1)
+    >>> t.shape, acc.shape, round(float(t[1]), 6)                       # dt = pi / (4 x 100 rad/s)
+    ((2549,), (2, 2549), 0.007854)
+    """
     seed = validate_seed(seed)
     plan = spectral_plan(excitation, t_end, cutoff, oversampling)
     acc, _ = ground_acceleration_samples(excitation, plan, seed, np.arange(n_samples))

@@ -11,11 +11,48 @@ __all__ = ["output_times"]
 
 
 def output_times(t_end=20.0, dt=0.05):
-    """Output instants ``0, dt, 2 dt, ..., t_end`` [s].
+    """Output instants ``0, dt, 2 dt, ..., t_end`` [s]: the time coordinate every method reports on.
 
-    ``t_end`` [s] > 0 and ``dt`` [s] in ``(0, t_end]``, at most ``MAX_TIMES - 1`` steps
-    (:mod:`screening.limits`); ``t_end`` must be a whole number of
-    steps (to 1e-9 relative) so that every method reports on the same grid.
+    The linearization, the Monte Carlo judge and the sweeps all write their histories on this one
+    grid, so their results line up instant by instant.  ``t_end`` must be a whole number of steps
+    (to 1e-9 relative) and the grid at most ``MAX_TIMES`` instants (:mod:`screening.limits`); bad
+    input is a one-line ``ValueError`` naming the parameter before any array is built.
+
+    Parameters
+    ----------
+    t_end : float
+        Duration of the record [s], ``> 0``.
+    dt : float
+        Output step [s], in ``(0, t_end]``; ``t_end / dt`` a whole number, at most ``MAX_TIMES - 1``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The ``round(t_end / dt) + 1`` instants ``k dt`` [s], float64, from 0 to ``t_end``.
+
+    Notes
+    -----
+    ``t_k = k dt`` for ``k = 0, ..., n`` with ``n = t_end / dt``; the records of the paper are 20 s
+    long, read every 0.05 s (the defaults).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] The package's documentation, ``docs/outputs.md`` (the ``t`` coordinate of a result).
+
+    Examples
+    --------
+    >>> t = output_times(t_end=1.0, dt=0.25)
+    >>> t
+    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+    >>> output_times().shape                          # 20 s every 0.05 s
+    (401,)
+    >>> output_times(t_end=1.0, dt=0.3)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'dt' must divide 't_end' into whole steps (got t_end=1.0, dt=0.3)
     """
     t_end = checked("t_end", t_end, lower=0.0)
     dt = checked("dt", dt, lower=0.0, upper=t_end, upper_inclusive=True)
