@@ -53,6 +53,8 @@ COVERED = [
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
+    "screening.workflow.connect",
+    "screening.workflow.errors",
 ]
 
 
