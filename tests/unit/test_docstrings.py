@@ -55,6 +55,7 @@ COVERED = [
     "screening.solvers.simulate",
     "screening.workflow.connect",
     "screening.workflow.errors",
+    "screening.workflow.interrupt",
 ]
 
 
