@@ -56,6 +56,8 @@ COVERED = [
     "screening.workflow.connect",
     "screening.workflow.errors",
     "screening.workflow.interrupt",
+    "screening.workflow.records_study",
+    "screening.workflow.study",
 ]
 
 
