@@ -58,6 +58,7 @@ COVERED = [
     "screening.workflow.interrupt",
     "screening.workflow.records_study",
     "screening.workflow.study",
+    "screening.workflow.sweep",
 ]
 
 
