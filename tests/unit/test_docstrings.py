@@ -56,6 +56,7 @@ COVERED = [
     "screening.workflow.connect",
     "screening.workflow.errors",
     "screening.workflow.interrupt",
+    "screening.workflow.probabilities",
     "screening.workflow.reader",
     "screening.workflow.records_study",
     "screening.workflow.study",
