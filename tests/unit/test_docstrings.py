@@ -53,6 +53,7 @@ COVERED = [
     "screening.solvers.moments",
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
+    "screening.workflow.accuracy",
     "screening.workflow.connect",
     "screening.workflow.errors",
     "screening.workflow.interrupt",
