@@ -54,6 +54,7 @@ COVERED = [
     "screening.solvers.montecarlo",
     "screening.solvers.simulate",
     "screening.workflow.accuracy",
+    "screening.workflow.cdofile",
     "screening.workflow.connect",
     "screening.workflow.errors",
     "screening.workflow.interrupt",
