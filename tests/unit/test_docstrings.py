@@ -57,6 +57,7 @@ COVERED = [
     "screening.workflow.cdofile",
     "screening.workflow.connect",
     "screening.workflow.errors",
+    "screening.workflow.grid",
     "screening.workflow.interrupt",
     "screening.workflow.probabilities",
     "screening.workflow.reader",
