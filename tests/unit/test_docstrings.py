@@ -64,6 +64,7 @@ COVERED = [
     "screening.workflow.records_study",
     "screening.workflow.study",
     "screening.workflow.sweep",
+    "screening.workflow.writer",
 ]
 
 
