@@ -65,6 +65,7 @@ COVERED = [
     "screening.workflow.study",
     "screening.workflow.sweep",
     "screening.workflow.writer",
+    "screening.workflow.zarrfile",
 ]
 
 
