@@ -55,6 +55,7 @@ COVERED = [
     "screening.solvers.simulate",
     "screening.workflow.accuracy",
     "screening.workflow.cdofile",
+    "screening.workflow.cloud",
     "screening.workflow.connect",
     "screening.workflow.errors",
     "screening.workflow.grid",
