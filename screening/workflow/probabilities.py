@@ -104,7 +104,7 @@ def levels_at(study, theta_ul, slenderness):
 
     References
     ----------
-    .. [1] screening documentation, "Probabilities: overturning, exceedance, rocking start",
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
 
     Examples
@@ -237,7 +237,7 @@ def probabilities_line(counts):
 
     References
     ----------
-    .. [1] screening documentation, "Probabilities: overturning, exceedance, rocking start",
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
 
     Examples

@@ -58,6 +58,7 @@ COVERED = [
     "screening.workflow.cloud",
     "screening.workflow.connect",
     "screening.workflow.errors",
+    "screening.workflow.execution",
     "screening.workflow.grid",
     "screening.workflow.interrupt",
     "screening.workflow.probabilities",
