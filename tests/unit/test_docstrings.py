@@ -56,6 +56,7 @@ COVERED = [
     "screening.workflow.accuracy",
     "screening.workflow.cdofile",
     "screening.workflow.cloud",
+    "screening.workflow.config",
     "screening.workflow.connect",
     "screening.workflow.errors",
     "screening.workflow.execution",
