@@ -142,11 +142,8 @@ def select(ds, selection):
     Examples
     --------
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> float(select(result, {"eps": 5e7})["peak_var_theta"])       # the nearest eps: 6e7 m-2
     4e-06
     """
@@ -240,11 +237,8 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     --------
     >>> import os, tempfile, netCDF4
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     dst = os.path.join(folder, "cdo.nc")
     ...     export_cdo(result, dst, complevel=1, history="screening export --layout cdo")

@@ -382,19 +382,7 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
 
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -466,19 +454,7 @@ def threshold_level(cloud, block, foundation):
     --------
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -589,19 +565,7 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
     --------
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -659,19 +623,7 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     --------
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -757,19 +709,7 @@ def plot_stripes(ds, path):
     >>> import pathlib, tempfile
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -855,19 +795,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     --------
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -961,19 +889,7 @@ def plot_cloud(ds, path):
     >>> import pathlib, tempfile
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
@@ -1122,19 +1038,7 @@ def write_demand_csv(ds, path):
     >>> import os, tempfile
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.records_study import block_and_foundation
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})

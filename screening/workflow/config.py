@@ -921,7 +921,8 @@ def applicable(contact, excitation, envelope):
     Returns
     -------
     set of str
-        The parameter names: the block's, ``k``, ``eps``, the law's damping parameter, the intensity, the excitation's and the envelope's.
+        The parameter names: the block's, ``k``, ``eps``, the law's damping parameter, the intensity,
+        the excitation's and the envelope's.
 
     References
     ----------

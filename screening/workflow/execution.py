@@ -108,8 +108,9 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     -----
     Per point, the covariance of rotation and rotational velocity follows the Lyapunov moment equation
     :math:`\\dot{\\mathbf{C}} = \\mathbf{P}\\mathbf{C} + \\mathbf{C}\\mathbf{P}^\\top
-    + \\mathbb{E}[\\mathbf{v}\\mathbf{v}^\\top]`, eq. (45) in [1], with the equivalent stiffness and
-    damping of eqs. (35)-(36) in [1] updated at every step.
+    + \\mathbb{E}[\\mathbf{v}\\mathbf{v}^\\top]`, eq. (45) in [1] (eq. (51) for filtered noise), with the
+    equivalent stiffness and damping of eqs. (35)-(36) in [1] (corrected, ``docs/method.md``) updated at
+    every step.
 
     References
     ----------
@@ -203,19 +204,7 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
     >>> import numpy as np
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.grid import batch_models, plan_batches
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
     >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
     >>> condensation = study.cases[0].condensation_model
@@ -280,19 +269,7 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
     >>> import numpy as np
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.grid import batch_models, plan_batches
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
     >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
     >>> condensation = study.cases[0].condensation_model
@@ -371,19 +348,7 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, mo
     >>> import numpy as np
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.grid import batch_models, plan_batches
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
     >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
     >>> condensation = study.cases[0].condensation_model
@@ -478,19 +443,7 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
     >>> import numpy as np
     >>> from screening.workflow.study import parse_study
     >>> from screening.workflow.grid import batch_models, plan_batches
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
     >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
     >>> condensation = study.cases[0].condensation_model
@@ -563,21 +516,9 @@ def wants_probabilities(study):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
-    >>> wants_probabilities(parse_study(text)), wants_probabilities(parse_study(text + "[fragility]\\nthresholds = [0.5]\\n"))
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> with_fragility = text + "[fragility]\\nthresholds = [0.5]\\n"
+    >>> wants_probabilities(parse_study(text)), wants_probabilities(parse_study(with_fragility))
     (False, True)
     """
     return study.accuracy is not None or study.fragility is not None
@@ -777,20 +718,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
 
     >>> from unittest import mock
     >>> import numpy as np
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> study = parse_study(text)
     >>> block, foundation, excitation = build_models(study.cases[0], {"eps": 6e7}, study.t_end)  # one point
     >>> condensation = study.cases[0].condensation_model
@@ -963,20 +891,7 @@ def default_workers(study):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> default_workers(parse_study(text))            # two points: in this process
     0
     """

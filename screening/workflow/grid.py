@@ -66,20 +66,8 @@ def holds_histories(study):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> holds_histories(study)                        # [output] stores all six histories by default
     True
@@ -119,20 +107,8 @@ def default_batch_size(study, n_workers, target=None):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> default_batch_size(study, n_workers=2)        # 6 points: at least 2 batches per worker
     2
@@ -201,20 +177,8 @@ def plan_batches(study, batch_size):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> [(b.lo, b.hi) for b in plan_batches(study, 4)]
     [(0, 4), (4, 6)]
@@ -302,20 +266,8 @@ def batch_values(study, batch):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> batch_values(study, plan_batches(study, 4)[1])["S0"]      # points 4, 5: eps = 6e7 m-2
     array([0.0001, 0.001 ])
@@ -351,20 +303,8 @@ def point_values(study, index):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> point_values(study, (1, 2))
     (0, {'eps': 60000000.0, 'S0': 0.001})
@@ -399,20 +339,8 @@ def batch_models(study, batch):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> block, foundation, excitation = batch_models(study, plan_batches(study, 4)[0])
     >>> foundation.eps, excitation.S0
@@ -444,20 +372,8 @@ def batch_point_models(study, batch):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> block, foundation, excitation, underivable = batch_point_models(study, plan_batches(study, 4)[0])
     >>> bool(underivable)                               # S0 given: nothing to derive
@@ -497,24 +413,9 @@ def select_spots(study, status, peak_p_uplift):
     Examples
     --------
     >>> import numpy as np
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... [mcs]
-    ... points = "auto"
-    ... count = 2
-    ... samples = 100
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> text += '[mcs]\\npoints = "auto"\\ncount = 2\\nsamples = 100\\n'
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> uplift = np.array([0.1, 0.5, 0.2, 0.3, 0.9, 0.0])
     >>> select_spots(study, np.zeros(6, dtype=np.int8), uplift)   # the highest uplift, then near 0.45
@@ -589,20 +490,8 @@ def parameter_table(study):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = [1e-5, 1e-4, 1e-3]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
     >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
     >>> constants, per_case, labels, case_labels = parameter_table(study)
     >>> constants["k"], round(constants["I_cm"], 4), labels["contact"], per_case

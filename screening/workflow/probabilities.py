@@ -109,23 +109,8 @@ def levels_at(study, theta_ul, slenderness):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... [fragility]
-    ... thresholds = [0.5, 1.0]
-    ... relative_to = "slenderness"
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY + '[fragility]\\nthresholds = [0.5, 1.0]\\nrelative_to = "slenderness"\\n'
     >>> levels_at(parse_study(text), theta_ul=[0.01], slenderness=[0.16])
     array([[0.16, 0.08, 0.16]])
     """

@@ -8,7 +8,7 @@ from pathlib import Path
 from screening.workflow.errors import SweepError, exception_line
 
 __all__ = ["ResultError", "REQUIRED_VARIABLES", "open_result", "layout_problem", "damaged_data_error",
-           "result_key", "VERIFY_BLOCK_BYTES", "verify_result"]
+           "result_key", "VERIFY_BLOCK_BYTES", "verify_result", "example_result"]
 
 
 class ResultError(SweepError):
@@ -52,11 +52,8 @@ def open_result(path):
     --------
     >>> import os, tempfile
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = os.path.join(folder, "result.nc")
     ...     result.to_netcdf(path)
@@ -124,11 +121,8 @@ def layout_problem(ds):
     Examples
     --------
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> layout_problem(result)
     ''
     >>> layout_problem(result.assign(status=result["status"].astype(float)))
@@ -224,11 +218,8 @@ def result_key(path):
     --------
     >>> import os, tempfile
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = os.path.join(folder, "result.nc")
     ...     result.to_netcdf(path)
@@ -284,26 +275,10 @@ def verify_result(path, study):
     Examples
     --------
     >>> import os, tempfile
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = os.path.join(folder, "result.nc")
     ...     result.to_netcdf(path)
@@ -342,3 +317,41 @@ def verify_result(path, study):
     except (OSError, RuntimeError, ValueError, IndexError, TypeError, KeyError) as exc:
         return f"its data cannot be read ({exception_line(exc)})"
     return None
+
+
+def example_result():
+    """A two-point result in memory: the smallest layout :func:`open_result` accepts, for examples.
+
+    The grid is the two beds of :data:`~screening.workflow.study.EXAMPLE_STUDY` (``eps`` = 0 and 6e7
+    [m-2]) with three output instants and the required variables only (:data:`REQUIRED_VARIABLES`);
+    the values are made up, not computed.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``status`` (CF flags ``ok`` / ``failed``), ``peak_var_theta`` [rad2], ``peak_p_uplift`` [1] and
+        ``min_k_eq`` [N m rad-1] on ``eps`` [m-2]; ``t`` [s]; the global attribute ``study_sha256``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 "Flags",
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> result = example_result()
+    >>> dict(result.sizes), layout_problem(result), result["peak_var_theta"].attrs["units"]
+    ({'eps': 2, 't': 3}, '', 'rad2')
+    """
+    import numpy as np
+    import xarray as xr
+
+    flags = {"flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "ok failed"}
+    return xr.Dataset(
+        {"status": ("eps", np.zeros(2, dtype=np.int8), flags),
+         "peak_var_theta": ("eps", [1e-6, 4e-6], {"units": "rad2"}),
+         "peak_p_uplift": ("eps", [0.1, 0.3], {"units": "1"}),
+         "min_k_eq": ("eps", [900.0, 700.0], {"units": "N m rad-1"})},
+        coords={"eps": ("eps", [0.0, 6e7], {"units": "m-2"}), "t": ("t", [0.0, 0.05, 0.1], {"units": "s"})},
+        attrs={"study_sha256": "ab12"})

@@ -45,18 +45,8 @@ def load_record_study(path):
     Examples
     --------
     >>> import os, tempfile
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [records]
-    ... files = ["el_centro.AT2"]
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY
+    >>> text = EXAMPLE_STUDY + '[records]\\nfiles = ["el_centro.AT2"]\\n'
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = os.path.join(folder, "bed.toml")
     ...     with open(path, "w") as fh:
@@ -106,20 +96,7 @@ def pick_case(study, case=None):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> pick_case(parse_study(text)).contact
     'hunt_crossley'
     """
@@ -171,20 +148,7 @@ def block_and_foundation(study, case=None, overrides=None):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> block, foundation, _ = block_and_foundation(parse_study(text), overrides={"eps": 6e7})
     >>> block.b, foundation.k, foundation.eps
     (0.035, 28900000.0, 60000000.0)

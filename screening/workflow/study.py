@@ -118,7 +118,26 @@ from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, bu
                                        read_study_text, required, resolve_case, short_repr, table,
                                        time_table, title_and_description, type_name)
 
-__all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
+__all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study",
+           "EXAMPLE_STUDY"]
+
+#: The smallest useful study, for examples: the paper's block (m = 8.67 kg, b = 0.035 m, h = 0.21 m) on a
+#: Hunt-Crossley bed (k = 2.89e7 N m-2, lam = 8.95e8 N s m-3) with eps swept over 0 and 6e7 m-2 (two
+#: points), under modulated white noise of S0 = 1e-4 m2 s-3 (default envelope, 20 s at 0.05 s).  The
+#: examples of the workflow's docstrings start from it (:func:`parse_study`).
+EXAMPLE_STUDY = """\
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = [0.0, 6e7]
+[excitation]
+kind = "white"
+S0 = 1e-4
+"""
 
 #: The Monte Carlo models a study may name (the registered ones, :mod:`screening.solvers.mc_registry`, and
 #: ``"auto"``: per point the cheapest one whose measured validity holds, :mod:`screening.solvers.model_choice`).
@@ -302,19 +321,7 @@ def load_study(path):
     Examples
     --------
     >>> import os, tempfile
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = os.path.join(folder, "bed.toml")
     ...     with open(path, "w") as fh:
@@ -359,19 +366,7 @@ def parse_study(text, name="study", source="<string>"):
 
     Examples
     --------
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> study = parse_study(text, name="bed")
     >>> study.dims, study.coordinate("eps").tolist(), len(study.times)
     (('eps',), [0.0, 60000000.0], 401)

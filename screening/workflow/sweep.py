@@ -146,13 +146,15 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     Notes
     -----
     Each point's response covariance :math:`\\mathbf{C}(t)` of rotation and rotational velocity
-    follows the Lyapunov moment equation of the equivalent linear system, eq. (45) in [1],
+    follows the Lyapunov moment equation of the equivalent linear system, eq. (45) in [1] (eq. (51)
+    for filtered noise),
 
     .. math:: \\dot{\\mathbf{C}} = \\mathbf{P}\\mathbf{C} + \\mathbf{C}\\mathbf{P}^\\top
               + \\mathbb{E}[\\mathbf{v}\\mathbf{v}^\\top],
 
-    with :math:`\\mathbf{P}` built from the equivalent stiffness and damping of eqs. (35)-(36) in [1],
-    updated from the moments at every step; the result's layout is described in [2].
+    with :math:`\\mathbf{P}` built from the equivalent stiffness and damping of eqs. (35)-(36) in [1]
+    (corrected, ``docs/method.md``), updated from the moments at every step; the result's layout is
+    described in [2].
 
     References
     ----------
@@ -166,20 +168,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     Arguments are checked before any cluster starts:
 
     >>> import os, tempfile
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     try:
     ...         run_sweep(parse_study(text), os.path.join(folder, "bed.nc"), batch_size=0)

@@ -186,20 +186,7 @@ def result_attributes(study, created, batch_size):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> study = parse_study(text, name="bed", source="bed.toml")
     >>> attrs = result_attributes(study, "2026-11-26T03:00:00Z", batch_size=2)
     >>> attrs["Conventions"], attrs["grid_dims"], attrs["t_end"], attrs["history"]
@@ -257,20 +244,7 @@ def band_limit_attribute(study):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> study = parse_study(text, name="bed", source="bed.toml")
     >>> band_limit_attribute(study)                     # the default band limit
     {'band_limit_hz': 25.0}
@@ -400,22 +374,8 @@ def region_variables(study):
 
     Examples
     --------
-    >>> from screening.workflow.study import parse_study
-    >>> text = '''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... eps = [0.0, 6e7]
-    ... [excitation]
-    ... kind = "white"
-    ... S0 = 1e-4
-    ... [output]
-    ... histories = "none"
-    ... '''
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY + '[output]\\nhistories = "none"\\n'
     >>> study = parse_study(text, name="bed", source="bed.toml")
     >>> names = region_variables(study)
     >>> names[:4], "var_theta" in names

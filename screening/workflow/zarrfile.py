@@ -519,11 +519,8 @@ def store_problem(root, deep=True):
     --------
     >>> import os, tempfile
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> folder = tempfile.TemporaryDirectory()
     >>> store = os.path.join(folder.name, "result.zarr")
     >>> with warnings_ignored():
@@ -621,11 +618,8 @@ def open_zarr_result(path):
     --------
     >>> import os, tempfile
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> folder = tempfile.TemporaryDirectory()
     >>> store = os.path.join(folder.name, "result.zarr")
     >>> with warnings_ignored():
@@ -765,11 +759,8 @@ def export_netcdf(src, dst, complevel, history):
     >>> import netCDF4
     >>> import os, tempfile
     >>> import numpy as np, xarray as xr
-    >>> flags = {"flag_values": np.array([0, 1], "i1"), "flag_meanings": "ok failed"}
-    >>> result = xr.Dataset({"status": ("eps", np.zeros(2, "i1"), flags),
-    ...                      "peak_var_theta": ("eps", [1e-6, 4e-6]), "peak_p_uplift": ("eps", [0.1, 0.3]),
-    ...                      "min_k_eq": ("eps", [900.0, 700.0])},
-    ...                     coords={"eps": [0.0, 6e7], "t": [0.0, 0.05, 0.1]}, attrs={"study_sha256": "ab12"})
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
     >>> folder = tempfile.TemporaryDirectory()
     >>> store = os.path.join(folder.name, "result.zarr")
     >>> with warnings_ignored():
