@@ -357,7 +357,7 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, mo
     ...        "slenderness": np.full(2, float(block.slenderness))}
     >>> var_theta = np.linspace(0.0, 1e-7, study.times.size) * np.ones((2, 1))
     >>> trust = batch_trust({"var_theta": var_theta}, block, foundation, excitation, condensation, out, study.times)
-    >>> trust["sl_trust"]                                 # no uplift: trusted; uplift 0.3: check
+    >>> trust["sl_trust"]                                 # trusted (0), check (1)
     array([0, 1], dtype=int8)
     """
     from screening.analysis import error_model as em
