@@ -22,8 +22,7 @@ from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
 from screening.progress import Progress
 
-__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "Stage", "point_table", "escalate",
-           "escalation_runs", "accuracy_line"]
+__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "Stage", "escalate", "accuracy_line"]
 
 #: Resume records of escalated points are spot parts numbered from here (after any spot check): the
 #: point's result after its waves, its top-up run, and the planner's state after each wave.
@@ -87,7 +86,55 @@ def escalate(stage):
     ``stage``: a :class:`Stage`.  Returns ``((flat indices, models, runs), info)``: the escalated points with
     their :class:`~screening.status.EscalationModel` codes and the dicts of
     :func:`~screening.workflow.execution.escalation_task` (their sample peaks feed
-    :mod:`screening.workflow.probabilities`), and what the escalation did (the run report's ``accuracy``)."""
+    :mod:`screening.workflow.probabilities`), and what the escalation did (the run report's ``accuracy``).
+
+    The points whose trust band cannot promise ``[accuracy] target`` are ordered to cover the grid's
+    features, given a Monte Carlo model each (stiff-bed, condensed or coupled, by their measured
+    validity) and run wave by wave within ``budget_s`` (:func:`escalation_runs`); the linearization's
+    error learned at the escalated points then gives a best estimate of the peak variances at every
+    point (:func:`screening.analysis.correction.best_estimates`).
+
+    Parameters
+    ----------
+    stage : Stage
+        The dask client, the study, the resume record, the result being built, the log function and
+        the progress switch.
+
+    Returns
+    -------
+    escalated : tuple
+        ``(flat indices, models, runs)`` of the escalated points: their grid positions, their
+        :class:`~screening.status.EscalationModel` codes and the run dicts (sample peaks [rad], peak
+        variances [rad2], [rad2 s-2], their standard errors, CPU time [s]).
+    info : dict
+        What the escalation did: target [1], budget and cost [s], points selected, escalated, short
+        of the target and failed, the correction's leave-one-out RMS [1] and points per best-estimate
+        method (the line of :func:`accuracy_line`).
+
+    Notes
+    -----
+    The standard error of a Monte Carlo estimate falls as :math:`1/\\sqrt{n}`: from a pilot of
+    :math:`n_0` samples with relative standard error :math:`\\mathrm{se}_0`, a point is given
+    :math:`n = s\\, n_0\\, (\\mathrm{se}_0 / (\\mathrm{target}/2))^2` samples, :math:`s` the safety factor
+    :data:`~screening.analysis.escalation.SAMPLE_SAFETY`
+    (:func:`~screening.analysis.escalation.samples_needed`).
+
+    References
+    ----------
+    .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
+       ``docs/accuracy_in_sweeps.md``.
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    The stage works on plain values (a live dask client and result; see :func:`run_sweep
+    <screening.workflow.sweep.run_sweep>`, which builds it):
+
+    >>> Stage._fields
+    ('client', 'study', 'store', 'result', 'log', 'progress')
+    """
     from screening.analysis import escalation as esc
     from screening.analysis.correction import best_estimates, point_features
     from screening.analysis.trust import shipped_calibration
@@ -383,7 +430,40 @@ def escalation_runs(stage, order, models):
 
 
 def accuracy_line(info):
-    """One line: what the ``[accuracy]`` escalation covered and what it could not."""
+    """One line: what the ``[accuracy]`` escalation covered and what it could not.
+
+    Parameters
+    ----------
+    info : dict
+        What :func:`escalate` did (its second return value): ``target`` [1], ``budget_s``, ``cost_s``
+        and ``cpu_s`` [s], point counts and ``methods`` (points per best-estimate method).
+
+    Returns
+    -------
+    str
+        The line of the run's log and of the result's ``accuracy_note`` attribute.
+
+    References
+    ----------
+    .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
+       ``docs/accuracy_in_sweeps.md``.
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> info = {"target": 0.15, "budget_s": 600, "cost_s": 412.0, "cpu_s": 398.7, "n_candidates": 12,
+    ...         "n_escalated": 10, "n_coupled": 7, "n_condensed": 3, "n_short": 1, "n_failed": 0,
+    ...         "loo_rms": 0.08, "correction_usable": True,
+    ...         "methods": {"linearization": 88, "corrected_linearization": 2, "coupled_monte_carlo": 7,
+    ...                     "condensed_monte_carlo": 3}}
+    >>> print(accuracy_line(info))   # doctest: +NORMALIZE_WHITESPACE
+    accuracy (target 0.15): 12 point(s) beyond the trust rule's promise; Monte Carlo at 10 (7 coupled,
+    3 condensed; 1 short of the target's standard error) for 412.0 of 600 CPU s by the cost model
+    (398.7 s measured); 2 without Monte Carlo (correction leave-one-out RMS 0.08); best estimates:
+    linearization 88, corrected_linearization 2, coupled_monte_carlo 7, condensed_monte_carlo 3
+    """
     methods = ", ".join(f"{name} {n}" for name, n in info["methods"].items())
     left = info["n_candidates"] - info["n_escalated"]
     return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise; "

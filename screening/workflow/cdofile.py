@@ -33,8 +33,7 @@ from screening.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
 from screening.workflow.errors import SweepError, read_values
 from screening.workflow.grid import hyperslabs
 
-__all__ = ["MAX_GRID_DIMS", "BLOCK_VALUES", "SOURCE_CACHE_BYTES", "open_source", "parse_selection", "select",
-           "string_attribute_target", "grid_chunks", "export_cdo"]
+__all__ = ["MAX_GRID_DIMS", "BLOCK_VALUES", "SOURCE_CACHE_BYTES", "parse_selection", "select", "export_cdo"]
 
 #: Grid dimensions CDO can hold besides time (z, y, x).
 MAX_GRID_DIMS = 3
@@ -62,7 +61,37 @@ def open_source(path):
 
 def parse_selection(items, grid):
     """``{dim: value}`` from ``DIM=VALUE`` strings; ``dim`` a grid dimension, ``value`` a number (a
-    case name or index for ``case``).  :class:`SweepError` naming the item otherwise."""
+    case name or index for ``case``).  :class:`SweepError` naming the item otherwise.
+
+    Parameters
+    ----------
+    items : iterable of str
+        The ``--select`` options, ``"DIM=VALUE"`` each (the value in the dimension's SI unit).
+    grid : sequence of str
+        The result's grid dimensions.
+
+    Returns
+    -------
+    dict
+        ``{dim: value}``: a float for a swept parameter, an int (index) or str (name) for ``case``.
+
+    Raises
+    ------
+    SweepError
+        An item that is not ``DIM=VALUE``, an unknown dimension or a value that is not a finite number.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Other tools: xarray, NCO, CDO",
+       ``docs/outputs.md``.
+    .. [2] U. Schulzweida, "CDO User Guide", Max Planck Institute for Meteorology,
+       https://code.mpimet.mpg.de/projects/cdo/wiki/Cdo#Documentation
+
+    Examples
+    --------
+    >>> parse_selection(["eps=6e7", "case=roof"], grid=("case", "eps", "S0"))
+    {'eps': 60000000.0, 'case': 'roof'}
+    """
     out = {}
     for item in items:
         dim, sep, value = item.partition("=")
@@ -84,7 +113,40 @@ def parse_selection(items, grid):
 
 
 def select(ds, selection):
-    """``ds`` at the nearest swept value of each ``{dim: value}`` (a case by name or index)."""
+    """``ds`` at the nearest swept value of each ``{dim: value}`` (a case by name or index).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An opened result.
+    selection : dict
+        ``{dim: value}`` (:func:`parse_selection`); values in the dimension's SI unit.
+
+    Returns
+    -------
+    xarray.Dataset
+        The result with each selected dimension fixed (dropped).
+
+    Raises
+    ------
+    SweepError
+        An unknown case name, a case index out of range or a dimension without numeric values.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Other tools: xarray, NCO, CDO",
+       ``docs/outputs.md``.
+    .. [2] U. Schulzweida, "CDO User Guide", Max Planck Institute for Meteorology,
+       https://code.mpimet.mpg.de/projects/cdo/wiki/Cdo#Documentation
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> float(select(result, {"eps": 5e7})["peak_var_theta"])       # the nearest eps: 6e7 m-2
+    4e-06
+    """
     for dim, value in selection.items():
         if dim == "case" and isinstance(value, str):
             names = [str(n) for n in ds["case_name"].values]
@@ -135,7 +197,55 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     """Write the opened result ``ds`` (:func:`~screening.workflow.reader.open_result`) at ``dst`` (a new
     netCDF4 file) in the CDO layout (module docstring), after ``selection`` (``{dim: value}``,
     :func:`select`).  ``history``: the line appended to the ``history`` attribute.  Raises
-    :class:`SweepError` if more than :data:`MAX_GRID_DIMS` grid dimensions remain."""
+    :class:`SweepError` if more than :data:`MAX_GRID_DIMS` grid dimensions remain.
+
+    The data is streamed in blocks of at most about :data:`BLOCK_VALUES` values, each chunk of the
+    new file written once, so memory does not grow with the grid.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The opened result.
+    dst : str or os.PathLike
+        The netCDF4 file to write (created or overwritten; the caller makes it appear all or none).
+    complevel : int
+        zlib compression level, 0 (none) to 9.
+    history : str
+        The line appended to the file's ``history`` attribute (the command that wrote it).
+    selection : dict, optional
+        ``{dim: value}`` fixed first (:func:`select`).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    SweepError
+        More than :data:`MAX_GRID_DIMS` grid dimensions left after the selection.
+    ReadFailure
+        A value of the result that cannot be read.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Other tools: xarray, NCO, CDO",
+       ``docs/outputs.md``.
+    .. [2] U. Schulzweida, "CDO User Guide", Max Planck Institute for Meteorology,
+       https://code.mpimet.mpg.de/projects/cdo/wiki/Cdo#Documentation
+
+    Examples
+    --------
+    >>> import os, tempfile, netCDF4
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     dst = os.path.join(folder, "cdo.nc")
+    ...     export_cdo(result, dst, complevel=1, history="screening export --layout cdo")
+    ...     with netCDF4.Dataset(dst) as nc:
+    ...         print(nc["t"].units, nc.dimensions["t"].isunlimited(), nc["status"].dimensions)
+    seconds since 1970-01-01 00:00:00 True ('eps',)
+    """
     import netCDF4
 
     from screening.workflow.zarrfile import netcdf_attributes

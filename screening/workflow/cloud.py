@@ -45,10 +45,9 @@ from screening.status import FitFlag
 from screening import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
-__all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "run_record", "read_cloud_records",
-           "failed_record", "record_rows", "run_cloud", "threshold_level", "scaled_to", "run_stripes",
-           "stripe_dataset", "plot_stripes", "cloud_dataset", "plot_cloud", "synthesise_records",
-           "write_demand_csv"]
+__all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
+           "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "plot_stripes", "cloud_dataset",
+           "plot_cloud", "synthesise_records", "write_demand_csv"]
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels",
                 "vertical")
@@ -82,7 +81,60 @@ def load_cloud_study(path, units=None, vertical=True):
 
     ``units``: the ``--units`` of the command line (``[records] units`` if absent; both: must agree).
     ``vertical``: False (``--no-vertical``) leaves the records' vertical components out whatever
-    ``[records] vertical`` says."""
+    ``[records] vertical`` says.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML study file with a ``[records]`` table (module docstring); record paths are relative
+        to its folder.
+    units : str, optional
+        Units of the records' accelerations: ``"g"``, ``"m/s2"``, ``"cm/s2"`` or ``"gal"``.
+    vertical : bool, optional
+        False leaves the vertical components out.
+
+    Returns
+    -------
+    CloudStudy
+        The study of the block and bed with the ``[records]`` settings (files found, threshold [rad
+        or fraction], intensity measure, Sa period [s], IM levels of a multiple-stripe analysis).
+
+    Raises
+    ------
+    StudyError
+        One line naming the file and the key.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.excitations import KanaiTajimi
+    >>> from screening.model.excitation import Envelope
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5))
+    >>> paths = synthesise_records(os.path.join(folder.name, "records"), ground, n_records=3, t_end=10.0,
+    ...                            cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
+    >>> with open(os.path.join(folder.name, "cloud.toml"), "w") as fh:
+    ...     _ = fh.write('''
+    ... [block]
+    ... m = 8.67
+    ... b = 0.035
+    ... h = 0.21
+    ... [foundation]
+    ... k = 2.89e7
+    ... lam = 8.95e8
+    ... [records]
+    ... files = "records/*.at2"
+    ... threshold = 0.2
+    ... ''')
+    >>> cloud = load_cloud_study(os.path.join(folder.name, "cloud.toml"))
+    >>> [os.path.basename(f) for f in cloud.files], cloud.im, cloud.threshold, cloud.relative_to
+    (['synthetic_00.at2', 'synthetic_01.at2', 'synthetic_02.at2'], 'pga', 0.2, 'slenderness')
+    >>> folder.cleanup()
+    """
     from screening.records import check_scale, check_time_step, expand_records, unit_factor
     from screening.workflow.records_study import load_record_study
 
@@ -173,7 +225,54 @@ def run_record(block, foundation, record, model="coupled", condensation="paper",
 
 def read_cloud_records(cloud):
     """The records of a :class:`CloudStudy`, read and scaled (:class:`StudyError` naming the bad file);
-    without their vertical components when the study leaves them out."""
+    without their vertical components when the study leaves them out.
+
+    Parameters
+    ----------
+    cloud : CloudStudy
+        The cloud study.
+
+    Returns
+    -------
+    list of screening.records.Record
+        The records (accelerations [m s-2], time step [s]), in the order of ``cloud.files``.
+
+    Raises
+    ------
+    StudyError
+        A record that cannot be read (its file named).
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.excitations import KanaiTajimi
+    >>> from screening.model.excitation import Envelope
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5))
+    >>> paths = synthesise_records(os.path.join(folder.name, "records"), ground, n_records=3, t_end=10.0,
+    ...                            cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
+    >>> with open(os.path.join(folder.name, "cloud.toml"), "w") as fh:
+    ...     _ = fh.write('''
+    ... [block]
+    ... m = 8.67
+    ... b = 0.035
+    ... h = 0.21
+    ... [foundation]
+    ... k = 2.89e7
+    ... lam = 8.95e8
+    ... [records]
+    ... files = "records/*.at2"
+    ... threshold = 0.2
+    ... ''')
+    >>> cloud = load_cloud_study(os.path.join(folder.name, "cloud.toml"))
+    >>> [(r.name, r.dt, r.acceleration.size) for r in read_cloud_records(cloud)][0]     # 10 s at 0.01 s
+    ('synthetic_00', 0.01, 1001)
+    >>> folder.cleanup()
+    """
     from dataclasses import replace
 
     from screening.records import read_record
@@ -240,7 +339,59 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     """Run every record of a :class:`CloudStudy`; returns ``(dataset, warnings)`` (see the module docstring).
 
     ``client``: a ``distributed.Client`` to run one task per record on (default: in this process).
-    ``records``: the records already read by :func:`read_cloud_records` (read here if ``None``)."""
+    ``records``: the records already read by :func:`read_cloud_records` (read here if ``None``).
+
+    Parameters
+    ----------
+    cloud : CloudStudy
+        The cloud study.
+    case : str, optional
+        The study's case to run (:func:`~screening.workflow.records_study.pick_case`).
+    overrides : dict, optional
+        Values of swept block or bed parameters (SI), e.g. ``{"eps": 6e7}`` [m-2].
+    progress : callable, optional
+        Receives one line per finished record.
+    client : distributed.Client, optional
+        Runs one task per record (default: in this process).
+    records : list of screening.records.Record, optional
+        The records, already read.
+
+    Returns
+    -------
+    dataset : xarray.Dataset
+        Per record the peak ``|theta|`` [rad], the flags and intensity measures, and the fitted
+        lognormal fragility (:func:`cloud_dataset`).
+    warnings : list of str
+        Failed records and what the fit could not do.
+
+    Notes
+    -----
+    The fragility :math:`P(\\mathrm{exceed} \\mid IM) = \\Phi(\\ln(IM/\\theta)/\\beta)` is fitted by
+    maximum likelihood to the exceed / not-exceed outcome of each record (Bernoulli likelihood) [1].
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
+       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    The block and bed are checked before any record runs (the integration itself compiles the
+    solvers on first use):
+
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> try:
+    ...     run_cloud(cloud)                          # eps is swept: one value must be chosen
+    ... except StudyError as exc:
+    ...     print(exc)
+    foundation.eps is swept in the study; fix it with --set eps=VALUE (swept values: 0, 6e+07)
+    """
     from screening.workflow.records_study import block_and_foundation
 
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
@@ -276,7 +427,40 @@ def vertical_summary(cloud, records):
 
 
 def threshold_level(cloud, block, foundation):
-    """The rotation threshold [rad] of a cloud study on ``block`` and ``foundation``."""
+    """The rotation threshold [rad] of a cloud study on ``block`` and ``foundation``.
+
+    ``threshold`` times the slenderness angle :math:`\\alpha = \\arctan(b/h)`, times the uplift angle
+    :math:`\\theta_{ul}` of the paper's condensation, or in radians, as ``relative_to`` says.
+
+    Parameters
+    ----------
+    cloud : CloudStudy
+        The cloud study.
+    block : screening.model.Block
+        The block.
+    foundation : screening.model.Foundation
+        The bed.
+
+    Returns
+    -------
+    float
+        The threshold rotation [rad].
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> round(threshold_level(cloud, block, foundation), 6), round(0.2 * float(block.slenderness), 6)
+    (0.03303, 0.03303)
+    """
     if cloud.relative_to == "slenderness":
         return cloud.threshold * float(block.slenderness)
     if cloud.relative_to == "theta_ul":
@@ -287,7 +471,45 @@ def threshold_level(cloud, block, foundation):
 
 def scaled_to(record, im, level, period=None):
     """``record`` scaled so that its intensity measure ``im`` equals ``level``: the factor is
-    ``level / IM`` (PGA, Sa, RMS are proportional to the scale), ``sqrt(level / IM)`` for Arias."""
+    ``level / IM`` (PGA, Sa, RMS are proportional to the scale), ``sqrt(level / IM)`` for Arias.
+
+    The vertical component, if any, is scaled by the same factor.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record.
+    im : str
+        The intensity measure, a key of :data:`IMS`.
+    level : float
+        Its target value, in its unit ([m s-2] for PGA, Sa, RMS; [m s-1] for Arias and PGV).
+    period : float, optional
+        The period of Sa [s].
+
+    Returns
+    -------
+    screening.records.Record
+        The scaled record.
+
+    Notes
+    -----
+    Arias intensity :math:`I_a = \\frac{\\pi}{2g}\\int a^2\\,dt` grows with the square of the scale,
+    hence the square root [1].
+
+    References
+    ----------
+    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press, Cambridge MA (1970) 438-483.
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.records import Record
+    >>> record = Record(np.sin(np.linspace(0.0, 20.0, 2001)), 0.01, "sine")   # PGA 1 m s-2
+    >>> round(float(np.abs(scaled_to(record, "pga", 2.0).acceleration).max()), 12)
+    2.0
+    """
     from screening.analysis.intensity import record_measures
     from screening.records import Record
 
@@ -301,7 +523,58 @@ def scaled_to(record, im, level, period=None):
 def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, records=None):
     """Multiple-stripe analysis: every record scaled to every IM level of ``cloud.levels``, run, and the
     exceedances at each level fitted by the binomial likelihood with standard errors
-    (:func:`screening.analysis.fragility.fit_binomial_fragility`).  Returns ``(dataset, warnings)``."""
+    (:func:`screening.analysis.fragility.fit_binomial_fragility`).  Returns ``(dataset, warnings)``.
+
+    Parameters
+    ----------
+    cloud : CloudStudy
+        The study, with ``[records] levels``.
+    case : str, optional
+        The study's case to run.
+    overrides : dict, optional
+        Values of swept block or bed parameters (SI).
+    progress : callable, optional
+        Receives one line per finished run.
+    client : distributed.Client, optional
+        Runs one task per record and level (default: in this process).
+    records : list of screening.records.Record, optional
+        The records, already read.
+
+    Returns
+    -------
+    dataset : xarray.Dataset
+        Per level and record the peak [rad], flags and exceedance; per level the counts; the fit
+        (:func:`stripe_dataset`).
+    warnings : list of str
+        Failed runs and what the fit could not do.
+
+    Notes
+    -----
+    With :math:`z_j` of :math:`n_j` records exceeding at level :math:`x_j`, the median :math:`\\theta`
+    and dispersion :math:`\\beta` maximise
+    :math:`\\sum_j \\ln\\binom{n_j}{z_j} + z_j\\ln p_j + (n_j - z_j)\\ln(1 - p_j)`,
+    :math:`p_j = \\Phi(\\ln(x_j/\\theta)/\\beta)` [1].
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
+       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> try:
+    ...     run_stripes(cloud)
+    ... except StudyError as exc:
+    ...     print(exc)
+    foundation.eps is swept in the study; fix it with --set eps=VALUE (swept values: 0, 6e+07)
+    """
     from screening.workflow.records_study import block_and_foundation
 
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
@@ -316,7 +589,54 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
 
 def stripe_dataset(cloud, block, foundation, rows, names):
     """The result of a multiple-stripe analysis from its rows (level-major): per level and record the
-    peak, flags and exceedance; per level the counts; the binomial fit with its standard errors."""
+    peak, flags and exceedance; per level the counts; the binomial fit with its standard errors.
+
+    Parameters
+    ----------
+    cloud : CloudStudy
+        The study, with its IM ``levels``.
+    block : screening.model.Block
+        The block.
+    foundation : screening.model.Foundation
+        The bed.
+    rows : list of dict
+        One per level and record, level-major: ``peak_abs_theta`` [rad], ``overturned``,
+        ``diverged``, ``overturning_time`` [s], ``lift_off`` and the intensity measures.
+    names : list of str
+        The record names.
+
+    Returns
+    -------
+    dataset : xarray.Dataset
+        On ``(level, record)``; ``n_exceed``, ``n_used`` on ``level``; ``fit_median`` (the IM's
+        unit), ``beta`` [1], their standard errors and ``fit_flag``.
+    warnings : list of str
+        What the fit could not do.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
+       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> from dataclasses import replace
+    >>> stripes = replace(cloud, levels=(1.0, 2.0))
+    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
+    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
+    ...         for a, p, o in [(1.0, 0.001, False), (1.0, 0.04, False), (1.0, 0.002, False),
+    ...                         (2.0, 0.05, False), (2.0, 0.003, False), (2.0, 0.01, True)]]   # level-major
+    >>> ds, warnings = stripe_dataset(stripes, block, foundation, rows, ["r1", "r2", "r3"])
+    >>> ds["n_exceed"].values.tolist(), ds["n_used"].values.tolist(), ds["fit_median"].attrs["units"]
+    ([1, 2], [3, 3], 'm s-2')
+    """
     from screening import schema
     from screening.analysis.fragility import fit_binomial_fragility
 
@@ -364,7 +684,46 @@ def stripe_dataset(cloud, block, foundation, rows, names):
 
 
 def plot_stripes(ds, path):
-    """The fraction of records exceeding at each level (+-2 binomial standard errors) and the fitted curve."""
+    """The fraction of records exceeding at each level (+-2 binomial standard errors) and the fitted curve.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A multiple-stripe result (:func:`stripe_dataset`).
+    path : str or os.PathLike
+        The PNG file to write.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
+       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> from dataclasses import replace
+    >>> stripes = replace(cloud, levels=(1.0, 2.0))
+    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
+    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
+    ...         for a, p, o in [(1.0, 0.001, False), (1.0, 0.04, False), (1.0, 0.002, False),
+    ...                         (2.0, 0.05, False), (2.0, 0.003, False), (2.0, 0.01, True)]]   # level-major
+    >>> ds, _ = stripe_dataset(stripes, block, foundation, rows, ["r1", "r2", "r3"])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     plot_stripes(ds, pathlib.Path(folder) / "stripes.png").read_bytes()[:4]
+    b'\\x89PNG'
+    """
     from scipy.special import ndtr
 
     from screening.report.figure_base import new_figure, save_figure
@@ -394,7 +753,59 @@ def plot_stripes(ds, path):
 
 def cloud_dataset(cloud, block, foundation, rows, names):
     """The result dataset of a cloud analysis from its per-record ``rows``: the records, the
-    exceedance of each, and the maximum-likelihood lognormal fragility; returns ``(ds, warnings)``."""
+    exceedance of each, and the maximum-likelihood lognormal fragility; returns ``(ds, warnings)``.
+
+    A record exceeds when its peak ``|theta|`` is above :func:`threshold_level` or it overturned;
+    diverged records are left out of the fit.
+
+    Parameters
+    ----------
+    cloud : CloudStudy
+        The study.
+    block : screening.model.Block
+        The block.
+    foundation : screening.model.Foundation
+        The bed.
+    rows : list of dict
+        One per record: ``peak_abs_theta`` [rad], ``overturned``, ``diverged``, ``overturning_time``
+        [s], ``lift_off`` and the intensity measures.
+    names : list of str
+        The record names.
+
+    Returns
+    -------
+    ds : xarray.Dataset
+        On ``record``: the rows and ``exceed``; ``threshold_rad`` and ``slenderness`` [rad];
+        ``fit_median`` (the IM's unit), ``beta`` [1] and ``fit_flag``.
+    warnings : list of str
+        What the fit could not do (no fit, perfect separation, a threshold beyond the slenderness).
+
+    Notes
+    -----
+    :math:`P(\\mathrm{exceed} \\mid IM) = \\Phi(\\ln(IM/\\theta)/\\beta)`, with :math:`\\theta` and
+    :math:`\\beta` maximising the Bernoulli likelihood of the records' outcomes [1].
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
+       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
+    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
+    ...         for p, o, a in [(0.001, False, 0.5), (0.04, False, 1.0), (0.002, False, 1.5), (0.01, True, 2.0)]]
+    >>> ds, warnings = cloud_dataset(cloud, block, foundation, rows, ["r1", "r2", "r3", "r4"])
+    >>> ds["exceed"].values.tolist(), round(float(ds["fit_median"]), 2), warnings
+    ([False, True, False, True], 1.14, [])
+    """
     from screening import schema
     from screening.analysis.fragility import fit_lognormal_fragility
 
@@ -453,7 +864,43 @@ def cloud_dataset(cloud, block, foundation, rows, names):
 
 
 def plot_cloud(ds, path):
-    """The cloud (peak |theta| / slenderness against the IM) and the fitted fragility curve."""
+    """The cloud (peak |theta| / slenderness against the IM) and the fitted fragility curve.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A cloud result (:func:`cloud_dataset`).
+    path : str or os.PathLike
+        The PNG file to write.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
+       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
+    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
+    ...         for p, o, a in [(0.001, False, 0.5), (0.04, False, 1.0), (0.002, False, 1.5), (0.01, True, 2.0)]]
+    >>> ds, _ = cloud_dataset(cloud, block, foundation, rows, ["r1", "r2", "r3", "r4"])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     plot_cloud(ds, pathlib.Path(folder) / "cloud.png").read_bytes()[:4]
+    b'\\x89PNG'
+    """
     from scipy.special import ndtr
 
     from screening.report.figure_base import new_figure, save_figure
@@ -494,7 +941,55 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
     """Write ``n_records`` synthesised records of ``excitation`` (spectral representation, seed ``seed``),
     resampled to ``dt`` and multiplied by ``scales[i]``, as PEER-style ``.AT2`` files in ``folder``.
 
-    For examples and tests (no download): returns the file paths."""
+    For examples and tests (no download): returns the file paths.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        Where to write (created if missing).
+    excitation : screening.excitations.Excitation
+        The ground motion model (its PSD and envelope).
+    n_records : int
+        Records to write.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Highest circular frequency of the spectral representation [rad s-1].
+    scales : sequence of float
+        Factor of each record [1].
+    seed : int, optional
+        Seed of the random phases.
+    dt : float, optional
+        Time step of the files [s].
+
+    Returns
+    -------
+    list of str
+        The paths written, ``synthetic_00.at2``, ...
+
+    Notes
+    -----
+    Spectral representation: :math:`a(t) = q(t)\\,\\sqrt{2}\\sum_k \\sqrt{2 S(\\omega_k)\\Delta\\omega}\\,
+    \\cos(\\omega_k t + \\varphi_k)` with independent phases :math:`\\varphi_k \\sim U[0, 2\\pi)` and
+    :math:`S` the PSD of the excitation (:mod:`screening.solvers.synthesis`) [1].
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral
+       representation", Applied Mechanics Reviews 44(4) (1991) 191-204. https://doi.org/10.1115/1.3119501
+    .. [2] PEER Ground Motion Database, "AT2 file format", https://ngawest2.berkeley.edu
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.excitations import KanaiTajimi
+    >>> from screening.model.excitation import Envelope
+    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     paths = synthesise_records(folder, ground, n_records=2, t_end=10.0, cutoff=120.0, scales=[1.0, 2.0])
+    ...     [os.path.basename(p) for p in paths], open(paths[0]).readline().strip()
+    (['synthetic_00.at2', 'synthetic_01.at2'], 'PEER NGA STRONG MOTION DATABASE RECORD')
+    """
     from screening.records import Record, write_at2
     from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
 
@@ -517,7 +1012,47 @@ def write_demand_csv(ds, path):
     multiple-stripe analysis, with the ``level`` column): its name, its intensity measures, the peak
     ``|theta|`` [rad] and as a fraction of the slenderness angle, and the flags (overturned, diverged:
     left out of the fit, exceed) - the table a PSDM or a pelicun demand sample is built from.  Headers
-    carry the units in brackets."""
+    carry the units in brackets.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A cloud or multiple-stripe result.
+    path : str or os.PathLike
+        The CSV file to write.
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    References
+    ----------
+    .. [1] A. Zsarnóczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
+       loss and community resilience", Proceedings of the 17th World Conference on Earthquake
+       Engineering, Sendai (2020).
+    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.records_study import block_and_foundation
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
+    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
+    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
+    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
+    ...         for p, o, a in [(0.001, False, 0.5), (0.04, False, 1.0), (0.002, False, 1.5), (0.01, True, 2.0)]]
+    >>> ds, _ = cloud_dataset(cloud, block, foundation, rows, ["r1", "r2", "r3", "r4"])
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     lines = open(write_demand_csv(ds, os.path.join(folder, "demands.csv"))).read().splitlines()
+    >>> lines[0].split(",")[-5:]
+    ['peak_abs_theta [rad]', 'peak_abs_theta / slenderness [1]', 'overturned', 'diverged', 'exceed']
+    >>> lines[4]                                                  # r4: overturned, so it exceeds
+    '3,r4,2,0.5,2,0.2,0.01,0.0605515,1,0,1'
+    """
     import csv
 
     from screening.analysis.intensity import RECORD_MEASURES

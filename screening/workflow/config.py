@@ -83,7 +83,37 @@ class StudyError(ValueError):
 def read_study_text(path):
     """The text of the study file ``path`` (UTF-8, a byte-order mark dropped); :class:`StudyError` if
     it is not a regular file of at most :data:`~screening.limits.MAX_STUDY_BYTES` or cannot
-    be read (checked before reading: a FIFO or a device never blocks or fills the memory)."""
+    be read (checked before reading: a FIFO or a device never blocks or fills the memory).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The study file.
+
+    Returns
+    -------
+    str
+        Its text.
+
+    Raises
+    ------
+    StudyError
+        A missing, unreadable, special or too large file (one line naming it).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "bed.toml")
+    ...     with open(path, "w", encoding="utf-8-sig") as fh:         # a byte-order mark
+    ...         _ = fh.write("[block]\\nm = 8.67\\n")
+    ...     read_study_text(path)
+    '[block]\\nm = 8.67\\n'
+    """
     try:
         return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)
     except InputFileError as exc:
@@ -96,7 +126,42 @@ def read_study_text(path):
 
 
 def parse_toml(text, source, build):
-    """``build(raw)`` on the parsed TOML ``text``; every :class:`StudyError` is prefixed with ``source``."""
+    """``build(raw)`` on the parsed TOML ``text``; every :class:`StudyError` is prefixed with ``source``.
+
+    Parameters
+    ----------
+    text : str
+        The study, in TOML.
+    source : str
+        Where it came from (the prefix of every message).
+    build : callable
+        ``build(raw)`` makes the study of the parsed tables ``raw`` (a dict).
+
+    Returns
+    -------
+    object
+        What ``build`` returned.
+
+    Raises
+    ------
+    StudyError
+        Text too long or nested too deep, invalid TOML, or a :class:`StudyError` of ``build``; prefixed with ``source``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    .. [2] TOML v1.0.0 specification, https://toml.io/en/v1.0.0
+
+    Examples
+    --------
+    >>> parse_toml("[block]\\nm = 8.67\\n", "bed.toml", lambda raw: raw)
+    {'block': {'m': 8.67}}
+    >>> try:
+    ...     parse_toml("[block\\n", "bed.toml", lambda raw: raw)
+    ... except StudyError as exc:
+    ...     print(exc)
+    bed.toml: invalid TOML: Expected ']' at the end of a table declaration (at line 1, column 7)
+    """
     if len(text) > limits.MAX_STUDY_CHARS:
         raise StudyError(f"{source}: the study file has {len(text)} characters; at most "
                          f"{limits.MAX_STUDY_CHARS} are read")
@@ -119,10 +184,52 @@ def parse_toml(text, source, build):
 
 # ----------------------------------------------------------------------------- helpers
 def one_line(exc):
+    """The message of ``exc`` on one line.
+
+    Parameters
+    ----------
+    exc : BaseException
+        An exception (or any object).
+
+    Returns
+    -------
+    str
+        Its message with every run of white space made one space.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> one_line(ValueError("bad\\n   value"))
+    'bad value'
+    """
     return " ".join(str(exc).split())
 
 
 def type_name(value):
+    """How a wrong value is named in a message (``got ...``).
+
+    Parameters
+    ----------
+    value : object
+        A value parsed from TOML.
+
+    Returns
+    -------
+    str
+        ``"a boolean"``, ``"the string '...'"``, ``"a list"``, ``"a table"`` or the type's name.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> type_name(True), type_name("x"), type_name([1]), type_name({}), type_name(1.5)
+    ('a boolean', "the string 'x'", 'a list', 'a table', 'float')
+    """
     if isinstance(value, bool):
         return "a boolean"
     if isinstance(value, str):
@@ -135,7 +242,41 @@ def type_name(value):
 
 
 def table(raw, key, where=""):
-    """Sub-table ``key`` of ``raw`` (empty if absent)."""
+    """Sub-table ``key`` of ``raw`` (empty if absent).
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+    key : str
+        The sub-table's name.
+    where : str, optional
+        The prefix of ``raw``'s keys (with its trailing dot).
+
+    Returns
+    -------
+    dict
+        The sub-table, or ``{}`` when absent.
+
+    Raises
+    ------
+    StudyError
+        ``key`` is not a table.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> table({"block": {"m": 8.67}}, "block"), table({}, "time")
+    ({'m': 8.67}, {})
+    >>> try:
+    ...     table({"time": 5}, "time")
+    ... except StudyError as exc:
+    ...     print(exc)
+    time: must be a table (got int)
+    """
     value = raw.get(key, {})
     if not isinstance(value, dict):
         raise StudyError(f"{where}{key}: must be a table (got {type_name(value)})")
@@ -143,23 +284,152 @@ def table(raw, key, where=""):
 
 
 def check_keys(tbl, allowed, where):
+    """Refuse a key of ``tbl`` not in ``allowed`` (a typo is never ignored).
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    allowed : sequence of str
+        Its allowed keys.
+    where : str
+        The prefix of its keys (with its trailing dot).
+
+    Returns
+    -------
+    None
+        Returns only when every key is allowed.
+
+    Raises
+    ------
+    StudyError
+        An unknown key (the allowed ones listed).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_keys({"m": 8.67, "mass": 8.67}, ("m", "b", "h"), "block.")
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.mass: unknown key (allowed: m, b, h)
+    """
     for key in tbl:
         if key not in allowed:
             raise StudyError(f"{where}{key}: unknown key (allowed: {', '.join(allowed)})")
 
 
 def required(tbl, key, where, why=""):
+    """``tbl[key]``, or :class:`StudyError` naming the missing key.
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    key : str
+        The key.
+    where : str
+        The prefix of the table's keys.
+    why : str, optional
+        Appended to the message.
+
+    Returns
+    -------
+    object
+        ``tbl[key]``.
+
+    Raises
+    ------
+    StudyError
+        ``key`` is missing.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> required({"m": 8.67}, "m", "block.")
+    8.67
+    >>> try:
+    ...     required({"m": 8.67}, "b", "block.")
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.b: required
+    """
     if key not in tbl:
         raise StudyError(f"{where}{key}: required{why}")
     return tbl[key]
 
 
 def is_number(value):
+    """Whether ``value`` is a real number (a TOML boolean is not).
+
+    Parameters
+    ----------
+    value : object
+        A value parsed from TOML.
+
+    Returns
+    -------
+    bool
+        True for an integer or a float, False for a boolean or anything else.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> is_number(2), is_number(0.5), is_number(True), is_number("1")
+    (True, True, False, False)
+    """
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def check_value(key, value, lower=None, inclusive=False, upper=None):
-    """``value`` as a float: a finite number above ``lower`` and at most ``upper`` (each optional)."""
+    """``value`` as a float: a finite number above ``lower`` and at most ``upper`` (each optional).
+
+    Parameters
+    ----------
+    key : str
+        The full key, named in the message.
+    value : object
+        The value.
+    lower : float, optional
+        Lower bound.
+    inclusive : bool, optional
+        Whether ``lower`` itself is allowed.
+    upper : float, optional
+        Upper bound (inclusive).
+
+    Returns
+    -------
+    float
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not a number, not finite, or out of range (the range stated).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> check_value("block.m", 8.67, lower=0.0)
+    8.67
+    >>> try:
+    ...     check_value("block.m", 0, lower=0.0)
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.m: must be a finite number > 0 (got 0.0)
+    """
     if not is_number(value):
         raise StudyError(f"{key}: must be a number (got {type_name(value)})")
     try:
@@ -182,7 +452,43 @@ def check_value(key, value, lower=None, inclusive=False, upper=None):
 
 
 def check_integer(key, value, lower, upper=None):
-    """``value``: an integer (no float, no boolean) ``>= lower`` (and ``<= upper`` if given)."""
+    """``value``: an integer (no float, no boolean) ``>= lower`` (and ``<= upper`` if given).
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    lower : int
+        Smallest allowed.
+    upper : int, optional
+        Largest allowed.
+
+    Returns
+    -------
+    int
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not an integer (a float or a boolean is not), or out of range.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> check_integer("mcs.samples", 200, 1)
+    200
+    >>> try:
+    ...     check_integer("mcs.samples", 2.0, 1)
+    ... except StudyError as exc:
+    ...     print(exc)
+    mcs.samples: must be an integer >= 1 (got 2.0)
+    """
     if (isinstance(value, bool) or not isinstance(value, int) or value < lower
             or (upper is not None and value > upper)):
         rng = f">= {lower}" if upper is None else f"in {lower}..{upper}"
@@ -191,7 +497,27 @@ def check_integer(key, value, lower, upper=None):
 
 
 def short_repr(value):
-    """``repr(value)``, shortened for integers of hundreds of digits."""
+    """``repr(value)``, shortened for integers of hundreds of digits.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+
+    Returns
+    -------
+    str
+        At most 60 characters; an integer of 30 digits or more as its digit count.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> short_repr(10**40), short_repr(3)
+    ('an integer of 41 digits', '3')
+    """
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
         return f"an integer of {len(str(abs(value)))} digits"
     text = repr(value)
@@ -199,11 +525,79 @@ def short_repr(value):
 
 
 def integer(tbl, key, default, lower, where, upper=None):
+    """``tbl[key]`` (or ``default``) checked by :func:`check_integer`.
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    key : str
+        The key.
+    default : int
+        The value when absent.
+    lower : int
+        Smallest allowed.
+    where : str
+        The prefix of the table's keys.
+    upper : int, optional
+        Largest allowed.
+
+    Returns
+    -------
+    int
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not an integer, or out of range.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> integer({"count": 3}, "count", 1, 1, "mcs."), integer({}, "count", 1, 1, "mcs.")
+    (3, 1)
+    """
     return check_integer(f"{where}{key}", tbl.get(key, default), lower, upper)
 
 
 def check_list(key, value):
-    """``value``: a non-empty list."""
+    """``value``: a non-empty list.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+
+    Returns
+    -------
+    list
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not a list, or an empty one.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> check_list("fragility.thresholds", [0.5])
+    [0.5]
+    >>> try:
+    ...     check_list("fragility.thresholds", [])
+    ... except StudyError as exc:
+    ...     print(exc)
+    fragility.thresholds: empty list (give at least one value)
+    """
     if not isinstance(value, list):
         raise StudyError(f"{key}: must be a list (got {type_name(value)})")
     if not value:
@@ -212,16 +606,112 @@ def check_list(key, value):
 
 
 def number_list(key, value, **bounds):
-    """A non-empty list of numbers, each checked by :func:`check_value` (``bounds``); a tuple of floats."""
+    """A non-empty list of numbers, each checked by :func:`check_value` (``bounds``); a tuple of floats.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    **bounds
+        ``lower``, ``inclusive``, ``upper`` of :func:`check_value`.
+
+    Returns
+    -------
+    tuple of float
+        The values.
+
+    Raises
+    ------
+    StudyError
+        Not a non-empty list, or an entry out of range (named by its index).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> number_list("fragility.thresholds", [0.5, 1], lower=0.0)
+    (0.5, 1.0)
+    >>> try:
+    ...     number_list("fragility.thresholds", [0.5, -1], lower=0.0)
+    ... except StudyError as exc:
+    ...     print(exc)
+    fragility.thresholds[1]: must be a finite number > 0 (got -1.0)
+    """
     return tuple(check_value(f"{key}[{i}]", v, **bounds) for i, v in enumerate(check_list(key, value)))
 
 
 def integer_list(key, value, lower):
-    """A non-empty list of integers ``>= lower``; a tuple."""
+    """A non-empty list of integers ``>= lower``; a tuple.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    lower : int
+        Smallest allowed.
+
+    Returns
+    -------
+    tuple of int
+        The values.
+
+    Raises
+    ------
+    StudyError
+        Not a non-empty list, or an entry that is not an integer ``>= lower``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> integer_list("convergence.samples", [100, 400], 1)
+    (100, 400)
+    """
     return tuple(check_integer(f"{key}[{i}]", v, lower) for i, v in enumerate(check_list(key, value)))
 
 
 def check_choice(key, value, choices):
+    """``value`` if it is one of ``choices``, else :class:`StudyError` listing them.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    choices : sequence
+        The allowed values.
+
+    Returns
+    -------
+    object
+        The value.
+
+    Raises
+    ------
+    StudyError
+        A value not among ``choices`` (listed).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_choice("output.histories", "some", ("all", "none", "spots"))
+    ... except StudyError as exc:
+    ...     print(exc)
+    output.histories: must be one of 'all', 'none', 'spots' (got 'some')
+    """
     if value not in choices:
         raise StudyError(f"{key}: must be one of {', '.join(map(repr, choices))} "
                          f"(got {type_name(value) if not isinstance(value, str) else repr(value)})")
@@ -229,6 +719,40 @@ def check_choice(key, value, choices):
 
 
 def choice(tbl, key, choices, where, default=None):
+    """``tbl[key]`` (or ``default``) checked by :func:`check_choice`.
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    key : str
+        The key.
+    choices : sequence
+        The allowed values.
+    where : str
+        The prefix of the table's keys.
+    default : object, optional
+        The value when absent (None: required).
+
+    Returns
+    -------
+    object
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Missing without a default, or not among ``choices``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> choice({}, "contact", ("hunt_crossley", "winkler"), "foundation.", default="hunt_crossley")
+    'hunt_crossley'
+    """
     value = tbl.get(key, default)
     if value is None:
         raise StudyError(f"{where}{key}: required (one of {', '.join(map(repr, choices))})")
@@ -236,13 +760,68 @@ def choice(tbl, key, choices, where, default=None):
 
 
 def name_string(key, value):
-    """A name: a non-empty string."""
+    """A name: a non-empty string.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+
+    Returns
+    -------
+    str
+        The name.
+
+    Raises
+    ------
+    StudyError
+        Not a string, or only white space.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> name_string("case[0].name", "roof")
+    'roof'
+    """
     if not isinstance(value, str) or not value.strip():
         raise StudyError(f"{key}: required, a non-empty string (got {type_name(value)})")
     return value
 
 
 def title_and_description(raw, default_title):
+    """The study's ``title`` and ``description`` (both optional strings).
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+    default_title : str
+        The title when none is given.
+
+    Returns
+    -------
+    tuple of str
+        ``(title, description)``; the description defaults to ``""``.
+
+    Raises
+    ------
+    StudyError
+        A title or description that is not a string.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> title_and_description({"title": "Soft beds"}, "screening: bed")
+    ('Soft beds', '')
+    """
     title = raw.get("title", default_title)
     description = raw.get("description", "")
     for key, value in (("title", title), ("description", description)):
@@ -252,7 +831,37 @@ def title_and_description(raw, default_title):
 
 
 def time_table(raw):
-    """``[time]``: ``(t_end, dt)`` [s] (defaults 20 and 0.05); ``dt`` must divide ``t_end``."""
+    """``[time]``: ``(t_end, dt)`` [s] (defaults 20 and 0.05); ``dt`` must divide ``t_end``.
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+
+    Returns
+    -------
+    tuple of float
+        ``(t_end, dt)`` [s].
+
+    Raises
+    ------
+    StudyError
+        Unknown keys, values that are not positive, ``dt`` not dividing ``t_end``, or too many output steps.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> time_table({"time": {"t_end": 10.0, "dt": 0.1}}), time_table({})
+    ((10.0, 0.1), (20.0, 0.05))
+    >>> try:
+    ...     time_table({"time": {"t_end": 1.0, "dt": 0.3}})
+    ... except StudyError as exc:
+    ...     print(exc)
+    time.dt: parameter 'dt' must divide 't_end' into whole steps (got t_end=1.0, dt=0.3)
+    """
     tbl = table(raw, "time")
     check_keys(tbl, ("t_end", "dt"), "time.")
     t_end = check_value("time.t_end", tbl.get("t_end", 20.0), 0.0, False)
@@ -298,6 +907,34 @@ class Case:
 
 
 def applicable(contact, excitation, envelope):
+    """The numeric parameters that mean something for this contact law, excitation and envelope.
+
+    Parameters
+    ----------
+    contact : str
+        The registered contact law.
+    excitation : str
+        The registered excitation.
+    envelope : str
+        ``"exponential"`` or ``"constant"``.
+
+    Returns
+    -------
+    set of str
+        The parameter names: the block's, ``k``, ``eps``, the law's damping parameter, the intensity,
+        the excitation's and the envelope's.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> sorted(applicable("winkler", "kanai_tajimi", "constant") - applicable("hunt_crossley", "white", "constant"))
+    ['c', 'omega_g', 'zeta_g']
+    >>> {"T1", "T2"} <= applicable("hunt_crossley", "white", "exponential")
+    True
+    """
     names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga", "band_limit_hz"}
     names.add(laws.get(contact).parameter)
     names |= set(excitations.get(excitation).parameters)
@@ -308,7 +945,39 @@ def applicable(contact, excitation, envelope):
 
 def model_tables(raw, allowed=TABLE_KEYS):
     """The model tables ``[block]``, ``[foundation]``, ``[excitation]`` of ``raw``, their keys checked
-    against ``allowed`` (table name -> keys)."""
+    against ``allowed`` (table name -> keys).
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+    allowed : dict, optional
+        Table name -> allowed keys (default :data:`TABLE_KEYS`).
+
+    Returns
+    -------
+    dict
+        ``{"block": ..., "foundation": ..., "excitation": ...}`` (empty tables when absent).
+
+    Raises
+    ------
+    StudyError
+        A table that is not one, or an unknown key.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> model_tables({"block": {"m": 8.67}})
+    {'block': {'m': 8.67}, 'foundation': {}, 'excitation': {}}
+    >>> try:
+    ...     model_tables({"block": {"mass": 8.67}})
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.mass: unknown key (allowed: m, b, h, I_cm, g)
+    """
     tables = {}
     for tname in MODEL_TABLES:
         tbl = table(raw, tname)
@@ -319,7 +988,47 @@ def model_tables(raw, allowed=TABLE_KEYS):
 
 def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS, upper=None):
     """Values of a swept parameter from a list or a range table (validated; a range has at most
-    ``max_num`` values, checked before the values are built)."""
+    ``max_num`` values, checked before the values are built).
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    spec : list or dict
+        A list of values, or a range ``{start, stop, num, log}``.
+    lower : float or None
+        Lower bound of every value.
+    inclusive : bool
+        Whether ``lower`` itself is allowed.
+    max_num : int, optional
+        Most values of a range.
+    upper : float, optional
+        Upper bound.
+
+    Returns
+    -------
+    numpy.ndarray
+        The values, strictly monotonic, in the parameter's SI unit.
+
+    Raises
+    ------
+    StudyError
+        A bad list or range, values out of range, too many, or repeated.
+
+    Notes
+    -----
+    A range holds ``num`` values from ``start`` to ``stop``, both included: evenly spaced, or with
+    ``log = true`` geometrically (:math:`x_i = x_0 (x_{n-1}/x_0)^{i/(n-1)}`).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> sweep_values("excitation.S0", {"start": 1e-5, "stop": 1e-3, "num": 3, "log": True}, 0.0, False)
+    array([1.e-05, 1.e-04, 1.e-03])
+    """
     if isinstance(spec, list):
         values = number_list(key, spec, lower=lower, inclusive=inclusive, upper=upper)
     else:
@@ -358,7 +1067,45 @@ def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS,
 def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=limits.DEFAULT_MAX_POINTS):
     """Scalars of one model table; swept entries go to ``sweeps`` (only when allowed: ``sweeps`` not
     None and the key in ``sweepable``).  The grid of ``sweeps`` may have at most ``max_points``
-    points (checked as each swept parameter is added, before anything is built on the grid)."""
+    points (checked as each swept parameter is added, before anything is built on the grid).
+
+    Parameters
+    ----------
+    tbl : dict
+        One model table.
+    tname : str
+        Its name (``"block"``, ...).
+    sweeps : dict or None
+        Receives the swept parameters' values (None: a case, scalars only).
+    where : str
+        The prefix of the table's keys.
+    sweepable : sequence of str, optional
+        The parameters that may be swept.
+    max_points : int, optional
+        Most grid points.
+
+    Returns
+    -------
+    dict
+        ``{parameter: value}`` of the scalars (SI); the swept ones are added to ``sweeps``.
+
+    Raises
+    ------
+    StudyError
+        A value out of its range, a sweep where none is allowed, or a grid too large.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> sweeps = {}
+    >>> numeric_table({"k": 2.89e7, "eps": [0.0, 6e7], "contact": "winkler"}, "foundation", sweeps, "")
+    {'k': 28900000.0}
+    >>> sweeps
+    {'eps': array([       0., 60000000.])}
+    """
     scalars = {}
     for key, value in tbl.items():
         if key not in NUMERIC:
@@ -379,7 +1126,39 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=lim
 
 
 def check_grid_size(sweeps, max_points, key, n_cases=1):
-    """:class:`StudyError` naming ``key`` if ``n_cases`` x the swept values exceed ``max_points``."""
+    """:class:`StudyError` naming ``key`` if ``n_cases`` x the swept values exceed ``max_points``.
+
+    Parameters
+    ----------
+    sweeps : dict
+        Swept parameter -> values (None: not known yet, left out).
+    max_points : int
+        Most grid points.
+    key : str
+        The key named in the message.
+    n_cases : int, optional
+        Cases of the study.
+
+    Returns
+    -------
+    int
+        The grid's points.
+
+    Raises
+    ------
+    StudyError
+        More than ``max_points``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_grid_size({"eps": np.zeros(10), "S0": np.zeros(20)}, 1000, "excitation.S0")
+    200
+    """
     sizes = [n_cases] if n_cases > 1 else []
     sizes += [len(v) for v in sweeps.values() if v is not None]
     n = math.prod(sizes)
@@ -398,6 +1177,42 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     parameters are not read: None is fine).  Parameters named in ``inherited`` (set by the base
     tables, not by the case) are dropped when they do not apply to the case's contact law /
     excitation / envelope.
+
+    Parameters
+    ----------
+    name : str
+        The case's name (``""`` without cases).
+    tables : dict
+        The model tables of the configuration.
+    sweeps : dict
+        Parameters given per grid point -> values.
+    where : str
+        The prefix of the keys (``"case[0]."``).
+    inherited : frozenset of str, optional
+        Parameters set by the base tables.
+
+    Returns
+    -------
+    Case
+        The configuration, with defaults filled in (``eps`` 0, ``g`` 9.81 m s-2, ``T1`` 4 s, ``T2`` 2 s, ...).
+
+    Raises
+    ------
+    StudyError
+        A parameter that does not apply, one missing, S0 and pga both given, or a bed the condensation cannot carry.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> case.contact, case.params["g"], case.params["T1"]
+    ('hunt_crossley', 9.81, 4.0)
     """
     block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
     contact = choice(foundation, "contact", laws.names(), f"{where}foundation.", DEFAULTS["contact"])
@@ -507,6 +1322,37 @@ def build_models(case, values, t_end=None):
     (``pga`` [m s-2]) becomes the ``S0`` whose record of ``t_end`` [s] has that median PGA
     (:func:`screening.analysis.intensity.s0_for_pga`, with the excitation's ground-motion band limit);
     ``ValueError`` where a point's ``S0`` cannot be derived (:func:`build_point_models` flags them instead).
+
+    Parameters
+    ----------
+    case : Case
+        The configuration.
+    values : dict
+        Values of the swept parameters (scalars or arrays, SI).
+    t_end : float, optional
+        Record length [s]; needed with a target PGA.
+
+    Returns
+    -------
+    tuple
+        ``(block, foundation, excitation)``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> block, foundation, excitation = build_models(case, {"eps": np.array([0.0, 6e7])})
+    >>> block.m, foundation.eps, excitation.S0
+    (8.67, array([       0., 60000000.]), 0.0001)
     """
     block, foundation, excitation, underivable = build_point_models(case, values, t_end)
     if np.any(underivable):
@@ -519,7 +1365,31 @@ def build_models(case, values, t_end=None):
 def case_cutoff(case):
     """The ground-motion band limit [rad/s] of a case's excitation (``excitation.band_limit_hz``, default
     :data:`~screening.analysis.intensity.GROUND_BAND_LIMIT_HZ`): the band its intensity measures and a
-    target PGA refer to, whatever stands on the ground."""
+    target PGA refer to, whatever stands on the ground.
+
+    Parameters
+    ----------
+    case : Case
+        The configuration.
+
+    Returns
+    -------
+    float
+        The band limit [rad s-1]: :math:`2\\pi f` with ``band_limit_hz`` :math:`f`.
+
+    References
+    ----------
+    .. [1] screening documentation, "Intensity measures of the stochastic inputs", ``docs/intensity_measures.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> round(case_cutoff(case), 4)                  # 25 Hz
+    157.0796
+    """
     return ground_cutoff(case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ))
 
 
@@ -527,7 +1397,36 @@ def build_point_models(case, values, t_end=None):
     """:func:`build_models` that flags instead of refusing: ``(block, foundation, excitation, underivable)``,
     ``underivable`` a boolean array (broadcast with the fields; ``False`` without a target PGA) of the
     points whose ``S0`` cannot follow from the target PGA; their excitation carries ``S0 = 1`` as a
-    placeholder (the caller flags them and discards what is computed there)."""
+    placeholder (the caller flags them and discards what is computed there).
+
+    Parameters
+    ----------
+    case : Case
+        The configuration.
+    values : dict
+        Values of the swept parameters (SI).
+    t_end : float, optional
+        Record length [s]; needed with a target PGA.
+
+    Returns
+    -------
+    tuple
+        ``(block, foundation, excitation, underivable)``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> block, foundation, excitation, underivable = build_point_models(case, {"eps": 6e7})
+    >>> foundation.eps, bool(underivable)
+    (60000000.0, False)
+    """
     p = dict(case.params)
     p.update(values)
     block, foundation = _block(p), _foundation(case, p)

@@ -38,7 +38,45 @@ TLS_SETTINGS = ("distributed.comm.tls.client.cert", "distributed.comm.tls.ca-fil
 
 
 def scheduler_address(scheduler):
-    """The address in ``scheduler`` (an address, or a scheduler JSON file with an ``address``)."""
+    """The address in ``scheduler`` (an address, or a scheduler JSON file with an ``address``).
+
+    A path ending in ``.json`` that names a file is read as dask's scheduler file (at most
+    :data:`MAX_SCHEDULER_FILE` bytes) and its ``"address"`` returned; anything else is returned as
+    given, as text.
+
+    Parameters
+    ----------
+    scheduler : str or os.PathLike
+        A scheduler address (``tcp://host:port``) or the path of a scheduler JSON file.
+
+    Returns
+    -------
+    str
+        The scheduler's address.
+
+    Raises
+    ------
+    SweepError
+        A scheduler file that is too large, unreadable, not JSON, or without an ``"address"`` string.
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, "Connect to a scheduler" and "Launch Dask from a scheduler
+       file", https://distributed.dask.org/en/stable/client.html and
+       https://docs.dask.org/en/stable/deploying-cli.html
+
+    Examples
+    --------
+    >>> import json, os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "scheduler.json")
+    ...     with open(path, "w") as fh:
+    ...         json.dump({"address": "tcp://10.0.0.5:8786", "workers": {}}, fh)
+    ...     scheduler_address(path)
+    'tcp://10.0.0.5:8786'
+    >>> scheduler_address("tcp://127.0.0.1:8786")
+    'tcp://127.0.0.1:8786'
+    """
     text = str(scheduler)
     if text.endswith(".json") and Path(text).is_file():
         try:
@@ -62,7 +100,47 @@ def scheduler_address(scheduler):
 
 def check_scheduler(scheduler, timeout=None):
     """Raise :class:`SweepError` unless a dask scheduler answers at ``scheduler`` (TCP addresses;
-    other protocols are left to dask)."""
+    other protocols are left to dask).
+
+    The address (see :func:`scheduler_address`) must be ``host:port``, ``tcp://host:port`` or
+    ``tls://host:port`` with a port in 1..65535; a ``tls://`` address needs dask's TLS settings
+    (:data:`TLS_SETTINGS`) and is then left to dask.  A TCP address is connected to, and the whole
+    handshake message a dask scheduler sends on accept must arrive within ``timeout`` and be one
+    (:func:`is_handshake`).
+
+    Parameters
+    ----------
+    scheduler : str or os.PathLike
+        A scheduler address or the path of a scheduler JSON file.
+    timeout : float, optional
+        The time allowed for the connection and the whole handshake [s]; default
+        :data:`HANDSHAKE_TIMEOUT`.
+
+    Returns
+    -------
+    str
+        The address checked (the one in the scheduler file for a file).
+
+    Raises
+    ------
+    SweepError
+        A malformed address, missing TLS settings, no connection, silence, or a peer that is not
+        a dask scheduler; one line.
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, "Connect to a scheduler" and "Launch Dask from a scheduler
+       file", https://distributed.dask.org/en/stable/client.html and
+       https://docs.dask.org/en/stable/deploying-cli.html
+
+    Examples
+    --------
+    >>> try:
+    ...     check_scheduler("tcp://localhost:99999")
+    ... except SweepError as exc:
+    ...     print(exc)
+    the dask scheduler address 'tcp://localhost:99999' is not host:port or tcp://host:port with a port in 1..65535
+    """
     timeout = HANDSHAKE_TIMEOUT if timeout is None else timeout
     address = scheduler_address(scheduler)
     shown = address if len(address) <= 80 else address[:80] + "..."
@@ -126,7 +204,37 @@ def _receive(sock, n, deadline, shown):
 
 def is_handshake(message):
     """Whether ``message`` (the bytes after the length) is a dask handshake: a frame count, the frame
-    lengths adding up to the rest, and a first frame that is a msgpack map."""
+    lengths adding up to the rest, and a first frame that is a msgpack map.
+
+    Dask's wire format: a little-endian 8-byte frame count ``n``, ``n`` 8-byte frame lengths, then
+    the frames; the first frame of the scheduler's greeting is a msgpack-encoded map.
+
+    Parameters
+    ----------
+    message : bytes
+        The message, without its leading 8-byte total length.
+
+    Returns
+    -------
+    bool
+        True if the bytes are such a message, False for anything else (never raises).
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, "Connect to a scheduler" and "Launch Dask from a scheduler
+       file", https://distributed.dask.org/en/stable/client.html and
+       https://docs.dask.org/en/stable/deploying-cli.html
+    .. [2] msgpack specification, https://github.com/msgpack/msgpack/blob/master/spec.md
+
+    Examples
+    --------
+    >>> import struct, msgpack
+    >>> head = msgpack.packb({"op": "handshake"})
+    >>> is_handshake(struct.pack("<QQ", 1, len(head)) + head)
+    True
+    >>> is_handshake(b"HTTP/1.1 400 Bad Request\\r\\n")
+    False
+    """
     import msgpack
 
     if len(message) < 16:

@@ -14,7 +14,31 @@ class SweepError(Exception):
 
 
 def exception_line(exc):
-    """``Type: message`` of an exception on one line (at most 200 characters of message)."""
+    """``Type: message`` of an exception on one line (at most 200 characters of message).
+
+    Runs of white space (new lines of a traceback-like message) become one space, so that a failed
+    point or batch is reported on one line of the log and in a result's string attributes.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception to describe.
+
+    Returns
+    -------
+    str
+        ``"<type name>: <message>"``, the message cut to 200 characters.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> exception_line(ValueError("bad\\n   value"))
+    'ValueError: bad value'
+    """
     return f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
 
 
@@ -24,7 +48,42 @@ class ReadFailure(Exception):
 
 
 def read_values(read):
-    """``read()`` (a value of a result being converted); its failure as :class:`ReadFailure`."""
+    """``read()`` (a value of a result being converted); its failure as :class:`ReadFailure`.
+
+    Converting a result (``screening export``) reads it chunk by chunk; an I/O error, a netCDF
+    ``RuntimeError`` or a codec's ``ValueError`` on a damaged chunk becomes a :class:`ReadFailure`
+    whose message is the reason, so that the command names the result it was reading.
+
+    Parameters
+    ----------
+    read : callable
+        Called with no argument; returns the value read.
+
+    Returns
+    -------
+    object
+        What ``read()`` returned.
+
+    Raises
+    ------
+    ReadFailure
+        When ``read()`` raised ``OSError``, ``RuntimeError`` or ``ValueError``.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> read_values(lambda: 42)
+    42
+    >>> try:
+    ...     read_values(lambda: int("damaged"))
+    ... except ReadFailure as exc:
+    ...     print(exc)
+    invalid literal for int() with base 10: 'damaged'
+    """
     try:
         return read()
     except (OSError, RuntimeError, ValueError) as exc:      # netCDF: RuntimeError; codecs: ValueError & co
@@ -39,7 +98,35 @@ def write_failure_reason(exc, path=None):
     """Why a write failed, on one line: the operating system's words when it gave any.
 
     The netCDF/HDF5 library reports a full disk as ``NetCDF: HDF error``; with the ``path`` written,
-    the free space of its file system is looked up and named (a full disk said as such)."""
+    the free space of its file system is looked up and named (a full disk said as such: less than
+    :data:`LOW_SPACE_BYTES` free).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception the write raised.
+    path : str or os.PathLike, optional
+        The file being written; its file system's free space [bytes] explains a ``NetCDF:`` error.
+
+    Returns
+    -------
+    str
+        The reason: the ``strerror`` of an ``OSError``, else the message (at most 200 characters),
+        completed with the free space for a netCDF error when ``path`` is given.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import errno
+    >>> write_failure_reason(OSError(errno.ENOSPC, "No space left on device"))
+    'No space left on device'
+    >>> write_failure_reason(RuntimeError("NetCDF:   HDF error"))
+    'NetCDF: HDF error'
+    """
     if isinstance(exc, OSError) and exc.strerror:
         return exc.strerror
     text = " ".join(str(exc).split())[:200]
@@ -65,7 +152,34 @@ _DISK_ERRNOS = frozenset(getattr(errno, name) for name in (
 def is_write_error(exc):
     """A failure of the disk (full, read-only, permission): an OS error on a file or with a file-system
     errno (not a network error of dask), or an error of the netCDF/HDF5 library (which reports a failed
-    write as ``RuntimeError: NetCDF: ...``)."""
+    write as ``RuntimeError: NetCDF: ...``).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception a write raised.
+
+    Returns
+    -------
+    bool
+        True for a failure of the disk (the sweep stops with the reason), False otherwise (a failed
+        task, retried or reported per batch).
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import errno
+    >>> is_write_error(OSError(errno.EROFS, "Read-only file system"))
+    True
+    >>> is_write_error(RuntimeError("NetCDF: HDF error"))
+    True
+    >>> is_write_error(ConnectionResetError(errno.ECONNRESET, "Connection reset by peer"))
+    False
+    """
     if isinstance(exc, OSError):
         return exc.filename is not None or exc.errno in _DISK_ERRNOS
     return str(exc).startswith("NetCDF:")

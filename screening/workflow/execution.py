@@ -31,13 +31,10 @@ from screening.workflow.errors import SweepError, exception_line
 from screening.workflow.grid import batch_point_models, point_values
 from screening.workflow.study import build_models, case_cutoff
 
-__all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "SPOT_HISTORIES", "SPOT_LINEAR", "solve_batch", "flag_points",
-           "batch_intensity", "batch_rocking_start", "solve_and_store_batch", "batch_trust", "batch_probabilities",
-           "wants_probabilities", "refused_batch", "failed_result", "spot_task", "escalation_task",
-           "submit_escalation", "sample_state", "spot_linear_names", "failed_spot", "submit_batch", "submit_spot",
-           "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers", "sees_folder", "warm_up",
-           "warm_up_monte_carlo", "dask_client", "LOCAL_CLUSTER_CONFIG", "START_METHOD_VARIABLE", "WORKER_SETUP",
-           "worker_start_method", "stop_workers"]
+__all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "SPOT_HISTORIES", "SPOT_LINEAR", "solve_batch", "batch_intensity",
+           "batch_rocking_start", "batch_trust", "batch_probabilities", "wants_probabilities", "failed_result",
+           "escalation_task", "sample_state", "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers",
+           "warm_up", "dask_client", "LOCAL_CLUSTER_CONFIG", "START_METHOD_VARIABLE", "WORKER_SETUP"]
 
 CONNECT_TIMEOUT = "15s"
 TASK_RETRIES = 2
@@ -69,6 +66,72 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     excitation holds a placeholder): status ``beyond_float_range``, NaN values, ``sl_trust`` untrusted.
     ``probabilities`` (:func:`wants_probabilities`): also the linearization's ``p_overturn``,
     ``p_overturn_se`` and, with ``fragility``, ``p_exceed_se`` (:func:`batch_probabilities`).
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block(s) of the batch (array fields over its points where swept).
+    foundation : screening.model.Foundation
+        The bed(s).
+    excitation : screening.excitations.Excitation
+        The ground motion model(s).
+    condensation : screening.condensation.Condensation
+        The condensation of the batch's case.
+    t_out : numpy.ndarray
+        Output times [s].
+    rtol : float
+        Relative tolerance of the moment integration [1].
+    max_steps : int
+        Most integration steps per point.
+    histories : tuple of str, optional
+        History variables to return.
+    fragility : screening.workflow.study.Fragility, optional
+        The ``[fragility]`` thresholds and method.
+    trust_models : dict, optional
+        ``{condensation: ErrorModel}`` of the trust rule (read here if None).
+    derived_inputs : tuple of str, optional
+        Per-point inputs to return (``("S0",)`` for a target PGA).
+    underivable : numpy.ndarray of bool, optional
+        Points whose ``S0`` could not follow from their target PGA.
+    cutoff : float, optional
+        Band limit of the ground motion [rad s-1].
+    probabilities : bool, optional
+        Also the linearization's probabilities.
+
+    Returns
+    -------
+    dict
+        ``{variable: array}`` flat over the batch (points, or points x time for histories), in the
+        units of :mod:`screening.solvers.outputs`.
+
+    Notes
+    -----
+    Per point, the covariance of rotation and rotational velocity follows the Lyapunov moment equation
+    :math:`\\dot{\\mathbf{C}} = \\mathbf{P}\\mathbf{C} + \\mathbf{C}\\mathbf{P}^\\top
+    + \\mathbb{E}[\\mathbf{v}\\mathbf{v}^\\top]`, eq. (45) in [1] (eq. (51) for filtered noise), with the
+    equivalent stiffness and damping of eqs. (35)-(36) in [1] (corrected, ``docs/method.md``) updated at
+    every step.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] screening documentation, "The module map", ``docs/architecture.md``.
+
+    Examples
+    --------
+    A batch task (the moment solver compiles on its first call, so this is shown, not run)::
+
+        out = solve_batch(block, foundation, excitation, condensation, study.times, study.rtol,
+                          study.max_steps, histories=())
+        out["peak_var_theta"]                     # [rad2], one per point
+
+    Its result holds the variables below (here those of a failed batch of two points, which the sweep
+    writes in its place, :func:`failed_result`):
+
+    >>> sorted(failed_result(2, 401, histories=()))[:6]
+    ['arias_intensity', 'min_k_eq', 'n_rejected', 'n_steps', 'p_rocking_start', 'peak_p_uplift']
     """
     probabilities = probabilities or fragility is not None
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
@@ -104,7 +167,54 @@ def flag_points(out, bad):
 def batch_intensity(excitation, t_out, n, cutoff=None):
     """The intensity measures of the ``n`` points of a batch (the ``intensity`` stage of
     :mod:`screening.solvers.outputs`: [m s-2, m s-2, m s-1]), band-limited to
-    ``cutoff`` [rad/s] (default: :func:`screening.analysis.intensity.ground_cutoff`)."""
+    ``cutoff`` [rad/s] (default: :func:`screening.analysis.intensity.ground_cutoff`).
+
+    Parameters
+    ----------
+    excitation : screening.excitations.Excitation
+        The ground motion model(s) of the batch.
+    t_out : array_like
+        Output times [s]; the last is the record length.
+    n : int
+        Points of the batch.
+    cutoff : float, optional
+        Band limit [rad s-1].
+
+    Returns
+    -------
+    dict
+        ``pga_median`` [m s-2] (median peak ground acceleration), ``rms_acceleration`` [m s-2] and
+        ``arias_intensity`` [m s-1], one value per point.
+
+    Notes
+    -----
+    Arias intensity :math:`I_a = \\frac{\\pi}{2g}\\int_0^T \\mathbb{E}[a^2]\\,dt` [1]; the median peak
+    by random vibration theory [2].
+
+    References
+    ----------
+    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press, Cambridge MA (1970) 438-483.
+    .. [2] D. M. Boore, "Simulation of ground motion using the stochastic method", Pure and Applied
+       Geophysics 160 (2003) 635-676. https://doi.org/10.1007/PL00012553
+    .. [3] screening documentation, "Intensity measures of the stochastic inputs", ``docs/intensity_measures.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.grid import batch_models, plan_batches
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
+    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
+    >>> condensation = study.cases[0].condensation_model
+    >>> t = np.linspace(0.0, 2.0, 41)                     # the first 2 s of the record
+    >>> measures = batch_intensity(excitation, t, 2)      # white noise, S0 = 1e-4 m2 s-3
+    >>> measures["rms_acceleration"].round(4), measures["arias_intensity"].round(5)
+    (array([0.12, 0.12]), array([0.00461, 0.00461]))
+    >>> round(float(np.pi / (2 * 9.81) * measures["rms_acceleration"][0] ** 2 * 2.0), 5)   # pi/(2g) rms^2 T
+    0.00461
+    """
     from screening.analysis.intensity import ground_cutoff, input_measures
 
     measures = input_measures(excitation, float(np.asarray(t_out)[-1]), ground_cutoff() if cutoff is None else cutoff)
@@ -116,7 +226,57 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
 def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, cutoff=None):
     """The uplift acceleration [m s-2] and the probability that rocking starts [1] of the ``n`` points of a
     batch (the ``rocking`` stage of :mod:`screening.solvers.outputs`), band-limited to the ground motion's
-    ``cutoff`` [rad/s] (default :func:`screening.analysis.intensity.ground_cutoff`: the band its PGA refers to)."""
+    ``cutoff`` [rad/s] (default :func:`screening.analysis.intensity.ground_cutoff`: the band its PGA refers to).
+
+    A bed the condensation cannot carry gives NaN (the solver flags the point).
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block(s).
+    foundation : screening.model.Foundation
+        The bed(s).
+    excitation : screening.excitations.Excitation
+        The ground motion model(s).
+    condensation : screening.condensation.Condensation
+        The case's condensation.
+    t_out : array_like
+        Output times [s]; the last is the record length.
+    n : int
+        Points of the batch.
+    cutoff : float, optional
+        Band limit [rad s-1].
+
+    Returns
+    -------
+    dict
+        ``uplift_acceleration`` [m s-2] and ``p_rocking_start`` [1], one value per point.
+
+    Notes
+    -----
+    :math:`p = 1 - \\exp(-\\int_0^T \\nu(a_{ul}, t)\\,dt)` with Rice's rate :math:`\\nu` of crossings of
+    :math:`\\pm a_{ul}` by the modulated ground acceleration [1], [2].
+
+    References
+    ----------
+    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+    .. [2] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.grid import batch_models, plan_batches
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
+    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
+    >>> condensation = study.cases[0].condensation_model
+    >>> start = batch_rocking_start(block, foundation, excitation, condensation, study.times, 2)
+    >>> start["uplift_acceleration"].round(3), start["p_rocking_start"].round(3)   # hardening bed rocks later
+    (array([0.533, 0.741]), array([0.501, 0.008]))
+    """
     from screening.analysis.intensity import ground_cutoff, rocking_start_probability
     from screening.analysis.probabilities import uplift_acceleration
 
@@ -150,6 +310,55 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, mo
     ``models``: ``{condensation: ErrorModel}`` (:func:`screening.analysis.error_model.shipped_model`), read
     once by the client and sent with the task: worker threads must not read netCDF while the client writes
     one (HDF5 is not thread-safe).  None reads the shipped model here.
+
+    Parameters
+    ----------
+    res : dict
+        The solver's arrays (``var_theta`` [rad2], points x time, when it returned histories).
+    block : screening.model.Block
+        The block(s).
+    foundation : screening.model.Foundation
+        The bed(s).
+    excitation : screening.excitations.Excitation
+        The ground motion model(s).
+    condensation : screening.condensation.Condensation
+        The case's condensation.
+    out : dict
+        The batch's summaries so far: ``status``, ``peak_p_uplift`` [1], ``min_k_eq`` [N m rad-1],
+        ``peak_var_theta`` [rad2], ``slenderness`` [rad].
+    t_out : array_like
+        Output times [s].
+    models : dict, optional
+        The error models per condensation.
+
+    Returns
+    -------
+    dict
+        ``sl_trust`` (:class:`~screening.status.Trust` codes), ``sl_error_low`` and ``sl_error_high``
+        [1]: the band of ``SL / MCS - 1`` of peak var_theta.
+
+    References
+    ----------
+    .. [1] screening documentation, "Trusting a point", ``docs/trust.md``.
+    .. [2] screening documentation, "The error atlas: how wrong the linearization is, over the whole
+       space", ``docs/error_atlas.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.grid import batch_models, plan_batches
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
+    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
+    >>> condensation = study.cases[0].condensation_model
+    >>> out = {"status": np.zeros(2, np.int8), "peak_p_uplift": np.array([0.0, 0.3]),
+    ...        "min_k_eq": np.array([900.0, 400.0]), "peak_var_theta": np.array([1e-7, 4e-6]),
+    ...        "slenderness": np.full(2, float(block.slenderness))}
+    >>> var_theta = np.linspace(0.0, 1e-7, study.times.size) * np.ones((2, 1))
+    >>> trust = batch_trust({"var_theta": var_theta}, block, foundation, excitation, condensation, out, study.times)
+    >>> trust["sl_trust"]                                 # trusted (0), check (1)
+    array([0, 1], dtype=int8)
     """
     from screening.analysis import error_model as em
     from screening.analysis.trust import error_model_trust, trust_indicators
@@ -184,6 +393,71 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
     ``[sl_error_low, sl_error_high]`` of ``SL / MCS - 1`` (both variances divided by ``1 + e``; the band stands
     for two standard errors each way), at the ``trusted`` points (the only ones where it is used); NaN elsewhere
     and where the band is not finite or reaches ``e <= -1``.
+
+    Parameters
+    ----------
+    res : dict
+        The solver's float64 histories (points x time): ``var_theta`` [rad2], ``var_theta_dot``
+        [rad2 s-2], ``cov_theta_theta_dot`` [rad2 s-1], ``c_eq`` [N m s rad-1], ``k_eq`` [N m rad-1], and
+        ``status``.
+    block : screening.model.Block
+        The block(s).
+    foundation : screening.model.Foundation
+        The bed(s).
+    excitation : screening.excitations.Excitation
+        The ground motion model(s).
+    out : dict
+        The batch's summaries: ``status``, ``sl_trust``, ``sl_error_low``, ``sl_error_high`` [1],
+        ``slenderness`` and ``theta_ul`` [rad] as the thresholds need.
+    t_out : array_like
+        Output times [s].
+    fragility : screening.workflow.study.Fragility, optional
+        The thresholds and the up-crossing method.
+
+    Returns
+    -------
+    dict
+        ``p_overturn``, ``p_overturn_se`` [1] per point; with ``fragility`` ``p_exceed`` and ``p_exceed_se``
+        (points x thresholds).
+
+    Notes
+    -----
+    The probability that :math:`|\\theta|` exceeds a level :math:`x` within the record, from the Gaussian
+    moments: Rice's up-crossing rate :math:`\\nu = \\frac{\\sigma_{\\dot\\theta}}{\\pi\\sigma_\\theta}
+    e^{-x^2/2\\sigma_\\theta^2}` of the two barriers [2], with Vanmarcke's bandwidth correction [3].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+    .. [3] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    Stationary moments, sigma_theta = 0.063 rad against atan(b/h) = 0.165 rad over 20 s:
+
+    >>> import numpy as np
+    >>> from screening.workflow.study import parse_study
+    >>> from screening.workflow.grid import batch_models, plan_batches
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
+    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
+    >>> condensation = study.cases[0].condensation_model
+    >>> out = {"status": np.zeros(2, np.int8), "peak_p_uplift": np.array([0.0, 0.3]),
+    ...        "min_k_eq": np.array([900.0, 400.0]), "peak_var_theta": np.array([1e-7, 4e-6]),
+    ...        "slenderness": np.full(2, float(block.slenderness))}
+    >>> nt = study.times.size
+    >>> res = {"status": np.zeros(2, np.int8), "var_theta": np.full((2, nt), 4e-3),
+    ...        "var_theta_dot": np.full((2, nt), 0.4), "cov_theta_theta_dot": np.zeros((2, nt)),
+    ...        "c_eq": np.full((2, nt), 5.0), "k_eq": np.full((2, nt), 1000.0)}
+    >>> out.update(sl_trust=np.array([0, 1], np.int8), sl_error_low=np.full(2, -0.1), sl_error_high=np.full(2, 0.1))
+    >>> p = batch_probabilities(res, block, foundation, excitation, out, study.times)
+    >>> p["p_overturn"].round(3), p["p_overturn_se"].round(3)       # a standard error at trusted points only
+    (array([0.735, 0.735]), array([0.056,   nan]))
     """
     from screening.analysis.fragility import linearized_exceedance
 
@@ -223,7 +497,30 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
 
 def wants_probabilities(study):
     """Whether the points of ``study`` carry ``p_overturn`` (and, with ``[fragility]``, ``p_exceed``) with
-    their standard errors and source: with ``[accuracy]`` or ``[fragility]``."""
+    their standard errors and source: with ``[accuracy]`` or ``[fragility]``.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    bool
+        True with an ``[accuracy]`` or a ``[fragility]`` table.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> with_fragility = text + "[fragility]\\nthresholds = [0.5]\\n"
+    >>> wants_probabilities(parse_study(text)), wants_probabilities(parse_study(with_fragility))
+    (False, True)
+    """
     return study.accuracy is not None or study.fragility is not None
 
 
@@ -235,7 +532,38 @@ def refused_batch(message):
 
 def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=(), probabilities=False):
     """Batch result for ``n`` points whose task failed: each declared variable's failed value (status
-    ``task_failed``, NaN values, zero counts, ``sl_trust`` untrusted)."""
+    ``task_failed``, NaN values, zero counts, ``sl_trust`` untrusted).
+
+    Parameters
+    ----------
+    n : int
+        Points of the batch.
+    nt : int
+        Output instants.
+    histories : tuple of str, optional
+        The stored histories.
+    fragility : screening.workflow.study.Fragility, optional
+        The ``[fragility]`` table (``p_exceed`` per threshold).
+    derived_inputs : tuple of str, optional
+        Per-point inputs of the study.
+    probabilities : bool, optional
+        Whether the points carry the probabilities.
+
+    Returns
+    -------
+    dict
+        ``{variable: array}`` shaped as :func:`solve_batch`'s result.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Status flags", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> failed = failed_result(2, 3)
+    >>> failed["status"], failed["peak_var_theta"], failed["sl_trust"], failed["var_theta"].shape
+    (array([-1, -1], dtype=int8), array([nan, nan]), array([2, 2], dtype=int8), (2, 3))
+    """
     n_thresholds = len(fragility.thresholds) if fragility is not None else 0
     return {o.name: o.failed_array(n, nt, n_thresholds)
             for o in selected(histories, derived_inputs, probabilities, fragility is not None)}
@@ -338,6 +666,70 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     motions (:func:`paired_escalation`); peak var_theta is then the two-fidelity estimate and the result
     carries the cheap run's per-sample peaks for the probabilities.  ``estimator`` says which estimate it is.
     ``progress``: as for :func:`spot_task`.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block at the point.
+    foundation : screening.model.Foundation
+        The bed.
+    excitation : screening.excitations.Excitation
+        The ground motion model.
+    condensation : screening.condensation.Condensation
+        The case's condensation (for a model that reads one).
+    samples : int
+        Monte Carlo samples.
+    model : str
+        A registered Monte Carlo model's name.
+    t_end : float
+        Record length [s].
+    dt : float
+        Output step [s].
+    seed : int
+        Seed of the ground motions.
+    cheap : tuple, optional
+        ``(model, condensation, samples)`` of the paired cheaper model.
+    progress : tuple, optional
+        ``(topic, run)`` of the worker events.
+
+    Returns
+    -------
+    dict
+        ``peak_var_theta`` [rad2], ``peak_var_theta_dot`` [rad2 s-2] and their standard errors,
+        ``cpu_time`` [s], ``samples``, ``n_steps``, ``n_grid``, ``rodas``, the sample counts, per-sample
+        ``peak_abs_theta`` [rad] and ``sample_state``, ``estimator``, ``cheap_samples``, ``correlation``.
+
+    Notes
+    -----
+    The peak of the sample variance :math:`\\hat\\sigma^2_\\theta(t)` over the output times, with the
+    standard error of the variance estimate at that time.
+
+    References
+    ----------
+    .. [1] screening documentation, "Monte Carlo numerics", ``docs/montecarlo_numerics.md``.
+    .. [2] B. Peherstorfer, K. Willcox and M. Gunzburger, "Optimal model management for multifidelity
+       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5) (2016) A3163-A3194.
+       https://doi.org/10.1137/15M1046472
+
+    Examples
+    --------
+    The peaks are taken from the Monte Carlo run's histories (here a stand-in for the run, which
+    compiles the integrators on its first call):
+
+    >>> from unittest import mock
+    >>> import numpy as np
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> study = parse_study(text)
+    >>> block, foundation, excitation = build_models(study.cases[0], {"eps": 6e7}, study.t_end)  # one point
+    >>> condensation = study.cases[0].condensation_model
+    >>> run = {"var_theta": np.array([0.0, 2e-4, 1e-4]), "var_theta_se": np.array([0.0, 1e-5, 1e-5]),
+    ...        "var_theta_dot": np.array([0.0, 3e-2, 1e-2]), "var_theta_dot_se": np.array([0.0, 2e-3, 1e-3]),
+    ...        "n_grid": 1000, "n_overturned": 0, "n_diverged": 0, "n_used": 8, "n_steps": 5000,
+    ...        "peak_abs_theta": np.full(8, 0.02), "sample_state": np.zeros(8, np.int8)}
+    >>> with mock.patch(f"{__name__}.spot_task", return_value=run):
+    ...     out = escalation_task(block, foundation, excitation, condensation, 8, "coupled", 0.1, 0.05, seed=0)
+    >>> out["peak_var_theta"], out["peak_var_theta_se"], out["samples"]
+    (np.float64(0.0002), np.float64(1e-05), np.int32(8))
     """
     from screening.solvers.montecarlo import choose_integrator
     from screening.status import EscalationEstimator
@@ -390,7 +782,32 @@ def _sample_events(progress):
 
 
 def sample_state(overturned, diverged):
-    """Per-sample :class:`~screening.status.SampleState` codes from the flags of a Monte Carlo run."""
+    """Per-sample :class:`~screening.status.SampleState` codes from the flags of a Monte Carlo run.
+
+    A diverged sample is ``diverged_or_failed`` even if also flagged overturned.
+
+    Parameters
+    ----------
+    overturned : array_like of bool
+        Per sample: it overturned.
+    diverged : array_like of bool
+        Per sample: its integration diverged or failed.
+
+    Returns
+    -------
+    numpy.ndarray of int8
+        ``standing`` (0), ``overturned`` (1) or ``diverged_or_failed`` (2) per sample.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
+       ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> sample_state([False, True, False], [False, False, True])
+    array([0, 1, 2], dtype=int8)
+    """
     state = np.full(np.shape(overturned), SampleState.standing, dtype=np.int8)
     state[np.asarray(overturned, dtype=bool)] = SampleState.overturned
     state[np.asarray(diverged, dtype=bool)] = SampleState.diverged_or_failed
@@ -452,7 +869,32 @@ DEFAULT_WORKERS = 2
 
 
 def default_workers(study):
-    """Local workers for ``study`` when none are asked for: 0 (in-process) for a small study, else 2."""
+    """Local workers for ``study`` when none are asked for: 0 (in-process) for a small study, else 2.
+
+    Small: at most :data:`IN_PROCESS_MAX_POINTS` points and at most one Monte Carlo spot check
+    (starting worker processes would cost more than the work).
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    int
+        0 or :data:`DEFAULT_WORKERS`.
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, https://distributed.dask.org/en/stable/
+    .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> default_workers(parse_study(text))            # two points: in this process
+    0
+    """
     spots = 0 if study.mcs is None else (study.mcs.count if study.mcs.points == "auto" else len(study.mcs.points))
     return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
 
@@ -463,7 +905,31 @@ def sees_folder(path):
 
 
 def warm_up():
-    """Import the solver and load its compiled code on a worker; returns the time taken [s]."""
+    """Import the solver and load its compiled code on a worker; returns the time taken [s].
+
+    Solves one point (the paper's block on its bed under white noise) for 0.1 s, so that the
+    compiled moment solver is loaded (from numba's cache, or compiled) before the first batch.
+
+    Returns
+    -------
+    float
+        The time taken [s].
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, https://distributed.dask.org/en/stable/
+    .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
+    .. [3] Numba documentation, "Notes on caching",
+       https://numba.readthedocs.io/en/stable/developer/caching.html
+
+    Examples
+    --------
+    >>> from unittest import mock
+    >>> with mock.patch(f"{__name__}.solve_moments") as solve:       # not compiled here
+    ...     seconds = warm_up()
+    >>> solve.call_count, solve.call_args.args[3].tolist()
+    (1, [0.0, 0.1])
+    """
     start = time.perf_counter()
     from screening.model import Block, Foundation
     from screening.model.excitation import WhiteNoise
@@ -495,7 +961,42 @@ def dask_client(workers=2, scheduler=None, client=None):
     A client made here is never dask's default: the run submits to it by name, and a caller's later
     dask or xarray work in the same process does not go to a cluster this function has closed (with
     some library versions a closed default client made xarray's next ``to_netcdf`` fail with "IOLoop
-    is closed" and the one after it hang)."""
+    is closed" and the one after it hang).
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes of a new local cluster; 0: one worker thread in this process.
+    scheduler : str or os.PathLike, optional
+        Address or scheduler file of an existing cluster (checked first,
+        :func:`~screening.workflow.connect.check_scheduler`).
+    client : distributed.Client, optional
+        A client to use as it is (not closed).
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+        Yields the ``distributed.Client``.
+
+    Raises
+    ------
+    SweepError
+        A scheduler that cannot be reached or has no workers, or a local cluster that cannot start.
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, https://distributed.dask.org/en/stable/
+    .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    A given client is used as it is:
+
+    >>> mine = object()
+    >>> with dask_client(client=mine) as c:
+    ...     c is mine
+    True
+    """
     if client is not None:
         yield client
         return

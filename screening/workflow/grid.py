@@ -48,7 +48,30 @@ class Batch:
 
 
 def holds_histories(study):
-    """Whether a task of ``study`` holds time histories in memory: stored, or needed for ``[fragility]``."""
+    """Whether a task of ``study`` holds time histories in memory: stored, or needed for ``[fragility]``.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    bool
+        True if ``[output]`` stores histories or ``[fragility]`` is given.
+
+    References
+    ----------
+    .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> holds_histories(study)                        # [output] stores all six histories by default
+    True
+    """
     return bool(study.output.stored) or study.fragility is not None
 
 
@@ -63,6 +86,32 @@ def default_batch_size(study, n_workers, target=None):
     whole rows if possible, the number of rows (within 25 %) that ends the run most evenly.
     Never across a case, never more than the arrays over the output times of one task fit in
     :data:`~screening.limits.TASK_BYTES` (6 histories per point, or one envelope).
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    n_workers : int
+        Worker processes (or threads) of the cluster.
+    target : int, optional
+        The batch size aimed at (see above for the defaults).
+
+    Returns
+    -------
+    int
+        Points per batch, at least 1.
+
+    References
+    ----------
+    .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> default_batch_size(study, n_workers=2)        # 6 points: at least 2 batches per worker
+    2
     """
     per_case = study.points_per_case
     workers = max(int(n_workers), 1)
@@ -103,7 +152,37 @@ def _makespan(study, size, workers):
 
 
 def plan_batches(study, batch_size):
-    """Cut the grid into :class:`Batch` es of at most ``batch_size`` points, case by case."""
+    """Cut the grid into :class:`Batch` es of at most ``batch_size`` points, case by case.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    batch_size : int
+        Most points per batch, at least 1.
+
+    Returns
+    -------
+    list of Batch
+        The batches in order; each holds the flat C-order indices ``lo <= i < hi`` of one case.
+
+    Raises
+    ------
+    ValueError
+        ``batch_size`` below 1.
+
+    References
+    ----------
+    .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> [(b.lo, b.hi) for b in plan_batches(study, 4)]
+    [(0, 4), (4, 6)]
+    """
     if batch_size < 1:
         raise ValueError(f"parameter 'batch_size' must be an integer >= 1 (got {batch_size!r})")
     per_case = study.points_per_case
@@ -120,6 +199,29 @@ def hyperslabs(lo, hi, shape):
 
     Returns a list of ``(slices, a, b)``: ``array[slices]`` holds the flat points
     ``a <= i < b`` in order; the pieces cover ``[lo, hi)`` exactly.
+
+    Parameters
+    ----------
+    lo, hi : int
+        The flat range, ``0 <= lo <= hi <= prod(shape)``.
+    shape : tuple of int
+        The array's shape.
+
+    Returns
+    -------
+    list of tuple
+        ``(slices, a, b)`` per hyperslab, in C order.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> grid = np.arange(6).reshape(2, 3)
+    >>> [grid[slices].ravel().tolist() for slices, a, b in hyperslabs(1, 5, grid.shape)]
+    [[1, 2], [3, 4]]
     """
     if not shape:
         return [((), lo, hi)] if hi > lo else []
@@ -144,7 +246,32 @@ def hyperslabs(lo, hi, shape):
 
 
 def batch_values(study, batch):
-    """Swept parameter values of the points of ``batch`` (dict of 1-d arrays)."""
+    """Swept parameter values of the points of ``batch`` (dict of 1-d arrays).
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    batch : Batch
+        A batch of :func:`plan_batches`.
+
+    Returns
+    -------
+    dict
+        ``{swept parameter: values}``, one value per point of the batch, in the parameter's SI unit.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> batch_values(study, plan_batches(study, 4)[1])["S0"]      # points 4, 5: eps = 6e7 m-2
+    array([0.0001, 0.001 ])
+    """
     per_case = study.points_per_case
     flat = np.arange(batch.lo - batch.case * per_case, batch.hi - batch.case * per_case)
     if not study.swept_dims:
@@ -154,20 +281,104 @@ def batch_values(study, batch):
 
 
 def point_values(study, index):
-    """``(case, values)`` at grid index tuple ``index`` (swept values as floats)."""
+    """``(case, values)`` at grid index tuple ``index`` (swept values as floats).
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    index : tuple of int
+        The grid index (leading the case index when the study has cases).
+
+    Returns
+    -------
+    case : int
+        The case index (0 without cases).
+    values : dict
+        ``{swept parameter: value}`` in the parameter's SI unit.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> point_values(study, (1, 2))
+    (0, {'eps': 60000000.0, 'S0': 0.001})
+    """
     case = index[0] if study.has_case_dim else 0
     swept = index[1:] if study.has_case_dim else index
     return case, {name: float(study.sweeps[name][i]) for name, i in zip(study.swept_dims, swept)}
 
 
 def batch_models(study, batch):
-    """``(block, foundation, excitation)`` with array fields for the points of ``batch``."""
+    """``(block, foundation, excitation)`` with array fields for the points of ``batch``.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    batch : Batch
+        A batch of :func:`plan_batches`.
+
+    Returns
+    -------
+    block : Block
+        The rigid block (SI fields, arrays over the batch where swept).
+    foundation : Foundation
+        The bed.
+    excitation : Excitation
+        The ground motion model.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 4)[0])
+    >>> foundation.eps, excitation.S0
+    (array([       0.,        0.,        0., 60000000.]), array([1.e-05, 1.e-04, 1.e-03, 1.e-05]))
+    """
     return build_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
 
 def batch_point_models(study, batch):
     """:func:`batch_models` and the points whose ``S0`` cannot follow from a target PGA
-    (:func:`~screening.workflow.config.build_point_models`): ``(block, foundation, excitation, underivable)``."""
+    (:func:`~screening.workflow.config.build_point_models`): ``(block, foundation, excitation, underivable)``.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    batch : Batch
+        A batch of :func:`plan_batches`.
+
+    Returns
+    -------
+    tuple
+        ``(block, foundation, excitation, underivable)``; ``underivable`` flags the points whose target
+        PGA [m s-2] gives no ``S0`` (False when the study gives ``S0`` itself).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> block, foundation, excitation, underivable = batch_point_models(study, plan_batches(study, 4)[0])
+    >>> bool(underivable)                               # S0 given: nothing to derive
+    False
+    """
     return build_point_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
 
@@ -180,6 +391,35 @@ def select_spots(study, status, peak_p_uplift):
     ``top x (count - k) / count`` (``k = 1 .. count - 1``; ``top`` the highest uplift), each preferring,
     among the points within 0.05 of its level, a block/bed not yet visited (so that softening and
     hardening beds both get a check).  ``status`` and ``peak_p_uplift`` are flat arrays over the grid.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study (its ``[mcs]`` table).
+    status : numpy.ndarray
+        :class:`~screening.status.PointStatus` per point, flat over the grid.
+    peak_p_uplift : numpy.ndarray
+        Peak probability of uplift [1] per point, flat over the grid.
+
+    Returns
+    -------
+    list of tuple
+        The grid index of each spot point (empty without ``[mcs]``).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> text += '[mcs]\\npoints = "auto"\\ncount = 2\\nsamples = 100\\n'
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> uplift = np.array([0.1, 0.5, 0.2, 0.3, 0.9, 0.0])
+    >>> select_spots(study, np.zeros(6, dtype=np.int8), uplift)   # the highest uplift, then near 0.45
+    [(1, 1), (0, 1)]
     """
     spec = study.mcs
     if spec is None:
@@ -228,6 +468,34 @@ def parameter_table(study):
     non-swept numeric parameters to arrays over cases (NaN where one does not apply),
     ``labels``/``case_labels`` do the same for ``contact``, ``condensation``, ``excitation`` and
     ``envelope``.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    constants : dict
+        ``{name: value}`` of the parameters shared by every case, in SI units (``I_cm`` [kg m2]
+        computed when not given).
+    per_case : dict
+        ``{name: array over cases}``.
+    labels, case_labels : dict
+        The same for the model names.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
+    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
+    >>> constants, per_case, labels, case_labels = parameter_table(study)
+    >>> constants["k"], round(constants["I_cm"], 4), labels["contact"], per_case
+    (28900000.0, 0.131, 'hunt_crossley', {})
     """
     names = [n for n in PARAMETERS if n not in study.sweeps]
     values = {}
@@ -254,7 +522,30 @@ def parameter_table(study):
 
 
 def history_chunks(shape, nt):
-    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values)."""
+    """netCDF chunks of a history on grid ``shape``: ``(1, ..., n_last, nt)`` (at most 2**18 values).
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The grid's shape.
+    nt : int
+        Output instants.
+
+    Returns
+    -------
+    tuple of int
+        The chunk shape of a ``grid x t`` history.
+
+    References
+    ----------
+    .. [1] Unidata, "NetCDF Users Guide: Improving Performance with Chunking",
+       https://docs.unidata.ucar.edu/nug/current/netcdf_perf_chunking.html
+
+    Examples
+    --------
+    >>> history_chunks((2, 3), 401), history_chunks((10, 1000), 401)     # 653 x 401 < 2**18 values
+    ((1, 3, 401), (1, 653, 401))
+    """
     if not shape:
         return (nt,)
     last = min(shape[-1], max(1, 2**18 // nt))

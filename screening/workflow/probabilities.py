@@ -27,8 +27,7 @@ from screening.analysis.probabilities import choose_sources, monte_carlo_source,
 from screening.solvers import mc_registry
 from screening.status import EscalationEstimator, EscalationModel, PointStatus, ProbabilitySource, SampleState
 
-__all__ = ["CORRECTION_HISTORIES", "monte_carlo_runs", "levels_at", "corrected_estimates", "finish_probabilities",
-           "probabilities_line"]
+__all__ = ["CORRECTION_HISTORIES", "levels_at", "probabilities_line"]
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
@@ -83,7 +82,38 @@ def paired_probabilities(peaks, state, paired, levels):
 
 def levels_at(study, theta_ul, slenderness):
     """Rotations [rad] of ``p_overturn`` and of each ``[fragility]`` threshold at points with these angles
-    (points x (1 + thresholds))."""
+    (points x (1 + thresholds)).
+
+    Overturning is counted at the slenderness angle :math:`\\alpha = \\arctan(b/h)`; a ``[fragility]``
+    threshold :math:`x` is the rotation :math:`x` itself, or :math:`x\\,\\alpha` or
+    :math:`x\\,\\theta_{ul}` with ``relative_to = "slenderness"`` or ``"theta_ul"``.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study (its ``[fragility]`` table, if any).
+    theta_ul : array_like
+        The uplift angle of each point [rad].
+    slenderness : array_like
+        The slenderness angle of each point [rad].
+
+    Returns
+    -------
+    numpy.ndarray
+        Rotations [rad], shape ``(points, 1 + thresholds)``: the overturning angle, then each threshold.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY + '[fragility]\\nthresholds = [0.5, 1.0]\\nrelative_to = "slenderness"\\n'
+    >>> levels_at(parse_study(text), theta_ul=[0.01], slenderness=[0.16])
+    array([[0.16, 0.08, 0.16]])
+    """
     cols = [np.asarray(slenderness, dtype=float)]
     frag = study.fragility
     for threshold in (frag.thresholds if frag is not None else ()):
@@ -177,5 +207,27 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
 
 
 def probabilities_line(counts):
-    """One line: where the points' p_overturn / p_exceed come from."""
+    """One line: where the points' p_overturn / p_exceed come from.
+
+    Parameters
+    ----------
+    counts : dict
+        Points per source name (``p_source``'s ``flag_meanings``), as the sweep's probability stage
+        returns them.
+
+    Returns
+    -------
+    str
+        The line of the run's log.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> probabilities_line({"monte_carlo_coupled": 3, "linearization_gaussian": 97})
+    'probabilities (p_overturn, p_exceed) by source: monte_carlo_coupled 3, linearization_gaussian 97'
+    """
     return "probabilities (p_overturn, p_exceed) by source: " + ", ".join(f"{name} {k}" for name, k in counts.items())

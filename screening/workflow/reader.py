@@ -8,7 +8,7 @@ from pathlib import Path
 from screening.workflow.errors import SweepError, exception_line
 
 __all__ = ["ResultError", "REQUIRED_VARIABLES", "open_result", "layout_problem", "damaged_data_error",
-           "result_key", "VERIFY_BLOCK_BYTES", "verify_result"]
+           "result_key", "VERIFY_BLOCK_BYTES", "verify_result", "example_result"]
 
 
 class ResultError(SweepError):
@@ -21,7 +21,52 @@ REQUIRED_VARIABLES = ("status", "peak_var_theta", "peak_p_uplift", "min_k_eq")
 
 
 def open_result(path):
-    """Open a result file lazily with xarray; :class:`ResultError` if unreadable or foreign."""
+    """Open a result file lazily with xarray; :class:`ResultError` if unreadable or foreign.
+
+    A netCDF file or a zarr store (checked for completeness first) is opened without reading its
+    data; it must hold :data:`REQUIRED_VARIABLES` and a ``t`` dimension, in a layout
+    :func:`layout_problem` accepts.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The result: a netCDF file or a ``.zarr`` store.
+
+    Returns
+    -------
+    xarray.Dataset
+        The result, lazily loaded (close it when done).
+
+    Raises
+    ------
+    ResultError
+        No such file, an incomplete store, an unreadable file or one that is not a screening result.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 "Flags",
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "result.nc")
+    ...     result.to_netcdf(path)
+    ...     with open_result(path) as ds:
+    ...         print(dict(ds.sizes), ds["status"].attrs["flag_meanings"])
+    ...     xr.Dataset({"x": ("t", [1.0])}).to_netcdf(os.path.join(folder, "other.nc"))
+    ...     try:
+    ...         open_result(os.path.join(folder, "other.nc"))
+    ...     except ResultError as exc:
+    ...         print(str(exc)[len(folder) + 1:])
+    {'eps': 2, 't': 3} ok failed
+    other.nc: not a screening sweep result (missing status, peak_var_theta, peak_p_uplift, min_k_eq)
+    """
     import xarray as xr
 
     from screening.workflow.zarrfile import is_zarr_store, open_zarr_result, store_problem
@@ -55,7 +100,33 @@ def layout_problem(ds):
     has at most :data:`~screening.limits.MAX_POINTS_CEILING` points, ``t`` has at least
     one instant and at most :data:`~screening.limits.MAX_TIMES`, every history is
     ``grid x t`` and every summary ``grid``, and ``status`` carries integer ``flag_values`` with one
-    word of ``flag_meanings`` each.
+    word of ``flag_meanings`` each (CF flags, [2]).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An opened result.
+
+    Returns
+    -------
+    str
+        The first problem found, or ``""`` for a sound layout.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 "Flags",
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> layout_problem(result)
+    ''
+    >>> layout_problem(result.assign(status=result["status"].astype(float)))
+    'status is not an integer variable (float64)'
     """
     import numpy as np
 
@@ -94,12 +165,67 @@ def layout_problem(ds):
 
 def damaged_data_error(path, exc):
     """The :class:`ResultError` for a result whose data cannot be read (netCDF/HDF5 report damaged
-    chunks as ``RuntimeError``) although its header could."""
+    chunks as ``RuntimeError``) although its header could.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The result file.
+    exc : BaseException
+        The error reading its data raised.
+
+    Returns
+    -------
+    ResultError
+        The error to raise, its message on one line.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> print(damaged_data_error("result.nc", RuntimeError("NetCDF: HDF error")))
+    result.nc: cannot read the data of the result file, it is damaged (RuntimeError: NetCDF: HDF error)
+    """
     return ResultError(f"{path}: cannot read the data of the result file, it is damaged ({exception_line(exc)})")
 
 
 def result_key(path):
-    """The ``study_sha256`` attribute of an existing result file (or zarr store), or ``None``."""
+    """The ``study_sha256`` attribute of an existing result file (or zarr store), or ``None``.
+
+    The key is the hash of the study text, the package version and the result layout
+    (:attr:`Study.key <screening.workflow.study.Study.key>`): a result with the study's key is
+    reused rather than computed again.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A netCDF file or a zarr store.
+
+    Returns
+    -------
+    str or None
+        The key, or None when the file is missing, unreadable or has no key.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "result.nc")
+    ...     result.to_netcdf(path)
+    ...     result_key(path), result_key(os.path.join(folder, "missing.nc"))
+    ('ab12', None)
+    """
     import netCDF4
 
     from screening.workflow.zarrfile import is_zarr_store, read_attrs
@@ -128,6 +254,36 @@ def verify_result(path, study):
     grid and time dimensions must have the study's sizes, every required variable must
     be there, and every data chunk must decompress (damaged chunks raise in netCDF/HDF5).  The
     data is read in blocks of about :data:`VERIFY_BLOCK_BYTES` along the first dimension.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A netCDF file or a zarr store.
+    study : screening.workflow.study.Study
+        The study the result should hold.
+
+    Returns
+    -------
+    str or None
+        The reason, or None when the result can be reused.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "result.nc")
+    ...     result.to_netcdf(path)
+    ...     verify_result(path, parse_study(text))            # 20 s at 0.05 s: 401 instants
+    "its dimension 't' does not have the study's size 401"
     """
     import netCDF4
     import numpy as np
@@ -161,3 +317,41 @@ def verify_result(path, study):
     except (OSError, RuntimeError, ValueError, IndexError, TypeError, KeyError) as exc:
         return f"its data cannot be read ({exception_line(exc)})"
     return None
+
+
+def example_result():
+    """A two-point result in memory: the smallest layout :func:`open_result` accepts, for examples.
+
+    The grid is the two beds of :data:`~screening.workflow.study.EXAMPLE_STUDY` (``eps`` = 0 and 6e7
+    [m-2]) with three output instants and the required variables only (:data:`REQUIRED_VARIABLES`);
+    the values are made up, not computed.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``status`` (CF flags ``ok`` / ``failed``), ``peak_var_theta`` [rad2], ``peak_p_uplift`` [1] and
+        ``min_k_eq`` [N m rad-1] on ``eps`` [m-2]; ``t`` [s]; the global attribute ``study_sha256``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 "Flags",
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> result = example_result()
+    >>> dict(result.sizes), layout_problem(result), result["peak_var_theta"].attrs["units"]
+    ({'eps': 2, 't': 3}, '', 'rad2')
+    """
+    import numpy as np
+    import xarray as xr
+
+    flags = {"flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "ok failed"}
+    return xr.Dataset(
+        {"status": ("eps", np.zeros(2, dtype=np.int8), flags),
+         "peak_var_theta": ("eps", [1e-6, 4e-6], {"units": "rad2"}),
+         "peak_p_uplift": ("eps", [0.1, 0.3], {"units": "1"}),
+         "min_k_eq": ("eps", [900.0, 700.0], {"units": "N m rad-1"})},
+        coords={"eps": ("eps", [0.0, 6e7], {"units": "m-2"}), "t": ("t", [0.0, 0.05, 0.1], {"units": "s"})},
+        attrs={"study_sha256": "ab12"})

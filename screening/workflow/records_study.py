@@ -18,7 +18,43 @@ __all__ = ["load_record_study", "pick_case", "block_and_foundation"]
 
 def load_record_study(path):
     """``(study, records)``: a study file read for a record analysis — its ``[records]`` table (``None``
-    if absent) taken out, and the ``[excitation]`` table optional (the records are the input)."""
+    if absent) taken out, and the ``[excitation]`` table optional (the records are the input).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML study file.
+
+    Returns
+    -------
+    study : Study
+        The validated study (a white-noise excitation stands in when the file has none; record
+        analyses do not use it).
+    records : dict or None
+        The raw ``[records]`` table, validated by the command that reads it.
+
+    Raises
+    ------
+    StudyError
+        An unreadable file, invalid TOML, a ``records`` key that is not a table, or an invalid study.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.workflow.study import EXAMPLE_STUDY
+    >>> text = EXAMPLE_STUDY + '[records]\\nfiles = ["el_centro.AT2"]\\n'
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "bed.toml")
+    ...     with open(path, "w") as fh:
+    ...         _ = fh.write(text)
+    ...     study, records = load_record_study(path)
+    >>> study.dims, records
+    (('eps',), {'files': ['el_centro.AT2']})
+    """
     from screening.workflow.study import study_from_tables
 
     text = read_study_text(path)
@@ -35,7 +71,35 @@ def load_record_study(path):
 
 
 def pick_case(study, case=None):
-    """The :class:`~screening.workflow.config.Case` named ``case`` (the only one when ``None``)."""
+    """The :class:`~screening.workflow.config.Case` named ``case`` (the only one when ``None``).
+
+    Parameters
+    ----------
+    study : Study
+        A validated study.
+    case : str, optional
+        The case's name (a ``[[case]]`` table's ``name``); may be omitted when the study has one case.
+
+    Returns
+    -------
+    Case
+        The chosen configuration.
+
+    Raises
+    ------
+    StudyError
+        No such case, or several cases and none chosen (the message lists them).
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> pick_case(parse_study(text)).contact
+    'hunt_crossley'
+    """
     if case is None:
         if len(study.cases) > 1:
             names = ", ".join(repr(c.name) for c in study.cases)
@@ -52,6 +116,42 @@ def block_and_foundation(study, case=None, overrides=None):
 
     Swept block/bed parameters must be fixed in ``overrides`` (name -> value); swept excitation
     parameters are ignored (the record is the excitation).
+
+    Parameters
+    ----------
+    study : Study
+        A validated study.
+    case : str, optional
+        The case's name (see :func:`pick_case`).
+    overrides : dict, optional
+        Values of block and bed parameters (SI units, as in the study file: ``{"eps": 6e7}`` [m-2]);
+        every swept block or bed parameter must be given.
+
+    Returns
+    -------
+    block : Block
+        The rigid block.
+    foundation : Foundation
+        The bed (contact law and its parameters).
+    case : Case
+        The configuration chosen.
+
+    Raises
+    ------
+    StudyError
+        An unknown case, an override that is not a block or bed parameter, a swept parameter left
+        open, or values the models reject.
+
+    References
+    ----------
+    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> block, foundation, _ = block_and_foundation(parse_study(text), overrides={"eps": 6e7})
+    >>> block.b, foundation.k, foundation.eps
+    (0.035, 28900000.0, 60000000.0)
     """
     chosen = pick_case(study, case)
     overrides = dict(overrides or {})

@@ -118,7 +118,26 @@ from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, bu
                                        read_study_text, required, resolve_case, short_repr, table,
                                        time_table, title_and_description, type_name)
 
-__all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study"]
+__all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study",
+           "EXAMPLE_STUDY"]
+
+#: The smallest useful study, for examples: the paper's block (m = 8.67 kg, b = 0.035 m, h = 0.21 m) on a
+#: Hunt-Crossley bed (k = 2.89e7 N m-2, lam = 8.95e8 N s m-3) with eps swept over 0 and 6e7 m-2 (two
+#: points), under modulated white noise of S0 = 1e-4 m2 s-3 (default envelope, 20 s at 0.05 s).  The
+#: examples of the workflow's docstrings start from it (:func:`parse_study`).
+EXAMPLE_STUDY = """\
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = [0.0, 6e7]
+[excitation]
+kind = "white"
+S0 = 1e-4
+"""
 
 #: The Monte Carlo models a study may name (the registered ones, :mod:`screening.solvers.mc_registry`, and
 #: ``"auto"``: per point the cheapest one whose measured validity holds, :mod:`screening.solvers.model_choice`).
@@ -274,14 +293,89 @@ class Study:
 
 # ----------------------------------------------------------------------------- entry points
 def load_study(path):
-    """Read and validate a study file; raises :class:`StudyError` (also for unreadable files)."""
+    """Read and validate a study file; raises :class:`StudyError` (also for unreadable files).
+
+    Every table and key is checked before any work (docs/study.md lists them): a bad value is one line
+    naming the key and its allowed range.  The study's name is the file name without its suffix.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML study file.
+
+    Returns
+    -------
+    Study
+        The validated study: its swept parameters, cases, output times [s] and optional stages.
+
+    Raises
+    ------
+    StudyError
+        An unreadable file, invalid TOML or an invalid key or value (one line).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    .. [2] TOML v1.0.0 specification, https://toml.io/en/v1.0.0
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "bed.toml")
+    ...     with open(path, "w") as fh:
+    ...         _ = fh.write(text)
+    ...     study = load_study(path)
+    >>> study.name, study.dims, study.shape, study.t_end
+    ('bed', ('eps',), (2,), 20.0)
+    """
     text = read_study_text(path)
     path = os.fsdecode(path)
     return parse_study(text, name=Path(path).stem, source=str(path))
 
 
 def parse_study(text, name="study", source="<string>"):
-    """Validate study ``text`` (TOML) and return a :class:`Study`."""
+    """Validate study ``text`` (TOML) and return a :class:`Study`.
+
+    The same checks as :func:`load_study`, on text in memory.
+
+    Parameters
+    ----------
+    text : str
+        The study, in TOML.
+    name : str, optional
+        The study's name (the result's default title and file stem).
+    source : str, optional
+        Where the text came from, named in error messages.
+
+    Returns
+    -------
+    Study
+        The validated study.
+
+    Raises
+    ------
+    StudyError
+        Invalid TOML or an invalid key or value (one line naming it).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    .. [2] TOML v1.0.0 specification, https://toml.io/en/v1.0.0
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> study = parse_study(text, name="bed")
+    >>> study.dims, study.coordinate("eps").tolist(), len(study.times)
+    (('eps',), [0.0, 60000000.0], 401)
+    >>> try:
+    ...     parse_study(text.replace("b = 0.035", "b = -1"))
+    ... except StudyError as exc:
+    ...     print(exc)
+    <string>: block.b: must be a finite number >= 1e-06 and <= 1000 (got -1.0)
+    """
     return parse_toml(text, source, lambda raw: study_from_tables(raw, text, name, source))
 
 

@@ -95,23 +95,91 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
               progress=True, log=None, on_batch=None, complevel=COMPLEVEL):
     """Run ``study`` on dask and write the result file ``out``; returns a :class:`SweepReport`.
 
+    The grid is cut into batches of points, one dask task each: the moment equations of the
+    stochastic linearization are solved at every point of a batch and its per-point summaries (and
+    histories, as ``[output]`` asks) written into ``out``, all or none.  Then come the optional stages:
+    Monte Carlo spot checks (``[mcs]``), the escalation of untrusted points (``[accuracy]``) and the
+    probabilities (``[fragility]``).  A result of the same study is reused; an interrupted run resumes
+    from its finished batches (kept in ``<out>.partial/``).  Bad arguments raise before any work.
+
     Parameters
     ----------
-    study : :class:`screening.workflow.study.Study`.
-    out : path of the result, a netCDF file or (suffix ``.zarr``) a zarr store written by the workers;
+    study : screening.workflow.study.Study
+        The validated study (:func:`~screening.workflow.study.load_study`).
+    out : str or os.PathLike
+        Path of the result, a netCDF file or (suffix ``.zarr``) a zarr store written by the workers;
         its folder must exist.
-    workers : worker processes of the local cluster (ignored with ``scheduler``/``client``); 0: in
-        this process (one worker thread); None: 0 for a small study, else 2
+    workers : int or None, optional
+        Worker processes of the local cluster (ignored with ``scheduler``/``client``); 0: in this
+        process (one worker thread); None: 0 for a small study, else 2
         (:func:`~screening.workflow.execution.default_workers`).
-    scheduler : address (``tcp://host:port``) or scheduler file of an existing dask cluster.
-    client : an existing ``distributed.Client`` to use (not closed).
-    batch_size : points per task (default :func:`~screening.workflow.grid.default_batch_size`; a
-        resumed run keeps the layout it started with).
-    force : recompute even if ``out`` holds the results of this study.
-    progress : show a progress bar on stderr.
-    log : callable receiving one-line messages (default: stderr).
-    on_batch : callable ``on_batch(batch)`` after each batch is saved (e.g. for monitoring).
-    complevel : compression level, 1 (fastest, default) to 9 (zlib; zstd for zarr); 0 stores uncompressed.
+    scheduler : str or os.PathLike, optional
+        Address (``tcp://host:port``) or scheduler file of an existing dask cluster.
+    client : distributed.Client, optional
+        An existing client to use (not closed).
+    batch_size : int, optional
+        Points per task, in 1..2**31-1 (default :func:`~screening.workflow.grid.default_batch_size`;
+        a resumed run keeps the layout it started with).
+    force : bool, optional
+        Recompute even if ``out`` holds the results of this study.
+    progress : bool, optional
+        Show a progress bar on stderr.
+    log : callable, optional
+        Receives one-line messages (default: stderr).
+    on_batch : callable, optional
+        ``on_batch(batch)`` after each batch is saved (e.g. for monitoring).
+    complevel : int, optional
+        Compression level, 1 (fastest, default) to 9 (zlib; zstd for zarr); 0 stores uncompressed.
+
+    Returns
+    -------
+    SweepReport
+        What the run did: the output path, whether it was reused, batches resumed and failed,
+        points per status and trust flag, the stages' summaries and timings [s].
+
+    Raises
+    ------
+    SweepError
+        A bad argument, an output path that cannot be written, a cluster that cannot be reached or
+        cannot run the solver, or a full or read-only disk (the finished batches are kept).
+
+    Notes
+    -----
+    Each point's response covariance :math:`\\mathbf{C}(t)` of rotation and rotational velocity
+    follows the Lyapunov moment equation of the equivalent linear system, eq. (45) in [1] (eq. (51)
+    for filtered noise),
+
+    .. math:: \\dot{\\mathbf{C}} = \\mathbf{P}\\mathbf{C} + \\mathbf{C}\\mathbf{P}^\\top
+              + \\mathbb{E}[\\mathbf{v}\\mathbf{v}^\\top],
+
+    with :math:`\\mathbf{P}` built from the equivalent stiffness and damping of eqs. (35)-(36) in [1]
+    (corrected, ``docs/method.md``), updated from the moments at every step; the result's layout is
+    described in [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    Arguments are checked before any cluster starts:
+
+    >>> import os, tempfile
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     try:
+    ...         run_sweep(parse_study(text), os.path.join(folder, "bed.nc"), batch_size=0)
+    ...     except SweepError as exc:
+    ...         print(exc)
+    batch size must be an integer in 1..2147483647 (got 0)
+
+    A run (in this process; numba compiles the solvers on the first run)::
+
+        report = run_sweep(parse_study(text), "bed.nc", workers=0, progress=False)
+        report.status_counts                      # points per status, e.g. {'ok': 2}
     """
     log = log or _stderr
     out = check_output_path(out, inputs=(study.source,))

@@ -58,8 +58,7 @@ from screening.workflow.grid import history_chunks, hyperslabs, parameter_table
 
 __all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
            "NetcdfFormat", "result_attributes", "band_limit_attribute",
-           "relative_peak_error", "history_chunks", "point_chunks", "write_region", "region_variables",
-           "ResultFile"]
+           "relative_peak_error", "history_chunks", "point_chunks", "region_variables", "ResultFile"]
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
 COMPLEVEL = 1
@@ -75,7 +74,44 @@ def check_output_path(out, inputs=()):
 
     ``out`` may not be one of the ``inputs`` (the study or result file a command reads, under any
     spelling or link), nor an existing file that is not a regular file (a FIFO or a device would
-    block or be clobbered)."""
+    block or be clobbered).  An existing ``.zarr`` store is replaced only if it is a finished result
+    screening wrote.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output path (a netCDF file, or a ``.zarr`` store).
+    inputs : iterable of str or os.PathLike, optional
+        The files or folders the command reads.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out``, checked.
+
+    Raises
+    ------
+    SweepError
+        One line: the output is an input, lies inside one, is a directory or a special file, or its
+        folder is missing or not writable.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     print(check_output_path(os.path.join(folder, "r.nc")).name)
+    ...     try:
+    ...         check_output_path(os.path.join(folder, "missing", "r.nc"))
+    ...     except SweepError as exc:
+    ...         print(str(exc).replace(folder, "FOLDER"))
+    r.nc
+    output folder FOLDER/missing does not exist
+    """
     out = Path(out)
     for path in inputs:
         if _same_file(out, path):
@@ -122,7 +158,40 @@ def _same_file(a, b):
 
 
 def result_attributes(study, created, batch_size):
-    """Global attributes of the result file of ``study`` (``created``: ISO time stamp)."""
+    """Global attributes of the result file of ``study`` (``created``: ISO time stamp).
+
+    The CF attributes (``Conventions``, title, history, source, comment), a summary and the study's
+    provenance: its name, file, text and key (``study_sha256``), grid dimensions, solver settings,
+    output times [s] and the batch size.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+    created : str
+        ISO 8601 time stamp of the run.
+    batch_size : int
+        Points per batch of the run.
+
+    Returns
+    -------
+    dict
+        ``{attribute: value}``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> study = parse_study(text, name="bed", source="bed.toml")
+    >>> attrs = result_attributes(study, "2026-11-26T03:00:00Z", batch_size=2)
+    >>> attrs["Conventions"], attrs["grid_dims"], attrs["t_end"], attrs["history"]
+    ('CF-1.8', 'eps', 20.0, '2026-11-26T03:00:00Z: screening run bed.toml (screening ...)')
+    """
     cmd = f"screening run {study.source}"
     return global_attributes(
         __version__,
@@ -155,13 +224,67 @@ def result_attributes(study, created, batch_size):
 
 def band_limit_attribute(study):
     """``{"band_limit_hz": f}``: the ground-motion band limit [Hz] the intensity measures of the result refer
-    to, when every case has the same; ``{}`` otherwise."""
+    to, when every case has the same; ``{}`` otherwise.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    dict
+        ``{"band_limit_hz": f}`` with ``f`` [Hz], or ``{}``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
+    >>> study = parse_study(text, name="bed", source="bed.toml")
+    >>> band_limit_attribute(study)                     # the default band limit
+    {'band_limit_hz': 25.0}
+    """
     limits = {float(case.params.get("band_limit_hz", math.nan)) for case in study.cases}
     return {"band_limit_hz": limits.pop()} if len(limits) == 1 and all(math.isfinite(v) for v in limits) else {}
 
 
 def relative_peak_error(linear, mcs):
-    """``(max_t linear - max_t mcs) / max_t mcs`` over the common output grid; NaN if undefined."""
+    """``(max_t linear - max_t mcs) / max_t mcs`` over the common output grid; NaN if undefined.
+
+    Parameters
+    ----------
+    linear : array_like
+        The linearization's history (e.g. ``var_theta`` [rad2]) on the output times.
+    mcs : array_like
+        The Monte Carlo history of the same quantity on the same times.
+
+    Returns
+    -------
+    float
+        The relative error of the peak [1]; NaN when either history has no finite value or the
+        Monte Carlo peak is not positive.
+
+    Notes
+    -----
+    .. math:: e = \\frac{\\max_t \\sigma^2_{SL}(t) - \\max_t \\sigma^2_{MC}(t)}{\\max_t \\sigma^2_{MC}(t)}
+
+    (NaN values ignored).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
+       ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> round(relative_peak_error([1.0, 1.2, 1.1], [1.0, 1.0, 0.9]), 12)     # 20 % too high
+    0.2
+    """
     linear, mcs = np.asarray(linear, dtype=float), np.asarray(mcs, dtype=float)
     if not (np.any(np.isfinite(linear)) and np.any(np.isfinite(mcs))):
         return math.nan
@@ -171,7 +294,30 @@ def relative_peak_error(linear, mcs):
 
 def point_chunks(shape, target=POINT_CHUNK):
     """Chunks of a per-point variable on ``shape``: C-order runs of about ``target`` points, so that
-    consecutive batches fill one chunk after the other."""
+    consecutive batches fill one chunk after the other.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The grid's shape.
+    target : int, optional
+        Points per chunk at most (default :data:`POINT_CHUNK`).
+
+    Returns
+    -------
+    tuple of int
+        The chunk shape: whole trailing dimensions while they fit, then a part of the next one.
+
+    References
+    ----------
+    .. [1] Unidata, "NetCDF Users Guide: Improving Performance with Chunking",
+       https://docs.unidata.ucar.edu/nug/current/netcdf_perf_chunking.html
+
+    Examples
+    --------
+    >>> point_chunks((10, 100000)), point_chunks((3, 4), target=5)
+    ((1, 16384), (1, 4))
+    """
     chunks = []
     size = 1
     for n in reversed(shape):
@@ -206,7 +352,35 @@ def write_region(fmt, shape, histories, batch, result):
 
 
 def region_variables(study):
-    """Names of the variables :func:`write_region` writes for ``study``."""
+    """Names of the variables :func:`write_region` writes for ``study``.
+
+    The stored histories (``[output]``), then every per-point variable a result of the study holds.
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    tuple of str
+        Variable names, as in the result.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY + '[output]\\nhistories = "none"\\n'
+    >>> study = parse_study(text, name="bed", source="bed.toml")
+    >>> names = region_variables(study)
+    >>> names[:4], "var_theta" in names
+    (('status', 'sl_trust', 't_stop', 'peak_var_theta'), False)
+    """
     return tuple(o.name for o in _outputs(study))
 
 

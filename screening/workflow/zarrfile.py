@@ -29,9 +29,7 @@ from screening.atomicfile import create_new
 from screening.solvers.outputs import GRID_OUTPUTS
 
 __all__ = ["ZARR_SUFFIX", "ZARR_FORMAT", "BLOCK_BYTES", "COMPLETION_MARK", "ZARR_FILL", "is_zarr_path",
-           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrFormat", "file_check", "store_entries",
-           "write_completion_mark", "read_completion_mark", "store_problem", "foreign_files", "remove_store",
-           "warnings_ignored", "open_zarr_result", "read_attrs", "check_store", "netcdf_attributes",
+           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrFormat", "store_problem", "open_zarr_result",
            "export_netcdf"]
 
 ZARR_SUFFIX = ".zarr"
@@ -46,12 +44,59 @@ ZARR_FILL = {o.name: int(o.failed) for o in GRID_OUTPUTS if o.is_flag}
 
 
 def is_zarr_path(path):
-    """Whether ``path`` names a zarr result (by its suffix)."""
+    """Whether ``path`` names a zarr result (by its suffix).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An output path.
+
+    Returns
+    -------
+    bool
+        True if the suffix is :data:`ZARR_SUFFIX` (``.zarr``).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Zarr results", ``docs/outputs.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+
+    Examples
+    --------
+    >>> is_zarr_path("outputs/run.zarr"), is_zarr_path("outputs/run.nc")
+    (True, False)
+    """
     return Path(path).suffix == ZARR_SUFFIX
 
 
 def is_zarr_store(path):
-    """Whether ``path`` is a folder holding a zarr store (format 2 or 3)."""
+    """Whether ``path`` is a folder holding a zarr store (format 2 or 3).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A path.
+
+    Returns
+    -------
+    bool
+        True for a folder (not a link) with a ``zarr.json`` (format 3) or ``.zgroup`` (format 2).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Zarr results", ``docs/outputs.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     empty = is_zarr_store(folder)
+    ...     with open(os.path.join(folder, "zarr.json"), "w") as fh:
+    ...         _ = fh.write('{"zarr_format": 3, "node_type": "group"}')
+    ...     empty, is_zarr_store(folder)
+    (False, True)
+    """
     path = Path(path)
     return path.is_dir() and not path.is_symlink() and any((path / m).is_file() for m in ("zarr.json", ".zgroup"))
 
@@ -66,6 +111,30 @@ def point_chunks(shape, n_lead, batch_size):
     points, with ``c`` dividing that dimension's size (any ``c`` for the first swept dimension,
     whose last chunk may be short) and the chunk's size dividing ``batch_size``.  The largest such
     chunk is returned.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The grid's shape.
+    n_lead : int
+        Leading dimensions batches never cross (1 with ``case``, else 0).
+    batch_size : int
+        Points per batch.
+
+    Returns
+    -------
+    tuple of int
+        The chunk shape.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Zarr results", ``docs/outputs.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+
+    Examples
+    --------
+    >>> point_chunks((2, 10, 6), n_lead=1, batch_size=30)         # 5 rows of 6: 30 points a chunk
+    (1, 5, 6)
     """
     shape = tuple(int(n) for n in shape)
     lead, swept = (1,) * n_lead, shape[n_lead:]
@@ -84,7 +153,32 @@ def point_chunks(shape, n_lead, batch_size):
 
 def zarr_batch_size(shape, n_lead, target):
     """A batch size of at most ``target`` points that is a whole number of large chunks
-    (:func:`point_chunks`): the grid of a zarr result is then cut into few, large chunks."""
+    (:func:`point_chunks`): the grid of a zarr result is then cut into few, large chunks.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The grid's shape.
+    n_lead : int
+        Leading dimensions batches never cross (1 with ``case``, else 0).
+    target : int
+        The batch size aimed at (at least 1).
+
+    Returns
+    -------
+    int
+        Points per batch.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Zarr results", ``docs/outputs.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+
+    Examples
+    --------
+    >>> zarr_batch_size((10, 6), n_lead=0, target=40)             # 6 whole rows of 6
+    36
+    """
     swept = tuple(shape)[n_lead:]
     per_case = math.prod(swept)
     if target >= per_case:
@@ -401,7 +495,44 @@ def store_problem(root, deep=True):
 
     It must have its completion mark, and every file the mark lists must be there with its size
     (and, ``deep``, its checksum: every chunk is read).  A missing chunk would otherwise read as the
-    fill value, a zeroed one as whatever it decodes to."""
+    fill value, a zeroed one as whatever it decodes to.
+
+    Parameters
+    ----------
+    root : str or os.PathLike
+        The store's folder.
+    deep : bool, optional
+        Also compare every file's checksum (reads the whole store).
+
+    Returns
+    -------
+    str or None
+        The first problem found, or None for a finished, intact store.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> store = os.path.join(folder.name, "result.zarr")
+    >>> with warnings_ignored():
+    ...     _ = result.to_zarr(store, zarr_format=3)
+    >>> write_completion_mark(store)                  # what a finished run does last
+    >>> store_problem(store) is None
+    True
+    >>> os.remove(os.path.join(store, "peak_var_theta", "c", "0"))          # a chunk lost
+    >>> store_problem(store)
+    'its file peak_var_theta/c/0 is missing'
+    >>> folder.cleanup()
+    """
     files = read_completion_mark(root)
     if files is None:
         return ("it has no completion mark: the store of an interrupted run (re-run the same command to "
@@ -466,7 +597,39 @@ def _json(value):
 # ----------------------------------------------------------------------------- reading and export
 def open_zarr_result(path):
     """The result store at ``path`` opened lazily with xarray, as a netCDF result opens: arrays read on
-    access, not dask arrays (the readers' computations are numpy's)."""
+    access, not dask arrays (the readers' computations are numpy's).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store's folder.
+
+    Returns
+    -------
+    xarray.Dataset
+        The result (use :func:`~screening.workflow.reader.open_result` to have it checked first).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Zarr results", ``docs/outputs.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> store = os.path.join(folder.name, "result.zarr")
+    >>> with warnings_ignored():
+    ...     _ = result.to_zarr(store, zarr_format=3)
+    >>> write_completion_mark(store)                  # what a finished run does last
+    >>> with open_zarr_result(store) as ds:
+    ...     print(dict(ds.sizes), ds["peak_var_theta"].values)
+    {'eps': 2, 't': 3} [1.e-06 4.e-06]
+    >>> folder.cleanup()
+    """
     import xarray as xr
 
     with warnings_ignored():
@@ -561,6 +724,53 @@ def export_netcdf(src, dst, complevel, history):
     its variable, as CF wants); floats keep their NaN fill value.  Storage as in a direct run: zlib
     at ``complevel``, byte shuffle and ``(1, ..., n, nt)`` chunks for the histories.  ``history``:
     the line appended to the ``history`` attribute.
+
+    Parameters
+    ----------
+    src : str or os.PathLike
+        The zarr result.
+    dst : str or os.PathLike
+        The netCDF4 file to write (created or overwritten; the caller makes it appear all or none).
+    complevel : int
+        zlib compression level, 0 (none) to 9.
+    history : str
+        The line appended to the ``history`` attribute (the command that wrote it).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    SweepError
+        ``flag_values`` that are not a flat list of numbers of their variable's type.
+    ReadFailure
+        A chunk of the store that cannot be read.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Zarr results", ``docs/outputs.md``.
+    .. [2] Zarr core specification, version 3, https://zarr-specs.readthedocs.io/en/latest/v3/core/index.html
+    .. [3] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 "Flags",
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> import netCDF4
+    >>> import os, tempfile
+    >>> import numpy as np, xarray as xr
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> store = os.path.join(folder.name, "result.zarr")
+    >>> with warnings_ignored():
+    ...     _ = result.to_zarr(store, zarr_format=3)
+    >>> write_completion_mark(store)                  # what a finished run does last
+    >>> export_netcdf(store, os.path.join(folder.name, "result.nc"), complevel=1, history="screening export")
+    >>> with netCDF4.Dataset(os.path.join(folder.name, "result.nc")) as nc:
+    ...     print(nc["status"].dtype, nc["status"].flag_values, nc["peak_var_theta"][:], nc.study_sha256)
+    int8 [0 1] [1.e-06 4.e-06] ab12
+    >>> folder.cleanup()
     """
     import netCDF4
     import zarr

@@ -81,6 +81,22 @@ COVERED = [
     "screening.solvers.timegrid",
     "screening.status",
     "screening.validation",
+    "screening.workflow.accuracy",
+    "screening.workflow.cdofile",
+    "screening.workflow.cloud",
+    "screening.workflow.config",
+    "screening.workflow.connect",
+    "screening.workflow.errors",
+    "screening.workflow.execution",
+    "screening.workflow.grid",
+    "screening.workflow.interrupt",
+    "screening.workflow.probabilities",
+    "screening.workflow.reader",
+    "screening.workflow.records_study",
+    "screening.workflow.study",
+    "screening.workflow.sweep",
+    "screening.workflow.writer",
+    "screening.workflow.zarrfile",
 ]
 
 
