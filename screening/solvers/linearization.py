@@ -16,6 +16,7 @@ import xarray as xr
 from scipy.special import erfc
 
 from screening import condensation as condensations
+from screening.analysis.trust import add_trust
 from screening.condensation.base import Condensation
 from screening.model.points import numeric_fields
 from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
@@ -189,8 +190,4 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
         else:
             attrs.update(theta_capacity=float(capacity), peak_p_beyond_capacity=float(beyond))
     ds = linearization_dataset(res, t, dims, fields, derived, attrs)
-    if not trust:
-        return ds
-    from screening.analysis.trust import add_trust
-
-    return add_trust(ds)
+    return add_trust(ds) if trust else ds

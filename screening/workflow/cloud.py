@@ -47,7 +47,7 @@ from screening.workflow.config import StudyError, check_choice, check_keys, chec
 
 __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "run_record", "read_cloud_records",
            "failed_record", "record_rows", "run_cloud", "threshold_level", "scaled_to", "run_stripes",
-           "stripe_dataset", "plot_stripes", "cloud_dataset", "plot_cloud", "synthesise_records",
+           "stripe_dataset", "cloud_dataset", "synthesise_records",
            "write_demand_csv"]
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels",
@@ -363,35 +363,6 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     return ds, warnings
 
 
-def plot_stripes(ds, path):
-    """The fraction of records exceeding at each level (+-2 binomial standard errors) and the fitted curve."""
-    from scipy.special import ndtr
-
-    from screening.report.figure_base import new_figure, save_figure
-
-    x = ds["level"].values
-    n, k = ds["n_used"].values, ds["n_exceed"].values
-    frac = np.where(n > 0, k / np.maximum(n, 1), np.nan)
-    se = np.sqrt(frac * (1 - frac) / np.maximum(n, 1))
-    fig = new_figure(7.0, 4.8)
-    ax = fig.subplots()
-    ax.errorbar(x, frac, yerr=2 * se, fmt="s", color="k", capsize=3, label="stripes: fraction exceeding (+-2 se)")
-    med, beta = float(ds["fit_median"]), float(ds["beta"])
-    if np.isfinite(med):
-        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
-        ax.plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
-                label=f"binomial MLE: median {med:.3g} +- {float(ds['fit_median_se']):.2g}, "
-                      f"beta {beta:.2f} +- {float(ds['beta_se']):.2f}")
-    ax.set_xscale("log")
-    ax.set_ylim(-0.05, 1.05)
-    name = ds.attrs["intensity_variable"]
-    ax.set_xlabel(f"{name} [{ds[name].attrs.get('units', '')}]")
-    ax.set_ylabel("P(exceed)")
-    ax.legend(fontsize=7)
-    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
-    return save_figure(fig, path)
-
-
 def cloud_dataset(cloud, block, foundation, rows, names):
     """The result dataset of a cloud analysis from its per-record ``rows``: the records, the
     exceedance of each, and the maximum-likelihood lognormal fragility; returns ``(ds, warnings)``."""
@@ -450,44 +421,6 @@ def cloud_dataset(cloud, block, foundation, rows, names):
                     fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",
                     warnings="; ".join(warnings) or "none")
     return ds, warnings
-
-
-def plot_cloud(ds, path):
-    """The cloud (peak |theta| / slenderness against the IM) and the fitted fragility curve."""
-    from scipy.special import ndtr
-
-    from screening.report.figure_base import new_figure, save_figure
-
-    name = ds.attrs["intensity_variable"]
-    x = ds[name].values
-    fig = new_figure(7.0, 7.5)
-    ax = fig.subplots(2, 1, sharex=True)
-    slender = float(ds["slenderness"])
-    ratio = np.where(ds["overturned"].values, np.nan, ds["peak_abs_theta"].values / slender)
-    ax[0].scatter(x[~ds["overturned"].values], ratio[~ds["overturned"].values], s=18, label="survived")
-    over = ds["overturned"].values
-    if over.any():
-        ax[0].scatter(x[over], np.ones(over.sum()), marker="x", color="C3", s=30, label="overturned (plotted at 1)")
-    ax[0].axhline(float(ds["threshold_rad"]) / slender, color="0.4", ls="--", lw=0.8, label="threshold")
-    ax[0].set_yscale("log")
-    ax[0].set_ylabel("peak |theta| / atan(b/h)")
-    ax[0].legend(fontsize=7)
-    ax[1].scatter(x, ds["exceed"].values.astype(float), s=18, color="k", label="records (exceed = 1)")
-    med, beta = float(ds["fit_median"]), float(ds["beta"])
-    if np.isfinite(med):
-        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
-        ax[1].plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
-                   label=f"lognormal MLE: median {med:.3g} {ds['fit_median'].attrs['units']}, beta {beta:.2f}")
-    ax[1].set_xscale("log")
-    from matplotlib.ticker import NullFormatter
-    ax[1].xaxis.set_minor_formatter(NullFormatter())
-    ax[1].set_ylim(-0.05, 1.05)
-    units = ds[name].attrs.get("units", "")
-    ax[1].set_xlabel(f"{name} [{units}]")
-    ax[1].set_ylabel("P(exceed)")
-    ax[1].legend(fontsize=7)
-    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
-    return save_figure(fig, path)
 
 
 def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, seed=0, dt=0.01):
