@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from screening import excitations, laws
-from screening.solvers.outputs import OUTPUTS
+from screening.solvers.outputs import OUTPUTS, of_stage
 from screening.status import (BestMethod, ContactRegime, EscalationEstimator, EscalationModel, FitFlag, PointStatus,
                               SampleState, SpotStatus, TargetMet, flag_attributes, probability_sources)
 
@@ -84,8 +84,7 @@ DERIVED = {
 
 #: Linearization (stochastic linearization + Lyapunov moments).
 LINEARIZATION = {
-    **_declared("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift", "t_stop", "n_steps",
-                "n_rejected", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"),
+    **_declared(*(o.name for o in of_stage("linearize"))),        # the moment solver's outputs
     "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
     # a linearize() result: the statuses the solver gives (a sweep's status also says when its task failed)
@@ -198,8 +197,9 @@ FRAGILITY = {
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
 #: ``[fragility]`` (:mod:`screening.workflow.probabilities`), and the closed-form probability that rocking
 #: starts at all (every point; :func:`screening.analysis.intensity.rocking_start_probability`).
-#: ``p_exceed`` itself is declared in :data:`FRAGILITY`; ``p_source`` by :func:`probability_source_attributes`.
-PROBABILITIES = _declared("p_overturn", "p_overturn_se", "p_exceed_se", "p_rocking_start", "uplift_acceleration")
+#: ``p_exceed`` is found in :data:`FRAGILITY` first, with the same declared attributes; ``p_source`` is
+#: declared by :func:`probability_source_attributes`.
+PROBABILITIES = _declared(*(o.name for o in of_stage("probabilities", "rocking")))
 
 
 def probability_source_attributes():
