@@ -66,6 +66,11 @@ def test_every_public_module_declares_its_api(module):
     assert not [n for n in names if n not in defined], module
 
 
+def test_code_lines_leave_out_docstrings_comments_and_blank_lines():
+    text = '"""Module.\n\nMore."""\n\nimport os  # why\n\n\ndef f(x):\n    """One line."""\n    # a comment\n    return x\n'
+    assert ig.code_lines(text) == 3
+
+
 def test_the_graph_reader_sees_deferred_imports_cycles_and_layers():
     """The reader against a hand-made case: a circle closed by a deferred import, an upward import."""
     edges = {("a", "b"), ("b", "c"), ("c", "a"), ("c", "d")}
