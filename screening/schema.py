@@ -76,7 +76,7 @@ PARAMETERS = {
 
 #: Quantities derived from the model (stored beside the parameters, never re-derived downstream).
 DERIVED = {
-    **_declared("theta_ul", "slenderness"),
+    **_declared(*(o.name for o in of_stage("model"))),           # theta_ul, slenderness
     "m_sdof": _v("kg m2", "rotational inertia about the rocking edge, I_cm + m h2"),
     "theta_capacity": _v("rad", "capacity angle of the condensation (no quasi-static equilibrium beyond; "
                                 "inf if none)"),
@@ -93,7 +93,7 @@ LINEARIZATION = {
     # histories in files that do not store them)
     "k_eq_rest": _v("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
     "var_theta_end": _v("rad2", "variance of the rocking rotation at the end of the record"),
-    **_declared("sl_trust", "sl_error_low", "sl_error_high"),
+    **_declared(*(o.name for o in of_stage("trust"))),           # the trust rule's flag and band
 }
 
 #: Best estimates of a sweep with ``[accuracy]`` (:mod:`screening.analysis.correction`) and its escalated Monte
@@ -337,10 +337,10 @@ INTENSITY = {
 
 #: Per-point variables of a sweep that no other table declares: the status (with the failed tasks) and the
 #: intensity measures of each point's excitation.
-SWEEP = _declared("status", "pga_median", "rms_acceleration", "arias_intensity")
+SWEEP = _declared("status", *(o.name for o in of_stage("intensity")))
 
 #: Model inputs stored per point where the study derives them: ``S0`` from a target PGA (``excitation.pga``).
-SWEEP_INPUTS = _declared("S0")
+SWEEP_INPUTS = _declared(*(o.name for o in of_stage("inputs")))
 
 #: Cloud analysis (:mod:`screening.workflow.cloud`): one row per record, then the fitted fragility.
 CLOUD = {
