@@ -71,6 +71,8 @@ def main(verbose=False):
     print(f"imports inside functions: {len(deferred)}; of them dodging a circle: {len(dodging)}")
     print(f"modules without __all__: {len(missing_all)} of {len(public)}")
     print("largest modules (lines): " + ", ".join(f"{m} {n}" for n, m in sizes[:5]))
+    print("largest modules (lines of code: no docstring, comment or blank line): "
+          + ", ".join(f"{m} {n}" for n, m in ig.code_sizes(graph)[:5]))
     mentions = {name: output_mentions(name) for name in OUTPUT_SAMPLES}
     lists = {name: output_mentions(name, lists_only=True) for name in OUTPUT_SAMPLES}
     print("places naming each output variable on the write path (string constants, in files): " + ", ".join(

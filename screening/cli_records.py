@@ -280,8 +280,8 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff, figure):
 def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet, no_vertical):
     import contextlib
 
-    from screening.workflow.cloud import (load_cloud_study, plot_cloud, plot_stripes, read_cloud_records, run_cloud,
-                                          run_stripes, write_demand_csv)
+    from screening.report.record_figures import plot_cloud, plot_stripes
+    from screening.workflow.cloud import load_cloud_study, read_cloud_records, run_cloud, run_stripes, write_demand_csv
     from screening.workflow.execution import dask_client
     from screening.workflow.interrupt import shielded
     from screening.workflow.writer import check_output_path

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from screening import excitations, laws
-from screening.solvers.outputs import OUTPUTS
+from screening.solvers.outputs import OUTPUTS, of_stage
 from screening.status import (BestMethod, ContactRegime, EscalationEstimator, EscalationModel, FitFlag, PointStatus,
                               SampleState, SpotStatus, TargetMet, flag_attributes, probability_sources)
 
@@ -76,7 +76,7 @@ PARAMETERS = {
 
 #: Quantities derived from the model (stored beside the parameters, never re-derived downstream).
 DERIVED = {
-    **_declared("theta_ul", "slenderness"),
+    **_declared(*(o.name for o in of_stage("model"))),           # theta_ul, slenderness
     "m_sdof": _v("kg m2", "rotational inertia about the rocking edge, I_cm + m h2"),
     "theta_capacity": _v("rad", "capacity angle of the condensation (no quasi-static equilibrium beyond; "
                                 "inf if none)"),
@@ -84,8 +84,7 @@ DERIVED = {
 
 #: Linearization (stochastic linearization + Lyapunov moments).
 LINEARIZATION = {
-    **_declared("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq", "p_uplift", "t_stop", "n_steps",
-                "n_rejected", "peak_var_theta", "t_peak_var_theta", "peak_p_uplift", "min_k_eq"),
+    **_declared(*(o.name for o in of_stage("linearize"))),        # the moment solver's outputs
     "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
     # a linearize() result: the statuses the solver gives (a sweep's status also says when its task failed)
@@ -94,7 +93,7 @@ LINEARIZATION = {
     # histories in files that do not store them)
     "k_eq_rest": _v("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
     "var_theta_end": _v("rad2", "variance of the rocking rotation at the end of the record"),
-    **_declared("sl_trust", "sl_error_low", "sl_error_high"),
+    **_declared(*(o.name for o in of_stage("trust"))),           # the trust rule's flag and band
 }
 
 #: Best estimates of a sweep with ``[accuracy]`` (:mod:`screening.analysis.correction`) and its escalated Monte
@@ -198,8 +197,9 @@ FRAGILITY = {
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
 #: ``[fragility]`` (:mod:`screening.workflow.probabilities`), and the closed-form probability that rocking
 #: starts at all (every point; :func:`screening.analysis.intensity.rocking_start_probability`).
-#: ``p_exceed`` itself is declared in :data:`FRAGILITY`; ``p_source`` by :func:`probability_source_attributes`.
-PROBABILITIES = _declared("p_overturn", "p_overturn_se", "p_exceed_se", "p_rocking_start", "uplift_acceleration")
+#: ``p_exceed`` is found in :data:`FRAGILITY` first, with the same declared attributes; ``p_source`` is
+#: declared by :func:`probability_source_attributes`.
+PROBABILITIES = _declared(*(o.name for o in of_stage("probabilities", "rocking")))
 
 
 def probability_source_attributes():
@@ -359,10 +359,10 @@ INTENSITY = {
 
 #: Per-point variables of a sweep that no other table declares: the status (with the failed tasks) and the
 #: intensity measures of each point's excitation.
-SWEEP = _declared("status", "pga_median", "rms_acceleration", "arias_intensity")
+SWEEP = _declared("status", *(o.name for o in of_stage("intensity")))
 
 #: Model inputs stored per point where the study derives them: ``S0`` from a target PGA (``excitation.pga``).
-SWEEP_INPUTS = _declared("S0")
+SWEEP_INPUTS = _declared(*(o.name for o in of_stage("inputs")))
 
 #: Cloud analysis (:mod:`screening.workflow.cloud`): one row per record, then the fitted fragility.
 CLOUD = {

@@ -271,6 +271,25 @@ def sizes(graph):
     return sorted(((len(p.read_text().splitlines()), m) for m, p in graph.modules.items()), reverse=True)
 
 
+def code_lines(text):
+    """Lines of code of a module's source: not blank, not a comment, not in a docstring."""
+    tree = ast.parse(text)
+    docstrings = set()
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body \
+                and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+                and isinstance(body[0].value.value, str):
+            docstrings.update(range(body[0].lineno, body[0].end_lineno + 1))
+    return sum(1 for n, line in enumerate(text.splitlines(), 1)
+               if n not in docstrings and line.strip() and not line.strip().startswith("#"))
+
+
+def code_sizes(graph):
+    """``[(lines of code, module)]`` (:func:`code_lines`), largest first."""
+    return sorted(((code_lines(p.read_text()), m) for m, p in graph.modules.items()), reverse=True)
+
+
 def read_exceptions(text=None):
     """``(upward, circles)`` allowed by the architecture page's table of exceptions: the set of
     ``(source, target)`` upward imports and the list of module sets an import circle may stay within."""

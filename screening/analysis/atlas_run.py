@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 from screening.analysis import atlas
+from screening.analysis.target_intensity import calibrate_intensity
 
 __all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
            "point_intensity", "last_stable_intensity", "linearization_row", "monte_carlo_row", "evaluate_point",
@@ -61,10 +62,9 @@ def reference_model(block, foundation, timing, excitation_kind, coupled_radians=
 
 def point_intensity(block, foundation, shape, timing, p_target, factor):
     """``S0`` [m2 s-3]: the paper-condensation linearization's peak uplift probability reaches ``p_target``
-    (:func:`screening.analysis.tradeoff.calibrate_intensity`), times ``factor``; where the linearization stops
+    (:func:`screening.analysis.target_intensity.calibrate_intensity`), times ``factor``; where the linearization stops
     before reaching it, the last intensity at which it does not stop (:func:`last_stable_intensity`), times
     ``factor``."""
-    from screening.analysis.tradeoff import calibrate_intensity
     from screening.solvers.timegrid import output_times
 
     make = lambda s: atlas.make_excitation(shape, timing, s)                 # noqa: E731

@@ -26,6 +26,7 @@ from scipy import integrate, optimize
 
 from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, vanmarcke_factor
 from screening.analysis.intensity_records import OMEGA_LOW
+from screening.solvers.moment_kernels import lyapunov_rhs
 from screening.solvers.synthesis import envelope_rate
 
 __all__ = ["N_TIMES", "CHUNK_POINTS", "CROSSING_STEP", "CROSSING_EXTENT", "spectral_moments", "median_peak",
@@ -229,7 +230,7 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
         a = base.copy()
         a[iu + 1, :iu] = -q * C_f            # u'' = ... - q (C x + D w)
         b = np.concatenate([B_f, [0.0, -q * float(D_f)]])
-        return (a @ P + P @ a.T + 2.0 * math.pi * S0 * np.outer(b, b)).ravel()
+        return lyapunov_rhs(P, a, b, S0).ravel()
 
     t = _times(t_end, n_times)
     sol = integrate.solve_ivp(rhs, (0.0, float(t_end)), P0.ravel(), t_eval=t, rtol=1e-8,

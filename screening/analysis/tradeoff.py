@@ -37,7 +37,6 @@ Monte Carlo statistics are over the samples that neither overturned nor diverged
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from dataclasses import dataclass
@@ -48,6 +47,7 @@ import xarray as xr
 
 from screening import laws
 from screening.analysis.metrics import compare, peak_with_se, relative_difference, time_averaged_relative_error
+from screening.analysis.target_intensity import calibrate_intensity, round_significant
 from screening.analysis.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
                                                load_tradeoff_study)
 from screening.report.tradeoff_files import from_file_layout, output_paths, write_reports
@@ -55,7 +55,6 @@ from screening.schema import TRADEOFF, apply_schema
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
-from screening.status import PointStatus
 from screening.workflow.config import StudyError, build_models
 
 __all__ = ["round_significant", "calibrate_intensity", "Point", "build_points", "point_models", "time_call",
@@ -64,74 +63,6 @@ __all__ = ["round_significant", "calibrate_intensity", "Point", "build_points", 
 
 
 # ============================================================================ model set-up
-def round_significant(x, digits=3):
-    """``x`` rounded to ``digits`` significant digits.
-
-    Parameters
-    ----------
-    x : float
-        Any value (any unit); zero and non-finite values are returned as they are.
-    digits : int
-        Significant digits.
-
-    Returns
-    -------
-    float
-        The rounded value [unit of ``x``].
-
-    References
-    ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-
-    Examples
-    --------
-    >>> round_significant(0.000123456), round_significant(98765.0, 2), round_significant(float("inf"))
-    (0.000123, 99000.0, inf)
-    """
-    if x == 0 or not math.isfinite(x):
-        return x
-    return float(f"{x:.{digits - 1}e}")
-
-
-def calibrate_intensity(block, foundation, make_exc, target, t_out, rtol=1e-7, log10_bounds=(-10.0, 1.0),
-                        condensation="paper"):
-    """``S0`` [m2 s-3] at which SL's peak uplift probability equals ``target`` [1].
-
-    Bisection (Brent) on ``log10 S0`` of ``log(peak_p_uplift) - log(target)``; a point whose
-    SL integration stops (status != ok) counts as ``peak_p_uplift = 1``.  The result is
-    rounded to 3 significant digits and must give status ok and a peak uplift probability
-    within 10 % of the target, else ValueError.  ``make_exc(S0)`` builds the excitation.
-    """
-    from scipy.optimize import brentq
-
-    def solve(log_s0):
-        r = solve_moments(block, foundation, make_exc(10.0 ** log_s0), t_out, rtol=rtol, condensation=condensation)
-        return int(r["status"]), float(r["peak_p_uplift"])
-
-    def f(log_s0):
-        status, p = solve(log_s0)
-        p = 1.0 if status != PointStatus.ok else max(p, 1e-300)
-        return math.log(p) - math.log(target)
-
-    lo, hi = log10_bounds
-    if f(lo) >= 0 or f(hi) <= 0:
-        raise ValueError(f"target_peak_p_uplift {target:g} is not bracketed by S0 in "
-                         f"[1e{lo:g}, 1e{hi:g}] m2 s-3")
-    x = brentq(f, lo, hi, xtol=1e-6)
-    S0 = round_significant(10.0 ** x)
-    status, p = solve(math.log10(S0))
-    if status != PointStatus.ok or abs(p / target - 1.0) > 0.1:
-        raise ValueError(f"target_peak_p_uplift {target:g} is not reachable with SL status ok "
-                         f"(at S0 = {S0:.3g}: status {_status_name(status)}, peak p_uplift {p:.3g})")
-    return S0
-
-
-def _status_name(status):
-    return PointStatus(status).name if status in set(PointStatus) else status
-
-
 @dataclass(frozen=True)
 class Point:
     """One grid point of the trade study."""

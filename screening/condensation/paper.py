@@ -81,7 +81,7 @@ from screening.condensation.base import Condensation, MomentKernel, SdofKernel
 from screening.condensation.registry import register
 from screening.condensation.uplift_integrals import coefficient_table, gaussian_uplift_integrals, uplift_integrals_q
 from screening.kernels.signatures import FMA, moment_coefficients_signature, sdof_coefficients_signature
-from screening.physics.contact import linear_rocking_stiffness
+from screening.physics.contact import bed_rocking_stiffness, linear_rocking_stiffness
 
 __all__ = ["uplift_threshold", "static_indentation", "damping_inner_parts", "damping_inner", "rocking_damping",
            "rocking_stiffness", "restoring_moment", "SDOF_RECORD", "sdof_record", "damping_stiffness_jit",
@@ -518,7 +518,7 @@ def coefficient_constants(block, foundation):
         "C1": c1_rate + c1_indentation,
         "C1_rate": c1_rate,
         "C1_indentation": c1_indentation,
-        "K0": 2.0 / 3.0 * b**3 * k,
+        "K0": bed_rocking_stiffness(block, foundation),
         "mgh": m * g * h,
         "E0": (m * g) ** 2 * b / k,
         "theta_ul": uplift_threshold(block, foundation),

@@ -84,7 +84,7 @@ import numpy as np
 
 from screening.status import ContactRegime
 
-__all__ = ["linear_rocking_stiffness", "REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
+__all__ = ["bed_rocking_stiffness", "linear_rocking_stiffness", "REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
            "REGIME_NAMES", "foundation_constants", "law_constants", "corner_indentations", "contact_regime",
            "contact_length", "contact_resultants", "law_resultants", "linear_indentation", "rising_root",
            "rest_indentation", "UPLIFT_BEARING_LIMIT", "bearing_load", "exact_uplift_angle", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
@@ -481,8 +481,47 @@ def linear_indentation(block, foundation):
     return block.m * block.g / (2.0 * block.b * foundation.k)
 
 
+def bed_rocking_stiffness(block, foundation):
+    """Rocking stiffness of the linear bed under the base in full contact, ``(2/3) b^3 k`` [N m/rad].
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``b`` [m]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2]); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``(2/3) b^3 k`` [N m/rad].
+
+    Notes
+    -----
+    The restoring moment of the linear part of the contact pressure (eq. (3) in [1]) over the whole
+    base ``-b <= x <= b`` rotated by a small ``theta``: ``int k (x theta) x dx = (2/3) b^3 k theta``.
+    ``K0`` of the paper's closed-form coefficients (eqs. (35)-(36) in [1]) and the bed's part of
+    :func:`linear_rocking_stiffness`.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{float(bed_rocking_stiffness(block, bed)):.4g}"
+    '826.1'
+    """
+    return 2.0 / 3.0 * block.b**3 * foundation.k
+
+
 def linear_rocking_stiffness(block, foundation):
-    """Rocking stiffness at rest without the cubic term, ``K0 - m g h = (2/3) b^3 k - m g h`` [N m/rad].
+    """Rocking stiffness at rest without the cubic term, ``K0 - m g h = (2/3) b^3 k - m g h`` [N m/rad]
+    (``K0``: :func:`bed_rocking_stiffness`).
 
     Parameters
     ----------
@@ -516,7 +555,7 @@ def linear_rocking_stiffness(block, foundation):
     >>> f"{float(linear_rocking_stiffness(block, bed)):.4g}"
     '808.2'
     """
-    return 2.0 / 3.0 * block.b**3 * foundation.k - block.m * block.g * block.h
+    return bed_rocking_stiffness(block, foundation) - block.m * block.g * block.h
 
 
 def rising_root(alpha, beta, rhs, max_iter=100):

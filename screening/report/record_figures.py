@@ -1,12 +1,15 @@
-"""Figures of deterministic record analyses: one simulation's time histories."""
+"""Figures of record analyses: one simulation's time histories, an excitation fit, the multiple-stripe and
+cloud fragility results."""
 
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import NullFormatter
+from scipy.special import ndtr
 
 from screening.report.figure_base import new_figure, save_figure
 
-__all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit"]
+__all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit", "plot_stripes", "plot_cloud"]
 
 REGIME_LABELS = {0: "full contact", 1: "uplift +", 2: "uplift -", 3: "flight"}
 
@@ -142,4 +145,141 @@ def plot_excitation_fit(record, fit, path):
     flags = fit.get("flags", [])
     fig.suptitle(f"fit-excitation: {record.name}" + (f"\n{len(flags)} warning(s): see the command's output"
                                                      if flags else ""), fontsize=9)
+    return save_figure(fig, path)
+
+
+def plot_stripes(ds, path):
+    """A multiple-stripe result as a PNG: the fraction of records exceeding at each level (+-2 binomial
+    standard errors) and the fitted lognormal curve.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`screening.workflow.cloud.stripe_dataset` result: on ``level`` (the stripes' intensities),
+        ``n_used`` and ``n_exceed`` [1] and the intensity variable named by ``attrs["intensity_variable"]``
+        (with its ``units``); ``fit_median``, ``fit_median_se`` [units of the intensity], ``beta``,
+        ``beta_se`` [1].
+    path : str or os.PathLike
+        The PNG file (written atomically).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Notes
+    -----
+    The curve is ``P(exceed | im) = Phi(ln(im / median) / beta)``, fitted by binomial maximum
+    likelihood over the stripes [1]_.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31 (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib, xarray as xr
+    >>> ds = xr.Dataset({"stripe_pga": ("level", [1.0, 2.0, 4.0], {"units": "m s-2"}),
+    ...                  "n_used": ("level", [10, 10, 10]), "n_exceed": ("level", [1, 5, 9]),
+    ...                  "fit_median": 2.0, "fit_median_se": 0.2, "beta": 0.6, "beta_se": 0.1},
+    ...                 coords={"level": [1.0, 2.0, 4.0]}, attrs={"intensity_variable": "stripe_pga"})
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_stripes(ds, pathlib.Path(tmp) / "stripes.png").read_bytes()[:4]
+    b'\\x89PNG'
+    """
+    x = ds["level"].values
+    n, k = ds["n_used"].values, ds["n_exceed"].values
+    frac = np.where(n > 0, k / np.maximum(n, 1), np.nan)
+    se = np.sqrt(frac * (1 - frac) / np.maximum(n, 1))
+    fig = new_figure(7.0, 4.8)
+    ax = fig.subplots()
+    ax.errorbar(x, frac, yerr=2 * se, fmt="s", color="k", capsize=3, label="stripes: fraction exceeding (+-2 se)")
+    med, beta = float(ds["fit_median"]), float(ds["beta"])
+    if np.isfinite(med):
+        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
+        ax.plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
+                label=f"binomial MLE: median {med:.3g} +- {float(ds['fit_median_se']):.2g}, "
+                      f"beta {beta:.2f} +- {float(ds['beta_se']):.2f}")
+    ax.set_xscale("log")
+    ax.set_ylim(-0.05, 1.05)
+    name = ds.attrs["intensity_variable"]
+    ax.set_xlabel(f"{name} [{ds[name].attrs.get('units', '')}]")
+    ax.set_ylabel("P(exceed)")
+    ax.legend(fontsize=7)
+    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
+    return save_figure(fig, path)
+
+
+def plot_cloud(ds, path):
+    """A cloud result as a PNG: the cloud (peak ``|theta|`` / slenderness against the intensity measure)
+    and the fitted lognormal fragility curve.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`screening.workflow.cloud.cloud_dataset` result: on ``record``, the intensity named by
+        ``attrs["intensity_variable"]`` (with its ``units``), ``peak_abs_theta`` [rad], ``overturned``
+        and ``exceed`` [bool]; ``slenderness`` and ``threshold_rad`` [rad], ``fit_median`` [units of
+        the intensity, in its ``units`` attribute] and ``beta`` [1].
+    path : str or os.PathLike
+        The PNG file (written atomically).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Notes
+    -----
+    The curve is ``P(exceed | im) = Phi(ln(im / median) / beta)``, fitted by maximum likelihood on the
+    exceed / not-exceed outcome of each record [1]_.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31 (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib, xarray as xr
+    >>> ds = xr.Dataset({"pga": ("record", [1.0, 2.0, 3.0, 4.0], {"units": "m s-2"}),
+    ...                  "peak_abs_theta": ("record", [0.001, 0.02, 0.05, 0.1]),
+    ...                  "overturned": ("record", [False, False, False, True]),
+    ...                  "exceed": ("record", [False, False, True, True]),
+    ...                  "slenderness": 0.165, "threshold_rad": 0.03,
+    ...                  "fit_median": ((), 2.5, {"units": "m s-2"}), "beta": 0.4},
+    ...                 attrs={"intensity_variable": "pga"})
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     plot_cloud(ds, pathlib.Path(tmp) / "cloud.png").read_bytes()[:4]
+    b'\\x89PNG'
+    """
+    name = ds.attrs["intensity_variable"]
+    x = ds[name].values
+    fig = new_figure(7.0, 7.5)
+    ax = fig.subplots(2, 1, sharex=True)
+    slender = float(ds["slenderness"])
+    ratio = np.where(ds["overturned"].values, np.nan, ds["peak_abs_theta"].values / slender)
+    ax[0].scatter(x[~ds["overturned"].values], ratio[~ds["overturned"].values], s=18, label="survived")
+    over = ds["overturned"].values
+    if over.any():
+        ax[0].scatter(x[over], np.ones(over.sum()), marker="x", color="C3", s=30, label="overturned (plotted at 1)")
+    ax[0].axhline(float(ds["threshold_rad"]) / slender, color="0.4", ls="--", lw=0.8, label="threshold")
+    ax[0].set_yscale("log")
+    ax[0].set_ylabel("peak |theta| / atan(b/h)")
+    ax[0].legend(fontsize=7)
+    ax[1].scatter(x, ds["exceed"].values.astype(float), s=18, color="k", label="records (exceed = 1)")
+    med, beta = float(ds["fit_median"]), float(ds["beta"])
+    if np.isfinite(med):
+        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
+        ax[1].plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
+                   label=f"lognormal MLE: median {med:.3g} {ds['fit_median'].attrs['units']}, beta {beta:.2f}")
+    ax[1].set_xscale("log")
+    ax[1].xaxis.set_minor_formatter(NullFormatter())
+    ax[1].set_ylim(-0.05, 1.05)
+    units = ds[name].attrs.get("units", "")
+    ax[1].set_xlabel(f"{name} [{units}]")
+    ax[1].set_ylabel("P(exceed)")
+    ax[1].legend(fontsize=7)
+    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
     return save_figure(fig, path)

@@ -13,12 +13,13 @@ import dataclasses
 
 import numpy as np
 import xarray as xr
-from scipy.special import erfc
 
 from screening import condensation as condensations
+from screening.analysis.trust import add_trust
 from screening.condensation.base import Condensation
 from screening.model.points import numeric_fields
 from screening.solvers.datasets import linearization_dataset, model_fields, model_labels
+from screening.solvers.moment_kernels import uplift_occupancy
 from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
 
@@ -181,16 +182,11 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     if type(cond).capacity_angle is not Condensation.capacity_angle:
         capacity = on_own_dims(cond.capacity_angle, fields, structure, block, foundation)
         peak = xr.DataArray(res["peak_var_theta"], dims=dims)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            beyond = xr.where(np.isfinite(capacity) & (peak > 0),
-                              erfc(capacity / np.sqrt(2.0 * peak.where(peak > 0, 1.0))), 0.0)
+        with np.errstate(invalid="ignore"):         # eq. (58) with the capacity angle in place of theta_ul
+            beyond = xr.where(np.isfinite(capacity), xr.apply_ufunc(uplift_occupancy, capacity, peak), 0.0)
         if dims:
             derived.update(theta_capacity=capacity, peak_p_beyond_capacity=beyond)
         else:
             attrs.update(theta_capacity=float(capacity), peak_p_beyond_capacity=float(beyond))
     ds = linearization_dataset(res, t, dims, fields, derived, attrs)
-    if not trust:
-        return ds
-    from screening.analysis.trust import add_trust
-
-    return add_trust(ds)
+    return add_trust(ds) if trust else ds

@@ -339,5 +339,3 @@ def get(model):
         return _REGISTRY[model]
     raise ValueError(f"parameter 'model' must be one of {names()} (got {model!r})")
 
-
-from screening.solvers import mc_models as _builtin  # noqa: E402,F401,I001  (registers the built-in models)

@@ -46,8 +46,8 @@ from screening import limits
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
 __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
-           "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "plot_stripes", "cloud_dataset",
-           "plot_cloud", "synthesise_records", "write_demand_csv"]
+           "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "cloud_dataset",
+           "synthesise_records", "write_demand_csv"]
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels",
                 "vertical")
@@ -683,74 +683,6 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     return ds, warnings
 
 
-def plot_stripes(ds, path):
-    """The fraction of records exceeding at each level (+-2 binomial standard errors) and the fitted curve.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A multiple-stripe result (:func:`stripe_dataset`).
-    path : str or os.PathLike
-        The PNG file to write.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    References
-    ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
-       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
-
-    Examples
-    --------
-    >>> import pathlib, tempfile
-    >>> from screening.workflow.study import parse_study
-    >>> from screening.workflow.records_study import block_and_foundation
-    >>> from screening.workflow.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
-    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
-    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
-    >>> from dataclasses import replace
-    >>> stripes = replace(cloud, levels=(1.0, 2.0))
-    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
-    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
-    ...         for a, p, o in [(1.0, 0.001, False), (1.0, 0.04, False), (1.0, 0.002, False),
-    ...                         (2.0, 0.05, False), (2.0, 0.003, False), (2.0, 0.01, True)]]   # level-major
-    >>> ds, _ = stripe_dataset(stripes, block, foundation, rows, ["r1", "r2", "r3"])
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     plot_stripes(ds, pathlib.Path(folder) / "stripes.png").read_bytes()[:4]
-    b'\\x89PNG'
-    """
-    from scipy.special import ndtr
-
-    from screening.report.figure_base import new_figure, save_figure
-
-    x = ds["level"].values
-    n, k = ds["n_used"].values, ds["n_exceed"].values
-    frac = np.where(n > 0, k / np.maximum(n, 1), np.nan)
-    se = np.sqrt(frac * (1 - frac) / np.maximum(n, 1))
-    fig = new_figure(7.0, 4.8)
-    ax = fig.subplots()
-    ax.errorbar(x, frac, yerr=2 * se, fmt="s", color="k", capsize=3, label="stripes: fraction exceeding (+-2 se)")
-    med, beta = float(ds["fit_median"]), float(ds["beta"])
-    if np.isfinite(med):
-        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
-        ax.plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
-                label=f"binomial MLE: median {med:.3g} +- {float(ds['fit_median_se']):.2g}, "
-                      f"beta {beta:.2f} +- {float(ds['beta_se']):.2f}")
-    ax.set_xscale("log")
-    ax.set_ylim(-0.05, 1.05)
-    name = ds.attrs["intensity_variable"]
-    ax.set_xlabel(f"{name} [{ds[name].attrs.get('units', '')}]")
-    ax.set_ylabel("P(exceed)")
-    ax.legend(fontsize=7)
-    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
-    return save_figure(fig, path)
-
-
 def cloud_dataset(cloud, block, foundation, rows, names):
     """The result dataset of a cloud analysis from its per-record ``rows``: the records, the
     exceedance of each, and the maximum-likelihood lognormal fragility; returns ``(ds, warnings)``.
@@ -861,80 +793,6 @@ def cloud_dataset(cloud, block, foundation, rows, names):
                     fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",
                     warnings="; ".join(warnings) or "none")
     return ds, warnings
-
-
-def plot_cloud(ds, path):
-    """The cloud (peak |theta| / slenderness against the IM) and the fitted fragility curve.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A cloud result (:func:`cloud_dataset`).
-    path : str or os.PathLike
-        The PNG file to write.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    References
-    ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
-       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
-
-    Examples
-    --------
-    >>> import pathlib, tempfile
-    >>> from screening.workflow.study import parse_study
-    >>> from screening.workflow.records_study import block_and_foundation
-    >>> from screening.workflow.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
-    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
-    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
-    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
-    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
-    ...         for p, o, a in [(0.001, False, 0.5), (0.04, False, 1.0), (0.002, False, 1.5), (0.01, True, 2.0)]]
-    >>> ds, _ = cloud_dataset(cloud, block, foundation, rows, ["r1", "r2", "r3", "r4"])
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     plot_cloud(ds, pathlib.Path(folder) / "cloud.png").read_bytes()[:4]
-    b'\\x89PNG'
-    """
-    from scipy.special import ndtr
-
-    from screening.report.figure_base import new_figure, save_figure
-
-    name = ds.attrs["intensity_variable"]
-    x = ds[name].values
-    fig = new_figure(7.0, 7.5)
-    ax = fig.subplots(2, 1, sharex=True)
-    slender = float(ds["slenderness"])
-    ratio = np.where(ds["overturned"].values, np.nan, ds["peak_abs_theta"].values / slender)
-    ax[0].scatter(x[~ds["overturned"].values], ratio[~ds["overturned"].values], s=18, label="survived")
-    over = ds["overturned"].values
-    if over.any():
-        ax[0].scatter(x[over], np.ones(over.sum()), marker="x", color="C3", s=30, label="overturned (plotted at 1)")
-    ax[0].axhline(float(ds["threshold_rad"]) / slender, color="0.4", ls="--", lw=0.8, label="threshold")
-    ax[0].set_yscale("log")
-    ax[0].set_ylabel("peak |theta| / atan(b/h)")
-    ax[0].legend(fontsize=7)
-    ax[1].scatter(x, ds["exceed"].values.astype(float), s=18, color="k", label="records (exceed = 1)")
-    med, beta = float(ds["fit_median"]), float(ds["beta"])
-    if np.isfinite(med):
-        xs = np.geomspace(x.min() / 1.5, x.max() * 1.5, 200)
-        ax[1].plot(xs, ndtr(np.log(xs / med) / beta), color="C1",
-                   label=f"lognormal MLE: median {med:.3g} {ds['fit_median'].attrs['units']}, beta {beta:.2f}")
-    ax[1].set_xscale("log")
-    from matplotlib.ticker import NullFormatter
-    ax[1].xaxis.set_minor_formatter(NullFormatter())
-    ax[1].set_ylim(-0.05, 1.05)
-    units = ds[name].attrs.get("units", "")
-    ax[1].set_xlabel(f"{name} [{units}]")
-    ax[1].set_ylabel("P(exceed)")
-    ax[1].legend(fontsize=7)
-    fig.suptitle(ds.attrs.get("title", ""), fontsize=9)
-    return save_figure(fig, path)
 
 
 def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, seed=0, dt=0.01):

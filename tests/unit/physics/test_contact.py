@@ -216,6 +216,23 @@ def test_printed_eq11_eq12_cubic_terms_are_exact():
     assert -m_eps == pytest.approx(eps * K * z_b**4 * (4 * B * s - z) * c / (20 * s**2), rel=1e-9)
 
 
+def test_the_bed_rocking_stiffness_is_the_moment_of_the_linear_pressure_over_the_base():
+    """``(2/3) b^3 k`` against a quadrature of the moment ``k (x theta) x`` over ``-b..b`` per unit rotation,
+    for arrays of ``b`` and ``k``; the paper's ``K0`` and the linear rocking stiffness are built on it."""
+    from screening.condensation.paper import coefficient_constants
+    from screening.physics.contact import bed_rocking_stiffness, linear_rocking_stiffness
+
+    b, k = np.array([0.02, 0.035, 0.3]), np.array([1e6, 2.89e7, 5e8])
+    block, bed = Block(m=8.67, b=b, h=0.21), Foundation(k=k, lam=8.95e8)
+    theta = 1e-4
+    moment = [quad(lambda x, kk=kk: kk * (x * theta) * x, -bb, bb, epsabs=0, epsrel=1e-13)[0] / theta
+              for bb, kk in zip(b, k)]
+    np.testing.assert_allclose(bed_rocking_stiffness(block, bed), moment, rtol=1e-12)
+    np.testing.assert_array_equal(coefficient_constants(block, bed)["K0"], bed_rocking_stiffness(block, bed))
+    np.testing.assert_array_equal(linear_rocking_stiffness(block, bed),
+                                  bed_rocking_stiffness(block, bed) - block.m * block.g * block.h)
+
+
 def test_the_linear_rocking_stiffness_is_k_at_rest_of_every_condensation_without_the_cubic_term():
     """One home for ``(2/3) b^3 k - m g h``: each condensation's ``K(0)`` at ``eps = 0``, by its own
     function at ``theta = 0`` and by its ``stiffness_at_rest``; the rocking frequency squares to it."""

@@ -1,0 +1,85 @@
+"""The intensity at which the linearization reaches a target peak uplift probability.
+
+A study that sets its points by how hard they rock, not by ``S0``, asks for the white-noise or
+filtered intensity ``S0`` [m2 s-3] at which the stochastic linearization's peak uplift probability
+``max_t P(|theta| > theta_ul)`` equals a target: :func:`calibrate_intensity`, a bisection on
+``log10 S0``.  The speed-accuracy trade study (:mod:`screening.analysis.tradeoff`) and the error atlas
+(:mod:`screening.analysis.atlas_run`) set their points with it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from screening.solvers.moments import solve_moments
+from screening.status import PointStatus
+
+__all__ = ["round_significant", "calibrate_intensity"]
+
+
+def round_significant(x, digits=3):
+    """``x`` rounded to ``digits`` significant digits.
+
+    Parameters
+    ----------
+    x : float
+        Any value (any unit); zero and non-finite values are returned as they are.
+    digits : int
+        Significant digits.
+
+    Returns
+    -------
+    float
+        The rounded value [unit of ``x``].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> round_significant(0.000123456), round_significant(98765.0, 2), round_significant(float("inf"))
+    (0.000123, 99000.0, inf)
+    """
+    if x == 0 or not math.isfinite(x):
+        return x
+    return float(f"{x:.{digits - 1}e}")
+
+
+def calibrate_intensity(block, foundation, make_exc, target, t_out, rtol=1e-7, log10_bounds=(-10.0, 1.0),
+                        condensation="paper"):
+    """``S0`` [m2 s-3] at which SL's peak uplift probability equals ``target`` [1].
+
+    Bisection (Brent) on ``log10 S0`` of ``log(peak_p_uplift) - log(target)``; a point whose
+    SL integration stops (status != ok) counts as ``peak_p_uplift = 1``.  The result is
+    rounded to 3 significant digits and must give status ok and a peak uplift probability
+    within 10 % of the target, else ValueError.  ``make_exc(S0)`` builds the excitation.
+    """
+    from scipy.optimize import brentq
+
+    def solve(log_s0):
+        r = solve_moments(block, foundation, make_exc(10.0 ** log_s0), t_out, rtol=rtol, condensation=condensation)
+        return int(r["status"]), float(r["peak_p_uplift"])
+
+    def f(log_s0):
+        status, p = solve(log_s0)
+        p = 1.0 if status != PointStatus.ok else max(p, 1e-300)
+        return math.log(p) - math.log(target)
+
+    lo, hi = log10_bounds
+    if f(lo) >= 0 or f(hi) <= 0:
+        raise ValueError(f"target_peak_p_uplift {target:g} is not bracketed by S0 in "
+                         f"[1e{lo:g}, 1e{hi:g}] m2 s-3")
+    x = brentq(f, lo, hi, xtol=1e-6)
+    S0 = round_significant(10.0 ** x)
+    status, p = solve(math.log10(S0))
+    if status != PointStatus.ok or abs(p / target - 1.0) > 0.1:
+        raise ValueError(f"target_peak_p_uplift {target:g} is not reachable with SL status ok "
+                         f"(at S0 = {S0:.3g}: status {_status_name(status)}, peak p_uplift {p:.3g})")
+    return S0
+
+
+def _status_name(status):
+    return PointStatus(status).name if status in set(PointStatus) else status
