@@ -21,6 +21,7 @@ COVERED = [
     "screening.analysis.fit_excitation",
     "screening.analysis.fragility",
     "screening.analysis.im_fragility",
+    "screening.analysis.indicators",
     "screening.analysis.metrics",
     "screening.analysis.multifidelity",
     "screening.analysis.probabilities",
