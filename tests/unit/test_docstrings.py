@@ -17,6 +17,7 @@ import pytest
 
 #: Modules whose every public function has a full numpydoc docstring with a running example.
 COVERED = [
+    "screening.analysis.atlas",
     "screening.analysis.correction",
     "screening.analysis.fit_excitation",
     "screening.analysis.fragility",
