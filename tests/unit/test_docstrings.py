@@ -23,6 +23,7 @@ COVERED = [
     "screening.analysis.fragility",
     "screening.analysis.im_fragility",
     "screening.analysis.indicators",
+    "screening.analysis.intensity",
     "screening.analysis.intensity_records",
     "screening.analysis.intensity_rvt",
     "screening.analysis.metrics",
