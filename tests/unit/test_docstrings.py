@@ -31,6 +31,7 @@ COVERED = [
     "screening.analysis.multifidelity",
     "screening.analysis.probabilities",
     "screening.analysis.tradeoff_study",
+    "screening.analysis.trust",
     "screening.beds",
     "screening.condensation.api",
     "screening.condensation.cubic",
