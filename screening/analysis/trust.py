@@ -657,17 +657,15 @@ def error_model_trust(x, status, condensation, covered=True, models=None):
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
-    >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
-    ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
-    ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
-    ...      "slenderness": 0.16515, "status": ("S0", [0, 0])},
-    ...     coords={"S0": [1e-4, 1e-3], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
-    ...             "I_cm": 0.131, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": 6e7, "T1": 4.0, "T2": 2.0},
-    ...     attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley",
-    ...            "condensation": "paper"})
-    >>> from screening.analysis.error_model import dataset_features
-    >>> x, _, _ = dataset_features(ds)
+    Two points of the paper's block (their features from the model objects and the indicators):
+
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> from screening.analysis.error_model import model_features
+    >>> ind = {"peak_p_uplift": np.array([0.2011, 0.7653]), "k_eq_margin": np.array([1.0, 0.729]),
+    ...        "sigma_ratio": np.array([0.00569, 0.02437]), "decay_excess": np.array([1.342, 0.731])}
+    >>> x = model_features(ind, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
+    ...                    WhiteNoise(np.array([1e-4, 1e-3])))
     >>> error_model_trust(x, [0, 0], "paper")[0].tolist(), error_model_trust(x, [0, 2], "paper")[0].tolist()
     ([1, 2], [1, 2])
     """

@@ -19,6 +19,7 @@ import pytest
 COVERED = [
     "screening.analysis.atlas",
     "screening.analysis.correction",
+    "screening.analysis.error_model",
     "screening.analysis.escalation",
     "screening.analysis.fit_excitation",
     "screening.analysis.fragility",
