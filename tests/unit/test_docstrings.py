@@ -18,6 +18,7 @@ import pytest
 #: Modules whose every public function has a full numpydoc docstring with a running example.
 COVERED = [
     "screening.analysis.atlas",
+    "screening.analysis.atlas_run",
     "screening.analysis.correction",
     "screening.analysis.error_model",
     "screening.analysis.escalation",
