@@ -58,9 +58,8 @@ from screening.solvers.timegrid import output_times
 from screening.status import PointStatus
 from screening.workflow.config import StudyError, build_models
 
-__all__ = ["round_significant", "calibrate_intensity", "Point", "build_points", "point_models", "time_call",
-           "solve_sl", "run_sl", "run_mcs", "warm_up", "set_threads", "measure_grid", "grid_errors",
-           "measure_convergence", "measure_sl_numerics", "build_dataset", "run_tradeoff", "rerender_reports"]
+__all__ = ["round_significant", "calibrate_intensity", "Point", "time_call", "set_threads", "run_tradeoff",
+           "rerender_reports"]
 
 
 # ============================================================================ model set-up
@@ -103,6 +102,55 @@ def calibrate_intensity(block, foundation, make_exc, target, t_out, rtol=1e-7, l
     SL integration stops (status != ok) counts as ``peak_p_uplift = 1``.  The result is
     rounded to 3 significant digits and must give status ok and a peak uplift probability
     within 10 % of the target, else ValueError.  ``make_exc(S0)`` builds the excitation.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block (scalar fields).
+    foundation : screening.model.Foundation
+        Its bed.
+    make_exc : callable
+        ``make_exc(S0)`` -> the excitation at ``S0`` [m2 s-3].
+    target : float
+        Peak uplift probability aimed at [1], in (0, 1).
+    t_out : numpy.ndarray
+        Output times of the linearization [s].
+    rtol : float, default 1e-7
+        Relative tolerance of the moment equations.
+    log10_bounds : tuple of float, default (-10.0, 1.0)
+        Bracket of ``log10 S0`` [log10 of m2 s-3].
+    condensation : str, default "paper"
+        The condensation.
+
+    Returns
+    -------
+    float
+        ``S0`` [m2 s-3], 3 significant digits.
+
+    Notes
+    -----
+    The peak uplift probability is that of the stochastic linearization's moment equations
+    (eqs. (39)-(46) in [1]); the root is found by Brent's method [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. P. Brent, Algorithms for Minimization without Derivatives, Prentice-Hall (1973), chapter 4.
+
+    Examples
+    --------
+    The paper's block on a softening bed, 5 % peak uplift probability over a 4 s record:
+
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> from screening.model.excitation import Envelope
+    >>> from screening.solvers.timegrid import output_times
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5)
+    >>> t = output_times(4.0, 0.05)
+    >>> S0 = calibrate_intensity(block, bed, lambda s: WhiteNoise(s, Envelope(4.0, 2.0)), 0.05, t)
+    >>> S0, round(float(solve_moments(block, bed, WhiteNoise(S0, Envelope(4.0, 2.0)), t)["peak_p_uplift"]), 3)
+    (3.18e-05, 0.05)
     """
     from scipy.optimize import brentq
 
@@ -548,7 +596,76 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress``
     is a callable taking one line of text (default: stderr) or None.  Returns
     ``(dataset, paths, rules)``: the dataset of :func:`build_dataset`, the dict of written files
-    and the rules of :func:`~screening.analysis.metrics.derive_rules`.
+    and the rules of :func:`~screening.analysis.metrics.derive_rules`.  A bad study file raises
+    :class:`~screening.workflow.config.StudyError` before any work, and nothing is written.
+
+    Parameters
+    ----------
+    study_path : str or pathlib.Path or TradeoffStudy
+        The study file (TOML) or the parsed study.
+    out_dir : str or pathlib.Path, default "outputs"
+        Where the outputs go.
+    progress : callable or None, default: to stderr
+        Called with one line of text per step.
+
+    Returns
+    -------
+    tuple
+        ``(dataset, paths, rules)``: the :class:`xarray.Dataset` of every measurement (SI units in
+        its ``units`` attributes), ``{kind: pathlib.Path}`` of the written files and the rules.
+
+    Notes
+    -----
+    The errors of the linearization [1] and of the condensed Monte Carlo against the coupled one,
+    with their Monte Carlo standard errors [2]; what the shipped study found: [3].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+    .. [3] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    A study file with an unknown key is refused before anything runs or is written:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> STUDY = '''title = "t"
+    ... [block]
+    ... m = 8.67
+    ... b = 0.035
+    ... h = 0.21
+    ... [foundation]
+    ... k = 2.89e7
+    ... lam = 8.95e8
+    ... [time]
+    ... t_end = 2.0
+    ... dt = 0.05
+    ... [[family]]
+    ... name = "w"
+    ... kind = "white"
+    ... eps = [6e7]
+    ... S0 = [1e-5, 2e-5]
+    ... [mcs]
+    ... samples = 50
+    ... [convergence]
+    ... points = [{family = "w", eps = 6e7, index = 1}]
+    ... samples = [20, 50]
+    ... rtol_samples = 20
+    ... rtol_factors = [1.0, 32.0]
+    ... '''
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     bad = Path(d) / "bad.toml"
+    ...     _ = bad.write_text(STUDY.replace("[mcs]", "[mcs]\\nbogus = 1"))
+    ...     try:
+    ...         run_tradeoff(bad, Path(d) / "out", progress=None)
+    ...     except StudyError as err:
+    ...         print(str(err).split(": ", 1)[1].split(" (")[0], (Path(d) / "out").exists())
+    mcs.bogus: unknown key False
     """
     study = _study(study_path)
     start = time.perf_counter()
@@ -575,6 +692,61 @@ def rerender_reports(study_path, out_dir="outputs"):
     Returns ``(dataset, paths, rules)`` as :func:`run_tradeoff` (``paths`` without the netCDF).  Raises
     :class:`~screening.workflow.config.StudyError` for a bad study file and ``FileNotFoundError``
     when the study has not been run into ``out_dir``.
+
+    Parameters
+    ----------
+    study_path : str or pathlib.Path or TradeoffStudy
+        The study file (TOML) or the parsed study.
+    out_dir : str or pathlib.Path, default "outputs"
+        Where :func:`run_tradeoff` wrote the study.
+
+    Returns
+    -------
+    tuple
+        ``(dataset, paths, rules)``.
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+    .. [2] ``docs/cli.md``, "The command line" (``screening tradeoff``; this package's documentation).
+
+    Examples
+    --------
+    Before the study has run there is nothing to re-render:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> STUDY = '''title = "t"
+    ... [block]
+    ... m = 8.67
+    ... b = 0.035
+    ... h = 0.21
+    ... [foundation]
+    ... k = 2.89e7
+    ... lam = 8.95e8
+    ... [time]
+    ... t_end = 2.0
+    ... dt = 0.05
+    ... [[family]]
+    ... name = "w"
+    ... kind = "white"
+    ... eps = [6e7]
+    ... S0 = [1e-5, 2e-5]
+    ... [mcs]
+    ... samples = 50
+    ... [convergence]
+    ... points = [{family = "w", eps = 6e7, index = 1}]
+    ... samples = [20, 50]
+    ... rtol_samples = 20
+    ... rtol_factors = [1.0, 32.0]
+    ... '''
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     _ = (Path(d) / "tiny.toml").write_text(STUDY)
+    ...     try:
+    ...         rerender_reports(Path(d) / "tiny.toml", Path(d) / "out")
+    ...     except FileNotFoundError as err:
+    ...         print(Path(str(err).split()[0]).name, "does not exist")
+    tiny.nc does not exist
     """
     study = _study(study_path)
     nc = output_paths(out_dir, _stem(study))["nc"]
