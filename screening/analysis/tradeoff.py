@@ -630,42 +630,18 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
 
     Examples
     --------
-    A study file with an unknown key is refused before anything runs or is written:
+    A study file without a family is refused before anything runs or is written:
 
     >>> import tempfile
     >>> from pathlib import Path
-    >>> STUDY = '''title = "t"
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... [time]
-    ... t_end = 2.0
-    ... dt = 0.05
-    ... [[family]]
-    ... name = "w"
-    ... kind = "white"
-    ... eps = [6e7]
-    ... S0 = [1e-5, 2e-5]
-    ... [mcs]
-    ... samples = 50
-    ... [convergence]
-    ... points = [{family = "w", eps = 6e7, index = 1}]
-    ... samples = [20, 50]
-    ... rtol_samples = 20
-    ... rtol_factors = [1.0, 32.0]
-    ... '''
     >>> with tempfile.TemporaryDirectory() as d:
     ...     bad = Path(d) / "bad.toml"
-    ...     _ = bad.write_text(STUDY.replace("[mcs]", "[mcs]\\nbogus = 1"))
+    ...     _ = bad.write_text('title = "no families"\\n')
     ...     try:
     ...         run_tradeoff(bad, Path(d) / "out", progress=None)
     ...     except StudyError as err:
-    ...         print(str(err).split(": ", 1)[1].split(" (")[0], (Path(d) / "out").exists())
-    mcs.bogus: unknown key False
+    ...         print(str(err).split(": ", 1)[1], (Path(d) / "out").exists())
+    family: at least one [[family]] table is required False
     """
     study = _study(study_path)
     start = time.perf_counter()
