@@ -790,7 +790,7 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     ----------
     fields : mapping
         Parameter name to value (numpy arrays, xarray DataArrays or numbers): ``m`` [kg], ``b``, ``h``
-        [m], ``g`` [m s-2], ``k`` [N m-3], and where present ``eps`` [m-2], ``I_cm`` [kg m2], ``lam``
+        [m], ``g`` [m s-2], ``k`` [N m-2], and where present ``eps`` [m-2], ``I_cm`` [kg m2], ``lam``
         [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s] (a
         missing damping field gives a NaN ``zeta_v``).
     contact : str, default "hunt_crossley"
