@@ -456,7 +456,8 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     Parameters
     ----------
-    excitation : a registered excitation (scalar fields; envelope exponential or constant).
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
     cutoff : float
@@ -505,9 +506,16 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Parameters
     ----------
-    excitation, t_end, cutoff, n_records, seed
-        As for :func:`simulated_pgv` (the excitation, record length [s], band limit [rad s-1], records per
-        shape, seed); the acceleration is not high-passed.
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields; envelope exponential or constant).
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit of the ground motion [rad s-1].
+    n_records : int, default PGV_RECORDS
+        Records synthesised per excitation shape.
+    seed : int, default PGV_SEED
+        Seed of the synthesis.  As for :func:`simulated_pgv`, but the acceleration is not high-passed.
 
     Returns
     -------
@@ -566,7 +574,8 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     Parameters
     ----------
-    excitation : the study's excitation (scalar fields; envelope exponential or constant).
+    excitation : screening.excitations.base.Excitation
+        The study's excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
     cutoff : float
@@ -618,8 +627,9 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     Parameters
     ----------
-    excitation : the study's excitation (``psd(omega)`` [m2 s-3], any spectrum; ``envelope`` exponential
-        or constant).
+    excitation : screening.excitations.base.Excitation
+        The study's excitation (``psd(omega)`` [m2 s-3], any spectrum; ``envelope`` exponential or
+        constant).
     t_end : float
         Record length [s].
     cutoff : float
@@ -697,7 +707,8 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     Parameters
     ----------
-    excitation : the study's excitation.
+    excitation : screening.excitations.base.Excitation
+        The study's excitation.
     period : float
         Central period ``T`` [s].
     t_end : float

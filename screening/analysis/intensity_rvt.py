@@ -248,13 +248,18 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     Parameters
     ----------
-    excitation : a registered excitation (:mod:`screening.excitations`; array fields broadcast with the others).
-    t_end : record length [s].
-    cutoff : band limit of the ground motion [rad s-1] (:func:`ground_cutoff`, the one its PGA refers to).
-    uplift_acceleration : ground acceleration at which the block starts to rock [m s-2]
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (:mod:`screening.excitations`; array fields broadcast with the others).
+    t_end : float
+        Record length [s].
+    cutoff : float or array_like
+        Band limit of the ground motion [rad s-1] (:func:`ground_cutoff`, the one its PGA refers to).
+    uplift_acceleration : float or array_like
+        Ground acceleration at which the block starts to rock [m s-2]
         (:func:`screening.analysis.probabilities.uplift_acceleration`).
-    method : ``"poisson"`` (default: independent crossings, the distribution whose median is
-        :func:`pga_median`) or ``"vanmarcke"`` (clumped crossings).
+    method : {"poisson", "vanmarcke"}, default "poisson"
+        ``"poisson"``: independent crossings, the distribution whose median is :func:`pga_median`;
+        ``"vanmarcke"``: clumped crossings.
 
     Returns
     -------
@@ -582,7 +587,8 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     Parameters
     ----------
-    excitation : object with a method ``psd(omega)``, the two-sided PSD ``S(omega)`` [m2 s-3] of the
+    excitation : screening.excitations.base.Excitation
+        Any object with a method ``psd(omega)``, the two-sided PSD ``S(omega)`` [m2 s-3] of the
         unmodulated acceleration (any excitation: white noise, Kanai-Tajimi, Clough-Penzien, ...).
     cutoff : float
         Band limit ``omega_c`` [rad/s].
