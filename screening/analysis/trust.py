@@ -120,8 +120,8 @@ def bed_law(eps):
 
     Notes
     -----
-    The bed's stiffness per unit area is ``k (z + eps z^3)`` (section 2.1 in [1]): ``eps > 0`` stiffens
-    with the indentation, ``eps < 0`` softens.
+    The bed's restoring force per unit base length is ``k z + eps k z^3`` (eq. (3) in [1]): ``eps > 0``
+    stiffens with the indentation, ``eps < 0`` softens.
 
     References
     ----------
