@@ -91,12 +91,37 @@ KINDS = ("white", "kanai_tajimi")
 
 
 def design(n_points, seed=0):
-    """``(n_points, len(GROUPS))`` scrambled Sobol points in the unit cube [1] (:class:`scipy.stats.qmc.Sobol`).
+    """The atlas design: scrambled Sobol points in the unit cube, one coordinate per axis of :data:`GROUPS`.
+
+    Drawn with :class:`scipy.stats.qmc.Sobol` (Owen scrambling); the same ``seed`` gives the same points.
 
     Parameters
     ----------
-    n_points : number of points, integer >= 1 (a power of two keeps the balance properties of the sequence).
-    seed : scrambling seed, integer >= 0.
+    n_points : int
+        Number of points, >= 1 (a power of two keeps the balance properties of the sequence).
+    seed : int, default 0
+        Scrambling seed, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_points, len(GROUPS))`` coordinates in ``[0, 1)`` [1].
+
+    References
+    ----------
+    .. [1] I. M. Sobol', "On the distribution of points in a cube and the approximate evaluation of
+       integrals", USSR Computational Mathematics and Mathematical Physics 7(4) (1967) 86-112.
+    .. [2] A. B. Owen, "Scrambling Sobol' and Niederreiter-Xing points", Journal of Complexity 14(4)
+       (1998) 466-489.
+
+    Examples
+    --------
+    The first 8 points put exactly one coordinate in each eighth of every axis:
+
+    >>> import numpy as np
+    >>> u = design(8, seed=0)
+    >>> u.shape, sorted(np.floor(u[:, 0] * 8).astype(int).tolist())
+    ((8, 9), [0, 1, 2, 3, 4, 5, 6, 7])
     """
     from scipy.stats import qmc
 
@@ -112,19 +137,53 @@ def _lerp(u, bounds):
 
 
 def groups_of(u):
-    """The dimensionless groups of unit-cube design points ``u`` (``(..., len(GROUPS))``).
+    """The dimensionless groups of unit-cube design points.
+
+    Each coordinate maps onto its group over :data:`RANGES` (log-uniformly where the axis name says
+    ``log10``); ``u_bed`` picks the bed law and ``|e|``, ``u_kind`` the excitation kind, ``u_intensity``
+    the target uplift probability and the factor past toppling.
+
+    Parameters
+    ----------
+    u : array_like
+        Design points ``(..., len(GROUPS))`` in the unit cube [1] (:func:`design`); ``ValueError`` for
+        another last dimension or a coordinate outside ``[0, 1]``.
 
     Returns
     -------
-    dict of arrays over the points: ``alpha`` [rad], ``r_ul`` [1], ``zeta_v`` [1], ``e`` [1], ``bed_law``
-    (str), ``kind`` (str), ``omega_g_p`` [1] (NaN for white noise), ``zeta_g`` [1] (NaN for white noise),
-    ``tau`` [1], ``p_target`` [1], ``factor`` [1].
+    dict of str to numpy.ndarray
+        Arrays over the points: ``alpha`` [rad], ``r_ul`` [1], ``zeta_v`` [1], ``e`` [1], ``bed_law``
+        (str), ``kind`` (str), ``omega_g_p`` [1] (NaN for white noise), ``zeta_g`` [1] (NaN for white
+        noise), ``tau`` [1], ``p_target`` [1], ``factor`` [1].
 
     Notes
     -----
     ``p_target = 1 / (1 + exp(-x))`` with ``x`` uniform between the logits of :data:`P_TARGET` as
     ``u_intensity`` runs over ``[0, BEYOND_EDGE)``; above, ``p_target = P_BEYOND`` and
-    ``log factor`` is uniform over ``log BEYOND_FACTOR``.
+    ``log factor`` is uniform over ``log BEYOND_FACTOR``.  The groups follow from Buckingham's theorem
+    [3] with Housner's frequency parameter as the time scale [2]; the bed and the filter are those of
+    [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
+       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [3] E. Buckingham, "On physically similar systems; illustrations of the use of dimensional
+       equations", Physical Review 4(4) (1914) 345-376.
+
+    Examples
+    --------
+    The centre of the cube: the middle slenderness, a hardening bed, a Kanai-Tajimi filter.
+
+    >>> import numpy as np
+    >>> g = groups_of(np.full(9, 0.5))
+    >>> float(g["alpha"][0]), str(g["bed_law"][0]), str(g["kind"][0]), float(g["zeta_g"][0])
+    (0.275, 'hardening', 'kanai_tajimi', 0.5)
+    >>> f"{float(g['r_ul'][0]):.4g}", f"{(3e-5 * 0.25) ** 0.5:.4g}"       # the geometric mean of its range
+    ('0.002739', '0.002739')
     """
     u = np.atleast_2d(np.asarray(u, dtype=float))
     if u.shape[-1] != len(GROUPS) or np.any((u < 0) | (u > 1)):
@@ -156,16 +215,60 @@ def groups_of(u):
 
 
 def housner_frequency(block):
-    """Housner's frequency parameter ``p = sqrt(m g R / I_O)`` [rad/s], ``I_O = I_cm + m R^2``, ``R = sqrt(b^2+h^2)``."""
+    """Housner's frequency parameter ``p`` of a rigid block [rad s-1].
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block: ``m`` [kg], half-width ``b`` [m], half-height ``h`` [m], ``I_cm`` [kg m2], ``g``
+        [m s-2] (scalars).
+
+    Returns
+    -------
+    float
+        ``p`` [rad s-1].
+
+    Notes
+    -----
+    ``p = sqrt(m g R / I_O)`` with ``I_O = I_cm + m R^2`` and ``R = sqrt(b^2 + h^2)`` [2]; for a uniform
+    rectangular block ``I_O = 4 m R^2 / 3`` and ``p = sqrt(3 g / (4 R))``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
+       the Seismological Society of America 53(2) (1963) 403-417.
+
+    Examples
+    --------
+    >>> from screening import Block
+    >>> block = Block(m=100.0, b=0.3, h=0.4)                  # R = 0.5 m
+    >>> f"{housner_frequency(block):.6f}", f"{(3 * 9.81 / (4 * 0.5)) ** 0.5:.6f}"
+    ('3.836014', '3.836014')
+    """
     R = math.hypot(float(block.b), float(block.h))
     return math.sqrt(float(block.m) * float(block.g) * R / (float(block.I_cm) + float(block.m) * R * R))
 
 
 def physical_point(groups, i=0):
-    """``(block, foundation, excitation_shape, timing)`` of point ``i`` of :func:`groups_of` output.
+    """The physical block, bed and excitation shape of one design point: they have exactly its groups.
 
-    ``excitation_shape``: ``{"kind", "omega_g" [rad/s], "zeta_g" [1]}`` (the intensity ``S0`` is set later by
-    bisection, :func:`make_excitation`); ``timing``: ``{"T1", "T2", "t_end", "dt"}`` [s].
+    Parameters
+    ----------
+    groups : dict
+        Output of :func:`groups_of` (arrays over points, or scalars).
+    i : int, default 0
+        Index of the point.
+
+    Returns
+    -------
+    tuple
+        ``(block, foundation, excitation_shape, timing)``: a :class:`screening.model.Block`, a
+        :class:`screening.model.Foundation`, ``{"kind", "omega_g" [rad s-1], "zeta_g" [1]}`` (the
+        intensity ``S0`` is set later by bisection, :func:`make_excitation`) and ``{"T1", "T2",
+        "t_end", "dt"}`` [s].
 
     Notes
     -----
@@ -173,7 +276,29 @@ def physical_point(groups, i=0):
     r_ul alpha)``; ``eps = e / z0^2``, ``z0 = m g / (2 b k)``; ``lam = zeta_v m w_v / (b z_rest)`` with
     ``w_v = sqrt(2 b k / m)`` and ``z_rest`` the exact rest indentation with the cubic term
     (:func:`screening.physics.contact.rest_indentation`); ``omega_g = (omega_g/p) p``; ``T1 = tau / p``,
-    ``T2 = T1 / 2``, ``t_end = RECORD_T1 T1``, ``dt = t_end / N_OUTPUT``.
+    ``T2 = T1 / 2``, ``t_end = RECORD_T1 T1``, ``dt = t_end / N_OUTPUT``.  The bed is the Hunt-Crossley
+    contact law of section 2.1 in [1]; ``p`` is Housner's [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
+       the Seismological Society of America 53(2) (1963) 403-417.
+
+    Examples
+    --------
+    :func:`measured_groups` recomputes the groups from the physical objects:
+
+    >>> import numpy as np
+    >>> g = groups_of(np.full(9, 0.5))
+    >>> block, foundation, shape, timing = physical_point(g)
+    >>> m = measured_groups(block, foundation, shape, timing)
+    >>> all(np.isclose(m[k], g[k][0]) for k in ("alpha", "r_ul", "zeta_v", "e", "omega_g_p", "tau"))
+    True
+    >>> shape["kind"], f"{timing['t_end'] / timing['T1']:.1f}"
+    ('kanai_tajimi', '4.0')
     """
     from screening.model import Block, Foundation
     from screening.physics.contact import rest_indentation
@@ -200,7 +325,46 @@ def physical_point(groups, i=0):
 
 
 def make_excitation(shape, timing, S0):
-    """The excitation object of a point at intensity ``S0`` [m2 s-3] (two-sided PSD level of the driving noise)."""
+    """The excitation of a design point at intensity ``S0``.
+
+    White noise or a Kanai-Tajimi filtered noise, modulated by the envelope of ``timing``.
+
+    Parameters
+    ----------
+    shape : dict
+        ``{"kind": "white" | "kanai_tajimi", "omega_g" [rad s-1], "zeta_g" [1]}`` (:func:`physical_point`).
+    timing : dict
+        ``{"T1", "T2", ...}`` [s] (:func:`physical_point`).
+    S0 : float
+        Two-sided power spectral density level of the driving noise [m2 s-3].
+
+    Returns
+    -------
+    screening.model.excitation.WhiteNoise or screening.model.excitation.KanaiTajimi
+        The excitation, with an :class:`~screening.model.excitation.Envelope` of ``T1``, ``T2``.
+
+    Notes
+    -----
+    The envelope is ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57) in [1]); the Kanai-Tajimi filter
+    has the spectrum of eq. (50) in [1] ([2], [3]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] K. Kanai, "Semi-empirical formula for the seismic characteristics of the ground", Bulletin of
+       the Earthquake Research Institute, University of Tokyo 35 (1957) 309-325.
+    .. [3] H. Tajimi, "A statistical method of determining the maximum response of a building structure
+       during an earthquake", Proceedings of the 2nd World Conference on Earthquake Engineering, Tokyo
+       (1960) vol. 2, 781-797.
+
+    Examples
+    --------
+    >>> ex = make_excitation({"kind": "white"}, {"T1": 4.0, "T2": 2.0}, 0.01)
+    >>> type(ex).__name__, ex.S0, ex.envelope.T1
+    ('WhiteNoise', 0.01, 4.0)
+    """
     from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
 
     env = Envelope(timing["T1"], timing["T2"])
@@ -212,7 +376,45 @@ def make_excitation(shape, timing, S0):
 def measured_groups(block, foundation, shape, timing):
     """The dimensionless groups recomputed from physical objects (independently of the mapping).
 
-    Returns ``{"alpha", "r_ul", "zeta_v", "e", "omega_g_p", "tau", "record_T1"}`` [1 / rad].
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block (scalars: ``m`` [kg], ``b``, ``h`` [m], ...).
+    foundation : screening.model.Foundation
+        Its bed (``k`` [N m-2], ``lam`` [N s m-3], ``eps`` [m-2]).
+    shape : dict
+        ``{"kind", "omega_g" [rad s-1], ...}`` (:func:`physical_point`).
+    timing : dict
+        ``{"T1", "t_end", ...}`` [s] (:func:`physical_point`).
+
+    Returns
+    -------
+    dict of str to float
+        ``{"alpha" [rad], "r_ul", "zeta_v", "e", "omega_g_p" (NaN for white noise), "tau", "record_T1"}``
+        (all [1] but ``alpha``).
+
+    Notes
+    -----
+    ``r_ul = theta_ul / alpha`` with the uplift angle ``theta_ul = m g / (2 b^2 k)`` of [1]; ``e = eps
+    z0^2`` with the static indentation ``z0``; ``zeta_v`` from
+    :func:`screening.solvers.montecarlo.vertical_damping_ratio`; ``omega_g_p = omega_g / p`` and
+    ``tau = T1 p`` with Housner's ``p`` [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
+       the Seismological Society of America 53(2) (1963) 403-417.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> g = measured_groups(block, bed, {"kind": "white"}, {"T1": 4.0, "t_end": 20.0})
+    >>> f"{g['r_ul'] * g['alpha']:.4e}", f"{8.67 * 9.81 / (2 * 0.035 ** 2 * 2.89e7):.4e}", g["record_T1"]
+    ('1.2012e-03', '1.2012e-03', 5.0)
     """
     from screening.condensation import paper
     from screening.solvers.montecarlo import vertical_damping_ratio
@@ -230,9 +432,49 @@ def measured_groups(block, foundation, shape, timing):
 
 
 def derived_groups(block, foundation, shape, S0):
-    """Groups that follow from the design's: ``w_r_p`` (rocking on the bed / ``p``), ``w_v_p`` (vertical /
-    ``p``), ``omega_g_w_r`` (filter / rocking on the bed; NaN for white noise) and the intensity ``I_S =
-    sqrt(2 pi S0 p) / (g tan(alpha))`` [1]."""
+    """The groups that follow from the design's: frequency ratios and the dimensionless intensity.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block (scalars).
+    foundation : screening.model.Foundation
+        Its bed.
+    shape : dict
+        ``{"kind", "omega_g" [rad s-1], ...}`` (:func:`physical_point`).
+    S0 : float
+        Two-sided power spectral density level of the driving noise [m2 s-3].
+
+    Returns
+    -------
+    dict of str to float
+        ``w_r_p`` (rocking on the bed / ``p``), ``w_v_p`` (vertical / ``p``), ``omega_g_w_r`` (filter /
+        rocking on the bed; NaN for white noise) and ``I_S`` [1].
+
+    Notes
+    -----
+    ``I_S = sqrt(2 pi S0 p) / (g tan(alpha))``; for a uniform block ``(w_v / p)^2 = 4 R / (3 b
+    theta_ul)`` and ``(w_r / p)^2 = (sin(alpha) / (3 theta_ul) - cos(alpha)) (4/3) / (1/3 +
+    cos(alpha)^2)`` (module docstring), with Housner's ``p`` [2] and ``theta_ul`` of [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
+       the Seismological Society of America 53(2) (1963) 403-417.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> g = groups_of(np.full(9, 0.5))
+    >>> block, foundation, shape, _ = physical_point(g)
+    >>> d = derived_groups(block, foundation, shape, 0.01)
+    >>> theta_ul = float(g["r_ul"][0] * g["alpha"][0])
+    >>> f"{d['w_v_p']:.4f}", f"{math.sqrt(4 * 0.5 / (3 * float(block.b) * theta_ul)):.4f}"
+    ('80.7449', '80.7449')
+    """
     from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
     p = housner_frequency(block)
@@ -243,7 +485,38 @@ def derived_groups(block, foundation, shape, S0):
 
 
 def family_of(groups):
-    """Family id [int] of each point: the cell of (slenderness bin, ``r_ul`` bin, bed law, excitation kind)."""
+    """The family of each point: the cell of (slenderness bin, ``r_ul`` bin, bed law, excitation kind).
+
+    Parameters
+    ----------
+    groups : dict
+        ``alpha`` [rad], ``r_ul`` [1], ``bed_law`` and ``kind`` (str) over the points
+        (:func:`groups_of`).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The family ids [-], in ``0 .. 2 * 3 * 3 * 2 - 1`` (:func:`family_name` reads them).
+
+    Notes
+    -----
+    ``id = ((a n_r + r) n_law + law) n_kind + kind`` with the bins ``a`` of
+    :data:`FAMILY_ALPHA_EDGES`, ``r`` of :data:`FAMILY_R_EDGES` and the indices in :data:`BED_LAWS`
+    and :data:`KINDS`.  Held-out families are the groups of the grouped cross-validation of
+    ``docs/error_atlas.md``.
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ids = family_of(groups_of(np.full(9, 0.5)))
+    >>> ids.tolist(), family_name(ids[0])
+    ([29], 'alpha1-r1-hardening-kanai_tajimi')
+    """
     a = np.digitize(np.asarray(groups["alpha"], dtype=float), FAMILY_ALPHA_EDGES)
     r = np.digitize(np.asarray(groups["r_ul"], dtype=float), FAMILY_R_EDGES)
     law = np.array([BED_LAWS.index(s) for s in np.atleast_1d(groups["bed_law"])])
@@ -253,7 +526,28 @@ def family_of(groups):
 
 
 def family_name(family):
-    """Readable name of a family id, e.g. ``"alpha0-r1-softening-white"``."""
+    """Readable name of a family id, e.g. ``"alpha0-r1-softening-white"``.
+
+    Parameters
+    ----------
+    family : int
+        A family id of :func:`family_of`.
+
+    Returns
+    -------
+    str
+        ``"alpha<a>-r<r>-<bed law>-<kind>"``.
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+
+    Examples
+    --------
+    >>> family_name(0), family_name(35)
+    ('alpha0-r0-softening-white', 'alpha1-r2-hardening-kanai_tajimi')
+    """
     n_r, n_law, n_kind = len(FAMILY_R_EDGES) + 1, len(BED_LAWS), len(KINDS)
     family = int(family)
     kind = family % n_kind

@@ -23,7 +23,6 @@ from screening.analysis import atlas
 from screening.analysis.target_intensity import calibrate_intensity
 
 __all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
-           "point_intensity", "last_stable_intensity", "linearization_row", "monte_carlo_row", "evaluate_point",
            "assemble", "reference_validity", "REFERENCE_VALIDITY", "OUTSIDE_RULE", "mc_exceedance", "VARIABLES"]
 
 #: Exceedance levels as fractions of the slenderness angle [1].
@@ -50,6 +49,38 @@ def reference_model(block, foundation, timing, excitation_kind, coupled_radians=
     (its step count follows the vertical mode); beyond, the stiff-bed model where its measured validity
     rule vouches for it (:func:`screening.solvers.model_choice.vouches`, with the excitation's kind
     ``excitation_kind``), else the coupled model all the same.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block.
+    foundation : screening.model.Foundation
+        Its bed.
+    timing : dict
+        ``{"t_end": ...}`` [s] (:func:`screening.analysis.atlas.physical_point`).
+    excitation_kind : str
+        ``"white"`` or ``"kanai_tajimi"``.
+    coupled_radians : float, default COUPLED_RADIANS
+        The affordable ``w_v t_end`` [rad].
+
+    Returns
+    -------
+    str
+        ``"coupled"`` or ``"stiff_bed"``.
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+
+    Examples
+    --------
+    The paper's block: ``w_v t_end = sqrt(2 b k / m) t_end`` is about 9,700 rad over 20 s, affordable.
+
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> round((2 * 0.035 * 2.89e7 / 8.67) ** 0.5 * 20.0), reference_model(block, bed, {"t_end": 20.0}, "white")
+    (9661, 'coupled')
     """
     from screening.solvers.model_choice import rule_of, vouches
     from screening.solvers.synthesis import vertical_frequency
@@ -202,6 +233,41 @@ def assemble(results, attrs=None):
     derived groups, ``family``, ``S0``, the reference ``mc_model``; per point and condensation the
     linearization's summaries; per point the reference's summaries, its per-sample ``mc_peak_abs_theta`` and
     ``mc_sample_state`` (0 standing, 1 overturned, 2 diverged) and its ``mc_p_exceed`` at the levels.
+
+    Parameters
+    ----------
+    results : list of dict
+        Results of :func:`evaluate_point` (a point may lack ``sl`` and ``mc``: its values are NaN).
+    attrs : dict, optional
+        Global attributes to add.
+
+    Returns
+    -------
+    xarray.Dataset
+        The atlas, CF-1.8, units of :data:`VARIABLES`; with :func:`reference_validity`.
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+
+    Examples
+    --------
+    Two points, one without an intensity; the reference's four samples: one overturned.
+
+    >>> results = [
+    ...     {"index": 1, "u": [0.5] * 9, "samples": 4, "S0": 0.01,
+    ...      "sl": {"paper": {"status": 0, "peak_var_theta": 1e-5, "peak_p_uplift": 0.3, "sl_trust": 1,
+    ...                       "p_exceed": [0.5, 0.2, 0.01, 0.0, 0.0]}},
+    ...      "mc": {"model": "coupled", "peak_var_theta": 1.1e-5, "peak_var_theta_se": 1e-6,
+    ...             "peak_abs_theta": [0.001, 0.02, 0.05, 0.3], "overturned": [False, False, False, True],
+    ...             "diverged": [False] * 4}},
+    ...     {"index": 0, "u": [0.25] * 9, "samples": 4, "error": "no intensity"}]
+    >>> ds = assemble(results)
+    >>> ds["point"].values.tolist(), ds["mc_n_overturned"].values.tolist(), ds["mc_p_exceed"].values[1].tolist()
+    ([0, 1], [0, 1], [0.75, 0.5, 0.25, 0.25, 0.25])
+    >>> ds["mc_reference_valid"].values.tolist(), ds["sl_peak_var_theta"].attrs["units"]
+    ([0, 1], 'rad2')
     """
     import xarray as xr
 
@@ -300,6 +366,31 @@ def reference_validity(ds):
     and the first indicator out of its interval), empty elsewhere.  A point whose reference is not valid has no
     error (:func:`screening.analysis.error_model.targets`): it enters neither the error model nor its
     cross-validation.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An atlas dataset (``u``, ``mc_model``, ``mc_n_samples``).
+
+    Returns
+    -------
+    dict of str to xarray.DataArray
+        ``mc_reference_valid`` [1] (int8) and ``mc_reference_note`` (str), on ``point``.
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+
+    Examples
+    --------
+    A point whose reference did not run, and one judged by the coupled (full) model:
+
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset({"u": (("point", "axis"), np.full((2, 9), 0.5)), "mc_model": ("point", ["", "coupled"]),
+    ...                  "mc_n_samples": ("point", [0, 500])})
+    >>> reference_validity(ds)["mc_reference_valid"].values.tolist()
+    [0, 1]
     """
     import xarray as xr
 
@@ -324,9 +415,41 @@ def reference_validity(ds):
 
 
 def mc_exceedance(peaks, state, levels):
-    """``(p, se)`` [1] per point and level: fraction of the samples that did not diverge whose peak ``|theta|``
-    exceeds the level [rad] (overturned samples exceed every level), and its Agresti-Coull standard error
-    (:func:`screening.analysis.probabilities.sample_probabilities`, row by row)."""
+    """Monte Carlo probabilities of exceeding rotation levels, per point, with their standard errors.
+
+    The fraction of the samples that did not diverge whose peak ``|theta|`` exceeds the level
+    (overturned samples exceed every level), and its Agresti-Coull standard error
+    (:func:`screening.analysis.probabilities.sample_probabilities`, row by row).
+
+    Parameters
+    ----------
+    peaks : array_like
+        ``(points, samples)`` peak ``|theta|`` [rad].
+    state : array_like of int
+        ``(points, samples)``: 0 standing, 1 overturned, 2 diverged, -1 absent.
+    levels : array_like
+        ``(points, levels)`` [rad].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(p, se)`` [1], ``(points, levels)`` (NaN for a point without samples).
+
+    References
+    ----------
+    .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
+       proportions", The American Statistician 52(2) (1998) 119-126.
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    Four samples: one diverged (left out), one overturned (exceeds every level):
+
+    >>> p, se = mc_exceedance([[0.001, 0.02, 0.05, 0.3]], [[0, 0, 2, 1]], [[0.01, 0.1]])
+    >>> p.round(4).tolist()
+    [[0.6667, 0.3333]]
+    """
     from screening.analysis.probabilities import sample_probabilities
 
     peaks = np.asarray(peaks, dtype=float)

@@ -103,10 +103,44 @@ MIN_CONDENSED_ROWS = 2
 
 
 def escalation_candidates(status, trust, low, high, target):
-    """True at the points to escalate: every point where neither the linearization
-    (:func:`~screening.analysis.correction.linearization_promises`) nor the atlas-corrected linearization
-    (:func:`~screening.analysis.correction.atlas_promises`: the error atlas interval narrower than the
-    target) promises ``target``, the stopped ones included (Monte Carlo is their only estimate)."""
+    """The points to escalate to Monte Carlo: where no linearization estimate promises the target.
+
+    Neither the linearization (:func:`~screening.analysis.correction.linearization_promises`) nor the
+    atlas-corrected linearization (:func:`~screening.analysis.correction.atlas_promises`: the error
+    atlas interval narrower than the target) promises ``target``; the stopped points are included
+    (Monte Carlo is their only estimate), the failed tasks are not.
+
+    Parameters
+    ----------
+    status : array_like of int
+        :class:`~screening.status.PointStatus` codes.
+    trust : array_like of int
+        ``sl_trust`` codes (:class:`~screening.status.Trust`).
+    low, high : array_like
+        The predicted band of ``SL / MCS - 1`` [1].
+    target : float
+        Relative error aimed at [1].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Flat, one per point.
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
+       documentation).
+
+    Examples
+    --------
+    A trusted point within the target, an untrusted one, a stopped one and a failed task:
+
+    >>> import numpy as np
+    >>> from screening.status import Trust
+    >>> escalation_candidates([0, 0, 2, -1], [Trust.trusted, Trust.untrusted, Trust.untrusted, Trust.untrusted],
+    ...                       [-0.05, -0.3, np.nan, np.nan], [0.05, 0.3, np.nan, np.nan], 0.1).tolist()
+    [False, True, True, False]
+    """
     status = np.asarray(status).reshape(-1)
     promised = linearization_promises(trust, low, high, target).reshape(-1) | \
         (atlas_promises(low, high, target).reshape(-1) & (status == int(PointStatus.ok)))
@@ -119,6 +153,38 @@ def cover_points(features, candidates, priority, count):
     Greedy maximin on the standardised features (NaN treated as the column mean): the first point
     has the highest ``priority`` (e.g. ``peak_p_uplift``: the worst corner), each next one is the
     candidate farthest from those already chosen (ties: lowest index).
+
+    Parameters
+    ----------
+    features : array_like
+        ``(points, features)`` [any units: standardised per column].
+    candidates : array_like of bool
+        The candidate points (flat).
+    priority : array_like
+        Per point; the first point chosen has the highest (NaN: lowest).
+    count : int
+        At most this many points.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Flat indices of the chosen points, in the order chosen.
+
+    Notes
+    -----
+    The farthest-point (maximin) greedy choice of [1], started at the point of highest priority.
+
+    References
+    ----------
+    .. [1] T. F. Gonzalez, "Clustering to minimize the maximum intercluster distance", Theoretical Computer
+       Science 38 (1985) 293-306 (the greedy farthest-point choice).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> features = np.array([[0.0], [1.0], [2.0], [3.0], [10.0]])
+    >>> cover_points(features, [True] * 5, [0.1, 0.2, 0.3, 0.4, 0.9], 3).tolist()
+    [4, 0, 3]
     """
     idx = np.flatnonzero(np.asarray(candidates).reshape(-1))
     if idx.size == 0 or count < 1:
@@ -148,9 +214,35 @@ def cover_points(features, candidates, priority, count):
 def condensed_cells(calibration, target):
     """``{(bed law, bin): True}`` for the cells where condensed Monte Carlo may stand in for coupled.
 
-    ``calibration``: the calibration dataset (:func:`screening.analysis.trust.shipped_calibration`).
     A cell qualifies when it holds at least :data:`MIN_CONDENSED_ROWS` points with a condensed run,
     each within ``target / 2`` of the coupled peak var_theta, none with coupled overturning.
+
+    Parameters
+    ----------
+    calibration : xarray.Dataset
+        The calibration dataset (:func:`screening.analysis.trust.shipped_calibration`).
+    target : float
+        Relative error aimed at [1].
+
+    Returns
+    -------
+    dict
+        ``{(bed law, peak_p_uplift bin): bool}`` over the cells of the calibration.
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
+       documentation).
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.analysis.trust import shipped_calibration
+    >>> cells = condensed_cells(shipped_calibration(), 0.1)
+    >>> cells[("linear", 0)], cells[("hardening", 0)]
+    (True, False)
     """
     err = (calibration["condensed_peak_var_theta"] / calibration["coupled_peak_var_theta"] - 1.0).values
     over = (calibration["coupled_n_overturned"] / calibration["coupled_n_samples"]).values
@@ -166,9 +258,47 @@ def condensed_cells(calibration, target):
 
 
 def escalation_model(indicators, status, condensation, eps, cells):
-    """:class:`EscalationModel` per point: condensed where only the linearization is in doubt
-    (paper condensation, neither lock-in nor near toppling, SL ran to the end, a qualifying cell of
-    :func:`condensed_cells`), coupled otherwise."""
+    """The Monte Carlo model of every escalated point: condensed where only the linearization is in doubt.
+
+    Condensed where the paper condensation ran to the end, neither in lock-in nor near toppling, in
+    a qualifying cell of :func:`condensed_cells`; coupled otherwise.
+
+    Parameters
+    ----------
+    indicators : dict
+        The trust indicators (:func:`screening.analysis.indicators.trust_indicators`) [1].
+    status : array_like of int
+        :class:`~screening.status.PointStatus` codes.
+    condensation : str or array_like of str
+        The condensation of each point.
+    eps : array_like
+        The bed's cubic coefficient [m-2] (its sign is the bed law).
+    cells : dict
+        :func:`condensed_cells`.
+
+    Returns
+    -------
+    numpy.ndarray of int8
+        :class:`~screening.status.EscalationModel` codes.
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
+       documentation).
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    The second point is near toppling (``sigma_ratio`` > 0.25), the third in a cell that does not qualify:
+
+    >>> import numpy as np
+    >>> ind = {"peak_p_uplift": np.array([0.01, 0.01, 0.5]), "k_eq_margin": np.full(3, 0.9),
+    ...        "sigma_ratio": np.array([0.01, 0.5, 0.01]), "decay_excess": np.ones(3)}
+    >>> escalation_model(ind, [0, 0, 0], "paper", np.full(3, 1e7), {("hardening", 1): True}).tolist()
+    [0, 1, 1]
+    """
     reg = regime(indicators)
     bins = p_bin(indicators["peak_p_uplift"])
     law = np.broadcast_to(bed_law(eps), bins.shape)
@@ -193,10 +323,38 @@ def auto_escalation_model(calibrated, chosen):
 def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety=SAMPLE_SAFETY):
     """Samples for a relative standard error ``target / 2`` of the peak, from a pilot's relative SE.
 
+    Parameters
+    ----------
+    pilot_rel_se : float
+        The pilot's standard error of the peak over the peak [1].
+    pilot_samples : int
+        The pilot's samples ``n0``.
+    target : float
+        Relative error aimed at [1].
+    most : int, default MAX_SAMPLES
+        Upper bound.
+    safety : float, default SAMPLE_SAFETY
+        Factor on the estimate [1].
+
+    Returns
+    -------
+    int
+        Samples.
+
     Notes
     -----
-    The standard error falls as ``1/sqrt(n)``: ``n = safety n0 (se0 / (target / 2))^2``, clipped to
+    The standard error falls as ``1/sqrt(n)`` [1]: ``n = safety n0 (se0 / (target / 2))^2``, clipped to
     ``[MIN_SAMPLES, most]``; a pilot without a finite SE asks for ``most``.
+
+    References
+    ----------
+    .. [1] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> samples_needed(0.2, 64, 0.1), 1.5 * 64 * (0.2 / 0.05) ** 2, samples_needed(float("nan"), 64, 0.1)
+    (1536, 1536.0, 4000)
     """
     if not math.isfinite(pilot_rel_se) or pilot_rel_se <= 0:
         return int(most)
@@ -205,8 +363,32 @@ def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety
 
 
 def meets_target(peak, peak_se, target):
-    """True where a Monte Carlo peak's standard error is at most ``target / 2`` of the peak (two
-    standard errors within the target); False where either is not finite."""
+    """Whether a Monte Carlo peak's standard error is at most ``target / 2`` of the peak.
+
+    Two standard errors within the target; False where either is not finite.
+
+    Parameters
+    ----------
+    peak, peak_se : array_like
+        The peak and its standard error [any unit, the same].
+    target : float
+        Relative error aimed at [1].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+
+    References
+    ----------
+    .. [1] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> meets_target([1.0, 1.0, np.nan], [0.04, 0.06, 0.01], 0.1).tolist()
+    [True, False, False]
+    """
     peak, peak_se = np.asarray(peak, dtype=float), np.asarray(peak_se, dtype=float)
     with np.errstate(invalid="ignore"):
         return np.isfinite(peak) & np.isfinite(peak_se) & (peak > 0) & (peak_se <= target / 2.0 * peak)
@@ -225,15 +407,40 @@ def grid_point_cost(points_per_sample):
 
 
 def full_contact_share(p_uplift, n_used, samples):
-    """Share [1] of a run's input grid intervals the stiff-bed model advances exactly (in full contact):
-    the time mean of the run's uplift occupancy ``p_uplift`` [1] (its history over the output instants,
-    over the samples used) taken out, times the share of the samples used (an overturned or diverged
-    sample stops early; counted as stopped at once).
+    """Share of a run's input grid intervals the stiff-bed model advances exactly (in full contact).
+
+    The time mean of the run's uplift occupancy taken out, times the share of the samples used (an
+    overturned or diverged sample stops early; counted as stopped at once).
+
+    Parameters
+    ----------
+    p_uplift : array_like
+        The run's uplift occupancy history over the output instants, over the samples used [1].
+    n_used : int
+        Samples used.
+    samples : int
+        Samples run.
+
+    Returns
+    -------
+    float
+        The share [1].
 
     Notes
     -----
     ``(1 - mean_t p_uplift(t)) n_used / samples``, clipped to ``[0, 1]``; ``n_used / samples`` where
     ``p_uplift`` has no finite value (0 when every sample overturned or diverged: all steps adaptive).
+
+    References
+    ----------
+    .. [1] ``docs/montecarlo_numerics.md``, "Monte Carlo numerics: the sample integrators, stiff beds and the
+       cost model" (this package's documentation).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> round(full_contact_share([0.2, 0.4], 8, 10), 6), full_contact_share([np.nan], 5, 10)
+    (0.56, 0.5)
     """
     p = np.asarray(p_uplift, dtype=float)
     p = p[np.isfinite(p)]
@@ -244,9 +451,27 @@ def full_contact_share(p_uplift, n_used, samples):
 
 
 def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_contact=None):
-    """Estimated CPU time [s] of a Monte Carlo run from its integration steps and synthesis grid
-    points (each summed over its ``samples`` samples); ``rodas``: the steps are the linearly implicit
-    pair's; ``full_contact`` (stiff-bed model only): :func:`full_contact_share` of the run (None or NaN: not known).
+    """Estimated CPU time of a Monte Carlo run from its integration steps and synthesis grid points.
+
+    Parameters
+    ----------
+    steps : float
+        Integration steps, summed over the samples.
+    model : int
+        :class:`~screening.status.EscalationModel` code.
+    grid_points : float, default 0
+        Synthesis grid points, summed over the samples.
+    rodas : bool, default False
+        The steps are the linearly implicit pair's.
+    samples : int, default 1
+        Samples of the run.
+    full_contact : float, optional
+        Stiff-bed model only: :func:`full_contact_share` of the run [1] (None or NaN: not known).
+
+    Returns
+    -------
+    float
+        CPU time [s].
 
     Notes
     -----
@@ -259,7 +484,20 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
 
     (``grid_points - samples``: the grid intervals of all samples).  The counts are fixed by the study,
     the seed and the samples, so a budget planned on this cost selects the same points and samples on
-    every machine.
+    every machine.  The fitted constants and their check: [1], [2].
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold", section "Cost
+       model of the escalation" (this package's documentation).
+    .. [2] ``docs/montecarlo_numerics.md``, "Monte Carlo numerics: the sample integrators, stiff beds and the
+       cost model" (this package's documentation).
+
+    Examples
+    --------
+    >>> from screening.status import EscalationModel
+    >>> estimated_cost(1e6, EscalationModel.coupled), 1e6 * STEP_COST_S[EscalationModel.coupled]
+    (0.41, 0.41)
     """
     model = EscalationModel(int(model))
     grid = float(grid_points)
@@ -274,15 +512,66 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
 
 
 def prior_cost(samples, t_end, model):
-    """Estimated CPU time [s] of ``samples`` samples of ``t_end`` [s] before any run at the point
-    (:data:`PRIOR_STEPS_PER_S` steps per second of record)."""
+    """Estimated CPU time of a run before any run at the point.
+
+    Parameters
+    ----------
+    samples : int
+        Samples.
+    t_end : float
+        Record length [s].
+    model : int
+        :class:`~screening.status.EscalationModel` code.
+
+    Returns
+    -------
+    float
+        CPU time [s]: :func:`estimated_cost` of ``samples t_end PRIOR_STEPS_PER_S`` steps.
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold", section "Cost
+       model of the escalation" (this package's documentation).
+
+    Examples
+    --------
+    >>> from screening.status import EscalationModel
+    >>> f"{prior_cost(100, 20.0, EscalationModel.condensed):.4f}", f"{100 * 20.0 * 3000.0 * 0.14e-6:.4f}"
+    ('0.8400', '0.8400')
+    """
     return estimated_cost(samples * t_end * PRIOR_STEPS_PER_S, model)
 
 
 def affordable_points(budget_s, point_cost_s, most=MAX_POINTS):
-    """How many points a budget [s] covers at ``point_cost_s`` [s] each (pilot and full run), between
-    :data:`MIN_COVER` and ``most``: with a small budget, fewer points at the target's standard error
-    rather than many pilots of no use to anyone."""
+    """How many points a budget covers, between :data:`MIN_COVER` and ``most``.
+
+    With a small budget, fewer points at the target's standard error rather than many pilots of no
+    use to anyone.
+
+    Parameters
+    ----------
+    budget_s : float
+        CPU budget [s].
+    point_cost_s : float
+        Cost of one point, pilot and full run [s] (not finite or <= 0: ``most``).
+    most : int, default MAX_POINTS
+        Upper bound.
+
+    Returns
+    -------
+    int
+        Points.
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold", section "Cost
+       model of the escalation" (this package's documentation).
+
+    Examples
+    --------
+    >>> affordable_points(100.0, 5.0), affordable_points(100.0, 50.0), affordable_points(1e6, 1.0)
+    (20, 8, 48)
+    """
     if not (math.isfinite(point_cost_s) and point_cost_s > 0):
         return int(most)
     return int(min(max(math.floor(budget_s / point_cost_s), MIN_COVER), most))

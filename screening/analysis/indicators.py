@@ -22,7 +22,43 @@ ENVELOPE_FLOOR = 1e-12
 
 
 def envelope_fraction(ds):
-    """``q(t_end)^2 / max_t q(t)^2`` of a dataset's envelope on its output times (1 for a constant one)."""
+    """The envelope's power left at the end of the record: ``q(t_end)^2 / max_t q(t)^2``.
+
+    Evaluated on the dataset's output times ``t`` with its envelope parameters ``T1``, ``T2``; 1 for a
+    stationary (``envelope = "constant"``) input.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization dataset with ``t`` [s], ``T1`` and ``T2`` [s] and the attribute ``envelope``
+        (``"exponential"`` when absent).
+
+    Returns
+    -------
+    xarray.DataArray
+        The fraction [1], on the dimensions of ``T1`` and ``T2``.
+
+    Notes
+    -----
+    The envelope is ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57) in [1]); its square scales the
+    input's power spectral density (eq. (56) in [1]).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset({"T1": 4.0, "T2": 2.0}, coords={"t": np.linspace(0.0, 20.0, 201)})
+    >>> q = lambda t: 4 * (np.exp(-t / 4) - np.exp(-t / 2))
+    >>> f"{float(envelope_fraction(ds)):.5f}", f"{q(20.0) ** 2 / q(4 * np.log(2)) ** 2:.5f}"
+    ('0.00072', '0.00072')
+    >>> float(envelope_fraction(ds.assign_attrs(envelope="constant")))
+    1.0
+    """
     kind = ds.attrs.get("envelope", "exponential")
     if kind == "constant":
         return xr.DataArray(1.0)
@@ -32,22 +68,51 @@ def envelope_fraction(ds):
 
 def trust_indicators(peak_p_uplift, min_k_eq, k_eq_rest, peak_var_theta, slenderness, var_theta_end,
                      envelope_end_fraction):
-    """The numeric indicators of the rule (numpy arrays, broadcast against each other).
+    """The numeric indicators the trust rules read, from the linearization's outputs.
+
+    The four numbers the rules of :mod:`screening.analysis.trust` compare with their thresholds; the
+    inputs are numpy arrays (or scalars) that broadcast against each other.
 
     Parameters
     ----------
-    peak_p_uplift : SL peak uplift probability [1].
-    min_k_eq, k_eq_rest : minimum and at-rest equivalent stiffness [N m rad-1].
-    peak_var_theta : SL peak var_theta [rad2].
-    slenderness : atan(b/h) [rad].
-    var_theta_end : SL var_theta at the end of the record [rad2].
-    envelope_end_fraction : ``q(t_end)^2 / max q^2`` [1] (1 for stationary input).
+    peak_p_uplift : array_like
+        The linearization's peak uplift probability [1].
+    min_k_eq, k_eq_rest : array_like
+        The minimum and the at-rest equivalent stiffness [N m rad-1].
+    peak_var_theta : array_like
+        The linearization's peak variance of the rotation [rad2].
+    slenderness : array_like
+        ``atan(b/h)`` [rad].
+    var_theta_end : array_like
+        The variance of the rotation at the end of the record [rad2].
+    envelope_end_fraction : array_like
+        ``q(t_end)^2 / max q^2`` [1] (1 for a stationary input; :func:`envelope_fraction`).
 
     Returns
     -------
-    dict
-        ``{"peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess"}`` (see the module docstring),
-        arrays broadcast to one shape.
+    dict of str to numpy.ndarray
+        ``{"peak_p_uplift", "k_eq_margin", "sigma_ratio", "decay_excess"}`` [1], broadcast to one shape.
+
+    Notes
+    -----
+    ``k_eq_margin = min k_eq / k_eq(0)``; ``sigma_ratio = sqrt(peak var_theta) / atan(b/h)``;
+    ``decay_excess = (var_theta(t_end) / peak var_theta) / max(q(t_end)^2 / max q^2, 1e-12)``.  The
+    equivalent stiffness is that of the stochastic linearization (section 2.4 in [1]); ``atan(b/h)`` is
+    the rigid block's toppling angle [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
+       the Seismological Society of America 53(2) (1963) 403-417.
+
+    Examples
+    --------
+    >>> out = trust_indicators(0.3, 50.0, 100.0, 0.01, 0.2, 0.002, [0.1, 1.0])
+    >>> out["k_eq_margin"].tolist(), out["sigma_ratio"].round(6).tolist(), out["decay_excess"].tolist()
+    ([0.5, 0.5], [0.5, 0.5], [2.0, 0.2])
     """
     peak = np.asarray(peak_var_theta, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -62,8 +127,40 @@ def trust_indicators(peak_p_uplift, min_k_eq, k_eq_rest, peak_var_theta, slender
 
 
 def indicators_from_dataset(ds):
-    """:func:`trust_indicators` of a :func:`screening.linearize` (or sweep) dataset, as DataArrays on the
-    dimensions of ``peak_var_theta``."""
+    """:func:`trust_indicators` of a :func:`screening.linearize` (or sweep) dataset.
+
+    Reads the at-rest stiffness and the final variance from the time histories ``k_eq`` and
+    ``var_theta`` when the dataset has them, else from ``k_eq_rest`` and ``var_theta_end`` (NaN when
+    neither is there).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization dataset: ``peak_p_uplift`` [1], ``min_k_eq`` [N m rad-1], ``peak_var_theta``
+        [rad2], ``slenderness`` [rad], ``t``, ``T1``, ``T2`` [s] and ``k_eq`` / ``k_eq_rest``
+        [N m rad-1], ``var_theta`` / ``var_theta_end`` [rad2].
+
+    Returns
+    -------
+    dict of str to xarray.DataArray
+        The indicators of :func:`trust_indicators` [1], on the dimensions of ``peak_var_theta``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset({"peak_p_uplift": ("S0", [0.1, 0.4]), "min_k_eq": ("S0", [90.0, 40.0]),
+    ...                  "k_eq_rest": 100.0, "peak_var_theta": ("S0", [1e-4, 4e-4]), "slenderness": 0.1,
+    ...                  "var_theta_end": ("S0", [1e-5, 4e-5])}, attrs={"envelope": "constant"})
+    >>> ind = indicators_from_dataset(ds)
+    >>> ind["k_eq_margin"].dims, ind["k_eq_margin"].values.tolist(), ind["sigma_ratio"].values.round(6).tolist()
+    (('S0',), [0.9, 0.4], [0.1, 0.2])
+    """
     dims = ds["peak_var_theta"].dims
     peak = ds["peak_var_theta"]
 

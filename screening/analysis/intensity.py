@@ -103,29 +103,141 @@ PERIOD_MEASURES = ("sa_median", "avgsa_median", "sa", "avgsa")
 
 
 def rms_acceleration(excitation, t_end, cutoff):
-    """Root mean square of the modulated, band-limited ground acceleration over ``[0, t_end]`` [m s-2]."""
+    """Root mean square of the modulated, band-limited ground acceleration over ``[0, t_end]``.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit of the ground motion [rad s-1].
+
+    Returns
+    -------
+    float
+        ``a_rms`` [m s-2] (ensemble mean of the time average of ``a^2``, square-rooted).
+
+    Notes
+    -----
+    ``a_rms = sqrt(lambda_0 int_0^T q^2 dt / T)`` with the spectral moment ``lambda_0`` of
+    :func:`spectral_moments` and the envelope ``q`` of eq. (57) in [1]; the ground acceleration of
+    eq. (56) in [1], band-limited as in [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] D. M. Boore, "Simulation of ground motion using the stochastic method", Pure Appl. Geophys.
+       160 (2003) 635-676.
+
+    Examples
+    --------
+    Stationary white noise band-limited to 50 rad/s: ``sqrt(2 S0 omega_c)``.
+
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> rms_acceleration(white, 10.0, 50.0), (2 * 0.01 * 50.0) ** 0.5
+    (1.0, 1.0)
+    """
     lam0 = spectral_moments(excitation, cutoff)[0]
     t = _times(t_end)
     return math.sqrt(lam0 * np.trapezoid(excitation.envelope(t) ** 2, t) / float(t_end))
 
 
 def arias_intensity(excitation, t_end, cutoff, g=G):
-    """Expected Arias intensity ``pi/(2 g) E[int_0^T a^2 dt]`` [m s-1]."""
+    """Expected Arias intensity ``pi/(2 g) E[int_0^T a^2 dt]`` of the modulated, band-limited input.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit of the ground motion [rad s-1].
+    g : float, default G
+        Standard gravity [m s-2].
+
+    Returns
+    -------
+    float
+        ``E[I_A]`` [m s-1].
+
+    Notes
+    -----
+    ``E[I_A] = pi lambda_0 int_0^T q^2 dt / (2 g)`` [1] with the spectral moment ``lambda_0`` of
+    :func:`spectral_moments` and the envelope ``q`` of eq. (57) in [2].
+
+    References
+    ----------
+    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> import math
+    >>> f"{arias_intensity(white, 10.0, 50.0):.6f}", f"{math.pi / (2 * G) * 1.0 * 10.0:.6f}"
+    ('1.601766', '1.601766')
+    """
     lam0 = spectral_moments(excitation, cutoff)[0]
     t = _times(t_end)
     return math.pi / (2.0 * g) * lam0 * np.trapezoid(excitation.envelope(t) ** 2, t)
 
 
 def s0_for_pga(excitation, target_pga, t_end, cutoff):
-    """``S0`` [m2 s-3] giving the median PGA ``target_pga`` [m s-2] for the shape of ``excitation``
-    (its filter and envelope; its own ``S0`` is irrelevant), with band limit ``cutoff`` [rad/s] over a
-    record of ``t_end`` [s].
+    """The intensity ``S0`` that gives a target median PGA for the shape of an excitation.
+
+    The shape is the excitation's filter and envelope; its own ``S0`` is irrelevant.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation with its envelope (filter fields may be arrays).
+    target_pga : float or array_like
+        The median PGA [m s-2].
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit of the ground motion [rad s-1].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``S0`` [m2 s-3] (NaN where the measures are beyond float64).
+
+    Notes
+    -----
 
     PGA is proportional to ``sqrt(S0)``: ``S0 = (target_pga / pga_1)^2`` with ``pga_1`` the median PGA
     at ``S0 = 1`` of :func:`pga_median` (simulated: the median of the :data:`PGV_RECORDS` records of
     :func:`simulated_pga`, which scale exactly as ``sqrt(S0)``), so a point built from ``target_pga`` has
     ``pga_median`` equal to it to rounding.  ``target_pga``, ``cutoff`` and the excitation's ``omega_g``,
     ``zeta_g`` may be arrays (broadcast together); :func:`pga_median` runs once per distinct filter and band limit.
+    ``S0`` is the level of the input's PSD, eq. (56) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> s0 = s0_for_pga(white, 1.0, 2.0, 20.0)
+    >>> f"{s0:.6f}", f"{pga_median(WhiteNoise(s0, white.envelope), 2.0, 20.0):.6f}"
+    ('0.004518', '1.000000')
     """
     target, unit = _per_unit_s0(excitation, target_pga, t_end, cutoff)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):     # NaN / inf: not derivable
@@ -134,11 +246,41 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
 
 
 def input_measures(excitation, t_end, cutoff):
-    """``pga_median`` [m s-2], ``rms_acceleration`` [m s-2] and ``arias_intensity`` [m s-1] of every
-    point of ``excitation`` (array fields and ``cutoff`` [rad/s] broadcast together), as a dict.
+    """The PGA, RMS acceleration and Arias intensity of every point of an excitation.
 
     Computed once per distinct filter and band limit at ``S0 = 1`` and scaled: the first two are
-    proportional to ``sqrt(S0)``, the Arias intensity to ``S0``."""
+    proportional to ``sqrt(S0)``, the Arias intensity to ``S0``.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation with its envelope; ``S0`` and filter fields may be arrays.
+    t_end : float
+        Record length [s].
+    cutoff : float or array_like
+        Band limit of the ground motion [rad s-1] (broadcast with the fields).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``pga_median`` [m s-2] (:func:`pga_median`), ``rms_acceleration`` [m s-2]
+        (:func:`rms_acceleration`) and ``arias_intensity`` [m s-1] (:func:`arias_intensity`).
+
+    References
+    ----------
+    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> m = input_measures(white, 2.0, 20.0)
+    >>> f"{m['rms_acceleration']:.6f}", f"{(2 * 0.01 * 20.0) ** 0.5:.6f}", bool(m["pga_median"] == pga_median(white, 2.0, 20.0))
+    ('0.632456', '0.632456', True)
+    """
     s0, unit = _per_unit_s0(excitation, excitation.S0, t_end, cutoff)
     root = np.sqrt(s0)
     return {"pga_median": root * unit[..., 0], "rms_acceleration": root * unit[..., 1],
@@ -184,6 +326,51 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
     Dataset with ``pga_median``, ``rms_acceleration``, ``arias_intensity``, ``pgv_median`` and, with
     ``period`` [s], ``sa_median`` and ``avgsa_median`` (attribute ``period``), on the dimensions of the
     parameters they depend on.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result dataset (sweep or :func:`screening.linearize`) with the coordinates ``S0`` [m2 s-3],
+        the filter's parameters, ``T1``, ``T2`` [s] (exponential envelope), ``t`` [s] and the attributes
+        ``excitation`` and ``envelope``; a sweep whose cases differ in excitation is measured case by case.
+    period : float, optional
+        Oscillator period of ``sa_median`` and ``avgsa_median`` [s] (``None``: neither).
+    damping : float, default 0.05
+        Oscillator damping ratio [1].
+    cutoff : float, optional
+        Band limit [rad s-1] (see above).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``pga_median`` [m s-2], ``rms_acceleration`` [m s-2], ``arias_intensity`` [m s-1],
+        ``pgv_median`` [m s-1] and, with ``period``, ``sa_median`` and ``avgsa_median`` [m s-2].
+
+    Notes
+    -----
+    Every measure is proportional to ``sqrt(S0)`` (Arias: to ``S0``): each distinct filter, envelope
+    and band limit is measured once.  The measures and their accuracy: the module docstring and
+    ``docs/intensity_measures.md``.
+
+    References
+    ----------
+    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [3] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset(coords={"S0": [0.01, 0.04], "t": np.linspace(0.0, 2.0, 5)},
+    ...                 attrs={"excitation": "white", "envelope": "constant", "cutoff_rad_s": 20.0})
+    >>> im = intensity_measures(ds)
+    >>> sorted(im.data_vars), im["pga_median"].attrs["units"]
+    (['arias_intensity', 'pga_median', 'pgv_median', 'rms_acceleration'], 'm s-2')
+    >>> (im["pga_median"][1] / im["pga_median"][0]).item(), (im["arias_intensity"][1] / im["arias_intensity"][0]).item()
+    (2.0, 4.0)
     """
     from screening.analysis.fragility import parameter
 
@@ -269,7 +456,8 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     Parameters
     ----------
-    excitation : a registered excitation (scalar fields; envelope exponential or constant).
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
     cutoff : float
@@ -291,7 +479,24 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
     The velocity, like every measure of a Gaussian input, is proportional to ``sqrt(S0)``: the records
     are synthesised once per shape (filter parameters, envelope, ``t_end``, band limit, ``omega_low``,
     ``n_records``, ``seed``) at ``S0 = 1``, cached, and scaled.  A fixed seed makes the result
-    reproducible; with 2,000 records its standard error is ~0.6 % of the median.
+    reproducible; with 2,000 records its standard error is ~0.6 % of the median.  Records by spectral
+    representation [1], high-passed as in record processing [2].
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pgv, se = simulated_pgv(white, 2.0, 20.0, n_records=100)
+    >>> pgv4, _ = simulated_pgv(WhiteNoise(0.04, white.envelope), 2.0, 20.0, n_records=100)
+    >>> f"{pgv4 / pgv:.6f}", bool(0 < se < 0.1 * pgv)
+    ('2.000000', True)
     """
     return _simulated(excitation, t_end, cutoff, omega_low, n_records, seed)[2:]
 
@@ -301,9 +506,16 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Parameters
     ----------
-    excitation, t_end, cutoff, n_records, seed
-        As for :func:`simulated_pgv` (the excitation, record length [s], band limit [rad s-1], records per
-        shape, seed); the acceleration is not high-passed.
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields; envelope exponential or constant).
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit of the ground motion [rad s-1].
+    n_records : int, default PGV_RECORDS
+        Records synthesised per excitation shape.
+    seed : int, default PGV_SEED
+        Seed of the synthesis.  As for :func:`simulated_pgv`, but the acceleration is not high-passed.
 
     Returns
     -------
@@ -316,7 +528,21 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
     The same records, in the same pass and cache, as :func:`simulated_pgv`: synthesised once per shape
     at ``S0 = 1`` and scaled by ``sqrt(S0)``.  The peak is that of the continuous record (cubic Hermite
     interpolant of the synthesised values and rates, :func:`continuous_peak`).  With 2,000 records the
-    standard error is ~0.5 % of the median.
+    standard error is ~0.5 % of the median.  Records by spectral representation [1].
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pga, se = simulated_pga(white, 2.0, 20.0, n_records=100)
+    >>> pga4, se4 = simulated_pga(WhiteNoise(0.04, white.envelope), 2.0, 20.0, n_records=100)
+    >>> f"{pga4 / pga:.6f}", f"{se4 / se:.6f}"
+    ('2.000000', '2.000000')
     """
     return _simulated(excitation, t_end, cutoff, OMEGA_LOW, n_records, seed)[:2]
 
@@ -348,7 +574,8 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     Parameters
     ----------
-    excitation : the study's excitation (scalar fields; envelope exponential or constant).
+    excitation : screening.excitations.base.Excitation
+        The study's excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
     cutoff : float
@@ -375,8 +602,18 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     References
     ----------
-    Shinozuka, M. & Deodatis, G. (1991) Simulation of stochastic processes by spectral representation,
-    Appl. Mech. Rev. 44(4), 191-204.  Vanmarcke, E. H. (1975) J. Appl. Mech. 42, 215-220.
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pga = pga_median(white, 2.0, 20.0)
+    >>> f"{pga:.4f}", pga == simulated_pga(white, 2.0, 20.0)[0]
+    ('1.4877', True)
     """
     if method not in ("simulated", "rvt"):
         raise ValueError(f"parameter 'method' must be 'simulated' or 'rvt' (got {method!r})")
@@ -390,8 +627,9 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     Parameters
     ----------
-    excitation : the study's excitation (``psd(omega)`` [m2 s-3], any spectrum; ``envelope`` exponential
-        or constant).
+    excitation : screening.excitations.base.Excitation
+        The study's excitation (``psd(omega)`` [m2 s-3], any spectrum; ``envelope`` exponential or
+        constant).
     t_end : float
         Record length [s].
     cutoff : float
@@ -436,11 +674,22 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     References
     ----------
-    Vanmarcke, E. H. (1975) J. Appl. Mech. 42, 215-220.  Priestley, M. B. (1965) Evolutionary spectra and
-    non-stationary processes, J. R. Stat. Soc. B 27, 204-237.  Boore, D. M. & Bommer, J. J. (2005)
-    Processing of strong-motion accelerograms: needs, options and consequences, Soil Dyn. Earthq. Eng.
-    25, 93-115.  Shinozuka, M. & Deodatis, G. (1991) Simulation of stochastic processes by spectral
-    representation, Appl. Mech. Rev. 44(4), 191-204.
+    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [2] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
+       (1965) 204-237.
+    .. [3] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [4] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pgv = pgv_median(white, 2.0, 20.0)
+    >>> f"{pgv:.4f}", pgv == simulated_pgv(white, 2.0, 20.0)[0]
+    ('0.2809', True)
     """
     if method not in ("simulated", "rvt"):
         raise ValueError(f"parameter 'method' must be 'simulated' or 'rvt' (got {method!r})")
@@ -458,7 +707,8 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     Parameters
     ----------
-    excitation : the study's excitation.
+    excitation : screening.excitations.base.Excitation
+        The study's excitation.
     period : float
         Central period ``T`` [s].
     t_end : float
@@ -485,8 +735,17 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     References
     ----------
-    Eads, L., Miranda, E. & Lignos, D. G. (2015) Average spectral acceleration as an intensity measure
-    for collapse risk assessment, Earthq. Eng. Struct. Dyn. 44, 2057-2073.
+    .. [1] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
+       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+
+    Examples
+    --------
+    A short stationary record (ten Lyapunov integrations: about a second):
+
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> f"{avgsa_median(white, 2.0, 0.3, damping=0.2):.4f}"
+    '0.2397'
     """
     logs = [math.log(sa_median(excitation, p, t_end, damping, cutoff)) for p in avgsa_periods(period)]
     return math.exp(sum(logs) / len(logs))

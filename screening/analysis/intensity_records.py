@@ -39,8 +39,43 @@ G = 9.80665
 
 
 def oscillator_peak(acceleration, dt, period, damping=0.05):
-    """``max_t |u|`` [m] of ``u'' + 2 zeta w u' + w^2 u = -a`` from rest, for rows of ``acceleration``
-    [m s-2] sampled at ``dt`` [s]: the exact recurrence for piecewise-linear input (Nigam & Jennings 1969)."""
+    """Peak displacement of a linear oscillator driven by rows of sampled ground accelerations.
+
+    Parameters
+    ----------
+    acceleration : array_like
+        Ground accelerations [m s-2], one record per row (or one record).
+    dt : float
+        Time step [s].
+    period : float
+        Natural period ``2 pi / w`` [s].
+    damping : float, default 0.05
+        Damping ratio ``zeta`` [1], in ``[0, 1)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``max_t |u|`` [m] per row.
+
+    Notes
+    -----
+    ``u'' + 2 zeta w u' + w^2 u = -a`` from rest, stepped by the exact recurrence for piecewise-linear
+    input [1]; the peak is taken on the samples.
+
+    References
+    ----------
+    .. [1] N. C. Nigam and P. C. Jennings, "Calculation of response spectra from strong-motion earthquake
+       records", Bull. Seismol. Soc. Am. 59(2) (1969) 909-922.
+
+    Examples
+    --------
+    An undamped oscillator under a constant unit acceleration peaks at ``2 / w^2``:
+
+    >>> import math, numpy as np
+    >>> t = np.arange(0.0, 10.0001, 0.01)
+    >>> oscillator_peak(np.ones_like(t), 0.01, 2 * math.pi, damping=0.0).round(5)     # w = 1 rad/s
+    array([2.])
+    """
     acc = np.atleast_2d(np.asarray(acceleration, dtype=float))
     w = 2.0 * math.pi / float(period)
     z = float(damping)
@@ -66,10 +101,51 @@ def oscillator_peak(acceleration, dt, period, damping=0.05):
 
 
 def record_measures(record, period=None, damping=0.05, g=G):
-    """Intensity measures of one :class:`~screening.records.Record`: ``pga`` [m s-2], ``rms_acceleration``
-    [m s-2], ``arias_intensity`` [m s-1], ``pgv`` [m s-1] (:func:`record_velocity`, high-passed at
-    :data:`OMEGA_LOW`) and with ``period`` [s] ``sa`` = ``w^2 max|u|`` [m s-2] and ``avgsa`` [m s-2]
-    (:func:`record_avgsa`)."""
+    """Intensity measures of one accelerogram.
+
+    Parameters
+    ----------
+    record : screening.records.Record
+        The record (``acceleration`` [m s-2], ``dt`` [s]).
+    period : float, optional
+        Oscillator period [s] of ``sa`` and ``avgsa`` (``None``: neither).
+    damping : float, default 0.05
+        Oscillator damping ratio [1].
+    g : float, default G
+        Standard gravity of the Arias intensity [m s-2].
+
+    Returns
+    -------
+    dict of str to float
+        ``pga`` [m s-2], ``rms_acceleration`` [m s-2], ``arias_intensity`` [m s-1], ``pgv`` [m s-1]
+        (:func:`record_velocity`, high-passed at :data:`OMEGA_LOW`) and with ``period`` ``sa`` =
+        ``w^2 max|u|`` [m s-2] and ``avgsa`` [m s-2] (:func:`record_avgsa`).
+
+    Notes
+    -----
+    ``rms = sqrt(int a^2 dt / T)``, Arias ``I_A = pi / (2 g) int a^2 dt`` [1] (trapezoidal rule);
+    ``sa`` by :func:`oscillator_peak` [2]; ``avgsa`` as in [3].
+
+    References
+    ----------
+    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
+       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [2] N. C. Nigam and P. C. Jennings, "Calculation of response spectra from strong-motion earthquake
+       records", Bull. Seismol. Soc. Am. 59(2) (1969) 909-922.
+    .. [3] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
+       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+
+    Examples
+    --------
+    Ten seconds of a 1 Hz sine of unit amplitude:
+
+    >>> import math, numpy as np
+    >>> from screening.records import Record
+    >>> t = np.arange(0.0, 10.0001, 0.01)
+    >>> m = record_measures(Record(np.sin(2 * math.pi * t), 0.01, "sine"))
+    >>> m["pga"], f"{m['rms_acceleration']:.6f}", f"{m['arias_intensity']:.6f}", f"{math.pi / (2 * G) * 5.0:.6f}"
+    (1.0, '0.707107', '0.800883', '0.800883')
+    """
     a = record.acceleration
     energy = float(np.trapezoid(a * a, dx=record.dt))
     out = {"pga": float(np.max(np.abs(a))), "rms_acceleration": math.sqrt(energy / record.duration),
@@ -89,13 +165,35 @@ AVGSA_RANGE = (0.2, 1.5)
 
 
 def highpass_gain(omega, omega_low=OMEGA_LOW):
-    """Squared gain ``|H(omega)|^2 = omega^4 / (omega^4 + omega_low^4)`` [1] of the 2nd-order Butterworth
-    high-pass with corner ``omega_low`` [rad/s] at ``omega`` [rad/s].
+    """Squared gain ``|H(omega)|^2 = omega^4 / (omega^4 + omega_low^4)`` of the 2nd-order Butterworth high-pass.
+
+    Parameters
+    ----------
+    omega : array_like
+        Angular frequencies [rad s-1].
+    omega_low : float, default OMEGA_LOW
+        Corner [rad s-1].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``|H(omega)|^2`` [1].
 
     Notes
     -----
     ``H(s) = s^2 / (s^2 + sqrt(2) omega_low s + omega_low^2)``: the filter applied to the records by
-    :func:`record_velocity` and to the spectra by :func:`velocity_spectral_moments`.
+    :func:`record_velocity` and to the spectra by :func:`velocity_spectral_moments`; the usual
+    high-pass of record processing [1].
+
+    References
+    ----------
+    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    >>> highpass_gain([OMEGA_LOW, 10 * OMEGA_LOW]).round(6).tolist()
+    [0.5, 0.9999]
     """
     w4 = np.asarray(omega, dtype=float) ** 4
     return w4 / (w4 + float(omega_low) ** 4)
@@ -113,6 +211,16 @@ PGV_CHUNK = 250
 def median_standard_error(x):
     """Distribution-free standard error [units of ``x``] of the sample median of ``x``.
 
+    Parameters
+    ----------
+    x : array_like
+        The sample (flattened).
+
+    Returns
+    -------
+    float
+        The standard error [units of ``x``].
+
     Notes
     -----
     Half the width of the 95 % order-statistic interval of the median, ``x_(n/2 -+ 1.96 sqrt(n) / 2)``
@@ -121,7 +229,17 @@ def median_standard_error(x):
 
     References
     ----------
-    David, H. A. & Nagaraja, H. N. (2003) Order Statistics, 3rd ed., Wiley, section 7.1.
+    .. [1] H. A. David and H. N. Nagaraja, Order Statistics, 3rd ed., Wiley (2003), section 7.1.
+
+    Examples
+    --------
+    The normal quantiles of 10,000 points: close to ``sqrt(pi / 2) / sqrt(n)``.
+
+    >>> import math, numpy as np
+    >>> from scipy.stats import norm
+    >>> n = 10_000
+    >>> f"{median_standard_error(norm.ppf((np.arange(n) + 0.5) / n)):.4f}", f"{math.sqrt(math.pi / 2 / n):.4f}"
+    ('0.0125', '0.0125')
     """
     x = np.sort(np.asarray(x, dtype=float).ravel())
     n = x.size
@@ -131,14 +249,44 @@ def median_standard_error(x):
 
 
 def continuous_peak(acceleration, rate, dt, refine=8):
-    """``max_t |a(t)|`` [m s-2] per row of the cubic Hermite interpolant of ``acceleration`` [m s-2] with its
-    exact ``rate`` [m s-3] on the grid of step ``dt`` [s], searched at ``refine - 1`` points inside each step.
+    """Peak of the continuous record: ``max_t |a(t)|`` of the cubic Hermite interpolant of the samples.
+
+    Parameters
+    ----------
+    acceleration : array_like
+        Samples [m s-2], one record per row.
+    rate : array_like
+        Their exact rates ``a'`` [m s-3], same shape.
+    dt : float
+        Time step [s].
+    refine : int, default 8
+        The interpolant is searched at ``refine - 1`` points inside each step.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``max_t |a(t)|`` [m s-2] per row.
 
     Notes
     -----
     ``a(t_k + u dt) = h00(u) a_k + h10(u) dt a'_k + h01(u) a_{k+1} + h11(u) dt a'_{k+1}`` with the Hermite
     basis ``h00 = 2u^3 - 3u^2 + 1``, ``h10 = u^3 - 2u^2 + u``, ``h01 = -2u^3 + 3u^2``, ``h11 = u^3 - u^2``:
-    the peak of the continuous record, which the grid maximum underestimates by up to ``1 - cos(omega dt / 2)``.
+    the peak of the continuous record, which the grid maximum underestimates by up to ``1 - cos(omega dt / 2)``
+    [1].
+
+    References
+    ----------
+    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
+       17(2) (1980) 238-246 (the cubic Hermite basis).
+
+    Examples
+    --------
+    ``sin t`` sampled every second: the grid misses its peak of 1, the interpolant nearly finds it.
+
+    >>> import numpy as np
+    >>> t = np.arange(0.0, 6.0, 1.0)
+    >>> float(np.max(np.sin(t)).round(4)), continuous_peak(np.sin(t), np.cos(t), 1.0).round(4).tolist()
+    (0.9093, [0.9979])
     """
     acc, rate = np.atleast_2d(np.asarray(acceleration, dtype=float)), np.atleast_2d(np.asarray(rate, dtype=float))
     peak = np.max(np.abs(acc), axis=1)
@@ -150,12 +298,52 @@ def continuous_peak(acceleration, rate, dt, refine=8):
 
 
 def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEED, omega_low=OMEGA_LOW):
-    """``(pga [m s-2], pgv [m s-1])``: the peak ground accelerations and velocities of ``n_records`` records of
-    the excitation, synthesised exactly as the Monte Carlo synthesises them
-    (:mod:`screening.solvers.synthesis`, band limit ``cutoff`` [rad/s], records ``i = 0 .. n_records - 1`` of
-    run ``seed``, ``t_end`` [s]), in one pass: the PGA is the continuous peak (:func:`continuous_peak`), the
-    PGV ``max_t |v|`` on the synthesis grid of the velocity high-passed at ``omega_low`` [rad/s] by
-    :func:`record_velocity`."""
+    """The peak ground accelerations and velocities of records synthesised as the Monte Carlo does.
+
+    Records ``i = 0 .. n_records - 1`` of run ``seed`` (:mod:`screening.solvers.synthesis`), in one
+    pass: the PGA is the continuous peak (:func:`continuous_peak`), the PGV ``max_t |v|`` on the
+    synthesis grid of the velocity high-passed by :func:`record_velocity`.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit [rad s-1].
+    n_records : int, default PGV_RECORDS
+        Number of records.
+    seed : int, default PGV_SEED
+        Seed of the run.
+    omega_low : float, default OMEGA_LOW
+        High-pass corner of the velocity [rad s-1].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(pga [m s-2], pgv [m s-1])``, one value per record.
+
+    Notes
+    -----
+    Spectral-representation synthesis [1] of the modulated process; record ``i`` of a seed is the same
+    whatever ``n_records``.
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pga, pgv = synthesised_peaks(white, 5.0, 50.0, n_records=20, seed=1)
+    >>> pga.shape, bool(np.all(synthesised_peaks(white, 5.0, 50.0, n_records=3, seed=1)[0] == pga[:3]))
+    ((20,), True)
+    """
     plan = spectral_plan(excitation, float(t_end), float(cutoff))
     n = int(round(float(t_end) / plan.dt)) + 1
     pga, pgv = [], []
@@ -168,25 +356,116 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
 
 
 def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEED, omega_low=OMEGA_LOW):
-    """Peak ground velocities [m s-1] of :func:`synthesised_peaks` (same arguments)."""
+    """Peak ground velocities of :func:`synthesised_peaks` (same arguments).
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit [rad s-1].
+    n_records : int, default PGV_RECORDS
+        Number of records.
+    seed : int, default PGV_SEED
+        Seed of the run.
+    omega_low : float, default OMEGA_LOW
+        High-pass corner [rad s-1].
+
+    Returns
+    -------
+    numpy.ndarray
+        The PGV of every record [m s-1].
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pgv = synthesised_pgv(white, 5.0, 50.0, n_records=20, seed=1)
+    >>> bool(np.all(pgv == synthesised_peaks(white, 5.0, 50.0, n_records=20, seed=1)[1])), pgv.shape
+    (True, (20,))
+    """
     return synthesised_peaks(excitation, t_end, cutoff, n_records, seed, omega_low)[1]
 
 
 def avgsa_periods(period, n=AVGSA_N_PERIODS, span=AVGSA_RANGE):
-    """The ``n`` periods [s] of the average spectral acceleration at ``period`` [s]: log-spaced over
-    ``[0.2 period, 1.5 period]`` (OpenQuake's ``AvgSA``)."""
+    """The periods of the average spectral acceleration at ``period``: log-spaced over ``[0.2 T, 1.5 T]``.
+
+    Parameters
+    ----------
+    period : float
+        Central period ``T`` [s].
+    n : int, default AVGSA_N_PERIODS
+        Number of periods.
+    span : tuple of float, default AVGSA_RANGE
+        First and last period in units of ``T`` [1].
+
+    Returns
+    -------
+    numpy.ndarray
+        The ``n`` periods [s].
+
+    References
+    ----------
+    .. [1] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
+       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+
+    Examples
+    --------
+    >>> p = avgsa_periods(1.0)
+    >>> p.size, float(p[0]), float(p[-1]), f"{p[1] / p[0]:.6f}", f"{7.5 ** (1 / 9):.6f}"
+    (10, 0.2, 1.5, '1.250919', '1.250919')
+    """
     return np.geomspace(span[0] * float(period), span[1] * float(period), int(n))
 
 
 def record_velocity(acceleration, dt, omega_low=OMEGA_LOW):
-    """Ground velocity [m s-1] of rows of ``acceleration`` [m s-2] sampled at ``dt`` [s]: causal 2nd-order
-    Butterworth high-pass at ``omega_low`` [rad/s] (bilinear transform with pre-warped corner), then
-    trapezoidal integration from ``v(0) = 0``.
+    """Ground velocity of rows of sampled accelerations, high-passed as in record processing.
+
+    A causal 2nd-order Butterworth high-pass at ``omega_low`` (bilinear transform with pre-warped
+    corner), then trapezoidal integration from ``v(0) = 0``.
+
+    Parameters
+    ----------
+    acceleration : array_like
+        Ground accelerations [m s-2], one record per row.
+    dt : float
+        Time step [s].
+    omega_low : float, default OMEGA_LOW
+        High-pass corner [rad s-1], in ``(0, pi / dt]``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Velocities [m s-1], ``(rows, samples)``.
 
     Notes
     -----
     ``v(t) = int_0^t a_hp dt'``, ``a_hp = H * a`` with ``H(s) = s^2 / (s^2 + sqrt(2) omega_low s +
-    omega_low^2)`` (:func:`highpass_gain`), the filter of :func:`pgv_median`.
+    omega_low^2)`` (:func:`highpass_gain`), the filter of :func:`pgv_median` [1].
+
+    References
+    ----------
+    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    A 2 Hz sine far above the corner: after the transient the velocity's amplitude is ``1 / w``.
+
+    >>> import math, numpy as np
+    >>> w = 2 * math.pi * 2.0
+    >>> v = record_velocity(np.sin(w * np.arange(0.0, 20.0, 0.005)), 0.005)
+    >>> f"{np.max(np.abs(v[0, -1000:])):.5f}", f"{1 / w:.5f}"
+    ('0.07959', '0.07958')
     """
     from scipy import signal
     checked("omega_low", omega_low, lower=0.0, upper=math.pi / float(dt))
@@ -196,8 +475,46 @@ def record_velocity(acceleration, dt, omega_low=OMEGA_LOW):
 
 
 def record_avgsa(acceleration, dt, period, damping=0.05):
-    """Average spectral acceleration [m s-2] of rows of ``acceleration`` [m s-2] at ``period`` [s]: the
-    geometric mean of ``w_i^2 max|u_i|`` (:func:`oscillator_peak`) over :func:`avgsa_periods`."""
+    """Average spectral acceleration of rows of sampled accelerations at one period.
+
+    Parameters
+    ----------
+    acceleration : array_like
+        Ground accelerations [m s-2], one record per row.
+    dt : float
+        Time step [s].
+    period : float
+        Central period [s].
+    damping : float, default 0.05
+        Damping ratio [1].
+
+    Returns
+    -------
+    numpy.ndarray
+        AvgSA [m s-2] per row.
+
+    Notes
+    -----
+    ``AvgSA = (prod_i w_i^2 max|u_i|)^(1/n)`` over :func:`avgsa_periods` [1], the peaks by
+    :func:`oscillator_peak` [2].
+
+    References
+    ----------
+    .. [1] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
+       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+    .. [2] N. C. Nigam and P. C. Jennings, "Calculation of response spectra from strong-motion earthquake
+       records", Bull. Seismol. Soc. Am. 59(2) (1969) 909-922.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> from scipy.stats import gmean
+    >>> t = np.arange(0.0, 10.0001, 0.01)
+    >>> a = np.sin(2 * math.pi * t)
+    >>> sa = [(2 * math.pi / p) ** 2 * oscillator_peak(a, 0.01, p)[0] for p in avgsa_periods(1.0)]
+    >>> f"{record_avgsa(a, 0.01, 1.0)[0]:.6f}", f"{gmean(sa):.6f}"
+    ('2.072731', '2.072731')
+    """
     logs = [np.log((2.0 * math.pi / p) ** 2 * oscillator_peak(acceleration, dt, p, damping))
             for p in avgsa_periods(period)]
     return np.exp(np.mean(logs, axis=0))

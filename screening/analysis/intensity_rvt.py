@@ -41,12 +41,41 @@ CHUNK_POINTS = 64
 
 
 def spectral_moments(excitation, cutoff):
-    """``(lambda_0, lambda_1, lambda_2)`` of the unmodulated input band-limited to ``cutoff`` [rad/s].
+    """The first three spectral moments of the unmodulated input band-limited to ``cutoff``.
 
     ``ArithmeticError`` where the quadrature of a Kanai-Tajimi moment does not converge (a filter so
     narrow, ``zeta_g`` ~ 1e-9, that its peak escapes the quadrature).
 
-    ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega``: [m2 s-4], [m2 s-5], [m2 s-6].
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its two-sided PSD ``S(omega)`` [m2 s-3].
+    cutoff : float
+        Band limit ``omega_c`` [rad s-1].
+
+    Returns
+    -------
+    tuple of float
+        ``(lambda_0, lambda_1, lambda_2)`` [m2 s-4], [m2 s-5], [m2 s-6].
+
+    Notes
+    -----
+    ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega`` [1]; band-limited white noise
+    has ``lambda_i = 2 S0 omega_c^(i+1) / (i + 1)``.
+
+    References
+    ----------
+    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> spectral_moments(white, 50.0)
+    (1.0, 25.0, 833.33...)
+    >>> 2 * 0.01 * 50.0 ** 3 / 3
+    833.33...
     """
     return tuple(excitation.spectral_moment(i, float(cutoff), epsrel=1e-11) for i in range(3))
 
@@ -56,9 +85,53 @@ def _times(t_end, n=N_TIMES):
 
 
 def median_peak(t, var, var_dot, cov, bandwidth=None, probability=0.5):
-    """Level ``x`` with ``P(max_t |y| <= x) = probability`` for a non-stationary Gaussian ``y`` with the
-    given moments on times ``t`` (Rice rate, Vanmarcke clumping with ``bandwidth`` or none with ``None``,
-    Poisson in time)."""
+    """The level a non-stationary Gaussian process stays below with a given probability (its median peak).
+
+    Level ``x`` with ``P(max_t |y| <= x) = probability`` for a zero-mean Gaussian ``y`` with the given
+    moments on times ``t``; 0 for a process of zero variance.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Times [s].
+    var, var_dot, cov : numpy.ndarray
+        ``var y``, ``var y'`` and ``cov(y, y')`` on ``t`` [units of y squared, per s^2, per s].
+    bandwidth : float, optional
+        Vanmarcke's bandwidth ``delta`` [1] for clumped crossings; ``None`` (default): crossings
+        independent.
+    probability : float, default 0.5
+        Probability of not exceeding [1].
+
+    Returns
+    -------
+    float
+        The level ``x`` [units of y].
+
+    Notes
+    -----
+    ``P(max_t |y| <= x) = exp(-int_0^T nu(x, t) dt)`` with Rice's rate of crossings of ``|y| = x``
+    [1] of the non-stationary pair ``(y, y')`` (:func:`screening.analysis.fragility.upcrossing_rate`),
+    times Vanmarcke's clumping factor [2] when ``bandwidth`` is given; solved for ``x`` by Brent's
+    method.
+
+    References
+    ----------
+    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    A stationary unit-variance process of frequency 2 rad/s over 10 s: Rice's rate of crossings of
+    ``|y| = x`` is ``(2 / pi) exp(-x^2 / 2)``.
+
+    >>> import math, numpy as np
+    >>> t = np.linspace(0.0, 10.0, 2001)
+    >>> x = median_peak(t, np.ones_like(t), np.full_like(t, 4.0), np.zeros_like(t))
+    >>> f"{x:.6f}", f"{math.sqrt(2 * math.log(20 / math.pi / math.log(2))):.6f}"
+    ('2.105951', '2.105951')
+    """
     target = -math.log(probability)
     sigma = math.sqrt(float(np.max(var)))
     if not sigma > 0.0:
@@ -78,8 +151,45 @@ def median_peak(t, var, var_dot, cov, bandwidth=None, probability=0.5):
 
 
 def input_moments(excitation, t_end, cutoff):
-    """``(t, var a, var a', cov(a, a'), delta)`` of the modulated, band-limited ground acceleration on
-    :data:`N_TIMES` times over ``[0, t_end]`` [s, m2 s-4, m2 s-6, m2 s-5, 1] (see the module docstring)."""
+    """The non-stationary moments of the modulated, band-limited ground acceleration.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit [rad s-1].
+
+    Returns
+    -------
+    tuple
+        ``(t, var a, var a', cov(a, a'), delta)`` on :data:`N_TIMES` times over ``[0, t_end]``:
+        [s], [m2 s-4], [m2 s-6], [m2 s-5] and Vanmarcke's bandwidth [1].
+
+    Notes
+    -----
+    For ``a = q(t) f(t)``: ``var a = q^2 lambda_0``, ``var a' = q^2 lambda_2 + q'^2 lambda_0``,
+    ``cov(a, a') = q q' lambda_0`` and ``delta = sqrt(1 - lambda_1^2 / (lambda_0 lambda_2))`` [1] with
+    the moments of :func:`spectral_moments`; the envelope is eq. (57) in [2].
+
+    References
+    ----------
+    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> t, var, var_dot, cov, delta = input_moments(white, 10.0, 50.0)
+    >>> t.shape, float(var[0]), float(var_dot[0]), float(cov[0]), round(delta, 6)
+    ((4001,), 1.0, 833.33..., 0.0, 0.5)
+    """
     lam0, lam1, lam2 = spectral_moments(excitation, cutoff)
     t = _times(t_end)
     q = excitation.envelope(t)
@@ -89,10 +199,47 @@ def input_moments(excitation, t_end, cutoff):
 
 
 def pga_median(excitation, t_end, cutoff):
-    """RVT median peak ground acceleration [m s-2] of the modulated input (see the module docstring): the
-    median of the distribution of :func:`rocking_start_probability` (Rice's rate, crossings not clumped).
-    The study's ``pga_median`` is the simulated one (:func:`screening.analysis.intensity.pga_median`):
-    this one is +3.0 % high for soft soil, where crossings clump."""
+    """RVT median peak ground acceleration of the modulated input.
+
+    The median of the distribution of :func:`rocking_start_probability` (Rice's rate, crossings not
+    clumped).  The study's ``pga_median`` is the simulated one
+    (:func:`screening.analysis.intensity.pga_median`): this one is +3.0 % high for soft soil, where
+    crossings clump.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit [rad s-1].
+
+    Returns
+    -------
+    float
+        Median of ``max_t |a(t)|`` [m s-2].
+
+    Notes
+    -----
+    :func:`median_peak` of :func:`input_moments`: ``exp(-int_0^T nu(x, t) dt) = 1/2`` with Rice's rate
+    ``nu`` [1], [2].
+
+    References
+    ----------
+    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> pga = pga_median(white, 10.0, 50.0)
+    >>> f"{pga:.4f}", f"{pga_median(WhiteNoise(0.04, white.envelope), 10.0, 50.0) / pga:.6f}"
+    ('3.1264', '2.000000')
+    """
     t, var, var_dot, cov, _ = input_moments(excitation, t_end, cutoff)
     return median_peak(t, var, var_dot, cov)
 
@@ -102,17 +249,23 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     Parameters
     ----------
-    excitation : a registered excitation (:mod:`screening.excitations`; array fields broadcast with the others).
-    t_end : record length [s].
-    cutoff : band limit of the ground motion [rad s-1] (:func:`ground_cutoff`, the one its PGA refers to).
-    uplift_acceleration : ground acceleration at which the block starts to rock [m s-2]
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (:mod:`screening.excitations`; array fields broadcast with the others).
+    t_end : float
+        Record length [s].
+    cutoff : float or array_like
+        Band limit of the ground motion [rad s-1] (:func:`ground_cutoff`, the one its PGA refers to).
+    uplift_acceleration : float or array_like
+        Ground acceleration at which the block starts to rock [m s-2]
         (:func:`screening.analysis.probabilities.uplift_acceleration`).
-    method : ``"poisson"`` (default: independent crossings, the distribution whose median is
-        :func:`pga_median`) or ``"vanmarcke"`` (clumped crossings).
+    method : {"poisson", "vanmarcke"}, default "poisson"
+        ``"poisson"``: independent crossings, the distribution whose median is :func:`pga_median`;
+        ``"vanmarcke"``: clumped crossings.
 
     Returns
     -------
-    float or array over the broadcast points.
+    float or numpy.ndarray
+        The probability [1] over the broadcast points.
 
     Notes
     -----
@@ -138,7 +291,20 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     References
     ----------
-    Vanmarcke, E. H. (1975), see the module docstring.
+    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
+       24 (1945) 46-156.
+    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    At the RVT median PGA the probability is one half:
+
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> p = rocking_start_probability(white, 5.0, 50.0, pga_median(white, 5.0, 50.0))
+    >>> f"{p:.4f}"
+    '0.5000'
     """
     if method not in ("poisson", "vanmarcke"):
         raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
@@ -207,9 +373,54 @@ def _unit_input_moments(kind, envelope_kind, *args):
 
 
 def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIMES):
-    """``(t, var_u [m2], var_u_dot [m2 s-2], cov [m2 s-1])`` of a linear oscillator driven by ``-a(t)``
-    (Lyapunov equation of the excitation's filter states and the oscillator, the filter started in its
-    stationary state: :meth:`screening.excitations.Excitation.filter`)."""
+    """The non-stationary response moments of a linear oscillator driven by the ground acceleration.
+
+    The oscillator ``u'' + 2 zeta omega_n u' + omega_n^2 u = -a(t)`` starts at rest, the excitation's
+    filter states (:meth:`screening.excitations.base.Excitation.filter`) in their stationary state.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    period : float
+        Natural period ``T_n = 2 pi / omega_n`` [s].
+    t_end : float
+        Record length [s].
+    damping : float, default 0.05
+        Damping ratio ``zeta`` [1].
+    n_times : int, default N_TIMES
+        Output times over ``[0, t_end]``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(t [s], var_u [m2], var_u_dot [m2 s-2], cov(u, u') [m2 s-1])``.
+
+    Notes
+    -----
+    The Lyapunov equation ``P' = A P + P A^T + 2 pi S0 q(t)^2 b b^T`` of the joint state (filter, ``u``,
+    ``u'``) [1], as in eqs. (51)-(55) of [2] for the block; under stationary white noise the variance
+    tends to ``pi S0 / (2 zeta omega_n^3)`` [3].
+
+    References
+    ----------
+    .. [1] L. D. Lutes and S. Sarkani, Random Vibrations: Analysis of Structural and Mechanical Systems,
+       Elsevier Butterworth-Heinemann (2004).
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [3] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> import math
+    >>> t, var_u, var_ud, cov = oscillator_covariance(white, 0.5, 3.0, damping=0.2, n_times=11)
+    >>> wn = 2 * math.pi / 0.5
+    >>> f"{var_u[-1]:.5e}", f"{math.pi * 0.01 / (2 * 0.2 * wn ** 3):.5e}"
+    ('3.95786e-05', '3.95786e-05')
+    """
     wn = 2.0 * math.pi / float(period)
     z = float(damping)
     S0 = float(excitation.S0)
@@ -240,9 +451,52 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
 
 
 def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
-    """Median pseudo-spectral acceleration ``omega_n^2 max|u|`` [m s-2] at ``period`` [s] of the input
-    band-limited to ``cutoff`` [rad/s] (``None``: unbounded; it sets the bandwidth of the response,
-    :func:`oscillator_response_bandwidth`, not its variance)."""
+    """Median pseudo-spectral acceleration ``omega_n^2 max|u|`` of the input at one period (RVT).
+
+    A ``UserWarning`` when ``omega_n`` is above half the band limit (the Lyapunov variance ignores it).
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation (scalar fields) with its envelope.
+    period : float
+        Natural period [s].
+    t_end : float
+        Record length [s].
+    damping : float, default 0.05
+        Damping ratio [1].
+    cutoff : float, optional
+        Band limit of the input [rad s-1] (``None``: unbounded); it sets the bandwidth of the response
+        (:func:`oscillator_response_bandwidth`), not its variance.
+
+    Returns
+    -------
+    float
+        The median Sa [m s-2].
+
+    Notes
+    -----
+    ``Sa = omega_n^2 x`` with ``x`` the :func:`median_peak` of :func:`oscillator_covariance` under
+    Vanmarcke's clumping [1] for the larger of the white-noise bandwidth of the oscillator and that of
+    its response to the input [2].
+
+    References
+    ----------
+    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [2] A. Der Kiureghian, "Structural response to stationary excitation", J. Eng. Mech. Div. ASCE
+       106(6) (1980) 1195-1213.
+
+    Examples
+    --------
+    Proportional to ``sqrt(S0)``:
+
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> sa = sa_median(white, 0.5, 3.0, damping=0.2)
+    >>> f"{sa:.4f}", f"{sa_median(WhiteNoise(0.04, white.envelope), 0.5, 3.0, damping=0.2) / sa:.6f}"
+    ('2.1851', '2.000000')
+    """
     wn = 2.0 * math.pi / float(period)
     if cutoff is not None and wn > 0.5 * float(cutoff):
         warnings.warn(f"Sa at T = {period:g} s: omega_n = {wn:.3g} rad/s is above half the input's band limit "
@@ -256,8 +510,23 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
 
 def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None):
-    """Vanmarcke bandwidth ``delta`` [1] of the stationary response of a linear oscillator (period [s],
-    damping ratio [1]) to the excitation's spectrum band-limited to ``cutoff`` [rad/s] (``None``: unbounded).
+    """Vanmarcke bandwidth of the stationary response of a linear oscillator to the excitation's spectrum.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        An object with ``psd(omega)`` [m2 s-3] (and ``omega_g``, ``omega_f`` [rad s-1] if it has them).
+    period : float
+        Natural period [s].
+    damping : float, default 0.05
+        Damping ratio [1].
+    cutoff : float, optional
+        Band limit [rad s-1] (``None``: unbounded).
+
+    Returns
+    -------
+    float
+        ``delta`` [1].
 
     Notes
     -----
@@ -276,7 +545,18 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
 
     References
     ----------
-    Vanmarcke, E. H. (1975) J. Appl. Mech. 42, 215-220.
+    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
+       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+
+    Examples
+    --------
+    Under white noise it is the oscillator's own bandwidth:
+
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> from screening.analysis.fragility import oscillator_bandwidth
+    >>> f"{oscillator_response_bandwidth(white, 0.5):.6f}", f"{float(oscillator_bandwidth(0.05)):.6f}"
+    ('0.245612', '0.245612')
     """
     wn, z = 2.0 * math.pi / float(period), float(damping)
     top = float(cutoff) if cutoff is not None else math.inf
@@ -308,7 +588,8 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     Parameters
     ----------
-    excitation : object with a method ``psd(omega)``, the two-sided PSD ``S(omega)`` [m2 s-3] of the
+    excitation : screening.excitations.base.Excitation
+        Any object with a method ``psd(omega)``, the two-sided PSD ``S(omega)`` [m2 s-3] of the
         unmodulated acceleration (any excitation: white noise, Kanai-Tajimi, Clough-Penzien, ...).
     cutoff : float
         Band limit ``omega_c`` [rad/s].
@@ -327,7 +608,22 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
     ``S(omega) / omega^2``, which is not integrable at ``omega = 0`` when ``S(0) > 0`` (white and
     Kanai-Tajimi noise: their velocity is a random walk of unbounded variance).  The high-pass makes
     the velocity PSD ``S omega^2 / (omega^4 + omega_low^4)``, finite everywhere.  White noise without
-    band limit: ``mu_0 = pi S0 / (sqrt(2) omega_low)``.
+    band limit: ``mu_0 = pi S0 / (sqrt(2) omega_low)``.  The high-pass is a 2nd-order Butterworth
+    filter as in record processing [1].
+
+    References
+    ----------
+    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> mu0, mu1, mu2 = velocity_spectral_moments(white, 1e5, 0.5)
+    >>> import math
+    >>> f"{mu0:.5f}", f"{math.pi * 0.01 / (math.sqrt(2) * 0.5):.5f}"
+    ('0.04443', '0.04443')
     """
     wc, wl = float(cutoff), float(omega_low)
     points = sorted(p for p in (wl, getattr(excitation, "omega_g", None), getattr(excitation, "omega_f", None))
@@ -341,8 +637,36 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
 
 def envelope_exponentials(envelope):
-    """``(amplitudes [1], rates [1/s])`` with ``q(t) = sum_j amplitudes_j exp(-rates_j t)``: the exponential
-    envelope ``4 (exp(-t/T1) - exp(-t/T2))`` or the constant one (``ValueError`` for another kind)."""
+    """The envelope as a sum of exponentials: ``q(t) = sum_j amplitudes_j exp(-rates_j t)``.
+
+    Parameters
+    ----------
+    envelope : screening.model.excitation.Envelope or screening.model.excitation.ConstantEnvelope
+        The exponential envelope ``4 (exp(-t/T1) - exp(-t/T2))`` or the constant one (``ValueError``
+        for another kind).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(amplitudes [1], rates [s-1])``.
+
+    Notes
+    -----
+    The exponential envelope is eq. (57) in [1].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening.model.excitation import Envelope
+    >>> amplitudes, rates = envelope_exponentials(Envelope(4.0, 2.0))
+    >>> amplitudes.tolist(), rates.tolist()
+    ([4.0, -4.0], [0.25, 0.5])
+    """
     if envelope.kind == "constant":
         return np.array([1.0]), np.array([0.0])
     if envelope.kind == "exponential":
@@ -390,8 +714,31 @@ _low_band_velocity_cached = functools.lru_cache(maxsize=256)(_low_band_velocity)
 
 def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=1001, d_omega=0.02,
                         split=40.0):
-    """``(t [s], var_v [m2 s-2], var_v_dot [m2 s-4], cov [m2 s-3])`` of the high-passed ground velocity of
-    the modulated input, started at rest at ``t = 0``.
+    """The non-stationary moments of the high-passed ground velocity of the modulated input.
+
+    The velocity starts at rest at ``t = 0``.
+
+    Parameters
+    ----------
+    excitation : screening.excitations.base.Excitation
+        A registered excitation with ``psd(omega)`` [m2 s-3] and its envelope (exponential or constant).
+    t_end : float
+        Record length [s].
+    cutoff : float
+        Band limit [rad s-1].
+    omega_low : float, default OMEGA_LOW
+        Corner of the 2nd-order Butterworth high-pass [rad s-1].
+    n_times : int, default 1001
+        Output times over ``[0, t_end]``.
+    d_omega : float, default 0.02
+        Frequency step of the exact low band [rad s-1].
+    split : float, default 40.0
+        Top of the exact low band in units of ``omega_low`` [1].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(t [s], var_v [m2 s-2], var_v_dot [m2 s-4], cov [m2 s-3])``.
 
     Notes
     -----
@@ -404,6 +751,24 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
     exact, on a grid of step ``d_omega`` [rad/s] up to ``split omega_low``.  Above it the velocity is
     local (``M ~ q(t) G(i omega) e^{i omega t}``) and the quasi-stationary moments are used:
     ``q^2 mu_0``, ``q^2 mu_2 + q'^2 mu_0``, ``q q' mu_0`` of that band (:func:`velocity_spectral_moments`).
+
+    References
+    ----------
+    .. [1] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
+       (1965) 204-237.
+    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
+       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+
+    Examples
+    --------
+    Under stationary input, long after the start, the variance is the stationary one of
+    :func:`velocity_spectral_moments`:
+
+    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> t, var_v, var_vd, cov = velocity_covariance(white, 60.0, 50.0, omega_low=0.5)
+    >>> f"{var_v[-1]:.4f}", f"{velocity_spectral_moments(white, 50.0, 0.5)[0]:.4f}"
+    ('0.0440', '0.0440')
     """
     wl, wc = float(omega_low), float(cutoff)
     ws = min(wc, split * wl)

@@ -57,9 +57,8 @@ from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
 from screening.workflow.config import StudyError, build_models
 
-__all__ = ["round_significant", "calibrate_intensity", "Point", "build_points", "point_models", "time_call",
-           "solve_sl", "run_sl", "run_mcs", "warm_up", "set_threads", "measure_grid", "grid_errors",
-           "measure_convergence", "measure_sl_numerics", "build_dataset", "run_tradeoff", "rerender_reports"]
+__all__ = ["round_significant", "calibrate_intensity", "Point", "time_call", "set_threads", "run_tradeoff",
+           "rerender_reports"]
 
 
 # ============================================================================ model set-up
@@ -479,7 +478,52 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress``
     is a callable taking one line of text (default: stderr) or None.  Returns
     ``(dataset, paths, rules)``: the dataset of :func:`build_dataset`, the dict of written files
-    and the rules of :func:`~screening.analysis.metrics.derive_rules`.
+    and the rules of :func:`~screening.analysis.metrics.derive_rules`.  A bad study file raises
+    :class:`~screening.workflow.config.StudyError` before any work, and nothing is written.
+
+    Parameters
+    ----------
+    study_path : str or pathlib.Path or TradeoffStudy
+        The study file (TOML) or the parsed study.
+    out_dir : str or pathlib.Path, default "outputs"
+        Where the outputs go.
+    progress : callable or None, default: to stderr
+        Called with one line of text per step.
+
+    Returns
+    -------
+    tuple
+        ``(dataset, paths, rules)``: the :class:`xarray.Dataset` of every measurement (SI units in
+        its ``units`` attributes), ``{kind: pathlib.Path}`` of the written files and the rules.
+
+    Notes
+    -----
+    The errors of the linearization [1] and of the condensed Monte Carlo against the coupled one,
+    with their Monte Carlo standard errors [2]; what the shipped study found: [3].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+    .. [3] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    A study file without a family is refused before anything runs or is written:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     bad = Path(d) / "bad.toml"
+    ...     _ = bad.write_text('title = "no families"\\n')
+    ...     try:
+    ...         run_tradeoff(bad, Path(d) / "out", progress=None)
+    ...     except StudyError as err:
+    ...         print(str(err).split(": ", 1)[1], (Path(d) / "out").exists())
+    family: at least one [[family]] table is required False
     """
     study = _study(study_path)
     start = time.perf_counter()
@@ -506,6 +550,61 @@ def rerender_reports(study_path, out_dir="outputs"):
     Returns ``(dataset, paths, rules)`` as :func:`run_tradeoff` (``paths`` without the netCDF).  Raises
     :class:`~screening.workflow.config.StudyError` for a bad study file and ``FileNotFoundError``
     when the study has not been run into ``out_dir``.
+
+    Parameters
+    ----------
+    study_path : str or pathlib.Path or TradeoffStudy
+        The study file (TOML) or the parsed study.
+    out_dir : str or pathlib.Path, default "outputs"
+        Where :func:`run_tradeoff` wrote the study.
+
+    Returns
+    -------
+    tuple
+        ``(dataset, paths, rules)``.
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+    .. [2] ``docs/cli.md``, "The command line" (``screening tradeoff``; this package's documentation).
+
+    Examples
+    --------
+    Before the study has run there is nothing to re-render:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> STUDY = '''title = "t"
+    ... [block]
+    ... m = 8.67
+    ... b = 0.035
+    ... h = 0.21
+    ... [foundation]
+    ... k = 2.89e7
+    ... lam = 8.95e8
+    ... [time]
+    ... t_end = 2.0
+    ... dt = 0.05
+    ... [[family]]
+    ... name = "w"
+    ... kind = "white"
+    ... eps = [6e7]
+    ... S0 = [1e-5, 2e-5]
+    ... [mcs]
+    ... samples = 50
+    ... [convergence]
+    ... points = [{family = "w", eps = 6e7, index = 1}]
+    ... samples = [20, 50]
+    ... rtol_samples = 20
+    ... rtol_factors = [1.0, 32.0]
+    ... '''
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     _ = (Path(d) / "tiny.toml").write_text(STUDY)
+    ...     try:
+    ...         rerender_reports(Path(d) / "tiny.toml", Path(d) / "out")
+    ...     except FileNotFoundError as err:
+    ...         print(Path(str(err).split()[0]).name, "does not exist")
+    tiny.nc does not exist
     """
     study = _study(study_path)
     nc = output_paths(out_dir, _stem(study))["nc"]

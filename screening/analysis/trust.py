@@ -106,28 +106,133 @@ CALIBRATION_FILE = "trust_calibration.nc"
 
 # ----------------------------------------------------------------------------- indicators
 def bed_law(eps):
-    """``"hardening"`` (eps > 0), ``"linear"`` (eps == 0) or ``"softening"`` (eps < 0), elementwise."""
+    """The bed law of a bed from the sign of its cubic coefficient, elementwise.
+
+    Parameters
+    ----------
+    eps : array_like
+        The cubic coefficient of the bed's contact law [m-2].
+
+    Returns
+    -------
+    numpy.ndarray of str
+        ``"hardening"`` (eps > 0), ``"linear"`` (eps == 0) or ``"softening"`` (eps < 0).
+
+    Notes
+    -----
+    The bed's restoring force per unit base length is ``k z + eps k z^3`` (eq. (3) in [1]): ``eps > 0``
+    stiffens with the indentation, ``eps < 0`` softens.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> bed_law([6e7, 0.0, -6e5]).tolist()
+    ['hardening', 'linear', 'softening']
+    """
     eps = np.asarray(eps, dtype=float)
     return np.where(eps > 0, "hardening", np.where(eps < 0, "softening", "linear"))
 
 
 # ----------------------------------------------------------------------------- calibration -> table
 def error_of(sl_peak, mcs_peak, mcs_se):
-    """``(SL / MCS - 1, (SL / MCS) x SE / MCS)``: relative error of SL's peak and its standard error."""
+    """The relative error of the linearization's peak against Monte Carlo, and its standard error.
+
+    Parameters
+    ----------
+    sl_peak : array_like
+        The linearization's peak var_theta [rad2].
+    mcs_peak, mcs_se : array_like
+        Monte Carlo's peak var_theta and its standard error [rad2].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(SL / MCS - 1, (SL / MCS) x SE / MCS)`` [1].
+
+    Notes
+    -----
+    The standard error is the first-order (delta-method) propagation of the Monte Carlo one [1].
+
+    References
+    ----------
+    .. [1] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+
+    Examples
+    --------
+    >>> e, se = error_of([1.1, 0.5], [1.0, 1.0], [0.02, 0.02])
+    >>> e.round(6).tolist(), se.round(6).tolist()
+    ([0.1, -0.5], [0.022, 0.01])
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.asarray(sl_peak, dtype=float) / np.asarray(mcs_peak, dtype=float)
         return ratio - 1.0, ratio * np.asarray(mcs_se, dtype=float) / np.asarray(mcs_peak, dtype=float)
 
 
 def p_bin(p):
-    """Index of the ``peak_p_uplift`` bin (:data:`P_EDGES`), elementwise; -1 for NaN."""
+    """Index of the ``peak_p_uplift`` bin of the cell rule (:data:`P_EDGES`), elementwise; -1 for NaN.
+
+    Parameters
+    ----------
+    p : array_like
+        Peak uplift probability [1].
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The bin, ``0 .. len(P_EDGES) - 2``, or -1.
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p_bin([0.0, 0.01, 0.5, 0.95, np.nan]).tolist()
+    [0, 1, 4, 5, -1]
+    """
     p = np.asarray(p, dtype=float)
     idx = np.searchsorted(np.asarray(P_EDGES), p, side="right") - 1
     return np.where(np.isfinite(p), np.clip(idx, 0, len(P_EDGES) - 2), -1)
 
 
 def regime(ind):
-    """``"lock_in"``, ``"near_toppling"`` or ``"cell"`` per point (status is handled by the caller)."""
+    """The regime of each point: ``"lock_in"``, ``"near_toppling"`` or ``"cell"``.
+
+    The solver status is handled by the caller.
+
+    Parameters
+    ----------
+    ind : dict
+        ``decay_excess``, ``sigma_ratio`` and ``k_eq_margin`` [1] (:func:`trust_indicators`).
+
+    Returns
+    -------
+    numpy.ndarray of str
+
+    Notes
+    -----
+    ``lock_in`` where ``decay_excess > DECAY_LIMIT``, else ``near_toppling`` where ``sigma_ratio >
+    SIGMA_LIMIT`` or ``k_eq_margin < MARGIN_LIMIT``, else ``cell``.
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    >>> regime({"decay_excess": [1.0, 20.0, 1.0], "sigma_ratio": [0.1, 0.1, 0.3],
+    ...         "k_eq_margin": [0.9, 0.9, 0.9]}).tolist()
+    ['cell', 'lock_in', 'near_toppling']
+    """
     decay = np.asarray(ind["decay_excess"], dtype=float)
     lock = np.isfinite(decay) & (decay > DECAY_LIMIT)
     near = (np.asarray(ind["sigma_ratio"], dtype=float) > SIGMA_LIMIT) | \
@@ -136,7 +241,30 @@ def regime(ind):
 
 
 def calibration_rows(ds):
-    """Flat numpy columns of the calibration dataset, one row per (point, condensation) with SL status ok."""
+    """Flat numpy columns of the calibration dataset, one row per (point, condensation) with SL status ok.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The calibration dataset (:func:`shipped_calibration`).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The indicators (:data:`INDICATORS`) [1], ``error`` and ``error_se`` [1],
+        ``overturned_fraction`` [1], ``condensation``, ``bed_law`` and ``point`` (str).
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    >>> rows = calibration_rows(shipped_calibration())
+    >>> len(rows["error"]), sorted(set(rows["condensation"].tolist()))
+    (112, ['cubic', 'paper'])
+    """
     stacked = ds.stack(row=("point", "condensation"))
     ok = (stacked["sl_status"].values == int(PointStatus.ok)) & np.isfinite(stacked["sl_error"].values)
     eps = np.broadcast_to(stacked["eps"].values, ok.shape)
@@ -169,9 +297,37 @@ def _cell_flag(err, se, over, band):
 def trust_table(calibration, rows=None):
     """The rule's cells derived from a calibration dataset (or from ``rows`` of :func:`calibration_rows`).
 
-    Returns a JSON-serialisable dict: ``{"cells": {"<condensation>|<bed law>|<bin>": {"flag", "band",
-    "n", "points"}}, "overrides": {"lock_in"|"near_toppling": {"band", "n"}}, "pooled": {"<bin>": band},
-    "p_edges", "limits"}``.
+    Parameters
+    ----------
+    calibration : xarray.Dataset
+        The calibration dataset (:func:`shipped_calibration`); not read when ``rows`` is given.
+    rows : dict, optional
+        :func:`calibration_rows`.
+
+    Returns
+    -------
+    dict
+        JSON-serialisable: ``{"cells": {"<condensation>|<bed law>|<bin>": {"flag", "band", "n",
+        "points"}}, "overrides": {"lock_in"|"near_toppling": {"band", "n"}}, "pooled": {"<bin>": band},
+        "p_edges", "limits"}``; bands of ``SL / MCS - 1`` [1].
+
+    Notes
+    -----
+    A cell's band is ``[max(min(e - 2 se), -1), max(e + 2 se)]`` over its rows; its flag follows the
+    steps of the module docstring.
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    The table recomputed from the shipped file is the one shipped with it:
+
+    >>> table = trust_table(shipped_calibration())
+    >>> table == shipped_table(), table["cells"]["paper|linear|0"]["flag"]
+    (True, 0)
     """
     rows = calibration_rows(calibration) if rows is None else rows
     reg = regime(rows)
@@ -215,7 +371,26 @@ def shipped_table():
 
 
 def shipped_calibration():
-    """The shipped calibration dataset (``screening/data/trust_calibration.nc``), loaded into memory."""
+    """The shipped calibration dataset (``screening/data/trust_calibration.nc``), loaded into memory.
+
+    Returns
+    -------
+    xarray.Dataset
+        59 points (``point``) under two condensations (``condensation``): the linearization's
+        indicators and peak var_theta [rad2], the coupled (and condensed) Monte Carlo's, ``sl_error``
+        [1].
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    >>> cal = shipped_calibration()
+    >>> cal.sizes["point"], cal["condensation"].values.tolist()
+    (59, ['paper', 'cubic'])
+    """
     path = resources.files("screening.data").joinpath(CALIBRATION_FILE)
     with resources.as_file(path) as p, xr.open_dataset(p) as ds:
         return ds.load()
@@ -227,11 +402,36 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
 
     Parameters
     ----------
-    indicators : dict of arrays from :func:`trust_indicators` (broadcast against each other).
-    calibration : a table from :func:`trust_table`, a calibration dataset, or None (the shipped table).
-    status : SL status codes (:class:`screening.status.PointStatus`), broadcastable; None: all ok.
-    condensation : ``"paper"`` or ``"cubic"`` (array of strings allowed).
-    eps : cubic parameter of the bed [m-2] (its sign is the bed law), broadcastable.
+    indicators : dict
+        Arrays from :func:`trust_indicators` [1] (broadcast against each other).
+    calibration : dict or xarray.Dataset, optional
+        A table from :func:`trust_table`, a calibration dataset, or None (the shipped table).
+    status : array_like of int, optional
+        SL status codes (:class:`screening.status.PointStatus`), broadcastable; None: all ok.
+    condensation : str or array_like of str, default "paper"
+        ``"paper"`` or ``"cubic"`` (another is at best ``check``, with no band).
+    eps : array_like, default 0.0
+        Cubic parameter of the bed [m-2] (its sign is the bed law), broadcastable.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(flag, error_low, error_high)``: :class:`screening.status.Trust` codes [int8] and the band of
+        ``SL / MCS - 1`` [1] (NaN where there is none).
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    A point at low uplift on a linear bed, one at higher uplift, one whose linearization stopped:
+
+    >>> ind = trust_indicators([0.001, 0.3, 0.3], 95.0, 100.0, [1e-6, 1e-4, 1e-4], 0.165, [1e-7, 1e-5, 1e-5], 0.1)
+    >>> flag, low, high = sl_trust(ind, status=[0, 0, 2])
+    >>> flag.tolist(), np.isnan(high).tolist()
+    ([0, 1, 2], [False, False, True])
     """
     if calibration is None:
         table = shipped_table()
@@ -284,7 +484,25 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
 
 
 def trust_attributes():
-    """CF attributes of ``sl_trust``, ``sl_error_low``, ``sl_error_high`` (from :mod:`screening.schema`)."""
+    """CF attributes of ``sl_trust``, ``sl_error_low``, ``sl_error_high`` (from :mod:`screening.schema`).
+
+    Returns
+    -------
+    dict of str to dict
+        ``{name: attributes}``.
+
+    References
+    ----------
+    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags).
+    .. [2] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    >>> attrs = trust_attributes()
+    >>> attrs["sl_trust"]["flag_meanings"], attrs["sl_trust"]["flag_values"].tolist()
+    ('trusted check untrusted', [0, 1, 2])
+    """
     from screening import schema
 
     return {name: schema.attributes(name) for name in ("sl_trust", "sl_error_low", "sl_error_high")}
@@ -298,11 +516,52 @@ def add_trust(ds, models=None):
     +-50 %, reaches a factor 4 (open) or the point's status is not ok, ``check`` otherwise (and at best
     ``check`` outside the atlas).
 
-    ``models``: ``{condensation: ErrorModel}`` (None: the shipped models,
-    :func:`screening.analysis.error_model.shipped_model`).  The condensation comes from
-    ``attrs["condensation"]`` or a ``condensation`` coordinate (sweeps whose cases differ in it).
-    Without the histories (nor the per-point ``k_eq_rest``, ``var_theta_end``) the margin and decay
-    indicators are NaN: a point whose status is ok is then ``check`` with a NaN band.
+    The condensation comes from ``attrs["condensation"]`` or a ``condensation`` coordinate (sweeps
+    whose cases differ in it).  Without the histories (nor the per-point ``k_eq_rest``,
+    ``var_theta_end``) the margin and decay indicators are NaN: a point whose status is ok is then
+    ``check`` with a NaN band.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`screening.linearize` or sweep result (its indicators, ``status`` and parameter
+        coordinates, :func:`screening.analysis.error_model.dataset_features`).
+    models : dict, optional
+        ``{condensation: ErrorModel}`` (None: the shipped models,
+        :func:`screening.analysis.error_model.shipped_model`).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` with ``sl_trust`` (:class:`screening.status.Trust` codes), ``sl_error_low`` and
+        ``sl_error_high`` [1].
+
+    Notes
+    -----
+    The interval is the error model's normalised conformal interval [2] of ``log(SL / MC)``, mapped
+    to ``SL / MC - 1``.
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+    .. [2] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
+       (conformal prediction).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
+    ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
+    ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
+    ...      "slenderness": 0.16515, "status": ("S0", [0, 0])},
+    ...     coords={"S0": [1e-4, 1e-3], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
+    ...             "I_cm": 0.131, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": 6e7, "T1": 4.0, "T2": 2.0},
+    ...     attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley",
+    ...            "condensation": "paper"})
+    >>> out = add_trust(ds)
+    >>> out["sl_trust"].values.tolist(), out["sl_error_low"].values.round(2).tolist()
+    ([1, 2], [-0.73, -1.0])
     """
     from screening.analysis import error_model as em
 
@@ -329,8 +588,30 @@ def add_trust(ds, models=None):
 
 
 def trust_models(*condensations):
-    """``{condensation: ErrorModel}`` of the shipped error models of the given condensations (those the atlas
-    does not hold are left out: their points are at best ``check``)."""
+    """The shipped error models of the given condensations.
+
+    Those the atlas does not hold are left out: their points are at best ``check``.
+
+    Parameters
+    ----------
+    *condensations : str
+        Condensation names.
+
+    Returns
+    -------
+    dict
+        ``{condensation: ErrorModel}`` (:func:`screening.analysis.error_model.shipped_model`).
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+
+    Examples
+    --------
+    >>> sorted(trust_models("paper", "no_such_condensation"))
+    ['paper']
+    """
     from screening.analysis.error_model import shipped_model
 
     out = {}
@@ -343,9 +624,51 @@ def trust_models(*condensations):
 
 
 def error_model_trust(x, status, condensation, covered=True, models=None):
-    """``(flag, low, high)`` [int8, 1, 1] of flat points from their error-model features ``x`` ``(n,
-    len(FEATURES))``, status and condensation (a name or ``(n,)`` names), by each condensation's model
-    (``models`` as in :func:`add_trust`; a condensation without a model: ``check`` at best, NaN band)."""
+    """The trust flag and predicted error band of flat points from their error-model features.
+
+    Each condensation's points are judged by its model; a condensation without a model is ``check``
+    at best, with a NaN band.
+
+    Parameters
+    ----------
+    x : array_like
+        ``(n, len(FEATURES))`` features (:func:`screening.analysis.error_model.features`).
+    status : array_like of int
+        :class:`screening.status.PointStatus` codes, ``(n,)`` or scalar.
+    condensation : str or array_like of str
+        A name or ``(n,)`` names.
+    covered : bool or array_like of bool, default True
+        False where the point's model lies outside what the atlas samples.
+    models : dict, optional
+        As in :func:`add_trust` (None: the shipped ones).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(flag, low, high)``: :class:`screening.status.Trust` codes [int8] and the interval of
+        ``SL / MC - 1`` [1].
+
+    References
+    ----------
+    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
+       space" (this package's documentation).
+    .. [2] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
+       (conformal prediction).
+
+    Examples
+    --------
+    Two points of the paper's block (their features from the model objects and the indicators):
+
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> from screening.analysis.error_model import model_features
+    >>> ind = {"peak_p_uplift": np.array([0.2011, 0.7653]), "k_eq_margin": np.array([1.0, 0.729]),
+    ...        "sigma_ratio": np.array([0.00569, 0.02437]), "decay_excess": np.array([1.342, 0.731])}
+    >>> x = model_features(ind, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
+    ...                    WhiteNoise(np.array([1e-4, 1e-3])))
+    >>> error_model_trust(x, [0, 0], "paper")[0].tolist(), error_model_trust(x, [0, 2], "paper")[0].tolist()
+    ([1, 2], [1, 2])
+    """
     from screening.analysis import error_model as em
 
     x = np.atleast_2d(np.asarray(x, dtype=float))
@@ -377,6 +700,37 @@ def add_cell_trust(ds, calibration=None):
     the condensation from ``attrs["condensation"]`` or a ``condensation`` coordinate (sweeps whose
     cases differ in it).  Without the histories (nor the per-point values) the lock-in and margin
     indicators are NaN and no point is labelled trusted (at best ``check``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`screening.linearize` or sweep result.
+    calibration : dict or xarray.Dataset, optional
+        As in :func:`sl_trust` (None: the shipped table).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` with ``sl_trust``, ``sl_error_low`` and ``sl_error_high`` [1].
+
+    References
+    ----------
+    .. [1] ``docs/trust.md``, "Trusting a point" (this package's documentation), and ``docs/method.md``,
+       section "Trusting a point".
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
+    ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
+    ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
+    ...      "slenderness": 0.16515, "status": ("S0", [0, 0])},
+    ...     coords={"S0": [1e-4, 1e-3], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
+    ...             "I_cm": 0.131, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": 6e7, "T1": 4.0, "T2": 2.0},
+    ...     attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley",
+    ...            "condensation": "paper"})
+    >>> add_cell_trust(ds)["sl_trust"].values.tolist()
+    [2, 2]
     """
     dims = ds["peak_var_theta"].dims
     peak = ds["peak_var_theta"]
