@@ -18,7 +18,7 @@ budget_s = 4
 """
 
 
-@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+@pytest.mark.parametrize("suffix", [".nc", pytest.param(".zarr", marks=pytest.mark.slow)])   # .zarr: slow suite
 def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp_path, suffix):
     if suffix == ".zarr":
         pytest.importorskip("zarr")
@@ -120,6 +120,7 @@ def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkey
         assert np.all(np.isfinite(ds["esc_peak_var_theta"].values))
 
 
+@pytest.mark.slow
 def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monkeypatch):
     # the budget is planned on the cost model (integration steps), not on the measured CPU time: the same
     # points run with the same samples, so the best estimates are identical
@@ -158,6 +159,7 @@ def test_accuracy_on_a_one_point_grid(client, tmp_path, suffix):
         assert ds["best_peak_var_theta"].values.item() == ds["esc_peak_var_theta"].values.item()
 
 
+@pytest.mark.slow
 def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client, tmp_path, monkeypatch):
     """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
     record: the resumed run escalates the same points with the same samples and the same estimates."""

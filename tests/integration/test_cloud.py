@@ -135,6 +135,7 @@ def test_cloud_cli_runs_on_workers_and_checks_the_worker_count(folder, capsys):
         assert ds["fit_median"].attrs["units"] == "m s-2" and ds["peak_abs_theta"].attrs["units"] == "rad"
 
 
+@pytest.mark.slow
 def test_multiple_stripe_analysis_scales_every_record_to_every_level(folder, capsys):
     """[records] levels: each record scaled to each PGA level (its PGA is then the level), the
     exceedances counted per stripe and fitted by the binomial likelihood with standard errors."""

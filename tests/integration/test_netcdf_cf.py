@@ -112,7 +112,7 @@ def results(tmp_path_factory):
 
 @pytest.mark.skipif(not CHECKER.exists(), reason="IOOS compliance-checker is not installed in this environment "
                                                  "(pip install compliance-checker)")
-@pytest.mark.parametrize("name", ["grid", "cases", "single"])
+@pytest.mark.parametrize("name", [pytest.param("grid", marks=pytest.mark.slow), "cases", "single"])   # grid: slow suite
 def test_compliance_checker_cf18_strict_passes(results, name):
     assert_cf18_strict(results[name])
 

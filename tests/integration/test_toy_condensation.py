@@ -103,6 +103,7 @@ def test_toy_and_paper_agree_where_the_paper_block_does_not_uplift(toy):
     np.testing.assert_allclose(lin["var_theta"], paper["var_theta"], rtol=1e-4, atol=1e-6 * paper["var_theta"].max())
 
 
+@pytest.mark.slow
 def test_condensed_monte_carlo_with_the_toy_matches_the_band_limited_linear_variance(toy):
     w, zeta, a = linear_constants()
     cutoff = default_cutoff(BLOCK, BED)

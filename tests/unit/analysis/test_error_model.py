@@ -152,6 +152,7 @@ def test_an_interval_reaching_the_clip_is_open():
     assert np.isfinite(se[0]) and not np.isfinite(se[1]) and not np.isfinite(se[2])
 
 
+@pytest.mark.slow
 def test_a_held_out_family_is_never_trusted_beyond_25_percent(shipped):
     # leave one family out: a point the model (fitted without its family) calls trusted has a measured
     # |SL / MC - 1| within 25 % up to two Monte Carlo standard errors

@@ -27,6 +27,7 @@ def fits():
     return [fit_excitation(Record(a[:n], plan.dt)) for a in acc]
 
 
+@pytest.mark.slow
 def test_parameters_recovered(fits):
     med = {k: np.median([f[k] for f in fits]) for k in ("omega_g", "zeta_g", "T1", "T2")}
     assert med["omega_g"] == pytest.approx(15.0, rel=0.10)
