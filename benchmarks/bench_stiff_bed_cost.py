@@ -26,6 +26,12 @@ It prints the CPU time per sample (synthesis and integration, one numba thread: 
 Run (about 10 minutes at 300 samples on an idle core)::
 
     flock /work/bench.lock nice -n 10 env PYTHONPATH=. python benchmarks/bench_stiff_bed_cost.py --samples 300
+
+``--profile`` prints instead where one sample's time goes on the statue's k = 1e10 bed at the defaults: CPU
+per sample of the synthesis of the low-passed samples (with their modulation) against the whole run, and the
+kernel's steps per sample by phase (``stiff_bed_kernels.COUNT_ROWS``, counted by the kernel itself)::
+
+    flock /work/bench.lock nice -n 10 env PYTHONPATH=. python benchmarks/bench_stiff_bed_cost.py --profile --samples 200
 """
 
 from __future__ import annotations
@@ -45,6 +51,9 @@ from screening.model import Block, Foundation  # noqa: E402
 from screening.model.excitation import KanaiTajimi  # noqa: E402
 from screening.solvers import stiff_bed  # noqa: E402
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
+from screening.solvers.stiff_bed_kernels import COUNT_ROWS  # noqa: E402
+from screening.solvers.synthesis import (default_cutoff, envelope_rate, low_passed, spectral_plan,  # noqa: E402
+                                         stationary_samples)
 
 FRACTIONS = (0.05, 0.1, 0.3, 0.5)
 FILTER = dict(omega_g=15.6, zeta_g=0.6)          # Kanai-Tajimi ground filter of the calibration's statue
@@ -145,12 +154,65 @@ def run_bed(label, block, bed, S0, samples, seed):
     return lines
 
 
+class _Counting(stiff_bed.StiffBedModel):
+    """The stiff-bed model whose integrators count their steps by phase (``step_counts``)."""
+
+    def integrator(self, *args, **kwargs):
+        integrate = super().integrator(*args, **kwargs)
+        integrate.step_counts = np.zeros((len(COUNT_ROWS), 2), dtype=np.int64)
+        self.last = integrate
+        return integrate
+
+
+def synthesis_cpu(block, bed, excitation, model, samples, seed, chunk=64):
+    """CPU seconds per sample [s] of synthesizing and modulating the samples ``model`` reads, as
+    ``monte_carlo`` does (same plan, same chunks)."""
+    plan = spectral_plan(excitation, 20.0, default_cutoff(block, bed))
+    low = low_passed(plan, model.input_band(block, bed))[0]
+    q, q_dot = excitation.envelope(low.times), envelope_rate(excitation.envelope, low.times)
+    start = time.process_time()
+    for lo in range(0, samples, chunk):
+        acc, acc_dot = stationary_samples(low, seed, np.arange(lo, min(lo + chunk, samples)))
+        acc_dot *= q
+        acc_dot += q_dot * acc
+        acc *= q
+    return (time.process_time() - start) / samples, low
+
+
+def profile(samples, seed):
+    """Print where one sample's time goes (module docstring, ``--profile``)."""
+    label, block, bed, S0 = beds()[1]
+    excitation = KanaiTajimi(S0, FILTER["omega_g"], FILTER["zeta_g"])
+    stiff_bed.transfer_table(block, bed)
+    kw = dict(n_samples=samples, seed=seed, progress=False, t_end=20.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        start = time.process_time()
+        ds = monte_carlo(block, bed, excitation, model=stiff_bed.StiffBedModel(), **kw)
+        total = (time.process_time() - start) / samples
+        counting = _Counting()
+        monte_carlo(block, bed, excitation, model=counting, **kw)
+    synth, low = synthesis_cpu(block, bed, excitation, stiff_bed.StiffBedModel(), samples, seed)
+    counts = counting.last.step_counts / samples
+    print(f"{label}, Kanai-Tajimi S0 = {S0} m2/s3, {samples} samples, seed {seed}, defaults "
+          f"(rtol {stiff_bed.StiffBedModel.default_rtol:g}, h_max 5 ms)")
+    print(f"CPU per sample: {1e3 * total:.2f} ms, of which synthesis of the low-passed samples {1e3 * synth:.2f} ms "
+          f"({low.n_fft}-point FFT, {low.n_frequencies} components, grid {1e3 * low.dt:.3f} ms) and the rest "
+          f"{1e3 * (total - synth):.2f} ms (kernel and bookkeeping); {float(ds.n_steps.mean()):.0f} steps per sample")
+    print("| phase | accepted per sample | rejected per sample |\n|---|---|---|")
+    for name, (acc, rej) in zip(COUNT_ROWS, counts):
+        print(f"| {name} | {acc:.0f} | {rej:.0f} |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=300)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--only", help="run only the beds whose label contains one of these comma-separated texts")
+    parser.add_argument("--profile", action="store_true", help="where the time goes on the statue's k = 1e10 bed")
     args = parser.parse_args()
+    if args.profile:
+        return profile(args.samples, args.seed)
     statue = Block(m=1200.0, b=0.25, h=0.9)
     for model in ("coupled", stiff_bed.StiffBedModel(), stiff_bed.StiffBedModel(locate=False)):  # compile
         with warnings.catch_warnings():
