@@ -5,11 +5,14 @@ Per bed (the statue on k = 1e8, 1e10 and 1e11, the cabinet on its hardening pads
 
 * ``coupled``: the coupled model at its defaults (the judge);
 * ``auto``: ``model = "auto"`` (the stiff-bed model on these beds: the name that ran is printed);
-* ``stiff_bed before``: the stiff-bed model's first kernel (``StiffBedModel(locate=False)``, ``rtol = 1e-7``:
-  the transfer applied at the end of the step that crossed zero);
-* ``stiff_bed after``: the stiff-bed model at its defaults (the transfer located at the crossing,
-  ``rtol = 1e-5``);
-* ``stiff_bed reference``: the located kernel at ``rtol = 1e-9`` (the model's converged statistics).
+* ``stiff_bed first``: the stiff-bed model's first kernel (``StiffBedModel(locate=False)``, ``rtol = 1e-7``,
+  ``h_max = 5 ms``: the transfer applied at the end of the step that crossed zero);
+* ``stiff_bed 5 ms``: the defaults of 2026-11-25 (the transfer located at the crossing, ``rtol = 1e-5``,
+  ``h_max = 5 ms``, the largest step of every model then);
+* ``stiff_bed after``: the stiff-bed model at its defaults (as ``5 ms`` with the model's own largest step,
+  ``StiffBedModel.default_h_max = 10 ms``);
+* ``stiff_bed reference``: the located kernel at ``rtol = 1e-9``, ``h_max = 5 ms`` (the model's converged
+  statistics).
 
 It prints the CPU time per sample (synthesis and integration, one numba thread: the script sets
 ``NUMBA_NUM_THREADS=1`` unless it is set), the coupled / model cost ratio, and two accuracy checks:
@@ -59,6 +62,7 @@ FRACTIONS = (0.05, 0.1, 0.3, 0.5)
 FILTER = dict(omega_g=15.6, zeta_g=0.6)          # Kanai-Tajimi ground filter of the calibration's statue
 BEFORE_RTOL = 1e-7
 REFERENCE_RTOL = 1e-9
+BEFORE_H_MAX = 0.005
 
 
 def _bed(block, k, eps=0.0, zeta_v=0.05):
@@ -125,9 +129,10 @@ def run_bed(label, block, bed, S0, samples, seed):
     alpha = float(block.slenderness)
     kw = dict(n_samples=samples, seed=seed, progress=False, t_end=20.0)
     runs = [("coupled", "coupled", {}), ("auto", "auto", {}),
-            ("stiff_bed before", stiff_bed.StiffBedModel(locate=False), {"rtol": BEFORE_RTOL}),
+            ("stiff_bed first", stiff_bed.StiffBedModel(locate=False), {"rtol": BEFORE_RTOL, "h_max": BEFORE_H_MAX}),
+            ("stiff_bed 5 ms", stiff_bed.StiffBedModel(), {"h_max": BEFORE_H_MAX}),
             ("stiff_bed after", stiff_bed.StiffBedModel(), {}),
-            ("stiff_bed reference", stiff_bed.StiffBedModel(), {"rtol": REFERENCE_RTOL})]
+            ("stiff_bed reference", stiff_bed.StiffBedModel(), {"rtol": REFERENCE_RTOL, "h_max": BEFORE_H_MAX})]
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")                        # validity warnings: not the subject here
@@ -192,16 +197,20 @@ def profile(samples, seed):
         total = (time.process_time() - start) / samples
         counting = _Counting()
         monte_carlo(block, bed, excitation, model=counting, **kw)
+        capped = _Counting()
+        monte_carlo(block, bed, excitation, model=capped, h_max=BEFORE_H_MAX, **kw)
     synth, low = synthesis_cpu(block, bed, excitation, stiff_bed.StiffBedModel(), samples, seed)
     counts = counting.last.step_counts / samples
+    before = capped.last.step_counts / samples
     print(f"{label}, Kanai-Tajimi S0 = {S0} m2/s3, {samples} samples, seed {seed}, defaults "
-          f"(rtol {stiff_bed.StiffBedModel.default_rtol:g}, h_max 5 ms)")
+          f"(rtol {stiff_bed.StiffBedModel.default_rtol:g}, h_max {stiff_bed.StiffBedModel.default_h_max:g} s)")
     print(f"CPU per sample: {1e3 * total:.2f} ms, of which synthesis of the low-passed samples {1e3 * synth:.2f} ms "
           f"({low.n_fft}-point FFT, {low.n_frequencies} components, grid {1e3 * low.dt:.3f} ms) and the rest "
           f"{1e3 * (total - synth):.2f} ms (kernel and bookkeeping); {float(ds.n_steps.mean()):.0f} steps per sample")
-    print("| phase | accepted per sample | rejected per sample |\n|---|---|---|")
-    for name, (acc, rej) in zip(COUNT_ROWS, counts):
-        print(f"| {name} | {acc:.0f} | {rej:.0f} |")
+    print(f"| phase | accepted per sample | rejected per sample | at h_max = {BEFORE_H_MAX:g} s: accepted | rejected |"
+          "\n|---|---|---|---|---|")
+    for name, (acc, rej), (acc5, rej5) in zip(COUNT_ROWS, counts, before):
+        print(f"| {name} | {acc:.0f} | {rej:.0f} | {acc5:.0f} | {rej5:.0f} |")
 
 
 def main():
@@ -227,8 +236,9 @@ def main():
         if args.only is None or any(t in label for t in args.only.split(",")):
             run_bed(label, block, bed, S0, args.samples, args.seed)
     print(f"\n{args.samples} samples per row, seed {args.seed}, NUMBA_NUM_THREADS={os.environ['NUMBA_NUM_THREADS']}; "
-          f"Kanai-Tajimi omega_g = {FILTER['omega_g']} rad/s, zeta_g = {FILTER['zeta_g']}, t_end = 20 s; before: "
-          f"locate=False, rtol {BEFORE_RTOL:g}; reference: rtol {REFERENCE_RTOL:g}.")
+          f"Kanai-Tajimi omega_g = {FILTER['omega_g']} rad/s, zeta_g = {FILTER['zeta_g']}, t_end = 20 s; first: "
+          f"locate=False, rtol {BEFORE_RTOL:g}, h_max {BEFORE_H_MAX:g} s; 5 ms: h_max {BEFORE_H_MAX:g} s; reference: "
+          f"rtol {REFERENCE_RTOL:g}, h_max {BEFORE_H_MAX:g} s.")
 
 
 if __name__ == "__main__":
