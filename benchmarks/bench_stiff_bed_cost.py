@@ -30,7 +30,8 @@ Run (about 10 minutes at 300 samples on an idle core)::
 
     flock /work/bench.lock nice -n 10 env PYTHONPATH=. python benchmarks/bench_stiff_bed_cost.py --samples 300
 
-``--profile`` prints instead where one sample's time goes on the statue's k = 1e10 bed at the defaults: CPU
+``--profile`` prints instead where one sample's time goes on the statue's k = 1e10 bed (``--only`` another) at
+the defaults and at ``h_max = 5 ms``: CPU
 per sample of the synthesis of the low-passed samples (with their modulation) against the whole run, and the
 kernel's steps per sample by phase (``stiff_bed_kernels.COUNT_ROWS``, counted by the kernel itself)::
 
@@ -184,9 +185,10 @@ def synthesis_cpu(block, bed, excitation, model, samples, seed, chunk=64):
     return (time.process_time() - start) / samples, low
 
 
-def profile(samples, seed):
-    """Print where one sample's time goes (module docstring, ``--profile``)."""
-    label, block, bed, S0 = beds()[1]
+def profile(samples, seed, only="statue k=1e10"):
+    """Print where one sample's time goes (module docstring, ``--profile``) on the first bed whose label
+    contains ``only``."""
+    label, block, bed, S0 = next(b for b in beds() if only in b[0])
     excitation = KanaiTajimi(S0, FILTER["omega_g"], FILTER["zeta_g"])
     stiff_bed.transfer_table(block, bed)
     kw = dict(n_samples=samples, seed=seed, progress=False, t_end=20.0)
@@ -221,7 +223,7 @@ def main():
     parser.add_argument("--profile", action="store_true", help="where the time goes on the statue's k = 1e10 bed")
     args = parser.parse_args()
     if args.profile:
-        return profile(args.samples, args.seed)
+        return profile(args.samples, args.seed, *([args.only] if args.only else []))
     statue = Block(m=1200.0, b=0.25, h=0.9)
     for model in ("coupled", stiff_bed.StiffBedModel(), stiff_bed.StiffBedModel(locate=False)):  # compile
         with warnings.catch_warnings():
