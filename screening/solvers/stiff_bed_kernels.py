@@ -32,7 +32,8 @@ __all__ = ["linear_propagator", "transfer_ratio_jit", "integrate_sample", "integ
 #: transfers.
 COUNT_ROWS = ("full contact, exact interval", "full contact, adaptive", "theta_ul < |theta| <= 10 theta_ul",
               "10 theta_ul < |theta| <= 100 theta_ul", "100 theta_ul < |theta| <= 0.05 atan(b/h)",
-              "|theta| > 0.05 atan(b/h)", "(at h_max, landing on an output instant)", "(shortened to locate, transfers)")
+              "|theta| > 0.05 atan(b/h)", "(at h_max, landing on an output instant)",
+              "(shortened to locate, transfers)")
 #: Upper ``|theta|`` bounds of the adaptive phases 2, 3 in units of ``theta_ul`` and of phase 4 in units of
 #: ``atan(b/h)``.
 PHASE_BOUNDS = (10.0, 100.0, 0.05)
@@ -126,8 +127,9 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
     ``prop``: ``(2, 6)``, :func:`linear_propagator` ``[Phi | Gamma]`` for the grid step ``dt_grid``;
     ``log_amp``, ``log_eta``: the transfer table; ``acc``, ``acc_dot``: the ``(horizontal, vertical)``
     ground input of :func:`screening.solvers.mcs_kernels._integrate_chunk`; ``counts``: ``(8, 2)`` integers
-    incremented by the step counts of :data:`COUNT_ROWS`, or ``(0, 2)`` (not counted).  Returns ``(status, reason, peak_abs_theta,
-    n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as accepted steps).
+    incremented by the step counts of :data:`COUNT_ROWS`, or ``(0, 2)`` (not counted).  Returns ``(status,
+    reason, peak_abs_theta, n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as
+    accepted steps).
     """
     n_out = t_out.shape[0]
     n_grid = acc[0].shape[1]
@@ -186,11 +188,11 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                 n_acc += 1
                 if counting:
                     counts[0, 0] += 1
+                    if amp > tu and (old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0)):
+                        counts[7, 1] += 1
                 if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
                     if amp > tu:
                         y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
-                        if counting:
-                            counts[7, 1] += 1
                     amp = 0.0
                 a0 = abs(y0)
                 amp = max(amp, a0)
@@ -295,11 +297,11 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
             at_grid = False
         y0, y1 = n0, n1
         k1_0, k1_1 = k7_0, k7_1
+        if counting and amp > tu and (old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0)):
+            counts[7, 1] += 1
         if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
             if amp > tu:
                 y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
-                if counting:
-                    counts[7, 1] += 1
                 k1_0 = y1
                 k1_1 = _accel(sp, cp, y0, y1, acc_end)
             amp = 0.0
