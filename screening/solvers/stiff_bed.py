@@ -315,7 +315,7 @@ class StiffBedModel(MonteCarloModel):
     default_rtol = 1e-5
     #: Default largest step [s]: free rocking on the corner runs at the largest step (2,850 of the 5,800
     #: adaptive steps per sample of the statue on k = 1e10 at 5 ms); at 10 ms the error control sets it
-    #: (20 ms takes as many steps), 13 % fewer steps, and the statistics agree with a 1e-9 reference as
+    #: (20 ms takes as many steps), 12 % fewer steps, and the statistics agree with a 1e-9 reference as
     #: those at 5 ms do (4,000 paired samples: docs/stiff_bed.md, "Tolerance and cost").
     default_h_max = 0.01
 
