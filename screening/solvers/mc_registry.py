@@ -59,6 +59,8 @@ class MonteCarloModel(abc.ABC):
     description: str = ""
     #: default relative tolerance of the adaptive integrator [1]
     default_rtol: float = 1e-6
+    #: default largest step of the adaptive integrator [s] (``monte_carlo``'s ``h_max`` when not given)
+    default_h_max: float = 0.005
     #: whether the model reads the condensation argument (``condensation=``)
     uses_condensation: bool = False
     #: whether ``z_cb``, ``z_cb'`` are states of the model (else reported as 0)

@@ -79,7 +79,8 @@ DEFAULT_NUMERICS = {
     "band": None,               # band [rad/s] the model reads: the samples low-passed there (same seed and
                                 # components below it); None -> the model's own (MonteCarloModel.input_band)
     "oversampling": OVERSAMPLING,
-    "h_max": 0.005,             # largest integration step [s]
+    "h_max": None,              # largest integration step [s]; None -> the model's default_h_max (5 ms but
+                                # for the stiff-bed model, 10 ms)
     "max_steps": 5_000_000,     # step budget per sample (accepted + rejected)
     "max_flight_time": 0.5,     # longest admissible continuous flight [s]
     "chunk_size": 64,           # samples synthesized and integrated per batch
@@ -174,7 +175,8 @@ def _check_numerics(numerics):
     if opts["band"] is not None:
         opts["band"] = positive("band")
     opts["cutoff_factor"] = positive("cutoff_factor")
-    opts["h_max"] = positive("h_max")
+    if opts["h_max"] is not None:
+        opts["h_max"] = positive("h_max")
     opts["max_flight_time"] = positive("max_flight_time")
     opts["oversampling"] = check_integer("oversampling", opts["oversampling"], 2)
     opts["max_steps"] = check_integer("max_steps", opts["max_steps"], 1)
@@ -463,7 +465,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     **numerics : overrides of :data:`DEFAULT_NUMERICS` — ``rtol`` [1], ``cutoff`` [rad/s],
         ``cutoff_factor`` [1], ``band`` [rad/s] (the model reads the samples low-passed at this band,
         the same realizations as every other model of the same seed and cutoff below it; default the
-        model's own, :meth:`~screening.solvers.mc_registry.MonteCarloModel.input_band`), ``oversampling`` [1], ``h_max`` [s], ``max_steps``,
+        model's own, :meth:`~screening.solvers.mc_registry.MonteCarloModel.input_band`), ``oversampling`` [1], ``h_max`` [s] (None: the model's ``default_h_max``), ``max_steps``,
         ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``).
 
     Returns
@@ -523,6 +525,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     opts = _check_numerics(numerics)
     if opts["rtol"] is None:
         opts["rtol"] = mc.default_rtol
+    if opts["h_max"] is None:
+        opts["h_max"] = mc.default_h_max
     show = _show_progress(progress, n_samples, opts["chunk_size"])
     y0 = mc.initial_state(block, foundation)           # may raise for a bed that cannot carry the block
     cond.check(block, foundation)

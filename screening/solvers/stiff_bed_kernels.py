@@ -20,7 +20,23 @@ from screening.solvers.mcs_inputs import _hermite as _input, _vertical_row   # o
 from screening.solvers.mcs_kernels import _err_term as _err2                   # one home: the error norm
 from screening.solvers.stiff_bed_contact import rocking_acceleration_jit
 
-__all__ = ["linear_propagator", "transfer_ratio_jit", "integrate_sample", "integrate_chunk"]
+__all__ = ["linear_propagator", "transfer_ratio_jit", "integrate_sample", "integrate_chunk", "COUNT_ROWS",
+           "PHASE_BOUNDS"]
+
+#: Rows of the step counts :func:`integrate_sample` keeps when asked (``counts`` of shape ``(8, 2)``):
+#: per phase ``(accepted, rejected)`` steps, the phase read from ``|theta|`` at the step's start:
+#: ``0`` exact full-contact grid intervals, ``1`` adaptive steps in full contact, ``2..5`` adaptive steps
+#: with ``|theta|`` in ``(theta_ul, 10 theta_ul]``, ``(10, 100] theta_ul``, ``(100 theta_ul, 0.05 atan(b/h)]``
+#: and above ``0.05 atan(b/h)`` (free rocking on the corner); row ``6``: accepted steps of length ``h_max``
+#: and accepted steps landing on an output instant; row ``7``: steps shortened to locate a transfer and
+#: transfers.
+COUNT_ROWS = ("full contact, exact interval", "full contact, adaptive", "theta_ul < |theta| <= 10 theta_ul",
+              "10 theta_ul < |theta| <= 100 theta_ul", "100 theta_ul < |theta| <= 0.05 atan(b/h)",
+              "|theta| > 0.05 atan(b/h)", "(at h_max, landing on an output instant)",
+              "(shortened to locate, transfers)")
+#: Upper ``|theta|`` bounds of the adaptive phases 2, 3 in units of ``theta_ul`` and of phase 4 in units of
+#: ``atan(b/h)``.
+PHASE_BOUNDS = (10.0, 100.0, 0.05)
 
 
 def linear_propagator(m0, c0, k0, mh, dt):
@@ -88,15 +104,32 @@ def transfer_ratio_jit(log_amp, log_eta, amp):
     return math.exp(log_eta[j] + f * (log_eta[j + 1] - log_eta[j]))
 
 
+@numba.njit(cache=True, inline="always")
+def _phase(sp, a0):
+    """Row of :data:`COUNT_ROWS` of an adaptive step starting at ``|theta| = a0`` [rad]."""
+    tu = sp.theta_ul
+    if a0 <= tu:
+        return 1
+    if a0 <= PHASE_BOUNDS[0] * tu:
+        return 2
+    if a0 <= PHASE_BOUNDS[1] * tu:
+        return 3
+    if a0 <= PHASE_BOUNDS[2] * sp.theta_over:
+        return 4
+    return 5
+
+
 @numba.njit(cache=True)
 def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max,
-                     max_steps, out_theta, out_theta_dot, out_uplift):
+                     max_steps, out_theta, out_theta_dot, out_uplift, counts):
     """Integrate one sample of the stiff-bed model over ``t_out``; fill row ``row`` of the outputs.
 
     ``prop``: ``(2, 6)``, :func:`linear_propagator` ``[Phi | Gamma]`` for the grid step ``dt_grid``;
     ``log_amp``, ``log_eta``: the transfer table; ``acc``, ``acc_dot``: the ``(horizontal, vertical)``
-    ground input of :func:`screening.solvers.mcs_kernels._integrate_chunk`.  Returns ``(status, reason, peak_abs_theta,
-    n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as accepted steps).
+    ground input of :func:`screening.solvers.mcs_kernels._integrate_chunk`; ``counts``: ``(8, 2)`` integers
+    incremented by the step counts of :data:`COUNT_ROWS`, or ``(0, 2)`` (not counted).  Returns ``(status,
+    reason, peak_abs_theta, n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as
+    accepted steps).
     """
     n_out = t_out.shape[0]
     n_grid = acc[0].shape[1]
@@ -129,6 +162,7 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
     i_out = 1
     rejected = False
     locating = False
+    counting = counts.shape[0] > 0
     while i_out < n_out:
         if n_acc + n_rej >= max_steps:
             status, reason = kern.STATUS_DIVERGED, kern.REASON_STEP_BUDGET
@@ -152,6 +186,10 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                 t = jg * dt_grid
                 y0, y1 = n0, n1
                 n_acc += 1
+                if counting:
+                    counts[0, 0] += 1
+                    if amp > tu and (old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0)):
+                        counts[7, 1] += 1
                 if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
                     if amp > tu:
                         y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
@@ -207,8 +245,11 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
         e0 = h * (E1 * k1_0 + E3 * k3_0 + E4 * k4_0 + E5 * k5_0 + E6 * k6_0 + E7 * k7_0)
         e1 = h * (E1 * k1_1 + E3 * k3_1 + E4 * k4_1 + E5 * k5_1 + E6 * k6_1 + E7 * k7_1)
         err = math.sqrt(0.5 * (_err2(e0, y0, n0, s0, rtol) + _err2(e1, y1, n1, s1, rtol)))
+        phase = _phase(sp, abs(y0)) if counting else 0
         if not math.isfinite(err):
             n_rej += 1
+            if counting:
+                counts[phase, 1] += 1
             h = 0.1 * h
             rejected = True
             if h < h_floor:
@@ -217,6 +258,8 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
             continue
         if err > 1.0:
             n_rej += 1
+            if counting:
+                counts[phase, 1] += 1
             h = h * dopri.rejected_step_factor_log(math.log(err))
             rejected = True
             if h < h_floor:
@@ -228,6 +271,8 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
             # (linear estimate, repeated until the step ends in full contact) so the velocity ratio
             # is applied where the block passes through full contact, not a step later
             n_rej += 1
+            if counting:
+                counts[7, 0] += 1
             h = h * min(max(old0 / (old0 - n0), 0.01), 0.99)
             locating = True
             if h < h_floor:
@@ -235,6 +280,12 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                 break
             continue
         n_acc += 1
+        if counting:
+            counts[phase, 0] += 1
+            if h >= h_max:
+                counts[6, 0] += 1
+            if landing and not to_grid:
+                counts[6, 1] += 1
         if h < h_min_acc and not landing and not locating and n_acc > 10:
             h_min_acc = h
         locating = False
@@ -246,6 +297,8 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
             at_grid = False
         y0, y1 = n0, n1
         k1_0, k1_1 = k7_0, k7_1
+        if counting and amp > tu and (old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0)):
+            counts[7, 1] += 1
         if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
             if amp > tu:
                 y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
@@ -290,12 +343,15 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
 @numba.njit(cache=True, parallel=True)
 def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max,
                     max_steps, out_theta, out_theta_dot, out_uplift, peak, status, reason, n_accepted, n_rejected,
-                    h_min):
-    """:func:`integrate_sample` for every row of ``acc`` (``prange`` over samples)."""
+                    h_min, counts):
+    """:func:`integrate_sample` for every row of ``acc`` (``prange`` over samples).  ``counts``: ``(rows, 8, 2)``
+    integers (the step counts of row ``r`` added to ``counts[r]``) or ``(0, 8, 2)`` (not counted)."""
+    no_counts = np.zeros((0, 2), dtype=np.int64)
     for row in numba.prange(acc[0].shape[0]):
+        cnt = counts[row] if counts.shape[0] > 0 else no_counts
         st, rs, pk, na, nr, hm = integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                                                   t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
-                                                  out_theta_dot, out_uplift)
+                                                  out_theta_dot, out_uplift, cnt)
         status[row] = st
         reason[row] = rs
         peak[row] = pk

@@ -75,7 +75,8 @@ def test_locate_false_is_the_first_kernel_and_worse_at_a_coarse_tolerance():
 @pytest.mark.slow
 def test_default_tolerance_keeps_the_statistics_of_a_tight_one():
     """The statue on k = 1e10 at S0 = 0.015 m2/s3 (most samples rock, a few overturn), 200 samples, same
-    seed: the model at its default tolerance, and its first kernel (``locate=False``, rtol 1e-7), against
+    seed: the model at its default tolerance and largest step (10 ms), at the 5 ms of the other models, and
+    its first kernel (``locate=False``, rtol 1e-7), against
     the located kernel at rtol 1e-9.  The sample paths are sensitive at every tolerance (10-20 % of the
     samples change side of 0.1 atan(b/h) between any two tolerances), so the comparison is of the
     statistics: each of P(|theta| > a atan(b/h)), a = 0.05, 0.1, 0.3, 0.5, and P(overturn) within 2.5
@@ -97,8 +98,26 @@ def test_default_tolerance_keeps_the_statistics_of_a_tight_one():
     ref, var_ref, var_se = run(sb.StiffBedModel(), rtol=1e-9)
     assert 0.1 < ref[2].mean() < 0.9                       # an informative intensity
     n = ref.shape[1]
-    for ind, var, _ in (run(sb.StiffBedModel()), run(sb.StiffBedModel(locate=False), rtol=1e-7)):
+    for ind, var, _ in (run(sb.StiffBedModel()), run(sb.StiffBedModel(), h_max=0.005),
+                        run(sb.StiffBedModel(locate=False), rtol=1e-7)):
         d = ind - ref
         paired = np.maximum(np.std(d, axis=1, ddof=1) / math.sqrt(n), 1.0 / n)
         assert np.all(np.abs(d.mean(axis=1)) <= 2.5 * paired), (d.mean(axis=1), paired)
         assert abs(var - var_ref) <= 2.5 * math.sqrt(2.0) * var_se
+
+
+def test_largest_step_defaults_to_the_models_own_and_an_explicit_one_wins():
+    """``monte_carlo``'s ``h_max`` is the model's ``default_h_max`` unless given: 10 ms for the stiff-bed
+    model (free rocking is then set by the error control, not the cap: fewer steps), 5 ms for the others."""
+    exc = screening.KanaiTajimi(0.015, 15.6, 0.6)
+    kw = dict(n_samples=4, seed=2, progress=False, t_end=8.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        default = screening.monte_carlo(STATUE, BED, exc, model="stiff_bed", **kw)
+        capped = screening.monte_carlo(STATUE, BED, exc, model="stiff_bed", h_max=0.005, **kw)
+        coupled = screening.monte_carlo(STATUE, Foundation(k=1e8, lam=1e9), exc, model="coupled", **kw)
+    assert default.attrs["h_max"] == sb.StiffBedModel.default_h_max == 0.01
+    assert capped.attrs["h_max"] == 0.005 and coupled.attrs["h_max"] == 0.005
+    assert default.n_steps.sum() < capped.n_steps.sum()
+    with pytest.raises(ValueError, match="parameter 'h_max'"):
+        screening.monte_carlo(STATUE, BED, exc, model="stiff_bed", h_max=-1.0, **kw)
