@@ -236,11 +236,14 @@ def dask_processes(folder, worker_args, n_workers=2):
                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
         yield sched_file
     finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
+        # the workers first, while their scheduler still answers (a worker stopping after its scheduler
+        # waits for it until a timeout), then the scheduler
+        for group in (procs[1:], procs[:1]):
+            for p in group:
+                p.terminate()
+            for p in group:
+                try:
+                    p.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()

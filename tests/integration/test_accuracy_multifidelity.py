@@ -39,6 +39,7 @@ def forced(monkeypatch):
     return plans
 
 
+@pytest.mark.slow
 def test_a_multifidelity_point_records_its_estimator_and_pays_for_both_models(client, tmp_path, forced):
     study = parse_study(ONE_POINT)
     assert study.accuracy.multifidelity
