@@ -109,14 +109,18 @@ def test_bed_derived_transfer_loss_reproduces_the_coupled_free_rocking(k):
 
 
 def test_bed_derived_loss_grows_with_amplitude_and_with_stiffness_towards_housner():
-    """The loss depends on the amplitude (none at the smallest, the most at 0.7 alpha; non-increasing
-    energy ratio within 0.005) and, at large rotations, grows with the bed's stiffness towards, and
-    stays short of, Housner's plastic impact r^2 (0.80 for the statue; 0.92, 0.88, 0.85 measured)."""
+    """The loss depends on the amplitude (below 1 % at the three smallest nodes, up to 20 theta_ul, the most at
+    0.7 alpha; non-increasing energy ratio from there within 0.005) and, at large rotations, grows with the
+    bed's stiffness towards, and stays short of, Housner's plastic impact r^2 (0.80 for the statue; 0.885,
+    0.846, 0.821 measured).  At every node the coupled model loses at least what this model's own contact
+    damping takes over the half cycle (the ratio needs no clipping at 1)."""
     last = []
     for k in (1e10, 1e11, 1e12):
-        eta = np.exp(sb.transfer_table(STATUE, _bed(STATUE, k))[1])
-        assert eta[1] == 1.0 and eta[-1] < 0.95
-        assert np.all(np.diff(eta) < 0.005)
+        _, log_eta, eta_coupled, eta_model, _ = sb.transfer_table(STATUE, _bed(STATUE, k))
+        eta = np.exp(log_eta)
+        assert np.all(eta[1:4] > 0.99) and eta[-1] < 0.95
+        assert np.all(np.diff(eta[3:]) < 0.005)
+        assert np.all(eta_coupled <= eta_model)
         last.append(eta[-1])
     assert last[0] > last[1] > last[2] > sb.housner_restitution(STATUE) ** 2
 
