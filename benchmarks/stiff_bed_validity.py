@@ -280,6 +280,19 @@ def load_case(work, case):
     return {"case": case, "models": {}}
 
 
+def pinned(work, case):
+    """The case as stored in the work folder when it differs from ``case`` only in ``S0`` (``--keep-s0``: the
+    intensity of an earlier run, e.g. before the PGA label moved from RVT to simulation, so the stored coupled
+    samples stay comparable), else ``case``."""
+    path = case_path(work, case)
+    if not path.exists():
+        return case
+    stored = json.loads(path.read_text())["case"]
+    current = json.loads(json.dumps(case))
+    same = {k: v for k, v in stored.items() if k != "S0"} == {k: v for k, v in current.items() if k != "S0"}
+    return stored if same else case
+
+
 def save_case(work, record):
     from screening.atomicfile import atomic_open
 
@@ -678,6 +691,8 @@ def main():
     parser.add_argument("--condensed-samples", type=int,
                         help="samples of the condensed models (default --samples; the first of the same samples)")
     parser.add_argument("--minutes", type=float, default=9.0, help="start no model run after this wall time")
+    parser.add_argument("--keep-s0", action="store_true",
+                        help="keep the intensity S0 of a case already in the work folder (see pinned)")
     parser.add_argument("--list", action="store_true", help="list the cases and what is done, then stop")
     parser.add_argument("--report", action="store_true", help="print the table from the work folder, run nothing")
     parser.add_argument("--csv", help="with --report: write the table as CSV here")
@@ -697,6 +712,8 @@ def main():
     if unknown:
         parser.error(f"--models must be among {list(MODELS)} (got {unknown})")
     chosen = [c for c in cases() if args.only is None or any(t in c["id"] for t in args.only.split(","))]
+    if args.keep_s0:
+        chosen = [pinned(args.work, c) for c in chosen]
     if args.list:
         for c in chosen:
             done = sorted(load_case(args.work, c)["models"])

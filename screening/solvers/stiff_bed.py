@@ -20,11 +20,15 @@ model keeps those two and drops the vertical dynamics:
   ``T = m_eff(theta) theta'^2 / 2`` with
   ``m_eff = I_cm + m (h^2 cos^2 theta + (Z'(theta) + h sin theta)^2)``, and Lagrange's equation is::
 
-      m_eff theta'' + m_eff'(theta) theta'^2 / 2 = m h cos(theta) x_g'' - Q(theta) - cos^2(theta) C(a) theta'
+      m_eff theta'' + m_eff'(theta) theta'^2 / 2 = m h cos(theta) x_g'' - Q(theta) - cos^2(theta) C_D(a) theta'
       Q(theta) = sign(theta) cos(theta) (K(a) a + m g h a) - m g h sin(theta),   a = |sin theta|
 
-  ``K``, ``C``: the ``"cubic"`` condensation's secant stiffness and damping (so ``K(a) a + m g h a`` is
-  the bed moment and ``C`` its damping with the quasi-static vertical rate, as in the condensation).
+  ``K``: the ``"cubic"`` condensation's secant stiffness (so ``K(a) a + m g h a`` is the bed moment);
+  ``C_D``: the damping of the bed's damping pressure on the constraint, whose power is the coupled
+  model's contact dissipation at ``z_cb = Z(theta)``
+  (:func:`screening.solvers.stiff_bed_contact.constraint_damping`: the condensation's damping moment
+  plus the work of the vertical damping force along the constraint; the moment alone overstates the
+  dissipation in uplift by ``2 b / L``, ``L`` the contact length).
   On an infinitely stiff bed ``Z = -b |sin theta|``, ``Q = m g (b cos theta - h |sin theta|)`` and
   ``m_eff = I_cm + m (h^2 + b^2 cos^2 theta - 2 b h cos theta |sin theta|)``: exactly the coupled
   model's rigid limit, and Housner's block about its corner (``I_O = I_cm + m (b^2 + h^2)``) to first
@@ -49,7 +53,7 @@ contain an output instant or leave full contact) the adaptive Dormand–Prince 5
 other models integrates the nonlinear equation; steps in full contact land on grid points to hand
 back to the exact propagator.  A step that crosses zero after the block has rocked and would end in
 uplift on the other side is shortened to the crossing, so the transfer's velocity ratio is applied
-in full contact (``StiffBedModel(locate=False)``: at the end of the step that crossed zero).  A sample is overturned when ``|theta| > atan(b/h)``, diverged when
+in full contact (the rotation past zero scaled by the same ratio) (``StiffBedModel(locate=False)``: at the end of the step that crossed zero).  A sample is overturned when ``|theta| > atan(b/h)``, diverged when
 its state stops being finite or its rate exceeds ``1000 sqrt(g/h)``, when it passes the capacity
 angle of a softening bed, or when the step budget runs out.
 

@@ -16,9 +16,9 @@ import numpy as np
 from screening.condensation import cubic
 from screening.solvers.mcs_equations import GRAVITY_RATIO_MIN
 
-__all__ = ["housner_restitution", "indentation_curvature", "gravity_ratio", "rocking_coefficients",
+__all__ = ["housner_restitution", "indentation_curvature", "constraint_damping", "gravity_ratio", "rocking_coefficients",
            "rocking_acceleration", "potential", "STIFF", "stiff_record", "indentation_curvature_jit",
-           "rocking_acceleration_jit"]
+           "constraint_damping_jit", "rocking_acceleration_jit"]
 
 
 # ----------------------------------------------------------------------------- numpy reference
@@ -64,6 +64,59 @@ def indentation_curvature(theta, block, foundation):
     return np.where(up, curv_up, curv_in)[()]
 
 
+def constraint_damping(theta, block, foundation):
+    """Rocking damping ``C_D(a)`` [N m s/rad] of the bed's damping pressure on the quasi-static contact, at
+    ``a = |theta|`` (vectorised): the dissipated power is ``C_D(a) theta'^2`` (times ``cos^2 theta`` in the
+    model, where ``a = |sin theta|``).
+
+    Parameters
+    ----------
+    theta : array_like
+        Rotation [rad].
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``C_D`` [N m s/rad].
+
+    Notes
+    -----
+    With the base centre slaved to ``z = Z(a)`` (``w = dZ/da``), the indentation field is ``z(u) = z + a u``
+    and its rate ``(w + u) theta'`` at the signed distance ``u`` from the base centre (the compressed edge at
+    ``u = b``).  The damping pressure ``(w_rate + w_ind z(u)) zdot(u)`` dissipates
+
+    ``C_D = int (w_rate + w_ind z(u)) (w + u)^2 du``
+
+    over the contact: in full contact (``u`` in ``[-b, b]``)
+    ``C_D = w_rate (2 b w^2 + 2 b^3 / 3) + w_ind (z (2 b w^2 + 2 b^3 / 3) + 4 a w b^3 / 3)``; in uplift (contact
+    length ``L = v / a`` from the corner, ``v = z + b a``, ``q = w + b``)
+    ``C_D = w_rate L ((q - L/2)^2 + L^2/12) + w_ind v L ((q - L/3)^2 / 2 + L^2/36)``; continuous at
+    ``theta_ul``.  It is the condensation's damping moment coefficient ``C`` plus the work of the vertical
+    damping force along the constraint, ``w (w_rate + w_ind) int ... (w + u)``: ``C`` alone counts the
+    moment's work only, and in uplift, where the base centre rises at ``w ~ -b``, overstates the dissipation
+    by ``2 b / L`` (for ``eps = 0``: ``C = lam b v^3 / (12 a^2)`` against ``C_D = lam v^4 / (24 a^3)``).
+
+    References
+    ----------
+    Rayleigh's dissipation function of the contact pressure (eqs. 3-6 of the coupled model,
+    :mod:`screening.physics.contact`) on the constraint ``z_cb = Z(theta)`` (``docs/stiff_bed.md``).
+    """
+    z, dz, v, a, up = cubic._indentation_state(theta, block, foundation)
+    w_rate, w_ind = (float(x) for x in foundation.damping_weights)
+    b = float(block.b)
+    full = (w_rate + w_ind * z) * (2.0 * b * dz * dz + 2.0 / 3.0 * b ** 3) + w_ind * 4.0 / 3.0 * a * dz * b ** 3
+    with np.errstate(divide="ignore", invalid="ignore"):
+        length = v / a
+        q = dz + b
+        lifted = (w_rate * length * ((q - 0.5 * length) ** 2 + length * length / 12.0)
+                  + w_ind * v * length * (0.5 * (q - length / 3.0) ** 2 + length * length / 36.0))
+    return np.where(up, lifted, full)[()]
+
+
 def gravity_ratio(a_v, g):
     """``lam = (g + a_v) / g`` [1]: the weight under a vertical ground acceleration ``a_v`` [m/s2]
     (positive up), held at :data:`~screening.solvers.mcs_equations.GRAVITY_RATIO_MIN` or above (below 0
@@ -75,8 +128,8 @@ def rocking_coefficients(theta, block, foundation, a_v=0.0):
     """``(m_eff [kg m2], dm_eff/dtheta [kg m2/rad], Q [N m], C_eff [N m s/rad])`` of the stiff-bed model.
 
     ``m_eff`` the inertia on the quasi-static contact, ``Q`` the restoring generalized moment
-    (bed moment minus gravity), ``C_eff = cos^2(theta) C(|sin theta|)`` the damping (module
-    docstring).  ``theta`` [rad], vectorised; ``a_v`` [m/s2] the vertical ground acceleration.
+    (bed moment minus gravity), ``C_eff = cos^2(theta) C_D(|sin theta|)`` the damping
+    (:func:`constraint_damping`; module docstring).  ``theta`` [rad], vectorised; ``a_v`` [m/s2] the vertical ground acceleration.
 
     Notes
     -----
@@ -102,7 +155,7 @@ def rocking_coefficients(theta, block, foundation, a_v=0.0):
     m_eff = float(block.I_cm) + m * (h * h * c * c + u * u)
     dm_eff = m * (-2.0 * h * h * c * s + 2.0 * u * (z_tt + h * c))
     q = sigma * c * (cubic.rocking_stiffness(al, block, foundation) * a + mgh * a) - lam * mgh * s
-    c_eff = c * c * cubic.rocking_damping(al, block, foundation)
+    c_eff = c * c * constraint_damping(al, block, foundation)
     return m_eff, dm_eff, q, c_eff
 
 
@@ -178,6 +231,21 @@ def indentation_curvature_jit(cp, a, z, dz, v):
 
 
 @numba.njit(cache=True)
+def constraint_damping_jit(cp, a, z, dz, v):
+    """Compiled :func:`constraint_damping` from the indentation state ``(z, dz/da, v)`` at ``a``
+    (``cp`` a :data:`screening.condensation.cubic.SDOF_RECORD`)."""
+    b, w_rate, w_ind = cp.b, cp.w_rate, cp.w_indentation
+    if a <= cp.theta_ul:
+        return (w_rate + w_ind * z) * (2.0 * b * dz * dz + 2.0 / 3.0 * b * b * b) + w_ind * 4.0 / 3.0 * a * dz * b * b * b
+    length = v / a
+    q = dz + b
+    r = q - 0.5 * length
+    s = q - length / 3.0
+    return (w_rate * length * (r * r + length * length / 12.0)
+            + w_ind * v * length * (0.5 * s * s + length * length / 36.0))
+
+
+@numba.njit(cache=True)
 def rocking_acceleration_jit(sp, cp, theta, theta_dot, x_g_ddot, a_v=0.0):
     """Compiled :func:`rocking_acceleration` (``sp`` a :data:`STIFF` record, ``cp`` the cubic condensation's)."""
     s = math.sin(theta)
@@ -188,7 +256,8 @@ def rocking_acceleration_jit(sp, cp, theta, theta_dot, x_g_ddot, a_v=0.0):
     al = a / lam
     z, dz, v = cubic.quasi_static_indentation_jit(cp, al)
     d2z = indentation_curvature_jit(cp, al, z, dz, v) / lam
-    damping, stiffness = cubic.damping_stiffness_jit(cp, al)
+    stiffness = cubic.damping_stiffness_jit(cp, al)[1]
+    damping = constraint_damping_jit(cp, al, z, dz, v)
     m, h = sp.m, sp.h
     mgh = m * sp.g * h
     u = sigma * c * dz + h * s

@@ -193,6 +193,8 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                 if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
                     if amp > tu:
                         y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                        if sp.locate != 0.0:
+                            y0 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
                     amp = 0.0
                 a0 = abs(y0)
                 amp = max(amp, a0)
@@ -302,6 +304,8 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
         if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
             if amp > tu:
                 y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                if sp.locate != 0.0:                # the crossing, passed in full contact, at the reduced rate
+                    y0 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
                 k1_0 = y1
                 k1_1 = _accel(sp, cp, y0, y1, acc_end)
             amp = 0.0

@@ -52,13 +52,13 @@ def test_spot_check_runs_the_stiff_bed_model(client, tmp_path):
 
 def test_auto_spot_checks_record_the_model_chosen_per_point(client, tmp_path):
     """model = "auto" (the default): a bed inside the measured rule (k = 3e6 with a vertical damping ratio of
-    0.05) gets the stiff-bed model, the stiff bed (outside it under Kanai-Tajimi) the coupled model; the file's
-    per-spot mcs_model says which, with CF flag attributes."""
+    0.05) gets the stiff-bed model, a softer bed (k = 1.1e6: theta_ul / atan(b/h) = 0.32, beyond the softest
+    measured) the coupled model; the file's per-spot mcs_model says which, with CF flag attributes."""
     from screening.solvers import mc_registry
 
-    text = (STATUE.replace('model = "stiff_bed"\n', "").replace("k = 1e10", "k = [3e6, 1e10]")
+    text = (STATUE.replace('model = "stiff_bed"\n', "").replace("k = 1e10", "k = [3e6, 1.1e6]")
             .replace("lam = 2e11", "lam = 1081203.03")
-            .replace("points = [{S0 = 0.015}]", "points = [{S0 = 0.015, k = 3e6}, {S0 = 0.015, k = 1e10}]"))
+            .replace("points = [{S0 = 0.015}]", "points = [{S0 = 0.015, k = 3e6}, {S0 = 0.015, k = 1.1e6}]"))
     study = parse_study(text)
     assert study.mcs.model == "auto"
     out = tmp_path / "a.nc"

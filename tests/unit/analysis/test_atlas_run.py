@@ -115,8 +115,11 @@ def test_a_campaign_resumed_from_the_file_keeps_its_rows(shipped, tmp_path):
     merged = error_atlas.merge_rows(first, second)
     xr.testing.assert_identical(merged, bare)
     judged = atlas_run.reference_validity(merged)
-    for name in atlas_run.REFERENCE_VALIDITY:
-        np.testing.assert_array_equal(judged[name].values, shipped[name].values.astype(judged[name].dtype))
+    np.testing.assert_array_equal(judged["mc_reference_valid"].values, shipped["mc_reference_valid"].values)
+    # the notes quote the rule's intervals as they stood at assembly: which points have one, and why, is kept
+    notes, stored = judged["mc_reference_note"].values.astype(str), shipped["mc_reference_note"].values.astype(str)
+    np.testing.assert_array_equal(notes == "", stored == "")
+    assert all(n.split(":")[0] == s.split(":")[0] for n, s in zip(notes, stored))
     # a fresh row replaces the resumed one of the same point
     fresh = bare.isel(point=[0]).assign(S0=bare["S0"].isel(point=[0]) * 2)
     again = error_atlas.merge_rows(first, fresh)

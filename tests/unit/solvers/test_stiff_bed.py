@@ -109,16 +109,41 @@ def test_bed_derived_transfer_loss_reproduces_the_coupled_free_rocking(k):
 
 
 def test_bed_derived_loss_grows_with_amplitude_and_with_stiffness_towards_housner():
-    """The loss depends on the amplitude (none at the smallest, the most at 0.7 alpha; non-increasing
-    energy ratio within 0.005) and, at large rotations, grows with the bed's stiffness towards, and
-    stays short of, Housner's plastic impact r^2 (0.80 for the statue; 0.92, 0.88, 0.85 measured)."""
+    """The loss depends on the amplitude (below 1 % at the three smallest nodes, up to 20 theta_ul, the most at
+    0.7 alpha; non-increasing energy ratio from there within 0.005) and, at large rotations, grows with the
+    bed's stiffness towards, and stays short of, Housner's plastic impact r^2 (0.80 for the statue; 0.885,
+    0.846, 0.821 measured).  At every node the coupled model loses at least what this model's own contact
+    damping takes over the half cycle (the ratio needs no clipping at 1)."""
     last = []
     for k in (1e10, 1e11, 1e12):
-        eta = np.exp(sb.transfer_table(STATUE, _bed(STATUE, k))[1])
-        assert eta[1] == 1.0 and eta[-1] < 0.95
-        assert np.all(np.diff(eta) < 0.005)
+        _, log_eta, eta_coupled, eta_model, _ = sb.transfer_table(STATUE, _bed(STATUE, k))
+        eta = np.exp(log_eta)
+        assert np.all(eta[1:4] > 0.99) and eta[-1] < 0.95
+        assert np.all(np.diff(eta[3:]) < 0.005)
+        assert np.all(eta_coupled <= eta_model)
         last.append(eta[-1])
     assert last[0] > last[1] > last[2] > sb.housner_restitution(STATUE) ** 2
+
+
+# ----------------------------------------------------------------------------- partial-contact rocking
+@pytest.mark.parametrize("ratio", [0.85, 0.9, 0.93])
+def test_partial_contact_rocking_under_a_sine_burst_against_the_coupled_model(ratio):
+    """The calibration statue (600 kg, b = 0.2 m, h = 0.8 m) on k = 1e10, lam = 3e11 under a 2 s sine burst at
+    15.6 rad/s (sin^2 envelope) of amplitude ``ratio`` g b/h: the block rocks in partial contact for 40-85 %
+    of the time (~100 zero crossings, peaks 40-150 theta_ul), where the damping on the quasi-static contact
+    decides the build-up.  Peak within 3 % of the coupled model's (measured +0.5, -0.8, -1.1 %; with the
+    condensation's damping moment in place of the constraint's dissipation: -9, -14, -11 %)."""
+    block, bed = Block(m=600.0, b=0.2, h=0.8), Foundation(k=1e10, lam=3e11)
+    dt = 1e-3
+    t = np.arange(0.0, 4.0, dt)
+    record = ratio * block.g * block.b / block.h * np.sin(np.pi * np.clip(t / 2.0, 0, 1)) ** 2 * np.sin(15.6 * t)
+    peaks = {}
+    for model in ("coupled", "stiff_bed"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            peaks[model] = float(screening.simulate(block, bed, record, dt=dt, model=model).peak_abs_theta)
+    assert peaks["coupled"] > 30 * float(cubic.uplift_threshold(block, bed))      # well into partial contact
+    assert peaks["stiff_bed"] == pytest.approx(peaks["coupled"], rel=0.03)
 
 
 # ----------------------------------------------------------------------------- quasi-static tilt
