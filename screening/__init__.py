@@ -2,6 +2,10 @@
 
 __version__ = "0.1.0"
 
+from screening.kernels.cache import clear_stale_cache as _clear_stale_cache
+
+_clear_stale_cache()   # numba's cache does not follow changes of other modules: drop it when any source changed
+
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
 from screening.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,

@@ -6,15 +6,23 @@ first ``import screening`` plus the first run compile for one to two minutes: wi
 looks like a hang.  :func:`announce_compilation` prints one line on stderr before that work starts.
 Checked cheaply (a few ``stat`` calls, no numba import): the index of each key kernel must exist and
 be newer than its source.
+
+Numba checks a cached kernel against its own source file only: a kernel that calls a compiled
+function of another module, or reads a constant of another module, keeps its old machine code when
+only that other module changes (numba's documented caching limitation).  :func:`clear_stale_cache`,
+run when the package is imported, removes the package's numba cache files whenever any source of the
+package changed since they were written (a stamp of all sources), so an update never runs stale code.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 from pathlib import Path
 
-__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation"]
+__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation", "source_stamp",
+           "clear_stale_cache"]
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -105,3 +113,120 @@ def announce_compilation(stream=None):
     except (OSError, ValueError):           # a closed or broken stderr: say nothing
         pass
     return True
+
+
+_STAMP_NAME = "numba-sources.sha256"
+
+
+def source_stamp(package=None):
+    """A digest of every Python source of ``package``, of Python's and of numba's version.
+
+    Parameters
+    ----------
+    package : path-like, optional
+        The package folder; default the installed ``screening`` package.
+
+    Returns
+    -------
+    str
+        Hexadecimal SHA-256 digest [-]; it changes when any ``.py`` file under ``package`` changes.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Notes on caching" (cache invalidation does not follow functions defined
+       in other files), https://numba.readthedocs.io/en/stable/developer/caching.html
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = (Path(folder) / "a.py").write_text("x = 1")
+    ...     before = source_stamp(folder)
+    ...     _ = (Path(folder) / "a.py").write_text("x = 2")
+    ...     before != source_stamp(folder), len(before)
+    (True, 64)
+    """
+    package = Path(package) if package is not None else _PACKAGE
+    digest = hashlib.sha256(sys.version.encode())
+    try:
+        from importlib.metadata import version
+
+        digest.update(version("numba").encode())
+    except Exception:                       # numba's metadata unreadable: the sources alone
+        pass
+    for path in sorted(package.rglob("*.py")):
+        digest.update(str(path.relative_to(package)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def clear_stale_cache(package=None):
+    """Remove the numba cache files of ``package`` if its sources changed since they were written.
+
+    The stamp of :func:`source_stamp` is kept in ``package/__pycache__``; when it differs from the
+    sources' (or is missing while cache files exist), every ``*.nbi`` / ``*.nbc`` file under the
+    package's ``__pycache__`` folders is removed and the stamp rewritten.  Nothing is done with
+    ``NUMBA_CACHE_DIR`` set (numba then caches elsewhere) or where the package folder is not writable.
+
+    Parameters
+    ----------
+    package : path-like, optional
+        The package folder; default the installed ``screening`` package.
+
+    Returns
+    -------
+    int
+        The number of cache files removed [-].
+
+    Notes
+    -----
+    Numba keys a cached kernel on its own file's time stamp; a callee or a constant from another file
+    is frozen into the kernel's machine code.  A stamp over all sources is conservative: any source
+    change recompiles the kernels once (about a minute), never runs stale code.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Notes on caching",
+       https://numba.readthedocs.io/en/stable/developer/caching.html
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     root = Path(folder)
+    ...     _ = (root / "kernel.py").write_text("K = 1")
+    ...     (root / "__pycache__").mkdir()
+    ...     _ = (root / "__pycache__" / "kernel.f-3.py311.nbi").write_bytes(b"index")
+    ...     first = clear_stale_cache(root)          # no stamp yet: the files cannot be vouched for
+    ...     _ = (root / "__pycache__" / "kernel.f-3.py311.nbi").write_bytes(b"index")
+    ...     same = clear_stale_cache(root)           # sources unchanged: kept
+    ...     _ = (root / "kernel.py").write_text("K = 2")
+    ...     changed = clear_stale_cache(root)        # a source changed: removed
+    ...     first, same, changed
+    (1, 0, 1)
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return 0
+    package = Path(package) if package is not None else _PACKAGE
+    stamp_file = package / "__pycache__" / _STAMP_NAME
+    try:
+        stamp = source_stamp(package)
+        if stamp_file.is_file() and stamp_file.read_text().strip() == stamp:
+            return 0
+        if not os.access(package, os.W_OK):
+            return 0
+        removed = 0
+        for pattern in ("*.nbi", "*.nbc"):
+            for path in package.rglob(f"__pycache__/{pattern}"):
+                try:
+                    path.unlink()
+                    removed += 1
+                except FileNotFoundError:   # another process removed it first
+                    pass
+        stamp_file.parent.mkdir(exist_ok=True)
+        temporary = stamp_file.with_name(f"{_STAMP_NAME}.{os.getpid()}")
+        temporary.write_text(stamp + "\n")
+        os.replace(temporary, stamp_file)   # atomic: a concurrent import reads the old or the new stamp
+        return removed
+    except OSError:                         # a read-only or vanishing folder: numba's own checks remain
+        return 0

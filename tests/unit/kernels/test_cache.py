@@ -77,3 +77,52 @@ def test_only_commands_that_compute_announce_it(package, monkeypatch, tmp_path, 
     assert capsys.readouterr().err.startswith("screening: compiling the solvers with numba")
     assert cli.main(["info", str(tmp_path / "missing.nc")]) == 2
     assert "compiling" not in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- stale kernels of other modules
+_CALLEE = "import numba\n\n\n@numba.njit(cache=True)\ndef step():\n    return {value}.0\n"
+_CALLER = ("import numba\n\nfrom pkg.callee import step\n\n\n@numba.njit(cache=True)\ndef twice():\n"
+           "    return 2.0 * step()\n")
+_RUN = ("import sys; sys.path.insert(0, {root!r})\n"
+        "from screening.kernels.cache import clear_stale_cache\n"
+        "{clear}\n"
+        "from pkg.caller import twice\n"
+        "print(twice())\n")
+
+
+def _twice(root, clear):
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    code = _RUN.format(root=str(root), clear=f"clear_stale_cache({str(root / 'pkg')!r})" if clear else "")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    return float(out.stdout.split()[-1])
+
+
+def test_a_changed_callee_in_another_module_is_recompiled_not_loaded_stale(tmp_path):
+    """numba keys a cached kernel on its own file only; the stamp over all sources drops the cache when
+    a callee in another file changes, so the caller is compiled again with the new callee."""
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "callee.py").write_text(_CALLEE.format(value=1))
+    (pkg / "caller.py").write_text(_CALLER)
+    assert _twice(tmp_path, clear=True) == 2.0                 # compiled and cached
+    assert list((pkg / "__pycache__").glob("caller.twice-*.nbi"))
+    (pkg / "callee.py").write_text(_CALLEE.format(value=5))
+    assert _twice(tmp_path, clear=True) == 10.0                # the stale cache was dropped
+    assert _twice(tmp_path, clear=True) == 10.0                # and the new one is kept: unchanged sources
+
+
+def test_an_unchanged_package_keeps_its_cache_and_a_cache_elsewhere_is_left_alone(tmp_path, monkeypatch):
+    (tmp_path / "m.py").write_text("x = 1")
+    (tmp_path / "__pycache__").mkdir()
+    index = tmp_path / "__pycache__" / "m.f-1.py311.nbi"
+    index.write_bytes(b"")
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert cache.clear_stale_cache(tmp_path) == 1 and not index.exists()     # no stamp: not vouched for
+    index.write_bytes(b"")
+    assert cache.clear_stale_cache(tmp_path) == 0 and index.exists()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
+    (tmp_path / "m.py").write_text("x = 2")
+    assert cache.clear_stale_cache(tmp_path) == 0 and index.exists()
