@@ -102,7 +102,9 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     -----
     ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
     ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
-    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``.  The inputs are the dimensionless
+    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; an undamped bed (``zeta_v = 0``) has
+    ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one (:func:`interval_trust`: such a point
+    is at best ``check``).  The inputs are the dimensionless
     groups of the atlas (:mod:`screening.analysis.atlas`, [1]).
 
     References
@@ -120,12 +122,14 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     """
     p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
     kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
+    with np.errstate(divide="ignore"):          # an undamped bed: log zeta_v = -inf, a point at best check
+        log_zeta_v = np.log(np.asarray(zeta_v, dtype=float))
     cols = [np.log(p / (1 - p)),
             np.log(np.maximum(np.asarray(sigma_ratio, dtype=float), 1e-6)),
             np.log(np.maximum(1.0 - np.asarray(k_eq_margin, dtype=float), 1e-4)),
             np.clip(np.log(np.maximum(np.asarray(decay_excess, dtype=float), 1e-300)), -5.0, 10.0),
             np.asarray(alpha, dtype=float), np.log(np.asarray(r_ul, dtype=float)),
-            np.log(np.asarray(zeta_v, dtype=float)), np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
+            log_zeta_v, np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
             np.where(kt > 0, np.log(np.where(kt > 0, np.asarray(omega_g_p, dtype=float), 1.0)), 0.0),
             np.log(np.asarray(tau, dtype=float))]
     cols = np.broadcast_arrays(*cols)
@@ -1063,8 +1067,8 @@ def interval_trust(model, x, status=None, covered=True):
     errors beyond a factor 4.  ``covered`` (bool, broadcast to the points): False where the
     point's model lies outside what the atlas samples (another excitation kind or contact law); such points,
     and points whose inputs lie outside the atlas's range (:func:`inside_atlas`), are at best ``check``.  A
-    point whose status is ok but whose features are not all finite (an indicator could not be computed) is
-    ``check`` with a NaN band.
+    point whose status is ok but whose features are not all finite (an indicator could not be computed, an
+    undamped bed, a bed that cannot carry the block at rest: :func:`features`) is ``check`` with a NaN band.
 
     Parameters
     ----------

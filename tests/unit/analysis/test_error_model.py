@@ -275,3 +275,16 @@ def test_parameter_groups_on_dataarrays_equal_those_on_numpy_values():
     for name, value in labelled.items():
         assert value.dims == ("k", "eps")
         np.testing.assert_array_equal(value.values, np.broadcast_to(plain[name], (2, 3)), err_msg=name)
+
+
+def test_an_undamped_bed_is_at_best_check_without_a_warning():
+    """zeta_v = 0 (lam = 0): log zeta_v is -inf without a RuntimeWarning, and the point is check with a NaN band."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        x = em.features([0.2, 0.2], 0.01, 0.9, 1.0, 0.17, 7e-3, [0.0, 0.3], 0.0, "white", np.nan, 30.0)
+        flag, est, low, high = em.interval_trust(em.shipped_model("paper"), x)
+    assert x[0, em.FEATURES.index("log_zeta_v")] == -np.inf
+    assert flag[0] == 1 and np.isnan(low[0]) and np.isnan(high[0])
+    assert np.isfinite(x[1]).all() and np.isfinite(low[1])
