@@ -667,8 +667,8 @@ def vertical_damping_ratio(block, foundation, z_rest=None):
         The bed (``k`` [N m-2], ``eps`` [m-2] and ``damping_weights``, the law's damping
         ``zdot (w_rate [N s m-2] + w_indentation [N s m-3] z)``); fields may be arrays.
     z_rest : array_like, optional
-        The rest indentation ``z0`` [m] where already known (None: :func:`rest_indentation`, which raises
-        where the bed cannot carry the block).
+        The indentation ``z0`` [m] the dashpot is taken at, where already known (None: the rest indentation,
+        :func:`rest_indentation`, which raises where the bed cannot carry the block).
 
     Returns
     -------

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from screening.condensation import cubic
-from screening.physics.contact import vertical_damping_ratio
+from screening.physics import contact
 from screening.solvers import mc_registry
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
@@ -197,7 +197,7 @@ def indicators(block, foundation):
     in [1]_); the slenderness is ``atan(b / h)``; the frequencies are
     :func:`~screening.solvers.synthesis.vertical_frequency` (``sqrt(2 b k / m)``) and
     :func:`~screening.solvers.synthesis.rocking_frequency` (``inf`` where the block cannot stand); the damping
-    ratio is :func:`screening.physics.contact.vertical_damping_ratio`.
+    ratio is :func:`vertical_damping_ratio`.
 
     References
     ----------
@@ -219,7 +219,53 @@ def indicators(block, foundation):
     return {"theta_ul_over_slenderness": float(cubic.uplift_threshold(block, foundation)) / alpha,
             "slenderness": alpha,
             "vertical_over_rocking": vertical_frequency(block, foundation) / w_r if w_r > 0 else math.inf,
-            "vertical_damping_ratio": float(vertical_damping_ratio(block, foundation))}
+            "vertical_damping_ratio": vertical_damping_ratio(block, foundation)}
+
+
+def vertical_damping_ratio(block, foundation):
+    """Damping ratio [1] of the block bouncing vertically on the bed, about the linear bed's static indentation.
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields; ``m`` [kg], ``b`` [m], ``g`` [m s-2]).
+    foundation : screening.Foundation
+        The bed (scalar fields; ``k`` [N m-2] and the damping of its contact law).
+
+    Returns
+    -------
+    float
+        ``zeta_v`` [1]; above 1 the vertical mode is overdamped.
+
+    Notes
+    -----
+    :func:`screening.physics.contact.vertical_damping_ratio` with the dashpot taken at the static
+    indentation of the linear bed ``z_st = m g / (2 b k)`` (eq. (17) in [1]_), as the rule's intervals were
+    measured (``eps = 0``: the same; with a cubic term the physics layer takes the rest indentation):
+
+        zeta_v = b (w_rate + w_indentation z_st) / sqrt(2 b k m)
+
+    the inverse of :func:`screening.beds.c_from_vertical_damping` (Winkler ``c``) and
+    :func:`screening.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.beds import lam_from_vertical_damping
+    >>> block = Block(m=8.67, b=0.035, h=0.21)
+    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)):.4f}"     # the paper's bed
+    '0.3145'
+    >>> lam = float(lam_from_vertical_damping(2.89e7, 8.67, 0.035, 0.05))           # and back
+    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=lam, eps=2e9)):.6f}"
+    '0.050000'
+    """
+    return float(contact.vertical_damping_ratio(block, foundation, contact.linear_indentation(block, foundation)))
 
 
 def rule_of(model):

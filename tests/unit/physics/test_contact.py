@@ -314,14 +314,15 @@ def test_the_vertical_damping_ratio_is_that_of_the_linearised_vertical_oscillato
 
 
 def test_the_vertical_damping_ratio_has_one_home():
-    """The Monte Carlo set-up, the automatic model choice, the bed summary and the error model's inputs
-    use the physics layer's vertical damping ratio, over arrays as point by point."""
+    """The Monte Carlo set-up, the bed summary and the error model's inputs use the physics layer's vertical
+    damping ratio, over arrays as point by point; the automatic model choice takes it at the linear bed's
+    static indentation (the rule's indicator as measured), the same where eps = 0."""
     from screening.analysis.error_model import parameter_groups
     from screening.beds import bed_summary
     from screening.physics.contact import vertical_damping_ratio
     from screening.solvers import model_choice, montecarlo
 
-    assert montecarlo.vertical_damping_ratio is vertical_damping_ratio is model_choice.vertical_damping_ratio
+    assert montecarlo.vertical_damping_ratio is vertical_damping_ratio
     block, eps = Block(m=8.67, b=0.035, h=0.21), np.array([-6e5, 0.0, 6e7])
     zeta = vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8, eps=eps))
     each = [float(vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8, eps=e))) for e in eps]
@@ -330,3 +331,8 @@ def test_the_vertical_damping_ratio_has_one_home():
             for e in eps] == each
     groups = parameter_groups({"m": 8.67, "b": 0.035, "h": 0.21, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": eps})
     np.testing.assert_allclose(groups["zeta_v"], each, rtol=1e-12, atol=0)
+    z_st = 8.67 * 9.81 / (2 * 0.035 * 2.89e7)
+    for e in eps:
+        bed = Foundation(k=2.89e7, lam=8.95e8, eps=e)
+        assert model_choice.vertical_damping_ratio(block, bed) == vertical_damping_ratio(block, bed, z_st)
+    assert model_choice.vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)) == each[1]
