@@ -425,17 +425,17 @@ def bed_summary(block, foundation):
     '1.2012e-03 39.68'
     """
     from screening import condensation as condensations
-    from screening.physics.contact import exact_uplift_angle, linear_rocking_stiffness, rest_indentation
+    from screening.physics.contact import (exact_uplift_angle, linear_rocking_stiffness, rest_indentation,
+                                           vertical_damping_ratio)
     from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-    m, b = float(block.m), float(block.b)
-    k = float(foundation.k)
+    b = float(block.b)
     z_st = rest_indentation(block, foundation)
     wv = vertical_frequency(block, foundation)
     wr = rocking_frequency(block, foundation)
     w_rate, w_ind = (float(w) for w in foundation.damping_weights)
     damping_at_rest = w_rate + w_ind * z_st              # zdot (w_rate + w_ind z) at z = z_st
-    c_v, c_r = 2.0 * b * damping_at_rest, 2.0 / 3.0 * damping_at_rest * b**3
+    c_r = 2.0 / 3.0 * damping_at_rest * b**3
     k_r = float(linear_rocking_stiffness(block, foundation))
     exact = float(exact_uplift_angle(block, foundation))      # NaN where it does not exist
     return {
@@ -445,7 +445,7 @@ def bed_summary(block, foundation):
         "slenderness": float(block.slenderness),
         "rocking_frequency": wr,
         "vertical_frequency": wv,
-        "vertical_damping_ratio": c_v / (2.0 * math.sqrt(2.0 * b * k * m)),
+        "vertical_damping_ratio": float(vertical_damping_ratio(block, foundation, z_st)),
         "rocking_damping_ratio": c_r / (2.0 * math.sqrt(k_r * float(block.m_sdof))) if k_r > 0 else math.nan,
     }
 

@@ -19,7 +19,7 @@ and every acceleration against the uplift acceleration ``g tan(alpha)``):
   with ``p = sqrt(3 g / (4 R))`` Housner's frequency parameter, ``R = sqrt(b^2 + h^2)``,
   ``w_r`` the rocking frequency on the bed and ``w_v`` the vertical one.
 * ``zeta_v`` [1] -- damping ratio of the vertical mode at rest, ``c_v / (2 m w_v)`` with ``c_v = 2 b lam
-  z0`` (:func:`screening.solvers.montecarlo.vertical_damping_ratio`); for Hunt–Crossley it also fixes
+  z0`` (:func:`screening.physics.contact.vertical_damping_ratio`); for Hunt–Crossley it also fixes
   the rocking damping ratio at rest (derived ``zeta_r``).
 * ``e = eps z0^2`` [1] with ``z0 = m g / (2 b k)`` -- the cubic term against the linear one at the
   static indentation: hardening (``e > 0``), linear (``0``), softening (``e < 0``).
@@ -397,7 +397,7 @@ def measured_groups(block, foundation, shape, timing):
     -----
     ``r_ul = theta_ul / alpha`` with the uplift angle ``theta_ul = m g / (2 b^2 k)`` of [1]; ``e = eps
     z0^2`` with the static indentation ``z0``; ``zeta_v`` from
-    :func:`screening.solvers.montecarlo.vertical_damping_ratio`; ``omega_g_p = omega_g / p`` and
+    :func:`screening.physics.contact.vertical_damping_ratio`; ``omega_g_p = omega_g / p`` and
     ``tau = T1 p`` with Housner's ``p`` [2].
 
     References
@@ -417,7 +417,7 @@ def measured_groups(block, foundation, shape, timing):
     ('1.2012e-03', '1.2012e-03', 5.0)
     """
     from screening.condensation import paper
-    from screening.solvers.montecarlo import vertical_damping_ratio
+    from screening.physics.contact import vertical_damping_ratio
 
     alpha = float(block.slenderness)
     p = housner_frequency(block)

@@ -30,9 +30,12 @@ from __future__ import annotations
 
 import functools
 import math
+from types import SimpleNamespace
 from typing import NamedTuple
 
 import numpy as np
+
+from screening.physics.contact import REST_BEARING_LIMIT, rising_root, vertical_damping_ratio
 
 __all__ = ["FEATURES", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
            "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets",
@@ -99,7 +102,9 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     -----
     ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
     ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
-    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``.  The inputs are the dimensionless
+    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; an undamped bed (``zeta_v = 0``) has
+    ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one (:func:`interval_trust`: such a point
+    is at best ``check``).  The inputs are the dimensionless
     groups of the atlas (:mod:`screening.analysis.atlas`, [1]).
 
     References
@@ -117,12 +122,14 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     """
     p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
     kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
+    with np.errstate(divide="ignore"):          # an undamped bed: log zeta_v = -inf, a point at best check
+        log_zeta_v = np.log(np.asarray(zeta_v, dtype=float))
     cols = [np.log(p / (1 - p)),
             np.log(np.maximum(np.asarray(sigma_ratio, dtype=float), 1e-6)),
             np.log(np.maximum(1.0 - np.asarray(k_eq_margin, dtype=float), 1e-4)),
             np.clip(np.log(np.maximum(np.asarray(decay_excess, dtype=float), 1e-300)), -5.0, 10.0),
             np.asarray(alpha, dtype=float), np.log(np.asarray(r_ul, dtype=float)),
-            np.log(np.asarray(zeta_v, dtype=float)), np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
+            log_zeta_v, np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
             np.where(kt > 0, np.log(np.where(kt > 0, np.asarray(omega_g_p, dtype=float), 1.0)), 0.0),
             np.log(np.asarray(tau, dtype=float))]
     cols = np.broadcast_arrays(*cols)
@@ -806,8 +813,11 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     Notes
     -----
     ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)``; ``e = eps z0^2`` with ``z0 = m g / (2 b k)``;
-    ``zeta_v = c_v / (2 m w_v)``, ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b lam z_rest`` (Hunt–Crossley;
-    ``z_rest`` the root of ``z + eps z^3 = z0``, Newton from ``z0``) or ``2 b c`` (Winkler); ``p = sqrt(m g R /
+    ``zeta_v`` (:func:`screening.physics.contact.vertical_damping_ratio`) ``= c_v / (2 m w_v)``,
+    ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b lam z_rest`` (Hunt–Crossley; ``z_rest`` the root of
+    ``z + eps z^3 = z0`` on the rising branch) or ``2 b c`` (Winkler); NaN where a softening bed cannot carry
+    the block at rest (``-eps z0^2 >= 4/27``: no rest indentation), which makes such a point at best ``check``
+    (:func:`interval_trust`: a feature is not finite); ``p = sqrt(m g R /
     (I_cm + m R^2))``; ``omega_g / p`` (NaN without a filter); ``tau = T1 p`` (without ``T1``, a constant
     envelope: ``1e6``).  ``theta_ul = m g / (2 b^2 k)`` is the uplift angle of [1]; ``p`` Housner's [2].
 
@@ -828,21 +838,34 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     >>> f"{g['r_ul']:.5e}", f"{8.67 * 9.81 / (2 * 0.035 ** 2 * 2.89e7) / math.atan(0.035 / 0.21):.5e}"
     ('7.27359e-03', '7.27359e-03')
     """
+    like = None
+    if any(hasattr(v, "dims") for v in fields.values()):         # xarray: broadcast once, compute on numpy
+        import xarray as xr
+
+        labelled = xr.broadcast(*(v if hasattr(v, "dims") else xr.DataArray(v) for v in fields.values()))
+        like = labelled[0]
+        fields = {name: np.asarray(v.values, dtype=float) for name, v in zip(fields, labelled)}
     m, b, h, g, k = (fields[name] for name in ("m", "b", "h", "g", "k"))
     eps = fields.get("eps", 0.0)
     i_cm = fields.get("I_cm", m * (b**2 + h**2) / 3.0)
     alpha = np.arctan2(b, h)
     z0 = m * g / (2.0 * b * k)
-    z = z0
-    for _ in range(50):
-        z = z - (z + eps * z**3 - z0) / (1.0 + 3.0 * eps * z**2)
-    c_v = 2.0 * b * fields.get("c", np.nan) if contact == "winkler" else 2.0 * b * fields.get("lam", np.nan) * z
-    w_v = np.sqrt(2.0 * b * k / m)
+    eps_b, z0_b = np.broadcast_arrays(np.asarray(eps, dtype=float), np.asarray(z0, dtype=float))
+    carried = -eps_b * z0_b**2 < REST_BEARING_LIMIT             # else the bed cannot carry the block at rest
+    z_rest = np.full(z0_b.shape, np.nan)
+    z_rest[carried] = rising_root(eps_b[carried], 1.0, z0_b[carried])
+    damping = (fields.get("c", np.nan), 0.0) if contact == "winkler" else (0.0, fields.get("lam", np.nan))
+    zeta_v = vertical_damping_ratio(SimpleNamespace(m=m, b=b), SimpleNamespace(k=k, damping_weights=damping),
+                                    z_rest[()])
     R = np.hypot(b, h)
     p = np.sqrt(m * g * R / (i_cm + m * R**2))
-    return {"alpha": alpha, "r_ul": m * g / (2.0 * b**2 * k * alpha), "zeta_v": c_v / (2.0 * m * w_v),
-            "e": eps * z0**2, "omega_g_p": fields["omega_g"] / p if "omega_g" in fields else np.nan + 0.0 * p,
-            "tau": fields["T1"] * p if "T1" in fields else 1e6 + 0.0 * p}
+    out = {"alpha": alpha, "r_ul": m * g / (2.0 * b**2 * k * alpha), "zeta_v": zeta_v,
+           "e": eps * z0**2, "omega_g_p": fields["omega_g"] / p if "omega_g" in fields else np.nan + 0.0 * p,
+           "tau": fields["T1"] * p if "T1" in fields else 1e6 + 0.0 * p}
+    if like is None:
+        return out
+    return {name: xr.DataArray(np.broadcast_to(v, like.shape), dims=like.dims, coords=like.coords)
+            for name, v in out.items()}
 
 
 def dataset_features(ds):
@@ -1044,8 +1067,8 @@ def interval_trust(model, x, status=None, covered=True):
     errors beyond a factor 4.  ``covered`` (bool, broadcast to the points): False where the
     point's model lies outside what the atlas samples (another excitation kind or contact law); such points,
     and points whose inputs lie outside the atlas's range (:func:`inside_atlas`), are at best ``check``.  A
-    point whose status is ok but whose features are not all finite (an indicator could not be computed) is
-    ``check`` with a NaN band.
+    point whose status is ok but whose features are not all finite (an indicator could not be computed, an
+    undamped bed, a bed that cannot carry the block at rest: :func:`features`) is ``check`` with a NaN band.
 
     Parameters
     ----------

@@ -83,7 +83,8 @@ from screening.condensation.uplift_integrals import coefficient_table, gaussian_
 from screening.kernels.signatures import FMA, moment_coefficients_signature, sdof_coefficients_signature
 from screening.physics.contact import bed_rocking_stiffness, linear_rocking_stiffness
 
-__all__ = ["uplift_threshold", "static_indentation", "damping_inner_parts", "damping_inner", "rocking_damping",
+__all__ = ["uplift_threshold", "static_indentation", "damping_inner_parts", "damping_inner", "stiffness_at_rest",
+           "rocking_damping",
            "rocking_stiffness", "restoring_moment", "SDOF_RECORD", "sdof_record", "damping_stiffness_jit",
            "coefficient_constants", "equivalent_coefficients", "RECORD", "records", "equivalent_coefficients_jit",
            "PaperCondensation", "PAPER"]
@@ -240,6 +241,43 @@ def damping_inner(block, foundation):
     """
     rate, indentation = damping_inner_parts(block, foundation)
     return rate + indentation
+
+
+def stiffness_at_rest(block, foundation):
+    """Rocking stiffness at rest ``K(0)`` [N m/rad] of the paper's condensation.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2]); fields may be arrays.
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``K(0) = (2/3) b^3 k - m g h + eps m^2 g^2 b / (2 k)`` [N m/rad].
+
+    Notes
+    -----
+    Eq. (25) in [1] at ``theta = 0``: :func:`screening.physics.contact.linear_rocking_stiffness` plus the
+    cubic term's share about the static indentation ``m g / (2 b k)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block = Block(m=8.67, b=0.035, h=0.21)
+    >>> [f"{float(stiffness_at_rest(block, Foundation(k=2.89e7, lam=8.95e8, eps=e))):.4g}" for e in (0.0, 6e7)]
+    ['808.2', '1071']
+    """
+    e0 = (block.m * block.g) ** 2 * block.b / foundation.k
+    return linear_rocking_stiffness(block, foundation) + 0.5 * foundation.eps * e0
 
 
 def rocking_damping(theta, block, foundation):
@@ -421,10 +459,10 @@ def sdof_record(block, foundation):
     mg = m * g
     rec = np.zeros(1, dtype=SDOF_RECORD)
     rec["theta_ul"] = uplift_threshold(block, foundation)
-    rec["C1"] = 2.0 / 3.0 * w_rate * b**3 + w_ind * b * b * mg / (3.0 * k)
+    rec["C1"] = damping_inner(block, foundation)
     rec["C2_rate"] = w_rate / 12.0 * (2.0 * mg / k) ** 1.5            # x |theta|^-3/2
     rec["C2_indentation"] = w_ind * b / 12.0 * (2.0 * mg / k) ** 1.5  # x |theta|^-1/2
-    rec["K1_0"] = float(linear_rocking_stiffness(block, foundation)) + eps * mg * mg * b / (2.0 * k)
+    rec["K1_0"] = stiffness_at_rest(block, foundation)
     rec["K1_2"] = eps * 0.4 * k * b**5
     rec["MGB"] = mg * b
     rec["K2_32"] = mg * math.sqrt(2.0 * mg * k) / (3.0 * k)
@@ -699,9 +737,7 @@ class PaperCondensation(Condensation):
     def damping_at_rest(self, block, foundation):
         return damping_inner(block, foundation)
 
-    def stiffness_at_rest(self, block, foundation):
-        e0 = (block.m * block.g) ** 2 * block.b / foundation.k
-        return linear_rocking_stiffness(block, foundation) + 0.5 * foundation.eps * e0
+    stiffness_at_rest = staticmethod(stiffness_at_rest)
 
     def equivalent_coefficients(self, sigma_theta, cov_over_sigma, block, foundation):
         return equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation)

@@ -87,7 +87,7 @@ from screening.status import ContactRegime
 __all__ = ["bed_rocking_stiffness", "linear_rocking_stiffness", "REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
            "REGIME_NAMES", "foundation_constants", "law_constants", "corner_indentations", "contact_regime",
            "contact_length", "contact_resultants", "law_resultants", "linear_indentation", "rising_root",
-           "rest_indentation", "UPLIFT_BEARING_LIMIT", "bearing_load", "exact_uplift_angle", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
+           "rest_indentation", "vertical_damping_ratio", "REST_BEARING_LIMIT", "UPLIFT_BEARING_LIMIT", "bearing_load", "exact_uplift_angle", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
            "law_resultants_trig_jit"]
 
 #: Integer codes of the contact regimes returned by :func:`contact_regime`.
@@ -605,6 +605,11 @@ def rising_root(alpha, beta, rhs, max_iter=100):
     return z
 
 
+#: Largest bearing load ``|eps| z_lin^2`` [1] under which a softening bed carries the block's weight at rest
+#: (:func:`rest_indentation`; the rising branch of ``z + eps z^3 = z_lin`` ends there).
+REST_BEARING_LIMIT = 4.0 / 27.0
+
+
 def rest_indentation(block, foundation):
     """Static indentation of the base centre at rest ``z0`` [m], cubic term included.
 
@@ -644,11 +649,62 @@ def rest_indentation(block, foundation):
     z_lin = linear_indentation(block, foundation)
     eps = np.asarray(foundation.eps, dtype=float)
     load = -eps * np.asarray(z_lin, dtype=float) ** 2
-    if np.any(load >= 4.0 / 27.0):
-        bad = float(np.broadcast_to(eps, np.shape(load))[load >= 4.0 / 27.0].flat[0])
+    if np.any(load >= REST_BEARING_LIMIT):
+        bad = float(np.broadcast_to(eps, np.shape(load))[load >= REST_BEARING_LIMIT].flat[0])
         raise ValueError(f"parameter 'foundation.eps' = {bad!r} 1/m^2: the softening bed cannot carry the block's "
                          f"weight (need |eps| (m g/(2 b k))^2 < 4/27)")
     return rising_root(eps, 1.0, z_lin)[()]
+
+
+def vertical_damping_ratio(block, foundation, z_rest=None):
+    """Damping ratio ``zeta_v`` [1] of the block's vertical vibration on the bed about its rest indentation.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2] and ``damping_weights``, the law's damping
+        ``zdot (w_rate [N s m-2] + w_indentation [N s m-3] z)``); fields may be arrays.
+    z_rest : array_like, optional
+        The indentation ``z0`` [m] the dashpot is taken at, where already known (None: the rest indentation,
+        :func:`rest_indentation`, which raises where the bed cannot carry the block).
+
+    Returns
+    -------
+    numpy.ndarray or float
+        ``zeta_v`` [1]; above 1 the vertical mode is overdamped.
+
+    Notes
+    -----
+    About the rest indentation ``z0`` (eq. (13) in [1] at rest) the law's damping pressure (eqs. (3)-(4)
+    in [1]) integrated over the base ``2 b`` is the dashpot ``c_v = 2 b (w_rate + w_indentation z0)``
+    (Hunt-Crossley [2]: ``2 b lam z0``; Winkler: ``2 b c``), on the linear bed's vertical spring
+    ``k_v = 2 b k``; the viscous damping ratio of that oscillator [3] is
+
+        zeta_v = c_v / (2 sqrt(k_v m)) = b (w_rate + w_indentation z0) / sqrt(2 b k m)
+
+    The spring leaves out the tangent stiffness ``6 b k eps z0^2`` of the cubic term (``eps = 0``: exact).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
+       vibroimpact", J. Appl. Mech. 42 (1975) 440-445.
+    .. [3] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> f"{float(vertical_damping_ratio(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))):.4f}"
+    '0.3145'
+    """
+    if z_rest is None:
+        z_rest = rest_indentation(block, foundation)
+    w_rate, w_indentation = foundation.damping_weights
+    return block.b * (w_rate + w_indentation * z_rest) / np.sqrt(2.0 * block.b * foundation.k * block.m)
 
 
 #: Largest bearing load ``|eps| z_lin^2`` [1] of a softening bed that carries the block through the onset

@@ -77,6 +77,18 @@ def _err_term(e, y, ynew, scale, rtol):
 
 
 @numba.njit(cache=True)
+def _store_outcome(row, outcome, status, reason, peak, n_accepted, n_rejected, h_min):
+    """Row ``row`` of a chunk's per-sample outputs from a sample integrator's ``outcome``, the tuple
+    ``(status, reason, peak, n_accepted, n_rejected, h_min)``."""
+    status[row] = outcome[0]
+    reason[row] = outcome[1]
+    peak[row] = outcome[2]
+    n_accepted[row] = outcome[3]
+    n_rejected[row] = outcome[4]
+    h_min[row] = outcome[5]
+
+
+@numba.njit(cache=True)
 def _record(model, row, i, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
     out_theta[row, i] = y0
     out_theta_dot[row, i] = y1
@@ -629,15 +641,10 @@ def _integrate_chunk(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_o
     absolute tolerances.  Compiled per condensation record type by :func:`chunk_integrator`.
     """
     for row in numba.prange(acc[0].shape[0]):
-        st, rs, pk, na, nr, hm = integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out,
-                                                  models, y_init, scale, rtol, h_max, max_steps, out_theta,
-                                                  out_theta_dot, out_z, out_z_dot, out_uplift)
-        status[row] = st
-        reason[row] = rs
-        peak[row] = pk
-        n_accepted[row] = na
-        n_rejected[row] = nr
-        h_min[row] = hm
+        _store_outcome(row, integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out,
+                                             models, y_init, scale, rtol, h_max, max_steps, out_theta,
+                                             out_theta_dot, out_z, out_z_dot, out_uplift),
+                       status, reason, peak, n_accepted, n_rejected, h_min)
 
 
 _INTEGRATORS = {}

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from screening.condensation import cubic
+from screening.physics import contact
 from screening.solvers import mc_registry
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
@@ -221,17 +222,15 @@ def indicators(block, foundation):
             "vertical_damping_ratio": vertical_damping_ratio(block, foundation)}
 
 
-def vertical_damping_ratio(block, foundation, g=9.81):
-    """Damping ratio [1] of the block bouncing vertically on the bed, about its static indentation.
+def vertical_damping_ratio(block, foundation):
+    """Damping ratio [1] of the block bouncing vertically on the bed, about the linear bed's static indentation.
 
     Parameters
     ----------
     block : screening.Block
-        The block (scalar fields; ``m`` [kg], ``b`` [m]).
+        The block (scalar fields; ``m`` [kg], ``b`` [m], ``g`` [m s-2]).
     foundation : screening.Foundation
         The bed (scalar fields; ``k`` [N m-2] and the damping of its contact law).
-    g : float, optional
-        Gravity [m s-2].
 
     Returns
     -------
@@ -240,26 +239,20 @@ def vertical_damping_ratio(block, foundation, g=9.81):
 
     Notes
     -----
-    The damping pressure of every law is ``zdot (w_rate + w_indentation z)``
-    (:attr:`screening.model.Foundation.damping_weights`; Hunt-Crossley [2]_: ``w_indentation = lam``); about
-    the static indentation of the linear bed ``z_st = m g / (2 b k)`` it is the dashpot
-    ``c = w_rate + w_indentation z_st`` per unit length, and over the base ``2 b c = 2 zeta_v sqrt(2 b k m)``
-    (the viscous damping ratio of a single degree of freedom [3]_):
+    :func:`screening.physics.contact.vertical_damping_ratio` with the dashpot taken at the static
+    indentation of the linear bed ``z_st = m g / (2 b k)`` (eq. (17) in [1]_), as the rule's intervals were
+    measured (``eps = 0``: the same; with a cubic term the physics layer takes the rest indentation):
 
         zeta_v = b (w_rate + w_indentation z_st) / sqrt(2 b k m)
 
     the inverse of :func:`screening.beds.c_from_vertical_damping` (Winkler ``c``) and
-    :func:`screening.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).  The contact law is eqs.
-    (3)-(4) in [1]_.
+    :func:`screening.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).
 
     References
     ----------
     .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
        A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
        https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
-       vibroimpact", J. Appl. Mech. 42 (1975) 440-445.
-    .. [3] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
 
     Examples
     --------
@@ -269,13 +262,10 @@ def vertical_damping_ratio(block, foundation, g=9.81):
     >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)):.4f}"     # the paper's bed
     '0.3145'
     >>> lam = float(lam_from_vertical_damping(2.89e7, 8.67, 0.035, 0.05))           # and back
-    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=lam)):.6f}"
+    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=lam, eps=2e9)):.6f}"
     '0.050000'
     """
-    m, b, k = float(block.m), float(block.b), float(foundation.k)
-    w_rate, w_ind = (float(w) for w in foundation.damping_weights)
-    z_st = m * g / (2.0 * b * k)
-    return b * (w_rate + w_ind * z_st) / math.sqrt(2.0 * b * k * m)
+    return float(contact.vertical_damping_ratio(block, foundation, contact.linear_indentation(block, foundation)))
 
 
 def rule_of(model):

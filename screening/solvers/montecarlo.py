@@ -50,10 +50,10 @@ from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.condensation import get as get_condensation
 from screening.excitations import Excitation, names as excitation_names
-from screening.physics.contact import rest_indentation
+from screening.physics.contact import vertical_damping_ratio
 from screening.progress import Progress
 from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
-                                         spectral_plan, stationary_samples, validate_seed, vertical_frequency)
+                                         spectral_plan, stationary_samples, validate_seed)
 from screening.solvers.timegrid import output_times
 from screening.solvers.datasets import monte_carlo_dataset
 from screening.validation import check_integer, check_size
@@ -89,7 +89,7 @@ DEFAULT_NUMERICS = {
 }
 
 #: ``integrator="auto"`` takes RODAS for the coupled model where the bed's vertical mode has at least
-#: this damping ratio (:func:`vertical_damping_ratio`), the explicit pair elsewhere.
+#: this damping ratio (:func:`screening.physics.contact.vertical_damping_ratio`), the explicit pair elsewhere.
 #: ``docs/montecarlo_numerics.md`` gives the measurements behind it.
 RODAS_DAMPING_RATIO = 20.0
 
@@ -188,48 +188,6 @@ def _check_numerics(numerics):
 
 
 # ----------------------------------------------------------------------------- set-up
-def vertical_damping_ratio(block, foundation):
-    """Damping ratio [1] of the block's vertical vibration on the bed at rest, ``c_v / (2 m w_v)``.
-
-    Parameters
-    ----------
-    block : screening.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-
-    Returns
-    -------
-    float
-        ``zeta_v`` [1]; above 1 the vertical mode is overdamped.
-
-    Notes
-    -----
-    About the rest indentation ``z0`` (eq. (13) in [1] at rest) the bed acts as a vertical spring
-    ``k_v = 2 b k`` and dashpot ``c_v = 2 b lam z0`` (Hunt–Crossley, ``lam z zdot`` integrated over the
-    base, eq. (9)) or ``c_v = 2 b c`` (Winkler); ``w_v = sqrt(k_v / m)``
-    (:func:`~screening.solvers.synthesis.vertical_frequency`).  The fast decay rate ``~ c_v / m = 2 zeta w_v``
-    of an overdamped mode bounds an explicit integrator's stable step (:func:`choose_integrator`).
-
-    References
-    ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{vertical_damping_ratio(block, bed):.3g}"
-    '0.314'
-    """
-    b = float(block.b)
-    w_rate, w_indentation = foundation.damping_weights      # the law's damping zdot (w_rate + w_indentation z)
-    c_v = 2.0 * b * (float(w_rate) + float(w_indentation) * float(rest_indentation(block, foundation)))
-    return c_v / (2.0 * float(block.m) * vertical_frequency(block, foundation))
-
-
 def choose_integrator(block, foundation, model, integrator="auto"):
     """The sample integrator (a key of :data:`~screening.solvers.mcs_kernels.INTEGRATORS`) of a run.
 
@@ -253,7 +211,7 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
     Notes
     -----
-    The stiffness comes from the bed's vertical dashpot in eqs. (7)-(8) of [1] (:func:`vertical_damping_ratio`).
+    The stiffness comes from the bed's vertical dashpot in eqs. (7)-(8) of [1] (:func:`screening.physics.contact.vertical_damping_ratio`).
 
     References
     ----------

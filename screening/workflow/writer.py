@@ -53,7 +53,7 @@ from screening.schema import (ACCURACY, PRESSURE_PARAMETERS, SWEEP, TIME, attrib
 from screening.solvers.outputs import GRID_OUTPUTS, client_variables, selected
 from screening.status import SpotStatus
 from screening.workflow.errors import SweepError
-from screening.workflow.execution import SPOT_HISTORIES
+from screening.workflow.execution import SPOT_HISTORIES, SPOT_LINEAR
 from screening.workflow.grid import history_chunks, hyperslabs, parameter_table
 
 __all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
@@ -663,7 +663,7 @@ class ResultFile:
             var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
         for name in ("n_overturned", "n_diverged", "n_used"):
             var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
-        for name in ("var_theta", "var_theta_dot"):
+        for name in SPOT_LINEAR:
             lin = [r[f"sl_{name}"] if f"sl_{name}" in r else self.history(name, s) for r, s in zip(results, spots)]
             mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan
                                  for r in results])

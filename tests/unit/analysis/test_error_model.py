@@ -227,3 +227,65 @@ def test_a_reference_marked_invalid_has_no_error(shipped):
     np.testing.assert_array_equal(t["log_var_ratio"][others], y[others])
     with pytest.raises(ValueError, match="refit"):
         em.model_from_atlas(shipped.assign(mc_reference_valid=valid), "paper")
+
+
+def _soft_bed_points(status):
+    """Two points of the paper's block on a soft bed (k = 1e4 N/m2): linear, and softening so far that the bed
+    cannot carry the block at rest (eps z0^2 = -8.9e3, beyond -4/27)."""
+    import xarray as xr
+
+    return xr.Dataset(
+        {"peak_p_uplift": ("eps", [0.2, 0.2]), "min_k_eq": ("eps", [1000.0, 1000.0]), "k_eq_rest": 1071.0,
+         "peak_var_theta": ("eps", [1e-6, 1e-6]), "var_theta_end": ("eps", [1e-9, 1e-9]), "slenderness": 0.16515,
+         "status": ("eps", status)},
+        coords={"eps": [0.0, -6e5], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
+                "I_cm": 0.131, "g": 9.81, "k": 1e4, "lam": 8.95e8, "T1": 4.0, "T2": 2.0},
+        attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley", "condensation": "paper"})
+
+
+@pytest.mark.parametrize("status, flag", [([0, 0], 1), ([0, 1], 2)])
+def test_a_bed_that_cannot_carry_the_block_at_rest_has_no_damping_ratio_and_is_at_best_check(status, flag):
+    """No rest indentation: zeta_v is NaN (not the log of a diverged Newton iterate, no RuntimeWarning), and the
+    point's trust says it: check with a NaN band (untrusted where the linearization stopped)."""
+    import warnings
+
+    from screening.analysis.trust import add_trust
+
+    ds = _soft_bed_points(status)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        groups = em.parameter_groups({name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "lam")})
+        out = add_trust(ds)
+    zeta = groups["zeta_v"].values
+    assert np.isnan(zeta[1])
+    assert zeta[0] == pytest.approx(0.035 * 8.95e8 * 8.67 * 9.81 / (2 * 0.035 * 1e4)
+                                    / np.sqrt(2 * 0.035 * 1e4 * 8.67), rel=1e-12)
+    assert out["sl_trust"].values[1] == flag
+    assert np.isnan(out["sl_error_low"].values[1]) and np.isnan(out["sl_error_high"].values[1])
+
+
+def test_parameter_groups_on_dataarrays_equal_those_on_numpy_values():
+    """The groups of labelled fields are those of their numpy values (broadcast), to the last bit."""
+    import xarray as xr
+
+    eps = xr.DataArray([-6e5, 0.0, 6e7], dims="eps")
+    k = xr.DataArray([2.89e7, 1e8], dims="k")
+    fields = {"m": 8.67, "b": 0.035, "h": 0.21, "g": 9.81, "k": k, "eps": eps, "lam": 8.95e8, "T1": 4.0}
+    labelled = em.parameter_groups(fields)
+    plain = em.parameter_groups({**fields, "k": k.values[:, None], "eps": eps.values[None, :]})
+    for name, value in labelled.items():
+        assert value.dims == ("k", "eps")
+        np.testing.assert_array_equal(value.values, np.broadcast_to(plain[name], (2, 3)), err_msg=name)
+
+
+def test_an_undamped_bed_is_at_best_check_without_a_warning():
+    """zeta_v = 0 (lam = 0): log zeta_v is -inf without a RuntimeWarning, and the point is check with a NaN band."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        x = em.features([0.2, 0.2], 0.01, 0.9, 1.0, 0.17, 7e-3, [0.0, 0.3], 0.0, "white", np.nan, 30.0)
+        flag, est, low, high = em.interval_trust(em.shipped_model("paper"), x)
+    assert x[0, em.FEATURES.index("log_zeta_v")] == -np.inf
+    assert flag[0] == 1 and np.isnan(low[0]) and np.isnan(high[0])
+    assert np.isfinite(x[1]).all() and np.isfinite(low[1])

@@ -290,3 +290,26 @@ def test_condensed_equation_of_motion_with_cubic_condensation(paper_block):
     got = rocking_acceleration(th, thd, ag, paper_block, bed, condensation="cubic")
     assert got == pytest.approx(expected, rel=1e-14)
     assert got != pytest.approx(rocking_acceleration(th, thd, ag, paper_block, bed), rel=1e-3)
+
+
+@pytest.mark.parametrize("bed", [Foundation(k=2.89e7, lam=8.95e8, eps=6e7), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
+                                 Foundation(k=1e9, c=3e4, eps=2e9)])
+def test_the_compiled_record_takes_c_and_k_at_rest_from_their_one_home(paper_block, bed):
+    """sdof_record's C1 and K1_0 are the condensation's damping and stiffness at rest (bit for bit), and those
+    are the rate and rotation derivatives at rest of the moment of the contact pressure about the base
+    centre at the static indentation m g / (2 b k) (eqs. (24)-(25) at theta = 0), by quadrature, less m g h."""
+    b, z = paper_block.b, paper_block.m * paper_block.g / (2 * paper_block.b * bed.k)
+
+    def central_difference(pressure):          # of the moment, the quadrature of the difference of the pressures
+        return integrate.quad(lambda x: pressure(x) * x, -b, b, epsabs=0.0, epsrel=1e-12)[0]
+
+    d = 1e-9
+    k_rest = central_difference(lambda x: (contact_pressure(z + x * d, 0.0, bed)
+                                           - contact_pressure(z - x * d, 0.0, bed)) / (2 * d))
+    k_rest -= paper_block.m * paper_block.g * paper_block.h
+    c_rest = central_difference(lambda x: (contact_pressure(z, x, bed) - contact_pressure(z, -x, bed)) / 2.0)
+    rec = condensed.sdof_record(paper_block, bed)
+    assert rec["C1"][0] == condensed.PAPER.damping_at_rest(paper_block, bed)
+    assert rec["K1_0"][0] == condensed.PAPER.stiffness_at_rest(paper_block, bed)
+    assert rec["C1"][0] == pytest.approx(c_rest, rel=1e-9)
+    assert rec["K1_0"][0] == pytest.approx(k_rest, rel=1e-8)      # the difference quotient: ~1e-10

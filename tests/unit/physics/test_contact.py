@@ -291,3 +291,48 @@ def test_the_exact_uplift_angle_is_nan_where_a_softening_bed_cannot_carry_the_bl
     assert cubic.uplift_threshold(BLOCK, ok) == exact_uplift_angle(BLOCK, ok)
     with pytest.raises(ValueError, match="cannot carry"):
         cubic.uplift_threshold(BLOCK, Foundation(k=K, lam=8.95e8, eps=1.001 * limit_eps))
+
+
+@pytest.mark.parametrize("bed", [Foundation(k=2.89e7, lam=8.95e8), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
+                                 Foundation(k=2.89e7, lam=8.95e8, eps=-6e5), Foundation(k=1e9, c=3e4),
+                                 Foundation(k=1e5, lam=1e9, eps=2e3)])
+def test_the_vertical_damping_ratio_is_that_of_the_linearised_vertical_oscillator(bed):
+    """zeta_v from the eigenvalues of the block's vertical oscillator about its rest indentation: the rest
+    position a root of the static balance (numpy's polynomial roots), the dashpot the rate derivative of the
+    contact pressure integrated over the base, the linear bed's spring 2 b k (the last bed is overdamped)."""
+    from screening.physics.contact import vertical_damping_ratio
+
+    block = Block(m=8.67, b=0.035, h=0.21)
+    m, b, k, eps = block.m, block.b, bed.k, bed.eps
+    roots = np.roots([eps * k, 0.0, k, -m * block.g / (2 * b)]) if eps else np.array([m * block.g / (2 * b * k)])
+    z0 = min(r.real for r in roots if abs(r.imag) < 1e-12 * abs(r) and r.real > 0 and 1 + 3 * eps * r.real**2 > 0)
+    dv = 1e-3
+    c_v = 2 * b * (contact_pressure(z0, dv, bed) - contact_pressure(z0, -dv, bed)) / (2 * dv)
+    lam = np.linalg.eigvals(np.array([[0.0, 1.0], [-2 * b * k / m, -c_v / m]]))
+    zeta = -np.sum(lam).real / (2 * math.sqrt(np.prod(lam).real))
+    assert float(vertical_damping_ratio(block, bed)) == pytest.approx(zeta, rel=1e-9)
+
+
+def test_the_vertical_damping_ratio_has_one_home():
+    """The Monte Carlo set-up, the bed summary and the error model's inputs use the physics layer's vertical
+    damping ratio, over arrays as point by point; the automatic model choice takes it at the linear bed's
+    static indentation (the rule's indicator as measured), the same where eps = 0."""
+    from screening.analysis.error_model import parameter_groups
+    from screening.beds import bed_summary
+    from screening.physics.contact import vertical_damping_ratio
+    from screening.solvers import model_choice, montecarlo
+
+    assert montecarlo.vertical_damping_ratio is vertical_damping_ratio
+    block, eps = Block(m=8.67, b=0.035, h=0.21), np.array([-6e5, 0.0, 6e7])
+    zeta = vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8, eps=eps))
+    each = [float(vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8, eps=e))) for e in eps]
+    assert zeta.tolist() == each
+    assert [bed_summary(block, Foundation(k=2.89e7, lam=8.95e8, eps=e))["vertical_damping_ratio"]
+            for e in eps] == each
+    groups = parameter_groups({"m": 8.67, "b": 0.035, "h": 0.21, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": eps})
+    np.testing.assert_allclose(groups["zeta_v"], each, rtol=1e-12, atol=0)
+    z_st = 8.67 * 9.81 / (2 * 0.035 * 2.89e7)
+    for e in eps:
+        bed = Foundation(k=2.89e7, lam=8.95e8, eps=e)
+        assert model_choice.vertical_damping_ratio(block, bed) == vertical_damping_ratio(block, bed, z_st)
+    assert model_choice.vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)) == each[1]

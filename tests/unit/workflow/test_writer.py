@@ -85,3 +85,18 @@ def test_per_point_variables_have_bounded_chunks_and_chunk_cache(tmp_path):
         result.close()
     with netCDF4.Dataset(path) as nc:
         assert nc["t_stop"].chunking() == list(point_chunks(study.shape))
+
+
+def test_the_spot_comparison_names_have_one_home():
+    """The linearization histories a spot check is compared against are execution.SPOT_LINEAR: the writer
+    uses that name and spells no copy of the tuple."""
+    import ast
+    import inspect
+
+    from screening.workflow import execution, writer
+
+    tree = ast.parse(inspect.getsource(writer))
+    literals = {tuple(e.value for e in node.elts) for node in ast.walk(tree)
+                if isinstance(node, ast.Tuple) and node.elts and all(isinstance(e, ast.Constant) for e in node.elts)}
+    assert tuple(execution.SPOT_LINEAR) not in literals
+    assert writer.SPOT_LINEAR is execution.SPOT_LINEAR
