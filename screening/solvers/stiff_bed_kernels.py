@@ -353,12 +353,7 @@ def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out
     no_counts = np.zeros((0, 2), dtype=np.int64)
     for row in numba.prange(acc[0].shape[0]):
         cnt = counts[row] if counts.shape[0] > 0 else no_counts
-        st, rs, pk, na, nr, hm = integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
+        kern._store_outcome(row, integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                                                   t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
-                                                  out_theta_dot, out_uplift, cnt)
-        status[row] = st
-        reason[row] = rs
-        peak[row] = pk
-        n_accepted[row] = na
-        n_rejected[row] = nr
-        h_min[row] = hm
+                                                  out_theta_dot, out_uplift, cnt),
+                            status, reason, peak, n_accepted, n_rejected, h_min)
