@@ -88,6 +88,7 @@ COVERED = [
     "screening.solvers.montecarlo",
     "screening.solvers.outputs",
     "screening.solvers.simulate",
+    "screening.solvers.stiff_bed_contact",
     "screening.solvers.synthesis",
     "screening.solvers.timegrid",
     "screening.status",
