@@ -89,6 +89,7 @@ COVERED = [
     "screening.solvers.outputs",
     "screening.solvers.simulate",
     "screening.solvers.stiff_bed_contact",
+    "screening.solvers.stiff_bed_kernels",
     "screening.solvers.synthesis",
     "screening.solvers.timegrid",
     "screening.status",
