@@ -88,6 +88,7 @@ COVERED = [
     "screening.solvers.montecarlo",
     "screening.solvers.outputs",
     "screening.solvers.simulate",
+    "screening.solvers.stiff_bed",
     "screening.solvers.stiff_bed_contact",
     "screening.solvers.stiff_bed_kernels",
     "screening.solvers.synthesis",
