@@ -583,17 +583,9 @@ def constraint_damping_jit(cp, a, z, dz, v):
 
     Parameters
     ----------
-    cp : numpy.record
-        A :data:`screening.condensation.cubic.SDOF_RECORD` record (``screening.condensation.cubic.sdof_record(block,
-        foundation)[0]``).
-    a : float
-        ``|sin theta|`` [rad], the rotation's magnitude at which the law is read.
-    z : float
-        Base-centre indentation ``Z(a)`` [m] (:func:`screening.condensation.cubic.quasi_static_indentation_jit`).
-    dz : float
-        Its slope ``dZ/da`` [m/rad].
-    v : float
-        Indentation of the compressed edge ``z + b a`` [m].
+    cp, a, z, dz, v : see indentation_curvature_jit
+        The condensation's record [SI] and the indentation state at ``a`` [rad]: ``z`` [m], ``dz``
+        [m/rad], ``v`` [m], as in :func:`indentation_curvature_jit`.
 
     Returns
     -------
@@ -620,12 +612,9 @@ def constraint_damping_jit(cp, a, z, dz, v):
     >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
     >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
     >>> cp = cubic.sdof_record(block, bed)[0]
-    >>> tu = float(cp["theta_ul"])
-    >>> same = []
-    >>> for a in (0.5 * tu, 5.0 * tu, 50.0 * tu):
-    ...     z, dz, v = cubic.quasi_static_indentation_jit(cp, a)
-    ...     same.append(np.isclose(constraint_damping_jit(cp, a, z, dz, v), constraint_damping(a, block, bed)))
-    >>> all(same)
+    >>> jit = [constraint_damping_jit(cp, a, *cubic.quasi_static_indentation_jit(cp, a))
+    ...        for a in np.array([0.5, 5.0, 50.0]) * cp["theta_ul"]]
+    >>> bool(np.allclose(jit, constraint_damping(np.array([0.5, 5.0, 50.0]) * cp["theta_ul"], block, bed)))
     True
     """
     b, w_rate, w_ind = cp.b, cp.w_rate, cp.w_indentation

@@ -212,9 +212,9 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
 
     Parameters
     ----------
-    sp : numpy.ndarray or numpy.record
-        The :data:`screening.solvers.stiff_bed_contact.STIFF` record (``stiff_record(block, foundation)``).
-    cp : numpy.ndarray or numpy.record
+    sp : numpy.record
+        The :data:`screening.solvers.stiff_bed_contact.STIFF` record (``stiff_record(block, foundation)[0]``).
+    cp : numpy.record
         The ``"cubic"`` condensation's :data:`screening.condensation.cubic.SDOF_RECORD` record.
     prop : numpy.ndarray
         ``(2, 6)``: ``[Phi | Gamma]`` of :func:`linear_propagator` for the grid step ``dt_grid``.
@@ -509,40 +509,10 @@ def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out
 
     Parameters
     ----------
-    sp : numpy.ndarray or numpy.record
-        The :data:`screening.solvers.stiff_bed_contact.STIFF` record (``stiff_record(block, foundation)``).
-    cp : numpy.ndarray or numpy.record
-        The ``"cubic"`` condensation's :data:`screening.condensation.cubic.SDOF_RECORD` record.
-    prop : numpy.ndarray
-        ``(2, 6)``: ``[Phi | Gamma]`` of :func:`linear_propagator` for the grid step ``dt_grid``.
-    log_amp, log_eta : numpy.ndarray
-        The transfer table (:func:`screening.solvers.stiff_bed.transfer_table`): ``log`` of the half-cycle
-        amplitude [rad] and of the transfer energy ratio [1].
-    acc : tuple of numpy.ndarray
-        ``(horizontal, vertical)`` ground accelerations [m s-2] on the grid ``j dt_grid``: the inertial
-        ``x_g''`` one row per sample; the vertical ``a_v`` (positive up) one row per sample, one row for all,
-        or :data:`screening.solvers.mcs_kernels.NO_VERTICAL`.
-    acc_dot : tuple of numpy.ndarray
-        Their rates [m s-3], same layout.
-    dt_grid : float
-        Step of the input grid [s] (cubic Hermite interpolation in between).
-    t_out : numpy.ndarray
-        Output times [s].
-    y_init : numpy.ndarray
-        Initial ``(theta, theta')`` [rad, rad s-1].
-    scale : numpy.ndarray
-        Absolute error scales of the two states [rad, rad s-1] (times ``rtol``).
-    rtol : float
-        Relative tolerance [1].
-    h_max : float
-        Largest step [s].
-    max_steps : int
-        Step budget of a sample.
-    out_theta, out_theta_dot : numpy.ndarray
-        Histories (samples x output times) [rad, rad s-1], written in place (NaN after overturning or
-        divergence).
-    out_uplift : numpy.ndarray of bool
-        Uplift flag (``|theta| > theta_ul``) at the output times, same layout.
+    sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out : see integrate_sample
+        As in :func:`integrate_sample` (``sp``, ``cp`` here the 1-element arrays of the records).
+    y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_uplift : see integrate_sample
+        As in :func:`integrate_sample` (the histories hold every sample, one row each).
     peak : numpy.ndarray
         Per sample: largest ``|theta|`` [rad], written in place.
     status, reason : numpy.ndarray
