@@ -102,24 +102,123 @@ TABLE_RTOL = 1e-7
 
 # ----------------------------------------------------------------------------- validity
 def validity_limit():
-    """Largest ``theta_ul / atan(b/h)`` [1] of the model's measured validity (the shipped rule of
-    ``model = "auto"``, ``screening/data/model_choice.toml``: the uplift angle small against the slenderness)."""
+    """Largest ``theta_ul / atan(b/h)`` of the stiff-bed model's measured validity.
+
+    The upper bound of the shipped rule of ``model = "auto"`` (``screening/data/model_choice.toml``): the
+    model holds where the uplift angle is small against the slenderness.
+
+    Returns
+    -------
+    float
+        The bound on ``theta_ul / atan(b/h)`` [1].
+
+    Notes
+    -----
+    The rule is ``theta_ul / atan(b/h) <= validity_limit()``: the bed's vertical mode is then fast against
+    the rocking, so the quasi-static contact holds (``docs/stiff_bed.md``, "Validity").
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` (section "Validity") and
+       ``docs/model_choice.md`` (the shipped rules of ``model = "auto"``).
+
+    Examples
+    --------
+    >>> 0.0 < validity_limit() < 1.0
+    True
+    """
     from screening.solvers.model_choice import rule_of
 
     return rule_of("stiff_bed").bound("theta_ul_over_slenderness")[1]
 
 
 def validity(block, foundation):
-    """``(ratio, rule)``: ``theta_ul / atan(b/h)`` [1] and the rule the stiff-bed model is used under,
-    ``theta_ul / atan(b/h) <= validity_limit()`` (its vertical mode is then fast against rocking)."""
+    """The stiff-bed model's validity indicator at a block and bed, and its rule.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    ratio : float
+        ``theta_ul / atan(b/h)`` [1]: the ``"cubic"`` condensation's uplift angle over the slenderness.
+    rule : str
+        The rule the model is used under, ``theta_ul / atan(b/h) <= validity_limit()``.
+
+    Notes
+    -----
+    ``theta_ul`` is the rotation at which the indentation of the lifting edge reaches zero (uplift starts)
+    on the compression-only contact law of eq. (3) in [2]; small against
+    ``atan(b/h)``, the bed's vertical mode is fast against the rocking (``docs/stiff_bed.md``, "Validity").
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` (section "Validity") and
+       ``docs/model_choice.md`` (the shipped rules of ``model = "auto"``).
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
+    >>> bed = Foundation(k=1e10, lam=2e11)                     # [N m-2, N s m-3]
+    >>> ratio, rule = validity(block, bed)
+    >>> bool(ratio == cubic.uplift_threshold(block, bed) / block.slenderness), ratio < validity_limit()
+    (True, True)
+    >>> rule == f"theta_ul / atan(b/h) <= {validity_limit():g}"
+    True
+    """
     ratio = float(cubic.uplift_threshold(block, foundation)) / float(block.slenderness)
     return ratio, f"theta_ul / atan(b/h) <= {validity_limit():g}"
 
 
 def validity_problem(block, foundation, excitation=None):
-    """``None`` where the model's measured validity (:func:`screening.solvers.model_choice.vouches` with its
-    shipped rule) holds at the point, else one line naming the rule and the indicator outside it.
-    ``excitation``: the point's excitation (its kind is checked), or ``None`` (records: not checked)."""
+    """Why the stiff-bed model is outside its measured validity at a point, or ``None``.
+
+    Checks the point against the model's shipped rule (:func:`screening.solvers.model_choice.vouches`):
+    ``None`` where it holds, else one line naming the rule, the indicator outside it and what to use instead.
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    excitation : object, optional
+        The point's excitation (its ``kind`` is checked), or ``None`` (records: not checked).
+
+    Returns
+    -------
+    str or None
+        The message, or ``None`` inside the validity.
+
+    Notes
+    -----
+    The rule bounds dimensionless indicators of the point (``theta_ul / atan(b/h)``, the bed's vertical
+    damping ratio, ...) to the ranges the model was measured on against coupled Monte Carlo
+    (``docs/stiff_bed.md``, "Validity"; ``docs/model_choice.md``).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` (section "Validity") and
+       ``docs/model_choice.md`` (the shipped rules of ``model = "auto"``).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
+    >>> bed = Foundation(k=1e10, lam=2e11)                     # [N m-2, N s m-3]
+    >>> validity_problem(block, bed) is None
+    True
+    >>> print(validity_problem(block, Foundation(k=5e5, lam=3e7)))      # a soft bed
+    model 'stiff_bed' outside its measured validity: theta_ul_over_slenderness = 0.695 outside the measured ...
+    """
     from screening.solvers.model_choice import RULE_FILE, rule_of, vouches
 
     rule = rule_of("stiff_bed")
@@ -233,12 +332,60 @@ def _compute_transfer_table(block, foundation):
 
 
 def transfer_table(block, foundation):
-    """The bed-derived transfer loss of the stiff-bed model (module docstring), computed once per bed.
+    """The bed-derived transfer loss of the stiff-bed model, computed once per bed.
 
-    Returns ``(log_amp, log_eta, eta_coupled, eta_model, amplitudes)``: the table read by the kernel
-    (``log`` of the half-cycle amplitude [rad] and of the transfer energy ratio [1], with the node
-    ``(theta_ul, 1)`` first), and per amplitude [rad] the coupled model's and this model's (without
-    transfer loss) free-rocking energy ratios ``V(A_1) / V(A)`` through one transfer.
+    The energy kept through a corner-to-corner transfer, tabulated against the half-cycle amplitude: at each
+    of :data:`TABLE_POINTS` amplitudes log-spaced from ``TABLE_LOW theta_ul`` to ``TABLE_HIGH atan(b/h)`` the
+    coupled model rocks freely from rest through one transfer; its energy ratio over the one of this model
+    without transfer loss is the transfer's ratio ``eta``.  Cached per bed (the first call on a bed runs
+    the free-rocking integrations: tens of seconds).
+
+    Parameters
+    ----------
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+
+    Returns
+    -------
+    log_amp : numpy.ndarray
+        ``log`` of the table's half-cycle amplitudes [rad], the node ``theta_ul`` first (read by the kernel).
+    log_eta : numpy.ndarray
+        ``log`` of the transfer energy ratio [1] at those nodes, ``0`` at ``theta_ul``.
+    eta_coupled : numpy.ndarray
+        Per amplitude: the coupled model's free-rocking energy ratio ``V(A_1) / V(A)`` [1] through one transfer.
+    eta_model : numpy.ndarray
+        Per amplitude: this model's, without transfer loss [1].
+    amplitudes : numpy.ndarray
+        The amplitudes ``A`` [rad].
+
+    Notes
+    -----
+    ``eta(A) = [V(A_1) / V(A)]_coupled / [V(A_1') / V(A)]_no loss`` with ``V`` the stored energy
+    (:func:`potential`), clipped to ``(0, 1]``; ``eta = 1`` at ``A = theta_ul`` (no uplift, no transfer).
+    Never fitted to Monte Carlo.  Where ``TABLE_LOW theta_ul >= TABLE_HIGH atan(b/h)`` (a bed too soft for
+    the model) the table is the node ``(theta_ul, 1)`` alone (``docs/stiff_bed.md``; the coupled model's
+    contact law is eq. (3) in [2]).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` (the bed-derived transfer loss).
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    On a bed so soft that uplift starts near the slenderness, the table is one node: no transfer loss
+    (on a stiff bed the call runs the free-rocking integrations, tens of seconds):
+
+    >>> import numpy as np
+    >>> from screening import Block, Foundation
+    >>> block, soft = Block(m=1200.0, b=0.25, h=0.9), Foundation(k=5e5, lam=3e7)
+    >>> log_amp, log_eta, eta_coupled, eta_model, amplitudes = transfer_table(block, soft)
+    >>> bool(np.allclose(np.exp(log_amp), cubic.uplift_threshold(block, soft))), log_eta.tolist()
+    (True, [0.0])
     """
     return _transfer_table_cached(_bed_key(block, foundation))
 

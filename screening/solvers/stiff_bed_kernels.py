@@ -40,19 +40,61 @@ PHASE_BOUNDS = (10.0, 100.0, 0.05)
 
 
 def linear_propagator(m0, c0, k0, mh, dt):
-    """Exact one-interval map of the full-contact oscillator ``m0 x'' + c0 x' + k0 x = mh u(t)``.
+    """Exact one-interval map of the full-contact oscillator under a cubic Hermite input.
 
-    The input ``u`` is the cubic Hermite interpolant over ``[0, dt]`` [s] of the node values
-    ``u0, u1`` and rates ``d0, d1``.  Returns ``(Phi, Gamma)``, ``(2, 2)`` and ``(2, 4)``:
-    ``(x, x')(dt) = Phi (x, x')(0) + Gamma (u0, u1, dt d0, dt d1)``.
+    The stiff-bed model in full contact is the linear oscillator ``m0 x'' + c0 x' + k0 x = mh u(t)``; over one
+    input interval ``[0, dt]`` with ``u`` the cubic Hermite interpolant of the node values ``u0, u1`` and
+    rates ``d0, d1``, its state is advanced exactly by ``(x, x')(dt) = Phi (x, x')(0) + Gamma (u0, u1, dt d0,
+    dt d1)``.
+
+    Parameters
+    ----------
+    m0 : float
+        Inertia [kg m2].
+    c0 : float
+        Damping [N m s/rad].
+    k0 : float
+        Stiffness [N m/rad].
+    mh : float
+        Input coefficient ``m h`` [kg m].
+    dt : float
+        Interval [s].
+
+    Returns
+    -------
+    Phi : numpy.ndarray
+        ``(2, 2)`` state transition [1, s; s-1, 1].
+    Gamma : numpy.ndarray
+        ``(2, 4)`` input matrix [rad per m s-2; rad s-1 per m s-2].
 
     Notes
     -----
     ``Phi = exp(A dt)``, ``A = [[0, 1], [-k0/m0, -c0/m0]]``.  The response to the forcing
     ``tau^n / n!`` is the state part of ``exp(M_n dt) e_3`` with the augmented generator
     ``M_n = [[A, B e_n^T], [0, J]]``, ``B = (0, mh/m0)``, ``J`` the shift ``w_i' = w_{i-1}``
-    (``w_i = tau^i / i!``); the Hermite basis ``(1 - 3x^2 + 2x^3, 3x^2 - 2x^3, x - 2x^2 + x^3,
-    x^3 - x^2)``, ``x = tau / dt``, is a combination of those monomials.
+    (``w_i = tau^i / i!``), Van Loan's block-exponential integral [1]; the Hermite basis
+    ``(1 - 3x^2 + 2x^3, 3x^2 - 2x^3, x - 2x^2 + x^3, x^3 - x^2)``, ``x = tau / dt``, is a combination of
+    those monomials (``docs/stiff_bed.md``).
+
+    References
+    ----------
+    .. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential", IEEE Transactions on
+       Automatic Control 23(3) (1978) 395-404.
+
+    Examples
+    --------
+    Undamped at unit frequency a quarter period swaps position and velocity; under a constant input the
+    static deflection ``mh u / k0`` stays put:
+
+    >>> import numpy as np
+    >>> phi, gamma = linear_propagator(1.0, 0.0, 1.0, 1.0, np.pi / 2)
+    >>> np.round(phi, 12) + 0.0
+    array([[ 0.,  1.],
+           [-1.,  0.]])
+    >>> phi, gamma = linear_propagator(2.0, 0.5, 8.0, 3.0, 0.1)
+    >>> x_static = 3.0 / 8.0                                # [rad] under u = 1 m s-2
+    >>> bool(np.allclose(phi @ [x_static, 0.0] + gamma @ [1.0, 1.0, 0.0, 0.0], [x_static, 0.0]))
+    True
     """
     a_mat = np.array([[0.0, 1.0], [-k0 / m0, -c0 / m0]])
     phi = linalg.expm(a_mat * dt)
@@ -87,8 +129,46 @@ def _vertical_quiet(row, acc, acc_dot, j):
 
 @numba.njit(cache=True)
 def transfer_ratio_jit(log_amp, log_eta, amp):
-    """Energy ratio ``eta`` [1] of a transfer after a half cycle of amplitude ``amp`` [rad]: linear in
-    ``log amp`` between the table's nodes, 1 below the first node, the last value above the last."""
+    """Energy ratio ``eta`` of a transfer after a half cycle of amplitude ``amp``.
+
+    Reads the transfer table: linear in ``log amp`` between the table's nodes, the first node's value below
+    the first node (1 for :func:`screening.solvers.stiff_bed.transfer_table`, whose first node is
+    ``(theta_ul, 1)``), the last value above the last node, and 1 for ``amp <= 0``.
+
+    Parameters
+    ----------
+    log_amp : numpy.ndarray
+        ``log`` of the nodes' half-cycle amplitudes [rad], increasing.
+    log_eta : numpy.ndarray
+        ``log`` of the nodes' energy ratios [1].
+    amp : float
+        Half-cycle amplitude [rad].
+
+    Returns
+    -------
+    float
+        ``eta`` [1]: the rocking energy kept through the transfer.
+
+    Notes
+    -----
+    ``log eta = log eta_j + f (log eta_(j+1) - log eta_j)``, ``f = (log amp - log amp_j) /
+    (log amp_(j+1) - log amp_j)`` (``docs/stiff_bed.md``, the transfer loss).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` (the bed-derived transfer loss).
+
+    Examples
+    --------
+    Halfway in ``log amp`` between nodes at 1 and 0.8 the ratio is their geometric mean:
+
+    >>> import numpy as np
+    >>> log_amp, log_eta = np.log([1e-4, 1e-3]), np.log([1.0, 0.8])
+    >>> bool(np.isclose(transfer_ratio_jit(log_amp, log_eta, np.sqrt(1e-4 * 1e-3)), np.sqrt(0.8)))
+    True
+    >>> transfer_ratio_jit(log_amp, log_eta, 1e-5), round(transfer_ratio_jit(log_amp, log_eta, 1.0), 12)
+    (1.0, 0.8)
+    """
     if amp <= 0.0:
         return 1.0
     x = math.log(amp)
@@ -124,12 +204,86 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                      max_steps, out_theta, out_theta_dot, out_uplift, counts):
     """Integrate one sample of the stiff-bed model over ``t_out``; fill row ``row`` of the outputs.
 
-    ``prop``: ``(2, 6)``, :func:`linear_propagator` ``[Phi | Gamma]`` for the grid step ``dt_grid``;
-    ``log_amp``, ``log_eta``: the transfer table; ``acc``, ``acc_dot``: the ``(horizontal, vertical)``
-    ground input of :func:`screening.solvers.mcs_kernels._integrate_chunk`; ``counts``: ``(8, 2)`` integers
-    incremented by the step counts of :data:`COUNT_ROWS`, or ``(0, 2)`` (not counted).  Returns ``(status,
-    reason, peak_abs_theta, n_accepted, n_rejected, h_min_accepted)`` (exact full-contact intervals count as
-    accepted steps).
+    In full contact with no vertical input the state is advanced over whole grid intervals by the exact
+    :func:`linear_propagator`; elsewhere by the adaptive Dormand–Prince 5(4) pair on
+    :func:`screening.solvers.stiff_bed_contact.rocking_acceleration_jit`, with the transfer loss
+    (:func:`transfer_ratio_jit`) applied when the rotation changes sign.  After overturning or divergence
+    the remaining outputs are NaN.
+
+    Parameters
+    ----------
+    sp : numpy.record
+        The :data:`screening.solvers.stiff_bed_contact.STIFF` record (``stiff_record(block, foundation)[0]``).
+    cp : numpy.record
+        The ``"cubic"`` condensation's :data:`screening.condensation.cubic.SDOF_RECORD` record.
+    prop : numpy.ndarray
+        ``(2, 6)``: ``[Phi | Gamma]`` of :func:`linear_propagator` for the grid step ``dt_grid``.
+    log_amp, log_eta : numpy.ndarray
+        The transfer table (:func:`screening.solvers.stiff_bed.transfer_table`): ``log`` of the half-cycle
+        amplitude [rad] and of the transfer energy ratio [1].
+    row : int
+        The sample (row of ``acc`` and of the outputs).
+    acc : tuple of numpy.ndarray
+        ``(horizontal, vertical)`` ground accelerations [m s-2] on the grid ``j dt_grid``: the inertial
+        ``x_g''`` one row per sample; the vertical ``a_v`` (positive up) one row per sample, one row for all,
+        or :data:`screening.solvers.mcs_kernels.NO_VERTICAL`.
+    acc_dot : tuple of numpy.ndarray
+        Their rates [m s-3], same layout.
+    dt_grid : float
+        Step of the input grid [s] (cubic Hermite interpolation in between).
+    t_out : numpy.ndarray
+        Output times [s].
+    y_init : numpy.ndarray
+        Initial ``(theta, theta')`` [rad, rad s-1].
+    scale : numpy.ndarray
+        Absolute error scales of the two states [rad, rad s-1] (times ``rtol``).
+    rtol : float
+        Relative tolerance [1].
+    h_max : float
+        Largest step [s].
+    max_steps : int
+        Step budget of a sample.
+    out_theta, out_theta_dot : numpy.ndarray
+        Histories (samples x output times) [rad, rad s-1], written in place (NaN after overturning or
+        divergence).
+    out_uplift : numpy.ndarray of bool
+        Uplift flag (``|theta| > theta_ul``) at the output times, same layout.
+    counts : numpy.ndarray
+        ``(8, 2)`` integers incremented by the step counts of :data:`COUNT_ROWS`, or ``(0, 2)`` (not counted).
+
+    Returns
+    -------
+    tuple
+        ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected, h_min_accepted [s])`` (exact
+        full-contact intervals count as accepted steps): status as
+        :data:`screening.solvers.mcs_kernels.STATUS_OK` and its siblings, with a ``REASON_*`` code.
+
+    Notes
+    -----
+    The equation of motion ``m_eff theta'' + (1/2) dm_eff theta'^2 + C_eff theta' + Q = m h cos(theta)
+    x_g''`` on the contact law of eq. (3) in [1] (``docs/stiff_bed.md``), the Dormand–Prince pair [2] with
+    the PI step control of [3].  Compiling the kernel takes tens of seconds, so the example shows its
+    interface; ``tests/unit/solvers/test_stiff_bed_numerics.py`` holds it against scipy.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [3] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+    .. [4] The package's documentation, ``docs/stiff_bed.md`` (the stiff-bed model's numerics).
+
+    Examples
+    --------
+    >>> import inspect
+    >>> params = list(inspect.signature(integrate_sample.py_func).parameters)
+    >>> params[:5], len(params)
+    (['sp', 'cp', 'prop', 'log_amp', 'log_eta'], 19)
+    >>> len(COUNT_ROWS)                      # rows of ``counts``
+    8
     """
     n_out = t_out.shape[0]
     n_grid = acc[0].shape[1]
@@ -348,8 +502,58 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
 def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max,
                     max_steps, out_theta, out_theta_dot, out_uplift, peak, status, reason, n_accepted, n_rejected,
                     h_min, counts):
-    """:func:`integrate_sample` for every row of ``acc`` (``prange`` over samples).  ``counts``: ``(rows, 8, 2)``
-    integers (the step counts of row ``r`` added to ``counts[r]``) or ``(0, 8, 2)`` (not counted)."""
+    """:func:`integrate_sample` for every row of ``acc`` (samples in parallel).
+
+    Fills the histories and the per-sample outcome arrays in place (``prange`` over samples); the
+    integrator the registered stiff-bed model calls per chunk of Monte Carlo samples.
+
+    Parameters
+    ----------
+    sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out : see integrate_sample
+        As in :func:`integrate_sample` (``sp``, ``cp`` here the 1-element arrays of the records).
+    y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_uplift : see integrate_sample
+        As in :func:`integrate_sample` (the histories hold every sample, one row each).
+    peak : numpy.ndarray
+        Per sample: largest ``|theta|`` [rad], written in place.
+    status, reason : numpy.ndarray
+        Per sample: outcome code and its reason (:mod:`screening.solvers.mcs_kernels`), written in place.
+    n_accepted, n_rejected : numpy.ndarray
+        Per sample: accepted and rejected steps, written in place.
+    h_min : numpy.ndarray
+        Per sample: smallest accepted step [s], written in place.
+    counts : numpy.ndarray
+        ``(rows, 8, 2)`` integers (the step counts of row ``r``, :data:`COUNT_ROWS`, added to ``counts[r]``)
+        or ``(0, 8, 2)`` (not counted).
+
+    Returns
+    -------
+    None
+        The outputs are written in place.
+
+    Notes
+    -----
+    Each sample is :func:`integrate_sample` (its Notes: the equations of [1], the Dormand–Prince pair [2],
+    the step control of [3]).  Compiling the kernel takes tens of seconds, so the example shows its
+    interface.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
+       Math. 6 (1980) 19-26.
+    .. [3] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+       Springer (1993), sections II.4-II.6.
+    .. [4] The package's documentation, ``docs/stiff_bed.md`` (the stiff-bed model's numerics).
+
+    Examples
+    --------
+    >>> import inspect
+    >>> params = list(inspect.signature(integrate_chunk.py_func).parameters)
+    >>> params[:5], params[-1], len(params)
+    (['sp', 'cp', 'prop', 'log_amp', 'log_eta'], 'counts', 24)
+    """
     no_counts = np.zeros((0, 2), dtype=np.int64)
     for row in numba.prange(acc[0].shape[0]):
         cnt = counts[row] if counts.shape[0] > 0 else no_counts
