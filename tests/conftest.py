@@ -52,3 +52,21 @@ def one_worker():
 
     with in_process_client(1) as c:
         yield c
+
+
+def pytest_sessionstart(session):
+    """On a cold numba cache (a fresh clone), compile the solvers once before the first test, saying so:
+    otherwise the first test that solves a point is silent for the whole compilation (about a minute)."""
+    from screening.kernels.cache import cache_is_cold
+
+    if not cache_is_cold():
+        return
+    reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line("screening: compiling the solvers with numba before the tests (first run only, "
+                            "about a minute)...")
+    from screening.workflow.execution import warm_up, warm_up_monte_carlo
+
+    seconds = warm_up() + warm_up_monte_carlo()
+    if reporter is not None:
+        reporter.write_line(f"screening: compiled in {seconds:.0f} s")

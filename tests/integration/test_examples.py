@@ -61,6 +61,7 @@ def test_statue_script_writes_a_fragility_curve_over_pga(tmp_path, monkeypatch, 
     assert "median PGA" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_cabinet_script_fits_its_fragility_in_python(tmp_path, capsys):
     curves = _script("cabinet").main(_tiny("cabinet", tmp_path), str(tmp_path / "cabinet.nc"))
     p = curves["p_exceed"]
