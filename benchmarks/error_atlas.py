@@ -44,10 +44,10 @@ def point_path(work, index):
 
 def run_and_save(index, u, samples, seed, work):
     """Evaluate one point and write its JSON atomically (runs on a worker)."""
-    from screening.analysis.atlas_run import evaluate_point
+    from screening.analysis.atlas_run import _evaluate_point
     from screening.atomicfile import atomic_open
 
-    res = evaluate_point(index, u, samples=samples, seed=seed)
+    res = _evaluate_point(index, u, samples=samples, seed=seed)
     with atomic_open(point_path(work, index)) as fh:
         json.dump(res, fh)
     return {"index": index, "cpu": res.get("cpu", float("nan")), "model": res.get("mc", {}).get("model", "-"),

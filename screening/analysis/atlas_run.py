@@ -1,6 +1,6 @@
 """One point of the error atlas, and the atlas dataset assembled from its points.
 
-:func:`evaluate_point` realises a design point (:mod:`screening.analysis.atlas`), sets its intensity,
+:func:`_evaluate_point` realises a design point (:mod:`screening.analysis.atlas`), sets its intensity,
 runs every fast method (the linearization under each registered condensation, with its trust
 indicators and its exceedance probabilities) and the reference Monte Carlo the scene requires
 (:func:`reference_model`), and returns a JSON-able dict.  :func:`assemble` turns a list of such dicts
@@ -91,10 +91,10 @@ def reference_model(block, foundation, timing, excitation_kind, coupled_radians=
     return "stiff_bed" if held else "coupled"
 
 
-def point_intensity(block, foundation, shape, timing, p_target, factor):
+def _point_intensity(block, foundation, shape, timing, p_target, factor):
     """``S0`` [m2 s-3]: the paper-condensation linearization's peak uplift probability reaches ``p_target``
     (:func:`screening.analysis.target_intensity.calibrate_intensity`), times ``factor``; where the linearization stops
-    before reaching it, the last intensity at which it does not stop (:func:`last_stable_intensity`), times
+    before reaching it, the last intensity at which it does not stop (:func:`_last_stable_intensity`), times
     ``factor``."""
     from screening.solvers.timegrid import output_times
 
@@ -103,11 +103,11 @@ def point_intensity(block, foundation, shape, timing, p_target, factor):
     try:
         S0 = calibrate_intensity(block, foundation, make, float(p_target), t_out)
     except ValueError:
-        S0 = last_stable_intensity(block, foundation, make, t_out)
+        S0 = _last_stable_intensity(block, foundation, make, t_out)
     return float(S0 * factor)
 
 
-def last_stable_intensity(block, foundation, make_exc, t_out, log10_bounds=(-10.0, 1.0), xtol=1e-3):
+def _last_stable_intensity(block, foundation, make_exc, t_out, log10_bounds=(-10.0, 1.0), xtol=1e-3):
     """The largest ``S0`` [m2 s-3] (to ``xtol`` in log10) at which the paper linearization still ends with status
     ok: the intensity of a point whose target uplift probability the linearization cannot reach (it stops
     first).  ``ValueError`` if it stops at the lower bound already."""
@@ -133,7 +133,7 @@ def _finite(x):
     return x if math.isfinite(x) else None
 
 
-def linearization_row(block, foundation, excitation, timing, condensation):
+def _linearization_row(block, foundation, excitation, timing, condensation):
     """Peak ``var_theta`` [rad2], status, trust indicators, the cell rule's ``sl_trust`` and band
     (:func:`screening.analysis.trust.add_cell_trust`: the rule the atlas's first campaign recorded; the error
     model is learnt from the atlas, so it is not recorded in it), and ``p_exceed`` at :data:`LEVELS` of one
@@ -155,7 +155,7 @@ def linearization_row(block, foundation, excitation, timing, condensation):
     return row
 
 
-def monte_carlo_row(block, foundation, excitation, timing, model, samples, seed):
+def _monte_carlo_row(block, foundation, excitation, timing, model, samples, seed):
     """Reference Monte Carlo summaries and the per-sample peaks ``|theta|`` [rad] and states."""
     from screening.solvers.montecarlo import monte_carlo
 
@@ -177,7 +177,7 @@ def monte_carlo_row(block, foundation, excitation, timing, model, samples, seed)
             "wall": time.perf_counter() - t0, "cpu": time.process_time() - c0}
 
 
-def evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIANS):
+def _evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIANS):
     """Everything the atlas keeps of design point ``index`` with unit-cube coordinates ``u`` (JSON-able dict).
 
     Monte Carlo sample ``j`` uses ``numpy.random.default_rng([seed + index, j])``.  A point whose
@@ -188,16 +188,16 @@ def evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIAN
     block, foundation, shape, timing = atlas.physical_point(g, 0)
     out = {"index": int(index), "u": [float(x) for x in u], "seed": int(seed) + int(index), "samples": int(samples)}
     try:
-        S0 = point_intensity(block, foundation, shape, timing, g["p_target"][0], g["factor"][0])
+        S0 = _point_intensity(block, foundation, shape, timing, g["p_target"][0], g["factor"][0])
     except ValueError as exc:
         out.update(error=" ".join(str(exc).split())[:200], cpu=time.process_time() - c0)
         return out
     excitation = atlas.make_excitation(shape, timing, S0)
     out["S0"] = S0
-    out["sl"] = {c: linearization_row(block, foundation, excitation, timing, c) for c in CONDENSATIONS}
+    out["sl"] = {c: _linearization_row(block, foundation, excitation, timing, c) for c in CONDENSATIONS}
     model = reference_model(block, foundation, timing, excitation.kind, coupled_radians)
     try:
-        out["mc"] = monte_carlo_row(block, foundation, excitation, timing, model, samples, int(seed) + int(index))
+        out["mc"] = _monte_carlo_row(block, foundation, excitation, timing, model, samples, int(seed) + int(index))
     except (ValueError, ArithmeticError) as exc:
         if model == "coupled":
             out["mc"] = {"model": model, "error": " ".join(str(exc).split())[:200]}
@@ -212,8 +212,8 @@ def evaluate_point(index, u, samples=500, seed=0, coupled_radians=COUPLED_RADIAN
                 out.update(cpu=time.process_time() - c0, wall=time.perf_counter() - t0)
                 return out
             try:
-                out["mc"] = monte_carlo_row(block, foundation, excitation, timing, "coupled", samples,
-                                            int(seed) + int(index))
+                out["mc"] = _monte_carlo_row(block, foundation, excitation, timing, "coupled", samples,
+                                             int(seed) + int(index))
             except (ValueError, ArithmeticError) as exc2:
                 out["mc"] = {"model": "coupled", "error": " ".join(str(exc2).split())[:200]}
     out.update(cpu=time.process_time() - c0, wall=time.perf_counter() - t0)
@@ -227,7 +227,7 @@ def _num(x):
 
 def assemble(results, attrs=None):
     """The atlas dataset (dimensions ``point``, ``condensation``, ``level``, ``sample``) from
-    :func:`evaluate_point` results (any order; sorted by index).
+    :func:`_evaluate_point` results (any order; sorted by index).
 
     Per point: the design coordinates ``u`` and the groups (:func:`screening.analysis.atlas.groups_of`), the
     derived groups, ``family``, ``S0``, the reference ``mc_model``; per point and condensation the
@@ -237,7 +237,7 @@ def assemble(results, attrs=None):
     Parameters
     ----------
     results : list of dict
-        Results of :func:`evaluate_point` (a point may lack ``sl`` and ``mc``: its values are NaN).
+        Results of :func:`_evaluate_point` (a point may lack ``sl`` and ``mc``: its values are NaN).
     attrs : dict, optional
         Global attributes to add.
 

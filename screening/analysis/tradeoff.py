@@ -77,7 +77,7 @@ class Point:
     index: int
 
 
-def build_points(study, progress=None):
+def _build_points(study, progress=None):
     """Expand the families into :class:`Point`s (calibrating intensities given as targets)."""
     t_out = output_times(study.t_end, study.dt)
     points = []
@@ -105,7 +105,7 @@ def build_points(study, progress=None):
     return points
 
 
-def point_models(study, points):
+def _point_models(study, points):
     """``(block, foundation, excitation)`` of a :class:`Point`, or of a list of points of one family
     (array fields, for batched calls)."""
     if isinstance(points, Point):
@@ -153,21 +153,21 @@ def time_call(fn, repeats=1):
     return result, float(np.median(times))
 
 
-def solve_sl(study, models, t_out, rtol=None, h_max=None, repeats=1):
+def _solve_sl(study, models, t_out, rtol=None, h_max=None, repeats=1):
     """SL of ``models`` via :func:`~screening.solvers.moments.solve_moments`; ``(result dict, seconds)``."""
     rtol = study.sl["rtol"] if rtol is None else rtol
     return time_call(lambda: solve_moments(*models, t_out, rtol=rtol, h_max=h_max,
                                            condensation=study.condensation), repeats)
 
 
-def run_sl(study, point, t_out, rtol=None, h_max=None, repeats=1):
+def _run_sl(study, point, t_out, rtol=None, h_max=None, repeats=1):
     """SL at one point; ``(result dict, seconds)``."""
-    return solve_sl(study, point_models(study, point), t_out, rtol, h_max, repeats)
+    return _solve_sl(study, _point_models(study, point), t_out, rtol, h_max, repeats)
 
 
-def run_mcs(study, point, model, n_samples, rtol_factor=1.0):
+def _run_mcs(study, point, model, n_samples, rtol_factor=1.0):
     """Monte Carlo at one point: ``(dataset, wall seconds)`` (same seed for both models)."""
-    block, bed, exc = point_models(study, point)
+    block, bed, exc = _point_models(study, point)
     numerics = {"rtol": rtol_factor * study.mcs[f"rtol_{model}"]}
     for key in ("h_max", "chunk_size"):
         if key in study.mcs:
@@ -177,11 +177,11 @@ def run_mcs(study, point, model, n_samples, rtol_factor=1.0):
                                          condensation=study.condensation.name, **numerics))
 
 
-def warm_up(study):
+def _warm_up(study):
     """Compile (or load from cache) the SL and MCS kernels so that no timing includes it."""
     fam = study.families[0]
     pt = Point("warm-up", fam.name, fam.kind, fam.omega_g, fam.zeta_g, fam.eps[0], 1e-6, float("nan"), 0)
-    block, bed, exc = point_models(study, pt)
+    block, bed, exc = _point_models(study, pt)
     t_short = output_times(study.dt * 4, study.dt)
     solve_moments(block, bed, exc, t_short, condensation=study.condensation)
     for model in MCS_MODELS:
@@ -234,7 +234,7 @@ def _stderr(msg):
     print(f"[tradeoff] {msg}", file=sys.stderr, flush=True)
 
 
-def measure_grid(study, points, t_out, progress=None):
+def _measure_grid(study, points, t_out, progress=None):
     """SL and both MCS models at every point: histories, costs and overturning counts."""
     n, nt = len(points), t_out.size
     hist = {q: np.full((len(METHODS), n, nt), np.nan) for q in QUANTITIES}
@@ -251,7 +251,7 @@ def measure_grid(study, points, t_out, progress=None):
     sl_k0 = np.full(n, np.nan)
     mcs_runs = {}
     for j, pt in enumerate(points):
-        res, sec = run_sl(study, pt, t_out, repeats=study.sl["timing_repeats"])
+        res, sec = _run_sl(study, pt, t_out, repeats=study.sl["timing_repeats"])
         hist["var_theta"][0, j] = res["var_theta"]
         hist["var_theta_dot"][0, j] = res["var_theta_dot"]
         p_upl[0, j] = res["p_uplift"]
@@ -262,7 +262,7 @@ def measure_grid(study, points, t_out, progress=None):
         sl_k0[j] = res["k_eq"][0]
         sl_margin[j] = res["min_k_eq"] / res["k_eq"][0]
         for m, model in enumerate(MCS_MODELS):
-            ds, sec = run_mcs(study, pt, model, study.mcs["samples"])
+            ds, sec = _run_mcs(study, pt, model, study.mcs["samples"])
             mcs_runs[(j, model)] = (ds, sec)
             row = 1 + m
             for q in QUANTITIES:
@@ -277,7 +277,7 @@ def measure_grid(study, points, t_out, progress=None):
             "sl_margin": sl_margin, "sl_min_k_eq": sl_min_k, "sl_k_eq0": sl_k0, "mcs_runs": mcs_runs}
 
 
-def grid_errors(grid, t_out):
+def _grid_errors(grid, t_out):
     """:func:`compare` for every comparison x quantity x point; dict of arrays."""
     n = grid["cost"].shape[1]
     keys = ("peak_estimate", "peak_reference", "peak_rel_error", "peak_rel_se", "peak_significant",
@@ -297,7 +297,7 @@ def grid_errors(grid, t_out):
     return out
 
 
-def measure_convergence(study, points, grid, t_out, progress=None):
+def _measure_convergence(study, points, grid, t_out, progress=None):
     """MCS peak variance, SE and cost vs sample count and vs rtol factor at the chosen points."""
     cv = study.convergence
     idx = [next(j for j, p in enumerate(points) if (p.family, p.eps, p.index) == key) for key in cv["points"]]
@@ -315,7 +315,7 @@ def measure_convergence(study, points, grid, t_out, progress=None):
                 if n_s == study.mcs["samples"]:
                     ds, sec = grid["mcs_runs"][(j, model)]
                 else:
-                    ds, sec = run_mcs(study, points[j], model, n_s)
+                    ds, sec = _run_mcs(study, points[j], model, n_s)
                     _log(progress, f"convergence {points[j].name}: {model} n={n_s} {sec:.1f} s")
                 runs[n_s] = (ds, sec)
                 out["peak"][a, b, c], out["peak_se"][a, b, c] = peak_with_se(_history(ds, "var_theta"),
@@ -328,7 +328,7 @@ def measure_convergence(study, points, grid, t_out, progress=None):
                 if f == 1.0:
                     ds, sec = runs[cv["rtol_samples"]]
                 else:
-                    ds, sec = run_mcs(study, points[j], model, cv["rtol_samples"], rtol_factor=f)
+                    ds, sec = _run_mcs(study, points[j], model, cv["rtol_samples"], rtol_factor=f)
                     _log(progress, f"tolerance {points[j].name}: {model} rtol x {f:g} {sec:.1f} s")
                 out["tol_peak"][a, b, c], out["tol_peak_se"][a, b, c] = peak_with_se(
                     _history(ds, "var_theta"), _history(ds, "var_theta_se"))
@@ -341,16 +341,16 @@ def measure_convergence(study, points, grid, t_out, progress=None):
     return out
 
 
-def measure_sl_numerics(study, points, t_out):
+def _measure_sl_numerics(study, points, t_out):
     """SL numerical error (vs ``reference_rtol``) and cost per point over rtol and h_max settings."""
-    ref = [run_sl(study, p, t_out, rtol=study.sl["reference_rtol"])[0] for p in points]
+    ref = [_run_sl(study, p, t_out, rtol=study.sl["reference_rtol"])[0] for p in points]
     settings = [("rtol", r, None) for r in study.sl["rtol_sweep"]]
     settings += [("h_max", study.sl["rtol"], h) for h in study.sl["h_max_sweep"]]
     n = len(points)
     out = {k: np.full((len(settings), n), np.nan) for k in ("cost", "peak_err", "time_avg_err", "n_steps")}
     for s, (_, rtol, h_max) in enumerate(settings):
         for j, p in enumerate(points):
-            res, sec = run_sl(study, p, t_out, rtol=rtol, h_max=h_max, repeats=study.sl["timing_repeats"])
+            res, sec = _run_sl(study, p, t_out, rtol=rtol, h_max=h_max, repeats=study.sl["timing_repeats"])
             out["cost"][s, j] = sec
             out["n_steps"][s, j] = res["n_steps"]
             out["peak_err"][s, j] = relative_difference(res["peak_var_theta"], ref[j]["peak_var_theta"])
@@ -359,7 +359,7 @@ def measure_sl_numerics(study, points, t_out):
     fam_costs = []
     for fam in study.families:
         sel = [p for p in points if p.family == fam.name]
-        _, sec = solve_sl(study, point_models(study, sel), t_out, repeats=study.sl["timing_repeats"])
+        _, sec = _solve_sl(study, _point_models(study, sel), t_out, repeats=study.sl["timing_repeats"])
         fam_costs.append((sec, len(sel)))
     batched = sum(s for s, _ in fam_costs) / sum(k for _, k in fam_costs)
     out["settings"] = settings
@@ -368,7 +368,7 @@ def measure_sl_numerics(study, points, t_out):
 
 
 # ============================================================================ dataset
-def build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time):
+def _build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time):
     """Assemble every measurement in one labelled :class:`xarray.Dataset`; units and long names
     from :data:`screening.schema.TRADEOFF`."""
     cv = study.convergence
@@ -477,7 +477,7 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     ``study_path`` may also be a parsed :class:`TradeoffStudy`; outputs are named after the
     study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress``
     is a callable taking one line of text (default: stderr) or None.  Returns
-    ``(dataset, paths, rules)``: the dataset of :func:`build_dataset`, the dict of written files
+    ``(dataset, paths, rules)``: the dataset of :func:`_build_dataset`, the dict of written files
     and the rules of :func:`~screening.analysis.metrics.derive_rules`.  A bad study file raises
     :class:`~screening.workflow.config.StudyError` before any work, and nothing is written.
 
@@ -529,16 +529,16 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     start = time.perf_counter()
     previous = set_threads(study.mcs["threads"])
     try:
-        warm_up(study)
+        _warm_up(study)
         t_out = output_times(study.t_end, study.dt)
-        points = build_points(study, progress)
-        grid = measure_grid(study, points, t_out, progress)
-        errors = grid_errors(grid, t_out)
-        conv = measure_convergence(study, points, grid, t_out, progress)
-        numerics = measure_sl_numerics(study, points, t_out)
+        points = _build_points(study, progress)
+        grid = _measure_grid(study, points, t_out, progress)
+        errors = _grid_errors(grid, t_out)
+        conv = _measure_convergence(study, points, grid, t_out, progress)
+        numerics = _measure_sl_numerics(study, points, t_out)
     finally:
         set_threads(previous)
-    ds = build_dataset(study, points, t_out, grid, errors, conv, numerics, time.perf_counter() - start)
+    ds = _build_dataset(study, points, t_out, grid, errors, conv, numerics, time.perf_counter() - start)
     paths, rules = write_reports(study, ds, out_dir, _stem(study))
     return ds, paths, rules
 

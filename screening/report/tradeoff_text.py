@@ -1,6 +1,6 @@
 """Text reports of the speed-accuracy trade study: markdown tables, CSV rows, rules and the summary.
 
-Everything here reads a trade-study dataset (:func:`screening.analysis.tradeoff.build_dataset`, or a
+Everything here reads a trade-study dataset (made by :func:`screening.analysis.tradeoff.run_tradeoff`, or a
 saved file through :func:`~screening.analysis.tradeoff.from_file_layout`) and the rules of
 :func:`screening.analysis.metrics.derive_rules`; nothing is recomputed.
 """

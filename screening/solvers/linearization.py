@@ -48,7 +48,7 @@ def _same(a, b):
     return np.shape(a) == np.shape(b) and np.array_equal(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
 
 
-def labelled_fields(block, foundation, excitation):
+def _labelled_fields(block, foundation, excitation):
     """The model parameters by name as DataArrays aligned on their dimensions (not yet broadcast).
 
     A default ``I_cm`` (the block's uniform-rectangle value of its ``m``, ``b``, ``h``) is derived
@@ -75,26 +75,26 @@ def labelled_fields(block, foundation, excitation):
     return fields
 
 
-def broadcast_fields(fields):
+def _broadcast_fields(fields):
     """``(dims, arrays)``: the fields broadcast by dimension name, as numpy arrays on ``dims``."""
     arrays = xr.broadcast(*fields.values())
     dims = arrays[0].dims if arrays else ()
     return dims, {name: np.array(a.transpose(*dims).values, dtype=float) for name, a in zip(fields, arrays)}
 
 
-def with_fields(obj, arrays):
+def _with_fields(obj, arrays):
     """A copy of a model object whose fields named in ``arrays`` are replaced (the envelope's too)."""
     names = {f.name for f in dataclasses.fields(obj)}
     changes = {name: value for name, value in arrays.items() if name in names and name != "envelope"}
     if "envelope" in names:
-        changes["envelope"] = with_fields(obj.envelope, arrays)
+        changes["envelope"] = _with_fields(obj.envelope, arrays)
     return dataclasses.replace(obj, **changes)
 
 
-def on_own_dims(function, fields, names, block, foundation):
+def _on_own_dims(function, fields, names, block, foundation):
     """``function(block, foundation)`` on the grid of the parameters ``names`` only, as a DataArray."""
-    dims, arrays = broadcast_fields({name: fields[name] for name in names})
-    value = function(with_fields(block, arrays), with_fields(foundation, arrays))
+    dims, arrays = _broadcast_fields({name: fields[name] for name in names})
+    value = function(_with_fields(block, arrays), _with_fields(foundation, arrays))
     return xr.DataArray(np.broadcast_to(value, arrays[names[0]].shape), dims=dims)
 
 
@@ -169,18 +169,18 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     """
     cond = condensations.get(condensation)
     t = output_times(t_end, dt)
-    fields = labelled_fields(block, foundation, excitation)
-    dims, arrays = broadcast_fields(fields)
-    point_block, point_foundation = with_fields(block, arrays), with_fields(foundation, arrays)
+    fields = _labelled_fields(block, foundation, excitation)
+    dims, arrays = _broadcast_fields(fields)
+    point_block, point_foundation = _with_fields(block, arrays), _with_fields(foundation, arrays)
     structure = list(numeric_fields(block, foundation))
-    derived = {"theta_ul": on_own_dims(cond.uplift_threshold, fields, structure, block, foundation),
-               "slenderness": on_own_dims(lambda blk, _: blk.slenderness, fields, ["b", "h"], block, foundation)}
-    res = solve_moments(point_block, point_foundation, with_fields(excitation, arrays), t, rtol=rtol,
+    derived = {"theta_ul": _on_own_dims(cond.uplift_threshold, fields, structure, block, foundation),
+               "slenderness": _on_own_dims(lambda blk, _: blk.slenderness, fields, ["b", "h"], block, foundation)}
+    res = solve_moments(point_block, point_foundation, _with_fields(excitation, arrays), t, rtol=rtol,
                         condensation=cond)
     attrs = {**model_labels(foundation, excitation), "condensation": cond.name, "condensation_note": cond.description,
              "method": METHOD, "rtol": float(rtol)}
     if type(cond).capacity_angle is not Condensation.capacity_angle:
-        capacity = on_own_dims(cond.capacity_angle, fields, structure, block, foundation)
+        capacity = _on_own_dims(cond.capacity_angle, fields, structure, block, foundation)
         peak = xr.DataArray(res["peak_var_theta"], dims=dims)
         with np.errstate(invalid="ignore"):         # eq. (58) with the capacity angle in place of theta_ul
             beyond = xr.where(np.isfinite(capacity), xr.apply_ufunc(uplift_occupancy, capacity, peak), 0.0)

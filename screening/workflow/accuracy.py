@@ -46,7 +46,7 @@ class Stage(NamedTuple):
     progress: bool
 
 
-def point_table(stage):
+def _point_table(stage):
     """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
     features of the correction, condensation and eps, and SL's peaks."""
     from screening.analysis.trust import trust_indicators
@@ -90,7 +90,7 @@ def escalate(stage):
 
     The points whose trust band cannot promise ``[accuracy] target`` are ordered to cover the grid's
     features, given a Monte Carlo model each (stiff-bed, condensed or coupled, by their measured
-    validity) and run wave by wave within ``budget_s`` (:func:`escalation_runs`); the linearization's
+    validity) and run wave by wave within ``budget_s`` (:func:`_escalation_runs`); the linearization's
     error learned at the escalated points then gives a best estimate of the peak variances at every
     point (:func:`screening.analysis.correction.best_estimates`).
 
@@ -141,14 +141,14 @@ def escalate(stage):
     from screening.status import BestMethod, EscalationEstimator, EscalationModel
 
     acc = stage.study.accuracy
-    pts = point_table(stage)
+    pts = _point_table(stage)
     features = point_features(pts["features"])
     candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
     order = esc.cover_points(features, candidates, stage.result.peak_p_uplift, esc.MAX_POINTS)
     models = escalation_models(stage, order, esc.escalation_model(
         pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
         esc.condensed_cells(shipped_calibration(), acc.target))[order])
-    results, cost, spent, failed = escalation_runs(stage, order, models)
+    results, cost, spent, failed = _escalation_runs(stage, order, models)
     done = [j for j in range(len(order)) if j in results]
     escalated, models = order[done], models[done]
     runs = [results[j] for j in done]
@@ -208,7 +208,7 @@ def escalation_models(stage, order, calibrated):
     return auto_escalation_model(calibrated, chosen)
 
 
-def escalation_runs(stage, order, models):
+def _escalation_runs(stage, order, models):
     """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within the budget.
 
     The budget is planned on the deterministic cost model (:func:`~screening.analysis.escalation.estimated_cost`

@@ -17,7 +17,7 @@ is laid out for xarray and CF, and CDO cannot use it as it is (measured with CDO
 So the CDO file has ``t`` first and unlimited with :data:`screening.schema.CDO_TIME` (the same
 seconds, from a placeholder reference date), no ``coordinates`` attributes (the parameters stay
 variables with their units), string variables as attributes of their dimension's variable
-(:func:`string_attribute_target`), ``p_exceed`` as one variable per threshold, and at most
+(:func:`_string_attribute_target`), ``p_exceed`` as one variable per threshold, and at most
 :data:`MAX_GRID_DIMS` grid dimensions (``select`` fixes the others).  The swept parameters are
 CDO's z (levels: ``sellevel`` by value), y and x (``selindexbox``).
 """
@@ -165,7 +165,7 @@ def select(ds, selection):
     return ds
 
 
-def string_attribute_target(name, dims, variables):
+def _string_attribute_target(name, dims, variables):
     """The variable that carries string variable ``name`` (on ``dims``) as an attribute in the CDO file:
     ``<x>`` for ``<x>_name``, else the coordinate variable of its dimension (``None``: a global attribute)."""
     if name.endswith("_name") and name[:-5] in variables:
@@ -175,7 +175,7 @@ def string_attribute_target(name, dims, variables):
     return None
 
 
-def grid_chunks(shape, row_values):
+def _grid_chunks(shape, row_values):
     """Chunks over the grid ``shape`` of a variable with ``row_values`` values per point (C-order runs of
     points, :data:`BLOCK_VALUES` values at most when the shape allows), and the points per block: whole
     chunks of about :data:`BLOCK_VALUES` values, so that every chunk is written once, in full."""
@@ -286,7 +286,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
             chunks = {}
             if on_grid:
                 row = math.prod(ds.sizes[d] for d in extra)
-                grid_chunk, step = grid_chunks(shape, row)
+                grid_chunk, step = _grid_chunks(shape, row)
                 sizes = (1,) + grid_chunk if extra == ("t",) else grid_chunk + tuple(ds.sizes[d] for d in extra)
                 chunks = {"chunksizes": sizes, "chunk_cache": 2 * dtype.itemsize * math.prod(sizes)}
             out = nc.createVariable(name, dtype, dims, fill_value=fill, **storage, **chunks)
@@ -307,7 +307,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
                     out[...] = values
         labels = {}
         for name, v in strings.items():
-            target = string_attribute_target(name, v.dims, nc.variables)
+            target = _string_attribute_target(name, v.dims, nc.variables)
             text = json.dumps([str(s) for s in np.atleast_1d(v.values)], ensure_ascii=False)
             if target is None:
                 labels[name] = text
@@ -320,7 +320,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
 
 def _write_per_threshold(nc, name, v, thresholds, dtype, fill, attrs, grid, shape, storage):
     """``name`` on ``grid + (threshold,)`` as the variables ``<name>_<i>``, one per threshold."""
-    grid_chunk, step = grid_chunks(shape, thresholds.size)
+    grid_chunk, step = _grid_chunks(shape, thresholds.size)
     chunks = {"chunksizes": grid_chunk, "chunk_cache": 2 * dtype.itemsize * math.prod(grid_chunk)} if shape else {}
     outs = []
     for i, value in enumerate(np.asarray(thresholds.values, dtype=float)):

@@ -209,7 +209,7 @@ def _levels(value, im):
     return tuple(float(v) for v in value)
 
 
-def run_record(block, foundation, record, model="coupled", condensation="paper", period=None):
+def _run_record(block, foundation, record, model="coupled", condensation="paper", period=None):
     """One record: ``dict`` of the peak ``|theta|``, overturned/diverged flags, overturning time and the
     record's intensity measures."""
     from screening.analysis.intensity import record_measures
@@ -288,7 +288,7 @@ def read_cloud_records(cloud):
     return records
 
 
-def failed_record(period=None):
+def _failed_record(period=None):
     """The row of a record whose task failed: NaN values, ``diverged`` (left out of the fit)."""
     from screening.analysis.intensity import PERIOD_MEASURES, RECORD_MEASURES
 
@@ -298,11 +298,11 @@ def failed_record(period=None):
     return row
 
 
-def record_rows(block, foundation, records, model, condensation, period, client=None, progress=None):
-    """``run_record`` for every record, in this process (``client`` None) or as one dask task per record.
+def _record_rows(block, foundation, records, model, condensation, period, client=None, progress=None):
+    """``_run_record`` for every record, in this process (``client`` None) or as one dask task per record.
 
     Returns ``(rows, failures)``: one dict per record in the order given, and the messages of the
-    records whose task failed (their rows come from :func:`failed_record`)."""
+    records whose task failed (their rows come from :func:`_failed_record`)."""
     from screening.workflow.errors import exception_line
     from screening.workflow.interrupt import interruptible
 
@@ -314,21 +314,21 @@ def record_rows(block, foundation, records, model, condensation, period, client=
     rows, failures = [None] * len(records), []
     if client is None:
         for i, rec in enumerate(records):
-            rows[i] = run_record(block, foundation, rec, model, condensation, period)
+            rows[i] = _run_record(block, foundation, rec, model, condensation, period)
             said(i, rows[i])
         return rows, failures
     from distributed import as_completed
 
     from screening.workflow.execution import TASK_RETRIES
 
-    pending = {client.submit(run_record, block, foundation, rec, model, condensation, period, pure=False,
+    pending = {client.submit(_run_record, block, foundation, rec, model, condensation, period, pure=False,
                              retries=TASK_RETRIES): i for i, rec in enumerate(records)}
     for fut in interruptible(as_completed(list(pending), loop=client.loop)):
         i = pending.pop(fut)
         try:
             rows[i] = fut.result()
         except Exception as exc:                       # noqa: BLE001 - recorded, the record is left out
-            rows[i] = failed_record(period)
+            rows[i] = _failed_record(period)
             failures.append(f"record {records[i].name} failed: {exception_line(exc)}")
         fut.release()
         said(i, rows[i])
@@ -398,9 +398,9 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     if records is None:
         records = read_cloud_records(cloud)
     mc = model_choice.resolve(cloud.model, block, foundation)           # "auto": once, for this block and bed
-    rows, failures = record_rows(block, foundation, records, cloud.model,
-                                 chosen.condensation if mc.uses_condensation else "paper", cloud.period,
-                                 client, progress)
+    rows, failures = _record_rows(block, foundation, records, cloud.model,
+                                  chosen.condensation if mc.uses_condensation else "paper", cloud.period,
+                                  client, progress)
     ds, warnings = cloud_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
     ds.attrs["vertical_ground_motion"] = vertical_summary(cloud, records)
     lifted = [rec.name for rec, row in zip(records, rows) if row["lift_off"]]
@@ -581,8 +581,8 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
     records = read_cloud_records(cloud) if records is None else records
     scaled = [scaled_to(rec, cloud.im, level, cloud.period) for level in cloud.levels for rec in records]
     condensation = chosen.condensation if model_choice.resolve(cloud.model, block, foundation).uses_condensation else "paper"
-    rows, failures = record_rows(block, foundation, scaled, cloud.model, condensation, cloud.period, client,
-                                 progress)
+    rows, failures = _record_rows(block, foundation, scaled, cloud.model, condensation, cloud.period, client,
+                                  progress)
     ds, warnings = stripe_dataset(cloud, block, foundation, rows, [rec.name for rec in records])
     return ds, failures + warnings
 

@@ -2,11 +2,11 @@
 
 Each batch of points is **one** task, :func:`solve_batch`: a vectorised call of
 :func:`screening.solvers.moments.solve_moments` on arrays (there is no finer task graph); each
-Monte Carlo spot check is one task, :func:`spot_task`.  Tasks are submitted with
+Monte Carlo spot check is one task, :func:`_spot_task`.  Tasks are submitted with
 ``retries=TASK_RETRIES``; their results are plain dicts of numpy arrays (the batch record read
 by :class:`~screening.workflow.writer.ResultFile` and saved by
 :class:`~screening.workflow.store.PartialStore`).  Workers must be able to import
-:mod:`screening` (same environment).  For a zarr result, :func:`solve_and_store_batch` also writes the
+:mod:`screening` (same environment).  For a zarr result, :func:`_solve_and_store_batch` also writes the
 batch into its region of the store and marks it done: the workers then need the store's folder
 (the same path on a shared file system), and return only the batch's summary.
 """
@@ -150,11 +150,11 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     for name in derived_inputs:
         out[name] = OUTPUTS[name].cast(getattr(excitation, name), shape)
     if underivable is not None:
-        out = flag_points(out, np.broadcast_to(underivable, shape).reshape(n))
+        out = _flag_points(out, np.broadcast_to(underivable, shape).reshape(n))
     return out
 
 
-def flag_points(out, bad):
+def _flag_points(out, bad):
     """A batch result with the points ``bad`` (boolean per point) flagged ``beyond_float_range``: NaN
     values, zero counts, ``sl_trust`` untrusted (what :func:`failed_result` gives a failed batch)."""
     out = {name: np.array(value) for name, value in out.items()}
@@ -292,7 +292,7 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
             for name, value in (("uplift_acceleration", a_ul), ("p_rocking_start", p))}
 
 
-def solve_and_store_batch(target, batch, *solve_args):
+def _solve_and_store_batch(target, batch, *solve_args):
     """The dask task of a zarr result: :func:`solve_batch`, then its arrays written into the region of
     ``batch`` in the store and the batch marked done (:class:`~screening.workflow.store.RegionTarget`
     ``target``); returns what the client keeps of the batch
@@ -585,8 +585,8 @@ def spot_arrays(ds):
     return out
 
 
-def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None,
-              progress=None):
+def _spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None,
+               progress=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
     ``condensation`` (a :class:`screening.condensation.Condensation`) applies to a model that uses one
@@ -623,7 +623,7 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
     stays the plain one), and the cheap run's ``cheap_*`` results, the correlation of the influence values at the
     peak of var_theta and the :class:`~screening.status.EscalationEstimator` code.  Where the cheap model refuses
     the point (``ValueError`` before any work) the result is the plain one, with ``cheap_samples`` 0.
-    ``progress``: the expensive run's samples, as for :func:`spot_task`."""
+    ``progress``: the expensive run's samples, as for :func:`_spot_task`."""
     from screening.analysis.multifidelity import multifidelity_variance
     from screening.solvers.montecarlo import monte_carlo
     from screening.status import EscalationEstimator
@@ -657,7 +657,7 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
 
 def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, cheap=None,
                     progress=None):
-    """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks,
+    """The dask task of one escalated point: :func:`_spot_task` reduced to its peaks, per-sample peaks,
     the integration steps and synthesis grid points of all samples and whether the steps were the
     linearly implicit pair's (``n_steps``, ``n_grid``, ``rodas``, for the cost model) and the CPU time
     it took (``cpu_time`` [s], of the worker thread).
@@ -665,7 +665,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     ``cheap = (model, condensation, samples)``: a cheaper registered model also runs on the same ground
     motions (:func:`paired_escalation`); peak var_theta is then the two-fidelity estimate and the result
     carries the cheap run's per-sample peaks for the probabilities.  ``estimator`` says which estimate it is.
-    ``progress``: as for :func:`spot_task`.
+    ``progress``: as for :func:`_spot_task`.
 
     Parameters
     ----------
@@ -726,7 +726,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     ...        "var_theta_dot": np.array([0.0, 3e-2, 1e-2]), "var_theta_dot_se": np.array([0.0, 2e-3, 1e-3]),
     ...        "n_grid": 1000, "n_overturned": 0, "n_diverged": 0, "n_used": 8, "n_steps": 5000,
     ...        "peak_abs_theta": np.full(8, 0.02), "sample_state": np.zeros(8, np.int8)}
-    >>> with mock.patch(f"{__name__}.spot_task", return_value=run):
+    >>> with mock.patch(f"{__name__}._spot_task", return_value=run):
     ...     out = escalation_task(block, foundation, excitation, condensation, 8, "coupled", 0.1, 0.05, seed=0)
     >>> out["peak_var_theta"], out["peak_var_theta_se"], out["samples"]
     (np.float64(0.0002), np.float64(1e-05), np.int32(8))
@@ -736,7 +736,8 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
 
     start = time.thread_time()
     if cheap is None:
-        run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, progress=progress)
+        run = _spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
+                         progress=progress)
         extra = {"estimator": np.int8(EscalationEstimator.plain_monte_carlo), "cheap_samples": np.int32(0),
                  "correlation": np.float64(np.nan)}
     else:
@@ -759,7 +760,7 @@ def submit_escalation(client, study, flat_index, samples, model, key, cheap=None
     """Submit :func:`escalation_task` at flat grid index ``flat_index`` with ``samples`` samples of ``model``
     (a registered Monte Carlo model's name; ``cheap``: the paired model of :func:`escalation_task`; retried
     :data:`TASK_RETRIES` times); ``progress = (topic, run)``: the samples done are sent as worker events
-    (:func:`spot_task`)."""
+    (:func:`_spot_task`)."""
     index = tuple(int(i) for i in np.unravel_index(flat_index, study.shape))
     case, values = point_values(study, index)
     return client.submit(escalation_task, *build_models(study.cases[case], values, study.t_end),
@@ -835,7 +836,7 @@ def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
 # ============================================================================ submission
 def submit_batch(client, study, batch, key, target=None):
     """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times); with a
-    :class:`~screening.workflow.store.RegionTarget` ``target``, :func:`solve_and_store_batch`."""
+    :class:`~screening.workflow.store.RegionTarget` ``target``, :func:`_solve_and_store_batch`."""
     from screening.analysis.trust import trust_models
 
     case = study.cases[batch.case]
@@ -844,18 +845,18 @@ def submit_batch(client, study, batch, key, target=None):
             study.output.stored, study.fragility, trust_models(case.condensation_model.name), study.derived_inputs,
             underivable if np.any(underivable) else None, case_cutoff(case), wants_probabilities(study))
     if target is not None:
-        return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
+        return client.submit(_solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)
 
 
 def submit_spot(client, study, index, key, progress=None):
-    """Submit :func:`spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times);
+    """Submit :func:`_spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times);
     ``progress = (topic, spot)``: its samples are reported as worker events on ``topic``."""
     case, values = point_values(study, index)
     spec = study.mcs
     names = spot_linear_names(study)
     linear = (study.times, study.rtol, study.max_steps, names) if names else None
-    return client.submit(spot_task, *build_models(study.cases[case], values, study.t_end), study.cases[case].condensation_model,
+    return client.submit(_spot_task, *build_models(study.cases[case], values, study.t_end), study.cases[case].condensation_model,
                          spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, progress,
                          retries=TASK_RETRIES, pure=False, key=key)
 
@@ -1024,7 +1025,7 @@ def dask_client(workers=2, scheduler=None, client=None):
         return
     import dask
 
-    config = {**LOCAL_CLUSTER_CONFIG, "distributed.worker.multiprocessing-method": worker_start_method()}
+    config = {**LOCAL_CLUSTER_CONFIG, "distributed.worker.multiprocessing-method": _worker_start_method()}
     with dask.config.set(config), _local_client(workers) as c:
         yield c
 
@@ -1039,7 +1040,7 @@ LOCAL_CLUSTER_CONFIG = {"distributed.admin.low-level-log-length": 16}
 START_METHOD_VARIABLE = "DASK_DISTRIBUTED__WORKER__MULTIPROCESSING_METHOD"
 
 
-def worker_start_method():
+def _worker_start_method():
     """How the local cluster starts its worker processes: ``"fork"`` or ``"spawn"``.
 
     Forked workers start with this process's modules (numpy, numba, scipy, xarray, distributed,
@@ -1109,13 +1110,13 @@ def _local_client(workers):
         with Client(cluster, set_as_default=False) as c:
             yield c
     except KeyboardInterrupt:
-        stop_workers(cluster)
+        _stop_workers(cluster)
         raise
     finally:
         cluster.close()
 
 
-def stop_workers(cluster, timeout=0.5):
+def _stop_workers(cluster, timeout=0.5):
     """Stop the worker processes of a local ``cluster`` within about ``timeout`` [s] (after a Ctrl-C).
 
     A worker closes only once its running task is done, and a task holds the GIL for most of

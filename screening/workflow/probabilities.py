@@ -33,7 +33,7 @@ __all__ = ["CORRECTION_HISTORIES", "levels_at", "probabilities_line"]
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
 
 
-def monte_carlo_runs(study, escalated=None, spot_runs=None):
+def _monte_carlo_runs(study, escalated=None, spot_runs=None):
     """``[(flat index, model name, peak_abs_theta, sample_state, paired)]`` of the escalated points
     (``escalated``: ``(flat indices, models, runs)`` of :func:`screening.workflow.accuracy.escalate`) and the
     spot checks (``spot_runs``: ``(grid indices, results)``) of ``study``; ``paired``: ``(peak_abs_theta,
@@ -122,7 +122,7 @@ def levels_at(study, theta_ul, slenderness):
     return np.stack(cols, axis=-1)
 
 
-def corrected_estimates(study, res, points):
+def _corrected_estimates(study, res, points):
     """``(p, se)`` (points x levels) of the up-crossing of the moments rescaled to the best estimates at the
     flat indices ``points`` of the result ``res`` of ``study``; None where the result does not store the
     histories it needs."""
@@ -157,7 +157,7 @@ def corrected_estimates(study, res, points):
 
 def finish_probabilities(study, res, escalated=None, spot_runs=None):
     """Replace the workers' linearization estimates in the result ``res`` of ``study`` by the best ones and
-    write ``p_source``; ``escalated`` and ``spot_runs``: the Monte Carlo runs (:func:`monte_carlo_runs`).
+    write ``p_source``; ``escalated`` and ``spot_runs``: the Monte Carlo runs (:func:`_monte_carlo_runs`).
     Returns ``{source name: points}``."""
     from screening.analysis.probabilities import source_codes
 
@@ -172,7 +172,7 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
     source = choose_sources(res.status == PointStatus.ok, res.sl_trust, np.isfinite(low) & np.isfinite(high), best)
 
     corrected = np.flatnonzero(source == ProbabilitySource.corrected_linearization_gaussian)
-    estimate = corrected_estimates(study, res, corrected)
+    estimate = _corrected_estimates(study, res, corrected)
     if estimate is None:
         source[corrected] = ProbabilitySource.unreliable
     else:
@@ -182,7 +182,7 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
 
     levels = levels_at(study, res.read("theta_ul"), res.read("slenderness"))
     used = np.zeros(n)
-    for flat, model, peaks, state, paired in monte_carlo_runs(study, escalated, spot_runs):
+    for flat, model, peaks, state, paired in _monte_carlo_runs(study, escalated, spot_runs):
         state = np.asarray(state)
         valid = (state == SampleState.standing) | (state == SampleState.overturned)
         if valid.sum() <= used[flat]:

@@ -23,7 +23,7 @@
 Only the client touches the disk, so workers of a remote cluster need no shared file system --
 except for a zarr result (``out`` ending in ``.zarr``): the store is built in ``<out>.partial/`` by
 the workers, each writing and compressing the chunks of its own batches in place
-(:func:`screening.workflow.execution.solve_and_store_batch`) and marking them done; the client
+(:func:`screening.workflow.execution._solve_and_store_batch`) and marking them done; the client
 creates the store's metadata, keeps a few bytes per point, writes the spot checks and moves the
 finished store into place.  The store and its markers are the resume record of the batches.
 Workers of a remote cluster then need the folder at the same path (a shared file system).

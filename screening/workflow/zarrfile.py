@@ -399,7 +399,7 @@ class ZarrFormat:
             self.commit()
             import zarr
 
-            with warnings_ignored():
+            with _warnings_ignored():
                 zarr.consolidate_metadata(self.path, zarr_format=ZARR_FORMAT)
 
     # -- batches
@@ -436,7 +436,7 @@ def file_check(path):
     return [size, digest.hexdigest()]
 
 
-def store_entries(root):
+def _store_entries(root):
     """``(files, foreign)`` of the folder ``root``: the relative paths (``/``-separated) of its regular
     files other than the completion mark, and those of its entries that are neither a regular file
     nor a folder (links, FIFOs...)."""
@@ -461,7 +461,7 @@ def store_entries(root):
 def write_completion_mark(root):
     """Write the completion mark of the finished store ``root``: ``{"files": {path: [size, checksum]}}``
     of every file of the store.  Written last, atomically: a store without it was never finished."""
-    files, foreign = store_entries(root)
+    files, foreign = _store_entries(root)
     if foreign:
         raise OSError(0, f"the zarr store {root} holds {foreign[0]}, which is not a regular file")
     checks = {path: file_check(Path(root) / path) for path in files}
@@ -474,7 +474,7 @@ def write_completion_mark(root):
     os.replace(tmp, mark)
 
 
-def read_completion_mark(root):
+def _read_completion_mark(root):
     """The files ``{path: [size, checksum]}`` of the completion mark of ``root``, or ``None`` if it has
     none (or an unreadable one)."""
     try:
@@ -523,7 +523,7 @@ def store_problem(root, deep=True):
     >>> result = example_result()
     >>> folder = tempfile.TemporaryDirectory()
     >>> store = os.path.join(folder.name, "result.zarr")
-    >>> with warnings_ignored():
+    >>> with _warnings_ignored():
     ...     _ = result.to_zarr(store, zarr_format=3)
     >>> write_completion_mark(store)                  # what a finished run does last
     >>> store_problem(store) is None
@@ -533,7 +533,7 @@ def store_problem(root, deep=True):
     'its file peak_var_theta/c/0 is missing'
     >>> folder.cleanup()
     """
-    files = read_completion_mark(root)
+    files = _read_completion_mark(root)
     if files is None:
         return ("it has no completion mark: the store of an interrupted run (re-run the same command to "
                 "finish it) or one screening did not write")
@@ -553,8 +553,8 @@ def store_problem(root, deep=True):
 def foreign_files(root):
     """Entries of the folder ``root`` that screening did not write as a finished store (all of them
     if it has no completion mark); ``[]`` when it may be replaced."""
-    files, foreign = store_entries(root)
-    mark = read_completion_mark(root)
+    files, foreign = _store_entries(root)
+    mark = _read_completion_mark(root)
     if mark is None:
         return foreign + files or [COMPLETION_MARK + " (missing)"]
     return foreign + [f for f in files if f not in mark]
@@ -563,7 +563,7 @@ def foreign_files(root):
 def remove_store(root):
     """Delete the files of the finished store ``root`` its completion mark lists, the mark, and the
     folders left empty; anything else stays.  Returns whether ``root`` is gone."""
-    for path in read_completion_mark(root) or {}:
+    for path in _read_completion_mark(root) or {}:
         with contextlib.suppress(OSError, ValueError):
             os.unlink(Path(root) / path)
     with contextlib.suppress(OSError):
@@ -575,7 +575,7 @@ def remove_store(root):
 
 
 @contextlib.contextmanager
-def warnings_ignored():
+def _warnings_ignored():
     """zarr warns that consolidated metadata is not in the format 3 specification (yet): it is read by
     xarray and zarr-python, and optional for other readers."""
     import warnings
@@ -622,7 +622,7 @@ def open_zarr_result(path):
     >>> result = example_result()
     >>> folder = tempfile.TemporaryDirectory()
     >>> store = os.path.join(folder.name, "result.zarr")
-    >>> with warnings_ignored():
+    >>> with _warnings_ignored():
     ...     _ = result.to_zarr(store, zarr_format=3)
     >>> write_completion_mark(store)                  # what a finished run does last
     >>> with open_zarr_result(store) as ds:
@@ -632,7 +632,7 @@ def open_zarr_result(path):
     """
     import xarray as xr
 
-    with warnings_ignored():
+    with _warnings_ignored():
         return xr.open_zarr(path, zarr_format=ZARR_FORMAT, consolidated=None, chunks=None)
 
 
@@ -640,7 +640,7 @@ def read_attrs(path):
     """The global attributes of the store at ``path`` (a dict; empty if it has none)."""
     import zarr
 
-    with warnings_ignored():
+    with _warnings_ignored():
         return dict(zarr.open_group(path, mode="r").attrs)
 
 
@@ -654,7 +654,7 @@ def check_store(path, expected_dims, required):
     if problem:
         return problem
 
-    with warnings_ignored():
+    with _warnings_ignored():
         group = zarr.open_group(path, mode="r")
         arrays = dict(group.arrays())
     dims = {}
@@ -763,7 +763,7 @@ def export_netcdf(src, dst, complevel, history):
     >>> result = example_result()
     >>> folder = tempfile.TemporaryDirectory()
     >>> store = os.path.join(folder.name, "result.zarr")
-    >>> with warnings_ignored():
+    >>> with _warnings_ignored():
     ...     _ = result.to_zarr(store, zarr_format=3)
     >>> write_completion_mark(store)                  # what a finished run does last
     >>> export_netcdf(store, os.path.join(folder.name, "result.nc"), complevel=1, history="screening export")
@@ -778,7 +778,7 @@ def export_netcdf(src, dst, complevel, history):
     from screening.workflow.errors import read_values
     from screening.workflow.grid import history_chunks
 
-    with warnings_ignored():
+    with _warnings_ignored():
         group = zarr.open_group(src, mode="r")
         arrays = dict(group.arrays())
         attrs = dict(group.attrs)

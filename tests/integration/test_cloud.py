@@ -105,7 +105,7 @@ def test_cloud_on_dask_equals_the_serial_run(folder, client):
 def test_a_failed_record_task_is_kept_as_nan_and_left_out_of_the_fit(folder, client):
     from screening.model import Block, Foundation
     from screening.records import Record, read_record
-    from screening.workflow.cloud import cloud_dataset, record_rows
+    from screening.workflow.cloud import cloud_dataset, _record_rows
 
     cloud = load_cloud_study(folder / "d.toml") if (folder / "d.toml").exists() else None
     if cloud is None:
@@ -115,7 +115,7 @@ def test_a_failed_record_task_is_kept_as_nan_and_left_out_of_the_fit(folder, cli
     bad = Record(np.array([0.0, 1.0, 0.0]), 0.01, "bad")
     object.__setattr__(bad, "dt", -1.0)         # the reader refuses this; here a task meets it and fails
     block, bed = Block(8.67, 0.035, 0.21), Foundation(2.89e7, lam=8.95e8, eps=6e7)
-    rows, failures = record_rows(block, bed, [bad, *good], "coupled", "paper", None, client=client)
+    rows, failures = _record_rows(block, bed, [bad, *good], "coupled", "paper", None, client=client)
     assert len(failures) == 1 and failures[0].startswith("record bad failed: ValueError")
     assert rows[0]["diverged"] and np.isnan(rows[0]["peak_abs_theta"]) and np.isnan(rows[0]["pga"])
     ds, _ = cloud_dataset(cloud, block, bed, rows, ["bad"] + [r.name for r in good])

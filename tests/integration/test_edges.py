@@ -437,7 +437,7 @@ def probe():
     return signal.getsignal(signal.SIGINT) == signal.SIG_IGN, inherited
 
 def state():
-    method = execution.worker_start_method()
+    method = execution._worker_start_method()
     with execution.dask_client(2) as c:
         probes = list(c.run(probe).values())
         spot = c.submit(execution.warm_up_monte_carlo, pure=False).result(timeout=120)
@@ -471,12 +471,12 @@ def test_worker_start_method_set_for_dask_in_the_environment_is_used(monkeypatch
 
     monkeypatch.setenv(execution.START_METHOD_VARIABLE, "spawn")
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):   # as dask reads it at import
-        assert execution.worker_start_method() == "spawn"
+        assert execution._worker_start_method() == "spawn"
     monkeypatch.delenv(execution.START_METHOD_VARIABLE)
     import numba.np.ufunc.parallel as numba_parallel
 
     expected = "fork" if sys.platform.startswith("linux") and not numba_parallel._is_initialized else "spawn"
-    assert execution.worker_start_method() == expected
+    assert execution._worker_start_method() == expected
 
 
 # ----------------------------------------------------------------------------- readers and figures (B4, B6, B20)

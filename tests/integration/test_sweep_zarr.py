@@ -101,14 +101,14 @@ def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_pat
 
 
 def test_a_failed_batch_is_flagged_in_the_zarr_result(client, tmp_path, monkeypatch):
-    real = execution.solve_and_store_batch
+    real = execution._solve_and_store_batch
 
     def flaky(target, batch, *args):
         if batch.index == 1:
             raise FloatingPointError("synthetic failure")
         return real(target, batch, *args)
 
-    monkeypatch.setattr(execution, "solve_and_store_batch", flaky)
+    monkeypatch.setattr(execution, "_solve_and_store_batch", flaky)
     report = run_sweep(parse_study(GRID), tmp_path / "f.zarr", client=client, batch_size=5, progress=False,
                        log=quiet)
     assert report.n_failed_batches == 1

@@ -22,7 +22,7 @@ CHEAP = (102, 867)
 @pytest.fixture(scope="module")
 def fresh():
     u = atlas.design(1024, seed=0)
-    return [atlas_run.evaluate_point(i, u[i], samples=16, seed=0) for i in CHEAP]
+    return [atlas_run._evaluate_point(i, u[i], samples=16, seed=0) for i in CHEAP]
 
 
 def test_shipped_atlas_has_the_structure_the_assembler_makes(shipped, fresh):
@@ -79,8 +79,8 @@ def test_recomputed_points_match_the_shipped_ones_within_sampling_error(shipped)
     for i in CHEAP:
         if i not in shipped["point"].values:
             continue
-        r = atlas_run.evaluate_point(i, u[i], samples=int(shipped.attrs["samples"]),
-                                     seed=int(shipped.attrs["design_seed"]))
+        r = atlas_run._evaluate_point(i, u[i], samples=int(shipped.attrs["samples"]),
+                                      seed=int(shipped.attrs["design_seed"]))
         s = shipped.sel(point=i)
         se = float(s["mc_peak_var_theta_se"])
         # the same seeds: equal up to the integrator's rounding; 3 standard errors bound a rebuilt toolchain

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from screening.workflow import cdofile
-from screening.workflow.cdofile import parse_selection, select, string_attribute_target
+from screening.workflow.cdofile import parse_selection, select, _string_attribute_target
 from screening.workflow.errors import SweepError
 
 
@@ -62,17 +62,17 @@ def test_attributes_netcdf_cannot_hold_become_json_and_ragged_flags_are_refused(
 
 def test_strings_go_to_the_variable_they_name_or_their_dimension():
     variables = {"case", "spot_case"}
-    assert string_attribute_target("case_name", ("case",), variables) == "case"
-    assert string_attribute_target("spot_case_name", ("spot",), variables) == "spot_case"
-    assert string_attribute_target("excitation", ("case",), variables) == "case"
-    assert string_attribute_target("label", ("point",), variables) is None
+    assert _string_attribute_target("case_name", ("case",), variables) == "case"
+    assert _string_attribute_target("spot_case_name", ("spot",), variables) == "spot_case"
+    assert _string_attribute_target("excitation", ("case",), variables) == "case"
+    assert _string_attribute_target("label", ("point",), variables) is None
 
 
 @pytest.mark.parametrize("shape", [(7,), (3, 5), (2, 3, 4), (), (40, 1000)])
 @pytest.mark.parametrize("row", [1, 4, 401])
 def test_blocks_are_whole_chunks_of_bounded_size_covering_every_point_once(monkeypatch, shape, row):
     monkeypatch.setattr(cdofile, "BLOCK_VALUES", 4000)
-    chunks, step = cdofile.grid_chunks(shape, row)
+    chunks, step = cdofile._grid_chunks(shape, row)
     per_chunk = math.prod(chunks)
     assert step % per_chunk == 0 and (step * row <= 4000 or step == per_chunk == 1)
     seen = np.zeros(shape, dtype=int)
