@@ -185,6 +185,17 @@ def transfer_ratio_jit(log_amp, log_eta, amp):
 
 
 @numba.njit(cache=True, inline="always")
+def _transfer(sp, log_amp, log_eta, amp, y0, y1):
+    """``(theta, theta_dot)`` after a corner transfer of half-cycle amplitude ``amp`` [rad]: the rate scaled by
+    ``sqrt(eta)``, and, where the transfer is located, the rotation past zero with it (the crossing, passed in
+    full contact, at the reduced rate)."""
+    r = math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+    if sp.locate != 0.0:
+        y0 *= r
+    return y0, y1 * r
+
+
+@numba.njit(cache=True, inline="always")
 def _phase(sp, a0):
     """Row of :data:`COUNT_ROWS` of an adaptive step starting at ``|theta| = a0`` [rad]."""
     tu = sp.theta_ul
@@ -346,9 +357,7 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                         counts[7, 1] += 1
                 if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
                     if amp > tu:
-                        y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
-                        if sp.locate != 0.0:
-                            y0 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                        y0, y1 = _transfer(sp, log_amp, log_eta, amp, y0, y1)
                     amp = 0.0
                 a0 = abs(y0)
                 amp = max(amp, a0)
@@ -457,9 +466,7 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
             counts[7, 1] += 1
         if old0 * y0 < 0.0 or (old0 == 0.0 and y0 != 0.0):
             if amp > tu:
-                y1 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
-                if sp.locate != 0.0:                # the crossing, passed in full contact, at the reduced rate
-                    y0 *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                y0, y1 = _transfer(sp, log_amp, log_eta, amp, y0, y1)
                 k1_0 = y1
                 k1_1 = _accel(sp, cp, y0, y1, acc_end)
             amp = 0.0
