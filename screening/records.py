@@ -43,6 +43,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from screening.atomicfile import atomic_open
 from screening.validation import input_path, read_input_text
 from screening import limits
 
@@ -856,7 +857,8 @@ def write_at2(path, record, title="screening synthetic record", station="synthet
     Parameters
     ----------
     path : str or path-like
-        The file to write (overwritten).
+        The file to write [-]; an existing file is replaced atomically (a reader never sees half a
+        record, and a failed write leaves the old file as it was).
     record : Record
         The record; its accelerations [m/s2] are written in g (:data:`STANDARD_GRAVITY`).
     title : str, default "screening synthetic record"
@@ -890,7 +892,7 @@ def write_at2(path, record, title="screening synthetic record", station="synthet
     [0.0, 9.80665, -4.903325]
     """
     acc_g = record.acceleration / STANDARD_GRAVITY
-    with open(path, "w", encoding="utf-8") as fh:
+    with atomic_open(path, encoding="utf-8") as fh:         # a reader never sees half a record
         fh.write("PEER NGA STRONG MOTION DATABASE RECORD\n")
         fh.write(f"{title}, {station}\n")
         fh.write("ACCELERATION TIME SERIES IN UNITS OF G\n")

@@ -102,3 +102,27 @@ def test_expand_records_folder_and_glob(tmp_path):
     assert [p.split("/")[-1] for p in expand_records("*.at2", root=str(tmp_path))] == ["b.at2"]
     with pytest.raises(ValueError, match="match no file"):
         expand_records("*.xyz", root=str(tmp_path))
+
+
+class _FailsAfterFirstLine(np.ndarray):
+    """An acceleration array whose second block of five values cannot be read (a write that fails half-way)."""
+
+    def __getitem__(self, index):
+        if isinstance(index, slice) and (index.start or 0) >= 5:
+            raise RuntimeError("disk full")
+        return np.asarray(self).__getitem__(index)
+
+
+def test_write_at2_failure_leaves_old_file(tmp_path):
+    path = tmp_path / "x.at2"
+    write_at2(path, Record(ACC_G * STANDARD_GRAVITY, DT))
+    before = path.read_bytes()
+
+    class _Broken:
+        acceleration = (ACC_G[::-1] * STANDARD_GRAVITY).view(_FailsAfterFirstLine)
+        dt = DT
+
+    with pytest.raises(RuntimeError, match="disk full"):
+        write_at2(path, _Broken())
+    assert path.read_bytes() == before                               # the old record, whole
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.at2"]   # no temporary file left behind
