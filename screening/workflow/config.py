@@ -1314,6 +1314,38 @@ def _foundation(case, p):
     return Foundation(k=p["k"], eps=p["eps"], law=case.contact, **{damping: p[damping]})
 
 
+def case_block_and_foundation(case, values):
+    """The block and the bed of ``case`` with ``values`` merged in (no excitation: nothing to derive).
+
+    Parameters
+    ----------
+    case : Case
+        A resolved case (:func:`resolve_case`).
+    values : dict
+        Swept parameters by name (SI: ``m`` [kg], ``b``, ``h`` [m], ``k`` [N m-2], ...), scalars or arrays.
+
+    Returns
+    -------
+    block : screening.model.Block
+    foundation : screening.model.Foundation
+        With the case's contact law and its damping parameter.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> block, foundation = case_block_and_foundation(resolve_case("", tables, {}, ""), {"b": 0.05})
+    >>> float(block.b), float(foundation.k)
+    (0.05, 28900000.0)
+    """
+    p = {**case.params, **values}
+    return _block(p), _foundation(case, p)
+
+
 def build_models(case, values, t_end=None):
     """Model objects for ``case`` with ``values`` (swept parameters, scalars or arrays) merged in.
 
