@@ -407,7 +407,8 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
 @click.option("--quiet", is_flag=True, help="no progress lines on stderr")
 @click.option("--from-nc", is_flag=True, help="re-render reports from the saved netCDF instead of recomputing")
 def cmd_tradeoff(study, out_dir, quiet, from_nc):
-    from screening.analysis.tradeoff import load_tradeoff_study, rerender_reports, run_tradeoff
+    from screening.analysis.tradeoff import rerender_reports, run_tradeoff
+    from screening.analysis.tradeoff_study import load_tradeoff_study
     from screening.report.tradeoff_text import summary_text
     from screening.workflow.config import StudyError
 

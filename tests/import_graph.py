@@ -361,7 +361,8 @@ def name_uses(graph):
         for node in ast.walk(tree):
             if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
                 uses.append(Use(source, node.lineno, aliases[node.value.id], node.attr))
-    return [u for u in dict.fromkeys(uses) if u.target != u.source and u.name != "__all__"]
+    return [u for u in dict.fromkeys(uses)
+            if u.target != u.source and not (u.name.startswith("__") and u.name.endswith("__"))]
 
 
 def private_name_uses(graph):
@@ -371,11 +372,13 @@ def private_name_uses(graph):
 
 def undeclared_name_uses(graph):
     """Names one module takes from a public module that are not in that module's ``__all__``: its
-    internals, or names it merely imported (to be taken from their home)."""
+    internals, or names it merely imported (to be taken from their home).  A package ``__init__``
+    gathering its own package's names is not counted."""
     public = set(public_modules(graph))
     declared = {m: declared_all(graph.modules[m]) for m in public}
     return [u for u in name_uses(graph) if u.target in public and not _is_private(u.name)
-            and declared[u.target] is not None and u.name not in declared[u.target]]
+            and declared[u.target] is not None and u.name not in declared[u.target]
+            and not (graph.modules[u.source].name == "__init__.py" and u.target.startswith(u.source + "."))]
 
 
 def test_modules(root=ROOT / "tests"):

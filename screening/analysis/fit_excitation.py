@@ -586,7 +586,8 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
     ['0.25', '9.27', '9.65']
     """
     from screening.analysis.intensity import spectral_moments
-    from screening.model.excitation import KanaiTajimi, WhiteNoise
+    from screening.excitations.kanai_tajimi import KanaiTajimi
+    from screening.excitations.white import WhiteNoise
 
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt

@@ -21,8 +21,8 @@ __all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NU
            "table", "check_keys", "required", "is_number", "check_value", "check_integer", "short_repr", "integer",
            "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
            "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
-           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "build_models", "case_cutoff",
-           "build_point_models"]
+           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "case_block_and_foundation",
+           "build_models", "case_cutoff", "build_point_models"]
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport

@@ -29,7 +29,7 @@ from screening.solvers.outputs import HISTORY_VARIABLES, OUTPUTS, client_variabl
 from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError, exception_line
 from screening.workflow.grid import batch_point_models, point_values
-from screening.workflow.study import build_models, case_cutoff
+from screening.workflow.config import build_models, case_cutoff
 
 __all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "SPOT_HISTORIES", "SPOT_LINEAR", "solve_batch", "batch_intensity",
            "batch_rocking_start", "batch_trust", "batch_probabilities", "wants_probabilities", "failed_result",
@@ -933,7 +933,7 @@ def warm_up():
     """
     start = time.perf_counter()
     from screening.model import Block, Foundation
-    from screening.model.excitation import WhiteNoise
+    from screening.excitations.white import WhiteNoise
 
     solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
     return time.perf_counter() - start
@@ -943,7 +943,7 @@ def warm_up_monte_carlo():
     """Compile the Monte Carlo kernels on a worker (both models, two short samples); returns the time [s]."""
     start = time.perf_counter()
     from screening.model import Block, Foundation
-    from screening.model.excitation import WhiteNoise
+    from screening.excitations.white import WhiteNoise
     from screening.solvers.montecarlo import monte_carlo
 
     for model in ("coupled", "condensed"):

@@ -96,17 +96,13 @@ UNTESTED = {
 }
 
 
-def _has_test(module, tests):
-    """``a.b`` is tested by ``test_b.py`` or, where names repeat across packages (test basenames are
-    unique in this suite), by ``test_a_b.py``."""
-    return f"test_{module.rsplit('.', 1)[-1]}" in tests or f"test_{module.replace('.', '_')}" in tests
-
-
 def test_every_source_module_has_a_test_module_of_its_own_name():
-    tests = {p.stem for p in (ROOT / "tests").rglob("test_*.py")}
+    """``a.b`` is tested by ``test_b.py`` or ``test_a_b.py``; a package-internal ``a._b`` by ``test_b.py``
+    (:func:`import_graph.has_test_module`)."""
+    tests = ig.test_modules()
     graph = ig.read_graph()
     modules = [m for m, p in graph.modules.items() if m and p.name != "__init__.py"]
-    missing = sorted(m for m in modules if not _has_test(m, tests) and m not in UNTESTED)
+    missing = sorted(m for m in modules if not ig.has_test_module(m, tests) and m not in UNTESTED)
     assert not missing, missing
-    stale = sorted(m for m in UNTESTED if m not in modules or _has_test(m, tests))
+    stale = sorted(m for m in UNTESTED if m not in modules or ig.has_test_module(m, tests))
     assert not stale, stale
