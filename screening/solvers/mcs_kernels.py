@@ -260,7 +260,7 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
     -----
     The equations are the coupled eqs. (7)-(8) in [1]_ or the condensed eq. (22)
     (:mod:`screening.solvers.mcs_equations`).  Compiling the kernel takes tens of seconds, so the
-    example shows its interface; ``tests/unit/solvers/test_mcs_integrators.py`` holds it against scipy.
+    example shows its interface; ``tests/unit/solvers/test_mcs_kernels.py`` holds it against scipy.
 
     References
     ----------

@@ -69,19 +69,13 @@ def test_the_worker_setup_runs_as_a_dask_preload_only():
 
 #: Source modules without a test module of their own name, each with its reason.
 UNTESTED = {
-    "condensation.paper": "tested as test_paper_condensation.py and test_paper_coefficients.py",
     "condensation.api": "tested through the public functions in test_paper_coefficients.py, test_moments.py, "
                         "test_core_extremes.py",
     "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
-    "condensation.cubic": "tested in test_linearization.py, test_moments.py, test_datasets.py, test_fragility.py",
     "condensation.quadrature": "tested against the closed forms in test_paper_coefficients.py and by "
                                "test_toy_condensation.py",
-    "model.block": "tested in tests/unit/model/test_model.py",
-    "model.foundation": "tested in tests/unit/model/test_model.py and test_toy_contact_law.py",
-    "records": "tested as tests/unit/records/test_readers.py and test_reader_hardening.py",
     "schema": "tested as test_netcdf_cf.py (CF compliance of every result) and test_writers.py",
-    "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_integrators.py, test_montecarlo.py",
-    "solvers.mcs_kernels": "tested as test_mcs_integrators.py (against scipy) and test_montecarlo.py",
+    "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_kernels.py, test_montecarlo.py",
     "report.figure_base": "tested in tests/unit/report/test_figures.py",
     "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
