@@ -72,8 +72,6 @@ UNTESTED = {
     "condensation.api": "tested through the public functions in test_paper_coefficients.py, test_moments.py, "
                         "test_core_extremes.py",
     "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
-    "condensation.quadrature": "tested against the closed forms in test_paper_coefficients.py and by "
-                               "test_toy_condensation.py",
     "schema": "tested as test_netcdf_cf.py (CF compliance of every result) and test_writers.py",
     "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_kernels.py, test_montecarlo.py",
     "report.figure_base": "tested in tests/unit/report/test_figures.py",
@@ -84,7 +82,6 @@ UNTESTED = {
     "report.tradeoff_figures": "tested through run_tradeoff in test_tradeoff.py",
     "report.tradeoff_files": "tested through run_tradeoff in test_tradeoff.py",
     "report.tradeoff_text": "tested in test_tradeoff.py and test_metrics.py",
-    "workflow.connect": "tested through --scheduler in test_edges.py and test_robustness.py",
     "workflow.reader": "tested through the commands in test_cli.py, test_edges.py, test_robustness.py",
     "workflow.records_study": "tested through the record commands in test_cli_records.py and test_cloud.py",
 }
