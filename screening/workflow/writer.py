@@ -638,7 +638,7 @@ class ResultFile:
 
     def write_spots(self, spots, results, failed, spec):
         """Spot-check variables on dimension ``spot`` (``spots``: grid index tuples; ``results``: the
-        dicts of :func:`~screening.workflow.execution._spot_task`; ``failed``: flags)."""
+        dicts of :func:`~screening.workflow.execution.spot_task`; ``failed``: flags)."""
         fmt, study = self.format, self.study
         fmt.dimension("spot", len(spots))
         coords = []

@@ -18,7 +18,7 @@ from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_process
 
 from screening.cli import main
 from screening.status import PointStatus
-from screening.workflow import execution
+from screening.workflow import _submit, execution
 from screening.workflow.reader import result_key
 from screening.workflow.study import parse_study
 from screening.workflow.sweep import run_sweep
@@ -101,14 +101,14 @@ def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_pat
 
 
 def test_a_failed_batch_is_flagged_in_the_zarr_result(client, tmp_path, monkeypatch):
-    real = execution._solve_and_store_batch
+    real = _submit.solve_and_store_batch
 
     def flaky(target, batch, *args):
         if batch.index == 1:
             raise FloatingPointError("synthetic failure")
         return real(target, batch, *args)
 
-    monkeypatch.setattr(execution, "_solve_and_store_batch", flaky)
+    monkeypatch.setattr(_submit, "solve_and_store_batch", flaky)
     report = run_sweep(parse_study(GRID), tmp_path / "f.zarr", client=client, batch_size=5, progress=False,
                        log=quiet)
     assert report.n_failed_batches == 1

@@ -123,16 +123,6 @@ UNDECLARED = {
     ("workflow.writer", "workflow.zarrfile", "foreign_files"): "as netcdf_attributes",
     ("workflow.store", "workflow.writer", "write_region"): "the region writer the resume record replays",
     ("workflow.sweep", "workflow.probabilities", "finish_probabilities"): "the sweep's last stage",
-    ("workflow.accuracy", "workflow.execution", "submit_escalation"):
-        "the client side of the tasks (submission, stand-ins for failed ones), used by the sweep and the "
-        "[accuracy] stage",
-    ("workflow.accuracy", "workflow.execution", "warm_up_monte_carlo"): "as submit_escalation",
-    ("workflow.sweep", "workflow.execution", "submit_batch"): "as submit_escalation",
-    ("workflow.sweep", "workflow.execution", "refused_batch"): "as submit_escalation",
-    ("workflow.sweep", "workflow.execution", "failed_spot"): "as submit_escalation",
-    ("workflow.sweep", "workflow.execution", "submit_spot"): "as submit_escalation",
-    ("workflow.sweep", "workflow.execution", "sees_folder"): "as submit_escalation",
-    ("workflow.sweep", "workflow.execution", "spot_linear_names"): "as submit_escalation",
 }
 
 
