@@ -74,7 +74,6 @@ UNTESTED = {
     "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
     "schema": "tested as test_netcdf_cf.py (CF compliance of every result) and test_writers.py",
     "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_kernels.py, test_montecarlo.py",
-    "report.figure_base": "tested in tests/unit/report/test_figures.py",
     "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
     "report.record_figures": "tested through the commands in test_cli_records.py and test_cloud.py",
@@ -83,7 +82,6 @@ UNTESTED = {
     "report.tradeoff_files": "tested through run_tradeoff in test_tradeoff.py",
     "report.tradeoff_text": "tested in test_tradeoff.py and test_metrics.py",
     "workflow.reader": "tested through the commands in test_cli.py, test_edges.py, test_robustness.py",
-    "workflow.records_study": "tested through the record commands in test_cli_records.py and test_cloud.py",
 }
 
 
