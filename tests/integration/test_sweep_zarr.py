@@ -18,7 +18,7 @@ from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_process
 
 from screening.cli import main
 from screening.status import PointStatus
-from screening.workflow import _submit, execution
+from screening.workflow import _submit
 from screening.workflow.reader import result_key
 from screening.workflow.study import parse_study
 from screening.workflow.sweep import run_sweep
@@ -167,7 +167,7 @@ def test_a_finished_zarr_result_is_reused_then_replaced_by_another_study(client,
 def test_workers_that_do_not_see_the_output_folder_are_a_one_line_error(client, tmp_path, monkeypatch):
     from screening.workflow.errors import SweepError
 
-    monkeypatch.setattr(execution, "sees_folder", lambda path: False)
+    monkeypatch.setattr(_submit, "sees_folder", lambda path: False)
     with pytest.raises(SweepError, match=r"2 dask worker\(s\) .* do not see .*shared file system"):
         run_sweep(parse_study(GRID), tmp_path / "far.zarr", client=client, progress=False, log=quiet)
     assert not (tmp_path / "far.zarr").exists()
