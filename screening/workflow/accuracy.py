@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from screening import limits
-from screening.workflow import _submit, execution
+from screening.workflow import _submit
 from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
 from screening.progress import Progress

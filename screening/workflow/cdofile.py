@@ -248,7 +248,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     """
     import netCDF4
 
-    from screening.workflow.zarrfile import netcdf_attributes
+    from screening.workflow._zarr_store import netcdf_attributes
 
     ds = select(ds, selection or {})
     grid = tuple(ds["status"].dims)

@@ -54,8 +54,8 @@ from screening.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
 from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
-from screening.workflow.zarrfile import (foreign_files, is_zarr_path, remove_store, write_completion_mark,
-                                         zarr_batch_size)
+from screening.workflow._zarr_store import foreign_files, remove_store, write_completion_mark
+from screening.workflow.zarrfile import is_zarr_path, zarr_batch_size
 
 __all__ = ["MAX_FAILURE_MESSAGES", "IN_FLIGHT_PER_WORKER", "SweepReport", "run_sweep", "SampleCount"]
 

@@ -118,7 +118,8 @@ def check_output_path(out, inputs=()):
             raise SweepError(f"output path {out} is the input file {path}; give another --out")
         if _inside(out, path):
             raise SweepError(f"output path {out} is inside the input {path}; give another --out")
-    from screening.workflow.zarrfile import foreign_files, is_zarr_path, is_zarr_store
+    from screening.workflow._zarr_store import foreign_files
+    from screening.workflow.zarrfile import is_zarr_path, is_zarr_store
 
     if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
         raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")

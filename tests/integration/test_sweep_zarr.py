@@ -391,7 +391,7 @@ def test_export_of_foreign_attributes(client, tmp_path, capsys):
     are exported as JSON text / left out; ragged flag_values are one line, exit 2."""
     import zarr
 
-    from screening.workflow.zarrfile import write_completion_mark
+    from screening.workflow._zarr_store import write_completion_mark
 
     out = tmp_path / "f.zarr"
     run_sweep(parse_study(GRID), out, client=client, progress=False, log=quiet)

@@ -112,15 +112,6 @@ UNDECLARED = {
     ("workflow.records_study", "workflow.study", "study_from_tables"):
         "the record study reuses the sweep study's table reader; out of __all__ until it has a numpydoc docstring",
     ("cli", "workflow.cdofile", "open_source"): "the CDO export's source reader, used by `screening export`",
-    ("workflow.cdofile", "workflow.zarrfile", "netcdf_attributes"):
-        "the zarr store's file helpers, shared by the result formats, the reader and the sweep",
-    ("workflow.reader", "workflow.zarrfile", "read_attrs"): "as netcdf_attributes",
-    ("workflow.reader", "workflow.zarrfile", "check_store"): "as netcdf_attributes",
-    ("workflow.store", "workflow.zarrfile", "file_check"): "as netcdf_attributes",
-    ("workflow.sweep", "workflow.zarrfile", "foreign_files"): "as netcdf_attributes",
-    ("workflow.sweep", "workflow.zarrfile", "remove_store"): "as netcdf_attributes",
-    ("workflow.sweep", "workflow.zarrfile", "write_completion_mark"): "as netcdf_attributes",
-    ("workflow.writer", "workflow.zarrfile", "foreign_files"): "as netcdf_attributes",
     ("workflow.store", "workflow.writer", "write_region"): "the region writer the resume record replays",
     ("workflow.sweep", "workflow.probabilities", "finish_probabilities"): "the sweep's last stage",
 }
