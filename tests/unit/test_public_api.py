@@ -72,7 +72,6 @@ UNTESTED = {
     "condensation.api": "tested through the public functions in test_paper_coefficients.py, test_moments.py, "
                         "test_core_extremes.py",
     "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
-    "schema": "tested as test_netcdf_cf.py (CF compliance of every result) and test_writers.py",
     "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_kernels.py, test_montecarlo.py",
     "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
@@ -80,7 +79,6 @@ UNTESTED = {
     "report.text": "tested through `screening info` in test_cli.py, test_accuracy.py, test_sweep_probabilities.py",
     "report.tradeoff_figures": "tested through run_tradeoff in test_tradeoff.py",
     "report.tradeoff_text": "tested in test_tradeoff.py and test_metrics.py",
-    "workflow.reader": "tested through the commands in test_cli.py, test_edges.py, test_robustness.py",
 }
 
 
