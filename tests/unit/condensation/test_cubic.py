@@ -7,7 +7,6 @@ less the overturning ``m g h theta`` is the restoring moment; the slope ``dz/d|t
 indentation (central differences).  Below and above the uplift angle, hardening and softening beds.
 """
 
-import numpy as np
 import pytest
 from scipy import integrate
 
