@@ -5,7 +5,6 @@ condensation are the Gaussian expectations of eq. (31) computed here by adaptive
 ``c_eq = E[C(theta)]`` and, for uncorrelated ``(theta, theta')``, ``k_eq = E[K(theta) theta^2] / sigma^2``
 (Stein's lemma on ``E[d(K theta)/d theta]``)."""
 
-
 import numpy as np
 import pytest
 from scipy import integrate, stats
