@@ -73,7 +73,6 @@ UNTESTED = {
     "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
     "report.record_figures": "tested through the commands in test_cli_records.py and test_cloud.py",
-    "report.text": "tested through `screening info` in test_cli.py, test_accuracy.py, test_sweep_probabilities.py",
     "report.tradeoff_figures": "tested through run_tradeoff in test_tradeoff.py",
 }
 
