@@ -69,7 +69,6 @@ def test_the_worker_setup_runs_as_a_dask_preload_only():
 
 #: Source modules without a test module of their own name, each with its reason.
 UNTESTED = {
-    "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
     "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
     "report.record_figures": "tested through the commands in test_cli_records.py and test_cloud.py",
