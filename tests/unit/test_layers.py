@@ -104,14 +104,10 @@ UNDECLARED = {
     ("report.tradeoff_files", "report.tradeoff_text", "markdown_report"): "as write_reports",
     ("solvers.montecarlo", "solvers.datasets", "monte_carlo_dataset"):
         "the Monte Carlo dataset builder, out of __all__ until it has a numpydoc docstring",
-    ("workflow.accuracy", "analysis.escalation", "auto_escalation_model"):
-        "the escalation plan's helpers for the [accuracy] stage, out of __all__ until they have numpydoc docstrings",
-    ("workflow.accuracy", "analysis.escalation", "paired_model"): "as auto_escalation_model",
-    ("workflow.accuracy", "analysis.escalation", "PAIRED_MODEL"): "as auto_escalation_model",
-    ("workflow.accuracy", "analysis.escalation", "paired_plan"): "as auto_escalation_model",
+    ("workflow.accuracy", "analysis.escalation", "paired_plan"):
+        "the [accuracy] stage's allocation of a paired pilot, out of __all__ until it has a numpydoc docstring",
     ("workflow.records_study", "workflow.study", "study_from_tables"):
         "the record study reuses the sweep study's table reader; out of __all__ until it has a numpydoc docstring",
-    ("cli", "workflow.cdofile", "open_source"): "the CDO export's source reader, used by `screening export`",
     ("workflow.store", "workflow.writer", "write_region"): "the region writer the resume record replays",
     ("workflow.sweep", "workflow.probabilities", "finish_probabilities"): "the sweep's last stage",
 }
