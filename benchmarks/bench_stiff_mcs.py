@@ -60,6 +60,7 @@ import numpy as np  # noqa: E402
 
 from screening.analysis import escalation as esc  # noqa: E402
 from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff  # noqa: E402
+from screening.kernels._sample_steps import ground_input  # noqa: E402
 from screening.kernels.dopri import stability_bound  # noqa: E402
 from screening.model import Block, Foundation  # noqa: E402
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
@@ -215,7 +216,7 @@ def _loop_hermite(acc, acc_dot, dt, n):
         t += 0.37 * dt
         if t >= t_span:
             t -= t_span
-        total += kern._hermite(0, acc, acc_dot, dt, t)
+        total += ground_input(0, acc, acc_dot, dt, t)
     return total
 
 

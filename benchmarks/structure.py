@@ -70,6 +70,12 @@ def main(verbose=False):
     print(f"import circles: {len(circles)} ({', '.join(' <-> '.join(c) for c in circles)})")
     print(f"imports inside functions: {len(deferred)}; of them dodging a circle: {len(dodging)}")
     print(f"modules without __all__: {len(missing_all)} of {len(public)}")
+    private, undeclared = ig.private_name_uses(graph), ig.undeclared_name_uses(graph)
+    print(f"underscored names taken from another module: {len(private)}; names taken from a public module "
+          f"that are not in its __all__: {len(undeclared)}")
+    tested = [m for m in graph.modules if m and graph.modules[m].name != "__init__.py"]
+    print(f"source modules with a test module of their own name: "
+          f"{sum(ig.has_test_module(m) for m in tested)} of {len(tested)}")
     print("largest modules (lines): " + ", ".join(f"{m} {n}" for n, m in sizes[:5]))
     print("largest modules (lines of code: no docstring, comment or blank line): "
           + ", ".join(f"{m} {n}" for n, m in ig.code_sizes(graph)[:5]))
@@ -86,6 +92,8 @@ def main(verbose=False):
             print(f"  dodge {imp.source}:{imp.line} -> {imp.target}")
         for m in missing_all:
             print(f"  no __all__: {m}")
+        for use in private + undeclared:
+            print(f"  {'private' if use in private else 'undeclared'} {use.source}:{use.line} <- {use.target}.{use.name}")
         for name, m in mentions.items():
             print(f"  {name}: " + ", ".join(f"{module} {n}" for module, n in m.items())
                   + "; in lists: " + ", ".join(f"{module} {n}" for module, n in lists[name].items()))

@@ -7,7 +7,9 @@ from screening.kernels.cache import clear_stale_cache as _clear_stale_cache
 _clear_stale_cache()   # numba's cache does not follow changes of other modules: drop it when any source changed
 
 from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
+from screening.excitations.kanai_tajimi import KanaiTajimi
+from screening.excitations.white import WhiteNoise
+from screening.model.excitation import ConstantEnvelope, Envelope
 from screening.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,
                                         uplift_probability, uplift_threshold)
 from screening.model import Block, Foundation

@@ -38,9 +38,9 @@ import numpy as np
 
 from screening import __version__
 from screening.atomicfile import publish as _publish
-from screening.cli_base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandError, _Choice, MAX_WORKERS,
-                                POSITIVE_INT, WORKER_COUNT, POSITIVE_FLOAT, ZLIB_LEVEL, _not_with, _usage_message,
-                                cli, announce_compilation, _say, _temporary_for, _stem, _write_error, stamp_fragility,
+from screening._cli_common import Choice, not_with, result_stem, say, temporary_for, usage_message, write_error
+from screening.cli_base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandError, MAX_WORKERS, POSITIVE_INT,
+                                WORKER_COUNT, POSITIVE_FLOAT, ZLIB_LEVEL, cli, announce_compilation, stamp_fragility,
                                 lognormal_fit_text, write_file_set, fragility_figures, fit_files,
                                 write_fragility_files)
 
@@ -97,7 +97,7 @@ def main(argv=None):
     except click.exceptions.Exit as exc:            # --help / --version
         return exc.exit_code
     except click.UsageError as exc:
-        return _error(_usage_message(exc))
+        return _error(usage_message(exc))
     except (CommandError, StudyError, SweepError) as exc:
         return _error(str(exc))
     except KeyboardInterrupt:
@@ -219,10 +219,10 @@ def _quiet_abandoned_reads():
 @click.option("--out", help="result file (default outputs/<study-stem>.nc, folder created if missing; "
                             "the folder of an explicit path must exist); a path ending in .zarr is a zarr store "
                             "written in place by the workers (large runs; 'screening export' converts it)")
-@click.option("--workers", type=WORKER_COUNT, callback=_not_with("scheduler"),
+@click.option("--workers", type=WORKER_COUNT, callback=not_with("scheduler"),
               help="worker processes of the local dask cluster; 0 = in this process, no cluster (default: "
                    "0 for at most 500 points and at most one Monte Carlo spot check, else 2)")
-@click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
+@click.option("--scheduler", metavar="ADDRESS", callback=not_with("workers"),
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
 @click.option("--batch-size", type=POSITIVE_INT, help="points per task (default: about 500)")
 @click.option("--complevel", type=ZLIB_LEVEL, default="1",
@@ -248,15 +248,15 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
             raise SweepError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
         check_output_path(out, inputs=(study.source,))
     report = run_sweep(study, out, workers=workers, scheduler=scheduler, batch_size=batch_size,
-                       force=force, progress=not quiet, log=_say, complevel=complevel)
+                       force=force, progress=not quiet, log=say, complevel=complevel)
     if not report.reused:
         counts = ", ".join(f"{k} {v}" for k, v in report.status_counts.items())
         spots = f", {report.n_spots} spot check(s)" if report.n_spots else ""
         trust = ", ".join(f"{k} {v}" for k, v in report.trust_counts.items())
-        _say(f"wrote {out}: {report.n_points} points (status: {counts}; linearization against the coupled model: "
+        say(f"wrote {out}: {report.n_points} points (status: {counts}; linearization against the coupled model: "
              f"{trust}){spots} in {report.timings['total']:.1f} s")
     if not no_plots:
-        stem = _stem(out)
+        stem = result_stem(out)
         pngs = [out.parent / f"{stem}_{k}.png" for k in ("histories", "peaks")]
         if not report.reused or not all(p.exists() for p in pngs):
             try:
@@ -265,9 +265,9 @@ def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plo
                 raise SweepError(f"{exc}; the result {out} is complete, re-run 'screening plot {out}' "
                                  "for the figures") from None
             for path in paths:
-                _say(f"wrote {path}")
+                say(f"wrote {path}")
     if report.n_failed_batches:
-        _say(f"warning: {report.n_failed_batches} batch(es) failed; their points have status task_failed "
+        say(f"warning: {report.n_failed_batches} batch(es) failed; their points have status task_failed "
              f"in {out}")
     return EXIT_OK
 
@@ -279,20 +279,20 @@ def _plot(result, out_dir, response="var"):
 
     result = Path(result)
     with open_result(result) as ds:
-        stem = _stem(result)
+        stem = result_stem(result)
         try:
             return plot_result(ds, stem, out_dir, response)
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
         except OSError as exc:                  # the PNG could not be written
-            raise _write_error(out_dir, exc) from None
+            raise write_error(out_dir, exc) from None
 
 
 @cli.command("plot", help="write PNG figures of a result file")
 @click.argument("result")
 @click.option("--out-dir", help="folder for the figures (default: next to the result; created if missing, "
                                 "its parent must exist)")
-@click.option("--response", type=_Choice(["var", "sigma", "fraction"]), default="var",
+@click.option("--response", type=Choice(["var", "sigma", "fraction"]), default="var",
               help="rotation drawn as its variance var_theta [rad2] (default), its standard deviation sigma_theta "
                    "[rad], or sigma_theta as a fraction of the slenderness angle atan(b/h)")
 def cmd_plot(result, out_dir, response):
@@ -324,15 +324,15 @@ def cmd_plot(result, out_dir, response):
               help="rotation threshold: in rad, or a fraction of the angle named by --relative-to; repeat it for "
                    "several limit states (one fragility model, a figure per limit state); required but with "
                    "--limit-state overturn")
-@click.option("--relative-to", type=_Choice(["slenderness", "theta_ul"]),
+@click.option("--relative-to", type=Choice(["slenderness", "theta_ul"]),
               help="threshold as a fraction of the slenderness angle atan(b/h) or of theta_ul")
-@click.option("--method", type=_Choice(["vanmarcke", "poisson"]), default="vanmarcke",
+@click.option("--method", type=Choice(["vanmarcke", "poisson"]), default="vanmarcke",
               help="up-crossing approximation (default vanmarcke)")
 @click.option("--dim", help="swept intensity of the fragility curve and its lognormal fit (default: S0 or pga, "
                            "whichever is swept)")
 @click.option("--out", help="netCDF file (default <result-stem>_fragility.nc next to the result; "
                             "its folder must exist); the PNG goes next to it")
-@click.option("--im", type=_Choice(["pga", "sa", "pgv", "avgsa", "rms", "arias", "s0"]),
+@click.option("--im", type=Choice(["pga", "sa", "pgv", "avgsa", "rms", "arias", "s0"]),
               help="fit over an intensity measure of the input (RVT medians; screening.analysis.intensity) and "
                    "export the fits as CSV (a row per curve), pelicun CSV and OpenQuake NRML next to the netCDF "
                    "(docs/fragility.md)")
@@ -340,7 +340,7 @@ def cmd_plot(result, out_dir, response):
 @click.option("--modelling-dispersion", "modelling", type=POSITIVE_FLOAT,
               help="modelling dispersion beta_m [1] combined with each fitted beta by the square root of the sum of "
                    "squares (the fitted one kept as beta_fit)")
-@click.option("--limit-state", type=_Choice(["exceed", "overturn"]), default="exceed",
+@click.option("--limit-state", type=Choice(["exceed", "overturn"]), default="exceed",
               help="exceed (default): |theta| beyond --threshold; overturn: the probability of overturning "
                    "(p_overturn of a study with [accuracy] or [fragility]), fitted over --im (default s0)")
 def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, modelling, limit_state):
@@ -371,7 +371,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
             raise SweepError(f"--dim {dim!r} is not a swept dimension of {result} "
                              f"(swept: {', '.join(grid) or 'none'})")
         dim = dim or default_dim(grid) or "S0"
-        out = check_output_path(out or result.with_name(f"{_stem(result)}_fragility.nc"), inputs=(result,))
+        out = check_output_path(out or result.with_name(f"{result_stem(result)}_fragility.nc"), inputs=(result,))
         try:
             frag = stack_limit_states([fragility_dataset(ds, t, relative_to, method, dim).load() for t in threshold],
                                       threshold, relative_to)
@@ -388,14 +388,14 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
                           fit_files(frag, out) if "fit_median" in frag else (), warnings=warnings)
     p = frag["p_exceed"].values
     fit = lognormal_fit_text(frag, dim, frag["fit_median"].attrs.get("units", "") if "fit_median" in frag else "")
-    _say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}" + (f"; {fit}" if fit else ""))
+    say(f"P(exceed) over {p.size} point(s): min {np.nanmin(p):.3g}, max {np.nanmax(p):.3g}" + (f"; {fit}" if fit else ""))
     if "best_p_exceed" in frag:
         from screening.status import BestMethod
 
         source = frag["best_method"].values
         counts = ", ".join(f"{m.name} {int(np.sum(source == m))}" for m in BestMethod if np.any(source == m))
         best = frag["best_p_exceed"].values
-        _say(f"best estimates ([accuracy]): best_p_exceed min {np.nanmin(best):.3g}, max {np.nanmax(best):.3g}, "
+        say(f"best estimates ([accuracy]): best_p_exceed min {np.nanmin(best):.3g}, max {np.nanmax(best):.3g}, "
              f"with the band best_p_exceed_low/high; from {counts}")
     return EXIT_OK
 
@@ -407,7 +407,8 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
 @click.option("--quiet", is_flag=True, help="no progress lines on stderr")
 @click.option("--from-nc", is_flag=True, help="re-render reports from the saved netCDF instead of recomputing")
 def cmd_tradeoff(study, out_dir, quiet, from_nc):
-    from screening.analysis.tradeoff import load_tradeoff_study, rerender_reports, run_tradeoff
+    from screening.analysis.tradeoff import rerender_reports, run_tradeoff
+    from screening.analysis.tradeoff_study import load_tradeoff_study
     from screening.report.tradeoff_text import summary_text
     from screening.workflow.config import StudyError
 
@@ -472,7 +473,7 @@ def _describe_product(path):
 @click.argument("out")
 @click.option("--complevel", type=ZLIB_LEVEL, default="1",
               help="zlib level of the netCDF file: 1 (default, fastest) .. 9, 0 = uncompressed")
-@click.option("--layout", type=_Choice(["cf", "cdo"]), default="cf",
+@click.option("--layout", type=Choice(["cf", "cdo"]), default="cf",
               help="cf (default): the netCDF file of a direct run, from a zarr result; cdo: time first, for CDO "
                    "(from a netCDF or zarr result; docs/outputs.md, 'Other tools')")
 @click.option("--select", "selection", multiple=True, metavar="DIM=VALUE",
@@ -501,7 +502,7 @@ def cmd_export(result, out, complevel, layout, selection):
     try:
         selected = cdofile.parse_selection(selection, ds["status"].dims)
         out = check_output_path(out, inputs=(result,))
-        tmp = _temporary_for(out)
+        tmp = temporary_for(out)
         now = dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
         options = "".join([" --layout cdo"] * (layout == "cdo") + [f" --select {item}" for item in selection])
         history = f"{now}: screening export {result} {out}{options} (screening {__version__})"
@@ -516,7 +517,7 @@ def cmd_export(result, out, complevel, layout, selection):
             if isinstance(exc, ReadFailure):
                 raise SweepError(f"cannot read {result}: {exc}; nothing written") from None
             if isinstance(exc, (OSError, RuntimeError)):    # netCDF reports a failed write as RuntimeError
-                raise _write_error(out, exc) from None
+                raise write_error(out, exc) from None
             raise
     finally:
         ds.close()

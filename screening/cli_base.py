@@ -4,14 +4,12 @@ register their commands on :data:`cli`)."""
 
 from __future__ import annotations
 
-import sys
-
 import click
 import numpy as np
 
 from screening import __version__
 from screening.atomicfile import publish as _publish
-from screening.atomicfile import temporary_beside
+from screening._cli_common import say, temporary_for, write_error
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
            "WORKER_COUNT", "POSITIVE_FLOAT", "ZLIB_LEVEL", "cli", "announce_compilation", "stamp_fragility",
@@ -38,15 +36,6 @@ class _Checked(click.ParamType):
             return self.parse(str(value))
         except ValueError as exc:
             self.fail(str(exc), param, ctx)
-
-
-class _Choice(click.Choice):
-    """``click.Choice`` with argparse's words: ``invalid choice: 'x' (choose from 'a', 'b')``."""
-
-    def convert(self, value, param, ctx):
-        if value not in self.choices:
-            self.fail(f"invalid choice: {value!r} (choose from {', '.join(map(repr, self.choices))})", param, ctx)
-        return value
 
 
 def _integer_in(low, high=None):
@@ -88,16 +77,6 @@ POSITIVE_FLOAT = _Checked("number", _positive_float)
 ZLIB_LEVEL = _Checked("0..9", _zlib_level)
 
 
-def _not_with(other):
-    """Callback refusing an option given after ``--<other>`` (options processed in command-line order)."""
-    def callback(ctx, param, value):
-        if value is not None and ctx.params.get(other) is not None:
-            raise click.UsageError(f"argument {param.opts[0]}: not allowed with argument --{other.replace('_', '-')}",
-                                   ctx)
-        return value
-    return callback
-
-
 # ----------------------------------------------------------------------------- parser
 class _Command(click.Command):
     """A subcommand that reports extra positional arguments the way argparse did."""
@@ -132,24 +111,6 @@ class _Group(click.Group):
             raise click.UsageError(f"argument command: invalid choice: {args[0]!r} (choose from "
                                    f"{', '.join(map(repr, self.commands))})", ctx)
         return super().resolve_command(ctx, args)
-
-
-def _usage_message(exc):
-    """argparse's wording for a click usage error, with where to get help."""
-    param = getattr(exc, "param", None)
-    name = (param.opts[0] if isinstance(param, click.Option) else param.name) if param is not None else None
-    if isinstance(exc, click.MissingParameter) and name:
-        message = f"the following arguments are required: {name}"
-    elif isinstance(exc, click.BadParameter) and name:
-        message = f"argument {name}: {exc.message}"
-    elif isinstance(exc, click.NoSuchOption):
-        message = f"unrecognized arguments: {exc.option_name}"
-    elif isinstance(exc, click.BadOptionUsage) and "requires an argument" in exc.message:
-        message = f"argument {exc.option_name}: expected one argument"
-    else:
-        message = exc.format_message()
-    where = exc.ctx.command_path if exc.ctx is not None else "screening"
-    return f"{message} (see '{where} --help')"
 
 
 @click.group(cls=_Group, no_args_is_help=False,
@@ -192,31 +153,6 @@ def announce_compilation(quiet=False):
         from screening.kernels.cache import announce_compilation as announce
 
         announce()
-
-
-def _say(msg):
-    print(msg, file=sys.stderr, flush=True)
-
-
-def _temporary_for(out, suffix=""):
-    """A new empty file next to ``out`` (never a planted link) to write ``out`` into; its name ends in
-    ``.tmp`` and ``suffix`` (writers that read the format from the name)
-    (:func:`screening.atomicfile.temporary_beside`; a failure as a one-line error)."""
-    try:
-        return temporary_beside(out, suffix)
-    except OSError as exc:
-        raise _write_error(out, exc) from None
-
-
-def _stem(result):
-    """The name of a result without ``.nc`` / ``.zarr`` (for the names of its figures)."""
-    return result.stem if result.suffix in (".nc", ".zarr") else result.name
-
-
-def _write_error(path, exc):
-    from screening.workflow.errors import SweepError, write_failure_reason
-
-    return SweepError(f"cannot write {getattr(exc, 'filename', None) or path}: {write_failure_reason(exc, path)}")
 
 
 def stamp_fragility(frag, result, **options):
@@ -368,7 +304,7 @@ def write_file_set(files, warnings=()):
     done, drop = [], []
     try:
         for name, path, write in files:
-            tmp = _temporary_for(path, suffix=path.suffix)
+            tmp = temporary_for(path, suffix=path.suffix)
             done.append((tmp, path))
             try:
                 write(tmp)
@@ -381,7 +317,7 @@ def write_file_set(files, warnings=()):
         for tmp, _ in done:
             tmp.unlink(missing_ok=True)
         if isinstance(exc, (OSError, RuntimeError)):    # netCDF reports a failed write as RuntimeError
-            raise _write_error(files[0][1], exc) from None
+            raise write_error(files[0][1], exc) from None
         raise
     for tmp, path in done[::-1]:
         _publish(tmp, path)
@@ -392,7 +328,7 @@ def write_file_set(files, warnings=()):
     for _, path in done:
         print(path)
     for w in warnings:
-        _say(f"warning: {w}")
+        say(f"warning: {w}")
 
 
 def _drawn(path):

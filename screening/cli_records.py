@@ -12,9 +12,9 @@ import click
 
 from screening.atomicfile import atomic_path
 from screening.solvers import mc_registry
-from screening.cli_base import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, _Choice, _not_with, _say,
-                                _stem, _write_error, announce_compilation, cli, fragility_figures,
-                                lognormal_fit_text, fit_files, stamp_fragility, write_file_set,
+from screening._cli_common import Choice, not_with, result_stem, say, write_error
+from screening.cli_base import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, announce_compilation, cli,
+                                fragility_figures, lognormal_fit_text, fit_files, stamp_fragility, write_file_set,
                                 write_fragility_files)
 
 __all__ = ["SERIAL_RECORDS", "UNITS_HELP", "cmd_simulate", "fragility_over_im_command", "cmd_fit_excitation",
@@ -55,12 +55,12 @@ def _read(record, dt, units):
                                              "if any, is not used)")
 @click.option("--out", help="netCDF file (default <record-stem>_simulation.nc in the current folder; its folder "
                             "must exist); the PNG goes next to it")
-@click.option("--model", type=_Choice(list(mc_registry.names())), default="coupled",
+@click.option("--model", type=Choice(list(mc_registry.names())), default="coupled",
               help="coupled (eqs. 7-8, default), condensed (eq. 22, the study's condensation) or stiff_bed "
                    "(rigid block on the quasi-static contact, docs/stiff_bed.md)")
 @click.option("--dt", type=float, help="time step [s] of a one-column record (checked against a time column "
                                       "or an AT2 header)")
-@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
+@click.option("--units", type=Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
 @click.option("--scale", type=float, default=1.0, help="factor on the record's accelerations (default 1)")
 @click.option("--case", help="case of the study (required when it has several)")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
@@ -110,17 +110,17 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
             if not no_plots:
                 plot_simulation(ds, png_path)
     except (OSError, RuntimeError) as exc:
-        raise _write_error(out, exc) from None
+        raise write_error(out, exc) from None
     print(out)
     if not no_plots:
         print(png_path)
     over = (f"overturned at t = {float(ds['overturning_time']):.3f} s" if bool(ds["overturned"])
             else f"peak |theta| = {float(ds['peak_abs_theta']):.4g} rad "
                  f"({float(ds['peak_abs_theta']) / float(ds['slenderness']):.3f} of atan(b/h))")
-    _say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
+    say(f"{rec.name}: PGA {rec.pga / 9.80665:.3f} g, {model} model: {ds.attrs['status']}; {over}")
     if rec.vertical is not None:
         lift = " (g + a_v < 0: the block lifts off)" if bool(ds.get("lift_off", False)) else ""
-        _say(f"vertical component: {ds.attrs['vertical_ground_motion']}{lift}")
+        say(f"vertical component: {ds.attrs['vertical_ground_motion']}{lift}")
     return EXIT_OK
 
 
@@ -203,7 +203,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     result = Path(result)
     with open_result(result) as ds:
         stem = "overturn" if limit_state == "overturn" else "fragility"
-        out = check_output_path(out or result.with_name(f"{_stem(result)}_{stem}_{im}.nc"))
+        out = check_output_path(out or result.with_name(f"{result_stem(result)}_{stem}_{im}.nc"))
         try:
             ds = ds.load()
             frags, warnings = [], []
@@ -224,7 +224,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
                           fit_files(frag, out), warnings)
     fit = lognormal_fit_text(frag, frag.attrs["intensity_variable"], frag["fit_median"].attrs["units"])
     if fit:
-        _say(fit)
+        say(fit)
     return EXIT_OK
 
 
@@ -233,8 +233,8 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
 @click.argument("record")
 @click.option("--dt", type=float, help="time step [s] of a one-column record (checked against a time column "
                                       "or an AT2 header)")
-@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
-@click.option("--kind", type=_Choice(["kanai_tajimi", "white"]), default="kanai_tajimi",
+@click.option("--units", type=Choice(["g", "m/s2", "cm/s2"]), help=UNITS_HELP)
+@click.option("--kind", type=Choice(["kanai_tajimi", "white"]), default="kanai_tajimi",
               help="excitation model (default kanai_tajimi)")
 @click.option("--cutoff", type=POSITIVE_FLOAT, help="band limit [rad/s] of the study's synthesis (required for white)")
 @click.option("--figure", help="PNG of the fit: the record's Husid curve and spectrum against the fitted model's "
@@ -256,7 +256,7 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff, figure):
         write_file_set([("PNG", figure, lambda path: plot_excitation_fit(rec, fit, path))])
     print(excitation_table(fit))
     for flag in fit["flags"]:
-        _say(f"warning: {flag}")
+        say(f"warning: {flag}")
     return EXIT_OK
 
 
@@ -267,12 +267,12 @@ def cmd_fit_excitation(record, dt, units, kind, cutoff, figure):
 @click.option("--case", help="case of the study (required when it has several)")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
               help="value of a swept block/bed parameter (repeatable)")
-@click.option("--workers", type=WORKER_COUNT, callback=_not_with("scheduler"),
+@click.option("--workers", type=WORKER_COUNT, callback=not_with("scheduler"),
               help=f"local dask worker processes, one task per record; 0: in this process (default: 0 up to "
                    f"{SERIAL_RECORDS} records, else 2)")
-@click.option("--scheduler", metavar="ADDRESS", callback=_not_with("workers"),
+@click.option("--scheduler", metavar="ADDRESS", callback=not_with("workers"),
               help="use an existing dask cluster: scheduler address or scheduler JSON file")
-@click.option("--units", type=_Choice(["g", "m/s2", "cm/s2"]),
+@click.option("--units", type=Choice(["g", "m/s2", "cm/s2"]),
               help="acceleration units of the study's text records (as [records] units; both given: must agree)")
 @click.option("--quiet", is_flag=True, help="no progress lines")
 @click.option("--no-vertical", is_flag=True, help="leave out the records' vertical components (as [records] "
@@ -302,14 +302,14 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet, no_verti
         if not in_process:
             stack.enter_context(shielded())
             client = stack.enter_context(dask_client(workers, scheduler))
-        ds, warnings = run(cloud, case, _overrides(sets), progress=None if quiet else _say, client=client,
+        ds, warnings = run(cloud, case, _overrides(sets), progress=None if quiet else say, client=client,
                            records=records)
     frag = ds[["fit_median", "beta", "fit_flag", "threshold_rad", ds.attrs["intensity_variable"]]]
     demand = ("demand CSV", out.with_name(f"{out.stem}_demand.csv"), lambda path: write_demand_csv(ds, path))
     if cloud.levels:
         write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_stripes(ds, path))],
                               [demand, *fit_files(frag, out)], warnings)
-        _say(f"{ds.sizes['level']} stripes x {ds.sizes['record']} records: {int(ds['n_exceed'].sum())} of "
+        say(f"{ds.sizes['level']} stripes x {ds.sizes['record']} records: {int(ds['n_exceed'].sum())} of "
              f"{int(ds['n_used'].sum())} runs exceed; fragility over {ds.attrs['intensity_variable']}: median "
              f"{float(ds['fit_median']):.4g} +- {float(ds['fit_median_se']):.2g} {ds['fit_median'].attrs['units']}, "
              f"beta {float(ds['beta']):.3f} +- {float(ds['beta_se']):.3f} (standard errors)")
@@ -317,7 +317,7 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet, no_verti
     write_fragility_files(ds, out, [("PNG", out.with_suffix(".png"), lambda path: plot_cloud(ds, path))],
                           [demand, *fit_files(frag, out)], warnings)
     n = ds.sizes["record"]
-    _say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
+    say(f"{n} records: {int(ds['exceed'].sum())} exceed, {int(ds['overturned'].sum())} overturned; "
          f"fragility over {ds.attrs['intensity_variable']}: median {float(ds['fit_median']):.4g} "
          f"{ds['fit_median'].attrs['units']}, beta {float(ds['beta']):.3f}")
     return EXIT_OK

@@ -21,7 +21,7 @@ from importlib import resources
 import numpy as np
 
 __all__ = ["CODE_SPACES", "code_space", "PointStatus", "SampleStatus", "DivergenceReason", "SampleState",
-           "SpotStatus", "Trust", "BestMethod", "EscalationModel", "TargetMet", "ContactRegime", "FitFlag",
+           "SpotStatus", "Trust", "BestMethod", "EscalationModel", "EscalationEstimator", "TargetMet", "ContactRegime", "FitFlag",
            "ProbabilitySource", "MONTE_CARLO_SOURCE_BASE", "DIVERGENCE_TEXT", "probability_sources",
            "flag_attributes"]
 

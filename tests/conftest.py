@@ -71,7 +71,8 @@ def pytest_sessionstart(session):
     import numpy as np
 
     from screening.solvers.linearization import linearize
-    from screening.workflow.execution import warm_up, warm_up_monte_carlo
+    from screening.workflow._submit import warm_up_monte_carlo
+    from screening.workflow.execution import warm_up
 
     start = time.perf_counter()
     warm_up()

@@ -135,7 +135,8 @@ def interrupted_run(study, out, client, batch_size, n=2):
 def failed_result_file(study, path, zarr_batch_size=None):
     """A complete result of ``study`` (netCDF, or zarr with ``zarr_batch_size``) whose batches and spot
     checks all failed: the writer alone, no solver, no dask."""
-    from screening.workflow.execution import failed_result, failed_spot
+    from screening.workflow._submit import failed_spot
+    from screening.workflow.execution import failed_result
     from screening.workflow.grid import plan_batches, select_spots
     from screening.workflow.writer import ResultFile, result_attributes
 

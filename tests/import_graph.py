@@ -306,3 +306,90 @@ def read_exceptions(text=None):
         else:
             circles.append(frozenset(modules))
     return up, circles
+
+
+def declared_all(path):
+    """The names of a module's literal ``__all__`` (a list), or None (none, or not a literal)."""
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets):
+            try:
+                return list(ast.literal_eval(node.value))
+            except ValueError:
+                return None
+    return None
+
+
+@dataclass(frozen=True)
+class Use:
+    """A name of one package module used by another: ``from target import name`` or ``alias.name``
+    on an imported module."""
+
+    source: str
+    line: int
+    target: str
+    name: str
+
+
+def _is_private(name):
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def name_uses(graph):
+    """Every name a package module takes from another package module (not the modules themselves):
+    the names of ``from ... import`` and the attributes read on an imported module (``kern.x``)."""
+    uses = []
+    for source, path in graph.modules.items():
+        tree = ast.parse(path.read_text(), str(path))
+        skipped = _type_checking_only(tree)
+        aliases = {}                                  # local name -> package module it is bound to
+        for node in ast.walk(tree):
+            if id(node) in skipped:
+                continue
+            if isinstance(node, ast.Import):
+                for a in node.names:
+                    if a.name.startswith("screening.") and a.asname:
+                        aliases[a.asname] = _resolve(a.name[len("screening."):], graph.modules)
+            elif isinstance(node, ast.ImportFrom):
+                for target, a in zip(_targets(node, source, path.name == "__init__.py", graph.modules), node.names):
+                    if not target.startswith("screening.") or a.name == "*":
+                        continue
+                    dotted = target[len("screening."):]
+                    if dotted in graph.modules and dotted.rsplit(".", 1)[-1] == a.name:      # a module
+                        aliases[a.asname or a.name] = dotted
+                    else:
+                        uses.append(Use(source, node.lineno, _resolve(dotted, graph.modules), a.name))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
+                uses.append(Use(source, node.lineno, aliases[node.value.id], node.attr))
+    return [u for u in dict.fromkeys(uses)
+            if u.target != u.source and not (u.name.startswith("__") and u.name.endswith("__"))]
+
+
+def private_name_uses(graph):
+    """Underscored names (not dunders) one module takes from another: internals leaking across modules."""
+    return [u for u in name_uses(graph) if _is_private(u.name)]
+
+
+def undeclared_name_uses(graph):
+    """Names one module takes from a public module that are not in that module's ``__all__``: its
+    internals, or names it merely imported (to be taken from their home).  A package ``__init__``
+    gathering its own package's names is not counted."""
+    public = set(public_modules(graph))
+    declared = {m: declared_all(graph.modules[m]) for m in public}
+    return [u for u in name_uses(graph) if u.target in public and not _is_private(u.name)
+            and declared[u.target] is not None and u.name not in declared[u.target]
+            and not (graph.modules[u.source].name == "__init__.py" and u.target.startswith(u.source + "."))]
+
+
+def test_modules(root=ROOT / "tests"):
+    """The stems of every test module of the suite."""
+    return {p.stem for p in root.rglob("test_*.py")}
+
+
+def has_test_module(module, tests=None):
+    """Whether ``a.b`` has a test module of its own name: ``test_b.py`` or, where names repeat across
+    packages (test basenames are unique in this suite), ``test_a_b.py``; a private module ``a._b`` is
+    tested under its public name (``test_b.py``)."""
+    tests = test_modules() if tests is None else tests
+    parts = [p.lstrip("_") for p in module.split(".")]
+    return f"test_{parts[-1]}" in tests or f"test_{'_'.join(parts)}" in tests

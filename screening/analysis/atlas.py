@@ -365,7 +365,9 @@ def make_excitation(shape, timing, S0):
     >>> type(ex).__name__, ex.S0, ex.envelope.T1
     ('WhiteNoise', 0.01, 4.0)
     """
-    from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
+    from screening.excitations.kanai_tajimi import KanaiTajimi
+    from screening.excitations.white import WhiteNoise
+    from screening.model.excitation import Envelope
 
     env = Envelope(timing["T1"], timing["T2"])
     if shape["kind"] == "white":

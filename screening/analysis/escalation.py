@@ -36,7 +36,8 @@ __all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "MAIN_SHARE", "STEP_COST_S", "GRID_
            "PRIOR_STEPS_PER_S", "STIFF_BED_EXACT_COST_S", "STIFF_BED_ADAPTIVE_COST_S", "STIFF_BED_RUN_COST_S",
            "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MIN_COVER", "MIN_CONDENSED_ROWS",
            "escalation_candidates", "cover_points", "condensed_cells", "escalation_model", "samples_needed",
-           "meets_target", "estimated_cost", "full_contact_share", "prior_cost", "affordable_points"]
+           "meets_target", "estimated_cost", "full_contact_share", "prior_cost", "affordable_points",
+           "auto_escalation_model", "PAIRED_MODEL", "paired_model"]
 
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
 PILOT_SAMPLES = 64
@@ -311,10 +312,32 @@ def escalation_model(indicators, status, condensation, eps, cells):
 
 
 def auto_escalation_model(calibrated, chosen):
-    """:class:`EscalationModel` per point with ``[accuracy] model = "auto"``: the model the measured validity rule
-    picks (:func:`screening.solvers.model_choice.choose`, ``chosen``: its model names per point) where that
-    is the stiff-bed model, else the calibration's choice ``calibrated`` (:func:`escalation_model`: condensed
-    where its cells qualify, coupled otherwise)."""
+    """:class:`EscalationModel` per point with ``[accuracy] model = "auto"``.
+
+    Parameters
+    ----------
+    calibrated : array_like of int
+        The calibration's choice per point (:func:`escalation_model`: condensed where its cells qualify,
+        coupled otherwise).
+    chosen : array_like of str
+        The Monte Carlo model the measured validity rule picks per point
+        (:func:`screening.solvers.model_choice.choose`).
+
+    Returns
+    -------
+    numpy.ndarray of int8
+        The stiff-bed model where the rule picks it, else ``calibrated``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Automatic model choice", ``docs/model_choice.md``.
+
+    Examples
+    --------
+    >>> calibrated = [EscalationModel.coupled, EscalationModel.condensed, EscalationModel.coupled]
+    >>> [EscalationModel(m).name for m in auto_escalation_model(calibrated, ["coupled", "stiff_bed", "condensed"])]
+    ['coupled', 'stiff_bed', 'coupled']
+    """
     chosen = np.asarray(chosen, dtype=str)
     return np.where(chosen == "stiff_bed", int(EscalationModel.stiff_bed),
                     np.asarray(calibrated)).astype(np.int8)
@@ -580,12 +603,36 @@ def affordable_points(budget_s, point_cost_s, most=MAX_POINTS):
 #: The cheaper model paired with the coupled one for multi-fidelity estimates: a registered Monte Carlo
 #: model, its condensation, and the :class:`EscalationModel` whose step cost the cost model charges it.
 #: The virtual-work condensation tracks the coupled peak var_theta within -2 to +16 % on held-out points.
+#: The cheap partner of a coupled escalated point in a multi-fidelity estimate: ``(registered Monte Carlo model,
+#: condensation, cost class)``.
 PAIRED_MODEL = ("condensed", "virtual_work", EscalationModel.condensed)
 
 
 def paired_model(model):
-    """``(registered model, condensation, cost class)`` run beside an escalated point's ``model`` for a
-    multi-fidelity estimate, or None (a condensed point has no cheaper partner)."""
+    """The cheap model run beside an escalated point for a multi-fidelity estimate, or None.
+
+    Parameters
+    ----------
+    model : int or EscalationModel
+        The point's escalation model.
+
+    Returns
+    -------
+    tuple or None
+        :data:`PAIRED_MODEL` (``(registered model, condensation, cost class)``) for a coupled point; None for
+        the others (a condensed or stiff-bed point has no cheaper partner).
+
+    References
+    ----------
+    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity Monte Carlo
+       estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [2] screening documentation, "Multi-fidelity Monte Carlo", ``docs/multifidelity.md``.
+
+    Examples
+    --------
+    >>> paired_model(EscalationModel.coupled)[:2], paired_model(EscalationModel.condensed)
+    (('condensed', 'virtual_work'), None)
+    """
     return PAIRED_MODEL if EscalationModel(int(model)) == EscalationModel.coupled else None
 
 

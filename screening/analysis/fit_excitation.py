@@ -46,9 +46,10 @@ import math
 import numpy as np
 from scipy import optimize
 
+from screening.excitations.kanai_tajimi import kanai_tajimi_psd
 from screening.records import Record
 
-__all__ = ["DEFAULT_BAND_TOP", "fit_envelope", "smoothed_psd", "fit_spectral_shape", "DT_RANGE", "MIN_SAMPLES",
+__all__ = ["envelope_energy", "DEFAULT_BAND_TOP", "fit_envelope", "smoothed_psd", "fit_spectral_shape", "DT_RANGE", "MIN_SAMPLES",
            "DEGENERATE_T_RATIO", "MIN_ZETA_G", "HUSID_GAP", "DC_FRACTION", "MAX_SPIKE_SHARE", "checked_record",
            "envelope_peak", "zero_crossing_rate", "husid", "goodness_of_fit", "fit_excitation", "excitation_table"]
 
@@ -57,8 +58,43 @@ __all__ = ["DEFAULT_BAND_TOP", "fit_envelope", "smoothed_psd", "fit_spectral_sha
 DEFAULT_BAND_TOP = 2.0 * math.pi * 20.0
 
 
-def _q2_integral(t, T1, T2):
-    """``int_0^t q^2`` of ``q = 4 (exp(-s/T1) - exp(-s/T2))``."""
+def envelope_energy(t, T1, T2):
+    """The energy of the envelope up to ``t``: ``int_0^t q(s)^2 ds`` [s], closed form.
+
+    Parameters
+    ----------
+    t : array_like
+        Time [s], >= 0.
+    T1, T2 : float
+        The envelope's time constants [s] (eq. 57), ``T1 > T2 > 0``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``int_0^t q^2`` [s] (``q`` is dimensionless), the Husid curve of the model once divided by its
+        final value.
+
+    Notes
+    -----
+    With ``q(s) = 4 (exp(-s/T1) - exp(-s/T2))`` (eq. (57) in [1]) and ``a = 2/T1``, ``b = 1/T1 + 1/T2``,
+    ``c = 2/T2``: ``int_0^t q^2 = 16 ((1 - e^{-a t})/a - 2 (1 - e^{-b t})/b + (1 - e^{-c t})/c)``
+    (``expm1`` keeps it exact at small ``t``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    Against the trapezoidal rule on a fine grid:
+
+    >>> t = np.linspace(0.0, 10.0, 200001)
+    >>> q = 4 * (np.exp(-t / 4.0) - np.exp(-t / 2.0))
+    >>> bool(np.isclose(envelope_energy(10.0, 4.0, 2.0), np.trapezoid(q * q, t), rtol=1e-9))
+    True
+    """
     a, b, c = 2.0 / T1, 1.0 / T1 + 1.0 / T2, 2.0 / T2
     return 16.0 * (-np.expm1(-a * t) / a - 2.0 * (-np.expm1(-b * t)) / b + (-np.expm1(-c * t)) / c)
 
@@ -76,7 +112,7 @@ def _husid_envelope(t, curve):
 
     def resid(x):
         T1 = math.exp(x[0])
-        model = _q2_integral(t, T1, T1 / (1.0 + math.exp(x[1])))
+        model = envelope_energy(t, T1, T1 / (1.0 + math.exp(x[1])))
         if not (model[-1] > 0.0 and np.isfinite(model[-1])):
             return np.ones_like(curve)                # degenerate envelope (T2 -> T1): poor fit
         return model / model[-1] - curve
@@ -106,7 +142,7 @@ def envelope_deviance(x, edges, energies):
     (``Q_k = int q^2`` over window ``k``); :data:`NO_ENVELOPE` where the envelope underflows or overflows."""
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         T1 = math.exp(min(x[0], 700.0))
-        Q = np.diff(_q2_integral(edges, T1, T1 / (1.0 + math.exp(min(x[1], 700.0)))))
+        Q = np.diff(envelope_energy(edges, T1, T1 / (1.0 + math.exp(min(x[1], 700.0)))))
     if not (np.all(Q > 0.0) and np.all(np.isfinite(Q))):
         return NO_ENVELOPE
     return float(np.sum(np.log(Q)) + Q.size * math.log(np.mean(energies / Q)))
@@ -129,7 +165,7 @@ def fit_envelope(record, window=ENERGY_WINDOW):
     Notes
     -----
     The energy of window ``k``, ``E_k = int_k a^2 dt``, has expectation ``sigma^2 Q_k`` with
-    ``Q_k = int_k q^2 dt`` (closed form, :func:`_q2_integral`) and ``sigma^2 = lambda_0`` the variance of
+    ``Q_k = int_k q^2 dt`` (closed form, :func:`envelope_energy`) and ``sigma^2 = lambda_0`` the variance of
     the stationary process, and is approximately Gamma distributed with a constant coefficient of
     variation.  The envelope minimises the Gamma quasi-likelihood deviance with ``sigma^2`` profiled out
     (``sigma^2 = mean_k E_k / Q_k``):
@@ -180,11 +216,6 @@ def fit_envelope(record, window=ENERGY_WINDOW):
     return T1, T1 / (1.0 + math.exp(best.x[1]))
 
 
-def _kt_shape(w, wg, zg):
-    num = wg**4 + 4.0 * zg**2 * wg**2 * w**2
-    return num / ((w**2 - wg**2) ** 2 + 4.0 * zg**2 * wg**2 * w**2)
-
-
 def smoothed_psd(record, T1, T2, smooth=2.0):
     """The record's periodogram normalised by ``2 pi int q^2``, smoothed by a moving average.
 
@@ -233,7 +264,7 @@ def smoothed_psd(record, T1, T2, smooth=2.0):
     n = a.size
     spec = np.fft.rfft(a) * record.dt
     w = 2.0 * math.pi * np.fft.rfftfreq(n, record.dt)
-    s_hat = np.abs(spec) ** 2 / (2.0 * math.pi * _q2_integral(record.duration, T1, T2))
+    s_hat = np.abs(spec) ** 2 / (2.0 * math.pi * envelope_energy(record.duration, T1, T2))
     width = max(1, int(round(smooth / (w[1] - w[0]))))
     kernel = np.ones(width) / width
     return w, np.convolve(s_hat, kernel, mode="same")
@@ -297,7 +328,7 @@ def fit_spectral_shape(record, T1, T2, band=(1.0, None), smooth=2.0):
 
     def resid(x):
         wg, zg = math.exp(x[0]), math.exp(x[1])
-        shape = _kt_shape(w, wg, zg)
+        shape = kanai_tajimi_psd(w, 1.0, wg, zg)
         log_ratio = np.log(s) - np.log(shape)
         return log_ratio - log_ratio.mean()          # the level is free here (set by the energy)
 
@@ -555,11 +586,12 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
     ['0.25', '9.27', '9.65']
     """
     from screening.analysis.intensity import spectral_moments
-    from screening.model.excitation import KanaiTajimi, WhiteNoise
+    from screening.excitations.kanai_tajimi import KanaiTajimi
+    from screening.excitations.white import WhiteNoise
 
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt
-    model = _q2_integral(t, fit["T1"], fit["T2"])
+    model = envelope_energy(t, fit["T1"], fit["T2"])
     exc = (KanaiTajimi(1.0, fit["omega_g"], fit["zeta_g"]) if fit["kind"] == "kanai_tajimi" else WhiteNoise(1.0))
     lam0, _, lam2 = spectral_moments(exc, band_top)
     return {"husid_max_deviation": float(np.max(np.abs(model / model[-1] - h))),
@@ -634,7 +666,7 @@ def fit_excitation(record, kind="kanai_tajimi", cutoff=None, band=(1.0, None), s
     record = Record(a, record.dt, record.name, record.source, record.units_in)
     T1, T2 = fit_envelope(record)
     energy = float(np.trapezoid(a * a, dx=record.dt))
-    q2 = float(_q2_integral(record.duration, T1, T2))
+    q2 = float(envelope_energy(record.duration, T1, T2))
     out = {"kind": kind, "T1": T1, "T2": T2, "arias_intensity": math.pi / (2.0 * 9.80665) * energy,
            "method": f"envelope: Gamma quasi-likelihood of {ENERGY_WINDOW:g} s window energies; shape: "
                      "Kanai-Tajimi fit to the smoothed periodogram (log scale); S0: expected Arias intensity = "

@@ -74,9 +74,10 @@ from screening.analysis.intensity_records import (AVGSA_N_PERIODS, AVGSA_RANGE, 
                                                   record_measures, record_velocity, synthesised_peaks, synthesised_pgv,
                                                   continuous_peak)
 from screening.analysis import intensity_rvt
-from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, N_TIMES, _scalar_excitation,
-                                              _shape_key, _times, envelope_exponentials, input_moments, median_peak,
-                                              oscillator_covariance, oscillator_response_bandwidth,
+from screening.analysis._excitation_shape import scalar_excitation as _scalar_excitation
+from screening.analysis._excitation_shape import shape_key as _shape_key, times as _times
+from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, N_TIMES, envelope_exponentials,
+                                              input_moments, median_peak, oscillator_covariance, oscillator_response_bandwidth,
                                               rocking_start_probability, sa_median, spectral_moments,
                                               velocity_covariance, velocity_spectral_moments)
 from screening.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff

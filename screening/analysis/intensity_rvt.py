@@ -24,6 +24,9 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize
 
+from screening.analysis._excitation_shape import N_TIMES
+from screening.analysis._excitation_shape import scalar_excitation as _scalar_excitation
+from screening.analysis._excitation_shape import shape_key as _shape_key, times as _times
 from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, vanmarcke_factor
 from screening.analysis.intensity_records import OMEGA_LOW
 from screening.solvers.moment_kernels import lyapunov_rhs
@@ -33,9 +36,6 @@ __all__ = ["N_TIMES", "CHUNK_POINTS", "CROSSING_STEP", "CROSSING_EXTENT", "spect
            "input_moments", "pga_median", "rocking_start_probability", "oscillator_covariance", "sa_median",
            "oscillator_response_bandwidth", "velocity_spectral_moments", "envelope_exponentials", "velocity_covariance"]
 
-
-#: Times on which the non-stationary moments are evaluated over ``[0, t_end]``.
-N_TIMES = 4001
 #: Points evaluated together by :func:`rocking_start_probability`.
 CHUNK_POINTS = 64
 
@@ -78,10 +78,6 @@ def spectral_moments(excitation, cutoff):
     833.33...
     """
     return tuple(excitation.spectral_moment(i, float(cutoff), epsrel=1e-11) for i in range(3))
-
-
-def _times(t_end, n=N_TIMES):
-    return np.linspace(0.0, float(t_end), n)
 
 
 def median_peak(t, var, var_dot, cov, bandwidth=None, probability=0.5):
@@ -356,13 +352,6 @@ def _unit_crossings(*args):
     return x[keep], log_crossings[keep]
 
 
-def _shape_key(excitation, t_end):
-    """Cache key of the filter kind, envelope and record length of ``excitation``."""
-    env = excitation.envelope
-    return (excitation.kind, env.kind, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
-                                         if env.kind == "exponential" else ()), float(t_end))
-
-
 @functools.lru_cache(maxsize=256)
 def _unit_input_moments(kind, envelope_kind, *args):
     """:func:`input_moments` at ``S0 = 1`` of one filter (parameters ``names`` with ``values``),
@@ -574,13 +563,6 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
 
     lam0, lam1, lam2 = (moment(i) for i in range(3))
     return math.sqrt(max(1.0 - lam1 * lam1 / (lam0 * lam2), 0.0))
-
-
-def _scalar_excitation(kind, envelope_kind, p):
-    from screening import excitations
-    from screening.model.excitation import ConstantEnvelope, Envelope
-    env = Envelope(p["T1"], p["T2"]) if envelope_kind == "exponential" else ConstantEnvelope()
-    return excitations.build(kind, 1.0, p, env)
 
 
 def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):

@@ -114,7 +114,7 @@ from screening.condensation.registry import register
 from screening.kernels.signatures import sdof_coefficients_signature
 
 __all__ = ["SOFTENING_LIMIT", "bearing_load", "check_bearing", "rest_indentation", "uplift_threshold",
-           "capacity_angle", "in_equilibrium", "quasi_static_indentation", "rocking_damping", "rocking_stiffness",
+           "capacity_angle", "in_equilibrium", "quasi_static_indentation", "indentation_state", "rocking_damping", "rocking_stiffness",
            "restoring_moment", "damping_at_rest", "stiffness_at_rest", "SDOF_RECORD", "sdof_record",
            "quasi_static_indentation_jit", "damping_stiffness_jit", "CubicCondensation", "CUBIC"]
 
@@ -370,11 +370,55 @@ def quasi_static_indentation(theta, block, foundation):
     >>> [f"{v:.4e}" for v in z]
     ['3.8594e-05', '2.6027e-05']
     """
-    return _indentation_state(theta, block, foundation)[:2]
+    return indentation_state(theta, block, foundation)[:2]
 
 
-def _indentation_state(theta, block, foundation):
-    """``(z, dz/da, v, a, uplift)`` with ``v = b a + z`` the compressed-edge indentation [m]."""
+def indentation_state(theta, block, foundation):
+    """The quasi-static contact state at the rocking angle ``theta``: what the damping, the stiffness
+    and the stiff-bed model's contact read.
+
+    Parameters
+    ----------
+    theta : array_like
+        Rocking angle [rad]; only ``|theta|`` matters.
+    block : screening.model.Block
+        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
+    foundation : screening.model.Foundation
+        The bed (``k`` [N m-2], ``eps`` [m-2]); fields may be arrays.
+
+    Returns
+    -------
+    z : numpy.ndarray
+        Indentation of the base centre ``z_cb`` [m] (:func:`quasi_static_indentation`).
+    slope : numpy.ndarray
+        ``dz_cb/d|theta|`` [m/rad].
+    v : numpy.ndarray
+        Indentation of the compressed edge ``v = b |theta| + z_cb`` [m].
+    a : numpy.ndarray
+        ``|theta|`` [rad], broadcast with the fields.
+    uplift : numpy.ndarray of bool
+        Whether the far edge has lifted (``|theta| > theta_ul``).
+
+    Notes
+    -----
+    Below ``theta_ul`` the balance with the cubic term, ``eps z^3 + (1 + eps b^2 theta^2) z = z_lin``
+    (eq. (13) in [1]); above it the uplift balance eq. (15) in [1], held at the peak load beyond the
+    capacity angle of a softening bed (slope 0 there).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> z, slope, v, a, uplift = indentation_state([0.0, 2e-3], block, bed)
+    >>> bool(np.allclose(v, block.b * a + z)), uplift.tolist()
+    (True, [False, True])
+    """
     check_bearing(block, foundation)
     a = np.abs(np.asarray(theta, dtype=float))
     b, k, eps, mg = block.b, foundation.k, np.asarray(foundation.eps, dtype=float), block.m * block.g
@@ -442,7 +486,7 @@ def rocking_damping(theta, block, foundation):
     >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
     ['0.9873', '0.02667']
     """
-    z, dz, v, a, uplift = _indentation_state(theta, block, foundation)
+    z, dz, v, a, uplift = indentation_state(theta, block, foundation)
     b = block.b
     w_rate, w_ind = foundation.damping_weights          # zdot (w_rate + w_ind z)
     c_in = (2.0 / 3.0 * w_rate * b**3 + 0.0 * a) + 2.0 / 3.0 * w_ind * b**3 * (z + a * dz)
@@ -494,7 +538,7 @@ def rocking_stiffness(theta, block, foundation):
     >>> [f"{k:.4g}" for k in rocking_stiffness([0.0, 0.01], block, bed)]
     ['1030', '239.7']
     """
-    z, _, v, a, uplift = _indentation_state(theta, block, foundation)
+    z, _, v, a, uplift = indentation_state(theta, block, foundation)
     b, k, eps = block.b, foundation.k, foundation.eps
     mgh = block.m * block.g * block.h
     k_in = 2.0 / 3.0 * b**3 * k - mgh + eps * k * (2.0 * b**3 * z * z + 0.4 * b**5 * a * a)

@@ -114,13 +114,14 @@ def plot_excitation_fit(record, fit, path):
     ...     plot_excitation_fit(rec, fit_excitation(rec), pathlib.Path(tmp) / "fit.png").name
     'fit.png'
     """
-    from screening.analysis.fit_excitation import _kt_shape, _q2_integral, husid, smoothed_psd
+    from screening.analysis.fit_excitation import envelope_energy, husid, smoothed_psd
+    from screening.excitations.kanai_tajimi import kanai_tajimi_psd
 
     a = record.acceleration - record.acceleration.mean()
     t = np.arange(a.size) * record.dt
     fig = new_figure(7.0, 7.0)
     ax = fig.subplots(2, 1)
-    model = _q2_integral(t, fit["T1"], fit["T2"])
+    model = envelope_energy(t, fit["T1"], fit["T2"])
     ax[0].plot(t, husid(a, record.dt), color="k", lw=1.0, label="record")
     ax[0].plot(t, model / model[-1], "--", color="C1", lw=1.2,
                label=f"fitted envelope T1 = {fit['T1']:.3g} s, T2 = {fit['T2']:.3g} s")
@@ -134,7 +135,7 @@ def plot_excitation_fit(record, fit, path):
     w, s = smoothed_psd(Record(a, record.dt), fit["T1"], fit["T2"])
     use = w > 0
     ax[1].loglog(w[use], s[use], color="k", lw=0.8, label="record (smoothed periodogram / 2 pi int q^2)")
-    shape = _kt_shape(w[use], fit["omega_g"], fit["zeta_g"]) if fit["kind"] == "kanai_tajimi" else np.ones(use.sum())
+    shape = kanai_tajimi_psd(w[use], 1.0, fit["omega_g"], fit["zeta_g"]) if fit["kind"] == "kanai_tajimi" else np.ones(use.sum())
     ax[1].loglog(w[use], fit["S0"] * shape, "--", color="C1", lw=1.2,
                  label=f"fitted {fit['kind']}: S0 = {fit['S0']:.3g} m2 s-3"
                        + (f", omega_g = {fit['omega_g']:.3g} rad/s, zeta_g = {fit['zeta_g']:.3g}"

@@ -239,22 +239,6 @@ def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, 
 
 
 @numba.njit(cache=True)
-def _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc, p):
-    """Right-hand side at the state ``y`` under the ground input ``acc = (x_g'', a_v)`` [m/s^2]."""
-    if model == MODEL_COUPLED:
-        a1, a3 = coupled_accelerations(y0, y1, y2, y3, acc[0], p, acc[1])
-        return y1, a1, y3, a3
-    return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc[0], p, acc[1]), 0.0, 0.0
-
-
-@numba.njit(cache=True)
-def _in_uplift(model, theta, z_cb, p):
-    if model == MODEL_COUPLED:
-        return z_cb - p.b * abs(math.sin(theta)) < 0.0
-    return abs(theta) > p.theta_ul
-
-
-@numba.njit(cache=True)
 def input_gain(model, theta, p):
     """``d(theta'', z_cb'')/d x_g''`` [rad/m, 1]: the right-hand side is linear in the input.
 

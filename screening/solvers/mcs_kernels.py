@@ -17,7 +17,8 @@ points the input is their cubic Hermite interpolant.  Samples are independent, s
 Method and how it is checked: ``docs/method.md#coupled-and-condensed-models`` and
 ``docs/montecarlo_numerics.md`` (the two integrators, stiff beds, cost).  The equations integrated live in
 :mod:`screening.solvers.mcs_equations`, the ground input between grid points in
-:mod:`screening.solvers.mcs_inputs`; their public names are importable from here too.
+:mod:`screening.kernels._sample_steps` (package-internal, shared with the stiff-bed kernels); the
+public names of the equations are importable from here too.
 """
 
 from __future__ import annotations
@@ -33,16 +34,16 @@ from screening.kernels import dopri
 from screening.kernels import rodas as _ro
 from screening.kernels.signatures import function_type, record_type, sdof_coefficients_signature
 from screening.solvers.mcs_equations import (GRAVITY_RATIO_MIN, INTEGRATOR_DOPRI, INTEGRATOR_RODAS,  # noqa: F401
-                                             INTEGRATORS, MODEL, MODEL_CONDENSED, MODEL_COUPLED, _in_uplift, _rhs,
+                                             INTEGRATORS, MODEL, MODEL_CONDENSED, MODEL_COUPLED,
                                              condensed_acceleration, coupled_accelerations, input_gain, model_record,
                                              vertical_gain)
-from screening.solvers.mcs_inputs import NO_VERTICAL, _hermite, _hermite_rate  # noqa: F401
+from screening.kernels._sample_steps import NO_VERTICAL, err_term, ground_input, ground_input_rate, store_outcome
 from screening.status import DivergenceReason, SampleStatus
 
 __all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "STATUS_OK", "STATUS_OVERTURNED", "STATUS_DIVERGED", "REASON_NONE",
            "REASON_NONFINITE", "REASON_LONG_FLIGHT", "REASON_OUT_OF_BOUNDS", "REASON_STEP_UNDERFLOW",
-           "REASON_STEP_BUDGET", "REASON_NO_EQUILIBRIUM", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
-           "INTEGRATORS", "model_record", "coupled_accelerations", "condensed_acceleration", "integrate_sample",
+           "REASON_STEP_BUDGET", "REASON_NO_EQUILIBRIUM", "REASON_LIFT_OFF", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
+           "INTEGRATORS", "NO_VERTICAL", "model_record", "coupled_accelerations", "condensed_acceleration", "integrate_sample",
            "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "chunk_integrator"]
 
 
@@ -70,22 +71,19 @@ from screening.kernels.dopri import (  # noqa: E402  (scalar tableau, one home)
 
 
 @numba.njit(cache=True)
-def _err_term(e, y, ynew, scale, rtol):
-    sc = scale + rtol * max(abs(y), abs(ynew))
-    r = e / sc
-    return r * r
+def _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc, p):
+    """Right-hand side at the state ``y`` under the ground input ``acc = (x_g'', a_v)`` [m/s^2]."""
+    if model == MODEL_COUPLED:
+        a1, a3 = coupled_accelerations(y0, y1, y2, y3, acc[0], p, acc[1])
+        return y1, a1, y3, a3
+    return y1, condensed_acceleration(damping_stiffness, cond, y0, y1, acc[0], p, acc[1]), 0.0, 0.0
 
 
 @numba.njit(cache=True)
-def _store_outcome(row, outcome, status, reason, peak, n_accepted, n_rejected, h_min):
-    """Row ``row`` of a chunk's per-sample outputs from a sample integrator's ``outcome``, the tuple
-    ``(status, reason, peak, n_accepted, n_rejected, h_min)``."""
-    status[row] = outcome[0]
-    reason[row] = outcome[1]
-    peak[row] = outcome[2]
-    n_accepted[row] = outcome[3]
-    n_rejected[row] = outcome[4]
-    h_min[row] = outcome[5]
+def _in_uplift(model, theta, z_cb, p):
+    if model == MODEL_COUPLED:
+        return z_cb - p.b * abs(math.sin(theta)) < 0.0
+    return abs(theta) > p.theta_ul
 
 
 @numba.njit(cache=True)
@@ -171,8 +169,8 @@ def _next_step(h, fac, landing, h_proposed, h_max):
 def _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp):
     """RMS over the ``n_comp`` integrated components of the local error ``e`` against
     ``scale + rtol max(|y|, |y_new|)`` (accept at <= 1)."""
-    err = (_err_term(e0, y0, n0, s0, rtol) + _err_term(e1, y1, n1, s1, rtol)
-           + _err_term(e2, y2, n2, s2, rtol) + _err_term(e3, y3, n3, s3, rtol))
+    err = (err_term(e0, y0, n0, s0, rtol) + err_term(e1, y1, n1, s1, rtol)
+           + err_term(e2, y2, n2, s2, rtol) + err_term(e3, y3, n3, s3, rtol))
     return math.sqrt(err / n_comp)
 
 
@@ -262,7 +260,7 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
     -----
     The equations are the coupled eqs. (7)-(8) in [1]_ or the condensed eq. (22)
     (:mod:`screening.solvers.mcs_equations`).  Compiling the kernel takes tens of seconds, so the
-    example shows its interface; ``tests/unit/solvers/test_mcs_integrators.py`` holds it against scipy.
+    example shows its interface; ``tests/unit/solvers/test_mcs_kernels.py`` holds it against scipy.
 
     References
     ----------
@@ -341,7 +339,7 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
     t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
         model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
     log_err_old = dopri.LOG_ERR_START
-    k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, _hermite(row, acc, acc_dot, dt_grid, t), p)
+    k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, ground_input(row, acc, acc_dot, dt_grid, t), p)
     h = min(1e-4, h_max)
     rejected = False
     while i_out < n_out:
@@ -356,30 +354,30 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
         g2 = y2 + h * _A21 * k1_2
         g3 = y3 + h * _A21 * k1_3
         k2_0, k2_1, k2_2, k2_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      _hermite(row, acc, acc_dot, dt_grid, t + _C2 * h), p)
+                                      ground_input(row, acc, acc_dot, dt_grid, t + _C2 * h), p)
         g0 = y0 + h * (_A31 * k1_0 + _A32 * k2_0)
         g1 = y1 + h * (_A31 * k1_1 + _A32 * k2_1)
         g2 = y2 + h * (_A31 * k1_2 + _A32 * k2_2)
         g3 = y3 + h * (_A31 * k1_3 + _A32 * k2_3)
         k3_0, k3_1, k3_2, k3_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      _hermite(row, acc, acc_dot, dt_grid, t + _C3 * h), p)
+                                      ground_input(row, acc, acc_dot, dt_grid, t + _C3 * h), p)
         g0 = y0 + h * (_A41 * k1_0 + _A42 * k2_0 + _A43 * k3_0)
         g1 = y1 + h * (_A41 * k1_1 + _A42 * k2_1 + _A43 * k3_1)
         g2 = y2 + h * (_A41 * k1_2 + _A42 * k2_2 + _A43 * k3_2)
         g3 = y3 + h * (_A41 * k1_3 + _A42 * k2_3 + _A43 * k3_3)
         k4_0, k4_1, k4_2, k4_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      _hermite(row, acc, acc_dot, dt_grid, t + _C4 * h), p)
+                                      ground_input(row, acc, acc_dot, dt_grid, t + _C4 * h), p)
         g0 = y0 + h * (_A51 * k1_0 + _A52 * k2_0 + _A53 * k3_0 + _A54 * k4_0)
         g1 = y1 + h * (_A51 * k1_1 + _A52 * k2_1 + _A53 * k3_1 + _A54 * k4_1)
         g2 = y2 + h * (_A51 * k1_2 + _A52 * k2_2 + _A53 * k3_2 + _A54 * k4_2)
         g3 = y3 + h * (_A51 * k1_3 + _A52 * k2_3 + _A53 * k3_3 + _A54 * k4_3)
         k5_0, k5_1, k5_2, k5_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      _hermite(row, acc, acc_dot, dt_grid, t + _C5 * h), p)
+                                      ground_input(row, acc, acc_dot, dt_grid, t + _C5 * h), p)
         g0 = y0 + h * (_A61 * k1_0 + _A62 * k2_0 + _A63 * k3_0 + _A64 * k4_0 + _A65 * k5_0)
         g1 = y1 + h * (_A61 * k1_1 + _A62 * k2_1 + _A63 * k3_1 + _A64 * k4_1 + _A65 * k5_1)
         g2 = y2 + h * (_A61 * k1_2 + _A62 * k2_2 + _A63 * k3_2 + _A64 * k4_2 + _A65 * k5_2)
         g3 = y3 + h * (_A61 * k1_3 + _A62 * k2_3 + _A63 * k3_3 + _A64 * k4_3 + _A65 * k5_3)
-        acc_end = _hermite(row, acc, acc_dot, dt_grid, t + h)
+        acc_end = ground_input(row, acc, acc_dot, dt_grid, t + h)
         k6_0, k6_1, k6_2, k6_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3, acc_end, p)
         n0 = y0 + h * (_B1 * k1_0 + _B3 * k3_0 + _B4 * k4_0 + _B5 * k5_0 + _B6 * k6_0)
         n1 = y1 + h * (_B1 * k1_1 + _B3 * k3_1 + _B4 * k4_1 + _B5 * k5_1 + _B6 * k6_1)
@@ -509,7 +507,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
             status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
             break
         if fresh:
-            acc_t = _hermite(row, acc, acc_dot, dt_grid, t)
+            acc_t = ground_input(row, acc, acc_dot, dt_grid, t)
             f0, f1, f2, f3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc_t, p)
             d = _ro.JACOBIAN_STEP * max(abs(y0), s0 / rtol)
             _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0 + d, y1, y2, y3, acc_t, p)
@@ -526,7 +524,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
                 j13, j33 = (a1 - f1) / d, (a3 - f3) / d
             g1, g3 = input_gain(model, y0, p)
             v1, v3 = vertical_gain(model, y0, p)
-            rate, rate_v = _hermite_rate(row, acc, acc_dot, dt_grid, t)
+            rate, rate_v = ground_input_rate(row, acc, acc_dot, dt_grid, t)
             ft1, ft3 = g1 * rate + v1 * rate_v, g3 * rate + v3 * rate_v
             fresh = False
         t_next = t_out[i_out]
@@ -542,7 +540,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
         u10, u11, u12, u13 = _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
                                                f0, f1 + _ro.D1 * h * ft1, f2, f3 + _ro.D1 * h * ft3)
         # --- stage 2
-        a = _hermite(row, acc, acc_dot, dt_grid, t + _ro.C2 * h)
+        a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C2 * h)
         g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, y0 + _ro.A21 * u10, y1 + _ro.A21 * u11,
                               y2 + _ro.A21 * u12, y3 + _ro.A21 * u13, a, p)
         u20, u21, u22, u23 = _rosenbrock_solve(
@@ -550,7 +548,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
             g0 + hi * _ro.G21 * u10, g1 + hi * _ro.G21 * u11 + _ro.D2 * h * ft1,
             g2 + hi * _ro.G21 * u12, g3 + hi * _ro.G21 * u13 + _ro.D2 * h * ft3)
         # --- stage 3
-        a = _hermite(row, acc, acc_dot, dt_grid, t + _ro.C3 * h)
+        a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C3 * h)
         g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
                               y0 + _ro.A31 * u10 + _ro.A32 * u20, y1 + _ro.A31 * u11 + _ro.A32 * u21,
                               y2 + _ro.A31 * u12 + _ro.A32 * u22, y3 + _ro.A31 * u13 + _ro.A32 * u23, a, p)
@@ -561,7 +559,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
             g2 + hi * (_ro.G31 * u12 + _ro.G32 * u22),
             g3 + hi * (_ro.G31 * u13 + _ro.G32 * u23) + _ro.D3 * h * ft3)
         # --- stage 4
-        a = _hermite(row, acc, acc_dot, dt_grid, t + _ro.C4 * h)
+        a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C4 * h)
         g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
                               y0 + _ro.A41 * u10 + _ro.A42 * u20 + _ro.A43 * u30,
                               y1 + _ro.A41 * u11 + _ro.A42 * u21 + _ro.A43 * u31,
@@ -574,7 +572,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
             g2 + hi * (_ro.G41 * u12 + _ro.G42 * u22 + _ro.G43 * u32),
             g3 + hi * (_ro.G41 * u13 + _ro.G42 * u23 + _ro.G43 * u33) + _ro.D4 * h * ft3)
         # --- stage 5 (at t + h)
-        acc_end = _hermite(row, acc, acc_dot, dt_grid, t + h)
+        acc_end = ground_input(row, acc, acc_dot, dt_grid, t + h)
         v0 = y0 + _ro.A51 * u10 + _ro.A52 * u20 + _ro.A53 * u30 + _ro.A54 * u40
         v1 = y1 + _ro.A51 * u11 + _ro.A52 * u21 + _ro.A53 * u31 + _ro.A54 * u41
         v2 = y2 + _ro.A51 * u12 + _ro.A52 * u22 + _ro.A53 * u32 + _ro.A54 * u42
@@ -641,7 +639,7 @@ def _integrate_chunk(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_o
     absolute tolerances.  Compiled per condensation record type by :func:`chunk_integrator`.
     """
     for row in numba.prange(acc[0].shape[0]):
-        _store_outcome(row, integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out,
+        store_outcome(row, integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out,
                                              models, y_init, scale, rtol, h_max, max_steps, out_theta,
                                              out_theta_dot, out_z, out_z_dot, out_uplift),
                        status, reason, peak, n_accepted, n_rejected, h_min)

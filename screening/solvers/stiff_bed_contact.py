@@ -201,7 +201,7 @@ def constraint_damping(theta, block, foundation):
     >>> bool(abs(above / below - 1) < 1e-6)
     True
     """
-    z, dz, v, a, up = cubic._indentation_state(theta, block, foundation)
+    z, dz, v, a, up = cubic.indentation_state(theta, block, foundation)
     w_rate, w_ind = (float(x) for x in foundation.damping_weights)
     b = float(block.b)
     full = (w_rate + w_ind * z) * (2.0 * b * dz * dz + 2.0 / 3.0 * b ** 3) + w_ind * 4.0 / 3.0 * a * dz * b ** 3

@@ -16,8 +16,7 @@ from screening.kernels import dopri
 from screening.kernels.dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
                                      B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
 from screening.solvers import mcs_kernels as kern
-from screening.solvers.mcs_inputs import _hermite as _input, _vertical_row   # one home: the input
-from screening.solvers.mcs_kernels import _err_term as _err2                   # one home: the error norm
+from screening.kernels._sample_steps import err_term as _err2, ground_input as _input, store_outcome, vertical_row
 from screening.solvers.stiff_bed_contact import rocking_acceleration_jit
 
 __all__ = ["linear_propagator", "transfer_ratio_jit", "integrate_sample", "integrate_chunk", "COUNT_ROWS",
@@ -120,7 +119,7 @@ def _accel(sp, cp, theta, theta_dot, acc):
 def _vertical_quiet(row, acc, acc_dot, j):
     """True when the vertical channel is zero over grid interval ``j`` (values and rates): the exact
     full-contact propagator holds there."""
-    vrow = _vertical_row(row, acc[1])
+    vrow = vertical_row(row, acc[1])
     if vrow < 0:
         return True
     v, r = acc[1], acc_dot[1]
@@ -564,7 +563,7 @@ def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out
     no_counts = np.zeros((0, 2), dtype=np.int64)
     for row in numba.prange(acc[0].shape[0]):
         cnt = counts[row] if counts.shape[0] > 0 else no_counts
-        kern._store_outcome(row, integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
+        store_outcome(row, integrate_sample(sp[0], cp[0], prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
                                                   t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
                                                   out_theta_dot, out_uplift, cnt),
                             status, reason, peak, n_accepted, n_rejected, h_min)

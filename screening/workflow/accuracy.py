@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from screening import limits
-from screening.workflow import execution
+from screening.workflow import _submit
 from screening.workflow.errors import exception_line, write_failure_reason
 from screening.workflow.interrupt import interruptible
 from screening.progress import Progress
@@ -283,7 +283,7 @@ def _escalation_runs(stage, order, models):
     def submit(j, samples, what, cheap_samples=0):
         model = EscalationModel(int(models[j])).name
         cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
-        return execution.submit_escalation(stage.client, study, int(order[j]), samples, model,
+        return _submit.submit_escalation(stage.client, study, int(order[j]), samples, model,
                                            key=f"escalate-{what}-{token}-{j:04d}", cheap=cheap,
                                            progress=(topic, 3 * j + ("pilot", "full", "topup").index(what)))
 
@@ -325,7 +325,7 @@ def _escalation_runs(stage, order, models):
 
     main_budget = esc.MAIN_SHARE * acc.budget_s
     if w < len(todo):
-        stage.client.run(execution.warm_up_monte_carlo)     # compile outside the budget
+        stage.client.run(_submit.warm_up_monte_carlo)     # compile outside the budget
     label = "accuracy: Monte Carlo at escalated points"
     with Progress(len(todo) - w, label=label, enabled=stage.progress and w < len(todo)) as bar:
         def count(event):            # per-sample progress of the running points (worker events)

@@ -33,7 +33,8 @@ from screening.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
 from screening.workflow.errors import SweepError, read_values
 from screening.workflow.grid import hyperslabs
 
-__all__ = ["MAX_GRID_DIMS", "BLOCK_VALUES", "SOURCE_CACHE_BYTES", "parse_selection", "select", "export_cdo"]
+__all__ = ["MAX_GRID_DIMS", "BLOCK_VALUES", "SOURCE_CACHE_BYTES", "open_source", "parse_selection", "select",
+           "export_cdo"]
 
 #: Grid dimensions CDO can hold besides time (z, y, x).
 MAX_GRID_DIMS = 3
@@ -45,8 +46,38 @@ SOURCE_CACHE_BYTES = 4 * 2**20
 
 
 def open_source(path):
-    """The result at ``path`` (:func:`~screening.workflow.reader.open_result`), its netCDF variables with a
-    chunk cache of :data:`SOURCE_CACHE_BYTES`: the memory of an export does not grow with the grid."""
+    """The result at ``path`` opened for an export: its netCDF variables with a chunk cache of
+    :data:`SOURCE_CACHE_BYTES`, so that the memory of an export does not grow with the grid.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A result: a netCDF file or a ``.zarr`` store (:func:`~screening.workflow.reader.open_result`).
+
+    Returns
+    -------
+    xarray.Dataset
+        The result, lazily loaded (close it when done); netCDF4's default chunk cache is restored.
+
+    References
+    ----------
+    .. [1] NetCDF-C documentation, "Chunk cache", https://docs.unidata.ucar.edu/netcdf-c/current/
+    .. [2] screening documentation, "The command line", ``docs/cli.md`` (``screening export --layout cdo``).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import netCDF4
+    >>> from screening.workflow.reader import example_result
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = os.path.join(folder.name, "result.nc")
+    >>> example_result().to_netcdf(path)
+    >>> before = netCDF4.get_chunk_cache()
+    >>> ds = open_source(path)
+    >>> dict(ds.sizes), netCDF4.get_chunk_cache() == before
+    ({'eps': 2, 't': 3}, True)
+    >>> ds.close(); folder.cleanup()
+    """
     import netCDF4
 
     from screening.workflow.reader import open_result
@@ -248,7 +279,7 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     """
     import netCDF4
 
-    from screening.workflow.zarrfile import netcdf_attributes
+    from screening.workflow._zarr_store import netcdf_attributes
 
     ds = select(ds, selection or {})
     grid = tuple(ds["status"].dims)

@@ -21,8 +21,8 @@ __all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NU
            "table", "check_keys", "required", "is_number", "check_value", "check_integer", "short_repr", "integer",
            "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
            "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
-           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "build_models", "case_cutoff",
-           "build_point_models"]
+           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "case_block_and_foundation",
+           "build_models", "case_cutoff", "build_point_models"]
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
@@ -1312,6 +1312,38 @@ def _block(p):
 def _foundation(case, p):
     damping = laws.get(case.contact).parameter
     return Foundation(k=p["k"], eps=p["eps"], law=case.contact, **{damping: p[damping]})
+
+
+def case_block_and_foundation(case, values):
+    """The block and the bed of ``case`` with ``values`` merged in (no excitation: nothing to derive).
+
+    Parameters
+    ----------
+    case : Case
+        A resolved case (:func:`resolve_case`).
+    values : dict
+        Swept parameters by name (SI: ``m`` [kg], ``b``, ``h`` [m], ``k`` [N m-2], ...), scalars or arrays.
+
+    Returns
+    -------
+    block : screening.model.Block
+    foundation : screening.model.Foundation
+        With the case's contact law and its damping parameter.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> block, foundation = case_block_and_foundation(resolve_case("", tables, {}, ""), {"b": 0.05})
+    >>> float(block.b), float(foundation.k)
+    (0.05, 28900000.0)
+    """
+    p = {**case.params, **values}
+    return _block(p), _foundation(case, p)
 
 
 def build_models(case, values, t_end=None):

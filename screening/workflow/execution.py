@@ -2,11 +2,11 @@
 
 Each batch of points is **one** task, :func:`solve_batch`: a vectorised call of
 :func:`screening.solvers.moments.solve_moments` on arrays (there is no finer task graph); each
-Monte Carlo spot check is one task, :func:`_spot_task`.  Tasks are submitted with
+Monte Carlo spot check is one task, :func:`spot_task`.  Tasks are submitted with
 ``retries=TASK_RETRIES``; their results are plain dicts of numpy arrays (the batch record read
 by :class:`~screening.workflow.writer.ResultFile` and saved by
 :class:`~screening.workflow.store.PartialStore`).  Workers must be able to import
-:mod:`screening` (same environment).  For a zarr result, :func:`_solve_and_store_batch` also writes the
+:mod:`screening` (same environment).  For a zarr result, :func:`screening.workflow._submit.solve_and_store_batch` also writes the
 batch into its region of the store and marks it done: the workers then need the store's folder
 (the same path on a shared file system), and return only the batch's summary.
 """
@@ -25,15 +25,13 @@ import numpy as np
 from screening.analysis.escalation import full_contact_share
 from screening.solvers import mc_registry
 from screening.solvers.moments import solve_moments
-from screening.solvers.outputs import HISTORY_VARIABLES, OUTPUTS, client_variables, of_stage, selected
+from screening.solvers.outputs import HISTORY_VARIABLES, OUTPUTS, of_stage, selected
 from screening.status import PointStatus, SampleState, Trust
 from screening.workflow.errors import SweepError, exception_line
-from screening.workflow.grid import batch_point_models, point_values
-from screening.workflow.study import build_models, case_cutoff
 
 __all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "SPOT_HISTORIES", "SPOT_LINEAR", "solve_batch", "batch_intensity",
            "batch_rocking_start", "batch_trust", "batch_probabilities", "wants_probabilities", "failed_result",
-           "escalation_task", "sample_state", "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers",
+           "spot_task", "escalation_task", "sample_state", "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers",
            "warm_up", "dask_client", "LOCAL_CLUSTER_CONFIG", "START_METHOD_VARIABLE", "WORKER_SETUP"]
 
 CONNECT_TIMEOUT = "15s"
@@ -292,16 +290,6 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
             for name, value in (("uplift_acceleration", a_ul), ("p_rocking_start", p))}
 
 
-def _solve_and_store_batch(target, batch, *solve_args):
-    """The dask task of a zarr result: :func:`solve_batch`, then its arrays written into the region of
-    ``batch`` in the store and the batch marked done (:class:`~screening.workflow.store.RegionTarget`
-    ``target``); returns what the client keeps of the batch
-    (:func:`screening.solvers.outputs.client_variables`)."""
-    out = solve_batch(*solve_args)
-    target.write(batch, out)
-    return {name: out[name] for name in client_variables()}
-
-
 def batch_trust(res, block, foundation, excitation, condensation, out, t_out, models=None):
     """``sl_trust`` (:class:`screening.status.Trust`) and the error band of a batch, from what the
     solver returned, by the error atlas model (:func:`screening.analysis.trust.error_model_trust`; without
@@ -524,12 +512,6 @@ def wants_probabilities(study):
     return study.accuracy is not None or study.fragility is not None
 
 
-def refused_batch(message):
-    """The task of a batch whose models could not be built on the client: fails with ``message``, so
-    that its points get status ``task_failed`` like any failed batch."""
-    raise ValueError(message)
-
-
 def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_inputs=(), probabilities=False):
     """Batch result for ``n`` points whose task failed: each declared variable's failed value (status
     ``task_failed``, NaN values, zero counts, ``sl_trust`` untrusted).
@@ -585,15 +567,56 @@ def spot_arrays(ds):
     return out
 
 
-def _spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None,
-               progress=None):
+def spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, linear=None,
+              progress=None):
     """The dask task of one spot check: :func:`screening.solvers.montecarlo.monte_carlo` reduced to arrays.
 
-    ``condensation`` (a :class:`screening.condensation.Condensation`) applies to a model that uses one
-    (``model="condensed"``; the others have none).  ``linear = (t_out, rtol, max_steps,
-    names)``: also solve the linearization at the point and return its histories ``names`` as
-    ``sl_<name>`` (float64; for a result that does not store them on the grid).  ``progress = (topic,
-    spot)``: the samples done are sent as worker events ``{"spot": spot, "done": n}`` on ``topic``.
+    Parameters
+    ----------
+    block : screening.model.Block
+        The block of the point (SI fields, scalars).
+    foundation : screening.model.Foundation
+        Its bed (SI fields, scalars).
+    excitation : screening.excitations.base.Excitation
+        Its excitation (``S0`` [m2 s-3]).
+    condensation : screening.condensation.Condensation or None
+        The point's condensation, used by a model that uses one (``model="condensed"``; the others have none).
+    samples : int
+        Monte Carlo samples.
+    model : str
+        A registered Monte Carlo model's name, or ``"auto"`` (resolved once, for this point).
+    t_end, dt : float
+        Record length and output time step [s].
+    seed : int
+        Seed of the ground-motion synthesis.
+    linear : tuple, optional
+        ``(t_out [s], rtol, max_steps, names)``: also solve the linearization at the point and return its
+        histories ``names`` as ``sl_<name>`` (for a result that does not store them on the grid).
+    progress : tuple, optional
+        ``(topic, spot)``: the samples done are sent as worker events ``{"spot": spot, "done": n}`` on ``topic``.
+
+    Returns
+    -------
+    dict
+        :func:`spot_arrays` of the run (histories [rad2, rad2 s-2], counts, steps, per-sample peaks [rad] and
+        states), its model's code ``mcs_model``, and the ``sl_<name>`` histories asked for (float64).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
+       ``docs/outputs.md``.
+
+    Examples
+    --------
+    Two samples of the coupled model on the paper's block and bed (compiles the integrator on a first call):
+
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> out = spot_task(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), None, 2,
+    ...                 "coupled", 0.2, 0.1, 0)
+    >>> out["var_theta"].shape, out["peak_abs_theta"].shape
+    ((3,), (2,))
+    >>> int(out["n_used"] + out["n_overturned"] + out["n_diverged"])
+    2
     """
     from screening.solvers.model_choice import resolve
     from screening.solvers.montecarlo import monte_carlo
@@ -623,7 +646,7 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
     stays the plain one), and the cheap run's ``cheap_*`` results, the correlation of the influence values at the
     peak of var_theta and the :class:`~screening.status.EscalationEstimator` code.  Where the cheap model refuses
     the point (``ValueError`` before any work) the result is the plain one, with ``cheap_samples`` 0.
-    ``progress``: the expensive run's samples, as for :func:`_spot_task`."""
+    ``progress``: the expensive run's samples, as for :func:`spot_task`."""
     from screening.analysis.multifidelity import multifidelity_variance
     from screening.solvers.montecarlo import monte_carlo
     from screening.status import EscalationEstimator
@@ -657,7 +680,7 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
 
 def escalation_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed, cheap=None,
                     progress=None):
-    """The dask task of one escalated point: :func:`_spot_task` reduced to its peaks, per-sample peaks,
+    """The dask task of one escalated point: :func:`spot_task` reduced to its peaks, per-sample peaks,
     the integration steps and synthesis grid points of all samples and whether the steps were the
     linearly implicit pair's (``n_steps``, ``n_grid``, ``rodas``, for the cost model) and the CPU time
     it took (``cpu_time`` [s], of the worker thread).
@@ -665,7 +688,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     ``cheap = (model, condensation, samples)``: a cheaper registered model also runs on the same ground
     motions (:func:`paired_escalation`); peak var_theta is then the two-fidelity estimate and the result
     carries the cheap run's per-sample peaks for the probabilities.  ``estimator`` says which estimate it is.
-    ``progress``: as for :func:`_spot_task`.
+    ``progress``: as for :func:`spot_task`.
 
     Parameters
     ----------
@@ -718,6 +741,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
 
     >>> from unittest import mock
     >>> import numpy as np
+    >>> from screening.workflow.config import build_models
     >>> from screening.workflow.study import EXAMPLE_STUDY as text, parse_study
     >>> study = parse_study(text)
     >>> block, foundation, excitation = build_models(study.cases[0], {"eps": 6e7}, study.t_end)  # one point
@@ -726,7 +750,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     ...        "var_theta_dot": np.array([0.0, 3e-2, 1e-2]), "var_theta_dot_se": np.array([0.0, 2e-3, 1e-3]),
     ...        "n_grid": 1000, "n_overturned": 0, "n_diverged": 0, "n_used": 8, "n_steps": 5000,
     ...        "peak_abs_theta": np.full(8, 0.02), "sample_state": np.zeros(8, np.int8)}
-    >>> with mock.patch(f"{__name__}._spot_task", return_value=run):
+    >>> with mock.patch(f"{__name__}.spot_task", return_value=run):
     ...     out = escalation_task(block, foundation, excitation, condensation, 8, "coupled", 0.1, 0.05, seed=0)
     >>> out["peak_var_theta"], out["peak_var_theta_se"], out["samples"]
     (np.float64(0.0002), np.float64(1e-05), np.int32(8))
@@ -736,7 +760,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
 
     start = time.thread_time()
     if cheap is None:
-        run = _spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
+        run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
                          progress=progress)
         extra = {"estimator": np.int8(EscalationEstimator.plain_monte_carlo), "cheap_samples": np.int32(0),
                  "correlation": np.float64(np.nan)}
@@ -754,18 +778,6 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
         out[name] = run[name]
     out.update(extra)
     return out
-
-
-def submit_escalation(client, study, flat_index, samples, model, key, cheap=None, progress=None):
-    """Submit :func:`escalation_task` at flat grid index ``flat_index`` with ``samples`` samples of ``model``
-    (a registered Monte Carlo model's name; ``cheap``: the paired model of :func:`escalation_task`; retried
-    :data:`TASK_RETRIES` times); ``progress = (topic, run)``: the samples done are sent as worker events
-    (:func:`_spot_task`)."""
-    index = tuple(int(i) for i in np.unravel_index(flat_index, study.shape))
-    case, values = point_values(study, index)
-    return client.submit(escalation_task, *build_models(study.cases[case], values, study.t_end),
-                         study.cases[case].condensation_model, int(samples), model, study.t_end, study.dt,
-                         study.accuracy.seed, cheap, progress, retries=TASK_RETRIES, pure=False, key=key)
 
 
 def _sample_events(progress):
@@ -815,52 +827,6 @@ def sample_state(overturned, diverged):
     return state
 
 
-def spot_linear_names(study):
-    """The linearization histories a spot task must return: those the comparison needs but the grid
-    does not store, and those stored at the spots only (``[output] histories = "spots"``)."""
-    stored = set(study.output.stored)
-    wanted = set(study.output.at_spots) | set(SPOT_LINEAR) - stored
-    return tuple(name for name in HISTORY_VARIABLES if name in wanted)
-
-
-def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
-    """Spot-check result of a task that failed: NaN histories, every sample ``diverged_or_failed``."""
-    out = {name: np.full(nt, np.nan) for name in SPOT_HISTORIES}
-    out.update({f"sl_{name}": np.full(nt, np.nan) for name in linear_names})
-    out.update(n_overturned=np.int32(0), n_diverged=np.int32(0), n_used=np.int32(0),
-               peak_abs_theta=np.full(samples, np.nan),
-               sample_state=np.full(samples, SampleState.diverged_or_failed, dtype=np.int8))
-    return out
-
-
-# ============================================================================ submission
-def submit_batch(client, study, batch, key, target=None):
-    """Submit :func:`solve_batch` for ``batch`` (retried :data:`TASK_RETRIES` times); with a
-    :class:`~screening.workflow.store.RegionTarget` ``target``, :func:`_solve_and_store_batch`."""
-    from screening.analysis.trust import trust_models
-
-    case = study.cases[batch.case]
-    block, foundation, excitation, underivable = batch_point_models(study, batch)
-    args = (block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
-            study.output.stored, study.fragility, trust_models(case.condensation_model.name), study.derived_inputs,
-            underivable if np.any(underivable) else None, case_cutoff(case), wants_probabilities(study))
-    if target is not None:
-        return client.submit(_solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
-    return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)
-
-
-def submit_spot(client, study, index, key, progress=None):
-    """Submit :func:`_spot_task` at grid index tuple ``index`` (retried :data:`TASK_RETRIES` times);
-    ``progress = (topic, spot)``: its samples are reported as worker events on ``topic``."""
-    case, values = point_values(study, index)
-    spec = study.mcs
-    names = spot_linear_names(study)
-    linear = (study.times, study.rtol, study.max_steps, names) if names else None
-    return client.submit(_spot_task, *build_models(study.cases[case], values, study.t_end), study.cases[case].condensation_model,
-                         spec.samples, spec.model, study.t_end, study.dt, spec.seed, linear, progress,
-                         retries=TASK_RETRIES, pure=False, key=key)
-
-
 # ============================================================================ cluster
 #: Default execution: in-process (``workers = 0``) for grids of at most this many points with at
 #: most one Monte Carlo spot check (under a second of solver work: starting worker processes and
@@ -900,11 +866,6 @@ def default_workers(study):
     return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
 
 
-def sees_folder(path):
-    """Whether the folder ``path`` exists for this worker (the workers write a zarr result in place)."""
-    return os.path.isdir(path)
-
-
 def warm_up():
     """Import the solver and load its compiled code on a worker; returns the time taken [s].
 
@@ -933,22 +894,9 @@ def warm_up():
     """
     start = time.perf_counter()
     from screening.model import Block, Foundation
-    from screening.model.excitation import WhiteNoise
+    from screening.excitations.white import WhiteNoise
 
     solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
-    return time.perf_counter() - start
-
-
-def warm_up_monte_carlo():
-    """Compile the Monte Carlo kernels on a worker (both models, two short samples); returns the time [s]."""
-    start = time.perf_counter()
-    from screening.model import Block, Foundation
-    from screening.model.excitation import WhiteNoise
-    from screening.solvers.montecarlo import monte_carlo
-
-    for model in ("coupled", "condensed"):
-        monte_carlo(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), n_samples=2,
-                    model=model, t_end=0.2, dt=0.1, progress=False)
     return time.perf_counter() - start
 
 

@@ -18,7 +18,7 @@ from screening.schema import PARAMETERS
 from screening.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.limits import batch_budget
-from screening.workflow.study import build_models, build_point_models
+from screening.workflow.config import build_models, build_point_models
 
 __all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
            "default_batch_size", "plan_batches", "hyperslabs", "batch_values", "point_values", "batch_models",

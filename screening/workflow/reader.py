@@ -228,7 +228,8 @@ def result_key(path):
     """
     import netCDF4
 
-    from screening.workflow.zarrfile import is_zarr_store, read_attrs
+    from screening.workflow._zarr_store import read_attrs
+    from screening.workflow.zarrfile import is_zarr_store
 
     if is_zarr_store(path):
         try:

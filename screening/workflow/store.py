@@ -26,7 +26,7 @@ from screening import __version__
 from screening.atomicfile import create_new as _create
 from screening.atomicfile import open_nofollow as _open_nofollow
 from screening.workflow.errors import SweepError
-from screening.workflow.zarrfile import file_check
+from screening.workflow._zarr_store import file_check
 
 __all__ = ["PartialStore", "RegionTarget"]
 

@@ -573,7 +573,7 @@ def check_model_validity(model, cases, sweeps, strict, where):
     saying so (the run goes on).  ``"auto"`` is never outside (it picks per point)."""
     import warnings
 
-    from screening.workflow.config import _block, _foundation
+    from screening.workflow.config import case_block_and_foundation
 
     if model == model_choice.AUTO:
         return
@@ -585,8 +585,7 @@ def check_model_validity(model, cases, sweeps, strict, where):
         seen = 0
         for j in np.ndindex(*(len(sweeps[n]) for n in names)) if names else [()]:
             values = {n: float(sweeps[n][i]) for n, i in zip(names, j)}
-            p = {**case.params, **values}
-            problem = mc.validity_problem(_block(p), _foundation(case, p), kind)
+            problem = mc.validity_problem(*case_block_and_foundation(case, values), kind)
             if problem is None:
                 continue
             at = ", ".join(f"{n} = {v!r}" for n, v in values.items()) or "every point"

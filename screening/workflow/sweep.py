@@ -23,7 +23,7 @@
 Only the client touches the disk, so workers of a remote cluster need no shared file system --
 except for a zarr result (``out`` ending in ``.zarr``): the store is built in ``<out>.partial/`` by
 the workers, each writing and compressing the chunks of its own batches in place
-(:func:`screening.workflow.execution._solve_and_store_batch`) and marking them done; the client
+(:func:`screening.workflow._submit.solve_and_store_batch`) and marking them done; the client
 creates the store's metadata, keeps a few bytes per point, writes the spot checks and moves the
 finished store into place.  The store and its markers are the resume record of the batches.
 Workers of a remote cluster then need the folder at the same path (a shared file system).
@@ -45,7 +45,7 @@ import numpy as np
 
 from screening import __version__
 from screening.status import PointStatus, Trust
-from screening.workflow import execution
+from screening.workflow import _submit, execution
 from screening.workflow.accuracy import Stage, escalate
 from screening.workflow.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.workflow.grid import default_batch_size, plan_batches, select_spots
@@ -54,8 +54,8 @@ from screening.progress import Progress
 from screening.workflow.reader import result_key, verify_result
 from screening.workflow.store import PartialStore
 from screening.workflow.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
-from screening.workflow.zarrfile import (foreign_files, is_zarr_path, remove_store, write_completion_mark,
-                                         zarr_batch_size)
+from screening.workflow._zarr_store import foreign_files, remove_store, write_completion_mark
+from screening.workflow.zarrfile import is_zarr_path, zarr_batch_size
 
 __all__ = ["MAX_FAILURE_MESSAGES", "IN_FLIGHT_PER_WORKER", "SweepReport", "run_sweep", "SampleCount"]
 
@@ -348,7 +348,7 @@ class _SweepRun:
             shutil.rmtree(path, ignore_errors=True)
             result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size)
         self.target = self.store.region_target(study.shape, study.output.stored, region_variables(study))
-        blind = [w for w, ok in self.client.run(execution.sees_folder, self.target.store).items() if not ok]
+        blind = [w for w, ok in self.client.run(_submit.sees_folder, self.target.store).items() if not ok]
         if blind:
             raise SweepError(f"{len(blind)} dask worker(s) (e.g. {blind[0]}) do not see {self.store.dir}: the workers "
                              "write a zarr result in place, so its folder must be at the same path on every worker "
@@ -359,9 +359,9 @@ class _SweepRun:
     def _submit(self, batch, suffix=""):
         key = f"solve_batch-{self.token}-{batch.index:06d}{suffix}"
         try:
-            return execution.submit_batch(self.client, self.study, batch, target=self.target, key=key)
+            return _submit.submit_batch(self.client, self.study, batch, target=self.target, key=key)
         except ValueError as exc:      # its models cannot be built (e.g. S0 from a target PGA at extreme scales)
-            return self.client.submit(execution.refused_batch, str(exc), key=key, pure=False)
+            return self.client.submit(_submit.refused_batch, str(exc), key=key, pure=False)
 
     def _is_saved(self, batch):
         if self.target is not None:
@@ -489,9 +489,9 @@ class _SweepRun:
         topic = f"screening-spot-samples-{token}"
         results, failed, pending = [None] * len(spots), [False] * len(spots), {}
         for i, index in enumerate(spots):
-            results[i] = store.load_spot(i, index, execution.failed_spot(study.times.size, spec.samples))
+            results[i] = store.load_spot(i, index, _submit.failed_spot(study.times.size, spec.samples))
             if results[i] is None:
-                pending[execution.submit_spot(self.client, study, index, key=f"spot_check-{token}-{i:04d}",
+                pending[_submit.submit_spot(self.client, study, index, key=f"spot_check-{token}-{i:04d}",
                                               progress=(topic, i))] = i
         with Progress(len(spots) * spec.samples, label=f"spot checks ({len(spots)} x {spec.model}, samples)",
                       enabled=self.progress and bool(pending)) as bar:
@@ -507,8 +507,8 @@ class _SweepRun:
                         results[i] = fut.result()
                     except Exception as exc:              # noqa: BLE001 - recorded as a failed spot check
                         log(f"warning: spot check {i} failed: {exception_line(exc)}")
-                        results[i] = execution.failed_spot(study.times.size, spec.samples,
-                                                           execution.spot_linear_names(study))
+                        results[i] = _submit.failed_spot(study.times.size, spec.samples,
+                                                           _submit.spot_linear_names(study))
                         failed[i] = True
                     else:
                         try:                              # the resume record only: the result is kept

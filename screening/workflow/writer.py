@@ -118,7 +118,8 @@ def check_output_path(out, inputs=()):
             raise SweepError(f"output path {out} is the input file {path}; give another --out")
         if _inside(out, path):
             raise SweepError(f"output path {out} is inside the input {path}; give another --out")
-    from screening.workflow.zarrfile import foreign_files, is_zarr_path, is_zarr_store
+    from screening.workflow._zarr_store import foreign_files
+    from screening.workflow.zarrfile import is_zarr_path, is_zarr_store
 
     if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
         raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")
@@ -638,7 +639,7 @@ class ResultFile:
 
     def write_spots(self, spots, results, failed, spec):
         """Spot-check variables on dimension ``spot`` (``spots``: grid index tuples; ``results``: the
-        dicts of :func:`~screening.workflow.execution._spot_task`; ``failed``: flags)."""
+        dicts of :func:`~screening.workflow.execution.spot_task`; ``failed``: flags)."""
         fmt, study = self.format, self.study
         fmt.dimension("spot", len(spots))
         coords = []

@@ -15,8 +15,6 @@ HDF5 files cannot be written from several processes, hence this second form for 
 
 from __future__ import annotations
 
-import contextlib
-import hashlib
 import json
 import math
 import os
@@ -27,17 +25,18 @@ import numpy as np
 
 from screening.atomicfile import create_new
 from screening.solvers.outputs import GRID_OUTPUTS
+from screening.workflow._zarr_store import (COMPLETION_MARK, file_check, netcdf_attributes, read_completion_mark,
+                                           warnings_ignored)
+from screening.workflow._zarr_store import write_completion_mark  # noqa: F401 (the examples' finished runs)
 
 __all__ = ["ZARR_SUFFIX", "ZARR_FORMAT", "BLOCK_BYTES", "COMPLETION_MARK", "ZARR_FILL", "is_zarr_path",
-           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrFormat", "store_problem", "open_zarr_result",
-           "export_netcdf"]
+           "is_zarr_store", "point_chunks", "zarr_batch_size", "ZarrFormat", "store_problem", "check_store",
+           "open_zarr_result", "export_netcdf"]
 
 ZARR_SUFFIX = ".zarr"
 ZARR_FORMAT = 3
 #: Bytes read at a time when a variable is copied (:func:`export_netcdf`) or checked.
 BLOCK_BYTES = 32 * 2**20
-#: The completion mark of a finished store (:func:`write_completion_mark`), in its top folder.
-COMPLETION_MARK = "screening-complete.json"
 #: What a chunk that was never written reads as (zarr's fill value): for a flag, the value of a failed
 #: point (:mod:`screening.solvers.outputs`), never ``ok``.
 ZARR_FILL = {o.name: int(o.failed) for o in GRID_OUTPUTS if o.is_flag}
@@ -399,7 +398,7 @@ class ZarrFormat:
             self.commit()
             import zarr
 
-            with _warnings_ignored():
+            with warnings_ignored():
                 zarr.consolidate_metadata(self.path, zarr_format=ZARR_FORMAT)
 
     # -- batches
@@ -419,77 +418,6 @@ class ZarrFormat:
 
 
 # ----------------------------------------------------------------------------- integrity
-def file_check(path):
-    """``[size [bytes], checksum]`` of the regular file ``path`` (read without following a link), or
-    ``[-1, ""]`` if it is missing, a link or not a regular file."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
-    except OSError:
-        return [-1, ""]
-    with os.fdopen(fd, "rb") as fh:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            return [-1, ""]
-        digest, size = hashlib.blake2b(digest_size=16), 0
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-            size += len(block)
-    return [size, digest.hexdigest()]
-
-
-def _store_entries(root):
-    """``(files, foreign)`` of the folder ``root``: the relative paths (``/``-separated) of its regular
-    files other than the completion mark, and those of its entries that are neither a regular file
-    nor a folder (links, FIFOs...)."""
-    files, foreign = [], []
-    root = Path(root)
-    for folder, dirs, names in os.walk(root):
-        rel = Path(folder).relative_to(root)
-        for name in list(dirs):
-            if os.path.islink(os.path.join(folder, name)):
-                foreign.append((rel / name).as_posix())
-                dirs.remove(name)
-        for name in names:
-            st = os.lstat(os.path.join(folder, name))
-            path = (rel / name).as_posix()
-            if not stat.S_ISREG(st.st_mode):
-                foreign.append(path)
-            elif path != COMPLETION_MARK:
-                files.append(path)
-    return sorted(files), foreign
-
-
-def write_completion_mark(root):
-    """Write the completion mark of the finished store ``root``: ``{"files": {path: [size, checksum]}}``
-    of every file of the store.  Written last, atomically: a store without it was never finished."""
-    files, foreign = _store_entries(root)
-    if foreign:
-        raise OSError(0, f"the zarr store {root} holds {foreign[0]}, which is not a regular file")
-    checks = {path: file_check(Path(root) / path) for path in files}
-    mark = Path(root) / COMPLETION_MARK
-    tmp = mark.with_name(mark.name + ".tmp")
-    with create_new(tmp) as fh:
-        fh.write(json.dumps({"format": 1, "files": checks}).encode())
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, mark)
-
-
-def _read_completion_mark(root):
-    """The files ``{path: [size, checksum]}`` of the completion mark of ``root``, or ``None`` if it has
-    none (or an unreadable one)."""
-    try:
-        fd = os.open(Path(root) / COMPLETION_MARK, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
-        with os.fdopen(fd, "rb") as fh:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
-                return None
-            mark = json.loads(fh.read(1 << 28))
-        files = mark["files"]
-    except (OSError, ValueError, KeyError, TypeError, RecursionError):
-        return None
-    ok = isinstance(files, dict) and all(isinstance(v, list) and len(v) == 2 for v in files.values())
-    return files if ok else None
-
-
 def store_problem(root, deep=True):
     """Why the zarr store ``root`` is not a finished, intact result (a short phrase), or ``None``.
 
@@ -535,7 +463,7 @@ def store_problem(root, deep=True):
     'its file peak_var_theta/c/0 is missing'
     >>> folder.cleanup()
     """
-    files = _read_completion_mark(root)
+    files = read_completion_mark(root)
     if files is None:
         return ("it has no completion mark: the store of an interrupted run (re-run the same command to "
                 "finish it) or one screening did not write")
@@ -550,41 +478,6 @@ def store_problem(root, deep=True):
         if deep and file_check(full) != [size, digest]:
             return f"its file {path} has changed since it was written (checksum)"
     return None
-
-
-def foreign_files(root):
-    """Entries of the folder ``root`` that screening did not write as a finished store (all of them
-    if it has no completion mark); ``[]`` when it may be replaced."""
-    files, foreign = _store_entries(root)
-    mark = _read_completion_mark(root)
-    if mark is None:
-        return foreign + files or [COMPLETION_MARK + " (missing)"]
-    return foreign + [f for f in files if f not in mark]
-
-
-def remove_store(root):
-    """Delete the files of the finished store ``root`` its completion mark lists, the mark, and the
-    folders left empty; anything else stays.  Returns whether ``root`` is gone."""
-    for path in _read_completion_mark(root) or {}:
-        with contextlib.suppress(OSError, ValueError):
-            os.unlink(Path(root) / path)
-    with contextlib.suppress(OSError):
-        os.unlink(Path(root) / COMPLETION_MARK)
-    for folder, _, _ in sorted(os.walk(root), key=lambda entry: -len(entry[0])):
-        with contextlib.suppress(OSError):
-            os.rmdir(folder)
-    return not os.path.lexists(root)
-
-
-@contextlib.contextmanager
-def _warnings_ignored():
-    """zarr warns that consolidated metadata is not in the format 3 specification (yet): it is read by
-    xarray and zarr-python, and optional for other readers."""
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        yield
 
 
 def _json(value):
@@ -636,29 +529,61 @@ def open_zarr_result(path):
     """
     import xarray as xr
 
-    with _warnings_ignored():
+    with warnings_ignored():
         return xr.open_zarr(path, zarr_format=ZARR_FORMAT, consolidated=None, chunks=None)
 
 
-def read_attrs(path):
-    """The global attributes of the store at ``path`` (a dict; empty if it has none)."""
-    import zarr
-
-    with _warnings_ignored():
-        return dict(zarr.open_group(path, mode="r").attrs)
-
-
 def check_store(path, expected_dims, required):
-    """Why the store at ``path`` cannot be reused (a short reason), or ``None``: ``expected_dims``
-    ``{name: size}``, ``required`` variable names; every file is checked against the completion mark
-    (:func:`store_problem`) and every chunk read (a damaged one raises)."""
+    """Why the finished store at ``path`` cannot be reused for a study (a short reason), or ``None``.
+
+    Every file is checked against the completion mark (:func:`store_problem`), the dimensions and the
+    variables against the study's, and every chunk is read (a damaged one raises).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store's folder.
+    expected_dims : dict of str to int
+        The study's dimensions and their sizes.
+    required : sequence of str
+        The variables the study's result must hold.
+
+    Returns
+    -------
+    str or None
+        The first reason found, or None for a store the study can reuse.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile, warnings
+    >>> from screening.workflow.reader import example_result
+    >>> result = example_result()
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> store = os.path.join(folder.name, "result.zarr")
+    >>> with warnings.catch_warnings():                 # zarr: consolidated metadata is not in format 3 (yet)
+    ...     warnings.simplefilter("ignore")
+    ...     _ = result.to_zarr(store, zarr_format=3)
+    >>> write_completion_mark(store)                  # what a finished run does last
+    >>> check_store(store, dict(result.sizes), ["status"]) is None
+    True
+    >>> check_store(store, {**result.sizes, "time": 7}, ["status"])
+    "its dimension 'time' does not have the study's size 7"
+    >>> check_store(store, dict(result.sizes), ["status", "p_overturn"])
+    'it lacks p_overturn'
+    >>> folder.cleanup()
+    """
     import zarr
 
     problem = store_problem(path)
     if problem:
         return problem
 
-    with _warnings_ignored():
+    with warnings_ignored():
         group = zarr.open_group(path, mode="r")
         arrays = dict(group.arrays())
     dims = {}
@@ -685,40 +610,6 @@ def _blocks(arr):
     step = max(1, BLOCK_BYTES // max(row, 1))
     for lo in range(0, arr.shape[0], step):
         yield (slice(lo, lo + step),)
-
-
-def netcdf_attributes(attrs, dtype=None, where="the result"):
-    """``attrs`` as netCDF can store them: lists as arrays, ``None`` dropped, JSON objects and lists
-    netCDF cannot type (nested, mixed) as JSON text; ``flag_values`` in ``dtype`` (a
-    :class:`~screening.workflow.errors.SweepError` naming ``where`` if they are not a flat list of
-    numbers)."""
-    from screening.workflow.errors import SweepError
-
-    out = {}
-    for name, value in attrs.items():
-        if value is None:
-            continue
-        if isinstance(value, (bool, np.bool_)):
-            value = int(value)
-        if name == "flag_values" and dtype is not None:
-            try:
-                flags = np.asarray(value, dtype=dtype)
-                if flags.ndim > 1:
-                    raise ValueError
-            except (TypeError, ValueError, OverflowError):
-                raise SweepError(f"the flag_values of {where} are not a flat list of numbers of its type "
-                                 f"({dtype}); cannot export it") from None
-            out[name] = flags
-        elif isinstance(value, (dict, list, tuple)):
-            array = None
-            with contextlib.suppress(TypeError, ValueError, OverflowError):
-                array = np.asarray(value)
-            ok = array is not None and array.ndim == 1 and array.size and (
-                array.dtype.kind in "iuf" or array.dtype.kind == "U" and all(isinstance(v, str) for v in value))
-            out[name] = array if ok else json.dumps(value, ensure_ascii=False, default=str)
-        else:
-            out[name] = value
-    return out
 
 
 def export_netcdf(src, dst, complevel, history):
@@ -784,7 +675,7 @@ def export_netcdf(src, dst, complevel, history):
     from screening.workflow.errors import read_values
     from screening.workflow.grid import history_chunks
 
-    with _warnings_ignored():
+    with warnings_ignored():
         group = zarr.open_group(src, mode="r")
         arrays = dict(group.arrays())
         attrs = dict(group.attrs)

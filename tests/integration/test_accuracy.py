@@ -94,13 +94,13 @@ def test_fragility_uses_monte_carlo_where_it_ran_and_the_band_elsewhere(client, 
 
 
 def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkeypatch):
-    from screening.workflow import execution
+    from screening.workflow import _submit
     from screening.workflow.sweep import _SweepRun
 
     study = parse_study(TARGET)
-    real = execution.submit_escalation
+    real = _submit.submit_escalation
     calls = []
-    monkeypatch.setattr(execution, "submit_escalation", lambda *a, **k: calls.append(int(a[2])) or real(*a, **k))
+    monkeypatch.setattr(_submit, "submit_escalation", lambda *a, **k: calls.append(int(a[2])) or real(*a, **k))
 
     def interrupted(self):
         raise KeyboardInterrupt
@@ -164,7 +164,7 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
     record: the resumed run escalates the same points with the same samples and the same estimates."""
     from screening.analysis import escalation
-    from screening.workflow import accuracy, execution
+    from screening.workflow import _submit, accuracy
     from screening.workflow.store import PartialStore
 
     # a top-up round whatever the models' errors: no point meets the target, a top-up asks for a few samples more
@@ -173,9 +173,9 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     monkeypatch.setattr(escalation, "samples_needed", lambda se, n0, *a, **k: n0 + 16 if n0 != escalation.PILOT_SAMPLES
                         else real_needed(se, n0, *a, **k))
     study = parse_study(TARGET)
-    real_submit = execution.submit_escalation
+    real_submit = _submit.submit_escalation
     keys = []
-    monkeypatch.setattr(execution, "submit_escalation",
+    monkeypatch.setattr(_submit, "submit_escalation",
                         lambda *a, **k: keys.append(k["key"].split("-")[1]) or real_submit(*a, **k))
     run_sweep(study, tmp_path / "ref.nc", client=client, progress=False, log=lambda m: None)
     assert keys.count("topup") >= 1, keys                    # the study has a top-up round to interrupt

@@ -89,13 +89,13 @@ def test_the_pilot_decides_by_the_fallback_rule(client, tmp_path, monkeypatch):
 
 
 def test_an_interrupted_multifidelity_escalation_resumes_to_the_same_result(client, tmp_path, forced, monkeypatch):
-    from screening.workflow import execution
+    from screening.workflow import _submit
     from screening.workflow.sweep import _SweepRun
 
     study = parse_study(ONE_POINT)
-    real = execution.submit_escalation
+    real = _submit.submit_escalation
     calls = []
-    monkeypatch.setattr(execution, "submit_escalation", lambda *a, **k: calls.append(k.get("cheap")) or real(*a, **k))
+    monkeypatch.setattr(_submit, "submit_escalation", lambda *a, **k: calls.append(k.get("cheap")) or real(*a, **k))
 
     def interrupted(self):
         raise KeyboardInterrupt

@@ -430,7 +430,7 @@ def test_ctrl_c_prints_one_line_and_no_worker_tracebacks(tmp_path, moment):
 
 LOCAL_WORKERS_PROBE = """
 import signal, sys
-from screening.workflow import execution
+from screening.workflow import _submit, execution
 
 def probe():
     inherited = "state" in vars(sys.modules["__main__"])     # a forked worker has this script's functions
@@ -440,11 +440,11 @@ def state():
     method = execution._worker_start_method()
     with execution.dask_client(2) as c:
         probes = list(c.run(probe).values())
-        spot = c.submit(execution.warm_up_monte_carlo, pure=False).result(timeout=120)
+        spot = c.submit(_submit.warm_up_monte_carlo, pure=False).result(timeout=120)
     return method, probes, spot > 0
 
 print(state())
-execution.warm_up_monte_carlo()         # numba's parallel threads started in this process
+_submit.warm_up_monte_carlo()         # numba's parallel threads started in this process
 print(state())
 """
 

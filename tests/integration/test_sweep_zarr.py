@@ -18,7 +18,7 @@ from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_process
 
 from screening.cli import main
 from screening.status import PointStatus
-from screening.workflow import execution
+from screening.workflow import _submit
 from screening.workflow.reader import result_key
 from screening.workflow.study import parse_study
 from screening.workflow.sweep import run_sweep
@@ -101,14 +101,14 @@ def test_an_interrupted_zarr_run_resumes_from_the_marked_batches(client, tmp_pat
 
 
 def test_a_failed_batch_is_flagged_in_the_zarr_result(client, tmp_path, monkeypatch):
-    real = execution._solve_and_store_batch
+    real = _submit.solve_and_store_batch
 
     def flaky(target, batch, *args):
         if batch.index == 1:
             raise FloatingPointError("synthetic failure")
         return real(target, batch, *args)
 
-    monkeypatch.setattr(execution, "_solve_and_store_batch", flaky)
+    monkeypatch.setattr(_submit, "solve_and_store_batch", flaky)
     report = run_sweep(parse_study(GRID), tmp_path / "f.zarr", client=client, batch_size=5, progress=False,
                        log=quiet)
     assert report.n_failed_batches == 1
@@ -167,7 +167,7 @@ def test_a_finished_zarr_result_is_reused_then_replaced_by_another_study(client,
 def test_workers_that_do_not_see_the_output_folder_are_a_one_line_error(client, tmp_path, monkeypatch):
     from screening.workflow.errors import SweepError
 
-    monkeypatch.setattr(execution, "sees_folder", lambda path: False)
+    monkeypatch.setattr(_submit, "sees_folder", lambda path: False)
     with pytest.raises(SweepError, match=r"2 dask worker\(s\) .* do not see .*shared file system"):
         run_sweep(parse_study(GRID), tmp_path / "far.zarr", client=client, progress=False, log=quiet)
     assert not (tmp_path / "far.zarr").exists()
@@ -391,7 +391,7 @@ def test_export_of_foreign_attributes(client, tmp_path, capsys):
     are exported as JSON text / left out; ragged flag_values are one line, exit 2."""
     import zarr
 
-    from screening.workflow.zarrfile import write_completion_mark
+    from screening.workflow._zarr_store import write_completion_mark
 
     out = tmp_path / "f.zarr"
     run_sweep(parse_study(GRID), out, client=client, progress=False, log=quiet)

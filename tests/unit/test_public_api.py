@@ -69,44 +69,20 @@ def test_the_worker_setup_runs_as_a_dask_preload_only():
 
 #: Source modules without a test module of their own name, each with its reason.
 UNTESTED = {
-    "condensation.paper": "tested as test_paper_condensation.py and test_paper_coefficients.py",
-    "condensation.api": "tested through the public functions in test_paper_coefficients.py, test_moments.py, "
-                        "test_core_extremes.py",
-    "condensation.base": "the interface: tested by test_toy_condensation.py (a toy subclass) and test_signatures.py",
-    "condensation.cubic": "tested in test_linearization.py, test_moments.py, test_datasets.py, test_fragility.py",
-    "condensation.quadrature": "tested against the closed forms in test_paper_coefficients.py and by "
-                               "test_toy_condensation.py",
-    "model.block": "tested in tests/unit/model/test_model.py",
-    "model.foundation": "tested in tests/unit/model/test_model.py and test_toy_contact_law.py",
-    "records": "tested as tests/unit/records/test_readers.py and test_reader_hardening.py",
-    "schema": "tested as test_netcdf_cf.py (CF compliance of every result) and test_writers.py",
-    "solvers.mc_models": "tested in test_mc_registry.py, test_mcs_integrators.py, test_montecarlo.py",
-    "solvers.mcs_kernels": "tested as test_mcs_integrators.py (against scipy) and test_montecarlo.py",
-    "report.figure_base": "tested in tests/unit/report/test_figures.py",
     "report.fragility_figures": "tested in tests/unit/report/test_figures.py",
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
     "report.record_figures": "tested through the commands in test_cli_records.py and test_cloud.py",
-    "report.text": "tested through `screening info` in test_cli.py, test_accuracy.py, test_sweep_probabilities.py",
     "report.tradeoff_figures": "tested through run_tradeoff in test_tradeoff.py",
-    "report.tradeoff_files": "tested through run_tradeoff in test_tradeoff.py",
-    "report.tradeoff_text": "tested in test_tradeoff.py and test_metrics.py",
-    "workflow.connect": "tested through --scheduler in test_edges.py and test_robustness.py",
-    "workflow.reader": "tested through the commands in test_cli.py, test_edges.py, test_robustness.py",
-    "workflow.records_study": "tested through the record commands in test_cli_records.py and test_cloud.py",
 }
 
 
-def _has_test(module, tests):
-    """``a.b`` is tested by ``test_b.py`` or, where names repeat across packages (test basenames are
-    unique in this suite), by ``test_a_b.py``."""
-    return f"test_{module.rsplit('.', 1)[-1]}" in tests or f"test_{module.replace('.', '_')}" in tests
-
-
 def test_every_source_module_has_a_test_module_of_its_own_name():
-    tests = {p.stem for p in (ROOT / "tests").rglob("test_*.py")}
+    """``a.b`` is tested by ``test_b.py`` or ``test_a_b.py``; a package-internal ``a._b`` by ``test_b.py``
+    (:func:`import_graph.has_test_module`)."""
+    tests = ig.test_modules()
     graph = ig.read_graph()
     modules = [m for m, p in graph.modules.items() if m and p.name != "__init__.py"]
-    missing = sorted(m for m in modules if not _has_test(m, tests) and m not in UNTESTED)
+    missing = sorted(m for m in modules if not ig.has_test_module(m, tests) and m not in UNTESTED)
     assert not missing, missing
-    stale = sorted(m for m in UNTESTED if m not in modules or _has_test(m, tests))
+    stale = sorted(m for m in UNTESTED if m not in modules or ig.has_test_module(m, tests))
     assert not stale, stale

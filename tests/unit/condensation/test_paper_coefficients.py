@@ -119,7 +119,7 @@ def test_uplift_probability_eq58(paper_block, any_foundation):
 """c_eq, k_eq of the "cubic" condensation (quadrature of eq. 31, tabulated per point) against
 an independent quadrature of the regression form Cov^-1 E[g y] with scipy's adaptive quad
 over theta (split at +-theta_ul and +-theta_cap), using the cubic C(theta), K(theta) that
-tests/unit/condensation/test_paper_condensation.py checks against the distributed contact law."""
+tests/unit/condensation/test_paper.py checks against the distributed contact law."""
 
 import math  # noqa: E402
 

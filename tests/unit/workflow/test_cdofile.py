@@ -49,7 +49,7 @@ def test_a_case_index_is_plain_digits_and_a_string_coordinate_is_one_line():
 
 
 def test_attributes_netcdf_cannot_hold_become_json_and_ragged_flags_are_refused():
-    from screening.workflow.zarrfile import netcdf_attributes
+    from screening.workflow._zarr_store import netcdf_attributes
 
     out = netcdf_attributes({"meta": {"a": [1, 2]}, "gone": None, "mixed": [1, "x"], "nested": [[1], [2, 3]],
                              "values": [1, 2], "flag": True, "text": "t"})

@@ -11,7 +11,8 @@ from screening import condensation
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.status import PointStatus, SampleState
 from screening.workflow import execution
-from screening.workflow.execution import failed_result, failed_spot, sample_state, solve_batch
+from screening.workflow._submit import failed_spot
+from screening.workflow.execution import failed_result, sample_state, solve_batch
 from screening.workflow.grid import batch_models, plan_batches
 from screening.workflow.study import parse_study
 

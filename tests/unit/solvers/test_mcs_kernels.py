@@ -268,13 +268,3 @@ def test_auto_on_an_overdamped_bed_matches_the_reference_with_fewer_steps():
     np.testing.assert_allclose(new.peak_abs_theta, ref.peak_abs_theta, rtol=1e-4)
     assert float(new.n_steps.sum()) < 0.3 * float(ref.n_steps.sum())
 
-
-def test_a_sample_outcome_is_stored_in_its_row_of_the_chunk_outputs():
-    """The compiled helper the chunk integrators share writes the six fields of one outcome to their arrays at
-    that row, keeping their dtypes, and no other row."""
-    n = 3
-    outs = (np.zeros(n, np.int64), np.zeros(n, np.int64), np.full(n, -1.0), np.zeros(n, np.int64),
-            np.zeros(n, np.int64), np.full(n, -1.0))
-    kern._store_outcome(1, (2, 5, 0.25, 17, 3, 1e-6), *outs)
-    assert [a[1].item() for a in outs] == [2, 5, 0.25, 17, 3, 1e-6]
-    assert [a[[0, 2]].tolist() for a in outs] == [[0, 0], [0, 0], [-1.0, -1.0], [0, 0], [0, 0], [-1.0, -1.0]]

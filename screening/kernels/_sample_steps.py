@@ -1,7 +1,11 @@
-"""The ground input of a Monte Carlo sample between the grid points of its synthesis: the cubic Hermite
-interpolant of the grid values and exact rates of each channel (horizontal ``x_g''``, vertical ``a_v``),
-and its rate (for the linearly implicit integrator), compiled, as :mod:`screening.solvers.mcs_kernels`
-and the stiff-bed kernels read them.
+"""What the compiled sample integrators share (package-internal; those of the Monte Carlo models in
+:mod:`screening.solvers.mcs_kernels` and the stiff-bed model's in :mod:`screening.solvers.stiff_bed_kernels`).
+
+The ground input of a sample between the grid points of its synthesis: the cubic Hermite interpolant
+of the grid values and exact rates of each channel (horizontal ``x_g''``, vertical ``a_v``), and its
+rate (for the linearly implicit integrator); one term of the error norm of an adaptive step; the
+store of a sample's outcome into its row of the chunk's outputs.  No model knowledge: the models'
+equations stay with their integrators.
 """
 
 from __future__ import annotations
@@ -10,8 +14,6 @@ import numba
 import numpy as np
 
 from screening.kernels.interpolation import hermite, hermite_rate
-
-__all__ = ["NO_VERTICAL"]
 
 #: "No vertical channel": the vertical ground acceleration and rate of a run without one (read as 0).
 NO_VERTICAL = np.zeros((1, 0))
@@ -39,7 +41,7 @@ def _channel(row, acc, acc_dot, dt, t):
 
 
 @numba.njit(cache=True, inline="always")
-def _vertical_row(row, vertical):
+def vertical_row(row, vertical):
     """Row of the vertical channel read by sample ``row`` (-1: none, read as 0; a single row: every sample's)."""
     if vertical.shape[1] == 0:
         return np.int64(-1)
@@ -47,11 +49,11 @@ def _vertical_row(row, vertical):
 
 
 @numba.njit(cache=True, inline="always")
-def _hermite(row, acc, acc_dot, dt, t):
+def ground_input(row, acc, acc_dot, dt, t):
     """Ground input ``(x_g'', a_v)`` [m/s^2] at ``t``: ``acc = (horizontal, vertical)`` grid values and
     ``acc_dot`` their rates (:func:`_channel` each; a vertical channel of no columns reads 0)."""
     horizontal = _channel(row, acc[0], acc_dot[0], dt, t)
-    vrow = _vertical_row(row, acc[1])
+    vrow = vertical_row(row, acc[1])
     if vrow < 0:
         return horizontal, 0.0
     return horizontal, _channel(vrow, acc[1], acc_dot[1], dt, t)
@@ -65,10 +67,30 @@ def _channel_rate(row, acc, acc_dot, dt, t):
 
 
 @numba.njit(cache=True, inline="always")
-def _hermite_rate(row, acc, acc_dot, dt, t):
-    """Rates of the ground input ``(x_g'', a_v)`` at ``t`` [m/s^3]: derivative of :func:`_hermite`."""
+def ground_input_rate(row, acc, acc_dot, dt, t):
+    """Rates of the ground input ``(x_g'', a_v)`` at ``t`` [m/s^3]: derivative of :func:`ground_input`."""
     horizontal = _channel_rate(row, acc[0], acc_dot[0], dt, t)
-    vrow = _vertical_row(row, acc[1])
+    vrow = vertical_row(row, acc[1])
     if vrow < 0:
         return horizontal, 0.0
     return horizontal, _channel_rate(vrow, acc[1], acc_dot[1], dt, t)
+
+
+@numba.njit(cache=True)
+def err_term(e, y, ynew, scale, rtol):
+    """One component's term ``(e / (scale + rtol max(|y|, |ynew|)))^2`` of an adaptive step's error norm."""
+    sc = scale + rtol * max(abs(y), abs(ynew))
+    r = e / sc
+    return r * r
+
+
+@numba.njit(cache=True)
+def store_outcome(row, outcome, status, reason, peak, n_accepted, n_rejected, h_min):
+    """Row ``row`` of a chunk's per-sample outputs from a sample integrator's ``outcome``, the tuple
+    ``(status, reason, peak, n_accepted, n_rejected, h_min)``."""
+    status[row] = outcome[0]
+    reason[row] = outcome[1]
+    peak[row] = outcome[2]
+    n_accepted[row] = outcome[3]
+    n_rejected[row] = outcome[4]
+    h_min[row] = outcome[5]
