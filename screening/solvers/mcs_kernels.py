@@ -224,6 +224,14 @@ def step_peak(peak, h, theta0, rate0, theta1, rate1):
     ----------
     .. [1] E. Hairer, S. P. Norsett and G. Wanner, *Solving Ordinary Differential Equations I*, 2nd ed.,
        Springer (1993), sec. II.6 (dense output).
+
+    Examples
+    --------
+    A step of 0.1 s from rest at 0 back to 0, rates +1 and -1 rad/s: the ends give 0, the crest
+    ``theta(t) = t (1 - 10 t)`` at ``t = 0.05 s`` is 0.025 rad.
+
+    >>> round(step_peak(0.0, 0.1, 0.0, 1.0, 0.0, -1.0), 12)
+    0.025
     """
     peak = max(peak, abs(theta1))
     if not rate0 * rate1 < 0.0:
