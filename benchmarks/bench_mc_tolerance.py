@@ -1,9 +1,12 @@
 """Monte Carlo tolerance against the sampling error: the bias of the ensemble statistics per ``rtol``.
 
-Run (one core, under the shared lock; about 8 minutes with 200 samples on the loaded development machine):
+Run (one core, under the shared lock; each table is one run of at most 10 minutes on the loaded development
+machine, about 7 (accuracy, 200 samples), 2 (oversampling) and 6 (speed) minutes):
 
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD \\
-        .venv/bin/python benchmarks/bench_mc_tolerance.py [--samples 200] [--seed 0]
+        .venv/bin/python benchmarks/bench_mc_tolerance.py --only accuracy [--samples 200] [--seed 0]
+
+and the same with ``--only oversampling`` and ``--only speed`` (without ``--only``: all three in one run).
 
 For each case (the paper block on the paper bed at light, moderate and heavy uplift under white noise and
 the paper's Kanai-Tajimi filter; the statue block on k = 1e8 and 1e10) the coupled model is run on the
