@@ -289,7 +289,11 @@ def main():
     ap.add_argument("--speed-samples", type=int, default=48)
     ap.add_argument("--oversampling-rtol", type=float, default=1e-5, help="rtol of the oversampling table")
     ap.add_argument("--only", choices=("accuracy", "oversampling", "speed"), default=None)
+    ap.add_argument("--cases", default=None, help="only the cases whose name contains this text")
     args = ap.parse_args()
+    if args.cases:
+        for name in [name for name in CASES if args.cases not in name]:
+            del CASES[name]
     monte_carlo(PAPER, PAPER_BED, WhiteNoise(S0=1e-4, envelope=ENVELOPE), n_samples=2, t_end=1.0, progress=False)
     if args.only in (None, "accuracy"):
         largest_admissible(accuracy_table(args.samples, args.seed))
