@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 
 from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
 from screening.model import Block, Foundation  # noqa: E402
-from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo  # noqa: E402
+from screening.solvers.montecarlo import auto_rtol, monte_carlo  # noqa: E402
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 CASES = {
@@ -48,7 +48,8 @@ def main():
     foundation = Foundation(k=2.89e7, lam=8.95e8, eps=eps)
     import numba
     print(f"numba threads: {numba.get_num_threads()}  case {args.case}: eps={eps:g}, {excitation.kind}, "
-          f"S0={excitation.S0:g}; {args.samples} samples x 20 s; default rtol {DEFAULT_RTOL}")
+          f"S0={excitation.S0:g}; {args.samples} samples x 20 s; default rtol (auto) "
+          f"{ {m: auto_rtol(m, args.samples) for m in ('coupled', 'condensed')} }")
 
     t0 = time.perf_counter()
     for model in ("coupled", "condensed"):
@@ -56,7 +57,6 @@ def main():
     print(f"JIT warm-up (cache load or compile): {time.perf_counter() - t0:.1f} s")
 
     for model in ("coupled", "condensed"):
-        rtol = DEFAULT_RTOL[model]
         t0 = time.perf_counter()
         ds = monte_carlo(BLOCK, foundation, excitation, n_samples=args.samples, model=model, progress=False)
         wall = time.perf_counter() - t0
@@ -71,7 +71,7 @@ def main():
             continue
         t0 = time.perf_counter()
         fine = monte_carlo(BLOCK, foundation, excitation, n_samples=args.samples, model=model, progress=False,
-                           rtol=rtol / 32)
+                           rtol=ds.attrs["rtol"] / 32)
         wall_fine = time.perf_counter() - t0
         fv, _, _ = peak(fine, "var_theta")
         fvd, _, _ = peak(fine, "var_theta_dot")

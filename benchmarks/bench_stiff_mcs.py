@@ -67,7 +67,7 @@ from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa
 from screening.condensation import get as get_condensation  # noqa: E402
 from screening.solvers import mcs_kernels as kern  # noqa: E402
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: E402
-from screening.solvers.montecarlo import DEFAULT_RTOL, monte_carlo, vertical_damping_ratio  # noqa: E402
+from screening.solvers.montecarlo import auto_rtol, monte_carlo, vertical_damping_ratio  # noqa: E402
 from screening.solvers.synthesis import (OVERSAMPLING, default_cutoff, grid_points,  # noqa: E402
                                          spectral_plan, stationary_samples, vertical_frequency)
 from screening.status import EscalationModel  # noqa: E402
@@ -182,7 +182,7 @@ def peak_var(ds):
 
 def stiff_table(n, ratios):
     print(f"\n== 1. statue block, lam = 30 k, Kanai-Tajimi S0 = {STATUE_MOTION.S0:g}; {n} samples x {T_END:g} s; "
-          f"default rtol {DEFAULT_RTOL['coupled']:g}; reference: dopri rtol 1e-10")
+          f"default rtol (auto) {auto_rtol('coupled', n):g}; reference: dopri rtol 1e-10")
     print("| k [N/m2] | dopri ms/sample | dopri steps | rodas ms/sample | rodas steps | rodas/dopri CPU "
           "| cost vs k=1e8 (dopri) | dopri: d peak var / SE | dopri: sample peak err med / max "
           "| rodas: d peak var / SE | rodas: sample peak err med / max |")

@@ -44,7 +44,7 @@ __all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "STATUS_OK", "STATUS_OVERTURNED",
            "REASON_NONFINITE", "REASON_LONG_FLIGHT", "REASON_OUT_OF_BOUNDS", "REASON_STEP_UNDERFLOW",
            "REASON_STEP_BUDGET", "REASON_NO_EQUILIBRIUM", "REASON_LIFT_OFF", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
            "INTEGRATORS", "NO_VERTICAL", "model_record", "coupled_accelerations", "condensed_acceleration", "integrate_sample",
-           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "chunk_integrator"]
+           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "chunk_integrator", "step_peak"]
 
 
 STATUS_OK = int(SampleStatus.ok)
@@ -183,6 +183,70 @@ def _shrink(err, h, factor, h_floor):
         return h, REASON_NONFINITE if h < h_floor else REASON_NONE
     h = h * factor
     return h, REASON_STEP_UNDERFLOW if h < h_floor else REASON_NONE
+
+
+@numba.njit(cache=True, inline="always")
+def step_peak(peak, h, theta0, rate0, theta1, rate1):
+    """The larger of ``peak`` and the largest ``|theta|`` inside one accepted step.
+
+    Parameters
+    ----------
+    peak : float
+        Largest ``|theta|`` so far [rad].
+    h : float
+        Step [s].
+    theta0, rate0 : float
+        Rotation [rad] and its rate [rad s-1] at the start of the step.
+    theta1, rate1 : float
+        The same at its end.
+
+    Returns
+    -------
+    float
+        ``max(peak, |theta1|, |p(s*)|)`` [rad], with ``p`` the cubic Hermite interpolant of the step and
+        ``s*`` its extremum inside the step where the rate changes sign.
+
+    Notes
+    -----
+    On ``s = (t - t0) / h`` in ``[0, 1]`` the interpolant is
+
+    .. math:: p(s) = H_{00}(s) \\theta_0 + H_{10}(s) h \\dot\\theta_0 + H_{01}(s) \\theta_1 + H_{11}(s) h \\dot\\theta_1
+
+    with the cubic Hermite basis ``H``.  Its derivative ``h dp/dt = a s^2 + b s + c`` with
+    ``a = 6 (theta0 - theta1) + 3 h (rate0 + rate1)``, ``b = 6 (theta1 - theta0) - h (4 rate0 + 2 rate1)``,
+    ``c = h rate0`` has one root in ``(0, 1)`` where ``rate0 rate1 < 0`` (``a + b + c = h rate1``).  The peak
+    over the accepted steps alone misses the true maximum by ``O(h^2)`` (``theta'' h^2 / 8`` at most); the
+    interpolant's error is ``O(h^4)`` [1], so the peak no longer depends on the step the tolerance allows.
+
+    References
+    ----------
+    .. [1] E. Hairer, S. P. Norsett and G. Wanner, *Solving Ordinary Differential Equations I*, 2nd ed.,
+       Springer (1993), sec. II.6 (dense output).
+
+    Examples
+    --------
+    A step of 0.1 s from rest at 0 back to 0, rates +1 and -1 rad/s: the ends give 0, the crest
+    ``theta(t) = t (1 - 10 t)`` at ``t = 0.05 s`` is 0.025 rad.
+
+    >>> round(step_peak(0.0, 0.1, 0.0, 1.0, 0.0, -1.0), 12)
+    0.025
+    """
+    peak = max(peak, abs(theta1))
+    if not rate0 * rate1 < 0.0:
+        return peak
+    a = 6.0 * (theta0 - theta1) + 3.0 * h * (rate0 + rate1)
+    b = 6.0 * (theta1 - theta0) - h * (4.0 * rate0 + 2.0 * rate1)
+    c = h * rate0
+    disc = max(b * b - 4.0 * a * c, 0.0)
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    s = 0.5 if q == 0.0 else c / q                    # the root of smaller magnitude (stable form)
+    if not 0.0 <= s <= 1.0 and a != 0.0:
+        s = q / a
+    s = min(max(s, 0.0), 1.0)
+    s2, s3 = s * s, s * s * s
+    value = ((2.0 * s3 - 3.0 * s2 + 1.0) * theta0 + (s3 - 2.0 * s2 + s) * h * rate0
+             + (3.0 * s2 - 2.0 * s3) * theta1 + (s3 - s2) * h * rate1)
+    return max(peak, abs(value))
 
 
 @numba.njit(cache=True, inline="always")
@@ -400,6 +464,7 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
                 break
             continue
         # --- accepted step
+        peak = step_peak(peak, h, y0, y1, n0, n1)
         y0, y1, y2, y3 = n0, n1, n2, n3
         k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
@@ -608,6 +673,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
                 break
             continue
         # --- accepted step
+        peak = step_peak(peak, h, y0, y1, n0, n1)
         y0, y1, y2, y3 = n0, n1, n2, n3
         fresh = True
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
