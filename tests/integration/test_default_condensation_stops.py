@@ -4,6 +4,7 @@ and the ``[accuracy]`` best estimate (Monte Carlo or ``unreliable``, never the l
 
 import numpy as np
 import xarray as xr
+from helpers import study_text
 
 from screening.cli import main
 from screening.condensation import DEFAULT_CONDENSATION
@@ -11,26 +12,8 @@ from screening.status import BestMethod, PointStatus, Trust
 
 # the paper's block on a hardening bed, no condensation chosen; at S0 = 2.4e-3 the default's k_eq
 # turns negative during the shaking (the quick study's strongest column), at 1e-5 it barely rocks
-STUDY = """
-title = "default condensation, a stopped point"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = 6e7
-[excitation]
-kind = "white"
-S0 = [1e-5, 2.4e-3]
-[time]
-t_end = 20.0
-dt = 0.05
-[accuracy]
-target = 0.15
-budget_s = 2
-"""
+STUDY = study_text({"title": '"default condensation, a stopped point"', "eps": "6e7", "S0": "[1e-5, 2.4e-3]",
+                    "t_end": "20.0"}, append="[accuracy]\ntarget = 0.15\nbudget_s = 2\n")
 
 
 def test_a_stopped_default_point_is_flagged_untrusted_and_never_a_linearization_estimate(tmp_path, capsys):

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import study_text
 
 from screening import Block, Foundation, condensation as condensations
 from screening.condensation import DEFAULT_CONDENSATION, api
@@ -20,23 +21,8 @@ from screening.workflow.study import load_study, parse_study
 
 ROOT = Path(__file__).resolve().parents[3]
 
-STUDY = """
-title = "t"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-eps = 0.0
-[excitation]
-kind = "white"
-S0 = 1e-4
-[time]
-t_end = 2.0
-dt = 0.05
-"""
+#: one point of the paper's block on a linear bed, no condensation chosen
+STUDY = study_text({"eps": "0.0", "S0": "1e-4", "t_end": "2.0"})
 
 
 def test_the_default_is_the_virtual_work_condensation():
