@@ -115,7 +115,8 @@ def _last_stable_intensity(block, foundation, make_exc, t_out, log10_bounds=(-10
     from screening.status import PointStatus
 
     def ok(log_s0):
-        return int(solve_moments(block, foundation, make_exc(10.0 ** log_s0), t_out)["status"]) == PointStatus.ok
+        return int(solve_moments(block, foundation, make_exc(10.0 ** log_s0), t_out,
+                                 condensation="paper")["status"]) == PointStatus.ok
 
     lo, hi = log10_bounds
     if not ok(lo):

@@ -1,13 +1,14 @@
 """Quasi-static condensations of the coupled model to one rocking equation, behind one interface.
 
 ``get(name)`` turns a registered name into a :class:`Condensation`; ``register`` adds one (a
-third-party condensation needs only the numpy functions of :class:`Condensation`).
+third-party condensation needs only the numpy functions of :class:`Condensation`);
+``DEFAULT_CONDENSATION`` names the one used wherever none is chosen.
 """
 
 from screening.condensation.base import Condensation
-from screening.condensation.registry import get, names, register, unregister
+from screening.condensation.registry import DEFAULT_CONDENSATION, get, names, register, unregister
 
-__all__ = ["Condensation", "get", "names", "register", "unregister"]
+__all__ = ["Condensation", "DEFAULT_CONDENSATION", "get", "names", "register", "unregister"]
 
 # the built-in condensations register themselves
 from screening.condensation import paper as _paper, cubic as _cubic, virtual_work as _virtual_work  # noqa: E402,F401,I001

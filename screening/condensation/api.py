@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.condensation.registry import get
+from screening.condensation.registry import DEFAULT_CONDENSATION, get
 from screening.condensation.uplift_integrals import gaussian_uplift_integrals
 
 __all__ = ["uplift_threshold", "rocking_damping", "rocking_stiffness", "restoring_moment", "rocking_acceleration",
            "equivalent_coefficients", "equivalent_coefficients_from_moments", "uplift_probability"]
 
 
-def uplift_threshold(block, foundation, condensation="paper"):
+def uplift_threshold(block, foundation, condensation=DEFAULT_CONDENSATION):
     """Uplift threshold ``theta_ul`` [rad]: the rotation at which the lifted edge leaves the bed.
 
     Parameters
@@ -27,7 +27,8 @@ def uplift_threshold(block, foundation, condensation="paper"):
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -55,7 +56,7 @@ def uplift_threshold(block, foundation, condensation="paper"):
     return get(condensation).uplift_threshold(block, foundation)
 
 
-def rocking_damping(theta, block, foundation, condensation="paper"):
+def rocking_damping(theta, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Rocking damping ``C(theta)`` [N m s/rad] of the condensed single-degree-of-freedom model.
 
     Parameters
@@ -67,7 +68,8 @@ def rocking_damping(theta, block, foundation, condensation="paper"):
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -89,13 +91,13 @@ def rocking_damping(theta, block, foundation, condensation="paper"):
     --------
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
+    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed, condensation="paper")]
     ['1.076', '0.3728']
     """
     return get(condensation).rocking_damping(theta, block, foundation)
 
 
-def rocking_stiffness(theta, block, foundation, condensation="paper"):
+def rocking_stiffness(theta, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Secant rocking stiffness ``K(theta)`` [N m/rad]: the restoring moment is ``K(theta) theta``.
 
     Parameters
@@ -107,7 +109,8 @@ def rocking_stiffness(theta, block, foundation, condensation="paper"):
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -136,7 +139,7 @@ def rocking_stiffness(theta, block, foundation, condensation="paper"):
     return get(condensation).rocking_stiffness(theta, block, foundation)
 
 
-def restoring_moment(theta, block, foundation, condensation="paper"):
+def restoring_moment(theta, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Restoring moment ``K(theta) theta`` [N m] of the condensed model.
 
     Parameters
@@ -148,7 +151,8 @@ def restoring_moment(theta, block, foundation, condensation="paper"):
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -175,7 +179,7 @@ def restoring_moment(theta, block, foundation, condensation="paper"):
     return get(condensation).restoring_moment(theta, block, foundation)
 
 
-def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundation, condensation="paper"):
+def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Rotational acceleration ``theta''`` [rad s-2] of the condensed model under a ground acceleration.
 
     Parameters
@@ -191,7 +195,8 @@ def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundatio
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -223,7 +228,7 @@ def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundatio
     return force / block.m_sdof
 
 
-def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation, condensation="paper"):
+def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Equivalent damping and stiffness of the Gaussian closure of the condensed model.
 
     Parameters
@@ -239,7 +244,8 @@ def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -288,7 +294,7 @@ def _finite_only(coefficients, s, cov_over_s, block, foundation):
     return c_eq[()], k_eq[()]
 
 
-def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation, condensation="paper"):
+def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Equivalent damping and stiffness from the moments the Lyapunov equations carry.
 
     Parameters
@@ -302,7 +308,8 @@ def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, 
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------
@@ -339,7 +346,7 @@ def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, 
     return _finite_only(get(condensation).equivalent_coefficients, s, cov_over_s, block, foundation)
 
 
-def uplift_probability(sigma_theta, block, foundation, condensation="paper"):
+def uplift_probability(sigma_theta, block, foundation, condensation=DEFAULT_CONDENSATION):
     """Uplift occupancy ``P(|theta| > theta_ul)`` [1] of a zero-mean Gaussian rotation.
 
     Parameters
@@ -351,7 +358,8 @@ def uplift_probability(sigma_theta, block, foundation, condensation="paper"):
     foundation : screening.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
     condensation : str or screening.condensation.Condensation, optional
-        A registered name (``"paper"``, the default; ``"cubic"``, ``"virtual_work"``) or an object.
+        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`.
 
     Returns
     -------

@@ -229,10 +229,17 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     dk = k_values - k0
     inv_s2 = 1.0 / sigma[:, 0] ** 2
     he2 = phi * (x2 - 1.0)
-    values = np.stack([phi @ c_values, (phi * x2) @ k_values, (he2 @ dc) * inv_s2], axis=1)
-    slopes = np.stack([he2 @ dc, (phi * x2 * (x2 - 3.0)) @ dk,
-                       ((phi * (x2 * (x2 - 6.0) + 3.0)) @ dc) * inv_s2], axis=1)
+    values = np.stack([_row_sums(phi, c_values), _row_sums(phi * x2, k_values), _row_sums(he2, dc) * inv_s2], axis=1)
+    slopes = np.stack([_row_sums(he2, dc), _row_sums(phi * x2 * (x2 - 3.0), dk),
+                       _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2], axis=1)
     return values, slopes
+
+
+def _row_sums(weights, values):
+    """``weights @ values`` by numpy's own pairwise summation: the same bits in every process (a BLAS
+    product's last bits depend on its thread count, so a table built in a dask worker and one built
+    in the main process would differ)."""
+    return np.sum(weights * values[None, :], axis=1)
 
 
 def _point_nodes(block, foundation, sigma_max, cond):

@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from screening import schema
+from screening.condensation.registry import DEFAULT_CONDENSATION
 from screening.solvers import mc_registry
 from screening.model.points import numeric_fields
 from screening.solvers.estimates import sample_probabilities
@@ -240,7 +241,7 @@ def _status_text(n_samples, n_overturned, n_diverged):
 
 def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                         block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
-                        condensation="paper", mc_model=None):
+                        condensation=DEFAULT_CONDENSATION, mc_model=None):
     """The dataset of :func:`screening.solvers.montecarlo.monte_carlo` (see its docstring).
 
     ``stats``: the ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`);

@@ -99,7 +99,8 @@ def _on_own_dims(function, fields, names, block, foundation):
 
 
 # ----------------------------------------------------------------------------- entry point
-def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL, condensation="paper",
+def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_RTOL,
+              condensation=condensations.DEFAULT_CONDENSATION,
               trust=True):
     """Time-varying second-order rocking statistics by stochastic linearization (sections 2.4–2.6).
 
@@ -121,9 +122,10 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     rtol : float, optional
         Solver relative tolerance [1].
     condensation : str or screening.condensation.Condensation, optional
-        A registered condensation (:func:`screening.condensation.get`): ``"paper"`` (eqs. (17)-(25) in
-        [1], default), ``"cubic"`` (static balance with the cubic term) or ``"virtual_work"`` (heavy
-        uplift, docs/models.md); recorded in ``attrs["condensation"]``.
+        A registered condensation (:func:`screening.condensation.get`): ``"virtual_work"`` (heavy
+        uplift, docs/models.md; the default, :data:`screening.condensation.DEFAULT_CONDENSATION`),
+        ``"paper"`` (eqs. (17)-(25) in [1]: pin it to reproduce the paper) or ``"cubic"`` (static
+        balance with the cubic term); recorded in ``attrs["condensation"]``.
     trust : bool, optional
         Add ``sl_trust`` and the predicted error band ``sl_error_low``/``sl_error_high`` of the
         linearization against the coupled model (:func:`screening.analysis.trust.add_trust`; default).
@@ -163,7 +165,7 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([1e-5, 1e-4])), t_end=10.0, dt=0.5, trust=False)
+    ...                WhiteNoise(np.array([1e-5, 1e-4])), t_end=10.0, dt=0.5, trust=False, condensation="paper")
     >>> ds["peak_var_theta"].dims, [f"{v:.3e}" for v in ds["peak_var_theta"].values]
     (('S0',), ['1.160e-07', '1.372e-06'])
     """

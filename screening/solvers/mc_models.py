@@ -26,7 +26,55 @@ from screening.solvers import mcs_kernels as kern
 from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, register
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-__all__ = ["COUPLED", "CONDENSED", "state_scales", "exact_uplift_threshold", "quasi_static_indentation"]
+__all__ = ["COUPLED", "CONDENSED", "KERNEL_CONDENSATION", "check_not_condensed", "state_scales",
+           "exact_uplift_threshold", "quasi_static_indentation"]
+
+#: The condensation a model that is not condensed builds its kernel record with (none of its
+#: functions is used there): the paper's.  Such a model accepts it as well as the default
+#: (:func:`check_not_condensed`).
+KERNEL_CONDENSATION = "paper"
+
+
+def check_not_condensed(model, condensation):
+    """Refuse a condensation chosen for a model that is not condensed (it would have no effect).
+
+    Parameters
+    ----------
+    model : str
+        The model's name (for the message).
+    condensation : str or screening.condensation.Condensation
+        What the caller passed.
+
+    Returns
+    -------
+    None
+        Returns for :data:`screening.condensation.DEFAULT_CONDENSATION` and :data:`KERNEL_CONDENSATION`
+        (the paper's, what callers pass for "none").
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter ``condensation`` for any other.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> check_not_condensed("coupled", "paper")
+    >>> try:
+    ...     check_not_condensed("coupled", "cubic")
+    ... except ValueError as exc:
+    ...     print(exc)
+    parameter 'condensation' applies to model='condensed' only (got condensation='cubic' with model='coupled')
+    """
+    cond = condensations.get(condensation)
+    if cond not in (condensations.get(condensations.DEFAULT_CONDENSATION), condensations.get(KERNEL_CONDENSATION)):
+        raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
+                         f"(got condensation={cond.name!r} with model={model!r})")
 
 
 def state_scales(block, foundation):
@@ -207,7 +255,7 @@ class _KernelModel(MonteCarloModel):
         return state_scales(block, foundation)
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
-        cond = condensations.get(condensation if self.uses_condensation else "paper")
+        cond = condensations.get(condensation if self.uses_condensation else KERNEL_CONDENSATION)
         return _KernelIntegrator(self.code, cond.sdof_kernel(block, foundation),
                                  kern.model_record(block, foundation, cond, max_flight_time, sample_integrator))
 
@@ -226,9 +274,7 @@ class CoupledModel(_KernelModel):
     code = kern.MODEL_COUPLED
 
     def check(self, block, foundation, condensation):
-        if condensations.get(condensation) != condensations.get("paper"):
-            raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
-                             f"(got condensation={condensations.get(condensation).name!r} with model='coupled')")
+        check_not_condensed(self.name, condensation)
 
     def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
         return np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])

@@ -37,6 +37,7 @@ import numpy as np
 from scipy import special
 
 from screening.condensation.api import equivalent_coefficients_from_moments
+from screening.condensation.registry import DEFAULT_CONDENSATION
 from screening.kernels import dopri
 from screening.kernels.dopri import (
     A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
@@ -1035,7 +1036,7 @@ def lyapunov_rhs(P, A, b, S0):
     return A @ P + P @ A.T + 2.0 * math.pi * S0 * np.outer(b, b)
 
 
-def moment_equations(t, P, block, foundation, excitation, condensation="paper"):
+def moment_equations(t, P, block, foundation, excitation, condensation=DEFAULT_CONDENSATION):
     """Right-hand side ``dP/dt`` of the linearized moment equations at time ``t`` (numpy reference).
 
     The whole nonlinear system that the compiled step loops integrate, written as matrix products:
@@ -1056,7 +1057,8 @@ def moment_equations(t, P, block, foundation, excitation, condensation="paper"):
     excitation : screening.excitations.Excitation
         The input, scalar fields (``S0`` [m2 s-3], its envelope and its shaping filter).
     condensation : str or screening.condensation.Condensation, optional
-        The condensation whose equivalent coefficients close the equations (default ``"paper"``).
+        The condensation whose equivalent coefficients close the equations (default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`).
 
     Returns
     -------

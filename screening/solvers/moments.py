@@ -36,7 +36,7 @@ import numba
 import numpy as np
 from numba import types
 
-from screening.condensation import get as get_condensation
+from screening.condensation import DEFAULT_CONDENSATION, get as get_condensation
 from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
 from screening.model.points import flatten, select
 from screening.solvers.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
@@ -319,7 +319,7 @@ def batch_solver(record_dtype):
 
 
 def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max=None,
-                  max_steps=DEFAULT_MAX_STEPS, condensation="paper", histories=True):
+                  max_steps=DEFAULT_MAX_STEPS, condensation=DEFAULT_CONDENSATION, histories=True):
     """Integrate the linearized moment equations for a batch of parameter points.
 
     Parameters
@@ -340,7 +340,8 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     max_steps : int, optional
         Step budget per point (accepted + rejected).
     condensation : str or screening.condensation.Condensation, optional
-        A condensation or a registered name (``"paper"``: eqs. (17)-(25) in [1], default; ``"cubic"``:
+        A condensation or a registered name (default :data:`screening.condensation.DEFAULT_CONDENSATION`;
+        ``"paper"``: eqs. (17)-(25) in [1]; ``"virtual_work"``: docs/heavy_uplift.md; ``"cubic"``:
         :mod:`screening.condensation.cubic`, raises ``ValueError`` for a softening bed that cannot carry
         the block through uplift).
     histories : bool, optional
@@ -375,7 +376,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise
     >>> res = solve_moments(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4),
-    ...                     np.linspace(0.0, 10.0, 11))
+    ...                     np.linspace(0.0, 10.0, 11), condensation="paper")
     >>> f"{res['peak_var_theta']:.3e} {res['t_peak_var_theta']:.2f} {res['status']}"
     '1.372e-06 3.42 0'
     """

@@ -50,7 +50,7 @@ import numpy as np
 from screening import schema
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.model_choice import resolve as resolve_model
-from screening.condensation import get as get_condensation
+from screening.condensation import DEFAULT_CONDENSATION, get as get_condensation
 from screening.excitations import Excitation, names as excitation_names
 from screening.physics.contact import vertical_damping_ratio
 from screening.progress import Progress
@@ -447,7 +447,7 @@ def _with_probabilities(run):
 
 @_with_probabilities
 def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", t_end=20.0, dt=0.05,
-                seed=0, progress=None, condensation="paper", thresholds=None, strict_validity=False,
+                seed=0, progress=None, condensation=DEFAULT_CONDENSATION, thresholds=None, strict_validity=False,
                 sample_histories=False, **numerics):
     """Monte Carlo ensemble statistics of the rocking response (the reference for the linearization).
 
@@ -472,8 +472,9 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     seed : integer >= 0; sample ``i`` uses ``numpy.random.default_rng([seed, i])``.
     progress : None (a bar on stderr for multi-chunk runs on a terminal), True or False; or a function
         called with the number of samples done after each chunk (a sweep's spot checks report so).
-    condensation : ``"paper"`` (eqs. 24–25) or ``"cubic"`` (:mod:`screening.condensation.cubic`):
-        the ``C(theta)``, ``K(theta)`` of ``model="condensed"``.  ``"cubic"`` with
+    condensation : a registered condensation, default :data:`screening.condensation.DEFAULT_CONDENSATION`
+        (``"virtual_work"``; ``"paper"``: eqs. 24–25; ``"cubic"``: :mod:`screening.condensation.cubic`):
+        the ``C(theta)``, ``K(theta)`` of ``model="condensed"``.  Another than the default with
         ``model="coupled"`` raises (the coupled model is not condensed).  With ``"cubic"`` on
         a softening bed, samples passing the capacity angle (no quasi-static equilibrium)
         are flagged diverged.
@@ -557,8 +558,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         opts["h_max"] = mc.default_h_max
     show = _show_progress(progress, n_samples, opts["chunk_size"])
     y0 = mc.initial_state(block, foundation)           # may raise for a bed that cannot carry the block
-    cond.check(block, foundation)
-    mc.check(block, foundation, cond)
+    mc.check(block, foundation, cond)                  # a condensed model checks its condensation's bed
     mc_registry.check_validity(mc, block, foundation, excitation, strict_validity)
     check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
     check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")

@@ -46,6 +46,7 @@ from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIM
 from screening.records import Record
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.datasets import finish
+from screening.solvers.mc_models import check_not_condensed
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.montecarlo import check_scalar_models
@@ -145,7 +146,7 @@ def _input(ground_acceleration, dt):
 
 
 def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", theta0=0.0, theta_dot0=0.0,
-             condensation="paper", t_end=None, output_dt=None, rtol=None, h_max=None, max_steps=20_000_000,
+             condensation=condensations.DEFAULT_CONDENSATION, t_end=None, output_dt=None, rtol=None, h_max=None, max_steps=20_000_000,
              max_flight_time=0.5, overturn_resolution=200, vertical=True):
     """Response of a block on a flexible bed to one ground-acceleration record.
 
@@ -162,7 +163,8 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
         ``"stiff_bed"`` (:mod:`screening.solvers.stiff_bed`).
     theta0 : initial rotation [rad], ``|theta0| <`` slenderness.
     theta_dot0 : initial angular velocity [rad/s].
-    condensation : condensation of the condensed model (``"paper"`` or ``"cubic"``).
+    condensation : condensation of the condensed model (default
+        :data:`screening.condensation.DEFAULT_CONDENSATION`; ``"paper"``, ``"cubic"``, ``"virtual_work"``).
     t_end : end time [s] (default: the record's duration; longer: ground at rest afterwards).
     output_dt : output step [s] (default ``dt``).
     rtol : relative tolerance (default :data:`screening.solvers.montecarlo.DEFAULT_RTOL` of the model).
@@ -203,7 +205,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     >>> from screening import Block, Foundation, simulate
     >>> t = np.arange(0.0, 2.0, 0.01)
     >>> ds = simulate(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...               2.0 * np.sin(2 * np.pi * 2.0 * t), dt=0.01, model="condensed")
+    ...               2.0 * np.sin(2 * np.pi * 2.0 * t), dt=0.01, model="condensed", condensation="paper")
     >>> ds.attrs["status"], f"{float(ds['peak_abs_theta']):.3e}"
     ('overturned', '1.669e-01')
     """
@@ -212,8 +214,8 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     mc = resolve_model(model, block, foundation)        # "auto": no rule is measured on records (the fallback)
     model = mc.name
     cond = condensations.get(condensation)
-    if not mc.uses_condensation and cond != condensations.get("paper"):
-        raise ValueError(f"parameter 'condensation' applies to model='condensed' only (got {cond.name!r})")
+    if not mc.uses_condensation:
+        check_not_condensed(model, cond)
     dt = record.dt
     theta0 = check_scalar("theta0", theta0)
     theta_dot0 = check_scalar("theta_dot0", theta_dot0)
@@ -228,8 +230,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     max_steps = check_integer("max_steps", max_steps, 1)
     max_flight_time = check_scalar("max_flight_time", max_flight_time, lower=0.0)
     overturn_resolution = check_integer("overturn_resolution", overturn_resolution, 1, MAX_OVERTURN_RESOLUTION)
-    cond.check(block, foundation)
-    mc.check(block, foundation, cond)
+    mc.check(block, foundation, cond)                 # a condensed model checks its condensation's bed
     mc_registry.check_validity(mc, block, foundation)
 
     # input on the record grid, padded with rest to cover t_end (plus two samples for the interpolant)

@@ -70,9 +70,11 @@ TABLE_KEYS = {
     "excitation": ("kind", "S0", "pga", *EXCITATION_PARAMETERS, "envelope", "T1", "T2", "band_limit_hz"),
 }
 MODEL_TABLES = tuple(TABLE_KEYS)
-DEFAULTS = {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential", "eps": 0.0, "g": 9.81,
+DEFAULTS = {"contact": "hunt_crossley", "condensation": condensations.DEFAULT_CONDENSATION, "envelope": "exponential", "eps": 0.0, "g": 9.81,
             "T1": 4.0, "T2": 2.0, "band_limit_hz": GROUND_BAND_LIMIT_HZ}
 _RANGE_KEYS = ("start", "stop", "num", "log")
+#: The condensation a refused bed is pointed to: the paper's accepts every bed (no bearing check).
+_CONDENSES_EVERY_BED = "paper"
 
 
 class StudyError(ValueError):
@@ -894,7 +896,7 @@ class Case:
     excitation: str
     envelope: str
     params: MappingProxyType
-    condensation: str = "paper"
+    condensation: str = condensations.DEFAULT_CONDENSATION
     condensation_model: condensations.Condensation = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
@@ -1284,10 +1286,9 @@ def _check_condensation(case, sweeps, where):
         cond.check(_block(p), _foundation(case, p))
     except ValueError as exc:
         at = _failing_point(case, sweeps)
-        default = DEFAULTS["condensation"]
         raise StudyError(f"{where}foundation.condensation: {cond.name!r} needs a bed it can condense and "
                          + (f"the one at {at}" if at else "this one") + f" is not ({one_line(exc)})"
-                         + (f"; use condensation = {default!r}" if cond.name != default else "")) from None
+                         + f"; use condensation = {_CONDENSES_EVERY_BED!r}") from None
 
 
 def _failing_point(case, sweeps):

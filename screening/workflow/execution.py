@@ -270,7 +270,8 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
     >>> from screening.workflow.study import EXAMPLE_STUDY as text
     >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
     >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
-    >>> condensation = study.cases[0].condensation_model
+    >>> from screening.condensation import get
+    >>> condensation = get("paper")                  # the paper's (the study's is the default)
     >>> start = batch_rocking_start(block, foundation, excitation, condensation, study.times, 2)
     >>> start["uplift_acceleration"].round(3), start["p_rocking_start"].round(3)   # hardening bed rocks later
     (array([0.533, 0.741]), array([0.501, 0.008]))

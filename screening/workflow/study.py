@@ -19,7 +19,7 @@ Example (SI units throughout)::
 
     [foundation]
     contact = "hunt_crossley"   # or "winkler" (then give c instead of lam)
-    condensation = "paper"      # or "cubic" (static balance with the eps term; see below)
+    condensation = "virtual_work"   # the default; "paper" (the paper's), "cubic" (see below)
     k = 2.89e7                  # N m-2
     lam = 8.95e8                # N s m-3
     eps = [-6e5, 0.0, 6e7]      # m-2: a list -> dimension "eps"
@@ -77,11 +77,14 @@ every case is validated on its own (errors are prefixed with ``case 'name':``).
 Condensation
 ------------
 ``foundation.condensation`` selects the quasi-static condensation behind the linearization
-and the condensed Monte Carlo model: ``"paper"`` (default, eqs. 17–25) or ``"cubic"`` (the
-static vertical balance keeps the ``eps`` term, :mod:`screening.condensation.cubic`; closer
-to the coupled model on hardening beds, slower to linearize).  Cases may override it, so one
-study can compare both.  ``"cubic"`` needs a bed that can carry the block through uplift
-onset, ``|eps| (m g / (2 b k))^2 < 2/27``; every grid point is checked before any work.
+and the condensed Monte Carlo model: ``"virtual_work"`` (the default,
+:data:`screening.condensation.DEFAULT_CONDENSATION`: the cubic static balance with the damping
+of virtual work, closest to the coupled model up to heavy uplift; docs/error_atlas.md),
+``"paper"`` (eqs. 17–25: pin it to reproduce the paper) or ``"cubic"`` (the static vertical
+balance keeps the ``eps`` term, :mod:`screening.condensation.cubic`).  Cases may override it,
+so one study can compare them.  ``"cubic"`` and ``"virtual_work"`` need a bed that can carry
+the block through uplift onset, ``|eps| (m g / (2 b k))^2 < 2/27``; every grid point is
+checked before any work (a refused bed is pointed to ``"paper"``, which has no such limit).
 Coupled Monte Carlo spot checks do not depend on it.
 
 Spot points

@@ -27,6 +27,8 @@ STUDY = study_text({"title": '"edges"', "eps": "[-6e5, 6e7]",
                     "excitation.T2": "2.0", "t_end": "2.0"}, "[mcs]\nsamples = 4\nseed = 0\n")
 
 R1000 = "{start = 1.0, stop = 2.0, num = 1000}"
+#: pins the paper's condensation in a study text (``.replace("[foundation]\n", PAPER_CONDENSATION)``)
+PAPER_CONDENSATION = '[foundation]\ncondensation = "paper"\n'
 
 # id, (old, new) replacements, needle of the one-line message
 BOUNDS = [
@@ -487,7 +489,8 @@ def test_all_flagged_study_writes_its_figures(client, tmp_path, capsys, monkeypa
     from screening.workflow import sweep
 
     study = tmp_path / "soft.toml"
-    study.write_text(STUDY.replace("k = 2.89e7", "k = 1e4").replace("eps = [-6e5, 6e7]", "eps = [-6e5, 0.0]").replace("[mcs]\nsamples = 4\nseed = 0\n", ""))
+    study.write_text(STUDY.replace("k = 2.89e7", "k = 1e4").replace("eps = [-6e5, 6e7]", "eps = [-6e5, 0.0]").replace("[mcs]\nsamples = 4\nseed = 0\n", "")
+                     .replace("[foundation]\n", PAPER_CONDENSATION))   # the default cannot condense this bed
     real = sweep.run_sweep
     monkeypatch.setattr("screening.workflow.sweep.run_sweep",
                         lambda *a, **kw: real(*a, **{**kw, "client": client}))
@@ -820,7 +823,8 @@ def test_blocks_at_the_ends_of_the_length_range_finish_with_a_status(b, h):
     from screening.workflow.execution import solve_batch
     from screening.workflow.grid import batch_models, plan_batches
 
-    study = parse_study(STUDY.replace("b = 0.035", f"b = {b!r}").replace("h = 0.21", f"h = {h!r}"))
+    study = parse_study(STUDY.replace("b = 0.035", f"b = {b!r}").replace("h = 0.21", f"h = {h!r}")
+                        .replace("[foundation]\n", PAPER_CONDENSATION))    # the paper's closed forms at the extremes
     batch = plan_batches(study, study.n_points)[0]
     with np.errstate(all="ignore"):
         out = solve_batch(*batch_models(study, batch), study.cases[0].condensation_model, study.times, study.rtol,

@@ -16,7 +16,9 @@ from screening.status import FitFlag
 
 #: Two beds (k) x five target PGAs, 3 s records, with [accuracy] (the combination that used to end in
 #: "t_end is needed to turn a target PGA into S0").
-PGA_STUDY = study_text({"foundation.k": "[2.89e7, 5e6]", "foundation.eps": "0.0", "excitation.S0": None,
+#: The paper condensation, pinned: the curve counts and the untrusted points asserted below are its own.
+PGA_STUDY = study_text({"foundation.k": "[2.89e7, 5e6]", "foundation.eps": "0.0", "foundation.condensation": '"paper"',
+                        "excitation.S0": None,
                         "excitation.pga": "{start = 0.5, stop = 4, num = 5, log = true}", "time.t_end": "3.0"},
                        append="[accuracy]\ntarget = 0.15\nbudget_s = 3\n")
 #: The same grid without [accuracy]: untrusted points keep the linearization's value.

@@ -48,6 +48,7 @@ def test_cubic_condensation_case_matches_direct_solves(client, tmp_path):
     text = GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = [-6e5, 6e7]") + """
 [[case]]
 name = "paper"
+foundation.condensation = "paper"
 [[case]]
 name = "cubic"
 foundation.condensation = "cubic"

@@ -126,12 +126,13 @@ def test_p_rocking_start_is_the_closed_form_at_every_point(client, tmp_path):
     from screening.model.excitation import WhiteNoise
     from screening.solvers.synthesis import default_cutoff
 
-    run_sweep(parse_study(GRID), tmp_path / "g.nc", client=client, progress=False, log=lambda m: None)
+    study = parse_study(GRID)
+    run_sweep(study, tmp_path / "g.nc", client=client, progress=False, log=lambda m: None)
     with xr.open_dataset(tmp_path / "g.nc") as ds:
         assert "p_overturn" not in ds and "p_source" not in ds
         point = ds.isel(eps=2, S0=3)
         block, bed = Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, eps=float(point["eps"]))
-        a_ul = uplift_acceleration(block, bed, condensation.get("paper"))
+        a_ul = uplift_acceleration(block, bed, condensation.get(study.cases[0].condensation))
         assert float(point["uplift_acceleration"]) == pytest.approx(float(a_ul), rel=1e-12)
         expected = rocking_start_probability(WhiteNoise(float(point["S0"])), 4.0, default_cutoff(block, bed), a_ul)
         assert float(point["p_rocking_start"]) == pytest.approx(expected, rel=1e-9)

@@ -47,12 +47,12 @@ def test_runs_by_name_through_linearization_and_condensed_monte_carlo():
     assert mc.attrs["condensation"] == "virtual_work" and int(mc.n_used) == 4
 
 
-def test_selectable_in_a_study_beside_the_default():
+def test_the_default_and_selectable_in_a_study_beside_the_paper():
     from screening.workflow.study import parse_study
     from tests.helpers import GRID
 
     default = parse_study(GRID, name="grid")
     chosen = parse_study(GRID.replace("eps = [-6e5, 0.0, 3e7, 6e7]",
-                                      'eps = [-6e5, 0.0, 3e7, 6e7]\ncondensation = "virtual_work"'), name="grid")
-    assert [c.condensation for c in default.cases] == ["paper"]
-    assert [c.condensation for c in chosen.cases] == ["virtual_work"]
+                                      'eps = [-6e5, 0.0, 3e7, 6e7]\ncondensation = "paper"'), name="grid")
+    assert [c.condensation for c in default.cases] == ["virtual_work"]
+    assert [c.condensation for c in chosen.cases] == ["paper"]

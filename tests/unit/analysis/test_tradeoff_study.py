@@ -80,11 +80,11 @@ def test_study_syntax_error_and_missing_family():
 
 
 def test_families_carry_the_shared_model_case_and_the_condensation_object():
-    from screening.condensation import Condensation
+    from screening.condensation import DEFAULT_CONDENSATION, Condensation
     from screening.workflow.config import build_models
 
     study = parse_tradeoff_study(GOOD)
-    assert isinstance(study.condensation, Condensation) and study.condensation.name == "paper"
+    assert isinstance(study.condensation, Condensation) and study.condensation.name == DEFAULT_CONDENSATION
     case = study.family("w").case
     assert case.excitation == "white" and case.params["T1"] == 4.0 and "eps" not in case.params
     block, bed, exc = build_models(case, {"eps": 6e7, "S0": 1e-5})

@@ -227,9 +227,10 @@ def test_shipped_rule_is_monotone_in_uplift(calibration):
 
 
 def test_add_cell_trust_with_the_shipped_rule(calibration):
-    """Softening paper bed at low intensity: trusted; the same block near toppling: untrusted."""
+    """Softening paper bed at low intensity: trusted; the same block near toppling: untrusted (the cell
+    rule's calibration is the paper condensation's, pinned here)."""
     ds = linearize(Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5),
-                   WhiteNoise(np.array([1.14e-5, 9.79e-5, 1e-2])), trust=False)
+                   WhiteNoise(np.array([1.14e-5, 9.79e-5, 1e-2])), trust=False, condensation="paper")
     out = trust.add_cell_trust(ds)
     assert list(out.sl_trust.values) == [Trust.trusted, Trust.check, Trust.untrusted]
     assert out.sl_error_low.values[0] < 0 < out.sl_error_high.values[0]
@@ -303,7 +304,7 @@ def test_add_trust_is_the_shipped_error_model():
     assert out.sl_trust.dims == ds.peak_var_theta.dims
     assert out.sl_trust.attrs["flag_meanings"] == "trusted check untrusted"
     x, dims, shape = em.dataset_features(ds)
-    flag, est, low, high = em.interval_trust(em.shipped_model("paper"), x,
+    flag, est, low, high = em.interval_trust(em.shipped_model(ds.attrs["condensation"]), x,
                                              ds.status.transpose(*dims).values.ravel())
     np.testing.assert_array_equal(out.sl_trust.transpose(*dims).values.ravel(), flag)
     np.testing.assert_allclose(out.sl_error_low.transpose(*dims).values.ravel(), low)

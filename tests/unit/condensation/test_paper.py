@@ -6,15 +6,19 @@ with z_st from eqs. (17)-(18); the moment about the base centre minus m g h thet
 equal C(theta) theta' + K(theta) theta.
 """
 
+from functools import partial
+
 import numpy as np
 import pytest
 from scipy import integrate
 
 from screening.condensation import api
-from screening.condensation.api import rocking_acceleration
 from screening.condensation.paper import (restoring_moment, rocking_damping, rocking_stiffness, static_indentation,
                                           uplift_threshold)
 from screening.model import contact_pressure
+
+#: the paper's condensation, pinned (the default is another); a ``condensation=`` argument overrides it
+rocking_acceleration = partial(api.rocking_acceleration, condensation="paper")
 
 
 def _quadrature_moment(theta, theta_dot, block, foundation):

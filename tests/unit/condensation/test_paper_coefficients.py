@@ -9,9 +9,15 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
+from functools import partial
+
+from screening.condensation import api
 from screening.condensation.paper import rocking_damping, restoring_moment, uplift_threshold
-from screening.condensation.api import (equivalent_coefficients, equivalent_coefficients_from_moments,
-                                        uplift_probability)
+
+# the paper's condensation, pinned (the default is another)
+equivalent_coefficients = partial(api.equivalent_coefficients, condensation="paper")
+equivalent_coefficients_from_moments = partial(api.equivalent_coefficients_from_moments, condensation="paper")
+uplift_probability = partial(api.uplift_probability, condensation="paper")
 from screening.condensation.uplift_integrals import gaussian_uplift_integrals
 
 
@@ -191,7 +197,7 @@ def test_cubic_with_eps_zero_reproduces_the_paper_closed_forms(paper_block, rati
     bed = Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
     s = ratio * cubic.uplift_threshold(paper_block, bed)
     for rho in (-0.5, 0.0, 0.8):
-        ref = linearization.equivalent_coefficients(s, 40 * s, rho, paper_block, bed)
+        ref = linearization.equivalent_coefficients(s, 40 * s, rho, paper_block, bed, condensation="paper")
         got = linearization.equivalent_coefficients(s, 40 * s, rho, paper_block, bed, condensation="cubic")
         np.testing.assert_allclose(got, ref, rtol=1e-10)
 

@@ -71,7 +71,7 @@ def test_monte_carlo_parameters_follow_the_model_kind(foundation, excitation, pr
 
 
 def test_monte_carlo_theta_ul_is_that_of_the_condensation_or_the_exact_angle():
-    paper = small_mc()
+    paper = small_mc(condensation="paper")
     cub = small_mc(condensation="cubic")
     coupled = small_mc(model="coupled")
     assert float(paper["theta_ul"]) == get("paper").uplift_threshold(BLOCK, HC)

@@ -22,8 +22,8 @@ def assert_point_equals(grid_point, one, rtol=1e-12):
 
 def test_scalar_input_gives_0d_summaries_and_parameters_as_scalar_coordinates(paper_block):
     bed, exc = Foundation(eps=6e7, **BED), WhiteNoise(2.4e-5, Envelope(4.0, 2.0))
-    ds = linearize(paper_block, bed, exc, t_end=6.0)
-    direct = solve_moments(paper_block, bed, exc, output_times(6.0, 0.05))
+    ds = linearize(paper_block, bed, exc, t_end=6.0, condensation="paper")     # eq. (19)'s theta_ul below
+    direct = solve_moments(paper_block, bed, exc, output_times(6.0, 0.05), condensation="paper")
     assert dict(ds.sizes) == {"t": 121}
     for name in HISTORY_VARIABLES:
         assert ds[name].dims == ("t",)

@@ -405,7 +405,7 @@ def test_bad_condensation_raises_before_any_work(no_work, kwargs, name):
 
 def test_cubic_condensed_run_records_its_condensation():
     ds = small_run(model="condensed", condensation="cubic")
-    paper = small_run(model="condensed")
+    paper = small_run(model="condensed", condensation="paper")
     assert ds.attrs["condensation"] == "cubic" and paper.attrs["condensation"] == "paper"
     assert float(ds["theta_ul"]) == cubic.uplift_threshold(BLOCK, HC)
     assert ds.attrs["C1"] == pytest.approx(cubic.damping_at_rest(BLOCK, HC), rel=1e-15)
@@ -419,7 +419,8 @@ def test_cubic_condensed_run_with_eps_zero_is_the_paper_run():
     # the two C, K agree to rounding: at a tight tolerance the runs differ by integration error only
     # (~3e-6 relative here; 7e-4 at the default rtol: the strongly nonlinear samples amplify it)
     cub = small_run(model="condensed", condensation="cubic", foundation=bed, excitation=strong, t_end=4.0, rtol=1e-10)
-    paper = small_run(model="condensed", foundation=bed, excitation=strong, t_end=4.0, rtol=1e-10)
+    paper = small_run(model="condensed", condensation="paper", foundation=bed, excitation=strong, t_end=4.0,
+                      rtol=1e-10)
     assert float(paper.p_uplift.max()) > 0.3
     for name in ("var_theta", "var_theta_dot"):
         np.testing.assert_allclose(cub[name].values, paper[name].values, rtol=1e-4,

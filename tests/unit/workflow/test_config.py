@@ -63,7 +63,7 @@ def test_resolve_case_and_build_models():
     tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
               "excitation": {"kind": "white"}}
     case = config.resolve_case("c", tables, {"eps": None, "S0": None}, "")
-    assert case.params["g"] == 9.81 and case.params["T1"] == 4.0 and case.condensation == "paper"
+    assert case.params["g"] == 9.81 and case.params["T1"] == 4.0 and case.condensation == config.DEFAULTS["condensation"]
     block, foundation, excitation = config.build_models(case, {"eps": np.array([1.0, 2.0]), "S0": 1e-4})
     np.testing.assert_array_equal(foundation.eps, [1.0, 2.0])
     assert block.m == 8.67 and excitation.S0 == 1e-4

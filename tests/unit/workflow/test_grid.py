@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from helpers import CASES, GRID
 
+from screening.condensation import DEFAULT_CONDENSATION
 from screening.workflow import grid
 from screening.workflow.grid import (batch_models, batch_values, default_batch_size, hyperslabs, parameter_table,
                                      plan_batches, point_values, select_spots)
@@ -127,7 +128,7 @@ def test_parameter_table_splits_constants_per_case_values_and_labels():
     np.testing.assert_array_equal(per_case["eps"], [6e7, -6e5])
     assert np.isnan(per_case["omega_g"][0]) and per_case["omega_g"][1] == 10.0
     assert "S0" not in constants and "S0" not in per_case                  # swept
-    assert labels == {"contact": "hunt_crossley", "condensation": "paper", "envelope": "exponential"}
+    assert labels == {"contact": "hunt_crossley", "condensation": DEFAULT_CONDENSATION, "envelope": "exponential"}
     assert case_labels == {"excitation": ["white", "kanai_tajimi"]}
 
 

@@ -141,20 +141,24 @@ foundation = {contact = "winkler", c = 2e4, lam = 0.0}
     assert "lam" not in s.cases[1].params
 
 
-def test_condensation_defaults_to_the_paper_and_cases_may_switch_it():
+def test_condensation_defaults_to_the_package_default_and_cases_may_switch_it():
     s = parse_study(BASE)
-    assert s.cases[0].condensation == "paper"
+    assert s.cases[0].condensation == condensation.DEFAULT_CONDENSATION
     text = edit(BASE, "eps = [-6e5, 0.0, 6e7]", "eps = [0.0, 6e7]") + """
 [[case]]
+name = "default"
+[[case]]
 name = "paper"
+foundation.condensation = "paper"
 [[case]]
 name = "cubic"
 foundation.condensation = "cubic"
 """
     s = parse_study(text)
-    assert [c.condensation for c in s.cases] == ["paper", "cubic"]
+    assert [c.condensation for c in s.cases] == [condensation.DEFAULT_CONDENSATION, "paper", "cubic"]
     # the names are looked up once, when the study is parsed: the solvers get the objects
-    assert [c.condensation_model for c in s.cases] == [condensation.get("paper"), condensation.get("cubic")]
+    assert [c.condensation_model for c in s.cases] == [condensation.get(condensation.DEFAULT_CONDENSATION),
+                                                       condensation.get("paper"), condensation.get("cubic")]
     s = parse_study(edit(BASE, 'contact = "hunt_crossley"', 'contact = "hunt_crossley"\ncondensation = "cubic"'))
     assert s.cases[0].condensation == "cubic"      # -6e5 1/m^2 carries the paper block
 
