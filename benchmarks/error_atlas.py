@@ -6,7 +6,7 @@ Run (regenerates ``screening/data/error_atlas.nc``)::
     nice -n 5 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python benchmarks/error_atlas.py \
         [--points 1024] [--samples 500] [--seed 0] [--workers 1 | --scheduler ADDRESS_OR_FILE] \
         [--work outputs/error_atlas] [--out screening/data/error_atlas.nc] [--pilot N] [--assemble-only] \
-        [--resume-from screening/data/error_atlas.nc]
+        [--resume-from screening/data/error_atlas.nc] [--redo POINTS]
 
 Each point's result is written atomically to ``--work/point_NNNNN.json``; a re-run skips the points
 already there (so an interrupted campaign resumes where it stopped, on this machine or a cluster),
@@ -14,7 +14,10 @@ then assembles every finished point into ``--out``, with the error model fitted 
 (:func:`screening.analysis.error_model.fitted_variables`).  ``--resume-from FILE`` resumes from an assembled
 atlas instead of (or besides) the JSON folder: the points already in FILE count as done and their rows
 are kept as they are in the new ``--out`` (a point present both in FILE and as a JSON is taken from the
-JSON); the CPU hours add up.  ``--pilot N`` runs N points spread over the
+JSON); the CPU hours add up.  ``--redo POINTS`` (indices and ranges, ``"3,17,40-45"``) evaluates those points
+again although FILE holds them (a JSON of theirs already in ``--work`` still counts as done, so a stopped redo
+resumes): the way to give a point a new reference, e.g. where the reference model's validity rule changed.
+``--pilot N`` runs N points spread over the
 design (every ``points // N``-th) and prints the CPU per point by reference model, to size a campaign.
 Progress (points done, CPU per point, ETA) is printed as points complete.
 """
@@ -96,6 +99,17 @@ def merge_rows(resumed, ds):
     return merged
 
 
+def parse_points(text):
+    """Sorted point indices from ``"3,17,40-45"`` (``ValueError`` naming ``--redo`` for anything else)."""
+    out = set()
+    for part in filter(None, (p.strip() for p in (text or "").split(","))):
+        lo, sep, hi = part.partition("-")
+        if not (lo.isdigit() and (not sep or hi.isdigit())) or (sep and int(hi) < int(lo)):
+            raise ValueError(f"--redo must be point indices or ranges such as 3,17,40-45 (got {part!r})")
+        out.update(range(int(lo), int(hi if sep else lo) + 1))
+    return sorted(out)
+
+
 def versions():
     import importlib.metadata as md
 
@@ -115,9 +129,18 @@ def main(argv=None):
     ap.add_argument("--pilot", type=int, default=0)
     ap.add_argument("--assemble-only", action="store_true")
     ap.add_argument("--resume-from", default=None)
+    ap.add_argument("--redo", default="", help="points to evaluate again although --resume-from holds them")
     args = ap.parse_args(argv)
     if args.points < 1 or args.samples < 2:
         print("error: --points must be >= 1 and --samples >= 2", file=sys.stderr)
+        return 2
+    try:
+        redo = parse_points(args.redo)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if redo and redo[-1] >= args.points:
+        print(f"error: --redo must be point indices in 0..{args.points - 1} (got {redo[-1]})", file=sys.stderr)
         return 2
 
     from screening.analysis import atlas
@@ -133,7 +156,7 @@ def main(argv=None):
         print(f"error: --resume-from has {resumed.attrs['samples']} samples per point, not --samples "
               f"{args.samples}", file=sys.stderr)
         return 2
-    in_file = set() if resumed is None else {int(i) for i in resumed["point"].values}
+    in_file = (set() if resumed is None else {int(i) for i in resumed["point"].values}) - set(redo)
     todo = [i for i in indices if not point_path(work, i).exists() and i not in in_file]
     print(f"error atlas: {len(indices)} points x {args.samples} samples; {len(indices) - len(todo)} already in "
           f"{work}" + (f" or {args.resume_from}" if resumed is not None else "") + f", {len(todo)} to run",

@@ -83,6 +83,9 @@ BLOCKS = {
     "equipment": (dict(m=300.0, b=0.3, h=0.9), (10.0, 0.4)),         # the calibration's hospital equipment
     "paper block": (dict(m=8.67, b=0.035, h=0.21), (10.0, 0.4)),     # the paper's block (section 3)
     "cabinet": (dict(m=400.0, b=0.3, h=1.0), (15.6, 0.6)),            # the scene's cabinet
+    # the error atlas's ends of slenderness (atan(b/h) 0.10 and 0.45, R = 0.5 m, m = 100 kg: its realisation)
+    "slender block": (dict(m=100.0, b=0.05, h=0.4975), (15.6, 0.6)),
+    "stocky block": (dict(m=100.0, b=0.2175, h=0.45), (15.6, 0.6)),
 }
 #: Beds: ``(label, block, k [N m-2], eps [m-2], lam [N s m-4] or None for a vertical damping ratio of 0.05)``.
 BEDS = (
@@ -95,7 +98,15 @@ BEDS = (
     ("paper block k=2.89e7 (paper bed)", "paper block", 2.89e7, 0.0, 8.95e8),
     ("statue k=3e6", "statue", 3e6, 0.0, None),
     ("statue k=1.5e6", "statue", 1.5e6, 0.0, None),
+    # the error atlas's corners in slenderness x vertical damping ratio (0.02 and 1.3, BED_ZETA), theta_ul / atan(b/h)
+    # about 3e-4, where its stiff-bed references lie (--only "block k=": these eight beds)
+    ("slender block k=6.5e9 zeta_v=0.02", "slender block", 6.5e9, 0.0, None),
+    ("slender block k=6.5e9 zeta_v=1.3", "slender block", 6.5e9, 0.0, None),
+    ("stocky block k=7.7e7 zeta_v=0.02", "stocky block", 7.7e7, 0.0, None),
+    ("stocky block k=7.7e7 zeta_v=1.3", "stocky block", 7.7e7, 0.0, None),
 )
+#: Vertical damping ratio of a bed whose ``lam`` is None, where it is not 0.05.
+BED_ZETA = {label: float(label.rsplit("=", 1)[1]) for label, *_ in BEDS if "zeta_v=" in label}
 #: Intensity levels: median PGA of the record (ground band) over the rigid block's uplift acceleration
 #: ``g b / h``, per block and excitation kind: moderate rocking and near toppling.
 #: Chosen from a 60-sample pilot of the stiff-bed model (moderate: some rocking, few or no overturns; strong:
@@ -106,6 +117,8 @@ LEVELS = {
     ("equipment", "kanai_tajimi"): (1.0, 1.3),
     ("paper block", "kanai_tajimi"): (0.85, 1.0),
     ("paper block", "white"): (0.7, 1.2),
+    **{(name, "kanai_tajimi"): (1.0, 1.5) for name in ("slender block", "stocky block")},
+    **{(name, "white"): (2.2, 3.3) for name in ("slender block", "stocky block")},
 }
 #: Per-bed levels where the block's do not fit (softer beds topple at a fraction of ``g b / h``; from a
 #: 100-sample coupled pilot).
@@ -167,7 +180,7 @@ def cases():
     for label, name, k, eps, lam in BEDS:
         params, (wg, zg) = BLOCKS[name]
         block = Block(**params)
-        bed = _bed(block, k, eps, lam=lam)
+        bed = _bed(block, k, eps, zeta_v=BED_ZETA.get(label, 0.05), lam=lam)
         for kind in EXCITATIONS:
             shape = WhiteNoise(1.0) if kind == "white" else KanaiTajimi(1.0, wg, zg)
             ratios = BED_LEVELS.get(label, {}).get(kind) or LEVELS[(name, kind)]

@@ -205,7 +205,7 @@ def targets(ds, condensation):
     ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
     >>> y = targets(atlas, "paper")
     >>> y["log_var_ratio"].shape, y["p_exceed_diff"].shape, int(np.isfinite(y["log_var_ratio"]).sum())
-    ((1024,), (1024, 5), 853)
+    ((1024,), (1024, 5), 903)
     """
     s = ds.sel(condensation=condensation)
     ok = (s["sl_status"].values == 0) & valid_reference(ds)
@@ -754,7 +754,7 @@ def model_from_atlas(ds, condensation):
     ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
     >>> model = model_from_atlas(atlas, "paper")
     >>> model.x.shape, model.coverage, model.h == float(atlas["em_bandwidth"].sel(condensation="paper"))
-    ((853, 11), 0.9, True)
+    ((903, 11), 0.9, True)
     """
     if condensation not in ds["condensation"].values:
         raise ValueError(f"parameter 'condensation' must be one of {[str(c) for c in ds['condensation'].values]} "
@@ -1103,7 +1103,7 @@ def interval_trust(model, x, status=None, covered=True):
     ...                    WhiteNoise(np.array([1e-4, 1e-3])))
     >>> flag, est, low, high = interval_trust(shipped_model("paper"), x)
     >>> flag.tolist(), est.round(2).tolist(), high.round(2).tolist()
-    ([1, 2], [-0.55, -0.65], [-0.27, 0.32])
+    ([1, 2], [-0.56, -0.62], [-0.3, 0.17])
     """
     from screening.status import PointStatus, Trust
 

@@ -155,7 +155,8 @@ def check_validity(model, block, foundation, excitation=None, strict=False):
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> check_validity(get("coupled"), block, bed, strict=True) is None     # the coupled model holds everywhere
     True
-    >>> check_validity(get("stiff_bed"), block, bed, strict=True)           # the paper's bed is not stiff enough
+    >>> statue, soft = Block(m=1200.0, b=0.25, h=0.9), Foundation(k=1.1e6, lam=3.6e9)
+    >>> check_validity(get("stiff_bed"), statue, soft, strict=True)         # softer than any bed measured
     Traceback (most recent call last):
     ...
     ValueError: model 'stiff_bed' outside its measured validity: ...

@@ -394,7 +394,9 @@ def choose(block, foundation, excitation_kind, rule_set=None):
     --------
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> choose(block, bed, "white")[0]                      # the paper's bed: no cheaper model is vouched for
+    >>> choose(block, bed, "kanai_tajimi")[0]               # the paper's bed: the stiff-bed model passed there
+    'stiff_bed'
+    >>> choose(block, bed, "white")[0]                      # under white noise only the lightly damped beds
     'coupled'
     >>> toy = parse_rules({"model": [{"name": "condensed", "excitations": ["white"],
     ...                               "vertical_damping_ratio": [0.2, 0.5]}]})

@@ -85,9 +85,12 @@ def test_auto_picks_the_stiff_bed_model_only_inside_every_measured_interval():
     assert name == "coupled" and "theta_ul_over_slenderness" in why
     name, why = mc.choose(STATUE, STIFF, "pulse")                     # an excitation kind not measured
     assert name == "coupled" and "'pulse'" in why
-    name, why = mc.choose(Block(m=8.67, b=0.035, h=0.21), Foundation(k=1e9, lam=1e10), "kanai_tajimi")
-    assert name == "coupled" and "slenderness" in why                # 0.165: only the paper's bed measured there
-    paper_bed = Foundation(k=2.89e7, lam=8.95e8)                      # the paper's bed: damping ratio 0.31
+    # the paper block (atan(b/h) 0.165) passed on k = 1e9, between the slender block (0.10) and the statues
+    assert mc.choose(Block(m=8.67, b=0.035, h=0.21), Foundation(k=1e9, lam=1e10), "kanai_tajimi")[0] == "stiff_bed"
+    stocky = Block(m=100.0, b=0.2175, h=0.45)                         # atan(b/h) 0.45: failed
+    name, why = mc.choose(stocky, Foundation(k=7.7e7, lam=2.0e9), "kanai_tajimi")
+    assert name == "coupled" and "slenderness" in why
+    paper_bed = Foundation(k=2.89e7, lam=8.95e8)                      # under the statue: damping ratio 1.38
     name, why = mc.choose(STATUE, paper_bed, "kanai_tajimi")
     assert name == "coupled" and "vertical_damping_ratio" in why
     assert mc.choose(STATUE, STIFF, None)[0] == "coupled"              # records: not measured
