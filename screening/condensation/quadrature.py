@@ -223,15 +223,20 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     ([[2.0, 500.0, 0.0]], [[0.0, 0.0, 0.0]])
     """
     sigma = np.asarray(sigma, dtype=float)[:, None]
-    x2 = (theta[None, :] / sigma) ** 2
-    phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / sigma
-    dc = c_values - c0
-    dk = k_values - k0
-    inv_s2 = 1.0 / sigma[:, 0] ** 2
-    he2 = phi * (x2 - 1.0)
-    values = np.stack([_row_sums(phi, c_values), _row_sums(phi * x2, k_values), _row_sums(he2, dc) * inv_s2], axis=1)
-    slopes = np.stack([_row_sums(he2, dc), _row_sums(phi * x2 * (x2 - 3.0), dk),
-                       _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2], axis=1)
+    # at scales near the float range (k ~ 1e100) the products overflow: the table is then not finite and the
+    # solver flags the point, as it did when these sums were a BLAS product (which raises no floating-point
+    # warning); numpy's elementwise products would add a RuntimeWarning for the same outcome
+    with np.errstate(over="ignore", invalid="ignore"):
+        x2 = (theta[None, :] / sigma) ** 2
+        phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / sigma
+        dc = c_values - c0
+        dk = k_values - k0
+        inv_s2 = 1.0 / sigma[:, 0] ** 2
+        he2 = phi * (x2 - 1.0)
+        values = np.stack([_row_sums(phi, c_values), _row_sums(phi * x2, k_values), _row_sums(he2, dc) * inv_s2],
+                          axis=1)
+        slopes = np.stack([_row_sums(he2, dc), _row_sums(phi * x2 * (x2 - 3.0), dk),
+                           _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2], axis=1)
     return values, slopes
 
 

@@ -53,16 +53,16 @@ def test_intensity_measures_per_point_match_the_dataset_evaluation(client, tmp_p
 def test_a_batch_whose_models_cannot_be_built_is_flagged_and_the_run_goes_on(client, tmp_path, monkeypatch):
     """A ValueError while the client builds a batch's models (e.g. S0 from a target PGA at extreme
     scales) fails that batch like a failed task (status task_failed, one warning), never the run."""
-    from screening.workflow import execution
+    from screening.workflow import _submit                 # the client side of the tasks builds the models
 
-    real = execution.batch_point_models
+    real = _submit.batch_point_models
 
     def refuses_the_second(study, batch):
         if batch.index == 1:
             raise ValueError("parameter 'S0' must be a finite number > 0 (got nan)")
         return real(study, batch)
 
-    monkeypatch.setattr(execution, "batch_point_models", refuses_the_second)
+    monkeypatch.setattr(_submit, "batch_point_models", refuses_the_second)
     study = parse_study(GRID, name="s", source="s.toml")
     messages = []
     run_sweep(study, tmp_path / "r.nc", client=client, batch_size=4, progress=False, log=messages.append)
