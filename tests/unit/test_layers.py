@@ -104,7 +104,6 @@ UNDECLARED = {
     ("report.tradeoff_files", "report.tradeoff_text", "markdown_report"): "as write_reports",
     ("solvers.montecarlo", "solvers.datasets", "monte_carlo_dataset"):
         "the Monte Carlo dataset builder, out of __all__ until it has a numpydoc docstring",
-    ("workflow.store", "workflow.writer", "write_region"): "the region writer the resume record replays",
     ("workflow.sweep", "workflow.probabilities", "finish_probabilities"): "the sweep's last stage",
 }
 
