@@ -102,7 +102,6 @@ UNDECLARED = {
         "the trade study's report writers, out of __all__ until they have numpydoc docstrings",
     ("report.tradeoff_files", "report.tradeoff_figures", "plot_error_vs_cost"): "as write_reports",
     ("report.tradeoff_files", "report.tradeoff_text", "markdown_report"): "as write_reports",
-    ("workflow.sweep", "workflow.probabilities", "finish_probabilities"): "the sweep's last stage",
 }
 
 
