@@ -192,13 +192,15 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
     Where Monte Carlo ran (the run with more usable samples where both did) the probability of a level is
     the fraction ``p = k / n`` of the ``n`` standing or overturned samples that reached it, overturned
     samples exceeding every level, with the Agresti-Coull standard error
-    ``se = sqrt(p~ (1 - p~) / (n + 4))``, ``p~ = (k + 2) / (n + 4)``
+    ``se = sqrt(p~ (1 - p~) / (n + 4))``, ``p~ = (k + 2) / (n + 4)`` [2]_
     (:func:`screening.solvers.estimates.binomial_estimate`).
 
     References
     ----------
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
+    .. [2] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
+       proportions", The American Statistician 52(2), 119-126, 1998.
 
     Examples
     --------

@@ -403,7 +403,8 @@ def study_from_tables(raw, text, name, source):
     Returns
     -------
     Study
-        The validated study: its swept parameters, cases, output times [s] and optional stages.
+        The study the tables describe, with the hash of ``text``, the package version and the result
+        layout as its reuse ``key``.
 
     Raises
     ------
