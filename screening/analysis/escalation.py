@@ -37,7 +37,7 @@ __all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "MAIN_SHARE", "STEP_COST_S", "GRID_
            "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MIN_COVER", "MIN_CONDENSED_ROWS",
            "escalation_candidates", "cover_points", "condensed_cells", "escalation_model", "samples_needed",
            "meets_target", "estimated_cost", "full_contact_share", "prior_cost", "affordable_points",
-           "auto_escalation_model", "PAIRED_MODEL", "paired_model"]
+           "auto_escalation_model", "PAIRED_MODEL", "paired_model", "paired_plan"]
 
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
 PILOT_SAMPLES = 64
@@ -639,11 +639,57 @@ def paired_model(model):
 def paired_plan(pilot, model, pilot_samples, n_plain):
     """The :class:`~screening.analysis.multifidelity.Allocation` of a point from its paired pilot.
 
-    ``pilot``: the result of a paired pilot run (``n_steps``, ``n_grid``, ``rodas``, ``cheap_n_steps``,
-    ``cheap_n_grid``, ``correlation``); ``n_plain``: the samples plain Monte Carlo needs for the target.
-    The costs per sample are the cost model's (:func:`estimated_cost`: deterministic), the correlation the
-    pilot's at the peak of var_theta; plain Monte Carlo below
-    :data:`~screening.analysis.multifidelity.MIN_GAIN`, and never fewer expensive samples than the pilot's.
+    Parameters
+    ----------
+    pilot : mapping
+        The result of a paired pilot run: ``n_steps`` and ``n_grid`` (integration steps and synthesis
+        grid points of the expensive model, summed over the samples), ``rodas`` (its steps are the
+        linearly implicit pair's), ``cheap_n_steps`` and ``cheap_n_grid`` (the same of the cheap model,
+        :data:`PAIRED_MODEL`), ``correlation`` (the two models' correlation at the peak of var_theta,
+        in [-1, 1]) and optionally ``cheap_samples`` (default ``pilot_samples``).
+    model : int
+        :class:`~screening.status.EscalationModel` code of the expensive model.
+    pilot_samples : int
+        Samples of the pilot's expensive model, >= 1.
+    n_plain : int
+        Samples plain Monte Carlo needs for the target standard error.
+
+    Returns
+    -------
+    Allocation
+        The samples of each model (:func:`~screening.analysis.multifidelity.allocate`), never fewer
+        expensive samples than the pilot's when the two-fidelity estimator is chosen.
+
+    Notes
+    -----
+    The costs per sample are the cost model's (:func:`estimated_cost`: deterministic, so the plan is the
+    same on every machine)::
+
+        c_hi = estimated_cost(n_steps, model, n_grid, rodas, pilot_samples) / pilot_samples
+        c_lo = estimated_cost(cheap_n_steps, condensed, cheap_n_grid, False, cheap_samples) / cheap_samples
+
+    and the allocation is plain Monte Carlo when the predicted speed-up is below
+    :data:`~screening.analysis.multifidelity.MIN_GAIN`.  The pilot's samples are reused, so a two-fidelity
+    plan asks for at least ``pilot_samples`` of each model.
+
+    References
+    ----------
+    .. [1] ``docs/multifidelity.md``, "Multi-fidelity Monte Carlo: what a paired cheap model saves", sections
+       "When the cheap model runs" and "In the escalation" (this package's documentation).
+    .. [2] ``docs/montecarlo_numerics.md``, section "Cost model of the escalation" (this package's documentation).
+
+    Examples
+    --------
+    >>> from screening.status import EscalationModel
+    >>> pilot = {"n_steps": 2e5, "n_grid": 0, "rodas": False, "cheap_n_steps": 2e4, "cheap_n_grid": 0,
+    ...          "correlation": 0.95}
+    >>> plan = paired_plan(pilot, EscalationModel.coupled, 100, 2000)
+    >>> plan.estimator, plan.n_expensive, plan.n_cheap
+    ('multifidelity', 305, 5022)
+    >>> paired_plan(pilot, EscalationModel.coupled, 100, 300).n_expensive       # at least the pilot's
+    100
+    >>> paired_plan(dict(pilot, correlation=0.3), EscalationModel.coupled, 100, 2000).estimator
+    'plain'
     """
     from screening.analysis.multifidelity import allocate
 

@@ -28,7 +28,7 @@ from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
 from screening.status import DIVERGENCE_TEXT, DivergenceReason
 
 __all__ = ["MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
-           "finish", "linearization_dataset", "with_probabilities"]
+           "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
 
 #: Ensemble statistics of a Monte Carlo run, on ``t``.
 MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",
@@ -242,13 +242,96 @@ def _status_text(n_samples, n_overturned, n_diverged):
 def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, reason, n_over, n_div,
                         block, foundation, excitation, model, n_samples, seed, t_end, dt, opts, plan, h_min, wall,
                         condensation=DEFAULT_CONDENSATION, mc_model=None):
-    """The dataset of :func:`screening.solvers.montecarlo.monte_carlo` (see its docstring).
+    """The dataset of :func:`screening.solvers.montecarlo.monte_carlo`: a run's plain arrays labelled.
 
-    ``stats``: the ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`);
-    ``peak``, ``overturned``, ``diverged``, ``n_acc``, ``n_rej``, ``reason``, ``h_min``: per sample;
-    ``n_over``, ``n_div``: counts; ``opts``: the numerics; ``plan``: the spectral plan of the input;
-    ``wall``: the integration time [s]; ``mc_model``: the :class:`~screening.solvers.mc_registry.MonteCarloModel`
-    (default: the registered ``model``), which gives ``theta_ul`` and its own attributes.
+    Parameters
+    ----------
+    times : numpy.ndarray
+        Output times ``t`` [s], shape ``(n_t,)``.
+    stats : dict of numpy.ndarray
+        The ensemble statistics on ``t`` (:func:`~screening.solvers.montecarlo.ensemble_statistics`), one
+        array per name of :data:`MONTE_CARLO_STATISTICS` ([rad2], [rad2 s-2], [rad2 s-1], [1]).
+    peak : numpy.ndarray
+        Peak of ``|theta|`` per sample [rad], shape ``(n_samples,)``.
+    overturned, diverged : numpy.ndarray of bool
+        Per sample: it overturned; its integration failed.
+    n_acc, n_rej : numpy.ndarray of int
+        Accepted and rejected integration steps per sample.
+    reason : numpy.ndarray of int
+        :class:`~screening.status.DivergenceReason` code per sample (read where ``diverged``).
+    n_over, n_div : int
+        Counts of overturned and diverged samples.
+    block : Block
+        The block.
+    foundation : Foundation
+        The bed.
+    excitation : Excitation
+        The ground motion.
+    model : str
+        The registered Monte Carlo model's name (``"coupled"``, ``"condensed"``, ...).
+    n_samples : int
+        Samples of the run.
+    seed : int
+        The seed of the input samples.
+    t_end : float
+        End of the record [s].
+    dt : float
+        Output step [s].
+    opts : dict
+        The numerics: ``rtol`` [1], ``h_max`` [s], ``max_flight_time`` [s] and optionally ``integrator``
+        (a key of :data:`INTEGRATOR_TEXT`, default ``"dopri"``).
+    plan : SpectralPlan
+        The spectral plan of the input (:func:`~screening.solvers.synthesis.spectral_plan`).
+    h_min : numpy.ndarray
+        Smallest accepted step per sample after the start-up ramp [s].
+    wall : float
+        The integration's wall time [s].
+    condensation : str, optional
+        The condensation of the bed (default: the package's).
+    mc_model : MonteCarloModel, optional
+        The :class:`~screening.solvers.mc_registry.MonteCarloModel` (default: the registered ``model``),
+        which gives ``theta_ul`` and its own attributes.
+
+    Returns
+    -------
+    xarray.Dataset
+        The statistics on ``t``, ``peak_abs_theta``, ``overturned``, ``diverged`` and ``n_steps`` on
+        ``sample``, the counts ``n_overturned``, ``n_diverged``, ``n_used``, the uplift threshold
+        ``theta_ul`` [rad] and ``slenderness`` [rad]; the model's parameters as coordinates; the run's
+        numerics, synthesis and status as attributes; units from the schema (CF-1.8).
+
+    Notes
+    -----
+    The statistics are over the used samples, ``n_used = n_samples - n_over - n_div``; the ``status``
+    attribute is ``"ok"`` when ``n_used >= 2``.  The mean integration step is
+    ``dt_integration_mean = t_end / mean(n_acc)`` over the used samples.
+
+    References
+    ----------
+    .. [1] screening documentation, "Monte Carlo numerics: the sample integrators, stiff beds and the cost
+       model", ``docs/montecarlo_numerics.md``.
+    .. [2] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> from screening.solvers.montecarlo import ensemble_statistics
+    >>> from screening.solvers.synthesis import spectral_plan
+    >>> block, bed, noise = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> rng = np.random.default_rng(0)
+    >>> theta, theta_dot = 1e-3 * rng.standard_normal((4, 5)), 1e-2 * rng.standard_normal((4, 5))
+    >>> overturned = np.array([False, False, False, True])        # the last sample is not used
+    >>> stats = ensemble_statistics(theta, theta_dot, np.zeros((4, 5), dtype=bool), ~overturned)
+    >>> opts = {"rtol": 1e-6, "h_max": 0.01, "max_flight_time": 1.0}
+    >>> ds = monte_carlo_dataset(np.linspace(0.0, 2.0, 5), stats, np.abs(theta).max(axis=1), overturned,
+    ...                          np.zeros(4, dtype=bool), np.full(4, 100), np.full(4, 3), np.zeros(4, dtype=int),
+    ...                          1, 0, block, bed, noise, "condensed", 4, 0, 2.0, 0.5, opts,
+    ...                          spectral_plan(noise, 2.0, 200.0), np.full(4, 1e-3), 0.2)
+    >>> int(ds["n_used"]), ds.attrs["status"], ds["var_theta"].attrs["units"], ds.attrs["dt_integration_mean"]
+    (3, 'ok', 'rad2', 0.02)
+    >>> bool(np.isclose(ds["var_theta"][2], np.var(theta[:3, 2], ddof=1)))      # over the used samples
+    True
     """
     mc = mc_registry.get(model if mc_model is None else mc_model)
 

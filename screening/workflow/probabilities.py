@@ -27,7 +27,7 @@ from screening.analysis.probabilities import choose_sources, monte_carlo_source,
 from screening.solvers import mc_registry
 from screening.status import EscalationEstimator, EscalationModel, PointStatus, ProbabilitySource, SampleState
 
-__all__ = ["CORRECTION_HISTORIES", "levels_at", "probabilities_line"]
+__all__ = ["CORRECTION_HISTORIES", "levels_at", "finish_probabilities", "probabilities_line"]
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
@@ -156,9 +156,78 @@ def _corrected_estimates(study, res, points):
 
 
 def finish_probabilities(study, res, escalated=None, spot_runs=None):
-    """Replace the workers' linearization estimates in the result ``res`` of ``study`` by the best ones and
-    write ``p_source``; ``escalated`` and ``spot_runs``: the Monte Carlo runs (:func:`_monte_carlo_runs`).
-    Returns ``{source name: points}``."""
+    """Replace the workers' linearization estimates in a sweep's result by the best ones and write ``p_source``.
+
+    The sweep's last stage, run on the client once the escalated points and the spot checks are in: at
+    every point the probabilities of overturning (and of exceeding each ``[fragility]`` threshold) of the
+    best model that ran there, in the order of this module's docstring (Monte Carlo, the trusted
+    linearization, the corrected linearization, else ``unreliable`` with a NaN standard error).
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study (its grid, ``[fragility]``, ``[accuracy]`` and ``[mcs]`` tables).
+    res : ResultFile
+        The open result (:class:`~screening.workflow.writer.ResultFile`): read for the workers'
+        estimates ``p_overturn``, ``p_exceed`` [1] and their standard errors, the trust band
+        ``sl_error_low``/``sl_error_high`` [1], ``theta_ul`` and ``slenderness`` [rad], ``status``,
+        ``sl_trust`` (and ``best_method`` with ``[accuracy]``); written through ``write_probabilities``.
+    escalated : tuple, optional
+        ``(flat indices, EscalationModel codes, runs)`` of the escalated points
+        (:func:`screening.workflow.accuracy.escalate`), each run with ``peak_abs_theta`` [rad] and
+        ``sample_state`` per sample (and its paired cheaper model's for a multi-fidelity point).
+    spot_runs : tuple, optional
+        ``(grid index tuples, results)`` of the Monte Carlo spot checks, each result with
+        ``peak_abs_theta`` [rad], ``sample_state`` and optionally ``mcs_model`` (a code of
+        :func:`screening.solvers.mc_registry.names`; default the study's ``[mcs] model``).
+
+    Returns
+    -------
+    dict
+        ``{source name: points}``: how many points took their probabilities from each source
+        (:func:`screening.analysis.probabilities.source_codes`).
+
+    Notes
+    -----
+    Where Monte Carlo ran (the run with more usable samples where both did) the probability of a level is
+    the fraction ``p = k / n`` of the ``n`` standing or overturned samples that reached it, overturned
+    samples exceeding every level, with the Agresti-Coull standard error
+    ``se = sqrt(p~ (1 - p~) / (n + 4))``, ``p~ = (k + 2) / (n + 4)`` [2]_
+    (:func:`screening.solvers.estimates.binomial_estimate`).
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+    .. [2] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
+       proportions", The American Statistician 52(2), 119-126, 1998.
+
+    Examples
+    --------
+    Two points: the first trusted, the second not, with a spot check of 4 coupled samples (one overturned).
+
+    >>> import numpy as np
+    >>> from screening.solvers import mc_registry
+    >>> from screening.status import PointStatus, SampleState, Trust
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> class Result(dict):                   # the reads and the write of a result used here
+    ...     status = np.array([PointStatus.ok, PointStatus.ok])
+    ...     sl_trust = np.array([Trust.trusted, Trust.untrusted])
+    ...     def commit(self):
+    ...         pass
+    ...     def read(self, name):
+    ...         return np.asarray(self[name], dtype=float)
+    ...     def write_probabilities(self, values, source):
+    ...         self.update(values, p_source=source)
+    >>> res = Result(p_overturn=[1e-3, 0.2], p_overturn_se=[2e-4, 0.05], sl_error_low=[-0.1, -0.1],
+    ...              sl_error_high=[0.1, 0.1], theta_ul=[1e-3, 1e-3], slenderness=[0.165, 0.165])
+    >>> spot = {"mcs_model": mc_registry.names().index("coupled"), "peak_abs_theta": [0.01, 0.02, 0.05, 0.3],
+    ...         "sample_state": [SampleState.standing] * 3 + [SampleState.overturned]}
+    >>> finish_probabilities(parse_study(EXAMPLE_STUDY), res, spot_runs=([(1,)], [spot]))
+    {'linearization_gaussian': 1, 'monte_carlo_coupled': 1}
+    >>> res["p_overturn"].tolist(), bool(np.isclose(res["p_overturn_se"][1], np.sqrt(0.375 * 0.625 / 8)))
+    ([0.001, 0.25], True)
+    """
     from screening.analysis.probabilities import source_codes
 
     res.commit()                    # a zarr store creates the variables defined since (best estimates) here

@@ -122,7 +122,7 @@ from screening.workflow.config import (NUMERIC, TABLE_KEYS, Case, StudyError, bu
                                        time_table, title_and_description, type_name)
 
 __all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study",
-           "EXAMPLE_STUDY"]
+           "study_from_tables", "EXAMPLE_STUDY"]
 
 #: The smallest useful study, for examples: the paper's block (m = 8.67 kg, b = 0.035 m, h = 0.21 m) on a
 #: Hunt-Crossley bed (k = 2.89e7 N m-2, lam = 8.95e8 N s m-3) with eps swept over 0 and 6e7 m-2 (two
@@ -384,8 +384,52 @@ def parse_study(text, name="study", source="<string>"):
 
 # ----------------------------------------------------------------------------- building
 def study_from_tables(raw, text, name, source):
-    """The :class:`Study` of a parsed study file ``raw`` (its TOML tables; ``text`` is kept for the result's
-    provenance); raises :class:`StudyError` with one line naming the key."""
+    """The :class:`Study` of a parsed study file: its tables validated and built.
+
+    The builder behind :func:`parse_study`, for a reader that parses the TOML itself (the record study
+    reuses it for its shared tables).  Every table and key is checked before any work.
+
+    Parameters
+    ----------
+    raw : dict
+        The study file's TOML tables (``tomllib.loads(text)``).
+    text : str
+        The study's text, kept for the result's provenance and its hash.
+    name : str
+        The study's name (the result's default title and file stem).
+    source : str
+        Where the text came from, named in error messages.
+
+    Returns
+    -------
+    Study
+        The study the tables describe, with the hash of ``text``, the package version and the result
+        layout as its reuse ``key``.
+
+    Raises
+    ------
+    StudyError
+        An invalid key or value (one line naming the key and its allowed range).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import tomllib
+    >>> from screening.workflow.study import EXAMPLE_STUDY as text
+    >>> study = study_from_tables(tomllib.loads(text), text, "bed", "<string>")
+    >>> study.dims, study.shape, study.t_end, study.dt
+    (('eps',), (2,), 20.0, 0.05)
+    >>> study.key == parse_study(text, name="bed").key          # the same study as from the text
+    True
+    >>> try:
+    ...     study_from_tables(dict(tomllib.loads(text), colour="red"), text, "bed", "<string>")
+    ... except StudyError as exc:
+    ...     print(str(exc)[:28])
+    colour: unknown key (allowed
+    """
     check_keys(raw, _TOP_KEYS, "")
     title, description = title_and_description(raw, f"Stochastic-linearization screening: {name}")
     max_points = _run(raw)

@@ -58,7 +58,7 @@ from screening.workflow.grid import history_chunks, hyperslabs, parameter_table
 
 __all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
            "NetcdfFormat", "result_attributes", "band_limit_attribute",
-           "relative_peak_error", "history_chunks", "point_chunks", "region_variables", "ResultFile"]
+           "relative_peak_error", "history_chunks", "point_chunks", "region_variables", "write_region", "ResultFile"]
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
 COMPLEVEL = 1
@@ -333,11 +333,57 @@ def _slab_key(slab):
 
 
 def write_region(fmt, shape, histories, batch, result):
-    """Write the arrays of ``batch`` (``result`` of :func:`~screening.workflow.execution.solve_batch`:
-    flat over the batch) into their hyperslabs of the grid ``shape`` of the result format ``fmt``
-    (:class:`NetcdfFormat` or :class:`~screening.workflow.zarrfile.ZarrFormat`): the stored ``histories``
-    and every other declared variable (:mod:`screening.solvers.outputs`): those a result always holds,
-    the others if present."""
+    """Write the arrays of one batch of grid points into their hyperslabs of the result.
+
+    The batch covers the flat C-order points ``batch.lo <= i < batch.hi`` of the grid; its arrays go
+    into the hyperslabs of that range (:func:`~screening.workflow.grid.hyperslabs`).  Written are the
+    stored ``histories`` and every other declared variable (:mod:`screening.solvers.outputs`): those a
+    result always holds, the others if ``result`` has them.  The resume record replays this for a batch
+    already solved.
+
+    Parameters
+    ----------
+    fmt : NetcdfFormat or ZarrFormat
+        The result format (:class:`NetcdfFormat` or :class:`~screening.workflow.zarrfile.ZarrFormat`;
+        any object with a ``write(name, key, values)`` method).
+    shape : tuple of int
+        The grid's shape (``()`` for a single point).
+    histories : iterable of str
+        The history variables the result stores (the study's ``[output]``).
+    batch : object
+        The batch, with the flat range ``lo`` and ``hi`` (``0 <= lo <= hi <= prod(shape)``).
+    result : dict of numpy.ndarray
+        The batch's arrays (:func:`~screening.workflow.execution.solve_batch`), flat over the batch:
+        ``(hi - lo,)`` per point or ``(hi - lo, n_t)`` per history, in the variables' units
+        (:mod:`screening.solvers.outputs`).
+
+    Returns
+    -------
+    None
+        The arrays are written into ``fmt``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> import types
+    >>> import numpy as np
+    >>> from screening.solvers.outputs import GRID_OUTPUTS
+    >>> class Arrays(dict):                      # the one method of a result format used here
+    ...     def write(self, name, key, values):
+    ...         self.setdefault(name, np.full((2, 3) + values.shape[2:], np.nan))[key] = values
+    >>> result = {o.name: np.arange(1.0, 5.0) for o in GRID_OUTPUTS if o.when == "always"}
+    >>> result["var_theta"] = np.ones((4, 3))     # 4 points, 3 output times
+    >>> fmt = Arrays()
+    >>> write_region(fmt, (2, 3), ("var_theta",), types.SimpleNamespace(lo=1, hi=5), result)
+    >>> fmt["peak_var_theta"]
+    array([[nan,  1.,  2.],
+           [ 3.,  4., nan]])
+    >>> fmt["var_theta"].shape, "var_theta_dot" in fmt, "p_overturn" in fmt      # only what is stored
+    ((2, 3, 3), False, False)
+    """
     names = set(histories)
     outputs = [o for o in GRID_OUTPUTS if o.name in names or o.shape != "history" and
                (o.when == "always" or o.name in result)]

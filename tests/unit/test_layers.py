@@ -102,14 +102,6 @@ UNDECLARED = {
         "the trade study's report writers, out of __all__ until they have numpydoc docstrings",
     ("report.tradeoff_files", "report.tradeoff_figures", "plot_error_vs_cost"): "as write_reports",
     ("report.tradeoff_files", "report.tradeoff_text", "markdown_report"): "as write_reports",
-    ("solvers.montecarlo", "solvers.datasets", "monte_carlo_dataset"):
-        "the Monte Carlo dataset builder, out of __all__ until it has a numpydoc docstring",
-    ("workflow.accuracy", "analysis.escalation", "paired_plan"):
-        "the [accuracy] stage's allocation of a paired pilot, out of __all__ until it has a numpydoc docstring",
-    ("workflow.records_study", "workflow.study", "study_from_tables"):
-        "the record study reuses the sweep study's table reader; out of __all__ until it has a numpydoc docstring",
-    ("workflow.store", "workflow.writer", "write_region"): "the region writer the resume record replays",
-    ("workflow.sweep", "workflow.probabilities", "finish_probabilities"): "the sweep's last stage",
 }
 
 
