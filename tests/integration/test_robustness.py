@@ -802,9 +802,12 @@ def test_worker_process_killed_mid_sweep_the_batch_is_retried(tmp_path):
                            on_batch=kill_a_busy_worker)
         assert killed and killed["tasks"], "no worker was busy when the first batch came back"
         assert killed["pid"] not in c.run(os.getpid).values()
-    assert report.n_failed_batches == 0 and report.status_counts == {"ok": study.n_points}
     eps, s0 = np.meshgrid(study.sweeps["eps"], study.sweeps["S0"], indexing="ij")
     direct = solve_moments(*build_models(study.cases[0], {"eps": eps, "S0": s0}), study.times)
+    codes, counts = np.unique(np.asarray(direct["status"]), return_counts=True)
+    assert report.n_failed_batches == 0
+    assert report.status_counts == {PointStatus(int(c)).name: int(n) for c, n in zip(codes, counts)}   # as direct calls
+    assert report.status_counts.get("ok", 0) >= 0.9 * study.n_points      # the grid is mostly ordinary points
     with xr.open_dataset(tmp_path / "r.nc") as ds:
         for name in HISTORY_VARIABLES:
             np.testing.assert_array_equal(ds[name].values, direct[name].astype(np.float32), err_msg=name)
