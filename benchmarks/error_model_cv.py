@@ -172,7 +172,8 @@ def feature_experiments(ds):
             inside = (yc >= lo) & (yc <= hi)
             trusted = (em.trust_from_interval(lo, hi) == 0) & ok
             bad = trusted & (np.abs(np.expm1(yc)) - 2 * y_se * np.exp(yc) > em.TRUSTED_ERROR)
-            print(f"{str(cond):13s} {label:21s} n {int(ok.sum())} coverage {inside[ok].mean():.3f} (" + " / ".join(
+            print(f"{str(cond):13s} {label:21s} n {int(ok.sum())} (" + " / ".join(
+                str(int((ok & (regime == k)).sum())) for k in range(3)) + f") coverage {inside[ok].mean():.3f} (" + " / ".join(
                 f"{inside[ok & (regime == k)].mean():.3f}" for k in range(3)) + f"), median width "
                 f"{np.median(width[ok]):.3f} (" + " / ".join(f"{np.median(width[ok & (regime == k)]):.3f}"
                                                              for k in range(3)) +
