@@ -184,7 +184,8 @@ def feature_experiments(ds):
     x = em.atlas_features(ds, "paper")
     y = em.targets(ds, "paper")["log_var_ratio"]
     for label in ("before: 11 features", "shipped (per regime)"):
-        print(f"error model cost, {label}: {prediction_cost(em.fit_error_model(x, y, groups, clip=em.LOG_CLIP, regimes=sets[label]), x):.1f} us CPU per point")
+        model = em.fit_error_model(x, y, groups, clip=em.LOG_CLIP, regimes=sets[label])
+        print(f"error model cost, {label}: {prediction_cost(model, x):.1f} us CPU per point")
 
 
 def prediction_cost(model, x, n=10_000):

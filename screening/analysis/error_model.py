@@ -40,7 +40,8 @@ import numpy as np
 
 from screening.physics.contact import REST_BEARING_LIMIT, rising_root, vertical_damping_ratio
 
-__all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
+__all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS",
+           "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
            "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets",
            "valid_reference", "ErrorModel",
            "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
@@ -119,9 +120,9 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     -----
     ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
     ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
-    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; ``log I_S``, ``log w_v_p``; an undamped bed (``zeta_v = 0``) has
-    ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one (:func:`interval_trust`: such a point
-    is at best ``check``).  The inputs are the dimensionless
+    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; ``log I_S``, ``log w_v_p``; an undamped bed
+    (``zeta_v = 0``) has ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one
+    (:func:`interval_trust`: such a point is at best ``check``).  The inputs are the dimensionless
     groups of the atlas (:mod:`screening.analysis.atlas`, [1]).
 
     References
