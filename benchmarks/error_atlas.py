@@ -6,7 +6,7 @@ Run (regenerates ``screening/data/error_atlas.nc``)::
     nice -n 5 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python benchmarks/error_atlas.py \
         [--points 1024] [--samples 500] [--seed 0] [--workers 1 | --scheduler ADDRESS_OR_FILE] \
         [--work outputs/error_atlas] [--out screening/data/error_atlas.nc] [--pilot N] [--assemble-only] \
-        [--resume-from screening/data/error_atlas.nc] [--redo POINTS]
+        [--resume-from screening/data/error_atlas.nc] [--redo POINTS] [--refit-model]
 
 Each point's result is written atomically to ``--work/point_NNNNN.json``; a re-run skips the points
 already there (so an interrupted campaign resumes where it stopped, on this machine or a cluster),
@@ -19,6 +19,9 @@ again although FILE holds them (a JSON of theirs already in ``--work`` still cou
 resumes): the way to give a point a new reference, e.g. where the reference model's validity rule changed.
 ``--pilot N`` runs N points spread over the
 design (every ``points // N``-th) and prints the CPU per point by reference model, to size a campaign.
+``--refit-model`` runs nothing: it refits the stored error model of the assembled ``--out`` in place (its
+``em_*`` variables, :func:`screening.analysis.error_model.fitted_variables`), every other variable and
+attribute kept, and records the command in ``attrs["error_model_command"]``.
 Progress (points done, CPU per point, ETA) is printed as points complete.
 """
 
@@ -130,7 +133,15 @@ def main(argv=None):
     ap.add_argument("--assemble-only", action="store_true")
     ap.add_argument("--resume-from", default=None)
     ap.add_argument("--redo", default="", help="points to evaluate again although --resume-from holds them")
+    ap.add_argument("--refit-model", action="store_true",
+                    help="only refit the stored error model of the assembled --out in place")
     args = ap.parse_args(argv)
+    if args.refit_model:
+        if not Path(args.out).is_file():
+            print(f"error: --out must be an assembled atlas to refit (no file {args.out})", file=sys.stderr)
+            return 2
+        return refit_model(Path(args.out), "benchmarks/error_atlas.py " + " ".join(
+            argv if argv is not None else sys.argv[1:]))
     if args.points < 1 or args.samples < 2:
         print("error: --points must be >= 1 and --samples >= 2", file=sys.stderr)
         return 2
@@ -193,7 +204,6 @@ def main(argv=None):
               f"{np.mean(allc) * args.points / 3600:.2f} CPU h")
         return 0
     from screening.analysis.atlas_run import REFERENCE_VALIDITY, assemble, reference_validity
-    from screening.atomicfile import atomic_path
 
     cpu_h = sum(r.get("cpu", 0.0) for r in results) / 3600
     given = [a for a in (argv if argv is not None else sys.argv[1:]) if a != "--assemble-only"]
@@ -215,12 +225,36 @@ def main(argv=None):
     ds.attrs.update({"command": command, "versions": versions(), "design_points": args.points,
                      "design_seed": args.seed, "samples": args.samples,
                      "points_finished": int(ds.sizes["point"]), "cpu_hours": round(cpu_h, 3)})
-    enc = {name: {"zlib": True, "complevel": 5} for name in ds.data_vars if ds[name].dtype != object}
     out = Path(args.out)
-    with atomic_path(out) as tmp:
-        ds.to_netcdf(tmp, encoding=enc)
+    write_atlas(ds, out)
     print(f"wrote {out}: {ds.sizes['point']} of {args.points} points, {cpu_h:.2f} CPU h, "
           f"{out.stat().st_size / 1e6:.1f} MB", flush=True)
+    return 0
+
+
+def write_atlas(ds, out):
+    """Write the atlas ``ds`` to ``out`` atomically (numeric variables compressed)."""
+    from screening.atomicfile import atomic_path
+
+    enc = {name: {"zlib": True, "complevel": 5} for name in ds.data_vars if ds[name].dtype != object}
+    with atomic_path(out) as tmp:
+        ds.to_netcdf(tmp, encoding=enc)
+
+
+def refit_model(path, command):
+    """Replace the stored error model of the assembled atlas ``path`` by one fitted now; every other variable
+    and attribute kept."""
+    import xarray as xr
+
+    from screening.analysis.error_model import STORED_FIT, fitted_variables
+
+    with xr.open_dataset(path) as src:
+        ds = src.load()
+    ds = ds.drop_vars([name for name in STORED_FIT if name in ds.variables])
+    ds = ds.assign(fitted_variables(ds))
+    ds.attrs["error_model_command"] = command.strip()
+    write_atlas(ds, path)
+    print(f"refitted the error model of {path} ({ds.sizes['point']} points)", flush=True)
     return 0
 
 

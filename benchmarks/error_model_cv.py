@@ -47,7 +47,8 @@ def main(argv=None):
     ap.add_argument("--coverage", type=float, default=0.9)
     ap.add_argument("--variance-only", action="store_true", help="skip the exceedance probabilities (5 x faster)")
     ap.add_argument("--experiments", action="store_true",
-                    help="only the feature-set experiments (indicators alone below p_uplift 0.2; + log I_S, log w_v/p)")
+                    help="only the feature-set comparison: the shipped per-regime model against one feature set "
+                         "everywhere (the eleven features shipped before, thirteen, the indicators with and without e)")
     args = ap.parse_args(argv)
     ds = xr.load_dataset(args.atlas)
     if args.experiments:
@@ -118,14 +119,8 @@ def main(argv=None):
     # cost of a prediction
     x = em.atlas_features(ds, "paper")
     y = em.targets(ds, "paper")["log_var_ratio"]
-    m = em.fit_error_model(x, y, groups, clip=em.LOG_CLIP)
-    finite = x[np.all(np.isfinite(x), axis=1)]
-    rng = np.random.default_rng(0)
-    xq = finite[rng.integers(0, len(finite), 10_000)] * (1 + 0.01 * rng.normal(size=(10_000, x.shape[1])))
-    t0 = time.process_time()
-    em.interval_trust(m, xq)
-    per = (time.process_time() - t0) / len(xq)
-    print(f"error model cost: {per * 1e6:.1f} us CPU per point ({len(xq)} points, {int(np.isfinite(y).sum())} "
+    per = prediction_cost(em.fit_error_model(x, y, groups, clip=em.LOG_CLIP), x)
+    print(f"error model cost: {per:.1f} us CPU per point (10000 points, {int(np.isfinite(y).sum())} "
           f"atlas rows; the linearization: ~200 us)")
     # best condensation by p_uplift region (measured |log error|)
     p = ds["sl_peak_p_uplift"].sel(condensation="paper").values
@@ -149,36 +144,61 @@ def main(argv=None):
 
 
 def feature_experiments(ds):
-    """Leave one family out with other feature sets (log var ratio): the eleven features, plus ``log I_S`` and
-    ``log w_v/p``, the four indicators alone, and the hybrid (indicators alone below a peak p_uplift of 0.2,
-    thirteen features above); coverage, median width per regime, trusted and wrongly trusted points."""
+    """Leave one family out (log var ratio) with a feature set per uplift regime: the shipped one
+    (:data:`~screening.analysis.error_model.REGIME_FEATURES`) against one set everywhere (the eleven features of
+    the model shipped before, the thirteen, the four indicators, the indicators and ``e``); coverage and median
+    width per regime and where the reference overturns at most 5 % of its samples, trusted and wrongly trusted
+    held-out points per regime, the points near the regimes' edge at 0.2, and the cost of a prediction."""
     from screening.analysis import error_model as em
 
     groups = ds["family"].values
+    n_used = np.maximum(ds["mc_n_samples"].values - ds["mc_n_diverged"].values, 1)
+    standing = ds["mc_n_overturned"].values / n_used <= 0.05
+    sets = {"before: 11 features": (em.FEATURES[:11],) * em.N_REGIMES, "13 features": (em.FEATURES,) * em.N_REGIMES,
+            "4 indicators": (em.FEATURES[:4],) * em.N_REGIMES,
+            "indicators + e": (em.LOW_UPLIFT_FEATURES,) * em.N_REGIMES, "shipped (per regime)": em.REGIME_FEATURES}
     for cond in ds["condensation"].values:
         x = em.atlas_features(ds, cond)
         t = em.targets(ds, cond)
         y, y_se = t["log_var_ratio"], t["log_var_ratio_se"]
         yc = np.clip(y, -em.LOG_CLIP, em.LOG_CLIP)
-        regime = np.searchsorted(np.asarray(em.P_REGIMES), ds["sl_peak_p_uplift"].sel(condensation=cond).values,
-                                 side="right")
-        more = np.column_stack([x, np.log(ds["I_S"].values), np.log(ds["w_v_p"].values)])
-        runs = {"11 features": em.grouped_cross_validation(x, y, groups, clip=em.LOG_CLIP),
-                "+ log I_S, log w_v/p": em.grouped_cross_validation(more, y, groups, clip=em.LOG_CLIP),
-                "4 indicators": em.grouped_cross_validation(x[:, :4], y, groups, clip=em.LOG_CLIP)}
-        runs["hybrid"] = tuple(np.where(regime == 0, a, b) for a, b in zip(runs["4 indicators"],
-                                                                          runs["+ log I_S, log w_v/p"]))
-        for label, (est, lo, hi) in runs.items():
+        p = ds["sl_peak_p_uplift"].sel(condensation=cond).values
+        regime = np.searchsorted(np.asarray(em.P_REGIMES), p, side="right")
+        edge = (p >= 0.15) & (p < 0.25)
+        for label, regimes in sets.items():
+            est, lo, hi = em.grouped_cross_validation(x, y, groups, clip=em.LOG_CLIP, regimes=regimes)
             ok = np.isfinite(y) & np.isfinite(est)
             width = (np.exp(hi) - np.exp(lo)) / np.exp(est)
             inside = (yc >= lo) & (yc <= hi)
             trusted = (em.trust_from_interval(lo, hi) == 0) & ok
             bad = trusted & (np.abs(np.expm1(yc)) - 2 * y_se * np.exp(yc) > em.TRUSTED_ERROR)
-            print(f"{str(cond):13s} {label:22s} coverage {inside[ok].mean():.3f} (" + " / ".join(
+            print(f"{str(cond):13s} {label:21s} n {int(ok.sum())} (" + " / ".join(
+                str(int((ok & (regime == k)).sum())) for k in range(3)) + f") coverage {inside[ok].mean():.3f} (" + " / ".join(
                 f"{inside[ok & (regime == k)].mean():.3f}" for k in range(3)) + f"), median width "
                 f"{np.median(width[ok]):.3f} (" + " / ".join(f"{np.median(width[ok & (regime == k)]):.3f}"
                                                              for k in range(3)) +
-                f"), trusted {int(trusted.sum())}, beyond 25 %: {int(bad.sum())}", flush=True)
+                f"; MC overturns <= 5 %: {np.median(width[ok & standing]):.3f}), trusted {int(trusted.sum())} (" +
+                " / ".join(str(int((trusted & (regime == k)).sum())) for k in range(3)) +
+                f"), beyond 25 %: {int(bad.sum())}; p_uplift 0.15-0.25: n {int((ok & edge).sum())}, coverage "
+                f"{inside[ok & edge].mean():.3f}, trusted {int((trusted & edge).sum())}", flush=True)
+    x = em.atlas_features(ds, "paper")
+    y = em.targets(ds, "paper")["log_var_ratio"]
+    for label in ("before: 11 features", "shipped (per regime)"):
+        model = em.fit_error_model(x, y, groups, clip=em.LOG_CLIP, regimes=sets[label])
+        print(f"error model cost, {label}: {prediction_cost(model, x):.1f} us CPU per point")
+
+
+def prediction_cost(model, x, n=10_000):
+    """CPU time [us] of :func:`~screening.analysis.error_model.interval_trust` per point, over ``n`` queries near
+    atlas rows of ``x``."""
+    from screening.analysis import error_model as em
+
+    finite = x[np.all(np.isfinite(x), axis=1)]
+    rng = np.random.default_rng(0)
+    xq = finite[rng.integers(0, len(finite), n)] * (1 + 0.01 * rng.normal(size=(n, x.shape[1])))
+    t0 = time.process_time()
+    em.interval_trust(model, xq)
+    return (time.process_time() - t0) / n * 1e6
 
 
 def print_stops(ds, edges):

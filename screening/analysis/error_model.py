@@ -2,7 +2,10 @@
 
 For one condensation, the error of a linearized point is predicted from what the linearization
 computes at that point (its trust indicators) and from the point's dimensionless inputs
-(:data:`FEATURES`; :func:`features`).  The model (:func:`fit_error_model`, :func:`predict`) is
+(:data:`FEATURES`; :func:`features`), with a feature set per regime of peak uplift probability
+(:data:`REGIME_FEATURES`, :class:`RegimeModel`): below a peak ``p_uplift`` of 0.2 the indicators and the
+bed's hardening ``e`` (:data:`LOW_UPLIFT_FEATURES`), above it every feature.  Each part
+(:func:`fit_error_model`, :func:`predict`) is
 
 * a *local linear regression*: at a query ``x`` the estimate is the intercept of the weighted least
   squares fit of the atlas errors ``y_i`` on ``x_i - x`` over the :data:`NEIGHBOURS` nearest atlas
@@ -37,7 +40,8 @@ import numpy as np
 
 from screening.physics.contact import REST_BEARING_LIMIT, rising_root, vertical_damping_ratio
 
-__all__ = ["FEATURES", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
+__all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS",
+           "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
            "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets",
            "valid_reference", "ErrorModel",
            "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
@@ -48,7 +52,11 @@ __all__ = ["FEATURES", "BANDWIDTHS", "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCA
 
 #: The features, in order: the linearization's indicators and the point's dimensionless inputs.
 FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",
-            "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau")
+            "log_zeta_v", "asinh_e", "kanai_tajimi", "log_omega_g_p", "log_tau", "log_I_S", "log_w_v_p")
+#: The features of the model at little uplift: the four indicators and the bed's hardening ``e``.  Below a peak
+#: ``p_uplift`` of 0.2 the block barely rocks: the error is how the condensation carries the bed's nonlinearity,
+#: and the other input groups only take the neighbours of a new family away (docs/error_atlas.md).
+LOW_UPLIFT_FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "asinh_e")
 #: Candidate bandwidths (in standardised feature units, times sqrt(number of features)).
 BANDWIDTHS = (0.15, 0.25, 0.4, 0.6, 1.0)
 #: Edges of the peak uplift probability between the regimes whose conformal factors are calibrated apart
@@ -56,6 +64,11 @@ BANDWIDTHS = (0.15, 0.25, 0.4, 0.6, 1.0)
 #: atlas points a regime needs for its own factor (else the pooled one).
 P_REGIMES = (0.2, 0.7)
 MIN_REGIME = 20
+#: Regimes of peak uplift probability of the conformal factors (dimension ``regime`` of the stored model).
+N_REGIMES = len(P_REGIMES) + 1
+#: The features of the model of each regime of :data:`P_REGIMES` (:class:`RegimeModel`): at little uplift
+#: :data:`LOW_UPLIFT_FEATURES`, elsewhere every feature.
+REGIME_FEATURES = (LOW_UPLIFT_FEATURES, FEATURES, FEATURES)
 #: Clip of ``log(SL / MC)`` [1] in the fit (a factor of 4 either way).
 LOG_CLIP = math.log(4.0)
 #: Out-of-family residuals the local scale s(x) is the RMS of (the nearest ones).
@@ -71,7 +84,8 @@ SCALE_FLOOR = 1e-3
 NEIGHBOURS = 64
 
 
-def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul, zeta_v, e, kind, omega_g_p, tau):
+def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul, zeta_v, e, kind, omega_g_p, tau,
+             I_S, w_v_p):
     """The ``(n, len(FEATURES))`` feature matrix [1] of points (array-likes broadcast to ``n``).
 
     Parameters
@@ -92,6 +106,10 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
         Filter frequency over Housner's ``p`` [1] (ignored for white noise).
     tau : array_like
         ``T1 p`` [1].
+    I_S : array_like
+        Intensity ``sqrt(2 pi S0 p) / (g tan(alpha))`` [1].
+    w_v_p : array_like
+        Vertical frequency on the bed over Housner's ``p`` [1].
 
     Returns
     -------
@@ -102,9 +120,9 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     -----
     ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
     ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
-    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; an undamped bed (``zeta_v = 0``) has
-    ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one (:func:`interval_trust`: such a point
-    is at best ``check``).  The inputs are the dimensionless
+    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; ``log I_S``, ``log w_v_p``; an undamped bed
+    (``zeta_v = 0``) has ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one
+    (:func:`interval_trust`: such a point is at best ``check``).  The inputs are the dimensionless
     groups of the atlas (:mod:`screening.analysis.atlas`, [1]).
 
     References
@@ -115,10 +133,10 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     Examples
     --------
     >>> import numpy as np
-    >>> x = features(0.5, 0.1, 0.9, 1.0, 0.2, 1e-3, 0.1, 0.0, "white", np.nan, 10.0)
+    >>> x = features(0.5, 0.1, 0.9, 1.0, 0.2, 1e-3, 0.1, 0.0, "white", np.nan, 10.0, 0.05, 80.0)
     >>> x.shape, np.allclose(x[0], [0, np.log(0.1), np.log(0.1), 0, 0.2, np.log(1e-3), np.log(0.1), 0, 0, 0,
-    ...                               np.log(10.0)])
-    ((1, 11), True)
+    ...                               np.log(10.0), np.log(0.05), np.log(80.0)])
+    ((1, 13), True)
     """
     p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
     kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
@@ -131,7 +149,8 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
             np.asarray(alpha, dtype=float), np.log(np.asarray(r_ul, dtype=float)),
             log_zeta_v, np.arcsinh(np.asarray(e, dtype=float) / 1e-3), kt,
             np.where(kt > 0, np.log(np.where(kt > 0, np.asarray(omega_g_p, dtype=float), 1.0)), 0.0),
-            np.log(np.asarray(tau, dtype=float))]
+            np.log(np.asarray(tau, dtype=float)), np.log(np.asarray(I_S, dtype=float)),
+            np.log(np.asarray(w_v_p, dtype=float))]
     cols = np.broadcast_arrays(*cols)
     return np.stack([np.asarray(c, dtype=float).ravel() for c in cols], axis=1)
 
@@ -163,12 +182,13 @@ def atlas_features(ds, condensation):
     >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
     ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
     >>> atlas_features(atlas, "paper").shape
-    (1024, 11)
+    (1024, 13)
     """
     s = ds.sel(condensation=condensation)
     return features(s["sl_peak_p_uplift"].values, s["sl_sigma_ratio"].values, s["sl_k_eq_margin"].values,
                     s["sl_decay_excess"].values, ds["alpha"].values, ds["r_ul"].values, ds["zeta_v"].values,
-                    ds["e"].values, ds["kind"].values.astype(str), ds["omega_g_p"].values, ds["tau"].values)
+                    ds["e"].values, ds["kind"].values.astype(str), ds["omega_g_p"].values, ds["tau"].values,
+                    ds["I_S"].values, ds["w_v_p"].values)
 
 
 def targets(ds, condensation):
@@ -263,6 +283,17 @@ class ErrorModel(NamedTuple):
     r: np.ndarray
     q: np.ndarray
     coverage: float
+
+
+class RegimeModel(NamedTuple):
+    """A fitted error model with a feature set per uplift regime (:func:`fit_error_model`): ``parts`` (one
+    :class:`ErrorModel` per distinct feature set, fitted on every atlas point), ``columns`` (the columns of
+    :data:`FEATURES` each part reads) and ``part_of_regime`` (the part that predicts each regime of
+    :data:`P_REGIMES`, with that part's conformal factor of the regime)."""
+
+    parts: tuple
+    columns: tuple
+    part_of_regime: tuple
 
 
 def local_linear(xq, x, y, h, ridge=RIDGE, neighbours=NEIGHBOURS):
@@ -399,8 +430,53 @@ def _out_of_family(x, y, groups, h):
     return r
 
 
-def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None):
-    """Fit the error model of one method and one error (module docstring).
+def _standardised(x):
+    center = np.median(x, axis=0)
+    width = np.std(x, axis=0)
+    width = np.where(width > 0, width, 1.0)
+    return (x - center) / width, center, width
+
+
+def _regime_columns(x, regimes):
+    """``(columns, part_of_regime)`` of the feature sets ``regimes`` (None: :data:`REGIME_FEATURES` where ``x``
+    holds every feature, else one model on every column: None)."""
+    if regimes is None:
+        if x.shape[1] != len(FEATURES):
+            return None
+        regimes = REGIME_FEATURES
+    if len(regimes) != N_REGIMES or x.shape[1] != len(FEATURES) or \
+            any(not names or names[0] != FEATURES[0] or not set(names) <= set(FEATURES) for names in regimes):
+        raise ValueError(f"parameter 'regimes' must give {N_REGIMES} feature sets of FEATURES, each starting with "
+                         f"{FEATURES[0]!r}, for a feature matrix of {len(FEATURES)} columns")
+    columns = list(dict.fromkeys(tuple(FEATURES.index(n) for n in names) for names in regimes))
+    return tuple(columns), tuple(columns.index(tuple(FEATURES.index(n) for n in names)) for names in regimes)
+
+
+def _fit_part(x, y, groups, coverage, bandwidths):
+    xs, center, width = _standardised(x)
+    d = x.shape[1]
+    best = None
+    for b in bandwidths:
+        h = b * math.sqrt(d)
+        r = _out_of_family(xs, y, groups, h)
+        mse = float(np.mean(r * r))
+        if best is None or mse < best[0]:
+            best = (mse, h, r)
+    _, h, r = best
+    other = groups[:, None] != groups[None, :]
+    s = _local_scale(xs, xs, r, mask=other)
+    ratio = np.abs(r) / s
+    regime = uplift_regime(x)
+    q = np.empty(N_REGIMES)
+    for c in range(len(q)):
+        mine = ratio[regime == c] if np.count_nonzero(regime == c) >= MIN_REGIME else ratio
+        level = min(1.0, math.ceil((len(mine) + 1) * coverage) / len(mine))
+        q[c] = float(np.quantile(mine, level))
+    return ErrorModel(xs, y, center, width, h, r, q, float(coverage))
+
+
+def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None, regimes=None):
+    """Fit the error model of one method and one error (module docstring), with a feature set per uplift regime.
 
     Parameters
     ----------
@@ -418,16 +494,23 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
         Errors are clipped to ``[-clip, clip]`` before the fit (None: not clipped); :data:`LOG_CLIP` for
         ``log(SL / MC)``: beyond a factor of 4 either way a point is untrusted whatever the exact factor,
         and the few such errors would otherwise set the interval everywhere near them.
+    regimes : sequence of sequence of str, optional
+        The feature names (of :data:`FEATURES`, the first ``logit_p_uplift``) of the model of each regime of
+        :data:`P_REGIMES`, for ``x`` of every feature; None: :data:`REGIME_FEATURES` where ``x`` has a column
+        per feature of :data:`FEATURES`, else one model on every column of ``x``.
 
     Returns
     -------
-    ErrorModel
-        The fitted model.
+    ErrorModel or RegimeModel
+        The fitted model: one :class:`ErrorModel` on every column, or a :class:`RegimeModel` of one
+        :class:`ErrorModel` per distinct feature set (each fitted on every point, rows with a non-finite
+        feature of any set dropped).
 
     Notes
     -----
     Local linear regression [2] with the bandwidth of least out-of-family squared error, and a
-    normalised, Mondrian split-conformal interval [1] calibrated on out-of-family residuals.
+    normalised, Mondrian split-conformal interval [1] calibrated on out-of-family residuals.  A point of
+    regime ``c`` is predicted by the part of ``regimes[c]`` with that part's factor of regime ``c``.
 
     References
     ----------
@@ -457,35 +540,18 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     groups = np.asarray(groups)
+    split = _regime_columns(x, regimes)
     keep = np.isfinite(y) & np.all(np.isfinite(x), axis=1)
     x, y, groups = x[keep], y[keep], groups[keep]
     if clip is not None:
         y = np.clip(y, -clip, clip)
     if len(np.unique(groups)) < 2:
         raise ValueError("parameter 'groups' must hold at least two families with finite errors")
-    center = np.median(x, axis=0)
-    width = np.std(x, axis=0)
-    width = np.where(width > 0, width, 1.0)
-    xs = (x - center) / width
-    d = x.shape[1]
-    best = None
-    for b in bandwidths:
-        h = b * math.sqrt(d)
-        r = _out_of_family(xs, y, groups, h)
-        mse = float(np.mean(r * r))
-        if best is None or mse < best[0]:
-            best = (mse, h, r)
-    _, h, r = best
-    other = groups[:, None] != groups[None, :]
-    s = _local_scale(xs, xs, r, mask=other)
-    ratio = np.abs(r) / s
-    regime = uplift_regime(x)
-    q = np.empty(len(P_REGIMES) + 1)
-    for c in range(len(q)):
-        mine = ratio[regime == c] if np.count_nonzero(regime == c) >= MIN_REGIME else ratio
-        level = min(1.0, math.ceil((len(mine) + 1) * coverage) / len(mine))
-        q[c] = float(np.quantile(mine, level))
-    return ErrorModel(xs, y, center, width, h, r, q, float(coverage))
+    if split is None:
+        return _fit_part(x, y, groups, coverage, bandwidths)
+    columns, part_of_regime = split
+    return RegimeModel(tuple(_fit_part(x[:, list(c)], y, groups, coverage, bandwidths) for c in columns),
+                       columns, part_of_regime)
 
 
 def predict(model, x):
@@ -495,10 +561,10 @@ def predict(model, x):
 
     Parameters
     ----------
-    model : ErrorModel
+    model : ErrorModel or RegimeModel
         :func:`fit_error_model`.
     x : array_like
-        ``(m, d)`` features (:func:`features`).
+        ``(m, d)`` features (:func:`features`; every feature for a :class:`RegimeModel`).
 
     Returns
     -------
@@ -508,7 +574,8 @@ def predict(model, x):
     Notes
     -----
     ``estimate +- q s(x)``: the local linear estimate [2] and the normalised conformal half-width [1]
-    (module docstring).
+    (module docstring); a :class:`RegimeModel` predicts each point by the part of its uplift regime, and is
+    NaN where any feature is not finite (whether its part reads it or not).
 
     References
     ----------
@@ -529,6 +596,14 @@ def predict(model, x):
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     ok = np.all(np.isfinite(x), axis=1)
+    if isinstance(model, RegimeModel):
+        part = np.full(len(x), -1)
+        part[ok] = np.asarray(model.part_of_regime)[uplift_regime(x[ok])]
+        out = np.full((3, len(x)), np.nan)
+        for k, (one, cols) in enumerate(zip(model.parts, model.columns)):
+            if np.any(part == k):
+                out[:, part == k] = predict(one, x[part == k][:, list(cols)])
+        return out[0], out[1], out[2]
     est = np.full(len(x), np.nan)
     half = np.full(len(x), np.nan)
     if ok.any():
@@ -538,7 +613,7 @@ def predict(model, x):
     return est, est - half, est + half
 
 
-def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None):
+def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None, regimes=None):
     """``(estimate, low, high)`` of every point predicted by a model fitted without its fold of families.
 
     ``folds = 0``: each family is its own fold (leave one family out); otherwise the families are dealt at
@@ -557,6 +632,8 @@ def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None):
     coverage : float, default 0.9
         Nominal coverage [1].
     clip : float, optional
+        As in :func:`fit_error_model`.
+    regimes : sequence of sequence of str, optional
         As in :func:`fit_error_model`.
 
     Returns
@@ -598,7 +675,7 @@ def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None):
         test = fold == k
         if len(np.unique(groups[~test & np.isfinite(y)])) < 2:
             continue
-        model = fit_error_model(x[~test], y[~test], groups[~test], coverage=coverage, clip=clip)
+        model = fit_error_model(x[~test], y[~test], groups[~test], coverage=coverage, clip=clip, regimes=regimes)
         est[test], low[test], high[test] = predict(model, x[test])
     return est, low, high
 
@@ -657,15 +734,13 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
 ATLAS_FILE = "error_atlas.nc"
 
 
-#: Regimes of peak uplift probability of the conformal factors (dimension ``regime`` of the stored model).
-N_REGIMES = len(P_REGIMES) + 1
-
-
 def fitted_variables(ds):
     """The error model of ``log(SL / MC)`` of every condensation of an atlas dataset (:func:`fit_error_model`,
-    :data:`LOG_CLIP`), as variables to store with it: ``em_residual`` (point, condensation; the out-of-family
-    residuals, NaN where a point is not fitted), ``em_bandwidth`` (condensation) and ``em_q`` (condensation,
-    regime).  :func:`model_from_atlas` rebuilds the model from them without refitting.
+    :data:`LOG_CLIP`, :data:`REGIME_FEATURES`), as variables to store with it: ``em_residual`` (point,
+    condensation, em_part; the out-of-family residuals of each part, NaN where a point is not fitted),
+    ``em_bandwidth`` (condensation, em_part), ``em_q`` (condensation, em_part, regime) and
+    ``em_part_of_regime`` (regime); the coordinate ``em_part`` names each part's features (space-separated).
+    :func:`model_from_atlas` rebuilds the model from them without refitting.
 
     Parameters
     ----------
@@ -675,7 +750,7 @@ def fitted_variables(ds):
     Returns
     -------
     dict of str to xarray.DataArray
-        ``em_residual`` [1], ``em_bandwidth`` [1], ``em_q`` [1].
+        ``em_residual`` [1], ``em_bandwidth`` [1], ``em_q`` [1], ``em_part_of_regime`` [1].
 
     References
     ----------
@@ -693,25 +768,38 @@ def fitted_variables(ds):
     >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
     ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
     >>> fitted = fitted_variables(atlas.isel(point=slice(0, 64)))
-    >>> {name: v.dims for name, v in fitted.items()}
-    {'em_residual': ('point', 'condensation'), 'em_bandwidth': ('condensation',), 'em_q': ('condensation', 'regime')}
+    >>> {name: v.dims for name, v in fitted.items()}                        # doctest: +NORMALIZE_WHITESPACE
+    {'em_residual': ('point', 'condensation', 'em_part'), 'em_bandwidth': ('condensation', 'em_part'),
+     'em_q': ('condensation', 'em_part', 'regime'), 'em_part_of_regime': ('regime',)}
+    >>> fitted["em_q"]["em_part"].values.tolist()[0]
+    'logit_p_uplift log_sigma_ratio log_margin_loss log_decay_excess asinh_e'
     """
     import xarray as xr
 
     conds = [str(c) for c in ds["condensation"].values]
-    res = np.full((ds.sizes["point"], len(conds)), np.nan)
-    h, q = np.full(len(conds), np.nan), np.full((len(conds), N_REGIMES), np.nan)
+    columns, part_of_regime = _regime_columns(np.empty((0, len(FEATURES))), REGIME_FEATURES)
+    n_parts = len(columns)
+    res = np.full((ds.sizes["point"], len(conds), n_parts), np.nan)
+    h, q = np.full((len(conds), n_parts), np.nan), np.full((len(conds), n_parts, N_REGIMES), np.nan)
     for j, c in enumerate(conds):
         x, y, keep = _atlas_rows(ds, c)
-        model = fit_error_model(x, y, ds["family"].values, clip=LOG_CLIP)
-        res[np.flatnonzero(keep), j] = model.r
-        h[j], q[j] = model.h, model.q
-    return {"em_residual": xr.DataArray(res, dims=("point", "condensation"), attrs={
-                "units": "1", "long_name": "out-of-family residual of log(SL / MC) of the error model"}),
-            "em_bandwidth": xr.DataArray(h, dims="condensation", attrs={
-                "units": "1", "long_name": "bandwidth of the error model's local linear fit (standardised features)"}),
-            "em_q": xr.DataArray(q, dims=("condensation", "regime"), attrs={
-                "units": "1", "long_name": "conformal factor of the error model's 90 % interval per uplift regime"})}
+        model = fit_error_model(x, y, ds["family"].values, clip=LOG_CLIP, regimes=REGIME_FEATURES)
+        for k, part in enumerate(model.parts):
+            res[np.flatnonzero(keep), j, k] = part.r
+            h[j, k], q[j, k] = part.h, part.q
+    part = {"em_part": ("em_part", np.array([" ".join(FEATURES[i] for i in cols) for cols in columns], dtype=object),
+                        {"long_name": "features of each part of the error model"})}
+    return {"em_residual": xr.DataArray(res, dims=("point", "condensation", "em_part"), coords=part, attrs={
+                "units": "1", "long_name": "out-of-family residual of log(SL / MC) of the error model's part"}),
+            "em_bandwidth": xr.DataArray(h, dims=("condensation", "em_part"), coords=part, attrs={
+                "units": "1", "long_name": "bandwidth of the local linear fit of the error model's part "
+                                           "(standardised features)"}),
+            "em_q": xr.DataArray(q, dims=("condensation", "em_part", "regime"), coords=part, attrs={
+                "units": "1", "long_name": "conformal factor of the error model's 90 % interval per part and "
+                                           "uplift regime"}),
+            "em_part_of_regime": xr.DataArray(np.asarray(part_of_regime, dtype=np.int8), dims="regime", attrs={
+                "units": "1", "long_name": "index along em_part of the part that predicts each uplift regime "
+                                           "(peak p_uplift below 0.2, 0.2 to 0.7, above)"})}
 
 
 def _atlas_rows(ds, condensation):
@@ -719,6 +807,10 @@ def _atlas_rows(ds, condensation):
     y = targets(ds, condensation)["log_var_ratio"]
     keep = np.isfinite(y) & np.all(np.isfinite(x), axis=1)
     return x, y, keep
+
+
+#: The variables of a stored error model fit (:func:`fitted_variables`).
+STORED_FIT = ("em_residual", "em_bandwidth", "em_q", "em_part_of_regime", "em_part")
 
 
 def model_from_atlas(ds, condensation):
@@ -736,7 +828,7 @@ def model_from_atlas(ds, condensation):
 
     Returns
     -------
-    ErrorModel
+    RegimeModel
         The model.
 
     References
@@ -753,24 +845,29 @@ def model_from_atlas(ds, condensation):
     >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
     ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
     >>> model = model_from_atlas(atlas, "paper")
-    >>> model.x.shape, model.coverage, model.h == float(atlas["em_bandwidth"].sel(condensation="paper"))
-    ((903, 11), 0.9, True)
+    >>> [part.x.shape for part in model.parts], model.part_of_regime
+    ([(903, 5), (903, 13)], (0, 1, 1))
     """
     if condensation not in ds["condensation"].values:
         raise ValueError(f"parameter 'condensation' must be one of {[str(c) for c in ds['condensation'].values]} "
                          f"(got {condensation!r})")
     x, y, keep = _atlas_rows(ds, condensation)
     if "em_residual" not in ds.variables:
-        return fit_error_model(x, y, ds["family"].values, clip=LOG_CLIP)
-    r = ds["em_residual"].sel(condensation=condensation).values
-    if not np.array_equal(np.isfinite(r), keep):
+        return fit_error_model(x, y, ds["family"].values, clip=LOG_CLIP, regimes=REGIME_FEATURES)
+    if "em_part" not in ds["em_residual"].dims:
+        raise ValueError("the atlas's stored error model has no parts (an older layout): refit it (fitted_variables)")
+    r = ds["em_residual"].sel(condensation=condensation).transpose("point", "em_part").values
+    if not all(np.array_equal(np.isfinite(r[:, k]), keep) for k in range(r.shape[1])):
         raise ValueError("the atlas's stored error model does not match its points: refit it (fitted_variables)")
     x, y = x[keep], np.clip(y[keep], -LOG_CLIP, LOG_CLIP)
-    center = np.median(x, axis=0)
-    width = np.std(x, axis=0)
-    width = np.where(width > 0, width, 1.0)
-    return ErrorModel((x - center) / width, y, center, width, float(ds["em_bandwidth"].sel(condensation=condensation)),
-                      r[keep], ds["em_q"].sel(condensation=condensation).values.astype(float), 0.9)
+    columns = tuple(tuple(FEATURES.index(n) for n in str(names).split()) for names in ds["em_part"].values)
+    h = ds["em_bandwidth"].sel(condensation=condensation).values
+    q = ds["em_q"].sel(condensation=condensation).transpose("em_part", "regime").values.astype(float)
+    parts = []
+    for k, cols in enumerate(columns):
+        xs, center, width = _standardised(x[:, list(cols)])
+        parts.append(ErrorModel(xs, y, center, width, float(h[k]), r[keep, k], q[k], 0.9))
+    return RegimeModel(tuple(parts), columns, tuple(int(i) for i in ds["em_part_of_regime"].values))
 
 
 @functools.lru_cache(maxsize=None)
@@ -781,10 +878,10 @@ def shipped_model(condensation="paper"):
 
     import xarray as xr
 
-    names = ["u", "alpha", "r_ul", "zeta_v", "e", "kind", "omega_g_p", "tau", "family", "sl_status",
+    names = ["u", "alpha", "r_ul", "zeta_v", "e", "kind", "omega_g_p", "tau", "I_S", "w_v_p", "family", "sl_status",
              "sl_peak_var_theta", "sl_peak_p_uplift", "sl_sigma_ratio", "sl_k_eq_margin", "sl_decay_excess",
              "sl_p_exceed", "mc_peak_var_theta", "mc_peak_var_theta_se", "mc_p_exceed", "mc_p_exceed_se",
-             "mc_reference_valid", "em_residual", "em_bandwidth", "em_q"]
+             "mc_reference_valid", *STORED_FIT]
     with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path, xr.open_dataset(path) as ds:
         ds = ds[[n for n in names if n in ds.variables]].load()
     return model_from_atlas(ds, condensation)
@@ -798,8 +895,8 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     fields : mapping
         Parameter name to value (numpy arrays, xarray DataArrays or numbers): ``m`` [kg], ``b``, ``h``
         [m], ``g`` [m s-2], ``k`` [N m-2], and where present ``eps`` [m-2], ``I_cm`` [kg m2], ``lam``
-        [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s] (a
-        missing damping field gives a NaN ``zeta_v``).
+        [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s], ``S0``
+        [m2 s-3] (a missing damping field gives a NaN ``zeta_v``, a missing ``S0`` a NaN ``I_S``).
     contact : str, default "hunt_crossley"
         ``"hunt_crossley"`` or ``"winkler"``.
     excitation : str, default "white"
@@ -808,7 +905,8 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     Returns
     -------
     dict
-        ``alpha`` [rad], ``r_ul``, ``zeta_v``, ``e``, ``omega_g_p``, ``tau`` [1] (same types as ``fields``).
+        ``alpha`` [rad], ``r_ul``, ``zeta_v``, ``e``, ``omega_g_p``, ``tau``, ``I_S``, ``w_v_p`` [1] (same types
+        as ``fields``).
 
     Notes
     -----
@@ -819,7 +917,9 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     the block at rest (``-eps z0^2 >= 4/27``: no rest indentation), which makes such a point at best ``check``
     (:func:`interval_trust`: a feature is not finite); ``p = sqrt(m g R /
     (I_cm + m R^2))``; ``omega_g / p`` (NaN without a filter); ``tau = T1 p`` (without ``T1``, a constant
-    envelope: ``1e6``).  ``theta_ul = m g / (2 b^2 k)`` is the uplift angle of [1]; ``p`` Housner's [2].
+    envelope: ``1e6``); ``I_S = sqrt(2 pi S0 p) / (g tan(alpha))`` (``S0`` the driving white noise's level, of
+    the filter's input for Kanai–Tajimi noise); ``w_v_p = sqrt(2 b k / m) / p`` (the vertical frequency of
+    eq. (13) of [1]).  ``theta_ul = m g / (2 b^2 k)`` is the uplift angle of [1]; ``p`` Housner's [2].
 
     References
     ----------
@@ -861,7 +961,9 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     p = np.sqrt(m * g * R / (i_cm + m * R**2))
     out = {"alpha": alpha, "r_ul": m * g / (2.0 * b**2 * k * alpha), "zeta_v": zeta_v,
            "e": eps * z0**2, "omega_g_p": fields["omega_g"] / p if "omega_g" in fields else np.nan + 0.0 * p,
-           "tau": fields["T1"] * p if "T1" in fields else 1e6 + 0.0 * p}
+           "tau": fields["T1"] * p if "T1" in fields else 1e6 + 0.0 * p,
+           "I_S": np.sqrt(2.0 * np.pi * fields.get("S0", np.nan) * p) / (g * b / h),
+           "w_v_p": np.sqrt(2.0 * b * k / m) / p}
     if like is None:
         return out
     return {name: xr.DataArray(np.broadcast_to(v, like.shape), dims=like.dims, coords=like.coords)
@@ -903,23 +1005,23 @@ def dataset_features(ds):
     ...            "condensation": "paper"})
     >>> x, dims, shape = dataset_features(ds)
     >>> x.shape, dims, shape, round(float(x[0, FEATURES.index("alpha")]), 4)
-    ((2, 11), ('S0',), (2,), 0.1651)
+    ((2, 13), ('S0',), (2,), 0.1651)
     """
     import xarray as xr
 
     from screening.analysis.indicators import indicators_from_dataset
 
     ind = indicators_from_dataset(ds)
-    fields = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm", "lam", "c", "omega_g", "T1")
+    fields = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm", "lam", "c", "omega_g", "T1", "S0")
               if name in ds.variables}
     kind = ds.attrs.get("excitation", "white")
     grp = parameter_groups(fields, ds.attrs.get("contact", "hunt_crossley"), kind)
     parts = [ind["peak_p_uplift"], ind["sigma_ratio"], ind["k_eq_margin"], ind["decay_excess"],
-             *(grp[name] for name in ("alpha", "r_ul", "zeta_v", "e", "omega_g_p", "tau"))]
+             *(grp[name] for name in ("alpha", "r_ul", "zeta_v", "e", "omega_g_p", "tau", "I_S", "w_v_p"))]
     parts = xr.broadcast(*[xr.DataArray(v) if not isinstance(v, xr.DataArray) else v for v in parts])
     dims = parts[0].dims
     vals = [np.asarray(v.transpose(*dims).values, dtype=float).ravel() for v in parts]
-    x = features(*vals[:8], np.full(vals[0].size, kind), vals[8], vals[9])
+    x = features(*vals[:8], np.full(vals[0].size, kind), *vals[8:])
     return x, dims, parts[0].transpose(*dims).shape
 
 
@@ -958,7 +1060,7 @@ def model_features(indicators, block, foundation, excitation):
     >>> x = model_features(ind, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
     ...                    WhiteNoise(np.array([1e-4, 1e-3])))
     >>> x.shape, x[:, FEATURES.index("log_r_ul")].round(3).tolist()
-    ((2, 11), [-4.924, -4.924])
+    ((2, 13), [-4.924, -4.924])
     """
     from screening.solvers.datasets import model_fields, model_labels
 
@@ -968,12 +1070,14 @@ def model_features(indicators, block, foundation, excitation):
     col = {name: np.broadcast_to(np.asarray(v, dtype=float), (n,)) for name, v in grp.items()}
     return features(indicators["peak_p_uplift"], indicators["sigma_ratio"], indicators["k_eq_margin"],
                     indicators["decay_excess"], col["alpha"], col["r_ul"], col["zeta_v"], col["e"],
-                    np.full(n, labels["excitation"]), col["omega_g_p"], col["tau"])
+                    np.full(n, labels["excitation"]), col["omega_g_p"], col["tau"], col["I_S"], col["w_v_p"])
 
 
-#: Features of the point's inputs (not the linearization's indicators): outside the atlas's range of any of
-#: them a point is never ``trusted`` (the interval is calibrated for systems like the atlas's).
-INPUT_FEATURES = FEATURES[4:]
+#: Features of the point's inputs that are the atlas's design groups: outside the atlas's range of any of
+#: them a point is never ``trusted`` (the interval is calibrated for systems like the atlas's).  ``I_S`` and
+#: ``w_v/p`` are no design axes (the atlas sets the intensity by a target uplift probability, and ``w_v/p``
+#: follows from ``alpha`` and ``r_ul`` for a uniform block).
+INPUT_FEATURES = FEATURES[4:11]
 #: Excitation kinds and contact laws the atlas samples.
 ATLAS_KINDS = ("white", "kanai_tajimi")
 ATLAS_CONTACTS = ("hunt_crossley",)
@@ -984,8 +1088,8 @@ def inside_atlas(model, x):
 
     Parameters
     ----------
-    model : ErrorModel
-        A fitted model.
+    model : ErrorModel or RegimeModel
+        A fitted model (of every feature, or with a part that reads every input group).
     x : array_like
         ``(n, len(FEATURES))`` features.
 
@@ -1016,7 +1120,12 @@ def inside_atlas(model, x):
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     cols = [FEATURES.index(name) for name in INPUT_FEATURES]
-    train = model.x[:, cols] * model.width[cols] + model.center[cols]
+    if isinstance(model, RegimeModel):          # the input groups of a part that reads them all
+        model, part_cols = next((m, list(c)) for m, c in zip(model.parts, model.columns) if set(cols) <= set(c))
+        cols_in = [part_cols.index(i) for i in cols]
+    else:
+        cols_in = cols
+    train = model.x[:, cols_in] * model.width[cols_in] + model.center[cols_in]
     lo, hi = train.min(axis=0), train.max(axis=0)
     pad = 1e-9 * np.maximum(np.abs(lo), np.abs(hi)) + 1e-12
     with np.errstate(invalid="ignore"):
@@ -1072,7 +1181,7 @@ def interval_trust(model, x, status=None, covered=True):
 
     Parameters
     ----------
-    model : ErrorModel
+    model : ErrorModel or RegimeModel
         A fitted model.
     x : array_like
         ``(n, len(FEATURES))`` features.
@@ -1103,7 +1212,7 @@ def interval_trust(model, x, status=None, covered=True):
     ...                    WhiteNoise(np.array([1e-4, 1e-3])))
     >>> flag, est, low, high = interval_trust(shipped_model("paper"), x)
     >>> flag.tolist(), est.round(2).tolist(), high.round(2).tolist()
-    ([1, 2], [-0.56, -0.62], [-0.3, 0.17])
+    ([1, 2], [-0.53, -0.63], [-0.3, 0.27])
     """
     from screening.status import PointStatus, Trust
 
@@ -1128,7 +1237,7 @@ def with_error_model(ds, model):
     ----------
     ds : xarray.Dataset
         A :func:`screening.linearize` dataset of the condensation ``model`` was fitted for.
-    model : ErrorModel
+    model : ErrorModel or RegimeModel
         The fitted model.
 
     Returns

@@ -561,7 +561,7 @@ def add_trust(ds, models=None):
     ...            "condensation": "paper"})
     >>> out = add_trust(ds)
     >>> out["sl_trust"].values.tolist(), out["sl_error_low"].values.round(2).tolist()
-    ([1, 2], [-0.72, -1.0])
+    ([1, 2], [-0.68, -1.0])
     """
     from screening.analysis import error_model as em
 

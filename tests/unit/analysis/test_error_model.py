@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from screening.analysis import error_model as em
 
@@ -70,12 +71,13 @@ def test_predict_gives_nan_for_missing_features_and_fit_checks_its_inputs():
 
 def test_features_transforms():
     f = em.features(0.5, 0.1, 0.75, 1.0, 0.2, 0.01, 0.1, 0.0, np.array(["white", "kanai_tajimi"]),
-                    np.array([np.nan, 2.0]), 10.0)
+                    np.array([np.nan, 2.0]), 10.0, 0.05, 80.0)
     assert f.shape == (2, len(em.FEATURES))
     col = dict(zip(em.FEATURES, f.T))
     assert np.allclose(col["logit_p_uplift"], 0.0)
     assert np.allclose(col["log_margin_loss"], np.log(0.25))
     assert np.allclose(col["kanai_tajimi"], [0, 1]) and np.allclose(col["log_omega_g_p"], [0, np.log(2.0)])
+    assert np.allclose(col["log_I_S"], np.log(0.05)) and np.allclose(col["log_w_v_p"], np.log(80.0))
 
 
 @pytest.fixture(scope="module")
@@ -95,9 +97,10 @@ def test_dataset_features_recompute_the_atlas_features(shipped):
 
     g = atlas.groups_of(shipped["u"].values)
     x_atlas = em.atlas_features(shipped, "paper")
-    done = 0
+    done = {"white": 0, "kanai_tajimi": 0}          # the intensity I_S of Kanai-Tajimi noise: S0 of its input
     for i in range(shipped.sizes["point"]):
-        if not np.isfinite(shipped["S0"].values[i]) or shipped["sl_status"].values[i, 0] != 0:
+        kind = str(shipped["kind"].values[i])
+        if not np.isfinite(shipped["S0"].values[i]) or shipped["sl_status"].values[i, 0] != 0 or done[kind] == 2:
             continue
         block, foundation, shape, timing = atlas.physical_point(g, i)
         ds = linearize(block, foundation, atlas.make_excitation(shape, timing, float(shipped["S0"].values[i])),
@@ -105,10 +108,10 @@ def test_dataset_features_recompute_the_atlas_features(shipped):
         x, dims, shape_out = em.dataset_features(ds)
         assert dims == () and x.shape == (1, len(em.FEATURES))
         assert np.allclose(x[0], x_atlas[i], rtol=1e-6, atol=1e-9), (i, x[0] - x_atlas[i])
-        done += 1
-        if done == 3:
+        done[kind] += 1
+        if sum(done.values()) == 4:
             break
-    assert done == 3
+    assert done == {"white": 2, "kanai_tajimi": 2}
 
 
 def test_with_error_model_labels_a_sweep(shipped):
@@ -117,7 +120,8 @@ def test_with_error_model_labels_a_sweep(shipped):
     from screening.status import Trust
 
     model = em.shipped_model("paper")
-    assert model.x.shape[0] == int(np.isfinite(em.targets(shipped, "paper")["log_var_ratio"]).sum())
+    n_rows = int(np.isfinite(em.targets(shipped, "paper")["log_var_ratio"]).sum())
+    assert [part.x.shape for part in model.parts] == [(n_rows, len(em.LOW_UPLIFT_FEATURES)), (n_rows, len(em.FEATURES))]
     with pytest.raises(ValueError, match="condensation"):
         em.shipped_model("nonsense")
     g = atlas.groups_of(shipped["u"].values)
@@ -171,15 +175,17 @@ def test_uplift_regimes_calibrate_their_own_factor():
     n_fam, per = 60, 10
     fam = np.repeat(np.arange(n_fam), per)
     p = np.where(rng.uniform(size=n_fam) < 0.5, 0.05, 0.9)[fam]
-    x = em.features(p, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(fam), "white"), np.nan, 10.0)
+    x = em.features(p, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(fam), "white"), np.nan, 10.0, 0.05, 80.0)
     x = x + 0.01 * rng.normal(size=x.shape)
     noise = np.where(p < 0.2, 0.05, 0.5)
-    model = em.fit_error_model(x, noise * rng.normal(size=len(fam)), fam)
+    # the eleven features of the model before the per-regime parts (two more features of pure noise would
+    # dilute the neighbourhoods of this synthetic set)
+    model = em.fit_error_model(x, noise * rng.normal(size=len(fam)), fam, regimes=(em.FEATURES[:11],) * em.N_REGIMES)
     assert list(em.uplift_regime(x[:1])) in ([0], [2])
-    assert model.q.shape == (len(em.P_REGIMES) + 1,)
+    assert len(model.parts) == 1 and model.parts[0].q.shape == (len(em.P_REGIMES) + 1,)
     ft = np.repeat(np.arange(200), 10)
     pt = np.where(rng.uniform(size=200) < 0.5, 0.05, 0.9)[ft]
-    xt = em.features(pt, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(ft), "white"), np.nan, 10.0)
+    xt = em.features(pt, 0.01, 0.9, 1.0, 0.2, 0.01, 0.1, 0.0, np.full(len(ft), "white"), np.nan, 10.0, 0.05, 80.0)
     xt = xt + 0.01 * rng.normal(size=xt.shape)
     yt = np.where(pt < 0.2, 0.05, 0.5) * rng.normal(size=len(ft))
     est, lo, hi = em.predict(model, xt)
@@ -194,25 +200,61 @@ def test_uplift_regimes_calibrate_their_own_factor():
 def test_the_stored_model_is_the_one_refitted_from_the_file(shipped):
     # the shipped file stores the fit (residuals, bandwidth, conformal factors); refitting from its points
     # must give the same model the product uses
-    assert {"em_residual", "em_bandwidth", "em_q"} <= set(shipped.data_vars)
-    bare = shipped.drop_vars(["em_residual", "em_bandwidth", "em_q"])
+    assert set(em.STORED_FIT) <= set(shipped.variables)
+    bare = shipped.drop_vars(list(em.STORED_FIT))
     for cond in shipped["condensation"].values:
         stored, refit = em.model_from_atlas(shipped, cond), em.model_from_atlas(bare, cond)
-        assert stored.h == refit.h
-        for a, b in zip(stored[:-2], refit[:-2]):
-            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
-        np.testing.assert_allclose(stored.q, refit.q, rtol=1e-12)
-        shipped_one = em.shipped_model(str(cond))
-        np.testing.assert_array_equal(shipped_one.r, stored.r)
+        assert stored.columns == refit.columns and stored.part_of_regime == refit.part_of_regime
+        for one, again in zip(stored.parts, refit.parts):
+            assert one.h == again.h
+            for a, b in zip(one[:-2], again[:-2]):
+                np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(one.q, again.q, rtol=1e-12)
+        for one, product in zip(stored.parts, em.shipped_model(str(cond)).parts):
+            np.testing.assert_array_equal(product.r, one.r)
 
 
 def test_a_stored_fit_of_other_points_is_refused(shipped):
     res = shipped["em_residual"].copy()
-    first = int(np.flatnonzero(np.isfinite(res.sel(condensation="paper").values))[0])
-    res.loc[{"condensation": "paper"}] = np.where(np.arange(res.sizes["point"]) == first, np.nan,
-                                                  res.sel(condensation="paper").values)
+    paper = res.sel(condensation="paper").transpose("point", "em_part").values
+    first = int(np.flatnonzero(np.isfinite(paper[:, 0]))[0])
+    paper[first, 0] = np.nan                                   # one part's residual of one point missing
+    res.loc[{"condensation": "paper"}] = xr.DataArray(paper, dims=("point", "em_part"))
     with pytest.raises(ValueError, match="refit"):
         em.model_from_atlas(shipped.assign(em_residual=res), "paper")
+    with pytest.raises(ValueError, match="refit"):                 # the layout before the parts
+        em.model_from_atlas(shipped.assign(em_residual=shipped["em_residual"].isel(em_part=0, drop=True)), "paper")
+
+
+def test_a_regime_model_predicts_each_regime_by_its_own_part():
+    # independent of the dispatch: each part fitted alone on its columns, then queried where its regime is
+    rng = np.random.default_rng(6)
+    fam = np.repeat(np.arange(40), 10)
+    n = fam.size
+    p = rng.uniform(0.01, 0.95, n)
+    x = em.features(p, rng.uniform(1e-3, 0.1, n), rng.uniform(0.3, 1.0, n), rng.uniform(0.5, 2.0, n),
+                    rng.uniform(0.1, 0.4, n), 10 ** rng.uniform(-4, -1, n), rng.uniform(0.02, 0.5, n),
+                    rng.uniform(0.0, 0.5, n), "white", np.nan, 10 ** rng.uniform(0.7, 1.5, n),
+                    10 ** rng.uniform(-2, -0.5, n), 10 ** rng.uniform(1, 2.5, n))
+    y = np.where(p < 0.2, 0.05, 0.3) * rng.normal(size=n) + 0.2 * x[:, em.FEATURES.index("asinh_e")] / 10
+    model = em.fit_error_model(x, y, fam)
+    assert isinstance(model, em.RegimeModel) and model.part_of_regime == (0, 1, 1)
+    low_cols = [em.FEATURES.index(f) for f in em.LOW_UPLIFT_FEATURES]
+    assert model.columns == (tuple(low_cols), tuple(range(len(em.FEATURES))))
+    low = em.fit_error_model(x[:, low_cols], y, fam)
+    full = em.fit_error_model(x, y, fam, regimes=(em.FEATURES,) * em.N_REGIMES).parts[0]
+    xq = x[:60] * (1 + 0.01 * rng.normal(size=(60, x.shape[1])))
+    got = np.array(em.predict(model, xq))
+    below = em.uplift_regime(xq) == 0
+    assert below.any() and (~below).any()
+    np.testing.assert_allclose(got[:, below], np.array(em.predict(low, xq[below][:, low_cols])), rtol=1e-12)
+    np.testing.assert_allclose(got[:, ~below], np.array(em.predict(full, xq[~below])), rtol=1e-12)
+    # at little uplift only the indicators and e count: another slenderness does not move the interval
+    moved = xq[below].copy()
+    moved[:, em.FEATURES.index("alpha")] += 0.1
+    np.testing.assert_allclose(np.array(em.predict(model, moved)), got[:, below], rtol=1e-12)
+    with pytest.raises(ValueError, match="regimes"):
+        em.fit_error_model(x, y, fam, regimes=(("alpha",),) * em.N_REGIMES)
 
 
 def test_a_reference_marked_invalid_has_no_error(shipped):
@@ -284,7 +326,7 @@ def test_an_undamped_bed_is_at_best_check_without_a_warning():
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        x = em.features([0.2, 0.2], 0.01, 0.9, 1.0, 0.17, 7e-3, [0.0, 0.3], 0.0, "white", np.nan, 30.0)
+        x = em.features([0.2, 0.2], 0.01, 0.9, 1.0, 0.17, 7e-3, [0.0, 0.3], 0.0, "white", np.nan, 30.0, 0.05, 80.0)
         flag, est, low, high = em.interval_trust(em.shipped_model("paper"), x)
     assert x[0, em.FEATURES.index("log_zeta_v")] == -np.inf
     assert flag[0] == 1 and np.isnan(low[0]) and np.isnan(high[0])

@@ -266,7 +266,8 @@ def _flat_model(noise, seed=0):
                     rng.uniform(0.5, 2, fam.size), rng.uniform(0.1, 0.45, fam.size), 10 ** rng.uniform(-4, -0.6, fam.size),
                     10 ** rng.uniform(-1.7, 0, fam.size), rng.uniform(-1e-3, 1.0, fam.size),
                     np.where(rng.uniform(size=fam.size) < 0.5, "white", "kanai_tajimi"),
-                    10 ** rng.uniform(-0.3, 1.3, fam.size), 10 ** rng.uniform(0.7, 1.5, fam.size))
+                    10 ** rng.uniform(-0.3, 1.3, fam.size), 10 ** rng.uniform(0.7, 1.5, fam.size),
+                    10 ** rng.uniform(-2, -0.5, fam.size), 10 ** rng.uniform(1, 2.5, fam.size))
     return em.fit_error_model(x, noise * rng.normal(size=fam.size), fam), x
 
 
