@@ -176,7 +176,7 @@ def compare_files(a, b, ignore=()):
 def assert_cdo_form_of(result, cdo_file):
     """``cdo_file`` (``screening export --layout cdo``) holds every number of ``result``: the same values
     with ``t`` first, ``p_exceed`` (and every variable on ``threshold``) as ``p_exceed_<i>``, the strings as
-    attributes (JSON lists)."""
+    attributes (JSON lists); a variable without values (on a dimension of length 0) is named in ``left_out``."""
     import json
 
     import numpy as np
@@ -185,7 +185,9 @@ def assert_cdo_form_of(result, cdo_file):
 
     with open_result(result) as ds, xr.open_dataset(cdo_file, decode_times=False) as cdo:
         for name, v in ds.variables.items():
-            if v.dtype.kind in "OSU":
+            if 0 in v.shape:
+                assert name not in cdo.variables and name in cdo.attrs["left_out"].split(":")[0].split(", "), name
+            elif v.dtype.kind in "OSU":
                 where = cdo.attrs.get(name) or next(c.attrs[name] for c in cdo.variables.values() if name in c.attrs)
                 assert json.loads(where) == [str(s) for s in np.atleast_1d(v.values)], name
             elif "threshold" in v.dims and name != "threshold":
