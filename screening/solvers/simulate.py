@@ -145,8 +145,8 @@ def _input(ground_acceleration, dt):
 
 
 def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", theta0=0.0, theta_dot0=0.0,
-             condensation=condensations.DEFAULT_CONDENSATION, t_end=None, output_dt=None, rtol=None, h_max=None, max_steps=20_000_000,
-             max_flight_time=0.5, overturn_resolution=200, vertical=True):
+             condensation=condensations.DEFAULT_CONDENSATION, t_end=None, output_dt=None, rtol=None, h_max=None,
+             max_steps=20_000_000, max_flight_time=0.5, overturn_resolution=200, vertical=True):
     """Response of a block on a flexible bed to one ground-acceleration record.
 
     Parameters
