@@ -9,6 +9,8 @@ from pathlib import Path
 
 import xarray as xr
 
+from screening.analysis.tradeoff_study import EXAMPLE_TRADEOFF_STUDY
+
 #: 4 eps x 5 S0 white-noise points, 4 s records: the sweep tests' standard grid.
 GRID = """
 title = "sweep test"
@@ -48,32 +50,8 @@ def study_text(edits=None, append="", base=GRID):
     return "\n" + "\n".join(lines) + "\n" + append
 
 
-#: A small speed-accuracy trade study: one white-noise family, 2 points, 2 s records.
-TRADE_STUDY = """
-title = "t"
-[block]
-m = 8.67
-b = 0.035
-h = 0.21
-[foundation]
-k = 2.89e7
-lam = 8.95e8
-[time]
-t_end = 2.0
-dt = 0.05
-[[family]]
-name = "w"
-kind = "white"
-eps = [6e7]
-S0 = [1e-5, 2e-5]
-[mcs]
-samples = 50
-[convergence]
-points = [{family = "w", eps = 6e7, index = 1}]
-samples = [20, 50]
-rtol_samples = 20
-rtol_factors = [1.0, 32.0]
-"""
+#: A small speed-accuracy trade study: one white-noise family, 2 points, 2 s records (the package's example).
+TRADE_STUDY = EXAMPLE_TRADEOFF_STUDY
 
 #: Two cases (white noise on a hardening bed, Kanai-Tajimi on a softening one) x 3 S0: 6 points.
 CASES = """
