@@ -393,18 +393,19 @@ def example_tradeoff():
     ratios = {c: factor[METHODS.index(a)] / factor[METHODS.index(b)] - 1.0 for c, (a, b) in COMPARISONS.items()}
     err = np.array([[[ratios[c]] * n] * len(QUANTITIES) for c in COMPARISONS])
     rel_se = np.full(err.shape, 0.03)
-    rep = [family.S0.index(family.S0[-1])]
+    rep = [index for _, _, index in study.convergence["points"]]         # one eps: the point is the S0 index
     n_samples, factors = study.convergence["samples"], study.convergence["rtol_factors"]
     cv = peak[1:, rep].T[:, :, None] * np.array([1.03, 1.0])           # (rep_point, cv_model, n_samples)
     tol = cv[:, :, :1] * np.array([1.0, 1.001])                          # (rep_point, cv_model, rtol_factor)
-    zeros = {"overturned": np.zeros((len(rep), 2, 2), dtype=np.int32)}
+    none_over = np.zeros((len(rep), 2, 2), dtype=np.int32)                # overturned samples
     per_point = ("point",)
     data = {
         "var_theta": (("approach", "point", "t"), var), "var_theta_se": (("approach", "point", "t"), mcs_se * var),
         "var_theta_dot": (("approach", "point", "t"), 100.0 * var),
         "var_theta_dot_se": (("approach", "point", "t"), 100.0 * mcs_se * var),
         "p_uplift": (("approach", "point", "t"), 0.2 * np.arange(1, n + 1)[None, :, None] * ramp * np.ones((3, 1, 1))),
-        "peak_var_theta": (("approach", "point"), peak), "peak_var_theta_se": (("approach", "point"), mcs_se[..., 0] * peak),
+        "peak_var_theta": (("approach", "point"), peak),
+        "peak_var_theta_se": (("approach", "point"), mcs_se[..., 0] * peak),
         "n_overturned": (("mcs_model", "point"), np.zeros((2, n), dtype=np.int32)),
         "n_used": (("mcs_model", "point"), np.full((2, n), study.mcs["samples"], dtype=np.int32)),
         "overturned_fraction": (("mcs_model", "point"), np.zeros((2, n))),
@@ -423,13 +424,13 @@ def example_tradeoff():
         "rep_point_name": (("rep_point",), [f"{family.name}_{i}" for i in rep]),
         "cv_peak_var_theta": (("rep_point", "cv_model", "n_samples"), cv),
         "cv_peak_var_theta_se": (("rep_point", "cv_model", "n_samples"), cv * np.array([0.05, 0.03])),
-        "cv_n_overturned": (("rep_point", "cv_model", "n_samples"), zeros["overturned"]),
+        "cv_n_overturned": (("rep_point", "cv_model", "n_samples"), none_over),
         "cv_deviation_vs_reference": (("rep_point", "cv_model", "n_samples"), cv / cv[..., -1:] - 1.0),
         "cv_cost": (("rep_point", "cv_model", "n_samples"), np.array([[[0.4, 1.0], [2.0, 5.0]]])),
         "cv_sl_peak_var_theta": (("rep_point",), peak[0, rep]),
         "tol_peak_var_theta": (("rep_point", "cv_model", "rtol_factor"), tol),
         "tol_peak_var_theta_se": (("rep_point", "cv_model", "rtol_factor"), 0.05 * tol),
-        "tol_n_overturned": (("rep_point", "cv_model", "rtol_factor"), zeros["overturned"]),
+        "tol_n_overturned": (("rep_point", "cv_model", "rtol_factor"), none_over),
         "tol_change_vs_tightest": (("rep_point", "cv_model", "rtol_factor"), tol / tol[..., :1] - 1.0),
         "tol_cost": (("rep_point", "cv_model", "rtol_factor"), np.array([[[0.4, 0.2], [2.0, 1.0]]])),
         "sl_setting_kind": (("sl_setting",), ["rtol", "h_max"]),
@@ -443,5 +444,7 @@ def example_tradeoff():
     coords = {"approach": list(METHODS), "point": np.arange(n), "t": t, "mcs_model": ["coupled", "condensed"],
               "comparison": list(COMPARISONS), "quantity": list(QUANTITIES), "cv_model": list(MCS_MODELS),
               "n_samples": list(n_samples), "rtol_factor": list(factors), "sl_setting": [0, 1],
-              "eps": ("point", np.repeat(family.eps, len(family.S0))), "S0": ("point", np.tile(family.S0, len(family.eps)))}
-    return study, xr.Dataset(data, coords=coords, attrs={"wall_time_s": 42.0, "tol_samples": study.convergence["rtol_samples"]})
+              "eps": ("point", np.repeat(family.eps, len(family.S0))),
+              "S0": ("point", np.tile(family.S0, len(family.eps)))}
+    attrs = {"wall_time_s": 42.0, "tol_samples": study.convergence["rtol_samples"]}
+    return study, xr.Dataset(data, coords=coords, attrs=attrs)

@@ -117,7 +117,8 @@ def test_a_gaussian_probability_that_underflows_gets_a_standard_error_that_reach
            "var_theta_dot": np.repeat(100.0 * var, nt, 1), "cov_theta_theta_dot": np.zeros((2, nt)),
            "c_eq": np.full((2, nt), 5.0), "k_eq": np.full((2, nt), 1000.0)}
     slender = float(block.slenderness)
-    out = {"status": np.zeros(2, np.int8), "slenderness": np.full(2, slender), "sl_trust": np.full(2, int(Trust.trusted), np.int8),
+    out = {"status": np.zeros(2, np.int8), "slenderness": np.full(2, slender),
+           "sl_trust": np.full(2, int(Trust.trusted), np.int8),
            "sl_error_low": np.full(2, -0.1), "sl_error_high": np.full(2, 0.1)}
     p = execution.batch_probabilities(res, block, foundation, excitation, out, study.times)
     assert p["p_overturn"][0] == 0.0                                                 # underflowed
