@@ -40,10 +40,11 @@ from scipy import optimize, special
 from screening import schema
 from screening.model.block import Block
 from screening.solvers.datasets import finish
+from screening.analysis.trust import OVERTURN_LIMIT
 from screening.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
 
 __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "exceedance_probability_from_moments",
-           "linearized_exceedance",
+           "linearized_exceedance", "band_standard_error",
            "mcs_exceedance_probability", "lognormal_fragility", "binomial_nll", "fit_binomial_fragility",
            "total_dispersion", "with_modelling_dispersion", "fit_lognormal_fragility", "parameter",
            "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
@@ -258,6 +259,49 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
     elif method != "poisson":
         raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
     return -np.expm1(-np.trapezoid(rate, np.asarray(t, dtype=float), axis=axis))
+
+
+def band_standard_error(p, p_low, p_high):
+    """Standard error [1] of a linearization's Gaussian probability from its values at the two ends of the
+    point's trust band, bounded below where the trust rule cannot vouch for a smaller one.
+
+    Parameters
+    ----------
+    p : array_like
+        The probability at the point's moments [1].
+    p_low, p_high : array_like
+        The probability with the moments at the two ends of the band (standing for two standard errors
+        each way) [1].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``max(|p_high - p_low| / 4, (OVERTURN_LIMIT - p) / 2)`` [1]; NaN where an input is NaN.
+
+    Notes
+    -----
+    The band's quarter alone vanishes where the Gaussian tail underflows (both ends 0), and is far below
+    what the trust rule checked wherever the tail is small: a trusted cell admits calibration points whose
+    Monte Carlo overturned up to :data:`screening.analysis.trust.OVERTURN_LIMIT` of its samples [2], and an
+    overturned sample exceeds every threshold.  So the standard error is at least
+    ``(OVERTURN_LIMIT - p) / 2``: ``p + 2 se`` reaches that fraction, as the Agresti-Coull ``p + 2 se`` of a
+    Monte Carlo without an overturned sample reaches about ``3 / n``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``, and "Trusting a point", ``docs/trust.md``.
+
+    Examples
+    --------
+    >>> band_standard_error([0.0, 0.30], [0.0, 0.26], [0.0, 0.34]).round(4)       # an underflowed tail; a wide one
+    array([0.005, 0.02 ])
+    """
+    p, p_low, p_high = (np.asarray(a, dtype=float) for a in (p, p_low, p_high))
+    return np.maximum(np.abs(p_high - p_low) / 4.0, (OVERTURN_LIMIT - p) / 2.0)
 
 
 def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq, k_eq, m_sdof, status, level,

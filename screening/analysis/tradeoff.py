@@ -574,30 +574,7 @@ def rerender_reports(study_path, out_dir="outputs"):
 
     >>> import tempfile
     >>> from pathlib import Path
-    >>> STUDY = '''title = "t"
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... [time]
-    ... t_end = 2.0
-    ... dt = 0.05
-    ... [[family]]
-    ... name = "w"
-    ... kind = "white"
-    ... eps = [6e7]
-    ... S0 = [1e-5, 2e-5]
-    ... [mcs]
-    ... samples = 50
-    ... [convergence]
-    ... points = [{family = "w", eps = 6e7, index = 1}]
-    ... samples = [20, 50]
-    ... rtol_samples = 20
-    ... rtol_factors = [1.0, 32.0]
-    ... '''
+    >>> from screening.analysis.tradeoff_study import EXAMPLE_TRADEOFF_STUDY as STUDY
     >>> with tempfile.TemporaryDirectory() as d:
     ...     _ = (Path(d) / "tiny.toml").write_text(STUDY)
     ...     try:

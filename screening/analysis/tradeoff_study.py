@@ -23,8 +23,8 @@ from screening.workflow.config import (EXCITATIONS, NUMERIC, TABLE_KEYS, Case, S
                                        read_study_text, required, resolve_case, table, time_table,
                                        title_and_description, type_name)
 
-__all__ = ["METHODS", "MCS_MODELS", "COMPARISONS", "QUANTITIES", "MODEL_KEYS", "Family", "TradeoffStudy",
-           "load_tradeoff_study", "parse_tradeoff_study"]
+__all__ = ["METHODS", "MCS_MODELS", "COMPARISONS", "QUANTITIES", "MODEL_KEYS", "EXAMPLE_TRADEOFF_STUDY", "Family",
+           "TradeoffStudy", "load_tradeoff_study", "parse_tradeoff_study", "example_tradeoff"]
 
 #: The methods compared: stochastic linearization and Monte Carlo on the condensed / coupled model.
 METHODS = ("sl", "condensed_mcs", "coupled_mcs")
@@ -36,6 +36,32 @@ COMPARISONS = {
     "condensed_vs_coupled": ("condensed_mcs", "coupled_mcs"),
 }
 QUANTITIES = ("var_theta", "var_theta_dot")
+
+#: A trade study of one family of two points (one representative point), for examples and tests.
+EXAMPLE_TRADEOFF_STUDY = """title = "example trade study"
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+[time]
+t_end = 2.0
+dt = 0.05
+[[family]]
+name = "w"
+kind = "white"
+eps = [6e7]
+S0 = [1e-5, 2e-5]
+[mcs]
+samples = 50
+[convergence]
+points = [{family = "w", eps = 6e7, index = 1}]
+samples = [20, 50]
+rtol_samples = 20
+rtol_factors = [1.0, 32.0]
+"""
 
 #: Model-table keys of a trade study: ``eps`` and the excitation kind and intensity are per family.
 MODEL_KEYS = {"block": TABLE_KEYS["block"], "foundation": ("contact", "condensation", "k", "lam", "c"),
@@ -323,3 +349,102 @@ def _rule(raw):
                                                    lower=0.0))),
             "metric": choice(tbl, "metric", RULE_METRICS, "rule.", "peak"),
             "quantity": choice(tbl, "quantity", QUANTITIES, "rule.", "var_theta")}
+
+
+def example_tradeoff():
+    """The study :data:`EXAMPLE_TRADEOFF_STUDY` and a made-up dataset of its layout (nothing is solved).
+
+    Every variable the trade study's reports read (:func:`screening.report.tradeoff_files.write_reports`),
+    with round numbers: SL's variances 0.95 of condensed Monte Carlo's and 0.91 of coupled Monte Carlo's,
+    Monte Carlo standard errors of 2 %, costs of 0.01 s (SL), 1 s (condensed) and 5 s (coupled) per point.
+
+    Returns
+    -------
+    study : TradeoffStudy
+        The parsed example study (two points: ``S0`` = 1e-5, 2e-5 m2 s-3 at ``eps`` = 6e7 m-2).
+    ds : xarray.Dataset
+        Histories ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2] (with ``*_se``), ``p_uplift`` [1] on
+        ``(approach, point, t)``; peaks, relative errors [1] and their significance over ``comparison`` and
+        ``quantity``; costs [s]; the sample-count (``cv_*``), tolerance (``tol_*``) and SL-numerics
+        (``sl_*`` over ``sl_setting``) sub-studies at the representative point.
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    >>> study, ds = example_tradeoff()
+    >>> dict(ds.sizes)["point"], float(ds.peak_rel_error.sel(comparison="sl_vs_coupled", quantity="var_theta")[0])
+    (2, -0.09090909090909094)
+    """
+    import xarray as xr
+
+    study = parse_tradeoff_study(EXAMPLE_TRADEOFF_STUDY, source="example.toml")
+    t = np.arange(round(study.t_end / study.dt) + 1) * study.dt
+    ramp = t / study.t_end
+    family = study.families[0]
+    n = len(family.eps) * len(family.S0)
+    factor = np.array([1.0, 1.05, 1.1])                      # sl, condensed, coupled: variance over SL's
+    base = 1e-6 * np.arange(1, n + 1)                       # SL's peak var_theta [rad2] per point
+    var = factor[:, None, None] * base[None, :, None] * ramp
+    mcs_se = np.array([0.0, 0.02, 0.02])[:, None, None]
+    peak = factor[:, None] * base
+    ratios = {c: factor[METHODS.index(a)] / factor[METHODS.index(b)] - 1.0 for c, (a, b) in COMPARISONS.items()}
+    err = np.array([[[ratios[c]] * n] * len(QUANTITIES) for c in COMPARISONS])
+    rel_se = np.full(err.shape, 0.03)
+    rep = [index for _, _, index in study.convergence["points"]]         # one eps: the point is the S0 index
+    n_samples, factors = study.convergence["samples"], study.convergence["rtol_factors"]
+    cv = peak[1:, rep].T[:, :, None] * np.array([1.03, 1.0])           # (rep_point, cv_model, n_samples)
+    tol = cv[:, :, :1] * np.array([1.0, 1.001])                          # (rep_point, cv_model, rtol_factor)
+    none_over = np.zeros((len(rep), 2, 2), dtype=np.int32)                # overturned samples
+    per_point = ("point",)
+    data = {
+        "var_theta": (("approach", "point", "t"), var), "var_theta_se": (("approach", "point", "t"), mcs_se * var),
+        "var_theta_dot": (("approach", "point", "t"), 100.0 * var),
+        "var_theta_dot_se": (("approach", "point", "t"), 100.0 * mcs_se * var),
+        "p_uplift": (("approach", "point", "t"), 0.2 * np.arange(1, n + 1)[None, :, None] * ramp * np.ones((3, 1, 1))),
+        "peak_var_theta": (("approach", "point"), peak),
+        "peak_var_theta_se": (("approach", "point"), mcs_se[..., 0] * peak),
+        "n_overturned": (("mcs_model", "point"), np.zeros((2, n), dtype=np.int32)),
+        "n_used": (("mcs_model", "point"), np.full((2, n), study.mcs["samples"], dtype=np.int32)),
+        "overturned_fraction": (("mcs_model", "point"), np.zeros((2, n))),
+        "sl_status": (per_point, np.zeros(n, dtype=np.int8)),
+        "sl_peak_p_uplift": (per_point, 0.2 * np.arange(1, n + 1)),
+        "k_eq_margin": (per_point, 1.0 - 0.2 * np.arange(1, n + 1)),
+        "point_name": (per_point, [f"{family.name}_{i}" for i in range(n)]),
+        "family": (per_point, [family.name] * n),
+        "peak_rel_error": (("comparison", "quantity", "point"), err),
+        "peak_rel_se": (("comparison", "quantity", "point"), rel_se),
+        "peak_significant": (("comparison", "quantity", "point"), np.abs(err) > 2 * rel_se),
+        "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err)),
+        "time_avg_significant": (("comparison", "quantity", "point"), np.abs(err) > 2 * rel_se),
+        "cost": (("approach", "point"), np.array([0.01, 1.0, 5.0])[:, None] * np.ones(n)),
+        "sl_batched_cost": ((), 0.001),
+        "rep_point_name": (("rep_point",), [f"{family.name}_{i}" for i in rep]),
+        "cv_peak_var_theta": (("rep_point", "cv_model", "n_samples"), cv),
+        "cv_peak_var_theta_se": (("rep_point", "cv_model", "n_samples"), cv * np.array([0.05, 0.03])),
+        "cv_n_overturned": (("rep_point", "cv_model", "n_samples"), none_over),
+        "cv_deviation_vs_reference": (("rep_point", "cv_model", "n_samples"), cv / cv[..., -1:] - 1.0),
+        "cv_cost": (("rep_point", "cv_model", "n_samples"), np.array([[[0.4, 1.0], [2.0, 5.0]]])),
+        "cv_sl_peak_var_theta": (("rep_point",), peak[0, rep]),
+        "tol_peak_var_theta": (("rep_point", "cv_model", "rtol_factor"), tol),
+        "tol_peak_var_theta_se": (("rep_point", "cv_model", "rtol_factor"), 0.05 * tol),
+        "tol_n_overturned": (("rep_point", "cv_model", "rtol_factor"), none_over),
+        "tol_change_vs_tightest": (("rep_point", "cv_model", "rtol_factor"), tol / tol[..., :1] - 1.0),
+        "tol_cost": (("rep_point", "cv_model", "rtol_factor"), np.array([[[0.4, 0.2], [2.0, 1.0]]])),
+        "sl_setting_kind": (("sl_setting",), ["rtol", "h_max"]),
+        "sl_rtol": (("sl_setting",), [study.sl["rtol"]] * 2),
+        "sl_h_max": (("sl_setting",), [np.nan, 0.01]),
+        "sl_cost": (("sl_setting", "point"), np.array([0.01, 0.02])[:, None] * np.ones(n)),
+        "sl_n_steps": (("sl_setting", "point"), np.array([120.0, 200.0])[:, None] * np.ones(n)),
+        "sl_numerical_peak_error": (("sl_setting", "point"), np.array([1e-5, 1e-4])[:, None] * np.ones(n)),
+        "sl_numerical_time_avg_error": (("sl_setting", "point"), np.array([1e-5, 1e-4])[:, None] * np.ones(n)),
+    }
+    coords = {"approach": list(METHODS), "point": np.arange(n), "t": t, "mcs_model": ["coupled", "condensed"],
+              "comparison": list(COMPARISONS), "quantity": list(QUANTITIES), "cv_model": list(MCS_MODELS),
+              "n_samples": list(n_samples), "rtol_factor": list(factors), "sl_setting": [0, 1],
+              "eps": ("point", np.repeat(family.eps, len(family.S0))),
+              "S0": ("point", np.tile(family.S0, len(family.eps)))}
+    attrs = {"wall_time_s": 42.0, "tol_samples": study.convergence["rtol_samples"]}
+    return study, xr.Dataset(data, coords=coords, attrs=attrs)

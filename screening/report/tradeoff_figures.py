@@ -15,7 +15,7 @@ from screening.analysis.metrics import classify_error, rule_error
 from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
 from screening.report.figure_base import save_figure
 
-__all__ = ["DPI", "study_n", "plot_validity"]
+__all__ = ["DPI", "study_n", "plot_error_vs_cost", "plot_validity"]
 
 DPI = 130
 
@@ -29,7 +29,44 @@ def _figure():
 
 def plot_error_vs_cost(ds, path):
     """Log-log error vs cost per point, one marker per method/setting (two panels:
-    error against coupled MCS, the judge; and against condensed MCS, SL's own model)."""
+    error against coupled MCS, the judge; and against condensed MCS, SL's own model).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The trade-study dataset: ``cost`` [s] over ``approach``; the sample-count study ``cv_peak_var_theta``
+        [rad2] with its ``_se``, ``cv_cost`` [s] over ``rep_point``, ``cv_model``, ``n_samples``; the tolerance
+        study ``tol_peak_var_theta`` with its ``_se``, ``tol_cost`` [s] and ``tol_change_vs_tightest`` [1] over
+        ``rtol_factor``; ``cv_sl_peak_var_theta`` [rad2]; ``peak_rel_error`` [1]; the SL settings ``sl_cost``
+        [s], ``sl_rtol``, ``sl_h_max`` [s], ``sl_setting_kind`` over ``sl_setting``.
+    path : str or pathlib.Path
+        The PNG to write (whole or not at all).
+
+    Returns
+    -------
+    None
+
+    Notes
+    -----
+    A Monte Carlo marker's error is ``sqrt(bias^2 + (se / peak)^2)`` (plus the tolerance change for the
+    tolerance variants), the bias being the relative difference of the model's largest-sample peak from
+    the panel's reference; SL's is ``|SL / reference - 1|``, its modelling error.
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from screening.analysis.tradeoff_study import example_tradeoff
+    >>> _, ds = example_tradeoff()                      # made-up numbers
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     png = pathlib.Path(folder) / "error_vs_cost.png"
+    ...     plot_error_vs_cost(ds, png)
+    ...     png.read_bytes()[:4]
+    b'\\x89PNG'
+    """
     fig, axes = _figure()
     models = list(ds.cv_model.values)
     nref = ds.sizes["n_samples"] - 1

@@ -17,7 +17,7 @@ from screening.analysis.metrics import derive_rules
 from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
 from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, write_csv
 
-__all__ = ["LABEL_DIMS", "to_file_layout", "from_file_layout", "file_encoding", "output_paths"]
+__all__ = ["LABEL_DIMS", "to_file_layout", "from_file_layout", "file_encoding", "output_paths", "write_reports"]
 
 #: Dimensions labelled by strings in memory (``ds.sel(approach="sl")``); in the file they are
 #: plain dimensions with a ``<dim>_name`` auxiliary coordinate (CF coordinate variables are numeric).
@@ -167,8 +167,46 @@ def output_paths(out_dir, stem):
 def write_reports(study, ds, out_dir, stem, write_nc=True):
     """Derive the rules from ``ds`` and write the netCDF, markdown, CSV and plots.
 
-    Returns ``(paths, rules)``.  With ``write_nc=False`` only the reports are (re)written,
-    e.g. from a saved dataset (:func:`rerender_reports`).
+    With ``write_nc=False`` only the reports are (re)written, e.g. from a saved dataset
+    (:func:`screening.analysis.tradeoff.rerender_reports`).  Each file appears whole or not at all.
+
+    Parameters
+    ----------
+    study : screening.analysis.tradeoff_study.TradeoffStudy
+        The trade study (its ``rule`` table, and what the markdown report prints of it).
+    ds : xarray.Dataset
+        The trade-study dataset in memory (:func:`screening.analysis.tradeoff.run_tradeoff`); its
+        attribute ``rules`` is set to the derived rules, one line each.
+    out_dir : str or pathlib.Path
+        The folder of the files (created if missing).
+    stem : str
+        The files' common name (:func:`output_paths`).
+    write_nc : bool, default True
+        Also write the dataset as ``<stem>.nc`` (:func:`to_file_layout`).
+
+    Returns
+    -------
+    paths : dict
+        ``{"nc", "md", "csv", "error_vs_cost", "validity"}`` -> :class:`pathlib.Path` (:func:`output_paths`).
+    rules : list of dict
+        The validity rules of SL (:func:`screening.analysis.metrics.derive_rules` with the study's
+        ``rule`` thresholds, metric and quantity).
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from screening.analysis.tradeoff_study import example_tradeoff
+    >>> study, ds = example_tradeoff()                  # made-up numbers
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     paths, rules = write_reports(study, ds, folder, "example")
+    ...     sorted(p.name for p in paths.values() if p.exists())
+    ['example.csv', 'example.md', 'example.nc', 'example_error_vs_cost.png', 'example_validity.png']
+    >>> print(ds.attrs["rules"].splitlines()[0][:60])
+    [all] SL within 10% of condensed MCS (peak var_theta): at ev
     """
     paths = output_paths(out_dir, stem)
     paths["nc"].parent.mkdir(parents=True, exist_ok=True)

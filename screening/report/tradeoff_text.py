@@ -18,7 +18,7 @@ from screening.atomicfile import atomic_open
 from screening.status import PointStatus
 
 __all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary",
-           "summary_text"]
+           "markdown_report", "summary_text"]
 
 
 def rule_text(rule, metric, quantity):
@@ -318,7 +318,38 @@ def cost_summary(ds):
 
 
 def markdown_report(study, ds, rules):
-    """The trade tables as markdown text."""
+    """The trade tables as markdown text.
+
+    Parameters
+    ----------
+    study : screening.analysis.tradeoff_study.TradeoffStudy
+        The trade study (title, source, record length and step, ``mcs``, ``sl``, ``convergence`` and
+        ``rule`` tables: printed in the header and the table captions).
+    ds : xarray.Dataset
+        The trade-study dataset (:func:`point_rows`, :func:`cost_summary`, and the ``cv_*``, ``tol_*`` and
+        ``sl_*`` sub-studies).
+    rules : list of dict
+        From :func:`screening.analysis.metrics.derive_rules`.
+
+    Returns
+    -------
+    str
+        The report: accuracy per point, error summary, cost per point, Monte Carlo against sample count
+        and tolerance, SL numerics and the validity rules (relative errors in %, costs in s).
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    >>> from screening.analysis.metrics import derive_rules
+    >>> from screening.analysis.tradeoff_study import example_tradeoff
+    >>> study, ds = example_tradeoff()                  # made-up numbers
+    >>> text = markdown_report(study, ds, derive_rules(ds, study.rule["thresholds"]))
+    >>> print(next(line for line in text.splitlines() if line.startswith("Cost ratio")))
+    Cost ratio SL : condensed MCS : coupled MCS (medians) = 1 : 100 : 500.
+    """
     rows = point_rows(ds)
     L = [f"# {study.title}", "",
          f"Study file `{study.source}`; screening {__version__}.  Records of {study.t_end:g} s, output step "

@@ -23,59 +23,10 @@ from screening import condensation as condensations
 from screening.condensation.paper import uplift_threshold as paper_uplift_threshold
 from screening.physics.contact import exact_uplift_angle, law_constants, law_resultants, rest_indentation
 from screening.solvers import mcs_kernels as kern
-from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, register
+from screening.solvers.mc_registry import KERNEL_CONDENSATION, ChunkIntegrator, MonteCarloModel, register
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-__all__ = ["COUPLED", "CONDENSED", "KERNEL_CONDENSATION", "check_not_condensed", "state_scales",
-           "exact_uplift_threshold", "quasi_static_indentation"]
-
-#: The condensation a model that is not condensed builds its kernel record with (none of its
-#: functions is used there): the paper's.  Such a model accepts it as well as the default
-#: (:func:`check_not_condensed`).
-KERNEL_CONDENSATION = "paper"
-
-
-def check_not_condensed(model, condensation):
-    """Refuse a condensation chosen for a model that is not condensed (it would have no effect).
-
-    Parameters
-    ----------
-    model : str
-        The model's name (for the message).
-    condensation : str or screening.condensation.Condensation
-        What the caller passed.
-
-    Returns
-    -------
-    None
-        Returns for :data:`screening.condensation.DEFAULT_CONDENSATION` and :data:`KERNEL_CONDENSATION`
-        (the paper's, what callers pass for "none").
-
-    Raises
-    ------
-    ValueError
-        Naming the parameter ``condensation`` for any other.
-
-    References
-    ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-
-    Examples
-    --------
-    >>> check_not_condensed("coupled", "paper")
-    >>> try:
-    ...     check_not_condensed("coupled", "cubic")
-    ... except ValueError as exc:
-    ...     print(exc)
-    parameter 'condensation' applies to model='condensed' only (got condensation='cubic' with model='coupled')
-    """
-    cond = condensations.get(condensation)
-    if cond not in (condensations.get(condensations.DEFAULT_CONDENSATION), condensations.get(KERNEL_CONDENSATION)):
-        raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
-                         f"(got condensation={cond.name!r} with model={model!r})")
-
+__all__ = ["COUPLED", "CONDENSED", "state_scales", "exact_uplift_threshold", "quasi_static_indentation"]
 
 def state_scales(block, foundation):
     """Absolute error scales of the Monte Carlo state ``(theta, theta', z_cb, z_cb')``.
@@ -272,9 +223,6 @@ class CoupledModel(_KernelModel):
     default_rtol = 1e-7
     vertical_state = True
     code = kern.MODEL_COUPLED
-
-    def check(self, block, foundation, condensation):
-        check_not_condensed(self.name, condensation)
 
     def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
         return np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])

@@ -20,7 +20,57 @@ from __future__ import annotations
 
 import abc
 
-__all__ = ["ChunkIntegrator", "MonteCarloModel", "check_validity", "code", "get", "names", "register", "unregister"]
+from screening import condensation as condensations
+
+__all__ = ["KERNEL_CONDENSATION", "ChunkIntegrator", "MonteCarloModel", "check_not_condensed", "check_validity", "code",
+           "get", "names", "register", "unregister"]
+
+#: The condensation a model that is not condensed builds its kernel record with (none of its
+#: functions is used there): the paper's.  Such a model accepts it as well as the default
+#: (:func:`check_not_condensed`).
+KERNEL_CONDENSATION = "paper"
+
+
+def check_not_condensed(model, condensation):
+    """Refuse a condensation chosen for a model that is not condensed (it would have no effect).
+
+    Parameters
+    ----------
+    model : str
+        The model's name (for the message).
+    condensation : str or screening.condensation.Condensation
+        What the caller passed.
+
+    Returns
+    -------
+    None
+        Returns for :data:`screening.condensation.DEFAULT_CONDENSATION` and :data:`KERNEL_CONDENSATION`
+        (the paper's, what callers pass for "none").
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter ``condensation`` for any other.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> check_not_condensed("coupled", "paper")
+    >>> try:
+    ...     check_not_condensed("coupled", "cubic")
+    ... except ValueError as exc:
+    ...     print(exc)
+    parameter 'condensation' applies to model='condensed' only (got condensation='cubic' with model='coupled')
+    """
+    cond = condensations.get(condensation)
+    if cond not in (condensations.get(condensations.DEFAULT_CONDENSATION), condensations.get(KERNEL_CONDENSATION)):
+        raise ValueError(f"parameter 'condensation' applies to model='condensed' only "
+                         f"(got condensation={cond.name!r} with model={model!r})")
 
 
 class ChunkIntegrator(abc.ABC):
@@ -67,7 +117,12 @@ class MonteCarloModel(abc.ABC):
     vertical_state: bool = False
 
     def check(self, block, foundation, condensation):
-        """Raise ``ValueError`` naming the parameter for a combination the model cannot run (default: accept)."""
+        """Raise ``ValueError`` naming the parameter for a combination the model cannot run: the one place
+        that refuses it (:func:`screening.monte_carlo` and :func:`screening.simulate` call it alike).  Default: a
+        model that does not read the condensation (:attr:`uses_condensation` False) refuses any but the
+        default and :data:`KERNEL_CONDENSATION` (:func:`check_not_condensed`); an override calls this one."""
+        if not self.uses_condensation:
+            check_not_condensed(self.name, condensation)
 
     @abc.abstractmethod
     def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):

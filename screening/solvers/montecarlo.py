@@ -179,10 +179,10 @@ def _check_numerics(numerics):
             raise ValueError(f"parameter '{name}' must be a finite number in (0, {upper:g}] (got {v!r})")
         return float(v)
 
-    if opts["rtol"] is not None and not (isinstance(opts["rtol"], str) and opts["rtol"] == "auto"):
-        if isinstance(opts["rtol"], str):
-            raise ValueError(f"parameter 'rtol' must be \"auto\" or a finite number in (0, {limits.MAX_RTOL:g}] "
-                             f"(got {opts['rtol']!r})")
+    if isinstance(opts["rtol"], str) and opts["rtol"] != "auto":
+        raise ValueError(f"parameter 'rtol' must be \"auto\" or a finite number in (0, {limits.MAX_RTOL:g}] "
+                         f"(got {opts['rtol']!r})")
+    if opts["rtol"] is not None and not isinstance(opts["rtol"], str):        # None: the model's; "auto"
         opts["rtol"] = positive("rtol", limits.MAX_RTOL)
     if opts["cutoff"] is not None:
         opts["cutoff"] = positive("cutoff")

@@ -46,7 +46,6 @@ from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIM
 from screening.records import Record
 from screening.solvers import mc_registry, mcs_kernels as kern
 from screening.solvers.datasets import finish
-from screening.solvers.mc_models import check_not_condensed
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.montecarlo import check_scalar_models
@@ -146,8 +145,8 @@ def _input(ground_acceleration, dt):
 
 
 def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", theta0=0.0, theta_dot0=0.0,
-             condensation=condensations.DEFAULT_CONDENSATION, t_end=None, output_dt=None, rtol=None, h_max=None, max_steps=20_000_000,
-             max_flight_time=0.5, overturn_resolution=200, vertical=True):
+             condensation=condensations.DEFAULT_CONDENSATION, t_end=None, output_dt=None, rtol=None, h_max=None,
+             max_steps=20_000_000, max_flight_time=0.5, overturn_resolution=200, vertical=True):
     """Response of a block on a flexible bed to one ground-acceleration record.
 
     Parameters
@@ -164,7 +163,9 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     theta0 : initial rotation [rad], ``|theta0| <`` slenderness.
     theta_dot0 : initial angular velocity [rad/s].
     condensation : condensation of the condensed model (default
-        :data:`screening.condensation.DEFAULT_CONDENSATION`; ``"paper"``, ``"cubic"``, ``"virtual_work"``).
+        :data:`screening.condensation.DEFAULT_CONDENSATION`; ``"paper"``, ``"cubic"``, ``"virtual_work"``);
+        a model that does not read it accepts the default or ``"paper"`` only, as in :func:`screening.monte_carlo`
+        (:meth:`~screening.solvers.mc_registry.MonteCarloModel.check`).
     t_end : end time [s] (default: the record's duration; longer: ground at rest afterwards).
     output_dt : output step [s] (default ``dt``).
     rtol : relative tolerance (default :data:`screening.solvers.montecarlo.DEFAULT_RTOL` of the model).
@@ -214,8 +215,6 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     mc = resolve_model(model, block, foundation)        # "auto": no rule is measured on records (the fallback)
     model = mc.name
     cond = condensations.get(condensation)
-    if not mc.uses_condensation:
-        check_not_condensed(model, cond)
     dt = record.dt
     theta0 = check_scalar("theta0", theta0)
     theta_dot0 = check_scalar("theta_dot0", theta_dot0)
@@ -230,7 +229,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     max_steps = check_integer("max_steps", max_steps, 1)
     max_flight_time = check_scalar("max_flight_time", max_flight_time, lower=0.0)
     overturn_resolution = check_integer("overturn_resolution", overturn_resolution, 1, MAX_OVERTURN_RESOLUTION)
-    mc.check(block, foundation, cond)                 # a condensed model checks its condensation's bed
+    mc.check(block, foundation, cond)                 # what the model cannot use: its own check, as monte_carlo
     mc_registry.check_validity(mc, block, foundation)
 
     # input on the record grid, padded with rest to cover t_end (plus two samples for the interpolant)

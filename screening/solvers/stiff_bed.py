@@ -492,6 +492,7 @@ class StiffBedModel(MonteCarloModel):
         return max(ROCKING_BAND_FACTOR * rocking_frequency(block, foundation), ground)
 
     def check(self, block, foundation, condensation):
+        super().check(block, foundation, condensation)
         check_standing(block, foundation)
 
     def validity_problem(self, block, foundation, excitation=None):

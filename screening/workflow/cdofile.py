@@ -12,14 +12,18 @@ is laid out for xarray and CF, and CDO cannot use it as it is (measured with CDO
   parameters, ``k_value``, ``spot_*``, ``esc_*``) gives "Coordinates variable ... can't be assigned",
   and string variables "Unsupported data type (char/string), skipped variable";
 * at most three dimensions besides time ("4 dimensional variables without time dimension are not
-  supported").
+  supported");
+* a dimension of length 0 (``escalation`` when the ``[accuracy]`` stage escalated no point) is an
+  unlimited dimension in netCDF (a length of 0 means unlimited there), and a variable on a second
+  unlimited dimension besides time is "Unsupported grid, skipped variable".
 
 So the CDO file has ``t`` first and unlimited with :data:`screening.schema.CDO_TIME` (the same
 seconds, from a placeholder reference date), no ``coordinates`` attributes (the parameters stay
 variables with their units), string variables as attributes of their dimension's variable
-(:func:`_string_attribute_target`), ``p_exceed`` as one variable per threshold, and at most
-:data:`MAX_GRID_DIMS` grid dimensions (``select`` fixes the others).  The swept parameters are
-CDO's z (levels: ``sellevel`` by value), y and x (``selindexbox``).
+(:func:`_string_attribute_target`), ``p_exceed`` as one variable per threshold, at most
+:data:`MAX_GRID_DIMS` grid dimensions (``select`` fixes the others), and neither the dimensions of
+length 0 nor the variables on them (they hold no value; the global attribute ``left_out`` names
+them).  The swept parameters are CDO's z (levels: ``sellevel`` by value), y and x (``selindexbox``).
 """
 
 from __future__ import annotations
@@ -289,6 +293,8 @@ def export_cdo(ds, dst, complevel, history, selection=None):
                          f"--select DIM=VALUE (e.g. --select {grid[0]}={_example(ds, grid[0])})")
     shape = tuple(ds.sizes[d] for d in grid)
     nt = ds.sizes["t"]
+    empty = [name for name, v in ds.variables.items() if 0 in v.shape]       # on a dimension of length 0
+    ds = ds.drop_vars(empty)                                                   # and the dimensions go with them
     strings = {name: v for name, v in ds.variables.items() if v.dtype.kind in "OSU"}
     zlib = {"zlib": True, "complevel": complevel} if complevel > 0 else {}
     with netCDF4.Dataset(dst, "w", format="NETCDF4") as nc:
@@ -346,6 +352,8 @@ def export_cdo(ds, dst, complevel, history, selection=None):
                 nc[target].setncattr(name, text)
         attrs = dict(ds.attrs)
         attrs["history"] = f"{attrs['history']}\n{history}" if attrs.get("history") else history
+        if empty:
+            labels["left_out"] = f"{', '.join(empty)}: no values (a dimension of length 0)"
         nc.setncatts(netcdf_attributes({**attrs, **labels, "layout": CDO_LAYOUT}))
 
 

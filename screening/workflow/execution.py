@@ -380,8 +380,9 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
 
     The standard errors are a quarter of the change of the probability across the point's trust band
     ``[sl_error_low, sl_error_high]`` of ``SL / MCS - 1`` (both variances divided by ``1 + e``; the band stands
-    for two standard errors each way), at the ``trusted`` points (the only ones where it is used); NaN elsewhere
-    and where the band is not finite or reaches ``e <= -1``.
+    for two standard errors each way), at least what the trust rule leaves open below a small probability
+    (:func:`~screening.analysis.fragility.band_standard_error`), at the ``trusted`` points (the only ones where it
+    is used); NaN elsewhere and where the band is not finite or reaches ``e <= -1``.
 
     Parameters
     ----------
@@ -448,7 +449,7 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
     >>> p["p_overturn"].round(3), p["p_overturn_se"].round(3)       # a standard error at trusted points only
     (array([0.735, 0.735]), array([0.056,   nan]))
     """
-    from screening.analysis.fragility import linearized_exceedance
+    from screening.analysis.fragility import band_standard_error, linearized_exceedance
 
     n = out["status"].size
     shape = res["status"].shape
@@ -477,7 +478,7 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
         p[:, j] = probability(slice(None), level)
         if at.size:
             lo, hi = (probability(at, level, e[at][:, None]) for e in edges)
-            se[at, j] = np.abs(hi - lo) / 4.0
+            se[at, j] = band_standard_error(p[at, j], lo, hi)
     result = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if fragility is not None:
         result.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])

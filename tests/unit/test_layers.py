@@ -98,10 +98,6 @@ UNDECLARED = {
         "the paper's cases (model layer) take the excitations through their former home, whose __getattr__ "
         "serves them: a direct import of screening.excitations would run up the layers",
     ("model.cases", "model.excitation", "WhiteNoise"): "as KanaiTajimi",
-    ("analysis.tradeoff", "report.tradeoff_files", "write_reports"):
-        "the trade study's report writers, out of __all__ until they have numpydoc docstrings",
-    ("report.tradeoff_files", "report.tradeoff_figures", "plot_error_vs_cost"): "as write_reports",
-    ("report.tradeoff_files", "report.tradeoff_text", "markdown_report"): "as write_reports",
 }
 
 

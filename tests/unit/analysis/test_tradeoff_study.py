@@ -38,7 +38,7 @@ def _edit(text, old, new):
 
 
 @pytest.mark.parametrize("old, new, key", [
-    ("title = \"t\"", "title = \"t\"\nbogus = 1", "bogus"),
+    ("title = \"example trade study\"", "title = \"example trade study\"\nbogus = 1", "bogus"),
     ("[mcs]\nsamples = 50", "[mcs]\nsampels = 50", "mcs.sampels"),
     ("[mcs]\nsamples = 50", "[mcs]\nsamples = 1", "mcs.samples"),
     ("[mcs]\nsamples = 50", "[mcs]\nsamples = 50.5", "mcs.samples"),

@@ -125,3 +125,35 @@ def test_band_option_low_passes_what_any_model_reads_and_is_recorded():
     assert not np.array_equal(low.peak_abs_theta.values, full.peak_abs_theta.values)
     with pytest.raises(ValueError, match="parameter 'band'"):
         monte_carlo(block, bed, motion, model="coupled", band=-1.0, **kw)
+
+
+class _Accepted(Exception):
+    """Raised where the engine would go on to run: the model's check passed."""
+
+
+@pytest.mark.parametrize("model", ["coupled", "condensed", "stiff_bed"])
+@pytest.mark.parametrize("condensation", ["paper", "cubic", "virtual_work"])
+def test_simulate_and_monte_carlo_refuse_and_accept_the_same_condensations(monkeypatch, model, condensation):
+    """The model's own check is the one place that refuses a condensation it cannot use: a model that does not
+    read it takes the default and the paper's only (what callers pass for "none"), the condensed model any; both
+    entry points stop there with the same one line naming the parameter, before any work."""
+    def accepted(*args, **kwargs):
+        raise _Accepted()
+
+    monkeypatch.setattr(mc_registry, "check_validity", accepted)        # called right after the model's check
+    calls = {"simulate": lambda: screening.simulate(BLOCK, BED, np.zeros(100), dt=0.01, model=model,
+                                                    condensation=condensation),
+             "monte_carlo": lambda: screening.monte_carlo(BLOCK, BED, WhiteNoise(1e-4), n_samples=10**12,
+                                                          model=model, condensation=condensation, seed=0)}
+    outcomes = {}
+    for name, call in calls.items():
+        try:
+            call()
+        except _Accepted:
+            outcomes[name] = "accepted"
+        except ValueError as exc:
+            outcomes[name] = str(exc)
+    refused = model != "condensed" and condensation == "cubic"
+    expected = (f"parameter 'condensation' applies to model='condensed' only "
+                f"(got condensation='cubic' with model={model!r})") if refused else "accepted"
+    assert outcomes == {"simulate": expected, "monte_carlo": expected}

@@ -88,3 +88,33 @@ def test_blocks_are_whole_chunks_of_bounded_size_covering_every_point_once(monke
 def test_integers_decoded_to_float_get_their_fill_back():
     out = cdofile._encoded(xr.DataArray([1.0, np.nan]), np.dtype("i1"), -1)
     assert out.dtype == np.int8 and out.tolist() == [1, -1]
+
+
+def test_variables_on_a_dimension_of_length_0_are_left_out_and_named(tmp_path):
+    """No escalated point: ``escalation`` has length 0, which netCDF stores as unlimited; CDO refuses a variable
+    on a second unlimited dimension ("Unsupported grid").  The CDO form leaves out those variables (they hold no
+    value) and their dimension, names them in ``left_out``, and CDO reads the rest without a warning."""
+    import shutil
+    import subprocess
+
+    import netCDF4
+
+    from screening.workflow.reader import example_result
+
+    result = example_result().assign(
+        var_theta=(("eps", "t"), np.arange(6.0).reshape(2, 3) * 1e-6, {"units": "rad2"}),
+        esc_grid_index=("escalation", np.zeros(0, dtype=np.int32), {"units": "1"}),
+        esc_peak_abs_theta=(("escalation", "esc_sample"), np.zeros((0, 4)), {"units": "rad"}))
+    source, dst = tmp_path / "result.nc", tmp_path / "cdo.nc"
+    result.to_netcdf(source)
+    with cdofile.open_source(source) as ds:
+        cdofile.export_cdo(ds, dst, complevel=1, history="export")
+    with netCDF4.Dataset(dst) as nc:
+        assert [d for d, dim in nc.dimensions.items() if dim.isunlimited()] == ["t"]
+        assert "escalation" not in nc.dimensions and not [v for v in nc.variables if v.startswith("esc_")]
+        assert nc.left_out == "esc_grid_index, esc_peak_abs_theta: no values (a dimension of length 0)"
+        np.testing.assert_array_equal(nc["var_theta"][:], result["var_theta"].values.T)
+    if shutil.which("cdo"):
+        proc = subprocess.run(["cdo", "-s", "sinfon", str(dst)], capture_output=True, text=True, timeout=60)
+        assert proc.returncode == 0 and "Warning" not in proc.stderr, proc.stderr
+        assert "var_theta" in proc.stdout

@@ -9,7 +9,7 @@ from helpers import GRID
 
 from screening import condensation
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
-from screening.status import PointStatus, SampleState
+from screening.status import PointStatus, SampleState, Trust
 from screening.workflow import execution
 from screening.workflow._submit import failed_spot
 from screening.workflow.execution import failed_result, sample_state, solve_batch
@@ -98,3 +98,34 @@ def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads
     unknown = execution.spot_arrays(ds)["full_contact"]
     assert np.isnan(unknown)
     assert esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4, full_contact=unknown) == without
+
+
+def test_a_gaussian_probability_that_underflows_gets_a_standard_error_that_reaches_the_trust_limit():
+    """A trusted point far below toppling: the up-crossing probability underflows to 0 at both ends of the trust
+    band, which made its standard error 0 (certainty).  The trust rule vouches for points whose calibration Monte
+    Carlo overturned up to OVERTURN_LIMIT of its samples, so ``p + 2 se`` reaches that limit; a large probability
+    keeps the band's quarter (computed here from the up-crossing at the band's two ends)."""
+    from screening.analysis.fragility import linearized_exceedance
+    from screening.analysis.trust import OVERTURN_LIMIT
+    from screening.workflow.study import EXAMPLE_STUDY
+
+    study = parse_study(EXAMPLE_STUDY)
+    block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
+    nt = study.times.size
+    var = np.array([1e-7, 4e-3])[:, None]                      # sigma_theta: 3e-4 and 0.063 rad; atan(b/h) = 0.165
+    res = {"status": np.zeros(2, np.int8), "var_theta": np.repeat(var, nt, 1),
+           "var_theta_dot": np.repeat(100.0 * var, nt, 1), "cov_theta_theta_dot": np.zeros((2, nt)),
+           "c_eq": np.full((2, nt), 5.0), "k_eq": np.full((2, nt), 1000.0)}
+    slender = float(block.slenderness)
+    out = {"status": np.zeros(2, np.int8), "slenderness": np.full(2, slender),
+           "sl_trust": np.full(2, int(Trust.trusted), np.int8),
+           "sl_error_low": np.full(2, -0.1), "sl_error_high": np.full(2, 0.1)}
+    p = execution.batch_probabilities(res, block, foundation, excitation, out, study.times)
+    assert p["p_overturn"][0] == 0.0                                                 # underflowed
+    assert p["p_overturn_se"][0] > 0 and p["p_overturn"][0] + 2 * p["p_overturn_se"][0] == pytest.approx(OVERTURN_LIMIT)
+    ends = [linearized_exceedance(study.times, res["var_theta"][1:] / (1 + e), res["var_theta_dot"][1:] / (1 + e),
+                                  res["cov_theta_theta_dot"][1:], res["c_eq"][1:], res["k_eq"][1:],
+                                  np.atleast_1d(block.m_sdof), np.zeros(1, np.int8), np.array([slender]))[0]
+            for e in (0.1, -0.1)]
+    assert p["p_overturn"][1] > 0.1
+    assert p["p_overturn_se"][1] == pytest.approx((ends[1] - ends[0]) / 4, rel=1e-12)
