@@ -382,7 +382,7 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
             labels = {n: str(one[n].values) for n in ("excitation", "envelope") if n in one.coords}
             parts.append(intensity_measures(one.drop_vars(list(labels)).assign_attrs(**{**ds.attrs, **labels}),
                                             period, damping, cutoff).expand_dims("case"))
-        out = xr.concat(parts, "case", combine_attrs="override")
+        out = xr.concat(parts, "case", coords="different", compat="equals", join="outer", combine_attrs="override")
         return out.assign_coords(case=ds["case"])
     from screening import excitations
 
