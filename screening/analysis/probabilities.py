@@ -333,7 +333,7 @@ HEAVY_UPLIFT = P_EDGES[-2]
 NEAR_TOPPLING_STATUS = (PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness)
 
 
-def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplift):
+def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplift, variance_vouched=None):
     """Which quantity answers each point: the peak variance or, near toppling, the probabilities.
 
     Parameters
@@ -348,6 +348,9 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
         ``inf`` at an open end).
     peak_p_uplift : array_like
         The linearization's peak probability of uplift [1].
+    variance_vouched : array_like of bool, optional
+        True where the point's best peak variance is vouched for (``best_method`` not ``unreliable``);
+        default: everywhere.
 
     Returns
     -------
@@ -356,7 +359,8 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
         ``probabilities_stopped`` where the linearization stopped near toppling
         (:data:`NEAR_TOPPLING_STATUS`); ``probabilities_overturning`` where ``p_overturn`` is vouched for and
         ``p_overturn - 2 se >= TOPPLING_FRACTION``; ``probabilities_open_interval`` at status ok in heavy
-        uplift (``peak_p_uplift >= HEAVY_UPLIFT``) with the interval open; ``variance`` elsewhere (also where
+        uplift (``peak_p_uplift >= HEAVY_UPLIFT``) with the interval open or the variance not vouched for
+        (its interval too wide); ``variance`` elsewhere (also where
         the task failed or the solver gave up for another reason: nothing there says the block topples).
 
     Notes
@@ -376,7 +380,7 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
     >>> import numpy as np
     >>> answer_quantities([1, 0, 0, 0, 0], [np.nan, 0.3, 0.06, 0.2, 0.01], [np.nan, 0.02, 0.02, np.nan, 0.01],
     ...                   [np.nan, -0.1, -0.1, -0.6, -0.1], [np.nan, 0.1, 0.1, np.inf, 0.1],
-    ...                   [0.99, 0.98, 0.9, 0.97, 0.2]).tolist()
+    ...                   [0.99, 0.98, 0.9, 0.97, 0.2], [False, True, True, False, True]).tolist()
     [1, 2, 0, 3, 0]
     """
     status = np.asarray(status).reshape(-1)
@@ -385,7 +389,10 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
     uplift = np.asarray(peak_p_uplift, dtype=float).reshape(-1)
     out = np.full(status.shape, int(AnswerQuantity.variance), dtype=np.int8)
     with np.errstate(invalid="ignore"):
-        open_interval = (status == int(PointStatus.ok)) & (uplift >= HEAVY_UPLIFT) & ((low <= -1) | np.isposinf(high))
+        unvouched = (np.zeros(status.shape, dtype=bool) if variance_vouched is None
+                     else ~np.asarray(variance_vouched, dtype=bool).reshape(-1))
+        open_interval = (status == int(PointStatus.ok)) & (uplift >= HEAVY_UPLIFT) & (
+            (low <= -1) | np.isposinf(high) | unvouched)
         material = np.isfinite(se) & (p - 2.0 * se >= TOPPLING_FRACTION)
     out[open_interval] = int(AnswerQuantity.probabilities_open_interval)
     out[material] = int(AnswerQuantity.probabilities_overturning)

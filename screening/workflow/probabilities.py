@@ -419,15 +419,15 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     usable &= source < MONTE_CARLO_SOURCE_BASE
     best_p, best_se = p[:, 0].copy(), se[:, 0].copy()
     best_p[usable], best_se[usable] = surface_p[usable, 0], surface_se[usable, 0]
-    answer = answer_quantities(res.status, best_p, best_se, low, high, res.peak_p_uplift)
-    take = usable & (answer != AnswerQuantity.variance)
-    p[take], se[take] = surface_p[take], surface_se[take]
-    source[take] = ProbabilitySource.study_fragility_surface
     if best is not None:
         variance_vouched = best != BestMethod.unreliable
     else:
         variance_vouched = ((res.status == PointStatus.ok) & (res.sl_trust == Trust.trusted) & np.isfinite(low)
                             & np.isfinite(high))
+    answer = answer_quantities(res.status, best_p, best_se, low, high, res.peak_p_uplift, variance_vouched)
+    take = usable & (answer != AnswerQuantity.variance)
+    p[take], se[take] = surface_p[take], surface_se[take]
+    source[take] = ProbabilitySource.study_fragility_surface
 
     values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if thresholds:
@@ -473,7 +473,7 @@ def probabilities_line(counts):
 #: Short names of the answer codes in :func:`answer_line`.
 _ANSWER_TEXT = {AnswerQuantity.probabilities_stopped: "linearization stopped",
                 AnswerQuantity.probabilities_overturning: "p_overturn material",
-                AnswerQuantity.probabilities_open_interval: "open interval in heavy uplift"}
+                AnswerQuantity.probabilities_open_interval: "heavy uplift without a vouched-for variance"}
 
 
 def answer_line(answer, reliable, variance_vouched):
@@ -504,7 +504,7 @@ def answer_line(answer, reliable, variance_vouched):
     Examples
     --------
     >>> answer_line([0, 0, 1, 3], [True, False, True, False], [True, False, False, False])
-    'answers: variance 2, probabilities 2 (linearization stopped 1, open interval in heavy uplift 1); unreliable: 3 variance, 2 without any reliable answer'
+    'answers: variance 2, probabilities 2 (linearization stopped 1, heavy uplift without a vouched-for variance 1); unreliable: 3 variance, 2 without any reliable answer'
     """
     answer = np.asarray(answer).reshape(-1)
     by_variance = int(np.sum(answer == AnswerQuantity.variance))

@@ -79,6 +79,10 @@ def test_which_quantity_answers_a_point():
                             A.variance, A.probabilities_open_interval, A.probabilities_open_interval, A.variance,
                             A.variance, A.variance]
     vouched = np.array([False, False, True, True, False, False, True, False, False])
+    # in heavy uplift a variance nothing vouches for (a finite but too wide interval) is no answer either
+    heavy = answer_quantities([S.ok, S.ok, S.ok], [0.01] * 3, [0.01] * 3, [-0.5] * 3, [1.8] * 3,
+                              [0.95, 0.95, 0.5], [False, True, False])
+    assert heavy.tolist() == [A.probabilities_open_interval, A.variance, A.variance]
     source = np.array([3, 0, 2, 2, 3, 0, 1, 0, 0])
     assert reliable_answer(got, vouched, source).tolist() == [True, False, True, True, True, False, True, False,
                                                               False]
