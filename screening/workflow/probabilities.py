@@ -241,6 +241,7 @@ def surface_estimates(columns, case, counts, n_used):
     for c in np.unique(case):
         rows = np.flatnonzero(case == c)
         z, names = fs.surface_inputs({name: values[rows] for name, values in columns.items()})
+        z = z if z.shape[0] == rows.size else np.zeros((rows.size, 0))          # no swept input at all
         position = {int(r): j for j, r in enumerate(rows)}
         mc = np.array([position[f] for f in sorted(counts) if f in position], dtype=int)
         flats = [f for f in sorted(counts) if f in position]

@@ -128,3 +128,8 @@ def test_surfaces_are_fitted_per_case_and_only_where_every_level_is_vouched_for(
     both = {i: np.array([c[0], 1000 - (i in (0, 2))]) for i, c in counts.items()}
     _, _, usable2, notes2 = surface_estimates({"S0": s0}, case, both, {i: 1000 for i in mc})
     assert not usable2.any() and "p_exceed[0]: no fragility surface" in notes2[1]
+
+
+def test_a_study_without_swept_inputs_gets_no_surface():
+    p, se, usable, notes = surface_estimates({}, np.zeros(1, dtype=int), {0: np.array([3.0])}, {0: 10})
+    assert not usable.any() and np.isnan(p).all() and "no fragility surface" in notes[0]
