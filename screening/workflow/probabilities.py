@@ -436,8 +436,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     res.write_probabilities(values, source, answer)
     line = answer_line(answer, reliable_answer(answer, variance_vouched, source), variance_vouched)
     res.set_attrs(answer_note=line, fragility_surface_note="; ".join(notes))
-    for text in [line] + [f"fragility surface: {note}" for note in notes]:
-        if log is not None:
+    if log is not None:
+        for text in [line] + [f"fragility surface: {note}" for note in notes]:
             log(text)
     names = {code: name for name, code in source_codes().items()}
     codes, counts = np.unique(source, return_counts=True)
