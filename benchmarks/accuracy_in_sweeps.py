@@ -8,7 +8,7 @@ interrupted run resumes)::
         benchmarks/accuracy_in_sweeps.py [--families NAME ...] [--budget 600] [--target 0.15] [--grid 12] \
         [--work outputs/accuracy_in_sweeps] [--force] [--table-only]
     ... benchmarks/accuracy_in_sweeps.py --atlas screening/data/error_atlas.nc [--condensation paper] \
-        [--sweep-points 10000] [--budget 600] [--target 0.15]
+        [--sweep-points 10000] [--budget 600] [--target 0.15] [--holdout-points 20] [--holdout-samples 1000]
 
 ``--atlas FILE``: the error atlas's held-out points instead of the calibration families.  Each atlas point
 is predicted by the error model fitted *without its family* (grouped cross-validation,
@@ -20,7 +20,13 @@ the atlas's 500-sample reference.  Prints the fraction ``unreliable``, the fract
 Monte Carlo (the atlas interval wider than the target), and the hold rate (within the target or within 2
 reported SE; and with the reference's own SE).  ``--sweep-points N`` (> 0) also runs the ``N``-point sweep of
 ``benchmarks/accuracy_escalation.py`` (the eps x S0 grid of ``bench_sweep.py``) with ``[accuracy]`` and
-``--budget`` and prints its best-estimate methods and unreliable fraction.
+``--budget`` and prints its best-estimate methods and unreliable fraction, the probabilities' sources, which
+quantity answers the points (``answer_quantity``: the variance, or near toppling the probabilities) with the
+unreliable counts (variance; without any reliable answer), and the study's fragility surface; then, as
+held-out truth for that surface, coupled Monte Carlo (``--holdout-samples``, the escalation's task and
+settings, the study's seed + 1) at ``--holdout-points`` random points whose ``p_overturn`` came from the surface,
+and the share within 2 combined standard errors (goal >= 90 %).  The sweep stores the histories the corrected
+probabilities need (``c_eq`` among them: :data:`screening.workflow.probabilities.CORRECTION_HISTORIES`).
 
 ``benchmarks/accuracy_escalation.py`` corrects each calibration point from the *other* calibration points,
 which belong to other blocks, beds and excitations: a stress test of the correction across families.  A
@@ -334,20 +340,29 @@ def atlas_summary(r, target, label):
     return lines
 
 
+#: ``[output]`` of the 10,000-point sweep: the histories the trust rule reads and those the corrected
+#: probabilities need (``CORRECTION_HISTORIES``: without ``c_eq`` every corrected point's p_source is unreliable).
+SWEEP_OUTPUT = ("[output]\nvariables = [" + ", ".join(f'"{name}"' for name in (
+    "var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")) + "]\n")
+
+
 def sweep_unreliable(points, budget, target, work, workers=2):
     """Printed lines of the ``points``-point sweep of ``accuracy_escalation.py`` (the eps x S0 grid of
-    ``bench_sweep.py``) run with ``[accuracy] target, budget_s``."""
+    ``bench_sweep.py``) run with ``[accuracy] target, budget_s``; the study and its result path."""
     from bench_sweep import STUDY
 
+    from screening.workflow.probabilities import CORRECTION_HISTORIES
     from screening.workflow.study import parse_study
     from screening.workflow.sweep import run_sweep
 
+    assert all(f'"{name}"' in SWEEP_OUTPUT for name in CORRECTION_HISTORIES)
     n = max(int(round(np.sqrt(points))), 1)
-    study = parse_study(STUDY.format(n=n, output=OUTPUT) + f"\n[accuracy]\ntarget = {target}\nbudget_s = {budget}\n",
-                        name="atlas_sweep")
+    study = parse_study(STUDY.format(n=n, output=SWEEP_OUTPUT) + f"\n[accuracy]\ntarget = {target}\n"
+                        f"budget_s = {budget}\n", name="atlas_sweep")
     work.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    report = run_sweep(study, work / "atlas_sweep.nc", workers=workers, force=True, progress=False,
+    out = work / "atlas_sweep.nc"
+    report = run_sweep(study, out, workers=workers, force=True, progress=False,
                        log=lambda m: print("   ", m, file=sys.stderr))
     wall = time.perf_counter() - start
     acc = report.accuracy
@@ -355,7 +370,89 @@ def sweep_unreliable(points, budget, target, work, workers=2):
     return [f"{total}-point sweep, [accuracy] target {target}, budget_s {budget:g}: {wall:.0f} s wall, "
             f"{acc['n_candidates']} points need Monte Carlo ({acc['n_candidates'] / total:.1%}), Monte Carlo at "
             f"{acc['n_escalated']} ({acc['cost_s']:.0f} CPU s by the cost model, {acc['cpu_s']:.0f} measured)",
-            f"  unreliable: {acc['n_unreliable']} ({acc['n_unreliable'] / total:.1%}); best estimates: {acc['methods']}"]
+            f"  unreliable: {acc['n_unreliable']} ({acc['n_unreliable'] / total:.1%}); best estimates: {acc['methods']}",
+            f"  probabilities by source: {report.probabilities}"], study, out
+
+
+def answer_lines(path):
+    """Printed lines: which quantity answers the sweep's points, the unreliable counts (variance; any answer)
+    and the study's fragility surface."""
+    import xarray as xr
+
+    from screening.analysis.probabilities import reliable_answer
+    from screening.status import AnswerQuantity, ProbabilitySource
+
+    with xr.open_dataset(path) as ds:
+        answer = ds["answer_quantity"].values.reshape(-1)
+        source = ds["p_source"].values.reshape(-1)
+        variance_ok = ds["best_method"].values.reshape(-1) != BestMethod.unreliable
+        note, surface_note = ds.attrs["answer_note"], ds.attrs.get("fragility_surface_note", "")
+    total = answer.size
+    reliable = reliable_answer(answer, variance_ok, source)
+    probs = answer != AnswerQuantity.variance
+    lines = [f"  {note}",
+             f"  unreliable: {np.sum(~variance_ok)} variance ({np.mean(~variance_ok):.1%}), {np.sum(~reliable)} "
+             f"without any reliable answer ({np.mean(~reliable):.1%}) of {total}",
+             f"  answered by the probabilities: {probs.sum()}, of which p_source "
+             + ", ".join(f"{s.name} {np.sum(probs & (source == s))}" for s in ProbabilitySource
+                         if np.any(probs & (source == s)))
+             + f", Monte Carlo {np.sum(probs & (source >= 10))}",
+             f"  fragility surface: {surface_note}"]
+    return lines
+
+
+def surface_holdout(study, path, points, samples, seed=2026, workers=2):
+    """Held-out truth for the study's fragility surface: coupled Monte Carlo (``samples`` samples, the
+    escalation's task and settings, the study's seed + 1 so that the samples are not those of the escalated
+    points) at ``points`` random points whose p_overturn came from the surface.  Printed lines."""
+    import xarray as xr
+    from distributed import Client, LocalCluster
+
+    from screening.solvers.estimates import binomial_estimate
+    from screening.status import ProbabilitySource, SampleState
+    from screening.workflow.config import build_models
+    from screening.workflow.execution import escalation_task
+    from screening.workflow.grid import point_values
+
+    with xr.open_dataset(path) as ds:
+        source = ds["p_source"].values.reshape(-1)
+        p_s = ds["p_overturn"].values.reshape(-1)
+        se_s = ds["p_overturn_se"].values.reshape(-1)
+    pool = np.flatnonzero(source == ProbabilitySource.study_fragility_surface)
+    if pool.size == 0:
+        return ["  held-out check of the fragility surface: no point took its p_overturn from the surface"]
+    pick = np.sort(np.random.default_rng(seed).choice(pool, size=min(points, pool.size), replace=False))
+    start = time.perf_counter()
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        futures = []
+        for flat in pick:
+            case, values = point_values(study, tuple(int(i) for i in np.unravel_index(int(flat), study.shape)))
+            futures.append(client.submit(escalation_task, *build_models(study.cases[case], values, study.t_end),
+                                         study.cases[case].condensation_model, int(samples), "coupled", study.t_end,
+                                         study.dt, study.accuracy.seed + 1, pure=False))
+        runs = client.gather(futures)
+    wall = time.perf_counter() - start
+    cpu = sum(float(r["cpu_time"]) for r in runs)
+    lines = [f"  held-out check of the fragility surface: coupled Monte Carlo ({samples} samples, seed "
+             f"{study.accuracy.seed + 1}) at {pick.size} random points of the {pool.size} whose p_overturn came "
+             f"from the surface ({cpu:.0f} CPU s, {wall:.0f} s wall on {workers} workers)",
+             f"    {'eps':>9s} {'S0':>9s} {'p surface':>16s} {'p Monte Carlo':>16s} {'z':>5s}"]
+    ok = 0
+    names = list(study.dims)
+    for flat, r in zip(pick, runs):
+        state = np.asarray(r["sample_state"])
+        valid = (state == SampleState.standing) | (state == SampleState.overturned)
+        p_mc, se_mc = binomial_estimate(int(np.sum(state == SampleState.overturned)), int(valid.sum()))
+        z = abs(p_s[flat] - p_mc) / np.hypot(se_s[flat], se_mc)
+        ok += bool(z <= 2)
+        index = np.unravel_index(int(flat), study.shape)
+        coords = [float(study.sweeps[d][i]) for d, i in zip(names, index)]
+        lines.append(f"    {coords[0]:9.3g} {coords[-1]:9.3g} {p_s[flat]:8.3f} +- {se_s[flat]:5.3f} "
+                     f"{float(p_mc):8.3f} +- {float(se_mc):5.3f} {z:5.2f}")
+    lines.append(f"  |p_surface - p_MC| <= 2 sqrt(se_surface^2 + se_MC^2) at {ok} of {pick.size} held-out points "
+                 f"({ok / pick.size:.0%}; goal >= 90 %)")
+    return lines
 
 
 def main(argv=None):
@@ -371,11 +468,19 @@ def main(argv=None):
     ap.add_argument("--atlas", type=Path, default=None, help="held-out points of this error atlas instead")
     ap.add_argument("--condensation", default="paper", help="with --atlas: the condensation (default paper)")
     ap.add_argument("--sweep-points", type=int, default=0, help="with --atlas: also run a sweep of this many points")
+    ap.add_argument("--holdout-points", type=int, default=20,
+                    help="with --sweep-points: coupled Monte Carlo at this many points whose p_overturn came from the "
+                         "study's fragility surface, as held-out truth (0: none)")
+    ap.add_argument("--holdout-samples", type=int, default=1000, help="samples of each held-out Monte Carlo run")
     args = ap.parse_args(argv)
     if not 0 < args.target <= 1:
         ap.error(f"--target must be in (0, 1] (got {args.target})")
     if not args.budget > 0:
         ap.error(f"--budget must be > 0 [s] (got {args.budget})")
+    if args.holdout_points < 0:
+        ap.error(f"--holdout-points must be >= 0 (got {args.holdout_points})")
+    if not 1 <= args.holdout_samples <= 4000:
+        ap.error(f"--holdout-samples must be in [1, 4000] (got {args.holdout_samples})")
     if args.grid < 2:
         ap.error(f"--grid must be >= 2 (got {args.grid})")
     if args.atlas is not None:
@@ -384,7 +489,12 @@ def main(argv=None):
         print("\n".join(atlas_summary(atlas_rows(args.atlas, args.condensation, args.target), args.target,
                                       args.condensation)))
         if args.sweep_points > 0:
-            print("\n".join(sweep_unreliable(args.sweep_points, args.budget, args.target, args.work)))
+            start = time.perf_counter()
+            lines, study, out = sweep_unreliable(args.sweep_points, args.budget, args.target, args.work)
+            print("\n".join(lines + answer_lines(out)), flush=True)
+            if args.holdout_points > 0:
+                print("\n".join(surface_holdout(study, out, args.holdout_points, args.holdout_samples)))
+            print(f"  whole sweep stage: {time.perf_counter() - start:.0f} s wall")
         return 0
     families = calibration_families()
     chosen = args.families or list(families)

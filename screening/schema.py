@@ -13,8 +13,9 @@ import numpy as np
 
 from screening import excitations, laws
 from screening.solvers.outputs import OUTPUTS, of_stage
-from screening.status import (BestMethod, ContactRegime, EscalationEstimator, EscalationModel, FitFlag, PointStatus,
-                              SampleState, SpotStatus, TargetMet, flag_attributes, probability_sources)
+from screening.status import (AnswerQuantity, BestMethod, ContactRegime, EscalationEstimator, EscalationModel,
+                              FitFlag, PointStatus, SampleState, SpotStatus, TargetMet, flag_attributes,
+                              probability_sources)
 
 __all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
            "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
@@ -199,7 +200,13 @@ FRAGILITY = {
 #: starts at all (every point; :func:`screening.analysis.intensity.rocking_start_probability`).
 #: ``p_exceed`` is found in :data:`FRAGILITY` first, with the same declared attributes; ``p_source`` is
 #: declared by :func:`probability_source_attributes`.
-PROBABILITIES = _declared(*(o.name for o in of_stage("probabilities", "rocking")))
+PROBABILITIES = {
+    **_declared(*(o.name for o in of_stage("probabilities", "rocking"))),
+    "answer_quantity": {**flag_attributes(AnswerQuantity, "which quantity answers the point: its peak variance, or "
+                                                          "near toppling p_overturn and p_exceed (with p_source); "
+                                                          "never read a variance where the probabilities answer"),
+                        "units": "1"},
+}
 
 
 def probability_source_attributes():

@@ -4,7 +4,7 @@ The code spaces are declared once, as data, in ``screening/data/status_codes.tom
 name, integer code and meaning.  This module turns each table into an :class:`enum.IntEnum` at
 import (``PointStatus``, ``SampleStatus``, ``DivergenceReason``, ``SampleState``, ``SpotStatus``,
 ``Trust``, ``BestMethod``, ``EscalationModel``, ``EscalationEstimator``, ``TargetMet``, ``ContactRegime``, ``FitFlag``,
-``ProbabilitySource``); every member
+``ProbabilitySource``, ``AnswerQuantity``); every member
 carries its ``meaning`` (plain language, for messages and documentation).  Compiled kernels read
 the members as integer constants (numba supports ``IntEnum``); files store the integer with CF
 ``flag_values`` / ``flag_meanings`` made by :func:`flag_attributes`.  Nothing else in the package
@@ -22,7 +22,7 @@ import numpy as np
 
 __all__ = ["CODE_SPACES", "code_space", "PointStatus", "SampleStatus", "DivergenceReason", "SampleState",
            "SpotStatus", "Trust", "BestMethod", "EscalationModel", "EscalationEstimator", "TargetMet", "ContactRegime", "FitFlag",
-           "ProbabilitySource", "MONTE_CARLO_SOURCE_BASE", "DIVERGENCE_TEXT", "probability_sources",
+           "ProbabilitySource", "AnswerQuantity", "MONTE_CARLO_SOURCE_BASE", "DIVERGENCE_TEXT", "probability_sources",
            "flag_attributes"]
 
 try:
@@ -91,6 +91,7 @@ TargetMet = code_space("TargetMet")
 ContactRegime = code_space("ContactRegime")
 FitFlag = code_space("FitFlag")
 ProbabilitySource = code_space("ProbabilitySource")
+AnswerQuantity = code_space("AnswerQuantity")
 
 #: Code of the first Monte Carlo model of :data:`ProbabilitySource` (the others follow in their order).
 MONTE_CARLO_SOURCE_BASE = 10
@@ -123,7 +124,7 @@ def probability_sources(models):
     --------
     >>> probability_sources(["coupled", "condensed"])            # doctest: +NORMALIZE_WHITESPACE
     {'unreliable': 0, 'linearization_gaussian': 1, 'corrected_linearization_gaussian': 2,
-     'monte_carlo_coupled': 10, 'monte_carlo_condensed': 11}
+     'study_fragility_surface': 3, 'monte_carlo_coupled': 10, 'monte_carlo_condensed': 11}
     """
     return {**{m.name: int(m) for m in ProbabilitySource},
             **{f"monte_carlo_{model}": MONTE_CARLO_SOURCE_BASE + i for i, model in enumerate(models)}}

@@ -12,7 +12,8 @@ functions behind them:
 * :func:`source_codes` / :func:`monte_carlo_source` -- the codes of the provenance variable
   ``p_source`` (:data:`screening.status.ProbabilitySource`, with one ``monte_carlo_<model>`` code per
   model :func:`screening.monte_carlo` knows);
-* :func:`choose_sources` -- which estimate each grid point of a sweep carries.
+* :func:`choose_sources` -- which estimate each grid point of a sweep carries;
+* :func:`answer_quantities` -- whether the variance or, near toppling, the probabilities answer a point.
 
 Outputs and their meaning: ``docs/outputs_probabilities.md``.
 """
@@ -22,11 +23,14 @@ from __future__ import annotations
 import numpy as np
 
 from screening.solvers.estimates import Z, binomial_estimate, sample_probabilities
-from screening.status import BestMethod, ProbabilitySource, SampleState, Trust, probability_sources
+from screening.analysis.trust import P_EDGES
+from screening.status import (AnswerQuantity, BestMethod, PointStatus, ProbabilitySource, SampleState, Trust,
+                              probability_sources)
 
 __all__ = ["uplift_acceleration", "source_codes", "monte_carlo_source", "choose_sources",
            "overturning_probability", "TOPPLING_FRACTION", "spot_check_probabilities", "probability_text", "Z",
-           "binomial_estimate", "sample_probabilities"]
+           "binomial_estimate", "sample_probabilities", "HEAVY_UPLIFT", "NEAR_TOPPLING_STATUS", "answer_quantities",
+           "reliable_answer"]
 
 
 def uplift_acceleration(block, foundation, condensation):
@@ -321,3 +325,110 @@ def probability_text(p, se):
     ('0.432 +- 0.051', 'n/a')
     """
     return f"{p:.3g} +- {se:.2g}" if np.isfinite(p) else "n/a"
+
+
+#: Peak probability of uplift from which a point is in heavy uplift (the last bin of the trust cells).
+HEAVY_UPLIFT = P_EDGES[-2]
+#: Solver statuses of a linearization that stopped because the block is near toppling.
+NEAR_TOPPLING_STATUS = (PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness)
+
+
+def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplift, variance_vouched=None):
+    """Which quantity answers each point: the peak variance or, near toppling, the probabilities.
+
+    Parameters
+    ----------
+    status : array_like of int
+        :class:`~screening.status.PointStatus` codes.
+    p_overturn, p_overturn_se : array_like
+        The point's best probability of overturning and its standard error [1] (NaN standard error where
+        nothing vouches for it).
+    low, high : array_like
+        The error atlas interval of the linearization's peak variance, ``SL / MCS - 1`` [1] (``-1`` or
+        ``inf`` at an open end).
+    peak_p_uplift : array_like
+        The linearization's peak probability of uplift [1].
+    variance_vouched : array_like of bool, optional
+        True where the point's best peak variance is vouched for (``best_method`` not ``unreliable``);
+        default: everywhere.
+
+    Returns
+    -------
+    numpy.ndarray of int8
+        :class:`~screening.status.AnswerQuantity` codes [-], the first rule that holds:
+        ``probabilities_stopped`` where the linearization stopped near toppling
+        (:data:`NEAR_TOPPLING_STATUS`); ``probabilities_overturning`` where ``p_overturn`` is vouched for and
+        ``p_overturn - 2 se >= TOPPLING_FRACTION``; ``probabilities_open_interval`` at status ok in heavy
+        uplift (``peak_p_uplift >= HEAVY_UPLIFT``) with the interval open or the variance not vouched for
+        (its interval too wide); ``variance`` elsewhere (also where
+        the task failed or the solver gave up for another reason: nothing there says the block topples).
+
+    Notes
+    -----
+    A variance over the surviving samples changes meaning once a material share of the samples overturns:
+    the survivors are the samples that rocked least.  :data:`TOPPLING_FRACTION` (5 %) is the share from
+    which a Monte Carlo point is already called near toppling; two standard errors below it keep a point
+    whose overturning is not established with its variance.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> answer_quantities([1, 0, 0, 0, 0], [np.nan, 0.3, 0.06, 0.2, 0.01], [np.nan, 0.02, 0.02, np.nan, 0.01],
+    ...                   [np.nan, -0.1, -0.1, -0.6, -0.1], [np.nan, 0.1, 0.1, np.inf, 0.1],
+    ...                   [0.99, 0.98, 0.9, 0.97, 0.2], [False, True, True, False, True]).tolist()
+    [1, 2, 0, 3, 0]
+    """
+    status = np.asarray(status).reshape(-1)
+    p, se = np.asarray(p_overturn, dtype=float).reshape(-1), np.asarray(p_overturn_se, dtype=float).reshape(-1)
+    low, high = np.asarray(low, dtype=float).reshape(-1), np.asarray(high, dtype=float).reshape(-1)
+    uplift = np.asarray(peak_p_uplift, dtype=float).reshape(-1)
+    out = np.full(status.shape, int(AnswerQuantity.variance), dtype=np.int8)
+    with np.errstate(invalid="ignore"):
+        unvouched = (np.zeros(status.shape, dtype=bool) if variance_vouched is None
+                     else ~np.asarray(variance_vouched, dtype=bool).reshape(-1))
+        open_interval = (status == int(PointStatus.ok)) & (uplift >= HEAVY_UPLIFT) & (
+            (low <= -1) | np.isposinf(high) | unvouched)
+        material = np.isfinite(se) & (p - 2.0 * se >= TOPPLING_FRACTION)
+    out[open_interval] = int(AnswerQuantity.probabilities_open_interval)
+    out[material] = int(AnswerQuantity.probabilities_overturning)
+    out[np.isin(status, [int(s) for s in NEAR_TOPPLING_STATUS])] = int(AnswerQuantity.probabilities_stopped)
+    return out
+
+
+def reliable_answer(answer, variance_vouched, source):
+    """Whether a point's answer is vouched for: its variance where the variance answers it, its probabilities
+    where they do.
+
+    Parameters
+    ----------
+    answer : array_like of int
+        :class:`~screening.status.AnswerQuantity` codes (:func:`answer_quantities`).
+    variance_vouched : array_like of bool
+        True where the point's best peak variance is vouched for (``best_method`` not ``unreliable``).
+    source : array_like of int
+        ``p_source`` codes (:func:`source_codes`).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True where the quantity that answers the point is vouched for.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
+
+    Examples
+    --------
+    >>> reliable_answer([0, 0, 1, 1], [True, False, False, False], [0, 2, 3, 0]).tolist()
+    [True, False, True, False]
+    """
+    answer = np.asarray(answer).reshape(-1)
+    by_variance = answer == int(AnswerQuantity.variance)
+    return np.where(by_variance, np.asarray(variance_vouched, dtype=bool).reshape(-1),
+                    np.asarray(source).reshape(-1) != int(ProbabilitySource.unreliable))

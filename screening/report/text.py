@@ -134,7 +134,8 @@ def probability_lines(ds):
     """Lines on the probabilities stored on the points of a result.
 
     Where the points' ``p_overturn`` and ``p_exceed`` come from (``p_source``), their ranges, the
-    points near toppling, and the range of ``p_rocking_start``.
+    points near toppling, which quantity answers the points (the ``answer_note`` attribute), and the range
+    of ``p_rocking_start``.
 
     Parameters
     ----------
@@ -176,6 +177,8 @@ def probability_lines(ds):
             lines.append(f"  p_overturn where vouched for: {_fmt(float(p[vouched].min()))} .. "
                          f"{_fmt(float(p[vouched].max()))}; {near} point(s) above {100 * TOPPLING_FRACTION:g} % "
                          "(near toppling: read the probabilities, not the variances over the survivors)")
+        if "answer_note" in ds.attrs:           # which quantity answers each point (answer_quantity)
+            lines.append(f"  {ds.attrs['answer_note']} (answer_quantity)")
     if "p_rocking_start" in ds.variables:
         p = np.asarray(ds["p_rocking_start"].values, dtype=float).reshape(-1)
         if np.isfinite(p).any():

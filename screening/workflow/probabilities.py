@@ -14,7 +14,14 @@ estimate of the best model that ran there, recorded in ``p_source``
 3. with ``[accuracy]``, where the correction reaches the point: the up-crossing of the moments rescaled
    to the corrected best estimates (:func:`screening.analysis.fragility.best_exceedance`; needs the
    histories in the result);
-4. elsewhere ``unreliable``: the linearization's number stays, its standard error is NaN.
+4. elsewhere ``unreliable``: the linearization's number stays, its standard error is NaN;
+5. near toppling (:func:`screening.analysis.probabilities.answer_quantities`: the linearization stopped,
+   ``p_overturn`` material, or the variance's interval open in heavy uplift), where no Monte Carlo ran:
+   the study's own fragility surface (``study_fragility_surface``, :mod:`screening.analysis.fragility_surface`)
+   where its leave-one-out check vouches for it and the point lies inside the hull of the Monte Carlo points.
+
+Every point also gets ``answer_quantity`` (:class:`~screening.status.AnswerQuantity`): whether its variance
+or its probabilities answer it.
 
 Outputs and their meaning: ``docs/outputs_probabilities.md``.
 """
@@ -23,11 +30,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.analysis.probabilities import choose_sources, monte_carlo_source, sample_probabilities
+from screening.analysis.probabilities import (answer_quantities, choose_sources, monte_carlo_source, reliable_answer,
+                                              sample_probabilities)
 from screening.solvers import mc_registry
-from screening.status import EscalationEstimator, EscalationModel, PointStatus, ProbabilitySource, SampleState
+from screening.status import (MONTE_CARLO_SOURCE_BASE, AnswerQuantity, BestMethod, EscalationEstimator,
+                              EscalationModel, PointStatus, ProbabilitySource, SampleState, Trust)
 
-__all__ = ["CORRECTION_HISTORIES", "levels_at", "finish_probabilities", "probabilities_line"]
+__all__ = ["CORRECTION_HISTORIES", "levels_at", "surface_estimates", "finish_probabilities", "probabilities_line",
+           "answer_line"]
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
@@ -155,13 +165,140 @@ def _corrected_estimates(study, res, points):
     return p, se
 
 
-def finish_probabilities(study, res, escalated=None, spot_runs=None):
+def _swept_columns(study):
+    """``({swept input: values at every point}, case index of every point)`` of ``study`` (flat, C order)."""
+    from screening.workflow.grid import Batch, batch_values
+
+    n, per_case = study.n_points, study.points_per_case
+    columns = {name: np.empty(n) for name in study.swept_dims}
+    for c in range(len(study.cases)):
+        whole = Batch(0, c, c * per_case, (c + 1) * per_case)
+        for name, values in batch_values(study, whole).items():
+            columns[name][whole.lo:whole.hi] = values
+    return columns, np.repeat(np.arange(len(study.cases)), per_case)
+
+
+def surface_estimates(columns, case, counts, n_used):
+    """The study's fragility surfaces at every point, for every level, where they are vouched for.
+
+    Parameters
+    ----------
+    columns : dict of str to numpy.ndarray
+        ``{swept input: values}`` at every point of the study (flat) [SI units].
+    case : numpy.ndarray of int
+        Case index of every point (a surface is fitted per case: the cases differ in more than the
+        swept inputs).
+    counts : dict of int to numpy.ndarray
+        ``{flat index: samples reaching each level}`` at the Monte Carlo points [-]: overturned, then
+        exceeding each ``[fragility]`` threshold (overturned samples exceed every level).
+    n_used : dict of int to int
+        ``{flat index: usable samples}`` (standing or overturned) at the same points [-].
+
+    Returns
+    -------
+    p, se : numpy.ndarray
+        ``(points, levels)`` [1]: the surface's probability and its standard error; NaN where it is not
+        vouched for.
+    usable : numpy.ndarray of bool
+        True where every level's surface is vouched for and the point lies inside the hull of the case's
+        Monte Carlo points.
+    notes : list of str
+        One line per case and level: the form, the Monte Carlo points, the leave-one-out share, the
+        dispersion, or why there is no surface.
+
+    Notes
+    -----
+    Per case: :func:`~screening.analysis.fragility_surface.surface_inputs` of the case's points,
+    :func:`~screening.analysis.fragility_surface.study_surface` on its Monte Carlo points for each level,
+    :func:`~screening.analysis.fragility_surface.predict_surface` and
+    :func:`~screening.analysis.fragility_surface.inside_hull` at its points.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``, section "Near toppling: the study's fragility surface".
+
+    Examples
+    --------
+    Nine Monte Carlo points on a probit curve in ``log S0`` (median 1e-3, beta 0.5), then the grid between:
+
+    >>> import numpy as np
+    >>> from scipy.special import ndtr
+    >>> S0 = np.geomspace(1e-4, 1e-2, 17)
+    >>> mc = range(0, 17, 2)
+    >>> counts = {i: np.array([round(1000 * ndtr(np.log(S0[i] / 1e-3) / 0.5))]) for i in mc}
+    >>> p, se, usable, notes = surface_estimates({"S0": S0}, np.zeros(17, int), counts, {i: 1000 for i in mc})
+    >>> bool(usable.all()), round(float(p[8, 0]), 2), bool(abs(p[3, 0] - ndtr(np.log(S0[3] / 1e-3) / 0.5)) < 0.02)
+    (True, 0.5, True)
+    """
+    from screening.analysis import fragility_surface as fs
+
+    n = case.size
+    levels = len(next(iter(counts.values()))) if counts else 1
+    p, se = np.full((n, levels), np.nan), np.full((n, levels), np.nan)
+    usable = np.zeros(n, dtype=bool)
+    notes = []
+    for c in np.unique(case):
+        rows = np.flatnonzero(case == c)
+        z, names = fs.surface_inputs({name: values[rows] for name, values in columns.items()})
+        z = z if z.shape[0] == rows.size else np.zeros((rows.size, 0))          # no swept input at all
+        position = {int(r): j for j, r in enumerate(rows)}
+        mc = np.array([position[f] for f in sorted(counts) if f in position], dtype=int)
+        flats = [f for f in sorted(counts) if f in position]
+        label = f"case {c}: " if np.unique(case).size > 1 else ""
+        if mc.size == 0:
+            notes.append(f"{label}no Monte Carlo point: no fragility surface")
+            continue
+        k = np.array([counts[f] for f in flats], dtype=float)
+        m = np.array([n_used[f] for f in flats], dtype=float)
+        fits = [fs.study_surface(z[mc], k[:, j], m) for j in range(levels)]
+        for j, fit in enumerate(fits):
+            level = "p_overturn" if j == 0 else f"p_exceed[{j - 1}]"
+            if fit is None:
+                notes.append(f"{label}{level}: no fragility surface ({mc.size} Monte Carlo points, "
+                             f"{int(np.sum((k[:, j] > 0) & (k[:, j] < m)))} with 0 < overturned < samples: too few "
+                             f"for a form)")
+            else:
+                notes.append(f"{label}{level}: {fit.form} probit surface in {', '.join(names)} on {mc.size} Monte "
+                             f"Carlo points, leave-one-out {fit.loo_share:.0%} of {fit.loo_in_play} within "
+                             f"{fs.LOO_Z:g} SE, dispersion {fit.dispersion:.2f}: "
+                             + ("vouched for" if fit.vouched else f"not vouched for ({fit.reason})"))
+        if not all(fit is not None and fit.vouched for fit in fits):
+            continue
+        inside = fs.inside_hull(z[mc], z)
+        for j, fit in enumerate(fits):
+            pj, sej = fs.predict_surface(fit, fs.surface_terms(z, fit.form))
+            p[rows[inside], j], se[rows[inside], j] = pj[inside], sej[inside]
+        usable[rows[inside]] = True
+    return p, se, usable, notes
+
+
+def _level_counts(runs, levels):
+    """``({flat: samples reaching each level}, {flat: usable samples})`` of the Monte Carlo runs (the run with
+    more usable samples where a point has two); ``levels``: the rotations [rad] of every point."""
+    counts, used = {}, {}
+    for flat, _, peaks, state, _ in runs:
+        state = np.asarray(state)
+        valid = (state == SampleState.standing) | (state == SampleState.overturned)
+        if valid.sum() <= used.get(flat, 0):
+            continue
+        over = (state == SampleState.overturned)[valid]
+        peak = np.asarray(peaks, dtype=float)[valid]
+        counts[flat] = np.array([over.sum()] + [np.sum((peak > a) | over) for a in levels[flat, 1:]], dtype=float)
+        used[flat] = int(valid.sum())
+    return counts, used
+
+
+def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     """Replace the workers' linearization estimates in a sweep's result by the best ones and write ``p_source``.
 
     The sweep's last stage, run on the client once the escalated points and the spot checks are in: at
     every point the probabilities of overturning (and of exceeding each ``[fragility]`` threshold) of the
     best model that ran there, in the order of this module's docstring (Monte Carlo, the trusted
-    linearization, the corrected linearization, else ``unreliable`` with a NaN standard error).
+    linearization, the corrected linearization, else ``unreliable`` with a NaN standard error), and near
+    toppling where no Monte Carlo ran the study's fragility surface where it is vouched for
+    (:func:`surface_estimates`); and at every point which quantity answers it (``answer_quantity``,
+    :func:`screening.analysis.probabilities.answer_quantities`).
 
     Parameters
     ----------
@@ -171,7 +308,9 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
         The open result (:class:`~screening.workflow.writer.ResultFile`): read for the workers'
         estimates ``p_overturn``, ``p_exceed`` [1] and their standard errors, the trust band
         ``sl_error_low``/``sl_error_high`` [1], ``theta_ul`` and ``slenderness`` [rad], ``status``,
-        ``sl_trust`` (and ``best_method`` with ``[accuracy]``); written through ``write_probabilities``.
+        ``sl_trust``, ``peak_p_uplift`` (and ``best_method`` with ``[accuracy]``); written through
+        ``write_probabilities`` (the probabilities, ``p_source`` and ``answer_quantity``) and ``set_attrs``
+        (``answer_note``, ``fragility_surface_note``).
     escalated : tuple, optional
         ``(flat indices, EscalationModel codes, runs)`` of the escalated points
         (:func:`screening.workflow.accuracy.escalate`), each run with ``peak_abs_theta`` [rad] and
@@ -180,6 +319,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
         ``(grid index tuples, results)`` of the Monte Carlo spot checks, each result with
         ``peak_abs_theta`` [rad], ``sample_state`` and optionally ``mcs_model`` (a code of
         :func:`screening.solvers.mc_registry.names`; default the study's ``[mcs] model``).
+    log : callable, optional
+        Called with the answer line (:func:`answer_line`) and the surface's lines.
 
     Returns
     -------
@@ -213,12 +354,15 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
     >>> class Result(dict):                   # the reads and the write of a result used here
     ...     status = np.array([PointStatus.ok, PointStatus.ok])
     ...     sl_trust = np.array([Trust.trusted, Trust.untrusted])
+    ...     peak_p_uplift = np.array([0.1, 0.5])
     ...     def commit(self):
     ...         pass
     ...     def read(self, name):
     ...         return np.asarray(self[name], dtype=float)
-    ...     def write_probabilities(self, values, source):
-    ...         self.update(values, p_source=source)
+    ...     def write_probabilities(self, values, source, answer):
+    ...         self.update(values, p_source=source, answer_quantity=answer)
+    ...     def set_attrs(self, **attrs):
+    ...         self.update(attrs)
     >>> res = Result(p_overturn=[1e-3, 0.2], p_overturn_se=[2e-4, 0.05], sl_error_low=[-0.1, -0.1],
     ...              sl_error_high=[0.1, 0.1], theta_ul=[1e-3, 1e-3], slenderness=[0.165, 0.165])
     >>> spot = {"mcs_model": mc_registry.names().index("coupled"), "peak_abs_theta": [0.01, 0.02, 0.05, 0.3],
@@ -227,6 +371,10 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
     {'linearization_gaussian': 1, 'monte_carlo_coupled': 1}
     >>> res["p_overturn"].tolist(), bool(np.isclose(res["p_overturn_se"][1], np.sqrt(0.375 * 0.625 / 8)))
     ([0.001, 0.25], True)
+    >>> res["answer_quantity"].tolist()            # 1 of 4 overturned: not established at 2 SE
+    [0, 0]
+    >>> res["answer_note"]
+    'answers: variance 2, probabilities 0; unreliable: 1 variance, 1 without any reliable answer'
     """
     from screening.analysis.probabilities import source_codes
 
@@ -251,7 +399,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
 
     levels = levels_at(study, res.read("theta_ul"), res.read("slenderness"))
     used = np.zeros(n)
-    for flat, model, peaks, state, paired in _monte_carlo_runs(study, escalated, spot_runs):
+    runs = _monte_carlo_runs(study, escalated, spot_runs)
+    for flat, model, peaks, state, paired in runs:
         state = np.asarray(state)
         valid = (state == SampleState.standing) | (state == SampleState.overturned)
         if valid.sum() <= used[flat]:
@@ -266,10 +415,30 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None):
         source[flat] = monte_carlo_source(model)
         used[flat] = valid.sum()
 
+    # near toppling, where no Monte Carlo ran: the study's fragility surface where it is vouched for
+    surface_p, surface_se, usable, notes = surface_estimates(*_swept_columns(study), *_level_counts(runs, levels))
+    usable &= source < MONTE_CARLO_SOURCE_BASE
+    best_p, best_se = p[:, 0].copy(), se[:, 0].copy()
+    best_p[usable], best_se[usable] = surface_p[usable, 0], surface_se[usable, 0]
+    if best is not None:
+        variance_vouched = best != BestMethod.unreliable
+    else:
+        variance_vouched = ((res.status == PointStatus.ok) & (res.sl_trust == Trust.trusted) & np.isfinite(low)
+                            & np.isfinite(high))
+    answer = answer_quantities(res.status, best_p, best_se, low, high, res.peak_p_uplift, variance_vouched)
+    take = usable & (answer != AnswerQuantity.variance)
+    p[take], se[take] = surface_p[take], surface_se[take]
+    source[take] = ProbabilitySource.study_fragility_surface
+
     values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if thresholds:
         values.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
-    res.write_probabilities(values, source)
+    res.write_probabilities(values, source, answer)
+    line = answer_line(answer, reliable_answer(answer, variance_vouched, source), variance_vouched)
+    res.set_attrs(answer_note=line, fragility_surface_note="; ".join(notes))
+    if log is not None:
+        for text in [line] + [f"fragility surface: {note}" for note in notes]:
+            log(text)
     names = {code: name for name, code in source_codes().items()}
     codes, counts = np.unique(source, return_counts=True)
     return {names[int(c)]: int(k) for c, k in zip(codes, counts)}
@@ -300,3 +469,49 @@ def probabilities_line(counts):
     'probabilities (p_overturn, p_exceed) by source: monte_carlo_coupled 3, linearization_gaussian 97'
     """
     return "probabilities (p_overturn, p_exceed) by source: " + ", ".join(f"{name} {k}" for name, k in counts.items())
+
+
+#: Short names of the answer codes in :func:`answer_line`.
+_ANSWER_TEXT = {AnswerQuantity.probabilities_stopped: "linearization stopped",
+                AnswerQuantity.probabilities_overturning: "p_overturn material",
+                AnswerQuantity.probabilities_open_interval: "heavy uplift without a vouched-for variance"}
+
+
+def answer_line(answer, reliable, variance_vouched):
+    """One line: which quantity answers the points, and how many have no reliable answer.
+
+    Parameters
+    ----------
+    answer : array_like of int
+        :class:`~screening.status.AnswerQuantity` codes of the points.
+    reliable : array_like of bool
+        True where the quantity that answers the point is vouched for
+        (:func:`screening.analysis.probabilities.reliable_answer`).
+    variance_vouched : array_like of bool
+        True where the point's best peak variance is vouched for.
+
+    Returns
+    -------
+    str
+        ``answers: variance N, probabilities M (reason k, ...); unreliable: U variance, W without any
+        reliable answer`` -- ``U`` counts the points whose variance is ``unreliable`` (the answer there may
+        still be the probabilities), ``W`` those whose answering quantity is not vouched for.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
+
+    Examples
+    --------
+    >>> answer_line([0, 0, 1, 3], [True, False, True, False], [True, False, False, False])
+    'answers: variance 2, probabilities 2 (linearization stopped 1, heavy uplift without a vouched-for variance 1); unreliable: 3 variance, 2 without any reliable answer'
+    """
+    answer = np.asarray(answer).reshape(-1)
+    by_variance = int(np.sum(answer == AnswerQuantity.variance))
+    reasons = ", ".join(f"{text} {int(np.sum(answer == code))}" for code, text in _ANSWER_TEXT.items()
+                        if np.any(answer == code))
+    probabilities = answer.size - by_variance
+    return (f"answers: variance {by_variance}, probabilities {probabilities}" + (f" ({reasons})" if reasons else "")
+            + f"; unreliable: {int(np.sum(~np.asarray(variance_vouched, dtype=bool)))} variance, "
+              f"{int(np.sum(~np.asarray(reliable, dtype=bool)))} without any reliable answer")

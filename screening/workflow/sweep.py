@@ -315,7 +315,7 @@ class _SweepRun:
                     from screening.workflow.probabilities import finish_probabilities, probabilities_line
 
                     self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
-                                                                     self.spot_runs)
+                                                                     self.spot_runs, log=self.log)
                     self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
                     self.log(probabilities_line(self.report.probabilities))
                 t0 = time.perf_counter()

@@ -819,15 +819,17 @@ class ResultFile:
         self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, compress=True,
                        values=np.asarray(method, dtype=np.int8).reshape(self.shape))
 
-    def write_probabilities(self, values, source):
+    def write_probabilities(self, values, source, answer):
         """Per-point probabilities after the Monte Carlo stages: ``values`` maps ``p_overturn``,
         ``p_overturn_se`` (flat) and ``p_exceed``, ``p_exceed_se`` (flat x thresholds) to their final values;
-        ``source`` the flat ``p_source`` codes (:func:`screening.schema.probability_source_attributes`)."""
+        ``source`` the flat ``p_source`` codes (:func:`screening.schema.probability_source_attributes`),
+        ``answer`` the flat ``answer_quantity`` codes (:class:`~screening.status.AnswerQuantity`)."""
         for name, value in values.items():
             value = np.asarray(value, dtype=float)
             self.format.write(name, Ellipsis, value.reshape(self.shape + value.shape[1:]))
-        self._variable("p_source", "i1", self.study.dims, False, self._coordinates(), compress=True,
-                       values=np.asarray(source, dtype=np.int8).reshape(self.shape))
+        for name, codes in (("p_source", source), ("answer_quantity", answer)):
+            self._variable(name, "i1", self.study.dims, False, self._coordinates(), compress=True,
+                           values=np.asarray(codes, dtype=np.int8).reshape(self.shape))
 
     def set_attrs(self, **attrs):
         self.format.set_attrs(attrs)

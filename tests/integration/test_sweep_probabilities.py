@@ -9,7 +9,8 @@ from helpers import GRID
 
 from screening.analysis.fragility import best_exceedance
 from screening.analysis.probabilities import monte_carlo_source
-from screening.status import EscalationModel, ProbabilitySource, SampleState
+from screening.status import (AnswerQuantity, BestMethod, EscalationModel, PointStatus, ProbabilitySource,
+                              SampleState)
 from screening.workflow.study import parse_study
 from screening.workflow.sweep import run_sweep
 
@@ -61,12 +62,22 @@ def test_accuracy_study_points_carry_probabilities_from_the_best_model(client, t
     unreliable = src == ProbabilitySource.unreliable
     assert np.all(np.isnan(se_over[unreliable])) and np.all(np.isfinite(se_over[~unreliable]))
     assert np.all(np.isnan(se_exc[unreliable])) and np.all(np.isfinite(se_exc[~unreliable]))
-    assert set(np.unique(src)) <= {int(ProbabilitySource.unreliable), int(ProbabilitySource.linearization_gaussian),
-                                   int(ProbabilitySource.corrected_linearization_gaussian),
+    assert set(np.unique(src)) <= {*[int(s) for s in ProbabilitySource],
                                    *[monte_carlo_source(m.name) for m in EscalationModel]}
+    # which quantity answers each point: the probabilities where the linearization stopped; the study's
+    # fragility surface only where the probabilities answer and no Monte Carlo ran
+    answer = _flat(ds, "answer_quantity")
+    stopped = np.isin(_flat(ds, "status"), [PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness])
+    assert np.all(answer[stopped] == AnswerQuantity.probabilities_stopped)
+    surface = src == ProbabilitySource.study_fragility_surface
+    assert np.all(answer[surface] != AnswerQuantity.variance) and not np.any(np.isin(np.flatnonzero(surface), at))
+    assert ds["answer_quantity"].attrs["flag_meanings"].split() == [m.name for m in AnswerQuantity]
+    assert ds.attrs["answer_note"].startswith(f"answers: variance {np.sum(answer == 0)}, probabilities "
+                                              f"{np.sum(answer != 0)}")
+    assert f"unreliable: {np.sum(_flat(ds, 'best_method') == BestMethod.unreliable)} variance" in ds.attrs["answer_note"]
     # overturned samples count as exceeding: p_exceed >= p_overturn, and falls with the threshold
     assert np.all(p_exc[:, 1] >= p_over - 1e-12) and np.all(p_exc[:, 0] >= p_exc[:, 1] - 1e-12)
-    assert ds["p_source"].attrs["flag_meanings"].split()[:3] == [m.name for m in ProbabilitySource]
+    assert ds["p_source"].attrs["flag_meanings"].split()[:len(ProbabilitySource)] == [m.name for m in ProbabilitySource]
     assert "probabilities_note" in ds.attrs and ds["p_overturn"].attrs["units"] == "1"
 
 

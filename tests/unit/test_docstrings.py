@@ -24,6 +24,7 @@ COVERED = [
     "screening.analysis.escalation",
     "screening.analysis.fit_excitation",
     "screening.analysis.fragility",
+    "screening.analysis.fragility_surface",
     "screening.analysis.im_fragility",
     "screening.analysis.indicators",
     "screening.analysis.intensity",

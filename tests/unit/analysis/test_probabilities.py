@@ -59,3 +59,30 @@ def test_uplift_acceleration_on_a_winkler_bed_is_the_kern_limit():
     got = uplift_acceleration(block, bed, condensation.get("paper"))
     np.testing.assert_allclose(got, expected, rtol=1e-12)
     np.testing.assert_allclose(uplift_acceleration(block, bed, condensation.get("cubic")), expected, rtol=1e-6)
+
+
+def test_which_quantity_answers_a_point():
+    from screening.analysis.probabilities import HEAVY_UPLIFT, answer_quantities, reliable_answer
+    from screening.status import AnswerQuantity as A, PointStatus as S
+
+    status = [S.k_eq_negative, S.sigma_theta_beyond_slenderness, S.ok, S.ok, S.ok, S.ok, S.ok, S.task_failed,
+              S.step_budget_exhausted]
+    p = [np.nan, 0.5, 0.10, 0.10, 0.3, 0.3, 0.01, np.nan, np.nan]
+    se = [np.nan, 0.1, 0.02, 0.03, np.nan, np.nan, 0.01, np.nan, np.nan]
+    low = [np.nan, np.nan, -0.1, -0.1, -0.6, -1.0, -0.6, np.nan, np.nan]
+    high = [np.nan, np.nan, 0.1, 0.1, np.inf, 0.5, np.inf, np.nan, np.nan]
+    uplift = [0.99, 0.99, 0.5, 0.5, HEAVY_UPLIFT, 0.95, HEAVY_UPLIFT - 1e-9, 0.99, 0.99]
+    got = answer_quantities(status, p, se, low, high, uplift)
+    # stopped near toppling; 0.10 - 2 x 0.02 >= 0.05 but 0.10 - 2 x 0.03 is not; an unvouched p (NaN SE) never
+    # counts; open intervals in heavy uplift (either end); not below HEAVY_UPLIFT; other failures keep the variance
+    assert got.tolist() == [A.probabilities_stopped, A.probabilities_stopped, A.probabilities_overturning,
+                            A.variance, A.probabilities_open_interval, A.probabilities_open_interval, A.variance,
+                            A.variance, A.variance]
+    vouched = np.array([False, False, True, True, False, False, True, False, False])
+    # in heavy uplift a variance nothing vouches for (a finite but too wide interval) is no answer either
+    heavy = answer_quantities([S.ok, S.ok, S.ok], [0.01] * 3, [0.01] * 3, [-0.5] * 3, [1.8] * 3,
+                              [0.95, 0.95, 0.5], [False, True, False])
+    assert heavy.tolist() == [A.probabilities_open_interval, A.variance, A.variance]
+    source = np.array([3, 0, 2, 2, 3, 0, 1, 0, 0])
+    assert reliable_answer(got, vouched, source).tolist() == [True, False, True, True, True, False, True, False,
+                                                              False]

@@ -39,6 +39,9 @@ def test_the_probability_lines_count_sources_and_the_points_near_toppling():
     assert f"; {near} point(s) above" in lines[1]
     assert lines[2].endswith(": 0.05 .. 0.7")
     assert len(lines) == 3
+    # with the accounting of which quantity answers the points, one more line after the sources
+    ds.attrs["answer_note"] = "answers: variance 3, probabilities 1 (linearization stopped 1); unreliable: ..."
+    assert text.probability_lines(ds)[2] == f"  {ds.attrs['answer_note']} (answer_quantity)"
 
 
 @pytest.mark.parametrize("ds", [xr.Dataset(), xr.Dataset({"p_rocking_start": ("S0", [np.nan, np.nan])})])

@@ -1,0 +1,564 @@
+"""A study's own fragility surface: the probability of overturning (or of exceeding a rotation) over the
+swept inputs, fitted on the study's Monte Carlo points, and given only where it can be vouched for.
+
+Near toppling the linearization stops or its error is beyond what the error atlas can bound, and a
+variance over the surviving samples is no answer; the probability of overturning is.  A sweep runs
+Monte Carlo at a few dozen points only, but the overturned counts there follow a smooth surface over
+the swept inputs (a fragility curve in the intensity, shifted and steepened by the other inputs).
+The pure functions here fit that surface and decide where it may stand in for Monte Carlo:
+
+* :func:`surface_inputs` -- the swept inputs, transformed (log where they span a decade) and
+  standardised;
+* :func:`surface_terms` -- the design matrix of a model form (``linear``, ``quadratic``);
+* :func:`fit_probit_surface` -- a binomial GLM with the probit link, by Fisher scoring, with its
+  covariance and Pearson dispersion;
+* :func:`predict_surface` -- the probability and its delta-method standard error at any point;
+* :func:`choose_form` -- the form the number of Monte Carlo points affords, by AIC;
+* :func:`leave_one_out` and :func:`loo_check` -- every Monte Carlo point predicted from the others;
+* :func:`inside_hull` -- the points inside the convex hull of the Monte Carlo points;
+* :func:`study_surface` -- all of the above for one level: the fitted surface and whether it is vouched for.
+
+Pure functions on numpy arrays; no I/O.  Method and validation: ``docs/outputs_probabilities.md``,
+"Near toppling: the study's fragility surface".
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from scipy import special, stats
+from scipy.spatial import Delaunay, QhullError
+
+from screening.solvers.estimates import binomial_estimate
+
+__all__ = ["FORMS", "MIN_IN_PLAY", "LOO_PASS", "LOO_Z", "MIN_POINTS_PER_TERM", "Surface", "surface_inputs",
+           "surface_terms", "fit_probit_surface", "predict_surface", "choose_form", "leave_one_out", "loo_check",
+           "inside_hull", "study_surface"]
+
+#: Model forms, from the simplest: the probit of the probability linear in the standardised inputs, or
+#: quadratic (squares and pairwise products added).
+FORMS = ("linear", "quadratic")
+#: At least this many Monte Carlo points in play (some samples overturned, or the surface expects one) for the
+#: surface to be checked at all.
+MIN_IN_PLAY = 5
+#: Share of the held-out Monte Carlo points in play that must lie within :data:`LOO_Z` combined standard
+#: errors of the surface fitted without them (one miss is allowed however few the points: at 2 SE a sound
+#: surface misses 5 % of them, so 7 points pass all together only 70 % of the time).
+LOO_PASS = 0.9
+#: Combined standard errors of the leave-one-out check (about 95 % for a Gaussian error).
+LOO_Z = 2.0
+#: A form needs at least this many Monte Carlo points per term, and more points with ``0 < k < n`` than terms.
+MIN_POINTS_PER_TERM = 2
+#: Probabilities are clipped to ``[P_FLOOR, 1 - P_FLOOR]`` in the weights (never in the estimate).
+P_FLOOR = 1e-12
+
+
+class Surface(NamedTuple):
+    """A fitted probit surface: its ``form``, coefficients ``coef`` [-] and their covariance ``cov`` (inflated
+    by ``dispersion`` where > 1), the Pearson ``dispersion`` [-], the Monte Carlo ``points`` it was fitted on,
+    whether the fit ``converged``, and (from :func:`study_surface`) the leave-one-out share ``loo_share`` [-]
+    of the ``loo_in_play`` held-out points, whether it is ``vouched`` for and, if not, the ``reason``."""
+
+    form: str
+    coef: np.ndarray
+    cov: np.ndarray
+    dispersion: float
+    points: int
+    converged: bool
+    loo_share: float = np.nan
+    loo_in_play: int = 0
+    vouched: bool = False
+    reason: str = ""
+
+
+def surface_inputs(columns):
+    """The swept inputs as the surface reads them: transformed and standardised, one column per input.
+
+    Parameters
+    ----------
+    columns : dict of str to array_like
+        ``{input name: values}`` at every point of the study (SI units; e.g. ``S0`` [m2 s-3], ``eps`` [m-2]).
+
+    Returns
+    -------
+    z : numpy.ndarray
+        ``(points, inputs)`` [-]: each input that varies, ``log`` of it where all its values are positive and
+        span at least a factor 10, the value itself otherwise, then centred on its mean over the points and
+        divided by its standard deviation.
+    names : list of str
+        The inputs kept, in the order of the columns of ``z`` (an input with a single value is dropped).
+
+    Notes
+    -----
+    .. math:: z_j = (u_j - \\bar u_j) / s_j, \\qquad u_j = \\ln x_j \\text{ (positive, } \\max/\\min \\ge 10)
+       \\text{ or } x_j
+
+    A fragility curve is lognormal in the intensity [1]_, a probit linear in ``ln S0``; an input swept over
+    zero (the bed's ``eps``) stays linear.
+
+    References
+    ----------
+    .. [1] R. P. Kennedy, M. K. Ravindra, "Seismic fragilities for nuclear power plant risk studies", Nuclear
+       Engineering and Design 79(1), 47-68, 1984.
+
+    Examples
+    --------
+    >>> z, names = surface_inputs({"S0": [1e-4, 1e-3, 1e-2], "eps": [0.0, 0.0, 0.0], "k": [1.0, 2.0, 3.0]})
+    >>> names, (z[:, 0].round(4) + 0.0).tolist(), (z[:, 1].round(4) + 0.0).tolist()
+    (['S0', 'k'], [-1.2247, 0.0, 1.2247], [-1.2247, 0.0, 1.2247])
+    """
+    cols, names = [], []
+    for name, values in columns.items():
+        x = np.asarray(values, dtype=float).reshape(-1)
+        if x.size == 0 or np.ptp(x) == 0:
+            continue
+        if np.all(x > 0) and x.max() / x.min() >= 10.0:
+            x = np.log(x)
+        sd = x.std()
+        cols.append((x - x.mean()) / sd)
+        names.append(name)
+    n = len(next(iter(columns.values()))) if columns else 0
+    return (np.column_stack(cols) if cols else np.zeros((n, 0))), names
+
+
+def surface_terms(z, form="linear"):
+    """The design matrix of a model form over standardised inputs.
+
+    Parameters
+    ----------
+    z : array_like
+        ``(points, inputs)`` standardised inputs [-] (:func:`surface_inputs`).
+    form : {"linear", "quadratic"}
+        ``linear``: a constant and each input; ``quadratic``: also each input squared and each pairwise
+        product.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(points, terms)`` [-].
+
+    Notes
+    -----
+    .. math:: \\Phi^{-1}(p) = \\beta_0 + \\sum_j \\beta_j z_j
+       \\;\\Big[+ \\sum_{j \\le l} \\gamma_{jl} z_j z_l\\Big]
+
+    References
+    ----------
+    .. [1] P. McCullagh, J. A. Nelder, Generalized Linear Models, 2nd ed., Chapman & Hall (1989), ch. 4.
+
+    Examples
+    --------
+    >>> surface_terms([[1.0, 2.0]], "quadratic").tolist()
+    [[1.0, 1.0, 2.0, 1.0, 2.0, 4.0]]
+    """
+    if form not in FORMS:
+        raise ValueError(f"parameter 'form' must be one of {', '.join(FORMS)} (got {form!r})")
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    cols = [np.ones(z.shape[0])] + [z[:, j] for j in range(z.shape[1])]
+    if form == "quadratic":
+        cols += [z[:, j] * z[:, m] for j in range(z.shape[1]) for m in range(j, z.shape[1])]
+    return np.column_stack(cols)
+
+
+def _log_likelihood(eta, k, n):
+    return float(np.sum(k * special.log_ndtr(eta) + (n - k) * special.log_ndtr(-eta)))
+
+
+def _mills(eta):
+    """``(phi / Phi, phi / (1 - Phi))`` at ``eta``, computed on the log scale (no 0 / 0 in the tails)."""
+    log_pdf = stats.norm.logpdf(eta)
+    return np.exp(log_pdf - special.log_ndtr(eta)), np.exp(log_pdf - special.log_ndtr(-eta))
+
+
+def fit_probit_surface(x, k, n, form="linear", max_iter=100, tol=1e-10):
+    """Maximum-likelihood fit of a binomial GLM with the probit link.
+
+    Parameters
+    ----------
+    x : array_like
+        ``(points, terms)`` design matrix [-] (:func:`surface_terms`).
+    k : array_like
+        Samples that reached the level (overturned, or exceeded the rotation) at each point [-].
+    n : array_like
+        Usable samples at each point (standing or overturned) [-], ``> 0``.
+    form : str, default "linear"
+        The form's name, kept in the result.
+    max_iter : int, default 100
+        Fisher-scoring iterations at most.
+    tol : float, default 1e-10
+        Convergence: the largest change of a coefficient [-].
+
+    Returns
+    -------
+    Surface
+        Coefficients, covariance (the inverse Fisher information, times the Pearson dispersion where it
+        is > 1), dispersion, the number of points and whether the iteration converged (an ill-posed fit,
+        e.g. separated counts, does not).
+
+    Notes
+    -----
+    With :math:`\\eta_i = x_i^T\\beta` and :math:`p_i = \\Phi(\\eta_i)`, the log-likelihood is
+    :math:`\\ell = \\sum_i k_i \\ln\\Phi(\\eta_i) + (n_i - k_i)\\ln\\Phi(-\\eta_i)`; Fisher scoring [1]_ steps
+    :math:`\\beta \\leftarrow \\beta + (X^T W X)^{-1} X^T s` with the score
+    :math:`s_i = k_i\\,\\phi/\\Phi - (n_i - k_i)\\,\\phi/(1 - \\Phi)` and the weight
+    :math:`w_i = n_i\\,\\phi^2 / (\\Phi (1 - \\Phi))` (halved while the likelihood falls).  The covariance
+    is :math:`(X^T W X)^{-1}` times the Pearson dispersion
+    :math:`\\hat\\varphi = \\frac{1}{N - P}\\sum_i (k_i - n_i p_i)^2 / (n_i p_i (1 - p_i))` where
+    :math:`\\hat\\varphi > 1` (quasi-binomial) [1]_.
+
+    References
+    ----------
+    .. [1] P. McCullagh, J. A. Nelder, Generalized Linear Models, 2nd ed., Chapman & Hall (1989), sections 4.4
+       (the probit link, Fisher scoring) and 4.5 (over-dispersion).
+
+    Examples
+    --------
+    Counts exactly on ``Phi(0.5 z)``:
+
+    >>> import numpy as np
+    >>> z = np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
+    >>> n = np.full(5, 1e6)
+    >>> fit = fit_probit_surface(surface_terms(z[:, None]), n * special.ndtr(0.5 * z), n)
+    >>> fit.coef.round(6).tolist(), fit.converged
+    ([0.0, 0.5], True)
+    """
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
+    pts, terms = x.shape
+    p0 = np.clip((k + 0.5) / (n + 1.0), 1e-3, 1 - 1e-3)        # start: weighted least squares on probit(p)
+    sw = np.sqrt(n)
+    beta = np.linalg.lstsq(x * sw[:, None], special.ndtri(p0) * sw, rcond=None)[0]
+    ll = _log_likelihood(x @ beta, k, n)
+    converged = False
+    info = np.eye(terms)
+    for _ in range(max_iter):
+        eta = x @ beta
+        r1, r0 = _mills(eta)
+        score = x.T @ (k * r1 - (n - k) * r0)
+        info = (x * (n * r1 * r0)[:, None]).T @ x
+        try:
+            step = np.linalg.solve(info, score)
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(step)):
+            break
+        for _ in range(40):                                    # step halving: the likelihood never falls
+            new = _log_likelihood(x @ (beta + step), k, n)
+            if new >= ll - 1e-12 * abs(ll):
+                break
+            step = step / 2.0
+        beta, ll = beta + step, new
+        if np.max(np.abs(step)) < tol:
+            converged = True
+            break
+    eta = x @ beta
+    r1, r0 = _mills(eta)
+    info = (x * (n * r1 * r0)[:, None]).T @ x
+    try:
+        cov = np.linalg.inv(info)
+    except np.linalg.LinAlgError:
+        cov, converged = np.full((terms, terms), np.nan), False
+    p = np.clip(special.ndtr(eta), P_FLOOR, 1 - P_FLOOR)
+    dispersion = float(np.sum((k - n * p) ** 2 / (n * p * (1 - p))) / (pts - terms)) if pts > terms else np.nan
+    converged = converged and bool(np.all(np.isfinite(beta)) and np.all(np.isfinite(np.diag(cov)))
+                                   and np.all(np.diag(cov) > 0))
+    inflate = dispersion if np.isfinite(dispersion) and dispersion > 1.0 else 1.0
+    return Surface(form, beta, cov * inflate, dispersion, pts, converged)
+
+
+def predict_surface(surface, x):
+    """The probability and its standard error at points of the design.
+
+    Parameters
+    ----------
+    surface : Surface
+        A fit (:func:`fit_probit_surface`).
+    x : array_like
+        ``(points, terms)`` design matrix [-] of the same form.
+
+    Returns
+    -------
+    p : numpy.ndarray
+        :math:`\\Phi(x^T\\hat\\beta)` [-].
+    se : numpy.ndarray
+        Its standard error [-] by the delta method.
+
+    Notes
+    -----
+    .. math:: \\mathrm{se}(\\hat p) = \\phi(x^T\\hat\\beta)\\,\\sqrt{x^T \\hat C x}
+
+    with :math:`\\hat C` the fit's covariance (dispersion included) [1]_.
+
+    References
+    ----------
+    .. [1] G. Casella, R. L. Berger, Statistical Inference, 2nd ed., Duxbury (2002), section 5.5.4 (the delta
+       method).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> fit = Surface("linear", np.array([0.0, 1.0]), np.diag([0.01, 0.0]), 1.0, 10, True)
+    >>> p, se = predict_surface(fit, [[1.0, 0.0]])
+    >>> float(p[0]), round(float(se[0]), 6), round(float(stats.norm.pdf(0.0) * 0.1), 6)
+    (0.5, 0.039894, 0.039894)
+    """
+    x = np.atleast_2d(np.asarray(x, dtype=float))
+    eta = x @ surface.coef
+    var = np.einsum("ij,jk,ik->i", x, surface.cov, x)
+    return special.ndtr(eta), stats.norm.pdf(eta) * np.sqrt(np.maximum(var, 0.0))
+
+
+def choose_form(z, k, n):
+    """The model form the Monte Carlo points afford, by Akaike's criterion.
+
+    Parameters
+    ----------
+    z : array_like
+        ``(points, inputs)`` standardised inputs of the Monte Carlo points [-].
+    k, n : array_like
+        Samples that reached the level and usable samples at each point [-].
+
+    Returns
+    -------
+    str or None
+        The form of :data:`FORMS` with the lowest AIC among those whose terms ``P`` satisfy
+        ``points >= MIN_POINTS_PER_TERM P`` and ``(points with 0 < k < n) > P`` and whose fit converged;
+        None when no form qualifies.
+
+    Notes
+    -----
+    :math:`\\mathrm{AIC} = 2P - 2\\ell(\\hat\\beta)` [1]_.
+
+    References
+    ----------
+    .. [1] H. Akaike, "A new look at the statistical model identification", IEEE Transactions on Automatic
+       Control 19(6), 716-723, 1974.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.linspace(-2, 2, 9)[:, None]
+    >>> n = np.full(9, 1000.0)
+    >>> choose_form(z, np.round(n * special.ndtr(z[:, 0])), n), choose_form(z[:2], [1, 2], [10, 10])
+    ('linear', None)
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
+    mixed = int(np.sum((k > 0) & (k < n)))
+    best, best_aic = None, np.inf
+    for form in FORMS:
+        x = surface_terms(z, form)
+        terms = x.shape[1]
+        if z.shape[0] < MIN_POINTS_PER_TERM * terms or mixed <= terms:
+            continue
+        fit = fit_probit_surface(x, k, n, form)
+        if not fit.converged:
+            continue
+        aic = 2 * terms - 2 * _log_likelihood(x @ fit.coef, k, n)
+        if aic < best_aic:
+            best, best_aic = form, aic
+    return best
+
+
+def leave_one_out(z, k, n, form):
+    """Every Monte Carlo point predicted by the surface fitted without it.
+
+    Parameters
+    ----------
+    z : array_like
+        ``(points, inputs)`` standardised inputs of the Monte Carlo points [-].
+    k, n : array_like
+        Samples that reached the level and usable samples at each point [-].
+    form : str
+        The model form (:data:`FORMS`).
+
+    Returns
+    -------
+    p, se : numpy.ndarray
+        The held-out prediction at each point and its standard error [-]; NaN where the fit without the
+        point did not converge.
+
+    Notes
+    -----
+    :math:`\\hat p_{(-i)} = \\Phi(x_i^T \\hat\\beta_{(-i)})` with the delta-method standard error of
+    :func:`predict_surface` [1]_.
+
+    References
+    ----------
+    .. [1] M. Stone, "Cross-validatory choice and assessment of statistical predictions", Journal of the
+       Royal Statistical Society B 36(2), 111-147, 1974.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.linspace(-2, 2, 9)[:, None]
+    >>> n = np.full(9, 1e6)
+    >>> p, se = leave_one_out(z, n * special.ndtr(z[:, 0]), n, "linear")
+    >>> bool(np.allclose(p, special.ndtr(z[:, 0]), atol=1e-9))
+    True
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
+    x = surface_terms(z, form)
+    p, se = np.full(k.size, np.nan), np.full(k.size, np.nan)
+    for i in range(k.size):
+        keep = np.arange(k.size) != i
+        fit = fit_probit_surface(x[keep], k[keep], n[keep], form)
+        if fit.converged:
+            p[i], se[i] = (v[0] for v in predict_surface(fit, x[i:i + 1]))
+    return p, se
+
+
+def loo_check(k, n, p_loo, se_loo):
+    """Whether the held-out predictions agree with the Monte Carlo points they left out.
+
+    Parameters
+    ----------
+    k, n : array_like
+        Samples that reached the level and usable samples at each point [-].
+    p_loo, se_loo : array_like
+        Held-out predictions and their standard errors [-] (:func:`leave_one_out`).
+
+    Returns
+    -------
+    share : float
+        Share [-] of the points in play whose prediction is within :data:`LOO_Z` combined standard errors of
+        the point (NaN when none is in play).
+    in_play : int
+        Points in play: some of their samples reached the level, or the prediction expects at least one
+        (``n p_loo >= 1``), or the prediction is not finite (counted as a miss).
+    passed : bool
+        ``in_play >= MIN_IN_PLAY`` and the misses at most ``max(1, floor((1 - LOO_PASS) in_play))``: a share of
+        at least ``LOO_PASS``, one miss allowed below ten points.
+
+    Notes
+    -----
+    A point holds when :math:`|\\hat p_{(-i)} - k_i/n_i| \\le z\\sqrt{\\mathrm{se}_{(-i)}^2 + \\mathrm{se}_i^2}`,
+    :math:`\\mathrm{se}_i` the Agresti-Coull standard error of the point's fraction [1]_ and :math:`z` =
+    :data:`LOO_Z`.  Points where neither the samples nor the surface expect the level to be reached are
+    left out of the share: they would pass whatever the surface does elsewhere.
+
+    References
+    ----------
+    .. [1] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
+       proportions", The American Statistician 52(2), 119-126, 1998.
+
+    Examples
+    --------
+    >>> loo_check([0, 10, 50, 90, 0, 30], [100] * 6, [0.02, 0.12, 0.5, 0.6, 0.0, 0.3], [0.01] * 6)
+    (0.8, 5, True)
+    >>> loo_check([0, 10, 50, 90, 0, 30], [100] * 6, [0.02, 0.12, 0.7, 0.6, 0.0, 0.3], [0.01] * 6)
+    (0.6, 5, False)
+    """
+    k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
+    p_loo, se_loo = np.asarray(p_loo, dtype=float).reshape(-1), np.asarray(se_loo, dtype=float).reshape(-1)
+    frac, se = binomial_estimate(k, n)
+    finite = np.isfinite(p_loo) & np.isfinite(se_loo)
+    with np.errstate(invalid="ignore"):
+        play = (k > 0) | ~finite | (n * p_loo >= 1.0)
+        holds = finite & (np.abs(p_loo - frac) <= LOO_Z * np.sqrt(se_loo ** 2 + se ** 2))
+    in_play = int(play.sum())
+    share = float(np.mean(holds[play])) if in_play else np.nan
+    misses = in_play - int(np.sum(holds[play]))
+    allowed = max(1, int(np.floor((1.0 - LOO_PASS) * in_play + 1e-9)))
+    return share, in_play, bool(in_play >= MIN_IN_PLAY and misses <= allowed)
+
+
+def inside_hull(z_points, z):
+    """Which points lie inside the convex hull of the Monte Carlo points (their range, with one input).
+
+    Parameters
+    ----------
+    z_points : array_like
+        ``(Monte Carlo points, inputs)`` standardised inputs [-].
+    z : array_like
+        ``(points, inputs)`` standardised inputs of the points asked about [-].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True inside (or on) the hull; with fewer Monte Carlo points than ``inputs + 1`` or a flat hull, the
+        box of their ranges instead; with no input, True.
+
+    Notes
+    -----
+    The Delaunay triangulation of the Monte Carlo points (Qhull [1]_): a point is inside when it lies in one
+    of its simplices.
+
+    References
+    ----------
+    .. [1] C. B. Barber, D. P. Dobkin, H. Huhdanpaa, "The Quickhull algorithm for convex hulls", ACM
+       Transactions on Mathematical Software 22(4), 469-483, 1996.
+
+    Examples
+    --------
+    >>> inside_hull([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [[0.2, 0.2], [0.8, 0.8], [-0.1, 0.0]]).tolist()
+    [True, False, False]
+    """
+    zp = np.atleast_2d(np.asarray(z_points, dtype=float))
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    if z.shape[1] == 0:
+        return np.ones(z.shape[0], dtype=bool)
+    lo, hi = zp.min(axis=0), zp.max(axis=0)
+    tol = 1e-9 * np.maximum(hi - lo, 1.0)
+    box = np.all((z >= lo - tol) & (z <= hi + tol), axis=1)
+    if z.shape[1] == 1 or zp.shape[0] < z.shape[1] + 1:
+        return box
+    try:
+        return box & (Delaunay(zp).find_simplex(z, tol=1e-9) >= 0)
+    except QhullError:
+        return box
+
+
+def study_surface(z, k, n):
+    """The study's surface for one level: the form the points afford, its fit and whether it is vouched for.
+
+    Parameters
+    ----------
+    z : array_like
+        ``(Monte Carlo points, inputs)`` standardised inputs [-] (:func:`surface_inputs`).
+    k, n : array_like
+        Samples that reached the level and usable samples at each Monte Carlo point [-].
+
+    Returns
+    -------
+    Surface or None
+        The fit on every point with its leave-one-out share and ``vouched`` (the fit converged and
+        :func:`loo_check` passed); None when no form qualifies (:func:`choose_form`: too few points, or too
+        few with ``0 < k < n``).
+
+    Notes
+    -----
+    The steps: :func:`choose_form`, :func:`fit_probit_surface` on every point, :func:`leave_one_out` and
+    :func:`loo_check`.  The points where the surface may be used are those :func:`inside_hull` finds (the
+    caller's step).
+
+    References
+    ----------
+    .. [1] P. McCullagh, J. A. Nelder, Generalized Linear Models, 2nd ed., Chapman & Hall (1989).
+    .. [2] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.linspace(-2, 2, 9)[:, None]
+    >>> n = np.full(9, 1000.0)
+    >>> fit = study_surface(z, np.round(n * special.ndtr(z[:, 0] - 0.5)), n)
+    >>> fit.form, fit.vouched, round(float(fit.coef[1]), 1)
+    ('linear', True, 1.0)
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
+    form = choose_form(z, k, n)
+    if form is None:
+        return None
+    fit = fit_probit_surface(surface_terms(z, form), k, n, form)
+    share, in_play, passed = loo_check(k, n, *leave_one_out(z, k, n, form))
+    vouched = fit.converged and passed
+    reason = "" if vouched else (
+        "the fit did not converge" if not fit.converged else
+        f"leave-one-out: {share:.0%} of {in_play} held-out Monte Carlo points within {LOO_Z:g} combined SE "
+        f"(needs {LOO_PASS:.0%}, one miss allowed, of at least {MIN_IN_PLAY})")
+    return fit._replace(loo_share=share, loo_in_play=in_play, vouched=vouched, reason=reason)
