@@ -261,7 +261,8 @@ def surface_estimates(columns, case, counts, n_used):
             else:
                 notes.append(f"{label}{level}: {fit.form} probit surface in {', '.join(names)} on {mc.size} Monte "
                              f"Carlo points, leave-one-out {fit.loo_share:.0%} of {fit.loo_in_play} within "
-                             f"{fs.LOO_Z:g} SE, dispersion {fit.dispersion:.2f}: "
+                             f"{fs.LOO_Z:g} SE, dispersion {fit.dispersion:.2f}, standard errors widened "
+                             f"x{fit.loo_scale:.2f} by the held-out errors: "
                              + ("vouched for" if fit.vouched else f"not vouched for ({fit.reason})"))
         if not all(fit is not None and fit.vouched for fit in fits):
             continue

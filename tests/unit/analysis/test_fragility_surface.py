@@ -108,6 +108,27 @@ def test_the_leave_one_out_check_passes_on_the_model_form_and_fails_on_a_surface
     assert "leave-one-out" in fit.reason
 
 
+def test_held_out_errors_widen_the_standard_errors_by_their_rms_z_and_never_narrow_them():
+    """Independent: the z-scores written out from the held-out predictions and Agresti-Coull errors."""
+    z, k, n = _synthetic(7)
+    p, se = fs.leave_one_out(z, k, n, "linear")
+    frac, tilde = k / n, (k + 2) / (n + 4)
+    se_mc = np.sqrt(tilde * (1 - tilde) / (n + 4))
+    play = (k > 0) | (n * p >= 1)
+    rms = np.sqrt(np.mean(((p - frac) / np.hypot(se, se_mc))[play] ** 2))
+    assert fs.loo_scale(k, n, p, se) == pytest.approx(max(1.0, rms), rel=1e-12)
+    # a surface the linear form follows only roughly: the held-out errors exceed the delta method's
+    rng = np.random.default_rng(3)
+    k_bent = rng.binomial(800, special.ndtr(fs.surface_terms(z) @ TRUE + 0.4 * z[:, 0] ** 2)).astype(float)
+    fit = fs.study_surface(z, k_bent, n)
+    plain = fs.fit_probit_surface(fs.surface_terms(z, fit.form), k_bent, n, fit.form)
+    scale = fs.loo_scale(k_bent, n, *fs.leave_one_out(z, k_bent, n, fit.form))
+    assert fit.loo_scale == pytest.approx(scale, rel=1e-12) and fit.loo_scale >= 1.0
+    np.testing.assert_allclose(fit.cov, plain.cov * scale ** 2, rtol=1e-12)
+    # the form right and the errors honest: the factor stays near 1 (20-40 points in play: RMS z within ~0.35)
+    assert fs.study_surface(z, k, n).loo_scale < 1.35
+
+
 def test_leave_one_out_predicts_each_point_from_the_others():
     z, k, n = _synthetic(9, points=12)
     p, se = fs.leave_one_out(z, k, n, "linear")
