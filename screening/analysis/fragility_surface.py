@@ -453,13 +453,9 @@ def loo_check(k, n, p_loo, se_loo):
     >>> loo_check([0, 10, 50, 90, 0, 30], [100] * 6, [0.02, 0.12, 0.7, 0.6, 0.0, 0.3], [0.01] * 6)
     (0.6, 5, False)
     """
-    k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
-    p_loo, se_loo = np.asarray(p_loo, dtype=float).reshape(-1), np.asarray(se_loo, dtype=float).reshape(-1)
-    frac, se = binomial_estimate(k, n)
-    finite = np.isfinite(p_loo) & np.isfinite(se_loo)
+    z, finite, play = _held_out_z(k, n, p_loo, se_loo)
     with np.errstate(invalid="ignore"):
-        play = (k > 0) | ~finite | (n * p_loo >= 1.0)
-        holds = finite & (np.abs(p_loo - frac) <= LOO_Z * np.sqrt(se_loo ** 2 + se ** 2))
+        holds = finite & (np.abs(z) <= LOO_Z)
     in_play = int(play.sum())
     share = float(np.mean(holds[play])) if in_play else np.nan
     misses = in_play - int(np.sum(holds[play]))
@@ -503,16 +499,24 @@ def loo_scale(k, n, p_loo, se_loo):
     >>> loo_scale([10, 50, 30, 20, 40], [100] * 5, [0.1, 0.5, 0.3, 0.2, 0.4], [0.01] * 5)
     1.0
     """
+    z, finite, play = _held_out_z(k, n, p_loo, se_loo)
+    use = finite & play
+    if use.sum() < MIN_IN_PLAY:
+        return 1.0
+    return float(max(1.0, np.sqrt(np.mean(z[use] ** 2))))
+
+
+def _held_out_z(k, n, p_loo, se_loo):
+    """z-scores of the held-out predictions against the Monte Carlo fractions, which are finite, and which
+    points are in play (some samples reached the level, the prediction expects one, or it is not finite)."""
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
     p_loo, se_loo = np.asarray(p_loo, dtype=float).reshape(-1), np.asarray(se_loo, dtype=float).reshape(-1)
     frac, se = binomial_estimate(k, n)
     finite = np.isfinite(p_loo) & np.isfinite(se_loo)
-    with np.errstate(invalid="ignore"):
-        use = finite & ((k > 0) | (n * p_loo >= 1.0))
-    if use.sum() < MIN_IN_PLAY:
-        return 1.0
-    z = (p_loo[use] - frac[use]) / np.sqrt(se_loo[use] ** 2 + se[use] ** 2)
-    return float(max(1.0, np.sqrt(np.mean(z ** 2))))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = (p_loo - frac) / np.sqrt(se_loo ** 2 + se ** 2)
+        play = (k > 0) | ~finite | (n * p_loo >= 1.0)
+    return z, finite, play
 
 
 def inside_hull(z_points, z):
