@@ -138,7 +138,7 @@ def _corrected_estimates(study, res, points):
     histories it needs."""
     import xarray as xr
 
-    from screening.analysis.fragility import best_exceedance
+    from screening.analysis.fragility import band_standard_error, best_exceedance
     from screening.workflow.grid import point_values
     from screening.workflow.study import build_models
 
@@ -161,7 +161,7 @@ def _corrected_estimates(study, res, points):
     p, se = np.empty((points.size, len(asked))), np.empty((points.size, len(asked)))
     for j, (threshold, relative_to) in enumerate(asked):
         value, low, high, _ = best_exceedance(ds, threshold, relative_to, method)
-        p[:, j], se[:, j] = value.values, (high - low).values / 4.0
+        p[:, j], se[:, j] = value.values, band_standard_error(value.values, low.values, high.values)
     return p, se
 
 
