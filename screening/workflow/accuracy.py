@@ -50,13 +50,13 @@ def _point_table(stage):
     """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
     features of the correction, condensation and eps, and SL's peaks."""
     from screening.analysis.trust import trust_indicators
-    from screening.workflow.grid import Batch, batch_point_models, batch_values
+    from screening.workflow.grid import Batch, batch_point_models, swept_columns
 
     study, res = stage.study, stage.result
     n, per_case = study.n_points, study.points_per_case
     cols = {name: np.empty(n) for name in ("k_rest", "eps", "envelope_end")}
     cond = np.empty(n, dtype=object)
-    swept = {name: np.empty(n) for name in study.swept_dims}
+    swept, case_index = swept_columns(study)
     for c, case in enumerate(study.cases):
         whole = Batch(0, c, c * per_case, (c + 1) * per_case)
         block, foundation, excitation, _ = batch_point_models(study, whole)
@@ -66,15 +66,12 @@ def _point_table(stage):
         q2 = np.asarray(excitation.envelope(study.times), dtype=float) ** 2
         cols["envelope_end"][rows] = q2[-1] / max(q2.max(), 1e-300)
         cond[rows] = case.condensation_model.name
-        for name, values in batch_values(study, whole).items():
-            swept[name][rows] = values
     peak = res.read("peak_var_theta")
     var_end = res.read("var_theta", -1) if "var_theta" in study.output.stored else np.full(n, np.nan)
     ind = trust_indicators(res.peak_p_uplift, res.read("min_k_eq"), cols["k_rest"], peak, res.read("slenderness"),
                            var_end, cols["envelope_end"])
     dot = res.read("var_theta_dot", None) if "var_theta_dot" in study.output.stored else np.full(n, np.nan)
-    features = {**swept, **({"case": np.repeat(np.arange(len(study.cases)), per_case)}
-                            if study.has_case_dim else {}), **ind}
+    features = {**swept, **({"case": case_index} if study.has_case_dim else {}), **ind}
     return {"status": res.status, "trust": res.sl_trust, "low": res.read("sl_error_low"),
             "high": res.read("sl_error_high"), "indicators": ind, "features": features,
             "condensation": cond.astype(str), "eps": cols["eps"], "peak_var_theta": peak,

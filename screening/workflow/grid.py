@@ -21,7 +21,8 @@ from screening.limits import batch_budget
 from screening.workflow.config import build_models, build_point_models
 
 __all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
-           "default_batch_size", "plan_batches", "hyperslabs", "batch_values", "point_values", "batch_models",
+           "default_batch_size", "plan_batches", "hyperslabs", "batch_values", "swept_columns", "point_values",
+           "batch_models",
            "batch_point_models", "select_spots", "parameter_table", "history_chunks"]
 
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
@@ -278,6 +279,45 @@ def batch_values(study, batch):
         return {}
     idx = np.unravel_index(flat, study.swept_shape)
     return {name: study.sweeps[name][i] for name, i in zip(study.swept_dims, idx)}
+
+
+def swept_columns(study):
+    """Swept parameter values and case index of every point of ``study`` (flat, C order).
+
+    Parameters
+    ----------
+    study : screening.workflow.study.Study
+        The study.
+
+    Returns
+    -------
+    columns : dict
+        ``{swept parameter: values}``, one value per point of the study, in the parameter's SI unit
+        (:func:`batch_values` of each case's points).
+    case : numpy.ndarray of int
+        The case index of every point (0 without cases).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> from screening.workflow.study import EXAMPLE_STUDY, parse_study
+    >>> study = parse_study(EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]"))   # eps x S0: 2 x 3
+    >>> columns, case = swept_columns(study)
+    >>> columns["eps"].tolist()
+    [0.0, 0.0, 0.0, 60000000.0, 60000000.0, 60000000.0]
+    >>> columns["S0"].tolist(), case.tolist()
+    ([1e-05, 0.0001, 0.001, 1e-05, 0.0001, 0.001], [0, 0, 0, 0, 0, 0])
+    """
+    n, per_case = study.n_points, study.points_per_case
+    columns = {name: np.empty(n) for name in study.swept_dims}
+    for c in range(len(study.cases)):
+        whole = Batch(0, c, c * per_case, (c + 1) * per_case)
+        for name, values in batch_values(study, whole).items():
+            columns[name][whole.lo:whole.hi] = values
+    return columns, np.repeat(np.arange(len(study.cases)), per_case)
 
 
 def point_values(study, index):

@@ -33,6 +33,7 @@ import numpy as np
 from screening.analysis.probabilities import (answer_quantities, choose_sources, monte_carlo_source, reliable_answer,
                                               sample_probabilities)
 from screening.solvers import mc_registry
+from screening.workflow.grid import swept_columns
 from screening.status import (MONTE_CARLO_SOURCE_BASE, AnswerQuantity, BestMethod, EscalationEstimator,
                               EscalationModel, PointStatus, ProbabilitySource, SampleState, Trust)
 
@@ -163,19 +164,6 @@ def _corrected_estimates(study, res, points):
         value, low, high, _ = best_exceedance(ds, threshold, relative_to, method)
         p[:, j], se[:, j] = value.values, band_standard_error(value.values, low.values, high.values)
     return p, se
-
-
-def _swept_columns(study):
-    """``({swept input: values at every point}, case index of every point)`` of ``study`` (flat, C order)."""
-    from screening.workflow.grid import Batch, batch_values
-
-    n, per_case = study.n_points, study.points_per_case
-    columns = {name: np.empty(n) for name in study.swept_dims}
-    for c in range(len(study.cases)):
-        whole = Batch(0, c, c * per_case, (c + 1) * per_case)
-        for name, values in batch_values(study, whole).items():
-            columns[name][whole.lo:whole.hi] = values
-    return columns, np.repeat(np.arange(len(study.cases)), per_case)
 
 
 def surface_estimates(columns, case, counts, n_used):
@@ -417,7 +405,7 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
         used[flat] = valid.sum()
 
     # near toppling, where no Monte Carlo ran: the study's fragility surface where it is vouched for
-    surface_p, surface_se, usable, notes = surface_estimates(*_swept_columns(study), *_level_counts(runs, levels))
+    surface_p, surface_se, usable, notes = surface_estimates(*swept_columns(study), *_level_counts(runs, levels))
     usable &= source < MONTE_CARLO_SOURCE_BASE
     best_p, best_se = p[:, 0].copy(), se[:, 0].copy()
     best_p[usable], best_se[usable] = surface_p[usable, 0], surface_se[usable, 0]

@@ -10,7 +10,7 @@ from helpers import CASES, GRID
 from screening.condensation import DEFAULT_CONDENSATION
 from screening.workflow import grid
 from screening.workflow.grid import (batch_models, batch_values, default_batch_size, hyperslabs, parameter_table,
-                                     plan_batches, point_values, select_spots)
+                                     plan_batches, point_values, select_spots, swept_columns)
 from screening.workflow.study import parse_study
 
 
@@ -120,6 +120,17 @@ def test_batch_values_and_models_follow_the_flat_c_order():
     assert point_values(study, (1, 2)) == (0, {"eps": study.sweeps["eps"][1], "S0": study.sweeps["S0"][2]})
     cases = parse_study(CASES)
     assert point_values(cases, (1, 0)) == (1, {"S0": 1e-4})
+
+
+@pytest.mark.parametrize("text", [GRID, CASES])
+def test_swept_columns_give_every_points_values_and_case_as_point_values_does(text):
+    """Independent: each flat point's grid index unravelled and read by point_values."""
+    study = parse_study(text)
+    columns, case = swept_columns(study)
+    assert case.shape == (study.n_points,) and set(columns) == set(study.swept_dims)
+    for flat in range(study.n_points):
+        c, values = point_values(study, tuple(int(i) for i in np.unravel_index(flat, study.shape)))
+        assert case[flat] == c and {name: columns[name][flat] for name in columns} == values
 
 
 def test_parameter_table_splits_constants_per_case_values_and_labels():
