@@ -7,7 +7,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test test-slow clean
+.PHONY: run test test-slow test-portable clean
 
 # setuptools says "Editable installation ... be careful with folders named like the package" on every
 # editable install: information for packagers, noise for a user; silenced by its message, nothing else.
@@ -34,6 +34,16 @@ test: $(TEST_STAMP)
 
 test-slow: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m slow --durations=10
+
+# `make test-portable`: the suite as another machine runs it: kernels compiled for a generic x86-64 CPU (no
+# AVX, no FMA: other rounding, other adaptive steps) on one thread, in a cache of their own.  A test that
+# passes here and with `make test` holds its numbers to the computation's accuracy, not to this machine's
+# digits (issue #37).  CI runs it after `make test`.  The cache starts empty each time (the package's stale-cache
+# check looks only at its own __pycache__), so the first minutes compile.
+test-portable: $(TEST_STAMP)
+	rm -rf $(VENV)/numba-generic
+	NUMBA_CPU_NAME=generic NUMBA_NUM_THREADS=1 NUMBA_CACHE_DIR=$(VENV)/numba-generic \
+		$(BIN)/python -m pytest -m "not slow" -q -p no:cacheprovider
 
 clean:
 	rm -rf $(VENV) .pytest_cache

@@ -87,8 +87,11 @@ def test_recomputed_points_match_the_shipped_ones_within_sampling_error(shipped)
         se = float(s["mc_peak_var_theta_se"])
         # the same seeds: equal up to the integrator's rounding; 3 standard errors bound a rebuilt toolchain
         assert r["mc"]["peak_var_theta"] == pytest.approx(float(s["mc_peak_var_theta"]), abs=3 * se)
+        # the linearization at rtol 1e-8 is within 2.4e-7 (relative) of a solve at rtol 1e-11 on the atlas's
+        # first points (5.5e-8 at point 102): two machines differ by up to twice that; 1e-5 keeps a 20x margin
+        # (issue #37; benchmarks/stored_numbers_accuracy.py, docs/validation.md "Stored numbers")
         assert r["sl"]["paper"]["peak_var_theta"] == pytest.approx(
-            float(s["sl_peak_var_theta"].sel(condensation="paper")), rel=1e-6)
+            float(s["sl_peak_var_theta"].sel(condensation="paper")), rel=1e-5)
 
 
 def test_a_campaign_resumed_from_the_file_keeps_its_rows(shipped, tmp_path):

@@ -90,6 +90,10 @@ def shipped():
         return xr.load_dataset(path)
 
 
+#: Absolute tolerance [1] of a recomputed feature against the stored atlas (see the test below).
+FEATURE_ATOL = 2e-4
+
+
 def test_dataset_features_recompute_the_atlas_features(shipped):
     # two independent paths: the atlas's design groups, and the coordinates of a linearization dataset
     from screening.analysis import atlas
@@ -107,7 +111,14 @@ def test_dataset_features_recompute_the_atlas_features(shipped):
                        t_end=timing["t_end"], dt=timing["dt"], condensation="paper")
         x, dims, shape_out = em.dataset_features(ds)
         assert dims == () and x.shape == (1, len(em.FEATURES))
-        assert np.allclose(x[0], x_atlas[i], rtol=1e-6, atol=1e-9), (i, x[0] - x_atlas[i])
+        # Tolerance from the solver's own accuracy, not the machine's digits.  The features are logs and logits
+        # of quantities the linearization integrates at rtol 1e-8; against a solve at rtol 1e-11 they move by up
+        # to 2.8e-5 at these four points (log_margin_loss at point 0, log_decay_excess 8.6e-6 at point 1: min
+        # k_eq and var_theta(t_end) are sampled from adaptive steps).  Another machine (other SIMD width, so other
+        # rounding and other steps) moved log_decay_excess by 3.6e-6 (issue #37).  2e-4 is 7x the largest
+        # measured integration error and still 50x below any change of a feature's definition (>= 1e-2).
+        # The measurement: benchmarks/stored_numbers_accuracy.py (docs/validation.md, "Stored numbers").
+        assert np.allclose(x[0], x_atlas[i], rtol=0.0, atol=FEATURE_ATOL), (i, x[0] - x_atlas[i])
         done[kind] += 1
         if sum(done.values()) == 4:
             break
