@@ -192,7 +192,9 @@ def clear_stale_cache(package=None):
     Examples
     --------
     >>> import tempfile
-    >>> with tempfile.TemporaryDirectory() as folder:
+    >>> from unittest import mock
+    >>> with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ):
+    ...     _ = os.environ.pop("NUMBA_CACHE_DIR", None)   # as without it, whatever the caller has set
     ...     root = Path(folder)
     ...     _ = (root / "kernel.py").write_text("K = 1")
     ...     (root / "__pycache__").mkdir()
