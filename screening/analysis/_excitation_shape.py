@@ -24,7 +24,7 @@ def shape_key(excitation, t_end):
 
 
 def scalar_excitation(kind, envelope_kind, p):
-    from screening import excitations
-    from screening.model.excitation import ConstantEnvelope, Envelope
+    from screening.core import excitations
+    from screening.core.model.excitation import ConstantEnvelope, Envelope
     env = Envelope(p["T1"], p["T2"]) if envelope_kind == "exponential" else ConstantEnvelope()
     return excitations.build(kind, 1.0, p, env)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from screening.solvers.outputs import info_variables
-from screening.status import BestMethod, PointStatus, SpotStatus, Trust
+from screening.core.status import BestMethod, PointStatus, SpotStatus, Trust
 
 __all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
            "product_kind", "describe_product"]
@@ -247,7 +247,7 @@ def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):
 
 
 def bed_lines(ds, max_points=400):
-    """``block on its bed:`` lines of :func:`screening.beds.bed_summary`.
+    """``block on its bed:`` lines of :func:`screening.analysis.beds.bed_summary`.
 
     Ranges over the grid where the block or bed is swept; nothing if the dataset lacks a parameter.
 
@@ -286,10 +286,10 @@ def bed_lines(ds, max_points=400):
     import xarray as xr
 
     from screening.analysis.fragility import parameter
-    from screening.beds import bed_summary, format_bed_summary
-    from screening.model import Block, Foundation
+    from screening.analysis.beds import bed_summary, format_bed_summary
+    from screening.core.model import Block, Foundation
 
-    from screening import laws
+    from screening.core import laws
 
     law = ds.attrs.get("contact", "hunt_crossley")
     try:
@@ -481,7 +481,7 @@ def describe_product(ds, path="file"):
                      f"min {_fmt(float(np.nanmin(p)))}, max {_fmt(float(np.nanmax(p)))}"
                      if np.isfinite(p).any() else "P(exceed): no finite value")
     if "fit_median" in ds:
-        from screening.analysis.im_fragility import curve_count_text
+        from screening.applications.im_fragility import curve_count_text
 
         units = ds["fit_median"].attrs.get("units", "")
         fit = f"lognormal fit over {ds['fit_median'].attrs.get('intensity', '?')}: {curve_count_text(ds)}"
