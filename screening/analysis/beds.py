@@ -26,6 +26,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from screening.core import condensation as condensations
+from screening.core.physics.contact import (exact_uplift_angle, linear_rocking_stiffness, rest_indentation,
+                                            vertical_damping_ratio)
+from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
 __all__ = ["TYPICAL", "oedometric_modulus", "pad_compression_modulus", "layer_stiffness", "hunt_crossley_lambda",
            "c_from_vertical_damping", "lam_from_vertical_damping", "restitution_from_damping_ratio",
@@ -424,11 +428,6 @@ def bed_summary(block, foundation):
     >>> f"{s['uplift_angle']:.4e} {s['rocking_frequency']:.4g}"
     '1.2012e-03 39.68'
     """
-    from screening.core import condensation as condensations
-    from screening.core.physics.contact import (exact_uplift_angle, linear_rocking_stiffness, rest_indentation,
-                                                vertical_damping_ratio)
-    from screening.solvers.synthesis import rocking_frequency, vertical_frequency
-
     b = float(block.b)
     z_st = rest_indentation(block, foundation)
     wv = vertical_frequency(block, foundation)

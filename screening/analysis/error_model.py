@@ -38,7 +38,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from screening.analysis.indicators import indicators_from_dataset
 from screening.core.physics.contact import REST_BEARING_LIMIT, rising_root, vertical_damping_ratio
+from screening.core.status import PointStatus, Trust
+from screening.solvers.datasets import model_fields, model_labels
 
 __all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS",
            "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
@@ -718,8 +721,6 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
     >>> trust_from_interval(np.log([0.9, 0.9, 0.3, np.nan]), np.log([1.1, 1.4, 0.4, 1.0])).tolist()
     [0, 1, 2, 2]
     """
-    from screening.core.status import Trust
-
     low = np.asarray(low, dtype=float)
     high = np.asarray(high, dtype=float)
     with np.errstate(invalid="ignore", over="ignore"):
@@ -1009,8 +1010,6 @@ def dataset_features(ds):
     """
     import xarray as xr
 
-    from screening.analysis.indicators import indicators_from_dataset
-
     ind = indicators_from_dataset(ds)
     fields = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm", "lam", "c", "omega_g", "T1", "S0")
               if name in ds.variables}
@@ -1062,8 +1061,6 @@ def model_features(indicators, block, foundation, excitation):
     >>> x.shape, x[:, FEATURES.index("log_r_ul")].round(3).tolist()
     ((2, 13), [-4.924, -4.924])
     """
-    from screening.solvers.datasets import model_fields, model_labels
-
     labels = model_labels(foundation, excitation)
     grp = parameter_groups(model_fields(block, foundation, excitation), labels["contact"], labels["excitation"])
     n = np.size(indicators["peak_p_uplift"])
@@ -1214,8 +1211,6 @@ def interval_trust(model, x, status=None, covered=True):
     >>> flag.tolist(), est.round(2).tolist(), high.round(2).tolist()
     ([1, 2], [-0.53, -0.63], [-0.3, 0.27])
     """
-    from screening.core.status import PointStatus, Trust
-
     x = np.atleast_2d(np.asarray(x, dtype=float))
     est, low, high = open_ended(*predict(model, x))
     bad = np.zeros(len(x), dtype=bool) if status is None else \

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from screening.analysis.correction import atlas_promises, linearization_promises
+from screening.analysis.multifidelity import allocate
 from screening.analysis.trust import bed_law, p_bin, regime
 from screening.core.status import EscalationModel, PointStatus
 
@@ -691,8 +692,6 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
     >>> paired_plan(dict(pilot, correlation=0.3), EscalationModel.coupled, 100, 2000).estimator
     'plain'
     """
-    from screening.analysis.multifidelity import allocate
-
     c_hi = estimated_cost(pilot["n_steps"], model, pilot["n_grid"], bool(pilot["rodas"]), pilot_samples) / pilot_samples
     cheap_samples = max(int(pilot.get("cheap_samples", pilot_samples)), 1)
     c_lo = estimated_cost(pilot["cheap_n_steps"], PAIRED_MODEL[2], pilot["cheap_n_grid"], False,

@@ -68,20 +68,22 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from screening.analysis.intensity_records import (AVGSA_N_PERIODS, AVGSA_RANGE, G, OMEGA_LOW, PGV_CHUNK, PGV_RECORDS,
-                                                  PGV_SEED, RECORD_MEASURES, avgsa_periods, highpass_gain,
-                                                  median_standard_error, oscillator_peak, record_avgsa,
-                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv,
-                                                  continuous_peak)
 from screening.analysis import intensity_rvt
-from screening.analysis._excitation_shape import scalar_excitation as _scalar_excitation
-from screening.analysis._excitation_shape import shape_key as _shape_key, times as _times
-from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, N_TIMES, envelope_exponentials,
-                                              input_moments, median_peak, oscillator_covariance, oscillator_response_bandwidth,
-                                              rocking_start_probability, sa_median, spectral_moments,
-                                              velocity_covariance, velocity_spectral_moments)
+from screening.analysis._excitation_shape import (scalar_excitation as _scalar_excitation, shape_key as _shape_key,
+                                                  times as _times)
+from screening.analysis.fragility import parameter
+from screening.analysis.intensity_records import (AVGSA_N_PERIODS, avgsa_periods, AVGSA_RANGE, continuous_peak, G,
+                                                  highpass_gain, median_standard_error, OMEGA_LOW, oscillator_peak,
+                                                  PGV_CHUNK, PGV_RECORDS, PGV_SEED, record_avgsa, RECORD_MEASURES,
+                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv)
+from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, envelope_exponentials,
+                                              input_moments, median_peak, N_TIMES, oscillator_covariance,
+                                              oscillator_response_bandwidth, rocking_start_probability, sa_median,
+                                              spectral_moments, velocity_covariance, velocity_spectral_moments)
+from screening.core import excitations
 from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.core.validation import checked
+from screening.solvers import schema
 
 __all__ = ["MEASURES", "RECORD_MEASURES", "PERIOD_MEASURES", "GROUND_BAND_LIMIT_HZ", "G", "N_TIMES",
            "CHUNK_POINTS", "ground_cutoff", "spectral_moments", "rms_acceleration", "arias_intensity",
@@ -377,8 +379,6 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
     >>> (im["pga_median"][1] / im["pga_median"][0]).item(), (im["arias_intensity"][1] / im["arias_intensity"][0]).item()
     (2.0, 4.0)
     """
-    from screening.analysis.fragility import parameter
-
     if "excitation" not in ds.attrs and "excitation" in ds.coords and ds["excitation"].dims == ("case",):
         parts = []                                     # sweep whose cases differ in excitation or envelope
         for i in range(ds.sizes["case"]):
@@ -388,7 +388,6 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
                                             period, damping, cutoff).expand_dims("case"))
         out = xr.concat(parts, "case", coords="different", compat="equals", join="outer", combine_attrs="override")
         return out.assign_coords(case=ds["case"])
-    from screening.core import excitations
 
     kind = ds.attrs.get("excitation")
     envelope_kind = ds.attrs.get("envelope", "exponential")
@@ -449,7 +448,6 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
                                    f"seed {PGV_SEED} (simulated_pga)")
     out["pgv_median"].attrs.update(omega_low=OMEGA_LOW, method=f"median of {PGV_RECORDS} synthesised records per "
                                    f"excitation shape, seed {PGV_SEED} (simulated_pgv)")
-    from screening.solvers import schema
     for name in MEASURES:
         if name in out:
             out[name].attrs.update(schema.attributes(name, schema.INTENSITY))

@@ -24,10 +24,10 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize
 
-from screening.analysis._excitation_shape import N_TIMES
-from screening.analysis._excitation_shape import scalar_excitation as _scalar_excitation
-from screening.analysis._excitation_shape import shape_key as _shape_key, times as _times
-from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, vanmarcke_factor
+from screening.analysis._excitation_shape import (N_TIMES, scalar_excitation as _scalar_excitation,
+                                                  shape_key as _shape_key, times as _times)
+from screening.analysis.fragility import (exceedance_probability_from_moments, oscillator_bandwidth, upcrossing_rate,
+                                          vanmarcke_factor)
 from screening.analysis.intensity_records import OMEGA_LOW
 from screening.kernels.moment_kernels import lyapunov_rhs
 from screening.solvers.synthesis import envelope_rate
@@ -340,8 +340,6 @@ def _unit_crossings(*args):
     tabulated at levels ``x`` every :data:`CROSSING_STEP` peak standard deviations (``log`` of the expected
     crossings is nearly quadratic in ``x``: linear interpolation errs by about ``step^2 / 8``, 5e-5 relative;
     beyond the table, 12 peak standard deviations, the probability is below 1e-28 and read as 0)."""
-    from screening.analysis.fragility import exceedance_probability_from_moments
-
     *shape, method = args
     t, var, var_dot, cov, delta = _unit_input_moments(*shape)
     x = np.arange(0.0, CROSSING_EXTENT, CROSSING_STEP) * math.sqrt(float(np.max(var)))

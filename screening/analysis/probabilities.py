@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.solvers.estimates import Z, binomial_estimate, sample_probabilities
+from screening.analysis.fragility import exceedance_probability, spot_positions
 from screening.analysis.trust import P_EDGES
-from screening.core.status import (AnswerQuantity, BestMethod, PointStatus, ProbabilitySource, SampleState, Trust,
-                                   probability_sources)
+from screening.core.status import (AnswerQuantity, BestMethod, PointStatus, probability_sources, ProbabilitySource,
+                                   SampleState, Trust)
+from screening.solvers import mc_registry
+from screening.solvers.estimates import binomial_estimate, sample_probabilities, Z
 
 __all__ = ["uplift_acceleration", "source_codes", "monte_carlo_source", "choose_sources",
            "overturning_probability", "TOPPLING_FRACTION", "spot_check_probabilities", "probability_text", "Z",
@@ -102,8 +104,6 @@ def source_codes():
     >>> codes["unreliable"], codes["linearization_gaussian"], codes["monte_carlo_coupled"]
     (0, 1, 10)
     """
-    from screening.solvers import mc_registry
-
     return probability_sources(mc_registry.names())
 
 
@@ -223,8 +223,6 @@ def overturning_probability(ds, method="vanmarcke"):
     >>> p.values.tolist(), note
     ([0.1, 0.3], '')
     """
-    from screening.analysis.fragility import exceedance_probability
-
     if "p_overturn" in ds.variables and "p_source" in ds.variables:
         unreliable = ds["p_source"] == int(ProbabilitySource.unreliable)
         n = int(unreliable.sum())
@@ -279,8 +277,6 @@ def spot_check_probabilities(ds):
     >>> prob["p_overturn"].tolist(), prob["near_toppling"].tolist(), prob["thresholds"]
     ([0.25, 0.0], [True, False], ())
     """
-    from screening.analysis.fragility import spot_positions
-
     state = np.asarray(ds["mcs_sample_state"].values)
     peaks = np.asarray(ds["mcs_peak_abs_theta"].values, dtype=float)
     relative_to = str(ds["p_exceed"].attrs.get("relative_to", "None")) if "p_exceed" in ds.variables else "None"

@@ -66,8 +66,11 @@ from importlib import resources
 import numpy as np
 import xarray as xr
 
+from screening.analysis import error_model as em
+from screening.analysis.error_model import shipped_model
 from screening.analysis.indicators import ENVELOPE_FLOOR, envelope_fraction, indicators_from_dataset, trust_indicators
 from screening.core.status import PointStatus, Trust
+from screening.solvers import schema
 
 __all__ = ["ENVELOPE_FLOOR", "P_EDGES", "DECAY_LIMIT", "SIGMA_LIMIT", "MARGIN_LIMIT", "TRUSTED_ERROR",
            "TRUSTED_BAND", "UNTRUSTED_ERROR", "N_SE", "MIN_ROWS", "OVERTURN_LIMIT", "BED_LAWS", "CONDENSATIONS",
@@ -503,8 +506,6 @@ def trust_attributes():
     >>> attrs["sl_trust"]["flag_meanings"], attrs["sl_trust"]["flag_values"].tolist()
     ('trusted check untrusted', [0, 1, 2])
     """
-    from screening.solvers import schema
-
     return {name: schema.attributes(name) for name in ("sl_trust", "sl_error_low", "sl_error_high")}
 
 
@@ -563,8 +564,6 @@ def add_trust(ds, models=None):
     >>> out["sl_trust"].values.tolist(), out["sl_error_low"].values.round(2).tolist()
     ([1, 2], [-0.68, -1.0])
     """
-    from screening.analysis import error_model as em
-
     dims = ds["peak_var_theta"].dims
     peak = ds["peak_var_theta"]
 
@@ -612,8 +611,6 @@ def trust_models(*condensations):
     >>> sorted(trust_models("paper", "no_such_condensation"))
     ['paper']
     """
-    from screening.analysis.error_model import shipped_model
-
     out = {}
     for name in condensations:
         try:
@@ -669,8 +666,6 @@ def error_model_trust(x, status, condensation, covered=True, models=None):
     >>> error_model_trust(x, [0, 0], "paper")[0].tolist(), error_model_trust(x, [0, 2], "paper")[0].tolist()
     ([1, 2], [1, 2])
     """
-    from screening.analysis import error_model as em
-
     x = np.atleast_2d(np.asarray(x, dtype=float))
     n = len(x)
     cond = np.broadcast_to(np.asarray(condensation, dtype=str), (n,))

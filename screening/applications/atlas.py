@@ -45,6 +45,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from screening.core.condensation import paper
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.model.excitation import Envelope
+from screening.core.physics.contact import rest_indentation, vertical_damping_ratio
+from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
 __all__ = ["GROUPS", "RANGES", "BED_EDGES", "SOFTENING_E", "HARDENING_E", "WHITE_FRACTION", "P_TARGET",
            "BEYOND_EDGE", "P_BEYOND", "BEYOND_FACTOR", "RECORD_T1", "N_OUTPUT", "SCALE_R", "SCALE_M", "G",
@@ -300,9 +307,6 @@ def physical_point(groups, i=0):
     >>> shape["kind"], f"{timing['t_end'] / timing['T1']:.1f}"
     ('kanai_tajimi', '4.0')
     """
-    from screening.core.model import Block, Foundation
-    from screening.core.physics.contact import rest_indentation
-
     g = {k: (v[i] if np.ndim(v) else v) for k, v in groups.items()}
     alpha = float(g["alpha"])
     block = Block(m=SCALE_M, b=SCALE_R * math.sin(alpha), h=SCALE_R * math.cos(alpha), g=G)
@@ -365,10 +369,6 @@ def make_excitation(shape, timing, S0):
     >>> type(ex).__name__, ex.S0, ex.envelope.T1
     ('WhiteNoise', 0.01, 4.0)
     """
-    from screening.core.excitations.kanai_tajimi import KanaiTajimi
-    from screening.core.excitations.white import WhiteNoise
-    from screening.core.model.excitation import Envelope
-
     env = Envelope(timing["T1"], timing["T2"])
     if shape["kind"] == "white":
         return WhiteNoise(S0, env)
@@ -418,9 +418,6 @@ def measured_groups(block, foundation, shape, timing):
     >>> f"{g['r_ul'] * g['alpha']:.4e}", f"{8.67 * 9.81 / (2 * 0.035 ** 2 * 2.89e7):.4e}", g["record_T1"]
     ('1.2012e-03', '1.2012e-03', 5.0)
     """
-    from screening.core.condensation import paper
-    from screening.core.physics.contact import vertical_damping_ratio
-
     alpha = float(block.slenderness)
     p = housner_frequency(block)
     z0 = float(paper.static_indentation(0.0, block, foundation))
@@ -477,8 +474,6 @@ def derived_groups(block, foundation, shape, S0):
     >>> f"{d['w_v_p']:.4f}", f"{math.sqrt(4 * 0.5 / (3 * float(block.b) * theta_ul)):.4f}"
     ('80.7449', '80.7449')
     """
-    from screening.solvers.synthesis import rocking_frequency, vertical_frequency
-
     p = housner_frequency(block)
     w_r, w_v = rocking_frequency(block, foundation), vertical_frequency(block, foundation)
     return {"w_r_p": w_r / p, "w_v_p": w_v / p,

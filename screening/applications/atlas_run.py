@@ -19,8 +19,18 @@ import time
 
 import numpy as np
 
-from screening.applications import atlas
+from screening.analysis.fragility import exceedance_probability
+from screening.analysis.linearization import linearize
+from screening.analysis.probabilities import sample_probabilities
 from screening.analysis.target_intensity import calibrate_intensity
+from screening.analysis.trust import add_cell_trust, indicators_from_dataset
+from screening.applications import atlas
+from screening.core.status import PointStatus
+from screening.solvers.model_choice import rule_of, rules, vouches
+from screening.solvers.moments import solve_moments
+from screening.solvers.montecarlo import monte_carlo
+from screening.solvers.synthesis import vertical_frequency
+from screening.solvers.timegrid import output_times
 
 __all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
            "assemble", "reference_validity", "REFERENCE_VALIDITY", "OUTSIDE_RULE", "mc_exceedance", "VARIABLES"]
@@ -82,9 +92,6 @@ def reference_model(block, foundation, timing, excitation_kind, coupled_radians=
     >>> round((2 * 0.035 * 2.89e7 / 8.67) ** 0.5 * 20.0), reference_model(block, bed, {"t_end": 20.0}, "white")
     (9661, 'coupled')
     """
-    from screening.solvers.model_choice import rule_of, vouches
-    from screening.solvers.synthesis import vertical_frequency
-
     if vertical_frequency(block, foundation) * timing["t_end"] <= coupled_radians:
         return "coupled"
     held, _ = vouches(rule_of("stiff_bed"), block, foundation, excitation_kind)
@@ -96,8 +103,6 @@ def _point_intensity(block, foundation, shape, timing, p_target, factor):
     (:func:`screening.analysis.target_intensity.calibrate_intensity`), times ``factor``; where the linearization stops
     before reaching it, the last intensity at which it does not stop (:func:`_last_stable_intensity`), times
     ``factor``."""
-    from screening.solvers.timegrid import output_times
-
     make = lambda s: atlas.make_excitation(shape, timing, s)                 # noqa: E731
     t_out = output_times(timing["t_end"], timing["dt"])
     try:
@@ -111,9 +116,6 @@ def _last_stable_intensity(block, foundation, make_exc, t_out, log10_bounds=(-10
     """The largest ``S0`` [m2 s-3] (to ``xtol`` in log10) at which the paper linearization still ends with status
     ok: the intensity of a point whose target uplift probability the linearization cannot reach (it stops
     first).  ``ValueError`` if it stops at the lower bound already."""
-    from screening.solvers.moments import solve_moments
-    from screening.core.status import PointStatus
-
     def ok(log_s0):
         return int(solve_moments(block, foundation, make_exc(10.0 ** log_s0), t_out,
                                  condensation="paper")["status"]) == PointStatus.ok
@@ -139,10 +141,6 @@ def _linearization_row(block, foundation, excitation, timing, condensation):
     (:func:`screening.analysis.trust.add_cell_trust`: the rule the atlas's first campaign recorded; the error
     model is learnt from the atlas, so it is not recorded in it), and ``p_exceed`` at :data:`LEVELS` of one
     condensation (``{"error": ...}`` if it does not apply)."""
-    from screening.analysis.fragility import exceedance_probability
-    from screening.analysis.trust import add_cell_trust, indicators_from_dataset
-    from screening.analysis.linearization import linearize
-
     try:
         ds = add_cell_trust(linearize(block, foundation, excitation, t_end=timing["t_end"], dt=timing["dt"],
                                       condensation=condensation, trust=False))
@@ -158,8 +156,6 @@ def _linearization_row(block, foundation, excitation, timing, condensation):
 
 def _monte_carlo_row(block, foundation, excitation, timing, model, samples, seed):
     """Reference Monte Carlo summaries and the per-sample peaks ``|theta|`` [rad] and states."""
-    from screening.solvers.montecarlo import monte_carlo
-
     t0, c0 = time.perf_counter(), time.process_time()
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=model, t_end=timing["t_end"],
                      dt=timing["dt"], seed=seed, progress=False)
@@ -395,8 +391,6 @@ def reference_validity(ds):
     """
     import xarray as xr
 
-    from screening.solvers.model_choice import rule_of, rules, vouches
-
     fallback = rules()[1]
     g = atlas.groups_of(np.asarray(ds["u"].values, dtype=float))
     models = ds["mc_model"].values.astype(str)
@@ -451,8 +445,6 @@ def mc_exceedance(peaks, state, levels):
     >>> p.round(4).tolist()
     [[0.6667, 0.3333]]
     """
-    from screening.analysis.probabilities import sample_probabilities
-
     peaks = np.asarray(peaks, dtype=float)
     state = np.asarray(state)
     levels = np.asarray(levels, dtype=float)

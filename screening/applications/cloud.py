@@ -40,10 +40,20 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening.solvers import model_choice
-from screening.core.status import FitFlag
+from screening.analysis.fragility import fit_binomial_fragility, fit_lognormal_fragility
+from screening.analysis.intensity import PERIOD_MEASURES, record_measures, RECORD_MEASURES
+from screening.applications.records_study import block_and_foundation, load_record_study
 from screening.core import limits
-from screening.sweep.config import StudyError, check_choice, check_keys, check_value
+from screening.core.records import (check_scale, check_time_step, expand_records, read_record, Record, unit_factor,
+                                    write_at2)
+from screening.core.status import FitFlag
+from screening.io.errors import exception_line
+from screening.solvers import model_choice, schema
+from screening.solvers.simulate import simulate
+from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
+from screening.sweep.config import check_choice, check_keys, check_value, StudyError
+from screening.sweep.execution import TASK_RETRIES
+from screening.sweep.interrupt import interruptible
 
 __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
            "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "cloud_dataset",
@@ -135,9 +145,6 @@ def load_cloud_study(path, units=None, vertical=True):
     (['synthetic_00.at2', 'synthetic_01.at2', 'synthetic_02.at2'], 'pga', 0.2, 'slenderness')
     >>> folder.cleanup()
     """
-    from screening.core.records import check_scale, check_time_step, expand_records, unit_factor
-    from screening.applications.records_study import load_record_study
-
     base, rec = load_record_study(path)
     root = Path(path).parent
     if rec is None:
@@ -212,9 +219,6 @@ def _levels(value, im):
 def _run_record(block, foundation, record, model="coupled", condensation="paper", period=None):
     """One record: ``dict`` of the peak ``|theta|``, overturned/diverged flags, overturning time and the
     record's intensity measures."""
-    from screening.analysis.intensity import record_measures
-    from screening.solvers.simulate import simulate
-
     ds = simulate(block, foundation, record, model=model, condensation=condensation, output_dt=max(record.dt, 0.01))
     out = {"peak_abs_theta": float(ds["peak_abs_theta"]), "overturned": bool(ds["overturned"]),
            "diverged": bool(ds["diverged"]), "overturning_time": float(ds["overturning_time"]),
@@ -275,8 +279,6 @@ def read_cloud_records(cloud):
     """
     from dataclasses import replace
 
-    from screening.core.records import read_record
-
     records = []
     for path in cloud.files:
         try:
@@ -290,8 +292,6 @@ def read_cloud_records(cloud):
 
 def _failed_record(period=None):
     """The row of a record whose task failed: NaN values, ``diverged`` (left out of the fit)."""
-    from screening.analysis.intensity import PERIOD_MEASURES, RECORD_MEASURES
-
     row = {"peak_abs_theta": math.nan, "overturned": False, "diverged": True, "overturning_time": math.nan,
            "lift_off": False}
     row.update({name: math.nan for name in RECORD_MEASURES if name not in PERIOD_MEASURES or period is not None})
@@ -303,9 +303,6 @@ def _record_rows(block, foundation, records, model, condensation, period, client
 
     Returns ``(rows, failures)``: one dict per record in the order given, and the messages of the
     records whose task failed (their rows come from :func:`_failed_record`)."""
-    from screening.io.errors import exception_line
-    from screening.sweep.interrupt import interruptible
-
     def said(i, row):
         if progress:
             progress(f"record {i + 1}/{len(records)} {records[i].name}: peak |theta| {row['peak_abs_theta']:.4g} rad"
@@ -318,8 +315,6 @@ def _record_rows(block, foundation, records, model, condensation, period, client
             said(i, rows[i])
         return rows, failures
     from distributed import as_completed
-
-    from screening.sweep.execution import TASK_RETRIES
 
     pending = {client.submit(_run_record, block, foundation, rec, model, condensation, period, pure=False,
                              retries=TASK_RETRIES): i for i, rec in enumerate(records)}
@@ -392,8 +387,6 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     ...     print(exc)
     foundation.eps is swept in the study; fix it with --set eps=VALUE (swept values: 0, 6e+07)
     """
-    from screening.applications.records_study import block_and_foundation
-
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
     if records is None:
         records = read_cloud_records(cloud)
@@ -510,9 +503,6 @@ def scaled_to(record, im, level, period=None):
     >>> round(float(np.abs(scaled_to(record, "pga", 2.0).acceleration).max()), 12)
     2.0
     """
-    from screening.analysis.intensity import record_measures
-    from screening.core.records import Record
-
     value = record_measures(record, period=period)[IMS[im]]
     factor = level / value if im != "arias" else math.sqrt(level / value)
     vertical = None if record.vertical is None else record.vertical * factor     # both components alike
@@ -575,8 +565,6 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
     ...     print(exc)
     foundation.eps is swept in the study; fix it with --set eps=VALUE (swept values: 0, 6e+07)
     """
-    from screening.applications.records_study import block_and_foundation
-
     block, foundation, chosen = block_and_foundation(cloud.study, case, overrides)
     records = read_cloud_records(cloud) if records is None else records
     scaled = [scaled_to(rec, cloud.im, level, cloud.period) for level in cloud.levels for rec in records]
@@ -637,9 +625,6 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     >>> ds["n_exceed"].values.tolist(), ds["n_used"].values.tolist(), ds["fit_median"].attrs["units"]
     ([1, 2], [3, 3], 'm s-2')
     """
-    from screening.solvers import schema
-    from screening.analysis.fragility import fit_binomial_fragility
-
     levels, n_rec = np.asarray(cloud.levels), len(names)
     level = threshold_level(cloud, block, foundation)
     grid = {k: (("level", "record"), np.array([r[k] for r in rows]).reshape(levels.size, n_rec)) for k in rows[0]}
@@ -738,9 +723,6 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     >>> ds["exceed"].values.tolist(), round(float(ds["fit_median"]), 2), warnings
     ([False, True, False, True], 1.14, [])
     """
-    from screening.solvers import schema
-    from screening.analysis.fragility import fit_lognormal_fragility
-
     slender = float(block.slenderness)
     level = threshold_level(cloud, block, foundation)
     data = {k: ("record", np.array([r[k] for r in rows])) for k in rows[0]}
@@ -848,9 +830,6 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
     ...     [os.path.basename(p) for p in paths], open(paths[0]).readline().strip()
     (['synthetic_00.at2', 'synthetic_01.at2'], 'PEER NGA STRONG MOTION DATABASE RECORD')
     """
-    from screening.core.records import Record, write_at2
-    from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
-
     plan = spectral_plan(excitation, t_end, cutoff)
     acc, _ = ground_acceleration_samples(excitation, plan, seed, np.arange(n_records))
     t = np.arange(0.0, t_end + 0.5 * dt, dt)
@@ -912,8 +891,6 @@ def write_demand_csv(ds, path):
     '3,r4,2,0.5,2,0.2,0.01,0.0605515,1,0,1'
     """
     import csv
-
-    from screening.analysis.intensity import RECORD_MEASURES
 
     ims = [name for name in RECORD_MEASURES if name in ds]
     slender = float(ds["slenderness"])

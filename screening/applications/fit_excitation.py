@@ -46,7 +46,9 @@ import math
 import numpy as np
 from scipy import optimize
 
-from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
+from screening.analysis.intensity import spectral_moments
+from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd, KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 from screening.core.records import Record
 
 __all__ = ["envelope_energy", "DEFAULT_BAND_TOP", "fit_envelope", "smoothed_psd", "fit_spectral_shape", "DT_RANGE", "MIN_SAMPLES",
@@ -585,10 +587,6 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
     >>> [f"{g[k]:.2f}" for k in ("husid_max_deviation", "zero_crossing_rate_record", "zero_crossing_rate_model")]
     ['0.25', '9.27', '9.65']
     """
-    from screening.analysis.intensity import spectral_moments
-    from screening.core.excitations.kanai_tajimi import KanaiTajimi
-    from screening.core.excitations.white import WhiteNoise
-
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt
     model = envelope_energy(t, fit["T1"], fit["T2"])

@@ -34,7 +34,8 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import xarray as xr
 
-from screening.analysis.fragility import model_quantity, parameter
+from screening.analysis.fragility import add_fit, fragility_dataset, model_quantity, parameter
+from screening.analysis.intensity import intensity_measures
 from screening.core.atomicfile import atomic_open
 from screening.core.status import FitFlag
 
@@ -55,7 +56,6 @@ IMS = {
 
 
 def _im_values(ds, im, period, cutoff):
-    from screening.analysis.intensity import intensity_measures
     if im == "s0":
         return parameter(ds, "S0"), None
     if im in ("sa", "avgsa") and period is None:
@@ -162,8 +162,6 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     >>> f"{float(frag['fit_median']):.4f} {float(frag['beta']):.4f}", frag["fit_median"].attrs["units"], warnings
     ('1.2381 0.1175', 'm s-2', [])
     """
-    from screening.analysis.fragility import add_fit, fragility_dataset
-
     if im not in IMS:
         raise ValueError(f"--im must be one of {', '.join(IMS)} (got {im!r})")
     grid = list(ds["status"].dims) if "status" in ds else [d for d in ds["var_theta"].dims if d != "t"]

@@ -11,7 +11,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from screening.sweep.config import NUMERIC, StudyError, build_models, parse_toml, read_study_text
+from screening.sweep.config import build_models, NUMERIC, parse_toml, read_study_text, StudyError
+from screening.sweep.study import study_from_tables
 
 __all__ = ["load_record_study", "pick_case", "block_and_foundation"]
 
@@ -55,8 +56,6 @@ def load_record_study(path):
     >>> study.dims, records
     (('eps',), {'files': ['el_centro.AT2']})
     """
-    from screening.sweep.study import study_from_tables
-
     text = read_study_text(path)
     path = os.fsdecode(path)
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from screening.core.atomicfile import create_new
+from screening.io.errors import SweepError
 
 #: The completion mark of a finished store (:func:`write_completion_mark`), in its top folder.
 COMPLETION_MARK = "screening-complete.json"
@@ -141,8 +142,6 @@ def netcdf_attributes(attrs, dtype=None, where="the result"):
     netCDF cannot type (nested, mixed) as JSON text; ``flag_values`` in ``dtype`` (a
     :class:`~screening.io.errors.SweepError` naming ``where`` if they are not a flat list of
     numbers)."""
-    from screening.io.errors import SweepError
-
     out = {}
     for name, value in attrs.items():
         if value is None:

@@ -33,9 +33,12 @@ import math
 
 import numpy as np
 
-from screening.solvers.schema import CDO_LAYOUT, CDO_TIME, cdo_threshold_attributes
-from screening.io.errors import SweepError, read_values
+from screening.io._zarr_store import netcdf_attributes
+from screening.io.errors import read_values, SweepError
 from screening.io.layout import hyperslabs
+from screening.io.reader import open_result
+from screening.io.writer import POINT_CHUNK, point_chunks
+from screening.solvers.schema import CDO_LAYOUT, cdo_threshold_attributes, CDO_TIME
 
 __all__ = ["MAX_GRID_DIMS", "BLOCK_VALUES", "SOURCE_CACHE_BYTES", "open_source", "parse_selection", "select",
            "export_cdo"]
@@ -83,8 +86,6 @@ def open_source(path):
     >>> ds.close(); folder.cleanup()
     """
     import netCDF4
-
-    from screening.io.reader import open_result
 
     saved = netCDF4.get_chunk_cache()
     netCDF4.set_chunk_cache(SOURCE_CACHE_BYTES)
@@ -214,8 +215,6 @@ def _grid_chunks(shape, row_values):
     """Chunks over the grid ``shape`` of a variable with ``row_values`` values per point (C-order runs of
     points, :data:`BLOCK_VALUES` values at most when the shape allows), and the points per block: whole
     chunks of about :data:`BLOCK_VALUES` values, so that every chunk is written once, in full."""
-    from screening.io.writer import POINT_CHUNK, point_chunks
-
     chunks = point_chunks(shape, max(1, min(POINT_CHUNK, BLOCK_VALUES // max(row_values, 1))))
     points = math.prod(chunks)
     return chunks, points * max(1, BLOCK_VALUES // (max(row_values, 1) * points))
@@ -282,8 +281,6 @@ def export_cdo(ds, dst, complevel, history, selection=None):
     seconds since 1970-01-01 00:00:00 True ('eps',)
     """
     import netCDF4
-
-    from screening.io._zarr_store import netcdf_attributes
 
     ds = select(ds, selection or {})
     grid = tuple(ds["status"].dims)

@@ -5,7 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from screening.io.errors import SweepError, exception_line
+from screening.core import limits
+from screening.io._zarr_store import read_attrs
+from screening.io.errors import exception_line, SweepError
+from screening.io.zarrfile import check_store, is_zarr_store, open_zarr_result, store_problem
+from screening.solvers.moments import HISTORY_VARIABLES
 
 __all__ = ["ResultError", "REQUIRED_VARIABLES", "open_result", "layout_problem", "damaged_data_error",
            "result_key", "VERIFY_BLOCK_BYTES", "verify_result", "example_result"]
@@ -69,8 +73,6 @@ def open_result(path):
     """
     import xarray as xr
 
-    from screening.io.zarrfile import is_zarr_store, open_zarr_result, store_problem
-
     path = Path(path)
     zarr = is_zarr_store(path)
     if not path.is_file() and not zarr:
@@ -129,9 +131,6 @@ def layout_problem(ds):
     'status is not an integer variable (float64)'
     """
     import numpy as np
-
-    from screening.solvers.moments import HISTORY_VARIABLES
-    from screening.core import limits
 
     grid = tuple(ds["status"].dims)
     if "t" in grid:
@@ -228,9 +227,6 @@ def result_key(path):
     """
     import netCDF4
 
-    from screening.io._zarr_store import read_attrs
-    from screening.io.zarrfile import is_zarr_store
-
     if is_zarr_store(path):
         try:
             key = read_attrs(path).get("study_sha256")
@@ -288,8 +284,6 @@ def verify_result(path, study):
     """
     import netCDF4
     import numpy as np
-
-    from screening.io.zarrfile import check_store, is_zarr_store
 
     expected = dict(zip(study.dims, study.shape), t=int(study.times.size))
     if is_zarr_store(path):

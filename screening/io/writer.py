@@ -48,12 +48,15 @@ from pathlib import Path
 import numpy as np
 
 from screening._version import __version__
-from screening.solvers.schema import (ACCURACY, PRESSURE_PARAMETERS, SWEEP, TIME, attributes, global_attributes,
-                                      grid_coordinate_attributes)
-from screening.solvers.outputs import GRID_OUTPUTS, client_variables, selected
 from screening.core.status import SpotStatus
+from screening.io._zarr_store import foreign_files
 from screening.io.errors import SweepError
-from screening.io.layout import SPOT_HISTORIES, SPOT_LINEAR, history_chunks, hyperslabs, parameter_table, wants_probabilities
+from screening.io.layout import (history_chunks, hyperslabs, parameter_table, SPOT_HISTORIES, SPOT_LINEAR,
+                                 wants_probabilities)
+from screening.io.zarrfile import is_zarr_path, is_zarr_store
+from screening.solvers.outputs import client_variables, GRID_OUTPUTS, selected
+from screening.solvers.schema import (ACCURACY, attributes, global_attributes, grid_coordinate_attributes,
+                                      PRESSURE_PARAMETERS, SWEEP, TIME)
 
 __all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
            "NetcdfFormat", "result_attributes", "band_limit_attribute",
@@ -117,9 +120,6 @@ def check_output_path(out, inputs=()):
             raise SweepError(f"output path {out} is the input file {path}; give another --out")
         if _inside(out, path):
             raise SweepError(f"output path {out} is inside the input {path}; give another --out")
-    from screening.io._zarr_store import foreign_files
-    from screening.io.zarrfile import is_zarr_path, is_zarr_store
-
     if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
         raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")
     if is_zarr_path(out) and is_zarr_store(out):

@@ -24,10 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from screening.core.atomicfile import create_new
-from screening.solvers.outputs import GRID_OUTPUTS
-from screening.io.layout import history_chunks, hyperslabs
 from screening.io._zarr_store import (COMPLETION_MARK, file_check, netcdf_attributes, read_completion_mark,
                                       warnings_ignored)
+from screening.io.errors import read_values
+from screening.io.layout import history_chunks, hyperslabs
+from screening.solvers.outputs import GRID_OUTPUTS
 from screening.io._zarr_store import write_completion_mark  # noqa: F401 (the examples' finished runs)
 
 __all__ = ["ZARR_SUFFIX", "ZARR_FORMAT", "BLOCK_BYTES", "COMPLETION_MARK", "ZARR_FILL", "is_zarr_path",
@@ -670,8 +671,6 @@ def export_netcdf(src, dst, complevel, history):
     """
     import netCDF4
     import zarr
-
-    from screening.io.errors import read_values
 
     with warnings_ignored():
         group = zarr.open_group(src, mode="r")

@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from screening.core.atomicfile import atomic_open
 from screening.core.status import PointStatus, Trust
 
 __all__ = ["DPI", "RESPONSES", "FLAGGED_HATCH", "UNTRUSTED_HATCH", "FLAGGED_COLOR", "UNTRUSTED_COLOR",
@@ -527,8 +528,6 @@ def save_figure(fig, path):
     ...     out.read_bytes()[:4], sorted(p.name for p in pathlib.Path(tmp).iterdir())
     (b'\\x89PNG', ['f.png'])
     """
-    from screening.core.atomicfile import atomic_open
-
     with atomic_open(path, "wb") as fh:                 # never through a planted link
         fig.savefig(fh, format="png")
     return Path(path)

@@ -7,6 +7,9 @@ import numpy as np
 from matplotlib.ticker import NullFormatter
 from scipy.special import ndtr
 
+from screening.applications.fit_excitation import envelope_energy, husid, smoothed_psd
+from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
+from screening.core.records import Record
 from screening.report.figure_base import new_figure, save_figure
 
 __all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit", "plot_stripes", "plot_cloud"]
@@ -114,9 +117,6 @@ def plot_excitation_fit(record, fit, path):
     ...     plot_excitation_fit(rec, fit_excitation(rec), pathlib.Path(tmp) / "fit.png").name
     'fit.png'
     """
-    from screening.applications.fit_excitation import envelope_energy, husid, smoothed_psd
-    from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
-
     a = record.acceleration - record.acceleration.mean()
     t = np.arange(a.size) * record.dt
     fig = new_figure(7.0, 7.0)
@@ -130,7 +130,6 @@ def plot_excitation_fit(record, fit, path):
     ax[0].set_title(f"worst gap {fit['husid_max_deviation']:.3f}; zero crossings {fit['zero_crossing_rate_record']:.3g}"
                     f"/s (record) vs {fit['zero_crossing_rate_model']:.3g}/s (model)", fontsize=8)
     ax[0].legend(fontsize=7)
-    from screening.core.records import Record
 
     w, s = smoothed_psd(Record(a, record.dt), fit["T1"], fit["T2"])
     use = w > 0

@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.solvers.outputs import info_variables
+from screening.analysis.beds import bed_summary, format_bed_summary
+from screening.analysis.fragility import parameter
+from screening.analysis.intensity import intensity_measures
+from screening.analysis.probabilities import source_codes, TOPPLING_FRACTION
+from screening.core import laws
+from screening.core.model import Block, Foundation
 from screening.core.status import BestMethod, PointStatus, SpotStatus, Trust
+from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
+from screening.solvers.outputs import info_variables
 
 __all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
            "product_kind", "describe_product"]
@@ -48,8 +55,6 @@ def describe(ds, path="result"):
     >>> print(describe(ds, "demo.nc").splitlines()[4])
       S0       5 values, 0.0003 .. 0.0012 m2 s-3
     """
-    from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
-
     dims = grid_dims(ds)
     lines = [f"{path}: {ds.attrs.get('title', '')}",
              f"  screening {ds.attrs.get('screening_version', '?')}, study {ds.attrs.get('study_file', '?')}, "
@@ -161,8 +166,6 @@ def probability_lines(ds):
     >>> probability_lines(xr.Dataset())
     []
     """
-    from screening.analysis.probabilities import TOPPLING_FRACTION, source_codes
-
     lines = []
     if "p_source" in ds.variables:
         source = np.asarray(ds["p_source"].values).reshape(-1)
@@ -285,11 +288,6 @@ def bed_lines(ds, max_points=400):
     """
     import xarray as xr
 
-    from screening.analysis.fragility import parameter
-    from screening.analysis.beds import bed_summary, format_bed_summary
-    from screening.core.model import Block, Foundation
-
-    from screening.core import laws
 
     law = ds.attrs.get("contact", "hunt_crossley")
     try:
@@ -360,8 +358,6 @@ def intensity_lines(ds):
     >>> intensity_lines(ds)[2]
     '  rms_acceleration  0.2201 .. 0.4402 m s-2 (0.02245 .. 0.04489 g)'
     """
-    from screening.analysis.intensity import intensity_measures
-
     try:
         im = intensity_measures(ds)
     except (KeyError, ValueError):

@@ -47,20 +47,19 @@ import time
 
 import numpy as np
 
-from screening.solvers import schema
-from screening.solvers import mc_registry
-from screening.kernels import mcs_kernels as kern
-from screening.solvers.model_choice import resolve as resolve_model
+from screening.core import limits
 from screening.core.condensation import DEFAULT_CONDENSATION, get as get_condensation
 from screening.core.excitations import Excitation, names as excitation_names
 from screening.core.physics.contact import vertical_damping_ratio
 from screening.core.progress import Progress
-from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
+from screening.core.validation import check_integer, check_size
+from screening.kernels import mcs_kernels as kern
+from screening.solvers import mc_registry, schema
+from screening.solvers.datasets import monte_carlo_dataset, with_probabilities
+from screening.solvers.model_choice import resolve as resolve_model
+from screening.solvers.synthesis import (CUTOFF_FACTOR, default_cutoff, envelope_rate, low_passed, OVERSAMPLING,
                                          spectral_plan, stationary_samples, validate_seed)
 from screening.solvers.timegrid import output_times
-from screening.solvers.datasets import monte_carlo_dataset
-from screening.core.validation import check_integer, check_size
-from screening.core import limits
 
 __all__ = ["MODELS", "DEFAULT_RTOL", "AUTO_RTOL", "AUTO_RTOL_SAMPLES", "auto_rtol", "DEFAULT_NUMERICS",
            "RODAS_DAMPING_RATIO", "check_scalar_models",
@@ -438,8 +437,6 @@ def _with_probabilities(run):
 
     @functools.wraps(run)
     def monte_carlo(*args, thresholds=None, **kwargs):
-        from screening.solvers.datasets import with_probabilities
-
         thresholds = _check_thresholds(thresholds)
         return with_probabilities(run(*args, **kwargs), thresholds)
 

@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from screening._version import __version__
 from screening.core import excitations, laws
-from screening.solvers.outputs import OUTPUTS, of_stage
 from screening.core.status import (AnswerQuantity, BestMethod, ContactRegime, EscalationEstimator, EscalationModel,
-                                   FitFlag, PointStatus, SampleState, SpotStatus, TargetMet, flag_attributes,
-                                   probability_sources)
+                                   FitFlag, flag_attributes, PointStatus, probability_sources, SampleState, SpotStatus,
+                                   TargetMet)
+from screening.solvers import mc_registry
+from screening.solvers.outputs import of_stage, OUTPUTS
 
 __all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
            "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
@@ -235,8 +237,6 @@ def probability_source_attributes():
     >>> "monte_carlo_coupled" in attrs["flag_meanings"].split()
     True
     """
-    from screening.solvers import mc_registry
-
     codes = sorted(probability_sources(mc_registry.names()).items(), key=lambda item: item[1])
     return {"units": "1", "long_name": "model that produced p_overturn and p_exceed at the point",
             "flag_values": np.array([c for _, c in codes], dtype=np.int8),
@@ -246,8 +246,6 @@ def probability_source_attributes():
 def monte_carlo_model_attributes():
     """CF flag attributes of the per-spot ``mcs_model``: the Monte Carlo model that ran there (with ``model =
     "auto"`` the one chosen for the point), one value per registered model (read when asked)."""
-    from screening.solvers import mc_registry
-
     names = mc_registry.names()
     return {"units": "1", "long_name": "Monte Carlo model that produced the spot point's statistics",
             "flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}
@@ -672,8 +670,6 @@ def apply_schema(ds, table=None, **global_attrs):
     ...
     KeyError: "variable 'foo' is not declared in screening.solvers.schema"
     """
-    from screening._version import __version__
-
     ds = ds.copy()
     for name in list(ds.variables):
         declared = attributes(name, table)

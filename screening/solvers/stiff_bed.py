@@ -75,14 +75,17 @@ import math
 
 import numpy as np
 
+from screening.core import laws
 from screening.core.condensation import cubic
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
+from screening.core.model import Block, Foundation
 from screening.kernels import mcs_kernels as kern
-from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, get as get_model, register
-from screening.kernels.stiff_bed_contact import (STIFF, gravity_ratio, housner_restitution, indentation_curvature,
+from screening.kernels.stiff_bed_contact import (gravity_ratio, housner_restitution, indentation_curvature,
                                                  indentation_curvature_jit, potential, rocking_acceleration,
-                                                 rocking_acceleration_jit, rocking_coefficients, stiff_record)
-from screening.kernels.stiff_bed_kernels import (integrate_chunk, integrate_sample, linear_propagator,
-                                                 transfer_ratio_jit)
+                                                 rocking_acceleration_jit, rocking_coefficients, STIFF, stiff_record)
+from screening.kernels.stiff_bed_kernels import integrate_chunk, integrate_sample, linear_propagator, transfer_ratio_jit
+from screening.solvers.mc_registry import ChunkIntegrator, get as get_model, MonteCarloModel, register
+from screening.solvers.model_choice import RULE_FILE, rule_of, vouches
 from screening.solvers.synthesis import rocking_frequency
 
 __all__ = ["StiffBedModel", "STIFF_BED", "housner_restitution", "indentation_curvature", "linear_propagator",
@@ -126,8 +129,6 @@ def validity_limit():
     >>> 0.0 < validity_limit() < 1.0
     True
     """
-    from screening.solvers.model_choice import rule_of
-
     return rule_of("stiff_bed").bound("theta_ul_over_slenderness")[1]
 
 
@@ -218,8 +219,6 @@ def validity_problem(block, foundation, excitation=None):
     >>> print(validity_problem(block, Foundation(k=5e5, lam=3e7)))      # a soft bed
     model 'stiff_bed' outside its measured validity: theta_ul_over_slenderness = 0.695 outside the measured ...
     """
-    from screening.solvers.model_choice import RULE_FILE, rule_of, vouches
-
     rule = rule_of("stiff_bed")
     kind = getattr(excitation, "kind", None)
     ok, why = vouches(rule, block, foundation, kind, check_excitation=excitation is not None)
@@ -291,8 +290,6 @@ def _bed_key(block, foundation):
 
 @functools.lru_cache(maxsize=64)
 def _transfer_table_cached(key):
-    from screening.core.model import Block, Foundation
-    from screening.core import laws
     m, g, h, b, i_cm, k, eps, damping, law = key
     block = Block(m=m, b=b, h=h, I_cm=i_cm, g=g)
     foundation = Foundation(k=k, eps=eps, law=law, **{laws.get(law).parameter: damping})
@@ -481,8 +478,6 @@ class StiffBedModel(MonteCarloModel):
         self.locate = locate
 
     def input_band(self, block, foundation):
-        from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
-
         if self.band == "full":
             return None
         ground = ground_cutoff(GROUND_BAND_LIMIT_HZ)

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from screening.core.model import Block, Foundation
 from screening.core.physics.contact import linear_rocking_stiffness
 
 __all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
@@ -198,8 +199,6 @@ def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
     >>> default_cutoffs(Block(m=8.67, b=0.035, h=0.21), Foundation(k=np.array([2.89e7, 1e9]), lam=8.95e8)).round(1)
     array([1449.1, 8524.3])
     """
-    from screening.core.model import Block, Foundation
-
     def one(m, b, h, I_cm, g, k):
         try:
             return default_cutoff(Block(m, b, h, I_cm, g), Foundation(k=k, lam=0.0), factor)

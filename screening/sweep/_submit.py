@@ -11,11 +11,15 @@ import time
 
 import numpy as np
 
-from screening.solvers.outputs import HISTORY_VARIABLES, client_variables
+from screening.analysis.trust import trust_models
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model import Block, Foundation
 from screening.core.status import SampleState
-from screening.sweep.config import build_models, case_cutoff
 from screening.io.layout import SPOT_HISTORIES, SPOT_LINEAR, wants_probabilities
-from screening.sweep.execution import TASK_RETRIES, escalation_task, solve_batch, spot_task
+from screening.solvers.montecarlo import monte_carlo
+from screening.solvers.outputs import client_variables, HISTORY_VARIABLES
+from screening.sweep.config import build_models, case_cutoff
+from screening.sweep.execution import escalation_task, solve_batch, spot_task, TASK_RETRIES
 from screening.sweep.grid import batch_point_models, point_values
 
 
@@ -48,8 +52,6 @@ def failed_spot(nt, samples, linear_names=SPOT_LINEAR):
 def submit_batch(client, study, batch, key, target=None):
     """Submit :func:`~screening.sweep.execution.solve_batch` for ``batch`` (retried :data:`~screening.sweep.execution.TASK_RETRIES` times); with a
     :class:`~screening.io.store.RegionTarget` ``target``, :func:`solve_and_store_batch`."""
-    from screening.analysis.trust import trust_models
-
     case = study.cases[batch.case]
     block, foundation, excitation, underivable = batch_point_models(study, batch)
     args = (block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
@@ -103,10 +105,6 @@ def sees_folder(path):
 def warm_up_monte_carlo():
     """Compile the Monte Carlo kernels on a worker (both models, two short samples); returns the time [s]."""
     start = time.perf_counter()
-    from screening.core.model import Block, Foundation
-    from screening.core.excitations.white import WhiteNoise
-    from screening.solvers.montecarlo import monte_carlo
-
     for model in ("coupled", "condensed"):
         monte_carlo(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), n_samples=2,
                     model=model, t_end=0.2, dt=0.1, progress=False)

@@ -16,11 +16,19 @@ from typing import NamedTuple
 
 import numpy as np
 
+from screening.analysis import escalation as esc
+from screening.analysis.correction import best_estimates, point_features
+from screening.analysis.escalation import auto_escalation_model
+from screening.analysis.trust import shipped_calibration, trust_indicators
 from screening.core import limits
-from screening.sweep import _submit
-from screening.io.errors import exception_line, write_failure_reason
-from screening.sweep.interrupt import interruptible
 from screening.core.progress import Progress
+from screening.core.status import BestMethod, EscalationEstimator, EscalationModel
+from screening.io.errors import exception_line, write_failure_reason
+from screening.solvers.model_choice import AUTO, choose
+from screening.sweep import _submit
+from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
+from screening.sweep.interrupt import interruptible
+from screening.sweep.study import build_models
 
 __all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "Stage", "escalate", "accuracy_line"]
 
@@ -49,9 +57,6 @@ class Stage(NamedTuple):
 def _point_table(stage):
     """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
     features of the correction, condensation and eps, and SL's peaks."""
-    from screening.analysis.trust import trust_indicators
-    from screening.sweep.grid import Batch, batch_point_models, swept_columns
-
     study, res = stage.study, stage.result
     n, per_case = study.n_points, study.points_per_case
     cols = {name: np.empty(n) for name in ("k_rest", "eps", "envelope_end")}
@@ -132,11 +137,6 @@ def escalate(stage):
     >>> Stage._fields
     ('client', 'study', 'store', 'result', 'log', 'progress')
     """
-    from screening.analysis import escalation as esc
-    from screening.analysis.correction import best_estimates, point_features
-    from screening.analysis.trust import shipped_calibration
-    from screening.core.status import BestMethod, EscalationEstimator, EscalationModel
-
     acc = stage.study.accuracy
     pts = _point_table(stage)
     features = point_features(pts["features"])
@@ -187,12 +187,6 @@ def escalation_models(stage, order, calibrated):
     the measured validity rule's choice per point where it is the stiff-bed model, the calibration's
     (``calibrated``) elsewhere (:func:`~screening.analysis.escalation.auto_escalation_model`); an explicit model
     at every point.  Resolved once here: the tasks receive the model's name."""
-    from screening.analysis.escalation import auto_escalation_model
-    from screening.solvers.model_choice import AUTO, choose
-    from screening.core.status import EscalationModel
-    from screening.sweep.grid import point_values
-    from screening.sweep.study import build_models
-
     study = stage.study
     model = getattr(study.accuracy, "model", AUTO)
     if model != AUTO:
@@ -225,9 +219,6 @@ def _escalation_runs(stage, order, models):
     record, so that an interrupted run resumes to the same result.
     """
     from distributed import as_completed
-
-    from screening.analysis import escalation as esc
-    from screening.core.status import EscalationEstimator, EscalationModel
 
     study, store, acc = stage.study, stage.store, stage.study.accuracy
     most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)

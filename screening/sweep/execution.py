@@ -22,13 +22,23 @@ from pathlib import Path
 
 import numpy as np
 
+from screening.analysis import error_model as em
 from screening.analysis.escalation import full_contact_share
-from screening.solvers import mc_registry
-from screening.solvers.moments import solve_moments
-from screening.solvers.outputs import HISTORY_VARIABLES, OUTPUTS, of_stage, selected
-from screening.core.status import PointStatus, SampleState, Trust
+from screening.analysis.fragility import band_standard_error, linearized_exceedance
+from screening.analysis.intensity import ground_cutoff, input_measures, rocking_start_probability
+from screening.analysis.multifidelity import multifidelity_variance
+from screening.analysis.probabilities import uplift_acceleration
+from screening.analysis.trust import error_model_trust, trust_indicators
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.status import EscalationEstimator, PointStatus, SampleState, Trust
+from screening.io.errors import exception_line, SweepError
 from screening.io.layout import SPOT_HISTORIES
-from screening.io.errors import SweepError, exception_line
+from screening.solvers import mc_registry
+from screening.solvers.model_choice import resolve
+from screening.solvers.moments import solve_moments
+from screening.solvers.montecarlo import choose_integrator, monte_carlo
+from screening.solvers.outputs import HISTORY_VARIABLES, of_stage, OUTPUTS, selected
 
 __all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "solve_batch", "batch_intensity",
            "batch_rocking_start", "batch_trust", "batch_probabilities", "failed_result",
@@ -209,8 +219,6 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
     >>> round(float(np.pi / (2 * 9.81) * measures["rms_acceleration"][0] ** 2 * 2.0), 5)   # pi/(2g) rms^2 T
     0.00461
     """
-    from screening.analysis.intensity import ground_cutoff, input_measures
-
     measures = input_measures(excitation, float(np.asarray(t_out)[-1]), ground_cutoff() if cutoff is None else cutoff)
     return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
             else np.asarray(measures[name], dtype=np.float64).reshape(n)
@@ -272,9 +280,6 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
     >>> start["uplift_acceleration"].round(3), start["p_rocking_start"].round(3)   # hardening bed rocks later
     (array([0.533, 0.741]), array([0.501, 0.008]))
     """
-    from screening.analysis.intensity import ground_cutoff, rocking_start_probability
-    from screening.analysis.probabilities import uplift_acceleration
-
     try:
         with np.errstate(all="ignore"):
             a_ul = uplift_acceleration(block, foundation, condensation)
@@ -345,9 +350,6 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, mo
     >>> trust["sl_trust"]                                 # trusted (0), check (1)
     array([0, 1], dtype=int8)
     """
-    from screening.analysis import error_model as em
-    from screening.analysis.trust import error_model_trust, trust_indicators
-
     n = out["status"].size
 
     def on_points(value):          # a per-point array of the batch, or one value for all its points
@@ -445,8 +447,6 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
     >>> p["p_overturn"].round(3), p["p_overturn_se"].round(3)       # a standard error at trusted points only
     (array([0.735, 0.735]), array([0.056,   nan]))
     """
-    from screening.analysis.fragility import band_standard_error, linearized_exceedance
-
     n = out["status"].size
     shape = res["status"].shape
     t = np.asarray(t_out, dtype=float)
@@ -587,9 +587,6 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     >>> int(out["n_used"] + out["n_overturned"] + out["n_diverged"])
     2
     """
-    from screening.solvers.model_choice import resolve
-    from screening.solvers.montecarlo import monte_carlo
-
     mc = resolve(model, block, foundation, excitation)          # "auto": once, for this point
     kw = {"condensation": condensation} if mc.uses_condensation else {}
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=mc, t_end=t_end, dt=dt,
@@ -616,10 +613,6 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
     peak of var_theta and the :class:`~screening.core.status.EscalationEstimator` code.  Where the cheap model refuses
     the point (``ValueError`` before any work) the result is the plain one, with ``cheap_samples`` 0.
     ``progress``: the expensive run's samples, as for :func:`spot_task`."""
-    from screening.analysis.multifidelity import multifidelity_variance
-    from screening.solvers.montecarlo import monte_carlo
-    from screening.core.status import EscalationEstimator
-
     def run(name, cond, n, events=None):
         kw = {"condensation": cond} if mc_registry.get(name).uses_condensation else {}
         return monte_carlo(block, foundation, excitation, n_samples=n, model=name, t_end=t_end, dt=dt, seed=seed,
@@ -724,9 +717,6 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     >>> out["peak_var_theta"], out["peak_var_theta_se"], out["samples"]
     (np.float64(0.0002), np.float64(1e-05), np.int32(8))
     """
-    from screening.solvers.montecarlo import choose_integrator
-    from screening.core.status import EscalationEstimator
-
     start = time.thread_time()
     if cheap is None:
         run = spot_task(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
@@ -862,9 +852,6 @@ def warm_up():
     (1, [0.0, 0.1])
     """
     start = time.perf_counter()
-    from screening.core.model import Block, Foundation
-    from screening.core.excitations.white import WhiteNoise
-
     solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
     return time.perf_counter() - start
 

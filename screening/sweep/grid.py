@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from screening.core.limits import batch_budget
 from screening.core.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.core.limits import batch_budget
-from screening.sweep.config import build_models, build_point_models
+from screening.sweep.config import build_models, build_point_models, NUMERIC
 
 __all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
            "default_batch_size", "plan_batches", "batch_values", "swept_columns", "point_values",
@@ -436,8 +436,6 @@ def select_spots(study, status, peak_p_uplift):
 def _bed_keys(study):
     """For each flat grid index, a number naming its case and swept block/bed parameters (the excitation
     dimensions left out): points with equal numbers stand on the same block and bed."""
-    from screening.sweep.config import NUMERIC
-
     shape = study.shape
     keep = [i for i, d in enumerate(study.dims) if d == "case" or NUMERIC.get(d, ("",))[0] != "excitation"]
     if not keep:

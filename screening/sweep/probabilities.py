@@ -30,12 +30,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from screening.analysis import fragility_surface as fs
+from screening.analysis.fragility import band_standard_error, best_exceedance
+from screening.analysis.multifidelity import multifidelity_probabilities
 from screening.analysis.probabilities import (answer_quantities, choose_sources, monte_carlo_source, reliable_answer,
-                                              sample_probabilities)
+                                              sample_probabilities, source_codes)
+from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator, EscalationModel,
+                                   MONTE_CARLO_SOURCE_BASE, PointStatus, ProbabilitySource, SampleState, Trust)
 from screening.solvers import mc_registry
-from screening.sweep.grid import swept_columns
-from screening.core.status import (MONTE_CARLO_SOURCE_BASE, AnswerQuantity, BestMethod, EscalationEstimator,
-                                   EscalationModel, PointStatus, ProbabilitySource, SampleState, Trust)
+from screening.sweep.grid import point_values, swept_columns
+from screening.sweep.study import build_models
 
 __all__ = ["CORRECTION_HISTORIES", "levels_at", "surface_estimates", "finish_probabilities", "probabilities_line",
            "answer_line"]
@@ -71,8 +75,6 @@ def paired_probabilities(peaks, state, paired, levels):
     and its paired cheaper model's (:func:`screening.analysis.multifidelity.multifidelity_probabilities`);
     where a level carries no information in the pair (both models constant over the paired samples) the plain
     binomial estimate of the point's own samples."""
-    from screening.analysis.multifidelity import multifidelity_probabilities
-
     state, cheap_peaks, cheap_state = np.asarray(state), np.asarray(paired[0], dtype=float), np.asarray(paired[1])
 
     def flags(s):
@@ -138,10 +140,6 @@ def _corrected_estimates(study, res, points):
     flat indices ``points`` of the result ``res`` of ``study``; None where the result does not store the
     histories it needs."""
     import xarray as xr
-
-    from screening.analysis.fragility import band_standard_error, best_exceedance
-    from screening.sweep.grid import point_values
-    from screening.sweep.study import build_models
 
     if not points.size or not set(CORRECTION_HISTORIES) <= set(study.output.stored):
         return None
@@ -219,8 +217,6 @@ def surface_estimates(columns, case, counts, n_used):
     >>> bool(usable.all()), round(float(p[8, 0]), 2), bool(abs(p[3, 0] - ndtr(np.log(S0[3] / 1e-3) / 0.5)) < 0.02)
     (True, 0.5, True)
     """
-    from screening.analysis import fragility_surface as fs
-
     n = case.size
     levels = len(next(iter(counts.values()))) if counts else 1
     p, se = np.full((n, levels), np.nan), np.full((n, levels), np.nan)
@@ -365,8 +361,6 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     >>> res["answer_note"]
     'answers: variance 2, probabilities 0; unreliable: 1 variance, 1 without any reliable answer'
     """
-    from screening.analysis.probabilities import source_codes
-
     res.commit()                    # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
     thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0

@@ -111,15 +111,15 @@ from types import MappingProxyType, SimpleNamespace
 import numpy as np
 
 from screening._version import __version__
-from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
-from screening.solvers import mc_registry, model_choice
-from screening.solvers.timegrid import output_times
 from screening.core import limits
-from screening.sweep.config import (NUMERIC, TABLE_KEYS, Case, StudyError, build_models, build_point_models,
-                                    case_cutoff, check_choice, check_grid_size, check_keys, check_list,
-                                    check_value, choice, integer, model_tables, name_string, number_list,
-                                    numeric_table, parse_toml, read_study_text, required, resolve_case, short_repr,
-                                    table, time_table, title_and_description, type_name)
+from screening.solvers import mc_registry, model_choice
+from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
+from screening.solvers.timegrid import output_times
+from screening.sweep.config import (build_models, build_point_models, Case, case_block_and_foundation, case_cutoff,
+                                    check_choice, check_grid_size, check_keys, check_list, check_value, choice, integer,
+                                    model_tables, name_string, number_list, NUMERIC, numeric_table, parse_toml,
+                                    read_study_text, required, resolve_case, short_repr, StudyError, table, TABLE_KEYS,
+                                    time_table, title_and_description, type_name)
 
 __all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study",
            "study_from_tables", "EXAMPLE_STUDY"]
@@ -619,8 +619,6 @@ def check_model_validity(model, cases, sweeps, strict, where):
     with ``strict`` a :class:`StudyError` naming the rule and the first point outside it, else a ``UserWarning``
     saying so (the run goes on).  ``"auto"`` is never outside (it picks per point)."""
     import warnings
-
-    from screening.sweep.config import case_block_and_foundation
 
     if model == model_choice.AUTO:
         return

@@ -15,8 +15,9 @@ import abc
 
 import numpy as np
 
-from screening.core.signatures import MomentKernel, SdofKernel
+from screening.core.condensation import quadrature
 from screening.core.registry import NamedModel
+from screening.core.signatures import MomentKernel, SdofKernel
 
 __all__ = ["Condensation", "MomentKernel", "SdofKernel"]
 
@@ -68,14 +69,10 @@ class Condensation(NamedModel, abc.ABC):
 
         Default: Gaussian quadrature of ``C``, ``K`` (:mod:`screening.core.condensation.quadrature`).
         """
-        from screening.core.condensation import quadrature
-
         return quadrature.equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation, self)
 
     def moment_kernel(self, block, foundation):
         """:class:`MomentKernel` for model objects with flat (1-d) fields (default: quadrature tables)."""
-        from screening.core.condensation import quadrature
-
         return quadrature.moment_kernel(block, foundation, self)
 
     def sdof_kernel(self, block, foundation):
