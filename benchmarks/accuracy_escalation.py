@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 
 from screening.analysis.correction import best_estimates, point_features  # noqa: E402
 from screening.analysis.trust import INDICATORS, calibration_rows, shipped_calibration, shipped_table, sl_trust  # noqa: E402
-from screening.status import BestMethod, EscalationModel, Trust  # noqa: E402
+from screening.core.status import BestMethod, EscalationModel, Trust  # noqa: E402
 
 #: The 100 x 100 (eps x S0) study of bench_sweep.py, storing the histories the trust rule and fragility read.
 OUTPUT = '[output]\nvariables = ["var_theta", "var_theta_dot", "cov_theta_theta_dot", "k_eq"]\n'
@@ -45,8 +45,8 @@ OUTPUT = '[output]\nvariables = ["var_theta", "var_theta_dot", "cov_theta_theta_
 
 def sweep_cost(points, budget, target, workers, work):
     """Wall times [s] of the sweep without and with ``[accuracy]``, and the escalation's report."""
-    from screening.workflow.study import parse_study
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.study import parse_study
+    from screening.sweep.run import run_sweep
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_sweep import STUDY

@@ -26,7 +26,7 @@ unreliable counts (variance; without any reliable answer), and the study's fragi
 held-out truth for that surface, coupled Monte Carlo (``--holdout-samples``, the escalation's task and
 settings, the study's seed + 1) at ``--holdout-points`` random points whose ``p_overturn`` came from the surface,
 and the share within 2 combined standard errors (goal >= 90 %).  The sweep stores the histories the corrected
-probabilities need (``c_eq`` among them: :data:`screening.workflow.probabilities.CORRECTION_HISTORIES`).
+probabilities need (``c_eq`` among them: :data:`screening.sweep.probabilities.CORRECTION_HISTORIES`).
 
 ``benchmarks/accuracy_escalation.py`` corrects each calibration point from the *other* calibration points,
 which belong to other blocks, beds and excitations: a stress test of the correction across families.  A
@@ -69,8 +69,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from accuracy_escalation import OUTPUT, holds  # noqa: E402
 
-from screening.status import BestMethod  # noqa: E402
-from screening.workflow.study import DEFAULT_BUDGET_S  # noqa: E402
+from screening.core.status import BestMethod  # noqa: E402
+from screening.sweep.study import DEFAULT_BUDGET_S  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_WORK = ROOT / "outputs" / "accuracy_in_sweeps"
@@ -144,8 +144,8 @@ def study_text(family, params, S0_values, target, budget):
 
 def run_family(family, fam, args):
     """Run (or reuse) the family's sweep; returns the sidecar info (wall time, escalation report)."""
-    from screening.workflow.study import parse_study
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.study import parse_study
+    from screening.sweep.run import run_sweep
 
     out = args.work / f"{family}.nc"
     side = args.work / f"{family}.json"
@@ -167,7 +167,7 @@ def family_rows(family, fam, path, target):
     """Per calibration point of the family: SL, band, trust, the best estimate and the reference."""
     import xarray as xr
 
-    from screening.status import Trust
+    from screening.core.status import Trust
 
     rows = []
     with xr.open_dataset(path) as ds:
@@ -351,9 +351,9 @@ def sweep_unreliable(points, budget, target, work, workers=2):
     ``bench_sweep.py``) run with ``[accuracy] target, budget_s``; the study and its result path."""
     from bench_sweep import STUDY
 
-    from screening.workflow.probabilities import CORRECTION_HISTORIES
-    from screening.workflow.study import parse_study
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.probabilities import CORRECTION_HISTORIES
+    from screening.sweep.study import parse_study
+    from screening.sweep.run import run_sweep
 
     assert all(f'"{name}"' in SWEEP_OUTPUT for name in CORRECTION_HISTORIES)
     n = max(int(round(np.sqrt(points))), 1)
@@ -380,7 +380,7 @@ def answer_lines(path):
     import xarray as xr
 
     from screening.analysis.probabilities import reliable_answer
-    from screening.status import AnswerQuantity, ProbabilitySource
+    from screening.core.status import AnswerQuantity, ProbabilitySource
 
     with xr.open_dataset(path) as ds:
         answer = ds["answer_quantity"].values.reshape(-1)
@@ -409,10 +409,10 @@ def surface_holdout(study, path, points, samples, seed=2026, workers=2):
     from distributed import Client, LocalCluster
 
     from screening.solvers.estimates import binomial_estimate
-    from screening.status import ProbabilitySource, SampleState
-    from screening.workflow.config import build_models
-    from screening.workflow.execution import escalation_task
-    from screening.workflow.grid import point_values
+    from screening.core.status import ProbabilitySource, SampleState
+    from screening.sweep.config import build_models
+    from screening.sweep.execution import escalation_task
+    from screening.sweep.grid import point_values
 
     with xr.open_dataset(path) as ds:
         source = ds["p_source"].values.reshape(-1)

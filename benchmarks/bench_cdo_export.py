@@ -47,8 +47,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sides", type=int, nargs="+", default=[50, 100], help="values per swept parameter")
     args = parser.parse_args(argv)
-    from screening.workflow.study import parse_study
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.study import parse_study
+    from screening.sweep.run import run_sweep
 
     print(f"{'points':>8} {'export [s]':>11} {'peak RSS [MiB]':>15} {'result [MB]':>12} {'CDO form [MB]':>14}")
     with tempfile.TemporaryDirectory() as tmp:

@@ -36,8 +36,8 @@ def _size(path):
 
 def run_once(side, histories, suffix, tmp):
     """One run; returns ``(points, wall [s], client RSS, worker RSS [bytes], client CPU [s], size [bytes])``."""
-    from screening.workflow.study import parse_study
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.study import parse_study
+    from screening.sweep.run import run_sweep
 
     study = parse_study(STUDY.format(n=side, output=OUTPUT[histories]), name="bench")
     out = tmp / f"bench-{side}-{histories}{suffix}"
@@ -67,7 +67,7 @@ def main(argv=None):
     parser.add_argument("--one", nargs=4, metavar=("SIDE", "HISTORIES", "SUFFIX", "TMP"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:
-        from screening.workflow.execution import warm_up
+        from screening.sweep.execution import warm_up
 
         warm_up()                                      # the numba cache is loaded before the clock starts
         side, histories, suffix, tmp = args.one

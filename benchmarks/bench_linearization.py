@@ -21,8 +21,9 @@ import time
 
 import numpy as np
 
-from screening.model import Block, Foundation
-from screening.model.excitation import KanaiTajimi, WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
 

@@ -37,8 +37,10 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 
 import numpy as np  # noqa: E402
 
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers.montecarlo import AUTO_RTOL_SAMPLES, auto_rtol, monte_carlo  # noqa: E402
 
 ENVELOPE = Envelope(4.0, 2.0)

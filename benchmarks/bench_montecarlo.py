@@ -20,8 +20,10 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 
 import numpy as np  # noqa: E402
 
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model import Block, Foundation  # noqa: E402
 from screening.solvers.montecarlo import auto_rtol, monte_carlo  # noqa: E402
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)

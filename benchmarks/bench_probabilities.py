@@ -5,7 +5,7 @@ Run::
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD .venv/bin/python \\
         benchmarks/bench_probabilities.py
 
-Prints the wall time of one batch task (:func:`screening.workflow.execution.solve_batch`) of the whole grid
+Prints the wall time of one batch task (:func:`screening.sweep.execution.solve_batch`) of the whole grid
 of ``studies/quick.toml`` (paper block, 10 x 10 eps x S0, 20 s records, 0.05 s output, all histories):
 plain (every sweep: the linearization, trust, intensity measures and ``p_rocking_start``), with
 ``p_overturn`` (``[accuracy]``), and with ``p_overturn`` and two ``[fragility]`` thresholds; and the
@@ -24,9 +24,9 @@ FRAGILITY = '\n[fragility]\nthresholds = [0.1, 0.5]\nrelative_to = "slenderness"
 
 def main():
     from screening.analysis.trust import trust_models
-    from screening.workflow.execution import batch_rocking_start, solve_batch
-    from screening.workflow.grid import batch_models, plan_batches
-    from screening.workflow.study import parse_study
+    from screening.sweep.execution import batch_rocking_start, solve_batch
+    from screening.sweep.grid import batch_models, plan_batches
+    from screening.sweep.study import parse_study
 
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     source = Path(__file__).resolve().parent.parent / "studies" / "quick.toml"

@@ -50,12 +50,12 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 
 import numpy as np  # noqa: E402
 
-from screening.beds import lam_from_vertical_damping  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import KanaiTajimi  # noqa: E402
+from screening.analysis.beds import lam_from_vertical_damping  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi  # noqa: E402
 from screening.solvers import stiff_bed  # noqa: E402
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
-from screening.solvers.stiff_bed_kernels import COUNT_ROWS  # noqa: E402
+from screening.kernels.stiff_bed_kernels import COUNT_ROWS  # noqa: E402
 from screening.solvers.synthesis import (default_cutoff, envelope_rate, low_passed, spectral_plan,  # noqa: E402
                                          stationary_samples)
 

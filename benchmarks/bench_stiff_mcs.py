@@ -62,15 +62,17 @@ from screening.analysis import escalation as esc  # noqa: E402
 from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff  # noqa: E402
 from screening.kernels._sample_steps import ground_input  # noqa: E402
 from screening.kernels.dopri import stability_bound  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
-from screening.condensation import get as get_condensation  # noqa: E402
-from screening.solvers import mcs_kernels as kern  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.condensation import get as get_condensation  # noqa: E402
+from screening.kernels import mcs_kernels as kern  # noqa: E402
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: E402
 from screening.solvers.montecarlo import auto_rtol, monte_carlo, vertical_damping_ratio  # noqa: E402
 from screening.solvers.synthesis import (OVERSAMPLING, default_cutoff, grid_points,  # noqa: E402
                                          spectral_plan, stationary_samples, vertical_frequency)
-from screening.status import EscalationModel  # noqa: E402
+from screening.core.status import EscalationModel  # noqa: E402
 
 ENVELOPE = Envelope(4.0, 2.0)
 STATUE = Block(m=600.0, b=0.2, h=0.8)

@@ -1,6 +1,6 @@
 """Benchmark: a 10,000-point white-noise sweep (100 eps x 100 S0, 20 s records) end to end.
 
-Runs the sweep exactly as ``screening run`` does (:func:`screening.workflow.sweep.run_sweep`, timed in
+Runs the sweep exactly as ``screening run`` does (:func:`screening.sweep.run.run_sweep`, timed in
 a fresh process: local dask cluster, batches, streaming netCDF write, atomic rename) with 1 and then 2 worker
 processes, and prints points per second end to end, the 1 -> 2 worker scaling, and where
 the time goes: cluster start-up, worker warm-up (imports + loading the numba cache),
@@ -60,7 +60,7 @@ PHASES = ("cluster_start", "warm_up", "compute", "write", "finalize", "shutdown"
 def jit_in_this_process():
     """Import the solver and run it once (compiles only if the on-disk numba cache is stale) [s]."""
     start = time.perf_counter()
-    from screening.workflow.execution import warm_up
+    from screening.sweep.execution import warm_up
 
     warm_up()
     return time.perf_counter() - start
@@ -71,9 +71,9 @@ def _solve_share(n, side, queue, histories=True):
     cheap and costly points as the sweep) in this process; put the time taken [s]."""
     import numpy as np
 
-    from screening.model.excitation import WhiteNoise
+    from screening.core.excitations.white import WhiteNoise
     from screening.solvers.moments import solve_moments
-    from screening.model import Block, Foundation
+    from screening.core.model import Block, Foundation
     from screening.solvers.timegrid import output_times
 
     t = output_times(20.0, 0.05)
@@ -149,7 +149,7 @@ class RssSampler:
 
 def rss_curve(sides, histories, complevel, tmp):
     """Peak RSS of client and workers and points/s for 2 workers at each grid side; table + PNG."""
-    from screening.workflow.study import parse_study
+    from screening.sweep.study import parse_study
 
     rows = []
     for side in sides:
@@ -194,7 +194,7 @@ OUTPUT = {"all": "", "none": '[output]\nhistories = "none"\n'}
 
 def sweep_here(study, out, workers, complevel):
     """``run_sweep`` in this process: ``(wall [s], timings)``."""
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     start = time.perf_counter()
     report = run_sweep(study, out, workers=workers, force=True, progress=False, log=lambda *_: None,
@@ -207,7 +207,7 @@ def sweep_here(study, out, workers, complevel):
 def _run_sweep_child(study_path, out, workers, complevel, queue):
     """Time ``run_sweep`` in this fresh process: its imports done, its solvers not yet loaded -- the
     state of the ``screening run`` client when it starts the cluster (its workers are forked from it)."""
-    from screening.workflow.study import parse_study
+    from screening.sweep.study import parse_study
 
     study = parse_study(Path(study_path).read_text(), name="bench", source=str(study_path))
     queue.put(sweep_here(study, out, workers, complevel))
@@ -245,7 +245,7 @@ def main(argv=None):
     parser.add_argument("--workers", default="1,2", help="comma-separated worker counts to run (default 1,2)")
     args = parser.parse_args(argv)
 
-    from screening.workflow.study import parse_study
+    from screening.sweep.study import parse_study
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -307,7 +307,7 @@ def main(argv=None):
                 print(f"scaling 1 -> 2 workers, compute phase: {t1['compute'] / t2['compute']:.2f}x")
         if not args.cli:
             from screening.report.figures import plot_result
-            from screening.workflow.reader import open_result
+            from screening.io.reader import open_result
 
             start = time.perf_counter()
             with open_result(out) as ds:

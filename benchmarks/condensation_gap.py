@@ -3,12 +3,12 @@
 Run:  NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/condensation_gap.py [--samples 1000] [--seed 0]
       [--cases 1 3 5 7] [--markdown]
 
-For the paper's eight cases (:mod:`screening.model.cases`, numbered 1–8 as in docs/validation.md: Figs. 2–9)
+For the paper's eight cases (:mod:`screening.core.model.cases`, numbered 1–8 as in docs/validation.md: Figs. 2–9)
 prints the peak over the 20 s record of ``var_theta`` and of ``var_theta_dot`` from
 
 * ``coupled MCS``   — Monte Carlo of the full coupled model (eqs. 7–8), the reference;
 * ``cond. MCS paper`` / ``cond. MCS cubic`` — Monte Carlo of the condensed SDOF (eq. 22) with
-  the paper's condensation (eqs. 17–25) and with the cubic one (:mod:`screening.condensation.cubic`);
+  the paper's condensation (eqs. 17–25) and with the cubic one (:mod:`screening.core.condensation.cubic`);
 * ``SL paper`` / ``SL cubic`` — stochastic linearization + Lyapunov (:func:`screening.linearize`),
 
 with each estimate's difference from the coupled MCS in percent (MCS peaks carry their
@@ -29,9 +29,9 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 
 import numpy as np  # noqa: E402
 
-from screening.model.cases import PAPER_CASES, paper_case  # noqa: E402
+from screening.core.model.cases import PAPER_CASES, paper_case  # noqa: E402
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
-from screening.solvers.linearization import linearize  # noqa: E402
+from screening.analysis.linearization import linearize  # noqa: E402
 
 CASE_NAMES = list(PAPER_CASES)          # case n is CASE_NAMES[n - 1]
 MCS_RUNS = (("coupled MCS", "coupled", "paper"), ("cond. MCS paper", "condensed", "paper"),

@@ -32,9 +32,10 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 
 import numpy as np  # noqa: E402
 
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import KanaiTajimi, WhiteNoise  # noqa: E402
-from screening.solvers.linearization import linearize  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi  # noqa: E402
+from screening.core.excitations.white import WhiteNoise
+from screening.analysis.linearization import linearize  # noqa: E402
 from screening.solvers.simulate import simulate  # noqa: E402
 from screening.solvers.synthesis import default_cutoff, spectral_plan, stationary_samples  # noqa: E402
 

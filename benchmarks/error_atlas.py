@@ -1,5 +1,5 @@
 """The error atlas campaign: linearization (every condensation) against reference Monte Carlo over a
-Sobol design in dimensionless groups (:mod:`screening.analysis.atlas`), as a resumable dask job.
+Sobol design in dimensionless groups (:mod:`screening.applications.atlas`), as a resumable dask job.
 
 Run (regenerates ``screening/data/error_atlas.nc``)::
 
@@ -50,8 +50,8 @@ def point_path(work, index):
 
 def run_and_save(index, u, samples, seed, work):
     """Evaluate one point and write its JSON atomically (runs on a worker)."""
-    from screening.analysis.atlas_run import _evaluate_point
-    from screening.atomicfile import atomic_open
+    from screening.applications.atlas_run import _evaluate_point
+    from screening.core.atomicfile import atomic_open
 
     res = _evaluate_point(index, u, samples=samples, seed=seed)
     with atomic_open(point_path(work, index)) as fh:
@@ -75,7 +75,7 @@ def resumed_rows(path, indices):
         return None
     import xarray as xr
 
-    from screening.analysis.atlas_run import REFERENCE_VALIDITY
+    from screening.applications.atlas_run import REFERENCE_VALIDITY
 
     with xr.open_dataset(path) as ds:
         keep = np.isin(ds["point"].values, np.asarray(indices))
@@ -154,7 +154,7 @@ def main(argv=None):
         print(f"error: --redo must be point indices in 0..{args.points - 1} (got {redo[-1]})", file=sys.stderr)
         return 2
 
-    from screening.analysis import atlas
+    from screening.applications import atlas
 
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
@@ -176,7 +176,7 @@ def main(argv=None):
     if todo and not args.assemble_only:
         from distributed import as_completed
 
-        from screening.workflow.execution import dask_client
+        from screening.sweep.execution import dask_client
 
         with dask_client(workers=args.workers, scheduler=args.scheduler) as client:
             print(f"dask: {client}", flush=True)
@@ -203,7 +203,7 @@ def main(argv=None):
         print(f"pilot: all {len(allc)} points mean {np.mean(allc):.2f} s -> {args.points} points "
               f"{np.mean(allc) * args.points / 3600:.2f} CPU h")
         return 0
-    from screening.analysis.atlas_run import REFERENCE_VALIDITY, assemble, reference_validity
+    from screening.applications.atlas_run import REFERENCE_VALIDITY, assemble, reference_validity
 
     cpu_h = sum(r.get("cpu", 0.0) for r in results) / 3600
     given = [a for a in (argv if argv is not None else sys.argv[1:]) if a != "--assemble-only"]
@@ -234,7 +234,7 @@ def main(argv=None):
 
 def write_atlas(ds, out):
     """Write the atlas ``ds`` to ``out`` atomically (numeric variables compressed)."""
-    from screening.atomicfile import atomic_path
+    from screening.core.atomicfile import atomic_path
 
     enc = {name: {"zlib": True, "complevel": 5} for name in ds.data_vars if ds[name].dtype != object}
     with atomic_path(out) as tmp:

@@ -2,7 +2,7 @@
 
 For each of a few Kanai-Tajimi models (filter and envelope), 20 records of 30 s are synthesised with
 the package's own spectral representation (fixed seeds), fitted by
-:func:`screening.analysis.fit_excitation.fit_excitation`, and the table prints, per model and
+:func:`screening.applications.fit_excitation.fit_excitation`, and the table prints, per model and
 parameter, the median over the records of ``estimate / true - 1`` and its 10-90 % range.  ``S0_peak``
 is the intensity at the envelope's peak (``S0 max q^2``); ``PGA`` is the random-vibration median PGA
 of the fitted model against the true model's (ground band limit 25 Hz).  The goal: every median
@@ -17,10 +17,11 @@ import time
 
 import numpy as np
 
-from screening.analysis.fit_excitation import envelope_peak, fit_excitation
+from screening.applications.fit_excitation import envelope_peak, fit_excitation
 from screening.analysis.intensity import ground_cutoff, pga_median
-from screening.model.excitation import Envelope, KanaiTajimi
-from screening.records import Record
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.records import Record
 from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
 
 #: (name, S0 [m2 s-3], omega_g [rad/s], zeta_g, T1 [s], T2 [s]).

@@ -37,13 +37,15 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 
 import numpy as np  # noqa: E402
 
-from screening import condensation as condensations  # noqa: E402
-from screening.analysis.metrics import peak_with_se  # noqa: E402
-from screening.analysis.tradeoff import calibrate_intensity  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
-from screening.physics.contact import REGIME_FLIGHT, REGIME_FULL_CONTACT, contact_resultants  # noqa: E402
-from screening.solvers.linearization import linearize  # noqa: E402
+from screening.core import condensation as condensations  # noqa: E402
+from screening.applications.metrics import peak_with_se  # noqa: E402
+from screening.report.tradeoff import calibrate_intensity  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.physics.contact import REGIME_FLIGHT, REGIME_FULL_CONTACT, contact_resultants  # noqa: E402
+from screening.analysis.linearization import linearize  # noqa: E402
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
 from screening.solvers.simulate import simulate  # noqa: E402
 from screening.solvers.synthesis import default_cutoff, ground_acceleration  # noqa: E402
@@ -101,7 +103,7 @@ def free_rocking(block, bed, ratio, model, cond="paper"):
     e0 = potential(ratio * tu, block, bed)
     gap = float("nan")
     if model == "coupled":
-        from screening.condensation.cubic import quasi_static_indentation
+        from screening.core.condensation.cubic import quasi_static_indentation
         z_qs = quasi_static_indentation(th[first], block, bed)[0]
         gap = float(np.max(np.abs(ds.z_cb.values[first] - z_qs)) / (block.m * block.g / (2 * block.b * bed.k)))
     return dict(decay=decay, uplift=float(np.sum(power[up]) * out_dt / e0),
@@ -152,7 +154,7 @@ def record_detail(block, bed, excitation, n_detail, seed):
             per_transition.append(np.sum(power[strong]) * 0.002 / n_cross / np.mean(energy[strong]))
             share_up.append(np.sum(power[strong & up]) / np.sum(power[strong]))
             if model == "coupled":
-                from screening.condensation.cubic import quasi_static_indentation
+                from screening.core.condensation.cubic import quasi_static_indentation
                 z_qs = quasi_static_indentation(th[strong], block, bed)[0]
                 gaps.append(np.sqrt(np.mean((ds.z_cb.values[strong] - z_qs) ** 2)) / z_st)
         n = len(per_transition)

@@ -34,11 +34,13 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from screening.analysis.metrics import peak_with_se  # noqa: E402
-from screening.analysis.tradeoff import calibrate_intensity  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
-from screening.solvers.linearization import linearize  # noqa: E402
+from screening.applications.metrics import peak_with_se  # noqa: E402
+from screening.report.tradeoff import calibrate_intensity  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.analysis.linearization import linearize  # noqa: E402
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
 from screening.solvers.timegrid import output_times  # noqa: E402
 

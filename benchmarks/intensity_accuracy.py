@@ -25,9 +25,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "unit" / "analysis"))
 from intensity_reference import sample_all_measures  # noqa: E402
 
-from screening import excitations  # noqa: E402
+from screening.core import excitations  # noqa: E402
 from screening.analysis import intensity as I  # noqa: E402
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 
 T_END, CUTOFF = 20.0, 100.0
 POINTS = (("white noise", WhiteNoise(1e-3), 0.5),

@@ -52,7 +52,8 @@ import xarray as xr  # noqa: E402
 
 from screening.analysis.multifidelity import (control_variate_estimate, cost_ratio_needed,  # noqa: E402
                                               multifidelity_variance, optimal_ratio, speedup)
-from screening.model import Block, Envelope, Foundation, KanaiTajimi, WhiteNoise  # noqa: E402
+from screening.core.model import Block, Envelope, Foundation  # noqa: E402
+from screening.core.excitations import KanaiTajimi, WhiteNoise
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

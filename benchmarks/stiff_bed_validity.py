@@ -58,9 +58,10 @@ from pathlib import Path
 
 import numpy as np
 
-from screening.beds import lam_from_vertical_damping
-from screening.model import Block, Foundation
-from screening.model.excitation import KanaiTajimi, WhiteNoise
+from screening.analysis.beds import lam_from_vertical_damping
+from screening.core.model import Block, Foundation
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers import stiff_bed
 from screening.solvers.montecarlo import monte_carlo
 
@@ -206,7 +207,7 @@ def realize(case):
 def case_indicators(case):
     """The dimensionless indicators of the point (:func:`screening.solvers.model_choice.indicators`) and the
     intensity: median PGA over ``g b / h`` and over the bed's uplift acceleration."""
-    from screening import condensation
+    from screening.core import condensation
     from screening.analysis.probabilities import uplift_acceleration
     from screening.solvers.model_choice import indicators
 
@@ -266,7 +267,7 @@ def run_sl(case, name):
     Gaussian moments, peak var_theta, status and CPU (``{"error": ...}`` if the condensation refuses)."""
     from screening.analysis.fragility import exceedance_probability
     from screening.analysis.probabilities import overturning_probability
-    from screening.solvers.linearization import linearize
+    from screening.analysis.linearization import linearize
 
     block, foundation, excitation = realize(case)
     start = time.process_time()
@@ -307,7 +308,7 @@ def pinned(work, case):
 
 
 def save_case(work, record):
-    from screening.atomicfile import atomic_open
+    from screening.core.atomicfile import atomic_open
 
     with atomic_open(case_path(work, record["case"])) as fh:
         json.dump(record, fh)
@@ -600,7 +601,7 @@ def write_csv(rows, path, command):
     import csv
     import io
 
-    from screening.atomicfile import atomic_open
+    from screening.core.atomicfile import atomic_open
 
     buf = io.StringIO()
     buf.write(f"# {__doc__.splitlines()[0]}\n# measured {time.strftime('%Y-%m-%d')}: {command}\n")
@@ -620,7 +621,7 @@ def figure(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from screening.atomicfile import atomic_path
+    from screening.core.atomicfile import atomic_path
 
     cheap = [m for m in MODELS if m != "coupled"]
     fig, axes = plt.subplots(2, 4, figsize=(15, 7), sharex=True, sharey=True)
@@ -756,7 +757,7 @@ def main():
 
 def _compile():
     """Compile the kernels outside the timings."""
-    from screening.solvers.linearization import linearize
+    from screening.analysis.linearization import linearize
 
     block = Block(**STATUE)
     excitation = KanaiTajimi(1e-3, 15.6, 0.6)

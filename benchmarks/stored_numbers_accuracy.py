@@ -14,9 +14,9 @@ from importlib import resources
 import numpy as np
 import xarray as xr
 
-from screening.analysis import atlas
+from screening.applications import atlas
 from screening.analysis import error_model as em
-from screening.solvers.linearization import linearize
+from screening.analysis.linearization import linearize
 
 POINTS = 8
 RTOLS = (1e-8, 1e-11)

@@ -1,7 +1,7 @@
-"""Structure numbers of the package: imports back up the layers, circles, deferred imports, sizes.
+"""Structure numbers of the package: imports back up the folders (the layers), circles, deferred imports, sizes.
 
 Run: ``python benchmarks/structure.py`` (``--list`` prints every upward import, circle and dodging
-import).  The layers are read from the module table of ``docs/architecture.md``; the parsing is
+import).  The order of the folders is read from the folder table of ``docs/architecture.md``; the parsing is
 shared with ``tests/unit/test_layers.py`` (``tests/import_graph.py``).
 """
 
@@ -15,9 +15,9 @@ import import_graph as ig  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1] / "screening"
 #: The modules on the write path of a sweep result, from the solvers to the result formats and ``info``.
-OUTPUT_PATH = ("schema.py", "solvers/outputs.py", "solvers/moment_kernels.py", "solvers/moments.py",
-               "solvers/datasets.py", "workflow/execution.py", "workflow/writer.py", "workflow/zarrfile.py",
-               "workflow/store.py", "report/text.py")
+OUTPUT_PATH = ("solvers/schema.py", "solvers/outputs.py", "kernels/moment_kernels.py", "solvers/moments.py",
+               "solvers/datasets.py", "sweep/execution.py", "io/writer.py", "io/zarrfile.py",
+               "io/store.py", "report/text.py")
 #: Calls that declare an output variable (its name the first argument).
 DECLARATIONS = ("Output", "_history")
 #: Output variables whose mentions are counted: a history, a flag, a probability and a solver summary.
@@ -51,6 +51,22 @@ def output_mentions(name, lists_only=False):
     return out
 
 
+def statements_inside_functions():
+    """The import statements of the package that sit inside a function body (of any module)."""
+    inside = set()
+    for path in ROOT.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+                inside.update((path, c.lineno) for c in ast.walk(node) if isinstance(c, (ast.Import, ast.ImportFrom)))
+    return len(inside)
+
+
+def public_names(graph):
+    """The distinct names of the package's literal ``__all__`` lists."""
+    return {name for path in graph.modules.values() for name in (ig.declared_all(path) or [])}
+
+
 def main(verbose=False):
     """Print the structure numbers."""
     graph = ig.read_graph()
@@ -64,12 +80,14 @@ def main(verbose=False):
     public = ig.public_modules(graph)
     missing_all = ig.without_all(graph)
     sizes = ig.sizes(graph)
-    print(f"modules: {len(graph.modules)} ({len(unmapped)} without a layer{': ' + ', '.join(unmapped) if unmapped else ''})")
+    print(f"modules: {len(graph.modules)} ({len(unmapped)} outside the folders of docs/architecture.md{': ' + ', '.join(unmapped) if unmapped else ''})")
     print(f"imports of the package by the package: {len(graph.imports)}")
-    print(f"imports back up the layers: {len(up)} (top-level {sum(not i.deferred for i, _, _ in up)})")
+    print(f"imports back up the folders: {len(up)} (top-level {sum(not i.deferred for i, _, _ in up)})")
     print(f"import circles: {len(circles)} ({', '.join(' <-> '.join(c) for c in circles)})")
     print(f"imports inside functions: {len(deferred)}; of them dodging a circle: {len(dodging)}")
+    print(f"import statements inside functions (any module, package or not): {statements_inside_functions()}")
     print(f"modules without __all__: {len(missing_all)} of {len(public)}")
+    print(f"public names (distinct names in the __all__ lists): {len(public_names(graph))}")
     private, undeclared = ig.private_name_uses(graph), ig.undeclared_name_uses(graph)
     print(f"underscored names taken from another module: {len(private)}; names taken from a public module "
           f"that are not in its __all__: {len(undeclared)}")

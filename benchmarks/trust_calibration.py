@@ -29,7 +29,7 @@ and the relative error of SL's peak ``var_theta`` against the coupled model,
 ``SL / MCS - 1``, with its standard error ``(SL / MCS) x SE / MCS``.
 
 Intensities are given either as ``S0`` [m2 s-3] or as a target SL peak uplift probability
-(``S0`` found by bisection on SL, :func:`screening.analysis.tradeoff.calibrate_intensity`,
+(``S0`` found by bisection on SL, :func:`screening.report.tradeoff.calibrate_intensity`,
 optionally multiplied by ``factor`` to go past toppling).  Intensity convention
 ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``; envelope ``q(t) = 4 (exp(-t/4) - exp(-t/2))``; 20 s
 records, output step 0.05 s.
@@ -51,10 +51,12 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from screening import condensation as condensations  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise  # noqa: E402
-from screening.solvers.linearization import linearize  # noqa: E402
+from screening.core import condensation as condensations  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.model.excitation import Envelope  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.analysis.linearization import linearize  # noqa: E402
 from screening.solvers.montecarlo import monte_carlo  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -155,7 +157,7 @@ def point_S0(point):
     """``S0`` of a point (bisection on SL for a target uplift probability)."""
     if point["S0"] is not None:
         return float(point["S0"])
-    from screening.analysis.tradeoff import calibrate_intensity
+    from screening.report.tradeoff import calibrate_intensity
     from screening.solvers.timegrid import output_times
 
     block, foundation, make_exc = make_models(point)
@@ -217,7 +219,7 @@ def run_point(point, samples, seed, condensed):
 # ----------------------------------------------------------------------------- the labelled file
 def assemble(work, names):
     """The calibration dataset from the per-point JSON files: dimensions ``point`` x ``condensation``."""
-    from screening import schema
+    from screening.solvers import schema
     from screening.analysis.trust import error_of, trust_table
 
     rows = []
@@ -286,7 +288,7 @@ def assemble(work, names):
 def markdown_table(ds):
     """The calibration table (one line per point and condensation) with the rule's flag and band, as markdown."""
     from screening.analysis.trust import bed_law, sl_trust
-    from screening.status import Trust
+    from screening.core.status import Trust
 
     table = json.loads(ds.attrs["trust_table"])
     lines = ["| point | cond. | S0 [m2 s-3] | p_uplift | k_eq margin | sigma/slend. | decay excess | SL error vs "
@@ -312,7 +314,7 @@ def markdown_table(ds):
 def rule_table(ds):
     """The rule's cells as markdown (flag, band, number of calibration rows)."""
     from screening.analysis.trust import BED_LAWS, CONDENSATIONS, P_EDGES
-    from screening.status import Trust
+    from screening.core.status import Trust
 
     table = json.loads(ds.attrs["trust_table"])
     bins = [f"{P_EDGES[i]:g}–{P_EDGES[i + 1]:g}" for i in range(len(P_EDGES) - 1)]

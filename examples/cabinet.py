@@ -5,7 +5,7 @@ Run from the repository's root::
     .venv/bin/python examples/cabinet.py             # writes outputs/cabinet.nc and its figures
 
 The pads' ``k`` and ``lam`` in ``cabinet.toml`` are the numbers :func:`bed` prints; ``eps`` comes from
-the pads' backbone test (:func:`screening.beds.fit_backbone` fits ``F = k z (1 + eps z^2)``).
+the pads' backbone test (:func:`screening.analysis.beds.fit_backbone` fits ``F = k z (1 + eps z^2)``).
 """
 
 import sys
@@ -13,9 +13,9 @@ from pathlib import Path
 
 import xarray as xr
 
-from screening import beds
-from screening.workflow.study import load_study
-from screening.workflow.sweep import run_sweep
+from screening.analysis import beds
+from screening.sweep.study import load_study
+from screening.sweep.run import run_sweep
 
 HERE = Path(__file__).resolve().parent
 

@@ -1,19 +1,19 @@
 """screening: stochastic screening of rigid blocks rocking on flexible nonlinear foundations."""
 
-__version__ = "0.1.0"
+from screening._version import __version__
 
 from screening.kernels.cache import clear_stale_cache as _clear_stale_cache
 
 _clear_stale_cache()   # numba's cache does not follow changes of other modules: drop it when any source changed
 
-from screening.analysis import fragility as fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
-from screening.excitations.kanai_tajimi import KanaiTajimi
-from screening.excitations.white import WhiteNoise
-from screening.model.excitation import ConstantEnvelope, Envelope
-from screening.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,
-                                        uplift_probability, uplift_threshold)
-from screening.model import Block, Foundation
-from screening.solvers.linearization import linearize
+from screening.analysis import fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.condensation.api import (equivalent_coefficients, rocking_damping, rocking_stiffness,
+                                             uplift_probability, uplift_threshold)
+from screening.core.model import Block, Foundation
+from screening.analysis.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.simulate import simulate
 

@@ -1,8 +1,8 @@
 import pytest
 
-from screening.model.cases import PAPER_BED, PAPER_BLOCK
-from screening.model import Block, Foundation
-from screening.model.excitation import WhiteNoise
+from screening.core.model.cases import PAPER_BED, PAPER_BLOCK
+from screening.core.model import Block, Foundation
+from screening.core.excitations.white import WhiteNoise
 
 
 @pytest.fixture
@@ -70,9 +70,9 @@ def pytest_sessionstart(session):
 
     import numpy as np
 
-    from screening.solvers.linearization import linearize
-    from screening.workflow._submit import warm_up_monte_carlo
-    from screening.workflow.execution import warm_up
+    from screening.analysis.linearization import linearize
+    from screening.sweep._submit import warm_up_monte_carlo
+    from screening.sweep.execution import warm_up
 
     start = time.perf_counter()
     warm_up()

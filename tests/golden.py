@@ -129,7 +129,7 @@ timing_repeats = 1
 def _sl(study):
     """float64 SL results of every point of a study, on dims ``(point, t)``."""
     from screening.solvers.moments import solve_moments
-    from screening.workflow.study import build_models
+    from screening.sweep.study import build_models
 
     rows = []
     for c, case in enumerate(study.cases):
@@ -160,7 +160,7 @@ def _mcs(block, foundation, excitation, n, model, condensation, seed, t_end, dt,
 
 
 def compute_quick():
-    from screening.workflow.study import build_models, load_study
+    from screening.sweep.study import build_models, load_study
 
     study = load_study(ROOT / "studies" / "quick.toml")
     ds = _sl(study)
@@ -178,7 +178,7 @@ def compute_quick():
 
 
 def compute_paper_cases():
-    from screening.workflow.study import build_models, load_study
+    from screening.sweep.study import build_models, load_study
 
     study = load_study(ROOT / "studies" / "paper_cases.toml")
     ds = _sl(study)
@@ -196,7 +196,7 @@ TIMING_WORDS = ("time", "cost", "seconds", "wall")
 
 
 def compute_tradeoff(tmp_dir):
-    from screening.analysis import tradeoff as to
+    from screening.report import tradeoff as to
 
     path = Path(tmp_dir) / "tiny.toml"
     path.write_text(TRADEOFF_STUDY)
@@ -304,9 +304,9 @@ def _perturbed(scale_rtol=1.0, scale_k=1.0):
     import contextlib
     import dataclasses
 
-    from screening.analysis import tradeoff
+    from screening.report import tradeoff
     from screening.solvers import mc_registry, montecarlo
-    from screening.workflow import config, study
+    from screening.sweep import config, study
 
     @contextlib.contextmanager
     def patched():

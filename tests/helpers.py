@@ -9,7 +9,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from screening.analysis.tradeoff_study import EXAMPLE_TRADEOFF_STUDY
+from screening.applications.tradeoff_study import EXAMPLE_TRADEOFF_STUDY
 
 #: 4 eps x 5 S0 white-noise points, 4 s records: the sweep tests' standard grid.
 GRID = """
@@ -101,7 +101,7 @@ def interrupted_run(study, out, client, batch_size, n=2):
     indices of the batches finished by then."""
     import pytest
 
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     seen = []
     with pytest.raises(KeyboardInterrupt):
@@ -113,10 +113,10 @@ def interrupted_run(study, out, client, batch_size, n=2):
 def failed_result_file(study, path, zarr_batch_size=None):
     """A complete result of ``study`` (netCDF, or zarr with ``zarr_batch_size``) whose batches and spot
     checks all failed: the writer alone, no solver, no dask."""
-    from screening.workflow._submit import failed_spot
-    from screening.workflow.execution import failed_result
-    from screening.workflow.grid import plan_batches, select_spots
-    from screening.workflow.writer import ResultFile, result_attributes
+    from screening.sweep._submit import failed_spot
+    from screening.sweep.execution import failed_result
+    from screening.sweep.grid import plan_batches, select_spots
+    from screening.io.writer import ResultFile, result_attributes
 
     result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4),
                         zarr_batch_size=zarr_batch_size)
@@ -159,7 +159,7 @@ def assert_cdo_form_of(result, cdo_file):
 
     import numpy as np
 
-    from screening.workflow.reader import open_result
+    from screening.io.reader import open_result
 
     with open_result(result) as ds, xr.open_dataset(cdo_file, decode_times=False) as cdo:
         for name, v in ds.variables.items():

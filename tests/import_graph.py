@@ -1,8 +1,9 @@
-"""The package's import graph read with ``ast``: layers, upward imports, circles, deferred imports.
+"""The package's import graph read with ``ast``: folders (the layers), upward imports, circles, deferred imports.
 
 Shared by ``tests/unit/test_layers.py`` (which fails on what the architecture page does not allow)
-and ``benchmarks/structure.py`` (which prints the structure numbers).  The layer of each module is
-read from the module table of ``docs/architecture.md``: the one map of the package.
+and ``benchmarks/structure.py`` (which prints the structure numbers).  A module's layer is its folder (the first
+part of its dotted name; a module at the top, ``_version``, is its own); the order of the folders, from the
+bottom, is read from the folder table of ``docs/architecture.md``: the one map of the package.
 """
 
 import ast
@@ -13,11 +14,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "screening"
 ARCHITECTURE = ROOT / "docs" / "architecture.md"
-
-#: The layers from the bottom (imported by all) to the top (imports all), as named in the table.
-LAYERS = ("foundations", "model", "physics", "model axes", "kernels", "solvers", "analysis", "workflow",
-          "applications", "report", "cli")
-
 
 @dataclass(frozen=True)
 class Import:
@@ -113,50 +109,36 @@ def read_graph(package=PACKAGE):
 
 
 def read_layers(text=None):
-    """``{module or package prefix: layer}`` from the module table of the architecture page.
-
-    A row's first cell names the layer (an empty cell keeps the one above); its second cell names
-    one or more modules in backticks.  A name ending in ``.*`` stands for a whole package.
-    """
+    """The folders of the package from the bottom (imported by all) to the top (imports all): the backticked
+    names of the first column of the architecture page's folder table (``| folder | ... |``), in its order."""
     text = ARCHITECTURE.read_text() if text is None else text
-    layers, layer = {}, None
+    folders, inside = [], False
     for line in text.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) < 3 or not line.startswith("|") or cells[0] == "layer" or cells[1].startswith("---"):
+        if not line.startswith("|"):
+            inside = False
             continue
-        if cells[0]:
-            layer = cells[0]
-        if layer not in LAYERS:
+        if cells[0] == "folder":
+            inside = True
             continue
-        for module in re.findall(r"`([\w.*]+)`", cells[1]):
-            layers[module] = layer
-    return layers
+        if inside and not cells[0].startswith("---"):
+            folders += [name.rstrip("/").removesuffix(".py") for name in re.findall(r"`([\w./]+)`", cells[0])]
+    return folders
 
 
 def layer_of(module, layers):
-    """The layer of a module: its own row, else its package's ``pkg.*`` row; a package's ``__init__``
-    is in the layer of its package row."""
-    if module in layers:
-        return layers[module]
-    parts = module.split(".")
-    for n in range(len(parts), 0, -1):
-        star = ".".join(parts[:n]) + ".*"
-        if star in layers:
-            return layers[star]
-    return None
+    """The folder (layer) of a module: the first part of its dotted name, if the page lists it; None for the
+    package's ``__init__`` (the public face, above every folder) and for a folder the page does not list."""
+    folder = module.split(".")[0]
+    return folder if module and folder in layers else None
 
 
 def upward(graph, layers):
-    """Imports that run from a lower layer up to a higher one: ``[(Import, source layer, target layer)]``.
-
-    ``screening/__init__.py`` (the public face, which gathers the API) and the package
-    ``__init__`` files that re-export their package are above every layer and not counted.
-    """
-    rank = {name: n for n, name in enumerate(LAYERS)}
+    """Imports from a folder up to a folder above it: ``[(Import, source folder, target folder)]``.  Every import
+    counts, at the top of a module or inside a function; ``screening/__init__.py`` is above every folder."""
+    rank = {name: n for n, name in enumerate(layers)}
     found = []
     for imp in graph.imports:
-        if imp.source == "" or graph.modules[imp.source].name == "__init__.py" and imp.target.startswith(imp.source + "."):
-            continue
         a, b = layer_of(imp.source, layers), layer_of(imp.target, layers)
         if a and b and rank[b] > rank[a]:
             found.append((imp, a, b))
@@ -290,24 +272,6 @@ def code_sizes(graph):
     return sorted(((code_lines(p.read_text()), m) for m, p in graph.modules.items()), reverse=True)
 
 
-def read_exceptions(text=None):
-    """``(upward, circles)`` allowed by the architecture page's table of exceptions: the set of
-    ``(source, target)`` upward imports and the list of module sets an import circle may stay within."""
-    text = ARCHITECTURE.read_text() if text is None else text
-    section = text.split("## Exceptions to the layers", 1)[1].split("\n## ", 1)[0]
-    up, circles = set(), []
-    for line in section.splitlines():
-        cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) < 3 or cells[1] not in ("upward", "circle"):
-            continue
-        modules = re.findall(r"`([\w.]+)`", cells[0])
-        if cells[1] == "upward":
-            up.add(tuple(modules))
-        else:
-            circles.append(frozenset(modules))
-    return up, circles
-
-
 def declared_all(path):
     """The names of a module's literal ``__all__`` (a list), or None (none, or not a literal)."""
     for node in ast.parse(path.read_text()).body:
@@ -387,9 +351,9 @@ def test_modules(root=ROOT / "tests"):
 
 
 def has_test_module(module, tests=None):
-    """Whether ``a.b`` has a test module of its own name: ``test_b.py`` or, where names repeat across
-    packages (test basenames are unique in this suite), ``test_a_b.py``; a private module ``a._b`` is
-    tested under its public name (``test_b.py``)."""
+    """Whether ``a.b.c`` has a test module of its own name: ``test_c.py`` or, where names repeat across
+    packages (test basenames are unique in this suite), ``test_b_c.py`` or ``test_a_b_c.py``; a private module
+    ``a._b`` is tested under its public name (``test_b.py``)."""
     tests = test_modules() if tests is None else tests
     parts = [p.lstrip("_") for p in module.split(".")]
-    return f"test_{parts[-1]}" in tests or f"test_{'_'.join(parts)}" in tests
+    return any(f"test_{'_'.join(parts[-n:])}" in tests for n in range(1, len(parts) + 1))

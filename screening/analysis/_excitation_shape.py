@@ -7,6 +7,8 @@ envelope, record length) and the excitation of unit level rebuilt from its param
 from __future__ import annotations
 
 import numpy as np
+from screening.core import excitations
+from screening.core.model.excitation import ConstantEnvelope, Envelope
 
 #: Times on which the non-stationary moments are evaluated over ``[0, t_end]``.
 N_TIMES = 4001
@@ -24,7 +26,5 @@ def shape_key(excitation, t_end):
 
 
 def scalar_excitation(kind, envelope_kind, p):
-    from screening import excitations
-    from screening.model.excitation import ConstantEnvelope, Envelope
     env = Envelope(p["T1"], p["T2"]) if envelope_kind == "exponential" else ConstantEnvelope()
     return excitations.build(kind, 1.0, p, env)

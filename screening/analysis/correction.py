@@ -8,7 +8,7 @@ choosing the number of neighbours by leave-one-out; :func:`predict_correction` g
 standard error (the leave-one-out errors of the neighbours used) and whether the point is close
 enough to the escalated ones to be reached at all.  :func:`best_estimates` combines everything
 into one estimate per point, with its standard error and where it comes from
-(:class:`screening.status.BestMethod`).
+(:class:`screening.core.status.BestMethod`).
 
 Nearest neighbours rather than a global fit: the error of the linearization changes by regime
 (a few per cent below uplift, a factor 10-100 near toppling, the opposite sign under lock-in), which
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from screening.status import BestMethod, EscalationModel, PointStatus, Trust
+from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
 
 __all__ = ["NEIGHBOURS", "MIN_POINTS", "MAX_SE", "NOISE_FLOOR", "DISTANCE_FLOOR", "REACH", "Correction",
            "point_features", "fit_correction", "predict_correction", "linearization_promises", "within_band",
@@ -268,7 +268,7 @@ def linearization_promises(trust, low, high, target):
     Parameters
     ----------
     trust : array_like of int
-        ``sl_trust`` codes (:class:`~screening.status.Trust`).
+        ``sl_trust`` codes (:class:`~screening.core.status.Trust`).
     low, high : array_like
         The predicted band of the SL error ``SL / MCS - 1`` [1].
     target : float
@@ -289,7 +289,7 @@ def linearization_promises(trust, low, high, target):
 
     Examples
     --------
-    >>> from screening.status import Trust
+    >>> from screening.core.status import Trust
     >>> linearization_promises([Trust.trusted, Trust.trusted, Trust.untrusted], [-0.05, -0.2, -0.01],
     ...                        [0.05, 0.1, 0.01], 0.1).tolist()
     [True, False, False]
@@ -464,7 +464,7 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     model's interval (too few escalated points for the study's own correction):
 
     >>> import numpy as np
-    >>> from screening.status import BestMethod, EscalationModel
+    >>> from screening.core.status import BestMethod, EscalationModel
     >>> value, se, method, corr = best_estimates(
     ...     [1.0, 2.0, 3.0, 4.0, 5.0], [0] * 5, [0, 2, 2, 2, 2], [-0.05] + [-0.5] * 4, [0.05] + [0.5] * 4, 0.1,
     ...     np.arange(5.0)[:, None], [4], [6.0], [0.3], [EscalationModel.condensed])

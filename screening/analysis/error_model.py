@@ -38,7 +38,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from screening.physics.contact import REST_BEARING_LIMIT, rising_root, vertical_damping_ratio
+from screening.analysis.indicators import indicators_from_dataset
+from screening.core.physics.contact import REST_BEARING_LIMIT, rising_root, vertical_damping_ratio
+from screening.core.status import PointStatus, Trust
+from screening.solvers.datasets import model_fields, model_labels
 
 __all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS",
            "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
@@ -123,7 +126,7 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; ``log I_S``, ``log w_v_p``; an undamped bed
     (``zeta_v = 0``) has ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one
     (:func:`interval_trust`: such a point is at best ``check``).  The inputs are the dimensionless
-    groups of the atlas (:mod:`screening.analysis.atlas`, [1]).
+    groups of the atlas (:mod:`screening.applications.atlas`, [1]).
 
     References
     ----------
@@ -161,7 +164,7 @@ def atlas_features(ds, condensation):
     Parameters
     ----------
     ds : xarray.Dataset
-        An atlas dataset (``screening/data/error_atlas.nc``; :mod:`screening.analysis.atlas_run`).
+        An atlas dataset (``screening/data/error_atlas.nc``; :mod:`screening.applications.atlas_run`).
     condensation : str
         One of its condensations.
 
@@ -196,7 +199,7 @@ def targets(ds, condensation):
 
     NaN where a side is missing (the linearization stopped, no Monte Carlo survivor) or the
     reference is not valid at the point (``mc_reference_valid`` 0,
-    :func:`screening.analysis.atlas_run.reference_validity`).
+    :func:`screening.applications.atlas_run.reference_validity`).
 
     Parameters
     ----------
@@ -249,7 +252,7 @@ def valid_reference(ds):
     Returns
     -------
     numpy.ndarray of bool
-        ``mc_reference_valid`` 1 (:func:`screening.analysis.atlas_run.reference_validity`); every point
+        ``mc_reference_valid`` 1 (:func:`screening.applications.atlas_run.reference_validity`); every point
         of an atlas that does not record it.
 
     References
@@ -705,7 +708,7 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
     Returns
     -------
     numpy.ndarray of int8
-        :class:`screening.status.Trust` codes.
+        :class:`screening.core.status.Trust` codes.
 
     References
     ----------
@@ -718,8 +721,6 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
     >>> trust_from_interval(np.log([0.9, 0.9, 0.3, np.nan]), np.log([1.1, 1.4, 0.4, 1.0])).tolist()
     [0, 1, 2, 2]
     """
-    from screening.status import Trust
-
     low = np.asarray(low, dtype=float)
     high = np.asarray(high, dtype=float)
     with np.errstate(invalid="ignore", over="ignore"):
@@ -911,7 +912,7 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     Notes
     -----
     ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)``; ``e = eps z0^2`` with ``z0 = m g / (2 b k)``;
-    ``zeta_v`` (:func:`screening.physics.contact.vertical_damping_ratio`) ``= c_v / (2 m w_v)``,
+    ``zeta_v`` (:func:`screening.core.physics.contact.vertical_damping_ratio`) ``= c_v / (2 m w_v)``,
     ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b lam z_rest`` (Hunt–Crossley; ``z_rest`` the root of
     ``z + eps z^3 = z0`` on the rising branch) or ``2 b c`` (Winkler); NaN where a softening bed cannot carry
     the block at rest (``-eps z0^2 >= 4/27``: no rest indentation), which makes such a point at best ``check``
@@ -1009,8 +1010,6 @@ def dataset_features(ds):
     """
     import xarray as xr
 
-    from screening.analysis.indicators import indicators_from_dataset
-
     ind = indicators_from_dataset(ds)
     fields = {name: ds[name] for name in ("m", "b", "h", "g", "k", "eps", "I_cm", "lam", "c", "omega_g", "T1", "S0")
               if name in ds.variables}
@@ -1032,11 +1031,11 @@ def model_features(indicators, block, foundation, excitation):
     ----------
     indicators : dict
         :func:`screening.analysis.indicators.trust_indicators` (``(n,)`` arrays) [1].
-    block : screening.model.Block
+    block : screening.core.model.Block
         The block (fields scalar or ``(n,)``).
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         Its bed.
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         The excitation.
 
     Returns
@@ -1062,8 +1061,6 @@ def model_features(indicators, block, foundation, excitation):
     >>> x.shape, x[:, FEATURES.index("log_r_ul")].round(3).tolist()
     ((2, 13), [-4.924, -4.924])
     """
-    from screening.solvers.datasets import model_fields, model_labels
-
     labels = model_labels(foundation, excitation)
     grp = parameter_groups(model_fields(block, foundation, excitation), labels["contact"], labels["excitation"])
     n = np.size(indicators["peak_p_uplift"])
@@ -1167,10 +1164,10 @@ def open_ended(est, low, high, clip=LOG_CLIP):
 
 
 def interval_trust(model, x, status=None, covered=True):
-    """``(flag, estimate, low, high)`` of points: the :class:`screening.status.Trust` code [int8] and the
+    """``(flag, estimate, low, high)`` of points: the :class:`screening.core.status.Trust` code [int8] and the
     predicted ``SL / MC - 1`` of peak var_theta with its interval [1] (:func:`predict`, :func:`trust_from_interval`).
 
-    ``status`` (:class:`screening.status.PointStatus` codes, None: all ok): a point whose status is not ok is
+    ``status`` (:class:`screening.core.status.PointStatus` codes, None: all ok): a point whose status is not ok is
     ``untrusted`` with a NaN estimate and band.  An interval end that reaches the fit's clip is open
     (:func:`open_ended`: ``low = -1`` or ``high = inf``) and the point ``untrusted``: near it the atlas measured
     errors beyond a factor 4.  ``covered`` (bool, broadcast to the points): False where the
@@ -1186,7 +1183,7 @@ def interval_trust(model, x, status=None, covered=True):
     x : array_like
         ``(n, len(FEATURES))`` features.
     status : array_like of int, optional
-        :class:`screening.status.PointStatus` codes (None: all ok).
+        :class:`screening.core.status.PointStatus` codes (None: all ok).
     covered : bool or array_like of bool, default True
         See above.
 
@@ -1214,8 +1211,6 @@ def interval_trust(model, x, status=None, covered=True):
     >>> flag.tolist(), est.round(2).tolist(), high.round(2).tolist()
     ([1, 2], [-0.53, -0.63], [-0.3, 0.27])
     """
-    from screening.status import PointStatus, Trust
-
     x = np.atleast_2d(np.asarray(x, dtype=float))
     est, low, high = open_ended(*predict(model, x))
     bad = np.zeros(len(x), dtype=bool) if status is None else \

@@ -29,8 +29,9 @@ import math
 import numpy as np
 
 from screening.analysis.correction import atlas_promises, linearization_promises
+from screening.analysis.multifidelity import allocate
 from screening.analysis.trust import bed_law, p_bin, regime
-from screening.status import EscalationModel, PointStatus
+from screening.core.status import EscalationModel, PointStatus
 
 __all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "MAIN_SHARE", "STEP_COST_S", "GRID_COST_S", "RODAS_STEP_FACTOR",
            "PRIOR_STEPS_PER_S", "STIFF_BED_EXACT_COST_S", "STIFF_BED_ADAPTIVE_COST_S", "STIFF_BED_RUN_COST_S",
@@ -114,9 +115,9 @@ def escalation_candidates(status, trust, low, high, target):
     Parameters
     ----------
     status : array_like of int
-        :class:`~screening.status.PointStatus` codes.
+        :class:`~screening.core.status.PointStatus` codes.
     trust : array_like of int
-        ``sl_trust`` codes (:class:`~screening.status.Trust`).
+        ``sl_trust`` codes (:class:`~screening.core.status.Trust`).
     low, high : array_like
         The predicted band of ``SL / MCS - 1`` [1].
     target : float
@@ -137,7 +138,7 @@ def escalation_candidates(status, trust, low, high, target):
     A trusted point within the target, an untrusted one, a stopped one and a failed task:
 
     >>> import numpy as np
-    >>> from screening.status import Trust
+    >>> from screening.core.status import Trust
     >>> escalation_candidates([0, 0, 2, -1], [Trust.trusted, Trust.untrusted, Trust.untrusted, Trust.untrusted],
     ...                       [-0.05, -0.3, np.nan, np.nan], [0.05, 0.3, np.nan, np.nan], 0.1).tolist()
     [False, True, True, False]
@@ -269,7 +270,7 @@ def escalation_model(indicators, status, condensation, eps, cells):
     indicators : dict
         The trust indicators (:func:`screening.analysis.indicators.trust_indicators`) [1].
     status : array_like of int
-        :class:`~screening.status.PointStatus` codes.
+        :class:`~screening.core.status.PointStatus` codes.
     condensation : str or array_like of str
         The condensation of each point.
     eps : array_like
@@ -280,7 +281,7 @@ def escalation_model(indicators, status, condensation, eps, cells):
     Returns
     -------
     numpy.ndarray of int8
-        :class:`~screening.status.EscalationModel` codes.
+        :class:`~screening.core.status.EscalationModel` codes.
 
     References
     ----------
@@ -481,7 +482,7 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     steps : float
         Integration steps, summed over the samples.
     model : int
-        :class:`~screening.status.EscalationModel` code.
+        :class:`~screening.core.status.EscalationModel` code.
     grid_points : float, default 0
         Synthesis grid points, summed over the samples.
     rodas : bool, default False
@@ -518,7 +519,7 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
 
     Examples
     --------
-    >>> from screening.status import EscalationModel
+    >>> from screening.core.status import EscalationModel
     >>> estimated_cost(1e6, EscalationModel.coupled), 1e6 * STEP_COST_S[EscalationModel.coupled]
     (0.41, 0.41)
     """
@@ -544,7 +545,7 @@ def prior_cost(samples, t_end, model):
     t_end : float
         Record length [s].
     model : int
-        :class:`~screening.status.EscalationModel` code.
+        :class:`~screening.core.status.EscalationModel` code.
 
     Returns
     -------
@@ -558,7 +559,7 @@ def prior_cost(samples, t_end, model):
 
     Examples
     --------
-    >>> from screening.status import EscalationModel
+    >>> from screening.core.status import EscalationModel
     >>> f"{prior_cost(100, 20.0, EscalationModel.condensed):.4f}", f"{100 * 20.0 * 3000.0 * 0.14e-6:.4f}"
     ('0.8400', '0.8400')
     """
@@ -648,7 +649,7 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
         :data:`PAIRED_MODEL`), ``correlation`` (the two models' correlation at the peak of var_theta,
         in [-1, 1]) and optionally ``cheap_samples`` (default ``pilot_samples``).
     model : int
-        :class:`~screening.status.EscalationModel` code of the expensive model.
+        :class:`~screening.core.status.EscalationModel` code of the expensive model.
     pilot_samples : int
         Samples of the pilot's expensive model, >= 1.
     n_plain : int
@@ -680,7 +681,7 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
 
     Examples
     --------
-    >>> from screening.status import EscalationModel
+    >>> from screening.core.status import EscalationModel
     >>> pilot = {"n_steps": 2e5, "n_grid": 0, "rodas": False, "cheap_n_steps": 2e4, "cheap_n_grid": 0,
     ...          "correlation": 0.95}
     >>> plan = paired_plan(pilot, EscalationModel.coupled, 100, 2000)
@@ -691,8 +692,6 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
     >>> paired_plan(dict(pilot, correlation=0.3), EscalationModel.coupled, 100, 2000).estimator
     'plain'
     """
-    from screening.analysis.multifidelity import allocate
-
     c_hi = estimated_cost(pilot["n_steps"], model, pilot["n_grid"], bool(pilot["rodas"]), pilot_samples) / pilot_samples
     cheap_samples = max(int(pilot.get("cheap_samples", pilot_samples)), 1)
     c_lo = estimated_cost(pilot["cheap_n_steps"], PAIRED_MODEL[2], pilot["cheap_n_grid"], False,

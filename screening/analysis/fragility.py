@@ -37,11 +37,11 @@ import numpy as np
 import xarray as xr
 from scipy import optimize, special
 
-from screening import schema
-from screening.model.block import Block
+from screening.solvers import schema
+from screening.core.model.block import Block
 from screening.solvers.datasets import finish
 from screening.analysis.trust import OVERTURN_LIMIT
-from screening.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
+from screening.core.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
 
 __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "exceedance_probability_from_moments",
            "linearized_exceedance", "band_standard_error",
@@ -321,7 +321,7 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
     m_sdof : array_like
         Rocking inertia per point [kg m2].
     status : array_like of int
-        :class:`~screening.status.PointStatus` per point.
+        :class:`~screening.core.status.PointStatus` per point.
     level : array_like
         Threshold per point [rad].
     method : {"vanmarcke", "poisson"}
@@ -731,7 +731,7 @@ def parameter(ds, name):
     """A model parameter of a dataset: its coordinate.
 
     A swept ``k`` of a sweep file is stored as ``k_value``
-    (:data:`screening.workflow.sweep.AUX_GRID_COORDINATES`); both names are looked up.
+    (:data:`screening.sweep.run.AUX_GRID_COORDINATES`); both names are looked up.
 
     Parameters
     ----------
@@ -768,7 +768,7 @@ def parameter(ds, name):
 
 
 #: Derived quantities that :func:`model_quantity` rebuilds from the parameters when a dataset does
-#: not store them: name -> (parameters, property of :class:`~screening.model.Block` evaluated on them).
+#: not store them: name -> (parameters, property of :class:`~screening.core.model.Block` evaluated on them).
 _FROM_PARAMETERS = {
     "slenderness": (("b", "h"), Block.slenderness),
     "m_sdof": (("I_cm", "m", "h"), Block.m_sdof),
@@ -780,7 +780,7 @@ def model_quantity(ds, name):
 
     Datasets store ``theta_ul`` and ``slenderness`` as data variables; they are read, never
     recomputed.  Fallback for files written before ``slenderness`` was stored (and for ``m_sdof``,
-    which no dataset stores): the :class:`~screening.model.Block` property evaluated on the
+    which no dataset stores): the :class:`~screening.core.model.Block` property evaluated on the
     parameter coordinates.  ``theta_ul`` depends on the condensation and has no fallback.
 
     Parameters
@@ -1079,7 +1079,7 @@ def fit_fragility_curve(intensity, probability):
         [units of the IM]; NaN where ``flag`` is not ``ok``.
     beta : float
         Lognormal dispersion [1]; NaN where ``flag`` is not ``ok``.
-    flag : screening.status.FitFlag
+    flag : screening.core.status.FitFlag
         ``ok``, or why there is no fit (no finite value, never or always exceeded, fewer than two
         points strictly between, ``beta <= 0``).
 
@@ -1137,7 +1137,7 @@ def fit_curves(p, intensity, dim):
     -------
     xarray.Dataset
         ``fit_median`` [units of the IM], ``beta`` [1] and ``fit_flag``
-        (:class:`~screening.status.FitFlag`) over the other dimensions.
+        (:class:`~screening.core.status.FitFlag`) over the other dimensions.
 
     Notes
     -----
@@ -1198,7 +1198,7 @@ def unvouched_points(ds):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"sl_trust": ("S0", [Trust.untrusted, Trust.trusted]),
     ...                  "status": ("S0", [PointStatus.ok, PointStatus.ok])})
     >>> unvouched_points(ds).values.tolist()
@@ -1239,7 +1239,7 @@ def fitted_probability(frag):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import BestMethod
+    >>> from screening.core.status import BestMethod
     >>> frag = xr.Dataset({"p_exceed": ("S0", [0.1, 0.2]), "best_p_exceed": ("S0", [0.15, 0.25]),
     ...                    "best_method": ("S0", [BestMethod.unreliable, BestMethod.condensed_monte_carlo])})
     >>> fitted_probability(frag).values.tolist()
@@ -1525,7 +1525,7 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
     p, low, high : xarray.DataArray
         The probability [1] and its band [1] on the grid.
     source : xarray.DataArray
-        ``best_method`` (:class:`~screening.status.BestMethod`).
+        ``best_method`` (:class:`~screening.core.status.BestMethod`).
 
     References
     ----------

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from screening.model.excitation import Envelope
+from screening.core.model.excitation import Envelope
 
 __all__ = ["ENVELOPE_FLOOR", "envelope_fraction", "trust_indicators", "indicators_from_dataset"]
 

@@ -1,7 +1,7 @@
 """Intensity measures of the stochastic inputs by random-vibration theory (RVT).
 
 The ground acceleration of a study point is ``a(t) = q(t) f(t)``: the envelope ``q``
-(:mod:`screening.model.excitation`) times a zero-mean stationary Gaussian process ``f`` with
+(:mod:`screening.core.model.excitation`) times a zero-mean stationary Gaussian process ``f`` with
 two-sided PSD ``S(omega)`` band-limited to ``|omega| <= omega_c``.  The band limit is the ground
 motion's (:data:`GROUND_BAND_LIMIT_HZ`, 25 Hz, or the study's ``excitation.band_limit_hz``): the
 same nominal PGA is then the same ground motion under a statue on mortar and a cabinet on pads.
@@ -68,20 +68,22 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from screening.analysis.intensity_records import (AVGSA_N_PERIODS, AVGSA_RANGE, G, OMEGA_LOW, PGV_CHUNK, PGV_RECORDS,
-                                                  PGV_SEED, RECORD_MEASURES, avgsa_periods, highpass_gain,
-                                                  median_standard_error, oscillator_peak, record_avgsa,
-                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv,
-                                                  continuous_peak)
 from screening.analysis import intensity_rvt
-from screening.analysis._excitation_shape import scalar_excitation as _scalar_excitation
-from screening.analysis._excitation_shape import shape_key as _shape_key, times as _times
-from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, N_TIMES, envelope_exponentials,
-                                              input_moments, median_peak, oscillator_covariance, oscillator_response_bandwidth,
-                                              rocking_start_probability, sa_median, spectral_moments,
-                                              velocity_covariance, velocity_spectral_moments)
-from screening.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
-from screening.validation import checked
+from screening.analysis._excitation_shape import (scalar_excitation as _scalar_excitation, shape_key as _shape_key,
+                                                  times as _times)
+from screening.analysis.fragility import parameter
+from screening.analysis.intensity_records import (AVGSA_N_PERIODS, avgsa_periods, AVGSA_RANGE, continuous_peak, G,
+                                                  highpass_gain, median_standard_error, OMEGA_LOW, oscillator_peak,
+                                                  PGV_CHUNK, PGV_RECORDS, PGV_SEED, record_avgsa, RECORD_MEASURES,
+                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv)
+from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, envelope_exponentials,
+                                              input_moments, median_peak, N_TIMES, oscillator_covariance,
+                                              oscillator_response_bandwidth, rocking_start_probability, sa_median,
+                                              spectral_moments, velocity_covariance, velocity_spectral_moments)
+from screening.core import excitations
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
+from screening.core.validation import checked
+from screening.solvers import schema
 
 __all__ = ["MEASURES", "RECORD_MEASURES", "PERIOD_MEASURES", "GROUND_BAND_LIMIT_HZ", "G", "N_TIMES",
            "CHUNK_POINTS", "ground_cutoff", "spectral_moments", "rms_acceleration", "arias_intensity",
@@ -108,7 +110,7 @@ def rms_acceleration(excitation, t_end, cutoff):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     t_end : float
         Record length [s].
@@ -138,7 +140,8 @@ def rms_acceleration(excitation, t_end, cutoff):
     --------
     Stationary white noise band-limited to 50 rad/s: ``sqrt(2 S0 omega_c)``.
 
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> rms_acceleration(white, 10.0, 50.0), (2 * 0.01 * 50.0) ** 0.5
     (1.0, 1.0)
@@ -153,7 +156,7 @@ def arias_intensity(excitation, t_end, cutoff, g=G):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     t_end : float
         Record length [s].
@@ -182,7 +185,8 @@ def arias_intensity(excitation, t_end, cutoff, g=G):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> import math
     >>> f"{arias_intensity(white, 10.0, 50.0):.6f}", f"{math.pi / (2 * G) * 1.0 * 10.0:.6f}"
@@ -200,7 +204,7 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation with its envelope (filter fields may be arrays).
     target_pga : float or array_like
         The median PGA [m s-2].
@@ -234,7 +238,8 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> s0 = s0_for_pga(white, 1.0, 2.0, 20.0)
     >>> f"{s0:.6f}", f"{pga_median(WhiteNoise(s0, white.envelope), 2.0, 20.0):.6f}"
@@ -254,7 +259,7 @@ def input_measures(excitation, t_end, cutoff):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation with its envelope; ``S0`` and filter fields may be arrays.
     t_end : float
         Record length [s].
@@ -276,7 +281,8 @@ def input_measures(excitation, t_end, cutoff):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> m = input_measures(white, 2.0, 20.0)
     >>> f"{m['rms_acceleration']:.6f}", f"{(2 * 0.01 * 20.0) ** 0.5:.6f}", bool(m["pga_median"] == pga_median(white, 2.0, 20.0))
@@ -373,8 +379,6 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
     >>> (im["pga_median"][1] / im["pga_median"][0]).item(), (im["arias_intensity"][1] / im["arias_intensity"][0]).item()
     (2.0, 4.0)
     """
-    from screening.analysis.fragility import parameter
-
     if "excitation" not in ds.attrs and "excitation" in ds.coords and ds["excitation"].dims == ("case",):
         parts = []                                     # sweep whose cases differ in excitation or envelope
         for i in range(ds.sizes["case"]):
@@ -384,7 +388,6 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
                                             period, damping, cutoff).expand_dims("case"))
         out = xr.concat(parts, "case", coords="different", compat="equals", join="outer", combine_attrs="override")
         return out.assign_coords(case=ds["case"])
-    from screening import excitations
 
     kind = ds.attrs.get("excitation")
     envelope_kind = ds.attrs.get("envelope", "exponential")
@@ -445,7 +448,6 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
                                    f"seed {PGV_SEED} (simulated_pga)")
     out["pgv_median"].attrs.update(omega_low=OMEGA_LOW, method=f"median of {PGV_RECORDS} synthesised records per "
                                    f"excitation shape, seed {PGV_SEED} (simulated_pgv)")
-    from screening import schema
     for name in MEASURES:
         if name in out:
             out[name].attrs.update(schema.attributes(name, schema.INTENSITY))
@@ -457,7 +459,7 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
@@ -492,7 +494,8 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pgv, se = simulated_pgv(white, 2.0, 20.0, n_records=100)
     >>> pgv4, _ = simulated_pgv(WhiteNoise(0.04, white.envelope), 2.0, 20.0, n_records=100)
@@ -507,7 +510,7 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
@@ -538,7 +541,8 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pga, se = simulated_pga(white, 2.0, 20.0, n_records=100)
     >>> pga4, se4 = simulated_pga(WhiteNoise(0.04, white.envelope), 2.0, 20.0, n_records=100)
@@ -575,7 +579,7 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         The study's excitation (scalar fields; envelope exponential or constant).
     t_end : float
         Record length [s].
@@ -610,7 +614,8 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pga = pga_median(white, 2.0, 20.0)
     >>> f"{pga:.4f}", pga == simulated_pga(white, 2.0, 20.0)[0]
@@ -628,7 +633,7 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         The study's excitation (``psd(omega)`` [m2 s-3], any spectrum; ``envelope`` exponential or
         constant).
     t_end : float
@@ -686,7 +691,8 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pgv = pgv_median(white, 2.0, 20.0)
     >>> f"{pgv:.4f}", pgv == simulated_pgv(white, 2.0, 20.0)[0]
@@ -708,7 +714,7 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         The study's excitation.
     period : float
         Central period ``T`` [s].
@@ -743,7 +749,8 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
     --------
     A short stationary record (ten Lyapunov integrations: about a second):
 
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> f"{avgsa_median(white, 2.0, 0.3, damping=0.2):.4f}"
     '0.2397'

@@ -1,7 +1,7 @@
 """Intensity measures of records: PGA, PGV, Sa, AvgSA, RMS and Arias of accelerograms, and the PGVs of
 synthesised records.
 
-:func:`record_measures` reads one :class:`~screening.records.Record`; :func:`oscillator_peak` (exact
+:func:`record_measures` reads one :class:`~screening.core.records.Record`; :func:`oscillator_peak` (exact
 recurrence for piecewise-linear input), :func:`record_velocity` (the 0.1 Hz Butterworth high-pass of
 record processing, then integration) and :func:`record_avgsa` work on rows of accelerations.
 :func:`synthesised_pgv` draws records of a stochastic input exactly as the Monte Carlo does and returns
@@ -22,7 +22,7 @@ import numpy as np
 from scipy import integrate
 
 from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
-from screening.validation import checked
+from screening.core.validation import checked
 
 __all__ = ["RECORD_MEASURES", "G", "oscillator_peak", "record_measures", "OMEGA_LOW", "AVGSA_N_PERIODS",
            "AVGSA_RANGE", "highpass_gain", "PGV_RECORDS", "PGV_SEED", "PGV_CHUNK", "median_standard_error",
@@ -105,7 +105,7 @@ def record_measures(record, period=None, damping=0.05, g=G):
 
     Parameters
     ----------
-    record : screening.records.Record
+    record : screening.core.records.Record
         The record (``acceleration`` [m s-2], ``dt`` [s]).
     period : float, optional
         Oscillator period [s] of ``sa`` and ``avgsa`` (``None``: neither).
@@ -140,7 +140,7 @@ def record_measures(record, period=None, damping=0.05, g=G):
     Ten seconds of a 1 Hz sine of unit amplitude:
 
     >>> import math, numpy as np
-    >>> from screening.records import Record
+    >>> from screening.core.records import Record
     >>> t = np.arange(0.0, 10.0001, 0.01)
     >>> m = record_measures(Record(np.sin(2 * math.pi * t), 0.01, "sine"))
     >>> m["pga"], f"{m['rms_acceleration']:.6f}", f"{m['arias_intensity']:.6f}", f"{math.pi / (2 * G) * 5.0:.6f}"
@@ -306,7 +306,7 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     t_end : float
         Record length [s].
@@ -338,7 +338,8 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pga, pgv = synthesised_peaks(white, 5.0, 50.0, n_records=20, seed=1)
     >>> pga.shape, bool(np.all(synthesised_peaks(white, 5.0, 50.0, n_records=3, seed=1)[0] == pga[:3]))
@@ -360,7 +361,7 @@ def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_S
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     t_end : float
         Record length [s].
@@ -387,7 +388,8 @@ def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_S
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pgv = synthesised_pgv(white, 5.0, 50.0, n_records=20, seed=1)
     >>> bool(np.all(pgv == synthesised_peaks(white, 5.0, 50.0, n_records=20, seed=1)[1])), pgv.shape

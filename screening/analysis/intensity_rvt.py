@@ -24,12 +24,12 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize
 
-from screening.analysis._excitation_shape import N_TIMES
-from screening.analysis._excitation_shape import scalar_excitation as _scalar_excitation
-from screening.analysis._excitation_shape import shape_key as _shape_key, times as _times
-from screening.analysis.fragility import oscillator_bandwidth, upcrossing_rate, vanmarcke_factor
+from screening.analysis._excitation_shape import (N_TIMES, scalar_excitation as _scalar_excitation,
+                                                  shape_key as _shape_key, times as _times)
+from screening.analysis.fragility import (exceedance_probability_from_moments, oscillator_bandwidth, upcrossing_rate,
+                                          vanmarcke_factor)
 from screening.analysis.intensity_records import OMEGA_LOW
-from screening.solvers.moment_kernels import lyapunov_rhs
+from screening.kernels.moment_kernels import lyapunov_rhs
 from screening.solvers.synthesis import envelope_rate
 
 __all__ = ["N_TIMES", "CHUNK_POINTS", "CROSSING_STEP", "CROSSING_EXTENT", "spectral_moments", "median_peak",
@@ -48,7 +48,7 @@ def spectral_moments(excitation, cutoff):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its two-sided PSD ``S(omega)`` [m2 s-3].
     cutoff : float
         Band limit ``omega_c`` [rad s-1].
@@ -70,7 +70,8 @@ def spectral_moments(excitation, cutoff):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> spectral_moments(white, 50.0)
     (1.0, 25.0, 833.33...)
@@ -151,7 +152,7 @@ def input_moments(excitation, t_end, cutoff):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     t_end : float
         Record length [s].
@@ -180,7 +181,8 @@ def input_moments(excitation, t_end, cutoff):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> t, var, var_dot, cov, delta = input_moments(white, 10.0, 50.0)
     >>> t.shape, float(var[0]), float(var_dot[0]), float(cov[0]), round(delta, 6)
@@ -204,7 +206,7 @@ def pga_median(excitation, t_end, cutoff):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     t_end : float
         Record length [s].
@@ -230,7 +232,8 @@ def pga_median(excitation, t_end, cutoff):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pga = pga_median(white, 10.0, 50.0)
     >>> f"{pga:.4f}", f"{pga_median(WhiteNoise(0.04, white.envelope), 10.0, 50.0) / pga:.6f}"
@@ -245,8 +248,8 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
-        A registered excitation (:mod:`screening.excitations`; array fields broadcast with the others).
+    excitation : screening.core.excitations.base.Excitation
+        A registered excitation (:mod:`screening.core.excitations`; array fields broadcast with the others).
     t_end : float
         Record length [s].
     cutoff : float or array_like
@@ -296,7 +299,8 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
     --------
     At the RVT median PGA the probability is one half:
 
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> p = rocking_start_probability(white, 5.0, 50.0, pga_median(white, 5.0, 50.0))
     >>> f"{p:.4f}"
@@ -336,8 +340,6 @@ def _unit_crossings(*args):
     tabulated at levels ``x`` every :data:`CROSSING_STEP` peak standard deviations (``log`` of the expected
     crossings is nearly quadratic in ``x``: linear interpolation errs by about ``step^2 / 8``, 5e-5 relative;
     beyond the table, 12 peak standard deviations, the probability is below 1e-28 and read as 0)."""
-    from screening.analysis.fragility import exceedance_probability_from_moments
-
     *shape, method = args
     t, var, var_dot, cov, delta = _unit_input_moments(*shape)
     x = np.arange(0.0, CROSSING_EXTENT, CROSSING_STEP) * math.sqrt(float(np.max(var)))
@@ -365,11 +367,11 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
     """The non-stationary response moments of a linear oscillator driven by the ground acceleration.
 
     The oscillator ``u'' + 2 zeta omega_n u' + omega_n^2 u = -a(t)`` starts at rest, the excitation's
-    filter states (:meth:`screening.excitations.base.Excitation.filter`) in their stationary state.
+    filter states (:meth:`screening.core.excitations.base.Excitation.filter`) in their stationary state.
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     period : float
         Natural period ``T_n = 2 pi / omega_n`` [s].
@@ -402,7 +404,8 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> import math
     >>> t, var_u, var_ud, cov = oscillator_covariance(white, 0.5, 3.0, damping=0.2, n_times=11)
@@ -446,7 +449,7 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
     period : float
         Natural period [s].
@@ -480,7 +483,8 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
     --------
     Proportional to ``sqrt(S0)``:
 
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> sa = sa_median(white, 0.5, 3.0, damping=0.2)
     >>> f"{sa:.4f}", f"{sa_median(WhiteNoise(0.04, white.envelope), 0.5, 3.0, damping=0.2) / sa:.6f}"
@@ -503,7 +507,7 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         An object with ``psd(omega)`` [m2 s-3] (and ``omega_g``, ``omega_f`` [rad s-1] if it has them).
     period : float
         Natural period [s].
@@ -541,7 +545,8 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
     --------
     Under white noise it is the oscillator's own bandwidth:
 
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> from screening.analysis.fragility import oscillator_bandwidth
     >>> f"{oscillator_response_bandwidth(white, 0.5):.6f}", f"{float(oscillator_bandwidth(0.05)):.6f}"
@@ -570,7 +575,7 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         Any object with a method ``psd(omega)``, the two-sided PSD ``S(omega)`` [m2 s-3] of the
         unmodulated acceleration (any excitation: white noise, Kanai-Tajimi, Clough-Penzien, ...).
     cutoff : float
@@ -600,7 +605,8 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     Examples
     --------
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> mu0, mu1, mu2 = velocity_spectral_moments(white, 1e5, 0.5)
     >>> import math
@@ -623,7 +629,7 @@ def envelope_exponentials(envelope):
 
     Parameters
     ----------
-    envelope : screening.model.excitation.Envelope or screening.model.excitation.ConstantEnvelope
+    envelope : screening.core.model.excitation.Envelope or screening.core.model.excitation.ConstantEnvelope
         The exponential envelope ``4 (exp(-t/T1) - exp(-t/T2))`` or the constant one (``ValueError``
         for another kind).
 
@@ -644,7 +650,7 @@ def envelope_exponentials(envelope):
 
     Examples
     --------
-    >>> from screening.model.excitation import Envelope
+    >>> from screening.core.model.excitation import Envelope
     >>> amplitudes, rates = envelope_exponentials(Envelope(4.0, 2.0))
     >>> amplitudes.tolist(), rates.tolist()
     ([4.0, -4.0], [0.25, 0.5])
@@ -702,7 +708,7 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
 
     Parameters
     ----------
-    excitation : screening.excitations.base.Excitation
+    excitation : screening.core.excitations.base.Excitation
         A registered excitation with ``psd(omega)`` [m2 s-3] and its envelope (exponential or constant).
     t_end : float
         Record length [s].
@@ -746,7 +752,8 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
     Under stationary input, long after the start, the variance is the stationary one of
     :func:`velocity_spectral_moments`:
 
-    >>> from screening.model.excitation import ConstantEnvelope, WhiteNoise
+    >>> from screening.core.model.excitation import ConstantEnvelope
+    >>> from screening.core.excitations.white import WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> t, var_v, var_vd, cov = velocity_covariance(white, 60.0, 50.0, omega_low=0.5)
     >>> f"{var_v[-1]:.4f}", f"{velocity_spectral_moments(white, 50.0, 0.5)[0]:.4f}"

@@ -10,7 +10,7 @@ functions behind them:
 * :func:`uplift_acceleration` -- the ground acceleration at which the block starts to rock on its
   bed (quasi-static), the level of :func:`screening.analysis.intensity.rocking_start_probability`;
 * :func:`source_codes` / :func:`monte_carlo_source` -- the codes of the provenance variable
-  ``p_source`` (:data:`screening.status.ProbabilitySource`, with one ``monte_carlo_<model>`` code per
+  ``p_source`` (:data:`screening.core.status.ProbabilitySource`, with one ``monte_carlo_<model>`` code per
   model :func:`screening.monte_carlo` knows);
 * :func:`choose_sources` -- which estimate each grid point of a sweep carries;
 * :func:`answer_quantities` -- whether the variance or, near toppling, the probabilities answer a point.
@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.solvers.estimates import Z, binomial_estimate, sample_probabilities
+from screening.analysis.fragility import exceedance_probability, spot_positions
 from screening.analysis.trust import P_EDGES
-from screening.status import (AnswerQuantity, BestMethod, PointStatus, ProbabilitySource, SampleState, Trust,
-                              probability_sources)
+from screening.core.status import (AnswerQuantity, BestMethod, PointStatus, probability_sources, ProbabilitySource,
+                                   SampleState, Trust)
+from screening.solvers import mc_registry
+from screening.solvers.estimates import binomial_estimate, sample_probabilities, Z
 
 __all__ = ["uplift_acceleration", "source_codes", "monte_carlo_source", "choose_sources",
            "overturning_probability", "TOPPLING_FRACTION", "spot_check_probabilities", "probability_text", "Z",
@@ -39,11 +41,11 @@ def uplift_acceleration(block, foundation, condensation):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The block (``m`` [kg], ``h`` [m], ...; array fields broadcast).
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         Its bed (``k`` [N m-2], ...).
-    condensation : screening.condensation.base.Condensation
+    condensation : screening.core.condensation.base.Condensation
         The condensation of the bed's moment law.
 
     Returns
@@ -68,7 +70,7 @@ def uplift_acceleration(block, foundation, condensation):
     Examples
     --------
     >>> from screening import Block, Foundation
-    >>> from screening.condensation.registry import get
+    >>> from screening.core.condensation.registry import get
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> a_ul = uplift_acceleration(block, bed, get("paper"))
     >>> f"{float(a_ul):.4f}", f"{block.g * block.b / (3 * block.h) - block.g * 1.2012e-3:.4f}"
@@ -82,7 +84,7 @@ def uplift_acceleration(block, foundation, condensation):
 def source_codes():
     """The codes of the values of ``p_source``.
 
-    Those of :data:`~screening.status.ProbabilitySource` and ``monte_carlo_<model>`` for every registered
+    Those of :data:`~screening.core.status.ProbabilitySource` and ``monte_carlo_<model>`` for every registered
     Monte Carlo model (:mod:`screening.solvers.mc_registry`).
 
     Returns
@@ -102,8 +104,6 @@ def source_codes():
     >>> codes["unreliable"], codes["linearization_gaussian"], codes["monte_carlo_coupled"]
     (0, 1, 10)
     """
-    from screening.solvers import mc_registry
-
     return probability_sources(mc_registry.names())
 
 
@@ -146,16 +146,16 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
     status_ok : array_like of bool
         True where the linearization ran to the end.
     trust : array_like of int
-        ``sl_trust`` codes (:class:`~screening.status.Trust`).
+        ``sl_trust`` codes (:class:`~screening.core.status.Trust`).
     band_finite : array_like of bool
         True where the trust band of the point is finite.
     best_method : array_like of int, optional
-        ``best_method`` codes of ``[accuracy]`` (:class:`~screening.status.BestMethod`) or None.
+        ``best_method`` codes of ``[accuracy]`` (:class:`~screening.core.status.BestMethod`) or None.
 
     Returns
     -------
     numpy.ndarray of int8
-        :data:`~screening.status.ProbabilitySource` codes [-]: with ``[accuracy]``,
+        :data:`~screening.core.status.ProbabilitySource` codes [-]: with ``[accuracy]``,
         ``linearization_gaussian`` where the rule promises the target, ``corrected_linearization_gaussian``
         where the correction reaches the point, else ``unreliable``; without it, ``linearization_gaussian``
         where the point is ``trusted`` with a finite band, else ``unreliable``.  Monte Carlo points are
@@ -169,7 +169,7 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
 
     Examples
     --------
-    >>> from screening.status import Trust
+    >>> from screening.core.status import Trust
     >>> choose_sources([True, True, False], [Trust.trusted, Trust.untrusted, Trust.trusted], [True, True, True])
     array([1, 0, 0], dtype=int8)
     """
@@ -223,8 +223,6 @@ def overturning_probability(ds, method="vanmarcke"):
     >>> p.values.tolist(), note
     ([0.1, 0.3], '')
     """
-    from screening.analysis.fragility import exceedance_probability
-
     if "p_overturn" in ds.variables and "p_source" in ds.variables:
         unreliable = ds["p_source"] == int(ProbabilitySource.unreliable)
         n = int(unreliable.sum())
@@ -270,7 +268,7 @@ def spot_check_probabilities(ds):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import SampleState
+    >>> from screening.core.status import SampleState
     >>> ds = xr.Dataset({"status": ("S0", [0, 0]),
     ...                  "mcs_peak_abs_theta": (("spot", "sample"), [[1e-3, 3e-3, 0.2, 1e-3], [1e-3] * 4]),
     ...                  "mcs_sample_state": (("spot", "sample"), [[0, 0, SampleState.overturned, 0], [0] * 4])},
@@ -279,8 +277,6 @@ def spot_check_probabilities(ds):
     >>> prob["p_overturn"].tolist(), prob["near_toppling"].tolist(), prob["thresholds"]
     ([0.25, 0.0], [True, False], ())
     """
-    from screening.analysis.fragility import spot_positions
-
     state = np.asarray(ds["mcs_sample_state"].values)
     peaks = np.asarray(ds["mcs_peak_abs_theta"].values, dtype=float)
     relative_to = str(ds["p_exceed"].attrs.get("relative_to", "None")) if "p_exceed" in ds.variables else "None"
@@ -339,7 +335,7 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
     Parameters
     ----------
     status : array_like of int
-        :class:`~screening.status.PointStatus` codes.
+        :class:`~screening.core.status.PointStatus` codes.
     p_overturn, p_overturn_se : array_like
         The point's best probability of overturning and its standard error [1] (NaN standard error where
         nothing vouches for it).
@@ -355,7 +351,7 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
     Returns
     -------
     numpy.ndarray of int8
-        :class:`~screening.status.AnswerQuantity` codes [-], the first rule that holds:
+        :class:`~screening.core.status.AnswerQuantity` codes [-], the first rule that holds:
         ``probabilities_stopped`` where the linearization stopped near toppling
         (:data:`NEAR_TOPPLING_STATUS`); ``probabilities_overturning`` where ``p_overturn`` is vouched for and
         ``p_overturn - 2 se >= TOPPLING_FRACTION``; ``probabilities_open_interval`` at status ok in heavy
@@ -407,7 +403,7 @@ def reliable_answer(answer, variance_vouched, source):
     Parameters
     ----------
     answer : array_like of int
-        :class:`~screening.status.AnswerQuantity` codes (:func:`answer_quantities`).
+        :class:`~screening.core.status.AnswerQuantity` codes (:func:`answer_quantities`).
     variance_vouched : array_like of bool
         True where the point's best peak variance is vouched for (``best_method`` not ``unreliable``).
     source : array_like of int

@@ -3,8 +3,8 @@
 A study that sets its points by how hard they rock, not by ``S0``, asks for the white-noise or
 filtered intensity ``S0`` [m2 s-3] at which the stochastic linearization's peak uplift probability
 ``max_t P(|theta| > theta_ul)`` equals a target: :func:`calibrate_intensity`, a bisection on
-``log10 S0``.  The speed-accuracy trade study (:mod:`screening.analysis.tradeoff`) and the error atlas
-(:mod:`screening.analysis.atlas_run`) set their points with it.
+``log10 S0``.  The speed-accuracy trade study (:mod:`screening.report.tradeoff`) and the error atlas
+(:mod:`screening.applications.atlas_run`) set their points with it.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from screening.solvers.moments import solve_moments
-from screening.status import PointStatus
+from screening.core.status import PointStatus
 
 __all__ = ["round_significant", "calibrate_intensity"]
 
@@ -59,9 +59,9 @@ def calibrate_intensity(block, foundation, make_exc, target, t_out, rtol=1e-7, l
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The block (scalar fields).
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         Its bed.
     make_exc : callable
         ``make_exc(S0)`` -> the excitation at ``S0`` [m2 s-3].
@@ -98,7 +98,7 @@ def calibrate_intensity(block, foundation, make_exc, target, t_out, rtol=1e-7, l
     The paper's block on a softening bed, 5 % peak uplift probability over a 4 s record:
 
     >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.model.excitation import Envelope
+    >>> from screening.core.model.excitation import Envelope
     >>> from screening.solvers.timegrid import output_times
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5)
     >>> t = output_times(4.0, 0.05)

@@ -2,7 +2,7 @@
 
 Every linearized point gets
 
-* ``sl_trust`` (:class:`screening.status.Trust`): ``trusted`` (0), ``check`` (1), ``untrusted`` (2);
+* ``sl_trust`` (:class:`screening.core.status.Trust`): ``trusted`` (0), ``check`` (1), ``untrusted`` (2);
 * ``sl_error_low``, ``sl_error_high``: a predicted band of SL's relative error on peak
   ``var_theta`` against Monte Carlo, ``SL / MCS - 1`` [1].
 
@@ -66,8 +66,11 @@ from importlib import resources
 import numpy as np
 import xarray as xr
 
+from screening.analysis import error_model as em
+from screening.analysis.error_model import shipped_model
 from screening.analysis.indicators import ENVELOPE_FLOOR, envelope_fraction, indicators_from_dataset, trust_indicators
-from screening.status import PointStatus, Trust
+from screening.core.status import PointStatus, Trust
+from screening.solvers import schema
 
 __all__ = ["ENVELOPE_FLOOR", "P_EDGES", "DECAY_LIMIT", "SIGMA_LIMIT", "MARGIN_LIMIT", "TRUSTED_ERROR",
            "TRUSTED_BAND", "UNTRUSTED_ERROR", "N_SE", "MIN_ROWS", "OVERTURN_LIMIT", "BED_LAWS", "CONDENSATIONS",
@@ -407,7 +410,7 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
     calibration : dict or xarray.Dataset, optional
         A table from :func:`trust_table`, a calibration dataset, or None (the shipped table).
     status : array_like of int, optional
-        SL status codes (:class:`screening.status.PointStatus`), broadcastable; None: all ok.
+        SL status codes (:class:`screening.core.status.PointStatus`), broadcastable; None: all ok.
     condensation : str or array_like of str, default "paper"
         ``"paper"`` or ``"cubic"`` (another is at best ``check``, with no band).
     eps : array_like, default 0.0
@@ -416,7 +419,7 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
     Returns
     -------
     tuple of numpy.ndarray
-        ``(flag, error_low, error_high)``: :class:`screening.status.Trust` codes [int8] and the band of
+        ``(flag, error_low, error_high)``: :class:`screening.core.status.Trust` codes [int8] and the band of
         ``SL / MCS - 1`` [1] (NaN where there is none).
 
     References
@@ -484,7 +487,7 @@ def sl_trust(indicators, calibration=None, status=None, condensation="paper", ep
 
 
 def trust_attributes():
-    """CF attributes of ``sl_trust``, ``sl_error_low``, ``sl_error_high`` (from :mod:`screening.schema`).
+    """CF attributes of ``sl_trust``, ``sl_error_low``, ``sl_error_high`` (from :mod:`screening.solvers.schema`).
 
     Returns
     -------
@@ -503,8 +506,6 @@ def trust_attributes():
     >>> attrs["sl_trust"]["flag_meanings"], attrs["sl_trust"]["flag_values"].tolist()
     ('trusted check untrusted', [0, 1, 2])
     """
-    from screening import schema
-
     return {name: schema.attributes(name) for name in ("sl_trust", "sl_error_low", "sl_error_high")}
 
 
@@ -533,7 +534,7 @@ def add_trust(ds, models=None):
     Returns
     -------
     xarray.Dataset
-        ``ds`` with ``sl_trust`` (:class:`screening.status.Trust` codes), ``sl_error_low`` and
+        ``ds`` with ``sl_trust`` (:class:`screening.core.status.Trust` codes), ``sl_error_low`` and
         ``sl_error_high`` [1].
 
     Notes
@@ -563,8 +564,6 @@ def add_trust(ds, models=None):
     >>> out["sl_trust"].values.tolist(), out["sl_error_low"].values.round(2).tolist()
     ([1, 2], [-0.68, -1.0])
     """
-    from screening.analysis import error_model as em
-
     dims = ds["peak_var_theta"].dims
     peak = ds["peak_var_theta"]
 
@@ -612,8 +611,6 @@ def trust_models(*condensations):
     >>> sorted(trust_models("paper", "no_such_condensation"))
     ['paper']
     """
-    from screening.analysis.error_model import shipped_model
-
     out = {}
     for name in condensations:
         try:
@@ -634,7 +631,7 @@ def error_model_trust(x, status, condensation, covered=True, models=None):
     x : array_like
         ``(n, len(FEATURES))`` features (:func:`screening.analysis.error_model.features`).
     status : array_like of int
-        :class:`screening.status.PointStatus` codes, ``(n,)`` or scalar.
+        :class:`screening.core.status.PointStatus` codes, ``(n,)`` or scalar.
     condensation : str or array_like of str
         A name or ``(n,)`` names.
     covered : bool or array_like of bool, default True
@@ -645,7 +642,7 @@ def error_model_trust(x, status, condensation, covered=True, models=None):
     Returns
     -------
     tuple of numpy.ndarray
-        ``(flag, low, high)``: :class:`screening.status.Trust` codes [int8] and the interval of
+        ``(flag, low, high)``: :class:`screening.core.status.Trust` codes [int8] and the interval of
         ``SL / MC - 1`` [1].
 
     References
@@ -669,8 +666,6 @@ def error_model_trust(x, status, condensation, covered=True, models=None):
     >>> error_model_trust(x, [0, 0], "paper")[0].tolist(), error_model_trust(x, [0, 2], "paper")[0].tolist()
     ([1, 2], [1, 2])
     """
-    from screening.analysis import error_model as em
-
     x = np.atleast_2d(np.asarray(x, dtype=float))
     n = len(x)
     cond = np.broadcast_to(np.asarray(condensation, dtype=str), (n,))

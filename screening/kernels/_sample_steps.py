@@ -1,5 +1,5 @@
 """What the compiled sample integrators share (package-internal; those of the Monte Carlo models in
-:mod:`screening.solvers.mcs_kernels` and the stiff-bed model's in :mod:`screening.solvers.stiff_bed_kernels`).
+:mod:`screening.kernels.mcs_kernels` and the stiff-bed model's in :mod:`screening.kernels.stiff_bed_kernels`).
 
 The ground input of a sample between the grid points of its synthesis: the cubic Hermite interpolant
 of the grid values and exact rates of each channel (horizontal ``x_g''``, vertical ``a_v``), and its
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from screening.kernels.interpolation import hermite, hermite_rate
+from screening.core.interpolation import hermite, hermite_rate
 
 #: "No vertical channel": the vertical ground acceleration and rate of a run without one (read as 0).
 NO_VERTICAL = np.zeros((1, 0))

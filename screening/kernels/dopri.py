@@ -4,7 +4,7 @@ One home for the tableau (Hairer, Norsett & Wanner, *Solving ODEs I*, table II.5
 scipy's ``RK45``), its 4th-order dense output, and the PI step-size controller of Hairer's
 DOPRI5 (``alpha = 0.17``, ``beta = 0.04``: smooth near the stability bound).  The moment solver
 (:mod:`screening.solvers.moments`, arrays of 3 or 10 moments) and the Monte Carlo integrator
-(:mod:`screening.solvers.mcs_kernels`, 4 scalar states) run their step loops on these.
+(:mod:`screening.kernels.mcs_kernels`, 4 scalar states) run their step loops on these.
 
 Symbols: ``h`` step [s], stage ``s`` at time ``t + C[s] h``; ``y_new = y + h sum_s B[s] K[s]``;
 error estimate ``h sum_s E[s] K[s]`` (5th minus 4th order, FSAL stage 7 included).

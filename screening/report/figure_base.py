@@ -3,7 +3,7 @@ drawn, figure creation and the atomic PNG write.
 
 Every figure marks what is flagged or untrusted: points whose ``status`` is not ``ok`` are masked
 (never drawn as ordinary values) and marked (grey hatched cells, grey crosses), points whose
-linearization is ``untrusted`` (``sl_trust``, :class:`~screening.status.Trust`) are hatched or drawn
+linearization is ``untrusted`` (``sl_trust``, :class:`~screening.core.status.Trust`) are hatched or drawn
 hollow, with a legend and the counts in the title (:func:`flag_summary`).  The response is drawn as
 ``var_theta`` [rad2], as ``sigma_theta`` [rad] or as a fraction of the slenderness angle
 (``response = "var" | "sigma" | "fraction"``, :func:`response_values`).
@@ -19,7 +19,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from screening.status import PointStatus, Trust
+from screening.core.atomicfile import atomic_open
+from screening.core.status import PointStatus, Trust
 
 __all__ = ["DPI", "RESPONSES", "FLAGGED_HATCH", "UNTRUSTED_HATCH", "FLAGGED_COLOR", "UNTRUSTED_COLOR",
            "point_flags", "flag_summary", "point_flag_text", "response_values", "flag_legend", "grid_dims",
@@ -65,7 +66,7 @@ def point_flags(ds, index=None, order=None):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -105,7 +106,7 @@ def flag_summary(ds):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -147,7 +148,7 @@ def point_flag_text(ds, index):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -278,7 +279,7 @@ def grid_dims(ds):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -312,7 +313,7 @@ def grid_values(ds, dim):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -347,7 +348,7 @@ def grid_units(ds, dim):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -382,7 +383,7 @@ def spot_index(ds, i):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -450,7 +451,7 @@ def point_label(ds, index):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
@@ -527,8 +528,6 @@ def save_figure(fig, path):
     ...     out.read_bytes()[:4], sorted(p.name for p in pathlib.Path(tmp).iterdir())
     (b'\\x89PNG', ['f.png'])
     """
-    from screening.atomicfile import atomic_open
-
     with atomic_open(path, "wb") as fh:                 # never through a planted link
         fig.savefig(fh, format="png")
     return Path(path)
@@ -558,7 +557,7 @@ def axis_label(ds, name):
     Examples
     --------
     >>> import xarray as xr
-    >>> from screening.status import PointStatus, Trust
+    >>> from screening.core.status import PointStatus, Trust
     >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
     ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
     ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})

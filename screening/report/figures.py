@@ -26,7 +26,7 @@ from screening.report.figure_base import (
     point_label, response_values, save_figure)
 from screening.report.spot_figures import (
     MAX_SPOT_FIGURES, SPOT_PANEL_HISTORIES, plot_spot_panels, plot_spots, spot_file_label)
-from screening.status import PointStatus
+from screening.core.status import PointStatus
 
 __all__ = ["HISTORY_PANELS", "PEAK_PANELS", "LOG_PANELS", "representative_points", "plot_histories", "plot_peaks",
            "plot_result"]

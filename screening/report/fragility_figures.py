@@ -11,7 +11,7 @@ import numpy as np
 from screening.report.figure_base import (
     FLAGGED_COLOR, UNTRUSTED_COLOR, flag_summary, grid_units, grid_values, is_log_spaced, new_figure,
     point_flags, point_label, save_figure)
-from screening.status import BestMethod
+from screening.core.status import BestMethod
 
 __all__ = ["plot_fragility", "BEST_MARKERS"]
 
@@ -24,7 +24,7 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     standard errors) in the colour of the curve they lie on (black when that curve is not drawn).
     Up to ``max_curves`` curves, the other grid dimensions sampled evenly.  Where ``frag`` has
     ``best_p_exceed`` (``[accuracy]``), each drawn curve also gets its best estimates, the band
-    ``best_p_exceed_low..high`` shaded and one marker per :class:`~screening.status.BestMethod`
+    ``best_p_exceed_low..high`` shaded and one marker per :class:`~screening.core.status.BestMethod`
     (points without a vouched estimate: a red ``?``, no band).
 
     Parameters

@@ -7,6 +7,9 @@ import numpy as np
 from matplotlib.ticker import NullFormatter
 from scipy.special import ndtr
 
+from screening.applications.fit_excitation import envelope_energy, husid, smoothed_psd
+from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
+from screening.core.records import Record
 from screening.report.figure_base import new_figure, save_figure
 
 __all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit", "plot_stripes", "plot_cloud"]
@@ -76,17 +79,17 @@ def plot_simulation(ds, path):
 
 
 def plot_excitation_fit(record, fit, path):
-    """The goodness of a :func:`screening.analysis.fit_excitation.fit_excitation` as a PNG.
+    """The goodness of a :func:`screening.applications.fit_excitation.fit_excitation` as a PNG.
 
     The record's Husid curve against the fitted envelope's, and its smoothed periodogram against the
     fitted spectrum.
 
     Parameters
     ----------
-    record : screening.records.Record
+    record : screening.core.records.Record
         The record (acceleration [m s-2], time step [s]).
     fit : dict
-        Its :func:`~screening.analysis.fit_excitation.fit_excitation` result (``T1``, ``T2`` [s],
+        Its :func:`~screening.applications.fit_excitation.fit_excitation` result (``T1``, ``T2`` [s],
         ``S0`` [m2 s-3], ...).
     path : str or os.PathLike
         The PNG file (written atomically).
@@ -106,17 +109,14 @@ def plot_excitation_fit(record, fit, path):
     Examples
     --------
     >>> import numpy as np, tempfile, pathlib
-    >>> from screening.records import Record
-    >>> from screening.analysis.fit_excitation import fit_excitation
+    >>> from screening.core.records import Record
+    >>> from screening.applications.fit_excitation import fit_excitation
     >>> t = np.arange(0.0, 20.0, 0.01)
     >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * np.random.default_rng(1).normal(size=t.size), 0.01, "x")
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     plot_excitation_fit(rec, fit_excitation(rec), pathlib.Path(tmp) / "fit.png").name
     'fit.png'
     """
-    from screening.analysis.fit_excitation import envelope_energy, husid, smoothed_psd
-    from screening.excitations.kanai_tajimi import kanai_tajimi_psd
-
     a = record.acceleration - record.acceleration.mean()
     t = np.arange(a.size) * record.dt
     fig = new_figure(7.0, 7.0)
@@ -130,7 +130,6 @@ def plot_excitation_fit(record, fit, path):
     ax[0].set_title(f"worst gap {fit['husid_max_deviation']:.3f}; zero crossings {fit['zero_crossing_rate_record']:.3g}"
                     f"/s (record) vs {fit['zero_crossing_rate_model']:.3g}/s (model)", fontsize=8)
     ax[0].legend(fontsize=7)
-    from screening.records import Record
 
     w, s = smoothed_psd(Record(a, record.dt), fit["T1"], fit["T2"])
     use = w > 0
@@ -156,7 +155,7 @@ def plot_stripes(ds, path):
     Parameters
     ----------
     ds : xarray.Dataset
-        A :func:`screening.workflow.cloud.stripe_dataset` result: on ``level`` (the stripes' intensities),
+        A :func:`screening.applications.cloud.stripe_dataset` result: on ``level`` (the stripes' intensities),
         ``n_used`` and ``n_exceed`` [1] and the intensity variable named by ``attrs["intensity_variable"]``
         (with its ``units``); ``fit_median``, ``fit_median_se`` [units of the intensity], ``beta``,
         ``beta_se`` [1].
@@ -219,7 +218,7 @@ def plot_cloud(ds, path):
     Parameters
     ----------
     ds : xarray.Dataset
-        A :func:`screening.workflow.cloud.cloud_dataset` result: on ``record``, the intensity named by
+        A :func:`screening.applications.cloud.cloud_dataset` result: on ``record``, the intensity named by
         ``attrs["intensity_variable"]`` (with its ``units``), ``peak_abs_theta`` [rad], ``overturned``
         and ``exceed`` [bool]; ``slenderness`` and ``threshold_rad`` [rad], ``fit_median`` [units of
         the intensity, in its ``units`` attribute] and ``beta`` [1].

@@ -12,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from screening.report.figure_base import (
-    axis_label, flag_summary, new_figure, point_flag_text, point_label, save_figure, spot_index)
+from screening.analysis.probabilities import probability_text, spot_check_probabilities, TOPPLING_FRACTION
+from screening.report.figure_base import (axis_label, flag_summary, new_figure, point_flag_text, point_label,
+                                          save_figure, spot_index)
 
 __all__ = ["plot_spots", "Z95", "MAX_SPOT_FIGURES", "spot_file_label", "plot_spot_panels", "SPOT_PANEL_HISTORIES"]
 
@@ -83,15 +84,11 @@ def plot_spots(ds, path):
 
 def _spot_probabilities(ds):
     """:func:`screening.analysis.probabilities.spot_check_probabilities`, or None for a result without sample states."""
-    from screening.analysis.probabilities import spot_check_probabilities
-
     return spot_check_probabilities(ds) if "mcs_sample_state" in ds.variables else None
 
 
 def _probability_text(prob, i):
     """``(P(overturn) p +- se [NEAR TOPPLING ...], P(|theta| > a) p +- se, ...)`` of spot ``i``."""
-    from screening.analysis.probabilities import TOPPLING_FRACTION, probability_text
-
     rel = "" if prob["relative_to"] == "None" else f" {prob['relative_to']}"
     over = f"P(overturn) {probability_text(prob['p_overturn'][i], prob['p_overturn_se'][i])}"
     if prob["near_toppling"][i]:

@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from screening.analysis.beds import bed_summary, format_bed_summary
+from screening.analysis.fragility import parameter
+from screening.analysis.intensity import intensity_measures
+from screening.analysis.probabilities import source_codes, TOPPLING_FRACTION
+from screening.core import laws
+from screening.core.model import Block, Foundation
+from screening.core.status import BestMethod, PointStatus, SpotStatus, Trust
+from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
 from screening.solvers.outputs import info_variables
-from screening.status import BestMethod, PointStatus, SpotStatus, Trust
 
 __all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
            "product_kind", "describe_product"]
@@ -48,8 +55,6 @@ def describe(ds, path="result"):
     >>> print(describe(ds, "demo.nc").splitlines()[4])
       S0       5 values, 0.0003 .. 0.0012 m2 s-3
     """
-    from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
-
     dims = grid_dims(ds)
     lines = [f"{path}: {ds.attrs.get('title', '')}",
              f"  screening {ds.attrs.get('screening_version', '?')}, study {ds.attrs.get('study_file', '?')}, "
@@ -161,8 +166,6 @@ def probability_lines(ds):
     >>> probability_lines(xr.Dataset())
     []
     """
-    from screening.analysis.probabilities import TOPPLING_FRACTION, source_codes
-
     lines = []
     if "p_source" in ds.variables:
         source = np.asarray(ds["p_source"].values).reshape(-1)
@@ -247,7 +250,7 @@ def _spot_summary(rel, rel_dot, n_overturned, n_diverged, n_used, failed):
 
 
 def bed_lines(ds, max_points=400):
-    """``block on its bed:`` lines of :func:`screening.beds.bed_summary`.
+    """``block on its bed:`` lines of :func:`screening.analysis.beds.bed_summary`.
 
     Ranges over the grid where the block or bed is swept; nothing if the dataset lacks a parameter.
 
@@ -285,11 +288,6 @@ def bed_lines(ds, max_points=400):
     """
     import xarray as xr
 
-    from screening.analysis.fragility import parameter
-    from screening.beds import bed_summary, format_bed_summary
-    from screening.model import Block, Foundation
-
-    from screening import laws
 
     law = ds.attrs.get("contact", "hunt_crossley")
     try:
@@ -360,8 +358,6 @@ def intensity_lines(ds):
     >>> intensity_lines(ds)[2]
     '  rms_acceleration  0.2201 .. 0.4402 m s-2 (0.02245 .. 0.04489 g)'
     """
-    from screening.analysis.intensity import intensity_measures
-
     try:
         im = intensity_measures(ds)
     except (KeyError, ValueError):
@@ -481,7 +477,7 @@ def describe_product(ds, path="file"):
                      f"min {_fmt(float(np.nanmin(p)))}, max {_fmt(float(np.nanmax(p)))}"
                      if np.isfinite(p).any() else "P(exceed): no finite value")
     if "fit_median" in ds:
-        from screening.analysis.im_fragility import curve_count_text
+        from screening.applications.im_fragility import curve_count_text
 
         units = ds["fit_median"].attrs.get("units", "")
         fit = f"lognormal fit over {ds['fit_median'].attrs.get('intensity', '?')}: {curve_count_text(ds)}"

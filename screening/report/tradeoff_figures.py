@@ -11,8 +11,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from screening.analysis.metrics import classify_error, rule_error
-from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+from screening.applications.metrics import classify_error, rule_error
+from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
 from screening.report.figure_base import save_figure
 
 __all__ = ["DPI", "study_n", "plot_error_vs_cost", "plot_validity"]
@@ -59,7 +59,7 @@ def plot_error_vs_cost(ds, path):
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from screening.analysis.tradeoff_study import example_tradeoff
+    >>> from screening.applications.tradeoff_study import example_tradeoff
     >>> _, ds = example_tradeoff()                      # made-up numbers
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     png = pathlib.Path(folder) / "error_vs_cost.png"
@@ -186,13 +186,13 @@ def plot_validity(ds, rules, thresholds, path, metric="peak", quantity="var_thet
         (in the order of ``COMPARISONS``), ``quantity`` (of ``QUANTITIES``) and ``point``, and
         ``overturned_fraction`` [1] over ``mcs_model``.
     rules : list of dict
-        From :func:`screening.analysis.metrics.derive_rules`.
+        From :func:`screening.applications.metrics.derive_rules`.
     thresholds : sequence of float
         The tolerances [1]; the first and last set the colours.
     path : str or os.PathLike
         The PNG file (written atomically).
     metric : {"peak", "time_avg", "worst"}, default "peak"
-        The error shown (:func:`screening.analysis.metrics.rule_error`).
+        The error shown (:func:`screening.applications.metrics.rule_error`).
     quantity : {"var_theta", "var_theta_dot"}, default "var_theta"
         The quantity whose error is shown.
 
@@ -213,8 +213,8 @@ def plot_validity(ds, rules, thresholds, path, metric="peak", quantity="var_thet
     A made-up study of three points:
 
     >>> import numpy as np, xarray as xr
-    >>> from screening.analysis.metrics import derive_rules
-    >>> from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+    >>> from screening.applications.metrics import derive_rules
+    >>> from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
     >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
     >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
     ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),

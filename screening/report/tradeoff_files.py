@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from screening import __version__
-from screening.atomicfile import atomic_open, atomic_path
-from screening.analysis.metrics import derive_rules
+from screening._version import __version__
+from screening.core.atomicfile import atomic_open, atomic_path
+from screening.applications.metrics import derive_rules
 from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
 from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, write_csv
 
@@ -63,7 +63,7 @@ def to_file_layout(ds):
             out = out.assign_coords({name: (name, out[name].values.astype(np.int32), dict(out[name].attrs))})
     out.attrs["label_coordinates"] = ("dimensions " + ", ".join(LABEL_DIMS) + " are labelled by the auxiliary "
                                       "coordinates <dim>_name (e.g. ds.swap_dims(approach='approach_name'))")
-    out.attrs.setdefault("history", f"screening.analysis.tradeoff {__version__}: written by run_tradeoff")
+    out.attrs.setdefault("history", f"screening.report.tradeoff {__version__}: written by run_tradeoff")
     return out
 
 
@@ -168,14 +168,14 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
     """Derive the rules from ``ds`` and write the netCDF, markdown, CSV and plots.
 
     With ``write_nc=False`` only the reports are (re)written, e.g. from a saved dataset
-    (:func:`screening.analysis.tradeoff.rerender_reports`).  Each file appears whole or not at all.
+    (:func:`screening.report.tradeoff.rerender_reports`).  Each file appears whole or not at all.
 
     Parameters
     ----------
-    study : screening.analysis.tradeoff_study.TradeoffStudy
+    study : screening.applications.tradeoff_study.TradeoffStudy
         The trade study (its ``rule`` table, and what the markdown report prints of it).
     ds : xarray.Dataset
-        The trade-study dataset in memory (:func:`screening.analysis.tradeoff.run_tradeoff`); its
+        The trade-study dataset in memory (:func:`screening.report.tradeoff.run_tradeoff`); its
         attribute ``rules`` is set to the derived rules, one line each.
     out_dir : str or pathlib.Path
         The folder of the files (created if missing).
@@ -189,7 +189,7 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
     paths : dict
         ``{"nc", "md", "csv", "error_vs_cost", "validity"}`` -> :class:`pathlib.Path` (:func:`output_paths`).
     rules : list of dict
-        The validity rules of SL (:func:`screening.analysis.metrics.derive_rules` with the study's
+        The validity rules of SL (:func:`screening.applications.metrics.derive_rules` with the study's
         ``rule`` thresholds, metric and quantity).
 
     References
@@ -199,7 +199,7 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
     Examples
     --------
     >>> import tempfile
-    >>> from screening.analysis.tradeoff_study import example_tradeoff
+    >>> from screening.applications.tradeoff_study import example_tradeoff
     >>> study, ds = example_tradeoff()                  # made-up numbers
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     paths, rules = write_reports(study, ds, folder, "example")

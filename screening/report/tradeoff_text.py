@@ -1,8 +1,8 @@
 """Text reports of the speed-accuracy trade study: markdown tables, CSV rows, rules and the summary.
 
-Everything here reads a trade-study dataset (made by :func:`screening.analysis.tradeoff.run_tradeoff`, or a
-saved file through :func:`~screening.analysis.tradeoff.from_file_layout`) and the rules of
-:func:`screening.analysis.metrics.derive_rules`; nothing is recomputed.
+Everything here reads a trade-study dataset (made by :func:`screening.report.tradeoff.run_tradeoff`, or a
+saved file through :func:`~screening.report.tradeoff.from_file_layout`) and the rules of
+:func:`screening.applications.metrics.derive_rules`; nothing is recomputed.
 """
 
 from __future__ import annotations
@@ -11,18 +11,18 @@ import csv
 
 import numpy as np
 
-from screening import __version__
-from screening.analysis.metrics import peak_with_se, relative_difference
-from screening.analysis.tradeoff_study import COMPARISONS, METHODS, QUANTITIES
-from screening.atomicfile import atomic_open
-from screening.status import PointStatus
+from screening._version import __version__
+from screening.applications.metrics import peak_with_se, relative_difference
+from screening.applications.tradeoff_study import COMPARISONS, METHODS, QUANTITIES
+from screening.core.atomicfile import atomic_open
+from screening.core.status import PointStatus
 
 __all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary",
            "markdown_report", "summary_text"]
 
 
 def rule_text(rule, metric, quantity):
-    """One-line statement of a rule from :func:`~screening.analysis.metrics.derive_rules`.
+    """One-line statement of a rule from :func:`~screening.applications.metrics.derive_rules`.
 
     Parameters
     ----------
@@ -47,7 +47,7 @@ def rule_text(rule, metric, quantity):
     Examples
     --------
     >>> import numpy as np, xarray as xr
-    >>> from screening.analysis.metrics import derive_rules
+    >>> from screening.applications.metrics import derive_rules
     >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
     >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
     ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
@@ -85,7 +85,7 @@ def recommendation(rules):
     Parameters
     ----------
     rules : list of dict
-        From :func:`~screening.analysis.metrics.derive_rules` (thresholds [1]).
+        From :func:`~screening.applications.metrics.derive_rules` (thresholds [1]).
 
     Returns
     -------
@@ -101,7 +101,7 @@ def recommendation(rules):
     Examples
     --------
     >>> import numpy as np, xarray as xr
-    >>> from screening.analysis.metrics import derive_rules
+    >>> from screening.applications.metrics import derive_rules
     >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
     >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
     ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
@@ -188,8 +188,8 @@ def point_rows(ds):
     A made-up study of three points:
 
     >>> import numpy as np, xarray as xr
-    >>> from screening.analysis.metrics import derive_rules
-    >>> from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+    >>> from screening.applications.metrics import derive_rules
+    >>> from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
     >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
     >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
     ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
@@ -322,14 +322,14 @@ def markdown_report(study, ds, rules):
 
     Parameters
     ----------
-    study : screening.analysis.tradeoff_study.TradeoffStudy
+    study : screening.applications.tradeoff_study.TradeoffStudy
         The trade study (title, source, record length and step, ``mcs``, ``sl``, ``convergence`` and
         ``rule`` tables: printed in the header and the table captions).
     ds : xarray.Dataset
         The trade-study dataset (:func:`point_rows`, :func:`cost_summary`, and the ``cv_*``, ``tol_*`` and
         ``sl_*`` sub-studies).
     rules : list of dict
-        From :func:`screening.analysis.metrics.derive_rules`.
+        From :func:`screening.applications.metrics.derive_rules`.
 
     Returns
     -------
@@ -343,8 +343,8 @@ def markdown_report(study, ds, rules):
 
     Examples
     --------
-    >>> from screening.analysis.metrics import derive_rules
-    >>> from screening.analysis.tradeoff_study import example_tradeoff
+    >>> from screening.applications.metrics import derive_rules
+    >>> from screening.applications.tradeoff_study import example_tradeoff
     >>> study, ds = example_tradeoff()                  # made-up numbers
     >>> text = markdown_report(study, ds, derive_rules(ds, study.rule["thresholds"]))
     >>> print(next(line for line in text.splitlines() if line.startswith("Cost ratio")))
@@ -466,13 +466,13 @@ def summary_text(study, ds, rules):
     Parameters
     ----------
     study : object
-        The trade study (:func:`screening.analysis.tradeoff_study.load_tradeoff_study`): its
+        The trade study (:func:`screening.applications.tradeoff_study.load_tradeoff_study`): its
         ``mcs["samples"]`` and ``rule["metric"]``, ``rule["quantity"]`` are used.
     ds : xarray.Dataset
         The trade-study dataset (``cost`` [s] over ``approach`` and ``point``, ``sl_batched_cost``
         [s], the attribute ``wall_time_s`` [s]).
     rules : list of dict
-        From :func:`screening.analysis.metrics.derive_rules`.
+        From :func:`screening.applications.metrics.derive_rules`.
 
     Returns
     -------
@@ -490,8 +490,8 @@ def summary_text(study, ds, rules):
     A made-up study of three points:
 
     >>> import numpy as np, xarray as xr
-    >>> from screening.analysis.metrics import derive_rules
-    >>> from screening.analysis.tradeoff_study import COMPARISONS, QUANTITIES
+    >>> from screening.applications.metrics import derive_rules
+    >>> from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
     >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
     >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
     ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),

@@ -2,14 +2,14 @@
 
 Every dataset follows the package's contract:
 
-* model parameters are coordinates named as in :data:`screening.schema.PARAMETERS` (``m``, ``b``,
+* model parameters are coordinates named as in :data:`screening.solvers.schema.PARAMETERS` (``m``, ``b``,
   ``h``, ``I_cm``, ``g``, ``k``, ``lam`` or ``c``, ``eps``, ``S0``, ``omega_g``, ``zeta_g``, ``T1``,
   ``T2`` where they apply): scalar coordinates when fixed, coordinates on dimensions when they vary;
 * the string choices (``contact``, ``excitation``, ``envelope``, ``condensation``) are attributes;
 * the derived ``theta_ul`` [rad] (of the condensation used) and ``slenderness`` [rad]
   (``atan(b/h)``) are data variables on the dimensions of their parameters: downstream code
   reads them and never recomputes them;
-* units and long names come from :func:`screening.schema.apply_schema`, called once per dataset.
+* units and long names come from :func:`screening.solvers.schema.apply_schema`, called once per dataset.
 """
 
 from __future__ import annotations
@@ -19,13 +19,13 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
-from screening import schema
-from screening.condensation.registry import DEFAULT_CONDENSATION
+from screening.solvers import schema
+from screening.core.condensation.registry import DEFAULT_CONDENSATION
 from screening.solvers import mc_registry
-from screening.model.points import numeric_fields
+from screening.core.model.points import numeric_fields
 from screening.solvers.estimates import sample_probabilities
 from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
-from screening.status import DIVERGENCE_TEXT, DivergenceReason
+from screening.core.status import DIVERGENCE_TEXT, DivergenceReason
 
 __all__ = ["MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
            "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
@@ -46,7 +46,7 @@ def model_fields(block, foundation, excitation):
     """The numeric fields of the model objects by parameter name, in the order of the objects.
 
     What a result stores as coordinates: the block's, the bed's and the excitation's numbers under
-    the names of :data:`screening.schema.PARAMETERS` (``lam`` or ``c`` by contact law, ``omega_g``,
+    the names of :data:`screening.solvers.schema.PARAMETERS` (``lam`` or ``c`` by contact law, ``omega_g``,
     ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
 
     Parameters
@@ -61,7 +61,7 @@ def model_fields(block, foundation, excitation):
     Returns
     -------
     dict
-        Parameter name -> value (float or array, SI as in :data:`screening.schema.PARAMETERS`).
+        Parameter name -> value (float or array, SI as in :data:`screening.solvers.schema.PARAMETERS`).
 
     References
     ----------
@@ -129,7 +129,7 @@ def _declared(name, table=None):
 
 
 def finish(ds, table=None):
-    """:func:`screening.schema.apply_schema` on ``ds``, leaving alone the coordinates the schema does not
+    """:func:`screening.solvers.schema.apply_schema` on ``ds``, leaving alone the coordinates the schema does not
     declare (labels the caller brought along on its own DataArrays: they keep their own attributes).
 
     Every producer of a dataset ends with it, so every variable of every result has its CF ``units``
@@ -138,7 +138,7 @@ def finish(ds, table=None):
     Parameters
     ----------
     ds : xarray.Dataset
-        The dataset, its variables named as in :mod:`screening.schema`.
+        The dataset, its variables named as in :mod:`screening.solvers.schema`.
     table : dict, optional
         The producer's own schema table (e.g. ``schema.MONTE_CARLO``), tried before the shared ones;
         default none (the shared declarations only).
@@ -258,7 +258,7 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
     n_acc, n_rej : numpy.ndarray of int
         Accepted and rejected integration steps per sample.
     reason : numpy.ndarray of int
-        :class:`~screening.status.DivergenceReason` code per sample (read where ``diverged``).
+        :class:`~screening.core.status.DivergenceReason` code per sample (read where ``diverged``).
     n_over, n_div : int
         Counts of overturned and diverged samples.
     block : Block

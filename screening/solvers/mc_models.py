@@ -1,13 +1,13 @@
 """The coupled and the condensed Monte Carlo models behind :mod:`screening.solvers.mc_registry`.
 
-Both run on the compiled 4-state integrator of :mod:`screening.solvers.mcs_kernels` (selected
+Both run on the compiled 4-state integrator of :mod:`screening.kernels.mcs_kernels` (selected
 there by an integer model code, resolved here once):
 
 * ``"coupled"``: the full model, paper eqs. 7–8 with the exact contact resultants of
-  :mod:`screening.physics.contact` (states ``theta, theta', z_cb, z_cb'``), from static
+  :mod:`screening.core.physics.contact` (states ``theta, theta', z_cb, z_cb'``), from static
   equilibrium;
 * ``"condensed"``: the SDOF eq. 22 with a condensation's ``C(theta)``, ``K(theta)``
-  (:mod:`screening.condensation`), from rest.
+  (:mod:`screening.core.condensation`), from rest.
 
 Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`).
 """
@@ -19,10 +19,10 @@ import math
 import numpy as np
 from scipy import optimize
 
-from screening import condensation as condensations
-from screening.condensation.paper import uplift_threshold as paper_uplift_threshold
-from screening.physics.contact import exact_uplift_angle, law_constants, law_resultants, rest_indentation
-from screening.solvers import mcs_kernels as kern
+from screening.core import condensation as condensations
+from screening.core.condensation.paper import uplift_threshold as paper_uplift_threshold
+from screening.core.physics.contact import exact_uplift_angle, law_constants, law_resultants, rest_indentation
+from screening.kernels import mcs_kernels as kern
 from screening.solvers.mc_registry import KERNEL_CONDENSATION, ChunkIntegrator, MonteCarloModel, register
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
@@ -33,9 +33,9 @@ def state_scales(block, foundation):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
 
     Returns
@@ -74,15 +74,15 @@ def exact_uplift_threshold(block, foundation):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
 
     Returns
     -------
     theta_ul : float
-        The exact static uplift angle [rad] (:func:`screening.physics.contact.exact_uplift_angle`, the
+        The exact static uplift angle [rad] (:func:`screening.core.physics.contact.exact_uplift_angle`, the
         ``"cubic"`` threshold), or the paper's ``m g / (2 b^2 k)`` (eq. (19) in [1]) for a softening
         bed that cannot carry the block through uplift.
     attrs : dict
@@ -122,9 +122,9 @@ def quasi_static_indentation(block, foundation, theta0):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
     theta0 : float
         Rotation [rad].
@@ -133,7 +133,7 @@ def quasi_static_indentation(block, foundation, theta0):
     -------
     float
         ``z_cb`` [m] with ``F_cb(theta0, 0, z_cb, 0) = m g`` (exact contact resultant, eq. (5) in [1]);
-        :func:`~screening.physics.contact.rest_indentation` at ``theta0 = 0``.
+        :func:`~screening.core.physics.contact.rest_indentation` at ``theta0 = 0``.
 
     Raises
     ------
@@ -179,7 +179,7 @@ def quasi_static_indentation(block, foundation, theta0):
 
 
 class _KernelIntegrator(ChunkIntegrator):
-    """:func:`screening.solvers.mcs_kernels.chunk_integrator` with the model code and records bound."""
+    """:func:`screening.kernels.mcs_kernels.chunk_integrator` with the model code and records bound."""
 
     def __init__(self, code, sdof, params):
         self.code = code
@@ -198,7 +198,7 @@ class _KernelIntegrator(ChunkIntegrator):
 
 
 class _KernelModel(MonteCarloModel):
-    """A model of the 4-state kernel of :mod:`screening.solvers.mcs_kernels` (``code``: its model code)."""
+    """A model of the 4-state kernel of :mod:`screening.kernels.mcs_kernels` (``code``: its model code)."""
 
     code = -1
 

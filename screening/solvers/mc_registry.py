@@ -2,7 +2,7 @@
 
 A Monte Carlo model is a set of equations for one block on its bed that the engine
 (:func:`screening.solvers.montecarlo.monte_carlo`, :func:`screening.solvers.simulate.simulate`)
-integrates one sample at a time.  Like the condensations (:mod:`screening.condensation.registry`),
+integrates one sample at a time.  Like the condensations (:mod:`screening.core.condensation.registry`),
 a model name is turned into a :class:`MonteCarloModel` once, at set-up; the run path then calls
 the :class:`ChunkIntegrator` it returns and never looks at the name again.
 
@@ -13,14 +13,14 @@ module with a :class:`MonteCarloModel` subclass and a call to :func:`register`.
 Every model reports the same per-sample results: the state on the output grid as
 ``(theta, theta', z_cb, z_cb')`` (models without a vertical state fill ``z_cb`` columns with
 zeros), an uplift flag, the peak ``|theta|``, the status (ok / overturned / diverged with a
-reason, :class:`screening.status.SampleStatus`) and its step counts.
+reason, :class:`screening.core.status.SampleStatus`) and its step counts.
 """
 
 from __future__ import annotations
 
 import abc
 
-from screening import condensation as condensations
+from screening.core import condensation as condensations
 
 __all__ = ["KERNEL_CONDENSATION", "ChunkIntegrator", "MonteCarloModel", "check_not_condensed", "check_validity", "code",
            "get", "names", "register", "unregister"]
@@ -38,13 +38,13 @@ def check_not_condensed(model, condensation):
     ----------
     model : str
         The model's name (for the message).
-    condensation : str or screening.condensation.Condensation
+    condensation : str or screening.core.condensation.Condensation
         What the caller passed.
 
     Returns
     -------
     None
-        Returns for :data:`screening.condensation.DEFAULT_CONDENSATION` and :data:`KERNEL_CONDENSATION`
+        Returns for :data:`screening.core.condensation.DEFAULT_CONDENSATION` and :data:`KERNEL_CONDENSATION`
         (the paper's, what callers pass for "none").
 
     Raises
@@ -135,7 +135,7 @@ class MonteCarloModel(abc.ABC):
     @abc.abstractmethod
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
         """The :class:`ChunkIntegrator` of this model for scalar ``block`` and ``foundation`` (SI);
-        ``sample_integrator``: a key of :data:`screening.solvers.mcs_kernels.INTEGRATORS` for the models
+        ``sample_integrator``: a key of :data:`screening.kernels.mcs_kernels.INTEGRATORS` for the models
         integrated by that kernel (others ignore it)."""
 
     @abc.abstractmethod

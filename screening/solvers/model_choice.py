@@ -23,8 +23,8 @@ import tomllib
 from dataclasses import dataclass
 from importlib import resources
 
-from screening.condensation import cubic
-from screening.physics import contact
+from screening.core.condensation import cubic
+from screening.core.physics import contact
 from screening.solvers import mc_registry
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
@@ -193,7 +193,7 @@ def indicators(block, foundation):
     Notes
     -----
     ``theta_ul`` is the uplift angle of the cubic condensation's quasi-static contact
-    (:func:`screening.condensation.cubic.uplift_threshold`, ``m g / (2 b^2 k)`` for ``eps = 0``, eq. (19)
+    (:func:`screening.core.condensation.cubic.uplift_threshold`, ``m g / (2 b^2 k)`` for ``eps = 0``, eq. (19)
     in [1]_); the slenderness is ``atan(b / h)``; the frequencies are
     :func:`~screening.solvers.synthesis.vertical_frequency` (``sqrt(2 b k / m)``) and
     :func:`~screening.solvers.synthesis.rocking_frequency` (``inf`` where the block cannot stand); the damping
@@ -239,14 +239,14 @@ def vertical_damping_ratio(block, foundation):
 
     Notes
     -----
-    :func:`screening.physics.contact.vertical_damping_ratio` with the dashpot taken at the static
+    :func:`screening.core.physics.contact.vertical_damping_ratio` with the dashpot taken at the static
     indentation of the linear bed ``z_st = m g / (2 b k)`` (eq. (17) in [1]_), as the rule's intervals were
     measured (``eps = 0``: the same; with a cubic term the physics layer takes the rest indentation):
 
         zeta_v = b (w_rate + w_indentation z_st) / sqrt(2 b k m)
 
-    the inverse of :func:`screening.beds.c_from_vertical_damping` (Winkler ``c``) and
-    :func:`screening.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).
+    the inverse of :func:`screening.analysis.beds.c_from_vertical_damping` (Winkler ``c``) and
+    :func:`screening.analysis.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).
 
     References
     ----------
@@ -257,7 +257,7 @@ def vertical_damping_ratio(block, foundation):
     Examples
     --------
     >>> from screening import Block, Foundation
-    >>> from screening.beds import lam_from_vertical_damping
+    >>> from screening.analysis.beds import lam_from_vertical_damping
     >>> block = Block(m=8.67, b=0.035, h=0.21)
     >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)):.4f}"     # the paper's bed
     '0.3145'

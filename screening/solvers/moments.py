@@ -6,7 +6,7 @@ the whole system is one nonlinear ODE in the independent covariance entries: 3 f
 modulated white noise (``var_theta, cov, var_theta_dot``), ``(n_f + 2)(n_f + 3)/2`` for an
 excitation with ``n_f`` filter states (10 for Kanai–Tajimi: the 4x4 symmetric covariance of
 ``theta, theta', u_g, u_g'``).  The excitation enters only through its filter's state-space
-matrices (:meth:`screening.excitations.Excitation.filter`), its PSD at the rocking frequency and
+matrices (:meth:`screening.core.excitations.Excitation.filter`), its PSD at the rocking frequency and
 its stationary covariance (tolerance scales); the compiled loop never looks at its kind.
 
 :func:`solve_moments` integrates a batch of parameter points in one compiled call:
@@ -17,10 +17,10 @@ turns negative, whose ``sigma_theta`` passes the slenderness angle, whose state 
 finite, or which exceeds the step budget stops there with a ``status`` code; the other
 points of the batch are unaffected.
 
-Condensation.  The condensation (a :class:`~screening.condensation.Condensation`, or its
+Condensation.  The condensation (a :class:`~screening.core.condensation.Condensation`, or its
 registered name, turned into the object once here) hands the solver its compiled
 ``(c_eq, k_eq)`` function, one parameter record per point and its coefficient tables
-(:meth:`~screening.condensation.Condensation.moment_kernel`): the paper's closed forms read a
+(:meth:`~screening.core.condensation.Condensation.moment_kernel`): the paper's closed forms read a
 universal table, others per-point quadrature tables.  The compiled loop calls that function and
 never looks at the condensation's name; it is compiled (and cached) once per record type.
 
@@ -36,15 +36,15 @@ import numba
 import numpy as np
 from numba import types
 
-from screening.condensation import DEFAULT_CONDENSATION, get as get_condensation
-from screening.kernels.signatures import function_type, moment_coefficients_signature, record_type
-from screening.model.points import flatten, select
-from screening.solvers.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
+from screening.core.condensation import DEFAULT_CONDENSATION, get as get_condensation
+from screening.core.signatures import function_type, moment_coefficients_signature, record_type
+from screening.core.model.points import flatten, select
+from screening.kernels.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
                                               solve_point_white, uplift_occupancy)
 from screening.solvers.outputs import HISTORY_VARIABLES, solver_summaries
-from screening.status import PointStatus
-from screening.validation import check_integer, check_scalar, check_size
-from screening import limits
+from screening.core.status import PointStatus
+from screening.core.validation import check_integer, check_scalar, check_size
+from screening.core import limits
 
 __all__ = ["CHUNK", "DEFAULT_RTOL", "DEFAULT_MAX_STEPS", "OSCILLATOR", "HISTORY_VARIABLES",
            "oscillator_records", "FilterArrays", "in_float_range", "batch_solver", "solve_moments"]
@@ -77,13 +77,13 @@ def oscillator_records(block, foundation, excitation, cond):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block, flat (1-d) or scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed, flat or scalar fields.
-    excitation : screening.excitations.Excitation
+    excitation : screening.core.excitations.Excitation
         The input, flat or scalar fields.
-    cond : screening.condensation.Condensation
+    cond : screening.core.condensation.Condensation
         The condensation (its threshold, ``C(0)`` and ``K(0)``).
 
     Returns
@@ -105,8 +105,9 @@ def oscillator_records(block, foundation, excitation, cond):
 
     Examples
     --------
-    >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> from screening.core import condensation
+    >>> from screening.core.model.points import flatten
     >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
     ...                                WhiteNoise(1e-4))
     >>> rec = oscillator_records(block, bed, exc, condensation.get("paper"))
@@ -137,7 +138,7 @@ def oscillator_records(block, foundation, excitation, cond):
 class FilterArrays:
     """The excitation's filter for the compiled loops, one row per point: ``A`` (n, n_f, n_f), ``B``,
     ``C`` (n, n_f), ``D`` (n,) and the absolute-tolerance scales of the packed moments (n, m)
-    (:func:`screening.solvers.moment_kernels.filtered_scales`; empty for white noise)."""
+    (:func:`screening.kernels.moment_kernels.filtered_scales`; empty for white noise)."""
 
     def __init__(self, excitation, osc):
         n = osc.size
@@ -191,7 +192,7 @@ def in_float_range(osc, filters):
     Notes
     -----
     The loops divide by ``theta_ul^2`` (eq. (19) in [1]) and ``m_sdof``; a point beyond float range would
-    stop the whole batch, so it is flagged :attr:`~screening.status.PointStatus.beyond_float_range` instead.
+    stop the whole batch, so it is flagged :attr:`~screening.core.status.PointStatus.beyond_float_range` instead.
 
     References
     ----------
@@ -201,8 +202,9 @@ def in_float_range(osc, filters):
 
     Examples
     --------
-    >>> from screening import Block, Foundation, WhiteNoise, condensation
-    >>> from screening.model.points import flatten
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> from screening.core import condensation
+    >>> from screening.core.model.points import flatten
     >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21),
     ...                                Foundation(k=[2.89e7, 1e300], lam=8.95e8), WhiteNoise(1e-4))
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
@@ -246,7 +248,7 @@ def _solve_batch(coefficients, conds, osc, tables, table_index, fa, fb, fc, fd, 
                  status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
     """Every point of a batch (compiled per condensation record type by :func:`batch_solver`).
 
-    The step loop is specialised by state size (:mod:`screening.solvers.moment_kernels`): 3 scalar
+    The step loop is specialised by state size (:mod:`screening.kernels.moment_kernels`): 3 scalar
     moments for an input without filter states (white noise), the packed covariance of the
     augmented system otherwise (``fa, fb, fc, fd``: the filter of each point; constant-length loops
     for two filter states).  Histories are written only if ``store``.
@@ -276,7 +278,7 @@ def batch_solver(record_dtype):
     Parameters
     ----------
     record_dtype : numpy.dtype
-        The dtype of the condensation's per-point records (:meth:`~screening.condensation.Condensation.moment_kernel`).
+        The dtype of the condensation's per-point records (:meth:`~screening.core.condensation.Condensation.moment_kernel`).
 
     Returns
     -------
@@ -287,7 +289,7 @@ def batch_solver(record_dtype):
     Notes
     -----
     It integrates eq. (45) in [1] (white noise) or eq. (51) (a filtered input) for every point of a
-    batch (:func:`screening.solvers.moment_kernels.moment_equations` is their numpy reference).
+    batch (:func:`screening.kernels.moment_kernels.moment_equations` is their numpy reference).
 
     References
     ----------
@@ -297,8 +299,9 @@ def batch_solver(record_dtype):
 
     Examples
     --------
-    >>> from screening import Block, Foundation, condensation
-    >>> from screening.model.points import flatten
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> from screening.core.model.points import flatten
     >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))
     >>> dtype = condensation.get("paper").moment_kernel(block, bed).records.dtype
     >>> batch_solver(dtype) is batch_solver(dtype)
@@ -324,11 +327,11 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block; fields may be arrays (broadcast).
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed; fields may be arrays (broadcast).
-    excitation : screening.excitations.Excitation
+    excitation : screening.core.excitations.Excitation
         The input (``S0`` [m2 s-3], its envelope and filter); fields may be arrays (broadcast).
     t_out : array_like
         Increasing output times [s], starting at the initial time (zero covariance).
@@ -339,10 +342,10 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         Largest step [s]; default ``(t_out[-1] - t_out[0]) / 20``.
     max_steps : int, optional
         Step budget per point (accepted + rejected).
-    condensation : str or screening.condensation.Condensation, optional
-        A condensation or a registered name (default :data:`screening.condensation.DEFAULT_CONDENSATION`;
+    condensation : str or screening.core.condensation.Condensation, optional
+        A condensation or a registered name (default :data:`screening.core.condensation.DEFAULT_CONDENSATION`;
         ``"paper"``: eqs. (17)-(25) in [1]; ``"virtual_work"``: docs/heavy_uplift.md; ``"cubic"``:
-        :mod:`screening.condensation.cubic`, raises ``ValueError`` for a softening bed that cannot carry
+        :mod:`screening.core.condensation.cubic`, raises ``ValueError`` for a softening bed that cannot carry
         the block through uplift).
     histories : bool, optional
         False: per-point summaries only (no dense output, no coefficient evaluations at the output
@@ -354,7 +357,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         Numpy arrays: the time histories ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2],
         ``cov_theta_theta_dot`` [rad2 s-1], ``c_eq`` [N m s/rad], ``k_eq`` [N m/rad], ``p_uplift`` [1] of
         shape ``shape + (len(t_out),)`` (NaN after a point stopped; only if ``histories``), and per point
-        ``status`` (:class:`~screening.status.PointStatus`), ``t_stop`` [s], ``n_steps``, ``n_rejected``,
+        ``status`` (:class:`~screening.core.status.PointStatus`), ``t_stop`` [s], ``n_steps``, ``n_rejected``,
         ``peak_var_theta`` [rad2] with ``t_peak_var_theta`` [s], ``peak_p_uplift`` [1] and ``min_k_eq``
         [N m/rad] (over the integrated span).
 
@@ -363,7 +366,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     The Lyapunov equation ``dC/dt = P C + C P^T + E[v v^T]`` (eq. (45) in [1]; eq. (51) for a filtered
     input) with ``P`` built from the equivalent coefficients at the current moments (eq. (31)), one
     nonlinear ODE in the independent covariance entries; ``p_uplift`` is eq. (58).  Numpy reference of
-    the right-hand side: :func:`screening.solvers.moment_kernels.moment_equations`.
+    the right-hand side: :func:`screening.kernels.moment_kernels.moment_equations`.
 
     References
     ----------

@@ -2,8 +2,8 @@
 
 :func:`monte_carlo` integrates a registered Monte Carlo model (:mod:`screening.solvers.mc_registry`,
 resolved once at set-up): the full coupled model (paper eqs. 7–8 with the exact contact
-resultants of :mod:`screening.physics.contact`), the condensed SDOF (eq. 22 with eqs. 24–25, or
-with ``condensation="cubic"`` the ``C``, ``K`` of :mod:`screening.condensation.cubic`) or the
+resultants of :mod:`screening.core.physics.contact`), the condensed SDOF (eq. 22 with eqs. 24–25, or
+with ``condensation="cubic"`` the ``C``, ``K`` of :mod:`screening.core.condensation.cubic`) or the
 stiff-bed model (:mod:`screening.solvers.stiff_bed`, which reads the samples low-passed at its own
 band) for ``n_samples`` ground-acceleration samples
 synthesized by the spectral representation method (:mod:`screening.solvers.synthesis`), and
@@ -47,19 +47,19 @@ import time
 
 import numpy as np
 
-from screening import schema
-from screening.solvers import mc_registry, mcs_kernels as kern
+from screening.core import limits
+from screening.core.condensation import DEFAULT_CONDENSATION, get as get_condensation
+from screening.core.excitations import Excitation, names as excitation_names
+from screening.core.physics.contact import vertical_damping_ratio
+from screening.core.progress import Progress
+from screening.core.validation import check_integer, check_size
+from screening.kernels import mcs_kernels as kern
+from screening.solvers import mc_registry, schema
+from screening.solvers.datasets import monte_carlo_dataset, with_probabilities
 from screening.solvers.model_choice import resolve as resolve_model
-from screening.condensation import DEFAULT_CONDENSATION, get as get_condensation
-from screening.excitations import Excitation, names as excitation_names
-from screening.physics.contact import vertical_damping_ratio
-from screening.progress import Progress
-from screening.solvers.synthesis import (CUTOFF_FACTOR, OVERSAMPLING, default_cutoff, envelope_rate, low_passed,
+from screening.solvers.synthesis import (CUTOFF_FACTOR, default_cutoff, envelope_rate, low_passed, OVERSAMPLING,
                                          spectral_plan, stationary_samples, validate_seed)
 from screening.solvers.timegrid import output_times
-from screening.solvers.datasets import monte_carlo_dataset
-from screening.validation import check_integer, check_size
-from screening import limits
 
 __all__ = ["MODELS", "DEFAULT_RTOL", "AUTO_RTOL", "AUTO_RTOL_SAMPLES", "auto_rtol", "DEFAULT_NUMERICS",
            "RODAS_DAMPING_RATIO", "check_scalar_models",
@@ -100,7 +100,7 @@ DEFAULT_NUMERICS = {
 }
 
 #: ``integrator="auto"`` takes RODAS for the coupled model where the bed's vertical mode has at least
-#: this damping ratio (:func:`screening.physics.contact.vertical_damping_ratio`), the explicit pair elsewhere.
+#: this damping ratio (:func:`screening.core.physics.contact.vertical_damping_ratio`), the explicit pair elsewhere.
 #: ``docs/montecarlo_numerics.md`` gives the measurements behind it.
 RODAS_DAMPING_RATIO = 20.0
 
@@ -110,11 +110,11 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-    excitation : screening.excitations.Excitation, optional
+    excitation : screening.core.excitations.Excitation, optional
         The input (``S0`` [m2 s-3] and its parameters), if the caller has one.
     purpose : str, optional
         The caller's name in the message (default ``"monte_carlo"``).
@@ -159,7 +159,7 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
             raise ValueError(f"parameter '{name}' must be a scalar for {purpose} (got an array of shape "
                              f"{np.shape(value)}); loop over parameter points instead")
     if excitation is not None and not isinstance(excitation, Excitation):
-        raise ValueError(f"parameter 'excitation' must be an excitation of screening.excitations "
+        raise ValueError(f"parameter 'excitation' must be an excitation of screening.core.excitations "
                          f"(one of {excitation_names()}; got {type(excitation).__name__})")
     for name in (excitation.parameters if excitation is not None else ()):
         if np.ndim(getattr(excitation, name)) != 0:
@@ -255,13 +255,13 @@ def auto_rtol(model, n_samples):
 
 
 def choose_integrator(block, foundation, model, integrator="auto"):
-    """The sample integrator (a key of :data:`~screening.solvers.mcs_kernels.INTEGRATORS`) of a run.
+    """The sample integrator (a key of :data:`~screening.kernels.mcs_kernels.INTEGRATORS`) of a run.
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
     model : str
         The resolved Monte Carlo model's name.
@@ -277,7 +277,7 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
     Notes
     -----
-    The stiffness comes from the bed's vertical dashpot in eqs. (7)-(8) of [1] (:func:`screening.physics.contact.vertical_damping_ratio`).
+    The stiffness comes from the bed's vertical dashpot in eqs. (7)-(8) of [1] (:func:`screening.core.physics.contact.vertical_damping_ratio`).
 
     References
     ----------
@@ -304,9 +304,9 @@ def initial_state(block, foundation, model):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
     model : str or screening.solvers.mc_registry.MonteCarloModel
         A registered model or its name.
@@ -437,8 +437,6 @@ def _with_probabilities(run):
 
     @functools.wraps(run)
     def monte_carlo(*args, thresholds=None, **kwargs):
-        from screening.solvers.datasets import with_probabilities
-
         thresholds = _check_thresholds(thresholds)
         return with_probabilities(run(*args, **kwargs), thresholds)
 
@@ -453,10 +451,10 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
 
     Parameters
     ----------
-    block : :class:`~screening.model.Block` with scalar fields (SI).
-    foundation : :class:`~screening.model.Foundation` (Hunt–Crossley) or
+    block : :class:`~screening.core.model.Block` with scalar fields (SI).
+    foundation : :class:`~screening.core.model.Foundation` (Hunt–Crossley) or
         Winkler law, scalar fields (SI).
-    excitation : :class:`~screening.model.excitation.WhiteNoise` or :class:`~screening.model.excitation.KanaiTajimi`
+    excitation : :class:`~screening.core.excitations.white.WhiteNoise` or :class:`~screening.core.excitations.kanai_tajimi.KanaiTajimi`
         (horizontal ground acceleration ``q(t) xi(t)`` or ``q(t) z(t)``; ``S0`` [m^2/s^3] is the
         two-sided PSD level, ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``).
     n_samples : number of samples, integer >= 2.
@@ -472,8 +470,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     seed : integer >= 0; sample ``i`` uses ``numpy.random.default_rng([seed, i])``.
     progress : None (a bar on stderr for multi-chunk runs on a terminal), True or False; or a function
         called with the number of samples done after each chunk (a sweep's spot checks report so).
-    condensation : a registered condensation, default :data:`screening.condensation.DEFAULT_CONDENSATION`
-        (``"virtual_work"``; ``"paper"``: eqs. 24–25; ``"cubic"``: :mod:`screening.condensation.cubic`):
+    condensation : a registered condensation, default :data:`screening.core.condensation.DEFAULT_CONDENSATION`
+        (``"virtual_work"``; ``"paper"``: eqs. 24–25; ``"cubic"``: :mod:`screening.core.condensation.cubic`):
         the ``C(theta)``, ``K(theta)`` of ``model="condensed"``.  Another than the default with
         ``model="coupled"`` raises (the coupled model is not condensed).  With ``"cubic"`` on
         a softening bed, samples passing the capacity angle (no quasi-static equilibrium)
@@ -503,7 +501,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     ``p_uplift`` [1] (coupled: either base edge out of contact, ``z_cb < b |sin theta|``;
     condensed: ``|theta| > theta_ul``), per-sample ``peak_abs_theta`` [rad] (maximum of
     ``|theta|`` over the cubic Hermite interpolant of the accepted steps, up to overturning or
-    divergence; :func:`~screening.solvers.mcs_kernels.step_peak`), ``overturned``,
+    divergence; :func:`~screening.kernels.mcs_kernels.step_peak`), ``overturned``,
     ``diverged``, ``n_steps`` and scalars ``n_overturned``, ``n_diverged``, ``n_used``, ``p_overturn``
     [1] (fraction of the samples that did not diverge that overturned) and its standard error
     ``p_overturn_se`` [1] (Agresti-Coull; docs/outputs_probabilities.md).

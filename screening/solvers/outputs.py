@@ -5,8 +5,8 @@ One :class:`Output` per variable: its name, where it lies (``shape``: the histor
 ``(grid..., threshold)``), its type in the file, its CF attributes, the value a point gets when its
 task failed, when a result holds it and the stage of a run that fills it.  The solvers
 (:mod:`screening.solvers.moments`, :mod:`screening.solvers.datasets`), the batch task
-(:mod:`screening.workflow.execution`), both result formats (:mod:`screening.workflow.writer`,
-:mod:`screening.workflow.zarrfile`), :mod:`screening.schema` and ``screening info``
+(:mod:`screening.sweep.execution`), both result formats (:mod:`screening.io.writer`,
+:mod:`screening.io.zarrfile`), :mod:`screening.solvers.schema` and ``screening info``
 (:mod:`screening.report.text`) read these declarations; none keeps its own list of names.  The
 compiled kernels know nothing of them: they fill arrays they are handed.
 
@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from screening.status import PointStatus, Trust, flag_attributes
+from screening.core.status import PointStatus, Trust, flag_attributes
 
 __all__ = ["Output", "STAGES", "WHEN", "GRID_OUTPUTS", "OUTPUTS", "HISTORY_VARIABLES", "of_stage", "selected",
            "client_variables", "info_variables", "solver_summaries", "linearize_variables", "failed_value"]
@@ -29,7 +29,7 @@ __all__ = ["Output", "STAGES", "WHEN", "GRID_OUTPUTS", "OUTPUTS", "HISTORY_VARIA
 #: Who fills a variable: the moment solver (``linearize``), the block's model (``model``), the trust rule
 #: (:mod:`screening.analysis.trust`), the intensity measures of the input and the probability that rocking
 #: starts (:mod:`screening.analysis.intensity`), the per-point inputs a study derives (``inputs``) and the
-#: probabilities of overturning and exceedance (:mod:`screening.workflow.probabilities`).
+#: probabilities of overturning and exceedance (:mod:`screening.sweep.probabilities`).
 STAGES = ("linearize", "model", "trust", "intensity", "rocking", "inputs", "probabilities")
 
 #: When a result holds a variable: always; the histories the study stores (``[output]``); with
@@ -149,7 +149,7 @@ GRID_OUTPUTS = (
     Output("n_steps", "linearize", "i4", _v("1", "number of solver steps (accepted and rejected)"), failed=0,
            linearize=True),
     Output("n_rejected", "linearize", "i4", _v("1", "number of rejected solver steps"), failed=0),
-    # probabilities (the linearization's, replaced where Monte Carlo ran: screening.workflow.probabilities)
+    # probabilities (the linearization's, replaced where Monte Carlo ran: screening.sweep.probabilities)
     Output("p_exceed", "probabilities", "f8", _v("1", "probability that |theta| exceeds the threshold during the "
                                                       "record"), shape="threshold", when="fragility"),
     Output("p_exceed_se", "probabilities", "f8", _v("1", f"standard error of p_exceed {_PROBABILITY_SE}"),

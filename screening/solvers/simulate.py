@@ -3,7 +3,7 @@
 :func:`simulate` integrates the coupled model (eqs. 7–8 with the exact contact resultants)
 or the condensed SDOF (eq. 22) for a given, uniformly sampled horizontal ground
 acceleration, with the same compiled adaptive Dormand–Prince 5(4) integrator as the Monte
-Carlo engine (:func:`screening.solvers.mcs_kernels.integrate_sample`): one "sample" whose input
+Carlo engine (:func:`screening.kernels.mcs_kernels.integrate_sample`): one "sample" whose input
 row is the record.
 
 Sign convention
@@ -22,7 +22,7 @@ towards ``-x`` (``theta < 0``, edge ``A`` pressed), as a block on a braking truc
 The response to ``-a_g`` is the mirror image: ``theta``, ``theta'`` change sign and ``z_cb`` is
 unchanged (the model is symmetric about the block's axis).
 
-A record's vertical component ``a_v(t)`` (positive up, :attr:`screening.records.Record.vertical`)
+A record's vertical component ``a_v(t)`` (positive up, :attr:`screening.core.records.Record.vertical`)
 enters the models as a change of gravity, ``g -> g + a_v(t)`` in the block's frame
 (docs/method.md, "Vertical ground acceleration"); ``vertical=False`` leaves it out.  Where
 ``g + a_v < 0`` the ground pulls away faster than the block falls: the coupled model flies and
@@ -40,18 +40,20 @@ import math
 import numpy as np
 import xarray as xr
 
-from screening import condensation as condensations, schema
-from screening.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES, REGIME_UPLIFT_NEGATIVE,
-                                       REGIME_UPLIFT_POSITIVE, contact_regime)
-from screening.records import Record
-from screening.solvers import mc_registry, mcs_kernels as kern
+from screening.core import condensation as condensations
+from screening.solvers import schema
+from screening.core.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES,
+                                            REGIME_UPLIFT_NEGATIVE, REGIME_UPLIFT_POSITIVE, contact_regime)
+from screening.core.records import Record
+from screening.solvers import mc_registry
+from screening.kernels import mcs_kernels as kern
 from screening.solvers.datasets import finish
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.montecarlo import check_scalar_models
-from screening.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
-from screening.validation import check_integer, check_scalar
-from screening import limits
+from screening.core.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
+from screening.core.validation import check_integer, check_scalar
+from screening.core import limits
 
 __all__ = ["MAX_OVERTURN_RESOLUTION", "REGIME_NONE", "SIGN_CONVENTION", "simulation_times", "simulate"]
 
@@ -70,7 +72,7 @@ def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
 
     Parameters
     ----------
-    record : screening.records.Record
+    record : screening.core.records.Record
         The ground-acceleration record (its ``dt`` [s] and ``duration`` [s]).
     t_end : float, optional
         End time [s] > 0 (default the record's duration).
@@ -86,7 +88,7 @@ def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
     output_dt : float
         [s].
     n_out : int
-        Number of output instants, at most :data:`~screening.limits.MAX_RECORD_SAMPLES`.
+        Number of output instants, at most :data:`~screening.core.limits.MAX_RECORD_SAMPLES`.
 
     Raises
     ------
@@ -107,7 +109,7 @@ def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
     Examples
     --------
     >>> import numpy as np
-    >>> from screening.records import Record
+    >>> from screening.core.records import Record
     >>> simulation_times(Record(np.zeros(1001), 0.01, name="quiet"), output_dt=0.05)
     (10.0, 0.05, 201)
     """
@@ -151,9 +153,9 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
 
     Parameters
     ----------
-    block : :class:`~screening.model.Block` with scalar fields (SI).
-    foundation : :class:`~screening.model.Foundation` with scalar fields (SI).
-    ground_acceleration : :class:`~screening.records.Record` or 1-d array [m/s2], horizontal ground
+    block : :class:`~screening.core.model.Block` with scalar fields (SI).
+    foundation : :class:`~screening.core.model.Foundation` with scalar fields (SI).
+    ground_acceleration : :class:`~screening.core.records.Record` or 1-d array [m/s2], horizontal ground
         acceleration in the usual convention (positive: ground accelerates towards ``+x``; see
         the module docstring), sampled at ``dt``.
     dt : time step of the samples [s] (required for an array; taken from a Record).
@@ -163,7 +165,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     theta0 : initial rotation [rad], ``|theta0| <`` slenderness.
     theta_dot0 : initial angular velocity [rad/s].
     condensation : condensation of the condensed model (default
-        :data:`screening.condensation.DEFAULT_CONDENSATION`; ``"paper"``, ``"cubic"``, ``"virtual_work"``);
+        :data:`screening.core.condensation.DEFAULT_CONDENSATION`; ``"paper"``, ``"cubic"``, ``"virtual_work"``);
         a model that does not read it accepts the default or ``"paper"`` only, as in :func:`screening.monte_carlo`
         (:meth:`~screening.solvers.mc_registry.MonteCarloModel.check`).
     t_end : end time [s] (default: the record's duration; longer: ground at rest afterwards).
@@ -191,7 +193,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     Notes
     -----
     ``"coupled"``: the equations of motion of the block on its bed, eqs. (7)-(8) in [1] with the exact
-    contact resultants of eqs. (5)-(6) (:func:`screening.physics.contact.law_resultants`);
+    contact resultants of eqs. (5)-(6) (:func:`screening.core.physics.contact.law_resultants`);
     ``"condensed"``: eq. (22) with the condensation's ``C(theta)``, ``K(theta)``.
 
     References
@@ -307,7 +309,7 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
         "record_source": record.source, "record_units_in": record.units_in, "record_dt": dt,
         "sign_convention": SIGN_CONVENTION, "theta0": theta0, "theta_dot0": theta_dot0,
         "initial_z_cb": float(y0[2]), "rtol": rtol, "h_max": h_max, "n_steps": n_steps,
-        "integrator": "adaptive Dormand-Prince 5(4) (screening.solvers.mcs_kernels), steps land on output times; "
+        "integrator": "adaptive Dormand-Prince 5(4) (screening.kernels.mcs_kernels), steps land on output times; "
                       "input: cubic Hermite of the record with finite-difference slopes",
         "overturning_time_resolution": output_dt / int(overturn_resolution) if overturned else math.nan,
     }

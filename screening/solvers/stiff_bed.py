@@ -8,12 +8,12 @@ model keeps those two and drops the vertical dynamics:
 
 * **Quasi-static contact.**  The base-centre indentation is slaved to the exact static vertical
   balance, ``z_cb = Z(theta)``: the indentation law of the ``"cubic"`` condensation
-  (:func:`screening.condensation.cubic.quasi_static_indentation`, eqs. 13 and 15 with the cubic
+  (:func:`screening.core.condensation.cubic.quasi_static_indentation`, eqs. 13 and 15 with the cubic
   term) evaluated at ``a = |sin theta|``; the bed's moment is that condensation's moment law at
-  ``a`` times ``cos theta``, which is the exact contact moment of :mod:`screening.physics.contact` at
+  ``a`` times ``cos theta``, which is the exact contact moment of :mod:`screening.core.physics.contact` at
   that indentation (the condensation's small-angle formulas are exact in ``sin theta`` except for
   the lever ``cos theta``).  Linear in full contact (``K(0)``), uplift from ``theta_ul``
-  (:func:`screening.condensation.cubic.uplift_threshold`, ``m g / (2 b^2 k)`` for ``eps = 0``: a
+  (:func:`screening.core.condensation.cubic.uplift_threshold`, ``m g / (2 b^2 k)`` for ``eps = 0``: a
   ground acceleration of ``g b / (3 h)``), the contact then shrinking towards the corner.
 * **Rigid-block inertia on that constraint.**  With ``z_cb = Z(theta)`` and the base centre held
   horizontally (the kinematics of the coupled model), the kinetic energy is
@@ -26,7 +26,7 @@ model keeps those two and drops the vertical dynamics:
   ``K``: the ``"cubic"`` condensation's secant stiffness (so ``K(a) a + m g h a`` is the bed moment);
   ``C_D``: the damping of the bed's damping pressure on the constraint, whose power is the coupled
   model's contact dissipation at ``z_cb = Z(theta)``
-  (:func:`screening.solvers.stiff_bed_contact.constraint_damping`: the condensation's damping moment
+  (:func:`screening.kernels.stiff_bed_contact.constraint_damping`: the condensation's damping moment
   plus the work of the vertical damping force along the constraint; the moment alone overstates the
   dissipation in uplift by ``2 b / L``, ``L`` the contact length).
   On an infinitely stiff bed ``Z = -b |sin theta|``, ``Q = m g (b cos theta - h |sin theta|)`` and
@@ -75,15 +75,17 @@ import math
 
 import numpy as np
 
-from screening.condensation import cubic
-from screening.solvers import mcs_kernels as kern
-from screening.solvers.mc_registry import ChunkIntegrator, MonteCarloModel, get as get_model, register
-from screening.solvers.stiff_bed_contact import (STIFF, gravity_ratio, housner_restitution,  # noqa: F401
-                                                 indentation_curvature, indentation_curvature_jit, potential,
-                                                 rocking_acceleration, rocking_acceleration_jit,
-                                                 rocking_coefficients, stiff_record)
-from screening.solvers.stiff_bed_kernels import (integrate_chunk, integrate_sample,  # noqa: F401
-                                                 linear_propagator, transfer_ratio_jit)
+from screening.core import laws
+from screening.core.condensation import cubic
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
+from screening.core.model import Block, Foundation
+from screening.kernels import mcs_kernels as kern
+from screening.kernels.stiff_bed_contact import (gravity_ratio, housner_restitution, indentation_curvature,
+                                                 indentation_curvature_jit, potential, rocking_acceleration,
+                                                 rocking_acceleration_jit, rocking_coefficients, STIFF, stiff_record)
+from screening.kernels.stiff_bed_kernels import integrate_chunk, integrate_sample, linear_propagator, transfer_ratio_jit
+from screening.solvers.mc_registry import ChunkIntegrator, get as get_model, MonteCarloModel, register
+from screening.solvers.model_choice import RULE_FILE, rule_of, vouches
 from screening.solvers.synthesis import rocking_frequency
 
 __all__ = ["StiffBedModel", "STIFF_BED", "housner_restitution", "indentation_curvature", "linear_propagator",
@@ -127,8 +129,6 @@ def validity_limit():
     >>> 0.0 < validity_limit() < 1.0
     True
     """
-    from screening.solvers.model_choice import rule_of
-
     return rule_of("stiff_bed").bound("theta_ul_over_slenderness")[1]
 
 
@@ -137,9 +137,9 @@ def validity(block, foundation):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
 
     Returns
@@ -186,9 +186,9 @@ def validity_problem(block, foundation, excitation=None):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
     excitation : object, optional
         The point's excitation (its ``kind`` is checked), or ``None`` (records: not checked).
@@ -219,8 +219,6 @@ def validity_problem(block, foundation, excitation=None):
     >>> print(validity_problem(block, Foundation(k=5e5, lam=3e7)))      # a soft bed
     model 'stiff_bed' outside its measured validity: theta_ul_over_slenderness = 0.695 outside the measured ...
     """
-    from screening.solvers.model_choice import RULE_FILE, rule_of, vouches
-
     rule = rule_of("stiff_bed")
     kind = getattr(excitation, "kind", None)
     ok, why = vouches(rule, block, foundation, kind, check_excitation=excitation is not None)
@@ -292,8 +290,6 @@ def _bed_key(block, foundation):
 
 @functools.lru_cache(maxsize=64)
 def _transfer_table_cached(key):
-    from screening.model import Block, Foundation
-    from screening import laws
     m, g, h, b, i_cm, k, eps, damping, law = key
     block = Block(m=m, b=b, h=h, I_cm=i_cm, g=g)
     foundation = Foundation(k=k, eps=eps, law=law, **{laws.get(law).parameter: damping})
@@ -342,9 +338,9 @@ def transfer_table(block, foundation):
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
 
     Returns
@@ -444,7 +440,7 @@ class StiffBedModel(MonteCarloModel):
     ``max(ROCKING_BAND_FACTOR w_r, ground band)`` (``w_r`` the full-contact rocking frequency: in full
     contact the block is an oscillator at ``w_r`` and filters what lies above it, a rigid block in uplift
     responds to an input component at ``w`` like ``1/w^2``; the ground band
-    :data:`screening.excitations.base.GROUND_BAND_LIMIT_HZ` is the band the intensity measures refer
+    :data:`screening.core.excitations.base.GROUND_BAND_LIMIT_HZ` is the band the intensity measures refer
     to); ``"ground"`` the ground band alone (cheaper, but on mortar-stiff beds it misses the input that
     starts the rocking through the full-contact resonance); ``"full"`` all of them, as the coupled model
     reads them (its band is set by the vertical frequency).  ``monte_carlo(..., band=...)`` overrides
@@ -482,8 +478,6 @@ class StiffBedModel(MonteCarloModel):
         self.locate = locate
 
     def input_band(self, block, foundation):
-        from screening.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
-
         if self.band == "full":
             return None
         ground = ground_cutoff(GROUND_BAND_LIMIT_HZ)

@@ -1,7 +1,7 @@
 """Ground-acceleration samples by the spectral representation method (Shinozuka–Deodatis).
 
 A zero-mean stationary process with two-sided PSD ``S(omega)`` [m^2/s^3] (the convention of
-:mod:`screening.model.excitation`: ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)`` for white noise, i.e.
+:mod:`screening.core.model.excitation`: ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)`` for white noise, i.e.
 ``S = S0`` on ``-inf < omega < inf``) is simulated, band-limited to ``|omega| <= omega_c``, by
 
     f(t) = sqrt(2) sum_{k=0}^{N-1} A_k cos(omega_k t + phi_k),   A_k = sqrt(2 S(omega_k) d_omega),
@@ -40,7 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
-from screening.physics.contact import linear_rocking_stiffness
+from screening.core.model import Block, Foundation
+from screening.core.physics.contact import linear_rocking_stiffness
 
 __all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
            "default_cutoffs", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
@@ -198,8 +199,6 @@ def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
     >>> default_cutoffs(Block(m=8.67, b=0.035, h=0.21), Foundation(k=np.array([2.89e7, 1e9]), lam=8.95e8)).round(1)
     array([1449.1, 8524.3])
     """
-    from screening.model import Block, Foundation
-
     def one(m, b, h, I_cm, g, k):
         try:
             return default_cutoff(Block(m, b, h, I_cm, g), Foundation(k=k, lam=0.0), factor)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.validation import checked
-from screening import limits
+from screening.core.validation import checked
+from screening.core import limits
 
 __all__ = ["output_times"]
 
@@ -15,7 +15,7 @@ def output_times(t_end=20.0, dt=0.05):
 
     The linearization, the Monte Carlo judge and the sweeps all write their histories on this one
     grid, so their results line up instant by instant.  ``t_end`` must be a whole number of steps
-    (to 1e-9 relative) and the grid at most ``MAX_TIMES`` instants (:mod:`screening.limits`); bad
+    (to 1e-9 relative) and the grid at most ``MAX_TIMES`` instants (:mod:`screening.core.limits`); bad
     input is a one-line ``ValueError`` naming the parameter before any array is built.
 
     Parameters

@@ -7,9 +7,9 @@ import xarray as xr
 from helpers import GRID
 
 from screening.analysis.correction import linearization_promises
-from screening.status import BestMethod, EscalationModel, PointStatus, TargetMet
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.core.status import BestMethod, EscalationModel, PointStatus, TargetMet
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 TARGET = GRID.replace("t_end = 4.0", "t_end = 3.0") + """
 [accuracy]
@@ -94,8 +94,8 @@ def test_fragility_uses_monte_carlo_where_it_ran_and_the_band_elsewhere(client, 
 
 
 def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkeypatch):
-    from screening.workflow import _submit
-    from screening.workflow.sweep import _SweepRun
+    from screening.sweep import _submit
+    from screening.sweep.run import _SweepRun
 
     study = parse_study(TARGET)
     real = _submit.submit_escalation
@@ -124,7 +124,7 @@ def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkey
 def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monkeypatch):
     # the budget is planned on the cost model (integration steps), not on the measured CPU time: the same
     # points run with the same samples, so the best estimates are identical
-    from screening.workflow import accuracy
+    from screening.sweep import accuracy
 
     study = parse_study(TARGET)
     waits = []
@@ -164,8 +164,8 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
     record: the resumed run escalates the same points with the same samples and the same estimates."""
     from screening.analysis import escalation
-    from screening.workflow import _submit, accuracy
-    from screening.workflow.store import PartialStore
+    from screening.sweep import _submit, accuracy
+    from screening.io.store import PartialStore
 
     # a top-up round whatever the models' errors: no point meets the target, a top-up asks for a few samples more
     real_needed = escalation.samples_needed
@@ -204,7 +204,7 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     # only the top-up not kept runs again
     assert killed_then_resumed("a.nc", PartialStore, "save_spot", killed_while_saving_the_top_ups) == ["topup"]
     # killed after its top-up was kept: nothing runs again
-    from screening.workflow.sweep import _SweepRun
+    from screening.sweep.run import _SweepRun
 
     def killed(self):
         raise KeyboardInterrupt

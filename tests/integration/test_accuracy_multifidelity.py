@@ -9,9 +9,9 @@ from helpers import GRID
 
 from screening.analysis import escalation as esc
 from screening.analysis.multifidelity import allocate
-from screening.status import EscalationEstimator, EscalationModel
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.core.status import EscalationEstimator, EscalationModel
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 ONE_POINT = GRID.replace("t_end = 4.0", "t_end = 3.0").replace("eps = [-6e5, 0.0, 3e7, 6e7]", "eps = 0.0").replace(
     "S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}", "S0 = 2.4e-3") + """
@@ -89,8 +89,8 @@ def test_the_pilot_decides_by_the_fallback_rule(client, tmp_path, monkeypatch):
 
 
 def test_an_interrupted_multifidelity_escalation_resumes_to_the_same_result(client, tmp_path, forced, monkeypatch):
-    from screening.workflow import _submit
-    from screening.workflow.sweep import _SweepRun
+    from screening.sweep import _submit
+    from screening.sweep.run import _SweepRun
 
     study = parse_study(ONE_POINT)
     real = _submit.submit_escalation
@@ -115,7 +115,7 @@ def test_an_interrupted_multifidelity_escalation_resumes_to_the_same_result(clie
 
 
 def test_multifidelity_is_a_boolean_checked_when_the_study_is_read():
-    from screening.workflow.study import StudyError
+    from screening.sweep.study import StudyError
 
     assert not parse_study(ONE_POINT.replace("multifidelity = true\n", "")).accuracy.multifidelity
     with pytest.raises(StudyError, match=r"accuracy\.multifidelity: must be true or false"):

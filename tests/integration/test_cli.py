@@ -16,8 +16,8 @@ from helpers import compare_files, in_process_client, one_line_error, quiet
 from screening import __version__, linearize
 from screening.cli import main
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
-from screening.schema import LINEARIZATION as VARIABLES, PARAMETERS
-from screening.workflow.study import build_models, parse_study
+from screening.solvers.schema import LINEARIZATION as VARIABLES, PARAMETERS
+from screening.sweep.study import build_models, parse_study
 
 SCREENING = Path(sys.executable).parent / "screening"
 
@@ -204,7 +204,7 @@ BIG = STUDY.replace("eps = [-6e5, 2e7, 6e7]", "eps = {start = -6e5, stop = 6e7, 
 @pytest.mark.slow
 def test_killed_run_resumes_to_the_same_file(tmp_path):
     """SIGKILL a real `screening run` (and its workers) mid-way; the re-run resumes and matches."""
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     study_file = tmp_path / "big.toml"
     study_file.write_text(BIG)
@@ -243,7 +243,7 @@ def test_killed_run_resumes_to_the_same_file(tmp_path):
 # ----------------------------------------------------------------------------- fragility
 def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_result, tmp_path, capsys):
     from screening.analysis.fragility import exceedance_probability, mcs_exceedance_probability, threshold_angle
-    from screening.workflow.reader import open_result
+    from screening.io.reader import open_result
 
     out = tmp_path / "frag.nc"
     assert main(["fragility", str(cli_result / "outputs" / "study.nc"), "--threshold", "5", "--relative-to", "theta_ul",
@@ -352,12 +352,12 @@ def test_help_and_version_exit_0(capsys):
 
 
 def test_ctrl_c_exits_130_with_one_line(tmp_path, capsys, monkeypatch):
-    import screening.workflow.sweep
+    import screening.sweep.run
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(screening.workflow.sweep, "run_sweep", interrupted)
+    monkeypatch.setattr(screening.sweep.run, "run_sweep", interrupted)
     (tmp_path / "s.toml").write_text(STUDY)
     assert main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "r.nc")]) == 130
     assert [line for line in capsys.readouterr().err.splitlines() if line.strip()] == [

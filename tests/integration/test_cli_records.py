@@ -5,8 +5,8 @@ import pytest
 import xarray as xr
 
 from screening.cli import main
-from screening.records import Record, write_at2
-from screening.workflow.config import StudyError
+from screening.core.records import Record, write_at2
+from screening.sweep.config import StudyError
 
 STUDY = """
 title = "record CLI"
@@ -60,7 +60,7 @@ def test_simulate_needs_swept_value(tmp_path, capsys):
 
 def test_fit_excitation_prints_a_study_table(tmp_path, capsys):
     from screening.cli import main as run
-    from screening.workflow.study import parse_study
+    from screening.sweep.study import parse_study
 
     _, record = _files(tmp_path)
     assert run(["fit-excitation", str(record)]) == 0
@@ -200,7 +200,7 @@ def test_cloud_records_table_is_checked(tmp_path, capsys, files, extra, needle):
 
 
 def test_cloud_reads_a_csv_beside_a_one_column_file_as_time_and_acceleration(tmp_path, capsys):
-    from screening.workflow.cloud import load_cloud_study, read_cloud_records
+    from screening.applications.cloud import load_cloud_study, read_cloud_records
 
     _files(tmp_path)
     csv, pga_g = _csv_in_g(tmp_path, columns=3)
@@ -270,7 +270,7 @@ def test_a_vertical_component_is_used_unless_left_out(tmp_path, capsys):
 
 
 def test_cloud_uses_vertical_components_unless_left_out(tmp_path):
-    from screening.workflow.cloud import load_cloud_study, run_cloud
+    from screening.applications.cloud import load_cloud_study, run_cloud
 
     _files(tmp_path)
     _csv_in_g(tmp_path, columns=3)
@@ -295,7 +295,7 @@ def test_cloud_uses_vertical_components_unless_left_out(tmp_path):
 def test_a_record_that_lifts_the_block_off_is_one_warning_line(tmp_path, model, said):
     """A vertical pulse to -1.5 g: the record is flagged ``lift_off``; the condensed model stops it (diverged),
     the coupled block flies and lands; one warning line says which, never a crash."""
-    from screening.workflow.cloud import load_cloud_study, run_cloud
+    from screening.applications.cloud import load_cloud_study, run_cloud
 
     _files(tmp_path)
     t = np.arange(0.0, 2.0, 0.002)

@@ -5,9 +5,10 @@ import pytest
 import xarray as xr
 
 from screening.cli import main
-from screening.model.excitation import Envelope, KanaiTajimi
-from screening.workflow.cloud import load_cloud_study, run_cloud, synthesise_records
-from screening.workflow.config import StudyError
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.applications.cloud import load_cloud_study, run_cloud, synthesise_records
+from screening.sweep.config import StudyError
 
 STUDY = """
 title = "cloud test"
@@ -103,9 +104,9 @@ def test_cloud_on_dask_equals_the_serial_run(folder, client):
 
 
 def test_a_failed_record_task_is_kept_as_nan_and_left_out_of_the_fit(folder, client):
-    from screening.model import Block, Foundation
-    from screening.records import Record, read_record
-    from screening.workflow.cloud import cloud_dataset, _record_rows
+    from screening.core.model import Block, Foundation
+    from screening.core.records import Record, read_record
+    from screening.applications.cloud import cloud_dataset, _record_rows
 
     cloud = load_cloud_study(folder / "d.toml") if (folder / "d.toml").exists() else None
     if cloud is None:

@@ -12,15 +12,17 @@ import pytest
 from helpers import CASES, quiet
 from scipy import integrate
 
-from screening import condensation, excitations, schema
+from screening.core import condensation, excitations
+from screening.solvers import schema
 from screening.analysis.intensity import input_measures, oscillator_covariance
-from screening.excitations.clough_penzien import CloughPenzien
-from screening.model import Block, ConstantEnvelope, Foundation, KanaiTajimi
-from screening.solvers.linearization import linearize
+from screening.core.excitations.clough_penzien import CloughPenzien
+from screening.core.model import Block, ConstantEnvelope, Foundation
+from screening.core.excitations import KanaiTajimi
+from screening.analysis.linearization import linearize
 from screening.solvers.moments import solve_moments
 from screening.solvers.synthesis import band_limited_variance, ground_acceleration
 from screening.solvers.timegrid import output_times
-from screening.workflow.study import StudyError, build_models, parse_study
+from screening.sweep.study import StudyError, build_models, parse_study
 
 S0, WG, ZG, WF, ZF = 2e-4, 15.0, 0.6, 1.5, 0.8
 CP = CloughPenzien(S0, WG, ZG, WF, ZF, ConstantEnvelope())
@@ -151,7 +153,7 @@ def test_linearize_sweeps_its_parameters_as_dimensions():
 def test_a_sweep_over_its_parameter_writes_what_the_solver_gives(client, tmp_path):
     import xarray as xr
 
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     study = parse_study(STUDY)
     out = tmp_path / "cp.nc"

@@ -16,13 +16,15 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, example, given, seed, settings, strategies as st
 
-from screening.condensation.paper import uplift_threshold
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from screening.condensation import api
-from screening.condensation.paper_coefficients import coefficient_constants
+from screening.core.condensation.paper import uplift_threshold
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.condensation import api
+from screening.core.condensation.paper import coefficient_constants
 from screening.solvers import moments
-from screening.status import PointStatus
-from screening.model import Block, Foundation
+from screening.core.status import PointStatus
+from screening.core.model import Block, Foundation
 from screening.solvers.timegrid import output_times
 
 # the paper's condensation, pinned: these are the edges of its closed forms (the default condensation

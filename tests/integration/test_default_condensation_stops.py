@@ -7,8 +7,8 @@ import xarray as xr
 from helpers import study_text
 
 from screening.cli import main
-from screening.condensation import DEFAULT_CONDENSATION
-from screening.status import BestMethod, PointStatus, Trust
+from screening.core.condensation import DEFAULT_CONDENSATION
+from screening.core.status import BestMethod, PointStatus, Trust
 
 # the paper's block on a hardening bed, no condensation chosen; at S0 = 2.4e-3 the default's k_eq
 # turns negative during the shaking (the quick study's strongest column), at 1e-5 it barely rocks

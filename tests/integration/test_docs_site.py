@@ -53,7 +53,7 @@ def test_one_module_map_covers_every_module_and_command():
                      for p in (ROOT / "screening").rglob("*.py") if p.name != "__init__.py")
     absent = [m for m in modules if f"`{m}`" not in text]
     assert not absent, absent
-    from screening.cli import cli
+    from screening.cli.commands import cli
 
     commands = sorted(cli.commands)
     assert len(commands) >= 9

@@ -17,8 +17,8 @@ import pytest
 from helpers import one_line_error, study_text
 
 from screening.cli import main
-from screening import limits
-from screening.workflow.study import StudyError, parse_study
+from screening.core import limits
+from screening.sweep.study import StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -108,7 +108,7 @@ def test_limits_leave_ordinary_studies_alone():
 def test_default_batches_keep_one_task_within_its_memory_budget():
     """B8 neighbour: the longest record allowed gets batches whose histories fit the task budget."""
     from screening.solvers.moments import HISTORY_VARIABLES
-    from screening.workflow.grid import default_batch_size
+    from screening.sweep.grid import default_batch_size
 
     study = parse_study(STUDY.replace("t_end = 2.0", "t_end = 5000.0")
                         .replace("num = 3", "num = 1000"))     # 100001 instants, 2000 points
@@ -123,8 +123,8 @@ def test_default_batches_keep_one_task_within_its_memory_budget():
 def test_equivalent_coefficients_keep_nan_moments_nan(condensation):
     """B9: NaN moments gave the finite sigma = 0 coefficients (reproducer: sigma_theta = NaN;
     neighbours: a NaN velocity, NaN inside an array, and the moment form)."""
-    from screening.condensation.api import equivalent_coefficients, equivalent_coefficients_from_moments
-    from screening.model import Block, Foundation
+    from screening.core.condensation.api import equivalent_coefficients, equivalent_coefficients_from_moments
+    from screening.core.model import Block, Foundation
 
     block, bed = Block(8.67, 0.035, 0.21), Foundation(k=2.89e7, lam=8.95e8, eps=0.0)
     c, k = equivalent_coefficients(np.nan, 1.0, 0.5, block, bed, condensation)
@@ -145,7 +145,7 @@ def test_equivalent_coefficients_keep_nan_moments_nan(condensation):
 def result_file(client, tmp_path_factory):
     """A small valid result (2 x 3 points), in a folder of its own."""
     from helpers import quiet
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     out = tmp_path_factory.mktemp("result") / "res.nc"
     run_sweep(parse_study(STUDY.replace("[mcs]\nsamples = 4\nseed = 0\n", "")), out, client=client,
@@ -227,7 +227,7 @@ def test_info_escapes_terminal_control_characters_of_a_title(result_file, tmp_pa
 def _interrupted(client, study, out, after=2, batch_size=3):
     """Run ``study`` into ``out`` and stop after ``after`` saved batches (the partial folder stays)."""
     from helpers import quiet
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     def stop(batch, seen=[]):
         seen.append(batch.index)
@@ -241,7 +241,7 @@ def _interrupted(client, study, out, after=2, batch_size=3):
 @pytest.fixture(scope="module")
 def reference_grid(client, tmp_path_factory):
     from helpers import GRID, quiet
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     out = tmp_path_factory.mktemp("ref") / "ref.nc"
     run_sweep(parse_study(GRID), out, client=client, batch_size=3, progress=False, log=quiet)
@@ -251,7 +251,7 @@ def reference_grid(client, tmp_path_factory):
 def test_planted_lock_symlink_does_not_truncate_its_target(client, tmp_path, reference_grid):
     """B11: ``<out>.partial/lock`` was opened with open(..., "w"), following a planted link."""
     from helpers import GRID, compare_files, quiet
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     victim = tmp_path / "victim.txt"
     victim.write_text("precious")
@@ -281,8 +281,8 @@ def test_partial_folder_that_is_a_link_or_a_file_is_refused(client, tmp_path, ca
         partial.symlink_to(elsewhere)
     else:
         partial.write_text("x")
-    from screening.workflow.store import PartialStore
-    from screening.workflow.errors import SweepError
+    from screening.io.store import PartialStore
+    from screening.io.errors import SweepError
 
     with pytest.raises(SweepError, match="symbolic link" if kind == "symlink" else "not a folder"):
         PartialStore(tmp_path / "r.nc").open("k", {"n_points": 1, "shape": [1], "batch_size": 1}, print)
@@ -291,8 +291,8 @@ def test_partial_folder_that_is_a_link_or_a_file_is_refused(client, tmp_path, ca
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="needs root to make a folder owned by another user")
 def test_partial_folder_of_another_user_is_refused(tmp_path):
-    from screening.workflow.errors import SweepError
-    from screening.workflow.store import PartialStore
+    from screening.io.errors import SweepError
+    from screening.io.store import PartialStore
 
     partial = tmp_path / "r.nc.partial"
     partial.mkdir()
@@ -305,7 +305,7 @@ def test_damaged_finished_result_is_recomputed_not_reused(client, tmp_path, refe
     """B12: a finished result with damaged data chunks was reused as up to date forever."""
     from helpers import GRID, compare_files, quiet
     from test_robustness import _corrupt_data
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     out = tmp_path / "r.nc"
     _corrupt_data(reference_grid, out)
@@ -322,7 +322,7 @@ def test_result_with_the_key_but_another_grid_is_not_reused(client, tmp_path, re
     """B12 neighbour: a file carrying the study's key whose grid is not the study's (edited by hand)."""
     import netCDF4
     from helpers import GRID
-    from screening.workflow.reader import verify_result
+    from screening.io.reader import verify_result
 
     other = tmp_path / "other.nc"
     study = parse_study(GRID.replace("num = 5", "num = 4"))
@@ -350,7 +350,7 @@ def test_damaged_part_files_are_recomputed_on_resume(client, tmp_path, reference
     """B14: part files with the right key but a wrong shape / missing variable / wrong dtype gave a
     traceback on every resume."""
     from helpers import GRID, compare_files, quiet
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     study, out = parse_study(GRID), tmp_path / "r.nc"
     _interrupted(client, study, out)
@@ -370,7 +370,7 @@ def test_manifest_with_a_bad_batch_size_starts_again(client, tmp_path, reference
     """B14: a manifest whose key matches but whose batch_size is nonsense gave a traceback on resume."""
     import json
     from helpers import GRID, compare_files, quiet
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.run import run_sweep
 
     study, out = parse_study(GRID), tmp_path / "r.nc"
     _interrupted(client, study, out)
@@ -432,7 +432,7 @@ def test_ctrl_c_prints_one_line_and_no_worker_tracebacks(tmp_path, moment):
 
 LOCAL_WORKERS_PROBE = """
 import signal, sys
-from screening.workflow import _submit, execution
+from screening.sweep import _submit, execution
 
 def probe():
     inherited = "state" in vars(sys.modules["__main__"])     # a forked worker has this script's functions
@@ -469,7 +469,7 @@ def test_local_workers_ignore_ctrl_c_are_forked_while_safe_and_run_monte_carlo()
 def test_worker_start_method_set_for_dask_in_the_environment_is_used(monkeypatch):
     import dask
 
-    from screening.workflow import execution
+    from screening.sweep import execution
 
     monkeypatch.setenv(execution.START_METHOD_VARIABLE, "spawn")
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):   # as dask reads it at import
@@ -486,13 +486,13 @@ def test_all_flagged_study_writes_its_figures(client, tmp_path, capsys, monkeypa
     """B4: a valid study whose points are all flagged (soft bed k = 1e4) wrote its result and then
     plotting crashed ("Data cannot be log-scaled")."""
     from helpers import quiet
-    from screening.workflow import sweep
+    from screening.sweep import run as sweep
 
     study = tmp_path / "soft.toml"
     study.write_text(STUDY.replace("k = 2.89e7", "k = 1e4").replace("eps = [-6e5, 6e7]", "eps = [-6e5, 0.0]").replace("[mcs]\nsamples = 4\nseed = 0\n", "")
                      .replace("[foundation]\n", PAPER_CONDENSATION))   # the default cannot condense this bed
     real = sweep.run_sweep
-    monkeypatch.setattr("screening.workflow.sweep.run_sweep",
+    monkeypatch.setattr("screening.sweep.run.run_sweep",
                         lambda *a, **kw: real(*a, **{**kw, "client": client}))
     out = tmp_path / "soft.nc"
     assert main(["run", str(study), "--out", str(out), "--quiet"]) == 0, capsys.readouterr().err
@@ -572,7 +572,7 @@ def test_small_file_declaring_a_huge_grid_is_refused_without_allocating(tmp_path
     import netCDF4
 
     from screening.solvers.moments import HISTORY_VARIABLES
-    from screening.workflow.reader import REQUIRED_VARIABLES
+    from screening.io.reader import REQUIRED_VARIABLES
 
     path = tmp_path / "huge.nc"
     with netCDF4.Dataset(path, "w") as nc:
@@ -667,7 +667,7 @@ def _server(reply):
 def test_scheduler_that_is_not_dask_is_one_line_in_bounded_time(tmp_path, capsys, monkeypatch, reply, needle):
     import time
 
-    monkeypatch.setattr("screening.workflow.connect.HANDSHAKE_TIMEOUT", 1.0)
+    monkeypatch.setattr("screening.sweep.connect.HANDSHAKE_TIMEOUT", 1.0)
     study = tmp_path / "s.toml"
     study.write_text(STUDY)
     with _server(reply) as address:
@@ -698,8 +698,8 @@ def test_a_valid_scheduler_file_of_several_megabytes_gives_its_address(tmp_path)
     """A scheduler with many workers writes a large file: a 2 MB one was read as 'JSONDecodeError'."""
     import json
 
-    from screening.workflow.connect import MAX_SCHEDULER_FILE, scheduler_address
-    from screening.workflow.errors import SweepError
+    from screening.sweep.connect import MAX_SCHEDULER_FILE, scheduler_address
+    from screening.io.errors import SweepError
 
     workers = {f"tcp://10.0.{i // 250}.{i % 250}:40000": {"name": f"w{i}", "memory_limit": 4e9} for i in range(40000)}
     sched = tmp_path / "scheduler.json"
@@ -715,7 +715,7 @@ def test_a_valid_scheduler_file_of_several_megabytes_gives_its_address(tmp_path)
 def test_a_real_scheduler_passes_the_check():
     import logging
     from distributed import LocalCluster
-    from screening.workflow.connect import check_scheduler
+    from screening.sweep.connect import check_scheduler
 
     with LocalCluster(n_workers=0, processes=False, protocol="tcp://", dashboard_address=None,
                       silence_logs=logging.ERROR) as cluster:
@@ -740,7 +740,7 @@ def test_a_scheduler_handshake_cut_short_or_junk_is_one_line_in_bounded_time(tmp
     import json
     import time
 
-    monkeypatch.setattr("screening.workflow.connect.HANDSHAKE_TIMEOUT", 1.0)
+    monkeypatch.setattr("screening.sweep.connect.HANDSHAKE_TIMEOUT", 1.0)
     study = tmp_path / "s.toml"
     study.write_text(STUDY)
     with _server(reply) as address:
@@ -750,7 +750,7 @@ def test_a_scheduler_handshake_cut_short_or_junk_is_one_line_in_bounded_time(tmp
         argv = (["cloud", str(study)] if how == "cloud" else ["run", str(study)]) + [
             "--scheduler", address, "--out", str(tmp_path / "r.nc"), "--quiet"]
         if how == "cloud":
-            from screening.records import Record, write_at2
+            from screening.core.records import Record, write_at2
 
             (tmp_path / "rec").mkdir()
             write_at2(tmp_path / "rec" / "a.at2", Record(np.sin(np.arange(200) * 0.1), 0.01))
@@ -800,7 +800,7 @@ def _b7_models(field, value):
 def test_a_point_beyond_float_range_is_flagged_and_keeps_its_batch(name):
     """B7: one extreme point raised ZeroDivisionError in the compiled kernel and took its batch down."""
     from screening.solvers.moments import solve_moments
-    from screening.status import PointStatus
+    from screening.core.status import PointStatus
 
     field, extreme, ordinary = B7_POINTS[name]
     t = np.linspace(0.0, 2.0, 41)
@@ -819,9 +819,9 @@ def test_a_point_beyond_float_range_is_flagged_and_keeps_its_batch(name):
 def test_blocks_at_the_ends_of_the_length_range_finish_with_a_status(b, h):
     """Neighbours of b <= ~1e-170 (ZeroDivisionError) and b, h >= ~1e150 (OverflowError), now refused:
     the extreme lengths allowed are integrated or flagged, through the whole batch task."""
-    from screening.status import PointStatus
-    from screening.workflow.execution import solve_batch
-    from screening.workflow.grid import batch_models, plan_batches
+    from screening.core.status import PointStatus
+    from screening.sweep.execution import solve_batch
+    from screening.sweep.grid import batch_models, plan_batches
 
     study = parse_study(STUDY.replace("b = 0.035", f"b = {b!r}").replace("h = 0.21", f"h = {h!r}")
                         .replace("[foundation]\n", PAPER_CONDENSATION))    # the paper's closed forms at the extremes
@@ -838,7 +838,7 @@ def test_blocks_at_the_ends_of_the_length_range_finish_with_a_status(b, h):
 def test_points_near_the_float_range_are_integrated_or_flagged(field, value):
     """B7 neighbours: extreme but representable points finish with a status (no exception)."""
     from screening import linearize
-    from screening.status import PointStatus
+    from screening.core.status import PointStatus
 
     ds = linearize(*_b7_models(field, value), t_end=2.0)
     assert int(ds["status"]) in {int(s) for s in PointStatus if s >= PointStatus.ok}
@@ -848,8 +848,8 @@ def test_a_sweep_batch_with_a_point_beyond_float_range_keeps_its_other_points(cl
     """B7 through a sweep: the extreme point is flagged in the file, its batch's other points are ok."""
     import xarray as xr
     from helpers import quiet
-    from screening.status import PointStatus
-    from screening.workflow.sweep import run_sweep
+    from screening.core.status import PointStatus
+    from screening.sweep.run import run_sweep
 
     text = STUDY.replace("k = 2.89e7", "k = [2.89e7, 1e200]").replace("[mcs]\nsamples = 4\nseed = 0\n", "")
     out = tmp_path / "b7.nc"

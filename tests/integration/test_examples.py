@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from screening.workflow.study import load_study
+from screening.sweep.study import load_study
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

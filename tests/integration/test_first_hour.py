@@ -6,9 +6,9 @@ import pytest
 from helpers import GRID, compare_files, quiet
 
 from screening.cli import main
-from screening.workflow.execution import IN_PROCESS_MAX_POINTS, default_workers
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.sweep.execution import IN_PROCESS_MAX_POINTS, default_workers
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ import xarray as xr
 from helpers import study_text
 
 from screening.cli import main
-from screening.status import FitFlag
+from screening.core.status import FitFlag
 
 #: Two beds (k) x five target PGAs, 3 s records, with [accuracy] (the combination that used to end in
 #: "t_end is needed to turn a target PGA into S0").
@@ -125,7 +125,7 @@ def test_the_set_is_written_all_or_none(results, capsys, monkeypatch):
     """A failing NRML write leaves the files of the earlier run as they were and no temporary behind;
     the command that used to fail in the CSV writer (a threshold relative to the slenderness, stored
     per point) writes the whole set."""
-    import screening.analysis.im_fragility as imf
+    import screening.applications.im_fragility as imf
 
     folder = results[0].parent
     out = folder / "set.nc"
@@ -175,8 +175,9 @@ def test_a_point_whose_s0_cannot_follow_from_its_pga_is_flagged_and_the_others_s
     """zeta_g = 1e-9 makes the Kanai-Tajimi spectral moments unintegrable: those points are flagged
     beyond_float_range with NaN S0; the zeta_g = 0.6 points of the same batch are solved."""
     from screening.analysis.intensity import ground_cutoff, s0_for_pga
-    from screening.model.excitation import Envelope, KanaiTajimi
-    from screening.status import PointStatus
+    from screening.core.model.excitation import Envelope
+    from screening.core.excitations.kanai_tajimi import KanaiTajimi
+    from screening.core.status import PointStatus
 
     text = study_text({"foundation.eps": "0.0", "excitation.kind": '"kanai_tajimi"', "excitation.S0": None,
                        "excitation.pga": "[0.5, 1.0, 2.0]", "excitation.omega_g": "15.0",

@@ -11,16 +11,16 @@ import pytest
 import xarray as xr
 
 from screening import Block, Foundation, __version__
-from screening.condensation.api import uplift_threshold
+from screening.core.condensation.api import uplift_threshold
 from screening.solvers.moments import HISTORY_VARIABLES
 from helpers import assert_cdo_form_of, in_process_client, quiet
 
 from screening.cli import main
-from screening.schema import DERIVED, LINEARIZATION, PARAMETERS
+from screening.solvers.schema import DERIVED, LINEARIZATION, PARAMETERS
 
 VARIABLES = {**LINEARIZATION, **DERIVED}
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 CHECKER = Path(sys.executable).parent / "compliance-checker"
 
@@ -324,7 +324,7 @@ def test_ncdump_header_reads(results):
 
 
 def test_slenderness_is_stored_per_point_from_the_model(results):
-    from screening.schema import attributes
+    from screening.solvers.schema import attributes
 
     with xr.open_dataset(results["grid"]) as ds:
         assert ds["slenderness"].dims == ds["theta_ul"].dims == ("k", "eps", "S0")

@@ -4,8 +4,8 @@ paper's condensation (pinned: the package default is another)."""
 import pytest
 
 from screening import linearize
-from screening.model.cases import PAPER_CASES, paper_case
-from screening.schema import LINEARIZATION as VARIABLES
+from screening.core.model.cases import PAPER_CASES, paper_case
+from screening.solvers.schema import LINEARIZATION as VARIABLES
 
 
 @pytest.fixture(scope="module")

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import pytest
 
-from screening.workflow.study import load_study
+from screening.sweep.study import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 

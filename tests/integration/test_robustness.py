@@ -24,20 +24,22 @@ import xarray as xr
 
 from helpers import GRID, NO_HTTP_PORT_8787, compare_files, one_line_error, quiet, study_text
 
-from screening.workflow import execution
+from screening.sweep import execution
 from screening.cli import main
-from screening.model.excitation import ConstantEnvelope, KanaiTajimi, WhiteNoise
-from screening.condensation.paper_coefficients import coefficient_constants
+from screening.core.model.excitation import ConstantEnvelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.condensation.paper import coefficient_constants
 from screening.solvers.moments import DEFAULT_MAX_STEPS, HISTORY_VARIABLES, solve_moments
-from screening.status import PointStatus
-from screening.model import Block, Foundation
+from screening.core.status import PointStatus
+from screening.core.model import Block, Foundation
 from screening.solvers.montecarlo import monte_carlo
-from screening.workflow.study import build_models, parse_study
-from screening.workflow.errors import SweepError
-from screening.workflow.reader import open_result
-from screening.workflow.store import PartialStore
-from screening.workflow.sweep import run_sweep
-from screening.workflow.writer import ResultFile
+from screening.sweep.study import build_models, parse_study
+from screening.io.errors import SweepError
+from screening.io.reader import open_result
+from screening.io.store import PartialStore
+from screening.sweep.run import run_sweep
+from screening.io.writer import ResultFile
 from screening.solvers.timegrid import output_times
 
 SCREENING = Path(sys.executable).parent / "screening"

@@ -4,11 +4,11 @@ import numpy as np
 
 from helpers import GRID, quiet
 
-from screening.model import Block, Foundation
-from screening.model.excitation import WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers.montecarlo import monte_carlo
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import SampleCount, run_sweep
+from screening.sweep.study import parse_study
+from screening.sweep.run import SampleCount, run_sweep
 
 
 def test_monte_carlo_calls_a_progress_function_after_each_chunk():

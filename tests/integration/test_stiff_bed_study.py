@@ -6,8 +6,8 @@ import xarray as xr
 
 from helpers import quiet
 from screening.solvers.montecarlo import monte_carlo
-from screening.workflow.study import build_models, parse_study
-from screening.workflow.sweep import run_sweep
+from screening.sweep.study import build_models, parse_study
+from screening.sweep.run import run_sweep
 
 STATUE = """
 title = "statue on mortar"

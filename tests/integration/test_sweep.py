@@ -1,4 +1,4 @@
-"""Sweeps on dask (screening.workflow.sweep): exactness, failures, resume, reuse, spot checks, and a real
+"""Sweeps on dask (screening.sweep.run): exactness, failures, resume, reuse, spot checks, and a real
 ``dask scheduler`` + ``dask worker`` cluster.  The pure pieces are tested in tests/unit/workflow."""
 
 import json
@@ -10,17 +10,17 @@ import xarray as xr
 
 from helpers import CASES, GRID, compare_files, dask_processes, interrupted_run, quiet
 
-from screening.workflow import execution
-from screening.condensation.api import uplift_threshold
+from screening.sweep import execution
+from screening.core.condensation.api import uplift_threshold
 from screening.solvers.moments import solve_moments
-from screening.solvers.linearization import linearize
+from screening.analysis.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
-from screening.status import PointStatus
-from screening.workflow.errors import SweepError
-from screening.workflow.reader import result_key
-from screening.workflow.store import PartialStore
-from screening.workflow.study import build_models, parse_study
-from screening.workflow.sweep import run_sweep
+from screening.core.status import PointStatus
+from screening.io.errors import SweepError
+from screening.io.reader import result_key
+from screening.io.store import PartialStore
+from screening.sweep.study import build_models, parse_study
+from screening.sweep.run import run_sweep
 
 
 # ----------------------------------------------------------------------------- runs
@@ -379,7 +379,7 @@ def test_fragility_on_the_workers_matches_the_analysis_of_the_full_histories(cli
 
 def test_a_narrow_submission_window_gives_the_same_file(client, tmp_path, monkeypatch):
     """Batches are submitted a few per worker at a time: one in flight gives the same result."""
-    import screening.workflow.sweep as sweep_module
+    import screening.sweep.run as sweep_module
 
     study = parse_study(GRID)
     run_sweep(study, tmp_path / "wide.nc", client=client, batch_size=3, progress=False, log=quiet)
@@ -412,8 +412,8 @@ def test_spot_histories_are_those_of_the_full_result_at_the_spot(client, tmp_pat
 def test_every_point_carries_the_trust_flag_of_the_linearization(tmp_path, one_worker):
     """sl_trust and its error band on the workers equal add_trust on the same points solved directly."""
     from screening.analysis.trust import add_trust
-    from screening.status import Trust
-    from screening.workflow.reader import open_result
+    from screening.core.status import Trust
+    from screening.io.reader import open_result
 
     study = parse_study(GRID, name="trust")
     out = tmp_path / "trust.nc"

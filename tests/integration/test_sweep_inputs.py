@@ -8,8 +8,8 @@ import xarray as xr
 from helpers import CASES, GRID, quiet
 
 from screening.analysis.intensity import intensity_measures
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 PGA_KT = GRID.replace("S0 = {start = 1e-5, stop = 2.4e-3, num = 5, log = true}", "pga = [0.5, 1.0, 2.0]").replace(
     'kind = "white"', 'kind = "kanai_tajimi"\nomega_g = 15.6\nzeta_g = 0.6').replace(
@@ -53,7 +53,7 @@ def test_intensity_measures_per_point_match_the_dataset_evaluation(client, tmp_p
 def test_a_batch_whose_models_cannot_be_built_is_flagged_and_the_run_goes_on(client, tmp_path, monkeypatch):
     """A ValueError while the client builds a batch's models (e.g. S0 from a target PGA at extreme
     scales) fails that batch like a failed task (status task_failed, one warning), never the run."""
-    from screening.workflow import _submit                 # the client side of the tasks builds the models
+    from screening.sweep import _submit  # the client side of the tasks builds the models
 
     real = _submit.batch_point_models
 

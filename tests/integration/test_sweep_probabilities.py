@@ -10,10 +10,10 @@ from helpers import GRID
 from screening.analysis.fragility import best_exceedance
 from screening.analysis.trust import OVERTURN_LIMIT
 from screening.analysis.probabilities import monte_carlo_source
-from screening.status import (AnswerQuantity, BestMethod, EscalationModel, PointStatus, ProbabilitySource,
-                              SampleState)
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.core.status import (AnswerQuantity, BestMethod, EscalationModel, PointStatus, ProbabilitySource,
+                                   SampleState)
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 FRAGILITY = '\n[fragility]\nthresholds = [0.05, 0.3]\nrelative_to = "slenderness"\n'
 ACCURACY = GRID.replace("t_end = 4.0", "t_end = 3.0") + "\n[accuracy]\ntarget = 0.15\nbudget_s = 4\n" + FRAGILITY
@@ -87,7 +87,7 @@ def test_accuracy_study_points_carry_probabilities_from_the_best_model(client, t
 def test_fragility_study_points_carry_probabilities_and_the_spot_check_replaces_its_point(client, tmp_path, suffix):
     if suffix == ".zarr":
         pytest.importorskip("zarr")
-    from screening.workflow.reader import open_result
+    from screening.io.reader import open_result
 
     report = run_sweep(parse_study(SPOTS), tmp_path / f"s{suffix}", client=client, progress=False,
                        log=lambda m: None)
@@ -132,11 +132,11 @@ def test_fragility_study_points_carry_probabilities_and_the_spot_check_replaces_
 
 def test_p_rocking_start_is_the_closed_form_at_every_point(client, tmp_path):
     """Without [accuracy] or [fragility]: no p_overturn, but p_rocking_start and the uplift acceleration."""
-    from screening import condensation
+    from screening.core import condensation
     from screening.analysis.intensity import rocking_start_probability
     from screening.analysis.probabilities import uplift_acceleration
-    from screening.model import Block, Foundation
-    from screening.model.excitation import WhiteNoise
+    from screening.core.model import Block, Foundation
+    from screening.core.excitations.white import WhiteNoise
     from screening.solvers.synthesis import default_cutoff
 
     study = parse_study(GRID)

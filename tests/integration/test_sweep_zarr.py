@@ -17,11 +17,11 @@ import xarray as xr
 from helpers import CASES, GRID, assert_cdo_form_of, compare_files, dask_processes, interrupted_run, one_line_error, quiet
 
 from screening.cli import main
-from screening.status import PointStatus
-from screening.workflow import _submit
-from screening.workflow.reader import result_key
-from screening.workflow.study import parse_study
-from screening.workflow.sweep import run_sweep
+from screening.core.status import PointStatus
+from screening.sweep import _submit
+from screening.io.reader import result_key
+from screening.sweep.study import parse_study
+from screening.sweep.run import run_sweep
 
 pytest.importorskip("zarr")
 
@@ -58,7 +58,7 @@ def test_the_zarr_result_is_the_netcdf_result(client, tmp_path, text):
 
 def test_workers_write_the_zarr_chunks_and_return_only_summaries(client, tmp_path, monkeypatch):
     """The client never receives the histories of a zarr run: it writes no batch region itself."""
-    from screening.workflow.writer import ResultFile
+    from screening.io.writer import ResultFile
 
     study = parse_study(GRID)
     written = []
@@ -122,8 +122,8 @@ def test_disk_full_in_the_zarr_store_keeps_the_marked_batches_and_resumes(client
     kept batches; the same command then resumes."""
     import errno
 
-    from screening.workflow import writer
-    from screening.workflow.errors import SweepError
+    from screening.io import writer
+    from screening.io.errors import SweepError
 
     study = parse_study(GRID)
     ref = tmp_path / "ref.nc"
@@ -165,7 +165,7 @@ def test_a_finished_zarr_result_is_reused_then_replaced_by_another_study(client,
 
 
 def test_workers_that_do_not_see_the_output_folder_are_a_one_line_error(client, tmp_path, monkeypatch):
-    from screening.workflow.errors import SweepError
+    from screening.io.errors import SweepError
 
     monkeypatch.setattr(_submit, "sees_folder", lambda path: False)
     with pytest.raises(SweepError, match=r"2 dask worker\(s\) .* do not see .*shared file system"):
@@ -323,7 +323,7 @@ def test_a_store_with_files_screening_did_not_write_is_never_replaced(client, tm
     assert (out / "notes.txt").read_text() == "mine"
     # the user's file appears while the run computes: the finished result waits in the partial folder
     (out / "notes.txt").unlink()
-    from screening.workflow.errors import SweepError
+    from screening.io.errors import SweepError
 
     def add_notes(batch):
         (out / "notes.txt").write_text("mine")
@@ -391,7 +391,7 @@ def test_export_of_foreign_attributes(client, tmp_path, capsys):
     are exported as JSON text / left out; ragged flag_values are one line, exit 2."""
     import zarr
 
-    from screening.workflow._zarr_store import write_completion_mark
+    from screening.io._zarr_store import write_completion_mark
 
     out = tmp_path / "f.zarr"
     run_sweep(parse_study(GRID), out, client=client, progress=False, log=quiet)

@@ -1,5 +1,5 @@
 """A condensation registered from outside the package runs through the linearization and the
-condensed Monte Carlo without any change to them (the plug-in interface of screening.condensation).
+condensed Monte Carlo without any change to them (the plug-in interface of screening.core.condensation).
 
 The toy is the linear oscillator of the block at rest (no uplift): ``C = C(0)``, ``K = K(0)`` of
 the paper's condensation for every theta.  Under stationary white noise its rotation variance is
@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from screening import condensation
-from screening.condensation.base import SdofKernel
-from screening.kernels.signatures import sdof_coefficients_signature
-from screening.model import Block, ConstantEnvelope, Foundation, WhiteNoise
+from screening.core import condensation
+from screening.core.condensation.base import SdofKernel
+from screening.core.signatures import sdof_coefficients_signature
+from screening.core.model import Block, ConstantEnvelope, Foundation
+from screening.core.excitations import WhiteNoise
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.synthesis import default_cutoff

@@ -1,5 +1,5 @@
 """A contact law registered from outside the package runs through the contact resultants, the
-condensation and the linearization without any change to them (the plug-in interface of screening.laws).
+condensation and the linearization without any change to them (the plug-in interface of screening.core.laws).
 
 The toy is a dashpot that stiffens with the indentation, ``F_d = c zdot (1 + z / Z_REF)``: it has both
 basis pressures (``zdot`` and ``z zdot``) at once, which neither built-in law has.  Every check is
@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from screening import condensation, laws
-from screening.model import Block, ConstantEnvelope, Foundation, WhiteNoise
-from screening.physics.contact import law_constants, law_resultants, law_resultants_jit
+from screening.core import condensation, laws
+from screening.core.model import Block, ConstantEnvelope, Foundation
+from screening.core.excitations import WhiteNoise
+from screening.core.physics.contact import law_constants, law_resultants, law_resultants_jit
 from screening.solvers.moments import solve_moments
 from screening.solvers.timegrid import output_times
-from screening.workflow.study import StudyError, build_models, parse_study
+from screening.sweep.study import StudyError, build_models, parse_study
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 B = BLOCK.b

@@ -7,8 +7,9 @@ linearization and the condensed Monte Carlo by name.
 import numpy as np
 import pytest
 
-from screening.model import Block, Foundation, WhiteNoise
-from screening.solvers.linearization import linearize
+from screening.core.model import Block, Foundation
+from screening.core.excitations import WhiteNoise
+from screening.analysis.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.simulate import simulate
 
@@ -48,7 +49,7 @@ def test_runs_by_name_through_linearization_and_condensed_monte_carlo():
 
 
 def test_the_default_and_selectable_in_a_study_beside_the_paper():
-    from screening.workflow.study import parse_study
+    from screening.sweep.study import parse_study
     from tests.helpers import GRID
 
     default = parse_study(GRID, name="grid")

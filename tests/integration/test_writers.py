@@ -1,5 +1,5 @@
 """Every file a command writes goes through one temporary file made beside it and a rename
-(:mod:`screening.atomicfile`): never through a link planted at its name or at a fixed temporary
+(:mod:`screening.core.atomicfile`): never through a link planted at its name or at a fixed temporary
 name, and never over the command's own inputs."""
 
 import os
@@ -9,11 +9,12 @@ import pytest
 
 from helpers import one_line_error
 
-from screening.atomicfile import atomic_open, atomic_path
+from screening.core.atomicfile import atomic_open, atomic_path
 from screening.cli import main
-from screening.model.excitation import Envelope, KanaiTajimi
-from screening.records import Record, write_at2
-from screening.workflow.cloud import synthesise_records
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.records import Record, write_at2
+from screening.applications.cloud import synthesise_records
 
 BED = """
 [block]
@@ -112,15 +113,15 @@ def _umask():
 
 @pytest.mark.parametrize("command", ["simulate", "cloud", "fit-excitation"])
 def test_ctrl_c_in_a_command_that_keeps_nothing_says_so(record_folder, tmp_path, capsys, monkeypatch, command):
-    import screening.analysis.fit_excitation
+    import screening.applications.fit_excitation
     import screening.solvers.simulate
-    import screening.workflow.cloud
+    import screening.applications.cloud
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    for module, name in ((screening.solvers.simulate, "simulate"), (screening.workflow.cloud, "run_cloud"),
-                         (screening.analysis.fit_excitation, "fit_excitation")):
+    for module, name in ((screening.solvers.simulate, "simulate"), (screening.applications.cloud, "run_cloud"),
+                         (screening.applications.fit_excitation, "fit_excitation")):
         monkeypatch.setattr(module, name, interrupted)
     argv = {"simulate": ["simulate", str(record_folder / "pulse.at2"), "--study", str(record_folder / "bed.toml"),
                          "--out", str(tmp_path / "s.nc")],

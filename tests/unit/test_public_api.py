@@ -62,7 +62,7 @@ def test_importing_the_package_changes_no_signal_handler_exit_handler_or_thread(
 
 def test_the_worker_setup_runs_as_a_dask_preload_only():
     """A worker of a local cluster ignores SIGINT through dask's preload hook, not through an import."""
-    from screening.workflow import execution, interrupt
+    from screening.sweep import execution, interrupt
 
     assert execution.WORKER_SETUP == interrupt.__name__ and callable(interrupt.dask_setup)
 
@@ -73,6 +73,10 @@ UNTESTED = {
     "report.spot_figures": "tested in tests/unit/report/test_figures.py",
     "report.record_figures": "tested through the commands in test_cli_records.py and test_cloud.py",
     "report.tradeoff_figures": "tested through run_tradeoff in test_tradeoff.py",
+    "sweep.run": "run_sweep, tested in tests/integration/test_sweep.py",
+    "cli.commands": "the commands, tested in tests/integration/test_cli.py",
+    "cli.__main__": "python -m screening.cli, run in tests/integration/test_edges.py",
+    "_version": "one constant, read as screening.__version__ in tests/unit/io/test_writer.py",
 }
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from screening.analysis.correction import (MAX_SE, MIN_POINTS, best_estimates, fit_correction, point_features,
                                            predict_correction, within_band)
-from screening.status import BestMethod, EscalationModel, PointStatus, Trust
+from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
 
 
 def synthetic(n, noise, seed=0):

@@ -96,8 +96,8 @@ FEATURE_ATOL = 2e-4
 
 def test_dataset_features_recompute_the_atlas_features(shipped):
     # two independent paths: the atlas's design groups, and the coordinates of a linearization dataset
-    from screening.analysis import atlas
-    from screening.solvers.linearization import linearize
+    from screening.applications import atlas
+    from screening.analysis.linearization import linearize
 
     g = atlas.groups_of(shipped["u"].values)
     x_atlas = em.atlas_features(shipped, "paper")
@@ -126,9 +126,9 @@ def test_dataset_features_recompute_the_atlas_features(shipped):
 
 
 def test_with_error_model_labels_a_sweep(shipped):
-    from screening.analysis import atlas
-    from screening.solvers.linearization import linearize
-    from screening.status import Trust
+    from screening.applications import atlas
+    from screening.analysis.linearization import linearize
+    from screening.core.status import Trust
 
     model = em.shipped_model("paper")
     n_rows = int(np.isfinite(em.targets(shipped, "paper")["log_var_ratio"]).sum())

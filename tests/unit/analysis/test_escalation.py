@@ -9,7 +9,7 @@ from screening.analysis.escalation import (GRID_COST_S, GRID_DOUBLING_COST_S, GR
                                            escalation_candidates, escalation_model, estimated_cost, grid_point_cost,
                                            meets_target, prior_cost, samples_needed)
 from screening.analysis.trust import shipped_calibration
-from screening.status import BestMethod, EscalationModel, PointStatus, Trust
+from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
 
 
 def test_candidates_are_the_points_the_rule_does_not_promise():
@@ -102,10 +102,10 @@ def test_cost_model_is_linear_in_the_steps_and_cheaper_for_the_condensed_model()
 
 
 def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
-    from screening.model import Block, Foundation
-    from screening.model.excitation import WhiteNoise
+    from screening.core.model import Block, Foundation
+    from screening.core.excitations.white import WhiteNoise
     from screening.solvers.synthesis import default_cutoff, spectral_plan
-    from screening.workflow.execution import escalation_task
+    from screening.sweep.execution import escalation_task
 
     k = EscalationModel.coupled
     n = GRID_REFERENCE_POINTS

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from screening.analysis import _excitation_shape as shape
-from screening.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_psd
-from screening.excitations.white import WhiteNoise
-from screening.model.excitation import ConstantEnvelope, Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_psd
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model.excitation import ConstantEnvelope, Envelope
 
 
 def test_the_time_grid_spans_the_record_evenly():

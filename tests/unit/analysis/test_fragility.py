@@ -6,7 +6,7 @@ from scipy import integrate, stats
 from helpers import GRID
 
 from screening import Block, Foundation, WhiteNoise, linearize
-from screening.schema import PARAMETERS
+from screening.solvers.schema import PARAMETERS
 from screening.analysis.fragility import (exceedance_probability_from_moments, fit_lognormal_fragility,
                                  lognormal_fragility, mcs_exceedance_probability,
                                  oscillator_bandwidth, upcrossing_rate, vanmarcke_factor)
@@ -131,7 +131,7 @@ def test_gaussian_fragility_matches_monte_carlo_peaks_on_a_linear_case(S0, ratio
 # ---------------------------------------------------------------- thresholds read from the dataset
 def test_theta_ul_threshold_of_a_cubic_result_is_the_stored_one():
     from screening.analysis.fragility import threshold_angle
-    from screening.condensation import cubic
+    from screening.core.condensation import cubic
 
     block, bed = Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, 6e7)
     ds = linearize(block, bed, WhiteNoise(5e-4), t_end=4.0, condensation="cubic")
@@ -226,8 +226,8 @@ model = "condensed"
 @pytest.fixture(scope="module")
 def geometry_sweep(tmp_path_factory, one_worker):
     from helpers import quiet
-    from screening.workflow.study import parse_study
-    from screening.workflow.sweep import run_sweep
+    from screening.sweep.study import parse_study
+    from screening.sweep.run import run_sweep
 
     path = tmp_path_factory.mktemp("cases") / "cases.nc"
     run_sweep(parse_study(CASES, name="cases"), path, client=one_worker, progress=False, log=quiet)
@@ -237,7 +237,7 @@ def geometry_sweep(tmp_path_factory, one_worker):
 @pytest.mark.parametrize("threshold, relative_to", [(0.3, "slenderness"), (3.0, "theta_ul")])
 def test_fragility_of_cases_with_different_blocks(geometry_sweep, threshold, relative_to):
     from screening.analysis.fragility import fragility_dataset
-    from screening.workflow.reader import open_result
+    from screening.io.reader import open_result
 
     with open_result(geometry_sweep) as ds:
         ds = ds.load()
@@ -264,7 +264,7 @@ def test_fragility_of_cases_with_different_blocks(geometry_sweep, threshold, rel
 def test_fragility_command_on_cases_with_different_blocks(geometry_sweep, tmp_path, relative_to, threshold):
     from screening.analysis.fragility import fragility_dataset
     from screening.cli import main
-    from screening.workflow.reader import open_result
+    from screening.io.reader import open_result
 
     out = tmp_path / f"frag_{relative_to}.nc"
     assert main(["fragility", str(geometry_sweep), "--threshold", threshold, "--relative-to", relative_to,

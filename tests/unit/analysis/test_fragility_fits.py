@@ -6,7 +6,7 @@ import pytest
 
 from screening.analysis.fragility import (fit_binomial_fragility, fit_fragility_curve, lognormal_fragility,
                                           total_dispersion)
-from screening.status import FitFlag
+from screening.core.status import FitFlag
 
 MEDIAN, BETA = 0.8, 0.45
 LEVELS = np.geomspace(0.2, 3.0, 8)

@@ -16,8 +16,10 @@ import pytest
 
 import screening
 from screening.analysis import intensity as I
-from screening.model import Block, Foundation
-from screening.model.excitation import ConstantEnvelope, KanaiTajimi, WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.model.excitation import ConstantEnvelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -149,7 +151,7 @@ def test_rocking_start_probability_against_synthesised_records(name):
 
     exc, _ = POINTS[name]
     exc = type(exc)(*[getattr(exc, n) for n in (("S0",) if name == "white" else ("S0", "omega_g", "zeta_g"))],
-                    envelope=screening.model.excitation.Envelope(4.0, 2.0))
+                    envelope=screening.core.model.excitation.Envelope(4.0, 2.0))
     plan = spectral_plan(exc, T_END, CUTOFF)
     n_t = int(round(T_END / plan.dt)) + 1
     peaks = np.concatenate([hermite_peaks(*(a[:, :n_t] for a in ground_acceleration_samples(

@@ -16,10 +16,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from screening import excitations
+from screening.core import excitations
 from screening.analysis import intensity as I
 from screening.analysis.fragility import oscillator_bandwidth
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 
 sys.path.insert(0, str(Path(__file__).parent))
 from intensity_reference import sample_all_measures, sample_measures  # noqa: E402

@@ -17,10 +17,12 @@ import xarray as xr
 
 import screening
 from screening.analysis import intensity as I
-from screening.analysis.im_fragility import fragility_over_im, write_nrml
+from screening.applications.im_fragility import fragility_over_im, write_nrml
 from screening.cli import main
-from screening.model import Block, Foundation
-from screening.model.excitation import Envelope, KanaiTajimi, WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 
 sys.path.insert(0, str(Path(__file__).parent))
 from intensity_reference import sample_all_measures  # noqa: E402

@@ -10,7 +10,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from screening.analysis import intensity_records as I
-from screening.records import Record
+from screening.core.records import Record
 
 WL = I.OMEGA_LOW
 

@@ -11,7 +11,9 @@ from scipy import signal
 
 from screening.analysis import intensity_records as R
 from screening.analysis import intensity_rvt as I
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
 
 WL = R.OMEGA_LOW
 CUTOFF = 100.0

@@ -118,8 +118,9 @@ def test_paired_condensed_samples_reduce_the_error_of_coupled_exceedance_without
     error is never above the plain 64-sample one (at this heavy-uplift point the indicators of the
     two models correlate weakly, about 0.2: the weight follows and the estimate falls back towards
     the plain one, which is the "never worse" half of the contract)."""
-    from screening.model import Block, Foundation, WhiteNoise
-    from screening.model.cases import PAPER_BED, PAPER_BLOCK
+    from screening.core.model import Block, Foundation
+    from screening.core.excitations import WhiteNoise
+    from screening.core.model.cases import PAPER_BED, PAPER_BLOCK
     from screening.solvers.montecarlo import monte_carlo
 
     block, bed = Block(**PAPER_BLOCK), Foundation(eps=6e7, **PAPER_BED)
@@ -301,7 +302,7 @@ def test_the_escalation_plans_a_paired_point_from_its_pilot_on_the_cost_model():
     STEP_COST_S), never fewer coupled samples than the pilot's, plain where the gain is too small."""
     from screening.analysis import escalation as esc
     from screening.analysis.multifidelity import allocate
-    from screening.status import EscalationModel
+    from screening.core.status import EscalationModel
 
     pilot = {"n_steps": 64 * 100_000, "n_grid": 0, "rodas": False, "cheap_n_steps": 64 * 10_000, "cheap_n_grid": 0,
              "correlation": 0.99}
@@ -325,8 +326,9 @@ def test_the_two_fidelity_variance_of_engine_samples_is_unbiased_and_its_error_h
     matches the mean reported standard error within 40 % (a standard deviation from 30 repetitions has a relative
     sampling error of 1/sqrt(58) = 13 %: 3 of those)."""
     from screening.analysis.multifidelity import multifidelity_variance
-    from screening.model import Block, Foundation, WhiteNoise
-    from screening.model.cases import PAPER_BED, PAPER_BLOCK
+    from screening.core.model import Block, Foundation
+    from screening.core.excitations import WhiteNoise
+    from screening.core.model.cases import PAPER_BED, PAPER_BLOCK
     from screening.solvers.montecarlo import monte_carlo
 
     block, bed, excitation = Block(**PAPER_BLOCK), Foundation(eps=0.0, **PAPER_BED), WhiteNoise(S0=1e-3)
@@ -349,8 +351,9 @@ def test_the_two_fidelity_variance_of_engine_samples_is_unbiased_and_its_error_h
 
 
 def test_the_engines_sample_histories_are_the_ones_behind_its_variance():
-    from screening.model import Block, Foundation, WhiteNoise
-    from screening.model.cases import PAPER_BED, PAPER_BLOCK
+    from screening.core.model import Block, Foundation
+    from screening.core.excitations import WhiteNoise
+    from screening.core.model.cases import PAPER_BED, PAPER_BLOCK
     from screening.solvers.montecarlo import monte_carlo
 
     args = (Block(**PAPER_BLOCK), Foundation(eps=6e7, **PAPER_BED), WhiteNoise(S0=1e-3))
@@ -365,12 +368,13 @@ def test_the_engines_sample_histories_are_the_ones_behind_its_variance():
 
 
 def test_a_paired_escalation_run_falls_back_to_plain_where_the_cheap_model_refuses_the_point():
-    from screening.model import Block, Foundation, WhiteNoise
-    from screening.model.cases import PAPER_BED, PAPER_BLOCK
+    from screening.core.model import Block, Foundation
+    from screening.core.excitations import WhiteNoise
+    from screening.core.model.cases import PAPER_BED, PAPER_BLOCK
     from screening.solvers import mc_registry
     from screening.solvers.mc_models import CondensedModel
-    from screening.status import EscalationEstimator
-    from screening.workflow.execution import escalation_task
+    from screening.core.status import EscalationEstimator
+    from screening.sweep.execution import escalation_task
 
     class Refuses(CondensedModel):
         name = "refuses_every_bed"

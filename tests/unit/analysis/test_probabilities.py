@@ -5,7 +5,7 @@ import pytest
 
 from screening.analysis.probabilities import (binomial_estimate, choose_sources, monte_carlo_source,
                                               sample_probabilities, source_codes, uplift_acceleration)
-from screening.status import BestMethod, ProbabilitySource, Trust
+from screening.core.status import BestMethod, ProbabilitySource, Trust
 
 
 def test_the_sample_estimates_are_those_of_the_solvers():
@@ -16,7 +16,7 @@ def test_the_sample_estimates_are_those_of_the_solvers():
 
 
 def test_every_monte_carlo_model_has_its_own_source_code():
-    from screening.schema import attributes
+    from screening.solvers.schema import attributes
     from screening.solvers.montecarlo import MODELS
 
     codes = source_codes()
@@ -29,7 +29,7 @@ def test_every_monte_carlo_model_has_its_own_source_code():
     with pytest.raises(ValueError, match="parameter 'model'"):
         monte_carlo_source("no_such_model")
     # every model the [accuracy] escalation can run is a Monte Carlo model with a code
-    from screening.status import EscalationModel
+    from screening.core.status import EscalationModel
     assert {m.name for m in EscalationModel} <= set(MODELS)
 
 
@@ -50,8 +50,8 @@ def test_sources_before_monte_carlo():
 def test_uplift_acceleration_on_a_winkler_bed_is_the_kern_limit():
     """a_ul = g b / (3 h) - g theta_ul (pressure resultant at the kern edge b/3), from the paper condensation;
     the cubic condensation of the same linear bed (eps = 0) agrees."""
-    from screening import condensation
-    from screening.model import Block, Foundation
+    from screening.core import condensation
+    from screening.core.model import Block, Foundation
 
     block, bed = Block(1200.0, 0.25, 0.9), Foundation(1.0e10, 1e8, eps=0.0)
     theta_ul = block.m * block.g / (2 * block.b**2 * bed.k)
@@ -63,7 +63,7 @@ def test_uplift_acceleration_on_a_winkler_bed_is_the_kern_limit():
 
 def test_which_quantity_answers_a_point():
     from screening.analysis.probabilities import HEAVY_UPLIFT, answer_quantities, reliable_answer
-    from screening.status import AnswerQuantity as A, PointStatus as S
+    from screening.core.status import AnswerQuantity as A, PointStatus as S
 
     status = [S.k_eq_negative, S.sigma_theta_beyond_slenderness, S.ok, S.ok, S.ok, S.ok, S.ok, S.task_failed,
               S.step_budget_exhausted]

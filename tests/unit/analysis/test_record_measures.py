@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from screening.analysis.intensity import oscillator_peak, record_measures
-from screening.records import Record
+from screening.core.records import Record
 
 
 def test_oscillator_peak_against_ode_reference():

@@ -4,8 +4,9 @@
 import pytest
 
 from screening.analysis.target_intensity import calibrate_intensity, round_significant
-from screening.model import Block, Foundation
-from screening.model.excitation import Envelope, WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers.moments import solve_moments
 from screening.solvers.timegrid import output_times
 

@@ -7,7 +7,7 @@ import pytest
 
 from screening import Block, Foundation, WhiteNoise, linearize
 from screening.analysis import trust
-from screening.status import PointStatus, Trust
+from screening.core.status import PointStatus, Trust
 
 
 def rows(p, err, se=None, cond="paper", law="hardening", over=0.0, decay=1.0, sigma=0.01, margin=0.9):

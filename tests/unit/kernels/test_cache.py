@@ -68,7 +68,7 @@ def test_the_installed_package_is_warm_after_importing_it():
 
 def test_only_commands_that_compute_announce_it(package, monkeypatch, tmp_path, capsys):
     """`screening info` compiles nothing and says nothing; `run` says it first, unless --quiet."""
-    from screening import cli
+    from screening.cli import commands as cli
 
     monkeypatch.setattr(cache, "cache_is_cold", lambda: True)
     cli.announce_compilation(quiet=True)

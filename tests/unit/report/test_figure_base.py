@@ -6,7 +6,7 @@ import pytest
 import xarray as xr
 
 from screening.report import figure_base as fb
-from screening.status import PointStatus, Trust
+from screening.core.status import PointStatus, Trust
 
 STATUS = np.array([[PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok],
                    [PointStatus.ok, PointStatus.ok, PointStatus.non_finite_moments]])

@@ -6,11 +6,11 @@ import xarray as xr
 from matplotlib.image import imread
 
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.schema import LINEARIZATION as VARIABLES
+from screening.solvers.schema import LINEARIZATION as VARIABLES
 from screening.report.figure_base import point_label
 from screening.report.figures import plot_histories, plot_peaks, plot_result, representative_points
 from screening.report.spot_figures import plot_spots, spot_file_label
-from screening.schema import attributes
+from screening.solvers.schema import attributes
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -105,7 +105,7 @@ def test_labels_use_case_names_and_k_values():
 
 # ----------------------------------------------------------------------------- flagged and untrusted points
 from screening.report import figures, fragility_figures, spot_figures  # noqa: E402
-from screening.status import PointStatus, Trust  # noqa: E402
+from screening.core.status import PointStatus, Trust  # noqa: E402
 
 
 def _flagged(dims, sizes, spots=0):
@@ -213,7 +213,7 @@ def test_fragility_monte_carlo_points_take_the_colour_of_their_curve(drawn):
 
 def test_fragility_draws_the_best_estimate_band_and_says_which_method_gave_each_point(drawn):
     from screening.report.fragility_figures import BEST_MARKERS
-    from screening.status import BestMethod
+    from screening.core.status import BestMethod
 
     ds = _flagged(("S0",), (6,))
     s0 = ds["S0"]

@@ -8,7 +8,7 @@ import xarray as xr
 
 from screening.analysis.probabilities import TOPPLING_FRACTION, source_codes
 from screening.report import text
-from screening.status import BestMethod
+from screening.core.status import BestMethod
 
 
 def test_the_best_line_counts_each_method_and_the_escalations_figures():

@@ -5,11 +5,12 @@ import numpy as np
 import pytest
 
 from screening import linearize, monte_carlo, simulate
-from screening.model import Block, Foundation
-from screening.model.excitation import Envelope, WhiteNoise
-from screening.records import Record
+from screening.core.model import Block, Foundation
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.white import WhiteNoise
+from screening.core.records import Record
 from screening.solvers.moments import solve_moments
-from screening import limits
+from screening.core import limits
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 BED = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
@@ -20,7 +21,7 @@ RECORD = Record(0.1 * np.sin(np.linspace(0.0, 6.0, 201)), 0.01, name="sine")
 @pytest.fixture
 def no_work(monkeypatch):
     """Any integration reached is a failure of the check."""
-    import screening.solvers.mcs_kernels as kern
+    import screening.kernels.mcs_kernels as kern
     import screening.solvers.moments as moments
 
     def boom(*args, **kwargs):

@@ -7,9 +7,9 @@ import pytest
 import xarray as xr
 
 import screening
-from screening import (Block, ConstantEnvelope, Envelope, Foundation, KanaiTajimi, WhiteNoise,
-                       linearize, monte_carlo, schema)
-from screening.condensation import cubic, get
+from screening import Block, ConstantEnvelope, Envelope, Foundation, KanaiTajimi, WhiteNoise, linearize, monte_carlo
+from screening.solvers import schema
+from screening.core.condensation import cubic, get
 from screening.solvers.datasets import finish, linearization_dataset, model_fields
 from screening.solvers.moments import solve_moments
 

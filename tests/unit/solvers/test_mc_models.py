@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from screening.condensation import get
-from screening.model import Block, Foundation
+from screening.core.condensation import get
+from screening.core.model import Block, Foundation
 from screening.solvers import mc_models
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 import screening
-from screening.model import Block, Foundation
-from screening.model.excitation import WhiteNoise
+from screening.core.model import Block, Foundation
+from screening.core.excitations.white import WhiteNoise
 from screening.solvers import mc_registry
 from screening.solvers.mc_models import CondensedModel
-from screening.workflow.study import StudyError, parse_study
+from screening.sweep.study import StudyError, parse_study
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 BED = Foundation(k=2.89e7, lam=8.95e8)

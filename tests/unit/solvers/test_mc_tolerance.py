@@ -3,7 +3,7 @@
 * :func:`~screening.solvers.montecarlo.auto_rtol`: the rule ``rtol_0 min(1, sqrt(n_0 / n))`` and its use by
   :func:`~screening.solvers.montecarlo.monte_carlo` (recorded in ``attrs["rtol"]``; ``rtol=None`` keeps the
   fixed per-model tolerance).
-* :func:`~screening.solvers.mcs_kernels.step_peak` against a dense evaluation of the same cubic Hermite
+* :func:`~screening.kernels.mcs_kernels.step_peak` against a dense evaluation of the same cubic Hermite
   interpolant (numpy, 20,001 points) and against a closed-form peak (a sine).
 * The default tolerance's bias against ``rtol = 1e-10`` on the same samples (slow): within a tenth of
   the plain standard error at the rule's sample count, checked at two paired SEs.
@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from screening.model import Block, Foundation
-from screening.model.excitation import Envelope, WhiteNoise
-from screening.solvers import mcs_kernels as kern
+from screening.core.model import Block, Foundation
+from screening.core.model.excitation import Envelope
+from screening.core.excitations.white import WhiteNoise
+from screening.kernels import mcs_kernels as kern
 from screening.solvers import montecarlo as mc
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import screening
-from screening.model import Block, Foundation
+from screening.core.model import Block, Foundation
 from screening.solvers import mc_registry, model_choice as mc
 from screening.solvers.montecarlo import monte_carlo
 
@@ -49,7 +49,7 @@ def test_vertical_damping_ratio_against_the_decay_of_a_free_vertical_bounce(bed)
     helpers."""
     from scipy.integrate import solve_ivp
 
-    from screening.beds import c_from_vertical_damping, lam_from_vertical_damping
+    from screening.analysis.beds import c_from_vertical_damping, lam_from_vertical_damping
 
     block = Block(m=8.67, b=0.035, h=0.21)
     m, b, k, g = 8.67, 0.035, bed.k, 9.81
@@ -99,7 +99,7 @@ def test_auto_picks_the_stiff_bed_model_only_inside_every_measured_interval():
 def test_auto_never_picks_outside_the_rule_on_a_random_design():
     """Over random blocks and beds, whatever "auto" picks other than the fallback lies inside every interval of
     that model's rule (and every point inside the rule gets it: the rule lists one cheap model)."""
-    from screening.beds import lam_from_vertical_damping
+    from screening.analysis.beds import lam_from_vertical_damping
 
     rng = np.random.default_rng(3)
     (rule,) = mc.rules()[0]

@@ -7,17 +7,19 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from screening.model.cases import PAPER_CASES, paper_case
-from screening.condensation.paper import damping_inner, uplift_threshold
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise, kanai_tajimi_stationary_moments
-from screening.condensation.uplift_integrals import coefficient_table
-from screening.condensation import get as get_condensation
-from screening.model.points import flatten
-from screening.solvers.moment_kernels import augmented_rhs
+from screening.core.model.cases import PAPER_CASES, paper_case
+from screening.core.condensation.paper import damping_inner, uplift_threshold
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_stationary_moments
+from screening.core.excitations.white import WhiteNoise
+from screening.core.condensation.uplift_integrals import coefficient_table
+from screening.core.condensation import get as get_condensation
+from screening.core.model.points import flatten
+from screening.kernels.moment_kernels import augmented_rhs
 from screening.solvers import moments as _moments
 from screening.solvers.moments import oscillator_records
-from screening.status import PointStatus
-from screening.model import Foundation
+from screening.core.status import PointStatus
+from screening.core.model import Foundation
 from screening.solvers.timegrid import output_times
 
 solve_moments = partial(_moments.solve_moments, condensation="paper")
@@ -155,10 +157,10 @@ def test_bad_output_grid_is_rejected(paper_block):
 
 
 # ---------------------------------------------------------------- cubic condensation
-from screening.condensation import cubic  # noqa: E402
+from screening.core.condensation import cubic  # noqa: E402
 from screening.solvers import moments as lyapunov  # noqa: E402
-from screening.condensation.api import equivalent_coefficients_from_moments  # noqa: E402
-from screening.solvers import linearization as _linearization  # noqa: E402
+from screening.core.condensation.api import equivalent_coefficients_from_moments  # noqa: E402
+from screening.analysis import linearization as _linearization  # noqa: E402
 
 linearize = partial(_linearization.linearize, condensation="paper")
 
@@ -262,7 +264,7 @@ def test_linearize_reports_the_reach_beyond_the_capacity_angle(paper_block):
 
 def test_compiled_uplift_probability_and_envelope_are_their_numpy_references(paper_block):
     """The solver's p_uplift history is eq. (58) of its own var_theta; its stage gains are m h q(t) / M."""
-    from screening.condensation.api import uplift_probability
+    from screening.core.condensation.api import uplift_probability
     from screening.kernels import dopri
 
     bed = Foundation(2.89e7, 8.95e8, -6e5)
@@ -273,7 +275,7 @@ def test_compiled_uplift_probability_and_envelope_are_their_numpy_references(pap
     np.testing.assert_allclose(res["p_uplift"][ok], ref, rtol=1e-12, atol=1e-300)
     (block, fnd, exc), _ = flatten(paper_block, bed, WhiteNoise(1e-4, Envelope(4.0, 2.0)))
     osc = oscillator_records(block, fnd, exc, get_condensation("paper"))[0]
-    from screening.solvers.moment_kernels import envelope_state, initial_gain, stage_gains
+    from screening.kernels.moment_kernels import envelope_state, initial_gain, stage_gains
 
     gain = paper_block.m * paper_block.h / paper_block.m_sdof
     for t, h in ((0.0, 0.01), (2.7, 0.3), (19.5, 0.5)):

@@ -10,14 +10,16 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from screening import schema
-from screening.solvers import mcs_kernels as kern
+from screening.solvers import schema
+from screening.kernels import mcs_kernels as kern
 from screening.solvers import montecarlo as mc
-from screening.condensation import get as get_condensation
-from screening.condensation.paper import damping_inner, uplift_threshold
-from screening.physics.contact import rest_indentation
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise
-from screening.model import Block, Foundation
+from screening.core.condensation import get as get_condensation
+from screening.core.condensation.paper import damping_inner, uplift_threshold
+from screening.core.physics.contact import rest_indentation
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model import Block, Foundation
 from screening.solvers.mc_models import state_scales
 from screening.solvers.montecarlo import ensemble_statistics, monte_carlo
 
@@ -352,7 +354,7 @@ def test_white_noise_closed_form_equals_the_quadrature():
 def test_linear_regime_matches_the_lyapunov_solution():
     import importlib
     linearize = None
-    for module in ("screening.solvers.linearization", "screening.solvers.moments"):
+    for module in ("screening.analysis.linearization", "screening.solvers.moments"):
         try:
             linearize = getattr(importlib.import_module(module), "linearize", None) or linearize
         except ImportError:
@@ -387,7 +389,7 @@ def test_halving_the_step_changes_the_peak_variance_much_less_than_its_standard_
 
 
 # ---------------------------------------------------------------- cubic condensation
-from screening.condensation import cubic  # noqa: E402
+from screening.core.condensation import cubic  # noqa: E402
 
 
 @pytest.mark.parametrize("kwargs, name", [
@@ -448,7 +450,7 @@ def test_samples_beyond_the_capacity_angle_are_flagged_diverged():
 
 def test_cubic_linear_regime_matches_the_cubic_lyapunov_solution():
     """Hardening bed, tiny input: the cubic condensed MCS follows the cubic SL (not the paper's)."""
-    from screening.solvers.linearization import linearize
+    from screening.analysis.linearization import linearize
     excitation = WhiteNoise(S0=1e-6, envelope=Envelope(4.0, 2.0))
     ref = linearize(BLOCK, HC, excitation, t_end=8.0, dt=0.05, condensation="cubic")
     ds = monte_carlo(BLOCK, HC, excitation, n_samples=1000, model="condensed", condensation="cubic", t_end=8.0,

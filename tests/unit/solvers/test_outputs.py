@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from screening import schema
+from screening.solvers import schema
 from screening.solvers import outputs
-from screening.status import PointStatus, Trust
-from screening.workflow.zarrfile import ZARR_FILL
+from screening.core.status import PointStatus, Trust
+from screening.io.zarrfile import ZARR_FILL
 
 
 def test_each_variable_declared_once_with_a_known_stage_and_type():

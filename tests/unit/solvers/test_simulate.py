@@ -8,9 +8,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import screening
-from screening.model import Block, Foundation
-from screening.physics.contact import contact_resultants
-from screening.records import Record
+from screening.core.model import Block, Foundation
+from screening.core.physics.contact import contact_resultants
+from screening.core.records import Record
 
 BLOCK = Block(m=100.0, b=0.2, h=0.6)
 HC_BED = Foundation(k=5e7, lam=2e8)

@@ -13,9 +13,9 @@ import pytest
 from scipy.integrate import quad
 
 import screening
-from screening.beds import lam_from_vertical_damping
-from screening.condensation import cubic
-from screening.model import Block, Foundation
+from screening.analysis.beds import lam_from_vertical_damping
+from screening.core.condensation import cubic
+from screening.core.model import Block, Foundation
 from screening.solvers import mc_registry, stiff_bed as sb
 from screening.solvers.stiff_bed import StiffBedModel
 

@@ -10,8 +10,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import screening
-from screening.beds import lam_from_vertical_damping
-from screening.model import Block, Foundation
+from screening.analysis.beds import lam_from_vertical_damping
+from screening.core.model import Block, Foundation
 from screening.solvers import stiff_bed as sb
 
 STATUE = Block(m=1200.0, b=0.25, h=0.9)

@@ -11,8 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from screening.model.excitation import ConstantEnvelope, Envelope, KanaiTajimi, WhiteNoise, kanai_tajimi_stationary_moments
-from screening.model import Block, Foundation
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_stationary_moments
+from screening.core.excitations.white import WhiteNoise
+from screening.core.model import Block, Foundation
 from screening.solvers.synthesis import (band_limited_variance, default_cutoff, envelope_rate, ground_acceleration,
                                  ground_acceleration_samples, rocking_frequency, sample_phases, spectral_plan,
                                  stationary_samples, validate_seed, vertical_frequency)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from screening import limits
+from screening.core import limits
 from screening.solvers.timegrid import output_times
 
 

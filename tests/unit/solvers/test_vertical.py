@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 
 import screening
-from screening.beds import lam_from_vertical_damping
-from screening.condensation import cubic
-from screening.model import Block, Foundation
-from screening.records import Record
-from screening.solvers import mc_registry, mcs_kernels as kern, stiff_bed as sb
-from screening.status import DivergenceReason
+from screening.analysis.beds import lam_from_vertical_damping
+from screening.core.condensation import cubic
+from screening.core.model import Block, Foundation
+from screening.core.records import Record
+from screening.solvers import mc_registry, stiff_bed as sb
+from screening.kernels import mcs_kernels as kern
+from screening.core.status import DivergenceReason
 
 G = 9.81
 STATUE = Block(m=1200.0, b=0.25, h=0.9, g=G)
@@ -96,7 +97,7 @@ def test_stiff_bed_compiled_twin_under_a_v_equals_the_numpy_reference(bed):
 @pytest.mark.parametrize("a_v", [-0.5 * G, 0.3 * G])
 def test_condensed_law_under_a_v_is_the_law_built_with_g_plus_a_v(a_v):
     heavy = _with_g(STATUE, G + a_v)
-    cond = screening.condensation.get("cubic")
+    cond = screening.core.condensation.get("cubic")
     p, p_heavy = kern.model_record(STATUE, WINKLER, cond), kern.model_record(heavy, WINKLER, cond)
     rec, rec_heavy = cubic.sdof_record(STATUE, WINKLER)[0], cubic.sdof_record(heavy, WINKLER)[0]
     tu = float(cubic.uplift_threshold(STATUE, WINKLER))
@@ -198,7 +199,7 @@ def _lift_off_record():
 
 
 def test_coupled_block_flies_and_lands_when_the_ground_drops_faster_than_g():
-    from screening.physics.contact import REGIME_FLIGHT, REGIME_FULL_CONTACT
+    from screening.core.physics.contact import REGIME_FLIGHT, REGIME_FULL_CONTACT
 
     rec, t_lift = _lift_off_record()
     ds = screening.simulate(STATUE, SOFT, rec, model="coupled", output_dt=0.002, theta0=1e-4)

@@ -1,0 +1,731 @@
+"""Fragility over an engineering intensity measure, and its export (CSV, OpenQuake NRML).
+
+:func:`fragility_over_im` takes the exceedance probability of a result dataset
+(:func:`screening.analysis.fragility.exceedance_probability`) along a swept dimension of the
+excitation (usually ``S0``) and fits the lognormal curve ``P = Phi(ln(IM / median) / beta)``
+over the intensity measure of each point (:mod:`screening.analysis.intensity`): ``pga``
+(median PGA), ``sa`` (median Sa(T, 5 %), needs a period), ``pgv`` (median PGV, high-passed at
+0.1 Hz), ``avgsa`` (median AvgSA over 0.2-1.5 T, needs a period), ``rms``, ``arias`` or ``s0``.
+
+Refusals and flags (a fit others will load must mean what it says):
+
+* the dimension must carry intensity: the IM must change along it at every point, strictly
+  increasing (``ValueError`` otherwise: a bed parameter such as ``eps`` is not an intensity,
+  and a fit over a non-monotone IM has no meaning);
+* a fitted ``beta <= 0`` (probability falling with intensity) is flagged in ``fit_flag`` and
+  reported in the returned warnings; such fits are not exported;
+* a threshold at or beyond the slenderness angle is reported: beyond it the rigid block has
+  overturned and the Gaussian exceedance is not a rocking measure.
+
+Exports: :func:`write_csv` (one row per fitted curve: the other dimensions' values, the IM
+name and units, median, beta) and :func:`write_nrml` (OpenQuake NRML 0.5 ``fragilityModel``
+with continuous ``logncdf`` functions; OpenQuake parametrises them by the *mean* and *standard
+deviation* of the lognormal capacity, ``mean = median exp(beta^2/2)``,
+``stddev = mean sqrt(exp(beta^2) - 1)``, and reads PGA, SA and AvgSA in g, PGV in cm/s, Arias
+intensity ``IA`` in m/s).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+import xarray as xr
+
+from screening.analysis.fragility import add_fit, fragility_dataset, model_quantity, parameter
+from screening.analysis.intensity import intensity_measures
+from screening.core.atomicfile import atomic_open
+from screening.core.status import FitFlag
+
+__all__ = ["IMS", "default_dim", "fragility_over_im", "LIMIT_STATES", "THRESHOLD_FREE", "NoExport",
+           "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text", "write_csv",
+           "write_pelicun_csv", "nrml_parameters", "write_nrml"]
+
+#: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
+IMS = {
+    "pga": ("pga_median", "m s-2", "PGA", 1.0 / 9.80665),
+    "sa": ("sa_median", "m s-2", "SA", 1.0 / 9.80665),
+    "pgv": ("pgv_median", "m s-1", "PGV", 100.0),
+    "avgsa": ("avgsa_median", "m s-2", "AvgSA", 1.0 / 9.80665),
+    "rms": ("rms_acceleration", "m s-2", None, None),
+    "arias": ("arias_intensity", "m s-1", "IA", 1.0),
+    "s0": ("S0", "m2 s-3", None, None),
+}
+
+
+def _im_values(ds, im, period, cutoff):
+    if im == "s0":
+        return parameter(ds, "S0"), None
+    if im in ("sa", "avgsa") and period is None:
+        raise ValueError(f"--im {im} needs the oscillator period (--period SECONDS)")
+    measures = intensity_measures(ds, period=period if im in ("sa", "avgsa") else None, cutoff=cutoff)
+    return measures[IMS[im][0]], measures
+
+
+def default_dim(grid):
+    """The swept intensity a fragility is drawn along by default.
+
+    Parameters
+    ----------
+    grid : sequence of str
+        The swept dimensions.
+
+    Returns
+    -------
+    str or None
+        ``S0`` [m2 s-3] or ``pga`` [m s-2], whichever the grid sweeps (``None`` if neither).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> default_dim(["eps", "S0"]), default_dim(["k"])
+    ('S0', None)
+    """
+    return next((d for d in ("S0", "pga") if d in grid), None)
+
+
+def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, method="vanmarcke", period=None,
+                      cutoff=None, limit_state="exceed"):
+    """Exceedance probability along ``dim`` fitted over the intensity measure ``im``.
+
+    The :func:`~screening.analysis.fragility.fragility_dataset` of the result (``p_exceed``, best
+    estimates and Monte Carlo spot values where the result has them) with the IM (``pga_median``, ...)
+    over the dataset's dimensions and the fit over the IM.  ``limit_state="overturn"``: the probability
+    of overturning instead (:func:`screening.analysis.probabilities.overturning_probability`;
+    ``threshold`` and ``relative_to`` are not used, ``threshold_rad`` is ``atan(b/h)``), stored as
+    ``p_exceed`` with the attribute ``limit_state`` and exported with that limit state.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearization, sweep or Monte Carlo result.
+    threshold : float
+        The threshold, [rad] or a fraction [1] (``relative_to``).
+    im : str
+        A key of :data:`IMS` (``pga`` [m s-2], ``sa``, ``pgv`` [m s-1], ``avgsa``, ``rms``, ``arias``, ``s0``).
+    dim : str, optional
+        The swept intensity dimension (default :func:`default_dim`).
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+    method : {"vanmarcke", "poisson"}
+        The up-crossing approximation.
+    period : float, optional
+        Oscillator period [s] of ``sa`` and ``avgsa``.
+    cutoff : float, optional
+        Band limit [rad/s] of the random-vibration intensity measures.
+    limit_state : {"exceed", "overturn"}
+        :data:`LIMIT_STATES`.
+
+    Returns
+    -------
+    fragility : xarray.Dataset
+        With ``fit_median`` [IM units] (``attrs["intensity"]``), ``beta`` [1], ``fit_flag``
+        (:class:`~screening.core.status.FitFlag`) and ``fit_n_unvouched`` over the other dimensions.
+    warnings : list of str
+        Fits with ``beta <= 0``, thresholds beyond the slenderness angle, unreliable points left out.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``im``, a ``dim`` that is not swept or not an intensity dimension, or an IM
+        that is not strictly increasing along ``dim``.
+
+    Notes
+    -----
+    ``P(IM) = Phi(ln(IM / median) / beta)`` [2].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> frag, warnings = fragility_over_im(ds, 0.01, im="pga")
+    >>> f"{float(frag['fit_median']):.4f} {float(frag['beta']):.4f}", frag["fit_median"].attrs["units"], warnings
+    ('1.2381 0.1175', 'm s-2', [])
+    """
+    if im not in IMS:
+        raise ValueError(f"--im must be one of {', '.join(IMS)} (got {im!r})")
+    grid = list(ds["status"].dims) if "status" in ds else [d for d in ds["var_theta"].dims if d != "t"]
+    dim = dim if dim is not None else default_dim(grid)
+    if dim is None or dim not in grid:
+        raise ValueError(f"--dim {dim!r} is not a swept dimension (swept: {', '.join(grid) or 'none'})")
+    if ds.sizes[dim] < 2:
+        raise ValueError(f"--dim {dim!r} has one value: nothing to fit")
+    values, _ = _im_values(ds, im, period, cutoff)
+    name = IMS[im][0]
+    if dim not in values.dims:
+        raise ValueError(f"--dim {dim!r} is not an intensity dimension: {name} does not vary along it")
+    step = values.diff(dim)
+    if bool((step == 0).all()):
+        raise ValueError(f"--dim {dim!r} is not an intensity dimension: {name} does not vary along it")
+    if not bool((step > 0).all()):
+        raise ValueError(f"{name} is not strictly increasing along --dim {dim!r}: a lognormal fit over it "
+                         f"has no meaning")
+    if limit_state not in LIMIT_STATES:
+        raise ValueError(f"--limit-state must be one of {', '.join(LIMIT_STATES)} (got {limit_state!r})")
+    warnings = []
+    if limit_state == "overturn":
+        from screening.analysis.probabilities import overturning_probability
+
+        p, note = overturning_probability(ds, method)
+        warnings += [f"overturning: {note}"] if note else []
+        frag = xr.Dataset({"p_exceed": p.rename("p_exceed").assign_attrs(
+                               long_name="probability that the block overturns during the record", units="1"),
+                           "threshold_rad": model_quantity(ds, "slenderness")},
+                          attrs={"threshold": 1.0, "relative_to": "slenderness", "method": method})
+    else:
+        frag = fragility_dataset(ds, threshold, relative_to, method, dim)
+    units = IMS[im][1]
+    values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
+    out = add_fit(frag.assign({name: values}), ds, values, dim)
+    if limit_state == "overturn" and "p_source" in ds.variables:
+        # stored probabilities carry their source: the unreliable ones were left out above, every fitted
+        # point is vouched for (Monte Carlo, or a trusted or corrected linearization)
+        out["fit_n_unvouched"] = xr.zeros_like(out["fit_n_unvouched"])
+    out["fit_median"].attrs.update(units=units, intensity=name)
+    if period is not None and im in ("sa", "avgsa"):
+        out[name].attrs.update(period=float(period), damping_ratio=0.05)
+    out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim, limit_state=limit_state,
+                     title="Probability that |theta| exceeds a rotation, fitted over an intensity measure"
+                     if limit_state == "exceed" else "Probability of overturning, fitted over an intensity measure")
+    n_neg = int((out["fit_flag"] == FitFlag.non_positive_beta).sum())
+    if n_neg:
+        warnings.append(f"{n_neg} fit(s) have beta <= 0 (probability falling with {name}); flagged in fit_flag "
+                        "and left out of the exports")
+    try:
+        slender = model_quantity(ds, "slenderness")
+        if limit_state == "exceed" and bool((out["threshold_rad"] >= slender).any()):
+            warnings.append("the threshold is at or beyond the slenderness angle atan(b/h): the rigid block "
+                            "overturns there; P(exceed) is then not a rocking measure")
+    except KeyError:
+        pass
+    return out, warnings
+
+
+#: Limit states of :func:`fragility_over_im`: ``exceed`` (``|theta|`` beyond a threshold, named by
+#: :func:`limit_state_name`) or ``overturn`` (the block overturns; NRML limit state ``overturn``).
+LIMIT_STATES = ("exceed", "overturn")
+
+#: Variables of a fragility dataset that do not depend on the threshold (the intensities, the source).
+THRESHOLD_FREE = ("best_method", *(v[0] for v in IMS.values()))
+
+
+class NoExport(ValueError):
+    """A file of a fragility's set that this fragility cannot fill (an IM OpenQuake does not know, nothing
+    drawn): the set is written without it, with a warning."""
+
+
+def _single_state(frag):
+    """The exported name of the one limit state of a fragility without a ``limit_state`` dimension."""
+    return "overturn" if frag.attrs.get("limit_state") == "overturn" else "theta_exceeds_threshold"
+
+
+def limit_state_name(threshold, relative_to=None):
+    """The name of the limit state "``|theta|`` exceeds ``threshold``".
+
+    No spaces: NRML lists limit states separated by blanks.
+
+    Parameters
+    ----------
+    threshold : float
+        The threshold, [rad] or a fraction [1].
+    relative_to : str, optional
+        What it is a fraction of (None: radians).
+
+    Returns
+    -------
+    str
+        E.g. ``theta_0.1_slenderness``, ``theta_0.002_rad``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> limit_state_name(0.1, "slenderness"), limit_state_name(0.002)
+    ('theta_0.1_slenderness', 'theta_0.002_rad')
+    """
+    return f"theta_{float(threshold):g}_{relative_to or 'rad'}"
+
+
+def stack_limit_states(frags, thresholds, relative_to=None):
+    """Fragility datasets of the same result at increasing thresholds as one dataset over ``limit_state``.
+
+    The variables that depend on the threshold gain the dimension ``limit_state`` (names by
+    :func:`limit_state_name`, coordinate ``threshold``); the others (intensities) stay as they are.
+    One threshold: that dataset unchanged.
+
+    Parameters
+    ----------
+    frags : list of xarray.Dataset
+        Fragility datasets (:func:`fragility_over_im`), one per threshold.
+    thresholds : sequence of float
+        Their thresholds, [rad] or fractions [1].
+    relative_to : str, optional
+        What the thresholds are fractions of.
+
+    Returns
+    -------
+    xarray.Dataset
+        The stacked dataset.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> frags = [fragility_over_im(ds, a)[0] for a in (0.01, 0.015)]
+    >>> both = stack_limit_states(frags, [0.01, 0.015])
+    >>> both["limit_state"].values.tolist(), [f"{m:.3f}" for m in both["fit_median"].values]
+    (['theta_0.01_rad', 'theta_0.015_rad'], ['1.238', '1.515'])
+    """
+    if len(frags) == 1:
+        return frags[0]
+    names = [limit_state_name(t, relative_to) for t in thresholds]
+    varying = [n for n in frags[0].data_vars if n not in THRESHOLD_FREE]
+    out = xr.concat(frags, dim="limit_state", data_vars=varying, coords="minimal", compat="equals",
+                    combine_attrs="override")
+    out = out.assign_coords(limit_state=("limit_state", names),
+                            threshold=("limit_state", np.asarray(thresholds, dtype=float),
+                                       {"long_name": "threshold of the limit state (see relative_to)"}))
+    out.attrs["threshold"] = ", ".join(f"{float(t):g}" for t in thresholds)
+    return out
+
+
+# ----------------------------------------------------------------------------- export
+def _label_text(labels):
+    return ", ".join(f"{d} = {v:g}" if isinstance(v, float) else f"{d} = {v}" for d, v in labels.items())
+
+
+def curve_table(frag):
+    """Every curve of a fragility dataset, fitted or not.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset with ``fit_median``, ``beta``, ``fit_flag`` and ``threshold_rad``.
+
+    Returns
+    -------
+    list of dict
+        ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
+        several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.core.status.FitFlag`),
+        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value
+        is untrusted without a best estimate) and the rotation ``threshold_rad`` [rad] of the curve
+        (its range ``"lo..hi"`` if it varies along the curve).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> row = curve_table(fragility_over_im(ds, 0.01)[0])[0]
+    >>> row["labels"], f"{row['median']:.4f}", row["flag"].name, row["threshold_rad"]
+    ({}, '1.2381', 'ok', '0.01')
+    """
+    median, beta = frag["fit_median"], frag["beta"]
+    flag = frag["fit_flag"]
+    unvouched = frag["fit_n_unvouched"] if "fit_n_unvouched" in frag else xr.zeros_like(flag, dtype=np.int32)
+    th = frag["threshold_rad"]
+    dims = list(median.dims)
+    rows = []
+    for index in np.ndindex(*median.shape) if dims else [()]:
+        sel = dict(zip(dims, index))
+        labels = {d: frag[d].values[i].item() if d in frag.coords else i for d, i in sel.items()}
+        code = FitFlag(int(flag[sel]))
+        t = np.unique(np.asarray(th.isel({d: i for d, i in sel.items() if d in th.dims}).values, dtype=float))
+        t = t[np.isfinite(t)]
+        rows.append({"labels": labels, "median": float(median[sel]), "beta": float(beta[sel]), "flag": code,
+                     "reason": "" if code == FitFlag.ok else code.meaning, "n_unvouched": int(unvouched[sel]),
+                     "threshold_rad": (f"{t[0]:.8g}" if t.size == 1 else f"{t.min():.8g}..{t.max():.8g}"
+                                       if t.size else "")})
+    return rows
+
+
+def curve_count_text(frag):
+    """How many curves were fitted, as the printed line says it.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+
+    Returns
+    -------
+    str
+        E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 fitted through untrusted
+        points without a best estimate"``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> curve_count_text(fragility_over_im(ds, 0.01)[0])
+    '1 of 1 curve(s) fitted'
+    """
+    rows = curve_table(frag)
+    fitted = [r for r in rows if r["flag"] == FitFlag.ok]
+    missing = [r["flag"] for r in rows if r["flag"] != FitFlag.ok]
+    text = f"{len(fitted)} of {len(rows)} curve(s) fitted"
+    if missing:
+        counts = ", ".join(f"{f.name} {missing.count(f)}" for f in FitFlag if f in missing)
+        text += f" ({len(missing)} without a fit: {counts})"
+    shaky = sum(1 for r in fitted if r["n_unvouched"])
+    if shaky:
+        text += (f"; {shaky} fitted through untrusted linearized points without a best estimate "
+                 "(fit_n_unvouched; run with [accuracy] to replace them)")
+    return text
+
+
+def _intensity(frag):
+    name = frag["fit_median"].attrs.get("intensity", "intensity")
+    period = frag[name].attrs.get("period", "") if name in frag else ""
+    return name, frag["fit_median"].attrs.get("units", ""), period
+
+
+def write_csv(frag, path):
+    """Write the fits as CSV, one row per curve, fitted or not.
+
+    Columns: the other dimensions, ``intensity_measure``, ``units``, ``median``, ``beta`` (empty without
+    a fit), ``fit_flag`` and the ``reason`` there is no fit, ``n_unvouched`` (points fitted through
+    untrusted linearized values without a best estimate), ``threshold_rad`` and ``period_s``.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+    path : str or os.PathLike
+        The CSV file (written atomically).
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     print(write_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text().strip())
+    intensity_measure,units,median,beta,fit_flag,reason,n_unvouched,threshold_rad,period_s
+    pga_median,m s-2,1.2380663,0.117537,ok,,0,0.01,
+    """
+    name, units, period = _intensity(frag)
+    dims = list(frag["fit_median"].dims)
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(dims + ["intensity_measure", "units", "median", "beta", "fit_flag", "reason", "n_unvouched",
+                           "threshold_rad", "period_s"])
+        for r in curve_table(frag):
+            ok = r["flag"] == FitFlag.ok
+            w.writerow([r["labels"][d] for d in dims]
+                       + [name, units, f"{r['median']:.8g}" if ok else "", f"{r['beta']:.6g}" if ok else "",
+                          r["flag"].name, r["reason"], r["n_unvouched"], r["threshold_rad"], period])
+    return path
+
+
+def write_pelicun_csv(frag, path):
+    """Write the fits in pelicun's fragility-database layout.
+
+    One row per component (``ID``: the other dimensions' values), ``Demand-Type`` the IM in pelicun's
+    words (``Peak Ground Acceleration`` in g, ``Spectral Acceleration`` in g, else the IM's own name and
+    units), and for each limit state ``LS<i>-Family`` = ``lognormal``, ``LS<i>-Theta_0`` = median,
+    ``LS<i>-Theta_1`` = beta.  A curve without a fit is a row with empty parameters and its reason in
+    ``Comment``.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset over an IM.
+    path : str or os.PathLike
+        The CSV file (written atomically).
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [3] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
+       loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     text = write_pelicun_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text()
+    >>> text.splitlines()[1]
+    'screening,Peak Ground Acceleration,g,0,,lognormal,0.12624763,0.117537'
+    """
+    name, units, period = _intensity(frag)
+    key = _im_key(name)
+    factor, unit_out = (IMS[key][3], "g") if key in ("pga", "sa") else (1.0, units)
+    demand = {"pga": "Peak Ground Acceleration", "sa": f"Spectral Acceleration ({period:g} s)" if period else
+              "Spectral Acceleration"}.get(key, name)
+    rows = curve_table(frag)
+    states = [str(v) for v in frag["limit_state"].values] if "limit_state" in frag["fit_median"].dims else [
+        _single_state(frag)]
+    components = {}
+    for r in rows:
+        labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
+        state = str(r["labels"].get("limit_state", states[0]))
+        components.setdefault(_taxonomy(labels), {})[state] = r
+    header = ["ID", "Demand-Type", "Demand-Unit", "Incomplete", "Comment"]
+    for i in range(1, len(states) + 1):
+        header += [f"LS{i}-Family", f"LS{i}-Theta_0", f"LS{i}-Theta_1"]
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for cid, by_state in components.items():
+            row, notes = [cid, demand, unit_out], []
+            cells = []
+            for state in states:
+                r = by_state[state]
+                if r["flag"] == FitFlag.ok:
+                    cells += ["lognormal", f"{r['median'] * factor:.8g}", f"{r['beta']:.6g}"]
+                else:
+                    cells += ["", "", ""]
+                    notes.append(f"{state}: no fit ({r['flag'].name})")
+                if r["n_unvouched"]:
+                    notes.append(f"{state}: fitted through {r['n_unvouched']} untrusted point(s) without a best "
+                                 "estimate")
+            w.writerow(row + [int(bool(notes) and any("no fit" in n for n in notes)), "; ".join(notes)] + cells)
+    return path
+
+
+def _im_key(name):
+    """The ``--im`` key of an intensity variable: ``pga_median`` (a point's input), ``pga`` (a record's),
+    ``stripe_pga`` (a multiple-stripe level) -> ``pga``; ``None`` for another name."""
+    base = name.removeprefix("stripe_")
+    return next((k for k, v in IMS.items() if base in (v[0], k) or (k == "rms" and base == "rms_acceleration")
+                 or (k == "arias" and base == "arias_intensity")), None)
+
+
+def _taxonomy(labels):
+    """The taxonomy id of a curve: ``screening`` and the values of the swept dimensions that name it."""
+    return "screening" + "".join(f"_{d}={v:g}" if isinstance(v, float) else f"_{d}={v}" for d, v in labels.items())
+
+
+def nrml_parameters(median, beta):
+    """OpenQuake ``logncdf`` ``(mean, stddev)`` of a lognormal capacity with ``median`` and ``beta``.
+
+    Parameters
+    ----------
+    median : float
+        Median capacity [IM units].
+    beta : float
+        Lognormal dispersion [1].
+
+    Returns
+    -------
+    mean, stddev : float
+        Mean and standard deviation of the capacity [IM units].
+
+    Notes
+    -----
+    ``mean = median exp(beta^2 / 2)``, ``stddev = mean sqrt(exp(beta^2) - 1)``.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
+       functions), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> mean, std = nrml_parameters(0.5, 0.4)
+    >>> f"{mean:.4f} {std:.4f}"
+    '0.5416 0.2256'
+    """
+    mean = median * math.exp(0.5 * beta * beta)
+    return mean, mean * math.sqrt(math.expm1(beta * beta))
+
+
+def _comment(text):
+    return "    <!-- " + text.replace("--", "- -") + " -->"
+
+
+def write_nrml(frag, path, model_id="screening_rocking", description="rocking blocks on flexible beds"):
+    """Write the fits as an OpenQuake NRML 0.5 fragility model.
+
+    One continuous ``logncdf`` function per swept block/bed (its taxonomy id names the values of the
+    other dimensions), with one ``params`` per limit state (the ``limit_state`` dimension where the
+    dataset has several, else ``theta_exceeds_threshold``).  A taxonomy with a limit state that has no
+    fit is left out and named in a comment with the reason; a fit through untrusted points without a
+    best estimate is named in a comment.  Raises :class:`NoExport` (a ``ValueError``) for an IM
+    OpenQuake does not know.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset over an IM.
+    path : str or os.PathLike
+        The XML file (written atomically).
+    model_id : str
+        The ``fragilityModel`` id.
+    description : str
+        Its description.
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    Notes
+    -----
+    Parameters by :func:`nrml_parameters`; PGA, SA and AvgSA in g, PGV in cm/s, ``IA`` in m/s.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
+       functions), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     xml = write_nrml(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.xml").read_text()
+    >>> [line.strip() for line in xml.splitlines() if "<params" in line]
+    ['<params ls="theta_exceeds_threshold" mean="0.1271227" stddev="0.014993378"/>']
+    """
+    name, _, period = _intensity(frag)
+    key = _im_key(name)
+    if key is None or IMS[key][2] is None:
+        raise NoExport(f"OpenQuake has no intensity measure type for {name!r}; export CSV instead")
+    imt = IMS[key][2]
+    if imt in ("SA", "AvgSA"):
+        imt = f"{imt}({float(period):g})"
+    factor = IMS[key][3]
+    values = frag[name].values[np.isfinite(frag[name].values)] * factor
+    lo, hi = float(values.min()), float(values.max())
+    several = "limit_state" in frag["fit_median"].dims
+    states = [str(v) for v in frag["limit_state"].values] if several else [_single_state(frag)]
+    by_taxonomy = {}
+    for r in curve_table(frag):
+        labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
+        by_taxonomy.setdefault(_taxonomy(labels), {})[str(r["labels"].get("limit_state", states[0]))] = r
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             '<nrml xmlns="http://openquake.org/xmlns/nrml/0.5">',
+             f'  <fragilityModel id={quoteattr(model_id)} assetCategory="buildings" lossCategory="contents">',
+             f"    <description>{description}: P(max |theta| &gt; threshold) fitted by screening over "
+             f"{name}</description>",
+             f"    <limitStates>{' '.join(states)}</limitStates>"]
+    fixed = {n: float(frag[n]) for n in frag.coords if frag[n].ndim == 0 and frag[n].dtype.kind in "fi"
+             and n not in ("threshold",)}
+    if fixed:
+        lines.append(_comment("every function: the block and bed of " + ", ".join(
+            f"{n} = {v:g}{' ' + frag[n].attrs['units'] if frag[n].attrs.get('units') else ''}"
+            for n, v in fixed.items()) + "; the function id names the swept values"))
+    for fid, by_state in by_taxonomy.items():
+        missing = [f"{s}: {by_state[s]['flag'].name} ({by_state[s]['reason']})" for s in states
+                   if by_state[s]["flag"] != FitFlag.ok]
+        if missing:
+            lines.append(_comment(f"no fragility function for {fid}: " + "; ".join(missing)))
+            continue
+        for s in states:
+            if by_state[s]["n_unvouched"]:
+                lines.append(_comment(f"{fid} {s}: fitted through {by_state[s]['n_unvouched']} untrusted "
+                                      "linearized point(s) without a best estimate"))
+        lines += [f'    <fragilityFunction id={quoteattr(fid)} format="continuous" shape="logncdf">',
+                  f'      <imls imt="{imt}" minIML="{lo:.6g}" maxIML="{hi:.6g}"/>']
+        for s in states:
+            mean, std = nrml_parameters(by_state[s]["median"] * factor, by_state[s]["beta"])
+            lines.append(f'      <params ls="{s}" mean="{mean:.8g}" stddev="{std:.8g}"/>')
+        lines.append("    </fragilityFunction>")
+    lines += ["  </fragilityModel>", "</nrml>", ""]
+    with atomic_open(path, "w", encoding="utf-8") as fh:
+        fh.write("\n".join(lines))
+    return path

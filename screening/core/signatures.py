@@ -1,0 +1,173 @@
+"""Numba types of the functions a condensation hands to the compiled solvers, and the records
+(:class:`SdofKernel`, :class:`MomentKernel`) that carry them.
+
+A condensation's compiled functions take its own parameter record (a numpy structured dtype,
+one record per parameter point) and are passed to the solvers as first-class functions with
+these explicit signatures, so the solvers are compiled once per record type and cached (a
+closure or a dispatcher argument would never hit numba's cache).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+from numba import types
+
+__all__ = ["FMA", "FLOAT", "TABLE", "record_type", "moment_coefficients_signature", "sdof_coefficients_signature",
+           "function_type", "SdofKernel", "MomentKernel"]
+
+#: Floating-point flags of the moment solver's step loops and the coefficient functions they call:
+#: LLVM may fuse a multiply and an add into one FMA instruction where the CPU has one (shorter
+#: latency per Runge-Kutta stage, about 10 % less time per step; results change at rounding level,
+#: ~1e-13 of peak var_theta).  No other fast-math assumption: NaN and inf keep their meaning.
+FMA = {"contract"}
+
+FLOAT = types.float64
+TABLE = types.float64[:, ::1]   # per-interval cubic coefficients (screening.core.interpolation)
+
+
+def record_type(dtype):
+    """The numba type of one record of a structured dtype.
+
+    Parameters
+    ----------
+    dtype : numpy.dtype
+        A structured dtype of float fields (a condensation's parameters, each in SI units).
+
+    Returns
+    -------
+    numba.types.Record
+        The record type numba compiles against.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Supported NumPy features: structured scalars and record arrays",
+       https://numba.readthedocs.io/en/stable/reference/numpysupported.html
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rec = record_type(np.dtype([("k", "f8"), ("b", "f8")]))
+    >>> list(rec.fields), rec.size
+    (['k', 'b'], 16)
+    """
+    return numba.from_dtype(dtype)
+
+
+def moment_coefficients_signature(dtype):
+    """The signature of a condensation's compiled equivalent-coefficient function.
+
+    ``(record, table, var_theta [rad2], cov [rad2/s]) -> (c_eq [N m s/rad], k_eq [N m/rad])``.
+
+    Parameters
+    ----------
+    dtype : numpy.dtype
+        The condensation's parameter record dtype.
+
+    Returns
+    -------
+    numba.core.typing.templates.Signature
+        The explicit signature; the table is a C-contiguous 2-d float64 array of per-interval
+        cubic coefficients.
+
+    References
+    ----------
+    .. [1] Numba documentation, "First-class function objects",
+       https://numba.readthedocs.io/en/stable/reference/types.html#functions
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sig = moment_coefficients_signature(np.dtype([("k", "f8")]))
+    >>> str(sig.return_type), len(sig.args)
+    ('UniTuple(float64 x 2)', 4)
+    """
+    return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, FLOAT, FLOAT)
+
+
+def sdof_coefficients_signature(dtype):
+    """The signature of a condensation's compiled state-dependent damping and stiffness.
+
+    ``(record, theta [rad]) -> (C(theta) [N m s/rad], K(theta) [N m/rad])``.
+
+    Parameters
+    ----------
+    dtype : numpy.dtype
+        The condensation's parameter record dtype.
+
+    Returns
+    -------
+    numba.core.typing.templates.Signature
+        The explicit signature.
+
+    References
+    ----------
+    .. [1] Numba documentation, "First-class function objects",
+       https://numba.readthedocs.io/en/stable/reference/types.html#functions
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sig = sdof_coefficients_signature(np.dtype([("k", "f8")]))
+    >>> str(sig.return_type), str(sig.args[1])
+    ('UniTuple(float64 x 2)', 'float64')
+    """
+    return types.UniTuple(FLOAT, 2)(record_type(dtype), FLOAT)
+
+
+def function_type(signature):
+    """The first-class function type of a compiled function with a given signature.
+
+    Parameters
+    ----------
+    signature : numba.core.typing.templates.Signature
+        E.g. :func:`sdof_coefficients_signature` of a record dtype.
+
+    Returns
+    -------
+    numba.types.FunctionType
+        The type a solver declares for its function argument.
+
+    References
+    ----------
+    .. [1] Numba documentation, "First-class function objects",
+       https://numba.readthedocs.io/en/stable/reference/types.html#functions
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ftype = function_type(sdof_coefficients_signature(np.dtype([("k", "f8")])))
+    >>> type(ftype).__name__
+    'FunctionType'
+    """
+    return types.FunctionType(signature)
+
+
+class SdofKernel(NamedTuple):
+    """What the compiled Monte Carlo integrator needs of a condensation (condensed model).
+
+    ``damping_stiffness``: compiled ``(record, theta) -> (C, K)`` (signature
+    :func:`screening.core.signatures.sdof_coefficients_signature`); ``record``: a 1-element
+    structured array of its parameters.
+    """
+
+    damping_stiffness: object
+    record: np.ndarray
+
+
+class MomentKernel(NamedTuple):
+    """What the compiled moment solver needs of a condensation, for a batch of points.
+
+    ``coefficients``: compiled ``(record, table, var_theta, cov) -> (c_eq, k_eq)``
+    (signature :func:`screening.core.signatures.moment_coefficients_signature`); ``records``: one
+    structured record per point; ``tables``: ``(n_tables, rows, columns)``, each a table of
+    per-interval cubic coefficients (:func:`screening.core.interpolation.cubic_coefficients`);
+    ``table_index``: the table of each point.
+    """
+
+    coefficients: object
+    records: np.ndarray
+    tables: np.ndarray
+    table_index: np.ndarray

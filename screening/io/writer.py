@@ -1,0 +1,835 @@
+"""The CF-1.8 netCDF result file of a sweep, written batch by batch (:class:`ResultFile`).
+
+Every grid variable is laid out from its declaration (:mod:`screening.solvers.outputs`), every other
+``units``, ``long_name`` and flag attribute comes from :mod:`screening.solvers.schema`.  :class:`ResultFile` lays
+out the result on a result format, a small interface of its own: ``define`` a variable, ``write`` a
+region (:func:`write_region` writes a batch's), ``mark_done`` a batch, ``commit``, ``finish``.
+:class:`NetcdfFormat` implements it on netCDF4 (this file, written by the client), and
+:class:`~screening.io.zarrfile.ZarrFormat` on a zarr store (``--out result.zarr``, whose grid
+variables the workers write).
+
+Storage: histories are ``float32`` (7 significant digits, half the disk and bandwidth of
+``float64``; the solver tolerance is ``1e-7`` anyway), everything else ``float64`` or
+integers; zlib level 1 with byte shuffle (``complevel``; compression is the client's main
+cost, about 1.3 s per 10,000 points of 401 output times); chunks are ``(1, ..., n_last, nt)``
+for histories and C-order runs of about :data:`POINT_CHUNK` points for everything else, each
+variable with a chunk cache of :data:`CACHED_CHUNKS` chunks (the netCDF default, 64 MiB per
+variable, would keep the written chunks of the whole grid in memory: client memory independent of
+the number of points), and a file with histories is synced every :data:`SYNC_POINTS` points (the
+per-point chunks alone are written when they leave the cache: syncing them would compress each
+partly filled chunk again and again).  A 10,000-point sweep with 20 s
+records at 0.05 s is about 55 MB.
+
+File layout (checked with the IOOS compliance-checker in strict mode):
+
+* dimensions: ``case`` (if the study has cases), one per swept parameter (file order), ``t``,
+  and ``spot`` / ``sample`` for the spot checks;
+* coordinates: the swept values (no ``_FillValue``); a parameter in units of pressure (``k``) has
+  no ``units`` on its coordinate variable and its values with units in the auxiliary coordinate
+  ``k_value`` (CF reads a coordinate variable in pressure units as a vertical axis;
+  :func:`screening.solvers.schema.grid_coordinate_attributes`); ``case`` (index) with ``case_name``; ``t`` [s]
+  (no ``axis = "T"``: CF would then want a reference date in the units); fixed parameters as scalar
+  coordinates, and parameters that differ between cases on ``case`` (NaN where they do not apply);
+* data: the six histories on ``(grid..., t)``; per point ``status`` (flag variable), ``t_stop``,
+  ``n_steps``, ``n_rejected``, ``peak_var_theta``, ``t_peak_var_theta``, ``peak_p_uplift``,
+  ``min_k_eq``, ``theta_ul``, ``slenderness``; spot checks ``mcs_*`` on ``spot`` with the spot
+  coordinates ``spot_<dim>``;
+* global attributes: :func:`screening.solvers.schema.global_attributes`, ``title``, ``history``,
+  ``source``, the study file's path, text and hash, the solver settings.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import stat
+from pathlib import Path
+
+import numpy as np
+
+from screening._version import __version__
+from screening.core.status import SpotStatus
+from screening.io._zarr_store import foreign_files
+from screening.io.errors import SweepError
+from screening.io.layout import (history_chunks, hyperslabs, parameter_table, SPOT_HISTORIES, SPOT_LINEAR,
+                                 wants_probabilities)
+from screening.io.zarrfile import is_zarr_path, is_zarr_store
+from screening.solvers.outputs import client_variables, GRID_OUTPUTS, selected
+from screening.solvers.schema import (ACCURACY, attributes, global_attributes, grid_coordinate_attributes,
+                                      PRESSURE_PARAMETERS, SWEEP, TIME)
+
+__all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
+           "NetcdfFormat", "result_attributes", "band_limit_attribute",
+           "relative_peak_error", "point_chunks", "region_variables", "write_region", "ResultFile"]
+
+SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
+COMPLEVEL = 1
+#: Points per chunk of a per-point variable (about; whole trailing dimensions first).
+POINT_CHUNK = 2**14
+#: Chunks each variable keeps in its cache: those the batches in flight are filling.
+CACHED_CHUNKS = 4
+TITLE_FALLBACK = "Stochastic-linearization screening"
+
+
+def check_output_path(out, inputs=()):
+    """Raise :class:`SweepError` unless ``out`` can be written (its folder must exist).
+
+    ``out`` may not be one of the ``inputs`` (the study or result file a command reads, under any
+    spelling or link), nor an existing file that is not a regular file (a FIFO or a device would
+    block or be clobbered).  An existing ``.zarr`` store is replaced only if it is a finished result
+    screening wrote.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The output path (a netCDF file, or a ``.zarr`` store).
+    inputs : iterable of str or os.PathLike, optional
+        The files or folders the command reads.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out``, checked.
+
+    Raises
+    ------
+    SweepError
+        One line: the output is an input, lies inside one, is a directory or a special file, or its
+        folder is missing or not writable.
+
+    References
+    ----------
+    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
+       ``docs/outputs_storage.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     print(check_output_path(os.path.join(folder, "r.nc")).name)
+    ...     try:
+    ...         check_output_path(os.path.join(folder, "missing", "r.nc"))
+    ...     except SweepError as exc:
+    ...         print(str(exc).replace(folder, "FOLDER"))
+    r.nc
+    output folder FOLDER/missing does not exist
+    """
+    out = Path(out)
+    for path in inputs:
+        if _same_file(out, path):
+            raise SweepError(f"output path {out} is the input file {path}; give another --out")
+        if _inside(out, path):
+            raise SweepError(f"output path {out} is inside the input {path}; give another --out")
+    if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
+        raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")
+    if is_zarr_path(out) and is_zarr_store(out):
+        foreign = foreign_files(out)
+        if foreign:
+            raise SweepError(f"output path {out} holds files screening did not write as a finished result "
+                             f"(e.g. {foreign[0]}); only such a store is replaced: give another --out")
+    if out.is_dir() and not is_zarr_path(out):
+        raise SweepError(f"output path {out} is a directory")
+    try:
+        mode = out.lstat().st_mode if is_zarr_path(out) else out.stat().st_mode
+    except OSError:
+        mode = None
+    if mode is not None and not stat.S_ISREG(mode) and not (is_zarr_path(out) and stat.S_ISDIR(mode)):
+        raise SweepError(f"output path {out} exists and is not a regular file (a FIFO, socket or device); "
+                         "give another --out")
+    if not out.parent.is_dir():
+        raise SweepError(f"output folder {out.parent} does not exist")
+    if not os.access(out.parent, os.W_OK):
+        raise SweepError(f"output folder {out.parent} is not writable")
+    return out
+
+
+def _inside(out, folder):
+    """Whether ``out`` lies inside the folder ``folder`` (links resolved)."""
+    if not os.path.isdir(folder):
+        return False
+    return Path(os.path.realpath(out.parent)).is_relative_to(os.path.realpath(folder))
+
+
+def _same_file(a, b):
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(os.path.abspath(a)) == Path(os.path.abspath(b))
+
+
+def result_attributes(study, created, batch_size):
+    """Global attributes of the result file of ``study`` (``created``: ISO time stamp).
+
+    The CF attributes (``Conventions``, title, history, source, comment), a summary and the study's
+    provenance: its name, file, text and key (``study_sha256``), grid dimensions, solver settings,
+    output times [s] and the batch size.
+
+    Parameters
+    ----------
+    study : screening.sweep.study.Study
+        The study.
+    created : str
+        ISO 8601 time stamp of the run.
+    batch_size : int
+        Points per batch of the run.
+
+    Returns
+    -------
+    dict
+        ``{attribute: value}``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
+    >>> study = parse_study(text, name="bed", source="bed.toml")
+    >>> attrs = result_attributes(study, "2026-11-26T03:00:00Z", batch_size=2)
+    >>> attrs["Conventions"], attrs["grid_dims"], attrs["t_end"], attrs["history"]
+    ('CF-1.8', 'eps', 20.0, '2026-11-26T03:00:00Z: screening run bed.toml (screening ...)')
+    """
+    cmd = f"screening run {study.source}"
+    return global_attributes(
+        __version__,
+        title=study.title or TITLE_FALLBACK,
+        summary=study.description or ("Time-varying second-order rocking statistics of a rigid block on a "
+                                      "flexible nonlinear foundation by stochastic linearization and "
+                                      "Lyapunov moment equations, over a parameter grid"),
+        history=f"{created}: {cmd} (screening {__version__})",
+        source=f"screening {__version__}: stochastic linearization + Lyapunov moment equations "
+               "(screening.solvers.moments.solve_moments)",
+        comment=("histories (var_theta, var_theta_dot, cov_theta_theta_dot, c_eq, k_eq, p_uplift) are "
+                 "stored as float32, everything else as float64/integers; values after a point stopped "
+                 "(status != ok) are NaN"),
+        date_created=created,
+        study_name=study.name,
+        study_file=study.source,
+        study_sha256=study.key,
+        study_text=study.text,
+        grid_dims=" ".join(study.dims),
+        rtol=study.rtol,
+        max_steps=np.int32(study.max_steps),
+        t_end=study.t_end,
+        dt=study.dt,
+        **band_limit_attribute(study),
+        batch_size=np.int32(batch_size),
+        output_histories=study.output.histories,
+        output_history_variables=" ".join(study.output.stored),
+    )
+
+
+def band_limit_attribute(study):
+    """``{"band_limit_hz": f}``: the ground-motion band limit [Hz] the intensity measures of the result refer
+    to, when every case has the same; ``{}`` otherwise.
+
+    Parameters
+    ----------
+    study : screening.sweep.study.Study
+        The study.
+
+    Returns
+    -------
+    dict
+        ``{"band_limit_hz": f}`` with ``f`` [Hz], or ``{}``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
+    >>> study = parse_study(text, name="bed", source="bed.toml")
+    >>> band_limit_attribute(study)                     # the default band limit
+    {'band_limit_hz': 25.0}
+    """
+    limits = {float(case.params.get("band_limit_hz", math.nan)) for case in study.cases}
+    return {"band_limit_hz": limits.pop()} if len(limits) == 1 and all(math.isfinite(v) for v in limits) else {}
+
+
+def relative_peak_error(linear, mcs):
+    """``(max_t linear - max_t mcs) / max_t mcs`` over the common output grid; NaN if undefined.
+
+    Parameters
+    ----------
+    linear : array_like
+        The linearization's history (e.g. ``var_theta`` [rad2]) on the output times.
+    mcs : array_like
+        The Monte Carlo history of the same quantity on the same times.
+
+    Returns
+    -------
+    float
+        The relative error of the peak [1]; NaN when either history has no finite value or the
+        Monte Carlo peak is not positive.
+
+    Notes
+    -----
+    .. math:: e = \\frac{\\max_t \\sigma^2_{SL}(t) - \\max_t \\sigma^2_{MC}(t)}{\\max_t \\sigma^2_{MC}(t)}
+
+    (NaN values ignored).
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
+       ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> round(relative_peak_error([1.0, 1.2, 1.1], [1.0, 1.0, 0.9]), 12)     # 20 % too high
+    0.2
+    """
+    linear, mcs = np.asarray(linear, dtype=float), np.asarray(mcs, dtype=float)
+    if not (np.any(np.isfinite(linear)) and np.any(np.isfinite(mcs))):
+        return math.nan
+    ref = np.nanmax(mcs)
+    return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan
+
+
+def point_chunks(shape, target=POINT_CHUNK):
+    """Chunks of a per-point variable on ``shape``: C-order runs of about ``target`` points, so that
+    consecutive batches fill one chunk after the other.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The grid's shape.
+    target : int, optional
+        Points per chunk at most (default :data:`POINT_CHUNK`).
+
+    Returns
+    -------
+    tuple of int
+        The chunk shape: whole trailing dimensions while they fit, then a part of the next one.
+
+    References
+    ----------
+    .. [1] Unidata, "NetCDF Users Guide: Improving Performance with Chunking",
+       https://docs.unidata.ucar.edu/nug/current/netcdf_perf_chunking.html
+
+    Examples
+    --------
+    >>> point_chunks((10, 100000)), point_chunks((3, 4), target=5)
+    ((1, 16384), (1, 4))
+    """
+    chunks = []
+    size = 1
+    for n in reversed(shape):
+        c = max(1, min(n, target // size))
+        chunks.insert(0, c)
+        size *= c
+    return tuple(chunks)
+
+
+def _slab_key(slab):
+    return slab if slab else Ellipsis
+
+
+def write_region(fmt, shape, histories, batch, result):
+    """Write the arrays of one batch of grid points into their hyperslabs of the result.
+
+    The batch covers the flat C-order points ``batch.lo <= i < batch.hi`` of the grid; its arrays go
+    into the hyperslabs of that range (:func:`~screening.io.layout.hyperslabs`).  Written are the
+    stored ``histories`` and every other declared variable (:mod:`screening.solvers.outputs`): those a
+    result always holds, the others if ``result`` has them.  The resume record replays this for a batch
+    already solved.
+
+    Parameters
+    ----------
+    fmt : NetcdfFormat or ZarrFormat
+        The result format (:class:`NetcdfFormat` or :class:`~screening.io.zarrfile.ZarrFormat`;
+        any object with a ``write(name, key, values)`` method).
+    shape : tuple of int
+        The grid's shape (``()`` for a single point).
+    histories : iterable of str
+        The history variables the result stores (the study's ``[output]``).
+    batch : object
+        The batch, with the flat range ``lo`` and ``hi`` (``0 <= lo <= hi <= prod(shape)``).
+    result : dict of numpy.ndarray
+        The batch's arrays (:func:`~screening.sweep.execution.solve_batch`), flat over the batch:
+        ``(hi - lo,)`` per point or ``(hi - lo, n_t)`` per history, in the variables' units
+        (:mod:`screening.solvers.outputs`).
+
+    Returns
+    -------
+    None
+        The arrays are written into ``fmt``.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+
+    Examples
+    --------
+    >>> import types
+    >>> import numpy as np
+    >>> from screening.solvers.outputs import GRID_OUTPUTS
+    >>> class Arrays(dict):                      # the one method of a result format used here
+    ...     def write(self, name, key, values):
+    ...         self.setdefault(name, np.full((2, 3) + values.shape[2:], np.nan))[key] = values
+    >>> result = {o.name: np.arange(1.0, 5.0) for o in GRID_OUTPUTS if o.when == "always"}
+    >>> result["var_theta"] = np.ones((4, 3))     # 4 points, 3 output times
+    >>> fmt = Arrays()
+    >>> write_region(fmt, (2, 3), ("var_theta",), types.SimpleNamespace(lo=1, hi=5), result)
+    >>> fmt["peak_var_theta"]
+    array([[nan,  1.,  2.],
+           [ 3.,  4., nan]])
+    >>> fmt["var_theta"].shape, "var_theta_dot" in fmt, "p_overturn" in fmt      # only what is stored
+    ((2, 3, 3), False, False)
+    """
+    names = set(histories)
+    outputs = [o for o in GRID_OUTPUTS if o.name in names or o.shape != "history" and
+               (o.when == "always" or o.name in result)]
+    for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
+        rows = slice(a - batch.lo, b - batch.lo)
+        region = tuple(s.stop - s.start for s in slab)
+        for o in outputs:
+            values = result[o.name]
+            if o.shape == "point":
+                fmt.write(o.name, _slab_key(slab), values[rows].reshape(region))
+            else:
+                fmt.write(o.name, slab + (slice(None),), values[rows].reshape(region + (values.shape[1],)))
+
+
+def region_variables(study):
+    """Names of the variables :func:`write_region` writes for ``study``.
+
+    The stored histories (``[output]``), then every per-point variable a result of the study holds.
+
+    Parameters
+    ----------
+    study : screening.sweep.study.Study
+        The study.
+
+    Returns
+    -------
+    tuple of str
+        Variable names, as in the result.
+
+    References
+    ----------
+    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
+    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
+       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+
+    Examples
+    --------
+    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
+    >>> text = EXAMPLE_STUDY + '[output]\\nhistories = "none"\\n'
+    >>> study = parse_study(text, name="bed", source="bed.toml")
+    >>> names = region_variables(study)
+    >>> names[:4], "var_theta" in names
+    (('status', 'sl_trust', 't_stop', 'peak_var_theta'), False)
+    """
+    return tuple(o.name for o in _outputs(study))
+
+
+def _outputs(study):
+    """The declared grid variables the result of ``study`` holds, in file order."""
+    return selected(study.output.stored, study.derived_inputs, wants_probabilities(study), study.fragility is not None)
+
+
+class NetcdfFormat:
+    """The netCDF4/HDF5 form of a result, written by the client alone: the result-format interface
+    :class:`ResultFile` drives (``dimension``, ``define``, ``write`` a region, ``mark_done``, ``commit``,
+    ``finish``; ``read``, ``dims``, ``attrs``, ``set_attrs``), as
+    :class:`~screening.io.zarrfile.ZarrFormat` is for zarr.
+
+    ``complevel``: zlib level of the compressed variables; a file with histories is synced every
+    :data:`SYNC_POINTS` points marked done.
+    """
+
+    def __init__(self, path, complevel=COMPLEVEL):
+        import netCDF4              # here, not at module level: workers never need it
+
+        self.dataset = netCDF4.Dataset(path, "w", format="NETCDF4")
+        self.dataset.set_auto_mask(False)
+        self.complevel = complevel
+        self._unsynced = 0
+
+    # -- definition
+    def dimension(self, name, size):
+        self.dataset.createDimension(name, size)
+
+    def dimension_size(self, name):
+        return len(self.dataset.dimensions[name])
+
+    def define(self, name, dtype, dims, attrs, fill=False, values=None, compress=False, shuffle=None, chunks=None):
+        """Create variable ``name`` with its attributes (and ``values``): zlib-compressed where
+        ``compress`` (``shuffle``: byte shuffle; None, netCDF's default), in ``chunks`` with a chunk cache
+        of :data:`CACHED_CHUNKS` of them."""
+        storage = {"zlib": self.complevel > 0, "complevel": max(self.complevel, 1)} if compress else {}
+        if shuffle is not None:
+            storage["shuffle"] = shuffle
+        if chunks:
+            storage.update(chunksizes=chunks,
+                           chunk_cache=CACHED_CHUNKS * np.dtype(dtype).itemsize * math.prod(chunks))
+        v = self.dataset.createVariable(name, dtype, dims, fill_value=fill, **storage)
+        v.setncatts(attrs)
+        if values is not None:
+            v[slice(None) if dtype is str else Ellipsis] = values
+
+    def has(self, name):
+        return name in self.dataset.variables
+
+    # -- data
+    def write(self, name, key, values):
+        """Write ``values`` into the region ``key`` of variable ``name``."""
+        self.dataset[name][key] = values
+
+    def read(self, name, key=Ellipsis):
+        return self.dataset[name][key]
+
+    def dims(self, name):
+        return self.dataset[name].dimensions
+
+    def attrs(self, name):
+        v = self.dataset[name]
+        return {key: v.getncattr(key) for key in v.ncattrs()}
+
+    def set_attrs(self, attrs):
+        self.dataset.setncatts(attrs)
+
+    def mark_done(self, batch, points=0, target=None):
+        """``batch`` is written (``points``: its points with histories): compress and write the cached
+        chunks every :data:`SYNC_POINTS` such points, while the workers compute.  (``target``: for the
+        zarr form only.)"""
+        self._unsynced += points
+        if self._unsynced >= SYNC_POINTS:
+            self.commit()
+            self._unsynced = 0
+
+    def commit(self):
+        self.dataset.sync()
+
+    def is_open(self):
+        return self.dataset.isopen()
+
+    def finish(self):
+        if self.dataset.isopen():
+            self.dataset.close()
+
+
+class ResultFile:
+    """Build the CF-1.8 result of ``study`` at ``path``, batch by batch: a netCDF4/HDF5 file
+    (:class:`NetcdfFormat`), or with ``zarr_batch_size`` (the batch size of the run) a zarr store whose
+    grid variables the workers write (:class:`~screening.io.zarrfile.ZarrFormat`, chunks of
+    :func:`~screening.io.zarrfile.point_chunks`).  It speaks to the format only through their
+    shared interface.
+
+    ``attrs``: the global attributes (:func:`result_attributes`); ``reopen``: open the zarr store of an
+    interrupted run instead of creating one.  Keeps what the client keeps of every point
+    (:func:`screening.solvers.outputs.client_variables`: spot selection, run summary) in memory;
+    histories go straight to disk.
+    """
+
+    def __init__(self, path, study, attrs, complevel=COMPLEVEL, zarr_batch_size=None, reopen=False):
+        self.path = Path(path)
+        self.study = study
+        self.shape = study.shape
+        self.nt = study.times.size
+        self.histories = study.output.stored
+        #: What the client keeps of every point (:func:`screening.solvers.outputs.client_variables`), flat.
+        self.kept = {o.name: o.failed_array(study.n_points) for o in GRID_OUTPUTS if o.client}
+        if zarr_batch_size is not None:
+            from screening.io.zarrfile import ZarrFormat, point_chunks
+
+            chunks = point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
+            self.format = ZarrFormat(self.path, "r+" if reopen else "w", study.dims, chunks, complevel)
+            if reopen:
+                return
+        else:
+            self.format = NetcdfFormat(self.path, complevel)
+        try:
+            self._define(attrs)
+            self.format.commit()
+        except BaseException:
+            self.format.finish()
+            raise
+
+    @property
+    def nc(self):
+        """The format's own dataset (a ``netCDF4.Dataset`` or a zarr group), for inspection."""
+        return self.format.dataset
+
+    # -- definition
+    def _variable(self, name, dtype, dims, fill, coordinates="", table=SWEEP, values=None, **storage):
+        """Define variable ``name`` with its schema attributes (and ``coordinates``)."""
+        attrs = attributes(name, table)
+        if coordinates:
+            attrs["coordinates"] = coordinates
+        self.format.define(name, dtype, dims, attrs, fill, values, **storage)
+
+    def _define(self, attrs):
+        fmt, study = self.format, self.study
+        dims = study.dims
+        for dim, n in zip(dims, self.shape):
+            fmt.dimension(dim, n)
+        fmt.dimension("t", self.nt)
+        if study.has_case_dim:
+            self._variable("case", "i4", ("case",), False, values=np.arange(len(study.cases), dtype=np.int32))
+            self._variable("case_name", str, ("case",), None, values=np.array([c.name for c in study.cases],
+                                                                              dtype=object))
+        aux = []
+        for name, values in study.sweeps.items():
+            fmt.define(name, "f8", (name,), grid_coordinate_attributes(name), values=values)
+            if name in PRESSURE_PARAMETERS:          # the values with units (schema.PRESSURE_PARAMETERS)
+                fmt.define(f"{name}_value", "f8", (name,), attributes(f"{name}_value"), values=values)
+                aux.append(f"{name}_value")
+        fmt.define("t", "f8", ("t",), TIME, values=study.times)
+
+        constants, per_case, labels, case_labels = parameter_table(study)
+        coords = (["case_name"] if study.has_case_dim else []) + aux
+        for name, value in constants.items():
+            self._variable(name, "f8", (), False, values=value)
+            coords.append(name)
+        for name, values in per_case.items():
+            self._variable(name, "f8", ("case",), np.nan, values=values)
+            coords.append(name)
+        for name, values in case_labels.items():
+            self._variable(name, str, ("case",), None, values=np.array(values, dtype=object))
+            coords.append(name)
+        coordinates = " ".join(coords)
+
+        frag = study.fragility
+        for output in _outputs(study):
+            if output.shape == "threshold" and not fmt.has("threshold"):
+                fmt.dimension("threshold", len(frag.thresholds))
+                fmt.define("threshold", "f8", ("threshold",), {
+                    "units": "rad" if frag.relative_to is None else "1",
+                    "long_name": "rotation threshold of p_exceed" + (
+                        "" if frag.relative_to is None else f", as a fraction of {frag.relative_to}")},
+                    values=np.asarray(frag.thresholds, dtype=float))
+            extra = ({"method": frag.method, "relative_to": str(frag.relative_to)} if output.shape == "threshold"
+                     else {})
+            self._declare(output, coordinates, extra)
+        fmt.set_attrs({**attrs, **labels})
+
+    def _declare(self, output, coordinates, extra):
+        """Define the grid variable of the declaration ``output`` (:mod:`screening.solvers.outputs`): its
+        dimensions, type, fill value, attributes (with ``coordinates`` and ``extra``), compression and
+        chunks."""
+        dims = self.study.dims
+        if output.shape == "history":
+            dims += ("t",)
+            storage = {"shuffle": self.format.complevel > 0, "chunks": history_chunks(self.shape, self.nt)}
+        elif output.shape == "threshold":
+            n = self.format.dimension_size("threshold")
+            dims += ("threshold",)
+            storage = {"chunks": point_chunks(self.shape, POINT_CHUNK // n) + (n,)}
+        else:
+            storage = {"chunks": point_chunks(self.shape)}
+        attrs = dict(output.attrs)
+        if coordinates:
+            attrs["coordinates"] = coordinates
+        self.format.define(output.name, output.dtype, dims, {**attrs, **extra}, output.fill, compress=True, **storage)
+
+    def _coordinates(self):
+        """The ``coordinates`` attribute of the grid variables."""
+        return self.format.attrs("status").get("coordinates", "")
+
+    # -- data
+    def write_batch(self, batch, result):
+        """Write the arrays of ``batch`` (as returned by :func:`~screening.sweep.execution.solve_batch`)
+        into their regions, and mark it done."""
+        write_region(self.format, self.shape, self.histories, batch, result)
+        self.format.mark_done(batch, batch.size if self.histories else 0)
+        self.record(batch, result)
+
+    @property
+    def status(self):
+        return self.kept["status"]
+
+    @property
+    def sl_trust(self):
+        return self.kept["sl_trust"]
+
+    @property
+    def peak_p_uplift(self):
+        return self.kept["peak_p_uplift"]
+
+    def record(self, batch, summary):
+        """Keep what the client keeps of ``batch`` (a worker wrote the rest)."""
+        for name, values in self.kept.items():
+            values[batch.lo:batch.hi] = summary[name]
+
+    def read_summary(self, batch):
+        """What the client keeps of ``batch``, as stored (flat arrays)."""
+        out = {}
+        for name in client_variables():
+            parts = [np.asarray(self.format.read(name, _slab_key(slab))).reshape(-1)
+                     for slab, _, _ in hyperslabs(batch.lo, batch.hi, self.shape)]
+            out[name] = np.concatenate(parts)
+        return out
+
+    def history(self, name, index):
+        """Stored history of ``name`` at grid index tuple ``index`` (float64)."""
+        return np.asarray(self.format.read(name, tuple(index) + (slice(None),)), dtype=np.float64)
+
+    def has(self, name):
+        """Whether the result defines variable ``name``."""
+        return self.format.has(name)
+
+    def commit(self):
+        """Create what was defined since (a zarr store creates its variables here)."""
+        self.format.commit()
+
+    def write_spots(self, spots, results, failed, spec):
+        """Spot-check variables on dimension ``spot`` (``spots``: grid index tuples; ``results``: the
+        dicts of :func:`~screening.sweep.execution.spot_task`; ``failed``: flags)."""
+        fmt, study = self.format, self.study
+        fmt.dimension("spot", len(spots))
+        coords = []
+        for axis, dim in enumerate(study.dims):
+            idx = np.array([s[axis] for s in spots])
+            if dim == "case":
+                self._variable("spot_case", "i4", ("spot",), False, values=idx.astype(np.int32))
+                self._variable("spot_case_name", str, ("spot",), None, values=np.array(
+                    [study.cases[i].name for i in idx], dtype=object))
+                coords += ["spot_case", "spot_case_name"]
+            else:
+                self._variable(f"spot_{dim}", "f8", ("spot",), False, values=study.sweeps[dim][idx])
+                coords.append(f"spot_{dim}")
+        coordinates = " ".join(coords)
+
+        def var(name, dtype, dims, values, fill=np.nan):
+            self._variable(name, dtype, dims, fill, coordinates, values=values, compress=True)
+
+        for name in SPOT_HISTORIES:
+            var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
+        for name in study.output.at_spots:          # [output] histories = "spots"
+            var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
+        for name in ("n_overturned", "n_diverged", "n_used"):
+            var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
+        for name in SPOT_LINEAR:
+            lin = [r[f"sl_{name}"] if f"sl_{name}" in r else self.history(name, s) for r, s in zip(results, spots)]
+            mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan
+                                 for r in results])
+            var(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak)
+            var(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
+                np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]))
+        fmt.dimension("sample", spec.samples)
+        self._variable("sample", "i4", ("sample",), False, values=np.arange(spec.samples, dtype=np.int32))
+        var("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]))
+        var("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
+            fill=False)
+        if any("mcs_model" in r for r in results):        # a failed spot check: the fill value
+            var("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results], dtype=np.int8),
+                fill=np.int8(-1))
+        var("mcs_status", "i1", ("spot",),
+            np.array([SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), fill=False)
+        selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "
+                     "the Gaussian closure is least trustworthy)" if spec.points == "auto"
+                     else "explicit points of the study file")
+        fmt.set_attrs({"mcs_model": spec.model, "mcs_samples": np.int32(spec.samples),
+                       "mcs_seed": np.int32(spec.seed), "mcs_selection": selection,
+                       "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
+
+    def read(self, name, t_index=None):
+        """Flat float64 values of per-point variable ``name`` over the grid (a history: at output index
+        ``t_index``, or its maximum over time with ``None``)."""
+        if "t" not in self.format.dims(name):
+            return np.asarray(self.format.read(name), dtype=np.float64).reshape(-1)
+        if t_index is not None:
+            return np.asarray(self.format.read(name, (Ellipsis, t_index % self.nt)), dtype=np.float64).reshape(-1)
+        out = np.full(self.study.n_points, np.nan)
+        step = max(SYNC_POINTS, 1)
+        for lo in range(0, self.study.n_points, step):          # a slab of histories at a time
+            for slab, a, b in hyperslabs(lo, min(lo + step, self.study.n_points), self.shape):
+                rows = np.asarray(self.format.read(name, slab + (slice(None),)), dtype=np.float64).reshape(
+                    b - a, self.nt)
+                finite = np.isfinite(rows).any(axis=1)
+                out[a:b][finite] = np.nanmax(rows[finite], axis=1)
+        return out
+
+    def read_all(self, name):
+        """The stored values of variable ``name`` (float64, its own shape)."""
+        return np.asarray(self.format.read(name), dtype=float)
+
+    def write_escalation(self, flat_indices, models, runs):
+        """The ``[accuracy]`` Monte Carlo points on dimension ``escalation`` (``runs``: the dicts of
+        :func:`~screening.sweep.execution.escalation_task`; ``models``: their
+        :class:`~screening.core.status.EscalationModel` codes)."""
+        fmt, study = self.format, self.study
+        n = len(runs)
+        fmt.dimension("escalation", n)
+        most = max((int(r["samples"]) for r in runs), default=1)
+        fmt.dimension("esc_sample", most)
+        idx = (np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if n and self.shape
+               else [()] * len(self.shape))             # a one-point grid has no grid dimension
+        coords = []
+        for axis, dim in enumerate(study.dims):
+            name = f"esc_{dim}"
+            values = np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]]
+            self._variable(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY,
+                           values=values)
+            coords.append(name)
+        coordinates = " ".join(coords)
+
+        def var(name, dtype, dims, values, fill=np.nan):
+            self._variable(name, dtype, dims, fill, coordinates, table=ACCURACY, values=values, compress=True)
+
+        var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
+        var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
+        var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
+        var("esc_estimator", "i1", ("escalation",), np.array([r.get("estimator", 0) for r in runs], dtype=np.int8),
+            fill=False)
+        var("esc_cheap_samples", "i4", ("escalation",), np.array([r.get("cheap_samples", 0) for r in runs],
+                                                                  dtype=np.int32), fill=False)
+        var("esc_correlation", "f8", ("escalation",), np.array([r.get("correlation", np.nan) for r in runs],
+                                                                dtype=float))
+        var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
+        var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
+        var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
+            fill=False)
+        for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
+            var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
+        at = np.asarray(flat_indices, dtype=np.int64)
+        var("esc_sl_peak_var_theta", "f8", ("escalation",), self.read("peak_var_theta")[at])
+        var("esc_sl_peak_var_theta_dot", "f8", ("escalation",),
+            self.read("var_theta_dot")[at] if "var_theta_dot" in self.histories else np.full(n, np.nan))
+        for name in ("n_overturned", "n_diverged", "n_used"):
+            var(f"esc_{name}", "i4", ("escalation",), np.array([r[name] for r in runs], dtype=np.int32), fill=False)
+        peaks = np.full((n, most), np.nan)
+        state = np.full((n, most), -1, dtype=np.int8)
+        for i, r in enumerate(runs):
+            peaks[i, :r["peak_abs_theta"].size] = r["peak_abs_theta"]
+            state[i, :r["sample_state"].size] = r["sample_state"]
+        var("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks)
+        var("esc_sample_state", "i1", ("escalation", "esc_sample"), state, fill=np.int8(-1))
+
+    def write_best(self, var_theta, var_theta_dot, method):
+        """Per-point best estimates: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat arrays,
+        ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
+        dims = self.study.dims
+        coordinates = self._coordinates()
+        for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot)):
+            for name, values in ((base, value), (f"{base}_se", se)):
+                self._variable(name, "f8", dims, np.nan, coordinates, table=ACCURACY, compress=True,
+                               values=np.asarray(values, dtype=float).reshape(self.shape))
+        self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, compress=True,
+                       values=np.asarray(method, dtype=np.int8).reshape(self.shape))
+
+    def write_probabilities(self, values, source, answer):
+        """Per-point probabilities after the Monte Carlo stages: ``values`` maps ``p_overturn``,
+        ``p_overturn_se`` (flat) and ``p_exceed``, ``p_exceed_se`` (flat x thresholds) to their final values;
+        ``source`` the flat ``p_source`` codes (:func:`screening.solvers.schema.probability_source_attributes`),
+        ``answer`` the flat ``answer_quantity`` codes (:class:`~screening.core.status.AnswerQuantity`)."""
+        for name, value in values.items():
+            value = np.asarray(value, dtype=float)
+            self.format.write(name, Ellipsis, value.reshape(self.shape + value.shape[1:]))
+        for name, codes in (("p_source", source), ("answer_quantity", answer)):
+            self._variable(name, "i1", self.study.dims, False, self._coordinates(), compress=True,
+                           values=np.asarray(codes, dtype=np.int8).reshape(self.shape))
+
+    def set_attrs(self, **attrs):
+        self.format.set_attrs(attrs)
+
+    def close(self):
+        self.format.finish()

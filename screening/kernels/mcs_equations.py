@@ -1,0 +1,338 @@
+"""The equations a Monte Carlo sample integrates (:mod:`screening.kernels.mcs_kernels` runs them): the
+per-run model record, the compiled right-hand sides of the coupled eqs. (7)–(8) and the condensed eq. (22)
+under horizontal and vertical ground acceleration, their input gains, and the uplift test.
+
+Method: ``docs/method.md#coupled-and-condensed-models``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from screening.core.physics.contact import law_resultants_trig_jit
+
+__all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "GRAVITY_RATIO_MIN", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
+           "INTEGRATORS", "model_record", "coupled_accelerations", "condensed_acceleration", "input_gain",
+           "vertical_gain"]
+
+#: Which equations a sample integrates.
+MODEL_COUPLED = 0
+MODEL_CONDENSED = 1
+
+#: Smallest gravity ratio ``(g + a_v) / g`` the condensed laws are evaluated at (a sample whose ratio
+#: falls below zero is stopped as lifted off at the end of the step).
+GRAVITY_RATIO_MIN = 1e-3
+
+#: Per-sample-run parameters of the compiled kernels (SI units), built by :func:`model_record`.
+MODEL = np.dtype([
+    ("m", "f8"), ("g", "f8"), ("h", "f8"), ("I_cm", "f8"), ("b", "f8"),      # block
+    ("k", "f8"), ("eps", "f8"), ("w_rate", "f8"), ("w_indentation", "f8"),  # bed (law's weights)
+    ("m_sdof", "f8"),                                                        # I_cm + m h^2 [kg m2]
+    ("theta_over", "f8"),        # overturning angle atan(b/h) [rad]
+    ("theta_ul", "f8"),          # uplift threshold of the condensation [rad] (condensed uplift flag)
+    ("theta_cap", "f8"),         # capacity angle of the condensation [rad] (inf: none)
+    ("max_flight", "f8"),        # longest flight before a sample is called diverged [s]
+    ("z_max", "f8"), ("z_min", "f8"), ("rate_max", "f8"),   # physical bounds of the coupled state
+    ("integrator", "i8"),        # INTEGRATOR_DOPRI or INTEGRATOR_RODAS
+])
+
+#: Integrators of a sample (the ``integrator`` field of :data:`MODEL`), by the name of the
+#: ``integrator`` numerics option.
+INTEGRATOR_DOPRI = 0
+INTEGRATOR_RODAS = 1
+INTEGRATORS = {"dopri": INTEGRATOR_DOPRI, "rodas": INTEGRATOR_RODAS}
+
+
+def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri"):
+    """The :data:`MODEL` record of scalar model objects: every number a compiled sample integration reads.
+
+    Built once per run; the kernels read the block, the bed's law weights, ``m_sdof``, the
+    overturning, uplift and capacity angles, the flight limit, the physical bounds of the coupled
+    state and the integrator from it.
+
+    Parameters
+    ----------
+    block : screening.Block
+        The block (scalar fields: ``m`` [kg], ``b``, ``h`` [m], ``I_cm`` [kg m^2], ``g`` [m/s^2]).
+    foundation : screening.Foundation
+        The bed (scalar fields: ``k`` [N/m^2], ``eps`` [1/m^2], its damping weights).
+    cond : screening.core.condensation.Condensation
+        The condensation of condensed runs (its uplift threshold and capacity angle are stored).
+    max_flight_time : float, optional
+        Longest flight [s] before a sample is called diverged.
+    integrator : str, optional
+        A key of :data:`INTEGRATORS` (``"dopri"`` or ``"rodas"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        A 0-d record of dtype :data:`MODEL` (SI units).
+
+    Notes
+    -----
+    ``m_sdof = I_cm + m h^2`` (eq. (22) in [1]_), ``theta_over = atan(b / h)``, ``theta_ul`` of the
+    condensation (eq. (19) for the paper's); the bounds ``z_max = b``, ``z_min = -2 h`` and
+    ``rate_max = 1000 sqrt(g / h)`` flag a blown-up coupled state.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> rec = model_record(block, bed, condensation.get("paper"), integrator="rodas")
+    >>> f"{rec['m_sdof']:.5f} {rec['theta_ul']:.4e}", int(rec["integrator"]) == INTEGRATOR_RODAS
+    ('0.51334 1.2012e-03', True)
+    """
+    m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
+    rec = np.zeros((), dtype=MODEL)
+    values = dict(m=m, g=g, h=h, I_cm=float(block.I_cm), b=b, k=float(foundation.k), eps=float(foundation.eps),
+                  w_rate=float(foundation.damping_weights[0]), w_indentation=float(foundation.damping_weights[1]),
+                  m_sdof=float(block.m_sdof), theta_over=float(block.slenderness),
+                  theta_ul=float(cond.uplift_threshold(block, foundation)),
+                  theta_cap=float(cond.capacity_angle(block, foundation)), max_flight=float(max_flight_time),
+                  z_max=b,                              # sinking half the base width into the bed: blown up
+                  z_min=-2.0 * h,                       # jumping a block height off the bed: blown up
+                  rate_max=1e3 * math.sqrt(g / h),      # ~1000 x the free-fall rocking rate: blown up
+                  integrator=INTEGRATORS[integrator])
+    for name, value in values.items():
+        rec[name] = value
+    return rec
+
+
+# ----------------------------------------------------------------------------- right-hand sides
+@numba.njit(cache=True)
+def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0):
+    """``(theta'', z_cb'')`` [rad/s^2, m/s^2] of the coupled eqs. (7)–(8).
+
+    The right-hand side of the coupled Monte Carlo model: the block's rocking and vertical motion
+    on the bed, contact resultants integrated in closed form over the actual contact zone
+    (:func:`screening.core.physics.contact.law_resultants_trig_jit`).
+
+    Parameters
+    ----------
+    theta : float
+        Rotation [rad].
+    theta_dot : float
+        Angular velocity [rad/s].
+    z_cb : float
+        Indentation of the base centre [m] (positive down, relative to the ground).
+    z_cb_dot : float
+        Its rate [m/s].
+    x_g_ddot : float
+        Horizontal ground acceleration [m/s^2].
+    p : numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+    a_v : float, optional
+        Vertical ground acceleration [m/s^2], positive up.
+
+    Returns
+    -------
+    theta_ddot : float
+        Angular acceleration [rad/s^2].
+    z_ddot : float
+        Vertical acceleration of the base centre [m/s^2].
+
+    Notes
+    -----
+    Eliminating ``z_cb''`` from eq. (8) in [1]_ with eq. (7):
+    ``(I_cm + m h^2 cos^2) theta'' = m h x_g'' cos - M_cb + h F_cb sin + m h^2 theta'^2 sin cos``,
+    ``z_cb'' = g + a_v - F_cb/m - h (theta'^2 cos + theta'' sin)``, with ``a_v`` the vertical
+    ground acceleration (positive up): in the ground's frame it adds to gravity, and ``z_cb`` (down) is
+    relative to the ground, so it enters the vertical equation only (docs/method.md).  The printed
+    resultants of eqs. (10)-(12) are corrected (docs/method.md, "Corrections to the printed equations").
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> p = model_record(block, bed, condensation.get("paper"))[()]
+    >>> z_st = 8.67 * 9.81 / (2 * 0.035 * 2.89e7)                   # static indentation m g / (2 b k)
+    >>> coupled_accelerations(0.0, 0.0, z_st, 0.0, 0.0, p)          # at rest: in balance
+    (0.0, 0.0)
+    >>> a, _ = coupled_accelerations(0.0, 0.0, z_st, 0.0, 1.0, p)   # 1 m/s2: m h / (I_cm + m h^2)
+    >>> f"{a:.6f}", f"{8.67 * 0.21 / block.m_sdof:.6f}"
+    ('3.546798', '3.546798')
+    """
+    m, g, h = p.m, p.g, p.h
+    s = math.sin(theta)
+    c = math.cos(theta)
+    force, moment = law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.w_rate,
+                                            p.w_indentation)
+    mh = m * h
+    theta_ddot = ((mh * x_g_ddot * c - moment + h * force * s + mh * h * theta_dot * theta_dot * s * c)
+                  / (p.I_cm + mh * h * c * c))
+    z_ddot = (g + a_v) - force / m - h * (theta_dot * theta_dot * c + theta_ddot * s)
+    return theta_ddot, z_ddot
+
+
+@numba.njit(cache=True)
+def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, p, a_v=0.0):
+    """``theta''`` [rad/s^2] of the condensed SDOF, eq. (22): ``(m h x_g'' - C theta' - K theta) / m_sdof``.
+
+    Parameters
+    ----------
+    damping_stiffness : numba function
+        The condensation's compiled ``(cond, theta) -> (C, K)`` (:class:`~screening.core.signatures.SdofKernel`).
+    cond : numpy.record
+        Its record.
+    theta : float
+        Rotation [rad].
+    theta_dot : float
+        Angular velocity [rad/s].
+    x_g_ddot : float
+        Horizontal ground acceleration [m/s^2].
+    p : numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+    a_v : float, optional
+        Vertical ground acceleration [m/s^2], positive up.
+
+    Returns
+    -------
+    float
+        ``theta''`` [rad/s^2].
+
+    Notes
+    -----
+    Eq. (22) in [1]_ with ``C(theta)``, ``K(theta)`` of eqs. (24)-(25) (or the chosen condensation's).
+    A vertical ground acceleration scales the weight by ``lam = (g + a_v) / g``; the laws are read at
+    ``theta / lam`` and the weight's moment gains ``m h a_v theta`` (docs/method.md, "Vertical ground
+    acceleration")::
+
+        m_sdof theta'' = m h x_g'' - C(theta / lam) theta' - K(theta / lam) theta + m h a_v theta
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> block, bed, paper = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), condensation.get("paper")
+    >>> p, kernel = model_record(block, bed, paper)[()], paper.sdof_kernel(block, bed)
+    >>> a = condensed_acceleration(kernel.damping_stiffness, kernel.record[0], 1e-4, 0.0, 1.0, p)
+    >>> by_hand = (8.67 * 0.21 * 1.0 - paper.restoring_moment(1e-4, block, bed)) / block.m_sdof
+    >>> f"{a:.8f}", f"{by_hand:.8f}"
+    ('3.38935790', '3.38935790')
+    """
+    if a_v == 0.0:                                  # the horizontal-only path: no divisions
+        damping, stiffness = damping_stiffness(cond, theta)
+        return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta) / p.m_sdof
+    lam = max(1.0 + a_v / p.g, GRAVITY_RATIO_MIN)
+    damping, stiffness = damping_stiffness(cond, theta / lam)
+    return (p.m * p.h * x_g_ddot - damping * theta_dot - stiffness * theta + p.m * p.h * a_v * theta) / p.m_sdof
+
+
+@numba.njit(cache=True)
+def input_gain(model, theta, p):
+    """``d(theta'', z_cb'')/d x_g''`` [rad/m, 1]: the right-hand side is linear in the input.
+
+    The linearly implicit integrator reads the exact time derivative of the right-hand side as this
+    gain times the input's rate.
+
+    Parameters
+    ----------
+    model : int
+        :data:`MODEL_COUPLED` or :data:`MODEL_CONDENSED`.
+    theta : float
+        Rotation [rad].
+    p : numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+
+    Returns
+    -------
+    tuple of float
+        ``(d theta''/d x_g'' [rad/m], d z_cb''/d x_g'' [1])``.
+
+    Notes
+    -----
+    Coupled (eqs. (7)-(8) in [1]_ as in :func:`coupled_accelerations`): ``m h cos / (I_cm + m h^2 cos^2)``
+    and ``-h sin`` times that; condensed (eq. (22)): ``m h / m_sdof`` and 0.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> p = model_record(block, bed, condensation.get("paper"))[()]
+    >>> [f"{g:.6f}" for g in input_gain(MODEL_CONDENSED, 0.01, p)]               # m h / m_sdof, 0
+    ['3.546798', '0.000000']
+    >>> g1, g2 = input_gain(MODEL_COUPLED, 0.01, p)
+    >>> a0, z0 = coupled_accelerations(0.01, 0.0, 1e-4, 0.0, 0.0, p)              # a finite difference
+    >>> a1, z1 = coupled_accelerations(0.01, 0.0, 1e-4, 0.0, 1.0, p)
+    >>> f"{g1:.6f} {a1 - a0:.6f}", f"{g2:.6f} {z1 - z0:.6f}"
+    ('3.546885 3.546885', '-0.007448 -0.007448')
+    """
+    if model == MODEL_COUPLED:
+        s = math.sin(theta)
+        c = math.cos(theta)
+        mh = p.m * p.h
+        g1 = mh * c / (p.I_cm + mh * p.h * c * c)
+        return g1, -p.h * s * g1
+    return p.m * p.h / p.m_sdof, 0.0
+
+
+@numba.njit(cache=True)
+def vertical_gain(model, theta, p):
+    """``d(theta'', z_cb'')/d a_v`` [rad/m, 1]: coupled ``(0, 1)``; condensed ``m h theta / m_sdof`` and 0
+    (the weight's moment; the law's dependence through ``theta / lam`` is left out of this rate).
+
+    Parameters
+    ----------
+    model, theta, p : int, float, numpy.record
+        As :func:`input_gain`: the model code, the rotation [rad] and the :data:`MODEL` record.
+
+    Returns
+    -------
+    tuple of float
+        ``(d theta''/d a_v [rad/m], d z_cb''/d a_v [1])``.
+
+    Notes
+    -----
+    From :func:`coupled_accelerations` (``a_v`` enters ``z_cb''`` only) and the condensed equation of
+    :func:`condensed_acceleration` (eq. (22) in [1]_ with the weight's moment ``m h a_v theta``).
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> p = model_record(block, bed, condensation.get("paper"))[()]
+    >>> vertical_gain(MODEL_COUPLED, 0.01, p)
+    (0.0, 1.0)
+    >>> f"{vertical_gain(MODEL_CONDENSED, 0.01, p)[0]:.6f}", f"{8.67 * 0.21 * 0.01 / block.m_sdof:.6f}"
+    ('0.035468', '0.035468')
+    """
+    if model == MODEL_COUPLED:
+        return 0.0, 1.0
+    return p.m * p.h * theta / p.m_sdof, 0.0

@@ -1,0 +1,594 @@
+"""Speed–accuracy trade study: stochastic linearization (SL) vs Monte Carlo (condensed, coupled).
+
+Users choose between three methods for the second-order rocking statistics:
+
+* **SL** — stochastic linearization + Lyapunov moment equations of the condensed SDOF
+  (:func:`screening.solvers.moments.solve_moments`), ~1 ms per point;
+* **condensed MCS** — Monte Carlo on the same condensed SDOF (eq. 22), which isolates the
+  *linearization* error of SL (SL vs condensed MCS);
+* **coupled MCS** — Monte Carlo on the full coupled rocking/vertical model (eqs. 7–8), the
+  judge; condensed vs coupled MCS (same input samples, same seed) is the *condensation* error.
+
+This module makes the choice measurable.  A study file (TOML, see
+``studies/speed_accuracy.toml`` and
+:func:`~screening.applications.tradeoff_study.parse_tradeoff_study`) defines the block, the bed,
+a grid of excitation *families* x cubic parameters ``eps`` x intensities (given as ``S0`` or as
+target SL peak uplift probabilities, calibrated by bisection on SL), the sample counts and
+tolerances.  :func:`run_tradeoff` then measures, at every point, the errors of SL and of
+condensed MCS against coupled MCS, with the Monte Carlo standard errors, the cost of each
+method in seconds per point on one core, how the MCS error and cost move with the sample
+count and the integrator tolerance at representative points, and how SL's numerical error
+and cost move with its tolerance and maximum step.  It writes
+
+* ``<out_dir>/<stem>.nc`` — every number, labelled, with units;
+* ``<out_dir>/<stem>.md`` and ``<stem>.csv`` — the trade tables;
+* ``<out_dir>/<stem>_error_vs_cost.png`` and ``<stem>_validity.png`` — the plots;
+
+and derives a validity rule (e.g. "SL within 10 % of condensed MCS when SL peak p_uplift < X")
+from the data.
+
+Error metrics and rules: :mod:`screening.applications.metrics`; the study file:
+:mod:`screening.applications.tradeoff_study`; reports and figures: :mod:`screening.report.tradeoff_text`,
+:mod:`screening.report.tradeoff_figures`; units and long names: :data:`screening.solvers.schema.TRADEOFF`.
+
+Monte Carlo statistics are over the samples that neither overturned nor diverged
+(survivors); the overturned fraction is reported with every point.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from screening.core import laws
+from screening.applications.metrics import compare, peak_with_se, relative_difference, time_averaged_relative_error
+from screening.analysis.target_intensity import calibrate_intensity, round_significant
+from screening.applications.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
+                                                   load_tradeoff_study)
+from screening.report.tradeoff_files import from_file_layout, output_paths, write_reports
+from screening.solvers.schema import TRADEOFF, apply_schema
+from screening.solvers.moments import solve_moments
+from screening.solvers.montecarlo import monte_carlo
+from screening.solvers.timegrid import output_times
+from screening.sweep.config import StudyError, build_models
+
+__all__ = ["round_significant", "calibrate_intensity", "Point", "time_call", "set_threads", "run_tradeoff",
+           "rerender_reports"]
+
+
+# ============================================================================ model set-up
+@dataclass(frozen=True)
+class Point:
+    """One grid point of the trade study."""
+
+    name: str
+    family: str
+    kind: str
+    omega_g: float
+    zeta_g: float
+    eps: float
+    S0: float
+    target: float
+    index: int
+
+
+def _build_points(study, progress=None):
+    """Expand the families into :class:`Point`s (calibrating intensities given as targets)."""
+    t_out = output_times(study.t_end, study.dt)
+    points = []
+    for f, fam in enumerate(study.families):
+        for eps in fam.eps:
+            for i in range(fam.n_intensities):
+                if fam.S0 is not None:
+                    S0, target = fam.S0[i], float("nan")
+                else:
+                    target = fam.target_peak_p_uplift[i]
+                    block, bed, _ = build_models(fam.case, {"eps": eps, "S0": 1.0})   # S0: excitation only
+                    try:
+                        S0 = calibrate_intensity(
+                            block, bed, lambda s: build_models(fam.case, {"eps": eps, "S0": s})[2], target, t_out,
+                            rtol=study.sl["calibration_rtol"], condensation=study.condensation)
+                    except ValueError as err:
+                        raise StudyError(f"{study.source}: family[{f}].target_peak_p_uplift[{i}]: family "
+                                         f"'{fam.name}', eps = {eps:g}: {err}") from None
+                label = f"p{target:g}" if fam.S0 is None else f"S0={S0:.3g}"
+                points.append(Point(name=f"{fam.name} eps={eps:g} {label}", family=fam.name, kind=fam.kind,
+                                    omega_g=fam.omega_g, zeta_g=fam.zeta_g, eps=float(eps), S0=float(S0),
+                                    target=float(target), index=i))
+                if progress:
+                    progress(f"point {len(points)}: {points[-1].name}: S0 = {S0:.3g} m2 s-3")
+    return points
+
+
+def _point_models(study, points):
+    """``(block, foundation, excitation)`` of a :class:`Point`, or of a list of points of one family
+    (array fields, for batched calls)."""
+    if isinstance(points, Point):
+        return build_models(study.family(points.family).case, {"eps": points.eps, "S0": points.S0})
+    return build_models(study.family(points[0].family).case, {"eps": np.array([p.eps for p in points]),
+                                                               "S0": np.array([p.S0 for p in points])})
+
+
+# ============================================================================ measurements
+def time_call(fn, repeats=1):
+    """Call ``fn`` ``repeats`` times and time it.
+
+    Parameters
+    ----------
+    fn : callable
+        Called without arguments.
+    repeats : int
+        Number of calls.
+
+    Returns
+    -------
+    result : object
+        The result of the last call.
+    seconds : float
+        Median wall time per call [s].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> result, seconds = time_call(lambda: sum(range(1000)), repeats=3)
+    >>> result, seconds >= 0.0
+    (499500, True)
+    """
+    times = []
+    result = None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+    return result, float(np.median(times))
+
+
+def _solve_sl(study, models, t_out, rtol=None, h_max=None, repeats=1):
+    """SL of ``models`` via :func:`~screening.solvers.moments.solve_moments`; ``(result dict, seconds)``."""
+    rtol = study.sl["rtol"] if rtol is None else rtol
+    return time_call(lambda: solve_moments(*models, t_out, rtol=rtol, h_max=h_max,
+                                           condensation=study.condensation), repeats)
+
+
+def _run_sl(study, point, t_out, rtol=None, h_max=None, repeats=1):
+    """SL at one point; ``(result dict, seconds)``."""
+    return _solve_sl(study, _point_models(study, point), t_out, rtol, h_max, repeats)
+
+
+def _run_mcs(study, point, model, n_samples, rtol_factor=1.0):
+    """Monte Carlo at one point: ``(dataset, wall seconds)`` (same seed for both models)."""
+    block, bed, exc = _point_models(study, point)
+    numerics = {"rtol": rtol_factor * study.mcs[f"rtol_{model}"]}
+    for key in ("h_max", "chunk_size"):
+        if key in study.mcs:
+            numerics[key] = study.mcs[key]
+    return time_call(lambda: monte_carlo(block, bed, exc, n_samples=n_samples, model=model, t_end=study.t_end,
+                                         dt=study.dt, seed=study.mcs["seed"], progress=False,
+                                         condensation=study.condensation.name, **numerics))
+
+
+def _warm_up(study):
+    """Compile (or load from cache) the SL and MCS kernels so that no timing includes it."""
+    fam = study.families[0]
+    pt = Point("warm-up", fam.name, fam.kind, fam.omega_g, fam.zeta_g, fam.eps[0], 1e-6, float("nan"), 0)
+    block, bed, exc = _point_models(study, pt)
+    t_short = output_times(study.dt * 4, study.dt)
+    solve_moments(block, bed, exc, t_short, condensation=study.condensation)
+    for model in MCS_MODELS:
+        monte_carlo(block, bed, exc, n_samples=2, model=model, t_end=study.dt * 4, dt=study.dt, progress=False,
+                    condensation=study.condensation)
+
+
+def set_threads(n):
+    """Limit numba to ``n`` threads (cost per core).
+
+    Parameters
+    ----------
+    n : int
+        Threads wanted [-] (capped at ``NUMBA_NUM_THREADS``).
+
+    Returns
+    -------
+    int
+        The previous setting.
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numba
+    >>> previous = set_threads(1)
+    >>> numba.get_num_threads(), set_threads(previous) == 1
+    (1, True)
+    """
+    import numba
+    previous = numba.get_num_threads()
+    numba.set_num_threads(min(int(n), numba.config.NUMBA_NUM_THREADS))
+    return previous
+
+
+def _history(ds, name):
+    return np.asarray(ds[name].values, dtype=float)
+
+
+def _log(progress, msg):
+    if progress:
+        progress(msg)
+
+
+def _stderr(msg):
+    print(f"[tradeoff] {msg}", file=sys.stderr, flush=True)
+
+
+def _measure_grid(study, points, t_out, progress=None):
+    """SL and both MCS models at every point: histories, costs and overturning counts."""
+    n, nt = len(points), t_out.size
+    hist = {q: np.full((len(METHODS), n, nt), np.nan) for q in QUANTITIES}
+    se = {q: np.full((len(METHODS), n, nt), np.nan) for q in QUANTITIES}
+    p_upl = np.full((len(METHODS), n, nt), np.nan)
+    cost = np.full((len(METHODS), n), np.nan)
+    n_over = np.zeros((len(MCS_MODELS), n), dtype=np.int32)
+    n_div = np.zeros((len(MCS_MODELS), n), dtype=np.int32)
+    n_used = np.zeros((len(MCS_MODELS), n), dtype=np.int32)
+    sl_status = np.zeros(n, dtype=np.int8)
+    sl_peak_p = np.full(n, np.nan)
+    sl_margin = np.full(n, np.nan)
+    sl_min_k = np.full(n, np.nan)
+    sl_k0 = np.full(n, np.nan)
+    mcs_runs = {}
+    for j, pt in enumerate(points):
+        res, sec = _run_sl(study, pt, t_out, repeats=study.sl["timing_repeats"])
+        hist["var_theta"][0, j] = res["var_theta"]
+        hist["var_theta_dot"][0, j] = res["var_theta_dot"]
+        p_upl[0, j] = res["p_uplift"]
+        cost[0, j] = sec
+        sl_status[j] = res["status"]
+        sl_peak_p[j] = res["peak_p_uplift"]
+        sl_min_k[j] = res["min_k_eq"]
+        sl_k0[j] = res["k_eq"][0]
+        sl_margin[j] = res["min_k_eq"] / res["k_eq"][0]
+        for m, model in enumerate(MCS_MODELS):
+            ds, sec = _run_mcs(study, pt, model, study.mcs["samples"])
+            mcs_runs[(j, model)] = (ds, sec)
+            row = 1 + m
+            for q in QUANTITIES:
+                hist[q][row, j] = _history(ds, q)
+                se[q][row, j] = _history(ds, q + "_se")
+            p_upl[row, j] = _history(ds, "p_uplift")
+            cost[row, j] = sec
+            n_over[m, j], n_div[m, j], n_used[m, j] = int(ds.n_overturned), int(ds.n_diverged), int(ds.n_used)
+            _log(progress, f"{j + 1}/{n} {pt.name}: {model} MCS {sec:.1f} s, overturned {n_over[m, j]}")
+    return {"hist": hist, "se": se, "p_uplift": p_upl, "cost": cost, "n_overturned": n_over,
+            "n_diverged": n_div, "n_used": n_used, "sl_status": sl_status, "sl_peak_p_uplift": sl_peak_p,
+            "sl_margin": sl_margin, "sl_min_k_eq": sl_min_k, "sl_k_eq0": sl_k0, "mcs_runs": mcs_runs}
+
+
+def _grid_errors(grid, t_out):
+    """:func:`compare` for every comparison x quantity x point; dict of arrays."""
+    n = grid["cost"].shape[1]
+    keys = ("peak_estimate", "peak_reference", "peak_rel_error", "peak_rel_se", "peak_significant",
+            "time_avg_rel_error", "time_avg_rel_se", "time_avg_significant")
+    out = {k: np.full((len(COMPARISONS), len(QUANTITIES), n), np.nan) for k in keys}
+    for c, (est, ref) in enumerate(COMPARISONS.values()):
+        ie, ir = METHODS.index(est), METHODS.index(ref)
+        for iq, q in enumerate(QUANTITIES):
+            for j in range(n):
+                e_se = None if est == "sl" else grid["se"][q][ie, j]
+                r = compare(grid["hist"][q][ie, j], grid["hist"][q][ir, j], t_out, est_se=e_se,
+                            ref_se=grid["se"][q][ir, j])
+                for k in keys:
+                    out[k][c, iq, j] = r[k]
+    for k in ("peak_significant", "time_avg_significant"):
+        out[k] = out[k].astype(bool)
+    return out
+
+
+def _measure_convergence(study, points, grid, t_out, progress=None):
+    """MCS peak variance, SE and cost vs sample count and vs rtol factor at the chosen points."""
+    cv = study.convergence
+    idx = [next(j for j, p in enumerate(points) if (p.family, p.eps, p.index) == key) for key in cv["points"]]
+    models, ns, factors = cv["models"], cv["samples"], cv["rtol_factors"]
+    shape_n = (len(idx), len(models), len(ns))
+    shape_f = (len(idx), len(models), len(factors))
+    out = {name: np.full(shape_n, np.nan) for name in ("peak", "peak_se", "peak_dot", "peak_dot_se", "cost")}
+    out["n_overturned"] = np.zeros(shape_n, dtype=np.int32)
+    out.update({f"tol_{name}": np.full(shape_f, np.nan) for name in ("peak", "peak_se", "peak_dot", "cost")})
+    out["tol_n_overturned"] = np.zeros(shape_f, dtype=np.int32)
+    for a, j in enumerate(idx):
+        for b, model in enumerate(models):
+            runs = {}
+            for c, n_s in enumerate(ns):
+                if n_s == study.mcs["samples"]:
+                    ds, sec = grid["mcs_runs"][(j, model)]
+                else:
+                    ds, sec = _run_mcs(study, points[j], model, n_s)
+                    _log(progress, f"convergence {points[j].name}: {model} n={n_s} {sec:.1f} s")
+                runs[n_s] = (ds, sec)
+                out["peak"][a, b, c], out["peak_se"][a, b, c] = peak_with_se(_history(ds, "var_theta"),
+                                                                             _history(ds, "var_theta_se"))
+                out["peak_dot"][a, b, c], out["peak_dot_se"][a, b, c] = peak_with_se(
+                    _history(ds, "var_theta_dot"), _history(ds, "var_theta_dot_se"))
+                out["cost"][a, b, c] = sec
+                out["n_overturned"][a, b, c] = int(ds.n_overturned)
+            for c, f in enumerate(factors):
+                if f == 1.0:
+                    ds, sec = runs[cv["rtol_samples"]]
+                else:
+                    ds, sec = _run_mcs(study, points[j], model, cv["rtol_samples"], rtol_factor=f)
+                    _log(progress, f"tolerance {points[j].name}: {model} rtol x {f:g} {sec:.1f} s")
+                out["tol_peak"][a, b, c], out["tol_peak_se"][a, b, c] = peak_with_se(
+                    _history(ds, "var_theta"), _history(ds, "var_theta_se"))
+                out["tol_peak_dot"][a, b, c] = peak_with_se(_history(ds, "var_theta_dot"))[0]
+                out["tol_cost"][a, b, c] = sec
+                out["tol_n_overturned"][a, b, c] = int(ds.n_overturned)
+    out["point_index"] = np.array(idx)
+    # SL at the same points (for biases against the largest-sample reference)
+    out["sl_peak"] = np.array([peak_with_se(grid["hist"]["var_theta"][0, j])[0] for j in idx])
+    return out
+
+
+def _measure_sl_numerics(study, points, t_out):
+    """SL numerical error (vs ``reference_rtol``) and cost per point over rtol and h_max settings."""
+    ref = [_run_sl(study, p, t_out, rtol=study.sl["reference_rtol"])[0] for p in points]
+    settings = [("rtol", r, None) for r in study.sl["rtol_sweep"]]
+    settings += [("h_max", study.sl["rtol"], h) for h in study.sl["h_max_sweep"]]
+    n = len(points)
+    out = {k: np.full((len(settings), n), np.nan) for k in ("cost", "peak_err", "time_avg_err", "n_steps")}
+    for s, (_, rtol, h_max) in enumerate(settings):
+        for j, p in enumerate(points):
+            res, sec = _run_sl(study, p, t_out, rtol=rtol, h_max=h_max, repeats=study.sl["timing_repeats"])
+            out["cost"][s, j] = sec
+            out["n_steps"][s, j] = res["n_steps"]
+            out["peak_err"][s, j] = relative_difference(res["peak_var_theta"], ref[j]["peak_var_theta"])
+            out["time_avg_err"][s, j] = time_averaged_relative_error(res["var_theta"], ref[j]["var_theta"], t_out)
+    # the whole grid in batched calls, one per family (per-point cost of the batched form)
+    fam_costs = []
+    for fam in study.families:
+        sel = [p for p in points if p.family == fam.name]
+        _, sec = _solve_sl(study, _point_models(study, sel), t_out, repeats=study.sl["timing_repeats"])
+        fam_costs.append((sec, len(sel)))
+    batched = sum(s for s, _ in fam_costs) / sum(k for _, k in fam_costs)
+    out["settings"] = settings
+    out["batched_cost"] = batched
+    return out
+
+
+# ============================================================================ dataset
+def _build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time):
+    """Assemble every measurement in one labelled :class:`xarray.Dataset`; units and long names
+    from :data:`screening.solvers.schema.TRADEOFF`."""
+    cv = study.convergence
+    settings = numerics["settings"]
+    reps = conv["point_index"]
+    coords = {
+        "t": t_out, "approach": list(METHODS), "mcs_model": list(MCS_MODELS), "comparison": list(COMPARISONS),
+        "quantity": list(QUANTITIES), "point": np.arange(len(points)),
+        "point_name": ("point", [p.name for p in points]),
+        "family": ("point", [p.family for p in points]),
+        "excitation_kind": ("point", [p.kind for p in points]),
+        **{name: ("point", [getattr(p, name) for p in points]) for name in ("eps", "S0", "omega_g", "zeta_g")},
+        "target_peak_p_uplift": ("point", [p.target for p in points]),
+        "rep_point_index": ("rep_point", reps.astype(np.int32)),
+        "rep_point_name": ("rep_point", [points[j].name for j in reps]),
+        "cv_model": list(cv["models"]), "n_samples": np.array(cv["samples"], dtype=np.int32),
+        "rtol_factor": np.array(cv["rtol_factors"]),
+        "sl_setting": np.arange(len(settings)),
+        "sl_setting_kind": ("sl_setting", [s[0] for s in settings]),
+        "sl_rtol": ("sl_setting", [s[1] for s in settings]),
+        "sl_h_max": ("sl_setting", [np.nan if s[2] is None else s[2] for s in settings]),
+    }
+    apt, ap, mp = ("approach", "point", "t"), ("approach", "point"), ("mcs_model", "point")
+    dv = {}
+    for q in QUANTITIES:
+        dv[q] = (apt, grid["hist"][q])
+        dv[q + "_se"] = (apt, grid["se"][q])
+    dv["p_uplift"] = (apt, grid["p_uplift"])
+    dv["cost"] = (ap, grid["cost"], {
+        "note": f"sl: median of {study.sl['timing_repeats']} single-point solve_moments calls; "
+                f"MCS: one monte_carlo call with {study.mcs['samples']} samples, "
+                f"{study.mcs['threads']} numba thread(s)"})
+    for name in ("n_overturned", "n_diverged", "n_used"):
+        dv[name] = (mp, grid[name])
+    dv["overturned_fraction"] = (mp, grid["n_overturned"] / study.mcs["samples"])
+    dv["sl_status"] = ("point", grid["sl_status"])
+    for name, key in (("sl_peak_p_uplift", "sl_peak_p_uplift"), ("sl_min_k_eq", "sl_min_k_eq"),
+                      ("sl_k_eq0", "sl_k_eq0"), ("k_eq_margin", "sl_margin")):
+        dv[name] = ("point", grid[key])
+    for k in ("peak_rel_error", "peak_rel_se", "peak_significant", "time_avg_rel_error", "time_avg_rel_se",
+              "time_avg_significant"):
+        val = errors[k].astype(np.int8) if errors[k].dtype == bool else errors[k]
+        dv[k] = (("comparison", "quantity", "point"), val)
+    for q in QUANTITIES:
+        peak, se = peak_with_se(grid["hist"][q], grid["se"][q])
+        dv[f"peak_{q}"], dv[f"peak_{q}_se"] = (ap, peak), (ap, se)
+    # convergence sub-study
+    rn, rf = ("rep_point", "cv_model", "n_samples"), ("rep_point", "cv_model", "rtol_factor")
+    for name, key in (("cv_peak_var_theta", "peak"), ("cv_peak_var_theta_se", "peak_se"),
+                      ("cv_peak_var_theta_dot", "peak_dot"), ("cv_peak_var_theta_dot_se", "peak_dot_se"),
+                      ("cv_cost", "cost"), ("cv_n_overturned", "n_overturned")):
+        dv[name] = (rn, conv[key])
+    dv["cv_deviation_vs_reference"] = (rn, conv["peak"] / conv["peak"][:, :, -1:] - 1.0)
+    dv["cv_rel_se"] = (rn, conv["peak_se"] / conv["peak"])
+    dv["tol_peak_var_theta"] = (rf, conv["tol_peak"], {"note": f"{cv['rtol_samples']} samples"})
+    for name, key in (("tol_peak_var_theta_se", "tol_peak_se"), ("tol_cost", "tol_cost"),
+                      ("tol_n_overturned", "tol_n_overturned")):
+        dv[name] = (rf, conv[key])
+    dv["tol_change_vs_tightest"] = (rf, conv["tol_peak"] / conv["tol_peak"][:, :, :1] - 1.0)
+    dv["cv_sl_peak_var_theta"] = ("rep_point", conv["sl_peak"])
+    # SL numerics
+    sp = ("sl_setting", "point")
+    dv["sl_cost"] = (sp, numerics["cost"])
+    dv["sl_n_steps"] = (sp, numerics["n_steps"])
+    dv["sl_numerical_peak_error"] = (sp, numerics["peak_err"],
+                                     {"note": f"reference: rtol {study.sl['reference_rtol']:g}"})
+    dv["sl_numerical_time_avg_error"] = (sp, numerics["time_avg_err"])
+    dv["sl_batched_cost"] = ((), numerics["batched_cost"])
+    case = study.families[0].case          # block, bed and envelope are common to every family
+    p = case.params
+    attrs = {
+        "title": study.title,
+        "study_file": study.source,
+        "study_toml": study.text,
+        "mcs_samples": study.mcs["samples"], "mcs_seed": study.mcs["seed"], "mcs_threads": study.mcs["threads"],
+        "mcs_rtol_coupled": study.mcs["rtol_coupled"], "mcs_rtol_condensed": study.mcs["rtol_condensed"],
+        "sl_rtol_default": study.sl["rtol"],
+        "tol_samples": cv["rtol_samples"],
+        "statistics_note": "Monte Carlo moments are over surviving samples (neither overturned nor diverged); "
+                           "condensed and coupled MCS use the same input samples (same seed)",
+        "significance": "peak: |diff| > 2 SE; time-averaged: error > 2 x noise floor",
+        "rule_metric": study.rule["metric"], "rule_quantity": study.rule["quantity"],
+        "wall_time_s": float(wall_time),
+        "block_m": p["m"], "block_b": p["b"], "block_h": p["h"],
+        "foundation_contact": case.contact, "foundation_k": p["k"],
+        "envelope_T1": p["T1"], "envelope_T2": p["T2"],
+        "t_end": study.t_end, "dt": study.dt,
+    }
+    damping = laws.get(case.contact).parameter
+    attrs[f"foundation_{damping}"] = p[damping]
+    return apply_schema(xr.Dataset(dv, coords=coords, attrs=attrs), table=TRADEOFF)
+
+
+# ============================================================================ runner
+def _stem(study):
+    return Path(study.source).stem if study.source != "<string>" else "tradeoff"
+
+
+def _study(study_path):
+    return study_path if isinstance(study_path, TradeoffStudy) else load_tradeoff_study(study_path)
+
+
+def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
+    """Run the whole trade study of ``study_path`` and write its outputs into ``out_dir``.
+
+    ``study_path`` may also be a parsed :class:`TradeoffStudy`; outputs are named after the
+    study file's stem (see :func:`~screening.report.tradeoff_files.output_paths`).  ``progress``
+    is a callable taking one line of text (default: stderr) or None.  Returns
+    ``(dataset, paths, rules)``: the dataset of :func:`_build_dataset`, the dict of written files
+    and the rules of :func:`~screening.applications.metrics.derive_rules`.  A bad study file raises
+    :class:`~screening.sweep.config.StudyError` before any work, and nothing is written.
+
+    Parameters
+    ----------
+    study_path : str or pathlib.Path or TradeoffStudy
+        The study file (TOML) or the parsed study.
+    out_dir : str or pathlib.Path, default "outputs"
+        Where the outputs go.
+    progress : callable or None, default: to stderr
+        Called with one line of text per step.
+
+    Returns
+    -------
+    tuple
+        ``(dataset, paths, rules)``: the :class:`xarray.Dataset` of every measurement (SI units in
+        its ``units`` attributes), ``{kind: pathlib.Path}`` of the written files and the rules.
+
+    Notes
+    -----
+    The errors of the linearization [1] and of the condensed Monte Carlo against the coupled one,
+    with their Monte Carlo standard errors [2]; what the shipped study found: [3].
+
+    References
+    ----------
+    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
+       (standard errors of Monte Carlo estimates).
+    .. [3] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+
+    Examples
+    --------
+    A study file without a family is refused before anything runs or is written:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     bad = Path(d) / "bad.toml"
+    ...     _ = bad.write_text('title = "no families"\\n')
+    ...     try:
+    ...         run_tradeoff(bad, Path(d) / "out", progress=None)
+    ...     except StudyError as err:
+    ...         print(str(err).split(": ", 1)[1], (Path(d) / "out").exists())
+    family: at least one [[family]] table is required False
+    """
+    study = _study(study_path)
+    start = time.perf_counter()
+    previous = set_threads(study.mcs["threads"])
+    try:
+        _warm_up(study)
+        t_out = output_times(study.t_end, study.dt)
+        points = _build_points(study, progress)
+        grid = _measure_grid(study, points, t_out, progress)
+        errors = _grid_errors(grid, t_out)
+        conv = _measure_convergence(study, points, grid, t_out, progress)
+        numerics = _measure_sl_numerics(study, points, t_out)
+    finally:
+        set_threads(previous)
+    ds = _build_dataset(study, points, t_out, grid, errors, conv, numerics, time.perf_counter() - start)
+    paths, rules = write_reports(study, ds, out_dir, _stem(study))
+    return ds, paths, rules
+
+
+def rerender_reports(study_path, out_dir="outputs"):
+    """Re-derive the rules and rewrite the markdown, CSV and plots from the saved ``<out_dir>/<stem>.nc``,
+    without recomputing (e.g. after changing ``[rule]``).
+
+    Returns ``(dataset, paths, rules)`` as :func:`run_tradeoff` (``paths`` without the netCDF).  Raises
+    :class:`~screening.sweep.config.StudyError` for a bad study file and ``FileNotFoundError``
+    when the study has not been run into ``out_dir``.
+
+    Parameters
+    ----------
+    study_path : str or pathlib.Path or TradeoffStudy
+        The study file (TOML) or the parsed study.
+    out_dir : str or pathlib.Path, default "outputs"
+        Where :func:`run_tradeoff` wrote the study.
+
+    Returns
+    -------
+    tuple
+        ``(dataset, paths, rules)``.
+
+    References
+    ----------
+    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+    .. [2] ``docs/cli.md``, "The command line" (``screening tradeoff``; this package's documentation).
+
+    Examples
+    --------
+    Before the study has run there is nothing to re-render:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from screening.applications.tradeoff_study import EXAMPLE_TRADEOFF_STUDY as STUDY
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     _ = (Path(d) / "tiny.toml").write_text(STUDY)
+    ...     try:
+    ...         rerender_reports(Path(d) / "tiny.toml", Path(d) / "out")
+    ...     except FileNotFoundError as err:
+    ...         print(Path(str(err).split()[0]).name, "does not exist")
+    tiny.nc does not exist
+    """
+    study = _study(study_path)
+    nc = output_paths(out_dir, _stem(study))["nc"]
+    if not nc.exists():
+        raise FileNotFoundError(f"{nc} does not exist (run the study first)")
+    with xr.open_dataset(nc) as saved:
+        ds = from_file_layout(saved.load())
+    paths, rules = write_reports(study, ds, out_dir, _stem(study), write_nc=False)
+    del paths["nc"]
+    return ds, paths, rules

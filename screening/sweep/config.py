@@ -1,0 +1,1481 @@
+"""What every study file shares: validation helpers, the model tables and the model builder.
+
+Sweep studies (:mod:`screening.sweep.study`) and the speed-accuracy trade study
+(:mod:`screening.applications.tradeoff_study`) read ``[block]``, ``[foundation]``, ``[excitation]``
+and ``[time]`` with the code below, and report every problem as :class:`StudyError`: one line,
+``"<source>: <key>: <message>"``, naming the key as it is spelled in the file (``block.m``,
+``family[0].eps``, ``convergence.points[1].index``).
+
+Conventions of the helpers: ``where`` is the prefix of the keys of a table, with its trailing dot
+(``"block."``, ``""`` at the top level); ``key`` is a full key.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+
+__all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NUMERIC", "TABLE_KEYS",
+           "MODEL_TABLES", "DEFAULTS", "StudyError", "read_study_text", "parse_toml", "one_line", "type_name",
+           "table", "check_keys", "required", "is_number", "check_value", "check_integer", "short_repr", "integer",
+           "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
+           "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
+           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "case_block_and_foundation",
+           "build_models", "case_cutoff", "build_point_models"]
+try:
+    import tomllib
+except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
+    import tomli as tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+
+from screening.core import condensation as condensations, excitations, laws
+from screening.core.condensation import names as condensation_names
+from screening.core.model import Block, Foundation
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
+from screening.core.model.block import LENGTH_RANGE
+from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.solvers.timegrid import output_times
+from screening.core.validation import InputFileError, read_input_text
+from screening.core import limits
+
+#: Numeric parameters of the registered excitations besides S0 (``omega_g``, ``zeta_g``, ...).
+EXCITATION_PARAMETERS = excitations.parameters()
+#: Parameters that may be swept (given as a list or a range).
+SWEEPABLE = ("eps", "S0", "pga", "k", "lam", "c", *EXCITATION_PARAMETERS)
+
+EXCITATIONS = excitations.names()
+ENVELOPES = ("exponential", "constant")
+
+#: Numeric model parameters: (table, lower bound, lower bound inclusive, upper bound or None).
+NUMERIC = {
+    "m": ("block", 0.0, False, None), "b": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
+    "h": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
+    "I_cm": ("block", 0.0, False, None), "g": ("block", 0.0, False, None),
+    "k": ("foundation", 0.0, False, None), "lam": ("foundation", 0.0, True, None),
+    "c": ("foundation", 0.0, True, None), "eps": ("foundation", None, False, None),
+    "S0": ("excitation", 0.0, False, None), "pga": ("excitation", 0.0, False, None),
+    **{name: ("excitation", p.lower, p.lower_inclusive, p.upper) for name, p in EXCITATION_PARAMETERS.items()},
+    "T1": ("excitation", 0.0, False, None), "T2": ("excitation", 0.0, False, None),
+    "band_limit_hz": ("excitation", 0.0, False, 1e5),
+}
+#: Keys of the model tables of a sweep study (other study kinds allow a subset).
+TABLE_KEYS = {
+    "block": ("m", "b", "h", "I_cm", "g"),
+    "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
+    "excitation": ("kind", "S0", "pga", *EXCITATION_PARAMETERS, "envelope", "T1", "T2", "band_limit_hz"),
+}
+MODEL_TABLES = tuple(TABLE_KEYS)
+DEFAULTS = {"contact": "hunt_crossley", "condensation": condensations.DEFAULT_CONDENSATION, "envelope": "exponential", "eps": 0.0, "g": 9.81,
+            "T1": 4.0, "T2": 2.0, "band_limit_hz": GROUND_BAND_LIMIT_HZ}
+_RANGE_KEYS = ("start", "stop", "num", "log")
+#: The condensation a refused bed is pointed to: the paper's accepts every bed (no bearing check).
+_CONDENSES_EVERY_BED = "paper"
+
+
+class StudyError(ValueError):
+    """A study file problem; the message is one line and names the offending key."""
+
+
+# ----------------------------------------------------------------------------- reading
+def read_study_text(path):
+    """The text of the study file ``path`` (UTF-8, a byte-order mark dropped); :class:`StudyError` if
+    it is not a regular file of at most :data:`~screening.core.limits.MAX_STUDY_BYTES` or cannot
+    be read (checked before reading: a FIFO or a device never blocks or fills the memory).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The study file.
+
+    Returns
+    -------
+    str
+        Its text.
+
+    Raises
+    ------
+    StudyError
+        A missing, unreadable, special or too large file (one line naming it).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "bed.toml")
+    ...     with open(path, "w", encoding="utf-8-sig") as fh:         # a byte-order mark
+    ...         _ = fh.write("[block]\\nm = 8.67\\n")
+    ...     read_study_text(path)
+    '[block]\\nm = 8.67\\n'
+    """
+    try:
+        return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)
+    except InputFileError as exc:
+        raise StudyError(f"{exc.path}: cannot read the study file ({exc.problem})") from None
+    except ValueError as exc:
+        raise StudyError(f"cannot read the study file ({one_line(exc)})") from None
+    except OSError as exc:
+        raise StudyError(f"{os.fsdecode(path)}: cannot read the study file ({exc.__class__.__name__}: "
+                         f"{exc.strerror or exc})") from None
+
+
+def parse_toml(text, source, build):
+    """``build(raw)`` on the parsed TOML ``text``; every :class:`StudyError` is prefixed with ``source``.
+
+    Parameters
+    ----------
+    text : str
+        The study, in TOML.
+    source : str
+        Where it came from (the prefix of every message).
+    build : callable
+        ``build(raw)`` makes the study of the parsed tables ``raw`` (a dict).
+
+    Returns
+    -------
+    object
+        What ``build`` returned.
+
+    Raises
+    ------
+    StudyError
+        Text too long or nested too deep, invalid TOML, or a :class:`StudyError` of ``build``; prefixed with ``source``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    .. [2] TOML v1.0.0 specification, https://toml.io/en/v1.0.0
+
+    Examples
+    --------
+    >>> parse_toml("[block]\\nm = 8.67\\n", "bed.toml", lambda raw: raw)
+    {'block': {'m': 8.67}}
+    >>> try:
+    ...     parse_toml("[block\\n", "bed.toml", lambda raw: raw)
+    ... except StudyError as exc:
+    ...     print(exc)
+    bed.toml: invalid TOML: Expected ']' at the end of a table declaration (at line 1, column 7)
+    """
+    if len(text) > limits.MAX_STUDY_CHARS:
+        raise StudyError(f"{source}: the study file has {len(text)} characters; at most "
+                         f"{limits.MAX_STUDY_CHARS} are read")
+    depth = limits.nesting_depth(text)
+    if depth > limits.MAX_NESTING:
+        raise StudyError(f"{source}: invalid TOML: arrays/tables nested {depth} deep (parts of dotted keys "
+                         f"count as levels); at most "
+                         f"{limits.MAX_NESTING} levels are read")
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{source}: invalid TOML: {one_line(exc)}") from None
+    except RecursionError:
+        raise StudyError(f"{source}: invalid TOML: nested too deep") from None
+    try:
+        return build(raw)
+    except StudyError as exc:
+        raise StudyError(f"{source}: {exc}") from None
+
+
+# ----------------------------------------------------------------------------- helpers
+def one_line(exc):
+    """The message of ``exc`` on one line.
+
+    Parameters
+    ----------
+    exc : BaseException
+        An exception (or any object).
+
+    Returns
+    -------
+    str
+        Its message with every run of white space made one space.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> one_line(ValueError("bad\\n   value"))
+    'bad value'
+    """
+    return " ".join(str(exc).split())
+
+
+def type_name(value):
+    """How a wrong value is named in a message (``got ...``).
+
+    Parameters
+    ----------
+    value : object
+        A value parsed from TOML.
+
+    Returns
+    -------
+    str
+        ``"a boolean"``, ``"the string '...'"``, ``"a list"``, ``"a table"`` or the type's name.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> type_name(True), type_name("x"), type_name([1]), type_name({}), type_name(1.5)
+    ('a boolean', "the string 'x'", 'a list', 'a table', 'float')
+    """
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, str):
+        return f"the string {value!r}"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a table"
+    return type(value).__name__
+
+
+def table(raw, key, where=""):
+    """Sub-table ``key`` of ``raw`` (empty if absent).
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+    key : str
+        The sub-table's name.
+    where : str, optional
+        The prefix of ``raw``'s keys (with its trailing dot).
+
+    Returns
+    -------
+    dict
+        The sub-table, or ``{}`` when absent.
+
+    Raises
+    ------
+    StudyError
+        ``key`` is not a table.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> table({"block": {"m": 8.67}}, "block"), table({}, "time")
+    ({'m': 8.67}, {})
+    >>> try:
+    ...     table({"time": 5}, "time")
+    ... except StudyError as exc:
+    ...     print(exc)
+    time: must be a table (got int)
+    """
+    value = raw.get(key, {})
+    if not isinstance(value, dict):
+        raise StudyError(f"{where}{key}: must be a table (got {type_name(value)})")
+    return value
+
+
+def check_keys(tbl, allowed, where):
+    """Refuse a key of ``tbl`` not in ``allowed`` (a typo is never ignored).
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    allowed : sequence of str
+        Its allowed keys.
+    where : str
+        The prefix of its keys (with its trailing dot).
+
+    Returns
+    -------
+    None
+        Returns only when every key is allowed.
+
+    Raises
+    ------
+    StudyError
+        An unknown key (the allowed ones listed).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_keys({"m": 8.67, "mass": 8.67}, ("m", "b", "h"), "block.")
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.mass: unknown key (allowed: m, b, h)
+    """
+    for key in tbl:
+        if key not in allowed:
+            raise StudyError(f"{where}{key}: unknown key (allowed: {', '.join(allowed)})")
+
+
+def required(tbl, key, where, why=""):
+    """``tbl[key]``, or :class:`StudyError` naming the missing key.
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    key : str
+        The key.
+    where : str
+        The prefix of the table's keys.
+    why : str, optional
+        Appended to the message.
+
+    Returns
+    -------
+    object
+        ``tbl[key]``.
+
+    Raises
+    ------
+    StudyError
+        ``key`` is missing.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> required({"m": 8.67}, "m", "block.")
+    8.67
+    >>> try:
+    ...     required({"m": 8.67}, "b", "block.")
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.b: required
+    """
+    if key not in tbl:
+        raise StudyError(f"{where}{key}: required{why}")
+    return tbl[key]
+
+
+def is_number(value):
+    """Whether ``value`` is a real number (a TOML boolean is not).
+
+    Parameters
+    ----------
+    value : object
+        A value parsed from TOML.
+
+    Returns
+    -------
+    bool
+        True for an integer or a float, False for a boolean or anything else.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> is_number(2), is_number(0.5), is_number(True), is_number("1")
+    (True, True, False, False)
+    """
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def check_value(key, value, lower=None, inclusive=False, upper=None):
+    """``value`` as a float: a finite number above ``lower`` and at most ``upper`` (each optional).
+
+    Parameters
+    ----------
+    key : str
+        The full key, named in the message.
+    value : object
+        The value.
+    lower : float, optional
+        Lower bound.
+    inclusive : bool, optional
+        Whether ``lower`` itself is allowed.
+    upper : float, optional
+        Upper bound (inclusive).
+
+    Returns
+    -------
+    float
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not a number, not finite, or out of range (the range stated).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> check_value("block.m", 8.67, lower=0.0)
+    8.67
+    >>> try:
+    ...     check_value("block.m", 0, lower=0.0)
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.m: must be a finite number > 0 (got 0.0)
+    """
+    if not is_number(value):
+        raise StudyError(f"{key}: must be a number (got {type_name(value)})")
+    try:
+        value = float(value)
+    except OverflowError:                           # an integer with hundreds of digits
+        value = math.inf if value > 0 else -math.inf
+    ok = math.isfinite(value)
+    if ok and lower is not None:
+        ok = value >= lower if inclusive else value > lower
+    if ok and upper is not None:
+        ok = value <= upper
+    if not ok:
+        rng = "a finite number"
+        if lower is not None:
+            rng += f" {'>=' if inclusive else '>'} {lower:g}"
+        if upper is not None:
+            rng += f"{' and' if lower is not None else ''} <= {upper:g}"
+        raise StudyError(f"{key}: must be {rng} (got {value!r})")
+    return value
+
+
+def check_integer(key, value, lower, upper=None):
+    """``value``: an integer (no float, no boolean) ``>= lower`` (and ``<= upper`` if given).
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    lower : int
+        Smallest allowed.
+    upper : int, optional
+        Largest allowed.
+
+    Returns
+    -------
+    int
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not an integer (a float or a boolean is not), or out of range.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> check_integer("mcs.samples", 200, 1)
+    200
+    >>> try:
+    ...     check_integer("mcs.samples", 2.0, 1)
+    ... except StudyError as exc:
+    ...     print(exc)
+    mcs.samples: must be an integer >= 1 (got 2.0)
+    """
+    if (isinstance(value, bool) or not isinstance(value, int) or value < lower
+            or (upper is not None and value > upper)):
+        rng = f">= {lower}" if upper is None else f"in {lower}..{upper}"
+        raise StudyError(f"{key}: must be an integer {rng} (got {short_repr(value)})")
+    return value
+
+
+def short_repr(value):
+    """``repr(value)``, shortened for integers of hundreds of digits.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+
+    Returns
+    -------
+    str
+        At most 60 characters; an integer of 30 digits or more as its digit count.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> short_repr(10**40), short_repr(3)
+    ('an integer of 41 digits', '3')
+    """
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        return f"an integer of {len(str(abs(value)))} digits"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def integer(tbl, key, default, lower, where, upper=None):
+    """``tbl[key]`` (or ``default``) checked by :func:`check_integer`.
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    key : str
+        The key.
+    default : int
+        The value when absent.
+    lower : int
+        Smallest allowed.
+    where : str
+        The prefix of the table's keys.
+    upper : int, optional
+        Largest allowed.
+
+    Returns
+    -------
+    int
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not an integer, or out of range.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> integer({"count": 3}, "count", 1, 1, "mcs."), integer({}, "count", 1, 1, "mcs.")
+    (3, 1)
+    """
+    return check_integer(f"{where}{key}", tbl.get(key, default), lower, upper)
+
+
+def check_list(key, value):
+    """``value``: a non-empty list.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+
+    Returns
+    -------
+    list
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Not a list, or an empty one.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> check_list("fragility.thresholds", [0.5])
+    [0.5]
+    >>> try:
+    ...     check_list("fragility.thresholds", [])
+    ... except StudyError as exc:
+    ...     print(exc)
+    fragility.thresholds: empty list (give at least one value)
+    """
+    if not isinstance(value, list):
+        raise StudyError(f"{key}: must be a list (got {type_name(value)})")
+    if not value:
+        raise StudyError(f"{key}: empty list (give at least one value)")
+    return value
+
+
+def number_list(key, value, **bounds):
+    """A non-empty list of numbers, each checked by :func:`check_value` (``bounds``); a tuple of floats.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    **bounds
+        ``lower``, ``inclusive``, ``upper`` of :func:`check_value`.
+
+    Returns
+    -------
+    tuple of float
+        The values.
+
+    Raises
+    ------
+    StudyError
+        Not a non-empty list, or an entry out of range (named by its index).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> number_list("fragility.thresholds", [0.5, 1], lower=0.0)
+    (0.5, 1.0)
+    >>> try:
+    ...     number_list("fragility.thresholds", [0.5, -1], lower=0.0)
+    ... except StudyError as exc:
+    ...     print(exc)
+    fragility.thresholds[1]: must be a finite number > 0 (got -1.0)
+    """
+    return tuple(check_value(f"{key}[{i}]", v, **bounds) for i, v in enumerate(check_list(key, value)))
+
+
+def integer_list(key, value, lower):
+    """A non-empty list of integers ``>= lower``; a tuple.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    lower : int
+        Smallest allowed.
+
+    Returns
+    -------
+    tuple of int
+        The values.
+
+    Raises
+    ------
+    StudyError
+        Not a non-empty list, or an entry that is not an integer ``>= lower``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> integer_list("convergence.samples", [100, 400], 1)
+    (100, 400)
+    """
+    return tuple(check_integer(f"{key}[{i}]", v, lower) for i, v in enumerate(check_list(key, value)))
+
+
+def check_choice(key, value, choices):
+    """``value`` if it is one of ``choices``, else :class:`StudyError` listing them.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+    choices : sequence
+        The allowed values.
+
+    Returns
+    -------
+    object
+        The value.
+
+    Raises
+    ------
+    StudyError
+        A value not among ``choices`` (listed).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> try:
+    ...     check_choice("output.histories", "some", ("all", "none", "spots"))
+    ... except StudyError as exc:
+    ...     print(exc)
+    output.histories: must be one of 'all', 'none', 'spots' (got 'some')
+    """
+    if value not in choices:
+        raise StudyError(f"{key}: must be one of {', '.join(map(repr, choices))} "
+                         f"(got {type_name(value) if not isinstance(value, str) else repr(value)})")
+    return value
+
+
+def choice(tbl, key, choices, where, default=None):
+    """``tbl[key]`` (or ``default``) checked by :func:`check_choice`.
+
+    Parameters
+    ----------
+    tbl : dict
+        A table.
+    key : str
+        The key.
+    choices : sequence
+        The allowed values.
+    where : str
+        The prefix of the table's keys.
+    default : object, optional
+        The value when absent (None: required).
+
+    Returns
+    -------
+    object
+        The value.
+
+    Raises
+    ------
+    StudyError
+        Missing without a default, or not among ``choices``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> choice({}, "contact", ("hunt_crossley", "winkler"), "foundation.", default="hunt_crossley")
+    'hunt_crossley'
+    """
+    value = tbl.get(key, default)
+    if value is None:
+        raise StudyError(f"{where}{key}: required (one of {', '.join(map(repr, choices))})")
+    return check_choice(f"{where}{key}", value, choices)
+
+
+def name_string(key, value):
+    """A name: a non-empty string.
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    value : object
+        The value.
+
+    Returns
+    -------
+    str
+        The name.
+
+    Raises
+    ------
+    StudyError
+        Not a string, or only white space.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> name_string("case[0].name", "roof")
+    'roof'
+    """
+    if not isinstance(value, str) or not value.strip():
+        raise StudyError(f"{key}: required, a non-empty string (got {type_name(value)})")
+    return value
+
+
+def title_and_description(raw, default_title):
+    """The study's ``title`` and ``description`` (both optional strings).
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+    default_title : str
+        The title when none is given.
+
+    Returns
+    -------
+    tuple of str
+        ``(title, description)``; the description defaults to ``""``.
+
+    Raises
+    ------
+    StudyError
+        A title or description that is not a string.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> title_and_description({"title": "Soft beds"}, "screening: bed")
+    ('Soft beds', '')
+    """
+    title = raw.get("title", default_title)
+    description = raw.get("description", "")
+    for key, value in (("title", title), ("description", description)):
+        if not isinstance(value, str):
+            raise StudyError(f"{key}: must be a string (got {type_name(value)})")
+    return title, description
+
+
+def time_table(raw):
+    """``[time]``: ``(t_end, dt)`` [s] (defaults 20 and 0.05); ``dt`` must divide ``t_end``.
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+
+    Returns
+    -------
+    tuple of float
+        ``(t_end, dt)`` [s].
+
+    Raises
+    ------
+    StudyError
+        Unknown keys, values that are not positive, ``dt`` not dividing ``t_end``, or too many output steps.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> time_table({"time": {"t_end": 10.0, "dt": 0.1}}), time_table({})
+    ((10.0, 0.1), (20.0, 0.05))
+    >>> try:
+    ...     time_table({"time": {"t_end": 1.0, "dt": 0.3}})
+    ... except StudyError as exc:
+    ...     print(exc)
+    time.dt: parameter 'dt' must divide 't_end' into whole steps (got t_end=1.0, dt=0.3)
+    """
+    tbl = table(raw, "time")
+    check_keys(tbl, ("t_end", "dt"), "time.")
+    t_end = check_value("time.t_end", tbl.get("t_end", 20.0), 0.0, False)
+    dt = check_value("time.dt", tbl.get("dt", 0.05), 0.0, False)
+    steps = limits.output_steps(t_end, dt)
+    if not steps < limits.MAX_TIMES:           # checked before output_times builds the array
+        key = "time.t_end" if "dt" not in tbl else "time.dt" if "t_end" not in tbl else "time.t_end / time.dt"
+        raise StudyError(f"{key}: t_end / dt = {steps:.3g} output steps; at most {limits.MAX_TIMES - 1} "
+                         f"are allowed (got t_end={t_end!r}, dt={dt!r})")
+    try:
+        output_times(t_end, dt)
+    except ValueError as exc:
+        raise StudyError(f"time.dt: {one_line(exc)}") from None
+    return t_end, dt
+
+
+# ----------------------------------------------------------------------------- model tables
+@dataclass(frozen=True)
+class Case:
+    """One named configuration: structure (contact law, excitation, envelope) and scalars.
+
+    ``params`` maps parameter names to floats [SI] for every non-swept numeric parameter
+    that applies to this case (``I_cm`` only when given).  ``condensation`` is the registered
+    name; ``condensation_model`` the :class:`screening.core.condensation.Condensation` it names,
+    looked up once when the case is made (what the solvers are given).
+    """
+
+    name: str
+    contact: str
+    excitation: str
+    envelope: str
+    params: MappingProxyType
+    condensation: str = condensations.DEFAULT_CONDENSATION
+    condensation_model: condensations.Condensation = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self):
+        if self.condensation_model is None:
+            object.__setattr__(self, "condensation_model", condensations.get(self.condensation))
+
+    def applies(self, name):
+        """Whether parameter ``name`` is meaningful for this case."""
+        return name in applicable(self.contact, self.excitation, self.envelope)
+
+
+def applicable(contact, excitation, envelope):
+    """The numeric parameters that mean something for this contact law, excitation and envelope.
+
+    Parameters
+    ----------
+    contact : str
+        The registered contact law.
+    excitation : str
+        The registered excitation.
+    envelope : str
+        ``"exponential"`` or ``"constant"``.
+
+    Returns
+    -------
+    set of str
+        The parameter names: the block's, ``k``, ``eps``, the law's damping parameter, the intensity,
+        the excitation's and the envelope's.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> sorted(applicable("winkler", "kanai_tajimi", "constant") - applicable("hunt_crossley", "white", "constant"))
+    ['c', 'omega_g', 'zeta_g']
+    >>> {"T1", "T2"} <= applicable("hunt_crossley", "white", "exponential")
+    True
+    """
+    names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga", "band_limit_hz"}
+    names.add(laws.get(contact).parameter)
+    names |= set(excitations.get(excitation).parameters)
+    if envelope == "exponential":
+        names |= {"T1", "T2"}
+    return names
+
+
+def model_tables(raw, allowed=TABLE_KEYS):
+    """The model tables ``[block]``, ``[foundation]``, ``[excitation]`` of ``raw``, their keys checked
+    against ``allowed`` (table name -> keys).
+
+    Parameters
+    ----------
+    raw : dict
+        The parsed tables.
+    allowed : dict, optional
+        Table name -> allowed keys (default :data:`TABLE_KEYS`).
+
+    Returns
+    -------
+    dict
+        ``{"block": ..., "foundation": ..., "excitation": ...}`` (empty tables when absent).
+
+    Raises
+    ------
+    StudyError
+        A table that is not one, or an unknown key.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> model_tables({"block": {"m": 8.67}})
+    {'block': {'m': 8.67}, 'foundation': {}, 'excitation': {}}
+    >>> try:
+    ...     model_tables({"block": {"mass": 8.67}})
+    ... except StudyError as exc:
+    ...     print(exc)
+    block.mass: unknown key (allowed: m, b, h, I_cm, g)
+    """
+    tables = {}
+    for tname in MODEL_TABLES:
+        tbl = table(raw, tname)
+        check_keys(tbl, allowed[tname], f"{tname}.")
+        tables[tname] = tbl
+    return tables
+
+
+def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS, upper=None):
+    """Values of a swept parameter from a list or a range table (validated; a range has at most
+    ``max_num`` values, checked before the values are built).
+
+    Parameters
+    ----------
+    key : str
+        The full key.
+    spec : list or dict
+        A list of values, or a range ``{start, stop, num, log}``.
+    lower : float or None
+        Lower bound of every value.
+    inclusive : bool
+        Whether ``lower`` itself is allowed.
+    max_num : int, optional
+        Most values of a range.
+    upper : float, optional
+        Upper bound.
+
+    Returns
+    -------
+    numpy.ndarray
+        The values, strictly monotonic, in the parameter's SI unit.
+
+    Raises
+    ------
+    StudyError
+        A bad list or range, values out of range, too many, or repeated.
+
+    Notes
+    -----
+    A range holds ``num`` values from ``start`` to ``stop``, both included: evenly spaced, or with
+    ``log = true`` geometrically (:math:`x_i = x_0 (x_{n-1}/x_0)^{i/(n-1)}`).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> sweep_values("excitation.S0", {"start": 1e-5, "stop": 1e-3, "num": 3, "log": True}, 0.0, False)
+    array([1.e-05, 1.e-04, 1.e-03])
+    """
+    if isinstance(spec, list):
+        values = number_list(key, spec, lower=lower, inclusive=inclusive, upper=upper)
+    else:
+        check_keys(spec, _RANGE_KEYS, f"{key}.")
+        for part in ("start", "stop", "num"):
+            if part not in spec:
+                raise StudyError(f"{key}.{part}: required in a range (keys: start, stop, num, log)")
+        num = spec["num"]
+        if isinstance(num, int) and not isinstance(num, bool) and num > max_num:
+            raise StudyError(f"{key}.num: must be an integer in 1..{max_num} (the grid limit run.max_points; "
+                             f"got {short_repr(num)})")
+        num = check_integer(f"{key}.num", num, 1)
+        log = spec.get("log", False)
+        if not isinstance(log, bool):
+            raise StudyError(f"{key}.log: must be true or false (got {type_name(log)})")
+        start = check_value(f"{key}.start", spec["start"], lower, inclusive, upper)
+        stop = check_value(f"{key}.stop", spec["stop"], lower, inclusive, upper)
+        if log:
+            if start <= 0.0 or stop <= 0.0:
+                raise StudyError(f"{key}: log = true needs start > 0 and stop > 0 (got {start!r}, {stop!r})")
+            values = np.geomspace(start, stop, num)
+            values[0] = start
+            if num > 1:
+                values[-1] = stop
+        else:
+            values = np.linspace(start, stop, num)
+    values = np.asarray(values, dtype=float)
+    if values.size > 1:
+        step = np.diff(values)
+        if not (np.all(step > 0) or np.all(step < 0)):
+            raise StudyError(f"{key}: values must be strictly increasing or strictly decreasing "
+                             "(a coordinate cannot repeat values)")
+    return values
+
+
+def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=limits.DEFAULT_MAX_POINTS):
+    """Scalars of one model table; swept entries go to ``sweeps`` (only when allowed: ``sweeps`` not
+    None and the key in ``sweepable``).  The grid of ``sweeps`` may have at most ``max_points``
+    points (checked as each swept parameter is added, before anything is built on the grid).
+
+    Parameters
+    ----------
+    tbl : dict
+        One model table.
+    tname : str
+        Its name (``"block"``, ...).
+    sweeps : dict or None
+        Receives the swept parameters' values (None: a case, scalars only).
+    where : str
+        The prefix of the table's keys.
+    sweepable : sequence of str, optional
+        The parameters that may be swept.
+    max_points : int, optional
+        Most grid points.
+
+    Returns
+    -------
+    dict
+        ``{parameter: value}`` of the scalars (SI); the swept ones are added to ``sweeps``.
+
+    Raises
+    ------
+    StudyError
+        A value out of its range, a sweep where none is allowed, or a grid too large.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> sweeps = {}
+    >>> numeric_table({"k": 2.89e7, "eps": [0.0, 6e7], "contact": "winkler"}, "foundation", sweeps, "")
+    {'k': 28900000.0}
+    >>> sweeps
+    {'eps': array([       0., 60000000.])}
+    """
+    scalars = {}
+    for key, value in tbl.items():
+        if key not in NUMERIC:
+            continue
+        _, lower, inclusive, upper = NUMERIC[key]
+        full = f"{where}{tname}.{key}"
+        if isinstance(value, (list, dict)):
+            if key not in sweepable:
+                only = f"; only {', '.join(sweepable)} may be swept" if sweepable else ""
+                raise StudyError(f"{full}: must be a number (got {type_name(value)}{only})")
+            if sweeps is None:
+                raise StudyError(f"{full}: a case sets scalars only (sweep in the base tables)")
+            sweeps[key] = sweep_values(full, value, lower, inclusive, max_points, upper)
+            check_grid_size(sweeps, max_points, full)
+        else:
+            scalars[key] = check_value(full, value, lower, inclusive, upper)
+    return scalars
+
+
+def check_grid_size(sweeps, max_points, key, n_cases=1):
+    """:class:`StudyError` naming ``key`` if ``n_cases`` x the swept values exceed ``max_points``.
+
+    Parameters
+    ----------
+    sweeps : dict
+        Swept parameter -> values (None: not known yet, left out).
+    max_points : int
+        Most grid points.
+    key : str
+        The key named in the message.
+    n_cases : int, optional
+        Cases of the study.
+
+    Returns
+    -------
+    int
+        The grid's points.
+
+    Raises
+    ------
+    StudyError
+        More than ``max_points``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_grid_size({"eps": np.zeros(10), "S0": np.zeros(20)}, 1000, "excitation.S0")
+    200
+    """
+    sizes = [n_cases] if n_cases > 1 else []
+    sizes += [len(v) for v in sweeps.values() if v is not None]
+    n = math.prod(sizes)
+    if n > max_points:
+        names = (["case"] if n_cases > 1 else []) + [k for k, v in sweeps.items() if v is not None]
+        shape = " x ".join(f"{d} {s}" for d, s in zip(names, sizes))
+        raise StudyError(f"{key}: the grid has {n} points ({shape}); at most run.max_points = {max_points} "
+                         "are allowed (sweep fewer values, or raise [run] max_points)")
+    return n
+
+
+def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
+    """Check one configuration (model tables, e.g. base tables merged with a case) and return a :class:`Case`.
+
+    ``sweeps`` maps the parameters given per grid point to their values (the values of excitation
+    parameters are not read: None is fine).  Parameters named in ``inherited`` (set by the base
+    tables, not by the case) are dropped when they do not apply to the case's contact law /
+    excitation / envelope.
+
+    Parameters
+    ----------
+    name : str
+        The case's name (``""`` without cases).
+    tables : dict
+        The model tables of the configuration.
+    sweeps : dict
+        Parameters given per grid point -> values.
+    where : str
+        The prefix of the keys (``"case[0]."``).
+    inherited : frozenset of str, optional
+        Parameters set by the base tables.
+
+    Returns
+    -------
+    Case
+        The configuration, with defaults filled in (``eps`` 0, ``g`` 9.81 m s-2, ``T1`` 4 s, ``T2`` 2 s, ...).
+
+    Raises
+    ------
+    StudyError
+        A parameter that does not apply, one missing, S0 and pga both given, or a bed the condensation cannot carry.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> case.contact, case.params["g"], case.params["T1"]
+    ('hunt_crossley', 9.81, 4.0)
+    """
+    block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
+    contact = choice(foundation, "contact", laws.names(), f"{where}foundation.", DEFAULTS["contact"])
+    kind = choice(excitation, "kind", EXCITATIONS, f"{where}excitation.")
+    envelope = choice(excitation, "envelope", ENVELOPES, f"{where}excitation.", DEFAULTS["envelope"])
+    condensation = choice(foundation, "condensation", condensation_names(), f"{where}foundation.",
+                          DEFAULTS["condensation"])
+    names = applicable(contact, kind, envelope)
+    params = {}
+    for tname, tbl in (("block", block), ("foundation", foundation), ("excitation", excitation)):
+        tbl = {k: v for k, v in tbl.items() if k in names or k not in inherited}
+        params.update(numeric_table(tbl, tname, None, where))
+    structure = {"contact": f"contact = {contact!r}", "kind": f"kind = {kind!r}",
+                 "envelope": f"envelope = {envelope!r}"}
+    reason = {**dict.fromkeys(laws.DAMPING_FIELDS, structure["contact"]),
+              **dict.fromkeys(EXCITATION_PARAMETERS, structure["kind"]),
+              "T1": structure["envelope"], "T2": structure["envelope"]}
+    for key in list(params) + list(sweeps):
+        if key not in names:
+            raise StudyError(f"{where}{NUMERIC[key][0]}.{key}: does not apply to {reason[key]}")
+    given = set(params) | set(sweeps)
+    if {"S0", "pga"} <= given:
+        raise StudyError(f"{where}excitation.pga: give the intensity as S0 or as pga, not both")
+    if not {"S0", "pga"} & given:
+        raise StudyError(f"{where}excitation.S0: required (or give a target median PGA as excitation.pga [m s-2])")
+    for key in sorted(names - given - {"S0", "pga"}, key=list(NUMERIC).index):
+        if key in DEFAULTS:
+            params[key] = DEFAULTS[key]
+        elif key != "I_cm":
+            why = f" for {reason[key]}" if key in reason else ""
+            raise StudyError(f"{where}{NUMERIC[key][0]}.{key}: required{why}")
+    if envelope == "exponential" and params["T2"] >= params["T1"]:
+        raise StudyError(f"{where}excitation.T2: must be smaller than excitation.T1 "
+                         f"(got T1={params['T1']!r}, T2={params['T2']!r})")
+    case = Case(name=name, contact=contact, excitation=kind, envelope=envelope,
+                params=MappingProxyType(params), condensation=condensation)
+    _check_condensation(case, sweeps, where)
+    _check_target_pga(case, sweeps, where)
+    return case
+
+
+#: Target median PGA [m s-2] a study may give (``excitation.pga``): about 1e-7 g to 100 g.
+PGA_RANGE = (1e-6, 1e3)
+
+
+def _check_target_pga(case, sweeps, where):
+    """A target PGA must lie in :data:`PGA_RANGE` (its ``S0`` follows with the excitation's own band limit
+    ``band_limit_hz``, whatever the bed)."""
+    if "pga" not in case.params and "pga" not in sweeps:
+        return
+    values = sweeps["pga"] if "pga" in sweeps else [case.params["pga"]]
+    for v in values if values is not None else ():
+        if not PGA_RANGE[0] <= v <= PGA_RANGE[1]:
+            raise StudyError(f"{where}excitation.pga: must be a number in {PGA_RANGE[0]:g}..{PGA_RANGE[1]:g} m s-2 "
+                             f"(got {float(v)!r})")
+
+
+def _check_condensation(case, sweeps, where):
+    """Every grid point of ``case`` must be a bed its condensation can condense
+    (:meth:`screening.core.condensation.Condensation.check` on the arrays of grid values)."""
+    cond = case.condensation_model
+    sweeps = {n: v for n, v in sweeps.items() if NUMERIC[n][0] != "excitation"}   # trailing dims: no effect
+    if any(v is None for v in sweeps.values()):
+        return                      # values given later (trade-study families): checked there
+    names = list(sweeps)
+    grids = np.meshgrid(*sweeps.values(), indexing="ij", sparse=True) if names else []
+    p = {**case.params, **dict(zip(names, grids))}
+    try:
+        cond.check(_block(p), _foundation(case, p))
+    except ValueError as exc:
+        at = _failing_point(case, sweeps)
+        raise StudyError(f"{where}foundation.condensation: {cond.name!r} needs a bed it can condense and "
+                         + (f"the one at {at}" if at else "this one") + f" is not ({one_line(exc)})"
+                         + f"; use condensation = {_CONDENSES_EVERY_BED!r}") from None
+
+
+def _failing_point(case, sweeps):
+    """``"name = value, ..."`` of the swept block/foundation parameters at the first grid point
+    (C order) that the case's condensation refuses; ``""`` if none is swept or none is found."""
+    names = list(sweeps)
+    for j in np.ndindex(*(len(sweeps[n]) for n in names)) if names else ():
+        values = {n: sweeps[n][i] for n, i in zip(names, j)}
+        p = {**case.params, **values}
+        try:
+            case.condensation_model.check(_block(p), _foundation(case, p))
+        except ValueError:
+            return ", ".join(f"{n} = {float(v)!r}" for n, v in values.items())
+    return ""
+
+
+# ----------------------------------------------------------------------------- models
+def _block(p):
+    return Block(m=p["m"], b=p["b"], h=p["h"], I_cm=p.get("I_cm"), g=p["g"])
+
+
+def _foundation(case, p):
+    damping = laws.get(case.contact).parameter
+    return Foundation(k=p["k"], eps=p["eps"], law=case.contact, **{damping: p[damping]})
+
+
+def case_block_and_foundation(case, values):
+    """The block and the bed of ``case`` with ``values`` merged in (no excitation: nothing to derive).
+
+    Parameters
+    ----------
+    case : Case
+        A resolved case (:func:`resolve_case`).
+    values : dict
+        Swept parameters by name (SI: ``m`` [kg], ``b``, ``h`` [m], ``k`` [N m-2], ...), scalars or arrays.
+
+    Returns
+    -------
+    block : screening.core.model.Block
+    foundation : screening.core.model.Foundation
+        With the case's contact law and its damping parameter.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> block, foundation = case_block_and_foundation(resolve_case("", tables, {}, ""), {"b": 0.05})
+    >>> float(block.b), float(foundation.k)
+    (0.05, 28900000.0)
+    """
+    p = {**case.params, **values}
+    return _block(p), _foundation(case, p)
+
+
+def build_models(case, values, t_end=None):
+    """Model objects for ``case`` with ``values`` (swept parameters, scalars or arrays) merged in.
+
+    Returns ``(block, foundation, excitation)``; array fields broadcast as in
+    :func:`screening.solvers.moments.solve_moments`.  An intensity given as a target median PGA
+    (``pga`` [m s-2]) becomes the ``S0`` whose record of ``t_end`` [s] has that median PGA
+    (:func:`screening.analysis.intensity.s0_for_pga`, with the excitation's ground-motion band limit);
+    ``ValueError`` where a point's ``S0`` cannot be derived (:func:`build_point_models` flags them instead).
+
+    Parameters
+    ----------
+    case : Case
+        The configuration.
+    values : dict
+        Values of the swept parameters (scalars or arrays, SI).
+    t_end : float, optional
+        Record length [s]; needed with a target PGA.
+
+    Returns
+    -------
+    tuple
+        ``(block, foundation, excitation)``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
+       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
+       https://doi.org/10.1016/j.jsv.2026.119733
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> block, foundation, excitation = build_models(case, {"eps": np.array([0.0, 6e7])})
+    >>> block.m, foundation.eps, excitation.S0
+    (8.67, array([       0., 60000000.]), 0.0001)
+    """
+    block, foundation, excitation, underivable = build_point_models(case, values, t_end)
+    if np.any(underivable):
+        raise ValueError("excitation.pga: S0 cannot be derived from the target PGA at "
+                         f"{int(np.sum(underivable))} point(s) (the median PGA per unit S0 is zero, infinite or "
+                         "cannot be computed for their filter and envelope)")
+    return block, foundation, excitation
+
+
+def case_cutoff(case):
+    """The ground-motion band limit [rad/s] of a case's excitation (``excitation.band_limit_hz``, default
+    :data:`~screening.analysis.intensity.GROUND_BAND_LIMIT_HZ`): the band its intensity measures and a
+    target PGA refer to, whatever stands on the ground.
+
+    Parameters
+    ----------
+    case : Case
+        The configuration.
+
+    Returns
+    -------
+    float
+        The band limit [rad s-1]: :math:`2\\pi f` with ``band_limit_hz`` :math:`f`.
+
+    References
+    ----------
+    .. [1] screening documentation, "Intensity measures of the stochastic inputs", ``docs/intensity_measures.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> round(case_cutoff(case), 4)                  # 25 Hz
+    157.0796
+    """
+    return ground_cutoff(case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ))
+
+
+def build_point_models(case, values, t_end=None):
+    """:func:`build_models` that flags instead of refusing: ``(block, foundation, excitation, underivable)``,
+    ``underivable`` a boolean array (broadcast with the fields; ``False`` without a target PGA) of the
+    points whose ``S0`` cannot follow from the target PGA; their excitation carries ``S0 = 1`` as a
+    placeholder (the caller flags them and discards what is computed there).
+
+    Parameters
+    ----------
+    case : Case
+        The configuration.
+    values : dict
+        Values of the swept parameters (SI).
+    t_end : float, optional
+        Record length [s]; needed with a target PGA.
+
+    Returns
+    -------
+    tuple
+        ``(block, foundation, excitation, underivable)``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
+    ...           "excitation": {"kind": "white", "S0": 1e-4}}
+    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
+    >>> block, foundation, excitation, underivable = build_point_models(case, {"eps": 6e7})
+    >>> foundation.eps, bool(underivable)
+    (60000000.0, False)
+    """
+    p = dict(case.params)
+    p.update(values)
+    block, foundation = _block(p), _foundation(case, p)
+    envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
+
+    def excitation(s0):
+        return excitations.build(case.excitation, s0, p, envelope)
+
+    if "pga" in p:
+        from screening.analysis.intensity import s0_for_pga
+
+        if t_end is None:
+            raise ValueError("t_end is needed to turn a target PGA into S0")
+        s0 = np.asarray(s0_for_pga(excitation(1.0), p["pga"], t_end, case_cutoff(case)))
+        with np.errstate(invalid="ignore"):
+            underivable = ~(np.isfinite(s0) & (s0 > 0))
+        s0 = np.where(underivable, 1.0, s0)
+        return block, foundation, excitation(float(s0) if s0.ndim == 0 else s0), underivable
+    return block, foundation, excitation(p["S0"]), np.zeros((), dtype=bool)

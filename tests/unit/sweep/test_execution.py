@@ -1,0 +1,132 @@
+"""The task functions of a sweep (screening.sweep.execution), called directly (no dask)."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+from helpers import GRID
+
+from screening.core import condensation
+from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
+from screening.core.status import PointStatus, SampleState, Trust
+from screening.io.layout import SPOT_HISTORIES
+from screening.sweep import execution
+from screening.sweep._submit import failed_spot
+from screening.sweep.execution import failed_result, sample_state, solve_batch
+from screening.sweep.grid import batch_models, plan_batches
+from screening.sweep.study import parse_study
+
+
+@pytest.mark.parametrize("name", ["paper", "cubic"])
+def test_condensation_objects_survive_pickling(name):
+    cond = condensation.get(name)
+    copy = pickle.loads(pickle.dumps(cond))
+    assert type(copy) is type(cond) and copy.name == name
+
+
+@pytest.mark.parametrize("name", ["paper", "cubic"])
+def test_solve_batch_takes_the_condensation_object(name):
+    study = parse_study(GRID.replace("t_end = 4.0", "t_end = 0.5"))
+    batch = plan_batches(study, 7)[1]
+    block, foundation, excitation = batch_models(study, batch)
+    cond = condensation.get(name)
+    out = solve_batch(block, foundation, excitation, cond, study.times, study.rtol, study.max_steps)
+    direct = solve_moments(block, foundation, excitation, study.times, condensation=name)
+    for key in HISTORY_VARIABLES:
+        assert out[key].dtype == np.float32 and out[key].shape == (7, study.times.size)
+        np.testing.assert_array_equal(out[key], direct[key].astype(np.float32))
+    np.testing.assert_array_equal(out["status"], direct["status"])
+    np.testing.assert_array_equal(out["theta_ul"], cond.uplift_threshold(block, foundation))
+    np.testing.assert_array_equal(out["slenderness"], np.full(7, block.slenderness))
+
+
+def test_failed_results_use_the_status_enums():
+    part = failed_result(3, 5)
+    assert np.all(part["status"] == PointStatus.task_failed) and part["status"].dtype == np.int8
+    assert np.all(np.isnan(part["var_theta"])) and np.all(part["n_steps"] == 0)
+    assert np.all(np.isnan(part["slenderness"]))
+    spot = failed_spot(5, 4)
+    assert np.all(spot["sample_state"] == SampleState.diverged_or_failed) and int(spot["n_used"]) == 0
+
+
+def test_sample_state_codes():
+    over = np.array([True, False, False, False])
+    div = np.array([False, True, False, False])
+    np.testing.assert_array_equal(sample_state(over, div), [SampleState.overturned, SampleState.diverged_or_failed,
+                                                            SampleState.standing, SampleState.standing])
+
+
+def test_the_local_client_is_never_made_dask_s_default():
+    """A run's client is used by name only: inside and after the run, dask's default client and its
+    scheduler setting are what they were (a closed default client breaks a caller's later xarray writes)."""
+    import dask
+    from distributed.client import _get_global_client
+
+    before = (_get_global_client(), dask.config.get("scheduler", None))
+    with execution.dask_client(0) as c:
+        assert c.submit(sum, [1, 2]).result() == 3
+        assert (_get_global_client(), dask.config.get("scheduler", None)) == before
+    assert (_get_global_client(), dask.config.get("scheduler", None)) == before
+
+
+def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads():
+    """A hand-made Monte Carlo dataset of 4 samples (one overturned): ``full_contact`` is the mean over
+    time of 1 - p_uplift, scaled to the used samples, and the stiff-bed cost estimate changes with it."""
+    import xarray as xr
+
+    from screening.analysis import escalation as esc
+
+    t = np.linspace(0.0, 1.0, 5)
+    p = np.array([0.0, 0.25, 0.5, 0.25, 0.0])
+    histories = {name: ("t", np.zeros(t.size)) for name in SPOT_HISTORIES}
+    histories["p_uplift"] = ("t", p)
+    ds = xr.Dataset({**histories,
+                     "n_overturned": ((), 1), "n_diverged": ((), 0), "n_steps": ("sample", np.full(4, 1000)),
+                     "peak_abs_theta": ("sample", np.ones(4)), "overturned": ("sample", [False, True, False, False]),
+                     "diverged": ("sample", np.zeros(4, bool))},
+                    coords={"t": t, "sample": np.arange(4)}, attrs={"input_grid_points": 64})
+    out = execution.spot_arrays(ds)
+    expected = (1.0 - p.mean()) * 3 / 4
+    assert out["full_contact"] == pytest.approx(expected, rel=1e-12)
+    assert out["full_contact"] == pytest.approx(esc.full_contact_share(p, 3, 4), rel=1e-12)
+    model = esc.EscalationModel.stiff_bed
+    with_share = esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4, full_contact=out["full_contact"])
+    without = esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4)
+    assert np.isfinite(with_share) and with_share > 0 and with_share != pytest.approx(without)
+    # a run that did not keep p_uplift: the share is unknown (NaN), and the cost model falls back
+    del ds["p_uplift"]
+    unknown = execution.spot_arrays(ds)["full_contact"]
+    assert np.isnan(unknown)
+    assert esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4, full_contact=unknown) == without
+
+
+def test_a_gaussian_probability_that_underflows_gets_a_standard_error_that_reaches_the_trust_limit():
+    """A trusted point far below toppling: the up-crossing probability underflows to 0 at both ends of the trust
+    band, which made its standard error 0 (certainty).  The trust rule vouches for points whose calibration Monte
+    Carlo overturned up to OVERTURN_LIMIT of its samples, so ``p + 2 se`` reaches that limit; a large probability
+    keeps the band's quarter (computed here from the up-crossing at the band's two ends)."""
+    from screening.analysis.fragility import linearized_exceedance
+    from screening.analysis.trust import OVERTURN_LIMIT
+    from screening.sweep.study import EXAMPLE_STUDY
+
+    study = parse_study(EXAMPLE_STUDY)
+    block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
+    nt = study.times.size
+    var = np.array([1e-7, 4e-3])[:, None]                      # sigma_theta: 3e-4 and 0.063 rad; atan(b/h) = 0.165
+    res = {"status": np.zeros(2, np.int8), "var_theta": np.repeat(var, nt, 1),
+           "var_theta_dot": np.repeat(100.0 * var, nt, 1), "cov_theta_theta_dot": np.zeros((2, nt)),
+           "c_eq": np.full((2, nt), 5.0), "k_eq": np.full((2, nt), 1000.0)}
+    slender = float(block.slenderness)
+    out = {"status": np.zeros(2, np.int8), "slenderness": np.full(2, slender),
+           "sl_trust": np.full(2, int(Trust.trusted), np.int8),
+           "sl_error_low": np.full(2, -0.1), "sl_error_high": np.full(2, 0.1)}
+    p = execution.batch_probabilities(res, block, foundation, excitation, out, study.times)
+    assert p["p_overturn"][0] == 0.0                                                 # underflowed
+    assert p["p_overturn_se"][0] > 0 and p["p_overturn"][0] + 2 * p["p_overturn_se"][0] == pytest.approx(OVERTURN_LIMIT)
+    ends = [linearized_exceedance(study.times, res["var_theta"][1:] / (1 + e), res["var_theta_dot"][1:] / (1 + e),
+                                  res["cov_theta_theta_dot"][1:], res["c_eq"][1:], res["k_eq"][1:],
+                                  np.atleast_1d(block.m_sdof), np.zeros(1, np.int8), np.array([slender]))[0]
+            for e in (0.1, -0.1)]
+    assert p["p_overturn"][1] > 0.1
+    assert p["p_overturn_se"][1] == pytest.approx((ends[1] - ends[0]) / 4, rel=1e-12)
