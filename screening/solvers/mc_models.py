@@ -262,3 +262,4 @@ COUPLED = register(CoupledModel())
 CONDENSED = register(CondensedModel())
 
 from screening.solvers import stiff_bed  # noqa: E402,F401  (registers "stiff_bed")
+from screening.solvers import stiff_bed_fast  # noqa: E402,F401  (registers "stiff_bed_fast")
