@@ -32,8 +32,9 @@ from screening.solvers import mcs_kernels as kern
 from screening.solvers.stiff_bed_contact import constraint_damping_jit, indentation_curvature_jit
 from screening.solvers.stiff_bed_kernels import transfer_ratio_jit
 
-__all__ = ["oscillator_exponential", "oscillator_step", "grid_propagator", "grid_pieces", "uplift_acceleration", "integrate_sample",
-           "integrate_chunk", "PIECE_PHASE", "COUNTS"]
+__all__ = ["oscillator_exponential", "oscillator_step", "grid_propagator", "grid_pieces", "uplift_acceleration", "lifted_record", "lifted_acceleration", "LIFTED",
+           "integrate_sample",
+           "integrate_chunk", "modulate", "PIECE_PHASE", "COUNTS"]
 
 #: What :func:`integrate_sample` counts when asked (``counts`` of shape ``(7,)``).
 COUNTS = ("full contact: whole grid intervals", "full contact: closed-form pieces", "uplift: accepted steps",
@@ -266,6 +267,152 @@ def uplift_acceleration(sp, cp, theta, theta_dot, x_g_ddot):
     return (m * h * c * x_g_ddot - q - c * c * damping * theta_dot - 0.5 * dm_eff * theta_dot * theta_dot) / m_eff
 
 
+#: Per-bed constants of :func:`lifted_acceleration` (:func:`lifted_record`).
+LIFTED = ("m", "g", "h", "I_cm", "b", "k", "eps", "w_rate", "w_indentation", "theta_ul")
+
+
+def lifted_record(sp, cp):
+    """The constants of :func:`lifted_acceleration` (:data:`LIFTED`, SI) from the model's two records.
+
+    Parameters
+    ----------
+    sp, cp : numpy.record
+        The :data:`screening.solvers.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(len(LIFTED),)``.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.solvers.stiff_bed_contact import stiff_record
+    >>> block, bed = Block(m=1200.0, b=0.25, h=0.9), Foundation(k=1e10, lam=2e11)
+    >>> rec = lifted_record(stiff_record(block, bed)[0], cubic.sdof_record(block, bed)[0])
+    >>> float(rec[LIFTED.index("b")]), float(rec[LIFTED.index("k")])
+    (0.25, 10000000000.0)
+    """
+    return _lifted(sp, cp)
+
+
+@numba.njit(cache=True)
+def _lifted(sp, cp):
+    """Compiled :func:`lifted_record`."""
+    return np.array([sp.m, sp.g, sp.h, sp.I_cm, cp.b, cp.k, cp.eps, cp.w_rate, cp.w_indentation, cp.theta_ul])
+
+
+@numba.njit(cache=True)
+def lifted_acceleration(par, sp, cp, theta, theta_dot, x_g_ddot):
+    """:func:`uplift_acceleration` with the uplift branch of the contact law written out once (two square
+    roots, three divisions); in full contact and beyond the capacity angle it is :func:`uplift_acceleration`.
+
+    Parameters
+    ----------
+    par : numpy.ndarray
+        :func:`lifted_record`.
+    sp, cp : numpy.record
+        The model's records (:func:`uplift_acceleration`).
+    theta, theta_dot : float
+        Rotation [rad] and rate [rad s-1].
+    x_g_ddot : float
+        Inertial ground acceleration [m s-2].
+
+    Returns
+    -------
+    float
+        ``theta''`` [rad s-2].
+
+    Notes
+    -----
+    Uplift (``eps z^3``-free Winkler pressure with its cubic term, contact from the corner): ``A = 2 m g a / k``,
+    ``S = sqrt(1 + 2 eps A)``, ``v = sqrt(2 A / (1 + S))``, ``Z = v - b a``, ``Z' = m g / (k S v) - b``,
+    ``Z'' = -(m g / k) (2 eps m g v / (k S) + S (Z' + b)) / (S v)^2``, the bed moment
+    ``(k v^2 (2 b a - Z) / 6 + eps k v^4 (4 b a - Z) / 20) / a^2`` and ``C_D`` of
+    :func:`screening.solvers.stiff_bed_contact.constraint_damping` with ``L = v / a`` (``docs/stiff_bed.md``).
+
+    Examples
+    --------
+    >>> import inspect
+    >>> list(inspect.signature(lifted_acceleration.py_func).parameters)[:3]
+    ['par', 'sp', 'cp']
+    """
+    s = math.sin(theta)
+    c = math.cos(theta)
+    sigma = 1.0 if theta >= 0.0 else -1.0
+    a = sigma * s
+    m, g, h, i_cm, b, k, eps, w_rate, w_ind, tu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7], \
+        par[8], par[9]
+    if a <= tu:
+        return uplift_acceleration(sp, cp, theta, theta_dot, x_g_ddot)
+    mg_k = m * g / k
+    big_a = 2.0 * mg_k * a
+    if eps == 0.0:
+        S = 1.0
+        v = math.sqrt(big_a)
+    else:
+        s2 = 1.0 + 2.0 * eps * big_a
+        if s2 <= 0.0:
+            return uplift_acceleration(sp, cp, theta, theta_dot, x_g_ddot)
+        S = math.sqrt(s2)
+        v = math.sqrt(2.0 * big_a / (1.0 + S))
+    inv_sv = 1.0 / (S * v)
+    inv_a = 1.0 / a
+    ba = b * a
+    z = v - ba
+    dz = mg_k * inv_sv - b
+    qq = dz + b
+    d2z = -mg_k * (2.0 * eps * mg_k / S * v + S * qq) * inv_sv * inv_sv
+    length = v * inv_a
+    r = qq - 0.5 * length
+    t3 = qq - length / 3.0
+    l2 = length * length
+    damping = w_rate * length * (r * r + l2 / 12.0) + w_ind * v * length * (0.5 * t3 * t3 + l2 / 36.0)
+    v2 = v * v
+    moment = (k * v2 * (2.0 * ba - z) / 6.0 + eps * k * v2 * v2 * (4.0 * ba - z) / 20.0) * inv_a * inv_a
+    mgh = m * g * h
+    u = sigma * c * dz + h * s
+    m_eff = i_cm + m * (h * h * c * c + u * u)
+    dm_eff = m * (-2.0 * h * h * c * s + 2.0 * u * (c * c * d2z - a * dz + h * c))
+    q = sigma * c * moment - mgh * s
+    return (m * h * c * x_g_ddot - q - c * c * damping * theta_dot - 0.5 * dm_eff * theta_dot * theta_dot) / m_eff
+
+
+@numba.njit(cache=True)
+def modulate(z, cos_shift, sin_shift, q, q_dot, acc, rate):
+    """``acc = q f``, ``rate = q' f + q f'`` from ``f + i f' = z e^{i d_omega t / 2}`` (the half-bin shift as its
+    cosine and sine), row by row, in one pass (:func:`screening.solvers.stiff_bed_fast.band_samples`).
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        ``(rows, >= n)`` complex: the inverse FFT of the batch.
+    cos_shift, sin_shift, q, q_dot : numpy.ndarray
+        ``(n,)``: the shift's cosine and sine [1], the envelope [1] and its rate [s-1].
+    acc, rate : numpy.ndarray
+        ``(rows, n)`` outputs [m s-2, m s-3], written in place.
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
+    >>> z = np.array([[1.0 + 2.0j]])
+    >>> acc, rate = np.empty((1, 1)), np.empty((1, 1))
+    >>> modulate(z, np.ones(1), np.zeros(1), np.full(1, 0.5), np.full(1, 0.1), acc, rate)
+    >>> float(acc[0, 0]), round(float(rate[0, 0]), 12)
+    (0.5, 1.1)
+    """
+    n = acc.shape[1]
+    for r in range(acc.shape[0]):
+        for j in range(n):
+            f = z[r, j].real * cos_shift[j] - z[r, j].imag * sin_shift[j]
+            fd = z[r, j].real * sin_shift[j] + z[r, j].imag * cos_shift[j]
+            acc[r, j] = q[j] * f
+            rate[r, j] = q_dot[j] * f + q[j] * fd
+
+
 @numba.njit(cache=True, inline="always")
 def _input(acc, acc_dot, row, dt, n_grid, t):
     """Cubic Hermite ground input of row ``row`` at ``t``."""
@@ -390,6 +537,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
     i_out = 1
     tol_t = 1e-9 * dt_grid
     counting = counts.shape[0] > 0
+    par = _lifted(sp, cp)
     while i_out < n_out:
         if n_acc + n_rej >= max_steps:
             status, reason = kern.STATUS_DIVERGED, kern.REASON_STEP_BUDGET
@@ -499,7 +647,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             continue
         # ---------------------------------------------------------------- uplift, adaptive step
         k1_0 = v
-        k1_1 = uplift_acceleration(sp, cp, x, v, _input(acc, acc_dot, row, dt_grid, n_grid, t))
+        k1_1 = lifted_acceleration(par, sp, cp, x, v, _input(acc, acc_dot, row, dt_grid, n_grid, t))
         locating = False
         rejected = False
         while True:
@@ -513,28 +661,28 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             g0 = x + h * A21 * k1_0
             g1 = v + h * A21 * k1_1
             k2_0 = g1
-            k2_1 = uplift_acceleration(sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C2 * h))
+            k2_1 = lifted_acceleration(par, sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C2 * h))
             g0 = x + h * (A31 * k1_0 + A32 * k2_0)
             g1 = v + h * (A31 * k1_1 + A32 * k2_1)
             k3_0 = g1
-            k3_1 = uplift_acceleration(sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C3 * h))
+            k3_1 = lifted_acceleration(par, sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C3 * h))
             g0 = x + h * (A41 * k1_0 + A42 * k2_0 + A43 * k3_0)
             g1 = v + h * (A41 * k1_1 + A42 * k2_1 + A43 * k3_1)
             k4_0 = g1
-            k4_1 = uplift_acceleration(sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C4 * h))
+            k4_1 = lifted_acceleration(par, sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C4 * h))
             g0 = x + h * (A51 * k1_0 + A52 * k2_0 + A53 * k3_0 + A54 * k4_0)
             g1 = v + h * (A51 * k1_1 + A52 * k2_1 + A53 * k3_1 + A54 * k4_1)
             k5_0 = g1
-            k5_1 = uplift_acceleration(sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C5 * h))
+            k5_1 = lifted_acceleration(par, sp, cp, g0, g1, _input(acc, acc_dot, row, dt_grid, n_grid, t + C5 * h))
             g0 = x + h * (A61 * k1_0 + A62 * k2_0 + A63 * k3_0 + A64 * k4_0 + A65 * k5_0)
             g1 = v + h * (A61 * k1_1 + A62 * k2_1 + A63 * k3_1 + A64 * k4_1 + A65 * k5_1)
             u_end = _input(acc, acc_dot, row, dt_grid, n_grid, t + h)
             k6_0 = g1
-            k6_1 = uplift_acceleration(sp, cp, g0, g1, u_end)
+            k6_1 = lifted_acceleration(par, sp, cp, g0, g1, u_end)
             n0 = x + h * (B1 * k1_0 + B3 * k3_0 + B4 * k4_0 + B5 * k5_0 + B6 * k6_0)
             n1 = v + h * (B1 * k1_1 + B3 * k3_1 + B4 * k4_1 + B5 * k5_1 + B6 * k6_1)
             k7_0 = n1
-            k7_1 = uplift_acceleration(sp, cp, n0, n1, u_end)
+            k7_1 = lifted_acceleration(par, sp, cp, n0, n1, u_end)
             e0 = h * (E1 * k1_0 + E3 * k3_0 + E4 * k4_0 + E5 * k5_0 + E6 * k6_0 + E7 * k7_0)
             e1 = h * (E1 * k1_1 + E3 * k3_1 + E4 * k4_1 + E5 * k5_1 + E6 * k6_1 + E7 * k7_1)
             err = math.sqrt(0.5 * (err_term(e0, x, n0, s0, rtol) + err_term(e1, v, n1, s1, rtol)))

@@ -120,13 +120,12 @@ def band_samples(excitation, plan, seed, sample_indices):
     coef = np.zeros((indices.size, M), dtype=complex)
     coef[:, :n] = c * (1.0 - omega)
     coef[:, M - 1:M - 1 - n:-1] = np.conj(c) * (1.0 + omega)
-    z = sfft.ifft(coef, axis=1, overwrite_x=True, workers=1)[:, :plan.n_times]
+    z = sfft.ifft(coef, axis=1, overwrite_x=True, workers=1)
     t = plan.times
-    z *= np.exp(0.5j * plan.d_omega * t)
-    q = excitation.envelope(t)
-    q_dot = envelope_rate(excitation.envelope, t)
-    acc = np.ascontiguousarray(z.real * q)
-    rate = np.ascontiguousarray(z.imag * q + z.real * q_dot)
+    acc = np.empty((indices.size, plan.n_times))
+    rate = np.empty_like(acc)
+    fast.modulate(z, np.cos(0.5 * plan.d_omega * t), np.sin(0.5 * plan.d_omega * t), excitation.envelope(t),
+                  envelope_rate(excitation.envelope, t), acc, rate)
     return acc, rate
 
 

@@ -63,13 +63,16 @@ def test_grid_maps_against_van_loan():
 
 @pytest.mark.parametrize("block,bed", [(STATUE, BED), (CABINET, PADS)], ids=["statue", "cabinet pads"])
 def test_acceleration_is_the_reference(block, bed):
-    """One indentation solve per call gives the reference's acceleration (1e-12), in full contact and uplift."""
+    """One indentation solve per call (and the uplift branch written out once) gives the reference's acceleration
+    (1e-12), in full contact and uplift."""
     sp, cp = stiff_record(block, bed)[0], cubic.sdof_record(block, bed)[0]
+    par = fast.lifted_record(sp, cp)
     tu = float(cp["theta_ul"])
     for theta in (0.3 * tu, -0.9 * tu, 1.5 * tu, -40 * tu, 0.2 * float(block.slenderness)):
         for rate, u in ((0.0, 0.0), (0.05, 2.0), (-0.3, -4.0)):
             ref = rocking_acceleration_jit(sp, cp, theta, rate, u)
             assert fast.uplift_acceleration(sp, cp, theta, rate, u) == pytest.approx(ref, rel=1e-12, abs=1e-12)
+            assert fast.lifted_acceleration(par, sp, cp, theta, rate, u) == pytest.approx(ref, rel=1e-12, abs=1e-12)
 
 
 def _kernel(model, acc, acc_dot, dt, t_out, y0, rtol, h_max=0.01):
