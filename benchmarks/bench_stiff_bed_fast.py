@@ -10,10 +10,17 @@ deviation of the per-sample differences over ``sqrt(n)``, at least ``1/n``), pas
 :data:`SE_TOLERANCE`; the peak ``var_theta`` (over the output times, surviving samples) within
 :data:`VAR_TOLERANCE`.  Cases: the statue (1200 kg, b = 0.25 m, h = 0.9 m) on ``k = 1e10`` and ``1e11`` at
 ``S0 = 0.015 m2 s-3`` (the cost cases), and the Kanai-Tajimi cases of ``benchmarks/stiff_bed_validity.py``
-inside the stiff-bed model's validity (``--only`` to choose by text in the case id)::
+inside the stiff-bed model's validity (``--only`` to choose by text in the case id); ``--control`` adds the
+reference at a largest step of 5 ms (its default 10 ms) against itself under the same criterion::
 
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/bench_stiff_bed_fast.py \\
-        --validity --samples 2000
+        --validity --control --samples 2000
+
+``--converged``: on the cost cases, both kernels against the reference kernel at ``rtol = 1e-9``,
+``h_max = 5 ms`` (the model's converged statistics), same criterion::
+
+    flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/bench_stiff_bed_fast.py \\
+        --converged --samples 2000
 
 ``--cost``: CPU per sample (synthesis and integration, one numba thread) of both on the statue at
 ``k = 1e10`` and ``1e11``, where the exact-contact kernel's work goes (its counts per sample), and both as a
@@ -54,6 +61,11 @@ SE_TOLERANCE = 1.5
 #: The peak var_theta passes within this relative difference.
 VAR_TOLERANCE = 0.05
 STATUE = dict(m=1200.0, b=0.25, h=0.9)
+#: ``--control``: the reference kernel at this largest step [s] (its default is 10 ms) against itself, to show how
+#: often the same model under other numerics passes the criterion (its sample paths are sensitive: docs/stiff_bed.md).
+CONTROL_H_MAX = 0.005
+#: ``--converged``: the reference kernel's converged statistics (tolerance and largest step).
+CONVERGED = dict(rtol=1e-9, h_max=0.005)
 
 
 def cost_cases():
@@ -105,10 +117,10 @@ def compare(ref, new, alpha):
     return ind_r[:, used_r].mean(axis=1), ind_n[:, used_n].mean(axis=1), z, var_rel, ok
 
 
-def run(model, block, bed, excitation, samples, seed, cutoff_hz, count=False):
+def run(model, block, bed, excitation, samples, seed, cutoff_hz, count=False, h_max=None):
     start = time.process_time()
     out = stiff_bed_fast.sample(block, bed, excitation, samples, cutoff_hz=cutoff_hz, seed=seed, model=model,
-                                count=count)
+                                count=count, h_max=h_max)
     out["cpu"] = (time.process_time() - start) / samples
     return out
 
@@ -120,10 +132,11 @@ def warm(block, bed, excitation, cutoff_hz):
         stiff_bed_fast.sample(block, bed, excitation, 2, cutoff_hz=cutoff_hz, t_end=0.5, model=model, count=True)
 
 
-def validity(samples, seed, cutoff_hz, only=None):
+def validity(samples, seed, cutoff_hz, only=None, control=False):
     print("| case | P ref (0.05, 0.1, 0.3 alpha, overturn) | P exact-contact | paired diff / SE | peak var_theta "
-          "| CPU ref / exact [ms] | verdict |\n|---|---|---|---|---|---|---|", flush=True)
-    passed = 0
+          "| CPU ref / exact [ms] | verdict |" + (" control: paired diff / SE, peak var_theta |" if control else "")
+          + "\n|---|---|---|---|---|---|---|" + ("---|" if control else ""), flush=True)
+    passed = controls = 0
     chosen = [c for c in validity_cases() if only is None or any(t in c[0] for t in only.split(","))]
     for label, block, bed, excitation in chosen:
         warm(block, bed, excitation, cutoff_hz)
@@ -131,12 +144,43 @@ def validity(samples, seed, cutoff_hz, only=None):
         new = run(stiff_bed_fast.STIFF_BED_FAST, block, bed, excitation, samples, seed, cutoff_hz)
         p_r, p_n, z, var_rel, ok = compare(ref, new, float(block.slenderness))
         passed += ok
+        extra = ""
+        if control:                          # the reference against itself at another largest step
+            other = run(stiff_bed.STIFF_BED, block, bed, excitation, samples, seed, cutoff_hz, h_max=CONTROL_H_MAX)
+            *_, z_c, var_c, ok_c = compare(ref, other, float(block.slenderness))
+            controls += ok_c
+            extra = f" {' '.join(f'{x:+.2f}' for x in z_c)}, {var_c:+.1%} {'ok' if ok_c else 'FAILS'} |"
         print(f"| {label} | {' '.join(f'{x:.3f}' for x in p_r)} | {' '.join(f'{x:.3f}' for x in p_n)} "
               f"| {' '.join(f'{x:+.2f}' for x in z)} | {var_rel:+.1%} | {1e3 * ref['cpu']:.2f} / {1e3 * new['cpu']:.2f} "
-              f"| {'ok' if ok else 'FAILS'} |", flush=True)
+              f"| {'ok' if ok else 'FAILS'} |{extra}", flush=True)
+    if control:
+        print(f"\ncontrol (the reference at h_max = {CONTROL_H_MAX:g} s against the reference): {controls} of "
+              f"{len(chosen)} cases pass the same criterion")
     print(f"\n{passed} of {len(chosen)} cases pass; {samples} paired samples per case, seed {seed}, cut-off "
           f"{cutoff_hz:g} Hz; tolerance {SE_TOLERANCE:g} paired SE, peak var_theta {VAR_TOLERANCE:.0%}; "
           f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS')}")
+
+
+def converged(samples, seed, cutoff_hz, only=None):
+    """Both kernels against the reference kernel at :data:`CONVERGED` (the model's converged statistics, as in
+    ``benchmarks/bench_stiff_bed_cost.py``), on the cost cases: paired differences in paired SE and the peak
+    var_theta."""
+    print("| case | P converged (0.05, 0.1, 0.3 alpha, overturn) | reference: paired diff / SE, peak var_theta "
+          "| exact-contact: paired diff / SE, peak var_theta |\n|---|---|---|---|", flush=True)
+    for label, block, bed, excitation in cost_cases():
+        if only is not None and not any(t in label for t in only.split(",")):
+            continue
+        warm(block, bed, excitation, cutoff_hz)
+        tight = stiff_bed_fast.sample(block, bed, excitation, samples, cutoff_hz=cutoff_hz, seed=seed,
+                                      model=stiff_bed.STIFF_BED, **CONVERGED)
+        cells = []
+        for model in (stiff_bed.STIFF_BED, stiff_bed_fast.STIFF_BED_FAST):
+            got = run(model, block, bed, excitation, samples, seed, cutoff_hz)
+            p_t, _, z, var_rel, ok = compare(tight, got, float(block.slenderness))
+            cells.append(f"{' '.join(f'{x:+.2f}' for x in z)}, {var_rel:+.1%} {'ok' if ok else 'FAILS'}")
+        print(f"| {label} | {' '.join(f'{x:.3f}' for x in p_t)} | {cells[0]} | {cells[1]} |", flush=True)
+    print(f"\n{samples} paired samples per case, seed {seed}, cut-off {cutoff_hz:g} Hz; converged: the reference "
+          f"kernel at {CONVERGED}")
 
 
 def linearization_cpu(block, bed, excitation, cutoff_hz, repeats=3):
@@ -183,11 +227,16 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--cutoff-hz", type=float, default=25.0)
     parser.add_argument("--only", help="cases whose id contains one of these comma-separated texts")
+    parser.add_argument("--control", action="store_true", help="also the reference at h_max = 5 ms against itself")
+    parser.add_argument("--converged", action="store_true",
+                        help="both kernels against the reference at rtol 1e-9, h_max 5 ms (the cost cases)")
     args = parser.parse_args()
     if args.cost:
         cost(args.samples, args.seed, args.cutoff_hz)
-    if args.validity or not args.cost:
-        validity(args.samples, args.seed, args.cutoff_hz, args.only)
+    if args.converged:
+        converged(args.samples, args.seed, args.cutoff_hz, args.only)
+    if args.validity or not (args.cost or args.converged):
+        validity(args.samples, args.seed, args.cutoff_hz, args.only, args.control)
 
 
 if __name__ == "__main__":

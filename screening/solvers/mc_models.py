@@ -9,7 +9,8 @@ there by an integer model code, resolved here once):
 * ``"condensed"``: the SDOF eq. 22 with a condensation's ``C(theta)``, ``K(theta)``
   (:mod:`screening.condensation`), from rest.
 
-Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`).
+Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`) and its
+exact-contact sampler (:mod:`screening.solvers.stiff_bed_fast`).
 """
 
 from __future__ import annotations
