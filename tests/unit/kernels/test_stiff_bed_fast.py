@@ -171,6 +171,7 @@ def test_registered_model_runs_in_the_engine_and_a_vertical_record_takes_the_ref
     assert np.array_equal(runs[0].theta.values, runs[1].theta.values, equal_nan=True)
 
 
+@pytest.mark.slow
 def test_paired_statistics_against_the_reference():
     """200 paired samples of the statue on k = 1e10 (Kanai-Tajimi S0 = 0.015, 25 Hz): every exceedance and the
     overturning probability within 2.5 paired standard errors of the reference kernel's (the benchmark
