@@ -9,7 +9,8 @@ there by an integer model code, resolved here once):
 * ``"condensed"``: the SDOF eq. 22 with a condensation's ``C(theta)``, ``K(theta)``
   (:mod:`screening.core.condensation`), from rest.
 
-Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`).
+Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`) and its
+exact-contact sampler (:mod:`screening.solvers.stiff_bed_fast`).
 """
 
 from __future__ import annotations
@@ -262,3 +263,4 @@ COUPLED = register(CoupledModel())
 CONDENSED = register(CondensedModel())
 
 from screening.solvers import stiff_bed  # noqa: E402,F401  (registers "stiff_bed")
+from screening.solvers import stiff_bed_fast  # noqa: E402,F401  (registers "stiff_bed_fast")
