@@ -46,10 +46,10 @@ if __name__ == "__main__":   # as a script only
 
 import numpy as np  # noqa: E402
 
-from screening.beds import lam_from_vertical_damping  # noqa: E402
+from screening.analysis.beds import lam_from_vertical_damping  # noqa: E402
 from screening.kernels.stiff_bed_fast import COUNTS  # noqa: E402
-from screening.model import Block, Foundation  # noqa: E402
-from screening.model.excitation import KanaiTajimi  # noqa: E402
+from screening.core.model import Block, Foundation  # noqa: E402
+from screening.core.excitations.kanai_tajimi import KanaiTajimi  # noqa: E402
 from screening.solvers import stiff_bed, stiff_bed_fast  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -185,7 +185,7 @@ def converged(samples, seed, cutoff_hz, only=None):
 
 def linearization_cpu(block, bed, excitation, cutoff_hz, repeats=3):
     """CPU seconds of one linearization point (the smallest of ``repeats``, after a first call)."""
-    from screening.solvers.linearization import linearize
+    from screening.analysis.linearization import linearize
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

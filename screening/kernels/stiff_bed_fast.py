@@ -1,7 +1,7 @@
 """Compiled sample integrator of the stiff-bed model's exact-contact sampler (``model="stiff_bed_fast"``,
 :mod:`screening.solvers.stiff_bed_fast`).
 
-The same equations as :mod:`screening.solvers.stiff_bed_kernels` (the reference), integrated differently:
+The same equations as :mod:`screening.kernels.stiff_bed_kernels` (the reference), integrated differently:
 
 * full contact (``|theta| <= theta_ul``) is the linear oscillator ``m0 x'' + c0 x' + k0 x = mh u(t)``; it is
   advanced in closed form over any interval (:func:`oscillator_step`: the exponential of the 2x2 system and
@@ -23,14 +23,14 @@ import math
 import numba
 import numpy as np
 
-from screening.condensation import cubic
+from screening.core.condensation import cubic
 from screening.kernels import dopri
 from screening.kernels._sample_steps import err_term, store_outcome
 from screening.kernels.dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
                                      B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
-from screening.solvers import mcs_kernels as kern
-from screening.solvers.stiff_bed_contact import constraint_damping_jit, indentation_curvature_jit
-from screening.solvers.stiff_bed_kernels import transfer_ratio_jit
+from screening.kernels import mcs_kernels as kern
+from screening.kernels.stiff_bed_contact import constraint_damping_jit, indentation_curvature_jit
+from screening.kernels.stiff_bed_kernels import transfer_ratio_jit
 
 __all__ = ["oscillator_exponential", "oscillator_step", "grid_propagator", "grid_pieces", "uplift_acceleration", "lifted_record", "lifted_acceleration", "LIFTED",
            "integrate_sample",
@@ -161,7 +161,7 @@ def _hermite_poly(u0, u1, d0, d1, dt, s0):
 
 def grid_propagator(omega2, c, g, dt, tau=None):
     """``[Phi | Gamma]`` (2 x 6) of one grid interval: ``(x, v)(dt) = Phi (x, v)(0) + Gamma (u0, u1, dt d0, dt d1)``,
-    from :func:`oscillator_step` (the same map as :func:`screening.solvers.stiff_bed_kernels.linear_propagator`).
+    from :func:`oscillator_step` (the same map as :func:`screening.kernels.stiff_bed_kernels.linear_propagator`).
 
     Parameters
     ----------
@@ -220,13 +220,13 @@ def grid_pieces(omega2, c, g, dt):
 
 @numba.njit(cache=True)
 def uplift_acceleration(sp, cp, theta, theta_dot, x_g_ddot):
-    """Compiled :func:`screening.solvers.stiff_bed_contact.rocking_acceleration` without vertical input: one
+    """Compiled :func:`screening.kernels.stiff_bed_contact.rocking_acceleration` without vertical input: one
     indentation solve per call (the reference solves it twice).
 
     Parameters
     ----------
     sp, cp : numpy.record
-        The :data:`screening.solvers.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
+        The :data:`screening.kernels.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
     theta, theta_dot : float
         Rotation [rad] and rate [rad s-1].
     x_g_ddot : float
@@ -277,7 +277,7 @@ def lifted_record(sp, cp):
     Parameters
     ----------
     sp, cp : numpy.record
-        The :data:`screening.solvers.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
+        The :data:`screening.kernels.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
 
     Returns
     -------
@@ -287,7 +287,7 @@ def lifted_record(sp, cp):
     Examples
     --------
     >>> from screening import Block, Foundation
-    >>> from screening.solvers.stiff_bed_contact import stiff_record
+    >>> from screening.kernels.stiff_bed_contact import stiff_record
     >>> block, bed = Block(m=1200.0, b=0.25, h=0.9), Foundation(k=1e10, lam=2e11)
     >>> rec = lifted_record(stiff_record(block, bed)[0], cubic.sdof_record(block, bed)[0])
     >>> float(rec[LIFTED.index("b")]), float(rec[LIFTED.index("k")])
@@ -329,7 +329,7 @@ def lifted_acceleration(par, sp, cp, theta, theta_dot, x_g_ddot):
     ``S = sqrt(1 + 2 eps A)``, ``v = sqrt(2 A / (1 + S))``, ``Z = v - b a``, ``Z' = m g / (k S v) - b``,
     ``Z'' = -(m g / k) (2 eps m g v / (k S) + S (Z' + b)) / (S v)^2``, the bed moment
     ``(k v^2 (2 b a - Z) / 6 + eps k v^4 (4 b a - Z) / 20) / a^2`` and ``C_D`` of
-    :func:`screening.solvers.stiff_bed_contact.constraint_damping` with ``L = v / a`` (``docs/stiff_bed.md``).
+    :func:`screening.kernels.stiff_bed_contact.constraint_damping` with ``L = v / a`` (``docs/stiff_bed.md``).
 
     Examples
     --------
@@ -464,7 +464,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
     Parameters
     ----------
     sp, cp : numpy.record
-        The :data:`screening.solvers.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
+        The :data:`screening.kernels.stiff_bed_contact.STIFF` and ``"cubic"`` condensation records.
     osc : numpy.ndarray
         ``(omega2 [s-2], c [s-1], g [rad per m], omega_r [rad s-1])`` of the full-contact oscillator.
     prop : numpy.ndarray

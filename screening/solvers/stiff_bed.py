@@ -88,7 +88,7 @@ from screening.solvers.mc_registry import ChunkIntegrator, get as get_model, Mon
 from screening.solvers.model_choice import RULE_FILE, rule_of, vouches
 from screening.solvers.synthesis import rocking_frequency
 
-__all__ = ["StiffBedModel", "STIFF_BED", "housner_restitution", "indentation_curvature", "linear_propagator",
+__all__ = ["StiffBedModel", "StiffIntegrator", "check_standing", "STIFF_BED", "housner_restitution", "indentation_curvature", "linear_propagator",
            "rocking_coefficients", "rocking_acceleration", "potential", "transfer_table", "validity",
            "validity_limit", "validity_problem"]
 
@@ -387,7 +387,7 @@ def transfer_table(block, foundation):
 
 
 # ----------------------------------------------------------------------------- the registered model
-class _StiffIntegrator(ChunkIntegrator):
+class StiffIntegrator(ChunkIntegrator):
     def __init__(self, block, foundation, log_amp, log_eta, locate=True):
         self.sp = stiff_record(block, foundation, locate)
         self.cp = cubic.sdof_record(block, foundation)
@@ -511,7 +511,7 @@ class StiffBedModel(MonteCarloModel):
         return log_amp, log_eta
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
-        return _StiffIntegrator(block, foundation, *self.table(block, foundation), locate=self.locate)
+        return StiffIntegrator(block, foundation, *self.table(block, foundation), locate=self.locate)
 
     def uplift_threshold(self, block, foundation, condensation):
         return float(cubic.uplift_threshold(block, foundation)), {"theta_ul_condensation": "cubic"}

@@ -14,12 +14,12 @@ import math
 import numpy as np
 from scipy import fft as sfft
 
-from screening.condensation import cubic
+from screening.core.condensation import cubic
 from screening.kernels import stiff_bed_fast as fast
-from screening.solvers import mcs_kernels as kern
+from screening.kernels import mcs_kernels as kern
 from screening.solvers.mc_registry import register
-from screening.solvers.stiff_bed import StiffBedModel, _StiffIntegrator, check_standing
-from screening.solvers.stiff_bed_kernels import COUNT_ROWS
+from screening.solvers.stiff_bed import StiffBedModel, StiffIntegrator, check_standing
+from screening.kernels.stiff_bed_kernels import COUNT_ROWS
 from screening.solvers.synthesis import (OVERSAMPLING, envelope_rate, rocking_frequency, sample_phases,
                                          spectral_plan, validate_seed)
 from screening.solvers.timegrid import output_times
@@ -33,7 +33,7 @@ def band_plan(excitation, t_end, cutoff_hz, oversampling=OVERSAMPLING):
 
     Parameters
     ----------
-    excitation : screening.excitations.Excitation
+    excitation : screening.core.excitations.Excitation
         The input: its two-sided PSD (:meth:`psd`, [m2 s-3]) and envelope.
     t_end : float
         Record length [s], > 0.
@@ -74,7 +74,7 @@ def band_samples(excitation, plan, seed, sample_indices):
 
     Parameters
     ----------
-    excitation : screening.excitations.Excitation
+    excitation : screening.core.excitations.Excitation
         The input (its envelope ``q(t)``).
     plan : screening.solvers.synthesis.SpectralPlan
         The plan (:func:`band_plan`).
@@ -130,7 +130,7 @@ def band_samples(excitation, plan, seed, sample_indices):
 
 
 # ----------------------------------------------------------------------------- the integrator
-class _FastIntegrator(_StiffIntegrator):
+class _FastIntegrator(StiffIntegrator):
     """The exact-contact kernel; a record with a vertical channel goes to the reference kernel."""
 
     def __init__(self, block, foundation, log_amp, log_eta):
@@ -196,11 +196,11 @@ def sample(block, foundation, excitation, n_samples, cutoff_hz=25.0, t_end=20.0,
 
     Parameters
     ----------
-    block : screening.model.Block
+    block : screening.core.model.Block
         The rigid block (``m`` [kg], ``b``, ``h`` [m]); scalar fields.
-    foundation : screening.model.Foundation
+    foundation : screening.core.model.Foundation
         The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-    excitation : screening.excitations.Excitation
+    excitation : screening.core.excitations.Excitation
         The input (PSD [m2 s-3] and envelope).
     n_samples : int
         Samples [1], >= 1.
@@ -221,12 +221,12 @@ def sample(block, foundation, excitation, n_samples, cutoff_hz=25.0, t_end=20.0,
     count : bool, optional
         Also return ``counts``, the work per sample (the exact-contact kernel's
         :data:`screening.kernels.stiff_bed_fast.COUNTS`, the reference's
-        :data:`screening.solvers.stiff_bed_kernels.COUNT_ROWS`).
+        :data:`screening.kernels.stiff_bed_kernels.COUNT_ROWS`).
 
     Returns
     -------
     dict
-        ``peak`` [rad], ``status`` (:mod:`screening.solvers.mcs_kernels` codes), ``overturned``, ``diverged``,
+        ``peak`` [rad], ``status`` (:mod:`screening.kernels.mcs_kernels` codes), ``overturned``, ``diverged``,
         ``theta`` (samples x output times) [rad], ``n_steps``, ``plan``.
 
     Examples

@@ -11,16 +11,16 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import screening
-from screening.beds import lam_from_vertical_damping
-from screening.condensation import cubic
+from screening.analysis.beds import lam_from_vertical_damping
+from screening.core.condensation import cubic
 from screening.kernels import stiff_bed_fast as fast
-from screening.model import Block, Foundation
-from screening.model.excitation import KanaiTajimi
-from screening.records import Record
+from screening.core.model import Block, Foundation
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
+from screening.core.records import Record
 from screening.solvers import stiff_bed as sb
 from screening.solvers import stiff_bed_fast as sf
-from screening.solvers.stiff_bed_contact import rocking_acceleration_jit, stiff_record
-from screening.solvers.stiff_bed_kernels import linear_propagator
+from screening.kernels.stiff_bed_contact import rocking_acceleration_jit, stiff_record
+from screening.kernels.stiff_bed_kernels import linear_propagator
 from screening.solvers.synthesis import ground_acceleration_samples
 
 STATUE = Block(m=1200.0, b=0.25, h=0.9)
