@@ -14,7 +14,9 @@ estimate of the best model that ran there, recorded in ``p_source``
 3. with ``[accuracy]``, where the correction reaches the point: the up-crossing of the moments rescaled
    to the corrected best estimates (:func:`screening.analysis.fragility.best_exceedance`; needs the
    histories in the result);
-4. elsewhere ``unreliable``: the linearization's number stays, its standard error is NaN;
+4. elsewhere ``unreliable``: the linearization's number stays, its standard error is NaN; where the
+   linearization stopped near toppling there is no number to keep: ``p_overturn``, ``p_exceed`` and their
+   standard errors are NaN (missing, never a 1 that reads as an answer);
 5. near toppling (:func:`screening.analysis.probabilities.answer_quantities`: the linearization stopped,
    ``p_overturn`` material, or the variance's interval open in heavy uplift), where no Monte Carlo ran:
    the study's own fragility surface (``study_fragility_surface``, :mod:`screening.analysis.fragility_surface`)
@@ -30,8 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.analysis.probabilities import (answer_quantities, choose_sources, monte_carlo_source, reliable_answer,
-                                              sample_probabilities)
+from screening.analysis.probabilities import (NEAR_TOPPLING_STATUS, answer_quantities, choose_sources,
+                                              monte_carlo_source, reliable_answer, sample_probabilities)
 from screening.solvers import mc_registry
 from screening.workflow.grid import swept_columns
 from screening.status import (MONTE_CARLO_SOURCE_BASE, AnswerQuantity, BestMethod, EscalationEstimator,
@@ -419,6 +421,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     p[take], se[take] = surface_p[take], surface_se[take]
     source[take] = ProbabilitySource.study_fragility_surface
 
+    stopped = np.isin(res.status, [int(c) for c in NEAR_TOPPLING_STATUS]) & (source == ProbabilitySource.unreliable)
+    p[stopped], se[stopped] = np.nan, np.nan
     values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if thresholds:
         values.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
