@@ -384,6 +384,8 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
                 flags = None
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
+        except ValueError as exc:               # a threshold the result has no probabilities for
+            raise CommandError(f"--threshold: {exc}") from None
     frag = with_modelling_dispersion(frag, modelling)
     stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold),
                     relative_to=relative_to, modelling_dispersion=modelling)

@@ -31,11 +31,12 @@ class Progress:
     terminal, or ``lines=True``) a new line is written every :data:`LINE_STEP` of the work or
     :data:`LINE_INTERVAL` seconds, and at the end.  A background thread keeps it alive while one
     long task (a spot check) runs.  The time left is the elapsed time per unit of work times the
-    units left.  Silent when ``enabled`` is false.  Use as a context manager; call :meth:`update`.
+    units left.  Silent when ``enabled`` is false.  ``clock``: seconds (default ``time.perf_counter``; a fake
+    one in tests).  Use as a context manager; call :meth:`update`.
     """
 
     def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None,
-                 clock=time.perf_counter):
+                 clock=None):
         self.total = max(int(total), 1)
         self.label = label
         self.enabled = enabled
@@ -47,9 +48,9 @@ class Progress:
             except (AttributeError, ValueError):
                 lines = True
         self.lines = lines
-        self.clock = clock
+        self.clock = clock if clock is not None else (lambda: time.perf_counter())
         self.done = 0
-        self._start = clock()
+        self._start = self.clock()
         self._last = -float("inf")
         self._last_step = 0
         self._lock = threading.Lock()

@@ -1477,8 +1477,9 @@ def add_fit(out, ds, intensity, dim):
     xarray.Dataset
         ``out`` with :func:`fit_curves` of :func:`fitted_probability` (``fit_median``, ``beta``,
         ``fit_flag``) and ``fit_n_unvouched``, the number of the curve's points left out of the fit because
-        nothing vouches for them (:func:`unvouched_points`); a curve the vouched points alone cannot fit
-        but the left-out ones would have is flagged ``untrusted``.
+        nothing vouches for them (:func:`unvouched_points`); a curve whose vouched points alone are too few
+        (no value, fewer than two between 0 and 1, never or always exceeded) while points were left out is
+        flagged ``untrusted``.
 
     References
     ----------
@@ -1505,7 +1506,8 @@ def add_fit(out, ds, intensity, dim):
     left_out = _left_out(out, unvouched)
     count = left_out.sum(dim) if dim in left_out.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
     fit["fit_n_unvouched"] = count.astype(np.int32).broadcast_like(fit["fit_flag"])
-    untrusted = (fit["fit_flag"] != FitFlag.ok) & (fit["fit_n_unvouched"] > 0)
+    too_few = fit["fit_flag"].isin([FitFlag.no_values, FitFlag.no_fit, FitFlag.never_exceeded, FitFlag.always_exceeded])
+    untrusted = too_few & (fit["fit_n_unvouched"] > 0)
     fit["fit_flag"] = xr.where(untrusted, np.int8(FitFlag.untrusted), fit["fit_flag"]).astype(np.int8)
     out = out.drop_vars([n for n in fit.data_vars if n in out]).merge(fit, compat="override")
     return out.assign_attrs(fit_source="best_p_exceed where [accuracy] vouches for it, else p_exceed"
