@@ -1398,7 +1398,8 @@ def unvouched_points(ds, stored=True):
     if "p_source" in ds.variables:
         bad = (ds["p_source"] == ProbabilitySource.unreliable) if stored else ~ds["p_source"].isin(
             [ProbabilitySource.linearization_gaussian, ProbabilitySource.corrected_linearization_gaussian])
-        return bad.drop_vars([c for c in bad.coords if c not in bad.dims]).rename("unvouched")
+        bad = bad.drop_vars([c for c in bad.coords if c not in bad.dims]).rename("unvouched")
+        return bad.drop_attrs()                          # not p_source's flag attributes
     if "sl_trust" not in ds.variables:
         return xr.zeros_like(ds["status"] if "status" in ds.variables else xr.DataArray(False), dtype=bool)
     bad = ds["sl_trust"] == Trust.untrusted
@@ -1505,7 +1506,9 @@ def add_fit(out, ds, intensity, dim):
     fit = fit_curves(fitted_probability(out, unvouched), intensity, dim)
     left_out = _left_out(out, unvouched)
     count = left_out.sum(dim) if dim in left_out.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
-    fit["fit_n_unvouched"] = count.astype(np.int32).broadcast_like(fit["fit_flag"])
+    count = count.astype(np.int32).broadcast_like(fit["fit_flag"])
+    count.attrs = {}                                     # not p_source's flag attributes
+    fit["fit_n_unvouched"] = count
     too_few = fit["fit_flag"].isin([FitFlag.no_values, FitFlag.no_fit, FitFlag.never_exceeded, FitFlag.always_exceeded])
     untrusted = too_few & (fit["fit_n_unvouched"] > 0)
     fit["fit_flag"] = xr.where(untrusted, np.int8(FitFlag.untrusted), fit["fit_flag"]).astype(np.int8)

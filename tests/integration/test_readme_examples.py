@@ -68,7 +68,7 @@ TINY = {
                                ("{index = {eps = 0, S0 = 18}}, {index = {eps = 0, S0 = 20}},\n", ""),
                                ("{index = {eps = 1, S0 = 18}}, {index = {eps = 1, S0 = 20}},\n", "")],
     "studies/quick.toml": [("samples = 100", "samples = 20")],
-    "examples/statue.toml": [("samples = 100", "samples = 10")],
+    "examples/statue.toml": [("budget_s = 60", "budget_s = 3")],
 }
 
 
