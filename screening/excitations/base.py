@@ -240,8 +240,15 @@ class Excitation:
         by adaptive quadrature with :meth:`psd_peaks` as break points (scalar fields).  Raises
         ``ArithmeticError`` where the quadrature does not converge (a degenerate filter: the point is
         flagged by the caller, never given a wrong moment)."""
-        value, _, *problem = integrate.quad(lambda w: w**order * float(self.psd(w)), 0.0, float(cutoff), limit=400,
-                                            points=self.psd_peaks() or None, epsrel=epsrel, full_output=1)
+        cutoff = float(cutoff)
+        # break points QUADPACK can split at: inside the band and not within rounding of its ends (a filter
+        # frequency of 1e-300 as a break point crashes QUADPACK itself, the whole process)
+        points = [p for p in self.psd_peaks() if math.isfinite(p) and 1e-9 * cutoff < p < (1.0 - 1e-9) * cutoff]
+        if not math.isfinite(float(self.psd(0.5 * cutoff))):
+            raise ArithmeticError(f"spectral moment lambda_{order}: the spectrum is not finite (a filter parameter "
+                                  "beyond float range)")
+        value, _, *problem = integrate.quad(lambda w: w**order * float(self.psd(w)), 0.0, cutoff, limit=400,
+                                            points=points or None, epsrel=epsrel, full_output=1)
         if len(problem) > 1:                       # quad's message: the integral did not converge
             raise ArithmeticError(f"spectral moment lambda_{order}: {' '.join(str(problem[1]).split())}")
         return 2.0 * value

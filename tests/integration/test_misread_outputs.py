@@ -205,3 +205,18 @@ def test_the_quickstart_fragility_stands_on_vouched_points():
     assert study.fragility.relative_to == "slenderness"
     readme = (ROOT / "README.md").read_text()
     assert "--threshold 0.3 --relative-to slenderness" in readme
+
+
+def test_a_target_pga_point_with_a_filter_beyond_float_range_is_flagged_not_a_crash(tmp_path, capsys):
+    """A neighbour of item 4 (one bad point sinks its batch): omega_g = 1e-300 at one point of a target-PGA
+    study made QUADPACK crash the whole process (segmentation fault) while S0 was derived from the PGA."""
+    text = CLOUGH_PENZIEN.replace('kind = "clough_penzien"\nS0 = [1e-4, 5e-4]\nomega_g = 15.0',
+                                  'kind = "kanai_tajimi"\npga = [1.0, 2.0]\nomega_g = [15.0, 1e-300]')
+    text = text.replace("omega_f = 1.5\nzeta_f = [0.8, 1e-21]\n", "")
+    (tmp_path / "kt.toml").write_text(text)
+    assert main(["run", str(tmp_path / "kt.toml"), "--out", str(tmp_path / "kt.nc"), "--workers", "0", "--quiet",
+                 "--no-plots"]) == 0
+    with xr.open_dataset(tmp_path / "kt.nc") as ds:
+        status = ds["status"].transpose("pga", "omega_g").values
+    assert (status[:, 1] == PointStatus.beyond_float_range).all() and (status[:, 0] != PointStatus.task_failed).all()
+    assert "RuntimeWarning" not in capsys.readouterr().err
