@@ -4,6 +4,7 @@ register their commands on :data:`cli`)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import click
@@ -376,8 +377,6 @@ def refuse_collisions(out, others, option="--out"):
     ...     print(exc)
     --out f.csv: the command also writes its CSV there; give the netCDF file another name (e.g. f.nc)
     """
-    import os
-
     def key(path):
         return os.path.normcase(os.path.abspath(os.fspath(path)))
 

@@ -49,7 +49,8 @@ SKIPPED = {
     "make ": "the set-up itself; this test runs inside it",
     "--scheduler": "needs a running dask scheduler",
     ".venv/bin/dask ": "starts a dask scheduler or workers (test_sweep_zarr.py runs this recipe with its own processes)",
-    "kill %": "stops the scheduler and workers of the recipe",
+    "echo $! > /tmp/": "keeps the process id of the scheduler or workers the recipe started",
+    'kill "$(cat /tmp/': "stops the scheduler and workers of the recipe by their process ids",
     "export outputs/quick.zarr": "exports the result of the skipped --scheduler run",
     "tradeoff studies/speed_accuracy.toml": "about 10 minutes of Monte Carlo; the trade study has its own tests",
 }
