@@ -122,14 +122,17 @@ def announce_compilation(stream=None):
 
 #: Longest silence while numba compiles [s]: a line at least this often.
 COMPILE_INTERVAL = 10.0
+#: Compiling shorter than this [s] is not worth a line (a small kernel); longer is said at once.
+COMPILE_DELAY = 2.0
 
 
 class CompileAnnouncer:
     """Lines on ``stream`` while numba compiles kernels its cache does not hold.
 
     :meth:`started` and :meth:`finished` are called for each compile (numba's ``numba:compile`` event,
-    :func:`announcing_compiles`); :meth:`tick` (a background thread in :func:`announcing_compiles`)
-    writes a "still compiling" line when nothing was said for ``interval`` seconds while a compile runs.
+    :func:`announcing_compiles`); :meth:`tick` (a background thread of :func:`announcing_compiles`, every
+    second) writes the first line once compiling has gone on for ``delay`` seconds, then a "still
+    compiling" line whenever nothing was said for ``interval`` seconds while compiling goes on.
 
     Parameters
     ----------
@@ -137,6 +140,8 @@ class CompileAnnouncer:
         Where to write; default ``sys.stderr``.
     interval : float
         Longest silence while compiling [s].
+    delay : float
+        Compiling shorter than this is not announced [s].
     clock : callable
         Seconds [s] (a fake clock in tests).
 
@@ -144,17 +149,18 @@ class CompileAnnouncer:
     --------
     >>> import io
     >>> out, now = io.StringIO(), [0.0]
-    >>> a = CompileAnnouncer(out, interval=10.0, clock=lambda: now[0])
-    >>> a.started("solve_batch"); now[0] = 9.0; a.tick(); now[0] = 12.0; a.tick(); a.finished()
+    >>> a = CompileAnnouncer(out, interval=10.0, delay=2.0, clock=lambda: now[0])
+    >>> a.started("solve_batch"); now[0] = 1.0; a.tick(); now[0] = 2.0; a.tick()
+    >>> now[0] = 9.0; a.tick(); now[0] = 12.0; a.tick(); a.finished()
     >>> print(out.getvalue(), end="")
     screening: compiling solve_batch with numba (not in its cache yet; first run only, about 10-60 s)...
     screening: still compiling (1 kernel(s) so far, now solve_batch, 12 s)
     """
 
-    def __init__(self, stream=None, interval=COMPILE_INTERVAL, clock=time.monotonic):
-        self.stream, self.interval, self.clock = stream, interval, clock
+    def __init__(self, stream=None, interval=COMPILE_INTERVAL, delay=COMPILE_DELAY, clock=time.monotonic):
+        self.stream, self.interval, self.delay, self.clock = stream, interval, delay, clock
         self.active, self.count, self.name = 0, 0, ""
-        self._first = self._last = None
+        self._first = self._last = self._idle_since = None
         self._lock = threading.Lock()
 
     def _write(self, text):
@@ -170,20 +176,27 @@ class CompileAnnouncer:
             self.active += 1
             self.count += 1
             self.name = name
-            now = self.clock()
             if self._first is None:
-                self._first = self._last = now
-                self._write(f"screening: compiling {name} with numba (not in its cache yet; first run only, "
-                            f"{FIRST_COMPILE})...")
+                self._first = self.clock()
 
     def finished(self):
         with self._lock:
             self.active = max(self.active - 1, 0)
+            if not self.active:
+                self._idle_since = self.clock()
 
     def tick(self):
         with self._lock:
             now = self.clock()
-            if self.active and self._last is not None and now - self._last >= self.interval:
+            busy = self.active or (self._idle_since is not None and now - self._idle_since < 1.0)
+            if not busy or self._first is None:
+                return
+            if self._last is None:
+                if now - self._first >= self.delay:
+                    self._last = now
+                    self._write(f"screening: compiling {self.name} with numba (not in its cache yet; first run "
+                                f"only, {FIRST_COMPILE})...")
+            elif now - self._last >= self.interval:
                 self._last = now
                 self._write(f"screening: still compiling ({self.count} kernel(s) so far, now {self.name}, "
                             f"{now - self._first:.0f} s)")
