@@ -1578,8 +1578,10 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
     Returns
     -------
     xarray.Dataset
-        ``p_exceed`` [1] over the dims of the dataset, and ``fit_median`` (in the units of ``dim``;
-        ``fit_median.attrs["intensity"]`` names it), ``beta`` [1] and ``fit_flag`` over the other dims.
+        ``p_exceed`` [1] over the dims of the dataset (at a ``[fragility]`` threshold of a sweep, its stored
+        value: :func:`stored_exceedance`), and ``fit_median`` (in the units of ``dim``;
+        ``fit_median.attrs["intensity"]`` names it), ``beta`` [1] and ``fit_flag`` over the other dims, fitted
+        on the vouched points (``fit_n_unvouched`` left out).
 
     Notes
     -----
@@ -1604,7 +1606,8 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
     >>> f"{float(curve['fit_median']):.3e} {float(curve['beta']):.3f}", curve["fit_median"].attrs["units"]
     ('5.381e-04 0.235', 'm2 s-3')
     """
-    p = exceedance_probability(ds, threshold, relative_to, method)
+    p = (stored_exceedance(ds, threshold, relative_to) if has_stored_exceedance(ds, threshold, relative_to)
+         else exceedance_probability(ds, threshold, relative_to, method))
     if dim not in p.dims:
         raise ValueError(f"parameter 'dim' must be a swept dimension of the dataset (got {dim!r}; have {list(p.dims)})")
     out = add_fit(xr.Dataset({"p_exceed": p}), ds, parameter(ds, dim), dim)
