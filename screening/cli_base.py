@@ -10,8 +10,9 @@ from pathlib import Path
 import click
 import numpy as np
 
-from screening import __version__, limits
+from screening import __version__
 from screening.atomicfile import publish as _publish
+from screening.limits import MAX_MODELLING_DISPERSION
 from screening._cli_common import say, temporary_for, write_error
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
@@ -69,8 +70,8 @@ def _positive_float(text):
 
 def _dispersion(text):
     value = _positive_float(text)
-    if value > limits.MAX_MODELLING_DISPERSION:
-        raise ValueError(f"must be a number > 0 and <= {limits.MAX_MODELLING_DISPERSION:g} (got {text!r})")
+    if value > MAX_MODELLING_DISPERSION:
+        raise ValueError(f"must be a number > 0 and <= {MAX_MODELLING_DISPERSION:g} (got {text!r})")
     return value
 
 

@@ -42,7 +42,8 @@ import xarray as xr
 
 from screening.solvers import model_choice
 from screening.status import FitFlag
-from screening import limits, schema
+from screening import limits
+from screening.schema import INTENSITY
 from screening.workflow.config import StudyError, check_choice, check_keys, check_value
 
 __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
@@ -207,7 +208,7 @@ def _levels(value, im):
     """``[records] levels``: the IM levels [units of ``im``] of a multiple-stripe analysis (``()``: a cloud)."""
     if value is None:
         return ()
-    units = schema.INTENSITY[IMS[im]]["units"]
+    units = INTENSITY[IMS[im]]["units"]
     ok = isinstance(value, list) and 2 <= len(value) <= MAX_LEVELS and all(
         isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in value)
     if not ok or any(b <= a for a, b in zip(value, value[1:])):
