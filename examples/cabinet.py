@@ -16,6 +16,7 @@ import xarray as xr
 from screening.analysis import beds
 from screening.sweep.study import load_study
 from screening.sweep.run import run_sweep
+from screening.core.status import FitFlag
 
 HERE = Path(__file__).resolve().parent
 
@@ -35,8 +36,11 @@ def main(study=HERE / "cabinet.toml", out="outputs/cabinet.nc"):
     with xr.open_dataset(out) as result:
         curves = result.rocking.fragility_curve(0.3, dim="pga", relative_to="slenderness").load()
         trust = result["sl_trust"].load()
-    print(f"P(|theta| > 0.3 atan(b/h)): median PGA {float(curves['fit_median']):.3g} m s-2, "
-          f"beta {float(curves['beta']):.3g}; linearization {trust.attrs['flag_meanings']}: "
+    flag = FitFlag(int(curves["fit_flag"]))
+    fit = (f"median PGA {float(curves['fit_median']):.3g} m s-2, beta {float(curves['beta']):.3g}"
+           if flag == FitFlag.ok else f"no fit ({flag.name}: {flag.meaning})")
+    print(f"P(|theta| > 0.3 atan(b/h)): {fit}; {int(curves['fit_n_unvouched'])} point(s) left out (nothing vouches "
+          f"for them); linearization {trust.attrs['flag_meanings']}: "
           + ", ".join(str(int((trust == v).sum())) for v in trust.attrs["flag_values"]))
     return curves
 

@@ -450,7 +450,7 @@ def bed_summary(block, foundation):
 
 
 def format_bed_summary(summary):
-    """The :func:`bed_summary` as text lines with units and engineering units.
+    """The :func:`bed_summary` as text: one line per quantity, with units and engineering units.
 
     Parameters
     ----------
@@ -459,8 +459,8 @@ def format_bed_summary(summary):
 
     Returns
     -------
-    list of str
-        One line per quantity, as ``screening info`` prints them.
+    str
+        Lines joined by newlines (no final newline), as ``screening info`` prints them.
 
     Notes
     -----
@@ -476,11 +476,11 @@ def format_bed_summary(summary):
     --------
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> format_bed_summary(bed_summary(block, bed))[1]
+    >>> format_bed_summary(bed_summary(block, bed)).splitlines()[1]
     'uplift angle        0.001201 rad (paper m g/(2 b^2 k)), 0.001201 rad exact'
     """
     s = summary
-    return [
+    return "\n".join([
         f"static indentation  {s['static_indentation'] * 1e3:.4g} mm",
         f"uplift angle        {s['uplift_angle']:.4g} rad (paper m g/(2 b^2 k))"
         + (f", {s['uplift_angle_exact']:.4g} rad exact" if np.isfinite(s['uplift_angle_exact']) else ""),
@@ -490,4 +490,4 @@ def format_bed_summary(summary):
         f"vertical frequency  {s['vertical_frequency']:.4g} rad/s ({s['vertical_frequency'] / (2 * math.pi):.3g} Hz)",
         f"damping ratios      vertical {s['vertical_damping_ratio']:.3g}, rocking {s['rocking_damping_ratio']:.3g} "
         "(full contact, at the static indentation)",
-    ]
+    ])

@@ -41,18 +41,22 @@ from screening.solvers import schema
 from screening.core.model.block import Block
 from screening.solvers.datasets import finish
 from screening.analysis.trust import OVERTURN_LIMIT
-from screening.core.status import BestMethod, FitFlag, PointStatus, SampleState, Trust
+from screening.core.status import BestMethod, FitFlag, PointStatus, SampleState, Trust, ProbabilitySource
 
 __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "exceedance_probability_from_moments",
            "linearized_exceedance", "band_standard_error",
            "mcs_exceedance_probability", "lognormal_fragility", "binomial_nll", "fit_binomial_fragility",
            "total_dispersion", "with_modelling_dispersion", "fit_lognormal_fragility", "parameter",
            "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
-           "sample_exceedance", "exceedance_probability", "fit_fragility_curve", "fit_curves", "unvouched_points",
+           "sample_exceedance", "exceedance_probability", "STORED", "has_stored_exceedance", "stored_exceedance",
+           "fit_flag_of", "fit_fragility_curve", "fit_curves", "unvouched_points",
            "fitted_probability", "add_fit", "grid_units_of", "fragility_curve", "RockingAccessor",
            "spot_positions", "mcs_exceedance_at_spots", "best_exceedance", "fragility_dataset"]
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
+
+#: ``method`` of a probability a sweep stored with its ``p_source`` (:func:`stored_exceedance`).
+STORED = "stored (p_source)"
 
 
 def _phi(x):
@@ -331,8 +335,9 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
     Returns
     -------
     numpy.ndarray
-        Probability per point [1]: 1 where the linearized model became unstable (``k_eq_negative``,
-        ``sigma_theta_beyond_slenderness``), NaN at the other points that are not ``ok``.
+        Probability per point [1]; NaN at every point that is not ``ok``: where the linearized model
+        stopped near toppling (``k_eq_negative``, ``sigma_theta_beyond_slenderness``) nothing vouches for a
+        number (only Monte Carlo answers there), and where it failed.
 
     Notes
     -----
@@ -351,7 +356,7 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
     Examples
     --------
     Stationary moments (sigma 0.01 rad, sigma_dot 0.1 rad/s) over 10 s, level 3 sigma: Poisson gives
-    ``1 - exp(-10 x 2 x 1.59 x exp(-4.5)) = 0.298``; a point with ``k_eq_negative`` gets 1:
+    ``1 - exp(-10 x 2 x 1.59 x exp(-4.5)) = 0.298``; a point with ``k_eq_negative`` gets NaN:
 
     >>> import numpy as np
     >>> t = np.linspace(0.0, 10.0, 101)
@@ -359,7 +364,7 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
     >>> p = linearized_exceedance(t, 1e-4 * ones, 1e-2 * ones, 0 * ones, 0.1 * ones, 10.0 * ones,
     ...                           np.ones(2), [0, 1], np.full(2, 0.03), method="poisson")
     >>> np.round(p, 3).tolist()
-    [0.298, 1.0]
+    [0.298, nan]
     """
     if method not in ("poisson", "vanmarcke"):
         raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
@@ -374,9 +379,7 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
                                                                * np.asarray(m_sdof, dtype=float)[:, None]))
         bandwidth = oscillator_bandwidth(np.where(np.isnan(zeta), 0.05, zeta))
     p = exceedance_probability_from_moments(t, *moments, level, method=method, bandwidth=bandwidth)
-    status = np.asarray(status)
-    unstable = np.isin(status, [PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness])
-    return np.where(unstable, 1.0, np.where(status == PointStatus.ok, p, np.nan))
+    return np.where(np.asarray(status) == PointStatus.ok, p, np.nan)
 
 
 def mcs_exceedance_probability(peak_abs_theta, level, overturned=None):
@@ -507,6 +510,55 @@ def binomial_nll(log_median, log_beta, intensity, n_exceed, n_total):
     return -float(np.sum(n_exceed * np.log(p) + (n_total - n_exceed) * np.log(q)))
 
 
+#: Relative standard error of beta from which the data are said not to determine it.
+BETA_UNIDENTIFIED = 1.0
+
+
+def fit_flag_of(intensity, median, beta, beta_se=np.nan):
+    """Whether a fitted lognormal fragility is one the data support: :class:`~screening.core.status.FitFlag`.
+
+    Parameters
+    ----------
+    intensity : array_like
+        The intensities of the points the curve was fitted to [IM units].
+    median : float
+        The fitted median [IM units].
+    beta : float
+        The fitted dispersion [1].
+    beta_se : float, optional
+        Its standard error [1] (NaN: unknown).
+
+    Returns
+    -------
+    screening.core.status.FitFlag
+        ``not_identified`` where median or beta is not finite or ``beta_se >= BETA_UNIDENTIFIED beta``,
+        ``non_positive_beta`` where ``beta <= 0``, ``median_outside_data`` where the median lies outside
+        the intensities, else ``ok``.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> fit_flag_of([1.0, 2.0], 1.5, 0.4).name, fit_flag_of([1.0, 2.0], 2.8e136, 609.0).name
+    ('ok', 'median_outside_data')
+    >>> fit_flag_of([1.0, 2.0], 1.5, 0.4, beta_se=2624.0).name
+    'not_identified'
+    """
+    im = np.asarray(intensity, dtype=float).ravel()
+    im = im[np.isfinite(im)]
+    if not (np.isfinite(median) and np.isfinite(beta)) or (np.isfinite(beta_se) and beta_se >= BETA_UNIDENTIFIED
+                                                              * abs(beta)):
+        return FitFlag.not_identified
+    if beta <= 0:
+        return FitFlag.non_positive_beta
+    if im.size == 0 or not im.min() <= median <= im.max():
+        return FitFlag.median_outside_data
+    return FitFlag.ok
+
+
 def fit_binomial_fragility(intensity, n_exceed, n_total):
     """Maximum-likelihood lognormal fragility of stripes of trials, with standard errors.
 
@@ -519,7 +571,11 @@ def fit_binomial_fragility(intensity, n_exceed, n_total):
     Returns
     -------
     dict with ``median`` [IM units], ``beta`` [1], their standard errors ``median_se``, ``beta_se``
-    (NaN where the information matrix is singular: perfectly separated stripes) and ``n_trials``.
+    (NaN where the information matrix is singular: perfectly separated stripes), ``n_trials`` and
+    ``flag`` (:class:`~screening.core.status.FitFlag`): ``separated`` where every stripe is all or nothing,
+    ``not_identified`` with fewer than two levels or a beta the information does not determine,
+    ``non_positive_beta``, ``median_outside_data`` (:func:`fit_flag_of`), else ``ok``: only an ``ok`` fit
+    is an answer.
 
     Notes
     -----
@@ -540,8 +596,10 @@ def fit_binomial_fragility(intensity, n_exceed, n_total):
     Examples
     --------
     >>> fit = fit_binomial_fragility([0.5, 1.0, 2.0], [1, 5, 9], 10)
-    >>> f"{fit['median']:.3f} {fit['beta']:.3f} {fit['n_trials']}"
-    '1.000 0.541 30'
+    >>> f"{fit['median']:.3f} {fit['beta']:.3f} {fit['n_trials']} {fit['flag'].name}"
+    '1.000 0.541 30 ok'
+    >>> fit_binomial_fragility([1.0], [4], 10)["flag"].name          # one stripe: beta is not determined
+    'not_identified'
     """
     x = np.asarray(intensity, dtype=float).ravel()
     k = np.asarray(n_exceed, dtype=float).ravel()
@@ -571,9 +629,17 @@ def fit_binomial_fragility(intensity, n_exceed, n_total):
         se = np.sqrt(np.diag(cov)) if np.all(np.diag(cov) > 0) else np.full(2, np.nan)
     except np.linalg.LinAlgError:
         se = np.full(2, np.nan)
-    median, beta = float(np.exp(best[0])), float(np.exp(best[1]))
-    return {"median": median, "beta": beta, "median_se": median * float(se[0]), "beta_se": beta * float(se[1]),
-            "n_trials": int(n.sum())}
+    with np.errstate(over="ignore", invalid="ignore"):
+        median, beta = float(np.exp(best[0])), float(np.exp(best[1]))
+        median_se, beta_se = median * float(se[0]), beta * float(se[1])
+    if np.all((k == 0) | (k == n)):
+        flag = FitFlag.separated
+    elif np.unique(x).size < 2:
+        flag = FitFlag.not_identified
+    else:
+        flag = fit_flag_of(x, median, beta, beta_se if np.isfinite(beta_se) else np.inf)
+    return {"median": median, "beta": beta, "median_se": median_se, "beta_se": beta_se, "n_trials": int(n.sum()),
+            "flag": flag}
 
 
 def total_dispersion(beta, modelling):
@@ -722,8 +788,9 @@ def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=
         raise ValueError("need at least two intensities with 0 < probability < 1 to fit a fragility curve")
     z = special.ndtri(p[use])
     slope, intercept = np.polyfit(np.log(im[use]), z, 1)
-    beta = 1.0 / slope
-    return float(np.exp(-intercept * beta)), float(beta)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        beta = 1.0 / slope
+        return float(np.exp(-intercept * beta)), float(beta)
 
 
 # ------------------------------------------------------------------ xarray layer
@@ -997,9 +1064,10 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
     """Probability [1] that ``|theta|`` exceeds the threshold during the record, on the dims of the dataset.
 
     Linearization results and sweeps: the up-crossing approximation ``method`` on the Gaussian
-    moments.  Points whose linearized model became unstable (status ``k_eq_negative`` or
-    ``sigma_theta_beyond_slenderness``) are given probability 1; points that failed numerically
-    are NaN.  Monte Carlo results: the fraction of the samples that did not diverge whose peak
+    moments; NaN at every point that is not ``ok`` (where the linearization stopped near toppling,
+    ``k_eq_negative`` or ``sigma_theta_beyond_slenderness``, nothing vouches for a number; elsewhere it
+    failed).  A sweep that stores ``p_exceed`` at this threshold without the moments (``[output]
+    histories = "spots"``): the stored value, NaN where its ``p_source`` is ``unreliable``.  Monte Carlo results: the fraction of the samples that did not diverge whose peak
     ``|theta|`` exceeds the threshold (overturned samples count), named ``mcs_p_exceed``, with its
     binomial standard error as the coordinate ``mcs_p_exceed_se`` (``method`` is not used).
 
@@ -1047,6 +1115,8 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
         return _monte_carlo_exceedance(ds, level)
     if method not in ("poisson", "vanmarcke"):
         raise ValueError(f"parameter 'method' must be 'poisson' or 'vanmarcke' (got {method!r})")
+    if "var_theta" not in ds.variables:
+        return stored_exceedance(ds, threshold, relative_to)
     moments = [ds[name].fillna(0.0) for name in ("var_theta", "var_theta_dot", "cov_theta_theta_dot")]
     along_t = [xr.broadcast(level, ds["t"])[0]]
     if method == "vanmarcke":
@@ -1058,9 +1128,105 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
 
     p = xr.apply_ufunc(_prob, ds["t"], *moments, *along_t, input_core_dims=[["t"]] * (4 + len(along_t)))
     if "status" in ds.variables:
-        unstable = ds["status"].isin([PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness])
-        p = xr.where(unstable, 1.0, p.where(ds["status"] == PointStatus.ok))
+        p = p.where(ds["status"] == PointStatus.ok)
     return p.rename("p_exceed").assign_attrs(schema.attributes("p_exceed"), method=method)
+
+
+def _stored_base(ds):
+    """What the stored thresholds are fractions of (``p_exceed``'s attribute ``relative_to``), ``"None"``."""
+    return str(ds["p_exceed"].attrs.get("relative_to", ds["threshold"].attrs.get("relative_to", "None")))
+
+
+def has_stored_exceedance(ds, threshold, relative_to=None):
+    """Whether a sweep stored ``p_exceed`` with ``p_source`` at this ``[fragility]`` threshold (the sweep's best
+    answer there: :func:`stored_exceedance`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result.
+    threshold : float
+        The threshold, [rad] or a fraction [1].
+    relative_to : {None, "slenderness", "theta_ul"}
+        What ``threshold`` is a fraction of.
+
+    Returns
+    -------
+    bool
+        True where the result holds ``p_exceed`` at ``threshold`` relative to the same angle, with ``p_source``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> ds = xr.Dataset({"p_exceed": (("S0", "threshold"), [[0.1, 0.0]], {"relative_to": "slenderness"}),
+    ...                  "p_source": ("S0", [1])}, coords={"threshold": [0.1, 0.3]})
+    >>> has_stored_exceedance(ds, 0.3, "slenderness"), has_stored_exceedance(ds, 0.2, "slenderness")
+    (True, False)
+    """
+    if not ("p_exceed" in ds.variables and "p_source" in ds.variables and "threshold" in ds["p_exceed"].dims):
+        return False
+    if _stored_base(ds) != str(relative_to):
+        return False
+    return bool(np.any(np.isclose(np.asarray(ds["threshold"].values, dtype=float), float(threshold), rtol=1e-9,
+                                  atol=0.0)))
+
+
+def stored_exceedance(ds, threshold, relative_to=None):
+    """The ``p_exceed`` a sweep stored at a ``[fragility]`` threshold, NaN where ``p_source`` is ``unreliable``.
+
+    What :func:`exceedance_probability` gives on a result without the moments' histories (``[output]
+    histories = "spots"``): the sweep's own probabilities (Monte Carlo, trusted or corrected
+    linearization, or the study's fragility surface, by ``p_source``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result with ``p_exceed`` over ``threshold`` (a ``[fragility]`` table).
+    threshold : float
+        One of the stored thresholds, [rad] or a fraction [1].
+    relative_to : {None, "slenderness", "theta_ul"}
+        As the study's ``[fragility] relative_to``.
+
+    Returns
+    -------
+    xarray.DataArray
+        ``p_exceed`` [1] over the grid.
+
+    Raises
+    ------
+    ValueError
+        One line: the result stores no moments and no probabilities at this threshold.
+
+    References
+    ----------
+    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
+       ``docs/outputs_probabilities.md``.
+
+    Examples
+    --------
+    >>> ds = xr.Dataset({"p_exceed": (("S0", "threshold"), [[0.1, 0.0], [0.6, 0.2]], {"relative_to": "slenderness"}),
+    ...                  "p_source": ("S0", [1, 0])}, coords={"threshold": [0.1, 0.3]})
+    >>> stored_exceedance(ds, 0.3, "slenderness").values.tolist()
+    [0.0, nan]
+    """
+    stored = ds["p_exceed"] if "p_exceed" in ds.variables and "threshold" in ds["p_exceed"].dims else None
+    have = [] if stored is None else [float(t) for t in ds["threshold"].values]
+    same_base = stored is not None and _stored_base(ds) == str(relative_to)
+    match = [i for i, t in enumerate(have) if np.isclose(t, float(threshold), rtol=1e-9, atol=0.0)]
+    if not (same_base and match):
+        base = _stored_base(ds) if stored is not None else None
+        offer = (f"its [fragility] thresholds {', '.join(f'{t:g}' for t in have)} (relative to {base})"
+                 if have else "no [fragility] thresholds")
+        raise ValueError(f"the result stores no histories of the moments ([output] histories = \"spots\"): only "
+                         f"{offer} have probabilities; give one of them, or run the study with histories")
+    p = stored.isel(threshold=match[0], drop=True)
+    if "p_source" in ds.variables:
+        p = p.where(ds["p_source"] != ProbabilitySource.unreliable)
+    return p.rename("p_exceed").assign_attrs(schema.attributes("p_exceed"), method=STORED)
 
 
 def fit_fragility_curve(intensity, probability):
@@ -1081,7 +1247,8 @@ def fit_fragility_curve(intensity, probability):
         Lognormal dispersion [1]; NaN where ``flag`` is not ``ok``.
     flag : screening.core.status.FitFlag
         ``ok``, or why there is no fit (no finite value, never or always exceeded, fewer than two
-        points strictly between, ``beta <= 0``).
+        points strictly between, ``beta <= 0``, a median outside the intensities, a slope the points do
+        not determine: :func:`fit_flag_of`).
 
     Notes
     -----
@@ -1102,6 +1269,8 @@ def fit_fragility_curve(intensity, probability):
     '1.200 0.500 ok'
     >>> fit_fragility_curve([0.5, 1.0], [0.0, 0.0])[2].name
     'never_exceeded'
+    >>> fit_fragility_curve([1.0, 1.1, 1.2, 1.3], [0.30, 0.31, 0.29, 0.30])[2].name     # flat: noise only
+    'not_identified'
     """
     im = np.asarray(intensity, dtype=float).ravel()
     p = np.asarray(probability, dtype=float).ravel()
@@ -1116,9 +1285,24 @@ def fit_fragility_curve(intensity, probability):
         median, beta = fit_lognormal_fragility(im[finite], p[finite])
     except ValueError:
         return np.nan, np.nan, FitFlag.no_fit
-    if not beta > 0:
-        return np.nan, np.nan, FitFlag.non_positive_beta
-    return median, beta, FitFlag.ok
+    flag = fit_flag_of(im[finite], median, beta, _probit_beta_se(im[finite], p[finite], beta))
+    return (median, beta, flag) if flag == FitFlag.ok else (np.nan, np.nan, flag)
+
+
+def _probit_beta_se(im, p, beta):
+    """Standard error [1] of the least-squares ``beta`` of :func:`fit_lognormal_fragility` from the scatter
+    of the probits about the line (NaN with two points: an exact line)."""
+    use = np.isfinite(p) & (p > 1e-6) & (p < 1 - 1e-6) & (im > 0)
+    x, z = np.log(im[use]), special.ndtri(p[use])
+    if x.size < 3 or not np.isfinite(beta) or beta == 0:
+        return np.nan
+    slope, intercept = np.polyfit(x, z, 1)
+    resid = z - (slope * x + intercept)
+    sxx = float(np.sum((x - x.mean()) ** 2))
+    if sxx <= 0:
+        return np.inf
+    slope_se = math.sqrt(float(np.sum(resid ** 2)) / (x.size - 2) / sxx)
+    return abs(beta) * slope_se / abs(slope) if slope != 0 else np.inf
 
 
 def fit_curves(p, intensity, dim):
@@ -1172,17 +1356,24 @@ def fit_curves(p, intensity, dim):
                        "fit_flag": fit.isel(fit=2, drop=True).astype(np.int8)})
 
 
-def unvouched_points(ds):
-    """Grid points whose linearized value nobody vouches for.
+def unvouched_points(ds, stored=True):
+    """Grid points whose value nobody vouches for: a fit leaves them out.
 
-    Their ``sl_trust`` is ``untrusted``, their status ``ok`` and they have no best estimate (no
-    ``[accuracy]``, or ``best_method`` ``unreliable``): a fit through them stands on numbers nobody
-    vouches for.  All False where the dataset stores no ``sl_trust``.
+    Where the result stores ``p_source``: for its stored probabilities (``stored``) the points whose source
+    is ``unreliable``; for another threshold (a Gaussian value, ``stored`` false) every point whose source is
+    not the trusted or corrected linearization (a best estimate of ``[accuracy]`` still counts, by
+    :func:`fitted_probability`).  Otherwise the
+    points whose ``sl_trust`` is ``untrusted`` with status ``ok``, and those where the linearization
+    stopped near toppling (``k_eq_negative``, ``sigma_theta_beyond_slenderness``), without a best
+    estimate (no ``[accuracy]``, or ``best_method`` ``unreliable``).  All False where the dataset stores
+    neither ``p_source`` nor ``sl_trust``.
 
     Parameters
     ----------
     ds : xarray.Dataset
         A linearization or sweep result.
+    stored : bool, default True
+        Whether the fitted probability is the one the result stored with ``p_source``.
 
     Returns
     -------
@@ -1204,26 +1395,34 @@ def unvouched_points(ds):
     >>> unvouched_points(ds).values.tolist()
     [True, False]
     """
+    if "p_source" in ds.variables:
+        bad = (ds["p_source"] == ProbabilitySource.unreliable) if stored else ~ds["p_source"].isin(
+            [ProbabilitySource.linearization_gaussian, ProbabilitySource.corrected_linearization_gaussian])
+        bad = bad.drop_vars([c for c in bad.coords if c not in bad.dims]).rename("unvouched")
+        return bad.drop_attrs()                          # not p_source's flag attributes
     if "sl_trust" not in ds.variables:
         return xr.zeros_like(ds["status"] if "status" in ds.variables else xr.DataArray(False), dtype=bool)
     bad = ds["sl_trust"] == Trust.untrusted
     if "status" in ds.variables:
-        bad = bad & (ds["status"] == PointStatus.ok)
+        bad = (bad & (ds["status"] == PointStatus.ok)) | ds["status"].isin(
+            [PointStatus.k_eq_negative, PointStatus.sigma_theta_beyond_slenderness])
     if "best_method" in ds.variables:
         bad = bad & (ds["best_method"] == BestMethod.unreliable)
     return bad.drop_vars([c for c in bad.coords if c not in bad.dims]).rename("unvouched")
 
 
-def fitted_probability(frag):
+def fitted_probability(frag, unvouched=None):
     """The probability a fragility fit uses.
 
     ``best_p_exceed`` where ``[accuracy]`` vouches for it (``best_method`` not ``unreliable``), else
-    ``p_exceed``.
+    ``p_exceed``; NaN (left out) at the ``unvouched`` points without a vouched best estimate.
 
     Parameters
     ----------
     frag : xarray.Dataset
         A fragility dataset with ``p_exceed`` [1] (and optionally ``best_p_exceed`` [1], ``best_method``).
+    unvouched : xarray.DataArray of bool, optional
+        :func:`unvouched_points` of the result.
 
     Returns
     -------
@@ -1245,11 +1444,19 @@ def fitted_probability(frag):
     >>> fitted_probability(frag).values.tolist()
     [0.1, 0.25]
     """
-    p = frag["p_exceed"]
+    p = frag["p_exceed"] if unvouched is None else frag["p_exceed"].where(~unvouched)
     if "best_p_exceed" not in frag:
         return p
     vouched = (frag["best_method"] != BestMethod.unreliable) & np.isfinite(frag["best_p_exceed"])
     return xr.where(vouched, frag["best_p_exceed"], p)
+
+
+def _left_out(frag, unvouched):
+    """The unvouched points a fit leaves out: those without a vouched best estimate."""
+    out = unvouched
+    if "best_p_exceed" in frag:
+        out = out & ~((frag["best_method"] != BestMethod.unreliable) & np.isfinite(frag["best_p_exceed"]))
+    return out
 
 
 def add_fit(out, ds, intensity, dim):
@@ -1270,7 +1477,10 @@ def add_fit(out, ds, intensity, dim):
     -------
     xarray.Dataset
         ``out`` with :func:`fit_curves` of :func:`fitted_probability` (``fit_median``, ``beta``,
-        ``fit_flag``) and ``fit_n_unvouched``, the number of the curve's unvouched points.
+        ``fit_flag``) and ``fit_n_unvouched``, the number of the curve's points left out of the fit because
+        nothing vouches for them (:func:`unvouched_points`); a curve whose vouched points alone are too few
+        (no value, fewer than two between 0 and 1, never or always exceeded) while points were left out is
+        flagged ``untrusted``.
 
     References
     ----------
@@ -1292,10 +1502,16 @@ def add_fit(out, ds, intensity, dim):
     >>> f"{float(out['fit_median']):.3e} {float(out['beta']):.3f} {int(out['fit_n_unvouched'])}"
     '5.381e-04 0.235 0'
     """
-    fit = fit_curves(fitted_probability(out), intensity, dim)
-    unvouched = unvouched_points(ds)
-    count = unvouched.sum(dim) if dim in unvouched.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
-    fit["fit_n_unvouched"] = count.astype(np.int32).broadcast_like(fit["fit_flag"])
+    unvouched = unvouched_points(ds, stored=out["p_exceed"].attrs.get("method") == STORED)
+    fit = fit_curves(fitted_probability(out, unvouched), intensity, dim)
+    left_out = _left_out(out, unvouched)
+    count = left_out.sum(dim) if dim in left_out.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
+    count = count.astype(np.int32).broadcast_like(fit["fit_flag"])
+    count.attrs = {}                                     # not p_source's flag attributes
+    fit["fit_n_unvouched"] = count
+    too_few = fit["fit_flag"].isin([FitFlag.no_values, FitFlag.no_fit, FitFlag.never_exceeded, FitFlag.always_exceeded])
+    untrusted = too_few & (fit["fit_n_unvouched"] > 0)
+    fit["fit_flag"] = xr.where(untrusted, np.int8(FitFlag.untrusted), fit["fit_flag"]).astype(np.int8)
     out = out.drop_vars([n for n in fit.data_vars if n in out]).merge(fit, compat="override")
     return out.assign_attrs(fit_source="best_p_exceed where [accuracy] vouches for it, else p_exceed"
                             if "best_p_exceed" in out else "p_exceed")
@@ -1362,8 +1578,10 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
     Returns
     -------
     xarray.Dataset
-        ``p_exceed`` [1] over the dims of the dataset, and ``fit_median`` (in the units of ``dim``;
-        ``fit_median.attrs["intensity"]`` names it), ``beta`` [1] and ``fit_flag`` over the other dims.
+        ``p_exceed`` [1] over the dims of the dataset (at a ``[fragility]`` threshold of a sweep, its stored
+        value: :func:`stored_exceedance`), and ``fit_median`` (in the units of ``dim``;
+        ``fit_median.attrs["intensity"]`` names it), ``beta`` [1] and ``fit_flag`` over the other dims, fitted
+        on the vouched points (``fit_n_unvouched`` left out).
 
     Notes
     -----
@@ -1388,7 +1606,8 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
     >>> f"{float(curve['fit_median']):.3e} {float(curve['beta']):.3f}", curve["fit_median"].attrs["units"]
     ('5.381e-04 0.235', 'm2 s-3')
     """
-    p = exceedance_probability(ds, threshold, relative_to, method)
+    p = (stored_exceedance(ds, threshold, relative_to) if has_stored_exceedance(ds, threshold, relative_to)
+         else exceedance_probability(ds, threshold, relative_to, method))
     if dim not in p.dims:
         raise ValueError(f"parameter 'dim' must be a swept dimension of the dataset (got {dim!r}; have {list(p.dims)})")
     out = add_fit(xr.Dataset({"p_exceed": p}), ds, parameter(ds, dim), dim)
@@ -1589,8 +1808,9 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
 def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="S0"):
     """The fragility result of a dataset.
 
-    ``p_exceed`` over its dims, the rotation ``threshold_rad`` and, when ``dim`` is swept with at
-    least two points, the lognormal ``fit_median`` and ``beta``.  At Monte Carlo spot points of a
+    ``p_exceed`` over its dims (at a threshold the sweep stored with ``p_source``, its own best answer,
+    :func:`stored_exceedance`; else the linearization's), the rotation ``threshold_rad`` and, when ``dim``
+    is swept with at least two points, the lognormal ``fit_median`` and ``beta`` of the vouched points.  At Monte Carlo spot points of a
     sweep (``spot`` dimension with per-sample ``mcs_peak_abs_theta``), the same probability from the
     sample peaks (``mcs_p_exceed`` and its standard error ``mcs_p_exceed_se``) is put beside the
     Gaussian one (``p_exceed_at_spot``).  For a Monte Carlo result: ``mcs_p_exceed`` and
@@ -1638,16 +1858,20 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
         p = exceedance_probability(ds, threshold, relative_to, method)
         out = xr.Dataset({"mcs_p_exceed": p.drop_vars("mcs_p_exceed_se"), "mcs_p_exceed_se": p["mcs_p_exceed_se"]})
     else:
-        p = exceedance_probability(ds, threshold, relative_to, method)
+        stored = has_stored_exceedance(ds, threshold, relative_to)
+        p = (stored_exceedance(ds, threshold, relative_to) if stored
+             else exceedance_probability(ds, threshold, relative_to, method))
         out = xr.Dataset({"p_exceed": p})
         if "mcs_peak_abs_theta" in ds and "spot" in ds.dims:
             out["mcs_p_exceed"], out["mcs_p_exceed_se"] = mcs_exceedance_at_spots(ds, level)
             out["p_exceed_at_spot"] = p.isel(spot_positions(ds)) if p.ndim else p.expand_dims(spot=ds.sizes["spot"])
-        if "best_method" in ds and all(n in ds for n in ("var_theta", "var_theta_dot", "cov_theta_theta_dot")):
+        if not stored and "best_method" in ds and all(n in ds for n in ("var_theta", "var_theta_dot",
+                                                                          "cov_theta_theta_dot")):
             best = best_exceedance(ds, threshold, relative_to, method)
             for name, value in zip(("best_p_exceed", "best_p_exceed_low", "best_p_exceed_high", "best_method"), best):
                 out[name] = value.drop_vars([c for c in value.coords if c not in value.dims and c not in out.coords])
     if "p_exceed" in out and dim in out["p_exceed"].dims and out.sizes[dim] >= 2:
         out = add_fit(out, ds, parameter(ds, dim), dim)
     out["threshold_rad"] = level
-    return _finish(out, dim, threshold, relative_to, "monte_carlo" if is_monte_carlo(ds) else method)
+    return _finish(out, dim, threshold, relative_to, "monte_carlo" if is_monte_carlo(ds) else
+                   STORED if out["p_exceed"].attrs.get("method") == STORED else method)

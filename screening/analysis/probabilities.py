@@ -223,11 +223,13 @@ def overturning_probability(ds, method="vanmarcke"):
     >>> p.values.tolist(), note
     ([0.1, 0.3], '')
     """
+    from screening.analysis.fragility import STORED, exceedance_probability
+
     if "p_overturn" in ds.variables and "p_source" in ds.variables:
         unreliable = ds["p_source"] == int(ProbabilitySource.unreliable)
         n = int(unreliable.sum())
         note = f"{n} point(s) whose p_source is unreliable left out of the fit" if n else ""
-        return ds["p_overturn"].where(~unreliable), note
+        return ds["p_overturn"].where(~unreliable).assign_attrs(method=STORED), note
     if "p_overturn" in ds.variables:
         return ds["p_overturn"], ""
     p = exceedance_probability(ds, 1.0, "slenderness", method)

@@ -54,6 +54,7 @@ from screening.solvers.synthesis import ground_acceleration_samples, spectral_pl
 from screening.sweep.config import check_choice, check_keys, check_value, StudyError
 from screening.sweep.execution import TASK_RETRIES
 from screening.sweep.interrupt import interruptible
+from screening.solvers.schema import INTENSITY
 
 __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
            "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "cloud_dataset",
@@ -203,11 +204,18 @@ def load_cloud_study(path, units=None, vertical=True):
                       vertical=bool(vertical and use_vertical))
 
 
+def _model_attrs(cloud, block, foundation):
+    """``model``: the Monte Carlo model that ran (``"auto"`` resolved for this block and bed), and
+    ``model_requested`` where the study asked for ``"auto"``."""
+    ran = model_choice.resolve(cloud.model, block, foundation).name
+    return {"model": ran, **({"model_requested": cloud.model} if cloud.model != ran else {})}
+
+
 def _levels(value, im):
     """``[records] levels``: the IM levels [units of ``im``] of a multiple-stripe analysis (``()``: a cloud)."""
     if value is None:
         return ()
-    units = {"pga": "m s-2", "sa": "m s-2", "rms": "m s-2", "arias": "m s-1"}[im]
+    units = INTENSITY[IMS[im]]["units"]
     ok = isinstance(value, list) and 2 <= len(value) <= MAX_LEVELS and all(
         isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in value)
     if not ok or any(b <= a for a, b in zip(value, value[1:])):
@@ -638,17 +646,22 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     ds["threshold_rad"] = ((), level)
     ds["slenderness"] = ((), float(block.slenderness))
     name = IMS[cloud.im]
-    warnings, flag = [], FitFlag.ok
+    warnings = []
     fit = {"median": math.nan, "beta": math.nan, "median_se": math.nan, "beta_se": math.nan}
     try:
         fit = fit_binomial_fragility(levels, ds["n_exceed"].values, ds["n_used"].values)
+        flag = fit["flag"]
     except ValueError as exc:
         flag = FitFlag.never_exceeded if not exceed.any() else FitFlag.always_exceeded if exceed[used].all() \
             else FitFlag.no_fit
         warnings.append(f"no fragility fit: {exc}")
-    if flag == FitFlag.ok and not np.isfinite(fit["beta_se"]):
-        warnings.append("the standard errors are not defined (the stripes separate exceeding from not exceeding "
-                        "perfectly): add levels near the median")
+    if flag == FitFlag.separated:
+        warnings.append("the stripes separate exceeding from not exceeding perfectly: beta is not determined "
+                        "(fit_flag separated, no fit exported); add levels near the median")
+    elif flag != FitFlag.ok and "flag" in fit:
+        warnings.append(f"no fragility fit: {FitFlag(flag).meaning} (fit_flag {FitFlag(flag).name})")
+    if flag != FitFlag.ok:
+        fit = {key: math.nan for key in ("median", "beta", "median_se", "beta_se")}
     ds["fit_median"] = ((), fit["median"])
     ds["beta"] = ((), fit["beta"])
     ds["fit_median_se"] = ((), fit["median_se"])
@@ -660,7 +673,7 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     for v in ("fit_median", "fit_median_se", "stripe_" + name, "level"):
         ds[v].attrs.update(units=units)
     ds["fit_median"].attrs["intensity"] = "stripe_" + name
-    ds.attrs.update(title=f"Multiple-stripe analysis: {cloud.study.title}", model=cloud.model,
+    ds.attrs.update(title=f"Multiple-stripe analysis: {cloud.study.title}", **_model_attrs(cloud, block, foundation),
                     study=cloud.study.source, intensity_measure=cloud.im, intensity_variable="stripe_" + name,
                     intensity_dim="level", threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, binomial maximum likelihood over the stripes (Baker 2015), standard errors "
@@ -723,6 +736,9 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     >>> ds["exceed"].values.tolist(), round(float(ds["fit_median"]), 2), warnings
     ([False, True, False, True], 1.14, [])
     """
+    from screening.solvers import schema
+    from screening.analysis.fragility import fit_flag_of, fit_lognormal_fragility
+
     slender = float(block.slenderness)
     level = threshold_level(cloud, block, foundation)
     data = {k: ("record", np.array([r[k] for r in rows])) for k in rows[0]}
@@ -745,16 +761,22 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     except ValueError as exc:
         median, beta = math.nan, math.nan
         warnings.append(f"no fragility fit: {exc} the threshold")
+    separated = False
     if np.isfinite(beta) and beta > 0:
         x_in, x_out = im_values[used][exceed[used]], im_values[used][~exceed[used]]
         if x_in.min() > x_out.max():
+            separated = True
             warnings.append(f"the records are perfectly separated by {name} (every exceeding record has a larger "
-                            "IM than every other): beta is not identified (the likelihood grows as beta -> 0); "
-                            "add records near the median")
+                            "IM than every other): beta is not identified (the likelihood grows as beta -> 0; "
+                            "fit_flag separated, no fit exported); add records near the median")
     if level >= slender:
         warnings.append("the threshold is at or beyond the slenderness angle atan(b/h)")
-    if np.isfinite(beta):
-        flag = FitFlag.ok if beta > 0 else FitFlag.non_positive_beta
+    if separated:
+        flag = FitFlag.separated
+    elif np.isfinite(beta):
+        flag = fit_flag_of(im_values[used], median, beta)
+        if flag not in (FitFlag.ok, FitFlag.non_positive_beta):
+            warnings.append(f"no fragility fit: {flag.meaning} (fit_flag {flag.name})")
     elif used.any() and (exceed[used].all() or not exceed[used].any()):
         flag = FitFlag.always_exceeded if exceed[used].all() else FitFlag.never_exceeded
     else:
@@ -769,7 +791,8 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     for name_with_period in ("sa", "avgsa"):
         if name_with_period in ds:
             ds[name_with_period].attrs.update(period=cloud.period, damping_ratio=0.05)
-    ds.attrs.update(title=f"Cloud analysis: {cloud.study.title}", model=cloud.model, study=cloud.study.source,
+    ds.attrs.update(title=f"Cloud analysis: {cloud.study.title}", **_model_attrs(cloud, block, foundation),
+                    study=cloud.study.source,
                     intensity_measure=cloud.im, intensity_variable=name, intensity_dim="record",
                     threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",

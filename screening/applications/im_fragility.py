@@ -197,10 +197,6 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     units = IMS[im][1]
     values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
     out = add_fit(frag.assign({name: values}), ds, values, dim)
-    if limit_state == "overturn" and "p_source" in ds.variables:
-        # stored probabilities carry their source: the unreliable ones were left out above, every fitted
-        # point is vouched for (Monte Carlo, or a trusted or corrected linearization)
-        out["fit_n_unvouched"] = xr.zeros_like(out["fit_n_unvouched"])
     out["fit_median"].attrs.update(units=units, intensity=name)
     if period is not None and im in ("sa", "avgsa"):
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
@@ -344,8 +340,8 @@ def curve_table(frag):
     list of dict
         ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
         several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.core.status.FitFlag`),
-        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value
-        is untrusted without a best estimate) and the rotation ``threshold_rad`` [rad] of the curve
+        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve left out of the fit: nothing
+        vouches for them) and the rotation ``threshold_rad`` [rad] of the curve
         (its range ``"lo..hi"`` if it varies along the curve).
 
     References
@@ -397,8 +393,8 @@ def curve_count_text(frag):
     Returns
     -------
     str
-        E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 fitted through untrusted
-        points without a best estimate"``.
+        E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 with points left out of the
+        fit: ..."``.
 
     References
     ----------
@@ -425,10 +421,11 @@ def curve_count_text(frag):
     if missing:
         counts = ", ".join(f"{f.name} {missing.count(f)}" for f in FitFlag if f in missing)
         text += f" ({len(missing)} without a fit: {counts})"
-    shaky = sum(1 for r in fitted if r["n_unvouched"])
+    shaky = sum(1 for r in rows if r["n_unvouched"])
     if shaky:
-        text += (f"; {shaky} fitted through untrusted linearized points without a best estimate "
-                 "(fit_n_unvouched; run with [accuracy] to replace them)")
+        text += (f"; {shaky} with points left out of the fit: nothing vouches for them (fit_n_unvouched "
+                 f"{sum(r['n_unvouched'] for r in rows)}; Monte Carlo there would answer them: [accuracy], or a "
+                 "larger budget_s)")
     return text
 
 
@@ -442,8 +439,8 @@ def write_csv(frag, path):
     """Write the fits as CSV, one row per curve, fitted or not.
 
     Columns: the other dimensions, ``intensity_measure``, ``units``, ``median``, ``beta`` (empty without
-    a fit), ``fit_flag`` and the ``reason`` there is no fit, ``n_unvouched`` (points fitted through
-    untrusted linearized values without a best estimate), ``threshold_rad`` and ``period_s``.
+    a fit), ``fit_flag`` and the ``reason`` there is no fit, ``n_unvouched`` (points left out of
+    the fit: nothing vouches for them), ``threshold_rad`` and ``period_s``.
 
     Parameters
     ----------
@@ -566,8 +563,8 @@ def write_pelicun_csv(frag, path):
                     cells += ["", "", ""]
                     notes.append(f"{state}: no fit ({r['flag'].name})")
                 if r["n_unvouched"]:
-                    notes.append(f"{state}: fitted through {r['n_unvouched']} untrusted point(s) without a best "
-                                 "estimate")
+                    notes.append(f"{state}: {r['n_unvouched']} point(s) left out of the fit (nothing vouches "
+                                 "for them)")
             w.writerow(row + [int(bool(notes) and any("no fit" in n for n in notes)), "; ".join(notes)] + cells)
     return path
 
@@ -712,17 +709,27 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     for fid, by_state in by_taxonomy.items():
         missing = [f"{s}: {by_state[s]['flag'].name} ({by_state[s]['reason']})" for s in states
                    if by_state[s]["flag"] != FitFlag.ok]
+        params = {}
+        for s in states:
+            if by_state[s]["flag"] == FitFlag.ok:
+                try:
+                    params[s] = nrml_parameters(by_state[s]["median"] * factor, by_state[s]["beta"])
+                except OverflowError:
+                    params[s] = (math.inf, math.inf)
+                if not all(math.isfinite(v) for v in params[s]):
+                    missing.append(f"{s}: beta {by_state[s]['beta']:.3g} gives a logncdf mean or stddev beyond "
+                                   "a float (not a fragility OpenQuake can use)")
         if missing:
             lines.append(_comment(f"no fragility function for {fid}: " + "; ".join(missing)))
             continue
         for s in states:
             if by_state[s]["n_unvouched"]:
-                lines.append(_comment(f"{fid} {s}: fitted through {by_state[s]['n_unvouched']} untrusted "
-                                      "linearized point(s) without a best estimate"))
+                lines.append(_comment(f"{fid} {s}: {by_state[s]['n_unvouched']} point(s) left out of the fit "
+                                      "(nothing vouches for them)"))
         lines += [f'    <fragilityFunction id={quoteattr(fid)} format="continuous" shape="logncdf">',
                   f'      <imls imt="{imt}" minIML="{lo:.6g}" maxIML="{hi:.6g}"/>']
         for s in states:
-            mean, std = nrml_parameters(by_state[s]["median"] * factor, by_state[s]["beta"])
+            mean, std = params[s]
             lines.append(f'      <params ls="{s}" mean="{mean:.8g}" stddev="{std:.8g}"/>')
         lines.append("    </fragilityFunction>")
     lines += ["  </fragilityModel>", "</nrml>", ""]

@@ -4,16 +4,22 @@ register their commands on :data:`cli`)."""
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import click
 import numpy as np
 
 from screening._version import __version__
 from screening.core.atomicfile import publish as _publish
 from screening.cli._common import say, temporary_for, write_error
+from screening import __version__
+from screening.core.limits import MAX_MODELLING_DISPERSION
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
-           "WORKER_COUNT", "POSITIVE_FLOAT", "ZLIB_LEVEL", "cli", "announce_compilation", "stamp_fragility",
-           "lognormal_fit_text", "write_file_set", "fragility_figures", "fit_files", "write_fragility_files"]
+           "WORKER_COUNT", "POSITIVE_FLOAT", "DISPERSION", "ZLIB_LEVEL", "cli", "announce_compilation", "stamp_fragility",
+           "lognormal_fit_text", "write_file_set", "refuse_collisions", "fragility_outputs", "fragility_figures", "fit_files",
+           "write_fragility_files"]
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -63,6 +69,13 @@ def _positive_float(text):
     return value
 
 
+def _dispersion(text):
+    value = _positive_float(text)
+    if value > MAX_MODELLING_DISPERSION:
+        raise ValueError(f"must be a number > 0 and <= {MAX_MODELLING_DISPERSION:g} (got {text!r})")
+    return value
+
+
 def _zlib_level(text):
     if text not in [str(i) for i in range(10)]:
         raise ValueError(f"must be an integer in 0..9 (got {text!r})")
@@ -74,6 +87,7 @@ MAX_WORKERS = 256
 POSITIVE_INT = _Checked("integer", _integer_in(1))
 WORKER_COUNT = _Checked("integer", _integer_in(0, MAX_WORKERS))
 POSITIVE_FLOAT = _Checked("number", _positive_float)
+DISPERSION = _Checked("number", _dispersion)
 ZLIB_LEVEL = _Checked("0..9", _zlib_level)
 
 
@@ -331,6 +345,83 @@ def write_file_set(files, warnings=()):
         say(f"warning: {w}")
 
 
+def refuse_collisions(out, others, option="--out"):
+    """Refuse an output path that is also one of the command's other outputs (before any work).
+
+    Parameters
+    ----------
+    out : path-like
+        The path the user gave.
+    others : iterable of tuple
+        ``(name, path)`` of the other files the command writes next to it.
+    option : str, default "--out"
+        The option named in the message.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    CommandError
+        One line naming the clash (exit status 2).
+
+    References
+    ----------
+    .. [1] screening documentation, "The command line", docs/cli.md.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> try:
+    ...     refuse_collisions(Path("f.csv"), [("CSV", Path("f.csv"))])
+    ... except CommandError as exc:
+    ...     print(exc)
+    --out f.csv: the command also writes its CSV there; give the netCDF file another name (e.g. f.nc)
+    """
+    def key(path):
+        return os.path.normcase(os.path.abspath(os.fspath(path)))
+
+    for name, path in others:
+        if key(path) == key(out):
+            raise CommandError(f"{option} {out}: the command also writes its {name} there; give the netCDF file "
+                               f"another name (e.g. {Path(out).with_suffix('.nc')})")
+
+
+def fragility_outputs(out, limit_states=()):
+    """``(name, path)`` of every file ``screening fragility`` writes beside the netCDF file ``out``: the PNG
+    (one per limit state with several), the CSV, pelicun CSV and NRML of the fits (:func:`fragility_figures`,
+    :func:`fit_files`).
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The fragility netCDF file.
+    limit_states : sequence of str, default ()
+        The limit-state names where there are several (a ``limit_state`` dimension).
+
+    Returns
+    -------
+    list of tuple
+        ``(name, path)``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md, section "The files (written as a set: all or none)".
+
+    Examples
+    --------
+    >>> [p.name for _, p in fragility_outputs(Path("f.nc"))]
+    ['f.png', 'f.csv', 'f_pelicun.csv', 'f.xml']
+    """
+    out = Path(out)
+    figures = ([(f"PNG of {name}", out.with_name(f"{out.stem}_{name}.png")) for name in limit_states]
+               if limit_states else [("PNG", out.with_suffix(".png"))])
+    return figures + [("CSV", out.with_suffix(".csv")), ("pelicun CSV", out.with_name(f"{out.stem}_pelicun.csv")),
+                      ("NRML", out.with_suffix(".xml"))]
+
+
 def _drawn(path):
     """The path a figure function returned; :class:`~screening.applications.im_fragility.NoExport` (no figure
     file) where it drew none."""
@@ -385,12 +476,10 @@ def fragility_figures(frag, out, dim, flags=None):
         return lambda path: _drawn(plot_fragility(one, dim, path, flags=flags))
 
     if "limit_state" not in frag.dims:
-        return [("PNG", out.with_suffix(".png"), draw(frag))]
-    entries = []
-    for i, name in enumerate(frag["limit_state"].values):
-        one = frag.isel(limit_state=i).assign_attrs(threshold=float(frag["threshold"].values[i]))
-        entries.append((f"PNG of {name}", out.with_name(f"{out.stem}_{name}.png"), draw(one)))
-    return entries
+        return [("PNG", fragility_outputs(out)[0][1], draw(frag))]
+    names = [str(name) for name in frag["limit_state"].values]
+    return [(label, path, draw(frag.isel(limit_state=i).assign_attrs(threshold=float(frag["threshold"].values[i]))))
+            for i, (label, path) in enumerate(fragility_outputs(out, names)[:len(names)])]
 
 
 def fit_files(frag, out):
@@ -427,9 +516,9 @@ def fit_files(frag, out):
     """
     from screening.applications.im_fragility import write_csv, write_nrml, write_pelicun_csv
 
-    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
-            ("pelicun CSV", out.with_name(f"{out.stem}_pelicun.csv"), lambda path: write_pelicun_csv(frag, path)),
-            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
+    writers = (lambda path: write_csv(frag, path), lambda path: write_pelicun_csv(frag, path),
+               lambda path: write_nrml(frag, path))
+    return [(name, path, write) for (name, path), write in zip(fragility_outputs(out)[-3:], writers)]
 
 
 def write_fragility_files(ds, out, figures, extras=(), warnings=()):

@@ -40,9 +40,10 @@ from screening._version import __version__
 from screening.core.atomicfile import publish as _publish
 from screening.cli._common import Choice, not_with, result_stem, say, temporary_for, usage_message, write_error
 from screening.cli.base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandError, MAX_WORKERS, POSITIVE_INT,
-                                WORKER_COUNT, POSITIVE_FLOAT, ZLIB_LEVEL, cli, announce_compilation,
-                                stamp_fragility, lognormal_fit_text, write_file_set, fragility_figures, fit_files,
-                                write_fragility_files)
+                                WORKER_COUNT, POSITIVE_FLOAT, ZLIB_LEVEL, cli, announce_compilation, stamp_fragility,
+                                lognormal_fit_text, write_file_set, fragility_figures, fit_files,
+                                write_fragility_files, DISPERSION, fragility_outputs, refuse_collisions)
+from screening import __version__
 
 __all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
            "WORKER_COUNT", "POSITIVE_FLOAT", "ZLIB_LEVEL", "cli", "main", "RESUMING_COMMANDS", "interrupted_note",
@@ -83,11 +84,13 @@ def main(argv=None):
     from screening.io.errors import SweepError
     from screening.sweep.interrupt import interrupt_guard
     from screening.sweep.study import StudyError
+    from screening.kernels.cache import announcing_compiles
 
     argv = sys.argv[1:] if argv is None else list(argv)
 
     try:
-        with interrupt_guard(), cli.make_context("screening", argv) as ctx:
+        with interrupt_guard(), announcing_compiles(quiet="--quiet" in argv), \
+                cli.make_context("screening", argv) as ctx:
             status = cli.invoke(ctx)
         sys.stdout.flush()                      # a closed pipe shows here, not at interpreter exit
         return status
@@ -337,8 +340,8 @@ def cmd_plot(result, out_dir, response):
                    "export the fits as CSV (a row per curve), pelicun CSV and OpenQuake NRML next to the netCDF "
                    "(docs/fragility.md)")
 @click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa and --im avgsa")
-@click.option("--modelling-dispersion", "modelling", type=POSITIVE_FLOAT,
-              help="modelling dispersion beta_m [1] combined with each fitted beta by the square root of the sum of "
+@click.option("--modelling-dispersion", "modelling", type=DISPERSION,
+              help="modelling dispersion beta_m [1], > 0 and <= 3, combined with each fitted beta by the square root of the sum of "
                    "squares (the fitted one kept as beta_fit)")
 @click.option("--limit-state", type=Choice(["exceed", "overturn"]), default="exceed",
               help="exceed (default): |theta| beyond --threshold; overturn: the probability of overturning "
@@ -358,8 +361,8 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
     if im is not None or period is not None:
         return cli_records.fragility_over_im_command(result, threshold, relative_to, method, dim, out, im or "sa",
                                                      period, modelling)
-    from screening.analysis.fragility import fragility_dataset, with_modelling_dispersion
-    from screening.applications.im_fragility import default_dim, stack_limit_states
+    from screening.analysis.fragility import fragility_dataset, with_modelling_dispersion, STORED
+    from screening.applications.im_fragility import default_dim, stack_limit_states, limit_state_name
     from screening.io.errors import SweepError
     from screening.io.reader import damaged_data_error, open_result
     from screening.io.writer import check_output_path
@@ -372,12 +375,18 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
                              f"(swept: {', '.join(grid) or 'none'})")
         dim = dim or default_dim(grid) or "S0"
         out = check_output_path(out or result.with_name(f"{result_stem(result)}_fragility.nc"), inputs=(result,))
+        refuse_collisions(out, fragility_outputs(out, [limit_state_name(t, relative_to) for t in threshold]
+                                                 if len(threshold) > 1 else ()))
         try:
             frag = stack_limit_states([fragility_dataset(ds, t, relative_to, method, dim).load() for t in threshold],
                                       threshold, relative_to)
             flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()
+            if frag.attrs.get("method") == STORED:          # the sweep's own answers: their p_source vouches
+                flags = None
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks
             raise damaged_data_error(result, exc) from None
+        except ValueError as exc:               # a threshold the result has no probabilities for
+            raise CommandError(f"--threshold: {exc}") from None
     frag = with_modelling_dispersion(frag, modelling)
     stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold),
                     relative_to=relative_to, modelling_dispersion=modelling)

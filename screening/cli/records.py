@@ -15,7 +15,7 @@ from screening.solvers import mc_registry
 from screening.cli._common import Choice, not_with, result_stem, say, write_error
 from screening.cli.base import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandError, announce_compilation, cli,
                                 fragility_figures, lognormal_fit_text, fit_files, stamp_fragility, write_file_set,
-                                write_fragility_files)
+                                write_fragility_files, fragility_outputs, refuse_collisions)
 
 __all__ = ["SERIAL_RECORDS", "UNITS_HELP", "cmd_simulate", "fragility_over_im_command", "cmd_fit_excitation",
            "cmd_cloud"]
@@ -39,13 +39,33 @@ def _overrides(pairs):
     return out
 
 
+def _output_folder(out):
+    """Create the default output folder (``outputs/``) of ``out``; one line if it cannot be."""
+    try:
+        out.parent.mkdir(exist_ok=True)
+    except OSError as exc:
+        raise CommandError(f"cannot create the output folder {out.parent}: {exc.strerror or exc}") from None
+
+
 def _read(record, dt, units):
     from screening.core.records import read_record
 
     try:
         return read_record(record, dt=dt, units=units, option="--units")
     except (ValueError, OSError) as exc:
-        raise CommandError(f"cannot read record {record}: {exc}") from None
+        raise CommandError(_record_error(record, exc)) from None
+
+
+def _record_error(record, exc):
+    """One line for a record that cannot be read, naming its file once (the reader's message may already
+    name it, as a ``path: ...`` prefix or inside the text)."""
+    text = str(exc)
+    for spelling in dict.fromkeys((str(record), str(Path(record)))):
+        if text.startswith(f"{spelling}: "):
+            return f"cannot read record {spelling}: {text[len(spelling) + 2:]}"
+        if spelling in text:
+            return f"cannot read record: {text}"
+    return f"cannot read record {record}: {text}"
 
 
 @cli.command("simulate", help="response of the study's block and bed to one ground-motion record "
@@ -53,8 +73,8 @@ def _read(record, dt, units):
 @click.argument("record")
 @click.option("--study", required=True, help="study file (TOML) giving the block and the bed (its excitation, "
                                              "if any, is not used)")
-@click.option("--out", help="netCDF file (default <record-stem>_simulation.nc in the current folder; its folder "
-                            "must exist); the PNG goes next to it")
+@click.option("--out", help="netCDF file (default outputs/<record-stem>_simulation.nc, folder created if missing; "
+                            "the folder of an explicit path must exist); the PNG goes next to it")
 @click.option("--model", type=Choice(list(mc_registry.names())), default="coupled",
               help="coupled (eqs. 7-8, default), condensed (eq. 22, the study's condensation) or stiff_bed "
                    "(rigid block on the quasi-static contact, docs/stiff_bed.md)")
@@ -92,7 +112,12 @@ def cmd_simulate(record, study, out, model, dt, units, scale, case, sets, theta0
         raise CommandError(str(exc)) from None
     st, _ = load_record_study(study)
     block, foundation, chosen = block_and_foundation(st, case, _overrides(sets))
-    out = check_output_path(out or Path(f"{rec.name}_simulation.nc"), inputs=(record, study))
+    if out is None:                         # like run and cloud: outputs/, created if missing
+        out = Path("outputs") / f"{rec.name}_simulation.nc"
+        _output_folder(out)
+    out = check_output_path(out, inputs=(record, study))
+    if not no_plots:
+        refuse_collisions(out, [("PNG", out.with_suffix(".png"))])
     announce_compilation()
     try:
         ds = simulate(block, foundation, rec, model=model, theta0=theta0, theta_dot0=theta_dot0,
@@ -187,7 +212,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     parameter '--period' must be a finite number >= 0.001 and <= 100 (got 500.0)
     """
     from screening.analysis.fragility import with_modelling_dispersion
-    from screening.applications.im_fragility import fragility_over_im, stack_limit_states
+    from screening.applications.im_fragility import fragility_over_im, stack_limit_states, limit_state_name
     from screening.io.reader import open_result
     from screening.io.writer import check_output_path
 
@@ -203,7 +228,9 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     result = Path(result)
     with open_result(result) as ds:
         stem = "overturn" if limit_state == "overturn" else "fragility"
-        out = check_output_path(out or result.with_name(f"{result_stem(result)}_{stem}_{im}.nc"))
+        out = check_output_path(out or result.with_name(f"{result_stem(result)}_{stem}_{im}.nc"), inputs=(result,))
+        refuse_collisions(out, fragility_outputs(out, [limit_state_name(t, relative_to) for t in threshold]
+                                                 if len(threshold) > 1 else ()))
         try:
             ds = ds.load()
             frags, warnings = [], []
@@ -291,8 +318,10 @@ def cmd_cloud(study, out, case, sets, workers, scheduler, units, quiet, no_verti
     records = read_cloud_records(cloud)                # every record checked before any work
     if out is None:
         out = Path("outputs") / f"{Path(study).stem}.nc"
-        out.parent.mkdir(exist_ok=True)
+        _output_folder(out)
     out = check_output_path(out, inputs=(study, *cloud.files))
+    refuse_collisions(out, [("PNG", out.with_suffix(".png")), ("demand CSV", out.with_name(f"{out.stem}_demand.csv")),
+                            *fragility_outputs(out)[1:]])
     announce_compilation(quiet)
     if workers is None and not scheduler:
         workers = 0 if len(cloud.files) * max(len(cloud.levels), 1) <= SERIAL_RECORDS else 2

@@ -17,7 +17,8 @@ import math
 __all__ = ["DEFAULT_MAX_POINTS", "MAX_POINTS_CEILING", "MAX_TIMES", "MAX_SAMPLES", "MAX_SAMPLE_VALUES", "MAX_SEED",
            "MAX_STUDY_CHARS", "MAX_NESTING", "MAX_HISTORY_VALUES", "MAX_RTOL", "TASK_BYTES", "MAX_CASES",
            "MAX_THRESHOLDS", "MAX_STUDY_BYTES", "MAX_RECORD_BYTES", "MAX_RECORD_SAMPLES", "MIN_RECORD_DT",
-           "MAX_RECORD_DT", "MAX_RECORD_SCALE", "MAX_RECORD_FILES", "SA_PERIOD_RANGE", "nesting_depth",
+           "MAX_RECORD_DT", "MAX_RECORD_SCALE", "MAX_RECORD_FILES", "SA_PERIOD_RANGE", "MAX_MODELLING_DISPERSION",
+           "nesting_depth",
            "output_steps", "batch_budget"]
 
 #: Default largest grid (``case`` x swept parameters); ``[run] max_points`` changes it.
@@ -62,6 +63,9 @@ MAX_RECORD_SCALE = 1_000.0
 MAX_RECORD_FILES = 100_000
 #: Oscillator periods of Sa(T, 5 %) of a record [s] (``[records] period``).
 SA_PERIOD_RANGE = (1e-3, 100.0)
+#: Largest modelling dispersion beta_m [1] (``screening fragility --modelling-dispersion``): FEMA P-58 uses
+#: 0.1-0.6; beyond a few units a lognormal capacity has no meaning (and exp(beta^2) overflows near 26.6).
+MAX_MODELLING_DISPERSION = 3.0
 
 
 def nesting_depth(text):

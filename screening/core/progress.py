@@ -10,8 +10,8 @@ __all__ = ["LINE_STEP", "LINE_INTERVAL", "Progress"]
 
 #: Without a terminal (a log file, CI, a pipe): one line per this fraction of the work ...
 LINE_STEP = 0.1
-#: ... or after this many seconds without one [s].
-LINE_INTERVAL = 30.0
+#: ... or after this many seconds without one [s]: nothing is silent for longer (a long batch, a compile).
+LINE_INTERVAL = 10.0
 
 
 def _duration(seconds):
@@ -31,10 +31,12 @@ class Progress:
     terminal, or ``lines=True``) a new line is written every :data:`LINE_STEP` of the work or
     :data:`LINE_INTERVAL` seconds, and at the end.  A background thread keeps it alive while one
     long task (a spot check) runs.  The time left is the elapsed time per unit of work times the
-    units left.  Silent when ``enabled`` is false.  Use as a context manager; call :meth:`update`.
+    units left.  Silent when ``enabled`` is false.  ``clock``: seconds (default ``time.perf_counter``; a fake
+    one in tests).  Use as a context manager; call :meth:`update`.
     """
 
-    def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None):
+    def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None,
+                 clock=None):
         self.total = max(int(total), 1)
         self.label = label
         self.enabled = enabled
@@ -46,8 +48,9 @@ class Progress:
             except (AttributeError, ValueError):
                 lines = True
         self.lines = lines
+        self.clock = clock if clock is not None else (lambda: time.perf_counter())
         self.done = 0
-        self._start = time.perf_counter()
+        self._start = self.clock()
         self._last = -float("inf")
         self._last_step = 0
         self._lock = threading.Lock()
@@ -56,7 +59,7 @@ class Progress:
 
     def text(self, now=None):
         """The progress line (without line ending)."""
-        elapsed = (time.perf_counter() if now is None else now) - self._start
+        elapsed = (self.clock() if now is None else now) - self._start
         pct = 100.0 * self.done / self.total
         head = f"{self.label}: {pct:3.0f}% ({self.done}/{self.total}) {elapsed:.1f} s"
         if 0 < self.done < self.total:
@@ -70,7 +73,7 @@ class Progress:
 
     def _show(self, finished=False):
         with self._lock:
-            now = time.perf_counter()
+            now = self.clock()
             if self.lines:
                 step = int(self.done / self.total / LINE_STEP + 1e-9)
                 if finished or step > self._last_step or now - self._last >= LINE_INTERVAL:
@@ -94,7 +97,7 @@ class Progress:
                 self._show()
 
     def __enter__(self):
-        self._start = time.perf_counter()
+        self._start = self.clock()
         if self.enabled:
             self._ticker = threading.Thread(target=self._tick, name="progress", daemon=True)
             self._ticker.start()

@@ -719,9 +719,9 @@ class ResultFile:
         var("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]))
         var("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
             fill=False)
-        if any("mcs_model" in r for r in results):        # a failed spot check: the fill value
+        if any("mcs_model" in r for r in results):        # a failed spot check: the flag value none (-1)
             var("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results], dtype=np.int8),
-                fill=np.int8(-1))
+                fill=False)
         var("mcs_status", "i1", ("spot",),
             np.array([SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), fill=False)
         selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "

@@ -612,6 +612,16 @@ def _blocks(arr):
         yield (slice(lo, lo + step),)
 
 
+def _export_fill(value, dtype):
+    """The netCDF ``_FillValue`` of an exported variable: the store's own (NaN for floats, an integer flag's
+    padding such as ``esc_sample_state``'s -1 kept in its type), ``False`` (none) where it has none."""
+    if value is None or dtype.kind not in "fiu":
+        return False
+    if dtype.kind == "f":
+        return np.nan if isinstance(value, str) or not np.isfinite(float(value)) else dtype.type(value)
+    return dtype.newbyteorder("=").type(int(value))
+
+
 def export_netcdf(src, dst, complevel, history):
     """Write the zarr result ``src`` as the CF netCDF file ``dst`` (a new file), block by block.
 
@@ -686,8 +696,7 @@ def export_netcdf(src, dst, complevel, history):
         for name, arr in arrays.items():
             dims = tuple(arr.metadata.dimension_names or ())
             var_attrs = dict(arr.attrs)
-            fill = np.nan if "_FillValue" in var_attrs and arr.dtype.kind == "f" else False
-            var_attrs.pop("_FillValue", None)
+            fill = _export_fill(var_attrs.pop("_FillValue", None), arr.dtype)
             kind = arr.dtype.kind
             dtype = str if kind in "OTU" else arr.dtype.newbyteorder("=")
             storage = {}

@@ -5,7 +5,10 @@ each module (``<module>.<function>-<line>.py<XY>.nbi`` indexes).  A fresh clone 
 first ``import screening`` plus the first run compile for one to two minutes: without a word that
 looks like a hang.  :func:`announce_compilation` prints one line on stderr before that work starts.
 Checked cheaply (a few ``stat`` calls, no numba import): the index of each key kernel must exist and
-be newer than its source.
+be newer than its source.  That cannot see a kernel compiled for a new type signature (another
+condensation, another law): :class:`CompileAnnouncer`, installed by the commands, listens to numba's own
+``numba:compile`` event (a compile after a cache miss) and says which kernel compiles, then every
+:data:`COMPILE_INTERVAL` seconds while compiling goes on.
 
 Numba checks a cached kernel against its own source file only: a kernel that calls a compiled
 function of another module, or reads a constant of another module, keeps its old machine code when
@@ -19,10 +22,12 @@ from __future__ import annotations
 import hashlib
 import os
 import sys
+import threading
+import time
 from pathlib import Path
 
-__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation", "source_stamp",
-           "clear_stale_cache"]
+__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation", "CompileAnnouncer",
+           "announcing_compiles", "source_stamp", "clear_stale_cache"]
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -113,6 +118,142 @@ def announce_compilation(stream=None):
     except (OSError, ValueError):           # a closed or broken stderr: say nothing
         pass
     return True
+
+
+#: Longest silence while numba compiles [s]: a line at least this often.
+COMPILE_INTERVAL = 10.0
+#: Compiling shorter than this [s] is not worth a line (a small kernel); longer is said at once.
+COMPILE_DELAY = 2.0
+
+
+class CompileAnnouncer:
+    """Lines on ``stream`` while numba compiles kernels its cache does not hold.
+
+    :meth:`started` and :meth:`finished` are called for each compile (numba's ``numba:compile`` event,
+    :func:`announcing_compiles`); :meth:`tick` (a background thread of :func:`announcing_compiles`, every
+    second) writes the first line once compiling has gone on for ``delay`` seconds, then a "still
+    compiling" line whenever nothing was said for ``interval`` seconds while compiling goes on.
+
+    Parameters
+    ----------
+    stream : file-like, optional
+        Where to write; default ``sys.stderr``.
+    interval : float
+        Longest silence while compiling [s].
+    delay : float
+        Compiling shorter than this is not announced [s].
+    clock : callable
+        Seconds [s] (a fake clock in tests).
+
+    Examples
+    --------
+    >>> import io
+    >>> out, now = io.StringIO(), [0.0]
+    >>> a = CompileAnnouncer(out, interval=10.0, delay=2.0, clock=lambda: now[0])
+    >>> a.started("solve_batch"); now[0] = 1.0; a.tick(); now[0] = 2.0; a.tick()
+    >>> now[0] = 9.0; a.tick(); now[0] = 12.0; a.tick(); a.finished()
+    >>> print(out.getvalue(), end="")
+    screening: compiling solve_batch with numba (not in its cache yet; first run only, about 10-60 s)...
+    screening: still compiling (1 kernel(s) so far, now solve_batch, 12 s)
+    """
+
+    def __init__(self, stream=None, interval=COMPILE_INTERVAL, delay=COMPILE_DELAY, clock=time.monotonic):
+        self.stream, self.interval, self.delay, self.clock = stream, interval, delay, clock
+        self.active, self.count, self.name = 0, 0, ""
+        self._first = self._last = self._idle_since = None
+        self._lock = threading.Lock()
+
+    def _write(self, text):
+        try:
+            stream = self.stream if self.stream is not None else sys.stderr
+            stream.write(text + "\n")
+            stream.flush()
+        except (OSError, ValueError):       # a closed or broken stderr: say nothing
+            pass
+
+    def started(self, name):
+        with self._lock:
+            self.active += 1
+            self.count += 1
+            self.name = name
+            if self._first is None:
+                self._first = self.clock()
+
+    def finished(self):
+        with self._lock:
+            self.active = max(self.active - 1, 0)
+            if not self.active:
+                self._idle_since = self.clock()
+
+    def tick(self):
+        with self._lock:
+            now = self.clock()
+            busy = self.active or (self._idle_since is not None and now - self._idle_since < 1.0)
+            if not busy or self._first is None:
+                return
+            if self._last is None:
+                if now - self._first >= self.delay:
+                    self._last = now
+                    self._write(f"screening: compiling {self.name} with numba (not in its cache yet; first run "
+                                f"only, {FIRST_COMPILE})...")
+            elif now - self._last >= self.interval:
+                self._last = now
+                self._write(f"screening: still compiling ({self.count} kernel(s) so far, now {self.name}, "
+                            f"{now - self._first:.0f} s)")
+
+
+class announcing_compiles:
+    """Context: a :class:`CompileAnnouncer` on numba's ``numba:compile`` event, with its ticker thread; removed
+    on exit.  Without numba's event API (or with ``quiet``) it does nothing.
+
+    Parameters
+    ----------
+    quiet : bool, default False
+        Say nothing.
+    stream : file-like, optional
+        Where to write; default ``sys.stderr``.
+    """
+
+    def __init__(self, quiet=False, stream=None):
+        self.quiet, self.stream = quiet, stream
+        self.announcer, self._listener, self._stop, self._thread = None, None, threading.Event(), None
+
+    def __enter__(self):
+        if self.quiet:
+            return self
+        try:
+            from numba.core import event
+        except ImportError:                 # an old numba: the cache check alone
+            return self
+        announcer = self.announcer = CompileAnnouncer(self.stream)
+
+        class _Listener(event.Listener):
+            def on_start(self, ev):
+                dispatcher = (ev.data or {}).get("dispatcher")
+                func = getattr(dispatcher, "py_func", None)
+                announcer.started(getattr(func, "__qualname__", "a kernel"))
+
+            def on_end(self, ev):
+                announcer.finished()
+
+        self._listener = _Listener()
+        event.register("numba:compile", self._listener)
+        self._thread = threading.Thread(target=self._run, name="compile-announcer", daemon=True)
+        self._thread.start()
+        return self
+
+    def _run(self):
+        while not self._stop.wait(1.0):
+            self.announcer.tick()
+
+    def __exit__(self, *exc):
+        if self._listener is not None:
+            from numba.core import event
+
+            event.unregister("numba:compile", self._listener)
+            self._stop.set()
+            self._thread.join()
+        return False
 
 
 _STAMP_NAME = "numba-sources.sha256"

@@ -11,7 +11,7 @@ import numpy as np
 from screening.report.figure_base import (
     FLAGGED_COLOR, UNTRUSTED_COLOR, flag_summary, grid_units, grid_values, is_log_spaced, new_figure,
     point_flags, point_label, save_figure)
-from screening.core.status import BestMethod
+from screening.core.status import BestMethod, FitFlag
 
 __all__ = ["plot_fragility", "BEST_MARKERS"]
 
@@ -91,8 +91,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     fig = new_figure(7.0, 5.4)
     ax = fig.subplots()
     shape = [p.sizes[d] for d in other]
-    median, beta, unvouched = (frag[v].transpose(*other).values.reshape(-1) if v in frag else None
-                               for v in ("fit_median", "beta", "fit_n_unvouched"))
+    median, beta, unvouched, flag = (frag[v].transpose(*other).values.reshape(-1) if v in frag else None
+                                     for v in ("fit_median", "beta", "fit_n_unvouched", "fit_flag"))
     best = _best_arrays(frag, other, dim) if "best_p_exceed" in frag else None
     colour, labelled = {}, set()
     for n, j in enumerate(picks):
@@ -106,14 +106,14 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
         ax.plot(x[flagged[j]], flat[j][flagged[j]], "x", ms=7, color=FLAGGED_COLOR, mew=1.5)
         if best is not None:
             _draw_best(ax, x, best, j, f"C{n}", labelled)
+        left = f" [{int(unvouched[j])} point(s) left out: nothing vouches for them]" if (
+            unvouched is not None and unvouched[j] > 0) else ""
         if median is not None and np.isfinite(median[j]) and np.isfinite(beta[j]):
             xs = np.geomspace(np.nanmin(x), np.nanmax(x), 200)
-            shaky = unvouched is not None and unvouched[j] > 0
-            ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), ":" if shaky else "--", color=f"C{n}",
-                    lw=1.4 if shaky else 0.9,
-                    label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}"
-                          + (f" [through {int(unvouched[j])} untrusted point(s) without a best estimate]"
-                             if shaky else ""))
+            ax.plot(xs, ndtr(np.log(xs / median[j]) / beta[j]), "--", color=f"C{n}", lw=0.9,
+                    label=f"lognormal fit: median {median[j]:.3g}, beta {beta[j]:.2f}" + left)
+        elif flag is not None:
+            ax.plot([], [], " ", label=f"no lognormal fit: {FitFlag(int(flag[j])).name}" + left)
     if "mcs_p_exceed" in frag and f"spot_{dim}" in frag:
         pm, se = frag["mcs_p_exceed"].values, frag["mcs_p_exceed_se"].values
         curve = _spot_curves(frag, other, shape)

@@ -311,7 +311,7 @@ def bed_lines(ds, max_points=400):
     if not summaries:
         return []
     if len(summaries) == 1:
-        return ["block on its bed:"] + ["  " + line for line in format_bed_summary(summaries[0])]
+        return ["block on its bed:"] + ["  " + line for line in format_bed_summary(summaries[0]).splitlines()]
     units = {"static_indentation": "m", "uplift_angle": "rad", "uplift_angle_exact": "rad", "slenderness": "rad",
              "rocking_frequency": "rad/s", "vertical_frequency": "rad/s", "vertical_damping_ratio": "1",
              "rocking_damping_ratio": "1"}

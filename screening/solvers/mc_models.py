@@ -175,7 +175,8 @@ def quasi_static_indentation(block, foundation, theta0):
             break
         hi = lo + 2.0 * (hi - lo)
     else:
-        raise ValueError(f"the bed cannot carry the block at theta0={theta0!r} rad")
+        raise ValueError(f"the softening bed (foundation.eps = {float(foundation.eps):.3g} m-2) cannot carry the block "
+                         f"at the initial rotation theta0 = {float(theta0):.4g} rad: start from a smaller rotation")
     return float(optimize.brentq(excess, lo, hi, xtol=1e-15, rtol=1e-14))
 
 

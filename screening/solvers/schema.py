@@ -194,7 +194,8 @@ FRAGILITY = {
     "beta": _v("1", "lognormal dispersion beta of the fragility curve"),
     "fit_median": {"long_name": "median of the lognormal fragility curve (units of the intensity it is fitted over)"},
     "fit_flag": {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"},
-    "fit_n_unvouched": _v("1", "points of the curve whose linearized value is untrusted and has no best estimate"),
+    "fit_n_unvouched": _v("1", "points of the curve left out of the fit: nothing vouches for their value (untrusted "
+                              "or stopped linearization without a best estimate or Monte Carlo)"),
 }
 
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
@@ -245,10 +246,14 @@ def probability_source_attributes():
 
 def monte_carlo_model_attributes():
     """CF flag attributes of the per-spot ``mcs_model``: the Monte Carlo model that ran there (with ``model =
-    "auto"`` the one chosen for the point), one value per registered model (read when asked)."""
+    "auto"`` the one chosen for the point), one value per registered model and -1 (``none``) where the spot
+    check's task failed, an integer flag variable without a fill value (read when asked)."""
+    from screening.solvers import mc_registry
+
     names = mc_registry.names()
     return {"units": "1", "long_name": "Monte Carlo model that produced the spot point's statistics",
-            "flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}
+            "flag_values": np.arange(-1, len(names), dtype=np.int8), "flag_meanings": " ".join(("none", *names)),
+            "comment": "none: the spot check's task failed (no model ran)"}
 
 
 #: Speed-accuracy trade study (:mod:`screening.report.tradeoff`): its variables and label coordinates.
@@ -387,7 +392,7 @@ CLOUD = {
     "fit_median_se": _v("1", "standard error of fit_median (observed information; units of the intensity)"),
     "beta_se": _v("1", "standard error of beta (observed information)"),
     **{f"stripe_{name}": _v("1", f"{name} of the stripe (records scaled to it)") for name in
-       ("pga", "sa", "rms_acceleration", "arias_intensity")},
+       ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa")},
 }
 
 #: Calibration of the trust rule (``benchmarks/trust_calibration.py`` -> ``screening/data/trust_calibration.nc``).

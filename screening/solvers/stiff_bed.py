@@ -314,8 +314,15 @@ def _compute_transfer_table(block, foundation):
     for i, amp in enumerate(amps):
         t_end = _half_period_estimate(amp, block, foundation)
         v0 = potential(amp, block, foundation)
-        a_c = _free_rocking_extreme(c_int, coupled.initial_state(block, foundation, amp), c_scale,
-                                    coupled.default_rtol, t_end)
+        try:
+            start = coupled.initial_state(block, foundation, amp)
+        except ValueError:
+            raise ValueError(
+                f"model 'stiff_bed': the softening bed (foundation.eps = {float(foundation.eps):.3g} m-2) cannot carry "
+                f"the block rocked to {amp / alpha:.2f} of its slenderness angle, where this model measures its "
+                "rocking losses; use model = \"coupled\" (or \"auto\"), or a bed that softens less (smaller "
+                "|foundation.eps|)") from None
+        a_c = _free_rocking_extreme(c_int, start, c_scale, coupled.default_rtol, t_end)
         a_m = _free_rocking_extreme(s_int, no_loss.initial_state(block, foundation, amp), s_scale, TABLE_RTOL,
                                     t_end)
         eta_c[i] = potential(a_c, block, foundation) / v0 if math.isfinite(a_c) else math.nan

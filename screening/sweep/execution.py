@@ -930,8 +930,21 @@ def dask_client(workers=2, scheduler=None, client=None):
     import dask
 
     config = {**LOCAL_CLUSTER_CONFIG, "distributed.worker.multiprocessing-method": _worker_start_method()}
-    with dask.config.set(config), _local_client(workers) as c:
+    with dask.config.set(config), _quiet_worker_log(), _local_client(workers) as c:
         yield c
+
+
+@contextlib.contextmanager
+def _quiet_worker_log():
+    """A local cluster's workers log every failed task with its traceback; the sweep reports each failed batch
+    in one line of its own, so their log is silenced (forked workers inherit the level) while it runs."""
+    logger = logging.getLogger("distributed.worker")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 #: dask settings of a local cluster: its scheduler (in this process) keeps the last messages sent to

@@ -255,7 +255,11 @@ def test_fragility_command_writes_probabilities_fit_and_mcs_side_by_side(cli_res
         assert frag["p_exceed"].dims == ("eps", "S0") and frag["p_exceed"].attrs["units"] == "1"
         assert frag["fit_median"].dims == ("eps",) and frag["beta"].dims == ("eps",)
         assert frag["fit_median"].attrs["units"] == PARAMETERS["S0"]["units"]
-        assert np.nanmin(expected) < 1e-6 and np.nanmax(expected) > 0.99 and np.all(np.isfinite(frag["fit_median"]))
+        assert np.nanmin(expected) < 1e-6 and np.nanmax(expected) > 0.99
+        # fitted on the vouched points only: a curve left with too few is flagged (untrusted), never fitted
+        ok = frag["fit_flag"].values == 0
+        assert ok.any() and np.all(np.isfinite(frag["fit_median"].values[ok]))
+        assert np.all(np.isnan(frag["fit_median"].values[~ok])) and np.all(frag["fit_n_unvouched"].values[~ok] > 0)
         # the Monte Carlo spot point: same probability from its per-sample peaks
         i = int(np.argmin(np.abs(res["eps"].values - float(res["spot_eps"][0]))))
         j = int(np.argmin(np.abs(res["S0"].values - float(res["spot_S0"][0]))))

@@ -9,6 +9,7 @@ from screening.core.model.excitation import Envelope
 from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.applications.cloud import load_cloud_study, run_cloud, synthesise_records
 from screening.sweep.config import StudyError
+from screening.core.status import FitFlag
 
 STUDY = """
 title = "cloud test"
@@ -157,10 +158,15 @@ def test_multiple_stripe_analysis_scales_every_record_to_every_level(folder, cap
         np.testing.assert_array_equal(k, (ds["exceed"].values & ~ds["diverged"].values).sum(axis=1))
         if 0 < k.sum() < n.sum():
             fit = fit_binomial_fragility(levels, k, n)
-            assert float(ds["fit_median"]) == pytest.approx(fit["median"], rel=1e-12)
-            assert float(ds["beta_se"]) == pytest.approx(fit["beta_se"], rel=1e-12, nan_ok=True)
+            assert int(ds["fit_flag"]) == fit["flag"]
+            if fit["flag"] == FitFlag.ok:
+                assert float(ds["fit_median"]) == pytest.approx(fit["median"], rel=1e-12)
+                assert float(ds["beta_se"]) == pytest.approx(fit["beta_se"], rel=1e-12, nan_ok=True)
+            else:                                   # e.g. separated stripes: no fit is given as good
+                assert np.isnan(float(ds["fit_median"])) and np.isnan(float(ds["beta"]))
             rows = list(csv.DictReader(out.with_suffix(".csv").open()))
             assert len(rows) == 1 and rows[0]["intensity_measure"] == "stripe_pga"
+            assert rows[0]["fit_flag"] == FitFlag(fit["flag"]).name
     assert out.with_suffix(".png").stat().st_size > 10_000
     assert main(["info", str(out)]) == 0
     assert "8 record(s) x 3 stripe(s) (stripe_pga levels)" in capsys.readouterr().out
@@ -182,6 +188,37 @@ def test_cloud_with_model_auto_runs_the_fallback_on_records(folder):
     auto, _ = run_cloud(load_cloud_study(folder / "auto.toml"))
     coupled, _ = run_cloud(load_cloud_study(folder / "coupled.toml"))
     np.testing.assert_array_equal(auto["peak_abs_theta"].values, coupled["peak_abs_theta"].values)
+    # issue 36 item 9: the result records the model that ran, and that "auto" chose it
+    assert auto.attrs["model"] == "coupled" and auto.attrs["model_requested"] == "auto"
+    assert coupled.attrs["model"] == "coupled" and "model_requested" not in coupled.attrs
     (folder / "rigid.toml").write_text(STUDY.format(im="pga").replace('files = "rec"', 'files = "rec"\nmodel = "rigid"'))
     with pytest.raises(StudyError, match="records.model: must be one of .*auto"):
         load_cloud_study(folder / "rigid.toml")
+
+
+@pytest.mark.parametrize("im, levels", [("pgv", [0.05, 0.15]), ("avgsa", [1.0, 3.0])])
+def test_multiple_stripes_over_every_documented_im(folder, im, levels):
+    """Issue 36 item 1: [records] im = "pgv" (or "avgsa") with levels gave KeyError: 'pgv' while the study
+    was read; every IM the docs list works in every place that takes an IM."""
+    (folder / f"msa_{im}.toml").write_text(STUDY.format(im=im) + f"levels = {levels}\n")
+    cloud = load_cloud_study(folder / f"msa_{im}.toml")
+    assert cloud.levels == tuple(levels)
+    from screening.applications.cloud import run_stripes
+
+    ds, _ = run_stripes(cloud)
+    name = {"pgv": "pgv", "avgsa": "avgsa"}[im]
+    np.testing.assert_allclose(ds[name].values, np.repeat(np.array(levels)[:, None], 8, axis=1), rtol=1e-6)
+    assert ds[f"stripe_{name}"].attrs["units"] == {"pgv": "m s-1", "avgsa": "m s-2"}[im]
+    (folder / f"bad_{im}.toml").write_text(STUDY.format(im=im) + "levels = [2.0, 1.0]\n")
+    with pytest.raises(StudyError, match=r"\[m s-1\]" if im == "pgv" else r"\[m s-2\]"):
+        load_cloud_study(folder / f"bad_{im}.toml")
+
+
+def test_every_im_of_the_cli_is_one_the_fits_know():
+    """The --im choices and [records] im are the IMs of screening.applications.im_fragility (one list)."""
+    from screening.applications.im_fragility import IMS as FIT_IMS
+    from screening.cli.commands import cmd_fragility
+    from screening.applications.cloud import IMS as CLOUD_IMS
+
+    choices = next(p for p in cmd_fragility.params if p.name == "im").type.choices
+    assert set(choices) == set(FIT_IMS) and set(CLOUD_IMS) == set(FIT_IMS) - {"s0"}

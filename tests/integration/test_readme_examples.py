@@ -49,7 +49,8 @@ SKIPPED = {
     "make ": "the set-up itself; this test runs inside it",
     "--scheduler": "needs a running dask scheduler",
     ".venv/bin/dask ": "starts a dask scheduler or workers (test_sweep_zarr.py runs this recipe with its own processes)",
-    "kill %": "stops the scheduler and workers of the recipe",
+    "echo $! > /tmp/": "keeps the process id of the scheduler or workers the recipe started",
+    'kill "$(cat /tmp/': "stops the scheduler and workers of the recipe by their process ids",
     "export outputs/quick.zarr": "exports the result of the skipped --scheduler run",
     "tradeoff studies/speed_accuracy.toml": "about 10 minutes of Monte Carlo; the trade study has its own tests",
 }
@@ -68,7 +69,7 @@ TINY = {
                                ("{index = {eps = 0, S0 = 18}}, {index = {eps = 0, S0 = 20}},\n", ""),
                                ("{index = {eps = 1, S0 = 18}}, {index = {eps = 1, S0 = 20}},\n", "")],
     "studies/quick.toml": [("samples = 100", "samples = 20")],
-    "examples/statue.toml": [("samples = 100", "samples = 10")],
+    "examples/statue.toml": [("budget_s = 60", "budget_s = 3")],
 }
 
 

@@ -65,12 +65,14 @@ def test_auto_spot_checks_record_the_model_chosen_per_point(client, tmp_path):
     run_sweep(study, out, client=client, progress=False, log=quiet)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["mcs_model"] == "auto"
-        codes = ds["mcs_model"].values.astype(int)            # (a failed spot check would be NaN)
+        assert ds["mcs_model"].dtype == np.int8               # an integer flag variable (a failed spot check: -1)
+        codes = ds["mcs_model"].values.astype(int)
         meanings = ds["mcs_model"].attrs["flag_meanings"].split()
-        assert list(ds["mcs_model"].attrs["flag_values"]) == list(range(len(meanings)))
+        assert list(ds["mcs_model"].attrs["flag_values"]) == list(range(-1, len(meanings) - 1))
         spot = ds["mcs_peak_abs_theta"].values[0]
-    assert [meanings[c] for c in codes] == ["stiff_bed", "coupled"]
-    assert meanings == list(mc_registry.names())
+    named = dict(zip(ds["mcs_model"].attrs["flag_values"].tolist(), meanings))
+    assert [named[c] for c in codes] == ["stiff_bed", "coupled"]
+    assert meanings == ["none", *mc_registry.names()]
     block, foundation, excitation = build_models(study.cases[0], {"S0": 0.015, "k": 3e6})
     direct = monte_carlo(block, foundation, excitation, n_samples=6, model="stiff_bed", t_end=4.0, dt=0.05, seed=2,
                          progress=False)

@@ -414,3 +414,29 @@ def test_export_of_foreign_attributes(client, tmp_path, capsys):
         assert main(["export", str(out), str(tmp_path / "x.nc"), "--layout", layout]) == 2
         assert "flag_values of sl_trust" in one_line_error(capsys.readouterr().err)
     assert not (tmp_path / "x.nc").exists()
+
+
+def test_export_of_an_accuracy_result_keeps_the_integer_fill_values(client, tmp_path, capsys):
+    """Issue 36 item 6: export dropped esc_sample_state's _FillValue (its padding read -1, outside its
+    flag_values); the exported file equals a direct netCDF run, variable by variable."""
+    text = GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]") + "[accuracy]\ntarget = 0.15\nbudget_s = 3\n"
+    study = parse_study(text, name="a", source="a.toml")
+    run_sweep(study, tmp_path / "direct.nc", client=client, progress=False, log=quiet)
+    run_sweep(study, tmp_path / "a.zarr", client=client, progress=False, log=quiet)
+    assert main(["export", str(tmp_path / "a.zarr"), str(tmp_path / "exported.nc")]) == 0
+    with xr.open_dataset(tmp_path / "direct.nc") as a, xr.open_dataset(tmp_path / "exported.nc") as b:
+        a, b = (ds.load().drop_vars("esc_cpu_time") for ds in (a, b))      # CPU times of two runs differ
+        for ds in (a, b):
+            for name in ("history", "date_created", "batch_size", "accuracy_cpu_s", "accuracy_note"):
+                ds.attrs.pop(name, None)
+        xr.testing.assert_identical(a, b)
+        assert a["esc_sample_state"].encoding.get("_FillValue") == -1 == b["esc_sample_state"].encoding["_FillValue"]
+    import netCDF4
+
+    with netCDF4.Dataset(tmp_path / "direct.nc") as a, netCDF4.Dataset(tmp_path / "exported.nc") as b:
+        assert a["esc_sample_state"].dimensions == b["esc_sample_state"].dimensions
+        for name in a.variables:
+            assert getattr(a[name], "_FillValue", None) is not None or getattr(b[name], "_FillValue", None) is None, name
+            if hasattr(a[name], "_FillValue"):
+                assert np.array_equal(np.asarray(a[name]._FillValue), np.asarray(b[name]._FillValue),
+                                      equal_nan=a[name].dtype.kind == "f"), name

@@ -158,7 +158,8 @@ def stationary_covariance(filt, S0):
     -----
     The solution of ``A P + P A^T + 2 pi S0 B B^T = 0``, the stationary form of the Lyapunov equation
     (eq. (51) in [1]) for the filter block; in Kronecker form ``vec(A P + P A^T) = (I (x) A + A (x) I)
-    vec(P)``, solved per point with :func:`numpy.linalg.solve`.
+    vec(P)``, solved per point with :func:`numpy.linalg.solve`; NaN at a point whose filter has no stationary
+    state (a singular system: a pole at zero, e.g. a high-pass frequency or damping ratio underflowing).
 
     References
     ----------
@@ -182,8 +183,18 @@ def stationary_covariance(filt, S0):
         + np.einsum("...ij,kl->...ikjl", A, eye).reshape(lead + (n * n, n * n))
     q = 2.0 * math.pi * np.asarray(S0, dtype=float)[..., None, None] * B[..., :, None] * B[..., None, :]
     rhs = -np.swapaxes(q, -1, -2).reshape(lead + (n * n, 1))
-    p = np.linalg.solve(kron, rhs)[..., 0].reshape(lead + (n, n))
-    return np.swapaxes(p, -1, -2)
+    try:
+        p = np.linalg.solve(kron, rhs)[..., 0]
+    except np.linalg.LinAlgError:           # a degenerate filter (a pole at 0): NaN at that point alone
+        flat_k = np.broadcast_to(kron, lead + (n * n, n * n)).reshape(-1, n * n, n * n)
+        flat_r = np.broadcast_to(rhs, lead + (n * n, 1)).reshape(-1, n * n, 1)
+        p = np.full((flat_k.shape[0], n * n), np.nan)
+        for i in range(flat_k.shape[0]):
+            try:
+                p[i] = np.linalg.solve(flat_k[i], flat_r[i])[:, 0]
+            except np.linalg.LinAlgError:
+                pass
+    return np.swapaxes(p.reshape(lead + (n, n)), -1, -2)
 
 
 class Excitation:
@@ -229,8 +240,15 @@ class Excitation:
         by adaptive quadrature with :meth:`psd_peaks` as break points (scalar fields).  Raises
         ``ArithmeticError`` where the quadrature does not converge (a degenerate filter: the point is
         flagged by the caller, never given a wrong moment)."""
-        value, _, *problem = integrate.quad(lambda w: w**order * float(self.psd(w)), 0.0, float(cutoff), limit=400,
-                                            points=self.psd_peaks() or None, epsrel=epsrel, full_output=1)
+        cutoff = float(cutoff)
+        # break points QUADPACK can split at: inside the band and not within rounding of its ends (a filter
+        # frequency of 1e-300 as a break point crashes QUADPACK itself, the whole process)
+        points = [p for p in self.psd_peaks() if math.isfinite(p) and 1e-9 * cutoff < p < (1.0 - 1e-9) * cutoff]
+        if not math.isfinite(float(self.psd(0.5 * cutoff))):
+            raise ArithmeticError(f"spectral moment lambda_{order}: the spectrum is not finite (a filter parameter "
+                                  "beyond float range)")
+        value, _, *problem = integrate.quad(lambda w: w**order * float(self.psd(w)), 0.0, cutoff, limit=400,
+                                            points=points or None, epsrel=epsrel, full_output=1)
         if len(problem) > 1:                       # quad's message: the integral did not converge
             raise ArithmeticError(f"spectral moment lambda_{order}: {' '.join(str(problem[1]).split())}")
         return 2.0 * value

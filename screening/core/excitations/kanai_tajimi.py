@@ -94,9 +94,10 @@ def kanai_tajimi_psd(omega, S0, omega_g, zeta_g):
     """
     w = np.asarray(omega, dtype=float)
     wg, zg = omega_g, zeta_g
-    num = wg**4 + 4.0 * zg**2 * wg**2 * w**2
-    den = (w**2 - wg**2) ** 2 + 4.0 * zg**2 * wg**2 * w**2
-    return S0 * num / den
+    with np.errstate(invalid="ignore", divide="ignore", under="ignore"):   # beyond float range: NaN, flagged
+        num = wg**4 + 4.0 * zg**2 * wg**2 * w**2
+        den = (w**2 - wg**2) ** 2 + 4.0 * zg**2 * wg**2 * w**2
+        return S0 * num / den
 
 
 @register

@@ -69,3 +69,12 @@ def test_info_prints_the_bed():
     for word in ("static indentation", "uplift angle", "slenderness", "rocking frequency", "vertical frequency",
                  "vertical"):
         assert word in text
+
+
+def test_format_bed_summary_returns_text():
+    """Issue 36 item 12: the name promises text; it returned a list."""
+    from screening import Block, Foundation
+    from screening.analysis.beds import bed_summary, format_bed_summary
+
+    text = format_bed_summary(bed_summary(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)))
+    assert isinstance(text, str) and text.splitlines()[1].startswith("uplift angle")

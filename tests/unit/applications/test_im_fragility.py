@@ -79,7 +79,8 @@ def test_csv_and_nrml_exports(result, tmp_path):
     sigma = math.sqrt(math.log(1 + (std / mean) ** 2))
     mu = mean**2 / math.sqrt(std**2 + mean**2)
     median_g = float(frag["fit_median"].values[ok][0]) / 9.80665
-    assert stats.lognorm.cdf(median_g, sigma, scale=mu) == pytest.approx(0.5, abs=1e-7)
+    # mean and stddev are written with 8 significant digits: the curve is reproduced to about 1e-7 of them
+    assert stats.lognorm.cdf(median_g, sigma, scale=mu) == pytest.approx(0.5, abs=1e-6)
     assert sigma == pytest.approx(float(frag["beta"].values[ok][0]), rel=1e-7)
     assert nrml_parameters(1.0, 0.0) == (1.0, 0.0)
 
@@ -96,15 +97,17 @@ def test_cli_fragility_im(result, tmp_path, capsys):
 
 
 def test_linearize_results_carry_trust_and_fits_count_the_untrusted_points(result, tmp_path):
-    """screening.linearize returns sl_trust and its band by default; a fit counts the untrusted points of
-    its curve (no [accuracy] here: none has a best estimate) and the CSV and NRML say so."""
+    """screening.linearize returns sl_trust and its band by default; a fit leaves out the untrusted and the
+    stopped points of its curve (no [accuracy] here: none has a best estimate), counts them, and the CSV and
+    NRML say so."""
     assert {"sl_trust", "sl_error_low", "sl_error_high"} <= set(result.data_vars)
     frag, _ = fragility_over_im(result, 0.1, "pga", relative_to="slenderness")
-    untrusted = ((result["sl_trust"] == 2) & (result["status"] == 0)).sum("S0")
+    stopped = result["status"].isin([1, 2])
+    untrusted = (((result["sl_trust"] == 2) & (result["status"] == 0)) | stopped).sum("S0")
     np.testing.assert_array_equal(frag["fit_n_unvouched"].values, untrusted.transpose(*frag["fit_n_unvouched"].dims))
     rows = list(csv.DictReader(open(write_csv(frag, tmp_path / "f.csv"))))
     assert [int(r["n_unvouched"]) for r in rows] == list(untrusted.values)
     text = open(write_nrml(frag, tmp_path / "f.xml")).read()
     fitted = frag["fit_flag"].values == 0
     shaky = int(np.sum(fitted & (frag["fit_n_unvouched"].values > 0)))
-    assert text.count("untrusted linearized point(s) without a best estimate") == shaky
+    assert text.count("point(s) left out of the fit (nothing vouches for them)") == shaky

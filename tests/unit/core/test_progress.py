@@ -1,4 +1,4 @@
-"""Progress on stderr: lines in a log (every 10 % or 30 s, with the time left), a bar on a terminal."""
+"""Progress on stderr: lines in a log (every 10 % or 10 s, with the time left), a bar on a terminal."""
 
 import io
 
@@ -28,7 +28,7 @@ def test_a_log_gets_a_line_every_tenth_with_the_time_left(monkeypatch):
     assert lines[-1] == "points: 100% (1000/1000) 50.0 s"
 
 
-def test_a_log_gets_a_line_after_30_s_without_a_tenth(monkeypatch):
+def test_a_log_gets_a_line_after_10_s_without_a_tenth(monkeypatch):
     clock = _Clock()
     monkeypatch.setattr(progress.time, "perf_counter", clock)
     stream = io.StringIO()
@@ -36,9 +36,9 @@ def test_a_log_gets_a_line_after_30_s_without_a_tenth(monkeypatch):
         clock.now = 1.0
         bar.update(1)                      # first update: a line (first report)
         clock.now = 10.0
-        bar.update(1)                      # neither a tenth nor 30 s later: nothing
+        bar.update(1)                      # neither a tenth nor 10 s later: nothing
         clock.now = 40.0
-        bar.update(1)                      # 30 s after the last line
+        bar.update(1)                      # more than 10 s after the last line
     lines = stream.getvalue().splitlines()
     assert len(lines) == 2 and lines[1].startswith("points:   0% (3/1000) 40.0 s, about 3 h")
 

@@ -275,3 +275,17 @@ def test_exceedance_and_overturning_probabilities_match_the_coupled_model_on_a_s
     se = np.sqrt((p * (1 - p) + q * (1 - q)) / 120)
     assert 0.03 < p[-1] < 0.6 and p[2] < 0.9          # an informative intensity
     assert np.all(np.abs(p - q) <= np.maximum(0.03, 2.5 * se)), (p, q)
+
+def test_a_softening_bed_the_model_cannot_use_says_what_to_change():
+    """Issue 36 item 7: 'the bed cannot carry the block at theta0=np.float64(0.0318...) rad' named an angle the
+    user never set, as a numpy repr."""
+    import pytest as _pytest
+
+    from screening import Block, Foundation
+    from screening.solvers.stiff_bed import transfer_table
+
+    with _pytest.raises(ValueError) as info:
+        transfer_table(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5))
+    text = str(info.value)
+    assert "np.float64" not in text and "theta0" not in text
+    assert "foundation.eps" in text and 'model = "coupled"' in text
