@@ -7,7 +7,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test test-slow test-portable clean
+.PHONY: run test test-quick test-slow test-portable clean
 
 # setuptools says "Editable installation ... be careful with folders named like the package" on every
 # editable install: information for packagers, noise for a user; silenced by its message, nothing else.
@@ -31,6 +31,11 @@ run: $(STAMP)
 # statistical and long-running tests (marked `slow`); CI runs both.
 test: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m "not slow" --durations=10
+
+# `make test-quick`: the unit tests only (tests/unit, one folder per package folder), for the edit-test loop;
+# the README states its measured duration.
+test-quick: $(TEST_STAMP)
+	$(BIN)/python -m pytest tests/unit -m "not slow" -q
 
 test-slow: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m slow --durations=10

@@ -26,7 +26,6 @@ from screening._version import __version__
 from screening.core.atomicfile import create_new as _create, open_nofollow as _open_nofollow
 from screening.io._zarr_store import file_check
 from screening.io.errors import SweepError
-from screening.io.writer import write_region
 from screening.io.zarrfile import ZarrFormat
 
 __all__ = ["PartialStore", "RegionTarget"]
@@ -280,6 +279,8 @@ class RegionTarget:
         """Write ``result`` into the region of ``batch``, then mark the batch done
         (:meth:`~screening.io.zarrfile.ZarrFormat.mark_done`: a marker holding the sizes and checksums
         of the chunk files written, created atomically: a batch cut short has none)."""
+        from screening.io.writer import write_region
+
         fmt = ZarrFormat(self.store, "r+")
         write_region(fmt, self.shape, self.histories, batch, result)
         fmt.mark_done(batch, target=self)

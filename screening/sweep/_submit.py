@@ -16,7 +16,6 @@ from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 from screening.core.status import SampleState
 from screening.io.layout import SPOT_HISTORIES, SPOT_LINEAR, wants_probabilities
-from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.outputs import client_variables, HISTORY_VARIABLES
 from screening.sweep.config import build_models, case_cutoff
 from screening.sweep.execution import escalation_task, solve_batch, spot_task, TASK_RETRIES
@@ -104,6 +103,8 @@ def sees_folder(path):
 
 def warm_up_monte_carlo():
     """Compile the Monte Carlo kernels on a worker (both models, two short samples); returns the time [s]."""
+    from screening.solvers.montecarlo import monte_carlo
+
     start = time.perf_counter()
     for model in ("coupled", "condensed"):
         monte_carlo(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), n_samples=2,

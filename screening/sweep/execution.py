@@ -37,7 +37,7 @@ from screening.io.layout import SPOT_HISTORIES
 from screening.solvers import mc_registry
 from screening.solvers.model_choice import resolve
 from screening.solvers.moments import solve_moments
-from screening.solvers.montecarlo import choose_integrator, monte_carlo
+from screening.solvers.montecarlo import choose_integrator
 from screening.solvers.outputs import HISTORY_VARIABLES, of_stage, OUTPUTS, selected
 
 __all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "solve_batch", "batch_intensity",
@@ -587,6 +587,8 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     >>> int(out["n_used"] + out["n_overturned"] + out["n_diverged"])
     2
     """
+    from screening.solvers.montecarlo import monte_carlo
+
     mc = resolve(model, block, foundation, excitation)          # "auto": once, for this point
     kw = {"condensation": condensation} if mc.uses_condensation else {}
     ds = monte_carlo(block, foundation, excitation, n_samples=samples, model=mc, t_end=t_end, dt=dt,
@@ -613,6 +615,8 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
     peak of var_theta and the :class:`~screening.core.status.EscalationEstimator` code.  Where the cheap model refuses
     the point (``ValueError`` before any work) the result is the plain one, with ``cheap_samples`` 0.
     ``progress``: the expensive run's samples, as for :func:`spot_task`."""
+    from screening.solvers.montecarlo import monte_carlo
+
     def run(name, cond, n, events=None):
         kw = {"condensation": cond} if mc_registry.get(name).uses_condensation else {}
         return monte_carlo(block, foundation, excitation, n_samples=n, model=name, t_end=t_end, dt=dt, seed=seed,
