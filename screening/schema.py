@@ -193,6 +193,8 @@ FRAGILITY = {
     "fit_median": {"long_name": "median of the lognormal fragility curve (units of the intensity it is fitted over)"},
     "fit_flag": {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"},
     "fit_n_unvouched": _v("1", "points of the curve whose linearized value is untrusted and has no best estimate"),
+    "fit_im_min": {"long_name": "lowest vouched intensity of the curve (units of the intensity it is fitted over)"},
+    "fit_im_max": {"long_name": "highest vouched intensity of the curve (units of the intensity it is fitted over)"},
 }
 
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or

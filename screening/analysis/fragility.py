@@ -49,7 +49,7 @@ __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "excee
            "total_dispersion", "with_modelling_dispersion", "fit_lognormal_fragility", "parameter",
            "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
            "sample_exceedance", "exceedance_probability", "fit_fragility_curve", "fit_curves", "unvouched_points",
-           "fitted_probability", "add_fit", "grid_units_of", "fragility_curve", "RockingAccessor",
+           "fitted_probability", "vouched_range", "add_fit", "grid_units_of", "fragility_curve", "RockingAccessor",
            "spot_positions", "mcs_exceedance_at_spots", "best_exceedance", "fragility_dataset"]
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
@@ -1252,6 +1252,53 @@ def fitted_probability(frag):
     return xr.where(vouched, frag["best_p_exceed"], p)
 
 
+def vouched_range(frag, ds, intensity, dim):
+    """The intensity range each curve's fit stands on: its lowest and highest vouched point.
+
+    A point is vouched when its fitted probability is finite and it is not unvouched
+    (:func:`screening.analysis.fragility.unvouched_points`).  Outside this range the curve is an
+    extrapolation: the NRML's ``minIML`` / ``maxIML`` and the risk integral's split
+    (``screening risk``) use it.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset with ``p_exceed`` [1].
+    ds : xarray.Dataset
+        The result it was computed from.
+    intensity : xarray.DataArray
+        The intensity [IM units] along ``dim``.
+    dim : str
+        The swept intensity dimension.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``fit_im_min``, ``fit_im_max`` [IM units] over the curves (NaN where no point is vouched).
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> frag = xr.Dataset({"p_exceed": ("pga", [0.1, 0.5, float("nan")])})
+    >>> x = xr.DataArray([1.0, 2.0, 4.0], dims="pga")
+    >>> r = vouched_range(frag, xr.Dataset(), x, "pga")
+    >>> float(r["fit_im_min"]), float(r["fit_im_max"])
+    (1.0, 2.0)
+    """
+    p = fitted_probability(frag)
+    good = np.isfinite(p)
+    if "sl_trust" in ds.variables:
+        good = good & ~unvouched_points(ds)
+    if not isinstance(intensity, xr.DataArray):
+        intensity = xr.DataArray(np.asarray(intensity, dtype=float), dims=dim)
+    x = intensity.drop_vars([c for c in intensity.coords if c not in intensity.dims]).broadcast_like(p).where(good)
+    units = intensity.attrs.get("units", "")
+    return xr.Dataset({
+        "fit_im_min": x.min(dim).assign_attrs(units=units, long_name="lowest vouched intensity of the curve"),
+        "fit_im_max": x.max(dim).assign_attrs(units=units, long_name="highest vouched intensity of the curve")}
+    ).drop_vars([c for c in p.coords if dim in p[c].dims or c == dim], errors="ignore")
+
+
 def add_fit(out, ds, intensity, dim):
     """A fragility Dataset with the lognormal fit of every curve along ``dim``.
 
@@ -1270,7 +1317,8 @@ def add_fit(out, ds, intensity, dim):
     -------
     xarray.Dataset
         ``out`` with :func:`fit_curves` of :func:`fitted_probability` (``fit_median``, ``beta``,
-        ``fit_flag``) and ``fit_n_unvouched``, the number of the curve's unvouched points.
+        ``fit_flag``), ``fit_n_unvouched``, the number of the curve's unvouched points, and the vouched
+        range ``fit_im_min``, ``fit_im_max`` (:func:`vouched_range`).
 
     References
     ----------
@@ -1297,6 +1345,7 @@ def add_fit(out, ds, intensity, dim):
     count = unvouched.sum(dim) if dim in unvouched.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
     fit["fit_n_unvouched"] = count.astype(np.int32).broadcast_like(fit["fit_flag"])
     out = out.drop_vars([n for n in fit.data_vars if n in out]).merge(fit, compat="override")
+    out = out.drop_vars(["fit_im_min", "fit_im_max"], errors="ignore").merge(vouched_range(out, ds, intensity, dim))
     return out.assign_attrs(fit_source="best_p_exceed where [accuracy] vouches for it, else p_exceed"
                             if "best_p_exceed" in out else "p_exceed")
 
@@ -1306,6 +1355,8 @@ def _finish(out, dim, threshold, relative_to, method):
     out = finish(out, table=schema.FRAGILITY)
     if "fit_median" in out:
         out["fit_median"].attrs.update(intensity=dim, units=grid_units_of(out, dim))
+        for name in ("fit_im_min", "fit_im_max"):
+            out[name].attrs.update(units=grid_units_of(out, dim))
     out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
                      title="Probability that |theta| exceeds a rotation during the record")
     return out
