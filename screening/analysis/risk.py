@@ -21,7 +21,8 @@ from scipy import special
 from screening.analysis.im_fragility import IMS, _im_key, _intensity, curve_table, export_problem
 from screening.status import FitFlag
 
-__all__ = ["annual_frequency", "HazardCurve", "HazardError", "read_hazard", "risk_table", "RISK_COLUMNS"]
+__all__ = ["annual_frequency", "HazardCurve", "HazardError", "read_hazard", "hazard_levels", "risk_table",
+           "RISK_COLUMNS", "write_risk_csv"]
 
 #: Standard gravity [m s-2]: OpenQuake's accelerations are in g.
 G = 9.80665
@@ -168,7 +169,8 @@ def read_hazard(path, site=None):
     OpenQuake (``hazard_curve-mean-PGA_*.csv``): a first line with ``investigation_time`` and ``imt``,
     a header ``lon,lat,depth,poe-<iml>,...`` and one row per site (``site``: the row, counted from 0;
     needed where there are several); accelerations in g.  The probabilities of exceedance ``poe`` over
-    ``T = investigation_time`` become annual rates ``-ln(1 - poe) / T`` (Poisson).  Plain table: a
+    ``T = investigation_time`` become annual rates ``-ln(1 - poe) / T`` (Poisson); levels with ``poe`` 0
+    or 1 carry no finite rate and are left out.  Plain table: a
     header ``PGA [g], annual_rate [1/yr]`` (the IMT as OpenQuake names it and its units in
     brackets: ``g``, ``m s-2``), then one ``level, rate`` per line; ``#`` starts a comment.
 
@@ -233,10 +235,12 @@ def _read_openquake(path, lines, site):
     n, row = rows[site]
     im = np.array([_number(path, 2, header[i], header[i].strip()[4:]) for i in cols])
     poe = np.array([_number(path, n, header[i], row[i]) for i in cols])
-    bad = np.flatnonzero((poe < 0) | (poe >= 1))
+    bad = np.flatnonzero((poe < 0) | (poe > 1))
     if bad.size:
-        _fail(path, n, header[cols[bad[0]]], f"probability of exceedance {poe[bad[0]]:g} must lie in [0, 1)")
-    keep = poe > 0                      # levels never exceeded in the investigation time carry no rate
+        _fail(path, n, header[cols[bad[0]]], f"probability of exceedance {poe[bad[0]]:g} must lie in [0, 1]")
+    # levels never exceeded (poe 0) or certainly exceeded (poe 1, as printed) in the investigation time
+    # carry no finite rate: left out
+    keep = (poe > 0) & (poe < 1)
     rate = -np.log1p(-poe[keep]) / T
     fields = [header[i] for i, k in zip(cols, keep) if k]
     for i in range(1, len(rate)):
@@ -245,7 +249,9 @@ def _read_openquake(path, lines, site):
                                       f"{poe[keep][i - 1]:g}")
     _check_curve(path, [n] * int(keep.sum()), im[keep], rate, "poe level", "poe")
     units = "g" if imt.startswith(("PGA", "SA", "AvgSA")) else "cm s-1" if imt == "PGV" else "m s-1"
-    return HazardCurve(imt, units, im[keep], rate, f"{path} (OpenQuake, investigation_time {T:g} yr, site {site})")
+    saturated = int(np.sum(poe >= 1))
+    return HazardCurve(imt, units, im[keep], rate, f"{path} (OpenQuake, investigation_time {T:g} yr, site {site}"
+                       + (f"; {saturated} level(s) with poe 1 left out" if saturated else "") + ")")
 
 
 def _read_plain(path, lines):
@@ -275,26 +281,47 @@ def _read_plain(path, lines):
     return HazardCurve(imt, _UNITS[units], im, rate, f"{path} (plain table)")
 
 
-def _fragility_imt(frag):
-    """OpenQuake's IMT of a fragility's intensity and the factor from its units to OpenQuake's."""
-    name, units, period = _intensity(frag)
+def hazard_levels(curve, name, units, period, hazard_path):
+    """The hazard's levels [``units``] for a fragility over the intensity variable ``name`` [``units``].
+
+    Parameters
+    ----------
+    curve : HazardCurve
+        The hazard curve.
+    name : str
+        The fragility's intensity (``pga``, ``pga_median``, ``sa_median``, ``stripe_pga``...).
+    units : str
+        Its units (``m s-2``).
+    period : float or str
+        The oscillator period [s] of an Sa fragility (``""`` otherwise).
+    hazard_path : str
+        Named in the error line.
+
+    Returns
+    -------
+    numpy.ndarray
+        The levels in ``units``.
+
+    Raises
+    ------
+    HazardError
+        One line naming the file, line 1 and the field (``imt``, ``units``) when the hazard curve is
+        for another intensity measure, another period or in units that cannot be converted.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> curve = HazardCurve("PGA", "g", np.array([0.1, 0.2]), np.array([1e-2, 1e-3]), "t")
+    >>> hazard_levels(curve, "pga_median", "m s-2", "", "h.csv").round(4).tolist()
+    [0.9807, 1.9613]
+    """
     key = _im_key(name)
     if key is None or IMS[key][2] is None:
-        return None, units, None
-    imt = IMS[key][2]
-    if imt in ("SA", "AvgSA"):
-        imt = f"{imt}({float(period):g})" if period != "" else imt
-    return imt, units, IMS[key][3]
-
-
-def hazard_in_fragility_units(curve, frag, hazard_path):
-    """The hazard's levels in the units of the fragility's IM, or :class:`HazardError` (one line) where
-    the IMTs differ or the units cannot be converted."""
-    imt, units, factor = _fragility_imt(frag)
-    name = _intensity(frag)[0]
-    if imt is None:
         raise HazardError(f"{hazard_path}:1: imt: the fragility is over {name!r}, which has no OpenQuake IMT; "
                           "fit it over pga or sa (screening fragility --im pga)")
+    imt = IMS[key][2]
+    if imt in ("SA", "AvgSA") and period not in ("", None):
+        imt = f"{imt}({float(period):g})"
     if _norm_imt(curve.imt) != _norm_imt(imt):
         raise HazardError(f"{hazard_path}:1: imt: the hazard curve is for {curve.imt}, the fragility for {imt} "
                           f"(its {name})")
@@ -371,7 +398,7 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     """
     from screening.analysis.im_fragility import _by_curve, _curve_ids, _states
 
-    im = hazard_in_fragility_units(curve, frag, hazard_path)
+    im = hazard_levels(curve, *_intensity(frag), hazard_path)
     rows = curve_table(frag)
     states = _states(frag)
     ids = _curve_ids(frag, rows)
@@ -391,6 +418,10 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
             out.append(row)
             continue
         res = annual_frequency(im, curve.rate, r["median"], r["beta"], r["im_min"], r["im_max"])
+        if "fit_im_min" in frag and not (np.isfinite(r["im_min"]) and np.isfinite(r["im_max"])):
+            # no point of the curve is vouched: all of the rate is from outside, bounded by 0 and the rate
+            # of the lowest hazard level
+            res.update(rate_vouched=0.0, share_outside=1.0, rate_low=0.0, rate_high=float(curve.rate[0]))
         sel = {d: i for d, i in zip(frag["fit_median"].dims, np.unravel_index(index, frag["fit_median"].shape))}
         mse = float(med_se[sel]) if med_se is not None else math.nan
         bse = float(beta_se[sel]) if beta_se is not None else math.nan
@@ -408,3 +439,41 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     for rank, row in enumerate(out, start=1):
         row["rank"] = rank if np.isfinite(row["annual_rate"]) else ""
     return out
+
+
+def write_risk_csv(rows, path):
+    """Write :func:`risk_table`'s rows as CSV (:data:`RISK_COLUMNS`; empty cells for missing values).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The ranked rows.
+    path : str or os.PathLike
+        The CSV file (written atomically).
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> row = dict.fromkeys(RISK_COLUMNS, float("nan")) | {"rank": 1, "object": "vase", "note": ""}
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     print(write_risk_csv([row], pathlib.Path(tmp) / "r.csv").read_text().splitlines()[1][:12])
+    1,vase,,,,,,
+    """
+    from screening.atomicfile import atomic_open
+
+    def cell(v):
+        if isinstance(v, float):
+            return f"{v:.6g}" if math.isfinite(v) else ""
+        return v
+
+    with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(RISK_COLUMNS)
+        for r in rows:
+            w.writerow([cell(r.get(c, "")) for c in RISK_COLUMNS])
+    return path

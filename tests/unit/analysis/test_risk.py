@@ -78,6 +78,10 @@ def test_openquake_hazard_curve_becomes_annual_rates(tmp_path):
     assert curve.imt == "PGA" and curve.units == "g"
     np.testing.assert_allclose(curve.im, [0.05, 0.1, 0.2, 0.4])          # the level never exceeded is left out
     np.testing.assert_allclose(curve.rate, -np.log1p(-np.array(poe[:4])) / 50.0, rtol=1e-12)
+    # a level certainly exceeded (poe printed as 1) has no finite rate: left out, and said
+    curve = read_hazard(_write(tmp_path, OQ.format(row="10.0,45.0,-0.1,1.000000e+00,0.5,0.1,0.01,0.0")))
+    np.testing.assert_allclose(curve.im, [0.1, 0.2, 0.4])
+    assert "1 level(s) with poe 1 left out" in curve.source
 
 
 @pytest.mark.parametrize("text, where", [
@@ -123,5 +127,5 @@ def test_risk_table_refuses_another_imt_or_units(tmp_path):
     x = np.geomspace(0.01, 3.0, 10)
     with pytest.raises(HazardError, match=r"^h.csv:1: imt: the hazard curve is for SA\(0.3\), the fragility for PGA"):
         risk_table(_frag(), HazardCurve("SA(0.3)", "g", x, 1e-4 * x**-2.0, "t"), 50.0, "h.csv")
-    with pytest.raises(HazardError, match="^h.csv:1: imt: the fragility is over 'S0'"):
+    with pytest.raises(HazardError, match="^h.csv:1: imt: the fragility is over 'S0'"):   # no OpenQuake IMT
         risk_table(_frag("m2 s-3", "S0"), HazardCurve("PGA", "g", x, 1e-4 * x**-2.0, "t"), 50.0, "h.csv")
