@@ -77,5 +77,4 @@ def plot_risk(rows, path, title="", years=50.0):
     ax.set_xlabel("mean annual frequency [1/yr]")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12 if n > 4 else -0.25), fontsize=7, ncol=2)
     ax.set_title(textwrap.fill(title or "risk at the site, ranked", 110), fontsize=8)
-    fig.subplots_adjust(left=0.3, right=0.97, bottom=0.18 if n > 4 else 0.35, top=0.9)
     return save_figure(fig, path)
