@@ -230,13 +230,15 @@ def _quiet_abandoned_reads():
 @click.option("--force", is_flag=True, help="recompute even if the result is up to date")
 @click.option("--no-plots", is_flag=True, help="do not write the PNG figures")
 @click.option("--quiet", is_flag=True, help="no progress bar")
-def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plots, quiet):
+@click.option("--inventory", type=click.Path(), help="a collection CSV (one row per object: name, m, b, h, depth, "
+                                                     "bed) turned into named cases (docs/study.md)")
+def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plots, quiet, inventory):
     from screening.workflow.errors import SweepError
     from screening.workflow.study import load_study
     from screening.workflow.sweep import run_sweep
     from screening.workflow.writer import check_output_path
 
-    study = load_study(study)
+    study = load_study(study, inventory=inventory)
     announce_compilation(quiet)
     if out:
         out = check_output_path(out, inputs=(study.source,))
