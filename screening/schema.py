@@ -388,8 +388,10 @@ CLOUD = {
     "level": _v("1", "intensity level of the stripe (units of the intensity measure)"),
     "n_exceed": _v("1", "records exceeding the threshold at the level"),
     "n_used": _v("1", "records integrated at the level (not diverged)"),
-    "fit_median_se": _v("1", "standard error of fit_median (observed information; units of the intensity)"),
-    "beta_se": _v("1", "standard error of beta (observed information)"),
+    "fit_median_se": _v("1", "standard error of fit_median (units of the intensity; stripes: observed information, "
+                             "sweeps: from the standard errors of the fitted points)"),
+    "beta_se": _v("1", "standard error of beta (stripes: observed information, sweeps: from the standard errors of "
+                       "the fitted points)"),
     **{f"stripe_{name}": _v("1", f"{name} of the stripe (records scaled to it)") for name in
        ("pga", "sa", "rms_acceleration", "arias_intensity")},
 }

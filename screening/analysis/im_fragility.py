@@ -194,7 +194,9 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
         warnings += [f"overturning: {note}"] if note else []
         frag = xr.Dataset({"p_exceed": p.rename("p_exceed").assign_attrs(
                                long_name="probability that the block overturns during the record", units="1"),
-                           "threshold_rad": model_quantity(ds, "slenderness")},
+                           "threshold_rad": model_quantity(ds, "slenderness"),
+                           **({"p_exceed_se": ds["p_overturn_se"].where(np.isfinite(p))}
+                              if "p_overturn_se" in ds.variables and "p_overturn" in ds.variables else {})},
                           attrs={"threshold": 1.0, "relative_to": "slenderness", "method": method})
     else:
         frag = fragility_dataset(ds, threshold, relative_to, method, dim)
@@ -206,6 +208,8 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
         # point is vouched for (Monte Carlo, or a trusted or corrected linearization)
         out["fit_n_unvouched"] = xr.zeros_like(out["fit_n_unvouched"])
     out["fit_median"].attrs.update(units=units, intensity=name)
+    if "fit_median_se" in out:
+        out["fit_median_se"].attrs.update(units=units)
     if period is not None and im in ("sa", "avgsa"):
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
     out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim, limit_state=limit_state,
