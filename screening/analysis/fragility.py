@@ -1148,6 +1148,11 @@ def fit_standard_errors(intensity, probability, standard_error):
     ``(X'X)^-1 X' diag(se(z)^2) X (X'X)^-1``; ``beta = 1/b``, ``ln median = -a/b`` carry it by the delta
     method: ``se(beta) = se(b) / b^2``, ``se(median) = median se(ln median)``.
 
+    References
+    ----------
+    .. [1] H. White, "A heteroskedasticity-consistent covariance matrix estimator and a direct test for
+       heteroskedasticity", Econometrica 48(4) (1980) 817-838.
+
     Examples
     --------
     >>> x = [0.5, 1.0, 2.0]
@@ -1194,6 +1199,10 @@ def fitted_standard_error(frag):
     -------
     xarray.DataArray
         [1], on the grid of ``p_exceed``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Trust", docs/trust.md.
 
     Examples
     --------
@@ -1367,6 +1376,11 @@ def vouched_range(frag, ds, intensity, dim):
     -------
     xarray.Dataset
         ``fit_im_min``, ``fit_im_max`` [IM units] over the curves (NaN where no point is vouched).
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md.
 
     Examples
     --------

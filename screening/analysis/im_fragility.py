@@ -467,6 +467,10 @@ def case_values(frag):
         ``{case index: {"name": case name, "values": {name: (value, units)}}}`` from the ``case_name``
         coordinate and the coordinates over ``case`` (empty without a ``case`` dimension).
 
+    References
+    ----------
+    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
+
     Examples
     --------
     >>> import xarray as xr
@@ -507,6 +511,11 @@ def export_problem(row):
     -------
     str
         The reason (``""``: exported).
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md, section "The files".
 
     Examples
     --------
@@ -593,6 +602,11 @@ def write_csv(frag, path):
     -------
     str or os.PathLike
         ``path``.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
 
     Examples
     --------
@@ -726,6 +740,11 @@ def write_pelicun_json(frag, path):
     str or os.PathLike
         ``path``.
 
+    References
+    ----------
+    .. [1] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
+       loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
+
     Examples
     --------
     >>> import json, tempfile, pathlib
@@ -799,6 +818,10 @@ def nrml_limit_state(name):
     -------
     str
         ``.`` written ``p``, ``+`` dropped.
+
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5), https://docs.openquake.org
 
     Examples
     --------

@@ -191,6 +191,10 @@ def read_hazard(path, site=None):
         One line naming the file, the line and the field: not a number, a level not increasing, a
         curve not decreasing, no level above 0, a missing header, a site not in the file.
 
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Output files: hazard curves", https://docs.openquake.org
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -308,6 +312,10 @@ def hazard_levels(curve, name, units, period, hazard_path):
         One line naming the file, line 1 and the field (``imt``, ``units``) when the hazard curve is
         for another intensity measure, another period or in units that cannot be converted.
 
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Intensity measure types", https://docs.openquake.org
+
     Examples
     --------
     >>> import numpy as np
@@ -385,6 +393,12 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     from the fragility's standard errors ``fit_median_se``, ``beta_se`` (where it has them) by the delta
     method.
 
+    References
+    ----------
+    .. [1] C. A. Cornell, F. Jalayer, R. O. Hamburger and D. A. Foutch, "Probabilistic basis for 2000
+       SAC Federal Emergency Management Agency steel moment frame guidelines", Journal of Structural
+       Engineering 128(4) (2002) 526-533.
+
     Examples
     --------
     >>> import numpy as np, xarray as xr
@@ -455,6 +469,10 @@ def write_risk_csv(rows, path):
     -------
     str or os.PathLike
         ``path``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The command line", docs/cli.md, section "Risk at a site".
 
     Examples
     --------

@@ -31,6 +31,10 @@ def plot_risk(rows, path, title="", years=50.0):
     pathlib.Path or None
         ``path``; ``None`` when no row has a rate.
 
+    References
+    ----------
+    .. [1] screening documentation, "The command line", docs/cli.md, section "Risk at a site".
+
     Examples
     --------
     >>> import tempfile, pathlib

@@ -86,6 +86,10 @@ def read_inventory(path):
         One line ``FILE:LINE: FIELD: problem``: a missing column, an empty required cell, a value that is
         not a number or not > 0 (``eps`` may have either sign), a duplicate name, an unknown material.
 
+    References
+    ----------
+    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -184,6 +188,10 @@ def with_collection(raw, source, inventory=None):
     ------
     StudyError
         A study with both ``[[case]]`` and a collection, a ``[collection]`` without ``file``, or a bad CSV.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
 
     Examples
     --------
