@@ -477,11 +477,11 @@ def cmd_risk(result, hazard, years, site, threshold, relative_to, im, period, ou
     rows.sort(key=lambda row: (not np.isfinite(row["annual_rate"]), -np.nan_to_num(row["annual_rate"])))
     for rank, row in enumerate(rows, start=1):
         row["rank"] = rank if np.isfinite(row["annual_rate"]) else ""
-    figure = out.with_suffix(".png")
-    write_file_set([("risk CSV", out, lambda path: write_risk_csv(rows, path)),
-                    ("risk figure", figure, lambda path: plot_risk(rows, path, f"{result.name} at {curve.source}",
-                                                                   years))])
     rated = [r for r in rows if np.isfinite(r["annual_rate"])]
+    figure = out.with_suffix(".png")
+    write_file_set([("risk CSV", out, lambda path: write_risk_csv(rows, path))]
+                   + ([("risk figure", figure, lambda path: plot_risk(rows, path, f"{result.name} at {curve.source}",
+                                                                      years))] if rated else []))
     say(f"risk of {len(rated)} of {len(rows)} object/limit-state pair(s) over {curve.source}" + (
         f"; highest: {rated[0]['object']} {rated[0]['limit_state']} {rated[0]['annual_rate']:.3g} /yr, "
         f"P({years:g} yr) = {rated[0]['probability']:.3g} ({100 * rated[0]['share_outside_vouched']:.0f} % of it "

@@ -41,7 +41,7 @@ from screening.status import FitFlag
 
 __all__ = ["IMS", "default_dim", "fragility_over_im", "LIMIT_STATES", "THRESHOLD_FREE", "NoExport",
            "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text",
-           "case_values", "export_problem", "write_csv", "write_pelicun_csv", "write_pelicun_json",
+           "case_values", "export_problem", "fragility_intensity", "im_key", "curves_by_object", "write_csv", "write_pelicun_csv", "write_pelicun_json",
            "nrml_limit_state", "nrml_parameters", "write_nrml"]
 
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
@@ -580,6 +580,99 @@ def _by_curve(frag, rows, ids, states):
 def _states(frag):
     return [str(v) for v in frag["limit_state"].values] if "limit_state" in frag["fit_median"].dims else [
         _single_state(frag)]
+
+
+def fragility_intensity(frag):
+    """The intensity a fragility dataset is fitted over: its variable's name, units and oscillator period.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset (``fit_median`` with the attributes ``intensity`` and ``units``).
+
+    Returns
+    -------
+    name : str
+        The intensity variable (``pga_median``, ``pga``, ``stripe_pga``...).
+    units : str
+        Its units (``m s-2``).
+    period : float or str
+        The oscillator period [s] of an Sa intensity, ``""`` otherwise.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> fragility_intensity(xr.Dataset({"fit_median": ((), 1.0, {"intensity": "pga", "units": "m s-2"})}))
+    ('pga', 'm s-2', '')
+    """
+    return _intensity(frag)
+
+
+def im_key(name):
+    """The ``--im`` key (:data:`IMS`) of an intensity variable, or ``None``.
+
+    Parameters
+    ----------
+    name : str
+        ``pga_median`` (a point's input), ``pga`` (a record's), ``stripe_pga`` (a multiple-stripe level)...
+
+    Returns
+    -------
+    str or None
+        ``pga``, ``sa``, ... (``None`` for another name).
+
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Intensity measure types", https://docs.openquake.org
+
+    Examples
+    --------
+    >>> im_key("stripe_pga"), im_key("sa_median"), im_key("S0"), im_key("theta")
+    ('pga', 'sa', 's0', None)
+    """
+    return _im_key(name)
+
+
+def curves_by_object(frag, pelicun=False):
+    """The curves of a fragility dataset grouped by object (a swept block/bed or case), as the exports name them.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+    pelicun : bool
+        Ids as pelicun reads them (no ``-``) instead of the NRML ids.
+
+    Returns
+    -------
+    states : list of str
+        The limit states.
+    objects : dict
+        ``{id: {"labels": {dim: value}, <limit state>: row of curve_table, ...}}`` in the order of
+        :func:`curve_table`.
+
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> frag = xr.Dataset({"fit_median": ("case", [1.0, 2.0]), "beta": ("case", [0.3, 0.4]),
+    ...                    "fit_flag": ("case", np.int8([0, 0])), "threshold_rad": 0.01},
+    ...                   coords={"case": [0, 1], "case_name": ("case", ["bust-wood", "vase"])})
+    >>> states, objects = curves_by_object(frag, pelicun=True)
+    >>> states, list(objects)
+    (['theta_exceeds_threshold'], ['screening_case=bust_wood', 'screening_case=vase'])
+    """
+    rows = curve_table(frag)
+    states = _states(frag)
+    return states, _by_curve(frag, rows, _curve_ids(frag, rows, pelicun=pelicun), states)
 
 
 def write_csv(frag, path):

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from scipy import special
 
-from screening.analysis.im_fragility import IMS, _im_key, _intensity, curve_table, export_problem
+from screening.analysis.im_fragility import IMS, curves_by_object, export_problem, fragility_intensity, im_key
 from screening.status import FitFlag
 
 __all__ = ["annual_frequency", "HazardCurve", "HazardError", "read_hazard", "hazard_levels", "risk_table",
@@ -323,7 +323,7 @@ def hazard_levels(curve, name, units, period, hazard_path):
     >>> hazard_levels(curve, "pga_median", "m s-2", "", "h.csv").round(4).tolist()
     [0.9807, 1.9613]
     """
-    key = _im_key(name)
+    key = im_key(name)
     if key is None or IMS[key][2] is None:
         raise HazardError(f"{hazard_path}:1: imt: the fragility is over {name!r}, which has no OpenQuake IMT; "
                           "fit it over pga or sa (screening fragility --im pga)")
@@ -364,6 +364,13 @@ def _se(im, rate, median, beta, median_se, beta_se, lo, hi):
     dm = (annual_frequency(im, rate, median * math.exp(d), beta, lo, hi)["rate"] - base) / d
     db = (annual_frequency(im, rate, median, beta * (1 + d), lo, hi)["rate"] - base) / (beta * d)
     return math.sqrt((dm * median_se / median) ** 2 + (db * beta_se) ** 2)
+
+
+def _position(frag, dim, label):
+    """Index along ``dim`` of a curve label of :func:`~screening.analysis.im_fragility.curve_table`."""
+    if dim not in frag.coords:
+        return int(label)
+    return int(np.flatnonzero(np.asarray(frag[dim].values) == label)[0])
 
 
 def risk_table(frag, curve, years, hazard_path="hazard"):
@@ -410,45 +417,41 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     >>> f"{row['annual_rate']:.3e} {row['probability']:.3e}", row["object"], row["limit_state"]
     ('3.311e-03 1.526e-01', 'screening', 'theta_exceeds_threshold')
     """
-    from screening.analysis.im_fragility import _by_curve, _curve_ids, _states
-
-    im = hazard_levels(curve, *_intensity(frag), hazard_path)
-    rows = curve_table(frag)
-    states = _states(frag)
-    ids = _curve_ids(frag, rows)
+    im = hazard_levels(curve, *fragility_intensity(frag), hazard_path)
+    states, objects = curves_by_object(frag)
     med_se = frag["fit_median_se"] if "fit_median_se" in frag else None
     beta_se = frag["beta_se"] if "beta_se" in frag else None
     units = frag["fit_median"].attrs.get("units", "")
+    dims = frag["fit_median"].dims
     out = []
-    for index, r in enumerate(rows):
-        labels = tuple((d, v) for d, v in r["labels"].items() if d != "limit_state")
-        state = str(r["labels"].get("limit_state", states[0]))
-        obj = ids[labels].removeprefix("screening_").replace("case=", "") if labels else "screening"
-        problem = export_problem(r)
-        row = {"object": obj, "limit_state": state, "median": r["median"], "beta": r["beta"], "units": units,
-               "years": years, "im_min": r["im_min"], "im_max": r["im_max"], "note": problem}
-        if r["flag"] != FitFlag.ok:
-            row.update({k: math.nan for k in RISK_COLUMNS if k.startswith(("annual_rate", "probability", "share"))})
+    for fid, by_state in objects.items():
+        obj = fid.removeprefix("screening_").replace("case=", "") if by_state["labels"] else "screening"
+        for state in states:
+            r = by_state[state]
+            problem = export_problem(r)
+            row = {"object": obj, "limit_state": state, "median": r["median"], "beta": r["beta"], "units": units,
+                   "years": years, "im_min": r["im_min"], "im_max": r["im_max"], "note": problem}
+            if r["flag"] != FitFlag.ok:
+                row.update({k: math.nan for k in RISK_COLUMNS if k.startswith(("annual_rate", "probability", "share"))})
+                out.append(row)
+                continue
+            res = annual_frequency(im, curve.rate, r["median"], r["beta"], r["im_min"], r["im_max"])
+            if "fit_im_min" in frag and not (np.isfinite(r["im_min"]) and np.isfinite(r["im_max"])):
+                # no point of the curve is vouched: all of the rate is from outside, bounded by 0 and the rate
+                # of the lowest hazard level
+                res.update(rate_vouched=0.0, share_outside=1.0, rate_low=0.0, rate_high=float(curve.rate[0]))
+            sel = {d: _position(frag, d, v) for d, v in r["labels"].items() if d in dims}
+            mse = float(med_se[sel]) if med_se is not None else math.nan
+            bse = float(beta_se[sel]) if beta_se is not None else math.nan
+            row.update(annual_rate=res["rate"], annual_rate_vouched=res["rate_vouched"],
+                       share_outside_vouched=res["share_outside"], annual_rate_low=res["rate_low"],
+                       annual_rate_high=res["rate_high"],
+                       annual_rate_se=_se(im, curve.rate, r["median"], r["beta"], mse, bse, r["im_min"],
+                                          r["im_max"]),
+                       probability=-math.expm1(-res["rate"] * years),
+                       probability_low=-math.expm1(-res["rate_low"] * years),
+                       probability_high=-math.expm1(-res["rate_high"] * years))
             out.append(row)
-            continue
-        res = annual_frequency(im, curve.rate, r["median"], r["beta"], r["im_min"], r["im_max"])
-        if "fit_im_min" in frag and not (np.isfinite(r["im_min"]) and np.isfinite(r["im_max"])):
-            # no point of the curve is vouched: all of the rate is from outside, bounded by 0 and the rate
-            # of the lowest hazard level
-            res.update(rate_vouched=0.0, share_outside=1.0, rate_low=0.0, rate_high=float(curve.rate[0]))
-        sel = {d: i for d, i in zip(frag["fit_median"].dims, np.unravel_index(index, frag["fit_median"].shape))}
-        mse = float(med_se[sel]) if med_se is not None else math.nan
-        bse = float(beta_se[sel]) if beta_se is not None else math.nan
-        row.update(annual_rate=res["rate"], annual_rate_vouched=res["rate_vouched"],
-                   share_outside_vouched=res["share_outside"], annual_rate_low=res["rate_low"],
-                   annual_rate_high=res["rate_high"],
-                   annual_rate_se=_se(im, curve.rate, r["median"], r["beta"], mse, bse, r["im_min"], r["im_max"]),
-                   probability=-math.expm1(-res["rate"] * years),
-                   probability_low=-math.expm1(-res["rate_low"] * years),
-                   probability_high=-math.expm1(-res["rate_high"] * years))
-        if problem:
-            row["note"] = problem
-        out.append(row)
     out.sort(key=lambda row: (not np.isfinite(row["annual_rate"]), -np.nan_to_num(row["annual_rate"])))
     for rank, row in enumerate(out, start=1):
         row["rank"] = rank if np.isfinite(row["annual_rate"]) else ""
