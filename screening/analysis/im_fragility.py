@@ -353,7 +353,8 @@ def curve_table(frag):
         ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
         several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.status.FitFlag`),
         ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value
-        is untrusted without a best estimate), ``im_min``, ``im_max`` (the vouched range,
+        is untrusted without a best estimate), ``degenerate`` (why a fit is degenerate, the dataset's
+        ``fit_degenerate``, else ``""``), ``im_min``, ``im_max`` (the vouched range,
         :func:`~screening.analysis.fragility.vouched_range`; NaN where the dataset has none) and the rotation ``threshold_rad`` [rad] of the curve
         (its range ``"lo..hi"`` if it varies along the curve).
 
@@ -392,6 +393,7 @@ def curve_table(frag):
         t = t[np.isfinite(t)]
         rows.append({"labels": labels, "median": float(median[sel]), "beta": float(beta[sel]), "flag": code,
                      "reason": "" if code == FitFlag.ok else code.meaning, "n_unvouched": int(unvouched[sel]),
+                     "degenerate": str(frag.attrs.get("fit_degenerate", "")) if code == FitFlag.ok else "",
                      "im_min": float(lo[sel]) if lo is not None else math.nan,
                      "im_max": float(hi[sel]) if hi is not None else math.nan,
                      "threshold_rad": (f"{t[0]:.8g}" if t.size == 1 else f"{t.min():.8g}..{t.max():.8g}"
@@ -500,7 +502,8 @@ def export_problem(row):
     """Why a curve of :func:`curve_table` is not exported as a fragility others may use, or ``""``.
 
     Not exported: no fit (its ``fit_flag``), a fit through untrusted points without a best estimate
-    (``untrusted``), a fit vouched at a single intensity or nowhere (``degenerate``).
+    (``untrusted``), a fit vouched at a single intensity, or whose records or stripes separate exceeding
+    from not exceeding perfectly (the dataset's ``fit_degenerate``: ``degenerate``).
 
     Parameters
     ----------
@@ -530,6 +533,8 @@ def export_problem(row):
     if row["n_unvouched"]:
         return (f"untrusted: fitted through {row['n_unvouched']} untrusted linearized point(s) without a best "
                 "estimate")
+    if row.get("degenerate"):
+        return f"degenerate: {row['degenerate']}"
     lo, hi = row.get("im_min", math.nan), row.get("im_max", math.nan)
     if math.isfinite(lo) and math.isfinite(hi) and not lo < hi:
         return "degenerate: vouched at a single intensity"

@@ -661,7 +661,10 @@ def stripe_dataset(cloud, block, foundation, rows, names):
         flag = FitFlag.never_exceeded if not exceed.any() else FitFlag.always_exceeded if exceed[used].all() \
             else FitFlag.no_fit
         warnings.append(f"no fragility fit: {exc}")
+    degenerate = ""
     if flag == FitFlag.ok and not np.isfinite(fit["beta_se"]):
+        degenerate = ("the stripes separate exceeding from not exceeding perfectly: beta is not identified "
+                      "(standard errors undefined)")
         warnings.append("the standard errors are not defined (the stripes separate exceeding from not exceeding "
                         "perfectly): add levels near the median")
     ds["fit_median"] = ((), fit["median"])
@@ -679,7 +682,8 @@ def stripe_dataset(cloud, block, foundation, rows, names):
                     study=cloud.study.source, intensity_measure=cloud.im, intensity_variable="stripe_" + name,
                     intensity_dim="level", threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, binomial maximum likelihood over the stripes (Baker 2015), standard errors "
-                        "from the observed information", warnings="; ".join(warnings) or "none")
+                        "from the observed information", warnings="; ".join(warnings) or "none",
+                    **({"fit_degenerate": degenerate} if degenerate else {}))
     return ds, warnings
 
 
@@ -763,9 +767,12 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     except ValueError as exc:
         median, beta = math.nan, math.nan
         warnings.append(f"no fragility fit: {exc} the threshold")
+    degenerate = ""
     if np.isfinite(beta) and beta > 0:
         x_in, x_out = im_values[used][exceed[used]], im_values[used][~exceed[used]]
         if x_in.min() > x_out.max():
+            degenerate = (f"the records are perfectly separated by {name}: beta is not identified (the likelihood "
+                          "grows as beta -> 0)")
             warnings.append(f"the records are perfectly separated by {name} (every exceeding record has a larger "
                             "IM than every other): beta is not identified (the likelihood grows as beta -> 0); "
                             "add records near the median")
@@ -791,7 +798,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
                     intensity_measure=cloud.im, intensity_variable=name, intensity_dim="record",
                     threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",
-                    warnings="; ".join(warnings) or "none")
+                    warnings="; ".join(warnings) or "none", **({"fit_degenerate": degenerate} if degenerate else {}))
     return ds, warnings
 
 

@@ -113,3 +113,22 @@ def test_linearize_results_carry_trust_and_fits_count_the_untrusted_points(resul
     assert shaky > 0 and text.count("untrusted linearized point(s) without a best estimate") == shaky
     # such a fit is no function of the NRML (it is named in a comment with its reason)
     assert text.count("<fragilityFunction") == int(np.sum(fitted & (frag["fit_n_unvouched"].values == 0)))
+
+
+def test_a_separated_fit_is_incomplete_and_not_a_function(tmp_path):
+    """Stripes that separate exceeding from not exceeding perfectly (beta not identified) carry
+    ``fit_degenerate``: the pelicun row is Incomplete with the reason in the JSON, the NRML has no function."""
+    import json
+
+    from screening.analysis.im_fragility import write_pelicun_csv, write_pelicun_json
+
+    frag = xr.Dataset({"fit_median": ((), 2.0, {"units": "m s-2", "intensity": "stripe_pga"}), "beta": 0.013,
+                       "fit_flag": np.int8(0), "threshold_rad": 0.01, "stripe_pga": ("level", [1.0, 2.0, 4.0])},
+                      attrs={"fit_degenerate": "the stripes separate exceeding from not exceeding perfectly"})
+    rows = list(csv.DictReader(open(write_pelicun_csv(frag, tmp_path / "p.csv"))))
+    assert rows[0]["Incomplete"] == "1" and rows[0]["LS1-Theta_0"] == ""
+    meta = json.loads(write_pelicun_json(frag, tmp_path / "p.json").read_text())
+    assert "degenerate: the stripes separate" in meta["screening"]["Comments"]
+    text = open(write_nrml(frag, tmp_path / "f.xml")).read()
+    assert "<fragilityFunction" not in text and "no fragility function for screening: theta_exceeds_threshold: " \
+        "degenerate" in text
