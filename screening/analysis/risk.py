@@ -417,8 +417,12 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     >>> f"{row['annual_rate']:.3e} {row['probability']:.3e}", row["object"], row["limit_state"]
     ('3.311e-03 1.526e-01', 'screening', 'theta_exceeds_threshold')
     """
+    name, _, _ = fragility_intensity(frag)
     im = hazard_levels(curve, *fragility_intensity(frag), hazard_path)
     states, objects = curves_by_object(frag)
+    # a fit without its own vouched range (cloud, stripes): the intensities of its records or stripes
+    whole = np.asarray(frag[name].values, dtype=float) if name in frag else np.array([])
+    whole = whole[np.isfinite(whole)]
     med_se = frag["fit_median_se"] if "fit_median_se" in frag else None
     beta_se = frag["beta_se"] if "beta_se" in frag else None
     units = frag["fit_median"].attrs.get("units", "")
@@ -435,6 +439,9 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
                 row.update({k: math.nan for k in RISK_COLUMNS if k.startswith(("annual_rate", "probability", "share"))})
                 out.append(row)
                 continue
+            if "fit_im_min" not in frag and whole.size:
+                r = {**r, "im_min": float(whole.min()), "im_max": float(whole.max())}
+                row.update(im_min=r["im_min"], im_max=r["im_max"])
             res = annual_frequency(im, curve.rate, r["median"], r["beta"], r["im_min"], r["im_max"])
             if "fit_im_min" in frag and not (np.isfinite(r["im_min"]) and np.isfinite(r["im_max"])):
                 # no point of the curve is vouched: all of the rate is from outside, bounded by 0 and the rate

@@ -148,3 +148,13 @@ def test_probit_fit_standard_errors_match_the_scatter_of_replicated_fits():
     assert np.std(fits[:, 0]) == pytest.approx(median_se, rel=0.08)
     assert np.std(fits[:, 1]) == pytest.approx(beta_se, rel=0.08)
     assert math.isnan(fit_standard_errors(x, p, np.where(x > 1, se, np.nan))[0])   # a point without one: unknown
+
+
+def test_a_fit_without_its_own_range_is_vouched_over_its_records():
+    """A cloud or multiple-stripe fit has no fit_im_min / fit_im_max: the range of its records' (stripes')
+    intensities stands in, so the share from outside it is said."""
+    frag = xr.Dataset({"fit_median": ((), 2.0, {"units": "m s-2", "intensity": "stripe_pga"}), "beta": 0.4,
+                       "fit_flag": np.int8(0), "threshold_rad": 0.01, "stripe_pga": ("level", [1.0, 2.0, 4.0])})
+    x = np.geomspace(0.01, 3.0, 40)
+    row = risk_table(frag, HazardCurve("PGA", "g", x, 1e-4 * x**-2.0, "t"), 50.0)[0]
+    assert (row["im_min"], row["im_max"]) == (1.0, 4.0) and 0 < row["share_outside_vouched"] < 1
