@@ -195,6 +195,9 @@ FRAGILITY = {
     "fit_n_unvouched": _v("1", "points of the curve whose linearized value is untrusted and has no best estimate"),
     "fit_im_min": {"long_name": "lowest vouched intensity of the curve (units of the intensity it is fitted over)"},
     "fit_im_max": {"long_name": "highest vouched intensity of the curve (units of the intensity it is fitted over)"},
+    "fit_median_se": {"long_name": "standard error of fit_median from the standard errors of the fitted points "
+                                   "(units of the intensity it is fitted over)"},
+    "beta_se": _v("1", "standard error of beta from the standard errors of the fitted points"),
 }
 
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
