@@ -6,8 +6,10 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
+ENGINES := .venv-engines
+ENGINES_STAMP := $(ENGINES)/.installed
 
-.PHONY: run test test-quick test-slow test-portable clean
+.PHONY: run test test-quick test-slow test-portable engines clean
 
 # setuptools says "Editable installation ... be careful with folders named like the package" on every
 # editable install: information for packagers, noise for a user; silenced by its message, nothing else.
@@ -37,8 +39,20 @@ test: $(TEST_STAMP)
 test-quick: $(TEST_STAMP)
 	$(BIN)/python -m pytest tests/unit -m "not slow" -q
 
-test-slow: $(TEST_STAMP)
-	$(BIN)/python -m pytest -m slow --durations=10
+test-slow: $(TEST_STAMP) $(ENGINES_STAMP)
+	SCREENING_ENGINES_PYTHON=$(ENGINES)/bin/python $(BIN)/python -m pytest -m slow --durations=10
+
+# `make engines`: pelicun and OpenQuake's NRML reader in their own environment .venv-engines (pelicun pins
+# scipy<1.16 and pandas<3, below screening's pins; openquake-engine's GDAL pins need the GDAL C library,
+# which its NRML reader does not use, so the engine goes in with --no-deps and the reader's imports from
+# tests/engines/requirements.txt).  tests/integration/test_engine_exports.py loads the exports there.
+engines: $(ENGINES_STAMP)
+
+$(ENGINES_STAMP): tests/engines/requirements.txt
+	$(PYTHON) -m venv $(ENGINES)
+	$(ENGINES)/bin/python -m pip install -q -r tests/engines/requirements.txt
+	$(ENGINES)/bin/python -m pip install -q --no-deps openquake-engine==3.26.2
+	touch $(ENGINES_STAMP)
 
 # `make test-portable`: the suite as another machine runs it: kernels compiled for a generic x86-64 CPU (no
 # AVX, no FMA: other rounding, other adaptive steps) on one thread, in a cache of their own.  A test that
@@ -51,7 +65,7 @@ test-portable: $(TEST_STAMP)
 		$(BIN)/python -m pytest -m "not slow" -q -p no:cacheprovider
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) $(ENGINES) .pytest_cache
 
 # `make docs`: the documentation site (docs/*.md and the API pages from the docstrings) into site/,
 # warnings as errors; the docs extras are installed once.

@@ -45,6 +45,7 @@ TYPICAL = {
     "loose sand": {"E": (10e6, 25e6), "nu": (0.2, 0.4), "zeta_v": (0.02, 0.10)},
     "dense sand": {"E": (50e6, 80e6), "nu": (0.3, 0.45), "zeta_v": (0.02, 0.10)},
     "dense sand and gravel": {"E": (100e6, 200e6), "nu": (0.15, 0.35), "zeta_v": (0.02, 0.10)},
+    "timber (across the grain)": {"E": (0.23e9, 1.6e9), "nu": (0.3, 0.45), "zeta_v": (0.01, 0.05)},
 }
 
 

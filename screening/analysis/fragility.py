@@ -50,7 +50,8 @@ __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "excee
            "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
            "sample_exceedance", "exceedance_probability", "STORED", "has_stored_exceedance", "stored_exceedance",
            "fit_flag_of", "fit_fragility_curve", "fit_curves", "unvouched_points",
-           "fitted_probability", "add_fit", "grid_units_of", "fragility_curve", "RockingAccessor",
+           "fitted_probability", "fitted_standard_error", "fit_standard_errors", "vouched_range", "add_fit",
+           "grid_units_of", "fragility_curve", "RockingAccessor",
            "spot_positions", "mcs_exceedance_at_spots", "best_exceedance", "fragility_dataset"]
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
@@ -1305,6 +1306,107 @@ def _probit_beta_se(im, p, beta):
     return abs(beta) * slope_se / abs(slope) if slope != 0 else np.inf
 
 
+def fit_standard_errors(intensity, probability, standard_error):
+    """Standard errors of the probit fit of :func:`fit_fragility_curve` from those of its points.
+
+    Parameters
+    ----------
+    intensity : array_like
+        Intensity measure [units of the IM], 1-d.
+    probability : array_like
+        Exceedance probability [1] at each intensity.
+    standard_error : array_like
+        Its standard error [1] at each intensity (NaN: unknown).
+
+    Returns
+    -------
+    median_se : float
+        [units of the IM]; NaN where a point of the fit has no standard error or the fit is undefined.
+    beta_se : float
+        [1].
+
+    Notes
+    -----
+    The fit regresses ``z_i = Phi^-1(p_i)`` on ``u_i = ln x_i`` (``z = a + b u``, points with
+    ``1e-6 < p < 1 - 1e-6``) by ordinary least squares; with independent point errors
+    ``se(z_i) = se(p_i) / phi(z_i)`` (delta method) its covariance is the sandwich
+    ``(X'X)^-1 X' diag(se(z)^2) X (X'X)^-1``; ``beta = 1/b``, ``ln median = -a/b`` carry it by the delta
+    method: ``se(beta) = se(b) / b^2``, ``se(median) = median se(ln median)``.
+
+    References
+    ----------
+    .. [1] H. White, "A heteroskedasticity-consistent covariance matrix estimator and a direct test for
+       heteroskedasticity", Econometrica 48(4) (1980) 817-838.
+
+    Examples
+    --------
+    >>> x = [0.5, 1.0, 2.0]
+    >>> p = lognormal_fragility(x, 1.2, 0.5)
+    >>> m_se, b_se = fit_standard_errors(x, p, [0.01, 0.01, 0.01])
+    >>> f"{m_se:.4f} {b_se:.4f}"
+    '0.0191 0.0223'
+    """
+    x = np.asarray(intensity, dtype=float).ravel()
+    p = np.asarray(probability, dtype=float).ravel()
+    se = np.asarray(standard_error, dtype=float).ravel()
+    use = np.isfinite(p) & (p > 1e-6) & (p < 1 - 1e-6) & np.isfinite(x) & (x > 0)
+    if use.sum() < 2 or not np.all(np.isfinite(se[use])):
+        return math.nan, math.nan
+    z = special.ndtri(p[use])
+    X = np.column_stack([np.ones(int(use.sum())), np.log(x[use])])
+    se_z = se[use] / np.exp(-0.5 * z * z) * math.sqrt(2 * math.pi)
+    try:
+        xtx = np.linalg.inv(X.T @ X)
+    except np.linalg.LinAlgError:
+        return math.nan, math.nan
+    a, b = xtx @ X.T @ z
+    if not b > 0:
+        return math.nan, math.nan
+    cov = xtx @ (X.T * se_z**2) @ X @ xtx
+    grad = np.array([-1.0 / b, a / b**2])
+    median = math.exp(-a / b)
+    return median * math.sqrt(max(float(grad @ cov @ grad), 0.0)), math.sqrt(max(cov[1, 1], 0.0)) / b**2
+
+
+def fitted_standard_error(frag):
+    """The standard error [1] of :func:`fitted_probability` where it is known, NaN elsewhere.
+
+    A quarter of the band ``best_p_exceed_low..high`` (two standard errors either side) where
+    ``[accuracy]`` vouches for the best estimate; ``p_exceed_se`` where the dataset has it; else NaN
+    (the linearization's own probabilities carry none).
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+
+    Returns
+    -------
+    xarray.DataArray
+        [1], on the grid of ``p_exceed``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Trust", docs/trust.md.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> from screening.core.status import BestMethod
+    >>> frag = xr.Dataset({"p_exceed": ("S0", [0.1, 0.2]), "best_p_exceed": ("S0", [0.15, 0.25]),
+    ...                    "best_p_exceed_low": ("S0", [0.1, 0.2]), "best_p_exceed_high": ("S0", [0.2, 0.3]),
+    ...                    "best_method": ("S0", [BestMethod.unreliable, BestMethod.condensed_monte_carlo])})
+    >>> [round(v, 3) for v in fitted_standard_error(frag).values.tolist()]
+    [nan, 0.025]
+    """
+    p = frag["p_exceed"]
+    se = frag["p_exceed_se"] if "p_exceed_se" in frag else xr.full_like(p, np.nan, dtype=float)
+    if "best_p_exceed" in frag and "best_p_exceed_low" in frag:
+        vouched = (frag["best_method"] != BestMethod.unreliable) & np.isfinite(frag["best_p_exceed"])
+        se = xr.where(vouched, (frag["best_p_exceed_high"] - frag["best_p_exceed_low"]) / 4, np.nan)
+    return se
+
+
 def fit_curves(p, intensity, dim):
     """The lognormal fit of every curve of ``p`` along ``dim``.
 
@@ -1459,6 +1561,58 @@ def _left_out(frag, unvouched):
     return out
 
 
+def vouched_range(frag, ds, intensity, dim):
+    """The intensity range each curve's fit stands on: its lowest and highest vouched point.
+
+    A point is vouched when its fitted probability is finite and it is not unvouched
+    (:func:`screening.analysis.fragility.unvouched_points`).  Outside this range the curve is an
+    extrapolation: the NRML's ``minIML`` / ``maxIML`` and the risk integral's split
+    (``screening risk``) use it.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset with ``p_exceed`` [1].
+    ds : xarray.Dataset
+        The result it was computed from.
+    intensity : xarray.DataArray
+        The intensity [IM units] along ``dim``.
+    dim : str
+        The swept intensity dimension.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``fit_im_min``, ``fit_im_max`` [IM units] over the curves (NaN where no point is vouched).
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> frag = xr.Dataset({"p_exceed": ("pga", [0.1, 0.5, float("nan")])})
+    >>> x = xr.DataArray([1.0, 2.0, 4.0], dims="pga")
+    >>> r = vouched_range(frag, xr.Dataset(), x, "pga")
+    >>> float(r["fit_im_min"]), float(r["fit_im_max"])
+    (1.0, 2.0)
+    """
+    p = fitted_probability(frag)
+    good = np.isfinite(p)
+    if "sl_trust" in ds.variables:
+        good = good & ~unvouched_points(ds)
+    if not isinstance(intensity, xr.DataArray):
+        intensity = xr.DataArray(np.asarray(intensity, dtype=float), dims=dim)
+    x = intensity.drop_vars([c for c in intensity.coords if c not in intensity.dims]).broadcast_like(p).where(good)
+    units = intensity.attrs.get("units", "")
+    return xr.Dataset({
+        "fit_im_min": x.min(dim).assign_attrs(units=units, long_name="lowest vouched intensity of the curve"),
+        "fit_im_max": x.max(dim).assign_attrs(units=units, long_name="highest vouched intensity of the curve")}
+    ).drop_vars([c for c in p.coords if dim in p[c].dims or c == dim], errors="ignore")
+
+
 def add_fit(out, ds, intensity, dim):
     """A fragility Dataset with the lognormal fit of every curve along ``dim``.
 
@@ -1480,7 +1634,8 @@ def add_fit(out, ds, intensity, dim):
         ``fit_flag``) and ``fit_n_unvouched``, the number of the curve's points left out of the fit because
         nothing vouches for them (:func:`unvouched_points`); a curve whose vouched points alone are too few
         (no value, fewer than two between 0 and 1, never or always exceeded) while points were left out is
-        flagged ``untrusted``.
+        flagged ``untrusted``; the vouched range ``fit_im_min``, ``fit_im_max`` (:func:`vouched_range`) and,
+        where the points have standard errors, ``fit_median_se``, ``beta_se`` (:func:`fit_standard_errors`).
 
     References
     ----------
@@ -1503,7 +1658,17 @@ def add_fit(out, ds, intensity, dim):
     '5.381e-04 0.235 0'
     """
     unvouched = unvouched_points(ds, stored=out["p_exceed"].attrs.get("method") == STORED)
-    fit = fit_curves(fitted_probability(out, unvouched), intensity, dim)
+    probability = fitted_probability(out, unvouched)
+    fit = fit_curves(probability, intensity, dim)
+    se = fitted_standard_error(out)
+    if bool(np.isfinite(se).any()):
+        x = intensity if isinstance(intensity, xr.DataArray) else xr.DataArray(np.asarray(intensity), dims=dim)
+        x, p, se = xr.broadcast(x, probability, se)
+        errors = xr.apply_ufunc(lambda *a: np.array(fit_standard_errors(*a)), x, p, se,
+                                input_core_dims=[[dim]] * 3, output_core_dims=[["se"]], vectorize=True)
+        errors = errors.drop_vars([c for c in errors.coords if dim in errors[c].dims or c == dim], errors="ignore")
+        fit["fit_median_se"] = errors.isel(se=0, drop=True)
+        fit["beta_se"] = errors.isel(se=1, drop=True)
     left_out = _left_out(out, unvouched)
     count = left_out.sum(dim) if dim in left_out.dims else xr.zeros_like(fit["fit_flag"], dtype=np.int32)
     count = count.astype(np.int32).broadcast_like(fit["fit_flag"])
@@ -1513,6 +1678,7 @@ def add_fit(out, ds, intensity, dim):
     untrusted = too_few & (fit["fit_n_unvouched"] > 0)
     fit["fit_flag"] = xr.where(untrusted, np.int8(FitFlag.untrusted), fit["fit_flag"]).astype(np.int8)
     out = out.drop_vars([n for n in fit.data_vars if n in out]).merge(fit, compat="override")
+    out = out.drop_vars(["fit_im_min", "fit_im_max"], errors="ignore").merge(vouched_range(out, ds, intensity, dim))
     return out.assign_attrs(fit_source="best_p_exceed where [accuracy] vouches for it, else p_exceed"
                             if "best_p_exceed" in out else "p_exceed")
 
@@ -1522,6 +1688,9 @@ def _finish(out, dim, threshold, relative_to, method):
     out = finish(out, table=schema.FRAGILITY)
     if "fit_median" in out:
         out["fit_median"].attrs.update(intensity=dim, units=grid_units_of(out, dim))
+        for name in ("fit_im_min", "fit_im_max", "fit_median_se"):
+            if name in out:
+                out[name].attrs.update(units=grid_units_of(out, dim))
     out.attrs.update(threshold=float(threshold), relative_to=str(relative_to), method=method,
                      title="Probability that |theta| exceeds a rotation during the record")
     return out

@@ -655,13 +655,12 @@ def stripe_dataset(cloud, block, foundation, rows, names):
         flag = FitFlag.never_exceeded if not exceed.any() else FitFlag.always_exceeded if exceed[used].all() \
             else FitFlag.no_fit
         warnings.append(f"no fragility fit: {exc}")
-    if flag == FitFlag.separated:
-        warnings.append("the stripes separate exceeding from not exceeding perfectly: beta is not determined "
-                        "(fit_flag separated, no fit exported); add levels near the median")
-    elif flag != FitFlag.ok and "flag" in fit:
-        warnings.append(f"no fragility fit: {FitFlag(flag).meaning} (fit_flag {FitFlag(flag).name})")
-    if flag != FitFlag.ok:
-        fit = {key: math.nan for key in ("median", "beta", "median_se", "beta_se")}
+    degenerate = ""
+    if flag == FitFlag.ok and not np.isfinite(fit["beta_se"]):
+        degenerate = ("the stripes separate exceeding from not exceeding perfectly: beta is not identified "
+                      "(standard errors undefined)")
+        warnings.append("the standard errors are not defined (the stripes separate exceeding from not exceeding "
+                        "perfectly): add levels near the median")
     ds["fit_median"] = ((), fit["median"])
     ds["beta"] = ((), fit["beta"])
     ds["fit_median_se"] = ((), fit["median_se"])
@@ -677,7 +676,8 @@ def stripe_dataset(cloud, block, foundation, rows, names):
                     study=cloud.study.source, intensity_measure=cloud.im, intensity_variable="stripe_" + name,
                     intensity_dim="level", threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, binomial maximum likelihood over the stripes (Baker 2015), standard errors "
-                        "from the observed information", warnings="; ".join(warnings) or "none")
+                        "from the observed information", warnings="; ".join(warnings) or "none",
+                    **({"fit_degenerate": degenerate} if degenerate else {}))
     return ds, warnings
 
 
@@ -761,11 +761,12 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     except ValueError as exc:
         median, beta = math.nan, math.nan
         warnings.append(f"no fragility fit: {exc} the threshold")
-    separated = False
+    degenerate = ""
     if np.isfinite(beta) and beta > 0:
         x_in, x_out = im_values[used][exceed[used]], im_values[used][~exceed[used]]
         if x_in.min() > x_out.max():
-            separated = True
+            degenerate = (f"the records are perfectly separated by {name}: beta is not identified (the likelihood "
+                          "grows as beta -> 0)")
             warnings.append(f"the records are perfectly separated by {name} (every exceeding record has a larger "
                             "IM than every other): beta is not identified (the likelihood grows as beta -> 0; "
                             "fit_flag separated, no fit exported); add records near the median")
@@ -796,7 +797,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
                     intensity_measure=cloud.im, intensity_variable=name, intensity_dim="record",
                     threshold=cloud.threshold, relative_to=cloud.relative_to,
                     fit="lognormal, maximum likelihood on the exceed / not-exceed outcome of each record",
-                    warnings="; ".join(warnings) or "none")
+                    warnings="; ".join(warnings) or "none", **({"fit_degenerate": degenerate} if degenerate else {}))
     return ds, warnings
 
 

@@ -28,6 +28,7 @@ intensity ``IA`` in m/s).
 from __future__ import annotations
 
 import csv
+import json
 import math
 from xml.sax.saxutils import quoteattr
 
@@ -40,8 +41,9 @@ from screening.core.atomicfile import atomic_open
 from screening.core.status import FitFlag
 
 __all__ = ["IMS", "default_dim", "fragility_over_im", "LIMIT_STATES", "THRESHOLD_FREE", "NoExport",
-           "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text", "write_csv",
-           "write_pelicun_csv", "nrml_parameters", "write_nrml"]
+           "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text",
+           "case_values", "export_problem", "fragility_intensity", "im_key", "curves_by_object", "write_csv", "write_pelicun_csv", "write_pelicun_json",
+           "nrml_limit_state", "nrml_parameters", "write_nrml"]
 
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
 IMS = {
@@ -190,7 +192,9 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
         warnings += [f"overturning: {note}"] if note else []
         frag = xr.Dataset({"p_exceed": p.rename("p_exceed").assign_attrs(
                                long_name="probability that the block overturns during the record", units="1"),
-                           "threshold_rad": model_quantity(ds, "slenderness")},
+                           "threshold_rad": model_quantity(ds, "slenderness"),
+                           **({"p_exceed_se": ds["p_overturn_se"].where(np.isfinite(p))}
+                              if "p_overturn_se" in ds.variables and "p_overturn" in ds.variables else {})},
                           attrs={"threshold": 1.0, "relative_to": "slenderness", "method": method})
     else:
         frag = fragility_dataset(ds, threshold, relative_to, method, dim)
@@ -198,6 +202,8 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     values = values.drop_vars([c for c in values.coords if c not in values.dims]).assign_attrs(units=units)
     out = add_fit(frag.assign({name: values}), ds, values, dim)
     out["fit_median"].attrs.update(units=units, intensity=name)
+    if "fit_median_se" in out:
+        out["fit_median_se"].attrs.update(units=units)
     if period is not None and im in ("sa", "avgsa"):
         out[name].attrs.update(period=float(period), damping_ratio=0.05)
     out.attrs.update(intensity_measure=im, intensity_variable=name, intensity_dim=dim, limit_state=limit_state,
@@ -340,8 +346,10 @@ def curve_table(frag):
     list of dict
         ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
         several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.core.status.FitFlag`),
-        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve left out of the fit: nothing
-        vouches for them) and the rotation ``threshold_rad`` [rad] of the curve
+        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value
+        is untrusted without a best estimate), ``degenerate`` (why a fit is degenerate, the dataset's
+        ``fit_degenerate``, else ``""``), ``im_min``, ``im_max`` (the vouched range,
+        :func:`~screening.analysis.fragility.vouched_range`; NaN where the dataset has none) and the rotation ``threshold_rad`` [rad] of the curve
         (its range ``"lo..hi"`` if it varies along the curve).
 
     References
@@ -367,6 +375,8 @@ def curve_table(frag):
     flag = frag["fit_flag"]
     unvouched = frag["fit_n_unvouched"] if "fit_n_unvouched" in frag else xr.zeros_like(flag, dtype=np.int32)
     th = frag["threshold_rad"]
+    lo = frag["fit_im_min"] if "fit_im_min" in frag else None
+    hi = frag["fit_im_max"] if "fit_im_max" in frag else None
     dims = list(median.dims)
     rows = []
     for index in np.ndindex(*median.shape) if dims else [()]:
@@ -377,6 +387,9 @@ def curve_table(frag):
         t = t[np.isfinite(t)]
         rows.append({"labels": labels, "median": float(median[sel]), "beta": float(beta[sel]), "flag": code,
                      "reason": "" if code == FitFlag.ok else code.meaning, "n_unvouched": int(unvouched[sel]),
+                     "degenerate": str(frag.attrs.get("fit_degenerate", "")) if code == FitFlag.ok else "",
+                     "im_min": float(lo[sel]) if lo is not None else math.nan,
+                     "im_max": float(hi[sel]) if hi is not None else math.nan,
                      "threshold_rad": (f"{t[0]:.8g}" if t.size == 1 else f"{t.min():.8g}..{t.max():.8g}"
                                        if t.size else "")})
     return rows
@@ -435,12 +448,238 @@ def _intensity(frag):
     return name, frag["fit_median"].attrs.get("units", ""), period
 
 
+def case_values(frag):
+    """The name and values of each swept block/bed a curve belongs to, for the exports.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+
+    Returns
+    -------
+    shared : dict
+        ``{name: (value, units)}`` of the scalar block/bed/excitation coordinates every curve shares.
+    per_case : dict
+        ``{case index: {"name": case name, "values": {name: (value, units)}}}`` from the ``case_name``
+        coordinate and the coordinates over ``case`` (empty without a ``case`` dimension).
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> frag = xr.Dataset(coords={"case": [0, 1], "case_name": ("case", ["bust", "vase"]),
+    ...                           "m": ("case", [8.0, 20.0], {"units": "kg"}), "h": ((), 0.2, {"units": "m"})})
+    >>> case_values(frag)
+    ({'h': (0.2, 'm')}, {0: {'name': 'bust', 'values': {'m': (8.0, 'kg')}}, 1: {'name': 'vase', 'values': {'m': (20.0, 'kg')}}})
+    """
+    shared = {n: (float(frag[n]), frag[n].attrs.get("units", "")) for n in frag.coords
+              if frag[n].ndim == 0 and frag[n].dtype.kind in "fi" and n != "threshold"}
+    per_case = {}
+    if "case" in frag.dims:
+        names = frag["case_name"].values if "case_name" in frag.coords else frag["case"].values
+        cols = [n for n, c in frag.coords.items() if c.dims == ("case",) and n not in ("case", "case_name")
+                and c.dtype.kind in "fi"]
+        for i, case in enumerate(frag["case"].values.tolist()):
+            per_case[case] = {"name": str(names[i]),
+                              "values": {n: (float(frag[n].values[i]), frag[n].attrs.get("units", "")) for n in cols}}
+    return shared, per_case
+
+
+def _values_text(values):
+    return ", ".join(f"{n} = {v:g}{' ' + u if u else ''}" for n, (v, u) in values.items())
+
+
+def export_problem(row):
+    """Why a curve of :func:`curve_table` is not exported as a fragility others may use, or ``""``.
+
+    Not exported: no fit (its ``fit_flag``, ``untrusted`` among them: too few vouched points once the
+    unvouched ones are left out), a fit vouched at a single intensity, or whose records or stripes separate exceeding
+    from not exceeding perfectly (the dataset's ``fit_degenerate``: ``degenerate``).
+
+    Parameters
+    ----------
+    row : dict
+        A row of :func:`curve_table`.
+
+    Returns
+    -------
+    str
+        The reason (``""``: exported).
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md, section "The files".
+
+    Examples
+    --------
+    >>> from screening.core.status import FitFlag
+    >>> export_problem({"flag": FitFlag.untrusted, "n_unvouched": 2, "im_min": 1.0, "im_max": 2.0})[:20]
+    'no fit (untrusted: t'
+    >>> export_problem({"flag": FitFlag.ok, "n_unvouched": 0, "im_min": 1.0, "im_max": 2.0})
+    ''
+    """
+    if row["flag"] != FitFlag.ok:
+        return f"no fit ({row['flag'].name}: {row['flag'].meaning})"
+    if row.get("degenerate"):
+        return f"degenerate: {row['degenerate']}"
+    lo, hi = row.get("im_min", math.nan), row.get("im_max", math.nan)
+    if math.isfinite(lo) and math.isfinite(hi) and not lo < hi:
+        return "degenerate: vouched at a single intensity"
+    return ""
+
+
+def _curve_ids(frag, rows, pelicun=False):
+    """``{labels without limit_state: id}`` of every swept block/bed, in the order of ``rows``.
+
+    ``screening_case=<name>_<dim>=<value>...``; with ``pelicun`` no ``-`` (pelicun splits ids on it):
+    a sign is written ``m`` (``-6e+05`` -> ``m6e05``) and a ``-`` in a case name ``_``; repeated ids get
+    ``_2``, ``_3``...
+    """
+    _, per_case = case_values(frag)
+    ids, seen = {}, set()
+    for r in rows:
+        labels = tuple((d, v) for d, v in r["labels"].items() if d != "limit_state")
+        if labels in ids:
+            continue
+        parts = []
+        for d, v in labels:
+            if d == "case" and v in per_case:
+                v = per_case[v]["name"]
+            text = f"{v:g}" if isinstance(v, float) else str(v)
+            if pelicun:
+                text = text.replace("e+", "e").replace("e-", "em").replace("-", "m" if isinstance(v, float) else "_")
+            parts.append(f"_{d}={text}")
+        cid = "screening" + "".join(parts)
+        if pelicun:
+            cid = cid.replace("-", "_")
+        base, n = cid, 1
+        while cid in seen:
+            n += 1
+            cid = f"{base}_{n}"
+        seen.add(cid)
+        ids[labels] = cid
+    return ids
+
+
+def _by_curve(frag, rows, ids, states):
+    out = {}
+    for r in rows:
+        labels = tuple((d, v) for d, v in r["labels"].items() if d != "limit_state")
+        out.setdefault(ids[labels], {"labels": dict(labels)})[str(r["labels"].get("limit_state", states[0]))] = r
+    return out
+
+
+def _states(frag):
+    return [str(v) for v in frag["limit_state"].values] if "limit_state" in frag["fit_median"].dims else [
+        _single_state(frag)]
+
+
+def fragility_intensity(frag):
+    """The intensity a fragility dataset is fitted over: its variable's name, units and oscillator period.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset (``fit_median`` with the attributes ``intensity`` and ``units``).
+
+    Returns
+    -------
+    name : str
+        The intensity variable (``pga_median``, ``pga``, ``stripe_pga``...).
+    units : str
+        Its units (``m s-2``).
+    period : float or str
+        The oscillator period [s] of an Sa intensity, ``""`` otherwise.
+
+    References
+    ----------
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+       Earthquake Spectra 31(1) (2015) 579-599.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> fragility_intensity(xr.Dataset({"fit_median": ((), 1.0, {"intensity": "pga", "units": "m s-2"})}))
+    ('pga', 'm s-2', '')
+    """
+    return _intensity(frag)
+
+
+def im_key(name):
+    """The ``--im`` key (:data:`IMS`) of an intensity variable, or ``None``.
+
+    Parameters
+    ----------
+    name : str
+        ``pga_median`` (a point's input), ``pga`` (a record's), ``stripe_pga`` (a multiple-stripe level)...
+
+    Returns
+    -------
+    str or None
+        ``pga``, ``sa``, ... (``None`` for another name).
+
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Intensity measure types", https://docs.openquake.org
+
+    Examples
+    --------
+    >>> im_key("stripe_pga"), im_key("sa_median"), im_key("S0"), im_key("theta")
+    ('pga', 'sa', 's0', None)
+    """
+    return _im_key(name)
+
+
+def curves_by_object(frag, pelicun=False):
+    """The curves of a fragility dataset grouped by object (a swept block/bed or case), as the exports name them.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset.
+    pelicun : bool
+        Ids as pelicun reads them (no ``-``) instead of the NRML ids.
+
+    Returns
+    -------
+    states : list of str
+        The limit states.
+    objects : dict
+        ``{id: {"labels": {dim: value}, <limit state>: row of curve_table, ...}}`` in the order of
+        :func:`curve_table`.
+
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> frag = xr.Dataset({"fit_median": ("case", [1.0, 2.0]), "beta": ("case", [0.3, 0.4]),
+    ...                    "fit_flag": ("case", np.int8([0, 0])), "threshold_rad": 0.01},
+    ...                   coords={"case": [0, 1], "case_name": ("case", ["bust-wood", "vase"])})
+    >>> states, objects = curves_by_object(frag, pelicun=True)
+    >>> states, list(objects)
+    (['theta_exceeds_threshold'], ['screening_case=bust_wood', 'screening_case=vase'])
+    """
+    rows = curve_table(frag)
+    states = _states(frag)
+    return states, _by_curve(frag, rows, _curve_ids(frag, rows, pelicun=pelicun), states)
+
+
 def write_csv(frag, path):
     """Write the fits as CSV, one row per curve, fitted or not.
 
-    Columns: the other dimensions, ``intensity_measure``, ``units``, ``median``, ``beta`` (empty without
-    a fit), ``fit_flag`` and the ``reason`` there is no fit, ``n_unvouched`` (points left out of
-    the fit: nothing vouches for them), ``threshold_rad`` and ``period_s``.
+    Columns: the other dimensions (with ``case``: ``case_name`` and the values each case sets),
+    ``intensity_measure``, ``units``, ``median``, ``beta`` (empty without a fit), ``fit_flag`` and the
+    ``reason`` there is no fit, ``n_unvouched`` (points left out of the fit: nothing vouches for their values
+    without a best estimate), ``threshold_rad``, ``period_s`` and the vouched range ``im_min``,
+    ``im_max`` (:func:`~screening.analysis.fragility.vouched_range`).
 
     Parameters
     ----------
@@ -456,10 +695,7 @@ def write_csv(frag, path):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
+    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
        Earthquake Spectra 31(1) (2015) 579-599.
 
     Examples
@@ -472,31 +708,53 @@ def write_csv(frag, path):
     >>> import tempfile, pathlib
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     print(write_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text().strip())
-    intensity_measure,units,median,beta,fit_flag,reason,n_unvouched,threshold_rad,period_s
-    pga_median,m s-2,1.2380663,0.117537,ok,,0,0.01,
+    intensity_measure,units,median,beta,fit_flag,reason,n_unvouched,threshold_rad,period_s,im_min,im_max
+    pga_median,m s-2,1.2380663,0.117537,ok,,0,0.01,,0.9244422,1.8488844
     """
     name, units, period = _intensity(frag)
     dims = list(frag["fit_median"].dims)
+    _, per_case = case_values(frag)
+    case_cols = [] if not per_case else ["case_name"] + list(next(iter(per_case.values()))["values"])
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
-        w.writerow(dims + ["intensity_measure", "units", "median", "beta", "fit_flag", "reason", "n_unvouched",
-                           "threshold_rad", "period_s"])
+        w.writerow(dims + case_cols + ["intensity_measure", "units", "median", "beta", "fit_flag", "reason",
+                                       "n_unvouched", "threshold_rad", "period_s", "im_min", "im_max"])
         for r in curve_table(frag):
             ok = r["flag"] == FitFlag.ok
-            w.writerow([r["labels"][d] for d in dims]
+            case = per_case.get(r["labels"].get("case"))
+            extra = [] if not case_cols else [case["name"]] + [f"{v:.8g}" for v, _ in case["values"].values()]
+            w.writerow([r["labels"][d] for d in dims] + extra
                        + [name, units, f"{r['median']:.8g}" if ok else "", f"{r['beta']:.6g}" if ok else "",
-                          r["flag"].name, r["reason"], r["n_unvouched"], r["threshold_rad"], period])
+                          r["flag"].name, r["reason"], r["n_unvouched"], r["threshold_rad"], period,
+                          f"{r['im_min']:.8g}" if math.isfinite(r["im_min"]) else "",
+                          f"{r['im_max']:.8g}" if math.isfinite(r["im_max"]) else ""])
     return path
 
 
-def write_pelicun_csv(frag, path):
-    """Write the fits in pelicun's fragility-database layout.
+#: pelicun's names of the acceleration and velocity units (``settings/default_units.json``).
+PELICUN_UNITS = {"m s-2": "mps2", "m s-1": "mps", "g": "g"}
 
-    One row per component (``ID``: the other dimensions' values), ``Demand-Type`` the IM in pelicun's
-    words (``Peak Ground Acceleration`` in g, ``Spectral Acceleration`` in g, else the IM's own name and
-    units), and for each limit state ``LS<i>-Family`` = ``lognormal``, ``LS<i>-Theta_0`` = median,
-    ``LS<i>-Theta_1`` = beta.  A curve without a fit is a row with empty parameters and its reason in
-    ``Comment``.
+
+def _pelicun_demand(frag):
+    name, units, period = _intensity(frag)
+    key = _im_key(name)
+    factor, unit_out = (IMS[key][3], "g") if key in ("pga", "sa") else (1.0, PELICUN_UNITS.get(units, units))
+    demand = {"pga": "Peak Ground Acceleration", "sa": f"Spectral Acceleration ({period:g} s)" if period else
+              "Spectral Acceleration"}.get(key, name)
+    return demand, unit_out, factor
+
+
+def write_pelicun_csv(frag, path):
+    """Write the fits as a pelicun damage-model collection's CSV.
+
+    pelicun's fragility-database columns: ``ID`` (no ``-``: pelicun splits ids on it; the case's name
+    and the other dimensions' values), ``Incomplete``, ``Demand-Type`` (``Peak Ground Acceleration``,
+    ``Spectral Acceleration (T s)`` in g, else the IM's own name), ``Demand-Unit``, ``Demand-Offset``
+    (0: the ground), ``Demand-Directional`` (1: the block rocks in one plane), and per limit state
+    ``LS<i>-Family`` = ``lognormal``, ``LS<i>-Theta_0`` = median, ``LS<i>-Theta_1`` = beta.  A block/bed
+    with a limit state that is not exported (:func:`export_problem`) has ``Incomplete`` = 1 and empty
+    parameters there; the reasons, the case's name and values are in the collection's JSON
+    (:func:`write_pelicun_json`).
 
     Parameters
     ----------
@@ -512,12 +770,7 @@ def write_pelicun_csv(frag, path):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
-    .. [3] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
+    .. [1] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
        loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
 
     Examples
@@ -531,41 +784,107 @@ def write_pelicun_csv(frag, path):
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     text = write_pelicun_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text()
     >>> text.splitlines()[1]
-    'screening,Peak Ground Acceleration,g,0,,lognormal,0.12624763,0.117537'
+    'screening,0,Peak Ground Acceleration,g,0,1,lognormal,0.12624763,0.117537'
     """
-    name, units, period = _intensity(frag)
-    key = _im_key(name)
-    factor, unit_out = (IMS[key][3], "g") if key in ("pga", "sa") else (1.0, units)
-    demand = {"pga": "Peak Ground Acceleration", "sa": f"Spectral Acceleration ({period:g} s)" if period else
-              "Spectral Acceleration"}.get(key, name)
+    demand, unit_out, factor = _pelicun_demand(frag)
     rows = curve_table(frag)
-    states = [str(v) for v in frag["limit_state"].values] if "limit_state" in frag["fit_median"].dims else [
-        _single_state(frag)]
-    components = {}
-    for r in rows:
-        labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
-        state = str(r["labels"].get("limit_state", states[0]))
-        components.setdefault(_taxonomy(labels), {})[state] = r
-    header = ["ID", "Demand-Type", "Demand-Unit", "Incomplete", "Comment"]
+    states = _states(frag)
+    ids = _curve_ids(frag, rows, pelicun=True)
+    header = ["ID", "Incomplete", "Demand-Type", "Demand-Unit", "Demand-Offset", "Demand-Directional"]
     for i in range(1, len(states) + 1):
         header += [f"LS{i}-Family", f"LS{i}-Theta_0", f"LS{i}-Theta_1"]
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(header)
-        for cid, by_state in components.items():
-            row, notes = [cid, demand, unit_out], []
-            cells = []
+        for cid, by_state in _by_curve(frag, rows, ids, states).items():
+            cells, incomplete = [], 0
             for state in states:
                 r = by_state[state]
-                if r["flag"] == FitFlag.ok:
-                    cells += ["lognormal", f"{r['median'] * factor:.8g}", f"{r['beta']:.6g}"]
-                else:
+                if export_problem(r):
                     cells += ["", "", ""]
-                    notes.append(f"{state}: no fit ({r['flag'].name})")
-                if r["n_unvouched"]:
-                    notes.append(f"{state}: {r['n_unvouched']} point(s) left out of the fit (nothing vouches "
-                                 "for them)")
-            w.writerow(row + [int(bool(notes) and any("no fit" in n for n in notes)), "; ".join(notes)] + cells)
+                    incomplete = 1
+                else:
+                    cells += ["lognormal", f"{r['median'] * factor:.8g}", f"{r['beta']:.6g}"]
+            w.writerow([cid, incomplete, demand, unit_out, 0, 1] + cells)
+    return path
+
+
+def write_pelicun_json(frag, path):
+    """Write the JSON metadata of the pelicun collection of :func:`write_pelicun_csv`.
+
+    ``_GeneralInformation`` (name, description, the limit states and the values every block/bed
+    shares) and per ``ID``: ``Description`` (the case's name and values), ``Comments`` (why a limit
+    state is not exported, or "vouched over IM lo..hi"), ``SuggestedComponentBlockSize`` ``1 EA``,
+    ``RoundUpToIntegerQuantity``, ``LimitStates`` (``LS<i>`` -> ``DS<i>`` with the limit state's name
+    and rotation), and the values (``Case``, ``Values``) as numbers.
+
+    Parameters
+    ----------
+    frag : xarray.Dataset
+        A fragility dataset over an IM.
+    path : str or os.PathLike
+        The JSON file (written atomically).
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``.
+
+    References
+    ----------
+    .. [1] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
+       loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
+
+    Examples
+    --------
+    >>> import json, tempfile, pathlib
+    >>> import numpy as np
+    >>> from screening import Block, Foundation, WhiteNoise, linearize
+    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                condensation="paper")
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     meta = json.loads(write_pelicun_json(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.json").read_text())
+    >>> sorted(meta), meta["screening"]["LimitStates"]["LS1"]["DS1"]["Description"]
+    (['_GeneralInformation', 'screening'], 'theta_exceeds_threshold: max |theta| > 0.01 rad')
+    """
+    from screening import __version__
+
+    name, units, _ = _intensity(frag)
+    demand, unit_out, factor = _pelicun_demand(frag)
+    rows = curve_table(frag)
+    states = _states(frag)
+    shared, per_case = case_values(frag)
+    info = {"_GeneralInformation": {
+        "ShortName": "screening rocking-block fragilities",
+        "Description": f"P(max |theta| > threshold) of rocking blocks on flexible beds, lognormal fits over "
+                       f"{name} ({demand}, {unit_out}) by screening {__version__}",
+        "Version": __version__, "LimitStates": states, "SharedValues": _values_text(shared)}}
+    for cid, by_state in _by_curve(frag, rows, _curve_ids(frag, rows, pelicun=True), states).items():
+        labels = by_state["labels"]
+        case = per_case.get(labels.get("case"))
+        others = {d: v for d, v in labels.items() if d != "case"}
+        text = (f"case {case['name']!r}: {_values_text(case['values'])}" if case else "") + \
+            ("; " if case and others else "") + _label_text(others)
+        comments = []
+        for s in states:
+            r = by_state[s]
+            problem = export_problem(r)
+            comments.append(f"{s}: {problem}" if problem else
+                            f"{s}: vouched over {name} {r['im_min'] * factor:.4g}..{r['im_max'] * factor:.4g} "
+                            f"{unit_out}" if math.isfinite(r["im_min"]) else f"{s}: fitted")
+        info[cid] = {"Description": text or "the one block and bed of the study",
+                     "Comments": "; ".join(comments),
+                     "SuggestedComponentBlockSize": "1 EA", "RoundUpToIntegerQuantity": "True",
+                     "Case": case["name"] if case else None,
+                     "Values": {**{n: v for n, (v, _) in (case["values"] if case else {}).items()},
+                                **{d: v for d, v in others.items()}},
+                     "LimitStates": {f"LS{i}": {f"DS{i}": {"Description": f"{s}: max |theta| > "
+                                                            f"{by_state[s]['threshold_rad']} rad"}}
+                                     for i, s in enumerate(states, 1)}}
+    with atomic_open(path, "w", encoding="utf-8") as fh:
+        json.dump(info, fh, indent=2)
+        fh.write("\n")
     return path
 
 
@@ -577,9 +896,29 @@ def _im_key(name):
                  or (k == "arias" and base == "arias_intensity")), None)
 
 
-def _taxonomy(labels):
-    """The taxonomy id of a curve: ``screening`` and the values of the swept dimensions that name it."""
-    return "screening" + "".join(f"_{d}={v:g}" if isinstance(v, float) else f"_{d}={v}" for d, v in labels.items())
+def nrml_limit_state(name):
+    """A limit state's name as OpenQuake accepts it (letters, digits, ``_``, ``-``, ``:``).
+
+    Parameters
+    ----------
+    name : str
+        A limit-state name (:func:`limit_state_name`).
+
+    Returns
+    -------
+    str
+        ``.`` written ``p``, ``+`` dropped.
+
+    References
+    ----------
+    .. [1] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5), https://docs.openquake.org
+
+    Examples
+    --------
+    >>> nrml_limit_state("theta_0.02_slenderness")
+    'theta_0p02_slenderness'
+    """
+    return name.replace(".", "p").replace("+", "")
 
 
 def nrml_parameters(median, beta):
@@ -628,12 +967,14 @@ def _comment(text):
 def write_nrml(frag, path, model_id="screening_rocking", description="rocking blocks on flexible beds"):
     """Write the fits as an OpenQuake NRML 0.5 fragility model.
 
-    One continuous ``logncdf`` function per swept block/bed (its taxonomy id names the values of the
-    other dimensions), with one ``params`` per limit state (the ``limit_state`` dimension where the
-    dataset has several, else ``theta_exceeds_threshold``).  A taxonomy with a limit state that has no
-    fit is left out and named in a comment with the reason; a fit through untrusted points without a
-    best estimate is named in a comment.  Raises :class:`NoExport` (a ``ValueError``) for an IM
-    OpenQuake does not know.
+    One continuous ``logncdf`` function per swept block/bed (its taxonomy id names the case and the
+    values of the other dimensions; a comment gives the case's values), with one ``params`` per limit
+    state (the ``limit_state`` dimension where the dataset has several, else
+    ``theta_exceeds_threshold``; names by :func:`nrml_limit_state`).  ``minIML`` / ``maxIML`` are the
+    range the function was vouched over (:func:`~screening.analysis.fragility.vouched_range`, common to its limit states).  A
+    block/bed with a limit state that is not exported (:func:`export_problem`: no fit, untrusted,
+    degenerate) is left out and named in a comment with the reason.  Raises :class:`NoExport` (a
+    ``ValueError``) for an IM OpenQuake does not know.
 
     Parameters
     ----------
@@ -687,38 +1028,42 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
         imt = f"{imt}({float(period):g})"
     factor = IMS[key][3]
     values = frag[name].values[np.isfinite(frag[name].values)] * factor
-    lo, hi = float(values.min()), float(values.max())
-    several = "limit_state" in frag["fit_median"].dims
-    states = [str(v) for v in frag["limit_state"].values] if several else [_single_state(frag)]
-    by_taxonomy = {}
-    for r in curve_table(frag):
-        labels = {d: v for d, v in r["labels"].items() if d != "limit_state"}
-        by_taxonomy.setdefault(_taxonomy(labels), {})[str(r["labels"].get("limit_state", states[0]))] = r
+    lo_all, hi_all = float(values.min()), float(values.max())
+    states = _states(frag)
+    names = [nrml_limit_state(s) for s in states]
+    rows = curve_table(frag)
+    shared, per_case = case_values(frag)
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              '<nrml xmlns="http://openquake.org/xmlns/nrml/0.5">',
              f'  <fragilityModel id={quoteattr(model_id)} assetCategory="buildings" lossCategory="contents">',
              f"    <description>{description}: P(max |theta| &gt; threshold) fitted by screening over "
              f"{name}</description>",
-             f"    <limitStates>{' '.join(states)}</limitStates>"]
-    fixed = {n: float(frag[n]) for n in frag.coords if frag[n].ndim == 0 and frag[n].dtype.kind in "fi"
-             and n not in ("threshold",)}
-    if fixed:
-        lines.append(_comment("every function: the block and bed of " + ", ".join(
-            f"{n} = {v:g}{' ' + frag[n].attrs['units'] if frag[n].attrs.get('units') else ''}"
-            for n, v in fixed.items()) + "; the function id names the swept values"))
-    for fid, by_state in by_taxonomy.items():
-        missing = [f"{s}: {by_state[s]['flag'].name} ({by_state[s]['reason']})" for s in states
-                   if by_state[s]["flag"] != FitFlag.ok]
+             f"    <limitStates>{' '.join(names)}</limitStates>"]
+    if names != states:
+        lines.append(_comment("limit states: " + ", ".join(f"{n} = {s}" for n, s in zip(names, states))))
+    if shared:
+        lines.append(_comment("every function: the block and bed of " + _values_text(shared)
+                              + "; the function id names the swept values"))
+    lines.append(_comment("minIML..maxIML: the range each function was vouched over (OpenQuake holds the "
+                          "curve constant beyond it)"))
+    for fid, by_state in _by_curve(frag, rows, _curve_ids(frag, rows), states).items():
+        case = per_case.get(by_state["labels"].get("case"))
+        if case:
+            lines.append(_comment(f"{fid}: case {case['name']!r}: {_values_text(case['values'])}"))
+        missing = [f"{s}: {export_problem(by_state[s])}" for s in states if export_problem(by_state[s])]
+        lo = max((by_state[s]["im_min"] for s in states), default=math.nan) * factor
+        hi = min((by_state[s]["im_max"] for s in states), default=math.nan) * factor
+        lo, hi = (lo, hi) if math.isfinite(lo) and math.isfinite(hi) else (lo_all, hi_all)
+        if not missing and not lo < hi:
+            missing = ["degenerate: the limit states have no common vouched range"]
         params = {}
-        for s in states:
-            if by_state[s]["flag"] == FitFlag.ok:
-                try:
-                    params[s] = nrml_parameters(by_state[s]["median"] * factor, by_state[s]["beta"])
-                except OverflowError:
-                    params[s] = (math.inf, math.inf)
-                if not all(math.isfinite(v) for v in params[s]):
-                    missing.append(f"{s}: beta {by_state[s]['beta']:.3g} gives a logncdf mean or stddev beyond "
-                                   "a float (not a fragility OpenQuake can use)")
+        for s in ([] if missing else states):
+            try:
+                params[s] = nrml_parameters(by_state[s]["median"] * factor, by_state[s]["beta"])
+            except OverflowError:
+                params[s] = (math.inf, math.inf)
+            if not all(math.isfinite(v) for v in params[s]):
+                missing.append(f"{s}: beta {by_state[s]['beta']:.3g} gives a logncdf mean or stddev beyond a float")
         if missing:
             lines.append(_comment(f"no fragility function for {fid}: " + "; ".join(missing)))
             continue
@@ -728,9 +1073,9 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
                                       "(nothing vouches for them)"))
         lines += [f'    <fragilityFunction id={quoteattr(fid)} format="continuous" shape="logncdf">',
                   f'      <imls imt="{imt}" minIML="{lo:.6g}" maxIML="{hi:.6g}"/>']
-        for s in states:
+        for s, n in zip(states, names):
             mean, std = params[s]
-            lines.append(f'      <params ls="{s}" mean="{mean:.8g}" stddev="{std:.8g}"/>')
+            lines.append(f'      <params ls="{n}" mean="{mean:.8g}" stddev="{std:.8g}"/>')
         lines.append("    </fragilityFunction>")
     lines += ["  </fragilityModel>", "</nrml>", ""]
     with atomic_open(path, "w", encoding="utf-8") as fh:

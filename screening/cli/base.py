@@ -496,7 +496,8 @@ def fit_files(frag, out):
     Returns
     -------
     list of tuple
-        ``(name, path, write)`` entries: ``<stem>.csv``, ``<stem>_pelicun.csv``, ``<stem>.xml``.
+        ``(name, path, write)`` entries: ``<stem>.csv``, ``<stem>_pelicun.csv``, ``<stem>_pelicun.json``,
+        ``<stem>.xml``.
 
     References
     ----------
@@ -512,13 +513,14 @@ def fit_files(frag, out):
     >>> import xarray as xr
     >>> from pathlib import Path
     >>> [(name, path.name) for name, path, _ in fit_files(xr.Dataset(), Path("out/frag_pga.nc"))]
-    [('CSV', 'frag_pga.csv'), ('pelicun CSV', 'frag_pga_pelicun.csv'), ('NRML', 'frag_pga.xml')]
+    [('CSV', 'frag_pga.csv'), ('pelicun CSV', 'frag_pga_pelicun.csv'), ('pelicun JSON', 'frag_pga_pelicun.json'), ('NRML', 'frag_pga.xml')]
     """
-    from screening.applications.im_fragility import write_csv, write_nrml, write_pelicun_csv
+    from screening.applications.im_fragility import write_csv, write_nrml, write_pelicun_csv, write_pelicun_json
 
-    writers = (lambda path: write_csv(frag, path), lambda path: write_pelicun_csv(frag, path),
-               lambda path: write_nrml(frag, path))
-    return [(name, path, write) for (name, path), write in zip(fragility_outputs(out)[-3:], writers)]
+    return [("CSV", out.with_suffix(".csv"), lambda path: write_csv(frag, path)),
+            ("pelicun CSV", out.with_name(f"{out.stem}_pelicun.csv"), lambda path: write_pelicun_csv(frag, path)),
+            ("pelicun JSON", out.with_name(f"{out.stem}_pelicun.json"), lambda path: write_pelicun_json(frag, path)),
+            ("NRML", out.with_suffix(".xml"), lambda path: write_nrml(frag, path))]
 
 
 def write_fragility_files(ds, out, figures, extras=(), warnings=()):

@@ -233,13 +233,15 @@ def _quiet_abandoned_reads():
 @click.option("--force", is_flag=True, help="recompute even if the result is up to date")
 @click.option("--no-plots", is_flag=True, help="do not write the PNG figures")
 @click.option("--quiet", is_flag=True, help="no progress bar")
-def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plots, quiet):
+@click.option("--inventory", type=click.Path(), help="a collection CSV (one row per object: name, m, b, h, depth, "
+                                                     "bed) turned into named cases (docs/study.md)")
+def cmd_run(study, out, workers, scheduler, batch_size, complevel, force, no_plots, quiet, inventory):
     from screening.io.errors import SweepError
     from screening.sweep.study import load_study
     from screening.sweep.run import run_sweep
     from screening.io.writer import check_output_path
 
-    study = load_study(study)
+    study = load_study(study, inventory=inventory)
     announce_compilation(quiet)
     if out:
         out = check_output_path(out, inputs=(study.source,))
@@ -535,4 +537,96 @@ def cmd_export(result, out, complevel, layout, selection):
 
 
 # registers simulate, fit-excitation, cloud on the group, after the commands above (their order in --help)
+@cli.command("risk", help="annual frequency and probability over a time span of overturning and of each limit "
+                           "state at a site: each object's fragility convolved with the site's hazard curve")
+@click.argument("result", type=click.Path())
+@click.option("--hazard", required=True, type=click.Path(),
+              help="the site's hazard curve: OpenQuake's hazard-curve CSV, or a table 'PGA [g], annual_rate [1/yr]'")
+@click.option("--years", type=POSITIVE_FLOAT, default=50.0, show_default=True,
+              help="time span [yr] of the probabilities (Poisson occurrences)")
+@click.option("--site", type=click.IntRange(min=0), help="the row of an OpenQuake hazard file with several sites")
+@click.option("--threshold", type=float, multiple=True,
+              help="with a sweep result: a limit state |theta| > X besides overturning (repeatable)")
+@click.option("--relative-to", type=Choice(["slenderness", "theta_ul"]), default=None,
+              help="--threshold is a fraction of this angle")
+@click.option("--im", type=Choice(["pga", "sa"]), default="pga", show_default=True,
+              help="with a sweep result: the intensity measure the fragilities are fitted over")
+@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
+@click.option("--out", type=click.Path(), help="the risk CSV (default RESULT_risk.csv; the figure beside it)")
+def cmd_risk(result, hazard, years, site, threshold, relative_to, im, period, out):
+    import xarray as xr
+
+    from screening.applications.im_fragility import IMS, fragility_over_im, stack_limit_states
+    from screening.applications.risk import HazardError, hazard_levels, read_hazard, risk_table, write_risk_csv
+    from screening.report.risk_figures import plot_risk
+    from screening.io.reader import ResultError, open_result
+    from screening.io.writer import check_output_path
+
+    result = Path(result)
+    try:
+        curve = read_hazard(hazard, site)
+    except HazardError as exc:
+        raise CommandError(str(exc)) from None
+    out = check_output_path(Path(out) if out else result.with_name(f"{result_stem(result)}_risk.csv"),
+                            inputs=(result, Path(hazard)))
+    try:
+        opened = open_result(result)
+    except ResultError as exc:          # not a sweep: a fragility file (of fragility or cloud) then
+        try:
+            opened = xr.open_dataset(result, engine="netcdf4")
+        except Exception:               # noqa: BLE001 - neither: the sweep reader's message stands
+            raise exc from None
+        if "fit_median" not in opened:
+            opened.close()
+            raise CommandError(f"{result}: neither a sweep result nor a fragility file (no fit_median)") from None
+    with opened as ds:
+        is_fragility = "fit_median" in ds
+        try:        # the hazard's IMT and units against the fragility's, before any work
+            if is_fragility:
+                name = ds["fit_median"].attrs.get("intensity", "")
+                period_of = ds[name].attrs.get("period", "") if name in ds else ""
+                hazard_levels(curve, name, ds["fit_median"].attrs.get("units", ""), period_of, hazard)
+            else:
+                if im == "sa" and period is None:
+                    raise CommandError("--im sa needs --period SECONDS")
+                hazard_levels(curve, IMS[im][0], IMS[im][1], period if im == "sa" else "", hazard)
+        except HazardError as exc:
+            raise CommandError(str(exc)) from None
+        if is_fragility:
+            frags = [ds.load()]
+        else:
+            ds = ds.load()
+            frags = []
+            if "p_overturn" in ds.variables:
+                frags.append(fragility_over_im(ds, 1.0, im, period=period, limit_state="overturn")[0])
+            if threshold:
+                stacked = stack_limit_states([fragility_over_im(ds, t, im, relative_to=relative_to, period=period)[0]
+                                              for t in sorted(threshold)], sorted(threshold), relative_to)
+                frags.append(stacked)
+            if not frags:
+                raise CommandError(f"{result}: no p_overturn stored (run the study with [accuracy] or [fragility]) "
+                                   "and no --threshold: nothing to convolve")
+    rows = []
+    for frag in frags:
+        rows += risk_table(frag, curve, years, hazard)
+    rows.sort(key=lambda row: (not np.isfinite(row["annual_rate"]), -np.nan_to_num(row["annual_rate"])))
+    for rank, row in enumerate(rows, start=1):
+        row["rank"] = rank if np.isfinite(row["annual_rate"]) else ""
+    rated = [r for r in rows if np.isfinite(r["annual_rate"])]
+    figure = out.with_suffix(".png")
+    write_file_set([("risk CSV", out, lambda path: write_risk_csv(rows, path))]
+                   + ([("risk figure", figure, lambda path: plot_risk(rows, path, f"{result.name} at {curve.source}",
+                                                                      years))] if rated else []))
+    say(f"risk of {len(rated)} of {len(rows)} object/limit-state pair(s) over {curve.source}" + (
+        f"; highest: {rated[0]['object']} {rated[0]['limit_state']} {rated[0]['annual_rate']:.3g} /yr, "
+        f"P({years:g} yr) = {rated[0]['probability']:.3g} ({100 * rated[0]['share_outside_vouched']:.0f} % of it "
+        "from outside the vouched range)" if rated else ""))
+    return EXIT_OK
+
+
 from screening.cli import records as cli_records  # noqa: E402,I001
+
+
+if __name__ == "__main__":               # python -m screening.cli: the commands live on the imported module
+    from screening.cli import main as _main
+    sys.exit(_main())

@@ -196,6 +196,11 @@ FRAGILITY = {
     "fit_flag": {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"},
     "fit_n_unvouched": _v("1", "points of the curve left out of the fit: nothing vouches for their value (untrusted "
                               "or stopped linearization without a best estimate or Monte Carlo)"),
+    "fit_im_min": {"long_name": "lowest vouched intensity of the curve (units of the intensity it is fitted over)"},
+    "fit_im_max": {"long_name": "highest vouched intensity of the curve (units of the intensity it is fitted over)"},
+    "fit_median_se": {"long_name": "standard error of fit_median from the standard errors of the fitted points "
+                                   "(units of the intensity it is fitted over)"},
+    "beta_se": _v("1", "standard error of beta from the standard errors of the fitted points"),
 }
 
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
@@ -389,8 +394,10 @@ CLOUD = {
     "level": _v("1", "intensity level of the stripe (units of the intensity measure)"),
     "n_exceed": _v("1", "records exceeding the threshold at the level"),
     "n_used": _v("1", "records integrated at the level (not diverged)"),
-    "fit_median_se": _v("1", "standard error of fit_median (observed information; units of the intensity)"),
-    "beta_se": _v("1", "standard error of beta (observed information)"),
+    "fit_median_se": _v("1", "standard error of fit_median (units of the intensity; stripes: observed information, "
+                             "sweeps: from the standard errors of the fitted points)"),
+    "beta_se": _v("1", "standard error of beta (stripes: observed information, sweeps: from the standard errors of "
+                       "the fitted points)"),
     **{f"stripe_{name}": _v("1", f"{name} of the stripe (records scaled to it)") for name in
        ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa")},
 }

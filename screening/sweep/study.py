@@ -116,10 +116,11 @@ from screening.solvers import mc_registry, model_choice
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
 from screening.sweep.config import (build_models, build_point_models, Case, case_block_and_foundation, case_cutoff,
-                                    check_choice, check_grid_size, check_keys, check_list, check_value, choice, integer,
-                                    model_tables, name_string, number_list, NUMERIC, numeric_table, parse_toml,
-                                    read_study_text, required, resolve_case, short_repr, StudyError, table, TABLE_KEYS,
-                                    time_table, title_and_description, type_name)
+                                    check_choice, check_grid_size, check_keys, check_list, check_value, choice,
+                                    integer, model_tables, name_string, number_list, NUMERIC, numeric_table,
+                                    parse_toml, read_study_text, required, resolve_case, short_repr, StudyError, table,
+                                    TABLE_KEYS, time_table, title_and_description, type_name)
+from screening.sweep.inventory import with_collection
 
 __all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study",
            "study_from_tables", "EXAMPLE_STUDY"]
@@ -146,7 +147,7 @@ S0 = 1e-4
 #: ``"auto"``: per point the cheapest one whose measured validity holds, :mod:`screening.solvers.model_choice`).
 MCS_MODELS = model_choice.choices()
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case", "output", "fragility", "run", "accuracy")
+             "case", "collection", "output", "fragility", "run", "accuracy")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
 HISTORY_CHOICES = ("all", "spots", "none")
 FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
@@ -295,7 +296,7 @@ class Study:
 
 
 # ----------------------------------------------------------------------------- entry points
-def load_study(path):
+def load_study(path, inventory=None):
     """Read and validate a study file; raises :class:`StudyError` (also for unreadable files).
 
     Every table and key is checked before any work (docs/study.md lists them): a bad value is one line
@@ -305,6 +306,8 @@ def load_study(path):
     ----------
     path : str or os.PathLike
         The TOML study file.
+    inventory : str or os.PathLike, optional
+        A collection CSV (``run --inventory``) instead of the study's ``[collection]``.
 
     Returns
     -------
@@ -335,10 +338,10 @@ def load_study(path):
     """
     text = read_study_text(path)
     path = os.fsdecode(path)
-    return parse_study(text, name=Path(path).stem, source=str(path))
+    return parse_study(text, name=Path(path).stem, source=str(path), inventory=inventory)
 
 
-def parse_study(text, name="study", source="<string>"):
+def parse_study(text, name="study", source="<string>", inventory=None):
     """Validate study ``text`` (TOML) and return a :class:`Study`.
 
     The same checks as :func:`load_study`, on text in memory.
@@ -351,6 +354,9 @@ def parse_study(text, name="study", source="<string>"):
         The study's name (the result's default title and file stem).
     source : str, optional
         Where the text came from, named in error messages.
+    inventory : str or os.PathLike, optional
+        A collection CSV (``--inventory``) turned into the study's cases
+        (:func:`screening.sweep.inventory.with_collection`).
 
     Returns
     -------
@@ -379,11 +385,11 @@ def parse_study(text, name="study", source="<string>"):
     ...     print(exc)
     <string>: block.b: must be a finite number >= 1e-06 and <= 1000 (got -1.0)
     """
-    return parse_toml(text, source, lambda raw: study_from_tables(raw, text, name, source))
+    return parse_toml(text, source, lambda raw: study_from_tables(raw, text, name, source, inventory))
 
 
 # ----------------------------------------------------------------------------- building
-def study_from_tables(raw, text, name, source):
+def study_from_tables(raw, text, name, source, inventory=None):
     """The :class:`Study` of a parsed study file: its tables validated and built.
 
     The builder behind :func:`parse_study`, for a reader that parses the TOML itself (the record study
@@ -399,6 +405,8 @@ def study_from_tables(raw, text, name, source):
         The study's name (the result's default title and file stem).
     source : str
         Where the text came from, named in error messages.
+    inventory : str or os.PathLike, optional
+        A collection CSV instead of the study's ``[collection]``; its text joins the hash.
 
     Returns
     -------
@@ -431,6 +439,7 @@ def study_from_tables(raw, text, name, source):
     colour: unknown key (allowed
     """
     check_keys(raw, _TOP_KEYS, "")
+    raw, collection = with_collection(raw, source, inventory)       # its text is part of the study's hash
     title, description = title_and_description(raw, f"Stochastic-linearization screening: {name}")
     max_points = _run(raw)
     base = model_tables(raw)
@@ -445,7 +454,8 @@ def study_from_tables(raw, text, name, source):
     rtol, max_steps = _solver(raw)
     shape = ((len(cases),) if "case" in raw else ()) + tuple(len(v) for v in sweeps.values())
     mcs = _mcs(raw, sweeps, cases, "case" in raw, shape, round(t_end / dt) + 1)
-    digest = hashlib.sha256(f"{text}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode())
+    digest = hashlib.sha256(f"{text}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode()
+                            + (f"\n--collection--\n{collection}".encode() if collection else b""))
     study = Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,

@@ -3,6 +3,7 @@ all or none, every curve present (or named missing with its reason), several lim
 NRML model, fits over the intensity the study sweeps, and curves through unvouched numbers flagged."""
 
 import csv
+import json
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -11,6 +12,7 @@ import xarray as xr
 
 from helpers import study_text
 
+from screening.applications.im_fragility import nrml_limit_state
 from screening.cli import main
 from screening.core.status import FitFlag, BestMethod, ProbabilitySource
 
@@ -93,14 +95,15 @@ def test_im_fragility_writes_every_curve_and_several_limit_states(results, capsy
     assert {float(r["k"]): r["fit_flag"] for r in missing} == expected
     root = ET.parse(out.with_suffix(".xml")).getroot()
     model = root.find("n:fragilityModel", NS)
-    assert model.find("n:limitStates", NS).text.split() == states
+    assert model.find("n:limitStates", NS).text.split() == [nrml_limit_state(s) for s in states]
     # no bed has both limit states fitted: no function, each named in a comment with its reason
     assert model.findall("n:fragilityFunction", NS) == []
     text = out.with_suffix(".xml").read_text()
     assert text.count("<!-- no fragility function for screening_k=") == 2
     pelicun = list(csv.DictReader(folder.joinpath("ls_pelicun.csv").open()))
     assert len(pelicun) == 2 and all(r["LS2-Theta_0"] and not r["LS1-Theta_0"] for r in pelicun)
-    assert all(r["Incomplete"] == "1" and "no fit" in r["Comment"] for r in pelicun)
+    meta = json.loads(folder.joinpath("ls_pelicun.json").read_text())
+    assert all(r["Incomplete"] == "1" and "no fit" in meta[r["ID"]]["Comments"] for r in pelicun)
     for ls in states:
         assert folder.joinpath(f"ls_{ls}.png").stat().st_size > 10_000
     assert _leftovers(folder) == []
@@ -117,7 +120,7 @@ def test_nrml_holds_both_limit_states_per_bed(results):
         out.with_suffix(".xml").read_text()
     for f in functions:
         means = [float(p.get("mean")) for p in f.findall("n:params", NS)]
-        assert [p.get("ls") for p in f.findall("n:params", NS)] == ["theta_0.02_slenderness", "theta_0.05_slenderness"]
+        assert [p.get("ls") for p in f.findall("n:params", NS)] == ["theta_0p02_slenderness", "theta_0p05_slenderness"]
         assert means[0] < means[1]                     # the larger rotation needs the stronger shaking
 
 
@@ -132,7 +135,7 @@ def test_the_set_is_written_all_or_none(results, capsys, monkeypatch):
     args = ["fragility", str(results[0]), "--threshold", "0.02", "--relative-to", "slenderness", "--im", "pga",
             "--out", str(out)]
     assert main(args) == 0
-    names = ["set.nc", "set.png", "set.csv", "set_pelicun.csv", "set.xml"]
+    names = ["set.nc", "set.png", "set.csv", "set_pelicun.csv", "set_pelicun.json", "set.xml"]
     before = {n: folder.joinpath(n).read_bytes() for n in names}
     assert len(list(csv.DictReader(folder.joinpath("set.csv").open()))) == 2
 

@@ -33,6 +33,7 @@ COVERED = [
     "screening.applications.metrics",
     "screening.analysis.multifidelity",
     "screening.analysis.probabilities",
+    "screening.applications.risk",
     "screening.analysis.target_intensity",
     "screening.report.tradeoff",
     "screening.applications.tradeoff_study",
@@ -53,6 +54,8 @@ COVERED = [
     "screening.core.excitations.clough_penzien",
     "screening.core.excitations.kanai_tajimi",
     "screening.core.excitations.registry",
+    "screening.report.risk_figures",
+    "screening.cli",
     "screening.kernels.cache",
     "screening.kernels.dopri",
     "screening.core.interpolation",
@@ -112,6 +115,7 @@ COVERED = [
     "screening.sweep.run",
     "screening.io.writer",
     "screening.io.zarrfile",
+    "screening.sweep.inventory",
 ]
 
 

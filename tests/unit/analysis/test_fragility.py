@@ -172,7 +172,8 @@ def test_accessor_on_a_broadcast_linearization_equals_point_by_point_results():
     curve = ds.rocking.fragility_curve(2.0, dim="S0", relative_to="theta_ul")
     assert curve["fit_median"].dims == ("eps",) and curve["fit_median"].attrs["intensity"] == "S0"
     frag = ds.rocking.fragility_dataset(2.0, relative_to="theta_ul")
-    assert set(frag.data_vars) == {"p_exceed", "fit_median", "beta", "fit_flag", "fit_n_unvouched", "threshold_rad"}
+    assert set(frag.data_vars) == {"p_exceed", "fit_median", "beta", "fit_flag", "fit_n_unvouched", "threshold_rad",
+                                   "fit_im_min", "fit_im_max"}     # the vouched range of each curve
     np.testing.assert_array_equal(frag["threshold_rad"].values, 2.0 * ds["theta_ul"].values)
 
 

@@ -62,7 +62,10 @@ def test_flags_negative_beta_and_threshold_beyond_slenderness(result):
 
 
 def test_csv_and_nrml_exports(result, tmp_path):
-    frag, _ = fragility_over_im(result, 0.1, "pga", relative_to="slenderness")
+    # without the trust rule's verdicts (trust=False) no point is known to be untrusted: every fit is exported
+    # (fits through untrusted points are left out of the NRML: the next test)
+    frag, _ = fragility_over_im(result.drop_vars(["sl_trust", "sl_error_low", "sl_error_high"]), 0.1, "pga",
+                                relative_to="slenderness")
     rows = list(csv.DictReader(open(write_csv(frag, tmp_path / "f.csv"))))
     ok = np.isfinite(frag["fit_median"].values)
     assert len(rows) == ok.size and rows[0]["intensity_measure"] == "pga_median" and rows[0]["units"] == "m s-2"
@@ -110,4 +113,25 @@ def test_linearize_results_carry_trust_and_fits_count_the_untrusted_points(resul
     text = open(write_nrml(frag, tmp_path / "f.xml")).read()
     fitted = frag["fit_flag"].values == 0
     shaky = int(np.sum(fitted & (frag["fit_n_unvouched"].values > 0)))
-    assert text.count("point(s) left out of the fit (nothing vouches for them)") == shaky
+    assert shaky > 0 and text.count("point(s) left out of the fit (nothing vouches for them)") == shaky
+    # such a fit stands on its vouched points: a function of the NRML, over the range they vouch for
+    assert text.count("<fragilityFunction") == int(np.sum(fitted))
+
+
+def test_a_separated_fit_is_incomplete_and_not_a_function(tmp_path):
+    """Stripes that separate exceeding from not exceeding perfectly (beta not identified) carry
+    ``fit_degenerate``: the pelicun row is Incomplete with the reason in the JSON, the NRML has no function."""
+    import json
+
+    from screening.applications.im_fragility import write_pelicun_csv, write_pelicun_json
+
+    frag = xr.Dataset({"fit_median": ((), 2.0, {"units": "m s-2", "intensity": "stripe_pga"}), "beta": 0.013,
+                       "fit_flag": np.int8(0), "threshold_rad": 0.01, "stripe_pga": ("level", [1.0, 2.0, 4.0])},
+                      attrs={"fit_degenerate": "the stripes separate exceeding from not exceeding perfectly"})
+    rows = list(csv.DictReader(open(write_pelicun_csv(frag, tmp_path / "p.csv"))))
+    assert rows[0]["Incomplete"] == "1" and rows[0]["LS1-Theta_0"] == ""
+    meta = json.loads(write_pelicun_json(frag, tmp_path / "p.json").read_text())
+    assert "degenerate: the stripes separate" in meta["screening"]["Comments"]
+    text = open(write_nrml(frag, tmp_path / "f.xml")).read()
+    assert "<fragilityFunction" not in text and "no fragility function for screening: theta_exceeds_threshold: " \
+        "degenerate" in text
