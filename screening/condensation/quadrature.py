@@ -36,29 +36,30 @@ set in ``theta`` per parameter point, Gauss–Legendre (:data:`GAUSS_ORDER` node
 
 ``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights.
 
-Table: an octave grid in ``q = (sigma / theta_ul)^2 = var_theta / theta_ul^2``
-(:func:`screening.kernels.interpolation.octave_grid`, :data:`TABLE_BITS` bits: ``2^TABLE_BITS``
-intervals per octave of ``q``) from ``2^Q_OCTAVE_LO`` (``t = ln(sigma / theta_ul) = -12.1``) up to
-the first octave above ``t_hi``; values and their exact first and second derivatives (same
-quadrature; ``d/dq = (d/dt) / (2 q)``, ``d2/dq2 = (d2/dt2 - 2 d/dt) / (4 q^2)``)::
+Table: ``t = ln(sigma / theta_ul)`` on ``[T_LO, t_hi]`` with :data:`STEPS_PER_UNIT` nodes per
+unit, values and their exact ``t``-derivatives (same quadrature)::
 
-    d e_c / dt = E[(C - C0) (x^2 - 1)],        d2 e_c / dt2 = E[(C - C0) (x^4 - 4 x^2 + 1)]
-    d e_k / dt = E[(K - K0) x^2 (x^2 - 3)],    d2 e_k / dt2 = E[(K - K0) x^2 (x^4 - 8 x^2 + 9)]
+    d e_c / dt = E[(C - C0) (x^2 - 1)],   d e_k / dt = E[(K - K0) x^2 (x^2 - 3)],
     d d_c / dt = E[(C - C0) (x^4 - 6 x^2 + 3)] / sigma^2
-    d2 d_c / dt2 = E[(C - C0) (x^6 - 13 x^4 + 33 x^2 - 9)] / sigma^2
 
-read back by quintic Hermite interpolation, stored as per-interval quintic coefficients
-(:func:`table_lookup_jit`: the interval from the bits of ``q``, no logarithm per call; largest
-error against the direct quadrature 3e-10 of ``c_eq`` and 1e-10 of ``K(0)`` in ``k_eq`` for the test
-beds; a cubic in ``q`` would need 8x the nodes for that, the functions being power laws in ``q``).
-The nodes' expectations are compiled sums (:func:`gaussian_expectations_jit`): a table of the
-paper's block (865 nodes) costs 1.3-2 ms, of which 0.6-1.3 ms evaluate ``C``, ``K`` at the
-quadrature nodes; a process keeps its :data:`TABLE_CACHE_SIZE` most recent tables, so a point met
-again (the next chunk of a batch, the next call) does not rebuild its table.  Below the grid
-(``sigma < 5.4e-6 theta_ul``) ``e_c``, ``e_k`` follow ``f0 + (f(q_lo) - f0) q / q_lo`` and ``d_c`` is
-held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``); above ``t_hi``
-(4 x the slenderness angle, where the moment solver has long stopped the point) the last values are
-held.
+read back by cubic Hermite interpolation, stored as per-interval cubic coefficients
+(:func:`coefficient_table`, :func:`table_lookup`; largest error against the direct quadrature
+3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; ~1200 nodes for the paper's block).  Below ``T_LO``
+(``sigma < 6e-6 theta_ul``) ``e_c``, ``e_k`` follow ``f0 + (f(T_LO) - f0) (sigma/sigma_lo)^2`` and
+``d_c`` is held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``);
+above ``t_hi`` (4 x the slenderness angle, where the moment solver has long stopped the
+point) the last values are held.
+
+The moment solver reads the same interpolant without a logarithm (:func:`octave_table`,
+:func:`octave_lookup_jit`): in ``q = (sigma / theta_ul)^2 = var_theta / theta_ul^2`` on an octave
+grid of :data:`BUCKET_BITS` bits (:func:`screening.kernels.interpolation.octave_grid`; the bucket of
+``q`` and the fraction in it come from the bits of ``q``), each bucket holds at most one node of
+the ``t`` grid, and each of its two pieces is the interpolant re-expressed as a polynomial of
+degree :data:`FIT_DEGREE` in the bucket fraction (Chebyshev-Lobatto interpolation: within 1e-13 of
+``K(0)`` of the cubic in ``t``, the rounding of its logarithm).
+A table costs ~5-9 ms per distinct point (numpy's sums: the bits the package's tables have always
+had), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
+next chunk of a batch, the next call) does not rebuild its table.
 """
 
 from __future__ import annotations
@@ -69,34 +70,37 @@ from collections import OrderedDict
 
 import numba
 import numpy as np
-from llvmlite import ir
-from numba import types
-from numba.extending import intrinsic
 
-from screening.kernels.interpolation import octave_first, octave_grid, octave_position_jit, quintic, quintic_coefficients
+from screening.kernels.interpolation import cubic, cubic_coefficients, octave_first, octave_grid, octave_position_jit
 from screening.kernels.signatures import FMA, MomentKernel, moment_coefficients_signature
 from screening.model.points import flatten, numeric_fields, point_key, select
 
-__all__ = ["Q_OCTAVE_LO", "TABLE_BITS", "GAUSS_ORDER", "J_INNER", "SIGMA_SPAN", "TABLE_CACHE_SIZE",
-           "theta_quadrature", "gaussian_expectations", "gaussian_expectations_jit", "expectations", "table_size",
-           "node_values", "coefficient_table", "coefficient_tables", "RECORD", "moment_kernel", "table_lookup",
-           "table_lookup_jit", "equivalent_coefficients_jit", "equivalent_coefficients"]
+__all__ = ["T_LO", "STEPS_PER_UNIT", "GAUSS_ORDER", "J_INNER", "SIGMA_SPAN", "theta_quadrature",
+           "gaussian_expectations", "expectations", "table_size", "node_values", "coefficient_table",
+           "coefficient_tables", "RECORD", "moment_kernel", "table_lookup", "table_lookup_grid",
+           "equivalent_coefficients_jit", "equivalent_coefficients", "BUCKET_BITS", "FIT_DEGREE", "TABLE_CACHE_SIZE",
+           "octave_table", "octave_lookup_jit"]
 
-#: Table grid: an octave grid in q = (sigma_theta / theta_ul)^2 from 2^Q_OCTAVE_LO (sigma = 5.4e-6 theta_ul,
-#: t = ln(sigma / theta_ul) = -12.1), TABLE_BITS mantissa bits (spacing in t 1/64 to 1/32).
-Q_OCTAVE_LO = -35
-TABLE_BITS = 4
-#: The first node, and the interval index of q = 2^Q_OCTAVE_LO in the bits of q
-#: (:func:`screening.kernels.interpolation.octave_first`).
-Q_LO = 2.0 ** Q_OCTAVE_LO
-_FIRST = octave_first(Q_OCTAVE_LO, TABLE_BITS)
+#: Table grid in t = ln(sigma_theta / theta_ul).
+T_LO = -12.0
+STEPS_PER_UNIT = 64
 #: Gauss–Legendre nodes per panel and number of geometric panels below theta_ul.
 GAUSS_ORDER = 16
 J_INNER = 22
-#: The Gaussian weight is below 1e-31 of its peak beyond 12 sigma: nodes beyond are left out of the sums.
+#: The Gaussian weight is below 1e-31 of its peak beyond 12 sigma.
 SIGMA_SPAN = 12.0
-#: Tables a process keeps (the most recently used; ~125 kB each for the paper's block).
-TABLE_CACHE_SIZE = 16
+#: Rows (sigma values) of :func:`gaussian_expectations` computed at a time (their arrays stay in cache).
+SIGMA_CHUNK = 32
+#: The solver's form of a table: buckets of an octave grid in q = (sigma / theta_ul)^2 from 2^Q_OCTAVE_LO
+#: (below exp(2 T_LO)), BUCKET_BITS mantissa bits (a bucket is at most 2^-5 = 3.1 % of q wide, less than the
+#: t grid's 3.2 %: at most one node per bucket), a polynomial of degree FIT_DEGREE per piece.
+Q_OCTAVE_LO = -35
+BUCKET_BITS = 5
+FIT_DEGREE = 5
+_FIRST = octave_first(Q_OCTAVE_LO, BUCKET_BITS)
+_Q_LO = math.exp(2.0 * T_LO)
+#: Tables a process keeps (the most recently used; ~0.6 MB each for the paper's block).
+TABLE_CACHE_SIZE = 8
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(GAUSS_ORDER)
 _INV_SQRT_2PI = 1.0 / math.sqrt(2.0 * math.pi)
@@ -244,21 +248,31 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     >>> values.round(9).tolist(), slopes.round(9).tolist()
     ([[2.0, 500.0, 0.0]], [[0.0, 0.0, 0.0]])
     """
-    sigma = np.asarray(sigma, dtype=float)[:, None]
-    # at scales near the float range (k ~ 1e100) the products overflow: the table is then not finite and the
-    # solver flags the point, as it did when these sums were a BLAS product (which raises no floating-point
-    # warning); numpy's elementwise products would add a RuntimeWarning for the same outcome
-    with np.errstate(over="ignore", invalid="ignore"):
-        x2 = (theta[None, :] / sigma) ** 2
-        phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / sigma
-        dc = c_values - c0
-        dk = k_values - k0
-        inv_s2 = 1.0 / sigma[:, 0] ** 2
-        he2 = phi * (x2 - 1.0)
-        values = np.stack([_row_sums(phi, c_values), _row_sums(phi * x2, k_values), _row_sums(he2, dc) * inv_s2],
-                          axis=1)
-        slopes = np.stack([_row_sums(he2, dc), _row_sums(phi * x2 * (x2 - 3.0), dk),
-                           _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2], axis=1)
+    sigma = np.asarray(sigma, dtype=float)
+    dc = c_values - c0
+    dk = k_values - k0
+    values = np.empty((sigma.size, 3))
+    slopes = np.empty((sigma.size, 3))
+    # SIGMA_CHUNK rows at a time (3x faster than all at once: the arrays stay in cache; each row's sums are
+    # the same operations in the same order, so the same bits)
+    for lo in range(0, sigma.size, SIGMA_CHUNK):
+        rows = slice(lo, lo + SIGMA_CHUNK)
+        s = sigma[rows, None]
+        # at scales near the float range (k ~ 1e100) the products overflow: the table is then not finite and the
+        # solver flags the point, as it did when these sums were a BLAS product (which raises no floating-point
+        # warning); numpy's elementwise products would add a RuntimeWarning for the same outcome
+        with np.errstate(over="ignore", invalid="ignore"):
+            x2 = (theta[None, :] / s) ** 2
+            phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / s
+            inv_s2 = 1.0 / s[:, 0] ** 2
+            he2 = _row_sums(phi * (x2 - 1.0), dc)
+            phi_x2 = phi * x2
+            values[rows, 0] = _row_sums(phi, c_values)
+            values[rows, 1] = _row_sums(phi_x2, k_values)
+            values[rows, 2] = he2 * inv_s2
+            slopes[rows, 0] = he2
+            slopes[rows, 1] = _row_sums(phi_x2 * (x2 - 3.0), dk)
+            slopes[rows, 2] = _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2
     return values, slopes
 
 
@@ -267,144 +281,6 @@ def _row_sums(weights, values):
     product's last bits depend on its thread count, so a table built in a dask worker and one built
     in the main process would differ)."""
     return np.sum(weights * values[None, :], axis=1)
-
-
-@intrinsic
-def _float_from_bits(typingctx, bits):
-    """The double whose IEEE 754 bits are the int64 ``bits`` (a bit cast, no conversion)."""
-    def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.DoubleType())
-    return types.float64(types.int64), codegen
-
-
-_LOG2E = 1.0 / math.log(2.0)
-_LN2_HI = 6.93147180369123816490e-01        # ln 2 in two parts (Cody and Waite): k * _LN2_HI is exact
-_LN2_LO = 1.90821492927058770002e-10
-
-
-@numba.njit(cache=True, inline="always")
-def _exp_nonpositive(y):
-    """``exp(y)`` for ``-700 <= y <= 0`` in straight-line arithmetic, so that LLVM vectorises the loops
-    that call it (libm's ``exp`` is a call): ``y = k ln 2 + r`` with ``|r| <= ln(2) / 2``, ``exp(r)`` by
-    its Taylor series to ``r^13`` (truncation below 1e-17 relative), ``2^k`` from its bits; within
-    2.3e-16 of ``math.exp`` (tests/unit/condensation/test_quadrature.py)."""
-    k = math.floor(y * _LOG2E + 0.5)
-    r = (y - k * _LN2_HI) - k * _LN2_LO
-    p = 1.0 / 6227020800.0
-    p = 1.0 / 479001600.0 + r * p
-    p = 1.0 / 39916800.0 + r * p
-    p = 1.0 / 3628800.0 + r * p
-    p = 1.0 / 362880.0 + r * p
-    p = 1.0 / 40320.0 + r * p
-    p = 1.0 / 5040.0 + r * p
-    p = 1.0 / 720.0 + r * p
-    p = 1.0 / 120.0 + r * p
-    p = 1.0 / 24.0 + r * p
-    p = 1.0 / 6.0 + r * p
-    p = 0.5 + r * p
-    p = 1.0 + r * p
-    p = 1.0 + r * p
-    return p * _float_from_bits((np.int64(k) + 1023) << 52)
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def gaussian_expectations_jit(sigma, theta, weight, c_values, k_values, c0, k0):
-    """Compiled twin of :func:`gaussian_expectations` (what the tables are built with).
-
-    Parameters
-    ----------
-    sigma : numpy.ndarray
-        Standard deviations of the rotation [rad], > 0 (1-d, float64).
-    theta, weight : numpy.ndarray
-        Nodes [rad] and weights [rad] (:func:`theta_quadrature`).
-    c_values : numpy.ndarray
-        ``C(theta)`` at the nodes [N m s/rad].
-    k_values : numpy.ndarray
-        ``K(theta)`` at the nodes [N m/rad].
-    c0, k0 : float
-        ``C(0)`` [N m s/rad] and ``K(0)`` [N m/rad].
-
-    Returns
-    -------
-    values : numpy.ndarray
-        ``(len(sigma), 3)``: ``e_c`` [N m s/rad], ``e_k`` [N m/rad], ``d_c`` [N m s/rad^3].
-    slopes : numpy.ndarray
-        ``(len(sigma), 3)``: their derivatives with respect to ``ln(sigma)`` (same units).
-    curvatures : numpy.ndarray
-        ``(len(sigma), 3)``: their second derivatives with respect to ``ln(sigma)`` (module docstring).
-
-    Notes
-    -----
-    The sums of eq. (31) in [1]_ over the Gaussian density, by Stein's lemma [2]_
-    (:func:`gaussian_expectations`, plus the second derivatives), in one pass per ``sigma``; nodes beyond :data:`SIGMA_SPAN` ``sigma``
-    (Gaussian weight below 1e-31) are left out.  The sums may be reassociated (vectorised): they agree
-    with numpy's to ~1e-13 relative and are the same bits in every process on one machine.
-
-    References
-    ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. M. Stein, "Estimation of the mean of a multivariate normal distribution", Annals of
-       Statistics 9(6) (1981) 1135-1151.
-
-    Examples
-    --------
-    >>> theta, weight = theta_quadrature(1e-3, math.inf, 0.12)
-    >>> c, k = 2.0 + 5e4 * theta**2, 500.0 - 3e7 * theta**2          # C = C0 + C2 theta^2, K likewise
-    >>> sigma = np.array([1e-4, 1e-3])
-    >>> values, slopes, curvatures = gaussian_expectations_jit(sigma, theta, weight, c, k, 2.0, 500.0)
-    >>> ref = gaussian_expectations(sigma, theta, weight, c, k, 2.0, 500.0)
-    >>> bool(np.allclose(values, ref[0], rtol=1e-12) and np.allclose(slopes, ref[1], rtol=1e-12, atol=1e-8))
-    True
-    >>> bool(np.allclose(curvatures[:, 0], 4 * 5e4 * sigma**2, rtol=1e-12))    # e_c = C0 + C2 sigma^2
-    True
-    """
-    n = sigma.shape[0]
-    m = theta.shape[0]
-    theta2 = theta * theta
-    dc = c_values - c0
-    dk = k_values - k0
-    span2 = SIGMA_SPAN * SIGMA_SPAN
-    values = np.empty((n, 3))
-    slopes = np.empty((n, 3))
-    curvatures = np.empty((n, 3))
-    for i in range(n):
-        inv = 1.0 / sigma[i]
-        inv2 = inv * inv
-        e_c = 0.0
-        e_k = 0.0
-        s_c = 0.0
-        s_k = 0.0
-        s_d = 0.0
-        r_c = 0.0
-        r_k = 0.0
-        r_d = 0.0
-        for j in range(m):
-            x2 = theta2[j] * inv2
-            phi = weight[j] * _exp_nonpositive(max(-0.5 * x2, -700.0))
-            phi = phi if x2 <= span2 else 0.0
-            pc = phi * dc[j]
-            pk = phi * x2 * dk[j]
-            e_c += phi * c_values[j]
-            e_k += phi * x2 * k_values[j]
-            s_c += pc * (x2 - 1.0)
-            s_k += pk * (x2 - 3.0)
-            s_d += pc * (x2 * (x2 - 6.0) + 3.0)
-            r_c += pc * (x2 * (x2 - 4.0) + 1.0)
-            r_k += pk * (x2 * (x2 - 8.0) + 9.0)
-            r_d += pc * (x2 * (x2 * (x2 - 13.0) + 33.0) - 9.0)
-        f = 2.0 * _INV_SQRT_2PI * inv
-        values[i, 0] = e_c * f
-        values[i, 1] = e_k * f
-        values[i, 2] = s_c * f * inv2
-        slopes[i, 0] = s_c * f
-        slopes[i, 1] = s_k * f
-        slopes[i, 2] = s_d * f * inv2
-        curvatures[i, 0] = r_c * f
-        curvatures[i, 1] = r_k * f
-        curvatures[i, 2] = r_d * f * inv2
-    return values, slopes, curvatures
 
 
 def _point_nodes(block, foundation, sigma_max, cond):
@@ -421,7 +297,7 @@ def _point_nodes(block, foundation, sigma_max, cond):
 def expectations(sigma_theta, block, foundation, cond):
     """``(e_c, e_k, d_c)`` [SI, module docstring] at ``sigma_theta`` [rad] >= 0 for one scalar point.
 
-    Direct quadrature (no table); below ``sigma_lo = theta_ul sqrt(Q_LO)`` the same ``sigma^2``
+    Direct quadrature (no table); below ``sigma_lo = theta_ul exp(T_LO)`` the same ``sigma^2``
     extrapolation as the table, exact limits at ``sigma = 0``.
 
     Parameters
@@ -476,7 +352,7 @@ def expectations(sigma_theta, block, foundation, cond):
     """
     s = np.asarray(sigma_theta, dtype=float)
     tu = float(cond.uplift_threshold(block, foundation))
-    s_lo = tu * math.sqrt(Q_LO)
+    s_lo = tu * math.exp(T_LO)
     theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, max(float(np.max(s, initial=0.0)), s_lo), cond)
     flat = s.ravel()
     above = flat >= s_lo
@@ -492,8 +368,7 @@ def expectations(sigma_theta, block, foundation, cond):
 
 
 def table_size(block, foundation, cond):
-    """Number of table nodes: the octave grid in ``q`` from ``2^Q_OCTAVE_LO`` to the first power of 2 at or
-    above ``exp(2 t_hi)``, ``t_hi = ln(4 atan(b/h) / theta_ul)`` (at least 2).
+    """Number of table nodes, from ``T_LO`` up to ``t_hi = ln(4 atan(b/h) / theta_ul)`` (at least 2).
 
     Vectorised over array model parameters (one size per point).
 
@@ -509,7 +384,7 @@ def table_size(block, foundation, cond):
     Returns
     -------
     int or numpy.ndarray of int
-        ``(e_hi - Q_OCTAVE_LO) 2^TABLE_BITS + 1`` nodes [-], with ``e_hi = ceil(2 t_hi / ln 2)`` and
+        ``ceil((t_hi - T_LO) STEPS_PER_UNIT) + 1`` nodes [-], with
         ``t_hi = max(ln(4 atan(b/h) / theta_ul), 2)``.
 
     References
@@ -524,23 +399,21 @@ def table_size(block, foundation, cond):
     >>> from screening import Block, Foundation
     >>> from screening.condensation import get
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> import math
     >>> cubic = get("cubic")
     >>> theta_ul = float(cubic.uplift_threshold(block, bed))                  # [rad]
-    >>> e_hi = math.ceil(2 * math.log(4 * math.atan(0.035 / 0.21) / theta_ul) / math.log(2))
-    >>> int(table_size(block, bed, cubic)), (e_hi - Q_OCTAVE_LO) * 2**TABLE_BITS + 1
-    (865, 865)
+    >>> int(table_size(block, bed, cubic)), math.ceil((math.log(4 * math.atan(0.035 / 0.21) / theta_ul) + 12) * 64) + 1
+    (1183, 1183)
     """
     tu = cond.uplift_threshold(block, foundation)
     t_hi = np.maximum(np.log(4.0 * block.slenderness / tu), 2.0)
-    e_hi = np.ceil(2.0 * t_hi / math.log(2.0)).astype(int)
-    return (((e_hi - Q_OCTAVE_LO) << TABLE_BITS) + 1)[()]
+    return (np.ceil((t_hi - T_LO) * STEPS_PER_UNIT).astype(int) + 1)[()]
 
 
 def node_values(block, foundation, cond):
-    """The table's nodes ``q`` and ``(values, slopes, curvatures)`` of shape ``(table_size, 3)`` for one scalar
-    point.
+    """``(values, slopes)`` of shape ``(table_size, 3)`` for one scalar point (module docstring).
 
-    Nodes on the octave grid ``q = (sigma / theta_ul)^2`` of :func:`table_size`; depends on the point alone.
+    Nodes at ``t = T_LO + i / STEPS_PER_UNIT``; depends on the point alone.
 
     Parameters
     ----------
@@ -553,21 +426,15 @@ def node_values(block, foundation, cond):
 
     Returns
     -------
-    q : numpy.ndarray
-        The nodes ``(sigma / theta_ul)^2`` [1].
     values : numpy.ndarray
         ``(table_size, 3)``: ``e_c`` [N m s/rad], ``e_k`` [N m/rad], ``d_c`` [N m s/rad^3] at
-        ``sigma = theta_ul sqrt(q)``.
+        ``sigma = theta_ul exp(t)``.
     slopes : numpy.ndarray
-        ``(table_size, 3)``: their derivatives with respect to ``q`` (units of the values).
-    curvatures : numpy.ndarray
-        ``(table_size, 3)``: their second derivatives with respect to ``q``.
+        ``(table_size, 3)``: their derivatives with respect to ``t`` (same units).
 
     Notes
     -----
-    :func:`gaussian_expectations_jit` at the table's ``sigma`` values, one node set for all of them;
-    with ``t = ln(sigma / theta_ul) = ln(q) / 2``, ``d/dq = (d/dt) / (2 q)`` and
-    ``d2/dq2 = (d2/dt2 - 2 d/dt) / (4 q^2)``.
+    :func:`gaussian_expectations` at the table's ``sigma`` values, one node set for all of them.
 
     References
     ----------
@@ -583,23 +450,21 @@ def node_values(block, foundation, cond):
     >>> from screening.condensation import get
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
     >>> cubic = get("cubic")
-    >>> q, values, slopes, curvatures = node_values(block, bed, cubic)
+    >>> values, slopes = node_values(block, bed, cubic)
     >>> values.shape, f"{values[0, 0]:.6f} {float(cubic.damping_at_rest(block, bed)):.6f}"   # e_c -> C(0)
-    ((865, 3), '0.987309 0.987309')
+    ((1183, 3), '0.987309 0.987309')
     """
     n = int(table_size(block, foundation, cond))
-    q = octave_grid(Q_OCTAVE_LO, Q_OCTAVE_LO + ((n - 1) >> TABLE_BITS), TABLE_BITS)
+    t = T_LO + np.arange(n) / STEPS_PER_UNIT
     tu = float(cond.uplift_threshold(block, foundation))
-    sigma = tu * np.sqrt(q)
+    sigma = tu * np.exp(t)
     theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond)
-    values, slopes, curvatures = gaussian_expectations_jit(sigma, theta, weight, c, k, c0, k0)
-    q2 = q[:, None]
-    return q, values, slopes / (2.0 * q2), (curvatures - 2.0 * slopes) / (4.0 * q2 * q2)
+    return gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
 
 
 def coefficient_table(block, foundation, cond):
-    """One scalar point's table: per-interval quintic coefficients ``(table_size, 18)`` of
-    :func:`node_values` in ``q`` (:func:`screening.kernels.interpolation.quintic_coefficients`).
+    """One scalar point's table: per-interval cubic coefficients ``(table_size, 12)`` of
+    :func:`node_values` (:func:`screening.kernels.interpolation.cubic_coefficients`).
 
     Parameters
     ----------
@@ -613,17 +478,17 @@ def coefficient_table(block, foundation, cond):
     Returns
     -------
     numpy.ndarray
-        ``(table_size, 18)``: for each interval of ``q``, the six quintic Hermite coefficients of
-        ``e_c`` (columns 0-5, [N m s/rad]), ``e_k`` (6-11, [N m/rad]) and ``d_c`` (12-17,
-        [N m s/rad^3]); columns 0, 6, 12 hold the node values.
+        ``(table_size, 12)``: for each interval of ``t``, the four cubic Hermite coefficients of
+        ``e_c`` (columns 0-3, [N m s/rad]), ``e_k`` (4-7, [N m/rad]) and ``d_c`` (8-11,
+        [N m s/rad^3]); columns 0, 4, 8 hold the node values.
 
     References
     ----------
     .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
        A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
        https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. XII (osculatory interpolation:
-       Hermite interpolation with derivatives at the nodes).
+    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
+       interpolation).
 
     Examples
     --------
@@ -632,45 +497,22 @@ def coefficient_table(block, foundation, cond):
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
     >>> cubic = get("cubic")
     >>> table = coefficient_table(block, bed, cubic)
-    >>> i = np.array([0, 400, 800])                                    # nodes 0, 400, 800 of the octave grid
-    >>> q = np.ldexp(1.0 + i % 2**TABLE_BITS / 2**TABLE_BITS, Q_OCTAVE_LO + i // 2**TABLE_BITS)
-    >>> sigma = float(cubic.uplift_threshold(block, bed)) * np.sqrt(q)
-    >>> table.shape, bool(np.allclose(table[i][:, 0::6], np.stack(expectations(sigma, block, bed, cubic), axis=1),
+    >>> i = np.array([0, 500, 1000])                                   # nodes t = T_LO + i / 64
+    >>> sigma = float(cubic.uplift_threshold(block, bed)) * np.exp(T_LO + i / STEPS_PER_UNIT)
+    >>> table.shape, bool(np.allclose(table[i][:, 0::4], np.stack(expectations(sigma, block, bed, cubic), axis=1),
     ...                               rtol=1e-9))
-    ((865, 18), True)
+    ((1183, 12), True)
     """
-    q, values, slopes, curvatures = node_values(block, foundation, cond)
-    return quintic_coefficients(values, slopes, curvatures, np.diff(q))
-
-
-_TABLES = OrderedDict()
-_TABLES_LOCK = threading.Lock()
-
-
-def _table(block, foundation, cond):
-    """:func:`coefficient_table` of one scalar point, from the process's cache of recent tables (read-only)."""
-    key = (cond, point_key(block, foundation))
-    with _TABLES_LOCK:
-        table = _TABLES.get(key)
-        if table is not None:
-            _TABLES.move_to_end(key)
-            return table
-    table = coefficient_table(block, foundation, cond)
-    table.flags.writeable = False
-    with _TABLES_LOCK:
-        _TABLES[key] = table
-        while len(_TABLES) > TABLE_CACHE_SIZE:
-            _TABLES.popitem(last=False)
-    return table
+    values, slopes = node_values(block, foundation, cond)
+    return cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
 
 
 def coefficient_tables(block, foundation, cond):
     """Tables of the points of flat (1-d) model fields: ``(tables, index)``.
 
-    ``tables``: ``(n_distinct, max size, 18)``, one :func:`coefficient_table` per distinct point,
-    zero-padded to the longest (the padding is never read: :func:`table_lookup_jit` gets each
-    point's number of intervals); ``index[i]`` is point i's table.  The process keeps its
-    :data:`TABLE_CACHE_SIZE` most recently used tables, so a point met again is not rebuilt.
+    ``tables``: ``(n_distinct, max size, 12)``, one :func:`coefficient_table` per distinct point,
+    zero-padded to the longest (the padding is never read: :func:`table_lookup_grid` gets each
+    point's :func:`table_size`); ``index[i]`` is point i's table.
 
     Parameters
     ----------
@@ -684,7 +526,7 @@ def coefficient_tables(block, foundation, cond):
     Returns
     -------
     tables : numpy.ndarray
-        ``(n_distinct, max table_size, 18)`` (units of :func:`coefficient_table`).
+        ``(n_distinct, max table_size, 12)`` (units of :func:`coefficient_table`).
     index : numpy.ndarray of int64
         Point ``i``'s table is ``tables[index[i]]``.
 
@@ -706,15 +548,14 @@ def coefficient_tables(block, foundation, cond):
     ...                           Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
     >>> tables, index = coefficient_tables(block, bed, get("cubic"))
     >>> tables.shape, index.tolist()
-    ((2, 865, 18), [0, 0, 1])
+    ((2, 1183, 12), [0, 0, 1])
     """
     first, index = _distinct_points(block, foundation)
-    return _stacked_tables(block, foundation, first, cond), index
+    return _stacked([coefficient_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]), index
 
 
-def _stacked_tables(block, foundation, first, cond):
-    """The tables of the points ``first`` of flat model fields, zero-padded to the longest and stacked."""
-    tables = [_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
+def _stacked(tables):
+    """Tables zero-padded to the longest and stacked (the padding is never read)."""
     size = max(tb.shape[0] for tb in tables)
     out = np.zeros((len(tables), size, tables[0].shape[1]))
     for j, tb in enumerate(tables):
@@ -736,16 +577,204 @@ def _distinct_points(block, foundation):
     return first[order], rank[inverse.reshape(-1)].astype(np.int64)
 
 
-#: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units; the table's last interval).
-RECORD = np.dtype([("inv_theta_ul2", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), ("table_intervals", "i8")])
+def _interpolant(q, table, c0, k0):
+    """:func:`table_lookup` at the points ``q = (sigma / theta_ul)^2 > 0`` (numpy, vectorised)."""
+    t = 0.5 * np.log(q)
+    n = table.shape[0]
+    u = (t - T_LO) * STEPS_PER_UNIT
+    i = np.clip(np.floor(u), 0, n - 2).astype(np.int64)
+    s = u - i
+    out = np.empty((q.size, 3))
+    for col in range(3):
+        a = table[i, 4 * col: 4 * col + 4]
+        out[:, col] = a[:, 0] + s * (a[:, 1] + s * (a[:, 2] + s * a[:, 3]))
+    below, held = t <= T_LO, u >= n - 1
+    f = np.exp(2.0 * (t[below] - T_LO))
+    out[below] = np.stack([c0 + (table[0, 0] - c0) * f, k0 + (table[0, 4] - k0) * f,
+                           np.full(f.shape, table[0, 8])], axis=1)
+    out[held] = table[n - 1, 0::4][:3]
+    return out
+
+
+_LOBATTO = 0.5 - 0.5 * np.cos(np.pi * np.arange(FIT_DEGREE + 1) / FIT_DEGREE)
+_TO_POWERS = np.linalg.inv(np.vander(_LOBATTO, FIT_DEGREE + 1, increasing=True))
+
+
+def octave_table(table, c0, k0):
+    """The solver's form of a :func:`coefficient_table`: its interpolant on the octave buckets of ``q``.
+
+    Parameters
+    ----------
+    table : numpy.ndarray
+        One point's :func:`coefficient_table` (on the grid ``t = T_LO + i / STEPS_PER_UNIT``).
+    c0 : float
+        ``C(0)`` [N m s/rad].
+    k0 : float
+        ``K(0)`` [N m/rad].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2 n_buckets, 3 + 3 (FIT_DEGREE + 1))``: rows ``2 j`` and ``2 j + 1`` are the two pieces of
+        bucket ``j`` of ``q = (sigma / theta_ul)^2`` (:func:`screening.kernels.interpolation.octave_grid`
+        from ``2^Q_OCTAVE_LO``, :data:`BUCKET_BITS` bits), split at the grid node inside it (if any).  Each
+        row holds that node's ``q`` (``inf`` if none), ``A``, ``B`` with ``y = A s + B`` in ``[0, 1]`` over
+        the piece (``s`` the fraction of the bucket), and the coefficients of ``e_c`` [N m s/rad],
+        ``e_k`` [N m/rad] and ``d_c`` [N m s/rad^3] in powers of ``y``.
+
+    Notes
+    -----
+    Within a piece the interpolant of :func:`table_lookup` (a cubic in ``t = ln(q) / 2``, or the
+    extrapolation below the grid) is analytic in ``q``; its interpolation at the :data:`FIT_DEGREE` + 1
+    Chebyshev-Lobatto points of the piece [1]_ reproduces it within 1e-13 of ``K(0)`` (the rounding of its
+    logarithm), and :func:`octave_lookup_jit` finds the piece from the bits of ``q``, without a logarithm.
+
+    References
+    ----------
+    .. [1] L. N. Trefethen, Approximation Theory and Approximation Practice, SIAM (2013), ch. 8
+       (convergence for analytic functions).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.condensation import get
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> cubic = get("cubic")
+    >>> table = coefficient_table(block, bed, cubic)
+    >>> c0, k0 = float(cubic.damping_at_rest(block, bed)), float(cubic.stiffness_at_rest(block, bed))
+    >>> solver_table = octave_table(table, c0, k0)
+    >>> q = np.geomspace(1e-12, 3e5, 7)
+    >>> got = np.array([octave_lookup_jit(x, solver_table, c0, k0, *table[0, 0::4][:3], *table[-1, 0::4][:3],
+    ...                                   solver_table.shape[0] // 2) for x in q])
+    >>> bool(np.allclose(got, [table_lookup(0.5 * math.log(x), table, c0, k0) for x in q], rtol=1e-11, atol=1e-12 * k0))
+    True
+    """
+    n = table.shape[0]
+    q_nodes = np.exp(2.0 * (T_LO + np.arange(n) / STEPS_PER_UNIT))
+    edges = octave_grid(Q_OCTAVE_LO, int(math.ceil(math.log2(q_nodes[-1]))), BUCKET_BITS)
+    lo, hi = edges[:-1], edges[1:]
+    k = np.minimum(np.searchsorted(q_nodes, lo), n - 1)           # the first node at or above each bucket
+    inside = q_nodes[k] < hi
+    node = np.where(inside, q_nodes[k], np.inf)
+    split = np.where(inside, (node - lo) / (hi - lo), 1.0)
+    rows = np.zeros((2 * lo.size, 3 + 3 * (FIT_DEGREE + 1)))
+    for piece, (a, b) in enumerate(((np.zeros_like(split), split), (split, np.ones_like(split)))):
+        width = np.where(b > a, b - a, 1.0)
+        s = a[:, None] + _LOBATTO[None, :] * width[:, None]
+        values = _interpolant((lo[:, None] + s * (hi - lo)[:, None]).ravel(), table, c0, k0)
+        values = values.reshape(lo.size, FIT_DEGREE + 1, 3)
+        # powers[b, c, i] = sum_j _TO_POWERS[i, j] values[b, j, c], summed in this order (no BLAS: the same bits
+        # in every process)
+        powers = sum(_TO_POWERS[None, None, :, j] * values[:, j, :, None] for j in range(FIT_DEGREE + 1))
+        rows[piece::2, 0] = node
+        rows[piece::2, 1] = 1.0 / width
+        rows[piece::2, 2] = -a / width
+        rows[piece::2, 3:] = powers.reshape(lo.size, -1)
+    return rows
+
+
+@numba.njit(cache=True, inline="always")
+def _piece(table, r, column, y):
+    """Column ``column`` (0 ``e_c``, 1 ``e_k``, 2 ``d_c``) of row ``r`` of an :func:`octave_table` at ``y``."""
+    c = 3 + (FIT_DEGREE + 1) * column
+    return table[r, c] + y * (table[r, c + 1] + y * (table[r, c + 2] + y * (table[r, c + 3] + y * (
+        table[r, c + 4] + y * table[r, c + 5]))))
+
+
+@numba.njit(cache=True, inline="always")
+def octave_lookup_jit(q, table, c0, k0, lo_c, lo_k, lo_d, hi_c, hi_k, hi_d, buckets):
+    """Compiled :func:`table_lookup` at ``q = (sigma_theta / theta_ul)^2`` from an :func:`octave_table`.
+
+    Parameters
+    ----------
+    q : float
+        ``(sigma_theta / theta_ul)^2`` [-]; any ``q <= 0`` (and NaN) gives the values at rest.
+    table : numpy.ndarray
+        The point's :func:`octave_table` (possibly zero-padded: rows beyond ``2 buckets`` are never read).
+    c0 : float
+        ``C(0)`` [N m s/rad].
+    k0 : float
+        ``K(0)`` [N m/rad].
+    lo_c, lo_k, lo_d : float
+        ``e_c``, ``e_k``, ``d_c`` at the first node of the :func:`coefficient_table` (``t = T_LO``) [SI].
+    hi_c, hi_k, hi_d : float
+        The same at its last node, held beyond [SI].
+    buckets : int
+        The table's number of buckets [-].
+
+    Returns
+    -------
+    tuple of float
+        ``(e_c [N m s/rad], e_k [N m/rad], d_c [N m s/rad^3])``.
+
+    Notes
+    -----
+    The bucket and the fraction ``s`` in it from the bits of ``q``
+    (:func:`screening.kernels.interpolation.octave_position_jit`), the piece by one comparison with the
+    node in the bucket, then a polynomial of degree :data:`FIT_DEGREE` in ``y = A s + B``: the cubic
+    Hermite interpolant [1]_ of :func:`table_lookup` without its logarithm.  Below ``2^Q_OCTAVE_LO`` the
+    extrapolation ``f0 + (f(T_LO) - f0) q / exp(2 T_LO)``.
+
+    References
+    ----------
+    .. [1] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
+       interpolation).
+
+    Examples
+    --------
+    Below the grid the values tend to those at rest (a made-up table of zeros):
+
+    >>> octave_lookup_jit(0.0, np.zeros((2, 21)), 1.0, 500.0, 0.9, 450.0, 3.0, 0.1, 20.0, 0.0, 1)
+    (1.0, 500.0, 3.0)
+    """
+    j, s = octave_position_jit(q, _FIRST, BUCKET_BITS)
+    if j < 0:
+        f = q * (1.0 / _Q_LO) if q > 0.0 else 0.0      # (sigma / sigma_lo)^2
+        return c0 + (lo_c - c0) * f, k0 + (lo_k - k0) * f, lo_d
+    if j >= buckets:
+        return hi_c, hi_k, hi_d
+    r = 2 * j + (1 if q >= table[2 * j, 0] else 0)
+    y = s * table[r, 1] + table[r, 2]
+    return _piece(table, r, 0, y), _piece(table, r, 1, y), _piece(table, r, 2, y)
+
+
+_TABLES = OrderedDict()
+_TABLES_LOCK = threading.Lock()
+
+
+def _solver_table(block, foundation, cond):
+    """``(octave table, node-0 values, last-node values)`` of one scalar point, from the process's cache of
+    recent tables (read-only)."""
+    key = (cond, point_key(block, foundation))
+    with _TABLES_LOCK:
+        entry = _TABLES.get(key)
+        if entry is not None:
+            _TABLES.move_to_end(key)
+            return entry
+    table = coefficient_table(block, foundation, cond)
+    solver_table = octave_table(table, float(cond.damping_at_rest(block, foundation)),
+                                float(cond.stiffness_at_rest(block, foundation)))
+    solver_table.flags.writeable = False
+    entry = (solver_table, table[0, 0::4][:3].copy(), table[-1, 0::4][:3].copy())
+    with _TABLES_LOCK:
+        _TABLES[key] = entry
+        while len(_TABLES) > TABLE_CACHE_SIZE:
+            _TABLES.popitem(last=False)
+    return entry
+
+
+#: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units): ``1 / theta_ul^2``, ``C(0)``,
+#: ``K(0)``, the table's first and last node values and its number of buckets.
+RECORD = np.dtype([("inv_theta_ul2", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), ("lo_c", "f8"), ("lo_k", "f8"),
+                   ("lo_d", "f8"), ("hi_c", "f8"), ("hi_k", "f8"), ("hi_d", "f8"), ("buckets", "i8")])
 
 
 def moment_kernel(block, foundation, cond):
     """:class:`~screening.condensation.base.MomentKernel` of ``cond`` for flat (1-d) model fields.
 
     The default moment kernel of a condensation without closed forms: the compiled
-    :func:`equivalent_coefficients_jit`, one :data:`RECORD` per point and the tables of
-    :func:`coefficient_tables`.
+    :func:`equivalent_coefficients_jit`, one :data:`RECORD` per point and the :func:`octave_table` of each
+    distinct point (kept by the process for the next call).
 
     Parameters
     ----------
@@ -759,9 +788,7 @@ def moment_kernel(block, foundation, cond):
     Returns
     -------
     screening.kernels.signatures.MomentKernel
-        ``(coefficients, records, tables, table_index)``: records in SI units
-        (``inv_theta_ul2`` = 1 / theta_ul^2 [rad-2], ``c_rest`` [N m s/rad], ``k_rest`` [N m/rad],
-        ``table_intervals`` = table_size - 1).
+        ``(coefficients, records, tables, table_index)``: records in SI units (:data:`RECORD`).
 
     References
     ----------
@@ -778,31 +805,34 @@ def moment_kernel(block, foundation, cond):
     >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=[0.21, 0.21]),
     ...                           Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
     >>> kernel = moment_kernel(block, bed, get("cubic"))
-    >>> kernel.tables.shape, kernel.table_index.tolist(), kernel.records["table_intervals"].tolist()
-    ((1, 865, 18), [0, 0], [864, 864])
+    >>> kernel.tables.shape, kernel.table_index.tolist(), kernel.records["buckets"].tolist()
+    ((1, 3456, 21), [0, 0], [1728, 1728])
     """
     first, index = _distinct_points(block, foundation)
-    tables = _stacked_tables(block, foundation, first, cond)
-    blk, fnd = select(block, first), select(foundation, first)          # one entry per table
-    fields = {"inv_theta_ul2": 1.0 / cond.uplift_threshold(blk, fnd) ** 2,
-              "c_rest": cond.damping_at_rest(blk, fnd), "k_rest": cond.stiffness_at_rest(blk, fnd),
-              "table_intervals": table_size(blk, fnd, cond) - 1}
+    entries = [_solver_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
+    blk, fnd = select(block, first), select(foundation, first)          # one entry per distinct point
     records = np.empty(first.size, dtype=RECORD)
-    for name, value in fields.items():
-        records[name] = np.broadcast_to(np.asarray(value, dtype=RECORD[name]), first.shape)
-    return MomentKernel(equivalent_coefficients_jit, records[index], tables, index)
+    records["inv_theta_ul2"] = 1.0 / np.broadcast_to(cond.uplift_threshold(blk, fnd), first.shape) ** 2
+    records["c_rest"] = np.broadcast_to(cond.damping_at_rest(blk, fnd), first.shape)
+    records["k_rest"] = np.broadcast_to(cond.stiffness_at_rest(blk, fnd), first.shape)
+    for end, column in (("lo", 1), ("hi", 2)):
+        values = np.array([e[column] for e in entries])
+        for k, name in enumerate(("c", "k", "d")):
+            records[f"{end}_{name}"] = values[:, k]
+    records["buckets"] = [e[0].shape[0] // 2 for e in entries]
+    return MomentKernel(equivalent_coefficients_jit, records[index], _stacked([e[0] for e in entries]), index)
 
 
-def table_lookup(q, table, c0, k0):
-    """``(e_c, e_k, d_c)`` at ``q = (sigma_theta / theta_ul)^2`` (>= 0) from one point's table.
+def table_lookup(t, table, c0, k0):
+    """``(e_c, e_k, d_c)`` at ``t = ln(sigma_theta / theta_ul)`` (``-inf`` allowed) from one point's table.
 
     ``c0``, ``k0``: ``C(0)`` [N m s/rad], ``K(0)`` [N m/rad], the limits at ``sigma = 0``.
-    Python entry point of :func:`table_lookup_jit`.
+    Python entry point of :func:`table_lookup_grid` on the grid of this module.
 
     Parameters
     ----------
-    q : float
-        ``(sigma_theta / theta_ul)^2`` [-], >= 0.
+    t : float
+        ``ln(sigma_theta / theta_ul)`` [-]; ``-inf`` for ``sigma_theta = 0``.
     table : numpy.ndarray
         One point's :func:`coefficient_table`.
     c0 : float
@@ -817,17 +847,17 @@ def table_lookup(q, table, c0, k0):
 
     Notes
     -----
-    Quintic Hermite interpolation [2]_ of the node values and ``q``-derivatives on the octave grid; below
-    ``Q_LO``, ``f0 + (f(Q_LO) - f0) q / Q_LO`` for ``e_c``, ``e_k`` and ``d_c`` held; above the last node
-    its values held.
+    Cubic Hermite interpolation [2]_ of the node values and ``t``-slopes; below ``T_LO``,
+    ``f0 + (f(T_LO) - f0) (sigma / sigma_lo)^2`` for ``e_c``, ``e_k`` and ``d_c`` held; above the
+    last node its values held.
 
     References
     ----------
     .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
        A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
        https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. XII (osculatory interpolation:
-       Hermite interpolation with derivatives at the nodes).
+    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
+       interpolation).
 
     Examples
     --------
@@ -836,38 +866,45 @@ def table_lookup(q, table, c0, k0):
     >>> from screening import Block, Foundation
     >>> from screening.condensation import get
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> import math
     >>> cubic = get("cubic")
     >>> table = coefficient_table(block, bed, cubic)
     >>> c0, k0 = float(cubic.damping_at_rest(block, bed)), float(cubic.stiffness_at_rest(block, bed))
-    >>> q = 2.0**-3 * (1 + 8.5 / 2**TABLE_BITS)                       # halfway between two nodes
-    >>> direct = expectations(float(cubic.uplift_threshold(block, bed)) * math.sqrt(q), block, bed, cubic)
-    >>> looked_up = table_lookup(q, table, c0, k0)
+    >>> t = T_LO + 700.5 / STEPS_PER_UNIT                             # halfway between nodes 700 and 701
+    >>> direct = expectations(float(cubic.uplift_threshold(block, bed)) * math.exp(t), block, bed, cubic)
+    >>> looked_up = table_lookup(t, table, c0, k0)
     >>> all(abs(a / float(b) - 1) < 1e-8 for a, b in zip(looked_up, direct))
     True
-    >>> table_lookup(0.0, table, c0, k0)[:2] == (c0, k0)              # sigma = 0: the values at rest
+    >>> table_lookup(-math.inf, table, c0, k0)[:2] == (c0, k0)       # sigma = 0: the values at rest
     True
     """
-    return table_lookup_jit(q, table, c0, k0, table.shape[0] - 1)
+    return table_lookup_grid(t, table, c0, k0, T_LO, float(STEPS_PER_UNIT), table.shape[0])
 
 
 @numba.njit(cache=True, inline="always")
-def table_lookup_jit(q, table, c0, k0, intervals):
-    """Compiled twin of :func:`table_lookup` on a table of ``intervals + 1`` nodes.
+def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
+    """Compiled :func:`table_lookup` on the grid ``t_lo + i / steps_per_unit`` of ``n`` nodes.
 
-    Rows of ``table`` beyond ``intervals`` (padding of stacked tables) are never read.
+    The grid is passed at run time (not read from module constants) so that compiled
+    callers cached by numba can never disagree with the tables built in Python; rows of
+    ``table`` beyond ``n`` (padding of stacked tables) are never read.
 
     Parameters
     ----------
-    q : float
-        ``(sigma_theta / theta_ul)^2`` [-]; any ``q <= 0`` (and NaN) gives the values at rest.
+    t : float
+        ``ln(sigma_theta / theta_ul)`` [-]; ``-inf`` for ``sigma_theta = 0``.
     table : numpy.ndarray
         One point's :func:`coefficient_table` (possibly zero-padded).
     c0 : float
         ``C(0)`` [N m s/rad].
     k0 : float
         ``K(0)`` [N m/rad].
-    intervals : int
-        The point's number of table intervals [-] (:func:`table_size` - 1).
+    t_lo : float
+        ``t`` of the first node [-] (:data:`T_LO`).
+    steps_per_unit : float
+        Nodes per unit of ``t`` [-] (:data:`STEPS_PER_UNIT`).
+    n : float or int
+        The point's number of nodes [-] (:func:`table_size`).
 
     Returns
     -------
@@ -876,41 +913,44 @@ def table_lookup_jit(q, table, c0, k0, intervals):
 
     Notes
     -----
-    The interval ``j`` and the fraction ``s`` in it are read from the bits of ``q``
-    (:func:`screening.kernels.interpolation.octave_position_jit`), and each quantity is the quintic
-    ``a0 + a1 s + ... + a5 s^5`` of row ``j`` (quintic Hermite interpolation [2]_); below ``Q_LO``,
-    ``f0 + (f(Q_LO) - f0) q / Q_LO`` for ``e_c``, ``e_k`` and ``d_c`` held.
+    With ``u = (t - t_lo) steps_per_unit``, ``i = floor(u)``, ``s = u - i``, each quantity is the
+    cubic ``a0 + a1 s + a2 s^2 + a3 s^3`` of row ``i`` (cubic Hermite interpolation [2]_); below
+    ``t_lo``, ``f0 + (f(t_lo) - f0) exp(2 (t - t_lo))`` for ``e_c``, ``e_k`` and ``d_c`` held.
 
     References
     ----------
     .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
        A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
        https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. XII (osculatory interpolation:
-       Hermite interpolation with derivatives at the nodes).
+    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
+       interpolation).
 
     Examples
     --------
-    At a node the lookup returns the node's values:
+    At a node the lookup returns the node's values (the Python function, ``py_func``, is the
+    same code as the compiled one):
 
     >>> from screening import Block, Foundation
     >>> from screening.condensation import get
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
     >>> cubic = get("cubic")
     >>> table = coefficient_table(block, bed, cubic)
-    >>> q = 2.0**-3 * (1 + 8 / 2**TABLE_BITS)                         # a node
-    >>> got = table_lookup_jit(q, table, 1.0, 1.0, table.shape[0] - 1)
-    >>> direct = expectations(float(cubic.uplift_threshold(block, bed)) * np.sqrt(q), block, bed, cubic)
+    >>> t = T_LO + 700 / STEPS_PER_UNIT                                # node 700
+    >>> got = table_lookup_grid.py_func(t, table, 1.0, 1.0, T_LO, float(STEPS_PER_UNIT), table.shape[0])
+    >>> direct = expectations(float(cubic.uplift_threshold(block, bed)) * np.exp(t), block, bed, cubic)
     >>> bool(np.allclose(got, [float(v) for v in direct], rtol=1e-9))
     True
     """
-    j, s = octave_position_jit(q, _FIRST, TABLE_BITS)
-    if j < 0:
-        f = q * (1.0 / Q_LO) if q > 0.0 else 0.0      # (sigma / sigma_lo)^2
-        return c0 + (table[0, 0] - c0) * f, k0 + (table[0, 6] - k0) * f, table[0, 12]
-    if j >= intervals:
-        return table[intervals, 0], table[intervals, 6], table[intervals, 12]   # the last node, held
-    return quintic(table, j, 0, s), quintic(table, j, 1, s), quintic(table, j, 2, s)
+    n = int(n)
+    if t <= t_lo:
+        f = math.exp(2.0 * (t - t_lo))                 # (sigma / sigma_lo)^2
+        return c0 + (table[0, 0] - c0) * f, k0 + (table[0, 4] - k0) * f, table[0, 8]
+    u = (t - t_lo) * steps_per_unit
+    if u >= n - 1:
+        return table[n - 1, 0], table[n - 1, 4], table[n - 1, 8]   # the last node, held
+    i = int(u)
+    s = u - i
+    return cubic(table, i, 0, s), cubic(table, i, 1, s), cubic(table, i, 2, s)
 
 
 @numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
@@ -939,7 +979,8 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     Notes
     -----
     Eq. (31) in [1]_ in the form ``c_eq = e_c``, ``k_eq = e_k + cov d_c`` (:func:`gaussian_expectations`),
-    read from the table by :func:`table_lookup_jit` at ``q = var_theta / theta_ul^2``.
+    read from the :func:`octave_table` by :func:`octave_lookup_jit` at ``q = var_theta / theta_ul^2`` (the
+    interpolant of :func:`table_lookup`, without a logarithm).
 
     References
     ----------
@@ -964,7 +1005,8 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     >>> bool(abs(c_eq / c_ref - 1) < 1e-8 and abs(k_eq / k_ref - 1) < 1e-6)
     True
     """
-    e_c, e_k, d_c = table_lookup_jit(var_theta * p.inv_theta_ul2, table, p.c_rest, p.k_rest, p.table_intervals)
+    e_c, e_k, d_c = octave_lookup_jit(var_theta * p.inv_theta_ul2, table, p.c_rest, p.k_rest, p.lo_c, p.lo_k,
+                                      p.lo_d, p.hi_c, p.hi_k, p.hi_d, p.buckets)
     return e_c, e_k + cov * d_c
 
 

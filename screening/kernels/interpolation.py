@@ -1,9 +1,9 @@
-"""Hermite interpolation: piecewise-cubic and piecewise-quintic tables read by the compiled coefficient
-functions (:mod:`screening.condensation.uplift_integrals`, :mod:`screening.condensation.quadrature`), and
-the cubic Hermite basis of the Monte Carlo input between its grid points (:mod:`screening.solvers.mcs_kernels`).
+"""Cubic Hermite interpolation: piecewise-cubic tables read by the compiled coefficient functions
+(:mod:`screening.condensation.uplift_integrals`, :mod:`screening.condensation.quadrature`), and the
+Hermite basis of the Monte Carlo input between its grid points (:mod:`screening.solvers.mcs_kernels`).
 
-A table is built once, in Python, from node values and exact slopes (cubic Hermite interpolation),
-or values, slopes and second derivatives (quintic), and stored as ready per-interval polynomial coefficients, so a compiled lookup is one index computation
+A table is built once, in Python, from node values and exact slopes (cubic Hermite interpolation)
+and stored as ready per-interval cubic coefficients, so a compiled lookup is one index computation
 and one Horner evaluation per column (no basis weights, no row views).
 
 Octave grids.  A table over many decades of a positive variable ``x`` can be read without a
@@ -20,8 +20,8 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-__all__ = ["SIGNIFICAND_BITS", "cubic_coefficients", "quintic_coefficients", "octave_grid", "octave_position",
-           "octave_first", "octave_position_jit", "cubic", "quintic", "hermite_weights", "hermite", "hermite_rate"]
+__all__ = ["SIGNIFICAND_BITS", "cubic_coefficients", "octave_grid", "octave_position", "octave_first",
+           "octave_position_jit", "cubic", "hermite_weights", "hermite", "hermite_rate"]
 
 #: Bits of a double's significand.
 SIGNIFICAND_BITS = 52
@@ -76,67 +76,6 @@ def cubic_coefficients(values, slopes, step):
     out[:-1, :, 3] = 2.0 * (v0 - v1) + d0 + d1
     out[-1, :, 0] = v[-1]
     return np.ascontiguousarray(out.reshape(n, 4 * cols))
-
-
-def quintic_coefficients(values, slopes, curvatures, step):
-    """Per-interval quintic coefficients of the Hermite interpolant of node values, slopes and second derivatives.
-
-    Parameters
-    ----------
-    values : array_like
-        ``(n_nodes, n_columns)`` node values.
-    slopes : array_like
-        ``(n_nodes, n_columns)`` first derivatives with respect to the grid variable.
-    curvatures : array_like
-        ``(n_nodes, n_columns)`` second derivatives with respect to the grid variable.
-    step : float or array_like
-        Interval lengths, one number (uniform grid) or ``(n_nodes - 1,)``, in the grid variable's units.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n_nodes, 6 n_columns)``: row ``i < n_nodes - 1`` holds, per column ``c``, ``(a0, ..., a5)`` with
-        ``f = a0 + s (a1 + s (a2 + s (a3 + s (a4 + s a5))))`` at fraction ``s`` of interval ``i``; the last row
-        holds the last node value as a constant.
-
-    Notes
-    -----
-    With ``D = v1 - v0``, ``d = h f'``, ``c = h^2 f''``: ``a0 = v0``, ``a1 = d0``, ``a2 = c0 / 2``,
-    ``a3 = 10 D - 6 d0 - 4 d1 - (3 c0 - c1) / 2``, ``a4 = -15 D + 8 d0 + 7 d1 + (3 c0 - 2 c1) / 2``,
-    ``a5 = 6 D - 3 (d0 + d1) - (c0 - c1) / 2``: the quintic Hermite basis [1] in power form (what
-    :func:`quintic` evaluates); the error is ``O(h^6)`` against ``O(h^4)`` of the cubic.
-
-    References
-    ----------
-    .. [1] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. XII (osculatory interpolation:
-       Hermite interpolation with derivatives at the nodes).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.array([0.0, 1.0, 2.0])
-    >>> table = quintic_coefficients((x**5)[:, None], (5 * x**4)[:, None], (20 * x**3)[:, None], 1.0)
-    >>> float(quintic(table, 1, 0, 0.5))                # a quintic is reproduced exactly: 1.5^5
-    7.59375
-    """
-    v = np.asarray(values, dtype=float)
-    n, cols = v.shape
-    step = np.broadcast_to(np.asarray(step, dtype=float), (n - 1,))[:, None]
-    d = np.asarray(slopes, dtype=float)
-    c = np.asarray(curvatures, dtype=float)
-    out = np.zeros((n, cols, 6))
-    v0, v1 = v[:-1], v[1:]
-    d0, d1 = d[:-1] * step, d[1:] * step
-    c0, c1 = c[:-1] * step * step, c[1:] * step * step
-    jump = v1 - v0
-    out[:-1, :, 0] = v0
-    out[:-1, :, 1] = d0
-    out[:-1, :, 2] = 0.5 * c0
-    out[:-1, :, 3] = 10.0 * jump - 6.0 * d0 - 4.0 * d1 - 1.5 * c0 + 0.5 * c1
-    out[:-1, :, 4] = -15.0 * jump + 8.0 * d0 + 7.0 * d1 + 1.5 * c0 - c1
-    out[:-1, :, 5] = 6.0 * jump - 3.0 * d0 - 3.0 * d1 - 0.5 * c0 + 0.5 * c1
-    out[-1, :, 0] = v[-1]
-    return np.ascontiguousarray(out.reshape(n, 6 * cols))
 
 
 def octave_grid(e_lo, e_hi, bits):
@@ -333,45 +272,6 @@ def cubic(table, i, column, s):
     """
     c = 4 * column
     return table[i, c] + s * (table[i, c + 1] + s * (table[i, c + 2] + s * table[i, c + 3]))
-
-
-@numba.njit(cache=True, inline="always")
-def quintic(table, i, column, s):
-    """Column ``column`` of a :func:`quintic_coefficients` table at fraction ``s`` of interval ``i``.
-
-    Parameters
-    ----------
-    table : numpy.ndarray
-        A table of :func:`quintic_coefficients`.
-    i : int
-        Interval index.
-    column : int
-        Column of the tabulated values.
-    s : float
-        Fraction [1] of the interval.
-
-    Returns
-    -------
-    float
-        ``a0 + s (a1 + s (a2 + s (a3 + s (a4 + s a5))))``.
-
-    Notes
-    -----
-    The quintic Hermite interpolant [1] in Horner form.
-
-    References
-    ----------
-    .. [1] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. XII (osculatory interpolation).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> float(quintic(quintic_coefficients([[0.0], [1.0]], [[0.0], [0.0]], [[0.0], [0.0]], 1.0), 0, 0, 0.5))
-    0.5
-    """
-    c = 6 * column
-    return table[i, c] + s * (table[i, c + 1] + s * (table[i, c + 2] + s * (table[i, c + 3] + s * (
-        table[i, c + 4] + s * table[i, c + 5]))))
 
 
 @numba.njit(cache=True, inline="always")

@@ -8,7 +8,6 @@ Gaussian ``x = theta / sigma``), values and slopes in ``ln(sigma)`` over five de
 
 import math
 
-import numba
 import numpy as np
 import pytest
 from scipy import integrate
@@ -49,34 +48,24 @@ def test_the_expectations_of_quadratic_coefficients_are_their_gaussian_moments()
     np.testing.assert_allclose(slopes[:, 2], 0.0, atol=1e-8 * a)
 
 
-def test_the_compiled_sums_are_numpys_and_their_second_derivatives_the_closed_forms():
+def test_the_sums_taken_a_few_sigmas_at_a_time_have_the_bits_of_the_whole_array():
     c0, a, k0, b = 2.0, 5e4, 1e3, -3e7            # C = c0 + a theta^2, K = k0 + b theta^2
-    theta, weight = quad.theta_quadrature(THETA_UL, math.inf, quad.SIGMA_SPAN * 1e-2)
+    theta, weight = quad.theta_quadrature(THETA_UL, 5.0 * THETA_UL, quad.SIGMA_SPAN * 1e-2)
     c, k = c0 + a * theta ** 2, k0 + b * theta ** 2
-    sigma = np.geomspace(1e-6, 1e-2 / 1.01, 11)
-    values, slopes, curvatures = quad.gaussian_expectations_jit(sigma, theta, weight, c, k, c0, k0)
-    ref_values, ref_slopes = quad.gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
-    np.testing.assert_allclose(values, ref_values, rtol=1e-12)
-    np.testing.assert_allclose(slopes, ref_slopes, rtol=1e-12, atol=1e-12 * a)
-    s2 = sigma ** 2                               # d2/d ln(sigma)2 of c0 + a s2, k0 + 3 b s2, 2 a
-    np.testing.assert_allclose(curvatures[:, 0], 4 * a * s2, rtol=1e-9)
-    np.testing.assert_allclose(curvatures[:, 1], 12 * b * s2, rtol=1e-9)
-    np.testing.assert_allclose(curvatures[:, 2], 0.0, atol=1e-8 * a)
-
-
-@numba.njit
-def _exps(y):
-    out = np.empty(y.size)
-    for i in range(y.size):
-        out[i] = quad._exp_nonpositive(y[i])
-    return out
-
-
-def test_the_vectorisable_exponential_is_within_a_rounding_of_libms():
-    y = np.concatenate([-np.random.default_rng(0).uniform(0.0, 700.0, 20000), [0.0, -0.5 * quad.SIGMA_SPAN ** 2]])
-    got = _exps(y)
-    assert np.max(np.abs(got / np.exp(y) - 1)) <= 2.3e-16 * 1.5
-    assert got[-2] == 1.0
+    sigma = np.geomspace(1e-8, 1e-2 / 1.01, 3 * quad.SIGMA_CHUNK + 5)
+    values, slopes = quad.gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
+    # the formulas on the whole (sigma, node) array at once: the tables' bits before they were chunked
+    s = sigma[:, None]
+    x2 = (theta[None, :] / s) ** 2
+    phi = (2.0 / math.sqrt(2.0 * math.pi)) * weight[None, :] * np.exp(-0.5 * x2) / s
+    he2 = phi * (x2 - 1.0)
+    inv_s2 = 1.0 / sigma ** 2
+    ref_values = np.stack([np.sum(phi * c, axis=1), np.sum(phi * x2 * k, axis=1),
+                           np.sum(he2 * (c - c0), axis=1) * inv_s2], axis=1)
+    ref_slopes = np.stack([np.sum(he2 * (c - c0), axis=1), np.sum(phi * x2 * (x2 - 3.0) * (k - k0), axis=1),
+                           np.sum(phi * (x2 * (x2 - 6.0) + 3.0) * (c - c0), axis=1) * inv_s2], axis=1)
+    np.testing.assert_array_equal(values, ref_values)
+    np.testing.assert_array_equal(slopes, ref_slopes)
 
 
 def test_a_point_met_again_reuses_its_table_and_the_cache_is_bounded():
@@ -88,13 +77,35 @@ def test_a_point_met_again_reuses_its_table_and_the_cache_is_bounded():
     quad._TABLES.clear()
     (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21),
                               Foundation(k=2.89e7, lam=8.95e8, eps=np.linspace(0.0, 6e7, quad.TABLE_CACHE_SIZE + 3)))
-    tables, index = quad.coefficient_tables(block, bed, cond)
-    assert len(quad._TABLES) == quad.TABLE_CACHE_SIZE and index.tolist() == list(range(bed.eps.size))
-    newest = next(reversed(quad._TABLES.values()))
-    again, _ = quad.coefficient_tables(*(flatten(Block(m=8.67, b=0.035, h=0.21),
-                                                 Foundation(k=2.89e7, lam=8.95e8, eps=6e7))[0]), cond)
-    assert next(reversed(quad._TABLES.values())) is newest and not newest.flags.writeable
-    np.testing.assert_array_equal(again[0], tables[-1])
+    kernel = quad.moment_kernel(block, bed, cond)
+    assert len(quad._TABLES) == quad.TABLE_CACHE_SIZE and kernel.table_index.tolist() == list(range(bed.eps.size))
+    newest = next(reversed(quad._TABLES.values()))[0]
+    again = quad.moment_kernel(*(flatten(Block(m=8.67, b=0.035, h=0.21),
+                                         Foundation(k=2.89e7, lam=8.95e8, eps=6e7))[0]), cond)
+    assert next(reversed(quad._TABLES.values()))[0] is newest and not newest.flags.writeable
+    np.testing.assert_array_equal(again.tables[0], kernel.tables[-1][:again.tables.shape[1]])
+
+
+def test_the_solver_reads_the_interpolant_of_the_table_without_a_logarithm(paper_block, cubic_bed):
+    from screening.condensation import get
+
+    cond = get("virtual_work")
+    table = quad.coefficient_table(paper_block, cubic_bed, cond)
+    c0, k0 = float(cond.damping_at_rest(paper_block, cubic_bed)), float(cond.stiffness_at_rest(paper_block, cubic_bed))
+    solver_table = quad.octave_table(table, c0, k0)
+    n_buckets = solver_table.shape[0] // 2
+    ends = (*table[0, 0::4][:3], *table[-1, 0::4][:3])
+    rng = np.random.default_rng(5)
+    t = np.concatenate([rng.uniform(quad.T_LO - 3, quad.T_LO + (table.shape[0] + 60) / quad.STEPS_PER_UNIT, 3000),
+                        quad.T_LO + np.arange(table.shape[0]) / quad.STEPS_PER_UNIT])     # and every node
+    got = np.array([quad.octave_lookup_jit(math.exp(2 * x), solver_table, c0, k0, *ends, n_buckets) for x in t])
+    ref = np.array([quad.table_lookup(x, table, c0, k0) for x in t])
+    # within the rounding of the logarithm that table_lookup takes (its t carries ~1e-13 absolute): measured
+    # 1e-13 K(0) in e_k and up to 4e-12 relative in e_c and d_c on the softening beds, where they are steepest
+    np.testing.assert_allclose(got[:, 0], ref[:, 0], rtol=1e-11)
+    np.testing.assert_allclose(got[:, 1], ref[:, 1], rtol=0, atol=1e-12 * abs(k0))
+    np.testing.assert_allclose(got[:, 2], ref[:, 2], rtol=0, atol=1e-11 * np.abs(ref[:, 2]).max())
+    assert quad.octave_lookup_jit(0.0, solver_table, c0, k0, *ends, n_buckets) == (c0, k0, table[0, 8])
 
 
 def test_distinct_points_are_found_as_point_key_finds_them():

@@ -1,11 +1,11 @@
-"""Piecewise-cubic and -quintic tables: per-interval coefficients and the octave grid's bit-level lookup."""
+"""Piecewise-cubic tables: per-interval coefficients and the octave grid's bit-level lookup."""
 
 import numba
 import numpy as np
 import pytest
 
 from screening.kernels.interpolation import (cubic, cubic_coefficients, octave_first, octave_grid, octave_position,
-                                             octave_position_jit, quintic, quintic_coefficients)
+                                             octave_position_jit)
 
 E_LO, E_HI, BITS = -7, 5, 4
 
@@ -61,24 +61,3 @@ def test_cubic_coefficients_on_an_octave_grid_reproduce_a_smooth_function():
     # cubic Hermite error h^4 max|f''''| / 384 with h = 2^-BITS x, f'''' = -6 / x^4
     np.testing.assert_allclose(got, np.log(probe), rtol=0, atol=6.0 / 384.0 * 2.0 ** (-4 * BITS) * 1.01)
     assert np.max(np.abs(got - np.log(probe))) > 1e-9          # the check could fail
-
-
-@numba.njit
-def _lookup_quintic(table, j, s):
-    return quintic(table, j, 0, s)
-
-
-def test_quintic_coefficients_on_an_octave_grid_reproduce_a_smooth_function():
-    x = octave_grid(E_LO, E_HI, BITS)
-    table = quintic_coefficients(np.log(x)[:, None], (1.0 / x)[:, None], (-1.0 / x**2)[:, None], np.diff(x))
-    probe = 2.0 ** np.linspace(E_LO + 0.01, E_HI - 0.01, 777)
-    j, s = octave_position(probe, E_LO, BITS)
-    got = np.array([_lookup_quintic(table, jj, ss) for jj, ss in zip(j, s)])
-    # quintic Hermite error h^6 max|f^(6)| / 46080 with h = 2^-BITS x, f^(6) = -120 / x^6
-    bound = 120.0 / 46080.0 * 2.0 ** (-6 * BITS)
-    np.testing.assert_allclose(got, np.log(probe), rtol=0, atol=bound * 1.01)
-    assert np.max(np.abs(got - np.log(probe))) > bound / 100          # the check could fail
-    p = np.polynomial.Polynomial([0.3, -1.0, 0.5, 2.0, -0.7, 0.25])   # a quintic: reproduced to rounding
-    table = quintic_coefficients(p(x)[:, None], p.deriv()(x)[:, None], p.deriv(2)(x)[:, None], np.diff(x))
-    got = np.array([_lookup_quintic(table, jj, ss) for jj, ss in zip(j, s)])
-    np.testing.assert_allclose(got, p(probe), rtol=1e-12, atol=1e-12)
