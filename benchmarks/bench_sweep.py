@@ -66,12 +66,14 @@ def jit_in_this_process():
     return time.perf_counter() - start
 
 
-def _solve_share(n, side, queue, histories=True):
+def _solve_share(n, side, queue, histories=True, condensation=None):
     """Solve ``n`` points evenly spread over the flattened ``side`` x ``side`` benchmark grid (the same mix of
-    cheap and costly points as the sweep) in this process; put the time taken [s]."""
+    cheap and costly points as the sweep) in this process, with ``condensation`` (default: the package's);
+    put the time taken [s]."""
     import numpy as np
 
     from screening.core.excitations.white import WhiteNoise
+    from screening.core.condensation import DEFAULT_CONDENSATION
     from screening.solvers.moments import solve_moments
     from screening.core.model import Block, Foundation
     from screening.solvers.timegrid import output_times
@@ -81,10 +83,24 @@ def _solve_share(n, side, queue, histories=True):
     i, j = np.unravel_index(flat, (side, side))
     models = (Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, np.linspace(-6e5, 6e7, side)[i]),
               WhiteNoise(np.geomspace(1e-5, 2.4e-3, side)[j]))
-    solve_moments(models[0], Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), t[:3])   # load the JIT cache
+    condensation = condensation or DEFAULT_CONDENSATION
+    solve_moments(models[0], Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), t[:3], condensation=condensation)  # JIT cache
     start = time.perf_counter()
-    solve_moments(*models, t, histories=histories)
+    solve_moments(*models, t, histories=histories, condensation=condensation)
     queue.put(time.perf_counter() - start)
+
+
+def single_core(n=CHECK_POINTS, side=100, histories=True, condensation=None):
+    """Seconds to solve ``n`` points of the ``side`` x ``side`` grid in one fresh process (no dask, no I/O)
+    with ``condensation`` (default: the package's; ``"paper"``: the single-core prototype of the paper's method)."""
+    import multiprocessing as mp
+
+    queue = mp.get_context("spawn").Queue()
+    proc = mp.get_context("spawn").Process(target=_solve_share, args=(n, side, queue, histories, condensation))
+    proc.start()
+    seconds = queue.get()
+    proc.join()
+    return seconds
 
 
 def machine_scaling(n=CHECK_POINTS, side=100, histories=True):

@@ -43,29 +43,43 @@ unit, values and their exact ``t``-derivatives (same quadrature)::
     d d_c / dt = E[(C - C0) (x^4 - 6 x^2 + 3)] / sigma^2
 
 read back by cubic Hermite interpolation, stored as per-interval cubic coefficients
-(:func:`table_lookup_grid`; largest error against
-the direct quadrature 3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; a table costs
-~20 ms per distinct point, ~1200 nodes for the paper's block).  Below ``T_LO``
+(:func:`coefficient_table`, :func:`table_lookup`; largest error against the direct quadrature
+3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; ~1200 nodes for the paper's block).  Below ``T_LO``
 (``sigma < 6e-6 theta_ul``) ``e_c``, ``e_k`` follow ``f0 + (f(T_LO) - f0) (sigma/sigma_lo)^2`` and
 ``d_c`` is held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``);
 above ``t_hi`` (4 x the slenderness angle, where the moment solver has long stopped the
 point) the last values are held.
+
+The moment solver reads the same interpolant without a logarithm (:func:`octave_table`,
+:func:`octave_lookup_jit`): in ``q = (sigma / theta_ul)^2 = var_theta / theta_ul^2`` on an octave
+grid of :data:`BUCKET_BITS` bits (:func:`screening.core.interpolation.octave_grid`; the bucket of
+``q`` and the fraction in it come from the bits of ``q``), each bucket holds at most one node of
+the ``t`` grid, and each of its two pieces is the interpolant re-expressed as a polynomial of
+degree :data:`FIT_DEGREE` in the bucket fraction (Chebyshev-Lobatto interpolation: within 1e-13 of
+``K(0)`` of the cubic in ``t``, the rounding of its logarithm).
+A table costs ~5-9 ms per distinct point (numpy's sums: the bits the package's tables have always
+had), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
+next chunk of a batch, the next call) does not rebuild its table.
 """
 
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
+
 import numba
 import numpy as np
 
-from screening.core.interpolation import cubic, cubic_coefficients
+from screening.core.interpolation import cubic, cubic_coefficients, octave_first, octave_grid, octave_position_jit
 from screening.core.signatures import FMA, MomentKernel, moment_coefficients_signature
-from screening.core.model.points import flatten, point_key, select
+from screening.core.model.points import flatten, point_key, select, numeric_fields
 
 __all__ = ["T_LO", "STEPS_PER_UNIT", "GAUSS_ORDER", "J_INNER", "SIGMA_SPAN", "theta_quadrature",
            "gaussian_expectations", "expectations", "table_size", "node_values", "coefficient_table",
            "coefficient_tables", "RECORD", "moment_kernel", "table_lookup", "table_lookup_grid",
-           "equivalent_coefficients_jit", "equivalent_coefficients"]
+           "equivalent_coefficients_jit", "equivalent_coefficients", "BUCKET_BITS", "FIT_DEGREE", "TABLE_CACHE_SIZE",
+           "octave_table", "octave_lookup_jit"]
 
 #: Table grid in t = ln(sigma_theta / theta_ul).
 T_LO = -12.0
@@ -75,6 +89,18 @@ GAUSS_ORDER = 16
 J_INNER = 22
 #: The Gaussian weight is below 1e-31 of its peak beyond 12 sigma.
 SIGMA_SPAN = 12.0
+#: Rows (sigma values) of :func:`gaussian_expectations` computed at a time (their arrays stay in cache).
+SIGMA_CHUNK = 32
+#: The solver's form of a table: buckets of an octave grid in q = (sigma / theta_ul)^2 from 2^Q_OCTAVE_LO
+#: (below exp(2 T_LO)), BUCKET_BITS mantissa bits (a bucket is at most 2^-5 = 3.1 % of q wide, less than the
+#: t grid's 3.2 %: at most one node per bucket), a polynomial of degree FIT_DEGREE per piece.
+Q_OCTAVE_LO = -35
+BUCKET_BITS = 5
+FIT_DEGREE = 5
+_FIRST = octave_first(Q_OCTAVE_LO, BUCKET_BITS)
+_Q_LO = math.exp(2.0 * T_LO)
+#: Tables a process keeps (the most recently used; ~0.6 MB each for the paper's block).
+TABLE_CACHE_SIZE = 8
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(GAUSS_ORDER)
 _INV_SQRT_2PI = 1.0 / math.sqrt(2.0 * math.pi)
@@ -222,21 +248,31 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     >>> values.round(9).tolist(), slopes.round(9).tolist()
     ([[2.0, 500.0, 0.0]], [[0.0, 0.0, 0.0]])
     """
-    sigma = np.asarray(sigma, dtype=float)[:, None]
-    # at scales near the float range (k ~ 1e100) the products overflow: the table is then not finite and the
-    # solver flags the point, as it did when these sums were a BLAS product (which raises no floating-point
-    # warning); numpy's elementwise products would add a RuntimeWarning for the same outcome
-    with np.errstate(over="ignore", invalid="ignore"):
-        x2 = (theta[None, :] / sigma) ** 2
-        phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / sigma
-        dc = c_values - c0
-        dk = k_values - k0
-        inv_s2 = 1.0 / sigma[:, 0] ** 2
-        he2 = phi * (x2 - 1.0)
-        values = np.stack([_row_sums(phi, c_values), _row_sums(phi * x2, k_values), _row_sums(he2, dc) * inv_s2],
-                          axis=1)
-        slopes = np.stack([_row_sums(he2, dc), _row_sums(phi * x2 * (x2 - 3.0), dk),
-                           _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2], axis=1)
+    sigma = np.asarray(sigma, dtype=float)
+    dc = c_values - c0
+    dk = k_values - k0
+    values = np.empty((sigma.size, 3))
+    slopes = np.empty((sigma.size, 3))
+    # SIGMA_CHUNK rows at a time (3x faster than all at once: the arrays stay in cache; each row's sums are
+    # the same operations in the same order, so the same bits)
+    for lo in range(0, sigma.size, SIGMA_CHUNK):
+        rows = slice(lo, lo + SIGMA_CHUNK)
+        s = sigma[rows, None]
+        # at scales near the float range (k ~ 1e100) the products overflow: the table is then not finite and the
+        # solver flags the point, as it did when these sums were a BLAS product (which raises no floating-point
+        # warning); numpy's elementwise products would add a RuntimeWarning for the same outcome
+        with np.errstate(over="ignore", invalid="ignore"):
+            x2 = (theta[None, :] / s) ** 2
+            phi = (2.0 * _INV_SQRT_2PI) * weight[None, :] * np.exp(-0.5 * x2) / s
+            inv_s2 = 1.0 / s[:, 0] ** 2
+            he2 = _row_sums(phi * (x2 - 1.0), dc)
+            phi_x2 = phi * x2
+            values[rows, 0] = _row_sums(phi, c_values)
+            values[rows, 1] = _row_sums(phi_x2, k_values)
+            values[rows, 2] = he2 * inv_s2
+            slopes[rows, 0] = he2
+            slopes[rows, 1] = _row_sums(phi_x2 * (x2 - 3.0), dk)
+            slopes[rows, 2] = _row_sums(phi * (x2 * (x2 - 6.0) + 3.0), dc) * inv_s2
     return values, slopes
 
 
@@ -423,8 +459,7 @@ def node_values(block, foundation, cond):
     tu = float(cond.uplift_threshold(block, foundation))
     sigma = tu * np.exp(t)
     theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond)
-    values, slopes = gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
-    return np.ascontiguousarray(values), np.ascontiguousarray(slopes)
+    return gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
 
 
 def coefficient_table(block, foundation, cond):
@@ -515,35 +550,231 @@ def coefficient_tables(block, foundation, cond):
     >>> tables.shape, index.tolist()
     ((2, 1183, 12), [0, 0, 1])
     """
-    n = np.size(block.m)
-    index = np.empty(n, dtype=np.int64)
-    tables, seen = [], {}
-    for i in range(n):
-        blk, fnd = select(block, i), select(foundation, i)
-        key = point_key(blk, fnd)
-        if key not in seen:
-            seen[key] = len(tables)
-            tables.append(coefficient_table(blk, fnd, cond))
-        index[i] = seen[key]
+    first, index = _distinct_points(block, foundation)
+    return _stacked([coefficient_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]), index
+
+
+def _stacked(tables):
+    """Tables zero-padded to the longest and stacked (the padding is never read)."""
     size = max(tb.shape[0] for tb in tables)
     out = np.zeros((len(tables), size, tables[0].shape[1]))
     for j, tb in enumerate(tables):
         out[j, :tb.shape[0]] = tb
-    return out, index
+    return out
 
 
-#: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units; the table grid in
-#: ``t = ln(sigma_theta / theta_ul)``).
-RECORD = np.dtype([("log_theta_ul", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), ("table_lo", "f8"),
-                   ("table_rate", "f8"), ("table_n", "f8")])
+def _distinct_points(block, foundation):
+    """``(first, index)`` of flat model fields: the first point of each distinct parameter point (equal
+    numeric fields, as :func:`screening.core.model.points.point_key` compares them), in order of appearance,
+    and each point's distinct point (one ``numpy.unique`` over the points, not a key per point)."""
+    n = np.size(block.m)
+    columns = [np.broadcast_to(np.asarray(value, dtype=float).reshape(-1), (n,))
+               for obj in (block, foundation) for value in numeric_fields(obj).values()]
+    _, first, inverse = np.unique(np.stack(columns, axis=1), axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return first[order], rank[inverse.reshape(-1)].astype(np.int64)
+
+
+def _interpolant(q, table, c0, k0):
+    """:func:`table_lookup` at the points ``q = (sigma / theta_ul)^2 > 0`` (numpy, vectorised)."""
+    t = 0.5 * np.log(q)
+    n = table.shape[0]
+    u = (t - T_LO) * STEPS_PER_UNIT
+    i = np.clip(np.floor(u), 0, n - 2).astype(np.int64)
+    s = u - i
+    out = np.empty((q.size, 3))
+    for col in range(3):
+        a = table[i, 4 * col: 4 * col + 4]
+        out[:, col] = a[:, 0] + s * (a[:, 1] + s * (a[:, 2] + s * a[:, 3]))
+    below, held = t <= T_LO, u >= n - 1
+    f = np.exp(2.0 * (t[below] - T_LO))
+    out[below] = np.stack([c0 + (table[0, 0] - c0) * f, k0 + (table[0, 4] - k0) * f,
+                           np.full(f.shape, table[0, 8])], axis=1)
+    out[held] = table[n - 1, 0::4][:3]
+    return out
+
+
+_LOBATTO = 0.5 - 0.5 * np.cos(np.pi * np.arange(FIT_DEGREE + 1) / FIT_DEGREE)
+_TO_POWERS = np.linalg.inv(np.vander(_LOBATTO, FIT_DEGREE + 1, increasing=True))
+
+
+def octave_table(table, c0, k0):
+    """The solver's form of a :func:`coefficient_table`: its interpolant on the octave buckets of ``q``.
+
+    Parameters
+    ----------
+    table : numpy.ndarray
+        One point's :func:`coefficient_table` (on the grid ``t = T_LO + i / STEPS_PER_UNIT``).
+    c0 : float
+        ``C(0)`` [N m s/rad].
+    k0 : float
+        ``K(0)`` [N m/rad].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2 n_buckets, 3 + 3 (FIT_DEGREE + 1))``: rows ``2 j`` and ``2 j + 1`` are the two pieces of
+        bucket ``j`` of ``q = (sigma / theta_ul)^2`` (:func:`screening.core.interpolation.octave_grid`
+        from ``2^Q_OCTAVE_LO``, :data:`BUCKET_BITS` bits), split at the grid node inside it (if any).  Each
+        row holds that node's ``q`` (``inf`` if none), ``A``, ``B`` with ``y = A s + B`` in ``[0, 1]`` over
+        the piece (``s`` the fraction of the bucket), and the coefficients of ``e_c`` [N m s/rad],
+        ``e_k`` [N m/rad] and ``d_c`` [N m s/rad^3] in powers of ``y``.
+
+    Notes
+    -----
+    Within a piece the interpolant of :func:`table_lookup` (a cubic in ``t = ln(q) / 2``, or the
+    extrapolation below the grid) is analytic in ``q``; its interpolation at the :data:`FIT_DEGREE` + 1
+    Chebyshev-Lobatto points of the piece [1]_ reproduces it within 1e-13 of ``K(0)`` (the rounding of its
+    logarithm), and :func:`octave_lookup_jit` finds the piece from the bits of ``q``, without a logarithm.
+
+    References
+    ----------
+    .. [1] L. N. Trefethen, Approximation Theory and Approximation Practice, SIAM (2013), ch. 8
+       (convergence for analytic functions).
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core.condensation import get
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
+    >>> cubic = get("cubic")
+    >>> table = coefficient_table(block, bed, cubic)
+    >>> c0, k0 = float(cubic.damping_at_rest(block, bed)), float(cubic.stiffness_at_rest(block, bed))
+    >>> solver_table = octave_table(table, c0, k0)
+    >>> q = np.geomspace(1e-12, 3e5, 7)
+    >>> got = np.array([octave_lookup_jit(x, solver_table, c0, k0, *table[0, 0::4][:3], *table[-1, 0::4][:3],
+    ...                                   solver_table.shape[0] // 2) for x in q])
+    >>> bool(np.allclose(got, [table_lookup(0.5 * math.log(x), table, c0, k0) for x in q], rtol=1e-11, atol=1e-12 * k0))
+    True
+    """
+    n = table.shape[0]
+    q_nodes = np.exp(2.0 * (T_LO + np.arange(n) / STEPS_PER_UNIT))
+    edges = octave_grid(Q_OCTAVE_LO, int(math.ceil(math.log2(q_nodes[-1]))), BUCKET_BITS)
+    lo, hi = edges[:-1], edges[1:]
+    k = np.minimum(np.searchsorted(q_nodes, lo), n - 1)           # the first node at or above each bucket
+    inside = q_nodes[k] < hi
+    node = np.where(inside, q_nodes[k], np.inf)
+    split = np.where(inside, (node - lo) / (hi - lo), 1.0)
+    rows = np.zeros((2 * lo.size, 3 + 3 * (FIT_DEGREE + 1)))
+    for piece, (a, b) in enumerate(((np.zeros_like(split), split), (split, np.ones_like(split)))):
+        width = np.where(b > a, b - a, 1.0)
+        s = a[:, None] + _LOBATTO[None, :] * width[:, None]
+        values = _interpolant((lo[:, None] + s * (hi - lo)[:, None]).ravel(), table, c0, k0)
+        values = values.reshape(lo.size, FIT_DEGREE + 1, 3)
+        # powers[b, c, i] = sum_j _TO_POWERS[i, j] values[b, j, c], summed in this order (no BLAS: the same bits
+        # in every process)
+        powers = sum(_TO_POWERS[None, None, :, j] * values[:, j, :, None] for j in range(FIT_DEGREE + 1))
+        rows[piece::2, 0] = node
+        rows[piece::2, 1] = 1.0 / width
+        rows[piece::2, 2] = -a / width
+        rows[piece::2, 3:] = powers.reshape(lo.size, -1)
+    return rows
+
+
+@numba.njit(cache=True, inline="always")
+def _piece(table, r, column, y):
+    """Column ``column`` (0 ``e_c``, 1 ``e_k``, 2 ``d_c``) of row ``r`` of an :func:`octave_table` at ``y``."""
+    c = 3 + (FIT_DEGREE + 1) * column
+    return table[r, c] + y * (table[r, c + 1] + y * (table[r, c + 2] + y * (table[r, c + 3] + y * (
+        table[r, c + 4] + y * table[r, c + 5]))))
+
+
+@numba.njit(cache=True, inline="always")
+def octave_lookup_jit(q, table, c0, k0, lo_c, lo_k, lo_d, hi_c, hi_k, hi_d, buckets):
+    """Compiled :func:`table_lookup` at ``q = (sigma_theta / theta_ul)^2`` from an :func:`octave_table`.
+
+    Parameters
+    ----------
+    q : float
+        ``(sigma_theta / theta_ul)^2`` [-]; any ``q <= 0`` (and NaN) gives the values at rest.
+    table : numpy.ndarray
+        The point's :func:`octave_table` (possibly zero-padded: rows beyond ``2 buckets`` are never read).
+    c0 : float
+        ``C(0)`` [N m s/rad].
+    k0 : float
+        ``K(0)`` [N m/rad].
+    lo_c, lo_k, lo_d : float
+        ``e_c``, ``e_k``, ``d_c`` at the first node of the :func:`coefficient_table` (``t = T_LO``) [SI].
+    hi_c, hi_k, hi_d : float
+        The same at its last node, held beyond [SI].
+    buckets : int
+        The table's number of buckets [-].
+
+    Returns
+    -------
+    tuple of float
+        ``(e_c [N m s/rad], e_k [N m/rad], d_c [N m s/rad^3])``.
+
+    Notes
+    -----
+    The bucket and the fraction ``s`` in it from the bits of ``q``
+    (:func:`screening.core.interpolation.octave_position_jit`), the piece by one comparison with the
+    node in the bucket, then a polynomial of degree :data:`FIT_DEGREE` in ``y = A s + B``: the cubic
+    Hermite interpolant [1]_ of :func:`table_lookup` without its logarithm.  Below ``2^Q_OCTAVE_LO`` the
+    extrapolation ``f0 + (f(T_LO) - f0) q / exp(2 T_LO)``.
+
+    References
+    ----------
+    .. [1] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
+       interpolation).
+
+    Examples
+    --------
+    Below the grid the values tend to those at rest (a made-up table of zeros):
+
+    >>> octave_lookup_jit(0.0, np.zeros((2, 21)), 1.0, 500.0, 0.9, 450.0, 3.0, 0.1, 20.0, 0.0, 1)
+    (1.0, 500.0, 3.0)
+    """
+    j, s = octave_position_jit(q, _FIRST, BUCKET_BITS)
+    if j < 0:
+        f = q * (1.0 / _Q_LO) if q > 0.0 else 0.0      # (sigma / sigma_lo)^2
+        return c0 + (lo_c - c0) * f, k0 + (lo_k - k0) * f, lo_d
+    if j >= buckets:
+        return hi_c, hi_k, hi_d
+    r = 2 * j + (1 if q >= table[2 * j, 0] else 0)
+    y = s * table[r, 1] + table[r, 2]
+    return _piece(table, r, 0, y), _piece(table, r, 1, y), _piece(table, r, 2, y)
+
+
+_TABLES = OrderedDict()
+_TABLES_LOCK = threading.Lock()
+
+
+def _solver_table(block, foundation, cond):
+    """``(octave table, node-0 values, last-node values)`` of one scalar point, from the process's cache of
+    recent tables (read-only)."""
+    key = (cond, point_key(block, foundation))
+    with _TABLES_LOCK:
+        entry = _TABLES.get(key)
+        if entry is not None:
+            _TABLES.move_to_end(key)
+            return entry
+    table = coefficient_table(block, foundation, cond)
+    solver_table = octave_table(table, float(cond.damping_at_rest(block, foundation)),
+                                float(cond.stiffness_at_rest(block, foundation)))
+    solver_table.flags.writeable = False
+    entry = (solver_table, table[0, 0::4][:3].copy(), table[-1, 0::4][:3].copy())
+    with _TABLES_LOCK:
+        _TABLES[key] = entry
+        while len(_TABLES) > TABLE_CACHE_SIZE:
+            _TABLES.popitem(last=False)
+    return entry
+
+
+#: Per-point parameters of :func:`equivalent_coefficients_jit` (SI units): ``1 / theta_ul^2``, ``C(0)``,
+#: ``K(0)``, the table's first and last node values and its number of buckets.
+RECORD = np.dtype([("inv_theta_ul2", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), ("lo_c", "f8"), ("lo_k", "f8"),
+                   ("lo_d", "f8"), ("hi_c", "f8"), ("hi_k", "f8"), ("hi_d", "f8"), ("buckets", "i8")])
 
 
 def moment_kernel(block, foundation, cond):
     """:class:`~screening.core.condensation.base.MomentKernel` of ``cond`` for flat (1-d) model fields.
 
     The default moment kernel of a condensation without closed forms: the compiled
-    :func:`equivalent_coefficients_jit`, one :data:`RECORD` per point and the tables of
-    :func:`coefficient_tables`.
+    :func:`equivalent_coefficients_jit`, one :data:`RECORD` per point and the :func:`octave_table` of each
+    distinct point (kept by the process for the next call).
 
     Parameters
     ----------
@@ -557,9 +788,7 @@ def moment_kernel(block, foundation, cond):
     Returns
     -------
     screening.core.signatures.MomentKernel
-        ``(coefficients, records, tables, table_index)``: records in SI units
-        (``log_theta_ul`` = ln(theta_ul / 1 rad), ``c_rest`` [N m s/rad], ``k_rest`` [N m/rad], the
-        table grid).
+        ``(coefficients, records, tables, table_index)``: records in SI units (:data:`RECORD`).
 
     References
     ----------
@@ -576,17 +805,22 @@ def moment_kernel(block, foundation, cond):
     >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=[0.21, 0.21]),
     ...                           Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
     >>> kernel = moment_kernel(block, bed, get("cubic"))
-    >>> kernel.tables.shape, kernel.table_index.tolist(), kernel.records["table_n"].tolist()
-    ((1, 1183, 12), [0, 0], [1183.0, 1183.0])
+    >>> kernel.tables.shape, kernel.table_index.tolist(), kernel.records["buckets"].tolist()
+    ((1, 3456, 21), [0, 0], [1728, 1728])
     """
-    tables, index = coefficient_tables(block, foundation, cond)
-    fields = {"log_theta_ul": np.log(cond.uplift_threshold(block, foundation)),
-              "c_rest": cond.damping_at_rest(block, foundation), "k_rest": cond.stiffness_at_rest(block, foundation),
-              "table_lo": T_LO, "table_rate": float(STEPS_PER_UNIT), "table_n": table_size(block, foundation, cond)}
-    records = np.empty(index.size, dtype=RECORD)
-    for name, value in fields.items():
-        records[name] = np.broadcast_to(np.asarray(value, dtype=float), index.shape)
-    return MomentKernel(equivalent_coefficients_jit, records, tables, index)
+    first, index = _distinct_points(block, foundation)
+    entries = [_solver_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
+    blk, fnd = select(block, first), select(foundation, first)          # one entry per distinct point
+    records = np.empty(first.size, dtype=RECORD)
+    records["inv_theta_ul2"] = 1.0 / np.broadcast_to(cond.uplift_threshold(blk, fnd), first.shape) ** 2
+    records["c_rest"] = np.broadcast_to(cond.damping_at_rest(blk, fnd), first.shape)
+    records["k_rest"] = np.broadcast_to(cond.stiffness_at_rest(blk, fnd), first.shape)
+    for end, column in (("lo", 1), ("hi", 2)):
+        values = np.array([e[column] for e in entries])
+        for k, name in enumerate(("c", "k", "d")):
+            records[f"{end}_{name}"] = values[:, k]
+    records["buckets"] = [e[0].shape[0] // 2 for e in entries]
+    return MomentKernel(equivalent_coefficients_jit, records[index], _stacked([e[0] for e in entries]), index)
 
 
 def table_lookup(t, table, c0, k0):
@@ -745,7 +979,8 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     Notes
     -----
     Eq. (31) in [1]_ in the form ``c_eq = e_c``, ``k_eq = e_k + cov d_c`` (:func:`gaussian_expectations`),
-    read from the table by :func:`table_lookup_grid` at ``t = ln(sigma_theta / theta_ul)``.
+    read from the :func:`octave_table` by :func:`octave_lookup_jit` at ``q = var_theta / theta_ul^2`` (the
+    interpolant of :func:`table_lookup`, without a logarithm).
 
     References
     ----------
@@ -770,8 +1005,8 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     >>> bool(abs(c_eq / c_ref - 1) < 1e-8 and abs(k_eq / k_ref - 1) < 1e-6)
     True
     """
-    t = 0.5 * math.log(var_theta) - p.log_theta_ul if var_theta > 0.0 else -math.inf
-    e_c, e_k, d_c = table_lookup_grid(t, table, p.c_rest, p.k_rest, p.table_lo, p.table_rate, p.table_n)
+    e_c, e_k, d_c = octave_lookup_jit(var_theta * p.inv_theta_ul2, table, p.c_rest, p.k_rest, p.lo_c, p.lo_k,
+                                      p.lo_d, p.hi_c, p.hi_k, p.hi_d, p.buckets)
     return e_c, e_k + cov * d_c
 
 

@@ -199,7 +199,7 @@ def test_compiled_cubic_coefficients_match_the_quadrature(paper_block, cubic_bed
     kernel = get_condensation("cubic").moment_kernel(block, bed)
     tables = kernel.tables
     tu = cubic.uplift_threshold(paper_block, cubic_bed)
-    assert kernel.records["log_theta_ul"][0] == np.log(tu)
+    assert kernel.records["inv_theta_ul2"][0] == 1.0 / tu**2
     k_scale = cubic.stiffness_at_rest(paper_block, cubic_bed)
     ratios = np.concatenate([[0.0, 1e-7], np.logspace(-3, np.log10(4 * paper_block.slenderness / tu), 41)])
     var = (ratios * tu) ** 2

@@ -46,3 +46,77 @@ def test_the_expectations_of_quadratic_coefficients_are_their_gaussian_moments()
     np.testing.assert_allclose(slopes[:, 0], 2 * a * s2, rtol=1e-9)
     np.testing.assert_allclose(slopes[:, 1], 6 * b * s2, rtol=1e-9)
     np.testing.assert_allclose(slopes[:, 2], 0.0, atol=1e-8 * a)
+
+
+def test_the_sums_taken_a_few_sigmas_at_a_time_have_the_bits_of_the_whole_array():
+    c0, a, k0, b = 2.0, 5e4, 1e3, -3e7            # C = c0 + a theta^2, K = k0 + b theta^2
+    theta, weight = quad.theta_quadrature(THETA_UL, 5.0 * THETA_UL, quad.SIGMA_SPAN * 1e-2)
+    c, k = c0 + a * theta ** 2, k0 + b * theta ** 2
+    sigma = np.geomspace(1e-8, 1e-2 / 1.01, 3 * quad.SIGMA_CHUNK + 5)
+    values, slopes = quad.gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
+    # the formulas on the whole (sigma, node) array at once: the tables' bits before they were chunked
+    s = sigma[:, None]
+    x2 = (theta[None, :] / s) ** 2
+    phi = (2.0 / math.sqrt(2.0 * math.pi)) * weight[None, :] * np.exp(-0.5 * x2) / s
+    he2 = phi * (x2 - 1.0)
+    inv_s2 = 1.0 / sigma ** 2
+    ref_values = np.stack([np.sum(phi * c, axis=1), np.sum(phi * x2 * k, axis=1),
+                           np.sum(he2 * (c - c0), axis=1) * inv_s2], axis=1)
+    ref_slopes = np.stack([np.sum(he2 * (c - c0), axis=1), np.sum(phi * x2 * (x2 - 3.0) * (k - k0), axis=1),
+                           np.sum(phi * (x2 * (x2 - 6.0) + 3.0) * (c - c0), axis=1) * inv_s2], axis=1)
+    np.testing.assert_array_equal(values, ref_values)
+    np.testing.assert_array_equal(slopes, ref_slopes)
+
+
+def test_a_point_met_again_reuses_its_table_and_the_cache_is_bounded():
+    from screening.core.condensation import get
+    from screening.core.model import Block, Foundation
+    from screening.core.model.points import flatten
+
+    cond = get("virtual_work")
+    quad._TABLES.clear()
+    (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21),
+                              Foundation(k=2.89e7, lam=8.95e8, eps=np.linspace(0.0, 6e7, quad.TABLE_CACHE_SIZE + 3)))
+    kernel = quad.moment_kernel(block, bed, cond)
+    assert len(quad._TABLES) == quad.TABLE_CACHE_SIZE and kernel.table_index.tolist() == list(range(bed.eps.size))
+    newest = next(reversed(quad._TABLES.values()))[0]
+    again = quad.moment_kernel(*(flatten(Block(m=8.67, b=0.035, h=0.21),
+                                         Foundation(k=2.89e7, lam=8.95e8, eps=6e7))[0]), cond)
+    assert next(reversed(quad._TABLES.values()))[0] is newest and not newest.flags.writeable
+    np.testing.assert_array_equal(again.tables[0], kernel.tables[-1][:again.tables.shape[1]])
+
+
+def test_the_solver_reads_the_interpolant_of_the_table_without_a_logarithm(paper_block, cubic_bed):
+    from screening.core.condensation import get
+
+    cond = get("virtual_work")
+    table = quad.coefficient_table(paper_block, cubic_bed, cond)
+    c0, k0 = float(cond.damping_at_rest(paper_block, cubic_bed)), float(cond.stiffness_at_rest(paper_block, cubic_bed))
+    solver_table = quad.octave_table(table, c0, k0)
+    n_buckets = solver_table.shape[0] // 2
+    ends = (*table[0, 0::4][:3], *table[-1, 0::4][:3])
+    rng = np.random.default_rng(5)
+    t = np.concatenate([rng.uniform(quad.T_LO - 3, quad.T_LO + (table.shape[0] + 60) / quad.STEPS_PER_UNIT, 3000),
+                        quad.T_LO + np.arange(table.shape[0]) / quad.STEPS_PER_UNIT])     # and every node
+    got = np.array([quad.octave_lookup_jit(math.exp(2 * x), solver_table, c0, k0, *ends, n_buckets) for x in t])
+    ref = np.array([quad.table_lookup(x, table, c0, k0) for x in t])
+    # within the rounding of the logarithm that table_lookup takes (its t carries ~1e-13 absolute): measured
+    # 1e-13 K(0) in e_k and up to 4e-12 relative in e_c and d_c on the softening beds, where they are steepest
+    np.testing.assert_allclose(got[:, 0], ref[:, 0], rtol=1e-11)
+    np.testing.assert_allclose(got[:, 1], ref[:, 1], rtol=0, atol=1e-12 * abs(k0))
+    np.testing.assert_allclose(got[:, 2], ref[:, 2], rtol=0, atol=1e-11 * np.abs(ref[:, 2]).max())
+    assert quad.octave_lookup_jit(0.0, solver_table, c0, k0, *ends, n_buckets) == (c0, k0, table[0, 8])
+
+
+def test_distinct_points_are_found_as_point_key_finds_them():
+    from screening.core.model import Block, Foundation
+    from screening.core.model.points import flatten, point_key, select
+
+    rng = np.random.default_rng(3)
+    (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=rng.choice([0.21, 0.3], 40)),
+                              Foundation(k=2.89e7, lam=8.95e8, eps=rng.choice([0.0, -0.0, 6e7, -6e5], 40)))
+    first, index = quad._distinct_points(block, bed)
+    keys = [point_key(select(block, i), select(bed, i)) for i in range(40)]
+    order = list(dict.fromkeys(keys))                       # distinct keys in order of appearance
+    assert [keys[i] for i in first] == order
+    assert [order.index(key) for key in keys] == index.tolist()
