@@ -31,10 +31,13 @@ class Progress:
     terminal, or ``lines=True``) a new line is written every :data:`LINE_STEP` of the work or
     :data:`LINE_INTERVAL` seconds, and at the end.  A background thread keeps it alive while one
     long task (a spot check) runs.  The time left is the elapsed time per unit of work times the
-    units left.  Silent when ``enabled`` is false.  Use as a context manager; call :meth:`update`.
+    units left, or what ``eta()`` says (seconds, or None: not known yet); ``line_interval`` [s]: the
+    longest time between lines (default :data:`LINE_INTERVAL`), and with it the first line is written at
+    once.  Silent when ``enabled`` is false.  Use as a context manager; call :meth:`update`.
     """
 
-    def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None):
+    def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None, eta=None,
+                 line_interval=None):
         self.total = max(int(total), 1)
         self.label = label
         self.enabled = enabled
@@ -46,6 +49,9 @@ class Progress:
             except (AttributeError, ValueError):
                 lines = True
         self.lines = lines
+        self.eta = eta
+        self.line_interval = LINE_INTERVAL if line_interval is None else float(line_interval)
+        self._eager = line_interval is not None
         self.done = 0
         self._start = time.perf_counter()
         self._last = -float("inf")
@@ -59,6 +65,9 @@ class Progress:
         elapsed = (time.perf_counter() if now is None else now) - self._start
         pct = 100.0 * self.done / self.total
         head = f"{self.label}: {pct:3.0f}% ({self.done}/{self.total}) {elapsed:.1f} s"
+        if self.eta is not None and self.done < self.total:
+            left = self.eta()
+            return head if left is None else f"{head}, about {_duration(left)} left"
         if 0 < self.done < self.total:
             return f"{head}, about {_duration(elapsed / self.done * (self.total - self.done))} left"
         return head
@@ -73,7 +82,7 @@ class Progress:
             now = time.perf_counter()
             if self.lines:
                 step = int(self.done / self.total / LINE_STEP + 1e-9)
-                if finished or step > self._last_step or now - self._last >= LINE_INTERVAL:
+                if finished or step > self._last_step or now - self._last >= self.line_interval:
                     self._last_step, self._last = step, now
                     self._write(self.text(now) + "\n")
             elif now - self._last >= self.interval or finished:
@@ -88,7 +97,7 @@ class Progress:
             self.enabled = False
 
     def _tick(self):
-        period = LINE_INTERVAL if self.lines else max(self.interval, 1.0)
+        period = self.line_interval if self.lines else max(self.interval, 1.0)
         while not self._stop.wait(period):
             if self.enabled and self.done < self.total:
                 self._show()
@@ -98,6 +107,8 @@ class Progress:
         if self.enabled:
             self._ticker = threading.Thread(target=self._tick, name="progress", daemon=True)
             self._ticker.start()
+            if self._eager:
+                self._show(True)
         return self
 
     def __exit__(self, *exc):
