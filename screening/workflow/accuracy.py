@@ -219,8 +219,9 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
     done = [j for j in range(len(order)) if j in results]
     escalated, models_done = order[done], models[done]
     runs = [results[j] for j in done]
-    for r in runs:
+    for j, r in zip(done, runs):
         r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
+        r["transition"] = np.int8(first[j])
     result.write_escalation(escalated, models_done, runs)
     best = {}
     for name in ("var_theta", "var_theta_dot"):
@@ -475,11 +476,18 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         return measured["wall"] / measured["cost"] if measured["cost"] > 0 else PRIOR_WALL_PER_COST
 
     def eta():
-        """Seconds left: the runs queued and the points not started, at the measured rate, within the budget."""
-        left = sum(n * rate for n, _, rate in todo.values())
-        left += sum(pilot_prior[j] for j in range(len(order)) if j not in results)
-        left += sum(c for c in in_flight.values())
-        return min(wall_per_cost() * left / threads, max(acc.budget_s - now(), 0.0)) if measured["cost"] else None
+        """Seconds left: the runs queued and in flight and the points not started (each as a finished point's runs
+        cost on average; before any, its pilot), at the measured rate (before any: the prior), within the budget.
+        Called from the display's thread: None where the loop changed the queue meanwhile."""
+        try:
+            left = sum(n * rate for n, _, rate in list(todo.values())) + sum(list(in_flight.values()))
+            done = [float(results[j]["cost_s"]) for j in list(finished) if j in results]
+            per_point = float(np.mean(done)) if done else None        # a finished point's runs, all told
+            left += sum(per_point or pilot_prior[j] for j in range(len(order))
+                        if j not in results and j not in in_flight and j not in counters["cut"])
+        except RuntimeError:
+            return None
+        return min(wall_per_cost() * left / threads, max(acc.budget_s - now(), 0.0))
 
     topic = f"screening-escalation-samples-{token}"
     samples_done, signal = {}, threading.Event()        # signal: a run ended
@@ -619,14 +627,14 @@ def _escalation_runs(stage, order, models, first, levels, answers):
                     stage.log(f"warning: accuracy: budget_s = {acc.budget_s:g} s reached with {len(cut)} run(s) still "
                               f"going: cancelled (points {', '.join(str(j) for j in cut)} keep their earlier runs)")
                     break
-                save_plan()
                 if done:
+                    save_plan()
                     write_interim()
                 fill()
         finally:
+            save_plan()                                 # the wall seconds spent, also when interrupted
             with contextlib.suppress(Exception):        # noqa: BLE001 - only the display
                 stage.client.unsubscribe_topic(topic)
-    save_plan()
     return results, ran()
 
 

@@ -794,6 +794,8 @@ class ResultFile:
         var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
         var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
             fill=False)
+        var("esc_transition", "i1", ("escalation",), np.array([r.get("transition", 0) for r in runs], dtype=np.int8),
+            fill=False)
         for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
             var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
         at = np.asarray(flat_indices, dtype=np.int64)

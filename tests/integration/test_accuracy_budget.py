@@ -103,6 +103,7 @@ def test_the_budget_in_wall_seconds_binds_on_the_clock(one_worker, tmp_path, mon
     with xr.open_dataset(out) as ds:
         assert float(ds.attrs["accuracy_wall_s"]) <= 1.1 * budget
         assert int(ds.attrs["accuracy_n_cut_by_budget"]) == info["n_cut"]
+        assert ds["esc_transition"].values[0] == 1                 # the first point to run decides a curve
         got = dict(zip(ds["esc_grid_index"].values.tolist(), ds["esc_samples"].values.tolist()))
     # the runs that were not shortened are the unbounded plan's (what a point runs depends on its own runs)
     full = dict(zip(esc["esc_grid_index"].tolist(), esc["esc_samples"].tolist()))
@@ -124,6 +125,7 @@ def test_transition_points_run_first(unbounded):
     assert pilots[:n] == list(range(n))
     with xr.open_dataset(report.path) as ds:
         flat = ds["esc_grid_index"].values
+        assert ds["esc_transition"].values.tolist() == [1] * n + [0] * (flat.size - n)
         p = np.column_stack([ds["p_overturn"].values.reshape(-1), ds["p_exceed"].values.reshape(ds["status"].size, -1)])
         s0_axis = list(ds["status"].dims).index("S0")
         shape = ds["status"].shape
