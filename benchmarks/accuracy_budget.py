@@ -50,7 +50,7 @@ def main(argv=None):
         acc, stage = report.accuracy, report.timings["accuracy"]
         print(f"{budget:g} | {stage:.1f} | {acc['wall_s']:.1f} | {acc['wall_s'] / budget:.2f} | {acc['n_escalated']}"
               f" | {acc['n_transition']} | {acc['n_cut']} | {acc['cost_s']:.1f} | {acc['cpu_s']:.1f}   "
-              f"(run {total:.0f} s)")
+              f"(run {total:.0f} s; compiling the Monte Carlo kernels {acc['warm_up_s']:.0f} s)")
         progress = [x for x in err.getvalue().splitlines() if x.startswith("accuracy")]
         print("   plan:", next((m for m in log if m.startswith("accuracy:")), "-"))
         print(f"   progress lines: {len(progress)}; first: {progress[0] if progress else '-'}")

@@ -245,7 +245,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
             "n_condensed": int(np.sum(models_done == EscalationModel.condensed)),
             "n_stiff_bed": int(np.sum(models_done == EscalationModel.stiff_bed)), "n_short": short,
             "n_multifidelity": sum(1 for r in runs if int(r.get("estimator", 0)) == EscalationEstimator.multifidelity),
-            "n_cut": int(ran["n_cut"]), "n_failed": int(ran["n_failed"]),
+            "n_cut": int(ran["n_cut"]), "n_failed": int(ran["n_failed"]), "warm_up_s": float(ran["warm_up_s"]),
             "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
             "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
@@ -361,7 +361,8 @@ def _escalation_runs(stage, order, models, first, levels, answers):
 
     Returns ``({position: result}, ran)``: each result carries its total ``cpu_time`` and ``cost_s``; ``ran``:
     ``wall_s`` (wall seconds of the stage, earlier runs included), ``n_cut`` (points the budget left short
-    or without a run), ``n_failed`` (failed tasks).
+    or without a run), ``n_failed`` (failed tasks), ``warm_up_s`` (the kernels' compilation on the workers, not
+    charged).
     """
     from screening.analysis import escalation as esc
     from screening.status import EscalationEstimator, EscalationModel
@@ -463,8 +464,13 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     pilots_s = sum(pilot_prior[j] for j in range(len(order)) if first[j] and j not in results)
     stage.log(plan_line(acc.budget_s, len(order), int(np.sum(first)),
                         PRIOR_WALL_PER_COST * pilots_s / threads, threads))
+    warm_up = 0.0
     if len(results) < len(order) or any(next_run(j) is not None for j in results):
-        stage.client.run(_submit.warm_up_monte_carlo)     # compile outside the budget
+        stage.log("accuracy: compiling the Monte Carlo kernels on the workers (cached after the first run; not "
+                  "charged to budget_s)")
+        t0 = time.perf_counter()
+        stage.client.run(_submit.warm_up_monte_carlo)
+        warm_up = time.perf_counter() - t0
     start = clock()
     measured = {"wall": 0.0, "cost": 0.0}                  # wall seconds of finished runs, their cost-model seconds
     pilot_costs = []                                       # cost-model seconds of the pilots run
@@ -594,7 +600,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         interim.update(last=now(), took=clock() - t0, count=len(results))
 
     def ran():
-        return {"wall_s": now(), "n_cut": len(counters["cut"]), "n_failed": counters["failed"]}
+        return {"wall_s": now(), "n_cut": len(counters["cut"]), "n_failed": counters["failed"], "warm_up_s": warm_up}
 
     with Progress(len(order), label=label, enabled=stage.progress and len(order) > 0, eta=eta,
                   line_interval=PROGRESS_INTERVAL_S) as bar:
