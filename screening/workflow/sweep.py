@@ -34,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import datetime as _dt
 import os
+import shutil
 import sys
 import threading
 import time
@@ -330,8 +331,6 @@ class _SweepRun:
 
     def _zarr_result(self, attrs, batch_size):
         """The zarr store of the run: the one of an interrupted run with the same manifest, or a new one."""
-        import shutil
-
         study, path = self.study, self.store.zarr_building
         result = None
         if path.is_symlink() or (path.exists() and not path.is_dir()):    # planted in our folder: never followed
@@ -534,8 +533,6 @@ class _SweepRun:
         them), the probabilities follow (without spot checks, which come later), and the copy replaces ``out``
         atomically.  Its ``interim_result`` attribute says what it is; a later run does not reuse it
         (:func:`~screening.workflow.reader.verify_result`) but resumes from the partial folder."""
-        import shutil
-
         study = self.study
         self.result.commit()
         tmp = self.store.building.with_name(self.store.building.name + ".interim")   # cleared with the folder
