@@ -4,6 +4,8 @@
 * :func:`cover_points` — points covering the candidates evenly in feature space (greedy maximin,
   starting from the worst corner), so that the correction (:mod:`screening.analysis.correction`)
   learns from the whole untrusted region, not only its extreme;
+* :func:`transition_points` and :func:`transition_first` — the points in the transition of a fragility
+  curve (P from ~0 to ~1 along the swept intensity) first, then the coverage of the others;
 * :func:`escalation_model` — condensed Monte Carlo where the calibration shows the condensed model
   within the target of the coupled one (only the linearization is in doubt), coupled otherwise;
 * :func:`auto_escalation_model` — with ``model = "auto"``, the stiff-bed model where its measured
@@ -11,10 +13,11 @@
 * :func:`samples_needed` — samples for a relative standard error of ``target / 2`` from a pilot run
   (or from the main run, for the top-up round), with a safety factor for heavy tails;
 * :func:`meets_target` — whether a run's standard error reached ``target / 2`` of its peak;
+* :func:`probability_samples` and :func:`probabilities_met` — the same for the probabilities of a
+  transition point (standard error :data:`PROBABILITY_SE`);
 * :func:`estimated_cost` — the deterministic cost model: CPU seconds estimated from a run's
   integration steps (the budget is planned on it, so the escalated points and their samples do not
   depend on the speed of the machine);
-* :func:`affordable_points` — how many points the budget covers at that many samples;
 * :func:`paired_model` — the cheaper model run beside the coupled one for a multi-fidelity estimate
   (``[accuracy] multifidelity``), and :func:`paired_plan` — its samples from a paired pilot.
 
@@ -32,12 +35,14 @@ from screening.analysis.correction import atlas_promises, linearization_promises
 from screening.analysis.multifidelity import allocate
 from screening.analysis.trust import bed_law, p_bin, regime
 from screening.core.status import EscalationModel, PointStatus
+from screening.solvers.estimates import Z, binomial_estimate
 
-__all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "MAIN_SHARE", "STEP_COST_S", "GRID_COST_S", "RODAS_STEP_FACTOR",
+__all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "TRANSITION_BAND", "PROBABILITY_SE", "STEP_COST_S", "GRID_COST_S", "RODAS_STEP_FACTOR",
            "PRIOR_STEPS_PER_S", "STIFF_BED_EXACT_COST_S", "STIFF_BED_ADAPTIVE_COST_S", "STIFF_BED_RUN_COST_S",
-           "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MIN_COVER", "MIN_CONDENSED_ROWS",
-           "escalation_candidates", "cover_points", "condensed_cells", "escalation_model", "samples_needed",
-           "meets_target", "estimated_cost", "full_contact_share", "prior_cost", "affordable_points",
+           "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MAX_TRANSITION_POINTS", "MIN_CONDENSED_ROWS",
+           "escalation_candidates", "cover_points", "transition_points", "transition_first", "condensed_cells",
+           "escalation_model", "samples_needed", "meets_target", "probability_samples", "probabilities_met",
+           "estimated_cost", "full_contact_share", "prior_cost",
            "auto_escalation_model", "PAIRED_MODEL", "paired_model", "paired_plan"]
 
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
@@ -45,8 +50,14 @@ PILOT_SAMPLES = 64
 #: Samples from the pilot's standard error are multiplied by this: a small pilot underestimates the
 #: spread of heavy-tailed peaks (with 32 samples and no factor, 34 of 41 points ended short).
 SAMPLE_SAFETY = 1.5
-#: Share of the budget the pilot and main runs may plan with; the rest is for the top-up round.
-MAIN_SHARE = 0.85
+#: A point is in the transition of a fragility curve where a probability of it (or of its neighbours along the
+#: swept intensity) lies in this band [1]: Monte Carlo there decides the curve.
+TRANSITION_BAND = (0.02, 0.98)
+#: Standard error [1] of every Monte Carlo probability a transition point aims at (the acceptance target of a
+#: collection's P(overturn), issue #40 item 6).
+PROBABILITY_SE = 0.03
+#: At most this many transition points are put first (the budget decides how many run).
+MAX_TRANSITION_POINTS = 1000
 #: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
 #: :class:`EscalationModel` (explicit pair, 20 s records, numba, one thread).  With the grid terms
 #: below, fitted to the median CPU time of 38 runs (the calibration beds, the statue block on k = 1e8
@@ -97,8 +108,6 @@ MIN_SAMPLES = 100
 MAX_SAMPLES = 4000
 #: At most this many escalated points (the correction needs a few dozen, not hundreds).
 MAX_POINTS = 48
-#: The budget is never spread over fewer points than this (the correction needs a few neighbours).
-MIN_COVER = 8
 #: The condensed model stands in for the coupled one where every calibration row of the (bed law,
 #: peak_p_uplift bin) cell, at least this many, has it within ``target / 2``.
 MIN_CONDENSED_ROWS = 2
@@ -191,13 +200,7 @@ def cover_points(features, candidates, priority, count):
     idx = np.flatnonzero(np.asarray(candidates).reshape(-1))
     if idx.size == 0 or count < 1:
         return np.zeros(0, dtype=int)
-    x = np.asarray(features, dtype=float)[idx]
-    if x.shape[1]:
-        mean = np.nanmean(np.where(np.isfinite(x), x, np.nan), axis=0)
-        mean = np.where(np.isfinite(mean), mean, 0.0)
-        x = np.where(np.isfinite(x), x, mean)
-        sd = x.std(axis=0)
-        x = (x - x.mean(axis=0)) / np.where(sd > 0, sd, 1.0)
+    x = _standardised(np.asarray(features, dtype=float)[idx])
     prio = np.nan_to_num(np.asarray(priority, dtype=float).reshape(-1)[idx], nan=-np.inf)
     first = int(np.argmax(prio))
     chosen = [first]
@@ -211,6 +214,144 @@ def cover_points(features, candidates, priority, count):
         dist = np.minimum(dist, np.sum((x - x[nxt]) ** 2, axis=1))
         dist[chosen] = -1.0
     return idx[np.array(chosen)]
+
+
+def transition_points(p, shape, axis=None, intensity=None, band=TRANSITION_BAND):
+    """Which points lie in the transition of a fragility curve, from P ~ 0 to P ~ 1 along the intensity.
+
+    A curve is the line of points along the swept intensity (``axis`` of the grid) with every other
+    coordinate fixed, one per probability level (P(overturn), each P(exceed)).  A point is in its transition
+    where its probability lies in ``band``, and on both sides of a step of the curve that crosses the band
+    between neighbours or that goes from a known probability below the top of the band to one not known
+    (NaN: the linearization stopped).
+
+    Parameters
+    ----------
+    p : array_like
+        ``(points, levels)`` (or ``(points,)``) probabilities [1], flat over the grid; NaN where not known.
+    shape : tuple of int
+        The grid's shape (``prod(shape)`` points).
+    axis : int, optional
+        The intensity's axis in ``shape``; None (no swept intensity): the band alone decides.
+    intensity : array_like, optional
+        The intensity's values along ``axis`` [any unit] (the curve is read in their order; default as stored).
+    band : tuple of float, default TRANSITION_BAND
+        ``(low, high)`` [1].
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Flat, one per point.
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "A budget in seconds" (this package's documentation).
+
+    Examples
+    --------
+    One curve of six intensities: 0.01 and 1.0 beside each other jump across the band; a stopped point
+    (NaN) beside 0.5:
+
+    >>> import numpy as np
+    >>> transition_points([0.0, 0.001, 0.01, 1.0, 0.5, np.nan], (6,), axis=0).tolist()
+    [False, False, True, True, True, True]
+    """
+    shape = tuple(int(k) for k in shape)
+    n = int(np.prod(shape, dtype=np.int64))
+    p = np.asarray(p, dtype=float).reshape(n, -1)
+    low, high = band
+    with np.errstate(invalid="ignore"):
+        mark = (np.isfinite(p) & (p >= low) & (p <= high)).any(axis=1)
+        if axis is None or not shape or shape[axis] < 2:
+            return mark
+        g = np.moveaxis(p.reshape(shape + (p.shape[1],)), axis, -2)
+        perm = np.argsort(np.asarray(intensity, dtype=float), kind="stable") if intensity is not None else \
+            np.arange(shape[axis])
+        g = g[..., perm, :]
+        known = np.isfinite(g)
+        below, above = known & (g < low), known & (g > high)
+        under_top = known & (g <= high)
+        t = np.zeros(g.shape, dtype=bool)
+        pair = (below[..., :-1, :] & above[..., 1:, :]) | (above[..., :-1, :] & below[..., 1:, :]) | \
+            (~known[..., :-1, :] & under_top[..., 1:, :]) | (under_top[..., :-1, :] & ~known[..., 1:, :])
+        t[..., :-1, :] |= pair
+        t[..., 1:, :] |= pair
+    back = np.empty_like(t)
+    back[..., perm, :] = t
+    return mark | np.moveaxis(back, -2, axis).reshape(n, -1).any(axis=1)
+
+
+def transition_first(features, candidates, transition, priority, count, most_transition=MAX_TRANSITION_POINTS):
+    """Flat indices of candidate points: those in a curve's transition first, then the coverage of the others.
+
+    The transition candidates (up to ``most_transition``) in the greedy maximin order of
+    :func:`cover_points`, then the other candidates continuing the same order (each the farthest from
+    every point chosen before it), up to ``count`` points in all -- never fewer than the transition
+    points.  Without transition points it is :func:`cover_points`.
+
+    Parameters
+    ----------
+    features : array_like
+        ``(points, features)`` [any units: standardised per column].
+    candidates, transition : array_like of bool
+        The candidate points, and those in the transition of a fragility curve (:func:`transition_points`).
+    priority : array_like
+        Per point; the first point of each group has the highest (NaN: lowest).
+    count : int
+        At most this many points beyond the transition points.
+    most_transition : int, default MAX_TRANSITION_POINTS
+        At most this many transition points.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Flat indices of the chosen points, in the order chosen.
+
+    References
+    ----------
+    .. [1] T. F. Gonzalez, "Clustering to minimize the maximum intercluster distance", Theoretical Computer
+       Science 38 (1985) 293-306 (the greedy farthest-point choice).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> features = np.array([[0.0], [1.0], [2.0], [3.0], [10.0]])
+    >>> transition_first(features, [True] * 5, [False, True, True, False, False], [0.1, 0.2, 0.3, 0.4, 0.9],
+    ...                  3).tolist()
+    [2, 1, 4]
+    """
+    candidates = np.asarray(candidates, dtype=bool).reshape(-1)
+    idx = np.flatnonzero(candidates)
+    if idx.size == 0:
+        return np.zeros(0, dtype=int)
+    x = _standardised(np.asarray(features, dtype=float)[idx])
+    prio = np.nan_to_num(np.asarray(priority, dtype=float).reshape(-1)[idx], nan=-np.inf)
+    first = np.asarray(transition, dtype=bool).reshape(-1)[idx]
+    chosen, dist = [], np.full(idx.size, np.inf)
+    for group in (first, ~first):
+        cap = len(chosen) + min(int(group.sum()), most_transition) if group is first else max(int(count), len(chosen))
+        avail = group.copy()
+        while avail.any() and len(chosen) < cap:
+            d = np.where(avail, dist, -np.inf)
+            if not chosen or d.max() <= 0:          # the first point, or duplicates in feature space: by priority
+                nxt = int(np.flatnonzero(avail)[np.argmax(prio[avail])])
+            else:
+                nxt = int(np.argmax(d))
+            chosen.append(nxt)
+            avail[nxt] = False
+            dist = np.minimum(dist, np.sum((x - x[nxt]) ** 2, axis=1))
+    return idx[np.array(chosen, dtype=int)]
+
+
+def _standardised(x):
+    """Columns of ``x`` standardised (NaN: the column mean), as :func:`cover_points` compares them."""
+    if not x.shape[1]:
+        return x
+    mean = np.nanmean(np.where(np.isfinite(x), x, np.nan), axis=0)
+    mean = np.where(np.isfinite(mean), mean, 0.0)
+    x = np.where(np.isfinite(x), x, mean)
+    sd = x.std(axis=0)
+    return (x - x.mean(axis=0)) / np.where(sd > 0, sd, 1.0)
 
 
 def condensed_cells(calibration, target):
@@ -418,6 +559,79 @@ def meets_target(peak, peak_se, target):
         return np.isfinite(peak) & np.isfinite(peak_se) & (peak > 0) & (peak_se <= target / 2.0 * peak)
 
 
+def probability_samples(hits, used, most=MAX_SAMPLES, se=PROBABILITY_SE):
+    """Samples for a standard error of at most ``se`` of every probability, from a run's counts.
+
+    Parameters
+    ----------
+    hits : array_like of int
+        Samples that reached each level (overturned, exceeded each threshold) in the run.
+    used : int
+        Its usable samples (standing or overturned).
+    most : int, default MAX_SAMPLES
+        Upper bound.
+    se : float, default PROBABILITY_SE
+        Standard error aimed at [1].
+
+    Returns
+    -------
+    int
+        Samples, in ``[MIN_SAMPLES, most]``; ``most`` without a usable sample.
+
+    Notes
+    -----
+    The Agresti-Coull standard error ``sqrt(p~ (1 - p~) / (n + 4))``, ``p~ = (k + 2) / (used + 4)`` [1], of
+    the level farthest from 0 and 1 reaches ``se`` at ``n = p~ (1 - p~) / se^2 - 4``; at most 274 for 0.03.
+
+    References
+    ----------
+    .. [1] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
+       proportions", The American Statistician 52(2), 119-126, 1998.
+
+    Examples
+    --------
+    >>> probability_samples([32], 64), probability_samples([0, 1], 64), probability_samples([], 0)
+    (274, 100, 4000)
+    """
+    hits = np.asarray(hits, dtype=float).reshape(-1)
+    if int(used) <= 0 or hits.size == 0:
+        return int(most)
+    q = (hits + Z * Z / 2.0) / (float(used) + Z * Z)
+    n = float(np.max(q * (1.0 - q))) / se**2 - Z * Z
+    return int(min(max(math.ceil(n), MIN_SAMPLES), most))
+
+
+def probabilities_met(hits, used, se=PROBABILITY_SE):
+    """Whether every probability of a run has a standard error of at most ``se`` [1].
+
+    Parameters
+    ----------
+    hits : array_like of int
+        Samples that reached each level.
+    used : int
+        Usable samples.
+    se : float, default PROBABILITY_SE
+        Standard error aimed at [1].
+
+    Returns
+    -------
+    bool
+
+    References
+    ----------
+    .. [1] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
+       proportions", The American Statistician 52(2), 119-126, 1998.
+
+    Examples
+    --------
+    >>> probabilities_met([32], 64), probabilities_met([150], 300), probabilities_met([0], 0)
+    (False, True, False)
+    """
+    if int(used) <= 0:
+        return False
+    return bool(np.all(binomial_estimate(np.asarray(hits, dtype=float), int(used))[1] <= se))
+
+
 def grid_point_cost(points_per_sample):
     """Estimated CPU time [s] per point of a synthesis grid of ``points_per_sample`` points.
 
@@ -564,41 +778,6 @@ def prior_cost(samples, t_end, model):
     ('0.8400', '0.8400')
     """
     return estimated_cost(samples * t_end * PRIOR_STEPS_PER_S, model)
-
-
-def affordable_points(budget_s, point_cost_s, most=MAX_POINTS):
-    """How many points a budget covers, between :data:`MIN_COVER` and ``most``.
-
-    With a small budget, fewer points at the target's standard error rather than many pilots of no
-    use to anyone.
-
-    Parameters
-    ----------
-    budget_s : float
-        CPU budget [s].
-    point_cost_s : float
-        Cost of one point, pilot and full run [s] (not finite or <= 0: ``most``).
-    most : int, default MAX_POINTS
-        Upper bound.
-
-    Returns
-    -------
-    int
-        Points.
-
-    References
-    ----------
-    .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold", section "Cost
-       model of the escalation" (this package's documentation).
-
-    Examples
-    --------
-    >>> affordable_points(100.0, 5.0), affordable_points(100.0, 50.0), affordable_points(1e6, 1.0)
-    (20, 8, 48)
-    """
-    if not (math.isfinite(point_cost_s) and point_cost_s > 0):
-        return int(most)
-    return int(min(max(math.floor(budget_s / point_cost_s), MIN_COVER), most))
 
 
 #: The cheaper model paired with the coupled one for multi-fidelity estimates: a registered Monte Carlo

@@ -31,12 +31,14 @@ class Progress:
     terminal, or ``lines=True``) a new line is written every :data:`LINE_STEP` of the work or
     :data:`LINE_INTERVAL` seconds, and at the end.  A background thread keeps it alive while one
     long task (a spot check) runs.  The time left is the elapsed time per unit of work times the
-    units left.  Silent when ``enabled`` is false.  ``clock``: seconds (default ``time.perf_counter``; a fake
-    one in tests).  Use as a context manager; call :meth:`update`.
+    units left, or what ``eta()`` says (seconds, or None: not known yet); ``line_interval`` [s]: the
+    longest time between lines (default :data:`LINE_INTERVAL`), and with it the first line is written at
+    once.  ``clock``: seconds (default ``time.perf_counter``; a fake one in tests).  Silent when
+    ``enabled`` is false.  Use as a context manager; call :meth:`update`.
     """
 
-    def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None,
-                 clock=None):
+    def __init__(self, total, label="progress", enabled=True, interval=0.5, stream=None, lines=None, eta=None,
+                 line_interval=None, clock=None):
         self.total = max(int(total), 1)
         self.label = label
         self.enabled = enabled
@@ -49,6 +51,9 @@ class Progress:
                 lines = True
         self.lines = lines
         self.clock = clock if clock is not None else (lambda: time.perf_counter())
+        self.eta = eta
+        self.line_interval = LINE_INTERVAL if line_interval is None else float(line_interval)
+        self._eager = line_interval is not None
         self.done = 0
         self._start = self.clock()
         self._last = -float("inf")
@@ -62,6 +67,9 @@ class Progress:
         elapsed = (self.clock() if now is None else now) - self._start
         pct = 100.0 * self.done / self.total
         head = f"{self.label}: {pct:3.0f}% ({self.done}/{self.total}) {elapsed:.1f} s"
+        if self.eta is not None and self.done < self.total:
+            left = self.eta()
+            return head if left is None else f"{head}, about {_duration(left)} left"
         if 0 < self.done < self.total:
             return f"{head}, about {_duration(elapsed / self.done * (self.total - self.done))} left"
         return head
@@ -76,7 +84,7 @@ class Progress:
             now = self.clock()
             if self.lines:
                 step = int(self.done / self.total / LINE_STEP + 1e-9)
-                if finished or step > self._last_step or now - self._last >= LINE_INTERVAL:
+                if finished or step > self._last_step or now - self._last >= self.line_interval:
                     self._last_step, self._last = step, now
                     self._write(self.text(now) + "\n")
             elif now - self._last >= self.interval or finished:
@@ -91,7 +99,7 @@ class Progress:
             self.enabled = False
 
     def _tick(self):
-        period = LINE_INTERVAL if self.lines else max(self.interval, 1.0)
+        period = self.line_interval if self.lines else max(self.interval, 1.0)
         while not self._stop.wait(period):
             if self.enabled and self.done < self.total:
                 self._show()
@@ -101,6 +109,8 @@ class Progress:
         if self.enabled:
             self._ticker = threading.Thread(target=self._tick, name="progress", daemon=True)
             self._ticker.start()
+            if self._eager:
+                self._show(True)
         return self
 
     def __exit__(self, *exc):

@@ -294,6 +294,8 @@ def verify_result(path, study):
     try:
         with netCDF4.Dataset(path) as nc:
             nc.set_auto_mask(False)
+            if "interim_result" in nc.ncattrs():
+                return "it is an interim result (its [accuracy] stage had not ended)"
             for dim, size in expected.items():
                 if dim not in nc.dimensions or len(nc.dimensions[dim]) != size:
                     return f"its dimension {dim!r} does not have the study's size {size}"

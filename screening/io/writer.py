@@ -442,13 +442,13 @@ class NetcdfFormat:
     :class:`~screening.io.zarrfile.ZarrFormat` is for zarr.
 
     ``complevel``: zlib level of the compressed variables; a file with histories is synced every
-    :data:`SYNC_POINTS` points marked done.
+    :data:`SYNC_POINTS` points marked done.  ``mode``: ``"w"`` creates the file, ``"a"`` opens an existing one.
     """
 
-    def __init__(self, path, complevel=COMPLEVEL):
+    def __init__(self, path, complevel=COMPLEVEL, mode="w"):
         import netCDF4              # here, not at module level: workers never need it
 
-        self.dataset = netCDF4.Dataset(path, "w", format="NETCDF4")
+        self.dataset = netCDF4.Dataset(path, mode, format="NETCDF4")
         self.dataset.set_auto_mask(False)
         self.complevel = complevel
         self._unsynced = 0
@@ -524,7 +524,8 @@ class ResultFile:
     shared interface.
 
     ``attrs``: the global attributes (:func:`result_attributes`); ``reopen``: open the zarr store of an
-    interrupted run instead of creating one.  Keeps what the client keeps of every point
+    interrupted run (or a netCDF file: a copy of the one being built, for an interim result) instead of
+    creating one.  Keeps what the client keeps of every point
     (:func:`screening.solvers.outputs.client_variables`: spot selection, run summary) in memory;
     histories go straight to disk.
     """
@@ -545,7 +546,9 @@ class ResultFile:
             if reopen:
                 return
         else:
-            self.format = NetcdfFormat(self.path, complevel)
+            self.format = NetcdfFormat(self.path, complevel, "a" if reopen else "w")
+            if reopen:
+                return
         try:
             self._define(attrs)
             self.format.commit()
@@ -761,8 +764,8 @@ class ResultFile:
         fmt.dimension("escalation", n)
         most = max((int(r["samples"]) for r in runs), default=1)
         fmt.dimension("esc_sample", most)
-        idx = (np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if n and self.shape
-               else [()] * len(self.shape))             # a one-point grid has no grid dimension
+        # (a one-point grid has no grid dimension; no escalated point: empty coordinates)
+        idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if self.shape else ()
         coords = []
         for axis, dim in enumerate(study.dims):
             name = f"esc_{dim}"
@@ -787,6 +790,8 @@ class ResultFile:
         var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
         var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
         var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
+            fill=False)
+        var("esc_transition", "i1", ("escalation",), np.array([r.get("transition", 0) for r in runs], dtype=np.int8),
             fill=False)
         for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
             var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))

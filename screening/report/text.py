@@ -223,10 +223,17 @@ def best_line(ds):
     line = f"best estimates ([accuracy] target {ds.attrs.get('accuracy_target', float('nan')):g}): {counts}"
     if "escalation" in ds.dims:
         line += (f"; Monte Carlo at {ds.sizes['escalation']} point(s), "
-                 f"{int(ds.attrs.get('accuracy_n_short_of_target', 0))} short of the target's standard error, "
-                 f"{float(ds.attrs.get('accuracy_cost_s', float('nan'))):.1f} of "
-                 f"{float(ds.attrs.get('accuracy_budget_s', float('nan'))):g} CPU s by the cost model "
-                 f"({float(ds.attrs.get('accuracy_cpu_s', float('nan'))):.1f} s measured)")
+                 f"{int(ds.attrs.get('accuracy_n_short_of_target', 0))} short of the target's standard error, ")
+        cost = float(ds.attrs.get("accuracy_cost_s", float("nan")))
+        budget = float(ds.attrs.get("accuracy_budget_s", float("nan")))
+        cpu = float(ds.attrs.get("accuracy_cpu_s", float("nan")))
+        if "accuracy_wall_s" in ds.attrs:                  # the budget in wall seconds
+            line += (f"{float(ds.attrs['accuracy_wall_s']):.0f} of {budget:g} wall s ({cost:.1f} CPU s by the "
+                     f"cost model, {cpu:.1f} s measured)")
+        else:                                              # a result of the CPU budget (before 2026-11-29)
+            line += f"{cost:.1f} of {budget:g} CPU s by the cost model ({cpu:.1f} s measured)"
+    if "interim_result" in ds.attrs:
+        line += f"; INTERIM result: {ds.attrs['interim_result']}"
     return line
 
 

@@ -124,7 +124,10 @@ ACCURACY = {
     "esc_cpu_time": _v("s", "CPU time of the Monte Carlo runs at the escalated point (pilot and top-up "
                             "included), measured"),
     "esc_cost": _v("s", "CPU time of the Monte Carlo runs at the escalated point estimated by the cost model "
-                        "from their integration steps (what the budget is planned on)"),
+                        "from their integration steps (the wall budget's projections scale it by the measured rate)"),
+    "esc_transition": _v("1", "1: the escalated point lies in the transition of a fragility curve (it went first and "
+                              "ran to a standard error of PROBABILITY_SE of every probability); 0: a covering point "
+                              "(run to target / 2 of peak var_theta)"),
     "esc_target_met": flag_attributes(TargetMet, "whether the standard error of esc_peak_var_theta reached "
                                                  "target / 2 of the peak"),
     "esc_sl_peak_var_theta": _v("rad2", "linearization peak var_theta at the escalated point"),

@@ -1,16 +1,19 @@
 """The ``[accuracy]`` stage of a sweep: Monte Carlo where the trust rule cannot promise the target,
-within the CPU budget, then best estimates at every point (:mod:`screening.analysis.escalation`,
+within a budget of wall seconds, then best estimates at every point (:mod:`screening.analysis.escalation`,
 :mod:`screening.analysis.correction`).
 
 :func:`escalate` runs after the linearization and before the spot checks on a :class:`Stage`: the client,
 the study, the resume record, the result being built, the log and the progress switch (plain values, not
-the sweep's run object); it returns the escalated points and what it did.
+the sweep's run object), and optionally where interim answers go and the clock; it returns the escalated
+points and what it did.
 """
 
 from __future__ import annotations
 
 import contextlib
 import math
+import threading
+import time
 import uuid
 from typing import NamedTuple
 
@@ -22,29 +25,45 @@ from screening.analysis.escalation import auto_escalation_model
 from screening.analysis.trust import shipped_calibration, trust_indicators
 from screening.core import limits
 from screening.core.progress import Progress
-from screening.core.status import BestMethod, EscalationEstimator, EscalationModel
+from screening.core.status import BestMethod, EscalationEstimator, EscalationModel, SampleState
 from screening.io.errors import exception_line, write_failure_reason
 from screening.solvers.model_choice import AUTO, choose
 from screening.sweep import _submit
 from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
-from screening.sweep.interrupt import interruptible
+from screening.sweep.interrupt import interruptible, raise_if_interrupted
 from screening.sweep.study import build_models
+from screening.solvers.estimates import sample_probabilities
 
-__all__ = ["ESCALATION_RECORD", "TOPUP_RECORD", "PLANNER_RECORD", "WAVE", "Stage", "escalate", "accuracy_line"]
+__all__ = ["ESCALATION_RECORD", "PLANNER_RECORD", "RUN_SHARE", "HARD_STOP", "INTERIM_INTERVAL_S",
+           "PROGRESS_INTERVAL_S", "Stage", "escalate", "accuracy_line", "plan_line"]
 
-#: Resume records of escalated points are spot parts numbered from here (after any spot check): the
-#: point's result after its waves, its top-up run, and the planner's state after each wave.
+#: Resume records of escalated points are spot parts numbered from here (after any spot check): each
+#: point's latest result (its pilot, main or top-up run, with the cost of all its runs), and before them the
+#: planner's record (the wall seconds spent).
 ESCALATION_RECORD = 5000
-TOPUP_RECORD = ESCALATION_RECORD + 1000
 PLANNER_RECORD = ESCALATION_RECORD - 1
-#: Escalated points per wave (fixed: the plan must not depend on the number of workers).
-WAVE = 4
+#: Share of ``budget_s`` the Monte Carlo runs may be planned into; the rest is for the answers at the end.
+RUN_SHARE = 0.95
+#: Runs still going at this multiple of ``budget_s`` are cancelled (their points keep their earlier runs).
+HARD_STOP = 1.08
+#: Interim answers (:attr:`Stage.interim`) are written at most this often [s], and never taking more than a
+#: fifth of the time.
+INTERIM_INTERVAL_S = 10.0
+#: The progress line is written at least this often [s].
+PROGRESS_INTERVAL_S = 10.0
+#: Wall seconds per cost-model second of one worker thread assumed before any run finished.
+PRIOR_WALL_PER_COST = 1.0
+#: The phases of a point's runs, as kept in its resume record.
+PILOT, MAIN, TOPUP = 0, 1, 2
 
 
 class Stage(NamedTuple):
     """What the ``[accuracy]`` stage works with: the dask ``client``, the ``study``, the resume record
     ``store`` (:class:`~screening.io.store.PartialStore`), the ``result`` being built
-    (:class:`~screening.io.writer.ResultFile`), the ``log`` function and whether to show ``progress``."""
+    (:class:`~screening.io.writer.ResultFile`), the ``log`` function, whether to show ``progress``,
+    ``interim``: None, or ``interim(write)`` writes a complete interim result (``write(result)`` puts the
+    escalated points and best estimates so far into a result and returns them as :func:`escalate` does),
+    and the wall ``clock`` [s] the budget is measured on."""
 
     client: object
     study: object
@@ -52,6 +71,8 @@ class Stage(NamedTuple):
     result: object
     log: object
     progress: bool
+    interim: object = None
+    clock: object = time.monotonic
 
 
 def _point_table(stage):
@@ -90,17 +111,21 @@ def escalate(stage):
     :func:`~screening.sweep.execution.escalation_task` (their sample peaks feed
     :mod:`screening.sweep.probabilities`), and what the escalation did (the run report's ``accuracy``).
 
-    The points whose trust band cannot promise ``[accuracy] target`` are ordered to cover the grid's
-    features, given a Monte Carlo model each (stiff-bed, condensed or coupled, by their measured
-    validity) and run wave by wave within ``budget_s`` (:func:`_escalation_runs`); the linearization's
-    error learned at the escalated points then gives a best estimate of the peak variances at every
-    point (:func:`screening.analysis.correction.best_estimates`).
+    The points whose trust band cannot promise ``[accuracy] target`` are ordered: those in the transition
+    of a fragility curve first (:func:`~screening.analysis.escalation.transition_points`: the
+    linearization's P(overturn) or P(exceed) between 0.02 and 0.98 along the swept intensity, or a jump
+    across that band beside them), then the coverage of the grid's features; each is given a Monte Carlo
+    model (stiff-bed, condensed or coupled, by their measured validity) and runs until its standard
+    error reaches the target, within ``budget_s`` wall seconds (:func:`_escalation_runs`).  One line
+    before any Monte Carlo says what the pilots of the transition points will cost (:func:`plan_line`).
+    The linearization's error learned at the escalated points then gives a best estimate of the peak
+    variances at every point (:func:`screening.analysis.correction.best_estimates`).
 
     Parameters
     ----------
     stage : Stage
-        The dask client, the study, the resume record, the result being built, the log function and
-        the progress switch.
+        The dask client, the study, the resume record, the result being built, the log function, the
+        progress switch, where interim answers go and the clock.
 
     Returns
     -------
@@ -109,25 +134,24 @@ def escalate(stage):
         :class:`~screening.core.status.EscalationModel` codes and the run dicts (sample peaks [rad], peak
         variances [rad2], [rad2 s-2], their standard errors, CPU time [s]).
     info : dict
-        What the escalation did: target [1], budget and cost [s], points selected, escalated, short
-        of the target and failed, the correction's leave-one-out RMS [1] and points per best-estimate
-        method (the line of :func:`accuracy_line`).
+        What the escalation did: target [1], budget, wall time and cost [s], points selected, in the
+        transition, escalated, short of the target, cut by the budget and failed, the correction's
+        leave-one-out RMS [1] and points per best-estimate method (the line of :func:`accuracy_line`).
 
     Notes
     -----
-    The standard error of a Monte Carlo estimate falls as :math:`1/\\sqrt{n}`: from a pilot of
+    The standard error of a Monte Carlo estimate falls as :math:`1/\\sqrt{n}`: from a run of
     :math:`n_0` samples with relative standard error :math:`\\mathrm{se}_0`, a point is given
     :math:`n = s\\, n_0\\, (\\mathrm{se}_0 / (\\mathrm{target}/2))^2` samples, :math:`s` the safety factor
     :data:`~screening.analysis.escalation.SAMPLE_SAFETY`
-    (:func:`~screening.analysis.escalation.samples_needed`).
+    (:func:`~screening.analysis.escalation.samples_needed`); a transition point is given the samples its
+    probabilities need for a standard error of :data:`~screening.analysis.escalation.PROBABILITY_SE`
+    (:func:`~screening.analysis.escalation.probability_samples`).
 
     References
     ----------
     .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
        ``docs/accuracy_in_sweeps.md``.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
 
     Examples
     --------
@@ -135,52 +159,111 @@ def escalate(stage):
     <screening.sweep.run.run_sweep>`, which builds it):
 
     >>> Stage._fields
-    ('client', 'study', 'store', 'result', 'log', 'progress')
+    ('client', 'study', 'store', 'result', 'log', 'progress', 'interim', 'clock')
     """
-    acc = stage.study.accuracy
+    from screening.analysis import escalation as esc
+    from screening.analysis.correction import point_features
+    from screening.analysis.trust import shipped_calibration
+
+    acc, study = stage.study.accuracy, stage.study
     pts = _point_table(stage)
     features = point_features(pts["features"])
     candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
-    order = esc.cover_points(features, candidates, stage.result.peak_p_uplift, esc.MAX_POINTS)
+    transition = _transition(stage, pts["status"])
+    order = esc.transition_first(features, candidates, transition, stage.result.peak_p_uplift, esc.MAX_POINTS)
     models = escalation_models(stage, order, esc.escalation_model(
         pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
         esc.condensed_cells(shipped_calibration(), acc.target))[order])
-    results, cost, spent, failed = _escalation_runs(stage, order, models)
-    done = [j for j in range(len(order)) if j in results]
-    escalated, models = order[done], models[done]
-    runs = [results[j] for j in done]
-    stage.result.write_escalation(escalated, models, runs)
+    levels = _levels(stage)[order]
+    first = transition[order]
 
+    def answers(result, results, ran):
+        return _write_answers(stage, result, pts, features, order, models, first, results,
+                              dict(ran, n_candidates=int(candidates.sum())))
+
+    results, ran = _escalation_runs(stage, order, models, first, levels, answers)
+    (escalated, models_done, runs), info = answers(stage.result, results, ran)
+    stage.log(accuracy_line(info))
+    return (escalated, models_done, runs), info
+
+
+def _transition(stage, status):
+    """Per point: in the transition of a fragility curve by the linearization's probabilities (NaN where it
+    stopped), along the swept intensity (``S0`` or ``pga``) if there is one."""
+    from screening.analysis.escalation import transition_points
+    from screening.core.status import PointStatus
+
+    study, res = stage.study, stage.result
+    p = [res.read("p_overturn")]
+    if study.fragility is not None:
+        p.append(res.read_all("p_exceed").reshape(study.n_points, -1))
+    p = np.column_stack(p)
+    p[np.asarray(status) != int(PointStatus.ok)] = np.nan
+    name = next((d for d in ("S0", "pga") if d in study.dims), None)
+    axis = study.dims.index(name) if name is not None else None
+    return transition_points(p, study.shape, axis, study.sweeps[name] if name is not None else None)
+
+
+def _levels(stage):
+    """Rotations [rad] of P(overturn) and each ``[fragility]`` threshold at every point (points x levels)."""
+    from screening.sweep.probabilities import levels_at
+
+    return levels_at(stage.study, stage.result.read("theta_ul"), stage.result.read("slenderness"))
+
+
+def _write_answers(stage, result, pts, features, order, models, first, results, ran):
+    """Write the escalated points ``results`` (``{position in order: run}``) and the best estimates at every
+    point into ``result``; returns ``((flat indices, models, runs), info)`` as :func:`escalate`.  ``ran``: what
+    the runs did (:func:`_escalation_runs`)."""
+    from screening.analysis import escalation as esc
+    from screening.analysis.correction import best_estimates
+    from screening.core.status import BestMethod, EscalationEstimator, EscalationModel
+
+    acc = stage.study.accuracy
+    done = [j for j in range(len(order)) if j in results]
+    escalated, models_done = order[done], models[done]
+    runs = [results[j] for j in done]
+    for j, r in zip(done, runs):
+        r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
+        r["transition"] = np.int8(first[j])
+    result.write_escalation(escalated, models_done, runs)
     best = {}
     for name in ("var_theta", "var_theta_dot"):
         mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
         mc_se = np.array([r[f"peak_{name}_se"] for r in runs]) if runs else np.zeros(0)
         value, se, method, corr = best_estimates(pts[f"peak_{name}"], pts["status"], pts["trust"], pts["low"],
-                                                 pts["high"], acc.target, features, escalated, mc, mc_se, models,
-                                                 atlas=name == "var_theta")
+                                                 pts["high"], acc.target, features, escalated, mc, mc_se,
+                                                 models_done, atlas=name == "var_theta")
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
-    stage.result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
+    result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
 
     short = sum(1 for r in runs if not r["target_met"])
     codes, counts = np.unique(method, return_counts=True)
-    info = {"target": acc.target, "budget_s": acc.budget_s, "cost_s": cost, "cpu_s": spent,
-            "n_candidates": int(candidates.sum()), "n_selected": len(order), "n_escalated": len(runs),
-            "n_coupled": int(np.sum(models == EscalationModel.coupled)),
-            "n_condensed": int(np.sum(models == EscalationModel.condensed)),
-            "n_stiff_bed": int(np.sum(models == EscalationModel.stiff_bed)), "n_short": short,
+    cost = sum(float(r["cost_s"]) for r in runs)
+    cpu = sum(float(r["cpu_time"]) for r in runs)
+    info = {"target": acc.target, "budget_s": acc.budget_s, "wall_s": ran["wall_s"], "cost_s": cost, "cpu_s": cpu,
+            "n_candidates": int(ran["n_candidates"]), "n_selected": len(order), "n_transition": int(np.sum(first)),
+            "n_escalated": len(runs), "n_transition_escalated": int(np.sum(first[done])) if done else 0,
+            "n_coupled": int(np.sum(models_done == EscalationModel.coupled)),
+            "n_condensed": int(np.sum(models_done == EscalationModel.condensed)),
+            "n_stiff_bed": int(np.sum(models_done == EscalationModel.stiff_bed)), "n_short": short,
             "n_multifidelity": sum(1 for r in runs if int(r.get("estimator", 0)) == EscalationEstimator.multifidelity),
-            "n_failed": failed, "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
+            "n_cut": int(ran["n_cut"]), "n_failed": int(ran["n_failed"]), "warm_up_s": float(ran["warm_up_s"]),
+            "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
             "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
-    stage.result.set_attrs(
-        accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_cost_s=cost, accuracy_cpu_s=spent,
+    result.set_attrs(
+        accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_wall_s=info["wall_s"],
+        accuracy_cost_s=cost, accuracy_cpu_s=cpu,
         accuracy_n_candidates=np.int32(info["n_candidates"]), accuracy_n_escalated=np.int32(len(runs)),
+        accuracy_n_transition=np.int32(info["n_transition"]),
+        accuracy_n_cut_by_budget=np.int32(info["n_cut"]),
         accuracy_n_short_of_target=np.int32(short), accuracy_n_unreliable=np.int32(info["n_unreliable"]),
         accuracy_correction_loo_rms=info["loo_rms"],
         accuracy_note=accuracy_line(info))
-    stage.log(accuracy_line(info))
-    return (escalated, models, runs), info
+    return (escalated, models_done, runs), info
+
 
 def escalation_models(stage, order, calibrated):
     """:class:`~screening.core.status.EscalationModel` of the ``order`` ed points: with ``[accuracy] model = "auto"``
@@ -199,31 +282,95 @@ def escalation_models(stage, order, calibrated):
     return auto_escalation_model(calibrated, chosen)
 
 
-def _escalation_runs(stage, order, models):
-    """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within the budget.
+def _threads(client):
+    """Worker threads of the client's cluster (at least 1)."""
+    try:
+        return max(int(sum(client.nthreads().values())), 1)
+    except Exception:                                   # noqa: BLE001 - a client without workers yet
+        return 1
 
-    The budget is planned on the deterministic cost model (:func:`~screening.analysis.escalation.estimated_cost`
-    of each run's integration steps), never on the measured CPU time, so the points run and their
-    samples are the same for a given study and seed on every machine.
 
-    1. Wave by wave (:data:`WAVE` points): a pilot of :data:`~screening.analysis.escalation.PILOT_SAMPLES`
-       samples, then the samples the target's standard error needs (with a safety factor), each point
-       given a fair share of the budget's :data:`~screening.analysis.escalation.MAIN_SHARE`; after each
-       wave the points are cut to those the budget affords (in the covering order).
-    2. Top-up: a point whose standard error is still above ``target / 2`` of its peak runs again with
-       the samples its main run's standard error asks for, while the whole budget allows.
+def plan_line(budget_s, n_points, n_transition, pilot_s, threads):
+    """One line before any Monte Carlo: the budget, the points, and what the pilots of the transition points
+    cost; where even those cannot fit, the budget they need.
 
-    Returns ``({position: result}, estimated cost [s], CPU seconds spent, failed tasks)``; each result
-    carries its total ``cpu_time``, ``cost_s`` and ``target_met``.  Finished points, the planner's state
-    after each wave (points planned, waves done, costs seen) and the top-up runs are kept in the resume
-    record, so that an interrupted run resumes to the same result.
+    Parameters
+    ----------
+    budget_s : float
+        ``[accuracy] budget_s`` [s] (wall).
+    n_points, n_transition : int
+        Points that may run Monte Carlo, and those of them in the transition of a fragility curve.
+    pilot_s : float
+        Estimated wall time [s] of the transition points' pilots on ``threads`` worker threads.
+    threads : int
+        Worker threads.
+
+    Returns
+    -------
+    str
+
+    References
+    ----------
+    .. [1] ``docs/accuracy_in_sweeps.md``, "A budget in seconds" (this package's documentation).
+
+    Examples
+    --------
+    >>> print(plan_line(60, 48, 20, 12.4, 2))   # doctest: +NORMALIZE_WHITESPACE
+    accuracy: Monte Carlo at up to 48 point(s), the 20 in the transition of a fragility curve first, within
+    budget_s = 60 s of wall time on 2 worker thread(s); their pilots take about 12 s
+    >>> print(plan_line(10, 48, 20, 31.0, 2))   # doctest: +NORMALIZE_WHITESPACE
+    accuracy: budget_s = 10 s cannot hold even the pilots of the 20 point(s) in the transition of a fragility
+    curve (about 31 s on 2 worker thread(s)); give [accuracy] budget_s >= 33 for them (running what fits)
     """
-    from distributed import as_completed
+    if pilot_s > RUN_SHARE * budget_s and n_transition:
+        need = math.ceil(pilot_s / RUN_SHARE)
+        return (f"accuracy: budget_s = {budget_s:g} s cannot hold even the pilots of the {n_transition} point(s) in "
+                f"the transition of a fragility curve (about {pilot_s:.0f} s on {threads} worker thread(s)); give "
+                f"[accuracy] budget_s >= {need} for them (running what fits)")
+    return (f"accuracy: Monte Carlo at up to {n_points} point(s)"
+            + (f", the {n_transition} in the transition of a fragility curve first" if n_transition else "")
+            + f", within budget_s = {budget_s:g} s of wall time on {threads} worker thread(s)"
+            + (f"; their pilots take about {pilot_s:.0f} s" if n_transition else ""))
 
-    study, store, acc = stage.study, stage.store, stage.study.accuracy
+
+def _escalation_runs(stage, order, models, first, levels, answers):
+    """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within ``budget_s`` wall seconds.
+
+    Each point runs a pilot of :data:`~screening.analysis.escalation.PILOT_SAMPLES` samples, then the samples
+    its target needs by the pilot (a transition point, ``first``: its probabilities' standard error
+    :data:`~screening.analysis.escalation.PROBABILITY_SE` at the rotations ``levels``; else the variance's
+    ``target / 2``), then, where still short, a top-up by the main run's standard error.  At most one run per
+    worker thread is in flight; a free thread takes the next run of the highest point in the order, else the
+    next point's pilot.  What a point runs depends on its own runs only, so where the budget does not bind
+    the points and their samples are the same on every machine and after any interruption.
+
+    The budget binds on the ``stage.clock``: a run is started only if its wall time (its cost-model seconds,
+    :func:`~screening.analysis.escalation.estimated_cost`, times the wall seconds per cost second measured
+    on the runs so far) ends within :data:`RUN_SHARE` of the budget; a main or top-up run that does not fit
+    is shortened to what fits (not below what the point has), a pilot that does not fit is not started; runs
+    still going at :data:`HARD_STOP` times the budget are cancelled.  Then which points ran depends on the
+    machine; the result says what ran at each point (``esc_samples``, ``esc_target_met``).
+
+    Every finished run is kept at once in the resume record (the point's latest result, with the cost of all
+    its runs) and the wall seconds spent in the planner's record, so an interrupted run loses no finished run
+    and its budget goes on from what was spent.  ``answers(result, results, ran)`` writes the answers so far;
+    with ``stage.interim`` they are written as a complete interim result at most every
+    :data:`INTERIM_INTERVAL_S`.
+
+    Returns ``({position: result}, ran)``: each result carries its total ``cpu_time`` and ``cost_s``; ``ran``:
+    ``wall_s`` (wall seconds of the stage, earlier runs included), ``n_cut`` (points the budget left short
+    or without a run), ``n_failed`` (failed tasks), ``warm_up_s`` (the kernels' compilation on the workers, not
+    charged).
+    """
+    from screening.analysis import escalation as esc
+    from screening.core.status import EscalationEstimator, EscalationModel
+
+    study, store, acc, clock = stage.study, stage.store, stage.study.accuracy, stage.clock
     most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)
     token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"
-    results, failed = {}, 0
+    threads = _threads(stage.client)
+    results, phase, todo, finished = {}, {}, {}, set()     # todo: {j: (samples, cheap samples)} ready to submit
+    counters = {"failed": 0, "cut": set()}
 
     def index_of(j):
         return tuple(int(i) for i in np.unravel_index(order[j], study.shape))
@@ -242,179 +389,257 @@ def _escalation_runs(stage, order, models):
         pair = esc.paired_model(models[j]) if acc.multifidelity else None
         return None if pair is None else pair[:2]
 
-    def load(record, j):
-        """A kept result (``ESCALATION_RECORD``: with the cost of all its runs) or top-up run of point ``j``."""
-        part = store.load_spot(record + j, index_of(j))
-        needed = {"cpu_time", "peak_var_theta", "samples", "n_steps"} | ({"cost_s"} if record == ESCALATION_RECORD
-                                                                          else set())
-        return part if part is not None and needed <= set(part) else None
-
-    plan = store.load_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64))
-    if plan is not None and {"todo", "w", "costs", "pilot_costs", "loaded"} <= set(plan):
-        todo, w, loaded = [int(j) for j in plan["todo"]], int(plan["w"]), int(plan["loaded"])
-        costs, pilot_costs = [float(c) for c in plan["costs"]], [float(c) for c in plan["pilot_costs"]]
-        waves_done = set(todo[:w])
-    else:                                                   # no wave finished: the plan starts afresh
-        todo, w, loaded, costs, pilot_costs, waves_done = list(range(len(order))), 0, 0, [], [], set()
-    for j in waves_done:
-        part = load(ESCALATION_RECORD, j)
-        if part is not None:
-            results[j] = part
-
-    def spent():
-        """Estimated cost [s] of every run so far (each result carries the cost of all its runs)."""
-        return sum(float(r["cost_s"]) for r in results.values())
-
-    topic = f"screening-escalation-samples-{token}"
-    samples_done, subscribed = {}, False
-
-    def submit(j, samples, what, cheap_samples=0):
-        model = EscalationModel(int(models[j])).name
-        cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
-        return _submit.submit_escalation(stage.client, study, int(order[j]), samples, model,
-                                           key=f"escalate-{what}-{token}-{j:04d}", cheap=cheap,
-                                           progress=(topic, 3 * j + ("pilot", "full", "topup").index(what)))
-
-    def gather(futures):
-        nonlocal failed
-        out = {}
-        for fut in interruptible(as_completed(list(futures), loop=stage.client.loop)):
-            j = futures[fut]
-            try:
-                out[j] = fut.result()
-            except Exception as exc:          # noqa: BLE001 - the point stays uncovered
-                failed += 1
-                stage.log(f"warning: Monte Carlo at escalated point {j} failed: {exception_line(exc)}")
-            fut.release()
-        return out
-
-    def keep(j, r, before=None):
-        """``r`` is the point's result from now on; CPU time and cost add up over its runs."""
-        r["cost_s"] = np.float64(cost(j, r) + (float(before["cost_s"]) if before is not None else 0.0))
-        r["cpu_time"] = np.float64(r["cpu_time"] + (float(before["cpu_time"]) if before is not None else 0.0))
-        results[j] = r
-
-    def save(js):
-        for j in js:
-            try:
-                store.save_spot(ESCALATION_RECORD + j, index_of(j), results[j])
-            except OSError as exc:
-                stage.log(f"warning: cannot save the resume record of escalated point {j} "
-                         f"({write_failure_reason(exc)})")
+    def hits(j, r):
+        """``(samples reaching each level, usable samples)`` of run ``r`` at point ``j``."""
+        state = np.asarray(r["sample_state"])
+        valid = (state == SampleState.standing) | (state == SampleState.overturned)
+        got = sample_probabilities(np.asarray(r["peak_abs_theta"], dtype=float), state == SampleState.overturned,
+                                   valid, levels[j, 1:])
+        n = int(valid.sum())
+        k = np.rint(np.concatenate([[got["p_overturn"]], np.atleast_1d(got["p_exceed"])]) * n) if n else np.zeros(0)
+        return k, n
 
     def rel_se(r):
         with np.errstate(divide="ignore", invalid="ignore"):
             return float(r["peak_var_theta_se"] / r["peak_var_theta"])
 
-    def save_plan():
-        store.save_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64),
-                        {"todo": np.asarray(todo, dtype=np.int64), "w": np.int64(w), "loaded": np.int64(loaded),
-                         "costs": np.asarray(costs, dtype=float), "pilot_costs": np.asarray(pilot_costs, dtype=float)})
+    def met(j, r):
+        if first[j]:
+            return esc.probabilities_met(*hits(j, r))
+        return bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
 
-    main_budget = esc.MAIN_SHARE * acc.budget_s
-    if w < len(todo):
-        stage.client.run(_submit.warm_up_monte_carlo)     # compile outside the budget
-    label = "accuracy: Monte Carlo at escalated points"
-    with Progress(len(todo) - w, label=label, enabled=stage.progress and w < len(todo)) as bar:
-        def count(event):            # per-sample progress of the running points (worker events)
-            samples_done[event[1]["spot"]] = max(samples_done.get(event[1]["spot"], 0), int(event[1]["done"]))
-            bar.label = f"{label} ({sum(samples_done.values())} samples done)"
+    def wanted(j, r):
+        """Samples its target needs by run ``r`` of point ``j``."""
+        if first[j]:
+            k, n = hits(j, r)
+            return esc.probability_samples(k, n, most)
+        return esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
 
-        if w < len(todo):
-            stage.client.subscribe_topic(topic, count)
-            subscribed = True
-        while w < len(todo):
-            pilots, committed = {}, 0.0
-            for j in todo[w:w + WAVE]:
-                guess = max(pilot_costs, default=esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]))
-                if spent() + committed + guess > main_budget:
-                    break
-                pilots[submit(j, esc.PILOT_SAMPLES, "pilot", esc.PILOT_SAMPLES if partner(j) else 0)] = j
-                committed += guess
-            if not pilots:
-                break
-            pilot = gather(pilots)
-            needed = {}
-            for j in sorted(pilot):
-                keep(j, pilot[j])
-                pilot_costs.append(float(pilot[j]["cost_s"]))
-                n = esc.samples_needed(rel_se(pilot[j]), esc.PILOT_SAMPLES, acc.target, most)
-                rate, n_cheap = cost(j, pilot[j], cheap=False) / esc.PILOT_SAMPLES, 0
-                if int(pilot[j].get("cheap_samples", 0)) > 0:       # a paired pilot: multi-fidelity if it pays
-                    plan = esc.paired_plan(pilot[j], models[j], esc.PILOT_SAMPLES, n)
-                    if plan.estimator == "multifidelity":
-                        rate_cheap = (cost(j, pilot[j]) - cost(j, pilot[j], cheap=False)) / esc.PILOT_SAMPLES
-                        n, n_cheap = plan.n_expensive, plan.n_cheap
-                        rate += rate_cheap * n_cheap / n          # per expensive sample, its cheap ones included
-                needed[j] = (rate, n, n_cheap)
-                costs.append(rate * n + float(pilot[j]["cost_s"]))
-            # as many points as the budget affords at the samples the target needs (coverage and
-            # accuracy both; never fewer than the correction needs), re-estimated after every wave
-            affordable = esc.affordable_points(main_budget, float(np.median(costs))) if costs else len(todo)
-            todo = todo[:max(affordable - loaded, w + WAVE)]
-            full, committed = {}, 0.0
-            for j in sorted(pilot):
-                rate, wanted, n_cheap = needed[j]
-                # a fair share of what is left for each point still to run (a paired run keeps its ratio)
-                left = todo[todo.index(j):]
-                share = (main_budget - spent() - committed) / max(len(left), 1)
-                n = min(wanted, int(share / max(rate, 1e-300)))
-                n_cheap = math.ceil(n_cheap * n / wanted) if n_cheap else 0
-                big = (n_cheap >= 2 * esc.PILOT_SAMPLES and n >= esc.PILOT_SAMPLES) if n_cheap else (
-                    n >= 2 * esc.PILOT_SAMPLES)
-                if big and spent() + committed + rate * n <= main_budget:
-                    full[submit(j, n, "full", n_cheap)] = j
-                    committed += rate * n
-            finished = gather(full)
-            for j in sorted(finished):
-                keep(j, finished[j], before=pilot[j])
-            save(sorted(pilot))
-            bar.update(len(todo[w:w + WAVE]))
-            w += WAVE
-            try:
-                save_plan()
-            except OSError as exc:
-                stage.log("warning: cannot save the resume record of the escalation plan "
-                          f"({write_failure_reason(exc)})")
-        if w < len(todo):                                   # the budget ended the waves: the plan is final
-            todo = todo[:w]
-            with contextlib.suppress(OSError):
-                save_plan()
-
-    # top-up: points still short of the target's standard error, in the covering order
-    # (each top-up run is kept apart from the point's result: the plan is made from the waves' results alone)
-    topup, committed, finished = {}, 0.0, {}
-    for j in sorted(results):
-        r = results[j]
-        if esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target):
-            continue
-        n = esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
-        rate = cost(j, r) / max(int(r["samples"]), 1)
+    def next_run(j):
+        """``(samples, cheap samples, cost per sample [s])`` of point ``j``'s next run, or None (done)."""
+        r, ph = results[j], phase[j]
+        if ph == TOPUP or (ph == MAIN and met(j, r)):
+            return None
+        n, n_cheap = wanted(j, r), 0
+        rate = cost(j, r, cheap=False) / max(int(r["samples"]), 1)
+        if ph == PILOT:
+            if int(r.get("cheap_samples", 0)) > 0:              # a paired pilot: multi-fidelity if it pays
+                plan = esc.paired_plan(r, models[j], esc.PILOT_SAMPLES, n)
+                if plan.estimator == "multifidelity":
+                    rate_cheap = (cost(j, r) - cost(j, r, cheap=False)) / esc.PILOT_SAMPLES
+                    n, n_cheap = plan.n_expensive, plan.n_cheap
+                    rate += rate_cheap * n_cheap / n           # per expensive sample, its cheap ones included
+            big = (n_cheap >= 2 * esc.PILOT_SAMPLES and n >= esc.PILOT_SAMPLES) if n_cheap else (
+                n >= 2 * esc.PILOT_SAMPLES)
+            return (n, n_cheap, rate) if big else None
         paired = int(r.get("estimator", EscalationEstimator.plain_monte_carlo)) == EscalationEstimator.multifidelity
-        n_cheap = math.ceil(int(r["cheap_samples"]) * n / int(r["samples"])) if paired else 0
-        if n > int(r["samples"]) and spent() + committed + rate * n <= acc.budget_s:
-            part = load(TOPUP_RECORD, j)
-            if part is not None and int(part["samples"]) == n and int(part.get("cheap_samples", 0)) == n_cheap:
-                finished[j] = part
-            else:
-                topup[submit(j, n, "topup", n_cheap)] = j
-            committed += rate * n
-    ran = gather(topup) if topup else {}
-    for j in sorted(ran):
+        if paired:
+            n_cheap = math.ceil(int(r["cheap_samples"]) * n / int(r["samples"]))
+            rate = cost(j, r) / max(int(r["samples"]), 1)
+        return (n, n_cheap, rate) if n > int(r["samples"]) else None
+
+    def settle(j):
+        """Point ``j``'s last run is in: queue its next run, or count it finished."""
+        nxt = next_run(j)
+        if nxt is None:
+            finished.add(j)
+            bar.update(1)
+        else:
+            todo[j] = nxt
+
+    # -- the resume record: every point's latest run, and the wall seconds spent
+    plan = store.load_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64))
+    spent_before = float(plan["spent_s"]) if plan is not None and "spent_s" in plan else 0.0
+    needed = {"cpu_time", "peak_var_theta", "samples", "n_steps", "cost_s", "phase", "sample_state"}
+    for j in range(len(order)):
+        part = store.load_spot(ESCALATION_RECORD + j, index_of(j))
+        if part is not None and needed <= set(part):
+            results[j], phase[j] = part, int(part["phase"])
+
+    # -- before any Monte Carlo: what the transition points' pilots cost, on the workers there are
+    pilot_prior = {j: esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]) * (2 if partner(j) else 1)
+                   for j in range(len(order))}
+    pilots_s = sum(pilot_prior[j] for j in range(len(order)) if first[j] and j not in results)
+    stage.log(plan_line(acc.budget_s, len(order), int(np.sum(first)),
+                        PRIOR_WALL_PER_COST * pilots_s / threads, threads))
+    warm_up = 0.0
+    if len(results) < len(order) or any(next_run(j) is not None for j in results):
+        stage.log("accuracy: compiling the Monte Carlo kernels on the workers (cached after the first run; not "
+                  "charged to budget_s)")
+        t0 = time.perf_counter()
+        stage.client.run(_submit.warm_up_monte_carlo)
+        warm_up = time.perf_counter() - t0
+    start = clock()
+    measured = {"wall": 0.0, "cost": 0.0}                  # wall seconds of finished runs, their cost-model seconds
+    pilot_costs = []                                       # cost-model seconds of the pilots run
+
+    def now():
+        return spent_before + clock() - start
+
+    def wall_per_cost():
+        return measured["wall"] / measured["cost"] if measured["cost"] > 0 else PRIOR_WALL_PER_COST
+
+    def eta():
+        """Seconds left: the runs queued and in flight and the points not started (each as a finished point's runs
+        cost on average; before any, its pilot), at the measured rate (before any: the prior), within the budget.
+        Called from the display's thread: None where the loop changed the queue meanwhile."""
         try:
-            store.save_spot(TOPUP_RECORD + j, index_of(j), ran[j])
+            left = sum(n * rate for n, _, rate in list(todo.values())) + sum(list(in_flight.values()))
+            done = [float(results[j]["cost_s"]) for j in list(finished) if j in results]
+            per_point = float(np.mean(done)) if done else None        # a finished point's runs, all told
+            left += sum(per_point or pilot_prior[j] for j in range(len(order))
+                        if j not in results and j not in in_flight and j not in counters["cut"])
+        except RuntimeError:
+            return None
+        return min(wall_per_cost() * left / threads, max(acc.budget_s - now(), 0.0))
+
+    topic = f"screening-escalation-samples-{token}"
+    samples_done, signal = {}, threading.Event()        # signal: a run ended
+    in_flight, pending, started = {}, {}, {}     # in flight: {j: estimated cost}; pending: {future: (j, phase)}
+    label = "accuracy: points done (Monte Carlo)"
+    interim = {"last": now(), "took": 0.0, "count": 0}
+
+    def submit(j, samples, what, cheap_samples=0):
+        model = EscalationModel(int(models[j])).name
+        cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
+        return _submit.submit_escalation(stage.client, study, int(order[j]), samples, model,
+                                         key=f"escalate-{('pilot', 'full', 'topup')[what]}-{token}-{j:04d}",
+                                         cheap=cheap, progress=(topic, 3 * j + what))
+
+    def keep(j, r, what):
+        """``r`` is the point's result from now on; CPU time and cost add up over its runs; kept at once."""
+        before = results.get(j)
+        r["cost_s"] = np.float64(cost(j, r) + (float(before["cost_s"]) if before is not None else 0.0))
+        r["cpu_time"] = np.float64(r["cpu_time"] + (float(before["cpu_time"]) if before is not None else 0.0))
+        r["phase"] = np.int8(what)
+        results[j], phase[j] = r, what
+        try:
+            store.save_spot(ESCALATION_RECORD + j, index_of(j), r)
         except OSError as exc:
             stage.log(f"warning: cannot save the resume record of escalated point {j} ({write_failure_reason(exc)})")
-    finished.update(ran)
-    for j in sorted(finished):
-        keep(j, finished[j], before=results[j])
-    for r in results.values():
-        r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
-    cpu = sum(float(r["cpu_time"]) for r in results.values())
-    if subscribed:
-        with contextlib.suppress(Exception):        # noqa: BLE001 - only the display
-            stage.client.unsubscribe_topic(topic)
-    return results, spent(), cpu, failed
+
+    def save_plan():
+        try:
+            store.save_spot(PLANNER_RECORD, np.asarray(order, dtype=np.int64), {"spent_s": np.float64(now())})
+        except OSError as exc:
+            stage.log(f"warning: cannot save the resume record of the escalation plan ({write_failure_reason(exc)})")
+
+    def fill():
+        """Start runs on the free threads: the next run of the highest point, else the next pilot."""
+        deadline = RUN_SHARE * acc.budget_s
+        while len(pending) < threads:
+            ready = sorted(todo)
+            if ready:
+                j = ready[0]
+                n, n_cheap, rate = todo.pop(j)
+                have = int(results[j]["samples"])
+                fits = int((deadline - now()) / max(wall_per_cost() * rate, 1e-300))
+                if n > fits:                                  # the budget binds: what fits, if it adds samples
+                    counters["cut"].add(j)
+                    n_cheap = math.ceil(n_cheap * fits / n) if n_cheap else 0
+                    n = fits
+                    if n < have + esc.PILOT_SAMPLES // 2:
+                        finished.add(j)
+                        bar.update(1)
+                        continue
+                what = MAIN if phase[j] == PILOT else TOPUP
+                fut = submit(j, n, what, n_cheap)
+                in_flight[j] = n * rate
+            else:
+                j = next((j for j in range(len(order)) if j not in results and j not in in_flight
+                          and j not in counters["cut"]), None)
+                if j is None:
+                    return
+                guess = max(pilot_costs, default=pilot_prior[j])
+                if now() + wall_per_cost() * guess > deadline:
+                    counters["cut"].add(j)
+                    bar.update(1)
+                    continue
+                fut = submit(j, esc.PILOT_SAMPLES, PILOT, esc.PILOT_SAMPLES if partner(j) else 0)
+                in_flight[j] = guess
+                what = PILOT
+            pending[fut] = (j, what)
+            started[fut] = clock()
+            fut.add_done_callback(lambda _: signal.set())
+
+    def arrived(fut):
+        j, what = pending.pop(fut)
+        in_flight.pop(j, None)
+        took = clock() - started.pop(fut)
+        try:
+            r = fut.result()
+        except Exception as exc:          # noqa: BLE001 - the point keeps what it has
+            counters["failed"] += 1
+            stage.log(f"warning: Monte Carlo at escalated point {j} failed: {exception_line(exc)}")
+            finished.add(j)
+            bar.update(1)
+            return
+        finally:
+            fut.release()
+        keep(j, r, what)
+        if what == PILOT:
+            pilot_costs.append(cost(j, r))
+        measured["wall"] += took
+        measured["cost"] += cost(j, r)
+        settle(j)
+
+    def write_interim():
+        """A complete interim result with the answers so far (at most every INTERIM_INTERVAL_S, and at most
+        a fifth of the time)."""
+        if stage.interim is None or not results or len(results) == interim["count"]:
+            return
+        if now() - interim["last"] < max(INTERIM_INTERVAL_S, 4 * interim["took"]):
+            return
+        t0 = clock()
+        try:
+            stage.interim(lambda result: answers(result, dict(results), ran())[0])
+        except OSError as exc:
+            stage.log(f"warning: cannot write the interim result ({write_failure_reason(exc)})")
+        interim.update(last=now(), took=clock() - t0, count=len(results))
+
+    def ran():
+        return {"wall_s": now(), "n_cut": len(counters["cut"]), "n_failed": counters["failed"], "warm_up_s": warm_up}
+
+    with Progress(len(order), label=label, enabled=stage.progress and len(order) > 0, eta=eta,
+                  line_interval=PROGRESS_INTERVAL_S) as bar:
+        def count(event):            # per-sample progress of the running points (worker events)
+            samples_done[event[1]["spot"]] = max(samples_done.get(event[1]["spot"], 0), int(event[1]["done"]))
+            bar.label = f"{label}, {sum(samples_done.values())} samples"
+
+        stage.client.subscribe_topic(topic, count)
+        try:
+            for j in sorted(results):
+                settle(j)
+            fill()
+            while pending:
+                raise_if_interrupted()
+                signal.clear()
+                done = [fut for fut in pending if fut.done()]
+                if not done:            # wake at least every second: the clock, the progress line, a Ctrl-C
+                    signal.wait(min(1.0, max(HARD_STOP * acc.budget_s - now(), 0.01)))
+                    done = [fut for fut in pending if fut.done()]
+                for fut in sorted(done, key=lambda f: pending[f][0]):
+                    arrived(fut)
+                if now() > HARD_STOP * acc.budget_s and pending:
+                    cut = sorted(j for j, _ in pending.values())
+                    for fut in list(pending):
+                        fut.cancel()
+                        j, _ = pending.pop(fut)
+                        counters["cut"].add(j)
+                    counters["cut"].update(todo)
+                    todo.clear()
+                    stage.log(f"warning: accuracy: budget_s = {acc.budget_s:g} s reached with {len(cut)} run(s) still "
+                              f"going: cancelled (points {', '.join(str(j) for j in cut)} keep their earlier runs)")
+                    break
+                if done:
+                    save_plan()
+                    write_interim()
+                fill()
+        finally:
+            save_plan()                                 # the wall seconds spent, also when interrupted
+            with contextlib.suppress(Exception):        # noqa: BLE001 - only the display
+                stage.client.unsubscribe_topic(topic)
+    return results, ran()
 
 
 def accuracy_line(info):
@@ -423,8 +648,9 @@ def accuracy_line(info):
     Parameters
     ----------
     info : dict
-        What :func:`escalate` did (its second return value): ``target`` [1], ``budget_s``, ``cost_s``
-        and ``cpu_s`` [s], point counts and ``methods`` (points per best-estimate method).
+        What :func:`escalate` did (its second return value): ``target`` [1], ``budget_s`` and ``wall_s``
+        (wall), ``cost_s`` (cost model) and ``cpu_s`` (measured CPU) [s], point counts and ``methods``
+        (points per best-estimate method).
 
     Returns
     -------
@@ -435,30 +661,35 @@ def accuracy_line(info):
     ----------
     .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
        ``docs/accuracy_in_sweeps.md``.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
 
     Examples
     --------
-    >>> info = {"target": 0.15, "budget_s": 600, "cost_s": 412.0, "cpu_s": 398.7, "n_candidates": 12,
-    ...         "n_escalated": 10, "n_coupled": 7, "n_condensed": 3, "n_short": 1, "n_failed": 0,
+    >>> info = {"target": 0.15, "budget_s": 600, "wall_s": 431.0, "cost_s": 812.0, "cpu_s": 798.7,
+    ...         "n_candidates": 12, "n_transition": 4, "n_transition_escalated": 4, "n_escalated": 10,
+    ...         "n_coupled": 7, "n_condensed": 3, "n_short": 1, "n_cut": 0, "n_failed": 0,
     ...         "loo_rms": 0.08, "correction_usable": True,
     ...         "methods": {"linearization": 88, "corrected_linearization": 2, "coupled_monte_carlo": 7,
     ...                     "condensed_monte_carlo": 3}}
     >>> print(accuracy_line(info))   # doctest: +NORMALIZE_WHITESPACE
-    accuracy (target 0.15): 12 point(s) beyond the trust rule's promise; Monte Carlo at 10 (7 coupled,
-    3 condensed; 1 short of the target's standard error) for 412.0 of 600 CPU s by the cost model
-    (398.7 s measured); 2 without Monte Carlo (correction leave-one-out RMS 0.08); best estimates:
-    linearization 88, corrected_linearization 2, coupled_monte_carlo 7, condensed_monte_carlo 3
+    accuracy (target 0.15): 12 point(s) beyond the trust rule's promise, 4 in the transition of a fragility
+    curve; Monte Carlo at 10 (4 of the transition; 7 coupled, 3 condensed; 1 short of the target's standard
+    error) in 431 of 600 wall s (812.0 CPU s by the cost model, 798.7 s measured); 2 without Monte Carlo
+    (correction leave-one-out RMS 0.08); best estimates: linearization 88, corrected_linearization 2,
+    coupled_monte_carlo 7, condensed_monte_carlo 3
     """
     methods = ", ".join(f"{name} {n}" for name, n in info["methods"].items())
     left = info["n_candidates"] - info["n_escalated"]
-    return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise; "
-            f"Monte Carlo at {info['n_escalated']} ({info['n_coupled']} coupled, {info['n_condensed']} condensed"
+    transition = info.get("n_transition", 0)
+    return (f"accuracy (target {info['target']:g}): {info['n_candidates']} point(s) beyond the trust rule's promise"
+            + (f", {transition} in the transition of a fragility curve" if transition else "") + "; "
+            f"Monte Carlo at {info['n_escalated']} ("
+            + (f"{info.get('n_transition_escalated', 0)} of the transition; " if transition else "")
+            + f"{info['n_coupled']} coupled, {info['n_condensed']} condensed"
             + (f", {info['n_stiff_bed']} stiff-bed" if info.get("n_stiff_bed") else "") + "; "
             + (f"{info['n_multifidelity']} multi-fidelity; " if info.get("n_multifidelity") else "") +
-            f"{info['n_short']} short of the target's standard error) for {info['cost_s']:.1f} of "
-            f"{info['budget_s']:g} CPU s by the cost model ({info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
+            f"{info['n_short']} short of the target's standard error"
+            + (f"; {info['n_cut']} cut short by the budget" if info.get("n_cut") else "") + ") in "
+            f"{info['wall_s']:.0f} of {info['budget_s']:g} wall s ({info['cost_s']:.1f} CPU s by the cost model, "
+            f"{info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "
             f"best estimates: {methods}")

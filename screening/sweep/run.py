@@ -34,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import datetime as _dt
 import os
+import shutil
 import sys
 import threading
 import time
@@ -306,7 +307,8 @@ class _SweepRun:
                 t0 = time.perf_counter()
                 if study.accuracy is not None:
                     self.escalated, self.report.accuracy = escalate(
-                        Stage(self.client, study, self.store, self.result, self.log, self.progress))
+                        Stage(self.client, study, self.store, self.result, self.log, self.progress,
+                              interim=self._interim if self.target is None else None))
                 timings["accuracy"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 if study.mcs is not None:
@@ -330,8 +332,6 @@ class _SweepRun:
 
     def _zarr_result(self, attrs, batch_size):
         """The zarr store of the run: the one of an interrupted run with the same manifest, or a new one."""
-        import shutil
-
         study, path = self.study, self.store.zarr_building
         result = None
         if path.is_symlink() or (path.exists() and not path.is_dir()):    # planted in our folder: never followed
@@ -526,6 +526,35 @@ class _SweepRun:
         self.result.write_spots(spots, results, failed, spec)
         self.spot_runs = (spots, results)
         return len(spots)
+
+    # -- interim answers of the [accuracy] stage
+    def _interim(self, write):
+        """A complete result at ``out`` with the answers so far, while the ``[accuracy]`` stage runs (netCDF only):
+        the file being built is copied, ``write(copy)`` adds the escalated points and best estimates (and returns
+        them), the probabilities follow (without spot checks, which come later), and the copy replaces ``out``
+        atomically.  Its ``interim_result`` attribute says what it is; a later run does not reuse it
+        (:func:`~screening.io.reader.verify_result`) but resumes from the partial folder."""
+        study = self.study
+        self.result.commit()
+        tmp = self.store.building.with_name(self.store.building.name + ".interim")   # cleared with the folder
+        shutil.copyfile(self.store.building, tmp)
+        res = ResultFile(tmp, study, None, self.complevel, reopen=True)
+        try:
+            res.kept = {name: values.copy() for name, values in self.result.kept.items()}
+            escalated = write(res)
+            if execution.wants_probabilities(study):
+                from screening.sweep.probabilities import finish_probabilities
+
+                finish_probabilities(study, res, escalated, None)
+            stamp = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
+            res.set_attrs(interim_result=f"written at {stamp} while the [accuracy] stage ran, with the "
+                                         f"{len(escalated[0])} escalated point(s) done by then (no spot checks); "
+                                         "the run replaces it when it ends")
+        finally:
+            res.close()
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, self.out)
 
     # -- the end
     def _publish_store(self):

@@ -51,7 +51,7 @@ Example (SI units throughout)::
 
     [accuracy]                  # optional: escalate to Monte Carlo where the trust rule cannot promise
     target = 0.15               # relative error of peak var_theta (0 < target <= 1; absent: no escalation)
-    budget_s = 600              # CPU seconds of Monte Carlo at most (default 600)
+    budget_s = 600              # wall seconds of Monte Carlo at most (default 600)
     seed = 0
     multifidelity = false       # true: pair coupled runs with the condensed model where it pays (docs/multifidelity.md)
 
@@ -153,7 +153,7 @@ HISTORY_CHOICES = ("all", "spots", "none")
 FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
 FRAGILITY_METHODS = ("vanmarcke", "poisson")
 
-#: ``[accuracy] budget_s``: default and ceiling [s] (a week of CPU).
+#: ``[accuracy] budget_s``: default and ceiling [s] of wall time (a week).
 DEFAULT_BUDGET_S = 600.0
 MAX_BUDGET_S = 7 * 86400.0
 
@@ -205,8 +205,8 @@ class Fragility:
 
 @dataclass(frozen=True)
 class Accuracy:
-    """The ``[accuracy]`` table: ``target`` (relative error of peak var_theta [1]), ``budget_s`` (CPU
-    seconds of Monte Carlo [s]), the Monte Carlo ``seed``, ``model``: ``"auto"`` (the stiff-bed model
+    """The ``[accuracy]`` table: ``target`` (relative error of peak var_theta [1]), ``budget_s`` (wall
+    seconds of the Monte Carlo on the workers the run has [s]), the Monte Carlo ``seed``, ``model``: ``"auto"`` (the stiff-bed model
     where its measured validity holds, elsewhere condensed where the calibration shows it within the
     target, else coupled) or a registered model run at every escalated point, and ``multifidelity`` (pair
     the coupled runs with a cheap model where the pilot says it pays: :mod:`screening.analysis.multifidelity`)."""

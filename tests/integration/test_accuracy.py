@@ -14,8 +14,10 @@ from screening.sweep.run import run_sweep
 TARGET = GRID.replace("t_end = 4.0", "t_end = 3.0") + """
 [accuracy]
 target = 0.15
-budget_s = 4
+budget_s = 10
 """
+#: The same with a budget that does not bind: the whole plan runs, the same on every machine.
+UNBOUNDED = TARGET.replace("budget_s = 10", "budget_s = 600000")
 
 
 @pytest.mark.parametrize("suffix", [".nc", pytest.param(".zarr", marks=pytest.mark.slow)])   # .zarr: slow suite
@@ -27,13 +29,12 @@ def test_target_study_escalates_within_budget_and_labels_every_point(client, tmp
     report = run_sweep(study, tmp_path / f"a{suffix}", client=client, progress=False, log=messages.append)
     info = report.accuracy
     assert info["n_escalated"] >= 1 and info["n_candidates"] >= info["n_escalated"]
-    # the budget holds on the cost model; the measured CPU time is reported (a loose check: the cost
-    # model is ~1.3x the development machine's rate, a loaded CI machine may be slower)
-    assert info["cost_s"] <= study.accuracy.budget_s
-    assert 0 < info["cpu_s"] <= 3 * study.accuracy.budget_s
+    # the budget holds on the wall clock (within 10 %); cost model and measured CPU time are reported
+    assert 0 < info["wall_s"] <= 1.1 * study.accuracy.budget_s
+    assert info["cost_s"] > 0 and info["cpu_s"] > 0
     assert any(m.startswith("accuracy (target 0.15):") for m in messages)
     with xr.open_dataset(tmp_path / f"a{suffix}") as ds:
-        assert float(ds.attrs["accuracy_cost_s"]) <= 4.0
+        assert float(ds.attrs["accuracy_wall_s"]) == pytest.approx(info["wall_s"])
         assert float(ds["esc_cpu_time"].sum()) == pytest.approx(float(ds.attrs["accuracy_cpu_s"]), rel=1e-9)
         assert float(ds["esc_cost"].sum()) == pytest.approx(float(ds.attrs["accuracy_cost_s"]), rel=1e-9)
         # the per-point flag says whether the standard error reached target / 2 of the peak
@@ -114,7 +115,7 @@ def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkey
     report = run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda msg: None)
     # no point of the record runs again; the resumed run may spend what is left of the budget elsewhere
     assert first and not first & set(calls)
-    assert report.accuracy["cost_s"] <= study.accuracy.budget_s
+    assert report.accuracy["wall_s"] <= 1.1 * study.accuracy.budget_s      # the budget counts both runs
     with xr.open_dataset(tmp_path / "a.nc") as ds:
         assert first <= set(ds["esc_grid_index"].values.tolist())
         assert np.all(np.isfinite(ds["esc_peak_var_theta"].values))
@@ -122,14 +123,14 @@ def test_interrupted_escalation_resumes_from_its_record(client, tmp_path, monkey
 
 @pytest.mark.slow
 def test_escalation_is_reproducible_for_a_study_and_seed(client, tmp_path, monkeypatch):
-    # the budget is planned on the cost model (integration steps), not on the measured CPU time: the same
-    # points run with the same samples, so the best estimates are identical
+    # where the budget does not bind, what a point runs depends on its own runs only (their standard errors):
+    # the same points run with the same samples, so the best estimates are identical
     from screening.sweep import accuracy
 
-    study = parse_study(TARGET)
+    study = parse_study(UNBOUNDED)
     waits = []
-    real = accuracy.interruptible
-    monkeypatch.setattr(accuracy, "interruptible", lambda it: waits.append(1) or real(it))
+    real = accuracy.raise_if_interrupted
+    monkeypatch.setattr(accuracy, "raise_if_interrupted", lambda: waits.append(1) or real())
     runs = []
     for name in ("a.nc", "b.nc"):
         run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
@@ -161,8 +162,8 @@ def test_accuracy_on_a_one_point_grid(client, tmp_path, suffix):
 
 @pytest.mark.slow
 def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client, tmp_path, monkeypatch):
-    """The planner's state (points planned, waves done, costs seen) and each top-up run are in the resume
-    record: the resumed run escalates the same points with the same samples and the same estimates."""
+    """Every finished run is in the resume record at once (the point's latest result): the resumed run runs
+    no kept run again and, where the budget does not bind, ends with the same points, samples and estimates."""
     from screening.analysis import escalation
     from screening.sweep import _submit, accuracy
     from screening.io.store import PartialStore
@@ -172,46 +173,33 @@ def test_a_run_killed_during_its_top_up_round_resumes_to_the_same_result(client,
     monkeypatch.setattr(escalation, "meets_target", lambda *a, **k: False)
     monkeypatch.setattr(escalation, "samples_needed", lambda se, n0, *a, **k: n0 + 16 if n0 != escalation.PILOT_SAMPLES
                         else real_needed(se, n0, *a, **k))
-    study = parse_study(TARGET)
+    study = parse_study(UNBOUNDED)
     real_submit = _submit.submit_escalation
     keys = []
     monkeypatch.setattr(_submit, "submit_escalation",
-                        lambda *a, **k: keys.append(k["key"].split("-")[1]) or real_submit(*a, **k))
+                        lambda *a, **k: keys.append((k["key"].split("-")[1], k["key"].rsplit("-", 1)[1]))
+                        or real_submit(*a, **k))
     run_sweep(study, tmp_path / "ref.nc", client=client, progress=False, log=lambda m: None)
-    assert keys.count("topup") >= 1, keys                    # the study has a top-up round to interrupt
+    assert sum(kind == "topup" for kind, _ in keys) >= 1, keys     # the study has a top-up round to interrupt
     real_save = PartialStore.save_spot
-    saved = []
+    kept = []
 
-    def killed_then_resumed(name, owner, method, replacement):
-        """Run into ``name`` with ``owner.method`` replaced (it raises KeyboardInterrupt), then resume;
-        returns the kinds of the Monte Carlo tasks the resumed run submitted."""
-        keys.clear()
-        with monkeypatch.context() as m:
-            m.setattr(owner, method, replacement)
-            with pytest.raises(KeyboardInterrupt):
-                run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
-        keys.clear()
-        run_sweep(study, tmp_path / name, client=client, progress=False, log=lambda m: None)
-        return list(keys)
-
-    def killed_while_saving_the_top_ups(self, i, index, result):
-        if i >= accuracy.TOPUP_RECORD:
-            saved.append(i)
-            if len(saved) == keys.count("topup"):
+    def killed_at_the_first_top_up(self, i, index, result):
+        real_save(self, i, index, result)
+        if i >= accuracy.ESCALATION_RECORD:
+            kept.append((("pilot", "full", "topup")[int(result["phase"])], f"{i - accuracy.ESCALATION_RECORD:04d}"))
+            if kept[-1][0] == "topup":
                 raise KeyboardInterrupt
-        return real_save(self, i, index, result)
 
-    # only the top-up not kept runs again
-    assert killed_then_resumed("a.nc", PartialStore, "save_spot", killed_while_saving_the_top_ups) == ["topup"]
-    # killed after its top-up was kept: nothing runs again
-    from screening.sweep.run import _SweepRun
-
-    def killed(self):
-        raise KeyboardInterrupt
-
-    assert killed_then_resumed("b.nc", _SweepRun, "_finalize", killed) == []
-    for name in ("a.nc", "b.nc"):
-        with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / name) as ds:
-            for var in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
-                        "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
-                np.testing.assert_array_equal(ds[var].values, ref[var].values, err_msg=f"{name} {var}")
+    keys.clear()
+    with monkeypatch.context() as m:
+        m.setattr(PartialStore, "save_spot", killed_at_the_first_top_up)
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
+    keys.clear()
+    run_sweep(study, tmp_path / "a.nc", client=client, progress=False, log=lambda m: None)
+    assert kept and not set(kept) & set(keys)                      # no kept run runs again
+    with xr.open_dataset(tmp_path / "ref.nc") as ref, xr.open_dataset(tmp_path / "a.nc") as ds:
+        for var in ("esc_grid_index", "esc_samples", "esc_cost", "esc_peak_var_theta", "esc_peak_var_theta_se",
+                    "best_method", "best_peak_var_theta", "best_peak_var_theta_se"):
+            np.testing.assert_array_equal(ds[var].values, ref[var].values, err_msg=var)

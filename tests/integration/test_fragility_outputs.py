@@ -22,7 +22,7 @@ from screening.core.status import FitFlag, BestMethod, ProbabilitySource
 PGA_STUDY = study_text({"foundation.k": "[2.89e7, 5e6]", "foundation.eps": "0.0", "foundation.condensation": '"paper"',
                         "excitation.S0": None,
                         "excitation.pga": "{start = 0.5, stop = 4, num = 5, log = true}", "time.t_end": "3.0"},
-                       append="[accuracy]\ntarget = 0.15\nbudget_s = 3\n")
+                       append="[accuracy]\ntarget = 0.15\nbudget_s = 600000\n")
 #: The same grid without [accuracy]: untrusted points keep the linearization's value.
 PLAIN_STUDY = PGA_STUDY.split("[accuracy]")[0]
 NS = {"n": "http://openquake.org/xmlns/nrml/0.5"}

@@ -51,7 +51,7 @@ samples = 6
 model = "condensed"
 [accuracy]
 target = 0.5
-budget_s = 1
+budget_s = 10
 """
 
 CASES = """
@@ -82,7 +82,7 @@ samples = 4
 model = "condensed"
 [accuracy]
 target = 0.15
-budget_s = 1
+budget_s = 10
 """
 
 SINGLE = """

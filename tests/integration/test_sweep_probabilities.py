@@ -16,7 +16,7 @@ from screening.sweep.study import parse_study
 from screening.sweep.run import run_sweep
 
 FRAGILITY = '\n[fragility]\nthresholds = [0.05, 0.3]\nrelative_to = "slenderness"\n'
-ACCURACY = GRID.replace("t_end = 4.0", "t_end = 3.0") + "\n[accuracy]\ntarget = 0.15\nbudget_s = 4\n" + FRAGILITY
+ACCURACY = GRID.replace("t_end = 4.0", "t_end = 3.0") + "\n[accuracy]\ntarget = 0.15\nbudget_s = 600000\n" + FRAGILITY
 SPOTS = GRID + FRAGILITY + "\n[mcs]\npoints = [{index = {eps = 3, S0 = 4}}]\nsamples = 40\n"
 
 

@@ -4,10 +4,12 @@ import numpy as np
 import pytest
 
 from screening.analysis.escalation import (GRID_COST_S, GRID_DOUBLING_COST_S, GRID_REFERENCE_POINTS, MAX_POINTS,
-                                           MAX_SAMPLES, MIN_COVER, MIN_SAMPLES, PRIOR_STEPS_PER_S, RODAS_STEP_FACTOR,
-                                           STEP_COST_S, affordable_points, condensed_cells, cover_points,
+                                           MAX_SAMPLES, MIN_SAMPLES, PRIOR_STEPS_PER_S, PROBABILITY_SE,
+                                           RODAS_STEP_FACTOR, STEP_COST_S, condensed_cells, cover_points,
                                            escalation_candidates, escalation_model, estimated_cost, grid_point_cost,
-                                           meets_target, prior_cost, samples_needed)
+                                           meets_target, prior_cost, probabilities_met, probability_samples,
+                                           samples_needed, transition_first, transition_points)
+from screening.solvers.estimates import binomial_estimate
 from screening.analysis.trust import shipped_calibration
 from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
 
@@ -60,11 +62,58 @@ def test_condensed_only_where_the_calibration_shows_it_close_to_coupled():
     assert np.all(stopped == k)
 
 
-def test_affordable_points_trade_coverage_for_the_target():
-    assert affordable_points(600.0, 20.0) == 30
-    assert affordable_points(60.0, 20.0) == MIN_COVER           # never fewer than the correction needs
-    assert affordable_points(1e6, 1.0) == MAX_POINTS
-    assert affordable_points(60.0, float("nan")) == MAX_POINTS
+def test_transition_points_are_where_each_curve_goes_from_0_to_1_along_the_intensity():
+    # two curves (eps = 0, eps = 6e7) along S0, stored out of order (S0 = 3, 1, 2, 4, 5, 6): read in the
+    # order of S0; two levels (P(overturn), P(exceed))
+    s0 = np.array([3.0, 1.0, 2.0, 4.0, 5.0, 6.0])
+    over = np.array([[0.0, 0.0, 0.0, 0.0, 0.5, 0.99],            # eps = 0: 0.5 at S0 = 5
+                     [0.001, 0.0, 0.0, np.nan, np.nan, np.nan]])  # eps = 6e7: the linearization stopped from S0 = 4
+    exceed = np.array([[0.01, 0.0, 0.0, 1.0, 1.0, 1.0],           # a jump across the band from S0 = 3 to 4
+                       [0.0, 0.0, 0.0, np.nan, np.nan, np.nan]])
+    p = np.stack([over.reshape(-1), exceed.reshape(-1)], axis=-1)
+    got = transition_points(p, (2, 6), axis=1, intensity=s0).reshape(2, 6)
+    assert got[0].tolist() == [True, False, False, True, True, False]   # jump 3 -> 4, 0.5 at 5; 0.99 is above
+    assert got[1].tolist() == [True, False, False, True, False, False]  # the last known and the first stopped
+    # without a swept intensity the band alone decides
+    assert transition_points(p, (2, 6)).reshape(2, 6)[0].tolist() == [False, False, False, False, True, False]
+    # the grid's other order gives the same points
+    assert np.array_equal(transition_points(p.reshape(2, 6, 2).transpose(1, 0, 2).reshape(12, 2), (6, 2), axis=0,
+                                            intensity=s0).reshape(6, 2).T, got)
+
+
+def test_transition_points_come_first_then_the_coverage_of_the_others():
+    rng = np.random.default_rng(3)
+    features = rng.normal(size=(40, 3))
+    candidates = rng.random(40) < 0.8
+    priority = rng.random(40)
+    transition = np.zeros(40, dtype=bool)
+    # without transition points the order is the coverage order, unchanged
+    np.testing.assert_array_equal(transition_first(features, candidates, transition, priority, 12),
+                                  cover_points(features, candidates, priority, 12))
+    transition[[2, 5, 7, 30, 31]] = True
+    order = transition_first(features, candidates, transition, priority, 12)
+    first = [i for i in (2, 5, 7, 30, 31) if candidates[i]]
+    assert sorted(order[:len(first)].tolist()) == first            # every transition candidate, first
+    assert order[0] == max(first, key=lambda i: priority[i])       # the first by priority
+    assert len(order) == 12 and len(set(order.tolist())) == 12 and np.all(candidates[order])
+    assert not np.any(transition[order[len(first):]])
+    # many transition points: all of them (up to the cap), however small the count
+    transition[:] = True
+    assert len(transition_first(features, candidates, transition, priority, 3)) == int(candidates.sum())
+    assert len(transition_first(features, candidates, transition, priority, 3, most_transition=5)) == 5
+
+
+def test_probability_samples_reach_the_standard_error_aimed_at():
+    for hits, used in (([32], 64), ([3, 20, 60], 64), ([64], 64)):
+        n = probability_samples(hits, used)
+        assert MIN_SAMPLES <= n <= MAX_SAMPLES
+        q = (np.asarray(hits) + 2.0) / (used + 4.0)               # the pilot's fractions at n samples
+        se = np.sqrt(q * (1 - q) / (n + 4.0))
+        assert np.all(se <= PROBABILITY_SE + 1e-12) and (n == MIN_SAMPLES or np.max(se) > 0.99 * PROBABILITY_SE)
+    assert probability_samples([], 0) == MAX_SAMPLES
+    assert probability_samples([32], 64, most=200) == 200
+    assert probabilities_met([140], 280) == bool(binomial_estimate(140, 280)[1] <= PROBABILITY_SE)
+    assert probabilities_met([0, 140], 280) and not probabilities_met([0, 140], 200)
 
 
 def test_target_is_met_when_two_standard_errors_fit_in_it():

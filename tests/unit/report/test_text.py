@@ -20,6 +20,11 @@ def test_the_best_line_counts_each_method_and_the_escalations_figures():
                                                            accuracy_budget_s=600, accuracy_cpu_s=10.0)
     assert text.best_line(ds).endswith("; Monte Carlo at 2 point(s), 1 short of the target's standard error, "
                                        "12.3 of 600 CPU s by the cost model (10.0 s measured)")
+    ds = ds.assign_attrs(accuracy_wall_s=431.2)                    # the budget in wall seconds
+    assert text.best_line(ds).endswith("1 short of the target's standard error, 431 of 600 wall s (12.3 CPU s by "
+                                       "the cost model, 10.0 s measured)")
+    ds = ds.assign_attrs(interim_result="written at 06:00 while the [accuracy] stage ran")
+    assert text.best_line(ds).endswith("; INTERIM result: written at 06:00 while the [accuracy] stage ran")
 
 
 def test_the_probability_lines_count_sources_and_the_points_near_toppling():
