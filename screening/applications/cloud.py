@@ -761,10 +761,11 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     except ValueError as exc:
         median, beta = math.nan, math.nan
         warnings.append(f"no fragility fit: {exc} the threshold")
-    degenerate = ""
+    degenerate, separated = "", False
     if np.isfinite(beta) and beta > 0:
         x_in, x_out = im_values[used][exceed[used]], im_values[used][~exceed[used]]
         if x_in.min() > x_out.max():
+            separated = True
             degenerate = (f"the records are perfectly separated by {name}: beta is not identified (the likelihood "
                           "grows as beta -> 0)")
             warnings.append(f"the records are perfectly separated by {name} (every exceeding record has a larger "
