@@ -542,7 +542,7 @@ class _SweepRun:
         try:
             res.kept = {name: values.copy() for name, values in self.result.kept.items()}
             escalated = write(res)
-            if execution.wants_probabilities(study):
+            if wants_probabilities(study):
                 from screening.sweep.probabilities import finish_probabilities
 
                 finish_probabilities(study, res, escalated, None)
