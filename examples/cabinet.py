@@ -13,7 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from screening.analysis import beds
+from screening import beds
 from screening.sweep.study import load_study
 from screening.sweep.run import run_sweep
 from screening.core.status import FitFlag

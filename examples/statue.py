@@ -13,7 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from screening.analysis import beds
+from screening import beds
 from screening.cli import main as screening
 
 HERE = Path(__file__).resolve().parent

@@ -6,6 +6,7 @@ from screening.kernels.cache import clear_stale_cache as _clear_stale_cache
 
 _clear_stale_cache()   # numba's cache does not follow changes of other modules: drop it when any source changed
 
+from screening.analysis import beds  # noqa: F401 - ``from screening import beds``: bed parameters from materials
 from screening.analysis import fragility  # noqa: F401 - registers the ``ds.rocking`` accessor
 from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
