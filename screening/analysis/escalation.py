@@ -54,7 +54,7 @@ SAMPLE_SAFETY = 1.5
 #: swept intensity) lies in this band [1]: Monte Carlo there decides the curve.
 TRANSITION_BAND = (0.02, 0.98)
 #: Standard error [1] of every Monte Carlo probability a transition point aims at (the acceptance target of a
-#: collection's P(overturn), issue #40 item 6).
+#: collection's P(overturn), docs/accuracy_in_sweeps.md).
 PROBABILITY_SE = 0.03
 #: At most this many transition points are put first (the budget decides how many run).
 MAX_TRANSITION_POINTS = 1000
