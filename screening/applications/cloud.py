@@ -656,11 +656,15 @@ def stripe_dataset(cloud, block, foundation, rows, names):
             else FitFlag.no_fit
         warnings.append(f"no fragility fit: {exc}")
     degenerate = ""
-    if flag == FitFlag.ok and not np.isfinite(fit["beta_se"]):
+    if flag == FitFlag.separated:
         degenerate = ("the stripes separate exceeding from not exceeding perfectly: beta is not identified "
                       "(standard errors undefined)")
-        warnings.append("the standard errors are not defined (the stripes separate exceeding from not exceeding "
-                        "perfectly): add levels near the median")
+        warnings.append("the stripes separate exceeding from not exceeding perfectly: beta is not determined "
+                        "(fit_flag separated, no fit exported); add levels near the median")
+    elif flag != FitFlag.ok and "flag" in fit:
+        warnings.append(f"no fragility fit: {FitFlag(flag).meaning} (fit_flag {FitFlag(flag).name})")
+    if flag != FitFlag.ok:
+        fit = {key: math.nan for key in ("median", "beta", "median_se", "beta_se")}
     ds["fit_median"] = ((), fit["median"])
     ds["beta"] = ((), fit["beta"])
     ds["fit_median_se"] = ((), fit["median_se"])

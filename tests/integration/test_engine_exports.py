@@ -38,13 +38,13 @@ pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(engines_python() is None, reason="no engines environment (pelicun, OpenQuake): "
                                  "run `make engines` or set SCREENING_ENGINES_PYTHON")]
 
-#: Four objects x two limit states: two fitted and vouched, one fitted through untrusted points, one without
-#: a fit at the second limit state.  Names with '-' (pelicun splits ids on it) and a negative eps.
+#: Four objects x two limit states: two fitted and vouched (one of them with points left out of its fit), one
+#: whose vouched points are too few for a fit (``untrusted``), one without a fit at the second limit state.  Names with '-' (pelicun splits ids on it) and a negative eps.
 NAMES = ["bust-wood", "vase_stone", "clock-case", "lamp"]
-MEDIAN = np.array([[1.2, 2.5, 1.0, 1.8], [2.0, 4.0, 1.6, np.nan]])      # m s-2, limit_state x case
-BETA = np.array([[0.3, 0.4, 0.35, 0.5], [0.3, 0.45, 0.3, np.nan]])
-FLAG = np.array([[0, 0, 0, 0], [0, 0, 0, int(FitFlag.never_exceeded)]])
-UNVOUCHED = np.array([[0, 0, 3, 0], [0, 0, 3, 0]])
+MEDIAN = np.array([[1.2, 2.5, np.nan, 1.8], [2.0, 4.0, np.nan, np.nan]])      # m s-2, limit_state x case
+BETA = np.array([[0.3, 0.4, np.nan, 0.5], [0.3, 0.45, np.nan, np.nan]])
+FLAG = np.array([[0, 0, int(FitFlag.untrusted), 0], [0, 0, int(FitFlag.untrusted), int(FitFlag.never_exceeded)]])
+UNVOUCHED = np.array([[0, 2, 3, 0], [0, 2, 3, 0]])
 
 
 def fragility():
@@ -107,7 +107,8 @@ def test_openquake_reads_the_fragility_model_and_its_curves_are_the_fits(read_ba
     # only the complete, vouched objects are functions; the others are comments with their reason
     assert sorted(oq["functions"]) == ["screening_case=bust-wood", "screening_case=vase_stone"]
     text = Path(paths["nrml"]).read_text()
-    assert "no fragility function for screening_case=clock-case: theta_0.1_slenderness: untrusted" in text
+    assert "no fragility function for screening_case=clock-case: theta_0.1_slenderness: no fit (untrusted" in text
+    assert "screening_case=vase_stone theta_0.1_slenderness: 2 point(s) left out of the fit" in text
     assert "no fragility function for screening_case=lamp: theta_0.5_slenderness: no fit (never_exceeded" in text
     assert "case 'bust-wood': m = 8.67 kg, eps = -600000 m-2" in text
     for i, fid in enumerate(["screening_case=bust-wood", "screening_case=vase_stone"]):
