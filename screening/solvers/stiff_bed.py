@@ -229,7 +229,29 @@ def validity_problem(block, foundation, excitation=None):
 
 
 def check_standing(block, foundation):
-    """Raise ``ValueError`` if the block cannot stand on the bed: ``K(0) = (2/3) b^3 k - m g h + ... <= 0``."""
+    """Raise ``ValueError`` if the block cannot stand on the bed.
+
+    Parameters
+    ----------
+    block : screening.core.model.Block
+        The block.
+    foundation : screening.core.model.Foundation
+        The bed.
+
+    Returns
+    -------
+    None
+        Raises ``ValueError`` (naming ``foundation.k``) where ``K(0) = (2/3) b^3 k - m g h + ... <= 0``.
+
+    References
+    ----------
+    .. [1] screening documentation, "The stiff-bed model", docs/stiff_bed.md.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> check_standing(Block(m=1200.0, b=0.25, h=0.9), Foundation(k=1e10, lam=1e12))
+    """
     cubic.check_bearing(block, foundation)
     k0 = float(cubic.stiffness_at_rest(block, foundation))
     if not k0 > 0.0:

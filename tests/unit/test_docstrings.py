@@ -55,7 +55,6 @@ COVERED = [
     "screening.core.excitations.kanai_tajimi",
     "screening.core.excitations.registry",
     "screening.report.risk_figures",
-    "screening.cli",
     "screening.kernels.cache",
     "screening.kernels.dopri",
     "screening.core.interpolation",

@@ -219,9 +219,12 @@ def test_the_stored_model_is_the_one_refitted_from_the_file(shipped):
         assert stored.columns == refit.columns and stored.part_of_regime == refit.part_of_regime
         for one, again in zip(stored.parts, refit.parts):
             assert one.h == again.h
+            # the fit goes through BLAS, whose summation order follows the library build and its threads: a
+            # refit moved 3 of 903 residuals by up to 3e-11 relative (2026-11-29, two suites sharing 2 cores);
+            # 1e-9 keeps 30x of that and is still far below any change of the model (>= 1e-3)
             for a, b in zip(one[:-2], again[:-2]):
-                np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
-            np.testing.assert_allclose(one.q, again.q, rtol=1e-12)
+                np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+            np.testing.assert_allclose(one.q, again.q, rtol=1e-9)
         for one, product in zip(stored.parts, em.shipped_model(str(cond)).parts):
             np.testing.assert_array_equal(product.r, one.r)
 

@@ -28,10 +28,10 @@ def test_one_panel_per_case_with_its_name_and_fit(tmp_path, monkeypatch, n):
     assert ff.plot_fragility(_frag(n), "pga", tmp_path / "f.png") == tmp_path / "f.png"
     panels = [ax for ax in drawn["fig"].axes if ax.get_visible()]
     assert [ax.get_title() for ax in panels] == [f"object_{i:02d}" for i in range(n)]
-    # each panel names its own fit, the untrusted ones say so; nothing else crowds the legend
+    # each panel names its own fit, those with points left out say how many; nothing else crowds the legend
     labels = [[t.get_text() for t in ax.get_legend().get_texts()] for ax in panels]
     assert all(len(lab) == 1 and lab[0].startswith("median ") for lab in labels)
-    assert sum("[untrusted points]" in lab[0] for lab in labels) == len(range(0, n, 5))
+    assert sum("left out]" in lab[0] for lab in labels) == len(range(0, n, 5))
 
 
 def test_few_cases_keep_one_panel(tmp_path, monkeypatch):
