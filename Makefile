@@ -57,7 +57,7 @@ $(ENGINES_STAMP): tests/engines/requirements.txt
 # `make test-portable`: the suite as another machine runs it: kernels compiled for a generic x86-64 CPU (no
 # AVX, no FMA: other rounding, other adaptive steps) on one thread, in a cache of their own.  A test that
 # passes here and with `make test` holds its numbers to the computation's accuracy, not to this machine's
-# digits (issue #37).  CI runs it after `make test`.  The cache starts empty each time (the package's stale-cache
+# digits.  The cache starts empty each time (the package's stale-cache
 # check looks only at its own __pycache__), so the first minutes compile.
 test-portable: $(TEST_STAMP)
 	rm -rf $(VENV)/numba-generic
