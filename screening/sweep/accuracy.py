@@ -30,7 +30,7 @@ from screening.io.errors import exception_line, write_failure_reason
 from screening.solvers.model_choice import AUTO, choose
 from screening.sweep import _submit
 from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
-from screening.sweep.interrupt import interruptible, raise_if_interrupted
+from screening.sweep.interrupt import raise_if_interrupted
 from screening.sweep.study import build_models
 from screening.solvers.estimates import sample_probabilities
 
@@ -161,9 +161,6 @@ def escalate(stage):
     >>> Stage._fields
     ('client', 'study', 'store', 'result', 'log', 'progress', 'interim', 'clock')
     """
-    from screening.analysis import escalation as esc
-    from screening.analysis.correction import point_features
-    from screening.analysis.trust import shipped_calibration
 
     acc, study = stage.study.accuracy, stage.study
     pts = _point_table(stage)
@@ -215,9 +212,6 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
     """Write the escalated points ``results`` (``{position in order: run}``) and the best estimates at every
     point into ``result``; returns ``((flat indices, models, runs), info)`` as :func:`escalate`.  ``ran``: what
     the runs did (:func:`_escalation_runs`)."""
-    from screening.analysis import escalation as esc
-    from screening.analysis.correction import best_estimates
-    from screening.core.status import BestMethod, EscalationEstimator, EscalationModel
 
     acc = stage.study.accuracy
     done = [j for j in range(len(order)) if j in results]
@@ -362,8 +356,6 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     or without a run), ``n_failed`` (failed tasks), ``warm_up_s`` (the kernels' compilation on the workers, not
     charged).
     """
-    from screening.analysis import escalation as esc
-    from screening.core.status import EscalationEstimator, EscalationModel
 
     study, store, acc, clock = stage.study, stage.store, stage.study.accuracy, stage.clock
     most = min(esc.MAX_SAMPLES, limits.MAX_SAMPLE_VALUES // study.times.size)
