@@ -130,9 +130,7 @@ def rms_acceleration(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] D. M. Boore, "Simulation of ground motion using the stochastic method", Pure Appl. Geophys.
        160 (2003) 635-676.
 
@@ -177,11 +175,8 @@ def arias_intensity(excitation, t_end, cutoff, g=G):
 
     References
     ----------
-    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -230,11 +225,8 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -274,10 +266,8 @@ def input_measures(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -361,12 +351,9 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
-    .. [3] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -487,10 +474,8 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
-    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -536,8 +521,7 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -607,10 +591,8 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -680,14 +662,11 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
     .. [2] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
        (1965) 204-237.
-    .. [3] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
-    .. [4] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [3] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    .. [4] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -742,8 +721,7 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
-       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+    .. [1] [eads2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

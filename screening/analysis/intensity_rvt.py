@@ -65,8 +65,7 @@ def spectral_moments(excitation, cutoff):
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -113,10 +112,8 @@ def median_peak(t, var, var_dot, cov, bandwidth=None, probability=0.5):
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -173,11 +170,8 @@ def input_moments(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -225,10 +219,8 @@ def pga_median(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -290,10 +282,8 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -397,10 +387,8 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
     ----------
     .. [1] L. D. Lutes and S. Sarkani, Random Vibrations: Analysis of Structural and Mechanical Systems,
        Elsevier Butterworth-Heinemann (2004).
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [3] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -474,8 +462,7 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
     .. [2] A. Der Kiureghian, "Structural response to stationary excitation", J. Eng. Mech. Div. ASCE
        106(6) (1980) 1195-1213.
 
@@ -538,8 +525,7 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -600,8 +586,7 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -644,9 +629,7 @@ def envelope_exponentials(envelope):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -744,8 +727,7 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
     ----------
     .. [1] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
        (1965) 204-237.
-    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

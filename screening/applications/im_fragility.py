@@ -81,11 +81,8 @@ def default_dim(grid):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -147,11 +144,8 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -260,11 +254,8 @@ def limit_state_name(threshold, relative_to=None):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -297,11 +288,8 @@ def stack_limit_states(frags, thresholds, relative_to=None):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -354,11 +342,8 @@ def curve_table(frag):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -411,11 +396,8 @@ def curve_count_text(frag):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -598,8 +580,7 @@ def fragility_intensity(frag):
 
     References
     ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -695,8 +676,7 @@ def write_csv(frag, path):
 
     References
     ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -942,11 +922,8 @@ def nrml_parameters(median, beta):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
        functions), https://docs.openquake.org
 
@@ -998,11 +975,8 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
        functions), https://docs.openquake.org
 

@@ -94,9 +94,7 @@ def envelope_rates(osc):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -130,9 +128,7 @@ def envelope_state(osc, t):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -171,9 +167,7 @@ def initial_gain(osc, e1, e2):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -216,11 +210,8 @@ def stage_gains(osc, e1, e2, h):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -272,9 +263,7 @@ def uplift_occupancy(theta_ul, var_theta):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -309,9 +298,7 @@ def p_uplift(osc, var_theta):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -359,10 +346,8 @@ def first_step(osc, k0, h_max, t, t_end):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -409,10 +394,8 @@ def trial_step(h, t, t_end, steps, max_steps):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -463,10 +446,8 @@ def judge_step(err, finite, h, t_end):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -530,10 +511,8 @@ def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -592,10 +571,8 @@ def peak_in_step(t, h, v0, v1, c0, c1, kv, kc, best, best_t):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -658,9 +635,7 @@ def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -725,10 +700,8 @@ def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -839,11 +812,8 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -941,9 +911,7 @@ def packed_size(n):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -984,9 +952,7 @@ def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1031,9 +997,7 @@ def lyapunov_rhs(P, A, b, S0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1086,9 +1050,7 @@ def moment_equations(t, P, block, foundation, excitation, condensation=DEFAULT_C
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1145,9 +1107,7 @@ def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1226,9 +1186,7 @@ def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1317,10 +1275,8 @@ def filtered_scales(osc, filter_covariance, psd_at_rocking):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1382,11 +1338,8 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1425,9 +1378,7 @@ def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -54,11 +54,8 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

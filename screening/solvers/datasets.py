@@ -202,9 +202,7 @@ def linearization_dataset(result, times, dims, parameters, derived, attrs):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/outputs.md`` (what a result holds).
 
     Examples

@@ -136,9 +136,7 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -237,9 +235,7 @@ def auto_rtol(model, n_samples):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] ``docs/montecarlo_numerics.md``, "Tolerance from the sample count" (this package's documentation).
 
     Examples
@@ -281,9 +277,7 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -323,9 +317,7 @@ def initial_state(block, foundation, model):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -368,9 +360,7 @@ def ensemble_statistics(theta, theta_dot, uplift, used):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] A. Stuart and J. K. Ord, Kendall's Advanced Theory of Statistics, vol. 1, 6th ed., Arnold (1994).
 
     Examples
@@ -523,9 +513,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

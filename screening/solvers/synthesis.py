@@ -81,9 +81,7 @@ def rocking_frequency(block, foundation):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -123,9 +121,7 @@ def vertical_frequency(block, foundation):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -156,8 +152,7 @@ def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
 
     Examples
@@ -233,9 +228,7 @@ def envelope_rate(envelope, t):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -277,11 +270,8 @@ def band_limited_variance(excitation, cutoff):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -442,8 +432,7 @@ def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -499,8 +488,7 @@ def low_passed(plan, band):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/model_choice.md`` ("Same ground motions, and the band each
        model reads").
 
@@ -597,8 +585,7 @@ def sample_phases(seed, index, n_frequencies):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] NumPy documentation, "Random Generator", https://numpy.org/doc/stable/reference/random/generator.html
 
     Examples
@@ -645,8 +632,7 @@ def stationary_samples(plan, seed, sample_indices):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -704,11 +690,8 @@ def ground_acceleration_samples(excitation, plan, seed, sample_indices):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -757,11 +740,8 @@ def ground_acceleration(excitation, t_end, cutoff, n_samples, seed=0, oversampli
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

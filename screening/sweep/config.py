@@ -1373,9 +1373,7 @@ def build_models(case, values, t_end=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

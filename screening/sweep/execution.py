@@ -118,9 +118,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "The module map", ``docs/architecture.md``.
 
     Examples
@@ -261,8 +259,7 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
 
@@ -416,13 +413,9 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [3] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

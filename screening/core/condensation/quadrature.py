@@ -155,9 +155,7 @@ def theta_quadrature(theta_ul, theta_cap, theta_top):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] P. J. Davis and P. Rabinowitz, Methods of Numerical Integration, 2nd ed., Academic Press
        (1984), ch. 2 (Gauss-Legendre rules).
 
@@ -230,11 +228,8 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. M. Stein, "Estimation of the mean of a multivariate normal distribution", Annals of
-       Statistics 9(6) (1981) 1135-1151.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -327,11 +322,8 @@ def expectations(sigma_theta, block, foundation, cond):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. M. Stein, "Estimation of the mean of a multivariate normal distribution", Annals of
-       Statistics 9(6) (1981) 1135-1151.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -389,9 +381,7 @@ def table_size(block, foundation, cond):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
 
     Examples
@@ -438,11 +428,8 @@ def node_values(block, foundation, cond):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. M. Stein, "Estimation of the mean of a multivariate normal distribution", Annals of
-       Statistics 9(6) (1981) 1135-1151.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -484,9 +471,7 @@ def coefficient_table(block, foundation, cond):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
 
@@ -532,9 +517,7 @@ def coefficient_tables(block, foundation, cond):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
 
     Examples
@@ -792,9 +775,7 @@ def moment_kernel(block, foundation, cond):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
 
     Examples
@@ -853,9 +834,7 @@ def table_lookup(t, table, c0, k0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
 
@@ -919,9 +898,7 @@ def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
 
@@ -984,11 +961,8 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. M. Stein, "Estimation of the mean of a multivariate normal distribution", Annals of
-       Statistics 9(6) (1981) 1135-1151.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1045,11 +1019,8 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation, cond
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] C. M. Stein, "Estimation of the mean of a multivariate normal distribution", Annals of
-       Statistics 9(6) (1981) 1135-1151.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -55,10 +55,8 @@ def clough_penzien_filter(omega_g, zeta_g, omega_f, zeta_f):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -104,10 +102,8 @@ def clough_penzien_psd(omega, S0, omega_g, zeta_g, omega_f, zeta_f):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -40,9 +40,7 @@ def kanai_tajimi_filter(omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -83,9 +81,7 @@ def kanai_tajimi_psd(omega, S0, omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -168,9 +164,7 @@ def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -209,9 +203,7 @@ def stationary_filter_moments_jit(S0, omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
