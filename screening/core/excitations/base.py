@@ -431,8 +431,16 @@ class Excitation:
         return ground_cutoff() if band is None else band_top(band, BAND_ORDER)
 
     def stationary_covariance(self):
-        """Stationary covariance of the filter states (:func:`stationary_covariance`)."""
-        return stationary_covariance(self.filter(), self.S0)
+        """Stationary covariance of the filter states (:func:`stationary_covariance`); NaN at a point whose
+        idealized filter has no stationary state (the stable band's low-pass after it can hide that singularity
+        from the solve in rounding)."""
+        cov = stationary_covariance(self.filter(), self.S0)
+        shaping = self.shaping_filter()
+        if getattr(self, "band_limit_hz", None) is None or not np.shape(shaping.A)[-1]:
+            return cov
+        alone = stationary_covariance(shaping, self.S0)
+        bad = ~np.all(np.isfinite(alone.reshape(alone.shape[:-2] + (-1,))), axis=-1)
+        return np.where(bad[..., None, None], np.nan, cov)
 
     def spectral_moment(self, order, cutoff, epsrel=1e-11):
         """``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega`` of the unmodulated input
