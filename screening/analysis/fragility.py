@@ -788,7 +788,7 @@ def parameter(ds, name):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> parameter(ds, "S0").values.tolist()[:2], float(parameter(ds, "k"))
     ([0.0003, 0.0004], 28900000.0)
@@ -841,7 +841,7 @@ def model_quantity(ds, name):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> f"{float(model_quantity(ds, 'slenderness')):.4f} {float(model_quantity(ds, 'm_sdof')):.4f}"
     '0.1651 0.5133'
@@ -891,7 +891,7 @@ def threshold_angle(ds, threshold, relative_to=None):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> f"{float(threshold_angle(ds, 0.5, 'slenderness')):.5f}", float(threshold_angle(ds, 0.01))
     ('0.08257', 0.01)
@@ -930,7 +930,7 @@ def equivalent_damping_ratio(ds):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> [f"{z:.4f}" for z in equivalent_damping_ratio(ds).isel(t=-1).values[:2]]
     ['0.0265', '0.0265']
@@ -1058,7 +1058,7 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> [f"{p:.4f}" for p in exceedance_probability(ds, 0.01).values]
     ['0.0062', '0.1035', '0.6853', '0.9558', '0.9997']
@@ -1589,7 +1589,7 @@ def add_fit(out, ds, intensity, dim):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> import xarray as xr
     >>> out = add_fit(xr.Dataset({"p_exceed": exceedance_probability(ds, 0.01)}), ds, ds["S0"], "S0")
@@ -1703,7 +1703,7 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> curve = fragility_curve(ds, 0.01)
     >>> f"{float(curve['fit_median']):.3e} {float(curve['beta']):.3f}", curve["fit_median"].attrs["units"]
@@ -1856,7 +1856,7 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> best, best_dot = 1.1 * ds["peak_var_theta"], 1.1 * ds["var_theta_dot"].max("t")
     >>> ds = ds.assign(best_peak_var_theta=best, best_peak_var_theta_se=0.05 * best,
@@ -1941,7 +1941,7 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> frag = fragility_dataset(ds, 0.01)
     >>> float(frag["threshold_rad"]), [f"{p:.4f}" for p in frag["p_exceed"].values[:2]]

@@ -336,7 +336,8 @@ def make_excitation(shape, timing, S0):
     Returns
     -------
     screening.core.excitations.white.WhiteNoise or screening.core.excitations.kanai_tajimi.KanaiTajimi
-        The excitation, with an :class:`~screening.core.model.excitation.Envelope` of ``T1``, ``T2``.
+        The excitation, with an :class:`~screening.core.model.excitation.Envelope` of ``T1``, ``T2``, without a band
+        (``band_limit_hz=None``: the idealized spectra the atlas was measured with).
 
     Notes
     -----
@@ -359,9 +360,9 @@ def make_excitation(shape, timing, S0):
     ('WhiteNoise', 0.01, 4.0)
     """
     env = Envelope(timing["T1"], timing["T2"])
-    if shape["kind"] == "white":
-        return WhiteNoise(S0, env)
-    return KanaiTajimi(S0, shape["omega_g"], shape["zeta_g"], env)
+    if shape["kind"] == "white":                 # the atlas measured the idealized spectra: no band
+        return WhiteNoise(S0, env, band_limit_hz=None)
+    return KanaiTajimi(S0, shape["omega_g"], shape["zeta_g"], env, band_limit_hz=None)
 
 
 def measured_groups(block, foundation, shape, timing):

@@ -152,7 +152,7 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> frag, warnings = fragility_over_im(ds, 0.01, im="pga")
     >>> f"{float(frag['fit_median']):.4f} {float(frag['beta']):.4f}", frag["fit_median"].attrs["units"], warnings
@@ -296,7 +296,7 @@ def stack_limit_states(frags, thresholds, relative_to=None):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> frags = [fragility_over_im(ds, a)[0] for a in (0.01, 0.015)]
     >>> both = stack_limit_states(frags, [0.01, 0.015])
@@ -350,7 +350,7 @@ def curve_table(frag):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> row = curve_table(fragility_over_im(ds, 0.01)[0])[0]
     >>> row["labels"], f"{row['median']:.4f}", row["flag"].name, row["threshold_rad"]
@@ -404,7 +404,7 @@ def curve_count_text(frag):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> curve_count_text(fragility_over_im(ds, 0.01)[0])
     '1 of 1 curve(s) fitted'
@@ -683,7 +683,7 @@ def write_csv(frag, path):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> import tempfile, pathlib
     >>> with tempfile.TemporaryDirectory() as tmp:
@@ -758,7 +758,7 @@ def write_pelicun_csv(frag, path):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> import tempfile, pathlib
     >>> with tempfile.TemporaryDirectory() as tmp:
@@ -985,7 +985,7 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> import tempfile, pathlib
     >>> with tempfile.TemporaryDirectory() as tmp:

@@ -101,7 +101,7 @@ def envelope_rates(osc):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> envelope_rates(osc)
     (0.25, 0.5)
@@ -135,7 +135,7 @@ def envelope_state(osc, t):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> e1, e2 = envelope_state(osc, 1.0)
     >>> f"{4 * (e1 - e2):.6f}", f"{float(exc.envelope(1.0)):.6f}"           # q(1 s) both ways
@@ -174,7 +174,7 @@ def initial_gain(osc, e1, e2):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> f"{initial_gain(osc, *envelope_state(osc, 1.0)):.6f}", f"{osc['gain'] * float(exc.envelope(1.0)):.6f}"
     ('2.444029', '2.444029')
@@ -218,7 +218,7 @@ def stage_gains(osc, e1, e2, h):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> e1, e2 = envelope_state(osc, 1.0)
     >>> *gains, f1, f2 = stage_gains(osc, e1, e2, 0.1)
@@ -305,7 +305,7 @@ def p_uplift(osc, var_theta):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> f"{p_uplift(osc, 1e-6):.12f}", f"{float(uplift_occupancy(osc['theta_ul'], 1e-6)):.12f}"
     ('0.229664132095', '0.229664132095')
@@ -354,7 +354,7 @@ def first_step(osc, k0, h_max, t, t_end):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> h, code, _ = first_step(osc, 808.2, 0.1, 0.0, 20.0)
     >>> f"{h:.6e}", f"{0.05 / np.sqrt(808.2 / osc['m_sdof']):.6e}", code.name
@@ -519,7 +519,7 @@ def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> out = end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 1e-6, 800.0, 808.0, 0.5, 0.0)
     >>> round(out[0], 12), round(out[1], 12), round(out[2], 12), out[5], out[6].name
@@ -642,7 +642,7 @@ def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> import numba
     >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))         # constant c_eq, k_eq
@@ -708,7 +708,7 @@ def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> import numba
     >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))
@@ -957,7 +957,7 @@ def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
     Examples
     --------
     >>> from screening.core.excitations import WhiteNoise
-    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, WhiteNoise(1e-4).filter())
+    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, WhiteNoise(1e-4, band_limit_hz=None).filter())
     >>> A.tolist(), b.tolist()
     ([[0.0, 1.0], [-1600.0, -2.0]], [0.0, 3.5])
     """
@@ -1059,7 +1059,7 @@ def moment_equations(t, P, block, foundation, excitation, condensation=DEFAULT_C
     >>> from screening.core.excitations import WhiteNoise
     >>> P = np.diag([1e-8, 1e-4])
     >>> dP = moment_equations(0.0, P, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                       WhiteNoise(1e-4))
+    ...                       WhiteNoise(1e-4, band_limit_hz=None))
     >>> bool(np.allclose(dP, dP.T)), dP.shape
     (True, (2, 2))
     """
@@ -1114,7 +1114,7 @@ def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
     Against the numpy reference :func:`lyapunov_rhs`, Kanai-Tajimi input:
 
     >>> from screening.core.excitations import KanaiTajimi
-    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6).filter()
+    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None).filter()
     >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
     >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
     >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
@@ -1191,7 +1191,7 @@ def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
     Examples
     --------
     >>> from screening.core.excitations import KanaiTajimi
-    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6).filter()
+    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None).filter()
     >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
     >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
     >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
@@ -1285,7 +1285,7 @@ def filtered_scales(osc, filter_covariance, psd_at_rocking):
     >>> from screening.core.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
     >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6))
+    ...                                KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None))
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
     >>> w = np.sqrt(osc["k_rest"] / osc["m_sdof"])
     >>> scale = filtered_scales(osc, exc.stationary_covariance(), exc.psd(w))

@@ -48,7 +48,7 @@ def describe(ds, path="result"):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> print(describe(ds, "demo.nc").splitlines()[4])
       S0       5 values, 0.0003 .. 0.0012 m2 s-3
@@ -280,7 +280,7 @@ def bed_lines(ds, max_points=400):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> bed_lines(ds)[2]
     '  uplift angle        0.001201 rad (paper m g/(2 b^2 k)), 0.001201 rad exact'
@@ -349,7 +349,7 @@ def intensity_lines(ds):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> intensity_lines(ds)[2]
     '  rms_acceleration  0.2201 .. 0.4402 m s-2 (0.02245 .. 0.04489 g)'
@@ -435,7 +435,7 @@ def describe_product(ds, path="file"):
     >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
+    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
     ...                condensation="paper")
     >>> from screening.analysis.fragility import fragility_dataset
     >>> print(describe_product(fragility_dataset(ds, 0.01), "frag.nc").splitlines()[-1])

@@ -47,7 +47,8 @@ def model_fields(block, foundation, excitation):
 
     What a result stores as coordinates: the block's, the bed's and the excitation's numbers under
     the names of :data:`screening.solvers.schema.PARAMETERS` (``lam`` or ``c`` by contact law, ``omega_g``,
-    ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
+    ``zeta_g`` for Kanai-Tajimi input, ``band_limit_hz`` unless the input has no band, ``T1``, ``T2`` for the
+    exponential envelope).
 
     Parameters
     ----------
@@ -72,7 +73,7 @@ def model_fields(block, foundation, excitation):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> fields = model_fields(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4))
     >>> list(fields)
-    ['m', 'b', 'h', 'I_cm', 'g', 'k', 'lam', 'eps', 'S0', 'T1', 'T2']
+    ['m', 'b', 'h', 'I_cm', 'g', 'k', 'lam', 'eps', 'S0', 'band_limit_hz', 'T1', 'T2']
     >>> fields["k"], fields["S0"]
     (28900000.0, 0.0001)
     """

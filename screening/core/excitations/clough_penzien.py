@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from screening.core.excitations.base import Excitation, Filter, Parameter
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Filter, Parameter
 from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_psd
 from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
@@ -126,6 +126,7 @@ class CloughPenzien(Excitation):
     omega_g, zeta_g : Kanai–Tajimi (soil) filter frequency [rad/s] and damping ratio [1], > 0.
     omega_f, zeta_f : high-pass filter frequency [rad/s] and damping ratio [1], > 0.
     envelope : modulating function.
+    band_limit_hz : corner of the band's low-pass [Hz] (:class:`~screening.core.excitations.Excitation`), None: none.
     """
 
     S0: float
@@ -134,6 +135,7 @@ class CloughPenzien(Excitation):
     omega_f: float
     zeta_f: float
     envelope: Envelope | ConstantEnvelope = field(default_factory=Envelope)
+    band_limit_hz: float | None = GROUND_BAND_LIMIT_HZ
 
     kind = "clough_penzien"
     description = "modulated Clough-Penzien noise (Kanai-Tajimi and a second-order high-pass)"
@@ -142,9 +144,9 @@ class CloughPenzien(Excitation):
                   "zeta_f": Parameter("1", "Clough-Penzien high-pass filter damping ratio")}
 
 
-    def filter(self):
+    def shaping_filter(self):
         return clough_penzien_filter(self.omega_g, self.zeta_g, self.omega_f, self.zeta_f)
 
-    def psd(self, omega):
+    def shaping_psd(self, omega):
         """Two-sided PSD of the filtered input [m^2/s^3] at ``omega`` [rad/s]."""
         return clough_penzien_psd(omega, self.S0, self.omega_g, self.zeta_g, self.omega_f, self.zeta_f)

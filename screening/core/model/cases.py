@@ -75,7 +75,7 @@ def paper_case(name):
     block = Block(**PAPER_BLOCK)
     foundation = Foundation(eps=eps, **PAPER_BED)
     if kind == "white":
-        excitation = WhiteNoise(S0, Envelope(4.0, 2.0))
+        excitation = WhiteNoise(S0, Envelope(4.0, 2.0), band_limit_hz=None)          # the paper's: no band
     else:
-        excitation = KanaiTajimi(S0, 10.0, 0.4, Envelope(4.0, 2.0))
+        excitation = KanaiTajimi(S0, 10.0, 0.4, Envelope(4.0, 2.0), band_limit_hz=None)
     return block, foundation, excitation
