@@ -39,7 +39,7 @@ def test_excitation_rejects_bad_values(make, name):
 
 @pytest.mark.parametrize("wg, zg", [(10.0, 0.4), (15.6, 0.6), (3.0, 0.05)])
 def test_kanai_tajimi_output_variance_matches_integral_of_psd(wg, zg):
-    kt = KanaiTajimi(2.0e-4, wg, zg)
+    kt = KanaiTajimi(2.0e-4, wg, zg, band_limit_hz=None)   # the closed form is the idealized spectrum's
     total = integrate.quad(kt.psd, -np.inf, np.inf, epsabs=0, epsrel=1e-11, limit=500)[0]
     assert kanai_tajimi_stationary_moments(2.0e-4, wg, zg)[2] == pytest.approx(total, rel=1e-8)
 
