@@ -58,12 +58,12 @@ def point_costs(n_points, repeat):
     S0 = np.logspace(-6, np.log10(2.4e-3), n_points)
     t = output_times(20.0, 0.05)
     measures = {
-        "linearize": lambda fnd, name: linearize(block, fnd, WhiteNoise(S0), condensation=name),
-        "solve (no histories)": lambda fnd, name: solve_moments(block, fnd, WhiteNoise(S0), t, condensation=name,
+        "linearize": lambda fnd, name: linearize(block, fnd, WhiteNoise(S0, band_limit_hz=None), condensation=name),
+        "solve (no histories)": lambda fnd, name: solve_moments(block, fnd, WhiteNoise(S0, band_limit_hz=None), t, condensation=name,
                                                                 histories=False),
     }
     for name in CONDENSATIONS:                          # load (or compile) every solver first
-        linearize(block, Foundation(2.89e7, 8.95e8, 6e7), WhiteNoise(S0[:2]), condensation=name)
+        linearize(block, Foundation(2.89e7, 8.95e8, 6e7), WhiteNoise(S0[:2], band_limit_hz=None), condensation=name)
     out = {}
     for r in range(repeat):
         order = CONDENSATIONS[r % 3:] + CONDENSATIONS[:r % 3]
