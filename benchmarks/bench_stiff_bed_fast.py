@@ -29,6 +29,10 @@ same cut-off) measured in the same run::
 
     flock /work/bench.lock nice -n 10 env NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/bench_stiff_bed_fast.py \\
         --cost --samples 500
+
+``--input band`` (with ``--validity`` and ``--cost``): Kanai-Tajimi through the ground's band instead of the cut-off
+(:class:`GroundBand`: an order-4 Butterworth low-pass at 25 Hz, synthesized up to 50 Hz).  The work counts
+include the uplift attempts by phase (``|theta| / theta_ul`` at the attempt's start).
 """
 
 from __future__ import annotations

@@ -11,7 +11,9 @@ The same equations as :mod:`screening.kernels.stiff_bed_kernels` (the reference)
 * uplift is integrated by the adaptive Dormand–Prince 5(4) pair on the model's acceleration (one indentation
   solve per evaluation, :func:`uplift_acceleration`), each step ending where the block re-enters full contact
   (located), so no step straddles the kink of the moment law at ``theta_ul``; the outputs are read from the
-  step's cubic Hermite interpolant instead of landing steps on them.
+  step's cubic Hermite interpolant instead of landing steps on them.  Moving towards full contact the next
+  step shrinks with the contact law's time scale ``|theta| / |theta'|`` (the error controller alone lags
+  behind it: all its rejections were there), and the last stage of a step is the next one's first.
 
 Method and measurements: ``docs/stiff_bed.md`` ("Exact-contact sampler").
 """
@@ -819,7 +821,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             fac = min(fac, 1.0)
         if x * v < 0.0 and x_start * v_start < 0.0:
             # moving towards full contact: the time scale |theta| / |theta'| of the contact law shrinks
-            # from step to step, so the next step shrinks with it (INWARD_PREDICTION)
+            # from step to step, so the next step shrinks with it
             ratio = (a0 * abs(v_start)) / (abs(x_start) * abs(v))
             if ratio < 1.0:
                 fac *= max(ratio, dopri.FAC_MIN)
