@@ -11,7 +11,9 @@ The same equations as :mod:`screening.kernels.stiff_bed_kernels` (the reference)
 * uplift is integrated by the adaptive Dormand–Prince 5(4) pair on the model's acceleration (one indentation
   solve per evaluation, :func:`uplift_acceleration`), each step ending where the block re-enters full contact
   (located), so no step straddles the kink of the moment law at ``theta_ul``; the outputs are read from the
-  step's cubic Hermite interpolant instead of landing steps on them.
+  step's cubic Hermite interpolant instead of landing steps on them.  Moving towards full contact the next
+  step shrinks with the contact law's time scale ``|theta| / |theta'|`` (the error controller alone lags
+  behind it: all its rejections were there), and the last stage of a step is the next one's first.
 
 Method and measurements: ``docs/stiff_bed.md`` ("Exact-contact sampler").
 """
@@ -36,10 +38,12 @@ __all__ = ["oscillator_exponential", "oscillator_step", "grid_propagator", "grid
            "integrate_sample",
            "integrate_chunk", "modulate", "PIECE_PHASE", "COUNTS"]
 
-#: What :func:`integrate_sample` counts when asked (``counts`` of shape ``(7,)``).
+#: What :func:`integrate_sample` counts when asked (``counts`` of shape ``(len(COUNTS),)``; an uplift attempt's
+#: phase by ``|theta|`` at its start).
 COUNTS = ("full contact: whole grid intervals", "full contact: closed-form pieces", "uplift: accepted steps",
           "uplift: rejected steps", "uplift: steps shortened to the re-entry", "exits from full contact",
-          "transfers at the zero crossing")
+          "transfers at the zero crossing", "uplift attempts at |theta|/theta_ul in (1, 10]", "... (10, 100]",
+          "... (100, 1000]", "... above 1000")
 
 #: Largest phase ``omega_r h`` [rad] of a closed-form piece in full contact when the block may leave it within a
 #: grid interval: the exit is checked at the ends of pieces this short (a sinusoid sampled every 0.5 rad shows
@@ -218,6 +222,24 @@ def grid_pieces(omega2, c, g, dt):
     return np.stack([grid_propagator(omega2, c, g, dt, i * dt / m) for i in range(1, m + 1)])
 
 
+#: Largest ``|theta|`` [rad] where :func:`_sin_cos` sums its Taylor polynomials (error below 1e-16 relative).
+SERIES_LIMIT = 0.3
+
+
+@numba.njit(cache=True, inline="always")
+def _sin_cos(theta):
+    """``(sin theta, cos theta)``: Taylor polynomials to ``theta^13`` and ``theta^14`` up to
+    :data:`SERIES_LIMIT` (within an ulp of ``math.sin``, ``math.cos``; a third of their cost), else ``math``."""
+    if abs(theta) > SERIES_LIMIT:
+        return math.sin(theta), math.cos(theta)
+    t2 = theta * theta
+    s = theta * (1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 + t2 * (-1.0 / 5040.0 + t2 * (
+        1.0 / 362880.0 + t2 * (-1.0 / 39916800.0 + t2 * (1.0 / 6227020800.0)))))))
+    c = 1.0 + t2 * (-0.5 + t2 * (1.0 / 24.0 + t2 * (-1.0 / 720.0 + t2 * (1.0 / 40320.0 + t2 * (
+        -1.0 / 3628800.0 + t2 * (1.0 / 479001600.0 + t2 * (-1.0 / 87178291200.0)))))))
+    return s, c
+
+
 @numba.njit(cache=True)
 def uplift_acceleration(sp, cp, theta, theta_dot, x_g_ddot):
     """Compiled :func:`screening.kernels.stiff_bed_contact.rocking_acceleration` without vertical input: one
@@ -243,8 +265,7 @@ def uplift_acceleration(sp, cp, theta, theta_dot, x_g_ddot):
     >>> list(inspect.signature(uplift_acceleration.py_func).parameters)
     ['sp', 'cp', 'theta', 'theta_dot', 'x_g_ddot']
     """
-    s = math.sin(theta)
-    c = math.cos(theta)
+    s, c = _sin_cos(theta)
     sigma = 1.0 if theta >= 0.0 else -1.0
     a = sigma * s
     z, dz, v = cubic.quasi_static_indentation_jit(cp, a)
@@ -337,8 +358,7 @@ def lifted_acceleration(par, sp, cp, theta, theta_dot, x_g_ddot):
     >>> list(inspect.signature(lifted_acceleration.py_func).parameters)[:3]
     ['par', 'sp', 'cp']
     """
-    s = math.sin(theta)
-    c = math.cos(theta)
+    s, c = _sin_cos(theta)
     sigma = 1.0 if theta >= 0.0 else -1.0
     a = sigma * s
     m, g, h, i_cm, b, k, eps, w_rate, w_ind, tu = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7], \
@@ -493,7 +513,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
     out_uplift : numpy.ndarray of bool
         Uplift flag at the output times.
     counts : numpy.ndarray
-        ``(7,)`` integers incremented by the work done (:data:`COUNTS`), or ``(0,)`` (not counted).
+        ``(len(COUNTS),)`` integers incremented by the work done (:data:`COUNTS`), or ``(0,)`` (not counted).
 
     Returns
     -------
@@ -538,6 +558,9 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
     tol_t = 1e-9 * dt_grid
     counting = counts.shape[0] > 0
     par = _lifted(sp, cp)
+    have_k1 = False
+    k1_keep = 0.0
+    x_start, v_start = x, v
     while i_out < n_out:
         if n_acc + n_rej >= max_steps:
             status, reason = kern.STATUS_DIVERGED, kern.REASON_STEP_BUDGET
@@ -621,6 +644,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
                             amp = 0.0
                         left = True
                         in_contact = False
+                        have_k1 = False
                         if counting:
                             counts[5] += 1
                         h = min(h_keep, 0.5 / omega)     # the stiff end of the moment law
@@ -647,7 +671,10 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             continue
         # ---------------------------------------------------------------- uplift, adaptive step
         k1_0 = v
-        k1_1 = lifted_acceleration(par, sp, cp, x, v, _input(acc, acc_dot, row, dt_grid, n_grid, t))
+        if have_k1:                                     # first same as last: the previous step's end
+            k1_1 = k1_keep
+        else:
+            k1_1 = lifted_acceleration(par, sp, cp, x, v, _input(acc, acc_dot, row, dt_grid, n_grid, t))
         locating = False
         rejected = False
         while True:
@@ -686,8 +713,11 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             e0 = h * (E1 * k1_0 + E3 * k3_0 + E4 * k4_0 + E5 * k5_0 + E6 * k6_0 + E7 * k7_0)
             e1 = h * (E1 * k1_1 + E3 * k3_1 + E4 * k4_1 + E5 * k5_1 + E6 * k6_1 + E7 * k7_1)
             err = math.sqrt(0.5 * (err_term(e0, x, n0, s0, rtol) + err_term(e1, v, n1, s1, rtol)))
-            if counting and (err > 1.0 or not math.isfinite(err)):
-                counts[3] += 1
+            if counting:
+                if err > 1.0 or not math.isfinite(err):
+                    counts[3] += 1
+                ratio = abs(x) / tu
+                counts[7 if ratio <= 10.0 else 8 if ratio <= 100.0 else 9 if ratio <= 1000.0 else 10] += 1
             if not math.isfinite(err):
                 n_rej += 1
                 h = 0.1 * h
@@ -762,12 +792,16 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             i_out += 1
         crossed = x * n0 < 0.0
         t = t_new
+        x_start, v_start = x, v
         x, v = n0, n1
+        have_k1 = True
+        k1_keep = k7_1
         if crossed:
             if amp > tu:
                 rr = math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
                 x *= rr
                 v *= rr
+                have_k1 = False
             amp = 0.0
         a0 = abs(x)
         amp = max(amp, a0)
@@ -785,6 +819,12 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
         fac, log_err = dopri.pi_step_factor(err, log_err_old)
         if rejected:
             fac = min(fac, 1.0)
+        if x * v < 0.0 and x_start * v_start < 0.0:
+            # moving towards full contact: the time scale |theta| / |theta'| of the contact law shrinks
+            # from step to step, so the next step shrinks with it
+            ratio = (a0 * abs(v_start)) / (abs(x_start) * abs(v))
+            if ratio < 1.0:
+                fac *= max(ratio, dopri.FAC_MIN)
         log_err_old = max(log_err, dopri.LOG_ERR_START)
         if locating:
             h = h_keep
@@ -803,7 +843,8 @@ def integrate_chunk(sp, cp, osc, prop, pieces, log_amp, log_eta, acc, acc_dot, d
                     max_steps, out_theta, out_theta_dot, out_uplift, peak, status, reason, n_accepted, n_rejected,
                     h_min, counts):
     """:func:`integrate_sample` for every row of ``acc`` (``prange`` over samples); the per-sample outcomes
-    written in place (``sp``, ``cp`` the 1-element record arrays; ``counts`` ``(rows, 7)`` or ``(0, 7)``).
+    written in place (``sp``, ``cp`` the 1-element record arrays; ``counts`` ``(rows, len(COUNTS))``, or
+    ``(0, len(COUNTS))``).
 
     Examples
     --------
