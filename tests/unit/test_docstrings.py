@@ -95,6 +95,7 @@ COVERED = [
     "screening.kernels.stiff_bed_contact",
     "screening.kernels.stiff_bed_kernels",
     "screening.solvers.synthesis",
+    "screening.solvers.tail",
     "screening.solvers.timegrid",
     "screening.core.status",
     "screening.core.validation",
