@@ -632,6 +632,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     if not isinstance(sample_histories, (bool, np.bool_)):
         raise ValueError(f"parameter 'sample_histories' must be True or False (got {sample_histories!r})")
     seed = validate_seed(seed)
+    _show_progress(progress, n_samples, 1)                       # refuses a bad progress before any work
     run = sample_setup(block, foundation, excitation, n_samples, model, t_end, dt, condensation, strict_validity,
                        **numerics)
     mc, cond, times, opts, plan, read_plan = run.model, run.condensation, run.times, run.opts, run.plan, run.read_plan

@@ -55,6 +55,7 @@ COVERED = [
     "screening.core.excitations.kanai_tajimi",
     "screening.core.excitations.registry",
     "screening.report.risk_figures",
+    "screening.report.collection_report",
     "screening.kernels.cache",
     "screening.kernels.dopri",
     "screening.core.interpolation",
