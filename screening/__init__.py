@@ -17,9 +17,11 @@ from screening.core.model import Block, Foundation
 from screening.analysis.linearization import linearize
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.simulate import simulate
+from screening.solvers.tail import tail_probability
 
 __all__ = [
     "Block", "Foundation", "Envelope", "ConstantEnvelope", "WhiteNoise",
     "KanaiTajimi", "uplift_threshold", "rocking_damping", "rocking_stiffness",
-    "equivalent_coefficients", "uplift_probability", "linearize", "monte_carlo", "simulate", "__version__",
+    "equivalent_coefficients", "uplift_probability", "linearize", "monte_carlo", "simulate", "tail_probability",
+    "__version__",
 ]

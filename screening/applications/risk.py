@@ -18,11 +18,12 @@ from pathlib import Path
 import numpy as np
 from scipy import special
 
-from screening.applications.im_fragility import IMS, curves_by_object, export_problem, fragility_intensity, im_key
+from screening.applications.im_fragility import (IMS, curves_by_object, export_problem, fragility_intensity,
+                                                 fragility_over_im, im_key, stack_limit_states)
 from screening.core.status import FitFlag
 
 __all__ = ["annual_frequency", "HazardCurve", "HazardError", "read_hazard", "hazard_levels", "risk_table",
-           "RISK_COLUMNS", "write_risk_csv"]
+           "RISK_COLUMNS", "write_risk_csv", "limit_state_fragilities"]
 
 #: Standard gravity [m s-2]: OpenQuake's accelerations are in g.
 G = 9.80665
@@ -505,3 +506,47 @@ def write_risk_csv(rows, path):
         for r in rows:
             w.writerow([cell(r.get(c, "")) for c in RISK_COLUMNS])
     return path
+
+
+def limit_state_fragilities(ds, im="pga", period=None, thresholds=(), relative_to=None):
+    """The fragilities of a sweep result over ``im``: overturning (where it stores ``p_overturn``) and the
+    exceedance of each threshold (one dataset on ``limit_state``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep result (loaded).
+    im : str
+        A key of :data:`~screening.applications.im_fragility.IMS` (``"pga"`` [m s-2] or ``"sa"``).
+    period : float, optional
+        Oscillator period [s] of ``sa``.
+    thresholds : sequence of float
+        Rotations [rad], or fractions of the angle ``relative_to``.
+    relative_to : {None, "slenderness", "theta_ul"}
+        What the thresholds are fractions of.
+
+    Returns
+    -------
+    list of xarray.Dataset
+        :func:`~screening.applications.im_fragility.fragility_over_im` of each limit state; empty when the
+        result has neither.
+
+    References
+    ----------
+    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
+       docs/fragility.md.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> limit_state_fragilities(xr.Dataset({"status": ("pga", [0, 0])}))
+    []
+    """
+    frags = []
+    if "p_overturn" in ds.variables:
+        frags.append(fragility_over_im(ds, 1.0, im, period=period, limit_state="overturn")[0])
+    if len(thresholds):
+        thresholds = sorted(float(t) for t in thresholds)
+        frags.append(stack_limit_states([fragility_over_im(ds, t, im, relative_to=relative_to, period=period)[0]
+                                         for t in thresholds], thresholds, relative_to))
+    return frags

@@ -556,8 +556,9 @@ def cmd_export(result, out, complevel, layout, selection):
 def cmd_risk(result, hazard, years, site, threshold, relative_to, im, period, out):
     import xarray as xr
 
-    from screening.applications.im_fragility import IMS, fragility_over_im, stack_limit_states
-    from screening.applications.risk import HazardError, hazard_levels, read_hazard, risk_table, write_risk_csv
+    from screening.applications.im_fragility import IMS
+    from screening.applications.risk import (HazardError, hazard_levels, limit_state_fragilities, read_hazard,
+                                             risk_table, write_risk_csv)
     from screening.report.risk_figures import plot_risk
     from screening.io.reader import ResultError, open_result
     from screening.io.writer import check_output_path
@@ -595,14 +596,7 @@ def cmd_risk(result, hazard, years, site, threshold, relative_to, im, period, ou
         if is_fragility:
             frags = [ds.load()]
         else:
-            ds = ds.load()
-            frags = []
-            if "p_overturn" in ds.variables:
-                frags.append(fragility_over_im(ds, 1.0, im, period=period, limit_state="overturn")[0])
-            if threshold:
-                stacked = stack_limit_states([fragility_over_im(ds, t, im, relative_to=relative_to, period=period)[0]
-                                              for t in sorted(threshold)], sorted(threshold), relative_to)
-                frags.append(stacked)
+            frags = limit_state_fragilities(ds.load(), im, period, threshold, relative_to)
             if not frags:
                 raise CommandError(f"{result}: no p_overturn stored (run the study with [accuracy] or [fragility]) "
                                    "and no --threshold: nothing to convolve")
@@ -621,6 +615,56 @@ def cmd_risk(result, hazard, years, site, threshold, relative_to, im, period, ou
         f"; highest: {rated[0]['object']} {rated[0]['limit_state']} {rated[0]['annual_rate']:.3g} /yr, "
         f"P({years:g} yr) = {rated[0]['probability']:.3g} ({100 * rated[0]['share_outside_vouched']:.0f} % of it "
         "from outside the vouched range)" if rated else ""))
+    return EXIT_OK
+
+
+@cli.command("report", help="one self-contained HTML page of a collection: ranked by risk at a site (--hazard) or by "
+                             "median capacity, each object's curves with the points that vouch for them, which model "
+                             "answered each point and how far to trust it, the inputs")
+@click.argument("result", type=click.Path())
+@click.option("--hazard", type=click.Path(),
+              help="the site's hazard curve (as `risk`): OpenQuake's hazard-curve CSV, or 'PGA [g], annual_rate [1/yr]'")
+@click.option("--years", type=POSITIVE_FLOAT, default=50.0, show_default=True,
+              help="time span [yr] of the probabilities (Poisson occurrences)")
+@click.option("--site", type=click.IntRange(min=0), help="the row of an OpenQuake hazard file with several sites")
+@click.option("--im", type=Choice(["pga", "sa"]), default="pga", show_default=True,
+              help="the intensity measure the fragilities are fitted over")
+@click.option("--period", type=POSITIVE_FLOAT, help="oscillator period [s] of --im sa")
+@click.option("--out", type=click.Path(), help="the HTML page (default RESULT_report.html)")
+def cmd_report(result, hazard, years, site, im, period, out):
+    from screening.applications.im_fragility import IMS
+    from screening.applications.risk import HazardError, hazard_levels, limit_state_fragilities, read_hazard
+    from screening.io.reader import ResultError, open_result
+    from screening.io.writer import check_output_path
+    from screening.report.collection_report import write_report
+
+    result = Path(result)
+    if im == "sa" and period is None:
+        raise CommandError("--im sa needs --period SECONDS")
+    try:
+        curve = read_hazard(hazard, site) if hazard else None
+        if curve is not None:
+            hazard_levels(curve, IMS[im][0], IMS[im][1], period if im == "sa" else "", hazard)
+    except HazardError as exc:
+        raise CommandError(str(exc)) from None
+    out = check_output_path(Path(out) if out else result.with_name(f"{result_stem(result)}_report.html"),
+                            inputs=(result, *((Path(hazard),) if hazard else ())))
+    try:
+        opened = open_result(result)
+    except ResultError as exc:
+        raise CommandError(str(exc)) from None
+    with opened as ds:
+        ds = ds.load()
+    thresholds = ds["threshold"].values.tolist() if "p_exceed" in ds and "threshold" in ds.coords else []
+    relative_to = ds["p_exceed"].attrs.get("relative_to") or None if thresholds else None
+    frags = limit_state_fragilities(ds, im, period, thresholds, relative_to)
+    if not frags:
+        raise CommandError(f"{result}: no p_overturn or p_exceed stored (run the study with [accuracy] or "
+                           "[fragility]): nothing to report")
+    objects = write_report(ds, out, result.name, curve, years, frags, hazard or "hazard")
+    say(f"wrote {out}: {len(objects)} object(s)" + (f", highest risk: {objects[0]['name']}" if curve is not None
+                                                     else f", lowest median capacity: {objects[0]['name']}"
+                                                     if objects else ""))
     return EXIT_OK
 
 

@@ -46,6 +46,7 @@ import math
 import numbers
 import sys
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -65,7 +66,8 @@ from screening.solvers.timegrid import output_times
 
 __all__ = ["MODELS", "DEFAULT_RTOL", "AUTO_RTOL", "AUTO_RTOL_SAMPLES", "auto_rtol", "DEFAULT_NUMERICS",
            "RODAS_DAMPING_RATIO", "check_scalar_models",
-           "vertical_damping_ratio", "choose_integrator", "initial_state", "ensemble_statistics", "monte_carlo"]
+           "vertical_damping_ratio", "choose_integrator", "initial_state", "ensemble_statistics", "SampleSetup",
+           "sample_setup", "monte_carlo"]
 
 #: The registered Monte Carlo models (:mod:`screening.solvers.mc_registry`).
 MODELS = mc_registry.names()
@@ -422,6 +424,97 @@ def _check_thresholds(thresholds):
     return tuple(out)
 
 
+@dataclass(frozen=True)
+class SampleSetup:
+    """A Monte Carlo model set up for one point (:func:`sample_setup`): what integrating a sample needs.
+
+    ``model`` and ``condensation`` resolved; ``times`` [s] the output instants; ``opts`` the numerics
+    (:data:`DEFAULT_NUMERICS`, resolved); ``plan`` the synthesis and ``read_plan`` the (low-passed) samples the
+    model reads; ``q``, ``q_dot`` the envelope [1] and its rate [1/s] on ``read_plan.times``; ``integrate`` the
+    model's :class:`~screening.solvers.mc_registry.ChunkIntegrator`; ``scales`` its absolute tolerances;
+    ``y0`` the initial state.
+    """
+
+    model: object
+    condensation: object
+    times: np.ndarray
+    opts: dict
+    plan: object
+    read_plan: object
+    q: np.ndarray
+    q_dot: np.ndarray
+    integrate: object
+    scales: np.ndarray
+    y0: np.ndarray
+
+
+def sample_setup(block, foundation, excitation, n_samples, model="coupled", t_end=20.0, dt=0.05,
+                 condensation=DEFAULT_CONDENSATION, strict_validity=False, **numerics):
+    """Check the inputs of a Monte Carlo run and set its model up, before any sample is integrated.
+
+    Parameters
+    ----------
+    block, foundation, excitation, n_samples, model, t_end, dt, condensation, strict_validity, **numerics
+        As :func:`monte_carlo` (``n_samples`` sets the ``"auto"`` tolerance and the size checks).
+
+    Returns
+    -------
+    SampleSetup
+        The resolved model, its integrator, tolerances and synthesis plans.
+
+    Raises
+    ------
+    ValueError
+        One line naming the parameter, for any bad input (the checks of :func:`monte_carlo`).
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/method.md#monte-carlo``.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> run = sample_setup(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4),
+    ...                    8, model="condensed", t_end=2.0, dt=0.5)
+    >>> run.model.name, run.times.size
+    ('condensed', 5)
+    """
+    if not isinstance(strict_validity, bool):
+        raise ValueError(f"parameter 'strict_validity' must be True or False (got {strict_validity!r})")
+    check_scalar_models(block, foundation, excitation)
+    mc = resolve_model(model, block, foundation, excitation)
+    model = mc.name
+    cond = get_condensation(condensation)
+    times = output_times(t_end, dt)
+    t_end, dt = float(t_end), float(dt)
+    opts = _check_numerics(numerics)
+    if opts["rtol"] is None:
+        opts["rtol"] = mc.default_rtol
+    elif opts["rtol"] == "auto":
+        opts["rtol"] = auto_rtol(mc, n_samples)
+    if opts["h_max"] is None:
+        opts["h_max"] = mc.default_h_max
+    y0 = mc.initial_state(block, foundation)           # may raise for a bed that cannot carry the block
+    mc.check(block, foundation, cond)                  # a condensed model checks its condensation's bed
+    mc_registry.check_validity(mc, block, foundation, excitation, strict_validity)
+    check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
+    check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
+    opts["integrator"] = choose_integrator(block, foundation, model, opts["integrator"])
+
+    check_band(excitation, t_end, opts["cutoff"], opts["oversampling"])
+    cutoff = synthesis_cutoff(excitation, block, foundation, opts["cutoff"], opts["cutoff_factor"])
+    plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
+    band = opts["band"] if opts["band"] is not None else mc.input_band(block, foundation)
+    read_plan = plan if band is None else low_passed(plan, band)[0]     # the model reads these samples
+    grid = read_plan.times
+    q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
+    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)
+    integrate_chunk = mc.integrator(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
+    scales = opts["rtol"] * mc.state_scales(block, foundation)
+
+    return SampleSetup(mc, cond, times, opts, plan, read_plan, q, q_dot, integrate_chunk, scales, y0)
+
+
 def _with_probabilities(run):
     """``run`` (the Monte Carlo engine) with its ``thresholds`` checked before any work and the probabilities of
     its samples added to its dataset (:func:`screening.solvers.datasets.with_probabilities`)."""
@@ -526,42 +619,16 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     (8, 5, 'ok')
     """
     n_samples = check_integer("n_samples", n_samples, 2)
-    if not isinstance(strict_validity, bool):
-        raise ValueError(f"parameter 'strict_validity' must be True or False (got {strict_validity!r})")
     if not isinstance(sample_histories, (bool, np.bool_)):
         raise ValueError(f"parameter 'sample_histories' must be True or False (got {sample_histories!r})")
-    check_scalar_models(block, foundation, excitation)
-    mc = resolve_model(model, block, foundation, excitation)
-    model = mc.name
-    cond = get_condensation(condensation)
     seed = validate_seed(seed)
-    times = output_times(t_end, dt)
-    t_end, dt = float(t_end), float(dt)
-    opts = _check_numerics(numerics)
-    if opts["rtol"] is None:
-        opts["rtol"] = mc.default_rtol
-    elif opts["rtol"] == "auto":
-        opts["rtol"] = auto_rtol(mc, n_samples)
-    if opts["h_max"] is None:
-        opts["h_max"] = mc.default_h_max
+    _show_progress(progress, n_samples, 1)                       # refuses a bad progress before any work
+    run = sample_setup(block, foundation, excitation, n_samples, model, t_end, dt, condensation, strict_validity,
+                       **numerics)
+    mc, cond, times, opts, plan, read_plan = run.model, run.condensation, run.times, run.opts, run.plan, run.read_plan
+    model, t_end, dt = mc.name, float(t_end), float(dt)
+    q, q_dot, integrate_chunk, scales, y0 = run.q, run.q_dot, run.integrate, run.scales, run.y0
     show = _show_progress(progress, n_samples, opts["chunk_size"])
-    y0 = mc.initial_state(block, foundation)           # may raise for a bed that cannot carry the block
-    mc.check(block, foundation, cond)                  # a condensed model checks its condensation's bed
-    mc_registry.check_validity(mc, block, foundation, excitation, strict_validity)
-    check_size("n_samples", n_samples, limits.MAX_SAMPLES, "samples")
-    check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
-    opts["integrator"] = choose_integrator(block, foundation, model, opts["integrator"])
-
-    check_band(excitation, t_end, opts["cutoff"], opts["oversampling"])
-    cutoff = synthesis_cutoff(excitation, block, foundation, opts["cutoff"], opts["cutoff_factor"])
-    plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
-    band = opts["band"] if opts["band"] is not None else mc.input_band(block, foundation)
-    read_plan = plan if band is None else low_passed(plan, band)[0]     # the model reads these samples
-    grid = read_plan.times
-    q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
-    q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)
-    integrate_chunk = mc.integrator(block, foundation, cond, opts["max_flight_time"], opts["integrator"])
-    scales = opts["rtol"] * mc.state_scales(block, foundation)
 
     n_t = times.size
     theta = np.empty((n_samples, n_t))

@@ -20,7 +20,7 @@ from screening.solvers import mc_registry
 from screening.solvers.outputs import of_stage, OUTPUTS
 
 __all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
-           "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "FRAGILITY", "PROBABILITIES",
+           "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "TAIL", "FRAGILITY", "PROBABILITIES",
            "probability_source_attributes", "TRADEOFF", "SIMULATION", "INTENSITY", "SWEEP", "SWEEP_INPUTS",
            "CLOUD", "TRUST_CALIBRATION", "COORDINATES", "PRESSURE_PARAMETERS", "grid_coordinate_attributes",
            "cdo_threshold_attributes", "attributes", "global_attributes", "apply_schema"]
@@ -185,6 +185,20 @@ MONTE_CARLO = {
                         "(overturned samples count)"),
     "p_exceed_se": _v("1", "standard error of p_exceed (binomial, Agresti-Coull)"),
     "threshold": _v("rad", "rotation threshold of p_exceed"),
+}
+
+#: Small probabilities by subset simulation (:func:`screening.solvers.tail.tail_probability`).
+TAIL = {
+    "p_overturn": _v("1", "probability that the block overturns (|theta| > atan(b/h)), by subset simulation"),
+    "p_overturn_se": _v("1", "standard error of p_overturn (p_overturn x p_overturn_cov)"),
+    "p_overturn_cov": _v("1", "coefficient of variation of p_overturn (Au & Beck, with the chain correlation)"),
+    "p_exceed": _v("1", "probability that the peak |theta| exceeds the threshold (overturning counts), by subset "
+                        "simulation"),
+    "p_exceed_se": _v("1", "standard error of p_exceed (p_exceed x p_exceed_cov)"),
+    "p_exceed_cov": _v("1", "coefficient of variation of p_exceed (Au & Beck, with the chain correlation)"),
+    "threshold": _v("rad", "rotation threshold of p_exceed"),
+    "level_threshold": _v("rad", "intermediate threshold of peak |theta| of each subset level"),
+    "level_gamma": _v("1", "correlation factor gamma of the Markov chains of each subset level"),
 }
 
 #: Fragility (exceedance of a rotation threshold).

@@ -48,6 +48,7 @@ from screening.core.physics.contact import linear_rocking_stiffness
 __all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
            "default_cutoffs", "max_band_limit_hz", "check_band", "synthesis_cutoff", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
            "grid_points", "spectral_plan", "low_passed", "validate_seed", "sample_phases", "stationary_samples",
+           "samples_from_phases",
            "ground_acceleration_samples", "ground_acceleration"]
 
 
@@ -777,13 +778,57 @@ def stationary_samples(plan, seed, sample_indices):
     True
     """
     indices = np.atleast_1d(np.asarray(sample_indices, dtype=np.int64))
-    n, M = plan.n_frequencies, plan.n_fft
-    omega = plan.omega
-    coef = np.zeros((indices.size, M), dtype=complex)
+    phases = np.empty((indices.size, plan.n_frequencies))
     for row, index in enumerate(indices):
-        c = (M * math.sqrt(2.0) / 2.0) * plan.amplitudes * np.exp(1j * sample_phases(seed, index, n))
-        coef[row, :n] = c * (1.0 - omega)
-        coef[row, M - 1:M - 1 - n:-1] = np.conj(c) * (1.0 + omega)
+        phases[row] = sample_phases(seed, index, plan.n_frequencies)
+    return samples_from_phases(plan, phases)
+
+
+def samples_from_phases(plan, phases):
+    """Unmodulated samples ``f`` [m/s^2] and rates ``f'`` [m/s^3] on ``plan.times`` from given phases.
+
+    What :func:`stationary_samples` computes once it has drawn the phases of its samples; samplers that
+    move the phases themselves (:mod:`screening.solvers.tail`) call it directly.
+
+    Parameters
+    ----------
+    plan : SpectralPlan
+        The frequency and time grids (:func:`spectral_plan`).
+    phases : array_like
+        Phases ``phi_k`` [rad], shape ``(n_rows, plan.n_frequencies)``.
+
+    Returns
+    -------
+    values, rates : numpy.ndarray
+        ``f`` [m/s^2] and ``f'`` [m/s^3], shape ``(n_rows, plan.n_times)``.
+
+    Notes
+    -----
+    The equation is :func:`stationary_samples`'s.
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from screening import WhiteNoise
+    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=2.0, cutoff=100.0)
+    >>> f, _ = samples_from_phases(plan, sample_phases(0, 1, plan.n_frequencies)[None, :])
+    >>> bool(np.array_equal(f, stationary_samples(plan, 0, [1])[0]))
+    True
+    """
+    phases = np.atleast_2d(np.asarray(phases, dtype=float))
+    n, M = plan.n_frequencies, plan.n_fft
+    if phases.shape[1] != n:
+        raise ValueError(f"parameter 'phases' must have {n} columns, one per frequency (got shape {phases.shape})")
+    omega = plan.omega
+    coef = np.zeros((phases.shape[0], M), dtype=complex)
+    c = (M * math.sqrt(2.0) / 2.0) * plan.amplitudes * np.exp(1j * phases)
+    coef[:, :n] = c * (1.0 - omega)
+    coef[:, M - 1:M - 1 - n:-1] = np.conj(c) * (1.0 + omega)
     z = sfft.ifft(coef, axis=1, overwrite_x=True)[:, :plan.n_times]
     z *= np.exp(0.5j * plan.d_omega * plan.times)
     return np.ascontiguousarray(z.real), np.ascontiguousarray(z.imag)
