@@ -201,8 +201,6 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     cluster = None
     if study.cluster is not None and client is None and not scheduler and workers is None:
         cluster = study.cluster                    # the study's [cluster]: a dask-jobqueue cluster
-    elif study.cluster is not None:
-        log("the study's [cluster] table is not used: workers, a scheduler or a client are given")
     if cluster is None and client is None and not scheduler and workers is None:
         workers = execution.default_workers(study)
     if cluster is None and client is None and not scheduler and (isinstance(workers, bool)
@@ -220,6 +218,8 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     timings = report.timings
     t0 = time.perf_counter()
     with shielded(), execution.dask_client(workers, scheduler, client, cluster, log) as c:
+        if study.cluster is not None and cluster is None:
+            log("the study's [cluster] table is not used: workers, a scheduler or a client are given")
         n_workers = len(c.nthreads()) or 1
         if cluster is not None:                    # the workers it keeps, not those started so far
             n_workers = max(n_workers, cluster.jobs * cluster.cores)
