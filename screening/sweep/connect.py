@@ -432,9 +432,11 @@ def run_on_workers(client, function, *args):
 
     Examples
     --------
-    Run on the workers that stay (a client of a cluster)::
-
-        pids = run_on_workers(client, os.getpid)
+    >>> class Client:                   # a cluster whose second worker retired during the call
+    ...     def run(self, function, *args, on_error):
+    ...         return {"tcp://a:1": function(*args), "tcp://b:2": OSError("Stream is closed")}
+    >>> run_on_workers(Client(), len, "abc")
+    {'tcp://a:1': 3}
     """
     try:
         answers = client.run(function, *args, on_error="return")
@@ -482,11 +484,14 @@ def check_workers(client, log=None):
 
     Examples
     --------
-    A cluster's check (here one that answers like matching workers)::
-
-        done = check_workers(client, log=print)
-        ...                                           # the run
-        done()
+    >>> class Client:                   # a cluster whose worker runs another numba
+    ...     def run(self, function, *args, on_error):
+    ...         return {"tcp://a:1": version_mismatch("tcp://a:1", {"numba": "0.1"}, {"numba": "0.2"})}
+    >>> try:
+    ...     check_workers(Client())
+    ... except SweepError as exc:
+    ...     print(exc)
+    the dask worker tcp://a:1 runs numba 0.1; this client runs numba 0.2: install the same versions on the workers
     """
     expected = software_versions()
     for problem in run_on_workers(client, worker_problem, expected).values():
@@ -543,10 +548,17 @@ def jobqueue_cluster(spec):
 
     Examples
     --------
-    The job script of a SLURM table (nothing submitted until the cluster scales)::
+    Where SLURM's ``sbatch`` is not on the ``PATH`` (or dask-jobqueue is not installed), one line:
 
-        cluster = jobqueue_cluster(cluster_table({"cluster": {"kind": "slurm", "memory": "8GB"}}))
-        print(cluster.job_script())
+    >>> import os
+    >>> from unittest import mock
+    >>> from screening.sweep.config import cluster_table
+    >>> with mock.patch.dict(os.environ, {"PATH": ""}):
+    ...     try:
+    ...         jobqueue_cluster(cluster_table({"cluster": {"kind": "slurm", "memory": "8GB"}}))
+    ...     except SweepError as exc:
+    ...         print("sbatch" in str(exc) or "dask-jobqueue" in str(exc))
+    True
     """
     try:
         import dask_jobqueue
