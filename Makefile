@@ -1,6 +1,7 @@
 # The two entry points of the README.  Both create .venv and install the package on first use:
 # `make run` installs only what running needs; `make test` adds the test extras (pytest,
-# hypothesis, compliance-checker with pyproj/shapely/lxml) on top, once.
+# hypothesis, compliance-checker with pyproj/shapely/lxml) and the cluster extra (dask-jobqueue, whose
+# local cluster the slow tests of workers that come and go run on) on top, once.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -22,7 +23,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 $(TEST_STAMP): $(STAMP) pyproject.toml
-	$(PIP_INSTALL) -e '.[test]'
+	$(PIP_INSTALL) -e '.[test,cluster]'
 	touch $(TEST_STAMP)
 
 run: $(STAMP)

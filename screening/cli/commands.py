@@ -224,9 +224,10 @@ def _quiet_abandoned_reads():
                             "written in place by the workers (large runs; 'screening export' converts it)")
 @click.option("--workers", type=WORKER_COUNT, callback=not_with("scheduler"),
               help="worker processes of the local dask cluster; 0 = in this process, no cluster (default: "
-                   "0 for at most 500 points and at most one Monte Carlo spot check, else 2)")
+                   "the study's [cluster] table if it has one, else 0 for at most 500 points and at most one Monte "
+                   "Carlo spot check, else 2)")
 @click.option("--scheduler", metavar="ADDRESS", callback=not_with("workers"),
-              help="use an existing dask cluster: scheduler address or scheduler JSON file")
+              help="use an existing dask cluster: scheduler address or scheduler JSON file (docs/distributed.md)")
 @click.option("--batch-size", type=POSITIVE_INT, help="points per task (default: about 500)")
 @click.option("--complevel", type=ZLIB_LEVEL, default="1",
               help="compression level (zlib; zstd for zarr): 1 (default, fastest) .. 9, 0 = uncompressed")

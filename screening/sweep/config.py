@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import re
 
 __all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NUMERIC", "TABLE_KEYS",
            "MODEL_TABLES", "DEFAULTS", "StudyError", "read_study_text", "parse_toml", "one_line", "type_name",
@@ -22,7 +23,8 @@ __all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NU
            "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
            "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
            "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "case_block_and_foundation",
-           "build_models", "case_cutoff", "build_point_models", "band_limit_value"]
+           "build_models", "case_cutoff", "build_point_models", "band_limit_value", "CLUSTER_KINDS", "CLUSTER_KEYS", "MAX_JOBS",
+           "MAX_CORES", "NUMBA_CACHE_DEFAULT", "ClusterSpec", "duration", "cluster_table"]
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
@@ -1532,3 +1534,186 @@ def build_point_models(case, values, t_end=None):
         s0 = np.where(underivable, 1.0, s0)
         return block, foundation, excitation(float(s0) if s0.ndim == 0 else s0), underivable
     return block, foundation, excitation(p["S0"]), np.zeros((), dtype=bool)
+
+
+# ----------------------------------------------------------------------------- [cluster]
+#: ``[cluster] kind``: the batch queue dask-jobqueue submits the worker jobs to; ``"local"``: the jobs are
+#: processes of this machine (dask-jobqueue's own ``LocalCluster``, to try a recipe before the queue).
+CLUSTER_KINDS = ("slurm", "pbs", "local")
+#: The keys of ``[cluster]`` (``docs/distributed.md``).
+CLUSTER_KEYS = ("kind", "cores", "memory", "walltime", "jobs", "lifetime", "lifetime_stagger", "batch_size", "queue",
+                "account", "interface", "local_directory", "job_extra_directives", "job_script_prologue",
+                "numba_cache_dir")
+#: Most jobs ``[cluster] jobs`` may keep running, and most worker processes per job (``cores``).
+MAX_JOBS = 10_000
+MAX_CORES = 1024
+#: Where a job's workers keep numba's compiled code unless ``numba_cache_dir`` says otherwise: a folder of the
+#: node (``$TMPDIR`` of the job, else ``/tmp``), per user; expanded by the job script's shell.
+NUMBA_CACHE_DEFAULT = "${TMPDIR:-/tmp}/screening-numba-$(id -u)"
+_DURATION_UNITS = {"s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
+
+
+@dataclass(frozen=True)
+class ClusterSpec:
+    """The ``[cluster]`` table: a dask-jobqueue cluster of ``jobs`` batch jobs of ``kind``, each with ``cores``
+    single-threaded worker processes, ``memory`` (dask's spelling, ``"4GB"``) and ``walltime`` (``HH:MM:SS``,
+    ``walltime_s`` [s]); its workers retire after ``lifetime_s`` +- ``lifetime_stagger_s`` [s] and new jobs take
+    their place; ``batch_size`` (points per task, None: the sweep's default) bounds how long a task runs.
+    The other fields go to the job script as given."""
+
+    kind: str
+    memory: str
+    walltime: str
+    walltime_s: float
+    lifetime_s: float
+    lifetime_stagger_s: float
+    cores: int = 1
+    jobs: int = 1
+    batch_size: int | None = None
+    queue: str | None = None
+    account: str | None = None
+    interface: str | None = None
+    local_directory: str | None = None
+    job_extra_directives: tuple = ()
+    job_script_prologue: tuple = ()
+    numba_cache_dir: str = NUMBA_CACHE_DEFAULT
+
+
+def duration(key, value):
+    """Seconds of a duration given as a number [s] or a string ``"<number><unit>"`` (unit ``s``, ``m``,
+    ``min`` or ``h``); :class:`StudyError` naming ``key`` unless it is positive and finite.
+
+    Parameters
+    ----------
+    key : str
+        The full key (for the message).
+    value : object
+        The value from the file.
+
+    Returns
+    -------
+    float
+        The duration [s].
+
+    Raises
+    ------
+    StudyError
+        Anything but a positive finite duration.
+
+    References
+    ----------
+    .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    >>> duration("cluster.lifetime", "55m"), duration("cluster.lifetime", 90)
+    (3300.0, 90.0)
+    """
+    seconds = None
+    if is_number(value):
+        seconds = float(value)
+    elif isinstance(value, str):
+        text = value.strip()
+        unit = next((u for u in sorted(_DURATION_UNITS, key=len, reverse=True) if text.endswith(u)), None)
+        if unit is not None:
+            try:
+                seconds = float(text[:-len(unit)]) * _DURATION_UNITS[unit]
+            except ValueError:
+                seconds = None
+    if seconds is None or not (math.isfinite(seconds) and seconds > 0):
+        raise StudyError(f"{key}: must be a positive duration, seconds or a string like \"30s\", \"55m\", \"2h\" "
+                         f"(got {short_repr(value)})")
+    return seconds
+
+
+def _line_string(key, value):
+    """A non-empty string of one line (it goes into a job script)."""
+    if not isinstance(value, str) or not value.strip() or "\n" in value or "\r" in value:
+        raise StudyError(f"{key}: must be a non-empty string of one line (got {short_repr(value)})")
+    return value
+
+
+def cluster_table(raw):
+    """The ``[cluster]`` table of a study: a :class:`ClusterSpec`, or None without one.
+
+    ``kind`` (:data:`CLUSTER_KINDS`) and ``memory`` are required; ``cores`` (worker processes per job, default
+    1), ``jobs`` (jobs kept running, default 1), ``walltime`` (``HH:MM:SS``, default ``"01:00:00"``),
+    ``lifetime`` and ``lifetime_stagger`` (durations; by default a margin ``min(5 min, walltime / 20)`` is the
+    stagger and the lifetime is the walltime less two margins, so a worker leaves before the queue kills its
+    job); ``batch_size`` (points per task, so that a task ends well within a lifetime; default the sweep's,
+    ``--batch-size`` wins); ``queue``, ``account``, ``interface``, ``local_directory``, ``job_extra_directives``,
+    ``job_script_prologue`` (lists of lines) and ``numba_cache_dir`` (default :data:`NUMBA_CACHE_DEFAULT`) go to
+    the job script.  An unknown key or a bad value is one line naming it.
+
+    Parameters
+    ----------
+    raw : dict
+        The study file's tables.
+
+    Returns
+    -------
+    ClusterSpec or None
+        The cluster, or None when the study has no ``[cluster]``.
+
+    Raises
+    ------
+    StudyError
+        An unknown key, a missing required key or a value out of its range (one line naming it).
+
+    References
+    ----------
+    .. [1] dask-jobqueue documentation, "How to handle job queueing system walltime killing workers",
+       https://jobqueue.dask.org/en/latest/clusters-advanced-tips-and-tricks.html
+    .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    >>> spec = cluster_table({"cluster": {"kind": "slurm", "memory": "8GB", "cores": 4, "jobs": 10}})
+    >>> spec.walltime, spec.lifetime_s, spec.lifetime_stagger_s
+    ('01:00:00', 3240.0, 180.0)
+    >>> try:
+    ...     cluster_table({"cluster": {"kind": "slurm", "memory": "8GB", "wall_time": "02:00:00"}})
+    ... except StudyError as exc:
+    ...     print(str(exc)[:39])
+    cluster.wall_time: unknown key (allowed
+    """
+    if "cluster" not in raw:
+        return None
+    tbl = table(raw, "cluster")
+    check_keys(tbl, CLUSTER_KEYS, "cluster.")
+    kind = required(tbl, "kind", "cluster.", f" ({', '.join(CLUSTER_KINDS)})")
+    check_choice("cluster.kind", kind, CLUSTER_KINDS)
+    memory = _line_string("cluster.memory", required(tbl, "memory", "cluster.", " (the memory of one job, e.g. \"8GB\")"))
+    if not re.fullmatch(r"\s*\d+(\.\d+)?\s*([kKMGTP]i?)?B\s*", memory):
+        raise StudyError(f"cluster.memory: must be an amount of memory like \"8GB\" or \"16GiB\" (got {memory!r})")
+    cores = integer(tbl, "cores", 1, 1, "cluster.", MAX_CORES)
+    jobs = integer(tbl, "jobs", 1, 1, "cluster.", MAX_JOBS)
+    batch_size = integer(tbl, "batch_size", 1, 1, "cluster.", 2**31 - 1) if "batch_size" in tbl else None
+    walltime = _line_string("cluster.walltime", tbl.get("walltime", "01:00:00"))
+    hms = re.fullmatch(r"(\d{1,4}):([0-5]\d):([0-5]\d)", walltime)
+    walltime_s = float(int(hms[1]) * 3600 + int(hms[2]) * 60 + int(hms[3])) if hms else 0.0
+    if walltime_s <= 0:
+        raise StudyError(f"cluster.walltime: must be HH:MM:SS, more than zero (got {short_repr(walltime)})")
+    margin = min(300.0, walltime_s / 20)
+    stagger = duration("cluster.lifetime_stagger", tbl["lifetime_stagger"]) if "lifetime_stagger" in tbl else margin
+    lifetime = duration("cluster.lifetime", tbl["lifetime"]) if "lifetime" in tbl else walltime_s - 2 * margin
+    if lifetime + stagger >= walltime_s and kind != "local":
+        raise StudyError(f"cluster.lifetime: {lifetime:g} s + lifetime_stagger {stagger:g} s must end before the "
+                         f"walltime ({walltime} = {walltime_s:g} s), so that a worker leaves before its job is killed")
+    if stagger >= lifetime:
+        raise StudyError(f"cluster.lifetime_stagger: must be shorter than the lifetime ({lifetime:g} s; "
+                         f"got {stagger:g} s)")
+    lines = {}
+    for key in ("job_extra_directives", "job_script_prologue"):
+        value = tbl.get(key, [])
+        if not isinstance(value, list):
+            raise StudyError(f"cluster.{key}: must be a list of strings (got {type_name(value)})")
+        lines[key] = tuple(_line_string(f"cluster.{key}[{i}]", v) for i, v in enumerate(value))
+    if kind == "local" and lines["job_script_prologue"]:
+        raise StudyError("cluster.job_script_prologue: not used by kind = 'local' (its jobs are processes of this "
+                         "machine, with this process's environment)")
+    text = {key: _line_string(f"cluster.{key}", tbl[key]) if key in tbl else None
+            for key in ("queue", "account", "interface", "local_directory")}
+    cache = _line_string("cluster.numba_cache_dir", tbl.get("numba_cache_dir", NUMBA_CACHE_DEFAULT))
+    return ClusterSpec(kind=kind, memory=memory, walltime=walltime, walltime_s=walltime_s, lifetime_s=lifetime,
+                       lifetime_stagger_s=stagger, cores=cores, jobs=jobs, batch_size=batch_size, **text, **lines, numba_cache_dir=cache)

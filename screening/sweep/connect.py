@@ -10,20 +10,40 @@ TCP connection and reads the whole handshake message a dask scheduler sends on a
 little-endian length, the frame count and lengths, a msgpack map), all within
 :data:`HANDSHAKE_TIMEOUT` in total; silence, a closed connection, an implausible length or bytes
 that are not such a message are a one-line :class:`SweepError`.
+
+Once connected, :func:`check_workers` refuses workers that would compute silently with other code: each
+worker's :func:`software_versions` (screening and a digest of its sources, Python, numpy, numba) must equal
+the client's, and a ``NUMBA_CACHE_DIR`` it was given must be writable; a worker that joins later is closed
+by :class:`VersionGuard`.  :func:`jobqueue_cluster` builds the dask-jobqueue cluster of a study's
+``[cluster]`` table (:class:`~screening.sweep.config.ClusterSpec`).
 """
 
 from __future__ import annotations
 
 import json
+import operator
+import os
+import platform
+import shutil
 import socket
 import struct
+import tempfile
 import time
 from pathlib import Path
 
-from screening.io.errors import SweepError
+import numba
+import numpy as np
+from distributed.core import Status
+from distributed.diagnostics.plugin import WorkerPlugin
+
+from screening._version import __version__
+from screening.io.errors import SweepError, exception_line
+from screening.kernels.cache import source_stamp
 
 __all__ = ["HANDSHAKE_TIMEOUT", "MAX_HANDSHAKE", "MAX_HOST", "MAX_SCHEDULER_FILE", "TLS_SETTINGS",
-           "scheduler_address", "check_scheduler", "is_handshake"]
+           "scheduler_address", "check_scheduler", "is_handshake", "REFUSED_TOPIC", "software_versions",
+           "version_mismatch", "worker_problem", "VersionGuard", "run_on_workers", "check_workers", "JOBQUEUE_CLASSES",
+           "jobqueue_cluster"]
 
 #: Seconds to wait for the connection and for the scheduler's first bytes.
 HANDSHAKE_TIMEOUT = 10.0
@@ -251,3 +271,321 @@ def is_handshake(message):
     except Exception:                                   # noqa: BLE001 - msgpack raises many types on junk
         return False
     return isinstance(head, dict)
+
+
+# ----------------------------------------------------------------------------- the workers' software
+#: The topic of the worker events of a refused worker (:class:`VersionGuard`).
+REFUSED_TOPIC = "screening-refused-worker"
+#: The dask-jobqueue cluster class of each ``[cluster] kind``.
+JOBQUEUE_CLASSES = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "local": "local.LocalCluster"}
+
+
+def software_versions():
+    """What a result depends on besides the study: screening's version and a digest of its sources
+    (:func:`~screening.kernels.cache.source_stamp`, first 12 hex digits), Python's, numpy's and numba's.
+
+    Returns
+    -------
+    dict
+        ``{"screening": "0.1.0 (sources 1a2b3c4d5e6f)", "python": "3.12.3", "numpy": ..., "numba": ...}``.
+
+    References
+    ----------
+    .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    >>> sorted(software_versions())
+    ['numba', 'numpy', 'python', 'screening']
+    """
+    return {"screening": f"{__version__} (sources {source_stamp()[:12]})", "python": platform.python_version(),
+            "numpy": np.__version__, "numba": numba.__version__}
+
+
+def version_mismatch(worker, theirs, mine):
+    """One line naming what differs between a worker's :func:`software_versions` ``theirs`` and the
+    client's ``mine``, or None when nothing does.
+
+    Parameters
+    ----------
+    worker : str
+        The worker's address.
+    theirs, mine : dict
+        The worker's and the client's versions.
+
+    Returns
+    -------
+    str or None
+        The line, or None.
+
+    References
+    ----------
+    .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    >>> version_mismatch("tcp://10.0.0.7:4242", {"numba": "0.61.0"}, {"numba": "0.62.1"})
+    'the dask worker tcp://10.0.0.7:4242 runs numba 0.61.0; this client runs numba 0.62.1: install the same versions on the workers'
+    """
+    names = [name for name in mine if theirs.get(name) != mine[name]]
+    if not names:
+        return None
+    worker_side = ", ".join(f"{n} {theirs.get(n, 'missing')}" for n in names)
+    client_side = ", ".join(f"{n} {mine[n]}" for n in names)
+    return (f"the dask worker {worker} runs {worker_side}; this client runs {client_side}: install the same "
+            "versions on the workers")
+
+
+def worker_problem(expected, dask_worker=None):
+    """On a worker: why it cannot compute for a client with :func:`software_versions` ``expected`` (the
+    versions differ, or numba's cache folder ``NUMBA_CACHE_DIR`` is not writable), or None.
+
+    Parameters
+    ----------
+    expected : dict
+        The client's :func:`software_versions`.
+    dask_worker : distributed.Worker, optional
+        The worker (``client.run`` passes it), named in the line.
+
+    Returns
+    -------
+    str or None
+        One line, or None when the worker may compute.
+
+    References
+    ----------
+    .. [1] Numba documentation, "Environment variables" (``NUMBA_CACHE_DIR``),
+       https://numba.readthedocs.io/en/stable/reference/envvars.html
+
+    Examples
+    --------
+    >>> worker_problem(software_versions()) is None          # this process against itself
+    True
+    """
+    where = dask_worker.address if dask_worker is not None else f"on {platform.node()}"
+    problem = version_mismatch(where, software_versions(), expected)
+    if problem is None:
+        problem = _cache_problem(where)
+    return problem
+
+
+def _cache_problem(where):
+    """Why numba cannot keep its compiled code in ``NUMBA_CACHE_DIR`` (set, but not a writable folder), or None."""
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if not folder:
+        return None
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        return (f"the dask worker {where} cannot write numba's cache folder NUMBA_CACHE_DIR={folder} "
+                f"({exc.strerror or exc}): give each node a writable folder of its own")
+    return None
+
+
+class VersionGuard(WorkerPlugin):
+    """A worker plugin: a worker joining with other :func:`software_versions` than ``expected`` (or an
+    unwritable numba cache) is closed before it computes, and says why once on :data:`REFUSED_TOPIC`."""
+
+    name = "screening-version-guard"
+
+    def __init__(self, expected):
+        self.expected = expected
+
+    def setup(self, worker):
+        problem = worker_problem(self.expected, worker)
+        if problem is not None:
+            worker.log_event(REFUSED_TOPIC, {"worker": worker.address, "problem": problem})
+            worker.status = Status.closing_gracefully               # no task starts on it
+            worker.loop.add_callback(worker.close, reason="screening-refused", nanny=True)
+            raise RuntimeError(problem)
+
+
+def run_on_workers(client, function, *args):
+    """``client.run(function, *args)`` on the workers that stay: ``{address: result}``; a worker that
+    leaves meanwhile (retired at its lifetime, its job ended) is left out.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The connected client.
+    function : callable
+        What to run on each worker.
+    *args
+        Its arguments.
+
+    Returns
+    -------
+    dict
+        The result of each worker that answered.
+
+    Raises
+    ------
+    SweepError
+        A worker that cannot run it (e.g. screening is not installed there), or none left (one line).
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, "Client.run",
+       https://distributed.dask.org/en/stable/api.html#distributed.Client.run
+
+    Examples
+    --------
+    >>> class Client:                   # a cluster whose second worker retired during the call
+    ...     def run(self, function, *args, on_error):
+    ...         return {"tcp://a:1": function(*args), "tcp://b:2": OSError("Stream is closed")}
+    >>> run_on_workers(Client(), len, "abc")
+    {'tcp://a:1': 3}
+    """
+    try:
+        answers = client.run(function, *args, on_error="return")
+    except OSError:                                 # the workers left while the call was sent
+        answers = {}
+    except Exception as exc:                        # noqa: BLE001 - e.g. a function the workers cannot load
+        raise SweepError(f"the dask workers cannot run the solver: {exception_line(exc)}") from None
+    for answer in answers.values():
+        if isinstance(answer, Exception) and not isinstance(answer, OSError):
+            raise SweepError(f"the dask workers cannot run the solver: {exception_line(answer)}")
+    kept = {worker: answer for worker, answer in answers.items() if not isinstance(answer, OSError)}
+    if not kept:
+        raise SweepError("no dask worker answered: the workers left (their lifetime or their jobs ended)")
+    return kept
+
+
+def check_workers(client, log=None):
+    """Refuse a cluster whose workers run other code than this client: one line naming both versions.
+
+    Every connected worker's :func:`worker_problem` must be None (else :class:`SweepError`, the workers left
+    as they are); then a :class:`VersionGuard` is registered so that workers joining later (new batch jobs)
+    are checked too, and closed if they differ (``log`` gets one line each).  Returns a function that
+    removes the guard (call it when the run ends).
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The connected client.
+    log : callable, optional
+        Receives the line of each worker refused later.
+
+    Returns
+    -------
+    callable
+        ``done()``: unregisters the guard and the log subscription.
+
+    Raises
+    ------
+    SweepError
+        A worker with other versions or an unwritable ``NUMBA_CACHE_DIR``; a worker that cannot run the check.
+
+    References
+    ----------
+    .. [1] Dask.distributed documentation, "Plugins", https://distributed.dask.org/en/stable/plugins.html
+
+    Examples
+    --------
+    >>> class Client:                   # a cluster whose worker runs another numba
+    ...     def run(self, function, *args, on_error):
+    ...         return {"tcp://a:1": version_mismatch("tcp://a:1", {"numba": "0.1"}, {"numba": "0.2"})}
+    >>> try:
+    ...     check_workers(Client())
+    ... except SweepError as exc:
+    ...     print(exc)
+    the dask worker tcp://a:1 runs numba 0.1; this client runs numba 0.2: install the same versions on the workers
+    """
+    expected = software_versions()
+    for problem in run_on_workers(client, worker_problem, expected).values():
+        if problem is not None:
+            raise SweepError(problem)
+    if log is not None:
+        client.subscribe_topic(REFUSED_TOPIC, lambda event: log(f"warning: refused a joining worker: "
+                                                               f"{event[1]['problem']}"))
+    try:
+        client.register_plugin(VersionGuard(expected))
+    except Exception as exc:                        # noqa: BLE001 - a worker that joined since, and differs
+        raise SweepError(exception_line(exc)) from None
+
+    def done():
+        for step in (lambda: client.unregister_worker_plugin(VersionGuard.name),
+                     lambda: client.unsubscribe_topic(REFUSED_TOPIC)):
+            try:
+                step()
+            except Exception:                       # noqa: BLE001 - a cluster already gone
+                pass
+    return done
+
+
+def jobqueue_cluster(spec):
+    """The dask-jobqueue cluster of a ``[cluster]`` table, no job submitted yet (the caller keeps ``spec.jobs``
+    jobs with ``cluster.adapt(minimum_jobs=spec.jobs, maximum_jobs=spec.jobs)``, so that a retired job is
+    replaced, and closes it).
+
+    Each job runs ``spec.cores`` single-threaded worker processes (the solver holds the GIL) that retire after
+    ``spec.lifetime_s`` +- ``spec.lifetime_stagger_s`` (dask's ``--lifetime``/``--lifetime-stagger``), and
+    its script exports ``NUMBA_CACHE_DIR = spec.numba_cache_dir`` (a folder of the node) before the workers
+    start.  The scheduler runs in this process, its dashboard on a free port.
+
+    Parameters
+    ----------
+    spec : screening.sweep.config.ClusterSpec
+        The ``[cluster]`` table.
+
+    Returns
+    -------
+    dask_jobqueue.JobQueueCluster
+        The cluster (its scheduler running in this process).
+
+    Raises
+    ------
+    SweepError
+        dask-jobqueue is not installed, the queue's submit command (``sbatch``, ``qsub``) is not on the
+        ``PATH``, or the cluster cannot start (one line).
+
+    References
+    ----------
+    .. [1] dask-jobqueue documentation, https://jobqueue.dask.org/en/latest/
+    .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
+
+    Examples
+    --------
+    Where SLURM's ``sbatch`` is not on the ``PATH`` (or dask-jobqueue is not installed), one line:
+
+    >>> import os
+    >>> from unittest import mock
+    >>> from screening.sweep.config import cluster_table
+    >>> with mock.patch.dict(os.environ, {"PATH": ""}):
+    ...     try:
+    ...         jobqueue_cluster(cluster_table({"cluster": {"kind": "slurm", "memory": "8GB"}}))
+    ...     except SweepError as exc:
+    ...         print("sbatch" in str(exc) or "dask-jobqueue" in str(exc))
+    True
+    """
+    try:
+        import dask_jobqueue
+        import dask_jobqueue.local
+    except ImportError:
+        raise SweepError(f"the [cluster] table (kind = {spec.kind!r}) needs dask-jobqueue: "
+                         "pip install 'screening[cluster]'") from None
+    options = {key: value for key in ("queue", "account", "interface", "local_directory")
+               if (value := getattr(spec, key)) is not None and spec.kind != "local"}
+    if spec.kind != "local":
+        options["walltime"] = spec.walltime
+        options["job_script_prologue"] = [f'export NUMBA_CACHE_DIR="{spec.numba_cache_dir}"',
+                                          *spec.job_script_prologue]
+    elif spec.local_directory is not None:
+        options["local_directory"] = spec.local_directory
+    args = ["--lifetime", f"{spec.lifetime_s:g}s", "--lifetime-stagger", f"{spec.lifetime_stagger_s:g}s"]
+    make = operator.attrgetter(JOBQUEUE_CLASSES[spec.kind])(dask_jobqueue)
+    command = getattr(make.job_cls, "submit_command", None)
+    if command and shutil.which(command.split()[0]) is None:
+        raise SweepError(f"[cluster] kind = {spec.kind!r} submits jobs with {command}, which is not on this machine's "
+                         "PATH: run screening where the batch queue's commands are (a login node)")
+    try:
+        cluster = make(
+            cores=spec.cores, processes=spec.cores, memory=spec.memory, worker_extra_args=args,
+            job_extra_directives=list(spec.job_extra_directives), scheduler_options={"dashboard_address": ":0"},
+            **options)
+    except Exception as exc:                        # noqa: BLE001 - dask-jobqueue raises many types
+        raise SweepError(f"cannot start the dask-jobqueue {JOBQUEUE_CLASSES[spec.kind]}: {exception_line(exc)}") \
+            from None
+    return cluster

@@ -40,7 +40,7 @@ from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import choose_integrator
 from screening.solvers.outputs import HISTORY_VARIABLES, of_stage, OUTPUTS, selected
 
-__all__ = ["CONNECT_TIMEOUT", "TASK_RETRIES", "solve_batch", "batch_intensity",
+__all__ = ["CONNECT_TIMEOUT", "QUEUE_WAIT_LINES", "TASK_RETRIES", "solve_batch", "batch_intensity",
            "batch_rocking_start", "batch_trust", "batch_probabilities", "failed_result",
            "spot_task", "escalation_task", "sample_state", "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers",
            "warm_up", "dask_client", "LOCAL_CLUSTER_CONFIG", "START_METHOD_VARIABLE", "WORKER_SETUP"]
@@ -856,11 +856,13 @@ def warm_up():
 
 
 @contextlib.contextmanager
-def dask_client(workers=2, scheduler=None, client=None):
+def dask_client(workers=2, scheduler=None, client=None, cluster=None, log=None):
     """A ``distributed.Client``: the given one, one connected to ``scheduler`` (an address
-    or a scheduler JSON file), or a new ``LocalCluster`` of ``workers`` single-threaded
-    processes (closed on exit); ``workers = 0``: one worker thread in this process (no process
-    started, the same tasks and futures, so one orchestration serves both).
+    or a scheduler JSON file), one of a new dask-jobqueue cluster (``cluster``, a study's ``[cluster]``
+    table), or a new ``LocalCluster`` of ``workers`` single-threaded processes (closed on exit);
+    ``workers = 0``: one worker thread in this process (no process started, the same tasks and futures,
+    so one orchestration serves both).  The workers of a scheduler or a jobqueue cluster must run this
+    client's versions (:func:`~screening.sweep.connect.check_workers`).
 
     A client made here is never dask's default: the run submits to it by name, and a caller's later
     dask or xarray work in the same process does not go to a cluster this function has closed (with
@@ -876,6 +878,10 @@ def dask_client(workers=2, scheduler=None, client=None):
         :func:`~screening.sweep.connect.check_scheduler`).
     client : distributed.Client, optional
         A client to use as it is (not closed).
+    cluster : screening.sweep.config.ClusterSpec, optional
+        A ``[cluster]`` table: its jobs are submitted, the client waits for the first worker.
+    log : callable, optional
+        Receives one-line messages (waiting for the queue, a worker refused); default: none.
 
     Returns
     -------
@@ -885,7 +891,8 @@ def dask_client(workers=2, scheduler=None, client=None):
     Raises
     ------
     SweepError
-        A scheduler that cannot be reached or has no workers, or a local cluster that cannot start.
+        A scheduler that cannot be reached or has no workers, workers with other versions, or a
+        cluster that cannot start.
 
     References
     ----------
@@ -906,8 +913,12 @@ def dask_client(workers=2, scheduler=None, client=None):
         return
     from distributed import Client
 
+    if cluster is not None:
+        with _jobqueue_client(cluster, log or (lambda msg: None)) as c:
+            yield c
+        return
     if scheduler:
-        from screening.sweep.connect import check_scheduler
+        from screening.sweep.connect import check_scheduler, check_workers
 
         check_scheduler(scheduler)                 # bounded handshake, sane peer, sane JSON file
         try:
@@ -922,7 +933,11 @@ def dask_client(workers=2, scheduler=None, client=None):
                 c.wait_for_workers(1, timeout=30)
             except TimeoutError:
                 raise SweepError(f"the dask scheduler {scheduler} has no workers") from None
-            yield c
+            done = check_workers(c, log)
+            try:
+                yield c
+            finally:
+                done()
         finally:
             c.close()
         return
@@ -931,6 +946,47 @@ def dask_client(workers=2, scheduler=None, client=None):
     config = {**LOCAL_CLUSTER_CONFIG, "distributed.worker.multiprocessing-method": _worker_start_method()}
     with dask.config.set(config), _quiet_worker_log(), _local_client(workers) as c:
         yield c
+
+
+#: How often [s] a run waiting for its first batch job says so: every 10 s for a minute, then every minute.
+QUEUE_WAIT_LINES = (10.0, 60.0)
+
+
+@contextlib.contextmanager
+def _jobqueue_client(spec, log):
+    """A client of the dask-jobqueue cluster of ``spec`` (:func:`~screening.sweep.connect.jobqueue_cluster`),
+    once its first worker is there and checked; the jobs are cancelled on exit."""
+    from distributed import Client
+
+    from screening.sweep.connect import check_workers, jobqueue_cluster
+
+    cluster = jobqueue_cluster(spec)
+    try:
+        try:
+            cluster.adapt(minimum_jobs=spec.jobs, maximum_jobs=spec.jobs)       # a retired job is replaced
+        except Exception as exc:                  # noqa: BLE001 - dask-jobqueue raises many types
+            raise SweepError(f"cannot submit the jobs of the dask-jobqueue cluster: {exception_line(exc)}") from None
+        with Client(cluster, set_as_default=False) as c:
+            log(f"submitted {spec.jobs} {spec.kind} job(s) of {spec.cores} worker(s) each (workers retire after "
+                f"{spec.lifetime_s:g} +- {spec.lifetime_stagger_s:g} s; new jobs take their place); dask dashboard "
+                f"{cluster.dashboard_link}")
+            start = time.monotonic()
+            while True:
+                waited = time.monotonic() - start
+                try:
+                    c.wait_for_workers(1, timeout=QUEUE_WAIT_LINES[waited >= 60])
+                    break
+                except TimeoutError:
+                    log(f"waiting for the first worker: {time.monotonic() - start:.0f} s since the jobs were "
+                        "submitted (the batch queue starts them)")
+            done = check_workers(c, log)
+            try:
+                yield c
+            finally:
+                done()
+    finally:
+        with contextlib.suppress(Exception):
+            cluster.close()
 
 
 @contextlib.contextmanager

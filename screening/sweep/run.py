@@ -47,6 +47,7 @@ import numpy as np
 from screening._version import __version__
 from screening.core.status import PointStatus, Trust
 from screening.sweep import _submit, execution
+from screening.sweep.connect import run_on_workers
 from screening.sweep.accuracy import Stage, escalate
 from screening.io.errors import SweepError, exception_line, is_write_error, write_failure_reason
 from screening.io.layout import wants_probabilities
@@ -113,8 +114,8 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
         its folder must exist.
     workers : int or None, optional
         Worker processes of the local cluster (ignored with ``scheduler``/``client``); 0: in this
-        process (one worker thread); None: 0 for a small study, else 2
-        (:func:`~screening.sweep.execution.default_workers`).
+        process (one worker thread); None: the study's ``[cluster]`` (a dask-jobqueue cluster) if it has
+        one, else 0 for a small study and 2 otherwise (:func:`~screening.sweep.execution.default_workers`).
     scheduler : str or os.PathLike, optional
         Address (``tcp://host:port``) or scheduler file of an existing dask cluster.
     client : distributed.Client, optional
@@ -195,10 +196,13 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
     if batch_size is not None and (isinstance(batch_size, bool) or int(batch_size) != batch_size
                                    or not 1 <= batch_size < 2**31):
         raise SweepError(f"batch size must be an integer in 1..{2**31 - 1} (got {batch_size!r})")
-    if client is None and not scheduler and workers is None:
+    cluster = None
+    if study.cluster is not None and client is None and not scheduler and workers is None:
+        cluster = study.cluster                    # the study's [cluster]: a dask-jobqueue cluster
+    if cluster is None and client is None and not scheduler and workers is None:
         workers = execution.default_workers(study)
-    if client is None and not scheduler and (isinstance(workers, bool) or not isinstance(workers, int)
-                                             or workers < 0):
+    if cluster is None and client is None and not scheduler and (isinstance(workers, bool)
+                                                                 or not isinstance(workers, int) or workers < 0):
         raise SweepError(f"the number of workers must be an integer >= 0 (got {workers!r})")
     if isinstance(complevel, bool) or complevel not in range(10):
         raise SweepError(f"zlib level must be an integer in 0..9 (got {complevel!r})")
@@ -211,20 +215,23 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
 
     timings = report.timings
     t0 = time.perf_counter()
-    with shielded(), execution.dask_client(workers, scheduler, client) as c:
+    with shielded(), execution.dask_client(workers, scheduler, client, cluster, log) as c:
+        if study.cluster is not None and cluster is None:
+            log("the study's [cluster] table is not used: workers, a scheduler or a client are given")
         n_workers = len(c.nthreads()) or 1
-        if client is None and not scheduler:
+        if cluster is not None:                    # the workers it keeps, not those started so far
+            n_workers = max(n_workers, cluster.jobs * cluster.cores)
+        elif client is None and not scheduler:
             c.wait_for_workers(max(workers, 1))
             n_workers = max(workers, 1)
         report.n_workers = n_workers
         timings["cluster_start"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        try:
-            c.run(execution.warm_up)
-        except Exception as exc:                      # noqa: BLE001 - e.g. screening missing on a worker
-            raise SweepError(f"the dask workers cannot run the solver: {exception_line(exc)}") from None
+        run_on_workers(c, execution.warm_up)          # a worker that retires meanwhile is left out
         timings["warm_up"] = time.perf_counter() - t0
         try:
+            if batch_size is None and cluster is not None:
+                batch_size = cluster.batch_size            # [cluster] batch_size, or None
             if batch_size is None:
                 batch_size = default_batch_size(study, n_workers)
                 if is_zarr_path(out):            # whole chunks per batch
@@ -347,7 +354,7 @@ class _SweepRun:
             shutil.rmtree(path, ignore_errors=True)
             result = ResultFile(path, study, attrs, self.complevel, zarr_batch_size=batch_size)
         self.target = self.store.region_target(study.shape, study.output.stored, region_variables(study))
-        blind = [w for w, ok in self.client.run(_submit.sees_folder, self.target.store).items() if not ok]
+        blind = [w for w, ok in run_on_workers(self.client, _submit.sees_folder, self.target.store).items() if not ok]
         if blind:
             raise SweepError(f"{len(blind)} dask worker(s) (e.g. {blind[0]}) do not see {self.store.dir}: the workers "
                              "write a zarr result in place, so its folder must be at the same path on every worker "

@@ -105,6 +105,8 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import re
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
@@ -116,8 +118,9 @@ from screening.core import limits
 from screening.solvers import mc_registry, model_choice
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
-from screening.sweep.config import (band_limit_value, build_models, build_point_models, Case,
-                                    case_block_and_foundation, case_cutoff, check_choice, check_grid_size, check_keys, check_list, check_value, choice,
+from screening.sweep.config import (band_limit_value, build_models, build_point_models, Case, case_block_and_foundation,
+                                    case_cutoff, ClusterSpec, cluster_table,
+                                    check_choice, check_grid_size, check_keys, check_list, check_value, choice,
                                     integer, model_tables, name_string, number_list, NUMERIC, numeric_table,
                                     parse_toml, read_study_text, required, resolve_case, short_repr, StudyError, table,
                                     TABLE_KEYS, time_table, title_and_description, type_name)
@@ -148,7 +151,7 @@ S0 = 1e-4
 #: ``"auto"``: per point the cheapest one whose measured validity holds, :mod:`screening.solvers.model_choice`).
 MCS_MODELS = model_choice.choices()
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
-             "case", "collection", "output", "fragility", "run", "accuracy")
+             "case", "collection", "output", "fragility", "run", "accuracy", "cluster")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
 HISTORY_CHOICES = ("all", "spots", "none")
 FRAGILITY_RELATIVE_TO = ("slenderness", "theta_ul")
@@ -245,6 +248,8 @@ class Study:
     output: Output = Output()
     fragility: Fragility | None = None
     accuracy: Accuracy | None = None
+    #: ``[cluster]``: where the run goes when no workers or scheduler are given (not part of the ``key``)
+    cluster: ClusterSpec | None = None
 
     @property
     def derived_inputs(self):
@@ -458,17 +463,42 @@ def study_from_tables(raw, text, name, source, inventory=None):
     rtol, max_steps = _solver(raw)
     shape = ((len(cases),) if "case" in raw else ()) + tuple(len(v) for v in sweeps.values())
     mcs = _mcs(raw, sweeps, cases, "case" in raw, shape, round(t_end / dt) + 1)
-    digest = hashlib.sha256(f"{text}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode()
+    digest = hashlib.sha256(f"{_without_cluster(text, raw)}\n--\nscreening {__version__}\nlayout {LAYOUT_VERSION}".encode()
                             + (f"\n--collection--\n{collection}".encode() if collection else b""))
     study = Study(name=name, title=title, text=text, source=source,
                  sweeps=MappingProxyType(sweeps), cases=tuple(cases), has_case_dim="case" in raw,
                  t_end=t_end, dt=dt, rtol=rtol, max_steps=max_steps, mcs=mcs,
                  description=description, _hash=digest.hexdigest(), output=_output(raw),
-                 fragility=_fragility(raw), accuracy=_accuracy(raw, cases, sweeps))
+                 fragility=_fragility(raw), accuracy=_accuracy(raw, cases, sweeps),
+                 cluster=cluster_table(raw))
     if study.output.histories == "spots" and study.mcs is None:
         raise StudyError("output.histories: 'spots' stores the histories at the [mcs] spot points; "
                          "give an [mcs] table (or histories = 'none')")
     return study
+
+
+def _without_cluster(text, raw):
+    """``text`` without its ``[cluster]`` table, for the study's key: where a study runs does not change its
+    result, so a run resumed with other jobs or lifetimes, or moved to a cluster, keeps its finished batches.
+    The table is cut from its header to the next header, with the blank lines before it; when what is left does not parse to the other tables (a dotted
+    ``cluster.kind`` key, a header inside a string), the whole text is kept."""
+    if "cluster" not in raw:
+        return text
+    lines, kept, inside = text.splitlines(keepends=True), [], False
+    for line in lines:
+        head = line.strip()
+        if head.startswith("["):
+            inside = re.fullmatch(r"\[\s*cluster\s*\](\s*#.*)?", head) is not None
+            while inside and kept and not kept[-1].strip():        # the blank lines before it go too
+                kept.pop()
+        if not inside:
+            kept.append(line)
+    cut = "".join(kept)
+    try:
+        same = tomllib.loads(cut) == {k: v for k, v in raw.items() if k != "cluster"}
+    except tomllib.TOMLDecodeError:
+        same = False
+    return cut if same else text
 
 
 def _cases(raw, base, sweeps):

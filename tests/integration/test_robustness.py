@@ -76,7 +76,7 @@ def reference(client, tmp_path_factory):
 def cli_on_client(client, monkeypatch):
     """Make ``screening run`` use the in-process cluster instead of starting worker processes."""
     @contextlib.contextmanager
-    def local(workers=2, scheduler=None, given=None):
+    def local(workers=2, scheduler=None, given=None, cluster=None, log=None):
         yield client
 
     monkeypatch.setattr(execution, "dask_client", local)

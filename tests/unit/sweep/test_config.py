@@ -96,3 +96,46 @@ def test_sweep_and_trade_studies_share_the_model_tables_and_their_one_line_error
         messages.append(str(info.value))
     assert messages[0] == messages[1]
     assert messages[0].startswith(f"s.toml: {needle}") and "\n" not in messages[0]
+
+
+# ----------------------------------------------------------------------------- [cluster]
+def _cluster(**keys):
+    return config.cluster_table({"cluster": {"kind": "slurm", "memory": "8GB", **keys}})
+
+
+def test_a_cluster_table_has_defaults_that_leave_before_the_walltime():
+    assert config.cluster_table({}) is None
+    spec = _cluster(walltime="02:00:00", cores=4, jobs=10, queue="short", job_script_prologue=["module load x"])
+    # margin min(5 min, walltime / 20) = 300 s: lifetime 2 h - 600 s, stagger 300 s, ending 300 s before the walltime
+    assert (spec.walltime_s, spec.lifetime_s, spec.lifetime_stagger_s) == (7200.0, 6600.0, 300.0)
+    assert (spec.cores, spec.jobs, spec.queue, spec.job_script_prologue, spec.batch_size) == \
+        (4, 10, "short", ("module load x",), None)
+    assert spec.numba_cache_dir == config.NUMBA_CACHE_DEFAULT
+    short = _cluster(walltime="00:10:00")                          # margin 30 s
+    assert (short.lifetime_s, short.lifetime_stagger_s) == (540.0, 30.0)
+    assert _cluster(lifetime="50m", lifetime_stagger=120).lifetime_s == 3000.0
+
+
+@pytest.mark.parametrize("keys, message", [
+    ({"walltim": "01:00:00"}, "cluster.walltim: unknown key (allowed: kind, cores, memory,"),
+    ({"kind": "sge"}, "cluster.kind: must be one of"),
+    ({"kind": None}, "cluster.kind: required (slurm, pbs, local)"),
+    ({"memory": None}, "cluster.memory: required (the memory of one job"),
+    ({"memory": "lots"}, "cluster.memory: must be an amount of memory like"),
+    ({"cores": 0}, "cluster.cores: must be an integer in 1..1024 (got 0)"),
+    ({"jobs": 2.5}, "cluster.jobs: must be an integer"),
+    ({"walltime": "1h"}, "cluster.walltime: must be HH:MM:SS, more than zero (got '1h')"),
+    ({"lifetime": "59m"}, "cluster.lifetime: 3540 s + lifetime_stagger 180 s must end before the walltime"),
+    ({"lifetime": "-5m"}, "cluster.lifetime: must be a positive duration"),
+    ({"lifetime": "10m", "lifetime_stagger": "10m"}, "cluster.lifetime_stagger: must be shorter than the lifetime"),
+    ({"queue": "a\n#SBATCH --x"}, "cluster.queue: must be a non-empty string of one line"),
+    ({"job_extra_directives": "--exclusive"}, "cluster.job_extra_directives: must be a list of strings"),
+    ({"kind": "local", "job_script_prologue": ["module load x"]}, "cluster.job_script_prologue: not used by kind"),
+    ({"batch_size": 0}, "cluster.batch_size: must be an integer"),
+])
+def test_a_bad_cluster_table_is_one_line_naming_the_key(keys, message):
+    table = {"kind": "slurm", "memory": "8GB", **keys}
+    table = {k: v for k, v in table.items() if v is not None}
+    with pytest.raises(StudyError) as err:
+        config.cluster_table({"cluster": table})
+    assert str(err.value).startswith(message) and "\n" not in str(err.value), str(err.value)

@@ -501,3 +501,20 @@ def test_strict_validity_refuses_the_stiff_bed_model_outside_its_rule_in_one_lin
     parse_study(inside + '\n[mcs]\ncount = 1\nmodel = "stiff_bed"\nstrict_validity = true\n')     # inside
     with pytest.raises(StudyError, match="mcs.strict_validity: must be true or false"):
         parse_study(soft + "strict_validity = 1\n")
+
+
+def test_the_cluster_table_is_read_and_left_out_of_the_study_key():
+    """Where a study runs does not change its result: a run resumed with other jobs keeps its batches."""
+    from screening.sweep.study import EXAMPLE_STUDY
+
+    plain = parse_study(EXAMPLE_STUDY)
+    table = '\n[cluster]  # where it runs\nkind = "slurm"\nmemory = "8GB"\njobs = 4\n'
+    on_slurm = parse_study(EXAMPLE_STUDY.replace("[block]", table.lstrip() + "[block]"))
+    at_end = parse_study(EXAMPLE_STUDY + table.replace("jobs = 4", "jobs = 40"))
+    assert on_slurm.cluster.jobs == 4 and at_end.cluster.jobs == 40 and plain.cluster is None
+    assert plain.key == on_slurm.key == at_end.key
+    # a dotted key cannot be cut from the text: the whole text is the key (a new key, never a wrong one)
+    dotted = parse_study('cluster.kind = "slurm"\ncluster.memory = "8GB"\n' + EXAMPLE_STUDY)
+    assert dotted.cluster.kind == "slurm" and dotted.key != plain.key
+    with pytest.raises(StudyError, match=r"cluster\.cpus: unknown key"):
+        parse_study(EXAMPLE_STUDY + table + "cpus = 4\n")
