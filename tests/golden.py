@@ -102,6 +102,8 @@ h = 0.21
 condensation = "paper"
 k = 2.89e7
 lam = 8.95e8
+[excitation]
+band_limit_hz = "none"
 [time]
 t_end = 2.0
 dt = 0.05

@@ -25,6 +25,17 @@ def shape_key(excitation, t_end):
                                          if env.kind == "exponential" else ()), float(t_end))
 
 
+def shape_names(excitation):
+    """The fields that make an excitation's shape besides its envelope: its filter parameters and, with a
+    band, ``band_limit_hz``."""
+    band = () if getattr(excitation, "band_limit_hz", None) is None else ("band_limit_hz",)
+    return tuple(excitation.parameters) + band
+
+
 def scalar_excitation(kind, envelope_kind, p):
+    """The excitation of unit level of the shape ``p`` (filter parameters, ``T1``, ``T2`` and, with a band,
+    ``band_limit_hz``; without it, or NaN, the idealized spectrum)."""
     env = Envelope(p["T1"], p["T2"]) if envelope_kind == "exponential" else ConstantEnvelope()
-    return excitations.build(kind, 1.0, p, env)
+    band = p.get("band_limit_hz")
+    band = None if band is None or not np.isfinite(band) else float(band)
+    return excitations.build(kind, 1.0, p, env, band_limit_hz=band)

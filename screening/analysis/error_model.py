@@ -334,8 +334,7 @@ def local_linear(xq, x, y, h, ridge=RIDGE, neighbours=NEIGHBOURS):
 
     References
     ----------
-    .. [1] W. S. Cleveland and S. J. Devlin, "Locally weighted regression: an approach to regression
-       analysis by local fitting", J. Am. Stat. Assoc. 83(403) (1988) 596-610.
+    .. [1] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
     .. [2] J. Fan and I. Gijbels, Local Polynomial Modelling and Its Applications, Chapman & Hall (1996).
 
     Examples
@@ -411,8 +410,7 @@ def uplift_regime(x):
 
     References
     ----------
-    .. [1] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
+    .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -517,10 +515,8 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
 
     References
     ----------
-    .. [1] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
-    .. [2] W. S. Cleveland and S. J. Devlin, "Locally weighted regression: an approach to regression
-       analysis by local fitting", J. Am. Stat. Assoc. 83(403) (1988) 596-610.
+    .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -582,10 +578,8 @@ def predict(model, x):
 
     References
     ----------
-    .. [1] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
-    .. [2] W. S. Cleveland and S. J. Devlin, "Locally weighted regression: an approach to regression
-       analysis by local fitting", J. Am. Stat. Assoc. 83(403) (1988) 596-610.
+    .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -650,8 +644,7 @@ def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None, reg
 
     References
     ----------
-    .. [1] T. Hastie, R. Tibshirani and J. Friedman, The Elements of Statistical Learning, 2nd ed.,
-       Springer (2009), sections 7.10 (cross-validation) and 13.3 (nearest neighbours).
+    .. [1] [hastie2009] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -757,8 +750,7 @@ def fitted_variables(ds):
     ----------
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
-    .. [2] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
+    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -836,8 +828,7 @@ def model_from_atlas(ds, condensation):
     ----------
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
-    .. [2] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
+    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -924,11 +915,8 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
-       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1196,8 +1184,7 @@ def interval_trust(model, x, status=None, covered=True):
     ----------
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
-    .. [2] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
+    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1245,8 +1232,7 @@ def with_error_model(ds, model):
     ----------
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
-    .. [2] V. Vovk, A. Gammerman and G. Shafer, Algorithmic Learning in a Random World, Springer (2005)
-       (conformal prediction; normalised and Mondrian conformal predictors).
+    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

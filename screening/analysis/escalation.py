@@ -376,9 +376,7 @@ def condensed_cells(calibration, target):
     ----------
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
        documentation).
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -428,9 +426,7 @@ def escalation_model(indicators, status, condensation, eps, cells):
     ----------
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
        documentation).
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -513,8 +509,7 @@ def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety
 
     References
     ----------
-    .. [1] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
-       (standard errors of Monte Carlo estimates).
+    .. [1] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -545,8 +540,7 @@ def meets_target(peak, peak_se, target):
 
     References
     ----------
-    .. [1] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
-       (standard errors of Monte Carlo estimates).
+    .. [1] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -585,8 +579,7 @@ def probability_samples(hits, used, most=MAX_SAMPLES, se=PROBABILITY_SE):
 
     References
     ----------
-    .. [1] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
-       proportions", The American Statistician 52(2), 119-126, 1998.
+    .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -619,8 +612,7 @@ def probabilities_met(hits, used, se=PROBABILITY_SE):
 
     References
     ----------
-    .. [1] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
-       proportions", The American Statistician 52(2), 119-126, 1998.
+    .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -804,8 +796,7 @@ def paired_model(model):
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity Monte Carlo
-       estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Multi-fidelity Monte Carlo", ``docs/multifidelity.md``.
 
     Examples

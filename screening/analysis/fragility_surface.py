@@ -443,8 +443,7 @@ def loo_check(k, n, p_loo, se_loo):
 
     References
     ----------
-    .. [1] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
-       proportions", The American Statistician 52(2), 119-126, 1998.
+    .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

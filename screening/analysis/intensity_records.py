@@ -64,8 +64,7 @@ def oscillator_peak(acceleration, dt, period, damping=0.05):
 
     References
     ----------
-    .. [1] N. C. Nigam and P. C. Jennings, "Calculation of response spectra from strong-motion earthquake
-       records", Bull. Seismol. Soc. Am. 59(2) (1969) 909-922.
+    .. [1] [nigam1969] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -128,12 +127,9 @@ def record_measures(record, period=None, damping=0.05, g=G):
 
     References
     ----------
-    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
-    .. [2] N. C. Nigam and P. C. Jennings, "Calculation of response spectra from strong-motion earthquake
-       records", Bull. Seismol. Soc. Am. 59(2) (1969) 909-922.
-    .. [3] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
-       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [nigam1969] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [eads2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -187,8 +183,7 @@ def highpass_gain(omega, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -276,8 +271,7 @@ def continuous_peak(acceleration, rate, dt, refine=8):
 
     References
     ----------
-    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
-       17(2) (1980) 238-246 (the cubic Hermite basis).
+    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -331,10 +325,8 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
-    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -381,10 +373,8 @@ def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_S
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
-    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -417,8 +407,7 @@ def avgsa_periods(period, n=AVGSA_N_PERIODS, span=AVGSA_RANGE):
 
     References
     ----------
-    .. [1] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
-       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
+    .. [1] [eads2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -456,8 +445,7 @@ def record_velocity(acceleration, dt, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -502,10 +490,8 @@ def record_avgsa(acceleration, dt, period, damping=0.05):
 
     References
     ----------
-    .. [1] L. Eads, E. Miranda and D. G. Lignos, "Average spectral acceleration as an intensity measure
-       for collapse risk assessment", Earthq. Eng. Struct. Dyn. 44(12) (2015) 2057-2073.
-    .. [2] N. C. Nigam and P. C. Jennings, "Calculation of response spectra from strong-motion earthquake
-       records", Bull. Seismol. Soc. Am. 59(2) (1969) 909-922.
+    .. [1] [eads2015] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [nigam1969] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

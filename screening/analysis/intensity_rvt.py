@@ -25,7 +25,7 @@ import numpy as np
 from scipy import integrate, optimize
 
 from screening.analysis._excitation_shape import (N_TIMES, scalar_excitation as _scalar_excitation,
-                                                  shape_key as _shape_key, times as _times)
+                                                  shape_key as _shape_key, shape_names as _shape_names, times as _times)
 from screening.analysis.fragility import (exceedance_probability_from_moments, oscillator_bandwidth, upcrossing_rate,
                                           vanmarcke_factor)
 from screening.analysis.intensity_records import OMEGA_LOW
@@ -65,14 +65,13 @@ def spectral_moments(excitation, cutoff):
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> spectral_moments(white, 50.0)
     (1.0, 25.0, 833.33...)
     >>> 2 * 0.01 * 50.0 ** 3 / 3
@@ -113,10 +112,8 @@ def median_peak(t, var, var_dot, cov, bandwidth=None, probability=0.5):
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -173,17 +170,14 @@ def input_moments(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> t, var, var_dot, cov, delta = input_moments(white, 10.0, 50.0)
     >>> t.shape, float(var[0]), float(var_dot[0]), float(cov[0]), round(delta, 6)
     ((4001,), 1.0, 833.33..., 0.0, 0.5)
@@ -225,18 +219,16 @@ def pga_median(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> pga = pga_median(white, 10.0, 50.0)
-    >>> f"{pga:.4f}", f"{pga_median(WhiteNoise(0.04, white.envelope), 10.0, 50.0) / pga:.6f}"
+    >>> f"{pga:.4f}", f"{pga_median(WhiteNoise(0.04, white.envelope, band_limit_hz=None), 10.0, 50.0) / pga:.6f}"
     ('3.1264', '2.000000')
     """
     t, var, var_dot, cov, _ = input_moments(excitation, t_end, cutoff)
@@ -290,10 +282,8 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -301,7 +291,7 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
 
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> p = rocking_start_probability(white, 5.0, 50.0, pga_median(white, 5.0, 50.0))
     >>> f"{p:.4f}"
     '0.5000'
@@ -311,7 +301,7 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
     s0 = np.asarray(excitation.S0, dtype=float)
     level, s0, cut = np.broadcast_arrays(np.asarray(uplift_acceleration, dtype=float), s0,
                                          np.asarray(cutoff, dtype=float))
-    names = tuple(excitation.parameters)
+    names = _shape_names(excitation)
     filt = [np.broadcast_to(np.asarray(getattr(excitation, n), dtype=float), level.shape) for n in names]
     out = np.full(level.shape, np.nan)
     keys = {}
@@ -397,16 +387,14 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
     ----------
     .. [1] L. D. Lutes and S. Sarkani, Random Vibrations: Analysis of Structural and Mechanical Systems,
        Elsevier Butterworth-Heinemann (2004).
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [3] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> import math
     >>> t, var_u, var_ud, cov = oscillator_covariance(white, 0.5, 3.0, damping=0.2, n_times=11)
     >>> wn = 2 * math.pi / 0.5
@@ -474,8 +462,7 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
     .. [2] A. Der Kiureghian, "Structural response to stationary excitation", J. Eng. Mech. Div. ASCE
        106(6) (1980) 1195-1213.
 
@@ -485,9 +472,9 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> sa = sa_median(white, 0.5, 3.0, damping=0.2)
-    >>> f"{sa:.4f}", f"{sa_median(WhiteNoise(0.04, white.envelope), 0.5, 3.0, damping=0.2) / sa:.6f}"
+    >>> f"{sa:.4f}", f"{sa_median(WhiteNoise(0.04, white.envelope, band_limit_hz=None), 0.5, 3.0, damping=0.2) / sa:.6f}"
     ('2.1851', '2.000000')
     """
     wn = 2.0 * math.pi / float(period)
@@ -538,8 +525,7 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
 
     References
     ----------
-    .. [1] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -547,7 +533,7 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
 
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> from screening.analysis.fragility import oscillator_bandwidth
     >>> f"{oscillator_response_bandwidth(white, 0.5):.6f}", f"{float(oscillator_bandwidth(0.05)):.6f}"
     ('0.245612', '0.245612')
@@ -600,14 +586,13 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> mu0, mu1, mu2 = velocity_spectral_moments(white, 1e5, 0.5)
     >>> import math
     >>> f"{mu0:.5f}", f"{math.pi * 0.01 / (math.sqrt(2) * 0.5):.5f}"
@@ -644,9 +629,7 @@ def envelope_exponentials(envelope):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -744,8 +727,7 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
     ----------
     .. [1] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
        (1965) 204-237.
-    .. [2] D. M. Boore and J. J. Bommer, "Processing of strong-motion accelerograms: needs, options and
-       consequences", Soil Dyn. Earthq. Eng. 25(2) (2005) 93-115.
+    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -754,7 +736,7 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
 
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> from screening.core.excitations.white import WhiteNoise
-    >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
+    >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> t, var_v, var_vd, cov = velocity_covariance(white, 60.0, 50.0, omega_low=0.5)
     >>> f"{var_v[-1]:.4f}", f"{velocity_spectral_moments(white, 50.0, 0.5)[0]:.4f}"
     ('0.0440', '0.0440')

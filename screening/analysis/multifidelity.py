@@ -108,9 +108,7 @@ def control_variate_functional(value_y, influence_y, value_x, value_x_all, influ
     References
     ----------
     .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
-    .. [2] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
-       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
-       683-706, 2018.
+    .. [2] [qian2018] in the bibliography, ``docs/bibliography.md``.
 
 
     Examples
@@ -166,9 +164,7 @@ def conditional_mean_influence(g, valid=None):
 
     References
     ----------
-    .. [1] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
-       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
-       683-706, 2018.
+    .. [1] [qian2018] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -212,9 +208,7 @@ def variance_influence(theta, valid=None):
 
     References
     ----------
-    .. [1] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
-       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
-       683-706, 2018.
+    .. [1] [qian2018] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -256,9 +250,7 @@ def multifidelity_variance(theta_y, valid_y, theta_x, valid_x):
 
     References
     ----------
-    .. [1] E. Qian, B. Peherstorfer, D. O'Malley, V. V. Vesselinov, K. Willcox, "Multifidelity Monte Carlo
-       estimation of variance and sensitivity indices", SIAM/ASA J. Uncertainty Quantification 6(2),
-       683-706, 2018.
+    .. [1] [qian2018] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -303,8 +295,7 @@ def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturne
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
-       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -371,8 +362,7 @@ def control_variate_estimate(y, x, x_extra=None, x_mean=None):
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
-       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     .. [2] P. Glasserman, "Monte Carlo Methods in Financial Engineering", Springer, 2003.
 
     Examples
@@ -475,8 +465,7 @@ def speedup(correlation, cost_expensive, cost_cheap, ratio=None):
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
-       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -547,8 +536,7 @@ def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, "Optimal model management for multifidelity
-       Monte Carlo estimation", SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -128,9 +128,7 @@ def bed_law(eps):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -163,8 +161,7 @@ def error_of(sl_peak, mcs_peak, mcs_se):
 
     References
     ----------
-    .. [1] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
-       (standard errors of Monte Carlo estimates).
+    .. [1] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -173,11 +173,8 @@ def groups_of(u):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
-       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
     .. [3] E. Buckingham, "On physically similar systems; illustrations of the use of dimensional
        equations", Physical Review 4(4) (1914) 345-376.
 
@@ -242,11 +239,8 @@ def housner_frequency(block):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
-       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -288,11 +282,8 @@ def physical_point(groups, i=0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
-       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -345,7 +336,8 @@ def make_excitation(shape, timing, S0):
     Returns
     -------
     screening.core.excitations.white.WhiteNoise or screening.core.excitations.kanai_tajimi.KanaiTajimi
-        The excitation, with an :class:`~screening.core.model.excitation.Envelope` of ``T1``, ``T2``.
+        The excitation, with an :class:`~screening.core.model.excitation.Envelope` of ``T1``, ``T2``, without a band
+        (``band_limit_hz=None``: the idealized spectra the atlas was measured with).
 
     Notes
     -----
@@ -354,9 +346,7 @@ def make_excitation(shape, timing, S0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] K. Kanai, "Semi-empirical formula for the seismic characteristics of the ground", Bulletin of
        the Earthquake Research Institute, University of Tokyo 35 (1957) 309-325.
     .. [3] H. Tajimi, "A statistical method of determining the maximum response of a building structure
@@ -370,9 +360,9 @@ def make_excitation(shape, timing, S0):
     ('WhiteNoise', 0.01, 4.0)
     """
     env = Envelope(timing["T1"], timing["T2"])
-    if shape["kind"] == "white":
-        return WhiteNoise(S0, env)
-    return KanaiTajimi(S0, shape["omega_g"], shape["zeta_g"], env)
+    if shape["kind"] == "white":                 # the atlas measured the idealized spectra: no band
+        return WhiteNoise(S0, env, band_limit_hz=None)
+    return KanaiTajimi(S0, shape["omega_g"], shape["zeta_g"], env, band_limit_hz=None)
 
 
 def measured_groups(block, foundation, shape, timing):
@@ -404,11 +394,8 @@ def measured_groups(block, foundation, shape, timing):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
-       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -458,11 +445,8 @@ def derived_groups(block, foundation, shape, S0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] G. W. Housner, "The behavior of inverted pendulum structures during earthquakes", Bulletin of
-       the Seismological Society of America 53(2) (1963) 403-417.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

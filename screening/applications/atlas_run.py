@@ -434,8 +434,7 @@ def mc_exceedance(peaks, state, levels):
     ----------
     .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
        proportions", The American Statistician 52(2) (1998) 119-126.
-    .. [2] R. Y. Rubinstein and D. P. Kroese, Simulation and the Monte Carlo Method, 3rd ed., Wiley (2017)
-       (standard errors of Monte Carlo estimates).
+    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

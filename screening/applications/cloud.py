@@ -50,7 +50,7 @@ from screening.core.status import FitFlag
 from screening.io.errors import exception_line
 from screening.solvers import model_choice, schema
 from screening.solvers.simulate import simulate
-from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
+from screening.solvers.synthesis import check_band, ground_acceleration_samples, spectral_plan
 from screening.sweep.config import check_choice, check_keys, check_value, StudyError
 from screening.sweep.execution import TASK_RETRIES
 from screening.sweep.interrupt import interruptible
@@ -125,7 +125,7 @@ def load_cloud_study(path, units=None, vertical=True):
     >>> from screening.core.excitations import KanaiTajimi
     >>> from screening.core.model.excitation import Envelope
     >>> folder = tempfile.TemporaryDirectory()
-    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5))
+    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5), band_limit_hz=None)
     >>> paths = synthesise_records(os.path.join(folder.name, "records"), ground, n_records=3, t_end=10.0,
     ...                            cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
     >>> with open(os.path.join(folder.name, "cloud.toml"), "w") as fh:
@@ -264,7 +264,7 @@ def read_cloud_records(cloud):
     >>> from screening.core.excitations import KanaiTajimi
     >>> from screening.core.model.excitation import Envelope
     >>> folder = tempfile.TemporaryDirectory()
-    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5))
+    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5), band_limit_hz=None)
     >>> paths = synthesise_records(os.path.join(folder.name, "records"), ground, n_records=3, t_end=10.0,
     ...                            cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
     >>> with open(os.path.join(folder.name, "cloud.toml"), "w") as fh:
@@ -823,7 +823,8 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
     t_end : float
         Record length [s].
     cutoff : float
-        Highest circular frequency of the spectral representation [rad s-1].
+        Highest circular frequency of the spectral representation [rad s-1]; the excitation's band
+        (``band_limit_hz``, its low-pass in the PSD) must lie below it and below the Nyquist frequency of ``dt``.
     scales : sequence of float
         Factor of each record [1].
     seed : int, optional
@@ -853,12 +854,13 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
     >>> import os, tempfile
     >>> from screening.core.excitations import KanaiTajimi
     >>> from screening.core.model.excitation import Envelope
-    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5))
+    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5), band_limit_hz=None)
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     paths = synthesise_records(folder, ground, n_records=2, t_end=10.0, cutoff=120.0, scales=[1.0, 2.0])
     ...     [os.path.basename(p) for p in paths], open(paths[0]).readline().strip()
     (['synthetic_00.at2', 'synthetic_01.at2'], 'PEER NGA STRONG MOTION DATABASE RECORD')
     """
+    check_band(excitation, t_end, min(float(cutoff), math.pi / float(dt)))   # the band below the files' Nyquist
     plan = spectral_plan(excitation, t_end, cutoff)
     acc, _ = ground_acceleration_samples(excitation, plan, seed, np.arange(n_records))
     t = np.arange(0.0, t_end + 0.5 * dt, dt)

@@ -84,9 +84,7 @@ def envelope_energy(t, T1, T2):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -243,11 +241,8 @@ def smoothed_psd(record, T1, T2, smooth=2.0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -301,11 +296,8 @@ def fit_spectral_shape(record, T1, T2, band=(1.0, None), smooth=2.0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -386,11 +378,8 @@ def checked_record(record):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -448,11 +437,8 @@ def envelope_peak(T1, T2):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -482,11 +468,8 @@ def zero_crossing_rate(acceleration, dt, husid=None):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -527,11 +510,8 @@ def husid(acceleration, dt):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     .. [3] R. Husid, "Analisis de terremotos: analisis general", Revista del IDIEM 8 (1969) 21-42.
 
     Examples
@@ -567,11 +547,8 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -590,7 +567,8 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt
     model = envelope_energy(t, fit["T1"], fit["T2"])
-    exc = (KanaiTajimi(1.0, fit["omega_g"], fit["zeta_g"]) if fit["kind"] == "kanai_tajimi" else WhiteNoise(1.0))
+    exc = (KanaiTajimi(1.0, fit["omega_g"], fit["zeta_g"], band_limit_hz=None) if fit["kind"] == "kanai_tajimi"
+           else WhiteNoise(1.0, band_limit_hz=None))           # the fitted idealized spectrum, to the record's band
     lam0, _, lam2 = spectral_moments(exc, band_top)
     return {"husid_max_deviation": float(np.max(np.abs(model / model[-1] - h))),
             "zero_crossing_rate_record": float(zero_crossing_rate(acceleration, dt, h)),
@@ -634,11 +612,8 @@ def fit_excitation(record, kind="kanai_tajimi", cutoff=None, band=(1.0, None), s
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -716,11 +691,8 @@ def excitation_table(fit):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press (1970) 438-483.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -230,8 +230,7 @@ def lognormal_fit_text(frag, over, units=""):
     ----------
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -457,8 +456,7 @@ def fragility_figures(frag, out, dim, flags=None):
     ----------
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] J. D. Hunter, "Matplotlib: A 2D graphics environment", Computing in Science & Engineering 9(3)
-       (2007) 90-95.
+    .. [2] [hunter2007] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -503,8 +501,7 @@ def fit_files(frag, out):
     ----------
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [3] M. Pagani et al., "OpenQuake engine: an open hazard (and risk) software for the Global
        Earthquake Model", Seismological Research Letters 85(3) (2014) 692-702.
 

@@ -198,8 +198,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     ----------
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md.
-    .. [2] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31(1) (2015) 579-599.
+    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -53,8 +53,7 @@ def cubic_coefficients(values, slopes, step):
 
     References
     ----------
-    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
-       17(2) (1980) 238-246 (the cubic Hermite basis).
+    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -261,8 +260,7 @@ def cubic(table, i, column, s):
 
     References
     ----------
-    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
-       17(2) (1980) 238-246 (the cubic Hermite basis).
+    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -295,8 +293,7 @@ def hermite_weights(s):
 
     References
     ----------
-    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
-       17(2) (1980) 238-246 (the cubic Hermite basis).
+    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -338,8 +335,7 @@ def hermite(v0, v1, d0, d1, s, step):
 
     References
     ----------
-    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
-       17(2) (1980) 238-246 (the cubic Hermite basis).
+    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -381,8 +377,7 @@ def hermite_rate(v0, v1, d0, d1, s, step):
 
     References
     ----------
-    .. [1] F. N. Fritsch and R. E. Carlson, "Monotone piecewise cubic interpolation", SIAM J. Numer. Anal.
-       17(2) (1980) 238-246 (the cubic Hermite basis).
+    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

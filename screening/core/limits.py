@@ -16,7 +16,7 @@ import math
 
 __all__ = ["DEFAULT_MAX_POINTS", "MAX_POINTS_CEILING", "MAX_TIMES", "MAX_SAMPLES", "MAX_SAMPLE_VALUES", "MAX_SEED",
            "MAX_STUDY_CHARS", "MAX_NESTING", "MAX_HISTORY_VALUES", "MAX_RTOL", "TASK_BYTES", "MAX_CASES",
-           "MAX_THRESHOLDS", "MAX_STUDY_BYTES", "MAX_RECORD_BYTES", "MAX_RECORD_SAMPLES", "MIN_RECORD_DT",
+           "MAX_THRESHOLDS", "MAX_STUDY_BYTES", "MAX_SYNTHESIS_POINTS", "MAX_RECORD_BYTES", "MAX_RECORD_SAMPLES", "MIN_RECORD_DT",
            "MAX_RECORD_DT", "MAX_RECORD_SCALE", "MAX_RECORD_FILES", "SA_PERIOD_RANGE", "MAX_MODELLING_DISPERSION",
            "nesting_depth",
            "output_steps", "batch_budget"]
@@ -31,6 +31,9 @@ MAX_TIMES = 100_001
 MAX_SAMPLES = 1_000_000
 #: Most ``samples x output instants`` of one spot check (about 17 bytes each: ~0.9 GB).
 MAX_SAMPLE_VALUES = 50_000_000
+#: Grid points of one synthesized Monte Carlo sample at most (its complex FFT: 134 MB): bounds the band an
+#: excitation may carry over a record (screening.solvers.synthesis.max_band_limit_hz).
+MAX_SYNTHESIS_POINTS = 2**23
 #: Seeds are stored as int32 (``mcs_seed``): ``0 .. 2**31 - 1``.
 MAX_SEED = 2**31 - 1
 #: Largest study file [characters] (a study is a page of TOML).

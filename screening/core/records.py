@@ -451,8 +451,7 @@ def read_at2(path, units=None, option="units", dt=None):
     ----------
     .. [1] screening documentation, "Records, intensity measures and cloud analysis",
        docs/records.md (sections "Units" and "Files").
-    .. [2] T. D. Ancheta et al., "NGA-West2 database", Earthquake Spectra 30(3) (2014) 989-1005
-       (the PEER ``.AT2`` record format).
+    .. [2] [ancheta2014] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -767,8 +766,7 @@ def read_record(path, dt=None, units=None, option="units"):
     ----------
     .. [1] screening documentation, "Records, intensity measures and cloud analysis",
        docs/records.md (sections "Units" and "Files").
-    .. [2] T. D. Ancheta et al., "NGA-West2 database", Earthquake Spectra 30(3) (2014) 989-1005
-       (the PEER ``.AT2`` record format).
+    .. [2] [ancheta2014] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -874,8 +872,7 @@ def write_at2(path, record, title="screening synthetic record", station="synthet
     ----------
     .. [1] screening documentation, "Records, intensity measures and cloud analysis",
        docs/records.md (sections "Units" and "Files").
-    .. [2] T. D. Ancheta et al., "NGA-West2 database", Earthquake Spectra 30(3) (2014) 989-1005
-       (the PEER ``.AT2`` record format).
+    .. [2] [ancheta2014] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -147,7 +147,8 @@ def parameter_table(study):
                 p = case.params
                 col.append(float(Block(m=p["m"], b=p["b"], h=p["h"]).I_cm))
             else:
-                col.append(float(case.params.get(name, math.nan)))
+                value = float(case.params.get(name, math.nan))
+                col.append(math.nan if math.isinf(value) else value)       # band_limit_hz = "none": no band
         if not all(math.isnan(v) for v in col):
             values[name] = np.array(col)
     constants = {n: float(v[0]) for n, v in values.items() if np.all(v == v[0])}

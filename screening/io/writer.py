@@ -59,7 +59,7 @@ from screening.solvers.schema import (ACCURACY, attributes, global_attributes, g
                                       PRESSURE_PARAMETERS, SWEEP, TIME)
 
 __all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
-           "NetcdfFormat", "result_attributes", "band_limit_attribute",
+           "NetcdfFormat", "result_attributes",
            "relative_peak_error", "point_chunks", "region_variables", "write_region", "ResultFile"]
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
@@ -215,42 +215,10 @@ def result_attributes(study, created, batch_size):
         max_steps=np.int32(study.max_steps),
         t_end=study.t_end,
         dt=study.dt,
-        **band_limit_attribute(study),
         batch_size=np.int32(batch_size),
         output_histories=study.output.histories,
         output_history_variables=" ".join(study.output.stored),
     )
-
-
-def band_limit_attribute(study):
-    """``{"band_limit_hz": f}``: the ground-motion band limit [Hz] the intensity measures of the result refer
-    to, when every case has the same; ``{}`` otherwise.
-
-    Parameters
-    ----------
-    study : screening.sweep.study.Study
-        The study.
-
-    Returns
-    -------
-    dict
-        ``{"band_limit_hz": f}`` with ``f`` [Hz], or ``{}``.
-
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
-       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
-    >>> study = parse_study(text, name="bed", source="bed.toml")
-    >>> band_limit_attribute(study)                     # the default band limit
-    {'band_limit_hz': 25.0}
-    """
-    limits = {float(case.params.get("band_limit_hz", math.nan)) for case in study.cases}
-    return {"band_limit_hz": limits.pop()} if len(limits) == 1 and all(math.isfinite(v) for v in limits) else {}
 
 
 def relative_peak_error(linear, mcs):

@@ -92,10 +92,8 @@ def dense_output(y0, K, h, theta, j):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -131,10 +129,8 @@ def rejected_step_factor(err):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -166,10 +162,8 @@ def accepted_step_factor(err, err_old):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -201,10 +195,8 @@ def accepted_step_factor_log(log_err, log_err_old):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -240,10 +232,8 @@ def pi_step_factor(err, log_err_old):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -275,10 +265,8 @@ def rejected_step_factor_log(log_err):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -325,10 +313,8 @@ def dense_weights(theta):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -370,10 +356,8 @@ def dense_value(y0, k, h, theta):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

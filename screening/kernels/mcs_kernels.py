@@ -327,9 +327,7 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` (the two integrators).
 
     Examples
@@ -381,10 +379,8 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -94,16 +94,14 @@ def envelope_rates(osc):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> envelope_rates(osc)
     (0.25, 0.5)
@@ -130,16 +128,14 @@ def envelope_state(osc, t):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> e1, e2 = envelope_state(osc, 1.0)
     >>> f"{4 * (e1 - e2):.6f}", f"{float(exc.envelope(1.0)):.6f}"           # q(1 s) both ways
@@ -171,16 +167,14 @@ def initial_gain(osc, e1, e2):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> f"{initial_gain(osc, *envelope_state(osc, 1.0)):.6f}", f"{osc['gain'] * float(exc.envelope(1.0)):.6f}"
     ('2.444029', '2.444029')
@@ -216,18 +210,15 @@ def stage_gains(osc, e1, e2, h):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> e1, e2 = envelope_state(osc, 1.0)
     >>> *gains, f1, f2 = stage_gains(osc, e1, e2, 0.1)
@@ -272,9 +263,7 @@ def uplift_occupancy(theta_ul, var_theta):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -309,16 +298,14 @@ def p_uplift(osc, var_theta):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> f"{p_uplift(osc, 1e-6):.12f}", f"{float(uplift_occupancy(osc['theta_ul'], 1e-6)):.12f}"
     ('0.229664132095', '0.229664132095')
@@ -359,17 +346,15 @@ def first_step(osc, k0, h_max, t, t_end):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> h, code, _ = first_step(osc, 808.2, 0.1, 0.0, 20.0)
     >>> f"{h:.6e}", f"{0.05 / np.sqrt(808.2 / osc['m_sdof']):.6e}", code.name
@@ -409,10 +394,8 @@ def trial_step(h, t, t_end, steps, max_steps):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -463,10 +446,8 @@ def judge_step(err, finite, h, t_end):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -530,17 +511,15 @@ def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> out = end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 1e-6, 800.0, 808.0, 0.5, 0.0)
     >>> round(out[0], 12), round(out[1], 12), round(out[2], 12), out[5], out[6].name
@@ -592,10 +571,8 @@ def peak_in_step(t, h, v0, v1, c0, c1, kv, kc, best, best_t):
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -658,16 +635,14 @@ def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> import numba
     >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))         # constant c_eq, k_eq
@@ -725,17 +700,15 @@ def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h
 
     References
     ----------
-    .. [1] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [2] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.core import condensation
     >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
+    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
     >>> import numba
     >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))
@@ -839,11 +812,8 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -941,9 +911,7 @@ def packed_size(n):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -984,14 +952,12 @@ def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.excitations import WhiteNoise
-    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, WhiteNoise(1e-4).filter())
+    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, WhiteNoise(1e-4, band_limit_hz=None).filter())
     >>> A.tolist(), b.tolist()
     ([[0.0, 1.0], [-1600.0, -2.0]], [0.0, 3.5])
     """
@@ -1031,9 +997,7 @@ def lyapunov_rhs(P, A, b, S0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1086,9 +1050,7 @@ def moment_equations(t, P, block, foundation, excitation, condensation=DEFAULT_C
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1097,7 +1059,7 @@ def moment_equations(t, P, block, foundation, excitation, condensation=DEFAULT_C
     >>> from screening.core.excitations import WhiteNoise
     >>> P = np.diag([1e-8, 1e-4])
     >>> dP = moment_equations(0.0, P, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                       WhiteNoise(1e-4))
+    ...                       WhiteNoise(1e-4, band_limit_hz=None))
     >>> bool(np.allclose(dP, dP.T)), dP.shape
     (True, (2, 2))
     """
@@ -1145,16 +1107,14 @@ def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     Against the numpy reference :func:`lyapunov_rhs`, Kanai-Tajimi input:
 
     >>> from screening.core.excitations import KanaiTajimi
-    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6).filter()
+    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None).filter()
     >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
     >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
     >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
@@ -1226,14 +1186,12 @@ def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening.core.excitations import KanaiTajimi
-    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6).filter()
+    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None).filter()
     >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
     >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
     >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
@@ -1317,10 +1275,8 @@ def filtered_scales(osc, filter_covariance, psd_at_rocking):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1329,7 +1285,7 @@ def filtered_scales(osc, filter_covariance, psd_at_rocking):
     >>> from screening.core.model.points import flatten
     >>> from screening.solvers.moments import oscillator_records
     >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6))
+    ...                                KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None))
     >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
     >>> w = np.sqrt(osc["k_rest"] / osc["m_sdof"])
     >>> scale = filtered_scales(osc, exc.stationary_covariance(), exc.psd(w))
@@ -1382,11 +1338,8 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1425,9 +1378,7 @@ def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -277,13 +277,9 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [3] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [hairer1993] in the bibliography, ``docs/bibliography.md``.
     .. [4] The package's documentation, ``docs/stiff_bed.md`` (the stiff-bed model's numerics).
 
     Examples
@@ -544,13 +540,9 @@ def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] J. R. Dormand and P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput. Appl.
-       Math. 6 (1980) 19-26.
-    .. [3] E. Hairer, S. P. Norsett and G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
-       Springer (1993), sections II.4-II.6.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [hairer1993] in the bibliography, ``docs/bibliography.md``.
     .. [4] The package's documentation, ``docs/stiff_bed.md`` (the stiff-bed model's numerics).
 
     Examples

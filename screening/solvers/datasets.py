@@ -47,7 +47,8 @@ def model_fields(block, foundation, excitation):
 
     What a result stores as coordinates: the block's, the bed's and the excitation's numbers under
     the names of :data:`screening.solvers.schema.PARAMETERS` (``lam`` or ``c`` by contact law, ``omega_g``,
-    ``zeta_g`` for Kanai-Tajimi input, ``T1``, ``T2`` for the exponential envelope).
+    ``zeta_g`` for Kanai-Tajimi input, ``band_limit_hz`` unless the input has no band, ``T1``, ``T2`` for the
+    exponential envelope).
 
     Parameters
     ----------
@@ -72,7 +73,7 @@ def model_fields(block, foundation, excitation):
     >>> from screening import Block, Foundation, WhiteNoise
     >>> fields = model_fields(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4))
     >>> list(fields)
-    ['m', 'b', 'h', 'I_cm', 'g', 'k', 'lam', 'eps', 'S0', 'T1', 'T2']
+    ['m', 'b', 'h', 'I_cm', 'g', 'k', 'lam', 'eps', 'S0', 'band_limit_hz', 'T1', 'T2']
     >>> fields["k"], fields["S0"]
     (28900000.0, 0.0001)
     """
@@ -202,9 +203,7 @@ def linearization_dataset(result, times, dims, parameters, derived, attrs):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/outputs.md`` (what a result holds).
 
     Examples

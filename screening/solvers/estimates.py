@@ -112,9 +112,7 @@ def sample_probabilities(peak_abs_theta, overturned, valid, levels=()):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
        of binomial proportions", The American Statistician 52(2) (1998) 119-126.
 

@@ -22,8 +22,10 @@ Numerics (all overridable through ``**numerics``; recorded in the dataset attrib
   the coupled model takes the linearly implicit RODAS 4(3) pair instead, with the same
   tolerances (``integrator``: ``"auto"``, the default, see :func:`choose_integrator`;
   ``"dopri"`` or ``"rodas"`` to force one; ``docs/montecarlo_numerics.md``);
-* the input is band-limited to ``cutoff`` (default :func:`screening.solvers.synthesis.default_cutoff`,
-  3 x the larger of the rocking and vertical frequencies) and read between its grid
+* the input is synthesized up to :func:`screening.solvers.synthesis.synthesis_cutoff`: the top of the
+  excitation's band (its PSD carries the band's low-pass), or, for an idealized spectrum
+  (``band_limit_hz=None``), ``cutoff`` (default :func:`screening.solvers.synthesis.default_cutoff`,
+  3 x the larger of the rocking and vertical frequencies); it is read between its grid
   points by cubic Hermite interpolation;
 * the coupled model starts from static equilibrium (``theta = 0``, ``z_cb`` = exact static
   indentation including the cubic term, all rates zero), the condensed one from rest.
@@ -57,8 +59,8 @@ from screening.kernels import mcs_kernels as kern
 from screening.solvers import mc_registry, schema
 from screening.solvers.datasets import monte_carlo_dataset, with_probabilities
 from screening.solvers.model_choice import resolve as resolve_model
-from screening.solvers.synthesis import (CUTOFF_FACTOR, default_cutoff, envelope_rate, low_passed, OVERSAMPLING,
-                                         spectral_plan, stationary_samples, validate_seed)
+from screening.solvers.synthesis import (check_band, CUTOFF_FACTOR, envelope_rate, low_passed, OVERSAMPLING,
+                                         spectral_plan, stationary_samples, synthesis_cutoff, validate_seed)
 from screening.solvers.timegrid import output_times
 
 __all__ = ["MODELS", "DEFAULT_RTOL", "AUTO_RTOL", "AUTO_RTOL_SAMPLES", "auto_rtol", "DEFAULT_NUMERICS",
@@ -136,9 +138,7 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -237,9 +237,7 @@ def auto_rtol(model, n_samples):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] ``docs/montecarlo_numerics.md``, "Tolerance from the sample count" (this package's documentation).
 
     Examples
@@ -281,9 +279,7 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -323,9 +319,7 @@ def initial_state(block, foundation, model):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -368,9 +362,7 @@ def ensemble_statistics(theta, theta_dot, uplift, used):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] A. Stuart and J. K. Ord, Kendall's Advanced Theory of Statistics, vol. 1, 6th ed., Arnold (1994).
 
     Examples
@@ -523,9 +515,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -562,8 +552,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     check_size("n_samples", n_samples * times.size, limits.MAX_SAMPLE_VALUES, "samples x output instants")
     opts["integrator"] = choose_integrator(block, foundation, model, opts["integrator"])
 
-    cutoff = opts["cutoff"] if opts["cutoff"] is not None else default_cutoff(block, foundation,
-                                                                              opts["cutoff_factor"])
+    check_band(excitation, t_end, opts["cutoff"], opts["oversampling"])
+    cutoff = synthesis_cutoff(excitation, block, foundation, opts["cutoff"], opts["cutoff_factor"])
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
     band = opts["band"] if opts["band"] is not None else mc.input_band(block, foundation)
     read_plan = plan if band is None else low_passed(plan, band)[0]     # the model reads these samples

@@ -75,6 +75,10 @@ PARAMETERS = {
     **{name: _v(p.units, p.long_name) for name, p in excitations.parameters().items()},   # the excitations'
     "T1": _v("s", "envelope decay time T1"),
     "T2": _v("s", "envelope rise time T2"),
+    "band_limit_hz": _v("Hz", "corner of the ground motion's band: order-4 Butterworth low-pass of the excitation's "
+                              "spectrum (screening.core.excitations.base.band_gain)",
+                        note="absent, or NaN in a case: no band, the idealized spectrum (band_limit_hz = \"none\"); "
+                             "the intensity measures then refer to a sharp 25 Hz"),
 }
 
 #: Quantities derived from the model (stored beside the parameters, never re-derived downstream).

@@ -159,9 +159,7 @@ def validity(block, foundation):
     ----------
     .. [1] The package's documentation, ``docs/stiff_bed.md`` (section "Validity") and
        ``docs/model_choice.md`` (the shipped rules of ``model = "auto"``).
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -396,9 +394,7 @@ def transfer_table(block, foundation):
     References
     ----------
     .. [1] The package's documentation, ``docs/stiff_bed.md`` (the bed-derived transfer loss).
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -1,7 +1,7 @@
 """The stiff-bed model's exact-contact sampler (``model="stiff_bed_fast"``): the same model as
 ``model="stiff_bed"`` (:mod:`screening.solvers.stiff_bed`, the reference), integrated with closed-form
 full contact, located phase changes and dense output (:mod:`screening.kernels.stiff_bed_fast`), and its
-ground motions synthesized in batches at a cut-off frequency (:func:`band_samples`).
+ground motions synthesized in batches up to the excitation's band (:func:`band_samples`).
 
 A record with a vertical component is integrated by the reference kernel (the closed form assumes the
 weight ``m g``).  Method and measurements: ``docs/stiff_bed.md`` ("Exact-contact sampler").
@@ -20,8 +20,8 @@ from screening.kernels import mcs_kernels as kern
 from screening.solvers.mc_registry import register
 from screening.solvers.stiff_bed import StiffBedModel, StiffIntegrator, check_standing
 from screening.kernels.stiff_bed_kernels import COUNT_ROWS
-from screening.solvers.synthesis import (OVERSAMPLING, envelope_rate, rocking_frequency, sample_phases,
-                                         spectral_plan, validate_seed)
+from screening.solvers.synthesis import (check_band, envelope_rate, OVERSAMPLING, rocking_frequency, sample_phases,
+                                         spectral_plan, synthesis_cutoff, validate_seed)
 from screening.solvers.timegrid import output_times
 
 __all__ = ["FastStiffBedModel", "STIFF_BED_FAST", "band_plan", "band_samples", "sample"]
@@ -187,9 +187,10 @@ STIFF_BED_FAST = register(FastStiffBedModel())
 
 
 # ----------------------------------------------------------------------------- the sampler
-def sample(block, foundation, excitation, n_samples, cutoff_hz=25.0, t_end=20.0, dt=0.05, seed=0, chunk_size=64,
+def sample(block, foundation, excitation, n_samples, cutoff_hz=None, t_end=20.0, dt=0.05, seed=0, chunk_size=64,
            model=STIFF_BED_FAST, rtol=None, h_max=None, first=0, count=False):
-    """Per-sample results of the stiff-bed model under ground motions synthesized up to ``cutoff_hz``.
+    """Per-sample results of the stiff-bed model under ground motions synthesized up to the excitation's band
+    (as :func:`screening.monte_carlo` does) or ``cutoff_hz``.
 
     The sampler without the ensemble statistics of :func:`screening.monte_carlo`: batches of ``chunk_size``
     samples synthesized (:func:`band_samples`) and integrated.
@@ -205,7 +206,8 @@ def sample(block, foundation, excitation, n_samples, cutoff_hz=25.0, t_end=20.0,
     n_samples : int
         Samples [1], >= 1.
     cutoff_hz : float, optional
-        Cut-off frequency of the synthesis [Hz] (default 25).
+        Cut-off frequency of the synthesis [Hz] (default: :func:`screening.solvers.synthesis.synthesis_cutoff`,
+        the top of the excitation's band; a band above ``cutoff_hz`` is refused).
     t_end, dt : float, optional
         Record length and output step [s].
     seed : int, optional
@@ -238,7 +240,12 @@ def sample(block, foundation, excitation, n_samples, cutoff_hz=25.0, t_end=20.0,
     ((2, 21), False)
     """
     check_standing(block, foundation)
-    plan = band_plan(excitation, t_end, cutoff_hz)
+    if cutoff_hz is None:
+        check_band(excitation, t_end)
+        plan = spectral_plan(excitation, t_end, synthesis_cutoff(excitation, block, foundation))
+    else:
+        plan = band_plan(excitation, t_end, cutoff_hz)
+        check_band(excitation, t_end, 2.0 * math.pi * float(cutoff_hz))
     times = output_times(t_end, dt)
     integrate = model.integrator(block, foundation, "paper", 0.5)
     if count:

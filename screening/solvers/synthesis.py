@@ -40,11 +40,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from screening.core import limits
+from screening.core.excitations.base import band_top
 from screening.core.model import Block, Foundation
 from screening.core.physics.contact import linear_rocking_stiffness
 
 __all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
-           "default_cutoffs", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
+           "default_cutoffs", "max_band_limit_hz", "check_band", "synthesis_cutoff", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
            "grid_points", "spectral_plan", "low_passed", "validate_seed", "sample_phases", "stationary_samples",
            "ground_acceleration_samples", "ground_acceleration"]
 
@@ -81,9 +83,7 @@ def rocking_frequency(block, foundation):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -123,9 +123,7 @@ def vertical_frequency(block, foundation):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -156,8 +154,7 @@ def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
 
     Examples
@@ -208,6 +205,130 @@ def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
     return np.vectorize(one, otypes=[float])(block.m, block.b, block.h, block.I_cm, block.g, foundation.k)
 
 
+def max_band_limit_hz(t_end, oversampling=OVERSAMPLING):
+    """The largest ``band_limit_hz`` [Hz] the synthesis can carry over a record of ``t_end`` [s].
+
+    Parameters
+    ----------
+    t_end : float
+        Record length [s], > 0.
+    oversampling : int, optional
+        Grid points per Nyquist step [1] (default :data:`OVERSAMPLING`).
+
+    Returns
+    -------
+    float
+        The corner [Hz] whose :func:`~screening.core.excitations.base.band_top` puts the synthesis grid (step
+        ``pi / (oversampling omega_top)``) at :data:`~screening.core.limits.MAX_SYNTHESIS_POINTS` points per sample.
+
+    Notes
+    -----
+    The synthesis reaches the band's top ``omega_top`` (5.6 x its corner): its time step is
+    ``pi / (oversampling omega_top)``, whose Nyquist frequency carries the band; a finer step than
+    ``t_end / MAX_SYNTHESIS_POINTS`` is refused (a sample would no longer fit in memory).
+
+    References
+    ----------
+    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
+       Appl. Mech. Rev. 44(4) (1991) 191-204.
+
+    Examples
+    --------
+    >>> f"{max_band_limit_hz(20.0):.0f}"
+    '9323'
+    """
+    top = (limits.MAX_SYNTHESIS_POINTS - 2) * math.pi / (oversampling * float(t_end))
+    return top / band_top(1.0)
+
+
+def check_band(excitation, t_end, cutoff=None, oversampling=OVERSAMPLING):
+    """Refuse a band the synthesis cannot carry: ``ValueError`` naming ``band_limit_hz`` and its range.
+
+    Parameters
+    ----------
+    excitation : Excitation
+        The input (``band_limit_hz`` [Hz] or None: nothing to check).
+    t_end : float
+        Record length [s].
+    cutoff : float, optional
+        A cut-off [rad/s] the synthesis is held to (Monte Carlo ``numerics``); the band's corner must lie
+        below it.
+    oversampling : int, optional
+        Grid points per Nyquist step [1].
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ValueError
+        One line naming the parameter and its range.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/models.md`` ("The ground motion's band").
+
+    Examples
+    --------
+    >>> from screening import WhiteNoise
+    >>> check_band(WhiteNoise(1e-4), 20.0, cutoff=100.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter 'band_limit_hz' must be in (0, 15.92] Hz for the synthesis' cutoff 100 rad/s, or None (got 25.0)
+    """
+    band = getattr(excitation, "band_limit_hz", None)
+    if band is None:
+        return
+    most = max_band_limit_hz(t_end, oversampling)
+    reason = f"for a {float(t_end):g} s record"
+    if cutoff is not None and cutoff / (2.0 * math.pi) < most:
+        most, reason = cutoff / (2.0 * math.pi), f"for the synthesis' cutoff {float(cutoff):g} rad/s"
+    if not np.all(np.asarray(band) <= most):
+        raise ValueError(f"parameter 'band_limit_hz' must be in (0, {most:.4g}] Hz {reason}, or None "
+                         f"(got {band!r})")
+
+
+def synthesis_cutoff(excitation, block, foundation, cutoff=None, factor=CUTOFF_FACTOR):
+    """The band [rad/s] a Monte Carlo run synthesizes its input to.
+
+    Parameters
+    ----------
+    excitation : Excitation
+        The input; its ``band_limit_hz`` [Hz] or None.
+    block : screening.Block
+        The block (scalar fields, SI).
+    foundation : screening.Foundation
+        The bed (scalar fields, SI).
+    cutoff : float, optional
+        A cut-off [rad/s] asked for (``numerics["cutoff"]``).
+    factor : float, optional
+        :func:`default_cutoff`'s multiple [1].
+
+    Returns
+    -------
+    float
+        With a band: its :meth:`~screening.core.excitations.Excitation.reference_cutoff` (where ``|H|^2`` has
+        fallen to :data:`~screening.core.excitations.base.BAND_TAIL`), or ``cutoff`` if lower; without one
+        (the idealized spectrum): ``cutoff``, else :func:`default_cutoff`.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/models.md`` ("The ground motion's band").
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation, WhiteNoise
+    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
+    >>> f"{synthesis_cutoff(WhiteNoise(1e-4), block, bed):.1f}", f"{synthesis_cutoff(WhiteNoise(1e-4, band_limit_hz=None), block, bed):.1f}"
+    ('883.3', '1449.1')
+    """
+    if getattr(excitation, "band_limit_hz", None) is None:
+        return float(cutoff) if cutoff is not None else default_cutoff(block, foundation, factor)
+    top = float(excitation.reference_cutoff())
+    return top if cutoff is None else min(float(cutoff), top)
+
+
 def envelope_rate(envelope, t):
     """Time derivative ``q'(t)`` [1/s] of the modulating function at ``t`` [s] (eq. 57).
 
@@ -233,9 +354,7 @@ def envelope_rate(envelope, t):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -277,16 +396,13 @@ def band_limited_variance(excitation, cutoff):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import WhiteNoise
-    >>> round(band_limited_variance(WhiteNoise(1e-4), 100.0), 12)           # 2 S0 omega_c
+    >>> round(band_limited_variance(WhiteNoise(1e-4, band_limit_hz=None), 100.0), 12)     # 2 S0 omega_c
     0.02
     """
     return excitation.spectral_moment(0, cutoff, epsrel=1e-12)
@@ -442,16 +558,16 @@ def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
     >>> from screening import WhiteNoise
-    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=20.0, cutoff=100.0)
+    >>> noise = WhiteNoise(1e-4, band_limit_hz=None)           # the idealized spectrum: S = S0
+    >>> plan = spectral_plan(noise, t_end=20.0, cutoff=100.0)
     >>> plan.n_fft, plan.n_times, plan.n_frequencies, round(plan.d_omega, 4)
     (2560, 2549, 320, 0.3125)
-    >>> round(plan.stationary_variance, 12), round(band_limited_variance(WhiteNoise(1e-4), plan.cutoff), 12)
+    >>> round(plan.stationary_variance, 12), round(band_limited_variance(noise, plan.cutoff), 12)
     (0.02, 0.02)
     """
     if not (np.isfinite(cutoff) and cutoff > 0.0):
@@ -499,8 +615,7 @@ def low_passed(plan, band):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/model_choice.md`` ("Same ground motions, and the band each
        model reads").
 
@@ -597,8 +712,7 @@ def sample_phases(seed, index, n_frequencies):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] NumPy documentation, "Random Generator", https://numpy.org/doc/stable/reference/random/generator.html
 
     Examples
@@ -645,8 +759,7 @@ def stationary_samples(plan, seed, sample_indices):
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -704,11 +817,8 @@ def ground_acceleration_samples(excitation, plan, seed, sample_indices):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -757,11 +867,8 @@ def ground_acceleration(excitation, t_end, cutoff, n_samples, seed=0, oversampli
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -37,9 +37,7 @@ def output_times(t_end=20.0, dt=0.05):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/outputs.md`` (the ``t`` coordinate of a result).
 
     Examples

@@ -22,7 +22,7 @@ __all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NU
            "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
            "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
            "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "case_block_and_foundation",
-           "build_models", "case_cutoff", "build_point_models"]
+           "build_models", "case_cutoff", "build_point_models", "band_limit_value"]
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
@@ -36,7 +36,7 @@ import numpy as np
 from screening.core import condensation as condensations, excitations, laws
 from screening.core.condensation import names as condensation_names
 from screening.core.model import Block, Foundation
-from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, band_top, ground_cutoff
 from screening.core.model.block import LENGTH_RANGE
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 from screening.solvers.timegrid import output_times
@@ -1122,9 +1122,61 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=lim
                 raise StudyError(f"{full}: a case sets scalars only (sweep in the base tables)")
             sweeps[key] = sweep_values(full, value, lower, inclusive, max_points, upper)
             check_grid_size(sweeps, max_points, full)
+        elif key == "band_limit_hz":
+            scalars[key] = band_limit_value(full, value)
         else:
             scalars[key] = check_value(full, value, lower, inclusive, upper)
     return scalars
+
+
+def band_limit_value(key, value, t_end=None):
+    """``excitation.band_limit_hz`` [Hz] as a float: a number in ``(0, most]`` Hz, or ``inf`` for ``"none"`` (the
+    idealized spectrum).  ``most`` is what the Monte Carlo synthesis of a ``t_end`` record can carry
+    (:func:`~screening.solvers.synthesis.max_band_limit_hz`; without ``t_end``, the key's bound in :data:`NUMERIC`).
+
+    Parameters
+    ----------
+    key : str
+        The full key, named in the message.
+    value : object
+        The value in the study.
+    t_end : float, optional
+        Record length [s].
+
+    Returns
+    -------
+    float
+        The corner [Hz], ``inf`` for ``"none"``.
+
+    Raises
+    ------
+    StudyError
+        One line naming the key and its range.
+
+    References
+    ----------
+    .. [1] screening documentation, "The study file", ``docs/study.md``.
+
+    Examples
+    --------
+    >>> band_limit_value("excitation.band_limit_hz", "none"), band_limit_value("excitation.band_limit_hz", 25)
+    (inf, 25.0)
+    >>> try:
+    ...     band_limit_value("excitation.band_limit_hz", 0.0)
+    ... except StudyError as exc:
+    ...     print(exc)
+    excitation.band_limit_hz: must be a number in (0, 1e+05] Hz or "none" (got 0.0)
+    """
+    if value == "none" or (value == math.inf and t_end is not None):
+        return math.inf
+    from screening.solvers.synthesis import max_band_limit_hz
+
+    most = NUMERIC["band_limit_hz"][3] if t_end is None else max_band_limit_hz(t_end)
+    ok = is_number(value) and math.isfinite(float(value)) and 0.0 < float(value) <= most
+    if not ok:
+        why = "" if t_end is None else f" (what the synthesis of a {t_end:g} s record can carry)"
+        raise StudyError(f'{key}: must be a number in (0, {most:.4g}] Hz{why} or "none" (got {short_repr(value)})')
+    return float(value)
 
 
 def check_grid_size(sweeps, max_points, key, n_cases=1):
@@ -1373,9 +1425,7 @@ def build_models(case, values, t_end=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-    .. [2] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1396,9 +1446,10 @@ def build_models(case, values, t_end=None):
 
 
 def case_cutoff(case):
-    """The ground-motion band limit [rad/s] of a case's excitation (``excitation.band_limit_hz``, default
-    :data:`~screening.analysis.intensity.GROUND_BAND_LIMIT_HZ`): the band its intensity measures and a
-    target PGA refer to, whatever stands on the ground.
+    """The band [rad/s] a case's intensity measures and target PGA integrate the input's spectrum over,
+    whatever stands on the ground: the top of its band's low-pass
+    (:func:`~screening.core.excitations.base.band_top` of ``excitation.band_limit_hz``, default 25 Hz), or, for
+    ``band_limit_hz = "none"``, a sharp cut at :data:`~screening.core.excitations.base.GROUND_BAND_LIMIT_HZ`.
 
     Parameters
     ----------
@@ -1408,7 +1459,7 @@ def case_cutoff(case):
     Returns
     -------
     float
-        The band limit [rad s-1]: :math:`2\\pi f` with ``band_limit_hz`` :math:`f`.
+        [rad s-1]: 5.62 x :math:`2\\pi f` with ``band_limit_hz`` :math:`f`; :math:`2\\pi` 25 Hz without a band.
 
     References
     ----------
@@ -1420,10 +1471,11 @@ def case_cutoff(case):
     >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
     ...           "excitation": {"kind": "white", "S0": 1e-4}}
     >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
-    >>> round(case_cutoff(case), 4)                  # 25 Hz
-    157.0796
+    >>> round(case_cutoff(case), 1)                  # the top of a 25 Hz band
+    883.3
     """
-    return ground_cutoff(case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ))
+    band = case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ)
+    return ground_cutoff() if math.isinf(band) else band_top(band)
 
 
 def build_point_models(case, values, t_end=None):
@@ -1466,7 +1518,8 @@ def build_point_models(case, values, t_end=None):
     envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
 
     def excitation(s0):
-        return excitations.build(case.excitation, s0, p, envelope)
+        band = p.get("band_limit_hz", GROUND_BAND_LIMIT_HZ)
+        return excitations.build(case.excitation, s0, p, envelope, None if math.isinf(band) else band)
 
     if "pga" in p:
         from screening.analysis.intensity import s0_for_pga

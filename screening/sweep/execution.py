@@ -25,7 +25,7 @@ import numpy as np
 from screening.analysis import error_model as em
 from screening.analysis.escalation import full_contact_share
 from screening.analysis.fragility import band_standard_error, linearized_exceedance
-from screening.analysis.intensity import ground_cutoff, input_measures, rocking_start_probability
+from screening.analysis.intensity import input_measures, rocking_start_probability
 from screening.analysis.multifidelity import multifidelity_variance
 from screening.analysis.probabilities import uplift_acceleration
 from screening.analysis.trust import error_model_trust, trust_indicators
@@ -63,7 +63,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     thresholds) [1], from the float64 histories while they are in memory
     (:func:`screening.analysis.fragility.exceedance_probability`).  Always the
     intensity measures of each point's input (:func:`batch_intensity`), with the ground-motion band limit
-    ``cutoff`` [rad/s] of the excitation (default :func:`screening.analysis.intensity.ground_cutoff`), and the
+    ``cutoff`` [rad/s] of the excitation (default its :meth:`~screening.core.excitations.Excitation.reference_cutoff`), and the
     probability that rocking starts (:func:`batch_rocking_start`, same band limit);
     ``derived_inputs`` (names of the ``inputs`` stage): those inputs per point.  ``underivable``
     (boolean per point, or None): points whose ``S0`` could not follow from their target PGA (their
@@ -118,9 +118,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "The module map", ``docs/architecture.md``.
 
     Examples
@@ -171,7 +169,7 @@ def _flag_points(out, bad):
 def batch_intensity(excitation, t_out, n, cutoff=None):
     """The intensity measures of the ``n`` points of a batch (the ``intensity`` stage of
     :mod:`screening.solvers.outputs`: [m s-2, m s-2, m s-1]), band-limited to
-    ``cutoff`` [rad/s] (default: :func:`screening.analysis.intensity.ground_cutoff`).
+    ``cutoff`` [rad/s] (default: the excitation's :meth:`~screening.core.excitations.Excitation.reference_cutoff`).
 
     Parameters
     ----------
@@ -215,11 +213,12 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
     >>> t = np.linspace(0.0, 2.0, 41)                     # the first 2 s of the record
     >>> measures = batch_intensity(excitation, t, 2)      # white noise, S0 = 1e-4 m2 s-3
     >>> measures["rms_acceleration"].round(4), measures["arias_intensity"].round(5)
-    (array([0.12, 0.12]), array([0.00461, 0.00461]))
+    (array([0.1215, 0.1215]), array([0.00473, 0.00473]))
     >>> round(float(np.pi / (2 * 9.81) * measures["rms_acceleration"][0] ** 2 * 2.0), 5)   # pi/(2g) rms^2 T
-    0.00461
+    0.00473
     """
-    measures = input_measures(excitation, float(np.asarray(t_out)[-1]), ground_cutoff() if cutoff is None else cutoff)
+    measures = input_measures(excitation, float(np.asarray(t_out)[-1]),
+                              excitation.reference_cutoff() if cutoff is None else cutoff)
     return {name: np.broadcast_to(measures[name], (n,)).astype(np.float64) if np.size(measures[name]) != n
             else np.asarray(measures[name], dtype=np.float64).reshape(n)
             for name in (o.name for o in of_stage("intensity"))}
@@ -228,7 +227,8 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
 def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, cutoff=None):
     """The uplift acceleration [m s-2] and the probability that rocking starts [1] of the ``n`` points of a
     batch (the ``rocking`` stage of :mod:`screening.solvers.outputs`), band-limited to the ground motion's
-    ``cutoff`` [rad/s] (default :func:`screening.analysis.intensity.ground_cutoff`: the band its PGA refers to).
+    ``cutoff`` [rad/s] (default the excitation's :meth:`~screening.core.excitations.Excitation.reference_cutoff`: the
+    band its PGA refers to).
 
     A bed the condensation cannot carry gives NaN (the solver flags the point).
 
@@ -261,8 +261,7 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
 
     References
     ----------
-    .. [1] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
+    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
 
@@ -278,13 +277,13 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
     >>> condensation = get("paper")                  # the paper's (the study's is the default)
     >>> start = batch_rocking_start(block, foundation, excitation, condensation, study.times, 2)
     >>> start["uplift_acceleration"].round(3), start["p_rocking_start"].round(3)   # hardening bed rocks later
-    (array([0.533, 0.741]), array([0.501, 0.008]))
+    (array([0.533, 0.741]), array([0.586, 0.011]))
     """
     try:
         with np.errstate(all="ignore"):
             a_ul = uplift_acceleration(block, foundation, condensation)
             p = rocking_start_probability(excitation, float(np.asarray(t_out)[-1]),
-                                          ground_cutoff() if cutoff is None else cutoff, a_ul)
+                                          excitation.reference_cutoff() if cutoff is None else cutoff, a_ul)
     except (ArithmeticError, ValueError):       # a bed the condensation cannot carry: the solver flags it
         a_ul = p = np.nan
     return {name: np.broadcast_to(np.asarray(value, dtype=np.float64), (n,)).copy() if np.size(value) != n
@@ -416,13 +415,9 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23 (1944) 282-332 and
-       24 (1945) 46-156.
-    .. [3] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42(1) (1975) 215-220.
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    .. [3] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -327,8 +327,7 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     ----------
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
-    .. [2] A. Agresti, B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
-       proportions", The American Statistician 52(2), 119-126, 1998.
+    .. [2] [agresti1998] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

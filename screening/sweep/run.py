@@ -160,9 +160,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "What a result holds", ``docs/outputs.md``.
 
     Examples

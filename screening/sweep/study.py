@@ -103,6 +103,7 @@ range, ``T2 >= T1``, ...) raises :class:`StudyError` with a one-line message nam
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -115,8 +116,8 @@ from screening.core import limits
 from screening.solvers import mc_registry, model_choice
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
-from screening.sweep.config import (build_models, build_point_models, Case, case_block_and_foundation, case_cutoff,
-                                    check_choice, check_grid_size, check_keys, check_list, check_value, choice,
+from screening.sweep.config import (band_limit_value, build_models, build_point_models, Case,
+                                    case_block_and_foundation, case_cutoff, check_choice, check_grid_size, check_keys, check_list, check_value, choice,
                                     integer, model_tables, name_string, number_list, NUMERIC, numeric_table,
                                     parse_toml, read_study_text, required, resolve_case, short_repr, StudyError, table,
                                     TABLE_KEYS, time_table, title_and_description, type_name)
@@ -451,6 +452,9 @@ def study_from_tables(raw, text, name, source, inventory=None):
     if "case" in raw:
         check_grid_size(sweeps, max_points, "case", n_cases=len(cases))
     t_end, dt = time_table(raw)
+    for case in cases:                          # a band the synthesis of a t_end record cannot carry
+        band_limit_value(f"case {case.name!r}: excitation.band_limit_hz" if case.name else "excitation.band_limit_hz",
+                         case.params.get("band_limit_hz", math.inf), t_end)
     rtol, max_steps = _solver(raw)
     shape = ((len(cases),) if "case" in raw else ()) + tuple(len(v) for v in sweeps.values())
     mcs = _mcs(raw, sweeps, cases, "case" in raw, shape, round(t_end / dt) + 1)

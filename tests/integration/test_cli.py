@@ -196,6 +196,20 @@ def test_console_script_reports_errors_without_traceback(tmp_path):
 
 
 # ----------------------------------------------------------------------------- kill and resume
+@pytest.mark.parametrize("value, needle", [
+    ("0", 'excitation.band_limit_hz: must be a number in (0, 1e+05] Hz or "none" (got 0)'),
+    ("nan", 'excitation.band_limit_hz: must be a number in (0, 1e+05] Hz or "none" (got nan)'),
+    ('"wide"', "excitation.band_limit_hz: must be a number in (0, 1e+05] Hz or \"none\" (got 'wide')"),
+    ("5e4", 'excitation.band_limit_hz: must be a number in (0, 3.108e+04] Hz (what the synthesis of a 6 s record '
+            'can carry) or "none" (got 50000.0)')])
+def test_a_bad_band_exits_2_with_one_line_before_any_work(tmp_path, capsys, value, needle):
+    bad = tmp_path / "band.toml"
+    bad.write_text(STUDY.replace('kind = "white"', f'kind = "white"\nband_limit_hz = {value}'))
+    assert main(["run", str(bad), "--out", str(tmp_path / "out" / "band.nc")]) == 2
+    assert needle in one_line_error(capsys.readouterr().err)
+    assert not (tmp_path / "out").exists()
+
+
 BIG = STUDY.replace("eps = [-6e5, 2e7, 6e7]", "eps = {start = -6e5, stop = 6e7, num = 20}") \
            .replace("num = 4, log = true", "num = 150, log = true").replace("t_end = 6.0", "t_end = 20.0") \
            .split("[mcs]")[0]

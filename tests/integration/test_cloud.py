@@ -32,7 +32,7 @@ im = "{im}"
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
     root = tmp_path_factory.mktemp("cloud")
-    synthesise_records(root / "rec", KanaiTajimi(1e-3, 15.6, 0.6, Envelope(2.0, 1.0)), 8, 8.0, 100.0,
+    synthesise_records(root / "rec", KanaiTajimi(1e-3, 15.6, 0.6, Envelope(2.0, 1.0), band_limit_hz=None), 8, 8.0, 100.0,
                        np.geomspace(0.4, 2.5, 8), seed=15)
     return root
 

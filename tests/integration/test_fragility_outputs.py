@@ -187,7 +187,7 @@ def test_fits_leave_out_untrusted_points_without_best_estimates_and_say_so(resul
 def test_a_point_whose_s0_cannot_follow_from_its_pga_is_flagged_and_the_others_solved(tmp_path, capsys):
     """zeta_g = 1e-9 makes the Kanai-Tajimi spectral moments unintegrable: those points are flagged
     beyond_float_range with NaN S0; the zeta_g = 0.6 points of the same batch are solved."""
-    from screening.analysis.intensity import ground_cutoff, s0_for_pga
+    from screening.analysis.intensity import s0_for_pga
     from screening.core.model.excitation import Envelope
     from screening.core.excitations.kanai_tajimi import KanaiTajimi
     from screening.core.status import PointStatus
@@ -204,5 +204,5 @@ def test_a_point_whose_s0_cannot_follow_from_its_pga_is_flagged_and_the_others_s
     assert np.all(status[0] == PointStatus.beyond_float_range) and np.all(np.isnan(s0[0]))
     assert np.all(status[1] != PointStatus.task_failed) and np.all(np.isfinite(s0[1]))
     shape = KanaiTajimi(1.0, 15.0, 0.6, Envelope())
-    expected = s0_for_pga(shape, np.array([0.5, 1.0, 2.0]), 3.0, ground_cutoff(25.0))
+    expected = s0_for_pga(shape, np.array([0.5, 1.0, 2.0]), 3.0, shape.reference_cutoff())   # the 25-Hz band, to its top
     np.testing.assert_allclose(s0[1], expected, rtol=1e-9)

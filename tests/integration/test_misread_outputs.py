@@ -84,8 +84,8 @@ def test_simulate_and_cloud_refuse_an_out_named_like_their_other_outputs(tmp_pat
     from screening.core.excitations.kanai_tajimi import KanaiTajimi
     from screening.applications.cloud import synthesise_records
 
-    synthesise_records(tmp_path / "rec", KanaiTajimi(1e-3, 15.6, 0.6, Envelope(1.0, 0.5)), 2, 2.0, 100.0,
-                       [1.0, 2.0], seed=3)
+    synthesise_records(tmp_path / "rec", KanaiTajimi(1e-3, 15.6, 0.6, Envelope(1.0, 0.5), band_limit_hz=None), 2,
+                       2.0, 100.0, [1.0, 2.0], seed=3)      # at 100 rad/s: no room for the 25-Hz band
     block = "[block]\nm = 8.67\nb = 0.035\nh = 0.21\n[foundation]\nk = 2.89e7\nlam = 8.95e8\n"
     (tmp_path / "c.toml").write_text(block + '[records]\nfiles = "rec"\nthreshold = 0.1\n')
     record = sorted((tmp_path / "rec").iterdir())[0]

@@ -30,7 +30,7 @@ def test_a_target_pga_study_stores_s0_per_point_and_meets_its_target(client, tmp
     ratio = ds["S0"].isel(pga=2) / ds["S0"].isel(pga=0)
     np.testing.assert_allclose(ratio, 16.0, rtol=1e-12)
     np.testing.assert_array_equal(ds["S0"].isel(k=0), ds["S0"].isel(k=1))
-    assert float(ds.attrs["band_limit_hz"]) == 25.0
+    assert float(ds["band_limit_hz"]) == 25.0 and ds["band_limit_hz"].attrs["units"] == "Hz"   # the coordinate
     # stored median PGA = the target, and an independent evaluation from the stored S0 agrees
     target = ds["pga"].broadcast_like(ds["pga_median"])
     np.testing.assert_allclose(ds["pga_median"], target, rtol=1e-9)

@@ -111,7 +111,7 @@ def test_condensed_monte_carlo_with_the_toy_matches_the_band_limited_linear_vari
     h2 = lambda om: a**2 / ((w**2 - om**2) ** 2 + (2.0 * zeta * w * om) ** 2)
     expected = 2.0 * S0 * integrate.quad(h2, 0.0, cutoff, points=[w], limit=400, epsrel=1e-10)[0]
     assert expected == pytest.approx(np.pi * S0 * a**2 / (2.0 * zeta * w**3), rel=0.01)   # the band holds it
-    ds = monte_carlo(BLOCK, BED, WhiteNoise(S0, ConstantEnvelope()), n_samples=1000, model="condensed",
+    ds = monte_carlo(BLOCK, BED, WhiteNoise(S0, ConstantEnvelope(), band_limit_hz=None), n_samples=1000, model="condensed",
                      t_end=12.0, dt=0.5, seed=7, condensation=toy)
     assert int(ds.n_used) == 1000
     late = ds.t.values >= 6.0                                 # ~6 decay times of the linear oscillator

@@ -55,7 +55,7 @@ def record_folder(tmp_path_factory):
     dt = 0.005
     t = np.arange(0.0, 2.0, dt)
     write_at2(root / "pulse.at2", Record(2.0 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-((t - 1.0) / 0.4) ** 2), dt))
-    synthesise_records(root / "rec", KanaiTajimi(1e-3, 15.6, 0.6, Envelope(2.0, 1.0)), 5, 4.0, 100.0,
+    synthesise_records(root / "rec", KanaiTajimi(1e-3, 15.6, 0.6, Envelope(2.0, 1.0), band_limit_hz=None), 5, 4.0, 100.0,
                        np.geomspace(0.5, 2.5, 5), seed=3)
     (root / "cloud.toml").write_text(CLOUD)
     return root

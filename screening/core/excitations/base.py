@@ -24,15 +24,21 @@ from scipy import integrate
 
 from screening.core.validation import checked
 
-__all__ = ["GROUND_BAND_LIMIT_HZ", "ground_cutoff", "Parameter", "Filter", "transfer_psd", "stationary_covariance",
-           "Excitation"]
+__all__ = ["GROUND_BAND_LIMIT_HZ", "BAND_ORDER", "BAND_TAIL", "ground_cutoff", "band_gain", "band_top",
+           "band_filter", "cascade", "Parameter", "Filter", "transfer_psd", "stationary_covariance", "Excitation"]
 
-#: Default ground-motion band limit [Hz] of a stochastic input: the band its intensity measures (and a
+#: Default ground-motion band limit [Hz] of every excitation (its ``band_limit_hz``): the corner of the
+#: low-pass :func:`band_gain` every model applies alike, and the band its intensity measures (and a
 #: target PGA) refer to.  Strong-motion records are processed to about 25 Hz (low-pass corners of 20-30 Hz,
 #: e.g. the PEER NGA processing); above it a rock-site acceleration spectrum has little energy (the
-#: ``kappa`` decay).  A property of the ground motion, not of what stands on it: the Monte Carlo
-#: synthesis may extend its own band for numerics (3 x the bed's frequencies), the label stays this one.
+#: ``kappa`` decay).  A property of the ground motion, not of what stands on it.
 GROUND_BAND_LIMIT_HZ = 25.0
+#: Order ``n`` of the Butterworth low-pass of the band (docs/models.md, "The ground motion's band":
+#: order 4 costs the moment solver 1.3-2x order 2 and removes 60x more of a white input above 2x the band).
+BAND_ORDER = 4
+#: ``|H|^2`` where the band's spectrum is cut for quadrature and synthesis (:func:`band_top`): above it a white
+#: input keeps less than 1e-6 of its variance.
+BAND_TAIL = 1e-6
 
 
 def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
@@ -56,9 +62,7 @@ def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -66,6 +70,76 @@ def ground_cutoff(band_limit_hz=GROUND_BAND_LIMIT_HZ):
     '157.0796'
     """
     return 2.0 * math.pi * float(band_limit_hz)
+
+
+def band_gain(omega, band_limit_hz, order=BAND_ORDER):
+    """Squared gain ``|H|^2`` [1] of the band's Butterworth low-pass.
+
+    Parameters
+    ----------
+    omega : array_like
+        Circular frequency [rad s-1].
+    band_limit_hz : array_like
+        Corner frequency ``f_c`` [Hz], > 0 (broadcast with ``omega``).
+    order : int, optional
+        Butterworth order ``n`` (default :data:`BAND_ORDER`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``1 / (1 + (omega / (2 pi f_c))^(2 n))`` [1].
+
+    Notes
+    -----
+    The maximally flat low-pass of order ``n`` [1]: ``|H|^2 = 1/2`` at the corner, ``-20 n`` dB per decade
+    above it.  Every model multiplies the excitation's idealized PSD by it (:meth:`Excitation.psd`).
+
+    References
+    ----------
+    .. [1] S. Butterworth, "On the theory of filter amplifiers", Wireless Engineer 7 (1930) 536-541.
+
+    Examples
+    --------
+    >>> [f"{g:.4g}" for g in band_gain([0.0, 2 * 3.141592653589793 * 25.0, 1000.0], 25.0)]
+    ['1', '0.5', '3.706e-07']
+    """
+    w = np.asarray(omega, dtype=float) / (2.0 * math.pi * np.asarray(band_limit_hz, dtype=float))
+    return 1.0 / (1.0 + w ** (2 * int(order)))
+
+
+def band_top(band_limit_hz, order=BAND_ORDER, tail=BAND_TAIL):
+    """Frequency [rad s-1] above which the band's ``|H|^2`` is below ``tail``: where its spectrum is cut.
+
+    Parameters
+    ----------
+    band_limit_hz : float
+        Corner frequency ``f_c`` [Hz], > 0.
+    order : int, optional
+        Butterworth order ``n`` (default :data:`BAND_ORDER`).
+    tail : float, optional
+        ``|H|^2`` at the cut [1] (default :data:`BAND_TAIL`).
+
+    Returns
+    -------
+    float
+        ``2 pi f_c (1 / tail - 1)^(1 / (2 n))`` [rad s-1] (5.6 x the corner for order 4).
+
+    Notes
+    -----
+    The spectral representation of a band-limited input stops here and the intensity measures integrate
+    its spectrum up to here (:meth:`Excitation.reference_cutoff`); a white input loses
+    ``(omega_top / omega_c)^(1 - 2 n) / (2 n - 1)`` of ``2 S0 omega_c`` above it (1.2e-6 for order 4).
+
+    References
+    ----------
+    .. [1] S. Butterworth, "On the theory of filter amplifiers", Wireless Engineer 7 (1930) 536-541.
+
+    Examples
+    --------
+    >>> f"{band_top(25.0) / (2 * 3.141592653589793 * 25.0):.3f}"
+    '5.623'
+    """
+    return 2.0 * math.pi * float(band_limit_hz) * (1.0 / float(tail) - 1.0) ** (1.0 / (2 * int(order)))
 
 
 class Parameter(NamedTuple):
@@ -116,9 +190,7 @@ def transfer_psd(filt, S0, omega):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -137,6 +209,95 @@ def transfer_psd(filt, S0, omega):
         eye = np.eye(n)
         h = np.array([C @ np.linalg.solve(1j * w * eye - A, B) for w in flat]) + D
     return (S0 * np.abs(h) ** 2).reshape(omega.shape)
+
+
+def cascade(first, second):
+    """The filter ``second`` driven by the output of ``first``, batched over the leading axes.
+
+    Parameters
+    ----------
+    first, second : screening.core.excitations.Filter
+        ``(A, B, C, D)`` of the two filters (leading axes broadcast together).
+
+    Returns
+    -------
+    screening.core.excitations.Filter
+        States ``(x1, x2)``: ``A = [[A1, 0], [B2 C1, A2]]``, ``B = [B1, B2 D1]``, ``C = [D2 C1, C2]``,
+        ``D = D2 D1``.
+
+    Notes
+    -----
+    Series connection of two state-space systems: ``x1' = A1 x1 + B1 w``, ``a = C1 x1 + D1 w`` and
+    ``x2' = A2 x2 + B2 a``, output ``C2 x2 + D2 a`` (e.g. [1], ch. 2).
+
+    References
+    ----------
+    .. [1] K. Zhou, J. C. Doyle and K. Glover, Robust and Optimal Control, Prentice Hall (1996).
+
+    Examples
+    --------
+    >>> from screening.core.excitations.kanai_tajimi import kanai_tajimi_filter
+    >>> f = cascade(kanai_tajimi_filter(15.0, 0.6), band_filter(25.0))
+    >>> f.A.shape, float(f.D)
+    ((6, 6), 0.0)
+    """
+    A1, B1, C1, D1 = (np.asarray(m, dtype=float) for m in first)
+    A2, B2, C2, D2 = (np.asarray(m, dtype=float) for m in second)
+    lead = np.broadcast_shapes(A1.shape[:-2], A2.shape[:-2], np.shape(D1), np.shape(D2))
+    n1, n2 = A1.shape[-1], A2.shape[-1]
+    A = np.zeros(lead + (n1 + n2, n1 + n2))
+    A[..., :n1, :n1] = A1
+    A[..., n1:, n1:] = A2
+    A[..., n1:, :n1] = B2[..., :, None] * C1[..., None, :]
+    B = np.concatenate([np.broadcast_to(B1, lead + (n1,)), np.broadcast_to(B2 * D1[..., None], lead + (n2,))], -1)
+    C = np.concatenate([np.broadcast_to(D2[..., None] * C1, lead + (n1,)), np.broadcast_to(C2, lead + (n2,))], -1)
+    return Filter(A, B, C, np.broadcast_to(D2 * D1, lead).copy())
+
+
+def band_filter(band_limit_hz, order=BAND_ORDER):
+    """State-space matrices of the band's Butterworth low-pass, batched over ``band_limit_hz``.
+
+    Parameters
+    ----------
+    band_limit_hz : array_like
+        Corner frequency ``f_c`` [Hz], > 0.
+    order : int, optional
+        Butterworth order ``n``, even (default :data:`BAND_ORDER`).
+
+    Returns
+    -------
+    screening.core.excitations.Filter
+        ``n`` states ``(y_1, y_1', ..., y_{n/2}, y_{n/2}')`` [m s-2, m s-3]: ``A`` [..., n, n], ``B``, ``C``
+        [..., n], ``D = 0``; its squared gain is :func:`band_gain`.
+
+    Notes
+    -----
+    A cascade of ``n / 2`` second-order sections ``y'' + 2 zeta_k omega_c y' + omega_c^2 y = omega_c^2 u``
+    with ``zeta_k = sin((2 k - 1) pi / (2 n))``, the pole pairs of the Butterworth polynomial [1]; each
+    section's output is the next one's input, the last one's is the band-limited acceleration.
+
+    References
+    ----------
+    .. [1] S. Butterworth, "On the theory of filter amplifiers", Wireless Engineer 7 (1930) 536-541.
+
+    Examples
+    --------
+    >>> f = band_filter(25.0)
+    >>> bool(abs(transfer_psd(f, 1.0, 300.0) - band_gain(300.0, 25.0)) < 1e-12)
+    True
+    """
+    n = int(order)
+    if n < 2 or n % 2:
+        raise ValueError(f"parameter 'order' must be an even integer >= 2 (got {order!r})")
+    wc = 2.0 * math.pi * np.asarray(band_limit_hz, dtype=float)
+    zero, one = np.zeros_like(wc), np.ones_like(wc)
+    out = None
+    for k in range(1, n // 2 + 1):
+        z = math.sin((2 * k - 1) * math.pi / (2 * n))
+        A = np.stack([np.stack([zero, one], -1), np.stack([-wc * wc, -2.0 * z * wc], -1)], -2)
+        section = Filter(A, np.stack([zero, wc * wc], -1), np.stack([one, zero], -1), zero)
+        out = section if out is None else cascade(out, section)
+    return out
 
 
 def stationary_covariance(filt, S0):
@@ -163,9 +324,7 @@ def stationary_covariance(filt, S0):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -198,9 +357,14 @@ def stationary_covariance(filt, S0):
 
 
 class Excitation:
-    """Base of the excitation classes (frozen dataclasses with fields ``S0``, the :attr:`parameters`
-    and ``envelope``).  Subclasses set :attr:`kind`, :attr:`description`, :attr:`parameters` and
-    implement :meth:`filter`; :meth:`psd` defaults to the filter's transfer function."""
+    """Base of the excitation classes (frozen dataclasses with fields ``S0``, the :attr:`parameters`,
+    ``envelope`` and ``band_limit_hz``).  Subclasses set :attr:`kind`, :attr:`description`,
+    :attr:`parameters` and implement :meth:`shaping_filter` (and :meth:`shaping_psd` where they have it in
+    closed form); the base class appends the band's low-pass to both (:meth:`filter`, :meth:`psd`).
+
+    ``band_limit_hz`` [Hz]: the corner of the Butterworth low-pass :func:`band_filter` every model applies
+    alike (default :data:`GROUND_BAND_LIMIT_HZ`); ``None``: the idealized spectrum, unbounded in frequency
+    (the paper's inputs)."""
 
     #: registry name (``kind = ...`` in studies, the ``excitation`` attribute of results)
     kind = ""
@@ -210,29 +374,67 @@ class Excitation:
     parameters = {}
 
     def __post_init__(self):
-        """Validate ``S0`` (> 0) and the :attr:`parameters` (their declared ranges); one line naming the
-        parameter and its range otherwise."""
+        """Validate ``S0`` (> 0), the :attr:`parameters` (their declared ranges) and ``band_limit_hz``
+        (None or a finite number > 0 Hz); one line naming the parameter and its range otherwise."""
         object.__setattr__(self, "S0", checked("S0", self.S0, lower=0.0))
         for name, p in self.parameters.items():
             object.__setattr__(self, name, checked(name, getattr(self, name), lower=p.lower,
                                                    lower_inclusive=p.lower_inclusive, upper=p.upper,
                                                    upper_inclusive=True))
+        band = getattr(self, "band_limit_hz", None)
+        if band is not None:
+            if isinstance(band, str):
+                raise ValueError(f"parameter 'band_limit_hz' must be None (no band) or a finite number > 0 Hz "
+                                 f"(got {band!r})")
+            object.__setattr__(self, "band_limit_hz", checked("band_limit_hz", band, lower=0.0))
 
-    def filter(self):
-        """:class:`Filter` of this excitation (array fields: one set per element, leading axes)."""
+    def shaping_filter(self):
+        """:class:`Filter` of the idealized spectrum (array fields: one set per element, leading axes)."""
         raise NotImplementedError
 
+    def filter(self):
+        """:class:`Filter` of this excitation: :meth:`shaping_filter` followed by the band's low-pass
+        (:func:`band_filter`, :data:`BAND_ORDER` more states) unless ``band_limit_hz`` is None."""
+        shaping = self.shaping_filter()
+        band = getattr(self, "band_limit_hz", None)
+        return shaping if band is None else cascade(shaping, band_filter(band, BAND_ORDER))
+
+    def shaping_psd(self, omega):
+        """Two-sided PSD of the idealized spectrum [m^2/s^3] at ``omega`` [rad/s] (scalar fields)."""
+        return transfer_psd(self.shaping_filter(), float(self.S0), omega)
+
     def psd(self, omega):
-        """Two-sided PSD of the unmodulated input [m^2/s^3] at ``omega`` [rad/s] (scalar fields)."""
-        return transfer_psd(self.filter(), float(self.S0), omega)
+        """Two-sided PSD of the unmodulated input [m^2/s^3] at ``omega`` [rad/s]: :meth:`shaping_psd` times the
+        band's :func:`band_gain` (the transfer function of :meth:`filter`)."""
+        band = getattr(self, "band_limit_hz", None)
+        value = self.shaping_psd(omega)
+        return value if band is None else value * band_gain(omega, band, BAND_ORDER)
 
     def psd_peaks(self):
-        """Frequencies [rad/s] where :meth:`psd` may peak (break points for quadrature)."""
-        return [float(getattr(self, name)) for name, p in self.parameters.items() if p.units == "rad s-1"]
+        """Frequencies [rad/s] where :meth:`psd` may peak or bend (break points for quadrature)."""
+        peaks = [float(getattr(self, name)) for name, p in self.parameters.items() if p.units == "rad s-1"]
+        band = getattr(self, "band_limit_hz", None)
+        return peaks + ([] if band is None else [2.0 * math.pi * band])
+
+    def reference_cutoff(self):
+        """The band [rad/s] the intensity measures integrate :meth:`psd` over and the Monte Carlo synthesis
+        reaches: :func:`band_top` of ``band_limit_hz`` (5.6 x its corner), or, for the idealized spectrum,
+        a sharp cut at :data:`GROUND_BAND_LIMIT_HZ` (the intensity measures; the synthesis then keeps its
+        own cut-off)."""
+        band = getattr(self, "band_limit_hz", None)
+        return ground_cutoff() if band is None else band_top(band, BAND_ORDER)
 
     def stationary_covariance(self):
-        """Stationary covariance of the filter states (:func:`stationary_covariance`)."""
-        return stationary_covariance(self.filter(), self.S0)
+        """Stationary covariance of the filter states (:func:`stationary_covariance`); NaN at a point whose
+        idealized filter has no stationary state (the stable band's low-pass after it can hide that singularity
+        from the solve in rounding)."""
+        cov = stationary_covariance(self.filter(), self.S0)
+        shaping = self.shaping_filter()
+        if getattr(self, "band_limit_hz", None) is None or not np.shape(shaping.A)[-1]:
+            return cov
+        alone = stationary_covariance(shaping, self.S0)
+        bad = ~np.all(np.isfinite(alone.reshape(alone.shape[:-2] + (-1,))), axis=-1)
+        return np.where(bad[..., None, None], np.nan, cov)
 
     def spectral_moment(self, order, cutoff, epsrel=1e-11):
         """``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega`` of the unmodulated input

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from screening.core.excitations.base import Excitation, Filter, Parameter
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Filter, Parameter
 from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_psd
 from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
@@ -55,10 +55,8 @@ def clough_penzien_filter(omega_g, zeta_g, omega_f, zeta_f):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -104,10 +102,8 @@ def clough_penzien_psd(omega, S0, omega_g, zeta_g, omega_f, zeta_f):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
-    .. [2] R. W. Clough and J. Penzien, Dynamics of Structures, McGraw-Hill, New York (1975).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -130,6 +126,7 @@ class CloughPenzien(Excitation):
     omega_g, zeta_g : Kanai–Tajimi (soil) filter frequency [rad/s] and damping ratio [1], > 0.
     omega_f, zeta_f : high-pass filter frequency [rad/s] and damping ratio [1], > 0.
     envelope : modulating function.
+    band_limit_hz : corner of the band's low-pass [Hz] (:class:`~screening.core.excitations.Excitation`), None: none.
     """
 
     S0: float
@@ -138,6 +135,7 @@ class CloughPenzien(Excitation):
     omega_f: float
     zeta_f: float
     envelope: Envelope | ConstantEnvelope = field(default_factory=Envelope)
+    band_limit_hz: float | None = GROUND_BAND_LIMIT_HZ
 
     kind = "clough_penzien"
     description = "modulated Clough-Penzien noise (Kanai-Tajimi and a second-order high-pass)"
@@ -146,9 +144,9 @@ class CloughPenzien(Excitation):
                   "zeta_f": Parameter("1", "Clough-Penzien high-pass filter damping ratio")}
 
 
-    def filter(self):
+    def shaping_filter(self):
         return clough_penzien_filter(self.omega_g, self.zeta_g, self.omega_f, self.zeta_f)
 
-    def psd(self, omega):
+    def shaping_psd(self, omega):
         """Two-sided PSD of the filtered input [m^2/s^3] at ``omega`` [rad/s]."""
         return clough_penzien_psd(omega, self.S0, self.omega_g, self.zeta_g, self.omega_f, self.zeta_f)

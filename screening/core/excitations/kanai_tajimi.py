@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from screening.core.excitations.base import Excitation, Filter, Parameter
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Filter, Parameter
 from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 
@@ -40,9 +40,7 @@ def kanai_tajimi_filter(omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -83,9 +81,7 @@ def kanai_tajimi_psd(omega, S0, omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -111,12 +107,14 @@ class KanaiTajimi(Excitation):
     omega_g : filter (soil) natural frequency [rad/s], > 0.
     zeta_g : filter damping ratio [1], > 0.
     envelope : modulating function.
+    band_limit_hz : corner of the band's low-pass [Hz] (:class:`~screening.core.excitations.Excitation`), None: none.
     """
 
     S0: float
     omega_g: float
     zeta_g: float
     envelope: Envelope | ConstantEnvelope = field(default_factory=Envelope)
+    band_limit_hz: float | None = GROUND_BAND_LIMIT_HZ
 
     kind = "kanai_tajimi"
     description = "modulated Kanai-Tajimi noise (eqs. 47-50)"
@@ -124,15 +122,18 @@ class KanaiTajimi(Excitation):
                   "zeta_g": Parameter("1", "Kanai-Tajimi filter damping ratio")}
 
 
-    def filter(self):
+    def shaping_filter(self):
         return kanai_tajimi_filter(self.omega_g, self.zeta_g)
 
-    def psd(self, omega):
-        """Two-sided PSD of the filter output ``z`` [m^2/s^3] at ``omega`` [rad/s] (eq. 50)."""
+    def shaping_psd(self, omega):
+        """Two-sided PSD of the filter output ``z`` [m^2/s^3] at ``omega`` [rad/s] (eq. 50), without the band."""
         return kanai_tajimi_psd(omega, self.S0, self.omega_g, self.zeta_g)
 
     def stationary_covariance(self):
-        """Stationary covariance of ``(u, u')``: :func:`kanai_tajimi_stationary_moments` on the diagonal."""
+        """Stationary covariance of ``(u, u')``: :func:`kanai_tajimi_stationary_moments` on the diagonal (with a
+        band, of every filter state: the base class's)."""
+        if self.band_limit_hz is not None:
+            return super().stationary_covariance()
         var_u, var_u_dot, _ = kanai_tajimi_stationary_moments(self.S0, self.omega_g, self.zeta_g)
         var_u, var_u_dot = np.broadcast_arrays(var_u, var_u_dot)
         zero = np.zeros_like(var_u)
@@ -168,9 +169,7 @@ def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -209,9 +208,7 @@ def stationary_filter_moments_jit(S0, omega_g, zeta_g):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

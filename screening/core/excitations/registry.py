@@ -3,7 +3,7 @@ readers); the solvers use the excitation object's filter and PSD, never its kind
 
 from __future__ import annotations
 
-from screening.core.excitations.base import Excitation
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation
 from screening.core.registry import Registry
 
 __all__ = ["register", "unregister", "names", "get", "parameters", "build"]
@@ -89,7 +89,7 @@ def parameters():
     return out
 
 
-def build(kind, S0, params, envelope):
+def build(kind, S0, params, envelope, band_limit_hz=GROUND_BAND_LIMIT_HZ):
     """An excitation of a registered ``kind``, its filter parameters taken by name from ``params``.
 
     Parameters
@@ -103,6 +103,9 @@ def build(kind, S0, params, envelope):
         extra names are ignored.
     envelope : Envelope or ConstantEnvelope
         The modulating function ``q(t)`` [1].
+    band_limit_hz : float or None, optional
+        Corner of the band's low-pass [Hz] (default :data:`~screening.core.excitations.base.GROUND_BAND_LIMIT_HZ`);
+        None: the idealized spectrum.
 
     Returns
     -------
@@ -119,7 +122,7 @@ def build(kind, S0, params, envelope):
     --------
     >>> from screening.core.model.excitation import ConstantEnvelope
     >>> build("kanai_tajimi", 0.01, {"omega_g": 15.0, "zeta_g": 0.6, "omega_f": 1.0}, ConstantEnvelope())
-    KanaiTajimi(S0=0.01, omega_g=15.0, zeta_g=0.6, envelope=ConstantEnvelope())
+    KanaiTajimi(S0=0.01, omega_g=15.0, zeta_g=0.6, envelope=ConstantEnvelope(), band_limit_hz=25.0)
     """
     cls = get(kind)
-    return cls(S0, *(params[name] for name in cls.parameters), envelope=envelope)
+    return cls(S0, *(params[name] for name in cls.parameters), envelope=envelope, band_limit_hz=band_limit_hz)

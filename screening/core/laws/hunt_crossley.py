@@ -39,9 +39,7 @@ def hunt_crossley_damping(z, z_dot, lam):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
        vibroimpact", J. Appl. Mech. 42(2) (1975) 440-445.
 

@@ -39,9 +39,7 @@ def winkler_damping(z, z_dot, c):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] E. Winkler, Die Lehre von der Elasticitaet und Festigkeit, Dominicus, Prague (1867).
 
     Examples

@@ -129,9 +129,7 @@ def contact_pressure(z, z_dot, foundation):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
        vibroimpact", J. Appl. Mech. 42(2) (1975) 440-445.
     .. [3] E. Winkler, Die Lehre von der Elasticitaet und Festigkeit, Dominicus, Prague (1867).

@@ -153,7 +153,7 @@ def test_cost_model_is_linear_in_the_steps_and_cheaper_for_the_condensed_model()
 def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     from screening.core.model import Block, Foundation
     from screening.core.excitations.white import WhiteNoise
-    from screening.solvers.synthesis import default_cutoff, spectral_plan
+    from screening.solvers.synthesis import spectral_plan, synthesis_cutoff
     from screening.sweep.execution import escalation_task
 
     k = EscalationModel.coupled
@@ -167,7 +167,7 @@ def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     assert grid_point_cost(1) > 0.0
     block, bed, motion = Block(m=8.67, b=0.035, h=0.21), Foundation(k=1e9, lam=1e10, eps=0.0), WhiteNoise(S0=1e-5)
     out = escalation_task(block, bed, motion, None, 3, "coupled", 0.2, 0.05, 0)
-    plan = spectral_plan(motion, 0.2, default_cutoff(block, bed))
+    plan = spectral_plan(motion, 0.2, synthesis_cutoff(motion, block, bed))    # to the top of the 25-Hz band
     assert int(out["n_grid"]) == 3 * plan.n_times                  # the grid the samples were synthesized on
     assert not out["rodas"]                                          # a lightly damped bed: the explicit pair
     assert estimated_cost(1000, k, 0, rodas=True) == pytest.approx(1000 * STEP_COST_S[k] * RODAS_STEP_FACTOR)

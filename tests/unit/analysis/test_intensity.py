@@ -20,6 +20,7 @@ from screening.core.model import Block, Foundation
 from screening.core.model.excitation import ConstantEnvelope
 from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
+from screening.core.excitations.base import band_top
 from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -76,10 +77,10 @@ def test_s0_for_pga_broadcasts_over_targets_filters_and_band_limits():
 
 
 def test_white_noise_moments_closed_form():
-    lam0, lam1, lam2 = I.spectral_moments(WhiteNoise(2.0), 10.0)
+    lam0, lam1, lam2 = I.spectral_moments(WhiteNoise(2.0, band_limit_hz=None), 10.0)
     assert (lam0, lam1, lam2) == (40.0, 200.0, pytest.approx(4000.0 / 3.0))
     # stationary: PGA median approaches sigma sqrt(2 ln(nu T / ln 2)) at large nu T (Poisson, delta -> Davenport)
-    exc = WhiteNoise(1.0, ConstantEnvelope())
+    exc = WhiteNoise(1.0, ConstantEnvelope(), band_limit_hz=None)
     assert I.rms_acceleration(exc, 10.0, 10.0) == pytest.approx(math.sqrt(20.0))
 
 
@@ -99,12 +100,19 @@ def test_intensity_measures_of_a_linearize_dataset():
     assert float(im.pga_median[1] / im.pga_median[0]) == pytest.approx(2.0, rel=1e-9)
     assert float(im.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, CUTOFF), rel=1e-9)
     assert im["sa_median"].attrs["period"] == 0.5 and im["pga_median"].attrs["units"] == "m s-2"
-    default = I.intensity_measures(ds)                      # the ground motion's band limit, 25 Hz
+    default = I.intensity_measures(ds)                      # the excitation's band: its spectrum to the band's top
+    assert float(ds.band_limit_hz) == 25.0
+    assert float(default.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, band_top(25.0)), rel=1e-9)
+    assert "band_limit_hz" in default.attrs["cutoff_rad_s_source"]
+    # the idealized spectrum: no band coordinate, a sharp 25 Hz (or a file's legacy band_limit_hz attribute)
+    idealized = screening.linearize(block, bed, WhiteNoise(s0, band_limit_hz=None), t_end=5.0, dt=0.05)
+    assert "band_limit_hz" not in idealized.coords
     wc = 2.0 * np.pi * 25.0
-    assert float(default.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, wc), rel=1e-9)
-    assert "25 Hz" in default.attrs["cutoff_rad_s_source"]
-    wider = I.intensity_measures(ds.assign_attrs(band_limit_hz=50.0))
-    assert float(wider.pga_median[0]) == pytest.approx(I.pga_median(WhiteNoise(1e-4), 5.0, 2 * wc), rel=1e-9)
+    ideal = WhiteNoise(1e-4, band_limit_hz=None)
+    assert float(I.intensity_measures(idealized).pga_median[0]) == pytest.approx(I.pga_median(ideal, 5.0, wc),
+                                                                                  rel=1e-9)
+    wider = I.intensity_measures(idealized.assign_attrs(band_limit_hz=50.0))
+    assert float(wider.pga_median[0]) == pytest.approx(I.pga_median(ideal, 5.0, 2 * wc), rel=1e-9)
 
 
 def test_intensity_measures_per_case_excitation():

@@ -48,7 +48,7 @@ def test_response_bandwidth_under_white_noise_is_the_closed_form():
     """Unbounded white noise: the integral equals the closed form of the white-noise oscillator
     bandwidth (1 - 2/pi atan(z / sqrt(1 - z^2)))^2 / (1 - z^2) = 1 - delta^2."""
     for zeta in (0.02, 0.05, 0.2):
-        assert I.oscillator_response_bandwidth(WhiteNoise(1.0), 0.5, zeta) == pytest.approx(
+        assert I.oscillator_response_bandwidth(WhiteNoise(1.0, band_limit_hz=None), 0.5, zeta) == pytest.approx(
             float(oscillator_bandwidth(zeta)), rel=1e-6)
 
 

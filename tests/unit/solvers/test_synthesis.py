@@ -21,8 +21,9 @@ from screening.solvers.synthesis import (band_limited_variance, default_cutoff, 
 
 BLOCK = Block(m=8.67, b=0.035, h=0.21)
 FOUNDATION = Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-WHITE = WhiteNoise(S0=2.4e-5, envelope=ConstantEnvelope())
-KT = KanaiTajimi(S0=2.5e-4, omega_g=10.0, zeta_g=0.4, envelope=ConstantEnvelope())
+# the idealized spectra: their closed forms (the band's low-pass: tests/unit/core/excitations/test_band.py)
+WHITE = WhiteNoise(S0=2.4e-5, envelope=ConstantEnvelope(), band_limit_hz=None)
+KT = KanaiTajimi(S0=2.5e-4, omega_g=10.0, zeta_g=0.4, envelope=ConstantEnvelope(), band_limit_hz=None)
 N_SAMPLES = 1000
 T_END = 4.0
 CUTOFF = 300.0          # small grids keep the tests fast; the code paths are the same
@@ -107,7 +108,7 @@ def test_ensemble_variance_and_covariance_match_theory(excitation):
 
 
 def test_modulated_variance_follows_the_envelope():
-    excitation = WhiteNoise(S0=2.4e-5, envelope=Envelope(T1=4.0, T2=2.0))
+    excitation = WhiteNoise(S0=2.4e-5, envelope=Envelope(T1=4.0, T2=2.0), band_limit_hz=None)
     plan = spectral_plan(excitation, 8.0, CUTOFF)
     acc, acc_rate = ground_acceleration_samples(excitation, plan, 11, np.arange(N_SAMPLES))
     idx = np.searchsorted(plan.times, [1.0, 2.77, 4.0, 6.0, 7.5])

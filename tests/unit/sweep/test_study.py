@@ -14,6 +14,7 @@ from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Foundation
 from screening.sweep.study import StudyError, build_models, load_study, parse_study
+from screening.core.excitations.base import band_top
 
 STUDIES = Path(__file__).resolve().parents[3] / "studies"
 
@@ -225,9 +226,9 @@ def test_intensity_as_a_target_pga_gives_the_s0_of_that_median_pga():
     assert s.dims == ("eps", "pga") and s.shape == (3, 2)
     pga = np.array([0.5, 2.0])
     block, bed, excitation = build_models(s.cases[0], {"eps": 0.0, "pga": pga}, s.t_end)
-    cutoff = 2 * np.pi * 25.0                          # the ground motion's band limit (default 25 Hz)
+    assert excitation.band_limit_hz == 25.0            # the ground motion's band (default 25 Hz), to its top
     for target, s0 in zip(pga, excitation.S0):         # an independent evaluation of the median PGA
-        assert pga_median(KanaiTajimi(s0, 15.6, 0.6), s.t_end, cutoff) == pytest.approx(target, rel=1e-9)
+        assert pga_median(KanaiTajimi(s0, 15.6, 0.6), s.t_end, band_top(25.0)) == pytest.approx(target, rel=1e-9)
     # the same PGA is the same ground motion on a statue's mortar and a cabinet's pads
     mortar = build_models(s.cases[0], {"eps": 0.0, "pga": pga, "k": 2.89e7}, s.t_end)[2]
     pads = build_models(s.cases[0], {"eps": 0.0, "pga": pga, "k": 2.0e5}, s.t_end)[2]
@@ -236,7 +237,8 @@ def test_intensity_as_a_target_pga_gives_the_s0_of_that_median_pga():
     wide = parse_study(edit(text, "zeta_g = 0.6", "zeta_g = 0.6\nband_limit_hz = 50"))
     s0_wide = build_models(wide.cases[0], {"eps": 0.0, "pga": pga}, s.t_end)[2].S0
     for target, s0 in zip(pga, s0_wide):
-        assert pga_median(KanaiTajimi(s0, 15.6, 0.6), s.t_end, 2 * np.pi * 50.0) == pytest.approx(target, rel=1e-9)
+        assert pga_median(KanaiTajimi(s0, 15.6, 0.6, band_limit_hz=50.0), s.t_end,
+                          band_top(50.0)) == pytest.approx(target, rel=1e-9)
     assert np.all(s0_wide < excitation.S0)             # a wider band: more acceleration per unit S0
     with pytest.raises(ValueError, match="t_end"):
         build_models(s.cases[0], {"eps": 0.0, "pga": pga})

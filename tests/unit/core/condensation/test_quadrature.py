@@ -48,13 +48,14 @@ def test_the_expectations_of_quadratic_coefficients_are_their_gaussian_moments()
     np.testing.assert_allclose(slopes[:, 2], 0.0, atol=1e-8 * a)
 
 
-def test_the_sums_taken_a_few_sigmas_at_a_time_have_the_bits_of_the_whole_array():
+def test_the_compiled_sums_equal_numpys_formulas_and_each_row_has_its_own_bits():
     c0, a, k0, b = 2.0, 5e4, 1e3, -3e7            # C = c0 + a theta^2, K = k0 + b theta^2
     theta, weight = quad.theta_quadrature(THETA_UL, 5.0 * THETA_UL, quad.SIGMA_SPAN * 1e-2)
     c, k = c0 + a * theta ** 2, k0 + b * theta ** 2
-    sigma = np.geomspace(1e-8, 1e-2 / 1.01, 3 * quad.SIGMA_CHUNK + 5)
+    sigma = np.geomspace(1e-8, 1e-2 / 1.01, 101)
     values, slopes = quad.gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
-    # the formulas on the whole (sigma, node) array at once: the tables' bits before they were chunked
+    # the formulas on the whole (sigma, node) array at once (numpy's pairwise sums: the tables' numbers until
+    # 2026-11; the compiled loop sums in node order, so the two differ by the rounding of the sums only)
     s = sigma[:, None]
     x2 = (theta[None, :] / s) ** 2
     phi = (2.0 / math.sqrt(2.0 * math.pi)) * weight[None, :] * np.exp(-0.5 * x2) / s
@@ -64,8 +65,18 @@ def test_the_sums_taken_a_few_sigmas_at_a_time_have_the_bits_of_the_whole_array(
                            np.sum(he2 * (c - c0), axis=1) * inv_s2], axis=1)
     ref_slopes = np.stack([np.sum(he2 * (c - c0), axis=1), np.sum(phi * x2 * (x2 - 3.0) * (k - k0), axis=1),
                            np.sum(phi * (x2 * (x2 - 6.0) + 3.0) * (c - c0), axis=1) * inv_s2], axis=1)
-    np.testing.assert_array_equal(values, ref_values)
-    np.testing.assert_array_equal(slopes, ref_slopes)
+    # rounding bound of a sum of n terms: n eps times the sum of the terms' magnitudes (the slopes cancel)
+    eps = np.finfo(float).eps * theta.size
+    bound_v = np.stack([np.sum(np.abs(phi * c), axis=1), np.sum(np.abs(phi * x2 * k), axis=1),
+                        np.sum(np.abs(he2 * (c - c0)), axis=1) * inv_s2], axis=1) * eps
+    bound_s = np.stack([np.sum(np.abs(he2 * (c - c0)), axis=1), np.sum(np.abs(phi * x2 * (x2 - 3.0) * (k - k0)), axis=1),
+                        np.sum(np.abs(phi * (x2 * (x2 - 6.0) + 3.0) * (c - c0)), axis=1) * inv_s2], axis=1) * eps
+    assert np.all(np.abs(values - ref_values) <= bound_v)
+    assert np.all(np.abs(slopes - ref_slopes) <= bound_s)
+    # a row's numbers do not depend on the other rows computed with it (a batch's table, any process)
+    part_values, part_slopes = quad.gaussian_expectations(sigma[37:40], theta, weight, c, k, c0, k0)
+    np.testing.assert_array_equal(part_values, values[37:40])
+    np.testing.assert_array_equal(part_slopes, slopes[37:40])
 
 
 def test_a_point_met_again_reuses_its_table_and_the_cache_is_bounded():
