@@ -201,8 +201,9 @@ def scene_beds():
 
 
 def _band(band_limit_hz):
-    """Keyword of an excitation's band: none before the excitations carried one (the idealized spectra)."""
-    return {} if band_limit_hz is None else {"band_limit_hz": band_limit_hz}
+    """Keyword of an excitation's band [Hz]: ``None`` or ``"none"`` the idealized spectrum, as every case measured
+    before the excitations carried a band (a case without ``band_limit_hz``)."""
+    return {"band_limit_hz": None if band_limit_hz in (None, "none") else float(band_limit_hz)}
 
 
 def cases(band_limit_hz=None):
@@ -787,8 +788,8 @@ def main():
     parser.add_argument("--csv", help="with --report: write the table as CSV here")
     parser.add_argument("--figure", help="with --report: draw the figure here (PNG)")
     parser.add_argument("--band-limit-hz", type=lambda v: v if v == "none" else float(v),
-                        help="the excitations' ground band [Hz] or none (the idealized spectra); absent: the "
-                             "excitations' own default (the cases of the table before the band existed)")
+                        help="the excitations' ground band [Hz] (the cases' ids end _band_<f>); absent: none, the "
+                             "idealized spectra every case of the table before the band was measured with")
     parser.add_argument("--band", action="store_true",
                         help="print the band and cost table instead (statue k=1e10, 1e11; see band_and_cost)")
     args = parser.parse_args()
