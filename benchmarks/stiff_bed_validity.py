@@ -60,10 +60,12 @@ import numpy as np
 
 from screening.analysis.beds import lam_from_vertical_damping
 from screening.core.model import Block, Foundation
+from screening.core.excitations.clough_penzien import CloughPenzien
 from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
 from screening.solvers import stiff_bed
 from screening.solvers.montecarlo import monte_carlo
+from screening.sweep.inventory import read_inventory
 
 FRACTIONS = (0.05, 0.1, 0.3, 0.5)
 #: Names of the probabilities of a row: exceedance of each fraction of atan(b/h), then overturning.
@@ -88,6 +90,15 @@ BLOCKS = {
     "slender block": (dict(m=100.0, b=0.05, h=0.4975), (15.6, 0.6)),
     "stocky block": (dict(m=100.0, b=0.2175, h=0.45), (15.6, 0.6)),
 }
+#: The objects of the acceptance collection (``examples/collection.csv``): name -> (block, Kanai-Tajimi firm soil).
+COLLECTION_FILE = Path(__file__).resolve().parents[1] / "examples" / "collection.csv"
+_COLLECTION = read_inventory(COLLECTION_FILE)[0]
+for _row in _COLLECTION:
+    BLOCKS.setdefault(_row["name"].split(" on ")[0], (_row["block"], (15.6, 0.6)))
+#: Beds of the collection, as its study makes them (material and thickness -> k, lam): ``BEDS`` entries.
+COLLECTION_BEDS = tuple((f"{r['name']} k={r['foundation']['k']:.3g}", r["name"].split(" on ")[0],
+                         r["foundation"]["k"], 0.0, r["foundation"]["lam"]) for r in _COLLECTION)
+COLLECTION_K = {r["name"]: r["foundation"]["k"] for r in _COLLECTION}
 #: Beds: ``(label, block, k [N m-2], eps [m-2], lam [N s m-4] or None for a vertical damping ratio of 0.05)``.
 BEDS = (
     ("calibration statue k=1e10", "calibration statue", 1e10, 0.0, 3e11),
@@ -105,6 +116,12 @@ BEDS = (
     ("slender block k=6.5e9 zeta_v=1.3", "slender block", 6.5e9, 0.0, None),
     ("stocky block k=7.7e7 zeta_v=0.02", "stocky block", 7.7e7, 0.0, None),
     ("stocky block k=7.7e7 zeta_v=1.3", "stocky block", 7.7e7, 0.0, None),
+    # the museum collection of examples/collection.csv (its beds from screening.beds, as the study makes them):
+    # each object on its three bases (--only "on mortar,on pad,on timber"), then the box's damping edges
+    *COLLECTION_BEDS,
+    ("bust on mortar zeta_v=0.5", "bust", COLLECTION_K["bust on mortar"], 0.0, None),
+    ("statuette on pad zeta_v=0.5", "statuette", COLLECTION_K["statuette on pad"], 0.0, None),
+    ("showcase on pad zeta_v=0.01", "showcase", COLLECTION_K["showcase on pad"], 0.0, None),
 )
 #: Vertical damping ratio of a bed whose ``lam`` is None, where it is not 0.05.
 BED_ZETA = {label: float(label.rsplit("=", 1)[1]) for label, *_ in BEDS if "zeta_v=" in label}
@@ -120,6 +137,9 @@ LEVELS = {
     ("paper block", "white"): (0.7, 1.2),
     **{(name, "kanai_tajimi"): (1.0, 1.5) for name in ("slender block", "stocky block")},
     **{(name, "white"): (2.2, 3.3) for name in ("slender block", "stocky block")},
+    # the collection's objects: the statues' multiples (rocking; near toppling)
+    **{(name, kind): (1.0, 1.5) for name in ("statuette", "bust", "amphora", "showcase", "stele")
+       for kind in ("kanai_tajimi", "clough_penzien")},
 }
 #: Per-bed levels where the block's do not fit (softer beds topple at a fraction of ``g b / h``; from a
 #: 100-sample coupled pilot).
@@ -128,7 +148,18 @@ BED_LEVELS = {
     "statue k=3e6": {"kanai_tajimi": (0.45, 0.7), "white": (0.7, 1.2)},
     "paper block k=2.89e7 (paper bed)": {"kanai_tajimi": (0.6, 0.7), "white": (0.8, 1.5)},
 }
-EXCITATIONS = ("kanai_tajimi", "white")
+EXCITATIONS = ("kanai_tajimi", "white", "clough_penzien")
+#: Excitation kinds of a bed where not all of :data:`EXCITATIONS`: the collection's Kanai-Tajimi firm soil, and
+#: Clough-Penzien (Kanai-Tajimi with the high-pass of :data:`CP_FILTER`) on the stocky objects' beds.
+BED_EXCITATIONS = {
+    **{label: ("kanai_tajimi",) for label, *_ in COLLECTION_BEDS},
+    **{label: ("kanai_tajimi", "clough_penzien") for label, name, *_ in COLLECTION_BEDS
+       if name in ("bust", "showcase")},
+    "bust on mortar zeta_v=0.5": ("kanai_tajimi",), "statuette on pad zeta_v=0.5": ("kanai_tajimi",),
+    "showcase on pad zeta_v=0.01": ("kanai_tajimi",),
+}
+#: Clough-Penzien high-pass filter [rad/s, 1] (firm soil, with the Kanai-Tajimi filter of the block's family).
+CP_FILTER = (1.5, 0.6)
 
 #: Monte Carlo models: name -> (model, condensation) for :func:`screening.monte_carlo`.
 MC_MODELS = {
@@ -169,10 +200,18 @@ def scene_beds():
     ]
 
 
-def cases():
+def _band(band_limit_hz):
+    """Keyword of an excitation's band [Hz]: ``None`` or ``"none"`` the idealized spectrum, as every case measured
+    before the excitations carried a band (a case without ``band_limit_hz``)."""
+    return {"band_limit_hz": None if band_limit_hz in (None, "none") else float(band_limit_hz)}
+
+
+def cases(band_limit_hz=None):
     """The cases of the validity table, cheapest first (by the coupled model's vertical frequency): dicts with
     ``id``, ``bed``, ``block`` (name), ``block_params``, ``bed_params`` (k, eps, lam), ``excitation``,
-    ``omega_g``, ``zeta_g``, ``level``, ``pga_ratio`` and ``S0`` [m2 s-3]."""
+    ``omega_g``, ``zeta_g``, ``level``, ``pga_ratio`` and ``S0`` [m2 s-3]; with ``band_limit_hz`` [Hz] (the
+    excitation's ground band, ``"none"``: the idealized spectrum) also ``band_limit_hz``, the id ending
+    ``_band_<f>``."""
     from screening.analysis.intensity import GROUND_BAND_LIMIT_HZ, ground_cutoff, s0_for_pga
     from screening.solvers.synthesis import vertical_frequency
 
@@ -182,16 +221,21 @@ def cases():
         params, (wg, zg) = BLOCKS[name]
         block = Block(**params)
         bed = _bed(block, k, eps, zeta_v=BED_ZETA.get(label, 0.05), lam=lam)
-        for kind in EXCITATIONS:
-            shape = WhiteNoise(1.0) if kind == "white" else KanaiTajimi(1.0, wg, zg)
+        for kind in BED_EXCITATIONS.get(label, ("kanai_tajimi", "white")):
+            band = _band(band_limit_hz)
+            shape = (WhiteNoise(1.0, **band) if kind == "white" else KanaiTajimi(1.0, wg, zg, **band)
+                     if kind == "kanai_tajimi" else CloughPenzien(1.0, wg, zg, *CP_FILTER, **band))
             ratios = BED_LEVELS.get(label, {}).get(kind) or LEVELS[(name, kind)]
             for level, ratio in zip(("moderate", "strong"), ratios):
                 S0 = float(s0_for_pga(shape, ratio * G * params["b"] / params["h"], T_END, cutoff))
-                out.append(dict(id=_slug(f"{label}_{kind}_{level}"), bed=label, block=name, block_params=params,
-                                bed_params=dict(k=k, eps=eps, lam=float(bed.lam)), excitation=kind,
-                                omega_g=wg if kind == "kanai_tajimi" else None,
-                                zeta_g=zg if kind == "kanai_tajimi" else None, level=level, pga_ratio=ratio,
-                                S0=S0, w_v=float(vertical_frequency(block, bed))))
+                case = dict(id=_slug(f"{label}_{kind}_{level}"), bed=label, block=name, block_params=params,
+                            bed_params=dict(k=k, eps=eps, lam=float(bed.lam)), excitation=kind,
+                            omega_g=wg if kind != "white" else None,
+                            zeta_g=zg if kind != "white" else None, level=level, pga_ratio=ratio,
+                            S0=S0, w_v=float(vertical_frequency(block, bed)))
+                if band_limit_hz is not None:
+                    case.update(id=case["id"] + _slug(f"_band_{band_limit_hz}"), band_limit_hz=band_limit_hz)
+                out.append(case)
     return sorted(out, key=lambda c: (c["w_v"], c["bed"], c["excitation"], c["level"]))
 
 
@@ -199,9 +243,12 @@ def realize(case):
     """``(block, foundation, excitation)`` of a case."""
     block = Block(**case["block_params"])
     foundation = Foundation(**case["bed_params"])
+    band = _band(case.get("band_limit_hz"))
     if case["excitation"] == "white":
-        return block, foundation, WhiteNoise(case["S0"])
-    return block, foundation, KanaiTajimi(case["S0"], case["omega_g"], case["zeta_g"])
+        return block, foundation, WhiteNoise(case["S0"], **band)
+    if case["excitation"] == "clough_penzien":
+        return block, foundation, CloughPenzien(case["S0"], case["omega_g"], case["zeta_g"], *CP_FILTER, **band)
+    return block, foundation, KanaiTajimi(case["S0"], case["omega_g"], case["zeta_g"], **band)
 
 
 def case_indicators(case):
@@ -464,7 +511,7 @@ def table_rows(work, chosen):
                 got.update(diff=np.zeros(len(PROBABILITIES)), passed=None, cost_ratio=1.0)
             else:
                 got = compare(case, ref, m)
-            rows.append(dict(case=case, indicators=ind, model=name,
+            rows.append(dict(case=case, indicators=ind, model=name, band=m.get("band"), band_ref=ref.get("band"),
                              cpu_ms=(1e3 * m["cpu_per_sample"] if m.get("kind") == "mc" and not m.get("error")
                                      else None), **got))
     return rows
@@ -566,7 +613,8 @@ CSV_COLUMNS = ("case", "bed", "block", "m", "b", "h", "k", "eps", "lam", "excita
                "vertical_over_rocking", "vertical_damping_ratio", "model", "n_samples", *PROBABILITIES,
                *(f"{p}_coupled" for p in PROBABILITIES),
                *(f"diff_{p}" for p in PROBABILITIES), *(f"tol_{p}" for p in PROBABILITIES), "n_overturned_coupled",
-               "var_ratio", "passed", "cpu_ms_per_sample", "coupled_over_model_cost", "note")
+               "var_ratio", "passed", "cpu_ms_per_sample", "coupled_over_model_cost", "band_limit_hz",
+               "input_band_rad_s", "input_band_rad_s_coupled", "note")
 
 
 def csv_rows(rows):
@@ -592,22 +640,50 @@ def csv_rows(rows):
                         n_overturned_coupled=r["n_overturned_coupled"],
                         var_ratio="" if r["var_ratio"] is None else r["var_ratio"], passed=bool(r["passed"]),
                         cpu_ms_per_sample="" if r["cpu_ms"] is None else r["cpu_ms"],
-                        coupled_over_model_cost=r["cost_ratio"], note=""))
+                        coupled_over_model_cost=r["cost_ratio"], band_limit_hz=c.get("band_limit_hz", "none"),
+                        input_band_rad_s="" if r.get("band") is None else r["band"],
+                        input_band_rad_s_coupled="" if r.get("band_ref") is None else r["band_ref"], note=""))
     return out
 
 
+def _shipped_rows(path):
+    """``(comment lines, rows)`` of the table already at ``path`` (none if absent); a row of a table written before
+    the band columns measured the idealized spectra (``band_limit_hz = none``)."""
+    import csv
+
+    path = Path(path)
+    if not path.exists():
+        return [], []
+    lines = path.read_text().splitlines()
+    comments = [line for line in lines if line.startswith("#")]
+    rows = list(csv.DictReader(line for line in lines if not line.startswith("#")))
+    for row in rows:
+        row.setdefault("band_limit_hz", "none")
+        row["band_limit_hz"] = row["band_limit_hz"] or "none"
+    return comments, rows
+
+
 def write_csv(rows, path, command):
-    """The table as CSV (atomic), one line per case and cheap model, the command and date in the header."""
+    """The table as CSV (atomic), one line per case and cheap model, the commands and dates in the header.  The rows
+    of a table already there whose case and model this run did not measure are kept (the work folder of an earlier
+    campaign need not be at hand), with its header lines."""
     import csv
     import io
 
     from screening.core.atomicfile import atomic_open
 
+    comments, kept = _shipped_rows(path)
+    new = csv_rows(rows)
+    measured = {(r["case"], r["model"]) for r in new}
+    kept = [r for r in kept if (r["case"], r["model"]) not in measured]
     buf = io.StringIO()
-    buf.write(f"# {__doc__.splitlines()[0]}\n# measured {time.strftime('%Y-%m-%d')}: {command}\n")
-    writer = csv.DictWriter(buf, fieldnames=CSV_COLUMNS, lineterminator="\n")
+    comments = comments or [f"# {__doc__.splitlines()[0]}"]
+    buf.write("\n".join(comments) + f"\n# measured {time.strftime('%Y-%m-%d')}: {command}\n")
+    writer = csv.DictWriter(buf, fieldnames=CSV_COLUMNS, lineterminator="\n", restval="")
     writer.writeheader()
-    for row in csv_rows(rows):
+    for row in kept:
+        writer.writerow({k: row.get(k, "") for k in CSV_COLUMNS})
+    for row in new:
         writer.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in row.items()})
     with atomic_open(path) as fh:
         fh.write(buf.getvalue())
@@ -711,6 +787,9 @@ def main():
     parser.add_argument("--report", action="store_true", help="print the table from the work folder, run nothing")
     parser.add_argument("--csv", help="with --report: write the table as CSV here")
     parser.add_argument("--figure", help="with --report: draw the figure here (PNG)")
+    parser.add_argument("--band-limit-hz", type=lambda v: v if v == "none" else float(v),
+                        help="the excitations' ground band [Hz] (the cases' ids end _band_<f>); absent: none, the "
+                             "idealized spectra every case of the table before the band was measured with")
     parser.add_argument("--band", action="store_true",
                         help="print the band and cost table instead (statue k=1e10, 1e11; see band_and_cost)")
     args = parser.parse_args()
@@ -725,7 +804,7 @@ def main():
     unknown = [m for m in models if m not in MODELS]
     if unknown:
         parser.error(f"--models must be among {list(MODELS)} (got {unknown})")
-    chosen = [c for c in cases() if args.only is None or any(t in c["id"] for t in args.only.split(","))]
+    chosen = [c for c in cases(args.band_limit_hz) if args.only is None or any(t in c["id"] for t in args.only.split(","))]
     if args.keep_s0:
         chosen = [pinned(args.work, c) for c in chosen]
     if args.list:

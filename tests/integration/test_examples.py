@@ -79,3 +79,28 @@ def test_cabinet_script_fits_its_fragility_in_python(tmp_path, capsys):
     assert int(curves["fit_n_unvouched"]) >= int(np.sum(np.isnan(p.values)))
     out = capsys.readouterr().out
     assert "pads: k = 9.75e+09" in out and "trusted check untrusted" in out
+
+
+def test_the_collection_is_five_objects_on_three_bases_of_screening_beds():
+    """``examples/collection.toml`` (the README's quickstart, issue 40 item 6): 5 objects x 3 bases, each bed made
+    from its material and thickness as ``screening.beds`` makes it, 10 PGA levels 0.05-0.5 g of Kanai-Tajimi
+    firm soil, ``[fragility]`` at 0.05, 0.1, 0.3 of the slenderness and ``[accuracy]``."""
+    from screening.analysis import beds
+
+    study = load_study(EXAMPLES / "collection.toml")
+    names = [case.name for case in study.cases]
+    objects = sorted({name.split(" on ")[0] for name in names})
+    bases = sorted({name.split(" on ")[1] for name in names})
+    assert len(names) == 15 and len(objects) == 5 and bases == ["mortar", "pad", "timber"]
+    for case in study.cases:
+        p = case.params
+        assert case.excitation == "kanai_tajimi" and (p["omega_g"], p["zeta_g"]) == (15.6, 0.6)
+        assert 1e8 <= p["k"] <= 1e12
+        zeta = beds.TYPICAL[{"mortar": "lime mortar", "pad": "elastomeric pad (natural rubber / neoprene)",
+                             "timber": "timber (across the grain)"}[case.name.split(" on ")[1]]]["zeta_v"]
+        lam = beds.lam_from_vertical_damping(p["k"], p["m"], p["b"], 0.5 * (zeta[0] + zeta[1]))
+        np.testing.assert_allclose(p["lam"], lam, rtol=1e-12)
+    pga = np.asarray(study.sweeps["pga"]) / 9.81
+    assert len(pga) >= 10 and abs(pga[0] - 0.05) < 1e-3 and abs(pga[-1] - 0.5) < 1e-3
+    assert list(study.fragility.thresholds) == [0.05, 0.1, 0.3] and study.fragility.relative_to == "slenderness"
+    assert study.accuracy is not None and study.accuracy.budget_s > 0

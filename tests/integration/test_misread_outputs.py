@@ -200,12 +200,12 @@ def test_the_quickstart_fragility_stands_on_vouched_points():
     where the linearization is not trusted, and p_exceed stored at its threshold with p_source)."""
     from screening.sweep.study import load_study
 
-    study = load_study(ROOT / "examples" / "statue.toml")
+    study = load_study(ROOT / "examples" / "collection.toml")
     assert study.accuracy is not None and study.fragility is not None
-    assert study.fragility.thresholds == (0.3,) or list(study.fragility.thresholds) == [0.3]
+    assert list(study.fragility.thresholds) == [0.05, 0.1, 0.3]
     assert study.fragility.relative_to == "slenderness"
     readme = (ROOT / "README.md").read_text()
-    assert "--threshold 0.3 --relative-to slenderness" in readme
+    assert "fragility outputs/collection.nc --limit-state overturn" in readme
 
 
 def test_a_target_pga_point_with_a_filter_beyond_float_range_is_flagged_not_a_crash(tmp_path, capsys):

@@ -10,7 +10,7 @@ alphabetically):
   longer program, with why);
 * every ```toml block: it must parse; one whose first line names a file (``# examples/statue.toml``)
   is that file: compared with the repository's copy when there is one (the quickstart's study is
-  ``examples/statue.toml``), else written into the working folder for the lines after it; either
+  ``examples/collection.toml``), else written into the working folder for the lines after it; either
   way it must load as a study.
 
 All run in one temporary folder holding copies of ``studies/`` and ``examples/``.  Lines not run, and
@@ -70,6 +70,7 @@ TINY = {
                                ("{index = {eps = 1, S0 = 18}}, {index = {eps = 1, S0 = 20}},\n", "")],
     "studies/quick.toml": [("samples = 100", "samples = 20")],
     "examples/statue.toml": [("budget_s = 60", "budget_s = 3")],
+    "examples/collection.toml": [("budget_s = 600", "budget_s = 3"), ("num = 10", "num = 2")],
 }
 
 
@@ -180,9 +181,18 @@ def test_examples_are_found_and_most_run():
     assert any(line.startswith("make run") and reason for _, _, line, reason in bash)
     assert sum(reason is None for *_, reason in bash) >= 12, bash
     readme = [text for page, _, text, _ in EXAMPLES if page == "README.md"]
-    assert any("examples/statue.toml" in text and "--dim pga" not in text for text in readme)
-    assert any("fragility outputs/statue.nc" in text and "--dim pga" in text for text in readme)
-    assert any("beds.layer_stiffness" in text for text in readme)
+    assert any(text.startswith(".venv/bin/screening run examples/collection.toml") for text in readme)
+    assert any("fragility outputs/collection.nc" in text and "--limit-state overturn" in text for text in readme)
+
+
+def test_the_quickstart_shows_rows_of_the_collection_file():
+    """The quickstart's excerpt of ``examples/collection.csv`` (a block without a language, not run) is the file's
+    header and rows as they are."""
+    text = (ROOT / "README.md").read_text()
+    excerpt = re.search(r"```\n# examples/collection.csv[^\n]*\n(.*?)```", text, flags=re.S).group(1)
+    rows = (ROOT / "examples" / "collection.csv").read_text().splitlines()
+    lines = excerpt.strip().splitlines()
+    assert len(lines) >= 2 and all(line in rows for line in lines), lines
 
 
 def test_quickstart_is_at_most_40_lines():
@@ -199,7 +209,7 @@ def test_example_runs(example, tiny_workspace):
 def test_examples_wrote_what_they_say(tiny_workspace):
     """After the examples above (same module, same folder): the files the pages name are there."""
     out = tiny_workspace / "outputs"
-    for name in ("statue.nc", "statue_fragility.nc", "statue_fragility.png", "my_study.nc", "quick.nc",
+    for name in ("collection.nc", "collection_overturn_pga.nc", "collection_overturn_pga.png", "my_study.nc", "quick.nc",
                  "fragility.nc", "fragility_fragility.nc"):
         assert (out / name).is_file(), name
     assert list((tiny_workspace / "figs").glob("quick_*.png"))
