@@ -143,8 +143,7 @@ def oscillator_bandwidth(zeta):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42 (1975) 215-220.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -185,8 +184,7 @@ def vanmarcke_factor(var_theta, level, bandwidth):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [rice1944] in the bibliography, ``docs/bibliography.md``.
-    .. [3] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42 (1975) 215-220.
+    .. [3] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -234,8 +232,7 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42 (1975) 215-220.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -1050,8 +1047,7 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] E. H. Vanmarcke, "On the distribution of the first-passage time for normal stationary random
-       processes", J. Appl. Mech. 42 (1975) 215-220.
+    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

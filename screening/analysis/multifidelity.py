@@ -107,7 +107,7 @@ def control_variate_functional(value_y, influence_y, value_x, value_x_all, influ
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     .. [2] [qian2018] in the bibliography, ``docs/bibliography.md``.
 
 
@@ -426,7 +426,7 @@ def optimal_ratio(correlation, cost_expensive, cost_cheap, max_ratio=MAX_RATIO):
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
 
 
     Examples
@@ -586,7 +586,7 @@ def cost_ratio_needed(correlation, target_speedup):
 
     References
     ----------
-    .. [1] B. Peherstorfer, K. Willcox, M. Gunzburger, SIAM J. Sci. Comput. 38(5), A3163-A3194, 2016.
+    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
 
 
     Examples

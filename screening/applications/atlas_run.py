@@ -432,8 +432,7 @@ def mc_exceedance(peaks, state, levels):
 
     References
     ----------
-    .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation of binomial
-       proportions", The American Statistician 52(2) (1998) 119-126.
+    .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
     .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
 
     Examples

@@ -374,8 +374,7 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
 
     References
     ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
-       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
 
     Examples
@@ -555,8 +554,7 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
 
     References
     ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
-       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
 
     Examples
@@ -611,8 +609,7 @@ def stripe_dataset(cloud, block, foundation, rows, names):
 
     References
     ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
-       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
 
     Examples
@@ -721,8 +718,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
 
     References
     ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural
-       analysis", Earthquake Spectra 31(1) (2015) 579-599. https://doi.org/10.1193/021113EQS025M
+    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
 
     Examples

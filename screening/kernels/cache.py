@@ -40,12 +40,21 @@ KEY_KERNELS = (("solvers/moments.py", "_solve_batch"), ("kernels/mcs_kernels.py"
 FIRST_COMPILE = "about 10-60 s"
 
 
+def _cache_folder(source):
+    """Where numba keeps the cache of ``source``: ``__pycache__`` beside it, or under ``NUMBA_CACHE_DIR`` in
+    ``<folder name>_<sha1 of the folder's absolute path>`` (numba's user-provided cache locator)."""
+    custom = os.environ.get("NUMBA_CACHE_DIR")
+    if custom:
+        folder = os.path.dirname(os.path.abspath(source))
+        return Path(custom).absolute() / f"{os.path.basename(folder)}_{hashlib.sha1(folder.encode()).hexdigest()}"
+    return source.parent / "__pycache__"
+
+
 def _index_is_current(module, function):
     source = _PACKAGE / module
     tag = f"py{sys.version_info.major}{sys.version_info.minor}"
-    folder = source.parent / "__pycache__"
     try:
-        indexes = list(folder.glob(f"{source.stem}.{function}-*.{tag}.nbi"))
+        indexes = list(_cache_folder(source).glob(f"{source.stem}.{function}-*.{tag}.nbi"))
         return bool(indexes) and max(p.stat().st_mtime for p in indexes) >= source.stat().st_mtime
     except OSError:
         return False
@@ -54,30 +63,26 @@ def _index_is_current(module, function):
 def cache_is_cold():
     """True if numba will compile the key kernels: an index is missing or older than its source.
 
-    Only the cache next to the package is looked at: with ``NUMBA_CACHE_DIR`` set, or a package
-    folder numba cannot write to (it then caches elsewhere), the answer is False (nothing said).
+    The cache looked at is numba's: beside the package, or under ``NUMBA_CACHE_DIR`` where it is set (a
+    cluster node's own folder, the portable test run).  A package folder numba cannot write to, without
+    ``NUMBA_CACHE_DIR`` (numba then caches elsewhere), is not judged: False.
 
     Returns
     -------
     bool
         Whether the first run will compile (about 10-60 s [s] per fresh cache).
 
-    References
-    ----------
-    .. [1] Numba documentation, "Notes on caching",
-       https://numba.readthedocs.io/en/stable/developer/caching.html
-
     Examples
     --------
     >>> import os
     >>> from unittest import mock
-    >>> with mock.patch.dict(os.environ, {"NUMBA_CACHE_DIR": "/elsewhere"}):   # numba caches elsewhere
+    >>> with mock.patch.dict(os.environ, {"NUMBA_CACHE_DIR": "/nonexistent-numba-cache"}):   # a fresh cache
     ...     cache_is_cold()
-    False
+    True
     """
-    if os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("NUMBA_DISABLE_JIT") == "1":
+    if os.environ.get("NUMBA_DISABLE_JIT") == "1":
         return False
-    if not os.access(_PACKAGE / "solvers", os.W_OK):
+    if not os.environ.get("NUMBA_CACHE_DIR") and not os.access(_PACKAGE / "solvers", os.W_OK):
         return False
     return not all(_index_is_current(module, function) for module, function in KEY_KERNELS)
 
@@ -105,7 +110,7 @@ def announce_compilation(stream=None):
     >>> import io, os
     >>> from unittest import mock
     >>> out = io.StringIO()
-    >>> with mock.patch.dict(os.environ, {"NUMBA_CACHE_DIR": "/elsewhere"}):   # nothing to announce
+    >>> with mock.patch.dict(os.environ, {"NUMBA_DISABLE_JIT": "1"}):   # nothing will compile
     ...     announce_compilation(out), out.getvalue()
     (False, '')
     """

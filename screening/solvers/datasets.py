@@ -406,8 +406,7 @@ def with_probabilities(ds, thresholds=None):
 
     References
     ----------
-    .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
-       of binomial proportions", The American Statistician 52(2) (1998) 119-126.
+    .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/outputs_probabilities.md``.
 
     Examples

@@ -113,8 +113,7 @@ def sample_probabilities(peak_abs_theta, overturned, valid, levels=()):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
-       of binomial proportions", The American Statistician 52(2) (1998) 119-126.
+    .. [2] [agresti1998] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

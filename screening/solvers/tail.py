@@ -83,9 +83,7 @@ def chain_correlation_factor(indicator):
 
     References
     ----------
-    .. [1] S.-K. Au and J. L. Beck, "Estimation of small failure probabilities in high dimensions by subset
-       simulation", Probabilistic Engineering Mechanics 16(4) (2001) 263-277.
-       https://doi.org/10.1016/S0266-8920(01)00019-4
+    .. [1] [au2001] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -180,9 +178,7 @@ def subset_simulation(response, dim, thresholds, n_per_level=1000, p0=0.1, seed=
 
     References
     ----------
-    .. [1] S.-K. Au and J. L. Beck, "Estimation of small failure probabilities in high dimensions by subset
-       simulation", Probabilistic Engineering Mechanics 16(4) (2001) 263-277.
-       https://doi.org/10.1016/S0266-8920(01)00019-4
+    .. [1] [au2001] in the bibliography, ``docs/bibliography.md``.
     .. [2] I. Papaioannou, W. Betz, K. Zwirglmaier and D. Straub, "MCMC algorithms for subset simulation",
        Probabilistic Engineering Mechanics 41 (2015) 89-103. https://doi.org/10.1016/j.probengmech.2015.06.006
 
@@ -339,9 +335,7 @@ def tail_probability(block, foundation, excitation, thresholds=(), model="stiff_
 
     References
     ----------
-    .. [1] S.-K. Au and J. L. Beck, "Estimation of small failure probabilities in high dimensions by subset
-       simulation", Probabilistic Engineering Mechanics 16(4) (2001) 263-277.
-       https://doi.org/10.1016/S0266-8920(01)00019-4
+    .. [1] [au2001] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

@@ -14,9 +14,8 @@ estimate of the best model that ran there, recorded in ``p_source``
 3. with ``[accuracy]``, where the correction reaches the point: the up-crossing of the moments rescaled
    to the corrected best estimates (:func:`screening.analysis.fragility.best_exceedance`; needs the
    histories in the result);
-4. elsewhere ``unreliable``: the linearization's number stays, its standard error is NaN; where the
-   linearization stopped near toppling there is no number to keep: ``p_overturn``, ``p_exceed`` and their
-   standard errors are NaN (missing, never a 1 that reads as an answer);
+4. elsewhere ``unreliable``: ``p_overturn``, ``p_exceed`` and their standard errors are NaN (missing, never a
+   number that reads as an answer: a 1 where the linearization stopped, a 6e-188 where it is untrusted);
 5. near toppling (:func:`screening.analysis.probabilities.answer_quantities`: the linearization stopped,
    ``p_overturn`` material, or the variance's interval open in heavy uplift), where no Monte Carlo ran:
    the study's own fragility surface (``study_fragility_surface``, :mod:`screening.analysis.fragility_surface`)
@@ -36,7 +35,7 @@ from screening.analysis import fragility_surface as fs
 from screening.analysis.fragility import band_standard_error, best_exceedance
 from screening.analysis.multifidelity import multifidelity_probabilities
 from screening.analysis.probabilities import (answer_quantities, choose_sources, monte_carlo_source, reliable_answer,
-                                              sample_probabilities, source_codes, NEAR_TOPPLING_STATUS)
+                                              sample_probabilities, source_codes)
 from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator, EscalationModel,
                                    MONTE_CARLO_SOURCE_BASE, PointStatus, ProbabilitySource, SampleState, Trust)
 from screening.solvers import mc_registry
@@ -414,8 +413,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     p[take], se[take] = surface_p[take], surface_se[take]
     source[take] = ProbabilitySource.study_fragility_surface
 
-    stopped = np.isin(res.status, [int(c) for c in NEAR_TOPPLING_STATUS]) & (source == ProbabilitySource.unreliable)
-    p[stopped], se[stopped] = np.nan, np.nan
+    unvouched = source == ProbabilitySource.unreliable            # nothing vouches for a number: missing values
+    p[unvouched], se[unvouched] = np.nan, np.nan
     values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if thresholds:
         values.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])

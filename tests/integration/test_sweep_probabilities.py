@@ -100,14 +100,20 @@ def test_fragility_study_points_carry_probabilities_and_the_spot_check_replaces_
                          [0.05 * float(ds["slenderness"][spot]), 0.3 * float(ds["slenderness"][spot])])
     assert float(ds["p_overturn"][spot]) == pytest.approx(over, abs=1e-15)
     np.testing.assert_allclose(ds["p_exceed"].values[spot], exc, atol=1e-15)
-    # elsewhere the linearization's Gaussian up-crossing, vouched for where the point is trusted
+    # elsewhere the linearization's Gaussian up-crossing where the point is trusted; missing values where
+    # nothing vouches for a number (p_source unreliable)
     rest = np.ones(src.shape, bool)
     rest[spot] = False
+    vouched = rest & (src != ProbabilitySource.unreliable)
+    unvouched = rest & (src == ProbabilitySource.unreliable)
+    assert vouched.any() and unvouched.any()
     for j, thr in enumerate((0.05, 0.3)):
         ref = ds.rocking.exceedance_probability(thr, relative_to="slenderness").values
-        np.testing.assert_allclose(ds["p_exceed"].values[..., j][rest], ref[rest], rtol=1e-4, atol=1e-12)
+        np.testing.assert_allclose(ds["p_exceed"].values[..., j][vouched], ref[vouched], rtol=1e-4, atol=1e-12)
+        assert np.all(np.isnan(ds["p_exceed"].values[..., j][unvouched]))
     ref = ds.rocking.exceedance_probability(1.0, relative_to="slenderness").values
-    np.testing.assert_allclose(ds["p_overturn"].values[rest], ref[rest], rtol=1e-4, atol=1e-12)
+    np.testing.assert_allclose(ds["p_overturn"].values[vouched], ref[vouched], rtol=1e-4, atol=1e-12)
+    assert np.all(np.isnan(ds["p_overturn"].values[unvouched]) & np.isnan(ds["p_overturn_se"].values[unvouched]))
     trusted = rest & (ds["sl_trust"].values == 0) & (ds["status"].values == 0)
     np.testing.assert_array_equal(src[rest], np.where(trusted[rest], ProbabilitySource.linearization_gaussian,
                                                       ProbabilitySource.unreliable))

@@ -96,7 +96,7 @@ def band_gain(omega, band_limit_hz, order=BAND_ORDER):
 
     References
     ----------
-    .. [1] S. Butterworth, "On the theory of filter amplifiers", Wireless Engineer 7 (1930) 536-541.
+    .. [1] [butterworth1930] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -132,7 +132,7 @@ def band_top(band_limit_hz, order=BAND_ORDER, tail=BAND_TAIL):
 
     References
     ----------
-    .. [1] S. Butterworth, "On the theory of filter amplifiers", Wireless Engineer 7 (1930) 536-541.
+    .. [1] [butterworth1930] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------
@@ -278,7 +278,7 @@ def band_filter(band_limit_hz, order=BAND_ORDER):
 
     References
     ----------
-    .. [1] S. Butterworth, "On the theory of filter amplifiers", Wireless Engineer 7 (1930) 536-541.
+    .. [1] [butterworth1930] in the bibliography, ``docs/bibliography.md``.
 
     Examples
     --------

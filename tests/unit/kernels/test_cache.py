@@ -50,8 +50,21 @@ def test_an_index_older_than_its_source_is_cold(package):
     assert cache.cache_is_cold()
 
 
-def test_a_cache_elsewhere_is_not_judged(package, monkeypatch):
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(package / "elsewhere"))
+def test_a_cache_under_numba_cache_dir_is_judged_where_numba_keeps_it(package, monkeypatch, tmp_path):
+    """A fresh NUMBA_CACHE_DIR (a cluster node's folder, the portable run) is cold and says so; indexes where
+    numba's user-provided locator puts them are warm (the real locator: test_the_installed_package_is_warm...)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
+    assert cache.cache_is_cold()
+    tag = f"py{sys.version_info.major}{sys.version_info.minor}"
+    for module, function in cache.KEY_KERNELS:
+        source = package / module
+        folder = cache._cache_folder(source)
+        assert folder.parent == tmp_path / "elsewhere"
+        folder.mkdir(parents=True, exist_ok=True)
+        index = folder / f"{source.stem}.{function}-1.{tag}.nbi"
+        index.write_bytes(b"")
+        os.utime(index, (2_000_000, 2_000_000))
+        os.utime(source, (1_000_000, 1_000_000))
     assert not cache.cache_is_cold()
 
 
