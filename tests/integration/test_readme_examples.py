@@ -58,6 +58,8 @@ SKIPPED = {
 #: (page, substring of a python block) -> why the block is a fragment, not a program
 FRAGMENTS = {
     ("docs/records.md", "RSN6_IMPVALL"): "needs a PEER record file and a block and bed defined before it",
+    ("docs/distributed.md", "SLURMCluster"): "submits jobs to a SLURM queue (test_cluster.py runs the same path "
+                                             "on dask-jobqueue's local cluster)",
 }
 
 #: other tools in the recipes: run when installed
