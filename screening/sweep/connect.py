@@ -402,6 +402,12 @@ class VersionGuard(WorkerPlugin):
             raise RuntimeError(problem)
 
 
+#: Calls of :func:`run_on_workers` when every worker left meanwhile, and how long [s] each retry waits for a
+#: worker to join (batch jobs replacing retired ones).
+RUN_ATTEMPTS = 3
+REJOIN_TIMEOUT = 30.0
+
+
 def run_on_workers(client, function, *args):
     """``client.run(function, *args)`` on the workers that stay: ``{address: result}``; a worker that
     leaves meanwhile (retired at its lifetime, its job ended) is left out.
@@ -438,19 +444,26 @@ def run_on_workers(client, function, *args):
     >>> run_on_workers(Client(), len, "abc")
     {'tcp://a:1': 3}
     """
-    try:
-        answers = client.run(function, *args, on_error="return")
-    except OSError:                                 # the workers left while the call was sent
-        answers = {}
-    except Exception as exc:                        # noqa: BLE001 - e.g. a function the workers cannot load
-        raise SweepError(f"the dask workers cannot run the solver: {exception_line(exc)}") from None
-    for answer in answers.values():
-        if isinstance(answer, Exception) and not isinstance(answer, OSError):
-            raise SweepError(f"the dask workers cannot run the solver: {exception_line(answer)}")
-    kept = {worker: answer for worker, answer in answers.items() if not isinstance(answer, OSError)}
-    if not kept:
-        raise SweepError("no dask worker answered: the workers left (their lifetime or their jobs ended)")
-    return kept
+    for attempt in range(RUN_ATTEMPTS):
+        if attempt:                                 # every worker left at once: wait for the next to join
+            try:
+                client.wait_for_workers(1, timeout=REJOIN_TIMEOUT)
+            except Exception:                       # noqa: BLE001 - dask's TimeoutError, a closed client
+                break
+        try:
+            answers = client.run(function, *args, on_error="return")
+        except OSError:                             # the workers left while the call was sent
+            answers = {}
+        except Exception as exc:                    # noqa: BLE001 - e.g. a function the workers cannot load
+            raise SweepError(f"the dask workers cannot run the solver: {exception_line(exc)}") from None
+        for answer in answers.values():
+            if isinstance(answer, Exception) and not isinstance(answer, OSError):
+                raise SweepError(f"the dask workers cannot run the solver: {exception_line(answer)}")
+        kept = {worker: answer for worker, answer in answers.items() if not isinstance(answer, OSError)}
+        if kept:
+            return kept
+    raise SweepError("no dask worker answered: the workers left (their lifetime or their jobs ended) and no new "
+                     f"one joined within {RUN_ATTEMPTS - 1} x {REJOIN_TIMEOUT:.0f} s")
 
 
 def check_workers(client, log=None):
