@@ -72,6 +72,11 @@ def cache_is_cold():
     bool
         Whether the first run will compile (about 10-60 s [s] per fresh cache).
 
+    References
+    ----------
+    .. [1] Numba documentation, "Notes on caching" (the cache locators),
+       https://numba.readthedocs.io/en/stable/developer/caching.html
+
     Examples
     --------
     >>> import os
