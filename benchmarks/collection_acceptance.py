@@ -37,7 +37,7 @@ import xarray as xr
 
 from screening.analysis.fragility import fit_fragility_curve
 from screening.core.model import Block, Foundation
-from screening.core.status import EscalationModel, ProbabilitySource
+from screening.core.status import EscalationModel, FitFlag, ProbabilitySource
 from screening.solvers.model_choice import choose
 from screening.sweep.study import load_study
 
@@ -121,7 +121,7 @@ def report(ds, wall=None, study=None):
     lines.append("overturning fragility per object and base: P(overturn) at PGA " + " ".join(f"{x / G:.2f}" for x in pga)
                  + " g; lognormal fit on the vouched points")
     names = ds["case_name"].values if "case_name" in ds.coords else [str(c) for c in ds["case"].values]
-    fitted = 0
+    fitted = bounded = 0
     for i, name in enumerate(names):
         pi, oki = p.isel(case=i).values, ok.isel(case=i).values
         cells = " ".join(f"{v:.2f}" if good else "  - " for v, good in zip(pi, oki))
@@ -131,12 +131,19 @@ def report(ds, wall=None, study=None):
             if np.isfinite(median) and np.isfinite(beta):
                 fitted += 1
                 fit = f"median {median / G:.3g} g, beta {beta:.2f}"
+            elif flag == FitFlag.never_exceeded and oki.all():       # every point vouched: the median is above
+                bounded += 1
+                fit = f"never overturns up to {pga.max() / G:.2f} g: median above the range"
+            elif flag == FitFlag.always_exceeded and oki.all():
+                bounded += 1
+                fit = f"overturns from {pga.min() / G:.2f} g: median below the range"
             else:
-                fit = f"no fit (flag {int(flag)})"
+                fit = f"no fit ({FitFlag(int(flag)).name})"
         else:
             fit = "no fit: fewer than 2 vouched points"
         lines.append(f"  {str(name):22s} {cells} | {int(oki.sum())}/{len(pga)} vouched | {fit}")
-    lines.append(f"fragility curves fitted: {fitted} of {len(names)} objects and bases")
+    lines.append(f"overturning fragility answered for {fitted + bounded} of {len(names)} objects and bases "
+                 f"({fitted} lognormal fits, {bounded} bounded: no overturning, or always, over the whole range)")
     if study is not None:
         lines.append("")
         lines.append("model = \"auto\" per object and base (Kanai-Tajimi):")

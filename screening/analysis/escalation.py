@@ -106,7 +106,8 @@ PRIOR_STEPS_PER_S = 3000.0
 #: Bounds of the samples of the full run at an escalated point.
 MIN_SAMPLES = 100
 MAX_SAMPLES = 4000
-#: At most this many escalated points (the correction needs a few dozen, not hundreds).
+#: At most this many escalated points where the variance is the answer (the correction needs a few dozen, not
+#: hundreds); with ``[fragility]`` every candidate may run (the probabilities need Monte Carlo at every point).
 MAX_POINTS = 48
 #: The condensed model stands in for the coupled one where every calibration row of the (bed law,
 #: peak_p_uplift bin) cell, at least this many, has it within ``target / 2``.

@@ -267,10 +267,14 @@ class announcing_compiles:
 
 
 _STAMP_NAME = "numba-sources.sha256"
+#: The folders whose sources compiled code can depend on: compiled code lives in ``core/``, ``kernels/`` and
+#: ``solvers/``, and a folder imports only folders below it (``tests/unit/test_layers.py``).
+COMPILED_LAYERS = ("data", "core", "kernels", "solvers")
 
 
 def source_stamp(package=None):
-    """A digest of every Python source of ``package``, of Python's and of numba's version.
+    """A digest of the Python sources compiled code can depend on (the top level of ``package`` and its
+    :data:`COMPILED_LAYERS`), of Python's and of numba's version.
 
     Parameters
     ----------
@@ -280,7 +284,8 @@ def source_stamp(package=None):
     Returns
     -------
     str
-        Hexadecimal SHA-256 digest [-]; it changes when any ``.py`` file under ``package`` changes.
+        Hexadecimal SHA-256 digest [-]; it changes when any of those ``.py`` files changes (an edit of
+        ``sweep/`` or ``cli/`` keeps the compiled kernels).
 
     References
     ----------
@@ -306,6 +311,9 @@ def source_stamp(package=None):
     except Exception:                       # numba's metadata unreadable: the sources alone
         pass
     for path in sorted(package.rglob("*.py")):
+        parts = path.relative_to(package).parts
+        if len(parts) > 1 and parts[0] not in COMPILED_LAYERS:
+            continue
         digest.update(str(path.relative_to(package)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
@@ -332,8 +340,9 @@ def clear_stale_cache(package=None):
     Notes
     -----
     Numba keys a cached kernel on its own file's time stamp; a callee or a constant from another file
-    is frozen into the kernel's machine code.  A stamp over all sources is conservative: any source
-    change recompiles the kernels once (about a minute), never runs stale code.
+    is frozen into the kernel's machine code.  A stamp over every source compiled code can reach (the
+    layers up to ``solvers/``, :func:`source_stamp`) is conservative there: such a change recompiles the
+    kernels once (about a minute), never runs stale code.
 
     References
     ----------

@@ -114,7 +114,9 @@ def escalate(stage):
     The points whose trust band cannot promise ``[accuracy] target`` are ordered: those in the transition
     of a fragility curve first (:func:`~screening.analysis.escalation.transition_points`: the
     linearization's P(overturn) or P(exceed) between 0.02 and 0.98 along the swept intensity, or a jump
-    across that band beside them), then the coverage of the grid's features; each is given a Monte Carlo
+    across that band beside them), then the coverage of the grid's features (with ``[fragility]`` every
+    candidate, the budget deciding how many run; else at most
+    :data:`~screening.analysis.escalation.MAX_POINTS`); each is given a Monte Carlo
     model (stiff-bed, condensed or coupled, by their measured validity) and runs until its standard
     error reaches the target, within ``budget_s`` wall seconds (:func:`_escalation_runs`).  One line
     before any Monte Carlo says what the pilots of the transition points will cost (:func:`plan_line`).
@@ -167,7 +169,8 @@ def escalate(stage):
     features = point_features(pts["features"])
     candidates = esc.escalation_candidates(pts["status"], pts["trust"], pts["low"], pts["high"], acc.target)
     transition = _transition(stage, pts["status"])
-    order = esc.transition_first(features, candidates, transition, stage.result.peak_p_uplift, esc.MAX_POINTS)
+    most = int(candidates.sum()) if study.fragility is not None else esc.MAX_POINTS    # probabilities: every point
+    order = esc.transition_first(features, candidates, transition, stage.result.peak_p_uplift, most)
     models = escalation_models(stage, order, esc.escalation_model(
         pts["indicators"], pts["status"], pts["condensation"], pts["eps"],
         esc.condensed_cells(shipped_calibration(), acc.target))[order])
@@ -331,11 +334,14 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     """Pilot, main and top-up Monte Carlo runs at the ``order`` ed points, within ``budget_s`` wall seconds.
 
     Each point runs a pilot of :data:`~screening.analysis.escalation.PILOT_SAMPLES` samples, then the samples
-    its target needs by the pilot (a transition point, ``first``: its probabilities' standard error
+    its target needs by the pilot (where its probabilities answer it -- a transition point, ``first``, or a
+    pilot sample that overturned or exceeded a ``[fragility]`` threshold -- their standard error
     :data:`~screening.analysis.escalation.PROBABILITY_SE` at the rotations ``levels``; else the variance's
     ``target / 2``), then, where still short, a top-up by the main run's standard error.  At most one run per
-    worker thread is in flight; a free thread takes the next run of the highest point in the order, else the
-    next point's pilot.  What a point runs depends on its own runs only, so where the budget does not bind
+    worker thread is in flight; a free thread takes the next point's pilot (every point a first answer before
+    any is refined, so a run stopped at any moment has answers), then the next run of the highest point in the
+    order, those deciding a fragility curve (a probability strictly between 0 and 1) first.  What a point runs
+    depends on its own runs only, so where the budget does not bind
     the points and their samples are the same on every machine and after any interruption.
 
     The budget binds on the ``stage.clock``: a run is started only if its wall time (its cost-model seconds,
@@ -395,14 +401,27 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         with np.errstate(divide="ignore", invalid="ignore"):
             return float(r["peak_var_theta_se"] / r["peak_var_theta"])
 
-    def met(j, r):
+    def probabilities_answer(j, r):
+        """Whether point ``j``'s probabilities answer it: in a curve's transition by the linearization, or a
+        sample of run ``r`` reached a level (overturned, or exceeded a ``[fragility]`` threshold)."""
+        return bool(first[j]) or bool(np.any(hits(j, r)[0] > 0))
+
+    def deciding(j):
+        """Point ``j`` decides a fragility curve: in a transition, or its runs so far put a probability strictly
+        between 0 and 1."""
         if first[j]:
+            return True
+        k, n = hits(j, results[j])
+        return bool(np.any((k > 0) & (k < n)))
+
+    def met(j, r):
+        if probabilities_answer(j, r):
             return esc.probabilities_met(*hits(j, r))
         return bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
 
     def wanted(j, r):
         """Samples its target needs by run ``r`` of point ``j``."""
-        if first[j]:
+        if probabilities_answer(j, r):
             k, n = hits(j, r)
             return esc.probability_samples(k, n, most)
         return esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
@@ -517,10 +536,13 @@ def _escalation_runs(stage, order, models, first, levels, answers):
             stage.log(f"warning: cannot save the resume record of the escalation plan ({write_failure_reason(exc)})")
 
     def fill():
-        """Start runs on the free threads: the next run of the highest point, else the next pilot."""
+        """Start runs on the free threads: the next pilot (every point a first answer before any is refined),
+        then the next run of the highest point, those deciding a fragility curve first."""
         deadline = RUN_SHARE * acc.budget_s
         while len(pending) < threads:
-            ready = sorted(todo)
+            pilot = next((j for j in range(len(order)) if j not in results and j not in in_flight
+                          and j not in counters["cut"]), None)
+            ready = sorted(todo, key=lambda j: (not deciding(j), j)) if pilot is None else []
             if ready:
                 j = ready[0]
                 n, n_cheap, rate = todo.pop(j)
@@ -538,8 +560,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
                 fut = submit(j, n, what, n_cheap)
                 in_flight[j] = n * rate
             else:
-                j = next((j for j in range(len(order)) if j not in results and j not in in_flight
-                          and j not in counters["cut"]), None)
+                j = pilot
                 if j is None:
                     return
                 guess = max(pilot_costs, default=pilot_prior[j])

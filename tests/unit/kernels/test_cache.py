@@ -139,3 +139,20 @@ def test_an_unchanged_package_keeps_its_cache_and_a_cache_elsewhere_is_left_alon
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
     (tmp_path / "m.py").write_text("x = 2")
     assert cache.clear_stale_cache(tmp_path) == 0 and index.exists()
+
+
+def test_the_stamp_follows_the_layers_compiled_code_can_reach(tmp_path):
+    """An edit in a folder above ``solvers/`` (the sweep, the command line) keeps the compiled kernels; an edit in
+    ``core/``, ``kernels/``, ``solvers/`` or at the top level recompiles them."""
+    for folder in ("core", "kernels", "solvers", "sweep", "cli"):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "m.py").write_text("x = 1")
+    (tmp_path / "__init__.py").write_text("")
+    before = cache.source_stamp(tmp_path)
+    for folder in ("sweep", "cli"):
+        (tmp_path / folder / "m.py").write_text("x = 2")
+    assert cache.source_stamp(tmp_path) == before
+    for path in ("core/m.py", "kernels/m.py", "solvers/m.py", "__init__.py"):
+        (tmp_path / path).write_text("x = 3")
+        assert cache.source_stamp(tmp_path) != before, path
+        before = cache.source_stamp(tmp_path)
