@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening.analysis.fragility import fit_fragility_curve
+from screening.analysis.fragility import fit_fragility_curve, fit_lognormal_fragility
 from screening.core.model import Block, Foundation
 from screening.core.status import EscalationModel, FitFlag, ProbabilitySource
 from screening.solvers.model_choice import choose
@@ -137,13 +137,18 @@ def report(ds, wall=None, study=None):
             elif flag == FitFlag.always_exceeded and oki.all():
                 bounded += 1
                 fit = f"overturns from {pga.min() / G:.2f} g: median below the range"
+            elif flag == FitFlag.median_outside_data and oki.all():  # the lower tail measured, the median beyond
+                bounded += 1
+                median, beta = fit_lognormal_fragility(pga[oki], pi[oki])
+                fit = (f"median above the range (extrapolated {median / G:.3g} g, beta {beta:.2f}; P "
+                       f"{pi[oki][-1]:.2f} at {pga.max() / G:.2f} g)")
             else:
                 fit = f"no fit ({FitFlag(int(flag)).name})"
         else:
             fit = "no fit: fewer than 2 vouched points"
         lines.append(f"  {str(name):22s} {cells} | {int(oki.sum())}/{len(pga)} vouched | {fit}")
     lines.append(f"overturning fragility answered for {fitted + bounded} of {len(names)} objects and bases "
-                 f"({fitted} lognormal fits, {bounded} bounded: no overturning, or always, over the whole range)")
+                 f"({fitted} lognormal fits, {bounded} bounded: the median beyond the range, with every point vouched)")
     if study is not None:
         lines.append("")
         lines.append("model = \"auto\" per object and base (Kanai-Tajimi):")

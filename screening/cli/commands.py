@@ -383,7 +383,7 @@ def cmd_fragility(result, threshold, relative_to, method, dim, out, im, period, 
         try:
             frag = stack_limit_states([fragility_dataset(ds, t, relative_to, method, dim).load() for t in threshold],
                                       threshold, relative_to)
-            flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load()
+            flags = ds[[name for name in ("status", "sl_trust", "p_source") if name in ds.variables]].load()
             if frag.attrs.get("method") == STORED:          # the sweep's own answers: their p_source vouches
                 flags = None
         except RuntimeError as exc:             # netCDF/HDF5: damaged data chunks

@@ -240,7 +240,7 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
             frag = stack_limit_states(frags, threshold, relative_to) if limit_state == "exceed" else frags[0]
         except (ValueError, KeyError) as exc:
             raise CommandError(str(exc).strip("'\"")) from None
-        flags = ds[[name for name in ("status", "sl_trust") if name in ds.variables]].load() \
+        flags = ds[[name for name in ("status", "sl_trust", "p_source") if name in ds.variables]].load() \
             if "status" in ds.variables else None
     frag = with_modelling_dispersion(frag, modelling)
     stamp_fragility(frag, result, threshold=" --threshold ".join(f"{t:g}" for t in threshold) or None, im=im,

@@ -4,14 +4,16 @@ with their band and the method behind each point; flagged and untrusted points m
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
+from matplotlib.ticker import NullFormatter
 
 from screening.report.figure_base import (
     FLAGGED_COLOR, UNTRUSTED_COLOR, flag_summary, grid_units, grid_values, is_log_spaced, new_figure,
     point_flags, point_label, save_figure)
-from screening.core.status import BestMethod, FitFlag
+from screening.core.status import MONTE_CARLO_SOURCE_BASE, BestMethod, FitFlag
 
 __all__ = ["plot_fragility", "BEST_MARKERS", "PANEL_CASES"]
 
@@ -117,15 +119,17 @@ def _plot_panels(frag, dim, path, max_curves, flags):
             axes[i].set_xlabel("")
     for ax in axes[n:]:
         ax.set_visible(False)
-    fig.suptitle(_title(frag, dim, flags) + f"\none panel per case ({n}); " + PANEL_KEY, fontsize=9)
+    key = textwrap.fill(f"one panel per case ({n}); " + PANEL_KEY, width=int(14 * min(2.6 * ncols + 1.0, 30.0)))
+    fig.suptitle(_title(frag, dim, flags) + "\n" + key, fontsize=9)
     save_figure(fig, path)
     return Path(path)
 
 
 #: What the marks of a panel mean (the one-panel figure says it in its legend).
 PANEL_KEY = ("solid: P per point; dashed: lognormal fit (median, beta in the panel; [n left out]: points nothing "
-             "vouches for, left out of the fit); hollow red circles: linearization untrusted; grey x: "
-             "flagged; squares: Monte Carlo +-2 se; shaded: best-estimate band")
+             "vouches for, left out of the fit); filled squares: Monte Carlo answers (p_source); hollow red circles: "
+             "linearization untrusted; grey x: flagged; open squares: Monte Carlo spot checks +-2 se; shaded: "
+             "best-estimate band")
 
 
 def _one_case(frag, i):
@@ -166,6 +170,10 @@ def _draw_curves(ax, frag, dim, max_curves, flags, legend_size=7, short=False):
         flagged, untrusted = (a.reshape(flat.shape) for a in point_flags(flags, None, (*other, dim)))
     else:
         flagged = untrusted = np.zeros(flat.shape, dtype=bool)
+    monte_carlo = np.zeros(flat.shape, dtype=bool)     # answered by Monte Carlo: the linearization's marks do not apply
+    if flags is not None and "p_source" in flags:
+        monte_carlo = (flags["p_source"].transpose(*other, dim).values.reshape(flat.shape) >= MONTE_CARLO_SOURCE_BASE)
+        flagged, untrusted = flagged & ~monte_carlo, untrusted & ~monte_carlo
     picks = np.unique(np.linspace(0, flat.shape[0] - 1, min(max_curves, flat.shape[0])).round().astype(int))
     shape = [p.sizes[d] for d in other]
     median, beta, unvouched, flag = (frag[v].transpose(*other).values.reshape(-1) if v in frag else None
@@ -185,6 +193,7 @@ def _draw_curves(ax, frag, dim, max_curves, flags, legend_size=7, short=False):
         ax.plot(x, flat[j], "o-", color=f"C{n}", ms=3, lw=1.2, label=lab(label))
         ax.plot(x[untrusted[j]], flat[j][untrusted[j]], "o", ms=7, mfc="none", mec=UNTRUSTED_COLOR, mew=1.2)
         ax.plot(x[flagged[j]], flat[j][flagged[j]], "x", ms=7, color=FLAGGED_COLOR, mew=1.5)
+        ax.plot(x[monte_carlo[j]], flat[j][monte_carlo[j]], "s", ms=4, color=f"C{n}")
         if best is not None:
             _draw_best(ax, x, best, j, f"C{n}", _LABELLED_ALREADY if short else labelled)
         if median is not None and np.isfinite(median[j]) and np.isfinite(beta[j]):
@@ -215,10 +224,14 @@ def _draw_curves(ax, frag, dim, max_curves, flags, legend_size=7, short=False):
         counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
         ax.plot([], [], " ", label=f"best estimates (all points): {counts}")
     if flags is not None and not short:
+        if monte_carlo.any():
+            ax.plot([], [], "s", color="k", ms=4, label=f"Monte Carlo answer (p_source): {int(monte_carlo.sum())}")
         ax.plot([], [], "x", color=FLAGGED_COLOR, label=f"flagged (status != ok): {int(flagged.sum())} of {flagged.size}")
         ax.plot([], [], "o", mfc="none", mec=UNTRUSTED_COLOR, label=f"linearization untrusted: {int(untrusted.sum())}")
     if is_log_spaced(grid_values(frag, dim)) or name:
         ax.set_xscale("log")
+        if short:                                # narrow panels: the minor labels would run into each other
+            ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_ylim(-0.02, 1.02)
     if name:
         extra = f", T = {frag[name].attrs['period']:g} s" if "period" in frag[name].attrs else ""

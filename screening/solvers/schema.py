@@ -132,8 +132,10 @@ ACCURACY = {
     "esc_transition": _v("1", "1: the escalated point lies in the transition of a fragility curve (it went first and "
                               "ran to a standard error of PROBABILITY_SE of every probability); 0: a covering point "
                               "(run to target / 2 of peak var_theta)"),
-    "esc_target_met": flag_attributes(TargetMet, "whether the standard error of esc_peak_var_theta reached "
-                                                 "target / 2 of the peak"),
+    "esc_target_met": flag_attributes(TargetMet, "whether the point's Monte Carlo reached its standard error: "
+                                                 "PROBABILITY_SE of every probability where they answer the point "
+                                                 "(a transition point, or a sample reached a level), else target / 2 "
+                                                 "of peak var_theta"),
     "esc_sl_peak_var_theta": _v("rad2", "linearization peak var_theta at the escalated point"),
     "esc_sl_peak_var_theta_dot": _v("rad2 s-2", "linearization peak var_theta_dot at the escalated point"),
     "esc_peak_var_theta": _v("rad2", "Monte Carlo peak var_theta at the escalated point"),

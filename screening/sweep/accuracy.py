@@ -221,7 +221,9 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
     escalated, models_done = order[done], models[done]
     runs = [results[j] for j in done]
     for j, r in zip(done, runs):
-        r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
+        if "target_met" not in r:                 # judged when the run was kept (its probabilities or its variance)
+            r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
+        r["target_met"] = bool(r["target_met"])
         r["transition"] = np.int8(first[j])
     result.write_escalation(escalated, models_done, runs)
     best = {}
@@ -523,6 +525,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         r["cost_s"] = np.float64(cost(j, r) + (float(before["cost_s"]) if before is not None else 0.0))
         r["cpu_time"] = np.float64(r["cpu_time"] + (float(before["cpu_time"]) if before is not None else 0.0))
         r["phase"] = np.int8(what)
+        r["target_met"] = np.int8(met(j, r))
         results[j], phase[j] = r, what
         try:
             store.save_spot(ESCALATION_RECORD + j, index_of(j), r)
