@@ -289,9 +289,9 @@ def _threads(client):
         return 1
 
 
-def plan_line(budget_s, n_points, n_transition, pilot_s, threads):
-    """One line before any Monte Carlo: the budget, the points, and what the pilots of the transition points
-    cost; where even those cannot fit, the budget they need.
+def plan_line(budget_s, n_points, n_transition, pilot_s, threads, all_pilots_s=None):
+    """One line before any Monte Carlo: the budget, the points, and what the pilots cost (all of them go
+    first); where even the transition points' pilots cannot fit, the budget they need.
 
     Parameters
     ----------
@@ -303,6 +303,8 @@ def plan_line(budget_s, n_points, n_transition, pilot_s, threads):
         Estimated wall time [s] of the transition points' pilots on ``threads`` worker threads.
     threads : int
         Worker threads.
+    all_pilots_s : float, optional
+        Estimated wall time [s] of the pilots of all ``n_points``.
 
     Returns
     -------
@@ -314,9 +316,10 @@ def plan_line(budget_s, n_points, n_transition, pilot_s, threads):
 
     Examples
     --------
-    >>> print(plan_line(60, 48, 20, 12.4, 2))   # doctest: +NORMALIZE_WHITESPACE
+    >>> print(plan_line(60, 48, 20, 12.4, 2, 30.2))   # doctest: +NORMALIZE_WHITESPACE
     accuracy: Monte Carlo at up to 48 point(s), the 20 in the transition of a fragility curve first, within
-    budget_s = 60 s of wall time on 2 worker thread(s); their pilots take about 12 s
+    budget_s = 60 s of wall time on 2 worker thread(s); the pilots (64 samples at every point, first) take
+    about 30 s
     >>> print(plan_line(10, 48, 20, 31.0, 2))   # doctest: +NORMALIZE_WHITESPACE
     accuracy: budget_s = 10 s cannot hold even the pilots of the 20 point(s) in the transition of a fragility
     curve (about 31 s on 2 worker thread(s)); give [accuracy] budget_s >= 33 for them (running what fits)
@@ -329,7 +332,8 @@ def plan_line(budget_s, n_points, n_transition, pilot_s, threads):
     return (f"accuracy: Monte Carlo at up to {n_points} point(s)"
             + (f", the {n_transition} in the transition of a fragility curve first" if n_transition else "")
             + f", within budget_s = {budget_s:g} s of wall time on {threads} worker thread(s)"
-            + (f"; their pilots take about {pilot_s:.0f} s" if n_transition else ""))
+            + (f"; the pilots ({esc.PILOT_SAMPLES} samples at every point, first) take about {all_pilots_s:.0f} s"
+               if all_pilots_s is not None else f"; their pilots take about {pilot_s:.0f} s" if n_transition else ""))
 
 
 def _escalation_runs(stage, order, models, first, levels, answers):
@@ -473,8 +477,9 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     pilot_prior = {j: esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]) * (2 if partner(j) else 1)
                    for j in range(len(order))}
     pilots_s = sum(pilot_prior[j] for j in range(len(order)) if first[j] and j not in results)
+    every_s = sum(pilot_prior[j] for j in range(len(order)) if j not in results)
     stage.log(plan_line(acc.budget_s, len(order), int(np.sum(first)),
-                        PRIOR_WALL_PER_COST * pilots_s / threads, threads))
+                        PRIOR_WALL_PER_COST * pilots_s / threads, threads, PRIOR_WALL_PER_COST * every_s / threads))
     warm_up = 0.0
     if len(results) < len(order) or any(next_run(j) is not None for j in results):
         stage.log("accuracy: compiling the Monte Carlo kernels on the workers (cached after the first run; not "

@@ -30,7 +30,6 @@ try:
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
     import tomli as tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np

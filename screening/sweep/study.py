@@ -118,8 +118,8 @@ from screening.core import limits
 from screening.solvers import mc_registry, model_choice
 from screening.solvers.moments import DEFAULT_MAX_STEPS, DEFAULT_RTOL, HISTORY_VARIABLES
 from screening.solvers.timegrid import output_times
-from screening.sweep.config import (band_limit_value, build_models, build_point_models, Case, case_block_and_foundation,
-                                    case_cutoff, ClusterSpec, cluster_table,
+from screening.sweep.config import (band_limit_value, build_models, Case, case_block_and_foundation,
+                                    ClusterSpec, cluster_table,
                                     check_choice, check_grid_size, check_keys, check_list, check_value, choice,
                                     integer, model_tables, name_string, number_list, NUMERIC, numeric_table,
                                     parse_toml, read_study_text, required, resolve_case, short_repr, StudyError, table,
