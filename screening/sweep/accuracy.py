@@ -485,7 +485,8 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         stage.log("accuracy: compiling the Monte Carlo kernels on the workers (cached after the first run; not "
                   "charged to budget_s)")
         t0 = time.perf_counter()
-        stage.client.run(_submit.warm_up_monte_carlo)
+        used = {EscalationModel(int(m)).name for m in models} | {partner(j)[0] for j in range(len(order)) if partner(j)}
+        stage.client.run(_submit.warm_up_monte_carlo, tuple(sorted(used)))
         warm_up = time.perf_counter() - t0
     start = clock()
     measured = {"wall": 0.0, "cost": 0.0}                  # wall seconds of finished runs, their cost-model seconds
