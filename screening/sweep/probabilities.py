@@ -421,8 +421,12 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     res.write_probabilities(values, source, answer)
     line = answer_line(answer, reliable_answer(answer, variance_vouched, source), variance_vouched)
     res.set_attrs(answer_note=line, fragility_surface_note="; ".join(notes))
-    if log is not None:
-        for text in [line] + [f"fragility surface: {note}" for note in notes]:
+    if log is not None:                      # many cases: one line, each surface's note in the result's attribute
+        shown = notes if len(notes) <= 4 else [
+            f"{len(notes)} surfaces (per case and quantity), {sum('vouched for' in n and 'not vouched' not in n for n in notes)}"
+            f" vouched for, used at {int(take.sum())} point(s) where no Monte Carlo ran; each in the result's "
+            "fragility_surface_note attribute"]
+        for text in [line] + [f"fragility surface: {note}" for note in shown]:
             log(text)
     names = {code: name for name, code in source_codes().items()}
     codes, counts = np.unique(source, return_counts=True)
