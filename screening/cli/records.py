@@ -199,16 +199,6 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md.
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A period outside the range is refused before the result is opened:
-
-    >>> try:
-    ...     fragility_over_im_command("result.nc", (0.01,), None, "vanmarcke", None, None, "sa", 500.0)
-    ... except CommandError as exc:
-    ...     print(exc)
-    parameter '--period' must be a finite number >= 0.001 and <= 100 (got 500.0)
     """
     from screening.analysis.fragility import with_modelling_dispersion
     from screening.applications.im_fragility import fragility_over_im, stack_limit_states, limit_state_name

@@ -126,13 +126,6 @@ def foundation_constants(foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> foundation_constants(bed)
-    (28900000.0, 0.0, 895000000.0, False)
     """
     return float(foundation.k), float(foundation.eps), float(foundation.damping), foundation.law == "winkler"
 
@@ -164,13 +157,6 @@ def law_constants(foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> law_constants(bed)
-    (28900000.0, 0.0, 0.0, 895000000.0)
     """
     w_rate, w_indentation = foundation.damping_weights
     return float(foundation.k), float(foundation.eps), float(w_rate), float(w_indentation)
@@ -203,12 +189,6 @@ def corner_indentations(theta, z_cb, b):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> z_c, z_f = corner_indentations(1e-3, 2e-5, 0.035)
-    >>> f"{float(z_c):.3e} {float(z_f):.3e}"
-    '5.500e-05 -1.500e-05'
     """
     a = np.abs(np.sin(np.asarray(theta, dtype=float)))
     z_cb = np.asarray(z_cb, dtype=float)
@@ -241,12 +221,6 @@ def contact_regime(theta, z_cb, b):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> codes = contact_regime([0.0, 1e-3, -1e-3, 1e-3], [2e-5, 2e-5, 2e-5, -1e-4], 0.035)
-    >>> [REGIME_NAMES[int(r)] for r in codes]
-    ['full contact', 'uplift, theta > 0', 'uplift, theta < 0', 'flight']
     """
     theta = np.asarray(theta, dtype=float)
     z_c, z_f = corner_indentations(theta, z_cb, b)
@@ -279,11 +253,6 @@ def contact_length(theta, z_cb, b):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> [f"{p:.4g}" for p in contact_length([0.0, 1e-3, 1e-3], [2e-5, 2e-5, -1e-4], 0.035)]
-    ['0.07', '0.055', '0']
     """
     a = np.abs(np.sin(np.asarray(theta, dtype=float)))
     z_c, z_f = corner_indentations(theta, z_cb, b)
@@ -331,12 +300,6 @@ def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, win
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> F, M = contact_resultants(0.0, 0.0, 4.2e-5, 0.0, 0.035, 2.89e7, 0.0, 8.95e8)
-    >>> f"{float(F):.4g} {float(M):.4g}"
-    '84.97 0'
     """
     w_rate, w_indentation = (damping, 0.0) if winkler else (0.0, damping)
     return law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation)
@@ -387,12 +350,6 @@ def law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indent
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> F, M = law_resultants(1e-3, 0.0, 2e-5, 0.0, 0.035, 2.89e7, 0.0, 0.0, 8.95e8)
-    >>> f"{float(F):.4g} {float(M):.4g}"
-    '43.71 0.7285'
     """
     theta = np.asarray(theta, dtype=float)
     theta_dot = np.asarray(theta_dot, dtype=float)
@@ -454,13 +411,6 @@ def linear_indentation(block, foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{float(linear_indentation(block, bed)):.4e}"
-    '4.2043e-05'
     """
     return block.m * block.g / (2.0 * block.b * foundation.k)
 
@@ -490,13 +440,6 @@ def bed_rocking_stiffness(block, foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{float(bed_rocking_stiffness(block, bed)):.4g}"
-    '826.1'
     """
     return 2.0 / 3.0 * block.b**3 * foundation.k
 
@@ -527,13 +470,6 @@ def linear_rocking_stiffness(block, foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{float(linear_rocking_stiffness(block, bed)):.4g}"
-    '808.2'
     """
     return bed_rocking_stiffness(block, foundation) - block.m * block.g * block.h
 
@@ -567,11 +503,6 @@ def rising_root(alpha, beta, rhs, max_iter=100):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> f"{float(rising_root(1.0, 1.0, 2.0)):.12f}"
-    '1.000000000000'
     """
     alpha, beta, rhs = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (alpha, beta, rhs)))
     z = rhs / beta
@@ -615,12 +546,6 @@ def rest_indentation(block, foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> f"{float(rest_indentation(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7))):.6e}"
-    '3.859378e-05'
     """
     z_lin = linear_indentation(block, foundation)
     eps = np.asarray(foundation.eps, dtype=float)
@@ -668,12 +593,6 @@ def vertical_damping_ratio(block, foundation, z_rest=None):
     .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
        vibroimpact", J. Appl. Mech. 42 (1975) 440-445.
     .. [3] [clough1975] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> f"{float(vertical_damping_ratio(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))):.4f}"
-    '0.3145'
     """
     if z_rest is None:
         z_rest = rest_indentation(block, foundation)
@@ -710,13 +629,6 @@ def bearing_load(block, foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.model import Block, Foundation
-    >>> load = bearing_load(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5))
-    >>> f"{float(load):.3g}"
-    '0.00106'
     """
     eps = np.asarray(foundation.eps, dtype=float)
     return -eps * np.asarray(linear_indentation(block, foundation), dtype=float) ** 2
@@ -751,15 +663,6 @@ def exact_uplift_angle(block, foundation):
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.model import Block, Foundation
-    >>> block = Block(m=8.67, b=0.035, h=0.21)
-    >>> f"{float(exact_uplift_angle(block, Foundation(k=2.89e7, lam=8.95e8))):.4e}"
-    '1.2012e-03'
-    >>> f"{float(exact_uplift_angle(block, Foundation(k=2.89e7, lam=8.95e8, eps=6e7))):.4e}"
-    '1.0372e-03'
     """
     eps = np.asarray(foundation.eps, dtype=float)
     carried = bearing_load(block, foundation) < UPLIFT_BEARING_LIMIT
@@ -808,14 +711,6 @@ def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping,
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math
-    >>> F, M = contact_resultants_jit(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8, False)
-    >>> F0, M0 = contact_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8)
-    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
-    True
     """
     return contact_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                        damping, winkler)
@@ -863,14 +758,6 @@ def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damp
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math
-    >>> F, M = contact_resultants_trig_jit(math.sin(1e-3), math.cos(1e-3), 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8, False)
-    >>> F0, M0 = contact_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 8.95e8)
-    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
-    True
     """
     if winkler:
         return law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, 0.0)
@@ -916,14 +803,6 @@ def law_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_in
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math
-    >>> F, M = law_resultants_jit(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
-    >>> F0, M0 = law_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
-    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
-    True
     """
     return law_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                    w_rate, w_indentation)
@@ -970,14 +849,6 @@ def law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, 
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math
-    >>> F, M = law_resultants_trig_jit(math.sin(1e-3), math.cos(1e-3), 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
-    >>> F0, M0 = law_resultants(1e-3, 0.1, 2e-5, 0.0, 0.035, 2.89e7, 6e7, 0.0, 8.95e8)
-    >>> bool(math.isclose(F, F0, rel_tol=1e-12) and math.isclose(M, M0, rel_tol=1e-12))
-    True
     """
     sigma = 1.0 if s >= 0.0 else -1.0
     a = sigma * s
