@@ -25,9 +25,7 @@ import numpy as np
 
 from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
 
-__all__ = ["NEIGHBOURS", "MIN_POINTS", "MAX_SE", "NOISE_FLOOR", "DISTANCE_FLOOR", "REACH", "Correction",
-           "point_features", "fit_correction", "predict_correction", "linearization_promises", "within_band",
-           "INTERVAL_Z", "atlas_correction", "atlas_promises", "best_estimates"]
+__all__ = []
 
 #: Numbers of neighbours tried by the leave-one-out choice.
 NEIGHBOURS = (1, 2, 3, 4, 6, 8)

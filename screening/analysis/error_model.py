@@ -43,15 +43,7 @@ from screening.core.physics.contact import REST_BEARING_LIMIT, rising_root, vert
 from screening.core.status import PointStatus, Trust
 from screening.solvers.datasets import model_fields, model_labels
 
-__all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS",
-           "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
-           "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets",
-           "valid_reference", "ErrorModel",
-           "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
-           "TRUSTED_ERROR", "UNTRUSTED_ERROR", "trust_from_interval", "ATLAS_FILE", "shipped_model",
-           "parameter_groups", "dataset_features", "model_features", "INPUT_FEATURES", "ATLAS_KINDS",
-           "ATLAS_CONTACTS", "inside_atlas", "interval_trust", "with_error_model", "N_REGIMES",
-           "fitted_variables", "model_from_atlas", "open_ended"]
+__all__ = []
 
 #: The features, in order: the linearization's indicators and the point's dimensionless inputs.
 FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",

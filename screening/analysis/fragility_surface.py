@@ -32,9 +32,7 @@ from scipy.spatial import Delaunay, QhullError
 
 from screening.solvers.estimates import binomial_estimate
 
-__all__ = ["FORMS", "MIN_IN_PLAY", "LOO_PASS", "LOO_Z", "MIN_POINTS_PER_TERM", "Surface", "surface_inputs",
-           "surface_terms", "fit_probit_surface", "predict_surface", "choose_form", "leave_one_out", "loo_check",
-           "loo_scale", "inside_hull", "study_surface"]
+__all__ = []
 
 #: Model forms, from the simplest: the probit of the probability linear in the standardised inputs, or
 #: quadratic (squares and pairwise products added).

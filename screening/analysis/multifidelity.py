@@ -30,10 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ControlVariateEstimate", "conditional_mean_influence", "control_variate_estimate",
-           "control_variate_functional", "multifidelity_probabilities", "multifidelity_variance", "optimal_ratio",
-           "Allocation", "allocate", "MIN_GAIN",
-           "cost_ratio_needed", "speedup", "variance_influence"]
+__all__ = []
 
 
 @dataclass(frozen=True)

@@ -29,10 +29,7 @@ from screening.core.status import (AnswerQuantity, BestMethod, PointStatus, prob
 from screening.solvers import mc_registry
 from screening.solvers.estimates import binomial_estimate, sample_probabilities, Z
 
-__all__ = ["uplift_acceleration", "source_codes", "monte_carlo_source", "choose_sources",
-           "overturning_probability", "TOPPLING_FRACTION", "spot_check_probabilities", "probability_text", "Z",
-           "binomial_estimate", "sample_probabilities", "HEAVY_UPLIFT", "NEAR_TOPPLING_STATUS", "answer_quantities",
-           "reliable_answer"]
+__all__ = []
 
 
 def uplift_acceleration(block, foundation, condensation):

@@ -14,7 +14,7 @@ import math
 from screening.solvers.moments import solve_moments
 from screening.core.status import PointStatus
 
-__all__ = ["round_significant", "calibrate_intensity"]
+__all__ = []
 
 
 def round_significant(x, digits=3):

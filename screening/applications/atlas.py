@@ -53,10 +53,7 @@ from screening.core.model.excitation import Envelope
 from screening.core.physics.contact import rest_indentation, vertical_damping_ratio
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-__all__ = ["GROUPS", "RANGES", "BED_EDGES", "SOFTENING_E", "HARDENING_E", "WHITE_FRACTION", "P_TARGET",
-           "BEYOND_EDGE", "P_BEYOND", "BEYOND_FACTOR", "RECORD_T1", "N_OUTPUT", "SCALE_R", "SCALE_M", "G",
-           "FAMILY_ALPHA_EDGES", "FAMILY_R_EDGES", "BED_LAWS", "KINDS", "design", "groups_of", "housner_frequency",
-           "physical_point", "make_excitation", "measured_groups", "derived_groups", "family_of", "family_name"]
+__all__ = []
 
 #: Axes of the unit-cube design, in order.
 GROUPS = ("alpha", "log10_r_ul", "log10_zeta_v", "u_bed", "u_kind", "log10_omega_g_p", "zeta_g", "log10_tau",

@@ -32,8 +32,7 @@ from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.synthesis import vertical_frequency
 from screening.solvers.timegrid import output_times
 
-__all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
-           "assemble", "reference_validity", "REFERENCE_VALIDITY", "OUTSIDE_RULE", "mc_exceedance", "VARIABLES"]
+__all__ = []
 
 #: Exceedance levels as fractions of the slenderness angle [1].
 LEVELS = (0.05, 0.1, 0.2, 0.5, 1.0)

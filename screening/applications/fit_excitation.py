@@ -51,9 +51,7 @@ from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd, KanaiTajim
 from screening.core.excitations.white import WhiteNoise
 from screening.core.records import Record
 
-__all__ = ["envelope_energy", "DEFAULT_BAND_TOP", "fit_envelope", "smoothed_psd", "fit_spectral_shape", "DT_RANGE", "MIN_SAMPLES",
-           "DEGENERATE_T_RATIO", "MIN_ZETA_G", "HUSID_GAP", "DC_FRACTION", "MAX_SPIKE_SHARE", "checked_record",
-           "envelope_peak", "zero_crossing_rate", "husid", "goodness_of_fit", "fit_excitation", "excitation_table"]
+__all__ = []
 
 
 #: Default top of the fitted band [rad/s]: 20 Hz (records are usually low-pass filtered at 20-25 Hz).

@@ -40,10 +40,7 @@ from screening.analysis.intensity import intensity_measures
 from screening.core.atomicfile import atomic_open
 from screening.core.status import FitFlag
 
-__all__ = ["IMS", "default_dim", "fragility_over_im", "LIMIT_STATES", "THRESHOLD_FREE", "NoExport",
-           "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text",
-           "case_values", "export_problem", "fragility_intensity", "im_key", "curves_by_object", "write_csv", "write_pelicun_csv", "write_pelicun_json",
-           "nrml_limit_state", "nrml_parameters", "write_nrml"]
+__all__ = []
 
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
 IMS = {

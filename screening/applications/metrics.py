@@ -23,10 +23,7 @@ import math
 
 import numpy as np
 
-__all__ = ["RULE_METRICS", "peak_with_se", "relative_difference", "peak_relative_error",
-           "time_averaged_relative_error", "time_averaged_relative_se", "combined_se", "is_significant",
-           "classify_error", "threshold_rule", "rule_error", "compare", "safe_indicator_range", "rule_groups",
-           "derive_rules"]
+__all__ = []
 
 #: Error a validity rule is judged on (:func:`rule_error`).
 RULE_METRICS = ("peak", "time_avg", "worst")

@@ -22,8 +22,7 @@ from screening.applications.im_fragility import (IMS, curves_by_object, export_p
                                                  fragility_over_im, im_key, stack_limit_states)
 from screening.core.status import FitFlag
 
-__all__ = ["annual_frequency", "HazardCurve", "HazardError", "read_hazard", "hazard_levels", "risk_table",
-           "RISK_COLUMNS", "write_risk_csv", "limit_state_fragilities"]
+__all__ = []
 
 #: Standard gravity [m s-2]: OpenQuake's accelerations are in g.
 G = 9.80665

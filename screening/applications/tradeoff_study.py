@@ -23,8 +23,7 @@ from screening.sweep.config import (EXCITATIONS, NUMERIC, TABLE_KEYS, Case, Stud
                                     read_study_text, required, resolve_case, table, time_table,
                                     title_and_description, type_name)
 
-__all__ = ["METHODS", "MCS_MODELS", "COMPARISONS", "QUANTITIES", "MODEL_KEYS", "EXAMPLE_TRADEOFF_STUDY", "Family",
-           "TradeoffStudy", "load_tradeoff_study", "parse_tradeoff_study", "example_tradeoff"]
+__all__ = []
 
 #: The methods compared: stochastic linearization and Monte Carlo on the condensed / coupled model.
 METHODS = ("sl", "condensed_mcs", "coupled_mcs")

@@ -16,10 +16,7 @@ from screening.cli._common import say, temporary_for, write_error
 from screening import __version__
 from screening.core.limits import MAX_MODELLING_DISPERSION
 
-__all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
-           "WORKER_COUNT", "POSITIVE_FLOAT", "DISPERSION", "ZLIB_LEVEL", "cli", "announce_compilation", "stamp_fragility",
-           "lognormal_fit_text", "write_file_set", "refuse_collisions", "fragility_outputs", "fragility_figures", "fit_files",
-           "write_fragility_files"]
+__all__ = []
 
 EXIT_OK = 0
 EXIT_USAGE = 2

@@ -45,11 +45,7 @@ from screening.cli.base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandEr
                                 write_fragility_files, DISPERSION, fragility_outputs, refuse_collisions)
 from screening import __version__
 
-__all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
-           "WORKER_COUNT", "POSITIVE_FLOAT", "ZLIB_LEVEL", "cli", "main", "RESUMING_COMMANDS", "interrupted_note",
-           "announce_compilation", "printable", "cmd_run", "stamp_fragility", "lognormal_fit_text",
-           "write_file_set", "fragility_figures", "fit_files", "write_fragility_files", "cmd_plot",
-           "cmd_fragility", "cmd_tradeoff", "cmd_info", "cmd_export"]
+__all__ = []
 
 def main(argv=None):
     """Entry point of the ``screening`` console script; returns the exit status.

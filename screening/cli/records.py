@@ -17,8 +17,7 @@ from screening.cli.base import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandEr
                                 fragility_figures, lognormal_fit_text, fit_files, stamp_fragility, write_file_set,
                                 write_fragility_files, fragility_outputs, refuse_collisions)
 
-__all__ = ["SERIAL_RECORDS", "UNITS_HELP", "cmd_simulate", "fragility_over_im_command", "cmd_fit_excitation",
-           "cmd_cloud"]
+__all__ = []
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4

@@ -14,7 +14,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["temporary_beside", "publish", "atomic_path", "atomic_open", "open_nofollow", "create_new"]
+__all__ = []
 
 
 def temporary_beside(path, suffix=""):

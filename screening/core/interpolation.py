@@ -20,8 +20,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-__all__ = ["SIGNIFICAND_BITS", "cubic_coefficients", "octave_grid", "octave_position", "octave_first",
-           "octave_position_jit", "cubic", "hermite_weights", "hermite", "hermite_rate"]
+__all__ = []
 
 #: Bits of a double's significand.
 SIGNIFICAND_BITS = 52

@@ -14,12 +14,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEFAULT_MAX_POINTS", "MAX_POINTS_CEILING", "MAX_TIMES", "MAX_SAMPLES", "MAX_SAMPLE_VALUES", "MAX_SEED",
-           "MAX_STUDY_CHARS", "MAX_NESTING", "MAX_HISTORY_VALUES", "MAX_RTOL", "TASK_BYTES", "MAX_CASES",
-           "MAX_THRESHOLDS", "MAX_STUDY_BYTES", "MAX_SYNTHESIS_POINTS", "MAX_RECORD_BYTES", "MAX_RECORD_SAMPLES", "MIN_RECORD_DT",
-           "MAX_RECORD_DT", "MAX_RECORD_SCALE", "MAX_RECORD_FILES", "SA_PERIOD_RANGE", "MAX_MODELLING_DISPERSION",
-           "nesting_depth",
-           "output_steps", "batch_budget"]
+__all__ = []
 
 #: Default largest grid (``case`` x swept parameters); ``[run] max_points`` changes it.
 DEFAULT_MAX_POINTS = 1_000_000

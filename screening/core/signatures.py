@@ -15,8 +15,7 @@ import numba
 import numpy as np
 from numba import types
 
-__all__ = ["FMA", "FLOAT", "TABLE", "record_type", "moment_coefficients_signature", "sdof_coefficients_signature",
-           "function_type", "SdofKernel", "MomentKernel"]
+__all__ = []
 
 #: Floating-point flags of the moment solver's step loops and the coefficient functions they call:
 #: LLVM may fuse a multiply and an add into one FMA instruction where the CPU has one (shorter

@@ -20,10 +20,9 @@ from importlib import resources
 
 import numpy as np
 
-__all__ = ["CODE_SPACES", "code_space", "PointStatus", "SampleStatus", "DivergenceReason", "SampleState",
-           "SpotStatus", "Trust", "BestMethod", "EscalationModel", "EscalationEstimator", "TargetMet", "ContactRegime", "FitFlag",
-           "ProbabilitySource", "AnswerQuantity", "MONTE_CARLO_SOURCE_BASE", "DIVERGENCE_TEXT", "probability_sources",
-           "flag_attributes"]
+__all__ = ["PointStatus", "SampleStatus", "DivergenceReason", "SampleState", "SpotStatus", "Trust", "BestMethod",
+           "EscalationModel", "EscalationEstimator", "TargetMet", "ContactRegime", "FitFlag", "ProbabilitySource",
+           "AnswerQuantity"]
 
 try:
     import tomllib

@@ -11,8 +11,7 @@ import stat
 import numpy as np
 import xarray as xr
 
-__all__ = ["NOT_NUMBERS", "as_checked_array", "check_scalar", "check_integer", "check_size", "checked",
-           "InputFileError", "file_problem", "input_path", "read_input_bytes", "read_input_text"]
+__all__ = []
 
 
 #: numpy dtype kinds that are not real numbers although ``float()`` accepts some of them: booleans,

@@ -5,8 +5,7 @@ from __future__ import annotations
 import errno
 import os
 
-__all__ = ["SweepError", "exception_line", "ReadFailure", "read_values", "LOW_SPACE_BYTES", "write_failure_reason",
-           "is_write_error"]
+__all__ = []
 
 
 class SweepError(Exception):

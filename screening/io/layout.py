@@ -11,7 +11,7 @@ import numpy as np
 from screening.core.model import Block
 from screening.solvers.schema import PARAMETERS
 
-__all__ = ["SPOT_HISTORIES", "SPOT_LINEAR", "hyperslabs", "history_chunks", "parameter_table", "wants_probabilities"]
+__all__ = []
 
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")

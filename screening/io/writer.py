@@ -58,9 +58,7 @@ from screening.solvers.outputs import client_variables, GRID_OUTPUTS, selected
 from screening.solvers.schema import (ACCURACY, attributes, global_attributes, grid_coordinate_attributes,
                                       PRESSURE_PARAMETERS, SWEEP, TIME)
 
-__all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
-           "NetcdfFormat", "result_attributes",
-           "relative_peak_error", "point_chunks", "region_variables", "write_region", "ResultFile"]
+__all__ = []
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
 COMPLEVEL = 1

@@ -26,8 +26,7 @@ import threading
 import time
 from pathlib import Path
 
-__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation", "CompileAnnouncer",
-           "announcing_compiles", "source_stamp", "clear_stale_cache"]
+__all__ = []
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 

@@ -20,7 +20,7 @@ from screening.applications.risk import risk_table
 from screening.core.atomicfile import atomic_open
 from screening.report.figure_base import new_figure
 
-__all__ = ["report_objects", "write_report"]
+__all__ = []
 
 #: Marker of each probability source (``p_source`` flag meaning); others get ``"P"``.
 MARKERS = {"linearization_gaussian": "o", "corrected_linearization_gaussian": "s", "study_fragility_surface": "D",

@@ -22,10 +22,7 @@ from matplotlib.patches import Patch
 from screening.core.atomicfile import atomic_open
 from screening.core.status import PointStatus, Trust
 
-__all__ = ["DPI", "RESPONSES", "FLAGGED_HATCH", "UNTRUSTED_HATCH", "FLAGGED_COLOR", "UNTRUSTED_COLOR",
-           "point_flags", "flag_summary", "point_flag_text", "response_values", "flag_legend", "grid_dims",
-           "grid_values", "grid_units", "spot_index", "is_log_spaced", "point_label", "new_figure", "save_figure",
-           "axis_label"]
+__all__ = []
 
 DPI = 110
 

@@ -28,8 +28,7 @@ from screening.report.spot_figures import (
     MAX_SPOT_FIGURES, SPOT_PANEL_HISTORIES, plot_spot_panels, plot_spots, spot_file_label)
 from screening.core.status import PointStatus
 
-__all__ = ["HISTORY_PANELS", "PEAK_PANELS", "LOG_PANELS", "representative_points", "plot_histories", "plot_peaks",
-           "plot_result"]
+__all__ = []
 
 HISTORY_PANELS = ("var_theta", "var_theta_dot", "c_eq", "k_eq", "p_uplift")
 PEAK_PANELS = ("peak_var_theta", "peak_p_uplift", "min_k_eq", "status")

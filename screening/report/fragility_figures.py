@@ -13,7 +13,7 @@ from screening.report.figure_base import (
     point_flags, point_label, save_figure)
 from screening.core.status import BestMethod, FitFlag
 
-__all__ = ["plot_fragility", "BEST_MARKERS", "PANEL_CASES"]
+__all__ = []
 
 
 def plot_fragility(frag, dim, path, max_curves=8, flags=None):

@@ -12,7 +12,7 @@ from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
 from screening.core.records import Record
 from screening.report.figure_base import new_figure, save_figure
 
-__all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit", "plot_stripes", "plot_cloud"]
+__all__ = []
 
 REGIME_LABELS = {0: "full contact", 1: "uplift +", 2: "uplift -", 3: "flight"}
 

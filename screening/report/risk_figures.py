@@ -8,7 +8,7 @@ import numpy as np
 
 from screening.report.figure_base import new_figure, save_figure
 
-__all__ = ["plot_risk"]
+__all__ = []
 
 
 def plot_risk(rows, path, title="", years=50.0):

@@ -16,7 +16,7 @@ from screening.analysis.probabilities import probability_text, spot_check_probab
 from screening.report.figure_base import (axis_label, flag_summary, new_figure, point_flag_text, point_label,
                                           save_figure, spot_index)
 
-__all__ = ["plot_spots", "Z95", "MAX_SPOT_FIGURES", "spot_file_label", "plot_spot_panels", "SPOT_PANEL_HISTORIES"]
+__all__ = []
 
 def plot_spots(ds, path):
     """Linearization vs Monte Carlo at the spot points, as a PNG.

@@ -14,8 +14,7 @@ from screening.core.status import BestMethod, PointStatus, SpotStatus, Trust
 from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
 from screening.solvers.outputs import info_variables
 
-__all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
-           "product_kind", "describe_product"]
+__all__ = []
 
 
 def _fmt(value):

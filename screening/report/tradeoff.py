@@ -57,8 +57,7 @@ from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
 from screening.sweep.config import StudyError, build_models
 
-__all__ = ["round_significant", "calibrate_intensity", "Point", "time_call", "set_threads", "run_tradeoff",
-           "rerender_reports"]
+__all__ = []
 
 
 # ============================================================================ model set-up

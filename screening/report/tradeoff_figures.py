@@ -15,7 +15,7 @@ from screening.applications.metrics import classify_error, rule_error
 from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
 from screening.report.figure_base import save_figure
 
-__all__ = ["DPI", "study_n", "plot_error_vs_cost", "plot_validity"]
+__all__ = []
 
 DPI = 130
 

@@ -17,7 +17,7 @@ from screening.applications.metrics import derive_rules
 from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
 from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, write_csv
 
-__all__ = ["LABEL_DIMS", "to_file_layout", "from_file_layout", "file_encoding", "output_paths", "write_reports"]
+__all__ = []
 
 #: Dimensions labelled by strings in memory (``ds.sel(approach="sl")``); in the file they are
 #: plain dimensions with a ``<dim>_name`` auxiliary coordinate (CF coordinate variables are numeric).

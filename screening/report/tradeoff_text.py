@@ -17,8 +17,7 @@ from screening.applications.tradeoff_study import COMPARISONS, METHODS, QUANTITI
 from screening.core.atomicfile import atomic_open
 from screening.core.status import PointStatus
 
-__all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary",
-           "markdown_report", "summary_text"]
+__all__ = []
 
 
 def rule_text(rule, metric, quantity):

@@ -27,8 +27,7 @@ from screening.solvers.estimates import sample_probabilities
 from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
 from screening.core.status import DIVERGENCE_TEXT, DivergenceReason
 
-__all__ = ["MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
-           "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
+__all__ = []
 
 #: Ensemble statistics of a Monte Carlo run, on ``t``.
 MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",

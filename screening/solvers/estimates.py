@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Z", "binomial_estimate", "sample_probabilities"]
+__all__ = []
 
 #: ``z`` of the Agresti-Coull interval (about 95 %, ``p_tilde +- Z se``).
 Z = 2.0

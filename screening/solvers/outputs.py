@@ -23,8 +23,7 @@ import numpy as np
 
 from screening.core.status import PointStatus, Trust, flag_attributes
 
-__all__ = ["Output", "STAGES", "WHEN", "GRID_OUTPUTS", "OUTPUTS", "HISTORY_VARIABLES", "of_stage", "selected",
-           "client_variables", "info_variables", "solver_summaries", "linearize_variables", "failed_value"]
+__all__ = []
 
 #: Who fills a variable: the moment solver (``linearize``), the block's model (``model``), the trust rule
 #: (:mod:`screening.analysis.trust`), the intensity measures of the input and the probability that rocking

@@ -19,11 +19,7 @@ from screening.core.status import (AnswerQuantity, BestMethod, ContactRegime, Es
 from screening.solvers import mc_registry
 from screening.solvers.outputs import of_stage, OUTPUTS
 
-__all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
-           "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "TAIL", "FRAGILITY", "PROBABILITIES",
-           "probability_source_attributes", "TRADEOFF", "SIMULATION", "INTENSITY", "SWEEP", "SWEEP_INPUTS",
-           "CLOUD", "TRUST_CALIBRATION", "COORDINATES", "PRESSURE_PARAMETERS", "grid_coordinate_attributes",
-           "cdo_threshold_attributes", "attributes", "global_attributes", "apply_schema"]
+__all__ = []
 
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"

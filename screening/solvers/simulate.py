@@ -55,7 +55,7 @@ from screening.core.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReas
 from screening.core.validation import check_integer, check_scalar
 from screening.core import limits
 
-__all__ = ["MAX_OVERTURN_RESOLUTION", "REGIME_NONE", "SIGN_CONVENTION", "simulation_times", "simulate"]
+__all__ = ["simulate"]
 
 #: Most sub-intervals on which the overturning time is located.
 MAX_OVERTURN_RESOLUTION = 100_000

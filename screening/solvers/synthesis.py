@@ -45,11 +45,7 @@ from screening.core.excitations.base import band_top
 from screening.core.model import Block, Foundation
 from screening.core.physics.contact import linear_rocking_stiffness
 
-__all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
-           "default_cutoffs", "max_band_limit_hz", "check_band", "synthesis_cutoff", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
-           "grid_points", "spectral_plan", "low_passed", "validate_seed", "sample_phases", "stationary_samples",
-           "samples_from_phases",
-           "ground_acceleration_samples", "ground_acceleration"]
+__all__ = []
 
 
 #: Default cutoff = CUTOFF_FACTOR x the larger of the rocking and vertical frequencies.

@@ -24,7 +24,7 @@ from screening.solvers import schema
 from screening.solvers.montecarlo import sample_setup
 from screening.solvers.synthesis import samples_from_phases, validate_seed
 
-__all__ = ["SAMPLERS", "SubsetEstimate", "chain_correlation_factor", "subset_simulation", "tail_probability"]
+__all__ = ["tail_probability"]
 
 #: Markov chain samplers of the levels: ``"acs"`` adaptive conditional sampling (Papaioannou et al. 2015),
 #: ``"mma"`` the component-wise modified Metropolis of Au & Beck (2001).

@@ -7,7 +7,7 @@ import numpy as np
 from screening.core.validation import checked
 from screening.core import limits
 
-__all__ = ["output_times"]
+__all__ = []
 
 
 def output_times(t_end=20.0, dt=0.05):

@@ -24,8 +24,7 @@ from scipy import integrate
 
 from screening.core.validation import checked
 
-__all__ = ["GROUND_BAND_LIMIT_HZ", "BAND_ORDER", "BAND_TAIL", "ground_cutoff", "band_gain", "band_top",
-           "band_filter", "cascade", "Parameter", "Filter", "transfer_psd", "stationary_covariance", "Excitation"]
+__all__ = ["Excitation", "Filter", "Parameter", "stationary_covariance", "transfer_psd"]
 
 #: Default ground-motion band limit [Hz] of every excitation (its ``band_limit_hz``): the corner of the
 #: low-pass :func:`band_gain` every model applies alike, and the band its intensity measures (and a

@@ -25,7 +25,7 @@ from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_ps
 from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 
-__all__ = ["clough_penzien_filter", "clough_penzien_psd", "CloughPenzien"]
+__all__ = ["CloughPenzien"]
 
 
 def clough_penzien_filter(omega_g, zeta_g, omega_f, zeta_f):

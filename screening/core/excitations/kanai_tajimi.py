@@ -13,8 +13,7 @@ from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Fi
 from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 
-__all__ = ["kanai_tajimi_filter", "kanai_tajimi_psd", "KanaiTajimi", "kanai_tajimi_stationary_moments",
-           "stationary_filter_moments_jit"]
+__all__ = ["KanaiTajimi"]
 
 
 def kanai_tajimi_filter(omega_g, zeta_g):

@@ -11,7 +11,7 @@ import numpy as np
 from screening.core.laws.base import ContactLaw
 from screening.core.laws.registry import register
 
-__all__ = ["hunt_crossley_damping", "HuntCrossley", "HUNT_CROSSLEY"]
+__all__ = ["HuntCrossley"]
 
 
 def hunt_crossley_damping(z, z_dot, lam):

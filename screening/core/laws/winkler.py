@@ -11,7 +11,7 @@ import numpy as np
 from screening.core.laws.base import ContactLaw
 from screening.core.laws.registry import register
 
-__all__ = ["winkler_damping", "Winkler", "WINKLER"]
+__all__ = ["Winkler"]
 
 
 def winkler_damping(z, z_dot, c):

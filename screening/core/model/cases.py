@@ -12,7 +12,7 @@ from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 
-__all__ = ["PAPER_BLOCK", "PAPER_BED", "PAPER_CASES", "paper_case"]
+__all__ = []
 
 PAPER_BLOCK = dict(m=8.67, b=0.035, h=0.21)
 PAPER_BED = dict(k=2.89e7, lam=8.95e8)

@@ -13,7 +13,7 @@ import functools
 
 import numpy as np
 
-__all__ = ["numeric_fields", "broadcast_shape", "flatten", "select", "point_key"]
+__all__ = []
 
 
 @functools.lru_cache(maxsize=None)

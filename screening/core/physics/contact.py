@@ -84,11 +84,7 @@ import numpy as np
 
 from screening.core.status import ContactRegime
 
-__all__ = ["bed_rocking_stiffness", "linear_rocking_stiffness", "REGIME_FULL_CONTACT", "REGIME_UPLIFT_POSITIVE", "REGIME_UPLIFT_NEGATIVE", "REGIME_FLIGHT",
-           "REGIME_NAMES", "foundation_constants", "law_constants", "corner_indentations", "contact_regime",
-           "contact_length", "contact_resultants", "law_resultants", "linear_indentation", "rising_root",
-           "rest_indentation", "vertical_damping_ratio", "REST_BEARING_LIMIT", "UPLIFT_BEARING_LIMIT", "bearing_load", "exact_uplift_angle", "contact_resultants_jit", "contact_resultants_trig_jit", "law_resultants_jit",
-           "law_resultants_trig_jit"]
+__all__ = []
 
 #: Integer codes of the contact regimes returned by :func:`contact_regime`.
 REGIME_FULL_CONTACT = int(ContactRegime.full_contact)
