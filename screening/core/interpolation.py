@@ -160,28 +160,9 @@ def _float_bits(typingctx, x):
 
 @numba.njit(cache=True, inline="always")
 def octave_position_jit(x, first, bits):
-    """Compiled twin of :func:`octave_position`, from the bits of ``x``.
+    """Compiled twin of :func:`octave_position`, exact from the bits of ``x`` (a bit cast, a shift and a mask).
 
-    Parameters
-    ----------
-    x : float
-        A number.
-    first : int
-        :func:`octave_first` of the grid.
-    bits : int
-        Mantissa bits of the grid.
-
-    Returns
-    -------
-    j : int
-        Interval index; negative for any ``x <= 0`` (``-0.0`` included), beyond every grid for ``+inf``, NaN.
-    s : float
-        Fraction [1] in [0, 1).
-
-    Notes
-    -----
-    Exact (no rounding): a bit cast of the binary64 ``x`` [1], a shift and a mask.
-
+    ``j`` is negative for any ``x <= 0`` (``-0.0`` included) and beyond every grid for ``+inf`` and NaN.
     """
     shift = SIGNIFICAND_BITS - bits
     b = _float_bits(x)
@@ -286,36 +267,13 @@ def hermite(v0, v1, d0, d1, s, step):
 
 @numba.njit(cache=True, inline="always")
 def hermite_rate(v0, v1, d0, d1, s, step):
-    """Derivative of :func:`hermite` with respect to the grid variable at fraction ``s``.
-
-    Parameters
-    ----------
-    v0 : float
-        Value at the interval's start.
-    v1 : float
-        Value at its end.
-    d0 : float
-        Derivative at the start (per unit of ``step``).
-    d1 : float
-        Derivative at the end.
-    s : float
-        Fraction [1] of the interval.
-    step : float
-        Interval length.
-
-    Returns
-    -------
-    float
-        The rate, in units of the values per unit of ``step``.
+    """Like :func:`hermite` (same arguments): its derivative with respect to the grid variable [values per
+    unit of ``step``].
 
     Notes
     -----
     ``6 (s - s^2) (v1 - v0) / step + (3 s^2 - 4 s + 1) d0 + (3 s^2 - 2 s) d1``, the derivative of the
-    Hermite basis [1].
-
-    References
-    ----------
-    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
+    Hermite basis ([fritsch1980] in the bibliography).
     """
     s2 = s * s
     return (6.0 * (s - s2) * (v1 - v0) / step + (3.0 * s2 - 4.0 * s + 1.0) * d0

@@ -669,44 +669,8 @@ def exact_uplift_angle(block, foundation):
 # ----------------------------------------------------------------------------- compiled
 @numba.njit(cache=True)
 def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """Compiled scalar :func:`contact_resultants` (Hunt–Crossley or Winkler by a flag).
-
-    Parameters
-    ----------
-    theta : float
-        Rotation [rad].
-    theta_dot : float
-        Rotation rate [rad s-1].
-    z_cb : float
-        Indentation of the base centre [m], positive into the bed.
-    z_cb_dot : float
-        Its rate [m s-1].
-    b : float
-        Half-width of the base [m].
-    k : float
-        Bed stiffness [N m-2].
-    eps : float
-        Cubic stiffness parameter [m-2].
-    damping : float
-        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
-    winkler : bool
-        True for a Winkler bed.
-
-    Returns
-    -------
-    F_cb : float
-        Resultant contact force [N].
-    M_cb : float
-        Resultant moment about the base centre [N m].
-
-    Notes
-    -----
-    Eqs. (5)-(6) in [1], exact; the compiled twin of :func:`contact_resultants`, kept for callers that hold a
-    flag (the solvers use :func:`law_resultants_jit`).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    """Compiled twin of :func:`contact_resultants` (scalars; ``winkler`` a flag), kept for callers that hold
+    a flag (the solvers use :func:`law_resultants_jit`).
     """
     return contact_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                        damping, winkler)
@@ -714,46 +678,8 @@ def contact_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping,
 
 @numba.njit(cache=True)
 def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler):
-    """:func:`contact_resultants_jit` from ``sin(theta)`` and ``cos(theta)``.
-
-    Parameters
-    ----------
-    s : float
-        ``sin(theta)`` [1] of the rotation, ``|theta| < pi/2``.
-    c : float
-        ``cos(theta)`` [1].
-    theta_dot : float
-        Rotation rate [rad s-1].
-    z_cb : float
-        Indentation of the base centre [m], positive into the bed.
-    z_cb_dot : float
-        Its rate [m s-1].
-    b : float
-        Half-width of the base [m].
-    k : float
-        Bed stiffness [N m-2].
-    eps : float
-        Cubic stiffness parameter [m-2].
-    damping : float
-        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
-    winkler : bool
-        True for a Winkler bed.
-
-    Returns
-    -------
-    F_cb : float
-        Resultant contact force [N].
-    M_cb : float
-        Resultant moment about the base centre [N m].
-
-    Notes
-    -----
-    Eqs. (5)-(6) in [1]: :func:`law_resultants_trig_jit` with the weights of the Winkler (``winkler`` true)
-    or Hunt–Crossley law.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    """Compiled twin of :func:`contact_resultants_jit` from ``s = sin(theta)`` and ``c = cos(theta)``
+    (``|theta| < pi/2``).
     """
     if winkler:
         return law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, 0.0)
@@ -762,89 +688,15 @@ def contact_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, damp
 
 @numba.njit(cache=True)
 def law_resultants_jit(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
-    """Compiled scalar :func:`law_resultants`: the contact force and moment of any contact law.
-
-    Parameters
-    ----------
-    theta : float
-        Rotation [rad].
-    theta_dot : float
-        Rotation rate [rad s-1].
-    z_cb : float
-        Indentation of the base centre [m], positive into the bed.
-    z_cb_dot : float
-        Its rate [m s-1].
-    b : float
-        Half-width of the base [m].
-    k : float
-        Bed stiffness [N m-2].
-    eps : float
-        Cubic stiffness parameter [m-2].
-    w_rate : float
-        Weight [N s m-2] of the rate in the damping pressure.
-    w_indentation : float
-        Weight [N s m-3] of the rate times the indentation.
-
-    Returns
-    -------
-    F_cb : float
-        Resultant contact force [N].
-    M_cb : float
-        Resultant moment about the base centre [N m].
-
-    Notes
-    -----
-    Eqs. (5)-(6) in [1], exact; the compiled twin of :func:`law_resultants` (same arguments and units).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    """
+    """Compiled twin of :func:`law_resultants` (scalars; same arguments and units)."""
     return law_resultants_trig_jit(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, b, k, eps,
                                    w_rate, w_indentation)
 
 
 @numba.njit(cache=True)
 def law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation):
-    """:func:`law_resultants_jit` from ``sin(theta)`` and ``cos(theta)`` (``|theta| < pi/2``).
-
-    Parameters
-    ----------
-    s : float
-        ``sin(theta)`` [1] of the rotation, ``|theta| < pi/2``.
-    c : float
-        ``cos(theta)`` [1].
-    theta_dot : float
-        Rotation rate [rad s-1].
-    z_cb : float
-        Indentation of the base centre [m], positive into the bed.
-    z_cb_dot : float
-        Its rate [m s-1].
-    b : float
-        Half-width of the base [m].
-    k : float
-        Bed stiffness [N m-2].
-    eps : float
-        Cubic stiffness parameter [m-2].
-    w_rate : float
-        Weight [N s m-2] of the rate in the damping pressure.
-    w_indentation : float
-        Weight [N s m-3] of the rate times the indentation.
-
-    Returns
-    -------
-    F_cb : float
-        Resultant contact force [N].
-    M_cb : float
-        Resultant moment about the base centre [N m].
-
-    Notes
-    -----
-    Eqs. (5)-(6) in [1]; used by the Monte Carlo integrator, which needs ``sin`` and ``cos`` anyway.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    """Compiled twin of :func:`law_resultants_jit` from ``s = sin(theta)`` and ``c = cos(theta)``
+    (``|theta| < pi/2``).
     """
     sigma = 1.0 if s >= 0.0 else -1.0
     a = sigma * s
