@@ -85,11 +85,6 @@ def point_features(features):
     -------
     numpy.ndarray
         Shape ``(points, kept features)``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
     """
     cols = []
     for value in features.values():
@@ -199,11 +194,6 @@ def predict_correction(correction, features):
         point —, floored at :data:`NOISE_FLOOR`.
     reached : numpy.ndarray of bool
         The nearest escalated point is within :data:`REACH` spacings and the features are finite.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
     """
     x = np.asarray(features, dtype=float)
     z = (x - correction.mean) / correction.scale
@@ -245,11 +235,6 @@ def linearization_promises(trust, low, high, target):
     -------
     numpy.ndarray of bool
         Per point.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
     """
     trust = np.asarray(trust)
     with np.errstate(invalid="ignore"):
@@ -322,11 +307,6 @@ def within_band(y, low, high):
     -------
     numpy.ndarray of bool
         Per point.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
     """
     with np.errstate(invalid="ignore", over="ignore"):
         implied = np.expm1(-np.asarray(y, dtype=float))
@@ -376,11 +356,6 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
         stopped).
     correction : Correction
         The fitted correction.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
     """
     sl = np.asarray(sl_peak, dtype=float).reshape(-1)
     n = sl.size

@@ -206,11 +206,6 @@ def smoothed_psd(record, T1, T2, smooth=2.0):
     Notes
     -----
     For a slowly modulated process ``E|A(omega)|^2 = 2 pi S(omega) int q^2 dt``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     a = record.acceleration
     n = a.size
@@ -248,11 +243,6 @@ def fit_spectral_shape(record, T1, T2, band=(1.0, None), smooth=2.0):
     -----
     Least squares on log scale of the shape ``(wg^4 + 4 zg^2 wg^2 w^2) / ((w^2 - wg^2)^2 + 4 zg^2 wg^2 w^2)``
     (eq. (50) in [1]) with its level free.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     w, s = smoothed_psd(record, T1, T2, smooth)
     hi = band[1] if band[1] is not None else min(0.5 * math.pi / record.dt, DEFAULT_BAND_TOP)
@@ -315,11 +305,6 @@ def checked_record(record):
         One line naming the problem and its allowed range: a time step outside :data:`DT_RANGE`, fewer
         than :data:`MIN_SAMPLES` samples, a non-finite value, a constant record, or one whose energy sits
         in a few samples (an impulse, a spike).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     dt = float(record.dt)
     if not DT_RANGE[0] <= dt <= DT_RANGE[1]:
@@ -362,11 +347,6 @@ def envelope_peak(T1, T2):
     Notes
     -----
     The envelope of eq. (57) in [1]; its peak is 1 only for ``T1 = 2 T2``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     t = math.log(T1 / T2) * T1 * T2 / (T1 - T2)
     return 4.0 * (math.exp(-t / T1) - math.exp(-t / T2))
@@ -388,11 +368,6 @@ def zero_crossing_rate(acceleration, dt, husid=None):
     -------
     float
         The rate [1/s].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     a = np.asarray(acceleration, dtype=float)
     lo, hi = 0, a.size - 1
@@ -455,11 +430,6 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
         envelope's; ``zero_crossing_rate_record`` [1/s] (strong-motion part) and
         ``zero_crossing_rate_model`` [1/s] of the fitted stationary process band-limited to
         ``band_top`` (``sqrt(lambda_2 / lambda_0) / pi``, Rice).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt
@@ -506,11 +476,6 @@ def fit_excitation(record, kind="kanai_tajimi", cutoff=None, band=(1.0, None), s
     ``S0`` equates the model's expected Arias intensity with the record's:
     ``int a^2 dt = var_z(S0) int q^2 dt`` with ``var_z = pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)``
     (the Kanai-Tajimi filter of eqs. (47)-(50) in [1]).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     if not isinstance(record, Record):
         raise TypeError("fit_excitation() takes a screening.core.records.Record")
@@ -572,11 +537,6 @@ def excitation_table(fit):
     -------
     str
         Comments (method, Arias intensity, goodness of fit, warnings) and the table.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     lines = [f"# fitted by screening fit-excitation: {fit['method']}",
              f"# record Arias intensity {fit['arias_intensity']:.4g} m/s; peak intensity S0_peak = S0 max q^2 = "

@@ -75,11 +75,6 @@ def default_dim(grid):
     -------
     str or None
         ``S0`` [m2 s-3] or ``pga`` [m s-2], whichever the grid sweeps (``None`` if neither).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     """
     return next((d for d in ("S0", "pga") if d in grid), None)
 
@@ -232,11 +227,6 @@ def limit_state_name(threshold, relative_to=None):
     -------
     str
         E.g. ``theta_0.1_slenderness``, ``theta_0.002_rad``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     """
     return f"theta_{float(threshold):g}_{relative_to or 'rad'}"
 
@@ -261,11 +251,6 @@ def stack_limit_states(frags, thresholds, relative_to=None):
     -------
     xarray.Dataset
         The stacked dataset.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     """
     if len(frags) == 1:
         return frags[0]
@@ -303,11 +288,6 @@ def curve_table(frag):
         ``fit_degenerate``, else ``""``), ``im_min``, ``im_max`` (the vouched range,
         :func:`~screening.analysis.fragility.vouched_range`; NaN where the dataset has none) and the rotation ``threshold_rad`` [rad] of the curve
         (its range ``"lo..hi"`` if it varies along the curve).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     """
     median, beta = frag["fit_median"], frag["beta"]
     flag = frag["fit_flag"]
@@ -346,11 +326,6 @@ def curve_count_text(frag):
     str
         E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 with points left out of the
         fit: ..."``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     """
     rows = curve_table(frag)
     fitted = [r for r in rows if r["flag"] == FitFlag.ok]

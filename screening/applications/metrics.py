@@ -47,11 +47,6 @@ def peak_with_se(values, se=None, axis=-1):
     -------
     peak, se_at_peak : float or numpy.ndarray
         In the unit of ``values``; both NaN where no entry is finite.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     v = np.asarray(values, dtype=float)
     v = np.moveaxis(v, axis, -1)
@@ -84,11 +79,6 @@ def relative_difference(estimate, reference):
     -------
     float or numpy.ndarray
         The relative difference [1].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     e = np.asarray(estimate, dtype=float)
     r = np.asarray(reference, dtype=float)
@@ -111,11 +101,6 @@ def peak_relative_error(estimate, reference, axis=-1):
     -------
     float or numpy.ndarray
         The relative error [1].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     return relative_difference(peak_with_se(estimate, axis=axis)[0], peak_with_se(reference, axis=axis)[0])
 
@@ -141,11 +126,6 @@ def time_averaged_relative_error(estimate, reference, t):
     -------
     float or numpy.ndarray
         The error [1]; NaN if nothing is left or ``int |reference| = 0``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     a = np.asarray(estimate, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -184,11 +164,6 @@ def time_averaged_relative_se(se, reference, t, estimate=None):
     Notes
     -----
     ``E|N(0, s^2)| = s sqrt(2/pi)`` gives the factor 0.8.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     s = np.asarray(se, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -217,11 +192,6 @@ def combined_se(*standard_errors):
     -------
     numpy.ndarray
         The combined standard error [same unit].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     return np.sqrt(sum(np.asarray(s, dtype=float) ** 2 for s in standard_errors))
 
@@ -242,11 +212,6 @@ def is_significant(difference, se, k=2.0):
     -------
     bool or numpy.ndarray of bool
         False where either is NaN.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     d = np.abs(np.asarray(difference, dtype=float))
     s = np.asarray(se, dtype=float)
@@ -274,11 +239,6 @@ def classify_error(error, relative_se, threshold, k=2.0):
         ``"within"`` if ``|error| + k se <= threshold``, ``"outside"`` if ``|error| - k se >
         threshold``, ``"ambiguous"`` otherwise (the tolerance lies within ``k`` standard errors), and
         ``"undefined"`` for a NaN error.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     e, s = abs(float(error)), float(relative_se)
     if not math.isfinite(e):
@@ -311,11 +271,6 @@ def threshold_rule(indicator, passed, direction="below"):
         ``X`` [unit of the indicator].
     n_covered : int
         The number of points inside (all of which passed).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -346,11 +301,6 @@ def rule_error(peak_error, time_avg_error, metric="peak"):
     -------
     numpy.ndarray
         The error [1] (NaN for ``"worst"`` where either is NaN).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     p = np.abs(np.asarray(peak_error, dtype=float))
     ta = np.asarray(time_avg_error, dtype=float)
@@ -382,11 +332,6 @@ def compare(estimate, reference, t, est_se=None, ref_se=None):
         ``peak_rel_se`` (SE of the difference of the peaks over the reference peak),
         ``peak_significant`` (``|diff| > 2 SE``), ``time_avg_rel_error``, ``time_avg_rel_se`` (noise
         floor) and ``time_avg_significant`` (error > 2 x floor).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     pe, se_e = peak_with_se(estimate, est_se)
     pr, se_r = peak_with_se(reference, ref_se)
@@ -427,11 +372,6 @@ def safe_indicator_range(indicator, passed, tie=0.05):
         The number of points with ``indicator <= p_safe`` (all passed).
     i_fail : int or None
         The index of the failing point with the smallest indicator (None if nothing failed).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -460,11 +400,6 @@ def rule_groups(eps):
     -------
     dict of str to numpy.ndarray of bool
         ``{group name: mask}``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     eps = np.asarray(eps, dtype=float)
     groups = {"all": np.ones(eps.size, dtype=bool)}
@@ -503,11 +438,6 @@ def derive_rules(ds, thresholds=(0.10, 0.25), metric="peak", quantity="var_theta
         ``reference``, ``threshold``, ``group``, ``n``, ``n_pass``, ``p_safe``, ``n_safe``, ``p_max``
         (largest tested p), ``fail_p``, ``fail_name``, ``fail_error`` (the first failure in p),
         ``margin_bound``, ``n_margin``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     """
     p_all = ds.sl_peak_p_uplift.values
     margin_all = ds.k_eq_margin.values

@@ -51,11 +51,6 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     Notes
     -----
     The fit drawn is ``P(IM) = Phi(ln(IM / median) / beta)``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     """
     p = frag["p_exceed"]
     if dim not in p.dims:

@@ -290,11 +290,6 @@ def intensity_lines(ds):
     list of str
         The lines (accelerations [m s-2] and [g], Arias intensity and PGV [m s-1]); nothing if they
         cannot be computed.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
     """
     try:
         im = intensity_measures(ds)

@@ -93,11 +93,6 @@ def sample_probabilities(peak_abs_theta, overturned, valid, levels=()):
     ``p_exceed(a) = #((max_t |theta| > a or overturned) & valid) / N``: an overturned sample has
     passed every rotation on its way down.  These are the Monte Carlo estimates the judge holds the
     linearization's probabilities against (section 3 of [1]_ compares the two methods).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [agresti1998] in the bibliography, ``docs/bibliography.md``.
     """
     peaks = np.asarray(peak_abs_theta, dtype=float)
     over = np.asarray(overturned, dtype=bool) & np.asarray(valid, dtype=bool)

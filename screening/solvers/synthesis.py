@@ -308,11 +308,6 @@ def band_limited_variance(excitation, cutoff):
     With ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)`` (eq. (39) in [1]_) the spectrum is two-sided,
     ``S = S0`` for white noise and eq. (50) for Kanai-Tajimi; the variance of the band ``|omega| <= omega_c``
     is ``int S d omega``, which :attr:`SpectralPlan.stationary_variance` approximates by the midpoint rule.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     """
     return excitation.spectral_moment(0, cutoff, epsrel=1e-12)
 
@@ -669,11 +664,6 @@ def ground_acceleration_samples(excitation, plan, seed, sample_indices):
     -----
     ``x_g''(t) = q(t) f(t)``: eq. (39) in [1]_ (white noise) or eq. (47) (a filtered input), with the
     envelope of eq. (57); ``f`` from :func:`stationary_samples`.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     """
     values, rates = stationary_samples(plan, seed, sample_indices)
     t = plan.times
@@ -708,11 +698,6 @@ def ground_acceleration(excitation, t_end, cutoff, n_samples, seed=0, oversampli
         ``x_g''`` [m/s^2], shape ``(n_samples, plan.n_times)``.
     plan : SpectralPlan
         The grids used.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     """
     seed = validate_seed(seed)
     plan = spectral_plan(excitation, t_end, cutoff, oversampling)

@@ -258,44 +258,11 @@ def contact_length(theta, z_cb, b):
 
 
 def contact_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, damping, winkler=False):
-    """Contact force and moment of a Hunt–Crossley or Winkler bed, chosen by a flag.
+    """Like :func:`law_resultants`, with one ``damping`` and a flag in place of the two weights.
 
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad] (positive clockwise, edge B compressed).
-    theta_dot : array_like
-        Rotation rate [rad s-1].
-    z_cb : array_like
-        Indentation of the base centre [m], positive into the bed.
-    z_cb_dot : array_like
-        Its rate [m s-1].
-    b : float or array_like
-        Half-width of the base [m].
-    k : float or array_like
-        Bed stiffness [N m-2].
-    eps : float or array_like
-        Cubic stiffness parameter [m-2].
-    damping : float or array_like
-        ``lam`` [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler).
-    winkler : bool, optional
-        True for a Winkler bed (default False: Hunt–Crossley).
-
-    Returns
-    -------
-    F_cb : numpy.ndarray
-        Resultant contact force [N].
-    M_cb : numpy.ndarray
-        Resultant moment about the base centre [N m].
-
-    Notes
-    -----
-    :func:`law_resultants` with the weights ``(0, lam)`` or ``(c, 0)``: eqs. (5)-(6) in [1], exact.
+    ``damping`` is ``lam`` [N s m-3] of a Hunt–Crossley bed (weights ``(0, lam)``) or, with ``winkler``
+    true, ``c`` [N s m-2] of a Winkler bed (weights ``(c, 0)``); eqs. (5)-(6) of [mitseas2026], exact.
     Kept for callers that hold a damping and a flag; the solvers pass the law's weights.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     """
     w_rate, w_indentation = (damping, 0.0) if winkler else (0.0, damping)
     return law_resultants(theta, theta_dot, z_cb, z_cb_dot, b, k, eps, w_rate, w_indentation)
