@@ -89,8 +89,8 @@ def main(verbose=False):
     print(f"modules without __all__: {len(missing_all)} of {len(public)}")
     print(f"public names (distinct names in the __all__ lists): {len(public_names(graph))}")
     private, undeclared = ig.private_name_uses(graph), ig.undeclared_name_uses(graph)
-    print(f"underscored names taken from another module: {len(private)}; names taken from a public module "
-          f"that are not in its __all__: {len(undeclared)}")
+    print(f"underscored names taken from another module: {len(private)}; names shared inside the package "
+          f"outside __all__ (allowed: __all__ is the user API): {len(undeclared)}")
     tested = [m for m in graph.modules if m and graph.modules[m].name != "__init__.py"]
     print(f"source modules with a test module of their own name: "
           f"{sum(ig.has_test_module(m) for m in tested)} of {len(tested)}")

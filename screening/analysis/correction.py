@@ -25,9 +25,7 @@ import numpy as np
 
 from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
 
-__all__ = ["NEIGHBOURS", "MIN_POINTS", "MAX_SE", "NOISE_FLOOR", "DISTANCE_FLOOR", "REACH", "Correction",
-           "point_features", "fit_correction", "predict_correction", "linearization_promises", "within_band",
-           "INTERVAL_Z", "atlas_correction", "atlas_promises", "best_estimates"]
+__all__ = []
 
 #: Numbers of neighbours tried by the leave-one-out choice.
 NEIGHBOURS = (1, 2, 3, 4, 6, 8)
@@ -87,16 +85,6 @@ def point_features(features):
     -------
     numpy.ndarray
         Shape ``(points, kept features)``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> point_features({"S0": [1e-5, 1e-4, 1e-3], "eps": [0.0, 0.0, 0.0], "r": [0.1, 0.2, 0.4]}).tolist()
-    [[-5.0, 0.1], [-4.0, 0.2], [-3.0, 0.4]]
     """
     cols = []
     for value in features.values():
@@ -155,14 +143,6 @@ def fit_correction(features, y, y_se=None):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.linspace(0.0, 1.0, 8)[:, None]
-    >>> corr = fit_correction(x, 0.5 * x[:, 0], np.full(8, 0.01))
-    >>> corr.k, corr.n, bool(corr.usable), f"{corr.loo_rms:.4f}"
-    (2, 8, True, '0.0476')
     """
     x = np.asarray(features, dtype=float)
     y = np.asarray(y, dtype=float).reshape(-1)
@@ -214,20 +194,6 @@ def predict_correction(correction, features):
         point —, floored at :data:`NOISE_FLOOR`.
     reached : numpy.ndarray of bool
         The nearest escalated point is within :data:`REACH` spacings and the features are finite.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.linspace(0.0, 1.0, 8)[:, None]
-    >>> corr = fit_correction(x, 0.5 * x[:, 0], np.full(8, 0.01))
-    >>> y, se, reached = predict_correction(corr, np.array([[0.5], [5.0]]))
-    >>> f"{y[0]:.3f}", float(se[0]), reached.tolist()
-    ('0.250', 0.05, [True, False])
     """
     x = np.asarray(features, dtype=float)
     z = (x - correction.mean) / correction.scale
@@ -269,18 +235,6 @@ def linearization_promises(trust, low, high, target):
     -------
     numpy.ndarray of bool
         Per point.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.status import Trust
-    >>> linearization_promises([Trust.trusted, Trust.trusted, Trust.untrusted], [-0.05, -0.2, -0.01],
-    ...                        [0.05, 0.1, 0.01], 0.1).tolist()
-    [True, False, False]
     """
     trust = np.asarray(trust)
     with np.errstate(invalid="ignore"):
@@ -308,16 +262,6 @@ def atlas_correction(low, high):
     :mod:`screening.analysis.error_model`): ``y = -(log(1 + low) + log(1 + high)) / 2`` and
     ``se = (log(1 + high) - log(1 + low)) / (2 z)``, ``z`` = :data:`INTERVAL_Z`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> y, se = atlas_correction([-0.2, -1.0], [0.1, np.inf])
-    >>> np.round(y, 4).tolist(), np.round(se, 4).tolist()
-    ([0.0639, nan], [0.0968, nan])
     """
     low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -341,14 +285,6 @@ def atlas_promises(low, high, target):
         True where ``exp(z se) - 1 <= target`` (``se`` of :func:`atlas_correction`, ``z`` =
         :data:`INTERVAL_Z`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> atlas_promises([-0.2, -0.05], [0.1, 0.05], 0.15).tolist()
-    [False, True]
     """
     _, se = atlas_correction(low, high)
     with np.errstate(invalid="ignore"):
@@ -371,16 +307,6 @@ def within_band(y, low, high):
     -------
     numpy.ndarray of bool
         Per point.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> within_band([0.0, 1.0, 1.0], [-0.1, -0.1, float("nan")], [0.1, 0.1, float("nan")]).tolist()
-    [True, False, True]
     """
     with np.errstate(invalid="ignore", over="ignore"):
         implied = np.expm1(-np.asarray(y, dtype=float))
@@ -430,24 +356,6 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
         stopped).
     correction : Correction
         The fitted correction.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    One trusted point, one escalated to condensed Monte Carlo, three corrected from the error atlas
-    model's interval (too few escalated points for the study's own correction):
-
-    >>> import numpy as np
-    >>> from screening.core.status import BestMethod, EscalationModel
-    >>> value, se, method, corr = best_estimates(
-    ...     [1.0, 2.0, 3.0, 4.0, 5.0], [0] * 5, [0, 2, 2, 2, 2], [-0.05] + [-0.5] * 4, [0.05] + [0.5] * 4, 0.1,
-    ...     np.arange(5.0)[:, None], [4], [6.0], [0.3], [EscalationModel.condensed])
-    >>> [round(v, 3) for v in value.tolist()], [BestMethod(m).name for m in method[[0, 1, 4]]]
-    ([1.0, 2.309, 3.464, 4.619, 6.0], ['linearization', 'corrected_linearization', 'condensed_monte_carlo'])
     """
     sl = np.asarray(sl_peak, dtype=float).reshape(-1)
     n = sl.size

@@ -43,15 +43,7 @@ from screening.core.physics.contact import REST_BEARING_LIMIT, rising_root, vert
 from screening.core.status import PointStatus, Trust
 from screening.solvers.datasets import model_fields, model_labels
 
-__all__ = ["FEATURES", "LOW_UPLIFT_FEATURES", "REGIME_FEATURES", "RegimeModel", "STORED_FIT", "BANDWIDTHS",
-           "P_REGIMES", "MIN_REGIME", "LOG_CLIP", "SCALE_NEIGHBOURS", "RIDGE",
-           "PRIOR_WEIGHT", "SCALE_FLOOR", "NEIGHBOURS", "features", "atlas_features", "targets",
-           "valid_reference", "ErrorModel",
-           "local_linear", "uplift_regime", "fit_error_model", "predict", "grouped_cross_validation",
-           "TRUSTED_ERROR", "UNTRUSTED_ERROR", "trust_from_interval", "ATLAS_FILE", "shipped_model",
-           "parameter_groups", "dataset_features", "model_features", "INPUT_FEATURES", "ATLAS_KINDS",
-           "ATLAS_CONTACTS", "inside_atlas", "interval_trust", "with_error_model", "N_REGIMES",
-           "fitted_variables", "model_from_atlas", "open_ended"]
+__all__ = []
 
 #: The features, in order: the linearization's indicators and the point's dimensionless inputs.
 FEATURES = ("logit_p_uplift", "log_sigma_ratio", "log_margin_loss", "log_decay_excess", "alpha", "log_r_ul",
@@ -128,18 +120,6 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     (:func:`interval_trust`: such a point is at best ``check``).  The inputs are the dimensionless
     groups of the atlas (:mod:`screening.applications.atlas`, [1]).
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = features(0.5, 0.1, 0.9, 1.0, 0.2, 1e-3, 0.1, 0.0, "white", np.nan, 10.0, 0.05, 80.0)
-    >>> x.shape, np.allclose(x[0], [0, np.log(0.1), np.log(0.1), 0, 0.2, np.log(1e-3), np.log(0.1), 0, 0, 0,
-    ...                               np.log(10.0), np.log(0.05), np.log(80.0)])
-    ((1, 13), True)
     """
     p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
     kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
@@ -173,19 +153,6 @@ def atlas_features(ds, condensation):
     numpy.ndarray
         ``(points, len(FEATURES))`` [1].
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> from importlib import resources
-    >>> import xarray as xr
-    >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
-    ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
-    >>> atlas_features(atlas, "paper").shape
-    (1024, 13)
     """
     s = ds.sel(condensation=condensation)
     return features(s["sl_peak_p_uplift"].values, s["sl_sigma_ratio"].values, s["sl_k_eq_margin"].values,
@@ -215,20 +182,6 @@ def targets(ds, condensation):
         ``(n, n_levels)`` = ``SL p_exceed - MC p_exceed``, and their Monte Carlo standard errors
         ``log_var_ratio_se``, ``p_exceed_diff_se`` [1].
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> from importlib import resources
-    >>> import xarray as xr
-    >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
-    ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
-    >>> y = targets(atlas, "paper")
-    >>> y["log_var_ratio"].shape, y["p_exceed_diff"].shape, int(np.isfinite(y["log_var_ratio"]).sum())
-    ((1024,), (1024, 5), 903)
     """
     s = ds.sel(condensation=condensation)
     ok = (s["sl_status"].values == 0) & valid_reference(ds)
@@ -255,18 +208,6 @@ def valid_reference(ds):
         ``mc_reference_valid`` 1 (:func:`screening.applications.atlas_run.reference_validity`); every point
         of an atlas that does not record it.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> valid_reference(xr.Dataset({"mc_reference_valid": ("point", [1, 0, 1])})).tolist()
-    [True, False, True]
-    >>> valid_reference(xr.Dataset(coords={"point": [0, 1]})).tolist()
-    [True, True]
     """
     if "mc_reference_valid" not in ds.variables:
         return np.ones(ds.sizes["point"], dtype=bool)
@@ -336,13 +277,6 @@ def local_linear(xq, x, y, h, ridge=RIDGE, neighbours=NEIGHBOURS):
     ----------
     .. [1] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
     .. [2] J. Fan and I. Gijbels, Local Polynomial Modelling and Its Applications, Chapman & Hall (1996).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.random.default_rng(0).uniform(-1.0, 1.0, (60, 2))
-    >>> local_linear([[0.2, 0.3]], x, 1.0 + 2.0 * x[:, 0] - x[:, 1], 1.0, ridge=0.0).round(10).tolist()
-    [1.1]
     """
     from scipy.spatial import cKDTree
 
@@ -411,13 +345,6 @@ def uplift_regime(x):
     References
     ----------
     .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> p = np.array([0.1, 0.5, 0.9])
-    >>> uplift_regime(np.log(p / (1 - p))[:, None]).tolist()
-    [0, 1, 2]
     """
     p = 1.0 / (1.0 + np.exp(-np.asarray(x, dtype=float)[:, FEATURES.index("logit_p_uplift")]))
     return np.searchsorted(np.asarray(P_REGIMES), p, side="right")
@@ -517,22 +444,6 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
     ----------
     .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
     .. [2] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    Fresh points fall in the 90 % interval nine times in ten (the binomial standard error of the
-    fraction over 1,000 points is 0.009):
-
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> x = rng.uniform(-1.0, 1.0, (400, 2))                   # two features; y = x0 / 2 + noise of SD 0.1
-    >>> y, families = 0.5 * x[:, 0] + rng.normal(0.0, 0.1, 400), np.repeat(np.arange(20), 20)
-    >>> model = fit_error_model(x, y, families)
-    >>> x_new = rng.uniform(-1.0, 1.0, (1000, 2))
-    >>> y_new = 0.5 * x_new[:, 0] + rng.normal(0.0, 0.1, 1000)
-    >>> _, low, high = predict(model, x_new)
-    >>> float(np.mean((y_new >= low) & (y_new <= high)))
-    0.889
     """
     if not 0.0 < coverage < 1.0:
         raise ValueError(f"parameter 'coverage' must be in (0, 1) (got {coverage!r})")
@@ -580,16 +491,6 @@ def predict(model, x):
     ----------
     .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
     .. [2] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> x = rng.uniform(-1.0, 1.0, (400, 2))                   # two features; y = x0 / 2 + noise of SD 0.1
-    >>> y, families = 0.5 * x[:, 0] + rng.normal(0.0, 0.1, 400), np.repeat(np.arange(20), 20)
-    >>> est, low, high = predict(fit_error_model(x, y, families), [[0.0, 0.0], [np.nan, 0.0]])
-    >>> est.round(3).tolist(), np.isnan(low).tolist()
-    ([0.002, nan], [False, True])
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     ok = np.all(np.isfinite(x), axis=1)
@@ -645,16 +546,6 @@ def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None, reg
     References
     ----------
     .. [1] [hastie2009] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> x = rng.uniform(-1.0, 1.0, (400, 2))                   # two features; y = x0 / 2 + noise of SD 0.1
-    >>> y, families = 0.5 * x[:, 0] + rng.normal(0.0, 0.1, 400), np.repeat(np.arange(20), 20)
-    >>> est, low, high = grouped_cross_validation(x[:200], y[:200], families[:200], folds=5)
-    >>> float(np.mean((y[:200] >= low) & (y[:200] <= high)))        # nominal 0.9, standard error 0.02
-    0.91
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -703,16 +594,6 @@ def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=
     numpy.ndarray of int8
         :class:`screening.core.status.Trust` codes.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> trust_from_interval(np.log([0.9, 0.9, 0.3, np.nan]), np.log([1.1, 1.4, 0.4, 1.0])).tolist()
-    [0, 1, 2, 2]
     """
     low = np.asarray(low, dtype=float)
     high = np.asarray(high, dtype=float)
@@ -751,21 +632,6 @@ def fitted_variables(ds):
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
     .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    On the first 64 points of the shipped atlas:
-
-    >>> from importlib import resources
-    >>> import xarray as xr
-    >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
-    ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
-    >>> fitted = fitted_variables(atlas.isel(point=slice(0, 64)))
-    >>> {name: v.dims for name, v in fitted.items()}                        # doctest: +NORMALIZE_WHITESPACE
-    {'em_residual': ('point', 'condensation', 'em_part'), 'em_bandwidth': ('condensation', 'em_part'),
-     'em_q': ('condensation', 'em_part', 'regime'), 'em_part_of_regime': ('regime',)}
-    >>> fitted["em_q"]["em_part"].values.tolist()[0]
-    'logit_p_uplift log_sigma_ratio log_margin_loss log_decay_excess asinh_e'
     """
     import xarray as xr
 
@@ -829,16 +695,6 @@ def model_from_atlas(ds, condensation):
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
     .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from importlib import resources
-    >>> import xarray as xr
-    >>> with resources.as_file(resources.files("screening.data") / ATLAS_FILE) as path:
-    ...     atlas = xr.load_dataset(path, drop_variables=["mc_peak_abs_theta", "mc_sample_state"])
-    >>> model = model_from_atlas(atlas, "paper")
-    >>> [part.x.shape for part in model.parts], model.part_of_regime
-    ([(903, 5), (903, 13)], (0, 1, 1))
     """
     if condensation not in ds["condensation"].values:
         raise ValueError(f"parameter 'condensation' must be one of {[str(c) for c in ds['condensation'].values]} "
@@ -917,15 +773,6 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    The paper's block on its bed:
-
-    >>> import math
-    >>> g = parameter_groups({"m": 8.67, "b": 0.035, "h": 0.21, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "T1": 4.0})
-    >>> f"{g['r_ul']:.5e}", f"{8.67 * 9.81 / (2 * 0.035 ** 2 * 2.89e7) / math.atan(0.035 / 0.21):.5e}"
-    ('7.27359e-03', '7.27359e-03')
     """
     like = None
     if any(hasattr(v, "dims") for v in fields.values()):         # xarray: broadcast once, compute on numpy
@@ -976,25 +823,6 @@ def dataset_features(ds):
         ``(features, dims, shape)``: the ``(points, len(FEATURES))`` matrix [1], the dimensions and
         shape the points are flattened from.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
-    ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
-    ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
-    ...      "slenderness": 0.16515, "status": ("S0", [0, 0])},
-    ...     coords={"S0": [1e-4, 1e-3], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
-    ...             "I_cm": 0.131, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": 6e7, "T1": 4.0, "T2": 2.0},
-    ...     attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley",
-    ...            "condensation": "paper"})
-    >>> x, dims, shape = dataset_features(ds)
-    >>> x.shape, dims, shape, round(float(x[0, FEATURES.index("alpha")]), 4)
-    ((2, 13), ('S0',), (2,), 0.1651)
     """
     import xarray as xr
 
@@ -1031,23 +859,6 @@ def model_features(indicators, block, foundation, excitation):
     numpy.ndarray
         ``(n, len(FEATURES))`` [1].
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    The same points as the dataset of :func:`dataset_features`, given as objects:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> ind = {"peak_p_uplift": np.array([0.2011, 0.7653]), "k_eq_margin": np.array([1.0, 0.729]),
-    ...        "sigma_ratio": np.array([0.00569, 0.02437]), "decay_excess": np.array([1.342, 0.731])}
-    >>> x = model_features(ind, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
-    ...                    WhiteNoise(np.array([1e-4, 1e-3])))
-    >>> x.shape, x[:, FEATURES.index("log_r_ul")].round(3).tolist()
-    ((2, 13), [-4.924, -4.924])
     """
     labels = model_labels(foundation, excitation)
     grp = parameter_groups(model_fields(block, foundation, excitation), labels["contact"], labels["excitation"])
@@ -1083,25 +894,6 @@ def inside_atlas(model, x):
     numpy.ndarray of bool
         True where every feature of :data:`INPUT_FEATURES` is inside.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    The paper's block is inside; the same with a slenderness of 1 rad is not:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> ind = {"peak_p_uplift": np.array([0.2011, 0.7653]), "k_eq_margin": np.array([1.0, 0.729]),
-    ...        "sigma_ratio": np.array([0.00569, 0.02437]), "decay_excess": np.array([1.342, 0.731])}
-    >>> x = model_features(ind, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
-    ...                    WhiteNoise(np.array([1e-4, 1e-3])))
-    >>> wide = x.copy()
-    >>> wide[:, FEATURES.index("alpha")] = 1.0
-    >>> inside_atlas(shipped_model("paper"), x).tolist(), inside_atlas(shipped_model("paper"), wide).tolist()
-    ([True, True], [False, False])
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     cols = [FEATURES.index(name) for name in INPUT_FEATURES]
@@ -1135,16 +927,6 @@ def open_ended(est, low, high, clip=LOG_CLIP):
     tuple
         ``(est, low, high)`` [1], the ends at the clip made infinite.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> est, low, high = open_ended(0.0, [-2.0, -0.1], [0.1, 1.5])
-    >>> low.tolist(), high.tolist()
-    ([-inf, -0.1], [0.1, inf])
     """
     low = np.where(np.asarray(low, dtype=float) <= -clip, -np.inf, low)
     high = np.where(np.asarray(high, dtype=float) >= clip, np.inf, high)
@@ -1185,18 +967,6 @@ def interval_trust(model, x, status=None, covered=True):
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
     .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> ind = {"peak_p_uplift": np.array([0.2011, 0.7653]), "k_eq_margin": np.array([1.0, 0.729]),
-    ...        "sigma_ratio": np.array([0.00569, 0.02437]), "decay_excess": np.array([1.342, 0.731])}
-    >>> x = model_features(ind, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7),
-    ...                    WhiteNoise(np.array([1e-4, 1e-3])))
-    >>> flag, est, low, high = interval_trust(shipped_model("paper"), x)
-    >>> flag.tolist(), est.round(2).tolist(), high.round(2).tolist()
-    ([1, 2], [-0.53, -0.63], [-0.3, 0.27])
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     est, low, high = open_ended(*predict(model, x))
@@ -1233,21 +1003,6 @@ def with_error_model(ds, model):
     .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
        space" (this package's documentation).
     .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
-    ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
-    ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
-    ...      "slenderness": 0.16515, "status": ("S0", [0, 0])},
-    ...     coords={"S0": [1e-4, 1e-3], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
-    ...             "I_cm": 0.131, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": 6e7, "T1": 4.0, "T2": 2.0},
-    ...     attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley",
-    ...            "condensation": "paper"})
-    >>> out = with_error_model(ds, shipped_model("paper"))
-    >>> out["sl_trust"].values.tolist(), out["sl_error"].attrs["units"]
-    ([1, 2], '1')
     """
     import xarray as xr
 

@@ -32,9 +32,7 @@ from scipy.spatial import Delaunay, QhullError
 
 from screening.solvers.estimates import binomial_estimate
 
-__all__ = ["FORMS", "MIN_IN_PLAY", "LOO_PASS", "LOO_Z", "MIN_POINTS_PER_TERM", "Surface", "surface_inputs",
-           "surface_terms", "fit_probit_surface", "predict_surface", "choose_form", "leave_one_out", "loo_check",
-           "loo_scale", "inside_hull", "study_surface"]
+__all__ = []
 
 #: Model forms, from the simplest: the probit of the probability linear in the standardised inputs, or
 #: quadratic (squares and pairwise products added).
@@ -99,16 +97,6 @@ def surface_inputs(columns):
     A fragility curve is lognormal in the intensity [1]_, a probit linear in ``ln S0``; an input swept over
     zero (the bed's ``eps``) stays linear.
 
-    References
-    ----------
-    .. [1] R. P. Kennedy, M. K. Ravindra, "Seismic fragilities for nuclear power plant risk studies", Nuclear
-       Engineering and Design 79(1), 47-68, 1984.
-
-    Examples
-    --------
-    >>> z, names = surface_inputs({"S0": [1e-4, 1e-3, 1e-2], "eps": [0.0, 0.0, 0.0], "k": [1.0, 2.0, 3.0]})
-    >>> names, (z[:, 0].round(4) + 0.0).tolist(), (z[:, 1].round(4) + 0.0).tolist()
-    (['S0', 'k'], [-1.2247, 0.0, 1.2247], [-1.2247, 0.0, 1.2247])
     """
     cols, names = [], []
     for name, values in columns.items():
@@ -145,14 +133,6 @@ def surface_terms(z, form="linear"):
     .. math:: \\Phi^{-1}(p) = \\beta_0 + \\sum_j \\beta_j z_j
        \\;\\Big[+ \\sum_{j \\le l} \\gamma_{jl} z_j z_l\\Big]
 
-    References
-    ----------
-    .. [1] P. McCullagh, J. A. Nelder, Generalized Linear Models, 2nd ed., Chapman & Hall (1989), ch. 4.
-
-    Examples
-    --------
-    >>> surface_terms([[1.0, 2.0]], "quadratic").tolist()
-    [[1.0, 1.0, 2.0, 1.0, 2.0, 4.0]]
     """
     if form not in FORMS:
         raise ValueError(f"parameter 'form' must be one of {', '.join(FORMS)} (got {form!r})")
@@ -209,21 +189,6 @@ def fit_probit_surface(x, k, n, form="linear", max_iter=100, tol=1e-10):
     :math:`\\hat\\varphi = \\frac{1}{N - P}\\sum_i (k_i - n_i p_i)^2 / (n_i p_i (1 - p_i))` where
     :math:`\\hat\\varphi > 1` (quasi-binomial) [1]_.
 
-    References
-    ----------
-    .. [1] P. McCullagh, J. A. Nelder, Generalized Linear Models, 2nd ed., Chapman & Hall (1989), sections 4.4
-       (the probit link, Fisher scoring) and 4.5 (over-dispersion).
-
-    Examples
-    --------
-    Counts exactly on ``Phi(0.5 z)``:
-
-    >>> import numpy as np
-    >>> z = np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
-    >>> n = np.full(5, 1e6)
-    >>> fit = fit_probit_surface(surface_terms(z[:, None]), n * special.ndtr(0.5 * z), n)
-    >>> fit.coef.round(6).tolist(), fit.converged
-    ([0.0, 0.5], True)
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
@@ -292,18 +257,6 @@ def predict_surface(surface, x):
 
     with :math:`\\hat C` the fit's covariance (dispersion included) [1]_.
 
-    References
-    ----------
-    .. [1] G. Casella, R. L. Berger, Statistical Inference, 2nd ed., Duxbury (2002), section 5.5.4 (the delta
-       method).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> fit = Surface("linear", np.array([0.0, 1.0]), np.diag([0.01, 0.0]), 1.0, 10, True)
-    >>> p, se = predict_surface(fit, [[1.0, 0.0]])
-    >>> float(p[0]), round(float(se[0]), 6), round(float(stats.norm.pdf(0.0) * 0.1), 6)
-    (0.5, 0.039894, 0.039894)
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     eta = x @ surface.coef
@@ -332,18 +285,6 @@ def choose_form(z, k, n):
     -----
     :math:`\\mathrm{AIC} = 2P - 2\\ell(\\hat\\beta)` [1]_.
 
-    References
-    ----------
-    .. [1] H. Akaike, "A new look at the statistical model identification", IEEE Transactions on Automatic
-       Control 19(6), 716-723, 1974.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> z = np.linspace(-2, 2, 9)[:, None]
-    >>> n = np.full(9, 1000.0)
-    >>> choose_form(z, np.round(n * special.ndtr(z[:, 0])), n), choose_form(z[:2], [1, 2], [10, 10])
-    ('linear', None)
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
@@ -386,19 +327,6 @@ def leave_one_out(z, k, n, form):
     :math:`\\hat p_{(-i)} = \\Phi(x_i^T \\hat\\beta_{(-i)})` with the delta-method standard error of
     :func:`predict_surface` [1]_.
 
-    References
-    ----------
-    .. [1] M. Stone, "Cross-validatory choice and assessment of statistical predictions", Journal of the
-       Royal Statistical Society B 36(2), 111-147, 1974.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> z = np.linspace(-2, 2, 9)[:, None]
-    >>> n = np.full(9, 1e6)
-    >>> p, se = leave_one_out(z, n * special.ndtr(z[:, 0]), n, "linear")
-    >>> bool(np.allclose(p, special.ndtr(z[:, 0]), atol=1e-9))
-    True
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
@@ -444,13 +372,6 @@ def loo_check(k, n, p_loo, se_loo):
     References
     ----------
     .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> loo_check([0, 10, 50, 90, 0, 30], [100] * 6, [0.02, 0.12, 0.5, 0.6, 0.0, 0.3], [0.01] * 6)
-    (0.8, 5, True)
-    >>> loo_check([0, 10, 50, 90, 0, 30], [100] * 6, [0.02, 0.12, 0.7, 0.6, 0.0, 0.3], [0.01] * 6)
-    (0.6, 5, False)
     """
     z, finite, play = _held_out_z(k, n, p_loo, se_loo)
     with np.errstate(invalid="ignore"):
@@ -486,17 +407,6 @@ def loo_scale(k, n, p_loo, se_loo):
     errors are widened by it, as a normalised cross-validation residual calibrates a predictive interval [1]_.
     It never narrows them.  Points in play as in :func:`loo_check`.
 
-    References
-    ----------
-    .. [1] M. Stone, "Cross-validatory choice and assessment of statistical predictions", Journal of the
-       Royal Statistical Society B 36(2), 111-147, 1974.
-
-    Examples
-    --------
-    >>> loo_scale([0, 10, 50, 90, 30, 20], [100] * 6, [0.02, 0.12, 0.5, 0.6, 0.3, 0.2], [0.01] * 6) > 1
-    True
-    >>> loo_scale([10, 50, 30, 20, 40], [100] * 5, [0.1, 0.5, 0.3, 0.2, 0.4], [0.01] * 5)
-    1.0
     """
     z, finite, play = _held_out_z(k, n, p_loo, se_loo)
     use = finite & play
@@ -539,15 +449,6 @@ def inside_hull(z_points, z):
     The Delaunay triangulation of the Monte Carlo points (Qhull [1]_): a point is inside when it lies in one
     of its simplices.
 
-    References
-    ----------
-    .. [1] C. B. Barber, D. P. Dobkin, H. Huhdanpaa, "The Quickhull algorithm for convex hulls", ACM
-       Transactions on Mathematical Software 22(4), 469-483, 1996.
-
-    Examples
-    --------
-    >>> inside_hull([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [[0.2, 0.2], [0.8, 0.8], [-0.1, 0.0]]).tolist()
-    [True, False, False]
     """
     zp = np.atleast_2d(np.asarray(z_points, dtype=float))
     z = np.atleast_2d(np.asarray(z, dtype=float))
@@ -587,20 +488,6 @@ def study_surface(z, k, n):
     :func:`loo_check`, and the covariance widened by :func:`loo_scale` squared.  The points where the surface may be used are those :func:`inside_hull` finds (the
     caller's step).
 
-    References
-    ----------
-    .. [1] P. McCullagh, J. A. Nelder, Generalized Linear Models, 2nd ed., Chapman & Hall (1989).
-    .. [2] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> z = np.linspace(-2, 2, 9)[:, None]
-    >>> n = np.full(9, 1000.0)
-    >>> fit = study_surface(z, np.round(n * special.ndtr(z[:, 0] - 0.5)), n)
-    >>> fit.form, fit.vouched, round(float(fit.coef[1]), 1)
-    ('linear', True, 1.0)
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)

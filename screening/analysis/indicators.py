@@ -15,7 +15,7 @@ import xarray as xr
 
 from screening.core.model.excitation import Envelope
 
-__all__ = ["ENVELOPE_FLOOR", "envelope_fraction", "trust_indicators", "indicators_from_dataset"]
+__all__ = []
 
 #: Floor of the envelope's late fraction q(t_end)^2 / max q^2 (avoids dividing by ~0).
 ENVELOPE_FLOOR = 1e-12

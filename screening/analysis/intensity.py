@@ -85,16 +85,13 @@ from screening.core.excitations.base import band_top, GROUND_BAND_LIMIT_HZ, grou
 from screening.core.validation import checked
 from screening.solvers import schema
 
-__all__ = ["MEASURES", "RECORD_MEASURES", "PERIOD_MEASURES", "GROUND_BAND_LIMIT_HZ", "G", "N_TIMES",
-           "CHUNK_POINTS", "ground_cutoff", "spectral_moments", "rms_acceleration", "arias_intensity",
-           "median_peak", "input_moments", "pga_median", "rocking_start_probability", "CROSSING_STEP",
-           "CROSSING_EXTENT", "oscillator_covariance", "sa_median", "s0_for_pga", "input_measures",
-           "intensity_measures", "oscillator_peak", "record_measures", "OMEGA_LOW", "AVGSA_N_PERIODS",
-           "AVGSA_RANGE", "highpass_gain", "velocity_spectral_moments", "envelope_exponentials",
-           "velocity_covariance", "pgv_median", "PGV_RECORDS", "PGV_SEED", "PGV_CHUNK", "median_standard_error",
-           "synthesised_pgv", "simulated_pgv", "synthesised_peaks", "continuous_peak", "simulated_pga",
-           "avgsa_periods", "avgsa_median", "record_velocity", "record_avgsa",
-           "oscillator_response_bandwidth"]
+__all__ = ["MEASURES", "RECORD_MEASURES", "PERIOD_MEASURES", "ground_cutoff", "spectral_moments",
+           "rms_acceleration", "arias_intensity", "median_peak", "input_moments", "pga_median",
+           "rocking_start_probability", "oscillator_covariance", "sa_median", "s0_for_pga", "input_measures",
+           "intensity_measures", "oscillator_peak", "record_measures", "highpass_gain", "velocity_spectral_moments",
+           "envelope_exponentials", "velocity_covariance", "pgv_median", "median_standard_error", "synthesised_pgv",
+           "simulated_pgv", "synthesised_peaks", "continuous_peak", "simulated_pga", "avgsa_periods",
+           "avgsa_median", "record_velocity", "record_avgsa", "oscillator_response_bandwidth"]
 
 #: Names of the measures (data variables of :func:`intensity_measures`) and their units.
 MEASURES = {"pga_median": "m s-2", "rms_acceleration": "m s-2", "arias_intensity": "m s-1", "sa_median": "m s-2",

@@ -24,8 +24,7 @@ from scipy import integrate
 from screening.solvers.synthesis import ground_acceleration_samples, spectral_plan
 from screening.core.validation import checked
 
-__all__ = ["RECORD_MEASURES", "G", "oscillator_peak", "record_measures", "OMEGA_LOW", "AVGSA_N_PERIODS",
-           "AVGSA_RANGE", "highpass_gain", "PGV_RECORDS", "PGV_SEED", "PGV_CHUNK", "median_standard_error",
+__all__ = ["RECORD_MEASURES", "oscillator_peak", "record_measures", "highpass_gain", "median_standard_error",
            "synthesised_pgv", "synthesised_peaks", "continuous_peak", "avgsa_periods", "record_velocity",
            "record_avgsa"]
 

@@ -32,9 +32,9 @@ from screening.analysis.intensity_records import OMEGA_LOW
 from screening.kernels.moment_kernels import lyapunov_rhs
 from screening.solvers.synthesis import envelope_rate
 
-__all__ = ["N_TIMES", "CHUNK_POINTS", "CROSSING_STEP", "CROSSING_EXTENT", "spectral_moments", "median_peak",
-           "input_moments", "pga_median", "rocking_start_probability", "oscillator_covariance", "sa_median",
-           "oscillator_response_bandwidth", "velocity_spectral_moments", "envelope_exponentials", "velocity_covariance"]
+__all__ = ["spectral_moments", "median_peak", "input_moments", "pga_median", "rocking_start_probability",
+           "oscillator_covariance", "sa_median", "oscillator_response_bandwidth", "velocity_spectral_moments",
+           "envelope_exponentials", "velocity_covariance"]
 
 #: Points evaluated together by :func:`rocking_start_probability`.
 CHUNK_POINTS = 64

@@ -23,7 +23,7 @@ from screening.kernels.moment_kernels import uplift_occupancy
 from screening.solvers.moments import DEFAULT_RTOL, solve_moments
 from screening.solvers.timegrid import output_times
 
-__all__ = ["METHOD", "linearize"]
+__all__ = ["linearize"]
 
 METHOD = "stochastic linearization + Lyapunov moment equations"
 

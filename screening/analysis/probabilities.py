@@ -29,10 +29,7 @@ from screening.core.status import (AnswerQuantity, BestMethod, PointStatus, prob
 from screening.solvers import mc_registry
 from screening.solvers.estimates import binomial_estimate, sample_probabilities, Z
 
-__all__ = ["uplift_acceleration", "source_codes", "monte_carlo_source", "choose_sources",
-           "overturning_probability", "TOPPLING_FRACTION", "spot_check_probabilities", "probability_text", "Z",
-           "binomial_estimate", "sample_probabilities", "HEAVY_UPLIFT", "NEAR_TOPPLING_STATUS", "answer_quantities",
-           "reliable_answer"]
+__all__ = []
 
 
 def uplift_acceleration(block, foundation, condensation):
@@ -61,18 +58,6 @@ def uplift_acceleration(block, foundation, condensation):
     resultant of the bed's pressure reaches the edge of the kern of the base, a third of the half-width
     from the centre.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation.registry import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> a_ul = uplift_acceleration(block, bed, get("paper"))
-    >>> f"{float(a_ul):.4f}", f"{block.g * block.b / (3 * block.h) - block.g * 1.2012e-3:.4f}"
-    ('0.5332', '0.5332')
     """
     theta_ul = condensation.uplift_threshold(block, foundation)
     moment = condensation.restoring_moment(theta_ul, block, foundation)
@@ -90,15 +75,6 @@ def source_codes():
     dict of str to int
         ``{name: code}`` [-].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> codes = source_codes()
-    >>> codes["unreliable"], codes["linearization_gaussian"], codes["monte_carlo_coupled"]
-    (0, 1, 10)
     """
     return probability_sources(mc_registry.names())
 
@@ -116,14 +92,6 @@ def monte_carlo_source(model):
     int
         The code [-] (:func:`source_codes`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> monte_carlo_source("coupled") == source_codes()["monte_carlo_coupled"]
-    True
     """
     codes = source_codes()
     if f"monte_carlo_{model}" not in codes:
@@ -155,15 +123,6 @@ def choose_sources(status_ok, trust, band_finite, best_method=None):
         where the point is ``trusted`` with a finite band, else ``unreliable``.  Monte Carlo points are
         set by the caller (:func:`monte_carlo_source`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.status import Trust
-    >>> choose_sources([True, True, False], [Trust.trusted, Trust.untrusted, Trust.trusted], [True, True, True])
-    array([1, 0, 0], dtype=int8)
     """
     ok = np.asarray(status_ok, dtype=bool)
     src = np.full(ok.shape, int(ProbabilitySource.unreliable), dtype=np.int8)
@@ -202,16 +161,6 @@ def overturning_probability(ds, method="vanmarcke"):
     note : str
         A one-line caveat, or ``""`` when there is none.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> p, note = overturning_probability(xr.Dataset({"p_overturn": ("S0", [0.1, 0.3])}))
-    >>> p.values.tolist(), note
-    ([0.1, 0.3], '')
     """
     from screening.analysis.fragility import STORED, exceedance_probability
 
@@ -251,21 +200,6 @@ def spot_check_probabilities(ds):
         with ``thresholds`` (the values of the result's ``threshold`` coordinate, ``()`` without) and
         ``relative_to``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import SampleState
-    >>> ds = xr.Dataset({"status": ("S0", [0, 0]),
-    ...                  "mcs_peak_abs_theta": (("spot", "sample"), [[1e-3, 3e-3, 0.2, 1e-3], [1e-3] * 4]),
-    ...                  "mcs_sample_state": (("spot", "sample"), [[0, 0, SampleState.overturned, 0], [0] * 4])},
-    ...                 coords={"S0": [1e-4, 2e-4], "spot_S0": ("spot", [1e-4, 2e-4])})
-    >>> prob = spot_check_probabilities(ds)
-    >>> prob["p_overturn"].tolist(), prob["near_toppling"].tolist(), prob["thresholds"]
-    ([0.25, 0.0], [True, False], ())
     """
     state = np.asarray(ds["mcs_sample_state"].values)
     peaks = np.asarray(ds["mcs_peak_abs_theta"].values, dtype=float)
@@ -299,14 +233,6 @@ def probability_text(p, se):
     str
         Three significant digits for ``p``, two for ``se``; ``"n/a"`` where ``p`` is not finite.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> probability_text(0.4321, 0.0512), probability_text(float("nan"), 0.1)
-    ('0.432 +- 0.051', 'n/a')
     """
     return f"{p:.3g} +- {se:.2g}" if np.isfinite(p) else "n/a"
 
@@ -354,18 +280,6 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
     which a Monte Carlo point is already called near toppling; two standard errors below it keep a point
     whose overturning is not established with its variance.
 
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> answer_quantities([1, 0, 0, 0, 0], [np.nan, 0.3, 0.06, 0.2, 0.01], [np.nan, 0.02, 0.02, np.nan, 0.01],
-    ...                   [np.nan, -0.1, -0.1, -0.6, -0.1], [np.nan, 0.1, 0.1, np.inf, 0.1],
-    ...                   [0.99, 0.98, 0.9, 0.97, 0.2], [False, True, True, False, True]).tolist()
-    [1, 2, 0, 3, 0]
     """
     status = np.asarray(status).reshape(-1)
     p, se = np.asarray(p_overturn, dtype=float).reshape(-1), np.asarray(p_overturn_se, dtype=float).reshape(-1)
@@ -402,15 +316,6 @@ def reliable_answer(answer, variance_vouched, source):
     numpy.ndarray of bool
         True where the quantity that answers the point is vouched for.
 
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
-
-    Examples
-    --------
-    >>> reliable_answer([0, 0, 1, 1], [True, False, False, False], [0, 2, 3, 0]).tolist()
-    [True, False, True, False]
     """
     answer = np.asarray(answer).reshape(-1)
     by_variance = answer == int(AnswerQuantity.variance)

@@ -14,7 +14,7 @@ import math
 from screening.solvers.moments import solve_moments
 from screening.core.status import PointStatus
 
-__all__ = ["round_significant", "calibrate_intensity"]
+__all__ = []
 
 
 def round_significant(x, digits=3):
@@ -32,14 +32,6 @@ def round_significant(x, digits=3):
     float
         The rounded value [unit of ``x``].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> round_significant(0.000123456), round_significant(98765.0, 2), round_significant(float("inf"))
-    (0.000123, 99000.0, inf)
     """
     if x == 0 or not math.isfinite(x):
         return x
@@ -84,24 +76,6 @@ def calibrate_intensity(block, foundation, make_exc, target, t_out, rtol=1e-7, l
     The peak uplift probability is that of the stochastic linearization's moment equations
     (eqs. (39)-(46) in [1]); the root is found by Brent's method [2].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] R. P. Brent, Algorithms for Minimization without Derivatives, Prentice-Hall (1973), chapter 4.
-
-    Examples
-    --------
-    The paper's block on a softening bed, 5 % peak uplift probability over a 4 s record:
-
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core.model.excitation import Envelope
-    >>> from screening.solvers.timegrid import output_times
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5)
-    >>> t = output_times(4.0, 0.05)
-    >>> S0 = calibrate_intensity(block, bed, lambda s: WhiteNoise(s, Envelope(4.0, 2.0)), 0.05, t)
-    >>> res = solve_moments(block, bed, WhiteNoise(S0, Envelope(4.0, 2.0)), t, condensation="paper")
-    >>> S0, round(float(res["peak_p_uplift"]), 3)
-    (3.18e-05, 0.05)
     """
     from scipy.optimize import brentq
 

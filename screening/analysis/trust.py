@@ -72,12 +72,9 @@ from screening.analysis.indicators import ENVELOPE_FLOOR, envelope_fraction, ind
 from screening.core.status import PointStatus, Trust
 from screening.solvers import schema
 
-__all__ = ["ENVELOPE_FLOOR", "P_EDGES", "DECAY_LIMIT", "SIGMA_LIMIT", "MARGIN_LIMIT", "TRUSTED_ERROR",
-           "TRUSTED_BAND", "UNTRUSTED_ERROR", "N_SE", "MIN_ROWS", "OVERTURN_LIMIT", "BED_LAWS", "CONDENSATIONS",
-           "INDICATORS", "OVERRIDES", "CALIBRATION_FILE", "bed_law", "envelope_fraction", "trust_indicators",
-           "indicators_from_dataset", "error_of", "p_bin", "regime", "calibration_rows", "trust_table",
-           "shipped_table", "shipped_calibration", "sl_trust", "trust_attributes", "add_trust", "trust_models", "error_model_trust",
-           "add_cell_trust"]
+__all__ = ["bed_law", "envelope_fraction", "trust_indicators", "indicators_from_dataset", "error_of", "p_bin",
+           "regime", "calibration_rows", "trust_table", "shipped_table", "shipped_calibration", "sl_trust",
+           "trust_attributes", "add_trust", "trust_models", "error_model_trust", "add_cell_trust"]
 
 #: Edges of the peak p_uplift bins of the cells.
 P_EDGES = (0.0, 0.007, 0.08, 0.2, 0.45, 0.9, np.inf)

@@ -53,10 +53,7 @@ from screening.core.model.excitation import Envelope
 from screening.core.physics.contact import rest_indentation, vertical_damping_ratio
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-__all__ = ["GROUPS", "RANGES", "BED_EDGES", "SOFTENING_E", "HARDENING_E", "WHITE_FRACTION", "P_TARGET",
-           "BEYOND_EDGE", "P_BEYOND", "BEYOND_FACTOR", "RECORD_T1", "N_OUTPUT", "SCALE_R", "SCALE_M", "G",
-           "FAMILY_ALPHA_EDGES", "FAMILY_R_EDGES", "BED_LAWS", "KINDS", "design", "groups_of", "housner_frequency",
-           "physical_point", "make_excitation", "measured_groups", "derived_groups", "family_of", "family_name"]
+__all__ = []
 
 #: Axes of the unit-cube design, in order.
 GROUPS = ("alpha", "log10_r_ul", "log10_zeta_v", "u_bed", "u_kind", "log10_omega_g_p", "zeta_g", "log10_tau",
@@ -114,21 +111,6 @@ def design(n_points, seed=0):
     numpy.ndarray
         ``(n_points, len(GROUPS))`` coordinates in ``[0, 1)`` [1].
 
-    References
-    ----------
-    .. [1] I. M. Sobol', "On the distribution of points in a cube and the approximate evaluation of
-       integrals", USSR Computational Mathematics and Mathematical Physics 7(4) (1967) 86-112.
-    .. [2] A. B. Owen, "Scrambling Sobol' and Niederreiter-Xing points", Journal of Complexity 14(4)
-       (1998) 466-489.
-
-    Examples
-    --------
-    The first 8 points put exactly one coordinate in each eighth of every axis:
-
-    >>> import numpy as np
-    >>> u = design(8, seed=0)
-    >>> u.shape, sorted(np.floor(u[:, 0] * 8).astype(int).tolist())
-    ((8, 9), [0, 1, 2, 3, 4, 5, 6, 7])
     """
     from scipy.stats import qmc
 
@@ -177,17 +159,6 @@ def groups_of(u):
     .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
     .. [3] E. Buckingham, "On physically similar systems; illustrations of the use of dimensional
        equations", Physical Review 4(4) (1914) 345-376.
-
-    Examples
-    --------
-    The centre of the cube: the middle slenderness, a hardening bed, a Kanai-Tajimi filter.
-
-    >>> import numpy as np
-    >>> g = groups_of(np.full(9, 0.5))
-    >>> float(g["alpha"][0]), str(g["bed_law"][0]), str(g["kind"][0]), float(g["zeta_g"][0])
-    (0.275, 'hardening', 'kanai_tajimi', 0.5)
-    >>> f"{float(g['r_ul'][0]):.4g}", f"{(3e-5 * 0.25) ** 0.5:.4g}"       # the geometric mean of its range
-    ('0.002739', '0.002739')
     """
     u = np.atleast_2d(np.asarray(u, dtype=float))
     if u.shape[-1] != len(GROUPS) or np.any((u < 0) | (u > 1)):
@@ -241,13 +212,6 @@ def housner_frequency(block):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block
-    >>> block = Block(m=100.0, b=0.3, h=0.4)                  # R = 0.5 m
-    >>> f"{housner_frequency(block):.6f}", f"{(3 * 9.81 / (4 * 0.5)) ** 0.5:.6f}"
-    ('3.836014', '3.836014')
     """
     R = math.hypot(float(block.b), float(block.h))
     return math.sqrt(float(block.m) * float(block.g) * R / (float(block.I_cm) + float(block.m) * R * R))
@@ -284,19 +248,6 @@ def physical_point(groups, i=0):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    :func:`measured_groups` recomputes the groups from the physical objects:
-
-    >>> import numpy as np
-    >>> g = groups_of(np.full(9, 0.5))
-    >>> block, foundation, shape, timing = physical_point(g)
-    >>> m = measured_groups(block, foundation, shape, timing)
-    >>> all(np.isclose(m[k], g[k][0]) for k in ("alpha", "r_ul", "zeta_v", "e", "omega_g_p", "tau"))
-    True
-    >>> shape["kind"], f"{timing['t_end'] / timing['T1']:.1f}"
-    ('kanai_tajimi', '4.0')
     """
     g = {k: (v[i] if np.ndim(v) else v) for k, v in groups.items()}
     alpha = float(g["alpha"])
@@ -344,20 +295,6 @@ def make_excitation(shape, timing, S0):
     The envelope is ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57) in [1]); the Kanai-Tajimi filter
     has the spectrum of eq. (50) in [1] ([2], [3]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] K. Kanai, "Semi-empirical formula for the seismic characteristics of the ground", Bulletin of
-       the Earthquake Research Institute, University of Tokyo 35 (1957) 309-325.
-    .. [3] H. Tajimi, "A statistical method of determining the maximum response of a building structure
-       during an earthquake", Proceedings of the 2nd World Conference on Earthquake Engineering, Tokyo
-       (1960) vol. 2, 781-797.
-
-    Examples
-    --------
-    >>> ex = make_excitation({"kind": "white"}, {"T1": 4.0, "T2": 2.0}, 0.01)
-    >>> type(ex).__name__, ex.S0, ex.envelope.T1
-    ('WhiteNoise', 0.01, 4.0)
     """
     env = Envelope(timing["T1"], timing["T2"])
     if shape["kind"] == "white":                 # the atlas measured the idealized spectra: no band
@@ -396,14 +333,6 @@ def measured_groups(block, foundation, shape, timing):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> g = measured_groups(block, bed, {"kind": "white"}, {"T1": 4.0, "t_end": 20.0})
-    >>> f"{g['r_ul'] * g['alpha']:.4e}", f"{8.67 * 9.81 / (2 * 0.035 ** 2 * 2.89e7):.4e}", g["record_T1"]
-    ('1.2012e-03', '1.2012e-03', 5.0)
     """
     alpha = float(block.slenderness)
     p = housner_frequency(block)
@@ -447,16 +376,6 @@ def derived_groups(block, foundation, shape, S0):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math, numpy as np
-    >>> g = groups_of(np.full(9, 0.5))
-    >>> block, foundation, shape, _ = physical_point(g)
-    >>> d = derived_groups(block, foundation, shape, 0.01)
-    >>> theta_ul = float(g["r_ul"][0] * g["alpha"][0])
-    >>> f"{d['w_v_p']:.4f}", f"{math.sqrt(4 * 0.5 / (3 * float(block.b) * theta_ul)):.4f}"
-    ('80.7449', '80.7449')
     """
     p = housner_frequency(block)
     w_r, w_v = rocking_frequency(block, foundation), vertical_frequency(block, foundation)
@@ -486,17 +405,6 @@ def family_of(groups):
     and :data:`KINDS`.  Held-out families are the groups of the grouped cross-validation of
     ``docs/error_atlas.md``.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> ids = family_of(groups_of(np.full(9, 0.5)))
-    >>> ids.tolist(), family_name(ids[0])
-    ([29], 'alpha1-r1-hardening-kanai_tajimi')
     """
     a = np.digitize(np.asarray(groups["alpha"], dtype=float), FAMILY_ALPHA_EDGES)
     r = np.digitize(np.asarray(groups["r_ul"], dtype=float), FAMILY_R_EDGES)
@@ -519,15 +427,6 @@ def family_name(family):
     str
         ``"alpha<a>-r<r>-<bed law>-<kind>"``.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    >>> family_name(0), family_name(35)
-    ('alpha0-r0-softening-white', 'alpha1-r2-hardening-kanai_tajimi')
     """
     n_r, n_law, n_kind = len(FAMILY_R_EDGES) + 1, len(BED_LAWS), len(KINDS)
     family = int(family)

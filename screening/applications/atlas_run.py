@@ -32,8 +32,7 @@ from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.synthesis import vertical_frequency
 from screening.solvers.timegrid import output_times
 
-__all__ = ["LEVELS", "CONDENSATIONS", "COUPLED_RADIANS", "FALLBACK_RADIANS", "INDICATORS", "reference_model",
-           "assemble", "reference_validity", "REFERENCE_VALIDITY", "OUTSIDE_RULE", "mc_exceedance", "VARIABLES"]
+__all__ = []
 
 #: Exceedance levels as fractions of the slenderness angle [1].
 LEVELS = (0.05, 0.1, 0.2, 0.5, 1.0)
@@ -78,19 +77,6 @@ def reference_model(block, foundation, timing, excitation_kind, coupled_radians=
     str
         ``"coupled"`` or ``"stiff_bed"``.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    The paper's block: ``w_v t_end = sqrt(2 b k / m) t_end`` is about 9,700 rad over 20 s, affordable.
-
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> round((2 * 0.035 * 2.89e7 / 8.67) ** 0.5 * 20.0), reference_model(block, bed, {"t_end": 20.0}, "white")
-    (9661, 'coupled')
     """
     if vertical_frequency(block, foundation) * timing["t_end"] <= coupled_radians:
         return "coupled"
@@ -243,28 +229,6 @@ def assemble(results, attrs=None):
     xarray.Dataset
         The atlas, CF-1.8, units of :data:`VARIABLES`; with :func:`reference_validity`.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    Two points, one without an intensity; the reference's four samples: one overturned.
-
-    >>> results = [
-    ...     {"index": 1, "u": [0.5] * 9, "samples": 4, "S0": 0.01,
-    ...      "sl": {"paper": {"status": 0, "peak_var_theta": 1e-5, "peak_p_uplift": 0.3, "sl_trust": 1,
-    ...                       "p_exceed": [0.5, 0.2, 0.01, 0.0, 0.0]}},
-    ...      "mc": {"model": "coupled", "peak_var_theta": 1.1e-5, "peak_var_theta_se": 1e-6,
-    ...             "peak_abs_theta": [0.001, 0.02, 0.05, 0.3], "overturned": [False, False, False, True],
-    ...             "diverged": [False] * 4}},
-    ...     {"index": 0, "u": [0.25] * 9, "samples": 4, "error": "no intensity"}]
-    >>> ds = assemble(results)
-    >>> ds["point"].values.tolist(), ds["mc_n_overturned"].values.tolist(), ds["mc_p_exceed"].values[1].tolist()
-    ([0, 1], [0, 1], [0.75, 0.5, 0.25, 0.25, 0.25])
-    >>> ds["mc_reference_valid"].values.tolist(), ds["sl_peak_var_theta"].attrs["units"]
-    ([0, 1], 'rad2')
     """
     import xarray as xr
 
@@ -374,20 +338,6 @@ def reference_validity(ds):
     dict of str to xarray.DataArray
         ``mc_reference_valid`` [1] (int8) and ``mc_reference_note`` (str), on ``point``.
 
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-
-    Examples
-    --------
-    A point whose reference did not run, and one judged by the coupled (full) model:
-
-    >>> import numpy as np, xarray as xr
-    >>> ds = xr.Dataset({"u": (("point", "axis"), np.full((2, 9), 0.5)), "mc_model": ("point", ["", "coupled"]),
-    ...                  "mc_n_samples": ("point", [0, 500])})
-    >>> reference_validity(ds)["mc_reference_valid"].values.tolist()
-    [0, 1]
     """
     import xarray as xr
 
@@ -434,14 +384,6 @@ def mc_exceedance(peaks, state, levels):
     ----------
     .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
     .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    Four samples: one diverged (left out), one overturned (exceeds every level):
-
-    >>> p, se = mc_exceedance([[0.001, 0.02, 0.05, 0.3]], [[0, 0, 2, 1]], [[0.01, 0.1]])
-    >>> p.round(4).tolist()
-    [[0.6667, 0.3333]]
     """
     peaks = np.asarray(peaks, dtype=float)
     state = np.asarray(state)

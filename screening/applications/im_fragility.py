@@ -40,10 +40,7 @@ from screening.analysis.intensity import intensity_measures
 from screening.core.atomicfile import atomic_open
 from screening.core.status import FitFlag
 
-__all__ = ["IMS", "default_dim", "fragility_over_im", "LIMIT_STATES", "THRESHOLD_FREE", "NoExport",
-           "limit_state_name", "stack_limit_states", "curve_table", "curve_count_text",
-           "case_values", "export_problem", "fragility_intensity", "im_key", "curves_by_object", "write_csv", "write_pelicun_csv", "write_pelicun_json",
-           "nrml_limit_state", "nrml_parameters", "write_nrml"]
+__all__ = []
 
 #: ``--im`` names -> (variable, units, OpenQuake IMT or None, factor from the units to the OpenQuake units).
 IMS = {
@@ -78,16 +75,6 @@ def default_dim(grid):
     -------
     str or None
         ``S0`` [m2 s-3] or ``pga`` [m s-2], whichever the grid sweeps (``None`` if neither).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> default_dim(["eps", "S0"]), default_dim(["k"])
-    ('S0', None)
     """
     return next((d for d in ("S0", "pga") if d in grid), None)
 
@@ -146,17 +133,6 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> frag, warnings = fragility_over_im(ds, 0.01, im="pga")
-    >>> f"{float(frag['fit_median']):.4f} {float(frag['beta']):.4f}", frag["fit_median"].attrs["units"], warnings
-    ('1.2381 0.1175', 'm s-2', [])
     """
     if im not in IMS:
         raise ValueError(f"--im must be one of {', '.join(IMS)} (got {im!r})")
@@ -251,16 +227,6 @@ def limit_state_name(threshold, relative_to=None):
     -------
     str
         E.g. ``theta_0.1_slenderness``, ``theta_0.002_rad``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> limit_state_name(0.1, "slenderness"), limit_state_name(0.002)
-    ('theta_0.1_slenderness', 'theta_0.002_rad')
     """
     return f"theta_{float(threshold):g}_{relative_to or 'rad'}"
 
@@ -285,23 +251,6 @@ def stack_limit_states(frags, thresholds, relative_to=None):
     -------
     xarray.Dataset
         The stacked dataset.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> frags = [fragility_over_im(ds, a)[0] for a in (0.01, 0.015)]
-    >>> both = stack_limit_states(frags, [0.01, 0.015])
-    >>> both["limit_state"].values.tolist(), [f"{m:.3f}" for m in both["fit_median"].values]
-    (['theta_0.01_rad', 'theta_0.015_rad'], ['1.238', '1.515'])
     """
     if len(frags) == 1:
         return frags[0]
@@ -339,22 +288,6 @@ def curve_table(frag):
         ``fit_degenerate``, else ``""``), ``im_min``, ``im_max`` (the vouched range,
         :func:`~screening.analysis.fragility.vouched_range`; NaN where the dataset has none) and the rotation ``threshold_rad`` [rad] of the curve
         (its range ``"lo..hi"`` if it varies along the curve).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> row = curve_table(fragility_over_im(ds, 0.01)[0])[0]
-    >>> row["labels"], f"{row['median']:.4f}", row["flag"].name, row["threshold_rad"]
-    ({}, '1.2381', 'ok', '0.01')
     """
     median, beta = frag["fit_median"], frag["beta"]
     flag = frag["fit_flag"]
@@ -393,21 +326,6 @@ def curve_count_text(frag):
     str
         E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 with points left out of the
         fit: ..."``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> curve_count_text(fragility_over_im(ds, 0.01)[0])
-    '1 of 1 curve(s) fitted'
     """
     rows = curve_table(frag)
     fitted = [r for r in rows if r["flag"] == FitFlag.ok]
@@ -446,17 +364,6 @@ def case_values(frag):
         ``{case index: {"name": case name, "values": {name: (value, units)}}}`` from the ``case_name``
         coordinate and the coordinates over ``case`` (empty without a ``case`` dimension).
 
-    References
-    ----------
-    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> frag = xr.Dataset(coords={"case": [0, 1], "case_name": ("case", ["bust", "vase"]),
-    ...                           "m": ("case", [8.0, 20.0], {"units": "kg"}), "h": ((), 0.2, {"units": "m"})})
-    >>> case_values(frag)
-    ({'h': (0.2, 'm')}, {0: {'name': 'bust', 'values': {'m': (8.0, 'kg')}}, 1: {'name': 'vase', 'values': {'m': (20.0, 'kg')}}})
     """
     shared = {n: (float(frag[n]), frag[n].attrs.get("units", "")) for n in frag.coords
               if frag[n].ndim == 0 and frag[n].dtype.kind in "fi" and n != "threshold"}
@@ -492,18 +399,6 @@ def export_problem(row):
     str
         The reason (``""``: exported).
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md, section "The files".
-
-    Examples
-    --------
-    >>> from screening.core.status import FitFlag
-    >>> export_problem({"flag": FitFlag.untrusted, "n_unvouched": 2, "im_min": 1.0, "im_max": 2.0})[:20]
-    'no fit (untrusted: t'
-    >>> export_problem({"flag": FitFlag.ok, "n_unvouched": 0, "im_min": 1.0, "im_max": 2.0})
-    ''
     """
     if row["flag"] != FitFlag.ok:
         return f"no fit ({row['flag'].name}: {row['flag'].meaning})"
@@ -581,12 +476,6 @@ def fragility_intensity(frag):
     References
     ----------
     .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> fragility_intensity(xr.Dataset({"fit_median": ((), 1.0, {"intensity": "pga", "units": "m s-2"})}))
-    ('pga', 'm s-2', '')
     """
     return _intensity(frag)
 
@@ -604,14 +493,6 @@ def im_key(name):
     str or None
         ``pga``, ``sa``, ... (``None`` for another name).
 
-    References
-    ----------
-    .. [1] GEM Foundation, OpenQuake Engine manual, "Intensity measure types", https://docs.openquake.org
-
-    Examples
-    --------
-    >>> im_key("stripe_pga"), im_key("sa_median"), im_key("S0"), im_key("theta")
-    ('pga', 'sa', 's0', None)
     """
     return _im_key(name)
 
@@ -634,19 +515,6 @@ def curves_by_object(frag, pelicun=False):
         ``{id: {"labels": {dim: value}, <limit state>: row of curve_table, ...}}`` in the order of
         :func:`curve_table`.
 
-    References
-    ----------
-    .. [1] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5), https://docs.openquake.org
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> frag = xr.Dataset({"fit_median": ("case", [1.0, 2.0]), "beta": ("case", [0.3, 0.4]),
-    ...                    "fit_flag": ("case", np.int8([0, 0])), "threshold_rad": 0.01},
-    ...                   coords={"case": [0, 1], "case_name": ("case", ["bust-wood", "vase"])})
-    >>> states, objects = curves_by_object(frag, pelicun=True)
-    >>> states, list(objects)
-    (['theta_exceeds_threshold'], ['screening_case=bust_wood', 'screening_case=vase'])
     """
     rows = curve_table(frag)
     states = _states(frag)
@@ -677,19 +545,6 @@ def write_csv(frag, path):
     References
     ----------
     .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     print(write_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text().strip())
-    intensity_measure,units,median,beta,fit_flag,reason,n_unvouched,threshold_rad,period_s,im_min,im_max
-    pga_median,m s-2,1.2380663,0.117537,ok,,0,0.01,,0.9244422,1.8488844
     """
     name, units, period = _intensity(frag)
     dims = list(frag["fit_median"].dims)
@@ -748,23 +603,6 @@ def write_pelicun_csv(frag, path):
     str or os.PathLike
         ``path``.
 
-    References
-    ----------
-    .. [1] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
-       loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     text = write_pelicun_csv(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.csv").read_text()
-    >>> text.splitlines()[1]
-    'screening,0,Peak Ground Acceleration,g,0,1,lognormal,0.12624763,0.117537'
     """
     demand, unit_out, factor = _pelicun_demand(frag)
     rows = curve_table(frag)
@@ -810,23 +648,6 @@ def write_pelicun_json(frag, path):
     str or os.PathLike
         ``path``.
 
-    References
-    ----------
-    .. [1] A. Zsarnoczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
-       loss and community resilience", Proceedings, 17th World Conference on Earthquake Engineering (2020).
-
-    Examples
-    --------
-    >>> import json, tempfile, pathlib
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3])), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     meta = json.loads(write_pelicun_json(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.json").read_text())
-    >>> sorted(meta), meta["screening"]["LimitStates"]["LS1"]["DS1"]["Description"]
-    (['_GeneralInformation', 'screening'], 'theta_exceeds_threshold: max |theta| > 0.01 rad')
     """
     from screening import __version__
 
@@ -889,14 +710,6 @@ def nrml_limit_state(name):
     str
         ``.`` written ``p``, ``+`` dropped.
 
-    References
-    ----------
-    .. [1] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5), https://docs.openquake.org
-
-    Examples
-    --------
-    >>> nrml_limit_state("theta_0.02_slenderness")
-    'theta_0p02_slenderness'
     """
     return name.replace(".", "p").replace("+", "")
 
@@ -926,12 +739,6 @@ def nrml_parameters(median, beta):
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
        functions), https://docs.openquake.org
-
-    Examples
-    --------
-    >>> mean, std = nrml_parameters(0.5, 0.4)
-    >>> f"{mean:.4f} {std:.4f}"
-    '0.5416 0.2256'
     """
     mean = median * math.exp(0.5 * beta * beta)
     return mean, mean * math.sqrt(math.expm1(beta * beta))
@@ -979,19 +786,6 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
        functions), https://docs.openquake.org
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     xml = write_nrml(fragility_over_im(ds, 0.01)[0], pathlib.Path(tmp) / "f.xml").read_text()
-    >>> [line.strip() for line in xml.splitlines() if "<params" in line]
-    ['<params ls="theta_exceeds_threshold" mean="0.1271227" stddev="0.014993378"/>']
     """
     name, _, period = _intensity(frag)
     key = _im_key(name)

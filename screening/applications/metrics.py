@@ -23,10 +23,7 @@ import math
 
 import numpy as np
 
-__all__ = ["RULE_METRICS", "peak_with_se", "relative_difference", "peak_relative_error",
-           "time_averaged_relative_error", "time_averaged_relative_se", "combined_se", "is_significant",
-           "classify_error", "threshold_rule", "rule_error", "compare", "safe_indicator_range", "rule_groups",
-           "derive_rules"]
+__all__ = []
 
 #: Error a validity rule is judged on (:func:`rule_error`).
 RULE_METRICS = ("peak", "time_avg", "worst")
@@ -50,17 +47,6 @@ def peak_with_se(values, se=None, axis=-1):
     -------
     peak, se_at_peak : float or numpy.ndarray
         In the unit of ``values``; both NaN where no entry is finite.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> peak_with_se([1.0, 3.0, np.nan, 2.0], [0.1, 0.2, 0.3, 0.4])
-    (3.0, 0.2)
     """
     v = np.asarray(values, dtype=float)
     v = np.moveaxis(v, axis, -1)
@@ -93,16 +79,6 @@ def relative_difference(estimate, reference):
     -------
     float or numpy.ndarray
         The relative difference [1].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> relative_difference(1.1, 1.0) - 0.1 < 1e-12, relative_difference([2.0, 1.0], [1.0, 0.0]).tolist()
-    (True, [1.0, nan])
     """
     e = np.asarray(estimate, dtype=float)
     r = np.asarray(reference, dtype=float)
@@ -125,16 +101,6 @@ def peak_relative_error(estimate, reference, axis=-1):
     -------
     float or numpy.ndarray
         The relative error [1].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> peak_relative_error([1.0, 2.5, 2.0], [1.0, 2.0, 1.5])
-    0.25
     """
     return relative_difference(peak_with_se(estimate, axis=axis)[0], peak_with_se(reference, axis=axis)[0])
 
@@ -160,16 +126,6 @@ def time_averaged_relative_error(estimate, reference, t):
     -------
     float or numpy.ndarray
         The error [1]; NaN if nothing is left or ``int |reference| = 0``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> time_averaged_relative_error([1.1, 1.1, 1.1], [1.0, 1.0, 1.0], [0.0, 1.0, 2.0])
-    0.10000000000000009
     """
     a = np.asarray(estimate, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -208,16 +164,6 @@ def time_averaged_relative_se(se, reference, t, estimate=None):
     Notes
     -----
     ``E|N(0, s^2)| = s sqrt(2/pi)`` gives the factor 0.8.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> time_averaged_relative_se([0.05, 0.05, 0.05], [1.0, 1.0, 1.0], [0.0, 1.0, 2.0])
-    0.05
     """
     s = np.asarray(se, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -246,16 +192,6 @@ def combined_se(*standard_errors):
     -------
     numpy.ndarray
         The combined standard error [same unit].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> float(combined_se(0.3, 0.4))
-    0.5
     """
     return np.sqrt(sum(np.asarray(s, dtype=float) ** 2 for s in standard_errors))
 
@@ -276,16 +212,6 @@ def is_significant(difference, se, k=2.0):
     -------
     bool or numpy.ndarray of bool
         False where either is NaN.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> is_significant(0.3, 0.1), is_significant(0.15, 0.1), is_significant(float("nan"), 0.1)
-    (True, False, False)
     """
     d = np.abs(np.asarray(difference, dtype=float))
     s = np.asarray(se, dtype=float)
@@ -313,16 +239,6 @@ def classify_error(error, relative_se, threshold, k=2.0):
         ``"within"`` if ``|error| + k se <= threshold``, ``"outside"`` if ``|error| - k se >
         threshold``, ``"ambiguous"`` otherwise (the tolerance lies within ``k`` standard errors), and
         ``"undefined"`` for a NaN error.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> [classify_error(e, 0.02, 0.10) for e in (0.05, -0.2, 0.09, float("nan"))]
-    ['within', 'outside', 'ambiguous', 'undefined']
     """
     e, s = abs(float(error)), float(relative_se)
     if not math.isfinite(e):
@@ -355,18 +271,6 @@ def threshold_rule(indicator, passed, direction="below"):
         ``X`` [unit of the indicator].
     n_covered : int
         The number of points inside (all of which passed).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> threshold_rule([0.1, 0.2, 0.3, 0.4], [True, True, False, True])
-    (0.3, 2)
-    >>> threshold_rule([0.1, 0.2, 0.3, 0.4], [True, True, False, True], "above")
-    (0.3, 1)
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -397,16 +301,6 @@ def rule_error(peak_error, time_avg_error, metric="peak"):
     -------
     numpy.ndarray
         The error [1] (NaN for ``"worst"`` where either is NaN).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> rule_error([-0.2, 0.05], [0.1, 0.3], "worst").tolist()
-    [0.2, 0.3]
     """
     p = np.abs(np.asarray(peak_error, dtype=float))
     ta = np.asarray(time_avg_error, dtype=float)
@@ -438,17 +332,6 @@ def compare(estimate, reference, t, est_se=None, ref_se=None):
         ``peak_rel_se`` (SE of the difference of the peaks over the reference peak),
         ``peak_significant`` (``|diff| > 2 SE``), ``time_avg_rel_error``, ``time_avg_rel_se`` (noise
         floor) and ``time_avg_significant`` (error > 2 x floor).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> out = compare([1.0, 2.4, 2.0], [1.0, 2.0, 1.8], [0.0, 1.0, 2.0], ref_se=[0.01, 0.05, 0.05])
-    >>> f"{out['peak_rel_error']:.2f} {out['peak_rel_se']:.3f}", out["peak_significant"]
-    ('0.20 0.025', True)
     """
     pe, se_e = peak_with_se(estimate, est_se)
     pr, se_r = peak_with_se(reference, ref_se)
@@ -489,16 +372,6 @@ def safe_indicator_range(indicator, passed, tie=0.05):
         The number of points with ``indicator <= p_safe`` (all passed).
     i_fail : int or None
         The index of the failing point with the smallest indicator (None if nothing failed).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> safe_indicator_range([0.1, 0.2, 0.3, 0.305], [True, True, True, False])
-    (0.2, 2, 3)
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -527,16 +400,6 @@ def rule_groups(eps):
     -------
     dict of str to numpy.ndarray of bool
         ``{group name: mask}``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> {name: mask.tolist() for name, mask in rule_groups([6e7, 6e7, -6e5]).items()}
-    {'all': [True, True, True], 'eps=6e+07': [True, True, False], 'eps=-600000': [False, False, True]}
     """
     eps = np.asarray(eps, dtype=float)
     groups = {"all": np.ones(eps.size, dtype=bool)}
@@ -575,24 +438,6 @@ def derive_rules(ds, thresholds=(0.10, 0.25), metric="peak", quantity="var_theta
         ``reference``, ``threshold``, ``group``, ``n``, ``n_pass``, ``p_safe``, ``n_safe``, ``p_max``
         (largest tested p), ``fail_p``, ``fail_name``, ``fail_error`` (the first failure in p),
         ``margin_bound``, ``n_margin``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
-    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
-    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
-    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err))},
-    ...                 coords={"comparison": ["sl_vs_condensed", "sl_vs_coupled"], "quantity": ["var_theta"]})
-    >>> rule = derive_rules(ds, thresholds=(0.10,))[1]
-    >>> rule["reference"], rule["p_safe"], rule["n_safe"], rule["fail_name"], rule["margin_bound"]
-    ('coupled', 0.4, 2, 'c', 0.2)
     """
     p_all = ds.sl_peak_p_uplift.values
     margin_all = ds.k_eq_margin.values

@@ -22,8 +22,7 @@ from screening.applications.im_fragility import (IMS, curves_by_object, export_p
                                                  fragility_over_im, im_key, stack_limit_states)
 from screening.core.status import FitFlag
 
-__all__ = ["annual_frequency", "HazardCurve", "HazardError", "read_hazard", "hazard_levels", "risk_table",
-           "RISK_COLUMNS", "write_risk_csv", "limit_state_fragilities"]
+__all__ = []
 
 #: Standard gravity [m s-2]: OpenQuake's accelerations are in g.
 G = 9.80665
@@ -73,19 +72,6 @@ def annual_frequency(im, rate, median, beta, im_min=None, im_max=None):
     For a power-law hazard ``H = k0 x^-k`` over all ``x > 0``:
     ``lambda = k0 median^-k exp(k^2 beta^2 / 2)`` [1].
 
-    References
-    ----------
-    .. [1] C. A. Cornell, F. Jalayer, R. O. Hamburger and D. A. Foutch, "Probabilistic basis for 2000
-       SAC Federal Emergency Management Agency steel moment frame guidelines", Journal of Structural
-       Engineering 128(4) (2002) 526-533.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.geomspace(1e-3, 1e3, 50)
-    >>> out = annual_frequency(x, 1e-3 * x**-2.0, 1.0, 0.4)
-    >>> f"{out['rate']:.5e} {1e-3 * np.exp(2.0**2 * 0.4**2 / 2):.5e}"
-    '1.37713e-03 1.37713e-03'
     """
     x = np.asarray(im, dtype=float)
     h = np.asarray(rate, dtype=float)
@@ -192,19 +178,6 @@ def read_hazard(path, site=None):
         One line naming the file, the line and the field: not a number, a level not increasing, a
         curve not decreasing, no level above 0, a missing header, a site not in the file.
 
-    References
-    ----------
-    .. [1] GEM Foundation, OpenQuake Engine manual, "Output files: hazard curves", https://docs.openquake.org
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     f = pathlib.Path(tmp) / "h.csv"
-    ...     _ = f.write_text("PGA [g], annual_rate [1/yr]\\n0.1, 1e-2\\n0.2, 3e-3\\n0.4, 5e-4\\n")
-    ...     curve = read_hazard(f)
-    >>> curve.imt, curve.units, curve.rate.tolist()
-    ('PGA', 'g', [0.01, 0.003, 0.0005])
     """
     path = Path(path)
     try:
@@ -313,16 +286,6 @@ def hazard_levels(curve, name, units, period, hazard_path):
         One line naming the file, line 1 and the field (``imt``, ``units``) when the hazard curve is
         for another intensity measure, another period or in units that cannot be converted.
 
-    References
-    ----------
-    .. [1] GEM Foundation, OpenQuake Engine manual, "Intensity measure types", https://docs.openquake.org
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> curve = HazardCurve("PGA", "g", np.array([0.1, 0.2]), np.array([1e-2, 1e-3]), "t")
-    >>> hazard_levels(curve, "pga_median", "m s-2", "", "h.csv").round(4).tolist()
-    [0.9807, 1.9613]
     """
     key = im_key(name)
     if key is None or IMS[key][2] is None:
@@ -401,22 +364,6 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     from the fragility's standard errors ``fit_median_se``, ``beta_se`` (where it has them) by the delta
     method.
 
-    References
-    ----------
-    .. [1] C. A. Cornell, F. Jalayer, R. O. Hamburger and D. A. Foutch, "Probabilistic basis for 2000
-       SAC Federal Emergency Management Agency steel moment frame guidelines", Journal of Structural
-       Engineering 128(4) (2002) 526-533.
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> frag = xr.Dataset({"fit_median": ((), 2.0, {"units": "m s-2", "intensity": "pga"}), "beta": 0.4,
-    ...                    "fit_flag": np.int8(0), "threshold_rad": 0.1, "pga": ("pga", [1.0, 4.0])})
-    >>> x = np.geomspace(0.01, 3.0, 40)
-    >>> curve = HazardCurve("PGA", "g", x, 1e-4 * x**-2.0, "example")
-    >>> row = risk_table(frag, curve, 50.0)[0]
-    >>> f"{row['annual_rate']:.3e} {row['probability']:.3e}", row["object"], row["limit_state"]
-    ('3.311e-03 1.526e-01', 'screening', 'theta_exceeds_threshold')
     """
     name, _, _ = fragility_intensity(frag)
     im = hazard_levels(curve, *fragility_intensity(frag), hazard_path)
@@ -481,17 +428,6 @@ def write_risk_csv(rows, path):
     str or os.PathLike
         ``path``.
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md, section "Risk at a site".
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> row = dict.fromkeys(RISK_COLUMNS, float("nan")) | {"rank": 1, "object": "vase", "note": ""}
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     print(write_risk_csv([row], pathlib.Path(tmp) / "r.csv").read_text().splitlines()[1][:12])
-    1,vase,,,,,,
     """
     from screening.core.atomicfile import atomic_open
 
@@ -531,16 +467,6 @@ def limit_state_fragilities(ds, im="pga", period=None, thresholds=(), relative_t
         :func:`~screening.applications.im_fragility.fragility_over_im` of each limit state; empty when the
         result has neither.
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> limit_state_fragilities(xr.Dataset({"status": ("pga", [0, 0])}))
-    []
     """
     frags = []
     if "p_overturn" in ds.variables:

@@ -23,8 +23,7 @@ from screening.sweep.config import (EXCITATIONS, NUMERIC, TABLE_KEYS, Case, Stud
                                     read_study_text, required, resolve_case, table, time_table,
                                     title_and_description, type_name)
 
-__all__ = ["METHODS", "MCS_MODELS", "COMPARISONS", "QUANTITIES", "MODEL_KEYS", "EXAMPLE_TRADEOFF_STUDY", "Family",
-           "TradeoffStudy", "load_tradeoff_study", "parse_tradeoff_study", "example_tradeoff"]
+__all__ = []
 
 #: The methods compared: stochastic linearization and Monte Carlo on the condensed / coupled model.
 METHODS = ("sl", "condensed_mcs", "coupled_mcs")
@@ -139,18 +138,6 @@ def load_tradeoff_study(path):
     TradeoffStudy
         The validated study; :class:`StudyError` names any bad key.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    The study shipped with the repository:
-
-    >>> import pathlib, screening
-    >>> study = load_tradeoff_study(pathlib.Path(screening.__file__).parents[1] / "studies" / "speed_accuracy.toml")
-    >>> [f.name for f in study.families], study.t_end, study.mcs["samples"]
-    (['white', 'kt40', 'kt10'], 20.0, 1000)
     """
     return parse_tradeoff_study(read_study_text(path), source=str(path))
 
@@ -192,18 +179,6 @@ def parse_tradeoff_study(text, source="<string>"):
     TradeoffStudy
         The validated study.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.config import StudyError
-    >>> try:
-    ...     parse_tradeoff_study("title = 1")
-    ... except StudyError as exc:
-    ...     print(exc)
-    <string>: title: must be a string (got int)
     """
     return parse_toml(text, source, lambda raw: _build(raw, text, source))
 
@@ -364,15 +339,6 @@ def example_tradeoff():
         ``quantity``; costs [s]; the sample-count (``cv_*``), tolerance (``tol_*``) and SL-numerics
         (``sl_*`` over ``sl_setting``) sub-studies at the representative point.
 
-    References
-    ----------
-    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
-
-    Examples
-    --------
-    >>> study, ds = example_tradeoff()
-    >>> dict(ds.sizes)["point"], float(ds.peak_rel_error.sel(comparison="sl_vs_coupled", quantity="var_theta")[0])
-    (2, -0.09090909090909094)
     """
     import xarray as xr
 

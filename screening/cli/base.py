@@ -16,10 +16,7 @@ from screening.cli._common import say, temporary_for, write_error
 from screening import __version__
 from screening.core.limits import MAX_MODELLING_DISPERSION
 
-__all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
-           "WORKER_COUNT", "POSITIVE_FLOAT", "DISPERSION", "ZLIB_LEVEL", "cli", "announce_compilation", "stamp_fragility",
-           "lognormal_fit_text", "write_file_set", "refuse_collisions", "fragility_outputs", "fragility_figures", "fit_files",
-           "write_fragility_files"]
+__all__ = []
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -148,20 +145,6 @@ def announce_compilation(quiet=False):
     None
         The line (if due) goes to stderr (:func:`screening.kernels.cache.announce_compilation`).
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md.
-    .. [2] Numba documentation, "Notes on caching",
-       https://numba.readthedocs.io/en/stable/developer/caching.html
-
-    Examples
-    --------
-    >>> import contextlib, io
-    >>> err = io.StringIO()
-    >>> with contextlib.redirect_stderr(err):
-    ...     announce_compilation(quiet=True)
-    >>> err.getvalue()
-    ''
     """
     if not quiet:
         from screening.kernels.cache import announce_compilation as announce
@@ -187,20 +170,6 @@ def stamp_fragility(frag, result, **options):
     None
         ``frag.attrs`` gains ``source_result``, ``screening_version`` and ``history``.
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 2.6.2
-       (``history``, ``source``), https://cfconventions.org
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> frag = xr.Dataset()
-    >>> stamp_fragility(frag, "r.nc", threshold="0.01", relative_to="slenderness", im=None)
-    >>> frag.attrs["history"], frag.attrs["source_result"]
-    ('screening fragility r.nc --threshold 0.01 --relative-to slenderness', 'r.nc')
     """
     flags = "".join(f" --{name.replace('_', '-')} {value}" for name, value in options.items() if value is not None)
     frag.attrs.update(source_result=str(result), screening_version=__version__,
@@ -231,17 +200,6 @@ def lognormal_fit_text(frag, over, units=""):
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md, section "The files (written as a set: all or none)".
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> frag = xr.Dataset({"fit_median": ("case", [1.2, 1.4, np.nan]), "beta": ("case", [0.3, 0.4, np.nan]),
-    ...                    "fit_flag": ("case", [0, 0, 3]), "threshold_rad": 0.01})   # 3: never exceeded
-    >>> print(lognormal_fit_text(frag, "pga_median", "m s-2"))
-    lognormal fit over pga_median: 2 of 3 curve(s) fitted (1 without a fit: never_exceeded 1);
-    median 1.3 m s-2, beta 0.350 (medians over the fitted curves)
-    >>> lognormal_fit_text(xr.Dataset(), "pga_median")
-    ''
     """
     from screening.applications.im_fragility import curve_count_text
 
@@ -283,33 +241,6 @@ def write_file_set(files, warnings=()):
     screening.io.errors.SweepError
         A write failed (``OSError`` or netCDF's ``RuntimeError``): nothing was published.
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-
-    Examples
-    --------
-    A failing second file leaves no file at all:
-
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> def fail(tmp):
-    ...     raise OSError(28, "No space left on device")
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     a, b = Path(folder) / "a.txt", Path(folder) / "b.txt"
-    ...     try:
-    ...         write_file_set([("text", a, lambda tmp: tmp.write_text("A")), ("more", b, fail)])
-    ...     except Exception as exc:
-    ...         print(type(exc).__name__, sorted(p.name for p in Path(folder).iterdir()))
-    ...     write_file_set([("text", a, lambda tmp: tmp.write_text("A")), ("more", b, lambda tmp: tmp.write_text("B"))])
-    ...     a.read_text() + b.read_text()
-    SweepError []
-    /.../a.txt
-    /.../b.txt
-    'AB'
     """
     from screening.applications.im_fragility import NoExport
 
@@ -365,18 +296,6 @@ def refuse_collisions(out, others, option="--out"):
     CommandError
         One line naming the clash (exit status 2).
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md.
-
-    Examples
-    --------
-    >>> from pathlib import Path
-    >>> try:
-    ...     refuse_collisions(Path("f.csv"), [("CSV", Path("f.csv"))])
-    ... except CommandError as exc:
-    ...     print(exc)
-    --out f.csv: the command also writes its CSV there; give the netCDF file another name (e.g. f.nc)
     """
     def key(path):
         return os.path.normcase(os.path.abspath(os.fspath(path)))
@@ -404,15 +323,6 @@ def fragility_outputs(out, limit_states=()):
     list of tuple
         ``(name, path)``.
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md, section "The files (written as a set: all or none)".
-
-    Examples
-    --------
-    >>> [p.name for _, p in fragility_outputs(Path("f.nc"))]
-    ['f.png', 'f.csv', 'f_pelicun.csv', 'f.xml']
     """
     out = Path(out)
     figures = ([(f"PNG of {name}", out.with_name(f"{out.stem}_{name}.png")) for name in limit_states]
@@ -452,21 +362,6 @@ def fragility_figures(frag, out, dim, flags=None):
     list of tuple
         ``(name, path, write)`` entries; ``write`` draws the figure when called (nothing is drawn here).
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] [hunter2007] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from pathlib import Path
-    >>> frag = xr.Dataset({"p_exceed": (("limit_state", "S0"), [[0.1, 0.5], [0.0, 0.2]])},
-    ...                   coords={"limit_state": ["exceed_0.01", "exceed_0.02"],
-    ...                           "threshold": ("limit_state", [0.01, 0.02])})
-    >>> [(name, path.name) for name, path, _ in fragility_figures(frag, Path("out/frag.nc"), "S0")]
-    [('PNG of exceed_0.01', 'frag_exceed_0.01.png'), ('PNG of exceed_0.02', 'frag_exceed_0.02.png')]
     """
     from screening.report.fragility_figures import plot_fragility
 
@@ -504,13 +399,6 @@ def fit_files(frag, out):
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
     .. [3] M. Pagani et al., "OpenQuake engine: an open hazard (and risk) software for the Global
        Earthquake Model", Seismological Research Letters 85(3) (2014) 692-702.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from pathlib import Path
-    >>> [(name, path.name) for name, path, _ in fit_files(xr.Dataset(), Path("out/frag_pga.nc"))]
-    [('CSV', 'frag_pga.csv'), ('pelicun CSV', 'frag_pga_pelicun.csv'), ('pelicun JSON', 'frag_pga_pelicun.json'), ('NRML', 'frag_pga.xml')]
     """
     from screening.applications.im_fragility import write_csv, write_nrml, write_pelicun_csv, write_pelicun_json
 
@@ -542,26 +430,6 @@ def write_fragility_files(ds, out, figures, extras=(), warnings=()):
     None
         The paths written are printed on stdout.
 
-    References
-    ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md, section "The files (written as a set: all or none)".
-    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> import xarray as xr
-    >>> from pathlib import Path
-    >>> frag = xr.Dataset({"p_exceed": ("S0", [0.1, 0.5])}, coords={"S0": [1e-4, 2e-4]})
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     out = Path(folder) / "frag.nc"
-    ...     write_fragility_files(frag, out, figures=[])
-    ...     with xr.open_dataset(out) as back:
-    ...         back["p_exceed"].values.tolist()
-    /.../frag.nc
-    [0.1, 0.5]
     """
     def netcdf(path):
         ds.to_netcdf(path, engine="netcdf4", encoding={c: {"_FillValue": None} for c in ds.coords})

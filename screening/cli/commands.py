@@ -45,11 +45,7 @@ from screening.cli.base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandEr
                                 write_fragility_files, DISPERSION, fragility_outputs, refuse_collisions)
 from screening import __version__
 
-__all__ = ["EXIT_OK", "EXIT_USAGE", "EXIT_INTERRUPTED", "CommandError", "MAX_WORKERS", "POSITIVE_INT",
-           "WORKER_COUNT", "POSITIVE_FLOAT", "ZLIB_LEVEL", "cli", "main", "RESUMING_COMMANDS", "interrupted_note",
-           "announce_compilation", "printable", "cmd_run", "stamp_fragility", "lognormal_fit_text",
-           "write_file_set", "fragility_figures", "fit_files", "write_fragility_files", "cmd_plot",
-           "cmd_fragility", "cmd_tradeoff", "cmd_info", "cmd_export"]
+__all__ = []
 
 def main(argv=None):
     """Entry point of the ``screening`` console script; returns the exit status.
@@ -68,18 +64,6 @@ def main(argv=None):
         The exit status: :data:`EXIT_OK` (0), :data:`EXIT_USAGE` (2: a user error, one line
         ``screening: error: ...`` on stderr, nothing written) or :data:`EXIT_INTERRUPTED` (130: Ctrl-C).
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md.
-    .. [2] screening documentation, "Robustness and the limits of the method", docs/limits.md,
-       section "Bad input and faults".
-
-    Examples
-    --------
-    A result file that does not exist is a user error: one line on stderr, status 2.
-
-    >>> main(["info", "/nonexistent/result.nc"])
-    2
     """
     from screening.io.errors import SweepError
     from screening.sweep.interrupt import interrupt_guard
@@ -126,18 +110,6 @@ def interrupted_note(argv):
     str
         The words printed after ``interrupted`` when Ctrl-C stops the command.
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md.
-    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md, section "The resume record of `run`".
-
-    Examples
-    --------
-    >>> interrupted_note(["run", "study.toml"])
-    'finished batches are kept, re-run the same command to resume'
-    >>> interrupted_note(["--quiet", "plot", "result.nc"])
-    'nothing is kept to resume from, re-run the command to start again'
     """
     command = next((a for a in argv if not a.startswith("-")), "")
     if command in RESUMING_COMMANDS:
@@ -175,16 +147,6 @@ def printable(text):
         The text with the C0 control characters but tab and newline, DEL and the C1 codes
         (U+0080-U+009F) replaced by ``\\xNN``.
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md.
-    .. [2] ECMA-48, Control Functions for Coded Character Sets, 5th ed., Ecma International (1991)
-       (C0 and C1 control characters, escape sequences).
-
-    Examples
-    --------
-    >>> print(printable("title\\x1b[31m red\\r"))
-    title\\x1b[31m red\\x0d
     """
     return str(text).translate(_CONTROL)
 

@@ -17,8 +17,7 @@ from screening.cli.base import (EXIT_OK, POSITIVE_FLOAT, WORKER_COUNT, CommandEr
                                 fragility_figures, lognormal_fit_text, fit_files, stamp_fragility, write_file_set,
                                 write_fragility_files, fragility_outputs, refuse_collisions)
 
-__all__ = ["SERIAL_RECORDS", "UNITS_HELP", "cmd_simulate", "fragility_over_im_command", "cmd_fit_excitation",
-           "cmd_cloud"]
+__all__ = []
 
 #: Largest record set a cloud analysis runs in process by default (larger sets: 2 local workers).
 SERIAL_RECORDS = 4
@@ -199,16 +198,6 @@ def fragility_over_im_command(result, threshold, relative_to, method, dim, out, 
     .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
        docs/fragility.md.
     .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A period outside the range is refused before the result is opened:
-
-    >>> try:
-    ...     fragility_over_im_command("result.nc", (0.01,), None, "vanmarcke", None, None, "sa", 500.0)
-    ... except CommandError as exc:
-    ...     print(exc)
-    parameter '--period' must be a finite number >= 0.001 and <= 100 (got 500.0)
     """
     from screening.analysis.fragility import with_modelling_dispersion
     from screening.applications.im_fragility import fragility_over_im, stack_limit_states, limit_state_name

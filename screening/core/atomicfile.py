@@ -14,7 +14,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["temporary_beside", "publish", "atomic_path", "atomic_open", "open_nofollow", "create_new"]
+__all__ = []
 
 
 def temporary_beside(path, suffix=""):
@@ -37,23 +37,6 @@ def temporary_beside(path, suffix=""):
     pathlib.Path
         The new empty file, in ``path``'s folder.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-    .. [2] Python documentation, ``tempfile.mkstemp``,
-       https://docs.python.org/3/library/tempfile.html#tempfile.mkstemp
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     tmp = temporary_beside(Path(folder) / "result.nc", suffix=".nc")
-    ...     tmp.parent == Path(folder), tmp.name.startswith(".result.nc."), tmp.name.endswith(".tmp.nc")
-    ...     tmp.stat().st_size
-    (True, True, True)
-    0
     """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
@@ -80,25 +63,6 @@ def publish(tmp, path):
     -------
     None
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-    .. [2] IEEE Std 1003.1-2017 (POSIX.1-2017), ``rename()``,
-       https://pubs.opengroup.org/onlinepubs/9699919799/functions/rename.html
-
-    Examples
-    --------
-    >>> import os, stat, tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     target = Path(folder) / "a.txt"
-    ...     tmp = temporary_beside(target)
-    ...     _ = tmp.write_text("done")
-    ...     publish(tmp, target)
-    ...     mask = os.umask(0); _ = os.umask(mask)
-    ...     target.read_text(), tmp.exists(), stat.S_IMODE(target.stat().st_mode) == 0o666 & ~mask
-    ('done', False, True)
     """
     mask = os.umask(0)
     os.umask(mask)
@@ -125,26 +89,6 @@ def atomic_path(path):
     pathlib.Path
         The temporary file to write (:func:`temporary_beside`), published by :func:`publish`.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     target = Path(folder) / "a.txt"
-    ...     _ = target.write_text("old")
-    ...     try:
-    ...         with atomic_path(target) as tmp:
-    ...             _ = tmp.write_text("half")
-    ...             raise RuntimeError("the writer failed")
-    ...     except RuntimeError:
-    ...         pass
-    ...     target.read_text(), sorted(p.name for p in Path(folder).iterdir())
-    ('old', ['a.txt'])
     """
     tmp = temporary_beside(path)
     try:
@@ -173,23 +117,6 @@ def atomic_open(path, mode="w", **kwargs):
     file object
         The open temporary file; ``path`` gets its content when the block ends without an exception.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     target = Path(folder) / "table.csv"
-    ...     with atomic_open(target, encoding="utf-8") as fh:
-    ...         _ = fh.write("a,b\\n1,2\\n")
-    ...         target.exists()                       # nothing at the target until the block ends
-    ...     target.read_text(encoding="utf-8").splitlines()
-    False
-    ['a,b', '1,2']
     """
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
         yield fh
@@ -219,29 +146,6 @@ def open_nofollow(path, flags, mode=0o600):
     OSError
         ``path`` is a symbolic link (``ELOOP``), missing, or not a regular file.
 
-    References
-    ----------
-    .. [1] IEEE Std 1003.1-2017 (POSIX.1-2017), ``open()`` (``O_NOFOLLOW``, ``O_NONBLOCK``),
-       https://pubs.opengroup.org/onlinepubs/9699919799/functions/open.html
-    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     real = Path(folder) / "real.txt"
-    ...     _ = real.write_text("x")
-    ...     link = Path(folder) / "link.txt"
-    ...     link.symlink_to(real)
-    ...     fd = open_nofollow(real, os.O_RDONLY); os.read(fd, 1); os.close(fd)
-    ...     try:
-    ...         open_nofollow(link, os.O_RDONLY)
-    ...     except OSError:
-    ...         print("the link is refused")
-    b'x'
-    the link is refused
     """
     fd = os.open(path, flags | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, mode)
     try:
@@ -268,26 +172,6 @@ def create_new(path):
     io.BufferedWriter
         The new file, open for writing bytes.
 
-    References
-    ----------
-    .. [1] IEEE Std 1003.1-2017 (POSIX.1-2017), ``open()`` (``O_CREAT | O_EXCL``),
-       https://pubs.opengroup.org/onlinepubs/9699919799/functions/open.html
-    .. [2] screening documentation, "How results are stored, and what the tool guarantees about
-       them", docs/outputs_storage.md.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     victim = Path(folder) / "victim.txt"
-    ...     _ = victim.write_text("keep")
-    ...     planted = Path(folder) / "out.bin"
-    ...     planted.symlink_to(victim)
-    ...     with create_new(planted) as fh:
-    ...         _ = fh.write(b"new")
-    ...     victim.read_text(), planted.is_symlink(), planted.read_bytes()
-    ('keep', False, b'new')
     """
     with contextlib.suppress(FileNotFoundError):
         os.unlink(path)

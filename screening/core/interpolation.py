@@ -20,8 +20,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-__all__ = ["SIGNIFICAND_BITS", "cubic_coefficients", "octave_grid", "octave_position", "octave_first",
-           "octave_position_jit", "cubic", "hermite_weights", "hermite", "hermite_rate"]
+__all__ = []
 
 #: Bits of a double's significand.
 SIGNIFICAND_BITS = 52
@@ -54,14 +53,6 @@ def cubic_coefficients(values, slopes, step):
     References
     ----------
     .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.array([0.0, 1.0, 2.0])
-    >>> table = cubic_coefficients((x**3)[:, None], (3 * x**2)[:, None], 1.0)
-    >>> float(cubic(table, 1, 0, 0.5))                  # a cubic is reproduced exactly: 1.5^3
-    3.375
     """
     v = np.asarray(values, dtype=float)
     d = np.asarray(slopes, dtype=float)
@@ -100,15 +91,6 @@ def octave_grid(e_lo, e_hi, bits):
     The interval of a number on this grid is read from its binary64 exponent and leading significand
     bits [1] (:func:`octave_position_jit`): no logarithm.
 
-    References
-    ----------
-    .. [1] IEEE Standard for Floating-Point Arithmetic, IEEE Std 754-2019 (the binary64 layout: 52 bits of
-       significand below 11 bits of exponent).
-
-    Examples
-    --------
-    >>> octave_grid(0, 2, 1).tolist()
-    [1.0, 1.5, 2.0, 3.0, 4.0]
     """
     m = np.arange(2**bits) / 2.0**bits
     e = np.arange(e_lo, e_hi)
@@ -138,16 +120,6 @@ def octave_position(x, e_lo, bits):
     -----
     From ``frexp``; the numpy reference of :func:`octave_position_jit`, which reads the same from the bits [1].
 
-    References
-    ----------
-    .. [1] IEEE Standard for Floating-Point Arithmetic, IEEE Std 754-2019 (the binary64 layout: 52 bits of
-       significand below 11 bits of exponent).
-
-    Examples
-    --------
-    >>> j, s = octave_position(2.25, 0, 1)
-    >>> int(j), float(s)
-    (2, 0.25)
     """
     mantissa, exponent = np.frexp(np.asarray(x, dtype=float))      # x = mantissa 2^exponent, mantissa in [0.5, 1)
     u = (2.0 * mantissa - 1.0) * 2.0**bits
@@ -174,15 +146,6 @@ def octave_first(e_lo, bits):
     -----
     The interval index of ``x`` is its bits shifted the same way minus this [1].
 
-    References
-    ----------
-    .. [1] IEEE Standard for Floating-Point Arithmetic, IEEE Std 754-2019 (the binary64 layout: 52 bits of
-       significand below 11 bits of exponent).
-
-    Examples
-    --------
-    >>> octave_first(0, 1) == (1023 << 1)
-    True
     """
     return int(np.float64(np.ldexp(1.0, e_lo)).view(np.int64)) >> (SIGNIFICAND_BITS - bits)
 
@@ -197,37 +160,9 @@ def _float_bits(typingctx, x):
 
 @numba.njit(cache=True, inline="always")
 def octave_position_jit(x, first, bits):
-    """Compiled twin of :func:`octave_position`, from the bits of ``x``.
+    """Compiled twin of :func:`octave_position`, exact from the bits of ``x`` (a bit cast, a shift and a mask).
 
-    Parameters
-    ----------
-    x : float
-        A number.
-    first : int
-        :func:`octave_first` of the grid.
-    bits : int
-        Mantissa bits of the grid.
-
-    Returns
-    -------
-    j : int
-        Interval index; negative for any ``x <= 0`` (``-0.0`` included), beyond every grid for ``+inf``, NaN.
-    s : float
-        Fraction [1] in [0, 1).
-
-    Notes
-    -----
-    Exact (no rounding): a bit cast of the binary64 ``x`` [1], a shift and a mask.
-
-    References
-    ----------
-    .. [1] IEEE Standard for Floating-Point Arithmetic, IEEE Std 754-2019 (the binary64 layout: 52 bits of
-       significand below 11 bits of exponent).
-
-    Examples
-    --------
-    >>> octave_position_jit(2.25, octave_first(0, 1), 1) == octave_position(2.25, 0, 1)
-    True
+    ``j`` is negative for any ``x <= 0`` (``-0.0`` included) and beyond every grid for ``+inf`` and NaN.
     """
     shift = SIGNIFICAND_BITS - bits
     b = _float_bits(x)
@@ -261,12 +196,6 @@ def cubic(table, i, column, s):
     References
     ----------
     .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> float(cubic(cubic_coefficients([[0.0], [1.0]], [[0.0], [0.0]], 1.0), 0, 0, 0.5))
-    0.5
     """
     c = 4 * column
     return table[i, c] + s * (table[i, c + 1] + s * (table[i, c + 2] + s * table[i, c + 3]))
@@ -294,11 +223,6 @@ def hermite_weights(s):
     References
     ----------
     .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> hermite_weights(0.5)
-    (0.5, 0.125, 0.5, -0.125)
     """
     s2 = s * s
     s3 = s2 * s
@@ -336,11 +260,6 @@ def hermite(v0, v1, d0, d1, s, step):
     References
     ----------
     .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> hermite(0.0, 1.0, 0.0, 3.0, 0.5, 1.0)              # t^3 at t = 0.5
-    0.125
     """
     h00, h10, h01, h11 = hermite_weights(s)
     return h00 * v0 + h01 * v1 + step * (h10 * d0 + h11 * d1)
@@ -348,41 +267,13 @@ def hermite(v0, v1, d0, d1, s, step):
 
 @numba.njit(cache=True, inline="always")
 def hermite_rate(v0, v1, d0, d1, s, step):
-    """Derivative of :func:`hermite` with respect to the grid variable at fraction ``s``.
-
-    Parameters
-    ----------
-    v0 : float
-        Value at the interval's start.
-    v1 : float
-        Value at its end.
-    d0 : float
-        Derivative at the start (per unit of ``step``).
-    d1 : float
-        Derivative at the end.
-    s : float
-        Fraction [1] of the interval.
-    step : float
-        Interval length.
-
-    Returns
-    -------
-    float
-        The rate, in units of the values per unit of ``step``.
+    """Like :func:`hermite` (same arguments): its derivative with respect to the grid variable [values per
+    unit of ``step``].
 
     Notes
     -----
     ``6 (s - s^2) (v1 - v0) / step + (3 s^2 - 4 s + 1) d0 + (3 s^2 - 2 s) d1``, the derivative of the
-    Hermite basis [1].
-
-    References
-    ----------
-    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> hermite_rate(0.0, 1.0, 0.0, 3.0, 0.5, 1.0)         # 3 t^2 at t = 0.5
-    0.75
+    Hermite basis ([fritsch1980] in the bibliography).
     """
     s2 = s * s
     return (6.0 * (s - s2) * (v1 - v0) / step + (3.0 * s2 - 4.0 * s + 1.0) * d0

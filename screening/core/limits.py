@@ -14,12 +14,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEFAULT_MAX_POINTS", "MAX_POINTS_CEILING", "MAX_TIMES", "MAX_SAMPLES", "MAX_SAMPLE_VALUES", "MAX_SEED",
-           "MAX_STUDY_CHARS", "MAX_NESTING", "MAX_HISTORY_VALUES", "MAX_RTOL", "TASK_BYTES", "MAX_CASES",
-           "MAX_THRESHOLDS", "MAX_STUDY_BYTES", "MAX_SYNTHESIS_POINTS", "MAX_RECORD_BYTES", "MAX_RECORD_SAMPLES", "MIN_RECORD_DT",
-           "MAX_RECORD_DT", "MAX_RECORD_SCALE", "MAX_RECORD_FILES", "SA_PERIOD_RANGE", "MAX_MODELLING_DISPERSION",
-           "nesting_depth",
-           "output_steps", "batch_budget"]
+__all__ = []
 
 #: Default largest grid (``case`` x swept parameters); ``[run] max_points`` changes it.
 DEFAULT_MAX_POINTS = 1_000_000
@@ -89,19 +84,6 @@ def nesting_depth(text):
     int
         An upper bound of its nesting depth [-], compared with :data:`MAX_NESTING`.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md,
-       section "What is bounded".
-    .. [2] T. Preston-Werner et al., "TOML: Tom's Obvious Minimal Language", version 1.0.0,
-       https://toml.io/en/v1.0.0
-
-    Examples
-    --------
-    >>> nesting_depth('a.b.c = 1')                            # a dotted key: three tables deep
-    3
-    >>> nesting_depth('x = [[1, 2], [3]]\\ntitle = "[[[["')     # brackets in a string do not count
-    2
     """
     depth = deepest = dots = 0
     stack = []                      # "[" of a table header, "a" of an array, "{" of an inline table
@@ -178,15 +160,6 @@ def output_steps(t_end, dt):
         The number of output steps [-] (the output has one instant more), compared with
         :data:`MAX_TIMES`; ``inf`` for ``dt = 0`` or an overflow.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md,
-       section "What is bounded".
-
-    Examples
-    --------
-    >>> output_steps(20.0, 0.01), output_steps(20.0, 0.0)
-    (2000.0, inf)
     """
     try:
         ratio = t_end / dt
@@ -212,16 +185,5 @@ def batch_budget(n_times, n_variables=6, budget=TASK_BYTES):
     int
         ``budget // (8 n_times n_variables)``, at least 1 [-].
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md,
-       section "What is bounded".
-
-    Examples
-    --------
-    >>> batch_budget(2001)                     # 20 s at 0.01 s: 2,794 points x 2,001 x 6 x 8 B <= 256 MiB
-    2794
-    >>> batch_budget(10**9)                    # never fewer than one point
-    1
     """
     return max(1, int(budget // (8 * max(int(n_times), 1) * max(int(n_variables), 1))))

@@ -6,7 +6,7 @@ import sys
 import threading
 import time
 
-__all__ = ["LINE_STEP", "LINE_INTERVAL", "Progress"]
+__all__ = []
 
 #: Without a terminal (a log file, CI, a pipe): one line per this fraction of the work ...
 LINE_STEP = 0.1

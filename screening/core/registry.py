@@ -6,7 +6,7 @@ registered ones (``parameter '<axis>' must be one of (...) (got ...)``).
 
 from __future__ import annotations
 
-__all__ = ["NamedModel", "Registry"]
+__all__ = []
 
 
 class NamedModel:

@@ -15,8 +15,7 @@ import numba
 import numpy as np
 from numba import types
 
-__all__ = ["FMA", "FLOAT", "TABLE", "record_type", "moment_coefficients_signature", "sdof_coefficients_signature",
-           "function_type", "SdofKernel", "MomentKernel"]
+__all__ = []
 
 #: Floating-point flags of the moment solver's step loops and the coefficient functions they call:
 #: LLVM may fuse a multiply and an add into one FMA instruction where the CPU has one (shorter
@@ -41,17 +40,6 @@ def record_type(dtype):
     numba.types.Record
         The record type numba compiles against.
 
-    References
-    ----------
-    .. [1] Numba documentation, "Supported NumPy features: structured scalars and record arrays",
-       https://numba.readthedocs.io/en/stable/reference/numpysupported.html
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rec = record_type(np.dtype([("k", "f8"), ("b", "f8")]))
-    >>> list(rec.fields), rec.size
-    (['k', 'b'], 16)
     """
     return numba.from_dtype(dtype)
 
@@ -72,17 +60,6 @@ def moment_coefficients_signature(dtype):
         The explicit signature; the table is a C-contiguous 2-d float64 array of per-interval
         cubic coefficients.
 
-    References
-    ----------
-    .. [1] Numba documentation, "First-class function objects",
-       https://numba.readthedocs.io/en/stable/reference/types.html#functions
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> sig = moment_coefficients_signature(np.dtype([("k", "f8")]))
-    >>> str(sig.return_type), len(sig.args)
-    ('UniTuple(float64 x 2)', 4)
     """
     return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, FLOAT, FLOAT)
 
@@ -102,17 +79,6 @@ def sdof_coefficients_signature(dtype):
     numba.core.typing.templates.Signature
         The explicit signature.
 
-    References
-    ----------
-    .. [1] Numba documentation, "First-class function objects",
-       https://numba.readthedocs.io/en/stable/reference/types.html#functions
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> sig = sdof_coefficients_signature(np.dtype([("k", "f8")]))
-    >>> str(sig.return_type), str(sig.args[1])
-    ('UniTuple(float64 x 2)', 'float64')
     """
     return types.UniTuple(FLOAT, 2)(record_type(dtype), FLOAT)
 
@@ -130,17 +96,6 @@ def function_type(signature):
     numba.types.FunctionType
         The type a solver declares for its function argument.
 
-    References
-    ----------
-    .. [1] Numba documentation, "First-class function objects",
-       https://numba.readthedocs.io/en/stable/reference/types.html#functions
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> ftype = function_type(sdof_coefficients_signature(np.dtype([("k", "f8")])))
-    >>> type(ftype).__name__
-    'FunctionType'
     """
     return types.FunctionType(signature)
 

@@ -20,10 +20,9 @@ from importlib import resources
 
 import numpy as np
 
-__all__ = ["CODE_SPACES", "code_space", "PointStatus", "SampleStatus", "DivergenceReason", "SampleState",
-           "SpotStatus", "Trust", "BestMethod", "EscalationModel", "EscalationEstimator", "TargetMet", "ContactRegime", "FitFlag",
-           "ProbabilitySource", "AnswerQuantity", "MONTE_CARLO_SOURCE_BASE", "DIVERGENCE_TEXT", "probability_sources",
-           "flag_attributes"]
+__all__ = ["PointStatus", "SampleStatus", "DivergenceReason", "SampleState", "SpotStatus", "Trust", "BestMethod",
+           "EscalationModel", "EscalationEstimator", "TargetMet", "ContactRegime", "FitFlag", "ProbabilitySource",
+           "AnswerQuantity"]
 
 try:
     import tomllib
@@ -55,19 +54,6 @@ def code_space(name):
     KeyError
         No such table.
 
-    References
-    ----------
-    .. [1] screening documentation, "Method", docs/method.md, section "Status flags".
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags),
-       https://cfconventions.org
-
-    Examples
-    --------
-    >>> trust = code_space("Trust")
-    >>> [(m.name, int(m)) for m in trust]
-    [('trusted', 0), ('check', 1), ('untrusted', 2)]
-    >>> PointStatus.ok.meaning
-    'integrated to the end of the record'
     """
     table = dict(CODE_SPACES[name])
     doc = table.pop("doc")
@@ -114,17 +100,6 @@ def probability_sources(models):
     dict
         ``{source name: integer code}``: the codes of ``probability_source`` in result files.
 
-    References
-    ----------
-    .. [1] screening documentation, "Method", docs/method.md, section "Status flags".
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags),
-       https://cfconventions.org
-
-    Examples
-    --------
-    >>> probability_sources(["coupled", "condensed"])            # doctest: +NORMALIZE_WHITESPACE
-    {'unreliable': 0, 'linearization_gaussian': 1, 'corrected_linearization_gaussian': 2,
-     'study_fragility_surface': 3, 'monte_carlo_coupled': 10, 'monte_carlo_condensed': 11}
     """
     return {**{m.name: int(m) for m in ProbabilitySource},
             **{f"monte_carlo_{model}": MONTE_CARLO_SOURCE_BASE + i for i, model in enumerate(models)}}
@@ -149,17 +124,6 @@ def flag_attributes(code_space, long_name, dtype=np.int8):
         ``long_name``; ``flag_values``, the codes as an array of ``dtype``; ``flag_meanings``, the
         member names separated by blanks, in the order of the values.
 
-    References
-    ----------
-    .. [1] screening documentation, "Method", docs/method.md, section "Status flags".
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 3.5 (flags),
-       https://cfconventions.org
-
-    Examples
-    --------
-    >>> attrs = flag_attributes(Trust, "trust of the linearization")
-    >>> attrs["flag_values"].tolist(), attrs["flag_meanings"], attrs["flag_values"].dtype
-    ([0, 1, 2], 'trusted check untrusted', dtype('int8'))
     """
     members = sorted(code_space, key=int)
     return {"long_name": long_name,

@@ -11,8 +11,7 @@ import stat
 import numpy as np
 import xarray as xr
 
-__all__ = ["NOT_NUMBERS", "as_checked_array", "check_scalar", "check_integer", "check_size", "checked",
-           "InputFileError", "file_problem", "input_path", "read_input_bytes", "read_input_text"]
+__all__ = []
 
 
 #: numpy dtype kinds that are not real numbers although ``float()`` accepts some of them: booleans,
@@ -58,19 +57,6 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
         ``"parameter '<name>' must be <range> (got <value>)"`` for the first bad element, or for an
         empty array.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> as_checked_array("k", [2.89e7, 5e7], lower=0.0).tolist()
-    [28900000.0, 50000000.0]
-    >>> as_checked_array("k", [2.89e7, -1.0], lower=0.0)
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'k' must be a finite number > 0 (got -1.0)
     """
     if range_text is None:
         parts = []
@@ -122,19 +108,6 @@ def check_scalar(name, value, **bounds):
     ValueError
         One line naming ``name``: not a number, not finite, out of range, or an array.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> check_scalar("T1", 4, lower=0.0)                  # [s]
-    4.0
-    >>> check_scalar("T1", [4.0, 5.0], lower=0.0)
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'T1' must be a single number (got an array of shape (2,))
     """
     arr = as_checked_array(name, value, **bounds)
     if arr.ndim != 0:
@@ -166,19 +139,6 @@ def check_integer(name, value, lower, upper=None):
     ValueError
         ``"parameter '<name>' must be an integer >= <lower>"`` (or ``in <lower>..<upper>``).
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> check_integer("seed", 7, 0, 2**31 - 1)
-    7
-    >>> check_integer("samples", 10.0, 1)
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'samples' must be an integer >= 1 (got 10.0)
     """
     ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
     if not ok or value < lower or (upper is not None and value > upper):
@@ -212,19 +172,6 @@ def check_size(name, size, limit, what):
     ValueError
         ``size > limit`` (or ``size`` is NaN).
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> check_size("duration", 1e5, 1e5, "output steps") is None
-    True
-    >>> check_size("duration", 2e5, 1e5, "output steps")
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'duration' asks for 2e+05 output steps; at most 1e+05 (a bound on the memory of one call)
     """
     if not size <= limit:
         raise ValueError(f"parameter '{name}' asks for {size:.3g} {what}; at most {limit:.3g} (a bound on the "
@@ -258,18 +205,6 @@ def checked(name, value, **kwargs):
     ValueError
         As :func:`as_checked_array`.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> checked("h", 0.21, lower=0.0)
-    0.21
-    >>> checked("h", xr.DataArray([1, 2], dims="h")).dtype
-    dtype('float64')
     """
     if isinstance(value, xr.DataArray):
         as_checked_array(name, value.values, **kwargs)
@@ -306,20 +241,6 @@ def file_problem(path):
     str or None
         The problem in words, or None for a regular file.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     link = Path(folder) / "gone.at2"
-    ...     link.symlink_to(Path(folder) / "missing")
-    ...     file_problem(folder), file_problem(link), file_problem(Path(folder) / "none.at2")
-    ('is a folder, not a file', 'is a broken symbolic link', 'does not exist')
     """
     try:
         mode = os.stat(path).st_mode
@@ -371,20 +292,6 @@ def input_path(path, what="file"):
     ValueError
         ``path`` is not a path (a number, None) or contains a NUL character.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> from pathlib import Path
-    >>> input_path(Path("records") / "a.at2"), input_path(b"a.at2")
-    ('records/a.at2', 'a.at2')
-    >>> input_path(3, "record")
-    Traceback (most recent call last):
-    ...
-    ValueError: record: must be a path (got int)
     """
     if isinstance(path, bytes):
         path = os.fsdecode(path)
@@ -422,25 +329,6 @@ def read_input_bytes(path, what, max_bytes):
     InputFileError
         (a ``ValueError``) ``"<what> <path> <problem>"``, the problem also as ``.problem``.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     path = Path(folder) / "a.txt"
-    ...     _ = path.write_bytes(b"0.1 0.2")
-    ...     print(read_input_bytes(path, "record", 100))
-    ...     try:
-    ...         read_input_bytes(path, "record", 4)
-    ...     except InputFileError as exc:
-    ...         print(exc.problem)
-    b'0.1 0.2'
-    has 7 bytes; at most 4 are read
     """
     path = input_path(path, what)
     problem = file_problem(path)
@@ -487,20 +375,6 @@ def read_input_text(path, what, max_bytes):
     InputFileError
         As :func:`read_input_bytes`, or ``"is not UTF-8 text (byte <n>)"``.
 
-    References
-    ----------
-    .. [1] screening documentation, "Robustness and the limits of the method", docs/limits.md
-       (sections "What is bounded" and "Bad input and faults").
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     path = Path(folder) / "a.txt"
-    ...     _ = path.write_bytes(b"\\xef\\xbb\\xbfdt = 0.01")           # a byte-order mark first
-    ...     read_input_text(path, "record", 100)
-    'dt = 0.01'
     """
     data = read_input_bytes(path, what, max_bytes)
     try:

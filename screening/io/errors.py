@@ -5,8 +5,7 @@ from __future__ import annotations
 import errno
 import os
 
-__all__ = ["SweepError", "exception_line", "ReadFailure", "read_values", "LOW_SPACE_BYTES", "write_failure_reason",
-           "is_write_error"]
+__all__ = []
 
 
 class SweepError(Exception):
@@ -29,15 +28,6 @@ def exception_line(exc):
     str
         ``"<type name>: <message>"``, the message cut to 200 characters.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
-       ``docs/outputs_storage.md``.
-
-    Examples
-    --------
-    >>> exception_line(ValueError("bad\\n   value"))
-    'ValueError: bad value'
     """
     return f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
 
@@ -69,20 +59,6 @@ def read_values(read):
     ReadFailure
         When ``read()`` raised ``OSError``, ``RuntimeError`` or ``ValueError``.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
-       ``docs/outputs_storage.md``.
-
-    Examples
-    --------
-    >>> read_values(lambda: 42)
-    42
-    >>> try:
-    ...     read_values(lambda: int("damaged"))
-    ... except ReadFailure as exc:
-    ...     print(exc)
-    invalid literal for int() with base 10: 'damaged'
     """
     try:
         return read()
@@ -114,18 +90,6 @@ def write_failure_reason(exc, path=None):
         The reason: the ``strerror`` of an ``OSError``, else the message (at most 200 characters),
         completed with the free space for a netCDF error when ``path`` is given.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
-       ``docs/outputs_storage.md``.
-
-    Examples
-    --------
-    >>> import errno
-    >>> write_failure_reason(OSError(errno.ENOSPC, "No space left on device"))
-    'No space left on device'
-    >>> write_failure_reason(RuntimeError("NetCDF:   HDF error"))
-    'NetCDF: HDF error'
     """
     if isinstance(exc, OSError) and exc.strerror:
         return exc.strerror
@@ -165,20 +129,6 @@ def is_write_error(exc):
         True for a failure of the disk (the sweep stops with the reason), False otherwise (a failed
         task, retried or reported per batch).
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
-       ``docs/outputs_storage.md``.
-
-    Examples
-    --------
-    >>> import errno
-    >>> is_write_error(OSError(errno.EROFS, "Read-only file system"))
-    True
-    >>> is_write_error(RuntimeError("NetCDF: HDF error"))
-    True
-    >>> is_write_error(ConnectionResetError(errno.ECONNRESET, "Connection reset by peer"))
-    False
     """
     if isinstance(exc, OSError):
         return exc.filename is not None or exc.errno in _DISK_ERRNOS

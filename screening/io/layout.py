@@ -11,7 +11,7 @@ import numpy as np
 from screening.core.model import Block
 from screening.solvers.schema import PARAMETERS
 
-__all__ = ["SPOT_HISTORIES", "SPOT_LINEAR", "hyperslabs", "history_chunks", "parameter_table", "wants_probabilities"]
+__all__ = []
 
 #: Histories of a spot check.
 SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
@@ -37,16 +37,6 @@ def hyperslabs(lo, hi, shape):
     list of tuple
         ``(slices, a, b)`` per hyperslab, in C order.
 
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> grid = np.arange(6).reshape(2, 3)
-    >>> [grid[slices].ravel().tolist() for slices, a, b in hyperslabs(1, 5, grid.shape)]
-    [[1, 2], [3, 4]]
     """
     if not shape:
         return [((), lo, hi)] if hi > lo else []
@@ -85,15 +75,6 @@ def history_chunks(shape, nt):
     tuple of int
         The chunk shape of a ``grid x t`` history.
 
-    References
-    ----------
-    .. [1] Unidata, "NetCDF Users Guide: Improving Performance with Chunking",
-       https://docs.unidata.ucar.edu/nug/current/netcdf_perf_chunking.html
-
-    Examples
-    --------
-    >>> history_chunks((2, 3), 401), history_chunks((10, 1000), 401)     # 653 x 401 < 2**18 values
-    ((1, 3, 401), (1, 653, 401))
     """
     if not shape:
         return (nt,)
@@ -125,18 +106,6 @@ def parameter_table(study):
     labels, case_labels : dict
         The same for the model names.
 
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> constants, per_case, labels, case_labels = parameter_table(study)
-    >>> constants["k"], round(constants["I_cm"], 4), labels["contact"], per_case
-    (28900000.0, 0.131, 'hunt_crossley', {})
     """
     names = [n for n in PARAMETERS if n not in study.sweeps]
     values = {}
@@ -177,16 +146,5 @@ def wants_probabilities(study):
     bool
         True with an ``[accuracy]`` or a ``[fragility]`` table.
 
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
-    >>> with_fragility = text + "[fragility]\\nthresholds = [0.5]\\n"
-    >>> wants_probabilities(parse_study(text)), wants_probabilities(parse_study(with_fragility))
-    (False, True)
     """
     return study.accuracy is not None or study.fragility is not None

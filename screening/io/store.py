@@ -28,7 +28,7 @@ from screening.io._zarr_store import file_check
 from screening.io.errors import SweepError
 from screening.io.zarrfile import ZarrFormat
 
-__all__ = ["PartialStore", "RegionTarget"]
+__all__ = []
 
 
 class PartialStore:

@@ -58,9 +58,7 @@ from screening.solvers.outputs import client_variables, GRID_OUTPUTS, selected
 from screening.solvers.schema import (ACCURACY, attributes, global_attributes, grid_coordinate_attributes,
                                       PRESSURE_PARAMETERS, SWEEP, TIME)
 
-__all__ = ["SYNC_POINTS", "COMPLEVEL", "POINT_CHUNK", "CACHED_CHUNKS", "TITLE_FALLBACK", "check_output_path",
-           "NetcdfFormat", "result_attributes",
-           "relative_peak_error", "point_chunks", "region_variables", "write_region", "ResultFile"]
+__all__ = []
 
 SYNC_POINTS = 2000            # points of histories between flushes of the file (compression overlaps compute)
 COMPLEVEL = 1
@@ -97,22 +95,6 @@ def check_output_path(out, inputs=()):
         One line: the output is an input, lies inside one, is a directory or a special file, or its
         folder is missing or not writable.
 
-    References
-    ----------
-    .. [1] screening documentation, "How results are stored, and what the tool guarantees about them",
-       ``docs/outputs_storage.md``.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     print(check_output_path(os.path.join(folder, "r.nc")).name)
-    ...     try:
-    ...         check_output_path(os.path.join(folder, "missing", "r.nc"))
-    ...     except SweepError as exc:
-    ...         print(str(exc).replace(folder, "FOLDER"))
-    r.nc
-    output folder FOLDER/missing does not exist
     """
     out = Path(out)
     for path in inputs:
@@ -178,19 +160,6 @@ def result_attributes(study, created, batch_size):
     dict
         ``{attribute: value}``.
 
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
-       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
-    >>> study = parse_study(text, name="bed", source="bed.toml")
-    >>> attrs = result_attributes(study, "2026-11-26T03:00:00Z", batch_size=2)
-    >>> attrs["Conventions"], attrs["grid_dims"], attrs["t_end"], attrs["history"]
-    ('CF-1.8', 'eps', 20.0, '2026-11-26T03:00:00Z: screening run bed.toml (screening ...)')
     """
     cmd = f"screening run {study.source}"
     return global_attributes(
@@ -243,15 +212,6 @@ def relative_peak_error(linear, mcs):
 
     (NaN values ignored).
 
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
-       ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> round(relative_peak_error([1.0, 1.2, 1.1], [1.0, 1.0, 0.9]), 12)     # 20 % too high
-    0.2
     """
     linear, mcs = np.asarray(linear, dtype=float), np.asarray(mcs, dtype=float)
     if not (np.any(np.isfinite(linear)) and np.any(np.isfinite(mcs))):
@@ -276,15 +236,6 @@ def point_chunks(shape, target=POINT_CHUNK):
     tuple of int
         The chunk shape: whole trailing dimensions while they fit, then a part of the next one.
 
-    References
-    ----------
-    .. [1] Unidata, "NetCDF Users Guide: Improving Performance with Chunking",
-       https://docs.unidata.ucar.edu/nug/current/netcdf_perf_chunking.html
-
-    Examples
-    --------
-    >>> point_chunks((10, 100000)), point_chunks((3, 4), target=5)
-    ((1, 16384), (1, 4))
     """
     chunks = []
     size = 1
@@ -329,27 +280,6 @@ def write_region(fmt, shape, histories, batch, result):
     None
         The arrays are written into ``fmt``.
 
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> import types
-    >>> import numpy as np
-    >>> from screening.solvers.outputs import GRID_OUTPUTS
-    >>> class Arrays(dict):                      # the one method of a result format used here
-    ...     def write(self, name, key, values):
-    ...         self.setdefault(name, np.full((2, 3) + values.shape[2:], np.nan))[key] = values
-    >>> result = {o.name: np.arange(1.0, 5.0) for o in GRID_OUTPUTS if o.when == "always"}
-    >>> result["var_theta"] = np.ones((4, 3))     # 4 points, 3 output times
-    >>> fmt = Arrays()
-    >>> write_region(fmt, (2, 3), ("var_theta",), types.SimpleNamespace(lo=1, hi=5), result)
-    >>> fmt["peak_var_theta"]
-    array([[nan,  1.,  2.],
-           [ 3.,  4., nan]])
-    >>> fmt["var_theta"].shape, "var_theta_dot" in fmt, "p_overturn" in fmt      # only what is stored
-    ((2, 3, 3), False, False)
     """
     names = set(histories)
     outputs = [o for o in GRID_OUTPUTS if o.name in names or o.shape != "history" and
@@ -380,20 +310,6 @@ def region_variables(study):
     tuple of str
         Variable names, as in the result.
 
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-    .. [2] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8,
-       https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY + '[output]\\nhistories = "none"\\n'
-    >>> study = parse_study(text, name="bed", source="bed.toml")
-    >>> names = region_variables(study)
-    >>> names[:4], "var_theta" in names
-    (('status', 'sl_trust', 't_stop', 'peak_var_theta'), False)
     """
     return tuple(o.name for o in _outputs(study))
 

@@ -26,8 +26,7 @@ import threading
 import time
 from pathlib import Path
 
-__all__ = ["KEY_KERNELS", "FIRST_COMPILE", "cache_is_cold", "announce_compilation", "CompileAnnouncer",
-           "announcing_compiles", "source_stamp", "clear_stale_cache"]
+__all__ = []
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -72,18 +71,6 @@ def cache_is_cold():
     bool
         Whether the first run will compile (about 10-60 s [s] per fresh cache).
 
-    References
-    ----------
-    .. [1] Numba documentation, "Notes on caching" (the cache locators),
-       https://numba.readthedocs.io/en/stable/developer/caching.html
-
-    Examples
-    --------
-    >>> import os
-    >>> from unittest import mock
-    >>> with mock.patch.dict(os.environ, {"NUMBA_CACHE_DIR": "/nonexistent-numba-cache"}):   # a fresh cache
-    ...     cache_is_cold()
-    True
     """
     if os.environ.get("NUMBA_DISABLE_JIT") == "1":
         return False
@@ -105,19 +92,6 @@ def announce_compilation(stream=None):
     bool
         True if the line was due (the cache is cold), False otherwise.
 
-    References
-    ----------
-    .. [1] Numba documentation, "Notes on caching",
-       https://numba.readthedocs.io/en/stable/developer/caching.html
-
-    Examples
-    --------
-    >>> import io, os
-    >>> from unittest import mock
-    >>> out = io.StringIO()
-    >>> with mock.patch.dict(os.environ, {"NUMBA_DISABLE_JIT": "1"}):   # nothing will compile
-    ...     announce_compilation(out), out.getvalue()
-    (False, '')
     """
     if not cache_is_cold():
         return False
@@ -154,17 +128,6 @@ class CompileAnnouncer:
         Compiling shorter than this is not announced [s].
     clock : callable
         Seconds [s] (a fake clock in tests).
-
-    Examples
-    --------
-    >>> import io
-    >>> out, now = io.StringIO(), [0.0]
-    >>> a = CompileAnnouncer(out, interval=10.0, delay=2.0, clock=lambda: now[0])
-    >>> a.started("solve_batch"); now[0] = 1.0; a.tick(); now[0] = 2.0; a.tick()
-    >>> now[0] = 9.0; a.tick(); now[0] = 12.0; a.tick(); a.finished()
-    >>> print(out.getvalue(), end="")
-    screening: compiling solve_batch with numba (not in its cache yet; first run only, about 10-60 s)...
-    screening: still compiling (1 kernel(s) so far, now solve_batch, 12 s)
     """
 
     def __init__(self, stream=None, interval=COMPILE_INTERVAL, delay=COMPILE_DELAY, clock=time.monotonic):
@@ -287,20 +250,6 @@ def source_stamp(package=None):
         Hexadecimal SHA-256 digest [-]; it changes when any of those ``.py`` files changes (an edit of
         ``sweep/`` or ``cli/`` keeps the compiled kernels).
 
-    References
-    ----------
-    .. [1] Numba documentation, "Notes on caching" (cache invalidation does not follow functions defined
-       in other files), https://numba.readthedocs.io/en/stable/developer/caching.html
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     _ = (Path(folder) / "a.py").write_text("x = 1")
-    ...     before = source_stamp(folder)
-    ...     _ = (Path(folder) / "a.py").write_text("x = 2")
-    ...     before != source_stamp(folder), len(before)
-    (True, 64)
     """
     package = Path(package) if package is not None else _PACKAGE
     digest = hashlib.sha256(sys.version.encode())
@@ -344,28 +293,6 @@ def clear_stale_cache(package=None):
     layers up to ``solvers/``, :func:`source_stamp`) is conservative there: such a change recompiles the
     kernels once (about a minute), never runs stale code.
 
-    References
-    ----------
-    .. [1] Numba documentation, "Notes on caching",
-       https://numba.readthedocs.io/en/stable/developer/caching.html
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from unittest import mock
-    >>> with tempfile.TemporaryDirectory() as folder, mock.patch.dict(os.environ):
-    ...     _ = os.environ.pop("NUMBA_CACHE_DIR", None)   # as without it, whatever the caller has set
-    ...     root = Path(folder)
-    ...     _ = (root / "kernel.py").write_text("K = 1")
-    ...     (root / "__pycache__").mkdir()
-    ...     _ = (root / "__pycache__" / "kernel.f-3.py311.nbi").write_bytes(b"index")
-    ...     first = clear_stale_cache(root)          # no stamp yet: the files cannot be vouched for
-    ...     _ = (root / "__pycache__" / "kernel.f-3.py311.nbi").write_bytes(b"index")
-    ...     same = clear_stale_cache(root)           # sources unchanged: kept
-    ...     _ = (root / "kernel.py").write_text("K = 2")
-    ...     changed = clear_stale_cache(root)        # a source changed: removed
-    ...     first, same, changed
-    (1, 0, 1)
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return 0

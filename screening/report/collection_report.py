@@ -20,7 +20,7 @@ from screening.applications.risk import risk_table
 from screening.core.atomicfile import atomic_open
 from screening.report.figure_base import new_figure
 
-__all__ = ["report_objects", "write_report"]
+__all__ = []
 
 #: Marker of each probability source (``p_source`` flag meaning); others get ``"P"``.
 MARKERS = {"linearization_gaussian": "o", "corrected_linearization_gaussian": "s", "study_fragility_surface": "D",
@@ -63,18 +63,6 @@ def report_objects(ds, frags, rows=None):
         ``name``, ``labels`` (``{dim: value}`` of the curve), ``curves`` (``[(frag, state, curve row)]``),
         ``risk`` (``{state: row}``), ``values`` (``{name: (value, units)}``), in rank order.
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md, section "A report to hand on".
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> frag = xr.Dataset({"fit_median": ("case", [2.0, 1.0], {"units": "m s-2", "intensity": "pga"}),
-    ...                    "beta": ("case", [0.3, 0.4]), "fit_flag": ("case", np.int8([0, 0])),
-    ...                    "threshold_rad": 0.1}, coords={"case": [0, 1], "case_name": ("case", ["bust", "vase"])})
-    >>> [o["name"] for o in report_objects(xr.Dataset(), [frag])]
-    ['vase', 'bust']
     """
     objects = {}
     per_case = case_values(ds)[1] if "case" in ds.dims else {}
@@ -263,16 +251,6 @@ def write_report(ds, path, source="", curve=None, years=50.0, frags=(), hazard_p
     list of dict
         :func:`report_objects`, in rank order.
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md, section "A report to hand on".
-
-    Examples
-    --------
-    >>> import tempfile, pathlib, xarray as xr
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     write_report(xr.Dataset(), pathlib.Path(tmp) / "r.html")
-    []
     """
     rows = [r for frag in frags for r in risk_table(frag, curve, years, hazard_path)] if curve is not None else None
     objects = report_objects(ds, list(frags), rows)

@@ -22,10 +22,7 @@ from matplotlib.patches import Patch
 from screening.core.atomicfile import atomic_open
 from screening.core.status import PointStatus, Trust
 
-__all__ = ["DPI", "RESPONSES", "FLAGGED_HATCH", "UNTRUSTED_HATCH", "FLAGGED_COLOR", "UNTRUSTED_COLOR",
-           "point_flags", "flag_summary", "point_flag_text", "response_values", "flag_legend", "grid_dims",
-           "grid_values", "grid_units", "spot_index", "is_log_spaced", "point_label", "new_figure", "save_figure",
-           "axis_label"]
+__all__ = []
 
 DPI = 110
 
@@ -57,19 +54,6 @@ def point_flags(ds, index=None, order=None):
     untrusted : numpy.ndarray of bool
         Status ``ok`` but the linearization ``untrusted`` (all False without ``sl_trust``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> [a.tolist() for a in point_flags(ds)]
-    [[False, True, False], [False, False, True]]
     """
     def values(name):
         da = ds[name].isel(index) if index else ds[name]
@@ -95,19 +79,6 @@ def flag_summary(ds):
         E.g. ``"status: ok 95, k_eq_negative 5; linearization vs coupled model: trusted 3, check 29,
         untrusted 63"`` (trust: "not stored" for files without ``sl_trust``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> flag_summary(ds)
-    'status: ok 2, k_eq_negative 1; linearization vs coupled model: trusted 2, check 0, untrusted 1'
     """
     codes, counts = np.unique(np.asarray(ds["status"].values), return_counts=True)
     names = {int(m): m.name for m in PointStatus}
@@ -135,19 +106,6 @@ def point_flag_text(ds, index):
     str
         The text, with a leading space when not empty.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> point_flag_text(ds, {"S0": 1}), point_flag_text(ds, {"S0": 2})
-    (' [flagged: k_eq_negative]', ' [linearization untrusted]')
     """
     code = int(np.asarray(ds["status"].isel(index).values))
     if code != PointStatus.ok:
@@ -180,17 +138,6 @@ def response_values(ds, da, kind, index=None):
     label : str
         Its axis label with units.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"slenderness": 0.2})
-    >>> values, label = response_values(ds, xr.DataArray([1e-4, 4e-4], dims="S0"), "fraction")
-    >>> [round(float(v), 6) for v in values], label
-    ([0.05, 0.1], 'sigma_theta / atan(b/h) [1]')
     """
     if kind == "var":
         return da, "var_theta [rad2]"
@@ -224,16 +171,6 @@ def flag_legend(fig, ds, flagged, untrusted, curves=False):
     -------
     None
 
-    References
-    ----------
-    .. [1] [hunter2007] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> fig = new_figure(4.0, 3.0)
-    >>> flag_legend(fig, None, [True, False], [False, False])
-    >>> [t.get_text() for t in fig.legends[0].get_texts()]
-    ['flagged (status != ok, not a value): 1', 'linearization untrusted: 0']
     """
     if curves:
         handles = [Line2D([], [], ls="", marker="x", color=FLAGGED_COLOR, label=f"flagged (status != ok, not a value): "
@@ -261,19 +198,6 @@ def grid_dims(ds):
     tuple of str
         The dimension names.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> grid_dims(ds)
-    ('S0',)
     """
     return tuple(ds["status"].dims)
 
@@ -293,19 +217,6 @@ def grid_values(ds, dim):
     numpy.ndarray
         Its values in SI units (e.g. ``S0`` [m2 s-3]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> grid_values(ds, "S0").tolist()
-    [0.0001, 0.0002, 0.0004]
     """
     name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
     return np.asarray(ds[name].values)
@@ -326,19 +237,6 @@ def grid_units(ds, dim):
     str
         Its ``units`` attribute (e.g. ``"m2 s-3"`` for ``S0``); ``""`` when it has none.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> grid_units(ds, "S0")
-    'm2 s-3'
     """
     name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
     return ds[name].attrs.get("units", "")
@@ -359,19 +257,6 @@ def spot_index(ds, i):
     dict of str to int
         ``{dim: position}``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> spot_index(ds.assign_coords(spot_S0=("spot", [2e-4])), 0)
-    {'S0': 1}
     """
     index = {}
     for dim in grid_dims(ds):
@@ -395,14 +280,6 @@ def is_log_spaced(values):
     bool
         True for a log axis.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> bool(is_log_spaced([1e-5, 1e-4, 1e-3])), bool(is_log_spaced([1.0, 2.0, 3.0]))
-    (True, False)
     """
     values = np.asarray(values, dtype=float)
     return values.size > 2 and np.all(values > 0) and values.max() / values.min() > 50
@@ -423,19 +300,6 @@ def point_label(ds, index):
     str
         The label (values in SI units, 3 significant digits); ``"single point"`` for an empty index.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> point_label(ds, {"S0": 2}), point_label(ds, {})
-    ('S0=0.0004', 'single point')
     """
     parts = []
     for dim, i in index.items():
@@ -461,15 +325,6 @@ def new_figure(width, height):
     matplotlib.figure.Figure
         The figure, at :data:`DPI` dots per inch.
 
-    References
-    ----------
-    .. [1] [hunter2007] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> fig = new_figure(4.0, 3.0)
-    >>> [float(x) for x in fig.get_size_inches()], float(fig.dpi)
-    ([4.0, 3.0], 110.0)
     """
     fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
@@ -493,17 +348,6 @@ def save_figure(fig, path):
     pathlib.Path
         ``path``.
 
-    References
-    ----------
-    .. [1] [hunter2007] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     out = save_figure(new_figure(2.0, 2.0), pathlib.Path(tmp) / "f.png")
-    ...     out.read_bytes()[:4], sorted(p.name for p in pathlib.Path(tmp).iterdir())
-    (b'\\x89PNG', ['f.png'])
     """
     with atomic_open(path, "wb") as fh:                 # never through a planted link
         fig.savefig(fh, format="png")
@@ -525,19 +369,6 @@ def axis_label(ds, name):
     str
         The label.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"status": ("S0", [PointStatus.ok, PointStatus.k_eq_negative, PointStatus.ok]),
-    ...                  "sl_trust": ("S0", [Trust.trusted, Trust.trusted, Trust.untrusted])},
-    ...                 coords={"S0": ("S0", [1e-4, 2e-4, 4e-4], {"units": "m2 s-3"})})
-    >>> axis_label(ds, "S0"), axis_label(ds, "status")
-    ('S0 [m2 s-3]', 'status')
     """
     units = ds[name].attrs.get("units")
     return f"{name} [{units}]" if units else name

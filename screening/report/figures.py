@@ -28,8 +28,7 @@ from screening.report.spot_figures import (
     MAX_SPOT_FIGURES, SPOT_PANEL_HISTORIES, plot_spot_panels, plot_spots, spot_file_label)
 from screening.core.status import PointStatus
 
-__all__ = ["HISTORY_PANELS", "PEAK_PANELS", "LOG_PANELS", "representative_points", "plot_histories", "plot_peaks",
-           "plot_result"]
+__all__ = []
 
 HISTORY_PANELS = ("var_theta", "var_theta_dot", "c_eq", "k_eq", "p_uplift")
 PEAK_PANELS = ("peak_var_theta", "peak_p_uplift", "min_k_eq", "status")
@@ -53,18 +52,6 @@ def representative_points(ds, n=4):
     list of dict
         Grid index dicts ``{dim: position}``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False)
-    >>> representative_points(ds)
-    [{'S0': 0}, {'S0': 2}, {'S0': 4}]
     """
     dims = grid_dims(ds)
     shape = ds["status"].shape
@@ -113,20 +100,6 @@ def plot_histories(ds, path, points=None, response="var"):
     -----
     The moments are those of the Lyapunov equation of the linearized system, eq. (45) in [1].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False)
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_histories(ds, pathlib.Path(tmp) / "h.png", response="sigma").read_bytes()[:4]
-    b'\\x89PNG'
     """
     points = representative_points(ds) if points is None else points
     fig = new_figure(8.0, 11.0)
@@ -206,20 +179,6 @@ def plot_peaks(ds, path, response="var"):
     pathlib.Path or None
         ``path``; ``None`` (nothing written) for a single-point result.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False)
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_peaks(ds, pathlib.Path(tmp) / "p.png").name, plot_peaks(ds.isel(S0=0), pathlib.Path(tmp) / "q.png")
-    ('p.png', None)
     """
     dims = grid_dims(ds)
     if not dims:
@@ -377,20 +336,6 @@ def plot_result(ds, stem, out_dir, response="var"):
     list of pathlib.Path
         The files written.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False)
-    >>> import tempfile
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     [p.name for p in plot_result(ds, "demo", tmp)]
-    ['demo_histories.png', 'demo_peaks.png']
     """
     out_dir = Path(out_dir)
     if response not in RESPONSES:

@@ -15,7 +15,7 @@ from screening.report.figure_base import (
     point_flags, point_label, save_figure)
 from screening.core.status import MONTE_CARLO_SOURCE_BASE, BestMethod, FitFlag
 
-__all__ = ["plot_fragility", "BEST_MARKERS", "PANEL_CASES"]
+__all__ = []
 
 
 def plot_fragility(frag, dim, path, max_curves=8, flags=None):
@@ -53,24 +53,6 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     Notes
     -----
     The fit drawn is ``P(IM) = Phi(ln(IM / median) / beta)``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False)
-    >>> import tempfile, pathlib
-    >>> from screening.analysis.fragility import fragility_dataset
-    >>> frag = fragility_dataset(ds, 0.01)
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_fragility(frag, "S0", pathlib.Path(tmp) / "f.png").name, plot_fragility(frag, "k", "x.png")
-    ('f.png', None)
     """
     p = frag["p_exceed"]
     if dim not in p.dims:

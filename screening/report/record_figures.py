@@ -12,7 +12,7 @@ from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
 from screening.core.records import Record
 from screening.report.figure_base import new_figure, save_figure
 
-__all__ = ["REGIME_LABELS", "plot_simulation", "plot_excitation_fit", "plot_stripes", "plot_cloud"]
+__all__ = []
 
 REGIME_LABELS = {0: "full contact", 1: "uplift +", 2: "uplift -", 3: "flight"}
 
@@ -34,20 +34,6 @@ def plot_simulation(ds, path):
     pathlib.Path
         ``path``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np, tempfile, pathlib
-    >>> from screening import Block, Foundation, simulate
-    >>> t = np.arange(0.0, 2.0, 0.01)
-    >>> ds = simulate(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...               2.0 * np.sin(2 * np.pi * 2.0 * t), dt=0.01, model="condensed")
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_simulation(ds, pathlib.Path(tmp) / "sim.png").read_bytes()[:4]
-    b'\\x89PNG'
     """
     fig = new_figure(8.0, 8.5)
     ax = fig.subplots(4, 1, sharex=True)
@@ -97,21 +83,6 @@ def plot_excitation_fit(record, fit, path):
     pathlib.Path
         ``path``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] R. Husid, "Analisis de terremotos: analisis general", Revista del IDIEM 8 (1969) 21-42.
-
-    Examples
-    --------
-    >>> import numpy as np, tempfile, pathlib
-    >>> from screening.core.records import Record
-    >>> from screening.applications.fit_excitation import fit_excitation
-    >>> t = np.arange(0.0, 20.0, 0.01)
-    >>> rec = Record(4 * (np.exp(-t / 4) - np.exp(-t / 2)) * np.random.default_rng(1).normal(size=t.size), 0.01, "x")
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_excitation_fit(rec, fit_excitation(rec), pathlib.Path(tmp) / "fit.png").name
-    'fit.png'
     """
     a = record.acceleration - record.acceleration.mean()
     t = np.arange(a.size) * record.dt
@@ -168,21 +139,6 @@ def plot_stripes(ds, path):
     The curve is ``P(exceed | im) = Phi(ln(im / median) / beta)``, fitted by binomial maximum
     likelihood over the stripes [1]_.
 
-    References
-    ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31 (2015) 579-599. https://doi.org/10.1193/021113EQS025M
-
-    Examples
-    --------
-    >>> import numpy as np, tempfile, pathlib, xarray as xr
-    >>> ds = xr.Dataset({"stripe_pga": ("level", [1.0, 2.0, 4.0], {"units": "m s-2"}),
-    ...                  "n_used": ("level", [10, 10, 10]), "n_exceed": ("level", [1, 5, 9]),
-    ...                  "fit_median": 2.0, "fit_median_se": 0.2, "beta": 0.6, "beta_se": 0.1},
-    ...                 coords={"level": [1.0, 2.0, 4.0]}, attrs={"intensity_variable": "stripe_pga"})
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_stripes(ds, pathlib.Path(tmp) / "stripes.png").read_bytes()[:4]
-    b'\\x89PNG'
     """
     x = ds["level"].values
     n, k = ds["n_used"].values, ds["n_exceed"].values
@@ -231,24 +187,6 @@ def plot_cloud(ds, path):
     The curve is ``P(exceed | im) = Phi(ln(im / median) / beta)``, fitted by maximum likelihood on the
     exceed / not-exceed outcome of each record [1]_.
 
-    References
-    ----------
-    .. [1] J. W. Baker, "Efficient analytical fragility function fitting using dynamic structural analysis",
-       Earthquake Spectra 31 (2015) 579-599. https://doi.org/10.1193/021113EQS025M
-
-    Examples
-    --------
-    >>> import numpy as np, tempfile, pathlib, xarray as xr
-    >>> ds = xr.Dataset({"pga": ("record", [1.0, 2.0, 3.0, 4.0], {"units": "m s-2"}),
-    ...                  "peak_abs_theta": ("record", [0.001, 0.02, 0.05, 0.1]),
-    ...                  "overturned": ("record", [False, False, False, True]),
-    ...                  "exceed": ("record", [False, False, True, True]),
-    ...                  "slenderness": 0.165, "threshold_rad": 0.03,
-    ...                  "fit_median": ((), 2.5, {"units": "m s-2"}), "beta": 0.4},
-    ...                 attrs={"intensity_variable": "pga"})
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_cloud(ds, pathlib.Path(tmp) / "cloud.png").read_bytes()[:4]
-    b'\\x89PNG'
     """
     name = ds.attrs["intensity_variable"]
     x = ds[name].values

@@ -8,7 +8,7 @@ import numpy as np
 
 from screening.report.figure_base import new_figure, save_figure
 
-__all__ = ["plot_risk"]
+__all__ = []
 
 
 def plot_risk(rows, path, title="", years=50.0):
@@ -31,18 +31,6 @@ def plot_risk(rows, path, title="", years=50.0):
     pathlib.Path or None
         ``path``; ``None`` when no row has a rate.
 
-    References
-    ----------
-    .. [1] screening documentation, "The command line", docs/cli.md, section "Risk at a site".
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> rows = [{"object": "vase", "limit_state": "overturn", "annual_rate": 2e-3, "annual_rate_low": 1e-3,
-    ...          "annual_rate_high": 4e-3, "annual_rate_se": float("nan"), "share_outside_vouched": 0.2}]
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     plot_risk(rows, pathlib.Path(tmp) / "r.png").name
-    'r.png'
     """
     rows = [r for r in rows if np.isfinite(r["annual_rate"]) and r["annual_rate"] > 0]
     if not rows:

@@ -16,7 +16,7 @@ from screening.analysis.probabilities import probability_text, spot_check_probab
 from screening.report.figure_base import (axis_label, flag_summary, new_figure, point_flag_text, point_label,
                                           save_figure, spot_index)
 
-__all__ = ["plot_spots", "Z95", "MAX_SPOT_FIGURES", "spot_file_label", "plot_spot_panels", "SPOT_PANEL_HISTORIES"]
+__all__ = []
 
 def plot_spots(ds, path):
     """Linearization vs Monte Carlo at the spot points, as a PNG.
@@ -36,15 +36,6 @@ def plot_spots(ds, path):
     pathlib.Path or None
         ``path``; ``None`` (nothing written) if the result has no spot point.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> plot_spots(xr.Dataset({"status": ("S0", [0])}), "never_written.png") is None
-    True
     """
     if "spot" not in ds.dims or ds.sizes["spot"] == 0:
         return None
@@ -116,18 +107,6 @@ def spot_file_label(ds, i):
     str
         Letters, digits and ``._-+`` only (values in SI units).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"status": (("eps", "S0"), [[0, 0], [0, 0]])},
-    ...                 coords={"eps": [0.0, 6e7], "S0": [1e-4, 2e-4], "spot_eps": ("spot", [6e7]),
-    ...                         "spot_S0": ("spot", [1e-4])})
-    >>> spot_file_label(ds, 0)
-    'eps_6e+07__S0_0.0001'
     """
     label = point_label(ds, spot_index(ds, i)).replace(", ", "__").replace("=", "_")
     return "".join(c if c.isalnum() or c in "._-+" else "_" for c in label) or f"spot{i}"
@@ -164,32 +143,6 @@ def plot_spot_panels(ds, i, path):
     distribution, and ``se`` the standard error of the Monte Carlo variance estimate;
     ``p_uplift = P(|theta| > theta_ul)`` is eq. (58) in [1]_.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hunter2007] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A made-up result: two intensities, the second one checked by Monte Carlo.
-
-    >>> import tempfile, pathlib
-    >>> import xarray as xr
-    >>> t = np.linspace(0.0, 10.0, 21)
-    >>> grid = lambda v: (("S0", "t"), np.tile(v, (2, 1)))
-    >>> spot = lambda v: (("spot", "t"), v[None, :])
-    >>> ds = xr.Dataset({"c_eq": grid(np.ones(t.size)), "k_eq": grid(np.full(t.size, 1000.0)),
-    ...                  "var_theta": grid(1e-6 * t), "var_theta_dot": grid(1e-4 * t), "p_uplift": grid(0.01 * t),
-    ...                  "mcs_var_theta": spot(1.1e-6 * t), "mcs_var_theta_se": spot(1e-8 * t),
-    ...                  "mcs_var_theta_dot": spot(1.1e-4 * t), "mcs_var_theta_dot_se": spot(1e-6 * t),
-    ...                  "mcs_rel_error_peak_var_theta": ("spot", [-0.09]),
-    ...                  "mcs_rel_error_peak_var_theta_dot": ("spot", [-0.09]),
-    ...                  "mcs_n_overturned": ("spot", [0]), "status": ("S0", [0, 0])},
-    ...                 coords={"S0": [1e-4, 2e-4], "t": t, "spot_S0": ("spot", [2e-4])})
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     png = plot_spot_panels(ds, 0, pathlib.Path(tmp) / "spot.png")
-    ...     png.name, png.read_bytes()[:4]
-    ('spot.png', b'\\x89PNG')
     """
     index = spot_index(ds, i)
     t = ds["t"].values

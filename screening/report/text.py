@@ -14,8 +14,7 @@ from screening.core.status import BestMethod, PointStatus, SpotStatus, Trust
 from screening.report.figure_base import grid_dims, grid_units, grid_values, point_label, spot_index
 from screening.solvers.outputs import info_variables
 
-__all__ = ["describe", "probability_lines", "best_line", "bed_lines", "intensity_lines", "PRODUCT_MAX_VALUES",
-           "product_kind", "describe_product"]
+__all__ = []
 
 
 def _fmt(value):
@@ -39,19 +38,6 @@ def describe(ds, path="result"):
         input intensity, the status counts, the ranges of ``peak_var_theta`` [rad2] and friends, the
         probabilities and the Monte Carlo spot checks.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> print(describe(ds, "demo.nc").splitlines()[4])
-      S0       5 values, 0.0003 .. 0.0012 m2 s-3
     """
     dims = grid_dims(ds)
     lines = [f"{path}: {ds.attrs.get('title', '')}",
@@ -150,17 +136,6 @@ def probability_lines(ds):
     list of str
         The lines (probabilities [1]); ``[]`` for a result without them.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> probability_lines(xr.Dataset({"p_rocking_start": ("S0", [0.01, 0.25])}))
-    ['probability that rocking starts (ground acceleration beyond the uplift acceleration): 0.01 .. 0.25']
-    >>> probability_lines(xr.Dataset())
-    []
     """
     lines = []
     if "p_source" in ds.variables:
@@ -201,16 +176,6 @@ def best_line(ds):
     str
         The line.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"best_method": ("S0", [0, 0, 1])}, attrs={"accuracy_target": 0.1})
-    >>> best_line(ds)
-    'best estimates ([accuracy] target 0.1): linearization 2, corrected_linearization 1'
     """
     method = np.asarray(ds["best_method"].values).reshape(-1)
     counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
@@ -271,19 +236,6 @@ def bed_lines(ds, max_points=400):
     -----
     The uplift angle is ``theta_ul = m g / (2 b^2 k)``, eq. (19) in [1].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> bed_lines(ds)[2]
-    '  uplift angle        0.001201 rad (paper m g/(2 b^2 k)), 0.001201 rad exact'
     """
     import xarray as xr
 
@@ -338,21 +290,6 @@ def intensity_lines(ds):
     list of str
         The lines (accelerations [m s-2] and [g], Arias intensity and PGV [m s-1]); nothing if they
         cannot be computed.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> intensity_lines(ds)[2]
-    '  rms_acceleration  0.2201 .. 0.4402 m s-2 (0.02245 .. 0.04489 g)'
     """
     try:
         im = intensity_measures(ds)
@@ -386,15 +323,6 @@ def product_kind(ds):
         ``"fragility"``, ``"cloud"``, ``"simulation"``, or ``None`` (a sweep result, or a variable of
         more than :data:`PRODUCT_MAX_VALUES` values [-]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> product_kind(xr.Dataset({"p_exceed": ("S0", [0.1, 0.5])})), product_kind(xr.Dataset({"status": 0}))
-    ('fragility', None)
     """
     names = set(ds.variables)
     if "status" in names or any(v.size > PRODUCT_MAX_VALUES for v in ds.variables.values()):
@@ -426,20 +354,6 @@ def describe_product(ds, path="file"):
         The summary (threshold [rad], probabilities [1], fitted median in the units of the
         intensity); ``None`` for a file that is none of these (:func:`product_kind`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> from screening.analysis.fragility import fragility_dataset
-    >>> print(describe_product(fragility_dataset(ds, 0.01), "frag.nc").splitlines()[-1])
-    lognormal fit over S0: 1 of 1 curve(s) fitted; median 0.0005381 m2 s-3, beta 0.2351 (medians over the fitted curves)
     """
     kind = product_kind(ds)
     if kind is None:

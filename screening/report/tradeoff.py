@@ -57,8 +57,7 @@ from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
 from screening.sweep.config import StudyError, build_models
 
-__all__ = ["round_significant", "calibrate_intensity", "Point", "time_call", "set_threads", "run_tradeoff",
-           "rerender_reports"]
+__all__ = []
 
 
 # ============================================================================ model set-up
@@ -132,15 +131,6 @@ def time_call(fn, repeats=1):
     seconds : float
         Median wall time per call [s].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> result, seconds = time_call(lambda: sum(range(1000)), repeats=3)
-    >>> result, seconds >= 0.0
-    (499500, True)
     """
     times = []
     result = None
@@ -200,16 +190,6 @@ def set_threads(n):
     int
         The previous setting.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numba
-    >>> previous = set_threads(1)
-    >>> numba.get_num_threads(), set_threads(previous) == 1
-    (1, True)
     """
     import numba
     previous = numba.get_num_threads()
@@ -502,21 +482,6 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
     .. [3] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
-
-    Examples
-    --------
-    A study file without a family is refused before anything runs or is written:
-
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> with tempfile.TemporaryDirectory() as d:
-    ...     bad = Path(d) / "bad.toml"
-    ...     _ = bad.write_text('title = "no families"\\n')
-    ...     try:
-    ...         run_tradeoff(bad, Path(d) / "out", progress=None)
-    ...     except StudyError as err:
-    ...         print(str(err).split(": ", 1)[1], (Path(d) / "out").exists())
-    family: at least one [[family]] table is required False
     """
     study = _study(study_path)
     start = time.perf_counter()
@@ -556,25 +521,6 @@ def rerender_reports(study_path, out_dir="outputs"):
     tuple
         ``(dataset, paths, rules)``.
 
-    References
-    ----------
-    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
-    .. [2] ``docs/cli.md``, "The command line" (``screening tradeoff``; this package's documentation).
-
-    Examples
-    --------
-    Before the study has run there is nothing to re-render:
-
-    >>> import tempfile
-    >>> from pathlib import Path
-    >>> from screening.applications.tradeoff_study import EXAMPLE_TRADEOFF_STUDY as STUDY
-    >>> with tempfile.TemporaryDirectory() as d:
-    ...     _ = (Path(d) / "tiny.toml").write_text(STUDY)
-    ...     try:
-    ...         rerender_reports(Path(d) / "tiny.toml", Path(d) / "out")
-    ...     except FileNotFoundError as err:
-    ...         print(Path(str(err).split()[0]).name, "does not exist")
-    tiny.nc does not exist
     """
     study = _study(study_path)
     nc = output_paths(out_dir, _stem(study))["nc"]

@@ -15,7 +15,7 @@ from screening.applications.metrics import classify_error, rule_error
 from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
 from screening.report.figure_base import save_figure
 
-__all__ = ["DPI", "study_n", "plot_error_vs_cost", "plot_validity"]
+__all__ = []
 
 DPI = 130
 
@@ -52,20 +52,6 @@ def plot_error_vs_cost(ds, path):
     tolerance variants), the bias being the relative difference of the model's largest-sample peak from
     the panel's reference; SL's is ``|SL / reference - 1|``, its modelling error.
 
-    References
-    ----------
-    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> from screening.applications.tradeoff_study import example_tradeoff
-    >>> _, ds = example_tradeoff()                      # made-up numbers
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     png = pathlib.Path(folder) / "error_vs_cost.png"
-    ...     plot_error_vs_cost(ds, png)
-    ...     png.read_bytes()[:4]
-    b'\\x89PNG'
     """
     fig, axes = _figure()
     models = list(ds.cv_model.values)
@@ -154,15 +140,6 @@ def study_n(ds):
     int or str
         The count [-], or ``"?"`` when the dataset does not say.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> study_n(xr.Dataset(attrs={"tol_samples": 500})), study_n(xr.Dataset())
-    (500, '?')
     """
     return int(ds.attrs.get("tol_samples", 0)) or "?"
 
@@ -198,37 +175,6 @@ def plot_validity(ds, rules, thresholds, path, metric="peak", quantity="var_thet
     -------
     None
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hunter2007] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A made-up study of three points:
-
-    >>> import numpy as np, xarray as xr
-    >>> from screening.applications.metrics import derive_rules
-    >>> from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
-    >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
-    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
-    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
-    ...                  "family": ("point", ["hardening", "hardening", "softening"]),
-    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "peak_rel_se": (("comparison", "quantity", "point"), np.full(err.shape, 0.01)),
-    ...                  "overturned_fraction": (("mcs_model", "point"), np.zeros((2, 3))),
-    ...                  "cost": (("approach", "point"), [[0.01, 0.02, 0.02], [1.0, 3.0, 2.0], [5.0, 7.0, 6.0]]),
-    ...                  "sl_batched_cost": 0.001},
-    ...                 coords={"comparison": list(COMPARISONS), "quantity": list(QUANTITIES),
-    ...                         "mcs_model": ["coupled", "condensed"],
-    ...                         "approach": ["sl", "condensed_mcs", "coupled_mcs"]}, attrs={"wall_time_s": 42.0})
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     png = pathlib.Path(tmp) / "validity.png"
-    ...     plot_validity(ds, derive_rules(ds, (0.10, 0.25)), (0.10, 0.25), png)
-    ...     png.read_bytes()[:4]
-    b'\\x89PNG'
     """
     t1, t2 = thresholds[0], thresholds[-1]
     x = ds.sl_peak_p_uplift.values

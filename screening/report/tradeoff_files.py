@@ -17,7 +17,7 @@ from screening.applications.metrics import derive_rules
 from screening.report.tradeoff_figures import plot_error_vs_cost, plot_validity
 from screening.report.tradeoff_text import markdown_report, point_rows, rule_text, write_csv
 
-__all__ = ["LABEL_DIMS", "to_file_layout", "from_file_layout", "file_encoding", "output_paths", "write_reports"]
+__all__ = []
 
 #: Dimensions labelled by strings in memory (``ds.sel(approach="sl")``); in the file they are
 #: plain dimensions with a ``<dim>_name`` auxiliary coordinate (CF coordinate variables are numeric).
@@ -39,17 +39,6 @@ def to_file_layout(ds):
     xarray.Dataset
         The file layout (CF coordinate variables are numeric).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"cost": ("approach", [0.01, 2.0])}, coords={"approach": ["sl", "coupled_mcs"]})
-    >>> out = to_file_layout(ds)
-    >>> "approach" in out.coords, out["approach_name"].values.tolist()
-    (False, ['sl', 'coupled_mcs'])
     """
     out = ds.copy()
     for d in LABEL_DIMS:
@@ -78,16 +67,6 @@ def from_file_layout(ds):
     xarray.Dataset
         With ``ds.sel(approach="sl")`` possible again.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"cost": ("approach", [0.01, 2.0])}, coords={"approach": ["sl", "coupled_mcs"]})
-    >>> float(from_file_layout(to_file_layout(ds))["cost"].sel(approach="sl"))
-    0.01
     """
     out = ds.copy()
     for d in LABEL_DIMS:
@@ -111,17 +90,6 @@ def file_encoding(ds):
     dict
         ``{variable: encoding}`` for :meth:`xarray.Dataset.to_netcdf`.
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, section 2.5.1
-       (missing data), https://cfconventions.org
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> enc = file_encoding(xr.Dataset(coords={"S0": [1e-4, 2e-4]}))
-    >>> enc["S0"], enc["var_theta"]
-    ({'_FillValue': None}, {'zlib': True, 'complevel': 4})
     """
     enc = {name: {"_FillValue": None} for name in ds.coords if ds[name].dtype.kind == "f"}
     for name in ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se", "p_uplift"):
@@ -144,14 +112,6 @@ def output_paths(out_dir, stem):
     dict of str to pathlib.Path
         The paths.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> sorted(p.name for p in output_paths("out", "trade").values())
-    ['trade.csv', 'trade.md', 'trade.nc', 'trade_error_vs_cost.png', 'trade_validity.png']
     """
     out = Path(out_dir)
     return {"nc": out / f"{stem}.nc", "md": out / f"{stem}.md", "csv": out / f"{stem}.csv",
@@ -186,21 +146,6 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
         The validity rules of SL (:func:`screening.applications.metrics.derive_rules` with the study's
         ``rule`` thresholds, metric and quantity).
 
-    References
-    ----------
-    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> from screening.applications.tradeoff_study import example_tradeoff
-    >>> study, ds = example_tradeoff()                  # made-up numbers
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     paths, rules = write_reports(study, ds, folder, "example")
-    ...     sorted(p.name for p in paths.values() if p.exists())
-    ['example.csv', 'example.md', 'example.nc', 'example_error_vs_cost.png', 'example_validity.png']
-    >>> print(ds.attrs["rules"].splitlines()[0][:60])
-    [all] SL within 10% of condensed MCS (peak var_theta): at ev
     """
     paths = output_paths(out_dir, stem)
     paths["nc"].parent.mkdir(parents=True, exist_ok=True)

@@ -17,8 +17,7 @@ from screening.applications.tradeoff_study import COMPARISONS, METHODS, QUANTITI
 from screening.core.atomicfile import atomic_open
 from screening.core.status import PointStatus
 
-__all__ = ["rule_text", "recommendation", "point_rows", "write_csv", "cost_summary",
-           "markdown_report", "summary_text"]
+__all__ = []
 
 
 def rule_text(rule, metric, quantity):
@@ -38,23 +37,6 @@ def rule_text(rule, metric, quantity):
     str
         The statement.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> from screening.applications.metrics import derive_rules
-    >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
-    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
-    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
-    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err))},
-    ...                 coords={"comparison": ["sl_vs_condensed", "sl_vs_coupled"], "quantity": ["var_theta"]})
-    >>> rules = derive_rules(ds, thresholds=(0.10,))
-    >>> print(rule_text(rules[1], "peak", "var_theta"))
-    [all] SL within 10% of coupled MCS (peak var_theta): for SL peak p_uplift <= 0.4 (2 tested points, all pass); first failure at p = 0.8 (c: +50 %); 2/3 pass overall; margin rule min_k_eq/k_eq(0) > 0.20 covers 2 points
     """
     what = {"peak": f"peak {quantity}", "time_avg": f"time-averaged {quantity}",
             "worst": f"peak and time-averaged {quantity}"}[metric]
@@ -90,23 +72,6 @@ def recommendation(rules):
     str
         The recommendation.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> from screening.applications.metrics import derive_rules
-    >>> err = np.array([[0.02, 0.05, 0.3], [0.04, 0.08, 0.5]])[:, None, :]   # (comparison, quantity, point)
-    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
-    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [0.0, 0.0, 0.0]),
-    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), np.abs(err))},
-    ...                 coords={"comparison": ["sl_vs_condensed", "sl_vs_coupled"], "quantity": ["var_theta"]})
-    >>> rules = derive_rules(ds, thresholds=(0.10,))
-    >>> recommendation(rules)[:72]
-    'Use SL alone for SL peak p_uplift <= 0.4: there it stays within 10% of c'
     """
     def pick(ref, thr_fn):
         cands = [r for r in rules if r["group"] == "all" and r["reference"] == ref]
@@ -173,41 +138,6 @@ def point_rows(ds):
         ...), the relative errors [1] of each comparison with their significance
         (``sl_vs_coupled_var_theta_peak``, ``..._sig``, ...) and the costs ``cost_<method>`` [s].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A made-up study of three points:
-
-    >>> import numpy as np, xarray as xr
-    >>> from screening.applications.metrics import derive_rules
-    >>> from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
-    >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
-    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
-    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
-    ...                  "family": ("point", ["hardening", "hardening", "softening"]),
-    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "peak_rel_se": (("comparison", "quantity", "point"), np.full(err.shape, 0.01)),
-    ...                  "overturned_fraction": (("mcs_model", "point"), np.zeros((2, 3))),
-    ...                  "cost": (("approach", "point"), [[0.01, 0.02, 0.02], [1.0, 3.0, 2.0], [5.0, 7.0, 6.0]]),
-    ...                  "sl_batched_cost": 0.001},
-    ...                 coords={"comparison": list(COMPARISONS), "quantity": list(QUANTITIES),
-    ...                         "mcs_model": ["coupled", "condensed"],
-    ...                         "approach": ["sl", "condensed_mcs", "coupled_mcs"]}, attrs={"wall_time_s": 42.0})
-    >>> t_grid = np.linspace(0.0, 1e-6, 5)
-    >>> vt = np.array([1.0, 1.1, 1.2])[:, None, None] * t_grid * np.ones((1, 3, 1))   # sl, condensed, coupled
-    >>> ds = ds.assign(peak_significant=ds.peak_rel_error > 0.1, time_avg_significant=ds.time_avg_rel_error > 0.1,
-    ...                var_theta=(("approach", "point", "t"), vt), var_theta_se=(("approach", "point", "t"), 0.01 * vt),
-    ...                S0=("point", [1e-4, 2e-4, 3e-4]), sl_status=("point", [0, 0, 0]))
-    >>> rows = point_rows(ds)
-    >>> row = rows[2]
-    >>> len(rows), row["point"], row["sl_vs_coupled_var_theta_peak"], row["sl_vs_coupled_var_theta_peak_sig"]
-    (3, 'c', 0.5, True)
-    >>> row["coup_peak"], row["cost_coupled_mcs"], row["sl_status"]
-    (1.2e-06, 6.0, 'ok')
     """
     rows = []
     comp = {c: i for i, c in enumerate(ds.comparison.values)}
@@ -255,18 +185,6 @@ def write_csv(rows, path):
     -------
     None
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     write_csv([{"point": "a", "cost_sl": 0.01}], pathlib.Path(tmp) / "t.csv")
-    ...     print((pathlib.Path(tmp) / "t.csv").read_text().strip())
-    point,cost_sl
-    a,0.01
     """
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -287,17 +205,6 @@ def cost_summary(ds):
     dict of str to tuple of float
         ``{method: (median, min, max)}`` [s], ``sl_batched`` included.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"cost": (("approach", "point"), [[0.01, 0.02], [1.0, 3.0], [5.0, 7.0]]),
-    ...                  "sl_batched_cost": 0.001}, coords={"approach": ["sl", "condensed_mcs", "coupled_mcs"]})
-    >>> cost_summary(ds)["coupled_mcs"], cost_summary(ds)["sl_batched"]
-    ((6.0, 5.0, 7.0), (0.001, 0.001, 0.001))
     """
     out = {}
     for m in METHODS:
@@ -327,18 +234,6 @@ def markdown_report(study, ds, rules):
         The report: accuracy per point, error summary, cost per point, Monte Carlo against sample count
         and tolerance, SL numerics and the validity rules (relative errors in %, costs in s).
 
-    References
-    ----------
-    .. [1] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
-
-    Examples
-    --------
-    >>> from screening.applications.metrics import derive_rules
-    >>> from screening.applications.tradeoff_study import example_tradeoff
-    >>> study, ds = example_tradeoff()                  # made-up numbers
-    >>> text = markdown_report(study, ds, derive_rules(ds, study.rule["thresholds"]))
-    >>> print(next(line for line in text.splitlines() if line.startswith("Cost ratio")))
-    Cost ratio SL : condensed MCS : coupled MCS (medians) = 1 : 100 : 500.
     """
     rows = point_rows(ds)
     L = [f"# {study.title}", "",
@@ -469,37 +364,6 @@ def summary_text(study, ds, rules):
     str
         The lines (costs in ms for SL, s for Monte Carlo).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A made-up study of three points:
-
-    >>> import numpy as np, xarray as xr
-    >>> from screening.applications.metrics import derive_rules
-    >>> from screening.applications.tradeoff_study import COMPARISONS, QUANTITIES
-    >>> err = np.repeat([[0.04, 0.08, 0.5], [0.02, 0.05, 0.3], [0.01, 0.02, 0.1]], 2, axis=0).reshape(3, 2, 3)
-    >>> ds = xr.Dataset({"sl_peak_p_uplift": ("point", [0.1, 0.4, 0.8]), "k_eq_margin": ("point", [0.9, 0.6, 0.2]),
-    ...                  "point_name": ("point", ["a", "b", "c"]), "eps": ("point", [6e7, 6e7, -6e5]),
-    ...                  "family": ("point", ["hardening", "hardening", "softening"]),
-    ...                  "peak_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "time_avg_rel_error": (("comparison", "quantity", "point"), err),
-    ...                  "peak_rel_se": (("comparison", "quantity", "point"), np.full(err.shape, 0.01)),
-    ...                  "overturned_fraction": (("mcs_model", "point"), np.zeros((2, 3))),
-    ...                  "cost": (("approach", "point"), [[0.01, 0.02, 0.02], [1.0, 3.0, 2.0], [5.0, 7.0, 6.0]]),
-    ...                  "sl_batched_cost": 0.001},
-    ...                 coords={"comparison": list(COMPARISONS), "quantity": list(QUANTITIES),
-    ...                         "mcs_model": ["coupled", "condensed"],
-    ...                         "approach": ["sl", "condensed_mcs", "coupled_mcs"]}, attrs={"wall_time_s": 42.0})
-    >>> import types
-    >>> study = types.SimpleNamespace(mcs={"samples": 200}, rule={"metric": "peak", "quantity": "var_theta"})
-    >>> lines = summary_text(study, ds, derive_rules(ds, thresholds=(0.10,))).splitlines()
-    >>> print(lines[0])
-    cost per point (median, one core): SL 20.00 ms, condensed MCS 2.00 s, coupled MCS 6.00 s (200 samples) -> SL : condensed : coupled = 1 : 100 : 300
-    >>> print(lines[-1])
-    total run time of the study 42 s
     """
     cs = cost_summary(ds)
     lines = [f"cost per point (median, one core): SL {1e3 * cs['sl'][0]:.2f} ms, condensed MCS "

@@ -27,8 +27,7 @@ from screening.solvers.estimates import sample_probabilities
 from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
 from screening.core.status import DIVERGENCE_TEXT, DivergenceReason
 
-__all__ = ["MONTE_CARLO_STATISTICS", "INTEGRATOR_TEXT", "model_fields", "model_labels",
-           "finish", "linearization_dataset", "monte_carlo_dataset", "with_probabilities"]
+__all__ = []
 
 #: Ensemble statistics of a Monte Carlo run, on ``t``.
 MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",
@@ -64,18 +63,6 @@ def model_fields(block, foundation, excitation):
     dict
         Parameter name -> value (float or array, SI as in :data:`screening.solvers.schema.PARAMETERS`).
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` (the parameters as coordinates of a result).
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> fields = model_fields(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4))
-    >>> list(fields)
-    ['m', 'b', 'h', 'I_cm', 'g', 'k', 'lam', 'eps', 'S0', 'band_limit_hz', 'T1', 'T2']
-    >>> fields["k"], fields["S0"]
-    (28900000.0, 0.0001)
     """
     return numeric_fields(block, foundation, excitation)
 
@@ -97,15 +84,6 @@ def model_labels(foundation, excitation):
     dict of str
         ``{"contact": ..., "excitation": ..., "envelope": ...}``.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` (the attributes of a result).
-
-    Examples
-    --------
-    >>> from screening import Foundation, KanaiTajimi
-    >>> model_labels(Foundation(k=2.89e7, lam=8.95e8), KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6))
-    {'contact': 'hunt_crossley', 'excitation': 'kanai_tajimi', 'envelope': 'exponential'}
     """
     return {"contact": foundation.law, "excitation": excitation.kind, "envelope": excitation.envelope.kind}
 
@@ -155,18 +133,6 @@ def finish(ds, table=None):
     KeyError
         For a data variable the schema does not declare.
 
-    References
-    ----------
-    .. [1] CF Conventions, "NetCDF Climate and Forecast (CF) Metadata Conventions", version 1.8,
-       https://cfconventions.org/
-    .. [2] The package's documentation, ``docs/outputs.md`` (the variables and their units).
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> ds = finish(xr.Dataset({"var_theta": ("t", np.zeros(3))}, coords={"t": [0.0, 0.5, 1.0], "k": 2.89e7}))
-    >>> ds["var_theta"].attrs["units"], ds["k"].attrs["units"], ds.attrs["Conventions"]
-    ('rad2', 'N m-2', 'CF-1.8')
     """
     foreign = [name for name in ds.coords if not _declared(name, table)]
     return schema.apply_schema(ds.drop_vars(foreign), table=table).assign_coords({c: ds[c].variable for c in foreign})
@@ -201,22 +167,6 @@ def linearization_dataset(result, times, dims, parameters, derived, attrs):
     xarray.Dataset
         The labelled result, with CF units (:func:`finish`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] The package's documentation, ``docs/outputs.md`` (what a result holds).
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
-    >>> res = {name: np.zeros((2, 5)) for name in HISTORY_VARIABLES}
-    >>> res.update({name: np.zeros(2) for name in linearize_variables()})
-    >>> S0 = xr.DataArray([1e-5, 1e-4], dims="S0")
-    >>> ds = linearization_dataset(res, np.linspace(0.0, 1.0, 5), ("S0",), {"m": 8.67, "S0": S0},
-    ...                            {"theta_ul": ((), 1e-3)}, {"contact": "hunt_crossley"})
-    >>> ds["var_theta"].dims, ds["S0"].attrs["units"], float(ds["m"]), ds.attrs["contact"]
-    (('S0', 't'), 'm2 s-3', 8.67, 'hunt_crossley')
     """
     dims = tuple(dims)
     data = {name: (dims + ("t",), result[name]) for name in HISTORY_VARIABLES}
@@ -305,32 +255,6 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
     attribute is ``"ok"`` when ``n_used >= 2``.  The mean integration step is
     ``dt_integration_mean = t_end / mean(n_acc)`` over the used samples.
 
-    References
-    ----------
-    .. [1] screening documentation, "Monte Carlo numerics: the sample integrators, stiff beds and the cost
-       model", ``docs/montecarlo_numerics.md``.
-    .. [2] screening documentation, "What a result holds", ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.solvers.montecarlo import ensemble_statistics
-    >>> from screening.solvers.synthesis import spectral_plan
-    >>> block, bed, noise = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4)
-    >>> rng = np.random.default_rng(0)
-    >>> theta, theta_dot = 1e-3 * rng.standard_normal((4, 5)), 1e-2 * rng.standard_normal((4, 5))
-    >>> overturned = np.array([False, False, False, True])        # the last sample is not used
-    >>> stats = ensemble_statistics(theta, theta_dot, np.zeros((4, 5), dtype=bool), ~overturned)
-    >>> opts = {"rtol": 1e-6, "h_max": 0.01, "max_flight_time": 1.0}
-    >>> ds = monte_carlo_dataset(np.linspace(0.0, 2.0, 5), stats, np.abs(theta).max(axis=1), overturned,
-    ...                          np.zeros(4, dtype=bool), np.full(4, 100), np.full(4, 3), np.zeros(4, dtype=int),
-    ...                          1, 0, block, bed, noise, "condensed", 4, 0, 2.0, 0.5, opts,
-    ...                          spectral_plan(noise, 2.0, 200.0), np.full(4, 1e-3), 0.2)
-    >>> int(ds["n_used"]), ds.attrs["status"], ds["var_theta"].attrs["units"], ds.attrs["dt_integration_mean"]
-    (3, 'ok', 'rad2', 0.02)
-    >>> bool(np.isclose(ds["var_theta"][2], np.var(theta[:3, 2], ddof=1)))      # over the used samples
-    True
     """
     mc = mc_registry.get(model if mc_model is None else mc_model)
 
@@ -408,16 +332,6 @@ def with_probabilities(ds, thresholds=None):
     ----------
     .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> mc = xr.Dataset({"peak_abs_theta": ("sample", [0.01, 0.05, 0.3, 0.02]),
-    ...                  "overturned": ("sample", [False, False, True, False]),
-    ...                  "diverged": ("sample", [False, False, False, True])})
-    >>> out = with_probabilities(mc, thresholds=[0.02, 0.1])
-    >>> float(out["p_overturn"]), out["p_exceed"].values.round(4), out["threshold"].attrs["units"]
-    (0.3333333333333333, array([0.6667, 0.3333]), 'rad')
     """
     levels = np.asarray(() if thresholds is None else thresholds, dtype=float)
     prob = sample_probabilities(ds["peak_abs_theta"].values, ds["overturned"].values, ~ds["diverged"].values, levels)

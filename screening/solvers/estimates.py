@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Z", "binomial_estimate", "sample_probabilities"]
+__all__ = []
 
 #: ``z`` of the Agresti-Coull interval (about 95 %, ``p_tilde +- Z se``).
 Z = 2.0
@@ -52,22 +52,6 @@ def binomial_estimate(hits, n):
     ``k = 0`` it is about ``1.4 / n``, so ``p + 2 se`` bounds ``p`` by about ``3 / n`` as the rule of
     three does.
 
-    References
-    ----------
-    .. [1] A. Agresti and B. A. Coull, "Approximate is better than 'exact' for interval estimation
-       of binomial proportions", The American Statistician 52(2) (1998) 119-126.
-       https://doi.org/10.1080/00031305.1998.10480550
-
-    Examples
-    --------
-    >>> p, se = binomial_estimate(25, 100)
-    >>> float(p), round(float(se), 4)      # p~ = 27/104: sqrt(p~ (1 - p~) / 104)
-    (0.25, 0.043)
-    >>> p, se = binomial_estimate(0, 1000)                 # no hit: a positive error all the same
-    >>> float(p), round(float(se), 5)
-    (0.0, 0.00141)
-    >>> binomial_estimate([3, 0], [10, 0])[0]              # no trial: NaN
-    array([0.3, nan])
     """
     k = np.asarray(hits, dtype=float)
     n = np.asarray(n, dtype=float)
@@ -109,20 +93,6 @@ def sample_probabilities(peak_abs_theta, overturned, valid, levels=()):
     ``p_exceed(a) = #((max_t |theta| > a or overturned) & valid) / N``: an overturned sample has
     passed every rotation on its way down.  These are the Monte Carlo estimates the judge holds the
     linearization's probabilities against (section 3 of [1]_ compares the two methods).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [agresti1998] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> out = sample_probabilities([0.01, 0.03, 0.2, 0.05], overturned=[False, False, True, False],
-    ...                            valid=[True, True, True, False], levels=[0.02, 0.1])
-    >>> float(out["p_overturn"])                          # 1 of the 3 valid samples overturned
-    0.3333333333333333
-    >>> out["p_exceed"]                                   # 2 of 3 passed 0.02 rad, 1 of 3 passed 0.1 rad
-    array([0.66666667, 0.33333333])
     """
     peaks = np.asarray(peak_abs_theta, dtype=float)
     over = np.asarray(overturned, dtype=bool) & np.asarray(valid, dtype=bool)

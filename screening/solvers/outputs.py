@@ -23,8 +23,7 @@ import numpy as np
 
 from screening.core.status import PointStatus, Trust, flag_attributes
 
-__all__ = ["Output", "STAGES", "WHEN", "GRID_OUTPUTS", "OUTPUTS", "HISTORY_VARIABLES", "of_stage", "selected",
-           "client_variables", "info_variables", "solver_summaries", "linearize_variables", "failed_value"]
+__all__ = []
 
 #: Who fills a variable: the moment solver (``linearize``), the block's model (``model``), the trust rule
 #: (:mod:`screening.analysis.trust`), the intensity measures of the input and the probability that rocking
@@ -183,16 +182,6 @@ def of_stage(*stages):
     tuple of Output
         The :class:`Output` declarations of those stages, in file order.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/architecture.md`` ("Adding an output variable").
-
-    Examples
-    --------
-    >>> [o.name for o in of_stage("model")]
-    ['theta_ul', 'slenderness']
-    >>> [(o.name, o.attrs["units"]) for o in of_stage("trust") if o.dtype == "f8"][0]
-    ('sl_error_low', '1')
     """
     return tuple(o for o in GRID_OUTPUTS if o.stage in stages)
 
@@ -218,18 +207,6 @@ def selected(histories=HISTORY_VARIABLES, derived=(), probabilities=False, fragi
     tuple of Output
         The declarations, histories first in the order asked, then the others in file order.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` (the variables of a result).
-
-    Examples
-    --------
-    >>> names = [o.name for o in selected(histories=("p_uplift", "var_theta"))]
-    >>> names[:3], "p_overturn" in names
-    (['p_uplift', 'var_theta', 'status'], False)
-    >>> names = [o.name for o in selected(histories=(), fragility=True, derived=("S0",))]
-    >>> "var_theta" in names, "S0" in names, names[-4:]
-    (False, True, ['p_exceed', 'p_exceed_se', 'p_overturn', 'p_overturn_se'])
     """
     wanted = {"always": True, "probabilities": probabilities or fragility, "fragility": fragility}
     chosen = [OUTPUTS[name] for name in histories]
@@ -247,14 +224,6 @@ def client_variables():
         The variables declared with ``client=True``, in file order (spot selection and run summary
         read them).
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` ("Memory": what the client holds).
-
-    Examples
-    --------
-    >>> client_variables()[:2], "var_theta" in client_variables()
-    (('status', 'sl_trust'), False)
     """
     return tuple(o.name for o in GRID_OUTPUTS if o.client)
 
@@ -267,14 +236,6 @@ def info_variables():
     tuple of str
         The variables declared with ``info=True``, in file order.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/cli.md`` (``screening info``).
-
-    Examples
-    --------
-    >>> "peak_var_theta" in info_variables(), "status" in info_variables()
-    (True, False)
     """
     return tuple(o.name for o in GRID_OUTPUTS if o.info)
 
@@ -287,14 +248,6 @@ def solver_summaries():
     tuple of str
         The ``"point"``-shaped variables of the ``linearize`` stage, in file order.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/method.md`` ("Moment solver", "Status flags").
-
-    Examples
-    --------
-    >>> solver_summaries()[:3], "n_rejected" in solver_summaries()
-    (('status', 't_stop', 'peak_var_theta'), True)
     """
     return tuple(o.name for o in of_stage("linearize") if o.shape == "point")
 
@@ -307,14 +260,6 @@ def linearize_variables():
     tuple of str
         The solver summaries declared with ``linearize=True`` (``n_rejected`` is a sweep's only).
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` (the variables of a result).
-
-    Examples
-    --------
-    >>> set(linearize_variables()) < set(solver_summaries()), "n_rejected" in linearize_variables()
-    (True, False)
     """
     return tuple(o.name for o in of_stage("linearize") if o.shape == "point" and o.linearize)
 
@@ -335,13 +280,5 @@ def failed_value(name):
     float or int
         Its value at a failed point (in the variable's units).
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` ("Status flags").
-
-    Examples
-    --------
-    >>> failed_value("var_theta"), int(failed_value("status")), failed_value("n_steps")
-    (nan, -1, 0)
     """
     return OUTPUTS[name].failed

@@ -19,11 +19,7 @@ from screening.core.status import (AnswerQuantity, BestMethod, ContactRegime, Es
 from screening.solvers import mc_registry
 from screening.solvers.outputs import of_stage, OUTPUTS
 
-__all__ = ["CONVENTIONS", "INTENSITY_CONVENTION", "REFERENCE", "TIME", "CDO_TIME", "CDO_LAYOUT", "PARAMETERS",
-           "DERIVED", "LINEARIZATION", "ACCURACY", "MONTE_CARLO", "TAIL", "FRAGILITY", "PROBABILITIES",
-           "probability_source_attributes", "TRADEOFF", "SIMULATION", "INTENSITY", "SWEEP", "SWEEP_INPUTS",
-           "CLOUD", "TRUST_CALIBRATION", "COORDINATES", "PRESSURE_PARAMETERS", "grid_coordinate_attributes",
-           "cdo_threshold_attributes", "attributes", "global_attributes", "apply_schema"]
+__all__ = []
 
 CONVENTIONS = "CF-1.8"
 INTENSITY_CONVENTION = "E[xi(t) xi(s)] = 2 pi S0 delta(t - s), S0 two-sided PSD"
@@ -252,19 +248,6 @@ def probability_source_attributes():
         :func:`screening.core.status.probability_sources`) and ``flag_meanings`` (the source names, in
         the order of the values).
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
-       (section 3.5, flags).
-    .. [2] screening documentation, "What a result holds", docs/outputs.md.
-
-    Examples
-    --------
-    >>> attrs = probability_source_attributes()
-    >>> attrs["flag_meanings"].split()[:3], attrs["flag_values"][:3].tolist()
-    (['unreliable', 'linearization_gaussian', 'corrected_linearization_gaussian'], [0, 1, 2])
-    >>> "monte_carlo_coupled" in attrs["flag_meanings"].split()
-    True
     """
     codes = sorted(probability_sources(mc_registry.names()).items(), key=lambda item: item[1])
     return {"units": "1", "long_name": "model that produced p_overturn and p_exceed at the point",
@@ -508,18 +491,6 @@ def grid_coordinate_attributes(name):
     KeyError
         ``name`` is not declared.
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
-       (sections 2.4 and 4.3, vertical coordinate).
-    .. [2] screening documentation, "What a result holds", docs/outputs.md.
-
-    Examples
-    --------
-    >>> grid_coordinate_attributes("h")
-    {'units': 'm', 'long_name': 'height of the centre of mass above the base'}
-    >>> "units" in grid_coordinate_attributes("k"), grid_coordinate_attributes("k")["comment"][:15]
-    (False, 'values in N m-2')
     """
     attrs = attributes(name)
     if name in PRESSURE_PARAMETERS:
@@ -545,17 +516,6 @@ def cdo_threshold_attributes(value, threshold_attrs):
     dict
         ``threshold`` (float), ``threshold_units`` (default ``"1"``) and ``threshold_long_name``.
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
-       (section 3.1, units).
-    .. [2] screening documentation, "What a result holds", docs/outputs.md, section "Other tools:
-       xarray, NCO, CDO".
-
-    Examples
-    --------
-    >>> cdo_threshold_attributes(0.01, MONTE_CARLO["threshold"])
-    {'threshold': 0.01, 'threshold_units': 'rad', 'threshold_long_name': 'rotation threshold of p_exceed'}
     """
     units = threshold_attrs.get("units", "1")
     return {"threshold": float(value), "threshold_units": units,
@@ -587,18 +547,6 @@ def attributes(name, table=None):
     KeyError
         ``name`` is not declared.
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
-       (sections 3.1-3.2, units and long_name).
-    .. [2] screening documentation, "What a result holds", docs/outputs.md.
-
-    Examples
-    --------
-    >>> attributes("k")
-    {'units': 'N m-2', 'long_name': 'distributed foundation stiffness'}
-    >>> attributes("spot_h")["long_name"]
-    'height of the centre of mass above the base at the spot point'
     """
     if table is not None and name in table:         # the table asked for first (the trade study's
         return dict(table[name])                    # ``mcs_model`` is a label dimension, not the flag)
@@ -644,17 +592,6 @@ def global_attributes(version, **extra):
         PSD, ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)``), ``screening_version``, ``references``
         and ``extra``.
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
-       (section 2.6, global attributes).
-    .. [2] screening documentation, "What a result holds", docs/outputs.md.
-
-    Examples
-    --------
-    >>> attrs = global_attributes("1.2.3", title="a sweep")
-    >>> attrs["Conventions"], attrs["screening_version"], attrs["title"]
-    ('CF-1.8', '1.2.3', 'a sweep')
     """
     return {"Conventions": CONVENTIONS, "intensity_convention": INTENSITY_CONVENTION,
             "screening_version": version, "references": REFERENCE, **extra}
@@ -687,23 +624,6 @@ def apply_schema(ds, table=None, **global_attrs):
     KeyError
         A variable or coordinate that is not declared.
 
-    References
-    ----------
-    .. [1] NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8, https://cfconventions.org
-       (all of it: units, long_name, flags, global attributes).
-    .. [2] screening documentation, "What a result holds", docs/outputs.md.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"theta_ul": ("h", [1e-3, 2e-3])}, coords={"h": [0.21, 0.3]})
-    >>> out = apply_schema(ds, title="example")
-    >>> out["theta_ul"].attrs["units"], out["h"].attrs["units"], out.attrs["Conventions"], out.attrs["title"]
-    ('rad', 'm', 'CF-1.8', 'example')
-    >>> apply_schema(xr.Dataset({"foo": ("x", [1.0])}))
-    Traceback (most recent call last):
-    ...
-    KeyError: "variable 'foo' is not declared in screening.solvers.schema"
     """
     ds = ds.copy()
     for name in list(ds.variables):

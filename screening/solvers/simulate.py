@@ -55,7 +55,7 @@ from screening.core.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReas
 from screening.core.validation import check_integer, check_scalar
 from screening.core import limits
 
-__all__ = ["MAX_OVERTURN_RESOLUTION", "REGIME_NONE", "SIGN_CONVENTION", "simulation_times", "simulate"]
+__all__ = ["simulate"]
 
 #: Most sub-intervals on which the overturning time is located.
 MAX_OVERTURN_RESOLUTION = 100_000
@@ -100,16 +100,6 @@ def simulation_times(record, t_end=None, output_dt=None, t_end_name="t_end"):
     The outputs are ``0, output_dt, ...`` up to ``t_end``; the record is read as the ground acceleration
     of eq. (8) in [1] and is zero after its end.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.core.records import Record
-    >>> simulation_times(Record(np.zeros(1001), 0.01, name="quiet"), output_dt=0.05)
-    (10.0, 0.05, 201)
     """
     t_end = check_scalar(t_end_name, record.duration if t_end is None else t_end, lower=0.0)
     output_dt = record.dt if output_dt is None else check_scalar("output_dt", output_dt, lower=0.0)

@@ -45,11 +45,7 @@ from screening.core.excitations.base import band_top
 from screening.core.model import Block, Foundation
 from screening.core.physics.contact import linear_rocking_stiffness
 
-__all__ = ["CUTOFF_FACTOR", "OVERSAMPLING", "rocking_frequency", "vertical_frequency", "default_cutoff",
-           "default_cutoffs", "max_band_limit_hz", "check_band", "synthesis_cutoff", "envelope_rate", "band_limited_variance", "SpectralPlan", "next_regular_length",
-           "grid_points", "spectral_plan", "low_passed", "validate_seed", "sample_phases", "stationary_samples",
-           "samples_from_phases",
-           "ground_acceleration_samples", "ground_acceleration"]
+__all__ = []
 
 
 #: Default cutoff = CUTOFF_FACTOR x the larger of the rocking and vertical frequencies.
@@ -82,20 +78,6 @@ def rocking_frequency(block, foundation):
     [1]_ at ``theta = 0`` without the cubic term (``eps`` is ignored: it adds ``eps m^2 g^2 b / (2 k)``),
     and ``m_sdof = I_cm + m h^2`` of eq. (22).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{rocking_frequency(block, bed):.4f}"
-    '39.6787'
-    >>> K0 = 2 / 3 * 0.035**3 * 2.89e7 - 8.67 * 9.81 * 0.21
-    >>> f"{math.sqrt(K0 / (block.I_cm + 8.67 * 0.21**2)):.4f}"          # by hand
-    '39.6787'
     """
     stiffness = linear_rocking_stiffness(block, foundation)
     return math.sqrt(max(float(stiffness), 0.0) / float(block.m_sdof))
@@ -122,15 +104,6 @@ def vertical_frequency(block, foundation):
     on a bed of stiffness ``k`` per unit length is a spring ``2 b k`` [N/m] under the mass ``m``,
     ``omega_v = sqrt(2 b k / m)``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> f"{vertical_frequency(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)):.2f}"
-    '483.05'
     """
     return math.sqrt(2.0 * float(block.b) * float(foundation.k) / float(block.m))
 
@@ -157,13 +130,6 @@ def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
     ----------
     .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{default_cutoff(block, bed):.2f}", f"{3 * vertical_frequency(block, bed):.2f}"   # the vertical mode rules
-    ('1449.14', '1449.14')
     """
     return float(factor) * max(rocking_frequency(block, foundation), vertical_frequency(block, foundation))
 
@@ -186,16 +152,6 @@ def default_cutoffs(block, foundation, factor=CUTOFF_FACTOR):
     numpy.ndarray
         ``omega_c`` [rad/s] per point, the broadcast shape of the fields.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> default_cutoffs(Block(m=8.67, b=0.035, h=0.21), Foundation(k=np.array([2.89e7, 1e9]), lam=8.95e8)).round(1)
-    array([1449.1, 8524.3])
     """
     def one(m, b, h, I_cm, g, k):
         try:
@@ -228,15 +184,6 @@ def max_band_limit_hz(t_end, oversampling=OVERSAMPLING):
     ``pi / (oversampling omega_top)``, whose Nyquist frequency carries the band; a finer step than
     ``t_end / MAX_SYNTHESIS_POINTS`` is refused (a sample would no longer fit in memory).
 
-    References
-    ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
-
-    Examples
-    --------
-    >>> f"{max_band_limit_hz(20.0):.0f}"
-    '9323'
     """
     top = (limits.MAX_SYNTHESIS_POINTS - 2) * math.pi / (oversampling * float(t_end))
     return top / band_top(1.0)
@@ -266,17 +213,6 @@ def check_band(excitation, t_end, cutoff=None, oversampling=OVERSAMPLING):
     ValueError
         One line naming the parameter and its range.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/models.md`` ("The ground motion's band").
-
-    Examples
-    --------
-    >>> from screening import WhiteNoise
-    >>> check_band(WhiteNoise(1e-4), 20.0, cutoff=100.0)
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'band_limit_hz' must be in (0, 15.92] Hz for the synthesis' cutoff 100 rad/s, or None (got 25.0)
     """
     band = getattr(excitation, "band_limit_hz", None)
     if band is None:
@@ -313,16 +249,6 @@ def synthesis_cutoff(excitation, block, foundation, cutoff=None, factor=CUTOFF_F
         fallen to :data:`~screening.core.excitations.base.BAND_TAIL`), or ``cutoff`` if lower; without one
         (the idealized spectrum): ``cutoff``, else :func:`default_cutoff`.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/models.md`` ("The ground motion's band").
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{synthesis_cutoff(WhiteNoise(1e-4), block, bed):.1f}", f"{synthesis_cutoff(WhiteNoise(1e-4, band_limit_hz=None), block, bed):.1f}"
-    ('883.3', '1449.1')
     """
     if getattr(excitation, "band_limit_hz", None) is None:
         return float(cutoff) if cutoff is not None else default_cutoff(block, foundation, factor)
@@ -353,18 +279,6 @@ def envelope_rate(envelope, t):
     From ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57) in [1]_):
     ``q'(t) = 4 (-exp(-t/T1) / T1 + exp(-t/T2) / T2)``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import WhiteNoise
-    >>> env = WhiteNoise(1e-4).envelope                       # T1 = 4 s, T2 = 2 s
-    >>> envelope_rate(env, [0.0, 1.0]).round(6)
-    array([1.      , 0.434261])
-    >>> round(float((env(1.0 + 1e-6) - env(1.0 - 1e-6)) / 2e-6), 6)   # central difference of q
-    0.434261
     """
     t = np.asarray(t, dtype=float)
     if envelope.kind == "constant":
@@ -394,17 +308,6 @@ def band_limited_variance(excitation, cutoff):
     With ``E[xi(t) xi(s)] = 2 pi S0 delta(t - s)`` (eq. (39) in [1]_) the spectrum is two-sided,
     ``S = S0`` for white noise and eq. (50) for Kanai-Tajimi; the variance of the band ``|omega| <= omega_c``
     is ``int S d omega``, which :attr:`SpectralPlan.stationary_variance` approximates by the midpoint rule.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import WhiteNoise
-    >>> round(band_limited_variance(WhiteNoise(1e-4, band_limit_hz=None), 100.0), 12)     # 2 S0 omega_c
-    0.02
     """
     return excitation.spectral_moment(0, cutoff, epsrel=1e-12)
 
@@ -464,20 +367,6 @@ def next_regular_length(n):
     int
         The smallest 5-smooth integer ``>= n``.
 
-    References
-    ----------
-    .. [1] J. W. Cooley and J. W. Tukey, "An algorithm for the machine calculation of complex Fourier
-       series", Math. Comput. 19 (1965) 297-301.
-    .. [2] SciPy documentation, ``scipy.fft.next_fast_len``,
-       https://docs.scipy.org/doc/scipy/reference/generated/scipy.fft.next_fast_len.html
-
-    Examples
-    --------
-    >>> from scipy import fft
-    >>> [next_regular_length(n) for n in (7, 1001, 1025, 2549)]
-    [8, 1024, 1080, 2560]
-    >>> all(next_regular_length(n) == fft.next_fast_len(n, real=True) for n in range(1, 3000))
-    True
     """
     best = 1 << max(int(n - 1).bit_length(), 0)
     p5 = 1
@@ -511,15 +400,6 @@ def grid_points(t_end, cutoff, oversampling=OVERSAMPLING):
     int
         Number of grid points [-], covering ``[0, t_end]`` plus one.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/method.md`` ("Ground motion synthesis").
-
-    Examples
-    --------
-    >>> import math
-    >>> grid_points(20.0, 100.0), math.ceil(20.0 / (math.pi / 400.0)) + 2
-    (2549, 2549)
     """
     return int(math.ceil(t_end / (math.pi / (oversampling * cutoff)))) + 2
 
@@ -560,16 +440,6 @@ def spectral_plan(excitation, t_end, cutoff, oversampling=OVERSAMPLING):
     References
     ----------
     .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import WhiteNoise
-    >>> noise = WhiteNoise(1e-4, band_limit_hz=None)           # the idealized spectrum: S = S0
-    >>> plan = spectral_plan(noise, t_end=20.0, cutoff=100.0)
-    >>> plan.n_fft, plan.n_times, plan.n_frequencies, round(plan.d_omega, 4)
-    (2560, 2549, 320, 0.3125)
-    >>> round(plan.stationary_variance, 12), round(band_limited_variance(noise, plan.cutoff), 12)
-    (0.02, 0.02)
     """
     if not (np.isfinite(cutoff) and cutoff > 0.0):
         raise ValueError(f"parameter 'cutoff' must be a finite number > 0 rad/s (got {cutoff!r})")
@@ -619,20 +489,6 @@ def low_passed(plan, band):
     .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/model_choice.md`` ("Same ground motions, and the band each
        model reads").
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import WhiteNoise
-    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=20.0, cutoff=100.0)
-    >>> low, stride = low_passed(plan, 20.0)
-    >>> stride, low.n_fft, low.n_frequencies, bool(np.array_equal(low.amplitudes, plan.amplitudes[:64]))
-    (5, 512, 64, True)
-    >>> part, _ = stationary_samples(low, 0, [3])                # sample 3 keeps its phases in the kept band
-    >>> direct = np.sqrt(2) * np.sum(low.amplitudes * np.cos(low.omega * low.times[7]
-    ...                                                       + sample_phases(0, 3, plan.n_frequencies)[:64]))
-    >>> bool(np.isclose(part[0, 7], direct))
-    True
     """
     n_keep = max(int(round(band / plan.d_omega)), 1)
     if not n_keep * plan.d_omega < 0.5 * plan.cutoff:
@@ -671,20 +527,6 @@ def validate_seed(seed):
     ValueError
         One line naming the parameter.
 
-    References
-    ----------
-    .. [1] NumPy documentation, "Random Generator", ``numpy.random.default_rng``,
-       https://numpy.org/doc/stable/reference/random/generator.html
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> validate_seed(np.int64(3))
-    3
-    >>> validate_seed(-1)
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'seed' must be an integer >= 0 (got -1)
     """
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise ValueError(f"parameter 'seed' must be an integer >= 0 (got {seed!r})")
@@ -715,15 +557,6 @@ def sample_phases(seed, index, n_frequencies):
     ----------
     .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
     .. [2] NumPy documentation, "Random Generator", https://numpy.org/doc/stable/reference/random/generator.html
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> phases = sample_phases(0, 5, 4)
-    >>> phases.shape, bool(np.all((0 <= phases) & (phases < 2 * np.pi)))
-    ((4,), True)
-    >>> bool(np.array_equal(sample_phases(0, 5, 4), np.random.default_rng([0, 5]).uniform(0, 2 * np.pi, 4)))
-    True
     """
     rng = np.random.default_rng([int(seed), int(index)])
     return rng.uniform(0.0, 2.0 * np.pi, n_frequencies)
@@ -761,21 +594,6 @@ def stationary_samples(plan, seed, sample_indices):
     References
     ----------
     .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import WhiteNoise
-    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=2.0, cutoff=100.0)
-    >>> f, f_dot = stationary_samples(plan, seed=0, sample_indices=[0, 1])
-    >>> f.shape == f_dot.shape == (2, plan.n_times)
-    True
-    >>> t, phi = plan.times[40], sample_phases(0, 1, plan.n_frequencies)      # the cosine sum, directly
-    >>> arg = plan.omega * t + phi
-    >>> bool(np.isclose(f[1, 40], np.sqrt(2) * np.sum(plan.amplitudes * np.cos(arg))))
-    True
-    >>> bool(np.isclose(f_dot[1, 40], -np.sqrt(2) * np.sum(plan.amplitudes * plan.omega * np.sin(arg))))
-    True
     """
     indices = np.atleast_1d(np.asarray(sample_indices, dtype=np.int64))
     phases = np.empty((indices.size, plan.n_frequencies))
@@ -806,19 +624,6 @@ def samples_from_phases(plan, phases):
     -----
     The equation is :func:`stationary_samples`'s.
 
-    References
-    ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral representation",
-       Appl. Mech. Rev. 44(4) (1991) 191-204.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import WhiteNoise
-    >>> plan = spectral_plan(WhiteNoise(1e-4), t_end=2.0, cutoff=100.0)
-    >>> f, _ = samples_from_phases(plan, sample_phases(0, 1, plan.n_frequencies)[None, :])
-    >>> bool(np.array_equal(f, stationary_samples(plan, 0, [1])[0]))
-    True
     """
     phases = np.atleast_2d(np.asarray(phases, dtype=float))
     n, M = plan.n_frequencies, plan.n_fft
@@ -859,22 +664,6 @@ def ground_acceleration_samples(excitation, plan, seed, sample_indices):
     -----
     ``x_g''(t) = q(t) f(t)``: eq. (39) in [1]_ (white noise) or eq. (47) (a filtered input), with the
     envelope of eq. (57); ``f`` from :func:`stationary_samples`.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import WhiteNoise
-    >>> noise = WhiteNoise(1e-4)
-    >>> plan = spectral_plan(noise, t_end=2.0, cutoff=100.0)
-    >>> acc, rate = ground_acceleration_samples(noise, plan, 0, [0])
-    >>> f, _ = stationary_samples(plan, 0, [0])
-    >>> float(acc[0, 0]), bool(np.allclose(acc, noise.envelope(plan.times) * f))    # q(0) = 0
-    (0.0, True)
     """
     values, rates = stationary_samples(plan, seed, sample_indices)
     t = plan.times
@@ -909,18 +698,6 @@ def ground_acceleration(excitation, t_end, cutoff, n_samples, seed=0, oversampli
         ``x_g''`` [m/s^2], shape ``(n_samples, plan.n_times)``.
     plan : SpectralPlan
         The grids used.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import WhiteNoise
-    >>> t, acc, plan = ground_acceleration(WhiteNoise(1e-4), t_end=20.0, cutoff=100.0, n_samples=2, seed=1)
-    >>> t.shape, acc.shape, round(float(t[1]), 6)                       # dt = pi / (4 x 100 rad/s)
-    ((2549,), (2, 2549), 0.007854)
     """
     seed = validate_seed(seed)
     plan = spectral_plan(excitation, t_end, cutoff, oversampling)

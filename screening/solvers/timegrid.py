@@ -7,7 +7,7 @@ import numpy as np
 from screening.core.validation import checked
 from screening.core import limits
 
-__all__ = ["output_times"]
+__all__ = []
 
 
 def output_times(t_end=20.0, dt=0.05):
@@ -35,22 +35,6 @@ def output_times(t_end=20.0, dt=0.05):
     ``t_k = k dt`` for ``k = 0, ..., n`` with ``n = t_end / dt``; the records of the paper are 20 s
     long, read every 0.05 s (the defaults).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] The package's documentation, ``docs/outputs.md`` (the ``t`` coordinate of a result).
-
-    Examples
-    --------
-    >>> t = output_times(t_end=1.0, dt=0.25)
-    >>> t
-    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
-    >>> output_times().shape                          # 20 s every 0.05 s
-    (401,)
-    >>> output_times(t_end=1.0, dt=0.3)
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'dt' must divide 't_end' into whole steps (got t_end=1.0, dt=0.3)
     """
     t_end = checked("t_end", t_end, lower=0.0)
     dt = checked("dt", dt, lower=0.0, upper=t_end, upper_inclusive=True)

@@ -34,9 +34,7 @@ def register(cls):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733 (the excitations of eqs. 47-50).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md`` (the excitations of eqs. 47-50).
 
     Examples
     --------
@@ -72,9 +70,7 @@ def parameters():
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733 (the filter parameters of eqs. 48-50).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md`` (the filter parameters of eqs. 48-50).
 
     Examples
     --------
@@ -114,9 +110,7 @@ def build(kind, S0, params, envelope, band_limit_hz=GROUND_BAND_LIMIT_HZ):
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733 (eqs. 47-50).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md`` (eqs. 47-50).
 
     Examples
     --------

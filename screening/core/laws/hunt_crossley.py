@@ -11,7 +11,7 @@ import numpy as np
 from screening.core.laws.base import ContactLaw
 from screening.core.laws.registry import register
 
-__all__ = ["hunt_crossley_damping", "HuntCrossley", "HUNT_CROSSLEY"]
+__all__ = ["HuntCrossley"]
 
 
 def hunt_crossley_damping(z, z_dot, lam):
@@ -42,11 +42,6 @@ def hunt_crossley_damping(z, z_dot, lam):
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
        vibroimpact", J. Appl. Mech. 42(2) (1975) 440-445.
-
-    Examples
-    --------
-    >>> hunt_crossley_damping([1e-3, 2e-3], [0.1, -0.1], 8.95e8)
-    array([  89500., -179000.])
     """
     return lam * np.asarray(z, dtype=float) * np.asarray(z_dot, dtype=float)
 

@@ -98,9 +98,7 @@ def parameters():
 
     References
     ----------
-    .. [1] I. P. Mitseas, "Nonlinear dynamics of rocking rigid blocks under stochastic base excitation:
-       A stochastic-linearization approach", Journal of Sound and Vibration (2026) 119733.
-       https://doi.org/10.1016/j.jsv.2026.119733 (the Hunt–Crossley law, eq. 4).
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md`` (the Hunt–Crossley law, eq. 4).
 
     Examples
     --------

@@ -11,7 +11,7 @@ import numpy as np
 from screening.core.laws.base import ContactLaw
 from screening.core.laws.registry import register
 
-__all__ = ["winkler_damping", "Winkler", "WINKLER"]
+__all__ = ["Winkler"]
 
 
 def winkler_damping(z, z_dot, c):
@@ -41,11 +41,6 @@ def winkler_damping(z, z_dot, c):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] E. Winkler, Die Lehre von der Elasticitaet und Festigkeit, Dominicus, Prague (1867).
-
-    Examples
-    --------
-    >>> winkler_damping([1e-3, 2e-3], [0.1, -0.1], 2.0e5)
-    array([ 20000., -20000.])
     """
     return c * np.asarray(z_dot, dtype=float) + 0.0 * np.asarray(z, dtype=float)
 

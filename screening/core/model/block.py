@@ -11,7 +11,7 @@ import numpy as np
 
 from screening.core.validation import checked
 
-__all__ = ["LENGTH_RANGE", "Block"]
+__all__ = ["Block"]
 
 
 #: Half-width ``b`` and height ``h`` [m] a block may have: a micrometre to a kilometre.  Far beyond, the

@@ -12,7 +12,7 @@ from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 
-__all__ = ["PAPER_BLOCK", "PAPER_BED", "PAPER_CASES", "paper_case"]
+__all__ = []
 
 PAPER_BLOCK = dict(m=8.67, b=0.035, h=0.21)
 PAPER_BED = dict(k=2.89e7, lam=8.95e8)
@@ -64,12 +64,6 @@ def paper_case(name):
     .. [2] H. Tajimi, "A statistical method of determining the maximum response of a building
        structure during an earthquake", Proc. 2nd World Conference on Earthquake Engineering,
        Tokyo and Kyoto, vol. 2 (1960).
-
-    Examples
-    --------
-    >>> block, bed, excitation = paper_case("fig6_kt_hardening_low")
-    >>> block.h, bed.k, bed.eps, type(excitation).__name__, excitation.S0
-    (0.21, 28900000.0, 60000000.0, 'KanaiTajimi', 0.00025)
     """
     eps, kind, S0, _ = PAPER_CASES[name]
     block = Block(**PAPER_BLOCK)

@@ -17,7 +17,7 @@ import numpy as np
 
 from screening.core.validation import checked
 
-__all__ = ["ENVELOPE_CODES", "Envelope", "ConstantEnvelope"]
+__all__ = ["Envelope", "ConstantEnvelope"]
 
 #: Integer codes of the envelope kinds, as the compiled solvers see them.
 ENVELOPE_CODES = {"exponential": 0, "constant": 1}

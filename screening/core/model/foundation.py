@@ -19,7 +19,7 @@ from screening.core import laws
 from screening.core.laws.base import DAMPING_FIELDS
 from screening.core.validation import checked
 
-__all__ = ["Foundation", "contact_pressure"]
+__all__ = ["Foundation"]
 
 
 def __getattr__(name):

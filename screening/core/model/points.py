@@ -13,7 +13,7 @@ import functools
 
 import numpy as np
 
-__all__ = ["numeric_fields", "broadcast_shape", "flatten", "select", "point_key"]
+__all__ = []
 
 
 @functools.lru_cache(maxsize=None)
@@ -78,13 +78,6 @@ def numeric_fields(*objs):
     References
     ----------
     .. [1] screening documentation, "Models", docs/models.md.
-
-    Examples
-    --------
-    >>> from screening.core.model import Block, Foundation
-    >>> fields = numeric_fields(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))
-    >>> sorted(fields), fields["k"]
-    (['I_cm', 'b', 'eps', 'g', 'h', 'k', 'lam', 'm'], 28900000.0)
     """
     out = {}
     for obj in objs:
@@ -112,14 +105,6 @@ def broadcast_shape(*objs):
     .. [1] C. R. Harris et al., "Array programming with NumPy", Nature 585 (2020) 357-362
        (broadcasting).
     .. [2] screening documentation, "Models", docs/models.md.
-
-    Examples
-    --------
-    >>> from screening.core.model import Block, Foundation
-    >>> block = Block(m=8.67, b=0.035, h=[0.21, 0.3, 0.4])             # h [m]: 3 points
-    >>> bed = Foundation(k=[[2.89e7], [5e7]], lam=8.95e8)             # k [N/m^2]: 2 x 1
-    >>> broadcast_shape(block, bed)
-    (2, 3)
     """
     return np.broadcast_shapes(*(a.shape for obj in objs for a in _all_arrays(obj)))
 
@@ -149,14 +134,6 @@ def flatten(*objs):
     .. [1] C. R. Harris et al., "Array programming with NumPy", Nature 585 (2020) 357-362
        (broadcasting).
     .. [2] screening documentation, "Models", docs/models.md.
-
-    Examples
-    --------
-    >>> from screening.core.model import Block, Foundation
-    >>> (block, bed), shape = flatten(Block(m=8.67, b=0.035, h=[0.21, 0.3, 0.4]),
-    ...                               Foundation(k=[[2.89e7], [5e7]], lam=8.95e8))
-    >>> shape, block.h.tolist(), bed.k.tolist()
-    ((2, 3), [0.21, 0.3, 0.4, 0.21, 0.3, 0.4], [28900000.0, 28900000.0, 28900000.0, 50000000.0, 50000000.0, 50000000.0])
     """
     shape = broadcast_shape(*objs)
     flat = tuple(_map(obj, lambda a: np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(-1)) for obj in objs)
@@ -182,13 +159,6 @@ def select(obj, index):
     References
     ----------
     .. [1] screening documentation, "Models", docs/models.md.
-
-    Examples
-    --------
-    >>> from screening.core.model import Block
-    >>> (block,), _ = flatten(Block(m=8.67, b=0.035, h=[0.21, 0.3, 0.4]))
-    >>> select(block, 1).h, select(block, slice(0, 2)).h.tolist()
-    (0.3, [0.21, 0.3])
     """
     if isinstance(index, (int, np.integer)):
         return _map(obj, lambda a: float(a[index]))
@@ -214,16 +184,6 @@ def point_key(*objs):
     References
     ----------
     .. [1] screening documentation, "Models", docs/models.md.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.core.model import Block
-    >>> point_key(Block(m=8.67, b=0.035, h=0.21)) == point_key(Block(m=8.67, b=0.035, h=np.float64(0.21)))
-    True
-    >>> key = point_key(Block(m=8.67, b=0.035, h=0.21))
-    >>> key[0], key[2], key[4]
-    ('Block', ('b', 0.035), ('h', 0.21))
     """
     key = []
     for obj in objs:
