@@ -182,7 +182,35 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0
 
 @numba.njit(cache=True, inline="always")
 def coupled_accelerations_trig(s, c, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v):
-    """:func:`coupled_accelerations` from ``s = sin(theta)``, ``c = cos(theta)``."""
+    """:func:`coupled_accelerations` from ``s = sin(theta)``, ``c = cos(theta)`` (a caller with its own ``sin``, ``cos``).
+
+    Parameters
+    ----------
+    s, c : float
+        ``sin(theta)``, ``cos(theta)`` [1] of the rotation.
+    theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v : float or numpy.record
+        As :func:`coupled_accelerations`.
+
+    Returns
+    -------
+    tuple of float
+        ``(theta'' [rad/s^2], z_cb'' [m/s^2])``.
+
+    References
+    ----------
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> p = model_record(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                  condensation.get("paper"))[()]
+    >>> args = (0.01, 4e-5, 1e-3, 0.5, p, 0.0)
+    >>> coupled_accelerations_trig(math.sin(2e-4), math.cos(2e-4), *args) == coupled_accelerations(2e-4, *args)
+    True
+    """
     m, g, h = p.m, p.g, p.h
     force, moment = law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.w_rate,
                                             p.w_indentation)

@@ -47,8 +47,7 @@ __all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "STATUS_OK", "STATUS_OVERTURNED",
            "REASON_STEP_BUDGET", "REASON_NO_EQUILIBRIUM", "REASON_LIFT_OFF", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
            "INTEGRATOR_EXACT", "INTEGRATORS", "NO_VERTICAL", "NO_PROPAGATOR", "CENSUS", "model_record",
            "coupled_accelerations", "condensed_acceleration", "full_contact_propagator", "integrate_sample",
-           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "integrate_sample_exact", "exact_step",
-           "exact_double_step",
+           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "integrate_sample_exact",
            "chunk_integrator", "step_peak"]
 
 #: Columns of a chunk's step census (accepted steps per sample, by the regime at the step's end): adaptive
@@ -439,8 +438,8 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
         As :func:`integrate_sample`.
     rtol, h_max, max_steps : float, float, int
         As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
-        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place (``prop`` not read).
 
     Returns
     -------
@@ -558,7 +557,7 @@ def _quiet(prop, p, x0, x1, x2, x3):
 
 
 @numba.njit(cache=True)
-def exact_step(prop, p, x0, x1, x2, x3, c0, c1, c2, c3, u_mid, u_end, m1, m3):
+def _exact_step(prop, p, x0, x1, x2, x3, c0, c1, c2, c3, u_mid, u_end, m1, m3):
     """One exact full-contact step over a grid interval from the deviation ``x`` from rest.
 
     Parameters
@@ -615,8 +614,8 @@ def exact_step(prop, p, x0, x1, x2, x3, c0, c1, c2, c3, u_mid, u_end, m1, m3):
 
 
 @numba.njit(cache=True)
-def exact_double_step(prop, p, x0, x1, x2, x3, c, d, m1, m3):
-    """:func:`exact_step` over two grid intervals (Hermite data ``c`` of the first, ``d`` of the second); the
+def _exact_double_step(prop, p, x0, x1, x2, x3, c, d, m1, m3):
+    """:func:`_exact_step` over two grid intervals (Hermite data ``c`` of the first, ``d`` of the second); the
     middle is the grid point between them, where the input is ``c[2] = d[0]``.  Same returns."""
     f0, f1, f2, f3 = _mv(prop, 0, x0, x1, x2, x3)
     w0, w1, w2, w3 = _mv(prop, 4, c[0], c[1], c[2], c[3])
@@ -654,8 +653,8 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
     """:func:`integrate_sample_dopri` with exact steps over the input's grid intervals in quiet full contact.
 
     At a grid point where the state is far from uplift (:data:`~screening.kernels.mcs_equations.CONTACT_MARGIN`)
-    and no output falls inside, one :func:`exact_double_step` covers two grid intervals (else one
-    :func:`exact_step` one) when its error estimate passes the explicit pair's norm and its middle and end stay
+    and no output falls inside, one :func:`_exact_double_step` covers two grid intervals (else one
+    :func:`_exact_step` one) when its error estimate passes the explicit pair's norm and its middle and end stay
     far from uplift; elsewhere the
     explicit pair steps, landing on the next grid point while the state is quiet.  After a refused exact step
     the next try waits 1, 2, 4 or 8 intervals.  Coupled model, no vertical input (else the explicit pair alone).
@@ -678,6 +677,13 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
     ----------
     .. [1] [hochbruck2010] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` ("Exact steps in full contact").
+
+    Examples
+    --------
+    >>> import inspect
+    >>> (list(inspect.signature(integrate_sample_exact.py_func).parameters)
+    ...  == list(inspect.signature(integrate_sample.py_func).parameters)), CENSUS[3]
+    (True, 'exact')
     """
     cond = conds[0]
     p = models[0]
@@ -716,7 +722,7 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
                 ok = False
                 if j_grid + 2 < n_grid and t_next >= (j_grid + 2) * dt_grid - 1e-9 * dt_grid:
                     span = 2
-                    xe, err_v, rem, quiet = exact_double_step(prop, p, x0, x1, x2, x3, c,
+                    xe, err_v, rem, quiet = _exact_double_step(prop, p, x0, x1, x2, x3, c,
                                                               _hermite_data(row, acc, acc_dot, dt_grid, j_grid + 1),
                                                               m1, m3)
                     n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
@@ -728,7 +734,7 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
                 if not ok:
                     span = 1
                     u_mid = 0.5 * (c[0] + c[2]) + 0.125 * (c[1] - c[3])
-                    xe, err_v, rem, quiet = exact_step(prop, p, x0, x1, x2, x3, c[0], c[1], c[2], c[3], u_mid, c[2],
+                    xe, err_v, rem, quiet = _exact_step(prop, p, x0, x1, x2, x3, c[0], c[1], c[2], c[3], u_mid, c[2],
                                                        m1, m3)
                     n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
                     err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
@@ -842,8 +848,8 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
         As :func:`integrate_sample`.
     rtol, h_max, max_steps : float, float, int
         As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
-        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place (``prop`` not read).
 
     Returns
     -------

@@ -21,7 +21,9 @@ Numerics (all overridable through ``**numerics``; recorded in the dataset attrib
   instants and never exceed ``h_max``.  On a bed whose vertical mode is heavily overdamped
   the coupled model takes the linearly implicit RODAS 4(3) pair instead, with the same
   tolerances (``integrator``: ``"auto"``, the default, see :func:`choose_integrator`;
-  ``"dopri"`` or ``"rodas"`` to force one; ``docs/montecarlo_numerics.md``);
+  ``"dopri"`` or ``"rodas"`` to force one; ``docs/montecarlo_numerics.md``); under a band-limited input on a
+  bed whose vertical mode is fast against the input grid (:data:`EXACT_CONTACT_MIN`) it adds exact steps
+  through quiet full contact (``"exact"``);
 * the input is synthesized up to :func:`screening.solvers.synthesis.synthesis_cutoff`: the top of the
   excitation's band (its PSD carries the band's low-pass), or, for an idealized spectrum
   (``band_limit_hz=None``), ``cutoff`` (default :func:`screening.solvers.synthesis.default_cutoff`,

@@ -176,7 +176,7 @@ def test_exact_step_error_estimate_bounds_its_error_on_the_nonlinear_bed():
     u = _hermite_input(c, dt)
     m1, m3 = mcs_kernels._remainder(prop, p, *x0, c[0])
     u_mid = u(0.5 * dt)
-    xe, est, _, quiet = mcs_kernels.exact_step(prop, p, *x0, *c, u_mid, c[2], m1, m3)
+    xe, est, _, quiet = mcs_kernels._exact_step(prop, p, *x0, *c, u_mid, c[2], m1, m3)
 
     def rhs(t, y):
         a1, a3 = kern.coupled_accelerations(y[0], y[1], y[2], y[3], u(t), p)
