@@ -11,11 +11,13 @@ import math
 
 import numba
 import numpy as np
+from scipy.linalg import expm
 
 from screening.core.physics.contact import law_resultants_trig_jit
 
 __all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "GRAVITY_RATIO_MIN", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
-           "INTEGRATORS", "model_record", "coupled_accelerations", "condensed_acceleration", "input_gain",
+           "INTEGRATOR_EXACT", "INTEGRATORS", "CONTACT_MARGIN", "NO_PROPAGATOR", "full_contact_propagator", "model_record",
+           "coupled_accelerations_trig", "coupled_accelerations", "condensed_acceleration", "input_gain",
            "vertical_gain"]
 
 #: Which equations a sample integrates.
@@ -43,7 +45,17 @@ MODEL = np.dtype([
 #: ``integrator`` numerics option.
 INTEGRATOR_DOPRI = 0
 INTEGRATOR_RODAS = 1
-INTEGRATORS = {"dopri": INTEGRATOR_DOPRI, "rodas": INTEGRATOR_RODAS}
+#: The explicit pair, but exact (exponential) steps over the input's grid intervals in quiet full contact
+#: (:func:`full_contact_propagator`; coupled model only).
+INTEGRATOR_EXACT = 2
+INTEGRATORS = {"dopri": INTEGRATOR_DOPRI, "rodas": INTEGRATOR_RODAS, "exact": INTEGRATOR_EXACT}
+
+#: An exact full-contact step needs the state's amplitude bound ``A_z + b A_theta`` (energy of each linear
+#: mode) within this fraction of the static indentation at its start, middle and end: far from uplift.
+CONTACT_MARGIN = 0.5
+
+#: "No propagator": what integrators other than ``"exact"`` are given.
+NO_PROPAGATOR = np.zeros((0, 4))
 
 
 def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri"):
@@ -64,7 +76,7 @@ def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri
     max_flight_time : float, optional
         Longest flight [s] before a sample is called diverged.
     integrator : str, optional
-        A key of :data:`INTEGRATORS` (``"dopri"`` or ``"rodas"``).
+        A key of :data:`INTEGRATORS` (``"dopri"``, ``"rodas"`` or ``"exact"``).
 
     Returns
     -------
@@ -165,9 +177,41 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0
     >>> f"{a:.6f}", f"{8.67 * 0.21 / block.m_sdof:.6f}"
     ('3.546798', '3.546798')
     """
+    return coupled_accelerations_trig(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v)
+
+
+@numba.njit(cache=True, inline="always")
+def coupled_accelerations_trig(s, c, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v):
+    """:func:`coupled_accelerations` from ``s = sin(theta)``, ``c = cos(theta)`` (a caller with its own ``sin``, ``cos``).
+
+    Parameters
+    ----------
+    s, c : float
+        ``sin(theta)``, ``cos(theta)`` [1] of the rotation.
+    theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v : float or numpy.record
+        As :func:`coupled_accelerations`.
+
+    Returns
+    -------
+    tuple of float
+        ``(theta'' [rad/s^2], z_cb'' [m/s^2])``.
+
+    References
+    ----------
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> p = model_record(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
+    ...                  condensation.get("paper"))[()]
+    >>> args = (0.01, 4e-5, 1e-3, 0.5, p, 0.0)
+    >>> coupled_accelerations_trig(math.sin(2e-4), math.cos(2e-4), *args) == coupled_accelerations(2e-4, *args)
+    True
+    """
     m, g, h = p.m, p.g, p.h
-    s = math.sin(theta)
-    c = math.cos(theta)
     force, moment = law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.w_rate,
                                             p.w_indentation)
     mh = m * h
@@ -326,3 +370,108 @@ def vertical_gain(model, theta, p):
     if model == MODEL_COUPLED:
         return 0.0, 1.0
     return p.m * p.h * theta / p.m_sdof, 0.0
+
+
+def _jacobian_at_rest(p, y_star):
+    """``(L, B)``: the coupled right-hand side's Jacobian at the rest state ``y_star`` (central differences,
+    exact for its quadratic terms) and its input gain there."""
+    z_st = float(y_star[2])
+    theta_step = 1e-3 * z_st / float(p["b"])
+    steps = np.array([theta_step, 1e3 * theta_step, 1e-3 * z_st, 1e3 * 1e-3 * z_st])
+    L = np.zeros((4, 4))
+    L[0, 1] = L[2, 3] = 1.0
+    for j in range(4):
+        up, down = np.array(y_star, float), np.array(y_star, float)
+        up[j] += steps[j]
+        down[j] -= steps[j]
+        a_up = coupled_accelerations(up[0], up[1], up[2], up[3], 0.0, p)
+        a_down = coupled_accelerations(down[0], down[1], down[2], down[3], 0.0, p)
+        L[1, j] = (a_up[0] - a_down[0]) / (2.0 * steps[j])
+        L[3, j] = (a_up[1] - a_down[1]) / (2.0 * steps[j])
+    g1, g3 = input_gain(MODEL_COUPLED, 0.0, p)
+    return L, np.array([0.0, g1, 0.0, g3])
+
+
+def _phi_functions(a):
+    """``(exp(a), phi_1(a), ..., phi_4(a))`` of a 4 x 4 matrix from one exponential of a 20 x 20 block matrix."""
+    big = np.zeros((20, 20))
+    big[:4, :4] = a
+    for i in range(4):
+        big[4 * i:4 * i + 4, 4 * i + 4:4 * i + 8] = np.eye(4)
+    e = expm(big)
+    return [e[:4, 4 * i:4 * i + 4] for i in range(5)]
+
+
+def _step_matrices(a, h, fraction):
+    """``(Phi, W, Psi1, Psi2)`` of a step over ``fraction`` (1 or 1/2) of a grid interval ``h``: ``a = L h
+    fraction``; ``W`` the responses to the cubic Hermite basis of the interval (before the input gain)."""
+    phi = _phi_functions(a)
+    hs = h * fraction
+    # response to sigma^k (sigma = s / h on the interval) for s in [0, h fraction]: hs k! fraction^k phi_{k+1}
+    mono = [hs * math.factorial(k) * fraction ** k * phi[k + 1] for k in range(4)]
+    hermite = [2.0 * mono[3] - 3.0 * mono[2] + mono[0], mono[3] - 2.0 * mono[2] + mono[1],
+               -2.0 * mono[3] + 3.0 * mono[2], mono[3] - mono[2]]
+    return phi[0], hermite, hs * phi[1], hs * fraction * phi[2]
+
+
+def full_contact_propagator(p, y_star, dt):
+    """The exact propagator of the coupled model linearized in full contact, over one input grid interval.
+
+    Parameters
+    ----------
+    p : numpy.ndarray or numpy.record
+        The :data:`MODEL` record (:func:`model_record`).
+    y_star : array_like
+        The rest state ``(0, 0, z_st, 0)`` [rad, rad/s, m, m/s].
+    dt : float
+        The input grid's step [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(45, 4)``: rows 0-15 ``Phi = exp(L dt)``, ``W`` (column ``c``: the response to the ``c``-th cubic
+        Hermite basis function of the input through its gain ``B``), ``Psi1``, ``Psi2`` (responses to a
+        constant and to a ramp ``s/dt`` of the remainder); rows 16-31 the same at ``dt/2``; row 32
+        ``y_star``; rows 33-34 rows 1 and 3 of ``L``; row 35 ``(dt, K_theta, K_z, B_1)``; row 36
+        ``(CONTACT_MARGIN z_st, 0, 0, 0)``.  :data:`NO_PROPAGATOR` where a full-contact mode is not a
+        stable oscillator (``K_theta`` or ``K_z`` <= 0).
+
+    Notes
+    -----
+    With ``x = y - y_star`` the coupled eqs. (7)-(8) in [1]_ read ``x' = L x + B u(t) + N(x, u)``.  Over an
+    interval of the cubic Hermite input ``u`` the linear part is propagated exactly (variation of
+    constants, ``phi`` functions from one matrix exponential [2]_); the remainder ``N`` (Hunt-Crossley
+    damping, cubic bed term, geometry) enters as a linear function of time (ETD2 of [2]_).
+
+    References
+    ----------
+    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    .. [2] [hochbruck2010] in the bibliography, ``docs/bibliography.md``.
+
+    Examples
+    --------
+    >>> from screening import Block, Foundation
+    >>> from screening.core import condensation
+    >>> block, bed = Block(m=600.0, b=0.2, h=0.8), Foundation(k=1e10, c=1e6)
+    >>> rec = model_record(block, bed, condensation.get("paper"))
+    >>> z_st = 600.0 * 9.81 / (2 * 0.2 * 1e10)
+    >>> prop = full_contact_propagator(rec, (0.0, 0.0, z_st, 0.0), 1e-3)
+    >>> prop.shape, f"{prop[35, 2]:.4g}", f"{2 * 0.2 * 1e10 / 600.0:.4g}"       # K_z = 2 b k / m
+    ((45, 4), '6.667e+06', '6.667e+06')
+    """
+    rec = p[()] if isinstance(p, np.ndarray) and p.ndim == 0 else p
+    L, B = _jacobian_at_rest(rec, y_star)
+    k_theta, k_z = -L[1, 0], -L[3, 2]
+    if not (k_theta > 0.0 and k_z > 0.0):
+        return NO_PROPAGATOR
+    rows = []
+    for fraction in (1.0, 0.5):
+        phi, hermite, psi1, psi2 = _step_matrices(L * dt * fraction, dt, fraction)
+        rows += [phi, np.column_stack([w @ B for w in hermite]), psi1, psi2]
+    rows.append(np.array(y_star, float)[None])
+    rows.append(L[[1, 3]])
+    rows.append(np.array([[dt, k_theta, k_z, B[1]]]))
+    rows.append(np.array([[CONTACT_MARGIN * float(y_star[2]), 0.0, 0.0, 0.0]]))
+    _, _, psi1, psi2 = _step_matrices(L * 2.0 * dt, 2.0 * dt, 1.0)       # a step over two intervals
+    rows += [psi1, psi2]
+    return np.ascontiguousarray(np.vstack(rows))

@@ -33,17 +33,27 @@ from numba import types
 from screening.kernels import dopri
 from screening.kernels import rodas as _ro
 from screening.core.signatures import function_type, record_type, sdof_coefficients_signature
-from screening.kernels.mcs_equations import (GRAVITY_RATIO_MIN, INTEGRATOR_DOPRI, INTEGRATOR_RODAS, INTEGRATORS,
-                                             MODEL, MODEL_CONDENSED, MODEL_COUPLED, condensed_acceleration,
-                                             coupled_accelerations, input_gain, model_record, vertical_gain)
-from screening.kernels._sample_steps import NO_VERTICAL, err_term, ground_input, ground_input_rate, store_outcome
+from screening.kernels.mcs_equations import (GRAVITY_RATIO_MIN, INTEGRATOR_DOPRI, INTEGRATOR_EXACT, INTEGRATOR_RODAS,
+                                             INTEGRATORS, MODEL, MODEL_CONDENSED, MODEL_COUPLED, NO_PROPAGATOR,
+                                             condensed_acceleration, coupled_accelerations,
+                                             coupled_accelerations_trig, full_contact_propagator,
+                                             input_gain, model_record, vertical_gain)
+from screening.kernels._sample_steps import (NO_VERTICAL, err_term, ground_input, ground_input_rate, store_outcome,
+                                             vertical_row)
 from screening.core.status import DivergenceReason, SampleStatus
 
 __all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "STATUS_OK", "STATUS_OVERTURNED", "STATUS_DIVERGED", "REASON_NONE",
            "REASON_NONFINITE", "REASON_LONG_FLIGHT", "REASON_OUT_OF_BOUNDS", "REASON_STEP_UNDERFLOW",
            "REASON_STEP_BUDGET", "REASON_NO_EQUILIBRIUM", "REASON_LIFT_OFF", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
-           "INTEGRATORS", "NO_VERTICAL", "model_record", "coupled_accelerations", "condensed_acceleration", "integrate_sample",
-           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "chunk_integrator", "step_peak"]
+           "INTEGRATOR_EXACT", "INTEGRATORS", "NO_VERTICAL", "NO_PROPAGATOR", "CENSUS", "model_record",
+           "coupled_accelerations", "condensed_acceleration", "full_contact_propagator", "integrate_sample",
+           "integrate_sample_dopri", "input_gain", "integrate_sample_rodas", "integrate_sample_exact",
+           "chunk_integrator", "step_peak"]
+
+#: Columns of a chunk's step census (accepted steps per sample, by the regime at the step's end): adaptive
+#: steps in full contact, in partial contact (uplift), in flight, exact full-contact steps; then the exact
+#: steps refused, near uplift and by their error estimate.
+CENSUS = ("full_contact", "partial_contact", "flight", "exact", "refused_near_uplift", "refused_error")
 
 
 STATUS_OK = int(SampleStatus.ok)
@@ -250,11 +260,21 @@ def step_peak(peak, h, theta0, rate0, theta1, rate1):
 
 @numba.njit(cache=True, inline="always")
 def _accept(model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, a_v):
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, a_v, census, exact):
     """Bookkeeping of an accepted step to the state ``y`` (``a_v``: the vertical ground acceleration at
-    its end): counts, smallest step, time, peak, status checks and the output at a landing.  Returns
-    ``(t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start)``."""
+    its end): counts (and the ``census`` row, ``exact``: an exact step), smallest step, time, peak, status
+    checks and the output at a landing.  Returns ``(t, i_out, n_acc, h_min_acc, peak, status, reason,
+    flight_start)``."""
     n_acc += 1
+    if census.shape[0] > row:
+        if exact:
+            census[row, 3] += 1
+        elif model == MODEL_COUPLED and y2 + p.b * abs(math.sin(y0)) <= 0.0:
+            census[row, 2] += 1
+        elif model == MODEL_COUPLED and y2 - p.b * abs(math.sin(y0)) < 0.0:
+            census[row, 1] += 1
+        else:
+            census[row, 0] += 1
     if h < h_min_acc and not landing and n_acc > 10:  # skip the ramp-up from the initial guess
         h_min_acc = h
     t = t_next if landing else t + h
@@ -268,12 +288,12 @@ def _accept(model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, fl
 
 @numba.njit(cache=True)
 def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale,
-                     rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+                     rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census):
     """Integrate one sample over ``t_out``; fill row ``row`` of the output arrays.
 
     ``models[0].integrator`` picks the method, once per sample: :func:`integrate_sample_dopri`
-    (explicit) or :func:`integrate_sample_rodas` (linearly implicit).  After overturning or
-    divergence the remaining outputs are NaN.
+    (explicit), :func:`integrate_sample_rodas` (linearly implicit) or :func:`integrate_sample_exact`
+    (explicit, exact steps in quiet full contact).  After overturning or divergence the remaining outputs are NaN.
 
     Parameters
     ----------
@@ -312,6 +332,10 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
         (``z_cb`` columns zero for the condensed model; NaN after overturning or divergence).
     out_uplift : numpy.ndarray of bool
         Uplift flag at the output times, same layout.
+    prop : numpy.ndarray
+        :func:`full_contact_propagator` of the run (read by the exact integrator; else :data:`NO_PROPAGATOR`).
+    census : numpy.ndarray
+        ``(n_rows, 6)`` int64 step counts by :data:`CENSUS`, row ``row`` incremented (no rows: not counted).
 
     Returns
     -------
@@ -335,22 +359,74 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
     >>> import inspect
     >>> params = list(inspect.signature(integrate_sample.py_func).parameters)
     >>> params[:4], len(params)
-    (['model', 'damping_stiffness', 'conds', 'row'], 19)
+    (['model', 'damping_stiffness', 'conds', 'row'], 21)
     >>> STATUS_OK, STATUS_OVERTURNED, STATUS_DIVERGED
     (0, 1, 2)
     """
     if models[0].integrator == INTEGRATOR_RODAS:
         return integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
                                       y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
-                                      out_z_dot, out_uplift)
+                                      out_z_dot, out_uplift, prop, census)
+    if models[0].integrator == INTEGRATOR_EXACT and model == MODEL_COUPLED and prop.shape[0] > 0:
+        return integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
+                                      y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
+                                      out_z_dot, out_uplift, prop, census)
     return integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
                                   y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
-                                  out_z_dot, out_uplift)
+                                  out_z_dot, out_uplift, prop, census)
+
+
+@numba.njit(cache=True, inline="always")
+def _dopri_stages(model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, k1_0, k1_1, k1_2,
+                  k1_3, p):
+    """One Dormand-Prince 5(4) step of ``h`` from ``y`` at ``t`` (``k1``: the rate there): ``(n, k7, e, acc_end)``,
+    the new state, its rate, the local error estimate and the ground input at ``t + h``."""
+    g0 = y0 + h * _A21 * k1_0
+    g1 = y1 + h * _A21 * k1_1
+    g2 = y2 + h * _A21 * k1_2
+    g3 = y3 + h * _A21 * k1_3
+    k2_0, k2_1, k2_2, k2_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
+                                  ground_input(row, acc, acc_dot, dt_grid, t + _C2 * h), p)
+    g0 = y0 + h * (_A31 * k1_0 + _A32 * k2_0)
+    g1 = y1 + h * (_A31 * k1_1 + _A32 * k2_1)
+    g2 = y2 + h * (_A31 * k1_2 + _A32 * k2_2)
+    g3 = y3 + h * (_A31 * k1_3 + _A32 * k2_3)
+    k3_0, k3_1, k3_2, k3_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
+                                  ground_input(row, acc, acc_dot, dt_grid, t + _C3 * h), p)
+    g0 = y0 + h * (_A41 * k1_0 + _A42 * k2_0 + _A43 * k3_0)
+    g1 = y1 + h * (_A41 * k1_1 + _A42 * k2_1 + _A43 * k3_1)
+    g2 = y2 + h * (_A41 * k1_2 + _A42 * k2_2 + _A43 * k3_2)
+    g3 = y3 + h * (_A41 * k1_3 + _A42 * k2_3 + _A43 * k3_3)
+    k4_0, k4_1, k4_2, k4_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
+                                  ground_input(row, acc, acc_dot, dt_grid, t + _C4 * h), p)
+    g0 = y0 + h * (_A51 * k1_0 + _A52 * k2_0 + _A53 * k3_0 + _A54 * k4_0)
+    g1 = y1 + h * (_A51 * k1_1 + _A52 * k2_1 + _A53 * k3_1 + _A54 * k4_1)
+    g2 = y2 + h * (_A51 * k1_2 + _A52 * k2_2 + _A53 * k3_2 + _A54 * k4_2)
+    g3 = y3 + h * (_A51 * k1_3 + _A52 * k2_3 + _A53 * k3_3 + _A54 * k4_3)
+    k5_0, k5_1, k5_2, k5_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
+                                  ground_input(row, acc, acc_dot, dt_grid, t + _C5 * h), p)
+    g0 = y0 + h * (_A61 * k1_0 + _A62 * k2_0 + _A63 * k3_0 + _A64 * k4_0 + _A65 * k5_0)
+    g1 = y1 + h * (_A61 * k1_1 + _A62 * k2_1 + _A63 * k3_1 + _A64 * k4_1 + _A65 * k5_1)
+    g2 = y2 + h * (_A61 * k1_2 + _A62 * k2_2 + _A63 * k3_2 + _A64 * k4_2 + _A65 * k5_2)
+    g3 = y3 + h * (_A61 * k1_3 + _A62 * k2_3 + _A63 * k3_3 + _A64 * k4_3 + _A65 * k5_3)
+    acc_end = ground_input(row, acc, acc_dot, dt_grid, t + h)
+    k6_0, k6_1, k6_2, k6_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3, acc_end, p)
+    n0 = y0 + h * (_B1 * k1_0 + _B3 * k3_0 + _B4 * k4_0 + _B5 * k5_0 + _B6 * k6_0)
+    n1 = y1 + h * (_B1 * k1_1 + _B3 * k3_1 + _B4 * k4_1 + _B5 * k5_1 + _B6 * k6_1)
+    n2 = y2 + h * (_B1 * k1_2 + _B3 * k3_2 + _B4 * k4_2 + _B5 * k5_2 + _B6 * k6_2)
+    n3 = y3 + h * (_B1 * k1_3 + _B3 * k3_3 + _B4 * k4_3 + _B5 * k5_3 + _B6 * k6_3)
+    k7_0, k7_1, k7_2, k7_3 = _rhs(model, damping_stiffness, cond, n0, n1, n2, n3, acc_end, p)
+    # --- error estimate (5th minus 4th order solution)
+    e0 = h * (_E1 * k1_0 + _E3 * k3_0 + _E4 * k4_0 + _E5 * k5_0 + _E6 * k6_0 + _E7 * k7_0)
+    e1 = h * (_E1 * k1_1 + _E3 * k3_1 + _E4 * k4_1 + _E5 * k5_1 + _E6 * k6_1 + _E7 * k7_1)
+    e2 = h * (_E1 * k1_2 + _E3 * k3_2 + _E4 * k4_2 + _E5 * k5_2 + _E6 * k6_2 + _E7 * k7_2)
+    e3 = h * (_E1 * k1_3 + _E3 * k3_3 + _E4 * k4_3 + _E5 * k5_3 + _E6 * k6_3 + _E7 * k7_3)
+    return (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end
 
 
 @numba.njit(cache=True)
 def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
-                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census):
     """:func:`integrate_sample` by the explicit Dormand–Prince 5(4) pair (the reference integrator).
 
     FSAL, Hairer's PI step control, the error measured component-wise against
@@ -362,8 +438,8 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
         As :func:`integrate_sample`.
     rtol, h_max, max_steps : float, float, int
         As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
-        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place (``prop`` not read).
 
     Returns
     -------
@@ -407,47 +483,8 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
             break
         t_next = t_out[i_out]
         h, h_proposed, landing = _landing(t, h, h_max, t_next)
-        # --- stages
-        g0 = y0 + h * _A21 * k1_0
-        g1 = y1 + h * _A21 * k1_1
-        g2 = y2 + h * _A21 * k1_2
-        g3 = y3 + h * _A21 * k1_3
-        k2_0, k2_1, k2_2, k2_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      ground_input(row, acc, acc_dot, dt_grid, t + _C2 * h), p)
-        g0 = y0 + h * (_A31 * k1_0 + _A32 * k2_0)
-        g1 = y1 + h * (_A31 * k1_1 + _A32 * k2_1)
-        g2 = y2 + h * (_A31 * k1_2 + _A32 * k2_2)
-        g3 = y3 + h * (_A31 * k1_3 + _A32 * k2_3)
-        k3_0, k3_1, k3_2, k3_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      ground_input(row, acc, acc_dot, dt_grid, t + _C3 * h), p)
-        g0 = y0 + h * (_A41 * k1_0 + _A42 * k2_0 + _A43 * k3_0)
-        g1 = y1 + h * (_A41 * k1_1 + _A42 * k2_1 + _A43 * k3_1)
-        g2 = y2 + h * (_A41 * k1_2 + _A42 * k2_2 + _A43 * k3_2)
-        g3 = y3 + h * (_A41 * k1_3 + _A42 * k2_3 + _A43 * k3_3)
-        k4_0, k4_1, k4_2, k4_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      ground_input(row, acc, acc_dot, dt_grid, t + _C4 * h), p)
-        g0 = y0 + h * (_A51 * k1_0 + _A52 * k2_0 + _A53 * k3_0 + _A54 * k4_0)
-        g1 = y1 + h * (_A51 * k1_1 + _A52 * k2_1 + _A53 * k3_1 + _A54 * k4_1)
-        g2 = y2 + h * (_A51 * k1_2 + _A52 * k2_2 + _A53 * k3_2 + _A54 * k4_2)
-        g3 = y3 + h * (_A51 * k1_3 + _A52 * k2_3 + _A53 * k3_3 + _A54 * k4_3)
-        k5_0, k5_1, k5_2, k5_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3,
-                                      ground_input(row, acc, acc_dot, dt_grid, t + _C5 * h), p)
-        g0 = y0 + h * (_A61 * k1_0 + _A62 * k2_0 + _A63 * k3_0 + _A64 * k4_0 + _A65 * k5_0)
-        g1 = y1 + h * (_A61 * k1_1 + _A62 * k2_1 + _A63 * k3_1 + _A64 * k4_1 + _A65 * k5_1)
-        g2 = y2 + h * (_A61 * k1_2 + _A62 * k2_2 + _A63 * k3_2 + _A64 * k4_2 + _A65 * k5_2)
-        g3 = y3 + h * (_A61 * k1_3 + _A62 * k2_3 + _A63 * k3_3 + _A64 * k4_3 + _A65 * k5_3)
-        acc_end = ground_input(row, acc, acc_dot, dt_grid, t + h)
-        k6_0, k6_1, k6_2, k6_3 = _rhs(model, damping_stiffness, cond, g0, g1, g2, g3, acc_end, p)
-        n0 = y0 + h * (_B1 * k1_0 + _B3 * k3_0 + _B4 * k4_0 + _B5 * k5_0 + _B6 * k6_0)
-        n1 = y1 + h * (_B1 * k1_1 + _B3 * k3_1 + _B4 * k4_1 + _B5 * k5_1 + _B6 * k6_1)
-        n2 = y2 + h * (_B1 * k1_2 + _B3 * k3_2 + _B4 * k4_2 + _B5 * k5_2 + _B6 * k6_2)
-        n3 = y3 + h * (_B1 * k1_3 + _B3 * k3_3 + _B4 * k4_3 + _B5 * k5_3 + _B6 * k6_3)
-        k7_0, k7_1, k7_2, k7_3 = _rhs(model, damping_stiffness, cond, n0, n1, n2, n3, acc_end, p)
-        # --- error estimate (5th minus 4th order solution)
-        e0 = h * (_E1 * k1_0 + _E3 * k3_0 + _E4 * k4_0 + _E5 * k5_0 + _E6 * k6_0 + _E7 * k7_0)
-        e1 = h * (_E1 * k1_1 + _E3 * k3_1 + _E4 * k4_1 + _E5 * k5_1 + _E6 * k6_1 + _E7 * k7_1)
-        e2 = h * (_E1 * k1_2 + _E3 * k3_2 + _E4 * k4_2 + _E5 * k5_2 + _E6 * k6_2 + _E7 * k7_2)
-        e3 = h * (_E1 * k1_3 + _E3 * k3_3 + _E4 * k4_3 + _E5 * k5_3 + _E6 * k6_3 + _E7 * k7_3)
+        (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end = _dopri_stages(
+            model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, k1_0, k1_1, k1_2, k1_3, p)
         err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
         if not err <= 1.0:                                  # rejected (or not finite)
             n_rej += 1
@@ -464,10 +501,306 @@ def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, d
         k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
             model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1])
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1], census, False)
         if status != STATUS_OK:
             break
         # --- next step size (PI control, Hairer's DOPRI5 constants)
+        fac, log_err = dopri.pi_step_factor(err, log_err_old)
+        if rejected:
+            fac = min(fac, 1.0)
+        rejected = False
+        log_err_old = max(log_err, dopri.LOG_ERR_START)
+        h = _next_step(h, fac, landing, h_proposed, h_max)
+    if not math.isfinite(peak):
+        peak = 0.0
+    return status, reason, peak, n_acc, n_rej, h_min_acc
+
+
+# ----------------------------------------------------------------------------- exact full-contact steps
+@numba.njit(cache=True, inline="always")
+def _mv(prop, r, x0, x1, x2, x3):
+    """Rows ``r .. r+3`` of ``prop`` (a 4 x 4 matrix) times ``x``."""
+    return (prop[r, 0] * x0 + prop[r, 1] * x1 + prop[r, 2] * x2 + prop[r, 3] * x3,
+            prop[r + 1, 0] * x0 + prop[r + 1, 1] * x1 + prop[r + 1, 2] * x2 + prop[r + 1, 3] * x3,
+            prop[r + 2, 0] * x0 + prop[r + 2, 1] * x1 + prop[r + 2, 2] * x2 + prop[r + 2, 3] * x3,
+            prop[r + 3, 0] * x0 + prop[r + 3, 1] * x1 + prop[r + 3, 2] * x2 + prop[r + 3, 3] * x3)
+
+
+@numba.njit(cache=True, inline="always")
+def _mv2(prop, r, n1, n3):
+    """Rows ``r .. r+3`` of ``prop`` times ``(0, n1, 0, n3)`` (a remainder: kinematic rows exact)."""
+    return (prop[r, 1] * n1 + prop[r, 3] * n3, prop[r + 1, 1] * n1 + prop[r + 1, 3] * n3,
+            prop[r + 2, 1] * n1 + prop[r + 2, 3] * n3, prop[r + 3, 1] * n1 + prop[r + 3, 3] * n3)
+
+
+@numba.njit(cache=True)
+def _remainder(prop, p, x0, x1, x2, x3, u):
+    """``(N_1, N_3)``: the coupled accelerations at ``y_star + x`` under ``u`` less their linear part ``L x + B u``."""
+    theta = prop[32, 0] + x0
+    if abs(theta) < 1e-3:       # sin, cos by their series to theta^5, theta^4: exact in double precision here
+        t2 = theta * theta
+        a1, a3 = coupled_accelerations_trig(theta * (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0)), 1.0 - 0.5 * t2 * (
+            1.0 - t2 / 12.0), prop[32, 1] + x1, prop[32, 2] + x2, prop[32, 3] + x3, u, p, 0.0)
+    else:
+        a1, a3 = coupled_accelerations(theta, prop[32, 1] + x1, prop[32, 2] + x2, prop[32, 3] + x3, u, p, 0.0)
+    return (a1 - (prop[33, 0] * x0 + prop[33, 1] * x1 + prop[33, 2] * x2 + prop[33, 3] * x3) - prop[35, 3] * u,
+            a3 - (prop[34, 0] * x0 + prop[34, 1] * x1 + prop[34, 2] * x2 + prop[34, 3] * x3))
+
+
+@numba.njit(cache=True, inline="always")
+def _quiet(prop, p, x0, x1, x2, x3):
+    """Whether the deviation ``x`` from rest is far from uplift: ``A_z + b A_theta`` (each linear mode's
+    amplitude from its energy) within the margin of row 36 of ``prop``."""
+    a_theta = math.sqrt(x0 * x0 + x1 * x1 / prop[35, 1])
+    a_z = math.sqrt(x2 * x2 + x3 * x3 / prop[35, 2])
+    return a_z + p.b * a_theta <= prop[36, 0]
+
+
+@numba.njit(cache=True)
+def _exact_step(prop, p, x0, x1, x2, x3, c0, c1, c2, c3, u_mid, u_end, m1, m3):
+    """One exact full-contact step over a grid interval from the deviation ``x`` from rest.
+
+    Parameters
+    ----------
+    prop : numpy.ndarray
+        :func:`full_contact_propagator` of the interval.
+    p : numpy.record
+        The :data:`MODEL` record.
+    x0, x1, x2, x3 : float
+        ``y - y_star`` at the interval's start [rad, rad/s, m, m/s].
+    c0, c1, c2, c3 : float
+        The input's Hermite data ``(u_j, dt u'_j, u_{j+1}, dt u'_{j+1})`` [m/s^2].
+    u_mid, u_end : float
+        The input at the interval's middle and end [m/s^2].
+    m1, m3 : float
+        The remainder at the start (:func:`_remainder`).
+
+    Returns
+    -------
+    tuple
+        ``(x_end, error, remainder_end, quiet)``: the deviation at the end (4 floats), the error estimate
+        (4 floats), the remainder there (2 floats), whether start, middle and end are far from uplift.
+
+    Notes
+    -----
+    ETD2 [1]_: ``x1 = Phi x + W c + Psi1 N0 + Psi2 (N1 - N0)``, ``N1`` at the predictor ``Phi x + W c + Psi1 N0``.
+    The error estimate adds the remainder's departure from a straight line at the middle (``(2/3) Psi1 d``)
+    and the corrector's change of ``N1`` (``Psi2 (N1c - N1)``).
+
+    References
+    ----------
+    .. [1] [hochbruck2010] in the bibliography, ``docs/bibliography.md``.
+    """
+    f0, f1, f2, f3 = _mv(prop, 0, x0, x1, x2, x3)
+    w0, w1, w2, w3 = _mv(prop, 4, c0, c1, c2, c3)
+    a0, a1, a2, a3 = _mv2(prop, 8, m1, m3)
+    q0, q1, q2, q3 = f0 + w0 + a0, f1 + w1 + a1, f2 + w2 + a2, f3 + w3 + a3          # predictor
+    n1, n3 = _remainder(prop, p, q0, q1, q2, q3, u_end)
+    b0, b1, b2, b3 = _mv2(prop, 12, n1 - m1, n3 - m3)
+    e0, e1, e2, e3 = q0 + b0, q1 + b1, q2 + b2, q3 + b3                              # corrector
+    f0, f1, f2, f3 = _mv(prop, 16, x0, x1, x2, x3)
+    w0, w1, w2, w3 = _mv(prop, 20, c0, c1, c2, c3)
+    a0, a1, a2, a3 = _mv2(prop, 24, m1, m3)
+    b0, b1, b2, b3 = _mv2(prop, 28, n1 - m1, n3 - m3)
+    h0, h1, h2, h3 = f0 + w0 + a0 + b0, f1 + w1 + a1 + b1, f2 + w2 + a2 + b2, f3 + w3 + a3 + b3   # middle
+    d1, d3 = _remainder(prop, p, h0, h1, h2, h3, u_mid)
+    d1 -= 0.5 * (m1 + n1)
+    d3 -= 0.5 * (m3 + n3)
+    r1, r3 = _remainder(prop, p, e0, e1, e2, e3, u_end)
+    a0, a1, a2, a3 = _mv2(prop, 8, 2.0 / 3.0 * d1, 2.0 / 3.0 * d3)
+    b0, b1, b2, b3 = _mv2(prop, 12, r1 - n1, r3 - n3)
+    quiet = _quiet(prop, p, x0, x1, x2, x3) and _quiet(prop, p, h0, h1, h2, h3) and _quiet(prop, p, e0, e1, e2, e3)
+    return (e0, e1, e2, e3), (a0 + b0, a1 + b1, a2 + b2, a3 + b3), (r1, r3), quiet
+
+
+@numba.njit(cache=True)
+def _exact_double_step(prop, p, x0, x1, x2, x3, c, d, m1, m3):
+    """:func:`_exact_step` over two grid intervals (Hermite data ``c`` of the first, ``d`` of the second); the
+    middle is the grid point between them, where the input is ``c[2] = d[0]``.  Same returns."""
+    f0, f1, f2, f3 = _mv(prop, 0, x0, x1, x2, x3)
+    w0, w1, w2, w3 = _mv(prop, 4, c[0], c[1], c[2], c[3])
+    l0, l1, l2, l3 = f0 + w0, f1 + w1, f2 + w2, f3 + w3                              # linear part, middle
+    f0, f1, f2, f3 = _mv(prop, 0, l0, l1, l2, l3)
+    w0, w1, w2, w3 = _mv(prop, 4, d[0], d[1], d[2], d[3])
+    a0, a1, a2, a3 = _mv2(prop, 37, m1, m3)
+    q0, q1, q2, q3 = f0 + w0 + a0, f1 + w1 + a1, f2 + w2 + a2, f3 + w3 + a3          # predictor
+    n1, n3 = _remainder(prop, p, q0, q1, q2, q3, d[2])
+    b0, b1, b2, b3 = _mv2(prop, 41, n1 - m1, n3 - m3)
+    e0, e1, e2, e3 = q0 + b0, q1 + b1, q2 + b2, q3 + b3                              # corrector
+    a0, a1, a2, a3 = _mv2(prop, 8, m1, m3)
+    b0, b1, b2, b3 = _mv2(prop, 12, 0.5 * (n1 - m1), 0.5 * (n3 - m3))
+    h0, h1, h2, h3 = l0 + a0 + b0, l1 + a1 + b1, l2 + a2 + b2, l3 + a3 + b3          # middle
+    d1, d3 = _remainder(prop, p, h0, h1, h2, h3, c[2])
+    d1 -= 0.5 * (m1 + n1)
+    d3 -= 0.5 * (m3 + n3)
+    r1, r3 = _remainder(prop, p, e0, e1, e2, e3, d[2])
+    a0, a1, a2, a3 = _mv2(prop, 37, 2.0 / 3.0 * d1, 2.0 / 3.0 * d3)
+    b0, b1, b2, b3 = _mv2(prop, 41, r1 - n1, r3 - n3)
+    quiet = _quiet(prop, p, x0, x1, x2, x3) and _quiet(prop, p, h0, h1, h2, h3) and _quiet(prop, p, e0, e1, e2, e3)
+    return (e0, e1, e2, e3), (a0 + b0, a1 + b1, a2 + b2, a3 + b3), (r1, r3), quiet
+
+
+@numba.njit(cache=True, inline="always")
+def _hermite_data(row, acc, acc_dot, dt, j):
+    """``(u_j, dt u'_j, u_{j+1}, dt u'_{j+1})`` of the horizontal input of sample ``row``."""
+    return (acc[0][row, j], acc_dot[0][row, j] * dt, acc[0][row, j + 1], acc_dot[0][row, j + 1] * dt)
+
+
+@numba.njit(cache=True)
+def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
+                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop,
+                           census):
+    """:func:`integrate_sample_dopri` with exact steps over the input's grid intervals in quiet full contact.
+
+    At a grid point where the state is far from uplift (:data:`~screening.kernels.mcs_equations.CONTACT_MARGIN`)
+    and no output falls inside, one :func:`_exact_double_step` covers two grid intervals (else one
+    :func:`_exact_step` one) when its error estimate passes the explicit pair's norm and its middle and end stay
+    far from uplift; elsewhere the
+    explicit pair steps, landing on the next grid point while the state is quiet.  After a refused exact step
+    the next try waits 1, 2, 4 or 8 intervals.  Coupled model, no vertical input (else the explicit pair alone).
+
+    Parameters
+    ----------
+    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
+        As :func:`integrate_sample`.
+    rtol, h_max, max_steps : float, float, int
+        As :func:`integrate_sample`.
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
+        As :func:`integrate_sample`.
+
+    Returns
+    -------
+    tuple
+        As :func:`integrate_sample` (exact steps count as accepted steps).
+
+    References
+    ----------
+    .. [1] [hochbruck2010] in the bibliography, ``docs/bibliography.md``.
+    .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` ("Exact steps in full contact").
+
+    Examples
+    --------
+    >>> import inspect
+    >>> (list(inspect.signature(integrate_sample_exact.py_func).parameters)
+    ...  == list(inspect.signature(integrate_sample.py_func).parameters)), CENSUS[3]
+    (True, 'exact')
+    """
+    cond = conds[0]
+    p = models[0]
+    n_out = t_out.shape[0]
+    n_grid = acc[0].shape[1]
+    y0, y1, y2, y3 = y_init[0], y_init[1], y_init[2], y_init[3]
+    s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
+    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
+        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
+    usable = vertical_row(row, acc[1]) < 0 and abs(prop[35, 0] - dt_grid) <= 1e-12 * dt_grid
+    log_err_old = dopri.LOG_ERR_START
+    stale = True                    # the explicit pair's first rate is to be evaluated
+    k1_0 = k1_1 = k1_2 = k1_3 = 0.0
+    h = min(1e-4, h_max)
+    rejected = False
+    j_grid = 0
+    at_grid = abs(t) <= 1e-12
+    wait_until = -1.0               # no exact try before this time
+    backoff = 1.0
+    m_fresh = False                 # remainder at the current grid point known
+    m1 = m3 = 0.0
+    y_star2 = prop[32, 2]
+    while i_out < n_out:
+        if n_acc + n_rej >= max_steps:
+            status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
+            break
+        t_next = t_out[i_out]
+        # --- an exact step over the grid interval [j dt, (j + 1) dt]
+        if usable and at_grid and t >= wait_until and j_grid + 1 < n_grid:
+            x0, x1, x2, x3 = y0 - prop[32, 0], y1 - prop[32, 1], y2 - y_star2, y3 - prop[32, 3]
+            if t_next >= (j_grid + 1) * dt_grid - 1e-9 * dt_grid and _quiet(prop, p, x0, x1, x2, x3):
+                c = _hermite_data(row, acc, acc_dot, dt_grid, j_grid)
+                if not m_fresh:
+                    m1, m3 = _remainder(prop, p, x0, x1, x2, x3, c[0])
+                span = 1
+                ok = False
+                if j_grid + 2 < n_grid and t_next >= (j_grid + 2) * dt_grid - 1e-9 * dt_grid:
+                    span = 2
+                    xe, err_v, rem, quiet = _exact_double_step(prop, p, x0, x1, x2, x3, c,
+                                                              _hermite_data(row, acc, acc_dot, dt_grid, j_grid + 1),
+                                                              m1, m3)
+                    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
+                    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
+                                      s0, s1, s2, s3, rtol, 4.0)
+                    ok = quiet and err <= 1.0
+                    if census.shape[0] > row and not ok:
+                        census[row, 4 if not quiet else 5] += 1
+                if not ok:
+                    span = 1
+                    u_mid = 0.5 * (c[0] + c[2]) + 0.125 * (c[1] - c[3])
+                    xe, err_v, rem, quiet = _exact_step(prop, p, x0, x1, x2, x3, c[0], c[1], c[2], c[3], u_mid, c[2],
+                                                       m1, m3)
+                    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
+                    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
+                                      s0, s1, s2, s3, rtol, 4.0)
+                    ok = quiet and err <= 1.0
+                    if census.shape[0] > row and not ok:
+                        census[row, 4 if not quiet else 5] += 1
+                if ok:
+                    t_end = (j_grid + span) * dt_grid
+                    peak = step_peak(peak, span * dt_grid, y0, y1, n0, n1)
+                    y0, y1, y2, y3 = n0, n1, n2, n3
+                    m1, m3 = rem
+                    m_fresh = True
+                    stale = True
+                    landing = t_next <= t_end + 1e-9 * dt_grid
+                    t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
+                        model, row, span * dt_grid, t, t_next if landing else t_end, landing, i_out, n_acc,
+                        h_min_acc, peak, flight_start, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot,
+                        out_uplift, 0.0, census, True)
+                    t = t_end
+                    j_grid += span
+                    backoff = 1.0
+                    if status != STATUS_OK:
+                        break
+                    continue
+                wait_until = t + (backoff - 0.5) * dt_grid
+                backoff = min(2.0 * backoff, 8.0)
+        # --- an explicit step, landing on the next grid point while quiet
+        at_grid = False
+        m_fresh = False
+        if stale:
+            k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3,
+                                          ground_input(row, acc, acc_dot, dt_grid, t), p)
+            stale = False
+        target = t_next
+        to_grid = False
+        if usable and _quiet(prop, p, y0 - prop[32, 0], y1 - prop[32, 1], y2 - y_star2, y3 - prop[32, 3]):
+            j_next = int(t / dt_grid + 1e-9) + 1
+            if j_next < n_grid and j_next * dt_grid < t_next - 1e-9 * dt_grid and j_next * dt_grid >= wait_until:
+                target = j_next * dt_grid
+                to_grid = True
+        h, h_proposed, landing = _landing(t, h, h_max, target)
+        (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end = _dopri_stages(
+            model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, k1_0, k1_1, k1_2, k1_3, p)
+        err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, 4.0)
+        if not err <= 1.0:                                  # rejected (or not finite)
+            n_rej += 1
+            rejected = True
+            h, reason = _shrink(err, h, dopri.rejected_step_factor_log(math.log(err)) if math.isfinite(err)
+                                else 0.1, h_floor)
+            if reason != REASON_NONE:
+                status = STATUS_DIVERGED
+                break
+            continue
+        peak = step_peak(peak, h, y0, y1, n0, n1)
+        y0, y1, y2, y3 = n0, n1, n2, n3
+        k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
+        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
+            model, row, h, t, target, landing and not to_grid, i_out, n_acc, h_min_acc, peak, flight_start,
+            y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1], census, False)
+        if status != STATUS_OK:
+            break
+        if landing and to_grid:
+            t = target
+            j_grid = int(target / dt_grid + 0.5)
+            at_grid = True
         fac, log_err = dopri.pi_step_factor(err, log_err_old)
         if rejected:
             fac = min(fac, 1.0)
@@ -500,7 +833,7 @@ def _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32, r0, r1, r2,
 
 @numba.njit(cache=True)
 def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
-                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift):
+                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census):
     """:func:`integrate_sample` by the Rosenbrock pair RODAS 4(3) (:mod:`screening.kernels.rodas`).
 
     Linearly implicit: each step solves six linear systems with ``I / (gamma h) - J``, ``J`` the
@@ -515,8 +848,8 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
         As :func:`integrate_sample`.
     rtol, h_max, max_steps : float, float, int
         As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift : numpy.ndarray
-        As :func:`integrate_sample`: the outputs, row ``row`` written in place.
+    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
+        As :func:`integrate_sample`: the outputs, row ``row`` written in place (``prop`` not read).
 
     Returns
     -------
@@ -673,7 +1006,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
         fresh = True
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
             model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1])
+            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1], census, False)
         if status != STATUS_OK:
             break
         fac = min(max(fac, _ro.FAC_MIN), _ro.FAC_MAX)
@@ -688,7 +1021,7 @@ def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, d
 
 def _integrate_chunk(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_out, models, y_init, scale, rtol,
                      h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason,
-                     n_accepted, n_rejected, h_min):
+                     n_accepted, n_rejected, h_min, prop, census):
     """Integrate every row of ``acc`` (one sample per row) in parallel; fills the outputs.
 
     ``damping_stiffness``, ``conds[0]``: the condensation's compiled ``(C, K)`` and its record
@@ -697,12 +1030,13 @@ def _integrate_chunk(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_o
     inertial ``x_g''`` one row per sample; the vertical ``a_v``, positive up, one row per sample, one
     row for all, or :data:`NO_VERTICAL`); ``t_out`` output times [s]; ``models[0]``: the
     :data:`MODEL` record; ``y_init`` the initial ``(theta, theta', z_cb, z_cb')``; ``scale``
-    absolute tolerances.  Compiled per condensation record type by :func:`chunk_integrator`.
+    absolute tolerances; ``prop``, ``census`` as :func:`integrate_sample`.  Compiled per condensation record
+    type by :func:`chunk_integrator`.
     """
     for row in numba.prange(acc[0].shape[0]):
         store_outcome(row, integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out,
                                              models, y_init, scale, rtol, h_max, max_steps, out_theta,
-                                             out_theta_dot, out_z, out_z_dot, out_uplift),
+                                             out_theta_dot, out_z, out_z_dot, out_uplift, prop, census),
                        status, reason, peak, n_accepted, n_rejected, h_min)
 
 
@@ -727,7 +1061,7 @@ def chunk_integrator(record_dtype):
     numba dispatcher
         ``integrate(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_out, models, y_init,
         scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, peak,
-        status, reason, n_accepted, n_rejected, h_min)``: fills the outputs, returns None.
+        status, reason, n_accepted, n_rejected, h_min, prop, census)``: fills the outputs, returns None.
 
     References
     ----------
@@ -748,7 +1082,7 @@ def chunk_integrator(record_dtype):
     (True, 1, {'cache': True, 'parallel': True})
     >>> sig = njit.call_args.args[0]
     >>> len(sig.args), str(sig.return_type)
-    (24, 'none')
+    (26, 'none')
     """
     if record_dtype not in _INTEGRATORS:
         f8, i8 = types.float64, types.int64
@@ -760,6 +1094,7 @@ def chunk_integrator(record_dtype):
                          types.Array(record_type(record_dtype), 1, "C"), channels, channels, f8, a1,
                          types.Array(record_type(MODEL), 1, "C"), a1, a1, f8, f8, i8,
                          a2_rows, a2_rows, a2_rows, a2_rows, types.Array(types.boolean, 2, "C"),
-                         a1, types.int64[::1], types.int64[::1], types.int64[::1], types.int64[::1], a1)
+                         a1, types.int64[::1], types.int64[::1], types.int64[::1], types.int64[::1], a1,
+                         types.float64[:, ::1], types.int64[:, ::1])
         _INTEGRATORS[record_dtype] = numba.njit(sig, cache=True, parallel=True)(_integrate_chunk)
     return _INTEGRATORS[record_dtype]

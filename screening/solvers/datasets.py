@@ -38,6 +38,8 @@ MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "
 INTEGRATOR_TEXT = {
     "dopri": "adaptive Dormand-Prince 5(4), PI step control, steps land on output times",
     "rodas": "adaptive Rosenbrock RODAS 4(3) (linearly implicit, L-stable), steps land on output times",
+    "exact": "adaptive Dormand-Prince 5(4), exact (ETD2) steps over the input grid in quiet full contact, steps "
+             "land on output times",
 }
 
 

@@ -175,22 +175,36 @@ def quasi_static_indentation(block, foundation, theta0):
 
 
 class _KernelIntegrator(ChunkIntegrator):
-    """:func:`screening.kernels.mcs_kernels.chunk_integrator` with the model code and records bound."""
+    """:func:`screening.kernels.mcs_kernels.chunk_integrator` with the model code and records bound; ``rest``:
+    the coupled model's rest state, from which the exact integrator's propagator is built per input grid."""
 
-    def __init__(self, code, sdof, params):
+    def __init__(self, code, sdof, params, rest=None):
         self.code = code
         self.sdof = sdof
         self.params = params[None]
+        self.rest = rest
         self.integrate = kern.chunk_integrator(sdof.record.dtype)
+        self._propagators = {}
+
+    def propagator(self, dt_grid):
+        """The :func:`~screening.kernels.mcs_kernels.full_contact_propagator` of the grid ``dt_grid`` [s] (once
+        per grid), or :data:`~screening.kernels.mcs_kernels.NO_PROPAGATOR` for another integrator."""
+        if int(self.params[0]["integrator"]) != kern.INTEGRATOR_EXACT or self.rest is None:
+            return kern.NO_PROPAGATOR
+        if dt_grid not in self._propagators:
+            self._propagators[dt_grid] = kern.full_contact_propagator(self.params[0], self.rest, float(dt_grid))
+        return self._propagators[dt_grid]
 
     def __call__(self, acc, acc_dot, dt_grid, t_out, y_init, scale, rtol, h_max, max_steps, out_theta,
                  out_theta_dot, out_z, out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min,
-                 vertical=None):
+                 vertical=None, census=None):
         vacc, vrate = (kern.NO_VERTICAL, kern.NO_VERTICAL) if vertical is None else vertical
+        census = np.zeros((0, len(kern.CENSUS)), dtype=np.int64) if census is None else census
         self.integrate(self.code, self.sdof.damping_stiffness, self.sdof.record, (acc, vacc), (acc_dot, vrate), dt_grid,
                        t_out,
                        self.params, y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
-                       out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min)
+                       out_z_dot, out_uplift, peak, status, reason, n_accepted, n_rejected, h_min,
+                       self.propagator(dt_grid), census)
 
 
 class _KernelModel(MonteCarloModel):
@@ -203,8 +217,9 @@ class _KernelModel(MonteCarloModel):
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
         cond = condensations.get(condensation if self.uses_condensation else KERNEL_CONDENSATION)
+        rest = self.initial_state(block, foundation) if self.code == kern.MODEL_COUPLED else None
         return _KernelIntegrator(self.code, cond.sdof_kernel(block, foundation),
-                                 kern.model_record(block, foundation, cond, max_flight_time, sample_integrator))
+                                 kern.model_record(block, foundation, cond, max_flight_time, sample_integrator), rest)
 
 
 class CoupledModel(_KernelModel):

@@ -21,7 +21,9 @@ Numerics (all overridable through ``**numerics``; recorded in the dataset attrib
   instants and never exceed ``h_max``.  On a bed whose vertical mode is heavily overdamped
   the coupled model takes the linearly implicit RODAS 4(3) pair instead, with the same
   tolerances (``integrator``: ``"auto"``, the default, see :func:`choose_integrator`;
-  ``"dopri"`` or ``"rodas"`` to force one; ``docs/montecarlo_numerics.md``);
+  ``"dopri"`` or ``"rodas"`` to force one; ``docs/montecarlo_numerics.md``); under a band-limited input on a
+  bed whose vertical mode is fast against the input grid (:data:`EXACT_CONTACT_MIN`) it adds exact steps
+  through quiet full contact (``"exact"``);
 * the input is synthesized up to :func:`screening.solvers.synthesis.synthesis_cutoff`: the top of the
   excitation's band (its PSD carries the band's low-pass), or, for an idealized spectrum
   (``band_limit_hz=None``), ``cutoff`` (default :func:`screening.solvers.synthesis.default_cutoff`,
@@ -61,11 +63,12 @@ from screening.solvers import mc_registry, schema
 from screening.solvers.datasets import monte_carlo_dataset, with_probabilities
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.synthesis import (check_band, CUTOFF_FACTOR, envelope_rate, low_passed, OVERSAMPLING,
-                                         spectral_plan, stationary_samples, synthesis_cutoff, validate_seed)
+                                         spectral_plan, stationary_samples, synthesis_cutoff, validate_seed,
+                                         vertical_frequency)
 from screening.solvers.timegrid import output_times
 
 __all__ = ["MODELS", "DEFAULT_RTOL", "AUTO_RTOL", "AUTO_RTOL_SAMPLES", "auto_rtol", "DEFAULT_NUMERICS",
-           "RODAS_DAMPING_RATIO", "check_scalar_models",
+           "RODAS_DAMPING_RATIO", "EXACT_CONTACT_MIN", "check_scalar_models",
            "vertical_damping_ratio", "choose_integrator", "initial_state", "ensemble_statistics", "SampleSetup",
            "sample_setup", "monte_carlo"]
 
@@ -99,14 +102,21 @@ DEFAULT_NUMERICS = {
     "max_steps": 5_000_000,     # step budget per sample (accepted + rejected)
     "max_flight_time": 0.5,     # longest admissible continuous flight [s]
     "chunk_size": 64,           # samples synthesized and integrated per batch
-    "integrator": "auto",       # "dopri" (explicit 5(4) pair), "rodas" (linearly implicit 4(3) pair) or
-                                # "auto" (per point: see choose_integrator)
+    "integrator": "auto",       # "dopri" (explicit 5(4) pair), "rodas" (linearly implicit 4(3) pair), "exact"
+                                # (explicit pair, exact steps in quiet full contact) or "auto" (per point: see
+                                # choose_integrator and EXACT_CONTACT_MIN)
 }
 
 #: ``integrator="auto"`` takes RODAS for the coupled model where the bed's vertical mode has at least
 #: this damping ratio (:func:`screening.core.physics.contact.vertical_damping_ratio`), the explicit pair elsewhere.
 #: ``docs/montecarlo_numerics.md`` gives the measurements behind it.
 RODAS_DAMPING_RATIO = 20.0
+
+#: ``integrator="auto"`` takes the exact full-contact steps (``"exact"``) for the coupled model under a
+#: band-limited input where the bed's vertical frequency times the input grid's step is at least this: the
+#: explicit pair's stability-held steps (``h w_v`` about 2) would take two or more per grid interval
+#: (``benchmarks/bench_coupled_band.py``; ``docs/montecarlo_numerics.md``).  The idealized input keeps the pair.
+EXACT_CONTACT_MIN = 4.0
 
 # ----------------------------------------------------------------------------- validation
 def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo"):
@@ -506,6 +516,10 @@ def sample_setup(block, foundation, excitation, n_samples, model="coupled", t_en
     plan = spectral_plan(excitation, t_end, cutoff, opts["oversampling"])
     band = opts["band"] if opts["band"] is not None else mc.input_band(block, foundation)
     read_plan = plan if band is None else low_passed(plan, band)[0]     # the model reads these samples
+    if (numerics.get("integrator", "auto") == "auto" and opts["integrator"] == "dopri" and model == "coupled"
+            and getattr(excitation, "band_limit_hz", None) is not None
+            and vertical_frequency(block, foundation) * read_plan.dt >= EXACT_CONTACT_MIN):
+        opts["integrator"] = "exact"
     grid = read_plan.times
     q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)
@@ -575,7 +589,7 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
         ``cutoff_factor`` [1], ``band`` [rad/s] (the model reads the samples low-passed at this band,
         the same realizations as every other model of the same seed and cutoff below it; default the
         model's own, :meth:`~screening.solvers.mc_registry.MonteCarloModel.input_band`), ``oversampling`` [1], ``h_max`` [s] (None: the model's ``default_h_max``), ``max_steps``,
-        ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``).
+        ``max_flight_time`` [s], ``chunk_size``, ``integrator`` (``"auto"``, ``"dopri"``, ``"rodas"``, ``"exact"``).
 
     Returns
     -------

@@ -89,7 +89,7 @@ def _run_kernel(model, acc, t_out, foundation, y_init, rtol=1e-8, dt_grid=1e-3, 
     kern.chunk_integrator(sdof.record.dtype)(model, sdof.damping_stiffness, sdof.record, (acc, kern.NO_VERTICAL),
                                              (np.zeros_like(acc), kern.NO_VERTICAL), dt_grid, t_out, p[None],
                                              np.asarray(y_init, float), scale, rtol, 0.005, 10**7, *outs, uplift,
-                                             *flags)
+                                             *flags, kern.NO_PROPAGATOR, np.zeros((0, 4), np.int64))
     return outs, flags
 
 
@@ -459,3 +459,25 @@ def test_cubic_linear_regime_matches_the_cubic_lyapunov_solution():
     at = dict(t=[2.0, 3.0, 5.0, 8.0], method="nearest")
     mc_var, se = ds.var_theta.sel(**at).values, ds.var_theta_se.sel(**at).values
     assert np.all(np.abs(mc_var - ref.var_theta.sel(**at).values) < 3 * se)
+
+
+def test_auto_takes_exact_full_contact_steps_only_on_stiff_beds_under_a_banded_input():
+    """``integrator="auto"``: ``"exact"`` where ``w_v dt_grid >= EXACT_CONTACT_MIN`` under a band-limited input;
+    the explicit pair on a soft bed and on the idealized input (its runs, and the paper's goldens, unchanged)."""
+    from screening.core.excitations.kanai_tajimi import KanaiTajimi
+    from screening.solvers.montecarlo import EXACT_CONTACT_MIN, sample_setup
+    from screening.solvers.synthesis import vertical_frequency
+
+    statue = Block(m=600.0, b=0.2, h=0.8)
+    chosen = {}
+    for k in (1e8, 1e11):
+        for band in (25.0, None):
+            bed = Foundation(k=k, lam=30 * k)
+            run = sample_setup(statue, bed, KanaiTajimi(S0=3e-3, omega_g=15.6, zeta_g=0.6, band_limit_hz=band), 8)
+            chosen[k, band] = (run.opts["integrator"], vertical_frequency(statue, bed) * run.read_plan.dt)
+    assert chosen[1e11, 25.0][0] == "exact" and chosen[1e11, 25.0][1] >= EXACT_CONTACT_MIN
+    assert chosen[1e8, 25.0][0] == "dopri" and chosen[1e8, 25.0][1] < EXACT_CONTACT_MIN
+    assert chosen[1e11, None][0] == chosen[1e8, None][0] == "dopri"
+    bed = Foundation(k=1e11, lam=3e12)
+    forced = sample_setup(statue, bed, KanaiTajimi(S0=3e-3, omega_g=15.6, zeta_g=0.6), 8, integrator="dopri")
+    assert forced.opts["integrator"] == "dopri"
