@@ -9,9 +9,9 @@ The same equations as :mod:`screening.kernels.stiff_bed_kernels` (the reference)
   ``[Phi | Gamma]``; the exit at ``|theta| = theta_ul`` and the zero crossing (where the transfer ratio
   applies) are located on the closed form (Newton in the bracket), so no adaptive step enters full contact;
 * uplift is integrated by the adaptive Dormand–Prince 5(4) pair on the model's acceleration (one indentation
-  solve per evaluation, :func:`uplift_acceleration`), each step ending where the block re-enters full contact
-  (located), so no step straddles the kink of the moment law at ``theta_ul``; the outputs are read from the
-  step's cubic Hermite interpolant instead of landing steps on them.  Moving towards full contact the next
+  solve per evaluation, :func:`uplift_acceleration`); an accepted step that ends in full contact is cut where
+  the block re-enters it, the last root of ``|theta| = theta_ul`` on the step's dense output (no step redone);
+  the outputs are read from the step's cubic Hermite interpolant instead of landing steps on them.  Moving towards full contact the next
   step shrinks with the contact law's time scale ``|theta| / |theta'|`` (the error controller alone lags
   behind it: all its rejections were there), and the last stage of a step is the next one's first.
 
@@ -28,7 +28,7 @@ import numpy as np
 from screening.core.condensation import cubic
 from screening.kernels import dopri
 from screening.kernels._sample_steps import err_term, store_outcome
-from screening.kernels.dopri import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
+from screening.kernels.dopri import (P, A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
                                      B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
 from screening.kernels import mcs_kernels as kern
 from screening.kernels.stiff_bed_contact import constraint_damping_jit, indentation_curvature_jit
@@ -41,7 +41,7 @@ __all__ = ["oscillator_exponential", "oscillator_step", "grid_propagator", "grid
 #: What :func:`integrate_sample` counts when asked (``counts`` of shape ``(len(COUNTS),)``; an uplift attempt's
 #: phase by ``|theta|`` at its start).
 COUNTS = ("full contact: whole grid intervals", "full contact: closed-form pieces", "uplift: accepted steps",
-          "uplift: rejected steps", "uplift: steps shortened to the re-entry", "exits from full contact",
+          "uplift: rejected steps", "uplift: steps cut at the re-entry", "exits from full contact",
           "transfers at the zero crossing", "uplift attempts at |theta|/theta_ul in (1, 10]", "... (10, 100]",
           "... (100, 1000]", "... above 1000")
 
@@ -224,6 +224,8 @@ def grid_pieces(omega2, c, g, dt):
 
 #: Largest ``|theta|`` [rad] where :func:`_sin_cos` sums its Taylor polynomials (error below 1e-16 relative).
 SERIES_LIMIT = 0.3
+#: Below this ``|theta|`` [rad] :func:`_sin_cos` stops at ``theta^7`` and ``theta^8`` (error below 1e-19 relative).
+SHORT_SERIES_LIMIT = 0.02
 
 
 @numba.njit(cache=True, inline="always")
@@ -233,6 +235,9 @@ def _sin_cos(theta):
     if abs(theta) > SERIES_LIMIT:
         return math.sin(theta), math.cos(theta)
     t2 = theta * theta
+    if t2 < SHORT_SERIES_LIMIT * SHORT_SERIES_LIMIT:          # the first terms suffice: a shorter chain
+        return (theta * (1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 + t2 * (-1.0 / 5040.0)))),
+                1.0 + t2 * (-0.5 + t2 * (1.0 / 24.0 + t2 * (-1.0 / 720.0 + t2 * (1.0 / 40320.0)))))
     s = theta * (1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 + t2 * (-1.0 / 5040.0 + t2 * (
         1.0 / 362880.0 + t2 * (-1.0 / 39916800.0 + t2 * (1.0 / 6227020800.0)))))))
     c = 1.0 + t2 * (-0.5 + t2 * (1.0 / 24.0 + t2 * (-1.0 / 720.0 + t2 * (1.0 / 40320.0 + t2 * (
@@ -323,7 +328,7 @@ def _lifted(sp, cp):
     return np.array([sp.m, sp.g, sp.h, sp.I_cm, cp.b, cp.k, cp.eps, cp.w_rate, cp.w_indentation, cp.theta_ul])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def lifted_acceleration(par, sp, cp, theta, theta_dot, x_g_ddot):
     """:func:`uplift_acceleration` with the uplift branch of the contact law written out once (two square
     roots, three divisions); in full contact and beyond the capacity angle it is :func:`uplift_acceleration`.
@@ -431,6 +436,28 @@ def modulate(z, cos_shift, sin_shift, q, q_dot, acc, rate):
             fd = z[r, j].real * sin_shift[j] + z[r, j].imag * cos_shift[j]
             acc[r, j] = q[j] * f
             rate[r, j] = q_dot[j] * f + q[j] * fd
+
+
+@numba.njit(cache=True, inline="always")
+def _dense_sum(k1, k3, k4, k5, k6, k7, s):
+    """``sum_i K_i q_i(s)`` of the Dormand-Prince dense output (:func:`screening.kernels.dopri.dense_output`)."""
+    ks = (k1, 0.0, k3, k4, k5, k6, k7)
+    val = 0.0
+    for i in range(7):
+        val += ks[i] * s * (P[i, 0] + s * (P[i, 1] + s * (P[i, 2] + s * P[i, 3])))
+    return val
+
+
+@numba.njit(cache=True, inline="always")
+def _dense_rotation(x, h, k1, k3, k4, k5, k6, k7, s):
+    """The rotation of the step's dense output at fraction ``s`` and its derivative in ``s``."""
+    val = 0.0
+    der = 0.0
+    ks = (k1, 0.0, k3, k4, k5, k6, k7)
+    for i in range(7):
+        val += ks[i] * s * (P[i, 0] + s * (P[i, 1] + s * (P[i, 2] + s * P[i, 3])))
+        der += ks[i] * (P[i, 0] + s * (2.0 * P[i, 1] + s * (3.0 * P[i, 2] + s * 4.0 * P[i, 3])))
+    return x + h * val, h * der
 
 
 @numba.njit(cache=True, inline="always")
@@ -675,7 +702,9 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             k1_1 = k1_keep
         else:
             k1_1 = lifted_acceleration(par, sp, cp, x, v, _input(acc, acc_dot, row, dt_grid, n_grid, t))
-        locating = False
+        reentry = False
+        s_re = 1.0
+        v_re = 0.0
         rejected = False
         while True:
             if n_acc + n_rej >= max_steps:
@@ -735,31 +764,29 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
                     break
                 continue
             side = 1.0 if x > 0.0 else -1.0
-            if side * n0 < tu and not locating:
-                # re-entry into full contact: end the step where |theta| = theta_ul (root of the step's cubic
-                # Hermite, from the linear estimate), so no step straddles the kink of the moment law
-                f0 = side * x - tu
-                f1 = side * n0 - tu
-                s = f0 / (f0 - f1)
-                for _ in range(3):
-                    s2 = s * s
-                    s3 = s2 * s
-                    val = (2 * s3 - 3 * s2 + 1) * x + (3 * s2 - 2 * s3) * n0 + h * ((s3 - 2 * s2 + s) * v
-                                                                                    + (s3 - s2) * n1)
-                    der = (6 * s2 - 6 * s) * (x - n0) + h * ((3 * s2 - 4 * s + 1) * v + (3 * s2 - 2 * s) * n1)
-                    if der == 0.0:
+            if side * n0 < tu:
+                # re-entry into full contact: the step ends where |theta| = theta_ul, the last root of its dense
+                # output (Newton from the step's end, kept in the bracket), and the closed form takes over there
+                lo = 0.0
+                hi = 1.0
+                s_re = 1.0
+                for _ in range(30):
+                    val, der = _dense_rotation(x, h, k1_0, k3_0, k4_0, k5_0, k6_0, k7_0, s_re)
+                    f = side * val - tu
+                    if f >= 0.0:
+                        lo = s_re
+                    else:
+                        hi = s_re
+                    if abs(f) <= 1e-12 * tu or hi - lo <= 1e-14:
                         break
-                    s_new = s - (side * val - tu) / (side * der)
-                    if not (0.0 < s_new < 1.0):
-                        break
-                    s = s_new
-                n_rej += 1
+                    s_new = s_re - f / (side * der) if der != 0.0 else 0.5 * (lo + hi)
+                    if not (lo < s_new < hi):
+                        s_new = 0.5 * (lo + hi)
+                    s_re = s_new
+                v_re = v + h * _dense_sum(k1_1, k3_1, k4_1, k5_1, k6_1, k7_1, s_re)
+                reentry = True
                 if counting:
                     counts[4] += 1
-                h_keep = h
-                h = h * min(max(s * (1.0 + 1e-6) + 1e-9, 1e-3), 0.999)
-                locating = True
-                continue
             break
         if status != kern.STATUS_OK or n_acc + n_rej >= max_steps:
             if status == kern.STATUS_OK:
@@ -768,9 +795,11 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
         n_acc += 1
         if counting:
             counts[2] += 1
-        if h < h_min_acc and not landing and not locating and n_acc > 10:
+        if h < h_min_acc and not landing and not reentry and n_acc > 10:
             h_min_acc = h
-        t_new = t_end if landing else t + h
+        t_new = t + s_re * h if reentry else t_end if landing else t + h
+        if reentry:
+            landing = False
         # outputs inside the step: its cubic Hermite interpolant (theta with theta', theta' with theta'')
         while i_out < n_out and t_out[i_out] <= t_new + 1e-9 * h:
             s = (t_out[i_out] - t) / h
@@ -790,11 +819,14 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             if abs(xo) > peak:
                 peak = abs(xo)
             i_out += 1
+        if reentry:
+            n0 = tu if x > 0.0 else -tu
+            n1 = v_re
         crossed = x * n0 < 0.0
         t = t_new
         x_start, v_start = x, v
         x, v = n0, n1
-        have_k1 = True
+        have_k1 = not reentry
         k1_keep = k7_1
         if crossed:
             if amp > tu:
@@ -826,8 +858,8 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
             if ratio < 1.0:
                 fac *= max(ratio, dopri.FAC_MIN)
         log_err_old = max(log_err, dopri.LOG_ERR_START)
-        if locating:
-            h = h_keep
+        if reentry:
+            h_keep = h
         else:
             h = h * fac
             h_keep = h

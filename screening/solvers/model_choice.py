@@ -29,7 +29,7 @@ from screening.solvers import mc_registry
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
 __all__ = ["AUTO", "INDICATORS", "Rule", "RULE_FILE", "VALIDITY_TABLE", "choices", "choose", "indicators",
-           "parse_rules", "resolve", "rule_of", "rules", "vertical_damping_ratio", "vouches"]
+           "parse_rules", "resolve", "rule_of", "rules", "sampler_of", "vertical_damping_ratio", "vouches"]
 
 #: The value of ``model`` that asks for the automatic choice.
 AUTO = "auto"
@@ -50,8 +50,9 @@ INDICATORS = {
 @dataclass(frozen=True)
 class Rule:
     """Where one model is vouched for: ``bounds`` ``((indicator, (low, high)), ...)`` (closed), the excitation
-    kinds measured, the benchmark that measured them, and ``by_excitation`` ``((kind, bounds), ...)``:
-    narrower intervals for one excitation kind (each inside the common one)."""
+    kinds measured, the benchmark that measured them, ``by_excitation`` ``((kind, bounds), ...)``:
+    narrower intervals for one excitation kind (each inside the common one), and ``sampler``: the registered
+    model that runs ``model`` under ``"auto"`` (the same equations integrated otherwise; ``""``: ``model``)."""
 
     model: str
     bounds: tuple
@@ -59,6 +60,7 @@ class Rule:
     benchmark: str = ""
     note: str = ""
     by_excitation: tuple = ()
+    sampler: str = ""
 
     def bound(self, name):
         """``(low, high)`` of indicator ``name``, common to every excitation kind (``KeyError`` if the rule does
@@ -123,7 +125,11 @@ def parse_rules(raw):
             raise ValueError(f"model choice: model[{i}].name must be a registered model {mc_registry.names()} "
                              f"(got {name!r})")
         bounds = _intervals(entry, f"model[{i}]", skip=("name", "benchmark", "measured", "note", "excitations",
-                                                           "by_excitation"))
+                                                           "by_excitation", "sampler", "sampler_note"))
+        sampler = entry.get("sampler", "")
+        if sampler and sampler not in mc_registry.names():
+            raise ValueError(f"model choice: model[{i}].sampler must be a registered model {mc_registry.names()} "
+                             f"(got {sampler!r})")
         if not bounds:
             raise ValueError(f"model choice: model[{i}] ({name}) bounds no indicator: it would vouch everywhere")
         kinds = entry.get("excitations")
@@ -143,7 +149,7 @@ def parse_rules(raw):
                                      f"(got [{low:g}, {high:g}])")
             by_excitation.append((kind, narrower))
         out.append(Rule(name, bounds, tuple(kinds), str(entry.get("benchmark", "")), str(entry.get("note", "")),
-                        tuple(by_excitation)))
+                        tuple(by_excitation), sampler))
     return tuple(out), fallback
 
 
@@ -302,6 +308,36 @@ def rule_of(model):
     raise KeyError(f"no measured rule for Monte Carlo model {model!r} in {RULE_FILE}")
 
 
+def sampler_of(model, rule_set=None):
+    """The registered model that runs ``model`` when ``"auto"`` picks it: its rule's ``sampler``, else ``model``.
+
+    Parameters
+    ----------
+    model : str
+        A model name :func:`choose` returns.
+    rule_set : tuple, optional
+        ``(rules, fallback)`` as :func:`parse_rules` returns; default the shipped :func:`rules`.
+
+    Returns
+    -------
+    str
+        A registered Monte Carlo model name.
+
+    References
+    ----------
+    .. [1] The package's documentation, ``docs/stiff_bed.md`` ("Exact-contact sampler").
+
+    Examples
+    --------
+    >>> sampler_of("stiff_bed"), sampler_of("coupled")
+    ('stiff_bed_fast', 'coupled')
+    """
+    for rule in (rules() if rule_set is None else rule_set)[0]:
+        if rule.model == model and rule.sampler:
+            return rule.sampler
+    return model
+
+
 def vouches(rule, block, foundation, excitation_kind, check_excitation=True):
     """``(True, "")`` where ``rule`` holds at the point, else ``(False, why)``: the first indicator out of its
     measured interval, or an excitation kind not measured.
@@ -427,7 +463,7 @@ def resolve(model, block, foundation, excitation=None):
     Returns
     -------
     MonteCarloModel
-        The model the point runs with.
+        The model the point runs with (``"auto"``: the chosen model's :func:`sampler_of`).
 
     References
     ----------
@@ -442,7 +478,7 @@ def resolve(model, block, foundation, excitation=None):
     """
     if isinstance(model, str) and model == AUTO:
         kind = getattr(excitation, "kind", None) if excitation is not None else None
-        return mc_registry.get(choose(block, foundation, kind)[0])
+        return mc_registry.get(sampler_of(choose(block, foundation, kind)[0]))
     return mc_registry.get(model)
 
 

@@ -27,7 +27,7 @@ from screening.core import limits
 from screening.core.progress import Progress
 from screening.core.status import BestMethod, EscalationEstimator, EscalationModel, SampleState
 from screening.io.errors import exception_line, write_failure_reason
-from screening.solvers.model_choice import AUTO, choose
+from screening.solvers.model_choice import AUTO, choose, sampler_of
 from screening.sweep import _submit
 from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
 from screening.sweep.interrupt import raise_if_interrupted
@@ -518,8 +518,11 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     label = "accuracy: points done (Monte Carlo)"
     interim = {"last": now(), "took": 0.0, "count": 0}
 
+    auto = getattr(study.accuracy, "model", AUTO) == AUTO
+
     def submit(j, samples, what, cheap_samples=0):
         model = EscalationModel(int(models[j])).name
+        model = sampler_of(model) if auto else model              # "auto": the chosen model's sampler
         cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
         return _submit.submit_escalation(stage.client, study, int(order[j]), samples, model,
                                          key=f"escalate-{('pilot', 'full', 'topup')[what]}-{token}-{j:04d}",

@@ -71,9 +71,9 @@ def test_auto_spot_checks_record_the_model_chosen_per_point(client, tmp_path):
         assert list(ds["mcs_model"].attrs["flag_values"]) == list(range(-1, len(meanings) - 1))
         spot = ds["mcs_peak_abs_theta"].values[0]
     named = dict(zip(ds["mcs_model"].attrs["flag_values"].tolist(), meanings))
-    assert [named[c] for c in codes] == ["stiff_bed", "coupled"]
+    assert [named[c] for c in codes] == ["stiff_bed_fast", "coupled"]      # auto runs the stiff-bed model's sampler
     assert meanings == ["none", *mc_registry.names()]
     block, foundation, excitation = build_models(study.cases[0], {"S0": 0.015, "k": 3e6})
-    direct = monte_carlo(block, foundation, excitation, n_samples=6, model="stiff_bed", t_end=4.0, dt=0.05, seed=2,
-                         progress=False)
+    direct = monte_carlo(block, foundation, excitation, n_samples=6, model="stiff_bed_fast", t_end=4.0, dt=0.05,
+                         seed=2, progress=False)
     np.testing.assert_array_equal(spot, direct.peak_abs_theta.values)

@@ -120,6 +120,23 @@ def test_auto_never_picks_outside_the_rule_on_a_random_design():
     assert picked > 0
 
 
+def test_auto_runs_the_stiff_bed_rule_with_its_sampler_and_the_box_is_the_models():
+    """The shipped stiff-bed rule names its sampler (the exact-contact kernel): "auto" runs it exactly where the
+    stiff-bed rule holds, the rule's box and reasons stay the stiff-bed model's, the fallback runs itself; a rule
+    without a sampler runs its model; a sampler that is no registered model is refused naming the entry."""
+    rule = mc.rule_of("stiff_bed")
+    assert rule.sampler == "stiff_bed_fast" and mc.sampler_of("stiff_bed") == "stiff_bed_fast"
+    assert mc.sampler_of("coupled") == "coupled"
+    for bed, expected in ((INSIDE, "stiff_bed_fast"), (STIFF, "stiff_bed_fast"), (SOFT, "coupled")):
+        assert mc.resolve("auto", STATUE, bed, KT).name == expected
+        assert mc.choose(STATUE, bed, "kanai_tajimi")[0] == ("stiff_bed" if expected != "coupled" else "coupled")
+    plain = mc.parse_rules({"model": [{"name": "stiff_bed", "slenderness": [0.2, 0.3], "excitations": ["white"]}]})
+    assert mc.sampler_of("stiff_bed", plain) == "stiff_bed"
+    with pytest.raises(ValueError, match=r"model\[0\]\.sampler must be a registered model"):
+        mc.parse_rules({"model": [{"name": "stiff_bed", "slenderness": [0.2, 0.3], "excitations": ["white"],
+                                   "sampler": "rigid"}]})
+
+
 def test_a_bad_rule_file_is_refused_naming_the_entry():
     good = {"fallback": "coupled", "model": [{"name": "stiff_bed", "slenderness": [0.2, 0.3],
                                               "excitations": ["kanai_tajimi"]}]}
@@ -163,12 +180,12 @@ def test_a_rule_narrowed_for_one_excitation_kind():
 def test_monte_carlo_resolves_auto_once_and_records_the_model_that_ran():
     kw = dict(n_samples=2, t_end=0.2, dt=0.1, progress=False)
     stiff = monte_carlo(STATUE, INSIDE, KT, model="auto", **kw)
-    assert stiff.attrs["model"] == "stiff_bed"
-    direct = monte_carlo(STATUE, INSIDE, KT, model="stiff_bed", **kw)
+    assert stiff.attrs["model"] == "stiff_bed_fast"              # the stiff-bed model, run by its sampler
+    direct = monte_carlo(STATUE, INSIDE, KT, model="stiff_bed_fast", **kw)
     np.testing.assert_array_equal(stiff.peak_abs_theta.values, direct.peak_abs_theta.values)
     soft = monte_carlo(STATUE, SOFT, KT, model="auto", **kw)
     assert soft.attrs["model"] == "coupled"
-    assert mc.resolve("auto", STATUE, INSIDE, KT) is mc_registry.get("stiff_bed")
+    assert mc.resolve("auto", STATUE, INSIDE, KT) is mc_registry.get("stiff_bed_fast")
     assert "auto" in mc.choices() and "auto" not in mc_registry.names()
 
 
