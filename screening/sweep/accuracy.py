@@ -485,7 +485,9 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         stage.log("accuracy: compiling the Monte Carlo kernels on the workers (cached after the first run; not "
                   "charged to budget_s)")
         t0 = time.perf_counter()
-        used = {EscalationModel(int(m)).name for m in models} | {partner(j)[0] for j in range(len(order)) if partner(j)}
+        runs_auto = getattr(study.accuracy, "model", AUTO) == AUTO
+        used = {sampler_of(name) if runs_auto else name for name in {EscalationModel(int(m)).name for m in models}}
+        used |= {partner(j)[0] for j in range(len(order)) if partner(j)}
         stage.client.run(_submit.warm_up_monte_carlo, tuple(sorted(used)))
         warm_up = time.perf_counter() - t0
     start = clock()
