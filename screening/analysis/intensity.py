@@ -75,7 +75,8 @@ from screening.analysis.fragility import parameter
 from screening.analysis.intensity_records import (AVGSA_N_PERIODS, avgsa_periods, AVGSA_RANGE, continuous_peak, G,
                                                   highpass_gain, median_standard_error, OMEGA_LOW, oscillator_peak,
                                                   PGV_CHUNK, PGV_RECORDS, PGV_SEED, record_avgsa, RECORD_MEASURES,
-                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv)
+                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv,
+                                                  _record_peaks)
 from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, envelope_exponentials,
                                               input_moments, median_peak, N_TIMES, oscillator_covariance,
                                               oscillator_response_bandwidth, rocking_start_probability, sa_median,
@@ -544,17 +545,18 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
     >>> f"{pga4 / pga:.6f}", f"{se4 / se:.6f}"
     ('2.000000', '2.000000')
     """
-    return _simulated(excitation, t_end, cutoff, OMEGA_LOW, n_records, seed)[:2]
+    return _simulated(excitation, t_end, cutoff, None, n_records, seed)[:2]       # no velocity needed
 
 
 def _simulated(excitation, t_end, cutoff, omega_low, n_records, seed):
     """``(pga median, its standard error, pgv median, its standard error)`` of the shape of ``excitation``
-    scaled to its ``S0``."""
-    checked("omega_low", omega_low, lower=0.0, upper=float(cutoff))
+    scaled to its ``S0``; ``omega_low = None``: the PGA alone (the PGV NaN)."""
+    if omega_low is not None:
+        omega_low = float(checked("omega_low", omega_low, lower=0.0, upper=float(cutoff)))
     checked("n_records", n_records, lower=10.0, upper=1e7, lower_inclusive=True)
     names = _shape_names(excitation)
     key = (*_shape_key(excitation, t_end), names, tuple(float(getattr(excitation, k)) for k in names),
-           float(cutoff), float(omega_low), int(n_records), int(seed))
+           float(cutoff), omega_low, int(n_records), int(seed))
     root = math.sqrt(float(excitation.S0))
     return tuple(root * v for v in _unit_simulated(*key))
 
@@ -564,8 +566,9 @@ def _unit_simulated(kind, envelope_kind, *args):
     """``(pga median, standard error, pgv median, standard error)`` at ``S0 = 1`` of one shape (one synthesis)."""
     *envelope, t_end, names, values, cutoff, omega_low, n_records, seed = args
     p = {**dict(zip(names, values)), **dict(zip(("T1", "T2"), envelope))}
-    pga, pgv = synthesised_peaks(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff, n_records, seed,
-                                 omega_low)
+    pga, pgv = _record_peaks(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff, n_records, seed, omega_low)
+    if pgv is None:
+        return float(np.median(pga)), median_standard_error(pga), math.nan, math.nan
     return (float(np.median(pga)), median_standard_error(pga), float(np.median(pgv)), median_standard_error(pgv))
 
 

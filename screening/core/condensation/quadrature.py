@@ -241,30 +241,39 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     ([[2.0, 500.0, 0.0]], [[0.0, 0.0, 0.0]])
     """
     sigma = np.asarray(sigma, dtype=float).reshape(-1)
+    theta = np.asarray(theta, dtype=float)
+    order = np.argsort(theta, kind="stable")            # ascending: each sigma sums a leading run of nodes
     values = np.empty((sigma.size, 3))
     slopes = np.empty((sigma.size, 3))
-    _expectation_sums_jit(sigma, np.asarray(theta, dtype=float), np.asarray(weight, dtype=float),
-                          np.asarray(c_values, dtype=float), np.asarray(k_values, dtype=float), float(c0), float(k0),
-                          values, slopes)
+    _expectation_sums_jit(sigma, theta[order], np.asarray(weight, dtype=float)[order],
+                          np.asarray(c_values, dtype=float)[order], np.asarray(k_values, dtype=float)[order],
+                          float(c0), float(k0), values, slopes)
     return values, slopes
 
 
-#: Beyond x^2 = (theta / sigma)^2 = 1500 the Gaussian weight exp(-x^2 / 2) is zero in binary64 (it underflows
-#: below 5e-324 from x^2 = 1490): such nodes add exactly nothing and are skipped.
-_X2_ZERO = 1500.0
+#: Nodes beyond x^2 = (theta / sigma)^2 = SIGMA_SPAN^2 are left out of a sigma's sums: their Gaussian weight
+#: exp(-x^2 / 2) is below 6e-32 of its peak, and below 2e-27 after the factor x^4 of the slopes.
+_X2_CUT = SIGMA_SPAN ** 2
 
 
 @numba.njit(cache=True)
 def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, values, slopes):
-    """Compiled loop of :func:`gaussian_expectations`: fills ``values`` and ``slopes`` in place."""
+    """Compiled loop of :func:`gaussian_expectations` on nodes in ascending ``theta``: fills ``values`` and
+    ``slopes`` in place, each row over its nodes with ``x^2 <= _X2_CUT`` (found by bisection: a row's bits
+    depend on its ``sigma`` alone)."""
     scale = 2.0 * _INV_SQRT_2PI
     for i in range(sigma.size):
         s = sigma[i]
+        lo, hi = 0, theta.size                # the first node with x^2 > _X2_CUT (or x^2 NaN)
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if (theta[mid] / s) ** 2 <= _X2_CUT:
+                lo = mid + 1
+            else:
+                hi = mid
         e_c = e_k = he2 = s_k = s_d = 0.0
-        for j in range(theta.size):
+        for j in range(lo):
             x2 = (theta[j] / s) ** 2
-            if _X2_ZERO < x2 < math.inf:      # at inf (a float-range scale) the sums turn NaN, as the point must
-                continue
             phi = scale * weight[j] * math.exp(-0.5 * x2) / s
             dc = c_values[j] - c0
             phi_x2 = phi * x2
@@ -273,6 +282,8 @@ def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, valu
             he2 += phi * (x2 - 1.0) * dc
             s_k += phi_x2 * (x2 - 3.0) * (k_values[j] - k0)
             s_d += phi * (x2 * (x2 - 6.0) + 3.0) * dc
+        if lo < theta.size and not (theta[-1] / s) ** 2 < math.inf:     # a float-range scale: NaN, as the
+            e_c = e_k = he2 = s_k = s_d = math.nan                        # point must
         inv_s2 = 1.0 / (s * s)
         values[i, 0] = e_c
         values[i, 1] = e_k
@@ -564,27 +575,52 @@ def _distinct_points(block, foundation):
     return first[order], rank[inverse.reshape(-1)].astype(np.int64)
 
 
-def _interpolant(q, table, c0, k0):
-    """:func:`table_lookup` at the points ``q = (sigma / theta_ul)^2 > 0`` (numpy, vectorised)."""
-    t = 0.5 * np.log(q)
-    n = table.shape[0]
-    u = (t - T_LO) * STEPS_PER_UNIT
-    i = np.clip(np.floor(u), 0, n - 2).astype(np.int64)
-    s = u - i
-    out = np.empty((q.size, 3))
-    for col in range(3):
-        a = table[i, 4 * col: 4 * col + 4]
-        out[:, col] = a[:, 0] + s * (a[:, 1] + s * (a[:, 2] + s * a[:, 3]))
-    below, held = t <= T_LO, u >= n - 1
-    f = np.exp(2.0 * (t[below] - T_LO))
-    out[below] = np.stack([c0 + (table[0, 0] - c0) * f, k0 + (table[0, 4] - k0) * f,
-                           np.full(f.shape, table[0, 8])], axis=1)
-    out[held] = table[n - 1, 0::4][:3]
-    return out
-
-
 _LOBATTO = 0.5 - 0.5 * np.cos(np.pi * np.arange(FIT_DEGREE + 1) / FIT_DEGREE)
 _TO_POWERS = np.linalg.inv(np.vander(_LOBATTO, FIT_DEGREE + 1, increasing=True))
+
+
+@numba.njit(cache=True, inline="always")
+def _interpolant_jit(q, table, c0, k0, out):
+    """:func:`table_lookup` at ``q = (sigma / theta_ul)^2 > 0`` into ``out`` (``e_c``, ``e_k``, ``d_c``)."""
+    t = 0.5 * math.log(q)
+    n = table.shape[0]
+    if t <= T_LO:
+        f = math.exp(2.0 * (t - T_LO))
+        out[0] = c0 + (table[0, 0] - c0) * f
+        out[1] = k0 + (table[0, 4] - k0) * f
+        out[2] = table[0, 8]
+        return
+    u = (t - T_LO) * STEPS_PER_UNIT
+    if u >= n - 1:
+        for column in range(3):
+            out[column] = table[n - 1, 4 * column]
+        return
+    i = int(min(math.floor(u), n - 2.0))
+    s = u - i
+    for column in range(3):
+        out[column] = cubic(table, i, column, s)
+
+
+@numba.njit(cache=True)
+def _octave_rows_jit(table, c0, k0, lo, hi, node, split, rows):
+    """Fills the rows of :func:`octave_table` from the buckets ``[lo, hi)``, their nodes and splits."""
+    values = np.empty((FIT_DEGREE + 1, 3))
+    for b in range(lo.size):
+        for piece in range(2):
+            a, e = (0.0, split[b]) if piece == 0 else (split[b], 1.0)
+            width = e - a if e > a else 1.0
+            r = 2 * b + piece
+            rows[r, 0] = node[b]
+            rows[r, 1] = 1.0 / width
+            rows[r, 2] = -a / width
+            for j in range(FIT_DEGREE + 1):
+                _interpolant_jit(lo[b] + (a + _LOBATTO[j] * width) * (hi[b] - lo[b]), table, c0, k0, values[j])
+            for column in range(3):
+                for i in range(FIT_DEGREE + 1):
+                    acc = 0.0
+                    for j in range(FIT_DEGREE + 1):
+                        acc += _TO_POWERS[i, j] * values[j, column]
+                    rows[r, 3 + (FIT_DEGREE + 1) * column + i] = acc
 
 
 def octave_table(table, c0, k0):
@@ -644,19 +680,8 @@ def octave_table(table, c0, k0):
     inside = q_nodes[k] < hi
     node = np.where(inside, q_nodes[k], np.inf)
     split = np.where(inside, (node - lo) / (hi - lo), 1.0)
-    rows = np.zeros((2 * lo.size, 3 + 3 * (FIT_DEGREE + 1)))
-    for piece, (a, b) in enumerate(((np.zeros_like(split), split), (split, np.ones_like(split)))):
-        width = np.where(b > a, b - a, 1.0)
-        s = a[:, None] + _LOBATTO[None, :] * width[:, None]
-        values = _interpolant((lo[:, None] + s * (hi - lo)[:, None]).ravel(), table, c0, k0)
-        values = values.reshape(lo.size, FIT_DEGREE + 1, 3)
-        # powers[b, c, i] = sum_j _TO_POWERS[i, j] values[b, j, c], summed in this order (no BLAS: the same bits
-        # in every process)
-        powers = sum(_TO_POWERS[None, None, :, j] * values[:, j, :, None] for j in range(FIT_DEGREE + 1))
-        rows[piece::2, 0] = node
-        rows[piece::2, 1] = 1.0 / width
-        rows[piece::2, 2] = -a / width
-        rows[piece::2, 3:] = powers.reshape(lo.size, -1)
+    rows = np.empty((2 * lo.size, 3 + 3 * (FIT_DEGREE + 1)))
+    _octave_rows_jit(np.ascontiguousarray(table, dtype=float), float(c0), float(k0), lo, hi, node, split, rows)
     return rows
 
 
