@@ -254,25 +254,72 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
 #: Nodes beyond x^2 = (theta / sigma)^2 = SIGMA_SPAN^2 are left out of a sigma's sums: their Gaussian weight
 #: exp(-x^2 / 2) is below 6e-32 of its peak, and below 2e-27 after the factor x^4 of the slopes.
 _X2_CUT = SIGMA_SPAN ** 2
+#: Nodes with x^2 <= _X2_SERIES enter a sigma's sums through their moments (prefix sums of ``w f theta^(2r)``),
+#: with exp(-x^2 / 2) by its Taylor series to the power _SERIES_TERMS: remainder below 2e-17 of each term.
+_X2_SERIES = 0.01
+_SERIES_TERMS = 5
+
+
+@numba.njit(cache=True, inline="always")
+def _first_beyond(theta, s, x2):
+    """The first index of ascending ``theta`` with ``(theta / s)^2 > x2`` (or NaN), by bisection."""
+    lo, hi = 0, theta.size
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if (theta[mid] / s) ** 2 <= x2:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @numba.njit(cache=True)
 def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, values, slopes):
     """Compiled loop of :func:`gaussian_expectations` on nodes in ascending ``theta``: fills ``values`` and
-    ``slopes`` in place, each row over its nodes with ``x^2 <= _X2_CUT`` (found by bisection: a row's bits
-    depend on its ``sigma`` alone)."""
+    ``slopes`` in place.  A row sums its nodes with ``_X2_SERIES < x^2 <= _X2_CUT`` one by one and those below
+    through prefix moments (a row's bits depend on its ``sigma`` alone)."""
     scale = 2.0 * _INV_SQRT_2PI
+    n = theta.size
+    powers = _SERIES_TERMS + 3
+    q_norm = theta[n - 1] ** 2 if n > 0 else 1.0
+    # prefix moments of w F q^r, q = theta^2 / q_norm, F = C, K, C - C0, K - K0 (columns 0-3)
+    moments = np.zeros((n + 1, 4, powers))
+    for j in range(n):
+        q = theta[j] ** 2 / q_norm
+        f0, f1, f2, f3 = weight[j] * c_values[j], weight[j] * k_values[j], weight[j] * (c_values[j] - c0), \
+            weight[j] * (k_values[j] - k0)
+        qr = 1.0
+        for r in range(powers):
+            moments[j + 1, 0, r] = moments[j, 0, r] + f0 * qr
+            moments[j + 1, 1, r] = moments[j, 1, r] + f1 * qr
+            moments[j + 1, 2, r] = moments[j, 2, r] + f2 * qr
+            moments[j + 1, 3, r] = moments[j, 3, r] + f3 * qr
+            qr *= q
     for i in range(sigma.size):
         s = sigma[i]
-        lo, hi = 0, theta.size                # the first node with x^2 > _X2_CUT (or x^2 NaN)
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if (theta[mid] / s) ** 2 <= _X2_CUT:
-                lo = mid + 1
-            else:
-                hi = mid
+        hi = _first_beyond(theta, s, _X2_CUT)
+        lo = _first_beyond(theta, s, _X2_SERIES)
         e_c = e_k = he2 = s_k = s_d = 0.0
-        for j in range(lo):
+        if lo > 0:              # sum_l w F q^p exp(-z q / 2) = sum_m (-z / 2)^m / m! z^m M_F[p + m], x^2 = z q
+            z = q_norm / (s * s)
+            sc0 = sk1 = sd0 = sd1 = sd2 = sq1 = sq2 = 0.0
+            a = 1.0
+            for m in range(_SERIES_TERMS + 1):
+                sc0 += a * moments[lo, 0, m]
+                sk1 += a * moments[lo, 1, m + 1]
+                sd0 += a * moments[lo, 2, m]
+                sd1 += a * moments[lo, 2, m + 1]
+                sd2 += a * moments[lo, 2, m + 2]
+                sq1 += a * moments[lo, 3, m + 1]
+                sq2 += a * moments[lo, 3, m + 2]
+                a *= -0.5 * z / (m + 1)
+            f = scale / s
+            e_c = f * sc0
+            e_k = f * z * sk1
+            he2 = f * (z * sd1 - sd0)
+            s_k = f * z * (z * sq2 - 3.0 * sq1)
+            s_d = f * (z * (z * sd2 - 6.0 * sd1) + 3.0 * sd0)
+        for j in range(lo, hi):
             x2 = (theta[j] / s) ** 2
             phi = scale * weight[j] * math.exp(-0.5 * x2) / s
             dc = c_values[j] - c0
@@ -282,7 +329,7 @@ def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, valu
             he2 += phi * (x2 - 1.0) * dc
             s_k += phi_x2 * (x2 - 3.0) * (k_values[j] - k0)
             s_d += phi * (x2 * (x2 - 6.0) + 3.0) * dc
-        if lo < theta.size and not (theta[-1] / s) ** 2 < math.inf:     # a float-range scale: NaN, as the
+        if hi < n and not (theta[n - 1] / s) ** 2 < math.inf:          # a float-range scale: NaN, as the
             e_c = e_k = he2 = s_k = s_d = math.nan                        # point must
         inv_s2 = 1.0 / (s * s)
         values[i, 0] = e_c
@@ -293,9 +340,10 @@ def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, valu
         slopes[i, 2] = s_d * inv_s2
 
 
-def _point_nodes(block, foundation, sigma_max, cond):
-    """Nodes, weights, ``C``, ``K`` at the nodes and ``C(0)``, ``K(0)`` for one (scalar) point."""
-    tu = float(cond.uplift_threshold(block, foundation))
+def _point_nodes(block, foundation, sigma_max, cond, tu=None):
+    """Nodes, weights, ``C``, ``K`` at the nodes and ``C(0)``, ``K(0)`` for one (scalar) point (``tu``: its
+    ``theta_ul`` [rad], if known)."""
+    tu = float(cond.uplift_threshold(block, foundation)) if tu is None else tu
     cap = float(cond.capacity_angle(block, foundation))
     theta, weight = theta_quadrature(tu, cap, SIGMA_SPAN * sigma_max)
     c = cond.rocking_damping(theta, block, foundation)
@@ -410,8 +458,12 @@ def table_size(block, foundation, cond):
     >>> int(table_size(block, bed, cubic)), math.ceil((math.log(4 * math.atan(0.035 / 0.21) / theta_ul) + 12) * 64) + 1
     (1183, 1183)
     """
-    tu = cond.uplift_threshold(block, foundation)
-    t_hi = np.maximum(np.log(4.0 * block.slenderness / tu), 2.0)
+    return _size(block.slenderness, cond.uplift_threshold(block, foundation))
+
+
+def _size(slenderness, tu):
+    """:func:`table_size` from the slenderness angle and ``theta_ul`` [rad]."""
+    t_hi = np.maximum(np.log(4.0 * slenderness / tu), 2.0)
     return (np.ceil((t_hi - T_LO) * STEPS_PER_UNIT).astype(int) + 1)[()]
 
 
@@ -456,12 +508,17 @@ def node_values(block, foundation, cond):
     >>> values.shape, f"{values[0, 0]:.6f} {float(cubic.damping_at_rest(block, bed)):.6f}"   # e_c -> C(0)
     ((1183, 3), '0.987309 0.987309')
     """
-    n = int(table_size(block, foundation, cond))
-    t = T_LO + np.arange(n) / STEPS_PER_UNIT
+    return _node_values(block, foundation, cond)[:2]
+
+
+def _node_values(block, foundation, cond):
+    """``(values, slopes, theta_ul, C(0), K(0))`` of one scalar point (:func:`node_values`)."""
     tu = float(cond.uplift_threshold(block, foundation))
+    n = int(_size(block.slenderness, tu))
+    t = T_LO + np.arange(n) / STEPS_PER_UNIT
     sigma = tu * np.exp(t)
-    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond)
-    return gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
+    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond, tu)
+    return (*gaussian_expectations(sigma, theta, weight, c, k, c0, k0), tu, c0, k0)
 
 
 def coefficient_table(block, foundation, cond):
@@ -755,19 +812,22 @@ _TABLES_LOCK = threading.Lock()
 
 
 def _solver_table(block, foundation, cond):
-    """``(octave table, node-0 values, last-node values)`` of one scalar point, from the process's cache of
-    recent tables (read-only)."""
+    """``(octave table, its RECORD)`` of one scalar point, from the process's cache of recent tables
+    (read-only)."""
     key = (cond, point_key(block, foundation))
     with _TABLES_LOCK:
         entry = _TABLES.get(key)
         if entry is not None:
             _TABLES.move_to_end(key)
             return entry
-    table = coefficient_table(block, foundation, cond)
-    solver_table = octave_table(table, float(cond.damping_at_rest(block, foundation)),
-                                float(cond.stiffness_at_rest(block, foundation)))
+    values, slopes, tu, c0, k0 = _node_values(block, foundation, cond)
+    table = cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
+    solver_table = octave_table(table, c0, k0)
     solver_table.flags.writeable = False
-    entry = (solver_table, table[0, 0::4][:3].copy(), table[-1, 0::4][:3].copy())
+    record = np.empty(1, dtype=RECORD)
+    record[0] = (1.0 / tu ** 2, c0, k0, *table[0, 0::4][:3], *table[-1, 0::4][:3], solver_table.shape[0] // 2)
+    record.flags.writeable = False
+    entry = (solver_table, record)
     with _TABLES_LOCK:
         _TABLES[key] = entry
         while len(_TABLES) > TABLE_CACHE_SIZE:
@@ -820,16 +880,7 @@ def moment_kernel(block, foundation, cond):
     """
     first, index = _distinct_points(block, foundation)
     entries = [_solver_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
-    blk, fnd = select(block, first), select(foundation, first)          # one entry per distinct point
-    records = np.empty(first.size, dtype=RECORD)
-    records["inv_theta_ul2"] = 1.0 / np.broadcast_to(cond.uplift_threshold(blk, fnd), first.shape) ** 2
-    records["c_rest"] = np.broadcast_to(cond.damping_at_rest(blk, fnd), first.shape)
-    records["k_rest"] = np.broadcast_to(cond.stiffness_at_rest(blk, fnd), first.shape)
-    for end, column in (("lo", 1), ("hi", 2)):
-        values = np.array([e[column] for e in entries])
-        for k, name in enumerate(("c", "k", "d")):
-            records[f"{end}_{name}"] = values[:, k]
-    records["buckets"] = [e[0].shape[0] // 2 for e in entries]
+    records = np.concatenate([e[1] for e in entries])
     return MomentKernel(equivalent_coefficients_jit, records[index], _stacked([e[0] for e in entries]), index)
 
 
