@@ -69,7 +69,8 @@ import numpy as np
 import xarray as xr
 
 from screening.analysis import intensity_rvt
-from screening.analysis._excitation_shape import (scalar_excitation as _scalar_excitation, shape_key as _shape_key,
+from screening.analysis._excitation_shape import (distinct_points as _distinct_points,
+                                                  scalar_excitation as _scalar_excitation, shape_key as _shape_key,
                                                   shape_names as _shape_names, times as _times)
 from screening.analysis.fragility import parameter
 from screening.analysis.intensity_records import (AVGSA_N_PERIODS, avgsa_periods, AVGSA_RANGE, continuous_peak, G,
@@ -295,11 +296,12 @@ def _per_unit_s0(excitation, values, t_end, cutoff):
     shape = (excitation.kind, env.kind, names, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
                                                  if env.kind == "exponential" else ()), float(t_end))
     unit = np.empty(values.shape + (3,))
-    for index in np.ndindex(values.shape):
+    flat = unit.reshape(-1, 3)
+    for (*point, wc), rows in _distinct_points([*filt, cut], values.shape):
         try:
-            unit[index] = _unit_measures(*shape, tuple(float(f[index]) for f in filt), float(cut[index]))
+            flat[rows] = _unit_measures(*shape, tuple(point), wc)
         except (ArithmeticError, ValueError):          # scales beyond float64 (see PointStatus.beyond_float_range)
-            unit[index] = np.nan
+            flat[rows] = np.nan
     return values, unit
 
 
