@@ -34,7 +34,8 @@ set in ``theta`` per parameter point, Gauss–Legendre (:data:`GAUSS_ORDER` node
   (``dz/da ~ (theta_cap - a)^(-1/2)`` becomes analytic in ``s``), and geometric panels above
   ``theta_cap``.
 
-``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights.
+``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights, its nodes up to
+``SIGMA_SPAN sigma`` one by one and those below ``0.1 sigma`` through prefix moments.
 
 Table: ``t = ln(sigma / theta_ul)`` on ``[T_LO, t_hi]`` with :data:`STEPS_PER_UNIT` nodes per
 unit, values and their exact ``t``-derivatives (same quadrature)::
@@ -57,7 +58,7 @@ grid of :data:`BUCKET_BITS` bits (:func:`screening.core.interpolation.octave_gri
 the ``t`` grid, and each of its two pieces is the interpolant re-expressed as a polynomial of
 degree :data:`FIT_DEGREE` in the bucket fraction (Chebyshev-Lobatto interpolation: within 1e-13 of
 ``K(0)`` of the cubic in ``t``, the rounding of its logarithm).
-A table costs ~3-6 ms per distinct point (the compiled sums of :func:`gaussian_expectations`), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
+A table costs ~3-4 ms per distinct point (the sums, ``C``, ``K`` at the nodes, the octave form), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
 next chunk of a batch, the next call) does not rebuild its table.
 """
 
