@@ -528,7 +528,7 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Notes
     -----
-    The same records, in the same pass and cache, as :func:`simulated_pgv`: synthesised once per shape
+    The same records as :func:`simulated_pgv` (without their velocities): synthesised once per shape
     at ``S0 = 1`` and scaled by ``sqrt(S0)``.  The peak is that of the continuous record (cubic Hermite
     interpolant of the synthesised values and rates, :func:`continuous_peak`).  With 2,000 records the
     standard error is ~0.5 % of the median.  Records by spectral representation [1].
