@@ -76,8 +76,7 @@ from screening.analysis.fragility import parameter
 from screening.analysis.intensity_records import (AVGSA_N_PERIODS, avgsa_periods, AVGSA_RANGE, continuous_peak, G,
                                                   highpass_gain, median_standard_error, OMEGA_LOW, oscillator_peak,
                                                   PGV_CHUNK, PGV_RECORDS, PGV_SEED, record_avgsa, RECORD_MEASURES,
-                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv,
-                                                  _record_peaks)
+                                                  record_measures, record_velocity, synthesised_peaks, synthesised_pgv)
 from screening.analysis.intensity_rvt import (CHUNK_POINTS, CROSSING_EXTENT, CROSSING_STEP, envelope_exponentials,
                                               input_moments, median_peak, N_TIMES, oscillator_covariance,
                                               oscillator_response_bandwidth, rocking_start_probability, sa_median,
@@ -568,7 +567,8 @@ def _unit_simulated(kind, envelope_kind, *args):
     """``(pga median, standard error, pgv median, standard error)`` at ``S0 = 1`` of one shape (one synthesis)."""
     *envelope, t_end, names, values, cutoff, omega_low, n_records, seed = args
     p = {**dict(zip(names, values)), **dict(zip(("T1", "T2"), envelope))}
-    pga, pgv = _record_peaks(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff, n_records, seed, omega_low)
+    pga, pgv = synthesised_peaks(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff, n_records, seed,
+                                 omega_low)
     if pgv is None:
         return float(np.median(pga)), median_standard_error(pga), math.nan, math.nan
     return (float(np.median(pga)), median_standard_error(pga), float(np.median(pgv)), median_standard_error(pgv))

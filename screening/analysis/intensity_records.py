@@ -315,8 +315,8 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
         Number of records.
     seed : int, default PGV_SEED
         Seed of the run.
-    omega_low : float, default OMEGA_LOW
-        High-pass corner of the velocity [rad s-1].
+    omega_low : float or None, default OMEGA_LOW
+        High-pass corner of the velocity [rad s-1]; None: the PGA alone (``pgv`` None, no filter).
 
     Returns
     -------
@@ -342,11 +342,6 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
     >>> pga.shape, bool(np.all(synthesised_peaks(white, 5.0, 50.0, n_records=3, seed=1)[0] == pga[:3]))
     ((20,), True)
     """
-    return _record_peaks(excitation, t_end, cutoff, n_records, seed, omega_low)
-
-
-def _record_peaks(excitation, t_end, cutoff, n_records, seed, omega_low):
-    """:func:`synthesised_peaks`; ``omega_low = None``: the PGA alone, ``pgv`` None (no velocity filter)."""
     plan = spectral_plan(excitation, float(t_end), float(cutoff))
     n = int(round(float(t_end) / plan.dt)) + 1
     pga, pgv = [], []
