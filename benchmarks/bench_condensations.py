@@ -4,6 +4,7 @@ against a single-core prototype of the paper's method (issue 38).
     .venv/bin/python benchmarks/bench_condensations.py                 # both parts
     .venv/bin/python benchmarks/bench_condensations.py --part costs --points 2000 --repeat 5
     .venv/bin/python benchmarks/bench_condensations.py --part sweep --n 316 --repeat 3
+    .venv/bin/python benchmarks/bench_condensations.py --part cpu --n 316 --repeat 2       # CPU seconds, loaded machines
 
 Per point (``--part costs``): ``linearize`` (the solver with every history, as a user calls it, trust
 columns included) and ``solve_moments(histories=False)`` (what a history-free sweep runs), on
@@ -19,6 +20,11 @@ none, 2 workers, the default condensation, timed in a fresh process as ``screeni
 against the prototype: the paper's method (``condensation = "paper"``) solved on one core in one
 process, no dask, no I/O, on 5,000 points spread over the same grid.  The two are interleaved
 ``--repeat`` times and each sweep's rate is divided by the prototype rate measured just before it.
+
+CPU model (``--part cpu``): the same comparison in CPU seconds, which a loaded machine distorts less
+than the wall clock: each half of the sweep's batches solved by ``solve_batch`` in a fresh process, as
+one of the 2 workers would (its first batch included), against the prototype's CPU time per point; the
+rate of 2 workers is the points over the slower half's CPU time (no dask, no I/O, no tail).
 
 The machine is shared (2 cores): the load average is printed with the figures.
 """
@@ -122,9 +128,68 @@ def sweep_against_prototype(side, repeat):
     return n_points, rows
 
 
+def _cpu_half(side, part, queue):
+    """CPU seconds of ``solve_batch`` over every other batch (from ``part``) of the sweep, in this fresh process."""
+    import bench_sweep
+    from screening.sweep._submit import case_cutoff, trust_models, wants_probabilities
+    from screening.sweep.execution import solve_batch, warm_up
+    from screening.sweep.grid import batch_point_models, default_batch_size, plan_batches
+    from screening.sweep.study import parse_study
+
+    study = parse_study(bench_sweep.STUDY.format(n=side, output=bench_sweep.OUTPUT["none"]), name="bench")
+    warm_up()
+    start, n = time.process_time(), 0
+    for batch in plan_batches(study, default_batch_size(study, 2))[part::2]:
+        case = study.cases[batch.case]
+        block, foundation, excitation, _ = batch_point_models(study, batch)
+        solve_batch(block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
+                    study.output.stored, study.fragility, trust_models(case.condensation_model.name),
+                    study.derived_inputs, None, case_cutoff(case), wants_probabilities(study))
+        n += batch.hi - batch.lo
+    queue.put((n, time.process_time() - start))
+
+
+def _cpu_prototype(side, queue):
+    """CPU seconds of the prototype (``bench_sweep.single_core``'s work) in this fresh process."""
+    import bench_sweep
+    from screening.core.excitations.white import WhiteNoise
+    from screening.core.model import Block, Foundation
+    from screening.solvers.moments import solve_moments
+    from screening.solvers.timegrid import output_times
+
+    t = output_times(20.0, 0.05)
+    flat = np.unique(np.linspace(0, side * side - 1, min(bench_sweep.CHECK_POINTS, side * side)).round().astype(int))
+    i, j = np.unravel_index(flat, (side, side))
+    models = (Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, np.linspace(-6e5, 6e7, side)[i]),
+              WhiteNoise(np.geomspace(1e-5, 2.4e-3, side)[j], band_limit_hz=None))
+    solve_moments(models[0], Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5, band_limit_hz=None), t[:3], condensation="paper")
+    start = time.process_time()
+    solve_moments(*models, t, histories=False, condensation="paper")
+    queue.put((flat.size, time.process_time() - start))
+
+
+def cpu_model(side, repeat):
+    """Print, ``repeat`` times: the prototype's and each half's points per CPU second, and their ratio."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    for _ in range(repeat):
+        out = []
+        for target, args in ((_cpu_prototype, (side,)), (_cpu_half, (side, 0)), (_cpu_half, (side, 1))):
+            queue = ctx.Queue()
+            proc = ctx.Process(target=target, args=(*args, queue))
+            proc.start()
+            out.append(queue.get())
+            proc.join()
+        (n0, c0), (na, ca), (nb, cb) = out
+        sweep = (na + nb) / max(ca, cb)
+        print(f"  CPU model: prototype {n0 / c0:.0f} points per CPU s; halves {na / ca:.0f}, {nb / cb:.0f}; "
+              f"2 workers {sweep:.0f} points/s; ratio {sweep / (n0 / c0):.2f}; {_load()}", flush=True)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--part", choices=("costs", "sweep", "both"), default="both")
+    parser.add_argument("--part", choices=("costs", "sweep", "both", "cpu"), default="both")
     parser.add_argument("--points", type=int, default=2000, help="points per timed call (costs)")
     parser.add_argument("--repeat", type=int, default=3, help="interleaved repeats")
     parser.add_argument("--n", type=int, default=316, help="values per swept parameter (sweep; 316: 99,856 points)")
@@ -141,6 +206,9 @@ def main(argv=None):
               f"{min(rates):.0f}-{max(rates):.0f}); sweep / prototype {statistics.median(ratios):.2f} "
               f"(median; {min(ratios):.2f}-{max(ratios):.2f})  (target >= 1.5: "
               f"{'PASS' if statistics.median(ratios) >= 1.5 else 'FAIL'})")
+    if args.part == "cpu":
+        print(f"CPU model of the sweep ({args.n} x {args.n} points) against the prototype, {args.repeat} runs")
+        cpu_model(args.n, args.repeat)
 
 
 if __name__ == "__main__":

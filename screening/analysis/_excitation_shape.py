@@ -39,3 +39,17 @@ def scalar_excitation(kind, envelope_kind, p):
     band = p.get("band_limit_hz")
     band = None if band is None or not np.isfinite(band) else float(band)
     return excitations.build(kind, 1.0, p, env, band_limit_hz=band)
+
+
+def distinct_points(columns, shape):
+    """``[(values, flat indices)]``: the points of ``shape`` grouped by their values of ``columns`` (arrays
+    broadcast to ``shape``; ``values`` a tuple of floats), one ``numpy.unique`` instead of a key per point."""
+    n = int(np.prod(shape, dtype=int))
+    if not columns:
+        return [((), np.arange(n))]
+    rows = np.stack([np.broadcast_to(np.asarray(c, dtype=float), shape).reshape(n) for c in columns], axis=1)
+    if np.all(rows == rows[:1]):                        # one shape for the whole batch (the usual case)
+        return [(tuple(float(v) for v in rows[0]), np.arange(n))]
+    distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
+    inverse = inverse.reshape(n)
+    return [(tuple(float(v) for v in row), np.flatnonzero(inverse == j)) for j, row in enumerate(distinct)]

@@ -69,7 +69,8 @@ import numpy as np
 import xarray as xr
 
 from screening.analysis import intensity_rvt
-from screening.analysis._excitation_shape import (scalar_excitation as _scalar_excitation, shape_key as _shape_key,
+from screening.analysis._excitation_shape import (distinct_points as _distinct_points,
+                                                  scalar_excitation as _scalar_excitation, shape_key as _shape_key,
                                                   shape_names as _shape_names, times as _times)
 from screening.analysis.fragility import parameter
 from screening.analysis.intensity_records import (AVGSA_N_PERIODS, avgsa_periods, AVGSA_RANGE, continuous_peak, G,
@@ -291,11 +292,12 @@ def _per_unit_s0(excitation, values, t_end, cutoff):
     shape = (excitation.kind, env.kind, names, *(np.atleast_1d(env.params[1:]).astype(float).tolist()
                                                  if env.kind == "exponential" else ()), float(t_end))
     unit = np.empty(values.shape + (3,))
-    for index in np.ndindex(values.shape):
+    flat = unit.reshape(-1, 3)
+    for (*point, wc), rows in _distinct_points([*filt, cut], values.shape):
         try:
-            unit[index] = _unit_measures(*shape, tuple(float(f[index]) for f in filt), float(cut[index]))
+            flat[rows] = _unit_measures(*shape, tuple(point), wc)
         except (ArithmeticError, ValueError):          # scales beyond float64 (see PointStatus.beyond_float_range)
-            unit[index] = np.nan
+            flat[rows] = np.nan
     return values, unit
 
 
@@ -522,7 +524,7 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Notes
     -----
-    The same records, in the same pass and cache, as :func:`simulated_pgv`: synthesised once per shape
+    The same records as :func:`simulated_pgv` (without their velocities): synthesised once per shape
     at ``S0 = 1`` and scaled by ``sqrt(S0)``.  The peak is that of the continuous record (cubic Hermite
     interpolant of the synthesised values and rates, :func:`continuous_peak`).  With 2,000 records the
     standard error is ~0.5 % of the median.  Records by spectral representation [1].
@@ -541,17 +543,18 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
     >>> f"{pga4 / pga:.6f}", f"{se4 / se:.6f}"
     ('2.000000', '2.000000')
     """
-    return _simulated(excitation, t_end, cutoff, OMEGA_LOW, n_records, seed)[:2]
+    return _simulated(excitation, t_end, cutoff, None, n_records, seed)[:2]       # no velocity needed
 
 
 def _simulated(excitation, t_end, cutoff, omega_low, n_records, seed):
     """``(pga median, its standard error, pgv median, its standard error)`` of the shape of ``excitation``
-    scaled to its ``S0``."""
-    checked("omega_low", omega_low, lower=0.0, upper=float(cutoff))
+    scaled to its ``S0``; ``omega_low = None``: the PGA alone (the PGV NaN)."""
+    if omega_low is not None:
+        omega_low = float(checked("omega_low", omega_low, lower=0.0, upper=float(cutoff)))
     checked("n_records", n_records, lower=10.0, upper=1e7, lower_inclusive=True)
     names = _shape_names(excitation)
     key = (*_shape_key(excitation, t_end), names, tuple(float(getattr(excitation, k)) for k in names),
-           float(cutoff), float(omega_low), int(n_records), int(seed))
+           float(cutoff), omega_low, int(n_records), int(seed))
     root = math.sqrt(float(excitation.S0))
     return tuple(root * v for v in _unit_simulated(*key))
 
@@ -563,6 +566,8 @@ def _unit_simulated(kind, envelope_kind, *args):
     p = {**dict(zip(names, values)), **dict(zip(("T1", "T2"), envelope))}
     pga, pgv = synthesised_peaks(_scalar_excitation(kind, envelope_kind, p), t_end, cutoff, n_records, seed,
                                  omega_low)
+    if pgv is None:
+        return float(np.median(pga)), median_standard_error(pga), math.nan, math.nan
     return (float(np.median(pga)), median_standard_error(pga), float(np.median(pgv)), median_standard_error(pgv))
 
 

@@ -284,9 +284,14 @@ def continuous_peak(acceleration, rate, dt, refine=8):
     acc, rate = np.atleast_2d(np.asarray(acceleration, dtype=float)), np.atleast_2d(np.asarray(rate, dtype=float))
     peak = np.max(np.abs(acc), axis=1)
     a0, a1, d0, d1 = acc[:, :-1], acc[:, 1:], rate[:, :-1] * dt, rate[:, 1:] * dt
+    # within a step |a(t)| <= max(|a0|, |a1|) + 4/27 (|d0| + |d1|) (h00, h01 >= 0 sum to 1, |h10|, |h11| <= 4/27):
+    # only the steps that may pass the sampled peak are searched (the same values, fewer of them)
+    bound = np.maximum(np.abs(a0), np.abs(a1)) + (4.0 / 27.0) * (np.abs(d0) + np.abs(d1))
+    row, col = np.nonzero(bound * (1.0 + 1e-9) >= peak[:, None])
+    a0, a1, d0, d1 = a0[row, col], a1[row, col], d0[row, col], d1[row, col]
     for u in np.linspace(0.0, 1.0, int(refine) + 1)[1:-1]:
         h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-        peak = np.maximum(peak, np.max(np.abs(h00 * a0 + h10 * d0 + h01 * a1 + h11 * d1), axis=1))
+        np.maximum.at(peak, row, np.abs(h00 * a0 + h10 * d0 + h01 * a1 + h11 * d1))
     return peak
 
 
@@ -309,8 +314,8 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
         Number of records.
     seed : int, default PGV_SEED
         Seed of the run.
-    omega_low : float, default OMEGA_LOW
-        High-pass corner of the velocity [rad s-1].
+    omega_low : float or None, default OMEGA_LOW
+        High-pass corner of the velocity [rad s-1]; None: the PGA alone (``pgv`` None, no filter).
 
     Returns
     -------
@@ -343,8 +348,9 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
         acc, rate = ground_acceleration_samples(excitation, plan, seed, np.arange(lo, min(lo + PGV_CHUNK, n_records)))
         acc, rate = acc[:, :n], rate[:, :n]
         pga.append(continuous_peak(acc, rate, plan.dt))
-        pgv.append(np.max(np.abs(record_velocity(acc, plan.dt, omega_low)), axis=1))
-    return np.concatenate(pga), np.concatenate(pgv)
+        if omega_low is not None:
+            pgv.append(np.max(np.abs(record_velocity(acc, plan.dt, omega_low)), axis=1))
+    return np.concatenate(pga), (np.concatenate(pgv) if omega_low is not None else None)
 
 
 def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEED, omega_low=OMEGA_LOW):

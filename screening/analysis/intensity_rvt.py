@@ -24,7 +24,8 @@ import warnings
 import numpy as np
 from scipy import integrate, optimize
 
-from screening.analysis._excitation_shape import (N_TIMES, scalar_excitation as _scalar_excitation,
+from screening.analysis._excitation_shape import (N_TIMES, distinct_points as _distinct_points,
+                                                  scalar_excitation as _scalar_excitation,
                                                   shape_key as _shape_key, shape_names as _shape_names, times as _times)
 from screening.analysis.fragility import (exceedance_probability_from_moments, oscillator_bandwidth, upcrossing_rate,
                                           vanmarcke_factor)
@@ -304,19 +305,16 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
     names = _shape_names(excitation)
     filt = [np.broadcast_to(np.asarray(getattr(excitation, n), dtype=float), level.shape) for n in names]
     out = np.full(level.shape, np.nan)
-    keys = {}
-    for index in np.ndindex(level.shape):
-        keys.setdefault((tuple(float(f[index]) for f in filt), float(cut[index])), []).append(index)
-    for (values, wc), points in keys.items():
+    flat_out, flat_level, flat_s0 = out.reshape(-1), level.reshape(-1), s0.reshape(-1)
+    for (*values, wc), rows in _distinct_points([*filt, cut], level.shape):
         try:
-            x_grid, log_crossings = _unit_crossings(*_shape_key(excitation, t_end), names, values, wc, method)
+            x_grid, log_crossings = _unit_crossings(*_shape_key(excitation, t_end), names, tuple(values), wc, method)
         except (ArithmeticError, ValueError):          # scales beyond float64: NaN
             continue
-        rows = tuple(np.array(i) for i in zip(*points)) if level.ndim else ()
         with np.errstate(divide="ignore", invalid="ignore"):
-            x = level[rows] / np.sqrt(s0[rows])
+            x = flat_level[rows] / np.sqrt(flat_s0[rows])
             crossings = np.exp(np.interp(x, x_grid, log_crossings, right=-np.inf))
-            out[rows] = np.where(np.isfinite(x), -np.expm1(-crossings), np.nan)
+            flat_out[rows] = np.where(np.isfinite(x), -np.expm1(-crossings), np.nan)
     return float(out) if out.ndim == 0 else out
 
 

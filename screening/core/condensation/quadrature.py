@@ -34,7 +34,8 @@ set in ``theta`` per parameter point, Gauss–Legendre (:data:`GAUSS_ORDER` node
   (``dz/da ~ (theta_cap - a)^(-1/2)`` becomes analytic in ``s``), and geometric panels above
   ``theta_cap``.
 
-``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights.
+``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights, its nodes up to
+``SIGMA_SPAN sigma`` one by one and those below ``0.1 sigma`` through prefix moments.
 
 Table: ``t = ln(sigma / theta_ul)`` on ``[T_LO, t_hi]`` with :data:`STEPS_PER_UNIT` nodes per
 unit, values and their exact ``t``-derivatives (same quadrature)::
@@ -57,7 +58,7 @@ grid of :data:`BUCKET_BITS` bits (:func:`screening.core.interpolation.octave_gri
 the ``t`` grid, and each of its two pieces is the interpolant re-expressed as a polynomial of
 degree :data:`FIT_DEGREE` in the bucket fraction (Chebyshev-Lobatto interpolation: within 1e-13 of
 ``K(0)`` of the cubic in ``t``, the rounding of its logarithm).
-A table costs ~3-6 ms per distinct point (the compiled sums of :func:`gaussian_expectations`), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
+A table costs ~3-4 ms per distinct point (the sums, ``C``, ``K`` at the nodes, the octave form), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
 next chunk of a batch, the next call) does not rebuild its table.
 """
 
@@ -241,30 +242,86 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     ([[2.0, 500.0, 0.0]], [[0.0, 0.0, 0.0]])
     """
     sigma = np.asarray(sigma, dtype=float).reshape(-1)
+    theta = np.asarray(theta, dtype=float)
+    order = np.argsort(theta, kind="stable")            # ascending: each sigma sums a leading run of nodes
     values = np.empty((sigma.size, 3))
     slopes = np.empty((sigma.size, 3))
-    _expectation_sums_jit(sigma, np.asarray(theta, dtype=float), np.asarray(weight, dtype=float),
-                          np.asarray(c_values, dtype=float), np.asarray(k_values, dtype=float), float(c0), float(k0),
-                          values, slopes)
+    _expectation_sums_jit(sigma, theta[order], np.asarray(weight, dtype=float)[order],
+                          np.asarray(c_values, dtype=float)[order], np.asarray(k_values, dtype=float)[order],
+                          float(c0), float(k0), values, slopes)
     return values, slopes
 
 
-#: Beyond x^2 = (theta / sigma)^2 = 1500 the Gaussian weight exp(-x^2 / 2) is zero in binary64 (it underflows
-#: below 5e-324 from x^2 = 1490): such nodes add exactly nothing and are skipped.
-_X2_ZERO = 1500.0
+#: Nodes beyond x^2 = (theta / sigma)^2 = SIGMA_SPAN^2 are left out of a sigma's sums: their Gaussian weight
+#: exp(-x^2 / 2) is below 6e-32 of its peak, and below 2e-27 after the factor x^4 of the slopes.
+_X2_CUT = SIGMA_SPAN ** 2
+#: Nodes with x^2 <= _X2_SERIES enter a sigma's sums through their moments (prefix sums of ``w f theta^(2r)``),
+#: with exp(-x^2 / 2) by its Taylor series to the power _SERIES_TERMS: remainder below 2e-17 of each term.
+_X2_SERIES = 0.01
+_SERIES_TERMS = 5
+
+
+@numba.njit(cache=True, inline="always")
+def _first_beyond(theta, s, x2):
+    """The first index of ascending ``theta`` with ``(theta / s)^2 > x2`` (or NaN), by bisection."""
+    lo, hi = 0, theta.size
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if (theta[mid] / s) ** 2 <= x2:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @numba.njit(cache=True)
 def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, values, slopes):
-    """Compiled loop of :func:`gaussian_expectations`: fills ``values`` and ``slopes`` in place."""
+    """Compiled loop of :func:`gaussian_expectations` on nodes in ascending ``theta``: fills ``values`` and
+    ``slopes`` in place.  A row sums its nodes with ``_X2_SERIES < x^2 <= _X2_CUT`` one by one and those below
+    through prefix moments (a row's bits depend on its ``sigma`` alone)."""
     scale = 2.0 * _INV_SQRT_2PI
+    n = theta.size
+    powers = _SERIES_TERMS + 3
+    q_norm = theta[n - 1] ** 2 if n > 0 else 1.0
+    # prefix moments of w F q^r, q = theta^2 / q_norm, F = C, K, C - C0, K - K0 (columns 0-3)
+    moments = np.zeros((n + 1, 4, powers))
+    for j in range(n):
+        q = theta[j] ** 2 / q_norm
+        f0, f1, f2, f3 = weight[j] * c_values[j], weight[j] * k_values[j], weight[j] * (c_values[j] - c0), \
+            weight[j] * (k_values[j] - k0)
+        qr = 1.0
+        for r in range(powers):
+            moments[j + 1, 0, r] = moments[j, 0, r] + f0 * qr
+            moments[j + 1, 1, r] = moments[j, 1, r] + f1 * qr
+            moments[j + 1, 2, r] = moments[j, 2, r] + f2 * qr
+            moments[j + 1, 3, r] = moments[j, 3, r] + f3 * qr
+            qr *= q
     for i in range(sigma.size):
         s = sigma[i]
+        hi = _first_beyond(theta, s, _X2_CUT)
+        lo = _first_beyond(theta, s, _X2_SERIES)
         e_c = e_k = he2 = s_k = s_d = 0.0
-        for j in range(theta.size):
+        if lo > 0:              # sum_l w F q^p exp(-z q / 2) = sum_m (-z / 2)^m / m! z^m M_F[p + m], x^2 = z q
+            z = q_norm / (s * s)
+            sc0 = sk1 = sd0 = sd1 = sd2 = sq1 = sq2 = 0.0
+            a = 1.0
+            for m in range(_SERIES_TERMS + 1):
+                sc0 += a * moments[lo, 0, m]
+                sk1 += a * moments[lo, 1, m + 1]
+                sd0 += a * moments[lo, 2, m]
+                sd1 += a * moments[lo, 2, m + 1]
+                sd2 += a * moments[lo, 2, m + 2]
+                sq1 += a * moments[lo, 3, m + 1]
+                sq2 += a * moments[lo, 3, m + 2]
+                a *= -0.5 * z / (m + 1)
+            f = scale / s
+            e_c = f * sc0
+            e_k = f * z * sk1
+            he2 = f * (z * sd1 - sd0)
+            s_k = f * z * (z * sq2 - 3.0 * sq1)
+            s_d = f * (z * (z * sd2 - 6.0 * sd1) + 3.0 * sd0)
+        for j in range(lo, hi):
             x2 = (theta[j] / s) ** 2
-            if _X2_ZERO < x2 < math.inf:      # at inf (a float-range scale) the sums turn NaN, as the point must
-                continue
             phi = scale * weight[j] * math.exp(-0.5 * x2) / s
             dc = c_values[j] - c0
             phi_x2 = phi * x2
@@ -273,6 +330,8 @@ def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, valu
             he2 += phi * (x2 - 1.0) * dc
             s_k += phi_x2 * (x2 - 3.0) * (k_values[j] - k0)
             s_d += phi * (x2 * (x2 - 6.0) + 3.0) * dc
+        if hi < n and not (theta[n - 1] / s) ** 2 < math.inf:          # a float-range scale: NaN, as the
+            e_c = e_k = he2 = s_k = s_d = math.nan                        # point must
         inv_s2 = 1.0 / (s * s)
         values[i, 0] = e_c
         values[i, 1] = e_k
@@ -282,9 +341,10 @@ def _expectation_sums_jit(sigma, theta, weight, c_values, k_values, c0, k0, valu
         slopes[i, 2] = s_d * inv_s2
 
 
-def _point_nodes(block, foundation, sigma_max, cond):
-    """Nodes, weights, ``C``, ``K`` at the nodes and ``C(0)``, ``K(0)`` for one (scalar) point."""
-    tu = float(cond.uplift_threshold(block, foundation))
+def _point_nodes(block, foundation, sigma_max, cond, tu=None):
+    """Nodes, weights, ``C``, ``K`` at the nodes and ``C(0)``, ``K(0)`` for one (scalar) point (``tu``: its
+    ``theta_ul`` [rad], if known)."""
+    tu = float(cond.uplift_threshold(block, foundation)) if tu is None else tu
     cap = float(cond.capacity_angle(block, foundation))
     theta, weight = theta_quadrature(tu, cap, SIGMA_SPAN * sigma_max)
     c = cond.rocking_damping(theta, block, foundation)
@@ -399,8 +459,12 @@ def table_size(block, foundation, cond):
     >>> int(table_size(block, bed, cubic)), math.ceil((math.log(4 * math.atan(0.035 / 0.21) / theta_ul) + 12) * 64) + 1
     (1183, 1183)
     """
-    tu = cond.uplift_threshold(block, foundation)
-    t_hi = np.maximum(np.log(4.0 * block.slenderness / tu), 2.0)
+    return _size(block.slenderness, cond.uplift_threshold(block, foundation))
+
+
+def _size(slenderness, tu):
+    """:func:`table_size` from the slenderness angle and ``theta_ul`` [rad]."""
+    t_hi = np.maximum(np.log(4.0 * slenderness / tu), 2.0)
     return (np.ceil((t_hi - T_LO) * STEPS_PER_UNIT).astype(int) + 1)[()]
 
 
@@ -445,12 +509,17 @@ def node_values(block, foundation, cond):
     >>> values.shape, f"{values[0, 0]:.6f} {float(cubic.damping_at_rest(block, bed)):.6f}"   # e_c -> C(0)
     ((1183, 3), '0.987309 0.987309')
     """
-    n = int(table_size(block, foundation, cond))
-    t = T_LO + np.arange(n) / STEPS_PER_UNIT
+    return _node_values(block, foundation, cond)[:2]
+
+
+def _node_values(block, foundation, cond):
+    """``(values, slopes, theta_ul, C(0), K(0))`` of one scalar point (:func:`node_values`)."""
     tu = float(cond.uplift_threshold(block, foundation))
+    n = int(_size(block.slenderness, tu))
+    t = T_LO + np.arange(n) / STEPS_PER_UNIT
     sigma = tu * np.exp(t)
-    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond)
-    return gaussian_expectations(sigma, theta, weight, c, k, c0, k0)
+    theta, weight, c, k, c0, k0 = _point_nodes(block, foundation, float(sigma[-1]), cond, tu)
+    return (*gaussian_expectations(sigma, theta, weight, c, k, c0, k0), tu, c0, k0)
 
 
 def coefficient_table(block, foundation, cond):
@@ -564,27 +633,52 @@ def _distinct_points(block, foundation):
     return first[order], rank[inverse.reshape(-1)].astype(np.int64)
 
 
-def _interpolant(q, table, c0, k0):
-    """:func:`table_lookup` at the points ``q = (sigma / theta_ul)^2 > 0`` (numpy, vectorised)."""
-    t = 0.5 * np.log(q)
-    n = table.shape[0]
-    u = (t - T_LO) * STEPS_PER_UNIT
-    i = np.clip(np.floor(u), 0, n - 2).astype(np.int64)
-    s = u - i
-    out = np.empty((q.size, 3))
-    for col in range(3):
-        a = table[i, 4 * col: 4 * col + 4]
-        out[:, col] = a[:, 0] + s * (a[:, 1] + s * (a[:, 2] + s * a[:, 3]))
-    below, held = t <= T_LO, u >= n - 1
-    f = np.exp(2.0 * (t[below] - T_LO))
-    out[below] = np.stack([c0 + (table[0, 0] - c0) * f, k0 + (table[0, 4] - k0) * f,
-                           np.full(f.shape, table[0, 8])], axis=1)
-    out[held] = table[n - 1, 0::4][:3]
-    return out
-
-
 _LOBATTO = 0.5 - 0.5 * np.cos(np.pi * np.arange(FIT_DEGREE + 1) / FIT_DEGREE)
 _TO_POWERS = np.linalg.inv(np.vander(_LOBATTO, FIT_DEGREE + 1, increasing=True))
+
+
+@numba.njit(cache=True, inline="always")
+def _interpolant_jit(q, table, c0, k0, out):
+    """:func:`table_lookup` at ``q = (sigma / theta_ul)^2 > 0`` into ``out`` (``e_c``, ``e_k``, ``d_c``)."""
+    t = 0.5 * math.log(q)
+    n = table.shape[0]
+    if t <= T_LO:
+        f = math.exp(2.0 * (t - T_LO))
+        out[0] = c0 + (table[0, 0] - c0) * f
+        out[1] = k0 + (table[0, 4] - k0) * f
+        out[2] = table[0, 8]
+        return
+    u = (t - T_LO) * STEPS_PER_UNIT
+    if u >= n - 1:
+        for column in range(3):
+            out[column] = table[n - 1, 4 * column]
+        return
+    i = int(min(math.floor(u), n - 2.0))
+    s = u - i
+    for column in range(3):
+        out[column] = cubic(table, i, column, s)
+
+
+@numba.njit(cache=True)
+def _octave_rows_jit(table, c0, k0, lo, hi, node, split, rows):
+    """Fills the rows of :func:`octave_table` from the buckets ``[lo, hi)``, their nodes and splits."""
+    values = np.empty((FIT_DEGREE + 1, 3))
+    for b in range(lo.size):
+        for piece in range(2):
+            a, e = (0.0, split[b]) if piece == 0 else (split[b], 1.0)
+            width = e - a if e > a else 1.0
+            r = 2 * b + piece
+            rows[r, 0] = node[b]
+            rows[r, 1] = 1.0 / width
+            rows[r, 2] = -a / width
+            for j in range(FIT_DEGREE + 1):
+                _interpolant_jit(lo[b] + (a + _LOBATTO[j] * width) * (hi[b] - lo[b]), table, c0, k0, values[j])
+            for column in range(3):
+                for i in range(FIT_DEGREE + 1):
+                    acc = 0.0
+                    for j in range(FIT_DEGREE + 1):
+                        acc += _TO_POWERS[i, j] * values[j, column]
+                    rows[r, 3 + (FIT_DEGREE + 1) * column + i] = acc
 
 
 def octave_table(table, c0, k0):
@@ -644,19 +738,8 @@ def octave_table(table, c0, k0):
     inside = q_nodes[k] < hi
     node = np.where(inside, q_nodes[k], np.inf)
     split = np.where(inside, (node - lo) / (hi - lo), 1.0)
-    rows = np.zeros((2 * lo.size, 3 + 3 * (FIT_DEGREE + 1)))
-    for piece, (a, b) in enumerate(((np.zeros_like(split), split), (split, np.ones_like(split)))):
-        width = np.where(b > a, b - a, 1.0)
-        s = a[:, None] + _LOBATTO[None, :] * width[:, None]
-        values = _interpolant((lo[:, None] + s * (hi - lo)[:, None]).ravel(), table, c0, k0)
-        values = values.reshape(lo.size, FIT_DEGREE + 1, 3)
-        # powers[b, c, i] = sum_j _TO_POWERS[i, j] values[b, j, c], summed in this order (no BLAS: the same bits
-        # in every process)
-        powers = sum(_TO_POWERS[None, None, :, j] * values[:, j, :, None] for j in range(FIT_DEGREE + 1))
-        rows[piece::2, 0] = node
-        rows[piece::2, 1] = 1.0 / width
-        rows[piece::2, 2] = -a / width
-        rows[piece::2, 3:] = powers.reshape(lo.size, -1)
+    rows = np.empty((2 * lo.size, 3 + 3 * (FIT_DEGREE + 1)))
+    _octave_rows_jit(np.ascontiguousarray(table, dtype=float), float(c0), float(k0), lo, hi, node, split, rows)
     return rows
 
 
@@ -730,19 +813,22 @@ _TABLES_LOCK = threading.Lock()
 
 
 def _solver_table(block, foundation, cond):
-    """``(octave table, node-0 values, last-node values)`` of one scalar point, from the process's cache of
-    recent tables (read-only)."""
+    """``(octave table, its RECORD)`` of one scalar point, from the process's cache of recent tables
+    (read-only)."""
     key = (cond, point_key(block, foundation))
     with _TABLES_LOCK:
         entry = _TABLES.get(key)
         if entry is not None:
             _TABLES.move_to_end(key)
             return entry
-    table = coefficient_table(block, foundation, cond)
-    solver_table = octave_table(table, float(cond.damping_at_rest(block, foundation)),
-                                float(cond.stiffness_at_rest(block, foundation)))
+    values, slopes, tu, c0, k0 = _node_values(block, foundation, cond)
+    table = cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
+    solver_table = octave_table(table, c0, k0)
     solver_table.flags.writeable = False
-    entry = (solver_table, table[0, 0::4][:3].copy(), table[-1, 0::4][:3].copy())
+    record = np.empty(1, dtype=RECORD)
+    record[0] = (1.0 / tu ** 2, c0, k0, *table[0, 0::4][:3], *table[-1, 0::4][:3], solver_table.shape[0] // 2)
+    record.flags.writeable = False
+    entry = (solver_table, record)
     with _TABLES_LOCK:
         _TABLES[key] = entry
         while len(_TABLES) > TABLE_CACHE_SIZE:
@@ -795,16 +881,7 @@ def moment_kernel(block, foundation, cond):
     """
     first, index = _distinct_points(block, foundation)
     entries = [_solver_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
-    blk, fnd = select(block, first), select(foundation, first)          # one entry per distinct point
-    records = np.empty(first.size, dtype=RECORD)
-    records["inv_theta_ul2"] = 1.0 / np.broadcast_to(cond.uplift_threshold(blk, fnd), first.shape) ** 2
-    records["c_rest"] = np.broadcast_to(cond.damping_at_rest(blk, fnd), first.shape)
-    records["k_rest"] = np.broadcast_to(cond.stiffness_at_rest(blk, fnd), first.shape)
-    for end, column in (("lo", 1), ("hi", 2)):
-        values = np.array([e[column] for e in entries])
-        for k, name in enumerate(("c", "k", "d")):
-            records[f"{end}_{name}"] = values[:, k]
-    records["buckets"] = [e[0].shape[0] // 2 for e in entries]
+    records = np.concatenate([e[1] for e in entries])
     return MomentKernel(equivalent_coefficients_jit, records[index], _stacked([e[0] for e in entries]), index)
 
 

@@ -131,3 +131,35 @@ def test_distinct_points_are_found_as_point_key_finds_them():
     order = list(dict.fromkeys(keys))                       # distinct keys in order of appearance
     assert [keys[i] for i in first] == order
     assert [order.index(key) for key in keys] == index.tolist()
+
+
+#: (eps [m-2], S0 [m2 s-3], peak var_theta [rad2] of virtual_work, of cubic), 20 s of the paper block's white
+#: noise, solved 2026-11-29 before the tables were built faster (issue 38: results within 1e-6 relative).
+PEAKS_BEFORE = [
+    (-6e5, 1e-05, 1.1626353530696153e-07, 1.1628040935959838e-07),
+    (-6e5, 0.00015491933384829674, 2.7363182166009012e-06, 2.4767384243862114e-06),
+    (-6e5, 0.00096274077986829, 0.00019250205797083242, 7.78540636532256e-05),
+    (-6e5, 0.0024, 0.0036869009057764134, 0.0009326106157440177),
+    (2.97e7, 1e-05, 1.0676494233032789e-07, 1.0627960497090722e-07),
+    (2.97e7, 0.00015491933384829674, 3.0754715620297885e-06, 2.663141065789832e-06),
+    (2.97e7, 0.00096274077986829, 0.0003621231962031293, 0.00023281976502764417),
+    (6e7, 1e-05, 1.0042889309058819e-07, 9.981783153840936e-08),
+    (6e7, 0.00015491933384829674, 3.326430222980717e-06, 2.861944464681202e-06),
+    (6e7, 0.00096274077986829, 0.000445742006764719, 0.0003559072424586905),
+]
+
+
+def test_the_peak_variances_are_those_of_the_tables_before_they_were_built_faster():
+    from screening.core.condensation import get
+    from screening.core.excitations.white import WhiteNoise
+    from screening.core.model import Block, Foundation
+    from screening.solvers.moments import solve_moments
+    from screening.solvers.timegrid import output_times
+
+    eps, s0, *before = (np.array(column) for column in zip(*PEAKS_BEFORE))
+    for name, peak in zip(("virtual_work", "cubic"), before):
+        quad._TABLES.clear()
+        res = solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8, eps), WhiteNoise(s0, band_limit_hz=None),
+                            output_times(20.0, 0.05), condensation=get(name), histories=False)
+        assert np.all(res["status"] == 0)
+        np.testing.assert_allclose(res["peak_var_theta"], peak, rtol=1e-6)
