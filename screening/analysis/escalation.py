@@ -37,13 +37,7 @@ from screening.analysis.trust import bed_law, p_bin, regime
 from screening.core.status import EscalationModel, PointStatus
 from screening.solvers.estimates import Z, binomial_estimate
 
-__all__ = ["PILOT_SAMPLES", "SAMPLE_SAFETY", "TRANSITION_BAND", "PROBABILITY_SE", "STEP_COST_S", "GRID_COST_S", "RODAS_STEP_FACTOR",
-           "PRIOR_STEPS_PER_S", "STIFF_BED_EXACT_COST_S", "STIFF_BED_ADAPTIVE_COST_S", "STIFF_BED_RUN_COST_S",
-           "MIN_SAMPLES", "MAX_SAMPLES", "MAX_POINTS", "MAX_TRANSITION_POINTS", "MIN_CONDENSED_ROWS",
-           "escalation_candidates", "cover_points", "transition_points", "transition_first", "condensed_cells",
-           "escalation_model", "samples_needed", "meets_target", "probability_samples", "probabilities_met",
-           "estimated_cost", "full_contact_share", "prior_cost",
-           "auto_escalation_model", "PAIRED_MODEL", "paired_model", "paired_plan"]
+__all__ = []
 
 #: Samples of the pilot run at each escalated point (cost per sample and spread of the estimate).
 PILOT_SAMPLES = 64
@@ -142,16 +136,6 @@ def escalation_candidates(status, trust, low, high, target):
     ----------
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
        documentation).
-
-    Examples
-    --------
-    A trusted point within the target, an untrusted one, a stopped one and a failed task:
-
-    >>> import numpy as np
-    >>> from screening.core.status import Trust
-    >>> escalation_candidates([0, 0, 2, -1], [Trust.trusted, Trust.untrusted, Trust.untrusted, Trust.untrusted],
-    ...                       [-0.05, -0.3, np.nan, np.nan], [0.05, 0.3, np.nan, np.nan], 0.1).tolist()
-    [False, True, True, False]
     """
     status = np.asarray(status).reshape(-1)
     promised = linearization_promises(trust, low, high, target).reshape(-1) | \
@@ -190,13 +174,6 @@ def cover_points(features, candidates, priority, count):
     ----------
     .. [1] T. F. Gonzalez, "Clustering to minimize the maximum intercluster distance", Theoretical Computer
        Science 38 (1985) 293-306 (the greedy farthest-point choice).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> features = np.array([[0.0], [1.0], [2.0], [3.0], [10.0]])
-    >>> cover_points(features, [True] * 5, [0.1, 0.2, 0.3, 0.4, 0.9], 3).tolist()
-    [4, 0, 3]
     """
     idx = np.flatnonzero(np.asarray(candidates).reshape(-1))
     if idx.size == 0 or count < 1:
@@ -247,15 +224,6 @@ def transition_points(p, shape, axis=None, intensity=None, band=TRANSITION_BAND)
     References
     ----------
     .. [1] ``docs/accuracy_in_sweeps.md``, "A budget in seconds" (this package's documentation).
-
-    Examples
-    --------
-    One curve of six intensities: 0.01 and 1.0 beside each other jump across the band; a stopped point
-    (NaN) beside 0.5:
-
-    >>> import numpy as np
-    >>> transition_points([0.0, 0.001, 0.01, 1.0, 0.5, np.nan], (6,), axis=0).tolist()
-    [False, False, True, True, True, True]
     """
     shape = tuple(int(k) for k in shape)
     n = int(np.prod(shape, dtype=np.int64))
@@ -312,14 +280,6 @@ def transition_first(features, candidates, transition, priority, count, most_tra
     ----------
     .. [1] T. F. Gonzalez, "Clustering to minimize the maximum intercluster distance", Theoretical Computer
        Science 38 (1985) 293-306 (the greedy farthest-point choice).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> features = np.array([[0.0], [1.0], [2.0], [3.0], [10.0]])
-    >>> transition_first(features, [True] * 5, [False, True, True, False, False], [0.1, 0.2, 0.3, 0.4, 0.9],
-    ...                  3).tolist()
-    [2, 1, 4]
     """
     candidates = np.asarray(candidates, dtype=bool).reshape(-1)
     idx = np.flatnonzero(candidates)
@@ -378,13 +338,6 @@ def condensed_cells(calibration, target):
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
        documentation).
     .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.analysis.trust import shipped_calibration
-    >>> cells = condensed_cells(shipped_calibration(), 0.1)
-    >>> cells[("linear", 0)], cells[("hardening", 0)]
-    (True, False)
     """
     err = (calibration["condensed_peak_var_theta"] / calibration["coupled_peak_var_theta"] - 1.0).values
     over = (calibration["coupled_n_overturned"] / calibration["coupled_n_samples"]).values
@@ -428,16 +381,6 @@ def escalation_model(indicators, status, condensation, eps, cells):
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold" (this package's
        documentation).
     .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    The second point is near toppling (``sigma_ratio`` > 0.25), the third in a cell that does not qualify:
-
-    >>> import numpy as np
-    >>> ind = {"peak_p_uplift": np.array([0.01, 0.01, 0.5]), "k_eq_margin": np.full(3, 0.9),
-    ...        "sigma_ratio": np.array([0.01, 0.5, 0.01]), "decay_excess": np.ones(3)}
-    >>> escalation_model(ind, [0, 0, 0], "paper", np.full(3, 1e7), {("hardening", 1): True}).tolist()
-    [0, 1, 1]
     """
     reg = regime(indicators)
     bins = p_bin(indicators["peak_p_uplift"])
@@ -470,12 +413,6 @@ def auto_escalation_model(calibrated, chosen):
     References
     ----------
     .. [1] screening documentation, "Automatic model choice", ``docs/model_choice.md``.
-
-    Examples
-    --------
-    >>> calibrated = [EscalationModel.coupled, EscalationModel.condensed, EscalationModel.coupled]
-    >>> [EscalationModel(m).name for m in auto_escalation_model(calibrated, ["coupled", "stiff_bed", "condensed"])]
-    ['coupled', 'stiff_bed', 'coupled']
     """
     chosen = np.asarray(chosen, dtype=str)
     return np.where(chosen == "stiff_bed", int(EscalationModel.stiff_bed),
@@ -511,11 +448,6 @@ def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety
     References
     ----------
     .. [1] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> samples_needed(0.2, 64, 0.1), 1.5 * 64 * (0.2 / 0.05) ** 2, samples_needed(float("nan"), 64, 0.1)
-    (1536, 1536.0, 4000)
     """
     if not math.isfinite(pilot_rel_se) or pilot_rel_se <= 0:
         return int(most)
@@ -542,12 +474,6 @@ def meets_target(peak, peak_se, target):
     References
     ----------
     .. [1] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> meets_target([1.0, 1.0, np.nan], [0.04, 0.06, 0.01], 0.1).tolist()
-    [True, False, False]
     """
     peak, peak_se = np.asarray(peak, dtype=float), np.asarray(peak_se, dtype=float)
     with np.errstate(invalid="ignore"):
@@ -581,11 +507,6 @@ def probability_samples(hits, used, most=MAX_SAMPLES, se=PROBABILITY_SE):
     References
     ----------
     .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> probability_samples([32], 64), probability_samples([0, 1], 64), probability_samples([], 0)
-    (274, 100, 4000)
     """
     hits = np.asarray(hits, dtype=float).reshape(-1)
     if int(used) <= 0 or hits.size == 0:
@@ -614,11 +535,6 @@ def probabilities_met(hits, used, se=PROBABILITY_SE):
     References
     ----------
     .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> probabilities_met([32], 64), probabilities_met([150], 300), probabilities_met([0], 0)
-    (False, True, False)
     """
     if int(used) <= 0:
         return False
@@ -666,12 +582,6 @@ def full_contact_share(p_uplift, n_used, samples):
     ----------
     .. [1] ``docs/montecarlo_numerics.md``, "Monte Carlo numerics: the sample integrators, stiff beds and the
        cost model" (this package's documentation).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> round(full_contact_share([0.2, 0.4], 8, 10), 6), full_contact_share([np.nan], 5, 10)
-    (0.56, 0.5)
     """
     p = np.asarray(p_uplift, dtype=float)
     p = p[np.isfinite(p)]
@@ -723,12 +633,6 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
        model of the escalation" (this package's documentation).
     .. [2] ``docs/montecarlo_numerics.md``, "Monte Carlo numerics: the sample integrators, stiff beds and the
        cost model" (this package's documentation).
-
-    Examples
-    --------
-    >>> from screening.core.status import EscalationModel
-    >>> estimated_cost(1e6, EscalationModel.coupled), 1e6 * STEP_COST_S[EscalationModel.coupled]
-    (0.41, 0.41)
     """
     model = EscalationModel(int(model))
     grid = float(grid_points)
@@ -763,12 +667,6 @@ def prior_cost(samples, t_end, model):
     ----------
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold", section "Cost
        model of the escalation" (this package's documentation).
-
-    Examples
-    --------
-    >>> from screening.core.status import EscalationModel
-    >>> f"{prior_cost(100, 20.0, EscalationModel.condensed):.4f}", f"{100 * 20.0 * 3000.0 * 0.14e-6:.4f}"
-    ('0.8400', '0.8400')
     """
     return estimated_cost(samples * t_end * PRIOR_STEPS_PER_S, model)
 
@@ -799,11 +697,6 @@ def paired_model(model):
     ----------
     .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Multi-fidelity Monte Carlo", ``docs/multifidelity.md``.
-
-    Examples
-    --------
-    >>> paired_model(EscalationModel.coupled)[:2], paired_model(EscalationModel.condensed)
-    (('condensed', 'virtual_work'), None)
     """
     return PAIRED_MODEL if EscalationModel(int(model)) == EscalationModel.coupled else None
 
@@ -849,19 +742,6 @@ def paired_plan(pilot, model, pilot_samples, n_plain):
     .. [1] ``docs/multifidelity.md``, "Multi-fidelity Monte Carlo: what a paired cheap model saves", sections
        "When the cheap model runs" and "In the escalation" (this package's documentation).
     .. [2] ``docs/montecarlo_numerics.md``, section "Cost model of the escalation" (this package's documentation).
-
-    Examples
-    --------
-    >>> from screening.core.status import EscalationModel
-    >>> pilot = {"n_steps": 2e5, "n_grid": 0, "rodas": False, "cheap_n_steps": 2e4, "cheap_n_grid": 0,
-    ...          "correlation": 0.95}
-    >>> plan = paired_plan(pilot, EscalationModel.coupled, 100, 2000)
-    >>> plan.estimator, plan.n_expensive, plan.n_cheap
-    ('multifidelity', 305, 5022)
-    >>> paired_plan(pilot, EscalationModel.coupled, 100, 300).n_expensive       # at least the pilot's
-    100
-    >>> paired_plan(dict(pilot, correlation=0.3), EscalationModel.coupled, 100, 2000).estimator
-    'plain'
     """
     c_hi = estimated_cost(pilot["n_steps"], model, pilot["n_grid"], bool(pilot["rodas"]), pilot_samples) / pilot_samples
     cheap_samples = max(int(pilot.get("cheap_samples", pilot_samples)), 1)

@@ -15,10 +15,7 @@ from scipy.linalg import expm
 
 from screening.core.physics.contact import law_resultants_trig_jit
 
-__all__ = ["MODEL_COUPLED", "MODEL_CONDENSED", "GRAVITY_RATIO_MIN", "MODEL", "INTEGRATOR_DOPRI", "INTEGRATOR_RODAS",
-           "INTEGRATOR_EXACT", "INTEGRATORS", "CONTACT_MARGIN", "NO_PROPAGATOR", "full_contact_propagator", "model_record",
-           "coupled_accelerations_trig", "coupled_accelerations", "condensed_acceleration", "input_gain",
-           "vertical_gain"]
+__all__ = []
 
 #: Which equations a sample integrates.
 MODEL_COUPLED = 0
@@ -89,18 +86,6 @@ def model_record(block, foundation, cond, max_flight_time=0.5, integrator="dopri
     condensation (eq. (19) for the paper's); the bounds ``z_max = b``, ``z_min = -2 h`` and
     ``rate_max = 1000 sqrt(g / h)`` flag a blown-up coupled state.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> rec = model_record(block, bed, condensation.get("paper"), integrator="rodas")
-    >>> f"{rec['m_sdof']:.5f} {rec['theta_ul']:.4e}", int(rec["integrator"]) == INTEGRATOR_RODAS
-    ('0.51334 1.2012e-03', True)
     """
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     rec = np.zeros((), dtype=MODEL)
@@ -160,22 +145,6 @@ def coupled_accelerations(theta, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v=0.0
     relative to the ground, so it enters the vertical equation only (docs/method.md).  The printed
     resultants of eqs. (10)-(12) are corrected (docs/method.md, "Corrections to the printed equations").
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> p = model_record(block, bed, condensation.get("paper"))[()]
-    >>> z_st = 8.67 * 9.81 / (2 * 0.035 * 2.89e7)                   # static indentation m g / (2 b k)
-    >>> coupled_accelerations(0.0, 0.0, z_st, 0.0, 0.0, p)          # at rest: in balance
-    (0.0, 0.0)
-    >>> a, _ = coupled_accelerations(0.0, 0.0, z_st, 0.0, 1.0, p)   # 1 m/s2: m h / (I_cm + m h^2)
-    >>> f"{a:.6f}", f"{8.67 * 0.21 / block.m_sdof:.6f}"
-    ('3.546798', '3.546798')
     """
     return coupled_accelerations_trig(math.sin(theta), math.cos(theta), theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v)
 
@@ -196,20 +165,6 @@ def coupled_accelerations_trig(s, c, theta_dot, z_cb, z_cb_dot, x_g_ddot, p, a_v
     tuple of float
         ``(theta'' [rad/s^2], z_cb'' [m/s^2])``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import math
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> p = model_record(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                  condensation.get("paper"))[()]
-    >>> args = (0.01, 4e-5, 1e-3, 0.5, p, 0.0)
-    >>> coupled_accelerations_trig(math.sin(2e-4), math.cos(2e-4), *args) == coupled_accelerations(2e-4, *args)
-    True
     """
     m, g, h = p.m, p.g, p.h
     force, moment = law_resultants_trig_jit(s, c, theta_dot, z_cb, z_cb_dot, p.b, p.k, p.eps, p.w_rate,
@@ -256,20 +211,6 @@ def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, 
 
         m_sdof theta'' = m h x_g'' - C(theta / lam) theta' - K(theta / lam) theta + m h a_v theta
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> block, bed, paper = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), condensation.get("paper")
-    >>> p, kernel = model_record(block, bed, paper)[()], paper.sdof_kernel(block, bed)
-    >>> a = condensed_acceleration(kernel.damping_stiffness, kernel.record[0], 1e-4, 0.0, 1.0, p)
-    >>> by_hand = (8.67 * 0.21 * 1.0 - paper.restoring_moment(1e-4, block, bed)) / block.m_sdof
-    >>> f"{a:.8f}", f"{by_hand:.8f}"
-    ('3.38935790', '3.38935790')
     """
     if a_v == 0.0:                                  # the horizontal-only path: no divisions
         damping, stiffness = damping_stiffness(cond, theta)
@@ -305,23 +246,6 @@ def input_gain(model, theta, p):
     Coupled (eqs. (7)-(8) in [1]_ as in :func:`coupled_accelerations`): ``m h cos / (I_cm + m h^2 cos^2)``
     and ``-h sin`` times that; condensed (eq. (22)): ``m h / m_sdof`` and 0.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> p = model_record(block, bed, condensation.get("paper"))[()]
-    >>> [f"{g:.6f}" for g in input_gain(MODEL_CONDENSED, 0.01, p)]               # m h / m_sdof, 0
-    ['3.546798', '0.000000']
-    >>> g1, g2 = input_gain(MODEL_COUPLED, 0.01, p)
-    >>> a0, z0 = coupled_accelerations(0.01, 0.0, 1e-4, 0.0, 0.0, p)              # a finite difference
-    >>> a1, z1 = coupled_accelerations(0.01, 0.0, 1e-4, 0.0, 1.0, p)
-    >>> f"{g1:.6f} {a1 - a0:.6f}", f"{g2:.6f} {z1 - z0:.6f}"
-    ('3.546885 3.546885', '-0.007448 -0.007448')
     """
     if model == MODEL_COUPLED:
         s = math.sin(theta)
@@ -352,20 +276,6 @@ def vertical_gain(model, theta, p):
     From :func:`coupled_accelerations` (``a_v`` enters ``z_cb''`` only) and the condensed equation of
     :func:`condensed_acceleration` (eq. (22) in [1]_ with the weight's moment ``m h a_v theta``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> p = model_record(block, bed, condensation.get("paper"))[()]
-    >>> vertical_gain(MODEL_COUPLED, 0.01, p)
-    (0.0, 1.0)
-    >>> f"{vertical_gain(MODEL_CONDENSED, 0.01, p)[0]:.6f}", f"{8.67 * 0.21 * 0.01 / block.m_sdof:.6f}"
-    ('0.035468', '0.035468')
     """
     if model == MODEL_COUPLED:
         return 0.0, 1.0
@@ -447,17 +357,6 @@ def full_contact_propagator(p, y_star, dt):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hochbruck2010] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> block, bed = Block(m=600.0, b=0.2, h=0.8), Foundation(k=1e10, c=1e6)
-    >>> rec = model_record(block, bed, condensation.get("paper"))
-    >>> z_st = 600.0 * 9.81 / (2 * 0.2 * 1e10)
-    >>> prop = full_contact_propagator(rec, (0.0, 0.0, z_st, 0.0), 1e-3)
-    >>> prop.shape, f"{prop[35, 2]:.4g}", f"{2 * 0.2 * 1e10 / 600.0:.4g}"       # K_z = 2 b k / m
-    ((45, 4), '6.667e+06', '6.667e+06')
     """
     rec = p[()] if isinstance(p, np.ndarray) and p.ndim == 0 else p
     L, B = _jacobian_at_rest(rec, y_star)

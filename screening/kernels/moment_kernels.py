@@ -45,12 +45,7 @@ from screening.kernels.dopri import (
 from screening.core.signatures import FMA
 from screening.core.status import PointStatus
 
-__all__ = ["uplift_occupancy", "SCALE_FLOOR", "OK", "K_EQ_NEGATIVE", "BEYOND_SLENDERNESS", "STEP_BUDGET", "NON_FINITE",
-           "PEAK_HALVINGS", "envelope_rates", "envelope_state", "initial_gain", "stage_gains", "p_uplift",
-           "first_step", "trial_step", "judge_step", "end_of_step", "peak_in_step", "store_outputs",
-           "store_dense_outputs", "SUMMARIES", "solve_point_white", "packed_size", "augmented_system",
-           "lyapunov_rhs", "moment_equations", "augmented_rhs", "augmented_rhs_two_states", "filtered_scales", "solve_point_filtered",
-           "solve_point_two_states"]
+__all__ = []
 
 #: Smallest absolute-tolerance scale [moment units]: below it the scale would underflow.
 SCALE_FLOOR = 1e-300
@@ -92,19 +87,6 @@ def envelope_rates(osc):
     -----
     The decay rates of the two exponentials of eq. (57) in [1]_.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> envelope_rates(osc)
-    (0.25, 0.5)
     """
     return 1.0 / osc.T1, 1.0 / osc.T2
 
@@ -126,20 +108,6 @@ def envelope_state(osc, t):
     tuple of float
         ``(e1, e2) = (exp(-t/T1), exp(-t/T2))`` [1]; ``q(t) = 4 (e1 - e2)`` (eq. (57) in [1]_).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> e1, e2 = envelope_state(osc, 1.0)
-    >>> f"{4 * (e1 - e2):.6f}", f"{float(exc.envelope(1.0)):.6f}"           # q(1 s) both ways
-    ('0.689080', '0.689080')
     """
     r1, r2 = envelope_rates(osc)
     return math.exp(-t * r1), math.exp(-t * r2)
@@ -165,19 +133,6 @@ def initial_gain(osc, e1, e2):
     -----
     The gain of eq. (43) in [1]_ with the envelope of eq. (57).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> f"{initial_gain(osc, *envelope_state(osc, 1.0)):.6f}", f"{osc['gain'] * float(exc.envelope(1.0)):.6f}"
-    ('2.444029', '2.444029')
     """
     return osc.gain * (1.0 if osc.constant_envelope == 1.0 else 4.0 * (e1 - e2))
 
@@ -212,20 +167,6 @@ def stage_gains(osc, e1, e2, h):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> e1, e2 = envelope_state(osc, 1.0)
-    >>> *gains, f1, f2 = stage_gains(osc, e1, e2, 0.1)
-    >>> f"{gains[-1]:.6f}", f"{osc['gain'] * float(exc.envelope(1.1)):.6f}"   # stage 6 sits at t + h
-    ('2.590898', '2.590898')
-    >>> bool(np.allclose((e1 * f1, e2 * f2), envelope_state(osc, 1.1), rtol=1e-14))
-    True
     """
     if osc.constant_envelope == 1.0:
         g = osc.gain
@@ -261,14 +202,6 @@ def uplift_occupancy(theta_ul, var_theta):
     Eq. (58) in [1].  The numpy reference of the compiled :func:`p_uplift`, which the step loops evaluate
     at every output instant; :mod:`screening.solvers.moments` applies it to the peak variance.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> [f"{p:.4f}" for p in uplift_occupancy(1e-3, [0.0, 1e-6, 4e-6])]
-    ['0.0000', '0.3173', '0.6171']
     """
     var_theta = np.asarray(var_theta, dtype=float)
     with np.errstate(divide="ignore"):
@@ -296,21 +229,6 @@ def p_uplift(osc, var_theta):
     -----
     Eq. (58) in [1]_.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> f"{p_uplift(osc, 1e-6):.12f}", f"{float(uplift_occupancy(osc['theta_ul'], 1e-6)):.12f}"
-    ('0.229664132095', '0.229664132095')
-    >>> p_uplift(osc, 0.0)
-    0.0
     """
     if var_theta <= 0.0:
         return 0.0
@@ -348,19 +266,6 @@ def first_step(osc, k0, h_max, t, t_end):
     ----------
     .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> h, code, _ = first_step(osc, 808.2, 0.1, 0.0, 20.0)
-    >>> f"{h:.6e}", f"{0.05 / np.sqrt(808.2 / osc['m_sdof']):.6e}", code.name
-    ('1.260119e-03', '1.260119e-03', 'ok')
-    >>> first_step(osc, -1.0, 0.1, 3.0, 20.0)[1:]
-    (<PointStatus.k_eq_negative: 1>, 3.0)
     """
     if not (k0 > 0.0):
         return 0.0, K_EQ_NEGATIVE, t
@@ -396,14 +301,6 @@ def trial_step(h, t, t_end, steps, max_steps):
     ----------
     .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> h, code = trial_step(0.5, 19.8, 20.0, 10, 100)
-    >>> round(h, 12), code.name
-    (0.2, 'ok')
-    >>> trial_step(0.1, 1.0, 20.0, 100, 100)[1].name
-    'step_budget_exhausted'
     """
     if t + h > t_end:
         h = t_end - t
@@ -448,16 +345,6 @@ def judge_step(err, finite, h, t_end):
     ----------
     .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> judge_step(0.5, True, 0.1, 20.0)[:3]
-    (True, 0.1, 0)
-    >>> accepted, h, rejected, _ = judge_step(2.0, True, 0.1, 20.0)
-    >>> accepted, f"{h:.6f}", f"{0.1 * max(0.2, 0.9 * 2.0 ** -0.2):.6f}", rejected
-    (False, '0.078350', '0.078350', 1)
-    >>> judge_step(0.0, False, 1e-12, 20.0)[3].name
-    'non_finite_moments'
     """
     if not finite:
         if h > 1e-12 * t_end:
@@ -513,19 +400,6 @@ def end_of_step(osc, t, h, h_max, e1, e2, f1, f2, var_theta, k_eq, lowest_k, err
     ----------
     .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> out = end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 1e-6, 800.0, 808.0, 0.5, 0.0)
-    >>> round(out[0], 12), round(out[1], 12), round(out[2], 12), out[5], out[6].name
-    (1.1, 0.45, 0.285, 800.0, 'ok')
-    >>> end_of_step(osc, 1.0, 0.1, 1.0, 0.5, 0.3, 0.9, 0.95, 0.03, 800.0, 808.0, 0.5, 0.0)[6].name  # sigma > 0.165 rad
-    'sigma_theta_beyond_slenderness'
     """
     if k_eq < lowest_k:
         lowest_k = k_eq
@@ -573,17 +447,6 @@ def peak_in_step(t, h, v0, v1, c0, c1, kv, kc, best, best_t):
     ----------
     .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    A step over which ``var_theta = 1 - (t - 0.5)^2`` (so ``cov = -(t - 0.5)``), its stage derivatives
-    exact: the peak 1 at ``t = 0.5``.
-
-    >>> nodes = (0.0, 0.3, 0.8, 8 / 9, 1.0, 1.0)                   # stages 1, 3, 4, 5, 6, 7
-    >>> kv, kc = tuple(-2.0 * (c - 0.5) for c in nodes), (-1.0,) * 6
-    >>> best, best_t = peak_in_step(0.0, 1.0, 0.75, 0.75, 0.5, -0.5, kv, kc, 0.0, 0.0)
-    >>> round(best, 12), round(best_t, 6)
-    (1.0, 0.5)
     """
     bound = max(v0, v1) + h * max(abs(c0), abs(c1)) * 2.0
     if c0 > 0.0 and c1 <= 0.0 and bound > best:
@@ -633,23 +496,6 @@ def store_outputs(coefficients, cond, table, osc, i, k, var, cv, vd,
     -------
     None
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> import numba
-    >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))         # constant c_eq, k_eq
-    >>> out = [np.zeros((1, 3)) for _ in range(6)]
-    >>> store_outputs(toy, 0.0, 0.0, osc, 0, 1, 1e-6, 0.0, 1e-3, *out)
-    >>> [float(a[0, 1]) for a in out[:5]], f"{out[5][0, 1]:.4f}"
-    ([1e-06, 0.0, 0.001, 1.0, 2.0], '0.2297')
     """
     var_theta[i, k] = var
     cov[i, k] = cv
@@ -702,23 +548,6 @@ def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h
     ----------
     .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.solvers.moments import oscillator_records
-    >>> block, bed, exc = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4, band_limit_hz=None)
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))[0]    # T1 = 4 s, T2 = 2 s
-    >>> import numba
-    >>> toy = numba.njit(lambda cond, table, var, cv: (1.0, 2.0))
-    >>> out = [np.zeros((1, 4)) for _ in range(6)]
-    >>> still = ((0.0,) * 6,) * 3                                         # moments constant over the step
-    >>> store_dense_outputs.py_func(toy, 0.0, 0.0, osc, 0, 1, np.array([0.0, 0.5, 1.0, 1.5]), 0.0, 1.0,
-    ...                             (1e-6, 0.0, 1e-3), still, *out)        # writes t = 0.5 and 1.0
-    3
-    >>> out[0][0].tolist()
-    [0.0, 1e-06, 1e-06, 0.0]
     """
     nt = t_out.shape[0]
     t_new = t + h
@@ -810,18 +639,6 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
     ``d vd/dt = -2 (k_eq cov + c_eq vd) / m_sdof + 2 pi S0 alpha(t)^2``; numpy reference:
     :func:`moment_equations`.  Compiling it takes tens of seconds, so the example shows its interface.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import inspect
-    >>> list(inspect.signature(solve_point_white.py_func).parameters)[:5]
-    ['coefficients', 'cond', 'table', 'osc', 't_out']
-    >>> SUMMARIES[0], SUMMARIES[4]
-    ('status', 'peak_var_theta')
     """
     inv_m = 1.0 / osc.m_sdof
     S0 = osc.S0
@@ -909,14 +726,6 @@ def packed_size(n):
     int
         ``n (n + 1) / 2``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> packed_size(2), packed_size(4), packed_size(6)          # white noise, Kanai-Tajimi, Clough-Penzien
-    (3, 10, 21)
     """
     return n * (n + 1) // 2
 
@@ -950,16 +759,6 @@ def augmented_system(k_eq, c_eq, m_sdof, alpha, filt):
     ``A = [[0, 1, 0], [-k_eq/m_sdof, -c_eq/m_sdof, alpha C_f], [0, 0, A_f]]``, ``b = [0, alpha D_f, B_f]``;
     eq. (42) in [1] for white noise (``n_f = 0``, ``D_f = 1``), eq. (52) for the Kanai–Tajimi filter.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.excitations import WhiteNoise
-    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, WhiteNoise(1e-4, band_limit_hz=None).filter())
-    >>> A.tolist(), b.tolist()
-    ([[0.0, 1.0], [-1600.0, -2.0]], [0.0, 3.5])
     """
     A_f, B_f, C_f, D_f = (np.asarray(m, dtype=float) for m in filt)
     nf = A_f.shape[-1]
@@ -995,16 +794,6 @@ def lyapunov_rhs(P, A, b, S0):
     -----
     Eq. (45) in [1] (white noise, with eq. (46)) and eq. (51) (the filtered input, with eq. (55)).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> dP = lyapunov_rhs(np.zeros((2, 2)), np.array([[0.0, 1.0], [-1600.0, -2.0]]), np.array([0.0, 3.5]), 1e-4)
-    >>> f"{dP[1, 1]:.6f}"
-    '0.007697'
     """
     return A @ P + P @ A.T + 2.0 * math.pi * S0 * np.outer(b, b)
 
@@ -1048,20 +837,6 @@ def moment_equations(t, P, block, foundation, excitation, condensation=DEFAULT_C
     :func:`solve_point_white` and :func:`solve_point_filtered` integrate the same equations on the
     packed upper triangle.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.core.model import Block, Foundation
-    >>> from screening.core.excitations import WhiteNoise
-    >>> P = np.diag([1e-8, 1e-4])
-    >>> dP = moment_equations(0.0, P, Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                       WhiteNoise(1e-4, band_limit_hz=None))
-    >>> bool(np.allclose(dP, dP.T)), dP.shape
-    (True, (2, 2))
     """
     P = np.asarray(P, dtype=float)
     c_eq, k_eq = equivalent_coefficients_from_moments(P[0, 0], P[0, 1], block, foundation, condensation)
@@ -1105,24 +880,6 @@ def augmented_rhs(kap, gam, alpha, q, fa, fb, fc, fd, y, dy, P, M):
     ``dP/dt = A P + P A^T + 2 pi S0 b b^T``: eq. (45) in [1]_ for white noise, eq. (51) with eq. (55) for a
     filtered input (:func:`augmented_system` builds ``A`` and ``b``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    Against the numpy reference :func:`lyapunov_rhs`, Kanai-Tajimi input:
-
-    >>> from screening.core.excitations import KanaiTajimi
-    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None).filter()
-    >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
-    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
-    >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
-    >>> iu, dy = np.triu_indices(4), np.zeros(10)
-    >>> augmented_rhs(1600.0, 2.0, 3.5, 2 * np.pi * 1e-4, fa, fb, fc, float(fd), C[iu], dy,
-    ...               np.empty((4, 4)), np.empty((4, 4)))
-    >>> bool(np.allclose(dy, lyapunov_rhs(C, A, b, 1e-4)[iu], rtol=1e-13, atol=0))
-    True
     """
     n = P.shape[0]
     nf = n - 2
@@ -1184,21 +941,6 @@ def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
     -----
     Eq. (51) in [1]_ with eqs. (52)-(55) (the Kanai-Tajimi filter), as :func:`lyapunov_rhs`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.excitations import KanaiTajimi
-    >>> filt = KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None).filter()
-    >>> fa, fb, fc, fd = (np.asarray(m, dtype=float) for m in filt)
-    >>> A, b = augmented_system(800.0, 1.0, 0.5, 3.5, filt)
-    >>> C = 1e-6 * np.array([[4, 1, .5, .2], [1, 3, .1, .3], [.5, .1, 2, .4], [.2, .3, .4, 1]])
-    >>> iu, dy = np.triu_indices(4), np.zeros(10)
-    >>> augmented_rhs_two_states(1600.0, 2.0, 3.5, 2 * np.pi * 1e-4, fa, fb, fc, float(fd), C[iu], dy)
-    >>> bool(np.allclose(dy, lyapunov_rhs(C, A, b, 1e-4)[iu], rtol=1e-13, atol=0))
-    True
     """
     c00, c01, c02, c03, c11, c12, c13, c22, c23, c33 = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9]
     g0 = alpha * fc[0]
@@ -1277,21 +1019,6 @@ def filtered_scales(osc, filter_covariance, psd_at_rocking):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [clough1975] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, KanaiTajimi
-    >>> from screening.core import condensation
-    >>> from screening.core.model.points import flatten
-    >>> from screening.solvers.moments import oscillator_records
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                KanaiTajimi(1e-4, omega_g=15.0, zeta_g=0.6, band_limit_hz=None))
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
-    >>> w = np.sqrt(osc["k_rest"] / osc["m_sdof"])
-    >>> scale = filtered_scales(osc, exc.stationary_covariance(), exc.psd(w))
-    >>> vd = np.pi * exc.psd(w) * osc["gain"] ** 2 / (2 * max(0.5 * osc["c_rest"][0] / osc["m_sdof"][0], 0.05))
-    >>> scale.shape, bool(np.isclose(scale[0, 4], vd[0])), bool(np.isclose(scale[0, 0], vd[0] / w[0] ** 2))
-    ((1, 10), True, True)
     """
     m = osc["m_sdof"]
     w2 = np.abs(osc["k_rest"]) / m
@@ -1336,17 +1063,6 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
     Eq. (51) in [1]_ with eq. (55), on the packed upper triangle (:func:`augmented_rhs`; numpy reference
     :func:`moment_equations`).  Compiling it takes tens of seconds, so the example shows its interface.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import inspect
-    >>> names = list(inspect.signature(solve_point_filtered.py_func).parameters)
-    >>> names[4:9], len(names)
-    (['fa', 'fb', 'fc', 'fd', 'scale'], 21)
     """
     return _filtered_steps(packed_size(fa.shape[0] + 2), coefficients, cond, table, osc, fa, fb, fc, fd, scale,
                            t_out, rtol, h_max, max_steps, store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o,
@@ -1376,16 +1092,6 @@ def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale
     Eq. (51) in [1]_ with eqs. (52)-(55).  Compiling it takes tens of seconds, so the example shows its
     interface.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import inspect
-    >>> (list(inspect.signature(solve_point_two_states.py_func).parameters)
-    ...  == list(inspect.signature(solve_point_filtered.py_func).parameters))
-    True
     """
     return _filtered_steps(10, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps,
                            store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)

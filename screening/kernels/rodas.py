@@ -17,9 +17,7 @@ estimate meaningful on stiff components; stiffly accurate (index-1 DAEs to order
 
 from __future__ import annotations
 
-__all__ = ["GAMMA", "C2", "C3", "C4", "D1", "D2", "D3", "D4", "A21", "A31", "A32", "A41", "A42", "A43", "A51",
-           "A52", "A53", "A54", "G21", "G31", "G32", "G41", "G42", "G43", "G51", "G52", "G53", "G54", "G61", "G62",
-           "G63", "G64", "G65", "SAFETY", "FAC_MIN", "FAC_MAX", "EXPONENT", "JACOBIAN_STEP"]
+__all__ = []
 
 #: Diagonal ``gamma`` of the method [1].
 GAMMA = 0.25

@@ -16,9 +16,7 @@ import numpy as np
 from screening.core.condensation import cubic
 from screening.kernels.mcs_equations import GRAVITY_RATIO_MIN
 
-__all__ = ["housner_restitution", "indentation_curvature", "constraint_damping", "gravity_ratio", "rocking_coefficients",
-           "rocking_acceleration", "potential", "STIFF", "stiff_record", "indentation_curvature_jit",
-           "constraint_damping_jit", "rocking_acceleration_jit"]
+__all__ = []
 
 
 # ----------------------------------------------------------------------------- numpy reference
@@ -52,16 +50,6 @@ def housner_restitution(block):
     References
     ----------
     .. [1] [housner1963] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> round(housner_restitution(block), 4)
-    0.8926
-    >>> bool(abs(housner_restitution(block) - (1 - 1.5 * 0.25**2 / (0.25**2 + 0.9**2))) < 1e-12)
-    True
     """
     return 1.0 - 1.5 * math.sin(math.atan2(float(block.b), float(block.h))) ** 2
 
@@ -98,24 +86,6 @@ def indentation_curvature(theta, block, foundation):
     The static balance is that of the contact law, eq. (3) in [1], on the quasi-static contact of
     ``docs/stiff_bed.md``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    The closed form against a central difference of the slope ``dZ/da``, in full contact and in uplift:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> tu = float(cubic.uplift_threshold(block, bed))          # uplift angle [rad]
-    >>> a = np.array([0.5, 5.0, 50.0]) * tu
-    >>> slope = lambda x: cubic.quasi_static_indentation(x, block, bed)[1]
-    >>> fd = (slope(1.001 * a) - slope(0.999 * a)) / (0.002 * a)
-    >>> bool(np.allclose(indentation_curvature(a, block, bed), fd, rtol=1e-5))
-    True
     """
     a = np.abs(np.asarray(theta, dtype=float))
     z, dz = cubic.quasi_static_indentation(a, block, foundation)
@@ -174,27 +144,6 @@ def constraint_damping(theta, block, foundation):
     This is Rayleigh's dissipation function of the contact pressure on the constraint ``z_cb = Z(theta)``
     (``docs/stiff_bed.md``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    At rest on a linear bed (``w = 0``, ``z`` uniform) the integral is ``(w_rate + w_ind z) (2 b^3 / 3)``,
-    and the two branches meet at the uplift angle:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> w_rate, w_ind = (float(x) for x in bed.damping_weights)
-    >>> z = float(cubic.quasi_static_indentation(0.0, block, bed)[0])   # [m]
-    >>> float(constraint_damping(0.0, block, bed)), round((w_rate + w_ind * z) * 2 * 0.25**3 / 3, 6)
-    (7357.5, 7357.5)
-    >>> tu = float(cubic.uplift_threshold(block, bed))
-    >>> below, above = constraint_damping(tu * np.array([1 - 1e-9, 1 + 1e-9]), block, bed)
-    >>> bool(abs(above / below - 1) < 1e-6)
-    True
     """
     z, dz, v, a, up = cubic.indentation_state(theta, block, foundation)
     w_rate, w_ind = (float(x) for x in foundation.damping_weights)
@@ -235,11 +184,6 @@ def gravity_ratio(a_v, g):
     References
     ----------
     .. [1] ``docs/stiff_bed.md``, section "Vertical ground acceleration".
-
-    Examples
-    --------
-    >>> [float(x) for x in gravity_ratio([4.905, 0.0, -20.0], 9.81)]     # half g up, none, free fall and beyond
-    [1.5, 1.0, 0.001]
     """
     return np.maximum(1.0 + np.asarray(a_v, dtype=float) / g, GRAVITY_RATIO_MIN)
 
@@ -287,20 +231,6 @@ def rocking_coefficients(theta, block, foundation, a_v=0.0):
     so the laws are read at ``a / lam``, ``Z''`` divided by ``lam``, and gravity's moment is
     ``lam m g h sin(theta)`` (``docs/stiff_bed.md``, "Vertical ground acceleration").
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    At rest the inertia is that about the base centre, ``I_cm + m h^2``, and nothing restores:
-
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> m_eff, dm_eff, q, c_eff = rocking_coefficients(0.0, block, bed)
-    >>> float(m_eff), float(block.I_cm + block.m * block.h ** 2), float(q), float(dm_eff)
-    (1321.0, 1321.0, 0.0, 0.0)
     """
     theta = np.asarray(theta, dtype=float)
     lam = gravity_ratio(a_v, float(block.g))
@@ -356,21 +286,6 @@ def rocking_acceleration(theta, theta_dot, x_g_ddot, block, foundation, a_v=0.0)
 
     (``docs/stiff_bed.md``, "Rigid block on that constraint"; the contact law is eq. (3) in [1]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    At rest with no input nothing moves; tilted, the bed pushes the block back:
-
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> float(rocking_acceleration(0.0, 0.0, 0.0, block, bed))
-    0.0
-    >>> bool(rocking_acceleration(0.01, 0.0, 0.0, block, bed) < 0)
-    True
     """
     m_eff, dm_eff, q, c_eff = rocking_coefficients(theta, block, foundation, a_v)
     theta_dot = np.asarray(theta_dot, dtype=float)
@@ -413,19 +328,6 @@ def potential(theta, block, foundation, n_pieces=64, order=8):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] M. Abramowitz and I. A. Stegun, Handbook of Mathematical Functions, Dover (1965), 25.4.29.
-
-    Examples
-    --------
-    Its derivative is the restoring moment:
-
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> th, d = 0.01, 1e-6
-    >>> slope = (potential(th + d, block, bed) - potential(th - d, block, bed)) / (2 * d)
-    >>> q = float(rocking_coefficients(th, block, bed)[2])
-    >>> bool(abs(slope / q - 1) < 1e-6), round(q)
-    (True, 2777)
     """
     a = abs(float(theta))
     tu = float(cubic.uplift_threshold(block, foundation))
@@ -475,15 +377,6 @@ def stiff_record(block, foundation, locate=True):
     References
     ----------
     .. [1] ``docs/stiff_bed.md`` (the model's compiled integrator).
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> rec = stiff_record(block, bed)
-    >>> rec.shape, float(rec["h"][0]), bool(rec["theta_ul"][0] == cubic.uplift_threshold(block, bed))
-    ((1,), 0.9, True)
     """
     rec = np.zeros(1, dtype=STIFF)
     values = dict(m=float(block.m), g=float(block.g), h=float(block.h), I_cm=float(block.I_cm),
@@ -525,26 +418,6 @@ def indentation_curvature_jit(cp, a, z, dz, v):
     The equations of :func:`indentation_curvature` (the contact law, eq. (3) in [1]); a test holds the two
     together.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    It agrees with its numpy reference, in full contact and in uplift:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> cp = cubic.sdof_record(block, bed)[0]
-    >>> tu = float(cp["theta_ul"])
-    >>> same = []
-    >>> for a in (0.5 * tu, 5.0 * tu, 50.0 * tu):
-    ...     z, dz, v = cubic.quasi_static_indentation_jit(cp, a)
-    ...     same.append(np.isclose(indentation_curvature_jit(cp, a, z, dz, v), indentation_curvature(a, block, bed)))
-    >>> all(same)
-    True
     """
     eps, b = cp.eps, cp.b
     if a <= cp.theta_ul:
@@ -584,23 +457,6 @@ def constraint_damping_jit(cp, a, z, dz, v):
     The equations of :func:`constraint_damping` (the damping of the contact law, eq. (3) in [1]); a test
     holds the two together.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    It agrees with its numpy reference, in full contact and in uplift:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> cp = cubic.sdof_record(block, bed)[0]
-    >>> jit = [constraint_damping_jit(cp, a, *cubic.quasi_static_indentation_jit(cp, a))
-    ...        for a in np.array([0.5, 5.0, 50.0]) * cp["theta_ul"]]
-    >>> bool(np.allclose(jit, constraint_damping(np.array([0.5, 5.0, 50.0]) * cp["theta_ul"], block, bed)))
-    True
     """
     b, w_rate, w_ind = cp.b, cp.w_rate, cp.w_indentation
     if a <= cp.theta_ul:
@@ -644,27 +500,6 @@ def rocking_acceleration_jit(sp, cp, theta, theta_dot, x_g_ddot, a_v=0.0):
     ``m_eff theta'' + (1/2) dm_eff theta'^2 + C_eff theta' + Q = m h cos(theta) x_g''``, on the contact law
     of eq. (3) in [1]; a test holds the two together.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    It agrees with its numpy reference, with and without a vertical input:
-
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=1200.0, b=0.25, h=0.9)                 # [kg, m, m]
-    >>> bed = Foundation(k=1e10, lam=3e11)                     # [N m-2, N s m-3]
-    >>> cp = cubic.sdof_record(block, bed)[0]
-    >>> tu = float(cp["theta_ul"])
-    >>> sp = stiff_record(block, bed)[0]
-    >>> bool(np.isclose(rocking_acceleration_jit(sp, cp, 0.01, 0.2, 1.5),
-    ...                 rocking_acceleration(0.01, 0.2, 1.5, block, bed)))
-    True
-    >>> bool(np.isclose(rocking_acceleration_jit(sp, cp, 0.01, 0.2, 1.5, 2.0),
-    ...                 rocking_acceleration(0.01, 0.2, 1.5, block, bed, 2.0)))
-    True
     """
     s = math.sin(theta)
     c = math.cos(theta)

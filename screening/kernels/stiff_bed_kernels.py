@@ -19,8 +19,7 @@ from screening.kernels import mcs_kernels as kern
 from screening.kernels._sample_steps import err_term as _err2, ground_input as _input, store_outcome, vertical_row
 from screening.kernels.stiff_bed_contact import rocking_acceleration_jit
 
-__all__ = ["linear_propagator", "transfer_ratio_jit", "integrate_sample", "integrate_chunk", "COUNT_ROWS",
-           "PHASE_BOUNDS"]
+__all__ = []
 
 #: Rows of the step counts :func:`integrate_sample` keeps when asked (``counts`` of shape ``(8, 2)``):
 #: per phase ``(accepted, rejected)`` steps, the phase read from ``|theta|`` at the step's start:
@@ -79,21 +78,6 @@ def linear_propagator(m0, c0, k0, mh, dt):
     ----------
     .. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential", IEEE Transactions on
        Automatic Control 23(3) (1978) 395-404.
-
-    Examples
-    --------
-    Undamped at unit frequency a quarter period swaps position and velocity; under a constant input the
-    static deflection ``mh u / k0`` stays put:
-
-    >>> import numpy as np
-    >>> phi, gamma = linear_propagator(1.0, 0.0, 1.0, 1.0, np.pi / 2)
-    >>> np.round(phi, 12) + 0.0
-    array([[ 0.,  1.],
-           [-1.,  0.]])
-    >>> phi, gamma = linear_propagator(2.0, 0.5, 8.0, 3.0, 0.1)
-    >>> x_static = 3.0 / 8.0                                # [rad] under u = 1 m s-2
-    >>> bool(np.allclose(phi @ [x_static, 0.0] + gamma @ [1.0, 1.0, 0.0, 0.0], [x_static, 0.0]))
-    True
     """
     a_mat = np.array([[0.0, 1.0], [-k0 / m0, -c0 / m0]])
     phi = linalg.expm(a_mat * dt)
@@ -156,17 +140,6 @@ def transfer_ratio_jit(log_amp, log_eta, amp):
     References
     ----------
     .. [1] The package's documentation, ``docs/stiff_bed.md`` (the bed-derived transfer loss).
-
-    Examples
-    --------
-    Halfway in ``log amp`` between nodes at 1 and 0.8 the ratio is their geometric mean:
-
-    >>> import numpy as np
-    >>> log_amp, log_eta = np.log([1e-4, 1e-3]), np.log([1.0, 0.8])
-    >>> bool(np.isclose(transfer_ratio_jit(log_amp, log_eta, np.sqrt(1e-4 * 1e-3)), np.sqrt(0.8)))
-    True
-    >>> transfer_ratio_jit(log_amp, log_eta, 1e-5), round(transfer_ratio_jit(log_amp, log_eta, 1.0), 12)
-    (1.0, 0.8)
     """
     if amp <= 0.0:
         return 1.0
@@ -281,15 +254,6 @@ def integrate_sample(sp, cp, prop, log_amp, log_eta, row, acc, acc_dot, dt_grid,
     .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [3] [hairer1993] in the bibliography, ``docs/bibliography.md``.
     .. [4] The package's documentation, ``docs/stiff_bed.md`` (the stiff-bed model's numerics).
-
-    Examples
-    --------
-    >>> import inspect
-    >>> params = list(inspect.signature(integrate_sample.py_func).parameters)
-    >>> params[:5], len(params)
-    (['sp', 'cp', 'prop', 'log_amp', 'log_eta'], 19)
-    >>> len(COUNT_ROWS)                      # rows of ``counts``
-    8
     """
     n_out = t_out.shape[0]
     n_grid = acc[0].shape[1]
@@ -544,13 +508,6 @@ def integrate_chunk(sp, cp, prop, log_amp, log_eta, acc, acc_dot, dt_grid, t_out
     .. [2] [dormand1980] in the bibliography, ``docs/bibliography.md``.
     .. [3] [hairer1993] in the bibliography, ``docs/bibliography.md``.
     .. [4] The package's documentation, ``docs/stiff_bed.md`` (the stiff-bed model's numerics).
-
-    Examples
-    --------
-    >>> import inspect
-    >>> params = list(inspect.signature(integrate_chunk.py_func).parameters)
-    >>> params[:5], params[-1], len(params)
-    (['sp', 'cp', 'prop', 'log_amp', 'log_eta'], 'counts', 24)
     """
     no_counts = np.zeros((0, 2), dtype=np.int64)
     for row in numba.prange(acc[0].shape[0]):

@@ -27,7 +27,7 @@ from screening.kernels import mcs_kernels as kern
 from screening.solvers.mc_registry import KERNEL_CONDENSATION, ChunkIntegrator, MonteCarloModel, register
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-__all__ = ["COUPLED", "CONDENSED", "state_scales", "exact_uplift_threshold", "quasi_static_indentation"]
+__all__ = []
 
 def state_scales(block, foundation):
     """Absolute error scales of the Monte Carlo state ``(theta, theta', z_cb, z_cb')``.
@@ -51,16 +51,6 @@ def state_scales(block, foundation):
     The integrators scale their absolute tolerance by these: the state's natural sizes at the onset
     of uplift.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{s:.3g}" for s in state_scales(block, bed)]
-    ['0.0012', '0.0477', '4.2e-05', '0.0203']
     """
     tu = float(paper_uplift_threshold(block, foundation))
     z_st = float(block.m * block.g / (2.0 * block.b * foundation.k))
@@ -92,17 +82,6 @@ def exact_uplift_threshold(block, foundation):
     The coupled model has no threshold of its own; the exact angle is where its static balance
     (eq. (13) in [1]) lifts the far edge.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> tu, attrs = exact_uplift_threshold(block, bed)
-    >>> f"{tu:.4e}", attrs
-    ('1.2012e-03', {'theta_ul_condensation': 'cubic'})
     """
     tu = float(exact_uplift_angle(block, foundation))
     if math.isfinite(tu):
@@ -142,16 +121,6 @@ def quasi_static_indentation(block, foundation, theta0):
     The initial vertical state of a coupled sample started at ``theta0``: the root in ``z_cb`` of the
     vertical balance by Brent's method, bracketed from the flight boundary ``z_cb = -b |sin theta0|``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{quasi_static_indentation(block, bed, 0.0):.4e} {quasi_static_indentation(block, bed, 2e-3):.4e}"
-    '4.2043e-05 3.8499e-05'
     """
     if theta0 == 0.0:
         return rest_indentation(block, foundation)

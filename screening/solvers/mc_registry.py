@@ -22,8 +22,7 @@ import abc
 
 from screening.core import condensation as condensations
 
-__all__ = ["KERNEL_CONDENSATION", "ChunkIntegrator", "MonteCarloModel", "check_not_condensed", "check_validity", "code",
-           "get", "names", "register", "unregister"]
+__all__ = []
 
 #: The condensation a model that is not condensed builds its kernel record with (none of its
 #: functions is used there): the paper's.  Such a model accepts it as well as the default
@@ -52,18 +51,6 @@ def check_not_condensed(model, condensation):
     ValueError
         Naming the parameter ``condensation`` for any other.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> check_not_condensed("coupled", "paper")
-    >>> try:
-    ...     check_not_condensed("coupled", "cubic")
-    ... except ValueError as exc:
-    ...     print(exc)
-    parameter 'condensation' applies to model='condensed' only (got condensation='cubic' with model='coupled')
     """
     cond = condensations.get(condensation)
     if cond not in (condensations.get(condensations.DEFAULT_CONDENSATION), condensations.get(KERNEL_CONDENSATION)):
@@ -199,18 +186,6 @@ def check_validity(model, block, foundation, excitation=None, strict=False):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/stiff_bed_validity.md`` (the measured validity of a model).
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> check_validity(get("coupled"), block, bed, strict=True) is None     # the coupled model holds everywhere
-    True
-    >>> statue, soft = Block(m=1200.0, b=0.25, h=0.9), Foundation(k=1.1e6, lam=3.6e9)
-    >>> check_validity(get("stiff_bed"), statue, soft, strict=True)         # softer than any bed measured
-    Traceback (most recent call last):
-    ...
-    ValueError: model 'stiff_bed' outside its measured validity: ...
     """
     problem = model.validity_problem(block, foundation, excitation)
     if problem is None:
@@ -252,16 +227,6 @@ def register(model):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/stiff_bed.md`` (a model added through this registry).
-
-    Examples
-    --------
-    >>> coupled = get("coupled")
-    >>> register(coupled) is coupled, names()[0]
-    (True, 'coupled')
-    >>> register("coupled")
-    Traceback (most recent call last):
-    ...
-    TypeError: register() takes a MonteCarloModel instance (got str)
     """
     if not isinstance(model, MonteCarloModel):
         raise TypeError(f"register() takes a MonteCarloModel instance (got {type(model).__name__})")
@@ -284,17 +249,6 @@ def unregister(name):
     References
     ----------
     .. [1] The package's documentation, ``docs/stiff_bed.md`` (the registry of Monte Carlo models).
-
-    Examples
-    --------
-    >>> class Toy(get("coupled").__class__):
-    ...     name = "toy"
-    >>> _ = register(Toy())
-    >>> names()[-1]
-    'toy'
-    >>> unregister("toy")
-    >>> "toy" in names()
-    False
     """
     _REGISTRY.pop(name, None)
 
@@ -310,11 +264,6 @@ def names():
     References
     ----------
     .. [1] The package's documentation, ``docs/outputs.md`` (``mcs_model``: flag values in registry order).
-
-    Examples
-    --------
-    >>> names()[:3]
-    ('coupled', 'condensed', 'stiff_bed')
     """
     return tuple(_REGISTRY)
 
@@ -340,11 +289,6 @@ def code(name):
     References
     ----------
     .. [1] The package's documentation, ``docs/outputs.md`` (``mcs_model``: flag values in registry order).
-
-    Examples
-    --------
-    >>> code("coupled"), code("condensed"), code(get("stiff_bed"))
-    (0, 1, 2)
     """
     return names().index(get(name).name)
 
@@ -373,15 +317,6 @@ def get(model):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/models.md`` (the Monte Carlo models).
-
-    Examples
-    --------
-    >>> get("coupled").name, get("coupled").vertical_state, get("condensed").vertical_state
-    ('coupled', True, False)
-    >>> get("rigid")
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'model' must be one of ('coupled', 'condensed', 'stiff_bed'...) (got 'rigid')
     """
     if isinstance(model, MonteCarloModel):
         return model

@@ -28,8 +28,7 @@ from screening.core.physics import contact
 from screening.solvers import mc_registry
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
-__all__ = ["AUTO", "INDICATORS", "Rule", "RULE_FILE", "VALIDITY_TABLE", "choices", "choose", "indicators",
-           "parse_rules", "resolve", "rule_of", "rules", "sampler_of", "vertical_damping_ratio", "vouches"]
+__all__ = []
 
 #: The value of ``model`` that asks for the automatic choice.
 AUTO = "auto"
@@ -103,17 +102,6 @@ def parse_rules(raw):
     References
     ----------
     .. [1] The package's documentation, ``docs/model_choice.md`` ("The rule is data").
-
-    Examples
-    --------
-    >>> raw = {"model": [{"name": "condensed", "excitations": ["white"], "vertical_damping_ratio": [0.2, 0.5]}]}
-    >>> chosen, fallback = parse_rules(raw)
-    >>> chosen[0].model, chosen[0].bound("vertical_damping_ratio"), fallback
-    ('condensed', (0.2, 0.5), 'coupled')
-    >>> parse_rules({"model": [{"name": "condensed", "excitations": ["white"], "slenderness": [0.3, 0.1]}]})
-    Traceback (most recent call last):
-    ...
-    ValueError: model choice: model[0].slenderness must be [low, high] with finite low <= high (got [0.3, 0.1])
     """
     fallback = raw.get("fallback", "coupled")
     if fallback not in mc_registry.names():
@@ -209,14 +197,6 @@ def indicators(block, foundation):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] The package's documentation, ``docs/model_choice.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> ind = indicators(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))
-    >>> {name: round(value, 4) for name, value in ind.items()}       # theta_ul = m g / (2 b^2 k) = 1.2e-3 rad
-    {'theta_ul_over_slenderness': 0.0073, 'slenderness': 0.1651, 'vertical_over_rocking': 12.1739,
-     'vertical_damping_ratio': 0.3145}
     """
     alpha = float(block.slenderness)
     w_r = rocking_frequency(block, foundation)
@@ -252,20 +232,6 @@ def vertical_damping_ratio(block, foundation):
     the inverse of :func:`screening.analysis.beds.c_from_vertical_damping` (Winkler ``c``) and
     :func:`screening.analysis.beds.lam_from_vertical_damping` (Hunt-Crossley ``lam``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.analysis.beds import lam_from_vertical_damping
-    >>> block = Block(m=8.67, b=0.035, h=0.21)
-    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=8.95e8)):.4f}"     # the paper's bed
-    '0.3145'
-    >>> lam = float(lam_from_vertical_damping(2.89e7, 8.67, 0.035, 0.05))           # and back
-    >>> f"{vertical_damping_ratio(block, Foundation(k=2.89e7, lam=lam, eps=2e9)):.6f}"
-    '0.050000'
     """
     return float(contact.vertical_damping_ratio(block, foundation, contact.linear_indentation(block, foundation)))
 
@@ -291,16 +257,6 @@ def rule_of(model):
     References
     ----------
     .. [1] The package's documentation, ``docs/stiff_bed_validity.md`` (the measurements behind the rule).
-
-    Examples
-    --------
-    >>> rule = rule_of("stiff_bed")
-    >>> rule.model, rule.benchmark, "white" in rule.excitations
-    ('stiff_bed', 'benchmarks/stiff_bed_validity.py', True)
-    >>> rule_of("condensed")
-    Traceback (most recent call last):
-    ...
-    KeyError: "no measured rule for Monte Carlo model 'condensed' in model_choice.toml"
     """
     for rule in rules()[0]:
         if rule.model == model:
@@ -326,11 +282,6 @@ def sampler_of(model, rule_set=None):
     References
     ----------
     .. [1] The package's documentation, ``docs/stiff_bed.md`` ("Exact-contact sampler").
-
-    Examples
-    --------
-    >>> sampler_of("stiff_bed"), sampler_of("coupled")
-    ('stiff_bed_fast', 'coupled')
     """
     for rule in (rules() if rule_set is None else rule_set)[0]:
         if rule.model == model and rule.sampler:
@@ -370,17 +321,6 @@ def vouches(rule, block, foundation, excitation_kind, check_excitation=True):
     References
     ----------
     .. [1] The package's documentation, ``docs/model_choice.md`` ("The rule is data").
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)   # zeta_v = 0.31
-    >>> (rule,), _ = parse_rules({"model": [{"name": "condensed", "excitations": ["white"],
-    ...                                      "vertical_damping_ratio": [0.2, 0.5]}]})
-    >>> vouches(rule, block, bed, "white")
-    (True, '')
-    >>> vouches(rule, block, bed, None)
-    (False, "excitation 'record' not among those measured for condensed ['white']")
     """
     if check_excitation and excitation_kind not in rule.excitations:
         return False, (f"excitation {excitation_kind or 'record'!r} not among those measured for {rule.model} "
@@ -421,19 +361,6 @@ def choose(block, foundation, excitation_kind, rule_set=None):
     References
     ----------
     .. [1] The package's documentation, ``docs/model_choice.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> choose(block, bed, "kanai_tajimi")[0]               # the paper's bed: the stiff-bed model passed there
-    'stiff_bed'
-    >>> choose(block, bed, "white")[0]                      # under white noise only the lightly damped beds
-    'coupled'
-    >>> toy = parse_rules({"model": [{"name": "condensed", "excitations": ["white"],
-    ...                               "vertical_damping_ratio": [0.2, 0.5]}]})
-    >>> choose(block, bed, "white", toy)
-    ('condensed', 'condensed: its measured validity holds ()')
     """
     chosen, fallback = rules() if rule_set is None else rule_set
     why = []
@@ -468,13 +395,6 @@ def resolve(model, block, foundation, excitation=None):
     References
     ----------
     .. [1] The package's documentation, ``docs/model_choice.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> resolve("auto", block, bed, WhiteNoise(1e-4)).name, resolve("condensed", block, bed).name
-    ('coupled', 'condensed')
     """
     if isinstance(model, str) and model == AUTO:
         kind = getattr(excitation, "kind", None) if excitation is not None else None
@@ -493,10 +413,5 @@ def choices():
     References
     ----------
     .. [1] The package's documentation, ``docs/model_choice.md``.
-
-    Examples
-    --------
-    >>> choices()[0], choices()[-1]
-    ('coupled', 'auto')
     """
     return (*mc_registry.names(), AUTO)

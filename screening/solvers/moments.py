@@ -46,8 +46,7 @@ from screening.core.status import PointStatus
 from screening.core.validation import check_integer, check_scalar, check_size
 from screening.core import limits
 
-__all__ = ["CHUNK", "DEFAULT_RTOL", "DEFAULT_MAX_STEPS", "OSCILLATOR", "HISTORY_VARIABLES",
-           "oscillator_records", "FilterArrays", "in_float_range", "batch_solver", "solve_moments"]
+__all__ = []
 
 #: Points per call of the compiled solver (bounds the memory of per-point coefficient tables).
 CHUNK = 256
@@ -97,20 +96,6 @@ def oscillator_records(block, foundation, excitation, cond):
     ``m_sdof = I_cm + m h^2`` (eq. (23) in [1]), input gain ``m h / m_sdof`` (eq. (43)), envelope
     ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. (57)).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.core.model.points import flatten
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                                WhiteNoise(1e-4))
-    >>> rec = oscillator_records(block, bed, exc, condensation.get("paper"))
-    >>> f"{rec['gain'][0]:.4g} {rec['k_rest'][0]:.4g}"
-    '3.547 808.2'
     """
     env = excitation.envelope
     constant = env.kind == "constant"
@@ -192,20 +177,6 @@ def in_float_range(osc, filters):
     The loops divide by ``theta_ul^2`` (eq. (19) in [1]) and ``m_sdof``; a point beyond float range would
     stop the whole batch, so it is flagged :attr:`~screening.core.status.PointStatus.beyond_float_range` instead.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> from screening.core import condensation
-    >>> from screening.core.model.points import flatten
-    >>> (block, bed, exc), _ = flatten(Block(m=8.67, b=0.035, h=0.21),
-    ...                                Foundation(k=[2.89e7, 1e300], lam=8.95e8), WhiteNoise(1e-4))
-    >>> osc = oscillator_records(block, bed, exc, condensation.get("paper"))
-    >>> in_float_range(osc, FilterArrays(exc, osc)).tolist()
-    [True, False]
     """
     tiny = np.finfo(float).tiny
     with np.errstate(all="ignore"):
@@ -287,19 +258,6 @@ def batch_solver(record_dtype):
     It integrates eq. (45) in [1] (white noise) or eq. (51) (a filtered input) for every point of a
     batch (:func:`screening.kernels.moment_kernels.moment_equations` is their numpy reference).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core import condensation
-    >>> from screening.core.model.points import flatten
-    >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8))
-    >>> dtype = condensation.get("paper").moment_kernel(block, bed).records.dtype
-    >>> batch_solver(dtype) is batch_solver(dtype)
-    True
     """
     if record_dtype not in _SOLVERS:
         f8, i8 = types.float64, types.int64
@@ -362,18 +320,6 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
     nonlinear ODE in the independent covariance entries; ``p_uplift`` is eq. (58).  Numpy reference of
     the right-hand side: :func:`screening.kernels.moment_kernels.moment_equations`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> res = solve_moments(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4),
-    ...                     np.linspace(0.0, 10.0, 11), condensation="paper")
-    >>> f"{res['peak_var_theta']:.3e} {res['t_peak_var_theta']:.2f} {res['status']}"
-    '1.372e-06 3.42 0'
     """
     cond = get_condensation(condensation)
     t_out = np.ascontiguousarray(t_out, dtype=float)

@@ -148,18 +148,6 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
     A Monte Carlo run integrates the equations of motion of one block on one bed (eqs. (7)-(8) or (22)
     in [1]); grids of points are the linearization's (:func:`screening.linearize`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation
-    >>> check_scalar_models(Block(m=8.67, b=0.035, h=0.21), Foundation(k=np.array([1e7, 2e7]), lam=8.95e8))
-    Traceback (most recent call last):
-    ...
-    ValueError: parameter 'foundation.k' must be a scalar for monte_carlo (got an array of shape (2,)); loop over parameter points instead
     """
     fields = {"block." + n: getattr(block, n) for n in ("m", "b", "h", "I_cm", "g")}
     fields.update({"foundation." + n: getattr(foundation, n) for n in ("k", "eps")})
@@ -251,11 +239,6 @@ def auto_rtol(model, n_samples):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] ``docs/montecarlo_numerics.md``, "Tolerance from the sample count" (this package's documentation).
-
-    Examples
-    --------
-    >>> auto_rtol("coupled", 500), auto_rtol("coupled", 16_000), auto_rtol("condensed", 16_000)
-    (1e-06, 5e-07, 1e-06)
     """
     name = model if isinstance(model, str) else model.name
     base = AUTO_RTOL.get(name)
@@ -289,16 +272,6 @@ def choose_integrator(block, foundation, model, integrator="auto"):
     -----
     The stiffness comes from the bed's vertical dashpot in eqs. (7)-(8) of [1] (:func:`screening.core.physics.contact.vertical_damping_ratio`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> choose_integrator(block, bed, "coupled"), choose_integrator(block, bed, "coupled", "rodas")
-    ('dopri', 'rodas')
     """
     if integrator != "auto":
         return integrator
@@ -329,16 +302,6 @@ def initial_state(block, foundation, model):
     -----
     Every sample starts from this state; the input starts at ``t = 0`` with the envelope (eq. (57) in [1]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{v:.4g}" for v in initial_state(block, bed, "coupled")]
-    ['0', '0', '4.204e-05', '0']
     """
     return mc_registry.get(model).initial_state(block, foundation)
 
@@ -376,14 +339,6 @@ def ensemble_statistics(theta, theta_dot, uplift, used):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] A. Stuart and J. K. Ord, Kendall's Advanced Theory of Statistics, vol. 1, 6th ed., Arnold (1994).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> x = np.array([[0.0], [1.0], [2.0], [3.0]])
-    >>> stats = ensemble_statistics(x, 2 * x, x > 1.5, np.ones(4, bool))
-    >>> float(stats["var_theta"][0]), float(stats["cov_theta_theta_dot"][0]), float(stats["p_uplift"][0])
-    (1.6666666666666667, 3.3333333333333335, 0.5)
     """
     n = int(np.count_nonzero(used))
     n_t = theta.shape[1]
@@ -480,14 +435,6 @@ def sample_setup(block, foundation, excitation, n_samples, model="coupled", t_en
     References
     ----------
     .. [1] The package's documentation, ``docs/method.md#monte-carlo``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> run = sample_setup(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8), WhiteNoise(1e-4),
-    ...                    8, model="condensed", t_end=2.0, dt=0.5)
-    >>> run.model.name, run.times.size
-    ('condensed', 5)
     """
     if not isinstance(strict_validity, bool):
         raise ValueError(f"parameter 'strict_validity' must be True or False (got {strict_validity!r})")

@@ -34,8 +34,7 @@ from screening.sweep.interrupt import raise_if_interrupted
 from screening.sweep.study import build_models
 from screening.solvers.estimates import sample_probabilities
 
-__all__ = ["ESCALATION_RECORD", "PLANNER_RECORD", "RUN_SHARE", "HARD_STOP", "INTERIM_INTERVAL_S",
-           "PROGRESS_INTERVAL_S", "Stage", "escalate", "accuracy_line", "plan_line"]
+__all__ = []
 
 #: Resume records of escalated points are spot parts numbered from here (after any spot check): each
 #: point's latest result (its pilot, main or top-up run, with the cost of all its runs), and before them the
@@ -154,14 +153,6 @@ def escalate(stage):
     ----------
     .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
        ``docs/accuracy_in_sweeps.md``.
-
-    Examples
-    --------
-    The stage works on plain values (a live dask client and result; see :func:`run_sweep
-    <screening.sweep.run.run_sweep>`, which builds it):
-
-    >>> Stage._fields
-    ('client', 'study', 'store', 'result', 'log', 'progress', 'interim', 'clock')
     """
 
     acc, study = stage.study.accuracy, stage.study
@@ -313,16 +304,6 @@ def plan_line(budget_s, n_points, n_transition, pilot_s, threads, all_pilots_s=N
     References
     ----------
     .. [1] ``docs/accuracy_in_sweeps.md``, "A budget in seconds" (this package's documentation).
-
-    Examples
-    --------
-    >>> print(plan_line(60, 48, 20, 12.4, 2, 30.2))   # doctest: +NORMALIZE_WHITESPACE
-    accuracy: Monte Carlo at up to 48 point(s), the 20 in the transition of a fragility curve first, within
-    budget_s = 60 s of wall time on 2 worker thread(s); the pilots (64 samples at every point, first) take
-    about 30 s
-    >>> print(plan_line(10, 48, 20, 31.0, 2))   # doctest: +NORMALIZE_WHITESPACE
-    accuracy: budget_s = 10 s cannot hold even the pilots of the 20 point(s) in the transition of a fragility
-    curve (about 31 s on 2 worker thread(s)); give [accuracy] budget_s >= 33 for them (running what fits)
     """
     if pilot_s > RUN_SHARE * budget_s and n_transition:
         need = math.ceil(pilot_s / RUN_SHARE)
@@ -688,21 +669,6 @@ def accuracy_line(info):
     ----------
     .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
        ``docs/accuracy_in_sweeps.md``.
-
-    Examples
-    --------
-    >>> info = {"target": 0.15, "budget_s": 600, "wall_s": 431.0, "cost_s": 812.0, "cpu_s": 798.7,
-    ...         "n_candidates": 12, "n_transition": 4, "n_transition_escalated": 4, "n_escalated": 10,
-    ...         "n_coupled": 7, "n_condensed": 3, "n_short": 1, "n_cut": 0, "n_failed": 0,
-    ...         "loo_rms": 0.08, "correction_usable": True,
-    ...         "methods": {"linearization": 88, "corrected_linearization": 2, "coupled_monte_carlo": 7,
-    ...                     "condensed_monte_carlo": 3}}
-    >>> print(accuracy_line(info))   # doctest: +NORMALIZE_WHITESPACE
-    accuracy (target 0.15): 12 point(s) beyond the trust rule's promise, 4 in the transition of a fragility
-    curve; Monte Carlo at 10 (4 of the transition; 7 coupled, 3 condensed; 1 short of the target's standard
-    error) in 431 of 600 wall s (812.0 CPU s by the cost model, 798.7 s measured); 2 without Monte Carlo
-    (correction leave-one-out RMS 0.08); best estimates: linearization 88, corrected_linearization 2,
-    coupled_monte_carlo 7, condensed_monte_carlo 3
     """
     methods = ", ".join(f"{name} {n}" for name, n in info["methods"].items())
     left = info["n_candidates"] - info["n_escalated"]

@@ -17,14 +17,7 @@ import numbers
 import os
 import re
 
-__all__ = ["EXCITATION_PARAMETERS", "SWEEPABLE", "EXCITATIONS", "ENVELOPES", "NUMERIC", "TABLE_KEYS",
-           "MODEL_TABLES", "DEFAULTS", "StudyError", "read_study_text", "parse_toml", "one_line", "type_name",
-           "table", "check_keys", "required", "is_number", "check_value", "check_integer", "short_repr", "integer",
-           "check_list", "number_list", "integer_list", "check_choice", "choice", "name_string",
-           "title_and_description", "time_table", "Case", "applicable", "model_tables", "sweep_values",
-           "numeric_table", "check_grid_size", "resolve_case", "PGA_RANGE", "case_block_and_foundation",
-           "build_models", "case_cutoff", "build_point_models", "band_limit_value", "CLUSTER_KINDS", "CLUSTER_KEYS", "MAX_JOBS",
-           "MAX_CORES", "NUMBA_CACHE_DEFAULT", "ClusterSpec", "duration", "cluster_table"]
+__all__ = []
 try:
     import tomllib
 except ModuleNotFoundError:          # Python 3.10: the same parser as the backport
@@ -106,16 +99,6 @@ def read_study_text(path):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     path = os.path.join(folder, "bed.toml")
-    ...     with open(path, "w", encoding="utf-8-sig") as fh:         # a byte-order mark
-    ...         _ = fh.write("[block]\\nm = 8.67\\n")
-    ...     read_study_text(path)
-    '[block]\\nm = 8.67\\n'
     """
     try:
         return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)
@@ -154,16 +137,6 @@ def parse_toml(text, source, build):
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
     .. [2] TOML v1.0.0 specification, https://toml.io/en/v1.0.0
-
-    Examples
-    --------
-    >>> parse_toml("[block]\\nm = 8.67\\n", "bed.toml", lambda raw: raw)
-    {'block': {'m': 8.67}}
-    >>> try:
-    ...     parse_toml("[block\\n", "bed.toml", lambda raw: raw)
-    ... except StudyError as exc:
-    ...     print(exc)
-    bed.toml: invalid TOML: Expected ']' at the end of a table declaration (at line 1, column 7)
     """
     if len(text) > limits.MAX_STUDY_CHARS:
         raise StudyError(f"{source}: the study file has {len(text)} characters; at most "
@@ -202,11 +175,6 @@ def one_line(exc):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> one_line(ValueError("bad\\n   value"))
-    'bad value'
     """
     return " ".join(str(exc).split())
 
@@ -227,11 +195,6 @@ def type_name(value):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> type_name(True), type_name("x"), type_name([1]), type_name({}), type_name(1.5)
-    ('a boolean', "the string 'x'", 'a list', 'a table', 'float')
     """
     if isinstance(value, bool):
         return "a boolean"
@@ -269,16 +232,6 @@ def table(raw, key, where=""):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> table({"block": {"m": 8.67}}, "block"), table({}, "time")
-    ({'m': 8.67}, {})
-    >>> try:
-    ...     table({"time": 5}, "time")
-    ... except StudyError as exc:
-    ...     print(exc)
-    time: must be a table (got int)
     """
     value = raw.get(key, {})
     if not isinstance(value, dict):
@@ -311,14 +264,6 @@ def check_keys(tbl, allowed, where):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> try:
-    ...     check_keys({"m": 8.67, "mass": 8.67}, ("m", "b", "h"), "block.")
-    ... except StudyError as exc:
-    ...     print(exc)
-    block.mass: unknown key (allowed: m, b, h)
     """
     for key in tbl:
         if key not in allowed:
@@ -352,16 +297,6 @@ def required(tbl, key, where, why=""):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> required({"m": 8.67}, "m", "block.")
-    8.67
-    >>> try:
-    ...     required({"m": 8.67}, "b", "block.")
-    ... except StudyError as exc:
-    ...     print(exc)
-    block.b: required
     """
     if key not in tbl:
         raise StudyError(f"{where}{key}: required{why}")
@@ -384,11 +319,6 @@ def is_number(value):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> is_number(2), is_number(0.5), is_number(True), is_number("1")
-    (True, True, False, False)
     """
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
@@ -422,16 +352,6 @@ def check_value(key, value, lower=None, inclusive=False, upper=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> check_value("block.m", 8.67, lower=0.0)
-    8.67
-    >>> try:
-    ...     check_value("block.m", 0, lower=0.0)
-    ... except StudyError as exc:
-    ...     print(exc)
-    block.m: must be a finite number > 0 (got 0.0)
     """
     if not is_number(value):
         raise StudyError(f"{key}: must be a number (got {type_name(value)})")
@@ -481,16 +401,6 @@ def check_integer(key, value, lower, upper=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> check_integer("mcs.samples", 200, 1)
-    200
-    >>> try:
-    ...     check_integer("mcs.samples", 2.0, 1)
-    ... except StudyError as exc:
-    ...     print(exc)
-    mcs.samples: must be an integer >= 1 (got 2.0)
     """
     if (isinstance(value, bool) or not isinstance(value, int) or value < lower
             or (upper is not None and value > upper)):
@@ -515,11 +425,6 @@ def short_repr(value):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> short_repr(10**40), short_repr(3)
-    ('an integer of 41 digits', '3')
     """
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
         return f"an integer of {len(str(abs(value)))} digits"
@@ -558,11 +463,6 @@ def integer(tbl, key, default, lower, where, upper=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> integer({"count": 3}, "count", 1, 1, "mcs."), integer({}, "count", 1, 1, "mcs.")
-    (3, 1)
     """
     return check_integer(f"{where}{key}", tbl.get(key, default), lower, upper)
 
@@ -590,16 +490,6 @@ def check_list(key, value):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> check_list("fragility.thresholds", [0.5])
-    [0.5]
-    >>> try:
-    ...     check_list("fragility.thresholds", [])
-    ... except StudyError as exc:
-    ...     print(exc)
-    fragility.thresholds: empty list (give at least one value)
     """
     if not isinstance(value, list):
         raise StudyError(f"{key}: must be a list (got {type_name(value)})")
@@ -633,16 +523,6 @@ def number_list(key, value, **bounds):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> number_list("fragility.thresholds", [0.5, 1], lower=0.0)
-    (0.5, 1.0)
-    >>> try:
-    ...     number_list("fragility.thresholds", [0.5, -1], lower=0.0)
-    ... except StudyError as exc:
-    ...     print(exc)
-    fragility.thresholds[1]: must be a finite number > 0 (got -1.0)
     """
     return tuple(check_value(f"{key}[{i}]", v, **bounds) for i, v in enumerate(check_list(key, value)))
 
@@ -672,11 +552,6 @@ def integer_list(key, value, lower):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> integer_list("convergence.samples", [100, 400], 1)
-    (100, 400)
     """
     return tuple(check_integer(f"{key}[{i}]", v, lower) for i, v in enumerate(check_list(key, value)))
 
@@ -706,14 +581,6 @@ def check_choice(key, value, choices):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> try:
-    ...     check_choice("output.histories", "some", ("all", "none", "spots"))
-    ... except StudyError as exc:
-    ...     print(exc)
-    output.histories: must be one of 'all', 'none', 'spots' (got 'some')
     """
     if value not in choices:
         raise StudyError(f"{key}: must be one of {', '.join(map(repr, choices))} "
@@ -750,11 +617,6 @@ def choice(tbl, key, choices, where, default=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> choice({}, "contact", ("hunt_crossley", "winkler"), "foundation.", default="hunt_crossley")
-    'hunt_crossley'
     """
     value = tbl.get(key, default)
     if value is None:
@@ -785,11 +647,6 @@ def name_string(key, value):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> name_string("case[0].name", "roof")
-    'roof'
     """
     if not isinstance(value, str) or not value.strip():
         raise StudyError(f"{key}: required, a non-empty string (got {type_name(value)})")
@@ -819,11 +676,6 @@ def title_and_description(raw, default_title):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> title_and_description({"title": "Soft beds"}, "screening: bed")
-    ('Soft beds', '')
     """
     title = raw.get("title", default_title)
     description = raw.get("description", "")
@@ -854,16 +706,6 @@ def time_table(raw):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> time_table({"time": {"t_end": 10.0, "dt": 0.1}}), time_table({})
-    ((10.0, 0.1), (20.0, 0.05))
-    >>> try:
-    ...     time_table({"time": {"t_end": 1.0, "dt": 0.3}})
-    ... except StudyError as exc:
-    ...     print(exc)
-    time.dt: parameter 'dt' must divide 't_end' into whole steps (got t_end=1.0, dt=0.3)
     """
     tbl = table(raw, "time")
     check_keys(tbl, ("t_end", "dt"), "time.")
@@ -930,13 +772,6 @@ def applicable(contact, excitation, envelope):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> sorted(applicable("winkler", "kanai_tajimi", "constant") - applicable("hunt_crossley", "white", "constant"))
-    ['c', 'omega_g', 'zeta_g']
-    >>> {"T1", "T2"} <= applicable("hunt_crossley", "white", "exponential")
-    True
     """
     names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga", "band_limit_hz"}
     names.add(laws.get(contact).parameter)
@@ -970,16 +805,6 @@ def model_tables(raw, allowed=TABLE_KEYS):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> model_tables({"block": {"m": 8.67}})
-    {'block': {'m': 8.67}, 'foundation': {}, 'excitation': {}}
-    >>> try:
-    ...     model_tables({"block": {"mass": 8.67}})
-    ... except StudyError as exc:
-    ...     print(exc)
-    block.mass: unknown key (allowed: m, b, h, I_cm, g)
     """
     tables = {}
     for tname in MODEL_TABLES:
@@ -1026,11 +851,6 @@ def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS,
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> sweep_values("excitation.S0", {"start": 1e-5, "stop": 1e-3, "num": 3, "log": True}, 0.0, False)
-    array([1.e-05, 1.e-04, 1.e-03])
     """
     if isinstance(spec, list):
         values = number_list(key, spec, lower=lower, inclusive=inclusive, upper=upper)
@@ -1100,14 +920,6 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=lim
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> sweeps = {}
-    >>> numeric_table({"k": 2.89e7, "eps": [0.0, 6e7], "contact": "winkler"}, "foundation", sweeps, "")
-    {'k': 28900000.0}
-    >>> sweeps
-    {'eps': array([       0., 60000000.])}
     """
     scalars = {}
     for key, value in tbl.items():
@@ -1157,16 +969,6 @@ def band_limit_value(key, value, t_end=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> band_limit_value("excitation.band_limit_hz", "none"), band_limit_value("excitation.band_limit_hz", 25)
-    (inf, 25.0)
-    >>> try:
-    ...     band_limit_value("excitation.band_limit_hz", 0.0)
-    ... except StudyError as exc:
-    ...     print(exc)
-    excitation.band_limit_hz: must be a number in (0, 1e+05] Hz or "none" (got 0.0)
     """
     if value == "none" or (value == math.inf and t_end is not None):
         return math.inf
@@ -1207,12 +1009,6 @@ def check_grid_size(sweeps, max_points, key, n_cases=1):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> check_grid_size({"eps": np.zeros(10), "S0": np.zeros(20)}, 1000, "excitation.S0")
-    200
     """
     sizes = [n_cases] if n_cases > 1 else []
     sizes += [len(v) for v in sweeps.values() if v is not None]
@@ -1259,15 +1055,6 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
-    ...           "excitation": {"kind": "white", "S0": 1e-4}}
-    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
-    >>> case.contact, case.params["g"], case.params["T1"]
-    ('hunt_crossley', 9.81, 4.0)
     """
     block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
     contact = choice(foundation, "contact", laws.names(), f"{where}foundation.", DEFAULTS["contact"])
@@ -1387,14 +1174,6 @@ def case_block_and_foundation(case, values):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
-    ...           "excitation": {"kind": "white", "S0": 1e-4}}
-    >>> block, foundation = case_block_and_foundation(resolve_case("", tables, {}, ""), {"b": 0.05})
-    >>> float(block.b), float(foundation.k)
-    (0.05, 28900000.0)
     """
     p = {**case.params, **values}
     return _block(p), _foundation(case, p)
@@ -1465,15 +1244,6 @@ def case_cutoff(case):
     References
     ----------
     .. [1] screening documentation, "Intensity measures of the stochastic inputs", ``docs/intensity_measures.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
-    ...           "excitation": {"kind": "white", "S0": 1e-4}}
-    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
-    >>> round(case_cutoff(case), 1)                  # the top of a 25 Hz band
-    883.3
     """
     band = case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ)
     return ground_cutoff() if math.isinf(band) else band_top(band)
@@ -1502,16 +1272,6 @@ def build_point_models(case, values, t_end=None):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> tables = {"block": {"m": 8.67, "b": 0.035, "h": 0.21}, "foundation": {"k": 2.89e7, "lam": 8.95e8},
-    ...           "excitation": {"kind": "white", "S0": 1e-4}}
-    >>> case = resolve_case("", tables, {"eps": np.array([0.0, 6e7])}, "")
-    >>> block, foundation, excitation, underivable = build_point_models(case, {"eps": 6e7})
-    >>> foundation.eps, bool(underivable)
-    (60000000.0, False)
     """
     p = dict(case.params)
     p.update(values)
@@ -1602,11 +1362,6 @@ def duration(key, value):
     References
     ----------
     .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    >>> duration("cluster.lifetime", "55m"), duration("cluster.lifetime", 90)
-    (3300.0, 90.0)
     """
     seconds = None
     if is_number(value):
@@ -1664,17 +1419,6 @@ def cluster_table(raw):
     .. [1] dask-jobqueue documentation, "How to handle job queueing system walltime killing workers",
        https://jobqueue.dask.org/en/latest/clusters-advanced-tips-and-tricks.html
     .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    >>> spec = cluster_table({"cluster": {"kind": "slurm", "memory": "8GB", "cores": 4, "jobs": 10}})
-    >>> spec.walltime, spec.lifetime_s, spec.lifetime_stagger_s
-    ('01:00:00', 3240.0, 180.0)
-    >>> try:
-    ...     cluster_table({"cluster": {"kind": "slurm", "memory": "8GB", "wall_time": "02:00:00"}})
-    ... except StudyError as exc:
-    ...     print(str(exc)[:39])
-    cluster.wall_time: unknown key (allowed
     """
     if "cluster" not in raw:
         return None

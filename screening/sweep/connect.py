@@ -40,10 +40,7 @@ from screening._version import __version__
 from screening.io.errors import SweepError, exception_line
 from screening.kernels.cache import source_stamp
 
-__all__ = ["HANDSHAKE_TIMEOUT", "MAX_HANDSHAKE", "MAX_HOST", "MAX_SCHEDULER_FILE", "TLS_SETTINGS",
-           "scheduler_address", "check_scheduler", "is_handshake", "REFUSED_TOPIC", "software_versions",
-           "version_mismatch", "worker_problem", "VersionGuard", "run_on_workers", "check_workers", "JOBQUEUE_CLASSES",
-           "jobqueue_cluster"]
+__all__ = []
 
 #: Seconds to wait for the connection and for the scheduler's first bytes.
 HANDSHAKE_TIMEOUT = 10.0
@@ -84,18 +81,6 @@ def scheduler_address(scheduler):
     .. [1] Dask.distributed documentation, "Connect to a scheduler" and "Launch Dask from a scheduler
        file", https://distributed.dask.org/en/stable/client.html and
        https://docs.dask.org/en/stable/deploying-cli.html
-
-    Examples
-    --------
-    >>> import json, os, tempfile
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     path = os.path.join(folder, "scheduler.json")
-    ...     with open(path, "w") as fh:
-    ...         json.dump({"address": "tcp://10.0.0.5:8786", "workers": {}}, fh)
-    ...     scheduler_address(path)
-    'tcp://10.0.0.5:8786'
-    >>> scheduler_address("tcp://127.0.0.1:8786")
-    'tcp://127.0.0.1:8786'
     """
     text = str(scheduler)
     if text.endswith(".json") and Path(text).is_file():
@@ -152,14 +137,6 @@ def check_scheduler(scheduler, timeout=None):
     .. [1] Dask.distributed documentation, "Connect to a scheduler" and "Launch Dask from a scheduler
        file", https://distributed.dask.org/en/stable/client.html and
        https://docs.dask.org/en/stable/deploying-cli.html
-
-    Examples
-    --------
-    >>> try:
-    ...     check_scheduler("tcp://localhost:99999")
-    ... except SweepError as exc:
-    ...     print(exc)
-    the dask scheduler address 'tcp://localhost:99999' is not host:port or tcp://host:port with a port in 1..65535
     """
     timeout = HANDSHAKE_TIMEOUT if timeout is None else timeout
     address = scheduler_address(scheduler)
@@ -245,15 +222,6 @@ def is_handshake(message):
        file", https://distributed.dask.org/en/stable/client.html and
        https://docs.dask.org/en/stable/deploying-cli.html
     .. [2] msgpack specification, https://github.com/msgpack/msgpack/blob/master/spec.md
-
-    Examples
-    --------
-    >>> import struct, msgpack
-    >>> head = msgpack.packb({"op": "handshake"})
-    >>> is_handshake(struct.pack("<QQ", 1, len(head)) + head)
-    True
-    >>> is_handshake(b"HTTP/1.1 400 Bad Request\\r\\n")
-    False
     """
     import msgpack
 
@@ -292,11 +260,6 @@ def software_versions():
     References
     ----------
     .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    >>> sorted(software_versions())
-    ['numba', 'numpy', 'python', 'screening']
     """
     return {"screening": f"{__version__} (sources {source_stamp()[:12]})", "python": platform.python_version(),
             "numpy": np.__version__, "numba": numba.__version__}
@@ -321,11 +284,6 @@ def version_mismatch(worker, theirs, mine):
     References
     ----------
     .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    >>> version_mismatch("tcp://10.0.0.7:4242", {"numba": "0.61.0"}, {"numba": "0.62.1"})
-    'the dask worker tcp://10.0.0.7:4242 runs numba 0.61.0; this client runs numba 0.62.1: install the same versions on the workers'
     """
     names = [name for name in mine if theirs.get(name) != mine[name]]
     if not names:
@@ -356,11 +314,6 @@ def worker_problem(expected, dask_worker=None):
     ----------
     .. [1] Numba documentation, "Environment variables" (``NUMBA_CACHE_DIR``),
        https://numba.readthedocs.io/en/stable/reference/envvars.html
-
-    Examples
-    --------
-    >>> worker_problem(software_versions()) is None          # this process against itself
-    True
     """
     where = dask_worker.address if dask_worker is not None else f"on {platform.node()}"
     problem = version_mismatch(where, software_versions(), expected)
@@ -435,14 +388,6 @@ def run_on_workers(client, function, *args):
     ----------
     .. [1] Dask.distributed documentation, "Client.run",
        https://distributed.dask.org/en/stable/api.html#distributed.Client.run
-
-    Examples
-    --------
-    >>> class Client:                   # a cluster whose second worker retired during the call
-    ...     def run(self, function, *args, on_error):
-    ...         return {"tcp://a:1": function(*args), "tcp://b:2": OSError("Stream is closed")}
-    >>> run_on_workers(Client(), len, "abc")
-    {'tcp://a:1': 3}
     """
     for attempt in range(RUN_ATTEMPTS):
         if attempt:                                 # every worker left at once: wait for the next to join
@@ -494,17 +439,6 @@ def check_workers(client, log=None):
     References
     ----------
     .. [1] Dask.distributed documentation, "Plugins", https://distributed.dask.org/en/stable/plugins.html
-
-    Examples
-    --------
-    >>> class Client:                   # a cluster whose worker runs another numba
-    ...     def run(self, function, *args, on_error):
-    ...         return {"tcp://a:1": version_mismatch("tcp://a:1", {"numba": "0.1"}, {"numba": "0.2"})}
-    >>> try:
-    ...     check_workers(Client())
-    ... except SweepError as exc:
-    ...     print(exc)
-    the dask worker tcp://a:1 runs numba 0.1; this client runs numba 0.2: install the same versions on the workers
     """
     expected = software_versions()
     for problem in run_on_workers(client, worker_problem, expected).values():
@@ -558,20 +492,6 @@ def jobqueue_cluster(spec):
     ----------
     .. [1] dask-jobqueue documentation, https://jobqueue.dask.org/en/latest/
     .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    Where SLURM's ``sbatch`` is not on the ``PATH`` (or dask-jobqueue is not installed), one line:
-
-    >>> import os
-    >>> from unittest import mock
-    >>> from screening.sweep.config import cluster_table
-    >>> with mock.patch.dict(os.environ, {"PATH": ""}):
-    ...     try:
-    ...         jobqueue_cluster(cluster_table({"cluster": {"kind": "slurm", "memory": "8GB"}}))
-    ...     except SweepError as exc:
-    ...         print("sbatch" in str(exc) or "dask-jobqueue" in str(exc))
-    True
     """
     try:
         import dask_jobqueue

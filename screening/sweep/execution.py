@@ -40,10 +40,7 @@ from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import choose_integrator
 from screening.solvers.outputs import HISTORY_VARIABLES, of_stage, OUTPUTS, selected
 
-__all__ = ["CONNECT_TIMEOUT", "QUEUE_WAIT_LINES", "TASK_RETRIES", "solve_batch", "batch_intensity",
-           "batch_rocking_start", "batch_trust", "batch_probabilities", "failed_result",
-           "spot_task", "escalation_task", "sample_state", "IN_PROCESS_MAX_POINTS", "DEFAULT_WORKERS", "default_workers",
-           "warm_up", "dask_client", "LOCAL_CLUSTER_CONFIG", "START_METHOD_VARIABLE", "WORKER_SETUP"]
+__all__ = []
 
 CONNECT_TIMEOUT = "15s"
 TASK_RETRIES = 2
@@ -120,20 +117,6 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "The module map", ``docs/architecture.md``.
-
-    Examples
-    --------
-    A batch task (the moment solver compiles on its first call, so this is shown, not run)::
-
-        out = solve_batch(block, foundation, excitation, condensation, study.times, study.rtol,
-                          study.max_steps, histories=())
-        out["peak_var_theta"]                     # [rad2], one per point
-
-    Its result holds the variables below (here those of a failed batch of two points, which the sweep
-    writes in its place, :func:`failed_result`):
-
-    >>> sorted(failed_result(2, 401, histories=()))[:6]
-    ['arias_intensity', 'min_k_eq', 'n_rejected', 'n_steps', 'p_rocking_start', 'peak_p_uplift']
     """
     probabilities = probabilities or fragility is not None
     res = solve_moments(block, foundation, excitation, t_out, rtol=rtol, max_steps=max_steps,
@@ -200,22 +183,6 @@ def batch_intensity(excitation, t_out, n, cutoff=None):
     .. [2] D. M. Boore, "Simulation of ground motion using the stochastic method", Pure and Applied
        Geophysics 160 (2003) 635-676. https://doi.org/10.1007/PL00012553
     .. [3] screening documentation, "Intensity measures of the stochastic inputs", ``docs/intensity_measures.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.sweep.grid import batch_models, plan_batches
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
-    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
-    >>> condensation = study.cases[0].condensation_model
-    >>> t = np.linspace(0.0, 2.0, 41)                     # the first 2 s of the record
-    >>> measures = batch_intensity(excitation, t, 2)      # white noise, S0 = 1e-4 m2 s-3
-    >>> measures["rms_acceleration"].round(4), measures["arias_intensity"].round(5)
-    (array([0.1215, 0.1215]), array([0.00473, 0.00473]))
-    >>> round(float(np.pi / (2 * 9.81) * measures["rms_acceleration"][0] ** 2 * 2.0), 5)   # pi/(2g) rms^2 T
-    0.00473
     """
     measures = input_measures(excitation, float(np.asarray(t_out)[-1]),
                               excitation.reference_cutoff() if cutoff is None else cutoff)
@@ -264,20 +231,6 @@ def batch_rocking_start(block, foundation, excitation, condensation, t_out, n, c
     .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.sweep.grid import batch_models, plan_batches
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
-    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
-    >>> from screening.core.condensation import get
-    >>> condensation = get("paper")                  # the paper's (the study's is the default)
-    >>> start = batch_rocking_start(block, foundation, excitation, condensation, study.times, 2)
-    >>> start["uplift_acceleration"].round(3), start["p_rocking_start"].round(3)   # hardening bed rocks later
-    (array([0.533, 0.741]), array([0.586, 0.011]))
     """
     try:
         with np.errstate(all="ignore"):
@@ -331,23 +284,6 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, mo
     .. [1] screening documentation, "Trusting a point", ``docs/trust.md``.
     .. [2] screening documentation, "The error atlas: how wrong the linearization is, over the whole
        space", ``docs/error_atlas.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.sweep.grid import batch_models, plan_batches
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
-    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
-    >>> condensation = study.cases[0].condensation_model
-    >>> out = {"status": np.zeros(2, np.int8), "peak_p_uplift": np.array([0.0, 0.3]),
-    ...        "min_k_eq": np.array([900.0, 400.0]), "peak_var_theta": np.array([1e-7, 4e-6]),
-    ...        "slenderness": np.full(2, float(block.slenderness))}
-    >>> var_theta = np.linspace(0.0, 1e-7, study.times.size) * np.ones((2, 1))
-    >>> trust = batch_trust({"var_theta": var_theta}, block, foundation, excitation, condensation, out, study.times)
-    >>> trust["sl_trust"]                                 # trusted (0), check (1)
-    array([0, 1], dtype=int8)
     """
     n = out["status"].size
 
@@ -418,29 +354,6 @@ def batch_probabilities(res, block, foundation, excitation, out, t_out, fragilit
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [rice1944] in the bibliography, ``docs/bibliography.md``.
     .. [3] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    Stationary moments, sigma_theta = 0.063 rad against atan(b/h) = 0.165 rad over 20 s:
-
-    >>> import numpy as np
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.sweep.grid import batch_models, plan_batches
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> study = parse_study(text)                     # two points: eps = 0 and 6e7 m-2
-    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 2)[0])
-    >>> condensation = study.cases[0].condensation_model
-    >>> out = {"status": np.zeros(2, np.int8), "peak_p_uplift": np.array([0.0, 0.3]),
-    ...        "min_k_eq": np.array([900.0, 400.0]), "peak_var_theta": np.array([1e-7, 4e-6]),
-    ...        "slenderness": np.full(2, float(block.slenderness))}
-    >>> nt = study.times.size
-    >>> res = {"status": np.zeros(2, np.int8), "var_theta": np.full((2, nt), 4e-3),
-    ...        "var_theta_dot": np.full((2, nt), 0.4), "cov_theta_theta_dot": np.zeros((2, nt)),
-    ...        "c_eq": np.full((2, nt), 5.0), "k_eq": np.full((2, nt), 1000.0)}
-    >>> out.update(sl_trust=np.array([0, 1], np.int8), sl_error_low=np.full(2, -0.1), sl_error_high=np.full(2, 0.1))
-    >>> p = batch_probabilities(res, block, foundation, excitation, out, study.times)
-    >>> p["p_overturn"].round(3), p["p_overturn_se"].round(3)       # a standard error at trusted points only
-    (array([0.735, 0.735]), array([0.056,   nan]))
     """
     n = out["status"].size
     shape = res["status"].shape
@@ -503,12 +416,6 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
     References
     ----------
     .. [1] screening documentation, "What a result holds", section "Status flags", ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> failed = failed_result(2, 3)
-    >>> failed["status"], failed["peak_var_theta"], failed["sl_trust"], failed["var_theta"].shape
-    (array([-1, -1], dtype=int8), array([nan, nan]), array([2, 2], dtype=int8), (2, 3))
     """
     n_thresholds = len(fragility.thresholds) if fragility is not None else 0
     return {o.name: o.failed_array(n, nt, n_thresholds)
@@ -569,18 +476,6 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     ----------
     .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
        ``docs/outputs.md``.
-
-    Examples
-    --------
-    Two samples of the coupled model on the paper's block and bed (compiles the integrator on a first call):
-
-    >>> from screening import Block, Foundation, WhiteNoise
-    >>> out = spot_task(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), None, 2,
-    ...                 "coupled", 0.2, 0.1, 0)
-    >>> out["var_theta"].shape, out["peak_abs_theta"].shape
-    ((3,), (2,))
-    >>> int(out["n_used"] + out["n_overturned"] + out["n_diverged"])
-    2
     """
     from screening.solvers.montecarlo import monte_carlo
 
@@ -694,27 +589,6 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     .. [2] B. Peherstorfer, K. Willcox and M. Gunzburger, "Optimal model management for multifidelity
        Monte Carlo estimation", SIAM J. Sci. Comput. 38(5) (2016) A3163-A3194.
        https://doi.org/10.1137/15M1046472
-
-    Examples
-    --------
-    The peaks are taken from the Monte Carlo run's histories (here a stand-in for the run, which
-    compiles the integrators on its first call):
-
-    >>> from unittest import mock
-    >>> import numpy as np
-    >>> from screening.sweep.config import build_models
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
-    >>> study = parse_study(text)
-    >>> block, foundation, excitation = build_models(study.cases[0], {"eps": 6e7}, study.t_end)  # one point
-    >>> condensation = study.cases[0].condensation_model
-    >>> run = {"var_theta": np.array([0.0, 2e-4, 1e-4]), "var_theta_se": np.array([0.0, 1e-5, 1e-5]),
-    ...        "var_theta_dot": np.array([0.0, 3e-2, 1e-2]), "var_theta_dot_se": np.array([0.0, 2e-3, 1e-3]),
-    ...        "n_grid": 1000, "n_overturned": 0, "n_diverged": 0, "n_used": 8, "n_steps": 5000,
-    ...        "peak_abs_theta": np.full(8, 0.02), "sample_state": np.zeros(8, np.int8)}
-    >>> with mock.patch(f"{__name__}.spot_task", return_value=run):
-    ...     out = escalation_task(block, foundation, excitation, condensation, 8, "coupled", 0.1, 0.05, seed=0)
-    >>> out["peak_var_theta"], out["peak_var_theta_se"], out["samples"]
-    (np.float64(0.0002), np.float64(1e-05), np.int32(8))
     """
     start = time.thread_time()
     if cheap is None:
@@ -773,11 +647,6 @@ def sample_state(overturned, diverged):
     ----------
     .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
        ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> sample_state([False, True, False], [False, False, True])
-    array([0, 1, 2], dtype=int8)
     """
     state = np.full(np.shape(overturned), SampleState.standing, dtype=np.int8)
     state[np.asarray(overturned, dtype=bool)] = SampleState.overturned
@@ -813,12 +682,6 @@ def default_workers(study):
     ----------
     .. [1] Dask.distributed documentation, https://distributed.dask.org/en/stable/
     .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
-    >>> default_workers(parse_study(text))            # two points: in this process
-    0
     """
     spots = 0 if study.mcs is None else (study.mcs.count if study.mcs.points == "auto" else len(study.mcs.points))
     return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
@@ -841,14 +704,6 @@ def warm_up():
     .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
     .. [3] Numba documentation, "Notes on caching",
        https://numba.readthedocs.io/en/stable/developer/caching.html
-
-    Examples
-    --------
-    >>> from unittest import mock
-    >>> with mock.patch(f"{__name__}.solve_moments") as solve:       # not compiled here
-    ...     seconds = warm_up()
-    >>> solve.call_count, solve.call_args.args[3].tolist()
-    (1, [0.0, 0.1])
     """
     start = time.perf_counter()
     solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
@@ -898,15 +753,6 @@ def dask_client(workers=2, scheduler=None, client=None, cluster=None, log=None):
     ----------
     .. [1] Dask.distributed documentation, https://distributed.dask.org/en/stable/
     .. [2] screening documentation, "Distributed runs", ``docs/distributed.md``.
-
-    Examples
-    --------
-    A given client is used as it is:
-
-    >>> mine = object()
-    >>> with dask_client(client=mine) as c:
-    ...     c is mine
-    True
     """
     if client is not None:
         yield client

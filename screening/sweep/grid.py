@@ -18,9 +18,7 @@ from screening.core.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
 from screening.sweep.config import build_models, build_point_models, NUMERIC
 
-__all__ = ["DEFAULT_BATCH", "HISTORY_FREE_BATCH", "BATCHES_PER_WORKER", "Batch", "holds_histories",
-           "default_batch_size", "plan_batches", "batch_values", "swept_columns", "point_values",
-           "batch_models", "batch_point_models", "select_spots"]
+__all__ = []
 
 #: Points per task when the histories are held in memory (stored, or needed for fragility).
 DEFAULT_BATCH = 500
@@ -61,14 +59,6 @@ def holds_histories(study):
     References
     ----------
     .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> holds_histories(study)                        # [output] stores all six histories by default
-    True
     """
     return bool(study.output.stored) or study.fragility is not None
 
@@ -102,14 +92,6 @@ def default_batch_size(study, n_workers, target=None):
     References
     ----------
     .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> default_batch_size(study, n_workers=2)        # 6 points: at least 2 batches per worker
-    2
     """
     per_case = study.points_per_case
     workers = max(int(n_workers), 1)
@@ -172,14 +154,6 @@ def plan_batches(study, batch_size):
     References
     ----------
     .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> [(b.lo, b.hi) for b in plan_batches(study, 4)]
-    [(0, 4), (4, 6)]
     """
     if batch_size < 1:
         raise ValueError(f"parameter 'batch_size' must be an integer >= 1 (got {batch_size!r})")
@@ -210,14 +184,6 @@ def batch_values(study, batch):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> batch_values(study, plan_batches(study, 4)[1])["S0"]      # points 4, 5: eps = 6e7 m-2
-    array([0.0001, 0.001 ])
     """
     per_case = study.points_per_case
     flat = np.arange(batch.lo - batch.case * per_case, batch.hi - batch.case * per_case)
@@ -246,16 +212,6 @@ def swept_columns(study):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> study = parse_study(EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]"))   # eps x S0: 2 x 3
-    >>> columns, case = swept_columns(study)
-    >>> columns["eps"].tolist()
-    [0.0, 0.0, 0.0, 60000000.0, 60000000.0, 60000000.0]
-    >>> columns["S0"].tolist(), case.tolist()
-    ([1e-05, 0.0001, 0.001, 1e-05, 0.0001, 0.001], [0, 0, 0, 0, 0, 0])
     """
     n, per_case = study.n_points, study.points_per_case
     columns = {name: np.empty(n) for name in study.swept_dims}
@@ -286,14 +242,6 @@ def point_values(study, index):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> point_values(study, (1, 2))
-    (0, {'eps': 60000000.0, 'S0': 0.001})
     """
     case = index[0] if study.has_case_dim else 0
     swept = index[1:] if study.has_case_dim else index
@@ -322,15 +270,6 @@ def batch_models(study, batch):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> block, foundation, excitation = batch_models(study, plan_batches(study, 4)[0])
-    >>> foundation.eps, excitation.S0
-    (array([       0.,        0.,        0., 60000000.]), array([1.e-05, 1.e-04, 1.e-03, 1.e-05]))
     """
     return build_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
@@ -355,15 +294,6 @@ def batch_point_models(study, batch):
     References
     ----------
     .. [1] screening documentation, "The study file", ``docs/study.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> block, foundation, excitation, underivable = batch_point_models(study, plan_batches(study, 4)[0])
-    >>> bool(underivable)                               # S0 given: nothing to derive
-    False
     """
     return build_point_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
@@ -395,17 +325,6 @@ def select_spots(study, status, peak_p_uplift):
     References
     ----------
     .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY.replace("S0 = 1e-4", "S0 = [1e-5, 1e-4, 1e-3]")
-    >>> text += '[mcs]\\npoints = "auto"\\ncount = 2\\nsamples = 100\\n'
-    >>> study = parse_study(text)                     # eps x S0: a 2 x 3 grid
-    >>> uplift = np.array([0.1, 0.5, 0.2, 0.3, 0.9, 0.0])
-    >>> select_spots(study, np.zeros(6, dtype=np.int8), uplift)   # the highest uplift, then near 0.45
-    [(1, 1), (0, 1)]
     """
     spec = study.mcs
     if spec is None:

@@ -15,8 +15,7 @@ import signal
 import sys
 import threading
 
-__all__ = ["interrupted", "raise_if_interrupted", "interrupt_guard", "shielded", "interruptible",
-           "deferred_interrupt", "dask_setup"]
+__all__ = []
 
 _pressed = threading.Event()
 _depth = {"shielded": 0, "open": 0}
@@ -37,11 +36,6 @@ def interrupted():
     ----------
     .. [1] Python documentation, "signal: Set handlers for asynchronous events",
        https://docs.python.org/3/library/signal.html
-
-    Examples
-    --------
-    >>> interrupted()
-    False
     """
     return _pressed.is_set()
 
@@ -63,11 +57,6 @@ def raise_if_interrupted():
     ----------
     .. [1] Python documentation, "signal: Set handlers for asynchronous events",
        https://docs.python.org/3/library/signal.html
-
-    Examples
-    --------
-    >>> raise_if_interrupted() is None                 # nothing pressed
-    True
     """
     if _pressed.is_set():
         raise KeyboardInterrupt
@@ -93,18 +82,6 @@ def interrupt_guard():
        https://docs.python.org/3/library/signal.html
     .. [2] Python documentation, "sys.unraisablehook",
        https://docs.python.org/3/library/sys.html#sys.unraisablehook
-
-    Examples
-    --------
-    >>> import signal
-    >>> with interrupt_guard():
-    ...     try:
-    ...         signal.raise_signal(signal.SIGINT)            # a Ctrl-C
-    ...     except KeyboardInterrupt:
-    ...         print("raised; recorded:", interrupted())
-    raised; recorded: True
-    >>> interrupted()                                         # cleared when the block ends
-    False
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -151,13 +128,6 @@ def shielded():
     ----------
     .. [1] Python documentation, "signal: Set handlers for asynchronous events",
        https://docs.python.org/3/library/signal.html
-
-    Examples
-    --------
-    >>> with shielded():
-    ...     total = sum(interruptible(range(4)))
-    >>> total
-    6
     """
     _depth["shielded"] += 1
     try:
@@ -187,11 +157,6 @@ def interruptible(iterable):
     ----------
     .. [1] Python documentation, "signal: Set handlers for asynchronous events",
        https://docs.python.org/3/library/signal.html
-
-    Examples
-    --------
-    >>> list(interruptible(["batch 0", "batch 1"]))
-    ['batch 0', 'batch 1']
     """
     iterator = iter(iterable)
     while True:
@@ -222,14 +187,6 @@ def deferred_interrupt():
     ----------
     .. [1] Python documentation, "signal: Set handlers for asynchronous events",
        https://docs.python.org/3/library/signal.html
-
-    Examples
-    --------
-    >>> import signal
-    >>> with deferred_interrupt() as pressed:
-    ...     signal.raise_signal(signal.SIGINT)                # held back, not raised
-    >>> pressed
-    [True]
     """
     pressed = []
     if threading.current_thread() is not threading.main_thread():
@@ -271,15 +228,6 @@ def dask_setup(worker):
        https://docs.python.org/3/library/signal.html
     .. [2] Dask.distributed documentation, "Preloading",
        https://distributed.dask.org/en/stable/preloading.html
-
-    Examples
-    --------
-    >>> import signal
-    >>> from unittest import mock
-    >>> with mock.patch("signal.signal") as set_handler, mock.patch("atexit.register"):  # not in this process
-    ...     dask_setup(worker=None)
-    >>> set_handler.call_args.args == (signal.SIGINT, signal.SIG_IGN)
-    True
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     atexit.register(os._exit, 0)

@@ -30,7 +30,7 @@ import numpy as np
 from screening.analysis import beds
 from screening.sweep.config import StudyError
 
-__all__ = ["REQUIRED_COLUMNS", "BED_COLUMNS", "read_inventory", "with_collection"]
+__all__ = []
 
 #: Columns every row must give, with their units.
 REQUIRED_COLUMNS = {"name": "", "m": "kg", "b": "m", "h": "m", "depth": "m"}
@@ -89,18 +89,6 @@ def read_inventory(path):
     References
     ----------
     .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     f = pathlib.Path(tmp) / "objects.csv"
-    ...     _ = f.write_text("name,m,b,h,depth,k\\nbust,8.67,0.035,0.21,0.1,2.89e7\\nvase,20,0.05,0.3,0.1,\\n")
-    ...     cases, _ = read_inventory(f)
-    >>> cases[0]
-    {'name': 'bust', 'block': {'m': 8.67, 'b': 0.035, 'h': 0.21}, 'foundation': {'k': 28900000.0}}
-    >>> cases[1]["foundation"]
-    {}
     """
     path = Path(path)
     try:
@@ -192,11 +180,6 @@ def with_collection(raw, source, inventory=None):
     References
     ----------
     .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
-
-    Examples
-    --------
-    >>> with_collection({"block": {"m": 1.0}}, "<string>") == ({"block": {"m": 1.0}}, "")
-    True
     """
     if inventory is None and "collection" not in raw:
         return raw, ""

@@ -42,8 +42,7 @@ from screening.solvers import mc_registry
 from screening.sweep.grid import point_values, swept_columns
 from screening.sweep.study import build_models
 
-__all__ = ["CORRECTION_HISTORIES", "levels_at", "surface_estimates", "finish_probabilities", "probabilities_line",
-           "answer_line"]
+__all__ = []
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
@@ -120,13 +119,6 @@ def levels_at(study, theta_ul, slenderness):
     ----------
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> text = EXAMPLE_STUDY + '[fragility]\\nthresholds = [0.5, 1.0]\\nrelative_to = "slenderness"\\n'
-    >>> levels_at(parse_study(text), theta_ul=[0.01], slenderness=[0.16])
-    array([[0.16, 0.08, 0.16]])
     """
     cols = [np.asarray(slenderness, dtype=float)]
     frag = study.fragility
@@ -204,19 +196,6 @@ def surface_estimates(columns, case, counts, n_used):
     ----------
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``, section "Near toppling: the study's fragility surface".
-
-    Examples
-    --------
-    Nine Monte Carlo points on a probit curve in ``log S0`` (median 1e-3, beta 0.5), then the grid between:
-
-    >>> import numpy as np
-    >>> from scipy.special import ndtr
-    >>> S0 = np.geomspace(1e-4, 1e-2, 17)
-    >>> mc = range(0, 17, 2)
-    >>> counts = {i: np.array([round(1000 * ndtr(np.log(S0[i] / 1e-3) / 0.5))]) for i in mc}
-    >>> p, se, usable, notes = surface_estimates({"S0": S0}, np.zeros(17, int), counts, {i: 1000 for i in mc})
-    >>> bool(usable.all()), round(float(p[8, 0]), 2), bool(abs(p[3, 0] - ndtr(np.log(S0[3] / 1e-3) / 0.5)) < 0.02)
-    (True, 0.5, True)
     """
     n = case.size
     levels = len(next(iter(counts.values()))) if counts else 1
@@ -327,39 +306,6 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
     .. [2] [agresti1998] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    Two points: the first trusted, the second not, with a spot check of 4 coupled samples (one overturned).
-
-    >>> import numpy as np
-    >>> from screening.solvers import mc_registry
-    >>> from screening.core.status import PointStatus, SampleState, Trust
-    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
-    >>> class Result(dict):                   # the reads and the write of a result used here
-    ...     status = np.array([PointStatus.ok, PointStatus.ok])
-    ...     sl_trust = np.array([Trust.trusted, Trust.untrusted])
-    ...     peak_p_uplift = np.array([0.1, 0.5])
-    ...     def commit(self):
-    ...         pass
-    ...     def read(self, name):
-    ...         return np.asarray(self[name], dtype=float)
-    ...     def write_probabilities(self, values, source, answer):
-    ...         self.update(values, p_source=source, answer_quantity=answer)
-    ...     def set_attrs(self, **attrs):
-    ...         self.update(attrs)
-    >>> res = Result(p_overturn=[1e-3, 0.2], p_overturn_se=[2e-4, 0.05], sl_error_low=[-0.1, -0.1],
-    ...              sl_error_high=[0.1, 0.1], theta_ul=[1e-3, 1e-3], slenderness=[0.165, 0.165])
-    >>> spot = {"mcs_model": mc_registry.names().index("coupled"), "peak_abs_theta": [0.01, 0.02, 0.05, 0.3],
-    ...         "sample_state": [SampleState.standing] * 3 + [SampleState.overturned]}
-    >>> finish_probabilities(parse_study(EXAMPLE_STUDY), res, spot_runs=([(1,)], [spot]))
-    {'linearization_gaussian': 1, 'monte_carlo_coupled': 1}
-    >>> res["p_overturn"].tolist(), bool(np.isclose(res["p_overturn_se"][1], np.sqrt(0.375 * 0.625 / 8)))
-    ([0.001, 0.25], True)
-    >>> res["answer_quantity"].tolist()            # 1 of 4 overturned: not established at 2 SE
-    [0, 0]
-    >>> res["answer_note"]
-    'answers: variance 2, probabilities 0; unreliable: 1 variance, 1 without any reliable answer'
     """
     res.commit()                    # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
@@ -451,11 +397,6 @@ def probabilities_line(counts):
     ----------
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> probabilities_line({"monte_carlo_coupled": 3, "linearization_gaussian": 97})
-    'probabilities (p_overturn, p_exceed) by source: monte_carlo_coupled 3, linearization_gaussian 97'
     """
     return "probabilities (p_overturn, p_exceed) by source: " + ", ".join(f"{name} {k}" for name, k in counts.items())
 
@@ -490,11 +431,6 @@ def answer_line(answer, reliable, variance_vouched):
     ----------
     .. [1] screening documentation, "Probabilities of overturning and of exceedance",
        ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
-
-    Examples
-    --------
-    >>> answer_line([0, 0, 1, 3], [True, False, True, False], [True, False, False, False])
-    'answers: variance 2, probabilities 2 (linearization stopped 1, heavy uplift without a vouched-for variance 1); unreliable: 3 variance, 2 without any reliable answer'
     """
     answer = np.asarray(answer).reshape(-1)
     by_variance = int(np.sum(answer == AnswerQuantity.variance))

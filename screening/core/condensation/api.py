@@ -157,16 +157,6 @@ def restoring_moment(theta, block, foundation, condensation=DEFAULT_CONDENSATION
     -----
     The conservative term of eq. (22) in [1], ``m_sdof theta'' + C(theta) theta' + K(theta) theta = m h a_g``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{float(restoring_moment(1e-3, block, bed)):.4g}"
-    '0.8082'
     """
     return get(condensation).restoring_moment(theta, block, foundation)
 
@@ -200,16 +190,6 @@ def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundatio
     Eq. (22) in [1] solved for the acceleration: ``theta'' = (m h a_g - C(theta) theta' - K(theta) theta)
     / m_sdof`` with ``m_sdof = I_cm + m h^2`` (eq. (23) in [1]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{float(rocking_acceleration(0.0, 0.0, 1.0, block, bed)):.4g}"
-    '3.547'
     """
     cond = get(condensation)
     force = (block.m * block.h * np.asarray(ground_acceleration, dtype=float)
@@ -312,17 +292,6 @@ def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, 
     and ``cov / sigma_theta = rho sigma_theta_dot`` only, and is finite at zero covariance (the start of
     every integration of eq. (45) in [1]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> c_eq, k_eq = equivalent_coefficients_from_moments(0.0, 0.0, block, bed)
-    >>> f"{float(c_eq):.4g} {float(k_eq):.4g}"
-    '1.076 808.2'
     """
     var_theta = np.asarray(var_theta, dtype=float)
     cov = np.asarray(cov_theta_theta_dot, dtype=float)

@@ -113,10 +113,7 @@ from screening.core.physics.contact import (UPLIFT_BEARING_LIMIT, bearing_load, 
 from screening.core.condensation.registry import register
 from screening.core.signatures import sdof_coefficients_signature
 
-__all__ = ["SOFTENING_LIMIT", "bearing_load", "check_bearing", "rest_indentation", "uplift_threshold",
-           "capacity_angle", "in_equilibrium", "quasi_static_indentation", "indentation_state", "rocking_damping", "rocking_stiffness",
-           "restoring_moment", "damping_at_rest", "stiffness_at_rest", "SDOF_RECORD", "sdof_record",
-           "quasi_static_indentation_jit", "damping_stiffness_jit", "CubicCondensation", "CUBIC"]
+__all__ = []
 
 #: Largest ``|eps| z_lin^2`` of a softening bed for which the uplift threshold exists
 #: (:data:`screening.core.physics.contact.UPLIFT_BEARING_LIMIT`).
@@ -149,16 +146,6 @@ def check_bearing(block, foundation):
     The condition is ``|eps| z_lin^2 < 2/27`` (:data:`SOFTENING_LIMIT`, :func:`bearing_load`; ``z_lin`` of
     eq. (17) in [1]); any element of array parameters failing it raises.  ``eps >= 0`` always passes.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> check_bearing(block, bed) is None
-    True
     """
     eps = np.asarray(foundation.eps, dtype=float)
     load = bearing_load(block, foundation)
@@ -194,16 +181,6 @@ def rest_indentation(block, foundation):
     -----
     Eq. (13) in [1] at rest, cubic term included, after :func:`check_bearing`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> f"{float(rest_indentation(block, bed)):.4e}"
-    '3.8594e-05'
     """
     check_bearing(block, foundation)
     return contact.rest_indentation(block, foundation)
@@ -235,16 +212,6 @@ def uplift_threshold(block, foundation):
     ``y = b theta_ul`` solves ``2 eps y^3 + y = z_lin``: the rotation at which the quasi-static ``z_cb(theta)``
     of eq. (13) in [1] reaches ``b theta`` (eq. (19) generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> f"{float(uplift_threshold(block, bed)):.4e}"
-    '1.0372e-03'
     """
     check_bearing(block, foundation)
     return exact_uplift_angle(block, foundation)
@@ -270,15 +237,6 @@ def capacity_angle(block, foundation):
     Beyond it the uplift balance ``(k/(2a)) v^2 + (eps k/(4a)) v^4 = m g`` (eq. (15) in [1], ``a = |theta|``)
     has no root: no quasi-static equilibrium exists.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> f"{float(capacity_angle(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5))):.4f}"
-    '0.1416'
     """
     eps = np.asarray(foundation.eps, dtype=float)
     with np.errstate(divide="ignore"):
@@ -307,15 +265,6 @@ def in_equilibrium(theta, block, foundation):
     -----
     :func:`capacity_angle` from the uplift balance eq. (15) in [1].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> in_equilibrium([0.1, 0.2], Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=-6e5)).tolist()
-    [True, False]
     """
     return np.abs(np.asarray(theta, dtype=float)) <= capacity_angle(block, foundation)
 
@@ -346,17 +295,6 @@ def quasi_static_indentation(theta, block, foundation):
     capacity angle of a softening bed the contact is held at its peak load and the slope reported is 0
     (module docstring).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> z, dz = quasi_static_indentation([0.0, 2e-3], block, bed)
-    >>> [f"{v:.4e}" for v in z]
-    ['3.8594e-05', '2.6027e-05']
     """
     return indentation_state(theta, block, foundation)[:2]
 
@@ -393,17 +331,6 @@ def indentation_state(theta, block, foundation):
     (eq. (13) in [1]); above it the uplift balance eq. (15) in [1], held at the peak load beyond the
     capacity angle of a softening bed (slope 0 there).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> z, slope, v, a, uplift = indentation_state([0.0, 2e-3], block, bed)
-    >>> bool(np.allclose(v, block.b * a + z)), uplift.tolist()
-    (True, [False, True])
     """
     check_bearing(block, foundation)
     a = np.abs(np.asarray(theta, dtype=float))
@@ -459,16 +386,6 @@ def rocking_damping(theta, block, foundation):
     Eqs. (14) and (16) in [1] re-derived with the quasi-static rate ``zdot_cb = (dz/dtheta) theta'`` and the
     law's damping pressure (module docstring); with ``eps = 0`` it is eq. (24).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
-    ['0.9873', '0.02667']
     """
     z, dz, v, a, uplift = indentation_state(theta, block, foundation)
     b = block.b
@@ -509,16 +426,6 @@ def rocking_stiffness(theta, block, foundation):
     ``K_in = (2/3) b^3 k - m g h + eps k (2 b^3 z^2 + (2/5) b^5 a^2)`` (eq. (14) in [1]) and ``K_up`` of
     eq. (16), at the quasi-static ``z`` of :func:`quasi_static_indentation`; with ``eps = 0`` it is eq. (25).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> [f"{k:.4g}" for k in rocking_stiffness([0.0, 0.01], block, bed)]
-    ['1030', '239.7']
     """
     z, _, v, a, uplift = indentation_state(theta, block, foundation)
     b, k, eps = block.b, foundation.k, foundation.eps
@@ -556,16 +463,6 @@ def restoring_moment(theta, block, foundation):
     -----
     The conservative term of eq. (22) in [1] with ``K`` of :func:`rocking_stiffness`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> f"{float(restoring_moment(1e-3, block, bed)):.4g}"
-    '1.042'
     """
     theta = np.asarray(theta, dtype=float)
     return (rocking_stiffness(theta, block, foundation) * theta)[()]
@@ -596,16 +493,6 @@ def damping_at_rest(block, foundation):
     -----
     Eq. (14) in [1] at ``theta = 0`` with the rest indentation ``z0`` (eq. (13)).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> f"{float(damping_at_rest(block, bed)):.4g}"
-    '0.9873'
     """
     check_bearing(block, foundation)
     w_rate, w_ind = foundation.damping_weights
@@ -638,16 +525,6 @@ def stiffness_at_rest(block, foundation):
     Eq. (14) in [1] at ``theta = 0`` with the rest indentation ``z0`` (eq. (13)); its ``eps = 0`` part is
     :func:`screening.core.physics.contact.linear_rocking_stiffness`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> f"{float(stiffness_at_rest(block, bed)):.4g}"
-    '1030'
     """
     z0 = rest_indentation(block, foundation)
     b, k = block.b, foundation.k
@@ -682,16 +559,6 @@ def sdof_record(block, foundation):
     The block, the bed, the threshold, ``z_lin`` (eq. (17) in [1]) and the rest indentation with its
     curvature (the Newton start of the balance of eq. (13)).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> f"{sdof_record(block, bed)['theta_ul'][0]:.4e}"
-    '1.0372e-03'
     """
     b, eps = float(block.b), float(foundation.eps)
     z0 = float(rest_indentation(block, foundation))
@@ -730,17 +597,6 @@ def quasi_static_indentation_jit(p, a):
     -----
     Newton on the balance of eq. (13) in [1] below ``theta_ul``, the closed-form root of eq. (15) above.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> z, dz, v = quasi_static_indentation_jit(sdof_record(block, bed)[0], 2e-3)
-    >>> bool(abs(z - quasi_static_indentation(2e-3, block, bed)[0]) < 1e-12 * z)
-    True
     """
     b, eps = p.b, p.eps
     if a <= p.theta_ul:
@@ -787,17 +643,6 @@ def damping_stiffness_jit(p, theta):
     -----
     Eqs. (14) and (16) in [1] with one indentation solve for both (:func:`quasi_static_indentation_jit`).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> C, K = damping_stiffness_jit(sdof_record(block, bed)[0], 0.01)
-    >>> bool(abs(K - rocking_stiffness(0.01, block, bed)) < 1e-9 * abs(K))
-    True
     """
     a = abs(theta)
     z, dz, v = quasi_static_indentation_jit(p, a)

@@ -84,11 +84,7 @@ from screening.core.condensation.uplift_integrals import (coefficient_table, gau
 from screening.core.signatures import FMA, moment_coefficients_signature, sdof_coefficients_signature
 from screening.core.physics.contact import bed_rocking_stiffness, linear_rocking_stiffness
 
-__all__ = ["uplift_threshold", "static_indentation", "damping_inner_parts", "damping_inner", "stiffness_at_rest",
-           "rocking_damping",
-           "rocking_stiffness", "restoring_moment", "SDOF_RECORD", "sdof_record", "damping_stiffness_jit",
-           "coefficient_constants", "equivalent_coefficients", "RECORD", "records", "equivalent_coefficients_jit",
-           "PaperCondensation", "PAPER"]
+__all__ = []
 
 
 def uplift_threshold(block, foundation):
@@ -111,16 +107,6 @@ def uplift_threshold(block, foundation):
     Eq. (19) in [1]: the rotation at which the linear static indentation ``m g / (2 b k)`` (eq. (17))
     equals ``b theta``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{uplift_threshold(block, bed):.4e}"
-    '1.2012e-03'
     """
     return block.m * block.g / (2.0 * block.b**2 * foundation.k)
 
@@ -147,16 +133,6 @@ def static_indentation(theta, block, foundation):
     -----
     The linear static balance in full contact and in uplift; continuous at ``theta_ul`` (eq. (19)).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{z:.4e}" for z in static_indentation([0.0, 2e-3], block, bed)]
-    ['4.2043e-05', '3.8499e-05']
     """
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
@@ -187,16 +163,6 @@ def damping_inner_parts(block, foundation):
     The no-uplift branch of eq. (24) in [1] is the ``z zdot`` part; the Winkler dashpot adds the ``zdot``
     part.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{c:.4g}" for c in damping_inner_parts(block, bed)]
-    ['0', '1.076']
     """
     w_rate, w_ind = foundation.damping_weights
     return 2.0 / 3.0 * w_rate * block.b**3, w_ind * block.b**2 * block.m * block.g / (3.0 * foundation.k)
@@ -221,16 +187,6 @@ def damping_inner(block, foundation):
     -----
     ``lam b^2 m g / (3 k)`` for Hunt–Crossley, eq. (24) in [1]; ``(2/3) c b^3`` for Winkler.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{damping_inner(block, bed):.4g}"
-    '1.076'
     """
     rate, indentation = damping_inner_parts(block, foundation)
     return rate + indentation
@@ -256,16 +212,6 @@ def stiffness_at_rest(block, foundation):
     Eq. (25) in [1] at ``theta = 0``: :func:`screening.core.physics.contact.linear_rocking_stiffness` plus the
     cubic term's share about the static indentation ``m g / (2 b k)``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block = Block(m=8.67, b=0.035, h=0.21)
-    >>> [f"{float(stiffness_at_rest(block, Foundation(k=2.89e7, lam=8.95e8, eps=e))):.4g}" for e in (0.0, 6e7)]
-    ['808.2', '1071']
     """
     e0 = (block.m * block.g) ** 2 * block.b / foundation.k
     return linear_rocking_stiffness(block, foundation) + 0.5 * foundation.eps * e0
@@ -294,16 +240,6 @@ def rocking_damping(theta, block, foundation):
     ``w_rate (2 m g / k)^(3/2) |theta|^(-3/2) / 12 + w_indentation b (2 m g / k)^(3/2) |theta|^(-1/2) / 12``:
     eq. (24) in [1] for Hunt–Crossley, its Winkler form from the module docstring.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
-    ['1.076', '0.3728']
     """
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
@@ -339,16 +275,6 @@ def rocking_stiffness(theta, block, foundation):
     ``|theta| <= theta_ul``, ``m g (b/|theta| - sqrt(2 m g k) |theta|^(-3/2) / (3 k) - h) +
     eps (m^2 g^2 b / k - m^2 g^2 sqrt(2 m g / k) |theta|^(-1/2) / (5 k))`` beyond.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{k:.4g}" for k in rocking_stiffness([0.0, 0.01], block, bed)]
-    ['808.2', '211']
     """
     theta = np.asarray(theta, dtype=float)
     a = np.abs(theta)
@@ -383,16 +309,6 @@ def restoring_moment(theta, block, foundation):
     -----
     The conservative term of eq. (22) in [1] with ``K`` of eq. (25).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{float(restoring_moment(1e-3, block, bed)):.4g}"
-    '0.8082'
     """
     theta = np.asarray(theta, dtype=float)
     return rocking_stiffness(theta, block, foundation) * theta
@@ -425,16 +341,6 @@ def sdof_record(block, foundation):
     The parameter-only factors of eqs. (24)-(25) in [1], so that the compiled twin evaluates ``C`` and
     ``K`` with one square root.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{sdof_record(block, bed)['C1'][0]:.4g}"
-    '1.076'
     """
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     k, eps = float(foundation.k), float(foundation.eps)
@@ -476,17 +382,6 @@ def damping_stiffness_jit(p, theta):
     -----
     Eqs. (24)-(25) in [1] from the record's constants; the condensed Monte Carlo's ``C``, ``K``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> C, K = damping_stiffness_jit(sdof_record(block, bed)[0], 0.01)
-    >>> bool(abs(C - rocking_damping(0.01, block, bed)) < 1e-12 * C)
-    True
     """
     a = abs(theta)
     if a <= p.theta_ul:
@@ -518,16 +413,6 @@ def coefficient_constants(block, foundation):
     -----
     The factors of eqs. (35)-(36) in [1] that do not depend on the moments.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> f"{coefficient_constants(block, bed)['K0']:.4g}"
-    '826.1'
     """
     m, g, b, h, k = block.m, block.g, block.b, block.h, foundation.k
     c1_rate, c1_indentation = damping_inner_parts(block, foundation)
@@ -570,17 +455,6 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
     integrals of :mod:`~screening.core.condensation.uplift_integrals`; :func:`equivalent_coefficients_jit` is the
     compiled twin.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> c_eq, k_eq = equivalent_coefficients(2e-3, 0.0, block, bed)
-    >>> f"{float(c_eq):.4g} {float(k_eq):.4g}"
-    '0.9243 560.7'
     """
     s = np.asarray(sigma_theta, dtype=float)
     cov_over_s = np.asarray(cov_over_sigma, dtype=float)
@@ -622,16 +496,6 @@ def records(block, foundation):
     -----
     :func:`coefficient_constants` laid out for :func:`equivalent_coefficients_jit` (eqs. (35)-(36) in [1]).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> records(block, bed)["theta_ul"].round(7).tolist()
-    [0.0012012]
     """
     const = coefficient_constants(block, foundation)
     fields = {"theta_ul": const["theta_ul"], "inv_theta_ul2": 1.0 / const["theta_ul"] ** 2,
@@ -671,19 +535,6 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     Eqs. (35)-(36) in [1] (corrected) with the Gaussian integrals read from the table; finite at
     ``var_theta = 0``, the start of every integration of eq. (45).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> from screening.core.condensation.uplift_integrals import coefficient_table
-    >>> c_eq, k_eq = equivalent_coefficients_jit(records(block, bed)[0], coefficient_table(), 4e-6, 0.0)
-    >>> c0, k0 = equivalent_coefficients(2e-3, 0.0, block, bed)
-    >>> bool(abs(c_eq - c0) < 1e-6 * c0 and abs(k_eq - k0) < 1e-6 * abs(k0))
-    True
     """
     q = var_theta * p.inv_theta_ul2                 # (sigma_theta / theta_ul)^2
     p_in, tail_m12, tail_m32, p32 = uplift_integrals_q(q, table)

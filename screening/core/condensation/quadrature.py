@@ -75,11 +75,7 @@ from screening.core.interpolation import cubic, cubic_coefficients, octave_first
 from screening.core.signatures import FMA, MomentKernel, moment_coefficients_signature
 from screening.core.model.points import flatten, point_key, select, numeric_fields
 
-__all__ = ["T_LO", "STEPS_PER_UNIT", "GAUSS_ORDER", "J_INNER", "SIGMA_SPAN", "theta_quadrature",
-           "gaussian_expectations", "expectations", "table_size", "node_values", "coefficient_table",
-           "coefficient_tables", "RECORD", "moment_kernel", "table_lookup", "table_lookup_grid",
-           "equivalent_coefficients_jit", "equivalent_coefficients", "BUCKET_BITS", "FIT_DEGREE", "TABLE_CACHE_SIZE",
-           "octave_table", "octave_lookup_jit"]
+__all__ = []
 
 #: Table grid in t = ln(sigma_theta / theta_ul).
 T_LO = -12.0
@@ -156,17 +152,6 @@ def theta_quadrature(theta_ul, theta_cap, theta_top):
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] P. J. Davis and P. Rabinowitz, Methods of Numerical Integration, 2nd ed., Academic Press
        (1984), ch. 2 (Gauss-Legendre rules).
-
-    Examples
-    --------
-    The nodes integrate the Gaussian density of ``sigma = 1 mrad`` and its variance exactly:
-
-    >>> import math
-    >>> theta, weight = theta_quadrature(1.0372e-3, math.inf, 0.12)
-    >>> sigma = 1e-3
-    >>> phi = 2 * np.exp(-0.5 * (theta / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
-    >>> round(float(weight @ phi), 12), round(float(weight @ (phi * theta**2)) / sigma**2, 12)
-    (1.0, 1.0)
     """
     inner = np.concatenate([[0.0], theta_ul * 2.0 ** -np.arange(J_INNER, -1, -1)])
     parts = [_gauss_legendre(inner)]
@@ -228,18 +213,6 @@ def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    For constant ``C`` and ``K`` the expectations are those constants, ``d_c = 0``, and nothing
-    changes with ``sigma``:
-
-    >>> import math
-    >>> theta, weight = theta_quadrature(1e-3, math.inf, 0.12)
-    >>> values, slopes = gaussian_expectations([1e-3], theta, weight, np.full(theta.shape, 2.0),
-    ...                                        np.full(theta.shape, 500.0), 2.0, 500.0)
-    >>> values.round(9).tolist(), slopes.round(9).tolist()
-    ([[2.0, 500.0, 0.0]], [[0.0, 0.0, 0.0]])
     """
     sigma = np.asarray(sigma, dtype=float).reshape(-1)
     theta = np.asarray(theta, dtype=float)
@@ -384,27 +357,6 @@ def expectations(sigma_theta, block, foundation, cond):
     :func:`gaussian_expectations` on the nodes of :func:`theta_quadrature`; the equivalent
     coefficients of eq. (31) in [1]_ are ``c_eq = e_c``, ``k_eq = e_k + cov d_c``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    The paper's condensation has closed forms (:mod:`screening.core.condensation.paper`): the
-    quadrature reproduces them, and gives the no-uplift values at ``sigma = 0``:
-
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> paper = get("paper")
-    >>> sigma = np.array([0.0, 1e-3, 3e-3])                                   # [rad]
-    >>> e_c, e_k, d_c = expectations(sigma, block, bed, paper)
-    >>> c_eq, k_eq = paper.equivalent_coefficients(sigma, 0.2, block, bed)    # cov / sigma = 0.2 rad/s
-    >>> bool(np.allclose(e_c, c_eq, rtol=1e-9) and np.allclose(e_k + 0.2 * sigma * d_c, k_eq, rtol=1e-9))
-    True
-    >>> bool(e_c[0] == paper.damping_at_rest(block, bed)), [f"{v:.4g}" for v in e_c]
-    (True, ['1.076', '1.041', '0.8289'])
     """
     s = np.asarray(sigma_theta, dtype=float)
     tu = float(cond.uplift_threshold(block, foundation))
@@ -447,17 +399,6 @@ def table_size(block, foundation, cond):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> import math
-    >>> cubic = get("cubic")
-    >>> theta_ul = float(cubic.uplift_threshold(block, bed))                  # [rad]
-    >>> int(table_size(block, bed, cubic)), math.ceil((math.log(4 * math.atan(0.035 / 0.21) / theta_ul) + 12) * 64) + 1
-    (1183, 1183)
     """
     return _size(block.slenderness, cond.uplift_threshold(block, foundation))
 
@@ -494,20 +435,6 @@ def node_values(block, foundation, cond):
     -----
     :func:`gaussian_expectations` at the table's ``sigma`` values, one node set for all of them.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> cubic = get("cubic")
-    >>> values, slopes = node_values(block, bed, cubic)
-    >>> values.shape, f"{values[0, 0]:.6f} {float(cubic.damping_at_rest(block, bed)):.6f}"   # e_c -> C(0)
-    ((1183, 3), '0.987309 0.987309')
     """
     return _node_values(block, foundation, cond)[:2]
 
@@ -547,19 +474,6 @@ def coefficient_table(block, foundation, cond):
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> cubic = get("cubic")
-    >>> table = coefficient_table(block, bed, cubic)
-    >>> i = np.array([0, 500, 1000])                                   # nodes t = T_LO + i / 64
-    >>> sigma = float(cubic.uplift_threshold(block, bed)) * np.exp(T_LO + i / STEPS_PER_UNIT)
-    >>> table.shape, bool(np.allclose(table[i][:, 0::4], np.stack(expectations(sigma, block, bed, cubic), axis=1),
-    ...                               rtol=1e-9))
-    ((1183, 12), True)
     """
     values, slopes = node_values(block, foundation, cond)
     return cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
@@ -592,19 +506,6 @@ def coefficient_tables(block, foundation, cond):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
-
-    Examples
-    --------
-    Two of three points are the same block and bed: they share a table.
-
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> from screening.core.model.points import flatten
-    >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=[0.21, 0.21, 0.3]),
-    ...                           Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
-    >>> tables, index = coefficient_tables(block, bed, get("cubic"))
-    >>> tables.shape, index.tolist()
-    ((2, 1183, 12), [0, 0, 1])
     """
     first, index = _distinct_points(block, foundation)
     return _stacked([coefficient_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]), index
@@ -714,21 +615,6 @@ def octave_table(table, c0, k0):
     ----------
     .. [1] L. N. Trefethen, Approximation Theory and Approximation Practice, SIAM (2013), ch. 8
        (convergence for analytic functions).
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> cubic = get("cubic")
-    >>> table = coefficient_table(block, bed, cubic)
-    >>> c0, k0 = float(cubic.damping_at_rest(block, bed)), float(cubic.stiffness_at_rest(block, bed))
-    >>> solver_table = octave_table(table, c0, k0)
-    >>> q = np.geomspace(1e-12, 3e5, 7)
-    >>> got = np.array([octave_lookup_jit(x, solver_table, c0, k0, *table[0, 0::4][:3], *table[-1, 0::4][:3],
-    ...                                   solver_table.shape[0] // 2) for x in q])
-    >>> bool(np.allclose(got, [table_lookup(0.5 * math.log(x), table, c0, k0) for x in q], rtol=1e-11, atol=1e-12 * k0))
-    True
     """
     n = table.shape[0]
     q_nodes = np.exp(2.0 * (T_LO + np.arange(n) / STEPS_PER_UNIT))
@@ -789,13 +675,6 @@ def octave_lookup_jit(q, table, c0, k0, lo_c, lo_k, lo_d, hi_c, hi_k, hi_d, buck
     ----------
     .. [1] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
-
-    Examples
-    --------
-    Below the grid the values tend to those at rest (a made-up table of zeros):
-
-    >>> octave_lookup_jit(0.0, np.zeros((2, 21)), 1.0, 500.0, 0.9, 450.0, 3.0, 0.1, 20.0, 0.0, 1)
-    (1.0, 500.0, 3.0)
     """
     j, s = octave_position_jit(q, _FIRST, BUCKET_BITS)
     if j < 0:
@@ -867,17 +746,6 @@ def moment_kernel(block, foundation, cond):
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> from screening.core.model.points import flatten
-    >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=[0.21, 0.21]),
-    ...                           Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
-    >>> kernel = moment_kernel(block, bed, get("cubic"))
-    >>> kernel.tables.shape, kernel.table_index.tolist(), kernel.records["buckets"].tolist()
-    ((1, 3456, 21), [0, 0], [1728, 1728])
     """
     first, index = _distinct_points(block, foundation)
     entries = [_solver_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
@@ -918,25 +786,6 @@ def table_lookup(t, table, c0, k0):
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
-
-    Examples
-    --------
-    Between two nodes the lookup agrees with the direct quadrature to 1e-8:
-
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> import math
-    >>> cubic = get("cubic")
-    >>> table = coefficient_table(block, bed, cubic)
-    >>> c0, k0 = float(cubic.damping_at_rest(block, bed)), float(cubic.stiffness_at_rest(block, bed))
-    >>> t = T_LO + 700.5 / STEPS_PER_UNIT                             # halfway between nodes 700 and 701
-    >>> direct = expectations(float(cubic.uplift_threshold(block, bed)) * math.exp(t), block, bed, cubic)
-    >>> looked_up = table_lookup(t, table, c0, k0)
-    >>> all(abs(a / float(b) - 1) < 1e-8 for a, b in zip(looked_up, direct))
-    True
-    >>> table_lookup(-math.inf, table, c0, k0)[:2] == (c0, k0)       # sigma = 0: the values at rest
-    True
     """
     return table_lookup_grid(t, table, c0, k0, T_LO, float(STEPS_PER_UNIT), table.shape[0])
 
@@ -982,22 +831,6 @@ def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
        interpolation).
-
-    Examples
-    --------
-    At a node the lookup returns the node's values (the Python function, ``py_func``, is the
-    same code as the compiled one):
-
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> cubic = get("cubic")
-    >>> table = coefficient_table(block, bed, cubic)
-    >>> t = T_LO + 700 / STEPS_PER_UNIT                                # node 700
-    >>> got = table_lookup_grid.py_func(t, table, 1.0, 1.0, T_LO, float(STEPS_PER_UNIT), table.shape[0])
-    >>> direct = expectations(float(cubic.uplift_threshold(block, bed)) * np.exp(t), block, bed, cubic)
-    >>> bool(np.allclose(got, [float(v) for v in direct], rtol=1e-9))
-    True
     """
     n = int(n)
     if t <= t_lo:
@@ -1040,25 +873,6 @@ def equivalent_coefficients_jit(p, table, var_theta, cov):
     read from the :func:`octave_table` by :func:`octave_lookup_jit` at ``q = var_theta / theta_ul^2`` (the
     interpolant of :func:`table_lookup`, without a logarithm).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    The compiled kernel (compiled at import) against the direct quadrature:
-
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> from screening.core.model.points import flatten
-    >>> (block, bed), _ = flatten(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7))
-    >>> cubic = get("cubic")
-    >>> kernel = moment_kernel(block, bed, cubic)
-    >>> c_eq, k_eq = equivalent_coefficients_jit(kernel.records[0], kernel.tables[0], 2e-3 ** 2, 2e-3 * 0.05)
-    >>> c_ref, k_ref = equivalent_coefficients(2e-3, 0.05, block, bed, cubic)
-    >>> bool(abs(c_eq / c_ref - 1) < 1e-8 and abs(k_eq / k_ref - 1) < 1e-6)
-    True
     """
     e_c, e_k, d_c = octave_lookup_jit(var_theta * p.inv_theta_ul2, table, p.c_rest, p.k_rest, p.lo_c, p.lo_k,
                                       p.lo_d, p.hi_c, p.hi_k, p.hi_d, p.buckets)
@@ -1102,23 +916,6 @@ def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation, cond
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
     .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    By quadrature, the paper's condensation gives its closed forms, eqs. (35)-(36) in [1]_
-    (:func:`screening.core.condensation.paper.equivalent_coefficients`):
-
-    >>> from screening import Block, Foundation
-    >>> from screening.core.condensation import get
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8, eps=6e7)
-    >>> paper = get("paper")
-    >>> sigma = np.array([1e-4, 1e-3])                                         # [rad]
-    >>> c_eq, k_eq = equivalent_coefficients(sigma, 0.5, block, bed, paper)
-    >>> c_ref, k_ref = paper.equivalent_coefficients(sigma, 0.5, block, bed)
-    >>> bool(np.allclose(c_eq, c_ref, rtol=1e-9) and np.allclose(k_eq, k_ref, rtol=1e-9))
-    True
-    >>> [f"{c:.4g}" for c in c_eq], [f"{k:.4g}" for k in k_eq]
-    (['1.076', '1.041'], ['1072', '1026'])
     """
     s = np.asarray(sigma_theta, dtype=float)
     cs = np.asarray(cov_over_sigma, dtype=float)

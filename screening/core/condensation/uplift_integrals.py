@@ -27,9 +27,7 @@ from scipy import special
 
 from screening.core.interpolation import cubic, cubic_coefficients, octave_first, octave_grid, octave_position_jit
 
-__all__ = ["X_LIMIT", "gaussian_uplift_integrals", "Q_OCTAVE_LO", "Q_OCTAVE_HI", "MANTISSA_BITS", "FIRST",
-           "N_INTERVALS", "R_LO", "R_HI", "P_IN", "TAIL_M12", "TAIL_M32", "P32", "N_FUNCS", "node_values",
-           "coefficient_table", "uplift_integrals", "uplift_integrals_q"]
+__all__ = []
 
 #: Beyond this x = theta_ul^2/(2 sigma_theta^2) every tail is below 1e-300: use the limits.
 X_LIMIT = 700.0
@@ -66,15 +64,6 @@ def gaussian_uplift_integrals(r):
     ``x > X_LIMIT``.  The compiled twins :func:`uplift_integrals` and :func:`uplift_integrals_q` read them from
     the table of :func:`coefficient_table`.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> g = gaussian_uplift_integrals(1.0)
-    >>> f"{float(g['p_in']):.4f} {float(g['p_out']):.4f}"
-    '0.6827 0.3173'
     """
     r = np.asarray(r, dtype=float)
     with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
@@ -160,15 +149,6 @@ def node_values():
     The universal functions of eqs. (35)-(36) in [1] (:func:`gaussian_uplift_integrals`) and their exact
     derivatives, for the cubic Hermite table.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> q, values, slopes = node_values()
-    >>> values.shape == slopes.shape == (q.size, 4)
-    True
     """
     q = octave_grid(Q_OCTAVE_LO, Q_OCTAVE_HI, MANTISSA_BITS)
     values, slopes_t = _table_values_and_slopes(0.5 * np.log(q))
@@ -190,14 +170,6 @@ def coefficient_table():
     The sigma-dependent parts of eqs. (35)-(36) in [1] depend on ``r = sigma_theta / theta_ul`` only, so one
     table serves every point (interpolation error ~1e-13).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> coefficient_table().shape[1]
-    16
     """
     q, values, slopes = node_values()
     return cubic_coefficients(values, slopes, np.diff(q))
@@ -230,15 +202,6 @@ def uplift_integrals(r, table):
     The compiled twin of :func:`gaussian_uplift_integrals` (eqs. (35)-(38) in [1]), :func:`uplift_integrals_q`
     at ``q = r^2``.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> p_in, *_ = uplift_integrals(1.0, coefficient_table())
-    >>> bool(abs(p_in - float(gaussian_uplift_integrals(1.0)["p_in"])) < 1e-12)
-    True
     """
     return uplift_integrals_q(r * r, table)
 
@@ -270,14 +233,6 @@ def uplift_integrals_q(q, table):
     Cubic Hermite interpolation on the octave grid (the interval from the bits of ``q``, no logarithm);
     series beyond the grid.  The integrals of eqs. (35)-(38) in [1].
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> uplift_integrals_q(0.0, coefficient_table())
-    (1.0, 0.0, 0.0, 1.0)
     """
     j, s = octave_position_jit(q, FIRST, MANTISSA_BITS)
     if j < 0:

@@ -60,7 +60,7 @@ from screening.core.condensation.base import Condensation, SdofKernel
 from screening.core.condensation.registry import register
 from screening.core.signatures import sdof_coefficients_signature
 
-__all__ = ["rocking_damping", "damping_stiffness_jit", "VirtualWorkCondensation", "VIRTUAL_WORK"]
+__all__ = []
 
 
 def rocking_damping(theta, block, foundation):
@@ -88,16 +88,6 @@ def rocking_damping(theta, block, foundation):
     generalised force of the law of eqs. (3)-(4) in [1] on the one remaining coordinate (the paper's
     eq. (24) takes the moment about the base centre instead; module docstring).
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed)]
-    ['1.076', '0.1292']
     """
     z, zp = cubic.quasi_static_indentation(theta, block, foundation)
     b = block.b
@@ -137,18 +127,6 @@ def damping_stiffness_jit(p, theta):
     -----
     The dissipation-consistent damping of :func:`rocking_damping` from one indentation solve.
 
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-
-    Examples
-    --------
-    >>> from screening.core.condensation import cubic
-    >>> from screening import Block, Foundation
-    >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
-    >>> C, K = damping_stiffness_jit(cubic.sdof_record(block, bed)[0], 0.01)
-    >>> bool(abs(C - rocking_damping(0.01, block, bed)) < 1e-9 * C)
-    True
     """
     a = abs(theta)
     z, zp, v = cubic.quasi_static_indentation_jit(p, a)
