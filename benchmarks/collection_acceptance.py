@@ -55,7 +55,7 @@ def run(study, out, workers, warm):
         if not warm:
             env["NUMBA_CACHE_DIR"] = cache
         command = [sys.executable, "-m", "screening.cli", "run", str(study), "--workers", str(workers),
-                   "--out", str(out)]
+                   "--out", str(out), "--force"]   # a fresh run, never the previous result reused
         print("$ " + ("" if warm else f"NUMBA_CACHE_DIR={cache} ") + " ".join(command), flush=True)
         start = time.monotonic()
         done = subprocess.run(command, env=env, check=False)

@@ -52,6 +52,9 @@ INTERIM_INTERVAL_S = 10.0
 PROGRESS_INTERVAL_S = 10.0
 #: Wall seconds per cost-model second of one worker thread assumed before any run finished.
 PRIOR_WALL_PER_COST = 1.0
+#: Samples for the probabilities are planned for this share of ``PROBABILITY_SE`` (the plan's estimate moves
+#: with the run; judged at ``PROBABILITY_SE`` itself).
+PLAN_MARGIN = 0.95
 #: The phases of a point's runs, as kept in its resume record.
 PILOT, MAIN, TOPUP = 0, 1, 2
 
@@ -410,13 +413,13 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         """Samples its target needs by run ``r`` of point ``j``."""
         if probabilities_answer(j, r):
             k, n = hits(j, r)
-            return esc.probability_samples(k, n, most)
+            return esc.probability_samples(k, n, most, se=PLAN_MARGIN * esc.PROBABILITY_SE)
         return esc.samples_needed(rel_se(r), int(r["samples"]), acc.target, most)
 
     def next_run(j):
         """``(samples, cheap samples, cost per sample [s])`` of point ``j``'s next run, or None (done)."""
         r, ph = results[j], phase[j]
-        if ph == TOPUP or (ph == MAIN and met(j, r)):
+        if ph == TOPUP or (ph == MAIN and met(j, r)) or (ph == PILOT and probabilities_answer(j, r) and met(j, r)):
             return None
         n, n_cheap = wanted(j, r), 0
         rate = cost(j, r, cheap=False) / max(int(r["samples"]), 1)
@@ -428,7 +431,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
                     n, n_cheap = plan.n_expensive, plan.n_cheap
                     rate += rate_cheap * n_cheap / n           # per expensive sample, its cheap ones included
             big = (n_cheap >= 2 * esc.PILOT_SAMPLES and n >= esc.PILOT_SAMPLES) if n_cheap else (
-                n >= 2 * esc.PILOT_SAMPLES)
+                n > int(r["samples"]) if probabilities_answer(j, r) else n >= 2 * esc.PILOT_SAMPLES)
             return (n, n_cheap, rate) if big else None
         paired = int(r.get("estimator", EscalationEstimator.plain_monte_carlo)) == EscalationEstimator.multifidelity
         if paired:
