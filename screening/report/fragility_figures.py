@@ -86,7 +86,8 @@ def _plot_panels(frag, dim, path, max_curves, flags):
     n = frag.sizes["case"]
     ncols = int(np.ceil(np.sqrt(n * 1.4)))
     nrows = int(np.ceil(n / ncols))
-    fig = new_figure(min(2.6 * ncols + 1.0, 30.0), min(2.2 * nrows + 1.2, 40.0))
+    width = min(2.6 * ncols + 1.0, 30.0)
+    fig = new_figure(width, min(2.2 * nrows + 1.2, 40.0))
     axes = np.atleast_1d(fig.subplots(nrows, ncols, sharex=True, sharey=True)).ravel()
     names = [str(v) for v in frag["case_name"].values] if "case_name" in frag.coords else [
         str(v) for v in frag["case"].values]
@@ -101,7 +102,7 @@ def _plot_panels(frag, dim, path, max_curves, flags):
             axes[i].set_xlabel("")
     for ax in axes[n:]:
         ax.set_visible(False)
-    key = textwrap.fill(f"one panel per case ({n}); " + PANEL_KEY, width=int(14 * min(2.6 * ncols + 1.0, 30.0)))
+    key = textwrap.fill(f"one panel per case ({n}); " + PANEL_KEY, width=int(14 * width))   # ~14 characters an inch
     fig.suptitle(_title(frag, dim, flags) + "\n" + key, fontsize=9)
     save_figure(fig, path)
     return Path(path)

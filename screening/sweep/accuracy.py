@@ -372,6 +372,12 @@ def _escalation_runs(stage, order, models, first, levels, answers):
                                     int(r["cheap_samples"]))
         return c
 
+    def runs_model(j):
+        """The Monte Carlo model that runs at point ``j``: its escalation model, with ``model = "auto"`` that
+        model's sampler."""
+        name = EscalationModel(int(models[j])).name
+        return sampler_of(name) if getattr(acc, "model", AUTO) == AUTO else name
+
     def partner(j):
         """``(model, condensation)`` paired with point ``j``'s runs, or None (plain Monte Carlo only)."""
         pair = esc.paired_model(models[j]) if acc.multifidelity else None
@@ -469,9 +475,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         stage.log("accuracy: compiling the Monte Carlo kernels on the workers (cached after the first run; not "
                   "charged to budget_s)")
         t0 = time.perf_counter()
-        runs_auto = getattr(study.accuracy, "model", AUTO) == AUTO
-        used = {sampler_of(name) if runs_auto else name for name in {EscalationModel(int(m)).name for m in models}}
-        used |= {partner(j)[0] for j in range(len(order)) if partner(j)}
+        used = {runs_model(j) for j in range(len(order))} | {partner(j)[0] for j in range(len(order)) if partner(j)}
         stage.client.run(_submit.warm_up_monte_carlo, tuple(sorted(used)))
         warm_up = time.perf_counter() - t0
     start = clock()
@@ -504,11 +508,8 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     label = "accuracy: points done (Monte Carlo)"
     interim = {"last": now(), "took": 0.0, "count": 0}
 
-    auto = getattr(study.accuracy, "model", AUTO) == AUTO
-
     def submit(j, samples, what, cheap_samples=0):
-        model = EscalationModel(int(models[j])).name
-        model = sampler_of(model) if auto else model              # "auto": the chosen model's sampler
+        model = runs_model(j)
         cheap = (*partner(j), int(cheap_samples)) if cheap_samples else None
         return _submit.submit_escalation(stage.client, study, int(order[j]), samples, model,
                                          key=f"escalate-{('pilot', 'full', 'topup')[what]}-{token}-{j:04d}",
