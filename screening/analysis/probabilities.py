@@ -170,7 +170,7 @@ def overturning_probability(ds, method="vanmarcke"):
         note = f"{n} point(s) whose p_source is unreliable left out of the fit" if n else ""
         return ds["p_overturn"].where(~unreliable).assign_attrs(method=STORED), note
     if "p_overturn" in ds.variables:
-        return ds["p_overturn"], ""
+        return ds["p_overturn"].assign_attrs(method="monte_carlo"), ""
     p = exceedance_probability(ds, 1.0, "slenderness", method)
     return p, ("the result stores no p_overturn: the linearization's Gaussian up-crossing of atan(b/h), which "
                "nothing vouches for near toppling (run the study with [accuracy] or [fragility])")

@@ -165,7 +165,8 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
                            "threshold_rad": model_quantity(ds, "slenderness"),
                            **({"p_exceed_se": ds["p_overturn_se"].where(np.isfinite(p))}
                               if "p_overturn_se" in ds.variables and "p_overturn" in ds.variables else {})},
-                          attrs={"threshold": 1.0, "relative_to": "slenderness", "method": method})
+                          attrs={"threshold": 1.0, "relative_to": "slenderness",
+                                 "method": p.attrs.get("method", method)})
     else:
         frag = fragility_dataset(ds, threshold, relative_to, method, dim)
     units = IMS[im][1]

@@ -7,7 +7,7 @@ import xarray as xr
 
 from helpers import GRID
 
-from screening.analysis.fragility import best_exceedance
+from screening.analysis.fragility import STORED, best_exceedance
 from screening.analysis.trust import OVERTURN_LIMIT
 from screening.analysis.probabilities import monte_carlo_source
 from screening.core.status import (AnswerQuantity, BestMethod, EscalationModel, PointStatus, ProbabilitySource,
@@ -197,5 +197,6 @@ def test_fragility_over_pga_for_the_overturning_limit_state(client, tmp_path):
     assert "<limitStates>overturn</limitStates>" in xml and 'ls="overturn"' in xml
     with xr.open_dataset(tmp_path / "o_overturn_pga.nc") as frag:
         assert frag.attrs["limit_state"] == "overturn"
+        assert frag.attrs["method"] == STORED          # the stored answers, not the up-crossing
         np.testing.assert_array_equal(frag["p_exceed"].values, p)
     assert main(["fragility", str(result), "--im", "pga", "--limit-state", "overturn", "--threshold", "0.1"]) == 2
