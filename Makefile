@@ -38,7 +38,7 @@ test: $(TEST_STAMP)
 # `make test-quick`: the unit tests only (tests/unit, one folder per package folder), for the edit-test loop;
 # the README states its measured duration.
 test-quick: $(TEST_STAMP)
-	$(BIN)/python -m pytest tests/unit -m "not slow" -q
+	$(BIN)/python -m pytest tests/unit tests/verification -m "not slow" -q
 
 test-slow: $(TEST_STAMP) $(ENGINES_STAMP)
 	SCREENING_ENGINES_PYTHON=$(ENGINES)/bin/python $(BIN)/python -m pytest -m slow --durations=10
