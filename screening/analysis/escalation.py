@@ -94,6 +94,11 @@ GRID_REFERENCE_POINTS = 2**15
 #: Cost model: a step of the linearly implicit pair (``integrator="rodas"``) in explicit steps (six
 #: stages and four Jacobian evaluations against six stages; measured 1.64 coupled, 1.2 condensed).
 RODAS_STEP_FACTOR = 1.6
+#: Cost model: a coupled run with exact steps in quiet full contact (``integrator="exact"``, the band-limited
+#: ground motion on a stiff bed) costs this fraction of its steps at :data:`STEP_COST_S`: measured / predicted
+#: 0.30-0.33 (median 0.32) over the 28 coupled points of ``benchmarks/collection_acceptance.py`` (2026-11-29,
+#: quiet machine), whose steps are mostly the explicit pair's partial-contact steps at the ground's band.
+EXACT_RUN_FACTOR = 0.32
 #: Integration steps per second of record and sample assumed before any pilot ran (the stiffest
 #: calibration beds take ~6,000; the paper block ~1,100).
 PRIOR_STEPS_PER_S = 3000.0
@@ -591,7 +596,7 @@ def full_contact_share(p_uplift, n_used, samples):
     return float(min(max((1.0 - float(np.mean(p))) * used, 0.0), 1.0))
 
 
-def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_contact=None):
+def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_contact=None, exact=False):
     """Estimated CPU time of a Monte Carlo run from its integration steps and synthesis grid points.
 
     Parameters
@@ -608,6 +613,8 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
         Samples of the run.
     full_contact : float, optional
         Stiff-bed model only: :func:`full_contact_share` of the run [1] (None or NaN: not known).
+    exact : bool, default False
+        Coupled model only: the run took exact steps through quiet full contact (``integrator="exact"``).
 
     Returns
     -------
@@ -643,6 +650,8 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
         return (exact * STIFF_BED_EXACT_COST_S + (float(steps) - exact) * STIFF_BED_ADAPTIVE_COST_S
                 + STIFF_BED_RUN_COST_S + grid * per_point)
     per_step = STEP_COST_S[model] * (RODAS_STEP_FACTOR if rodas else 1.0)
+    if exact and model == EscalationModel.coupled:
+        per_step *= EXACT_RUN_FACTOR
     return float(steps) * per_step + grid * per_point
 
 

@@ -366,7 +366,8 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     def cost(j, r, cheap=True):
         """Estimated cost [s] of run ``r`` at point ``j`` (``cheap``: with its paired cheaper model's samples)."""
         c = esc.estimated_cost(r["n_steps"], models[j], r.get("n_grid", 0), bool(r.get("rodas", False)),
-                               int(r.get("samples", 1)), full_contact=r.get("full_contact"))
+                               int(r.get("samples", 1)), full_contact=r.get("full_contact"),
+                               exact=bool(r.get("exact", False)))
         if cheap and int(r.get("cheap_samples", 0)) > 0:
             c += esc.estimated_cost(r["cheap_n_steps"], esc.PAIRED_MODEL[2], r["cheap_n_grid"], False,
                                     int(r["cheap_samples"]))

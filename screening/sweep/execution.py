@@ -35,9 +35,9 @@ from screening.core.status import EscalationEstimator, PointStatus, SampleState,
 from screening.io.errors import exception_line, SweepError
 from screening.io.layout import SPOT_HISTORIES
 from screening.solvers import mc_registry
+from screening.solvers.datasets import INTEGRATOR_TEXT
 from screening.solvers.model_choice import resolve
 from screening.solvers.moments import solve_moments
-from screening.solvers.montecarlo import choose_integrator
 from screening.solvers.outputs import HISTORY_VARIABLES, of_stage, OUTPUTS, selected
 
 __all__ = []
@@ -432,6 +432,8 @@ def spot_arrays(ds):
                peak_abs_theta=np.asarray(ds["peak_abs_theta"].values, dtype=np.float64),
                sample_state=sample_state(ds["overturned"].values, ds["diverged"].values))
     out["n_grid"] = np.int64(ds.sizes["sample"] * int(ds.attrs["input_grid_points"]))   # synthesis grid read (cost model)
+    integrator = ds.attrs.get("integrator")                     # which steps the run took (cost model)
+    out["rodas"], out["exact"] = (np.bool_(integrator == INTEGRATOR_TEXT[name]) for name in ("rodas", "exact"))
     # the share of the used samples' time in full contact (the stiff-bed model's cost model; NaN: not known)
     out["full_contact"] = (np.float64(full_contact_share(ds["p_uplift"].values, int(out["n_used"]), ds.sizes["sample"]))
                            if "p_uplift" in ds else np.float64(np.nan))
@@ -600,7 +602,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
         run, extra = paired_escalation(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
                                        *cheap, progress=progress)
     out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples),
-           "n_grid": run["n_grid"], "rodas": np.bool_(choose_integrator(block, foundation, model) == "rodas")}
+           "n_grid": run["n_grid"], "rodas": run["rodas"], "exact": run["exact"]}
     for name in ("var_theta", "var_theta_dot"):
         history, se = run[name], run[f"{name}_se"]
         at = int(np.nanargmax(history)) if np.any(np.isfinite(history)) else -1

@@ -4,10 +4,13 @@ import pickle
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from helpers import GRID
 
+from screening.analysis import escalation as esc
 from screening.core import condensation
+from screening.solvers.datasets import INTEGRATOR_TEXT
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.core.status import PointStatus, SampleState, Trust
 from screening.io.layout import SPOT_HISTORIES
@@ -73,10 +76,6 @@ def test_the_local_client_is_never_made_dask_s_default():
 def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads():
     """A hand-made Monte Carlo dataset of 4 samples (one overturned): ``full_contact`` is the mean over
     time of 1 - p_uplift, scaled to the used samples, and the stiff-bed cost estimate changes with it."""
-    import xarray as xr
-
-    from screening.analysis import escalation as esc
-
     t = np.linspace(0.0, 1.0, 5)
     p = np.array([0.0, 0.25, 0.5, 0.25, 0.0])
     histories = {name: ("t", np.zeros(t.size)) for name in SPOT_HISTORIES}
@@ -99,6 +98,24 @@ def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads
     unknown = execution.spot_arrays(ds)["full_contact"]
     assert np.isnan(unknown)
     assert esc.estimated_cost(out["n_steps"], model, out["n_grid"], False, 4, full_contact=unknown) == without
+
+
+@pytest.mark.parametrize("integrator", ["dopri", "rodas", "exact"])
+def test_the_spot_arrays_say_which_steps_the_run_took_and_the_cost_model_charges_them(integrator):
+    t = np.linspace(0.0, 1.0, 5)
+    ds = xr.Dataset({**{name: ("t", np.zeros(t.size)) for name in SPOT_HISTORIES},
+                     "n_overturned": ((), 0), "n_diverged": ((), 0), "n_steps": ("sample", np.full(2, 1000)),
+                     "peak_abs_theta": ("sample", np.ones(2)), "overturned": ("sample", np.zeros(2, bool)),
+                     "diverged": ("sample", np.zeros(2, bool))},
+                    coords={"t": t, "sample": np.arange(2)},
+                    attrs={"input_grid_points": 64, "integrator": INTEGRATOR_TEXT[integrator]})
+    out = execution.spot_arrays(ds)
+    assert (bool(out["rodas"]), bool(out["exact"])) == (integrator == "rodas", integrator == "exact")
+    coupled = esc.EscalationModel.coupled
+    plain = esc.estimated_cost(2000, coupled, 0, False, 2)
+    charged = esc.estimated_cost(2000, coupled, 0, bool(out["rodas"]), 2, exact=bool(out["exact"]))
+    factor = {"dopri": 1.0, "rodas": esc.RODAS_STEP_FACTOR, "exact": esc.EXACT_RUN_FACTOR}[integrator]
+    assert charged == pytest.approx(factor * plain, rel=1e-12)
 
 
 def test_a_gaussian_probability_that_underflows_gets_a_standard_error_that_reaches_the_trust_limit():
