@@ -28,6 +28,7 @@ from screening.core.progress import Progress
 from screening.core.status import BestMethod, EscalationEstimator, EscalationModel, SampleState
 from screening.io.errors import exception_line, write_failure_reason
 from screening.solvers.model_choice import AUTO, choose, sampler_of
+from screening.solvers.schema import ACCURACY
 from screening.sweep import _submit
 from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
 from screening.sweep.interrupt import raise_if_interrupted
@@ -219,7 +220,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
             r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
         r["target_met"] = bool(r["target_met"])
         r["transition"] = np.int8(first[j])
-    result.write_escalation(escalated, models_done, runs)
+    write_escalation(result, stage.study, escalated, models_done, runs)
     best = {}
     for name in ("var_theta", "var_theta_dot"):
         mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
@@ -229,7 +230,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
                                                  models_done, atlas=name == "var_theta")
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
-    result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
+    write_best(result, stage.study, best["var_theta"][:2], best["var_theta_dot"][:2], method)
 
     short = sum(1 for r in runs if not r["target_met"])
     codes, counts = np.unique(method, return_counts=True)
@@ -690,3 +691,68 @@ def accuracy_line(info):
             f"{info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "
             f"best estimates: {methods}")
+
+
+def write_escalation(result, study, flat_indices, models, runs):
+    """Write the ``[accuracy]`` Monte Carlo points into ``result`` on dimension ``escalation`` (``runs``: the dicts of
+    :func:`~screening.sweep.execution.escalation_task`; ``models``: their
+    :class:`~screening.core.status.EscalationModel` codes)."""
+    n = len(runs)
+    result.dimension("escalation", n)
+    most = max((int(r["samples"]) for r in runs), default=1)
+    result.dimension("esc_sample", most)
+    # (a one-point grid has no grid dimension; no escalated point: empty coordinates)
+    idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), study.shape) if study.shape else ()
+    coords = []
+    for axis, dim in enumerate(study.dims):
+        name = f"esc_{dim}"
+        values = np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]]
+        result.define(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY, values=values)
+        coords.append(name)
+    coordinates = " ".join(coords)
+
+    def var(name, dtype, dims, values, fill=np.nan):
+        result.define(name, dtype, dims, fill, coordinates, table=ACCURACY, values=values, compress=True)
+
+    var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
+    var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
+    var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
+    var("esc_estimator", "i1", ("escalation",), np.array([r.get("estimator", 0) for r in runs], dtype=np.int8),
+        fill=False)
+    var("esc_cheap_samples", "i4", ("escalation",), np.array([r.get("cheap_samples", 0) for r in runs],
+                                                              dtype=np.int32), fill=False)
+    var("esc_correlation", "f8", ("escalation",), np.array([r.get("correlation", np.nan) for r in runs],
+                                                            dtype=float))
+    var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
+    var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
+    var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
+        fill=False)
+    var("esc_transition", "i1", ("escalation",), np.array([r.get("transition", 0) for r in runs], dtype=np.int8),
+        fill=False)
+    for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
+        var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
+    at = np.asarray(flat_indices, dtype=np.int64)
+    var("esc_sl_peak_var_theta", "f8", ("escalation",), result.read("peak_var_theta")[at])
+    var("esc_sl_peak_var_theta_dot", "f8", ("escalation",),
+        result.read("var_theta_dot")[at] if "var_theta_dot" in study.output.stored else np.full(n, np.nan))
+    for name in ("n_overturned", "n_diverged", "n_used"):
+        var(f"esc_{name}", "i4", ("escalation",), np.array([r[name] for r in runs], dtype=np.int32), fill=False)
+    peaks = np.full((n, most), np.nan)
+    state = np.full((n, most), -1, dtype=np.int8)
+    for i, r in enumerate(runs):
+        peaks[i, :r["peak_abs_theta"].size] = r["peak_abs_theta"]
+        state[i, :r["sample_state"].size] = r["sample_state"]
+    var("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks)
+    var("esc_sample_state", "i1", ("escalation", "esc_sample"), state, fill=np.int8(-1))
+
+def write_best(result, study, var_theta, var_theta_dot, method):
+    """Write the per-point best estimates into ``result``: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat arrays,
+    ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
+    dims = study.dims
+    coordinates = result.grid_coordinates()
+    for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot)):
+        for name, values in ((base, value), (f"{base}_se", se)):
+            result.define(name, "f8", dims, np.nan, coordinates, table=ACCURACY, compress=True,
+                          values=np.asarray(values, dtype=float).reshape(study.shape))
+    result.define("best_method", "i1", dims, False, coordinates, table=ACCURACY, compress=True,
+                  values=np.asarray(method, dtype=np.int8).reshape(study.shape))

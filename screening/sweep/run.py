@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import math
 import os
 import shutil
 import sys
@@ -45,8 +46,9 @@ from pathlib import Path
 import numpy as np
 
 from screening._version import __version__
-from screening.core.status import PointStatus, Trust
+from screening.core.status import PointStatus, SpotStatus, Trust
 from screening.sweep import _submit, execution
+from screening.sweep.execution import SPOT_HISTORIES, SPOT_LINEAR
 from screening.sweep.connect import run_on_workers
 from screening.sweep.accuracy import Stage, escalate
 from screening.io.errors import SweepError, exception_line, is_write_error, write_failure_reason
@@ -395,7 +397,7 @@ class _SweepRun:
         else:
             if save:
                 self.store.save_batch(batch, part)
-            self.result.write_batch(batch, part)
+            write_batch(self.result, self.study, batch, part)
         self.write_time += time.perf_counter() - start
 
     def _write_failed(self, batch):
@@ -403,8 +405,8 @@ class _SweepRun:
         start = time.perf_counter()
         if self.target is not None:
             self.store.forget_marker(batch)
-        self.result.write_batch(batch, execution.failed_result(batch.size, self.study.times.size,
-                                                               self.study.output.stored, self.study.fragility))
+        write_batch(self.result, self.study, batch, execution.failed_result(
+            batch.size, self.study.times.size, self.study.output.stored, self.study.fragility))
         self.write_time += time.perf_counter() - start
 
     def _linearization(self, batches):
@@ -528,7 +530,7 @@ class _SweepRun:
                     raise_if_interrupted()
             finally:
                 self.client.unsubscribe_topic(topic)
-        self.result.write_spots(spots, results, failed, spec)
+        write_spots(self.result, study, spots, results, failed, spec)
         self.spot_runs = (spots, results)
         return len(spots)
 
@@ -596,3 +598,91 @@ class _SweepRun:
         with open(self.store.building, "rb") as fh:
             os.fsync(fh.fileno())
         os.replace(self.store.building, self.out)
+
+
+def write_batch(result, study, batch, part):
+    """Write the arrays ``part`` of ``batch`` into its region of ``result`` (by the client) and keep its summary."""
+    _submit.write_region(result.format, study.shape, study.output.stored, batch, part)
+    result.written(batch.size if study.output.stored else 0)
+    result.record(batch, part)
+
+
+def write_spots(result, study, spots, results, failed, spec):
+    """Write the spot checks into ``result`` on dimension ``spot`` (``spots``: grid index tuples; ``results``:
+    the dicts of :func:`~screening.sweep.execution.spot_task`; ``failed``: flags)."""
+    result.dimension("spot", len(spots))
+    coords = []
+    for axis, dim in enumerate(study.dims):
+        idx = np.array([s[axis] for s in spots])
+        if dim == "case":
+            result.define("spot_case", "i4", ("spot",), False, values=idx.astype(np.int32))
+            result.define("spot_case_name", str, ("spot",), None, values=np.array(
+                [study.cases[i].name for i in idx], dtype=object))
+            coords += ["spot_case", "spot_case_name"]
+        else:
+            result.define(f"spot_{dim}", "f8", ("spot",), False, values=study.sweeps[dim][idx])
+            coords.append(f"spot_{dim}")
+    coordinates = " ".join(coords)
+
+    def var(name, dtype, dims, values, fill=np.nan):
+        result.define(name, dtype, dims, fill, coordinates, values=values, compress=True)
+
+    for name in SPOT_HISTORIES:
+        var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
+    for name in study.output.at_spots:          # [output] histories = "spots"
+        var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
+    for name in ("n_overturned", "n_diverged", "n_used"):
+        var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
+    for name in SPOT_LINEAR:
+        lin = [r[f"sl_{name}"] if f"sl_{name}" in r else result.history(name, s) for r, s in zip(results, spots)]
+        mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan
+                             for r in results])
+        var(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak)
+        var(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
+            np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]))
+    result.dimension("sample", spec.samples)
+    result.define("sample", "i4", ("sample",), False, values=np.arange(spec.samples, dtype=np.int32))
+    var("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]))
+    var("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
+        fill=False)
+    if any("mcs_model" in r for r in results):        # a failed spot check: the flag value none (-1)
+        var("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results], dtype=np.int8),
+            fill=False)
+    var("mcs_status", "i1", ("spot",),
+        np.array([SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), fill=False)
+    selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "
+                 "the Gaussian closure is least trustworthy)" if spec.points == "auto"
+                 else "explicit points of the study file")
+    result.set_attrs(mcs_model=spec.model, mcs_samples=np.int32(spec.samples), mcs_seed=np.int32(spec.seed),
+                     mcs_selection=selection,
+                     mcs_note="Monte Carlo statistics over samples that neither overturned nor diverged")
+
+
+def relative_peak_error(linear, mcs):
+    """``(max_t linear - max_t mcs) / max_t mcs`` over the common output grid; NaN if undefined.
+
+    Parameters
+    ----------
+    linear : array_like
+        The linearization's history (e.g. ``var_theta`` [rad2]) on the output times.
+    mcs : array_like
+        The Monte Carlo history of the same quantity on the same times.
+
+    Returns
+    -------
+    float
+        The relative error of the peak [1]; NaN when either history has no finite value or the
+        Monte Carlo peak is not positive.
+
+    Notes
+    -----
+    .. math:: e = \\frac{\\max_t \\sigma^2_{SL}(t) - \\max_t \\sigma^2_{MC}(t)}{\\max_t \\sigma^2_{MC}(t)}
+
+    (NaN values ignored).
+
+    """
+    linear, mcs = np.asarray(linear, dtype=float), np.asarray(mcs, dtype=float)
+    if not (np.any(np.isfinite(linear)) and np.any(np.isfinite(mcs))):
+        return math.nan
+    ref = np.nanmax(mcs)
+    return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan

@@ -1,0 +1,138 @@
+"""The write path of ``screening run``, traced: the modules of ``screening/io`` and ``screening/sweep`` the
+client passes through, from the command until ``run_sweep`` returns (the result file closed and in place).
+
+Run: ``python benchmarks/write_path.py [--list] [--study FILE]``.  A ``sys.setprofile`` hook on the client's
+thread notes, at every call and return, the innermost frame of those folders; a *stop* is a change of that
+module, a *return* a stop at a module already left before.  Two counts: every call (``all calls``), and each
+call site's first trip only (``first trips``: a call from the same line to the same function of those folders
+again, in a loop or for the next batch, is skipped with everything under it: the path a reader follows).  The default study is
+the package's example (two points) with spot checks, ``[accuracy]`` and ``[fragility]``: every stage that
+writes.  The run is in this process (``--workers 0``), netCDF, no figures; numba compiles on a first run.
+"""
+
+import argparse
+import collections
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+FOLDERS = ("screening/io/", "screening/sweep/")
+
+STUDY = """\
+[block]
+m = 8.67
+b = 0.035
+h = 0.21
+[foundation]
+k = 2.89e7
+lam = 8.95e8
+eps = [0.0, 6e7]
+[excitation]
+kind = "white"
+S0 = 1e-4
+[time]
+t_end = 2.0
+dt = 0.05
+[mcs]
+points = "auto"
+count = 1
+samples = 20
+[fragility]
+thresholds = [0.01]
+[accuracy]
+target = 0.3
+budget_s = 30
+"""
+
+
+def _module(filename):
+    """``io/writer.py`` for a file of the two folders, else None."""
+    for folder in FOLDERS:
+        at = filename.find(folder)
+        if at >= 0:
+            return filename[at + len("screening/"):]
+    return None
+
+
+def trace(argv):
+    """Run the CLI with ``argv`` under the hook; returns the stops of every call and of first trips."""
+    from screening.cli import commands
+    from screening.sweep import run
+
+    every, first = [], []
+    seen_sites, skipping, done = set(), [], []
+
+    def innermost(frame):
+        while frame is not None:
+            name = _module(frame.f_code.co_filename)
+            if name is not None:
+                return name
+            frame = frame.f_back
+        return None
+
+    def stop(stops, here):
+        if here is not None and (not stops or stops[-1] != here):
+            stops.append(here)
+
+    def hook(frame, event, arg):
+        if done or event not in ("call", "return"):
+            return
+        here = innermost(frame if event == "call" else frame.f_back)
+        if event == "return" and frame.f_code is run.run_sweep.__code__:
+            done.append(True)
+        stop(every, here)
+        if event == "call" and _module(frame.f_code.co_filename) is not None:
+            caller = frame.f_back
+            site = (caller.f_code, caller.f_lineno, frame.f_code) if caller is not None else frame.f_code
+            if not skipping and site in seen_sites:
+                skipping.append(frame)
+            seen_sites.add(site)
+        if not skipping:
+            stop(first, here)
+        if event == "return" and skipping and skipping[-1] is frame:
+            skipping.pop()
+
+    sys.setprofile(hook)
+    try:
+        commands.main(argv)
+    except SystemExit as exc:
+        if exc.code:
+            raise
+    finally:
+        sys.setprofile(None)
+    return every, first
+
+
+def _count(stops):
+    """``(stops, modules, returns)``."""
+    seen, returns = set(), 0
+    for name in stops:
+        returns += name in seen
+        seen.add(name)
+    return len(stops), len(seen), returns
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--study", help="a study file (default: the example with [mcs], [accuracy], [fragility])")
+    parser.add_argument("--list", action="store_true", help="print the stops in order")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as folder:
+        study = Path(args.study) if args.study else Path(folder) / "write_path.toml"
+        if not args.study:
+            study.write_text(STUDY)
+        out = Path(folder) / "r.nc"
+        every, first = trace(["run", str(study), "--out", str(out), "--workers", "0", "--no-plots", "--quiet"])
+        assert out.exists(), "the run wrote no result"
+    for label, path in (("all calls", every), ("first trips", first)):
+        n, modules, returns = _count(path)
+        if args.list:
+            print(f"{label}: " + " -> ".join(path))
+        print(f"write path, {label}: {n} stops in {modules} modules, {returns} returns to a module already left")
+        print("  visits: " + ", ".join(f"{name} {k}" for name, k in collections.Counter(path).most_common()))
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    main()
