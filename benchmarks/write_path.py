@@ -3,9 +3,10 @@ client passes through, from the command until ``run_sweep`` returns (the result 
 
 Run: ``python benchmarks/write_path.py [--list] [--study FILE]``.  A ``sys.setprofile`` hook on the client's
 thread notes, at every call and return, the innermost frame of those folders; a *stop* is a change of that
-module, a *return* a stop at a module already left before.  Two counts: every call (``all calls``), and each
+module, a *return* a stop at a module already left before.  Three counts: every call (``all calls``), and each
 call site's first trip only (``first trips``: a call from the same line to the same function of those folders
-again, in a loop or for the next batch, is skipped with everything under it: the path a reader follows).  The default study is
+again, in a loop or for the next batch, is skipped with everything under it: the path a reader follows), and those
+first trips with the property reads (``study.dims``) left out as attribute reads, not visits.  The default study is
 the package's example (two points) with spot checks, ``[accuracy]`` and ``[fragility]``: every stage that
 writes.  The run is in this process (``--workers 0``), netCDF, no figures; numba compiles on a first run.
 """
@@ -55,13 +56,34 @@ def _module(filename):
     return None
 
 
-def trace(argv):
-    """Run the CLI with ``argv`` under the hook; returns the stops of every call and of first trips."""
-    from screening.cli import commands
-    from screening.sweep import run
+def _property_codes():
+    """The code of every property getter of the classes in the two folders (an attribute read, not a visit)."""
+    import functools
+    import inspect
 
-    every, first = [], []
-    seen_sites, skipping, done = set(), [], []
+    codes = set()
+    for name, module in list(sys.modules.items()):
+        if not name.startswith(("screening.io", "screening.sweep")):
+            continue
+        for cls in [c for _, c in inspect.getmembers(module, inspect.isclass) if c.__module__ == name]:
+            for attr in vars(cls).values():
+                if isinstance(attr, property) and attr.fget is not None:
+                    codes.add(attr.fget.__code__)
+                elif isinstance(attr, functools.cached_property):
+                    codes.add(attr.func.__code__)
+    return codes
+
+
+def trace(argv):
+    """Run the CLI with ``argv`` under the hook; returns the stops of every call, of first trips, and of first
+    trips without the property reads."""
+    from screening.cli import commands
+    from screening.sweep import run, study  # noqa: F401 (their classes' properties)
+    from screening.io import writer  # noqa: F401
+
+    every, first, lean = [], [], []
+    seen_sites, skipping, reading, done = set(), [], [], []
+    properties = _property_codes()
 
     def innermost(frame):
         while frame is not None:
@@ -90,6 +112,12 @@ def trace(argv):
             seen_sites.add(site)
         if not skipping:
             stop(first, here)
+            if event == "call" and not reading and frame.f_code in properties:
+                reading.append(frame)
+            if not reading:
+                stop(lean, here)
+            if event == "return" and reading and reading[-1] is frame:
+                reading.pop()
         if event == "return" and skipping and skipping[-1] is frame:
             skipping.pop()
 
@@ -101,7 +129,7 @@ def trace(argv):
             raise
     finally:
         sys.setprofile(None)
-    return every, first
+    return every, first, lean
 
 
 def _count(stops):
@@ -123,9 +151,9 @@ def main():
         if not args.study:
             study.write_text(STUDY)
         out = Path(folder) / "r.nc"
-        every, first = trace(["run", str(study), "--out", str(out), "--workers", "0", "--no-plots", "--quiet"])
+        every, first, lean = trace(["run", str(study), "--out", str(out), "--workers", "0", "--no-plots", "--quiet"])
         assert out.exists(), "the run wrote no result"
-    for label, path in (("all calls", every), ("first trips", first)):
+    for label, path in (("all calls", every), ("first trips", first), ("first trips, property reads left out", lean)):
         n, modules, returns = _count(path)
         if args.list:
             print(f"{label}: " + " -> ".join(path))

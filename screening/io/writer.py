@@ -42,6 +42,7 @@ import math
 import os
 import stat
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -307,6 +308,19 @@ class NetcdfFormat:
             self.dataset.close()
 
 
+class Variable(NamedTuple):
+    """A variable a stage adds to a result (:meth:`ResultFile.add`): its attributes are its schema's (``table``)."""
+
+    name: str
+    dtype: object
+    dims: tuple
+    values: object
+    fill: object = np.nan
+    coordinates: str = ""
+    table: dict = SWEEP
+    compress: bool = True
+
+
 class ResultFile:
     """Build the CF-1.8 result of ``study`` at ``path``, batch by batch: a netCDF4/HDF5 file
     (:class:`NetcdfFormat`), or with ``zarr_batch_size`` (the batch size of the run) a zarr store whose
@@ -323,15 +337,14 @@ class ResultFile:
     def __init__(self, path, study, attrs, complevel=COMPLEVEL, zarr_batch_size=None, reopen=False):
         self.path = Path(path)
         self.study = study
-        self.shape = study.shape
+        self.dims, self.shape, self.n_points = study.dims, study.shape, study.n_points
         self.nt = study.times.size
-        self.histories = study.output.stored
         #: What the client keeps of every point (:func:`screening.solvers.outputs.client_variables`), flat.
-        self.kept = {o.name: o.failed_array(study.n_points) for o in GRID_OUTPUTS if o.client}
+        self.kept = {o.name: o.failed_array(self.n_points) for o in GRID_OUTPUTS if o.client}
         self._unsynced = 0
         if zarr_batch_size is not None:
             chunks = zarr_point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
-            self.format = ZarrFormat(self.path, "r+" if reopen else "w", study.dims, chunks, complevel)
+            self.format = ZarrFormat(self.path, "r+" if reopen else "w", self.dims, chunks, complevel)
             if reopen:
                 return
         else:
@@ -358,9 +371,19 @@ class ResultFile:
             attrs["coordinates"] = coordinates
         self.format.define(name, dtype, dims, attrs, fill, values, **storage)
 
+    def add(self, variables, dimensions=None, attrs=None):
+        """Create the ``dimensions`` (``{name: size}``), define each of ``variables`` (:class:`Variable`) with its
+        values, and set the global ``attrs``."""
+        for name, size in (dimensions or {}).items():
+            self.format.dimension(name, size)
+        for v in variables:
+            self.define(v.name, v.dtype, v.dims, v.fill, v.coordinates, v.table, v.values,
+                        **({"compress": True} if v.compress else {}))
+        if attrs:
+            self.format.set_attrs(attrs)
+
     def _define(self, attrs):
-        fmt, study = self.format, self.study
-        dims = study.dims
+        fmt, study, dims = self.format, self.study, self.dims
         for dim, n in zip(dims, self.shape):
             fmt.dimension(dim, n)
         fmt.dimension("t", self.nt)
@@ -407,7 +430,7 @@ class ResultFile:
         """Define the grid variable of the declaration ``output`` (:mod:`screening.solvers.outputs`): its
         dimensions, type, fill value, attributes (with ``coordinates`` and ``extra``), compression and
         chunks."""
-        dims = self.study.dims
+        dims = self.dims
         if output.shape == "history":
             dims += ("t",)
             storage = {"shuffle": self.format.complevel > 0, "chunks": history_chunks(self.shape, self.nt)}
@@ -486,10 +509,10 @@ class ResultFile:
             return np.asarray(self.format.read(name), dtype=np.float64).reshape(-1)
         if t_index is not None:
             return np.asarray(self.format.read(name, (Ellipsis, t_index % self.nt)), dtype=np.float64).reshape(-1)
-        out = np.full(self.study.n_points, np.nan)
+        out = np.full(self.n_points, np.nan)
         step = max(SYNC_POINTS, 1)
-        for lo in range(0, self.study.n_points, step):          # a slab of histories at a time
-            for slab, a, b in hyperslabs(lo, min(lo + step, self.study.n_points), self.shape):
+        for lo in range(0, self.n_points, step):          # a slab of histories at a time
+            for slab, a, b in hyperslabs(lo, min(lo + step, self.n_points), self.shape):
                 rows = np.asarray(self.format.read(name, slab + (slice(None),)), dtype=np.float64).reshape(
                     b - a, self.nt)
                 finite = np.isfinite(rows).any(axis=1)

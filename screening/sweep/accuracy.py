@@ -27,6 +27,7 @@ from screening.core import limits
 from screening.core.progress import Progress
 from screening.core.status import BestMethod, EscalationEstimator, EscalationModel, SampleState
 from screening.io.errors import exception_line, write_failure_reason
+from screening.io.writer import Variable
 from screening.solvers.model_choice import AUTO, choose, sampler_of
 from screening.solvers.schema import ACCURACY
 from screening.sweep import _submit
@@ -698,61 +699,49 @@ def write_escalation(result, study, flat_indices, models, runs):
     :func:`~screening.sweep.execution.escalation_task`; ``models``: their
     :class:`~screening.core.status.EscalationModel` codes)."""
     n = len(runs)
-    result.dimension("escalation", n)
     most = max((int(r["samples"]) for r in runs), default=1)
-    result.dimension("esc_sample", most)
     # (a one-point grid has no grid dimension; no escalated point: empty coordinates)
     idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), study.shape) if study.shape else ()
-    coords = []
-    for axis, dim in enumerate(study.dims):
-        name = f"esc_{dim}"
-        values = np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]]
-        result.define(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY, values=values)
-        coords.append(name)
-    coordinates = " ".join(coords)
+    coords = [Variable(f"esc_{dim}", "i4" if dim == "case" else "f8", ("escalation",),
+                       np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]], False,
+                       table=ACCURACY, compress=False) for axis, dim in enumerate(study.dims)]
+    at = " ".join(c.name for c in coords)
 
-    def var(name, dtype, dims, values, fill=np.nan):
-        result.define(name, dtype, dims, fill, coordinates, table=ACCURACY, values=values, compress=True)
+    def column(key, dtype, default=None):
+        return np.array([r[key] if default is None else r.get(key, default) for r in runs], dtype=dtype)
 
-    var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
-    var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
-    var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
-    var("esc_estimator", "i1", ("escalation",), np.array([r.get("estimator", 0) for r in runs], dtype=np.int8),
-        fill=False)
-    var("esc_cheap_samples", "i4", ("escalation",), np.array([r.get("cheap_samples", 0) for r in runs],
-                                                              dtype=np.int32), fill=False)
-    var("esc_correlation", "f8", ("escalation",), np.array([r.get("correlation", np.nan) for r in runs],
-                                                            dtype=float))
-    var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
-    var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
-    var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
-        fill=False)
-    var("esc_transition", "i1", ("escalation",), np.array([r.get("transition", 0) for r in runs], dtype=np.int8),
-        fill=False)
-    for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
-        var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
-    at = np.asarray(flat_indices, dtype=np.int64)
-    var("esc_sl_peak_var_theta", "f8", ("escalation",), result.read("peak_var_theta")[at])
-    var("esc_sl_peak_var_theta_dot", "f8", ("escalation",),
-        result.read("var_theta_dot")[at] if "var_theta_dot" in study.output.stored else np.full(n, np.nan))
-    for name in ("n_overturned", "n_diverged", "n_used"):
-        var(f"esc_{name}", "i4", ("escalation",), np.array([r[name] for r in runs], dtype=np.int32), fill=False)
+    flags = {"esc_grid_index": np.asarray(flat_indices, dtype=np.int32), "esc_model": np.asarray(models, dtype=np.int8),
+             "esc_samples": column("samples", np.int32), "esc_estimator": column("estimator", np.int8, 0),
+             "esc_cheap_samples": column("cheap_samples", np.int32, 0)}
+    values = {"esc_correlation": column("correlation", float, np.nan), "esc_cpu_time": column("cpu_time", float),
+              "esc_cost": column("cost_s", float)}
+    flags2 = {"esc_target_met": column("target_met", np.int8), "esc_transition": column("transition", np.int8, 0)}
+    values2 = {f"esc_{name}": column(name, float) for name in ("peak_var_theta", "peak_var_theta_se",
+                                                               "peak_var_theta_dot", "peak_var_theta_dot_se")}
+    at_grid = np.asarray(flat_indices, dtype=np.int64)
+    values2["esc_sl_peak_var_theta"] = result.read("peak_var_theta")[at_grid]
+    values2["esc_sl_peak_var_theta_dot"] = (result.read("var_theta_dot")[at_grid] if "var_theta_dot" in study.output.stored
+                                            else np.full(n, np.nan))
+    counts = {f"esc_{name}": column(name, np.int32) for name in ("n_overturned", "n_diverged", "n_used")}
     peaks = np.full((n, most), np.nan)
     state = np.full((n, most), -1, dtype=np.int8)
     for i, r in enumerate(runs):
         peaks[i, :r["peak_abs_theta"].size] = r["peak_abs_theta"]
         state[i, :r["sample_state"].size] = r["sample_state"]
-    var("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks)
-    var("esc_sample_state", "i1", ("escalation", "esc_sample"), state, fill=np.int8(-1))
+    out = [Variable(name, v.dtype, ("escalation",), v, np.nan if v.dtype.kind == "f" else False, at, ACCURACY)
+           for group in (flags, values, flags2, values2, counts) for name, v in group.items()]
+    out += [Variable("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks, np.nan, at, ACCURACY),
+            Variable("esc_sample_state", "i1", ("escalation", "esc_sample"), state, np.int8(-1), at, ACCURACY)]
+    result.add(coords + out, {"escalation": n, "esc_sample": most})
+
 
 def write_best(result, study, var_theta, var_theta_dot, method):
-    """Write the per-point best estimates into ``result``: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat arrays,
-    ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
-    dims = study.dims
-    coordinates = result.grid_coordinates()
-    for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot)):
-        for name, values in ((base, value), (f"{base}_se", se)):
-            result.define(name, "f8", dims, np.nan, coordinates, table=ACCURACY, compress=True,
-                          values=np.asarray(values, dtype=float).reshape(study.shape))
-    result.define("best_method", "i1", dims, False, coordinates, table=ACCURACY, compress=True,
-                  values=np.asarray(method, dtype=np.int8).reshape(study.shape))
+    """Write the per-point best estimates into ``result``: ``var_theta`` and ``var_theta_dot`` are ``(value, se)``
+    flat arrays, ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
+    at = result.grid_coordinates()
+    out = [Variable(name, "f8", study.dims, np.asarray(values, dtype=float).reshape(study.shape), np.nan, at, ACCURACY)
+           for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot))
+           for name, values in ((base, value), (f"{base}_se", se))]
+    out.append(Variable("best_method", "i1", study.dims, np.asarray(method, dtype=np.int8).reshape(study.shape), False,
+                        at, ACCURACY))
+    result.add(out)

@@ -38,6 +38,7 @@ from screening.analysis.probabilities import (answer_quantities, choose_sources,
                                               sample_probabilities, source_codes)
 from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator, EscalationModel,
                                    MONTE_CARLO_SOURCE_BASE, PointStatus, ProbabilitySource, SampleState, Trust)
+from screening.io.writer import Variable
 from screening.solvers import mc_registry
 from screening.sweep.grid import point_values, swept_columns
 from screening.sweep.study import build_models
@@ -386,9 +387,9 @@ def write_probabilities(res, study, values, source, answer):
     for name, value in values.items():
         value = np.asarray(value, dtype=float)
         res.write(name, Ellipsis, value.reshape(study.shape + value.shape[1:]))
-    for name, codes in (("p_source", source), ("answer_quantity", answer)):
-        res.define(name, "i1", study.dims, False, res.grid_coordinates(), compress=True,
-                   values=np.asarray(codes, dtype=np.int8).reshape(study.shape))
+    at = res.grid_coordinates()
+    res.add([Variable(name, "i1", study.dims, np.asarray(codes, dtype=np.int8).reshape(study.shape), False, at)
+             for name, codes in (("p_source", source), ("answer_quantity", answer))])
 
 
 def probabilities_line(counts):

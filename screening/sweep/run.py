@@ -58,7 +58,8 @@ from screening.sweep.interrupt import interruptible, raise_if_interrupted, shiel
 from screening.core.progress import Progress
 from screening.io.reader import result_key, verify_result
 from screening.io.store import PartialStore
-from screening.io.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
+from screening.io.writer import (COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes,
+                                 Variable)
 from screening.io._zarr_store import foreign_files, remove_store, write_completion_mark
 from screening.io.zarrfile import is_zarr_path, zarr_batch_size
 
@@ -610,52 +611,45 @@ def write_batch(result, study, batch, part):
 def write_spots(result, study, spots, results, failed, spec):
     """Write the spot checks into ``result`` on dimension ``spot`` (``spots``: grid index tuples; ``results``:
     the dicts of :func:`~screening.sweep.execution.spot_task`; ``failed``: flags)."""
-    result.dimension("spot", len(spots))
     coords = []
     for axis, dim in enumerate(study.dims):
         idx = np.array([s[axis] for s in spots])
         if dim == "case":
-            result.define("spot_case", "i4", ("spot",), False, values=idx.astype(np.int32))
-            result.define("spot_case_name", str, ("spot",), None, values=np.array(
-                [study.cases[i].name for i in idx], dtype=object))
-            coords += ["spot_case", "spot_case_name"]
+            coords += [Variable("spot_case", "i4", ("spot",), idx.astype(np.int32), False, compress=False),
+                       Variable("spot_case_name", str, ("spot",), np.array([study.cases[i].name for i in idx],
+                                                                           dtype=object), None, compress=False)]
         else:
-            result.define(f"spot_{dim}", "f8", ("spot",), False, values=study.sweeps[dim][idx])
-            coords.append(f"spot_{dim}")
-    coordinates = " ".join(coords)
-
-    def var(name, dtype, dims, values, fill=np.nan):
-        result.define(name, dtype, dims, fill, coordinates, values=values, compress=True)
-
-    for name in SPOT_HISTORIES:
-        var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
-    for name in study.output.at_spots:          # [output] histories = "spots"
-        var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
-    for name in ("n_overturned", "n_diverged", "n_used"):
-        var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
+            coords.append(Variable(f"spot_{dim}", "f8", ("spot",), study.sweeps[dim][idx], False, compress=False))
+    at = " ".join(c.name for c in coords)
+    out = [Variable(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]), coordinates=at)
+           for name in SPOT_HISTORIES]
+    out += [Variable(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]),
+                     coordinates=at) for name in study.output.at_spots]          # [output] histories = "spots"
+    out += [Variable(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), False, at)
+            for name in ("n_overturned", "n_diverged", "n_used")]
     for name in SPOT_LINEAR:
         lin = [r[f"sl_{name}"] if f"sl_{name}" in r else result.history(name, s) for r, s in zip(results, spots)]
-        mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan
-                             for r in results])
-        var(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak)
-        var(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
-            np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]))
-    result.dimension("sample", spec.samples)
-    result.define("sample", "i4", ("sample",), False, values=np.arange(spec.samples, dtype=np.int32))
-    var("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]))
-    var("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
-        fill=False)
+        mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan for r in results])
+        out += [Variable(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak, coordinates=at),
+                Variable(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
+                         np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]), coordinates=at)]
+    out += [Variable("sample", "i4", ("sample",), np.arange(spec.samples, dtype=np.int32), False, compress=False),
+            Variable("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]),
+                     coordinates=at),
+            Variable("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
+                     False, at)]
     if any("mcs_model" in r for r in results):        # a failed spot check: the flag value none (-1)
-        var("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results], dtype=np.int8),
-            fill=False)
-    var("mcs_status", "i1", ("spot",),
-        np.array([SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), fill=False)
+        out.append(Variable("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results],
+                                                                    dtype=np.int8), False, at))
+    out.append(Variable("mcs_status", "i1", ("spot",), np.array(
+        [SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), False, at))
     selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "
                  "the Gaussian closure is least trustworthy)" if spec.points == "auto"
                  else "explicit points of the study file")
-    result.set_attrs(mcs_model=spec.model, mcs_samples=np.int32(spec.samples), mcs_seed=np.int32(spec.seed),
-                     mcs_selection=selection,
-                     mcs_note="Monte Carlo statistics over samples that neither overturned nor diverged")
+    result.add(coords + out, {"spot": len(spots), "sample": spec.samples}, {
+        "mcs_model": spec.model, "mcs_samples": np.int32(spec.samples), "mcs_seed": np.int32(spec.seed),
+        "mcs_selection": selection,
+        "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
 
 
 def relative_peak_error(linear, mcs):

@@ -41,8 +41,8 @@ class Result(dict):
     def write(self, name, region, values):
         self[name] = np.asarray(values)
 
-    def define(self, name, dtype, dims, fill, coordinates="", values=None, **storage):
-        self[name] = np.asarray(values)
+    def add(self, variables):
+        self.update({v.name: np.asarray(v.values) for v in variables})
 
     def grid_coordinates(self):
         return ""
