@@ -6,7 +6,8 @@ thread notes, at every call and return, the innermost frame of those folders; a 
 module, a *return* a stop at a module already left before.  Three counts: every call (``all calls``), and each
 call site's first trip only (``first trips``: a call from the same line to the same function of those folders
 again, in a loop or for the next batch, is skipped with everything under it: the path a reader follows), and those
-first trips with the property reads (``study.dims``) left out as attribute reads, not visits.  The default study is
+first trips with the property reads (``study.dims``) left out as attribute reads, not visits.  Also counted: the
+calls against the layers, from ``io/`` up into ``sweep/`` or from another io module into the writer.  The default study is
 the package's example (two points) with spot checks, ``[accuracy]`` and ``[fragility]``: every stage that
 writes.  The run is in this process (``--workers 0``), netCDF, no figures; numba compiles on a first run.
 """
@@ -81,7 +82,7 @@ def trace(argv):
     from screening.sweep import run, study  # noqa: F401 (their classes' properties)
     from screening.io import writer  # noqa: F401
 
-    every, first, lean = [], [], []
+    every, first, lean, against = [], [], [], []
     seen_sites, skipping, reading, done = set(), [], [], []
     properties = _property_codes()
 
@@ -110,6 +111,12 @@ def trace(argv):
             if not skipping and site in seen_sites:
                 skipping.append(frame)
             seen_sites.add(site)
+        if event == "call" and not skipping:
+            caller, callee = innermost(frame.f_back), _module(frame.f_code.co_filename)
+            if caller and callee and caller.startswith("io/") and callee != caller and (
+                    callee.startswith("sweep/") or callee == "io/writer.py"):
+                against.append((f"{caller}:{frame.f_back.f_code.co_name} -> {callee}:{frame.f_code.co_name}",
+                                frame.f_code in properties))
         if not skipping:
             stop(first, here)
             if event == "call" and not reading and frame.f_code in properties:
@@ -129,7 +136,7 @@ def trace(argv):
             raise
     finally:
         sys.setprofile(None)
-    return every, first, lean
+    return every, first, lean, against
 
 
 def _count(stops):
@@ -151,13 +158,19 @@ def main():
         if not args.study:
             study.write_text(STUDY)
         out = Path(folder) / "r.nc"
-        every, first, lean = trace(["run", str(study), "--out", str(out), "--workers", "0", "--no-plots", "--quiet"])
+        every, first, lean, against = trace(["run", str(study), "--out", str(out), "--workers", "0", "--no-plots", "--quiet"])
         assert out.exists(), "the run wrote no result"
+    calls = sum(not read for _, read in against)
+    print(f"against the layers (first trips): {calls} calls from io/ up into sweep/ or from another io module into "
+          f"the writer, and {len(against) - calls} property reads of a sweep object by io/"
+          + "".join(f"\n  {c}{' (property)' if read else ''}" for c, read in sorted(set(against)) if args.list))
     for label, path in (("all calls", every), ("first trips", first), ("first trips, property reads left out", lean)):
         n, modules, returns = _count(path)
         if args.list:
             print(f"{label}: " + " -> ".join(path))
-        print(f"write path, {label}: {n} stops in {modules} modules, {returns} returns to a module already left")
+        tail = _count(path[path.index("sweep/run.py"):])[2] if "sweep/run.py" in path else 0
+        print(f"write path, {label}: {n} stops in {modules} modules, {returns} returns to a module already left "
+              f"({tail} from run_sweep on, after the study is loaded)")
         print("  visits: " + ", ".join(f"{name} {k}" for name, k in collections.Counter(path).most_common()))
 
 
