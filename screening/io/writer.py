@@ -445,9 +445,6 @@ class ResultFile:
             attrs["coordinates"] = coordinates
         self.format.define(output.name, output.dtype, dims, {**attrs, **extra}, output.fill, compress=True, **storage)
 
-    def dimension(self, name, size):
-        self.format.dimension(name, size)
-
     def grid_coordinates(self):
         """The ``coordinates`` attribute of the grid variables."""
         return self.format.attrs("status").get("coordinates", "")
