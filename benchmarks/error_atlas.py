@@ -40,6 +40,7 @@ if __name__ == "__main__":   # as a script only: a test importing this module le
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))               # research/ (the campaign's points) lives beside the package
 DEFAULT_OUT = ROOT / "screening" / "data" / "error_atlas.nc"
 DEFAULT_WORK = ROOT / "outputs" / "error_atlas"
 
@@ -50,7 +51,7 @@ def point_path(work, index):
 
 def run_and_save(index, u, samples, seed, work):
     """Evaluate one point and write its JSON atomically (runs on a worker)."""
-    from screening.applications.atlas_run import _evaluate_point
+    from research.atlas_run import _evaluate_point
     from screening.core.atomicfile import atomic_open
 
     res = _evaluate_point(index, u, samples=samples, seed=seed)
@@ -75,7 +76,7 @@ def resumed_rows(path, indices):
         return None
     import xarray as xr
 
-    from screening.applications.atlas_run import REFERENCE_VALIDITY
+    from research.atlas_run import REFERENCE_VALIDITY
 
     with xr.open_dataset(path) as ds:
         keep = np.isin(ds["point"].values, np.asarray(indices))
@@ -203,7 +204,7 @@ def main(argv=None):
         print(f"pilot: all {len(allc)} points mean {np.mean(allc):.2f} s -> {args.points} points "
               f"{np.mean(allc) * args.points / 3600:.2f} CPU h")
         return 0
-    from screening.applications.atlas_run import REFERENCE_VALIDITY, assemble, reference_validity
+    from research.atlas_run import REFERENCE_VALIDITY, assemble, reference_validity
 
     cpu_h = sum(r.get("cpu", 0.0) for r in results) / 3600
     given = [a for a in (argv if argv is not None else sys.argv[1:]) if a != "--assemble-only"]

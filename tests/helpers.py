@@ -116,17 +116,18 @@ def failed_result_file(study, path, zarr_batch_size=None):
     from screening.sweep._submit import failed_spot
     from screening.sweep.execution import failed_result
     from screening.sweep.grid import plan_batches, select_spots
+    from screening.sweep.run import write_batch, write_spots
     from screening.io.writer import ResultFile, result_attributes
 
     result = ResultFile(path, study, result_attributes(study, "2024-01-01T00:00:00+00:00", 4),
                         zarr_batch_size=zarr_batch_size)
     try:
         for batch in plan_batches(study, 4):
-            result.write_batch(batch, failed_result(batch.size, study.times.size))
+            write_batch(result, study, batch, failed_result(batch.size, study.times.size))
         if study.mcs is not None:
             spots = select_spots(study, result.status, result.peak_p_uplift)
-            result.write_spots(spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
-                               [True] * len(spots), study.mcs)
+            write_spots(result, study, spots, [failed_spot(study.times.size, study.mcs.samples) for _ in spots],
+                        [True] * len(spots), study.mcs)
     finally:
         result.close()
     return path

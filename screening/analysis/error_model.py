@@ -144,7 +144,7 @@ def atlas_features(ds, condensation):
     Parameters
     ----------
     ds : xarray.Dataset
-        An atlas dataset (``screening/data/error_atlas.nc``; :mod:`screening.applications.atlas_run`).
+        An atlas dataset (``screening/data/error_atlas.nc``; ``research/atlas_run.py``).
     condensation : str
         One of its condensations.
 
@@ -166,7 +166,7 @@ def targets(ds, condensation):
 
     NaN where a side is missing (the linearization stopped, no Monte Carlo survivor) or the
     reference is not valid at the point (``mc_reference_valid`` 0,
-    :func:`screening.applications.atlas_run.reference_validity`).
+    ``reference_validity`` of ``research/atlas_run.py``).
 
     Parameters
     ----------
@@ -205,7 +205,7 @@ def valid_reference(ds):
     Returns
     -------
     numpy.ndarray of bool
-        ``mc_reference_valid`` 1 (:func:`screening.applications.atlas_run.reference_validity`); every point
+        ``mc_reference_valid`` 1 (``reference_validity`` of ``research/atlas_run.py``); every point
         of an atlas that does not record it.
 
     """

@@ -4,7 +4,7 @@ A study that sets its points by how hard they rock, not by ``S0``, asks for the 
 filtered intensity ``S0`` [m2 s-3] at which the stochastic linearization's peak uplift probability
 ``max_t P(|theta| > theta_ul)`` equals a target: :func:`calibrate_intensity`, a bisection on
 ``log10 S0``.  The speed-accuracy trade study (:mod:`screening.report.tradeoff`) and the error atlas
-(:mod:`screening.applications.atlas_run`) set their points with it.
+(``research/atlas_run.py``) set their points with it.
 """
 
 from __future__ import annotations

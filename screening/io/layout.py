@@ -1,6 +1,6 @@
 """The array layout of a sweep result, shared by the result formats and the sweep: where a flat range of points
-sits in the grid's arrays, the chunks of a history, the model parameters as constants or per case, which spot-check
-histories and probabilities a result holds."""
+sits in the grid's arrays, the chunks of a history, the model parameters as constants or per case, whether a result
+holds probabilities."""
 
 from __future__ import annotations
 
@@ -12,11 +12,6 @@ from screening.core.model import Block
 from screening.solvers.schema import PARAMETERS
 
 __all__ = []
-
-#: Histories of a spot check.
-SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
-#: Linearization histories a spot check is compared against.
-SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 
 def hyperslabs(lo, hi, shape):

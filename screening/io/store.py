@@ -26,7 +26,6 @@ from screening._version import __version__
 from screening.core.atomicfile import create_new as _create, open_nofollow as _open_nofollow
 from screening.io._zarr_store import file_check
 from screening.io.errors import SweepError
-from screening.io.zarrfile import ZarrFormat
 
 __all__ = []
 
@@ -275,12 +274,17 @@ class RegionTarget:
     histories: tuple
     variables: tuple
 
-    def write(self, batch, result):
-        """Write ``result`` into the region of ``batch``, then mark the batch done
-        (:meth:`~screening.io.zarrfile.ZarrFormat.mark_done`: a marker holding the sizes and checksums
-        of the chunk files written, created atomically: a batch cut short has none)."""
-        from screening.io.writer import write_region
-
-        fmt = ZarrFormat(self.store, "r+")
-        write_region(fmt, self.shape, self.histories, batch, result)
-        fmt.mark_done(batch, target=self)
+    def mark_done(self, batch, files):
+        """Mark ``batch`` done once its region is written: a marker holding ``files`` (``{chunk file: [size,
+        checksum]}``, :meth:`~screening.io.zarrfile.ZarrFormat.chunk_files`), created atomically (a batch cut
+        short has none)."""
+        marker = {"key": self.key, "index": batch.index, "lo": batch.lo, "hi": batch.hi, "files": files}
+        path = Path(self.done) / f"batch-{batch.index:06d}.json"
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        try:
+            with _create(tmp) as fh:
+                fh.write(json.dumps(marker).encode())
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise

@@ -2,11 +2,9 @@
 
 Every grid variable is laid out from its declaration (:mod:`screening.solvers.outputs`), every other
 ``units``, ``long_name`` and flag attribute comes from :mod:`screening.solvers.schema`.  :class:`ResultFile` lays
-out the result on a result format, a small interface of its own: ``define`` a variable, ``write`` a
-region (:func:`write_region` writes a batch's), ``mark_done`` a batch, ``commit``, ``finish``.
-:class:`NetcdfFormat` implements it on netCDF4 (this file, written by the client), and
-:class:`~screening.io.zarrfile.ZarrFormat` on a zarr store (``--out result.zarr``, whose grid
-variables the workers write).
+out the result on a :class:`~screening.io.formats.ResultFormat`: :class:`NetcdfFormat` (this file, written
+by the client) or :class:`~screening.io.zarrfile.ZarrFormat` (``--out result.zarr``, whose grid variables the
+workers write).  It knows no stage: the stages (:mod:`screening.sweep`) write their variables by name and region.
 
 Storage: histories are ``float32`` (7 significant digits, half the disk and bandwidth of
 ``float64``; the solver tolerance is ``1e-7`` anyway), everything else ``float64`` or
@@ -44,19 +42,18 @@ import math
 import os
 import stat
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from screening._version import __version__
-from screening.core.status import SpotStatus
 from screening.io._zarr_store import foreign_files
 from screening.io.errors import SweepError
-from screening.io.layout import (history_chunks, hyperslabs, parameter_table, SPOT_HISTORIES, SPOT_LINEAR,
-                                 wants_probabilities)
-from screening.io.zarrfile import is_zarr_path, is_zarr_store
+from screening.io.layout import history_chunks, hyperslabs, parameter_table, wants_probabilities
+from screening.io.zarrfile import is_zarr_path, is_zarr_store, point_chunks as zarr_point_chunks, ZarrFormat
 from screening.solvers.outputs import client_variables, GRID_OUTPUTS, selected
-from screening.solvers.schema import (ACCURACY, attributes, global_attributes, grid_coordinate_attributes,
-                                      PRESSURE_PARAMETERS, SWEEP, TIME)
+from screening.solvers.schema import (attributes, global_attributes, grid_coordinate_attributes, PRESSURE_PARAMETERS,
+                                      SWEEP, TIME)
 
 __all__ = []
 
@@ -190,36 +187,6 @@ def result_attributes(study, created, batch_size):
     )
 
 
-def relative_peak_error(linear, mcs):
-    """``(max_t linear - max_t mcs) / max_t mcs`` over the common output grid; NaN if undefined.
-
-    Parameters
-    ----------
-    linear : array_like
-        The linearization's history (e.g. ``var_theta`` [rad2]) on the output times.
-    mcs : array_like
-        The Monte Carlo history of the same quantity on the same times.
-
-    Returns
-    -------
-    float
-        The relative error of the peak [1]; NaN when either history has no finite value or the
-        Monte Carlo peak is not positive.
-
-    Notes
-    -----
-    .. math:: e = \\frac{\\max_t \\sigma^2_{SL}(t) - \\max_t \\sigma^2_{MC}(t)}{\\max_t \\sigma^2_{MC}(t)}
-
-    (NaN values ignored).
-
-    """
-    linear, mcs = np.asarray(linear, dtype=float), np.asarray(mcs, dtype=float)
-    if not (np.any(np.isfinite(linear)) and np.any(np.isfinite(mcs))):
-        return math.nan
-    ref = np.nanmax(mcs)
-    return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan
-
-
 def point_chunks(shape, target=POINT_CHUNK):
     """Chunks of a per-point variable on ``shape``: C-order runs of about ``target`` points, so that
     consecutive batches fill one chunk after the other.
@@ -250,53 +217,8 @@ def _slab_key(slab):
     return slab if slab else Ellipsis
 
 
-def write_region(fmt, shape, histories, batch, result):
-    """Write the arrays of one batch of grid points into their hyperslabs of the result.
-
-    The batch covers the flat C-order points ``batch.lo <= i < batch.hi`` of the grid; its arrays go
-    into the hyperslabs of that range (:func:`~screening.io.layout.hyperslabs`).  Written are the
-    stored ``histories`` and every other declared variable (:mod:`screening.solvers.outputs`): those a
-    result always holds, the others if ``result`` has them.  The resume record replays this for a batch
-    already solved.
-
-    Parameters
-    ----------
-    fmt : NetcdfFormat or ZarrFormat
-        The result format (:class:`NetcdfFormat` or :class:`~screening.io.zarrfile.ZarrFormat`;
-        any object with a ``write(name, key, values)`` method).
-    shape : tuple of int
-        The grid's shape (``()`` for a single point).
-    histories : iterable of str
-        The history variables the result stores (the study's ``[output]``).
-    batch : object
-        The batch, with the flat range ``lo`` and ``hi`` (``0 <= lo <= hi <= prod(shape)``).
-    result : dict of numpy.ndarray
-        The batch's arrays (:func:`~screening.sweep.execution.solve_batch`), flat over the batch:
-        ``(hi - lo,)`` per point or ``(hi - lo, n_t)`` per history, in the variables' units
-        (:mod:`screening.solvers.outputs`).
-
-    Returns
-    -------
-    None
-        The arrays are written into ``fmt``.
-
-    """
-    names = set(histories)
-    outputs = [o for o in GRID_OUTPUTS if o.name in names or o.shape != "history" and
-               (o.when == "always" or o.name in result)]
-    for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
-        rows = slice(a - batch.lo, b - batch.lo)
-        region = tuple(s.stop - s.start for s in slab)
-        for o in outputs:
-            values = result[o.name]
-            if o.shape == "point":
-                fmt.write(o.name, _slab_key(slab), values[rows].reshape(region))
-            else:
-                fmt.write(o.name, slab + (slice(None),), values[rows].reshape(region + (values.shape[1],)))
-
-
 def region_variables(study):
-    """Names of the variables :func:`write_region` writes for ``study``.
+    """Names of the grid variables a batch of ``study`` writes.
 
     The stored histories (``[output]``), then every per-point variable a result of the study holds.
 
@@ -320,13 +242,10 @@ def _outputs(study):
 
 
 class NetcdfFormat:
-    """The netCDF4/HDF5 form of a result, written by the client alone: the result-format interface
-    :class:`ResultFile` drives (``dimension``, ``define``, ``write`` a region, ``mark_done``, ``commit``,
-    ``finish``; ``read``, ``dims``, ``attrs``, ``set_attrs``), as
-    :class:`~screening.io.zarrfile.ZarrFormat` is for zarr.
+    """The netCDF4/HDF5 :class:`~screening.io.formats.ResultFormat`, written by the client alone.
 
-    ``complevel``: zlib level of the compressed variables; a file with histories is synced every
-    :data:`SYNC_POINTS` points marked done.  ``mode``: ``"w"`` creates the file, ``"a"`` opens an existing one.
+    ``complevel``: zlib level of the compressed variables.  ``mode``: ``"w"`` creates the file, ``"a"`` opens
+    an existing one.
     """
 
     def __init__(self, path, complevel=COMPLEVEL, mode="w"):
@@ -335,7 +254,6 @@ class NetcdfFormat:
         self.dataset = netCDF4.Dataset(path, mode, format="NETCDF4")
         self.dataset.set_auto_mask(False)
         self.complevel = complevel
-        self._unsynced = 0
 
     # -- definition
     def dimension(self, name, size):
@@ -363,12 +281,11 @@ class NetcdfFormat:
         return name in self.dataset.variables
 
     # -- data
-    def write(self, name, key, values):
-        """Write ``values`` into the region ``key`` of variable ``name``."""
-        self.dataset[name][key] = values
+    def write(self, name, region, values):
+        self.dataset[name][region] = values
 
-    def read(self, name, key=Ellipsis):
-        return self.dataset[name][key]
+    def read(self, name, region=Ellipsis):
+        return self.dataset[name][region]
 
     def dims(self, name):
         return self.dataset[name].dimensions
@@ -379,15 +296,6 @@ class NetcdfFormat:
 
     def set_attrs(self, attrs):
         self.dataset.setncatts(attrs)
-
-    def mark_done(self, batch, points=0, target=None):
-        """``batch`` is written (``points``: its points with histories): compress and write the cached
-        chunks every :data:`SYNC_POINTS` such points, while the workers compute.  (``target``: for the
-        zarr form only.)"""
-        self._unsynced += points
-        if self._unsynced >= SYNC_POINTS:
-            self.commit()
-            self._unsynced = 0
 
     def commit(self):
         self.dataset.sync()
@@ -400,12 +308,24 @@ class NetcdfFormat:
             self.dataset.close()
 
 
+class Variable(NamedTuple):
+    """A variable a stage adds to a result (:meth:`ResultFile.add`): its attributes are its schema's (``table``)."""
+
+    name: str
+    dtype: object
+    dims: tuple
+    values: object
+    fill: object = np.nan
+    coordinates: str = ""
+    table: dict = SWEEP
+    compress: bool = True
+
+
 class ResultFile:
     """Build the CF-1.8 result of ``study`` at ``path``, batch by batch: a netCDF4/HDF5 file
     (:class:`NetcdfFormat`), or with ``zarr_batch_size`` (the batch size of the run) a zarr store whose
     grid variables the workers write (:class:`~screening.io.zarrfile.ZarrFormat`, chunks of
-    :func:`~screening.io.zarrfile.point_chunks`).  It speaks to the format only through their
-    shared interface.
+    :func:`~screening.io.zarrfile.point_chunks`), through :class:`~screening.io.formats.ResultFormat` alone.
 
     ``attrs``: the global attributes (:func:`result_attributes`); ``reopen``: open the zarr store of an
     interrupted run (or a netCDF file: a copy of the one being built, for an interim result) instead of
@@ -417,16 +337,14 @@ class ResultFile:
     def __init__(self, path, study, attrs, complevel=COMPLEVEL, zarr_batch_size=None, reopen=False):
         self.path = Path(path)
         self.study = study
-        self.shape = study.shape
+        self.dims, self.shape, self.n_points = study.dims, study.shape, study.n_points
         self.nt = study.times.size
-        self.histories = study.output.stored
         #: What the client keeps of every point (:func:`screening.solvers.outputs.client_variables`), flat.
-        self.kept = {o.name: o.failed_array(study.n_points) for o in GRID_OUTPUTS if o.client}
+        self.kept = {o.name: o.failed_array(self.n_points) for o in GRID_OUTPUTS if o.client}
+        self._unsynced = 0
         if zarr_batch_size is not None:
-            from screening.io.zarrfile import ZarrFormat, point_chunks
-
-            chunks = point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
-            self.format = ZarrFormat(self.path, "r+" if reopen else "w", study.dims, chunks, complevel)
+            chunks = zarr_point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
+            self.format = ZarrFormat(self.path, "r+" if reopen else "w", self.dims, chunks, complevel)
             if reopen:
                 return
         else:
@@ -446,22 +364,32 @@ class ResultFile:
         return self.format.dataset
 
     # -- definition
-    def _variable(self, name, dtype, dims, fill, coordinates="", table=SWEEP, values=None, **storage):
+    def define(self, name, dtype, dims, fill, coordinates="", table=SWEEP, values=None, **storage):
         """Define variable ``name`` with its schema attributes (and ``coordinates``)."""
         attrs = attributes(name, table)
         if coordinates:
             attrs["coordinates"] = coordinates
         self.format.define(name, dtype, dims, attrs, fill, values, **storage)
 
+    def add(self, variables, dimensions=None, attrs=None):
+        """Create the ``dimensions`` (``{name: size}``), define each of ``variables`` (:class:`Variable`) with its
+        values, and set the global ``attrs``."""
+        for name, size in (dimensions or {}).items():
+            self.format.dimension(name, size)
+        for v in variables:
+            self.define(v.name, v.dtype, v.dims, v.fill, v.coordinates, v.table, v.values,
+                        **({"compress": True} if v.compress else {}))
+        if attrs:
+            self.format.set_attrs(attrs)
+
     def _define(self, attrs):
-        fmt, study = self.format, self.study
-        dims = study.dims
+        fmt, study, dims = self.format, self.study, self.dims
         for dim, n in zip(dims, self.shape):
             fmt.dimension(dim, n)
         fmt.dimension("t", self.nt)
         if study.has_case_dim:
-            self._variable("case", "i4", ("case",), False, values=np.arange(len(study.cases), dtype=np.int32))
-            self._variable("case_name", str, ("case",), None, values=np.array([c.name for c in study.cases],
+            self.define("case", "i4", ("case",), False, values=np.arange(len(study.cases), dtype=np.int32))
+            self.define("case_name", str, ("case",), None, values=np.array([c.name for c in study.cases],
                                                                               dtype=object))
         aux = []
         for name, values in study.sweeps.items():
@@ -474,13 +402,13 @@ class ResultFile:
         constants, per_case, labels, case_labels = parameter_table(study)
         coords = (["case_name"] if study.has_case_dim else []) + aux
         for name, value in constants.items():
-            self._variable(name, "f8", (), False, values=value)
+            self.define(name, "f8", (), False, values=value)
             coords.append(name)
         for name, values in per_case.items():
-            self._variable(name, "f8", ("case",), np.nan, values=values)
+            self.define(name, "f8", ("case",), np.nan, values=values)
             coords.append(name)
         for name, values in case_labels.items():
-            self._variable(name, str, ("case",), None, values=np.array(values, dtype=object))
+            self.define(name, str, ("case",), None, values=np.array(values, dtype=object))
             coords.append(name)
         coordinates = " ".join(coords)
 
@@ -502,7 +430,7 @@ class ResultFile:
         """Define the grid variable of the declaration ``output`` (:mod:`screening.solvers.outputs`): its
         dimensions, type, fill value, attributes (with ``coordinates`` and ``extra``), compression and
         chunks."""
-        dims = self.study.dims
+        dims = self.dims
         if output.shape == "history":
             dims += ("t",)
             storage = {"shuffle": self.format.complevel > 0, "chunks": history_chunks(self.shape, self.nt)}
@@ -517,17 +445,21 @@ class ResultFile:
             attrs["coordinates"] = coordinates
         self.format.define(output.name, output.dtype, dims, {**attrs, **extra}, output.fill, compress=True, **storage)
 
-    def _coordinates(self):
+    def grid_coordinates(self):
         """The ``coordinates`` attribute of the grid variables."""
         return self.format.attrs("status").get("coordinates", "")
 
     # -- data
-    def write_batch(self, batch, result):
-        """Write the arrays of ``batch`` (as returned by :func:`~screening.sweep.execution.solve_batch`)
-        into their regions, and mark it done."""
-        write_region(self.format, self.shape, self.histories, batch, result)
-        self.format.mark_done(batch, batch.size if self.histories else 0)
-        self.record(batch, result)
+    def write(self, name, region, values):
+        self.format.write(name, region, values)
+
+    def written(self, points):
+        """``points`` with histories were written: commit every :data:`SYNC_POINTS` of them (compression
+        overlaps the workers' compute)."""
+        self._unsynced += points
+        if self._unsynced >= SYNC_POINTS:
+            self.format.commit()
+            self._unsynced = 0
 
     @property
     def status(self):
@@ -567,57 +499,6 @@ class ResultFile:
         """Create what was defined since (a zarr store creates its variables here)."""
         self.format.commit()
 
-    def write_spots(self, spots, results, failed, spec):
-        """Spot-check variables on dimension ``spot`` (``spots``: grid index tuples; ``results``: the
-        dicts of :func:`~screening.sweep.execution.spot_task`; ``failed``: flags)."""
-        fmt, study = self.format, self.study
-        fmt.dimension("spot", len(spots))
-        coords = []
-        for axis, dim in enumerate(study.dims):
-            idx = np.array([s[axis] for s in spots])
-            if dim == "case":
-                self._variable("spot_case", "i4", ("spot",), False, values=idx.astype(np.int32))
-                self._variable("spot_case_name", str, ("spot",), None, values=np.array(
-                    [study.cases[i].name for i in idx], dtype=object))
-                coords += ["spot_case", "spot_case_name"]
-            else:
-                self._variable(f"spot_{dim}", "f8", ("spot",), False, values=study.sweeps[dim][idx])
-                coords.append(f"spot_{dim}")
-        coordinates = " ".join(coords)
-
-        def var(name, dtype, dims, values, fill=np.nan):
-            self._variable(name, dtype, dims, fill, coordinates, values=values, compress=True)
-
-        for name in SPOT_HISTORIES:
-            var(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]))
-        for name in study.output.at_spots:          # [output] histories = "spots"
-            var(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]))
-        for name in ("n_overturned", "n_diverged", "n_used"):
-            var(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), fill=False)
-        for name in SPOT_LINEAR:
-            lin = [r[f"sl_{name}"] if f"sl_{name}" in r else self.history(name, s) for r, s in zip(results, spots)]
-            mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan
-                                 for r in results])
-            var(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak)
-            var(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
-                np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]))
-        fmt.dimension("sample", spec.samples)
-        self._variable("sample", "i4", ("sample",), False, values=np.arange(spec.samples, dtype=np.int32))
-        var("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]))
-        var("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
-            fill=False)
-        if any("mcs_model" in r for r in results):        # a failed spot check: the flag value none (-1)
-            var("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results], dtype=np.int8),
-                fill=False)
-        var("mcs_status", "i1", ("spot",),
-            np.array([SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), fill=False)
-        selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "
-                     "the Gaussian closure is least trustworthy)" if spec.points == "auto"
-                     else "explicit points of the study file")
-        fmt.set_attrs({"mcs_model": spec.model, "mcs_samples": np.int32(spec.samples),
-                       "mcs_seed": np.int32(spec.seed), "mcs_selection": selection,
-                       "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
-
     def read(self, name, t_index=None):
         """Flat float64 values of per-point variable ``name`` over the grid (a history: at output index
         ``t_index``, or its maximum over time with ``None``)."""
@@ -625,10 +506,10 @@ class ResultFile:
             return np.asarray(self.format.read(name), dtype=np.float64).reshape(-1)
         if t_index is not None:
             return np.asarray(self.format.read(name, (Ellipsis, t_index % self.nt)), dtype=np.float64).reshape(-1)
-        out = np.full(self.study.n_points, np.nan)
+        out = np.full(self.n_points, np.nan)
         step = max(SYNC_POINTS, 1)
-        for lo in range(0, self.study.n_points, step):          # a slab of histories at a time
-            for slab, a, b in hyperslabs(lo, min(lo + step, self.study.n_points), self.shape):
+        for lo in range(0, self.n_points, step):          # a slab of histories at a time
+            for slab, a, b in hyperslabs(lo, min(lo + step, self.n_points), self.shape):
                 rows = np.asarray(self.format.read(name, slab + (slice(None),)), dtype=np.float64).reshape(
                     b - a, self.nt)
                 finite = np.isfinite(rows).any(axis=1)
@@ -638,84 +519,6 @@ class ResultFile:
     def read_all(self, name):
         """The stored values of variable ``name`` (float64, its own shape)."""
         return np.asarray(self.format.read(name), dtype=float)
-
-    def write_escalation(self, flat_indices, models, runs):
-        """The ``[accuracy]`` Monte Carlo points on dimension ``escalation`` (``runs``: the dicts of
-        :func:`~screening.sweep.execution.escalation_task`; ``models``: their
-        :class:`~screening.core.status.EscalationModel` codes)."""
-        fmt, study = self.format, self.study
-        n = len(runs)
-        fmt.dimension("escalation", n)
-        most = max((int(r["samples"]) for r in runs), default=1)
-        fmt.dimension("esc_sample", most)
-        # (a one-point grid has no grid dimension; no escalated point: empty coordinates)
-        idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), self.shape) if self.shape else ()
-        coords = []
-        for axis, dim in enumerate(study.dims):
-            name = f"esc_{dim}"
-            values = np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]]
-            self._variable(name, "i4" if dim == "case" else "f8", ("escalation",), False, table=ACCURACY,
-                           values=values)
-            coords.append(name)
-        coordinates = " ".join(coords)
-
-        def var(name, dtype, dims, values, fill=np.nan):
-            self._variable(name, dtype, dims, fill, coordinates, table=ACCURACY, values=values, compress=True)
-
-        var("esc_grid_index", "i4", ("escalation",), np.asarray(flat_indices, dtype=np.int32), fill=False)
-        var("esc_model", "i1", ("escalation",), np.asarray(models, dtype=np.int8), fill=False)
-        var("esc_samples", "i4", ("escalation",), np.array([r["samples"] for r in runs], dtype=np.int32), fill=False)
-        var("esc_estimator", "i1", ("escalation",), np.array([r.get("estimator", 0) for r in runs], dtype=np.int8),
-            fill=False)
-        var("esc_cheap_samples", "i4", ("escalation",), np.array([r.get("cheap_samples", 0) for r in runs],
-                                                                  dtype=np.int32), fill=False)
-        var("esc_correlation", "f8", ("escalation",), np.array([r.get("correlation", np.nan) for r in runs],
-                                                                dtype=float))
-        var("esc_cpu_time", "f8", ("escalation",), np.array([r["cpu_time"] for r in runs], dtype=float))
-        var("esc_cost", "f8", ("escalation",), np.array([r["cost_s"] for r in runs], dtype=float))
-        var("esc_target_met", "i1", ("escalation",), np.array([r["target_met"] for r in runs], dtype=np.int8),
-            fill=False)
-        var("esc_transition", "i1", ("escalation",), np.array([r.get("transition", 0) for r in runs], dtype=np.int8),
-            fill=False)
-        for name in ("peak_var_theta", "peak_var_theta_se", "peak_var_theta_dot", "peak_var_theta_dot_se"):
-            var(f"esc_{name}", "f8", ("escalation",), np.array([r[name] for r in runs], dtype=float))
-        at = np.asarray(flat_indices, dtype=np.int64)
-        var("esc_sl_peak_var_theta", "f8", ("escalation",), self.read("peak_var_theta")[at])
-        var("esc_sl_peak_var_theta_dot", "f8", ("escalation",),
-            self.read("var_theta_dot")[at] if "var_theta_dot" in self.histories else np.full(n, np.nan))
-        for name in ("n_overturned", "n_diverged", "n_used"):
-            var(f"esc_{name}", "i4", ("escalation",), np.array([r[name] for r in runs], dtype=np.int32), fill=False)
-        peaks = np.full((n, most), np.nan)
-        state = np.full((n, most), -1, dtype=np.int8)
-        for i, r in enumerate(runs):
-            peaks[i, :r["peak_abs_theta"].size] = r["peak_abs_theta"]
-            state[i, :r["sample_state"].size] = r["sample_state"]
-        var("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks)
-        var("esc_sample_state", "i1", ("escalation", "esc_sample"), state, fill=np.int8(-1))
-
-    def write_best(self, var_theta, var_theta_dot, method):
-        """Per-point best estimates: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat arrays,
-        ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
-        dims = self.study.dims
-        coordinates = self._coordinates()
-        for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot)):
-            for name, values in ((base, value), (f"{base}_se", se)):
-                self._variable(name, "f8", dims, np.nan, coordinates, table=ACCURACY, compress=True,
-                               values=np.asarray(values, dtype=float).reshape(self.shape))
-        self._variable("best_method", "i1", dims, False, coordinates, table=ACCURACY, compress=True,
-                       values=np.asarray(method, dtype=np.int8).reshape(self.shape))
-
-    def write_probabilities(self, values, source, answer):
-        """Per-point probabilities after the Monte Carlo stages: ``values`` maps ``p_overturn``,
-        ``p_overturn_se`` (flat) and ``p_exceed``, ``p_exceed_se`` (flat x thresholds) to their final values;
-        ``source`` the flat ``p_source`` codes (:func:`screening.solvers.schema.probability_source_attributes`),
-        ``answer`` the flat ``answer_quantity`` codes (:class:`~screening.core.status.AnswerQuantity`)."""
-        for name, value in values.items():
-            value = np.asarray(value, dtype=float)
-            self.format.write(name, Ellipsis, value.reshape(self.shape + value.shape[1:]))
-        for name, codes in (("p_source", source), ("answer_quantity", answer)):
-            self._variable(name, "i1", self.study.dims, False, self._coordinates(), compress=True,
-                           values=np.asarray(codes, dtype=np.int8).reshape(self.shape))
 
     def set_attrs(self, **attrs):
         self.format.set_attrs(attrs)

@@ -1,9 +1,8 @@
 """The zarr form of a sweep result (``--out result.zarr``): written in place by the workers.
 
-:class:`ZarrFormat` is the zarr (format 3) implementation of the result-format interface that
-:class:`~screening.io.writer.ResultFile` drives (define, write a region, mark a batch done,
-finish; :class:`~screening.io.writer.NetcdfFormat` is the netCDF one), so that one piece of code
-(``ResultFile``) lays out the variables of both forms, with the CF attributes of their declarations.
+:class:`ZarrFormat` is the zarr (format 3) :class:`~screening.io.formats.ResultFormat`
+(:class:`~screening.io.writer.NetcdfFormat` is the netCDF one), so that one piece of code
+(:class:`~screening.io.writer.ResultFile`) lays out the variables of both forms.
 Variables defined are created at the next :meth:`ZarrFormat.commit` (xarray writes their metadata and
 any values written; the grid variables are left unwritten for the workers).  A grid variable is cut
 into chunks that each lie in one batch (:func:`point_chunks`),
@@ -15,7 +14,6 @@ HDF5 files cannot be written from several processes, hence this second form for 
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import stat
@@ -23,11 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from screening.core.atomicfile import create_new
 from screening.io._zarr_store import (COMPLETION_MARK, file_check, netcdf_attributes, read_completion_mark,
                                       warnings_ignored)
 from screening.io.errors import read_values
-from screening.io.layout import history_chunks, hyperslabs
+from screening.io.layout import history_chunks
 from screening.solvers.outputs import GRID_OUTPUTS
 from screening.io._zarr_store import write_completion_mark  # noqa: F401 (the examples' finished runs)
 
@@ -234,9 +231,7 @@ class _Pending:
 
 
 class ZarrFormat:
-    """The zarr (format 3) form of a result: the result-format interface of
-    :class:`~screening.io.writer.ResultFile` (``dimension``, ``define``, ``write`` a region,
-    ``mark_done``, ``commit``, ``finish``; ``read``, ``dims``, ``attrs``, ``set_attrs``) on a zarr store.
+    """The zarr (format 3) :class:`~screening.io.formats.ResultFormat`.
 
     ``mode``: ``"w"`` (a new store; the folder must not exist) or ``"r+"``.  ``chunks``: the chunk shape
     over the grid dimensions ``grid`` (:func:`point_chunks`); other variables are one chunk.
@@ -302,17 +297,16 @@ class ZarrFormat:
         return self._arrays[name]
 
     # -- data
-    def write(self, name, key, values):
-        """Write ``values`` into the region ``key`` of variable ``name``."""
+    def write(self, name, region, values):
         if name in self._pending:
-            self._pending[name].write(key, values)
+            self._pending[name].write(region, values)
         else:
-            self._array(name)[key] = values
+            self._array(name)[region] = values
 
-    def read(self, name, key=Ellipsis):
+    def read(self, name, region=Ellipsis):
         if name in self._pending:
-            return self._pending[name].values[key]
-        return self._array(name)[key]
+            return self._pending[name].values[region]
+        return self._array(name)[region]
 
     def dims(self, name):
         if name in self._pending:
@@ -329,27 +323,6 @@ class ZarrFormat:
             self.group.attrs.update({k: _json(v) for k, v in attrs.items()})
         else:
             self._attrs.update(attrs)
-
-    def mark_done(self, batch, points=0, target=None):
-        """Mark ``batch`` done in the marker folder of ``target`` (a
-        :class:`~screening.io.store.RegionTarget`: a worker wrote the batch), once its region is
-        written: a marker holding the size and checksum of every chunk file of the batch, created
-        atomically (a batch cut short has none).  Without ``target`` (the client wrote a failed batch's
-        values) nothing is marked: a resumed run computes the batch again.  (``points``: for netCDF only.)"""
-        if target is None:
-            return
-        slabs = [slab for slab, _, _ in hyperslabs(batch.lo, batch.hi, target.shape)]
-        marker = {"key": target.key, "index": batch.index, "lo": batch.lo, "hi": batch.hi,
-                  "files": self.chunk_files(target.variables, slabs)}
-        path = Path(target.done) / f"batch-{batch.index:06d}.json"
-        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        try:
-            with create_new(tmp) as fh:
-                fh.write(json.dumps(marker).encode())
-            os.replace(tmp, path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
 
     def commit(self):
         """Create the pending variables (metadata, and the values that were written)."""

@@ -16,10 +16,12 @@ from screening.analysis.trust import trust_models
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 from screening.core.status import SampleState
-from screening.io.layout import SPOT_HISTORIES, SPOT_LINEAR, wants_probabilities
-from screening.solvers.outputs import client_variables, HISTORY_VARIABLES
+from screening.io.layout import hyperslabs, wants_probabilities
+from screening.io.zarrfile import ZarrFormat
+from screening.solvers.outputs import client_variables, GRID_OUTPUTS, HISTORY_VARIABLES
 from screening.sweep.config import build_models, case_cutoff
-from screening.sweep.execution import escalation_task, solve_batch, spot_task, TASK_RETRIES
+from screening.sweep.execution import (escalation_task, solve_batch, SPOT_HISTORIES, SPOT_LINEAR, spot_task,
+                                       TASK_RETRIES)
 from screening.sweep.grid import batch_point_models, point_values
 
 
@@ -88,12 +90,34 @@ def submit_escalation(client, study, flat_index, samples, model, key, cheap=None
 
 def solve_and_store_batch(target, batch, *solve_args):
     """The dask task of a zarr result: :func:`~screening.sweep.execution.solve_batch`, then its arrays written into the region of
-    ``batch`` in the store and the batch marked done (:class:`~screening.io.store.RegionTarget`
+    ``batch`` in the store and the batch marked done with its chunk files (:class:`~screening.io.store.RegionTarget`
     ``target``); returns what the client keeps of the batch
     (:func:`screening.solvers.outputs.client_variables`)."""
     out = solve_batch(*solve_args)
-    target.write(batch, out)
+    fmt = ZarrFormat(target.store, "r+")
+    write_region(fmt, target.shape, target.histories, batch, out)
+    slabs = [slab for slab, _, _ in hyperslabs(batch.lo, batch.hi, target.shape)]
+    target.mark_done(batch, fmt.chunk_files(target.variables, slabs))
     return {name: out[name] for name in client_variables()}
+
+
+def write_region(fmt, shape, histories, batch, result):
+    """Write the arrays of ``batch`` (:func:`~screening.sweep.execution.solve_batch`'s, flat over its points
+    ``lo <= i < hi``) into their hyperslabs of the result format ``fmt`` on the grid ``shape``: the stored
+    ``histories`` and every other declared variable (:mod:`screening.solvers.outputs`) a result always holds, or
+    that ``result`` has."""
+    names = set(histories)
+    outputs = [o for o in GRID_OUTPUTS if o.name in names or o.shape != "history" and
+               (o.when == "always" or o.name in result)]
+    for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
+        rows = slice(a - batch.lo, b - batch.lo)
+        region = tuple(s.stop - s.start for s in slab)
+        for o in outputs:
+            values = result[o.name]
+            if o.shape == "point":
+                fmt.write(o.name, slab if slab else Ellipsis, values[rows].reshape(region))
+            else:
+                fmt.write(o.name, slab + (slice(None),), values[rows].reshape(region + (values.shape[1],)))
 
 
 # ============================================================================ on the workers

@@ -27,7 +27,9 @@ from screening.core import limits
 from screening.core.progress import Progress
 from screening.core.status import BestMethod, EscalationEstimator, EscalationModel, SampleState
 from screening.io.errors import exception_line, write_failure_reason
+from screening.io.writer import Variable
 from screening.solvers.model_choice import AUTO, choose, sampler_of
+from screening.solvers.schema import ACCURACY
 from screening.sweep import _submit
 from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
 from screening.sweep.interrupt import raise_if_interrupted
@@ -219,7 +221,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
             r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
         r["target_met"] = bool(r["target_met"])
         r["transition"] = np.int8(first[j])
-    result.write_escalation(escalated, models_done, runs)
+    write_escalation(result, stage.study, escalated, models_done, runs)
     best = {}
     for name in ("var_theta", "var_theta_dot"):
         mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
@@ -229,7 +231,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
                                                  models_done, atlas=name == "var_theta")
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
-    result.write_best(best["var_theta"][:2], best["var_theta_dot"][:2], method)
+    write_best(result, stage.study, best["var_theta"][:2], best["var_theta_dot"][:2], method)
 
     short = sum(1 for r in runs if not r["target_met"])
     codes, counts = np.unique(method, return_counts=True)
@@ -691,3 +693,56 @@ def accuracy_line(info):
             f"{info['cpu_s']:.1f} s measured); {left} without Monte Carlo"
             f" (correction leave-one-out RMS {info['loo_rms']:.2f}{'' if info['correction_usable'] else ', not usable'}); "
             f"best estimates: {methods}")
+
+
+def write_escalation(result, study, flat_indices, models, runs):
+    """Write the ``[accuracy]`` Monte Carlo points into ``result`` on dimension ``escalation`` (``runs``: the dicts of
+    :func:`~screening.sweep.execution.escalation_task`; ``models``: their
+    :class:`~screening.core.status.EscalationModel` codes)."""
+    n = len(runs)
+    most = max((int(r["samples"]) for r in runs), default=1)
+    # (a one-point grid has no grid dimension; no escalated point: empty coordinates)
+    idx = np.unravel_index(np.asarray(flat_indices, dtype=np.int64), study.shape) if study.shape else ()
+    coords = [Variable(f"esc_{dim}", "i4" if dim == "case" else "f8", ("escalation",),
+                       np.asarray(idx[axis], dtype=np.int32) if dim == "case" else study.sweeps[dim][idx[axis]], False,
+                       table=ACCURACY, compress=False) for axis, dim in enumerate(study.dims)]
+    at = " ".join(c.name for c in coords)
+
+    def column(key, dtype, default=None):
+        return np.array([r[key] if default is None else r.get(key, default) for r in runs], dtype=dtype)
+
+    flags = {"esc_grid_index": np.asarray(flat_indices, dtype=np.int32), "esc_model": np.asarray(models, dtype=np.int8),
+             "esc_samples": column("samples", np.int32), "esc_estimator": column("estimator", np.int8, 0),
+             "esc_cheap_samples": column("cheap_samples", np.int32, 0)}
+    values = {"esc_correlation": column("correlation", float, np.nan), "esc_cpu_time": column("cpu_time", float),
+              "esc_cost": column("cost_s", float)}
+    flags2 = {"esc_target_met": column("target_met", np.int8), "esc_transition": column("transition", np.int8, 0)}
+    values2 = {f"esc_{name}": column(name, float) for name in ("peak_var_theta", "peak_var_theta_se",
+                                                               "peak_var_theta_dot", "peak_var_theta_dot_se")}
+    at_grid = np.asarray(flat_indices, dtype=np.int64)
+    values2["esc_sl_peak_var_theta"] = result.read("peak_var_theta")[at_grid]
+    values2["esc_sl_peak_var_theta_dot"] = (result.read("var_theta_dot")[at_grid] if "var_theta_dot" in study.output.stored
+                                            else np.full(n, np.nan))
+    counts = {f"esc_{name}": column(name, np.int32) for name in ("n_overturned", "n_diverged", "n_used")}
+    peaks = np.full((n, most), np.nan)
+    state = np.full((n, most), -1, dtype=np.int8)
+    for i, r in enumerate(runs):
+        peaks[i, :r["peak_abs_theta"].size] = r["peak_abs_theta"]
+        state[i, :r["sample_state"].size] = r["sample_state"]
+    out = [Variable(name, v.dtype, ("escalation",), v, np.nan if v.dtype.kind == "f" else False, at, ACCURACY)
+           for group in (flags, values, flags2, values2, counts) for name, v in group.items()]
+    out += [Variable("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks, np.nan, at, ACCURACY),
+            Variable("esc_sample_state", "i1", ("escalation", "esc_sample"), state, np.int8(-1), at, ACCURACY)]
+    result.add(coords + out, {"escalation": n, "esc_sample": most})
+
+
+def write_best(result, study, var_theta, var_theta_dot, method):
+    """Write the per-point best estimates into ``result``: ``var_theta`` and ``var_theta_dot`` are ``(value, se)``
+    flat arrays, ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
+    at = result.grid_coordinates()
+    out = [Variable(name, "f8", study.dims, np.asarray(values, dtype=float).reshape(study.shape), np.nan, at, ACCURACY)
+           for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot))
+           for name, values in ((base, value), (f"{base}_se", se))]
+    out.append(Variable("best_method", "i1", study.dims, np.asarray(method, dtype=np.int8).reshape(study.shape), False,
+                        at, ACCURACY))
+    result.add(out)

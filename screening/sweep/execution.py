@@ -33,7 +33,6 @@ from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 from screening.core.status import EscalationEstimator, PointStatus, SampleState, Trust
 from screening.io.errors import exception_line, SweepError
-from screening.io.layout import SPOT_HISTORIES
 from screening.solvers import mc_registry
 from screening.solvers.datasets import INTEGRATOR_TEXT
 from screening.solvers.model_choice import resolve
@@ -44,6 +43,10 @@ __all__ = []
 
 CONNECT_TIMEOUT = "15s"
 TASK_RETRIES = 2
+#: Histories of a spot check.
+SPOT_HISTORIES = ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se")
+#: Linearization histories a spot check is compared against.
+SPOT_LINEAR = ("var_theta", "var_theta_dot")
 
 
 # ============================================================================ tasks

@@ -38,6 +38,7 @@ from screening.analysis.probabilities import (answer_quantities, choose_sources,
                                               sample_probabilities, source_codes)
 from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator, EscalationModel,
                                    MONTE_CARLO_SOURCE_BASE, PointStatus, ProbabilitySource, SampleState, Trust)
+from screening.io.writer import Variable
 from screening.solvers import mc_registry
 from screening.sweep.grid import point_values, swept_columns
 from screening.sweep.study import build_models
@@ -273,9 +274,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
         The open result (:class:`~screening.io.writer.ResultFile`): read for the workers'
         estimates ``p_overturn``, ``p_exceed`` [1] and their standard errors, the trust band
         ``sl_error_low``/``sl_error_high`` [1], ``theta_ul`` and ``slenderness`` [rad], ``status``,
-        ``sl_trust``, ``peak_p_uplift`` (and ``best_method`` with ``[accuracy]``); written through
-        ``write_probabilities`` (the probabilities, ``p_source`` and ``answer_quantity``) and ``set_attrs``
-        (``answer_note``, ``fragility_surface_note``).
+        ``sl_trust``, ``peak_p_uplift`` (and ``best_method`` with ``[accuracy]``); the probabilities,
+        ``p_source``, ``answer_quantity`` and the notes written into it.
     escalated : tuple, optional
         ``(flat indices, EscalationModel codes, runs)`` of the escalated points
         (:func:`screening.sweep.accuracy.escalate`), each run with ``peak_abs_theta`` [rad] and
@@ -364,7 +364,7 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if thresholds:
         values.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
-    res.write_probabilities(values, source, answer)
+    write_probabilities(res, study, values, source, answer)
     line = answer_line(answer, reliable_answer(answer, variance_vouched, source), variance_vouched)
     res.set_attrs(answer_note=line, fragility_surface_note="; ".join(notes))
     if log is not None:                      # many cases: one line, each surface's note in the result's attribute
@@ -377,6 +377,19 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     names = {code: name for name, code in source_codes().items()}
     codes, counts = np.unique(source, return_counts=True)
     return {names[int(c)]: int(k) for c, k in zip(codes, counts)}
+
+
+def write_probabilities(res, study, values, source, answer):
+    """Write into ``res`` the per-point probabilities after the Monte Carlo stages: ``values`` maps ``p_overturn``,
+    ``p_overturn_se`` (flat) and ``p_exceed``, ``p_exceed_se`` (flat x thresholds) to their final values;
+    ``source`` the flat ``p_source`` codes (:func:`screening.solvers.schema.probability_source_attributes`),
+    ``answer`` the flat ``answer_quantity`` codes (:class:`~screening.core.status.AnswerQuantity`)."""
+    for name, value in values.items():
+        value = np.asarray(value, dtype=float)
+        res.write(name, Ellipsis, value.reshape(study.shape + value.shape[1:]))
+    at = res.grid_coordinates()
+    res.add([Variable(name, "i1", study.dims, np.asarray(codes, dtype=np.int8).reshape(study.shape), False, at)
+             for name, codes in (("p_source", source), ("answer_quantity", answer))])
 
 
 def probabilities_line(counts):

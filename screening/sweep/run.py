@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import math
 import os
 import shutil
 import sys
@@ -45,8 +46,9 @@ from pathlib import Path
 import numpy as np
 
 from screening._version import __version__
-from screening.core.status import PointStatus, Trust
+from screening.core.status import PointStatus, SpotStatus, Trust
 from screening.sweep import _submit, execution
+from screening.sweep.execution import SPOT_HISTORIES, SPOT_LINEAR
 from screening.sweep.connect import run_on_workers
 from screening.sweep.accuracy import Stage, escalate
 from screening.io.errors import SweepError, exception_line, is_write_error, write_failure_reason
@@ -56,7 +58,8 @@ from screening.sweep.interrupt import interruptible, raise_if_interrupted, shiel
 from screening.core.progress import Progress
 from screening.io.reader import result_key, verify_result
 from screening.io.store import PartialStore
-from screening.io.writer import COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes
+from screening.io.writer import (COMPLEVEL, ResultFile, check_output_path, region_variables, result_attributes,
+                                 Variable)
 from screening.io._zarr_store import foreign_files, remove_store, write_completion_mark
 from screening.io.zarrfile import is_zarr_path, zarr_batch_size
 
@@ -395,7 +398,7 @@ class _SweepRun:
         else:
             if save:
                 self.store.save_batch(batch, part)
-            self.result.write_batch(batch, part)
+            write_batch(self.result, self.study, batch, part)
         self.write_time += time.perf_counter() - start
 
     def _write_failed(self, batch):
@@ -403,8 +406,8 @@ class _SweepRun:
         start = time.perf_counter()
         if self.target is not None:
             self.store.forget_marker(batch)
-        self.result.write_batch(batch, execution.failed_result(batch.size, self.study.times.size,
-                                                               self.study.output.stored, self.study.fragility))
+        write_batch(self.result, self.study, batch, execution.failed_result(
+            batch.size, self.study.times.size, self.study.output.stored, self.study.fragility))
         self.write_time += time.perf_counter() - start
 
     def _linearization(self, batches):
@@ -528,7 +531,7 @@ class _SweepRun:
                     raise_if_interrupted()
             finally:
                 self.client.unsubscribe_topic(topic)
-        self.result.write_spots(spots, results, failed, spec)
+        write_spots(self.result, study, spots, results, failed, spec)
         self.spot_runs = (spots, results)
         return len(spots)
 
@@ -596,3 +599,84 @@ class _SweepRun:
         with open(self.store.building, "rb") as fh:
             os.fsync(fh.fileno())
         os.replace(self.store.building, self.out)
+
+
+def write_batch(result, study, batch, part):
+    """Write the arrays ``part`` of ``batch`` into its region of ``result`` (by the client) and keep its summary."""
+    _submit.write_region(result.format, study.shape, study.output.stored, batch, part)
+    result.written(batch.size if study.output.stored else 0)
+    result.record(batch, part)
+
+
+def write_spots(result, study, spots, results, failed, spec):
+    """Write the spot checks into ``result`` on dimension ``spot`` (``spots``: grid index tuples; ``results``:
+    the dicts of :func:`~screening.sweep.execution.spot_task`; ``failed``: flags)."""
+    coords = []
+    for axis, dim in enumerate(study.dims):
+        idx = np.array([s[axis] for s in spots])
+        if dim == "case":
+            coords += [Variable("spot_case", "i4", ("spot",), idx.astype(np.int32), False, compress=False),
+                       Variable("spot_case_name", str, ("spot",), np.array([study.cases[i].name for i in idx],
+                                                                           dtype=object), None, compress=False)]
+        else:
+            coords.append(Variable(f"spot_{dim}", "f8", ("spot",), study.sweeps[dim][idx], False, compress=False))
+    at = " ".join(c.name for c in coords)
+    out = [Variable(f"mcs_{name}", "f8", ("spot", "t"), np.stack([r[name] for r in results]), coordinates=at)
+           for name in SPOT_HISTORIES]
+    out += [Variable(f"spot_{name}", "f8", ("spot", "t"), np.stack([r[f"sl_{name}"] for r in results]),
+                     coordinates=at) for name in study.output.at_spots]          # [output] histories = "spots"
+    out += [Variable(f"mcs_{name}", "i4", ("spot",), np.array([r[name] for r in results], dtype=np.int32), False, at)
+            for name in ("n_overturned", "n_diverged", "n_used")]
+    for name in SPOT_LINEAR:
+        lin = [r[f"sl_{name}"] if f"sl_{name}" in r else result.history(name, s) for r, s in zip(results, spots)]
+        mcs_peak = np.array([np.nanmax(r[name]) if np.any(np.isfinite(r[name])) else np.nan for r in results])
+        out += [Variable(f"mcs_peak_{name}", "f8", ("spot",), mcs_peak, coordinates=at),
+                Variable(f"mcs_rel_error_peak_{name}", "f8", ("spot",),
+                         np.array([relative_peak_error(li, r[name]) for li, r in zip(lin, results)]), coordinates=at)]
+    out += [Variable("sample", "i4", ("sample",), np.arange(spec.samples, dtype=np.int32), False, compress=False),
+            Variable("mcs_peak_abs_theta", "f8", ("spot", "sample"), np.stack([r["peak_abs_theta"] for r in results]),
+                     coordinates=at),
+            Variable("mcs_sample_state", "i1", ("spot", "sample"), np.stack([r["sample_state"] for r in results]),
+                     False, at)]
+    if any("mcs_model" in r for r in results):        # a failed spot check: the flag value none (-1)
+        out.append(Variable("mcs_model", "i1", ("spot",), np.array([r.get("mcs_model", -1) for r in results],
+                                                                    dtype=np.int8), False, at))
+    out.append(Variable("mcs_status", "i1", ("spot",), np.array(
+        [SpotStatus.task_failed if f else SpotStatus.ok for f in failed], dtype=np.int8), False, at))
+    selection = ("auto: the status-ok points with the highest peak_p_uplift (uplift occupancy, where "
+                 "the Gaussian closure is least trustworthy)" if spec.points == "auto"
+                 else "explicit points of the study file")
+    result.add(coords + out, {"spot": len(spots), "sample": spec.samples}, {
+        "mcs_model": spec.model, "mcs_samples": np.int32(spec.samples), "mcs_seed": np.int32(spec.seed),
+        "mcs_selection": selection,
+        "mcs_note": "Monte Carlo statistics over samples that neither overturned nor diverged"})
+
+
+def relative_peak_error(linear, mcs):
+    """``(max_t linear - max_t mcs) / max_t mcs`` over the common output grid; NaN if undefined.
+
+    Parameters
+    ----------
+    linear : array_like
+        The linearization's history (e.g. ``var_theta`` [rad2]) on the output times.
+    mcs : array_like
+        The Monte Carlo history of the same quantity on the same times.
+
+    Returns
+    -------
+    float
+        The relative error of the peak [1]; NaN when either history has no finite value or the
+        Monte Carlo peak is not positive.
+
+    Notes
+    -----
+    .. math:: e = \\frac{\\max_t \\sigma^2_{SL}(t) - \\max_t \\sigma^2_{MC}(t)}{\\max_t \\sigma^2_{MC}(t)}
+
+    (NaN values ignored).
+
+    """
+    linear, mcs = np.asarray(linear, dtype=float), np.asarray(mcs, dtype=float)
+    if not (np.any(np.isfinite(linear)) and np.any(np.isfinite(mcs))):
+        return math.nan
+    ref = np.nanmax(mcs)
+    return float((np.nanmax(linear) - ref) / ref) if ref > 0 else math.nan

@@ -39,7 +39,7 @@ from screening.io.errors import SweepError
 from screening.io.reader import open_result
 from screening.io.store import PartialStore
 from screening.sweep.run import run_sweep
-from screening.io.writer import ResultFile
+from screening.sweep import run as sweep_run
 from screening.solvers.timegrid import output_times
 
 SCREENING = Path(sys.executable).parent / "screening"
@@ -561,19 +561,19 @@ def test_disk_full_while_saving_a_batch_keeps_earlier_batches_and_resumes(client
 def test_netcdf_write_error_keeps_the_saved_batches_and_resumes(client, reference, tmp_path, monkeypatch):
     study = parse_study(GRID)
     out = tmp_path / "hdf.nc"
-    original, written = ResultFile.write_batch, []
+    original, written = sweep_run.write_batch, []
 
-    def write_until_error(self, batch, result):
+    def write_until_error(result, study, batch, part):
         if len(written) == 3:
             raise RuntimeError("NetCDF: HDF error")
-        original(self, batch, result)
+        original(result, study, batch, part)
         written.append(batch.index)
 
-    monkeypatch.setattr(ResultFile, "write_batch", write_until_error)
+    monkeypatch.setattr(sweep_run, "write_batch", write_until_error)
     with pytest.raises(SweepError, match=r"NetCDF: HDF error; the 4 finished batch\(es\) are kept"):
         run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet)
     assert not out.exists()
-    monkeypatch.setattr(ResultFile, "write_batch", original)
+    monkeypatch.setattr(sweep_run, "write_batch", original)
     report = run_sweep(study, out, client=client, batch_size=3, progress=False, log=quiet)
     assert report.n_resumed_batches == 4
     compare_files(reference, out)
@@ -582,10 +582,10 @@ def test_netcdf_write_error_keeps_the_saved_batches_and_resumes(client, referenc
 @pytest.mark.parametrize("error", [RuntimeError("not a disk problem"), ConnectionResetError(errno.ECONNRESET, "reset")],
                          ids=["programming error", "network error"])
 def test_other_errors_are_not_disguised_as_disk_errors(client, tmp_path, monkeypatch, error):
-    def broken(self, batch, result):
+    def broken(result, study, batch, part):
         raise error
 
-    monkeypatch.setattr(ResultFile, "write_batch", broken)
+    monkeypatch.setattr(sweep_run, "write_batch", broken)
     with pytest.raises(type(error)):
         run_sweep(parse_study(GRID), tmp_path / "x.nc", client=client, batch_size=3, progress=False, log=quiet)
 

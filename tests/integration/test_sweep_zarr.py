@@ -58,11 +58,11 @@ def test_the_zarr_result_is_the_netcdf_result(client, tmp_path, text):
 
 def test_workers_write_the_zarr_chunks_and_return_only_summaries(client, tmp_path, monkeypatch):
     """The client never receives the histories of a zarr run: it writes no batch region itself."""
-    from screening.io.writer import ResultFile
+    from screening.sweep import run
 
     study = parse_study(GRID)
     written = []
-    monkeypatch.setattr(ResultFile, "write_batch", lambda self, batch, result: written.append(batch))
+    monkeypatch.setattr(run, "write_batch", lambda result, study, batch, part: written.append(batch))
     run_sweep(study, tmp_path / "w.zarr", client=client, batch_size=5, progress=False, log=quiet)
     assert written == []
     with xr.open_zarr(tmp_path / "w.zarr") as ds:
@@ -122,20 +122,19 @@ def test_disk_full_in_the_zarr_store_keeps_the_marked_batches_and_resumes(client
     kept batches; the same command then resumes."""
     import errno
 
-    from screening.io import writer
     from screening.io.errors import SweepError
 
     study = parse_study(GRID)
     ref = tmp_path / "ref.nc"
     run_sweep(study, ref, client=client, batch_size=5, progress=False, log=quiet)
-    original = writer.write_region
+    original = _submit.write_region
 
     def full_from_batch_2(nc, shape, histories, batch, result):
         if batch.index >= 2:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "full.zarr.partial"))
         original(nc, shape, histories, batch, result)
 
-    monkeypatch.setattr(writer, "write_region", full_from_batch_2)
+    monkeypatch.setattr(_submit, "write_region", full_from_batch_2)
     with pytest.raises(SweepError) as info:
         run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
     message = str(info.value)
@@ -144,7 +143,7 @@ def test_disk_full_in_the_zarr_store_keeps_the_marked_batches_and_resumes(client
     kept = re.search(r"the (\d+) finished batch\(es\) are kept in \S*full\.zarr\.partial", message)
     assert kept is not None and 0 <= int(kept.group(1)) <= 2, message
     assert not (tmp_path / "full.zarr").exists()
-    monkeypatch.setattr(writer, "write_region", original)
+    monkeypatch.setattr(_submit, "write_region", original)
     report = run_sweep(study, tmp_path / "full.zarr", client=client, batch_size=5, progress=False, log=quiet)
     # what was kept is resumed (a batch still running at the failure may have finished since)
     assert int(kept.group(1)) <= report.n_resumed_batches <= 2 and report.n_failed_batches == 0

@@ -21,7 +21,6 @@ import pytest
 #: Modules whose every public function has a full numpydoc docstring with a running example.
 COVERED = [
     "screening.applications.atlas",
-    "screening.applications.atlas_run",
     "screening.analysis.correction",
     "screening.analysis.error_model",
     "screening.analysis.escalation",

@@ -11,8 +11,8 @@ from screening.solvers.schema import SWEEP, TIME, attributes, global_attributes,
 from screening.core.status import PointStatus, SpotStatus
 from screening.io.errors import SweepError
 from screening.sweep.study import parse_study
-from screening.io.writer import (CACHED_CHUNKS, ResultFile, point_chunks, check_output_path, relative_peak_error,
-                                 result_attributes)
+from screening.io.writer import CACHED_CHUNKS, ResultFile, point_chunks, check_output_path, result_attributes
+from screening.sweep.run import relative_peak_error
 
 SPOTS = '[mcs]\npoints = [{case = "soft_kt", S0 = 1e-4}, {case = "hard_white", S0 = 2.4e-3}]\nsamples = 3\n'
 K_SWEPT = GRID.replace("k = 2.89e7", "k = [2.0e7, 2.89e7]")
@@ -88,15 +88,15 @@ def test_per_point_variables_have_bounded_chunks_and_chunk_cache(tmp_path):
 
 
 def test_the_spot_comparison_names_have_one_home():
-    """The linearization histories a spot check is compared against are layout.SPOT_LINEAR: the writer
-    uses that name and spells no copy of the tuple."""
+    """The linearization histories a spot check is compared against are execution.SPOT_LINEAR: the spot
+    checks' writer uses that name and spells no copy of the tuple."""
     import ast
     import inspect
 
-    from screening.io import layout, writer
+    from screening.sweep import execution, run
 
-    tree = ast.parse(inspect.getsource(writer))
+    tree = ast.parse(inspect.getsource(run))
     literals = {tuple(e.value for e in node.elts) for node in ast.walk(tree)
                 if isinstance(node, ast.Tuple) and node.elts and all(isinstance(e, ast.Constant) for e in node.elts)}
-    assert tuple(layout.SPOT_LINEAR) not in literals
-    assert writer.SPOT_LINEAR is layout.SPOT_LINEAR
+    assert tuple(execution.SPOT_LINEAR) not in literals
+    assert run.SPOT_LINEAR is execution.SPOT_LINEAR

@@ -65,9 +65,11 @@ def test_the_zarr_form_opens_to_the_netcdf_form(tmp_path, text):
 
 
 def test_a_region_target_marks_its_batch_with_the_chunk_files(tmp_path):
+    from screening.sweep._submit import write_region
     from screening.sweep.execution import failed_result
     from screening.io.store import PartialStore
     from screening.io.writer import ResultFile, region_variables, result_attributes
+    from screening.io.zarrfile import ZarrFormat
 
     study = parse_study(GRID)
     store = PartialStore(tmp_path / "m.zarr")
@@ -76,7 +78,9 @@ def test_a_region_target_marks_its_batch_with_the_chunk_files(tmp_path):
         ResultFile(store.zarr_building, study, result_attributes(study, "2024", 5), zarr_batch_size=5).close()
         target = store.region_target(study.shape, study.output.stored, region_variables(study))
         batches = plan_batches(study, 5)
-        target.write(batches[1], failed_result(5, study.times.size))
+        fmt = ZarrFormat(target.store, "r+")                 # what a worker does (_submit.solve_and_store_batch)
+        write_region(fmt, target.shape, target.histories, batches[1], failed_result(5, study.times.size))
+        target.mark_done(batches[1], fmt.chunk_files(target.variables, [(slice(1, 2), slice(0, 5))]))
         assert store.marker_ok(batches[1]) and not store.marker_ok(batches[0])
         assert [slab for slab, _, _ in hyperslabs(batches[1].lo, batches[1].hi, study.shape)] == [
             (slice(1, 2), slice(0, 5))]

@@ -13,7 +13,7 @@ from screening.core import condensation
 from screening.solvers.datasets import INTEGRATOR_TEXT
 from screening.solvers.moments import HISTORY_VARIABLES, solve_moments
 from screening.core.status import PointStatus, SampleState, Trust
-from screening.io.layout import SPOT_HISTORIES
+from screening.sweep.execution import SPOT_HISTORIES
 from screening.sweep import execution
 from screening.sweep._submit import failed_spot
 from screening.sweep.execution import failed_result, sample_state, solve_batch

@@ -10,7 +10,7 @@ import pytest
 from screening.solvers.outputs import HISTORY_VARIABLES, client_variables
 from screening.core.status import SampleState
 from screening.sweep import _submit
-from screening.io.layout import SPOT_HISTORIES, SPOT_LINEAR
+from screening.sweep.execution import SPOT_HISTORIES, SPOT_LINEAR
 
 
 def _study(stored, at_spots=()):
@@ -44,10 +44,24 @@ def test_a_refused_batch_fails_with_its_message():
 def test_the_zarr_batch_task_writes_its_region_and_returns_what_the_client_keeps(monkeypatch):
     full = {name: np.arange(3.0) for name in (*client_variables(), "var_theta")}
     monkeypatch.setattr(_submit, "solve_batch", lambda *args: dict(full, args=args))
-    written = []
-    target = SimpleNamespace(write=lambda batch, out: written.append((batch, sorted(out))))
-    kept = _submit.solve_and_store_batch(target, "batch-7", 1, 2)
-    assert written == [("batch-7", sorted(dict(full, args=None)))]
+    written, marked = [], []
+
+    class Store:
+        def __init__(self, path, mode):
+            assert (path, mode) == ("s.zarr", "r+")
+
+        def chunk_files(self, names, slabs):
+            return {"slabs": slabs}
+
+    monkeypatch.setattr(_submit, "ZarrFormat", Store)
+    monkeypatch.setattr(_submit, "write_region", lambda fmt, shape, histories, batch, out: written.append(
+        (batch, sorted(out))))
+    batch = SimpleNamespace(index=7, lo=0, hi=3)
+    target = SimpleNamespace(store="s.zarr", shape=(3,), histories=("var_theta",), variables=("var_theta",),
+                             mark_done=lambda batch, files: marked.append((batch, files)))
+    kept = _submit.solve_and_store_batch(target, batch, 1, 2)
+    assert written == [(batch, sorted(dict(full, args=None)))]
+    assert marked == [(batch, {"slabs": [(slice(0, 3),)]})]          # marked after its region is written
     assert sorted(kept) == sorted(client_variables())
 
 

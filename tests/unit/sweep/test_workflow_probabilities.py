@@ -38,8 +38,14 @@ class Result(dict):
     def read(self, name):
         return np.asarray(self[name], dtype=float)
 
-    def write_probabilities(self, values, source, answer):
-        self.update(values, p_source=np.asarray(source), answer_quantity=np.asarray(answer))
+    def write(self, name, region, values):
+        self[name] = np.asarray(values)
+
+    def add(self, variables):
+        self.update({v.name: np.asarray(v.values) for v in variables})
+
+    def grid_coordinates(self):
+        return ""
 
     def set_attrs(self, **attrs):
         self.update(attrs)

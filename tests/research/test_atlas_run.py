@@ -1,12 +1,17 @@
 """The shipped error atlas: reproducible in structure from the assembler, its points from the campaign."""
 
+import sys
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from screening.applications import atlas, atlas_run
+from screening.applications import atlas
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))        # research/ lives beside the package
+from research import atlas_run  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -103,7 +108,7 @@ def test_a_campaign_resumed_from_the_file_keeps_its_rows(shipped, tmp_path):
     import os
 
     threads = os.environ.get("NUMBA_NUM_THREADS")
-    sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "benchmarks"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
     import error_atlas
     # importing the campaign script leaves the environment alone (numba refuses a thread count that changes
     # under its launched pool, which failed every later compilation of the test session)
