@@ -118,7 +118,9 @@ def energy_balance(case, n, model):
             before = e[c - k] + w[c + k] - w[c - k]
             if before > 0:
                 eta = math.exp(np.interp(math.log(amp), log_amp, log_eta))
-                transfers.append((amp / alpha, e[c + k] / before, eta))
+                a_eq = math.exp(np.interp(before, v_grid, np.log(grid)))      # V(a_eq) = the energy at the impact
+                eta_eq = math.exp(np.interp(math.log(a_eq), log_amp, log_eta))
+                transfers.append((amp / alpha, e[c + k] / before, eta, before / v_of(amp), eta_eq))
     return np.array(transfers), np.array(halves)
 
 
@@ -136,9 +138,20 @@ def transfers(case, n):
             d = sel[:, 1] - sel[:, 2]
             diffs.append((d.mean(), d.std(ddof=1) / math.sqrt(len(d))))
             cells.append(f"{m} {len(sel)}: {sel[:, 1].mean():.4f} (table {sel[:, 2].mean():.4f})")
-        net = diffs[0][0] - diffs[1][0]
+        net, se = diffs[0][0] - diffs[1][0], math.hypot(diffs[0][1], diffs[1][1])
         print(f"  A/alpha [{lo:g}, {hi:g}): " + "; ".join(cells)
-              + f"; coupled - stiff_bed (each against the table) {net:+.4f} +- {math.hypot(diffs[0][1], diffs[1][1]):.4f}")
+              + f"; coupled - stiff_bed (each against the table) {net:+.4f} +- {se:.4f}")
+    print("  above 0.1 alpha, by the energy at the impact over the half cycle's V(A): coupled - stiff_bed, and "
+          "eta(A_eq) - eta(A) with V(A_eq) = E_impact (the table read at the impact's energy)")
+    for lo, hi in ((0.0, 0.8), (0.8, 1.0), (1.0, 1.2), (1.2, 1.5), (1.5, 2.0), (2.0, 5.0)):
+        sel = {}
+        for m in ("coupled", "stiff_bed"):
+            tr = got[m][0]
+            sel[m] = tr[(tr[:, 0] >= 0.1) & (tr[:, 3] >= lo) & (tr[:, 3] < hi)]
+        c, s = sel["coupled"], sel["stiff_bed"]
+        net = np.mean(c[:, 1] - c[:, 2]) - np.mean(s[:, 1] - s[:, 2])
+        print(f"    E_impact / V(A) [{lo:g}, {hi:g}): {len(c)} transfers, coupled - stiff_bed {net:+.4f}, "
+              f"predicted {np.mean(c[:, 4] - c[:, 2]):+.4f}")
     for m in ("coupled", "stiff_bed"):
         h = got[m][1]
         print(f"  half cycles, {m}: {len(h)}, dissipated / V(A) mean {h[:, 1].mean():+.1e}, "
