@@ -154,7 +154,8 @@ def transfers(case, n):
               f"predicted {np.mean(c[:, 4] - c[:, 2]):+.4f}")
     for m in ("coupled", "stiff_bed"):
         h = got[m][1]
-        print(f"  half cycles, {m}: {len(h)}, dissipated / V(A) mean {h[:, 1].mean():+.1e}, "
+        h = h[h[:, 0] >= BINS[0]]
+        print(f"  half cycles above {BINS[0]:g} alpha, {m}: {len(h)}, dissipated / V(A) mean {h[:, 1].mean():+.1e}, "
               f"largest |.| {np.abs(h[:, 1]).max():.1e}")
 
 
