@@ -344,10 +344,11 @@ def potential(theta, block, foundation, n_pieces=64, order=8):
 # ----------------------------------------------------------------------------- compiled twins
 #: Per-run parameters of the compiled stiff-bed kernel (SI), built by :func:`stiff_record`.
 STIFF = np.dtype([("m", "f8"), ("g", "f8"), ("h", "f8"), ("I_cm", "f8"), ("theta_ul", "f8"),
-                  ("theta_over", "f8"), ("theta_cap", "f8"), ("rate_max", "f8"), ("locate", "f8")])
+                  ("theta_over", "f8"), ("theta_cap", "f8"), ("rate_max", "f8"), ("locate", "f8"),
+                  ("by_rate", "f8")])
 
 
-def stiff_record(block, foundation, locate=True):
+def stiff_record(block, foundation, locate=True, by_rate=False):
     """The :data:`STIFF` record of the compiled stiff-bed kernel.
 
     A 1-element structured array of the block's and bed's scalars the kernel reads (SI), from scalar
@@ -362,12 +363,15 @@ def stiff_record(block, foundation, locate=True):
     locate : bool, optional
         Shorten a step that crosses zero into uplift on the other side to the crossing
         (:class:`screening.solvers.stiff_bed.StiffBedModel`; default True).
+    by_rate : bool, optional
+        Read the transfer table at the rate at the zero crossing instead of the half cycle's amplitude
+        (``StiffBedModel(transfer="impact")``; default False).
 
     Returns
     -------
     numpy.ndarray
         Shape ``(1,)``, dtype :data:`STIFF`: ``m`` [kg], ``g`` [m s-2], ``h`` [m], ``I_cm`` [kg m2],
-        ``theta_ul``, ``theta_over``, ``theta_cap`` [rad], ``rate_max`` [rad s-1], ``locate`` [1 or 0].
+        ``theta_ul``, ``theta_over``, ``theta_cap`` [rad], ``rate_max`` [rad s-1], ``locate``, ``by_rate`` [1 or 0].
 
     Notes
     -----
@@ -382,7 +386,8 @@ def stiff_record(block, foundation, locate=True):
     values = dict(m=float(block.m), g=float(block.g), h=float(block.h), I_cm=float(block.I_cm),
                   theta_ul=float(cubic.uplift_threshold(block, foundation)), theta_over=float(block.slenderness),
                   theta_cap=float(cubic.capacity_angle(block, foundation)),
-                  rate_max=1e3 * math.sqrt(float(block.g) / float(block.h)), locate=1.0 if locate else 0.0)
+                  rate_max=1e3 * math.sqrt(float(block.g) / float(block.h)), locate=1.0 if locate else 0.0,
+                  by_rate=1.0 if by_rate else 0.0)
     for name, value in values.items():
         rec[name] = value
     return rec

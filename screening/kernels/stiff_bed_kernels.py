@@ -160,8 +160,9 @@ def transfer_ratio_jit(log_amp, log_eta, amp):
 def _transfer(sp, log_amp, log_eta, amp, y0, y1):
     """``(theta, theta_dot)`` after a corner transfer of half-cycle amplitude ``amp`` [rad]: the rate scaled by
     ``sqrt(eta)``, and, where the transfer is located, the rotation past zero with it (the crossing, passed in
-    full contact, at the reduced rate)."""
-    r = math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+    full contact, at the reduced rate).  With ``sp.by_rate`` the table's nodes are crossing rates [rad/s] and
+    ``eta`` is read at the rate ``|theta_dot|`` at the crossing (the impact's state) instead of ``amp``."""
+    r = math.sqrt(transfer_ratio_jit(log_amp, log_eta, abs(y1) if sp.by_rate != 0.0 else amp))
     if sp.locate != 0.0:
         y0 *= r
     return y0, y1 * r

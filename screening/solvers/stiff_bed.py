@@ -366,10 +366,43 @@ def transfer_table(block, foundation):
     return _transfer_table_cached(_bed_key(block, foundation))
 
 
+def impact_table(block, foundation):
+    """The bed-derived transfer loss keyed by the state at the impact: the rate at the zero crossing.
+
+    Parameters
+    ----------
+    block : screening.core.model.Block
+        The rigid block (scalar fields, SI).
+    foundation : screening.core.model.Foundation
+        The bed (scalar fields, SI).
+
+    Returns
+    -------
+    log_rate : numpy.ndarray
+        ``log`` of the crossing rate [rad/s] of loss-free rocking from rest at each node of
+        :func:`transfer_table`.
+    log_eta : numpy.ndarray
+        ``log`` of the transfer energy ratio [1] at those nodes (:func:`transfer_table`'s).
+
+    Notes
+    -----
+    The corner impact sees only the state at the impact.  In free rocking from rest at ``A`` the block crosses
+    zero with the energy ``V(A)`` it stored, so with the inertia ``m_0 = I_cm + m h^2`` at ``theta = 0`` its
+    rate there is ``omega(A) = sqrt(2 V(A) / m_0)``: the table's node ``A`` becomes the node ``omega(A)``
+    (``V``: :func:`potential`).  Under a ground motion the half cycle's amplitude and the crossing rate part
+    (the ground pumps energy in or out), and the coupled model's loss follows the rate
+    (``docs/stiff_bed_validity.md``, "Why the bust on mortar fails").
+    """
+    log_amp, log_eta, *_ = transfer_table(block, foundation)
+    m0 = float(block.m_sdof)
+    rates = [math.sqrt(2.0 * potential(a, block, foundation) / m0) for a in np.exp(log_amp)]
+    return np.log(np.asarray(rates)), log_eta
+
+
 # ----------------------------------------------------------------------------- the registered model
 class StiffIntegrator(ChunkIntegrator):
-    def __init__(self, block, foundation, log_amp, log_eta, locate=True):
-        self.sp = stiff_record(block, foundation, locate)
+    def __init__(self, block, foundation, log_amp, log_eta, locate=True, by_rate=False):
+        self.sp = stiff_record(block, foundation, locate, by_rate)
         self.cp = cubic.sdof_record(block, foundation)
         self.log_amp = np.ascontiguousarray(log_amp, dtype=float)
         self.log_eta = np.ascontiguousarray(log_eta, dtype=float)
@@ -402,7 +435,7 @@ class StiffIntegrator(ChunkIntegrator):
         out_z_dot[...] = 0.0
 
 
-TRANSFER_LAWS = ("bed", "housner", "none")
+TRANSFER_LAWS = ("bed", "housner", "none", "impact")
 BANDS = ("rocking", "ground", "full")
 #: The ``"rocking"`` band is this many times the full-contact rocking frequency (at least the ground's band):
 #: on the statue's k = 1e11 bed the ground's band alone (25 Hz) moves P(|theta| > 0.05 atan(b/h)) by 0.12
@@ -414,7 +447,9 @@ class StiffBedModel(MonteCarloModel):
     """The stiff-bed model (module docstring).
 
     ``transfer``: ``"bed"`` (the bed-derived table, :func:`transfer_table`), ``"housner"``
-    (Housner's ``r^2`` per transfer) or ``"none"`` (no transfer loss; used to build the table).
+    (Housner's ``r^2`` per transfer), ``"none"`` (no transfer loss; used to build the table) or ``"impact"``
+    (the bed-derived table read at the impact: at the rate at the zero crossing, :func:`impact_table`, instead
+    of the half cycle's amplitude; the reference kernel only).
     ``band``: the band of the Monte Carlo ground motions the model reads (the same samples as the
     other models, same seed and components, low-passed on a coarser grid): ``"rocking"`` (the default)
     ``max(ROCKING_BAND_FACTOR w_r, ground band)`` (``w_r`` the full-contact rocking frequency: in full
@@ -487,11 +522,14 @@ class StiffBedModel(MonteCarloModel):
         if self.transfer == "housner":
             return np.array([math.log(tu), math.log(1.000001 * tu)]), \
                 np.array([0.0, 2.0 * math.log(housner_restitution(block))])
+        if self.transfer == "impact":
+            return impact_table(block, foundation)
         log_amp, log_eta, *_ = transfer_table(block, foundation)
         return log_amp, log_eta
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
-        return StiffIntegrator(block, foundation, *self.table(block, foundation), locate=self.locate)
+        return StiffIntegrator(block, foundation, *self.table(block, foundation), locate=self.locate,
+                               by_rate=self.transfer == "impact")
 
     def uplift_threshold(self, block, foundation, condensation):
         return float(cubic.uplift_threshold(block, foundation)), {"theta_ul_condensation": "cubic"}

@@ -158,6 +158,9 @@ class FastStiffBedModel(StiffBedModel):
                    "(docs/stiff_bed.md, 'Exact-contact sampler')")
 
     def __init__(self, transfer="bed", band="rocking"):
+        if transfer == "impact":
+            raise ValueError("parameter 'transfer' of the exact-contact sampler must be one of ('bed', 'housner', "
+                             "'none') (got 'impact': the reference model, StiffBedModel, reads it)")
         super().__init__(transfer=transfer, band=band, locate=True)
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):

@@ -125,6 +125,64 @@ def test_bed_derived_loss_grows_with_amplitude_and_with_stiffness_towards_housne
     assert last[0] > last[1] > last[2] > sb.housner_restitution(STATUE) ** 2
 
 
+def test_impact_table_keys_the_bed_table_by_the_rate_of_free_rocking_at_the_crossing():
+    """The node rates of transfer="impact" against the rate the loss-free model reaches at its first zero
+    crossing from rest at each node amplitude (simulated, linear interpolation at the crossing): within
+    0.5 % (the model's own contact damping over a quarter cycle, below 1 % of the energy past 0.01 alpha);
+    the energy ratios are the bed table's."""
+    bed = _bed(STATUE, 1e10)
+    log_amp, log_eta, *_ = sb.transfer_table(STATUE, bed)
+    log_rate, log_eta_impact = sb.impact_table(STATUE, bed)
+    assert np.array_equal(log_eta_impact, log_eta)
+    assert np.all(np.diff(log_rate) > 0)
+    alpha = STATUE.slenderness
+    for amp in np.exp(log_amp)[np.exp(log_amp) > 0.01 * alpha]:
+        t_end = sb._half_period_estimate(amp, STATUE, bed) / 3
+        t, theta, theta_dot = _free(StiffBedModel(transfer="none"), STATUE, bed, amp, t_end, output_dt=t_end / 40000)
+        i = np.flatnonzero(np.sign(theta[1:]) != np.sign(theta[:-1]))[0]
+        s_ = theta[i] / (theta[i] - theta[i + 1])
+        rate = abs(theta_dot[i] + s_ * (theta_dot[i + 1] - theta_dot[i]))
+        assert rate == pytest.approx(math.exp(np.interp(math.log(amp), log_amp, log_rate)), rel=5e-3), amp
+
+
+@pytest.mark.parametrize("pumped", [1.0, 2.0])
+def test_impact_transfer_reads_the_loss_at_the_rate_the_block_hits_with(pumped):
+    """A block started at A = 0.05 alpha towards zero with the kinetic energy (pumped - 1) V(A) (as a ground
+    motion pumps a half cycle) hits with the energy pumped V(A): the rate ratio squared across the crossing is
+    eta read at that rate (numpy interpolation of impact_table) with transfer="impact", at A with "bed"
+    (transfer_table) -- equal when nothing was pumped, 1.5 % apart at twice the energy; within 2e-3."""
+    bed = _bed(STATUE, 1e10)
+    alpha = STATUE.slenderness
+    amp = 0.05 * alpha
+    m_eff = float(sb.rocking_coefficients(amp, STATUE, bed)[0])
+    rate0 = -math.sqrt(2.0 * (pumped - 1.0) * sb.potential(amp, STATUE, bed) / m_eff)
+    log_amp, log_eta, *_ = sb.transfer_table(STATUE, bed)
+    log_rate, _ = sb.impact_table(STATUE, bed)
+    got = {}
+    for transfer in ("bed", "impact"):
+        ds = screening.simulate(STATUE, bed, np.zeros(3), dt=0.1, t_end=0.3, theta0=amp, theta_dot0=rate0,
+                                model=StiffBedModel(transfer=transfer), output_dt=2e-6)
+        theta, theta_dot = ds.theta.values, ds.theta_dot.values
+        i = np.flatnonzero(np.sign(theta[1:]) != np.sign(theta[:-1]))[0]
+        before, after = abs(theta_dot[i - 1]), abs(theta_dot[i + 2])
+        got[transfer] = (after / before) ** 2
+        expected = (math.exp(np.interp(math.log(before), log_rate, log_eta)) if transfer == "impact"
+                    else math.exp(np.interp(math.log(amp), log_amp, log_eta)))
+        assert got[transfer] == pytest.approx(expected, abs=2e-3), transfer
+    if pumped == 1.0:
+        assert got["impact"] == pytest.approx(got["bed"], abs=2e-3)
+    else:
+        assert got["bed"] - got["impact"] > 0.01
+
+
+def test_the_exact_contact_sampler_refuses_the_impact_transfer_naming_the_parameter():
+    from screening.solvers.stiff_bed_fast import FastStiffBedModel
+
+    with pytest.raises(ValueError, match="parameter 'transfer'") as err:
+        FastStiffBedModel(transfer="impact")
+    assert "\n" not in str(err.value)
+
+
 # ----------------------------------------------------------------------------- partial-contact rocking
 @pytest.mark.parametrize("ratio", [0.85, 0.9, 0.93])
 def test_partial_contact_rocking_under_a_sine_burst_against_the_coupled_model(ratio):
