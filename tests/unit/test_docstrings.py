@@ -150,9 +150,6 @@ def test_the_user_api_holds_the_top_level_names_and_the_api_pages():
     assert ds.python_function(ds.sections) not in USER
 
 
-#: Functions documented in modules not yet covered whole (module -> names).
-PARTIAL = {
-}
 
 
 def _run_examples(module, functions):
@@ -164,16 +161,6 @@ def _run_examples(module, functions):
             runner.run(test)
     result = runner.summarize(verbose=False)
     return result.attempted, result.failed
-
-
-@pytest.mark.parametrize("module_name", sorted(PARTIAL))
-def test_the_documented_functions_of_partly_covered_modules_are_complete_and_their_examples_run(module_name):
-    module, functions = _functions(module_name)
-    chosen = {name: functions[name] for name in PARTIAL[module_name]}
-    incomplete = _problems(chosen)
-    assert not incomplete, incomplete
-    attempted, failed = _run_examples(module, chosen)
-    assert failed == 0, "a doctest failed (its output is printed above)"
 
 
 def _functions(module_name):
