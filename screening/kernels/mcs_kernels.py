@@ -526,6 +526,20 @@ def _exact_double_step(prop, p, x0, x1, x2, x3, c, d, m1, m3):
 
 
 @numba.njit(cache=True, inline="always")
+def _exact_outcome(prop, xe, err_v, quiet, y0, y1, y2, y3, s0, s1, s2, s3, rtol, census, row):
+    """``(n, ok)``: the state at the end of an exact step (deviation ``xe`` from rest, error estimate ``err_v``) and
+    whether it is taken (``quiet`` and the error within the explicit pair's norm); a refusal counted in the
+    census."""
+    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], prop[32, 2] + xe[2], prop[32, 3] + xe[3]
+    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol,
+                      4.0)
+    ok = quiet and err <= 1.0
+    if census.shape[0] > row and not ok:
+        census[row, 4 if not quiet else 5] += 1
+    return (n0, n1, n2, n3), ok
+
+
+@numba.njit(cache=True, inline="always")
 def _hermite_data(row, acc, acc_dot, dt, j):
     """``(u_j, dt u'_j, u_{j+1}, dt u'_{j+1})`` of the horizontal input of sample ``row``."""
     return (acc[0][row, j], acc_dot[0][row, j] * dt, acc[0][row, j + 1], acc_dot[0][row, j + 1] * dt)
@@ -594,23 +608,15 @@ def _sample_loop(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_
                     xe, err_v, rem, quiet = _exact_double_step(prop, p, x0, x1, x2, x3, c,
                                                               _hermite_data(row, acc, acc_dot, dt_grid, j_grid + 1),
                                                               m1, m3)
-                    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
-                    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
-                                      s0, s1, s2, s3, rtol, 4.0)
-                    ok = quiet and err <= 1.0
-                    if census.shape[0] > row and not ok:
-                        census[row, 4 if not quiet else 5] += 1
+                    (n0, n1, n2, n3), ok = _exact_outcome(prop, xe, err_v, quiet, y0, y1, y2, y3, s0, s1, s2, s3,
+                                                          rtol, census, row)
                 if not ok:
                     span = 1
                     u_mid = 0.5 * (c[0] + c[2]) + 0.125 * (c[1] - c[3])
                     xe, err_v, rem, quiet = _exact_step(prop, p, x0, x1, x2, x3, c[0], c[1], c[2], c[3], u_mid, c[2],
                                                        m1, m3)
-                    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
-                    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
-                                      s0, s1, s2, s3, rtol, 4.0)
-                    ok = quiet and err <= 1.0
-                    if census.shape[0] > row and not ok:
-                        census[row, 4 if not quiet else 5] += 1
+                    (n0, n1, n2, n3), ok = _exact_outcome(prop, xe, err_v, quiet, y0, y1, y2, y3, s0, s1, s2, s3,
+                                                          rtol, census, row)
                 if ok:
                     t_end = (j_grid + span) * dt_grid
                     peak = step_peak(peak, span * dt_grid, y0, y1, n0, n1)
