@@ -277,9 +277,9 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
                      rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census):
     """Integrate one sample over ``t_out``; fill row ``row`` of the output arrays.
 
-    ``models[0].integrator`` picks the method, once per sample: :func:`integrate_sample_dopri`
-    (explicit), :func:`integrate_sample_rodas` (linearly implicit) or :func:`integrate_sample_exact`
-    (explicit, exact steps in quiet full contact).  After overturning or divergence the remaining outputs are NaN.
+    ``models[0].integrator`` picks the method (:func:`_sample_loop`): the explicit Dormand-Prince 5(4) pair
+    (``"dopri"``, the reference), the linearly implicit RODAS 4(3) pair (``"rodas"``) or the explicit pair with
+    exact steps in quiet full contact (``"exact"``).  After overturning or divergence the remaining outputs are NaN.
 
     Parameters
     ----------
@@ -332,25 +332,25 @@ def integrate_sample(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid
     Notes
     -----
     The equations are the coupled eqs. (7)-(8) in [1]_ or the condensed eq. (22)
-    (:mod:`screening.kernels.mcs_equations`).  Compiling the kernel takes tens of seconds, so the
-    example shows its interface; ``tests/unit/kernels/test_mcs_kernels.py`` holds it against scipy.
+    (:mod:`screening.kernels.mcs_equations`).  The explicit pair [2]_ with the PI controller of [3]_; RODAS
+    [4]_ solves six linear systems with ``I / (gamma h) - J`` a step (``J`` by forward differences at the step's
+    start, exact ``df/dt`` from the input's rate; the kinematic rows reduce each solve to 2 x 2); the exact
+    steps are ETD2 [5]_ on the full-contact linearization.  All three share the error norm, the output
+    landing, the status checks and the returns.  ``tests/unit/kernels/test_mcs_kernels.py`` holds them against
+    scipy and each other.
 
     References
     ----------
     .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` (the two integrators).
+    .. [2] [dormand1980] in the bibliography.
+    .. [3] [hairer1993] in the bibliography.
+    .. [4] E. Hairer and G. Wanner, Solving Ordinary Differential Equations II: Stiff and
+       Differential-Algebraic Problems, 2nd ed., Springer (1996), section IV.7.
+    .. [5] [hochbruck2010] in the bibliography; ``docs/montecarlo_numerics.md`` (the integrators).
     """
-    if models[0].integrator == INTEGRATOR_RODAS:
-        return integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
-                                      y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
-                                      out_z_dot, out_uplift, prop, census)
-    if models[0].integrator == INTEGRATOR_EXACT and model == MODEL_COUPLED and prop.shape[0] > 0:
-        return integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
-                                      y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
-                                      out_z_dot, out_uplift, prop, census)
-    return integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models,
-                                  y_init, scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z,
-                                  out_z_dot, out_uplift, prop, census)
+    return _sample_loop(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale, rtol,
+                        h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census,
+                        models[0].integrator)
 
 
 @numba.njit(cache=True, inline="always")
@@ -399,91 +399,6 @@ def _dopri_stages(model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t,
     e2 = h * (_E1 * k1_2 + _E3 * k3_2 + _E4 * k4_2 + _E5 * k5_2 + _E6 * k6_2 + _E7 * k7_2)
     e3 = h * (_E1 * k1_3 + _E3 * k3_3 + _E4 * k4_3 + _E5 * k5_3 + _E6 * k6_3 + _E7 * k7_3)
     return (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end
-
-
-@numba.njit(cache=True)
-def integrate_sample_dopri(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
-                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census):
-    """:func:`integrate_sample` by the explicit Dormand–Prince 5(4) pair (the reference integrator).
-
-    FSAL, Hairer's PI step control, the error measured component-wise against
-    ``atol_i + rtol |y_i|``; steps land exactly on the output instants.
-
-    Parameters
-    ----------
-    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
-        As :func:`integrate_sample`.
-    rtol, h_max, max_steps : float, float, int
-        As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
-        As :func:`integrate_sample`: the outputs, row ``row`` written in place (``prop`` not read).
-
-    Returns
-    -------
-    tuple
-        As :func:`integrate_sample`: ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected,
-        h_min_accepted [s])``.
-
-    Notes
-    -----
-    The Dormand-Prince 5(4) pair [1]_ with the PI controller of [2]_ on the equations of
-    :mod:`screening.kernels.mcs_equations`.  Compiling the kernel takes tens of seconds, so the
-    example shows its interface.
-
-    References
-    ----------
-    .. [1] [dormand1980] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hairer1993] in the bibliography, ``docs/bibliography.md``.
-    """
-    cond = conds[0]
-    p = models[0]
-    n_out = t_out.shape[0]
-    y0, y1, y2, y3 = y_init[0], y_init[1], y_init[2], y_init[3]
-    s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
-    n_comp = 4.0 if model == MODEL_COUPLED else 2.0
-    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
-        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-    log_err_old = dopri.LOG_ERR_START
-    k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, ground_input(row, acc, acc_dot, dt_grid, t), p)
-    h = min(1e-4, h_max)
-    rejected = False
-    while i_out < n_out:
-        if n_acc + n_rej >= max_steps:
-            status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
-            break
-        t_next = t_out[i_out]
-        h, h_proposed, landing = _landing(t, h, h_max, t_next)
-        (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end = _dopri_stages(
-            model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, k1_0, k1_1, k1_2, k1_3, p)
-        err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
-        if not err <= 1.0:                                  # rejected (or not finite)
-            n_rej += 1
-            rejected = True
-            h, reason = _shrink(err, h, dopri.rejected_step_factor_log(math.log(err)) if math.isfinite(err)
-                                else 0.1, h_floor)
-            if reason != REASON_NONE:
-                status = STATUS_DIVERGED
-                break
-            continue
-        # --- accepted step
-        peak = step_peak(peak, h, y0, y1, n0, n1)
-        y0, y1, y2, y3 = n0, n1, n2, n3
-        k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
-        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
-            model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1], census, False)
-        if status != STATUS_OK:
-            break
-        # --- next step size (PI control, Hairer's DOPRI5 constants)
-        fac, log_err = dopri.pi_step_factor(err, log_err_old)
-        if rejected:
-            fac = min(fac, 1.0)
-        rejected = False
-        log_err_old = max(log_err, dopri.LOG_ERR_START)
-        h = _next_step(h, fac, landing, h_proposed, h_max)
-    if not math.isfinite(peak):
-        peak = 0.0
-    return status, reason, peak, n_acc, n_rej, h_min_acc
 
 
 # ----------------------------------------------------------------------------- exact full-contact steps
@@ -611,42 +526,37 @@ def _exact_double_step(prop, p, x0, x1, x2, x3, c, d, m1, m3):
 
 
 @numba.njit(cache=True, inline="always")
+def _exact_outcome(prop, xe, err_v, quiet, y0, y1, y2, y3, s0, s1, s2, s3, rtol, census, row):
+    """``(n, ok)``: the state at the end of an exact step (deviation ``xe`` from rest, error estimate ``err_v``) and
+    whether it is taken (``quiet`` and the error within the explicit pair's norm); a refusal counted in the
+    census."""
+    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], prop[32, 2] + xe[2], prop[32, 3] + xe[3]
+    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol,
+                      4.0)
+    ok = quiet and err <= 1.0
+    if census.shape[0] > row and not ok:
+        census[row, 4 if not quiet else 5] += 1
+    return (n0, n1, n2, n3), ok
+
+
+@numba.njit(cache=True, inline="always")
 def _hermite_data(row, acc, acc_dot, dt, j):
     """``(u_j, dt u'_j, u_{j+1}, dt u'_{j+1})`` of the horizontal input of sample ``row``."""
     return (acc[0][row, j], acc_dot[0][row, j] * dt, acc[0][row, j + 1], acc_dot[0][row, j + 1] * dt)
 
 
 @numba.njit(cache=True)
-def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
-                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop,
-                           census):
-    """:func:`integrate_sample_dopri` with exact steps over the input's grid intervals in quiet full contact.
+def _sample_loop(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale, rtol, h_max,
+                 max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census, method):
+    """:func:`integrate_sample` by ``method``: one loop, one step bookkeeping for the three integrators.
 
-    At a grid point where the state is far from uplift (:data:`~screening.kernels.mcs_equations.CONTACT_MARGIN`)
-    and no output falls inside, one :func:`_exact_double_step` covers two grid intervals (else one
-    :func:`_exact_step` one) when its error estimate passes the explicit pair's norm and its middle and end stay
-    far from uplift; elsewhere the
-    explicit pair steps, landing on the next grid point while the state is quiet.  After a refused exact step
-    the next try waits 1, 2, 4 or 8 intervals.  Coupled model, no vertical input (else the explicit pair alone).
-
-    Parameters
-    ----------
-    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
-        As :func:`integrate_sample`.
-    rtol, h_max, max_steps : float, float, int
-        As :func:`integrate_sample`.
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
-        As :func:`integrate_sample`.
-
-    Returns
-    -------
-    tuple
-        As :func:`integrate_sample` (exact steps count as accepted steps).
-
-    References
-    ----------
-    .. [1] [hochbruck2010] in the bibliography, ``docs/bibliography.md``.
-    .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` ("Exact steps in full contact").
+    ``INTEGRATOR_DOPRI``: explicit steps; ``INTEGRATOR_RODAS``: linearly implicit steps; ``INTEGRATOR_EXACT``
+    (coupled model, ``prop`` given): explicit steps, and at a grid point where the state is far from uplift
+    (:data:`~screening.kernels.mcs_equations.CONTACT_MARGIN`) and no output falls inside, one
+    :func:`_exact_double_step` over two grid intervals (else one :func:`_exact_step` over one) when its error
+    estimate passes the explicit pair's norm and its middle and end stay far from uplift; the explicit steps land
+    on the next grid point while the state is quiet, and after a refused exact step the next try waits 1, 2, 4
+    or 8 intervals.  No exact steps under a vertical input.
     """
     cond = conds[0]
     p = models[0]
@@ -656,10 +566,20 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
     s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
     t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
         model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-    usable = vertical_row(row, acc[1]) < 0 and abs(prop[35, 0] - dt_grid) <= 1e-12 * dt_grid
+    coupled = model == MODEL_COUPLED
+    n_comp = 4.0 if coupled else 2.0
+    kz = 1.0 if coupled else 0.0
+    implicit = method == INTEGRATOR_RODAS
+    usable = (method == INTEGRATOR_EXACT and coupled and prop.shape[0] > 0 and vertical_row(row, acc[1]) < 0
+              and abs(prop[35, 0] - dt_grid) <= 1e-12 * dt_grid)
     log_err_old = dopri.LOG_ERR_START
     stale = True                    # the explicit pair's first rate is to be evaluated
     k1_0 = k1_1 = k1_2 = k1_3 = 0.0
+    k7_0 = k7_1 = k7_2 = k7_3 = 0.0
+    fresh = True                    # RODAS's f, J, df/dt of the current state are to be evaluated
+    f = (0.0, 0.0, 0.0, 0.0)
+    jac = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ft = (0.0, 0.0)
     h = min(1e-4, h_max)
     rejected = False
     j_grid = 0
@@ -668,7 +588,7 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
     backoff = 1.0
     m_fresh = False                 # remainder at the current grid point known
     m1 = m3 = 0.0
-    y_star2 = prop[32, 2]
+    y_star2 = prop[32, 2] if usable else 0.0
     while i_out < n_out:
         if n_acc + n_rej >= max_steps:
             status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
@@ -688,23 +608,15 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
                     xe, err_v, rem, quiet = _exact_double_step(prop, p, x0, x1, x2, x3, c,
                                                               _hermite_data(row, acc, acc_dot, dt_grid, j_grid + 1),
                                                               m1, m3)
-                    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
-                    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
-                                      s0, s1, s2, s3, rtol, 4.0)
-                    ok = quiet and err <= 1.0
-                    if census.shape[0] > row and not ok:
-                        census[row, 4 if not quiet else 5] += 1
+                    (n0, n1, n2, n3), ok = _exact_outcome(prop, xe, err_v, quiet, y0, y1, y2, y3, s0, s1, s2, s3,
+                                                          rtol, census, row)
                 if not ok:
                     span = 1
                     u_mid = 0.5 * (c[0] + c[2]) + 0.125 * (c[1] - c[3])
                     xe, err_v, rem, quiet = _exact_step(prop, p, x0, x1, x2, x3, c[0], c[1], c[2], c[3], u_mid, c[2],
                                                        m1, m3)
-                    n0, n1, n2, n3 = prop[32, 0] + xe[0], prop[32, 1] + xe[1], y_star2 + xe[2], prop[32, 3] + xe[3]
-                    err = _error_norm(err_v[0], err_v[1], err_v[2], err_v[3], y0, y1, y2, y3, n0, n1, n2, n3,
-                                      s0, s1, s2, s3, rtol, 4.0)
-                    ok = quiet and err <= 1.0
-                    if census.shape[0] > row and not ok:
-                        census[row, 4 if not quiet else 5] += 1
+                    (n0, n1, n2, n3), ok = _exact_outcome(prop, xe, err_v, quiet, y0, y1, y2, y3, s0, s1, s2, s3,
+                                                          rtol, census, row)
                 if ok:
                     t_end = (j_grid + span) * dt_grid
                     peak = step_peak(peak, span * dt_grid, y0, y1, n0, n1)
@@ -712,6 +624,7 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
                     m1, m3 = rem
                     m_fresh = True
                     stale = True
+                    fresh = True
                     landing = t_next <= t_end + 1e-9 * dt_grid
                     t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
                         model, row, span * dt_grid, t, t_next if landing else t_end, landing, i_out, n_acc,
@@ -725,13 +638,9 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
                     continue
                 wait_until = t + (backoff - 0.5) * dt_grid
                 backoff = min(2.0 * backoff, 8.0)
-        # --- an explicit step, landing on the next grid point while quiet
+        # --- an adaptive step, landing on the next grid point while quiet
         at_grid = False
         m_fresh = False
-        if stale:
-            k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3,
-                                          ground_input(row, acc, acc_dot, dt_grid, t), p)
-            stale = False
         target = t_next
         to_grid = False
         if usable and _quiet(prop, p, y0 - prop[32, 0], y1 - prop[32, 1], y2 - y_star2, y3 - prop[32, 3]):
@@ -740,21 +649,41 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
                 target = j_next * dt_grid
                 to_grid = True
         h, h_proposed, landing = _landing(t, h, h_max, target)
-        (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end = _dopri_stages(
-            model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, k1_0, k1_1, k1_2, k1_3, p)
-        err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, 4.0)
+        if implicit:
+            if fresh:
+                f, jac, ft = _rodas_jacobian(model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, y0, y1,
+                                             y2, y3, s0, s1, s2, s3, rtol, p)
+                fresh = False
+            (n0, n1, n2, n3), (e0, e1, e2, e3), acc_end = _rodas_stages(
+                model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, f, jac, ft, kz, p)
+        else:
+            if stale:
+                k1_0, k1_1, k1_2, k1_3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3,
+                                              ground_input(row, acc, acc_dot, dt_grid, t), p)
+                stale = False
+            (n0, n1, n2, n3), (k7_0, k7_1, k7_2, k7_3), (e0, e1, e2, e3), acc_end = _dopri_stages(
+                model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, k1_0, k1_1, k1_2,
+                k1_3, p)
+        err = _error_norm(e0, e1, e2, e3, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
         if not err <= 1.0:                                  # rejected (or not finite)
             n_rej += 1
             rejected = True
-            h, reason = _shrink(err, h, dopri.rejected_step_factor_log(math.log(err)) if math.isfinite(err)
-                                else 0.1, h_floor)
+            if implicit:
+                factor = max(_rodas_factor(err), _ro.FAC_MIN)
+            else:
+                factor = dopri.rejected_step_factor_log(math.log(err)) if math.isfinite(err) else 0.1
+            h, reason = _shrink(err, h, factor, h_floor)
             if reason != REASON_NONE:
                 status = STATUS_DIVERGED
                 break
             continue
         peak = step_peak(peak, h, y0, y1, n0, n1)
         y0, y1, y2, y3 = n0, n1, n2, n3
-        k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
+        fresh = True
+        if implicit:
+            stale = True
+        else:
+            k1_0, k1_1, k1_2, k1_3 = k7_0, k7_1, k7_2, k7_3
         t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
             model, row, h, t, target, landing and not to_grid, i_out, n_acc, h_min_acc, peak, flight_start,
             y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1], census, False)
@@ -764,27 +693,28 @@ def integrate_sample_exact(model, damping_stiffness, conds, row, acc, acc_dot, d
             t = target
             j_grid = int(target / dt_grid + 0.5)
             at_grid = True
-        fac, log_err = dopri.pi_step_factor(err, log_err_old)
+        if implicit:
+            fac = min(max(_rodas_factor(err), _ro.FAC_MIN), _ro.FAC_MAX)
+        else:
+            fac, log_err = dopri.pi_step_factor(err, log_err_old)
+            log_err_old = max(log_err, dopri.LOG_ERR_START)
         if rejected:
             fac = min(fac, 1.0)
         rejected = False
-        log_err_old = max(log_err, dopri.LOG_ERR_START)
         h = _next_step(h, fac, landing, h_proposed, h_max)
     if not math.isfinite(peak):
         peak = 0.0
     return status, reason, peak, n_acc, n_rej, h_min_acc
 
 
-# ----------------------------------------------------------------------------- linearly implicit integrator
-
-
+# ----------------------------------------------------------------------------- linearly implicit steps
 @numba.njit(cache=True)
 def _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32, r0, r1, r2, r3):
     """``u`` of ``(I / e - J) u = r`` for a Jacobian with kinematic rows ``(0, 1, 0, 0)``, ``(0, 0, 0, kz)``.
 
     Rows 0 and 2 give ``u0 = e (r0 + u1)``, ``u2 = e (r2 + kz u3)``; the rest is the 2 x 2 system
     ``[[m11, m13], [m31, m33]] (u1, u3) = (r1 + e (j10 r0 + j12 r2), r3 + e (j30 r0 + j32 r2))``
-    (Cramer's rule; ``m..`` from :func:`integrate_sample_rodas`).
+    (Cramer's rule; ``m..`` from :func:`_rodas_stages`).
     """
     q1 = r1 + e * (j10 * r0 + j12 * r2)
     q3 = r3 + e * (j30 * r0 + j32 * r2)
@@ -794,184 +724,118 @@ def _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32, r0, r1, r2,
     return e * (r0 + u1), u1, e * (r2 + kz * u3), u3
 
 
-@numba.njit(cache=True)
-def integrate_sample_rodas(model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init,
-                           scale, rtol, h_max, max_steps, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census):
-    """:func:`integrate_sample` by the Rosenbrock pair RODAS 4(3) (:mod:`screening.kernels.rodas`).
+@numba.njit(cache=True, inline="always")
+def _rodas_factor(err):
+    """RODAS's step factor after the error ``err`` (order-3 estimate), before clipping."""
+    return _ro.SAFETY * max(err, 1e-10) ** (-_ro.EXPONENT)
 
-    Linearly implicit: each step solves six linear systems with ``I / (gamma h) - J``, ``J`` the
-    Jacobian of the right-hand side at the step's start (forward differences in the state, one
-    evaluation per column; exact ``df/dt`` from the input's rate, :func:`input_gain`).  The
-    kinematic rows of ``J`` reduce each solve to a 2 x 2 system.  Same error norm, output landing,
-    status checks and return values as :func:`integrate_sample_dopri`.
 
-    Parameters
-    ----------
-    model, damping_stiffness, conds, row, acc, acc_dot, dt_grid, t_out, models, y_init, scale : various
-        As :func:`integrate_sample`.
-    rtol, h_max, max_steps : float, float, int
-        As :func:`integrate_sample` (relative tolerance [1], largest step [s], step budget).
-    out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, prop, census : numpy.ndarray
-        As :func:`integrate_sample`: the outputs, row ``row`` written in place (``prop`` not read).
+@numba.njit(cache=True, inline="always")
+def _rodas_jacobian(model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, y0, y1, y2, y3, s0, s1, s2, s3,
+                    rtol, p):
+    """``(f, J, df/dt)`` at the state ``y`` at ``t`` for :func:`_rodas_stages`: the rate (4 floats), rows 1 and 3
+    of the Jacobian (forward differences, one evaluation per column; 8 floats) and the rows 1 and 3 of the exact
+    time derivative from the input's rate (:func:`input_gain`, :func:`vertical_gain`)."""
+    acc_t = ground_input(row, acc, acc_dot, dt_grid, t)
+    f0, f1, f2, f3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc_t, p)
+    d = _ro.JACOBIAN_STEP * max(abs(y0), s0 / rtol)
+    _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0 + d, y1, y2, y3, acc_t, p)
+    j10, j30 = (a1 - f1) / d, (a3 - f3) / d
+    d = _ro.JACOBIAN_STEP * max(abs(y1), s1 / rtol)
+    _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1 + d, y2, y3, acc_t, p)
+    j11, j31 = (a1 - f1) / d, (a3 - f3) / d
+    j12 = j13 = j32 = j33 = 0.0
+    if model == MODEL_COUPLED:
+        d = _ro.JACOBIAN_STEP * max(abs(y2), s2 / rtol)
+        _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2 + d, y3, acc_t, p)
+        j12, j32 = (a1 - f1) / d, (a3 - f3) / d
+        d = _ro.JACOBIAN_STEP * max(abs(y3), s3 / rtol)
+        _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3 + d, acc_t, p)
+        j13, j33 = (a1 - f1) / d, (a3 - f3) / d
+    g1, g3 = input_gain(model, y0, p)
+    v1, v3 = vertical_gain(model, y0, p)
+    rate, rate_v = ground_input_rate(row, acc, acc_dot, dt_grid, t)
+    return ((f0, f1, f2, f3), (j10, j11, j12, j13, j30, j31, j32, j33),
+            (g1 * rate + v1 * rate_v, g3 * rate + v3 * rate_v))
 
-    Returns
-    -------
-    tuple
-        As :func:`integrate_sample`: ``(status, reason, peak_abs_theta [rad], n_accepted, n_rejected,
-        h_min_accepted [s])``.
 
-    Notes
-    -----
-    RODAS, the L-stable Rosenbrock method of order 4 with an embedded order-3 error estimate
-    (``gamma = 0.25``), section IV.7 of [1]_; for beds whose damping makes the contact dynamics stiff
-    (docs/montecarlo_numerics.md).  Compiling the kernel takes tens of seconds, so the example shows
-    its interface.
-
-    References
-    ----------
-    .. [1] E. Hairer and G. Wanner, Solving Ordinary Differential Equations II: Stiff and
-       Differential-Algebraic Problems, 2nd ed., Springer (1996), section IV.7.
-    .. [2] The package's documentation, ``docs/montecarlo_numerics.md`` ("The linearly implicit pair
-       (RODAS 4(3))").
-    """
-    cond = conds[0]
-    p = models[0]
-    n_out = t_out.shape[0]
-    y0, y1, y2, y3 = y_init[0], y_init[1], y_init[2], y_init[3]
-    s0, s1, s2, s3 = scale[0], scale[1], scale[2], scale[3]
-    coupled = model == MODEL_COUPLED
-    n_comp = 4.0 if coupled else 2.0
-    kz = 1.0 if coupled else 0.0
-    t, peak, status, reason, n_acc, n_rej, h_min_acc, flight_start, h_floor, i_out = _start(
-        model, row, t_out, y0, y1, y2, y3, p, out_theta, out_theta_dot, out_z, out_z_dot, out_uplift)
-    h = min(1e-4, h_max)
-    rejected = False
-    fresh = True                    # f, J, df/dt of the current state are still to be evaluated
-    f0 = f1 = f2 = f3 = 0.0
-    j10 = j11 = j12 = j13 = j30 = j31 = j32 = j33 = 0.0
-    ft1 = ft3 = 0.0
-    while i_out < n_out:
-        if n_acc + n_rej >= max_steps:
-            status, reason = STATUS_DIVERGED, REASON_STEP_BUDGET
-            break
-        if fresh:
-            acc_t = ground_input(row, acc, acc_dot, dt_grid, t)
-            f0, f1, f2, f3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3, acc_t, p)
-            d = _ro.JACOBIAN_STEP * max(abs(y0), s0 / rtol)
-            _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0 + d, y1, y2, y3, acc_t, p)
-            j10, j30 = (a1 - f1) / d, (a3 - f3) / d
-            d = _ro.JACOBIAN_STEP * max(abs(y1), s1 / rtol)
-            _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1 + d, y2, y3, acc_t, p)
-            j11, j31 = (a1 - f1) / d, (a3 - f3) / d
-            if coupled:
-                d = _ro.JACOBIAN_STEP * max(abs(y2), s2 / rtol)
-                _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2 + d, y3, acc_t, p)
-                j12, j32 = (a1 - f1) / d, (a3 - f3) / d
-                d = _ro.JACOBIAN_STEP * max(abs(y3), s3 / rtol)
-                _, a1, _, a3 = _rhs(model, damping_stiffness, cond, y0, y1, y2, y3 + d, acc_t, p)
-                j13, j33 = (a1 - f1) / d, (a3 - f3) / d
-            g1, g3 = input_gain(model, y0, p)
-            v1, v3 = vertical_gain(model, y0, p)
-            rate, rate_v = ground_input_rate(row, acc, acc_dot, dt_grid, t)
-            ft1, ft3 = g1 * rate + v1 * rate_v, g3 * rate + v3 * rate_v
-            fresh = False
-        t_next = t_out[i_out]
-        h, h_proposed, landing = _landing(t, h, h_max, t_next)
-        e = _ro.GAMMA * h
-        gi = 1.0 / e
-        m11 = gi - j11 - e * j10
-        m13 = -j13 - e * kz * j12
-        m31 = -j31 - e * j30
-        m33 = gi - j33 - e * kz * j32
-        hi = 1.0 / h
-        # --- stage 1
-        u10, u11, u12, u13 = _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
-                                               f0, f1 + _ro.D1 * h * ft1, f2, f3 + _ro.D1 * h * ft3)
-        # --- stage 2
-        a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C2 * h)
-        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, y0 + _ro.A21 * u10, y1 + _ro.A21 * u11,
-                              y2 + _ro.A21 * u12, y3 + _ro.A21 * u13, a, p)
-        u20, u21, u22, u23 = _rosenbrock_solve(
-            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
-            g0 + hi * _ro.G21 * u10, g1 + hi * _ro.G21 * u11 + _ro.D2 * h * ft1,
-            g2 + hi * _ro.G21 * u12, g3 + hi * _ro.G21 * u13 + _ro.D2 * h * ft3)
-        # --- stage 3
-        a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C3 * h)
-        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
-                              y0 + _ro.A31 * u10 + _ro.A32 * u20, y1 + _ro.A31 * u11 + _ro.A32 * u21,
-                              y2 + _ro.A31 * u12 + _ro.A32 * u22, y3 + _ro.A31 * u13 + _ro.A32 * u23, a, p)
-        u30, u31, u32, u33 = _rosenbrock_solve(
-            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
-            g0 + hi * (_ro.G31 * u10 + _ro.G32 * u20),
-            g1 + hi * (_ro.G31 * u11 + _ro.G32 * u21) + _ro.D3 * h * ft1,
-            g2 + hi * (_ro.G31 * u12 + _ro.G32 * u22),
-            g3 + hi * (_ro.G31 * u13 + _ro.G32 * u23) + _ro.D3 * h * ft3)
-        # --- stage 4
-        a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C4 * h)
-        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
-                              y0 + _ro.A41 * u10 + _ro.A42 * u20 + _ro.A43 * u30,
-                              y1 + _ro.A41 * u11 + _ro.A42 * u21 + _ro.A43 * u31,
-                              y2 + _ro.A41 * u12 + _ro.A42 * u22 + _ro.A43 * u32,
-                              y3 + _ro.A41 * u13 + _ro.A42 * u23 + _ro.A43 * u33, a, p)
-        u40, u41, u42, u43 = _rosenbrock_solve(
-            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
-            g0 + hi * (_ro.G41 * u10 + _ro.G42 * u20 + _ro.G43 * u30),
-            g1 + hi * (_ro.G41 * u11 + _ro.G42 * u21 + _ro.G43 * u31) + _ro.D4 * h * ft1,
-            g2 + hi * (_ro.G41 * u12 + _ro.G42 * u22 + _ro.G43 * u32),
-            g3 + hi * (_ro.G41 * u13 + _ro.G42 * u23 + _ro.G43 * u33) + _ro.D4 * h * ft3)
-        # --- stage 5 (at t + h)
-        acc_end = ground_input(row, acc, acc_dot, dt_grid, t + h)
-        v0 = y0 + _ro.A51 * u10 + _ro.A52 * u20 + _ro.A53 * u30 + _ro.A54 * u40
-        v1 = y1 + _ro.A51 * u11 + _ro.A52 * u21 + _ro.A53 * u31 + _ro.A54 * u41
-        v2 = y2 + _ro.A51 * u12 + _ro.A52 * u22 + _ro.A53 * u32 + _ro.A54 * u42
-        v3 = y3 + _ro.A51 * u13 + _ro.A52 * u23 + _ro.A53 * u33 + _ro.A54 * u43
-        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, v0, v1, v2, v3, acc_end, p)
-        u50, u51, u52, u53 = _rosenbrock_solve(
-            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
-            g0 + hi * (_ro.G51 * u10 + _ro.G52 * u20 + _ro.G53 * u30 + _ro.G54 * u40),
-            g1 + hi * (_ro.G51 * u11 + _ro.G52 * u21 + _ro.G53 * u31 + _ro.G54 * u41),
-            g2 + hi * (_ro.G51 * u12 + _ro.G52 * u22 + _ro.G53 * u32 + _ro.G54 * u42),
-            g3 + hi * (_ro.G51 * u13 + _ro.G52 * u23 + _ro.G53 * u33 + _ro.G54 * u43))
-        # --- stage 6 (at t + h): its increment is the error estimate
-        v0 += u50
-        v1 += u51
-        v2 += u52
-        v3 += u53
-        g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, v0, v1, v2, v3, acc_end, p)
-        u60, u61, u62, u63 = _rosenbrock_solve(
-            m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
-            g0 + hi * (_ro.G61 * u10 + _ro.G62 * u20 + _ro.G63 * u30 + _ro.G64 * u40 + _ro.G65 * u50),
-            g1 + hi * (_ro.G61 * u11 + _ro.G62 * u21 + _ro.G63 * u31 + _ro.G64 * u41 + _ro.G65 * u51),
-            g2 + hi * (_ro.G61 * u12 + _ro.G62 * u22 + _ro.G63 * u32 + _ro.G64 * u42 + _ro.G65 * u52),
-            g3 + hi * (_ro.G61 * u13 + _ro.G62 * u23 + _ro.G63 * u33 + _ro.G64 * u43 + _ro.G65 * u53))
-        n0, n1, n2, n3 = v0 + u60, v1 + u61, v2 + u62, v3 + u63
-        err = _error_norm(u60, u61, u62, u63, y0, y1, y2, y3, n0, n1, n2, n3, s0, s1, s2, s3, rtol, n_comp)
-        fac = _ro.SAFETY * max(err, 1e-10) ** (-_ro.EXPONENT)
-        if not err <= 1.0:                                  # rejected (or not finite)
-            n_rej += 1
-            rejected = True
-            h, reason = _shrink(err, h, max(fac, _ro.FAC_MIN), h_floor)
-            if reason != REASON_NONE:
-                status = STATUS_DIVERGED
-                break
-            continue
-        # --- accepted step
-        peak = step_peak(peak, h, y0, y1, n0, n1)
-        y0, y1, y2, y3 = n0, n1, n2, n3
-        fresh = True
-        t, i_out, n_acc, h_min_acc, peak, status, reason, flight_start = _accept(
-            model, row, h, t, t_next, landing, i_out, n_acc, h_min_acc, peak, flight_start, y0, y1, y2, y3, p,
-            out_theta, out_theta_dot, out_z, out_z_dot, out_uplift, acc_end[1], census, False)
-        if status != STATUS_OK:
-            break
-        fac = min(max(fac, _ro.FAC_MIN), _ro.FAC_MAX)
-        if rejected:
-            fac = min(fac, 1.0)
-        rejected = False
-        h = _next_step(h, fac, landing, h_proposed, h_max)
-    if not math.isfinite(peak):
-        peak = 0.0
-    return status, reason, peak, n_acc, n_rej, h_min_acc
+@numba.njit(cache=True, inline="always")
+def _rodas_stages(model, damping_stiffness, cond, row, acc, acc_dot, dt_grid, t, h, y0, y1, y2, y3, f, jac, ft, kz,
+                  p):
+    """One RODAS step of ``h`` from ``y`` at ``t`` (``f, jac, ft``: :func:`_rodas_jacobian` there; ``kz`` 1 for the
+    coupled model, else 0): ``(n, u6, acc_end)``, the new state, the local error estimate and the ground input at
+    ``t + h``."""
+    f0, f1, f2, f3 = f
+    j10, j11, j12, j13, j30, j31, j32, j33 = jac
+    ft1, ft3 = ft
+    e = _ro.GAMMA * h
+    gi = 1.0 / e
+    m11 = gi - j11 - e * j10
+    m13 = -j13 - e * kz * j12
+    m31 = -j31 - e * j30
+    m33 = gi - j33 - e * kz * j32
+    hi = 1.0 / h
+    # --- stage 1
+    u10, u11, u12, u13 = _rosenbrock_solve(m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+                                           f0, f1 + _ro.D1 * h * ft1, f2, f3 + _ro.D1 * h * ft3)
+    # --- stage 2
+    a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C2 * h)
+    g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, y0 + _ro.A21 * u10, y1 + _ro.A21 * u11,
+                          y2 + _ro.A21 * u12, y3 + _ro.A21 * u13, a, p)
+    u20, u21, u22, u23 = _rosenbrock_solve(
+        m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+        g0 + hi * _ro.G21 * u10, g1 + hi * _ro.G21 * u11 + _ro.D2 * h * ft1,
+        g2 + hi * _ro.G21 * u12, g3 + hi * _ro.G21 * u13 + _ro.D2 * h * ft3)
+    # --- stage 3
+    a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C3 * h)
+    g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
+                          y0 + _ro.A31 * u10 + _ro.A32 * u20, y1 + _ro.A31 * u11 + _ro.A32 * u21,
+                          y2 + _ro.A31 * u12 + _ro.A32 * u22, y3 + _ro.A31 * u13 + _ro.A32 * u23, a, p)
+    u30, u31, u32, u33 = _rosenbrock_solve(
+        m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+        g0 + hi * (_ro.G31 * u10 + _ro.G32 * u20),
+        g1 + hi * (_ro.G31 * u11 + _ro.G32 * u21) + _ro.D3 * h * ft1,
+        g2 + hi * (_ro.G31 * u12 + _ro.G32 * u22),
+        g3 + hi * (_ro.G31 * u13 + _ro.G32 * u23) + _ro.D3 * h * ft3)
+    # --- stage 4
+    a = ground_input(row, acc, acc_dot, dt_grid, t + _ro.C4 * h)
+    g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond,
+                          y0 + _ro.A41 * u10 + _ro.A42 * u20 + _ro.A43 * u30,
+                          y1 + _ro.A41 * u11 + _ro.A42 * u21 + _ro.A43 * u31,
+                          y2 + _ro.A41 * u12 + _ro.A42 * u22 + _ro.A43 * u32,
+                          y3 + _ro.A41 * u13 + _ro.A42 * u23 + _ro.A43 * u33, a, p)
+    u40, u41, u42, u43 = _rosenbrock_solve(
+        m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+        g0 + hi * (_ro.G41 * u10 + _ro.G42 * u20 + _ro.G43 * u30),
+        g1 + hi * (_ro.G41 * u11 + _ro.G42 * u21 + _ro.G43 * u31) + _ro.D4 * h * ft1,
+        g2 + hi * (_ro.G41 * u12 + _ro.G42 * u22 + _ro.G43 * u32),
+        g3 + hi * (_ro.G41 * u13 + _ro.G42 * u23 + _ro.G43 * u33) + _ro.D4 * h * ft3)
+    # --- stage 5 (at t + h)
+    acc_end = ground_input(row, acc, acc_dot, dt_grid, t + h)
+    v0 = y0 + _ro.A51 * u10 + _ro.A52 * u20 + _ro.A53 * u30 + _ro.A54 * u40
+    v1 = y1 + _ro.A51 * u11 + _ro.A52 * u21 + _ro.A53 * u31 + _ro.A54 * u41
+    v2 = y2 + _ro.A51 * u12 + _ro.A52 * u22 + _ro.A53 * u32 + _ro.A54 * u42
+    v3 = y3 + _ro.A51 * u13 + _ro.A52 * u23 + _ro.A53 * u33 + _ro.A54 * u43
+    g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, v0, v1, v2, v3, acc_end, p)
+    u50, u51, u52, u53 = _rosenbrock_solve(
+        m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+        g0 + hi * (_ro.G51 * u10 + _ro.G52 * u20 + _ro.G53 * u30 + _ro.G54 * u40),
+        g1 + hi * (_ro.G51 * u11 + _ro.G52 * u21 + _ro.G53 * u31 + _ro.G54 * u41),
+        g2 + hi * (_ro.G51 * u12 + _ro.G52 * u22 + _ro.G53 * u32 + _ro.G54 * u42),
+        g3 + hi * (_ro.G51 * u13 + _ro.G52 * u23 + _ro.G53 * u33 + _ro.G54 * u43))
+    # --- stage 6 (at t + h): its increment is the error estimate
+    v0 += u50
+    v1 += u51
+    v2 += u52
+    v3 += u53
+    g0, g1, g2, g3 = _rhs(model, damping_stiffness, cond, v0, v1, v2, v3, acc_end, p)
+    u60, u61, u62, u63 = _rosenbrock_solve(
+        m11, m13, m31, m33, e, kz, j10, j12, j30, j32,
+        g0 + hi * (_ro.G61 * u10 + _ro.G62 * u20 + _ro.G63 * u30 + _ro.G64 * u40 + _ro.G65 * u50),
+        g1 + hi * (_ro.G61 * u11 + _ro.G62 * u21 + _ro.G63 * u31 + _ro.G64 * u41 + _ro.G65 * u51),
+        g2 + hi * (_ro.G61 * u12 + _ro.G62 * u22 + _ro.G63 * u32 + _ro.G64 * u42 + _ro.G65 * u52),
+        g3 + hi * (_ro.G61 * u13 + _ro.G62 * u23 + _ro.G63 * u33 + _ro.G64 * u43 + _ro.G65 * u53))
+    return (v0 + u60, v1 + u61, v2 + u62, v3 + u63), (u60, u61, u62, u63), acc_end
 
 
 def _integrate_chunk(model, damping_stiffness, conds, acc, acc_dot, dt_grid, t_out, models, y_init, scale, rtol,
