@@ -61,6 +61,14 @@ def _plain(attrs):
 DECLARED = {}
 
 
+def __getattr__(name):
+    """A declared table by its name in capitals (``MONTE_CARLO``, ``SIMULATION``, ``TRADEOFF``, ...), as its producer
+    declares it."""
+    if name.lower() in DECLARED:
+        return DECLARED[name.lower()][0]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def declare(name, table, prefix=""):
     """Declare a producer's variables (``{variable: attributes}``) as ``name``, in the module that makes them;
     :func:`attributes` finds them with ``prefix`` (``mcs_`` in sweeps; None: by name), or as its ``table``."""
@@ -165,9 +173,6 @@ ACCURACY = {
 }
 
 #: Sweep results: a point's status also says when its task failed.
-
-#: Monte Carlo ensembles, as :mod:`screening.solvers.datasets` declares them (read when used).
-MONTE_CARLO = Live(lambda: DECLARED["monte_carlo"][0])
 
 #: Small probabilities by subset simulation (:func:`screening.solvers.tail.tail_probability`).
 TAIL = {
