@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from screening.core.status import BestMethod, EscalationModel, PointStatus, Trust
+from screening.core.status import BestMethod, PointStatus, Trust
+from screening.solvers import mc_registry
 
 __all__ = []
 
@@ -391,7 +392,5 @@ def best_estimates(sl_peak, status, trust, low, high, target, features, escalate
     have = np.isfinite(mc_peak) & (mc_peak > 0)
     at = escalated[have]
     value[at], se[at] = mc_peak[have], mc_se[have]
-    by_model = {int(EscalationModel.condensed): int(BestMethod.condensed_monte_carlo),
-                int(EscalationModel.stiff_bed): int(BestMethod.stiff_bed_monte_carlo)}
-    method[at] = [by_model.get(int(m), int(BestMethod.coupled_monte_carlo)) for m in np.asarray(mc_model)[have]]
+    method[at] = [int(mc_registry.escalation_model(m).best_method) for m in np.asarray(mc_model)[have]]
     return value, se, method, correction

@@ -26,6 +26,7 @@ Pure functions on numpy arrays (the calibration dataset is passed in); no I/O.
 
 from __future__ import annotations
 
+import collections.abc
 import dataclasses
 import math
 
@@ -35,6 +36,7 @@ from screening.analysis.correction import atlas_promises, linearization_promises
 from screening.analysis.multifidelity import allocate
 from screening.analysis.trust import bed_law, p_bin, regime
 from screening.core.status import EscalationModel, PointStatus
+from screening.solvers import mc_registry
 from screening.solvers.estimates import Z, binomial_estimate
 
 __all__ = []
@@ -52,16 +54,27 @@ TRANSITION_BAND = (0.02, 0.98)
 PROBABILITY_SE = 0.03
 #: At most this many transition points are put first (the budget decides how many run).
 MAX_TRANSITION_POINTS = 1000
+class _StepCosts(collections.abc.Mapping):
+    """``{EscalationModel: step_cost_s}`` of the registered models, read when used."""
+
+    def __getitem__(self, code):
+        return mc_registry.escalation_model(code).step_cost_s
+
+    def __iter__(self):
+        return iter(mc_registry.escalation_models())
+
+    def __len__(self):
+        return len(mc_registry.escalation_models())
+
+
 #: Cost model: estimated CPU seconds per integration step (accepted or rejected) of one sample, by
-#: :class:`EscalationModel` (explicit pair, 20 s records, numba, one thread).  With the grid terms
-#: below, fitted to the median CPU time of 38 runs (the calibration beds, the statue block on k = 1e8
-#: ... 1e11, both integrators, both models) by ``benchmarks/bench_stiff_mcs.py`` (relative least
-#: squares); there the measured / predicted ratio is 0.87-1.16 on every run.
-STEP_COST_S = {EscalationModel.condensed: 0.14e-6, EscalationModel.coupled: 0.41e-6,
-               # stiff-bed model, only where the run's full-contact share is not known (estimated_cost's
-               # ``full_contact``): one cost per step does not hold for it (measured / predicted 0.26-2.7 over
-               # intensity); with the share, STIFF_BED_EXACT_COST_S and STIFF_BED_ADAPTIVE_COST_S below
-               EscalationModel.stiff_bed: 0.2e-6}
+#: :class:`EscalationModel`: each model's ``step_cost_s`` (explicit pair, 20 s records, numba, one thread).
+#: With the grid terms below, fitted to the median CPU time of 38 runs (the calibration beds, the statue block
+#: on k = 1e8 ... 1e11, both integrators, both models) by ``benchmarks/bench_stiff_mcs.py`` (relative least
+#: squares); there the measured / predicted ratio is 0.87-1.16 on every run.  The stiff-bed model's holds only
+#: where the run's full-contact share is not known (``estimated_cost``'s ``full_contact``; measured / predicted
+#: 0.26-2.7 over intensity); with the share, STIFF_BED_EXACT_COST_S and STIFF_BED_ADAPTIVE_COST_S below.
+STEP_COST_S = _StepCosts()
 #: Cost model of the stiff-bed model: CPU seconds per input grid interval advanced exactly in full contact
 #: (a 2x6 product, the check of the vertical input, the bookkeeping), and per adaptive step (accepted or
 #: rejected: six evaluations of the contact's moment law and indentation).  Its steps follow the uplift,
@@ -413,15 +426,17 @@ def auto_escalation_model(calibrated, chosen):
     Returns
     -------
     numpy.ndarray of int8
-        The stiff-bed model where the rule picks it, else ``calibrated``.
+        The picked model's ``escalation_code`` where it is neither coupled nor condensed, else ``calibrated``.
 
     References
     ----------
     .. [1] screening documentation, "Automatic model choice", ``docs/model_choice.md``.
     """
     chosen = np.asarray(chosen, dtype=str)
-    return np.where(chosen == "stiff_bed", int(EscalationModel.stiff_bed),
-                    np.asarray(calibrated)).astype(np.int8)
+    own = [mc_registry.get(name).escalation_code for name in chosen.ravel()]
+    own = np.array([-1 if c is None else int(c) for c in own], dtype=int).reshape(chosen.shape)
+    keep = np.isin(own, [EscalationModel.coupled, EscalationModel.condensed]) | (own < 0)   # the calibration decides
+    return np.where(keep, np.asarray(calibrated), own).astype(np.int8)
 
 
 def samples_needed(pilot_rel_se, pilot_samples, target, most=MAX_SAMPLES, safety=SAMPLE_SAFETY):
@@ -641,7 +656,7 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     .. [2] ``docs/montecarlo_numerics.md``, "Monte Carlo numerics: the sample integrators, stiff beds and the
        cost model" (this package's documentation).
     """
-    model = EscalationModel(int(model))
+    model = mc_registry.escalation_models()(int(model))
     grid = float(grid_points)
     per_point = grid_point_cost(grid / max(int(samples), 1)) if grid > 0 else 0.0
     if model == EscalationModel.stiff_bed and full_contact is not None and np.isfinite(full_contact):

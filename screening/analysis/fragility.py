@@ -40,6 +40,8 @@ from scipy import optimize, special
 from screening.solvers import schema
 from screening.core.model.block import Block
 from screening.solvers.datasets import finish
+from screening.solvers.outputs import OUTPUTS
+from screening.solvers.schema import cf
 from screening.analysis.trust import OVERTURN_LIMIT
 from screening.core.status import BestMethod, FitFlag, PointStatus, SampleState, Trust, ProbabilitySource
 
@@ -53,6 +55,29 @@ __all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "excee
            "fitted_probability", "fitted_standard_error", "fit_standard_errors", "vouched_range", "add_fit",
            "grid_units_of", "fragility_curve", "RockingAccessor",
            "spot_positions", "mcs_exceedance_at_spots", "best_exceedance", "fragility_dataset"]
+
+#: The variables of a fragility dataset and of the sweep's best probabilities, declared here (found by name).
+FRAGILITY = schema.declare("fragility", {
+    "p_exceed": dict(OUTPUTS["p_exceed"].attrs),
+    "p_exceed_at_spot": cf("1", "Gaussian probability that |theta| exceeds the threshold, at the spot point"),
+    "mcs_p_exceed": cf("1", "probability that |theta| exceeds the threshold, from the Monte Carlo peaks"),
+    "mcs_p_exceed_se": cf("1", "standard error of mcs_p_exceed (binomial)"),
+    "threshold_rad": cf("rad", "rotation threshold"),
+    "best_p_exceed": cf("1", "probability that |theta| exceeds the threshold from the best estimates (Monte Carlo "
+                             "where it ran, else the Gaussian up-crossing of the corrected moments)"),
+    "best_p_exceed_low": cf("1", "lower end of the band of best_p_exceed (2 standard errors)"),
+    "best_p_exceed_high": cf("1", "upper end of the band of best_p_exceed (2 standard errors)"),
+    "beta": cf("1", "lognormal dispersion beta of the fragility curve"),
+    "fit_median": {"long_name": "median of the lognormal fragility curve (units of the intensity it is fitted over)"},
+    "fit_flag": schema.FIT_FLAG,
+    "fit_n_unvouched": cf("1", "points of the curve left out of the fit: nothing vouches for their value (untrusted "
+                              "or stopped linearization without a best estimate or Monte Carlo)"),
+    "fit_im_min": {"long_name": "lowest vouched intensity of the curve (units of the intensity it is fitted over)"},
+    "fit_im_max": {"long_name": "highest vouched intensity of the curve (units of the intensity it is fitted over)"},
+    "fit_median_se": {"long_name": "standard error of fit_median from the standard errors of the fitted points "
+                                   "(units of the intensity it is fitted over)"},
+    "beta_se": cf("1", "standard error of beta from the standard errors of the fitted points"),
+}, prefix=None)
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
 
@@ -1620,7 +1645,7 @@ def add_fit(out, ds, intensity, dim):
 
 def _finish(out, dim, threshold, relative_to, method):
     """The schema's metadata, the fit's ``intensity``, and the attributes."""
-    out = finish(out, table=schema.FRAGILITY)
+    out = finish(out, table=FRAGILITY)
     if "fit_median" in out:
         out["fit_median"].attrs.update(intensity=dim, units=grid_units_of(out, dim))
         for name in ("fit_im_min", "fit_im_max", "fit_median_se"):

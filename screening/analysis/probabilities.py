@@ -76,7 +76,7 @@ def source_codes():
         ``{name: code}`` [-].
 
     """
-    return probability_sources(mc_registry.names())
+    return probability_sources(mc_registry.codes())
 
 
 def monte_carlo_source(model):

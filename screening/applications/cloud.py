@@ -49,16 +49,39 @@ from screening.core.records import (check_scale, check_time_step, expand_records
 from screening.core.status import FitFlag
 from screening.io.errors import exception_line
 from screening.solvers import model_choice, schema
-from screening.solvers.simulate import simulate
+from screening.solvers.simulate import SIMULATION, simulate
 from screening.solvers.synthesis import check_band, ground_acceleration_samples, spectral_plan
 from screening.sweep.config import check_choice, check_keys, check_value, StudyError
 from screening.sweep.execution import TASK_RETRIES
 from screening.sweep.interrupt import interruptible
-from screening.solvers.schema import INTENSITY
+from screening.solvers.schema import cf, declare, INTENSITY
 
 __all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
            "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "cloud_dataset",
            "synthesise_records", "write_demand_csv"]
+
+#: The variables of a cloud analysis: one row per record, then the fitted fragility; declared here.
+CLOUD = declare("cloud", {
+    **{name: SIMULATION[name] for name in ("peak_abs_theta", "overturned", "overturning_time")},
+    "diverged": cf("1", "the integration diverged or its task failed (left out of the fit)"),
+    "lift_off": SIMULATION["lift_off"],
+    **{name: INTENSITY[name] for name in ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa",
+                                          "fit_flag")},
+    "record": cf("1", "record index"),
+    "record_name": {"long_name": "record name"},
+    "exceed": cf("1", "peak |theta| above the threshold, or overturned"),
+    "threshold_rad": cf("rad", "rotation threshold"),
+    "slenderness": cf("rad", "slenderness angle atan(b/h)"),
+    "level": cf("1", "intensity level of the stripe (units of the intensity measure)"),
+    "n_exceed": cf("1", "records exceeding the threshold at the level"),
+    "n_used": cf("1", "records integrated at the level (not diverged)"),
+    "fit_median_se": cf("1", "standard error of fit_median (units of the intensity; stripes: observed information, "
+                             "sweeps: from the standard errors of the fitted points)"),
+    "beta_se": cf("1", "standard error of beta (stripes: observed information, sweeps: from the standard errors of "
+                       "the fitted points)"),
+    **{f"stripe_{name}": cf("1", f"{name} of the stripe (records scaled to it)") for name in
+       ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa")},
+})
 
 _RECORD_KEYS = ("files", "units", "dt", "scale", "model", "period", "threshold", "relative_to", "im", "levels",
                 "vertical")
@@ -668,7 +691,7 @@ def stripe_dataset(cloud, block, foundation, rows, names):
     ds["beta_se"] = ((), fit["beta_se"])
     ds["fit_flag"] = ((), np.int8(flag))
     ds["stripe_" + name] = ("level", levels)
-    ds = schema.apply_schema(ds, schema.CLOUD)
+    ds = schema.apply_schema(ds, CLOUD)
     units = ds[name].attrs["units"]
     for v in ("fit_median", "fit_median_se", "stripe_" + name, "level"):
         ds[v].attrs.update(units=units)
@@ -788,7 +811,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     ds["fit_median"] = ((), median if flag == FitFlag.ok else math.nan)
     ds["beta"] = ((), beta if flag == FitFlag.ok else math.nan)
     ds["fit_flag"] = ((), np.int8(flag))
-    ds = schema.apply_schema(ds, schema.CLOUD)
+    ds = schema.apply_schema(ds, CLOUD)
     ds["fit_median"].attrs.update(units=ds[name].attrs["units"], intensity=name)
     for name_with_period in ("sa", "avgsa"):
         if name_with_period in ds:

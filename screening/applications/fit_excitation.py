@@ -47,8 +47,8 @@ import numpy as np
 from scipy import optimize
 
 from screening.analysis.intensity import spectral_moments
-from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd, KanaiTajimi
-from screening.core.excitations.white import WhiteNoise
+from screening.core import excitations
+from screening.core.excitations.kanai_tajimi import kanai_tajimi_psd
 from screening.core.records import Record
 
 __all__ = []
@@ -434,8 +434,8 @@ def goodness_of_fit(acceleration, dt, fit, band_top):
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt
     model = envelope_energy(t, fit["T1"], fit["T2"])
-    exc = (KanaiTajimi(1.0, fit["omega_g"], fit["zeta_g"], band_limit_hz=None) if fit["kind"] == "kanai_tajimi"
-           else WhiteNoise(1.0, band_limit_hz=None))           # the fitted idealized spectrum, to the record's band
+    kind = excitations.get(fit["kind"])             # the fitted idealized spectrum, to the record's band
+    exc = kind(1.0, **{name: fit[name] for name in kind.parameters}, band_limit_hz=None)
     lam0, _, lam2 = spectral_moments(exc, band_top)
     return {"husid_max_deviation": float(np.max(np.abs(model / model[-1] - h))),
             "zero_crossing_rate_record": float(zero_crossing_rate(acceleration, dt, h)),

@@ -14,7 +14,20 @@ from screening.core.atomicfile import temporary_beside
 
 
 class Choice(click.Choice):
-    """``click.Choice`` with argparse's words: ``invalid choice: 'x' (choose from 'a', 'b')``."""
+    """``click.Choice`` with argparse's words: ``invalid choice: 'x' (choose from 'a', 'b')``; ``choices`` may be
+    a function, called when used (a registry's names)."""
+
+    def __init__(self, choices, case_sensitive=True):
+        self._read = choices if callable(choices) else None
+        super().__init__(() if self._read else choices, case_sensitive)
+
+    @property
+    def choices(self):
+        return tuple(self._read()) if self._read else self._choices
+
+    @choices.setter
+    def choices(self, value):
+        self._choices = value
 
     def convert(self, value, param, ctx):
         if value not in self.choices:

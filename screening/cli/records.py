@@ -74,7 +74,7 @@ def _record_error(record, exc):
                                              "if any, is not used)")
 @click.option("--out", help="netCDF file (default outputs/<record-stem>_simulation.nc, folder created if missing; "
                             "the folder of an explicit path must exist); the PNG goes next to it")
-@click.option("--model", type=Choice(list(mc_registry.names())), default="coupled",
+@click.option("--model", type=Choice(mc_registry.names), default="coupled",
               help="coupled (eqs. 7-8, default), condensed (eq. 22, the study's condensation) or stiff_bed "
                    "(rigid block on the quasi-static contact, docs/stiff_bed.md)")
 @click.option("--dt", type=float, help="time step [s] of a one-column record (checked against a time column "

@@ -6,6 +6,8 @@ registered ones (``parameter '<axis>' must be one of (...) (got ...)``).
 
 from __future__ import annotations
 
+import collections.abc
+
 __all__ = []
 
 
@@ -63,3 +65,46 @@ class Registry:
         if isinstance(key, str) and key in self._items:
             return self._items[key]
         raise ValueError(f"parameter '{self.parameter}' must be one of {self.names()} (got {key!r})")
+
+
+class Live(collections.abc.Mapping):
+    """A mapping read from ``build()`` each time it is used: a table derived from registries, never a snapshot."""
+
+    def __init__(self, build):
+        self._build = build
+
+    def __getitem__(self, key):
+        return self._build()[key]
+
+    def __iter__(self):
+        return iter(self._build())
+
+    def __len__(self):
+        return len(self._build())
+
+    def __repr__(self):
+        return repr(self._build())
+
+
+class LiveTuple(collections.abc.Sequence):
+    """A tuple read from ``build()`` each time it is used (the names of a registry and the like)."""
+
+    def __init__(self, build):
+        self._build = build
+
+    def __getitem__(self, index):
+        return tuple(self._build())[index]
+
+    def __len__(self):
+        return len(tuple(self._build()))
+
+    def __eq__(self, other):
+        return tuple(self._build()) == (tuple(other) if isinstance(other, (tuple, LiveTuple)) else other)
+
+    __hash__ = None
+
+    def __add__(self, other):
+        return tuple(self._build()) + tuple(other)
+
+    def __repr__(self):
+        return repr(tuple(self._build()))

@@ -79,7 +79,7 @@ FitFlag = code_space("FitFlag")
 ProbabilitySource = code_space("ProbabilitySource")
 AnswerQuantity = code_space("AnswerQuantity")
 
-#: Code of the first Monte Carlo model of :data:`ProbabilitySource` (the others follow in their order).
+#: ``p_source`` code of Monte Carlo model ``flag_code`` 0 (the others: this plus their flag code).
 MONTE_CARLO_SOURCE_BASE = 10
 
 #: Plain-language text of the divergence reasons (messages to users).
@@ -87,13 +87,14 @@ DIVERGENCE_TEXT = {reason: reason.meaning for reason in DivergenceReason}
 
 
 def probability_sources(models):
-    """``{name: code}`` of every :data:`ProbabilitySource`, with ``monte_carlo_<model>`` for each of ``models``
-    (the Monte Carlo model names, in their registered order) from :data:`MONTE_CARLO_SOURCE_BASE` up.
+    """``{name: code}`` of every :data:`ProbabilitySource`, with ``monte_carlo_<model>`` at
+    :data:`MONTE_CARLO_SOURCE_BASE` plus the model's flag code for each of ``models`` (``{name: flag code}``;
+    a sequence of names takes their positions).
 
     Parameters
     ----------
-    models : sequence of str
-        The Monte Carlo model names, in their registered order.
+    models : mapping of str to int, or sequence of str
+        The Monte Carlo models and their flag codes.
 
     Returns
     -------
@@ -101,8 +102,9 @@ def probability_sources(models):
         ``{source name: integer code}``: the codes of ``probability_source`` in result files.
 
     """
+    pairs = models.items() if hasattr(models, "items") else ((m, i) for i, m in enumerate(models))
     return {**{m.name: int(m) for m in ProbabilitySource},
-            **{f"monte_carlo_{model}": MONTE_CARLO_SOURCE_BASE + i for i, model in enumerate(models)}}
+            **{f"monte_carlo_{model}": MONTE_CARLO_SOURCE_BASE + int(c) for model, c in pairs}}
 
 
 def flag_attributes(code_space, long_name, dtype=np.int8):

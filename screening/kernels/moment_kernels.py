@@ -30,6 +30,7 @@ evaluations and the ``erfc`` at the output times.
 
 from __future__ import annotations
 
+import collections
 import math
 
 import numba
@@ -586,16 +587,20 @@ def _white_scales(osc):
     return (max(v, SCALE_FLOOR), max(math.sqrt(v) * math.sqrt(vd), SCALE_FLOOR), max(vd, SCALE_FLOOR))
 
 
-#: Per-point summaries a kernel returns: ``(status, t_stop, n_steps, n_rejected, peak_var_theta,
-#: t_peak_var_theta, min_k_eq)``.
-SUMMARIES = ("status", "t_stop", "n_steps", "n_rejected", "peak_var_theta", "t_peak_var_theta", "min_k_eq")
+#: Per-point summaries a kernel returns as a :data:`Summary`, by name, and their types (the record the batch
+#: stores them in): :class:`~screening.core.status.PointStatus`, ``t_stop`` [s], steps, rejected steps,
+#: ``peak_var_theta`` [rad^2] at ``t_peak_var_theta`` [s], ``min_k_eq`` [N m/rad].
+SUMMARY = np.dtype([("status", np.int8), ("t_stop", np.float64), ("n_steps", np.int64), ("n_rejected", np.int64),
+                    ("peak_var_theta", np.float64), ("t_peak_var_theta", np.float64), ("min_k_eq", np.float64)])
+SUMMARIES = SUMMARY.names
+Summary = collections.namedtuple("Summary", SUMMARIES)
 
 
 @numba.njit(cache=True, fastmath=FMA)
 def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_steps, store, i,
                       var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """One white-noise point; histories into row ``i`` of the outputs only if ``store``.  Returns the
-    :data:`SUMMARIES`.
+    :data:`Summary`.
 
     Integrates the three moments ``(var_theta, cov, var_theta_dot)`` of the linearized oscillator
     under modulated white noise by the Dormand-Prince 5(4) pair with PI control and dense output,
@@ -629,8 +634,7 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
     Returns
     -------
     tuple
-        :data:`SUMMARIES`: ``(status, t_stop [s], n_steps, n_rejected, peak_var_theta [rad^2],
-        t_peak_var_theta [s], min_k_eq [N m/rad])``.
+        A :data:`Summary` (:data:`SUMMARY`).
 
     Notes
     -----
@@ -708,7 +712,8 @@ def solve_point_white(coefficients, cond, table, osc, t_out, rtol, h_max, max_st
                                                                 lowest_k, err, log_err_old)
         if code != OK:
             break
-    return code, t, steps, rejected, best, best_t, lowest_k
+    return Summary(status=code, t_stop=t, n_steps=steps, n_rejected=rejected, peak_var_theta=best,
+                   t_peak_var_theta=best_t, min_k_eq=lowest_k)
 
 
 # ---------------------------------------------------------------- filtered input: the augmented system
@@ -1036,7 +1041,7 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
                          store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl):
     """One point driven through a shaping filter (``fa, fb, fc, fd``: its ``A, B, C, D``), the packed
     covariance of ``(theta, theta', x)`` as the state; ``scale``: its absolute-tolerance scales
-    (:func:`filtered_scales`).  Histories into row ``i`` only if ``store``.  Returns the :data:`SUMMARIES`.
+    (:func:`filtered_scales`).  Histories into row ``i`` only if ``store``.  Returns a :data:`Summary`.
 
     Parameters
     ----------
@@ -1056,7 +1061,7 @@ def solve_point_filtered(coefficients, cond, table, osc, fa, fb, fc, fd, scale, 
     Returns
     -------
     tuple
-        :data:`SUMMARIES`, as :func:`solve_point_white`.
+        A :data:`Summary`, as :func:`solve_point_white`.
 
     Notes
     -----
@@ -1085,7 +1090,7 @@ def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale
     Returns
     -------
     tuple
-        :data:`SUMMARIES`, as :func:`solve_point_filtered`.
+        A :data:`Summary`, as :func:`solve_point_filtered`.
 
     Notes
     -----
@@ -1176,4 +1181,5 @@ def _filtered_steps(n, coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_
                                                                 lowest_k, err, log_err_old)
         if code != OK:
             break
-    return code, t, steps, rejected, best, best_t, lowest_k
+    return Summary(status=code, t_stop=t, n_steps=steps, n_rejected=rejected, peak_var_theta=best,
+                   t_peak_var_theta=best_t, min_k_eq=lowest_k)

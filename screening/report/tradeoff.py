@@ -29,7 +29,7 @@ from the data.
 
 Error metrics and rules: :mod:`screening.applications.metrics`; the study file:
 :mod:`screening.applications.tradeoff_study`; reports and figures: :mod:`screening.report.tradeoff_text`,
-:mod:`screening.report.tradeoff_figures`; units and long names: :data:`screening.solvers.schema.TRADEOFF`.
+:mod:`screening.report.tradeoff_figures`; units and long names: :data:`TRADEOFF`.
 
 Monte Carlo statistics are over the samples that neither overturned nor diverged
 (survivors); the overturned fraction is reported with every point.
@@ -51,7 +51,8 @@ from screening.analysis.target_intensity import calibrate_intensity, round_signi
 from screening.applications.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
                                                    load_tradeoff_study)
 from screening.report.tradeoff_files import from_file_layout, output_paths, write_reports
-from screening.solvers.schema import TRADEOFF, apply_schema
+from screening.core.status import flag_attributes, PointStatus
+from screening.solvers.schema import apply_schema, cf, declare, PARAMETERS
 from screening.solvers.moments import solve_moments
 from screening.solvers.montecarlo import monte_carlo
 from screening.solvers.timegrid import output_times
@@ -344,9 +345,86 @@ def _measure_sl_numerics(study, points, t_out):
 
 
 # ============================================================================ dataset
+#: The variables and label coordinates of the speed-accuracy trade study's dataset, declared here.
+TRADEOFF = declare("tradeoff", {
+    # coordinates
+    "approach": {"long_name": "method: sl (stochastic linearization), condensed_mcs, coupled_mcs"},
+    "mcs_model": {"long_name": "Monte Carlo model"},
+    "comparison": {"long_name": "estimate_vs_reference", "note": "relative errors are estimate/reference - 1"},
+    "quantity": {"long_name": "response variance compared"},
+    "point": {"long_name": "grid point index"},
+    "point_name": {"long_name": "grid point label"},
+    "family": {"long_name": "excitation family"},
+    "excitation_kind": {"long_name": "excitation kind"},
+    "omega_g": {**PARAMETERS["omega_g"], "note": "NaN for white noise"},
+    "zeta_g": {**PARAMETERS["zeta_g"], "note": "NaN for white noise"},
+    "target_peak_p_uplift": cf("1", "target SL peak uplift probability used to calibrate S0"),
+    "rep_point_index": {"long_name": "grid point index of a representative point"},
+    "rep_point_name": {"long_name": "label"},
+    "cv_model": {"long_name": "Monte Carlo model (convergence study)"},
+    "n_samples": cf("1", "Monte Carlo sample count"),
+    "rtol_factor": cf("1", "factor on the model's default MCS rtol"),
+    "sl_setting": {"long_name": "SL numerics setting"},
+    "sl_setting_kind": {"long_name": "which parameter is varied"},
+    "sl_rtol": cf("1", "SL relative tolerance"),
+    "sl_h_max": cf("s", "SL largest step (NaN: default t_end/20)"),
+    # histories and per-point results of each method
+    "var_theta": cf("rad2", "var_theta by each method", note="MCS: over surviving samples"),
+    "var_theta_dot": cf("rad2 s-2", "var_theta_dot by each method", note="MCS: over surviving samples"),
+    "var_theta_se": cf("rad2", "Monte Carlo standard error of var_theta (NaN for sl)"),
+    "var_theta_dot_se": cf("rad2 s-2", "Monte Carlo standard error of var_theta_dot (NaN for sl)"),
+    "p_uplift": cf("1", "uplift probability / occupancy"),
+    "cost": cf("s", "wall time per point on one core"),
+    "n_overturned": cf("1", "overturned samples"),
+    "n_diverged": cf("1", "diverged samples"),
+    "n_used": cf("1", "samples in the statistics (survivors)"),
+    "overturned_fraction": cf("1", "fraction of samples that overturned (statistics are over survivors)"),
+    "sl_status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "SL solver status"),
+    "sl_peak_p_uplift": cf("1", "SL peak uplift probability (eq. 58)"),
+    "sl_min_k_eq": cf("N m rad-1", "SL minimum equivalent stiffness"),
+    "sl_k_eq0": cf("N m rad-1", "SL equivalent stiffness at t = 0"),
+    "k_eq_margin": cf("1", "min_k_eq / k_eq(t=0) from SL"),
+    "peak_var_theta": cf("rad2", "peak over time of var_theta"),
+    "peak_var_theta_se": cf("rad2", "Monte Carlo standard error of peak_var_theta (at the peak time; 0 for sl)"),
+    "peak_var_theta_dot": cf("rad2 s-2", "peak over time of var_theta_dot"),
+    "peak_var_theta_dot_se": cf("rad2 s-2", "Monte Carlo standard error of peak_var_theta_dot (at the peak time; "
+                                            "0 for sl)"),
+    # errors of each comparison
+    "peak_rel_error": cf("1", "relative error of the peak: max_t estimate / max_t reference - 1"),
+    "peak_rel_se": cf("1", "standard error of the peak difference / reference peak (quadrature for MCS vs MCS)"),
+    "peak_significant": cf("1", "1 if |peak difference| > 2 SE"),
+    "time_avg_rel_error": cf("1", "int |estimate - reference| dt / int |reference| dt where both are defined"),
+    "time_avg_rel_se": cf("1", "int SE dt / int |reference| dt (noise floor of time_avg_rel_error)"),
+    "time_avg_significant": cf("1", "1 if time_avg_rel_error > 2 time_avg_rel_se"),
+    # Monte Carlo vs sample count and tolerance
+    "cv_peak_var_theta": cf("rad2", "MCS peak var_theta vs sample count"),
+    "cv_peak_var_theta_se": cf("rad2", "its standard error"),
+    "cv_peak_var_theta_dot": cf("rad2 s-2", "MCS peak var_theta_dot"),
+    "cv_peak_var_theta_dot_se": cf("rad2 s-2", "its standard error"),
+    "cv_cost": cf("s", "wall time per point, one core"),
+    "cv_n_overturned": cf("1", "overturned samples"),
+    "cv_deviation_vs_reference": cf("1", "peak var_theta / peak at the largest sample count (same model) - 1",
+                                    note="nested samples (same seed): the reference contains the smaller ensembles"),
+    "cv_rel_se": cf("1", "relative standard error of peak var_theta"),
+    "cv_sl_peak_var_theta": cf("rad2", "SL peak var_theta"),
+    "tol_peak_var_theta": cf("rad2", "MCS peak var_theta vs tolerance (same seed)"),
+    "tol_peak_var_theta_se": cf("rad2", "its standard error"),
+    "tol_cost": cf("s", "wall time per point, one core"),
+    "tol_n_overturned": cf("1", "overturned samples"),
+    "tol_change_vs_tightest": cf("1", "peak var_theta / peak at the tightest tolerance - 1 (paired samples)"),
+    # SL numerics
+    "sl_cost": cf("s", "SL wall time per point (single-point call, median)"),
+    "sl_n_steps": cf("1", "SL solver steps"),
+    "sl_numerical_peak_error": cf("1", "SL peak var_theta / tight-tolerance reference - 1"),
+    "sl_numerical_time_avg_error": cf("1", "SL time-averaged relative error of var_theta vs the tight-tolerance "
+                                           "reference"),
+    "sl_batched_cost": cf("s", "SL wall time per point in batched calls"),
+})
+
+
 def _build_dataset(study, points, t_out, grid, errors, conv, numerics, wall_time):
     """Assemble every measurement in one labelled :class:`xarray.Dataset`; units and long names
-    from :data:`screening.solvers.schema.TRADEOFF`."""
+    from :data:`TRADEOFF`."""
     cv = study.convergence
     settings = numerics["settings"]
     reps = conv["point_index"]

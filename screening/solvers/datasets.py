@@ -20,14 +20,51 @@ import numpy as np
 import xarray as xr
 
 from screening.solvers import schema
+from screening.solvers.schema import cf, declare
 from screening.core.condensation.registry import DEFAULT_CONDENSATION
 from screening.solvers import mc_registry
 from screening.core.model.points import numeric_fields
 from screening.solvers.estimates import sample_probabilities
 from screening.solvers.outputs import HISTORY_VARIABLES, linearize_variables
-from screening.core.status import DIVERGENCE_TEXT, DivergenceReason
+from screening.core.status import DIVERGENCE_TEXT, DivergenceReason, flag_attributes, SampleState, SpotStatus
 
 __all__ = []
+
+#: The variables of a Monte Carlo ensemble (``monte_carlo``), declared here; in sweeps with the prefix ``mcs_``.
+MONTE_CARLO = declare("monte_carlo", {
+    "var_theta": cf("rad2", "Monte Carlo ensemble variance of the rocking rotation"),
+    "var_theta_dot": cf("rad2 s-2", "Monte Carlo ensemble variance of the rocking angular velocity"),
+    "cov_theta_theta_dot": cf("rad2 s-1", "Monte Carlo ensemble covariance of theta and theta'"),
+    "var_theta_se": cf("rad2", "standard error of the Monte Carlo rotation variance"),
+    "var_theta_dot_se": cf("rad2 s-2", "standard error of the Monte Carlo angular-velocity variance"),
+    "p_uplift": cf("1", "fraction of Monte Carlo samples in uplift"),
+    "peak_abs_theta": cf("rad", "peak |theta| of each Monte Carlo sample over the record (up to overturning "
+                                "or divergence)"),
+    "theta_sample": cf("rad", "rotation of each Monte Carlo sample on the output times (meaningless after the "
+                              "sample overturned or diverged)"),
+    "overturned": cf("1", "Monte Carlo sample overturned (|theta| > atan(b/h))"),
+    "diverged": cf("1", "Monte Carlo sample diverged (excluded from the statistics)"),
+    "n_steps": cf("1", "integration steps of the sample (accepted + rejected)"),
+    "n_overturned": cf("1", "number of overturned Monte Carlo samples"),
+    "n_diverged": cf("1", "number of diverged Monte Carlo samples"),
+    "n_used": cf("1", "number of Monte Carlo samples in the statistics"),
+    "peak_var_theta": cf("rad2", "peak over the output times of the Monte Carlo rotation variance"),
+    "peak_var_theta_dot": cf("rad2 s-2", "peak over the output times of the Monte Carlo angular-velocity "
+                                         "variance"),
+    "rel_error_peak_var_theta": cf("1", "relative error of the linearization's peak var_theta against Monte "
+                                        "Carlo, (max_t lin - max_t mcs) / max_t mcs on the output times"),
+    "rel_error_peak_var_theta_dot": cf("1", "relative error of the linearization's peak var_theta_dot "
+                                            "against Monte Carlo, (max_t lin - max_t mcs) / max_t mcs"),
+    "sample_state": flag_attributes(SampleState, "state of each Monte Carlo sample at the end of the record"),
+    "status": flag_attributes(SpotStatus, "status of the Monte Carlo spot check"),
+    # screening.analysis.probabilities.sample_probabilities (over the samples that did not diverge)
+    "p_overturn": cf("1", "fraction of the Monte Carlo samples that overturned (|theta| > atan(b/h))"),
+    "p_overturn_se": cf("1", "standard error of p_overturn (binomial, Agresti-Coull)"),
+    "p_exceed": cf("1", "fraction of the Monte Carlo samples whose peak |theta| exceeds the threshold "
+                        "(overturned samples count)"),
+    "p_exceed_se": cf("1", "standard error of p_exceed (binomial, Agresti-Coull)"),
+    "threshold": cf("rad", "rotation threshold of p_exceed"),
+}, prefix="mcs_")
 
 #: Ensemble statistics of a Monte Carlo run, on ``t``.
 MONTE_CARLO_STATISTICS = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "var_theta_se", "var_theta_dot_se",
@@ -121,7 +158,7 @@ def finish(ds, table=None):
     ds : xarray.Dataset
         The dataset, its variables named as in :mod:`screening.solvers.schema`.
     table : dict, optional
-        The producer's own schema table (e.g. ``schema.MONTE_CARLO``), tried before the shared ones;
+        The producer's own schema table (e.g. :data:`MONTE_CARLO`), tried before the shared ones;
         default none (the shared declarations only).
 
     Returns
@@ -300,7 +337,7 @@ def monte_carlo_dataset(times, stats, peak, overturned, diverged, n_acc, n_rej, 
         **theta_ul_attrs,
     }
     attrs.update(mc.dataset_attributes(block, foundation, condensation))
-    return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.MONTE_CARLO)
+    return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=MONTE_CARLO)
 
 
 def with_probabilities(ds, thresholds=None):
@@ -342,5 +379,5 @@ def with_probabilities(ds, thresholds=None):
     if thresholds is not None:
         data.update(p_exceed=("threshold", prob["p_exceed"]), p_exceed_se=("threshold", prob["p_exceed_se"]))
         coords["threshold"] = ("threshold", levels)
-    added = finish(xr.Dataset(data, coords=coords), table=schema.MONTE_CARLO)
+    added = finish(xr.Dataset(data, coords=coords), table=MONTE_CARLO)
     return ds.assign_coords({name: added[name] for name in coords}).assign({name: added[name] for name in data})

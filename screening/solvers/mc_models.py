@@ -9,8 +9,8 @@ there by an integer model code, resolved here once):
 * ``"condensed"``: the SDOF eq. 22 with a condensation's ``C(theta)``, ``K(theta)``
   (:mod:`screening.core.condensation`), from rest.
 
-Importing this module registers both, then the stiff-bed model (:mod:`screening.solvers.stiff_bed`) and its
-exact-contact sampler (:mod:`screening.solvers.stiff_bed_fast`).
+Defining them registers both; importing this module then registers the stiff-bed model
+(:mod:`screening.solvers.stiff_bed`) and its exact-contact sampler (:mod:`screening.solvers.stiff_bed_fast`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ from screening.core import condensation as condensations
 from screening.core.condensation.paper import uplift_threshold as paper_uplift_threshold
 from screening.core.physics.contact import exact_uplift_angle, law_constants, law_resultants, rest_indentation
 from screening.kernels import mcs_kernels as kern
-from screening.solvers.mc_registry import KERNEL_CONDENSATION, ChunkIntegrator, MonteCarloModel, register
+from screening.core.status import BestMethod, EscalationModel
+from screening.solvers.mc_registry import KERNEL_CONDENSATION, ChunkIntegrator, get, MonteCarloModel
 from screening.solvers.synthesis import rocking_frequency, vertical_frequency
 
 __all__ = []
@@ -203,6 +204,9 @@ class CoupledModel(_KernelModel):
     default_rtol = 1e-7
     vertical_state = True
     code = kern.MODEL_COUPLED
+    flag_code = 0
+    escalation_code = EscalationModel.coupled
+    step_cost_s = 0.41e-6          # fitted with the escalation's grid terms (analysis.escalation, STEP_COST_S)
 
     def initial_state(self, block, foundation, theta0=0.0, theta_dot0=0.0):
         return np.array([theta0, theta_dot0, quasi_static_indentation(block, foundation, theta0), 0.0])
@@ -219,6 +223,10 @@ class CondensedModel(_KernelModel):
     default_rtol = 1e-6
     uses_condensation = True
     code = kern.MODEL_CONDENSED
+    flag_code = 1
+    escalation_code = EscalationModel.condensed
+    step_cost_s = 0.14e-6
+    best_method = BestMethod.condensed_monte_carlo
 
     def check(self, block, foundation, condensation):
         condensations.get(condensation).check(block, foundation)
@@ -238,8 +246,8 @@ class CondensedModel(_KernelModel):
         return attrs
 
 
-COUPLED = register(CoupledModel())
-CONDENSED = register(CondensedModel())
+COUPLED = get("coupled")
+CONDENSED = get("condensed")
 
 from screening.solvers import stiff_bed  # noqa: E402,F401  (registers "stiff_bed")
 from screening.solvers import stiff_bed_fast  # noqa: E402,F401  (registers "stiff_bed_fast")

@@ -6,9 +6,9 @@ integrates one sample at a time.  Like the condensations (:mod:`screening.core.c
 a model name is turned into a :class:`MonteCarloModel` once, at set-up; the run path then calls
 the :class:`ChunkIntegrator` it returns and never looks at the name again.
 
-The built-in models are registered by :mod:`screening.solvers.mc_models` (``"coupled"``,
-``"condensed"``) and :mod:`screening.solvers.stiff_bed` (``"stiff_bed"``); a new model is one
-module with a :class:`MonteCarloModel` subclass and a call to :func:`register`.
+A model registers itself by subclassing :class:`MonteCarloModel` with its own ``name`` and ``flag_code``
+(as hazardlib's GSIMs do): the built-in ``coupled``, ``condensed`` (:mod:`screening.solvers.mc_models`),
+``stiff_bed`` and ``stiff_bed_fast``.  Everything that lists the models reads the registry when used.
 
 Every model reports the same per-sample results: the state on the output grid as
 ``(theta, theta', z_cb, z_cb')`` (models without a vertical state fill ``z_cb`` columns with
@@ -19,8 +19,11 @@ reason, :class:`screening.core.status.SampleStatus`) and its step counts.
 from __future__ import annotations
 
 import abc
+import enum
+import warnings
 
 from screening.core import condensation as condensations
+from screening.core.status import BestMethod, EscalationModel
 
 __all__ = []
 
@@ -100,6 +103,20 @@ class MonteCarloModel(abc.ABC):
     uses_condensation: bool = False
     #: whether ``z_cb``, ``z_cb'`` are states of the model (else reported as 0)
     vertical_state: bool = False
+    #: its code in files (``mcs_model``; ``p_source`` ``monte_carlo_<name>`` is 10 + it): declared, never reused
+    flag_code: int | None = None
+    #: its :class:`~screening.core.status.EscalationModel` code under ``[accuracy]`` (None: not escalated)
+    escalation_code: int | None = None
+    #: CPU seconds per integration step of one sample, the escalation's cost model (``analysis.escalation``)
+    step_cost_s: float = 0.4e-6
+    #: the :class:`~screening.core.status.BestMethod` of a best estimate it gives under ``[accuracy]``
+    best_method: int = BestMethod.coupled_monte_carlo
+
+    def __init_subclass__(cls, **kwargs):
+        """A subclass declaring its own ``name`` and ``flag_code`` registers itself (made when first asked for)."""
+        super().__init_subclass__(**kwargs)
+        if cls.name and "name" in vars(cls) and "flag_code" in vars(cls):
+            _add(cls.name, cls)
 
     def check(self, block, foundation, condensation):
         """Raise ``ValueError`` naming the parameter for a combination the model cannot run: the one place
@@ -192,105 +209,89 @@ def check_validity(model, block, foundation, excitation=None, strict=False):
         return
     if strict:
         raise ValueError(problem)
-    import warnings
-
     warnings.warn(problem, stacklevel=4)
 
 
-_REGISTRY: dict[str, MonteCarloModel] = {}
+#: name -> the model (a class until first asked for, then its instance), in registration order
+_REGISTRY = {}
+#: name -> flag code of ``mcs_model`` in files
+_CODES = {}
 
 
-def register(model):
-    """Add a :class:`MonteCarloModel` instance under its ``name`` (a later one with the same name replaces it).
-
-    After it, the name is accepted wherever a Monte Carlo model is (``monte_carlo(model=...)``,
-    ``[mcs] model`` of a study, ``screening simulate --model``).  A new model is one module with a
-    :class:`MonteCarloModel` subclass and a call to ``register``.
-
-    Parameters
-    ----------
-    model : MonteCarloModel
-        The model (an instance of a :class:`MonteCarloModel` subclass; its :attr:`~MonteCarloModel.name`
-        is the registry key).
-
-    Returns
-    -------
-    MonteCarloModel
-        ``model`` itself.
-
-    Raises
-    ------
-    TypeError
-        For anything that is not a ``MonteCarloModel`` instance.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] The package's documentation, ``docs/stiff_bed.md`` (a model added through this registry).
-    """
-    if not isinstance(model, MonteCarloModel):
-        raise TypeError(f"register() takes a MonteCarloModel instance (got {type(model).__name__})")
-    _REGISTRY[model.name] = model
+def _add(name, model):
+    """Register ``model`` (a class or an instance) under ``name``: a declared flag code must be free, an inherited
+    (or no) code that is taken becomes the next free one."""
+    cls = model if isinstance(model, type) else type(model)
+    taken = {c: n for n, c in _CODES.items() if n != name}
+    code = cls.flag_code
+    if code is not None and "flag_code" in vars(cls) and code in taken:
+        raise ValueError(f"flag_code {code} of Monte Carlo model {name!r} is {taken[code]!r}'s")
+    if code is None or code in taken:           # inherited by a model registered by hand: the next free code
+        code = _CODES.get(name, max([*taken, -1]) + 1)
+    _REGISTRY[name], _CODES[name] = model, int(code)
     return model
 
 
-def unregister(name):
-    """Remove a registered model (tests that register their own); an unknown name is ignored.
+def _class(name):
+    """The class of registered model ``name``."""
+    model = _REGISTRY[name]
+    return model if isinstance(model, type) else type(model)
 
-    Parameters
-    ----------
-    name : str
-        The registry name of the model.
 
-    Returns
-    -------
-    None
+def register(model):
+    """Add a :class:`MonteCarloModel` instance under its ``name`` (replacing one of the same name); returns it.
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/stiff_bed.md`` (the registry of Monte Carlo models).
+    A subclass that declares its own ``name`` and ``flag_code`` registers itself when defined; ``register``
+    is for instances made with arguments and for models without a code of their own (tests), which take the
+    next free code.  ``TypeError`` for anything else.
     """
+    if not isinstance(model, MonteCarloModel):
+        raise TypeError(f"register() takes a MonteCarloModel instance (got {type(model).__name__})")
+    return _add(model.name, model)
+
+
+def unregister(name):
+    """Remove a registered model (tests that register their own); an unknown name is ignored."""
     _REGISTRY.pop(name, None)
+    _CODES.pop(name, None)
 
 
 def names():
-    """Registered names, in registration order (the built-in ``coupled``, ``condensed``, ``stiff_bed`` first).
-
-    Returns
-    -------
-    tuple of str
-        The names :func:`get` accepts; their positions are the model codes of :func:`code`.
-
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` (``mcs_model``: flag values in registry order).
-    """
+    """Registered names, in registration order (the built-in ``coupled``, ``condensed``, ``stiff_bed`` first)."""
     return tuple(_REGISTRY)
 
 
 def code(name):
-    """The code of a registered model in per-point records (``mcs_model``): its position in :func:`names`.
+    """The flag code of a registered model (name or instance) in ``mcs_model`` (its declared ``flag_code``)."""
+    return _CODES[get(name).name]
 
-    Parameters
-    ----------
-    name : str or MonteCarloModel
-        A registered name, or a registered model instance.
 
-    Returns
-    -------
-    int
-        The model's index in :func:`names` [-] (the flag value of ``mcs_model`` in a result).
+def codes():
+    """``{name: flag code}`` of the registered models, in registration order."""
+    return dict(_CODES)
 
-    Raises
-    ------
-    ValueError
-        For a name that is not registered (from :func:`get`).
 
-    References
-    ----------
-    .. [1] The package's documentation, ``docs/outputs.md`` (``mcs_model``: flag values in registry order).
-    """
-    return names().index(get(name).name)
+def name_of(flag):
+    """The name of the registered model with flag code ``flag``."""
+    return {c: n for n, c in _CODES.items()}[int(flag)]
+
+
+def escalation_models():
+    """The :class:`~screening.core.status.EscalationModel` codes of the registered models, read now: an
+    ``IntEnum`` with one member per model that declares an ``escalation_code`` (a model sharing another's
+    code, e.g. a sampler, is its alias), each with its ``meaning``."""
+    pairs = [(name, _class(name).escalation_code) for name in names()]
+    pairs = [(name, int(c)) for name, c in pairs if c is not None]
+    codes_ = enum.IntEnum("EscalationModel", pairs, module=__name__)
+    builtin = {int(m): m.meaning for m in EscalationModel}
+    for member in codes_:
+        member.meaning = builtin.get(int(member), _class(member.name).description)
+    return codes_
+
+
+def escalation_model(code_):
+    """The registered :class:`MonteCarloModel` that an :class:`EscalationModel` code names."""
+    return get(escalation_models()(int(code_)).name)
 
 
 def get(model):
@@ -321,6 +322,7 @@ def get(model):
     if isinstance(model, MonteCarloModel):
         return model
     if isinstance(model, str) and model in _REGISTRY:
+        if isinstance(_REGISTRY[model], type):      # declared by subclassing: made when first asked for
+            _REGISTRY[model] = _REGISTRY[model]()
         return _REGISTRY[model]
     raise ValueError(f"parameter 'model' must be one of {names()} (got {model!r})")
-

@@ -40,7 +40,7 @@ from screening.core.condensation import DEFAULT_CONDENSATION, get as get_condens
 from screening.core.signatures import function_type, moment_coefficients_signature, record_type
 from screening.core.model.points import flatten, select
 from screening.kernels.moment_kernels import (filtered_scales, solve_point_filtered, solve_point_two_states,
-                                              solve_point_white, uplift_occupancy)
+                                              solve_point_white, SUMMARIES, SUMMARY, uplift_occupancy)
 from screening.solvers.outputs import HISTORY_VARIABLES, solver_summaries
 from screening.core.status import PointStatus
 from screening.core.validation import check_integer, check_scalar, check_size
@@ -211,8 +211,7 @@ def _solve_representable(representable, shape, block, foundation, excitation, t_
 
 # ---------------------------------------------------------------- compiled batch
 def _solve_batch(coefficients, conds, osc, tables, table_index, fa, fb, fc, fd, scale, t_out, rtol, h_max,
-                 max_steps, store, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl,
-                 status, t_stop, n_steps, n_rejected, peak_var, t_peak, min_k_eq):
+                 max_steps, store, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl, summaries):
     """Every point of a batch (compiled per condensation record type by :func:`batch_solver`).
 
     The step loop is specialised by state size (:mod:`screening.kernels.moment_kernels`): 3 scalar
@@ -223,17 +222,19 @@ def _solve_batch(coefficients, conds, osc, tables, table_index, fa, fb, fc, fd, 
     for i in range(osc.shape[0]):
         j = table_index[i]
         if fa.shape[1] == 2:
-            summary = solve_point_two_states(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
+            s = solve_point_two_states(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
                                              scale[i], t_out, rtol, h_max, max_steps,
                                              store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
         elif fa.shape[1] > 0:
-            summary = solve_point_filtered(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
+            s = solve_point_filtered(coefficients, conds[i], tables[j], osc[i], fa[i], fb[i], fc[i], fd[i],
                                            scale[i], t_out, rtol, h_max, max_steps,
                                            store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
         else:
-            summary = solve_point_white(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max, max_steps,
+            s = solve_point_white(coefficients, conds[i], tables[j], osc[i], t_out, rtol, h_max, max_steps,
                                         store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl)
-        status[i], t_stop[i], n_steps[i], n_rejected[i], peak_var[i], t_peak[i], min_k_eq[i] = summary
+        out = summaries[i]
+        out.status, out.t_stop, out.n_steps, out.n_rejected = s.status, s.t_stop, s.n_steps, s.n_rejected
+        out.peak_var_theta, out.t_peak_var_theta, out.min_k_eq = s.peak_var_theta, s.t_peak_var_theta, s.min_k_eq
 
 
 _SOLVERS = {}
@@ -268,7 +269,7 @@ def batch_solver(record_dtype):
         sig = types.void(function_type(moment_coefficients_signature(record_dtype)),
                          types.Array(cond, 1, "C"), types.Array(record_type(OSCILLATOR), 1, "C"), a3,
                          types.int64[::1], a3, a2, a2, a1, a2, a1, f8, f8, i8, types.boolean, a2, a2, a2, a2, a2, a2,
-                         types.int8[::1], a1, types.int64[::1], types.int64[::1], a1, a1, a1)
+                         types.Array(record_type(SUMMARY), 1, "C"))
         _SOLVERS[record_dtype] = numba.njit(sig, cache=True)(_solve_batch)
     return _SOLVERS[record_dtype]
 
@@ -341,13 +342,7 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
         return _solve_representable(representable, shape, block, foundation, excitation, t_out, rtol, h_max,
                                     max_steps, cond, histories)
     hist = {name: np.full((n if histories else 0, nt), np.nan) for name in HISTORY_VARIABLES}
-    status = np.zeros(n, dtype=np.int8)
-    t_stop = np.full(n, np.nan)
-    n_steps = np.zeros(n, dtype=np.int64)
-    n_rejected = np.zeros(n, dtype=np.int64)
-    peak = np.full(n, np.nan)
-    t_peak = np.full(n, np.nan)
-    min_k = np.full(n, np.nan)
+    summaries = np.zeros(n, dtype=SUMMARY)
     for lo in range(0, n, CHUNK):
         part = slice(lo, min(lo + CHUNK, n))
         kernel = cond.moment_kernel(select(block, part), select(foundation, part))
@@ -357,16 +352,8 @@ def solve_moments(block, foundation, excitation, t_out, rtol=DEFAULT_RTOL, h_max
                kernel.table_index, f.A, f.B, f.C, f.D, f.scale, t_out, float(rtol), float(h_max), int(max_steps),
                bool(histories),
                hist["var_theta"][part], hist["cov_theta_theta_dot"][part], hist["var_theta_dot"][part],
-               hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], status[part], t_stop[part],
-               n_steps[part], n_rejected[part], peak[part], t_peak[part], min_k[part])
-    tu = osc["theta_ul"]
-    peak_p = uplift_occupancy(tu, peak)
+               hist["c_eq"][part], hist["k_eq"][part], hist["p_uplift"][part], summaries[part])
     out = {name: a.reshape(shape + (nt,)) for name, a in hist.items()} if histories else {}
-    out.update({
-        "status": status.reshape(shape), "t_stop": t_stop.reshape(shape),
-        "n_steps": n_steps.reshape(shape), "n_rejected": n_rejected.reshape(shape),
-        "peak_var_theta": peak.reshape(shape),
-        "t_peak_var_theta": t_peak.reshape(shape), "peak_p_uplift": peak_p.reshape(shape),
-        "min_k_eq": min_k.reshape(shape),
-    })
+    out.update({name: np.ascontiguousarray(summaries[name]).reshape(shape) for name in SUMMARIES})
+    out["peak_p_uplift"] = uplift_occupancy(osc["theta_ul"], summaries["peak_var_theta"]).reshape(shape)
     return out

@@ -60,7 +60,7 @@ from screening.core.progress import Progress
 from screening.core.validation import check_integer, check_size
 from screening.kernels import mcs_kernels as kern
 from screening.solvers import mc_registry, schema
-from screening.solvers.datasets import monte_carlo_dataset, with_probabilities
+from screening.solvers.datasets import MONTE_CARLO, monte_carlo_dataset, with_probabilities
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.synthesis import (check_band, CUTOFF_FACTOR, envelope_rate, low_passed, OVERSAMPLING,
                                          spectral_plan, stationary_samples, synthesis_cutoff, validate_seed,
@@ -72,13 +72,16 @@ __all__ = ["MODELS", "DEFAULT_RTOL", "AUTO_RTOL", "AUTO_RTOL_SAMPLES", "auto_rto
            "vertical_damping_ratio", "choose_integrator", "initial_state", "ensemble_statistics", "SampleSetup",
            "sample_setup", "monte_carlo"]
 
-#: The registered Monte Carlo models (:mod:`screening.solvers.mc_registry`).
-MODELS = mc_registry.names()
 
-#: Fixed relative tolerance per model (each model's ``default_rtol``): ``rtol=DEFAULT_RTOL[model]`` reproduces the
-#: runs made before ``rtol="auto"`` became the default, and it is what :func:`auto_rtol` gives a model without a
-#: measured rule.  The coupled model's is tight: near overturning its samples are sensitive to integration error.
-DEFAULT_RTOL = {name: mc_registry.get(name).default_rtol for name in MODELS}
+def __getattr__(name):
+    """``MODELS``: the registered Monte Carlo models; ``DEFAULT_RTOL``: each one's ``default_rtol`` (what
+    ``rtol="auto"`` gives a model without a measured rule); both read from the registry when asked."""
+    if name == "MODELS":
+        return mc_registry.names()
+    if name == "DEFAULT_RTOL":
+        return {model: mc_registry.get(model).default_rtol for model in mc_registry.names()}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 #: ``rtol="auto"`` (the default): per model, the loosest relative tolerance whose bias of every ensemble statistic
 #: against a ``rtol = 1e-10`` run on the same samples was measured below a tenth of the plain Monte Carlo standard
@@ -635,6 +638,6 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
                                     "input_band_rad_s: same seed, same components below it" if read_plan is not plan
                                     else "the model read the synthesized samples up to cutoff_rad_s")
     if sample_histories:
-        ds["theta_sample"] = (("sample", "t"), theta, schema.attributes("theta_sample", schema.MONTE_CARLO))
+        ds["theta_sample"] = (("sample", "t"), theta, schema.attributes("theta_sample", MONTE_CARLO))
     return ds
 

@@ -13,8 +13,9 @@ import numpy as np
 
 from screening._version import __version__
 from screening.core import excitations, laws
-from screening.core.status import (AnswerQuantity, BestMethod, ContactRegime, EscalationEstimator, EscalationModel,
-                                   FitFlag, flag_attributes, PointStatus, probability_sources, SampleState, SpotStatus,
+from screening.core.registry import Live
+from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator,
+                                   FitFlag, flag_attributes, PointStatus, probability_sources, SampleState,
                                    TargetMet)
 from screening.solvers import mc_registry
 from screening.solvers.outputs import of_stage, OUTPUTS
@@ -41,7 +42,8 @@ CDO_LAYOUT = ("CDO: t first and unlimited (seconds since a placeholder reference
               "(screening export --layout cdo)")
 
 
-def _v(units, long_name, **extra):
+def cf(units, long_name, **extra):
+    """CF attributes ``units`` [UDUNITS], ``long_name`` and ``extra``."""
     return {"units": units, "long_name": long_name, **extra}
 
 
@@ -55,177 +57,144 @@ def _plain(attrs):
     return {k: v for k, v in attrs.items() if k != "note"}
 
 
-#: Model parameters (coordinates, swept or scalar).
-PARAMETERS = {
-    "m": _v("kg", "block mass"),
-    "b": _v("m", "half-width of the block base"),
-    "h": _v("m", "height of the centre of mass above the base"),
-    "I_cm": _v("kg m2", "moment of inertia about the centre of mass"),
-    "g": _v("m s-2", "gravitational acceleration"),
-    "k": _v("N m-2", "distributed foundation stiffness"),
-    **{name: _v(a["units"], a["long_name"]) for name, a in laws.parameters().items()},   # the contact laws'
-    "eps": _v("m-2", "cubic stiffness parameter of the contact law"),
-    "S0": _plain(OUTPUTS["S0"].attrs),
-    "pga": _v("m s-2", "target median peak ground acceleration of the input (S0 follows from it, band-limited "
-                       "as the Monte Carlo synthesis)"),
-    **{name: _v(p.units, p.long_name) for name, p in excitations.parameters().items()},   # the excitations'
-    "T1": _v("s", "envelope decay time T1"),
-    "T2": _v("s", "envelope rise time T2"),
-    "band_limit_hz": _v("Hz", "corner of the ground motion's band: order-4 Butterworth low-pass of the excitation's "
-                              "spectrum (screening.core.excitations.base.band_gain)",
-                        note="absent, or NaN in a case: no band, the idealized spectrum (band_limit_hz = \"none\"); "
-                             "the intensity measures then refer to a sharp 25 Hz"),
-}
+#: The tables the producing modules declare beside their code (:func:`declare`): name -> ``(table, prefix)``.
+DECLARED = {}
+
+
+def __getattr__(name):
+    """A declared table by its name in capitals (``MONTE_CARLO``, ``SIMULATION``, ``TRADEOFF``, ...), as its producer
+    declares it."""
+    if name.lower() in DECLARED:
+        return DECLARED[name.lower()][0]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def declare(name, table, prefix=""):
+    """Declare a producer's variables (``{variable: attributes}``) as ``name``, in the module that makes them;
+    :func:`attributes` finds them with ``prefix`` (``mcs_`` in sweeps; None: by name), or as its ``table``."""
+    DECLARED[name] = (table, prefix)
+    return table
+
+
+def _parameters():
+    """:data:`PARAMETERS`, read now (the contact laws' and excitations' parameters from their registries)."""
+    return {
+        "m": cf("kg", "block mass"),
+        "b": cf("m", "half-width of the block base"),
+        "h": cf("m", "height of the centre of mass above the base"),
+        "I_cm": cf("kg m2", "moment of inertia about the centre of mass"),
+        "g": cf("m s-2", "gravitational acceleration"),
+        "k": cf("N m-2", "distributed foundation stiffness"),
+        **{name: cf(a["units"], a["long_name"]) for name, a in laws.parameters().items()},   # the contact laws'
+        "eps": cf("m-2", "cubic stiffness parameter of the contact law"),
+        "S0": _plain(OUTPUTS["S0"].attrs),
+        "pga": cf("m s-2", "target median peak ground acceleration of the input (S0 follows from it, band-limited "
+                           "as the Monte Carlo synthesis)"),
+        **{name: cf(p.units, p.long_name) for name, p in excitations.parameters().items()},   # the excitations'
+        "T1": cf("s", "envelope decay time T1"),
+        "T2": cf("s", "envelope rise time T2"),
+        "band_limit_hz": cf("Hz", "corner of the ground motion's band: order-4 Butterworth low-pass of the "
+                                  "excitation's spectrum (screening.core.excitations.base.band_gain)",
+                            note="absent, or NaN in a case: no band, the idealized spectrum (band_limit_hz = "
+                                 "\"none\"); the intensity measures then refer to a sharp 25 Hz"),
+    }
+
+
+#: Model parameters (coordinates, swept or scalar), read when used.
+PARAMETERS = Live(_parameters)
 
 #: Quantities derived from the model (stored beside the parameters, never re-derived downstream).
 DERIVED = {
     **_declared(*(o.name for o in of_stage("model"))),           # theta_ul, slenderness
-    "m_sdof": _v("kg m2", "rotational inertia about the rocking edge, I_cm + m h2"),
-    "theta_capacity": _v("rad", "capacity angle of the condensation (no quasi-static equilibrium beyond; "
+    "m_sdof": cf("kg m2", "rotational inertia about the rocking edge, I_cm + m h2"),
+    "theta_capacity": cf("rad", "capacity angle of the condensation (no quasi-static equilibrium beyond; "
                                 "inf if none)"),
 }
 
 #: Linearization (stochastic linearization + Lyapunov moments).
 LINEARIZATION = {
     **_declared(*(o.name for o in of_stage("linearize"))),        # the moment solver's outputs
-    "peak_p_beyond_capacity": _v("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
+    "peak_p_beyond_capacity": cf("1", "Gaussian probability that |theta| exceeds theta_capacity at the peak "
                                       "var_theta"),
     # a linearize() result: the statuses the solver gives (a sweep's status also says when its task failed)
     "status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "solver status of the point"),
     # trust of the point (screening.analysis.trust.add_trust; k_eq_rest and var_theta_end stand in for the
     # histories in files that do not store them)
-    "k_eq_rest": _v("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
-    "var_theta_end": _v("rad2", "variance of the rocking rotation at the end of the record"),
+    "k_eq_rest": cf("N m rad-1", "equivalent linear rocking stiffness at rest (t = 0)"),
+    "var_theta_end": cf("rad2", "variance of the rocking rotation at the end of the record"),
     **_declared(*(o.name for o in of_stage("trust"))),           # the trust rule's flag and band
 }
 
 #: Best estimates of a sweep with ``[accuracy]`` (:mod:`screening.analysis.correction`) and its escalated Monte
 #: Carlo points (dimension ``escalation``).
 ACCURACY = {
-    "best_peak_var_theta": _v("rad2", "best estimate of the coupled model's peak variance of the rocking rotation"),
-    "best_peak_var_theta_se": _v("rad2", "standard error of best_peak_var_theta"),
-    "best_peak_var_theta_dot": _v("rad2 s-2", "best estimate of the coupled model's peak variance of the rocking "
+    "best_peak_var_theta": cf("rad2", "best estimate of the coupled model's peak variance of the rocking rotation"),
+    "best_peak_var_theta_se": cf("rad2", "standard error of best_peak_var_theta"),
+    "best_peak_var_theta_dot": cf("rad2 s-2", "best estimate of the coupled model's peak variance of the rocking "
                                               "angular velocity"),
-    "best_peak_var_theta_dot_se": _v("rad2 s-2", "standard error of best_peak_var_theta_dot"),
+    "best_peak_var_theta_dot_se": cf("rad2 s-2", "standard error of best_peak_var_theta_dot"),
     "best_method": flag_attributes(BestMethod, "source of the best estimate of peak var_theta at the point "
                                                "(best_peak_var_theta_dot follows its own ratio; its standard error "
                                                "is NaN where that cannot be vouched for)"),
-    "escalation": _v("1", "escalated Monte Carlo point index"),
-    "esc_sample": _v("1", "Monte Carlo sample index of an escalated point (input seeded with "
+    "escalation": cf("1", "escalated Monte Carlo point index"),
+    "esc_sample": cf("1", "Monte Carlo sample index of an escalated point (input seeded with "
                           "default_rng([seed, sample]))"),
-    "esc_case": _v("1", "case index of the escalated point"),
-    "esc_model": flag_attributes(EscalationModel, "Monte Carlo model of the escalated point"),
-    "esc_samples": _v("1", "Monte Carlo samples run at the escalated point"),
+    "esc_case": cf("1", "case index of the escalated point"),
+    "esc_samples": cf("1", "Monte Carlo samples run at the escalated point"),
     "esc_estimator": flag_attributes(EscalationEstimator, "estimator of esc_peak_var_theta and of the point's "
                                                           "p_overturn and p_exceed"),
-    "esc_cheap_samples": _v("1", "samples of the cheaper paired model at the escalated point (0: plain Monte Carlo)"),
-    "esc_correlation": _v("1", "correlation of the paired models' influence values of var_theta at its peak time "
+    "esc_cheap_samples": cf("1", "samples of the cheaper paired model at the escalated point (0: plain Monte Carlo)"),
+    "esc_correlation": cf("1", "correlation of the paired models' influence values of var_theta at its peak time "
                                "(NaN without a paired model)"),
-    "esc_cpu_time": _v("s", "CPU time of the Monte Carlo runs at the escalated point (pilot and top-up "
+    "esc_cpu_time": cf("s", "CPU time of the Monte Carlo runs at the escalated point (pilot and top-up "
                             "included), measured"),
-    "esc_cost": _v("s", "CPU time of the Monte Carlo runs at the escalated point estimated by the cost model "
+    "esc_cost": cf("s", "CPU time of the Monte Carlo runs at the escalated point estimated by the cost model "
                         "from their integration steps (the wall budget's projections scale it by the measured rate)"),
-    "esc_transition": _v("1", "1: the escalated point lies in the transition of a fragility curve (it went first and "
+    "esc_transition": cf("1", "1: the escalated point lies in the transition of a fragility curve (it went first and "
                               "ran to a standard error of PROBABILITY_SE of every probability); 0: a covering point "
                               "(run to target / 2 of peak var_theta)"),
     "esc_target_met": flag_attributes(TargetMet, "whether the point's Monte Carlo reached its standard error: "
                                                  "PROBABILITY_SE of every probability where they answer the point "
                                                  "(a transition point, or a sample reached a level), else target / 2 "
                                                  "of peak var_theta"),
-    "esc_sl_peak_var_theta": _v("rad2", "linearization peak var_theta at the escalated point"),
-    "esc_sl_peak_var_theta_dot": _v("rad2 s-2", "linearization peak var_theta_dot at the escalated point"),
-    "esc_peak_var_theta": _v("rad2", "Monte Carlo peak var_theta at the escalated point"),
-    "esc_peak_var_theta_se": _v("rad2", "standard error of esc_peak_var_theta (at the peak time)"),
-    "esc_peak_var_theta_dot": _v("rad2 s-2", "Monte Carlo peak var_theta_dot at the escalated point"),
-    "esc_peak_var_theta_dot_se": _v("rad2 s-2", "standard error of esc_peak_var_theta_dot (at the peak time)"),
-    "esc_n_overturned": _v("1", "overturned Monte Carlo samples at the escalated point"),
-    "esc_n_diverged": _v("1", "diverged Monte Carlo samples at the escalated point"),
-    "esc_n_used": _v("1", "Monte Carlo samples in the statistics at the escalated point"),
-    "esc_peak_abs_theta": _v("rad", "peak |theta| of each Monte Carlo sample at the escalated point (NaN beyond "
+    "esc_sl_peak_var_theta": cf("rad2", "linearization peak var_theta at the escalated point"),
+    "esc_sl_peak_var_theta_dot": cf("rad2 s-2", "linearization peak var_theta_dot at the escalated point"),
+    "esc_peak_var_theta": cf("rad2", "Monte Carlo peak var_theta at the escalated point"),
+    "esc_peak_var_theta_se": cf("rad2", "standard error of esc_peak_var_theta (at the peak time)"),
+    "esc_peak_var_theta_dot": cf("rad2 s-2", "Monte Carlo peak var_theta_dot at the escalated point"),
+    "esc_peak_var_theta_dot_se": cf("rad2 s-2", "standard error of esc_peak_var_theta_dot (at the peak time)"),
+    "esc_n_overturned": cf("1", "overturned Monte Carlo samples at the escalated point"),
+    "esc_n_diverged": cf("1", "diverged Monte Carlo samples at the escalated point"),
+    "esc_n_used": cf("1", "Monte Carlo samples in the statistics at the escalated point"),
+    "esc_peak_abs_theta": cf("rad", "peak |theta| of each Monte Carlo sample at the escalated point (NaN beyond "
                                     "esc_samples)"),
     "esc_sample_state": flag_attributes(SampleState, "state of each Monte Carlo sample of the escalated point"),
-    "esc_grid_index": _v("1", "flat C-order grid index of the escalated point"),
+    "esc_grid_index": cf("1", "flat C-order grid index of the escalated point"),
 }
 
 #: Sweep results: a point's status also says when its task failed.
 
-#: Monte Carlo ensembles (``monte_carlo``); in sweeps the same names carry the prefix ``mcs_``.
-MONTE_CARLO = {
-    "var_theta": _v("rad2", "Monte Carlo ensemble variance of the rocking rotation"),
-    "var_theta_dot": _v("rad2 s-2", "Monte Carlo ensemble variance of the rocking angular velocity"),
-    "cov_theta_theta_dot": _v("rad2 s-1", "Monte Carlo ensemble covariance of theta and theta'"),
-    "var_theta_se": _v("rad2", "standard error of the Monte Carlo rotation variance"),
-    "var_theta_dot_se": _v("rad2 s-2", "standard error of the Monte Carlo angular-velocity variance"),
-    "p_uplift": _v("1", "fraction of Monte Carlo samples in uplift"),
-    "peak_abs_theta": _v("rad", "peak |theta| of each Monte Carlo sample over the record (up to overturning "
-                                "or divergence)"),
-    "theta_sample": _v("rad", "rotation of each Monte Carlo sample on the output times (meaningless after the "
-                              "sample overturned or diverged)"),
-    "overturned": _v("1", "Monte Carlo sample overturned (|theta| > atan(b/h))"),
-    "diverged": _v("1", "Monte Carlo sample diverged (excluded from the statistics)"),
-    "n_steps": _v("1", "integration steps of the sample (accepted + rejected)"),
-    "n_overturned": _v("1", "number of overturned Monte Carlo samples"),
-    "n_diverged": _v("1", "number of diverged Monte Carlo samples"),
-    "n_used": _v("1", "number of Monte Carlo samples in the statistics"),
-    "peak_var_theta": _v("rad2", "peak over the output times of the Monte Carlo rotation variance"),
-    "peak_var_theta_dot": _v("rad2 s-2", "peak over the output times of the Monte Carlo angular-velocity "
-                                         "variance"),
-    "rel_error_peak_var_theta": _v("1", "relative error of the linearization's peak var_theta against Monte "
-                                        "Carlo, (max_t lin - max_t mcs) / max_t mcs on the output times"),
-    "rel_error_peak_var_theta_dot": _v("1", "relative error of the linearization's peak var_theta_dot "
-                                            "against Monte Carlo, (max_t lin - max_t mcs) / max_t mcs"),
-    "sample_state": flag_attributes(SampleState, "state of each Monte Carlo sample at the end of the record"),
-    "status": flag_attributes(SpotStatus, "status of the Monte Carlo spot check"),
-    # screening.analysis.probabilities.sample_probabilities (over the samples that did not diverge)
-    "p_overturn": _v("1", "fraction of the Monte Carlo samples that overturned (|theta| > atan(b/h))"),
-    "p_overturn_se": _v("1", "standard error of p_overturn (binomial, Agresti-Coull)"),
-    "p_exceed": _v("1", "fraction of the Monte Carlo samples whose peak |theta| exceeds the threshold "
-                        "(overturned samples count)"),
-    "p_exceed_se": _v("1", "standard error of p_exceed (binomial, Agresti-Coull)"),
-    "threshold": _v("rad", "rotation threshold of p_exceed"),
-}
-
 #: Small probabilities by subset simulation (:func:`screening.solvers.tail.tail_probability`).
 TAIL = {
-    "p_overturn": _v("1", "probability that the block overturns (|theta| > atan(b/h)), by subset simulation"),
-    "p_overturn_se": _v("1", "standard error of p_overturn (p_overturn x p_overturn_cov)"),
-    "p_overturn_cov": _v("1", "coefficient of variation of p_overturn (Au & Beck, with the chain correlation)"),
-    "p_exceed": _v("1", "probability that the peak |theta| exceeds the threshold (overturning counts), by subset "
+    "p_overturn": cf("1", "probability that the block overturns (|theta| > atan(b/h)), by subset simulation"),
+    "p_overturn_se": cf("1", "standard error of p_overturn (p_overturn x p_overturn_cov)"),
+    "p_overturn_cov": cf("1", "coefficient of variation of p_overturn (Au & Beck, with the chain correlation)"),
+    "p_exceed": cf("1", "probability that the peak |theta| exceeds the threshold (overturning counts), by subset "
                         "simulation"),
-    "p_exceed_se": _v("1", "standard error of p_exceed (p_exceed x p_exceed_cov)"),
-    "p_exceed_cov": _v("1", "coefficient of variation of p_exceed (Au & Beck, with the chain correlation)"),
-    "threshold": _v("rad", "rotation threshold of p_exceed"),
-    "level_threshold": _v("rad", "intermediate threshold of peak |theta| of each subset level"),
-    "level_gamma": _v("1", "correlation factor gamma of the Markov chains of each subset level"),
+    "p_exceed_se": cf("1", "standard error of p_exceed (p_exceed x p_exceed_cov)"),
+    "p_exceed_cov": cf("1", "coefficient of variation of p_exceed (Au & Beck, with the chain correlation)"),
+    "threshold": cf("rad", "rotation threshold of p_exceed"),
+    "level_threshold": cf("rad", "intermediate threshold of peak |theta| of each subset level"),
+    "level_gamma": cf("1", "correlation factor gamma of the Markov chains of each subset level"),
 }
 
-#: Fragility (exceedance of a rotation threshold).
-FRAGILITY = {
-    **_declared("p_exceed"),
-    "p_exceed_at_spot": _v("1", "Gaussian probability that |theta| exceeds the threshold, at the spot point"),
-    "mcs_p_exceed": _v("1", "probability that |theta| exceeds the threshold, from the Monte Carlo peaks"),
-    "mcs_p_exceed_se": _v("1", "standard error of mcs_p_exceed (binomial)"),
-    "threshold_rad": _v("rad", "rotation threshold"),
-    "best_p_exceed": _v("1", "probability that |theta| exceeds the threshold from the best estimates (Monte Carlo "
-                             "where it ran, else the Gaussian up-crossing of the corrected moments)"),
-    "best_p_exceed_low": _v("1", "lower end of the band of best_p_exceed (2 standard errors)"),
-    "best_p_exceed_high": _v("1", "upper end of the band of best_p_exceed (2 standard errors)"),
-    "beta": _v("1", "lognormal dispersion beta of the fragility curve"),
-    "fit_median": {"long_name": "median of the lognormal fragility curve (units of the intensity it is fitted over)"},
-    "fit_flag": {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"},
-    "fit_n_unvouched": _v("1", "points of the curve left out of the fit: nothing vouches for their value (untrusted "
-                              "or stopped linearization without a best estimate or Monte Carlo)"),
-    "fit_im_min": {"long_name": "lowest vouched intensity of the curve (units of the intensity it is fitted over)"},
-    "fit_im_max": {"long_name": "highest vouched intensity of the curve (units of the intensity it is fitted over)"},
-    "fit_median_se": {"long_name": "standard error of fit_median from the standard errors of the fitted points "
-                                   "(units of the intensity it is fitted over)"},
-    "beta_se": _v("1", "standard error of beta from the standard errors of the fitted points"),
-}
+#: The attributes of ``fit_flag``, the state of a fitted lognormal fragility curve.
+FIT_FLAG = {**flag_attributes(FitFlag, "state of the lognormal fit"), "units": "1"}
 
 #: Probabilities of overturning and of exceedance at every point of a sweep with ``[accuracy]`` or
 #: ``[fragility]`` (:mod:`screening.sweep.probabilities`), and the closed-form probability that rocking
 #: starts at all (every point; :func:`screening.analysis.intensity.rocking_start_probability`).
-#: ``p_exceed`` is found in :data:`FRAGILITY` first, with the same declared attributes; ``p_source`` is
+#: ``p_exceed`` is :mod:`screening.analysis.fragility`'s too, with the same declared attributes; ``p_source`` is
 #: declared by :func:`probability_source_attributes`.
 PROBABILITIES = {
     **_declared(*(o.name for o in of_stage("probabilities", "rocking"))),
@@ -249,7 +218,7 @@ def probability_source_attributes():
         the order of the values).
 
     """
-    codes = sorted(probability_sources(mc_registry.names()).items(), key=lambda item: item[1])
+    codes = sorted(probability_sources(mc_registry.codes()).items(), key=lambda item: item[1])
     return {"units": "1", "long_name": "model that produced p_overturn and p_exceed at the point",
             "flag_values": np.array([c for _, c in codes], dtype=np.int8),
             "flag_meanings": " ".join(name for name, _ in codes)}
@@ -257,125 +226,30 @@ def probability_source_attributes():
 
 def monte_carlo_model_attributes():
     """CF flag attributes of the per-spot ``mcs_model``: the Monte Carlo model that ran there (with ``model =
-    "auto"`` the one chosen for the point), one value per registered model and -1 (``none``) where the spot
+    "auto"`` the one chosen for the point), each registered model's flag code and -1 (``none``) where the spot
     check's task failed, an integer flag variable without a fill value (read when asked)."""
-    from screening.solvers import mc_registry
-
-    names = mc_registry.names()
+    codes = sorted(mc_registry.codes().items(), key=lambda item: item[1])
     return {"units": "1", "long_name": "Monte Carlo model that produced the spot point's statistics",
-            "flag_values": np.arange(-1, len(names), dtype=np.int8), "flag_meanings": " ".join(("none", *names)),
+            "flag_values": np.array([-1, *(c for _, c in codes)], dtype=np.int8),
+            "flag_meanings": " ".join(("none", *(name for name, _ in codes))),
             "comment": "none: the spot check's task failed (no model ran)"}
 
-
-#: Speed-accuracy trade study (:mod:`screening.report.tradeoff`): its variables and label coordinates.
-TRADEOFF = {
-    # coordinates
-    "approach": {"long_name": "method: sl (stochastic linearization), condensed_mcs, coupled_mcs"},
-    "mcs_model": {"long_name": "Monte Carlo model"},
-    "comparison": {"long_name": "estimate_vs_reference", "note": "relative errors are estimate/reference - 1"},
-    "quantity": {"long_name": "response variance compared"},
-    "point": {"long_name": "grid point index"},
-    "point_name": {"long_name": "grid point label"},
-    "family": {"long_name": "excitation family"},
-    "excitation_kind": {"long_name": "excitation kind"},
-    "omega_g": {**PARAMETERS["omega_g"], "note": "NaN for white noise"},
-    "zeta_g": {**PARAMETERS["zeta_g"], "note": "NaN for white noise"},
-    "target_peak_p_uplift": _v("1", "target SL peak uplift probability used to calibrate S0"),
-    "rep_point_index": {"long_name": "grid point index of a representative point"},
-    "rep_point_name": {"long_name": "label"},
-    "cv_model": {"long_name": "Monte Carlo model (convergence study)"},
-    "n_samples": _v("1", "Monte Carlo sample count"),
-    "rtol_factor": _v("1", "factor on the model's default MCS rtol"),
-    "sl_setting": {"long_name": "SL numerics setting"},
-    "sl_setting_kind": {"long_name": "which parameter is varied"},
-    "sl_rtol": _v("1", "SL relative tolerance"),
-    "sl_h_max": _v("s", "SL largest step (NaN: default t_end/20)"),
-    # histories and per-point results of each method
-    "var_theta": _v("rad2", "var_theta by each method", note="MCS: over surviving samples"),
-    "var_theta_dot": _v("rad2 s-2", "var_theta_dot by each method", note="MCS: over surviving samples"),
-    "var_theta_se": _v("rad2", "Monte Carlo standard error of var_theta (NaN for sl)"),
-    "var_theta_dot_se": _v("rad2 s-2", "Monte Carlo standard error of var_theta_dot (NaN for sl)"),
-    "p_uplift": _v("1", "uplift probability / occupancy"),
-    "cost": _v("s", "wall time per point on one core"),
-    "n_overturned": _v("1", "overturned samples"),
-    "n_diverged": _v("1", "diverged samples"),
-    "n_used": _v("1", "samples in the statistics (survivors)"),
-    "overturned_fraction": _v("1", "fraction of samples that overturned (statistics are over survivors)"),
-    "sl_status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "SL solver status"),
-    "sl_peak_p_uplift": _v("1", "SL peak uplift probability (eq. 58)"),
-    "sl_min_k_eq": _v("N m rad-1", "SL minimum equivalent stiffness"),
-    "sl_k_eq0": _v("N m rad-1", "SL equivalent stiffness at t = 0"),
-    "k_eq_margin": _v("1", "min_k_eq / k_eq(t=0) from SL"),
-    "peak_var_theta": _v("rad2", "peak over time of var_theta"),
-    "peak_var_theta_se": _v("rad2", "Monte Carlo standard error of peak_var_theta (at the peak time; 0 for sl)"),
-    "peak_var_theta_dot": _v("rad2 s-2", "peak over time of var_theta_dot"),
-    "peak_var_theta_dot_se": _v("rad2 s-2", "Monte Carlo standard error of peak_var_theta_dot (at the peak time; "
-                                            "0 for sl)"),
-    # errors of each comparison
-    "peak_rel_error": _v("1", "relative error of the peak: max_t estimate / max_t reference - 1"),
-    "peak_rel_se": _v("1", "standard error of the peak difference / reference peak (quadrature for MCS vs MCS)"),
-    "peak_significant": _v("1", "1 if |peak difference| > 2 SE"),
-    "time_avg_rel_error": _v("1", "int |estimate - reference| dt / int |reference| dt where both are defined"),
-    "time_avg_rel_se": _v("1", "int SE dt / int |reference| dt (noise floor of time_avg_rel_error)"),
-    "time_avg_significant": _v("1", "1 if time_avg_rel_error > 2 time_avg_rel_se"),
-    # Monte Carlo vs sample count and tolerance
-    "cv_peak_var_theta": _v("rad2", "MCS peak var_theta vs sample count"),
-    "cv_peak_var_theta_se": _v("rad2", "its standard error"),
-    "cv_peak_var_theta_dot": _v("rad2 s-2", "MCS peak var_theta_dot"),
-    "cv_peak_var_theta_dot_se": _v("rad2 s-2", "its standard error"),
-    "cv_cost": _v("s", "wall time per point, one core"),
-    "cv_n_overturned": _v("1", "overturned samples"),
-    "cv_deviation_vs_reference": _v("1", "peak var_theta / peak at the largest sample count (same model) - 1",
-                                    note="nested samples (same seed): the reference contains the smaller ensembles"),
-    "cv_rel_se": _v("1", "relative standard error of peak var_theta"),
-    "cv_sl_peak_var_theta": _v("rad2", "SL peak var_theta"),
-    "tol_peak_var_theta": _v("rad2", "MCS peak var_theta vs tolerance (same seed)"),
-    "tol_peak_var_theta_se": _v("rad2", "its standard error"),
-    "tol_cost": _v("s", "wall time per point, one core"),
-    "tol_n_overturned": _v("1", "overturned samples"),
-    "tol_change_vs_tightest": _v("1", "peak var_theta / peak at the tightest tolerance - 1 (paired samples)"),
-    # SL numerics
-    "sl_cost": _v("s", "SL wall time per point (single-point call, median)"),
-    "sl_n_steps": _v("1", "SL solver steps"),
-    "sl_numerical_peak_error": _v("1", "SL peak var_theta / tight-tolerance reference - 1"),
-    "sl_numerical_time_avg_error": _v("1", "SL time-averaged relative error of var_theta vs the tight-tolerance "
-                                           "reference"),
-    "sl_batched_cost": _v("s", "SL wall time per point in batched calls"),
-}
-
-#: Deterministic simulation of one record (:func:`screening.simulate`).
-SIMULATION = {
-    "theta": _v("rad", "rocking rotation (theta > 0 presses edge B, the +x side, into the bed)"),
-    "theta_dot": _v("rad s-1", "rocking angular velocity"),
-    "z_cb": _v("m", "indentation of the base centre into the bed (coupled model; 0 condensed)"),
-    "z_cb_dot": _v("m s-1", "indentation rate of the base centre (coupled model; 0 condensed)"),
-    "contact_regime": {**flag_attributes(ContactRegime, "contact regime"), "units": "1"},
-    "ground_acceleration": _v("m s-2", "horizontal ground acceleration (usual convention: > 0 towards +x)"),
-    "vertical_ground_acceleration": _v("m s-2", "vertical ground acceleration that entered the model (> 0 up: "
-                                                "g + a_v acts on the block)"),
-    "lift_off": _v("1", "g + a_v < 0 somewhere in the record: the ground pulls away from the block (coupled: "
-                        "flight; condensed and stiff-bed: stopped, diverged with reason lift_off)"),
-    "peak_abs_theta": _v("rad", "peak |theta| over the record (up to overturning or divergence)"),
-    "overturned": _v("1", "the block overturned (|theta| > atan(b/h))"),
-    "diverged": _v("1", "the integration diverged"),
-    "overturning_time": _v("s", "time at which |theta| first exceeded atan(b/h) (NaN if it did not)"),
-}
 
 #: Intensity measures of the inputs (:mod:`screening.analysis.intensity`) and of records.
 INTENSITY = {
     **{name: _plain(OUTPUTS[name].attrs) for name in ("pga_median", "rms_acceleration", "arias_intensity")},
-    "sa_median": _v("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
-    "pgv_median": _v("m s-1", "median peak ground velocity of the modulated input, 2nd-order Butterworth "
+    "sa_median": cf("m s-2", "median 5 %-damped pseudo-spectral acceleration at the stated period"),
+    "pgv_median": cf("m s-1", "median peak ground velocity of the modulated input, 2nd-order Butterworth "
                               "high-pass at omega_low (random-vibration theory)"),
-    "avgsa_median": _v("m s-2", "median average spectral acceleration: geometric mean of Sa(T_i, 5 %) over 10 "
+    "avgsa_median": cf("m s-2", "median average spectral acceleration: geometric mean of Sa(T_i, 5 %) over 10 "
                                 "periods log-spaced in [0.2 T, 1.5 T]"),
-    "pga": _v("m s-2", "peak ground acceleration of the record"),
-    "pgv": _v("m s-1", "peak ground velocity of the record (2nd-order Butterworth high-pass at 0.1 Hz, "
+    "pga": cf("m s-2", "peak ground acceleration of the record"),
+    "pgv": cf("m s-1", "peak ground velocity of the record (2nd-order Butterworth high-pass at 0.1 Hz, "
                        "trapezoidal integration)"),
-    "avgsa": _v("m s-2", "average spectral acceleration of the record: geometric mean of Sa(T_i, 5 %) over 10 "
+    "avgsa": cf("m s-2", "average spectral acceleration of the record: geometric mean of Sa(T_i, 5 %) over 10 "
                          "periods log-spaced in [0.2 T, 1.5 T]"),
-    "sa": _v("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
-    "fit_flag": FRAGILITY["fit_flag"],
+    "sa": cf("m s-2", "5 %-damped pseudo-spectral acceleration of the record at the stated period"),
+    "fit_flag": FIT_FLAG,
 }
 
 #: Per-point variables of a sweep that no other table declares: the status (with the failed tasks) and the
@@ -385,29 +259,6 @@ SWEEP = _declared("status", *(o.name for o in of_stage("intensity")))
 #: Model inputs stored per point where the study derives them: ``S0`` from a target PGA (``excitation.pga``).
 SWEEP_INPUTS = _declared(*(o.name for o in of_stage("inputs")))
 
-#: Cloud analysis (:mod:`screening.applications.cloud`): one row per record, then the fitted fragility.
-CLOUD = {
-    **{name: SIMULATION[name] for name in ("peak_abs_theta", "overturned", "overturning_time")},
-    "diverged": _v("1", "the integration diverged or its task failed (left out of the fit)"),
-    "lift_off": SIMULATION["lift_off"],
-    **{name: INTENSITY[name] for name in ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa",
-                                          "fit_flag")},
-    "record": _v("1", "record index"),
-    "record_name": {"long_name": "record name"},
-    "exceed": _v("1", "peak |theta| above the threshold, or overturned"),
-    "threshold_rad": _v("rad", "rotation threshold"),
-    "slenderness": _v("rad", "slenderness angle atan(b/h)"),
-    "level": _v("1", "intensity level of the stripe (units of the intensity measure)"),
-    "n_exceed": _v("1", "records exceeding the threshold at the level"),
-    "n_used": _v("1", "records integrated at the level (not diverged)"),
-    "fit_median_se": _v("1", "standard error of fit_median (units of the intensity; stripes: observed information, "
-                             "sweeps: from the standard errors of the fitted points)"),
-    "beta_se": _v("1", "standard error of beta (stripes: observed information, sweeps: from the standard errors of "
-                       "the fitted points)"),
-    **{f"stripe_{name}": _v("1", f"{name} of the stripe (records scaled to it)") for name in
-       ("pga", "sa", "rms_acceleration", "arias_intensity", "pgv", "avgsa")},
-}
-
 #: Calibration of the trust rule (``benchmarks/trust_calibration.py`` -> ``screening/data/trust_calibration.nc``).
 TRUST_CALIBRATION = {
     "point": {"long_name": "calibration point name"},
@@ -415,38 +266,38 @@ TRUST_CALIBRATION = {
     "family": {"long_name": "block and bed family of the calibration point"},
     "excitation_kind": {"long_name": "excitation kind"},
     "contact": {"long_name": "contact law"},
-    "target_peak_p_uplift": _v("1", "target SL peak uplift probability used to find S0 (paper condensation)"),
+    "target_peak_p_uplift": cf("1", "target SL peak uplift probability used to find S0 (paper condensation)"),
     "omega_g": {**PARAMETERS["omega_g"], "note": "NaN for white noise"},
     "zeta_g": {**PARAMETERS["zeta_g"], "note": "NaN for white noise"},
-    "sl_peak_p_uplift": _v("1", "SL peak uplift probability"),
-    "sl_k_eq_margin": _v("1", "SL min_k_eq / k_eq at rest"),
-    "sl_sigma_ratio": _v("1", "SL sqrt(peak var_theta) / slenderness angle"),
-    "sl_decay_excess": _v("1", "SL (var_theta(t_end) / peak var_theta) / (q(t_end)^2 / max q^2)"),
-    "sl_peak_var_theta": _v("rad2", "SL peak var_theta"),
+    "sl_peak_p_uplift": cf("1", "SL peak uplift probability"),
+    "sl_k_eq_margin": cf("1", "SL min_k_eq / k_eq at rest"),
+    "sl_sigma_ratio": cf("1", "SL sqrt(peak var_theta) / slenderness angle"),
+    "sl_decay_excess": cf("1", "SL (var_theta(t_end) / peak var_theta) / (q(t_end)^2 / max q^2)"),
+    "sl_peak_var_theta": cf("rad2", "SL peak var_theta"),
     "sl_status": flag_attributes([s for s in PointStatus if s >= PointStatus.ok], "SL solver status",
                                  ) | {"note": "-2: the condensation does not apply to the point (no SL run)"},
-    "sl_error": _v("1", "relative error of SL's peak var_theta against coupled MCS, SL / MCS - 1"),
-    "sl_error_se": _v("1", "Monte Carlo standard error of sl_error"),
+    "sl_error": cf("1", "relative error of SL's peak var_theta against coupled MCS, SL / MCS - 1"),
+    "sl_error_se": cf("1", "Monte Carlo standard error of sl_error"),
     **{f"{model}_{name}": value for model in ("coupled", "condensed") for name, value in {
-        "peak_var_theta": _v("rad2", f"{model} MCS peak var_theta over surviving samples"),
-        "peak_var_theta_se": _v("rad2", f"standard error of the {model} MCS peak var_theta (at the peak time)"),
-        "n_overturned": _v("1", f"overturned {model} MCS samples"),
-        "n_diverged": _v("1", f"diverged {model} MCS samples"),
-        "n_samples": _v("1", f"{model} MCS samples"),
-        "peak_p_uplift": _v("1", f"{model} MCS peak uplift occupancy"),
-        "var_theta_end": _v("rad2", f"{model} MCS var_theta at the end of the record"),
-        "wall": _v("s", f"{model} MCS wall time"),
+        "peak_var_theta": cf("rad2", f"{model} MCS peak var_theta over surviving samples"),
+        "peak_var_theta_se": cf("rad2", f"standard error of the {model} MCS peak var_theta (at the peak time)"),
+        "n_overturned": cf("1", f"overturned {model} MCS samples"),
+        "n_diverged": cf("1", f"diverged {model} MCS samples"),
+        "n_samples": cf("1", f"{model} MCS samples"),
+        "peak_p_uplift": cf("1", f"{model} MCS peak uplift occupancy"),
+        "var_theta_end": cf("rad2", f"{model} MCS var_theta at the end of the record"),
+        "wall": cf("s", f"{model} MCS wall time"),
     }.items()},
 }
 
 #: Index and label coordinates.
 COORDINATES = {
     "t": TIME,
-    "sample": _v("1", "Monte Carlo sample index (input seeded with default_rng([seed, sample]))"),
-    "spot": _v("1", "Monte Carlo spot-check index"),
-    "case": _v("1", "case index (names in case_name)"),
+    "sample": cf("1", "Monte Carlo sample index (input seeded with default_rng([seed, sample]))"),
+    "spot": cf("1", "Monte Carlo spot-check index"),
+    "case": cf("1", "case index (names in case_name)"),
     "case_name": {"long_name": "case name (the [[case]] tables of the study file)"},
-    "spot_case": _v("1", "case index of the spot point"),
+    "spot_case": cf("1", "case index of the spot point"),
     "spot_case_name": {"long_name": "case name of the spot point"},
     # model labels of each case, on dimension case (sweeps whose cases differ in them)
     # a swept k: its values with units in the auxiliary coordinate k_value (grid_coordinate_attributes)
@@ -534,7 +385,7 @@ def attributes(name, table=None):
     name : str
         A variable or coordinate name.
     table : dict, optional
-        A producer's own table (``MONTE_CARLO``, ``TRADEOFF``, ...), tried first.
+        A producer's own table (``TRADEOFF``, :data:`screening.solvers.datasets.MONTE_CARLO`, ...), tried first.
 
     Returns
     -------
@@ -554,13 +405,17 @@ def attributes(name, table=None):
         return probability_source_attributes()
     if name == "mcs_model":
         return monte_carlo_model_attributes()
+    if name == "esc_model":                         # the registered models' escalation codes, read now
+        return flag_attributes(mc_registry.escalation_models(), "Monte Carlo model of the escalated point")
     tables = ([table] if table is not None else []) + [LINEARIZATION, PARAMETERS, DERIVED, COORDINATES,
-                                                       FRAGILITY, ACCURACY, PROBABILITIES]
+                                                       ACCURACY, PROBABILITIES]
+    tables += [t for t, prefix in DECLARED.values() if prefix is None]     # the shared declared ones
     for t in tables:
         if name in t:
             return dict(t[name])
-    if name.startswith("mcs_") and name[4:] in MONTE_CARLO:
-        return dict(MONTE_CARLO[name[4:]])
+    for declared, prefix in DECLARED.values():
+        if prefix and name.startswith(prefix) and name[len(prefix):] in declared:
+            return dict(declared[name[len(prefix):]])
     if name.startswith("spot_"):
         base = attributes(name[5:])
         return {**base, "long_name": f"{base['long_name']} at the spot point"}
@@ -600,7 +455,7 @@ def global_attributes(version, **extra):
 def apply_schema(ds, table=None, **global_attrs):
     """``ds`` with the declared attributes on every data variable and coordinate, and the global ones.
 
-    ``table``: the producer's own table (e.g. :data:`MONTE_CARLO` for ``monte_carlo``) tried before the
+    ``table``: the producer's own table (e.g. ``datasets.MONTE_CARLO`` for ``monte_carlo``) tried before the
     shared ones.  Existing attributes other than ``units``, ``long_name`` and flags are kept.
     Raises ``KeyError`` naming any variable that is not declared.
 

@@ -41,7 +41,6 @@ import numpy as np
 import xarray as xr
 
 from screening.core import condensation as condensations
-from screening.solvers import schema
 from screening.core.physics.contact import (REGIME_FLIGHT, REGIME_FULL_CONTACT, REGIME_NAMES,
                                             REGIME_UPLIFT_NEGATIVE, REGIME_UPLIFT_POSITIVE, contact_regime)
 from screening.core.records import Record
@@ -51,11 +50,30 @@ from screening.solvers.datasets import finish
 from screening.solvers.mc_models import quasi_static_indentation  # noqa: F401  (its former home)
 from screening.solvers.model_choice import resolve as resolve_model
 from screening.solvers.montecarlo import check_scalar_models
-from screening.core.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason
+from screening.core.status import ContactRegime, DIVERGENCE_TEXT, DivergenceReason, flag_attributes
+from screening.solvers.schema import cf, declare
 from screening.core.validation import check_integer, check_scalar
 from screening.core import limits
 
 __all__ = ["simulate"]
+
+#: The variables of a deterministic simulation of one record (:func:`simulate`), declared here.
+SIMULATION = declare("simulation", {
+    "theta": cf("rad", "rocking rotation (theta > 0 presses edge B, the +x side, into the bed)"),
+    "theta_dot": cf("rad s-1", "rocking angular velocity"),
+    "z_cb": cf("m", "indentation of the base centre into the bed (coupled model; 0 condensed)"),
+    "z_cb_dot": cf("m s-1", "indentation rate of the base centre (coupled model; 0 condensed)"),
+    "contact_regime": {**flag_attributes(ContactRegime, "contact regime"), "units": "1"},
+    "ground_acceleration": cf("m s-2", "horizontal ground acceleration (usual convention: > 0 towards +x)"),
+    "vertical_ground_acceleration": cf("m s-2", "vertical ground acceleration that entered the model (> 0 up: "
+                                                "g + a_v acts on the block)"),
+    "lift_off": cf("1", "g + a_v < 0 somewhere in the record: the ground pulls away from the block (coupled: "
+                        "flight; condensed and stiff-bed: stopped, diverged with reason lift_off)"),
+    "peak_abs_theta": cf("rad", "peak |theta| over the record (up to overturning or divergence)"),
+    "overturned": cf("1", "the block overturned (|theta| > atan(b/h))"),
+    "diverged": cf("1", "the integration diverged"),
+    "overturning_time": cf("s", "time at which |theta| first exceeded atan(b/h) (NaN if it did not)"),
+})
 
 #: Most sub-intervals on which the overturning time is located.
 MAX_OVERTURN_RESOLUTION = 100_000
@@ -305,5 +323,5 @@ def simulate(block, foundation, ground_acceleration, dt=None, model="coupled", t
     if use_vertical:
         data["vertical_ground_acceleration"] = ("t", np.interp(times, dt * np.arange(n_grid), vertical_input[0][0]))
         data["lift_off"] = ((), bool(np.any(float(block.g) + record.vertical < 0.0)))
-    return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=schema.SIMULATION)
+    return finish(xr.Dataset(data, coords=coords, attrs=attrs), table=SIMULATION)
 

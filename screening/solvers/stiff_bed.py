@@ -79,6 +79,7 @@ from screening.core import laws
 from screening.core.condensation import cubic
 from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.core.model import Block, Foundation
+from screening.core.status import BestMethod, EscalationModel
 from screening.kernels import mcs_kernels as kern
 from screening.kernels.stiff_bed_contact import (gravity_ratio, housner_restitution, indentation_curvature,
                                                  indentation_curvature_jit, potential, rocking_acceleration,
@@ -466,6 +467,10 @@ class StiffBedModel(MonteCarloModel):
     (the model's first kernel: its cost and sample paths at a given tolerance, for comparisons).
     """
 
+    flag_code = 2
+    escalation_code = EscalationModel.stiff_bed
+    step_cost_s = 0.2e-6           # where the full-contact share is not known (analysis.escalation)
+    best_method = BestMethod.stiff_bed_monte_carlo
     name = "stiff_bed"
     description = ("rigid block on the quasi-static contact of the cubic condensation, transfer loss "
                    "derived from the coupled model's free rocking (docs/stiff_bed.md)")

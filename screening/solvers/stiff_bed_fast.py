@@ -153,6 +153,7 @@ class FastStiffBedModel(StiffBedModel):
     band and validity) integrated by the exact-contact kernel (module docstring).  ``transfer`` and ``band``
     as the reference's; the transfer is always located (at the zero crossing, in closed form)."""
 
+    flag_code = 3
     name = "stiff_bed_fast"
     description = ("the stiff-bed model with closed-form full contact, located phase changes and dense output "
                    "(docs/stiff_bed.md, 'Exact-contact sampler')")

@@ -25,9 +25,10 @@ from screening.analysis.escalation import auto_escalation_model
 from screening.analysis.trust import shipped_calibration, trust_indicators
 from screening.core import limits
 from screening.core.progress import Progress
-from screening.core.status import BestMethod, EscalationEstimator, EscalationModel, SampleState
+from screening.core.status import BestMethod, EscalationEstimator, SampleState
 from screening.io.errors import exception_line, write_failure_reason
 from screening.io.writer import Variable
+from screening.solvers import mc_registry
 from screening.solvers.model_choice import AUTO, choose, sampler_of
 from screening.solvers.schema import ACCURACY
 from screening.sweep import _submit
@@ -240,9 +241,8 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
     info = {"target": acc.target, "budget_s": acc.budget_s, "wall_s": ran["wall_s"], "cost_s": cost, "cpu_s": cpu,
             "n_candidates": int(ran["n_candidates"]), "n_selected": len(order), "n_transition": int(np.sum(first)),
             "n_escalated": len(runs), "n_transition_escalated": int(np.sum(first[done])) if done else 0,
-            "n_coupled": int(np.sum(models_done == EscalationModel.coupled)),
-            "n_condensed": int(np.sum(models_done == EscalationModel.condensed)),
-            "n_stiff_bed": int(np.sum(models_done == EscalationModel.stiff_bed)), "n_short": short,
+            **{f"n_{m.name}": int(np.sum(models_done == m)) for m in mc_registry.escalation_models()},
+            "n_short": short,
             "n_multifidelity": sum(1 for r in runs if int(r.get("estimator", 0)) == EscalationEstimator.multifidelity),
             "n_cut": int(ran["n_cut"]), "n_failed": int(ran["n_failed"]), "warm_up_s": float(ran["warm_up_s"]),
             "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
@@ -268,7 +268,7 @@ def escalation_models(stage, order, calibrated):
     study = stage.study
     model = getattr(study.accuracy, "model", AUTO)
     if model != AUTO:
-        return np.full(len(order), int(EscalationModel[model]), dtype=np.int8)
+        return np.full(len(order), int(mc_registry.get(model).escalation_code), dtype=np.int8)
     chosen = []
     for flat in order:
         case, values = point_values(study, tuple(int(i) for i in np.unravel_index(int(flat), study.shape)))
@@ -378,8 +378,8 @@ def _escalation_runs(stage, order, models, first, levels, answers):
     def runs_model(j):
         """The Monte Carlo model that runs at point ``j``: its escalation model, with ``model = "auto"`` that
         model's sampler."""
-        name = EscalationModel(int(models[j])).name
-        return sampler_of(name) if getattr(acc, "model", AUTO) == AUTO else name
+        model = getattr(acc, "model", AUTO)
+        return sampler_of(mc_registry.escalation_models()(int(models[j])).name) if model == AUTO else model
 
     def partner(j):
         """``(model, condensation)`` paired with point ``j``'s runs, or None (plain Monte Carlo only)."""
@@ -685,7 +685,8 @@ def accuracy_line(info):
             f"Monte Carlo at {info['n_escalated']} ("
             + (f"{info.get('n_transition_escalated', 0)} of the transition; " if transition else "")
             + f"{info['n_coupled']} coupled, {info['n_condensed']} condensed"
-            + (f", {info['n_stiff_bed']} stiff-bed" if info.get("n_stiff_bed") else "") + "; "
+            + "".join(f", {info[f'n_{m.name}']} {m.name.replace('_', '-')}" for m in mc_registry.escalation_models()
+                      if m.name not in ("coupled", "condensed") and info.get(f"n_{m.name}")) + "; "
             + (f"{info['n_multifidelity']} multi-fidelity; " if info.get("n_multifidelity") else "") +
             f"{info['n_short']} short of the target's standard error"
             + (f"; {info['n_cut']} cut short by the budget" if info.get("n_cut") else "") + ") in "

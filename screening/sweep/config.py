@@ -33,37 +33,45 @@ from screening.core.model import Block, Foundation
 from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, band_top, ground_cutoff
 from screening.core.model.block import LENGTH_RANGE
 from screening.core.model.excitation import ConstantEnvelope, Envelope
+from screening.core.registry import Live, LiveTuple
 from screening.solvers.timegrid import output_times
 from screening.core.validation import InputFileError, read_input_text
 from screening.core import limits
 
-#: Numeric parameters of the registered excitations besides S0 (``omega_g``, ``zeta_g``, ...).
-EXCITATION_PARAMETERS = excitations.parameters()
+#: Numeric parameters of the registered excitations besides S0 (``omega_g``, ``zeta_g``, ...); this and the
+#: tables below read the registries when used, so an excitation registered later is a study key too.
+EXCITATION_PARAMETERS = Live(excitations.parameters)
 #: Parameters that may be swept (given as a list or a range).
-SWEEPABLE = ("eps", "S0", "pga", "k", "lam", "c", *EXCITATION_PARAMETERS)
+SWEEPABLE = LiveTuple(lambda: ("eps", "S0", "pga", "k", "lam", "c", *excitations.parameters()))
 
-EXCITATIONS = excitations.names()
+EXCITATIONS = LiveTuple(excitations.names)
 ENVELOPES = ("exponential", "constant")
 
+
+def _numeric():
+    """:data:`NUMERIC`, read now."""
+    return {
+        "m": ("block", 0.0, False, None), "b": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
+        "h": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
+        "I_cm": ("block", 0.0, False, None), "g": ("block", 0.0, False, None),
+        "k": ("foundation", 0.0, False, None), "lam": ("foundation", 0.0, True, None),
+        "c": ("foundation", 0.0, True, None), "eps": ("foundation", None, False, None),
+        "S0": ("excitation", 0.0, False, None), "pga": ("excitation", 0.0, False, None),
+        **{name: ("excitation", p.lower, p.lower_inclusive, p.upper) for name, p in excitations.parameters().items()},
+        "T1": ("excitation", 0.0, False, None), "T2": ("excitation", 0.0, False, None),
+        "band_limit_hz": ("excitation", 0.0, False, 1e5),
+    }
+
+
 #: Numeric model parameters: (table, lower bound, lower bound inclusive, upper bound or None).
-NUMERIC = {
-    "m": ("block", 0.0, False, None), "b": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
-    "h": ("block", LENGTH_RANGE[0], True, LENGTH_RANGE[1]),
-    "I_cm": ("block", 0.0, False, None), "g": ("block", 0.0, False, None),
-    "k": ("foundation", 0.0, False, None), "lam": ("foundation", 0.0, True, None),
-    "c": ("foundation", 0.0, True, None), "eps": ("foundation", None, False, None),
-    "S0": ("excitation", 0.0, False, None), "pga": ("excitation", 0.0, False, None),
-    **{name: ("excitation", p.lower, p.lower_inclusive, p.upper) for name, p in EXCITATION_PARAMETERS.items()},
-    "T1": ("excitation", 0.0, False, None), "T2": ("excitation", 0.0, False, None),
-    "band_limit_hz": ("excitation", 0.0, False, 1e5),
-}
+NUMERIC = Live(_numeric)
 #: Keys of the model tables of a sweep study (other study kinds allow a subset).
-TABLE_KEYS = {
+TABLE_KEYS = Live(lambda: {
     "block": ("m", "b", "h", "I_cm", "g"),
     "foundation": ("contact", "condensation", "k", "lam", "c", "eps"),
-    "excitation": ("kind", "S0", "pga", *EXCITATION_PARAMETERS, "envelope", "T1", "T2", "band_limit_hz"),
-}
-MODEL_TABLES = tuple(TABLE_KEYS)
+    "excitation": ("kind", "S0", "pga", *excitations.parameters(), "envelope", "T1", "T2", "band_limit_hz"),
+})
+MODEL_TABLES = ("block", "foundation", "excitation")
 DEFAULTS = {"contact": "hunt_crossley", "condensation": condensations.DEFAULT_CONDENSATION, "envelope": "exponential", "eps": 0.0, "g": 9.81,
             "T1": 4.0, "T2": 2.0, "band_limit_hz": GROUND_BAND_LIMIT_HZ}
 _RANGE_KEYS = ("start", "stop", "num", "log")

@@ -36,7 +36,7 @@ from screening.analysis.fragility import band_standard_error, best_exceedance
 from screening.analysis.multifidelity import multifidelity_probabilities
 from screening.analysis.probabilities import (answer_quantities, choose_sources, monte_carlo_source, reliable_answer,
                                               sample_probabilities, source_codes)
-from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator, EscalationModel,
+from screening.core.status import (AnswerQuantity, BestMethod, EscalationEstimator,
                                    MONTE_CARLO_SOURCE_BASE, PointStatus, ProbabilitySource, SampleState, Trust)
 from screening.io.writer import Variable
 from screening.solvers import mc_registry
@@ -61,12 +61,13 @@ def _monte_carlo_runs(study, escalated=None, spot_runs=None):
             paired = (r["cheap_peak_abs_theta"], r["cheap_sample_state"]) if (
                 int(r.get("estimator", EscalationEstimator.plain_monte_carlo)) == EscalationEstimator.multifidelity) \
                 else None
-            out.append((int(i), EscalationModel(int(code)).name, r["peak_abs_theta"], r["sample_state"], paired))
+            out.append((int(i), mc_registry.escalation_models()(int(code)).name, r["peak_abs_theta"],
+                        r["sample_state"], paired))
     if spot_runs is not None:
         spots, results = spot_runs
         for index, r in zip(spots, results):
             out.append((int(np.ravel_multi_index(index, study.shape)) if index else 0,
-                        mc_registry.names()[int(r["mcs_model"])] if "mcs_model" in r else study.mcs.model,
+                        mc_registry.name_of(r["mcs_model"]) if "mcs_model" in r else study.mcs.model,
                         r["peak_abs_theta"], r["sample_state"], None))
     return out
 

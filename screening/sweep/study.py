@@ -147,9 +147,6 @@ kind = "white"
 S0 = 1e-4
 """
 
-#: The Monte Carlo models a study may name (the registered ones, :mod:`screening.solvers.mc_registry`, and
-#: ``"auto"``: per point the cheapest one whose measured validity holds, :mod:`screening.solvers.model_choice`).
-MCS_MODELS = model_choice.choices()
 _TOP_KEYS = ("title", "description", "block", "foundation", "excitation", "time", "solver", "mcs",
              "case", "collection", "output", "fragility", "run", "accuracy", "cluster")
 #: ``[output] histories``: every chosen history at every point, only at the spot points, or none.
@@ -603,7 +600,8 @@ def _accuracy(raw, cases=(), sweeps=None):
     check_keys(tbl, ("target", "budget_s", "seed", "model", "multifidelity"), "accuracy.")
     budget = check_value("accuracy.budget_s", tbl.get("budget_s", DEFAULT_BUDGET_S), 0.0, False, MAX_BUDGET_S)
     seed = integer(tbl, "seed", 0, 0, "accuracy.", limits.MAX_SEED)
-    model = choice(tbl, "model", MCS_MODELS, "accuracy.", model_choice.AUTO)
+    model = choice(tbl, "model", (*mc_registry.escalation_models().__members__, model_choice.AUTO), "accuracy.",
+                   model_choice.AUTO)
     if "target" not in tbl:
         return None
     target = check_value("accuracy.target", tbl["target"], 0.0, False, 1.0)
@@ -631,7 +629,7 @@ def _mcs(raw, sweeps, cases, has_case_dim, shape, n_times):
                          f"mcs.samples: must be an integer in 2..{most} (got {short_repr(samples)})")
     samples = integer(tbl, "samples", 200, 2, "mcs.")
     seed = integer(tbl, "seed", 0, 0, "mcs.", limits.MAX_SEED)
-    model = choice(tbl, "model", MCS_MODELS, "mcs.", model_choice.AUTO)
+    model = choice(tbl, "model", model_choice.choices(), "mcs.", model_choice.AUTO)
     strict = tbl.get("strict_validity", False)
     if not isinstance(strict, bool):
         raise StudyError(f"mcs.strict_validity: must be true or false (got {type_name(strict)})")

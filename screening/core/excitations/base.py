@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy import integrate
 
+from screening.core.registry import Registry
 from screening.core.validation import checked
 
 __all__ = ["Excitation", "Filter", "Parameter", "stationary_covariance", "transfer_psd"]
@@ -349,6 +350,12 @@ class Excitation:
     #: ``{name: Parameter}`` of the numeric parameters besides ``S0`` (study keys, sweepable)
     parameters = {}
 
+    def __init_subclass__(cls, **kwargs):
+        """A subclass declaring its own :attr:`kind` registers itself (:mod:`screening.core.excitations.registry`)."""
+        super().__init_subclass__(**kwargs)
+        if "kind" in vars(cls) and cls.kind:
+            KINDS.add(cls.kind, cls)
+
     def __post_init__(self):
         """Validate ``S0`` (> 0), the :attr:`parameters` (their declared ranges) and ``band_limit_hz``
         (None or a finite number > 0 Hz); one line naming the parameter and its range otherwise."""
@@ -430,3 +437,7 @@ class Excitation:
         if len(problem) > 1:                       # quad's message: the integral did not converge
             raise ArithmeticError(f"spectral moment lambda_{order}: {' '.join(str(problem[1]).split())}")
         return 2.0 * value
+
+
+#: The registered excitation classes by kind (filled by subclassing :class:`Excitation`).
+KINDS = Registry("kind")

@@ -22,7 +22,6 @@ import numpy as np
 
 from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Filter, Parameter
 from screening.core.excitations.kanai_tajimi import KanaiTajimi, kanai_tajimi_psd
-from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 
 __all__ = ["CloughPenzien"]
@@ -105,7 +104,6 @@ def clough_penzien_psd(omega, S0, omega_g, zeta_g, omega_f, zeta_f):
     return kanai_tajimi_psd(omega, S0, omega_g, zeta_g) * high_pass
 
 
-@register
 @dataclass(frozen=True)
 class CloughPenzien(Excitation):
     """Modulated Clough–Penzien noise ``q(t) a(t)`` (module docstring).

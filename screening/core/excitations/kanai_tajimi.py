@@ -10,7 +10,6 @@ import numba
 import numpy as np
 
 from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Filter, Parameter
-from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 
 __all__ = ["KanaiTajimi"]
@@ -84,7 +83,6 @@ def kanai_tajimi_psd(omega, S0, omega_g, zeta_g):
         return S0 * num / den
 
 
-@register
 @dataclass(frozen=True)
 class KanaiTajimi(Excitation):
     """Modulated Kanai–Tajimi noise ``q(t) z(t)`` (eqs. 47–50).

@@ -1,20 +1,18 @@
-"""The registry of excitations: a ``kind`` is turned into its class at set-up (study parsing, result
-readers); the solvers use the excitation object's filter and PSD, never its kind."""
+"""The registry of excitations, filled by subclassing :class:`Excitation` with a ``kind``: a kind is turned into
+its class at set-up (study parsing, result readers); the solvers use the object's filter and PSD, never its kind."""
 
 from __future__ import annotations
 
-from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation
-from screening.core.registry import Registry
+from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, KINDS
 
 __all__ = ["register", "unregister", "names", "get", "parameters", "build"]
 
-_REGISTRY = Registry("kind")
+_REGISTRY = KINDS
 
 
 def register(cls):
-    """Add an :class:`Excitation` subclass under its ``kind`` (usable as a class decorator).
-
-    A later class with the same ``kind`` replaces the earlier one.
+    """Add an :class:`Excitation` subclass under its ``kind`` (a subclass declaring its ``kind`` is added when
+    defined); a later class with the same ``kind`` replaces the earlier one.
 
     Parameters
     ----------

@@ -7,13 +7,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, Excitation, Filter
-from screening.core.excitations.registry import register
 from screening.core.model.excitation import ConstantEnvelope, Envelope
 
 __all__ = ["WhiteNoise"]
 
 
-@register
 @dataclass(frozen=True)
 class WhiteNoise(Excitation):
     """Modulated Gaussian white noise ``q(t) xi(t)`` (eq. 39).

@@ -157,3 +157,58 @@ def test_simulate_and_monte_carlo_refuse_and_accept_the_same_condensations(monke
     expected = (f"parameter 'condensation' applies to model='condensed' only "
                 f"(got condensation='cubic' with model={model!r})") if refused else "accepted"
     assert outcomes == {"simulate": expected, "monte_carlo": expected}
+
+
+def test_a_model_defined_after_import_is_seen_by_studies_the_schema_the_escalation_and_the_cli():
+    """Defining a subclass with its own name and flag code registers it: read when used, the study validator,
+    the CF flags of mcs_model, p_source and esc_model, the escalation's cost model, best-estimate method,
+    counters line and the simulate command's choices all know it, with the declared codes; the built-in
+    models keep theirs."""
+    from screening.analysis import escalation as esc
+    from screening.cli.records import cmd_simulate
+    from screening.core.status import BestMethod
+    from screening.solvers import schema
+    from screening.sweep.accuracy import accuracy_line
+
+    class LateModel(CondensedModel):
+        name = "late_toy"
+        flag_code = 9
+        escalation_code = 7
+        step_cost_s = 3e-6
+        best_method = BestMethod.condensed_monte_carlo
+
+    try:
+        assert mc_registry.code("late_toy") == 9 and isinstance(mc_registry.get("late_toy"), LateModel)
+        assert mc_registry.codes()["coupled"] == 0 and mc_registry.codes()["stiff_bed_fast"] == 3
+        assert parse_study(STUDY.replace("MODEL", '"late_toy"')).mcs.model == "late_toy"
+        study = parse_study(STUDY.replace("MODEL", '"auto"') + '[accuracy]\ntarget = 0.2\nmodel = "late_toy"\n')
+        assert study.accuracy.model == "late_toy"
+        flags = schema.attributes("mcs_model")
+        assert dict(zip(flags["flag_meanings"].split(), flags["flag_values"].tolist()))["late_toy"] == 9
+        sources = schema.attributes("p_source")
+        assert dict(zip(sources["flag_meanings"].split(), sources["flag_values"].tolist()))["monte_carlo_late_toy"] == 19
+        escalated = schema.attributes("esc_model")
+        assert escalated["flag_meanings"].split() == ["condensed", "coupled", "stiff_bed", "late_toy"]
+        assert escalated["flag_values"].tolist() == [0, 1, 2, 7]
+        assert esc.estimated_cost(1000, 7) == pytest.approx(1000 * 3e-6) and esc.STEP_COST_S[7] == 3e-6
+        assert esc.auto_escalation_model([1, 1], ["late_toy", "coupled"]).tolist() == [7, 1]
+        assert mc_registry.escalation_model(7).best_method == BestMethod.condensed_monte_carlo
+        model = next(p for p in cmd_simulate.params if p.name == "model")
+        assert "late_toy" in model.type.choices
+        info = {"target": 0.2, "n_candidates": 3, "n_escalated": 1, "n_coupled": 0, "n_condensed": 0, "n_late_toy": 1,
+                "n_short": 0, "wall_s": 1.0, "budget_s": 10.0, "cost_s": 1.0, "cpu_s": 1.0, "loo_rms": 0.1,
+                "correction_usable": True, "methods": {}}
+        assert "0 coupled, 0 condensed, 1 late-toy;" in accuracy_line(info)
+    finally:
+        mc_registry.unregister("late_toy")
+    assert "late_toy" not in schema.attributes("mcs_model")["flag_meanings"]
+    with pytest.raises(StudyError, match="mcs.model: must be one of"):
+        parse_study(STUDY.replace("MODEL", '"late_toy"'))
+
+
+def test_a_declared_flag_code_cannot_be_taken_twice():
+    with pytest.raises(ValueError, match="flag_code 1 of Monte Carlo model 'clash' is 'condensed'"):
+        class Clash(CondensedModel):
+            name = "clash"
+            flag_code = 1
+    assert "clash" not in mc_registry.names()

@@ -139,3 +139,45 @@ def test_a_bad_cluster_table_is_one_line_naming_the_key(keys, message):
     with pytest.raises(StudyError) as err:
         config.cluster_table({"cluster": table})
     assert str(err.value).startswith(message) and "\n" not in str(err.value), str(err.value)
+
+
+def test_an_excitation_defined_after_import_is_a_study_kind_with_its_keys_and_attributes():
+    """Subclassing Excitation with a kind registers it; the study tables and the CF schema read the registry
+    when used, so its kind, its parameter (a key of [excitation], sweepable, range-checked) and the
+    parameter's attributes are known without a re-import."""
+    from dataclasses import dataclass, field
+
+    from screening.core import excitations
+    from screening.core.excitations.base import Excitation, Parameter
+    from screening.core.excitations.white import WhiteNoise
+    from screening.core.model.excitation import Envelope
+    from screening.solvers import schema
+    from screening.sweep.study import parse_study
+
+    @dataclass(frozen=True)
+    class LateNoise(Excitation):
+        S0: float
+        late_q: float
+        envelope: Envelope = field(default_factory=Envelope)
+        band_limit_hz: float | None = None
+
+        kind = "late_noise"
+        description = "white noise with a toy parameter"
+        parameters = {"late_q": Parameter("1", "toy parameter", 0.0, False, 10.0)}
+
+        def shaping_filter(self):
+            return WhiteNoise(self.S0, band_limit_hz=None).shaping_filter()
+
+    text = ('[block]\nm = 1200.0\nb = 0.25\nh = 0.9\n[foundation]\nk = 1e10\nlam = 2e11\n'
+            '[excitation]\nkind = "late_noise"\nS0 = 1e-3\nlate_q = LATE\n[time]\nt_end = 2.0\ndt = 0.05\n')
+    try:
+        assert excitations.get("late_noise") is LateNoise and "late_noise" in config.EXCITATIONS
+        assert "late_q" in config.SWEEPABLE and "late_q" in config.TABLE_KEYS["excitation"]
+        assert config.NUMERIC["late_q"] == ("excitation", 0.0, False, 10.0)
+        assert schema.attributes("late_q") == {"units": "1", "long_name": "toy parameter"}
+        assert parse_study(text.replace("LATE", "[1.0, 2.0]")).sweeps["late_q"].tolist() == [1.0, 2.0]
+        with pytest.raises(StudyError, match="late_q"):
+            parse_study(text.replace("LATE", "20.0"))
+    finally:
+        excitations.unregister("late_noise")
+    assert "late_q" not in config.NUMERIC and "late_noise" not in config.EXCITATIONS
