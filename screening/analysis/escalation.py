@@ -661,8 +661,8 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     per_point = grid_point_cost(grid / max(int(samples), 1)) if grid > 0 else 0.0
     if model == EscalationModel.stiff_bed and full_contact is not None and np.isfinite(full_contact):
         f = min(max(float(full_contact), 0.0), 1.0)
-        exact = min(f * max(grid - max(int(samples), 1), 0.0), float(steps))
-        return (exact * STIFF_BED_EXACT_COST_S + (float(steps) - exact) * STIFF_BED_ADAPTIVE_COST_S
+        intervals = min(f * max(grid - max(int(samples), 1), 0.0), float(steps))
+        return (intervals * STIFF_BED_EXACT_COST_S + (float(steps) - intervals) * STIFF_BED_ADAPTIVE_COST_S
                 + STIFF_BED_RUN_COST_S + grid * per_point)
     per_step = STEP_COST_S[model] * (RODAS_STEP_FACTOR if rodas else 1.0)
     if exact and model == EscalationModel.coupled:
