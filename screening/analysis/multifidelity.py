@@ -54,7 +54,21 @@ def _influence_moments(psi_y, psi_x):
 def control_variate_functional(value_y, influence_y, value_x, value_x_all, influence_x, n_cheap):
     r"""Control-variate estimate of a smooth functional of the expensive model's distribution (delta method).
 
-    Returns: with array fields where the functional is an array (one estimate per trailing index).
+    Parameters
+    ----------
+    value_y : float or ndarray
+        The functional from the ``n`` expensive samples (e.g. their sample variance at each time).
+    influence_y, influence_x : ndarray, shape (n, ...)
+        The per-sample influence values of the expensive and of the cheap model on the paired samples.
+    value_x, value_x_all : float or ndarray
+        The cheap model's functional from its ``n`` paired samples and from all ``n_cheap`` of them.
+    n_cheap : float
+        Cheap samples behind ``value_x_all`` (``>= n``; ``math.inf`` where ``value_x_all`` is exact).
+
+    Returns
+    -------
+    ControlVariateEstimate
+        With array fields where the functional is an array (one estimate per trailing index).
 
     Notes
     -----
@@ -173,7 +187,18 @@ def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturne
 def control_variate_estimate(y, x, x_extra=None, x_mean=None):
     r"""Control-variate (two-fidelity) estimate of the mean of the expensive model's quantity.
 
-    Returns: ControlVariateEstimate.
+    Parameters
+    ----------
+    y, x : array_like, shape (n,)
+        The expensive and the cheap model's per-sample values on the same ground motions.
+    x_extra : array_like, shape (m,), optional
+        The cheap model's values on further, independent ground motions (no expensive run).
+    x_mean : float, optional
+        The cheap model's exact expectation, where known; excludes ``x_extra``.
+
+    Returns
+    -------
+    ControlVariateEstimate
 
     Notes
     -----
@@ -279,9 +304,8 @@ class Allocation:
 def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN, max_ratio=MAX_RATIO):
     r"""Samples of the expensive and the cheap model for the standard error of ``n_plain`` plain samples.
 
-    Units: ``correlation`` in [-1, 1], ``cost_expensive``, ``cost_cheap`` [s].
-
-    Returns: Allocation.
+    Returns an :class:`Allocation` from the pilot ``correlation`` of the two models' influence values (in
+    [-1, 1]; NaN: plain) and their costs per sample ``cost_expensive``, ``cost_cheap`` [s].
 
     Notes
     -----

@@ -161,7 +161,7 @@ def read_hazard(path, site=None):
     header ``PGA [g], annual_rate [1/yr]`` (the IMT as OpenQuake names it and its units in
     brackets: ``g``, ``m s-2``), then one ``level, rate`` per line; ``#`` starts a comment.
 
-    Returns: HazardCurve.
+    Returns a :class:`HazardCurve`.
 
     Raises
     ------
