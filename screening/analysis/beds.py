@@ -1,24 +1,11 @@
 """Bed parameters from materials: the ``k``, ``lam`` or ``c`` and ``eps`` of a :class:`~screening.core.model.Foundation`.
 
-The contact law is a force per unit base length (docs/method.md, "Contact law"):
-``F_n = k z + eps k z^3 + lam z z'`` (Hunt-Crossley) or ``k z + eps k z^3 + c z'`` (Winkler).
-For a layer of thickness ``t`` [m] under a base of out-of-plane depth ``d`` [m] (the block's
-dimension perpendicular to the rocking plane), each strip of the base compresses the layer
-like a column, so
-
-    k = E_c d / t                                   [N m-2]
-
-with ``E_c`` the layer's modulus in confined compression: the oedometric modulus
-``E (1 - nu) / ((1 + nu)(1 - 2 nu))`` for a thin bonded layer of mortar or soil, or for an
-elastomeric pad ``E (1 + 2 kappa S^2)`` (Gent & Lindley 1959; ``S`` the shape factor, loaded
-area over the free bulging area, ``kappa`` 0.5..1 from the rubber hardness) capped by the bulk
-modulus.  ``eps`` [m-2] comes from a backbone (force-indentation) test by
-:func:`fit_backbone`; the damping from a coefficient of restitution (:func:`hunt_crossley_lambda`)
-or a vertical damping ratio (:func:`lam_from_vertical_damping`, :func:`c_from_vertical_damping`).
-
-:func:`bed_summary` gives the quantities an engineer checks (static indentation, uplift angle,
-slenderness, rocking and vertical frequencies, vertical damping ratio); ``screening info`` prints
-them.  Typical ranges and references: docs/beds.md.
+For a layer of thickness ``t`` [m] under a base of out-of-plane depth ``d`` [m], ``k = E_c d / t``
+[N m-2] with ``E_c`` the layer's confined modulus (:func:`oedometric_modulus`, or a pad's with its shape
+factor); ``eps`` [m-2] from a backbone test (:func:`fit_backbone`); the damping from a coefficient of
+restitution or a vertical damping ratio.  :func:`bed_summary` gives what an engineer checks (``screening
+info`` prints it).  The contact law: ``docs/method.md#contact-law``; typical ranges and references:
+``docs/beds.md``.
 """
 
 from __future__ import annotations
@@ -76,8 +63,7 @@ def oedometric_modulus(E, nu):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] J. E. Bowles, Foundation Analysis and Design, 5th ed., McGraw-Hill (1996).
+    [1] [mitseas2026]; [2] J. E. Bowles, Foundation Analysis and Design, 5th ed., McGraw-Hill (1996).
 
     Examples
     --------
@@ -115,8 +101,8 @@ def pad_compression_modulus(E, shape_factor, kappa=0.75, bulk_modulus=2.0e9):
 
     References
     ----------
-    .. [1] A. N. Gent and P. B. Lindley, "The compression of bonded rubber blocks", Proc. Inst. Mech.
-       Eng. 173 (1959) 111-122.
+    [1] A. N. Gent and P. B. Lindley, "The compression of bonded rubber blocks", Proc. Inst. Mech. Eng. 173
+    (1959) 111-122.
 
     Examples
     --------
@@ -151,7 +137,7 @@ def layer_stiffness(modulus, thickness, depth):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -192,13 +178,11 @@ def hunt_crossley_lambda(k, restitution, impact_velocity, model="hunt_crossley")
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as damping in
-       vibroimpact", J. Appl. Mech. 42 (1975) 440-445.
-    .. [3] H. M. Lankarani and P. E. Nikravesh, "A contact force model with hysteresis damping for impact
-       analysis of multibody systems", J. Mech. Des. 112 (1990) 369-376.
-    .. [4] P. Flores, M. Machado, M. T. Silva and J. M. Martins, "On the continuous contact force models
-       for soft materials in multibody dynamics", Multibody Syst. Dyn. 25 (2011) 357-375.
+    [1] [mitseas2026]; [2] K. H. Hunt and F. R. E. Crossley, "Coefficient of restitution interpreted as
+    damping in vibroimpact", J. Appl. Mech. 42 (1975) 440-445; [3] H. M. Lankarani and P. E. Nikravesh, "A
+    contact force model with hysteresis damping for impact analysis of multibody systems", J. Mech. Des. 112
+    (1990) 369-376; [4] P. Flores, M. Machado, M. T. Silva and J. M. Martins, "On the continuous contact
+    force models for soft materials in multibody dynamics", Multibody Syst. Dyn. 25 (2011) 357-375.
 
     Examples
     --------
@@ -246,7 +230,7 @@ def c_from_vertical_damping(k, m, b, zeta_v):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -284,7 +268,7 @@ def lam_from_vertical_damping(k, m, b, zeta_v, g=9.81):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -315,7 +299,7 @@ def restitution_from_damping_ratio(zeta):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -356,7 +340,7 @@ def fit_backbone(indentation, force_per_length, k=None):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -403,7 +387,7 @@ def bed_summary(block, foundation):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -453,7 +437,7 @@ def format_bed_summary(summary):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------

@@ -1,20 +1,10 @@
 """Corrected estimates everywhere: the linearization's error learned from the escalated Monte Carlo points.
 
-At the points where a sweep with ``[accuracy]`` ran Monte Carlo (:mod:`screening.analysis.escalation`)
-the log ratio ``y = log(MCS / SL)`` of a peak variance is known (with its Monte Carlo standard error).
-:func:`fit_correction` learns ``y`` over standardised features of the points (the trust indicators
-and the swept parameters, :func:`point_features`) by nearest-neighbour regression in feature space,
-choosing the number of neighbours by leave-one-out; :func:`predict_correction` gives ``y``, its
-standard error (the leave-one-out errors of the neighbours used) and whether the point is close
-enough to the escalated ones to be reached at all.  :func:`best_estimates` combines everything
-into one estimate per point, with its standard error and where it comes from
-(:class:`screening.core.status.BestMethod`).
-
-Nearest neighbours rather than a global fit: the error of the linearization changes by regime
-(a few per cent below uplift, a factor 10-100 near toppling, the opposite sign under lock-in), which
-a smooth global model averages away; a local average with a local error estimate stays honest.
-
-Pure functions on numpy arrays; no I/O.  Method: ``docs/method.md#trusting-a-point``.
+Where a sweep with ``[accuracy]`` ran Monte Carlo, ``y = log(MCS / SL)`` of a peak variance is known;
+:func:`fit_correction` learns it by nearest-neighbour regression over standardised point features
+(:func:`point_features`), a local average with a local error that stays honest across regimes where a
+global fit would average them away.  :func:`best_estimates` gives one estimate per point with its standard
+error and its :class:`screening.core.status.BestMethod`.  Pure numpy; ``docs/method.md#trusting-a-point``.
 """
 
 from __future__ import annotations
@@ -72,21 +62,7 @@ class Correction:
 
 
 def point_features(features):
-    """Stack a dict of per-point feature arrays into a (points x features) matrix [mixed units].
-
-    Positive features spanning more than a factor 10 are taken in log10 (swept intensities and
-    stiffnesses, the decay indicator); constant or all-NaN columns are dropped.
-
-    Parameters
-    ----------
-    features : dict of str to array_like
-        One array per feature, one value per point (each in its own SI unit).
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape ``(points, kept features)``.
-    """
+    """``(points, kept features)`` of a dict of per-point features: log10 of positive ones spanning over a factor 10, constant or all-NaN columns dropped."""
     cols = []
     for value in features.values():
         v = np.asarray(value, dtype=float).reshape(-1)
@@ -119,31 +95,16 @@ def fit_correction(features, y, y_se=None):
 
     Rows with a non-finite value are dropped.
 
-    Parameters
-    ----------
-    features : array_like
-        ``(points, features)`` from :func:`point_features`.
-    y : array_like
-        Log ratio per point [1].
-    y_se : array_like, optional
-        The Monte Carlo standard error of each ``y`` [1] (default 0, floored at :data:`NOISE_FLOOR`).
+    Units: ``y`` [1], ``y_se`` [1].
 
-    Returns
-    -------
-    Correction
-        The standardised points, the chosen ``k`` and the leave-one-out errors.
+    Returns: the standardised points, the chosen ``k`` and the leave-one-out errors.
 
     Notes
     -----
     Prediction at ``x``: ``sum_i w_i y_i / sum_i w_i`` over the ``k`` escalated points nearest to ``x``
     in standardised features ``z_j = (x_j - mean_j) / sd_j``, ``w_i = 1 / (y_se_i^2 (d_i + d0))``
     (``d0`` = :data:`DISTANCE_FLOOR`).
-    ``k`` minimises the leave-one-out RMS (each point predicted from the others) [2].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [hastie2009] in the bibliography, ``docs/bibliography.md``.
+    ``k`` minimises the leave-one-out RMS (each point predicted from the others) [hastie2009].
     """
     x = np.asarray(features, dtype=float)
     y = np.asarray(y, dtype=float).reshape(-1)
@@ -177,24 +138,12 @@ def fit_correction(features, y, y_se=None):
 def predict_correction(correction, features):
     """The correction, its standard error and whether it reaches, at new points.
 
-    Parameters
-    ----------
-    correction : Correction
-        From :func:`fit_correction`.
-    features : array_like
-        ``(points, features)``, the columns of the fit.
-
-    Returns
-    -------
-    y : numpy.ndarray
-        Predicted log ratio [1] (NaN where the features are not finite).
-    se : numpy.ndarray
-        ``sqrt(mean((e_loo,i max(1, d_i / nn_i))^2) + mean((y_i - y)^2))`` [1] over the neighbours ``i``
-        used — their own leave-one-out errors ``e_loo,i`` (measured at their nearest-neighbour
-        distance ``nn_i``, scaled to the distance ``d_i`` of the point) and their disagreement at the
-        point —, floored at :data:`NOISE_FLOOR`.
-    reached : numpy.ndarray of bool
-        The nearest escalated point is within :data:`REACH` spacings and the features are finite.
+    Returns ``(y, se, reached)``: ``y`` predicted log ratio [1] (NaN where the features are not finite);
+    ``se`` ``sqrt(mean((e_loo,i max(1, d_i / nn_i))^2) + mean((y_i - y)^2))`` [1] over the neighbours ``i``
+    used — their own leave-one-out errors ``e_loo,i`` (measured at their nearest-neighbour distance
+    ``nn_i``, scaled to the distance ``d_i`` of the point) and their disagreement at the point —, floored at
+    :data:`NOISE_FLOOR`; ``reached`` the nearest escalated point is within :data:`REACH` spacings and the
+    features are finite.
     """
     x = np.asarray(features, dtype=float)
     z = (x - correction.mean) / correction.scale
@@ -221,22 +170,7 @@ def predict_correction(correction, features):
 
 
 def linearization_promises(trust, low, high, target):
-    """True where the trust rule promises the target: ``trusted`` and the predicted band within ``+-target``.
-
-    Parameters
-    ----------
-    trust : array_like of int
-        ``sl_trust`` codes (:class:`~screening.core.status.Trust`).
-    low, high : array_like
-        The predicted band of the SL error ``SL / MCS - 1`` [1].
-    target : float
-        The relative error aimed at [1].
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        Per point.
-    """
+    """Boolean: ``sl_trust`` is ``trusted`` and the band ``[low, high]`` of ``SL / MCS - 1`` lies within ``+-target``."""
     trust = np.asarray(trust)
     with np.errstate(invalid="ignore"):
         return (trust == int(Trust.trusted)) & (np.maximum(np.abs(low), np.abs(high)) <= target)
@@ -245,24 +179,16 @@ def linearization_promises(trust, low, high, target):
 def atlas_correction(low, high):
     """The error atlas model's correction of a point and its standard error, from its interval.
 
-    Parameters
-    ----------
-    low, high : array_like
-        The predicted 90 % interval of ``SL / MCS - 1`` [1] per point (``sl_error_low``,
-        ``sl_error_high``).
+    Units: low, high [1].
 
-    Returns
-    -------
-    y, se : numpy.ndarray
-        The correction ``y = log(MCS / SL)`` [1] and its standard error [1]; NaN where the interval is
-        not finite or reaches ``SL / MCS - 1 <= -1`` (open).
+    Returns: the correction ``y = log(MCS / SL)`` [1] and its standard error [1]; NaN where the interval is
+    not finite or reaches ``SL / MCS - 1 <= -1`` (open).
 
     Notes
     -----
     The interval is symmetric in ``log(SL / MCS)`` about the estimate (``estimate +- q s``,
     :mod:`screening.analysis.error_model`): ``y = -(log(1 + low) + log(1 + high)) / 2`` and
     ``se = (log(1 + high) - log(1 + low)) / (2 z)``, ``z`` = :data:`INTERVAL_Z`.
-
     """
     low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -271,44 +197,14 @@ def atlas_correction(low, high):
 
 
 def atlas_promises(low, high, target):
-    """Where the atlas-corrected linearization is within the target: Monte Carlo is needed only elsewhere.
-
-    Parameters
-    ----------
-    low, high : array_like
-        The predicted 90 % interval of ``SL / MCS - 1`` [1] per point.
-    target : float
-        Relative error aimed at [1].
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        True where ``exp(z se) - 1 <= target`` (``se`` of :func:`atlas_correction`, ``z`` =
-        :data:`INTERVAL_Z`).
-
-    """
+    """Boolean: where the atlas-corrected linearization is within ``target``, ``exp(z se) - 1 <= target`` (:func:`atlas_correction`)."""
     _, se = atlas_correction(low, high)
     with np.errstate(invalid="ignore"):
         return np.isfinite(se) & (np.expm1(INTERVAL_Z * se) <= target)
 
 
 def within_band(y, low, high):
-    """True where the SL error implied by a log ratio lies in the trust rule's band (or there is no band).
-
-    A correction that contradicts what the calibration measured in the point's cell is not vouched for.
-
-    Parameters
-    ----------
-    y : array_like
-        Log ratio ``log(MCS / SL)`` [1]; the SL error it implies is ``exp(-y) - 1``.
-    low, high : array_like
-        The band of the SL error [1] (NaN: no band).
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        Per point.
-    """
+    """Boolean: the SL error ``exp(-y) - 1`` implied by ``y = log(MCS / SL)`` lies in the band ``[low, high]`` (or there is none)."""
     with np.errstate(invalid="ignore", over="ignore"):
         implied = np.expm1(-np.asarray(y, dtype=float))
         no_band = ~(np.isfinite(low) & np.isfinite(high))

@@ -1,32 +1,12 @@
 """An error model of the linearization learnt from the error atlas, with predictive intervals.
 
-For one condensation, the error of a linearized point is predicted from what the linearization
-computes at that point (its trust indicators) and from the point's dimensionless inputs
-(:data:`FEATURES`; :func:`features`), with a feature set per regime of peak uplift probability
-(:data:`REGIME_FEATURES`, :class:`RegimeModel`): below a peak ``p_uplift`` of 0.2 the indicators and the
-bed's hardening ``e`` (:data:`LOW_UPLIFT_FEATURES`), above it every feature.  Each part
-(:func:`fit_error_model`, :func:`predict`) is
-
-* a *local linear regression*: at a query ``x`` the estimate is the intercept of the weighted least
-  squares fit of the atlas errors ``y_i`` on ``x_i - x`` over the :data:`NEIGHBOURS` nearest atlas
-  points, with Gaussian kernel weights ``w_i = exp(-|x_i - x|^2 / (2 h^2))`` in standardised features (plus a small ridge that pulls the
-  slopes to zero where the neighbourhood is thin);
-* a *normalised conformal interval*: ``estimate +- q s(x)``, where ``s(x)`` is the RMS over the
-  :data:`SCALE_NEIGHBOURS` nearest atlas points of their *out-of-family* residuals -- each atlas point
-  predicted by a fit that has not seen its family -- and ``q`` is the
-  ``ceil((n + 1) coverage) / n`` quantile of ``|r_i| / s_i`` over the atlas, with ``s_i`` again
-  computed without the point's own family; ``q`` is calibrated apart in each regime of peak uplift
-  probability (:data:`P_REGIMES`, Mondrian conformal prediction).  The interval is therefore calibrated for a *new* system
-  (a family the atlas does not hold), not for a point next to one the atlas measured.
-
-The bandwidth ``h`` is chosen among :data:`BANDWIDTHS` by the out-of-family squared error.
-
-Errors modelled (:func:`targets`): ``log(SL peak var_theta / MC peak var_theta)`` [1] and, per
-exceedance level, ``SL p_exceed - MC p_exceed`` [1].  A relative error interval on the variance is
-``exp(low) - 1 .. exp(high) - 1``.
-
-Cost: one query costs ``O(NEIGHBOURS d^2 + n_atlas d)`` floating-point operations (a few tens of
-microseconds per point in batches, ``benchmarks/error_model_cv.py``).
+For one condensation, the error of a linearized point (:func:`targets`: ``log(SL / MC)`` of peak
+``var_theta`` and ``SL - MC`` of ``p_exceed``) is predicted from its trust indicators and dimensionless
+inputs (:func:`features`), with a feature set per regime of peak uplift probability
+(:data:`REGIME_FEATURES`), by a local linear regression over the :data:`NEIGHBOURS` nearest atlas points
+[cleveland1988] and a normalised Mondrian conformal interval ``estimate +- q s(x)`` [vovk2005] calibrated
+on out-of-family residuals: the interval holds for a *new* system, not a point next to one the atlas
+measured.  How it is fitted, checked and what it costs: ``docs/error_atlas.md#the-error-model``.
 """
 
 from __future__ import annotations
@@ -89,22 +69,10 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
         The linearization's indicators (:func:`screening.analysis.indicators.trust_indicators`) [1].
     alpha : array_like
         Slenderness [rad].
-    r_ul : array_like
-        ``theta_ul / alpha`` [1].
-    zeta_v : array_like
-        Vertical damping ratio [1].
-    e : array_like
-        ``eps z0^2`` [1].
+    r_ul, zeta_v, e, omega_g_p, tau, I_S, w_v_p : array_like
+        The dimensionless groups of :func:`parameter_groups` [1] (``omega_g_p`` ignored for white noise).
     kind : array_like of str
         ``"white"`` or ``"kanai_tajimi"``.
-    omega_g_p : array_like
-        Filter frequency over Housner's ``p`` [1] (ignored for white noise).
-    tau : array_like
-        ``T1 p`` [1].
-    I_S : array_like
-        Intensity ``sqrt(2 pi S0 p) / (g tan(alpha))`` [1].
-    w_v_p : array_like
-        Vertical frequency on the bed over Housner's ``p`` [1].
 
     Returns
     -------
@@ -114,12 +82,9 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
     Notes
     -----
     ``logit(p)`` with ``p`` clipped to ``[1e-4, 1 - 1e-4]``; ``log(1 - k_eq_margin)`` clipped below at
-    ``log 1e-4`` (the drop of the equivalent stiffness); ``log decay_excess`` clipped to ``[-5, 10]``;
-    ``asinh(e / 1e-3)``; for white noise ``log_omega_g_p = 0``; ``log I_S``, ``log w_v_p``; an undamped bed
-    (``zeta_v = 0``) has ``log_zeta_v = -inf`` and a bed without a rest indentation a NaN one
-    (:func:`interval_trust`: such a point is at best ``check``).  The inputs are the dimensionless
-    groups of the atlas (:mod:`screening.applications.atlas`, [1]).
-
+    ``log 1e-4``; ``log decay_excess`` clipped to ``[-5, 10]``; ``asinh(e / 1e-3)``; for white noise
+    ``log_omega_g_p = 0``; ``log I_S``, ``log w_v_p``; ``zeta_v = 0`` gives ``log_zeta_v = -inf`` and a bed
+    without a rest indentation a NaN one (:func:`interval_trust`: at best ``check``).
     """
     p = np.clip(np.asarray(peak_p_uplift, dtype=float), 1e-4, 1 - 1e-4)
     kt = (np.asarray(kind) == "kanai_tajimi").astype(float)
@@ -139,21 +104,7 @@ def features(peak_p_uplift, sigma_ratio, k_eq_margin, decay_excess, alpha, r_ul,
 
 
 def atlas_features(ds, condensation):
-    """:func:`features` of every point of an atlas dataset under one condensation.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        An atlas dataset (``screening/data/error_atlas.nc``; ``research/atlas_run.py``).
-    condensation : str
-        One of its condensations.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(points, len(FEATURES))`` [1].
-
-    """
+    """:func:`features` ``(points, len(FEATURES))`` of every point of an atlas dataset under one condensation."""
     s = ds.sel(condensation=condensation)
     return features(s["sl_peak_p_uplift"].values, s["sl_sigma_ratio"].values, s["sl_k_eq_margin"].values,
                     s["sl_decay_excess"].values, ds["alpha"].values, ds["r_ul"].values, ds["zeta_v"].values,
@@ -162,26 +113,13 @@ def atlas_features(ds, condensation):
 
 
 def targets(ds, condensation):
-    """The errors the model learns, of an atlas under one condensation, with their standard errors.
+    """The errors the model learns of an atlas under one condensation, with their standard errors (dict [1]).
 
-    NaN where a side is missing (the linearization stopped, no Monte Carlo survivor) or the
-    reference is not valid at the point (``mc_reference_valid`` 0,
-    ``reference_validity`` of ``research/atlas_run.py``).
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        An atlas dataset.
-    condensation : str
-        One of its condensations.
-
-    Returns
-    -------
-    dict of str to numpy.ndarray
-        ``log_var_ratio`` ``(n,)`` = ``log(SL / MC)`` of peak var_theta, ``p_exceed_diff``
-        ``(n, n_levels)`` = ``SL p_exceed - MC p_exceed``, and their Monte Carlo standard errors
-        ``log_var_ratio_se``, ``p_exceed_diff_se`` [1].
-
+    Notes
+    -----
+    ``log_var_ratio`` ``(n,)`` = ``log(SL / MC)`` of peak var_theta, ``p_exceed_diff`` ``(n, n_levels)`` =
+    ``SL p_exceed - MC p_exceed`` and their Monte Carlo standard errors ``*_se``; NaN where a side is
+    missing or the reference may not judge the point (:func:`valid_reference`).
     """
     s = ds.sel(condensation=condensation)
     ok = (s["sl_status"].values == 0) & valid_reference(ds)
@@ -195,20 +133,7 @@ def targets(ds, condensation):
 
 
 def valid_reference(ds):
-    """The points of an atlas whose reference Monte Carlo, if it ran, may judge the linearization.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        An atlas dataset.
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        ``mc_reference_valid`` 1 (``reference_validity`` of ``research/atlas_run.py``); every point
-        of an atlas that does not record it.
-
-    """
+    """Boolean: the atlas points whose reference Monte Carlo may judge the linearization (``mc_reference_valid``; every point where not recorded)."""
     if "mc_reference_valid" not in ds.variables:
         return np.ones(ds.sizes["point"], dtype=bool)
     return ds["mc_reference_valid"].values == 1
@@ -241,42 +166,14 @@ class RegimeModel(NamedTuple):
 
 
 def local_linear(xq, x, y, h, ridge=RIDGE, neighbours=NEIGHBOURS):
-    """Local linear estimates [units of ``y``] at standardised queries ``xq`` ``(m, d)`` from ``(x, y)``.
-
-    The fit at a query uses its ``neighbours`` nearest training points (all of them if fewer) with Gaussian
-    weights of bandwidth ``h``, scaled so that the nearest carries weight 1 (no underflow far from the
-    atlas).  Where the weighted normal equations are singular the estimate is the weighted mean.
-
-    Parameters
-    ----------
-    xq : array_like
-        ``(m, d)`` standardised queries.
-    x : numpy.ndarray
-        ``(n, d)`` standardised training features.
-    y : numpy.ndarray
-        ``(n,)`` training values.
-    h : float
-        Bandwidth (standardised feature units).
-    ridge : float, default RIDGE
-        Ridge on the slopes (not on the intercept).
-    neighbours : int, default NEIGHBOURS
-        Training points per fit.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(m,)`` estimates [units of ``y``].
+    """Local linear estimates ``(m,)`` [units of ``y``] at standardised queries ``xq`` ``(m, d)`` from ``(x, y)``.
 
     Notes
     -----
-    The estimate is the intercept ``beta_0`` of ``min sum_i w_i (y_i - beta_0 - beta^T (x_i - x_q))^2 +
-    ridge sum_i w_i |beta|^2`` with ``w_i = exp(-|x_i - x_q|^2 / (2 h^2))`` [1], [2]; without the ridge
-    it reproduces a linear function exactly.
-
-    References
-    ----------
-    .. [1] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
-    .. [2] J. Fan and I. Gijbels, Local Polynomial Modelling and Its Applications, Chapman & Hall (1996).
+    At a query, the intercept ``beta_0`` of ``min sum_i w_i (y_i - beta_0 - beta^T (x_i - x_q))^2 +
+    ridge sum_i w_i |beta|^2`` over its ``neighbours`` nearest training points, ``w_i =
+    exp(-|x_i - x_q|^2 / (2 h^2))`` scaled so the nearest weighs 1 [cleveland1988]; the weighted mean where
+    the normal equations are singular.  Without the ridge it reproduces a linear function exactly.
     """
     from scipy.spatial import cKDTree
 
@@ -326,26 +223,7 @@ def _local_scale(xq, x, r, mask=None, neighbours=None):
 
 
 def uplift_regime(x):
-    """Regime index of feature rows: the bin of the peak uplift probability (:data:`P_REGIMES` edges).
-
-    Parameters
-    ----------
-    x : array_like
-        ``(n, d)`` feature rows (:func:`features`; the first column is ``logit_p_uplift``).
-
-    Returns
-    -------
-    numpy.ndarray of int
-        ``0 .. len(P_REGIMES)``.
-
-    Notes
-    -----
-    The conformal factor is calibrated apart in each regime (Mondrian conformal prediction [1]).
-
-    References
-    ----------
-    .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-    """
+    """Regime index ``0 .. len(P_REGIMES)`` of feature rows: the bin of their first column, ``logit_p_uplift``."""
     p = 1.0 / (1.0 + np.exp(-np.asarray(x, dtype=float)[:, FEATURES.index("logit_p_uplift")]))
     return np.searchsorted(np.asarray(P_REGIMES), p, side="right")
 
@@ -415,35 +293,21 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
     groups : array_like
         ``(n,)`` family ids (a family is held out whole).
     coverage : float, default 0.9
-        Nominal coverage of the predictive interval, in (0, 1).
+        Nominal coverage of the interval, in (0, 1).
     bandwidths : sequence of float, default BANDWIDTHS
-        Candidate bandwidths (times ``sqrt(d)``, in standardised features).
+        Candidate bandwidths (times ``sqrt(d)``, standardised features); the least out-of-family squared error wins.
     clip : float, optional
-        Errors are clipped to ``[-clip, clip]`` before the fit (None: not clipped); :data:`LOG_CLIP` for
-        ``log(SL / MC)``: beyond a factor of 4 either way a point is untrusted whatever the exact factor,
-        and the few such errors would otherwise set the interval everywhere near them.
+        Errors clipped to ``[-clip, clip]`` before the fit (:data:`LOG_CLIP` for ``log(SL / MC)``: beyond a
+        factor of 4 a point is untrusted whatever the factor).
     regimes : sequence of sequence of str, optional
-        The feature names (of :data:`FEATURES`, the first ``logit_p_uplift``) of the model of each regime of
-        :data:`P_REGIMES`, for ``x`` of every feature; None: :data:`REGIME_FEATURES` where ``x`` has a column
-        per feature of :data:`FEATURES`, else one model on every column of ``x``.
+        The feature names of the model of each regime of :data:`P_REGIMES`; None: :data:`REGIME_FEATURES`
+        where ``x`` has every feature, else one model on every column.
 
     Returns
     -------
     ErrorModel or RegimeModel
-        The fitted model: one :class:`ErrorModel` on every column, or a :class:`RegimeModel` of one
-        :class:`ErrorModel` per distinct feature set (each fitted on every point, rows with a non-finite
-        feature of any set dropped).
-
-    Notes
-    -----
-    Local linear regression [2] with the bandwidth of least out-of-family squared error, and a
-    normalised, Mondrian split-conformal interval [1] calibrated on out-of-family residuals.  A point of
-    regime ``c`` is predicted by the part of ``regimes[c]`` with that part's factor of regime ``c``.
-
-    References
-    ----------
-    .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
+        One :class:`ErrorModel`, or a :class:`RegimeModel` of one per distinct feature set; a point of regime
+        ``c`` is predicted by the part of ``regimes[c]`` with that part's factor of regime ``c``.
     """
     if not 0.0 < coverage < 1.0:
         raise ValueError(f"parameter 'coverage' must be in (0, 1) (got {coverage!r})")
@@ -465,33 +329,7 @@ def fit_error_model(x, y, groups, coverage=0.9, bandwidths=BANDWIDTHS, clip=None
 
 
 def predict(model, x):
-    """The error model's estimate and predictive interval at new points.
-
-    NaN where a feature is not finite.
-
-    Parameters
-    ----------
-    model : ErrorModel or RegimeModel
-        :func:`fit_error_model`.
-    x : array_like
-        ``(m, d)`` features (:func:`features`; every feature for a :class:`RegimeModel`).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(estimate, low, high)`` [units of the error].
-
-    Notes
-    -----
-    ``estimate +- q s(x)``: the local linear estimate [2] and the normalised conformal half-width [1]
-    (module docstring); a :class:`RegimeModel` predicts each point by the part of its uplift regime, and is
-    NaN where any feature is not finite (whether its part reads it or not).
-
-    References
-    ----------
-    .. [1] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [cleveland1988] in the bibliography, ``docs/bibliography.md``.
-    """
+    """``(estimate, low, high)`` [units of the error] of the model at feature rows ``x``: ``estimate +- q s(x)``; NaN where a feature is not finite."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
     ok = np.all(np.isfinite(x), axis=1)
     if isinstance(model, RegimeModel):
@@ -512,40 +350,13 @@ def predict(model, x):
 
 
 def grouped_cross_validation(x, y, groups, folds=0, coverage=0.9, clip=None, regimes=None):
-    """``(estimate, low, high)`` of every point predicted by a model fitted without its fold of families.
-
-    ``folds = 0``: each family is its own fold (leave one family out); otherwise the families are dealt at
-    random (seed 0) into ``folds`` folds.  NaN where ``y`` or a feature is not finite.
-
-    Parameters
-    ----------
-    x : array_like
-        ``(n, d)`` features.
-    y : array_like
-        ``(n,)`` errors [1].
-    groups : array_like
-        ``(n,)`` family ids.
-    folds : int, default 0
-        Number of folds (0: one per family).
-    coverage : float, default 0.9
-        Nominal coverage [1].
-    clip : float, optional
-        As in :func:`fit_error_model`.
-    regimes : sequence of sequence of str, optional
-        As in :func:`fit_error_model`.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(estimate, low, high)`` [units of ``y``].
+    """``(estimate, low, high)`` of every point predicted by a model fitted without its fold of families [hastie2009].
 
     Notes
     -----
-    Grouped (leave-families-out) cross-validation [1]: the coverage it measures is that of a new system.
-
-    References
-    ----------
-    .. [1] [hastie2009] in the bibliography, ``docs/bibliography.md``.
+    ``folds = 0``: leave one family out; otherwise families dealt at random (seed 0) into ``folds`` folds.
+    ``coverage``, ``clip``, ``regimes`` as in :func:`fit_error_model`.  The coverage it measures is that of a
+    new system.
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -574,26 +385,12 @@ UNTRUSTED_ERROR = 0.5
 
 
 def trust_from_interval(low, high, trusted_error=TRUSTED_ERROR, untrusted_error=UNTRUSTED_ERROR):
-    """Trust codes from a predicted interval of ``log(SL / MC)``.
+    """:class:`screening.core.status.Trust` codes (int8) from an interval ``[low, high]`` of ``log(SL / MC)``.
 
-    ``trusted`` (0) when ``exp(low) - 1 >= -trusted_error`` and ``exp(high) - 1 <= trusted_error``;
-    ``untrusted`` (2) when the interval lies wholly beyond ``+-untrusted_error`` or is NaN; ``check``
-    (1) otherwise (an infinite end is an open interval, :func:`open_ended`).
-
-    Parameters
-    ----------
-    low, high : array_like
-        The interval of ``log(SL / MC)`` [1].
-    trusted_error : float, default TRUSTED_ERROR
-        [1].
-    untrusted_error : float, default UNTRUSTED_ERROR
-        [1].
-
-    Returns
-    -------
-    numpy.ndarray of int8
-        :class:`screening.core.status.Trust` codes.
-
+    Notes
+    -----
+    ``trusted`` where ``exp(low) - 1 >= -trusted_error`` and ``exp(high) - 1 <= trusted_error``; ``untrusted``
+    where it lies wholly beyond ``+-untrusted_error`` or is NaN; ``check`` otherwise.
     """
     low = np.asarray(low, dtype=float)
     high = np.asarray(high, dtype=float)
@@ -610,28 +407,14 @@ ATLAS_FILE = "error_atlas.nc"
 
 
 def fitted_variables(ds):
-    """The error model of ``log(SL / MC)`` of every condensation of an atlas dataset (:func:`fit_error_model`,
-    :data:`LOG_CLIP`, :data:`REGIME_FEATURES`), as variables to store with it: ``em_residual`` (point,
-    condensation, em_part; the out-of-family residuals of each part, NaN where a point is not fitted),
+    """The error model of ``log(SL / MC)`` of every condensation of an atlas, as DataArrays to store with it.
+
+    Notes
+    -----
+    ``em_residual`` (point, condensation, em_part: out-of-family residuals, NaN where not fitted),
     ``em_bandwidth`` (condensation, em_part), ``em_q`` (condensation, em_part, regime) and
-    ``em_part_of_regime`` (regime); the coordinate ``em_part`` names each part's features (space-separated).
+    ``em_part_of_regime`` (regime), coordinate ``em_part`` naming each part's features; all [1].
     :func:`model_from_atlas` rebuilds the model from them without refitting.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        An atlas dataset.
-
-    Returns
-    -------
-    dict of str to xarray.DataArray
-        ``em_residual`` [1], ``em_bandwidth`` [1], ``em_q`` [1], ``em_part_of_regime`` [1].
-
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
     """
     import xarray as xr
 
@@ -673,29 +456,7 @@ STORED_FIT = ("em_residual", "em_bandwidth", "em_q", "em_part_of_regime", "em_pa
 
 
 def model_from_atlas(ds, condensation):
-    """The error model of ``log(SL / MC)`` of one condensation of an atlas dataset.
-
-    Rebuilt from its stored fit (:func:`fitted_variables`) where the file has one, else fitted
-    (:func:`fit_error_model`).
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        An atlas dataset.
-    condensation : str
-        One of its condensations (``ValueError`` otherwise).
-
-    Returns
-    -------
-    RegimeModel
-        The model.
-
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-    """
+    """The :class:`RegimeModel` of ``log(SL / MC)`` of one condensation of an atlas: from its stored fit, else fitted."""
     if condensation not in ds["condensation"].values:
         raise ValueError(f"parameter 'condensation' must be one of {[str(c) for c in ds['condensation'].values]} "
                          f"(got {condensation!r})")
@@ -736,15 +497,13 @@ def shipped_model(condensation="paper"):
 
 
 def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
-    """The point's dimensionless inputs of :func:`features` from its model parameters.
+    """The point's dimensionless inputs of :func:`features` from its model parameters (same types as ``fields``).
 
     Parameters
     ----------
     fields : mapping
-        Parameter name to value (numpy arrays, xarray DataArrays or numbers): ``m`` [kg], ``b``, ``h``
-        [m], ``g`` [m s-2], ``k`` [N m-2], and where present ``eps`` [m-2], ``I_cm`` [kg m2], ``lam``
-        [N s m-3] (Hunt–Crossley) or ``c`` [N s m-2] (Winkler), ``omega_g`` [rad s-1], ``T1`` [s], ``S0``
-        [m2 s-3] (a missing damping field gives a NaN ``zeta_v``, a missing ``S0`` a NaN ``I_S``).
+        ``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2], ``k`` [N m-2], and where present ``eps`` [m-2], ``I_cm``
+        [kg m2], ``lam`` [N s m-3] or ``c`` [N s m-2], ``omega_g`` [rad s-1], ``T1`` [s], ``S0`` [m2 s-3].
     contact : str, default "hunt_crossley"
         ``"hunt_crossley"`` or ``"winkler"``.
     excitation : str, default "white"
@@ -753,26 +512,15 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
     Returns
     -------
     dict
-        ``alpha`` [rad], ``r_ul``, ``zeta_v``, ``e``, ``omega_g_p``, ``tau``, ``I_S``, ``w_v_p`` [1] (same types
-        as ``fields``).
+        ``alpha`` [rad], ``r_ul``, ``zeta_v``, ``e``, ``omega_g_p``, ``tau``, ``I_S``, ``w_v_p`` [1].
 
     Notes
     -----
-    ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)``; ``e = eps z0^2`` with ``z0 = m g / (2 b k)``;
-    ``zeta_v`` (:func:`screening.core.physics.contact.vertical_damping_ratio`) ``= c_v / (2 m w_v)``,
-    ``w_v = sqrt(2 b k / m)``, ``c_v = 2 b lam z_rest`` (Hunt–Crossley; ``z_rest`` the root of
-    ``z + eps z^3 = z0`` on the rising branch) or ``2 b c`` (Winkler); NaN where a softening bed cannot carry
-    the block at rest (``-eps z0^2 >= 4/27``: no rest indentation), which makes such a point at best ``check``
-    (:func:`interval_trust`: a feature is not finite); ``p = sqrt(m g R /
-    (I_cm + m R^2))``; ``omega_g / p`` (NaN without a filter); ``tau = T1 p`` (without ``T1``, a constant
-    envelope: ``1e6``); ``I_S = sqrt(2 pi S0 p) / (g tan(alpha))`` (``S0`` the driving white noise's level, of
-    the filter's input for Kanai–Tajimi noise); ``w_v_p = sqrt(2 b k / m) / p`` (the vertical frequency of
-    eq. (13) of [1]).  ``theta_ul = m g / (2 b^2 k)`` is the uplift angle of [1]; ``p`` Housner's [2].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
+    ``alpha = atan(b/h)``; ``r_ul = m g / (2 b^2 k alpha)`` (the uplift angle of [mitseas2026] over
+    ``alpha``); ``e = eps z0^2``, ``z0 = m g / (2 b k)``; ``zeta_v`` of
+    :func:`screening.core.physics.contact.vertical_damping_ratio` (NaN without damping or rest indentation);
+    Housner's [housner1963] ``p = sqrt(m g R / (I_cm + m R^2))``; ``omega_g / p``; ``tau = T1 p`` (``1e6``
+    without ``T1``); ``I_S = sqrt(2 pi S0 p) / (g tan(alpha))``; ``w_v_p = sqrt(2 b k / m) / p``.
     """
     like = None
     if any(hasattr(v, "dims") for v in fields.values()):         # xarray: broadcast once, compute on numpy
@@ -807,23 +555,7 @@ def parameter_groups(fields, contact="hunt_crossley", excitation="white"):
 
 
 def dataset_features(ds):
-    """:func:`features` of every point of a :func:`screening.linearize` (or sweep) dataset.
-
-    From its indicators (:func:`screening.analysis.indicators.indicators_from_dataset`) and its
-    parameter coordinates (:func:`parameter_groups`), on the dataset's dimensions.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The dataset.
-
-    Returns
-    -------
-    tuple
-        ``(features, dims, shape)``: the ``(points, len(FEATURES))`` matrix [1], the dimensions and
-        shape the points are flattened from.
-
-    """
+    """``(features, dims, shape)`` of every point of a :func:`screening.linearize` (or sweep) dataset, from its indicators and parameter coordinates."""
     import xarray as xr
 
     ind = indicators_from_dataset(ds)
@@ -841,25 +573,7 @@ def dataset_features(ds):
 
 
 def model_features(indicators, block, foundation, excitation):
-    """:func:`features` of ``n`` points given as model objects and their indicators.
-
-    Parameters
-    ----------
-    indicators : dict
-        :func:`screening.analysis.indicators.trust_indicators` (``(n,)`` arrays) [1].
-    block : screening.core.model.Block
-        The block (fields scalar or ``(n,)``).
-    foundation : screening.core.model.Foundation
-        Its bed.
-    excitation : screening.core.excitations.base.Excitation
-        The excitation.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n, len(FEATURES))`` [1].
-
-    """
+    """:func:`features` of ``n`` points given as model objects and their :func:`screening.analysis.indicators.trust_indicators`."""
     labels = model_labels(foundation, excitation)
     grp = parameter_groups(model_fields(block, foundation, excitation), labels["contact"], labels["excitation"])
     n = np.size(indicators["peak_p_uplift"])
@@ -880,21 +594,7 @@ ATLAS_CONTACTS = ("hunt_crossley",)
 
 
 def inside_atlas(model, x):
-    """Where every input feature of the rows lies within the range the model's atlas points span.
-
-    Parameters
-    ----------
-    model : ErrorModel or RegimeModel
-        A fitted model (of every feature, or with a part that reads every input group).
-    x : array_like
-        ``(n, len(FEATURES))`` features.
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        True where every feature of :data:`INPUT_FEATURES` is inside.
-
-    """
+    """Boolean: where every feature of :data:`INPUT_FEATURES` of the rows lies within the model's atlas range."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
     cols = [FEATURES.index(name) for name in INPUT_FEATURES]
     if isinstance(model, RegimeModel):          # the input groups of a part that reads them all
@@ -910,23 +610,12 @@ def inside_atlas(model, x):
 
 
 def open_ended(est, low, high, clip=LOG_CLIP):
-    """``(est, low, high)`` [1] of ``log(SL / MC)`` with an end of the interval that reaches the fit's clip
-    (``+-clip``, :data:`LOG_CLIP`) made infinite: the model is fitted on errors clipped there, so such an
-    interval says "beyond a factor 4", not how far (on held-out families the interval covers the unclipped
-    error at a third of such points, against 95 % elsewhere).
+    """``(est, low, high)`` of ``log(SL / MC)`` with an end that reaches the fit's clip ``+-clip`` made infinite.
 
-    Parameters
-    ----------
-    est, low, high : array_like
-        The estimate and interval of ``log(SL / MC)`` [1].
-    clip : float, default LOG_CLIP
-        The fit's clip [1].
-
-    Returns
-    -------
-    tuple
-        ``(est, low, high)`` [1], the ends at the clip made infinite.
-
+    Notes
+    -----
+    The model is fitted on errors clipped there, so such an interval says "beyond a factor 4", not how far
+    (on held-out families it covers the unclipped error at a third of such points, against 95 % elsewhere).
     """
     low = np.where(np.asarray(low, dtype=float) <= -clip, -np.inf, low)
     high = np.where(np.asarray(high, dtype=float) >= clip, np.inf, high)
@@ -934,39 +623,15 @@ def open_ended(est, low, high, clip=LOG_CLIP):
 
 
 def interval_trust(model, x, status=None, covered=True):
-    """``(flag, estimate, low, high)`` of points: the :class:`screening.core.status.Trust` code [int8] and the
-    predicted ``SL / MC - 1`` of peak var_theta with its interval [1] (:func:`predict`, :func:`trust_from_interval`).
+    """``(flag, estimate, low, high)``: the Trust code [int8] and the predicted ``SL / MC - 1`` of peak var_theta with its interval.
 
-    ``status`` (:class:`screening.core.status.PointStatus` codes, None: all ok): a point whose status is not ok is
-    ``untrusted`` with a NaN estimate and band.  An interval end that reaches the fit's clip is open
-    (:func:`open_ended`: ``low = -1`` or ``high = inf``) and the point ``untrusted``: near it the atlas measured
-    errors beyond a factor 4.  ``covered`` (bool, broadcast to the points): False where the
-    point's model lies outside what the atlas samples (another excitation kind or contact law); such points,
-    and points whose inputs lie outside the atlas's range (:func:`inside_atlas`), are at best ``check``.  A
-    point whose status is ok but whose features are not all finite (an indicator could not be computed, an
-    undamped bed, a bed that cannot carry the block at rest: :func:`features`) is ``check`` with a NaN band.
-
-    Parameters
-    ----------
-    model : ErrorModel or RegimeModel
-        A fitted model.
-    x : array_like
-        ``(n, len(FEATURES))`` features.
-    status : array_like of int, optional
-        :class:`screening.core.status.PointStatus` codes (None: all ok).
-    covered : bool or array_like of bool, default True
-        See above.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(flag, estimate, low, high)``: Trust codes [int8] and ``SL / MC - 1`` with its interval [1].
-
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
+    Notes
+    -----
+    A point whose ``status`` (:class:`screening.core.status.PointStatus`, None: all ok) is not ok is
+    ``untrusted`` with NaNs; an interval end at the clip is open (:func:`open_ended`: ``low = -1`` or
+    ``high = inf``) and the point ``untrusted``.  Points not ``covered`` (another excitation kind or contact
+    law than the atlas samples) or outside its range (:func:`inside_atlas`) are at best ``check``; a point
+    with a feature not finite is ``check`` with a NaN band.  ``docs/error_atlas.md``.
     """
     x = np.atleast_2d(np.asarray(x, dtype=float))
     est, low, high = open_ended(*predict(model, x))
@@ -983,27 +648,7 @@ def interval_trust(model, x, status=None, covered=True):
 
 
 def with_error_model(ds, model):
-    """A linearization dataset with the error model's trust, estimate and interval.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A :func:`screening.linearize` dataset of the condensation ``model`` was fitted for.
-    model : ErrorModel or RegimeModel
-        The fitted model.
-
-    Returns
-    -------
-    xarray.Dataset
-        ``ds`` with ``sl_trust``, ``sl_error`` (the estimate of ``SL / MC - 1``) and its interval
-        ``sl_error_low``, ``sl_error_high`` [1] (:func:`interval_trust`).
-
-    References
-    ----------
-    .. [1] ``docs/error_atlas.md``, "The error atlas: how wrong the linearization is, over the whole
-       space" (this package's documentation).
-    .. [2] [vovk2005] in the bibliography, ``docs/bibliography.md``.
-    """
+    """``ds`` (a :func:`screening.linearize` dataset) with ``sl_trust``, ``sl_error`` (``SL / MC - 1``), ``sl_error_low``, ``sl_error_high`` (:func:`interval_trust`)."""
     import xarray as xr
 
     x, dims, shape = dataset_features(ds)

@@ -1,31 +1,11 @@
 """Fragility post-processing: probability that |theta| exceeds a rotation during the record.
 
-From the Gaussian second-order statistics of the linearization, by the up-crossing
-approximation:
-
-* Rice's rate for the non-stationary, correlated Gaussian pair ``(theta, theta')``: the
-  mean rate of outward crossings of the double barrier ``|theta| = a`` is
-  ``nu(a, t) = 2 p_theta(a) [s phi(mu/s) + mu Phi(mu/s)]`` with the conditional mean
-  ``mu = a cov / var_theta`` and standard deviation ``s = sqrt(var_theta_dot - cov^2/var_theta)``
-  of ``theta'`` given ``theta = a`` (``phi``, ``Phi``: standard normal pdf and cdf).  For a
-  stationary process (``cov = 0``) it is ``(1/pi)(sigma_theta_dot/sigma_theta) exp(-a^2/(2 sigma_theta^2))``.
-* Poisson: crossings independent, ``P = 1 - exp(-int_0^T nu dt)``.
-* Vanmarcke (1975), double barrier: crossings come in clumps for narrow-band response;
-  the hazard is ``nu (1 - exp(-sqrt(pi/2) delta^1.2 r)) / (1 - exp(-r^2/2))`` with
-  ``r = a / sigma_theta`` and the bandwidth ``delta`` of the equivalent linear oscillator
-  (damping ratio ``zeta = c_eq / (2 sqrt(k_eq M))``, white-noise input).
-
-A fragility curve over a swept intensity (usually ``S0``) is fitted with the lognormal
-model ``P(IM) = Phi(ln(IM / median) / beta)``.
-
-The xarray layer (``ds.rocking``) works on every dataset the package returns: a
-:func:`screening.linearize` result (one point or a grid), a sweep result file, and a
-:func:`screening.monte_carlo` result (there the probability is the fraction of samples whose
-peak ``|theta|`` exceeds the threshold).  Every quantity is broadcast by dimension name, and
-the thresholds read the stored ``theta_ul`` and ``slenderness``: nothing here recomputes the
-model.
-
-Method and how it is checked: ``docs/method.md#fragility``.
+From the Gaussian moments of the linearization by the up-crossing approximation (Rice's rate of the
+non-stationary pair ``(theta, theta')`` [rice1944], Poisson or Vanmarcke's clumping [vanmarcke1975]), from
+Monte Carlo as the fraction of samples beyond the threshold, and a lognormal fragility curve
+``P(IM) = Phi(ln(IM / median) / beta)`` fitted over a swept intensity [baker2015].  The xarray accessor
+``ds.rocking`` works on every result the package returns and reads the stored ``theta_ul`` and
+``slenderness``: nothing here recomputes the model.  Method and checks: ``docs/method.md#fragility``.
 """
 
 from __future__ import annotations
@@ -121,8 +101,7 @@ def upcrossing_rate(var_theta, var_theta_dot, cov_theta_theta_dot, level):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rice1944] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [rice1944].
 
     Examples
     --------
@@ -167,8 +146,7 @@ def oscillator_bandwidth(zeta):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -207,9 +185,7 @@ def vanmarcke_factor(var_theta, level, bandwidth):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rice1944] in the bibliography, ``docs/bibliography.md``.
-    .. [3] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [rice1944]; [3] [vanmarcke1975].
 
     Examples
     --------
@@ -256,8 +232,7 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -306,9 +281,7 @@ def band_standard_error(p, p_low, p_high):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``, and "Trusting a point", ``docs/trust.md``.
+    [1] [mitseas2026]; [2] ``docs/outputs_probabilities.md``, ``docs/trust.md``.
 
     Examples
     --------
@@ -358,8 +331,7 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -416,7 +388,7 @@ def mcs_exceedance_probability(peak_abs_theta, level, overturned=None):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -456,8 +428,7 @@ def lognormal_fragility(intensity, median, beta):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -496,8 +467,7 @@ def binomial_nll(log_median, log_beta, intensity, n_exceed, n_total):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -537,7 +507,7 @@ def fit_flag_of(intensity, median, beta, beta_se=np.nan):
 
     References
     ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [baker2015].
 
     Examples
     --------
@@ -586,8 +556,7 @@ def fit_binomial_fragility(intensity, n_exceed, n_total):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -661,9 +630,7 @@ def total_dispersion(beta, modelling):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] FEMA P-58-1, Seismic Performance Assessment of Buildings, Volume 1 - Methodology, Federal
-       Emergency Management Agency (2012).
+    [1] [mitseas2026]; [2] [fema2012].
 
     Examples
     --------
@@ -696,9 +663,7 @@ def with_modelling_dispersion(frag, modelling):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] FEMA P-58-1, Seismic Performance Assessment of Buildings, Volume 1 - Methodology, Federal
-       Emergency Management Agency (2012).
+    [1] [mitseas2026]; [2] [fema2012].
 
     Examples
     --------
@@ -748,8 +713,7 @@ def fit_lognormal_fragility(intensity, probability=None, n_exceed=None, n_total=
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -803,15 +767,11 @@ def parameter(ds, name):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
+    >>> ds = xr.Dataset(coords={"S0": [3e-4, 4e-4], "k": 2.89e7})
     >>> parameter(ds, "S0").values.tolist()[:2], float(parameter(ds, "k"))
     ([0.0003, 0.0004], 28900000.0)
     """
@@ -856,7 +816,7 @@ def model_quantity(ds, name):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -906,15 +866,11 @@ def threshold_angle(ds, threshold, relative_to=None):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
+    >>> ds = xr.Dataset({"slenderness": 0.16515})
     >>> f"{float(threshold_angle(ds, 0.5, 'slenderness')):.5f}", float(threshold_angle(ds, 0.01))
     ('0.08257', 0.01)
     """
@@ -945,7 +901,7 @@ def equivalent_damping_ratio(ds):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -976,7 +932,7 @@ def is_monte_carlo(ds):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1012,7 +968,7 @@ def sample_exceedance(peaks, overturned, valid, level):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1052,10 +1008,8 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
     ----------
     ds : xarray.Dataset
         A linearization, sweep or Monte Carlo result.
-    threshold : float
-        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
-    relative_to : {None, "slenderness", "theta_ul"}
-        What ``threshold`` is a fraction of.
+    threshold, relative_to : float, {None, "slenderness", "theta_ul"}
+        The threshold [rad], or a fraction [1] of ``relative_to`` (:func:`threshold_angle`).
     method : {"vanmarcke", "poisson"}
         The up-crossing approximation (:func:`exceedance_probability_from_moments`).
 
@@ -1071,8 +1025,7 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -1131,8 +1084,7 @@ def has_stored_exceedance(ds, threshold, relative_to=None):
 
     References
     ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``.
+    [1] ``docs/outputs_probabilities.md``.
 
     Examples
     --------
@@ -1177,8 +1129,7 @@ def stored_exceedance(ds, threshold, relative_to=None):
 
     References
     ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``.
+    [1] ``docs/outputs_probabilities.md``.
 
     Examples
     --------
@@ -1230,8 +1181,7 @@ def fit_fragility_curve(intensity, probability):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -1305,8 +1255,7 @@ def fit_standard_errors(intensity, probability, standard_error):
 
     References
     ----------
-    .. [1] H. White, "A heteroskedasticity-consistent covariance matrix estimator and a direct test for
-       heteroskedasticity", Econometrica 48(4) (1980) 817-838.
+    [1] [white1980].
 
     Examples
     --------
@@ -1357,7 +1306,7 @@ def fitted_standard_error(frag):
 
     References
     ----------
-    .. [1] screening documentation, "Trust", docs/trust.md.
+    [1] ``docs/trust.md``.
 
     Examples
     --------
@@ -1401,8 +1350,7 @@ def fit_curves(p, intensity, dim):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -1451,7 +1399,7 @@ def unvouched_points(ds, stored=True):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1498,7 +1446,7 @@ def fitted_probability(frag, unvouched=None):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1550,8 +1498,7 @@ def vouched_range(frag, ds, intensity, dim):
 
     References
     ----------
-    .. [1] screening documentation, "Fragility: curves, formats, trust flags and multiple-stripe fits",
-       docs/fragility.md.
+    [1] ``docs/fragility.md``.
 
     Examples
     --------
@@ -1602,8 +1549,7 @@ def add_fit(out, ds, intensity, dim):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -1673,7 +1619,7 @@ def grid_units_of(ds, dim):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1716,8 +1662,7 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------
@@ -1775,7 +1720,7 @@ def spot_positions(ds):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1817,7 +1762,7 @@ def mcs_exceedance_at_spots(ds, level):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1852,10 +1797,8 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
         A sweep result with the moments, ``peak_var_theta`` [rad2] and the best estimates
         ``best_peak_var_theta`` [rad2], ``best_peak_var_theta_dot`` [rad2 s-2], their standard errors
         and ``best_method``.
-    threshold : float
-        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
-    relative_to : {None, "slenderness", "theta_ul"}
-        What ``threshold`` is a fraction of.
+    threshold, relative_to : float, {None, "slenderness", "theta_ul"}
+        The threshold [rad], or a fraction [1] of ``relative_to`` (:func:`threshold_angle`).
     method : {"vanmarcke", "poisson"}
         The up-crossing approximation.
 
@@ -1868,7 +1811,7 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -1938,10 +1881,8 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
     ----------
     ds : xarray.Dataset
         A linearization, sweep or Monte Carlo result.
-    threshold : float
-        The threshold, [rad] or a fraction [1] (:func:`threshold_angle`).
-    relative_to : {None, "slenderness", "theta_ul"}
-        What ``threshold`` is a fraction of.
+    threshold, relative_to : float, {None, "slenderness", "theta_ul"}
+        The threshold [rad], or a fraction [1] of ``relative_to`` (:func:`threshold_angle`).
     method : {"vanmarcke", "poisson"}
         The up-crossing approximation.
     dim : str
@@ -1954,8 +1895,7 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [baker2015].
 
     Examples
     --------

@@ -1,25 +1,11 @@
 """A study's own fragility surface: the probability of overturning (or of exceeding a rotation) over the
 swept inputs, fitted on the study's Monte Carlo points, and given only where it can be vouched for.
 
-Near toppling the linearization stops or its error is beyond what the error atlas can bound, and a
-variance over the surviving samples is no answer; the probability of overturning is.  A sweep runs
-Monte Carlo at a few dozen points only, but the overturned counts there follow a smooth surface over
-the swept inputs (a fragility curve in the intensity, shifted and steepened by the other inputs).
-The pure functions here fit that surface and decide where it may stand in for Monte Carlo:
-
-* :func:`surface_inputs` -- the swept inputs, transformed (log where they span a decade) and
-  standardised;
-* :func:`surface_terms` -- the design matrix of a model form (``linear``, ``quadratic``);
-* :func:`fit_probit_surface` -- a binomial GLM with the probit link, by Fisher scoring, with its
-  covariance and Pearson dispersion;
-* :func:`predict_surface` -- the probability and its delta-method standard error at any point;
-* :func:`choose_form` -- the form the number of Monte Carlo points affords, by AIC;
-* :func:`leave_one_out` and :func:`loo_check` -- every Monte Carlo point predicted from the others;
-* :func:`inside_hull` -- the points inside the convex hull of the Monte Carlo points;
-* :func:`study_surface` -- all of the above for one level: the fitted surface and whether it is vouched for.
-
-Pure functions on numpy arrays; no I/O.  Method and validation: ``docs/outputs_probabilities.md``,
-"Near toppling: the study's fragility surface".
+Near toppling the probability of overturning is the answer; the overturned counts at a sweep's few dozen
+Monte Carlo points follow a smooth surface over the swept inputs.  Here: a binomial probit GLM over the
+transformed, standardised inputs (:func:`study_surface`: the form by AIC, Fisher scoring, a leave-one-out
+check and widening), used only inside the hull of the Monte Carlo points (:func:`inside_hull`).  Pure
+numpy; ``docs/outputs_probabilities.md``, "Near toppling: the study's fragility surface".
 """
 
 from __future__ import annotations
@@ -73,30 +59,15 @@ class Surface(NamedTuple):
 
 
 def surface_inputs(columns):
-    """The swept inputs as the surface reads them: transformed and standardised, one column per input.
-
-    Parameters
-    ----------
-    columns : dict of str to array_like
-        ``{input name: values}`` at every point of the study (SI units; e.g. ``S0`` [m2 s-3], ``eps`` [m-2]).
-
-    Returns
-    -------
-    z : numpy.ndarray
-        ``(points, inputs)`` [-]: each input that varies, ``log`` of it where all its values are positive and
-        span at least a factor 10, the value itself otherwise, then centred on its mean over the points and
-        divided by its standard deviation.
-    names : list of str
-        The inputs kept, in the order of the columns of ``z`` (an input with a single value is dropped).
+    r"""``(z, names)``: the swept inputs ``(points, inputs)`` [-] as the surface reads them, and the names kept.
 
     Notes
     -----
-    .. math:: z_j = (u_j - \\bar u_j) / s_j, \\qquad u_j = \\ln x_j \\text{ (positive, } \\max/\\min \\ge 10)
-       \\text{ or } x_j
+    .. math:: z_j = (u_j - \bar u_j) / s_j, \qquad u_j = \ln x_j \text{ (positive, } \max/\min \ge 10)
+       \text{ or } x_j
 
-    A fragility curve is lognormal in the intensity [1]_, a probit linear in ``ln S0``; an input swept over
-    zero (the bed's ``eps``) stays linear.
-
+    An input with a single value is dropped.  A fragility curve is lognormal in the intensity [baker2015], a
+    probit linear in ``ln S0``; an input swept over zero (the bed's ``eps``) stays linear.
     """
     cols, names = [], []
     for name, values in columns.items():
@@ -113,26 +84,12 @@ def surface_inputs(columns):
 
 
 def surface_terms(z, form="linear"):
-    """The design matrix of a model form over standardised inputs.
-
-    Parameters
-    ----------
-    z : array_like
-        ``(points, inputs)`` standardised inputs [-] (:func:`surface_inputs`).
-    form : {"linear", "quadratic"}
-        ``linear``: a constant and each input; ``quadratic``: also each input squared and each pairwise
-        product.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(points, terms)`` [-].
+    r"""The design matrix ``(points, terms)`` of ``form`` over standardised inputs ``z``.
 
     Notes
     -----
-    .. math:: \\Phi^{-1}(p) = \\beta_0 + \\sum_j \\beta_j z_j
-       \\;\\Big[+ \\sum_{j \\le l} \\gamma_{jl} z_j z_l\\Big]
-
+    .. math:: \Phi^{-1}(p) = \beta_0 + \sum_j \beta_j z_j
+       \;\Big[+ \sum_{j \le l} \gamma_{jl} z_j z_l\Big]  \quad\text{(quadratic)}
     """
     if form not in FORMS:
         raise ValueError(f"parameter 'form' must be one of {', '.join(FORMS)} (got {form!r})")
@@ -235,29 +192,7 @@ def fit_probit_surface(x, k, n, form="linear", max_iter=100, tol=1e-10):
 
 
 def predict_surface(surface, x):
-    """The probability and its standard error at points of the design.
-
-    Parameters
-    ----------
-    surface : Surface
-        A fit (:func:`fit_probit_surface`).
-    x : array_like
-        ``(points, terms)`` design matrix [-] of the same form.
-
-    Returns
-    -------
-    p : numpy.ndarray
-        :math:`\\Phi(x^T\\hat\\beta)` [-].
-    se : numpy.ndarray
-        Its standard error [-] by the delta method.
-
-    Notes
-    -----
-    .. math:: \\mathrm{se}(\\hat p) = \\phi(x^T\\hat\\beta)\\,\\sqrt{x^T \\hat C x}
-
-    with :math:`\\hat C` the fit's covariance (dispersion included) [1]_.
-
-    """
+    r"""``(p, se)``: :math:`\Phi(x^T\hat\beta)` at the design rows ``x`` and its delta-method standard error :math:`\phi(x^T\hat\beta)\sqrt{x^T \hat C x}`."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
     eta = x @ surface.coef
     var = np.einsum("ij,jk,ik->i", x, surface.cov, x)
@@ -265,26 +200,12 @@ def predict_surface(surface, x):
 
 
 def choose_form(z, k, n):
-    """The model form the Monte Carlo points afford, by Akaike's criterion.
-
-    Parameters
-    ----------
-    z : array_like
-        ``(points, inputs)`` standardised inputs of the Monte Carlo points [-].
-    k, n : array_like
-        Samples that reached the level and usable samples at each point [-].
-
-    Returns
-    -------
-    str or None
-        The form of :data:`FORMS` with the lowest AIC among those whose terms ``P`` satisfy
-        ``points >= MIN_POINTS_PER_TERM P`` and ``(points with 0 < k < n) > P`` and whose fit converged;
-        None when no form qualifies.
+    r"""The form of :data:`FORMS` of lowest AIC :math:`2P - 2\ell(\hat\beta)` among those the points afford, or None.
 
     Notes
     -----
-    :math:`\\mathrm{AIC} = 2P - 2\\ell(\\hat\\beta)` [1]_.
-
+    A form of ``P`` terms qualifies where ``points >= MIN_POINTS_PER_TERM P``, more than ``P`` points have
+    ``0 < k < n`` (``k`` samples reached the level of ``n`` usable), and its fit converged.
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
@@ -305,29 +226,7 @@ def choose_form(z, k, n):
 
 
 def leave_one_out(z, k, n, form):
-    """Every Monte Carlo point predicted by the surface fitted without it.
-
-    Parameters
-    ----------
-    z : array_like
-        ``(points, inputs)`` standardised inputs of the Monte Carlo points [-].
-    k, n : array_like
-        Samples that reached the level and usable samples at each point [-].
-    form : str
-        The model form (:data:`FORMS`).
-
-    Returns
-    -------
-    p, se : numpy.ndarray
-        The held-out prediction at each point and its standard error [-]; NaN where the fit without the
-        point did not converge.
-
-    Notes
-    -----
-    :math:`\\hat p_{(-i)} = \\Phi(x_i^T \\hat\\beta_{(-i)})` with the delta-method standard error of
-    :func:`predict_surface` [1]_.
-
-    """
+    """``(p, se)``: every Monte Carlo point predicted by the surface of ``form`` fitted without it (NaN where that fit did not converge)."""
     z = np.atleast_2d(np.asarray(z, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)
     x = surface_terms(z, form)
@@ -341,37 +240,21 @@ def leave_one_out(z, k, n, form):
 
 
 def loo_check(k, n, p_loo, se_loo):
-    """Whether the held-out predictions agree with the Monte Carlo points they left out.
+    r"""Whether the held-out predictions agree with the Monte Carlo points they left out.
 
-    Parameters
-    ----------
-    k, n : array_like
-        Samples that reached the level and usable samples at each point [-].
-    p_loo, se_loo : array_like
-        Held-out predictions and their standard errors [-] (:func:`leave_one_out`).
-
-    Returns
-    -------
-    share : float
-        Share [-] of the points in play whose prediction is within :data:`LOO_Z` combined standard errors of
-        the point (NaN when none is in play).
-    in_play : int
-        Points in play: some of their samples reached the level, or the prediction expects at least one
-        (``n p_loo >= 1``), or the prediction is not finite (counted as a miss).
-    passed : bool
-        ``in_play >= MIN_IN_PLAY`` and the misses at most ``max(1, floor((1 - LOO_PASS) in_play))``: a share of
-        at least ``LOO_PASS``, one miss allowed below ten points.
+    Returns ``(share, in_play, passed)``: ``share`` share [-] of the points in play whose prediction is
+    within :data:`LOO_Z` combined standard errors of the point (NaN when none is in play); ``in_play``
+    points in play: some of their samples reached the level, or the prediction expects at least one (``n
+    p_loo >= 1``), or the prediction is not finite (counted as a miss); ``passed`` ``in_play >=
+    MIN_IN_PLAY`` and the misses at most ``max(1, floor((1 - LOO_PASS) in_play))``: a share of at least
+    ``LOO_PASS``, one miss allowed below ten points.
 
     Notes
     -----
-    A point holds when :math:`|\\hat p_{(-i)} - k_i/n_i| \\le z\\sqrt{\\mathrm{se}_{(-i)}^2 + \\mathrm{se}_i^2}`,
-    :math:`\\mathrm{se}_i` the Agresti-Coull standard error of the point's fraction [1]_ and :math:`z` =
+    A point holds when :math:`|\hat p_{(-i)} - k_i/n_i| \le z\sqrt{\mathrm{se}_{(-i)}^2 + \mathrm{se}_i^2}`,
+    :math:`\mathrm{se}_i` the Agresti-Coull standard error of the point's fraction [agresti1998] and :math:`z` =
     :data:`LOO_Z`.  Points where neither the samples nor the surface expect the level to be reached are
     left out of the share: they would pass whatever the surface does elsewhere.
-
-    References
-    ----------
-    .. [1] [agresti1998] in the bibliography, ``docs/bibliography.md``.
     """
     z, finite, play = _held_out_z(k, n, p_loo, se_loo)
     with np.errstate(invalid="ignore"):
@@ -384,29 +267,18 @@ def loo_check(k, n, p_loo, se_loo):
 
 
 def loo_scale(k, n, p_loo, se_loo):
-    """The factor by which the held-out errors say the surface's standard errors are too small.
+    r"""The factor by which the held-out errors say the surface's standard errors are too small.
 
-    Parameters
-    ----------
-    k, n : array_like
-        Samples that reached the level and usable samples at each Monte Carlo point [-].
-    p_loo, se_loo : array_like
-        Held-out predictions and their standard errors [-] (:func:`leave_one_out`).
-
-    Returns
-    -------
-    float
-        ``max(1, sqrt(mean(z_i^2)))`` [-] over the points in play with a finite prediction (1 when fewer than
-        :data:`MIN_IN_PLAY`).
+    Returns: ``max(1, sqrt(mean(z_i^2)))`` [-] over the points in play with a finite prediction (1 when
+    fewer than :data:`MIN_IN_PLAY`).
 
     Notes
     -----
-    :math:`z_i = (\\hat p_{(-i)} - k_i/n_i) / \\sqrt{\\mathrm{se}_{(-i)}^2 + \\mathrm{se}_i^2}` is
+    :math:`z_i = (\hat p_{(-i)} - k_i/n_i) / \sqrt{\mathrm{se}_{(-i)}^2 + \mathrm{se}_i^2}` is
     standard normal where the surface's form is right and its standard error honest; a root mean square above
     1 means the form misses part of the surface (a bias the delta method does not see), and the standard
     errors are widened by it, as a normalised cross-validation residual calibrates a predictive interval [1]_.
     It never narrows them.  Points in play as in :func:`loo_check`.
-
     """
     z, finite, play = _held_out_z(k, n, p_loo, se_loo)
     use = finite & play
@@ -429,26 +301,11 @@ def _held_out_z(k, n, p_loo, se_loo):
 
 
 def inside_hull(z_points, z):
-    """Which points lie inside the convex hull of the Monte Carlo points (their range, with one input).
-
-    Parameters
-    ----------
-    z_points : array_like
-        ``(Monte Carlo points, inputs)`` standardised inputs [-].
-    z : array_like
-        ``(points, inputs)`` standardised inputs of the points asked about [-].
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        True inside (or on) the hull; with fewer Monte Carlo points than ``inputs + 1`` or a flat hull, the
-        box of their ranges instead; with no input, True.
+    """Boolean: the points ``z`` inside (or on) the convex hull of the Monte Carlo points ``z_points`` (Qhull Delaunay simplices).
 
     Notes
     -----
-    The Delaunay triangulation of the Monte Carlo points (Qhull [1]_): a point is inside when it lies in one
-    of its simplices.
-
+    With fewer Monte Carlo points than ``inputs + 1`` or a flat hull, the box of their ranges; with no input, True.
     """
     zp = np.atleast_2d(np.asarray(z_points, dtype=float))
     z = np.atleast_2d(np.asarray(z, dtype=float))
@@ -468,26 +325,15 @@ def inside_hull(z_points, z):
 def study_surface(z, k, n):
     """The study's surface for one level: the form the points afford, its fit and whether it is vouched for.
 
-    Parameters
-    ----------
-    z : array_like
-        ``(Monte Carlo points, inputs)`` standardised inputs [-] (:func:`surface_inputs`).
-    k, n : array_like
-        Samples that reached the level and usable samples at each Monte Carlo point [-].
-
-    Returns
-    -------
-    Surface or None
-        The fit on every point with its leave-one-out share and ``vouched`` (the fit converged and
-        :func:`loo_check` passed); None when no form qualifies (:func:`choose_form`: too few points, or too
-        few with ``0 < k < n``).
+    Returns: the fit on every point with its leave-one-out share and ``vouched`` (the fit converged and
+    :func:`loo_check` passed); None when no form qualifies (:func:`choose_form`: too few points, or too few
+    with ``0 < k < n``).
 
     Notes
     -----
     The steps: :func:`choose_form`, :func:`fit_probit_surface` on every point, :func:`leave_one_out`,
     :func:`loo_check`, and the covariance widened by :func:`loo_scale` squared.  The points where the surface may be used are those :func:`inside_hull` finds (the
     caller's step).
-
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     k, n = np.asarray(k, dtype=float).reshape(-1), np.asarray(n, dtype=float).reshape(-1)

@@ -45,7 +45,7 @@ def envelope_fraction(ds):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -100,8 +100,7 @@ def trust_indicators(peak_p_uplift, min_k_eq, k_eq_rest, peak_var_theta, slender
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [housner1963] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [housner1963].
 
     Examples
     --------
@@ -142,7 +141,7 @@ def indicators_from_dataset(ds):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------

@@ -1,62 +1,16 @@
 """Intensity measures of the stochastic inputs by random-vibration theory (RVT).
 
-The ground acceleration of a study point is ``a(t) = q(t) f(t)``: the envelope ``q``
-(:mod:`screening.core.model.excitation`) times a zero-mean stationary Gaussian process ``f`` with
-two-sided PSD ``S(omega)`` integrated over ``|omega| <= omega_c``.  ``S`` carries the excitation's band
-(``band_limit_hz``, default 25 Hz: the order-4 low-pass every model applies) and ``omega_c`` is the
-band's top (:meth:`~screening.core.excitations.Excitation.reference_cutoff`), so the same nominal PGA is the
-same ground motion under a statue on mortar and a cabinet on pads, and the ground motion the linearization
-and the Monte Carlo synthesis see.  An idealized spectrum (``band_limit_hz=None``: the paper's) is cut
-sharply at :data:`GROUND_BAND_LIMIT_HZ`; white noise has a finite variance only through that cut (its PGA
-grows like ``sqrt(omega_c)``), while the linearization and the synthesis see it to higher frequencies.
-With the spectral
-moments ``lambda_i = int_{-omega_c}^{omega_c} |omega|^i S(omega) d omega``:
-
-* ``rms_acceleration`` [m s-2] = ``sqrt(lambda_0 int_0^T q^2 dt / T)``, the root mean square of
-  ``a`` over the record ``[0, T]`` (ensemble mean of the time average);
-* ``arias_intensity`` [m s-1] = ``E[pi/(2 g) int_0^T a^2 dt] = pi lambda_0 int_0^T q^2 dt / (2 g)``
-  (its expected value; the sample-to-sample scatter is a few per cent for records of many cycles);
-* ``pga_median`` [m s-2]: the median of ``max_t |a(t)|`` (the continuous peak) of the same
-  :data:`PGV_RECORDS` records per excitation shape as the PGV, synthesised in the same pass
-  (:func:`simulated_pga`, standard error ~0.5 %); ``method="rvt"`` keeps the first-passage median of
-  :func:`screening.analysis.intensity_rvt.pga_median` (Rice's rate of the non-stationary pair
-  ``(a, a')``, crossings independent), within the sampling error for white noise and firm soil but
-  +3.0 % (3.7 standard errors) for soft soil, where the crossings clump.  The distribution of
-  :func:`rocking_start_probability` (a probability, possibly small, not a median) stays the RVT one;
-* ``sa_median`` [m s-2]: median pseudo-spectral acceleration ``omega_n^2 max |u|`` of a linear
-  oscillator (period ``T_n``, damping ratio ``zeta``, default 5 %) driven by ``-a(t)``, from the
-  same first-passage formula applied to the oscillator's non-stationary covariance (Lyapunov
-  equation of the oscillator, with the Kanai-Tajimi filter states for that input, started at rest
-  with the filter in its stationary state as in the synthesis) and Vanmarcke's clumping for the
-  bandwidth of the oscillator's response to that input (:func:`oscillator_response_bandwidth`, at
-  least the white-noise one).  The Lyapunov
-  equation does not see the band limit: valid for ``omega_n`` well below ``omega_c`` (a
-  ``UserWarning`` is raised when ``omega_n > omega_c / 2``);
-* ``pgv_median`` [m s-1]: median peak velocity after a 2nd-order Butterworth high-pass at
-  ``omega_low`` (default 0.1 Hz: the velocity of white or Kanai-Tajimi noise has unbounded variance
-  at low frequency), the median of :data:`PGV_RECORDS` records synthesised per excitation shape with
-  a fixed seed (:func:`simulated_pgv`, standard error ~0.6 %): no first-passage model of the
-  velocity's spectral moments held (``method="rvt"``: the exact evolutionary-spectrum covariance of
-  the velocity, :func:`velocity_covariance`, and the first-passage formula, 4-11 % off);
-* ``avgsa_median`` [m s-2]: geometric mean of ``sa_median`` over 10 periods log-spaced in
-  ``[0.2 T, 1.5 T]`` (the median of AvgSA when the log-peaks are jointly normal).
-
-Every measure is proportional to ``sqrt(S0)`` (Arias: to ``S0``), so
-:func:`s0_for_pga` inverts a target PGA exactly.
-
-This module holds the measures of the inputs and the datasets; the peak factors are in
-:mod:`screening.analysis.intensity_rvt` and the measures of records in
-:mod:`screening.analysis.intensity_records` (their public names are importable from here too).
-
-Validation (``tests/unit/analysis/test_intensity.py``, ``test_intensity_pgv.py`` and
-``test_intensity_accuracy.py``, slow): 1,000 synthesised records of white-noise, Kanai-Tajimi (firm
-and soft soil) and Clough-Penzien points; medians of the sampled peaks against these predictions
-(measured accuracies in the test docstrings and ``docs/intensity_measures.md``).
-
-References: Vanmarcke, E. H. (1975) On the distribution of the first-passage time for normal
-stationary random processes, J. Appl. Mech. 42, 215-220.  Der Kiureghian, A. (1980) Structural
-response to stationary excitation, J. Eng. Mech. Div. 106(6), 1195-1213.  Boore, D. M. (2003)
-Simulation of ground motion using the stochastic method, Pure Appl. Geophys. 160, 635-676.
+A study point's ground acceleration is ``a(t) = q(t) f(t)``: the envelope ``q`` times a zero-mean
+stationary Gaussian process of two-sided PSD ``S(omega)`` over ``|omega| <= omega_c``, the excitation's
+band (:meth:`~screening.core.excitations.Excitation.reference_cutoff`), so the same nominal PGA is the
+same ground motion whatever the block.  The measures: ``rms_acceleration`` [m s-2], ``arias_intensity``
+[m s-1] (expected values), ``pga_median`` and ``pgv_median`` (medians of :data:`PGV_RECORDS` records
+synthesised per excitation shape; ``method="rvt"``: first passage), ``sa_median`` [m s-2] (first passage
+of the oscillator's Lyapunov covariance with Vanmarcke's clumping [vanmarcke1975]) and ``avgsa_median``.
+Every measure goes as ``sqrt(S0)`` (Arias: ``S0``), so :func:`s0_for_pga` inverts a PGA exactly.  The
+peak factors are in :mod:`screening.analysis.intensity_rvt`, the measures of records in
+:mod:`screening.analysis.intensity_records`.  Definitions, limits and measured accuracy:
+``docs/intensity_measures.md``.
 """
 
 from __future__ import annotations
@@ -128,9 +82,8 @@ def rms_acceleration(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] D. M. Boore, "Simulation of ground motion using the stochastic method", Pure Appl. Geophys.
-       160 (2003) 635-676.
+    [1] [mitseas2026]; [2] D. M. Boore, "Simulation of ground motion using the stochastic method", Pure Appl.
+    Geophys. 160 (2003) 635-676.
 
     Examples
     --------
@@ -173,8 +126,7 @@ def arias_intensity(excitation, t_end, cutoff, g=G):
 
     References
     ----------
-    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [arias1970]; [2] [mitseas2026].
 
     Examples
     --------
@@ -223,8 +175,7 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026]; [2] [shinozuka1991].
 
     Examples
     --------
@@ -264,8 +215,7 @@ def input_measures(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    [1] [arias1970]; [2] [shinozuka1991].
 
     Examples
     --------
@@ -315,15 +265,9 @@ def _unit_measures(kind, envelope_kind, names, *args):
 def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
     """RVT intensity measures of the input of every point of a result dataset (sweep or linearize).
 
-    Reads ``S0``, ``omega_g``, ``zeta_g``, ``T1``, ``T2`` (coordinates), the ``excitation`` and
-    ``envelope`` attributes, ``t_end`` (last ``t``) and the band limit: ``cutoff`` [rad/s], else
-    the dataset's ``cutoff_rad_s`` attribute, else the ground-motion band limit of its
-    ``band_limit_hz`` coordinate (the excitation's band: its spectrum to the band's top; NaN or absent, the
-    idealized spectrum to a sharp :data:`GROUND_BAND_LIMIT_HZ`, or to a legacy file's ``band_limit_hz``
-    attribute): never the block's or bed's.  Returns a
-    Dataset with ``pga_median``, ``rms_acceleration``, ``arias_intensity``, ``pgv_median`` and, with
-    ``period`` [s], ``sa_median`` and ``avgsa_median`` (attribute ``period``), on the dimensions of the
-    parameters they depend on.
+    The band limit: ``cutoff`` [rad/s], else the dataset's ``cutoff_rad_s`` attribute, else its
+    ``band_limit_hz`` coordinate (NaN or absent: the idealized spectrum to :data:`GROUND_BAND_LIMIT_HZ`):
+    never the block's or bed's.
 
     Parameters
     ----------
@@ -352,9 +296,7 @@ def intensity_measures(ds, period=None, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
-    .. [3] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    [1] [arias1970]; [2] [vanmarcke1975]; [3] [shinozuka1991].
 
     Examples
     --------
@@ -484,8 +426,7 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     References
     ----------
-    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [shinozuka1991]; [2] [boore2005].
 
     Examples
     --------
@@ -531,7 +472,7 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     References
     ----------
-    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    [1] [shinozuka1991].
 
     Examples
     --------
@@ -595,17 +536,13 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     Notes
     -----
-    Why simulated: the RVT median is exact to the sampling error of 1,000 records for white noise and
-    firm Kanai-Tajimi ground, but for soft soil (Kanai-Tajimi 5 rad/s, damping 0.3; 20 s, 100 rad/s)
-    it was +2.96 % high (3.7 standard errors): its narrow-band crossings arrive in clumps, which
-    Poisson counts as independent.  The simulated median is exact to its own sampling error
-    (:func:`simulated_pga`, ~0.5 %).  The label ``pga`` of a study (:func:`s0_for_pga`) inverts this
-    same median.  :func:`rocking_start_probability` stays RVT (see there).
+    Simulated because the RVT median is +3 % high on soft soil, where crossings clump
+    (``docs/intensity_measures.md``); the simulated one is exact to its sampling error (~0.5 %).  A
+    study's ``pga`` label (:func:`s0_for_pga`) inverts this same median.
 
     References
     ----------
-    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [shinozuka1991]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -649,37 +586,16 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     Notes
     -----
-    Why simulated: no peak-factor model of the spectral moments holds for this velocity.  Its dominant
-    period (~``2 pi / omega_low`` = 10 s) is about the strong-motion duration, so the median peak is
-    reached in a few cycles, and the spectrum keeps a ``1/omega^2`` tail up to the band limit (white
-    noise; Kanai-Tajimi above ``omega_g``) whose small fast oscillations make Rice's crossings arrive
-    in clumps.  Against 1,000 records (seed 0, 20 s, 100 rad/s), at the records' median Rice's
-    expected number of crossings is 1.26 (white), 0.87 (firm Kanai-Tajimi), 0.66 (soft soil) where the
-    Poisson assumption needs ``ln 2`` = 0.69; Vanmarcke's clumping, driven by a bandwidth of 0.65-0.92,
-    corrects too little for the tail and too much for the bimodal soft-soil spectrum: the RVT median was
-    +11.4 %, +4.2 % and -3.5 % off (12, 5 and 5 standard errors).  The simulated median is exact to its
-    own sampling error (reported by :func:`simulated_pgv`).
-
-    ``"rvt"``: the non-stationary moments of ``(v, v')`` from :func:`velocity_covariance` (the velocity
-    of the modulated acceleration lags the envelope by ~``1/omega_low``), Rice's rate of crossings of
-    ``|v| = x`` with Vanmarcke's clumping for the stationary bandwidth
-    ``delta = sqrt(1 - mu_1^2 / (mu_0 mu_2))`` (:func:`velocity_spectral_moments`) and
-    ``P(PGV <= x) = exp(-int_0^T nu dt) = 1/2``.
-
-    The high-pass is stated, not optional: the velocity of white or Kanai-Tajimi acceleration has
-    unbounded variance at low frequency (``S(0) > 0``: a random walk; a PGV without a low-frequency
-    limit grows with the record length).  The default 0.1 Hz is the usual corner of record
-    processing; the same causal 2nd-order Butterworth filter is applied to records by
-    :func:`record_velocity`, so the input and record PGVs compare.  It is the kind of high-pass that a
-    Clough-Penzien filter puts on the acceleration spectrum.
+    Simulated because no peak-factor model of the velocity's spectral moments holds (its period is about
+    the strong-motion duration, and its ``1/omega^2`` tail makes crossings clump): the RVT median
+    (``"rvt"``: :func:`velocity_covariance`, Rice's rate with Vanmarcke's clumping) was 4-11 % off.  The
+    high-pass is stated, not optional: the velocity of white or Kanai-Tajimi acceleration has unbounded
+    variance at low frequency; the same causal 2nd-order Butterworth filter is applied to records by
+    :func:`record_velocity`, so the two PGVs compare.  ``docs/intensity_measures.md``.
 
     References
     ----------
-    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
-    .. [2] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
-       (1965) 204-237.
-    .. [3] [boore2005] in the bibliography, ``docs/bibliography.md``.
-    .. [4] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
+    [1] [vanmarcke1975]; [2] [priestley1965]; [3] [boore2005]; [4] [shinozuka1991].
 
     Examples
     --------
@@ -734,7 +650,7 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] [eads2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [eads2015].
 
     Examples
     --------

@@ -1,17 +1,9 @@
-"""Intensity measures of records: PGA, PGV, Sa, AvgSA, RMS and Arias of accelerograms, and the PGVs of
-synthesised records.
+"""Intensity measures of records (PGA, PGV, Sa, AvgSA, RMS, Arias) and the PGVs of synthesised records.
 
 :func:`record_measures` reads one :class:`~screening.core.records.Record`; :func:`oscillator_peak` (exact
-recurrence for piecewise-linear input), :func:`record_velocity` (the 0.1 Hz Butterworth high-pass of
-record processing, then integration) and :func:`record_avgsa` work on rows of accelerations.
-:func:`synthesised_pgv` draws records of a stochastic input exactly as the Monte Carlo does and returns
-their PGVs (the median of which is :func:`screening.analysis.intensity.pgv_median`), and
-:func:`median_standard_error` the distribution-free standard error of a sample median.
-
-References: Nigam, N. C. & Jennings, P. C. (1969) Calculation of response spectra from strong-motion
-earthquake records, Bull. Seismol. Soc. Am. 59(2), 909-922.  Boore, D. M. & Bommer, J. J. (2005)
-Processing of strong-motion accelerograms: needs, options and consequences, Soil Dyn. Earthq. Eng. 25,
-93-115.  Eads, L., Miranda, E. & Lignos, D. G. (2015) Earthq. Eng. Struct. Dyn. 44, 2057-2073.
+recurrence for piecewise-linear input [nigam1969]), :func:`record_velocity` (0.1 Hz Butterworth high-pass,
+then integration [boore2005]) and :func:`record_avgsa` [eads2015] work on rows of accelerations;
+:func:`synthesised_pgv` draws records exactly as the Monte Carlo does.  ``docs/intensity_measures.md``.
 """
 
 from __future__ import annotations
@@ -63,7 +55,7 @@ def oscillator_peak(acceleration, dt, period, damping=0.05):
 
     References
     ----------
-    .. [1] [nigam1969] in the bibliography, ``docs/bibliography.md``.
+    [1] [nigam1969].
 
     Examples
     --------
@@ -126,9 +118,7 @@ def record_measures(record, period=None, damping=0.05, g=G):
 
     References
     ----------
-    .. [1] [arias1970] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [nigam1969] in the bibliography, ``docs/bibliography.md``.
-    .. [3] [eads2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [arias1970]; [2] [nigam1969]; [3] [eads2015].
 
     Examples
     --------
@@ -182,7 +172,7 @@ def highpass_gain(omega, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [boore2005].
 
     Examples
     --------
@@ -223,7 +213,7 @@ def median_standard_error(x):
 
     References
     ----------
-    .. [1] H. A. David and H. N. Nagaraja, Order Statistics, 3rd ed., Wiley (2003), section 7.1.
+    [1] H. A. David and H. N. Nagaraja, Order Statistics, 3rd ed., Wiley (2003), section 7.1.
 
     Examples
     --------
@@ -270,7 +260,7 @@ def continuous_peak(acceleration, rate, dt, refine=8):
 
     References
     ----------
-    .. [1] [fritsch1980] in the bibliography, ``docs/bibliography.md``.
+    [1] [fritsch1980].
 
     Examples
     --------
@@ -329,8 +319,7 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
 
     References
     ----------
-    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [shinozuka1991]; [2] [boore2005].
 
     Examples
     --------
@@ -378,8 +367,7 @@ def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_S
 
     References
     ----------
-    .. [1] [shinozuka1991] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [shinozuka1991]; [2] [boore2005].
 
     Examples
     --------
@@ -412,7 +400,7 @@ def avgsa_periods(period, n=AVGSA_N_PERIODS, span=AVGSA_RANGE):
 
     References
     ----------
-    .. [1] [eads2015] in the bibliography, ``docs/bibliography.md``.
+    [1] [eads2015].
 
     Examples
     --------
@@ -450,7 +438,7 @@ def record_velocity(acceleration, dt, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [boore2005].
 
     Examples
     --------
@@ -495,8 +483,7 @@ def record_avgsa(acceleration, dt, period, damping=0.05):
 
     References
     ----------
-    .. [1] [eads2015] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [nigam1969] in the bibliography, ``docs/bibliography.md``.
+    [1] [eads2015]; [2] [nigam1969].
 
     Examples
     --------

@@ -1,18 +1,10 @@
 """Random-vibration (RVT) peak factors of the stochastic inputs: the first-passage medians of PGA and Sa.
 
-A study point's ground acceleration ``a(t) = q(t) f(t)`` (envelope ``q``, stationary Gaussian ``f`` of
-two-sided PSD ``S(omega)`` band-limited to ``omega_c``) has, at every time, Gaussian ``(y, y')`` for
-``y`` the acceleration, an oscillator's response or the high-passed velocity.  This module gives their
-non-stationary moments (:func:`input_moments`, :func:`oscillator_covariance`, :func:`velocity_covariance`)
-and the peak distribution ``P(max_t |y| <= x) = exp(-int_0^T nu(x, t) dt)`` with Rice's rate ``nu``
-(:func:`median_peak`, :func:`rocking_start_probability`): :func:`pga_median` (crossings independent) and
-:func:`sa_median` (Vanmarcke's clumping for the bandwidth of the oscillator's response,
-:func:`oscillator_response_bandwidth`).  The method, its accuracy against synthesised records and its
-limits: :mod:`screening.analysis.intensity` and ``docs/intensity_measures.md``.
-
-References: Vanmarcke, E. H. (1975) On the distribution of the first-passage time for normal
-stationary random processes, J. Appl. Mech. 42, 215-220.  Priestley, M. B. (1965) Evolutionary spectra
-and non-stationary processes, J. R. Stat. Soc. B 27, 204-237.
+At every time ``(y, y')`` is Gaussian for ``y`` the ground acceleration, an oscillator's response or the
+high-passed velocity: their non-stationary moments (:func:`input_moments`, :func:`oscillator_covariance`,
+:func:`velocity_covariance`) and the peak distribution ``P(max_t |y| <= x) = exp(-int_0^T nu(x, t) dt)``
+with Rice's rate ``nu`` [rice1944] give :func:`pga_median` (crossings independent) and :func:`sa_median`
+(Vanmarcke's clumping [vanmarcke1975]).  Method, accuracy and limits: ``docs/intensity_measures.md``.
 """
 
 from __future__ import annotations
@@ -66,7 +58,7 @@ def spectral_moments(excitation, cutoff):
 
     References
     ----------
-    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [vanmarcke1975].
 
     Examples
     --------
@@ -113,8 +105,7 @@ def median_peak(t, var, var_dot, cov, bandwidth=None, probability=0.5):
 
     References
     ----------
-    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [rice1944]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -171,8 +162,7 @@ def input_moments(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [vanmarcke1975]; [2] [mitseas2026].
 
     Examples
     --------
@@ -220,8 +210,7 @@ def pga_median(excitation, t_end, cutoff):
 
     References
     ----------
-    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [rice1944]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -264,27 +253,14 @@ def rocking_start_probability(excitation, t_end, cutoff, uplift_acceleration, me
     The distribution of the peak ground acceleration of which :func:`pga_median` is the median:
     ``P(max_t |a| > x) = 1 - exp(-int_0^T nu(x, t) dt)`` with Rice's double-barrier rate ``nu`` of the
     non-stationary pair ``(a, a')`` (:func:`screening.analysis.fragility.exceedance_probability_from_moments`).
-    Ground acceleration is broad-band (bandwidth ``delta`` 0.5 for band-limited white noise, 0.65 for
-    the Kanai-Tajimi point of the tests), so its crossings barely clump: against 2,000 synthesised
-    records the Poisson form is within 2.5 binomial standard errors at probabilities 0.05-0.95, where
-    Vanmarcke's correction is up to 0.08 (12 standard errors) low at the middle of the distribution
-    (``tests/unit/analysis/test_intensity.py``).  The moments
-    scale with ``S0``, so one evaluation per distinct filter, envelope and band limit at ``S0 = 1``
-    serves every point, at the level ``x / sqrt(S0)``.
-
-    Why RVT while the study's ``pga_median`` is simulated
-    (:func:`screening.analysis.intensity.pga_median`): this is a probability that can be small (a block
-    that rarely starts to rock), which 2,000 records cannot resolve in the tail, while the first-passage
-    form is smooth to 1e-28.  Its bias is that of the RVT median: for soft soil (Kanai-Tajimi 5 rad/s,
-    damping 0.3; 20 s, 100 rad/s) the crossings clump, Poisson counts too many and the RVT median PGA is
-    +2.96 % high (z = +3.7 against 1,000 records): the probability of rocking is overestimated
-    (conservative), 0.558 where the records say 0.499 at their median PGA.  White noise, firm soil and
-    Clough-Penzien input are within the sampling error.
+    The ground acceleration is broad-band, so Poisson (independent crossings) is the default; the
+    moments scale with ``S0``, so one evaluation at ``S0 = 1`` serves every point.  RVT rather than
+    simulation because the probability can be small; its bias (conservative on soft soil) and its
+    check against synthesised records: ``docs/intensity_measures.md``.
 
     References
     ----------
-    .. [1] [rice1944] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [rice1944]; [2] [vanmarcke1975].
 
     Examples
     --------
@@ -383,10 +359,7 @@ def oscillator_covariance(excitation, period, t_end, damping=0.05, n_times=N_TIM
 
     References
     ----------
-    .. [1] L. D. Lutes and S. Sarkani, Random Vibrations: Analysis of Structural and Mechanical Systems,
-       Elsevier Butterworth-Heinemann (2004).
-    .. [2] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [3] [clough1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [lutes2004]; [2] [mitseas2026]; [3] [clough1975].
 
     Examples
     --------
@@ -460,9 +433,7 @@ def sa_median(excitation, period, t_end, damping=0.05, cutoff=None):
 
     References
     ----------
-    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
-    .. [2] A. Der Kiureghian, "Structural response to stationary excitation", J. Eng. Mech. Div. ASCE
-       106(6) (1980) 1195-1213.
+    [1] [vanmarcke1975]; [2] [derkiureghian1980].
 
     Examples
     --------
@@ -513,17 +484,12 @@ def oscillator_response_bandwidth(excitation, period, damping=0.05, cutoff=None)
     ``|H|^2 = 1 / ((omega_n^2 - omega^2)^2 + (2 zeta omega_n omega)^2)``.  Under white noise it is
     :func:`screening.analysis.fragility.oscillator_bandwidth`; under a narrow-band input away from
     ``omega_n`` the response has two spectral peaks (the input's and the resonance) and a larger
-    bandwidth: its crossings clump less than a white-noise-driven oscillator's.  :func:`sa_median` uses
-    the larger of this and the white-noise bandwidth: a response started at rest and driven by a short
-    strong phase is broader than the stationary one (the white-noise bandwidth held within 1-2 % for
-    oscillators near or below the input's frequency; this one alone left them up to 15 % low).  Above
-    half the band limit, where the Lyapunov variance of :func:`sa_median` ignores the band limit (and
-    a warning says so), it keeps the white-noise bandwidth: a band-limited bandwidth with an unbounded
-    variance raised the Sa of those periods by a further 7 % and AvgSA(0.3 s) by 2 %.
+    bandwidth.  :func:`sa_median` uses the larger of this and the white-noise bandwidth, and the white-noise
+    one alone above half the band limit (``docs/intensity_measures.md``).
 
     References
     ----------
-    .. [1] [vanmarcke1975] in the bibliography, ``docs/bibliography.md``.
+    [1] [vanmarcke1975].
 
     Examples
     --------
@@ -584,7 +550,7 @@ def velocity_spectral_moments(excitation, cutoff, omega_low=OMEGA_LOW):
 
     References
     ----------
-    .. [1] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [boore2005].
 
     Examples
     --------
@@ -627,7 +593,7 @@ def envelope_exponentials(envelope):
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------
@@ -723,9 +689,7 @@ def velocity_covariance(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_times=
 
     References
     ----------
-    .. [1] M. B. Priestley, "Evolutionary spectra and non-stationary processes", J. R. Stat. Soc. B 27(2)
-       (1965) 204-237.
-    .. [2] [boore2005] in the bibliography, ``docs/bibliography.md``.
+    [1] [priestley1965]; [2] [boore2005].
 
     Examples
     --------

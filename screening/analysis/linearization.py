@@ -156,7 +156,7 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [1] [mitseas2026].
 
     Examples
     --------

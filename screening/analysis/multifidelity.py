@@ -1,26 +1,11 @@
 """Multi-fidelity Monte Carlo: a cheap model run on the same ground motions as the expensive one.
 
-The coupled model is the judge, and it is expensive; a cheap model (the condensed model, the
-stiff-bed model, or any model whose expectation is known) run on the *same* ground-motion samples is
-correlated with it sample by sample.  Used as a control variate it removes the part of the coupled
-estimate's sampling error that the cheap model explains, at the cheap model's price:
-
-* :func:`control_variate_estimate` — the estimate of ``E[Y]`` from ``n`` paired samples ``(y, x)``
-  and the cheap model's mean from ``N >= n`` samples (or known exactly), with its standard error;
-* :func:`optimal_ratio` — how many cheap samples per expensive one minimise the variance at a
-  given cost (and whether the cheap model is worth running at all);
-* :func:`speedup` — CPU saved at equal standard error against plain Monte Carlo of the expensive
-  model alone;
-* :func:`control_variate_functional` — the same for a smooth functional of the samples (delta method on
-  its influence values), with :func:`multifidelity_variance` (the ensemble variance history behind
-  peak var_theta) and :func:`multifidelity_probabilities` (``p_overturn``, ``p_exceed``, conditional on
-  the valid samples as in the engine);
-* :func:`allocate` — expensive and cheap samples for a target standard error, or plain Monte Carlo
-  where the predicted gain is below :data:`MIN_GAIN` (the fallback rule).
-
-Pure functions on numpy arrays; no model is run here.  The quantities are means of per-sample
-values: an exceedance probability is the mean of the indicator ``peak |theta| > a`` (overturned
-samples count as exceeding), the probability of overturning the mean of the overturned flags.
+A cheap model (condensed, stiff-bed, or one whose expectation is known) on the *same* samples is
+correlated with the coupled model sample by sample; as a control variate [peherstorfer2016] it removes the
+part of the expensive estimate's sampling error it explains, at its own price.  Means of per-sample values
+(:func:`control_variate_estimate`) and smooth functionals by the delta method [qian2018]
+(:func:`control_variate_functional`); the sample split (:func:`optimal_ratio`, :func:`allocate`, with plain
+Monte Carlo where the predicted gain is below :data:`MIN_GAIN`).  Pure numpy; ``docs/multifidelity.md``.
 """
 
 from __future__ import annotations
@@ -67,18 +52,16 @@ def _influence_moments(psi_y, psi_x):
 
 
 def control_variate_functional(value_y, influence_y, value_x, value_x_all, influence_x, n_cheap):
-    """Control-variate estimate of a smooth functional of the expensive model's distribution (delta method).
+    r"""Control-variate estimate of a smooth functional of the expensive model's distribution (delta method).
 
     Parameters
     ----------
     value_y : float or ndarray
         The functional from the ``n`` expensive samples (e.g. their sample variance at each time).
-    influence_y : ndarray, shape (n, ...)
-        Its per-sample influence values (first-order terms of the delta method; see Notes).
+    influence_y, influence_x : ndarray, shape (n, ...)
+        The per-sample influence values of the expensive and of the cheap model on the paired samples.
     value_x, value_x_all : float or ndarray
         The cheap model's functional from its ``n`` paired samples and from all ``n_cheap`` of them.
-    influence_x : ndarray, shape (n, ...)
-        The cheap model's influence values on the paired samples.
     n_cheap : float
         Cheap samples behind ``value_x_all`` (``>= n``; ``math.inf`` where ``value_x_all`` is exact).
 
@@ -90,22 +73,17 @@ def control_variate_functional(value_y, influence_y, value_x, value_x_all, influ
     Notes
     -----
     A functional :math:`F` of the sample distribution is, to first order, the mean of its influence
-    values :math:`\\psi_i` (:math:`\\hat F - F \\approx \\bar\\psi`); a conditional mean
-    :math:`F = E[v g] / E[v]` over the valid samples (``v`` = 1) has :math:`\\psi_i = v_i (g_i - F) / \\bar v`,
-    a variance the same with :math:`g_i = (\\theta_i - \\mu)^2`.  The two-fidelity estimate and its variance
-    are those of the mean (eq. (2.7) in [1]) with the influence values in place of the samples ([2], section 3):
+    values :math:`\psi_i` (:math:`\hat F - F \approx \bar\psi`); a conditional mean
+    :math:`F = E[v g] / E[v]` over the valid samples (``v`` = 1) has :math:`\psi_i = v_i (g_i - F) / \bar v`,
+    a variance the same with :math:`g_i = (\theta_i - \mu)^2`.  The two-fidelity estimate and its variance
+    are those of the mean (eq. (2.7) in [peherstorfer2016]) with the influence values in place of the samples ([qian2018], section 3):
 
-    .. math:: \\hat F = \\hat F_y^{(n)} - \\alpha (\\hat F_x^{(n)} - \\hat F_x^{(N)}), \\quad
-              \\alpha = \\frac{\\widehat{\\mathrm{cov}}(\\psi_y, \\psi_x)}{\\widehat{\\mathrm{var}}(\\psi_x)}, \\quad
-              \\mathrm{Var}\\,\\hat F \\approx \\frac{\\mathrm{var}(\\psi_y)}{n}\\,[1 - (1 - n/N)\\rho_\\psi^2].
+    .. math:: \hat F = \hat F_y^{(n)} - \alpha (\hat F_x^{(n)} - \hat F_x^{(N)}), \quad
+              \alpha = \frac{\widehat{\mathrm{cov}}(\psi_y, \psi_x)}{\widehat{\mathrm{var}}(\psi_x)}, \quad
+              \mathrm{Var}\,\hat F \approx \frac{\mathrm{var}(\psi_y)}{n}\,[1 - (1 - n/N)\rho_\psi^2].
 
     Where ``influence_x`` or ``influence_y`` is constant (no information) the weight is 0 and the plain
     estimate is returned.
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [qian2018] in the bibliography, ``docs/bibliography.md``.
     """
     psi_y, psi_x = np.asarray(influence_y, dtype=float), np.asarray(influence_x, dtype=float)
     n = psi_y.shape[0]
@@ -127,29 +105,7 @@ def control_variate_functional(value_y, influence_y, value_x, value_x_all, influ
 
 
 def conditional_mean_influence(g, valid=None):
-    """The mean of ``g`` over the valid samples and its per-sample influence values.
-
-    Parameters
-    ----------
-    g : ndarray, shape (n, ...)
-        Per-sample values (samples on axis 0; any value where ``valid`` is False).
-    valid : ndarray of bool, shape (n,), optional
-        The samples in the estimate (default: all).
-
-    Returns
-    -------
-    (value, influence) : the mean over the valid samples (NaN without any) and ``v_i (g_i - value) / mean(v)``.
-
-
-    Notes
-    -----
-    For ``F = E[v g] / E[v]`` the first-order influence is ``psi_i = v_i (g_i - F) / mean(v)``
-    (section 3 of [1]).
-
-    References
-    ----------
-    .. [1] [qian2018] in the bibliography, ``docs/bibliography.md``.
-    """
+    """``(value, influence)``: the mean of ``g`` ``(n, ...)`` over the ``valid`` samples (NaN without any) and ``psi_i = v_i (g_i - value) / mean(v)`` (section 3 of [qian2018])."""
     g = np.asarray(g, dtype=float)
     v = np.ones(g.shape[0], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     vv = v.reshape(v.shape + (1,) * (g.ndim - 1))
@@ -162,31 +118,12 @@ def conditional_mean_influence(g, valid=None):
 
 
 def variance_influence(theta, valid=None):
-    """Ensemble variance (``ddof = 1``, about the sample mean, over the valid samples) and its influence values.
-
-    Parameters
-    ----------
-    theta : ndarray, shape (n, n_t)
-        Per-sample histories [rad] (samples on axis 0).
-    valid : ndarray of bool, shape (n,), optional
-        Samples in the ensemble (the Monte Carlo engine leaves out overturned and diverged ones).
-
-    Returns
-    -------
-    (variance [rad2], influence [rad2]) of shapes ``(n_t,)`` and ``(n, n_t)``; NaN variance with fewer
-    than two valid samples.
+    r"""Ensemble variance [rad2] ``(n_t,)`` (``ddof = 1``, over the valid samples; NaN below two) of ``theta`` ``(n, n_t)`` and its influence values ``(n, n_t)``.
 
     Notes
     -----
-    The influence of the variance :math:`\\sigma^2 = E[(\\theta - \\mu)^2]` is
-    :math:`(\\theta_i - \\mu)^2 - \\sigma^2` (the centring's own influence is second order), divided by the
-    valid fraction for the conditional variance: its variance over ``n`` is the engine's standard error
-    :math:`(m_4 - s^4) / n_{valid}` to first order.
-
-
-    References
-    ----------
-    .. [1] [qian2018] in the bibliography, ``docs/bibliography.md``.
+    The influence of :math:`\sigma^2 = E[(\theta - \mu)^2]` is :math:`(\theta_i - \mu)^2 - \sigma^2` divided by
+    the valid fraction [qian2018]: its variance over ``n`` is the engine's standard error to first order.
     """
     theta = np.asarray(theta, dtype=float)
     v = np.ones(theta.shape[0], dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
@@ -199,29 +136,13 @@ def variance_influence(theta, valid=None):
 
 
 def multifidelity_variance(theta_y, valid_y, theta_x, valid_x):
-    """Two-fidelity estimate of the ensemble variance history of the expensive model.
+    """Two-fidelity estimate [rad2] ``(n_t,)`` of the expensive model's ensemble variance history.
 
-    Parameters
-    ----------
-    theta_y : ndarray, shape (n, n_t)
-        The expensive model's histories [rad].
-    valid_y : ndarray of bool, shape (n,)
-        Its samples in the ensemble (neither overturned nor diverged).
-    theta_x : ndarray, shape (N, n_t)
-        The cheap model's histories [rad] on the same ground motions for its first ``n`` rows (``N >= n``).
-    valid_x : ndarray of bool, shape (N,)
-        The cheap model's samples in its ensemble.
-
-    Returns
-    -------
-    ControlVariateEstimate
-        Array fields of shape ``(n_t,)`` [rad2]: :func:`control_variate_functional` with the influence
-        values of :func:`variance_influence`.
-
-
-    References
-    ----------
-    .. [1] [qian2018] in the bibliography, ``docs/bibliography.md``.
+    Notes
+    -----
+    :func:`control_variate_functional` with :func:`variance_influence` of the expensive histories ``theta_y``
+    ``(n, n_t)`` and the cheap ``theta_x`` ``(N, n_t)`` (the first ``n`` rows on the same ground motions), each
+    over its valid (neither overturned nor diverged) samples.
     """
     theta_y, theta_x = np.asarray(theta_y, dtype=float), np.asarray(theta_x, dtype=float)
     n = theta_y.shape[0]
@@ -236,27 +157,13 @@ def multifidelity_variance(theta_y, valid_y, theta_x, valid_x):
 
 
 def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturned_x, valid_x, levels=()):
-    """Two-fidelity ``p_overturn`` and ``p_exceed(a)`` of the expensive model from paired per-sample peaks.
+    """Two-fidelity ``[p_overturn, p_exceed(levels[0]), ...]`` [1] of the expensive model from paired per-sample peaks.
 
-    Parameters
-    ----------
-    peak_y, overturned_y, valid_y : ndarray, shape (n,)
-        The expensive model's peak ``|theta|`` [rad], overturned flags and valid samples (not diverged).
-    peak_x, overturned_x, valid_x : ndarray, shape (N,)
-        The cheap model's, the first ``n`` on the same ground motions.
-    levels : sequence of float
-        Rotation thresholds [rad] of ``p_exceed``.
-
-    Returns
-    -------
-    list of ControlVariateEstimate
-        ``[p_overturn, p_exceed(levels[0]), ...]`` [1]: conditional means over the valid samples of the
-        indicators (:func:`conditional_mean_influence`; an overturned sample exceeds every level).
-
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
+    Notes
+    -----
+    ``*_y`` ``(n,)``, ``*_x`` ``(N,)`` (the first ``n`` paired): peak ``|theta|`` [rad], overturned flags, valid
+    samples.  Conditional means of the indicators over the valid samples (:func:`conditional_mean_influence`);
+    an overturned sample exceeds every level.
     """
     peak_y, peak_x = np.asarray(peak_y, dtype=float), np.asarray(peak_x, dtype=float)
     n = peak_y.size
@@ -278,19 +185,16 @@ def multifidelity_probabilities(peak_y, overturned_y, valid_y, peak_x, overturne
 
 
 def control_variate_estimate(y, x, x_extra=None, x_mean=None):
-    """Control-variate (two-fidelity) estimate of the mean of the expensive model's quantity.
+    r"""Control-variate (two-fidelity) estimate of the mean of the expensive model's quantity.
 
     Parameters
     ----------
-    y : array_like, shape (n,)
-        The expensive model's per-sample values (e.g. ``1.0`` where sample ``i`` exceeds the level).
-    x : array_like, shape (n,)
-        The cheap model's values on the same ground motions, sample by sample.
+    y, x : array_like, shape (n,)
+        The expensive and the cheap model's per-sample values on the same ground motions.
     x_extra : array_like, shape (m,), optional
         The cheap model's values on further, independent ground motions (no expensive run).
     x_mean : float, optional
-        The cheap model's exact expectation, where it is known (e.g. the linearization's Gaussian on
-        a linear bed); excludes ``x_extra``.
+        The cheap model's exact expectation, where known; excludes ``x_extra``.
 
     Returns
     -------
@@ -298,22 +202,17 @@ def control_variate_estimate(y, x, x_extra=None, x_mean=None):
 
     Notes
     -----
-    With ``N = n + m`` cheap samples (mean :math:`\\bar x_N`) the estimate is
+    With ``N = n + m`` cheap samples (mean :math:`\bar x_N`) the estimate is
 
-    .. math:: \\hat\\mu = \\bar y_n - \\alpha (\\bar x_n - \\bar x_N),
-              \\qquad \\alpha = \\widehat{\\mathrm{cov}}(x, y) / \\widehat{\\mathrm{var}}(x)
+    .. math:: \hat\mu = \bar y_n - \alpha (\bar x_n - \bar x_N),
+              \qquad \alpha = \widehat{\mathrm{cov}}(x, y) / \widehat{\mathrm{var}}(x)
 
-    with variance :math:`\\sigma_y^2/n \\, [1 - (1 - n/N) \\rho^2]` at the optimal weight
-    (eq. (2.7) in [1]; :math:`N \\to \\infty` where ``x_mean`` is given: :math:`\\sigma_y^2 (1-\\rho^2)/n`,
-    the classical control variate, section 4.1 of [2]).  The weight is estimated from the same
+    with variance :math:`\sigma_y^2/n \, [1 - (1 - n/N) \rho^2]` at the optimal weight
+    (eq. (2.7) in [peherstorfer2016]; :math:`N \to \infty` where ``x_mean`` is given: :math:`\sigma_y^2 (1-\rho^2)/n`,
+    the classical control variate, section 4.1 of [glasserman2003]).  The weight is estimated from the same
     samples, which biases the estimate by O(1/n), far below its standard error at the sample counts
     used here (tested against the scatter over seeds).  Where the cheap values are constant over
     the paired samples (no information) the weight is 0 and the plain estimate is returned.
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
-    .. [2] P. Glasserman, "Monte Carlo Methods in Financial Engineering", Springer, 2003.
     """
     y = np.asarray(y, dtype=float).reshape(-1)
     x = np.asarray(x, dtype=float).reshape(-1)
@@ -343,31 +242,17 @@ MAX_RATIO = 1000.0
 
 
 def optimal_ratio(correlation, cost_expensive, cost_cheap, max_ratio=MAX_RATIO):
-    """Cheap samples per expensive sample that minimise the variance at a fixed budget.
+    r"""Cheap samples per expensive sample that minimise the variance at a fixed budget.
 
-    Parameters
-    ----------
-    correlation : float
-        Correlation of the two models' per-sample values (from a pilot), in [-1, 1].
-    cost_expensive, cost_cheap : float
-        CPU seconds per sample of each model [s], > 0.
-    max_ratio : float
-        Upper bound of the result (default :data:`MAX_RATIO`).
+    Units: ``correlation`` in [-1, 1], ``cost_expensive``, ``cost_cheap`` [s].
 
-    Returns
-    -------
-    float
-        ``r = N / n`` in ``[1, max_ratio]``; ``1.0`` means the cheap model is not worth running beyond the paired samples
-        (and :func:`speedup` then says whether it is worth running at all).
+    Returns: ``r = N / n`` in ``[1, max_ratio]``; ``1.0`` means the cheap model is not worth running beyond
+    the paired samples (and :func:`speedup` then says whether it is worth running at all).
 
     Notes
     -----
-    :math:`r^* = \\sqrt{c_1 \\rho^2 / (c_2 (1 - \\rho^2))}` (eq. (3.11) in [1] for two models), where
+    :math:`r^* = \sqrt{c_1 \rho^2 / (c_2 (1 - \rho^2))}` (eq. (3.11) in [peherstorfer2016] for two models), where
     :math:`c_1, c_2` are the costs of the expensive and the cheap model.
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     """
     rho2 = min(float(correlation) ** 2, 1.0 - 1e-12)
     if not (cost_expensive > 0 and cost_cheap > 0):
@@ -376,31 +261,13 @@ def optimal_ratio(correlation, cost_expensive, cost_cheap, max_ratio=MAX_RATIO):
 
 
 def speedup(correlation, cost_expensive, cost_cheap, ratio=None):
-    """CPU of plain Monte Carlo divided by the CPU of the two-fidelity estimate at equal standard error.
-
-    Parameters
-    ----------
-    correlation : float
-        Correlation of the two models' per-sample values, in [-1, 1].
-    cost_expensive, cost_cheap : float
-        CPU seconds per sample [s].
-    ratio : float, optional
-        Cheap samples per expensive sample (default :func:`optimal_ratio`).
-
-    Returns
-    -------
-    float
-        > 1 where the cheap model pays for itself; below 1 the plain estimate is the better buy.
+    r"""CPU of plain Monte Carlo over that of the two-fidelity estimate at equal standard error (> 1: the cheap model pays).
 
     Notes
     -----
-    Per expensive sample the two-fidelity estimate costs :math:`c_1 + r c_2` and has the variance
-    :math:`\\sigma^2 [1 - (1 - 1/r) \\rho^2]`; plain Monte Carlo costs :math:`c_1` for :math:`\\sigma^2`.
-
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
+    Per expensive sample the two-fidelity estimate costs :math:`c_1 + r c_2` for the variance
+    :math:`\sigma^2 [1 - (1 - 1/r) \rho^2]` (``r``: ``ratio``, default :func:`optimal_ratio`); plain Monte
+    Carlo costs :math:`c_1` for :math:`\sigma^2` [peherstorfer2016].
     """
     r = optimal_ratio(correlation, cost_expensive, cost_cheap) if ratio is None else float(ratio)
     rho2 = min(float(correlation) ** 2, 1.0)
@@ -435,38 +302,18 @@ class Allocation:
 
 
 def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN, max_ratio=MAX_RATIO):
-    """Samples of the expensive and the cheap model for the standard error of ``n_plain`` plain samples.
+    r"""Samples of the expensive and the cheap model for the standard error of ``n_plain`` plain samples.
 
-    Parameters
-    ----------
-    correlation : float
-        Pilot correlation of the two models' influence values of the quantity planned for, in [-1, 1]
-        (NaN: no information, plain).
-    cost_expensive, cost_cheap : float
-        Cost per sample of each model [s], > 0.
-    n_plain : int
-        Expensive samples plain Monte Carlo needs for the target standard error.
-    min_gain : float
-        The least predicted :func:`speedup` worth the cheap model (default :data:`MIN_GAIN`).
-    max_ratio : float
-        Bound of the cheap-to-expensive ratio (:func:`optimal_ratio`).
-
-    Returns
-    -------
-    Allocation
+    Returns an :class:`Allocation` from the pilot ``correlation`` of the two models' influence values (in
+    [-1, 1]; NaN: plain) and their costs per sample ``cost_expensive``, ``cost_cheap`` [s].
 
     Notes
     -----
     With ``r`` from :func:`optimal_ratio`, the two-fidelity variance per expensive sample is
-    :math:`\\sigma^2 [1 - (1 - 1/r) \\rho^2]`, so ``n = ceil(n_plain [1 - (1 - 1/r) rho^2])`` expensive and
+    :math:`\sigma^2 [1 - (1 - 1/r) \rho^2]`, so ``n = ceil(n_plain [1 - (1 - 1/r) rho^2])`` expensive and
     ``ceil(r n)`` cheap samples give the plain standard error.  Rule: plain Monte Carlo (``n_plain``
     samples, no cheap run beyond the pilot) unless the predicted speed-up is at least ``min_gain``; the
     estimator is then never planned worse than plain Monte Carlo.
-
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     """
     n_plain = int(n_plain)
     if not (cost_expensive > 0 and cost_cheap > 0):
@@ -483,32 +330,20 @@ def allocate(correlation, cost_expensive, cost_cheap, n_plain, min_gain=MIN_GAIN
 
 
 def cost_ratio_needed(correlation, target_speedup):
-    """Expensive-to-cheap cost ratio at which the two-fidelity estimate reaches ``target_speedup``.
+    r"""Expensive-to-cheap cost ratio at which the two-fidelity estimate reaches ``target_speedup``.
 
-    Parameters
-    ----------
-    correlation : float
-        Correlation of the two models' per-sample values, in [-1, 1].
-    target_speedup : float
-        The :func:`speedup` asked for, > 1.
+    Units: ``correlation`` in [-1, 1].
 
-    Returns
-    -------
-    float
-        ``c_expensive / c_cheap`` [1]; ``math.inf`` where no cost ratio reaches it
-        (``target_speedup >= 1 / (1 - rho^2)``, the speed-up of free cheap samples).
+    Returns: ``c_expensive / c_cheap`` [1]; ``math.inf`` where no cost ratio reaches it (``target_speedup >=
+    1 / (1 - rho^2)``, the speed-up of free cheap samples).
 
     Notes
     -----
     At the optimal ratio the cost times the variance per expensive sample is
-    :math:`(\\sqrt{c_1 (1 - \\rho^2)} + \\rho \\sqrt{c_2})^2` ([1], section 3.4), so the speed-up is
-    :math:`S = 1 / (\\sqrt{1 - \\rho^2} + \\rho / \\sqrt{w})^2` with :math:`w = c_1 / c_2`, and
-    :math:`w = \\rho^2 / (S^{-1/2} - \\sqrt{1 - \\rho^2})^2`.  (Without the bound :data:`MAX_RATIO`
+    :math:`(\sqrt{c_1 (1 - \rho^2)} + \rho \sqrt{c_2})^2` ([1], section 3.4), so the speed-up is
+    :math:`S = 1 / (\sqrt{1 - \rho^2} + \rho / \sqrt{w})^2` with :math:`w = c_1 / c_2`, and
+    :math:`w = \rho^2 / (S^{-1/2} - \sqrt{1 - \rho^2})^2`.  (Without the bound :data:`MAX_RATIO`
     and where the optimal ratio exceeds 1.)
-
-    References
-    ----------
-    .. [1] [peherstorfer2016] in the bibliography, ``docs/bibliography.md``.
     """
     rho = abs(float(correlation))
     if not target_speedup > 1:

@@ -1,21 +1,11 @@
 """Probabilities of overturning and of exceeding a rotation, with their standard errors and their source.
 
-Near toppling the variance over the surviving samples is a fragile answer (it moves by tens of per
-cent between two runs of a few hundred samples); the probability of overturning and the
-probabilities of exceeding rotation thresholds are the robust ones.  This module holds the pure
-functions behind them:
-
-* :func:`binomial_estimate`, :func:`sample_probabilities` -- the fractions of samples with their
-  standard errors, from :mod:`screening.solvers.estimates` (below the solvers, which use them);
-* :func:`uplift_acceleration` -- the ground acceleration at which the block starts to rock on its
-  bed (quasi-static), the level of :func:`screening.analysis.intensity.rocking_start_probability`;
-* :func:`source_codes` / :func:`monte_carlo_source` -- the codes of the provenance variable
-  ``p_source`` (:data:`screening.core.status.ProbabilitySource`, with one ``monte_carlo_<model>`` code per
-  model :func:`screening.monte_carlo` knows);
-* :func:`choose_sources` -- which estimate each grid point of a sweep carries;
-* :func:`answer_quantities` -- whether the variance or, near toppling, the probabilities answer a point.
-
-Outputs and their meaning: ``docs/outputs_probabilities.md``.
+Near toppling the probabilities, not the variance over the surviving samples, are the robust answer.
+Pure functions: the sample fractions with their standard errors, the quasi-static uplift acceleration,
+the codes of the provenance variable ``p_source`` (:data:`screening.core.status.ProbabilitySource`, one
+``monte_carlo_<model>`` code per Monte Carlo model), which estimate each sweep point carries
+(:func:`choose_sources`) and which quantity answers it (:func:`answer_quantities`).
+``docs/outputs_probabilities.md``.
 """
 
 from __future__ import annotations
@@ -36,19 +26,7 @@ def uplift_acceleration(block, foundation, condensation):
     """Ground acceleration [m s-2] at which the block starts to rock: the quasi-static tilt reaches the
     bed's uplift angle.
 
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The block (``m`` [kg], ``h`` [m], ...; array fields broadcast).
-    foundation : screening.core.model.Foundation
-        Its bed (``k`` [N m-2], ...).
-    condensation : screening.core.condensation.base.Condensation
-        The condensation of the bed's moment law.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``a_ul`` [m s-2].
+    Returns: ``a_ul`` [m s-2].
 
     Notes
     -----
@@ -57,7 +35,6 @@ def uplift_acceleration(block, foundation, condensation):
     ``theta_ul = m g / (2 b^2 k)`` (eq. (19) in [1]), so ``a_ul = g b / (3 h) - g theta_ul``: the
     resultant of the bed's pressure reaches the edge of the kern of the base, a third of the half-width
     from the centre.
-
     """
     theta_ul = condensation.uplift_threshold(block, foundation)
     moment = condensation.restoring_moment(theta_ul, block, foundation)
@@ -70,11 +47,7 @@ def source_codes():
     Those of :data:`~screening.core.status.ProbabilitySource` and ``monte_carlo_<model>`` for every registered
     Monte Carlo model (:mod:`screening.solvers.mc_registry`).
 
-    Returns
-    -------
-    dict of str to int
-        ``{name: code}`` [-].
-
+    Returns: ``{name: code}`` [-].
     """
     return probability_sources(mc_registry.codes())
 
@@ -82,16 +55,7 @@ def source_codes():
 def monte_carlo_source(model):
     """The ``p_source`` code of a Monte Carlo model.
 
-    Parameters
-    ----------
-    model : str
-        A name in :data:`screening.solvers.montecarlo.MODELS`; ``ValueError`` for a model it does not know.
-
-    Returns
-    -------
-    int
-        The code [-] (:func:`source_codes`).
-
+    Returns: the code [-] (:func:`source_codes`).
     """
     codes = source_codes()
     if f"monte_carlo_{model}" not in codes:
@@ -103,26 +67,11 @@ def monte_carlo_source(model):
 def choose_sources(status_ok, trust, band_finite, best_method=None):
     """``p_source`` of every point before Monte Carlo: where the linearization's Gaussian estimate is vouched for.
 
-    Parameters
-    ----------
-    status_ok : array_like of bool
-        True where the linearization ran to the end.
-    trust : array_like of int
-        ``sl_trust`` codes (:class:`~screening.core.status.Trust`).
-    band_finite : array_like of bool
-        True where the trust band of the point is finite.
-    best_method : array_like of int, optional
-        ``best_method`` codes of ``[accuracy]`` (:class:`~screening.core.status.BestMethod`) or None.
-
-    Returns
-    -------
-    numpy.ndarray of int8
-        :data:`~screening.core.status.ProbabilitySource` codes [-]: with ``[accuracy]``,
-        ``linearization_gaussian`` where the rule promises the target, ``corrected_linearization_gaussian``
-        where the correction reaches the point, else ``unreliable``; without it, ``linearization_gaussian``
-        where the point is ``trusted`` with a finite band, else ``unreliable``.  Monte Carlo points are
-        set by the caller (:func:`monte_carlo_source`).
-
+    Returns: :data:`~screening.core.status.ProbabilitySource` codes [-]: with ``[accuracy]``,
+    ``linearization_gaussian`` where the rule promises the target, ``corrected_linearization_gaussian``
+    where the correction reaches the point, else ``unreliable``; without it, ``linearization_gaussian``
+    where the point is ``trusted`` with a finite band, else ``unreliable``.  Monte Carlo points are set by
+    the caller (:func:`monte_carlo_source`).
     """
     ok = np.asarray(status_ok, dtype=bool)
     src = np.full(ok.shape, int(ProbabilitySource.unreliable), dtype=np.int8)
@@ -147,20 +96,8 @@ def overturning_probability(ds, method="vanmarcke"):
     (:func:`screening.analysis.fragility.exceedance_probability`, ``method``), which nothing vouches for
     near toppling.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A linearization, sweep or Monte Carlo result.
-    method : {"vanmarcke", "poisson"}
-        The up-crossing approximation of the fallback.
-
-    Returns
-    -------
-    p_overturn : xarray.DataArray
-        The probability [1].
-    note : str
-        A one-line caveat, or ``""`` when there is none.
-
+    Returns ``(p_overturn, note)``: ``p_overturn`` the probability [1]; ``note`` a one-line caveat, or
+    ``""`` when there is none.
     """
     from screening.analysis.fragility import STORED, exceedance_probability
 
@@ -187,19 +124,9 @@ def spot_check_probabilities(ds):
     ``p_overturn`` and, where the result has ``[fragility]`` thresholds, ``p_exceed``, from the stored
     ``mcs_peak_abs_theta`` [rad] and ``mcs_sample_state`` (diverged or failed samples left out).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result with spot checks.
-
-    Returns
-    -------
-    dict
-        Arrays over ``spot``: ``p_overturn``, ``p_overturn_se`` [1], ``near_toppling``
-        (``p_overturn > TOPPLING_FRACTION``), and ``p_exceed``, ``p_exceed_se`` [1] (spot x thresholds)
-        with ``thresholds`` (the values of the result's ``threshold`` coordinate, ``()`` without) and
-        ``relative_to``.
-
+    Returns: arrays over ``spot``: ``p_overturn``, ``p_overturn_se`` [1], ``near_toppling`` (``p_overturn >
+    TOPPLING_FRACTION``), and ``p_exceed``, ``p_exceed_se`` [1] (spot x thresholds) with ``thresholds`` (the
+    values of the result's ``threshold`` coordinate, ``()`` without) and ``relative_to``.
     """
     state = np.asarray(ds["mcs_sample_state"].values)
     peaks = np.asarray(ds["mcs_peak_abs_theta"].values, dtype=float)
@@ -221,18 +148,9 @@ def spot_check_probabilities(ds):
 def probability_text(p, se):
     """A probability and its standard error as text: ``"0.43 +- 0.05"`` (or ``"n/a"``).
 
-    Parameters
-    ----------
-    p : float
-        The probability [1].
-    se : float
-        Its standard error [1].
+    Units: ``p`` [1], ``se`` [1].
 
-    Returns
-    -------
-    str
-        Three significant digits for ``p``, two for ``se``; ``"n/a"`` where ``p`` is not finite.
-
+    Returns: three significant digits for ``p``, two for ``se``; ``"n/a"`` where ``p`` is not finite.
     """
     return f"{p:.3g} +- {se:.2g}" if np.isfinite(p) else "n/a"
 
@@ -246,32 +164,15 @@ NEAR_TOPPLING_STATUS = (PointStatus.k_eq_negative, PointStatus.sigma_theta_beyon
 def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplift, variance_vouched=None):
     """Which quantity answers each point: the peak variance or, near toppling, the probabilities.
 
-    Parameters
-    ----------
-    status : array_like of int
-        :class:`~screening.core.status.PointStatus` codes.
-    p_overturn, p_overturn_se : array_like
-        The point's best probability of overturning and its standard error [1] (NaN standard error where
-        nothing vouches for it).
-    low, high : array_like
-        The error atlas interval of the linearization's peak variance, ``SL / MCS - 1`` [1] (``-1`` or
-        ``inf`` at an open end).
-    peak_p_uplift : array_like
-        The linearization's peak probability of uplift [1].
-    variance_vouched : array_like of bool, optional
-        True where the point's best peak variance is vouched for (``best_method`` not ``unreliable``);
-        default: everywhere.
+    Units: p_overturn, p_overturn_se [1], low, high [1], ``peak_p_uplift`` [1].
 
-    Returns
-    -------
-    numpy.ndarray of int8
-        :class:`~screening.core.status.AnswerQuantity` codes [-], the first rule that holds:
-        ``probabilities_stopped`` where the linearization stopped near toppling
-        (:data:`NEAR_TOPPLING_STATUS`); ``probabilities_overturning`` where ``p_overturn`` is vouched for and
-        ``p_overturn - 2 se >= TOPPLING_FRACTION``; ``probabilities_open_interval`` at status ok in heavy
-        uplift (``peak_p_uplift >= HEAVY_UPLIFT``) with the interval open or the variance not vouched for
-        (its interval too wide); ``variance`` elsewhere (also where
-        the task failed or the solver gave up for another reason: nothing there says the block topples).
+    Returns: :class:`~screening.core.status.AnswerQuantity` codes [-], the first rule that holds:
+    ``probabilities_stopped`` where the linearization stopped near toppling (:data:`NEAR_TOPPLING_STATUS`);
+    ``probabilities_overturning`` where ``p_overturn`` is vouched for and ``p_overturn - 2 se >=
+    TOPPLING_FRACTION``; ``probabilities_open_interval`` at status ok in heavy uplift (``peak_p_uplift >=
+    HEAVY_UPLIFT``) with the interval open or the variance not vouched for (its interval too wide);
+    ``variance`` elsewhere (also where the task failed or the solver gave up for another reason: nothing
+    there says the block topples).
 
     Notes
     -----
@@ -279,7 +180,6 @@ def answer_quantities(status, p_overturn, p_overturn_se, low, high, peak_p_uplif
     the survivors are the samples that rocked least.  :data:`TOPPLING_FRACTION` (5 %) is the share from
     which a Monte Carlo point is already called near toppling; two standard errors below it keep a point
     whose overturning is not established with its variance.
-
     """
     status = np.asarray(status).reshape(-1)
     p, se = np.asarray(p_overturn, dtype=float).reshape(-1), np.asarray(p_overturn_se, dtype=float).reshape(-1)
@@ -302,20 +202,7 @@ def reliable_answer(answer, variance_vouched, source):
     """Whether a point's answer is vouched for: its variance where the variance answers it, its probabilities
     where they do.
 
-    Parameters
-    ----------
-    answer : array_like of int
-        :class:`~screening.core.status.AnswerQuantity` codes (:func:`answer_quantities`).
-    variance_vouched : array_like of bool
-        True where the point's best peak variance is vouched for (``best_method`` not ``unreliable``).
-    source : array_like of int
-        ``p_source`` codes (:func:`source_codes`).
-
-    Returns
-    -------
-    numpy.ndarray of bool
-        True where the quantity that answers the point is vouched for.
-
+    Returns: True where the quantity that answers the point is vouched for.
     """
     answer = np.asarray(answer).reshape(-1)
     by_variance = answer == int(AnswerQuantity.variance)

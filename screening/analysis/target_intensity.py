@@ -20,18 +20,7 @@ __all__ = []
 def round_significant(x, digits=3):
     """``x`` rounded to ``digits`` significant digits.
 
-    Parameters
-    ----------
-    x : float
-        Any value (any unit); zero and non-finite values are returned as they are.
-    digits : int
-        Significant digits.
-
-    Returns
-    -------
-    float
-        The rounded value [unit of ``x``].
-
+    Returns: the rounded value [unit of ``x``].
     """
     if x == 0 or not math.isfinite(x):
         return x

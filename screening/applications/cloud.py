@@ -1,33 +1,11 @@
 """Cloud analysis: a study's block on its bed under an ensemble of recorded ground motions.
 
-A cloud study is a study file (block, foundation; the ``[excitation]`` table is optional and
-unused) with a ``[records]`` table::
-
-    [records]
-    files = "records/*.at2"      # a folder, a glob or a list of them, relative to the study file
-    units = "g"                  # "g", "m/s2", "cm/s2": required for text records whose header does not
-                                 # state them; AT2: from the header (must agree)
-    # dt = 0.01                  # s, for one-column records (checked against time columns, AT2 headers)
-    scale = 1.0                  # factor on every record (optional)
-    model = "coupled"            # or "condensed", "stiff_bed"
-    period = 0.5                 # s, period of Sa(T, 5 %) (optional)
-    threshold = 0.2              # rotation threshold of the fragility ...
-    relative_to = "slenderness"  # ... as a fraction of atan(b/h) or "theta_ul", or "rad"
-    im = "pga"                   # intensity measure of the fragility: pga, sa, rms, arias, pgv, avgsa
-    vertical = true              # use the records' vertical components where they have one (false: leave out)
-
-Each record is integrated by :func:`screening.simulate` (the coupled model by default) and the
-result holds, on a ``record`` dimension, the peak ``|theta|``, the overturned flag, the
-exceedance (peak above the threshold, or overturned) and the record's intensity measures
-(:func:`screening.analysis.intensity.record_measures`).  The fragility is the lognormal curve
-``P(exceed | IM) = Phi(ln(IM / median) / beta)`` fitted by maximum likelihood to the
-exceed/not-exceed outcome of each record (Bernoulli likelihood; Baker 2015, "Efficient
-analytical fragility function fitting using dynamic structural analysis", Earthquake
-Spectra 31(1)).
-
-The records run in this process, or as one dask task per record (``screening cloud --workers N``
-or ``--scheduler``; each record is a few seconds of compiled integration).  A record whose task
-fails is kept with NaN values and ``diverged`` set (left out of the fit) and named in the warnings.
+A cloud study is a study file with a ``[records]`` table (files, units, scale, model, threshold,
+intensity measure: ``docs/records.md``, "Cloud analysis").  Each record is integrated
+by :func:`screening.simulate` (in process, or one dask task per record); the result holds, on a
+``record`` dimension, the peak ``|theta|``, the overturned flag, the exceedance and the record's intensity
+measures, and the lognormal fragility is fitted by maximum likelihood to the exceed/not-exceed outcomes
+[baker2015].  A failed record is kept with NaNs and ``diverged`` set, named in the warnings.
 """
 
 from __future__ import annotations
@@ -140,7 +118,7 @@ def load_cloud_study(path, units=None, vertical=True):
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] ``docs/records.md``.
 
     Examples
     --------
@@ -279,7 +257,7 @@ def read_cloud_records(cloud):
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] ``docs/records.md``.
 
     Examples
     --------
@@ -288,22 +266,8 @@ def read_cloud_records(cloud):
     >>> from screening.core.model.excitation import Envelope
     >>> folder = tempfile.TemporaryDirectory()
     >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5), band_limit_hz=None)
-    >>> paths = synthesise_records(os.path.join(folder.name, "records"), ground, n_records=3, t_end=10.0,
-    ...                            cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
-    >>> with open(os.path.join(folder.name, "cloud.toml"), "w") as fh:
-    ...     _ = fh.write('''
-    ... [block]
-    ... m = 8.67
-    ... b = 0.035
-    ... h = 0.21
-    ... [foundation]
-    ... k = 2.89e7
-    ... lam = 8.95e8
-    ... [records]
-    ... files = "records/*.at2"
-    ... threshold = 0.2
-    ... ''')
-    >>> cloud = load_cloud_study(os.path.join(folder.name, "cloud.toml"))
+    >>> paths = synthesise_records(folder.name, ground, n_records=3, t_end=10.0, cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
+    >>> cloud = CloudStudy(None, tuple(paths), None, None, 1.0, "coupled", None, 0.2, "slenderness", "pga")
     >>> [(r.name, r.dt, r.acceleration.size) for r in read_cloud_records(cloud)][0]     # 10 s at 0.01 s
     ('synthetic_00', 0.01, 1001)
     >>> folder.cleanup()
@@ -397,8 +361,7 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
 
     References
     ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] [baker2015]; [2] ``docs/records.md``.
 
     Examples
     --------
@@ -471,7 +434,7 @@ def threshold_level(cloud, block, foundation):
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] ``docs/records.md``.
 
     Examples
     --------
@@ -521,9 +484,7 @@ def scaled_to(record, im, level, period=None):
 
     References
     ----------
-    .. [1] A. Arias, "A measure of earthquake intensity", in R. J. Hansen (ed.), Seismic Design for
-       Nuclear Power Plants, MIT Press, Cambridge MA (1970) 438-483.
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] [arias1970]; [2] ``docs/records.md``.
 
     Examples
     --------
@@ -577,8 +538,7 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
 
     References
     ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] [baker2015]; [2] ``docs/records.md``.
 
     Examples
     --------
@@ -632,8 +592,7 @@ def stripe_dataset(cloud, block, foundation, rows, names):
 
     References
     ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] [baker2015]; [2] ``docs/records.md``.
 
     Examples
     --------
@@ -741,8 +700,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
 
     References
     ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] [baker2015]; [2] ``docs/records.md``.
 
     Examples
     --------
@@ -864,9 +822,8 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
 
     References
     ----------
-    .. [1] M. Shinozuka and G. Deodatis, "Simulation of stochastic processes by spectral
-       representation", Applied Mechanics Reviews 44(4) (1991) 191-204. https://doi.org/10.1115/1.3119501
-    .. [2] PEER Ground Motion Database, "AT2 file format", https://ngawest2.berkeley.edu
+    [1] [shinozuka1991]; [2] PEER Ground Motion
+    Database, "AT2 file format", https://ngawest2.berkeley.edu.
 
     Examples
     --------
@@ -915,10 +872,9 @@ def write_demand_csv(ds, path):
 
     References
     ----------
-    .. [1] A. Zsarnóczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage,
-       loss and community resilience", Proceedings of the 17th World Conference on Earthquake
-       Engineering, Sendai (2020).
-    .. [2] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] A. Zsarnóczay and G. G. Deierlein, "PELICUN - A computational framework for estimating damage, loss
+    and community resilience", Proceedings of the 17th World Conference on Earthquake Engineering, Sendai
+    (2020); [2] ``docs/records.md``.
 
     Examples
     --------

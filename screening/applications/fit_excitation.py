@@ -1,42 +1,13 @@
 """Estimate the stochastic excitation of a study from one recorded accelerogram.
 
-:func:`fit_excitation` returns ``S0``, ``omega_g``, ``zeta_g`` (Kanai-Tajimi) and ``T1``, ``T2``
-(envelope ``q(t) = 4 (exp(-t/T1) - exp(-t/T2))``, eq. 57) such that the package's modulated
-process ``q(t) z(t)`` resembles the record, in three separate steps:
-
-1. **Envelope from the energies of short windows.**  ``E[int_k a^2] = lambda_0 int_k q^2`` over each
-   window ``k`` (0.25 s), so the window energies are fitted by ``sigma^2 int_k q^2`` (closed form) by
-   the Gamma quasi-likelihood with ``sigma^2`` profiled out, over ``T1 > T2 > 0``
-   (:func:`fit_envelope`), started from the least-squares fit of the normalised Husid curve
-   ``H(t) = int_0^t a^2 / int_0^T a^2``.  The record is taken to start at the onset of shaking (trim
-   pre-event noise first).
-2. **Spectral shape from the smoothed periodogram.**  For a slowly modulated process
-   ``E|A(omega)|^2 = 2 pi S(omega) int q^2 dt``; the periodogram so normalised, smoothed over
-   ``smooth`` [rad/s], is fitted by the Kanai-Tajimi shape ``(wg^4 + 4 zg^2 wg^2 w^2) /
-   ((w^2 - wg^2)^2 + 4 zg^2 wg^2 w^2)`` in least squares on log scale over ``band`` (default 1 rad/s to the lower of 20 Hz and half the Nyquist frequency).
-3. **Energy from the Arias intensity.**  ``S0`` is set so that the expected Arias intensity of the
-   model equals the record's: ``int a^2 dt = var_z(S0) int q^2 dt`` with the Kanai-Tajimi variance
-   ``var_z = pi S0 omega_g (1 + 4 zeta_g^2) / (2 zeta_g)`` (unbounded band); for ``kind="white"``,
-   ``var = 2 S0 omega_c`` with the band limit ``omega_c`` the study will use.
-
-What the numbers mean: the envelope of eq. (57) has the fixed factor 4, so its peak ``q_max`` is 1
-only for ``T1 = 2 T2`` and tends to zero as ``T1 -> T2``; the study's ``S0`` then compensates (a
-record fitted with ``T1 = 3.303``, ``T2 = 3.290`` needs ``S0`` 60 times its intensity).  The fit
-therefore also reports ``S0_peak = S0 q_max^2``, the spectral intensity at the envelope's peak (the
-normalised-envelope parameter), and flags ``T1 / T2 < 1.1``.  Records that cannot be fitted are
-refused in one line (:func:`checked_record`: time step outside 1e-5..1 s, fewer than 64 samples,
-non-finite values, a constant record, an impulse or spike); a DC offset is removed and flagged,
-a near-harmonic record (``zeta_g < 0.02``) and an unidentified envelope are flagged.  The goodness
-of fit is reported as the largest gap between the Husid curves of the record and of the fitted
-envelope, and the zero-crossing rates of the record (5-95 % Husid) and of the fitted process.
-
-Accuracy (``benchmarks/fit_excitation_recovery.py``: three Kanai-Tajimi models, 20 synthesised
-records of 30 s each; median over the records of estimate / true - 1, and the bootstrap standard
-error of that median): ``S0_peak`` +2 +- 6 %, +3 +- 9 %, -10 +- 4 %; ``omega_g`` -3, -1, -1 % (+- 1-4 %);
-``zeta_g`` +5, -1, +2 % (+- 2-4 %); ``T1`` -1, -3, -0 % (+- 0.4-2 %); ``T2`` +2, +4, +2 % (+- 3-5 %);
-the fitted model's RVT median PGA -2, -1, -5 % (+- 2-3 %).  A least-squares fit of the Husid curve
-alone left the soft-soil ``T1``, ``T2`` at -14 % and +21 %.  Single records scatter more (``T2``
--20..+50 %, 10-90 %); what they predict together (``S0_peak``, the PGA) is stable.
+:func:`fit_excitation` returns ``S0``, ``omega_g``, ``zeta_g`` (Kanai-Tajimi) and ``T1``, ``T2`` (envelope
+of eq. (57) of [mitseas2026]) in three steps: the envelope from the energies of 0.25 s windows (Gamma
+quasi-likelihood, :func:`fit_envelope`), the spectral shape from the smoothed periodogram (log least
+squares over ``band``), ``S0`` from the Arias intensity [arias1970].  It also reports
+``S0_peak = S0 q_max^2`` (the envelope's factor 4 makes ``S0`` alone misleading), the goodness of fit
+and flags; records that cannot be fitted are refused in one line (:func:`checked_record`).  Method and
+measured recovery (``benchmarks/fit_excitation_recovery.py``): ``docs/records.md``, "Fitting a study's
+excitation to a record".
 """
 
 from __future__ import annotations
@@ -61,25 +32,16 @@ DEFAULT_BAND_TOP = 2.0 * math.pi * 20.0
 def envelope_energy(t, T1, T2):
     """The energy of the envelope up to ``t``: ``int_0^t q(s)^2 ds`` [s], closed form.
 
-    Parameters
-    ----------
-    t : array_like
-        Time [s], >= 0.
-    T1, T2 : float
-        The envelope's time constants [s] (eq. 57), ``T1 > T2 > 0``.
+    Units: ``t`` [s], T1, T2 [s].
 
-    Returns
-    -------
-    numpy.ndarray
-        ``int_0^t q^2`` [s] (``q`` is dimensionless), the Husid curve of the model once divided by its
-        final value.
+    Returns: ``int_0^t q^2`` [s] (``q`` is dimensionless), the Husid curve of the model once divided by its
+    final value.
 
     Notes
     -----
     With ``q(s) = 4 (exp(-s/T1) - exp(-s/T2))`` (eq. (57) in [1]) and ``a = 2/T1``, ``b = 1/T1 + 1/T2``,
     ``c = 2/T2``: ``int_0^t q^2 = 16 ((1 - e^{-a t})/a - 2 (1 - e^{-b t})/b + (1 - e^{-c t})/c)``
     (``expm1`` keeps it exact at small ``t``).
-
     """
     a, b, c = 2.0 / T1, 1.0 / T1 + 1.0 / T2, 2.0 / T2
     return 16.0 * (-np.expm1(-a * t) / a - 2.0 * (-np.expm1(-b * t)) / b + (-np.expm1(-c * t)) / c)
@@ -137,16 +99,9 @@ def envelope_deviance(x, edges, energies):
 def fit_envelope(record, window=ENERGY_WINDOW):
     """``(T1, T2)`` [s] of the envelope ``q = 4 (exp(-t/T1) - exp(-t/T2))`` of ``record``.
 
-    Parameters
-    ----------
-    record : :class:`~screening.core.records.Record` (acceleration [m s-2], time step [s]).
-    window : float
-        Width [s] of the windows whose energies are fitted (default :data:`ENERGY_WINDOW`, 0.25 s).
+    Units: ``window`` [s].
 
-    Returns
-    -------
-    tuple of float
-        ``T1 > T2 > 0`` [s].
+    Returns: ``T1 > T2 > 0`` [s].
 
     Notes
     -----
@@ -166,7 +121,6 @@ def fit_envelope(record, window=ENERGY_WINDOW):
     alone weighs cumulative errors, which
     the strong part dominates: on 20 soft-soil records it left ``T1`` 14 % low and ``T2`` 21 % high
     (``benchmarks/fit_excitation_recovery.py``).
-
     """
     t = record.times
     curve = husid(record.acceleration, record.dt)
@@ -187,21 +141,10 @@ def fit_envelope(record, window=ENERGY_WINDOW):
 def smoothed_psd(record, T1, T2, smooth=2.0):
     """The record's periodogram normalised by ``2 pi int q^2``, smoothed by a moving average.
 
-    Parameters
-    ----------
-    record : screening.core.records.Record
-        The record (acceleration [m s-2], time step [s]).
-    T1, T2 : float
-        The envelope [s] (eq. 57).
-    smooth : float
-        Width of the moving average [rad/s].
+    Units: ``record`` [m s-2], T1, T2 [s], ``smooth`` [rad/s].
 
-    Returns
-    -------
-    omega : numpy.ndarray
-        Frequencies [rad/s].
-    S_hat : numpy.ndarray
-        The estimated two-sided PSD [m2 s-3].
+    Returns ``(omega, S_hat)``: ``omega`` frequencies [rad/s]; ``S_hat`` the estimated two-sided PSD [m2
+    s-3].
 
     Notes
     -----
@@ -220,24 +163,10 @@ def smoothed_psd(record, T1, T2, smooth=2.0):
 def fit_spectral_shape(record, T1, T2, band=(1.0, None), smooth=2.0):
     """The Kanai-Tajimi shape fitted to the smoothed periodogram.
 
-    Parameters
-    ----------
-    record : screening.core.records.Record
-        The record (acceleration [m s-2], time step [s]).
-    T1, T2 : float
-        The envelope [s] (eq. 57).
-    band : tuple of float
-        ``(low, high)`` [rad/s] of the fitted band; ``high`` None: the lower of 20 Hz and half the Nyquist
-        frequency.
-    smooth : float
-        Width of the moving average [rad/s] (:func:`smoothed_psd`).
+    Units: ``record`` [m s-2], T1, T2 [s], ``band`` [rad/s], ``smooth`` [rad/s].
 
-    Returns
-    -------
-    omega_g : float
-        Filter frequency [rad/s].
-    zeta_g : float
-        Filter damping ratio [1].
+    Returns ``(omega_g, zeta_g)``: ``omega_g`` filter frequency [rad/s]; ``zeta_g`` filter damping ratio
+    [1].
 
     Notes
     -----
@@ -287,17 +216,10 @@ MAX_SPIKE_SHARE = 0.5
 def checked_record(record):
     """The accelerations of a record ready to fit, and the flags raised.
 
-    Parameters
-    ----------
-    record : screening.core.records.Record
-        The record (acceleration [m s-2], time step [s]).
+    Units: ``record`` [m s-2].
 
-    Returns
-    -------
-    acceleration : numpy.ndarray
-        [m s-2], a DC offset removed.
-    flags : list of str
-        Plain-language warnings (the DC offset removed).
+    Returns ``(acceleration, flags)``: ``acceleration`` [m s-2], a DC offset removed; ``flags``
+    plain-language warnings (the DC offset removed).
 
     Raises
     ------
@@ -334,15 +256,9 @@ def checked_record(record):
 def envelope_peak(T1, T2):
     """``max_t q(t)`` [1] of ``q = 4 (exp(-t/T1) - exp(-t/T2))`` (eq. 57).
 
-    Parameters
-    ----------
-    T1, T2 : float
-        The envelope's time constants [s], ``T1 > T2 > 0``.
+    Units: T1, T2 [s].
 
-    Returns
-    -------
-    float
-        The peak [1], at ``t* = ln(T1/T2) T1 T2 / (T1 - T2)``.
+    Returns: the peak [1], at ``t* = ln(T1/T2) T1 T2 / (T1 - T2)``.
 
     Notes
     -----
@@ -355,19 +271,9 @@ def envelope_peak(T1, T2):
 def zero_crossing_rate(acceleration, dt, husid=None):
     """Zero crossings per second [1/s] of an acceleration over its strong-motion part.
 
-    Parameters
-    ----------
-    acceleration : array_like
-        [m s-2].
-    dt : float
-        Time step [s].
-    husid : array_like, optional
-        Its Husid curve [1]: the strong-motion part is 5-95 % of it (the whole record without it).
+    Units: ``acceleration`` [m s-2], ``dt`` [s], ``husid`` [1].
 
-    Returns
-    -------
-    float
-        The rate [1/s].
+    Returns: the rate [1/s].
     """
     a = np.asarray(acceleration, dtype=float)
     lo, hi = 0, a.size - 1
@@ -387,23 +293,14 @@ def cumulative_energy(acceleration, dt):
 def husid(acceleration, dt):
     """The normalised Husid curve ``int_0^t a^2 / int_0^T a^2`` [1] at the samples (trapezoidal rule).
 
-    Parameters
-    ----------
-    acceleration : array_like
-        [m s-2].
-    dt : float
-        Time step [s].
+    Units: ``acceleration`` [m s-2], ``dt`` [s].
 
-    Returns
-    -------
-    numpy.ndarray
-        From 0 to 1 [1].
+    Returns: from 0 to 1 [1].
 
     References
     ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [arias1970] in the bibliography, ``docs/bibliography.md``.
-    .. [3] R. Husid, "Analisis de terremotos: analisis general", Revista del IDIEM 8 (1969) 21-42.
+    [1] [mitseas2026]; [2] [arias1970]; [3] R. Husid, "Analisis de terremotos: analisis general", Revista del
+    IDIEM 8 (1969) 21-42.
     """
     energy = cumulative_energy(acceleration, dt)
     return energy / energy[-1]
@@ -412,24 +309,12 @@ def husid(acceleration, dt):
 def goodness_of_fit(acceleration, dt, fit, band_top):
     """How well a fitted excitation describes the record.
 
-    Parameters
-    ----------
-    acceleration : array_like
-        The record [m s-2].
-    dt : float
-        Time step [s].
-    fit : dict
-        A :func:`fit_excitation` result (``kind``, ``T1``, ``T2`` [s], ``omega_g`` [rad/s], ``zeta_g`` [1]).
-    band_top : float
-        Band limit [rad/s] of the model's zero-crossing rate.
+    Units: ``acceleration`` [m s-2], ``dt`` [s], ``fit`` [s], ``band_top`` [rad/s].
 
-    Returns
-    -------
-    dict
-        ``husid_max_deviation`` [1], the largest gap between the record's Husid curve and the fitted
-        envelope's; ``zero_crossing_rate_record`` [1/s] (strong-motion part) and
-        ``zero_crossing_rate_model`` [1/s] of the fitted stationary process band-limited to
-        ``band_top`` (``sqrt(lambda_2 / lambda_0) / pi``, Rice).
+    Returns: ``husid_max_deviation`` [1], the largest gap between the record's Husid curve and the fitted
+    envelope's; ``zero_crossing_rate_record`` [1/s] (strong-motion part) and ``zero_crossing_rate_model``
+    [1/s] of the fitted stationary process band-limited to ``band_top`` (``sqrt(lambda_2 / lambda_0) / pi``,
+    Rice).
     """
     h = husid(acceleration, dt)
     t = np.arange(h.size) * dt
@@ -527,16 +412,7 @@ def fit_excitation(record, kind="kanai_tajimi", cutoff=None, band=(1.0, None), s
 def excitation_table(fit):
     """The ``[excitation]`` table of a study (TOML text) for a :func:`fit_excitation` result.
 
-    Parameters
-    ----------
-    fit : dict
-        A :func:`fit_excitation` result (``S0`` [m2 s-3], ``omega_g`` [rad/s], ``zeta_g`` [1], ``T1``,
-        ``T2`` [s], ...).
-
-    Returns
-    -------
-    str
-        Comments (method, Arias intensity, goodness of fit, warnings) and the table.
+    Returns: comments (method, Arias intensity, goodness of fit, warnings) and the table.
     """
     lines = [f"# fitted by screening fit-excitation: {fit['method']}",
              f"# record Arias intensity {fit['arias_intensity']:.4g} m/s; peak intensity S0_peak = S0 max q^2 = "

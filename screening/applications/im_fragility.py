@@ -1,28 +1,11 @@
 """Fragility over an engineering intensity measure, and its export (CSV, OpenQuake NRML).
 
-:func:`fragility_over_im` takes the exceedance probability of a result dataset
-(:func:`screening.analysis.fragility.exceedance_probability`) along a swept dimension of the
-excitation (usually ``S0``) and fits the lognormal curve ``P = Phi(ln(IM / median) / beta)``
-over the intensity measure of each point (:mod:`screening.analysis.intensity`): ``pga``
-(median PGA), ``sa`` (median Sa(T, 5 %), needs a period), ``pgv`` (median PGV, high-passed at
-0.1 Hz), ``avgsa`` (median AvgSA over 0.2-1.5 T, needs a period), ``rms``, ``arias`` or ``s0``.
-
-Refusals and flags (a fit others will load must mean what it says):
-
-* the dimension must carry intensity: the IM must change along it at every point, strictly
-  increasing (``ValueError`` otherwise: a bed parameter such as ``eps`` is not an intensity,
-  and a fit over a non-monotone IM has no meaning);
-* a fitted ``beta <= 0`` (probability falling with intensity) is flagged in ``fit_flag`` and
-  reported in the returned warnings; such fits are not exported;
-* a threshold at or beyond the slenderness angle is reported: beyond it the rigid block has
-  overturned and the Gaussian exceedance is not a rocking measure.
-
-Exports: :func:`write_csv` (one row per fitted curve: the other dimensions' values, the IM
-name and units, median, beta) and :func:`write_nrml` (OpenQuake NRML 0.5 ``fragilityModel``
-with continuous ``logncdf`` functions; OpenQuake parametrises them by the *mean* and *standard
-deviation* of the lognormal capacity, ``mean = median exp(beta^2/2)``,
-``stddev = mean sqrt(exp(beta^2) - 1)``, and reads PGA, SA and AvgSA in g, PGV in cm/s, Arias
-intensity ``IA`` in m/s).
+:func:`fragility_over_im` fits ``P = Phi(ln(IM / median) / beta)`` to the exceedance probability along a
+swept excitation dimension (usually ``S0``) over each point's intensity measure (``pga``, ``sa``, ``pgv``,
+``avgsa``, ``rms``, ``arias`` or ``s0``).  It refuses a dimension along which the IM does not strictly
+increase, and flags ``beta <= 0`` (not exported) and thresholds beyond the slenderness.
+:func:`write_csv` and :func:`write_nrml` (NRML 0.5 continuous ``logncdf``: OpenQuake's mean and standard
+deviation of the capacity, IMs in g, cm/s, m/s) export the fits: ``docs/fragility.md``.
 """
 
 from __future__ import annotations
@@ -66,15 +49,7 @@ def _im_values(ds, im, period, cutoff):
 def default_dim(grid):
     """The swept intensity a fragility is drawn along by default.
 
-    Parameters
-    ----------
-    grid : sequence of str
-        The swept dimensions.
-
-    Returns
-    -------
-    str or None
-        ``S0`` [m2 s-3] or ``pga`` [m s-2], whichever the grid sweeps (``None`` if neither).
+    Returns: ``S0`` [m2 s-3] or ``pga`` [m s-2], whichever the grid sweeps (``None`` if neither).
     """
     return next((d for d in ("S0", "pga") if d in grid), None)
 
@@ -127,12 +102,7 @@ def fragility_over_im(ds, threshold, im="pga", dim=None, relative_to=None, metho
 
     Notes
     -----
-    ``P(IM) = Phi(ln(IM / median) / beta)`` [2].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    ``P(IM) = Phi(ln(IM / median) / beta)`` [baker2015].
     """
     if im not in IMS:
         raise ValueError(f"--im must be one of {', '.join(IMS)} (got {im!r})")
@@ -217,17 +187,9 @@ def limit_state_name(threshold, relative_to=None):
 
     No spaces: NRML lists limit states separated by blanks.
 
-    Parameters
-    ----------
-    threshold : float
-        The threshold, [rad] or a fraction [1].
-    relative_to : str, optional
-        What it is a fraction of (None: radians).
+    Units: ``threshold`` [rad].
 
-    Returns
-    -------
-    str
-        E.g. ``theta_0.1_slenderness``, ``theta_0.002_rad``.
+    Returns: e.g. ``theta_0.1_slenderness``, ``theta_0.002_rad``.
     """
     return f"theta_{float(threshold):g}_{relative_to or 'rad'}"
 
@@ -239,19 +201,9 @@ def stack_limit_states(frags, thresholds, relative_to=None):
     :func:`limit_state_name`, coordinate ``threshold``); the others (intensities) stay as they are.
     One threshold: that dataset unchanged.
 
-    Parameters
-    ----------
-    frags : list of xarray.Dataset
-        Fragility datasets (:func:`fragility_over_im`), one per threshold.
-    thresholds : sequence of float
-        Their thresholds, [rad] or fractions [1].
-    relative_to : str, optional
-        What the thresholds are fractions of.
+    Units: ``thresholds`` [rad].
 
-    Returns
-    -------
-    xarray.Dataset
-        The stacked dataset.
+    Returns: the stacked dataset.
     """
     if len(frags) == 1:
         return frags[0]
@@ -274,21 +226,13 @@ def _label_text(labels):
 def curve_table(frag):
     """Every curve of a fragility dataset, fitted or not.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset with ``fit_median``, ``beta``, ``fit_flag`` and ``threshold_rad``.
-
-    Returns
-    -------
-    list of dict
-        ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
-        several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.core.status.FitFlag`),
-        ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value
-        is untrusted without a best estimate), ``degenerate`` (why a fit is degenerate, the dataset's
-        ``fit_degenerate``, else ``""``), ``im_min``, ``im_max`` (the vouched range,
-        :func:`~screening.analysis.fragility.vouched_range`; NaN where the dataset has none) and the rotation ``threshold_rad`` [rad] of the curve
-        (its range ``"lo..hi"`` if it varies along the curve).
+    Returns: ``labels`` (the other dimensions' values, ``limit_state`` included where the dataset has
+    several), ``median`` [IM units], ``beta`` [1], ``flag`` (:class:`~screening.core.status.FitFlag`),
+    ``reason`` (``""`` when fitted), ``n_unvouched`` (points of the curve whose linearized value is
+    untrusted without a best estimate), ``degenerate`` (why a fit is degenerate, the dataset's
+    ``fit_degenerate``, else ``""``), ``im_min``, ``im_max`` (the vouched range,
+    :func:`~screening.analysis.fragility.vouched_range`; NaN where the dataset has none) and the rotation
+    ``threshold_rad`` [rad] of the curve (its range ``"lo..hi"`` if it varies along the curve).
     """
     median, beta = frag["fit_median"], frag["beta"]
     flag = frag["fit_flag"]
@@ -317,16 +261,8 @@ def curve_table(frag):
 def curve_count_text(frag):
     """How many curves were fitted, as the printed line says it.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset.
-
-    Returns
-    -------
-    str
-        E.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 with points left out of the
-        fit: ..."``.
+    Returns: e.g. ``"3 of 5 curves fitted (2 without a fit: never_exceeded 2); 1 with points left out of the
+    fit: ..."``.
     """
     rows = curve_table(frag)
     fitted = [r for r in rows if r["flag"] == FitFlag.ok]
@@ -352,19 +288,10 @@ def _intensity(frag):
 def case_values(frag):
     """The name and values of each swept block/bed a curve belongs to, for the exports.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset.
-
-    Returns
-    -------
-    shared : dict
-        ``{name: (value, units)}`` of the scalar block/bed/excitation coordinates every curve shares.
-    per_case : dict
-        ``{case index: {"name": case name, "values": {name: (value, units)}}}`` from the ``case_name``
-        coordinate and the coordinates over ``case`` (empty without a ``case`` dimension).
-
+    Returns ``(shared, per_case)``: ``shared`` ``{name: (value, units)}`` of the scalar block/bed/excitation
+    coordinates every curve shares; ``per_case`` ``{case index: {"name": case name, "values": {name: (value,
+    units)}}}`` from the ``case_name`` coordinate and the coordinates over ``case`` (empty without a
+    ``case`` dimension).
     """
     shared = {n: (float(frag[n]), frag[n].attrs.get("units", "")) for n in frag.coords
               if frag[n].ndim == 0 and frag[n].dtype.kind in "fi" and n != "threshold"}
@@ -390,16 +317,7 @@ def export_problem(row):
     unvouched ones are left out), a fit vouched at a single intensity, or whose records or stripes separate exceeding
     from not exceeding perfectly (the dataset's ``fit_degenerate``: ``degenerate``).
 
-    Parameters
-    ----------
-    row : dict
-        A row of :func:`curve_table`.
-
-    Returns
-    -------
-    str
-        The reason (``""``: exported).
-
+    Returns: the reason (``""``: exported).
     """
     if row["flag"] != FitFlag.ok:
         return f"no fit ({row['flag'].name}: {row['flag'].meaning})"
@@ -460,23 +378,9 @@ def _states(frag):
 def fragility_intensity(frag):
     """The intensity a fragility dataset is fitted over: its variable's name, units and oscillator period.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset (``fit_median`` with the attributes ``intensity`` and ``units``).
-
-    Returns
-    -------
-    name : str
-        The intensity variable (``pga_median``, ``pga``, ``stripe_pga``...).
-    units : str
-        Its units (``m s-2``).
-    period : float or str
-        The oscillator period [s] of an Sa intensity, ``""`` otherwise.
-
-    References
-    ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    Returns ``(name, units, period)``: ``name`` the intensity variable (``pga_median``, ``pga``,
+    ``stripe_pga``...); ``units`` its units (``m s-2``); ``period`` the oscillator period [s] of an Sa
+    intensity, ``""`` otherwise.
     """
     return _intensity(frag)
 
@@ -484,16 +388,7 @@ def fragility_intensity(frag):
 def im_key(name):
     """The ``--im`` key (:data:`IMS`) of an intensity variable, or ``None``.
 
-    Parameters
-    ----------
-    name : str
-        ``pga_median`` (a point's input), ``pga`` (a record's), ``stripe_pga`` (a multiple-stripe level)...
-
-    Returns
-    -------
-    str or None
-        ``pga``, ``sa``, ... (``None`` for another name).
-
+    Returns: ``pga``, ``sa``, ... (``None`` for another name).
     """
     return _im_key(name)
 
@@ -501,21 +396,8 @@ def im_key(name):
 def curves_by_object(frag, pelicun=False):
     """The curves of a fragility dataset grouped by object (a swept block/bed or case), as the exports name them.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset.
-    pelicun : bool
-        Ids as pelicun reads them (no ``-``) instead of the NRML ids.
-
-    Returns
-    -------
-    states : list of str
-        The limit states.
-    objects : dict
-        ``{id: {"labels": {dim: value}, <limit state>: row of curve_table, ...}}`` in the order of
-        :func:`curve_table`.
-
+    Returns ``(states, objects)``: ``states`` the limit states; ``objects`` ``{id: {"labels": {dim: value},
+    <limit state>: row of curve_table, ...}}`` in the order of :func:`curve_table`.
     """
     rows = curve_table(frag)
     states = _states(frag)
@@ -531,21 +413,7 @@ def write_csv(frag, path):
     without a best estimate), ``threshold_rad``, ``period_s`` and the vouched range ``im_min``,
     ``im_max`` (:func:`~screening.analysis.fragility.vouched_range`).
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset.
-    path : str or os.PathLike
-        The CSV file (written atomically).
-
-    Returns
-    -------
-    str or os.PathLike
-        ``path``.
-
-    References
-    ----------
-    .. [1] [baker2015] in the bibliography, ``docs/bibliography.md``.
+    Returns: ``path``.
     """
     name, units, period = _intensity(frag)
     dims = list(frag["fit_median"].dims)
@@ -592,18 +460,7 @@ def write_pelicun_csv(frag, path):
     parameters there; the reasons, the case's name and values are in the collection's JSON
     (:func:`write_pelicun_json`).
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset over an IM.
-    path : str or os.PathLike
-        The CSV file (written atomically).
-
-    Returns
-    -------
-    str or os.PathLike
-        ``path``.
-
+    Returns: ``path``.
     """
     demand, unit_out, factor = _pelicun_demand(frag)
     rows = curve_table(frag)
@@ -637,18 +494,7 @@ def write_pelicun_json(frag, path):
     ``RoundUpToIntegerQuantity``, ``LimitStates`` (``LS<i>`` -> ``DS<i>`` with the limit state's name
     and rotation), and the values (``Case``, ``Values``) as numbers.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset over an IM.
-    path : str or os.PathLike
-        The JSON file (written atomically).
-
-    Returns
-    -------
-    str or os.PathLike
-        ``path``.
-
+    Returns: ``path``.
     """
     from screening import __version__
 
@@ -701,16 +547,7 @@ def _im_key(name):
 def nrml_limit_state(name):
     """A limit state's name as OpenQuake accepts it (letters, digits, ``_``, ``-``, ``:``).
 
-    Parameters
-    ----------
-    name : str
-        A limit-state name (:func:`limit_state_name`).
-
-    Returns
-    -------
-    str
-        ``.`` written ``p``, ``+`` dropped.
-
+    Returns: ``.`` written ``p``, ``+`` dropped.
     """
     return name.replace(".", "p").replace("+", "")
 
@@ -718,17 +555,9 @@ def nrml_limit_state(name):
 def nrml_parameters(median, beta):
     """OpenQuake ``logncdf`` ``(mean, stddev)`` of a lognormal capacity with ``median`` and ``beta``.
 
-    Parameters
-    ----------
-    median : float
-        Median capacity [IM units].
-    beta : float
-        Lognormal dispersion [1].
+    Units: ``median`` [IM units], ``beta`` [1].
 
-    Returns
-    -------
-    mean, stddev : float
-        Mean and standard deviation of the capacity [IM units].
+    Returns: mean and standard deviation of the capacity [IM units].
 
     Notes
     -----
@@ -761,21 +590,7 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     degenerate) is left out and named in a comment with the reason.  Raises :class:`NoExport` (a
     ``ValueError``) for an IM OpenQuake does not know.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset over an IM.
-    path : str or os.PathLike
-        The XML file (written atomically).
-    model_id : str
-        The ``fragilityModel`` id.
-    description : str
-        Its description.
-
-    Returns
-    -------
-    str or os.PathLike
-        ``path``.
+    Returns: ``path``.
 
     Notes
     -----

@@ -1,20 +1,9 @@
 """Error metrics of the speed-accuracy trade study: pure, NaN-aware functions of numpy arrays.
 
-Histories are on a common time grid ``t`` [s] along the last axis.
-
-* peak relative error ``max_t a / max_t b - 1`` (:func:`peak_relative_error`), with the Monte Carlo
-  standard error at the peak (:func:`peak_with_se`);
-* time-averaged relative error ``int |a - b| dt / int |b| dt`` over the part of the record where
-  both are defined (:func:`time_averaged_relative_error`) and its noise floor
-  (:func:`time_averaged_relative_se`);
-* significance: a peak difference is significant when ``|diff| > 2 SE`` (:func:`is_significant`),
-  with ``SE`` the Monte Carlo standard error of the peak (the sum in quadrature for MCS vs MCS —
-  conservative, as both use the same input samples and their errors are positively correlated); a
-  time-averaged error is significant when it exceeds twice the time-averaged relative standard
-  error ``int SE dt / int |b| dt`` (pure sampling noise gives about 0.8 of it);
-* classification against a tolerance (:func:`classify_error`) and the validity rules of SL derived
-  from a trade-study dataset (:func:`threshold_rule`, :func:`safe_indicator_range`,
-  :func:`derive_rules`).
+Histories share a time grid ``t`` [s] on the last axis.  Peak relative error with its Monte Carlo
+standard error, time-averaged relative error with its noise floor, significance (``|diff| > 2 SE``;
+the sum in quadrature for MCS vs MCS, conservative), classification against a tolerance and the validity
+rules of SL derived from a trade-study dataset (:func:`derive_rules`).  ``docs/validation.md``.
 """
 
 from __future__ import annotations
@@ -34,19 +23,9 @@ _trapezoid = getattr(np, "trapezoid", None) or np.trapz     # numpy >= 2 renamed
 def peak_with_se(values, se=None, axis=-1):
     """Peak ``max_t values`` over the finite entries and the standard error at the peak time.
 
-    Parameters
-    ----------
-    values : array_like
-        A history [any unit], time along ``axis``.
-    se : array_like, optional
-        Standard error of each entry (same shape, same unit); None: the estimate is deterministic, SE 0.
-    axis : int
-        The time axis.
+    Units: ``values`` [any unit].
 
-    Returns
-    -------
-    peak, se_at_peak : float or numpy.ndarray
-        In the unit of ``values``; both NaN where no entry is finite.
+    Returns: in the unit of ``values``; both NaN where no entry is finite.
     """
     v = np.asarray(values, dtype=float)
     v = np.moveaxis(v, axis, -1)
@@ -70,15 +49,7 @@ def peak_with_se(values, se=None, axis=-1):
 def relative_difference(estimate, reference):
     """``estimate / reference - 1`` [1]; NaN where the reference is zero or not finite.
 
-    Parameters
-    ----------
-    estimate, reference : float or array_like
-        Same unit (any).
-
-    Returns
-    -------
-    float or numpy.ndarray
-        The relative difference [1].
+    Returns: the relative difference [1].
     """
     e = np.asarray(estimate, dtype=float)
     r = np.asarray(reference, dtype=float)
@@ -90,17 +61,9 @@ def relative_difference(estimate, reference):
 def peak_relative_error(estimate, reference, axis=-1):
     """Relative error of the peak over time: ``max_t estimate / max_t reference - 1`` [1].
 
-    Parameters
-    ----------
-    estimate, reference : array_like
-        Histories [same unit], time along ``axis``.
-    axis : int
-        The time axis.
+    Units: estimate, reference [same unit].
 
-    Returns
-    -------
-    float or numpy.ndarray
-        The relative error [1].
+    Returns: the relative error [1].
     """
     return relative_difference(peak_with_se(estimate, axis=axis)[0], peak_with_se(reference, axis=axis)[0])
 
@@ -115,17 +78,9 @@ def time_averaged_relative_error(estimate, reference, t):
     Only the instants where both histories are finite count (e.g. the part of the record where
     the Monte Carlo ensemble is defined).
 
-    Parameters
-    ----------
-    estimate, reference : array_like
-        Histories [same unit], time along the last axis.
-    t : array_like
-        The time grid [s].
+    Units: estimate, reference [same unit], ``t`` [s].
 
-    Returns
-    -------
-    float or numpy.ndarray
-        The error [1]; NaN if nothing is left or ``int |reference| = 0``.
+    Returns: the error [1]; NaN if nothing is left or ``int |reference| = 0``.
     """
     a = np.asarray(estimate, dtype=float)
     b = np.asarray(reference, dtype=float)
@@ -145,21 +100,9 @@ def time_averaged_relative_se(se, reference, t, estimate=None):
     and, if given, ``estimate`` are finite).  Pure sampling noise gives a time-averaged error of
     about ``sqrt(2/pi) ~ 0.8`` times this value.
 
-    Parameters
-    ----------
-    se : array_like
-        Standard error of the histories [unit of ``reference``].
-    reference : array_like
-        The reference history, time along the last axis.
-    t : array_like
-        The time grid [s].
-    estimate : array_like, optional
-        The estimate (its NaNs are masked too).
+    Units: ``se`` [unit of ``reference``], ``t`` [s].
 
-    Returns
-    -------
-    float or numpy.ndarray
-        The noise floor [1].
+    Returns: the noise floor [1].
 
     Notes
     -----
@@ -183,15 +126,9 @@ def combined_se(*standard_errors):
     Exact for independent estimates; conservative for positively correlated ones such as two
     models on the same samples.
 
-    Parameters
-    ----------
-    *standard_errors : float or array_like
-        The standard errors [same unit].
+    Units: ``*standard_errors`` [same unit].
 
-    Returns
-    -------
-    numpy.ndarray
-        The combined standard error [same unit].
+    Returns: the combined standard error [same unit].
     """
     return np.sqrt(sum(np.asarray(s, dtype=float) ** 2 for s in standard_errors))
 
@@ -199,19 +136,9 @@ def combined_se(*standard_errors):
 def is_significant(difference, se, k=2.0):
     """``|difference| > k se``: the difference is larger than the sampling noise (default 2 SE).
 
-    Parameters
-    ----------
-    difference : float or array_like
-        A difference [any unit].
-    se : float or array_like
-        Its standard error [same unit].
-    k : float
-        How many standard errors [1].
+    Units: ``difference`` [any unit], ``se`` [same unit], ``k`` [1].
 
-    Returns
-    -------
-    bool or numpy.ndarray of bool
-        False where either is NaN.
+    Returns: False where either is NaN.
     """
     d = np.abs(np.asarray(difference, dtype=float))
     s = np.asarray(se, dtype=float)
@@ -222,23 +149,11 @@ def is_significant(difference, se, k=2.0):
 def classify_error(error, relative_se, threshold, k=2.0):
     """Class of a relative error against a tolerance ``threshold`` [1].
 
-    Parameters
-    ----------
-    error : float
-        The relative error [1].
-    relative_se : float
-        Its standard error [1] (NaN counts as 0).
-    threshold : float
-        The tolerance [1].
-    k : float
-        How many standard errors [1].
+    Units: ``error`` [1], ``relative_se`` [1], ``threshold`` [1], ``k`` [1].
 
-    Returns
-    -------
-    str
-        ``"within"`` if ``|error| + k se <= threshold``, ``"outside"`` if ``|error| - k se >
-        threshold``, ``"ambiguous"`` otherwise (the tolerance lies within ``k`` standard errors), and
-        ``"undefined"`` for a NaN error.
+    Returns: ``"within"`` if ``|error| + k se <= threshold``, ``"outside"`` if ``|error| - k se >
+    threshold``, ``"ambiguous"`` otherwise (the tolerance lies within ``k`` standard errors), and
+    ``"undefined"`` for a NaN error.
     """
     e, s = abs(float(error)), float(relative_se)
     if not math.isfinite(e):
@@ -254,23 +169,10 @@ def classify_error(error, relative_se, threshold, k=2.0):
 def threshold_rule(indicator, passed, direction="below"):
     """The largest one-sided region of a scalar indicator in which every point passed.
 
-    Parameters
-    ----------
-    indicator : array_like
-        The indicator per point [any unit].
-    passed : array_like of bool
-        Whether each point passed (a NaN error counts as failed).
-    direction : {"below", "above"}
-        ``"below"``: ``X`` the smallest indicator value among the failed points (``inf`` if none
-        failed) and the points with ``indicator < X``; ``"above"``: ``X`` the largest indicator value
-        among the failed points (``-inf`` if none) and the points with ``indicator > X``.
+    Units: ``indicator`` [any unit].
 
-    Returns
-    -------
-    bound : float
-        ``X`` [unit of the indicator].
-    n_covered : int
-        The number of points inside (all of which passed).
+    Returns ``(bound, n_covered)``: ``bound`` ``X`` [unit of the indicator]; ``n_covered`` the number of
+    points inside (all of which passed).
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -288,19 +190,9 @@ def threshold_rule(indicator, passed, direction="below"):
 def rule_error(peak_error, time_avg_error, metric="peak"):
     """The error a validity rule is judged on: ``|peak|``, ``time_avg`` or the worse of the two.
 
-    Parameters
-    ----------
-    peak_error : array_like
-        Peak relative error [1] (signed).
-    time_avg_error : array_like
-        Time-averaged relative error [1].
-    metric : {"peak", "time_avg", "worst"}
-        :data:`RULE_METRICS`; ``ValueError`` otherwise.
+    Units: ``peak_error`` [1], ``time_avg_error`` [1].
 
-    Returns
-    -------
-    numpy.ndarray
-        The error [1] (NaN for ``"worst"`` where either is NaN).
+    Returns: the error [1] (NaN for ``"worst"`` where either is NaN).
     """
     p = np.abs(np.asarray(peak_error, dtype=float))
     ta = np.asarray(time_avg_error, dtype=float)
@@ -316,22 +208,12 @@ def rule_error(peak_error, time_avg_error, metric="peak"):
 def compare(estimate, reference, t, est_se=None, ref_se=None):
     """All error measures of one history against a reference, as a dict (units [1]).
 
-    Parameters
-    ----------
-    estimate, reference : array_like
-        Histories [same unit] on the time grid ``t``.
-    t : array_like
-        The time grid [s].
-    est_se, ref_se : array_like, optional
-        Their Monte Carlo standard errors [same unit]; None for a deterministic history.
+    Units: estimate, reference [same unit], ``t`` [s], est_se, ref_se [same unit].
 
-    Returns
-    -------
-    dict
-        ``peak_estimate``, ``peak_reference`` [unit of the histories], ``peak_rel_error``,
-        ``peak_rel_se`` (SE of the difference of the peaks over the reference peak),
-        ``peak_significant`` (``|diff| > 2 SE``), ``time_avg_rel_error``, ``time_avg_rel_se`` (noise
-        floor) and ``time_avg_significant`` (error > 2 x floor).
+    Returns: ``peak_estimate``, ``peak_reference`` [unit of the histories], ``peak_rel_error``,
+    ``peak_rel_se`` (SE of the difference of the peaks over the reference peak), ``peak_significant``
+    (``|diff| > 2 SE``), ``time_avg_rel_error``, ``time_avg_rel_se`` (noise floor) and
+    ``time_avg_significant`` (error > 2 x floor).
     """
     pe, se_e = peak_with_se(estimate, est_se)
     pr, se_r = peak_with_se(reference, ref_se)
@@ -354,24 +236,12 @@ def safe_indicator_range(indicator, passed, tie=0.05):
     Values within a relative ``tie`` of the first failure count as the same tested level (so a
     level at which some points pass and some fail is not called safe).
 
-    Parameters
-    ----------
-    indicator : array_like
-        The indicator per point [any unit].
-    passed : array_like of bool
-        Whether each point passed.
-    tie : float
-        Relative tolerance [1] of "the same tested level".
+    Units: ``indicator`` [any unit], ``tie`` [1].
 
-    Returns
-    -------
-    p_safe : float
-        The largest indicator value of a passing point below the first failure; NaN when no tested
-        level is safe.
-    n_safe : int
-        The number of points with ``indicator <= p_safe`` (all passed).
-    i_fail : int or None
-        The index of the failing point with the smallest indicator (None if nothing failed).
+    Returns ``(p_safe, n_safe, i_fail)``: ``p_safe`` the largest indicator value of a passing point below
+    the first failure; NaN when no tested level is safe; ``n_safe`` the number of points with ``indicator <=
+    p_safe`` (all passed); ``i_fail`` the index of the failing point with the smallest indicator (None if
+    nothing failed).
     """
     x = np.asarray(indicator, dtype=float)
     ok = np.asarray(passed, dtype=bool)
@@ -391,15 +261,9 @@ def safe_indicator_range(indicator, passed, tie=0.05):
 def rule_groups(eps):
     """Point groups a rule is derived for: ``"all"`` and, with 2–4 distinct ``eps``, one per bed.
 
-    Parameters
-    ----------
-    eps : array_like
-        The cubic stiffness parameter of each point [m-2].
+    Units: ``eps`` [m-2].
 
-    Returns
-    -------
-    dict of str to numpy.ndarray of bool
-        ``{group name: mask}``.
+    Returns: ``{group name: mask}``.
     """
     eps = np.asarray(eps, dtype=float)
     groups = {"all": np.ones(eps.size, dtype=bool)}
@@ -417,27 +281,11 @@ def derive_rules(ds, thresholds=(0.10, 0.25), metric="peak", quantity="var_theta
     the safe range of SL peak p_uplift (:func:`safe_indicator_range`) and of the k_eq margin
     (:func:`threshold_rule`, "above"), judged on :func:`rule_error` of ``quantity``.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset (``sl_peak_p_uplift`` [1], ``k_eq_margin`` [1], ``point_name``, ``eps``
-        [m-2], ``peak_rel_error`` and ``time_avg_rel_error`` [1] over ``comparison``, ``quantity``,
-        ``point``).
-    thresholds : sequence of float
-        Tolerances [1].
-    metric : {"peak", "time_avg", "worst"}
-        The error judged (:func:`rule_error`).
-    quantity : str
-        The quantity judged (``"var_theta"`` [rad2] or ``"var_theta_dot"`` [rad2 s-2]).
-    tie : float
-        Relative tolerance [1] of :func:`safe_indicator_range`.
+    Units: ``quantity`` [rad2].
 
-    Returns
-    -------
-    list of dict
-        ``reference``, ``threshold``, ``group``, ``n``, ``n_pass``, ``p_safe``, ``n_safe``, ``p_max``
-        (largest tested p), ``fail_p``, ``fail_name``, ``fail_error`` (the first failure in p),
-        ``margin_bound``, ``n_margin``.
+    Returns: ``reference``, ``threshold``, ``group``, ``n``, ``n_pass``, ``p_safe``, ``n_safe``, ``p_max``
+    (largest tested p), ``fail_p``, ``fail_name``, ``fail_error`` (the first failure in p),
+    ``margin_bound``, ``n_margin``.
     """
     p_all = ds.sl_peak_p_uplift.values
     margin_all = ds.k_eq_margin.values

@@ -41,7 +41,7 @@ def load_record_study(path):
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] ``docs/records.md``.
 
     Examples
     --------
@@ -91,7 +91,7 @@ def pick_case(study, case=None):
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] ``docs/records.md``.
 
     Examples
     --------
@@ -143,7 +143,7 @@ def block_and_foundation(study, case=None, overrides=None):
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis", ``docs/records.md``.
+    [1] ``docs/records.md``.
 
     Examples
     --------

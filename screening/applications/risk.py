@@ -161,23 +161,13 @@ def read_hazard(path, site=None):
     header ``PGA [g], annual_rate [1/yr]`` (the IMT as OpenQuake names it and its units in
     brackets: ``g``, ``m s-2``), then one ``level, rate`` per line; ``#`` starts a comment.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    site : int, optional
-        The row of an OpenQuake file with several sites.
-
-    Returns
-    -------
-    HazardCurve
+    Returns a :class:`HazardCurve`.
 
     Raises
     ------
     HazardError
         One line naming the file, the line and the field: not a number, a level not increasing, a
         curve not decreasing, no level above 0, a missing header, a site not in the file.
-
     """
     path = Path(path)
     try:
@@ -262,30 +252,15 @@ def _read_plain(path, lines):
 def hazard_levels(curve, name, units, period, hazard_path):
     """The hazard's levels [``units``] for a fragility over the intensity variable ``name`` [``units``].
 
-    Parameters
-    ----------
-    curve : HazardCurve
-        The hazard curve.
-    name : str
-        The fragility's intensity (``pga``, ``pga_median``, ``sa_median``, ``stripe_pga``...).
-    units : str
-        Its units (``m s-2``).
-    period : float or str
-        The oscillator period [s] of an Sa fragility (``""`` otherwise).
-    hazard_path : str
-        Named in the error line.
+    Units: ``period`` [s].
 
-    Returns
-    -------
-    numpy.ndarray
-        The levels in ``units``.
+    Returns: the levels in ``units``.
 
     Raises
     ------
     HazardError
         One line naming the file, line 1 and the field (``imt``, ``units``) when the hazard curve is
         for another intensity measure, another period or in units that cannot be converted.
-
     """
     key = im_key(name)
     if key is None or IMS[key][2] is None:
@@ -340,22 +315,10 @@ def _position(frag, dim, label):
 def risk_table(frag, curve, years, hazard_path="hazard"):
     """The risk of every curve of a fragility dataset at the site of ``curve``, ranked.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset (``screening fragility``) over PGA or Sa.
-    curve : HazardCurve
-        The site's hazard (:func:`read_hazard`).
-    years : float
-        The time span [yr] of the probabilities.
-    hazard_path : str
-        Named in the error lines.
+    Units: ``years`` [yr].
 
-    Returns
-    -------
-    list of dict
-        One per object and limit state (:data:`RISK_COLUMNS`), highest ``annual_rate`` first; curves
-        without a usable fit come last with a NaN rate and the reason in ``note``.
+    Returns: one per object and limit state (:data:`RISK_COLUMNS`), highest ``annual_rate`` first; curves
+    without a usable fit come last with a NaN rate and the reason in ``note``.
 
     Notes
     -----
@@ -363,7 +326,6 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
     occurrences), ``probability_low`` / ``_high`` from the monotone bounds of the rate.  ``annual_rate_se``
     from the fragility's standard errors ``fit_median_se``, ``beta_se`` (where it has them) by the delta
     method.
-
     """
     name, _, _ = fragility_intensity(frag)
     im = hazard_levels(curve, *fragility_intensity(frag), hazard_path)
@@ -416,18 +378,7 @@ def risk_table(frag, curve, years, hazard_path="hazard"):
 def write_risk_csv(rows, path):
     """Write :func:`risk_table`'s rows as CSV (:data:`RISK_COLUMNS`; empty cells for missing values).
 
-    Parameters
-    ----------
-    rows : list of dict
-        The ranked rows.
-    path : str or os.PathLike
-        The CSV file (written atomically).
-
-    Returns
-    -------
-    str or os.PathLike
-        ``path``.
-
+    Returns: ``path``.
     """
     from screening.core.atomicfile import atomic_open
 
@@ -448,25 +399,10 @@ def limit_state_fragilities(ds, im="pga", period=None, thresholds=(), relative_t
     """The fragilities of a sweep result over ``im``: overturning (where it stores ``p_overturn``) and the
     exceedance of each threshold (one dataset on ``limit_state``).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result (loaded).
-    im : str
-        A key of :data:`~screening.applications.im_fragility.IMS` (``"pga"`` [m s-2] or ``"sa"``).
-    period : float, optional
-        Oscillator period [s] of ``sa``.
-    thresholds : sequence of float
-        Rotations [rad], or fractions of the angle ``relative_to``.
-    relative_to : {None, "slenderness", "theta_ul"}
-        What the thresholds are fractions of.
+    Units: ``im`` [m s-2], ``period`` [s], ``thresholds`` [rad].
 
-    Returns
-    -------
-    list of xarray.Dataset
-        :func:`~screening.applications.im_fragility.fragility_over_im` of each limit state; empty when the
-        result has neither.
-
+    Returns: :func:`~screening.applications.im_fragility.fragility_over_im` of each limit state; empty when
+    the result has neither.
     """
     frags = []
     if "p_overturn" in ds.variables:

@@ -1,9 +1,8 @@
 """Writing a file all or nothing, never through a planted link: the one helper every writer uses.
 
-The content goes to a new file made by :func:`tempfile.mkstemp` in the target's folder (a name no
-one can have planted a link at; created with ``O_EXCL``), which gets the usual permissions (the
-umask) and is renamed over the target: the target is replaced whole, a link at the target is
-replaced (not followed), and a failing write leaves nothing behind.
+The content goes to a new file made by :func:`tempfile.mkstemp` (``O_EXCL``) in the target's folder,
+which gets the umask's permissions and is renamed over the target: a link at the target is replaced
+(not followed), and a failing write leaves nothing behind.
 """
 
 from __future__ import annotations
@@ -18,25 +17,12 @@ __all__ = []
 
 
 def temporary_beside(path, suffix=""):
-    """A new empty file next to ``path``, to write ``path`` into.
+    """A new empty file ``.<name>.<random>.tmp<suffix>`` in ``path``'s folder, to write ``path`` into.
 
-    Its name is hidden and random (``.<name>.<random>.tmp<suffix>``), made by
-    :func:`tempfile.mkstemp` with ``O_EXCL`` in ``path``'s folder, so no one can have planted a link
-    at it; ``suffix`` serves writers that read the format from the name (``".nc"``, ``".png"``).
-    The file is created and closed; :func:`publish` renames it over ``path``.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file to be written [-]; its folder must exist.
-    suffix : str, default ""
-        Appended after ``.tmp`` [-].
-
-    Returns
-    -------
-    pathlib.Path
-        The new empty file, in ``path``'s folder.
-
+    Notes
+    -----
+    Made by :func:`tempfile.mkstemp` with ``O_EXCL``, so no one can have planted a link at it; ``suffix``
+    serves writers that read the format from the name (``".nc"``); :func:`publish` renames it over ``path``.
     """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
@@ -45,24 +31,11 @@ def temporary_beside(path, suffix=""):
 
 
 def publish(tmp, path):
-    """Give the written ``tmp`` the permissions of a new file (umask) and rename it to ``path``.
+    """Give the written ``tmp`` the mode ``0o666 & ~umask`` and rename it (``os.replace``, atomic) to ``path``.
 
-    :func:`tempfile.mkstemp` makes files readable by their owner only; a published file gets the
-    mode ``0o666 & ~umask`` an ordinary ``open`` would give it.  The rename (``os.replace``) is
-    atomic on one file system: a reader sees the old file or the new one, never a part, and a link
-    at ``path`` is replaced, not followed.
-
-    Parameters
-    ----------
-    tmp : str or path-like
-        The written file [-], in ``path``'s folder (:func:`temporary_beside`).
-    path : str or path-like
-        Its final name [-].
-
-    Returns
-    -------
-    None
-
+    Notes
+    -----
+    A reader sees the old file or the new one, never a part, and a link at ``path`` is replaced, not followed.
     """
     mask = os.umask(0)
     os.umask(mask)
@@ -72,24 +45,7 @@ def publish(tmp, path):
 
 @contextlib.contextmanager
 def atomic_path(path):
-    """Yield a temporary path next to ``path`` to write; renamed to ``path`` if the block succeeds,
-    removed if it raises.
-
-    For writers that open the file themselves (netCDF, PNG): the block writes the yielded path,
-    and ``path`` then holds the whole new content, or (on any exception, Ctrl-C included) what it
-    held before.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file to write [-]; its folder must exist.
-
-    Yields
-    ------
-    pathlib.Path
-        The temporary file to write (:func:`temporary_beside`), published by :func:`publish`.
-
-    """
+    """Yield a temporary path next to ``path``: renamed to ``path`` if the block succeeds, removed if it raises (Ctrl-C included)."""
     tmp = temporary_beside(path)
     try:
         yield tmp
@@ -101,51 +57,18 @@ def atomic_path(path):
 
 @contextlib.contextmanager
 def atomic_open(path, mode="w", **kwargs):
-    """``open(path, mode, **kwargs)`` for writing, atomically (:func:`atomic_path`).
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file to write [-].
-    mode : str, default "w"
-        A writing mode of :func:`open` (``"w"``, ``"wb"``) [-].
-    **kwargs
-        Passed to :func:`open` (``encoding``, ``newline``).
-
-    Yields
-    ------
-    file object
-        The open temporary file; ``path`` gets its content when the block ends without an exception.
-
-    """
+    """``open(path, mode, **kwargs)`` for writing, atomically (:func:`atomic_path`)."""
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
         yield fh
 
 
 def open_nofollow(path, flags, mode=0o600):
-    """``os.open`` that never follows a symbolic link at ``path`` and only accepts a regular file
-    (a FIFO or device planted there is refused, without blocking).
+    """``os.open`` (``O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK`` added) that accepts only a regular file; returns the descriptor.
 
-    Parameters
-    ----------
-    path : str or path-like
-        The file to open [-].
-    flags : int
-        ``os.O_*`` flags [-]; ``O_NOFOLLOW``, ``O_CLOEXEC`` and ``O_NONBLOCK`` are added (the
-        descriptor is set blocking again once the file is known to be regular).
-    mode : int, default 0o600
-        The permissions of a file it creates [-] (before the umask).
-
-    Returns
-    -------
-    int
-        An open file descriptor (the caller closes it).
-
-    Raises
-    ------
-    OSError
-        ``path`` is a symbolic link (``ELOOP``), missing, or not a regular file.
-
+    Notes
+    -----
+    Raises ``OSError`` where ``path`` is a symbolic link (``ELOOP``), missing, or not a regular file (a FIFO
+    is refused without blocking); the descriptor is set blocking again once the file is known to be regular.
     """
     fd = os.open(path, flags | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, mode)
     try:
@@ -159,20 +82,7 @@ def open_nofollow(path, flags, mode=0o600):
 
 
 def create_new(path):
-    """A new file at ``path`` for writing (whatever was there, link or file, is removed first, the
-    new one created with ``O_EXCL``): a planted link cannot redirect the write.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file to create [-]; created with mode ``0o600`` (before the umask).
-
-    Returns
-    -------
-    io.BufferedWriter
-        The new file, open for writing bytes.
-
-    """
+    """A new file at ``path`` open for writing bytes (mode ``0o600`` before the umask), whatever was there removed first."""
     with contextlib.suppress(FileNotFoundError):
         os.unlink(path)
     return os.fdopen(open_nofollow(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb")

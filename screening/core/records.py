@@ -1,35 +1,11 @@
-"""Ground-motion records: readers for PEER NGA ``.AT2`` files and text/CSV records.
+"""Ground-motion records: readers for PEER NGA ``.AT2`` files [ancheta2014] and text/CSV records.
 
-One record is a :class:`Record`: a uniformly sampled horizontal ground acceleration [m/s2]
-in the usual sign convention (positive along the +x axis of the recording instrument; see
-:func:`screening.solvers.simulate.simulate` for how it drives the block), optionally a vertical
-one (positive upwards), its time step ``dt`` [s], a name and where it came from.
-
-Formats
--------
-* **PEER NGA** ``.AT2`` (:func:`read_at2`): four header lines — title, event/station/component,
-  ``ACCELERATION TIME SERIES IN UNITS OF G``, then either ``NPTS=  5590, DT=   .0050 SEC``
-  (NGA-West2) or ``5590    .0050    NPTS, DT`` (the older NGA-West1 layout; the numbers are
-  taken in the order of the labels) — followed by the accelerations, any number per line.
-* **Text or CSV** (:func:`read_text_record`): numbers separated by blanks, tabs, commas or
-  semicolons.  Two columns are time [s] and horizontal acceleration, three columns time,
-  horizontal and vertical acceleration; the time step must be uniform (relative spread < 1e-3
-  of ``dt``) and a ``dt`` given as well must agree with it.  One column (or four and more
-  numbers per line, read row by row) holds accelerations only and needs ``dt``.
-  Non-numeric lines before the data are a header, after it a footer; ``#`` starts a comment.
-
-Every value is a plain decimal number (``-1.25``, ``.5E-03``, Fortran's ``1.0D-3``): ``nan``,
-``inf``, ``1_0`` or hexadecimal are refused, as are numbers after a footer line.  Errors name
-the file and the line number, never the line's content.  Files are checked before they are read
-(a regular file of at most :data:`~screening.core.limits.MAX_RECORD_BYTES`; a folder, FIFO or
-device is named as such) and a UTF-8 byte-order mark is dropped.
-
-Units of the acceleration: ``"g"`` (multiplied by :data:`STANDARD_GRAVITY`), ``"m/s2"`` or
-``"cm/s2"`` (``"gal"``).  They are never guessed: an AT2 file states them on its third line
-(``UNITS OF G``), a text record in a header or comment line (``units: g``, ``units = cm/s2``) or in
-its column titles (``time [s], acc [g]``, ``t (s); a (cm/s2)``), or the caller gives them
-(``units``); a record whose units are stated nowhere is refused, and units given by the caller
-must agree with those in the file.
+A :class:`Record` is a uniformly sampled horizontal ground acceleration [m/s2] (positive along the
+instrument's +x axis), optionally a vertical one (positive upwards), its time step ``dt`` [s], a name
+and its source.  Every value must be a plain decimal number; errors name the file and the line, never
+its content.  Units (``"g"``, ``"m/s2"``, ``"cm/s2"``) are never guessed: the file states them (an AT2
+third line, a text header ``units: g`` or column titles ``acc [g]``) or the caller gives them, and the
+two must agree.  The layouts, the strictness and the units: ``docs/records.md``.
 """
 
 from __future__ import annotations
@@ -162,22 +138,16 @@ def check_time_step(dt, what="parameter 'dt'"):
     dt : float
         A record's time step [s]; a boolean is refused.
     what : str, default "parameter 'dt'"
-        How ``dt`` is named in the message [-].
+        How ``dt`` is named in the message.
 
     Returns
     -------
     float
-        ``dt`` [s].
-
-    Raises
-    ------
-    ValueError
-        ``"<what> must be a number of seconds in [1e-06, 1] (got ...)"``.
+        ``dt`` [s]; ``ValueError`` ``"<what> must be a number of seconds in [1e-06, 1] (got ...)"`` otherwise.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -196,31 +166,25 @@ def check_time_step(dt, what="parameter 'dt'"):
 
 
 def check_scale(scale, what="parameter 'scale'", signed=False):
-    """A factor on a record: finite, ``0 < scale <= MAX_RECORD_SCALE`` (``signed``: ``0 < |scale|``).
+    """A factor [-] on a record: finite, ``0 < scale <= MAX_RECORD_SCALE`` (``signed``: ``0 < |scale|``, a mirrored record).
 
     Parameters
     ----------
     scale : float
         The factor on the accelerations [-].
     what : str, default "parameter 'scale'"
-        How ``scale`` is named in the message [-].
+        How ``scale`` is named in the message.
     signed : bool, default False
-        Allow a negative factor (a record mirrored), ``0 < |scale| <= MAX_RECORD_SCALE``.
+        Allow a negative factor.
 
     Returns
     -------
     float
-        ``scale`` [-].
-
-    Raises
-    ------
-    ValueError
-        Not a finite number in the range.
+        ``scale``; ``ValueError`` where it is not a finite number in the range.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -241,31 +205,22 @@ def check_scale(scale, what="parameter 'scale'", signed=False):
 
 
 def unit_factor(units):
-    """Factor turning ``units`` into m/s2 (``"g"``, ``"m/s2"``, ``"cm/s2"``/``"gal"``).
-
-    Case and blanks are ignored, and the spellings ``m/s^2``, ``m s-2``, ``m/s**2``, ``m/sec2``,
-    ``m/s/s`` (and their ``cm`` forms) are accepted; ``"g"`` is standard gravity,
-    :data:`STANDARD_GRAVITY` = 9.80665 m/s2.
+    """Factor [m s-2 per unit] turning ``units`` into m/s2: 9.80665 (:data:`STANDARD_GRAVITY`) for ``"g"``, 1 for ``"m/s2"``, 0.01 for ``"cm/s2"``/``"gal"``.
 
     Parameters
     ----------
     units : str
-        The units of a record's accelerations.
+        The units of a record's accelerations; case and blanks ignored, and the spellings ``m/s^2``,
+        ``m s-2``, ``m/s**2``, ``m/sec2``, ``m/s/s`` (and their ``cm`` forms) accepted.
 
     Returns
     -------
     float
-        The factor [m s-2 per unit]: 9.80665 for g, 1 for m/s2, 0.01 for cm/s2.
-
-    Raises
-    ------
-    ValueError
-        Units other than g, m/s2 or cm/s2.
+        The factor; ``ValueError`` for other units.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -411,47 +366,29 @@ class _Data:
 
 
 def read_at2(path, units=None, option="units", dt=None):
-    """Read a PEER NGA ``.AT2`` file (both header layouts); accelerations converted to m/s2.
-
-    ``units``: the file's units when its third line does not state them (``... IN UNITS OF G``);
-    when both are given they must agree (``option``: how ``units`` is spelled in messages).
-    ``dt`` [s], if given, must agree with the header's DT.  Raises ``ValueError`` (file and line number) for a
-    header without NPTS and DT, a sample count other than NPTS, a token that is not a plain
-    decimal number, and numbers after a non-numeric footer line.
-
-    The header is four lines: a title, the event/station/component, ``ACCELERATION TIME SERIES
-    IN UNITS OF G`` (the units: ``G``, ``CM/S2`` or ``M/S2``) and ``NPTS=  5590, DT=   .0050 SEC``
-    (NGA-West2) or ``5590    .0050    NPTS, DT`` (NGA-West1); then the accelerations, any number
-    per line (Fortran fields that touch, ``0.1-0.2``, are split).
+    r"""Read a PEER NGA ``.AT2`` file (NGA-West2 ``NPTS=  5590, DT=   .0050 SEC`` or NGA-West1 ``5590 .0050 NPTS, DT`` header) in m/s2.
 
     Parameters
     ----------
     path : str or path-like
         The ``.AT2`` file.
     units : {"g", "m/s2", "cm/s2"}, optional
-        The file's acceleration units, needed only when its third line does not state them; if
-        both are given they must agree.
+        The file's units where its third line (``... IN UNITS OF G``) does not state them; both must agree.
     option : str, default "units"
-        How ``units`` is spelled in messages (``"--units"``, ``"records.units"``) [-].
+        How ``units`` is spelled in messages (``"--units"``, ``"records.units"``).
     dt : float, optional
         The time step [s] the caller expects; must agree with the header's DT (relative 1e-6).
 
     Returns
     -------
     Record
-        The horizontal accelerations in m/s2, ``dt`` [s] from the header, ``name`` the file stem,
-        ``units_in`` the file's units, ``metadata`` the title and station lines.
-
-    Raises
-    ------
-    ValueError
-        One line naming the file (and the line number): see above.
+        ``dt`` [s] from the header, ``name`` the file stem, ``units_in`` the file's units, ``metadata`` the
+        title and station lines.  ``ValueError`` (file and line number) for a header without NPTS and DT,
+        another sample count, a token that is not a plain decimal number, numbers after a footer line.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
-    .. [2] [ancheta2014] in the bibliography, ``docs/bibliography.md``.
+    ``docs/records.md`` (sections "Units" and "Files"); [ancheta2014]
 
     Examples
     --------
@@ -459,11 +396,11 @@ def read_at2(path, units=None, option="units", dt=None):
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = Path(folder) / "RSN1_TEST.AT2"
-    ...     _ = path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\\n"
-    ...                         "Test event, station, 090\\n"
-    ...                         "ACCELERATION TIME SERIES IN UNITS OF G\\n"
-    ...                         "NPTS=      4, DT=   .0100 SEC\\n"
-    ...                         "  0.1000E+00 -0.2000E+00  0.0000E+00  0.4000E+00\\n")
+    ...     _ = path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\n"
+    ...                         "Test event, station, 090\n"
+    ...                         "ACCELERATION TIME SERIES IN UNITS OF G\n"
+    ...                         "NPTS=      4, DT=   .0100 SEC\n"
+    ...                         "  0.1000E+00 -0.2000E+00  0.0000E+00  0.4000E+00\n")
     ...     record = read_at2(path)
     >>> record.name, record.dt, record.units_in, record.acceleration.round(6).tolist()   # g -> m/s2
     ('RSN1_TEST', 0.01, 'g', [0.980665, -1.96133, 0.0, 3.92266])
@@ -548,50 +485,30 @@ def _time_step(path, t, dt):
 
 
 def read_text_record(path, dt=None, units=None, option="units"):
-    """Read a text or CSV record (see the module docstring for the layouts).
+    r"""Read a text or CSV record: time and horizontal (and vertical) acceleration columns, or accelerations only.
 
     Parameters
     ----------
     path : str or bytes or path-like
-        The text or CSV file.
+        The file: two columns time [s] and acceleration, three with the vertical one (uniform time step
+        within 1e-3), or one column (or four and more numbers a line, read row by row) of accelerations.
     dt : float, optional
-        The time step [s]: required for accelerations without a time column, checked against the
-        time column otherwise.
+        The time step [s]: required without a time column, checked against it otherwise.
     units : {"g", "m/s2", "cm/s2"}, optional
-        The acceleration units: required unless a header line states them, and must agree with it.
+        Required unless a header line or the column titles state them (module docstring).
     option : str, default "units"
-        How the caller's ``units`` is spelled in messages (``"--units"``, ``"records.units"``) [-].
-
-    Notes
-    -----
-    Units are never guessed: an AT2 file states them on its third line (``... IN UNITS OF G``);
-    a text record states them in a header or comment line before the data (``units: g``,
-    ``units = cm/s2``) or in its column titles (``time [s], acc [g]``, ``t (s); a (cm/s2)``);
-    otherwise the caller declares them with ``units`` (``--units`` on the command line,
-    ``[records] units`` in a study).  A record whose units are stated nowhere is refused; units
-    given and units stated must agree.
-
-    Two columns are time [s] and the horizontal acceleration, three columns time, horizontal and
-    vertical acceleration (the time step from the time column, uniform within 1e-3 of it); one
-    column, or four and more numbers per line read row by row, are accelerations only and need
-    ``dt``.
+        How the caller's ``units`` is spelled in messages.
 
     Returns
     -------
     Record
-        The accelerations in m/s2 (``vertical`` from a third column, else None), ``dt`` [s],
-        ``name`` the file stem, ``units_in`` the units read or given.
-
-    Raises
-    ------
-    ValueError
-        One line naming the file (and the line number): units stated nowhere or disagreeing, a
-        time step missing or not uniform, a row that is not plain decimal numbers.
+        In m/s2 (``vertical`` from a third column, else None), ``dt`` [s], ``name`` the file stem,
+        ``units_in``; ``ValueError`` (file and line) for units stated nowhere or disagreeing, a time step
+        missing or not uniform, a row that is not plain decimal numbers.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -599,7 +516,7 @@ def read_text_record(path, dt=None, units=None, option="units"):
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = Path(folder) / "station.csv"
-    ...     _ = path.write_text("time [s], acc [cm/s2]\\n0.00, 10\\n0.02, -20\\n0.04, 5\\n")
+    ...     _ = path.write_text("time [s], acc [cm/s2]\n0.00, 10\n0.02, -20\n0.04, 5\n")
     ...     record = read_text_record(path)                      # units from the column titles
     >>> record.dt, record.units_in, record.acceleration.tolist()
     (0.02, 'cm/s2', [0.1, -0.2, 0.05])
@@ -637,32 +554,24 @@ def _text_record(path, dt, units, option):
 
 
 def read_two_column(path, units=None):
-    """Read time [s] and acceleration columns (blank, tab, comma or semicolon separated).
-
-    The time step must be uniform; the record starts at the first time given (shifted to 0).
+    r"""Read time [s] and acceleration columns; the record starts at the first time (shifted to 0).
 
     Parameters
     ----------
     path : str or path-like
-        The file: two numbers per data line, time [s] and acceleration.
+        Two numbers a data line, uniform time step.
     units : {"g", "m/s2", "cm/s2"}, optional
-        The acceleration units, required unless the file states them (``units: g`` or a column
-        title ``acc [g]`` before the data); if both are given they must agree.
+        Required unless the file states them.
 
     Returns
     -------
     Record
-        The accelerations in m/s2, ``dt`` [s] from the time column.
-
-    Raises
-    ------
-    ValueError
-        Not two columns, units stated nowhere or disagreeing, a non-uniform time step.
+        In m/s2, ``dt`` [s] from the time column; ``ValueError`` for other columns, units stated nowhere or
+        a non-uniform time step.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -670,7 +579,7 @@ def read_two_column(path, units=None):
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = Path(folder) / "a.txt"
-    ...     _ = path.write_text("1.00 0.1\\n1.01 0.2\\n1.02 -0.1\\n")
+    ...     _ = path.write_text("1.00 0.1\n1.01 0.2\n1.02 -0.1\n")
     ...     record = read_two_column(path, units="g")
     >>> round(record.dt, 12), record.pga                           # PGA [m/s2] = 0.2 g
     (0.01, 1.96133)
@@ -682,32 +591,25 @@ def read_two_column(path, units=None):
 
 
 def read_single_column(path, dt, units=None):
-    """Read accelerations only (one or more per line) with the time step ``dt`` [s] given.
+    r"""Read accelerations only (one or more a line, row by row) with the time step ``dt`` [s] given.
 
     Parameters
     ----------
     path : str or path-like
-        The file: accelerations only, one per line, or several per line read row by row.
+        The file.
     dt : float
-        The time step [s], in ``[MIN_RECORD_DT, MAX_RECORD_DT]`` of :mod:`screening.core.limits`.
+        The time step [s] (:func:`check_time_step`).
     units : {"g", "m/s2", "cm/s2"}, optional
-        The acceleration units, required unless a header line before the data states them
-        (``units: g``); if both are given they must agree.
+        Required unless a header line states them.
 
     Returns
     -------
     Record
-        The accelerations in m/s2 with the time step ``dt`` [s].
-
-    Raises
-    ------
-    ValueError
-        ``dt`` missing, a time column found (two or three columns), units stated nowhere.
+        In m/s2; ``ValueError`` for ``dt`` missing, a time column found, units stated nowhere.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -715,7 +617,7 @@ def read_single_column(path, dt, units=None):
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = Path(folder) / "a.txt"
-    ...     _ = path.write_text("# units = m/s2\\n0.1 0.2 0.3 0.4\\n0.5 0.6\\n")
+    ...     _ = path.write_text("# units = m/s2\n0.1 0.2 0.3 0.4\n0.5 0.6\n")
     ...     record = read_single_column(path, dt=0.005)
     >>> record.acceleration.size, record.duration                  # six samples: 5 x 0.005 s
     (6, 0.025)
@@ -729,44 +631,27 @@ def read_single_column(path, dt, units=None):
 
 
 def read_record(path, dt=None, units=None, option="units"):
-    """Read a record in any supported format (see the module docstring).
-
-    ``.at2`` files are PEER NGA (units from the header, or ``units`` when the header has none);
-    otherwise text or CSV (:func:`read_text_record`): units from ``units`` or a header line (a
-    record without stated units is refused, naming ``option``), a time column gives the time
-    step, accelerations alone need ``dt`` [s].
+    r"""Read a record in any supported format: ``.at2`` (any case) by :func:`read_at2`, else :func:`read_text_record`.
 
     Parameters
     ----------
     path : str or bytes or path-like
-        The record file (``.at2``, any case, is read as AT2).
+        The record file.
     dt : float, optional
-        The time step [s]: required for accelerations without a time column, checked against
-        the time column or the AT2 header otherwise.
+        The time step [s]: required without a time column, checked against it or the AT2 header otherwise.
     units : {"g", "m/s2", "cm/s2"}, optional
-        The acceleration units, needed when the file does not state them.
+        Needed where the file does not state them (module docstring).
     option : str, default "units"
-        How ``units`` is spelled in messages (``"--units"``, ``"records.units"``) [-].
+        How ``units`` is spelled in messages (``"--units"``, ``"records.units"``).
 
     Returns
     -------
     Record
-        The accelerations in m/s2 and the time step [s].
-
-    Notes
-    -----
-    Units are never guessed: an AT2 file states them on its third line (``... IN UNITS OF G``);
-    a text record states them in a header or comment line before the data (``units: g``,
-    ``units = cm/s2``) or in its column titles (``time [s], acc [g]``, ``t (s); a (cm/s2)``);
-    otherwise the caller declares them with ``units`` (``--units`` on the command line,
-    ``[records] units`` in a study).  A record whose units are stated nowhere is refused; units
-    given and units stated must agree.
+        The accelerations [m/s2] and the time step [s].
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
-    .. [2] [ancheta2014] in the bibliography, ``docs/bibliography.md``.
+    ``docs/records.md`` (sections "Units" and "Files"); [ancheta2014]
 
     Examples
     --------
@@ -774,7 +659,7 @@ def read_record(path, dt=None, units=None, option="units"):
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = Path(folder) / "a.dat"
-    ...     _ = path.write_text("0.1\\n-0.3\\n0.2\\n")
+    ...     _ = path.write_text("0.1\n-0.3\n0.2\n")
     ...     try:
     ...         read_record(path, dt=0.01, option="--units")       # units stated nowhere: refused
     ...     except ValueError as exc:
@@ -790,30 +675,23 @@ def read_record(path, dt=None, units=None, option="units"):
 
 
 def expand_records(spec, root="."):
-    """Files of a record list: a folder (every ``.at2``/``.csv``/``.txt``/``.dat`` in it), a glob or
-    a list of these, relative to ``root``; sorted, duplicates dropped.
+    """Files of a record list, sorted within each item, in item order, each once.
 
     Parameters
     ----------
     spec : str or path-like or list of them
-        A folder, a file, a glob pattern (``"records/*.AT2"``) or a list of these.
+        A folder (every ``.at2``/``.csv``/``.txt``/``.dat`` in it), a file, a glob (``"records/*.AT2"``) or a list.
     root : str or path-like, default "."
-        The folder relative paths are taken from (the study file's folder).
+        The folder relative paths are taken from (the study file's).
 
     Returns
     -------
     list of str
-        The files, sorted within each item, in the order of the items, each file once.
-
-    Raises
-    ------
-    ValueError
-        An item that matches no file.
+        The files; ``ValueError`` for an item that matches no file.
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
+    ``docs/records.md`` (sections "Units" and "Files")
 
     Examples
     --------
@@ -848,21 +726,16 @@ def expand_records(spec, root="."):
 
 
 def write_at2(path, record, title="screening synthetic record", station="synthetic"):
-    """Write ``record`` as a PEER NGA-West2 style ``.AT2`` file in g (5 values per line).
-
-    :func:`read_at2` reads it back (to the 8 significant digits written).
+    """Write ``record`` as a PEER NGA-West2 style ``.AT2`` file in g, 5 values a line (8 significant digits), atomically.
 
     Parameters
     ----------
     path : str or path-like
-        The file to write [-]; an existing file is replaced atomically (a reader never sees half a
-        record, and a failed write leaves the old file as it was).
+        The file to write; an existing one is replaced whole or not at all.
     record : Record
-        The record; its accelerations [m/s2] are written in g (:data:`STANDARD_GRAVITY`).
-    title : str, default "screening synthetic record"
-        Header line 2, first part [-].
-    station : str, default "synthetic"
-        Header line 2, second part [-].
+        Its accelerations [m/s2] are written in g (:data:`STANDARD_GRAVITY`).
+    title, station : str
+        Header line 2.
 
     Returns
     -------
@@ -870,9 +743,7 @@ def write_at2(path, record, title="screening synthetic record", station="synthet
 
     References
     ----------
-    .. [1] screening documentation, "Records, intensity measures and cloud analysis",
-       docs/records.md (sections "Units" and "Files").
-    .. [2] [ancheta2014] in the bibliography, ``docs/bibliography.md``.
+    ``docs/records.md`` (sections "Units" and "Files"); [ancheta2014]
 
     Examples
     --------

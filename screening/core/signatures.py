@@ -1,10 +1,7 @@
-"""Numba types of the functions a condensation hands to the compiled solvers, and the records
-(:class:`SdofKernel`, :class:`MomentKernel`) that carry them.
+"""Numba types of the functions a condensation hands to the compiled solvers, and the records that carry them.
 
-A condensation's compiled functions take its own parameter record (a numpy structured dtype,
-one record per parameter point) and are passed to the solvers as first-class functions with
-these explicit signatures, so the solvers are compiled once per record type and cached (a
-closure or a dispatcher argument would never hit numba's cache).
+The functions take the condensation's own structured parameter record and are passed as first-class
+functions with explicit signatures, so the solvers compile once per record type and hit numba's cache.
 """
 
 from __future__ import annotations
@@ -28,75 +25,22 @@ TABLE = types.float64[:, ::1]   # per-interval cubic coefficients (screening.cor
 
 
 def record_type(dtype):
-    """The numba type of one record of a structured dtype.
-
-    Parameters
-    ----------
-    dtype : numpy.dtype
-        A structured dtype of float fields (a condensation's parameters, each in SI units).
-
-    Returns
-    -------
-    numba.types.Record
-        The record type numba compiles against.
-
-    """
+    """The numba record type of a structured dtype of float fields [SI]."""
     return numba.from_dtype(dtype)
 
 
 def moment_coefficients_signature(dtype):
-    """The signature of a condensation's compiled equivalent-coefficient function.
-
-    ``(record, table, var_theta [rad2], cov [rad2/s]) -> (c_eq [N m s/rad], k_eq [N m/rad])``.
-
-    Parameters
-    ----------
-    dtype : numpy.dtype
-        The condensation's parameter record dtype.
-
-    Returns
-    -------
-    numba.core.typing.templates.Signature
-        The explicit signature; the table is a C-contiguous 2-d float64 array of per-interval
-        cubic coefficients.
-
-    """
+    """Signature ``(record, table, var_theta [rad2], cov [rad2/s]) -> (c_eq [N m s/rad], k_eq [N m/rad])`` of a condensation's compiled coefficients (table: C-contiguous 2-d float64)."""
     return types.UniTuple(FLOAT, 2)(record_type(dtype), TABLE, FLOAT, FLOAT)
 
 
 def sdof_coefficients_signature(dtype):
-    """The signature of a condensation's compiled state-dependent damping and stiffness.
-
-    ``(record, theta [rad]) -> (C(theta) [N m s/rad], K(theta) [N m/rad])``.
-
-    Parameters
-    ----------
-    dtype : numpy.dtype
-        The condensation's parameter record dtype.
-
-    Returns
-    -------
-    numba.core.typing.templates.Signature
-        The explicit signature.
-
-    """
+    """Signature ``(record, theta [rad]) -> (C(theta) [N m s/rad], K(theta) [N m/rad])`` of a condensation's compiled damping and stiffness."""
     return types.UniTuple(FLOAT, 2)(record_type(dtype), FLOAT)
 
 
 def function_type(signature):
-    """The first-class function type of a compiled function with a given signature.
-
-    Parameters
-    ----------
-    signature : numba.core.typing.templates.Signature
-        E.g. :func:`sdof_coefficients_signature` of a record dtype.
-
-    Returns
-    -------
-    numba.types.FunctionType
-        The type a solver declares for its function argument.
-
-    """
+    """The first-class function type a solver declares for a compiled function of ``signature``."""
     return types.FunctionType(signature)
 
 

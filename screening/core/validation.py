@@ -26,37 +26,26 @@ def _shown(value):
 
 def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=None,
                      upper_inclusive=False, range_text=None):
-    """Return ``value`` as a float array after checking it is finite and inside the range.
-
-    Raises ``ValueError`` naming ``name`` and the allowed range for strings, NaN/inf and
-    out-of-range values (any element of an array).
+    """``value`` as a float array (0-d for a scalar, unit unchanged) after checking it is finite and in range.
 
     Parameters
     ----------
     name : str
-        The parameter's name, as the user wrote it (it opens the message) [-].
+        The parameter's name as the user wrote it; it opens the message.
     value : float or array_like
-        The value, in the parameter's own SI unit; booleans, strings, bytes, dates, durations and
-        complex values are refused.
+        The value [its SI unit]; booleans, strings, bytes, dates, durations and complex values are refused.
     lower, upper : float, optional
-        The bounds, in the unit of ``value``; None: unbounded.
+        The bounds [unit of ``value``]; None: unbounded.
     lower_inclusive, upper_inclusive : bool, default False
         Whether a bound itself is allowed.
     range_text : str, optional
-        The allowed range in words for the message (default: built from the bounds, e.g.
-        ``"a finite number > 0"``).
+        The allowed range in words (default from the bounds, e.g. ``"a finite number > 0"``).
 
     Returns
     -------
     numpy.ndarray
-        ``value`` as a float array (0-d for a scalar), unit unchanged.
-
-    Raises
-    ------
-    ValueError
-        ``"parameter '<name>' must be <range> (got <value>)"`` for the first bad element, or for an
-        empty array.
-
+        ``value``; ``ValueError`` ``"parameter '<name>' must be <range> (got <value>)"`` for the first bad
+        element or an empty array.
     """
     if range_text is None:
         parts = []
@@ -85,30 +74,7 @@ def as_checked_array(name, value, *, lower=None, lower_inclusive=False, upper=No
 
 
 def check_scalar(name, value, **bounds):
-    """A finite scalar number in the range of ``bounds`` (as :func:`as_checked_array`) as a float;
-    arrays, booleans, dates and strings are refused with one line naming ``name``.
-
-    Parameters
-    ----------
-    name : str
-        The parameter's name, for the message [-].
-    value : float
-        The value, in the parameter's own SI unit.
-    **bounds
-        ``lower``, ``upper``, ``lower_inclusive``, ``upper_inclusive``, ``range_text`` of
-        :func:`as_checked_array`.
-
-    Returns
-    -------
-    float
-        ``value``, unit unchanged.
-
-    Raises
-    ------
-    ValueError
-        One line naming ``name``: not a number, not finite, out of range, or an array.
-
-    """
+    """A finite scalar in the range of ``bounds`` (of :func:`as_checked_array`) as a float; arrays, booleans, dates and strings are refused with one line naming ``name``."""
     arr = as_checked_array(name, value, **bounds)
     if arr.ndim != 0:
         raise ValueError(f"parameter '{name}' must be a single number (got an array of shape {arr.shape})")
@@ -116,30 +82,7 @@ def check_scalar(name, value, **bounds):
 
 
 def check_integer(name, value, lower, upper=None):
-    """An integer (no float, no boolean) ``>= lower`` (and ``<= upper``) as an ``int``.
-
-    Parameters
-    ----------
-    name : str
-        The parameter's name, for the message [-].
-    value : int
-        The value [-]; a float such as ``3.0`` or a boolean is refused.
-    lower : int
-        The smallest allowed value [-].
-    upper : int, optional
-        The largest allowed value [-]; None: unbounded.
-
-    Returns
-    -------
-    int
-        ``value``.
-
-    Raises
-    ------
-    ValueError
-        ``"parameter '<name>' must be an integer >= <lower>"`` (or ``in <lower>..<upper>``).
-
-    """
+    """An integer (no float, no boolean) ``>= lower`` (and ``<= upper``) as an ``int``, or one ``ValueError`` line naming ``name``."""
     ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
     if not ok or value < lower or (upper is not None and value > upper):
         rng = f">= {lower}" if upper is None else f"in {lower}..{upper}"
@@ -148,64 +91,14 @@ def check_integer(name, value, lower, upper=None):
 
 
 def check_size(name, size, limit, what):
-    """``size`` (a count of array elements about to be allocated) at most ``limit``: ``ValueError``
-    naming the parameter ``name`` that sets it, before anything is allocated.
-
-    Parameters
-    ----------
-    name : str
-        The parameter that sets the size, for the message [-].
-    size : int or float
-        The number of elements asked for [-].
-    limit : int or float
-        The largest allowed number [-].
-    what : str
-        What is counted, in words (``"output steps"``) [-].
-
-    Returns
-    -------
-    None
-        Nothing: the check passes silently.
-
-    Raises
-    ------
-    ValueError
-        ``size > limit`` (or ``size`` is NaN).
-
-    """
+    """``ValueError`` naming the parameter ``name`` that sets ``size`` (elements about to be allocated, ``what`` in words) where it exceeds ``limit`` or is NaN."""
     if not size <= limit:
         raise ValueError(f"parameter '{name}' asks for {size:.3g} {what}; at most {limit:.3g} (a bound on the "
                          f"memory of one call)")
 
 
 def checked(name, value, **kwargs):
-    """Like :func:`as_checked_array` but give back a Python float for scalar input.
-
-    An :class:`xarray.DataArray` is checked on its values and given back as a float DataArray
-    (dims and coordinates kept): the model objects then carry labelled parameters, which
-    :func:`screening.linearize` broadcasts by dimension name.
-
-    Parameters
-    ----------
-    name : str
-        The parameter's name, for the message [-].
-    value : float or array_like or xarray.DataArray
-        The value, in the parameter's own SI unit.
-    **kwargs
-        The bounds of :func:`as_checked_array`.
-
-    Returns
-    -------
-    float or numpy.ndarray or xarray.DataArray
-        A float for a scalar, a float array for an array, a float64 DataArray for a DataArray
-        (unit unchanged).
-
-    Raises
-    ------
-    ValueError
-        As :func:`as_checked_array`.
-
-    """
+    """Like :func:`as_checked_array`, but a float for a scalar and a float64 DataArray (dims, coordinates kept) for a DataArray."""
     if isinstance(value, xr.DataArray):
         as_checked_array(name, value.values, **kwargs)
         return value if value.dtype == np.float64 else value.astype(np.float64)
@@ -225,22 +118,11 @@ class InputFileError(ValueError):
 
 
 def file_problem(path):
-    """Why ``path`` cannot be read as an input file (words that follow the path: ``"does not exist"``,
-    ``"is a folder, not a file"``, ...), or ``None`` if it is a regular file.
+    """Why ``path`` cannot be read as an input file (``"does not exist"``, ``"is a folder, not a file"``, ...), or None for a regular file.
 
-    Tells a missing file from a folder, a FIFO, a device, a socket, a broken link and a link loop
-    (``os.stat`` alone reports most of them as "does not exist" or not at all).
-
-    Parameters
-    ----------
-    path : str or path-like
-        The input file [-].
-
-    Returns
-    -------
-    str or None
-        The problem in words, or None for a regular file.
-
+    Notes
+    -----
+    Tells a missing file from a folder, a FIFO, a device, a socket, a broken link and a link loop.
     """
     try:
         mode = os.stat(path).st_mode
@@ -272,27 +154,7 @@ def _mode_problem(mode):
 
 
 def input_path(path, what="file"):
-    """``path`` as ``str`` (a ``bytes`` path decoded by the file-system encoding); ``ValueError`` for
-    anything else.
-
-    Parameters
-    ----------
-    path : str or bytes or path-like
-        The path [-].
-    what : str, default "file"
-        What the file is, for the message (``"record"``, ``"study file"``) [-].
-
-    Returns
-    -------
-    str
-        The path.
-
-    Raises
-    ------
-    ValueError
-        ``path`` is not a path (a number, None) or contains a NUL character.
-
-    """
+    """``path`` as ``str`` (bytes decoded by the file-system encoding); ``ValueError`` naming ``what`` for a non-path or a NUL character."""
     if isinstance(path, bytes):
         path = os.fsdecode(path)
     if not isinstance(path, (str, os.PathLike)):
@@ -304,31 +166,13 @@ def input_path(path, what="file"):
 
 
 def read_input_bytes(path, what, max_bytes):
-    """The bytes of the regular file ``path`` (at most ``max_bytes``), checked before anything is read.
+    """The bytes of the regular file ``path``, at most ``max_bytes``, checked before anything is read.
 
-    ``ValueError`` with one line (``"<what> <path>: <problem>"``) for a missing file, a folder, a FIFO,
-    a device, a link loop or a file larger than ``max_bytes``.  The file is opened without blocking
-    (a FIFO never hangs) and read with a bound, so a file that grows while it is read is refused too.
-
-    Parameters
-    ----------
-    path : str or bytes or path-like
-        The input file [-].
-    what : str
-        What the file is, for the message (``"record"``) [-].
-    max_bytes : int
-        The largest file accepted [bytes].
-
-    Returns
-    -------
-    bytes
-        The file's content.
-
-    Raises
-    ------
-    InputFileError
-        (a ``ValueError``) ``"<what> <path> <problem>"``, the problem also as ``.problem``.
-
+    Notes
+    -----
+    :class:`InputFileError` (a ``ValueError``) ``"<what> <path> <problem>"`` for a missing file, a folder, a
+    FIFO, a device, a link loop or a larger file.  Opened without blocking and read with a bound, so a file
+    that grows while it is read is refused too.
     """
     path = input_path(path, what)
     problem = file_problem(path)
@@ -354,28 +198,7 @@ def read_input_bytes(path, what, max_bytes):
 
 
 def read_input_text(path, what, max_bytes):
-    """:func:`read_input_bytes` decoded as UTF-8 (a leading byte-order mark is dropped).
-
-    Parameters
-    ----------
-    path : str or bytes or path-like
-        The input file [-].
-    what : str
-        What the file is, for the message [-].
-    max_bytes : int
-        The largest file accepted [bytes].
-
-    Returns
-    -------
-    str
-        The text.
-
-    Raises
-    ------
-    InputFileError
-        As :func:`read_input_bytes`, or ``"is not UTF-8 text (byte <n>)"``.
-
-    """
+    """:func:`read_input_bytes` decoded as UTF-8 (a byte-order mark dropped); ``"is not UTF-8 text (byte <n>)"`` otherwise."""
     data = read_input_bytes(path, what, max_bytes)
     try:
         return data.decode("utf-8-sig")

@@ -48,21 +48,8 @@ def report_objects(ds, frags, rows=None):
     """The objects of a collection, ranked: by annual frequency of their first limit state with ``rows``
     (:func:`~screening.applications.risk.risk_table`), else by median capacity (lowest first).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The sweep result.
-    frags : list of xarray.Dataset
-        :func:`~screening.applications.risk.limit_state_fragilities` of the result.
-    rows : list of dict, optional
-        The risk rows of every fragility at the site.
-
-    Returns
-    -------
-    list of dict
-        ``name``, ``labels`` (``{dim: value}`` of the curve), ``curves`` (``[(frag, state, curve row)]``),
-        ``risk`` (``{state: row}``), ``values`` (``{name: (value, units)}``), in rank order.
-
+    Returns: ``name``, ``labels`` (``{dim: value}`` of the curve), ``curves`` (``[(frag, state, curve
+    row)]``), ``risk`` (``{state: row}``), ``values`` (``{name: (value, units)}``), in rank order.
     """
     objects = {}
     per_case = case_values(ds)[1] if "case" in ds.dims else {}
@@ -229,28 +216,7 @@ def _ranking(objects, years, with_risk):
 def write_report(ds, path, source="", curve=None, years=50.0, frags=(), hazard_path="hazard"):
     """Write the collection's report as one self-contained HTML page.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The sweep result (loaded).
-    path : str or os.PathLike
-        The HTML file (written atomically).
-    source : str
-        The result's name, shown at the top.
-    curve : screening.applications.risk.HazardCurve, optional
-        The site's hazard: the ranking by annual frequency (else by median capacity).
-    years : float
-        Time span [yr] of the probabilities.
-    frags : sequence of xarray.Dataset
-        :func:`~screening.applications.risk.limit_state_fragilities` of the result.
-    hazard_path : str
-        The hazard file, named in error lines.
-
-    Returns
-    -------
-    list of dict
-        :func:`report_objects`, in rank order.
-
+    Returns: :func:`report_objects`, in rank order.
     """
     rows = [r for frag in frags for r in risk_table(frag, curve, years, hazard_path)] if curve is not None else None
     objects = report_objects(ds, list(frags), rows)

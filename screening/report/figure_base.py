@@ -38,22 +38,8 @@ FLAGGED_COLOR, UNTRUSTED_COLOR = "0.55", "C3"
 def point_flags(ds, index=None, order=None):
     """The flagged and the untrusted points over the grid (or its slice ``index``).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result with ``status`` (and optionally ``sl_trust``) on the grid.
-    index : dict of str to int, optional
-        A slice of the grid (``ds.isel(index)``).
-    order : sequence of str, optional
-        The order of the dimensions of the arrays returned.
-
-    Returns
-    -------
-    flagged : numpy.ndarray of bool
-        Status not ``ok``.
-    untrusted : numpy.ndarray of bool
-        Status ``ok`` but the linearization ``untrusted`` (all False without ``sl_trust``).
-
+    Returns ``(flagged, untrusted)``: ``flagged`` status not ``ok``; ``untrusted`` status ``ok`` but the
+    linearization ``untrusted`` (all False without ``sl_trust``).
     """
     def values(name):
         da = ds[name].isel(index) if index else ds[name]
@@ -68,17 +54,8 @@ def point_flags(ds, index=None, order=None):
 def flag_summary(ds):
     """The counts of the status and trust codes over the whole grid, in one line.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result with ``status`` (and optionally ``sl_trust``).
-
-    Returns
-    -------
-    str
-        E.g. ``"status: ok 95, k_eq_negative 5; linearization vs coupled model: trusted 3, check 29,
-        untrusted 63"`` (trust: "not stored" for files without ``sl_trust``).
-
+    Returns: e.g. ``"status: ok 95, k_eq_negative 5; linearization vs coupled model: trusted 3, check 29,
+    untrusted 63"`` (trust: "not stored" for files without ``sl_trust``).
     """
     codes, counts = np.unique(np.asarray(ds["status"].values), return_counts=True)
     names = {int(m): m.name for m in PointStatus}
@@ -94,18 +71,7 @@ def flag_summary(ds):
 def point_flag_text(ds, index):
     """The flag of one grid point as text: `` [flagged: <status>]``, `` [linearization <trust>]`` or ``""``.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result with ``status`` (and optionally ``sl_trust``).
-    index : dict of str to int
-        The grid point.
-
-    Returns
-    -------
-    str
-        The text, with a leading space when not empty.
-
+    Returns: the text, with a leading space when not empty.
     """
     code = int(np.asarray(ds["status"].isel(index).values))
     if code != PointStatus.ok:
@@ -119,25 +85,8 @@ def point_flag_text(ds, index):
 def response_values(ds, da, kind, index=None):
     """The rotation response as drawn, with its axis label.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The result (its ``slenderness`` [rad] for ``kind="fraction"``).
-    da : xarray.DataArray
-        A ``var_theta`` [rad2], already sliced at ``index``.
-    kind : {"var", "sigma", "fraction"}
-        The variance [rad2], ``sigma_theta`` [rad] or ``sigma_theta / atan(b/h)`` [1]
-        (:data:`RESPONSES`); ``ValueError`` otherwise.
-    index : dict of str to int, optional
-        The slice of the grid ``da`` was taken at (the slenderness is sliced alike).
-
-    Returns
-    -------
-    values : xarray.DataArray
-        The response; NaN where the variance is negative.
-    label : str
-        Its axis label with units.
-
+    Returns ``(values, label)``: ``values`` the response; NaN where the variance is negative; ``label`` its
+    axis label with units.
     """
     if kind == "var":
         return da, "var_theta [rad2]"
@@ -154,24 +103,7 @@ def response_values(ds, da, kind, index=None):
 
 
 def flag_legend(fig, ds, flagged, untrusted, curves=False):
-    """Add the figure legend of the marks of flagged and untrusted points, with their counts.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure (constrained layout: the legend goes below the axes).
-    ds : xarray.Dataset
-        The result drawn (unused by the legend itself; kept for a uniform call).
-    flagged, untrusted : array_like of bool
-        The marks (:func:`point_flags`); their counts [-] are shown.
-    curves : bool
-        Markers (line plots) rather than hatched patches (maps).
-
-    Returns
-    -------
-    None
-
-    """
+    """Add the figure legend of the marks of flagged and untrusted points, with their counts."""
     if curves:
         handles = [Line2D([], [], ls="", marker="x", color=FLAGGED_COLOR, label=f"flagged (status != ok, not a value): "
                                                                                  f"{int(np.sum(flagged))}"),
@@ -188,16 +120,7 @@ def flag_legend(fig, ds, flagged, untrusted, curves=False):
 def grid_dims(ds):
     """The grid dimensions of a result (the dimensions of ``status``).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result with ``status``.
-
-    Returns
-    -------
-    tuple of str
-        The dimension names.
-
+    Returns: the dimension names.
     """
     return tuple(ds["status"].dims)
 
@@ -205,18 +128,7 @@ def grid_dims(ds):
 def grid_values(ds, dim):
     """Coordinate values of grid dimension ``dim`` (``k`` lives in ``k_value``; cases: index).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result.
-    dim : str
-        A grid dimension.
-
-    Returns
-    -------
-    numpy.ndarray
-        Its values in SI units (e.g. ``S0`` [m2 s-3]).
-
+    Returns: its values in SI units (e.g. ``S0`` [m2 s-3]).
     """
     name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
     return np.asarray(ds[name].values)
@@ -225,18 +137,7 @@ def grid_values(ds, dim):
 def grid_units(ds, dim):
     """The CF units of grid dimension ``dim`` (``k`` lives in ``k_value``).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result.
-    dim : str
-        A grid dimension.
-
-    Returns
-    -------
-    str
-        Its ``units`` attribute (e.g. ``"m2 s-3"`` for ``S0``); ``""`` when it has none.
-
+    Returns: its ``units`` attribute (e.g. ``"m2 s-3"`` for ``S0``); ``""`` when it has none.
     """
     name = f"{dim}_value" if f"{dim}_value" in ds.variables else dim
     return ds[name].attrs.get("units", "")
@@ -245,18 +146,7 @@ def grid_units(ds, dim):
 def spot_index(ds, i):
     """The grid index of Monte Carlo spot point ``i`` (the grid point nearest its ``spot_<dim>`` values).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result with spot checks.
-    i : int
-        The spot point.
-
-    Returns
-    -------
-    dict of str to int
-        ``{dim: position}``.
-
+    Returns: ``{dim: position}``.
     """
     index = {}
     for dim in grid_dims(ds):
@@ -270,16 +160,7 @@ def spot_index(ds, i):
 def is_log_spaced(values):
     """Whether a grid axis is better drawn on a log scale: more than two positive values spanning > 50 x.
 
-    Parameters
-    ----------
-    values : array_like
-        The axis values (any units).
-
-    Returns
-    -------
-    bool
-        True for a log axis.
-
+    Returns: True for a log axis.
     """
     values = np.asarray(values, dtype=float)
     return values.size > 2 and np.all(values > 0) and values.max() / values.min() > 50
@@ -288,18 +169,7 @@ def is_log_spaced(values):
 def point_label(ds, index):
     """A grid point as text: ``"eps=6e+07, S0=2.4e-05"`` (or the case name).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result.
-    index : dict of str to int
-        The grid point.
-
-    Returns
-    -------
-    str
-        The label (values in SI units, 3 significant digits); ``"single point"`` for an empty index.
-
+    Returns: the label (values in SI units, 3 significant digits); ``"single point"`` for an empty index.
     """
     parts = []
     for dim, i in index.items():
@@ -315,16 +185,7 @@ def point_label(ds, index):
 def new_figure(width, height):
     """A matplotlib figure with constrained layout and an Agg canvas (no pyplot, no display).
 
-    Parameters
-    ----------
-    width, height : float
-        Size [inch].
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure, at :data:`DPI` dots per inch.
-
+    Returns: the figure, at :data:`DPI` dots per inch.
     """
     fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
@@ -336,18 +197,7 @@ def save_figure(fig, path):
 
     A failing write (disk full, permission) leaves no partial file behind and raises the ``OSError``.
 
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure.
-    path : str or os.PathLike
-        The PNG file.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
+    Returns: ``path``.
     """
     with atomic_open(path, "wb") as fh:                 # never through a planted link
         fig.savefig(fh, format="png")
@@ -357,18 +207,7 @@ def save_figure(fig, path):
 def axis_label(ds, name):
     """The axis label of a variable: ``"name [units]"``, or its name when it has no units.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result.
-    name : str
-        A variable or coordinate.
-
-    Returns
-    -------
-    str
-        The label.
-
+    Returns: the label.
     """
     units = ds[name].attrs.get("units")
     return f"{name} [{units}]" if units else name

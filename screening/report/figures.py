@@ -1,15 +1,8 @@
 """PNG figures of a sweep result (matplotlib, object API with the Agg canvas: no pyplot state).
 
-* :func:`plot_histories` — ``var_theta``, ``var_theta_dot``, ``c_eq``, ``k_eq``, ``p_uplift``
-  against time for a few representative points (:func:`representative_points`);
-* :func:`plot_peaks` — ``peak_var_theta``, ``peak_p_uplift``, ``min_k_eq`` and ``status`` over the
-  grid: maps over the first two grid dimensions (further dimensions at their middle index),
-  curves for a one-dimensional grid;
-* :func:`plot_result` — these and the spot-check figures (:mod:`screening.report.spot_figures`)
-  for a result file, next to it or in ``out_dir`` (the rotation drawn as ``response``).
-
-Flagged and untrusted points are marked as :mod:`screening.report.figure_base` describes.  Only
-the slices that are drawn are read from the file.
+:func:`plot_histories` (moments against time at representative points), :func:`plot_peaks` (peaks and
+status over the grid) and :func:`plot_result` (these and the spot-check figures of a result file).
+Flagged and untrusted points are marked (:mod:`screening.report.figure_base`); only the slices drawn are read.
 """
 
 from __future__ import annotations
@@ -40,18 +33,7 @@ def representative_points(ds, n=4):
     The status-ok points with the smallest, median and largest ``peak_var_theta`` [rad2] and the
     largest ``peak_p_uplift`` [1] (any points if none is ok), without repeats.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A linearization or sweep result.
-    n : int
-        At most this many points.
-
-    Returns
-    -------
-    list of dict
-        Grid index dicts ``{dim: position}``.
-
+    Returns: grid index dicts ``{dim: position}``.
     """
     dims = grid_dims(ds)
     shape = ds["status"].shape
@@ -80,26 +62,11 @@ def plot_histories(ds, path, points=None, response="var"):
     [N m s rad-1], ``k_eq`` [N m rad-1] and ``p_uplift`` [1] against ``t`` [s].  A flagged point is
     drawn grey and dotted up to where it stopped, an untrusted one dashed; both say so in the legend.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result storing the histories.
-    path : str or os.PathLike
-        The PNG file (written atomically).
-    points : list of dict, optional
-        Grid index dicts; default :func:`representative_points`.
-    response : {"var", "sigma", "fraction"}
-        How the rotation is drawn (:data:`~screening.report.figure_base.RESPONSES`).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
+    Returns: ``path``.
 
     Notes
     -----
     The moments are those of the Lyapunov equation of the linearized system, eq. (45) in [1].
-
     """
     points = representative_points(ds) if points is None else points
     fig = new_figure(8.0, 11.0)
@@ -165,20 +132,7 @@ def plot_peaks(ds, path, response="var"):
     The rotation is drawn as ``response``; flagged points are masked and hatched grey, untrusted ones
     hatched red (maps) or drawn hollow (curves); the status colours are named.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A linearization or sweep result (``peak_var_theta`` [rad2], ``peak_p_uplift`` [1], ...).
-    path : str or os.PathLike
-        The PNG file (written atomically).
-    response : {"var", "sigma", "fraction"}
-        How the rotation is drawn.
-
-    Returns
-    -------
-    pathlib.Path or None
-        ``path``; ``None`` (nothing written) for a single-point result.
-
+    Returns: ``path``; ``None`` (nothing written) for a single-point result.
     """
     dims = grid_dims(ds)
     if not dims:
@@ -320,22 +274,7 @@ def plot_result(ds, stem, out_dir, response="var"):
     created are removed before the error propagates.  Figures of histories the result does not store
     (``[output]`` of the study) are not drawn.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A linearization or sweep result.
-    stem : str
-        The file-name stem.
-    out_dir : str or os.PathLike
-        The folder.
-    response : {"var", "sigma", "fraction"}
-        How the rotation is drawn; ``ValueError`` otherwise.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files written.
-
+    Returns: the files written.
     """
     out_dir = Path(out_dir)
     if response not in RESPONSES:

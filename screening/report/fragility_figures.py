@@ -31,24 +31,7 @@ def plot_fragility(frag, dim, path, max_curves=8, flags=None):
     or more gets one panel per case (its name as the title, shared axes; the first panel's legend
     explains the marks, the others name their fits), so that 15 or 50 objects stay readable.
 
-    Parameters
-    ----------
-    frag : xarray.Dataset
-        A fragility dataset (``p_exceed`` [1], ``fit_median`` in the units of ``dim``, ``beta`` [1]).
-    dim : str
-        The swept intensity (e.g. ``S0`` [m2 s-3]).
-    path : str or os.PathLike
-        The PNG file (written atomically).
-    max_curves : int
-        At most this many curves.
-    flags : xarray.Dataset, optional
-        The result's ``status`` (and ``sl_trust``) on the same grid: flagged points are crossed grey,
-        untrusted ones drawn hollow, counted in the legend.
-
-    Returns
-    -------
-    pathlib.Path or None
-        ``path``; ``None`` if ``dim`` is not a dimension of ``p_exceed``.
+    Returns: ``path``; ``None`` if ``dim`` is not a dimension of ``p_exceed``.
 
     Notes
     -----

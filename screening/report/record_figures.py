@@ -21,19 +21,7 @@ def plot_simulation(ds, path):
     """A simulation as a PNG: ground acceleration, ``theta / slenderness`` (with ``+-theta_ul``), ``z_cb``
     and the contact regime.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A :func:`screening.simulate` result (``t`` [s], ``ground_acceleration`` [m s-2], ``theta`` [rad],
-        ``z_cb`` [m], the regime; the coupled model's or the condensed one's).
-    path : str or os.PathLike
-        The PNG file (written atomically).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
+    Returns: ``path``.
     """
     fig = new_figure(8.0, 8.5)
     ax = fig.subplots(4, 1, sharex=True)
@@ -68,21 +56,7 @@ def plot_excitation_fit(record, fit, path):
     The record's Husid curve against the fitted envelope's, and its smoothed periodogram against the
     fitted spectrum.
 
-    Parameters
-    ----------
-    record : screening.core.records.Record
-        The record (acceleration [m s-2], time step [s]).
-    fit : dict
-        Its :func:`~screening.applications.fit_excitation.fit_excitation` result (``T1``, ``T2`` [s],
-        ``S0`` [m2 s-3], ...).
-    path : str or os.PathLike
-        The PNG file (written atomically).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
+    Returns: ``path``.
     """
     a = record.acceleration - record.acceleration.mean()
     t = np.arange(a.size) * record.dt
@@ -119,26 +93,12 @@ def plot_stripes(ds, path):
     """A multiple-stripe result as a PNG: the fraction of records exceeding at each level (+-2 binomial
     standard errors) and the fitted lognormal curve.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A :func:`screening.applications.cloud.stripe_dataset` result: on ``level`` (the stripes' intensities),
-        ``n_used`` and ``n_exceed`` [1] and the intensity variable named by ``attrs["intensity_variable"]``
-        (with its ``units``); ``fit_median``, ``fit_median_se`` [units of the intensity], ``beta``,
-        ``beta_se`` [1].
-    path : str or os.PathLike
-        The PNG file (written atomically).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
+    Returns: ``path``.
 
     Notes
     -----
     The curve is ``P(exceed | im) = Phi(ln(im / median) / beta)``, fitted by binomial maximum
     likelihood over the stripes [1]_.
-
     """
     x = ds["level"].values
     n, k = ds["n_used"].values, ds["n_exceed"].values
@@ -167,26 +127,12 @@ def plot_cloud(ds, path):
     """A cloud result as a PNG: the cloud (peak ``|theta|`` / slenderness against the intensity measure)
     and the fitted lognormal fragility curve.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A :func:`screening.applications.cloud.cloud_dataset` result: on ``record``, the intensity named by
-        ``attrs["intensity_variable"]`` (with its ``units``), ``peak_abs_theta`` [rad], ``overturned``
-        and ``exceed`` [bool]; ``slenderness`` and ``threshold_rad`` [rad], ``fit_median`` [units of
-        the intensity, in its ``units`` attribute] and ``beta`` [1].
-    path : str or os.PathLike
-        The PNG file (written atomically).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
+    Returns: ``path``.
 
     Notes
     -----
     The curve is ``P(exceed | im) = Phi(ln(im / median) / beta)``, fitted by maximum likelihood on the
     exceed / not-exceed outcome of each record [1]_.
-
     """
     name = ds.attrs["intensity_variable"]
     x = ds[name].values

@@ -15,22 +15,7 @@ def plot_risk(rows, path, title="", years=50.0):
     """The ranked annual frequencies as a PNG: one bar per object and limit state (log scale), its
     bounds from the vouched range as a line, the share from outside that range written beside it.
 
-    Parameters
-    ----------
-    rows : list of dict
-        :func:`screening.applications.risk.risk_table` (ranked; rows without a rate are left out).
-    path : str or os.PathLike
-        The PNG file (written atomically).
-    title : str
-        The figure's title.
-    years : float
-        The time span [yr] of the probability axis on top.
-
-    Returns
-    -------
-    pathlib.Path or None
-        ``path``; ``None`` when no row has a rate.
-
+    Returns: ``path``; ``None`` when no row has a rate.
     """
     rows = [r for r in rows if np.isfinite(r["annual_rate"]) and r["annual_rate"] > 0]
     if not rows:

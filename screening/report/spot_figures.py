@@ -24,18 +24,7 @@ def plot_spots(ds, path):
     The linearization's history is drawn where the result stores it (on the grid, or as
     ``spot_<name>`` with ``[output] histories = "spots"``); the peak error is always in the title.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result (``var_theta`` [rad2] and the Monte Carlo ``mcs_*`` variables over ``spot``).
-    path : str or os.PathLike
-        The PNG file (written atomically).
-
-    Returns
-    -------
-    pathlib.Path or None
-        ``path``; ``None`` (nothing written) if the result has no spot point.
-
+    Returns: ``path``; ``None`` (nothing written) if the result has no spot point.
     """
     if "spot" not in ds.dims or ds.sizes["spot"] == 0:
         return None
@@ -95,18 +84,7 @@ MAX_SPOT_FIGURES = 12
 def spot_file_label(ds, i):
     """File-name label of spot point ``i``: its case name, or its grid values.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result with spot checks.
-    i : int
-        The spot point.
-
-    Returns
-    -------
-    str
-        Letters, digits and ``._-+`` only (values in SI units).
-
+    Returns: letters, digits and ``._-+`` only (values in SI units).
     """
     label = point_label(ds, spot_index(ds, i)).replace(", ", "__").replace("=", "_")
     return "".join(c if c.isalnum() or c in "._-+" else "_" for c in label) or f"spot{i}"
@@ -121,28 +99,13 @@ def plot_spot_panels(ds, i, path):
     the ensemble) and, where the result stores the sample states, the probabilities of overturning
     and of exceedance with their standard errors.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result with spot checks and grid histories (:data:`SPOT_PANEL_HISTORIES`: ``c_eq``
-        [N m s/rad], ``k_eq`` [N m/rad], ``var_theta`` [rad2], ``var_theta_dot`` [rad2 s-2],
-        ``p_uplift`` [1]) and the Monte Carlo ``mcs_*`` variables over ``spot``.
-    i : int
-        The spot point.
-    path : str or os.PathLike
-        The PNG file (written atomically).
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
+    Returns: ``path``.
 
     Notes
     -----
     The band is ``mcs +- Z95 se`` with ``Z95 = 1.959964``, the two-sided 95 % quantile of the normal
     distribution, and ``se`` the standard error of the Monte Carlo variance estimate;
     ``p_uplift = P(|theta| > theta_ul)`` is eq. (58) in [1]_.
-
     """
     index = spot_index(ds, i)
     t = ds["t"].values

@@ -24,20 +24,9 @@ def _fmt(value):
 def describe(ds, path="result"):
     """Plain-text summary of a result dataset (what ``screening info`` prints).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A linearization or sweep result (``status``, ``t`` [s], the peak moments).
-    path : str
-        The name shown on the first line.
-
-    Returns
-    -------
-    str
-        Lines on the grid, the fixed parameters (SI units), the models, the block on its bed, the
-        input intensity, the status counts, the ranges of ``peak_var_theta`` [rad2] and friends, the
-        probabilities and the Monte Carlo spot checks.
-
+    Returns: lines on the grid, the fixed parameters (SI units), the models, the block on its bed, the input
+    intensity, the status counts, the ranges of ``peak_var_theta`` [rad2] and friends, the probabilities and
+    the Monte Carlo spot checks.
     """
     dims = grid_dims(ds)
     lines = [f"{path}: {ds.attrs.get('title', '')}",
@@ -126,16 +115,7 @@ def probability_lines(ds):
     points near toppling, which quantity answers the points (the ``answer_note`` attribute), and the range
     of ``p_rocking_start``.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result.
-
-    Returns
-    -------
-    list of str
-        The lines (probabilities [1]); ``[]`` for a result without them.
-
+    Returns: the lines (probabilities [1]); ``[]`` for a result without them.
     """
     lines = []
     if "p_source" in ds.variables:
@@ -166,16 +146,7 @@ def best_line(ds):
 
     Counts by ``best_method`` and, where points were escalated, what the escalation spent [CPU s].
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A sweep result with ``best_method`` and the ``accuracy_*`` attributes.
-
-    Returns
-    -------
-    str
-        The line.
-
+    Returns: the line.
     """
     method = np.asarray(ds["best_method"].values).reshape(-1)
     counts = ", ".join(f"{m.name} {int(np.sum(method == m))}" for m in BestMethod if np.any(method == m))
@@ -220,22 +191,11 @@ def bed_lines(ds, max_points=400):
 
     Ranges over the grid where the block or bed is swept; nothing if the dataset lacks a parameter.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result with the block and bed parameters (``m`` [kg], ``b``, ``h`` [m], ``k`` [N m-2], ...).
-    max_points : int
-        At most this many block/bed combinations are summarised.
-
-    Returns
-    -------
-    list of str
-        The lines (indentation [mm], angles [rad], frequencies [rad/s], damping ratios [1]).
+    Returns: the lines (indentation [mm], angles [rad], frequencies [rad/s], damping ratios [1]).
 
     Notes
     -----
     The uplift angle is ``theta_ul = m g / (2 b^2 k)``, eq. (19) in [1].
-
     """
     import xarray as xr
 
@@ -280,16 +240,8 @@ def intensity_lines(ds):
     Ranges of the RVT median PGA, RMS acceleration, Arias intensity and median PGV (0.1 Hz
     high-pass) (:func:`screening.analysis.intensity.intensity_measures`).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result with its excitation parameters (``S0`` [m2 s-3], ...).
-
-    Returns
-    -------
-    list of str
-        The lines (accelerations [m s-2] and [g], Arias intensity and PGV [m s-1]); nothing if they
-        cannot be computed.
+    Returns: the lines (accelerations [m s-2] and [g], Arias intensity and PGV [m s-1]); nothing if they
+    cannot be computed.
     """
     try:
         im = intensity_measures(ds)
@@ -312,17 +264,8 @@ PRODUCT_MAX_VALUES = 50_000_000
 def product_kind(ds):
     """Which other screening file ``ds`` is.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        An opened file.
-
-    Returns
-    -------
-    str or None
-        ``"fragility"``, ``"cloud"``, ``"simulation"``, or ``None`` (a sweep result, or a variable of
-        more than :data:`PRODUCT_MAX_VALUES` values [-]).
-
+    Returns: ``"fragility"``, ``"cloud"``, ``"simulation"``, or ``None`` (a sweep result, or a variable of
+    more than :data:`PRODUCT_MAX_VALUES` values [-]).
     """
     names = set(ds.variables)
     if "status" in names or any(v.size > PRODUCT_MAX_VALUES for v in ds.variables.values()):
@@ -341,19 +284,8 @@ def describe_product(ds, path="file"):
 
     What ``screening info`` prints for them.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The opened file.
-    path : str
-        The name shown on the first line.
-
-    Returns
-    -------
-    str or None
-        The summary (threshold [rad], probabilities [1], fitted median in the units of the
-        intensity); ``None`` for a file that is none of these (:func:`product_kind`).
-
+    Returns: the summary (threshold [rad], probabilities [1], fitted median in the units of the intensity);
+    ``None`` for a file that is none of these (:func:`product_kind`).
     """
     kind = product_kind(ds)
     if kind is None:

@@ -1,38 +1,12 @@
 """Speed–accuracy trade study: stochastic linearization (SL) vs Monte Carlo (condensed, coupled).
 
-Users choose between three methods for the second-order rocking statistics:
-
-* **SL** — stochastic linearization + Lyapunov moment equations of the condensed SDOF
-  (:func:`screening.solvers.moments.solve_moments`), ~1 ms per point;
-* **condensed MCS** — Monte Carlo on the same condensed SDOF (eq. 22), which isolates the
-  *linearization* error of SL (SL vs condensed MCS);
-* **coupled MCS** — Monte Carlo on the full coupled rocking/vertical model (eqs. 7–8), the
-  judge; condensed vs coupled MCS (same input samples, same seed) is the *condensation* error.
-
-This module makes the choice measurable.  A study file (TOML, see
-``studies/speed_accuracy.toml`` and
-:func:`~screening.applications.tradeoff_study.parse_tradeoff_study`) defines the block, the bed,
-a grid of excitation *families* x cubic parameters ``eps`` x intensities (given as ``S0`` or as
-target SL peak uplift probabilities, calibrated by bisection on SL), the sample counts and
-tolerances.  :func:`run_tradeoff` then measures, at every point, the errors of SL and of
-condensed MCS against coupled MCS, with the Monte Carlo standard errors, the cost of each
-method in seconds per point on one core, how the MCS error and cost move with the sample
-count and the integrator tolerance at representative points, and how SL's numerical error
-and cost move with its tolerance and maximum step.  It writes
-
-* ``<out_dir>/<stem>.nc`` — every number, labelled, with units;
-* ``<out_dir>/<stem>.md`` and ``<stem>.csv`` — the trade tables;
-* ``<out_dir>/<stem>_error_vs_cost.png`` and ``<stem>_validity.png`` — the plots;
-
-and derives a validity rule (e.g. "SL within 10 % of condensed MCS when SL peak p_uplift < X")
-from the data.
-
-Error metrics and rules: :mod:`screening.applications.metrics`; the study file:
-:mod:`screening.applications.tradeoff_study`; reports and figures: :mod:`screening.report.tradeoff_text`,
-:mod:`screening.report.tradeoff_figures`; units and long names: :data:`TRADEOFF`.
-
-Monte Carlo statistics are over the samples that neither overturned nor diverged
-(survivors); the overturned fraction is reported with every point.
+SL (~1 ms per point), condensed Monte Carlo on the same SDOF (eq. 22 of [mitseas2026]: isolates SL's
+*linearization* error) and coupled Monte Carlo (eqs. 7–8: the judge; condensed vs coupled, same samples,
+is the *condensation* error).  :func:`run_tradeoff` measures, over a study's grid
+(:func:`~screening.applications.tradeoff_study.parse_tradeoff_study`), every method's error against
+coupled Monte Carlo with its standard error and cost, writes ``<stem>.nc``, ``.md``, ``.csv`` and two
+figures, and derives SL's validity rules (:mod:`screening.applications.metrics`).  Monte Carlo statistics
+are over the survivors; the overturned fraction is reported.  ``docs/validation.md#speed-accuracy-trade``.
 """
 
 from __future__ import annotations
@@ -118,20 +92,8 @@ def _point_models(study, points):
 def time_call(fn, repeats=1):
     """Call ``fn`` ``repeats`` times and time it.
 
-    Parameters
-    ----------
-    fn : callable
-        Called without arguments.
-    repeats : int
-        Number of calls.
-
-    Returns
-    -------
-    result : object
-        The result of the last call.
-    seconds : float
-        Median wall time per call [s].
-
+    Returns ``(result, seconds)``: ``result`` the result of the last call; ``seconds`` median wall time per
+    call [s].
     """
     times = []
     result = None
@@ -181,16 +143,7 @@ def _warm_up(study):
 def set_threads(n):
     """Limit numba to ``n`` threads (cost per core).
 
-    Parameters
-    ----------
-    n : int
-        Threads wanted [-] (capped at ``NUMBA_NUM_THREADS``).
-
-    Returns
-    -------
-    int
-        The previous setting.
-
+    Returns: the previous setting.
     """
     import numba
     previous = numba.get_num_threads()
@@ -535,31 +488,13 @@ def run_tradeoff(study_path, out_dir="outputs", progress=_stderr):
     and the rules of :func:`~screening.applications.metrics.derive_rules`.  A bad study file raises
     :class:`~screening.sweep.config.StudyError` before any work, and nothing is written.
 
-    Parameters
-    ----------
-    study_path : str or pathlib.Path or TradeoffStudy
-        The study file (TOML) or the parsed study.
-    out_dir : str or pathlib.Path, default "outputs"
-        Where the outputs go.
-    progress : callable or None, default: to stderr
-        Called with one line of text per step.
-
-    Returns
-    -------
-    tuple
-        ``(dataset, paths, rules)``: the :class:`xarray.Dataset` of every measurement (SI units in
-        its ``units`` attributes), ``{kind: pathlib.Path}`` of the written files and the rules.
+    Returns: ``(dataset, paths, rules)``: the :class:`xarray.Dataset` of every measurement (SI units in its
+    ``units`` attributes), ``{kind: pathlib.Path}`` of the written files and the rules.
 
     Notes
     -----
     The errors of the linearization [1] and of the condensed Monte Carlo against the coupled one,
-    with their Monte Carlo standard errors [2]; what the shipped study found: [3].
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [rubinstein2017] in the bibliography, ``docs/bibliography.md``.
-    .. [3] ``docs/validation.md``, "Validation", section "Speed-accuracy trade" (this package's documentation).
+    with their Monte Carlo standard errors [rubinstein2017]; what the shipped study found: ``docs/validation.md``.
     """
     study = _study(study_path)
     start = time.perf_counter()
@@ -587,18 +522,7 @@ def rerender_reports(study_path, out_dir="outputs"):
     :class:`~screening.sweep.config.StudyError` for a bad study file and ``FileNotFoundError``
     when the study has not been run into ``out_dir``.
 
-    Parameters
-    ----------
-    study_path : str or pathlib.Path or TradeoffStudy
-        The study file (TOML) or the parsed study.
-    out_dir : str or pathlib.Path, default "outputs"
-        Where :func:`run_tradeoff` wrote the study.
-
-    Returns
-    -------
-    tuple
-        ``(dataset, paths, rules)``.
-
+    Returns: ``(dataset, paths, rules)``.
     """
     study = _study(study_path)
     nc = output_paths(out_dir, _stem(study))["nc"]

@@ -31,27 +31,11 @@ def plot_error_vs_cost(ds, path):
     """Log-log error vs cost per point, one marker per method/setting (two panels:
     error against coupled MCS, the judge; and against condensed MCS, SL's own model).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The trade-study dataset: ``cost`` [s] over ``approach``; the sample-count study ``cv_peak_var_theta``
-        [rad2] with its ``_se``, ``cv_cost`` [s] over ``rep_point``, ``cv_model``, ``n_samples``; the tolerance
-        study ``tol_peak_var_theta`` with its ``_se``, ``tol_cost`` [s] and ``tol_change_vs_tightest`` [1] over
-        ``rtol_factor``; ``cv_sl_peak_var_theta`` [rad2]; ``peak_rel_error`` [1]; the SL settings ``sl_cost``
-        [s], ``sl_rtol``, ``sl_h_max`` [s], ``sl_setting_kind`` over ``sl_setting``.
-    path : str or pathlib.Path
-        The PNG to write (whole or not at all).
-
-    Returns
-    -------
-    None
-
     Notes
     -----
     A Monte Carlo marker's error is ``sqrt(bias^2 + (se / peak)^2)`` (plus the tolerance change for the
     tolerance variants), the bias being the relative difference of the model's largest-sample peak from
     the panel's reference; SL's is ``|SL / reference - 1|``, its modelling error.
-
     """
     fig, axes = _figure()
     models = list(ds.cv_model.values)
@@ -130,16 +114,7 @@ def plot_error_vs_cost(ds, path):
 def study_n(ds):
     """Sample count of the tolerance sub-study (from the dataset).
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset (attribute ``tol_samples``).
-
-    Returns
-    -------
-    int or str
-        The count [-], or ``"?"`` when the dataset does not say.
-
+    Returns: the count [-], or ``"?"`` when the dataset does not say.
     """
     return int(ds.attrs.get("tol_samples", 0)) or "?"
 
@@ -152,29 +127,6 @@ def plot_validity(ds, rules, thresholds, path, metric="peak", quantity="var_thet
     softening one), labelled with its error (``?`` where a threshold lies within two standard
     errors, the overturned fraction of coupled MCS where there is one); dashed lines at the
     largest SL peak p_uplift up to which every point passes (the rules of the ``all`` group).
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset: ``sl_peak_p_uplift`` [1], ``k_eq_margin`` [1], ``family``, ``eps``
-        [m-2], ``peak_rel_error``, ``time_avg_rel_error``, ``peak_rel_se`` [1] over ``comparison``
-        (in the order of ``COMPARISONS``), ``quantity`` (of ``QUANTITIES``) and ``point``, and
-        ``overturned_fraction`` [1] over ``mcs_model``.
-    rules : list of dict
-        From :func:`screening.applications.metrics.derive_rules`.
-    thresholds : sequence of float
-        The tolerances [1]; the first and last set the colours.
-    path : str or os.PathLike
-        The PNG file (written atomically).
-    metric : {"peak", "time_avg", "worst"}, default "peak"
-        The error shown (:func:`screening.applications.metrics.rule_error`).
-    quantity : {"var_theta", "var_theta_dot"}, default "var_theta"
-        The quantity whose error is shown.
-
-    Returns
-    -------
-    None
-
     """
     t1, t2 = thresholds[0], thresholds[-1]
     x = ds.sl_peak_p_uplift.values

@@ -29,16 +29,7 @@ def to_file_layout(ds):
 
     Integer index coordinates become int32.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset (in memory).
-
-    Returns
-    -------
-    xarray.Dataset
-        The file layout (CF coordinate variables are numeric).
-
+    Returns: the file layout (CF coordinate variables are numeric).
     """
     out = ds.copy()
     for d in LABEL_DIMS:
@@ -57,16 +48,7 @@ def to_file_layout(ds):
 def from_file_layout(ds):
     """Inverse of :func:`to_file_layout`: string labels back as dimension coordinates.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset as read from its file.
-
-    Returns
-    -------
-    xarray.Dataset
-        With ``ds.sel(approach="sl")`` possible again.
-
+    Returns: with ``ds.sel(approach="sl")`` possible again.
     """
     out = ds.copy()
     for d in LABEL_DIMS:
@@ -80,16 +62,7 @@ def from_file_layout(ds):
 def file_encoding(ds):
     """netCDF encoding: no fill value on float coordinates (CF 2.5.1), compression on the histories.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        The dataset in file layout.
-
-    Returns
-    -------
-    dict
-        ``{variable: encoding}`` for :meth:`xarray.Dataset.to_netcdf`.
-
+    Returns: ``{variable: encoding}`` for :meth:`xarray.Dataset.to_netcdf`.
     """
     enc = {name: {"_FillValue": None} for name in ds.coords if ds[name].dtype.kind == "f"}
     for name in ("var_theta", "var_theta_dot", "var_theta_se", "var_theta_dot_se", "p_uplift"):
@@ -100,18 +73,7 @@ def file_encoding(ds):
 def output_paths(out_dir, stem):
     """The files a trade study writes: ``nc``, ``md``, ``csv``, ``error_vs_cost``, ``validity``.
 
-    Parameters
-    ----------
-    out_dir : str or os.PathLike
-        The folder.
-    stem : str
-        The file-name stem.
-
-    Returns
-    -------
-    dict of str to pathlib.Path
-        The paths.
-
+    Returns: the paths.
     """
     out = Path(out_dir)
     return {"nc": out / f"{stem}.nc", "md": out / f"{stem}.md", "csv": out / f"{stem}.csv",
@@ -124,28 +86,10 @@ def write_reports(study, ds, out_dir, stem, write_nc=True):
     With ``write_nc=False`` only the reports are (re)written, e.g. from a saved dataset
     (:func:`screening.report.tradeoff.rerender_reports`).  Each file appears whole or not at all.
 
-    Parameters
-    ----------
-    study : screening.applications.tradeoff_study.TradeoffStudy
-        The trade study (its ``rule`` table, and what the markdown report prints of it).
-    ds : xarray.Dataset
-        The trade-study dataset in memory (:func:`screening.report.tradeoff.run_tradeoff`); its
-        attribute ``rules`` is set to the derived rules, one line each.
-    out_dir : str or pathlib.Path
-        The folder of the files (created if missing).
-    stem : str
-        The files' common name (:func:`output_paths`).
-    write_nc : bool, default True
-        Also write the dataset as ``<stem>.nc`` (:func:`to_file_layout`).
-
-    Returns
-    -------
-    paths : dict
-        ``{"nc", "md", "csv", "error_vs_cost", "validity"}`` -> :class:`pathlib.Path` (:func:`output_paths`).
-    rules : list of dict
-        The validity rules of SL (:func:`screening.applications.metrics.derive_rules` with the study's
-        ``rule`` thresholds, metric and quantity).
-
+    Returns ``(paths, rules)``: ``paths`` ``{"nc", "md", "csv", "error_vs_cost", "validity"}`` ->
+    :class:`pathlib.Path` (:func:`output_paths`); ``rules`` the validity rules of SL
+    (:func:`screening.applications.metrics.derive_rules` with the study's ``rule`` thresholds, metric and
+    quantity).
     """
     paths = output_paths(out_dir, stem)
     paths["nc"].parent.mkdir(parents=True, exist_ok=True)

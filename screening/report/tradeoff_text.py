@@ -23,20 +23,7 @@ __all__ = []
 def rule_text(rule, metric, quantity):
     """One-line statement of a rule from :func:`~screening.applications.metrics.derive_rules`.
 
-    Parameters
-    ----------
-    rule : dict
-        One rule (``reference``, ``threshold`` [1], ``group``, ``p_safe`` [1], ...).
-    metric : {"peak", "time_avg", "worst"}
-        The error the rule was judged on.
-    quantity : str
-        The quantity judged (``var_theta`` [rad2] or ``var_theta_dot`` [rad2 s-2]).
-
-    Returns
-    -------
-    str
-        The statement.
-
+    Returns: the statement.
     """
     what = {"peak": f"peak {quantity}", "time_avg": f"time-averaged {quantity}",
             "worst": f"peak and time-averaged {quantity}"}[metric]
@@ -62,16 +49,7 @@ def recommendation(rules):
     Uses the loosest threshold against coupled MCS (where SL alone is acceptable) and the
     tightest against condensed MCS (where the linearization itself is accurate).
 
-    Parameters
-    ----------
-    rules : list of dict
-        From :func:`~screening.applications.metrics.derive_rules` (thresholds [1]).
-
-    Returns
-    -------
-    str
-        The recommendation.
-
+    Returns: the recommendation.
     """
     def pick(ref, thr_fn):
         cands = [r for r in rules if r["group"] == "all" and r["reference"] == ref]
@@ -121,23 +99,10 @@ def _sci(x, digits=3):
 def point_rows(ds):
     """Per-point accuracy rows (list of dicts) for the markdown/CSV trade table.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset: per ``point`` its ``point_name``, ``eps`` [m-2], ``S0`` [m2 s-3],
-        ``sl_peak_p_uplift`` [1], ``k_eq_margin`` [1], ``sl_status``, ``overturned_fraction`` [1]
-        over ``mcs_model``; ``var_theta``, ``var_theta_se`` [rad2] over ``approach`` and ``t``;
-        ``peak_rel_error``, ``time_avg_rel_error`` [1] and their ``*_significant`` flags over
-        ``comparison`` and ``quantity``; ``cost`` [s] over ``approach``.
-
-    Returns
-    -------
-    list of dict
-        One row per point: its parameters, SL status, overturned fractions, the peak ``var_theta``
-        of each method with its standard error [rad2] (``sl_peak``, ``cond_peak``, ``coup_peak``,
-        ...), the relative errors [1] of each comparison with their significance
-        (``sl_vs_coupled_var_theta_peak``, ``..._sig``, ...) and the costs ``cost_<method>`` [s].
-
+    Returns: one row per point: its parameters, SL status, overturned fractions, the peak ``var_theta`` of
+    each method with its standard error [rad2] (``sl_peak``, ``cond_peak``, ``coup_peak``, ...), the
+    relative errors [1] of each comparison with their significance (``sl_vs_coupled_var_theta_peak``,
+    ``..._sig``, ...) and the costs ``cost_<method>`` [s].
     """
     rows = []
     comp = {c: i for i, c in enumerate(ds.comparison.values)}
@@ -172,20 +137,7 @@ def point_rows(ds):
 
 
 def write_csv(rows, path):
-    """Write the per-point rows as CSV (atomically).
-
-    Parameters
-    ----------
-    rows : list of dict
-        From :func:`point_rows` (the keys of the first row are the columns; costs [s], errors [1]).
-    path : str or os.PathLike
-        The CSV file.
-
-    Returns
-    -------
-    None
-
-    """
+    """Write the per-point rows as CSV (atomically)."""
     with atomic_open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
@@ -195,16 +147,7 @@ def write_csv(rows, path):
 def cost_summary(ds):
     """Median / min / max cost per point of each method [s].
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A trade-study dataset (``cost`` [s] over ``approach`` and ``point``, ``sl_batched_cost`` [s]).
-
-    Returns
-    -------
-    dict of str to tuple of float
-        ``{method: (median, min, max)}`` [s], ``sl_batched`` included.
-
+    Returns: ``{method: (median, min, max)}`` [s], ``sl_batched`` included.
     """
     out = {}
     for m in METHODS:
@@ -217,23 +160,8 @@ def cost_summary(ds):
 def markdown_report(study, ds, rules):
     """The trade tables as markdown text.
 
-    Parameters
-    ----------
-    study : screening.applications.tradeoff_study.TradeoffStudy
-        The trade study (title, source, record length and step, ``mcs``, ``sl``, ``convergence`` and
-        ``rule`` tables: printed in the header and the table captions).
-    ds : xarray.Dataset
-        The trade-study dataset (:func:`point_rows`, :func:`cost_summary`, and the ``cv_*``, ``tol_*`` and
-        ``sl_*`` sub-studies).
-    rules : list of dict
-        From :func:`screening.applications.metrics.derive_rules`.
-
-    Returns
-    -------
-    str
-        The report: accuracy per point, error summary, cost per point, Monte Carlo against sample count
-        and tolerance, SL numerics and the validity rules (relative errors in %, costs in s).
-
+    Returns: the report: accuracy per point, error summary, cost per point, Monte Carlo against sample count
+    and tolerance, SL numerics and the validity rules (relative errors in %, costs in s).
     """
     rows = point_rows(ds)
     L = [f"# {study.title}", "",
@@ -348,22 +276,7 @@ def summary_text(study, ds, rules):
     their ratio (:func:`cost_summary`), the recommendation (:func:`recommendation`), one line per
     rule (:func:`rule_text`) and the run time of the study.
 
-    Parameters
-    ----------
-    study : object
-        The trade study (:func:`screening.applications.tradeoff_study.load_tradeoff_study`): its
-        ``mcs["samples"]`` and ``rule["metric"]``, ``rule["quantity"]`` are used.
-    ds : xarray.Dataset
-        The trade-study dataset (``cost`` [s] over ``approach`` and ``point``, ``sl_batched_cost``
-        [s], the attribute ``wall_time_s`` [s]).
-    rules : list of dict
-        From :func:`screening.applications.metrics.derive_rules`.
-
-    Returns
-    -------
-    str
-        The lines (costs in ms for SL, s for Monte Carlo).
-
+    Returns: the lines (costs in ms for SL, s for Monte Carlo).
     """
     cs = cost_summary(ds)
     lines = [f"cost per point (median, one core): SL {1e3 * cs['sl'][0]:.2f} ms, condensed MCS "

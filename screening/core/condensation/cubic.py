@@ -1,102 +1,13 @@
 """Quasi-static condensation with the cubic term in the static vertical balance (``"cubic"``).
 
-The paper's condensation (section 2.3, :mod:`screening.core.condensation.paper`) slaves the base-centre
-indentation to the *linear* static balance, ``z_st = m g / (2 b k)`` (eq. 17) and
-``(k / (2|theta|)) (b|theta| + z_cb)^2 = m g`` (eq. 18), although the moment equations
-(14), (16) it feeds keep the ``eps`` terms.  For a hardening bed the true rest indentation
-is smaller (``z0 = 0.92 z_st`` for the paper's block with ``eps = 6e7``), which lowers the
-no-uplift damping ``(2/3) lam b^3 z`` and the stiffness term ``2 eps k b^3 z^2``.
-Here ``z_cb(theta)`` is the root of the full static vertical balance instead, in both
-regimes, and ``C(theta)``, ``K(theta)`` follow from eqs. (14) and (16) with it.
-
-Symbols and units (SI): ``m`` [kg], ``g`` [m/s^2], ``b`` half-width [m], ``h`` height of the
-centre of mass [m], ``k`` [N/m^2], ``eps`` [1/m^2], ``lam`` [N s/m^3] (Hunt–Crossley) or ``c``
-[N s/m^2] (Winkler), ``theta`` [rad], ``a = |theta|``, ``z = z_cb`` [m] (positive into the
-bed), ``z_lin = m g / (2 b k)`` [m] (eq. 17).  Everything is even in ``theta`` (``C``, ``K``,
-``z_cb``) by the mirror symmetry of the base, so the formulas are written for ``a``.
-
-Derivation (small angles, as eqs. 13–16)
-----------------------------------------
-With ``u = b - eta`` the indentation field is ``z(u) = z + u theta`` (eqs. 1–2), in contact
-where it is positive.  Quasi-static condensation drops ``m z''`` and the damping force from
-the vertical balance (eqs. 13, 15), leaving ``F_k(theta, z) = m g`` with ``F_k`` the
-stiffness part of the resultant:
-
-* no uplift (``z >= b a``), eq. (13)::
-
-      2 b k z + 2 b eps k z (z^2 + b^2 a^2) = m g
-      <=>  eps z^3 + (1 + eps b^2 a^2) z = z_lin                                  (Q1)
-
-  At ``theta = 0`` this is the rest indentation ``z0``: ``eps z0^3 + z0 = z_lin``.
-  ``z`` depends on ``theta`` through ``eps b^2 a^2``; implicit differentiation gives
-  ``dz/da = -2 eps b^2 a z / (1 + eps b^2 a^2 + 3 eps z^2)``.
-
-* uplift (``-b a < z < b a``), eq. (15) with the compressed-edge indentation
-  ``v = b a + z`` (contact length ``v / a``)::
-
-      (k / (2a)) v^2 + (eps k / (4a)) v^4 = m g
-
-  a quadratic in ``w = v^2``: ``(eps/2) w^2 + w = A`` with ``A = 2 m g a / k`` [m^2], whose
-  root on the rising branch (``1 + eps w > 0``) is, without cancellation,
-  ``w = 2 A / (1 + S)``, ``S = sqrt(1 + 2 eps A)``,  so ``z = sqrt(w) - b a``   (Q2)
-  and ``dw/da = 2 m g / (k S)`` (from ``w' (1 + eps w) = A / a`` and ``1 + eps w = S``),
-  ``dz/da = (dw/da) / (2 v) - b``.  ``eps = 0`` gives eq. (18).
-
-* uplift threshold: the regimes meet where ``z = b a`` (``v = 2 b a``); both (Q1) and (Q2)
-  then read ``2 eps y^3 + y = z_lin`` with ``y = b theta_ul``, so
-  ``theta_ul = y / b``  (eq. 19 is the ``eps = 0`` case).  ``z_cb(theta)`` and ``dz/da`` are
-  continuous there (the pressure vanishes at the lifting edge).  The threshold is *not*
-  ``z0 / b``: with ``theta_ul = z0 / b`` the uplift root (Q2) would not meet ``z0`` and
-  ``z_cb``, ``C``, ``K theta`` would jump at the threshold (``z_cb`` by 7 % for the paper's
-  hardening bed).
-
-Moments about the base centre (eqs. 14 and 16, re-derived by integrating the law over
-the contact zone with ``zdot(u) = zdot_cb + u theta'``), minus the gravity term
-``m g h theta``:
-
-* stiffness, ``K(theta) = restoring moment / theta``::
-
-      K_in = (2/3) b^3 k - m g h + eps k (2 b^3 z^2 + (2/5) b^5 a^2)               (eq. 14)
-      K_up = [k v^2 (2 b a - z) / 6 + eps k v^4 (4 b a - z) / 20] / a^3 - m g h    (eq. 16)
-
-* damping, with the quasi-static rate ``zdot_cb = (dz/dtheta) theta'``::
-
-      Hunt–Crossley:  C_in = (2/3) lam b^3 (z + a dz/da)                           (eq. 14)
-                      C_up = lam / (12 a^3) [3 b^4 a^4 + 4 b^3 z a^3 + z^4
-                                             + 2 a (dz/da) v^2 (2 b a - z)]        (eq. 16)
-      Winkler:        C_in = (2/3) c b^3
-                      C_up = (c / a^2) [(dz/da) v (b a - z) / 2 + (b^3 a^3 + z^3) / (3 a)]
-
-  With the linear balance (``z = z_lin``, eq. 18) these are exactly eqs. (24)–(25) and the
-  Winkler forms of :mod:`screening.core.condensation.paper`; so ``eps = 0`` reproduces the paper.
-
-Rate terms.  ``zdot_cb = z_cb'(theta) theta'`` is kept in ``C``: it is what the paper does
-in the uplift branch (eq. 24 is eq. 16 with ``zdot_cb = z_st'(theta) theta'``), and without
-it the ``eps = 0`` limit would not be the paper's model.  In the no-uplift regime it is new
-(``z_st`` is constant in the paper): for ``eps > 0`` the block rises as it rotates
-(``dz/da < 0``), which lowers ``C_in`` towards the threshold (by 17 % at ``theta_ul`` for
-the paper's hardening bed).  ``C`` is continuous at ``theta_ul``.
-
-Softening beds (``eps < 0``)
-----------------------------
-* The threshold exists only while ``2 eps y^3 + y`` reaches ``z_lin`` on its rising branch:
-  ``|eps| z_lin^2 < 2/27``.  Otherwise the bed cannot carry the block through the onset of
-  uplift and :func:`check_bearing` raises ``ValueError`` (every public function calls it).
-  This is stricter than carrying it at rest (``|eps| z_lin^2 < 4/27``).
-* In uplift the quartic has a root only while ``1 + 2 eps A >= 0``, i.e. up to the
-  *capacity angle* ``theta_cap = k / (4 |eps| m g)`` (:func:`capacity_angle`; 0.142 rad for
-  the paper's softening bed, below its slenderness 0.165 rad).  Beyond it no quasi-static
-  equilibrium exists (the narrowing contact zone cannot carry ``m g``).  The functions here
-  then hold the compressed edge at the peak load (``w = 1/|eps|``, ``z = |eps|^(-1/2) - b a``)
-  and, there being no equilibrium to follow, carry no quasi-static rate (``dz/da`` is
-  reported as 0), so that ``K`` stays finite and continuous and ``C`` finite and positive
-  (``3 b^4 a^4 + 4 b^3 z a^3 + z^4 = v^2 ((z - b a)^2 + 2 b^2 a^2) > 0``) for the Gaussian
-  expectations.  :func:`in_equilibrium` flags those angles, the condensed Monte Carlo stops
-  such samples as diverged, and the moment solver records ``theta_capacity``.  Just below
-  ``theta_cap``, ``dz/da ~ (theta_cap - a)^(-1/2)`` (the block sinks ever faster), an
-  integrable singularity of ``C``.
-
-Method and how it is checked: ``docs/method.md#cubic-condensation``.
+The paper's condensation (:mod:`screening.core.condensation.paper`) slaves the base-centre indentation to
+the *linear* static balance (eqs. 17–18 of [mitseas2026]); here ``z_cb(theta)`` is the root of the full
+balance with the ``eps`` term in both regimes (eqs. 13 and 15), and ``C(theta)``, ``K(theta)`` follow
+from eqs. (14) and (16) with it, the quasi-static rate ``zdot_cb = z_cb'(theta) theta'`` kept in ``C``.
+``eps = 0`` reproduces the paper.  A softening bed has a capacity angle beyond which no quasi-static
+equilibrium exists (:func:`capacity_angle`); there the compressed edge is held at its peak load with no
+rate, so ``K`` and ``C`` stay finite.  Symbols [SI], the derivation, the uplift threshold and the
+softening limits: ``docs/method.md#cubic-condensation`` and ``#softening-beds-and-the-capacity-angle``.
 """
 
 from __future__ import annotations
@@ -123,29 +34,11 @@ SOFTENING_LIMIT = UPLIFT_BEARING_LIMIT
 def check_bearing(block, foundation):
     """Refuse a softening bed that cannot carry the block through the onset of uplift.
 
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    None
-        Returns only when every point passes.
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
-
     Notes
     -----
-    The condition is ``|eps| z_lin^2 < 2/27`` (:data:`SOFTENING_LIMIT`, :func:`bearing_load`; ``z_lin`` of
-    eq. (17) in [1]); any element of array parameters failing it raises.  ``eps >= 0`` always passes.
-
+    Raises ``ValueError`` naming ``foundation.eps`` unless ``|eps| z_lin^2 < 2/27`` (:data:`SOFTENING_LIMIT`,
+    :func:`bearing_load`; ``z_lin`` of eq. (17) of [mitseas2026]) at every point; ``eps >= 0`` passes.
+    Every public function here calls it.
     """
     eps = np.asarray(foundation.eps, dtype=float)
     load = bearing_load(block, foundation)
@@ -157,86 +50,30 @@ def check_bearing(block, foundation):
 
 
 def rest_indentation(block, foundation):
-    """Static indentation at rest ``z0`` [m] of a bed the cubic condensation can carry.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``z0`` [m] (:func:`screening.core.physics.contact.rest_indentation`).
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
-
-    Notes
-    -----
-    Eq. (13) in [1] at rest, cubic term included, after :func:`check_bearing`.
-
-    """
+    """Static indentation at rest ``z0`` [m] (eq. (13) of [mitseas2026], cubic term included), after :func:`check_bearing`."""
     check_bearing(block, foundation)
     return contact.rest_indentation(block, foundation)
 
 
 def uplift_threshold(block, foundation):
-    """Uplift threshold ``theta_ul`` [rad] of the cubic condensation: the exact static uplift angle.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``theta_ul`` [rad] (:func:`screening.core.physics.contact.exact_uplift_angle`).
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
+    """Uplift threshold ``theta_ul`` [rad]: the exact static uplift angle (:func:`screening.core.physics.contact.exact_uplift_angle`).
 
     Notes
     -----
-    ``y = b theta_ul`` solves ``2 eps y^3 + y = z_lin``: the rotation at which the quasi-static ``z_cb(theta)``
-    of eq. (13) in [1] reaches ``b theta`` (eq. (19) generalised; ``eps = 0`` gives ``m g / (2 b^2 k)``).
-
+    ``y = b theta_ul`` solves ``2 eps y^3 + y = z_lin``: where the quasi-static ``z_cb(theta)`` reaches
+    ``b theta`` (eq. (19) of [mitseas2026] generalised).  Raises ``ValueError`` naming ``foundation.eps`` where :func:`check_bearing` refuses the bed.
     """
     check_bearing(block, foundation)
     return exact_uplift_angle(block, foundation)
 
 
 def capacity_angle(block, foundation):
-    """Capacity angle ``theta_cap`` [rad] of a softening bed; ``inf`` for ``eps >= 0``.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``theta_cap = k / (4 |eps| m g)`` [rad].
+    """Capacity angle ``theta_cap = k / (4 |eps| m g)`` [rad] of a softening bed; ``inf`` for ``eps >= 0``.
 
     Notes
     -----
-    Beyond it the uplift balance ``(k/(2a)) v^2 + (eps k/(4a)) v^4 = m g`` (eq. (15) in [1], ``a = |theta|``)
-    has no root: no quasi-static equilibrium exists.
-
+    Beyond it the uplift balance ``(k/(2a)) v^2 + (eps k/(4a)) v^4 = m g`` (eq. (15) of [mitseas2026])
+    has no root.
     """
     eps = np.asarray(foundation.eps, dtype=float)
     with np.errstate(divide="ignore"):
@@ -245,92 +82,29 @@ def capacity_angle(block, foundation):
 
 
 def in_equilibrium(theta, block, foundation):
-    """Where a quasi-static vertical equilibrium exists, ``|theta| <= theta_cap``.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        Boolean, broadcast over ``theta`` and the model's fields.
-
-    Notes
-    -----
-    :func:`capacity_angle` from the uplift balance eq. (15) in [1].
-
-    """
+    """Boolean: where a quasi-static vertical equilibrium exists, ``|theta| <= theta_cap`` (:func:`capacity_angle`)."""
     return np.abs(np.asarray(theta, dtype=float)) <= capacity_angle(block, foundation)
 
 
 def quasi_static_indentation(theta, block, foundation):
-    """Quasi-static base-centre indentation and its slope in the cubic condensation.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    z_cb : numpy.ndarray
-        Indentation of the base centre [m], even in ``theta``.
-    slope : numpy.ndarray
-        ``dz_cb/d|theta|`` [m/rad]; ``dz_cb/dtheta = sign(theta) * slope``.
+    """Quasi-static base-centre indentation ``z_cb`` [m] (even in ``theta``) and its slope ``dz_cb/d|theta|`` [m/rad].
 
     Notes
     -----
-    ``z_cb`` solves the static vertical balance with the cubic term: ``eps z^3 + (1 + eps b^2 theta^2) z =
-    z_lin`` below ``theta_ul`` (eq. (13) in [1]) and the uplift balance eq. (15) above it; beyond the
-    capacity angle of a softening bed the contact is held at its peak load and the slope reported is 0
-    (module docstring).
-
+    Below ``theta_ul`` the balance ``eps z^3 + (1 + eps b^2 theta^2) z = z_lin`` (eq. (13) of [mitseas2026]),
+    above it the uplift balance (eq. (15)); beyond the capacity angle the contact is held at its peak load
+    with slope 0.
     """
     return indentation_state(theta, block, foundation)[:2]
 
 
 def indentation_state(theta, block, foundation):
-    """The quasi-static contact state at the rocking angle ``theta``: what the damping, the stiffness
-    and the stiff-bed model's contact read.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rocking angle [rad]; only ``|theta|`` matters.
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2]); fields may be arrays.
-
-    Returns
-    -------
-    z : numpy.ndarray
-        Indentation of the base centre ``z_cb`` [m] (:func:`quasi_static_indentation`).
-    slope : numpy.ndarray
-        ``dz_cb/d|theta|`` [m/rad].
-    v : numpy.ndarray
-        Indentation of the compressed edge ``v = b |theta| + z_cb`` [m].
-    a : numpy.ndarray
-        ``|theta|`` [rad], broadcast with the fields.
-    uplift : numpy.ndarray of bool
-        Whether the far edge has lifted (``|theta| > theta_ul``).
+    """The quasi-static contact state at ``theta`` [rad]: ``(z, slope, v, a, uplift)``.
 
     Notes
     -----
-    Below ``theta_ul`` the balance with the cubic term, ``eps z^3 + (1 + eps b^2 theta^2) z = z_lin``
-    (eq. (13) in [1]); above it the uplift balance eq. (15) in [1], held at the peak load beyond the
-    capacity angle of a softening bed (slope 0 there).
-
+    ``z``, ``slope`` of :func:`quasi_static_indentation`; ``v = b |theta| + z`` [m] the compressed-edge
+    indentation; ``a = |theta|`` broadcast with the fields; ``uplift`` where ``|theta| > theta_ul``.
     """
     check_bearing(block, foundation)
     a = np.abs(np.asarray(theta, dtype=float))
@@ -361,31 +135,10 @@ def indentation_state(theta, block, foundation):
 def rocking_damping(theta, block, foundation):
     """Rocking damping ``C(theta)`` [N m s/rad] of the cubic condensation.
 
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``C(theta)`` [N m s/rad], broadcast over ``theta`` and the model's fields.
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
-
     Notes
     -----
-    Eqs. (14) and (16) in [1] re-derived with the quasi-static rate ``zdot_cb = (dz/dtheta) theta'`` and the
-    law's damping pressure (module docstring); with ``eps = 0`` it is eq. (24).
-
+    Eqs. (14) and (16) of [mitseas2026] with the quasi-static rate ``zdot_cb = (dz/dtheta) theta'`` and the
+    law's damping pressure; ``eps = 0`` gives eq. (24).  Raises ``ValueError`` naming ``foundation.eps`` where :func:`check_bearing` refuses the bed.
     """
     z, dz, v, a, uplift = indentation_state(theta, block, foundation)
     b = block.b
@@ -399,33 +152,12 @@ def rocking_damping(theta, block, foundation):
 
 
 def rocking_stiffness(theta, block, foundation):
-    """Secant rocking stiffness ``K(theta)`` [N m/rad] of the cubic condensation.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``K(theta)`` [N m/rad]; the restoring moment is ``K(theta) theta``.  Same for both laws.
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
+    """Secant rocking stiffness ``K(theta)`` [N m/rad] (restoring moment ``K theta``), the same for both laws.
 
     Notes
     -----
-    ``K_in = (2/3) b^3 k - m g h + eps k (2 b^3 z^2 + (2/5) b^5 a^2)`` (eq. (14) in [1]) and ``K_up`` of
-    eq. (16), at the quasi-static ``z`` of :func:`quasi_static_indentation`; with ``eps = 0`` it is eq. (25).
-
+    ``K_in = (2/3) b^3 k - m g h + eps k (2 b^3 z^2 + (2/5) b^5 a^2)`` (eq. (14) of [mitseas2026]) and ``K_up``
+    of eq. (16) at the quasi-static ``z``; ``eps = 0`` gives eq. (25).  Raises ``ValueError`` naming ``foundation.eps`` where :func:`check_bearing` refuses the bed.
     """
     z, _, v, a, uplift = indentation_state(theta, block, foundation)
     b, k, eps = block.b, foundation.k, foundation.eps
@@ -437,95 +169,20 @@ def rocking_stiffness(theta, block, foundation):
 
 
 def restoring_moment(theta, block, foundation):
-    """Restoring moment ``K(theta) theta`` [N m] of the cubic condensation.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``K(theta) theta`` [N m], odd in ``theta``.
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
-
-    Notes
-    -----
-    The conservative term of eq. (22) in [1] with ``K`` of :func:`rocking_stiffness`.
-
-    """
+    """Restoring moment ``K(theta) theta`` [N m], odd in ``theta`` (eq. (22) of [mitseas2026])."""
     theta = np.asarray(theta, dtype=float)
     return (rocking_stiffness(theta, block, foundation) * theta)[()]
 
 
 def damping_at_rest(block, foundation):
-    """Rocking damping at rest ``C(0)`` [N m s/rad] of the cubic condensation.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``(2/3) b^3 (w_rate + w_indentation z0)`` (Hunt–Crossley ``(2/3) lam b^3 z0``, Winkler ``(2/3) c b^3``).
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
-
-    Notes
-    -----
-    Eq. (14) in [1] at ``theta = 0`` with the rest indentation ``z0`` (eq. (13)).
-
-    """
+    """Rocking damping at rest ``C(0) = (2/3) b^3 (w_rate + w_indentation z0)`` [N m s/rad] (eq. (14) of [mitseas2026])."""
     check_bearing(block, foundation)
     w_rate, w_ind = foundation.damping_weights
     return 2.0 / 3.0 * w_rate * block.b**3 + 2.0 / 3.0 * w_ind * block.b**3 * rest_indentation(block, foundation)
 
 
 def stiffness_at_rest(block, foundation):
-    """Rocking stiffness at rest ``K(0)`` [N m/rad] of the cubic condensation.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``(2/3) b^3 k - m g h + 2 eps k b^3 z0^2`` [N m/rad].
-
-    Raises
-    ------
-    ValueError
-        Naming ``foundation.eps`` for a softening bed that cannot carry the block through the onset of
-        uplift (:func:`check_bearing`).
-
-    Notes
-    -----
-    Eq. (14) in [1] at ``theta = 0`` with the rest indentation ``z0`` (eq. (13)); its ``eps = 0`` part is
-    :func:`screening.core.physics.contact.linear_rocking_stiffness`.
-
-    """
+    """Rocking stiffness at rest ``K(0) = (2/3) b^3 k - m g h + 2 eps k b^3 z0^2`` [N m/rad] (eq. (14) of [mitseas2026])."""
     z0 = rest_indentation(block, foundation)
     b, k = block.b, foundation.k
     return contact.linear_rocking_stiffness(block, foundation) + 2.0 * foundation.eps * k * b**3 * z0 * z0
@@ -540,25 +197,12 @@ SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("m", "f8"), ("g", "f8"), ("h", "f8"
 
 
 def sdof_record(block, foundation):
-    """The :data:`SDOF_RECORD` of scalar model objects, for the compiled twins.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-
-    Returns
-    -------
-    numpy.ndarray
-        A 1-element :data:`SDOF_RECORD` (SI units).
+    """The 1-element :data:`SDOF_RECORD` [SI] of scalar model objects, for the compiled twins.
 
     Notes
     -----
-    The block, the bed, the threshold, ``z_lin`` (eq. (17) in [1]) and the rest indentation with its
-    curvature (the Newton start of the balance of eq. (13)).
-
+    The block, the bed, the threshold, ``z_lin`` and the rest indentation with its curvature (the Newton
+    start of the balance of eq. (13) of [mitseas2026]).
     """
     b, eps = float(block.b), float(foundation.eps)
     z0 = float(rest_indentation(block, foundation))
@@ -575,29 +219,7 @@ def sdof_record(block, foundation):
 
 @numba.njit(cache=True)
 def quasi_static_indentation_jit(p, a):
-    """Compiled twin of :func:`quasi_static_indentation` at ``a = |theta|``.
-
-    Parameters
-    ----------
-    p : numpy.void
-        An :data:`SDOF_RECORD` (:func:`sdof_record`).
-    a : float
-        Absolute rotation [rad].
-
-    Returns
-    -------
-    z_cb : float
-        [m].
-    slope : float
-        ``dz_cb/da`` [m/rad].
-    v : float
-        Compressed-edge indentation ``b a + z_cb`` [m].
-
-    Notes
-    -----
-    Newton on the balance of eq. (13) in [1] below ``theta_ul``, the closed-form root of eq. (15) above.
-
-    """
+    """Compiled twin of :func:`quasi_static_indentation` at ``a = |theta|`` (record ``p``), also returning ``v``."""
     b, eps = p.b, p.eps
     if a <= p.theta_ul:
         # eps z^3 + beta z = z_lin, beta = 1 + eps b^2 a^2: Newton from the Taylor start
@@ -623,27 +245,7 @@ def quasi_static_indentation_jit(p, a):
 
 @numba.njit(sdof_coefficients_signature(SDOF_RECORD), cache=True)
 def damping_stiffness_jit(p, theta):
-    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`.
-
-    Parameters
-    ----------
-    p : numpy.void
-        An :data:`SDOF_RECORD` (:func:`sdof_record`).
-    theta : float
-        Rotation [rad].
-
-    Returns
-    -------
-    C : float
-        Rocking damping [N m s/rad].
-    K : float
-        Secant rocking stiffness [N m/rad].
-
-    Notes
-    -----
-    Eqs. (14) and (16) in [1] with one indentation solve for both (:func:`quasi_static_indentation_jit`).
-
-    """
+    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`: ``(C, K)`` from one indentation solve."""
     a = abs(theta)
     z, dz, v = quasi_static_indentation_jit(p, a)
     b, k, eps, w_rate, w_ind = p.b, p.k, p.eps, p.w_rate, p.w_indentation

@@ -1,73 +1,12 @@
-"""Quasi-static condensation: the single rocking equation ``M theta'' + C theta' + K theta = m h a_g``.
+"""The paper's quasi-static condensation ([mitseas2026] section 2.3, eqs. 17–25): ``M theta'' + C theta' + K theta = m h a_g``.
 
-Paper section 2.3, eqs. (17)–(25).  The vertical displacement of the base centre is
-slaved to its static value ``z_st(theta)`` (eqs. 17–18) and its rate to
-``z_st'(theta) theta'``; substituting in the small-angle rocking equation gives the
-piecewise damping ``C(theta)`` and stiffness ``K(theta)`` below, switching at the uplift
-threshold ``theta_ul = m g / (2 b^2 k)`` (eq. 19).  Both ``C`` and the restoring moment
-``K(theta) theta`` are continuous at ``|theta| = theta_ul``.
-
-Winkler bed (linear dashpot ``c zdot``), derived the same way
---------------------------------------------------------------
-The stiffness part of the law is the same as Hunt–Crossley, so ``K(theta)`` is eq. (25).
-For the damping moment about the base centre, ``M_d = int c zdot (b - eta) d eta`` over
-the contact zone, with ``zdot = zdot_B - eta theta'`` (small angles):
-
-* no uplift: ``z_cb = m g / (2 b k)`` is constant, ``zdot_B = b theta'``, so
-  ``M_d = c theta' int_0^{2b} (b - eta)^2 d eta = (2/3) c b^3 theta'``;
-* uplift (``theta > 0``): ``z_B = z_cb + b theta = sqrt(2 m g theta / k) = p theta`` with
-  ``p = sqrt(2 m g / (k theta))`` the contact length, ``zdot_B = (p/2) theta'``, so
-  ``M_d = c theta' int_0^p (p/2 - eta)(b - eta) d eta = c p^3 theta' / 12``, i.e.
-  ``C_2 = (c / 12) (2 m g / k)^{3/2} |theta|^{-3/2}``, mirror-symmetric in theta.
-
-``C_2(theta_ul) = (2/3) c b^3``: continuous, like the Hunt–Crossley case.  The same
-procedure applied to ``lam z zdot`` reproduces eq. (24), which checks the route.
-
-Equivalent linear coefficients (paper section 2.4)
---------------------------------------------------
-``c_eq = E[dg/dtheta']`` and ``k_eq = E[dg/dtheta]`` (eq. 31) for
-``g = C(theta) theta' + K(theta) theta`` with ``(theta, theta')`` zero-mean Gaussian.
-
-Closed forms (eq. 35 and eq. 36 as corrected: docs/method.md#eq-36-equivalent-stiffness).  With ``r = sigma_theta /
-theta_ul`` and ``x = theta_ul^2 / (2 sigma_theta^2) = 1 / (2 r^2)`` every sigma-dependent
-part is one of these dimensionless Gaussian integrals (``1_in``: ``|theta| <= theta_ul``):
-
-=====================  =====================================  ==========================================
-name                   definition                              closed form
-=====================  =====================================  ==========================================
-``p_in``               ``P(|theta| <= theta_ul)``              ``erf(sqrt(x))``
-``p_out``              ``P(|theta| > theta_ul)`` (eq. 58)      ``erfc(sqrt(x))``
-``tail_m12``           ``E[|theta/theta_ul|^-1/2 1_out]``      ``2^-1/4 / sqrt(pi) r^-1/2 Gamma(1/4, x)``
-``tail_m32``           ``E[|theta/theta_ul|^-3/2 1_out]``      ``2^-3/4 / sqrt(pi) r^-3/2 Gamma(-1/4, x)``
-``inner_m2``           ``E[(theta/theta_ul)^2 1_in]``          ``r^2 P(3/2, x)`` (regularised lower)
-=====================  =====================================  ==========================================
-
-with ``Gamma(-1/4, x) = 4 (x^-1/4 e^-x - Gamma(3/4, x))``.  Writing ``K0 = (2/3) b^3 k``,
-``E0 = m^2 g^2 b / k`` and ``C1`` the no-uplift damping, the coefficients are
-
-* Hunt–Crossley: ``c_eq = C1 (p_in + tail_m12)`` — eq. (35);
-* Winkler:       ``c_eq = C1 (p_in + tail_m32)``;
-* ``k_eq = K0 (p_in + tail_m32) - m g h - D + eps E0 (p_in/2 + p_out + 0.3 inner_m2 - tail_m12/5)``
-
-where the velocity-coupling term ``D = -E[C'(theta) theta']`` is
-``(C1/2) cov / sigma_theta^2 * tail_m12`` (Hunt–Crossley) or
-``(3/2) C1 cov / sigma_theta^2 * tail_m32`` (Winkler).  Expanding the tails recovers the
-printed eq. (36) term by term, including its three corrections: the ``Gamma(1/4)`` rho-term
-carries ``sigma_theta_dot / sigma_theta^(3/2)``, there is no jump term (``C`` is
-continuous), and the eps bracket is ``E[d(K_eps theta)/d theta]`` (coefficient 6/5 on
-``b^5``, halved ``Gamma(1/4)`` term).
-
-Limits: ``sigma_theta -> 0`` gives the no-uplift values ``c_eq = C1``,
-``k_eq = K0 - m g h + eps (E0/2 + (6/5) k b^5 sigma_theta^2)``; ``sigma_theta -> inf`` gives
-``c_eq -> 0`` and ``k_eq -> -m g h + eps E0``.
-
-
-Method and how it is checked: ``docs/method.md#closed-forms-for-the-paper-condensation``.
-
-The functions below are the paper's condensation alone; :mod:`screening.core.condensation.api` has
-the same functions for any registered condensation (``condensation=`` a name or object).
-
-Method and how it is checked: ``docs/method.md#paper-condensation``.
+The base-centre indentation is slaved to its linear static value ``z_st(theta)`` (eqs. 17–18) and its
+rate to ``z_st'(theta) theta'``, giving the piecewise ``C(theta)`` (eq. 24; its Winkler form derived
+the same way) and ``K(theta)`` (eq. 25), switching at ``theta_ul = m g / (2 b^2 k)`` (eq. 19), both
+continuous there.  The equivalent coefficients (eqs. 31, 35 and 36 as corrected) are closed forms in
+the universal uplift integrals.  The derivations, the closed forms and the corrections:
+``docs/method.md#paper-condensation``, ``#winkler-variant``, ``#closed-forms-for-the-paper-condensation``.
+:mod:`screening.core.condensation.api` has the same functions for any registered condensation.
 """
 
 from __future__ import annotations
@@ -88,51 +27,17 @@ __all__ = []
 
 
 def uplift_threshold(block, foundation):
-    """Static uplift angle ``theta_ul`` [rad] of the paper's condensation.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``theta_ul = m g / (2 b^2 k)`` [rad].
-
-    Notes
-    -----
-    Eq. (19) in [1]: the rotation at which the linear static indentation ``m g / (2 b k)`` (eq. (17))
-    equals ``b theta``.
-
-    """
+    """Static uplift angle ``theta_ul = m g / (2 b^2 k)`` [rad] (eq. (19) of [mitseas2026])."""
     return block.m * block.g / (2.0 * block.b**2 * foundation.k)
 
 
 def static_indentation(theta, block, foundation):
-    """Quasi-static vertical displacement of the base centre ``z_st(theta)`` [m].
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``m g / (2 b k)`` for ``|theta| <= theta_ul`` (eq. (17) in [1]) and
-        ``sqrt(2 m g |theta| / k) - b |theta|`` beyond (eq. (18)).
+    """Quasi-static base-centre indentation ``z_st(theta)`` [m] of the linear balance.
 
     Notes
     -----
-    The linear static balance in full contact and in uplift; continuous at ``theta_ul`` (eq. (19)).
-
+    ``m g / (2 b k)`` for ``|theta| <= theta_ul`` (eq. (17) of [mitseas2026]), ``sqrt(2 m g |theta| / k) - b |theta|``
+    beyond (eq. (18)); continuous at ``theta_ul``.
     """
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
@@ -142,77 +47,25 @@ def static_indentation(theta, block, foundation):
 
 
 def damping_inner_parts(block, foundation):
-    """No-uplift rocking damping of the law's two basis pressures [N m s/rad].
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    rate : numpy.ndarray or float
-        ``(2/3) w_rate b^3`` (the ``zdot`` pressure, Winkler).
-    indentation : numpy.ndarray or float
-        ``w_indentation b^2 m g / (3 k)`` (the ``z zdot`` pressure, Hunt–Crossley).
+    """No-uplift rocking damping [N m s/rad] of the law's two basis pressures: ``(rate, indentation)``.
 
     Notes
     -----
-    The no-uplift branch of eq. (24) in [1] is the ``z zdot`` part; the Winkler dashpot adds the ``zdot``
-    part.
-
+    ``rate = (2/3) w_rate b^3`` (the ``zdot`` pressure, Winkler), ``indentation = w_indentation b^2 m g / (3 k)``
+    (the ``z zdot`` pressure, Hunt–Crossley: the no-uplift branch of eq. (24) of [mitseas2026]).
     """
     w_rate, w_ind = foundation.damping_weights
     return 2.0 / 3.0 * w_rate * block.b**3, w_ind * block.b**2 * block.m * block.g / (3.0 * foundation.k)
 
 
 def damping_inner(block, foundation):
-    """No-uplift rocking damping ``C_1`` [N m s/rad].
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``C_1`` [N m s/rad]: the sum of :func:`damping_inner_parts`.
-
-    Notes
-    -----
-    ``lam b^2 m g / (3 k)`` for Hunt–Crossley, eq. (24) in [1]; ``(2/3) c b^3`` for Winkler.
-
-    """
+    """No-uplift rocking damping ``C_1`` [N m s/rad], the sum of :func:`damping_inner_parts` (eq. (24) of [mitseas2026])."""
     rate, indentation = damping_inner_parts(block, foundation)
     return rate + indentation
 
 
 def stiffness_at_rest(block, foundation):
-    """Rocking stiffness at rest ``K(0)`` [N m/rad] of the paper's condensation.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2]); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``K(0) = (2/3) b^3 k - m g h + eps m^2 g^2 b / (2 k)`` [N m/rad].
-
-    Notes
-    -----
-    Eq. (25) in [1] at ``theta = 0``: :func:`screening.core.physics.contact.linear_rocking_stiffness` plus the
-    cubic term's share about the static indentation ``m g / (2 b k)``.
-
-    """
+    """Rocking stiffness at rest ``K(0) = (2/3) b^3 k - m g h + eps m^2 g^2 b / (2 k)`` [N m/rad] (eq. (25) of [mitseas2026])."""
     e0 = (block.m * block.g) ** 2 * block.b / foundation.k
     return linear_rocking_stiffness(block, foundation) + 0.5 * foundation.eps * e0
 
@@ -220,26 +73,11 @@ def stiffness_at_rest(block, foundation):
 def rocking_damping(theta, block, foundation):
     """Piecewise rocking damping ``C(theta)`` [N m s/rad] of the paper's condensation.
 
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``C(theta)`` [N m s/rad], broadcast over ``theta`` and the model's fields.
-
     Notes
     -----
     ``C_1`` (:func:`damping_inner`) for ``|theta| <= theta_ul``; beyond,
     ``w_rate (2 m g / k)^(3/2) |theta|^(-3/2) / 12 + w_indentation b (2 m g / k)^(3/2) |theta|^(-1/2) / 12``:
-    eq. (24) in [1] for Hunt–Crossley, its Winkler form from the module docstring.
-
+    eq. (24) of [mitseas2026] for Hunt–Crossley and its Winkler form.
     """
     theta = np.abs(np.asarray(theta, dtype=float))
     mg, b, k = block.m * block.g, block.b, foundation.k
@@ -253,28 +91,13 @@ def rocking_damping(theta, block, foundation):
 
 
 def rocking_stiffness(theta, block, foundation):
-    """Piecewise secant rocking stiffness ``K(theta)`` [N m/rad] of the paper's condensation.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``K(theta)`` [N m/rad]; the restoring moment is ``K(theta) theta``.  Same for both laws.
+    """Piecewise secant rocking stiffness ``K(theta)`` [N m/rad] (restoring moment ``K theta``), the same for both laws.
 
     Notes
     -----
-    Eq. (25) in [1]: ``(2/3) b^3 k - m g h + eps (m^2 g^2 b / (2 k) + (2/5) k b^5 theta^2)`` for
+    Eq. (25) of [mitseas2026]: ``(2/3) b^3 k - m g h + eps (m^2 g^2 b / (2 k) + (2/5) k b^5 theta^2)`` for
     ``|theta| <= theta_ul``, ``m g (b/|theta| - sqrt(2 m g k) |theta|^(-3/2) / (3 k) - h) +
     eps (m^2 g^2 b / k - m^2 g^2 sqrt(2 m g / k) |theta|^(-1/2) / (5 k))`` beyond.
-
     """
     theta = np.asarray(theta, dtype=float)
     a = np.abs(theta)
@@ -289,27 +112,7 @@ def rocking_stiffness(theta, block, foundation):
 
 
 def restoring_moment(theta, block, foundation):
-    """Restoring moment ``K(theta) theta`` [N m] of the paper's condensation.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``K(theta) theta`` [N m], odd in ``theta``.
-
-    Notes
-    -----
-    The conservative term of eq. (22) in [1] with ``K`` of eq. (25).
-
-    """
+    """Restoring moment ``K(theta) theta`` [N m], odd in ``theta`` (eq. (22) of [mitseas2026])."""
     theta = np.asarray(theta, dtype=float)
     return rocking_stiffness(theta, block, foundation) * theta
 
@@ -322,26 +125,7 @@ SDOF_RECORD = np.dtype([("theta_ul", "f8"), ("C1", "f8"), ("C2_rate", "f8"), ("C
 
 
 def sdof_record(block, foundation):
-    """The :data:`SDOF_RECORD` of scalar model objects: the constants of ``C`` and ``K``.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-
-    Returns
-    -------
-    numpy.ndarray
-        A 1-element :data:`SDOF_RECORD` (SI units) for :func:`damping_stiffness_jit`.
-
-    Notes
-    -----
-    The parameter-only factors of eqs. (24)-(25) in [1], so that the compiled twin evaluates ``C`` and
-    ``K`` with one square root.
-
-    """
+    """The 1-element :data:`SDOF_RECORD` [SI] of scalar model objects: the parameter-only factors of eqs. (24)-(25) of [mitseas2026]."""
     m, g, h, b = float(block.m), float(block.g), float(block.h), float(block.b)
     k, eps = float(foundation.k), float(foundation.eps)
     w_rate, w_ind = (float(w) for w in foundation.damping_weights)
@@ -362,27 +146,7 @@ def sdof_record(block, foundation):
 
 @numba.njit(sdof_coefficients_signature(SDOF_RECORD), cache=True)
 def damping_stiffness_jit(p, theta):
-    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`.
-
-    Parameters
-    ----------
-    p : numpy.void
-        An :data:`SDOF_RECORD` (:func:`sdof_record`).
-    theta : float
-        Rotation [rad].
-
-    Returns
-    -------
-    C : float
-        Rocking damping [N m s/rad].
-    K : float
-        Secant rocking stiffness [N m/rad].
-
-    Notes
-    -----
-    Eqs. (24)-(25) in [1] from the record's constants; the condensed Monte Carlo's ``C``, ``K``.
-
-    """
+    """Compiled twin of :func:`rocking_damping` and :func:`rocking_stiffness`: ``(C, K)`` from the record ``p``."""
     a = abs(theta)
     if a <= p.theta_ul:
         return p.C1, p.K1_0 + p.K1_2 * theta * theta
@@ -394,25 +158,12 @@ def damping_stiffness_jit(p, theta):
 # ---------------------------------------------------------------- equivalent linear coefficients (section 2.4)
 
 def coefficient_constants(block, foundation):
-    """Parameter-only constants of the closed-form equivalent coefficients (SI).
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    dict
-        ``C1`` [N m s/rad] (and its parts ``C1_rate``, ``C1_indentation``), ``K0 = (2/3) b^3 k`` [N m/rad],
-        ``mgh`` [N m], ``E0 = (m g)^2 b / k`` [N m] and ``theta_ul`` [rad].
+    """The moment-free factors of eqs. (35)-(36) of [mitseas2026], a dict [SI].
 
     Notes
     -----
-    The factors of eqs. (35)-(36) in [1] that do not depend on the moments.
-
+    ``C1`` [N m s/rad] (and its parts ``C1_rate``, ``C1_indentation``), ``K0 = (2/3) b^3 k`` [N m/rad],
+    ``mgh`` [N m], ``E0 = (m g)^2 b / k`` [N m] and ``theta_ul`` [rad].
     """
     m, g, b, h, k = block.m, block.g, block.b, block.h, foundation.k
     c1_rate, c1_indentation = damping_inner_parts(block, foundation)
@@ -428,33 +179,14 @@ def coefficient_constants(block, foundation):
 
 
 def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation):
-    """Closed-form equivalent damping and stiffness of the paper's condensation.
-
-    Parameters
-    ----------
-    sigma_theta : array_like
-        Standard deviation of the rotation [rad], >= 0.
-    cov_over_sigma : array_like
-        ``cov(theta, theta') / sigma_theta = rho sigma_theta_dot`` [rad s-1].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-
-    Returns
-    -------
-    c_eq : numpy.ndarray
-        [N m s/rad], broadcast with the model's fields.
-    k_eq : numpy.ndarray
-        [N m/rad].
+    """Closed-form equivalent damping ``c_eq`` [N m s/rad] and stiffness ``k_eq`` [N m/rad] of the paper's condensation.
 
     Notes
     -----
-    Eqs. (35)-(36) in [1], with the corrections of ``docs/method.md`` (module docstring): the Gaussian
-    expectations of eq. (31) of the piecewise ``C``, ``K`` (eqs. (24)-(25)) through the universal uplift
-    integrals of :mod:`~screening.core.condensation.uplift_integrals`; :func:`equivalent_coefficients_jit` is the
-    compiled twin.
-
+    Eqs. (35)-(36) of [mitseas2026] as corrected (``docs/method.md#eq-36-equivalent-stiffness``): the Gaussian
+    expectations of eq. (31) of ``C``, ``K`` through the uplift integrals of
+    :mod:`~screening.core.condensation.uplift_integrals`, from ``sigma_theta`` [rad] and
+    ``cov_over_sigma = rho sigma_theta_dot`` [rad s-1].
     """
     s = np.asarray(sigma_theta, dtype=float)
     cov_over_s = np.asarray(cov_over_sigma, dtype=float)
@@ -478,25 +210,7 @@ RECORD = np.dtype([("theta_ul", "f8"), ("inv_theta_ul2", "f8"), ("C1_rate", "f8"
 
 
 def records(block, foundation):
-    """One :data:`RECORD` per point: the constants of the compiled closed forms.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); flat (1-d) or scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); flat (1-d) or scalar fields.
-
-    Returns
-    -------
-    numpy.ndarray
-        Structured array of :data:`RECORD` (SI units), one per point.
-
-    Notes
-    -----
-    :func:`coefficient_constants` laid out for :func:`equivalent_coefficients_jit` (eqs. (35)-(36) in [1]).
-
-    """
+    """One :data:`RECORD` [SI] per point (flat or scalar fields): :func:`coefficient_constants` for :func:`equivalent_coefficients_jit`."""
     const = coefficient_constants(block, foundation)
     fields = {"theta_ul": const["theta_ul"], "inv_theta_ul2": 1.0 / const["theta_ul"] ** 2,
               "C1_rate": const["C1_rate"], "C1_indentation": const["C1_indentation"],
@@ -510,32 +224,7 @@ def records(block, foundation):
 
 @numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
 def equivalent_coefficients_jit(p, table, var_theta, cov):
-    """Compiled twin of :func:`equivalent_coefficients` from the moments.
-
-    Parameters
-    ----------
-    p : numpy.void
-        A :data:`RECORD` (:func:`records`).
-    table : numpy.ndarray
-        The universal table of :func:`screening.core.condensation.uplift_integrals.coefficient_table`.
-    var_theta : float
-        Variance of the rotation [rad2].
-    cov : float
-        Covariance of the rotation and its rate [rad2 s-1].
-
-    Returns
-    -------
-    c_eq : float
-        [N m s/rad].
-    k_eq : float
-        [N m/rad].
-
-    Notes
-    -----
-    Eqs. (35)-(36) in [1] (corrected) with the Gaussian integrals read from the table; finite at
-    ``var_theta = 0``, the start of every integration of eq. (45).
-
-    """
+    """Compiled twin of :func:`equivalent_coefficients` from the moments ``var_theta`` [rad2], ``cov`` [rad2 s-1] and the uplift table."""
     q = var_theta * p.inv_theta_ul2                 # (sigma_theta / theta_ul)^2
     p_in, tail_m12, tail_m32, p32 = uplift_integrals_q(q, table)
     # the law's two basis pressures: zdot (tails |theta|^-3/2) and z zdot (|theta|^-1/2)

@@ -1,65 +1,17 @@
 """Equivalent linear coefficients of any condensation by Gaussian quadrature, tabulated per point.
 
-A condensation whose ``C(theta)``, ``K(theta)`` have no closed-form Gaussian expectations (the
-``"cubic"`` one, :mod:`screening.core.condensation.cubic`, or one registered from outside) gets the
-coefficients of eq. (31) by quadrature; this is the default of
-:meth:`screening.core.condensation.Condensation.equivalent_coefficients` and of its moment kernel.  For zero-mean Gaussian ``(theta, theta')`` with ``sigma = sigma_theta`` and
-``cov = E[theta theta']``, Stein's lemma ``E[f'(theta)] = E[theta f(theta)] / sigma^2`` and
-``E[theta' | theta] = cov theta / sigma^2`` turn ``g = C(theta) theta' + K(theta) theta`` into
+A condensation without closed-form Gaussian expectations of ``C(theta)``, ``K(theta)`` (``"cubic"``, or one
+registered from outside) gets the coefficients of eq. (31) of [mitseas2026] here: by Stein's lemma
+[stein1981] ``c_eq = e_c`` and ``k_eq = e_k + cov d_c`` with three functions of ``sigma = sigma_theta``
+alone (``x = theta / sigma``, ``C0 = C(0)``)::
 
-    c_eq = E[dg/dtheta'] = E[C]                                             = e_c
-    k_eq = E[dg/dtheta]  = E[(K theta)'] + E[C'(theta) theta']              = e_k + cov d_c
+    e_c = E[C]  [N m s/rad],   e_k = E[K x^2]  [N m/rad],   d_c = E[(C - C0) (x^2 - 1)] / sigma^2  [N m s/rad^3]
 
-with three functions of ``sigma`` alone (``x = theta / sigma``, ``C0 = C(0)``)::
-
-    e_c = E[C]                              [N m s/rad]
-    e_k = E[K x^2]                          [N m/rad]
-    d_c = E[(C - C0) (x^2 - 1)] / sigma^2   [N m s/rad^3]
-
-(``E[x^2 - 1] = 0`` lets ``C0`` be subtracted, which keeps ``d_c`` accurate at small
-``sigma``).  No derivative of the piecewise ``C``, ``K`` is taken: these are the regression
-form ``Cov^-1 E[g y]`` of eq. (31), correct across the kinks at ``+-theta_ul``.  Limits at
-``sigma -> 0``: ``e_c -> C(0)``, ``e_k -> K(0)`` (the no-uplift values) and
-``d_c -> 2 C_2`` for ``C = C0 + C_2 theta^2 + ...``, all finite.  For the paper's ``C``, ``K``
-the same formulas reproduce the closed forms of :mod:`screening.core.condensation.paper`.
-
-Quadrature (``E[f] = 2 int_0^inf f(theta) phi_sigma(theta) dtheta``, ``C``, ``K`` even): one node
-set in ``theta`` per parameter point, Gauss–Legendre (:data:`GAUSS_ORDER` nodes) on panels
-
-* ``[0, theta_ul]``: geometric panels ``[theta_ul 2^-(j+1), theta_ul 2^-j]`` down to
-  ``2^-J_INNER theta_ul``, so every ``sigma`` of the table finds panels of its own size;
-* ``[theta_ul, theta_top]``: geometric panels from ``theta_ul`` (``C``, ``K`` are analytic there
-  with their nearest singularity at ``theta = 0``, one panel length away);
-* softening beds: the panel ``[3/4 theta_cap, theta_cap]`` in ``s = sqrt(theta_cap - theta)``
-  (``dz/da ~ (theta_cap - a)^(-1/2)`` becomes analytic in ``s``), and geometric panels above
-  ``theta_cap``.
-
-``C``, ``K`` are evaluated once per point; each ``sigma`` only reweights, its nodes up to
-``SIGMA_SPAN sigma`` one by one and those below ``0.1 sigma`` through prefix moments.
-
-Table: ``t = ln(sigma / theta_ul)`` on ``[T_LO, t_hi]`` with :data:`STEPS_PER_UNIT` nodes per
-unit, values and their exact ``t``-derivatives (same quadrature)::
-
-    d e_c / dt = E[(C - C0) (x^2 - 1)],   d e_k / dt = E[(K - K0) x^2 (x^2 - 3)],
-    d d_c / dt = E[(C - C0) (x^4 - 6 x^2 + 3)] / sigma^2
-
-read back by cubic Hermite interpolation, stored as per-interval cubic coefficients
-(:func:`coefficient_table`, :func:`table_lookup`; largest error against the direct quadrature
-3e-7 of ``k_eq``, 3e-9 of ``c_eq`` for the test beds; ~1200 nodes for the paper's block).  Below ``T_LO``
-(``sigma < 6e-6 theta_ul``) ``e_c``, ``e_k`` follow ``f0 + (f(T_LO) - f0) (sigma/sigma_lo)^2`` and
-``d_c`` is held (relative errors ``O(sigma^2)`` on terms that are themselves ``O(sigma^2)``);
-above ``t_hi`` (4 x the slenderness angle, where the moment solver has long stopped the
-point) the last values are held.
-
-The moment solver reads the same interpolant without a logarithm (:func:`octave_table`,
-:func:`octave_lookup_jit`): in ``q = (sigma / theta_ul)^2 = var_theta / theta_ul^2`` on an octave
-grid of :data:`BUCKET_BITS` bits (:func:`screening.core.interpolation.octave_grid`; the bucket of
-``q`` and the fraction in it come from the bits of ``q``), each bucket holds at most one node of
-the ``t`` grid, and each of its two pieces is the interpolant re-expressed as a polynomial of
-degree :data:`FIT_DEGREE` in the bucket fraction (Chebyshev-Lobatto interpolation: within 1e-13 of
-``K(0)`` of the cubic in ``t``, the rounding of its logarithm).
-A table costs ~3-4 ms per distinct point (the sums, ``C``, ``K`` at the nodes, the octave form), and a process keeps its :data:`TABLE_CACHE_SIZE` most recent ones, so a point met again (the
-next chunk of a batch, the next call) does not rebuild its table.
+computed by Gauss–Legendre quadrature on geometric panels about ``theta_ul`` (and ``theta_cap``), tabulated
+per point in ``t = ln(sigma / theta_ul)`` with exact ``t``-slopes and read back by cubic Hermite
+interpolation; the moment solver reads the same interpolant on octave buckets of
+``q = var_theta / theta_ul^2`` without a logarithm.  A process keeps its :data:`TABLE_CACHE_SIZE` most
+recent tables.  The panels, the table, its accuracy and cost: ``docs/method.md#quadrature-tables``.
 """
 
 from __future__ import annotations
@@ -116,42 +68,15 @@ def _geometric_edges(start, stop):
 
 
 def theta_quadrature(theta_ul, theta_cap, theta_top):
-    """Nodes ``theta_j`` [rad] and weights [rad] on ``(0, theta_top]`` for Gaussian expectations.
-
-    ``theta_ul``: uplift threshold [rad]; ``theta_cap``: capacity angle [rad] (``inf`` if none);
-    ``theta_top``: upper end [rad] (at least ``SIGMA_SPAN`` times the largest sigma).  Panels
-    as in the module docstring.
-
-    Parameters
-    ----------
-    theta_ul : float
-        The uplift threshold [rad], > 0.
-    theta_cap : float
-        The capacity angle of a softening bed [rad]; ``math.inf`` for none.
-    theta_top : float
-        The upper end of the nodes [rad] (raised to ``2 theta_ul`` if below).
-
-    Returns
-    -------
-    theta : numpy.ndarray
-        The nodes [rad], in ``(0, theta_top]`` (up to the last geometric panel's end).
-    weight : numpy.ndarray
-        Their weights [rad]: ``sum(weight * f(theta))`` approximates ``int f dtheta``.
+    """Nodes ``theta`` [rad] on ``(0, theta_top]`` and weights [rad] for Gaussian expectations.
 
     Notes
     -----
-    :data:`GAUSS_ORDER`-point Gauss-Legendre rules [2]_ on geometric panels
-    ``[theta_ul 2^-(j+1), theta_ul 2^-j]`` (``j < J_INNER``) and ``[theta_ul 2^j, theta_ul 2^(j+1)]``,
-    so that every ``sigma`` between ``2^-J_INNER theta_ul`` and ``theta_top / SIGMA_SPAN`` finds
-    panels of its own size; below ``theta_cap`` the substitution ``theta = theta_cap - s^2`` removes
-    the square-root singularity of ``dz/dtheta``.  The expectations of eq. (31) in [1]_ are
-    ``E[f] = 2 sum(weight f(theta) phi_sigma(theta))`` for even ``f``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] P. J. Davis and P. Rabinowitz, Methods of Numerical Integration, 2nd ed., Academic Press
-       (1984), ch. 2 (Gauss-Legendre rules).
+    :data:`GAUSS_ORDER`-point Gauss-Legendre rules [davis1984] on geometric panels below and above the uplift
+    threshold ``theta_ul`` [rad] (``theta_top`` raised to ``2 theta_ul``), so that every ``sigma`` between
+    ``2^-J_INNER theta_ul`` and ``theta_top / SIGMA_SPAN`` finds panels of its own size; below the capacity
+    angle ``theta_cap`` [rad] (``inf``: none) ``theta = theta_cap - s^2`` removes the square-root singularity
+    of ``dz/dtheta``.  ``E[f] = 2 sum(weight f(theta) phi_sigma(theta))`` for even ``f``.
     """
     inner = np.concatenate([[0.0], theta_ul * 2.0 ** -np.arange(J_INNER, -1, -1)])
     parts = [_gauss_legendre(inner)]
@@ -172,47 +97,16 @@ def theta_quadrature(theta_ul, theta_cap, theta_top):
 
 
 def gaussian_expectations(sigma, theta, weight, c_values, k_values, c0, k0):
-    """``(values, slopes)``, each ``(len(sigma), 3)``: ``(e_c, e_k, d_c)`` and their d/d ln(sigma).
-
-    ``sigma`` [rad] > 0; ``theta``, ``weight`` from :func:`theta_quadrature`; ``c_values``
-    [N m s/rad], ``k_values`` [N m/rad] = ``C``, ``K`` at the nodes; ``c0``, ``k0`` = ``C(0)``, ``K(0)``.
-
-    Parameters
-    ----------
-    sigma : array_like
-        Standard deviations of the rotation [rad], > 0 (1-d).
-    theta, weight : numpy.ndarray
-        Nodes [rad] and weights [rad] (:func:`theta_quadrature`).
-    c_values : numpy.ndarray
-        The rocking damping ``C(theta)`` at the nodes [N m s/rad].
-    k_values : numpy.ndarray
-        The rocking stiffness ``K(theta)`` at the nodes [N m/rad].
-    c0, k0 : float
-        ``C(0)`` [N m s/rad] and ``K(0)`` [N m/rad].
-
-    Returns
-    -------
-    values : numpy.ndarray
-        ``(len(sigma), 3)``: ``e_c`` [N m s/rad], ``e_k`` [N m/rad], ``d_c`` [N m s/rad^3].
-    slopes : numpy.ndarray
-        ``(len(sigma), 3)``: their derivatives with respect to ``ln(sigma)`` (same units).
+    """``(values, slopes)``, each ``(len(sigma), 3)``: ``(e_c, e_k, d_c)`` (module docstring) and their d/d ln(sigma).
 
     Notes
     -----
-    With ``x = theta / sigma``, the expectations of eq. (31) in [1]_ over the Gaussian density
-    eq. (33), turned by Stein's lemma [2]_ into functions of ``sigma`` alone::
+    ``sigma`` [rad] > 0; ``theta``, ``weight`` of :func:`theta_quadrature`; ``c_values``, ``k_values``:
+    ``C``, ``K`` at the nodes; ``c0``, ``k0``: ``C(0)``, ``K(0)``.  The slopes::
 
-        e_c = E[C],   e_k = E[K x^2],   d_c = E[(C - C0) (x^2 - 1)] / sigma^2
         d e_c / d ln(sigma) = E[(C - C0) (x^2 - 1)]
         d e_k / d ln(sigma) = E[(K - K0) x^2 (x^2 - 3)]
         d d_c / d ln(sigma) = E[(C - C0) (x^4 - 6 x^2 + 3)] / sigma^2
-
-    so that ``c_eq = e_c`` and ``k_eq = e_k + cov(theta, theta') d_c``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
     """
     sigma = np.asarray(sigma, dtype=float).reshape(-1)
     theta = np.asarray(theta, dtype=float)
@@ -327,36 +221,12 @@ def _point_nodes(block, foundation, sigma_max, cond, tu=None):
 
 
 def expectations(sigma_theta, block, foundation, cond):
-    """``(e_c, e_k, d_c)`` [SI, module docstring] at ``sigma_theta`` [rad] >= 0 for one scalar point.
-
-    Direct quadrature (no table); below ``sigma_lo = theta_ul exp(T_LO)`` the same ``sigma^2``
-    extrapolation as the table, exact limits at ``sigma = 0``.
-
-    Parameters
-    ----------
-    sigma_theta : array_like
-        Standard deviation of the rotation [rad], >= 0.
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-    cond : screening.core.condensation.Condensation
-        The condensation whose ``C(theta)``, ``K(theta)`` are averaged (``get("cubic")``).
-
-    Returns
-    -------
-    e_c : numpy.ndarray
-        ``E[C]`` [N m s/rad], the shape of ``sigma_theta``.
-    e_k : numpy.ndarray
-        ``E[K x^2]`` [N m/rad].
-    d_c : numpy.ndarray
-        ``E[(C - C0) (x^2 - 1)] / sigma^2`` [N m s/rad^3].
+    """``(e_c, e_k, d_c)`` [SI, module docstring] at ``sigma_theta`` [rad] >= 0 by direct quadrature (no table) (``block``, ``foundation``: one scalar point; ``cond`` the condensation whose ``C``, ``K`` are averaged).
 
     Notes
     -----
-    :func:`gaussian_expectations` on the nodes of :func:`theta_quadrature`; the equivalent
-    coefficients of eq. (31) in [1]_ are ``c_eq = e_c``, ``k_eq = e_k + cov d_c``.
-
+    Below ``sigma_lo = theta_ul exp(T_LO)`` the same ``sigma^2`` extrapolation as the table; exact limits at
+    ``sigma = 0``.
     """
     s = np.asarray(sigma_theta, dtype=float)
     tu = float(cond.uplift_threshold(block, foundation))
@@ -376,30 +246,7 @@ def expectations(sigma_theta, block, foundation, cond):
 
 
 def table_size(block, foundation, cond):
-    """Number of table nodes, from ``T_LO`` up to ``t_hi = ln(4 atan(b/h) / theta_ul)`` (at least 2).
-
-    Vectorised over array model parameters (one size per point).
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``b``, ``h`` [m]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed; fields may be arrays.
-    cond : screening.core.condensation.Condensation
-        The condensation (its ``uplift_threshold``).
-
-    Returns
-    -------
-    int or numpy.ndarray of int
-        ``ceil((t_hi - T_LO) STEPS_PER_UNIT) + 1`` nodes [-], with
-        ``t_hi = max(ln(4 atan(b/h) / theta_ul), 2)``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
-    """
+    """Number of table nodes per point: ``ceil((t_hi - T_LO) STEPS_PER_UNIT) + 1``, ``t_hi = max(ln(4 atan(b/h) / theta_ul), 2)``."""
     return _size(block.slenderness, cond.uplift_threshold(block, foundation))
 
 
@@ -410,32 +257,7 @@ def _size(slenderness, tu):
 
 
 def node_values(block, foundation, cond):
-    """``(values, slopes)`` of shape ``(table_size, 3)`` for one scalar point (module docstring).
-
-    Nodes at ``t = T_LO + i / STEPS_PER_UNIT``; depends on the point alone.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-    cond : screening.core.condensation.Condensation
-        The condensation whose ``C(theta)``, ``K(theta)`` are averaged (``get("cubic")``).
-
-    Returns
-    -------
-    values : numpy.ndarray
-        ``(table_size, 3)``: ``e_c`` [N m s/rad], ``e_k`` [N m/rad], ``d_c`` [N m s/rad^3] at
-        ``sigma = theta_ul exp(t)``.
-    slopes : numpy.ndarray
-        ``(table_size, 3)``: their derivatives with respect to ``t`` (same units).
-
-    Notes
-    -----
-    :func:`gaussian_expectations` at the table's ``sigma`` values, one node set for all of them.
-
-    """
+    """``(values, slopes)``, each ``(table_size, 3)``, at ``t = T_LO + i / STEPS_PER_UNIT`` (``block``, ``foundation``: one scalar point; ``cond`` the condensation whose ``C``, ``K`` are averaged)."""
     return _node_values(block, foundation, cond)[:2]
 
 
@@ -450,63 +272,19 @@ def _node_values(block, foundation, cond):
 
 
 def coefficient_table(block, foundation, cond):
-    """One scalar point's table: per-interval cubic coefficients ``(table_size, 12)`` of
-    :func:`node_values` (:func:`screening.core.interpolation.cubic_coefficients`).
+    """One scalar point's table ``(table_size, 12)``: per-interval cubic Hermite coefficients of :func:`node_values`.
 
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-    cond : screening.core.condensation.Condensation
-        The condensation whose ``C(theta)``, ``K(theta)`` are averaged (``get("cubic")``).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(table_size, 12)``: for each interval of ``t``, the four cubic Hermite coefficients of
-        ``e_c`` (columns 0-3, [N m s/rad]), ``e_k`` (4-7, [N m/rad]) and ``d_c`` (8-11,
-        [N m s/rad^3]); columns 0, 4, 8 hold the node values.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
-       interpolation).
+    Notes
+    -----
+    Four coefficients [deboor1978] each of ``e_c`` (columns 0-3), ``e_k`` (4-7) and ``d_c`` (8-11); columns
+    0, 4, 8 hold the node values (:func:`screening.core.interpolation.cubic_coefficients`).
     """
     values, slopes = node_values(block, foundation, cond)
     return cubic_coefficients(values, slopes, 1.0 / STEPS_PER_UNIT)
 
 
 def coefficient_tables(block, foundation, cond):
-    """Tables of the points of flat (1-d) model fields: ``(tables, index)``.
-
-    ``tables``: ``(n_distinct, max size, 12)``, one :func:`coefficient_table` per distinct point,
-    zero-padded to the longest (the padding is never read: :func:`table_lookup_grid` gets each
-    point's :func:`table_size`); ``index[i]`` is point i's table.
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); flat (1-d) fields, one entry per point.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); flat (1-d) fields, one entry per point.
-    cond : screening.core.condensation.Condensation
-        The condensation whose ``C(theta)``, ``K(theta)`` are averaged (``get("cubic")``).
-
-    Returns
-    -------
-    tables : numpy.ndarray
-        ``(n_distinct, max table_size, 12)`` (units of :func:`coefficient_table`).
-    index : numpy.ndarray of int64
-        Point ``i``'s table is ``tables[index[i]]``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
-    """
+    """``(tables, index)`` of flat model fields: one :func:`coefficient_table` per distinct point, zero-padded to the longest; point ``i``'s is ``tables[index[i]]``."""
     first, index = _distinct_points(block, foundation)
     return _stacked([coefficient_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]), index
 
@@ -585,36 +363,14 @@ def _octave_rows_jit(table, c0, k0, lo, hi, node, split, rows):
 def octave_table(table, c0, k0):
     """The solver's form of a :func:`coefficient_table`: its interpolant on the octave buckets of ``q``.
 
-    Parameters
-    ----------
-    table : numpy.ndarray
-        One point's :func:`coefficient_table` (on the grid ``t = T_LO + i / STEPS_PER_UNIT``).
-    c0 : float
-        ``C(0)`` [N m s/rad].
-    k0 : float
-        ``K(0)`` [N m/rad].
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(2 n_buckets, 3 + 3 (FIT_DEGREE + 1))``: rows ``2 j`` and ``2 j + 1`` are the two pieces of
-        bucket ``j`` of ``q = (sigma / theta_ul)^2`` (:func:`screening.core.interpolation.octave_grid`
-        from ``2^Q_OCTAVE_LO``, :data:`BUCKET_BITS` bits), split at the grid node inside it (if any).  Each
-        row holds that node's ``q`` (``inf`` if none), ``A``, ``B`` with ``y = A s + B`` in ``[0, 1]`` over
-        the piece (``s`` the fraction of the bucket), and the coefficients of ``e_c`` [N m s/rad],
-        ``e_k`` [N m/rad] and ``d_c`` [N m s/rad^3] in powers of ``y``.
-
     Notes
     -----
-    Within a piece the interpolant of :func:`table_lookup` (a cubic in ``t = ln(q) / 2``, or the
-    extrapolation below the grid) is analytic in ``q``; its interpolation at the :data:`FIT_DEGREE` + 1
-    Chebyshev-Lobatto points of the piece [1]_ reproduces it within 1e-13 of ``K(0)`` (the rounding of its
-    logarithm), and :func:`octave_lookup_jit` finds the piece from the bits of ``q``, without a logarithm.
-
-    References
-    ----------
-    .. [1] L. N. Trefethen, Approximation Theory and Approximation Practice, SIAM (2013), ch. 8
-       (convergence for analytic functions).
+    ``(2 n_buckets, 3 + 3 (FIT_DEGREE + 1))``: rows ``2 j``, ``2 j + 1`` are the two pieces of bucket ``j`` of
+    ``q = (sigma / theta_ul)^2`` (:func:`screening.core.interpolation.octave_grid`), split at the grid node
+    inside it.  A row holds that node's ``q`` (``inf`` if none), ``A``, ``B`` with ``y = A s + B`` in
+    ``[0, 1]`` (``s`` the bucket fraction) and the coefficients of ``e_c``, ``e_k``, ``d_c`` in powers of
+    ``y``: the interpolant of :func:`table_lookup` at :data:`FIT_DEGREE` + 1 Chebyshev-Lobatto points of the
+    piece [trefethen2013], within 1e-13 of ``K(0)``.
     """
     n = table.shape[0]
     q_nodes = np.exp(2.0 * (T_LO + np.arange(n) / STEPS_PER_UNIT))
@@ -639,42 +395,14 @@ def _piece(table, r, column, y):
 
 @numba.njit(cache=True, inline="always")
 def octave_lookup_jit(q, table, c0, k0, lo_c, lo_k, lo_d, hi_c, hi_k, hi_d, buckets):
-    """Compiled :func:`table_lookup` at ``q = (sigma_theta / theta_ul)^2`` from an :func:`octave_table`.
-
-    Parameters
-    ----------
-    q : float
-        ``(sigma_theta / theta_ul)^2`` [-]; any ``q <= 0`` (and NaN) gives the values at rest.
-    table : numpy.ndarray
-        The point's :func:`octave_table` (possibly zero-padded: rows beyond ``2 buckets`` are never read).
-    c0 : float
-        ``C(0)`` [N m s/rad].
-    k0 : float
-        ``K(0)`` [N m/rad].
-    lo_c, lo_k, lo_d : float
-        ``e_c``, ``e_k``, ``d_c`` at the first node of the :func:`coefficient_table` (``t = T_LO``) [SI].
-    hi_c, hi_k, hi_d : float
-        The same at its last node, held beyond [SI].
-    buckets : int
-        The table's number of buckets [-].
-
-    Returns
-    -------
-    tuple of float
-        ``(e_c [N m s/rad], e_k [N m/rad], d_c [N m s/rad^3])``.
+    """Compiled :func:`table_lookup` at ``q = (sigma_theta / theta_ul)^2`` from an :func:`octave_table`: ``(e_c, e_k, d_c)``.
 
     Notes
     -----
-    The bucket and the fraction ``s`` in it from the bits of ``q``
-    (:func:`screening.core.interpolation.octave_position_jit`), the piece by one comparison with the
-    node in the bucket, then a polynomial of degree :data:`FIT_DEGREE` in ``y = A s + B``: the cubic
-    Hermite interpolant [1]_ of :func:`table_lookup` without its logarithm.  Below ``2^Q_OCTAVE_LO`` the
-    extrapolation ``f0 + (f(T_LO) - f0) q / exp(2 T_LO)``.
-
-    References
-    ----------
-    .. [1] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
-       interpolation).
+    ``q <= 0`` (and NaN) gives ``c0``, ``k0`` and ``d_c`` at rest.  Bucket and fraction from the bits of ``q``
+    (:func:`screening.core.interpolation.octave_position_jit`), the piece by one comparison, then a polynomial
+    in ``y``; below ``2^Q_OCTAVE_LO``, ``f0 + (f(T_LO) - f0) q / exp(2 T_LO)`` from the first node's values
+    ``lo_*``; above the last node, ``hi_*`` held.
     """
     j, s = octave_position_jit(q, _FIRST, BUCKET_BITS)
     if j < 0:
@@ -724,28 +452,10 @@ RECORD = np.dtype([("inv_theta_ul2", "f8"), ("c_rest", "f8"), ("k_rest", "f8"), 
 def moment_kernel(block, foundation, cond):
     """:class:`~screening.core.condensation.base.MomentKernel` of ``cond`` for flat (1-d) model fields.
 
-    The default moment kernel of a condensation without closed forms: the compiled
-    :func:`equivalent_coefficients_jit`, one :data:`RECORD` per point and the :func:`octave_table` of each
-    distinct point (kept by the process for the next call).
-
-    Parameters
-    ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); flat (1-d) fields, one entry per point.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); flat (1-d) fields, one entry per point.
-    cond : screening.core.condensation.Condensation
-        The condensation whose ``C(theta)``, ``K(theta)`` are averaged (``get("cubic")``).
-
-    Returns
-    -------
-    screening.core.signatures.MomentKernel
-        ``(coefficients, records, tables, table_index)``: records in SI units (:data:`RECORD`).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] screening documentation, "Method", docs/method.md, section "Quadrature tables".
+    Notes
+    -----
+    The default moment kernel of a condensation without closed forms: :func:`equivalent_coefficients_jit`,
+    one :data:`RECORD` per point [SI] and the :func:`octave_table` of each distinct point.
     """
     first, index = _distinct_points(block, foundation)
     entries = [_solver_table(select(block, int(i)), select(foundation, int(i)), cond) for i in first]
@@ -756,36 +466,11 @@ def moment_kernel(block, foundation, cond):
 def table_lookup(t, table, c0, k0):
     """``(e_c, e_k, d_c)`` at ``t = ln(sigma_theta / theta_ul)`` (``-inf`` allowed) from one point's table.
 
-    ``c0``, ``k0``: ``C(0)`` [N m s/rad], ``K(0)`` [N m/rad], the limits at ``sigma = 0``.
-    Python entry point of :func:`table_lookup_grid` on the grid of this module.
-
-    Parameters
-    ----------
-    t : float
-        ``ln(sigma_theta / theta_ul)`` [-]; ``-inf`` for ``sigma_theta = 0``.
-    table : numpy.ndarray
-        One point's :func:`coefficient_table`.
-    c0 : float
-        ``C(0)`` [N m s/rad].
-    k0 : float
-        ``K(0)`` [N m/rad].
-
-    Returns
-    -------
-    tuple of float
-        ``(e_c [N m s/rad], e_k [N m/rad], d_c [N m s/rad^3])``.
-
     Notes
     -----
-    Cubic Hermite interpolation [2]_ of the node values and ``t``-slopes; below ``T_LO``,
-    ``f0 + (f(T_LO) - f0) (sigma / sigma_lo)^2`` for ``e_c``, ``e_k`` and ``d_c`` held; above the
-    last node its values held.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
-       interpolation).
+    :func:`table_lookup_grid` on this module's grid: cubic Hermite interpolation [deboor1978]; below ``T_LO``
+    ``e_c``, ``e_k`` go as ``f0 + (f(T_LO) - f0) (sigma / sigma_lo)^2`` to ``c0 = C(0)``, ``k0 = K(0)`` and
+    ``d_c`` is held; above the last node its values are held.
     """
     return table_lookup_grid(t, table, c0, k0, T_LO, float(STEPS_PER_UNIT), table.shape[0])
 
@@ -794,43 +479,11 @@ def table_lookup(t, table, c0, k0):
 def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
     """Compiled :func:`table_lookup` on the grid ``t_lo + i / steps_per_unit`` of ``n`` nodes.
 
-    The grid is passed at run time (not read from module constants) so that compiled
-    callers cached by numba can never disagree with the tables built in Python; rows of
-    ``table`` beyond ``n`` (padding of stacked tables) are never read.
-
-    Parameters
-    ----------
-    t : float
-        ``ln(sigma_theta / theta_ul)`` [-]; ``-inf`` for ``sigma_theta = 0``.
-    table : numpy.ndarray
-        One point's :func:`coefficient_table` (possibly zero-padded).
-    c0 : float
-        ``C(0)`` [N m s/rad].
-    k0 : float
-        ``K(0)`` [N m/rad].
-    t_lo : float
-        ``t`` of the first node [-] (:data:`T_LO`).
-    steps_per_unit : float
-        Nodes per unit of ``t`` [-] (:data:`STEPS_PER_UNIT`).
-    n : float or int
-        The point's number of nodes [-] (:func:`table_size`).
-
-    Returns
-    -------
-    tuple of float
-        ``(e_c [N m s/rad], e_k [N m/rad], d_c [N m s/rad^3])``.
-
     Notes
     -----
-    With ``u = (t - t_lo) steps_per_unit``, ``i = floor(u)``, ``s = u - i``, each quantity is the
-    cubic ``a0 + a1 s + a2 s^2 + a3 s^3`` of row ``i`` (cubic Hermite interpolation [2]_); below
-    ``t_lo``, ``f0 + (f(t_lo) - f0) exp(2 (t - t_lo))`` for ``e_c``, ``e_k`` and ``d_c`` held.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] C. de Boor, A Practical Guide to Splines, Springer (1978), ch. IV (piecewise cubic Hermite
-       interpolation).
+    The grid is passed at run time so that numba-cached callers cannot disagree with the tables built in
+    Python; rows beyond ``n`` (padding) are never read.  With ``u = (t - t_lo) steps_per_unit``,
+    ``i = floor(u)``, ``s = u - i``, each quantity is the cubic ``a0 + a1 s + a2 s^2 + a3 s^3`` of row ``i``.
     """
     n = int(n)
     if t <= t_lo:
@@ -846,76 +499,20 @@ def table_lookup_grid(t, table, c0, k0, t_lo, steps_per_unit, n):
 
 @numba.njit(moment_coefficients_signature(RECORD), cache=True, fastmath=FMA)
 def equivalent_coefficients_jit(p, table, var_theta, cov):
-    """Compiled twin of :func:`equivalent_coefficients`, from the moments ``var_theta`` [rad2] and
-    ``cov`` [rad2/s], on one point's table: ``c_eq = e_c``, ``k_eq = e_k + cov d_c``.
-
-    Parameters
-    ----------
-    p : numpy.void
-        The point's :data:`RECORD` (:func:`moment_kernel`).
-    table : numpy.ndarray
-        The point's :func:`coefficient_table`.
-    var_theta : float
-        Variance of the rotation [rad2], >= 0.
-    cov : float
-        ``cov(theta, theta')`` [rad2/s].
-
-    Returns
-    -------
-    c_eq : float
-        Equivalent damping [N m s/rad].
-    k_eq : float
-        Equivalent stiffness [N m/rad].
-
-    Notes
-    -----
-    Eq. (31) in [1]_ in the form ``c_eq = e_c``, ``k_eq = e_k + cov d_c`` (:func:`gaussian_expectations`),
-    read from the :func:`octave_table` by :func:`octave_lookup_jit` at ``q = var_theta / theta_ul^2`` (the
-    interpolant of :func:`table_lookup`, without a logarithm).
-
-    """
+    """Compiled twin of :func:`equivalent_coefficients` from ``var_theta`` [rad2] and ``cov`` [rad2/s], read by :func:`octave_lookup_jit`."""
     e_c, e_k, d_c = octave_lookup_jit(var_theta * p.inv_theta_ul2, table, p.c_rest, p.k_rest, p.lo_c, p.lo_k,
                                       p.lo_d, p.hi_c, p.hi_k, p.hi_d, p.buckets)
     return e_c, e_k + cov * d_c
 
 
 def equivalent_coefficients(sigma_theta, cov_over_sigma, block, foundation, cond):
-    """``(c_eq [N m s/rad], k_eq [N m/rad])`` of the condensation ``cond`` by quadrature (module docstring).
-
-    ``sigma_theta`` [rad] >= 0 and ``cov_over_sigma = cov(theta, theta') / sigma_theta``
-    [rad/s] (``rho sigma_theta_dot``), broadcast with array model parameters (one quadrature
-    per distinct parameter point).
-
-    Parameters
-    ----------
-    sigma_theta : array_like
-        Standard deviation of the rotation [rad], >= 0.
-    cov_over_sigma : array_like
-        ``cov(theta, theta') / sigma_theta = rho sigma_theta_dot`` [rad s-1].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); fields may be arrays.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays.
-    cond : screening.core.condensation.Condensation
-        The condensation whose ``C(theta)``, ``K(theta)`` are averaged.
-
-    Returns
-    -------
-    c_eq : numpy.ndarray or float
-        Equivalent damping [N m s/rad], the broadcast shape of the model fields and the moments.
-    k_eq : numpy.ndarray or float
-        Equivalent stiffness [N m/rad].
+    """``(c_eq [N m s/rad], k_eq [N m/rad])`` of the condensation ``cond`` by quadrature.
 
     Notes
     -----
-    Eq. (31) in [1]_, ``c_eq = E[d g / d theta']``, ``k_eq = E[d g / d theta]`` for
-    ``g = C(theta) theta' + K(theta) theta`` over the Gaussian density eq. (34), by Stein's
-    lemma [2]_ ``c_eq = e_c``, ``k_eq = e_k + cov d_c`` (:func:`expectations`).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [stein1981] in the bibliography, ``docs/bibliography.md``.
+    ``c_eq = e_c``, ``k_eq = e_k + cov d_c`` (:func:`expectations`; eq. (31) of [mitseas2026] by Stein's
+    lemma [stein1981]) from ``sigma_theta`` [rad] and ``cov_over_sigma = rho sigma_theta_dot`` [rad s-1],
+    broadcast with array model fields (one quadrature per distinct point).
     """
     s = np.asarray(sigma_theta, dtype=float)
     cs = np.asarray(cov_over_sigma, dtype=float)
