@@ -35,10 +35,10 @@ run: $(STAMP)
 test: $(TEST_STAMP)
 	$(BIN)/python -m pytest -m "not slow" --durations=10
 
-# `make test-quick`: the unit tests only (tests/unit, one folder per package folder), for the edit-test loop;
-# the README states its measured duration.
+# `make test-quick`: the unit tests (tests/unit, one folder per package folder) and the fast verification
+# tables, for the edit-test loop, on every core (pytest-xdist); the README states its measured duration.
 test-quick: $(TEST_STAMP)
-	$(BIN)/python -m pytest tests/unit tests/verification -m "not slow" -q
+	$(BIN)/python -m pytest tests/unit tests/verification -m "not slow" -q -n auto
 
 test-slow: $(TEST_STAMP) $(ENGINES_STAMP)
 	SCREENING_ENGINES_PYTHON=$(ENGINES)/bin/python $(BIN)/python -m pytest -m slow --durations=10
