@@ -292,17 +292,11 @@ def test_exact_integrator_matches_the_explicit_reference_on_a_stiff_bed():
     assert not exact.overturned.any() and not exact.diverged.any()
 
 
-@pytest.mark.parametrize("integrator", ["dopri", "rodas"])
-def test_adaptive_integrators_count_every_accepted_step_once_in_the_census(integrator):
-    """The one loop's bookkeeping: every accepted step of the explicit or the implicit pair lands in one regime
-    column (full contact, partial contact, flight), none in the exact columns, and uplift is reached."""
-    from screening.core.excitations.kanai_tajimi import KanaiTajimi
-    from screening.solvers.montecarlo import sample_setup
+def _census_of(run):
+    """Integrate two samples of ``run`` (a :func:`~screening.solvers.montecarlo.sample_setup`) through its chunk
+    integrator; ``(census, flags)``, ``flags[3]`` the accepted steps per sample."""
     from screening.solvers.synthesis import stationary_samples
 
-    block, bed = Block(m=600.0, b=0.2, h=0.8), Foundation(k=1e9, lam=3e10, eps=0.0)
-    motion = KanaiTajimi(S0=3e-2, omega_g=15.6, zeta_g=0.6, envelope=Envelope(4.0, 2.0))
-    run = sample_setup(block, bed, motion, 2, "coupled", 4.0, 0.05, integrator=integrator)
     acc, acc_dot = stationary_samples(run.read_plan, 0, np.arange(2))
     acc_dot = acc_dot * run.q + run.q_dot * acc
     acc = acc * run.q
@@ -314,6 +308,20 @@ def test_adaptive_integrators_count_every_accepted_step_once_in_the_census(integ
     census = np.zeros((2, len(kern.CENSUS)), np.int64)
     run.integrate(acc, acc_dot, run.read_plan.dt, run.times, run.y0, run.scales, run.opts["rtol"], run.opts["h_max"],
                   10**7, *outs, uplift, *flags, census=census)
+    return census, flags
+
+
+@pytest.mark.parametrize("integrator", ["dopri", "rodas"])
+def test_adaptive_integrators_count_every_accepted_step_once_in_the_census(integrator):
+    """The one loop's bookkeeping: every accepted step of the explicit or the implicit pair lands in one regime
+    column (full contact, partial contact, flight), none in the exact columns, and uplift is reached."""
+    from screening.core.excitations.kanai_tajimi import KanaiTajimi
+    from screening.solvers.montecarlo import sample_setup
+
+    block, bed = Block(m=600.0, b=0.2, h=0.8), Foundation(k=1e9, lam=3e10, eps=0.0)
+    motion = KanaiTajimi(S0=3e-2, omega_g=15.6, zeta_g=0.6, envelope=Envelope(4.0, 2.0))
+    run = sample_setup(block, bed, motion, 2, "coupled", 4.0, 0.05, integrator=integrator)
+    census, flags = _census_of(run)
     assert np.array_equal(census[:, :3].sum(axis=1), flags[3])
     assert not census[:, 3:].any()
     assert np.all(census[:, 1] > 0)                                     # the samples rock (partial contact)
@@ -324,23 +332,12 @@ def test_exact_integrator_census_counts_exact_and_adaptive_steps():
     steps are most of them on the stiff bed in full contact (a short quiet record)."""
     from screening.core.excitations.kanai_tajimi import KanaiTajimi
     from screening.solvers.montecarlo import sample_setup
-    from screening.solvers.synthesis import stationary_samples
 
     block, bed = Block(m=600.0, b=0.2, h=0.8), Foundation(k=1e11, lam=3e12, eps=0.0)
     motion = KanaiTajimi(S0=1e-4, omega_g=15.6, zeta_g=0.6, envelope=Envelope(4.0, 2.0))
     run = sample_setup(block, bed, motion, 2, "coupled", 2.0, 0.05)
     assert run.opts["integrator"] == "exact"                  # the default picks it here
-    acc, acc_dot = stationary_samples(run.read_plan, 0, np.arange(2))
-    acc_dot = acc_dot * run.q + run.q_dot * acc
-    acc = acc * run.q
-    n_t = run.times.size
-    outs = [np.empty((2, n_t)) for _ in range(4)]
-    uplift = np.zeros((2, n_t), bool)
-    flags = [np.zeros(2), np.zeros(2, np.int64), np.zeros(2, np.int64), np.zeros(2, np.int64),
-             np.zeros(2, np.int64), np.zeros(2)]
-    census = np.zeros((2, len(kern.CENSUS)), np.int64)
-    run.integrate(acc, acc_dot, run.read_plan.dt, run.times, run.y0, run.scales, run.opts["rtol"], run.opts["h_max"],
-                  10**7, *outs, uplift, *flags, census=census)
+    census, flags = _census_of(run)
     assert np.array_equal(census[:, :4].sum(axis=1), flags[3])          # every accepted step counted once
     assert np.all(census[:, 3] > 0.8 * flags[3])
     assert np.all(census[:, 3] * run.read_plan.dt <= 2.0 + 1e-9)        # at most one per grid interval
