@@ -516,6 +516,11 @@ class ResultFile:
                 out[a:b][finite] = np.nanmax(rows[finite], axis=1)
         return out
 
+    def read_points(self, names):
+        """Several variables at once, as :meth:`read` reads each: ``names`` holds variable names and
+        ``(history, t_index)`` pairs; returns ``{name or pair: flat float64 values}``."""
+        return {name: self.read(*name) if isinstance(name, tuple) else self.read(name) for name in names}
+
     def read_all(self, name):
         """The stored values of variable ``name`` (float64, its own shape)."""
         return np.asarray(self.format.read(name), dtype=float)

@@ -34,6 +34,7 @@ from screening.solvers.schema import ACCURACY
 from screening.sweep import _submit
 from screening.sweep.grid import Batch, batch_point_models, point_values, swept_columns
 from screening.sweep.interrupt import raise_if_interrupted
+from screening.sweep.probabilities import levels_at
 from screening.sweep.study import build_models
 from screening.solvers.estimates import sample_probabilities
 
@@ -65,7 +66,9 @@ PILOT, MAIN, TOPUP = 0, 1, 2
 class Stage(NamedTuple):
     """What the ``[accuracy]`` stage works with: the dask ``client``, the ``study``, the resume record
     ``store`` (:class:`~screening.io.store.PartialStore`), the ``result`` being built
-    (:class:`~screening.io.writer.ResultFile`), the ``log`` function, whether to show ``progress``,
+    (:class:`~screening.io.writer.ResultFile`), the ``log`` function, whether to show ``progress``, the per-point
+    ``values`` the linearization left (:func:`screening.sweep.probabilities.stage_inputs`; the stage adds its best
+    estimates to them),
     ``interim``: None, or ``interim(write)`` writes a complete interim result (``write(result)`` puts the
     escalated points and best estimates so far into a result and returns them as :func:`escalate` does),
     and the wall ``clock`` [s] the budget is measured on."""
@@ -76,6 +79,7 @@ class Stage(NamedTuple):
     result: object
     log: object
     progress: bool
+    values: dict
     interim: object = None
     clock: object = time.monotonic
 
@@ -97,16 +101,15 @@ def _point_table(stage):
         q2 = np.asarray(excitation.envelope(study.times), dtype=float) ** 2
         cols["envelope_end"][rows] = q2[-1] / max(q2.max(), 1e-300)
         cond[rows] = case.condensation_model.name
-    peak = res.read("peak_var_theta")
-    var_end = res.read("var_theta", -1) if "var_theta" in study.output.stored else np.full(n, np.nan)
-    ind = trust_indicators(res.peak_p_uplift, res.read("min_k_eq"), cols["k_rest"], peak, res.read("slenderness"),
-                           var_end, cols["envelope_end"])
-    dot = res.read("var_theta_dot", None) if "var_theta_dot" in study.output.stored else np.full(n, np.nan)
+    values = stage.values
+    peak = values["peak_var_theta"]
+    ind = trust_indicators(res.peak_p_uplift, values["min_k_eq"], cols["k_rest"], peak, values["slenderness"],
+                           values["var_theta_end"], cols["envelope_end"])
     features = {**swept, **({"case": case_index} if study.has_case_dim else {}), **ind}
-    return {"status": res.status, "trust": res.sl_trust, "low": res.read("sl_error_low"),
-            "high": res.read("sl_error_high"), "indicators": ind, "features": features,
+    return {"status": res.status, "trust": res.sl_trust, "low": values["sl_error_low"],
+            "high": values["sl_error_high"], "indicators": ind, "features": features,
             "condensation": cond.astype(str), "eps": cols["eps"], "peak_var_theta": peak,
-            "peak_var_theta_dot": dot}
+            "peak_var_theta_dot": values["peak_var_theta_dot"]}
 
 def escalate(stage):
     """Escalate, write the escalated points and the best estimates into ``stage.result``.
@@ -190,10 +193,10 @@ def _transition(stage, status):
     from screening.analysis.escalation import transition_points
     from screening.core.status import PointStatus
 
-    study, res = stage.study, stage.result
-    p = [res.read("p_overturn")]
+    study, values = stage.study, stage.values
+    p = [values["p_overturn"]]
     if study.fragility is not None:
-        p.append(res.read_all("p_exceed").reshape(study.n_points, -1))
+        p.append(values["p_exceed"])
     p = np.column_stack(p)
     p[np.asarray(status) != int(PointStatus.ok)] = np.nan
     name = next((d for d in ("S0", "pga") if d in study.dims), None)
@@ -203,9 +206,7 @@ def _transition(stage, status):
 
 def _levels(stage):
     """Rotations [rad] of P(overturn) and each ``[fragility]`` threshold at every point (points x levels)."""
-    from screening.sweep.probabilities import levels_at
-
-    return levels_at(stage.study, stage.result.read("theta_ul"), stage.result.read("slenderness"))
+    return levels_at(stage.study, stage.values["theta_ul"], stage.values["slenderness"])
 
 
 def _write_answers(stage, result, pts, features, order, models, first, results, ran):
@@ -222,7 +223,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
             r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
         r["target_met"] = bool(r["target_met"])
         r["transition"] = np.int8(first[j])
-    write_escalation(result, stage.study, escalated, models_done, runs)
+    write_escalation(result, stage.study, escalated, models_done, runs, stage.values)
     best = {}
     for name in ("var_theta", "var_theta_dot"):
         mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
@@ -233,6 +234,10 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
     write_best(result, stage.study, best["var_theta"][:2], best["var_theta_dot"][:2], method)
+    for name in ("var_theta", "var_theta_dot"):                   # handed on to the probabilities
+        stage.values[f"best_peak_{name}"], stage.values[f"best_peak_{name}_se"] = (
+            np.asarray(v, dtype=float) for v in best[name][:2])
+    stage.values["best_method"] = np.asarray(method, dtype=np.int8)
 
     short = sum(1 for r in runs if not r["target_met"])
     codes, counts = np.unique(method, return_counts=True)
@@ -696,10 +701,11 @@ def accuracy_line(info):
             f"best estimates: {methods}")
 
 
-def write_escalation(result, study, flat_indices, models, runs):
+def write_escalation(result, study, flat_indices, models, runs, linear):
     """Write the ``[accuracy]`` Monte Carlo points into ``result`` on dimension ``escalation`` (``runs``: the dicts of
     :func:`~screening.sweep.execution.escalation_task`; ``models``: their
-    :class:`~screening.core.status.EscalationModel` codes)."""
+    :class:`~screening.core.status.EscalationModel` codes; ``linear``: the linearization's per-point values,
+    :func:`~screening.sweep.probabilities.stage_inputs`)."""
     n = len(runs)
     most = max((int(r["samples"]) for r in runs), default=1)
     # (a one-point grid has no grid dimension; no escalated point: empty coordinates)
@@ -721,9 +727,8 @@ def write_escalation(result, study, flat_indices, models, runs):
     values2 = {f"esc_{name}": column(name, float) for name in ("peak_var_theta", "peak_var_theta_se",
                                                                "peak_var_theta_dot", "peak_var_theta_dot_se")}
     at_grid = np.asarray(flat_indices, dtype=np.int64)
-    values2["esc_sl_peak_var_theta"] = result.read("peak_var_theta")[at_grid]
-    values2["esc_sl_peak_var_theta_dot"] = (result.read("var_theta_dot")[at_grid] if "var_theta_dot" in study.output.stored
-                                            else np.full(n, np.nan))
+    values2["esc_sl_peak_var_theta"] = linear["peak_var_theta"][at_grid]
+    values2["esc_sl_peak_var_theta_dot"] = linear["peak_var_theta_dot"][at_grid]
     counts = {f"esc_{name}": column(name, np.int32) for name in ("n_overturned", "n_diverged", "n_used")}
     peaks = np.full((n, most), np.nan)
     state = np.full((n, most), -1, dtype=np.int8)

@@ -47,6 +47,40 @@ __all__ = []
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
+#: Per-point variables the stages after the linearization start from (:func:`stage_inputs`).
+STAGE_INPUTS = ("peak_var_theta", "min_k_eq", "slenderness", "theta_ul", "sl_error_low", "sl_error_high",
+                "p_overturn", "p_overturn_se")
+
+
+def stage_inputs(result, study):
+    """The per-point values the ``[accuracy]`` stage and the probabilities start from, read from ``result`` in one
+    call once the linearization is written, then handed from stage to stage in memory: :data:`STAGE_INPUTS` (flat
+    float64), ``p_exceed`` and ``p_exceed_se`` with ``[fragility]`` (points x thresholds), ``var_theta_end`` (the
+    last stored ``var_theta``) and ``peak_var_theta_dot`` (the maximum of the stored ``var_theta_dot``), NaN where
+    the result does not store the history.  The ``[accuracy]`` stage adds its best estimates (``best_*``)."""
+    n, stored = study.n_points, study.output.stored
+    values = result.read_points([*STAGE_INPUTS, *(("p_exceed", "p_exceed_se") if study.fragility is not None else ()),
+                                 *((("var_theta", -1),) if "var_theta" in stored else ()),
+                                 *((("var_theta_dot", None),) if "var_theta_dot" in stored else ())])
+    for name in ("p_exceed", "p_exceed_se"):
+        if name in values:
+            values[name] = values[name].reshape(n, -1)
+    values["var_theta_end"] = values.pop(("var_theta", -1), np.full(n, np.nan))
+    values["peak_var_theta_dot"] = values.pop(("var_theta_dot", None), np.full(n, np.nan))
+    return values
+
+
+def _read_inputs(study, res):
+    """What :func:`finish_probabilities` starts from, read from ``res`` variable by variable."""
+    n = study.n_points
+    values = {name: res.read(name) for name in ("p_overturn", "p_overturn_se", "sl_error_low", "sl_error_high",
+                                                "theta_ul", "slenderness")}
+    if study.fragility is not None:
+        values.update(p_exceed=res.read_all("p_exceed").reshape(n, -1),
+                      p_exceed_se=res.read_all("p_exceed_se").reshape(n, -1))
+    if study.accuracy is not None:
+        values["best_method"] = res.read("best_method")
+    return values
 
 
 def _monte_carlo_runs(study, escalated=None, spot_runs=None):
@@ -130,7 +164,7 @@ def levels_at(study, theta_ul, slenderness):
     return np.stack(cols, axis=-1)
 
 
-def _corrected_estimates(study, res, points):
+def _corrected_estimates(study, res, points, values=None):
     """``(p, se)`` (points x levels) of the up-crossing of the moments rescaled to the best estimates at the
     flat indices ``points`` of the result ``res`` of ``study``; None where the result does not store the
     histories it needs."""
@@ -142,7 +176,11 @@ def _corrected_estimates(study, res, points):
     data = {name: (("point", "t"), np.stack([res.history(name, ix) for ix in index])) for name in CORRECTION_HISTORIES}
     for name in ("peak_var_theta", "best_peak_var_theta", "best_peak_var_theta_se", "best_peak_var_theta_dot",
                  "best_peak_var_theta_dot_se", "theta_ul", "slenderness", "status", "best_method"):
-        data[name] = ("point", res.read(name)[points])
+        if values is not None and name in values:
+            column = np.asarray(values[name], dtype=float)
+        else:
+            column = np.asarray(res.status, dtype=float) if name == "status" else res.read(name)
+        data[name] = ("point", column[points])
     blocks = [build_models(study.cases[case], values, study.t_end)[0]
               for case, values in (point_values(study, ix) for ix in index)]
     for name in ("m", "I_cm", "h"):
@@ -256,7 +294,7 @@ def _level_counts(runs, levels):
     return counts, used
 
 
-def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
+def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None, values=None):
     """Replace the workers' linearization estimates in a sweep's result by the best ones and write ``p_source``.
 
     The sweep's last stage, run on the client once the escalated points and the spot checks are in: at
@@ -287,6 +325,9 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
         :func:`screening.solvers.mc_registry.names`; default the study's ``[mcs] model``).
     log : callable, optional
         Called with the answer line (:func:`answer_line`) and the surface's lines.
+    values : dict, optional
+        The per-point values of :func:`stage_inputs` (with the ``[accuracy]`` stage's best estimates), handed on
+        by the run; default: read from ``res``.
 
     Returns
     -------
@@ -311,15 +352,15 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     res.commit()                    # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
     thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0
-    p = np.column_stack([res.read("p_overturn")] + ([res.read_all("p_exceed").reshape(n, -1)] if thresholds else []))
-    se = np.column_stack([res.read("p_overturn_se")] + (
-        [res.read_all("p_exceed_se").reshape(n, -1)] if thresholds else []))
-    low, high = res.read("sl_error_low"), res.read("sl_error_high")
-    best = res.read("best_method").astype(np.int8) if study.accuracy is not None else None
+    values = _read_inputs(study, res) if values is None else values
+    p = np.column_stack([values["p_overturn"]] + ([values["p_exceed"]] if thresholds else []))
+    se = np.column_stack([values["p_overturn_se"]] + ([values["p_exceed_se"]] if thresholds else []))
+    low, high = values["sl_error_low"], values["sl_error_high"]
+    best = np.asarray(values["best_method"]).astype(np.int8) if study.accuracy is not None else None
     source = choose_sources(res.status == PointStatus.ok, res.sl_trust, np.isfinite(low) & np.isfinite(high), best)
 
     corrected = np.flatnonzero(source == ProbabilitySource.corrected_linearization_gaussian)
-    estimate = _corrected_estimates(study, res, corrected)
+    estimate = _corrected_estimates(study, res, corrected, values)
     if estimate is None:
         source[corrected] = ProbabilitySource.unreliable
     else:
@@ -327,7 +368,7 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
     unreliable = source == ProbabilitySource.unreliable
     se[unreliable] = np.nan
 
-    levels = levels_at(study, res.read("theta_ul"), res.read("slenderness"))
+    levels = levels_at(study, values["theta_ul"], values["slenderness"])
     used = np.zeros(n)
     runs = _monte_carlo_runs(study, escalated, spot_runs)
     for flat, model, peaks, state, paired in runs:
@@ -362,10 +403,10 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None):
 
     unvouched = source == ProbabilitySource.unreliable            # nothing vouches for a number: missing values
     p[unvouched], se[unvouched] = np.nan, np.nan
-    values = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
+    answers = {"p_overturn": p[:, 0], "p_overturn_se": se[:, 0]}
     if thresholds:
-        values.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
-    write_probabilities(res, study, values, source, answer)
+        answers.update(p_exceed=p[:, 1:], p_exceed_se=se[:, 1:])
+    write_probabilities(res, study, answers, source, answer)
     line = answer_line(answer, reliable_answer(answer, variance_vouched, source), variance_vouched)
     res.set_attrs(answer_note=line, fragility_surface_note="; ".join(notes))
     if log is not None:                      # many cases: one line, each surface's note in the result's attribute

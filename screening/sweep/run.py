@@ -55,6 +55,7 @@ from screening.io.errors import SweepError, exception_line, is_write_error, writ
 from screening.io.layout import wants_probabilities
 from screening.sweep.grid import default_batch_size, plan_batches, select_spots
 from screening.sweep.interrupt import interruptible, raise_if_interrupted, shielded
+from screening.sweep.probabilities import finish_probabilities, probabilities_line, stage_inputs
 from screening.core.progress import Progress
 from screening.io.reader import result_key, verify_result
 from screening.io.store import PartialStore
@@ -288,6 +289,7 @@ class _SweepRun:
         self.target = None              # zarr: where the workers write (store.RegionTarget)
         self.escalated = None           # [accuracy]: (flat indices, models, runs) of the escalated points
         self.spot_runs = None           # [mcs]: (grid indices, results) of the spot checks
+        self.values = None              # [accuracy], [fragility]: the per-point values the stages start from
 
     def run(self, batch_size):
         study, timings = self.study, self.report.timings
@@ -313,20 +315,20 @@ class _SweepRun:
                 timings["compute"] = time.perf_counter() - t0
                 timings["write"] = self.write_time
                 t0 = time.perf_counter()
+                if wants_probabilities(study):
+                    self.values = stage_inputs(self.result, study)
                 if study.accuracy is not None:
                     self.escalated, self.report.accuracy = escalate(
-                        Stage(self.client, study, self.store, self.result, self.log, self.progress,
+                        Stage(self.client, study, self.store, self.result, self.log, self.progress, self.values,
                               interim=self._interim if self.target is None else None))
                 timings["accuracy"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 if study.mcs is not None:
                     self.report.n_spots = self._spot_checks()
                 timings["mcs"] = time.perf_counter() - t0
-                if wants_probabilities(study):
-                    from screening.sweep.probabilities import finish_probabilities, probabilities_line
-
+                if self.values is not None:
                     self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
-                                                                     self.spot_runs, log=self.log)
+                                                                     self.spot_runs, log=self.log, values=self.values)
                     self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
                     self.log(probabilities_line(self.report.probabilities))
                 t0 = time.perf_counter()
@@ -550,10 +552,7 @@ class _SweepRun:
         try:
             res.kept = {name: values.copy() for name, values in self.result.kept.items()}
             escalated = write(res)
-            if wants_probabilities(study):
-                from screening.sweep.probabilities import finish_probabilities
-
-                finish_probabilities(study, res, escalated, None)
+            finish_probabilities(study, res, escalated, None, values=self.values)
             stamp = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
             res.set_attrs(interim_result=f"written at {stamp} while the [accuracy] stage ran, with the "
                                          f"{len(escalated[0])} escalated point(s) done by then (no spot checks); "
