@@ -131,7 +131,7 @@ def sweep_against_prototype(side, repeat):
 def _cpu_half(side, part, queue):
     """CPU seconds of ``solve_batch`` over every other batch (from ``part``) of the sweep, in this fresh process."""
     import bench_sweep
-    from screening.sweep._submit import case_cutoff, trust_models, wants_probabilities
+    from screening.sweep._submit import trust_models
     from screening.sweep.execution import solve_batch, warm_up
     from screening.sweep.grid import batch_point_models, default_batch_size, plan_batches
     from screening.sweep.study import parse_study
@@ -144,7 +144,7 @@ def _cpu_half(side, part, queue):
         block, foundation, excitation, _ = batch_point_models(study, batch)
         solve_batch(block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
                     study.output.stored, study.fragility, trust_models(case.condensation_model.name),
-                    study.derived_inputs, None, case_cutoff(case), wants_probabilities(study))
+                    study.derived_inputs, None, case.cutoff, study.probabilities)
         n += batch.hi - batch.lo
     queue.put((n, time.process_time() - start))
 

@@ -1,6 +1,5 @@
 """The array layout of a sweep result, shared by the result formats and the sweep: where a flat range of points
-sits in the grid's arrays, the chunks of a history, the model parameters as constants or per case, whether a result
-holds probabilities."""
+sits in the grid's arrays, the chunks of a history, the model parameters as constants or per case."""
 
 from __future__ import annotations
 
@@ -125,21 +124,3 @@ def parameter_table(study):
         else:
             case_labels[name] = col
     return constants, per_case, labels, case_labels
-
-
-def wants_probabilities(study):
-    """Whether the points of ``study`` carry ``p_overturn`` (and, with ``[fragility]``, ``p_exceed``) with
-    their standard errors and source: with ``[accuracy]`` or ``[fragility]``.
-
-    Parameters
-    ----------
-    study : screening.sweep.study.Study
-        The study.
-
-    Returns
-    -------
-    bool
-        True with an ``[accuracy]`` or a ``[fragility]`` table.
-
-    """
-    return study.accuracy is not None or study.fragility is not None

@@ -49,7 +49,7 @@ import numpy as np
 from screening._version import __version__
 from screening.io._zarr_store import foreign_files
 from screening.io.errors import SweepError
-from screening.io.layout import history_chunks, hyperslabs, parameter_table, wants_probabilities
+from screening.io.layout import history_chunks, hyperslabs, parameter_table
 from screening.io.zarrfile import is_zarr_path, is_zarr_store, point_chunks as zarr_point_chunks, ZarrFormat
 from screening.solvers.outputs import client_variables, GRID_OUTPUTS, selected
 from screening.solvers.schema import (attributes, global_attributes, grid_coordinate_attributes, PRESSURE_PARAMETERS,
@@ -99,20 +99,21 @@ def check_output_path(out, inputs=()):
             raise SweepError(f"output path {out} is the input file {path}; give another --out")
         if _inside(out, path):
             raise SweepError(f"output path {out} is inside the input {path}; give another --out")
-    if is_zarr_path(out) and out.exists() and not is_zarr_store(out):
+    zarr = is_zarr_path(out)
+    if zarr and out.exists() and not is_zarr_store(out):
         raise SweepError(f"output path {out} exists and is not a zarr store; give another --out")
-    if is_zarr_path(out) and is_zarr_store(out):
+    if zarr and is_zarr_store(out):
         foreign = foreign_files(out)
         if foreign:
             raise SweepError(f"output path {out} holds files screening did not write as a finished result "
                              f"(e.g. {foreign[0]}); only such a store is replaced: give another --out")
-    if out.is_dir() and not is_zarr_path(out):
+    if out.is_dir() and not zarr:
         raise SweepError(f"output path {out} is a directory")
     try:
-        mode = out.lstat().st_mode if is_zarr_path(out) else out.stat().st_mode
+        mode = out.lstat().st_mode if zarr else out.stat().st_mode
     except OSError:
         mode = None
-    if mode is not None and not stat.S_ISREG(mode) and not (is_zarr_path(out) and stat.S_ISDIR(mode)):
+    if mode is not None and not stat.S_ISREG(mode) and not (zarr and stat.S_ISDIR(mode)):
         raise SweepError(f"output path {out} exists and is not a regular file (a FIFO, socket or device); "
                          "give another --out")
     if not out.parent.is_dir():
@@ -238,7 +239,7 @@ def region_variables(study):
 
 def _outputs(study):
     """The declared grid variables the result of ``study`` holds, in file order."""
-    return selected(study.output.stored, study.derived_inputs, wants_probabilities(study), study.fragility is not None)
+    return selected(study.output.stored, study.derived_inputs, study.probabilities, study.fragility is not None)
 
 
 class NetcdfFormat:

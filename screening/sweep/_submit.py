@@ -16,10 +16,10 @@ from screening.analysis.trust import trust_models
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 from screening.core.status import SampleState
-from screening.io.layout import hyperslabs, wants_probabilities
+from screening.io.layout import hyperslabs
 from screening.io.zarrfile import ZarrFormat
 from screening.solvers.outputs import client_variables, GRID_OUTPUTS, HISTORY_VARIABLES
-from screening.sweep.config import build_models, case_cutoff
+from screening.sweep.config import build_models
 from screening.sweep.execution import (escalation_task, solve_batch, SPOT_HISTORIES, SPOT_LINEAR, spot_task,
                                        TASK_RETRIES)
 from screening.sweep.grid import batch_point_models, point_values
@@ -58,7 +58,7 @@ def submit_batch(client, study, batch, key, target=None):
     block, foundation, excitation, underivable = batch_point_models(study, batch)
     args = (block, foundation, excitation, case.condensation_model, study.times, study.rtol, study.max_steps,
             study.output.stored, study.fragility, trust_models(case.condensation_model.name), study.derived_inputs,
-            underivable if np.any(underivable) else None, case_cutoff(case), wants_probabilities(study))
+            underivable if np.any(underivable) else None, case.cutoff, study.probabilities)
     if target is not None:
         return client.submit(solve_and_store_batch, target, batch, *args, retries=TASK_RETRIES, pure=False, key=key)
     return client.submit(solve_batch, *args, retries=TASK_RETRIES, pure=False, key=key)

@@ -67,7 +67,7 @@ class Stage(NamedTuple):
     """What the ``[accuracy]`` stage works with: the dask ``client``, the ``study``, the resume record
     ``store`` (:class:`~screening.io.store.PartialStore`), the ``result`` being built
     (:class:`~screening.io.writer.ResultFile`), the ``log`` function, whether to show ``progress``, the per-point
-    ``values`` the linearization left (:func:`screening.sweep.probabilities.stage_inputs`; the stage adds its best
+    ``values`` the linearization left (:func:`screening.sweep.run.stage_inputs`; the stage adds its best
     estimates to them),
     ``interim``: None, or ``interim(write)`` writes a complete interim result (``write(result)`` puts the
     escalated points and best estimates so far into a result and returns them as :func:`escalate` does),
@@ -705,7 +705,7 @@ def write_escalation(result, study, flat_indices, models, runs, linear):
     """Write the ``[accuracy]`` Monte Carlo points into ``result`` on dimension ``escalation`` (``runs``: the dicts of
     :func:`~screening.sweep.execution.escalation_task`; ``models``: their
     :class:`~screening.core.status.EscalationModel` codes; ``linear``: the linearization's per-point values,
-    :func:`~screening.sweep.probabilities.stage_inputs`)."""
+    :func:`~screening.sweep.run.stage_inputs`)."""
     n = len(runs)
     most = max((int(r["samples"]) for r in runs), default=1)
     # (a one-point grid has no grid dimension; no escalated point: empty coordinates)

@@ -754,10 +754,13 @@ class Case:
     params: MappingProxyType
     condensation: str = condensations.DEFAULT_CONDENSATION
     condensation_model: condensations.Condensation = field(default=None, compare=False, repr=False)
+    #: The band [rad/s] of its intensity measures and target PGA (:func:`case_cutoff`), set when the case is made.
+    cutoff: float = field(init=False, compare=False, repr=False)
 
     def __post_init__(self):
         if self.condensation_model is None:
             object.__setattr__(self, "condensation_model", condensations.get(self.condensation))
+        object.__setattr__(self, "cutoff", case_cutoff(self))
 
     def applies(self, name):
         """Whether parameter ``name`` is meaningful for this case."""
@@ -1300,7 +1303,7 @@ def build_point_models(case, values, t_end=None):
 
         if t_end is None:
             raise ValueError("t_end is needed to turn a target PGA into S0")
-        s0 = np.asarray(s0_for_pga(excitation(1.0), p["pga"], t_end, case_cutoff(case)))
+        s0 = np.asarray(s0_for_pga(excitation(1.0), p["pga"], t_end, case.cutoff))
         with np.errstate(invalid="ignore"):
             underivable = ~(np.isfinite(s0) & (s0 > 0))
         s0 = np.where(underivable, 1.0, s0)

@@ -68,7 +68,7 @@ def solve_batch(block, foundation, excitation, condensation, t_out, rtol, max_st
     ``derived_inputs`` (names of the ``inputs`` stage): those inputs per point.  ``underivable``
     (boolean per point, or None): points whose ``S0`` could not follow from their target PGA (their
     excitation holds a placeholder): status ``beyond_float_range``, NaN values, ``sl_trust`` untrusted.
-    ``probabilities`` (:func:`~screening.io.layout.wants_probabilities`): also the linearization's ``p_overturn``,
+    ``probabilities`` (:attr:`Study.probabilities <screening.sweep.study.Study>`): also the linearization's ``p_overturn``,
     ``p_overturn_se`` and, with ``fragility``, ``p_exceed_se`` (:func:`batch_probabilities`).
 
     Parameters

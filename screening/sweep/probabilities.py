@@ -47,29 +47,6 @@ __all__ = []
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
-#: Per-point variables the stages after the linearization start from (:func:`stage_inputs`).
-STAGE_INPUTS = ("peak_var_theta", "min_k_eq", "slenderness", "theta_ul", "sl_error_low", "sl_error_high",
-                "p_overturn", "p_overturn_se")
-
-
-def stage_inputs(result, study):
-    """The per-point values the ``[accuracy]`` stage and the probabilities start from, read from ``result`` in one
-    call once the linearization is written, then handed from stage to stage in memory: :data:`STAGE_INPUTS` (flat
-    float64), ``p_exceed`` and ``p_exceed_se`` with ``[fragility]`` (points x thresholds), ``var_theta_end`` (the
-    last stored ``var_theta``) and ``peak_var_theta_dot`` (the maximum of the stored ``var_theta_dot``), NaN where
-    the result does not store the history.  The ``[accuracy]`` stage adds its best estimates (``best_*``)."""
-    n, stored = study.n_points, study.output.stored
-    values = result.read_points([*STAGE_INPUTS, *(("p_exceed", "p_exceed_se") if study.fragility is not None else ()),
-                                 *((("var_theta", -1),) if "var_theta" in stored else ()),
-                                 *((("var_theta_dot", None),) if "var_theta_dot" in stored else ())])
-    for name in ("p_exceed", "p_exceed_se"):
-        if name in values:
-            values[name] = values[name].reshape(n, -1)
-    values["var_theta_end"] = values.pop(("var_theta", -1), np.full(n, np.nan))
-    values["peak_var_theta_dot"] = values.pop(("var_theta_dot", None), np.full(n, np.nan))
-    return values
-
-
 def _read_inputs(study, res):
     """What :func:`finish_probabilities` starts from, read from ``res`` variable by variable."""
     n = study.n_points
@@ -326,8 +303,8 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None, v
     log : callable, optional
         Called with the answer line (:func:`answer_line`) and the surface's lines.
     values : dict, optional
-        The per-point values of :func:`stage_inputs` (with the ``[accuracy]`` stage's best estimates), handed on
-        by the run; default: read from ``res``.
+        The per-point values of :func:`screening.sweep.run.stage_inputs` (with the ``[accuracy]`` stage's best
+        estimates), handed on by the run; default: read from ``res``.
 
     Returns
     -------

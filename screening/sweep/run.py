@@ -52,10 +52,9 @@ from screening.sweep.execution import SPOT_HISTORIES, SPOT_LINEAR
 from screening.sweep.connect import run_on_workers
 from screening.sweep.accuracy import Stage, escalate
 from screening.io.errors import SweepError, exception_line, is_write_error, write_failure_reason
-from screening.io.layout import wants_probabilities
 from screening.sweep.grid import default_batch_size, plan_batches, select_spots
 from screening.sweep.interrupt import interruptible, raise_if_interrupted, shielded
-from screening.sweep.probabilities import finish_probabilities, probabilities_line, stage_inputs
+from screening.sweep.probabilities import finish_probabilities, probabilities_line
 from screening.core.progress import Progress
 from screening.io.reader import result_key, verify_result
 from screening.io.store import PartialStore
@@ -210,7 +209,8 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
         raise SweepError(f"the number of workers must be an integer >= 0 (got {workers!r})")
     if isinstance(complevel, bool) or complevel not in range(10):
         raise SweepError(f"zlib level must be an integer in 0..9 (got {complevel!r})")
-    if is_zarr_path(out):
+    zarr_store = is_zarr_path(out)
+    if zarr_store:
         try:
             import zarr  # noqa: F401
         except ImportError:
@@ -238,9 +238,9 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
                 batch_size = cluster.batch_size            # [cluster] batch_size, or None
             if batch_size is None:
                 batch_size = default_batch_size(study, n_workers)
-                if is_zarr_path(out):            # whole chunks per batch
+                if zarr_store:                   # whole chunks per batch
                     batch_size = zarr_batch_size(study.shape, int(study.has_case_dim), batch_size)
-            _SweepRun(c, study, out, progress, log, on_batch, report, complevel).run(batch_size)
+            _SweepRun(c, study, out, progress, log, on_batch, report, complevel, zarr_store).run(batch_size)
         except (OSError, RuntimeError) as exc:
             if not is_write_error(exc):
                 raise
@@ -279,8 +279,8 @@ class SampleCount:
 class _SweepRun:
     """One run of a study on a client: partial store, result file being built, task loop."""
 
-    def __init__(self, client, study, out, progress, log, on_batch, report, complevel):
-        self.client, self.study, self.out = client, study, Path(out)
+    def __init__(self, client, study, out, progress, log, on_batch, report, complevel, zarr_store=False):
+        self.client, self.study, self.out, self.zarr_store = client, study, Path(out), zarr_store
         self.progress, self.log, self.on_batch, self.report = progress, log, on_batch, report
         self.complevel = complevel
         self.token = f"{study.key[:8]}-{uuid.uuid4().hex[:8]}"        # task keys unique per run
@@ -295,7 +295,7 @@ class _SweepRun:
         study, timings = self.study, self.report.timings
         layout = {"n_points": study.n_points, "shape": list(study.shape), "batch_size": int(batch_size),
                   "study_file": study.source}
-        if is_zarr_path(self.out):
+        if self.zarr_store:
             layout["format"] = "zarr"
         manifest = self.store.open(study.key, layout, self.log)
         try:
@@ -303,7 +303,7 @@ class _SweepRun:
             self.report.n_batches = len(batches)
             created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
             attrs = result_attributes(study, created, manifest["batch_size"])
-            if is_zarr_path(self.out):
+            if self.zarr_store:
                 self.result = self._zarr_result(attrs, manifest["batch_size"])
             else:
                 with contextlib.suppress(FileNotFoundError):
@@ -315,7 +315,7 @@ class _SweepRun:
                 timings["compute"] = time.perf_counter() - t0
                 timings["write"] = self.write_time
                 t0 = time.perf_counter()
-                if wants_probabilities(study):
+                if study.probabilities:
                     self.values = stage_inputs(self.result, study)
                 if study.accuracy is not None:
                     self.escalated, self.report.accuracy = escalate(
@@ -329,13 +329,15 @@ class _SweepRun:
                 if self.values is not None:
                     self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
                                                                      self.spot_runs, log=self.log, values=self.values)
-                    self.result.set_attrs(probabilities_note=probabilities_line(self.report.probabilities))
-                    self.log(probabilities_line(self.report.probabilities))
+                    line = probabilities_line(self.report.probabilities)
+                    self.result.set_attrs(probabilities_note=line)
+                    self.log(line)
                 t0 = time.perf_counter()
-                self._finalize()
+                self._finalize()                    # closes the result
                 timings["finalize"] = time.perf_counter() - t0
-            finally:
+            except BaseException:
                 self.result.close()
+                raise
         finally:
             self.store.close()
         self.store.remove()
@@ -384,7 +386,7 @@ class _SweepRun:
         if self.target is None:
             return self.store.load_batch(batch, execution.failed_result(
                 batch.size, self.study.times.size, self.study.output.stored, self.study.fragility,
-                probabilities=wants_probabilities(self.study)))
+                probabilities=self.study.probabilities))
         if not self.store.marker_ok(batch):
             return None
         try:
@@ -598,6 +600,29 @@ class _SweepRun:
         with open(self.store.building, "rb") as fh:
             os.fsync(fh.fileno())
         os.replace(self.store.building, self.out)
+
+
+#: Per-point variables the stages after the linearization start from (:func:`stage_inputs`).
+STAGE_INPUTS = ("peak_var_theta", "min_k_eq", "slenderness", "theta_ul", "sl_error_low", "sl_error_high",
+                "p_overturn", "p_overturn_se")
+
+
+def stage_inputs(result, study):
+    """The per-point values the ``[accuracy]`` stage and the probabilities start from, read from ``result`` in one
+    call once the linearization is written, then handed from stage to stage in memory: :data:`STAGE_INPUTS` (flat
+    float64), ``p_exceed`` and ``p_exceed_se`` with ``[fragility]`` (points x thresholds), ``var_theta_end`` (the
+    last stored ``var_theta``) and ``peak_var_theta_dot`` (the maximum of the stored ``var_theta_dot``), NaN where
+    the result does not store the history.  The ``[accuracy]`` stage adds its best estimates (``best_*``)."""
+    n, stored = study.n_points, study.output.stored
+    values = result.read_points([*STAGE_INPUTS, *(("p_exceed", "p_exceed_se") if study.fragility is not None else ()),
+                                 *((("var_theta", -1),) if "var_theta" in stored else ()),
+                                 *((("var_theta_dot", None),) if "var_theta_dot" in stored else ())])
+    for name in ("p_exceed", "p_exceed_se"):
+        if name in values:
+            values[name] = values[name].reshape(n, -1)
+    values["var_theta_end"] = values.pop(("var_theta", -1), np.full(n, np.nan))
+    values["peak_var_theta_dot"] = values.pop(("var_theta_dot", None), np.full(n, np.nan))
+    return values
 
 
 def write_batch(result, study, batch, part):

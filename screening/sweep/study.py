@@ -102,6 +102,7 @@ range, ``T2 >= T1``, ...) raises :class:`StudyError` with a one-line message nam
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -172,7 +173,8 @@ class Study:
     #: ``swept_dims``: the swept parameters, in grid order; ``dims``: ``case`` (with cases) then those;
     #: ``shape``: the grid's shape (without time), ``swept_shape`` without ``case``; ``times``: output times [s];
     #: ``derived_inputs``: model inputs that vary per point without being grid coordinates (``("S0",)`` when the
-    #: intensity is a target PGA, else ``()``).
+    #: intensity is a target PGA, else ``()``).  ``probabilities``: whether the points carry ``p_overturn`` (and, with
+    #: ``[fragility]``, ``p_exceed``) with their standard errors and source: with ``[accuracy]`` or ``[fragility]``.
     swept_dims: tuple = field(init=False, repr=False, compare=False)
     dims: tuple = field(init=False, repr=False, compare=False)
     swept_shape: tuple = field(init=False, repr=False, compare=False)
@@ -181,6 +183,7 @@ class Study:
     points_per_case: int = field(init=False, repr=False, compare=False)
     times: np.ndarray = field(init=False, repr=False, compare=False)
     derived_inputs: tuple = field(init=False, repr=False, compare=False)
+    probabilities: bool = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         swept_shape = tuple(len(v) for v in self.sweeps.values())
@@ -191,7 +194,8 @@ class Study:
                             ("swept_shape", swept_shape), ("shape", shape),
                             ("n_points", int(np.prod(shape, dtype=np.int64))),
                             ("points_per_case", int(np.prod(swept_shape, dtype=np.int64))),
-                            ("times", output_times(self.t_end, self.dt)), ("derived_inputs", derived)):
+                            ("times", output_times(self.t_end, self.dt)), ("derived_inputs", derived),
+                            ("probabilities", self.accuracy is not None or self.fragility is not None)):
             object.__setattr__(self, name, value)
 
     def coordinate(self, dim):
@@ -291,7 +295,8 @@ def parse_study(text, name="study", source="<string>", inventory=None):
     ...     print(exc)
     <string>: block.b: must be a finite number >= 1e-06 and <= 1000 (got -1.0)
     """
-    return parse_toml(text, source, lambda raw: study_from_tables(raw, text, name, source, inventory))
+    return Study(**parse_toml(text, source, functools.partial(study_fields, text=text, name=name, source=source,
+                                                              inventory=inventory, collect=with_collection)))
 
 
 # ----------------------------------------------------------------------------- building
