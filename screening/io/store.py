@@ -46,6 +46,8 @@ class PartialStore:
     def __init__(self, out):
         self.out = Path(out)
         self.dir = self.out.with_name(self.out.name + ".partial")
+        #: The netCDF file and the zarr store being built, in the folder.
+        self.building, self.zarr_building = self.dir / self.BUILDING, self.dir / self.ZARR_BUILDING
         self._lock = None
         self.manifest = None
 
@@ -109,14 +111,6 @@ class PartialStore:
         self.close()
         with contextlib.suppress(OSError):
             self.dir.rmdir()
-
-    @property
-    def building(self):
-        return self.dir / self.BUILDING
-
-    @property
-    def zarr_building(self):
-        return self.dir / self.ZARR_BUILDING
 
     # -- zarr: the store and its batch markers
     def region_target(self, shape, histories, variables):

@@ -342,22 +342,24 @@ class ResultFile:
         self.nt = study.times.size
         #: What the client keeps of every point (:func:`screening.solvers.outputs.client_variables`), flat.
         self.kept = {o.name: o.failed_array(self.n_points) for o in GRID_OUTPUTS if o.client}
+        #: The kept status, trust flag and peak uplift probability of every point (arrays of :attr:`kept`).
+        self.status, self.sl_trust, self.peak_p_uplift = (self.kept[n] for n in ("status", "sl_trust",
+                                                                                  "peak_p_uplift"))
         self._unsynced = 0
         if zarr_batch_size is not None:
             chunks = zarr_point_chunks(self.shape, int(study.has_case_dim), zarr_batch_size)
             self.format = ZarrFormat(self.path, "r+" if reopen else "w", self.dims, chunks, complevel)
-            if reopen:
-                return
         else:
             self.format = NetcdfFormat(self.path, complevel, "a" if reopen else "w")
-            if reopen:
-                return
-        try:
-            self._define(attrs)
-            self.format.commit()
-        except BaseException:
-            self.format.finish()
-            raise
+        if not reopen:
+            try:
+                self._define(attrs)
+                self.format.commit()
+            except BaseException:
+                self.format.finish()
+                raise
+        #: The ``coordinates`` attribute of the grid variables.
+        self.coordinates = self.grid_coordinates()
 
     @property
     def nc(self):
@@ -454,30 +456,15 @@ class ResultFile:
     def write(self, name, region, values):
         self.format.write(name, region, values)
 
-    def written(self, points):
-        """``points`` with histories were written: commit every :data:`SYNC_POINTS` of them (compression
-        overlaps the workers' compute)."""
-        self._unsynced += points
+    def record(self, batch, summary, written=0):
+        """Keep what the client keeps of ``batch`` (a worker wrote the rest); ``written``: points with histories
+        the client wrote, committed every :data:`SYNC_POINTS` of them (compression overlaps the workers' compute)."""
+        for name, values in self.kept.items():
+            values[batch.lo:batch.hi] = summary[name]
+        self._unsynced += written
         if self._unsynced >= SYNC_POINTS:
             self.format.commit()
             self._unsynced = 0
-
-    @property
-    def status(self):
-        return self.kept["status"]
-
-    @property
-    def sl_trust(self):
-        return self.kept["sl_trust"]
-
-    @property
-    def peak_p_uplift(self):
-        return self.kept["peak_p_uplift"]
-
-    def record(self, batch, summary):
-        """Keep what the client keeps of ``batch`` (a worker wrote the rest)."""
-        for name, values in self.kept.items():
-            values[batch.lo:batch.hi] = summary[name]
 
     def read_summary(self, batch):
         """What the client keeps of ``batch``, as stored (flat arrays)."""

@@ -223,7 +223,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
             r["target_met"] = bool(esc.meets_target(r["peak_var_theta"], r["peak_var_theta_se"], acc.target))
         r["target_met"] = bool(r["target_met"])
         r["transition"] = np.int8(first[j])
-    write_escalation(result, stage.study, escalated, models_done, runs, stage.values)
+    variables, dimensions = escalation_variables(stage.study, escalated, models_done, runs, stage.values)
     best = {}
     for name in ("var_theta", "var_theta_dot"):
         mc = np.array([r[f"peak_{name}"] for r in runs]) if runs else np.zeros(0)
@@ -233,7 +233,8 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
                                                  models_done, atlas=name == "var_theta")
         best[name] = (value, se, method, corr)
     method = best["var_theta"][2]
-    write_best(result, stage.study, best["var_theta"][:2], best["var_theta_dot"][:2], method)
+    variables += best_variables(stage.study, best["var_theta"][:2], best["var_theta_dot"][:2], method,
+                                result.coordinates)
     for name in ("var_theta", "var_theta_dot"):                   # handed on to the probabilities
         stage.values[f"best_peak_{name}"], stage.values[f"best_peak_{name}_se"] = (
             np.asarray(v, dtype=float) for v in best[name][:2])
@@ -253,7 +254,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
             "n_unreliable": int(np.sum(method == BestMethod.unreliable)),
             "loo_rms": float(best["var_theta"][3].loo_rms), "correction_usable": best["var_theta"][3].usable,
             "methods": {BestMethod(int(c)).name: int(k) for c, k in zip(codes, counts)}}
-    result.set_attrs(
+    result.add(variables, dimensions, dict(
         accuracy_target=acc.target, accuracy_budget_s=acc.budget_s, accuracy_wall_s=info["wall_s"],
         accuracy_cost_s=cost, accuracy_cpu_s=cpu,
         accuracy_n_candidates=np.int32(info["n_candidates"]), accuracy_n_escalated=np.int32(len(runs)),
@@ -261,7 +262,7 @@ def _write_answers(stage, result, pts, features, order, models, first, results, 
         accuracy_n_cut_by_budget=np.int32(info["n_cut"]),
         accuracy_n_short_of_target=np.int32(short), accuracy_n_unreliable=np.int32(info["n_unreliable"]),
         accuracy_correction_loo_rms=info["loo_rms"],
-        accuracy_note=accuracy_line(info))
+        accuracy_note=accuracy_line(info)))
     return (escalated, models_done, runs), info
 
 
@@ -701,8 +702,9 @@ def accuracy_line(info):
             f"best estimates: {methods}")
 
 
-def write_escalation(result, study, flat_indices, models, runs, linear):
-    """Write the ``[accuracy]`` Monte Carlo points into ``result`` on dimension ``escalation`` (``runs``: the dicts of
+def escalation_variables(study, flat_indices, models, runs, linear):
+    """The variables of the ``[accuracy]`` Monte Carlo points on dimension ``escalation`` and their dimensions, for
+    :meth:`~screening.io.writer.ResultFile.add` (``runs``: the dicts of
     :func:`~screening.sweep.execution.escalation_task`; ``models``: their
     :class:`~screening.core.status.EscalationModel` codes; ``linear``: the linearization's per-point values,
     :func:`~screening.sweep.run.stage_inputs`)."""
@@ -739,16 +741,16 @@ def write_escalation(result, study, flat_indices, models, runs, linear):
            for group in (flags, values, flags2, values2, counts) for name, v in group.items()]
     out += [Variable("esc_peak_abs_theta", "f8", ("escalation", "esc_sample"), peaks, np.nan, at, ACCURACY),
             Variable("esc_sample_state", "i1", ("escalation", "esc_sample"), state, np.int8(-1), at, ACCURACY)]
-    result.add(coords + out, {"escalation": n, "esc_sample": most})
+    return coords + out, {"escalation": n, "esc_sample": most}
 
 
-def write_best(result, study, var_theta, var_theta_dot, method):
-    """Write the per-point best estimates into ``result``: ``var_theta`` and ``var_theta_dot`` are ``(value, se)``
-    flat arrays, ``method`` the flat :class:`~screening.core.status.BestMethod` codes."""
-    at = result.grid_coordinates()
+def best_variables(study, var_theta, var_theta_dot, method, at):
+    """The variables of the per-point best estimates: ``var_theta`` and ``var_theta_dot`` are ``(value, se)`` flat
+    arrays, ``method`` the flat :class:`~screening.core.status.BestMethod` codes, ``at`` the grid variables'
+    ``coordinates`` attribute."""
     out = [Variable(name, "f8", study.dims, np.asarray(values, dtype=float).reshape(study.shape), np.nan, at, ACCURACY)
            for base, (value, se) in (("best_peak_var_theta", var_theta), ("best_peak_var_theta_dot", var_theta_dot))
            for name, values in ((base, value), (f"{base}_se", se))]
     out.append(Variable("best_method", "i1", study.dims, np.asarray(method, dtype=np.int8).reshape(study.shape), False,
                         at, ACCURACY))
-    result.add(out)
+    return out

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -37,10 +37,11 @@ class Batch:
     case: int
     lo: int
     hi: int
+    #: ``hi - lo``
+    size: int = field(init=False, repr=False, compare=False)
 
-    @property
-    def size(self):
-        return self.hi - self.lo
+    def __post_init__(self):
+        object.__setattr__(self, "size", self.hi - self.lo)
 
 
 def holds_histories(study):

@@ -290,6 +290,7 @@ class _SweepRun:
         self.escalated = None           # [accuracy]: (flat indices, models, runs) of the escalated points
         self.spot_runs = None           # [mcs]: (grid indices, results) of the spot checks
         self.values = None              # [accuracy], [fragility]: the per-point values the stages start from
+        self.attrs = {}                 # global attributes set when the result is finished
 
     def run(self, batch_size):
         study, timings = self.study, self.report.timings
@@ -330,7 +331,7 @@ class _SweepRun:
                     self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
                                                                      self.spot_runs, log=self.log, values=self.values)
                     line = probabilities_line(self.report.probabilities)
-                    self.result.set_attrs(probabilities_note=line)
+                    self.attrs["probabilities_note"] = line
                     self.log(line)
                 t0 = time.perf_counter()
                 self._finalize()                    # closes the result
@@ -338,9 +339,10 @@ class _SweepRun:
             except BaseException:
                 self.result.close()
                 raise
-        finally:
+        except BaseException:
             self.store.close()
-        self.store.remove()
+            raise
+        self.store.remove()                         # closes it
 
     def _zarr_result(self, attrs, batch_size):
         """The zarr store of the run: the one of an interrupted run with the same manifest, or a new one."""
@@ -552,7 +554,8 @@ class _SweepRun:
         shutil.copyfile(self.store.building, tmp)
         res = ResultFile(tmp, study, None, self.complevel, reopen=True)
         try:
-            res.kept = {name: values.copy() for name, values in self.result.kept.items()}
+            for name, values in self.result.kept.items():
+                res.kept[name][:] = values
             escalated = write(res)
             finish_probabilities(study, res, escalated, None, values=self.values)
             stamp = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
@@ -592,7 +595,8 @@ class _SweepRun:
         """Close the file, flush it to disk and move it into place atomically (a zarr store: renamed,
         an older store at ``out`` removed after)."""
         raise_if_interrupted()
-        self.result.set_attrs(n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
+        self.result.set_attrs(**self.attrs,
+                              n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
         self.result.close()
         if self.target is not None:
             self._publish_store()
@@ -628,8 +632,7 @@ def stage_inputs(result, study):
 def write_batch(result, study, batch, part):
     """Write the arrays ``part`` of ``batch`` into its region of ``result`` (by the client) and keep its summary."""
     _submit.write_region(result.format, study.shape, study.output.stored, batch, part)
-    result.written(batch.size if study.output.stored else 0)
-    result.record(batch, part)
+    result.record(batch, part, written=batch.size if study.output.stored else 0)
 
 
 def write_spots(result, study, spots, results, failed, spec):
