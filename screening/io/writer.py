@@ -516,5 +516,8 @@ class ResultFile:
     def set_attrs(self, **attrs):
         self.format.set_attrs(attrs)
 
-    def close(self):
+    def close(self, **attrs):
+        """Set the global ``attrs`` (if any) and close the result."""
+        if attrs:
+            self.format.set_attrs(attrs)
         self.format.finish()

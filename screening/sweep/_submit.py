@@ -112,12 +112,10 @@ def write_region(fmt, shape, histories, batch, result):
     for slab, a, b in hyperslabs(batch.lo, batch.hi, shape):
         rows = slice(a - batch.lo, b - batch.lo)
         region = tuple(s.stop - s.start for s in slab)
-        for o in outputs:
+        for o in outputs:                   # a history or per-threshold variable: its trailing axis whole
             values = result[o.name]
-            if o.shape == "point":
-                fmt.write(o.name, slab if slab else Ellipsis, values[rows].reshape(region))
-            else:
-                fmt.write(o.name, slab + (slice(None),), values[rows].reshape(region + (values.shape[1],)))
+            key = (slab if slab else Ellipsis) if o.shape == "point" else slab + (slice(None),)
+            fmt.write(o.name, key, values[rows].reshape(region + values.shape[1:]))
 
 
 # ============================================================================ on the workers

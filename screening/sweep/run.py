@@ -595,9 +595,8 @@ class _SweepRun:
         """Close the file, flush it to disk and move it into place atomically (a zarr store: renamed,
         an older store at ``out`` removed after)."""
         raise_if_interrupted()
-        self.result.set_attrs(**self.attrs,
-                              n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
-        self.result.close()
+        self.result.close(**self.attrs,
+                          n_failed_points=np.int32(np.sum(self.result.status == PointStatus.task_failed)))
         if self.target is not None:
             self._publish_store()
             return
