@@ -123,7 +123,7 @@ def main():
     for r in range(args.runs):
         start = time.process_time()
         ds = tail_probability(STATUE, BED, QUAKE, thresholds=THRESHOLDS, model=args.model,
-                              n_per_level=args.n_per_level, p0=args.p0, seed=args.seed0 + r, sampler=args.sampler,
+                              n_per_level=args.n_per_level, runs=1, p0=args.p0, seed=args.seed0 + r, sampler=args.sampler,
                               progress=args.runs <= 5)
         cpu.append((time.process_time() - start) / ds.attrs["n_model_runs"])
         est.append([float(ds.p_overturn), *ds.p_exceed.values])

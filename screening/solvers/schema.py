@@ -177,15 +177,15 @@ ACCURACY = {
 #: Small probabilities by subset simulation (:func:`screening.solvers.tail.tail_probability`).
 TAIL = {
     "p_overturn": cf("1", "probability that the block overturns (|theta| > atan(b/h)), by subset simulation"),
-    "p_overturn_se": cf("1", "standard error of p_overturn (p_overturn x p_overturn_cov)"),
-    "p_overturn_cov": cf("1", "coefficient of variation of p_overturn (Au & Beck, with the chain correlation)"),
+    "p_overturn_se": cf("1", "standard error of p_overturn: the larger of the spread of independent runs and Au & Beck's"),
+    "p_overturn_cov": cf("1", "coefficient of variation of p_overturn (p_overturn_se / p_overturn)"),
     "p_exceed": cf("1", "probability that the peak |theta| exceeds the threshold (overturning counts), by subset "
                         "simulation"),
-    "p_exceed_se": cf("1", "standard error of p_exceed (p_exceed x p_exceed_cov)"),
-    "p_exceed_cov": cf("1", "coefficient of variation of p_exceed (Au & Beck, with the chain correlation)"),
+    "p_exceed_se": cf("1", "standard error of p_exceed: the larger of the spread of independent runs and Au & Beck's"),
+    "p_exceed_cov": cf("1", "coefficient of variation of p_exceed (p_exceed_se / p_exceed)"),
     "threshold": cf("rad", "rotation threshold of p_exceed"),
-    "level_threshold": cf("rad", "intermediate threshold of peak |theta| of each subset level"),
-    "level_gamma": cf("1", "correlation factor gamma of the Markov chains of each subset level"),
+    "level_threshold": cf("rad", "intermediate threshold of peak |theta| of each subset level of each run"),
+    "level_gamma": cf("1", "correlation factor gamma of the Markov chains of each subset level of each run"),
 }
 
 #: The attributes of ``fit_flag``, the state of a fitted lognormal fragility curve.
