@@ -1144,7 +1144,7 @@ def fit_standard_errors(intensity, probability, standard_error):
 
 
 def fitted_standard_error(frag):
-    """The standard error [1] of :func:`fitted_probability` where it is known, NaN elsewhere.
+    """The standard error of :func:`fitted_probability` where it is known (``docs/trust.md``), NaN elsewhere.
 
     A quarter of the band ``best_p_exceed_low..high`` (two standard errors either side) where
     ``[accuracy]`` vouches for the best estimate; ``p_exceed_se`` where the dataset has it; else NaN
