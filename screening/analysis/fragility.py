@@ -259,7 +259,8 @@ def band_standard_error(p, p_low, p_high):
     The band's quarter alone vanishes where the Gaussian tail underflows (both ends 0), and is far below
     what the trust rule checked wherever the tail is small: a trusted cell admits calibration points whose
     Monte Carlo overturned up to :data:`screening.analysis.trust.OVERTURN_LIMIT` of its samples
-    (``docs/outputs_probabilities.md``, ``docs/trust.md``), and an overturned sample exceeds every threshold.  So the standard error is at least
+    (``docs/outputs_probabilities.md``, ``docs/trust.md``), and an overturned sample exceeds every threshold.
+    So the standard error is at least
     ``(OVERTURN_LIMIT - p) / 2``: ``p + 2 se`` reaches that fraction, as the Agresti-Coull ``p + 2 se`` of a
     Monte Carlo without an overturned sample reaches about ``3 / n``.
     """
