@@ -141,6 +141,8 @@ def layer_stiffness(modulus, thickness, depth):
 
     Examples
     --------
+    A 1 cm mortar joint (``E_c`` = 1.111 GPa) under a base 26 cm deep:
+
     >>> f"{float(layer_stiffness(1.111e9, 0.01, 0.26)):.4g}"
     '2.889e+10'
     """
@@ -209,12 +211,8 @@ def c_from_vertical_damping(k, m, b, zeta_v):
 
     Parameters
     ----------
-    k : array_like
-        Bed stiffness [N m-2].
-    m : array_like
-        Block mass [kg].
-    b : array_like
-        Half-width of the base [m].
+    k, m, b : array_like
+        Bed stiffness [N m-2], block mass [kg] and half-width of the base [m].
     zeta_v : array_like
         Vertical damping ratio [1].
 
@@ -234,6 +232,8 @@ def c_from_vertical_damping(k, m, b, zeta_v):
 
     Examples
     --------
+    The paper's block at 5 % vertical damping:
+
     >>> f"{float(c_from_vertical_damping(2.89e7, 8.67, 0.035, 0.05)):.4g}"
     '5983'
     """
@@ -245,14 +245,8 @@ def lam_from_vertical_damping(k, m, b, zeta_v, g=9.81):
 
     Parameters
     ----------
-    k : array_like
-        Bed stiffness [N m-2].
-    m : array_like
-        Block mass [kg].
-    b : array_like
-        Half-width of the base [m].
-    zeta_v : array_like
-        Vertical damping ratio [1].
+    k, m, b, zeta_v
+        As in :func:`c_from_vertical_damping`.
     g : float, optional
         Gravitational acceleration [m s-2] (default 9.81).
 
@@ -272,6 +266,8 @@ def lam_from_vertical_damping(k, m, b, zeta_v, g=9.81):
 
     Examples
     --------
+    The same, as a Hunt-Crossley ``lam``:
+
     >>> f"{float(lam_from_vertical_damping(2.89e7, 8.67, 0.035, 0.05)):.4g}"
     '1.423e+08'
     """
@@ -303,6 +299,8 @@ def restitution_from_damping_ratio(zeta):
 
     Examples
     --------
+    A contact at 5 % damping returns 85 % of the approach velocity:
+
     >>> f"{float(restitution_from_damping_ratio(0.05)):.4f}"
     '0.8545'
     """
@@ -344,7 +342,6 @@ def fit_backbone(indentation, force_per_length, k=None):
 
     Examples
     --------
-    >>> import numpy as np
     >>> z = np.linspace(1e-5, 1e-4, 5)
     >>> k, eps = fit_backbone(z, 2.89e7 * z * (1 + 6e7 * z**2))
     >>> f"{k:.4g} {eps:.4g}"
@@ -366,10 +363,9 @@ def bed_summary(block, foundation):
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    block, foundation : screening.core.model.Block, screening.core.model.Foundation
+        The block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]) and its bed (``k`` [N m-2], ``eps`` [m-2],
+        its damping), scalar fields.
 
     Returns
     -------
@@ -441,6 +437,8 @@ def format_bed_summary(summary):
 
     Examples
     --------
+    The line of the uplift angle:
+
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> format_bed_summary(bed_summary(block, bed)).splitlines()[1]

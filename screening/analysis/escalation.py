@@ -237,11 +237,7 @@ def transition_points(p, shape, axis=None, intensity=None, band=TRANSITION_BAND)
     Returns
     -------
     numpy.ndarray of bool
-        Flat, one per point.
-
-    References
-    ----------
-    .. [1] ``docs/accuracy_in_sweeps.md``, "A budget in seconds" (this package's documentation).
+        Flat, one per point; the rule of ``docs/accuracy_in_sweeps.md``, "A budget in seconds".
     """
     shape = tuple(int(k) for k in shape)
     n = int(np.prod(shape, dtype=np.int64))

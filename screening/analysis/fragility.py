@@ -25,16 +25,11 @@ from screening.solvers.schema import cf
 from screening.analysis.trust import OVERTURN_LIMIT
 from screening.core.status import BestMethod, FitFlag, PointStatus, SampleState, Trust, ProbabilitySource
 
-__all__ = ["upcrossing_rate", "oscillator_bandwidth", "vanmarcke_factor", "exceedance_probability_from_moments",
-           "linearized_exceedance", "band_standard_error",
-           "mcs_exceedance_probability", "lognormal_fragility", "binomial_nll", "fit_binomial_fragility",
-           "total_dispersion", "with_modelling_dispersion", "fit_lognormal_fragility", "parameter",
-           "model_quantity", "RELATIVE_TO", "threshold_angle", "equivalent_damping_ratio", "is_monte_carlo",
-           "sample_exceedance", "exceedance_probability", "STORED", "has_stored_exceedance", "stored_exceedance",
-           "fit_flag_of", "fit_fragility_curve", "fit_curves", "unvouched_points",
-           "fitted_probability", "fitted_standard_error", "fit_standard_errors", "vouched_range", "add_fit",
-           "grid_units_of", "fragility_curve", "RockingAccessor",
-           "spot_positions", "mcs_exceedance_at_spots", "best_exceedance", "fragility_dataset"]
+__all__ = ["upcrossing_rate", "vanmarcke_factor", "exceedance_probability_from_moments", "linearized_exceedance",
+           "mcs_exceedance_probability", "lognormal_fragility", "fit_binomial_fragility", "total_dispersion",
+           "with_modelling_dispersion", "fit_lognormal_fragility", "fit_fragility_curve", "RELATIVE_TO",
+           "threshold_angle", "exceedance_probability", "fragility_curve", "best_exceedance", "fragility_dataset",
+           "RockingAccessor"]
 
 #: The variables of a fragility dataset and of the sweep's best probabilities, declared here (found by name).
 FRAGILITY = schema.declare("fragility", {
@@ -105,7 +100,6 @@ def upcrossing_rate(var_theta, var_theta_dot, cov_theta_theta_dot, level):
 
     Examples
     --------
-    >>> import numpy as np
     >>> nu = upcrossing_rate(1e-6, 1e-2, 0.0, 1e-3)
     >>> bool(np.isclose(nu, np.sqrt(1e-2 / 1e-6) / np.pi * np.exp(-0.5)))
     True
@@ -141,17 +135,8 @@ def oscillator_bandwidth(zeta):
 
     Notes
     -----
-    In closed form ``1 - delta^2 = (1 - (2/pi) atan(zeta / sqrt(1 - zeta^2)))^2 / (1 - zeta^2)`` [2]; the
-    bandwidth of the linearized rocking response (eq. (26) in [1]) enters :func:`vanmarcke_factor`.
-
-    References
-    ----------
-    [1] [mitseas2026]; [2] [vanmarcke1975].
-
-    Examples
-    --------
-    >>> f"{float(oscillator_bandwidth(0.05)):.4f}"
-    '0.2456'
+    In closed form ``1 - delta^2 = (1 - (2/pi) atan(zeta / sqrt(1 - zeta^2)))^2 / (1 - zeta^2)`` [vanmarcke1975]; the
+    bandwidth of the linearized rocking response (eq. (26) in [mitseas2026]) enters :func:`vanmarcke_factor`.
     """
     z = np.clip(np.asarray(zeta, dtype=float), 1e-12, 1 - 1e-12)
     q = np.sqrt(1.0 - z * z)
@@ -236,7 +221,6 @@ def exceedance_probability_from_moments(t, var_theta, var_theta_dot, cov_theta_t
 
     Examples
     --------
-    >>> import numpy as np
     >>> t = np.linspace(0.0, 10.0, 11)
     >>> ones = np.ones_like(t)
     >>> p = exceedance_probability_from_moments(t, 1e-6 * ones, 1e-2 * ones, 0 * ones, 3e-3, method="poisson")
@@ -274,19 +258,11 @@ def band_standard_error(p, p_low, p_high):
     -----
     The band's quarter alone vanishes where the Gaussian tail underflows (both ends 0), and is far below
     what the trust rule checked wherever the tail is small: a trusted cell admits calibration points whose
-    Monte Carlo overturned up to :data:`screening.analysis.trust.OVERTURN_LIMIT` of its samples [2], and an
-    overturned sample exceeds every threshold.  So the standard error is at least
+    Monte Carlo overturned up to :data:`screening.analysis.trust.OVERTURN_LIMIT` of its samples
+    (``docs/outputs_probabilities.md``, ``docs/trust.md``), and an overturned sample exceeds every threshold.
+    So the standard error is at least
     ``(OVERTURN_LIMIT - p) / 2``: ``p + 2 se`` reaches that fraction, as the Agresti-Coull ``p + 2 se`` of a
     Monte Carlo without an overturned sample reaches about ``3 / n``.
-
-    References
-    ----------
-    [1] [mitseas2026]; [2] ``docs/outputs_probabilities.md``, ``docs/trust.md``.
-
-    Examples
-    --------
-    >>> band_standard_error([0.0, 0.30], [0.0, 0.26], [0.0, 0.34]).round(4)       # an underflowed tail; a wide one
-    array([0.005, 0.02 ])
     """
     p, p_low, p_high = (np.asarray(a, dtype=float) for a in (p, p_low, p_high))
     return np.maximum(np.abs(p_high - p_low) / 4.0, (OVERTURN_LIMIT - p) / 2.0)
@@ -338,7 +314,6 @@ def linearized_exceedance(t, var_theta, var_theta_dot, cov_theta_theta_dot, c_eq
     Stationary moments (sigma 0.01 rad, sigma_dot 0.1 rad/s) over 10 s, level 3 sigma: Poisson gives
     ``1 - exp(-10 x 2 x 1.59 x exp(-4.5)) = 0.298``; a point with ``k_eq_negative`` gets NaN:
 
-    >>> import numpy as np
     >>> t = np.linspace(0.0, 10.0, 101)
     >>> ones = np.ones((2, t.size))
     >>> p = linearized_exceedance(t, 1e-4 * ones, 1e-2 * ones, 0 * ones, 0.1 * ones, 10.0 * ones,
@@ -462,18 +437,8 @@ def binomial_nll(log_median, log_beta, intensity, n_exceed, n_total):
 
     Notes
     -----
-    The likelihood of [2], eq. (11), on the log scale of its parameters, minimised by
-    :func:`fit_binomial_fragility`; the exceedances come from the samples of the equations of motion of [1].
-
-    References
-    ----------
-    [1] [mitseas2026]; [2] [baker2015].
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> f"{binomial_nll(0.0, -0.9163, np.array([0.5, 1.0, 2.0]), np.array([1, 5, 9]), 10):.4f}"
-    '14.0568'
+    The likelihood of [baker2015], eq. (11), on the log scale of its parameters, minimised by
+    :func:`fit_binomial_fragility`; the exceedances come from the samples of the equations of motion of [mitseas2026].
     """
     p = np.clip(lognormal_fragility(intensity, np.exp(log_median), np.exp(log_beta)), 1e-300, 1.0)
     q = np.clip(1.0 - lognormal_fragility(intensity, np.exp(log_median), np.exp(log_beta)), 1e-300, 1.0)
@@ -504,17 +469,6 @@ def fit_flag_of(intensity, median, beta, beta_se=np.nan):
         ``not_identified`` where median or beta is not finite or ``beta_se >= BETA_UNIDENTIFIED beta``,
         ``non_positive_beta`` where ``beta <= 0``, ``median_outside_data`` where the median lies outside
         the intensities, else ``ok``.
-
-    References
-    ----------
-    [1] [baker2015].
-
-    Examples
-    --------
-    >>> fit_flag_of([1.0, 2.0], 1.5, 0.4).name, fit_flag_of([1.0, 2.0], 2.8e136, 609.0).name
-    ('ok', 'median_outside_data')
-    >>> fit_flag_of([1.0, 2.0], 1.5, 0.4, beta_se=2624.0).name
-    'not_identified'
     """
     im = np.asarray(intensity, dtype=float).ravel()
     im = im[np.isfinite(im)]
@@ -667,7 +621,6 @@ def with_modelling_dispersion(frag, modelling):
 
     Examples
     --------
-    >>> import xarray as xr
     >>> out = with_modelling_dispersion(xr.Dataset({"beta": 0.3}), 0.4)
     >>> float(out["beta"]), float(out["beta_fit"])
     (0.5, 0.3)
@@ -764,16 +717,6 @@ def parameter(ds, name):
     -------
     xarray.DataArray
         Its values in SI units; ``KeyError`` when the dataset does not record it.
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> ds = xr.Dataset(coords={"S0": [3e-4, 4e-4], "k": 2.89e7})
-    >>> parameter(ds, "S0").values.tolist()[:2], float(parameter(ds, "k"))
-    ([0.0003, 0.0004], 28900000.0)
     """
     for var in (name, f"{name}_value"):
         if var in ds.variables:
@@ -812,21 +755,7 @@ def model_quantity(ds, name):
     Notes
     -----
     ``slenderness = atan(b / h)`` and ``m_sdof = I_cm + m h^2`` (the rocking inertia about the
-    base centre, eq. (23) in [1]).
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> f"{float(model_quantity(ds, 'slenderness')):.4f} {float(model_quantity(ds, 'm_sdof')):.4f}"
-    '0.1651 0.5133'
+    base centre, eq. (23) in [mitseas2026]).
     """
     if name in ds.variables:
         return ds[name]
@@ -897,21 +826,7 @@ def equivalent_damping_ratio(ds):
     Notes
     -----
     ``zeta_eq = c_eq / (2 sqrt(k_eq M))`` with ``M = I_cm + m h^2``, the equivalent linear system of
-    eq. (42) in [1].
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> [f"{z:.4f}" for z in equivalent_damping_ratio(ds).isel(t=-1).values[:2]]
-    ['0.0265', '0.0265']
+    eq. (42) in [mitseas2026].
     """
     k_eq = ds["k_eq"].where(ds["k_eq"] > 0)
     return ds["c_eq"] / (2.0 * np.sqrt(k_eq * model_quantity(ds, "m_sdof")))
@@ -929,16 +844,6 @@ def is_monte_carlo(ds):
     -------
     bool
         Whether ``peak_abs_theta`` [rad] is stored per sample.
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> is_monte_carlo(xr.Dataset({"peak_abs_theta": ("sample", [1e-3, 2e-3])})), is_monte_carlo(xr.Dataset())
-    (True, False)
     """
     return "peak_abs_theta" in ds.variables and "sample" in ds["peak_abs_theta"].dims
 
@@ -965,19 +870,6 @@ def sample_exceedance(peaks, overturned, valid, level):
     Notes
     -----
     ``p = n_exceed / n_valid`` and the binomial standard error ``sqrt(p (1 - p) / n_valid)``.
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> peaks = xr.DataArray([1e-3, 3e-3, 5e-3, 0.0], dims="sample")
-    >>> over = xr.DataArray([False, False, False, True], dims="sample")
-    >>> p, se = sample_exceedance(peaks, over, xr.ones_like(over), 2e-3)
-    >>> float(p), f"{float(se):.4f}"
-    (0.75, '0.2165')
     """
     n = valid.sum("sample")
     n = n.where(n > 0)
@@ -1029,7 +921,8 @@ def exceedance_probability(ds, threshold, relative_to=None, method="vanmarcke"):
 
     Examples
     --------
-    >>> import numpy as np
+    The paper's block and bed under five white-noise intensities ``S0`` [m2 s-3]:
+
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
     ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
@@ -1081,17 +974,6 @@ def has_stored_exceedance(ds, threshold, relative_to=None):
     -------
     bool
         True where the result holds ``p_exceed`` at ``threshold`` relative to the same angle, with ``p_source``.
-
-    References
-    ----------
-    [1] ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> ds = xr.Dataset({"p_exceed": (("S0", "threshold"), [[0.1, 0.0]], {"relative_to": "slenderness"}),
-    ...                  "p_source": ("S0", [1])}, coords={"threshold": [0.1, 0.3]})
-    >>> has_stored_exceedance(ds, 0.3, "slenderness"), has_stored_exceedance(ds, 0.2, "slenderness")
-    (True, False)
     """
     if not ("p_exceed" in ds.variables and "p_source" in ds.variables and "threshold" in ds["p_exceed"].dims):
         return False
@@ -1126,17 +1008,6 @@ def stored_exceedance(ds, threshold, relative_to=None):
     ------
     ValueError
         One line: the result stores no moments and no probabilities at this threshold.
-
-    References
-    ----------
-    [1] ``docs/outputs_probabilities.md``.
-
-    Examples
-    --------
-    >>> ds = xr.Dataset({"p_exceed": (("S0", "threshold"), [[0.1, 0.0], [0.6, 0.2]], {"relative_to": "slenderness"}),
-    ...                  "p_source": ("S0", [1, 0])}, coords={"threshold": [0.1, 0.3]})
-    >>> stored_exceedance(ds, 0.3, "slenderness").values.tolist()
-    [0.0, nan]
     """
     stored = ds["p_exceed"] if "p_exceed" in ds.variables and "threshold" in ds["p_exceed"].dims else None
     have = [] if stored is None else [float(t) for t in ds["threshold"].values]
@@ -1231,10 +1102,8 @@ def fit_standard_errors(intensity, probability, standard_error):
 
     Parameters
     ----------
-    intensity : array_like
-        Intensity measure [units of the IM], 1-d.
-    probability : array_like
-        Exceedance probability [1] at each intensity.
+    intensity, probability
+        As in :func:`fit_fragility_curve`.
     standard_error : array_like
         Its standard error [1] at each intensity (NaN: unknown).
 
@@ -1249,21 +1118,9 @@ def fit_standard_errors(intensity, probability, standard_error):
     -----
     The fit regresses ``z_i = Phi^-1(p_i)`` on ``u_i = ln x_i`` (``z = a + b u``, points with
     ``1e-6 < p < 1 - 1e-6``) by ordinary least squares; with independent point errors
-    ``se(z_i) = se(p_i) / phi(z_i)`` (delta method) its covariance is the sandwich
+    ``se(z_i) = se(p_i) / phi(z_i)`` (delta method) its covariance is the sandwich [white1980]
     ``(X'X)^-1 X' diag(se(z)^2) X (X'X)^-1``; ``beta = 1/b``, ``ln median = -a/b`` carry it by the delta
     method: ``se(beta) = se(b) / b^2``, ``se(median) = median se(ln median)``.
-
-    References
-    ----------
-    [1] [white1980].
-
-    Examples
-    --------
-    >>> x = [0.5, 1.0, 2.0]
-    >>> p = lognormal_fragility(x, 1.2, 0.5)
-    >>> m_se, b_se = fit_standard_errors(x, p, [0.01, 0.01, 0.01])
-    >>> f"{m_se:.4f} {b_se:.4f}"
-    '0.0191 0.0223'
     """
     x = np.asarray(intensity, dtype=float).ravel()
     p = np.asarray(probability, dtype=float).ravel()
@@ -1288,7 +1145,7 @@ def fit_standard_errors(intensity, probability, standard_error):
 
 
 def fitted_standard_error(frag):
-    """The standard error [1] of :func:`fitted_probability` where it is known, NaN elsewhere.
+    """The standard error of :func:`fitted_probability` where it is known (``docs/trust.md``), NaN elsewhere.
 
     A quarter of the band ``best_p_exceed_low..high`` (two standard errors either side) where
     ``[accuracy]`` vouches for the best estimate; ``p_exceed_se`` where the dataset has it; else NaN
@@ -1303,20 +1160,6 @@ def fitted_standard_error(frag):
     -------
     xarray.DataArray
         [1], on the grid of ``p_exceed``.
-
-    References
-    ----------
-    [1] ``docs/trust.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import BestMethod
-    >>> frag = xr.Dataset({"p_exceed": ("S0", [0.1, 0.2]), "best_p_exceed": ("S0", [0.15, 0.25]),
-    ...                    "best_p_exceed_low": ("S0", [0.1, 0.2]), "best_p_exceed_high": ("S0", [0.2, 0.3]),
-    ...                    "best_method": ("S0", [BestMethod.unreliable, BestMethod.condensed_monte_carlo])})
-    >>> [round(v, 3) for v in fitted_standard_error(frag).values.tolist()]
-    [nan, 0.025]
     """
     p = frag["p_exceed"]
     se = frag["p_exceed_se"] if "p_exceed_se" in frag else xr.full_like(p, np.nan, dtype=float)
@@ -1347,19 +1190,6 @@ def fit_curves(p, intensity, dim):
     Notes
     -----
     Each curve is fitted by :func:`fit_fragility_curve`, ``P(IM) = Phi(ln(IM / median) / beta)``.
-
-    References
-    ----------
-    [1] [mitseas2026]; [2] [baker2015].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> im = [0.5, 1.0, 2.0]
-    >>> p = xr.DataArray(lognormal_fragility(im, 1.2, 0.5), dims="S0")
-    >>> fit = fit_curves(p, im, "S0")
-    >>> f"{float(fit['fit_median']):.3f} {float(fit['beta']):.3f} {int(fit['fit_flag'])}"
-    '1.200 0.500 0'
     """
     x = intensity if isinstance(intensity, xr.DataArray) else xr.DataArray(np.asarray(intensity), dims=dim)
     x, p = xr.broadcast(x, p)
@@ -1396,19 +1226,6 @@ def unvouched_points(ds, stored=True):
     -------
     xarray.DataArray of bool
         ``unvouched`` [-] over the grid.
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import PointStatus, Trust
-    >>> ds = xr.Dataset({"sl_trust": ("S0", [Trust.untrusted, Trust.trusted]),
-    ...                  "status": ("S0", [PointStatus.ok, PointStatus.ok])})
-    >>> unvouched_points(ds).values.tolist()
-    [True, False]
     """
     if "p_source" in ds.variables:
         bad = (ds["p_source"] == ProbabilitySource.unreliable) if stored else ~ds["p_source"].isin(
@@ -1443,19 +1260,6 @@ def fitted_probability(frag, unvouched=None):
     -------
     xarray.DataArray
         The probability [1].
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> from screening.core.status import BestMethod
-    >>> frag = xr.Dataset({"p_exceed": ("S0", [0.1, 0.2]), "best_p_exceed": ("S0", [0.15, 0.25]),
-    ...                    "best_method": ("S0", [BestMethod.unreliable, BestMethod.condensed_monte_carlo])})
-    >>> fitted_probability(frag).values.tolist()
-    [0.1, 0.25]
     """
     p = frag["p_exceed"] if unvouched is None else frag["p_exceed"].where(~unvouched)
     if "best_p_exceed" not in frag:
@@ -1495,19 +1299,6 @@ def vouched_range(frag, ds, intensity, dim):
     -------
     xarray.Dataset
         ``fit_im_min``, ``fit_im_max`` [IM units] over the curves (NaN where no point is vouched).
-
-    References
-    ----------
-    [1] ``docs/fragility.md``.
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> frag = xr.Dataset({"p_exceed": ("pga", [0.1, 0.5, float("nan")])})
-    >>> x = xr.DataArray([1.0, 2.0, 4.0], dims="pga")
-    >>> r = vouched_range(frag, xr.Dataset(), x, "pga")
-    >>> float(r["fit_im_min"]), float(r["fit_im_max"])
-    (1.0, 2.0)
     """
     p = fitted_probability(frag)
     good = np.isfinite(p)
@@ -1546,22 +1337,6 @@ def add_fit(out, ds, intensity, dim):
         (no value, fewer than two between 0 and 1, never or always exceeded) while points were left out is
         flagged ``untrusted``; the vouched range ``fit_im_min``, ``fit_im_max`` (:func:`vouched_range`) and,
         where the points have standard errors, ``fit_median_se``, ``beta_se`` (:func:`fit_standard_errors`).
-
-    References
-    ----------
-    [1] [mitseas2026]; [2] [baker2015].
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening import Block, Foundation, WhiteNoise, linearize
-    >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
-    ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
-    ...                condensation="paper")
-    >>> import xarray as xr
-    >>> out = add_fit(xr.Dataset({"p_exceed": exceedance_probability(ds, 0.01)}), ds, ds["S0"], "S0")
-    >>> f"{float(out['fit_median']):.3e} {float(out['beta']):.3f} {int(out['fit_n_unvouched'])}"
-    '5.381e-04 0.235 0'
     """
     unvouched = unvouched_points(ds, stored=out["p_exceed"].attrs.get("method") == STORED)
     probability = fitted_probability(out, unvouched)
@@ -1603,30 +1378,8 @@ def _finish(out, dim, threshold, relative_to, method):
 
 
 def grid_units_of(ds, dim):
-    """Units of the swept ``dim``: its coordinate's ``units``, else the schema's for a model parameter.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        A result dataset.
-    dim : str
-        A grid dimension or model parameter.
-
-    Returns
-    -------
-    str
-        CF units (``"m2 s-3"`` for ``S0``); ``""`` when unknown.
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> grid_units_of(xr.Dataset(), "S0"), grid_units_of(xr.Dataset(), "k")
-    ('m2 s-3', 'N m-2')
-    """
+    """CF units of the grid dimension or model parameter ``dim`` of the result ``ds`` (``"m2 s-3"`` for ``S0``):
+    its coordinate's ``units``, else the schema's for a model parameter, else ``""``."""
     if dim in ds.variables and "units" in ds[dim].attrs:
         return ds[dim].attrs["units"]
     return schema.PARAMETERS.get(dim, {}).get("units", "")
@@ -1666,7 +1419,8 @@ def fragility_curve(ds, threshold, dim="S0", relative_to=None, method="vanmarcke
 
     Examples
     --------
-    >>> import numpy as np
+    A lognormal curve over the same five intensities as :func:`exceedance_probability`:
+
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
     ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
@@ -1717,18 +1471,6 @@ def spot_positions(ds):
     -------
     dict of str to xarray.DataArray
         ``{dim: positions over spot}`` for a pointwise ``ds.isel(...)``.
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"status": ("S0", [0, 0, 0])}, coords={"S0": [1e-4, 2e-4, 4e-4],
-    ...                 "spot_S0": ("spot", [4e-4, 1e-4])})
-    >>> spot_positions(ds)["S0"].values.tolist()
-    [2, 0]
     """
     positions = {}
     for dim in ds["status"].dims:
@@ -1759,20 +1501,6 @@ def mcs_exceedance_at_spots(ds, level):
     -------
     p, standard_error : xarray.DataArray
         Over ``spot`` [1] (:func:`sample_exceedance`).
-
-    References
-    ----------
-    [1] [mitseas2026].
-
-    Examples
-    --------
-    >>> import xarray as xr
-    >>> ds = xr.Dataset({"status": ("S0", [0, 0]),
-    ...                  "mcs_peak_abs_theta": (("spot", "sample"), [[1e-3, 3e-3], [3e-3, 4e-3]])},
-    ...                 coords={"S0": [1e-4, 2e-4], "spot_S0": ("spot", [1e-4, 2e-4])})
-    >>> p, se = mcs_exceedance_at_spots(ds, xr.DataArray(2e-3))
-    >>> p.values.tolist()
-    [0.5, 1.0]
     """
     level = level.isel({d: i for d, i in spot_positions(ds).items() if d in level.dims})
     peaks = ds["mcs_peak_abs_theta"]
@@ -1817,7 +1545,6 @@ def best_exceedance(ds, threshold, relative_to=None, method="vanmarcke"):
     --------
     Best estimates 10 % above the linearization, with a 5 % standard error:
 
-    >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
     ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,
@@ -1879,14 +1606,8 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        A linearization, sweep or Monte Carlo result.
-    threshold, relative_to : float, {None, "slenderness", "theta_ul"}
-        The threshold [rad], or a fraction [1] of ``relative_to`` (:func:`threshold_angle`).
-    method : {"vanmarcke", "poisson"}
-        The up-crossing approximation.
-    dim : str
-        The intensity the curve is fitted over (default ``S0`` [m2 s-3]).
+    ds, threshold, relative_to, method, dim
+        As in :func:`fragility_curve`.
 
     Returns
     -------
@@ -1899,7 +1620,8 @@ def fragility_dataset(ds, threshold, relative_to=None, method="vanmarcke", dim="
 
     Examples
     --------
-    >>> import numpy as np
+    What ``screening fragility`` writes, here of one linearization:
+
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
     ...                WhiteNoise(np.array([3e-4, 4e-4, 6e-4, 8e-4, 1.2e-3]), band_limit_hz=None), t_end=10.0, dt=0.5, trust=False,

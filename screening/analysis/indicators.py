@@ -49,7 +49,6 @@ def envelope_fraction(ds):
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
     >>> ds = xr.Dataset({"T1": 4.0, "T2": 2.0}, coords={"t": np.linspace(0.0, 20.0, 201)})
     >>> q = lambda t: 4 * (np.exp(-t / 4) - np.exp(-t / 2))
     >>> f"{float(envelope_fraction(ds)):.5f}", f"{q(20.0) ** 2 / q(4 * np.log(2)) ** 2:.5f}"
@@ -145,7 +144,6 @@ def indicators_from_dataset(ds):
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
     >>> ds = xr.Dataset({"peak_p_uplift": ("S0", [0.1, 0.4]), "min_k_eq": ("S0", [90.0, 40.0]),
     ...                  "k_eq_rest": 100.0, "peak_var_theta": ("S0", [1e-4, 4e-4]), "slenderness": 0.1,
     ...                  "var_theta_end": ("S0", [1e-5, 4e-5])}, attrs={"envelope": "constant"})

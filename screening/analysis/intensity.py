@@ -64,10 +64,8 @@ def rms_acceleration(excitation, t_end, cutoff):
     ----------
     excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
-    t_end : float
-        Record length [s].
-    cutoff : float
-        Band limit of the ground motion [rad s-1].
+    t_end, cutoff : float
+        Record length [s] and band limit of the ground motion [rad s-1].
 
     Returns
     -------
@@ -89,8 +87,7 @@ def rms_acceleration(excitation, t_end, cutoff):
     --------
     Stationary white noise band-limited to 50 rad/s: ``sqrt(2 S0 omega_c)``.
 
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> rms_acceleration(white, 10.0, 50.0), (2 * 0.01 * 50.0) ** 0.5
     (1.0, 1.0)
@@ -105,12 +102,8 @@ def arias_intensity(excitation, t_end, cutoff, g=G):
 
     Parameters
     ----------
-    excitation : screening.core.excitations.base.Excitation
-        A registered excitation (scalar fields) with its envelope.
-    t_end : float
-        Record length [s].
-    cutoff : float
-        Band limit of the ground motion [rad s-1].
+    excitation, t_end, cutoff
+        As in :func:`rms_acceleration`.
     g : float, default G
         Standard gravity [m s-2].
 
@@ -130,8 +123,9 @@ def arias_intensity(excitation, t_end, cutoff, g=G):
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    The same noise over 10 s, against ``pi / (2 g) lambda_0 T``:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> import math
     >>> f"{arias_intensity(white, 10.0, 50.0):.6f}", f"{math.pi / (2 * G) * 1.0 * 10.0:.6f}"
@@ -153,10 +147,8 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
         A registered excitation with its envelope (filter fields may be arrays).
     target_pga : float or array_like
         The median PGA [m s-2].
-    t_end : float
-        Record length [s].
-    cutoff : float
-        Band limit of the ground motion [rad s-1].
+    t_end, cutoff
+        As in :func:`rms_acceleration`.
 
     Returns
     -------
@@ -179,8 +171,9 @@ def s0_for_pga(excitation, target_pga, t_end, cutoff):
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    The ``S0`` found gives back the target PGA of 1 m s-2:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> s0 = s0_for_pga(white, 1.0, 2.0, 20.0)
     >>> f"{s0:.6f}", f"{pga_median(WhiteNoise(s0, white.envelope, band_limit_hz=None), 2.0, 20.0):.6f}"
@@ -219,8 +212,9 @@ def input_measures(excitation, t_end, cutoff):
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    All three at once:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> m = input_measures(white, 2.0, 20.0)
     >>> f"{m['rms_acceleration']:.6f}", f"{(2 * 0.01 * 20.0) ** 0.5:.6f}", bool(m["pga_median"] == pga_median(white, 2.0, 20.0))
@@ -430,8 +424,9 @@ def simulated_pgv(excitation, t_end, cutoff, omega_low=OMEGA_LOW, n_records=PGV_
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    The median scales as ``sqrt(S0)`` (100 records, for speed):
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> pgv, se = simulated_pgv(white, 2.0, 20.0, n_records=100)
     >>> pgv4, _ = simulated_pgv(WhiteNoise(0.04, white.envelope, band_limit_hz=None), 2.0, 20.0, n_records=100)
@@ -446,16 +441,8 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Parameters
     ----------
-    excitation : screening.core.excitations.base.Excitation
-        A registered excitation (scalar fields; envelope exponential or constant).
-    t_end : float
-        Record length [s].
-    cutoff : float
-        Band limit of the ground motion [rad s-1].
-    n_records : int, default PGV_RECORDS
-        Records synthesised per excitation shape.
-    seed : int, default PGV_SEED
-        Seed of the synthesis.  As for :func:`simulated_pgv`, but the acceleration is not high-passed.
+    excitation, t_end, cutoff, n_records, seed
+        As in :func:`simulated_pgv`; the acceleration is not high-passed.
 
     Returns
     -------
@@ -476,8 +463,9 @@ def simulated_pga(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_SEE
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    So does the PGA's, and so does its standard error:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> pga, se = simulated_pga(white, 2.0, 20.0, n_records=100)
     >>> pga4, se4 = simulated_pga(WhiteNoise(0.04, white.envelope, band_limit_hz=None), 2.0, 20.0, n_records=100)
@@ -532,7 +520,7 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
     Returns
     -------
     float
-        Median of ``max_t |a(t)|`` [m s-2].
+        Median of ``max_t |a(t)|`` [m s-2], by ``method``.
 
     Notes
     -----
@@ -546,8 +534,9 @@ def pga_median(excitation, t_end, cutoff, method="simulated"):
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    The default method is the simulated median:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> pga = pga_median(white, 2.0, 20.0)
     >>> f"{pga:.4f}", pga == simulated_pga(white, 2.0, 20.0)[0]
@@ -599,12 +588,13 @@ def pgv_median(excitation, t_end, cutoff, omega_low=OMEGA_LOW, method="simulated
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    The default, simulated median of the high-passed velocity, against :func:`simulated_pgv`:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> pgv = pgv_median(white, 2.0, 20.0)
-    >>> f"{pgv:.4f}", pgv == simulated_pgv(white, 2.0, 20.0)[0]
-    ('0.2809', True)
+    >>> round(pgv, 4), pgv == simulated_pgv(white, 2.0, 20.0)[0]
+    (0.2809, True)
     """
     if method not in ("simulated", "rvt"):
         raise ValueError(f"parameter 'method' must be 'simulated' or 'rvt' (got {method!r})")
@@ -656,8 +646,7 @@ def avgsa_median(excitation, period, t_end, damping=0.05, cutoff=None):
     --------
     A short stationary record (ten Lyapunov integrations: about a second):
 
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope(), band_limit_hz=None)   # S0 = 0.01 m2 s-3, stationary, unbounded
     >>> f"{avgsa_median(white, 2.0, 0.3, damping=0.2):.4f}"
     '0.2397'

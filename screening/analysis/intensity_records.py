@@ -266,7 +266,6 @@ def continuous_peak(acceleration, rate, dt, refine=8):
     --------
     ``sin t`` sampled every second: the grid misses its peak of 1, the interpolant nearly finds it.
 
-    >>> import numpy as np
     >>> t = np.arange(0.0, 6.0, 1.0)
     >>> float(np.max(np.sin(t)).round(4)), continuous_peak(np.sin(t), np.cos(t), 1.0).round(4).tolist()
     (0.9093, [0.9979])
@@ -296,10 +295,8 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
     ----------
     excitation : screening.core.excitations.base.Excitation
         A registered excitation (scalar fields) with its envelope.
-    t_end : float
-        Record length [s].
-    cutoff : float
-        Band limit [rad s-1].
+    t_end, cutoff : float
+        Record length [s] and band limit [rad s-1].
     n_records : int, default PGV_RECORDS
         Number of records.
     seed : int, default PGV_SEED
@@ -323,8 +320,7 @@ def synthesised_peaks(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pga, pgv = synthesised_peaks(white, 5.0, 50.0, n_records=20, seed=1)
     >>> pga.shape, bool(np.all(synthesised_peaks(white, 5.0, 50.0, n_records=3, seed=1)[0] == pga[:3]))
@@ -347,18 +343,8 @@ def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_S
 
     Parameters
     ----------
-    excitation : screening.core.excitations.base.Excitation
-        A registered excitation (scalar fields) with its envelope.
-    t_end : float
-        Record length [s].
-    cutoff : float
-        Band limit [rad s-1].
-    n_records : int, default PGV_RECORDS
-        Number of records.
-    seed : int, default PGV_SEED
-        Seed of the run.
-    omega_low : float, default OMEGA_LOW
-        High-pass corner [rad s-1].
+    excitation, t_end, cutoff, n_records, seed, omega_low
+        As in :func:`synthesised_peaks` (``omega_low`` not None).
 
     Returns
     -------
@@ -371,8 +357,9 @@ def synthesised_pgv(excitation, t_end, cutoff, n_records=PGV_RECORDS, seed=PGV_S
 
     Examples
     --------
-    >>> from screening.core.model.excitation import ConstantEnvelope
-    >>> from screening.core.excitations.white import WhiteNoise
+    The velocities of the same records:
+
+    >>> from screening import ConstantEnvelope, WhiteNoise
     >>> white = WhiteNoise(0.01, ConstantEnvelope())          # S0 = 0.01 m2 s-3, stationary
     >>> pgv = synthesised_pgv(white, 5.0, 50.0, n_records=20, seed=1)
     >>> bool(np.all(pgv == synthesised_peaks(white, 5.0, 50.0, n_records=20, seed=1)[1])), pgv.shape
@@ -462,10 +449,8 @@ def record_avgsa(acceleration, dt, period, damping=0.05):
 
     Parameters
     ----------
-    acceleration : array_like
-        Ground accelerations [m s-2], one record per row.
-    dt : float
-        Time step [s].
+    acceleration, dt
+        As in :func:`record_velocity`.
     period : float
         Central period [s].
     damping : float, default 0.05

@@ -160,7 +160,6 @@ def linearize(block, foundation, excitation, t_end=20.0, dt=0.05, rtol=DEFAULT_R
 
     Examples
     --------
-    >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise, linearize
     >>> ds = linearize(Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8),
     ...                WhiteNoise(np.array([1e-5, 1e-4])), t_end=10.0, dt=0.5, trust=False, condensation="paper")

@@ -29,7 +29,7 @@ from screening.solvers import schema
 
 __all__ = ["bed_law", "envelope_fraction", "trust_indicators", "indicators_from_dataset", "error_of", "p_bin",
            "regime", "calibration_rows", "trust_table", "shipped_table", "shipped_calibration", "sl_trust",
-           "trust_attributes", "add_trust", "trust_models", "error_model_trust", "add_cell_trust"]
+           "trust_attributes", "add_trust", "trust_models", "error_model_trust"]
 
 #: Edges of the peak p_uplift bins of the cells.
 P_EDGES = (0.0, 0.007, 0.08, 0.2, 0.45, 0.9, np.inf)
@@ -145,7 +145,6 @@ def p_bin(p):
 
     Examples
     --------
-    >>> import numpy as np
     >>> p_bin([0.0, 0.01, 0.5, 0.95, np.nan]).tolist()
     [0, 1, 4, 5, -1]
     """
@@ -484,7 +483,6 @@ def add_trust(ds, models=None):
 
     Examples
     --------
-    >>> import numpy as np, xarray as xr
     >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
     ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
     ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
@@ -585,7 +583,6 @@ def error_model_trust(x, status, condensation, covered=True, models=None):
     --------
     Two points of the paper's block (their features from the model objects and the indicators):
 
-    >>> import numpy as np
     >>> from screening import Block, Foundation, WhiteNoise
     >>> from screening.analysis.error_model import model_features
     >>> ind = {"peak_p_uplift": np.array([0.2011, 0.7653]), "k_eq_margin": np.array([1.0, 0.729]),
@@ -636,24 +633,6 @@ def add_cell_trust(ds, calibration=None):
     -------
     xarray.Dataset
         ``ds`` with ``sl_trust``, ``sl_error_low`` and ``sl_error_high`` [1].
-
-    References
-    ----------
-    [1] ``docs/trust.md``, ``docs/method.md`` ("Trusting a point").
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> ds = xr.Dataset(            # two points of the paper's block, as screening.linearize reports them
-    ...     {"peak_p_uplift": ("S0", [0.2011, 0.7653]), "min_k_eq": ("S0", [1071.0, 780.7]), "k_eq_rest": 1071.0,
-    ...      "peak_var_theta": ("S0", [8.829e-7, 1.619e-5]), "var_theta_end": ("S0", [8.490e-10, 8.480e-9]),
-    ...      "slenderness": 0.16515, "status": ("S0", [0, 0])},
-    ...     coords={"S0": [1e-4, 1e-3], "t": np.linspace(0.0, 20.0, 401), "m": 8.67, "b": 0.035, "h": 0.21,
-    ...             "I_cm": 0.131, "g": 9.81, "k": 2.89e7, "lam": 8.95e8, "eps": 6e7, "T1": 4.0, "T2": 2.0},
-    ...     attrs={"excitation": "white", "envelope": "exponential", "contact": "hunt_crossley",
-    ...            "condensation": "paper"})
-    >>> add_cell_trust(ds)["sl_trust"].values.tolist()
-    [2, 2]
     """
     dims = ds["peak_var_theta"].dims
     peak = ds["peak_var_theta"]

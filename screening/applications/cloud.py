@@ -34,9 +34,8 @@ from screening.sweep.execution import TASK_RETRIES
 from screening.sweep.interrupt import interruptible
 from screening.solvers.schema import cf, declare, INTENSITY
 
-__all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "read_cloud_records", "run_cloud",
-           "threshold_level", "scaled_to", "run_stripes", "stripe_dataset", "cloud_dataset",
-           "synthesise_records", "write_demand_csv"]
+__all__ = ["MAX_LEVELS", "IMS", "CloudStudy", "load_cloud_study", "run_cloud", "run_stripes", "synthesise_records",
+           "write_demand_csv"]
 
 #: The variables of a cloud analysis: one row per record, then the fitted fragility; declared here.
 CLOUD = declare("cloud", {
@@ -114,7 +113,7 @@ def load_cloud_study(path, units=None, vertical=True):
     Raises
     ------
     StudyError
-        One line naming the file and the key.
+        One line naming the file and the key (``docs/records.md`` lists the keys).
 
     References
     ----------
@@ -122,7 +121,7 @@ def load_cloud_study(path, units=None, vertical=True):
 
     Examples
     --------
-    >>> import os, tempfile
+    >>> import tempfile
     >>> from screening.core.excitations import KanaiTajimi
     >>> from screening.core.model.excitation import Envelope
     >>> folder = tempfile.TemporaryDirectory()
@@ -254,23 +253,6 @@ def read_cloud_records(cloud):
     ------
     StudyError
         A record that cannot be read (its file named).
-
-    References
-    ----------
-    [1] ``docs/records.md``.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> from screening.core.excitations import KanaiTajimi
-    >>> from screening.core.model.excitation import Envelope
-    >>> folder = tempfile.TemporaryDirectory()
-    >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5), band_limit_hz=None)
-    >>> paths = synthesise_records(folder.name, ground, n_records=3, t_end=10.0, cutoff=120.0, scales=[0.5, 1.0, 2.0], seed=15)
-    >>> cloud = CloudStudy(None, tuple(paths), None, None, 1.0, "coupled", None, 0.2, "slenderness", "pga")
-    >>> [(r.name, r.dt, r.acceleration.size) for r in read_cloud_records(cloud)][0]     # 10 s at 0.01 s
-    ('synthetic_00', 0.01, 1001)
-    >>> folder.cleanup()
     """
     from dataclasses import replace
 
@@ -368,10 +350,8 @@ def run_cloud(cloud, case=None, overrides=None, progress=None, client=None, reco
     The block and bed are checked before any record runs (the integration itself compiles the
     solvers on first use):
 
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.applications.records_study import block_and_foundation
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
+    >>> cloud = CloudStudy(study=parse_study(EXAMPLE_STUDY), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
     >>> try:
@@ -420,32 +400,13 @@ def threshold_level(cloud, block, foundation):
 
     Parameters
     ----------
-    cloud : CloudStudy
-        The cloud study.
-    block : screening.core.model.Block
-        The block.
-    foundation : screening.core.model.Foundation
-        The bed.
+    cloud, block, foundation
+        The cloud study, its block and its bed.
 
     Returns
     -------
     float
         The threshold rotation [rad].
-
-    References
-    ----------
-    [1] ``docs/records.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.applications.records_study import block_and_foundation
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
-    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
-    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
-    >>> round(threshold_level(cloud, block, foundation), 6), round(0.2 * float(block.slenderness), 6)
-    (0.03303, 0.03303)
     """
     if cloud.relative_to == "slenderness":
         return cloud.threshold * float(block.slenderness)
@@ -480,19 +441,7 @@ def scaled_to(record, im, level, period=None):
     Notes
     -----
     Arias intensity :math:`I_a = \\frac{\\pi}{2g}\\int a^2\\,dt` grows with the square of the scale,
-    hence the square root [1].
-
-    References
-    ----------
-    [1] [arias1970]; [2] ``docs/records.md``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from screening.core.records import Record
-    >>> record = Record(np.sin(np.linspace(0.0, 20.0, 2001)), 0.01, "sine")   # PGA 1 m s-2
-    >>> round(float(np.abs(scaled_to(record, "pga", 2.0).acceleration).max()), 12)
-    2.0
+    hence the square root [arias1970].
     """
     value = record_measures(record, period=period)[IMS[im]]
     factor = level / value if im != "arias" else math.sqrt(level / value)
@@ -542,10 +491,8 @@ def run_stripes(cloud, case=None, overrides=None, progress=None, client=None, re
 
     Examples
     --------
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.applications.records_study import block_and_foundation
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
+    >>> cloud = CloudStudy(study=parse_study(EXAMPLE_STUDY), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
     >>> try:
@@ -589,28 +536,6 @@ def stripe_dataset(cloud, block, foundation, rows, names):
         unit), ``beta`` [1], their standard errors and ``fit_flag``.
     warnings : list of str
         What the fit could not do.
-
-    References
-    ----------
-    [1] [baker2015]; [2] ``docs/records.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.applications.records_study import block_and_foundation
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
-    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
-    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
-    >>> from dataclasses import replace
-    >>> stripes = replace(cloud, levels=(1.0, 2.0))
-    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
-    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
-    ...         for a, p, o in [(1.0, 0.001, False), (1.0, 0.04, False), (1.0, 0.002, False),
-    ...                         (2.0, 0.05, False), (2.0, 0.003, False), (2.0, 0.01, True)]]   # level-major
-    >>> ds, warnings = stripe_dataset(stripes, block, foundation, rows, ["r1", "r2", "r3"])
-    >>> ds["n_exceed"].values.tolist(), ds["n_used"].values.tolist(), ds["fit_median"].attrs["units"]
-    ([1, 2], [3, 3], 'm s-2')
     """
     levels, n_rec = np.asarray(cloud.levels), len(names)
     level = threshold_level(cloud, block, foundation)
@@ -696,26 +621,7 @@ def cloud_dataset(cloud, block, foundation, rows, names):
     Notes
     -----
     :math:`P(\\mathrm{exceed} \\mid IM) = \\Phi(\\ln(IM/\\theta)/\\beta)`, with :math:`\\theta` and
-    :math:`\\beta` maximising the Bernoulli likelihood of the records' outcomes [1].
-
-    References
-    ----------
-    [1] [baker2015]; [2] ``docs/records.md``.
-
-    Examples
-    --------
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.applications.records_study import block_and_foundation
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
-    ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
-    >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
-    >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),
-    ...          "lift_off": False, "pga": a, "rms_acceleration": a / 4, "arias_intensity": a, "pgv": a / 10}
-    ...         for p, o, a in [(0.001, False, 0.5), (0.04, False, 1.0), (0.002, False, 1.5), (0.01, True, 2.0)]]
-    >>> ds, warnings = cloud_dataset(cloud, block, foundation, rows, ["r1", "r2", "r3", "r4"])
-    >>> ds["exceed"].values.tolist(), round(float(ds["fit_median"]), 2), warnings
-    ([False, True, False, True], 1.14, [])
+    :math:`\\beta` maximising the Bernoulli likelihood of the records' outcomes [baker2015].
     """
     from screening.solvers import schema
     from screening.analysis.fragility import fit_flag_of, fit_lognormal_fragility
@@ -827,7 +733,7 @@ def synthesise_records(folder, excitation, n_records, t_end, cutoff, scales, see
 
     Examples
     --------
-    >>> import os, tempfile
+    >>> import tempfile
     >>> from screening.core.excitations import KanaiTajimi
     >>> from screening.core.model.excitation import Envelope
     >>> ground = KanaiTajimi(S0=1e-3, omega_g=15.6, zeta_g=0.6, envelope=Envelope(T1=3.0, T2=1.5), band_limit_hz=None)
@@ -878,11 +784,9 @@ def write_demand_csv(ds, path):
 
     Examples
     --------
-    >>> import os, tempfile
-    >>> from screening.sweep.study import parse_study
-    >>> from screening.applications.records_study import block_and_foundation
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text
-    >>> cloud = CloudStudy(study=parse_study(text), files=(), units=None, dt=None, scale=1.0, model="coupled",
+    >>> import tempfile
+    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
+    >>> cloud = CloudStudy(study=parse_study(EXAMPLE_STUDY), files=(), units=None, dt=None, scale=1.0, model="coupled",
     ...                    period=None, threshold=0.2, relative_to="slenderness", im="pga")
     >>> block, foundation, _ = block_and_foundation(cloud.study, overrides={"eps": 6e7})
     >>> rows = [{"peak_abs_theta": p, "overturned": o, "diverged": False, "overturning_time": float("nan"),

@@ -595,13 +595,6 @@ def write_nrml(frag, path, model_id="screening_rocking", description="rocking bl
     Notes
     -----
     Parameters by :func:`nrml_parameters`; PGA, SA and AvgSA in g, PGV in cm/s, ``IA`` in m/s.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    .. [2] [baker2015] in the bibliography, ``docs/bibliography.md``.
-    .. [3] GEM Foundation, OpenQuake Engine manual, "Fragility models" (NRML 0.5 ``logncdf``
-       functions), https://docs.openquake.org
     """
     name, _, period = _intensity(frag)
     key = _im_key(name)

@@ -95,8 +95,8 @@ def pick_case(study, case=None):
 
     Examples
     --------
-    >>> from screening.sweep.study import EXAMPLE_STUDY as text, parse_study
-    >>> pick_case(parse_study(text)).contact
+    >>> from screening.sweep.study import EXAMPLE_STUDY, parse_study
+    >>> pick_case(parse_study(EXAMPLE_STUDY)).contact
     'hunt_crossley'
     """
     if case is None:

@@ -392,6 +392,8 @@ def read_at2(path, units=None, option="units", dt=None):
 
     Examples
     --------
+    A four-sample NGA-West2 file in g:
+
     >>> import tempfile
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -512,6 +514,8 @@ def read_text_record(path, dt=None, units=None, option="units"):
 
     Examples
     --------
+    A CSV file whose column titles state the units:
+
     >>> import tempfile
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -575,6 +579,8 @@ def read_two_column(path, units=None):
 
     Examples
     --------
+    Times from 1 s: the record is shifted to start at 0.
+
     >>> import tempfile
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -613,6 +619,8 @@ def read_single_column(path, dt, units=None):
 
     Examples
     --------
+    Six samples on two lines, the units in a header line:
+
     >>> import tempfile
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -655,6 +663,8 @@ def read_record(path, dt=None, units=None, option="units"):
 
     Examples
     --------
+    A file that states no units is refused unless they are given:
+
     >>> import tempfile
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -747,6 +757,8 @@ def write_at2(path, record, title="screening synthetic record", station="synthet
 
     Examples
     --------
+    A round trip:
+
     >>> import tempfile
     >>> from pathlib import Path
     >>> with tempfile.TemporaryDirectory() as folder:

@@ -12,9 +12,9 @@ __all__ = []
 
 
 class NamedModel:
-    """Mixin of the registered model objects (condensations, contact laws): equal when of the same class
-    with the same state (a copy sent to a worker equals the original), hashed by class and ``name``,
-    shown as ``<{axis} {name!r}>`` with the class attribute ``axis``."""
+    """Mixin of the registered model objects (condensations, contact laws, Monte Carlo models): equal when
+    of the same class with the same state (a copy sent to a worker equals the original), hashed by class and
+    ``name``, shown as ``<{axis} {name!r}>`` with the class attribute ``axis``."""
 
     axis = "model"
     name = ""

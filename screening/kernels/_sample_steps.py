@@ -69,11 +69,9 @@ def _channel_rate(row, acc, acc_dot, dt, t):
 @numba.njit(cache=True, inline="always")
 def ground_input_rate(row, acc, acc_dot, dt, t):
     """Rates of the ground input ``(x_g'', a_v)`` at ``t`` [m/s^3]: derivative of :func:`ground_input`."""
-    horizontal = _channel_rate(row, acc[0], acc_dot[0], dt, t)
     vrow = vertical_row(row, acc[1])
-    if vrow < 0:
-        return horizontal, 0.0
-    return horizontal, _channel_rate(vrow, acc[1], acc_dot[1], dt, t)
+    vertical = _channel_rate(vrow, acc[1], acc_dot[1], dt, t) if vrow >= 0 else 0.0
+    return _channel_rate(row, acc[0], acc_dot[0], dt, t), vertical
 
 
 @numba.njit(cache=True)

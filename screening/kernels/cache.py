@@ -279,7 +279,7 @@ def clear_stale_cache(package=None):
     Parameters
     ----------
     package : path-like, optional
-        The package folder; default the installed ``screening`` package.
+        As in :func:`source_stamp`.
 
     Returns
     -------

@@ -186,16 +186,8 @@ def condensed_acceleration(damping_stiffness, cond, theta, theta_dot, x_g_ddot, 
         The condensation's compiled ``(cond, theta) -> (C, K)`` (:class:`~screening.core.signatures.SdofKernel`).
     cond : numpy.record
         Its record.
-    theta : float
-        Rotation [rad].
-    theta_dot : float
-        Angular velocity [rad/s].
-    x_g_ddot : float
-        Horizontal ground acceleration [m/s^2].
-    p : numpy.record
-        The :data:`MODEL` record (:func:`model_record`).
-    a_v : float, optional
-        Vertical ground acceleration [m/s^2], positive up.
+    theta, theta_dot, x_g_ddot, p, a_v
+        As in :func:`coupled_accelerations`.
 
     Returns
     -------

@@ -515,16 +515,8 @@ def store_dense_outputs(coefficients, cond, table, osc, i, next_out, t_out, t, h
 
     Parameters
     ----------
-    coefficients : numba function
-        The condensation's compiled ``(cond, table, var_theta, cov) -> (c_eq, k_eq)``.
-    cond : numpy.record
-        Its record.
-    table : numpy.ndarray
-        Its table.
-    osc : numpy.record
-        The point's :data:`screening.solvers.moments.OSCILLATOR` record.
-    i : int
-        Row (point) of the outputs.
+    coefficients, cond, table, osc, i
+        As in :func:`store_outputs`.
     next_out : int
         Index of the next output time to write.
     t_out : numpy.ndarray
@@ -923,20 +915,8 @@ def augmented_rhs_two_states(kap, gam, alpha, q, fa, fb, fc, fd, y, dy):
 
     Parameters
     ----------
-    kap : float
-        ``k_eq / m_sdof`` [1/s^2].
-    gam : float
-        ``c_eq / m_sdof`` [1/s].
-    alpha : float
-        Input gain ``m h q(t) / m_sdof`` [1/m].
-    q : float
-        ``2 pi S0`` [m^2/s^3].
-    fa, fb, fc, fd : numpy.ndarray or float
-        The filter's ``A`` (2 x 2), ``B``, ``C`` (2) and ``D``.
-    y : numpy.ndarray
-        Packed covariance, 10 entries.
-    dy : numpy.ndarray
-        Its rate, written in place.
+    kap, gam, alpha, q, fa, fb, fc, fd, y, dy
+        As in :func:`augmented_rhs`, with ``fa`` 2 x 2, ``fb``, ``fc`` of 2 and ``y``, ``dy`` of 10 entries.
 
     Returns
     -------
@@ -1082,15 +1062,15 @@ def solve_point_two_states(coefficients, cond, table, osc, fa, fb, fc, fd, scale
 
     Parameters
     ----------
-    coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps, store, i : various
+    coefficients, cond, table, osc, fa, fb, fc, fd, scale, t_out, rtol, h_max, max_steps : various
         As :func:`solve_point_filtered`, for a filter of two states (``fa`` 2 x 2, 10 packed moments).
-    var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl : numpy.ndarray
-        History arrays (points x output times), as :func:`solve_point_filtered`.
+    store, i, var_theta, cov, var_theta_dot, c_eq_o, k_eq_o, p_upl
+        As :func:`solve_point_filtered`.
 
     Returns
     -------
     tuple
-        A :data:`Summary`, as :func:`solve_point_filtered`.
+        A :data:`Summary`.
 
     Notes
     -----

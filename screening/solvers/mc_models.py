@@ -35,10 +35,8 @@ def state_scales(block, foundation):
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    block, foundation
+        One point of the model, as in :func:`screening.solvers.montecarlo.check_scalar_models`.
 
     Returns
     -------
@@ -64,10 +62,8 @@ def exact_uplift_threshold(block, foundation):
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    block, foundation
+        As in :func:`state_scales`.
 
     Returns
     -------
@@ -99,12 +95,8 @@ def quasi_static_indentation(block, foundation, theta0):
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
-    theta0 : float
-        Rotation [rad].
+    block, foundation, theta0
+        The model as in :func:`state_scales`, at the rotation ``theta0`` [rad].
 
     Returns
     -------

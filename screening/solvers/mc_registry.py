@@ -23,6 +23,7 @@ import enum
 import warnings
 
 from screening.core import condensation as condensations
+from screening.core.registry import NamedModel
 from screening.core.status import BestMethod, EscalationModel
 
 __all__ = []
@@ -88,9 +89,10 @@ class ChunkIntegrator(abc.ABC):
         """Integrate every row of ``acc``; fill the outputs (class docstring)."""
 
 
-class MonteCarloModel(abc.ABC):
+class MonteCarloModel(NamedModel, abc.ABC):
     """A model the Monte Carlo engine can integrate.  Subclasses set :attr:`name`."""
 
+    axis = "Monte Carlo model"
     #: registry name (the value of ``model`` in function arguments and studies)
     name: str = ""
     #: one line for attributes and reports
@@ -163,14 +165,6 @@ class MonteCarloModel(abc.ABC):
         """Extra attributes of a Monte Carlo dataset of this model (default: none)."""
         return {}
 
-    def __eq__(self, other):
-        return type(other) is type(self) and other.__dict__ == self.__dict__
-
-    def __hash__(self):
-        return hash((type(self), self.name))
-
-    def __repr__(self):
-        return f"<Monte Carlo model {self.name!r}>"
 
 
 def check_validity(model, block, foundation, excitation=None, strict=False):

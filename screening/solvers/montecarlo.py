@@ -127,10 +127,9 @@ def check_scalar_models(block, foundation, excitation=None, purpose="monte_carlo
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    block, foundation : screening.core.model.Block, screening.core.model.Foundation
+        The model at one point: the block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]) and its bed (``k`` [N m-2],
+        ``eps`` [m-2], its damping), every field a scalar.
     excitation : screening.core.excitations.Excitation, optional
         The input (``S0`` [m2 s-3] and its parameters), if the caller has one.
     purpose : str, optional
@@ -255,10 +254,8 @@ def choose_integrator(block, foundation, model, integrator="auto"):
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    block, foundation
+        As in :func:`check_scalar_models`.
     model : str
         The resolved Monte Carlo model's name.
     integrator : str, optional
@@ -288,10 +285,8 @@ def initial_state(block, foundation, model):
 
     Parameters
     ----------
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m], ``g`` [m s-2]); scalar fields.
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); scalar fields.
+    block, foundation
+        As in :func:`check_scalar_models`.
     model : str or screening.solvers.mc_registry.MonteCarloModel
         A registered model or its name.
 
@@ -601,12 +596,8 @@ def monte_carlo(block, foundation, excitation, n_samples=1000, model="coupled", 
     z_cb = np.empty((min(chunk, n_samples), n_t))            # scratch: z_cb is not reported
     z_cb_dot = np.empty_like(z_cb)
     uplift = np.zeros((n_samples, n_t), dtype=np.bool_)
-    peak = np.zeros(n_samples)
-    status = np.zeros(n_samples, dtype=np.int64)
-    reason = np.zeros(n_samples, dtype=np.int64)
-    n_acc = np.zeros(n_samples, dtype=np.int64)
-    n_rej = np.zeros(n_samples, dtype=np.int64)
-    h_min = np.zeros(n_samples)
+    peak, h_min = np.zeros(n_samples), np.zeros(n_samples)
+    status, reason, n_acc, n_rej = (np.zeros(n_samples, dtype=np.int64) for _ in range(4))
 
     start = time.perf_counter()
     with Progress(n_samples, label=f"monte_carlo[{model}]", enabled=show) as bar:

@@ -114,10 +114,8 @@ def default_cutoff(block, foundation, factor=CUTOFF_FACTOR):
 
     Parameters
     ----------
-    block : screening.Block
-        The block (scalar fields, SI).
-    foundation : screening.Foundation
-        The bed (scalar fields, SI).
+    block, foundation : screening.Block, screening.Foundation
+        The block and its bed (scalar fields, SI).
     factor : float, optional
         Multiple of the larger natural frequency [1] (default :data:`CUTOFF_FACTOR`, 3).
 
@@ -648,10 +646,8 @@ def ground_acceleration_samples(excitation, plan, seed, sample_indices):
         The input (its envelope ``q(t)``).
     plan : SpectralPlan
         The grids of the stationary process (:func:`spectral_plan` of ``excitation``).
-    seed : int
-        The run's seed, ``>= 0``.
-    sample_indices : array_like of int
-        Indices of the samples in the run.
+    seed, sample_indices
+        As in :func:`stationary_samples`.
 
     Returns
     -------

@@ -59,15 +59,8 @@ def rocking_damping(theta, block, foundation, condensation=DEFAULT_CONDENSATION)
 
     Parameters
     ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
+    theta, block, foundation, condensation
+        The rotation [rad] and the model, as in :func:`uplift_threshold`.
 
     Returns
     -------
@@ -85,6 +78,8 @@ def rocking_damping(theta, block, foundation, condensation=DEFAULT_CONDENSATION)
 
     Examples
     --------
+    The paper's block and bed, at rest and in uplift:
+
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> [f"{c:.4g}" for c in rocking_damping([0.0, 0.01], block, bed, condensation="paper")]
@@ -100,13 +95,8 @@ def rocking_stiffness(theta, block, foundation, condensation=DEFAULT_CONDENSATIO
     ----------
     theta : array_like
         Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
+    block, foundation, condensation
+        As in :func:`uplift_threshold`.
 
     Returns
     -------
@@ -125,6 +115,8 @@ def rocking_stiffness(theta, block, foundation, condensation=DEFAULT_CONDENSATIO
 
     Examples
     --------
+    The secant stiffness falls once the block lifts off:
+
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> [f"{k:.4g}" for k in rocking_stiffness([0.0, 0.01], block, bed)]
@@ -134,61 +126,19 @@ def rocking_stiffness(theta, block, foundation, condensation=DEFAULT_CONDENSATIO
 
 
 def restoring_moment(theta, block, foundation, condensation=DEFAULT_CONDENSATION):
-    """Restoring moment ``K(theta) theta`` [N m] of the condensed model.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``K(theta) theta`` [N m], odd in ``theta``.
-
-    Notes
-    -----
-    The conservative term of eq. (22) in [1], ``m_sdof theta'' + C(theta) theta' + K(theta) theta = m h a_g``.
-
-    """
+    """Like :func:`rocking_stiffness` times ``theta``: the restoring moment ``K(theta) theta`` [N m], odd in
+    ``theta``, the conservative term of eq. (22) in [mitseas2026]."""
     return get(condensation).restoring_moment(theta, block, foundation)
 
 
 def rocking_acceleration(theta, theta_dot, ground_acceleration, block, foundation, condensation=DEFAULT_CONDENSATION):
-    """Rotational acceleration ``theta''`` [rad s-2] of the condensed model under a ground acceleration.
-
-    Parameters
-    ----------
-    theta : array_like
-        Rotation [rad].
-    theta_dot : array_like
-        Rotation rate [rad s-1].
-    ground_acceleration : array_like
-        Horizontal ground acceleration ``a_g`` [m s-2].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
-
-    Returns
-    -------
-    numpy.ndarray or float
-        ``theta''`` [rad s-2], broadcast over all array arguments.
+    """Rotational acceleration ``theta''`` [rad s-2] of the condensed model at the rotation ``theta`` [rad], its
+    rate ``theta_dot`` [rad s-1] and the ground acceleration ``a_g`` [m s-2] (the model as in :func:`uplift_threshold`).
 
     Notes
     -----
-    Eq. (22) in [1] solved for the acceleration: ``theta'' = (m h a_g - C(theta) theta' - K(theta) theta)
-    / m_sdof`` with ``m_sdof = I_cm + m h^2`` (eq. (23) in [1]).
+    Eq. (22) in [mitseas2026] solved for the acceleration: ``theta'' = (m h a_g - C(theta) theta' - K(theta) theta)
+    / m_sdof`` with ``m_sdof = I_cm + m h^2`` (eq. (23)).
 
     """
     cond = get(condensation)
@@ -209,13 +159,8 @@ def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation
         Standard deviation of the rotation rate [rad s-1], >= 0.
     rho : array_like
         Correlation coefficient of ``theta`` and ``theta'`` [1], in [-1, 1].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
+    block, foundation, condensation
+        The model, as in :func:`uplift_threshold`.
 
     Returns
     -------
@@ -237,6 +182,8 @@ def equivalent_coefficients(sigma_theta, sigma_theta_dot, rho, block, foundation
 
     Examples
     --------
+    A small rotation keeps the block in contact, where ``c_eq = C(0)`` and ``k_eq = K(0)``:
+
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> c_eq, k_eq = equivalent_coefficients(1e-4, 1e-2, 0.0, block, bed)
@@ -263,35 +210,11 @@ def _finite_only(coefficients, s, cov_over_s, block, foundation):
 
 
 def equivalent_coefficients_from_moments(var_theta, cov_theta_theta_dot, block, foundation, condensation=DEFAULT_CONDENSATION):
-    """Equivalent damping and stiffness from the moments the Lyapunov equations carry.
+    """Like :func:`equivalent_coefficients`, from the moments the Lyapunov equations carry: the variance
+    ``var_theta`` [rad2] and the covariance ``cov_theta_theta_dot`` [rad2 s-1].
 
-    Parameters
-    ----------
-    var_theta : array_like
-        Variance of the rotation [rad2], >= 0.
-    cov_theta_theta_dot : array_like
-        Covariance of the rotation and its rate [rad2 s-1].
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
-
-    Returns
-    -------
-    c_eq : numpy.ndarray or float
-        Equivalent damping [N m s/rad]; NaN where a moment is not finite.
-    k_eq : numpy.ndarray or float
-        Equivalent stiffness [N m/rad].
-
-    Notes
-    -----
-    :func:`equivalent_coefficients` in the form the moment equations need: it depends on ``sigma_theta``
-    and ``cov / sigma_theta = rho sigma_theta_dot`` only, and is finite at zero covariance (the start of
-    every integration of eq. (45) in [1]).
-
+    It depends on ``sigma_theta`` and ``cov / sigma_theta = rho sigma_theta_dot`` only, and is finite at zero
+    covariance (the start of every integration of eq. (45) in [mitseas2026]); NaN where a moment is not finite.
     """
     var_theta = np.asarray(var_theta, dtype=float)
     cov = np.asarray(cov_theta_theta_dot, dtype=float)
@@ -308,13 +231,8 @@ def uplift_probability(sigma_theta, block, foundation, condensation=DEFAULT_COND
     ----------
     sigma_theta : array_like
         Standard deviation of the rotation [rad], >= 0.
-    block : screening.core.model.Block
-        The rigid block (``m`` [kg], ``b``, ``h`` [m]); fields may be arrays (broadcast).
-    foundation : screening.core.model.Foundation
-        The bed (``k`` [N m-2], ``eps`` [m-2], its damping); fields may be arrays (broadcast).
-    condensation : str or screening.core.condensation.Condensation, optional
-        A registered name (``"paper"``, ``"cubic"``, ``"virtual_work"``) or an object; default
-        :data:`screening.core.condensation.DEFAULT_CONDENSATION`.
+    block, foundation, condensation
+        The model and its condensation, as in :func:`uplift_threshold`.
 
     Returns
     -------
@@ -332,6 +250,8 @@ def uplift_probability(sigma_theta, block, foundation, condensation=DEFAULT_COND
 
     Examples
     --------
+    At ``sigma_theta = theta_ul`` the block is in uplift a third of the time:
+
     >>> from screening import Block, Foundation
     >>> block, bed = Block(m=8.67, b=0.035, h=0.21), Foundation(k=2.89e7, lam=8.95e8)
     >>> f"{float(uplift_probability(1.2012e-3, block, bed)):.4f}"

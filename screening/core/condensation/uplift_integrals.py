@@ -177,32 +177,8 @@ def coefficient_table():
 
 @numba.njit(cache=True, inline="always")
 def uplift_integrals(r, table):
-    """Compiled Gaussian uplift integrals at ``r = sigma_theta / theta_ul``, from the table.
-
-    Parameters
-    ----------
-    r : float
-        ``sigma_theta / theta_ul`` [1], >= 0.
-    table : numpy.ndarray
-        The table of :func:`coefficient_table`.
-
-    Returns
-    -------
-    p_in : float
-        ``P(|theta| <= theta_ul)`` [1].
-    tail_m12 : float
-        Uplift tail of ``(|theta|/theta_ul)^(-1/2)`` [1].
-    tail_m32 : float
-        Uplift tail of ``(|theta|/theta_ul)^(-3/2)`` [1].
-    p32 : float
-        ``P(3/2, x)``, the regularised lower incomplete gamma function at ``x = 1/(2 r^2)`` [1].
-
-    Notes
-    -----
-    The compiled twin of :func:`gaussian_uplift_integrals` (eqs. (35)-(38) in [1]), :func:`uplift_integrals_q`
-    at ``q = r^2``.
-
-    """
+    """Like :func:`uplift_integrals_q` at ``q = r^2``, from ``r = sigma_theta / theta_ul`` [1] (>= 0): the
+    compiled twin of :func:`gaussian_uplift_integrals` (eqs. (35)-(38) in [mitseas2026])."""
     return uplift_integrals_q(r * r, table)
 
 

@@ -70,23 +70,15 @@ def clough_penzien_psd(omega, S0, omega_g, zeta_g, omega_f, zeta_f):
 
     Parameters
     ----------
-    omega : array_like
-        Circular frequency [rad s-1].
-    S0 : array_like
-        Two-sided PSD level of the driving white noise [m2 s-3].
-    omega_g : array_like
-        Kanai–Tajimi (soil) filter frequency [rad s-1], > 0.
-    zeta_g : array_like
-        Kanai–Tajimi filter damping ratio [1], > 0.
-    omega_f : array_like
-        High-pass filter frequency [rad s-1], > 0.
-    zeta_f : array_like
-        High-pass filter damping ratio [1], > 0.
+    omega, S0, omega_g, zeta_g : array_like
+        As in :func:`~screening.core.excitations.kanai_tajimi.kanai_tajimi_psd`.
+    omega_f, zeta_f : array_like
+        As in :func:`clough_penzien_filter`.
 
     Returns
     -------
     numpy.ndarray
-        ``S(omega)`` [m2 s-3], broadcast over the arguments.
+        ``S(omega)`` [m2 s-3]: the Kanai–Tajimi PSD times the high-pass, broadcast over the arguments.
 
     Notes
     -----
@@ -113,9 +105,14 @@ class CloughPenzien(Excitation):
     S0 : two-sided PSD level of the white noise driving the filters [m^2/s^3], > 0.
     omega_g, zeta_g : Kanai–Tajimi (soil) filter frequency [rad/s] and damping ratio [1], > 0.
     omega_f, zeta_f : high-pass filter frequency [rad/s] and damping ratio [1], > 0.
-    envelope : modulating function.
-    band_limit_hz : corner of the band's low-pass [Hz] (:class:`~screening.core.excitations.Excitation`), None: none.
+    envelope, band_limit_hz : as in :class:`~screening.core.excitations.kanai_tajimi.KanaiTajimi`.
     """
+
+    kind = "clough_penzien"
+    description = "modulated Clough-Penzien noise (Kanai-Tajimi and a second-order high-pass)"
+    parameters = {**KanaiTajimi.parameters,
+                  "omega_f": Parameter("rad s-1", "Clough-Penzien high-pass filter frequency"),
+                  "zeta_f": Parameter("1", "Clough-Penzien high-pass filter damping ratio")}
 
     S0: float
     omega_g: float
@@ -124,12 +121,6 @@ class CloughPenzien(Excitation):
     zeta_f: float
     envelope: Envelope | ConstantEnvelope = field(default_factory=Envelope)
     band_limit_hz: float | None = GROUND_BAND_LIMIT_HZ
-
-    kind = "clough_penzien"
-    description = "modulated Clough-Penzien noise (Kanai-Tajimi and a second-order high-pass)"
-    parameters = {**KanaiTajimi.parameters,
-                  "omega_f": Parameter("rad s-1", "Clough-Penzien high-pass filter frequency"),
-                  "zeta_f": Parameter("1", "Clough-Penzien high-pass filter damping ratio")}
 
 
     def shaping_filter(self):

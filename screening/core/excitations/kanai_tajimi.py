@@ -20,10 +20,8 @@ def kanai_tajimi_filter(omega_g, zeta_g):
 
     Parameters
     ----------
-    omega_g : array_like
-        Filter (soil) natural frequency [rad s-1], > 0.
-    zeta_g : array_like
-        Filter damping ratio [1], > 0.
+    omega_g, zeta_g : array_like
+        Filter (soil) natural frequency [rad s-1] and damping ratio [1], both > 0.
 
     Returns
     -------
@@ -54,12 +52,8 @@ def kanai_tajimi_psd(omega, S0, omega_g, zeta_g):
     ----------
     omega : array_like
         Circular frequency [rad s-1].
-    S0 : array_like
-        Two-sided PSD level of the driving white noise [m2 s-3].
-    omega_g : array_like
-        Filter (soil) natural frequency [rad s-1], > 0.
-    zeta_g : array_like
-        Filter damping ratio [1], > 0.
+    S0, omega_g, zeta_g : array_like
+        As in :func:`kanai_tajimi_stationary_moments`.
 
     Returns
     -------
@@ -165,30 +159,6 @@ def kanai_tajimi_stationary_moments(S0, omega_g, zeta_g):
 
 @numba.njit(cache=True)
 def stationary_filter_moments_jit(S0, omega_g, zeta_g):
-    """Compiled twin of :func:`kanai_tajimi_stationary_moments` (the filter's two variances).
-
-    Parameters
-    ----------
-    S0 : float
-        Two-sided PSD level of the driving white noise [m2 s-3].
-    omega_g : float
-        Filter natural frequency [rad s-1].
-    zeta_g : float
-        Filter damping ratio [1].
-
-    Returns
-    -------
-    var_u : float
-        [m2].
-    var_u_dot : float
-        [m2 s-2].
-
-    Notes
-    -----
-    ``pi S0 / (2 zeta_g omega_g^3)`` and ``pi S0 / (2 zeta_g omega_g)`` (eqs. (49) and (51) in [1]).
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
-    """
+    """Compiled twin of :func:`kanai_tajimi_stationary_moments` (the filter's two variances, ``var_u`` [m2] and
+    ``var_u_dot`` [m2 s-2])."""
     return math.pi * S0 / (2.0 * zeta_g * omega_g**3), math.pi * S0 / (2.0 * zeta_g * omega_g)

@@ -53,11 +53,7 @@ def register(law):
     -----
     The solvers integrate one damping pressure only, linear in the indentation rate and at most
     linear in the indentation: ``p_d = zdot (w_rate + w_indentation z)``; Hunt–Crossley (eq. (4) in
-    [1]) has ``w_rate = 0, w_indentation = lam``, Winkler ``w_rate = c, w_indentation = 0``.
-
-    References
-    ----------
-    .. [1] [mitseas2026] in the bibliography, ``docs/bibliography.md``.
+    [mitseas2026]) has ``w_rate = 0, w_indentation = lam``, Winkler ``w_rate = c, w_indentation = 0``.
 
     Examples
     --------
@@ -78,13 +74,10 @@ def register(law):
     return _REGISTRY.add(law.name, law)
 
 
-#: Remove a registered law (tests that register their own).
-unregister = _REGISTRY.remove
-#: Registered names, in registration order.
-names = _REGISTRY.names
-#: The :class:`ContactLaw` for a registered name (an instance is returned as it is); ``ValueError`` naming
-#: the parameter and the registered names otherwise.
-get = _REGISTRY.get
+#: Remove a registered law (tests that register their own); the registered names, in registration order; the
+#: :class:`ContactLaw` for a registered name (an instance is returned as it is), ``ValueError`` naming the
+#: parameter and the registered names otherwise.
+unregister, names, get = _REGISTRY.remove, _REGISTRY.names, _REGISTRY.get
 
 
 def parameters():
