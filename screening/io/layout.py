@@ -83,23 +83,7 @@ def parameter_table(study):
     parameter names to floats (same for every case, not swept), ``per_case`` maps the other
     non-swept numeric parameters to arrays over cases (NaN where one does not apply),
     ``labels``/``case_labels`` do the same for ``contact``, ``condensation``, ``excitation`` and
-    ``envelope``.
-
-    Parameters
-    ----------
-    study : screening.sweep.study.Study
-        The study.
-
-    Returns
-    -------
-    constants : dict
-        ``{name: value}`` of the parameters shared by every case, in SI units (``I_cm`` [kg m2]
-        computed when not given).
-    per_case : dict
-        ``{name: array over cases}``.
-    labels, case_labels : dict
-        The same for the model names.
-
+    ``envelope``.  Constants are in SI units (``I_cm`` [kg m2] computed when not given).
     """
     names = [n for n in PARAMETERS if n not in study.sweeps]
     values = {}

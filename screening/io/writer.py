@@ -222,17 +222,6 @@ def region_variables(study):
     """Names of the grid variables a batch of ``study`` writes.
 
     The stored histories (``[output]``), then every per-point variable a result of the study holds.
-
-    Parameters
-    ----------
-    study : screening.sweep.study.Study
-        The study.
-
-    Returns
-    -------
-    tuple of str
-        Variable names, as in the result.
-
     """
     return tuple(o.name for o in _outputs(study))
 

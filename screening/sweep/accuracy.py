@@ -157,11 +157,6 @@ def escalate(stage):
     (:func:`~screening.analysis.escalation.samples_needed`); a transition point is given the samples its
     probabilities need for a standard error of :data:`~screening.analysis.escalation.PROBABILITY_SE`
     (:func:`~screening.analysis.escalation.probability_samples`).
-
-    References
-    ----------
-    .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
-       ``docs/accuracy_in_sweeps.md``.
     """
 
     acc, study = stage.study.accuracy, stage.study
@@ -677,11 +672,6 @@ def accuracy_line(info):
     -------
     str
         The line of the run's log and of the result's ``accuracy_note`` attribute.
-
-    References
-    ----------
-    .. [1] screening documentation, "Best estimates in a sweep: how often they hold",
-       ``docs/accuracy_in_sweeps.md``.
     """
     methods = ", ".join(f"{name} {n}" for name, n in info["methods"].items())
     left = info["n_candidates"] - info["n_escalated"]

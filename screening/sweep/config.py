@@ -108,10 +108,6 @@ def read_study_text(path):
     ------
     StudyError
         A missing, unreadable, special or too large file (one line naming it).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     try:
         return read_input_text(path, "the study file", limits.MAX_STUDY_BYTES)
@@ -173,42 +169,12 @@ def parse_toml(text, source, build):
 
 # ----------------------------------------------------------------------------- helpers
 def one_line(exc):
-    """The message of ``exc`` on one line.
-
-    Parameters
-    ----------
-    exc : BaseException
-        An exception (or any object).
-
-    Returns
-    -------
-    str
-        Its message with every run of white space made one space.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
-    """
+    """The message of ``exc`` on one line."""
     return " ".join(str(exc).split())
 
 
 def type_name(value):
-    """How a wrong value is named in a message (``got ...``).
-
-    Parameters
-    ----------
-    value : object
-        A value parsed from TOML.
-
-    Returns
-    -------
-    str
-        ``"a boolean"``, ``"the string '...'"``, ``"a list"``, ``"a table"`` or the type's name.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
-    """
+    """How a wrong value is named in a message (``got ...``)."""
     if isinstance(value, bool):
         return "a boolean"
     if isinstance(value, str):
@@ -223,28 +189,7 @@ def type_name(value):
 def table(raw, key, where=""):
     """Sub-table ``key`` of ``raw`` (empty if absent).
 
-    Parameters
-    ----------
-    raw : dict
-        The parsed tables.
-    key : str
-        The sub-table's name.
-    where : str, optional
-        The prefix of ``raw``'s keys (with its trailing dot).
-
-    Returns
-    -------
-    dict
-        The sub-table, or ``{}`` when absent.
-
-    Raises
-    ------
-    StudyError
-        ``key`` is not a table.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: ``key`` is not a table.
     """
     value = raw.get(key, {})
     if not isinstance(value, dict):
@@ -255,28 +200,7 @@ def table(raw, key, where=""):
 def check_keys(tbl, allowed, where):
     """Refuse a key of ``tbl`` not in ``allowed`` (a typo is never ignored).
 
-    Parameters
-    ----------
-    tbl : dict
-        A table.
-    allowed : sequence of str
-        Its allowed keys.
-    where : str
-        The prefix of its keys (with its trailing dot).
-
-    Returns
-    -------
-    None
-        Returns only when every key is allowed.
-
-    Raises
-    ------
-    StudyError
-        An unknown key (the allowed ones listed).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: an unknown key (the allowed ones listed).
     """
     for key in tbl:
         if key not in allowed:
@@ -286,30 +210,7 @@ def check_keys(tbl, allowed, where):
 def required(tbl, key, where, why=""):
     """``tbl[key]``, or :class:`StudyError` naming the missing key.
 
-    Parameters
-    ----------
-    tbl : dict
-        A table.
-    key : str
-        The key.
-    where : str
-        The prefix of the table's keys.
-    why : str, optional
-        Appended to the message.
-
-    Returns
-    -------
-    object
-        ``tbl[key]``.
-
-    Raises
-    ------
-    StudyError
-        ``key`` is missing.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: ``key`` is missing.
     """
     if key not in tbl:
         raise StudyError(f"{where}{key}: required{why}")
@@ -317,54 +218,14 @@ def required(tbl, key, where, why=""):
 
 
 def is_number(value):
-    """Whether ``value`` is a real number (a TOML boolean is not).
-
-    Parameters
-    ----------
-    value : object
-        A value parsed from TOML.
-
-    Returns
-    -------
-    bool
-        True for an integer or a float, False for a boolean or anything else.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
-    """
+    """Whether ``value`` is a real number (a TOML boolean is not)."""
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def check_value(key, value, lower=None, inclusive=False, upper=None):
     """``value`` as a float: a finite number above ``lower`` and at most ``upper`` (each optional).
 
-    Parameters
-    ----------
-    key : str
-        The full key, named in the message.
-    value : object
-        The value.
-    lower : float, optional
-        Lower bound.
-    inclusive : bool, optional
-        Whether ``lower`` itself is allowed.
-    upper : float, optional
-        Upper bound (inclusive).
-
-    Returns
-    -------
-    float
-        The value.
-
-    Raises
-    ------
-    StudyError
-        Not a number, not finite, or out of range (the range stated).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not a number, not finite, or out of range (the range stated).
     """
     if not is_number(value):
         raise StudyError(f"{key}: must be a number (got {type_name(value)})")
@@ -390,30 +251,7 @@ def check_value(key, value, lower=None, inclusive=False, upper=None):
 def check_integer(key, value, lower, upper=None):
     """``value``: an integer (no float, no boolean) ``>= lower`` (and ``<= upper`` if given).
 
-    Parameters
-    ----------
-    key : str
-        The full key.
-    value : object
-        The value.
-    lower : int
-        Smallest allowed.
-    upper : int, optional
-        Largest allowed.
-
-    Returns
-    -------
-    int
-        The value.
-
-    Raises
-    ------
-    StudyError
-        Not an integer (a float or a boolean is not), or out of range.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not an integer (a float or a boolean is not), or out of range.
     """
     if (isinstance(value, bool) or not isinstance(value, int) or value < lower
             or (upper is not None and value > upper)):
@@ -423,22 +261,7 @@ def check_integer(key, value, lower, upper=None):
 
 
 def short_repr(value):
-    """``repr(value)``, shortened for integers of hundreds of digits.
-
-    Parameters
-    ----------
-    value : object
-        The value.
-
-    Returns
-    -------
-    str
-        At most 60 characters; an integer of 30 digits or more as its digit count.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
-    """
+    """``repr(value)``, shortened for integers of hundreds of digits."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
         return f"an integer of {len(str(abs(value)))} digits"
     text = repr(value)
@@ -448,34 +271,7 @@ def short_repr(value):
 def integer(tbl, key, default, lower, where, upper=None):
     """``tbl[key]`` (or ``default``) checked by :func:`check_integer`.
 
-    Parameters
-    ----------
-    tbl : dict
-        A table.
-    key : str
-        The key.
-    default : int
-        The value when absent.
-    lower : int
-        Smallest allowed.
-    where : str
-        The prefix of the table's keys.
-    upper : int, optional
-        Largest allowed.
-
-    Returns
-    -------
-    int
-        The value.
-
-    Raises
-    ------
-    StudyError
-        Not an integer, or out of range.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not an integer, or out of range.
     """
     return check_integer(f"{where}{key}", tbl.get(key, default), lower, upper)
 
@@ -483,26 +279,7 @@ def integer(tbl, key, default, lower, where, upper=None):
 def check_list(key, value):
     """``value``: a non-empty list.
 
-    Parameters
-    ----------
-    key : str
-        The full key.
-    value : object
-        The value.
-
-    Returns
-    -------
-    list
-        The value.
-
-    Raises
-    ------
-    StudyError
-        Not a list, or an empty one.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not a list, or an empty one.
     """
     if not isinstance(value, list):
         raise StudyError(f"{key}: must be a list (got {type_name(value)})")
@@ -514,28 +291,7 @@ def check_list(key, value):
 def number_list(key, value, **bounds):
     """A non-empty list of numbers, each checked by :func:`check_value` (``bounds``); a tuple of floats.
 
-    Parameters
-    ----------
-    key : str
-        The full key.
-    value : object
-        The value.
-    **bounds
-        ``lower``, ``inclusive``, ``upper`` of :func:`check_value`.
-
-    Returns
-    -------
-    tuple of float
-        The values.
-
-    Raises
-    ------
-    StudyError
-        Not a non-empty list, or an entry out of range (named by its index).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not a non-empty list, or an entry out of range (named by its index).
     """
     return tuple(check_value(f"{key}[{i}]", v, **bounds) for i, v in enumerate(check_list(key, value)))
 
@@ -543,28 +299,7 @@ def number_list(key, value, **bounds):
 def integer_list(key, value, lower):
     """A non-empty list of integers ``>= lower``; a tuple.
 
-    Parameters
-    ----------
-    key : str
-        The full key.
-    value : object
-        The value.
-    lower : int
-        Smallest allowed.
-
-    Returns
-    -------
-    tuple of int
-        The values.
-
-    Raises
-    ------
-    StudyError
-        Not a non-empty list, or an entry that is not an integer ``>= lower``.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not a non-empty list, or an entry that is not an integer ``>= lower``.
     """
     return tuple(check_integer(f"{key}[{i}]", v, lower) for i, v in enumerate(check_list(key, value)))
 
@@ -572,28 +307,7 @@ def integer_list(key, value, lower):
 def check_choice(key, value, choices):
     """``value`` if it is one of ``choices``, else :class:`StudyError` listing them.
 
-    Parameters
-    ----------
-    key : str
-        The full key.
-    value : object
-        The value.
-    choices : sequence
-        The allowed values.
-
-    Returns
-    -------
-    object
-        The value.
-
-    Raises
-    ------
-    StudyError
-        A value not among ``choices`` (listed).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: a value not among ``choices`` (listed).
     """
     if value not in choices:
         raise StudyError(f"{key}: must be one of {', '.join(map(repr, choices))} "
@@ -604,32 +318,7 @@ def check_choice(key, value, choices):
 def choice(tbl, key, choices, where, default=None):
     """``tbl[key]`` (or ``default``) checked by :func:`check_choice`.
 
-    Parameters
-    ----------
-    tbl : dict
-        A table.
-    key : str
-        The key.
-    choices : sequence
-        The allowed values.
-    where : str
-        The prefix of the table's keys.
-    default : object, optional
-        The value when absent (None: required).
-
-    Returns
-    -------
-    object
-        The value.
-
-    Raises
-    ------
-    StudyError
-        Missing without a default, or not among ``choices``.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: missing without a default, or not among ``choices``.
     """
     value = tbl.get(key, default)
     if value is None:
@@ -640,26 +329,7 @@ def choice(tbl, key, choices, where, default=None):
 def name_string(key, value):
     """A name: a non-empty string.
 
-    Parameters
-    ----------
-    key : str
-        The full key.
-    value : object
-        The value.
-
-    Returns
-    -------
-    str
-        The name.
-
-    Raises
-    ------
-    StudyError
-        Not a string, or only white space.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: not a string, or only white space.
     """
     if not isinstance(value, str) or not value.strip():
         raise StudyError(f"{key}: required, a non-empty string (got {type_name(value)})")
@@ -669,26 +339,7 @@ def name_string(key, value):
 def title_and_description(raw, default_title):
     """The study's ``title`` and ``description`` (both optional strings).
 
-    Parameters
-    ----------
-    raw : dict
-        The parsed tables.
-    default_title : str
-        The title when none is given.
-
-    Returns
-    -------
-    tuple of str
-        ``(title, description)``; the description defaults to ``""``.
-
-    Raises
-    ------
-    StudyError
-        A title or description that is not a string.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
+    Raises :class:`StudyError`: a title or description that is not a string.
     """
     title = raw.get("title", default_title)
     description = raw.get("description", "")
@@ -715,10 +366,6 @@ def time_table(raw):
     ------
     StudyError
         Unknown keys, values that are not positive, ``dt`` not dividing ``t_end``, or too many output steps.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     tbl = table(raw, "time")
     check_keys(tbl, ("t_end", "dt"), "time.")
@@ -784,10 +431,6 @@ def applicable(contact, excitation, envelope):
     set of str
         The parameter names: the block's, ``k``, ``eps``, the law's damping parameter, the intensity,
         the excitation's and the envelope's.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     names = {"m", "b", "h", "I_cm", "g", "k", "eps", "S0", "pga", "band_limit_hz"}
     names.add(laws.get(contact).parameter)
@@ -817,10 +460,6 @@ def model_tables(raw, allowed=TABLE_KEYS):
     ------
     StudyError
         A table that is not one, or an unknown key.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     tables = {}
     for tname in MODEL_TABLES:
@@ -863,10 +502,6 @@ def sweep_values(key, spec, lower, inclusive, max_num=limits.DEFAULT_MAX_POINTS,
     -----
     A range holds ``num`` values from ``start`` to ``stop``, both included: evenly spaced, or with
     ``log = true`` geometrically (:math:`x_i = x_0 (x_{n-1}/x_0)^{i/(n-1)}`).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     if isinstance(spec, list):
         values = number_list(key, spec, lower=lower, inclusive=inclusive, upper=upper)
@@ -932,10 +567,6 @@ def numeric_table(tbl, tname, sweeps, where, sweepable=SWEEPABLE, max_points=lim
     ------
     StudyError
         A value out of its range, a sweep where none is allowed, or a grid too large.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     scalars = {}
     for key, value in tbl.items():
@@ -981,10 +612,6 @@ def band_limit_value(key, value, t_end=None):
     ------
     StudyError
         One line naming the key and its range.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     if value == "none" or (value == math.inf and t_end is not None):
         return math.inf
@@ -1021,10 +648,6 @@ def check_grid_size(sweeps, max_points, key, n_cases=1):
     ------
     StudyError
         More than ``max_points``.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     sizes = [n_cases] if n_cases > 1 else []
     sizes += [len(v) for v in sweeps.values() if v is not None]
@@ -1067,10 +690,6 @@ def resolve_case(name, tables, sweeps, where, inherited=frozenset()):
     ------
     StudyError
         A parameter that does not apply, one missing, S0 and pga both given, or a bed the condensation cannot carry.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     block, foundation, excitation = tables["block"], tables["foundation"], tables["excitation"]
     contact = choice(foundation, "contact", laws.names(), f"{where}foundation.", DEFAULTS["contact"])
@@ -1186,10 +805,6 @@ def case_block_and_foundation(case, values):
     block : screening.core.model.Block
     foundation : screening.core.model.Foundation
         With the case's contact law and its damping parameter.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     p = {**case.params, **values}
     return _block(p), _foundation(case, p)
@@ -1256,10 +871,6 @@ def case_cutoff(case):
     -------
     float
         [rad s-1]: 5.62 x :math:`2\\pi f` with ``band_limit_hz`` :math:`f`; :math:`2\\pi` 25 Hz without a band.
-
-    References
-    ----------
-    .. [1] screening documentation, "Intensity measures of the stochastic inputs", ``docs/intensity_measures.md``.
     """
     band = case.params.get("band_limit_hz", GROUND_BAND_LIMIT_HZ)
     return ground_cutoff() if math.isinf(band) else band_top(band)
@@ -1284,10 +895,6 @@ def build_point_models(case, values, t_end=None):
     -------
     tuple
         ``(block, foundation, excitation, underivable)``.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     p = dict(case.params)
     p.update(values)
@@ -1374,10 +981,6 @@ def duration(key, value):
     ------
     StudyError
         Anything but a positive finite duration.
-
-    References
-    ----------
-    .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
     """
     seconds = None
     if is_number(value):

@@ -256,10 +256,6 @@ def software_versions():
     -------
     dict
         ``{"screening": "0.1.0 (sources 1a2b3c4d5e6f)", "python": "3.12.3", "numpy": ..., "numba": ...}``.
-
-    References
-    ----------
-    .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
     """
     return {"screening": f"{__version__} (sources {source_stamp()[:12]})", "python": platform.python_version(),
             "numpy": np.__version__, "numba": numba.__version__}
@@ -280,10 +276,6 @@ def version_mismatch(worker, theirs, mine):
     -------
     str or None
         The line, or None.
-
-    References
-    ----------
-    .. [1] screening documentation, "Distributed runs", ``docs/distributed.md``.
     """
     names = [name for name in mine if theirs.get(name) != mine[name]]
     if not names:

@@ -281,12 +281,6 @@ def batch_trust(res, block, foundation, excitation, condensation, out, t_out, mo
     dict
         ``sl_trust`` (:class:`~screening.core.status.Trust` codes), ``sl_error_low`` and ``sl_error_high``
         [1]: the band of ``SL / MCS - 1`` of peak var_theta.
-
-    References
-    ----------
-    .. [1] screening documentation, "Trusting a point", ``docs/trust.md``.
-    .. [2] screening documentation, "The error atlas: how wrong the linearization is, over the whole
-       space", ``docs/error_atlas.md``.
     """
     n = out["status"].size
 
@@ -415,10 +409,6 @@ def failed_result(n, nt, histories=HISTORY_VARIABLES, fragility=None, derived_in
     -------
     dict
         ``{variable: array}`` shaped as :func:`solve_batch`'s result.
-
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", section "Status flags", ``docs/outputs.md``.
     """
     n_thresholds = len(fragility.thresholds) if fragility is not None else 0
     return {o.name: o.failed_array(n, nt, n_thresholds)
@@ -476,11 +466,6 @@ def spot_task(block, foundation, excitation, condensation, samples, model, t_end
     dict
         :func:`spot_arrays` of the run (histories [rad2, rad2 s-2], counts, steps, per-sample peaks [rad] and
         states), its model's code ``mcs_model``, and the ``sl_<name>`` histories asked for (float64).
-
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
-       ``docs/outputs.md``.
     """
     from screening.solvers.montecarlo import monte_carlo
 
@@ -647,11 +632,6 @@ def sample_state(overturned, diverged):
     -------
     numpy.ndarray of int8
         ``standing`` (0), ``overturned`` (1) or ``diverged_or_failed`` (2) per sample.
-
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", section "Monte Carlo spot checks",
-       ``docs/outputs.md``.
     """
     state = np.full(np.shape(overturned), SampleState.standing, dtype=np.int8)
     state[np.asarray(overturned, dtype=bool)] = SampleState.overturned

@@ -45,22 +45,7 @@ class Batch:
 
 
 def holds_histories(study):
-    """Whether a task of ``study`` holds time histories in memory: stored, or needed for ``[fragility]``.
-
-    Parameters
-    ----------
-    study : screening.sweep.study.Study
-        The study.
-
-    Returns
-    -------
-    bool
-        True if ``[output]`` stores histories or ``[fragility]`` is given.
-
-    References
-    ----------
-    .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
-    """
+    """Whether a task of ``study`` holds time histories in memory: stored, or needed for ``[fragility]``."""
     return bool(study.output.stored) or study.fragility is not None
 
 
@@ -89,10 +74,6 @@ def default_batch_size(study, n_workers, target=None):
     -------
     int
         Points per batch, at least 1.
-
-    References
-    ----------
-    .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
     """
     per_case = study.points_per_case
     workers = max(int(n_workers), 1)
@@ -151,10 +132,6 @@ def plan_batches(study, batch_size):
     ------
     ValueError
         ``batch_size`` below 1.
-
-    References
-    ----------
-    .. [1] screening documentation, "Performance", section "Sweep throughput", ``docs/performance.md``.
     """
     if batch_size < 1:
         raise ValueError(f"parameter 'batch_size' must be an integer >= 1 (got {batch_size!r})")
@@ -181,10 +158,6 @@ def batch_values(study, batch):
     -------
     dict
         ``{swept parameter: values}``, one value per point of the batch, in the parameter's SI unit.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     per_case = study.points_per_case
     flat = np.arange(batch.lo - batch.case * per_case, batch.hi - batch.case * per_case)
@@ -195,25 +168,9 @@ def batch_values(study, batch):
 
 
 def swept_columns(study):
-    """Swept parameter values and case index of every point of ``study`` (flat, C order).
-
-    Parameters
-    ----------
-    study : screening.sweep.study.Study
-        The study.
-
-    Returns
-    -------
-    columns : dict
-        ``{swept parameter: values}``, one value per point of the study, in the parameter's SI unit
-        (:func:`batch_values` of each case's points).
-    case : numpy.ndarray of int
-        The case index of every point (0 without cases).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
-    """
+    """``(columns, case)``: the swept parameter values (``{name: values}`` in the parameter's SI unit, by
+    :func:`batch_values` of each case's points) and the case index (0 without cases) of every point of
+    ``study`` (flat, C order)."""
     n, per_case = study.n_points, study.points_per_case
     columns = {name: np.empty(n) for name in study.swept_dims}
     for c in range(len(study.cases)):
@@ -239,10 +196,6 @@ def point_values(study, index):
         The case index (0 without cases).
     values : dict
         ``{swept parameter: value}`` in the parameter's SI unit.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     case = index[0] if study.has_case_dim else 0
     swept = index[1:] if study.has_case_dim else index
@@ -267,10 +220,6 @@ def batch_models(study, batch):
         The bed.
     excitation : Excitation
         The ground motion model.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     return build_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
@@ -291,10 +240,6 @@ def batch_point_models(study, batch):
     tuple
         ``(block, foundation, excitation, underivable)``; ``underivable`` flags the points whose target
         PGA [m s-2] gives no ``S0`` (False when the study gives ``S0`` itself).
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
     """
     return build_point_models(study.cases[batch.case], batch_values(study, batch), study.t_end)
 
@@ -322,10 +267,6 @@ def select_spots(study, status, peak_p_uplift):
     -------
     list of tuple
         The grid index of each spot point (empty without ``[mcs]``).
-
-    References
-    ----------
-    .. [1] screening documentation, "What a result holds", ``docs/outputs.md``.
     """
     spec = study.mcs
     if spec is None:

@@ -85,10 +85,6 @@ def read_inventory(path):
     StudyError
         One line ``FILE:LINE: FIELD: problem``: a missing column, an empty required cell, a value that is
         not a number or not > 0 (``eps`` may have either sign), a duplicate name, an unknown material.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
     """
     path = Path(path)
     try:
@@ -176,10 +172,6 @@ def with_collection(raw, source, inventory=None):
     ------
     StudyError
         A study with both ``[[case]]`` and a collection, a ``[collection]`` without ``file``, or a bad CSV.
-
-    References
-    ----------
-    .. [1] screening documentation, "The study file", docs/study.md, section "A collection of objects".
     """
     if inventory is None and "collection" not in raw:
         return raw, ""

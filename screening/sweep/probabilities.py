@@ -127,11 +127,6 @@ def levels_at(study, theta_ul, slenderness):
     -------
     numpy.ndarray
         Rotations [rad], shape ``(points, 1 + thresholds)``: the overturning angle, then each threshold.
-
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``.
     """
     cols = [np.asarray(slenderness, dtype=float)]
     frag = study.fragility
@@ -208,11 +203,6 @@ def surface_estimates(columns, case, counts, n_used):
     :func:`~screening.analysis.fragility_surface.study_surface` on its Monte Carlo points for each level,
     :func:`~screening.analysis.fragility_surface.predict_surface` and
     :func:`~screening.analysis.fragility_surface.inside_hull` at its points.
-
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``, section "Near toppling: the study's fragility surface".
     """
     n = case.size
     levels = len(next(iter(counts.values()))) if counts else 1
@@ -424,11 +414,6 @@ def probabilities_line(counts):
     -------
     str
         The line of the run's log.
-
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``.
     """
     return "probabilities (p_overturn, p_exceed) by source: " + ", ".join(f"{name} {k}" for name, k in counts.items())
 
@@ -458,11 +443,6 @@ def answer_line(answer, reliable, variance_vouched):
         ``answers: variance N, probabilities M (reason k, ...); unreliable: U variance, W without any
         reliable answer`` -- ``U`` counts the points whose variance is ``unreliable`` (the answer there may
         still be the probabilities), ``W`` those whose answering quantity is not vouched for.
-
-    References
-    ----------
-    .. [1] screening documentation, "Probabilities of overturning and of exceedance",
-       ``docs/outputs_probabilities.md``, section "Which quantity answers a point".
     """
     answer = np.asarray(answer).reshape(-1)
     by_variance = int(np.sum(answer == AnswerQuantity.variance))

@@ -280,8 +280,7 @@ def parse_study(text, name="study", source="<string>", inventory=None):
 
     References
     ----------
-    .. [1] screening documentation, "The study file", ``docs/study.md``.
-    .. [2] TOML v1.0.0 specification, https://toml.io/en/v1.0.0
+    .. [1] As :func:`load_study`.
 
     Examples
     --------
