@@ -1,8 +1,9 @@
 """Where each cheap model holds: exceedance and overturning probabilities against coupled Monte Carlo.
 
-The validity table of the cheap models (the stiff-bed model, with its bed-derived transfer loss and
-with Housner's; the condensed model under each condensation; the stochastic linearization under each
-condensation) against the coupled model (the judge), per bed, excitation and intensity level.
+The validity table of the cheap models (the stiff-bed model, with its bed-derived transfer loss (read at the
+half cycle's amplitude, and at the impact: ``stiff_bed impact``) and with Housner's; the condensed model under
+each condensation; the stochastic linearization under each condensation) against the coupled model (the judge),
+per bed, excitation and intensity level.
 
 Every Monte Carlo model runs on the SAME ground motions (same seed, same synthesis: sample ``i`` of
 seed ``s`` is the same realization for every model, the stiff-bed model reading it low-passed at its
@@ -705,7 +706,8 @@ def figure(rows, path):
     from screening.core.atomicfile import atomic_path
 
     cheap = [m for m in MODELS if m != "coupled"]
-    fig, axes = plt.subplots(2, 4, figsize=(15, 7), sharex=True, sharey=True)
+    columns = math.ceil(len(cheap) / 2)
+    fig, axes = plt.subplots(2, columns, figsize=(3.75 * columns, 7), sharex=True, sharey=True)
     markers = {"kanai_tajimi": "o", "white": "s"}
     for ax, name in zip(axes.ravel(), cheap):
         ax.axhspan(1e-3, 1.0, color="0.9", zorder=0)

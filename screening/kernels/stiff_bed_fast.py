@@ -465,7 +465,9 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
         ``(m, 2, 6)``: :func:`grid_propagator` from the interval's start to ``i dt / m``, ``i = 1..m``
         (:func:`grid_pieces`).
     log_amp, log_eta : numpy.ndarray
-        The transfer table (:func:`screening.solvers.stiff_bed.transfer_table`).
+        The transfer table (:func:`screening.solvers.stiff_bed.transfer_table`; with ``sp.by_rate`` keyed by the
+        rate at the zero crossing, :func:`screening.solvers.stiff_bed.impact_table`, and read at ``|theta'|``
+        there).
     row : int
         The sample (row of ``acc`` and of the outputs).
     acc, acc_dot : numpy.ndarray
@@ -591,9 +593,9 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
                         nx, nv = oscillator_step(omega2, c_osc, g_osc, x, v, p0, p1, p2, p3, s_end)
                     crossed = x_prev * nx < 0.0 or (x_prev == 0.0 and nx != 0.0)
                     if crossed and amp > tu:
-                        # the transfer: at the zero crossing, the rate times sqrt(eta(amp))
+                        # the transfer: at the zero crossing, the rate times sqrt(eta) (eta at amp, or at the rate there)
                         sz, zx, zv = _locate(osc, x, v, p0, p1, p2, p3, s_start, s_end, nx, 0.0)
-                        zv *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                        zv *= math.sqrt(transfer_ratio_jit(log_amp, log_eta, abs(zv) if sp.by_rate != 0.0 else amp))
                         if counting:
                             counts[6] += 1
                         amp = 0.0
@@ -769,7 +771,7 @@ def integrate_sample(sp, cp, osc, prop, pieces, log_amp, log_eta, row, acc, acc_
         k1_keep = k7_1
         if crossed:
             if amp > tu:
-                rr = math.sqrt(transfer_ratio_jit(log_amp, log_eta, amp))
+                rr = math.sqrt(transfer_ratio_jit(log_amp, log_eta, abs(v) if sp.by_rate != 0.0 else amp))
                 x *= rr
                 v *= rr
                 have_k1 = False

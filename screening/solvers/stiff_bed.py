@@ -450,7 +450,7 @@ class StiffBedModel(MonteCarloModel):
     ``transfer``: ``"bed"`` (the bed-derived table, :func:`transfer_table`), ``"housner"``
     (Housner's ``r^2`` per transfer), ``"none"`` (no transfer loss; used to build the table) or ``"impact"``
     (the bed-derived table read at the impact: at the rate at the zero crossing, :func:`impact_table`, instead
-    of the half cycle's amplitude; the reference kernel only).
+    of the half cycle's amplitude).
     ``band``: the band of the Monte Carlo ground motions the model reads (the same samples as the
     other models, same seed and components, low-passed on a coarser grid): ``"rocking"`` (the default)
     ``max(ROCKING_BAND_FACTOR w_r, ground band)`` (``w_r`` the full-contact rocking frequency: in full

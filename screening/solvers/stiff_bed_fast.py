@@ -114,8 +114,8 @@ def band_samples(excitation, plan, seed, sample_indices):
 class _FastIntegrator(StiffIntegrator):
     """The exact-contact kernel; a record with a vertical channel goes to the reference kernel."""
 
-    def __init__(self, block, foundation, log_amp, log_eta):
-        super().__init__(block, foundation, log_amp, log_eta, locate=True)
+    def __init__(self, block, foundation, log_amp, log_eta, by_rate=False):
+        super().__init__(block, foundation, log_amp, log_eta, locate=True, by_rate=by_rate)
         omega2 = self.k0 / self.m0
         self.osc = np.array([omega2, self.c0 / self.m0, self.mh / self.m0, math.sqrt(omega2)])
         self._maps = {}
@@ -159,13 +159,10 @@ class FastStiffBedModel(StiffBedModel):
                    "(docs/stiff_bed.md, 'Exact-contact sampler')")
 
     def __init__(self, transfer="bed", band="rocking"):
-        if transfer == "impact":
-            raise ValueError("parameter 'transfer' of the exact-contact sampler must be one of ('bed', 'housner', "
-                             "'none') (got 'impact': the reference model, StiffBedModel, reads it)")
         super().__init__(transfer=transfer, band=band, locate=True)
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):
-        return _FastIntegrator(block, foundation, *self.table(block, foundation))
+        return _FastIntegrator(block, foundation, *self.table(block, foundation), by_rate=self.transfer == "impact")
 
 
 STIFF_BED_FAST = register(FastStiffBedModel())
