@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy import signal
+from scipy import integrate, signal
 
 from screening.analysis import intensity_records as R
 from screening.analysis import intensity_rvt as I
@@ -70,3 +70,52 @@ def test_synthesised_velocity_variance_against_the_evolutionary_spectrum():
     for tk in (3.0, 6.0, 12.0):
         ref = np.interp(tk, t, var_v)
         assert np.var(v[:, int(round(tk / plan.dt))]) == pytest.approx(ref, rel=3 * math.sqrt(2 / n))
+
+
+def _adaptive_oscillator_covariance(exc, period, t_end, damping, n_times):
+    """The full Lyapunov equation ``P' = A(t) P + P A(t)^T + 2 pi S0 b(t) b(t)^T`` of (filter, u, u'),
+    integrated by LSODA with its exact Jacobian (rtol 1e-11): the filter block is integrated, not assumed
+    stationary, and the envelope is evaluated, not expanded in exponentials."""
+    wn = 2.0 * math.pi / period
+    A_f, B_f, C_f, D_f = (np.asarray(m, dtype=float) for m in exc.filter())
+    nf = A_f.shape[0]
+    n = nf + 2
+    base = np.zeros((n, n))
+    base[:nf, :nf] = A_f
+    base[nf:, nf:] = [[0.0, 1.0], [-wn * wn, -2.0 * damping * wn]]
+
+    def drift(t):
+        a = base.copy()
+        a[nf + 1, :nf] = -exc.envelope(t) * C_f
+        return a
+
+    def rhs(t, y):
+        P, a = y.reshape(n, n), drift(t)
+        b = np.concatenate([B_f, [0.0, -exc.envelope(t) * float(D_f)]])
+        return (a @ P + P @ a.T + 2.0 * math.pi * exc.S0 * np.outer(b, b)).ravel()
+
+    def jac(t, y):
+        a, one = drift(t), np.eye(n)
+        return np.kron(a, one) + np.kron(one, a)
+
+    P0 = np.zeros((n, n))
+    if nf:
+        P0[:nf, :nf] = exc.stationary_covariance()
+    t = np.linspace(0.0, t_end, n_times)
+    sol = integrate.solve_ivp(rhs, (0.0, t_end), P0.ravel(), method="LSODA", t_eval=t, jac=jac, rtol=1e-11,
+                              atol=1e-20 * exc.S0)
+    P = sol.y.reshape(n, n, -1)
+    return P[nf, nf], P[nf + 1, nf + 1], P[nf, nf + 1]
+
+
+@pytest.mark.parametrize("exc", [WhiteNoise(1e-3), KanaiTajimi(1e-3, 15.6, 0.6),
+                                 WhiteNoise(1e-3, ConstantEnvelope(), band_limit_hz=None),
+                                 KanaiTajimi(1e-3, 15.6, 0.6, band_limit_hz=None)],
+                         ids=["white-band", "kt-band", "white-stationary", "kt-unbounded"])
+def test_oscillator_covariance_against_an_adaptive_lyapunov_integration(exc):
+    """The exact propagation of :func:`oscillator_covariance` against the adaptive integration of the whole
+    Lyapunov equation on a 1 s record: agreement 1e-8 of each moment's peak (measured 2e-13 to 2e-9, the
+    reference's own tolerance; band-limited inputs: filter states of order 4 and 6)."""
+    got = I.oscillator_covariance(exc, 0.3, 1.0, 0.05, n_times=201)
+    for g, r in zip(got[1:], _adaptive_oscillator_covariance(exc, 0.3, 1.0, 0.05, 201)):
+        assert np.max(np.abs(g - r)) < 1e-8 * np.max(np.abs(r))

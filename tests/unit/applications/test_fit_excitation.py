@@ -21,12 +21,16 @@ from screening.sweep.study import parse_study
 TRUE = KanaiTajimi(2e-3, 15.0, 0.6, Envelope(4.0, 2.0))
 
 
+def _records(indices):
+    plan = spectral_plan(TRUE, 30.0, 200.0)
+    acc, _ = ground_acceleration_samples(TRUE, plan, 3, np.asarray(indices))
+    n = int(round(30.0 / plan.dt)) + 1
+    return [Record(a[:n], plan.dt) for a in acc]
+
+
 @pytest.fixture(scope="module")
 def fits():
-    plan = spectral_plan(TRUE, 30.0, 200.0)
-    acc, _ = ground_acceleration_samples(TRUE, plan, 3, np.arange(20))
-    n = int(round(30.0 / plan.dt)) + 1
-    return [fit_excitation(Record(a[:n], plan.dt)) for a in acc]
+    return [fit_excitation(r) for r in _records(np.arange(20))]
 
 
 @pytest.mark.slow
@@ -49,7 +53,7 @@ def test_parameters_recovered(fits):
     assert np.median(rates) == pytest.approx(1.0, abs=0.3)
 
 
-def test_white_noise_energy_and_table(fits):
+def test_white_noise_energy_and_table():
     plan = spectral_plan(WhiteNoise(1e-3), 20.0, 60.0)
     acc, _ = ground_acceleration_samples(WhiteNoise(1e-3), plan, 0, np.arange(10))
     n = int(round(20.0 / plan.dt)) + 1
@@ -57,10 +61,11 @@ def test_white_noise_energy_and_table(fits):
     assert np.median(s0) > 0
     with pytest.raises(ValueError, match="cutoff"):
         fit_excitation(Record(acc[0][:n], plan.dt), kind="white")
-    text = excitation_table(fits[0])
+    first = fit_excitation(_records([0])[0])              # one record: the 20 of ``fits`` are for the slow test
+    text = excitation_table(first)
     study = parse_study("[block]\nm = 1.0\nb = 0.1\nh = 0.3\n[foundation]\nk = 1e8\nlam = 1e9\n" + text)
     assert study.cases[0].excitation == "kanai_tajimi"
-    assert study.cases[0].params["omega_g"] == pytest.approx(fits[0]["omega_g"], rel=1e-5)
+    assert study.cases[0].params["omega_g"] == pytest.approx(first["omega_g"], rel=1e-5)
 
 
 def test_envelope_peak_matches_a_dense_evaluation():
@@ -96,19 +101,17 @@ def test_time_step_and_cutoff_are_checked():
             fit_excitation(Record(a, 0.01), kind="white", cutoff=bad)
 
 
-def test_harmonic_record_and_dc_offset_are_flagged(fits):
+def test_harmonic_record_and_dc_offset_are_flagged():
     t = np.arange(3000) * 0.01
     harmonic = fit_excitation(Record(np.sin(2 * np.pi * 2.0 * t), 0.01))
     assert any("nearly harmonic" in f for f in harmonic["flags"])
     assert any("envelope is not identified" in f for f in harmonic["flags"])
-    plan = spectral_plan(TRUE, 30.0, 200.0)
-    acc, _ = ground_acceleration_samples(TRUE, plan, 3, np.arange(1))
-    n = int(round(30.0 / plan.dt)) + 1
-    shifted = fit_excitation(Record(acc[0][:n] + 0.5, plan.dt))
+    record = _records([0])[0]
+    shifted = fit_excitation(Record(record.acceleration + 0.5, record.dt))
     assert any("DC offset" in f for f in shifted["flags"])
     # the offset is removed before the fit: same estimates as the record without it (to the rounding of
     # the envelope deviance, flat to 1e-12 over 1e-5 in log T: the offset itself would move them by %)
-    plain = fit_excitation(Record(acc[0][:n] - acc[0][:n].mean(), plan.dt))
+    plain = fit_excitation(Record(record.acceleration - record.acceleration.mean(), record.dt))
     for key in ("S0", "omega_g", "zeta_g", "T1", "T2"):
         assert shifted[key] == pytest.approx(plain[key], rel=1e-4)
 

@@ -29,6 +29,13 @@ CABINET = Block(m=400.0, b=0.3, h=1.0)
 PADS = Foundation(k=2.1e9, eps=2e9, lam=float(lam_from_vertical_damping(2.1e9, 400.0, 0.3, 0.05)))
 
 
+def _model_rhs(u=lambda s: 0.0):
+    """``(theta, theta')'`` of the model's equation for solve_ivp: the compiled twin of
+    ``stiff_bed.rocking_acceleration`` (held to it by test_stiff_bed_contact.py), 50x cheaper a call."""
+    sp, cp = stiff_record(STATUE, BED)[0], cubic.sdof_record(STATUE, BED)[0]
+    return lambda s, y: [y[1], rocking_acceleration_jit(sp, cp, y[0], y[1], u(s))]
+
+
 @pytest.mark.parametrize("omega2,c", [(1.7e5, 40.0), (1.7e5, 2 * math.sqrt(1.7e5)), (1.7e5, 2000.0), (4.0, 0.0)],
                          ids=["underdamped", "critical", "overdamped", "undamped"])
 def test_closed_form_step_against_solve_ivp(omega2, c):
@@ -118,9 +125,8 @@ def test_kernel_against_solve_ivp_of_the_model():
         h00, h01, h10, h11 = 2 * x**3 - 3 * x**2 + 1, 3 * x**2 - 2 * x**3, x**3 - 2 * x**2 + x, x**3 - x**2
         return h00 * acc[0, j] + h01 * acc[0, j + 1] + dt * (h10 * acc_dot[0, j] + h11 * acc_dot[0, j + 1])
 
-    rhs = lambda s, y: [y[1], float(sb.rocking_acceleration(y[0], y[1], u(s), STATUE, BED))]  # noqa: E731
     tu = float(cubic.uplift_threshold(STATUE, BED))
-    ref = solve_ivp(rhs, (0.0, t_end), [0.0, 0.0], t_eval=t_out, rtol=1e-11, atol=1e-9 * tu, method="DOP853",
+    ref = solve_ivp(_model_rhs(u), (0.0, t_end), [0.0, 0.0], t_eval=t_out, rtol=1e-11, atol=1e-9 * tu, method="DOP853",
                     max_step=1e-3).y[0]
     assert np.abs(ref).max() > 100 * tu                 # it rocks well beyond the partial contact
     assert np.sum(np.diff(np.sign(ref)) != 0) >= 4       # through transfers
@@ -132,7 +138,7 @@ def test_transfer_against_solve_ivp_with_an_event():
     against DOP853 to the zero crossing (event), the rate times r there, and on 0.1 s: within 1e-6 of the start
     in theta and of the rate (the transfer located in closed form at the crossing)."""
     theta0 = 0.3 * STATUE.slenderness
-    rhs = lambda t, y: [y[1], float(sb.rocking_acceleration(y[0], y[1], 0.0, STATUE, BED))]  # noqa: E731
+    rhs = _model_rhs()
     crossing = lambda t, y: y[0]  # noqa: E731
     crossing.terminal, crossing.direction = True, -1
     first = solve_ivp(rhs, (0.0, 5.0), [theta0, 0.0], events=crossing, rtol=1e-12, atol=1e-14, method="DOP853")
@@ -200,9 +206,8 @@ def test_reentry_on_the_dense_output_against_solve_ivp():
     start."""
     tu = float(cubic.uplift_threshold(STATUE, BED))
     theta0, t_end = 20.0 * tu, 0.3
-    rhs = lambda t, y: [y[1], float(sb.rocking_acceleration(y[0], y[1], 0.0, STATUE, BED))]  # noqa: E731
     t_out = np.linspace(0.0, t_end, 301)
-    ref = solve_ivp(rhs, (0.0, t_end), [theta0, 0.0], t_eval=t_out, rtol=1e-12, atol=1e-9 * tu, method="DOP853",
+    ref = solve_ivp(_model_rhs(), (0.0, t_end), [theta0, 0.0], t_eval=t_out, rtol=1e-12, atol=1e-9 * tu, method="DOP853",
                     max_step=1e-4).y[0]
     assert np.sum(np.diff(np.sign(np.abs(ref) - tu)) != 0) >= 4        # in and out of full contact
     n_grid = 61
