@@ -111,9 +111,9 @@ from types import MappingProxyType
 import numpy as np
 
 from screening.solvers.timegrid import output_times
-from screening.sweep.config import build_models, Case, ClusterSpec, parse_toml, read_study_text, StudyError  # noqa: F401
-from screening.sweep.tables import (Accuracy, DEFAULT_BUDGET_S, Fragility, Output, SpotChecks,  # noqa: F401
-                                    study_fields)
+from screening.sweep.config import (Accuracy, build_models, Case, ClusterSpec, DEFAULT_BUDGET_S,  # noqa: F401
+                                    Fragility, Output,
+                                    parse_toml, read_study_text, SpotChecks, study_fields, StudyError)
 from screening.sweep.inventory import with_collection
 
 __all__ = ["Accuracy", "Case", "SpotChecks", "Study", "StudyError", "build_models", "load_study", "parse_study",
