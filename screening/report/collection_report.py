@@ -91,7 +91,6 @@ def _object_figure(obj, ds):
     for j, (frag, state, curve) in enumerate(obj["curves"]):
         colour = COLOURS[j % len(COLOURS)]
         name, units, _ = fragility_intensity(frag)
-        dim = frag.attrs.get("intensity_dim", "pga")
         one = _state(frag, state).isel({d: _index(frag, d, v) for d, v in obj["labels"].items() if d in frag.dims})
         x = np.asarray(one[name].values, dtype=float)
         p = np.asarray(one["p_exceed"].values, dtype=float)

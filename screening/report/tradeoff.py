@@ -21,7 +21,7 @@ import xarray as xr
 
 from screening.core import laws
 from screening.applications.metrics import compare, peak_with_se, relative_difference, time_averaged_relative_error
-from screening.analysis.target_intensity import calibrate_intensity, round_significant
+from screening.analysis.target_intensity import calibrate_intensity
 from screening.applications.tradeoff_study import (COMPARISONS, MCS_MODELS, METHODS, QUANTITIES, TradeoffStudy,
                                                    load_tradeoff_study)
 from screening.report.tradeoff_files import from_file_layout, output_paths, write_reports

@@ -85,7 +85,7 @@ def test_no_module_takes_an_underscored_name_from_another():
 #: At most this many distinct names in the ``__all__`` lists: the user API (``screening.__all__``, the
 #: modules of the API pages, the registries' interfaces, the status codes) and the lists of the modules
 #: not yet reduced to it.  Only shrinks (the aim: 300).
-MAX_PUBLIC_NAMES = 250
+MAX_PUBLIC_NAMES = 225
 
 
 def test_all_lists_the_user_api_only():
