@@ -47,19 +47,6 @@ __all__ = []
 
 #: Histories the corrected estimate reads (the last two for Vanmarcke's bandwidth).
 CORRECTION_HISTORIES = ("var_theta", "var_theta_dot", "cov_theta_theta_dot", "c_eq", "k_eq")
-def _read_inputs(study, res):
-    """What :func:`finish_probabilities` starts from, read from ``res`` variable by variable."""
-    n = study.n_points
-    values = {name: res.read(name) for name in ("p_overturn", "p_overturn_se", "sl_error_low", "sl_error_high",
-                                                "theta_ul", "slenderness")}
-    if study.fragility is not None:
-        values.update(p_exceed=res.read_all("p_exceed").reshape(n, -1),
-                      p_exceed_se=res.read_all("p_exceed_se").reshape(n, -1))
-    if study.accuracy is not None:
-        values["best_method"] = res.read("best_method")
-    return values
-
-
 def _monte_carlo_runs(study, escalated=None, spot_runs=None):
     """``[(flat index, model name, peak_abs_theta, sample_state, paired)]`` of the escalated points
     (``escalated``: ``(flat indices, models, runs)`` of :func:`screening.sweep.accuracy.escalate`) and the
@@ -261,7 +248,7 @@ def _level_counts(runs, levels):
     return counts, used
 
 
-def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None, values=None):
+def finish_probabilities(study, res, values, escalated=None, spot_runs=None, log=None):
     """Replace the workers' linearization estimates in a sweep's result by the best ones and write ``p_source``.
 
     The sweep's last stage, run on the client once the escalated points and the spot checks are in: at
@@ -282,6 +269,9 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None, v
         ``sl_error_low``/``sl_error_high`` [1], ``theta_ul`` and ``slenderness`` [rad], ``status``,
         ``sl_trust``, ``peak_p_uplift`` (and ``best_method`` with ``[accuracy]``); the probabilities,
         ``p_source``, ``answer_quantity`` and the notes written into it.
+    values : dict
+        The per-point values of :func:`screening.sweep.run.stage_inputs` (with the ``[accuracy]`` stage's best
+        estimates), handed on by the run.
     escalated : tuple, optional
         ``(flat indices, EscalationModel codes, runs)`` of the escalated points
         (:func:`screening.sweep.accuracy.escalate`), each run with ``peak_abs_theta`` [rad] and
@@ -292,9 +282,6 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None, v
         :func:`screening.solvers.mc_registry.names`; default the study's ``[mcs] model``).
     log : callable, optional
         Called with the answer line (:func:`answer_line`) and the surface's lines.
-    values : dict, optional
-        The per-point values of :func:`screening.sweep.run.stage_inputs` (with the ``[accuracy]`` stage's best
-        estimates), handed on by the run; default: read from ``res``.
 
     Returns
     -------
@@ -319,7 +306,6 @@ def finish_probabilities(study, res, escalated=None, spot_runs=None, log=None, v
     res.commit()                    # a zarr store creates the variables defined since (best estimates) here
     n = study.n_points
     thresholds = len(study.fragility.thresholds) if study.fragility is not None else 0
-    values = _read_inputs(study, res) if values is None else values
     p = np.column_stack([values["p_overturn"]] + ([values["p_exceed"]] if thresholds else []))
     se = np.column_stack([values["p_overturn_se"]] + ([values["p_exceed_se"]] if thresholds else []))
     low, high = values["sl_error_low"], values["sl_error_high"]

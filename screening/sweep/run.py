@@ -328,8 +328,8 @@ class _SweepRun:
                     self.report.n_spots = self._spot_checks()
                 timings["mcs"] = time.perf_counter() - t0
                 if self.values is not None:
-                    self.report.probabilities = finish_probabilities(study, self.result, self.escalated,
-                                                                     self.spot_runs, log=self.log, values=self.values)
+                    self.report.probabilities = finish_probabilities(study, self.result, self.values, self.escalated,
+                                                                     self.spot_runs, log=self.log)
                     line = probabilities_line(self.report.probabilities)
                     self.attrs["probabilities_note"] = line
                     self.log(line)
@@ -557,7 +557,7 @@ class _SweepRun:
             for name, values in self.result.kept.items():
                 res.kept[name][:] = values
             escalated = write(res)
-            finish_probabilities(study, res, escalated, None, values=self.values)
+            finish_probabilities(study, res, self.values, escalated)
             stamp = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
             res.set_attrs(interim_result=f"written at {stamp} while the [accuracy] stage ran, with the "
                                          f"{len(escalated[0])} escalated point(s) done by then (no spot checks); "

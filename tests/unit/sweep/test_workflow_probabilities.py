@@ -51,6 +51,12 @@ class Result(dict):
         self.update(attrs)
 
 
+def _values(res):
+    """The per-point values the run hands the stage (:func:`screening.sweep.run.stage_inputs`), from the fake."""
+    return {name: res.read(name) for name in ("p_overturn", "p_overturn_se", "sl_error_low", "sl_error_high",
+                                              "theta_ul", "slenderness", "best_method")}
+
+
 def _runs(at, prob, seed, samples=1000):
     rng = np.random.default_rng(seed)
     runs = []
@@ -76,7 +82,8 @@ def test_near_toppling_points_take_the_surface_inside_the_monte_carlo_points_and
     mc = list(range(0, 18, 2))                       # Monte Carlo at S0 index 0, 2, ..., 16
     res = _result()
     lines = []
-    counts = finish_probabilities(study, res, escalated=_runs(mc, truth(S0), seed=11), log=lines.append)
+    counts = finish_probabilities(study, res, _values(res), escalated=_runs(mc, truth(S0), seed=11),
+                                  log=lines.append)
     src, p, se, answer = res["p_source"], res["p_overturn"], res["p_overturn_se"], res["answer_quantity"]
     surface = ProbabilitySource.study_fragility_surface
     # Monte Carlo where it ran
@@ -115,7 +122,7 @@ def test_a_surface_the_leave_one_out_check_rejects_is_used_nowhere():
     study = parse_study(STUDY)
     wavy = special.ndtr(2 * np.sin(3 * np.linspace(-1.5, 1.5, N)))
     res = _result()
-    finish_probabilities(study, res, escalated=_runs(list(range(0, 21, 2)), wavy, seed=12))
+    finish_probabilities(study, res, _values(res), escalated=_runs(list(range(0, 21, 2)), wavy, seed=12))
     assert not np.any(res["p_source"] == ProbabilitySource.study_fragility_surface)
     assert np.all(res["p_source"][11:20:2] == ProbabilitySource.unreliable)
     assert "not vouched for (leave-one-out" in res["fragility_surface_note"]
