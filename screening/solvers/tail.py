@@ -294,8 +294,8 @@ def _model_response(run):
 
 
 def tail_probability(block, foundation, excitation, thresholds=(), model="stiff_bed", n_per_level=250, p0=0.1,
-                     seed=0, runs=4, t_end=20.0, dt=0.05, sampler="acs", max_levels=12, condensation=DEFAULT_CONDENSATION,
-                     strict_validity=False, progress=False, **numerics):
+                     seed=0, runs=4, t_end=20.0, dt=0.05, sampler="acs", max_levels=12,
+                     condensation=DEFAULT_CONDENSATION, strict_validity=False, progress=False, **numerics):
     """Small ``p_overturn`` and ``p_exceed`` [1] of a Monte Carlo model, with their standard errors, by subset
     simulation over the model's input phases.
 
@@ -334,8 +334,8 @@ def tail_probability(block, foundation, excitation, thresholds=(), model="stiff_
     :func:`screening.solvers.synthesis.stationary_samples` with ``phi_k = 2 pi Phi(U_k)``, ``U ~ N(0, I)``, over
     the ``N`` frequencies the model reads: the phases are independent and uniform as in crude Monte Carlo, so
     ``P(Y > y)`` is the model's own.  :func:`subset_simulation` gives ``P`` and its coefficient of variation
-    (Au & Beck's eq. (30)) per run; the runs are combined by :func:`combine_runs`.  A diverged sample counts as not exceeding (crude Monte Carlo leaves it
-    out: ``n_diverged`` says how many).
+    (Au & Beck's eq. (30)) per run; the runs are combined by :func:`combine_runs`.  A diverged sample counts as
+    not exceeding (crude Monte Carlo leaves it out: ``n_diverged`` says how many).
 
     References
     ----------
@@ -378,5 +378,6 @@ def tail_probability(block, foundation, excitation, thresholds=(), model="stiff_
         coords={"threshold": ("threshold", rotations, attrs["threshold"])})
     ds.attrs.update(method="subset simulation (Au & Beck 2001) over the input phases", model=run.model.name,
                     sampler=sampler, n_per_level=n, runs=n_runs, p0=float(p0), seed=int(seed),
-                    n_model_runs=int(sum(e.n_calls for e in ests)), n_diverged=int(sum(e.n_missing for e in ests)), t_end=float(t_end), dt=float(dt))
+                    n_model_runs=int(sum(e.n_calls for e in ests)), n_diverged=int(sum(e.n_missing for e in ests)),
+                    t_end=float(t_end), dt=float(dt))
     return ds

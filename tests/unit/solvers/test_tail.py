@@ -58,7 +58,7 @@ def test_thresholds_reached_by_no_sample_are_nan_and_bad_input_is_refused():
 
 
 def test_stiff_bed_tail_agrees_with_crude_monte_carlo_within_the_standard_errors():
-    """A 5 s record where P(peak |theta| > 0.07 rad) ~ 0.03: subset simulation (2 x 150 samples a level, two levels)
+    """A 5 s record where P(peak |theta| > 0.07 rad) ~ 0.03: subset simulation (2 x 150 samples a level, 2 levels)
     against 3,000 crude samples of the same model (binomial SE ~ 0.003); the difference within 3 standard errors
     of the difference (two runs of 150 a level: their combined standard error; the binomial one for crude Monte
     Carlo)."""
