@@ -35,8 +35,9 @@ acceleration ``g b / h`` (:data:`LEVELS`).
 
 Each case is written atomically to ``--work/<case>.json`` after each of its models, so an interrupted
 run resumes where it stopped; ``--minutes`` stops starting new model runs after that much wall time.
-``--report`` assembles the table from the work folder (``--csv`` writes it as package data,
-``--figure`` draws it).  Run (the shipped table; about 40 minutes of CPU in all, in chunks)::
+``--report`` assembles the table from the work folder (``--csv`` writes it as package data, ``--figure`` draws
+it: the whole CSV with ``--csv``, else the work folder's rows).  Run (the shipped table; about 40 minutes of CPU in
+all, in chunks)::
 
     NUMBA_NUM_THREADS=1 PYTHONPATH=. nice -n 10 python benchmarks/stiff_bed_validity.py \\
         --samples 1000 --work outputs/stiff_bed_validity --minutes 9
@@ -720,8 +721,9 @@ def write_csv(rows, path, command):
 
 
 def figure(rows, path):
-    """Per cheap model, the worst |difference| / tolerance of each case against ``theta_ul / atan(b/h)``:
-    passes filled, fails open in red, the tolerance band shaded (<= 1)."""
+    """Per cheap model, the worst |difference| / tolerance of each case of the table against
+    ``theta_ul / atan(b/h)``: passes filled, fails open in red, the tolerance band shaded (<= 1).  ``rows``: the
+    table's rows as :func:`csv_rows` makes them or as read back from the CSV (the whole shipped table)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -732,20 +734,20 @@ def figure(rows, path):
     cheap = [m for m in MODELS if m != "coupled"]
     columns = math.ceil(len(cheap) / 2)
     fig, axes = plt.subplots(2, columns, figsize=(3.75 * columns, 7), sharex=True, sharey=True)
-    markers = {"kanai_tajimi": "o", "white": "s"}
+    markers = {"kanai_tajimi": "o", "white": "s", "clough_penzien": "^"}
     for ax, name in zip(axes.ravel(), cheap):
         ax.axhspan(1e-3, 1.0, color="0.9", zorder=0)
         ax.axhline(1.0, color="0.4", lw=0.8)
         for r in rows:
-            if r["model"] != name or r.get("error"):
+            if r["model"] != name or str(r.get("note", "")).startswith("refused"):
                 continue
-            x = r["indicators"]["theta_ul_over_slenderness"]
-            y = max(float(np.nanmax(np.abs(r["diff"]) / r["tol"])), 1e-2)
-            if r["var_ratio"] is not None:
-                y = max(y, abs(r["var_ratio"] - 1.0) / r["var_tol"])
-            ok = r["passed"]
-            ax.scatter([x], [min(y, 300)], marker=markers[r["case"]["excitation"]],
-                       s=36 if r["case"]["level"] == "strong" else 20, facecolors="tab:blue" if ok else "none",
+            x = float(r["theta_ul_over_slenderness"])
+            y = max(max(abs(float(r[f"diff_{q}"])) / float(r[f"tol_{q}"]) for q in PROBABILITIES), 1e-2)
+            if r.get("var_ratio") not in (None, ""):
+                y = max(y, abs(float(r["var_ratio"]) - 1.0) / float(r.get("tol_var_ratio") or VAR_TOL))
+            ok = r["passed"] in (True, "True")
+            ax.scatter([x], [min(y, 300)], marker=markers[r["excitation"]],
+                       s=36 if r["level"] == "strong" else 20, facecolors="tab:blue" if ok else "none",
                        edgecolors="tab:blue" if ok else "tab:red", zorder=3)
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -756,7 +758,8 @@ def figure(rows, path):
     for ax in axes[:, 0]:
         ax.set_ylabel("worst |diff| / tolerance")
     fig.suptitle("Cheap models against coupled Monte Carlo (same ground motions): filled = within tolerance "
-                 "(shaded), open red = fails; o Kanai-Tajimi, s white noise; large = strong level", fontsize=10)
+                 "(shaded), open red = fails;\no Kanai-Tajimi, s white noise, ^ Clough-Penzien; large = strong level",
+                 fontsize=10)
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
@@ -861,8 +864,8 @@ def main():
     if args.csv:
         write_csv(rows, args.csv, "NUMBA_NUM_THREADS=1 PYTHONPATH=. python benchmarks/stiff_bed_validity.py "
                   f"--samples {args.samples} --seed {args.seed} --work {args.work}")
-    if args.figure:
-        figure(rows, args.figure)
+    if args.figure:                              # the whole table when it was just written, else this run's rows
+        figure(_shipped_rows(args.csv)[1] if args.csv else csv_rows(rows), args.figure)
 
 
 def _compile():
