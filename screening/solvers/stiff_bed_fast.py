@@ -155,6 +155,7 @@ class FastStiffBedModel(StiffBedModel):
 
     flag_code = 3
     name = "stiff_bed_fast"
+    run_integrator = "exact_contact"
     description = ("the stiff-bed model with closed-form full contact, located phase changes and dense output "
                    "(docs/stiff_bed.md, 'Exact-contact sampler')")
 
