@@ -223,6 +223,11 @@ def test_the_exact_contact_sampler_is_charged_its_own_constants():
         assert got == pytest.approx(expected, rel=1e-12)
         assert got < estimated_cost(steps, sb, grid, samples=samples, full_contact=f)     # cheaper than the reference
     assert c["exact"] < c["adaptive"]
+    # before any run: a second of record and sample at the costliest fitted run's rate, below the reference's prior
+    from screening.analysis.escalation import FAST_PRIOR_S_PER_S, prior_cost
+    assert prior_cost(64, 20.0, sb, exact=True) == pytest.approx(64 * 20.0 * FAST_PRIOR_S_PER_S, rel=1e-12)
+    assert prior_cost(64, 20.0, sb, exact=True) < prior_cost(64, 20.0, sb)
+    assert prior_cost(64, 20.0, EscalationModel.coupled, exact=True) == prior_cost(64, 20.0, EscalationModel.coupled)
 
 def test_full_contact_share_is_the_mean_occupancy_out_of_the_used_samples():
     from screening.analysis.escalation import full_contact_share
