@@ -14,8 +14,6 @@ Every dataset follows the package's contract:
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import xarray as xr
 
