@@ -324,8 +324,10 @@ def calibration_table(n, ratios):
 STIFF_SCALES = (0.003, 0.03, 0.1, 0.3, 1.0, 3.0)
 
 
-def stiff_bed_cost_table(n_samples):
-    """The stiff-bed model's cost model against measured CPU over intensity (module docstring)."""
+def stiff_bed_cost_table(n_samples, sampler="stiff_bed"):
+    """The stiff-bed model's cost model against measured CPU over intensity (module docstring), for the
+    reference kernel (``sampler="stiff_bed"``) or the exact-contact sampler (``"stiff_bed_fast"``: the
+    constants ``FAST_*``, and the grid term fitted too, its synthesis being the batched real FFT)."""
     import warnings
 
     from bench_stiff_bed_cost import beds
@@ -333,10 +335,12 @@ def stiff_bed_cost_table(n_samples):
     from screening.solvers import stiff_bed
 
     rows = []
-    print(f"\n== stiff-bed cost model: {n_samples} samples x {T_END:g} s per run (and {max(n_samples // 8, 1)} "
+    fast = sampler == "stiff_bed_fast"
+    print(f"\n== stiff-bed cost model ({sampler}): {n_samples} samples x {T_END:g} s per run (and {max(n_samples // 8, 1)} "
           f"at two intensities), output dt 0.05 s, seed {SEED[0]}, median CPU of {REPEAT[0]}; STIFF_BED_EXACT_COST_S "
           f"{esc.STIFF_BED_EXACT_COST_S:g} s, STIFF_BED_ADAPTIVE_COST_S {esc.STIFF_BED_ADAPTIVE_COST_S:g} s, "
-          f"STIFF_BED_RUN_COST_S {esc.STIFF_BED_RUN_COST_S:g} s, grid term of the coupled model")
+          f"STIFF_BED_RUN_COST_S {esc.STIFF_BED_RUN_COST_S:g} s, grid term of the coupled model; exact-contact "
+          f"sampler: {esc.FAST_COSTS_S}")
     print("| bed | S0 [m2/s3] | samples | steps/sample | grid intervals/sample | full-contact share | overturned "
           "| measured ms/sample | predicted ms/sample | measured / predicted | single cost: measured / predicted |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -345,37 +349,44 @@ def stiff_bed_cost_table(n_samples):
         t0 = time.perf_counter()
         _, block, bed, s0 = beds()[0]
         monte_carlo(block, bed, KanaiTajimi(S0=s0, omega_g=15.6, zeta_g=0.6, envelope=ENVELOPE), n_samples=2,
-                    t_end=0.2, model="stiff_bed", progress=False)
+                    t_end=0.2, model=sampler, progress=False)
         print(f"numba threads {numba.get_num_threads()}; JIT warm-up {time.perf_counter() - t0:.1f} s")
         for label, block, bed, s0 in beds():
             stiff_bed.transfer_table(block, bed)           # once per bed, as a worker's cache does
             for scale, n in [(s, n_samples) for s in STIFF_SCALES] + [(STIFF_SCALES[0], max(n_samples // 8, 1)),
                                                                          (STIFF_SCALES[-2], max(n_samples // 8, 1))]:
                 motion = KanaiTajimi(S0=s0 * scale, omega_g=15.6, zeta_g=0.6, envelope=ENVELOPE)
-                ds, cpu = timed(block, bed, motion, n, model="stiff_bed", dt=0.05)
+                ds, cpu = timed(block, bed, motion, n, model=sampler, dt=0.05)
                 steps, grid = float(ds["n_steps"].sum()), float(n * int(ds.attrs["input_grid_points"]))
                 n_used = n - int(ds["n_overturned"]) - int(ds["n_diverged"])
                 share = esc.full_contact_share(ds["p_uplift"].values, n_used, n)
                 code = int(EscalationModel.stiff_bed)
-                pred = esc.estimated_cost(steps, code, grid, False, n, full_contact=share)
+                pred = esc.estimated_cost(steps, code, grid, False, n, full_contact=share, exact=fast)
                 single = esc.estimated_cost(steps, code, grid, False, n)
-                rows.append(dict(steps=steps, grid=grid, share=share, cpu=cpu, n=n,
+                rows.append(dict(steps=steps, grid=grid, share=share, cpu=cpu, n=n, runs=1.0,
                                  synth=grid * esc.grid_point_cost(grid / n)))
                 print(f"| {label} | {s0 * scale:.3g} | {n} | {steps / n:,.0f} | {grid / n - 1:,.0f} | {share:.3f} "
                       f"| {int(ds['n_overturned'])} | {1e3 * cpu / n:.2f} | {1e3 * pred / n:.2f} | {cpu / pred:.2f} "
                       f"| {cpu / single:.2f} |", flush=True)
     ratio = np.array([r["cpu"] for r in rows]) / np.array(
         [esc.estimated_cost(r["steps"], int(EscalationModel.stiff_bed), r["grid"], False, r["n"],
-                            full_contact=r["share"]) for r in rows])
+                            full_contact=r["share"], exact=fast) for r in rows])
     print(f"measured / predicted: {ratio.min():.2f} .. {ratio.max():.2f} over {ratio.size} runs "
           f"({np.sum(np.abs(ratio - 1) <= 0.25)} within +-25 %)")
     exact = np.array([min(r["share"] * (r["grid"] - r["n"]), r["steps"]) for r in rows])
-    x = np.c_[exact, np.array([r["steps"] for r in rows]) - exact, np.ones(len(rows))]
-    y = np.array([r["cpu"] - r["synth"] for r in rows])
     cpu = np.array([r["cpu"] for r in rows])
+    cols = [exact, np.array([r["steps"] for r in rows]) - exact, np.ones(len(rows))]
+    if fast:                                  # its own synthesis: the grid term is fitted too
+        cols.append(np.array([r["grid"] for r in rows]))
+        y = cpu
+    else:
+        y = cpu - np.array([r["synth"] for r in rows])
+    x = np.c_[tuple(cols)]
     coef, *_ = np.linalg.lstsq(x / cpu[:, None], y / cpu, rcond=None)
-    print(f"relative least-squares fit (grid term fixed): exact interval {coef[0]:.3g} s, adaptive step "
-          f"{coef[1]:.3g} s, run {coef[2]:.3g} s")
+    print(f"relative least-squares fit{'' if fast else ' (grid term fixed)'}: exact interval {coef[0]:.3g} s, "
+          f"adaptive step {coef[1]:.3g} s, run {coef[2]:.3g} s" + (f", grid point {coef[3]:.3g} s" if fast else ""))
+    fitted = x @ coef
+    print(f"with the fit: measured / predicted {np.min(cpu / fitted):.2f} .. {np.max(cpu / fitted):.2f}")
 
 
 def main():
@@ -385,13 +396,15 @@ def main():
     ap.add_argument("--cost-only", action="store_true", help="only the calibration beds of the cost model")
     ap.add_argument("--stiff-bed", action="store_true", help="only the stiff-bed model's cost model over intensity")
     ap.add_argument("--repeat", type=int, default=3, help="identical runs per timing (the median is taken)")
+    ap.add_argument("--sampler", default="stiff_bed", choices=("stiff_bed", "stiff_bed_fast"),
+                    help="with --stiff-bed: the reference kernel or the exact-contact sampler")
     args = ap.parse_args()
     SEED[0] = args.seed
     REPEAT[0] = args.repeat
     import numba
 
     if args.stiff_bed:
-        stiff_bed_cost_table(args.samples)
+        stiff_bed_cost_table(args.samples, args.sampler)
         return
     t0 = time.perf_counter()
     for integrator in ("dopri", "rodas"):

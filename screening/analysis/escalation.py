@@ -92,6 +92,16 @@ STIFF_BED_ADAPTIVE_COST_S = 0.59e-6
 #: Cost model of the stiff-bed model: CPU seconds per run, whatever its samples (the input plan, the
 #: full-contact propagator's five matrix exponentials, the dataset): as much as 30 samples in full contact.
 STIFF_BED_RUN_COST_S = 0.047
+#: Cost model of the stiff-bed model's exact-contact sampler (``model="stiff_bed_fast"``, what ``"auto"`` runs;
+#: ``estimated_cost(..., exact=True)``): CPU seconds per full-contact interval, per adaptive step, per run and
+#: per synthesis grid point (its own batched real FFT), fitted as the reference's constants are, by
+#: ``benchmarks/bench_stiff_mcs.py --stiff-bed --sampler stiff_bed_fast`` (figures in
+#: docs/montecarlo_numerics.md, "Cost model of the stiff-bed model").
+FAST_COSTS_S = {"exact": 17.7e-9, "adaptive": 0.234e-6, "run": 2.8e-3, "grid": 11e-9}
+#: Cost model: CPU seconds per second of record and sample of the exact-contact sampler before any run at a point
+#: (:func:`prior_cost`): the costliest of the 32 fitted runs (2.2 ms a 20 s sample, the statue on k = 1e11 near
+#: half uplift); its cheapest was 0.35 ms.
+FAST_PRIOR_S_PER_S = 1.1e-4
 #: Cost model: estimated CPU seconds per point of one sample's synthesis grid (FFT, modulation and
 #: rate of the input) for a grid of :data:`GRID_REFERENCE_POINTS` points per sample.  The input is
 #: band-limited at three times the larger of the rocking and vertical frequencies, so on a stiff bed
@@ -625,7 +635,8 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     full_contact : float, optional
         Stiff-bed model only: :func:`full_contact_share` of the run [1] (None or NaN: not known).
     exact : bool, default False
-        Coupled model only: the run took exact steps through quiet full contact (``integrator="exact"``).
+        The run took exact steps through full contact: the coupled model's ``integrator="exact"``, the
+        stiff-bed model's exact-contact sampler (:data:`FAST_COSTS_S`).
 
     Returns
     -------
@@ -658,6 +669,10 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     if model == EscalationModel.stiff_bed and full_contact is not None and np.isfinite(full_contact):
         f = min(max(float(full_contact), 0.0), 1.0)
         intervals = min(f * max(grid - max(int(samples), 1), 0.0), float(steps))
+        if exact:
+            c = FAST_COSTS_S
+            return (intervals * c["exact"] + (float(steps) - intervals) * c["adaptive"] + c["run"]
+                    + grid * c["grid"])
         return (intervals * STIFF_BED_EXACT_COST_S + (float(steps) - intervals) * STIFF_BED_ADAPTIVE_COST_S
                 + STIFF_BED_RUN_COST_S + grid * per_point)
     per_step = STEP_COST_S[model] * (RODAS_STEP_FACTOR if rodas else 1.0)
@@ -666,7 +681,7 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     return float(steps) * per_step + grid * per_point
 
 
-def prior_cost(samples, t_end, model):
+def prior_cost(samples, t_end, model, exact=False):
     """Estimated CPU time of a run before any run at the point.
 
     Parameters
@@ -677,6 +692,9 @@ def prior_cost(samples, t_end, model):
         Record length [s].
     model : int
         :class:`~screening.core.status.EscalationModel` code.
+    exact : bool, default False
+        As in :func:`estimated_cost`: the stiff-bed model's exact-contact sampler costs ``samples t_end
+        FAST_PRIOR_S_PER_S``.
 
     Returns
     -------
@@ -688,6 +706,8 @@ def prior_cost(samples, t_end, model):
     .. [1] ``docs/accuracy_in_sweeps.md``, "Best estimates in a sweep: how often they hold", section "Cost
        model of the escalation" (this package's documentation).
     """
+    if exact and mc_registry.escalation_models()(int(model)) == EscalationModel.stiff_bed:
+        return float(samples) * float(t_end) * FAST_PRIOR_S_PER_S
     return estimated_cost(samples * t_end * PRIOR_STEPS_PER_S, model)
 
 

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from screening.analysis.fragility import exceedance_probability, spot_positions
+from screening.analysis.fragility import spot_positions
 from screening.analysis.trust import P_EDGES
 from screening.core.status import (AnswerQuantity, BestMethod, PointStatus, probability_sources, ProbabilitySource,
                                    SampleState, Trust)
 from screening.solvers import mc_registry
-from screening.solvers.estimates import binomial_estimate, sample_probabilities, Z
+from screening.solvers.estimates import binomial_estimate, sample_probabilities
 
 __all__ = []
 

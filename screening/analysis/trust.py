@@ -23,7 +23,7 @@ import xarray as xr
 
 from screening.analysis import error_model as em
 from screening.analysis.error_model import shipped_model
-from screening.analysis.indicators import ENVELOPE_FLOOR, envelope_fraction, indicators_from_dataset, trust_indicators
+from screening.analysis.indicators import envelope_fraction, indicators_from_dataset, trust_indicators
 from screening.core.status import PointStatus, Trust
 from screening.solvers import schema
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from screening.analysis.fragility import fit_binomial_fragility, fit_lognormal_fragility
+from screening.analysis.fragility import fit_binomial_fragility
 from screening.analysis.intensity import PERIOD_MEASURES, record_measures, RECORD_MEASURES
 from screening.applications.records_study import block_and_foundation, load_record_study
 from screening.core import limits

@@ -39,7 +39,7 @@ import numpy as np
 from screening._version import __version__
 from screening.core.atomicfile import publish as _publish
 from screening.cli._common import Choice, not_with, result_stem, say, temporary_for, usage_message, write_error
-from screening.cli.base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandError, MAX_WORKERS, POSITIVE_INT,
+from screening.cli.base import (EXIT_OK, EXIT_USAGE, EXIT_INTERRUPTED, CommandError, POSITIVE_INT,
                                 WORKER_COUNT, POSITIVE_FLOAT, ZLIB_LEVEL, cli, announce_compilation, stamp_fragility,
                                 lognormal_fit_text, write_file_set, fragility_figures, fit_files,
                                 write_fragility_files, DISPERSION, fragility_outputs, refuse_collisions)

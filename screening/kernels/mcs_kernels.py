@@ -33,7 +33,7 @@ from numba import types
 from screening.kernels import dopri
 from screening.kernels import rodas as _ro
 from screening.core.signatures import function_type, record_type, sdof_coefficients_signature
-from screening.kernels.mcs_equations import (GRAVITY_RATIO_MIN, INTEGRATOR_DOPRI, INTEGRATOR_EXACT, INTEGRATOR_RODAS,
+from screening.kernels.mcs_equations import (INTEGRATOR_EXACT, INTEGRATOR_RODAS,
                                              INTEGRATORS, MODEL, MODEL_CONDENSED, MODEL_COUPLED, NO_PROPAGATOR,
                                              condensed_acceleration, coupled_accelerations,
                                              coupled_accelerations_trig, full_contact_propagator,

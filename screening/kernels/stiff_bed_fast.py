@@ -427,8 +427,26 @@ def _input(acc, acc_dot, row, dt, n_grid, t):
 @numba.njit(cache=True)
 def _locate(osc, x0, v0, p0, p1, p2, p3, lo, hi, f_hi, target):
     """Time ``sigma`` in ``(lo, hi]`` where the closed-form rotation from ``(x0, v0)`` reaches ``target``
-    (``x(lo) - target`` and ``f_hi`` of opposite signs), and the state there: Newton in the bracket."""
+    (``f_hi = x(hi) - target``), and the state there: Newton in the bracket.
+
+    A piece that starts on ``target`` (a re-entry at ``theta_ul``) and dips to the other side before crossing
+    back has no bracket at ``lo``: the bracket's low end moves to the first of ``lo + (hi - lo) 2^-j``
+    (``j = 1, 2, ...``) on the other side, so the root found is the return, never the start (a root at ``lo``
+    would hand the same state back and forth with the uplift steps, a stall).  If the rotation shows no such
+    point (a dip below rounding), the piece ends at ``hi`` with its state there."""
     f_lo = oscillator_step(osc[0], osc[1], osc[2], x0, v0, p0, p1, p2, p3, lo)[0] - target
+    if f_lo == 0.0 or (f_lo > 0.0) == (f_hi > 0.0):
+        width = hi - lo
+        found = False
+        for j in range(1, 60):
+            s = lo + width * 0.5 ** j
+            f = oscillator_step(osc[0], osc[1], osc[2], x0, v0, p0, p1, p2, p3, s)[0] - target
+            if f != 0.0 and (f > 0.0) != (f_hi > 0.0):
+                lo, f_lo, found = s, f, True
+                break
+        if not found:
+            x, v = oscillator_step(osc[0], osc[1], osc[2], x0, v0, p0, p1, p2, p3, hi)
+            return hi, x, v
     s = lo + (hi - lo) * f_lo / (f_lo - f_hi) if f_lo != f_hi else 0.5 * (lo + hi)
     x = target
     v = 0.0

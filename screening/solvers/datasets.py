@@ -14,8 +14,6 @@ Every dataset follows the package's contract:
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import xarray as xr
 
@@ -77,6 +75,8 @@ INTEGRATOR_TEXT = {
     "rodas": "adaptive Rosenbrock RODAS 4(3) (linearly implicit, L-stable), steps land on output times",
     "exact": "adaptive Dormand-Prince 5(4), exact (ETD2) steps over the input grid in quiet full contact, steps "
              "land on output times",
+    "exact_contact": "closed form in full contact (the linear oscillator's exponential, cubic Hermite input), "
+                     "adaptive Dormand-Prince 5(4) in uplift, outputs read from the steps' interpolants",
 }
 
 

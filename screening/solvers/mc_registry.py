@@ -111,6 +111,9 @@ class MonteCarloModel(NamedModel, abc.ABC):
     escalation_code: int | None = None
     #: CPU seconds per integration step of one sample, the escalation's cost model (``analysis.escalation``)
     step_cost_s: float = 0.4e-6
+    #: the integration it always runs, a key of :data:`screening.solvers.datasets.INTEGRATOR_TEXT` (None: the
+    #: run's ``integrator`` numerics choose)
+    run_integrator: str | None = None
     #: the :class:`~screening.core.status.BestMethod` of a best estimate it gives under ``[accuracy]``
     best_method: int = BestMethod.coupled_monte_carlo
 

@@ -465,6 +465,7 @@ def sample_setup(block, foundation, excitation, n_samples, model="coupled", t_en
             and getattr(excitation, "band_limit_hz", None) is not None
             and vertical_frequency(block, foundation) * read_plan.dt >= EXACT_CONTACT_MIN):
         opts["integrator"] = "exact"
+    opts["integrator"] = mc.run_integrator or opts["integrator"]
     grid = read_plan.times
     q = np.ascontiguousarray(excitation.envelope(grid), dtype=float)
     q_dot = np.ascontiguousarray(envelope_rate(excitation.envelope, grid), dtype=float)

@@ -81,9 +81,9 @@ from screening.core.excitations.base import GROUND_BAND_LIMIT_HZ, ground_cutoff
 from screening.core.model import Block, Foundation
 from screening.core.status import BestMethod, EscalationModel
 from screening.kernels import mcs_kernels as kern
-from screening.kernels.stiff_bed_contact import (gravity_ratio, housner_restitution, indentation_curvature,
+from screening.kernels.stiff_bed_contact import (housner_restitution, indentation_curvature,
                                                  indentation_curvature_jit, potential, rocking_acceleration,
-                                                 rocking_acceleration_jit, rocking_coefficients, STIFF, stiff_record)
+                                                 rocking_acceleration_jit, rocking_coefficients, stiff_record)
 from screening.kernels.stiff_bed_kernels import integrate_chunk, integrate_sample, linear_propagator, transfer_ratio_jit
 from screening.solvers.mc_registry import ChunkIntegrator, get as get_model, MonteCarloModel, register
 from screening.solvers.model_choice import RULE_FILE, rule_of, vouches

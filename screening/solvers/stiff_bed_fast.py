@@ -14,13 +14,12 @@ import math
 import numpy as np
 from scipy import fft as sfft
 
-from screening.core.condensation import cubic
 from screening.kernels import stiff_bed_fast as fast
 from screening.kernels import mcs_kernels as kern
 from screening.solvers.mc_registry import register
 from screening.solvers.stiff_bed import StiffBedModel, StiffIntegrator, check_standing
 from screening.kernels.stiff_bed_kernels import COUNT_ROWS
-from screening.solvers.synthesis import (check_band, envelope_rate, OVERSAMPLING, rocking_frequency, sample_phases,
+from screening.solvers.synthesis import (check_band, envelope_rate, OVERSAMPLING, sample_phases,
                                          spectral_plan, synthesis_cutoff, validate_seed)
 from screening.solvers.timegrid import output_times
 
@@ -155,6 +154,7 @@ class FastStiffBedModel(StiffBedModel):
 
     flag_code = 3
     name = "stiff_bed_fast"
+    run_integrator = "exact_contact"
     description = ("the stiff-bed model with closed-form full contact, located phase changes and dense output "
                    "(docs/stiff_bed.md, 'Exact-contact sampler')")
 

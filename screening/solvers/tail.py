@@ -196,7 +196,7 @@ def subset_simulation(response, dim, thresholds, n_per_level=1000, p0=0.1, seed=
         calls["missing"] += int(np.isnan(out).sum())
         return out
 
-    n_seeds, chain = int(round(p0 * n)), int(round(1.0 / p0))
+    n_seeds = int(round(p0 * n))
     p, cov = np.full(targets.size, np.nan), np.full(targets.size, np.nan)
     open_ = np.ones(targets.size, dtype=bool)
     levels, level_p, level_gamma, delta2, prob = [], [], [], 0.0, 1.0

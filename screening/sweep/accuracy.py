@@ -468,8 +468,9 @@ def _escalation_runs(stage, order, models, first, levels, answers):
             results[j], phase[j] = part, int(part["phase"])
 
     # -- before any Monte Carlo: what the transition points' pilots cost, on the workers there are
-    pilot_prior = {j: esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j]) * (2 if partner(j) else 1)
-                   for j in range(len(order))}
+    pilot_prior = {j: esc.prior_cost(esc.PILOT_SAMPLES, study.t_end, models[j],
+                                     exact=mc_registry.get(runs_model(j)).run_integrator == "exact_contact")
+                   * (2 if partner(j) else 1) for j in range(len(order))}
     pilots_s = sum(pilot_prior[j] for j in range(len(order)) if first[j] and j not in results)
     every_s = sum(pilot_prior[j] for j in range(len(order)) if j not in results)
     stage.log(plan_line(acc.budget_s, len(order), int(np.sum(first)),

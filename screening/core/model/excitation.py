@@ -11,7 +11,7 @@ Method and how it is checked: ``docs/method.md#excitation``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 

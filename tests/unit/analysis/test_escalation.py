@@ -207,6 +207,28 @@ def test_stiff_bed_cost_splits_exact_intervals_from_adaptive_steps_as_documented
     assert estimated_cost(1000, sb) == pytest.approx(1000 * STEP_COST_S[sb], rel=1e-12)
 
 
+def test_the_exact_contact_sampler_is_charged_its_own_constants():
+    """``exact=True`` on the stiff-bed model (the exact-contact sampler, what ``auto`` runs): the same split of
+    exact intervals and adaptive steps, at FAST_COSTS_S, with its own grid term (measured / predicted on 32 runs of
+    benchmarks/bench_stiff_mcs.py --stiff-bed --sampler stiff_bed_fast: 0.89-1.17)."""
+    from screening.analysis.escalation import FAST_COSTS_S as c
+
+    sb = EscalationModel.stiff_bed
+    samples, points = 64, 11_249
+    grid, intervals = samples * points, samples * (points - 1)
+    for f, steps in ((1.0, 745_000), (0.1, 360_000), (0.0, 150_000)):
+        exact = min(f * intervals, steps)
+        expected = exact * c["exact"] + (steps - exact) * c["adaptive"] + c["run"] + grid * c["grid"]
+        got = estimated_cost(steps, sb, grid, samples=samples, full_contact=f, exact=True)
+        assert got == pytest.approx(expected, rel=1e-12)
+        assert got < estimated_cost(steps, sb, grid, samples=samples, full_contact=f)     # cheaper than the reference
+    assert c["exact"] < c["adaptive"]
+    # before any run: a second of record and sample at the costliest fitted run's rate, below the reference's prior
+    from screening.analysis.escalation import FAST_PRIOR_S_PER_S, prior_cost
+    assert prior_cost(64, 20.0, sb, exact=True) == pytest.approx(64 * 20.0 * FAST_PRIOR_S_PER_S, rel=1e-12)
+    assert prior_cost(64, 20.0, sb, exact=True) < prior_cost(64, 20.0, sb)
+    assert prior_cost(64, 20.0, EscalationModel.coupled, exact=True) == prior_cost(64, 20.0, EscalationModel.coupled)
+
 def test_full_contact_share_is_the_mean_occupancy_out_of_the_used_samples():
     from screening.analysis.escalation import full_contact_share
 

@@ -233,3 +233,35 @@ def test_paired_statistics_against_the_reference(transfer):
         d = ind[0].astype(float) - ind[1]
         se = max(d.std(ddof=1) / math.sqrt(d.size), 1.0 / d.size)
         assert abs(d.mean()) <= 2.5 * se
+
+
+def test_exit_from_a_piece_that_starts_on_theta_ul_is_the_return():
+    """A piece that starts on -theta_ul moving inward, pulled out again by the ground (equilibrium at -2 theta_ul):
+    the exit located is the return (solve_ivp's event, DOP853 at rtol 1e-12, within 1e-6 of it), never the start,
+    where the bracket's low end lies (the stall of a sample that used its whole step budget)."""
+    omega2, c, g, tu = 7.885e5, 12.2, 0.8176, 9.4176e-7
+    p0 = -2.0 * tu * omega2 / g
+    x0, v0, hi = -tu, 9.8e-5, 5.2e-4
+    osc = np.array([omega2, c, g, math.sqrt(omega2)])
+    x_hi = fast.oscillator_step(omega2, c, g, x0, v0, p0, 0.0, 0.0, 0.0, hi)[0]
+    assert x_hi < -tu                                  # the piece ends outside: an exit to locate
+    s, x, _ = fast._locate(osc, x0, v0, p0, 0.0, 0.0, 0.0, 0.0, hi, x_hi + tu, -tu)
+
+    def leaves(_, y):
+        return y[0] + tu
+    leaves.direction = -1.0
+    ref = solve_ivp(lambda _, y: [y[1], g * p0 - c * y[1] - omega2 * y[0]], (1e-9, hi),
+                    fast.oscillator_step(omega2, c, g, x0, v0, p0, 0.0, 0.0, 0.0, 1e-9), events=leaves,
+                    rtol=1e-12, atol=1e-20, method="DOP853").t_events[0]
+    assert ref.size == 1 and ref[0] > 1e-5
+    assert s == pytest.approx(ref[0], rel=1e-6) and x == -tu
+
+
+def test_a_sample_grazing_theta_ul_does_not_stall():
+    """Sample 9 of seed 1, the statue on k = 1e11 at rtol 1e-6, re-enters full contact on theta_ul with the ground
+    pulling it out again: it used its whole budget of 5 million steps at one instant; it finishes now, within 10x
+    the median sample's steps (about 13,000)."""
+    bed = Foundation(k=1e11, lam=float(lam_from_vertical_damping(1e11, STATUE.m, STATUE.b, 0.05)))
+    out = sf.sample(STATUE, bed, KanaiTajimi(0.015, 15.6, 0.6), 1, cutoff_hz=25.0, seed=1, rtol=1e-6, first=9)
+    assert out["status"][0] == 0
+    assert out["n_steps"][0] < 130_000

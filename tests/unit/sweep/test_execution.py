@@ -118,6 +118,22 @@ def test_the_spot_arrays_say_which_steps_the_run_took_and_the_cost_model_charges
     assert charged == pytest.approx(factor * plain, rel=1e-12)
 
 
+def test_the_exact_contact_sampler_says_so_and_is_charged_as_exact():
+    """A run of the stiff-bed model's exact-contact sampler records that integration (not the explicit pair's text,
+    whose steps land on the outputs), and its spot arrays carry ``exact`` for the cost model."""
+    import screening
+    from screening.analysis.beds import lam_from_vertical_damping
+    from screening.core.excitations.kanai_tajimi import KanaiTajimi
+    from screening.core.model import Block, Foundation
+
+    statue = Block(m=1200.0, b=0.25, h=0.9)
+    bed = Foundation(k=1e10, lam=float(lam_from_vertical_damping(1e10, statue.m, statue.b, 0.05)))
+    ds = screening.monte_carlo(statue, bed, KanaiTajimi(0.015, 15.6, 0.6), n_samples=2, t_end=1.0,
+                               model="stiff_bed_fast", progress=False)
+    assert ds.attrs["integrator"] == INTEGRATOR_TEXT["exact_contact"]
+    out = execution.spot_arrays(ds)
+    assert bool(out["exact"]) and not bool(out["rodas"])
+
 def test_a_gaussian_probability_that_underflows_gets_a_standard_error_that_reaches_the_trust_limit():
     """A trusted point far below toppling: the up-crossing probability underflows to 0 at both ends of the trust
     band, which made its standard error 0 (certainty).  The trust rule vouches for points whose calibration Monte
