@@ -35,7 +35,8 @@ model keeps those two and drops the vertical dynamics:
   order in ``theta``.  Near rest ``m_eff = I_cm + m h^2``, the condensed model's inertia.
 * **Transfer loss from the bed.**  Each time ``theta`` changes sign after the block has rocked
   (its amplitude ``A`` since the last sign change above ``theta_ul``), ``theta'`` is multiplied by
-  ``sqrt(eta(A))``.  ``eta(A)`` is computed once per bed (:func:`transfer_table`): the coupled model
+  ``sqrt(eta(A))`` (``transfer="bed"``; the default ``"impact"`` reads the same table at the amplitude whose
+  loss-free crossing rate is the rate at the crossing, :func:`impact_table`).  ``eta(A)`` is computed once per bed (:func:`transfer_table`): the coupled model
   rocks freely from rest at ``A`` through one transfer to the next extreme ``A_1``; with the
   potential ``V(theta) = int_0^theta Q`` its energy ratio is ``V(A_1) / V(A)``; this model, run the
   same way without transfer loss, keeps ``V(A_1') / V(A)`` (its own contact damping); ``eta`` is the
@@ -447,10 +448,11 @@ ROCKING_BAND_FACTOR = 1.5
 class StiffBedModel(MonteCarloModel):
     """The stiff-bed model (module docstring).
 
-    ``transfer``: ``"bed"`` (the bed-derived table, :func:`transfer_table`), ``"housner"``
-    (Housner's ``r^2`` per transfer), ``"none"`` (no transfer loss; used to build the table) or ``"impact"``
-    (the bed-derived table read at the impact: at the rate at the zero crossing, :func:`impact_table`, instead
-    of the half cycle's amplitude).
+    ``transfer``: ``"impact"`` (the default since 2026-11-29: the bed-derived table read at the impact, at the rate
+    at the zero crossing, :func:`impact_table`), ``"bed"`` (the same table read at the half cycle's amplitude,
+    :func:`transfer_table`: where the ground pumped energy in during the half cycle it keeps too much, and on the
+    bust on mortar overturned too often), ``"housner"`` (Housner's ``r^2`` per transfer) or ``"none"`` (no
+    transfer loss; used to build the table).  The measured validity of each: ``docs/stiff_bed_validity.md``.
     ``band``: the band of the Monte Carlo ground motions the model reads (the same samples as the
     other models, same seed and components, low-passed on a coarser grid): ``"rocking"`` (the default)
     ``max(ROCKING_BAND_FACTOR w_r, ground band)`` (``w_r`` the full-contact rocking frequency: in full
@@ -486,7 +488,7 @@ class StiffBedModel(MonteCarloModel):
     #: those at 5 ms do (4,000 paired samples: docs/stiff_bed.md, "Tolerance and cost").
     default_h_max = 0.01
 
-    def __init__(self, transfer="bed", band="rocking", locate=True):
+    def __init__(self, transfer="impact", band="rocking", locate=True):
         if transfer not in TRANSFER_LAWS:
             raise ValueError(f"parameter 'transfer' must be one of {TRANSFER_LAWS} (got {transfer!r})")
         if band not in BANDS:

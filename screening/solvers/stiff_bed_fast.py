@@ -158,7 +158,7 @@ class FastStiffBedModel(StiffBedModel):
     description = ("the stiff-bed model with closed-form full contact, located phase changes and dense output "
                    "(docs/stiff_bed.md, 'Exact-contact sampler')")
 
-    def __init__(self, transfer="bed", band="rocking"):
+    def __init__(self, transfer="impact", band="rocking"):
         super().__init__(transfer=transfer, band=band, locate=True)
 
     def integrator(self, block, foundation, condensation, max_flight_time, sample_integrator="dopri"):

@@ -79,7 +79,7 @@ def test_auto_picks_the_stiff_bed_model_only_inside_every_measured_interval():
     assert mc.choose(EQUIPMENT, Foundation(k=1e9, lam=1e10), "kanai_tajimi")[0] == "stiff_bed"
     name, why = mc.choose(EQUIPMENT, Foundation(k=1e9, lam=1e10), "white")     # failed under white noise
     assert name == "coupled" and "under white" in why
-    name, why = mc.choose(STATUE, Foundation(k=1e12, lam=2e12), "kanai_tajimi")   # stiffer than any bed measured
+    name, why = mc.choose(STATUE, Foundation(k=1e13, lam=2e13), "kanai_tajimi")   # stiffer than any bed measured
     assert name == "coupled" and "theta_ul_over_slenderness" in why
     name, why = mc.choose(STATUE, SOFT, "kanai_tajimi")               # theta_ul / alpha = 0.32
     assert name == "coupled" and "theta_ul_over_slenderness" in why
