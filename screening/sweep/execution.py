@@ -566,7 +566,8 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
     -------
     dict
         ``peak_var_theta`` [rad2], ``peak_var_theta_dot`` [rad2 s-2] and their standard errors,
-        ``cpu_time`` [s], ``samples``, ``n_steps``, ``n_grid``, ``rodas``, the sample counts, per-sample
+        ``cpu_time`` [s], ``samples``, ``n_steps``, ``n_grid``, ``rodas``, ``exact``, ``full_contact`` (the cost
+        model's, :func:`spot_arrays`), the sample counts, per-sample
         ``peak_abs_theta`` [rad] and ``sample_state``, ``estimator``, ``cheap_samples``, ``correlation``.
 
     Notes
@@ -591,7 +592,7 @@ def escalation_task(block, foundation, excitation, condensation, samples, model,
         run, extra = paired_escalation(block, foundation, excitation, condensation, samples, model, t_end, dt, seed,
                                        *cheap, progress=progress)
     out = {"cpu_time": np.float64(time.thread_time() - start), "samples": np.int32(samples),
-           "n_grid": run["n_grid"], "rodas": run["rodas"], "exact": run["exact"]}
+           "n_grid": run["n_grid"], "rodas": run["rodas"], "exact": run["exact"], "full_contact": run["full_contact"]}
     for name in ("var_theta", "var_theta_dot"):
         history, se = run[name], run[f"{name}_se"]
         at = int(np.nanargmax(history)) if np.any(np.isfinite(history)) else -1

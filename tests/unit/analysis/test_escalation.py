@@ -173,6 +173,24 @@ def test_cost_model_adds_the_synthesis_grid_and_escalation_runs_report_it():
     assert estimated_cost(1000, k, 0, rodas=True) == pytest.approx(1000 * STEP_COST_S[k] * RODAS_STEP_FACTOR)
 
 
+def test_an_escalated_stiff_bed_run_reports_what_its_cost_model_needs():
+    """The escalation task hands on the full-contact share and the exact-contact flag of its run (the accuracy
+    stage charged every stiff-bed run the single cost per step without them: 682 CPU s predicted for 106 measured
+    on the acceptance collection); with them the run is charged FAST_COSTS_S."""
+    from screening.analysis.beds import lam_from_vertical_damping
+    from screening.core.excitations.kanai_tajimi import KanaiTajimi
+    from screening.core.model import Block, Foundation
+    from screening.sweep.execution import escalation_task
+
+    statue = Block(m=1200.0, b=0.25, h=0.9)
+    bed = Foundation(k=1e10, lam=float(lam_from_vertical_damping(1e10, statue.m, statue.b, 0.05)))
+    out = escalation_task(statue, bed, KanaiTajimi(0.015, 15.6, 0.6), None, 4, "stiff_bed_fast", 2.0, 0.05, 0)
+    assert bool(out["exact"]) and 0.0 <= float(out["full_contact"]) <= 1.0
+    sb = EscalationModel.stiff_bed
+    charged = estimated_cost(out["n_steps"], sb, out["n_grid"], False, 4, full_contact=out["full_contact"],
+                             exact=True)
+    assert charged < estimated_cost(out["n_steps"], sb, out["n_grid"], False, 4, full_contact=out["full_contact"])
+
 def test_stiff_bed_cost_splits_exact_intervals_from_adaptive_steps_as_documented():
     from screening.analysis.escalation import (STIFF_BED_ADAPTIVE_COST_S, STIFF_BED_EXACT_COST_S,
                                                STIFF_BED_RUN_COST_S)
