@@ -734,7 +734,7 @@ def figure(rows, path):
 
     from screening.core.atomicfile import atomic_path
 
-    cheap = [m for m in MODELS if m != "coupled"]
+    cheap = [m for m in MODELS if m != "coupled" and any(r["model"] == m for r in rows)]
     columns = math.ceil(len(cheap) / 2)
     fig, axes = plt.subplots(2, columns, figsize=(3.75 * columns, 7), sharex=True, sharey=True)
     markers = {"kanai_tajimi": "o", "white": "s", "clough_penzien": "^"}
