@@ -81,9 +81,10 @@ def test_default_tolerance_keeps_the_statistics_of_a_tight_one():
     its first kernel (``locate=False``, rtol 1e-7), against
     the located kernel at rtol 1e-9.  The sample paths are sensitive at every tolerance (10-20 % of the
     samples change side of 0.1 atan(b/h) between any two tolerances), so the comparison is of the
-    statistics: each of P(|theta| > a atan(b/h)), a = 0.05, 0.1, 0.3, 0.5, and P(overturn) within 2.5
-    standard errors of the paired difference (at least 1/n), peak var_theta within 2.5 of its standard
-    errors (sqrt(2) x the reference's)."""
+    statistics: each of P(|theta| > a atan(b/h)), a = 0.05, 0.1, 0.3, 0.5, and P(overturn) within 3.0
+    standard errors of the paired difference (at least 1/n): 15 comparisons, Bonferroni at a family-wise 5 %
+    gives 2.94 (with the default transfer law "impact" one of them read 2.71 on these 200 samples, and 0.6 on
+    600 of seed 5); peak var_theta within 2.5 of its standard errors (sqrt(2) x the reference's)."""
     exc = screening.KanaiTajimi(0.015, 15.6, 0.6)
     kw = dict(n_samples=200, seed=3, progress=False, t_end=20.0)
     alpha = STATUE.slenderness
@@ -104,7 +105,7 @@ def test_default_tolerance_keeps_the_statistics_of_a_tight_one():
                         run(sb.StiffBedModel(locate=False), rtol=1e-7)):
         d = ind - ref
         paired = np.maximum(np.std(d, axis=1, ddof=1) / math.sqrt(n), 1.0 / n)
-        assert np.all(np.abs(d.mean(axis=1)) <= 2.5 * paired), (d.mean(axis=1), paired)
+        assert np.all(np.abs(d.mean(axis=1)) <= 3.0 * paired), (d.mean(axis=1), paired)
         assert abs(var - var_ref) <= 2.5 * math.sqrt(2.0) * var_se
 
 
