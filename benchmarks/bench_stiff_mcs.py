@@ -336,8 +336,9 @@ def stiff_bed_cost_table(n_samples, sampler="stiff_bed"):
 
     rows = []
     fast = sampler == "stiff_bed_fast"
-    print(f"\n== stiff-bed cost model ({sampler}): {n_samples} samples x {T_END:g} s per run (and {max(n_samples // 8, 1)} "
-          f"at two intensities), output dt 0.05 s, seed {SEED[0]}, median CPU of {REPEAT[0]}; STIFF_BED_EXACT_COST_S "
+    print(f"\n== stiff-bed cost model ({sampler}): {n_samples} samples x {T_END:g} s per run "
+          f"(and {max(n_samples // 8, 1)} at two intensities), output dt 0.05 s, seed {SEED[0]}, "
+          f"median CPU of {REPEAT[0]}; STIFF_BED_EXACT_COST_S "
           f"{esc.STIFF_BED_EXACT_COST_S:g} s, STIFF_BED_ADAPTIVE_COST_S {esc.STIFF_BED_ADAPTIVE_COST_S:g} s, "
           f"STIFF_BED_RUN_COST_S {esc.STIFF_BED_RUN_COST_S:g} s, grid term of the coupled model; exact-contact "
           f"sampler: {esc.FAST_COSTS_S}")

@@ -860,7 +860,8 @@ def main():
     print(cost_table(rows))
     print()
     print(markdown(rows))
-    for name in ("stiff_bed", "stiff_bed bed", "stiff_bed housner", *[m for m in MODELS if m.startswith(("condensed", "lin"))]):
+    for name in ("stiff_bed", "stiff_bed bed", "stiff_bed housner",
+                 *[m for m in MODELS if m.startswith(("condensed", "lin"))]):
         print(f"{name}: passes throughout theta_ul/alpha in {passing_bounds(rows, name, 'theta_ul_over_slenderness')}")
     for line in rule_check(rows):
         print(line)

@@ -669,12 +669,10 @@ def estimated_cost(steps, model, grid_points=0, rodas=False, samples=1, full_con
     if model == EscalationModel.stiff_bed and full_contact is not None and np.isfinite(full_contact):
         f = min(max(float(full_contact), 0.0), 1.0)
         intervals = min(f * max(grid - max(int(samples), 1), 0.0), float(steps))
-        if exact:
-            c = FAST_COSTS_S
-            return (intervals * c["exact"] + (float(steps) - intervals) * c["adaptive"] + c["run"]
-                    + grid * c["grid"])
-        return (intervals * STIFF_BED_EXACT_COST_S + (float(steps) - intervals) * STIFF_BED_ADAPTIVE_COST_S
-                + STIFF_BED_RUN_COST_S + grid * per_point)
+        c = FAST_COSTS_S if exact else {"exact": STIFF_BED_EXACT_COST_S, "adaptive": STIFF_BED_ADAPTIVE_COST_S,
+                                        "run": STIFF_BED_RUN_COST_S, "grid": per_point}
+        return (intervals * c["exact"] + (float(steps) - intervals) * c["adaptive"] + c["run"]
+                + grid * c["grid"])
     per_step = STEP_COST_S[model] * (RODAS_STEP_FACTOR if rodas else 1.0)
     if exact and model == EscalationModel.coupled:
         per_step *= EXACT_RUN_FACTOR

@@ -41,7 +41,8 @@ import numpy as np
 import xarray as xr
 
 from screening.core import condensation as condensations
-from screening.core.physics.contact import (REGIME_FULL_CONTACT, REGIME_UPLIFT_NEGATIVE, REGIME_UPLIFT_POSITIVE, contact_regime)
+from screening.core.physics.contact import (REGIME_FULL_CONTACT, REGIME_UPLIFT_NEGATIVE, REGIME_UPLIFT_POSITIVE,
+                                            contact_regime)
 from screening.core.records import Record
 from screening.solvers import mc_registry
 from screening.kernels import mcs_kernels as kern

@@ -36,11 +36,11 @@ model keeps those two and drops the vertical dynamics:
 * **Transfer loss from the bed.**  Each time ``theta`` changes sign after the block has rocked
   (its amplitude ``A`` since the last sign change above ``theta_ul``), ``theta'`` is multiplied by
   ``sqrt(eta(A))`` (``transfer="bed"``; the default ``"impact"`` reads the same table at the amplitude whose
-  loss-free crossing rate is the rate at the crossing, :func:`impact_table`).  ``eta(A)`` is computed once per bed (:func:`transfer_table`): the coupled model
-  rocks freely from rest at ``A`` through one transfer to the next extreme ``A_1``; with the
-  potential ``V(theta) = int_0^theta Q`` its energy ratio is ``V(A_1) / V(A)``; this model, run the
-  same way without transfer loss, keeps ``V(A_1') / V(A)`` (its own contact damping); ``eta`` is the
-  ratio of the two (at most 1).  It is tabulated over ``log A`` and read by linear interpolation,
+  loss-free crossing rate is the rate at the crossing, :func:`impact_table`).  ``eta(A)`` is computed once per
+  bed (:func:`transfer_table`): the coupled model rocks freely from rest at ``A`` through one transfer to the
+  next extreme ``A_1``; with the potential ``V(theta) = int_0^theta Q`` its energy ratio is ``V(A_1) / V(A)``;
+  this model, run the same way without transfer loss, keeps ``V(A_1') / V(A)`` (its own contact damping);
+  ``eta`` is the ratio of the two (at most 1).  It is tabulated over ``log A`` and read by linear interpolation,
   ``eta = 1`` at ``A = theta_ul`` (no uplift, no transfer).  Never fitted to Monte Carlo.  With
   ``transfer="housner"`` the ratio is Housner's ``r^2``, ``r = 1 - (3/2) sin^2(alpha)``, the limit
   of a perfectly plastic impact on a rigid bed.
