@@ -32,7 +32,7 @@ _PACKAGE = Path(__file__).resolve().parents[1]
 
 #: ``(module path, function)`` of the kernels compiled on a first run: the moment solver and the
 #: Monte Carlo sample integrator.
-KEY_KERNELS = (("solvers/moments.py", "_solve_batch"), ("kernels/mcs_kernels.py", "integrate_sample"))
+KEY_KERNELS = (("solvers/moments.py", "_batch_filtered"), ("kernels/mcs_kernels.py", "integrate_sample"))
 
 #: What the first compilation costs (measured on a fresh clone, 2 cores: ~75 s before the first
 #: point, ~20 s more for the Monte Carlo kernels).
