@@ -1,5 +1,6 @@
 """The task functions of a sweep (screening.sweep.execution), called directly (no dask)."""
 
+import os
 import pickle
 
 import numpy as np
@@ -71,6 +72,39 @@ def test_the_local_client_is_never_made_dask_s_default():
         assert c.submit(sum, [1, 2]).result() == 3
         assert (_get_global_client(), dask.config.get("scheduler", None)) == before
     assert (_get_global_client(), dask.config.get("scheduler", None)) == before
+
+
+def test_local_workers_share_the_cores_among_numba_threads(monkeypatch):
+    """Each local worker process is told the cores over the workers (at least one), and its tasks run numba's
+    parallel loops on that many threads; outside such a worker nothing changes."""
+    import numba
+
+    assert execution.worker_environment(2, cores=2) == {execution.THREADS_VARIABLE: "1"}
+    assert execution.worker_environment(1, cores=2) == {execution.THREADS_VARIABLE: "2"}
+    assert execution.worker_environment(3, cores=8) == {execution.THREADS_VARIABLE: "2"}
+    assert execution.worker_environment(4, cores=2) == {execution.THREADS_VARIABLE: "1"}
+    before = numba.get_num_threads()
+    monkeypatch.delenv(execution.THREADS_VARIABLE, raising=False)
+    assert execution.task_threads() == before
+    monkeypatch.setenv(execution.THREADS_VARIABLE, "1")
+    try:
+        assert execution.task_threads() == 1 and numba.get_num_threads() == 1
+    finally:
+        numba.set_num_threads(before)
+
+
+@pytest.mark.slow
+def test_local_worker_processes_run_tasks_on_their_share_of_numba_threads():
+    """The share reaches the worker processes of a local cluster: a task there that applies it (as every spot check
+    does) runs on that many threads."""
+    def threads():
+        import numba
+        execution.task_threads()
+        return numba.get_num_threads()
+
+    with execution.dask_client(2) as c:
+        got = c.gather([c.submit(threads, pure=False) for _ in range(4)])
+    assert set(got) == {max(1, (os.cpu_count() or 1) // 2)}
 
 
 def test_spot_arrays_carry_the_full_contact_share_the_stiff_bed_cost_model_reads():
