@@ -499,6 +499,8 @@ def paired_escalation(block, foundation, excitation, condensation, samples, mode
     ``progress``: the expensive run's samples, as for :func:`spot_task`."""
     from screening.solvers.montecarlo import monte_carlo
 
+    task_threads()
+
     def run(name, cond, n, events=None):
         kw = {"condensation": cond} if mc_registry.get(name).uses_condensation else {}
         return monte_carlo(block, foundation, excitation, n_samples=n, model=name, t_end=t_end, dt=dt, seed=seed,
