@@ -899,11 +899,7 @@ def build_point_models(case, values, t_end=None):
     p = dict(case.params)
     p.update(values)
     block, foundation = _block(p), _foundation(case, p)
-    envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
-
-    def excitation(s0):
-        band = p.get("band_limit_hz", GROUND_BAND_LIMIT_HZ)
-        return excitations.build(case.excitation, s0, p, envelope, None if math.isinf(band) else band)
+    excitation = _excitation_builder(case, p)
 
     if "pga" in p:
         from screening.analysis.intensity import s0_for_pga
@@ -916,6 +912,20 @@ def build_point_models(case, values, t_end=None):
         s0 = np.where(underivable, 1.0, s0)
         return block, foundation, excitation(float(s0) if s0.ndim == 0 else s0), underivable
     return block, foundation, excitation(p["S0"]), np.zeros((), dtype=bool)
+
+
+def _excitation_builder(case, p):
+    """``excitation(S0)``: the case's excitation with parameters ``p`` (its own and the point's, SI)."""
+    envelope = Envelope(p["T1"], p["T2"]) if case.envelope == "exponential" else ConstantEnvelope()
+    band = p.get("band_limit_hz", GROUND_BAND_LIMIT_HZ)
+    return lambda s0: excitations.build(case.excitation, s0, p, envelope, None if math.isinf(band) else band)
+
+
+def filter_states(case, values):
+    """How many filter states the case's excitation has at a point (``values``: the swept parameters, SI): the
+    state size the moment solver is compiled for (:func:`screening.solvers.moments.batch_solver`)."""
+    p = {**case.params, **values}
+    return int(np.shape(_excitation_builder(case, p)(1.0).filter().A)[-1])
 
 
 # ----------------------------------------------------------------------------- [cluster]

@@ -29,6 +29,7 @@ from screening.analysis.intensity import input_measures, rocking_start_probabili
 from screening.analysis.multifidelity import multifidelity_variance
 from screening.analysis.probabilities import uplift_acceleration
 from screening.analysis.trust import error_model_trust, trust_indicators
+from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 from screening.core.status import EscalationEstimator, PointStatus, SampleState, Trust
@@ -677,11 +678,13 @@ def default_workers(study):
     return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
 
 
-def warm_up():
+def warm_up(state_counts=(4,)):
     """Import the solver and load its compiled code on a worker; returns the time taken [s].
 
-    Solves one point (the paper's block on its bed under white noise) for 0.1 s, so that the
-    compiled moment solver is loaded (from numba's cache, or compiled) before the first batch.
+    Solves one point (the paper's block on its bed) for 0.1 s under an excitation of each of ``state_counts``
+    filter states (0: white noise without a band; 2: Kanai–Tajimi without one; else the default white noise, four
+    states of its band), so that the moment solver's loops a run needs are loaded (from numba's cache, or
+    compiled) before the first batch, and no other.
 
     Returns
     -------
@@ -696,7 +699,10 @@ def warm_up():
        https://numba.readthedocs.io/en/stable/developer/caching.html
     """
     start = time.perf_counter()
-    solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), WhiteNoise(1e-5), np.array([0.0, 0.1]))
+    for n in state_counts:
+        excitation = (WhiteNoise(1e-5, band_limit_hz=None) if n == 0 else
+                      KanaiTajimi(1e-5, 15.6, 0.6, band_limit_hz=None) if n == 2 else WhiteNoise(1e-5))
+        solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), excitation, np.array([0.0, 0.1]))
     return time.perf_counter() - start
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from screening.core.limits import batch_budget
 from screening.core.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.sweep.config import build_models, build_point_models, NUMERIC
+from screening.sweep.config import build_models, build_point_models, filter_states, NUMERIC
 
 __all__ = []
 
@@ -200,6 +200,14 @@ def point_values(study, index):
     case = index[0] if study.has_case_dim else 0
     swept = index[1:] if study.has_case_dim else index
     return case, {name: float(study.sweeps[name][i]) for name, i in zip(study.swept_dims, swept)}
+
+
+def filter_state_counts(study):
+    """The filter states of the cases' excitations (each at its first point), sorted: the moment solver's
+    state sizes a run of ``study`` compiles."""
+    first = (0,) * len(study.swept_dims)
+    return tuple(sorted({filter_states(case, point_values(study, ((c,) if study.has_case_dim else ()) + first)[1])
+                         for c, case in enumerate(study.cases)}))
 
 
 def batch_models(study, batch):

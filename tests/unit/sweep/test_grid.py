@@ -127,3 +127,13 @@ def test_auto_spots_also_visit_intermediate_uplift_on_other_beds():
     assert len({s[0] for s in spots}) == 3                              # three different beds (eps)
     one = parse_study(GRID + '[mcs]\npoints = "auto"\ncount = 1\n')
     assert select_spots(one, status, upl) == [(0, 4)]
+
+
+def test_filter_state_counts_name_the_moment_loops_a_run_compiles():
+    """White noise and Kanai-Tajimi at the default band carry its four low-pass states (4 and 6), without a band
+    none and two; each case counts once."""
+    assert grid.filter_state_counts(parse_study(CASES)) == (4, 6)
+    assert grid.filter_state_counts(parse_study(GRID.replace('kind = "white"', 'kind = "white"\nband_limit_hz = "none"'))) \
+        == (0,)
+    kt = GRID.replace('kind = "white"', 'kind = "kanai_tajimi"\nomega_g = 10.0\nzeta_g = 0.4\nband_limit_hz = "none"')
+    assert grid.filter_state_counts(parse_study(kt)) == (2,)
