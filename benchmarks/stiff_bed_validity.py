@@ -30,15 +30,18 @@ The cases (:func:`cases`): the blocks and beds of the scene (the calibration's s
 the hospital equipment on ``1e9``, the paper's block on ``1e9`` and ``1e10``, the scene's statue on a
 mortar-stiff ``1e11``, the cabinet on hardening pads) and softer beds where the stiff-bed model should
 fail (the scene's statue on ``3e6`` and ``1.5e6``, the paper block on the paper's bed), under white noise
-and Kanai-Tajimi ground motion, at two intensities each: the median PGA of the record (ground band,
+and Kanai-Tajimi ground motion, and museum objects on their three bases (the collection's, ``examples/collection.csv``,
+and two stocky ones, ``benchmarks/stocky_objects.csv``) under Kanai-Tajimi and Clough-Penzien firm soil, at two
+intensities each (three where the second overturns under 10 %): the median PGA of the record (ground band,
 :func:`screening.analysis.intensity.s0_for_pga`) a fixed multiple of the rigid block's uplift
 acceleration ``g b / h`` (:data:`LEVELS`).
 
 Each case is written atomically to ``--work/<case>.json`` after each of its models, so an interrupted
 run resumes where it stopped; ``--minutes`` stops starting new model runs after that much wall time.
 ``--report`` assembles the table from the work folder (``--csv`` writes it as package data, ``--figure`` draws
-it: the whole CSV with ``--csv``, else the work folder's rows).  Run (the shipped table; about 40 minutes of CPU in
-all, in chunks)::
+it: the whole CSV with ``--csv``, else the work folder's rows; ``--relabel`` names the models of a folder measured
+before the default law changed as the table does).  Each stiff-bed run records its ``transfer`` law.  Run (the
+shipped table; about 40 minutes of CPU in all, in chunks)::
 
     NUMBA_NUM_THREADS=1 PYTHONPATH=. nice -n 10 python benchmarks/stiff_bed_validity.py \\
         --samples 1000 --work outputs/stiff_bed_validity --minutes 9
@@ -69,7 +72,7 @@ from screening.core.model import Block, Foundation
 from screening.core.excitations.clough_penzien import CloughPenzien
 from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
-from screening.solvers import stiff_bed
+from screening.solvers import mc_registry, stiff_bed
 from screening.solvers.montecarlo import monte_carlo
 from screening.sweep.inventory import read_inventory
 
@@ -108,6 +111,14 @@ for _row in _COLLECTION:
 COLLECTION_BEDS = tuple((f"{r['name']} k={r['foundation']['k']:.3g}", r["name"].split(" on ")[0],
                          r["foundation"]["k"], 0.0, r["foundation"]["lam"]) for r in _COLLECTION)
 COLLECTION_K = {r["name"]: r["foundation"]["k"] for r in _COLLECTION}
+#: Two stocky museum objects (an urn, atan(b/h) 0.448, and a stone basin, 0.598) on the collection's three bases,
+#: their beds made as the collection's (``benchmarks/stocky_objects.csv``): ``BEDS`` entries.
+STOCKY_FILE = Path(__file__).resolve().parent / "stocky_objects.csv"
+_STOCKY = read_inventory(STOCKY_FILE)[0]
+for _row in _STOCKY:
+    BLOCKS.setdefault(_row["name"].split(" on ")[0], (_row["block"], (15.6, 0.6)))
+STOCKY_BEDS = tuple((f"{r['name']} k={r['foundation']['k']:.3g}", r["name"].split(" on ")[0],
+                     r["foundation"]["k"], 0.0, r["foundation"]["lam"]) for r in _STOCKY)
 #: Beds: ``(label, block, k [N m-2], eps [m-2], lam [N s m-4] or None for a vertical damping ratio of 0.05)``.
 BEDS = (
     ("calibration statue k=1e10", "calibration statue", 1e10, 0.0, 3e11),
@@ -133,13 +144,16 @@ BEDS = (
     ("bust on mortar zeta_v=0.5", "bust", COLLECTION_K["bust on mortar"], 0.0, None),
     ("statuette on pad zeta_v=0.5", "statuette", COLLECTION_K["statuette on pad"], 0.0, None),
     ("showcase on pad zeta_v=0.01", "showcase", COLLECTION_K["showcase on pad"], 0.0, None),
+    # the stocky objects on their three bases (Kanai-Tajimi firm soil; --only "urn_on,basin_on")
+    *STOCKY_BEDS,
 )
 #: Vertical damping ratio of a bed whose ``lam`` is None, where it is not 0.05.
 BED_ZETA = {label: float(label.rsplit("=", 1)[1]) for label, *_ in BEDS if "zeta_v=" in label}
 #: Intensity levels: median PGA of the record (ground band) over the rigid block's uplift acceleration
 #: ``g b / h``, per block and excitation kind: moderate rocking and near toppling.
 #: Chosen from a 60-sample pilot of the stiff-bed model (moderate: some rocking, few or no overturns; strong:
-#: 10-50 % overturning).  The small paper block topples at a lower ratio than the statues.
+#: 10-50 % overturning; a third, severe, where the strong level overturns under 10 %).  The small paper block
+#: topples at a lower ratio than the statues.
 LEVELS = {
     **{(name, "kanai_tajimi"): (1.0, 1.5) for name in ("statue", "calibration statue", "cabinet")},
     **{(name, "white"): (2.2, 3.3) for name in ("statue", "calibration statue", "cabinet", "equipment")},
@@ -149,8 +163,10 @@ LEVELS = {
     **{(name, "kanai_tajimi"): (1.0, 1.5) for name in ("slender block", "stocky block", "very slender block")},
     **{(name, "white"): (2.2, 3.3) for name in ("slender block", "stocky block")},
     # the collection's objects: the statues' multiples (rocking; near toppling)
-    **{(name, kind): (1.0, 1.5) for name in ("statuette", "bust", "amphora", "showcase", "stele")
+    **{(name, kind): (1.0, 1.5) for name in ("statuette", "bust", "amphora", "showcase", "stele", "urn")
        for kind in ("kanai_tajimi", "clough_penzien")},
+    # the basin overturns 1-2 % at 1.5 g b/h: severe at 2.0 (a 100-sample pilot of the stiff-bed model on timber: 42 %)
+    **{("basin", kind): (1.0, 1.5, 2.0) for kind in ("kanai_tajimi", "clough_penzien")},
 }
 #: Per-bed levels where the block's do not fit (softer beds topple at a fraction of ``g b / h``; from a
 #: 100-sample coupled pilot).
@@ -160,12 +176,10 @@ BED_LEVELS = {
     "paper block k=2.89e7 (paper bed)": {"kanai_tajimi": (0.6, 0.7), "white": (0.8, 1.5)},
 }
 EXCITATIONS = ("kanai_tajimi", "white", "clough_penzien")
-#: Excitation kinds of a bed where not all of :data:`EXCITATIONS`: the collection's Kanai-Tajimi firm soil, and
-#: Clough-Penzien (Kanai-Tajimi with the high-pass of :data:`CP_FILTER`) on the stocky objects' beds.
+#: Excitation kinds of a bed where not all of :data:`EXCITATIONS`: on the museum objects' beds (the collection's and
+#: the stocky ones) Kanai-Tajimi firm soil and Clough-Penzien (it with the high-pass of :data:`CP_FILTER`).
 BED_EXCITATIONS = {
-    **{label: ("kanai_tajimi",) for label, *_ in COLLECTION_BEDS},
-    **{label: ("kanai_tajimi", "clough_penzien") for label, name, *_ in COLLECTION_BEDS
-       if name in ("bust", "showcase")},
+    **{label: ("kanai_tajimi", "clough_penzien") for label, *_ in (*COLLECTION_BEDS, *STOCKY_BEDS)},
     "bust on mortar zeta_v=0.5": ("kanai_tajimi",), "statuette on pad zeta_v=0.5": ("kanai_tajimi",),
     "showcase on pad zeta_v=0.01": ("kanai_tajimi",), "very slender block k=6.5e9 zeta_v=0.02": ("kanai_tajimi",),
 }
@@ -240,7 +254,7 @@ def cases(band_limit_hz=None):
             shape = (WhiteNoise(1.0, **band) if kind == "white" else KanaiTajimi(1.0, wg, zg, **band)
                      if kind == "kanai_tajimi" else CloughPenzien(1.0, wg, zg, *CP_FILTER, **band))
             ratios = BED_LEVELS.get(label, {}).get(kind) or LEVELS[(name, kind)]
-            for level, ratio in zip(("moderate", "strong"), ratios):
+            for level, ratio in zip(("moderate", "strong", "severe"), ratios):
                 S0 = float(s0_for_pga(shape, ratio * G * params["b"] / params["h"], T_END, cutoff))
                 case = dict(id=_slug(f"{label}_{kind}_{level}"), bed=label, block=name, block_params=params,
                             bed_params=dict(k=k, eps=eps, lam=float(bed.lam)), excitation=kind,
@@ -313,6 +327,7 @@ def run_mc(case, name, samples, seed):
     ok = np.isfinite(v)
     i = int(np.nanargmax(v)) if ok.any() else 0
     return {"kind": "mc", "n": samples, "model": ds.attrs["model"],
+            "transfer": getattr(mc_registry.get(model), "transfer", None),   # the stiff-bed model's law
             "peak": [float(x) for x in ds.peak_abs_theta.values],
             "overturned": [bool(x) for x in ds.overturned.values],
             "diverged": [bool(x) for x in ds.diverged.values],
@@ -523,18 +538,22 @@ def band_and_cost(samples, seed, models=("stiff_bed", "auto")):
     return "\n".join(lines)
 
 
-def table_rows(work, chosen):
+def table_rows(work, chosen, relabel=None):
     """The rows of the table (one per case and model, the coupled model first) from the work folder: dicts
-    with the case, its indicators, the model and :func:`compare`'s fields (``None`` where not run)."""
+    with the case, its indicators, the model and :func:`compare`'s fields (``None`` where not run).
+    ``relabel``: ``{name in the work folder: name in the table}`` (a folder measured before the default law
+    changed: ``{"stiff_bed": "stiff_bed bed", "stiff_bed impact": "stiff_bed"}``)."""
     rows = []
+    relabel = relabel or {}
     for case in chosen:
         record = load_case(work, case)
         ref = record["models"].get("coupled")
         if ref is None or ref.get("error"):
             continue
         ind = case_indicators(case)
+        models = {relabel.get(k, k): v for k, v in record["models"].items()}
         for name in MODELS:
-            m = record["models"].get(name)
+            m = models.get(name)
             if m is None:
                 continue
             if name == "coupled":
@@ -750,7 +769,7 @@ def figure(rows, path):
                 y = max(y, abs(float(r["var_ratio"]) - 1.0) / float(r.get("tol_var_ratio") or VAR_TOL))
             ok = r["passed"] in (True, "True")
             ax.scatter([x], [min(y, 300)], marker=markers[r["excitation"]],
-                       s=36 if r["level"] == "strong" else 20, facecolors="tab:blue" if ok else "none",
+                       s=20 if r["level"] == "moderate" else 36, facecolors="tab:blue" if ok else "none",
                        edgecolors="tab:blue" if ok else "tab:red", zorder=3)
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -761,7 +780,8 @@ def figure(rows, path):
     for ax in axes[:, 0]:
         ax.set_ylabel("worst |diff| / tolerance")
     fig.suptitle("Cheap models against coupled Monte Carlo (same ground motions): filled = within tolerance "
-                 "(shaded), open red = fails;\no Kanai-Tajimi, s white noise, ^ Clough-Penzien; large = strong level",
+                 "(shaded), open red = fails;\no Kanai-Tajimi, s white noise, ^ Clough-Penzien; "
+                 "large = strong or severe level",
                  fontsize=10)
     fig.tight_layout()
     with atomic_path(path) as tmp:
@@ -827,6 +847,9 @@ def main():
     parser.add_argument("--band-limit-hz", type=lambda v: v if v == "none" else float(v),
                         help="the excitations' ground band [Hz] (the cases' ids end _band_<f>); absent: none, the "
                              "idealized spectra every case of the table before the band was measured with")
+    parser.add_argument("--relabel", type=lambda v: dict(p.split("=", 1) for p in v.split(",")),
+                        help="with --report: OLD=NEW,... model names of the work folder as the table names them (a "
+                             "folder measured before 2026-11-29: 'stiff_bed=stiff_bed bed,stiff_bed impact=stiff_bed')")
     parser.add_argument("--band", action="store_true",
                         help="print the band and cost table instead (statue k=1e10, 1e11; see band_and_cost)")
     args = parser.parse_args()
@@ -854,7 +877,7 @@ def main():
         if not run_cases(chosen, args.work, args.samples, args.seed, models, args.minutes,
                          args.condensed_samples):
             raise SystemExit(3)                  # not finished: run the same command again to resume
-    rows = table_rows(args.work, chosen)
+    rows = table_rows(args.work, chosen, args.relabel)
     print(summary(rows))
     print()
     print(cost_table(rows))

@@ -87,9 +87,16 @@ def test_auto_picks_the_stiff_bed_model_only_inside_every_measured_interval():
     assert name == "coupled" and "'pulse'" in why
     # the paper block (atan(b/h) 0.165) passed on k = 1e9, between the slender block (0.10) and the statues
     assert mc.choose(Block(m=8.67, b=0.035, h=0.21), Foundation(k=1e9, lam=1e10), "kanai_tajimi")[0] == "stiff_bed"
-    stocky = Block(m=100.0, b=0.2175, h=0.45)                         # atan(b/h) 0.45: failed
-    name, why = mc.choose(stocky, Foundation(k=7.7e7, lam=2.0e9), "kanai_tajimi")
+    stocky = Block(m=100.0, b=0.2175, h=0.45)                         # atan(b/h) 0.45: passed at zeta_v 0.02
+    assert mc.choose(stocky, Foundation(k=7.7e7, lam=2.0e9), "kanai_tajimi")[0] == "stiff_bed"
+    name, why = mc.choose(stocky, Foundation(k=7.7e7, lam=1.18e10), "kanai_tajimi")     # zeta_v 1.3: failed
+    assert name == "coupled" and "vertical_damping_ratio" in why
+    squat = Block(m=100.0, b=0.38, h=0.45)                            # atan(b/h) 0.70: stockier than any measured
+    name, why = mc.choose(squat, Foundation(k=7.7e7, lam=2.0e9), "kanai_tajimi")
     assert name == "coupled" and "slenderness" in why
+    assert mc.choose(STATUE, STIFF, "clough_penzien")[0] == "stiff_bed"    # inside the museum objects' box
+    name, why = mc.choose(STATUE, INSIDE, "clough_penzien")           # theta_ul / alpha 0.12: beyond 1.1e-3
+    assert name == "coupled" and "theta_ul_over_slenderness" in why and "under clough_penzien" in why
     paper_bed = Foundation(k=2.89e7, lam=8.95e8)                      # under the statue: damping ratio 1.38
     name, why = mc.choose(STATUE, paper_bed, "kanai_tajimi")
     assert name == "coupled" and "vertical_damping_ratio" in why
