@@ -84,6 +84,26 @@ class Stage(NamedTuple):
     clock: object = time.monotonic
 
 
+def wall_model(walls, costs, prior=PRIOR_WALL_PER_COST):
+    """``(overhead [s], wall per cost-model second [1])`` of a run, ``wall = overhead + rate cost``, from the runs
+    measured (wall seconds ``walls``, cost-model seconds ``costs``, one worker thread each).
+
+    The rate alone (total wall over total cost) read the short first runs' fixed part (the task's round trip, the
+    bed's transfer table, the synthesis plan) as a slow rate: on the acceptance collection the time left said
+    3 min 15 s at 10 s, 79 s before the end.  A least-squares line over the runs once there are three of two
+    costs or more, its intercept within ``[0, shortest wall]`` and its slope then fitting the total; before,
+    the total ratio; before any run, ``(0, prior)``.
+    """
+    w, c = np.asarray(walls, dtype=float), np.asarray(costs, dtype=float)
+    if c.size == 0 or c.sum() <= 0.0:
+        return 0.0, prior
+    overhead = 0.0
+    if c.size >= 3 and np.ptp(c) > 0.0:
+        slope, intercept = np.polyfit(c, w, 1)
+        overhead = float(np.clip(intercept, 0.0, w.min())) if slope > 0.0 else 0.0
+    return overhead, float(max(w.sum() - c.size * overhead, 0.0) / c.sum()) or prior
+
+
 def _point_table(stage):
     """Flat per-point arrays the escalation needs: status, trust and band, the trust indicators, the
     features of the correction, condensation and eps, and SL's peaks."""
@@ -484,14 +504,18 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         stage.client.run(_submit.warm_up_monte_carlo, tuple(sorted(used)))
         warm_up = time.perf_counter() - t0
     start = clock()
-    measured = {"wall": 0.0, "cost": 0.0}                  # wall seconds of finished runs, their cost-model seconds
+    runs_wall, runs_cost = [], []                          # wall seconds of finished runs, their cost-model seconds
+    fitted = {"model": (0.0, PRIOR_WALL_PER_COST), "runs": {}}   # wall_model of them; runs per point
     pilot_costs = []                                       # cost-model seconds of the pilots run
 
     def now():
         return spent_before + clock() - start
 
     def wall_per_cost():
-        return measured["wall"] / measured["cost"] if measured["cost"] > 0 else PRIOR_WALL_PER_COST
+        return fitted["model"][1]
+
+    def overhead():
+        return fitted["model"][0]
 
     def eta():
         """Seconds left: the runs queued and in flight and the points not started (each as a finished point's runs
@@ -501,11 +525,13 @@ def _escalation_runs(stage, order, models, first, levels, answers):
             left = sum(n * rate for n, _, rate in list(todo.values())) + sum(list(in_flight.values()))
             done = [float(results[j]["cost_s"]) for j in list(finished) if j in results]
             per_point = float(np.mean(done)) if done else None        # a finished point's runs, all told
-            left += sum(per_point or pilot_prior[j] for j in range(len(order))
-                        if j not in results and j not in in_flight and j not in counters["cut"])
+            fresh = [j for j in range(len(order)) if j not in results and j not in in_flight and j not in counters["cut"]]
+            left += sum(per_point or pilot_prior[j] for j in fresh)
+            runs = list(fitted["runs"].values())
+            n_runs = len(todo) + len(fresh) * (float(np.mean(runs)) if runs else 1.0)
         except RuntimeError:
             return None
-        return min(wall_per_cost() * left / threads, max(acc.budget_s - now(), 0.0))
+        return min((wall_per_cost() * left + overhead() * n_runs) / threads, max(acc.budget_s - now(), 0.0))
 
     topic = f"screening-escalation-samples-{token}"
     samples_done, signal = {}, threading.Event()        # signal: a run ended
@@ -551,7 +577,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
                 j = ready[0]
                 n, n_cheap, rate = todo.pop(j)
                 have = int(results[j]["samples"])
-                fits = int((deadline - now()) / max(wall_per_cost() * rate, 1e-300))
+                fits = int((deadline - now() - overhead()) / max(wall_per_cost() * rate, 1e-300))
                 if n > fits:                                  # the budget binds: what fits, if it adds samples
                     counters["cut"].add(j)
                     n_cheap = math.ceil(n_cheap * fits / n) if n_cheap else 0
@@ -568,7 +594,7 @@ def _escalation_runs(stage, order, models, first, levels, answers):
                 if j is None:
                     return
                 guess = max(pilot_costs, default=pilot_prior[j])
-                if now() + wall_per_cost() * guess > deadline:
+                if now() + overhead() + wall_per_cost() * guess > deadline:
                     counters["cut"].add(j)
                     bar.update(1)
                     continue
@@ -596,8 +622,10 @@ def _escalation_runs(stage, order, models, first, levels, answers):
         keep(j, r, what)
         if what == PILOT:
             pilot_costs.append(cost(j, r))
-        measured["wall"] += took
-        measured["cost"] += cost(j, r)
+        runs_wall.append(took)
+        runs_cost.append(cost(j, r))
+        fitted["model"] = wall_model(runs_wall, runs_cost)
+        fitted["runs"][j] = fitted["runs"].get(j, 0) + 1
         settle(j)
 
     def write_interim():
