@@ -145,10 +145,13 @@ class CompileAnnouncer:
             pass
 
     def started(self, name):
+        """A compile of ``name`` began; the lines name the outermost compile going on (the kernel called, not the
+        helpers and numba's own implementations it compiles on the way)."""
         with self._lock:
             self.active += 1
             self.count += 1
-            self.name = name
+            if self.active == 1 or not self.name:
+                self.name = name
             if self._first is None:
                 self._first = self.clock()
 

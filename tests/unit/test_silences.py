@@ -46,6 +46,23 @@ def test_a_short_compile_is_not_announced():
     assert out.getvalue() == ""
 
 
+def test_the_lines_name_the_outermost_compile():
+    """Helpers compiled on the way (numba's own implementations among them) do not take the kernel's name."""
+    out, clock = io.StringIO(), Clock()
+    a = CompileAnnouncer(out, clock=clock)
+    a.started("integrate_chunk")
+    a.started("ol_min.<locals>.impl")
+    clock.now = 3.0
+    a.tick()
+    a.finished()
+    a.finished()
+    a.started("_record")                                     # a new outermost compile: its own name
+    clock.now = 14.0
+    a.tick()
+    lines = out.getvalue().splitlines()
+    assert "compiling integrate_chunk" in lines[0] and "now _record" in lines[1]
+
+
 def test_numba_compiles_are_heard(monkeypatch):
     """The announcer hears numba's own event: a fresh function compiled inside the context is named."""
     import numba
