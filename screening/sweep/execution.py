@@ -681,10 +681,15 @@ def default_workers(study):
 def warm_up(state_counts=(4,)):
     """Import the solver and load its compiled code on a worker; returns the time taken [s].
 
-    Solves one point (the paper's block on its bed) for 0.1 s under an excitation of each of ``state_counts``
-    filter states (0: white noise without a band; 2: Kanai–Tajimi without one; else the default white noise, four
-    states of its band), so that the moment solver's loops a run needs are loaded (from numba's cache, or
-    compiled) before the first batch, and no other.
+    Solves one point (the paper's block on its bed) for 0.1 s under an excitation of each state count, so that
+    the moment solver's loops a run needs are loaded (from numba's cache, or compiled) before the first batch,
+    and no other.
+
+    Parameters
+    ----------
+    state_counts : sequence of int, optional
+        Filter states of the run's excitations (:func:`screening.sweep.grid.filter_state_counts`): 0 white noise
+        without a band, 2 Kanai–Tajimi without one, any other the default white noise (four states of its band).
 
     Returns
     -------
