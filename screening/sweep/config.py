@@ -921,11 +921,9 @@ def _excitation_builder(case, p):
     return lambda s0: excitations.build(case.excitation, s0, p, envelope, None if math.isinf(band) else band)
 
 
-def filter_states(case, values):
-    """How many filter states the case's excitation has at a point (``values``: the swept parameters, SI): the
-    state size the moment solver is compiled for (:func:`screening.solvers.moments.batch_solver`)."""
-    p = {**case.params, **values}
-    return int(np.shape(_excitation_builder(case, p)(1.0).filter().A)[-1])
+def point_excitation(case, values, s0):
+    """The case's excitation at a point (``values``: the swept parameters, SI) at the PSD level ``s0`` [m2 s-3]."""
+    return _excitation_builder(case, {**case.params, **values})(s0)
 
 
 # ----------------------------------------------------------------------------- [cluster]

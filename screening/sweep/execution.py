@@ -29,7 +29,6 @@ from screening.analysis.intensity import input_measures, rocking_start_probabili
 from screening.analysis.multifidelity import multifidelity_variance
 from screening.analysis.probabilities import uplift_acceleration
 from screening.analysis.trust import error_model_trust, trust_indicators
-from screening.core.excitations.kanai_tajimi import KanaiTajimi
 from screening.core.excitations.white import WhiteNoise
 from screening.core.model import Block, Foundation
 from screening.core.status import EscalationEstimator, PointStatus, SampleState, Trust
@@ -678,18 +677,17 @@ def default_workers(study):
     return 0 if study.n_points <= IN_PROCESS_MAX_POINTS and spots <= 1 else DEFAULT_WORKERS
 
 
-def warm_up(state_counts=(4,)):
+def warm_up(excitations=None):
     """Import the solver and load its compiled code on a worker; returns the time taken [s].
 
-    Solves one point (the paper's block on its bed) for 0.1 s under an excitation of each state count, so that
-    the moment solver's loops a run needs are loaded (from numba's cache, or compiled) before the first batch,
-    and no other.
+    Solves one point (the paper's block on its bed) for 0.1 s under each excitation, so that the moment solver's
+    loops a run needs are loaded (from numba's cache, or compiled) before the first batch, and no other.
 
     Parameters
     ----------
-    state_counts : sequence of int, optional
-        Filter states of the run's excitations (:func:`screening.sweep.grid.filter_state_counts`): 0 white noise
-        without a band, 2 Kanai–Tajimi without one, any other the default white noise (four states of its band).
+    excitations : sequence of screening.core.excitations.Excitation, optional
+        One per state size of the run (:func:`screening.sweep.grid.warm_up_excitations`); default white noise at
+        the default band.
 
     Returns
     -------
@@ -704,9 +702,7 @@ def warm_up(state_counts=(4,)):
        https://numba.readthedocs.io/en/stable/developer/caching.html
     """
     start = time.perf_counter()
-    for n in state_counts:
-        excitation = (WhiteNoise(1e-5, band_limit_hz=None) if n == 0 else
-                      KanaiTajimi(1e-5, 15.6, 0.6, band_limit_hz=None) if n == 2 else WhiteNoise(1e-5))
+    for excitation in excitations or (WhiteNoise(1e-5),):
         solve_moments(Block(8.67, 0.035, 0.21), Foundation(2.89e7, 8.95e8), excitation, np.array([0.0, 0.1]))
     return time.perf_counter() - start
 

@@ -16,7 +16,7 @@ import numpy as np
 from screening.core.limits import batch_budget
 from screening.core.status import PointStatus
 from screening.solvers.moments import HISTORY_VARIABLES
-from screening.sweep.config import build_models, build_point_models, filter_states, NUMERIC
+from screening.sweep.config import build_models, build_point_models, NUMERIC, point_excitation
 
 __all__ = []
 
@@ -202,12 +202,16 @@ def point_values(study, index):
     return case, {name: float(study.sweeps[name][i]) for name, i in zip(study.swept_dims, swept)}
 
 
-def filter_state_counts(study):
-    """The filter states of the cases' excitations (each at its first point), sorted: the moment solver's
-    state sizes a run of ``study`` compiles."""
+def warm_up_excitations(study, s0=1e-5):
+    """The cases' excitations (each at its first point, PSD level ``s0`` [m2 s-3]), one per number of filter states
+    in increasing order: what the workers' warm-up solves under, so that it loads the moment solver's loops a run
+    of ``study`` needs (one per state size, :func:`screening.solvers.moments.batch_solver`) and no other."""
     first = (0,) * len(study.swept_dims)
-    return tuple(sorted({filter_states(case, point_values(study, ((c,) if study.has_case_dim else ()) + first)[1])
-                         for c, case in enumerate(study.cases)}))
+    by_states = {}
+    for c, case in enumerate(study.cases):
+        excitation = point_excitation(case, point_values(study, ((c,) if study.has_case_dim else ()) + first)[1], s0)
+        by_states.setdefault(int(np.shape(excitation.filter().A)[-1]), excitation)
+    return [by_states[n] for n in sorted(by_states)]
 
 
 def batch_models(study, batch):

@@ -52,7 +52,7 @@ from screening.sweep.execution import SPOT_HISTORIES, SPOT_LINEAR
 from screening.sweep.connect import run_on_workers
 from screening.sweep.accuracy import Stage, escalate
 from screening.io.errors import SweepError, exception_line, is_write_error, write_failure_reason
-from screening.sweep.grid import default_batch_size, filter_state_counts, plan_batches, select_spots
+from screening.sweep.grid import default_batch_size, plan_batches, select_spots, warm_up_excitations
 from screening.sweep.interrupt import interruptible, raise_if_interrupted, shielded
 from screening.sweep.probabilities import finish_probabilities, probabilities_line
 from screening.core.progress import Progress
@@ -231,7 +231,7 @@ def run_sweep(study, out, *, workers=2, scheduler=None, client=None, batch_size=
         report.n_workers = n_workers
         timings["cluster_start"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        run_on_workers(c, execution.warm_up, filter_state_counts(study))   # a worker that retires is left out
+        run_on_workers(c, execution.warm_up, warm_up_excitations(study))   # a worker that retires is left out
         timings["warm_up"] = time.perf_counter() - t0
         try:
             if batch_size is None and cluster is not None:

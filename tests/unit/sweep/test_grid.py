@@ -129,11 +129,14 @@ def test_auto_spots_also_visit_intermediate_uplift_on_other_beds():
     assert select_spots(one, status, upl) == [(0, 4)]
 
 
-def test_filter_state_counts_name_the_moment_loops_a_run_compiles():
+def test_warm_up_excitations_are_one_per_moment_loop_a_run_compiles():
     """White noise and Kanai-Tajimi at the default band carry its four low-pass states (4 and 6), without a band
-    none and two; each case counts once."""
-    assert grid.filter_state_counts(parse_study(CASES)) == (4, 6)
-    assert grid.filter_state_counts(parse_study(GRID.replace('kind = "white"', 'kind = "white"\nband_limit_hz = "none"'))) \
-        == (0,)
+    none and two; each state size once, the case's own kind."""
+    def states(text):
+        return [int(e.filter().A.shape[-1]) for e in grid.warm_up_excitations(parse_study(text))]
+
+    assert states(CASES) == [4, 6]
+    assert states(GRID.replace('kind = "white"', 'kind = "white"\nband_limit_hz = "none"')) == [0]
     kt = GRID.replace('kind = "white"', 'kind = "kanai_tajimi"\nomega_g = 10.0\nzeta_g = 0.4\nband_limit_hz = "none"')
-    assert grid.filter_state_counts(parse_study(kt)) == (2,)
+    (excitation,) = grid.warm_up_excitations(parse_study(kt))
+    assert excitation.filter().A.shape[-1] == 2 and excitation.omega_g == 10.0 and excitation.S0 == 1e-5
